@@ -1,0 +1,390 @@
+#include "io/pcd_scan.hpp"
+
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <limits>
+#include <sstream>
+
+#include <pcl/PCLPointCloud2.h>
+#include <pcl/io/pcd_io.h>
+
+#include "common/errors.hpp"
+#include "io/atomic_file.hpp"
+
+namespace lidarcal::io {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr std::size_t kMaxHeaderBytes = 1 << 16;     // a PCD header is a few hundred bytes
+constexpr std::size_t kMaxPoints = 100'000'000;      // refuse absurd POINTS before allocating
+constexpr double kMaxAbsCoordinate_m = 1.0e5;        // no lidar of ours sees 100 km
+
+constexpr const char* kFormatRemedy = "see docs/FORMAT.md for the scan file format";
+
+struct HeaderField {
+  std::string name;
+  int size = 0;
+  char type = '?';
+  int count = 1;
+};
+
+struct ParsedHeader {
+  std::vector<HeaderField> fields;
+  long long width = -1, height = -1, points = -1;
+  bool has_viewpoint = false;
+  double viewpoint[7] = {0, 0, 0, 1, 0, 0, 0};
+  std::string data;
+  std::size_t data_offset = 0;  // byte offset of the first data byte
+};
+
+std::vector<std::string> splitWords(const std::string& line) {
+  std::istringstream in(line);
+  std::vector<std::string> words;
+  for (std::string w; in >> w;) words.push_back(w);
+  return words;
+}
+
+bool parseLong(const std::string& text, long long& value) {
+  char* end = nullptr;
+  errno = 0;
+  value = std::strtoll(text.c_str(), &end, 10);
+  return errno == 0 && end != text.c_str() && *end == '\0';
+}
+
+bool parseDouble(const std::string& text, double& value) {
+  char* end = nullptr;
+  value = std::strtod(text.c_str(), &end);
+  return end != text.c_str() && *end == '\0';
+}
+
+ParsedHeader parseHeader(const fs::path& file) {
+  const std::string where = file.string();
+  std::ifstream in(file, std::ios::binary);
+  if (!in) {
+    std::error_code ec;
+    if (!fs::exists(file, ec)) throw InputError(where, "", "file does not exist", "check the path");
+    throw InputError(where, "", "cannot be opened for reading", "check its permissions");
+  }
+  ParsedHeader h;
+  std::vector<std::string> sizes, types, counts;
+  bool seen_fields = false, seen_size = false, seen_type = false;
+  std::string line;
+  std::size_t consumed = 0;
+  int line_no = 0;
+  while (std::getline(in, line)) {
+    ++line_no;
+    consumed += line.size() + 1;
+    if (consumed > kMaxHeaderBytes)
+      throw InputError(where, "header", "no DATA line in the first 64 KiB: not a PCD file or a damaged one",
+                       kFormatRemedy);
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.empty() || line[0] == '#') continue;
+    auto words = splitWords(line);
+    if (words.empty()) continue;
+    const std::string key = words[0];
+    const std::string item = "header line " + std::to_string(line_no) + " (" + key + ")";
+    words.erase(words.begin());
+    if (key == "VERSION") {
+      continue;
+    } else if (key == "FIELDS" || key == "COLUMNS") {
+      seen_fields = true;
+      for (const auto& w : words) h.fields.push_back({w});
+    } else if (key == "SIZE") {
+      seen_size = true;
+      sizes = words;
+    } else if (key == "TYPE") {
+      seen_type = true;
+      types = words;
+    } else if (key == "COUNT") {
+      counts = words;
+    } else if (key == "WIDTH" || key == "HEIGHT" || key == "POINTS") {
+      long long v = 0;
+      if (words.size() != 1 || !parseLong(words[0], v) || v < 0)
+        throw InputError(where, item, "expected one non-negative integer", kFormatRemedy);
+      (key == "WIDTH" ? h.width : key == "HEIGHT" ? h.height : h.points) = v;
+    } else if (key == "VIEWPOINT") {
+      if (words.size() != 7)
+        throw InputError(where, "VIEWPOINT", "expected 7 numbers `tx ty tz qw qx qy qz`, found " +
+                                                 std::to_string(words.size()),
+                         kFormatRemedy);
+      for (int i = 0; i < 7; ++i)
+        if (!parseDouble(words[static_cast<std::size_t>(i)], h.viewpoint[i]) || !std::isfinite(h.viewpoint[i]))
+          throw InputError(where, "VIEWPOINT", "value '" + words[static_cast<std::size_t>(i)] + "' is not a finite number",
+                           kFormatRemedy);
+      h.has_viewpoint = true;
+    } else if (key == "DATA") {
+      if (words.size() != 1 || (words[0] != "ascii" && words[0] != "binary" && words[0] != "binary_compressed"))
+        throw InputError(where, "DATA", "must be ascii, binary or binary_compressed", kFormatRemedy);
+      h.data = words[0];
+      h.data_offset = consumed;
+      break;
+    } else {
+      throw InputError(where, item, "unknown header keyword: not a PCD file or a damaged one", kFormatRemedy);
+    }
+  }
+  if (h.data.empty()) throw InputError(where, "DATA", "header has no DATA line: truncated or not a PCD file", kFormatRemedy);
+  if (!seen_fields || h.fields.empty()) throw InputError(where, "FIELDS", "missing", kFormatRemedy);
+  if (!seen_size || sizes.size() != h.fields.size())
+    throw InputError(where, "SIZE", "must give one size per field (" + std::to_string(h.fields.size()) + ")", kFormatRemedy);
+  if (!seen_type || types.size() != h.fields.size())
+    throw InputError(where, "TYPE", "must give one type per field (" + std::to_string(h.fields.size()) + ")", kFormatRemedy);
+  if (!counts.empty() && counts.size() != h.fields.size())
+    throw InputError(where, "COUNT", "must give one count per field (" + std::to_string(h.fields.size()) + ")", kFormatRemedy);
+  for (std::size_t i = 0; i < h.fields.size(); ++i) {
+    long long size = 0, count = 1;
+    if (!parseLong(sizes[i], size) || (size != 1 && size != 2 && size != 4 && size != 8))
+      throw InputError(where, "SIZE of field '" + h.fields[i].name + "'", "must be 1, 2, 4 or 8", kFormatRemedy);
+    if (types[i].size() != 1 || std::string("FIU").find(types[i][0]) == std::string::npos)
+      throw InputError(where, "TYPE of field '" + h.fields[i].name + "'", "must be F, I or U", kFormatRemedy);
+    if (!counts.empty() && (!parseLong(counts[i], count) || count < 1 || count > 1'000'000))
+      throw InputError(where, "COUNT of field '" + h.fields[i].name + "'", "must be a positive integer", kFormatRemedy);
+    h.fields[i].size = static_cast<int>(size);
+    h.fields[i].type = types[i][0];
+    h.fields[i].count = static_cast<int>(count);
+  }
+  if (h.width < 0) throw InputError(where, "WIDTH", "missing", kFormatRemedy);
+  if (h.height < 0) h.height = 1;
+  if (h.points < 0) h.points = h.width * h.height;
+  if (h.width > static_cast<long long>(kMaxPoints) || h.height > static_cast<long long>(kMaxPoints) ||
+      h.points != h.width * h.height)
+    throw InputError(where, "POINTS", "POINTS (" + std::to_string(h.points) + ") differs from WIDTH x HEIGHT (" +
+                                          std::to_string(h.width) + " x " + std::to_string(h.height) + ")",
+                     kFormatRemedy);
+  if (h.points > static_cast<long long>(kMaxPoints))
+    throw InputError(where, "POINTS", "more than 100 million points: refusing to load", kFormatRemedy);
+  return h;
+}
+
+const HeaderField* findField(const ParsedHeader& h, const std::string& name) {
+  for (const auto& f : h.fields)
+    if (f.name == name) return &f;
+  return nullptr;
+}
+
+Pose2 viewpointPose(const ParsedHeader& h, const std::string& where) {
+  if (!h.has_viewpoint)
+    throw InputError(where, "VIEWPOINT", "missing: every scan must carry the commanded sensor pose",
+                     "write `VIEWPOINT tx ty 0 qw 0 0 qz` into the header, see docs/FORMAT.md");
+  const double* v = h.viewpoint;
+  const double norm = std::sqrt(v[3] * v[3] + v[4] * v[4] + v[5] * v[5] + v[6] * v[6]);
+  if (std::abs(norm - 1.0) > 1e-3)
+    throw InputError(where, "VIEWPOINT", "quaternion (qw qx qy qz) is not of unit length (norm " + std::to_string(norm) + ")",
+                     kFormatRemedy);
+  if (std::abs(v[4]) > 1e-3 || std::abs(v[5]) > 1e-3)
+    throw InputError(where, "VIEWPOINT", "quaternion has roll/pitch (qx, qy not 0): only a yaw rotation is allowed",
+                     kFormatRemedy);
+  Pose2 pose;
+  pose.x_m = v[0];
+  pose.y_m = v[1];
+  pose.yaw_rad = wrapAngle(2.0 * std::atan2(v[6], v[3]));
+  return pose;
+}
+
+void checkCoordinateField(const ParsedHeader& h, const std::string& name, bool required, const std::string& where) {
+  const HeaderField* f = findField(h, name);
+  if (!f) {
+    if (required)
+      throw InputError(where, "FIELDS", "no '" + name + "' field: scans need at least x and y (and normally z)",
+                       kFormatRemedy);
+    return;
+  }
+  if (f->type != 'F' || (f->size != 4 && f->size != 8) || f->count != 1)
+    throw InputError(where, "field '" + name + "'", "must be a single float (TYPE F, SIZE 4 or 8, COUNT 1)", kFormatRemedy);
+}
+
+ScanHeader toScanHeader(const fs::path& file, const ParsedHeader& h) {
+  const std::string where = file.string();
+  checkCoordinateField(h, "x", true, where);
+  checkCoordinateField(h, "y", true, where);
+  checkCoordinateField(h, "z", false, where);
+  ScanHeader out;
+  out.path = file;
+  out.viewpoint = viewpointPose(h, where);
+  out.points = static_cast<std::size_t>(h.points);
+  out.has_intensity = findField(h, "intensity") != nullptr;
+  out.has_label = findField(h, "label") != nullptr;
+  out.binary = h.data != "ascii";
+  if (h.data == "binary") {
+    std::size_t point_bytes = 0;
+    for (const auto& f : h.fields) point_bytes += static_cast<std::size_t>(f.size) * static_cast<std::size_t>(f.count);
+    std::error_code ec;
+    const auto file_size = fs::file_size(file, ec);
+    if (!ec && file_size < h.data_offset + point_bytes * out.points)
+      throw InputError(where, "DATA", "file is truncated: " + std::to_string(file_size) + " bytes, the header promises " +
+                                          std::to_string(h.data_offset + point_bytes * out.points),
+                       "the recording was cut short; re-export or drop this file");
+  }
+  return out;
+}
+
+/// Value of element 0 of a field as double.
+double readValue(const std::uint8_t* p, std::uint8_t datatype) {
+  switch (datatype) {
+    case pcl::PCLPointField::INT8: { std::int8_t v; std::memcpy(&v, p, 1); return v; }
+    case pcl::PCLPointField::UINT8: { std::uint8_t v; std::memcpy(&v, p, 1); return v; }
+    case pcl::PCLPointField::INT16: { std::int16_t v; std::memcpy(&v, p, 2); return v; }
+    case pcl::PCLPointField::UINT16: { std::uint16_t v; std::memcpy(&v, p, 2); return v; }
+    case pcl::PCLPointField::INT32: { std::int32_t v; std::memcpy(&v, p, 4); return v; }
+    case pcl::PCLPointField::UINT32: { std::uint32_t v; std::memcpy(&v, p, 4); return v; }
+    case pcl::PCLPointField::FLOAT32: { float v; std::memcpy(&v, p, 4); return v; }
+    case pcl::PCLPointField::FLOAT64: { double v; std::memcpy(&v, p, 8); return v; }
+    default: return std::numeric_limits<double>::quiet_NaN();
+  }
+}
+
+const pcl::PCLPointField* cloudField(const pcl::PCLPointCloud2& cloud, const std::string& name) {
+  for (const auto& f : cloud.fields)
+    if (f.name == name) return &f;
+  return nullptr;
+}
+
+void appendField(pcl::PCLPointCloud2& cloud, const std::string& name, std::uint8_t datatype, std::uint32_t size) {
+  pcl::PCLPointField f;
+  f.name = name;
+  f.offset = cloud.point_step;
+  f.datatype = datatype;
+  f.count = 1;
+  cloud.fields.push_back(f);
+  cloud.point_step += size;
+}
+
+/// PCL's writeBinary stretches the file to one memory page plus the data and leaves the unused
+/// part of the page as zeros after the data. Cut the file back to header + data.
+void trimPageTail(const fs::path& file, std::size_t data_bytes) {
+  std::ifstream in(file, std::ios::binary);
+  std::string head(kMaxHeaderBytes, '\0');
+  in.read(head.data(), static_cast<std::streamsize>(head.size()));
+  head.resize(static_cast<std::size_t>(in.gcount()));
+  const std::string marker = "\nDATA binary\n";
+  const auto at = head.find(marker);
+  if (at == std::string::npos) throw std::runtime_error("PCL wrote a binary PCD without a DATA line: " + file.string());
+  std::error_code ec;
+  fs::resize_file(file, at + marker.size() + data_bytes, ec);
+  if (ec) throw InputError(file.string(), "", "could not finish the PCD file (" + ec.message() + ")", "check free space");
+}
+
+}  // namespace
+
+void yawToQuaternion(double yaw_rad, double& qw, double& qz) {
+  qw = std::cos(0.5 * yaw_rad);
+  qz = std::sin(0.5 * yaw_rad);
+}
+
+ScanHeader readScanHeader(const fs::path& file) { return toScanHeader(file, parseHeader(file)); }
+
+Scan readScan(const fs::path& file) {
+  const std::string where = file.string();
+  const ScanHeader header = readScanHeader(file);
+  pcl::PCLPointCloud2 blob;
+  Eigen::Vector4f origin;
+  Eigen::Quaternionf orientation;
+  int version = 0;
+  pcl::PCDReader reader;
+  if (reader.read(file.string(), blob, origin, orientation, version) < 0)
+    throw InputError(where, "DATA", "PCL could not read the point data (truncated or garbled file)",
+                     "re-export the scan; the header is valid but the data is not");
+  const std::size_t n = static_cast<std::size_t>(blob.width) * blob.height;
+  if (n != header.points || blob.data.size() < n * blob.point_step)
+    throw InputError(where, "DATA", "holds fewer points than the header's POINTS", "re-export the scan");
+
+  const pcl::PCLPointField* fx = cloudField(blob, "x");
+  const pcl::PCLPointField* fy = cloudField(blob, "y");
+  const pcl::PCLPointField* fz = cloudField(blob, "z");
+  const pcl::PCLPointField* fi = cloudField(blob, "intensity");
+  const pcl::PCLPointField* fl = cloudField(blob, "label");
+
+  Scan scan;
+  scan.name = file.filename().string();
+  scan.viewpoint = header.viewpoint;
+  scan.has_intensity = fi != nullptr;
+  scan.cloud.reset(new pcl::PointCloud<pcl::PointXYZI>);
+  scan.cloud->resize(n);
+  scan.cloud->width = static_cast<std::uint32_t>(n);
+  scan.cloud->height = 1;
+  scan.cloud->is_dense = true;
+  if (fl) scan.labels.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::uint8_t* p = blob.data.data() + i * blob.point_step;
+    const double x = readValue(p + fx->offset, fx->datatype);
+    const double y = readValue(p + fy->offset, fy->datatype);
+    const double z = fz ? readValue(p + fz->offset, fz->datatype) : 0.0;
+    const bool nan_x = std::isnan(x), nan_y = std::isnan(y);
+    const std::string item = "point " + std::to_string(i);
+    if (nan_x != nan_y)
+      throw InputError(where, item, "only one of x, y is NaN: a beam without return must have x and y NaN",
+                       kFormatRemedy);
+    if (!nan_x) {
+      if (!std::isfinite(x) || !std::isfinite(y) || (!std::isnan(z) && !std::isfinite(z)))
+        throw InputError(where, item, "coordinate is infinite", "write NaN for a beam with no return");
+      if (std::abs(x) > kMaxAbsCoordinate_m || std::abs(y) > kMaxAbsCoordinate_m ||
+          (!std::isnan(z) && std::abs(z) > kMaxAbsCoordinate_m))
+        throw InputError(where, item, "coordinate beyond 100 km: not a lidar reading",
+                         "check the units (metres) or write NaN for a beam with no return");
+    } else {
+      scan.cloud->is_dense = false;
+    }
+    auto& pt = (*scan.cloud)[i];
+    pt.x = static_cast<float>(x);
+    pt.y = static_cast<float>(y);
+    pt.z = nan_x ? std::numeric_limits<float>::quiet_NaN() : static_cast<float>(std::isnan(z) ? 0.0 : z);
+    pt.intensity = fi ? static_cast<float>(readValue(p + fi->offset, fi->datatype)) : 0.0f;
+    if (fl) {
+      const double label = readValue(p + fl->offset, fl->datatype);
+      if (!(label >= 0.0) || label > 4294967295.0)
+        throw InputError(where, item, "label is not a non-negative integer", kFormatRemedy);
+      scan.labels[i] = static_cast<std::uint32_t>(label);
+    }
+  }
+  return scan;
+}
+
+void writeScan(const fs::path& file, const Scan& scan, PcdEncoding encoding) {
+  if (!scan.cloud) throw std::invalid_argument("writeScan: scan has no cloud");
+  const std::size_t n = scan.cloud->size();
+  if (!scan.labels.empty() && scan.labels.size() != n)
+    throw std::invalid_argument("writeScan: labels and points differ in number");
+
+  // Packed fields, no padding: x y z [intensity] [label].
+  pcl::PCLPointCloud2 blob;
+  appendField(blob, "x", pcl::PCLPointField::FLOAT32, 4);
+  appendField(blob, "y", pcl::PCLPointField::FLOAT32, 4);
+  appendField(blob, "z", pcl::PCLPointField::FLOAT32, 4);
+  if (scan.has_intensity) appendField(blob, "intensity", pcl::PCLPointField::FLOAT32, 4);
+  if (!scan.labels.empty()) appendField(blob, "label", pcl::PCLPointField::UINT32, 4);
+  blob.width = static_cast<std::uint32_t>(n);
+  blob.height = 1;
+  blob.row_step = blob.point_step * blob.width;
+  blob.is_dense = true;
+  blob.data.resize(static_cast<std::size_t>(blob.row_step));
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto& pt = (*scan.cloud)[i];
+    std::uint8_t* p = blob.data.data() + i * blob.point_step;
+    std::memcpy(p + 0, &pt.x, 4);
+    std::memcpy(p + 4, &pt.y, 4);
+    std::memcpy(p + 8, &pt.z, 4);
+    std::size_t off = 12;
+    if (scan.has_intensity) {
+      std::memcpy(p + off, &pt.intensity, 4);
+      off += 4;
+    }
+    if (!scan.labels.empty()) std::memcpy(p + off, &scan.labels[i], 4);
+    if (!std::isfinite(pt.x)) blob.is_dense = false;
+  }
+
+  double qw = 1.0, qz = 0.0;
+  yawToQuaternion(scan.viewpoint.yaw_rad, qw, qz);
+  const Eigen::Vector4f origin(static_cast<float>(scan.viewpoint.x_m), static_cast<float>(scan.viewpoint.y_m), 0.0f, 0.0f);
+  const Eigen::Quaternionf orientation(static_cast<float>(qw), 0.0f, 0.0f, static_cast<float>(qz));
+
+  writeAtomically(file, [&](const fs::path& tmp) {
+    pcl::PCDWriter writer;
+    const int rc = encoding == PcdEncoding::binary ? writer.writeBinary(tmp.string(), blob, origin, orientation)
+                                                   : writer.writeASCII(tmp.string(), blob, origin, orientation, 9);
+    if (rc != 0) throw InputError(file.string(), "", "could not write the PCD file", "check free space and permissions");
+    if (encoding == PcdEncoding::binary) trimPageTail(tmp, blob.data.size());
+  });
+}
+
+}  // namespace lidarcal::io

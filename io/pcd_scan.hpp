@@ -1,0 +1,52 @@
+#pragma once
+// One scan of a sequence: a PCD file in the sensor frame with the commanded pose in VIEWPOINT.
+// The contract is docs/FORMAT.md. Loading and saving go through PCL's PCDReader/PCDWriter;
+// the header is checked first so that errors can name the field at fault.
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+
+#include "common/pose2.hpp"
+
+namespace lidarcal::io {
+
+/// What the header of a scan file says (read without loading the points).
+struct ScanHeader {
+  std::filesystem::path path;   ///< the file
+  Pose2 viewpoint;              ///< commanded pose from VIEWPOINT (yaw only)
+  std::size_t points = 0;       ///< POINTS (= WIDTH x HEIGHT)
+  bool has_intensity = false;   ///< an `intensity` field is present
+  bool has_label = false;       ///< a `label` field is present
+  bool binary = false;          ///< DATA binary or binary_compressed
+};
+
+/// One scan: points in beam order (NaN = no return), optional intensity and label per point.
+struct Scan {
+  std::string name;                                   ///< file name without directory
+  Pose2 viewpoint;                                    ///< commanded pose of the sensor
+  pcl::PointCloud<pcl::PointXYZI>::Ptr cloud;         ///< points; intensity 0 when absent
+  bool has_intensity = false;                         ///< write/read an `intensity` field
+  std::vector<std::uint32_t> labels;                  ///< per-point label; empty = no `label` field
+};
+
+/// PCD encoding used when writing.
+enum class PcdEncoding { binary, ascii };
+
+/// Reads and checks the header of a scan file. Throws InputError naming the file and field.
+ScanHeader readScanHeader(const std::filesystem::path& file);
+
+/// Reads a scan file (ASCII, binary or binary_compressed). Throws InputError on bad input.
+Scan readScan(const std::filesystem::path& file);
+
+/// Writes a scan atomically (temporary file + rename). Fields: x y z [intensity] [label].
+void writeScan(const std::filesystem::path& file, const Scan& scan, PcdEncoding encoding = PcdEncoding::binary);
+
+/// Viewpoint quaternion (w, z) of a yaw angle, as stored in VIEWPOINT `tx ty 0 qw 0 0 qz`.
+void yawToQuaternion(double yaw_rad, double& qw, double& qz);
+
+}  // namespace lidarcal::io

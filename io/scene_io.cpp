@@ -1,0 +1,213 @@
+#include "io/scene_io.hpp"
+
+#include <cmath>
+
+#include <nlohmann/json.hpp>
+
+#include "common/errors.hpp"
+#include "io/atomic_file.hpp"
+#include "io/json_util.hpp"
+
+namespace lidarcal::io {
+namespace {
+
+using ojson = nlohmann::ordered_json;
+
+Cylinder parseCylinder(const JsonView& v) {
+  v.requireObject();
+  Cylinder c;
+  c.x_m = v.getNumber("x_m");
+  c.y_m = v.getNumber("y_m");
+  c.radius_m = v.getPositive("radius_m");
+  return c;
+}
+
+Pose2 parsePose(const JsonView& v) {
+  Pose2 p;
+  p.x_m = v.getNumber("x_m", 0.0);
+  p.y_m = v.getNumber("y_m", 0.0);
+  if (v.has("yaw_rad") && v.has("yaw_deg")) v.fail("yaw_deg", "give either yaw_deg or yaw_rad, not both");
+  p.yaw_rad = v.has("yaw_rad") ? v.getNumber("yaw_rad") : deg2rad(v.getNumber("yaw_deg", 0.0));
+  return p;
+}
+
+ojson poseToJson(const Pose2& p) {
+  return ojson{{"x_m", p.x_m}, {"y_m", p.y_m}, {"yaw_rad", p.yaw_rad}};
+}
+
+NoiseModel parseNoise(const JsonView& v) {
+  v.requireObject();
+  NoiseModel n;
+  const std::string kind = v.getString("kind");
+  if (!parseNoiseKind(kind, n.kind))
+    v.fail("kind", "unknown noise kind '" + kind + "' (expected none, constant, polynomial, squared or power)");
+  switch (n.kind) {
+    case NoiseKind::none: break;
+    case NoiseKind::constant:
+    case NoiseKind::squared: n.sigma_e = v.getNonNegative("sigma_e"); break;
+    case NoiseKind::power:
+      n.sigma_e = v.getNonNegative("sigma_e");
+      n.exponent = v.getNumber("exponent");
+      break;
+    case NoiseKind::polynomial:
+      n.beta = v.getNumbers("beta");
+      if (n.beta.empty()) v.fail("beta", "must hold at least one coefficient");
+      break;
+  }
+  return n;
+}
+
+ojson noiseToJson(const NoiseModel& n) {
+  ojson j{{"kind", toString(n.kind)}};
+  switch (n.kind) {
+    case NoiseKind::none: break;
+    case NoiseKind::constant:
+    case NoiseKind::squared: j["sigma_e"] = n.sigma_e; break;
+    case NoiseKind::power:
+      j["sigma_e"] = n.sigma_e;
+      j["exponent"] = n.exponent;
+      break;
+    case NoiseKind::polynomial: j["beta"] = n.beta; break;
+  }
+  return j;
+}
+
+Scene parseScene(const JsonView& root) {
+  root.requireObject();
+  Scene s;
+  s.name = root.getString("name", s.name);
+
+  const JsonView sensor = root.child("sensor");
+  SensorSpec& spec = s.sensor;
+  spec.name = sensor.getString("name", spec.name);
+  spec.beams = sensor.getPositiveInt("beams", spec.beams);
+  if (spec.beams > 1'000'000) sensor.fail("beams", "more than a million beams per scan is not a 2D lidar");
+  spec.angle_min_rad = deg2rad(sensor.getNumber("angle_min_deg", 0.0));
+  spec.angle_increment_rad = deg2rad(sensor.getPositive("angle_increment_deg", 360.0 / spec.beams));
+  spec.range.range_min_m = sensor.getNonNegative("range_min_m");
+  spec.range.range_max_m = sensor.getPositive("range_max_m");
+  if (spec.range.range_min_m >= spec.range.range_max_m) sensor.fail("range_min_m", "must be smaller than range_max_m");
+  spec.range.bias.alpha = sensor.has("bias_alpha") ? sensor.getNumbers("bias_alpha") : std::vector<double>{0.0, 1.0};
+  if (spec.range.bias.alpha.empty() || spec.range.bias.alpha.size() > 10)
+    sensor.fail("bias_alpha", "must hold 1 to 10 coefficients alpha_0..alpha_n");
+  if (sensor.has("noise")) spec.range.noise = parseNoise(sensor.child("noise"));
+  else spec.range.noise.kind = NoiseKind::none;
+  spec.bearing_noise_rad = deg2rad(sensor.getNonNegative("bearing_noise_deg", 0.0));
+  spec.mount_yaw_rad = deg2rad(sensor.getNumber("mount_yaw_deg", 0.0));
+
+  const JsonView path = root.child("path");
+  PathSpec& p = s.path;
+  if (path.has("start")) p.start = parsePose(path.child("start"));
+  p.step_m = path.getNumber("step_m", p.step_m);
+  p.stops = path.getPositiveInt("stops", p.stops);
+  p.scans_per_stop = path.getPositiveInt("scans_per_stop", p.scans_per_stop);
+  if (static_cast<long long>(p.stops) * p.scans_per_stop > 10'000'000)
+    path.fail("stops", "stops x scans_per_stop exceeds 10 million scans");
+  p.sigma_s_m = path.getNonNegative("sigma_s_m", 0.0);
+  p.sigma_psi_rad = deg2rad(path.getNonNegative("sigma_psi_deg", 0.0));
+
+  if (root.has("landmarks"))
+    for (const auto& e : root.array("landmarks")) s.landmarks.push_back(parseCylinder(e));
+  if (root.has("clutter"))
+    for (const auto& e : root.array("clutter")) s.clutter.push_back(parseCylinder(e));
+  if (root.has("walls"))
+    for (const auto& e : root.array("walls")) {
+      e.requireObject();
+      Segment w{e.getNumber("x0_m"), e.getNumber("y0_m"), e.getNumber("x1_m"), e.getNumber("y1_m")};
+      if (std::hypot(w.x1_m - w.x0_m, w.y1_m - w.y0_m) <= 0.0) e.fail("", "wall has zero length");
+      s.walls.push_back(w);
+    }
+  s.publish_landmark_radius = root.getBool("publish_landmark_radius", true);
+  return s;
+}
+
+}  // namespace
+
+Scene readScene(const std::filesystem::path& file) {
+  const nlohmann::json j = readJsonFile(file);
+  return parseScene(JsonView(file.string(), j));
+}
+
+nlohmann::ordered_json sceneToJson(const Scene& s) {
+  ojson sensor{{"name", s.sensor.name},
+               {"beams", s.sensor.beams},
+               {"angle_min_deg", rad2deg(s.sensor.angle_min_rad)},
+               {"angle_increment_deg", rad2deg(s.sensor.angle_increment_rad)},
+               {"range_min_m", s.sensor.range.range_min_m},
+               {"range_max_m", s.sensor.range.range_max_m},
+               {"bias_alpha", s.sensor.range.bias.alpha},
+               {"noise", noiseToJson(s.sensor.range.noise)},
+               {"bearing_noise_deg", rad2deg(s.sensor.bearing_noise_rad)},
+               {"mount_yaw_deg", rad2deg(s.sensor.mount_yaw_rad)}};
+  ojson path{{"start", ojson{{"x_m", s.path.start.x_m}, {"y_m", s.path.start.y_m}, {"yaw_deg", rad2deg(s.path.start.yaw_rad)}}},
+             {"step_m", s.path.step_m},
+             {"stops", s.path.stops},
+             {"scans_per_stop", s.path.scans_per_stop},
+             {"sigma_s_m", s.path.sigma_s_m},
+             {"sigma_psi_deg", rad2deg(s.path.sigma_psi_rad)}};
+  auto cylinders = [](const std::vector<Cylinder>& cs) {
+    ojson a = ojson::array();
+    for (const auto& c : cs) a.push_back(ojson{{"x_m", c.x_m}, {"y_m", c.y_m}, {"radius_m", c.radius_m}});
+    return a;
+  };
+  ojson walls = ojson::array();
+  for (const auto& w : s.walls) walls.push_back(ojson{{"x0_m", w.x0_m}, {"y0_m", w.y0_m}, {"x1_m", w.x1_m}, {"y1_m", w.y1_m}});
+  return ojson{{"name", s.name},       {"sensor", sensor},   {"path", path},
+               {"landmarks", cylinders(s.landmarks)}, {"clutter", cylinders(s.clutter)}, {"walls", walls},
+               {"publish_landmark_radius", s.publish_landmark_radius}};
+}
+
+void writeTruth(const std::filesystem::path& file, const Truth& t) {
+  ojson landmarks = ojson::array();
+  for (std::size_t i = 0; i < t.scene.landmarks.size(); ++i) {
+    const auto& c = t.scene.landmarks[i];
+    landmarks.push_back(ojson{{"id", i + 1}, {"x_m", c.x_m}, {"y_m", c.y_m}, {"radius_m", c.radius_m}});
+  }
+  ojson stops = ojson::array();
+  for (std::size_t k = 0; k < t.stops.size(); ++k) {
+    const auto& s = t.stops[k];
+    stops.push_back(ojson{{"stop", k},
+                          {"commanded", poseToJson(s.commanded)},
+                          {"actual", poseToJson(s.actual)},
+                          {"first_scan", s.first_scan},
+                          {"scans", s.scans}});
+  }
+  const auto& r = t.scene.sensor.range;
+  ojson j{{"format", "lidarcal-truth/1"},
+          {"seed", t.seed},
+          {"landmarks", landmarks},
+          {"model", ojson{{"bias_alpha", r.bias.alpha},
+                          {"noise", noiseToJson(r.noise)},
+                          {"range_min_m", r.range_min_m},
+                          {"range_max_m", r.range_max_m}}},
+          {"stops", stops},
+          {"true_ranges_file", t.true_ranges_file},
+          {"scene", sceneToJson(t.scene)}};
+  writeTextAtomically(file, j.dump(2) + "\n");
+}
+
+Truth readTruth(const std::filesystem::path& file) {
+  const nlohmann::json j = readJsonFile(file);
+  const JsonView root(file.string(), j);
+  root.requireObject();
+  if (root.getString("format", "") != "lidarcal-truth/1")
+    root.fail("format", "not a lidarcal truth file (expected \"lidarcal-truth/1\")");
+  Truth t;
+  const auto& seed = j.at("seed");
+  if (!seed.is_number_unsigned()) root.fail("seed", "must be a non-negative integer");
+  t.seed = seed.get<std::uint64_t>();
+  t.scene = parseScene(root.child("scene"));
+  t.true_ranges_file = root.getString("true_ranges_file", t.true_ranges_file);
+  for (const auto& e : root.array("stops")) {
+    e.requireObject();
+    TruthStop s;
+    s.commanded = parsePose(e.child("commanded"));
+    s.actual = parsePose(e.child("actual"));
+    s.first_scan = static_cast<std::size_t>(e.getNonNegative("first_scan"));
+    s.scans = static_cast<std::size_t>(e.getNonNegative("scans"));
+    t.stops.push_back(s);
+  }
+  return t;
+}
+
+}  // namespace lidarcal::io

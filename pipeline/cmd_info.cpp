@@ -1,0 +1,27 @@
+// lidarcal info SEQ: what is in a scan sequence.
+
+#include <cstdio>
+#include <memory>
+
+#include <CLI/CLI.hpp>
+
+#include "pipeline/commands.hpp"
+#include "pipeline/progress.hpp"
+#include "pipeline/summary.hpp"
+
+namespace lidarcal::pipeline {
+
+void addInfoCommand(CLI::App& app) {
+  auto seq_dir = std::make_shared<std::string>();
+  CLI::App* sub = app.add_subcommand("info", "Summarise a scan sequence (scans, stops, beams, ranges, metadata)");
+  sub->add_option("SEQ", *seq_dir, "Sequence directory (.pcd files, see docs/FORMAT.md)")->required();
+  sub->callback([seq_dir] {
+    const io::Sequence seq = io::openSequence(*seq_dir);
+    Progress progress("reading", seq.scans.size());
+    const SequenceSummary s = summarize(seq, [&](std::size_t done) { progress.update(done); });
+    progress.finish();
+    std::fputs(toMarkdown(seq, s).c_str(), stdout);
+  });
+}
+
+}  // namespace lidarcal::pipeline

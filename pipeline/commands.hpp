@@ -1,0 +1,25 @@
+#pragma once
+// Every `lidarcal` subcommand is registered here, in one place. Each lives in its own
+// pipeline/cmd_*.cpp: it maps command-line options into the stage config structs, calls
+// the stages and prints (the library never prints).
+
+#include <filesystem>
+
+namespace CLI {
+class App;
+}
+
+namespace lidarcal::pipeline {
+
+void registerCommands(CLI::App& app);
+
+void addSimulateCommand(CLI::App& app);
+void addInfoCommand(CLI::App& app);
+
+/// Directory of the bundled data (scenes, example): $LIDARCAL_DATA_DIR, the source tree's
+/// data/ for a build tree, or the installed share/lidarcal.
+std::filesystem::path dataDir();
+/// The bundled example sequence (data/example/scans).
+std::filesystem::path bundledExample();
+
+}  // namespace lidarcal::pipeline

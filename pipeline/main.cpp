@@ -1,0 +1,42 @@
+// The `lidarcal` command: the only main, the only place that prints.
+
+#include <cstdio>
+#include <exception>
+
+#include <CLI/CLI.hpp>
+#include <pcl/console/print.h>
+
+#include "common/errors.hpp"
+#include "pipeline/commands.hpp"
+#include "pipeline/progress.hpp"
+
+int main(int argc, char** argv) {
+  // PCL's readers print their own diagnostics; ours are clearer and name the file and field.
+  pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);
+
+  CLI::App app{"lidarcal: calibrate cheap 2D lidars against fixed landmarks in unknown positions, without ground truth.\n"
+               "Formats: docs/FORMAT.md. Exit codes: 0 ok, 1 internal error, 2 bad input, 3 data cannot support the result."};
+  app.set_version_flag("--version", LIDARCAL_VERSION);
+  bool quiet = false;
+  app.add_flag("-q,--quiet", quiet, "No progress output on stderr");
+  app.require_subcommand(1);
+  app.fallthrough();  // global flags (--quiet) may follow the subcommand
+  lidarcal::pipeline::registerCommands(app);
+  app.parse_complete_callback([&] { lidarcal::pipeline::setQuiet(quiet); });
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
+  } catch (const lidarcal::DataError& e) {
+    std::fprintf(stderr, "lidarcal: cannot proceed: %s\n", e.what());
+    return 3;
+  } catch (const lidarcal::InputError& e) {
+    std::fprintf(stderr, "lidarcal: error: %s\n", e.what());
+    return 2;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "lidarcal: internal error: %s\n(please report this with the command you ran)\n", e.what());
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,8 @@
+#!/usr/bin/env bash
+# First README command: install what is missing, build, and run the main job on the bundled example.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+./scripts/install-deps.sh
+cmake -S . -B build -DLIDARCAL_WERROR=ON
+cmake --build build -j"$(nproc)"
+./build/pipeline/lidarcal info data/example/scans

@@ -1,0 +1,8 @@
+#!/usr/bin/env bash
+# Second README command (and CI): install what is missing, build with warnings as errors, run all tests.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+./scripts/install-deps.sh
+cmake -S . -B build -DLIDARCAL_WERROR=ON
+cmake --build build -j"$(nproc)"
+ctest --test-dir build --output-on-failure -j"$(nproc)"
