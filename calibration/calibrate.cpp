@@ -1,0 +1,436 @@
+#include "calibration/calibrate.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <optional>
+#include <set>
+#include <stdexcept>
+#include <tuple>
+
+#include "calibration/inversion.hpp"
+#include "calibration/noise_exponent.hpp"
+
+namespace lidarcal::calibration {
+namespace {
+
+/// Position of each scan within its stop (0, 1, 2, ...), from the sightings.
+std::map<std::size_t, std::size_t> scanPositions(const LandmarkObservations& obs) {
+  std::map<std::size_t, std::set<std::size_t>> scans_of_stop;
+  for (const auto& s : obs.sightings) scans_of_stop[s.stop].insert(s.scan);
+  std::map<std::size_t, std::size_t> pos;
+  for (const auto& [stop, scans] : scans_of_stop) {
+    std::size_t i = 0;
+    for (std::size_t scan : scans) pos[scan] = i++;
+  }
+  return pos;
+}
+
+std::map<std::size_t, std::size_t> scansPerStop(const LandmarkObservations& obs) {
+  std::map<std::size_t, std::set<std::size_t>> scans_of_stop;
+  for (const auto& s : obs.sightings) scans_of_stop[s.stop].insert(s.scan);
+  std::map<std::size_t, std::size_t> n;
+  for (const auto& [stop, scans] : scans_of_stop) n[stop] = scans.size();
+  return n;
+}
+
+double median(std::vector<double> v) {
+  if (v.empty()) return std::numeric_limits<double>::quiet_NaN();
+  std::sort(v.begin(), v.end());
+  const std::size_t m = v.size() / 2;
+  return v.size() % 2 ? v[m] : 0.5 * (v[m - 1] + v[m]);
+}
+
+/// Noise parameters of the requested law for a given bias, from (d, y) pairs.
+NoiseModel fitNoiseLaw(NoiseKind kind, int order, const BiasPolynomial& f, const std::vector<double>& d,
+                       const std::vector<double>& y) {
+  NoiseModel n;
+  n.kind = kind;
+  std::vector<double> r(d.size());
+  for (std::size_t i = 0; i < d.size(); ++i) r[i] = y[i] - f(d[i]);
+  switch (kind) {
+    case NoiseKind::squared: {
+      double s = 0.0;
+      for (std::size_t i = 0; i < d.size(); ++i) {
+        const double fd = f(d[i]);
+        s += r[i] * r[i] / (fd * fd * fd * fd);
+      }
+      n.sigma_e = std::sqrt(s / static_cast<double>(d.size()));
+      break;
+    }
+    case NoiseKind::polynomial: n.beta = fitNoisePolynomial(d, r, std::max(order, 0)); break;
+    case NoiseKind::constant: {
+      double s = 0.0;
+      for (double v : r) s += v * v;
+      n.sigma_e = std::sqrt(s / static_cast<double>(r.size()));
+      break;
+    }
+    default: throw std::invalid_argument("calibrate: noise law must be squared, polynomial or constant");
+  }
+  return n;
+}
+
+void fillNoiseFits(CalibrationModel& m, int order, const std::vector<double>& d, const std::vector<double>& y,
+                   const std::vector<std::vector<double>>& batches) {
+  std::vector<double> r(d.size());
+  for (std::size_t i = 0; i < d.size(); ++i) r[i] = y[i] - m.model.bias(d[i]);
+  const int noise_order = std::max(order, 1);
+  m.noise_fits.seed000_beta = fitNoisePolynomial(d, r, noise_order);
+  const int bias_order = std::max(order, 1);
+  const Seed004Fit cf = fitSeed004ClosedForm(d, y, bias_order);
+  m.noise_fits.seed004_cf_alpha = cf.alpha;
+  m.noise_fits.seed004_cf_sigma_e = cf.sigma_e;
+  const Seed004Fit ml = fitSeed004ML(d, y, cf.alpha);
+  m.noise_fits.seed004_ml_alpha = ml.alpha;
+  m.noise_fits.seed004_ml_sigma_e = ml.sigma_e;
+  const NoiseExponentTest t = testNoiseExponent(batches);
+  m.noise_fits.exponent_loglik = t.log_likelihood;
+  m.noise_fits.exponent_best = t.best;
+  m.noise_fits.exponent_batches = t.batches;
+}
+
+void fillOrders(CalibrationModel& m, const OrderSelection& sel, std::size_t n) {
+  m.orders.clear();
+  for (const auto& row : sel.table) {
+    OrderRow o;
+    o.order = row.order;
+    o.alpha = row.alpha;
+    o.aic = row.aic;
+    o.bic = row.aic - 2.0 * (row.order + 2.0) + (row.order + 2.0) * std::log(static_cast<double>(n));
+    o.validation_mse_m2 = row.validation_mse_m2;
+    o.test_mse_m2 = row.test_mse_m2;
+    m.orders.push_back(o);
+  }
+  m.order_aic = sel.order_aic;
+  m.order_validation = sel.order_validation;
+  m.order_rule = toString(sel.rule);
+}
+
+double rmsResidual(const BiasPolynomial& f, const std::vector<double>& d, const std::vector<double>& y) {
+  double s = 0.0;
+  for (std::size_t i = 0; i < d.size(); ++i) s += std::pow(y[i] - f(d[i]), 2);
+  return d.empty() ? 0.0 : std::sqrt(s / static_cast<double>(d.size()));
+}
+
+/// Starting centres for the joint refinement: bearing-only triangulation places far landmarks
+/// poorly along the line of sight, so start each triangulated landmark at the mean of
+/// commanded stop + (f^-1(central reading) + radius) along the bearing, with the closed-form f.
+std::map<int, Eigen::Vector2d> rangeBearingCentres(const LandmarkObservations& obs,
+                                                   const std::vector<LandmarkEstimate>& tri, const RangeModel& model,
+                                                   double radius) {
+  std::map<int, Eigen::Vector2d> sum;
+  std::map<int, int> count;
+  std::optional<RangeInverter> inverter;
+  try {
+    InversionConfig ic;
+    ic.d_max_m = 4.0 * std::max(obs.range_max_m < 1e8 ? obs.range_max_m : 50.0, 1.0);
+    inverter.emplace(model, ic);
+  } catch (const std::invalid_argument&) {
+  }
+  for (const auto& l : tri) {
+    if (!l.ok()) continue;
+    sum[l.id] = Eigen::Vector2d::Zero();
+    count[l.id] = 0;
+  }
+  for (const auto& s : obs.sightings) {
+    auto it = sum.find(s.landmark);
+    if (it == sum.end() || s.beams.empty() || !inverter) continue;
+    const auto d = inverter->invert(s.beams[centralBeam(s)].range_m);
+    if (!d) continue;
+    const Pose2& p = obs.commanded.at(s.stop);
+    const double a = p.yaw_rad + s.bearing_rad;
+    it->second += Eigen::Vector2d(p.x_m + (*d + radius) * std::cos(a), p.y_m + (*d + radius) * std::sin(a));
+    ++count[s.landmark];
+  }
+  std::map<int, Eigen::Vector2d> out;
+  for (const auto& l : tri) {
+    if (!l.ok()) continue;
+    out[l.id] = count[l.id] > 0 ? Eigen::Vector2d(sum[l.id] / count[l.id]) : Eigen::Vector2d(l.x_m, l.y_m);
+  }
+  return out;
+}
+
+}  // namespace
+
+const char* toString(Method m) { return m == Method::closed_form ? "closed-form" : "joint"; }
+
+const char* toString(JointOrderRule r) {
+  switch (r) {
+    case JointOrderRule::aic: return "aic";
+    case JointOrderRule::aic_parsimonious: return "aic-parsimonious";
+    case JointOrderRule::bic: return "bic";
+  }
+  return "unknown";
+}
+
+void CalibrationConfig::validate() const {
+  if (max_order < 1 || max_order > 6) throw std::invalid_argument("CalibrationConfig: max_order must be 1..6");
+  triangulation.validate();
+  JointConfig j = joint;
+  j.order = 1;
+  j.noise = noise;
+  j.validate();
+}
+
+double landmarkRadius(const LandmarkObservations& obs) {
+  if (obs.landmark_radius_m) return *obs.landmark_radius_m;
+  std::vector<double> r;
+  for (const auto& s : obs.sightings)
+    if (s.radius_m > 0.0) r.push_back(s.radius_m);
+  return median(r);
+}
+
+std::vector<RangePair> closedFormPairs(const LandmarkObservations& obs, const std::vector<LandmarkEstimate>& landmarks,
+                                       double radius_m, bool per_scan) {
+  std::map<int, const LandmarkEstimate*> ok;
+  for (const auto& l : landmarks)
+    if (l.ok()) ok[l.id] = &l;
+  const auto position = scanPositions(obs);
+  const auto per_stop = scansPerStop(obs);
+  struct Acc {
+    double d = 0, y = 0;
+    int n = 0;
+  };
+  std::map<std::tuple<int, std::size_t, int>, Acc> groups;  // (landmark, stop, part)
+  std::vector<RangePair> pairs;
+  for (const auto& s : obs.sightings) {
+    auto it = ok.find(s.landmark);
+    if (it == ok.end() || s.beams.empty()) continue;
+    const BeamReading& b = s.beams[centralBeam(s)];
+    if (!std::isfinite(b.range_m)) continue;
+    const Pose2& p = obs.commanded.at(s.stop);
+    const double d = rayCircleDistance(p.x_m, p.y_m, p.yaw_rad + b.angle_rad, it->second->x_m, it->second->y_m, radius_m);
+    // The paper's split (seed 000 section 4.3) into fit / choose / test thirds: by scan within
+    // the stop when a stop has at least three scans, else by (landmark, stop).
+    const int part = per_stop.at(s.stop) >= 3 ? static_cast<int>(position.at(s.scan) % 3)
+                                               : static_cast<int>((s.stop + static_cast<std::size_t>(s.landmark)) % 3);
+    if (per_scan) {
+      pairs.push_back({d, b.range_m, part});
+    } else {
+      Acc& a = groups[{s.landmark, s.stop, part}];
+      a.d += d;
+      a.y += b.range_m;
+      ++a.n;
+    }
+  }
+  for (const auto& [key, a] : groups) pairs.push_back({a.d / a.n, a.y / a.n, std::get<2>(key)});
+  return pairs;
+}
+
+std::vector<std::vector<double>> constantDistanceBatches(const LandmarkObservations& obs) {
+  std::map<std::tuple<std::size_t, int, std::uint32_t>, std::vector<std::pair<std::size_t, double>>> by_beam;
+  for (const auto& s : obs.sightings)
+    for (const auto& b : s.beams)
+      if (std::isfinite(b.range_m)) by_beam[{s.stop, s.landmark, b.beam}].push_back({s.scan, b.range_m});
+  std::vector<std::vector<double>> batches;
+  for (auto& [key, v] : by_beam) {
+    std::sort(v.begin(), v.end());
+    std::vector<double> y;
+    for (const auto& [scan, r] : v) y.push_back(r);
+    batches.push_back(std::move(y));
+  }
+  return batches;
+}
+
+CalibrationModel calibrate(const LandmarkObservations& obs, const CalibrationConfig& config) {
+  config.validate();
+  CalibrationModel m;
+  m.method = toString(config.method);
+  m.model.range_min_m = obs.range_min_m;
+  m.model.range_max_m = obs.range_max_m;
+
+  // Stage 1: triangulation.
+  const auto tri = triangulateAll(obs, config.triangulation);
+  const double radius = landmarkRadius(obs);
+  int usable = 0;
+  for (const auto& l : tri) {
+    CalibratedLandmark c;
+    c.id = l.id;
+    c.x_m = l.x_m;
+    c.y_m = l.y_m;
+    c.radius_m = radius;
+    c.covariance_m2 = {l.covariance(0, 0), l.covariance(0, 1), l.covariance(1, 0), l.covariance(1, 1)};
+    c.stops = l.stops;
+    c.status = l.ok() ? "ok" : std::string(toString(l.status)) + ": " + l.message;
+    m.landmarks.push_back(c);
+    usable += l.ok();
+  }
+  if (usable == 0) {
+    m.status = "no_usable_landmark";
+    m.message = tri.empty() ? "no landmark was observed: check that the poles are detected (lidarcal detect)"
+                            : "no landmark could be triangulated; see the landmarks' status";
+    return m;
+  }
+  if (!(radius > 0.0)) {
+    m.status = "no_radius";
+    m.message = "the landmark radius is unknown and could not be estimated";
+    return m;
+  }
+
+  // Stage 2: the paper's closed form.
+  const auto pairs = closedFormPairs(obs, tri, radius, false);
+  const auto scan_pairs = closedFormPairs(obs, tri, radius, true);
+  if (pairs.size() < static_cast<std::size_t>(config.max_order) + 3) {
+    m.status = "too_few_observations";
+    m.message = "only " + std::to_string(pairs.size()) + " landmark-stop distances: add stops or landmarks";
+    return m;
+  }
+  const OrderSelection sel = selectOrder(pairs, config.max_order, config.closed_form_rule);
+  fillOrders(m, sel, pairs.size());
+  std::vector<double> d, y;
+  for (const auto& p : scan_pairs) {
+    d.push_back(p.d_m);
+    y.push_back(p.y_m);
+  }
+  const int order = std::max(sel.chosen, 1);  // order 0 cannot be inverted
+  m.model.bias.alpha = sel.table[static_cast<std::size_t>(std::min<int>(order, static_cast<int>(sel.table.size()) - 1))].alpha;
+  m.model.noise = fitNoiseLaw(config.noise, order, m.model.bias, d, y);
+  const auto batches = constantDistanceBatches(obs);
+  fillNoiseFits(m, order, d, y, batches);
+  m.residual_rms_m = rmsResidual(m.model.bias, d, y);
+  m.readings = d.size();
+  {  // sigma_theta: RMS distance of the bearing lines from the centres, over the distance
+    double s = 0.0;
+    std::size_t n = 0;
+    for (const auto& l : tri) {
+      if (!l.ok()) continue;
+      for (const auto& sb : stopBearings(obs, l.id)) {
+        const Pose2& p = obs.commanded[sb.stop];
+        const double predicted = std::atan2(l.y_m - p.y_m, l.x_m - p.x_m);
+        s += std::pow(wrapAngle(sb.bearing_world_rad - predicted), 2);
+        ++n;
+      }
+    }
+    m.sigma_theta_rad = n ? std::sqrt(s / static_cast<double>(n)) : 0.0;
+  }
+  if (config.method == Method::closed_form) return m;
+
+  // Stage 3: joint refinement for each order, from the closed form.
+  // Start from the closed form's straight-line fit: a higher order chosen by AIC on noisy
+  // pairs can extrapolate wildly, a line is a safe start for the bias and the centres.
+  JointInit init;
+  init.poses = obs.commanded;
+  init.model = m.model;
+  init.model.bias.alpha = sel.table[std::min<std::size_t>(1, sel.table.size() - 1)].alpha;
+  init.model.noise = fitNoiseLaw(config.noise, 1, init.model.bias, d, y);
+  init.centres = rangeBearingCentres(obs, tri, init.model, radius);
+  init.radius_m = radius;
+  JointConfig jc = config.joint;
+  jc.noise = config.noise;
+  jc.estimate_radius = !obs.landmark_radius_m.has_value();
+  auto alphaAt = [&](int n, std::vector<double> alpha) {
+    alpha.resize(static_cast<std::size_t>(n) + 1, 0.0);
+    return alpha;
+  };
+  // Pass 1: settle the geometry at order 2 (1 if max_order is 1).
+  jc.order = std::min(2, config.max_order);
+  init.model.bias.alpha = alphaAt(jc.order, init.model.bias.alpha);
+  const JointResult settled = refineJoint(obs, init, jc);
+  if (settled.poses.empty()) {
+    m.status = "joint_failed";
+    m.message = settled.message;
+    return m;
+  }
+  // Pass 2: every order from the settled geometry on one fixed set of readings, so that their
+  // information criteria compare likelihoods of the same data.
+  JointInit from = init;
+  from.poses = settled.poses;
+  from.centres = settled.centres;
+  from.radius_m = settled.radius_m;
+  from.model = settled.model;
+  jc.reselect = false;
+  std::vector<JointResult> runs;
+  std::vector<OrderRow> rows;
+  for (int n = 1; n <= config.max_order; ++n) {
+    jc.order = n;
+    from.model.bias.alpha = alphaAt(n, settled.model.bias.alpha);
+    runs.push_back(refineJoint(obs, from, jc));
+    const auto& r = runs.back();
+    OrderRow row;
+    row.order = n;
+    row.alpha = r.model.bias.alpha;
+    row.aic = r.aic;
+    row.bic = r.bic;
+    row.validation_mse_m2 = row.test_mse_m2 = std::numeric_limits<double>::quiet_NaN();
+    rows.push_back(row);
+  }
+  std::size_t best_aic = 0, best_bic = 0;
+  for (std::size_t i = 1; i < runs.size(); ++i) {
+    if (runs[i].aic < runs[best_aic].aic) best_aic = i;
+    if (runs[i].bic < runs[best_bic].bic) best_bic = i;
+  }
+  std::size_t chosen = best_aic;
+  if (config.joint_rule == JointOrderRule::bic) chosen = best_bic;
+  if (config.joint_rule == JointOrderRule::aic_parsimonious)
+    for (std::size_t i = 0; i < runs.size(); ++i)
+      if (runs[i].aic <= runs[best_aic].aic + 2.0) {
+        chosen = i;
+        break;
+      }
+  const JointResult& j = runs[chosen];
+  if (j.poses.empty()) {
+    m.status = "joint_failed";
+    m.message = j.message;
+    return m;
+  }
+  m.orders = rows;
+  m.order_rule = toString(config.joint_rule);
+  m.order_aic = static_cast<int>(best_aic) + 1;
+  m.order_validation = -1;
+  m.model.bias = j.model.bias;
+  m.model.noise = j.model.noise;
+  m.sigma_theta_rad = j.sigma_theta_rad;
+  m.iterations = j.solver_iterations;
+  m.readings = j.readings;
+  m.pose_scatter_m = j.pose_scatter_m;
+  m.heading_scatter_rad = j.heading_scatter_rad;
+  m.residual_rms_m = j.residual_rms_m;
+  m.alpha_covariance.assign(j.alpha_covariance.data(), j.alpha_covariance.data() + j.alpha_covariance.size());
+  for (auto& c : m.landmarks) {
+    auto it = j.centres.find(c.id);
+    if (it == j.centres.end()) continue;
+    c.x_m = it->second.x();
+    c.y_m = it->second.y();
+    c.radius_m = j.radius_m;
+    auto cv = j.centre_covariance.find(c.id);
+    if (cv != j.centre_covariance.end())
+      c.covariance_m2 = {cv->second(0, 0), cv->second(0, 1), cv->second(1, 0), cv->second(1, 1)};
+  }
+  if (!j.converged) {
+    m.status = "ok";
+    m.message = "joint refinement: " + j.message;
+  }
+  return m;
+}
+
+CalibrationModel calibrateAgainstTruth(const std::vector<RangePair>& pairs, const CalibrationConfig& config,
+                                       const std::vector<std::vector<double>>& batches) {
+  config.validate();
+  CalibrationModel m;
+  m.method = "oracle";
+  if (pairs.size() < static_cast<std::size_t>(config.max_order) + 3) {
+    m.status = "too_few_observations";
+    m.message = "too few readings with a known distance";
+    return m;
+  }
+  const OrderSelection sel = selectOrder(pairs, config.max_order, config.closed_form_rule);
+  fillOrders(m, sel, pairs.size());
+  const int order = std::max(sel.chosen, 1);
+  std::vector<double> d, y;
+  for (const auto& p : pairs) {
+    d.push_back(p.d_m);
+    y.push_back(p.y_m);
+  }
+  m.model.bias.alpha = sel.table[static_cast<std::size_t>(std::min<int>(order, static_cast<int>(sel.table.size()) - 1))].alpha;
+  fillNoiseFits(m, order, d, y, batches);
+  // With known distances the oracle is seed 004's estimator: full ML of model (1) at the
+  // AIC order (eqs. 18-20) when the noise law is the squared one; least squares otherwise.
+  if (config.noise == NoiseKind::squared) m.model.bias.alpha = m.noise_fits.seed004_ml_alpha;
+  m.model.noise = fitNoiseLaw(config.noise, order, m.model.bias, d, y);
+  m.residual_rms_m = rmsResidual(m.model.bias, d, y);
+  m.readings = d.size();
+  return m;
+}
+
+}  // namespace lidarcal::calibration

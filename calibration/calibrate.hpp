@@ -1,0 +1,62 @@
+#pragma once
+// Calibration without ground truth, end to end on landmark observations:
+//   1. triangulate every landmark from its bearings (seed 000 section 3.1),
+//   2. distances from the landmarks to the stops, the bias polynomial for orders 0..n_max and
+//      the order by AIC and by held-out validation (seed 000 section 3.2), the noise law in
+//      seed 000's and seed 004's forms (seed 004 section 5), seed 004's noise-exponent test,
+//   3. (method joint) refine poses, landmarks, radius and bias together from every reading.
+// And the oracle: the same fits against true distances.
+
+#include <vector>
+
+#include "calibration/joint_refinement.hpp"
+#include "calibration/range_model_fit.hpp"
+#include "calibration/triangulation.hpp"
+#include "common/calibration_model.hpp"
+#include "common/landmark_observations.hpp"
+
+namespace lidarcal::calibration {
+
+enum class Method { closed_form, joint };
+const char* toString(Method m);
+
+/// How the joint refinement picks its order among 1..max_order.
+enum class JointOrderRule {
+  aic,              ///< smallest AIC
+  aic_parsimonious, ///< smallest order whose AIC is within 2 of the smallest (Burnham & Anderson)
+  bic,              ///< smallest BIC
+};
+const char* toString(JointOrderRule r);
+
+struct CalibrationConfig {
+  Method method = Method::joint;                      ///< closed form of the paper, or joint refinement
+  int max_order = 4;                                  ///< n_max of seed 000 phase 1
+  OrderRule closed_form_rule = OrderRule::aic;        ///< order rule of the closed form
+  JointOrderRule joint_rule = JointOrderRule::aic_parsimonious;  ///< order rule of the joint refinement
+  NoiseKind noise = NoiseKind::squared;               ///< noise law of the calibrated model
+  TriangulationConfig triangulation;                  ///< stage 1 settings
+  JointConfig joint;                                  ///< stage 3 settings (order is chosen here)
+  void validate() const;                              ///< throws std::invalid_argument
+};
+
+/// Pairs (estimated distance, reading) of the closed form: the beam nearest each landmark
+/// centre, distance from the commanded stop to the triangulated circle along that beam.
+/// `per_scan` false: averaged per (landmark, stop, part) as in seed 000; true: one per scan.
+std::vector<RangePair> closedFormPairs(const LandmarkObservations& obs, const std::vector<LandmarkEstimate>& landmarks,
+                                       double radius_m, bool per_scan);
+
+/// Common radius: the known one, else the median of the fitted radii.
+double landmarkRadius(const LandmarkObservations& obs);
+
+/// Calibrates. The result's status is "ok" or says why the data cannot support a model.
+CalibrationModel calibrate(const LandmarkObservations& obs, const CalibrationConfig& config);
+
+/// The oracle of seed 004: the same fits against known distances (pairs' d_m are true).
+/// `batches` (optional) feed the noise-exponent test.
+CalibrationModel calibrateAgainstTruth(const std::vector<RangePair>& pairs, const CalibrationConfig& config,
+                                       const std::vector<std::vector<double>>& batches = {});
+
+/// Readings grouped by constant true distance: (stop, landmark, beam) across the scans of a stop.
+std::vector<std::vector<double>> constantDistanceBatches(const LandmarkObservations& obs);
+
+}  // namespace lidarcal::calibration

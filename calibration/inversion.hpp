@@ -1,0 +1,45 @@
+#pragma once
+// Filtering stage (seed 000 section 3.2 phase 3, seed 004 section 5.2): the distance d that
+// explains a raw reading y under the calibrated model.
+//   LS (seed 004 eq. 30, seed 000 eq. 30): a root of f(d) = y; closed form for n <= 2,
+//       polynomial roots above; the root inside the window nearest the reading.
+//   ML (seed 004 eqs. 28-29): a root of (y - f(d)) (y - f(d) + d f'(d) / 2) = sigma_e^2 d^4,
+//       the stationary points of the likelihood of model (21); the most likely one.
+
+#include <optional>
+#include <string>
+
+#include "common/range_model.hpp"
+
+namespace lidarcal::calibration {
+
+enum class InversionMethod { ls, ml };
+const char* toString(InversionMethod m);
+
+struct InversionConfig {
+  InversionMethod method = InversionMethod::ls;  ///< LS (default) or ML (needs the squared noise law)
+  double d_min_m = 0.0;    ///< true distances searched in [d_min_m, d_max_m]
+  double d_max_m = 1e9;    ///< (normally the sensor's range window, widened by the bias)
+};
+
+/// Distances for readings under one model; construct once, call invert() per point.
+class RangeInverter {
+ public:
+  /// Throws std::invalid_argument for a model that cannot be inverted (order 0, or ML without
+  /// a squared noise law).
+  RangeInverter(const RangeModel& model, const InversionConfig& config);
+  /// The corrected distance, or nothing when no root lies in the window.
+  std::optional<double> invert(double y_m) const;
+
+ private:
+  std::optional<double> invertLs(double y_m) const;
+  std::optional<double> invertMl(double y_m) const;
+  RangeModel model_;
+  InversionConfig config_;
+};
+
+/// Whether f is strictly increasing on [d_min, d_max] (else the inversion is ambiguous);
+/// `where` receives a distance at which f' <= 0.
+bool isMonotone(const BiasPolynomial& f, double d_min_m, double d_max_m, double* where = nullptr);
+
+}  // namespace lidarcal::calibration

@@ -1,0 +1,69 @@
+#pragma once
+// A calibrated range model and how it was obtained: the content of model.json
+// (docs/FORMAT.md). Plain data: calibration/ fills it, io/ reads and writes it.
+
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "common/range_model.hpp"
+
+namespace lidarcal {
+
+/// One row of the order-selection table.
+struct OrderRow {
+  int order = 0;                   ///< polynomial order n
+  std::vector<double> alpha;       ///< coefficients fitted at this order
+  double aic = 0.0;                ///< Akaike information criterion (lower is better)
+  double bic = 0.0;                ///< Bayesian information criterion (lower is better)
+  double validation_mse_m2 = 0.0;  ///< fit on part 1 of 3, error on part 2 (NaN when not computed)
+  double test_mse_m2 = 0.0;        ///< fit on part 1 of 3, error on part 3 (NaN when not computed)
+};
+
+/// A landmark as calibrated.
+struct CalibratedLandmark {
+  int id = 0;                              ///< landmark id
+  double x_m = 0.0, y_m = 0.0;             ///< centre, world (commanded) frame
+  double radius_m = 0.0;                   ///< radius
+  std::array<double, 4> covariance_m2{};   ///< row-major 2x2 covariance of (x, y)
+  int stops = 0;                           ///< stops that saw it
+  std::string status = "ok";               ///< ok or why it was not used
+};
+
+/// Results of the noise-law estimators, reported side by side.
+struct NoiseFits {
+  std::vector<double> seed000_beta;            ///< sigma(d) = |sum beta_i d^i|, ML (seed 000 eq. 3)
+  std::vector<double> seed004_cf_alpha;        ///< seed 004 closed form eqs. 21-26: alpha
+  double seed004_cf_sigma_e = 0.0;             ///< and sigma_e
+  std::vector<double> seed004_ml_alpha;        ///< seed 004 full ML eqs. 18-20: alpha
+  double seed004_ml_sigma_e = 0.0;             ///< and sigma_e
+  std::array<double, 4> exponent_loglik{};     ///< seed 004 eq. 15 for H0..H3
+  int exponent_best = -1;                      ///< argmax of the above; -1 when not testable
+  std::size_t exponent_batches = 0;            ///< constant-distance batches used
+};
+
+struct CalibrationModel {
+  std::string format = "lidarcal-model/1";
+  std::string method;                ///< closed-form, joint, oracle or oracle-commanded
+  std::string sensor_name;           ///< from sequence.json, when known
+  std::optional<int> beams;          ///< beams per scan of the calibrated sensor, when known
+  RangeModel model;                  ///< bias f, noise law, range window [range_min_m, range_max_m]
+  double sigma_theta_rad = 0.0;      ///< bearing noise estimate
+  std::string order_rule;            ///< how the order was chosen
+  int order_aic = -1, order_validation = -1;  ///< orders each rule picks
+  std::vector<OrderRow> orders;      ///< the order-selection table
+  NoiseFits noise_fits;              ///< all noise estimators
+  std::vector<CalibratedLandmark> landmarks;  ///< landmark map
+  std::vector<double> alpha_covariance;       ///< row-major (n+1)x(n+1), empty when not computed
+  // Diagnostics
+  std::string status = "ok";         ///< ok or a reason
+  std::string message;               ///< details a user can act on
+  int iterations = 0;                ///< solver iterations
+  double residual_rms_m = 0.0;       ///< RMS of range residuals
+  std::size_t readings = 0;          ///< readings used
+  double pose_scatter_m = 0.0;       ///< joint: refined vs commanded stop positions (RMS per coordinate)
+  double heading_scatter_rad = 0.0;  ///< joint: refined vs commanded headings (RMS)
+};
+
+}  // namespace lidarcal

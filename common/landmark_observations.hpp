@@ -1,0 +1,40 @@
+#pragma once
+// What calibration consumes: landmarks seen from the stops of a sequence. Produced by the
+// detector (from scans) or by the landmark-level simulator (seed 000 eqs. 3, 5, 8).
+
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "common/pose2.hpp"
+
+namespace lidarcal {
+
+/// One raw beam reading on a landmark.
+struct BeamReading {
+  double angle_rad = 0.0;   ///< nominal beam angle in the sensor frame, radians
+  double range_m = 0.0;     ///< raw reading, metres
+  std::uint32_t beam = 0;   ///< index of the point in its scan
+};
+
+/// One landmark seen in one scan.
+struct Sighting {
+  std::size_t stop = 0;          ///< stop index (0-based)
+  std::size_t scan = 0;          ///< scan index in the sequence (0-based)
+  int landmark = 0;              ///< landmark id (> 0)
+  double bearing_rad = 0.0;      ///< bearing of the fitted centre in the sensor frame, radians
+  double centre_range_m = 0.0;   ///< distance to the fitted centre, metres
+  double radius_m = 0.0;         ///< radius of the fitted circle, metres
+  std::vector<BeamReading> beams;  ///< raw readings of the beams on the landmark, in beam order
+};
+
+/// Everything calibration needs from a sequence.
+struct LandmarkObservations {
+  std::vector<Pose2> commanded;           ///< commanded pose of each stop (VIEWPOINT)
+  std::vector<Sighting> sightings;        ///< every landmark in every scan
+  std::optional<double> landmark_radius_m;  ///< common landmark radius when known
+  double range_min_m = 0.0;               ///< sensor reporting window, metres
+  double range_max_m = 1e9;               ///< sensor reporting window, metres
+};
+
+}  // namespace lidarcal

@@ -1,0 +1,79 @@
+#include "simulation/landmark_level.hpp"
+
+#include <cmath>
+#include <random>
+
+#include "common/rng.hpp"
+#include "simulation/raycast.hpp"
+#include "simulation/simulator.hpp"
+
+namespace lidarcal::simulation {
+
+LandmarkLevelSample simulateLandmarkLevel(const LandmarkLevelConfig& config, std::uint64_t seed) {
+  LandmarkLevelSample out;
+  Scene scene;
+  scene.path = config.path;
+  out.stops = planStops(scene, seed);  // eqs. 7-8, shared with the scan-level simulator
+  out.obs.range_min_m = config.model.range_min_m;
+  out.obs.range_max_m = config.model.range_max_m;
+  if (config.publish_radius && !config.landmarks.empty()) out.obs.landmark_radius_m = config.landmarks.front().radius_m;
+  for (const auto& s : out.stops) out.obs.commanded.push_back(s.commanded);
+
+  std::normal_distribution<double> normal(0.0, 1.0);
+  for (std::size_t k = 0; k < out.stops.size(); ++k) {
+    const TruthStop& stop = out.stops[k];
+    const Pose2& a = stop.actual;
+    for (std::size_t i = 0; i < stop.scans; ++i) {
+      const std::size_t scan = stop.first_scan + i;
+      auto rng = makeRng(seed, scan + 1);
+      for (std::size_t l = 0; l < config.landmarks.size(); ++l) {
+        const Cylinder& c = config.landmarks[l];
+        const double dx = c.x_m - a.x_m, dy = c.y_m - a.y_m;
+        const double centre = std::hypot(dx, dy);
+        // Draw every number whether or not it is used, so streams stay aligned.
+        const double v = normal(rng), e = normal(rng);
+        if (centre <= c.radius_m) continue;
+        Sighting s;
+        s.stop = k;
+        s.scan = scan;
+        s.landmark = static_cast<int>(l) + 1;
+        const double true_bearing = wrapAngle(std::atan2(dy, dx) - a.yaw_rad);
+        s.bearing_rad = wrapAngle(true_bearing + config.sigma_theta_rad * v);  // eq. 5
+        s.centre_range_m = centre;
+        s.radius_m = c.radius_m;
+        std::vector<double> truth;
+        if (!config.beams) {
+          const double d = centre - c.radius_m;  // eq. 2 minus the radius
+          const double y = rangeReading(config.model, d, e);  // eq. 3
+          if (y < config.model.range_min_m || y > config.model.range_max_m) continue;
+          s.beams.push_back(BeamReading{s.bearing_rad, y, 0});
+          truth.push_back(d);
+        } else {
+          const double half = std::asin(c.radius_m / centre);
+          const double inc = config.angle_increment_rad;
+          const auto first = static_cast<long>(std::ceil((true_bearing - half) / inc));
+          const auto last = static_cast<long>(std::floor((true_bearing + half) / inc));
+          for (long j = first; j <= last; ++j) {
+            const double angle = static_cast<double>(j) * inc;
+            const Ray ray{a.x_m, a.y_m, std::cos(a.yaw_rad + angle), std::sin(a.yaw_rad + angle)};
+            const auto t = intersectCircle(ray, c);
+            const double eb = normal(rng);
+            if (!t) continue;
+            const double y = rangeReading(config.model, *t, eb);
+            if (y < config.model.range_min_m || y > config.model.range_max_m) continue;
+            const long n = static_cast<long>(std::llround(2.0 * kPi / inc));
+            const auto beam = static_cast<std::uint32_t>(((j % n) + n) % n);
+            s.beams.push_back(BeamReading{wrapAngle(angle), y, beam});
+            truth.push_back(*t);
+          }
+          if (s.beams.empty()) continue;
+        }
+        out.obs.sightings.push_back(std::move(s));
+        out.true_range_m.push_back(std::move(truth));
+      }
+    }
+  }
+  return out;
+}
+
+}  // namespace lidarcal::simulation
