@@ -123,9 +123,7 @@ std::map<int, Eigen::Vector2d> rangeBearingCentres(const LandmarkObservations& o
   std::map<int, int> count;
   std::optional<RangeInverter> inverter;
   try {
-    InversionConfig ic;
-    ic.d_max_m = 4.0 * std::max(obs.range_max_m < 1e8 ? obs.range_max_m : 50.0, 1.0);
-    inverter.emplace(model, ic);
+    inverter.emplace(model, inversionWindow(model, InversionMethod::ls));
   } catch (const std::invalid_argument&) {
   }
   for (const auto& l : tri) {
@@ -304,6 +302,7 @@ CalibrationModel calibrate(const LandmarkObservations& obs, const CalibrationCon
     }
     m.sigma_theta_rad = n ? std::sqrt(s / static_cast<double>(n)) : 0.0;
   }
+  m.stop_poses = obs.commanded;
   if (config.method == Method::closed_form) return m;
 
   // Stage 3: joint refinement for each order, from the closed form.
@@ -384,6 +383,7 @@ CalibrationModel calibrate(const LandmarkObservations& obs, const CalibrationCon
   m.iterations = j.solver_iterations;
   m.readings = j.readings;
   m.pose_scatter_m = j.pose_scatter_m;
+  m.stop_poses = j.poses;
   m.heading_scatter_rad = j.heading_scatter_rad;
   m.residual_rms_m = j.residual_rms_m;
   m.alpha_covariance.assign(j.alpha_covariance.data(), j.alpha_covariance.data() + j.alpha_covariance.size());

@@ -53,6 +53,14 @@ std::vector<double> polyMul(const std::vector<double>& a, const std::vector<doub
 
 const char* toString(InversionMethod m) { return m == InversionMethod::ls ? "ls" : "ml"; }
 
+InversionConfig inversionWindow(const RangeModel& model, InversionMethod method) {
+  InversionConfig c;
+  c.method = method;
+  c.d_min_m = 0.0;
+  c.d_max_m = 2.0 * std::max(model.range_max_m, 0.1);
+  return c;
+}
+
 bool isMonotone(const BiasPolynomial& f, double d_min_m, double d_max_m, double* where) {
   // f' is a polynomial: check its sign at its real roots inside the window and at the ends.
   std::vector<double> deriv;

@@ -22,6 +22,10 @@ struct InversionConfig {
   double d_max_m = 1e9;    ///< (normally the sensor's range window, widened by the bias)
 };
 
+/// The window searched for a model: true distances in [0, 2 range_max_m] (generous: the bias
+/// can put readings well below or above the distances).
+InversionConfig inversionWindow(const RangeModel& model, InversionMethod method);
+
 /// Distances for readings under one model; construct once, call invert() per point.
 class RangeInverter {
  public:

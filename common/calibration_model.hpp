@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "common/pose2.hpp"
 #include "common/range_model.hpp"
 
 namespace lidarcal {
@@ -55,6 +56,7 @@ struct CalibrationModel {
   std::vector<OrderRow> orders;      ///< the order-selection table
   NoiseFits noise_fits;              ///< all noise estimators
   std::vector<CalibratedLandmark> landmarks;  ///< landmark map
+  std::vector<Pose2> stop_poses;     ///< pose of each stop: refined (joint) or commanded (closed form)
   std::vector<double> alpha_covariance;       ///< row-major (n+1)x(n+1), empty when not computed
   // Diagnostics
   std::string status = "ok";         ///< ok or a reason

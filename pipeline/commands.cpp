@@ -9,6 +9,10 @@ namespace lidarcal::pipeline {
 void registerCommands(CLI::App& app) {
   addSimulateCommand(app);
   addInfoCommand(app);
+  addRunCommand(app);
+  addCalibrateCommand(app);
+  addCorrectCommand(app);
+  addEvaluateCommand(app);
 }
 
 std::filesystem::path dataDir() {

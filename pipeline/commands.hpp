@@ -15,6 +15,10 @@ void registerCommands(CLI::App& app);
 
 void addSimulateCommand(CLI::App& app);
 void addInfoCommand(CLI::App& app);
+void addCalibrateCommand(CLI::App& app);
+void addCorrectCommand(CLI::App& app);
+void addEvaluateCommand(CLI::App& app);
+void addRunCommand(CLI::App& app);
 
 /// Directory of the bundled data (scenes, example): $LIDARCAL_DATA_DIR, the source tree's
 /// data/ for a build tree, or the installed share/lidarcal.

@@ -1,0 +1,134 @@
+#include "io/model_io.hpp"
+
+#include <cmath>
+
+#include <nlohmann/json.hpp>
+
+#include "common/errors.hpp"
+#include "io/atomic_file.hpp"
+#include "io/json_util.hpp"
+
+namespace lidarcal::io {
+namespace {
+
+using ojson = nlohmann::ordered_json;
+
+/// NaN is not JSON: write null.
+ojson number(double v) { return std::isfinite(v) ? ojson(v) : ojson(nullptr); }
+
+ojson noiseJson(const NoiseModel& n) {
+  ojson j{{"kind", toString(n.kind)}};
+  if (n.kind == NoiseKind::polynomial) j["beta"] = n.beta;
+  if (n.kind == NoiseKind::constant || n.kind == NoiseKind::squared || n.kind == NoiseKind::power) j["sigma_e"] = n.sigma_e;
+  if (n.kind == NoiseKind::power) j["exponent"] = n.exponent;
+  return j;
+}
+
+}  // namespace
+
+void writeModel(const std::filesystem::path& file, const CalibrationModel& m) {
+  ojson orders = ojson::array();
+  for (const auto& o : m.orders)
+    orders.push_back(ojson{{"order", o.order},
+                           {"alpha", o.alpha},
+                           {"aic", number(o.aic)},
+                           {"bic", number(o.bic)},
+                           {"validation_mse_m2", number(o.validation_mse_m2)},
+                           {"test_mse_m2", number(o.test_mse_m2)}});
+  ojson landmarks = ojson::array();
+  for (const auto& l : m.landmarks)
+    landmarks.push_back(ojson{{"id", l.id},
+                              {"x_m", l.x_m},
+                              {"y_m", l.y_m},
+                              {"radius_m", l.radius_m},
+                              {"covariance_m2", ojson::array({number(l.covariance_m2[0]), number(l.covariance_m2[1]),
+                                                               number(l.covariance_m2[2]), number(l.covariance_m2[3])})},
+                              {"stops", l.stops},
+                              {"status", l.status}});
+  ojson stops = ojson::array();
+  for (const auto& p : m.stop_poses) stops.push_back(ojson{{"x_m", p.x_m}, {"y_m", p.y_m}, {"yaw_rad", p.yaw_rad}});
+  const auto& nf = m.noise_fits;
+  ojson j{{"format", m.format},
+          {"method", m.method},
+          {"sensor", ojson{{"name", m.sensor_name}, {"beams", m.beams ? ojson(*m.beams) : ojson(nullptr)},
+                           {"range_min_m", m.model.range_min_m}, {"range_max_m", m.model.range_max_m}}},
+          {"bias", ojson{{"order", m.model.bias.order()}, {"alpha", m.model.bias.alpha}}},
+          {"noise", noiseJson(m.model.noise)},
+          {"sigma_theta_rad", m.sigma_theta_rad},
+          {"alpha_covariance", m.alpha_covariance},
+          {"order_selection", ojson{{"rule", m.order_rule}, {"order_aic", m.order_aic},
+                                    {"order_validation", m.order_validation}, {"table", orders}}},
+          {"noise_estimators",
+           ojson{{"seed000_beta", nf.seed000_beta},
+                 {"seed004_closed_form", ojson{{"alpha", nf.seed004_cf_alpha}, {"sigma_e", nf.seed004_cf_sigma_e}}},
+                 {"seed004_ml", ojson{{"alpha", nf.seed004_ml_alpha}, {"sigma_e", nf.seed004_ml_sigma_e}}},
+                 {"exponent_test", ojson{{"log_likelihood_h0_h3", ojson::array({number(nf.exponent_loglik[0]),
+                                                                               number(nf.exponent_loglik[1]),
+                                                                               number(nf.exponent_loglik[2]),
+                                                                               number(nf.exponent_loglik[3])})},
+                                         {"best", nf.exponent_best},
+                                         {"batches", nf.exponent_batches}}}}},
+          {"landmarks", landmarks},
+          {"stops", stops},
+          {"diagnostics", ojson{{"status", m.status},
+                                {"message", m.message},
+                                {"iterations", m.iterations},
+                                {"residual_rms_m", m.residual_rms_m},
+                                {"readings", m.readings},
+                                {"pose_scatter_m", m.pose_scatter_m},
+                                {"heading_scatter_rad", m.heading_scatter_rad}}}};
+  writeTextAtomically(file, j.dump(2) + "\n");
+}
+
+CalibrationModel readModel(const std::filesystem::path& file) {
+  const nlohmann::json j = readJsonFile(file);
+  const JsonView root(file.string(), j);
+  root.requireObject();
+  CalibrationModel m;
+  m.format = root.getString("format", "");
+  if (m.format != "lidarcal-model/1")
+    root.fail("format", "not a lidarcal model file (expected \"lidarcal-model/1\"); create one with `lidarcal calibrate`");
+  m.method = root.getString("method", "");
+  const JsonView sensor = root.child("sensor");
+  m.sensor_name = sensor.getString("name", "");
+  if (sensor.has("beams") && !sensor.json().at("beams").is_null()) m.beams = sensor.getPositiveInt("beams");
+  m.model.range_min_m = sensor.getNonNegative("range_min_m");
+  m.model.range_max_m = sensor.getPositive("range_max_m");
+  if (m.model.range_min_m >= m.model.range_max_m) sensor.fail("range_min_m", "must be smaller than range_max_m");
+  const JsonView bias = root.child("bias");
+  m.model.bias.alpha = bias.getNumbers("alpha");
+  if (m.model.bias.alpha.size() < 2 || m.model.bias.alpha.size() > 10)
+    bias.fail("alpha", "must hold 2 to 10 coefficients (order 1 to 9)");
+  const JsonView noise = root.child("noise");
+  const std::string kind = noise.getString("kind");
+  if (!parseNoiseKind(kind, m.model.noise.kind)) noise.fail("kind", "unknown noise kind '" + kind + "'");
+  if (m.model.noise.kind == NoiseKind::polynomial) m.model.noise.beta = noise.getNumbers("beta");
+  else if (m.model.noise.kind != NoiseKind::none) m.model.noise.sigma_e = noise.getNonNegative("sigma_e");
+  if (m.model.noise.kind == NoiseKind::power) m.model.noise.exponent = noise.getNumber("exponent");
+  m.sigma_theta_rad = root.getNonNegative("sigma_theta_rad", 0.0);
+  if (root.has("landmarks"))
+    for (const auto& e : root.array("landmarks")) {
+      e.requireObject();
+      CalibratedLandmark l;
+      l.id = e.getInt("id");
+      l.x_m = e.getNumber("x_m");
+      l.y_m = e.getNumber("y_m");
+      l.radius_m = e.getNonNegative("radius_m", 0.0);
+      l.stops = e.getInt("stops", 0);
+      l.status = e.getString("status", "ok");
+      m.landmarks.push_back(l);
+    }
+  if (root.has("stops"))
+    for (const auto& e : root.array("stops")) {
+      e.requireObject();
+      m.stop_poses.push_back(Pose2{e.getNumber("x_m"), e.getNumber("y_m"), e.getNumber("yaw_rad")});
+    }
+  if (root.has("diagnostics")) {
+    const JsonView d = root.child("diagnostics");
+    m.status = d.getString("status", "ok");
+    m.message = d.getString("message", "");
+  }
+  return m;
+}
+
+}  // namespace lidarcal::io

@@ -1,0 +1,68 @@
+#include "pipeline/cli_options.hpp"
+
+#include <CLI/CLI.hpp>
+
+#include "common/errors.hpp"
+
+namespace lidarcal::pipeline {
+
+void addCalibrationOptions(CLI::App* app, const std::shared_ptr<CalibrationOptions>& o) {
+  app->add_option("--method", o->method,
+                  "closed-form: the paper's triangulation + least squares (seed 000); joint: refine poses, landmarks "
+                  "and bias together from every reading")
+      ->check(CLI::IsMember({"closed-form", "joint"}))
+      ->capture_default_str();
+  app->add_option("--max-order", o->max_order, "Largest bias polynomial order tried (n_max)")
+      ->check(CLI::Range(1, 6))
+      ->capture_default_str();
+  app->add_option("--order-rule", o->order_rule, "Order rule of the closed form: aic or validation (fit/choose/test split)")
+      ->check(CLI::IsMember({"aic", "validation"}))
+      ->capture_default_str();
+  app->add_option("--joint-order-rule", o->joint_order_rule,
+                  "Order rule of the joint refinement: aic, aic-parsimonious (smallest order within 2 of the best AIC) or bic")
+      ->check(CLI::IsMember({"aic", "aic-parsimonious", "bic"}))
+      ->capture_default_str();
+  app->add_option("--noise", o->noise, "Noise law: squared (seed 004: sigma_e f(d)^2), polynomial (seed 000), constant")
+      ->check(CLI::IsMember({"squared", "polynomial", "constant"}))
+      ->capture_default_str();
+  app->add_option("--sigma-s", o->sigma_s_m, "How far a stop may be from its commanded position (std. dev., m)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  app->add_option("--sigma-psi", o->sigma_psi_deg, "How far a stop's heading may be from the command (std. dev., degrees)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  app->add_option("--sigma-theta", o->sigma_theta_deg, "Bearing noise assumed by the triangulation weights (degrees)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  app->add_option("--radius", o->radius_m, "Landmark radius in metres (default: sequence.json, else estimated)")
+      ->check(CLI::PositiveNumber);
+  app->add_option("--min-stops", o->min_stops, "A landmark must be seen from at least this many stops")
+      ->check(CLI::Range(2, 1000))
+      ->capture_default_str();
+}
+
+calibration::CalibrationConfig calibrationConfig(const CalibrationOptions& o) {
+  calibration::CalibrationConfig c;
+  c.method = o.method == "closed-form" ? calibration::Method::closed_form : calibration::Method::joint;
+  c.max_order = o.max_order;
+  c.closed_form_rule = o.order_rule == "validation" ? calibration::OrderRule::validation : calibration::OrderRule::aic;
+  c.joint_rule = o.joint_order_rule == "aic"   ? calibration::JointOrderRule::aic
+                 : o.joint_order_rule == "bic" ? calibration::JointOrderRule::bic
+                                               : calibration::JointOrderRule::aic_parsimonious;
+  if (!parseNoiseKind(o.noise, c.noise)) throw InputError("", "--noise", "unknown noise law '" + o.noise + "'");
+  c.triangulation.sigma_s_m = o.sigma_s_m;
+  c.triangulation.sigma_theta_rad = deg2rad(o.sigma_theta_deg);
+  c.triangulation.min_stops = o.min_stops;
+  c.joint.sigma_s_m = o.sigma_s_m;
+  c.joint.sigma_psi_rad = deg2rad(o.sigma_psi_deg);
+  return c;
+}
+
+detectors::SequenceDetectionConfig detectionConfig(const CalibrationOptions& o) {
+  detectors::SequenceDetectionConfig c;
+  if (o.radius_m > 0.0) c.detection.landmark_radius_m = o.radius_m;
+  c.association.min_stops = o.min_stops;
+  return c;
+}
+
+}  // namespace lidarcal::pipeline

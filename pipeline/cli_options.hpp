@@ -1,0 +1,35 @@
+#pragma once
+// Command-line options shared by `calibrate` and `run`, mapped into the stage configs.
+
+#include <memory>
+#include <string>
+
+#include "calibration/calibrate.hpp"
+#include "detectors/sequence_detector.hpp"
+
+namespace CLI {
+class App;
+}
+
+namespace lidarcal::pipeline {
+
+struct CalibrationOptions {
+  std::string method = "joint";
+  int max_order = 4;
+  std::string order_rule = "aic";
+  std::string joint_order_rule = "aic-parsimonious";
+  std::string noise = "squared";
+  double sigma_s_m = 0.02;
+  double sigma_psi_deg = 0.5;
+  double sigma_theta_deg = 1.0;
+  double radius_m = 0.0;  // 0: from sequence.json or estimated
+  int min_stops = 3;
+};
+
+/// Adds the options to a subcommand.
+void addCalibrationOptions(CLI::App* app, const std::shared_ptr<CalibrationOptions>& o);
+/// Maps them into the stage configs (throws InputError for a bad value).
+calibration::CalibrationConfig calibrationConfig(const CalibrationOptions& o);
+detectors::SequenceDetectionConfig detectionConfig(const CalibrationOptions& o);
+
+}  // namespace lidarcal::pipeline

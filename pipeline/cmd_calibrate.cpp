@@ -1,0 +1,85 @@
+// lidarcal calibrate SEQ --out model.json [--method closed-form|joint] [--truth truth.json]
+
+#include <cstdio>
+#include <memory>
+
+#include <CLI/CLI.hpp>
+
+#include "common/errors.hpp"
+#include "io/model_io.hpp"
+#include "pipeline/cli_options.hpp"
+#include "pipeline/commands.hpp"
+#include "pipeline/progress.hpp"
+#include "pipeline/report.hpp"
+#include "pipeline/stages.hpp"
+
+namespace lidarcal::pipeline {
+namespace {
+
+struct CalibrateCommand {
+  std::string seq, out, truth, frame = "true", report;
+  bool overwrite = false;
+  std::shared_ptr<CalibrationOptions> options = std::make_shared<CalibrationOptions>();
+};
+
+void runCalibrate(const CalibrateCommand& c) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (fs::exists(c.out, ec) && !c.overwrite)
+    throw InputError(c.out, "--out", "already exists", "choose another file or pass --overwrite");
+  io::checkOutsideInput(c.seq, c.out);
+  const io::Sequence seq = io::openSequence(c.seq);
+  const auto config = calibrationConfig(*c.options);
+  CalibrationModel model;
+  if (!c.truth.empty()) {
+    // Oracle (seed 004): fitted against the true distances; for comparison only.
+    const SimulationTruth truth = loadTruth(c.truth);
+    const double scale = c.frame == "commanded" ? commandedScale(truth.truth) : 1.0;
+    model = calibrateOracle(seq, truth, scale, config);
+  } else {
+    Progress progress("detect", seq.scans.size());
+    const SequenceCalibration result =
+        calibrateSequence(seq, detectionConfig(*c.options), config, [&](std::size_t done, std::size_t) { progress.update(done); });
+    progress.finish();
+    model = result.model;
+    if (!c.report.empty() && model.status == "ok") {
+      ReportInputs in;
+      in.sequence = c.seq;
+      in.scans = seq.scans.size();
+      in.stops = seq.stops.size();
+      in.detections = result.detections.association.assigned;
+      in.observations = &result.observations;
+      in.model = &model;
+      in.command = "lidarcal calibrate " + c.seq + " --out " + c.out + " --method " + c.options->method;
+      writeReport(c.report, in);
+    }
+  }
+  if (model.status != "ok")
+    throw DataError(c.seq, "calibration", model.status + ": " + model.message, "see docs/ERRORS.md");
+  io::writeModel(c.out, model);
+  if (!quiet())
+    std::fprintf(stderr, "%s model of order %d written to %s\n", model.method.c_str(), model.model.bias.order(),
+                 c.out.c_str());
+}
+
+}  // namespace
+
+void addCalibrateCommand(CLI::App& app) {
+  auto c = std::make_shared<CalibrateCommand>();
+  CLI::App* sub = app.add_subcommand("calibrate", "Fit the range model of a sequence (no ground truth needed)");
+  sub->add_option("SEQ", c->seq, "Sequence directory (docs/FORMAT.md)")->required();
+  sub->add_option("--out", c->out, "model.json to write")->required();
+  sub->add_option("--truth", c->truth,
+                  "truth.json of a simulated sequence: fit against the true distances instead (the oracle, for comparison)");
+  sub->add_option("--frame", c->frame,
+                  "With --truth: true distances as they are (true), or scaled into the commanded frame (commanded): "
+                  "the best a self-calibration can reach")
+      ->check(CLI::IsMember({"true", "commanded"}))
+      ->capture_default_str();
+  sub->add_option("--report", c->report, "Also write a report (Markdown + PNG plots) into this directory");
+  sub->add_flag("--overwrite", c->overwrite, "Replace --out if it exists");
+  addCalibrationOptions(sub, c->options);
+  sub->callback([c] { runCalibrate(*c); });
+}
+
+}  // namespace lidarcal::pipeline

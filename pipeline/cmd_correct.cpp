@@ -1,0 +1,52 @@
+// lidarcal correct SEQ --model model.json --out OUT
+
+#include <cstdio>
+#include <memory>
+
+#include <CLI/CLI.hpp>
+
+#include "io/atomic_file.hpp"
+#include "io/model_io.hpp"
+#include "pipeline/commands.hpp"
+#include "pipeline/progress.hpp"
+#include "pipeline/stages.hpp"
+
+namespace lidarcal::pipeline {
+
+void addCorrectCommand(CLI::App& app) {
+  struct Options {
+    std::string seq, model, out, inversion = "ls";
+    bool ascii = false, overwrite = false;
+  };
+  auto o = std::make_shared<Options>();
+  CLI::App* sub = app.add_subcommand("correct", "Rewrite every scan of a sequence with calibrated ranges");
+  sub->add_option("SEQ", o->seq, "Sequence directory (any sequence of the calibrated sensor)")->required();
+  sub->add_option("--model", o->model, "model.json from lidarcal calibrate")->required();
+  sub->add_option("--out", o->out, "Output sequence directory")->required();
+  sub->add_option("--inversion", o->inversion,
+                  "ls: the distance whose f equals the reading (seed 004 eq. 30); ml: the most likely distance (eq. 28, "
+                  "squared noise law only)")
+      ->check(CLI::IsMember({"ls", "ml"}))
+      ->capture_default_str();
+  sub->add_flag("--ascii", o->ascii, "Write ASCII PCD instead of binary");
+  sub->add_flag("--overwrite", o->overwrite, "Replace OUT if it exists");
+  sub->callback([o] {
+    io::checkOutsideInput(o->seq, o->out);
+    const io::Sequence seq = io::openSequence(o->seq);
+    const CalibrationModel model = io::readModel(o->model);
+    checkModelFits(model, seq, o->model);
+    io::StagedDirectory out(o->out, o->overwrite);
+    Progress progress("correct", seq.scans.size());
+    const auto stats = correctSequence(
+        seq, model, o->inversion == "ml" ? calibration::InversionMethod::ml : calibration::InversionMethod::ls, out.path(),
+        o->ascii ? io::PcdEncoding::ascii : io::PcdEncoding::binary,
+        [&](std::size_t done, std::size_t) { progress.update(done); });
+    progress.finish();
+    out.commit();
+    if (!quiet())
+      std::fprintf(stderr, "corrected %zu returns in %zu scans into %s (%zu without a distance in the window)\n",
+                   stats.corrected, stats.scans, o->out.c_str(), stats.unresolved);
+  });
+}
+
+}  // namespace lidarcal::pipeline

@@ -1,0 +1,13 @@
+#pragma once
+// Plots through gnuplot (Debian's gnuplot-nox): the report writes data files and a script,
+// this runs it. A missing gnuplot is not an error: the report says the plots were skipped.
+
+#include <filesystem>
+#include <string>
+
+namespace lidarcal::pipeline {
+
+/// Runs `gnuplot script` in `dir`. Returns false (with a reason) when gnuplot is missing or fails.
+bool runGnuplot(const std::filesystem::path& dir, const std::string& script, std::string* why = nullptr);
+
+}  // namespace lidarcal::pipeline

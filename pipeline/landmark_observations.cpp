@@ -1,0 +1,44 @@
+#include "pipeline/landmark_observations.hpp"
+
+#include <cmath>
+
+namespace lidarcal::pipeline {
+
+LandmarkObservations toLandmarkObservations(const io::Sequence& seq, const detectors::SequenceDetections& det) {
+  LandmarkObservations obs;
+  for (const auto& stop : seq.stops) obs.commanded.push_back(stop.commanded);
+  if (det.known_radius_m) obs.landmark_radius_m = det.known_radius_m;
+  obs.range_min_m = seq.meta.range_min_m.value_or(0.0);
+  obs.range_max_m = seq.meta.range_max_m.value_or(1e9);
+  for (std::size_t i = 0; i < det.scans.size(); ++i) {
+    const auto& sd = det.scans[i];
+    const auto& ids = det.association.ids.at(i);
+    bool any = false;
+    for (int id : ids) any = any || id > 0;
+    if (!any) continue;
+    const io::Scan scan = io::readScan(seq.scans.at(i).path);
+    for (std::size_t j = 0; j < sd.detections.size(); ++j) {
+      if (ids[j] <= 0) continue;
+      const auto& d = sd.detections[j];
+      Sighting s;
+      s.stop = seq.stop_of_scan.at(i);
+      s.scan = i;
+      s.landmark = ids[j];
+      s.bearing_rad = d.bearing_rad;
+      s.centre_range_m = d.range_m;
+      s.radius_m = d.radius_m;
+      for (const auto idx : d.inliers) {
+        const auto& p = (*scan.cloud)[static_cast<std::size_t>(idx)];
+        if (!std::isfinite(p.x)) continue;
+        // The point's direction is its beam's direction: the sensor measures range along it.
+        s.beams.push_back(BeamReading{std::atan2(static_cast<double>(p.y), static_cast<double>(p.x)),
+                                      std::hypot(static_cast<double>(p.x), static_cast<double>(p.y)),
+                                      static_cast<std::uint32_t>(idx)});
+      }
+      if (!s.beams.empty()) obs.sightings.push_back(std::move(s));
+    }
+  }
+  return obs;
+}
+
+}  // namespace lidarcal::pipeline

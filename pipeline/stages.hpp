@@ -1,0 +1,51 @@
+#pragma once
+// The pipeline read like the paper: detect the poles in every scan and label them across
+// stops, triangulate, fit the range model (closed form, then the joint refinement), and
+// rewrite every scan with corrected ranges.
+
+#include <filesystem>
+#include <functional>
+
+#include "calibration/calibrate.hpp"
+#include "calibration/inversion.hpp"
+#include "common/calibration_model.hpp"
+#include "detectors/sequence_detector.hpp"
+#include "io/pcd_scan.hpp"
+#include "io/sequence.hpp"
+#include "pipeline/truth_eval.hpp"
+
+namespace lidarcal::pipeline {
+
+using StageProgress = std::function<void(std::size_t done, std::size_t total)>;
+
+struct SequenceCalibration {
+  detectors::SequenceDetections detections;  ///< circles per scan and landmark ids
+  LandmarkObservations observations;         ///< what calibration consumed
+  CalibrationModel model;                    ///< the result (status says whether it is usable)
+};
+
+/// Detection, association and calibration of a sequence.
+SequenceCalibration calibrateSequence(const io::Sequence& seq, const detectors::SequenceDetectionConfig& detection,
+                                      const calibration::CalibrationConfig& config, const StageProgress& on_scan = {});
+
+/// The oracle of seed 004 on a simulated sequence: the range model fitted against the true
+/// distances of the landmark beams, scaled by `scale` (1: plain oracle; commandedScale(): the
+/// best any self-calibration can do, in the commanded frame).
+CalibrationModel calibrateOracle(const io::Sequence& raw, const SimulationTruth& truth, double scale,
+                                 const calibration::CalibrationConfig& config);
+
+/// Throws InputError when the model does not belong to the sequence's sensor (beam count,
+/// range limits) and DataError when its bias cannot be inverted unambiguously.
+void checkModelFits(const CalibrationModel& model, const io::Sequence& seq, const std::filesystem::path& model_file);
+
+struct CorrectionStats {
+  std::size_t scans = 0, points = 0, corrected = 0, unresolved = 0;
+};
+
+/// Streams every scan through the filtering stage into `out_dir` (an existing, empty staging
+/// directory); copies sequence.json.
+CorrectionStats correctSequence(const io::Sequence& seq, const CalibrationModel& model,
+                                calibration::InversionMethod method, const std::filesystem::path& out_dir,
+                                io::PcdEncoding encoding, const StageProgress& on_scan = {});
+
+}  // namespace lidarcal::pipeline

@@ -1,0 +1,161 @@
+#include "pipeline/truth_eval.hpp"
+
+#include <cmath>
+#include <map>
+
+#include "common/errors.hpp"
+#include "io/scene_io.hpp"
+
+namespace lidarcal::pipeline {
+
+SimulationTruth loadTruth(const std::filesystem::path& truth_json) {
+  SimulationTruth t;
+  t.truth = io::readTruth(truth_json);
+  const auto csv = truth_json.parent_path() / t.truth.true_ranges_file;
+  t.ranges = io::readTrueRanges(csv);
+  t.beams = static_cast<std::size_t>(t.truth.scene.sensor.beams);
+  std::size_t scans = 0;
+  for (const auto& s : t.truth.stops) scans += s.scans;
+  if (t.ranges.size() != scans * t.beams)
+    throw InputError(csv.string(), "", "holds " + std::to_string(t.ranges.size()) + " rows, truth.json promises " +
+                                           std::to_string(scans * t.beams),
+                     "regenerate the simulation");
+  for (std::size_t i = 0; i < t.ranges.size(); ++i)
+    if (t.ranges[i].scan != i / t.beams || t.ranges[i].beam != i % t.beams)
+      throw InputError(csv.string(), "line " + std::to_string(i + 2), "rows are not in scan, beam order",
+                       "regenerate the simulation");
+  return t;
+}
+
+double commandedScale(const Truth& truth) {
+  std::vector<Pose2> actual, commanded;
+  for (const auto& s : truth.stops) {
+    actual.push_back(s.actual);
+    commanded.push_back(s.commanded);
+  }
+  return actual.size() >= 2 ? calibration::similarityScale(actual, commanded) : 1.0;
+}
+
+namespace {
+
+void checkMatches(const io::Sequence& raw, const SimulationTruth& truth) {
+  if (raw.scans.size() * truth.beams != truth.ranges.size())
+    throw InputError(raw.dir.string(), "", "has " + std::to_string(raw.scans.size()) +
+                                               " scans, the truth describes " +
+                                               std::to_string(truth.ranges.size() / std::max<std::size_t>(truth.beams, 1)),
+                     "pass the truth.json of this very sequence");
+}
+
+}  // namespace
+
+std::vector<calibration::RangePair> truthPairs(const io::Sequence& raw, const SimulationTruth& truth, double scale) {
+  checkMatches(raw, truth);
+  std::vector<calibration::RangePair> pairs;
+  for (std::size_t k = 0; k < raw.stops.size(); ++k) {
+    const auto& scans = raw.stops[k].scans;
+    for (std::size_t pos = 0; pos < scans.size(); ++pos) {
+      const std::size_t i = scans[pos];
+      const io::Scan scan = io::readScan(raw.scans[i].path);
+      for (std::size_t b = 0; b < scan.cloud->size() && b < truth.beams; ++b) {
+        const auto& t = truth.at(i, b);
+        const auto& p = (*scan.cloud)[b];
+        if (t.target != io::TargetKind::landmark || !std::isfinite(p.x)) continue;
+        const int part = scans.size() >= 3 ? static_cast<int>(pos % 3) : static_cast<int>((k + b) % 3);
+        pairs.push_back({scale * t.range_m, std::hypot(static_cast<double>(p.x), static_cast<double>(p.y)), part});
+      }
+    }
+  }
+  return pairs;
+}
+
+std::vector<std::vector<double>> truthBatches(const io::Sequence& raw, const SimulationTruth& truth) {
+  checkMatches(raw, truth);
+  std::vector<std::vector<double>> batches;
+  for (const auto& stop : raw.stops) {
+    std::map<std::size_t, std::vector<double>> by_beam;
+    for (std::size_t i : stop.scans) {
+      const io::Scan scan = io::readScan(raw.scans[i].path);
+      for (std::size_t b = 0; b < scan.cloud->size() && b < truth.beams; ++b) {
+        const auto& p = (*scan.cloud)[b];
+        if (truth.at(i, b).target == io::TargetKind::landmark && std::isfinite(p.x))
+          by_beam[b].push_back(std::hypot(static_cast<double>(p.x), static_cast<double>(p.y)));
+      }
+    }
+    for (auto& [b, v] : by_beam) batches.push_back(std::move(v));
+  }
+  return batches;
+}
+
+Evaluation evaluate(const io::Sequence& raw, const SimulationTruth& truth, const CorrectedRanges& corrected) {
+  checkMatches(raw, truth);
+  std::vector<double> t_l, r_l, c_l, t_w, r_w, c_w, t_a, r_a, c_a;
+  Evaluation e;
+  for (std::size_t i = 0; i < raw.scans.size(); ++i) {
+    const io::Scan rs = io::readScan(raw.scans[i].path);
+    const std::vector<double> cor = corrected(i, rs);
+    ++e.scans;
+    for (std::size_t b = 0; b < rs.cloud->size() && b < truth.beams && b < cor.size(); ++b) {
+      const auto& t = truth.at(i, b);
+      const auto& p = (*rs.cloud)[b];
+      if (!std::isfinite(p.x) || !std::isfinite(t.range_m)) continue;
+      if (!std::isfinite(cor[b])) {
+        ++e.lost;
+        continue;
+      }
+      const double raw_r = std::hypot(static_cast<double>(p.x), static_cast<double>(p.y));
+      t_a.push_back(t.range_m);
+      r_a.push_back(raw_r);
+      c_a.push_back(cor[b]);
+      if (t.target == io::TargetKind::landmark) {
+        t_l.push_back(t.range_m);
+        r_l.push_back(raw_r);
+        c_l.push_back(cor[b]);
+      } else if (t.target == io::TargetKind::wall) {
+        t_w.push_back(t.range_m);
+        r_w.push_back(raw_r);
+        c_w.push_back(cor[b]);
+      }
+    }
+  }
+  e.landmarks = calibration::compareRanges(t_l, r_l, c_l);
+  e.walls = calibration::compareRanges(t_w, r_w, c_w);
+  e.all = calibration::compareRanges(t_a, r_a, c_a);
+  return e;
+}
+
+Evaluation evaluate(const io::Sequence& corrected, const io::Sequence& raw, const SimulationTruth& truth) {
+  if (corrected.scans.size() != raw.scans.size())
+    throw InputError(corrected.dir.string(), "", "has " + std::to_string(corrected.scans.size()) + " scans, the raw sequence " +
+                                                     std::to_string(raw.scans.size()),
+                     "evaluate the output of `lidarcal correct` on this raw sequence");
+  return evaluate(raw, truth, [&](std::size_t i, const io::Scan& rs) {
+    if (raw.scans[i].path.filename() != corrected.scans[i].path.filename())
+      throw InputError(corrected.scans[i].path.string(), "", "does not match the raw scan " + raw.scans[i].path.string(),
+                       "the corrected and raw sequences must hold the same file names");
+    const io::Scan cs = io::readScan(corrected.scans[i].path);
+    if (cs.cloud->size() != rs.cloud->size())
+      throw InputError(corrected.scans[i].path.string(), "POINTS", "differs from the raw scan", "re-run lidarcal correct");
+    std::vector<double> r(cs.cloud->size());
+    for (std::size_t b = 0; b < r.size(); ++b) {
+      const auto& q = (*cs.cloud)[b];
+      r[b] = std::isfinite(q.x) ? std::hypot(static_cast<double>(q.x), static_cast<double>(q.y)) : std::nan("");
+    }
+    return r;
+  });
+}
+
+Evaluation evaluate(const CalibrationModel& model, calibration::InversionMethod method, const io::Sequence& raw,
+                    const SimulationTruth& truth) {
+  const calibration::RangeInverter inverter(model.model, calibration::inversionWindow(model.model, method));
+  return evaluate(raw, truth, [&](std::size_t, const io::Scan& rs) {
+    std::vector<double> r(rs.cloud->size(), std::nan(""));
+    for (std::size_t b = 0; b < r.size(); ++b) {
+      const auto& p = (*rs.cloud)[b];
+      if (!std::isfinite(p.x)) continue;
+      if (const auto d = inverter.invert(std::hypot(static_cast<double>(p.x), static_cast<double>(p.y)))) r[b] = *d;
+    }
+    return r;
+  });
+}
+
+}  // namespace lidarcal::pipeline
