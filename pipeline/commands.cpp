@@ -9,6 +9,7 @@ namespace lidarcal::pipeline {
 void registerCommands(CLI::App& app) {
   addSimulateCommand(app);
   addInfoCommand(app);
+  addImportCommand(app);
 }
 
 std::filesystem::path dataDir() {
