@@ -12,7 +12,8 @@ install(DIRECTORY "${PROJECT_SOURCE_DIR}/data/" DESTINATION ${CMAKE_INSTALL_DATA
 set(LIDARCAL_CMAKE_DIR ${CMAKE_INSTALL_LIBDIR}/cmake/lidarcal)
 install(EXPORT lidarcalTargets NAMESPACE lidarcal:: DESTINATION ${LIDARCAL_CMAKE_DIR})
 configure_package_config_file("${PROJECT_SOURCE_DIR}/cmake/lidarcalConfig.cmake.in"
-  "${PROJECT_BINARY_DIR}/lidarcalConfig.cmake" INSTALL_DESTINATION ${LIDARCAL_CMAKE_DIR})
+  "${PROJECT_BINARY_DIR}/lidarcalConfig.cmake" INSTALL_DESTINATION ${LIDARCAL_CMAKE_DIR}
+  PATH_VARS CMAKE_INSTALL_DATADIR)
 write_basic_package_version_file("${PROJECT_BINARY_DIR}/lidarcalConfigVersion.cmake"
   VERSION ${PROJECT_VERSION} COMPATIBILITY SameMinorVersion)
 install(FILES "${PROJECT_BINARY_DIR}/lidarcalConfig.cmake" "${PROJECT_BINARY_DIR}/lidarcalConfigVersion.cmake"
