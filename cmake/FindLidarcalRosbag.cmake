@@ -47,7 +47,6 @@ foreach(lib rosbag_storage roslz4 cpp_common rostime console_bridge boost_filesy
 endforeach()
 
 list(REMOVE_DUPLICATES LidarcalRosbag_INCLUDE_DIRS)
-include(FindPackageHandleStandardArgs)
 if(LidarcalRosbag_MISSING)
   set(LidarcalRosbag_FOUND FALSE)
 else()

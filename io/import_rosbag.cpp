@@ -91,6 +91,7 @@ double decimalOf(float value) {
 }  // namespace
 
 bool rosbagSupported() { return true; }
+void requireRosbagSupport(const fs::path&) {}
 
 void RosbagConfig::validate() const {
   checkRangeLimits(range_min_m.value_or(0.0), range_max_m.value_or(std::numeric_limits<double>::infinity()));

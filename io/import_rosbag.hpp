@@ -16,6 +16,8 @@ namespace lidarcal::io {
 
 /// True when this build can read ROS1 bags.
 bool rosbagSupported();
+/// Throws InputError (naming `bag` and how to enable bag support) when this build cannot read bags.
+void requireRosbagSupport(const std::filesystem::path& bag);
 
 /// One topic of a bag.
 struct BagTopic {

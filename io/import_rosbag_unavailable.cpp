@@ -14,6 +14,7 @@ namespace {
 }  // namespace
 
 bool rosbagSupported() { return false; }
+void requireRosbagSupport(const std::filesystem::path& bag) { unavailable(bag); }
 
 void RosbagConfig::validate() const {
   checkRangeLimits(range_min_m.value_or(0.0), range_max_m.value_or(std::numeric_limits<double>::infinity()));

@@ -77,7 +77,7 @@ ImportReport readYdlidarDat(const std::filesystem::path& dat, const YdlidarConfi
   if (report.scans == 0)
     throw InputError(dat.string(), "", "holds no scan line", "check the file; see docs/FORMAT.md (YDLIDAR X4 dataset)");
   report.sensor_name = "YDLIDAR X4";
-  report.notes.push_back("VIEWPOINT = odometry integrated from the distance/dtheta columns (mm, degrees)");
+  report.notes.push_back("VIEWPOINT = odometry integrated from the distance and dtheta columns (line 2 on)");
   return report;
 }
 

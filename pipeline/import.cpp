@@ -31,6 +31,7 @@ const char* toString(ImportFormat format) {
 ImportResult importRecording(const ImportSettings& s, const std::function<void(double)>& on_progress) {
   if (s.format != ImportFormat::rosbag1 && !s.topic.empty())
     throw InputError("", "--topic", "applies to --from rosbag1 only", "drop --topic");
+  if (s.format == ImportFormat::rosbag1) io::requireRosbagSupport(s.input);
   io::checkOutsideInput(s.input, s.out);
   io::SequenceWriter writer(s.out, s.writer);
   const io::ScanCallback on_scan = [&](const io::RawScan& scan) {

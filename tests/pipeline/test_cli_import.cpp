@@ -192,6 +192,17 @@ TEST(CliImportRosbag, RplidarBagGives1319ScansOf360BeamsAtOneStop) {
   EXPECT_EQ(test::readFile(dir / "some/scan_000001.pcd"), test::readFile(dir / "seq/scan_000010.pcd"));
 }
 
+TEST(CliImportRosbag, WithoutRosSupportTheErrorSaysHowToEnableIt) {
+  if (io::rosbagSupported()) GTEST_SKIP() << "this build reads bags";
+  TempDir dir;
+  test::writeFile(dir / "a.bag", "#ROSBAG V2.0\n");
+  const auto r = runCli("import --from rosbag1 " + (dir / "a.bag").string() + " --out " + (dir / "seq").string());
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("built without ROS1 bag support"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("-DLIDARCAL_WITH_ROSBAG=ON"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "seq"));
+}
+
 // ---- bad inputs: exit 2, a message naming file and line/topic with a remedy, nothing left behind.
 
 struct BadImport {
