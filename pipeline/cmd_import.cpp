@@ -1,7 +1,9 @@
 // lidarcal import --from rosbag1|carmen|ydlidar|csv INPUT --out SEQ [options]
 // Streams a recording into a PCD scan sequence (docs/FORMAT.md, "Importing recordings").
 
+#include <algorithm>
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 
 #include <CLI/CLI.hpp>
@@ -59,10 +61,13 @@ void runImport(const ImportOptions& o, const CLI::App& sub) {
   if (sub.count("--range-max")) s.range_max_m = o.range_max_m;
   s.sensor_name = o.sensor_name;
 
-  constexpr std::size_t kSteps = 1000;
-  Progress progress("import", kSteps);
+  // Progress in KiB of the input read (the number of scans is not known before the end).
+  std::error_code ec;
+  const auto bytes = std::filesystem::file_size(s.input, ec);
+  const std::size_t kib = ec ? 1 : std::max<std::size_t>(1, static_cast<std::size_t>(bytes / 1024));
+  Progress progress("import (KiB read)", kib);
   const ImportResult r = importRecording(s, [&](double fraction) {
-    progress.update(static_cast<std::size_t>(fraction * static_cast<double>(kSteps)));
+    progress.update(static_cast<std::size_t>(fraction * static_cast<double>(kib)));
   });
   progress.finish();
 
