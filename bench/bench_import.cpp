@@ -6,6 +6,8 @@
 //
 //   bench_import [--repeat N] [--data DIR] [--lidarcal PATH] > table.md
 //
+// Times are medians over N runs (default 5), peak RSS the largest.
+//
 // Add a step by appending to steps() (e.g. a detect step over the imported Freiburg sequence:
 // its `needs` names the import step whose output it reads). Numbers go to docs/RESULTS.md.
 
@@ -34,7 +36,8 @@ struct Step {
 
 struct Measure {
   double wall_s = 0.0;
-  double cpu_s = 0.0;  // user + system time of the child
+  double user_s = 0.0;    // user-space CPU time of the child (parsing, conversion, PCD encoding)
+  double system_s = 0.0;  // kernel CPU time of the child (file creation, I/O)
   long max_rss_kib = 0;
   int exit_code = -1;
 };
@@ -59,8 +62,8 @@ Measure runChild(const std::string& exe, const std::vector<std::string>& args) {
   Measure m;
   m.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   m.max_rss_kib = usage.ru_maxrss;  // kilobytes on Linux
-  m.cpu_s = static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
-            1e-6 * static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
+  m.user_s = static_cast<double>(usage.ru_utime.tv_sec) + 1e-6 * static_cast<double>(usage.ru_utime.tv_usec);
+  m.system_s = static_cast<double>(usage.ru_stime.tv_sec) + 1e-6 * static_cast<double>(usage.ru_stime.tv_usec);
   m.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return m;
 }
@@ -98,9 +101,11 @@ int main(int argc, char** argv) {
   const fs::path work = fs::temp_directory_path() / ("lidarcal-bench-import-" + std::to_string(getpid()));
   fs::create_directories(work);
 
-  // Wall time suffers when other work shares the CPU; CPU time (user + system) much less so.
-  std::printf("| step | scans | wall time | scans/s (wall) | CPU time | scans/s (CPU) | peak RSS |\n"
-              "|---|---|---|---|---|---|---|\n");
+  // Wall time suffers when other work shares the CPU; the child's user and system CPU times much
+  // less so. User time is lidarcal's own work; system time is mostly the file system creating
+  // one file per scan.
+  std::printf("| step | scans | wall time | scans/s (wall) | user CPU | scans/s (user CPU) | system CPU | peak RSS |\n"
+              "|---|---|---|---|---|---|---|---|\n");
   int failures = 0;
   int index = 0;
   for (const Step& step : steps(data)) {
@@ -112,7 +117,7 @@ int main(int argc, char** argv) {
     std::vector<std::string> args = step.args;
     for (auto& a : args)
       if (a == "{OUT}") a = out.string();
-    std::vector<double> walls, cpus;
+    std::vector<double> walls, users, systems;
     long rss = 0;
     for (int r = 0; r < repeat; ++r) {
       fs::remove_all(out);  // each run writes a fresh sequence (not timed)
@@ -123,19 +128,22 @@ int main(int argc, char** argv) {
         break;
       }
       walls.push_back(m.wall_s);
-      cpus.push_back(m.cpu_s);
+      users.push_back(m.user_s);
+      systems.push_back(m.system_s);
       rss = std::max(rss, m.max_rss_kib);
     }
     if (walls.empty()) continue;
-    std::sort(walls.begin(), walls.end());  // medians over the repeats
-    std::sort(cpus.begin(), cpus.end());
-    const double wall = walls[walls.size() / 2], cpu = cpus[cpus.size() / 2];
+    const auto median = [](std::vector<double> v) {
+      std::sort(v.begin(), v.end());
+      return v[v.size() / 2];
+    };
+    const double wall = median(walls), user = median(users), sys = median(systems);
     const double mib = static_cast<double>(rss) / 1024.0;
     if (step.scans)
-      std::printf("| %s | %zu | %.3f s | %.0f | %.3f s | %.0f | %.1f MiB |\n", step.name.c_str(), step.scans, wall,
-                  static_cast<double>(step.scans) / wall, cpu, static_cast<double>(step.scans) / cpu, mib);
+      std::printf("| %s | %zu | %.3f s | %.0f | %.3f s | %.0f | %.3f s | %.1f MiB |\n", step.name.c_str(), step.scans,
+                  wall, static_cast<double>(step.scans) / wall, user, static_cast<double>(step.scans) / user, sys, mib);
     else
-      std::printf("| %s | | %.3f s | | %.3f s | | %.1f MiB |\n", step.name.c_str(), wall, cpu, mib);
+      std::printf("| %s | | %.3f s | | %.3f s | | %.3f s | %.1f MiB |\n", step.name.c_str(), wall, user, sys, mib);
   }
   fs::remove_all(work);
   return failures == 0 ? 0 : 1;
