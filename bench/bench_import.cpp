@@ -20,6 +20,8 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <string>
 #include <vector>
 
@@ -32,6 +34,7 @@ struct Step {
   std::vector<std::string> args;  // arguments of `lidarcal` ({OUT} is replaced by the step's output directory)
   std::size_t scans = 0;          // scans processed (for scans/s); 0 = not a per-scan step
   std::string input;              // file that must exist (skipped otherwise)
+  int repeat = 0;                 // runs of this step; 0 = --repeat
 };
 
 struct Measure {
@@ -68,8 +71,22 @@ Measure runChild(const std::string& exe, const std::vector<std::string>& args) {
   return m;
 }
 
-std::vector<Step> steps(const fs::path& data) {
+/// Four copies of the Freiburg 079 log back to back (gzip members may be concatenated): a
+/// 19,164-scan recording, to show that memory does not grow with the length of the input.
+std::string longLog(const fs::path& data, const fs::path& work) {
+  const fs::path source = data / "carmen/freiburg-079-corrected.log.gz";
+  const fs::path target = work / "freiburg-079-x4.log.gz";
+  if (!fs::exists(source)) return source.string();
+  std::ifstream in(source, std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::ofstream out(target, std::ios::binary);
+  for (int i = 0; i < 4; ++i) out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  return target.string();
+}
+
+std::vector<Step> steps(const fs::path& data, const fs::path& work) {
   const std::string freiburg = (data / "carmen/freiburg-079-corrected.log.gz").string();
+  const std::string freiburg_x4 = longLog(data, work);
   const std::string bag = (data / "rplidar_a2_room/rplidar_1.bag").string();
   const std::vector<std::string> carmen = {"import", "-q", "--from", "carmen", freiburg, "--out", "{OUT}"};
   const std::vector<std::string> rosbag = {"import", "-q", "--from", "rosbag1", bag, "--out", "{OUT}"};
@@ -81,6 +98,8 @@ std::vector<Step> steps(const fs::path& data) {
       {"baseline: `lidarcal --version`", {"--version"}, 0, ""},
       {"import Freiburg 079 (CARMEN .log.gz), first 500 scans", with(carmen, {"--max-scans", "500"}), 500, freiburg},
       {"import Freiburg 079 (CARMEN .log.gz), all scans", carmen, 4791, freiburg},
+      {"import Freiburg 079 four times over (19,164 scans, one run)",
+       {"import", "-q", "--from", "carmen", freiburg_x4, "--out", "{OUT}"}, 4 * 4791, freiburg_x4, 1},
       {"import RPLIDAR bag (ROS1), first 130 scans", with(rosbag, {"--max-scans", "130"}), 130, bag},
       {"import RPLIDAR bag (ROS1), all scans", rosbag, 1319, bag},
   };
@@ -108,7 +127,7 @@ int main(int argc, char** argv) {
               "|---|---|---|---|---|---|---|---|\n");
   int failures = 0;
   int index = 0;
-  for (const Step& step : steps(data)) {
+  for (const Step& step : steps(data, work)) {
     const fs::path out = work / ("step" + std::to_string(index++));
     if (!step.input.empty() && !fs::exists(step.input)) {
       std::printf("| %s | skipped: %s absent | | | |\n", step.name.c_str(), step.input.c_str());
@@ -119,7 +138,8 @@ int main(int argc, char** argv) {
       if (a == "{OUT}") a = out.string();
     std::vector<double> walls, users, systems;
     long rss = 0;
-    for (int r = 0; r < repeat; ++r) {
+    const int runs = step.repeat > 0 ? step.repeat : repeat;
+    for (int r = 0; r < runs; ++r) {
       fs::remove_all(out);  // each run writes a fresh sequence (not timed)
       const Measure m = runChild(exe, args);
       if (m.exit_code != 0) {
@@ -132,6 +152,7 @@ int main(int argc, char** argv) {
       systems.push_back(m.system_s);
       rss = std::max(rss, m.max_rss_kib);
     }
+    fs::remove_all(out);
     if (walls.empty()) continue;
     const auto median = [](std::vector<double> v) {
       std::sort(v.begin(), v.end());

@@ -37,6 +37,14 @@ TEST(LineReader, PlainAndGzipGiveTheSameLines) {
   EXPECT_TRUE(LineReader(dir / "a.txt.gz").compressed());
 }
 
+TEST(LineReader, ConcatenatedGzipMembersReadAsOneFile) {
+  TempDir dir;
+  test::writeGzip(dir / "a.gz", "one\ntwo\n");
+  test::writeGzip(dir / "b.gz", "three\n");
+  test::writeFile(dir / "ab.gz", test::readFile(dir / "a.gz") + test::readFile(dir / "b.gz"));
+  EXPECT_EQ(readAll(dir / "ab.gz"), (std::vector<std::string>{"one", "two", "three"}));
+}
+
 TEST(LineReader, TruncatedGzipIsAnError) {
   TempDir dir;
   std::string text;
