@@ -47,6 +47,13 @@ class LineParser {
     return v;
   }
 
+  /// Reads x y theta starting at field i.
+  Pose2 pose(std::size_t i) const {
+    const double x = number(i, "x"), y = number(i + 1, "y"), theta = number(i + 2, "theta");
+    if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(theta)) fail("the pose is not finite");
+    return Pose2{x, y, wrapAngle(theta)};
+  }
+
   std::size_t count(std::size_t i, const char* what) const {
     const double v = number(i, what);
     if (!(v >= 0.0) || v != std::floor(v) || v > static_cast<double>(kMaxBeams))
@@ -79,8 +86,7 @@ void parseFlaser(const LineParser& p, const CarmenConfig& config, RawScan& scan)
   p.expectValues(n + 10, "n + 10: the beam count n, n ranges, x y theta odom_x odom_y odom_theta, "
                          "ipc_timestamp ipc_hostname logger_timestamp");
   p.ranges(2, n, scan.ranges_m);
-  const std::size_t pose = 2 + n + (config.pose == CarmenPose::corrected ? 0 : 3);
-  scan.pose = Pose2{p.number(pose, "x"), p.number(pose + 1, "y"), wrapAngle(p.number(pose + 2, "theta"))};
+  scan.pose = p.pose(2 + n + (config.pose == CarmenPose::corrected ? 0 : 3));
   scan.stamp_s = p.number(2 + n + 6, "ipc_timestamp");
   const double fov = flaserFov_rad(n);
   const double step = n > 1 ? fov / static_cast<double>(n - 1) : 0.0;
@@ -102,8 +108,7 @@ void parseRobotlaser(const LineParser& p, const CarmenConfig& config, RawScan& s
   scan.intensities.clear();
   if (m == n && n > 0) p.ranges(10 + n, m, scan.intensities);
   const std::size_t poses = 10 + n + m;
-  const std::size_t pose = poses + (config.pose == CarmenPose::corrected ? 0 : 3);
-  scan.pose = Pose2{p.number(pose, "x"), p.number(pose + 1, "y"), wrapAngle(p.number(pose + 2, "theta"))};
+  scan.pose = p.pose(poses + (config.pose == CarmenPose::corrected ? 0 : 3));
   scan.stamp_s = p.number(poses + 11, "timestamp");
   scan.angles_rad.resize(n);
   for (std::size_t i = 0; i < n; ++i) scan.angles_rad[i] = start + static_cast<double>(i) * resolution;

@@ -212,6 +212,7 @@ INSTANTIATE_TEST_SUITE_P(
                       BadLine{"RangeNotANumber", "FLASER 2 1.0 abc 0 0 0 0 0 0 1 host 1\n", "'abc', not a number"},
                       BadLine{"NoCount", "FLASER\n", "beam count"},
                       BadLine{"NegativeCount", "FLASER -3 1 2 3\n", "whole number"},
+                      BadLine{"PoseNotFinite", "FLASER 2 1.0 1.1 nan 0 0 0 0 0 1 host 1\n", "pose is not finite"},
                       BadLine{"RobotLaserShort", withoutLastValue(robotlaser1(4, -1, 0.25, 30, false)),
                               "line 6 (ROBOTLASER1): has 26 values after ROBOTLASER1, expected 27", true}),
     [](const auto& p) { return std::string(p.param.name); });
