@@ -135,7 +135,6 @@ ImportReport readCsvScans(const std::filesystem::path& csv, const CsvConfig& con
   else if (collecting) flush();  // the last scan: nothing left to stop
   if (!have_header) throw InputError(csv.string(), "", "is empty: no header line", kRemedy);
   if (report.scans == 0) throw InputError(csv.string(), "", "has a header but no data row", kRemedy);
-  report.sensor_name = "";
   report.notes.push_back("VIEWPOINT = the x_m, y_m, yaw_rad columns");
   return report;
 }
