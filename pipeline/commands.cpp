@@ -13,6 +13,7 @@ void registerCommands(CLI::App& app) {
   addCalibrateCommand(app);
   addCorrectCommand(app);
   addEvaluateCommand(app);
+  addImportCommand(app);
 }
 
 std::filesystem::path dataDir() {

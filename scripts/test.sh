@@ -3,6 +3,6 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/install-deps.sh
-cmake -S . -B build -DLIDARCAL_WERROR=ON
+cmake -S . -B build -DLIDARCAL_WERROR=ON -DLIDARCAL_WITH_ROSBAG=ON
 cmake --build build -j"$(nproc)"
 ctest --test-dir build --output-on-failure -j"$(nproc)"

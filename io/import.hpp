@@ -1,0 +1,46 @@
+#pragma once
+// What every importer (ROS1 bag, CARMEN, YDLIDAR X4 dataset, CSV) hands on: one scan at a time
+// in polar form, as the recording stores it. Importers stream: they refill one RawScan and call
+// the ScanCallback once per scan, so memory does not grow with the length of the recording.
+// The SequenceWriter (io/sequence_writer.hpp) turns the scans into a PCD scan sequence.
+
+#include <cstddef>
+#include <functional>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "common/pose2.hpp"
+
+namespace lidarcal::io {
+
+/// One scan of a recording, polar.
+struct RawScan {
+  Pose2 pose;                        ///< sensor pose in the world frame (becomes VIEWPOINT); identity when the recording has none
+  std::vector<double> angles_rad;    ///< bearing of each beam in the sensor frame, radians, counter-clockwise from x (forward)
+  std::vector<float> ranges_m;       ///< reading of each beam, metres; NaN, inf or <= 0 means no return
+  std::vector<float> intensities;    ///< intensity of each beam in the sensor's units; empty = none recorded
+  double range_min_m = 0.0;          ///< readings below this become beams without return, metres
+  double range_max_m = std::numeric_limits<double>::infinity();  ///< readings above this become beams without return, metres
+  double stamp_s = std::numeric_limits<double>::quiet_NaN();     ///< time stamp, seconds (informational; NaN when absent)
+  std::size_t source_index = 0;      ///< index of the scan in the recording (0-based, before --every)
+  double progress = 0.0;             ///< fraction of the input read so far, 0..1 (for progress display only)
+};
+
+/// Receives the scans one at a time; returns false to stop reading (enough scans).
+using ScanCallback = std::function<bool(const RawScan&)>;
+
+/// What an importer read.
+struct ImportReport {
+  std::size_t scans = 0;             ///< scans handed to the callback
+  std::size_t other_records = 0;     ///< records ignored because they are not scans of the selected source (lines, messages)
+  bool stopped_early = false;        ///< the callback asked to stop before the end of the input
+  std::string sensor_name;           ///< what the input says about the sensor (for sequence.json)
+  std::vector<std::string> notes;    ///< facts the user should know (e.g. which pose went into VIEWPOINT)
+};
+
+/// Checks a range window for the importers' configs: 0 <= range_min_m < range_max_m (max may
+/// be infinite). Throws InputError naming --range-min / --range-max.
+void checkRangeLimits(double range_min_m, double range_max_m);
+
+}  // namespace lidarcal::io

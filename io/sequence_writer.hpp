@@ -1,0 +1,65 @@
+#pragma once
+// The streaming sink of every importer: writes scan_NNNNNN.pcd files one at a time into a
+// staged output directory and, at commit(), sequence.json (sensor name, range limits, beams).
+// Nothing appears at the output path until commit(); a failed import leaves nothing behind.
+
+#include <cstddef>
+#include <filesystem>
+#include <string>
+
+#include "io/atomic_file.hpp"
+#include "io/import.hpp"
+#include "io/pcd_scan.hpp"
+
+namespace lidarcal::io {
+
+struct SequenceWriterConfig {
+  std::size_t every = 1;        ///< write every N-th scan offered (scans 0, N, 2N, ...); >= 1; default 1 = all
+  std::size_t max_scans = 0;    ///< stop after writing this many scans; 0 (default) = no limit
+  bool overwrite = false;       ///< replace an existing output directory at commit(); default false
+  PcdEncoding encoding = PcdEncoding::binary;  ///< encoding of the written PCD files; default binary
+
+  /// Throws InputError when a value is out of range.
+  void validate() const;
+};
+
+/// What was written.
+struct SequenceWriteSummary {
+  std::filesystem::path out;         ///< the sequence directory (final location)
+  std::size_t offered = 0;           ///< scans offered by the importer
+  std::size_t written = 0;           ///< scans written
+  std::size_t min_beams = 0;         ///< fewest points in a written scan
+  std::size_t max_beams = 0;         ///< most points in a written scan
+  std::size_t points = 0;            ///< points written (one per beam)
+  std::size_t returns = 0;           ///< points with coordinates (not NaN)
+  std::size_t no_return = 0;         ///< readings that were NaN, inf or <= 0 (no return in the source)
+  std::size_t outside_limits = 0;    ///< finite positive readings outside [range_min, range_max], written as NaN
+  std::size_t with_intensity = 0;    ///< written scans that carry an `intensity` field
+  double range_min_m = 0.0;          ///< lower range limit recorded in sequence.json, metres (smallest over the scans)
+  double range_max_m = 0.0;          ///< upper range limit recorded (largest over the scans; inf when unbounded: then not recorded)
+};
+
+class SequenceWriter {
+ public:
+  /// Prepares a staging directory beside `out`. Throws InputError when `out` exists (without
+  /// overwrite) or cannot be created.
+  SequenceWriter(const std::filesystem::path& out, const SequenceWriterConfig& config);
+
+  /// Offers the next scan of the recording: every N-th one is converted to points
+  /// (x = r cos a, y = r sin a, z = 0; NaN for readings without return or outside the scan's
+  /// range limits) and written. Returns false once max_scans scans have been written.
+  bool add(const RawScan& scan);
+
+  /// Writes sequence.json and moves the directory into place. Throws InputError when no scan was written.
+  SequenceWriteSummary commit(const std::string& sensor_name);
+
+  const SequenceWriteSummary& summary() const { return summary_; }
+
+ private:
+  SequenceWriterConfig config_;
+  StagedDirectory dir_;
+  SequenceWriteSummary summary_;
+  Scan scratch_;  // reused for every scan: memory stays that of one scan
+};
+
+}  // namespace lidarcal::io

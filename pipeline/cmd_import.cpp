@@ -1,0 +1,118 @@
+// lidarcal import --from rosbag1|carmen|ydlidar|csv INPUT --out SEQ [options]
+// Streams a recording into a PCD scan sequence (docs/FORMAT.md, "Importing recordings").
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+
+#include <CLI/CLI.hpp>
+
+#include "common/errors.hpp"
+#include "io/import_rosbag.hpp"
+#include "pipeline/commands.hpp"
+#include "pipeline/import.hpp"
+#include "pipeline/progress.hpp"
+
+namespace lidarcal::pipeline {
+namespace {
+
+struct ImportOptions {
+  std::string from;
+  std::string input;
+  std::string out;
+  std::string topic;
+  bool list_topics = false;
+  std::size_t every = 1;
+  std::size_t max_scans = 0;
+  bool overwrite = false;
+  bool ascii = false;
+  std::string pose = "corrected";
+  double range_min_m = 0.0;
+  double range_max_m = 0.0;
+  std::string sensor_name;
+};
+
+void listTopics(const ImportOptions& o) {
+  if (parseImportFormat(o.from) != ImportFormat::rosbag1)
+    throw InputError("", "--list-topics", "applies to --from rosbag1 only", "drop --list-topics");
+  std::printf("| topic | type | messages |\n|---|---|---|\n");
+  for (const io::BagTopic& t : io::listBagTopics(o.input))
+    std::printf("| %s | %s | %zu |\n", t.topic.c_str(), t.datatype.c_str(), t.messages);
+}
+
+void runImport(const ImportOptions& o, const CLI::App& sub) {
+  if (o.list_topics) return listTopics(o);
+  if (o.out.empty()) throw InputError("", "--out", "is required", "give the sequence directory to create");
+  ImportSettings s;
+  s.format = parseImportFormat(o.from);
+  s.input = o.input;
+  s.out = o.out;
+  s.topic = o.topic;
+  s.writer.every = o.every;
+  s.writer.max_scans = o.max_scans;
+  s.writer.overwrite = o.overwrite;
+  s.writer.encoding = o.ascii ? io::PcdEncoding::ascii : io::PcdEncoding::binary;
+  if (sub.count("--pose")) {
+    if (s.format != ImportFormat::carmen) throw InputError("", "--pose", "applies to --from carmen only", "drop --pose");
+    s.carmen_pose = o.pose == "odometry" ? io::CarmenPose::odometry : io::CarmenPose::corrected;
+  }
+  if (sub.count("--range-min")) s.range_min_m = o.range_min_m;
+  if (sub.count("--range-max")) s.range_max_m = o.range_max_m;
+  s.sensor_name = o.sensor_name;
+
+  // Progress in KiB of the input read (the number of scans is not known before the end).
+  std::error_code ec;
+  const auto bytes = std::filesystem::file_size(s.input, ec);
+  const std::size_t kib = ec ? 1 : std::max<std::size_t>(1, static_cast<std::size_t>(bytes / 1024));
+  Progress progress("import (KiB read)", kib);
+  const ImportResult r = importRecording(s, [&](double fraction) {
+    progress.update(static_cast<std::size_t>(fraction * static_cast<double>(kib)));
+  });
+  progress.finish();
+
+  const auto& w = r.written;
+  std::printf("imported %zu of %zu scans from %s (%s) into %s\n", w.written, r.read.scans, o.input.c_str(),
+              toString(s.format), w.out.c_str());
+  if (w.min_beams == w.max_beams) std::printf("  beams per scan: %zu\n", w.max_beams);
+  else std::printf("  beams per scan: %zu-%zu (sequence.json has no `beams`)\n", w.min_beams, w.max_beams);
+  std::printf("  returns: %zu of %zu points; %zu without return in the source, %zu outside the range limits\n",
+              w.returns, w.points, w.no_return, w.outside_limits);
+  std::printf("  scans with intensity: %zu\n", w.with_intensity);
+  if (r.read.other_records) std::printf("  other records ignored: %zu\n", r.read.other_records);
+  if (r.read.stopped_early) std::printf("  stopped after --max-scans %zu\n", o.max_scans);
+  for (const auto& note : r.read.notes) std::printf("  %s\n", note.c_str());
+}
+
+}  // namespace
+
+void addImportCommand(CLI::App& app) {
+  auto o = std::make_shared<ImportOptions>();
+  CLI::App* sub = app.add_subcommand(
+      "import", "Convert a recording (ROS1 bag, CARMEN log, YDLIDAR X4 .dat, CSV) into a scan sequence, streaming");
+  sub->add_option("--from", o->from, "Input format")
+      ->required()
+      ->check(CLI::IsMember({"rosbag1", "carmen", "ydlidar", "csv"}));
+  sub->add_option("INPUT", o->input, "The recording (.bag; CARMEN .log or .log.gz; .dat; .csv; text inputs may be gzip)")
+      ->required();
+  sub->add_option("--out", o->out, "Sequence directory to create (scan_NNNNNN.pcd + sequence.json)");
+  sub->add_option("--topic", o->topic, "rosbag1: sensor_msgs/LaserScan topic (default: the bag's only one)");
+  sub->add_flag("--list-topics", o->list_topics, "rosbag1: list the bag's topics and exit");
+  sub->add_option("--every", o->every, "Keep every N-th scan")->check(CLI::PositiveNumber)->capture_default_str();
+  sub->add_option("--max-scans", o->max_scans, "Stop after writing N scans (0 = all)")->capture_default_str();
+  sub->add_option("--pose", o->pose,
+                  "carmen: VIEWPOINT from the laser pose (`corrected`: FLASER x y theta) or the odometry "
+                  "(`odometry`: FLASER odom_x odom_y odom_theta)")
+      ->check(CLI::IsMember({"corrected", "odometry"}))
+      ->capture_default_str();
+  sub->add_option("--range-min", o->range_min_m, "Readings below this (m) become beams without return (default: per format)");
+  sub->add_option("--range-max", o->range_max_m, "Readings above this (m) become beams without return (default: per format)");
+  sub->add_option("--sensor-name", o->sensor_name, "sensor_name written to sequence.json (default: from the input)");
+  sub->add_flag("--ascii", o->ascii, "Write ASCII PCD instead of binary");
+  sub->add_flag("--overwrite", o->overwrite, "Replace SEQ if it exists");
+  sub->footer(std::string("ROS1 bag support in this build: ") + (io::rosbagSupported() ? "yes" : "no") +
+              ". Formats, conventions and range limits: docs/FORMAT.md.");
+  sub->callback([o, sub] { runImport(*o, *sub); });
+}
+
+}  // namespace lidarcal::pipeline
