@@ -9,6 +9,7 @@ namespace lidarcal::pipeline {
 void registerCommands(CLI::App& app) {
   addSimulateCommand(app);
   addInfoCommand(app);
+  addDetectCommand(app);
 }
 
 std::filesystem::path dataDir() {
