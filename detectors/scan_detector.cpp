@@ -41,6 +41,8 @@ void DetectionConfig::validate() const {
   if (!(min_width_fraction >= 0.0 && min_width_fraction <= 1.0)) fail("min_width_fraction", "must be in [0, 1]");
   if (!(line_evidence >= 0.0) || !std::isfinite(line_evidence)) fail("line_evidence", "must be >= 0");
   if (!(line_rms_ratio >= 0.0) || !std::isfinite(line_rms_ratio)) fail("line_rms_ratio", "must be >= 0");
+  if (!(max_threshold_to_radius > 0.0) || !std::isfinite(max_threshold_to_radius))
+    fail("max_threshold_to_radius", "must be > 0");
   if (!(max_radius_uncertainty > 0.0)) fail("max_radius_uncertainty", "must be > 0");
   if (free_radius_check_points < 3) fail("free_radius_check_points", "must be >= 3");
   if (max_iterations < 1) fail("max_iterations", "must be >= 1");
@@ -166,6 +168,10 @@ struct Classifier {
 
     if (idx.size() < min_points) {
       s.reason = "too few points (" + std::to_string(idx.size()) + ")";
+      return std::nullopt;
+    }
+    if (t > cfg.max_threshold_to_radius * (known ? *radius_known : cfg.radius_max_m)) {
+      s.reason = "too far: the noise hides the shape of a landmark";
       return std::nullopt;
     }
     if (cfg.require_free_edges && (nearerNeighbour(idx.front(), -1) || nearerNeighbour(idx.back(), +1))) {

@@ -3,6 +3,7 @@
 // circle (a pole: landmark candidate), a line (wall, box face) or clutter.
 //
 // A cluster is a circle when (seed 000 section 2, A1: cylinders of known or inferable radius)
+//  - it is near enough for its shape to show (t(range) <= max_threshold_to_radius R);
 //  - it stands in front of its surroundings: the beams next to its ends have no return or a
 //    farther one (require_free_edges; a wall seen between chair legs is cut by nearer returns);
 //  - it has enough points and its width across the line of sight fits the landmark: at most
@@ -49,6 +50,9 @@ struct DetectionConfig {
   int min_points_free = 4;                      ///< returns a cluster needs with R unknown. Default 4
   double threshold_m = 0.01;                    ///< inlier threshold at range 0, metres. Default 0.01
   double threshold_per_m2 = 0.005;              ///< growth of the threshold with range squared, 1/m. Default 0.005
+  /// Clusters so far that t exceeds this many radii (the largest radius when unknown) are not
+  /// judged: the noise hides the shape. Default 2.
+  double max_threshold_to_radius = 2.0;
   double max_rms_fraction = 0.6;                ///< fit RMS must be <= fraction * threshold. Default 0.6
   double min_inlier_fraction = 0.7;             ///< circle inliers / cluster returns. Default 0.7
   double extent_factor = 1.3;                   ///< width across the line of sight <= 2 R factor (range bias stretches arcs). Default 1.3
