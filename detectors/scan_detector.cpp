@@ -170,7 +170,7 @@ struct Classifier {
       s.reason = "too few points (" + std::to_string(idx.size()) + ")";
       return std::nullopt;
     }
-    if (t > cfg.max_threshold_to_radius * (known ? *radius_known : cfg.radius_max_m)) {
+    if (t > cfg.max_threshold_to_radius * r_wide) {
       s.reason = "too far: the noise hides the shape of a landmark";
       return std::nullopt;
     }

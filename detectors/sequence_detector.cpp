@@ -166,6 +166,7 @@ SequenceDetections detectSequence(std::size_t scan_count, const ScanLoader& load
     updateLandmarkPositions(r);
     redetectWithRadii(r, load, config, on_scan);
   }
+  if (on_scan && !known) on_scan(2 * scan_count, 2 * scan_count);  // no second pass without landmarks
   updateLandmarkPositions(r);
 
   std::size_t circles = 0;
@@ -173,7 +174,7 @@ SequenceDetections detectSequence(std::size_t scan_count, const ScanLoader& load
   if (r.association.landmarks.empty()) {
     r.radius_source = RadiusSource::none;
     r.note = circles == 0 ? "no circular object found in any scan: zero landmarks"
-                          : std::to_string(circles) + " circle(s) found, but none at " +
+                          : std::to_string(circles) + " circle(s) found, but none seen in half the scans of " +
                                 std::to_string(config.association.min_stops) +
                                 " or more stops (capped at the number of stops): zero landmarks";
   } else {
