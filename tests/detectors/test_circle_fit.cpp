@@ -172,6 +172,23 @@ TEST(FitCircle, RadiusOutsideTheLimitsIsAStatus) {
   EXPECT_EQ(fitCircle(few, all(few), cfg).status, FitStatus::radius_out_of_limits);
 }
 
+// PCL's trap: the optimised circle can leave the radius limits (and then select no inlier). Ours
+// falls back to RANSAC's unoptimised model, which respects the limits, and keeps its inliers.
+TEST(FitCircle, RefinementLeavingTheLimitsFallsBackToTheRansacModel) {
+  // Noise makes some minimal samples fall inside the limits; the least-squares circle does not.
+  const Cloud c = arc(0.0, 0.0, 1.0, 0.0, kPi / 2.0, 30, 0.01, 5);
+  CircleFitConfig cfg;
+  cfg.inlier_threshold_m = 0.03;
+  cfg.radius_min_m = 0.5;
+  cfg.radius_max_m = 0.97;  // the true radius (1.0) is just outside
+  const CircleFit fit = fitCircle(c, all(c), cfg);
+  ASSERT_EQ(fit.status, FitStatus::ok) << fit.message;
+  EXPECT_TRUE(fit.used_ransac);
+  EXPECT_TRUE(fit.refinement_rejected);
+  EXPECT_LE(fit.circle.radius_m, 0.97);
+  EXPECT_GE(fit.inliers.size(), 20u);
+}
+
 TEST(FitCircle, RigidMotionMovesTheCentreTheSameWay) {
   const Cloud base = arc(0.3, -0.2, 0.15, 0.2, 2.5, 25, 0.002, 3);
   const CircleFit a = fitCircle(base, all(base), CircleFitConfig{});
