@@ -238,7 +238,7 @@ Association associate(const std::vector<ScanDetections>& scans, const std::vecto
   }
   std::sort(offers.begin(), offers.end());
   std::set<std::pair<std::size_t, std::size_t>> taken_stop;  // (candidate, stop)
-  for (auto c = 0u; c < candidates.size(); ++c)
+  for (std::size_t c = 0; c < candidates.size(); ++c)
     for (auto q : candidates[c].clusters) taken_stop.emplace(c, clusters[q].stop);
   for (const auto& [dist, key, k, c] : offers) {
     if (candidate_of[k] >= 0 || taken_stop.count({c, clusters[k].stop})) continue;
