@@ -10,6 +10,7 @@ void registerCommands(CLI::App& app) {
   addSimulateCommand(app);
   addInfoCommand(app);
   addImportCommand(app);
+  addDetectCommand(app);
 }
 
 std::filesystem::path dataDir() {
