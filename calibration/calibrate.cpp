@@ -339,6 +339,8 @@ CalibrationModel calibrate(const LandmarkObservations& obs, const CalibrationCon
   from.radius_m = settled.radius_m;
   from.model = settled.model;
   jc.reselect = false;
+  jc.covariance = false;  // computed once, for the chosen order
+  jc.outer_iterations = std::min(jc.outer_iterations, 2);  // the noise law settled in pass 1
   std::vector<JointResult> runs;
   std::vector<OrderRow> rows;
   for (int n = 1; n <= config.max_order; ++n) {
@@ -367,6 +369,18 @@ CalibrationModel calibrate(const LandmarkObservations& obs, const CalibrationCon
         chosen = i;
         break;
       }
+  if (config.joint.covariance && !runs[chosen].poses.empty()) {
+    // Covariance at the chosen order: one more (already converged) solve with it switched on.
+    JointInit at = from;
+    at.poses = runs[chosen].poses;
+    at.centres = runs[chosen].centres;
+    at.radius_m = runs[chosen].radius_m;
+    at.model = runs[chosen].model;
+    jc.order = static_cast<int>(chosen) + 1;
+    jc.covariance = true;
+    jc.outer_iterations = 1;
+    runs[chosen] = refineJoint(obs, at, jc);
+  }
   const JointResult& j = runs[chosen];
   if (j.poses.empty()) {
     m.status = "joint_failed";
@@ -386,6 +400,8 @@ CalibrationModel calibrate(const LandmarkObservations& obs, const CalibrationCon
   m.stop_poses = j.poses;
   m.heading_scatter_rad = j.heading_scatter_rad;
   m.residual_rms_m = j.residual_rms_m;
+  // The noise estimators side by side, on the joint refinement's readings and distances.
+  fillNoiseFits(m, m.model.bias.order(), j.distances_m, j.readings_m, batches);
   m.alpha_covariance.assign(j.alpha_covariance.data(), j.alpha_covariance.data() + j.alpha_covariance.size());
   for (auto& c : m.landmarks) {
     auto it = j.centres.find(c.id);
@@ -416,17 +432,36 @@ CalibrationModel calibrateAgainstTruth(const std::vector<RangePair>& pairs, cons
   }
   const OrderSelection sel = selectOrder(pairs, config.max_order, config.closed_form_rule);
   fillOrders(m, sel, pairs.size());
-  const int order = std::max(sel.chosen, 1);
   std::vector<double> d, y;
   for (const auto& p : pairs) {
     d.push_back(p.d_m);
     y.push_back(p.y_m);
   }
-  m.model.bias.alpha = sel.table[static_cast<std::size_t>(std::min<int>(order, static_cast<int>(sel.table.size()) - 1))].alpha;
+  int order = std::max(sel.chosen, 1);
+  if (config.noise == NoiseKind::squared) {
+    // With known distances the oracle is seed 004's estimator: full ML of model (1) for every
+    // order (eqs. 18-20, from the closed form eqs. 21-26) and the order by AIC on that likelihood.
+    double best = std::numeric_limits<double>::infinity();
+    for (auto& row : m.orders) {
+      if (row.order < 1) continue;
+      const Seed004Fit cf = fitSeed004ClosedForm(d, y, row.order);
+      const Seed004Fit ml = fitSeed004ML(d, y, cf.alpha);
+      const double k = row.order + 2.0;
+      row.alpha = ml.alpha;
+      row.aic = 2.0 * k + 2.0 * ml.neg_log_likelihood;
+      row.bic = k * std::log(static_cast<double>(d.size())) + 2.0 * ml.neg_log_likelihood;
+      if (row.aic < best) {
+        best = row.aic;
+        order = row.order;
+      }
+    }
+    m.order_aic = order;
+    m.order_rule = "aic (seed 004 ML)";
+    m.model.bias.alpha = m.orders[static_cast<std::size_t>(order)].alpha;
+  } else {
+    m.model.bias.alpha = sel.table[static_cast<std::size_t>(std::min<int>(order, static_cast<int>(sel.table.size()) - 1))].alpha;
+  }
   fillNoiseFits(m, order, d, y, batches);
-  // With known distances the oracle is seed 004's estimator: full ML of model (1) at the
-  // AIC order (eqs. 18-20) when the noise law is the squared one; least squares otherwise.
-  if (config.noise == NoiseKind::squared) m.model.bias.alpha = m.noise_fits.seed004_ml_alpha;
   m.model.noise = fitNoiseLaw(config.noise, order, m.model.bias, d, y);
   m.residual_rms_m = rmsResidual(m.model.bias, d, y);
   m.readings = d.size();

@@ -55,6 +55,8 @@ struct JointResult {
   double heading_scatter_rad = 0.0;        ///< RMS of refined minus commanded heading
   std::size_t readings = 0;                ///< beam readings used
   double residual_rms_m = 0.0;             ///< RMS of reading minus f(predicted distance)
+  std::vector<double> distances_m;         ///< predicted distance of every reading used, at the solution
+  std::vector<double> readings_m;          ///< the readings themselves (same order)
   std::size_t outliers = 0;                ///< readings beyond the Huber threshold at the end
   double neg_log_likelihood = 0.0;         ///< Gaussian NLL of the readings at the solution
   double aic = 0.0;                        ///< 2 k + 2 NLL, k = bias + noise + radius parameters
