@@ -94,6 +94,7 @@ void fillOrders(CalibrationModel& m, const OrderSelection& sel, std::size_t n) {
   m.orders.clear();
   for (const auto& row : sel.table) {
     OrderRow o;
+    o.invertible = row.admissible;
     o.order = row.order;
     o.alpha = row.alpha;
     o.aic = row.aic;
@@ -147,6 +148,14 @@ std::map<int, Eigen::Vector2d> rangeBearingCentres(const LandmarkObservations& o
     out[l.id] = count[l.id] > 0 ? Eigen::Vector2d(sum[l.id] / count[l.id]) : Eigen::Vector2d(l.x_m, l.y_m);
   }
   return out;
+}
+
+/// Orders whose f cannot be inverted over the sensor's reading window are not candidates: the
+/// filtering stage could not use them (and they only arise from overfitting).
+Admissible invertibleOver(double range_min_m, double range_max_m) {
+  return [=](const std::vector<double>& alpha) {
+    return alpha.size() >= 2 && invertsReadingWindow(BiasPolynomial{alpha}, range_min_m, range_max_m);
+  };
 }
 
 }  // namespace
@@ -274,7 +283,9 @@ CalibrationModel calibrate(const LandmarkObservations& obs, const CalibrationCon
     m.message = "only " + std::to_string(pairs.size()) + " landmark-stop distances: add stops or landmarks";
     return m;
   }
-  const OrderSelection sel = selectOrder(pairs, config.max_order, config.closed_form_rule);
+  const bool window_known = obs.range_max_m < 1e8;
+  const OrderSelection sel = selectOrder(pairs, config.max_order, config.closed_form_rule,
+                                         window_known ? invertibleOver(obs.range_min_m, obs.range_max_m) : Admissible{});
   fillOrders(m, sel, pairs.size());
   std::vector<double> d, y;
   for (const auto& p : scan_pairs) {
@@ -356,16 +367,19 @@ CalibrationModel calibrate(const LandmarkObservations& obs, const CalibrationCon
     row.validation_mse_m2 = row.test_mse_m2 = std::numeric_limits<double>::quiet_NaN();
     rows.push_back(row);
   }
+  const Admissible ok_order = window_known ? invertibleOver(obs.range_min_m, obs.range_max_m) : Admissible{};
+  for (auto& row : rows) row.invertible = !ok_order || ok_order(row.alpha);
   std::size_t best_aic = 0, best_bic = 0;
-  for (std::size_t i = 1; i < runs.size(); ++i) {
-    if (runs[i].aic < runs[best_aic].aic) best_aic = i;
-    if (runs[i].bic < runs[best_bic].bic) best_bic = i;
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    if (!rows[i].invertible) continue;
+    if (!rows[best_aic].invertible || runs[i].aic < runs[best_aic].aic) best_aic = i;
+    if (!rows[best_bic].invertible || runs[i].bic < runs[best_bic].bic) best_bic = i;
   }
   std::size_t chosen = best_aic;
   if (config.joint_rule == JointOrderRule::bic) chosen = best_bic;
   if (config.joint_rule == JointOrderRule::aic_parsimonious)
     for (std::size_t i = 0; i < runs.size(); ++i)
-      if (runs[i].aic <= runs[best_aic].aic + 2.0) {
+      if (rows[i].invertible && runs[i].aic <= runs[best_aic].aic + 2.0) {
         chosen = i;
         break;
       }
@@ -421,16 +435,20 @@ CalibrationModel calibrate(const LandmarkObservations& obs, const CalibrationCon
 }
 
 CalibrationModel calibrateAgainstTruth(const std::vector<RangePair>& pairs, const CalibrationConfig& config,
-                                       const std::vector<std::vector<double>>& batches) {
+                                       const std::vector<std::vector<double>>& batches, double range_min_m,
+                                       double range_max_m) {
   config.validate();
   CalibrationModel m;
   m.method = "oracle";
+  m.model.range_min_m = range_min_m;
+  m.model.range_max_m = range_max_m;
   if (pairs.size() < static_cast<std::size_t>(config.max_order) + 3) {
     m.status = "too_few_observations";
     m.message = "too few readings with a known distance";
     return m;
   }
-  const OrderSelection sel = selectOrder(pairs, config.max_order, config.closed_form_rule);
+  const Admissible window = range_max_m < 1e8 ? invertibleOver(range_min_m, range_max_m) : Admissible{};
+  const OrderSelection sel = selectOrder(pairs, config.max_order, config.closed_form_rule, window);
   fillOrders(m, sel, pairs.size());
   std::vector<double> d, y;
   for (const auto& p : pairs) {
@@ -450,7 +468,8 @@ CalibrationModel calibrateAgainstTruth(const std::vector<RangePair>& pairs, cons
       row.alpha = ml.alpha;
       row.aic = 2.0 * k + 2.0 * ml.neg_log_likelihood;
       row.bic = k * std::log(static_cast<double>(d.size())) + 2.0 * ml.neg_log_likelihood;
-      if (row.aic < best) {
+      row.invertible = !window || window(row.alpha);
+      if (row.invertible && row.aic < best) {
         best = row.aic;
         order = row.order;
       }
