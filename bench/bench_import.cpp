@@ -8,8 +8,8 @@
 //
 // Times are medians over N runs (default 5), peak RSS the largest.
 //
-// Add a step by appending to steps() (e.g. a detect step over the imported Freiburg sequence:
-// its `needs` names the import step whose output it reads). Numbers go to docs/RESULTS.md.
+// Add a step by appending to steps(); a step with `keep` writes to that directory and leaves it
+// for later steps (the detect step reads the kept Freiburg import). Numbers go to docs/RESULTS.md.
 
 #include <sys/resource.h>
 #include <sys/wait.h>
@@ -35,6 +35,7 @@ struct Step {
   std::size_t scans = 0;          // scans processed (for scans/s); 0 = not a per-scan step
   std::string input;              // file that must exist (skipped otherwise)
   int repeat = 0;                 // runs of this step; 0 = --repeat
+  std::string keep;               // if set: write here instead of a scratch directory, and keep it for later steps
 };
 
 struct Measure {
@@ -94,14 +95,28 @@ std::vector<Step> steps(const fs::path& data, const fs::path& work) {
     v.insert(v.end(), extra);
     return v;
   };
+  auto step = [](std::string name, std::vector<std::string> args, std::size_t scans, std::string input, int repeat = 0,
+                 std::string keep = {}) {
+    return Step{std::move(name), std::move(args), scans, std::move(input), repeat, std::move(keep)};
+  };
   return {
-      {"baseline: `lidarcal --version`", {"--version"}, 0, ""},
-      {"import Freiburg 079 (CARMEN .log.gz), first 500 scans", with(carmen, {"--max-scans", "500"}), 500, freiburg},
-      {"import Freiburg 079 (CARMEN .log.gz), all scans", carmen, 4791, freiburg},
-      {"import Freiburg 079 four times over (19,164 scans, one run)",
-       {"import", "-q", "--from", "carmen", freiburg_x4, "--out", "{OUT}"}, 4 * 4791, freiburg_x4, 1},
-      {"import RPLIDAR bag (ROS1), first 130 scans", with(rosbag, {"--max-scans", "130"}), 130, bag},
-      {"import RPLIDAR bag (ROS1), all scans", rosbag, 1319, bag},
+      step("baseline: `lidarcal --version`", {"--version"}, 0, ""),
+      step("import Freiburg 079 (CARMEN .log.gz), first 500 scans", with(carmen, {"--max-scans", "500"}), 500, freiburg),
+      step("import Freiburg 079 (CARMEN .log.gz), all scans", carmen, 4791, freiburg),
+      step("import Freiburg 079 four times over (19,164 scans, one run)",
+       {"import", "-q", "--from", "carmen", freiburg_x4, "--out", "{OUT}"}, 4 * 4791, freiburg_x4, 1),
+      step("import RPLIDAR bag (ROS1), first 130 scans", with(rosbag, {"--max-scans", "130"}), 130, bag),
+      step("import RPLIDAR bag (ROS1), all scans", rosbag, 1319, bag),
+      // Import + detect over Freiburg 079: the import is kept and the detector reads it back
+      // (poles are not expected in that building; the point is speed and bounded memory).
+      step("import Freiburg 079, first 500 scans (kept for detect)", with(carmen, {"--max-scans", "500"}), 500, freiburg, 1,
+           (work / "freiburg079-500").string()),
+      step("detect over the first 500 scans of Freiburg 079",
+           {"detect", "-q", (work / "freiburg079-500").string(), "--out", "{OUT}"}, 500,
+           (work / "freiburg079-500").string()),
+      step("import Freiburg 079 again (kept for detect)", carmen, 4791, freiburg, 1, (work / "freiburg079").string()),
+      step("detect over Freiburg 079 (4791 scans)",
+       {"detect", "-q", (work / "freiburg079").string(), "--out", "{OUT}"}, 4791, (work / "freiburg079").string()),
   };
 }
 
@@ -128,7 +143,7 @@ int main(int argc, char** argv) {
   int failures = 0;
   int index = 0;
   for (const Step& step : steps(data, work)) {
-    const fs::path out = work / ("step" + std::to_string(index++));
+    const fs::path out = step.keep.empty() ? work / ("step" + std::to_string(index++)) : fs::path(step.keep);
     if (!step.input.empty() && !fs::exists(step.input)) {
       std::printf("| %s | skipped: %s absent | | | |\n", step.name.c_str(), step.input.c_str());
       continue;
@@ -152,7 +167,7 @@ int main(int argc, char** argv) {
       systems.push_back(m.system_s);
       rss = std::max(rss, m.max_rss_kib);
     }
-    fs::remove_all(out);
+    if (step.keep.empty()) fs::remove_all(out);
     if (walls.empty()) continue;
     const auto median = [](std::vector<double> v) {
       std::sort(v.begin(), v.end());

@@ -35,6 +35,7 @@ struct DetectOptions {
   bool estimate_radius = false;
   int min_stops = 3;
   double link_distance_m = 0.35;
+  int max_missing_beams = 1;
   std::string truth;
 };
 
@@ -63,6 +64,7 @@ void runDetect(const DetectOptions& o) {
   cfg.use_sequence_radius = !o.estimate_radius;
   cfg.association.min_stops = o.min_stops;
   cfg.association.link_distance_m = o.link_distance_m;
+  cfg.detection.segmentation.max_missing_beams = o.max_missing_beams;
   cfg.association.min_link_distance_m = std::min(cfg.association.min_link_distance_m, o.link_distance_m);
 
   std::optional<Truth> truth;
@@ -155,6 +157,11 @@ void addDetectCommand(CLI::App& app) {
   sub->add_option("--link-distance", o->link_distance_m,
                   "Detections closer than this in the world frame (metres) belong to one landmark")
       ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  sub->add_option("--max-missing-beams", o->max_missing_beams,
+                  "Beams without return tolerated inside an object (raise to 2-3 for sensors that drop many returns, "
+                  "such as the YDLIDAR X4)")
+      ->check(CLI::Range(0, 50))
       ->capture_default_str();
   sub->add_flag("--ascii", o->ascii, "Write ASCII PCD instead of binary");
   sub->add_option("--truth", o->truth,
