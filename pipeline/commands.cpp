@@ -9,6 +9,8 @@ namespace lidarcal::pipeline {
 void registerCommands(CLI::App& app) {
   addSimulateCommand(app);
   addInfoCommand(app);
+  addNoiseConsistencyCommand(app);
+  addLandmarksToObservationsCommand(app);
 }
 
 std::filesystem::path dataDir() {
