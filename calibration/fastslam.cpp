@@ -76,7 +76,8 @@ FastSlamResult runFastSlam(const NoiseProblem& problem, const NoiseSetting& assu
   // Without process noise every particle follows the same path with the same map and weight:
   // one particle gives the same result (up to rounding) at 1/N of the cost.
   const ProcessNoise& q = assumed.process;
-  const bool deterministic = q.dx_var_m2 == 0.0 && q.dy_var_m2 == 0.0 && q.dtheta_var_rad2 == 0.0;
+  const bool deterministic = config.collapse_identical_particles && q.dx_var_m2 == 0.0 && q.dy_var_m2 == 0.0 &&
+                             q.dtheta_var_rad2 == 0.0;
   const auto n_particles = deterministic ? std::size_t{1} : static_cast<std::size_t>(config.particles);
   const auto n_landmarks = static_cast<std::size_t>(problem.landmarks);
   std::vector<Particle> particles(n_particles, Particle{Pose2{}, std::vector<LandmarkEkf>(n_landmarks)});

@@ -14,7 +14,7 @@
 // even when the process noise is zero) and one uniform for systematic resampling (drawn even
 // when no resampling happens), so the same (seed, stream) gives the same random numbers for
 // every assumed noise setting (common random numbers). With zero assumed process noise all
-// particles stay identical, and the filter runs a single one (same result, up to rounding).
+// particles stay identical, and the filter may run a single one (collapse_identical_particles).
 
 #include <cstdint>
 #include <vector>
@@ -35,6 +35,10 @@ struct FastSlamConfig {
   /// particles (its error is zero by construction, not a sample of the noise). Default false
   /// (the seed counts every reading).
   bool skip_initialising = false;
+  /// With zero assumed process noise run a single particle: all N would stay identical, so the
+  /// result is the same (up to rounding) at 1/N of the cost. Default true; false runs all N as
+  /// the seed does.
+  bool collapse_identical_particles = true;
 
   /// Throws InputError when a value is out of range.
   void validate() const;

@@ -339,11 +339,17 @@ AdjustmentAnalysis analyseAdjustment(const NoiseProblem& problem, const MlState&
     Sinv = llt.solve(Eigen::MatrixXd::Identity(m, m));
   }
   const Eigen::MatrixXd F = m > 0 ? Eigen::MatrixXd(E * Sinv) : Eigen::MatrixXd(3 * std::max(P, 0), 0);
-  auto poseBlock = [&](int p, int q) -> Mat3 {  // (N^-1) block of poses p, q with |p - q| <= 1
-    Mat3 g = p == q ? Gd[static_cast<std::size_t>(p)] : p < q ? Go[static_cast<std::size_t>(p)] : Mat3(Go[static_cast<std::size_t>(q)].transpose());
-    if (m > 0) g += F.middleRows(3 * p, 3) * E.middleRows(3 * q, 3).transpose();
-    return g;
-  };
+  // (N^-1) blocks of a pose with itself and with the next pose.
+  std::vector<Mat3> Mdiag(uP), Mnext(uP > 0 ? uP - 1 : 0);
+  for (std::size_t p = 0; p < uP; ++p) {
+    const auto ip = 3 * static_cast<Eigen::Index>(p);
+    Mdiag[p] = Gd[p];
+    if (m > 0) Mdiag[p] += F.middleRows(ip, 3) * E.middleRows(ip, 3).transpose();
+    if (p + 1 < uP) {
+      Mnext[p] = Go[p];
+      if (m > 0) Mnext[p] += F.middleRows(ip, 3) * E.middleRows(ip + 3, 3).transpose();
+    }
+  }
 
   std::vector<double> redundancy(static_cast<std::size_t>(2 * S + 3), 0.0), redundancy_sq = redundancy;
   for (std::size_t i = 0; i < obs_rows.size(); ++i) {
@@ -352,7 +358,7 @@ AdjustmentAnalysis analyseAdjustment(const NoiseProblem& problem, const MlState&
     for (int a = 0; a < row.nz; ++a)
       for (int b = 0; b < row.nz; ++b) h += row.az[a] * Sinv(row.cols[a], row.cols[b]) * row.az[b];
     if (row.p >= 0) {
-      h += row.ap.dot(poseBlock(row.p, row.p) * row.ap);
+      h += row.ap.dot(Mdiag[static_cast<std::size_t>(row.p)] * row.ap);
       for (int a = 0; a < row.nz; ++a) h -= 2.0 * row.ap.dot(F.block(3 * row.p, row.cols[a], 3, 1).col(0)) * row.az[a];
     }
     redundancy[static_cast<std::size_t>(obs_group[i])] += 1.0 - h;
@@ -360,9 +366,10 @@ AdjustmentAnalysis analyseAdjustment(const NoiseProblem& problem, const MlState&
   }
   for (std::size_t i = 0; i < odo_rows.size(); ++i) {
     const OdoRow& row = odo_rows[i];
-    double h = row.ab.dot(poseBlock(row.pb, row.pb) * row.ab);
+    double h = row.ab.dot(Mdiag[static_cast<std::size_t>(row.pb)] * row.ab);
     if (row.pa >= 0)
-      h += row.aa.dot(poseBlock(row.pa, row.pa) * row.aa) + 2.0 * row.aa.dot(poseBlock(row.pa, row.pb) * row.ab);
+      h += row.aa.dot(Mdiag[static_cast<std::size_t>(row.pa)] * row.aa) +
+           2.0 * row.aa.dot(Mnext[static_cast<std::size_t>(row.pa)] * row.ab);
     redundancy[static_cast<std::size_t>(odo_group[i])] += 1.0 - h;
     redundancy_sq[static_cast<std::size_t>(odo_group[i])] += (1.0 - h) * (1.0 - h);
   }
@@ -399,8 +406,11 @@ MlNoiseResult estimateNoiseMl(const NoiseProblem& problem, const MlNoiseConfig& 
                       "estimate without biases, or record while the robot moves");
   }
 
-  // Variances: the initial setting, or 0.01 for every component; zeros start at 0.01 too.
-  std::vector<double> var(static_cast<std::size_t>(G), 0.01);
+  // Variances: the initial setting, or 1 (m^2, rad^2) for the sensors and 0.01 for the process:
+  // readings start under-weighted against the odometry, which keeps the first adjustment near
+  // dead reckoning (over-weighted bearings can pull a landmark onto a pose); zeros start at 0.01.
+  std::vector<double> var(static_cast<std::size_t>(G), 1.0);
+  for (int c = 0; c < 3; ++c) var[static_cast<std::size_t>(2 * S + c)] = 0.01;
   if (!config.initial.sensors.empty())
     for (int s = 0; s < S; ++s) {
       var[static_cast<std::size_t>(2 * s)] = config.initial.sensors[static_cast<std::size_t>(s)].range_var_m2;

@@ -34,11 +34,11 @@ namespace lidarcal::calibration {
 
 struct MlNoiseConfig {
   int max_iterations = 100;       ///< VCE iterations (adjustments) at most
-  double tolerance = 1e-5;        ///< stop when every variance changes by less than this fraction
-  double min_variance = 1e-10;    ///< floor of every variance (a component at the floor is reported as such), unit^2
+  double tolerance = 1e-3;        ///< stop when every variance changes by less than this fraction (of itself or its standard error)
+  double min_variance = 1e-8;     ///< floor of every variance (a component at the floor is reported as such), unit^2
   bool estimate_biases = true;    ///< estimate each sensor's range and bearing bias (else fixed at 0)
   bool estimate_process = true;   ///< estimate the process variances (else fixed at `initial.process`)
-  NoiseSetting initial;           ///< starting variances; empty sensors: 0.01 for every component
+  NoiseSetting initial;           ///< starting variances; empty sensors: 1 for the sensors, 0.01 for the process
   int solver_iterations = 50;     ///< Ceres iterations per adjustment at most
   void validate() const;          ///< throws InputError
 };
