@@ -7,6 +7,8 @@
 //   noise_experiments ml-study --scene S.json --seeds 20
 //     runs the ML estimator on seeds 1..20 and prints, per variance, the median estimate and the
 //     median relative error against the truth.
+//   noise_experiments objective-noise --scene S.json --init I.json [--seed N] [--evaluations 20]
+//     spread of the KL objective at one setting over particle streams, per variant.
 
 #include <algorithm>
 #include <cmath>
@@ -39,8 +41,8 @@ double median(std::vector<double> v) {
 std::vector<std::pair<std::string, double>> variances(const NoiseSetting& n) {
   std::vector<std::pair<std::string, double>> v;
   for (std::size_t s = 0; s < n.sensors.size(); ++s) {
-    v.emplace_back("s" + std::to_string(s + 1) + " range var", n.sensors[s].range_var_m2);
-    v.emplace_back("s" + std::to_string(s + 1) + " bearing var", n.sensors[s].bearing_var_rad2);
+    v.emplace_back("sensor " + std::to_string(s) + " range var", n.sensors[s].range_var_m2);
+    v.emplace_back("sensor " + std::to_string(s) + " bearing var", n.sensors[s].bearing_var_rad2);
   }
   v.emplace_back("process dx var", n.process.dx_var_m2);
   v.emplace_back("process dy var", n.process.dy_var_m2);
@@ -187,8 +189,35 @@ void mlStudy(const std::string& scene_file, int seeds) {
   }
   std::printf("\nMedian absolute bias error per sensor (range m, bearing rad):");
   for (std::size_t s = 0; s < truth.sensors.size(); ++s)
-    std::printf(" s%zu [%s, %s]", s + 1, fmt(median(bias_err[2 * s])).c_str(), fmt(median(bias_err[2 * s + 1])).c_str());
+    std::printf(" sensor %zu [%s, %s]", s, fmt(median(bias_err[2 * s])).c_str(), fmt(median(bias_err[2 * s + 1])).c_str());
   std::printf("\n");
+}
+
+// Spread of the objective at one setting over `n` evaluations (fresh particle streams for the
+// seed's variant, common random numbers for ours) against the change to a neighbour.
+void objectiveNoise(const std::string& scene_file, const std::string& init_file, std::uint64_t seed, int n) {
+  const ObservationScene scene = io::readObservationScene(scene_file);
+  const auto sim = simulation::simulateObservations(scene, seed);
+  const calibration::NoiseProblem problem = calibration::makeNoiseProblem(sim.observations, sim.odometry);
+  const NoiseSetting init = io::readNoiseSetting(init_file);
+  NoiseSetting neighbour = init;
+  neighbour.sensors[0].range_var_m2 += 0.01;
+  std::printf("| variant | objective at the start: mean | std over %d evaluations | neighbour (sensor 0 range var + 0.01) − start |\n|---|---|---|---|\n", n);
+  for (const bool faithful : {true, false}) {
+    const auto config = faithful ? calibration::KlObjectiveConfig::faithful() : calibration::KlObjectiveConfig::sound();
+    std::vector<double> v, d;
+    for (int e = 0; e < n; ++e) {
+      const double a = calibration::evaluateKlObjective(problem, init, config, seed, 2 * static_cast<std::uint64_t>(e)).total;
+      const double b = calibration::evaluateKlObjective(problem, neighbour, config, seed, 2 * static_cast<std::uint64_t>(e) + 1).total;
+      v.push_back(a);
+      d.push_back(b - a);
+    }
+    double mean = 0, var = 0;
+    for (double x : v) mean += x / n;
+    for (double x : v) var += (x - mean) * (x - mean) / std::max(1, n - 1);
+    std::printf("| %s | %.4f | %.4f | median %+.4f (range %+.4f .. %+.4f) |\n", faithful ? "seed's" : "ours", mean, std::sqrt(var),
+                median(d), *std::min_element(d.begin(), d.end()), *std::max_element(d.begin(), d.end()));
+  }
 }
 
 }  // namespace
@@ -208,10 +237,17 @@ int main(int argc, char** argv) {
   CLI::App* study = app.add_subcommand("ml-study", "ML over many seeds");
   study->add_option("--scene", scene)->required();
   study->add_option("--seeds", seeds);
+  int evaluations = 20;
+  CLI::App* noise = app.add_subcommand("objective-noise", "Spread of the KL objective over particle streams");
+  noise->add_option("--scene", scene)->required();
+  noise->add_option("--init", init)->required();
+  noise->add_option("--seed", seed);
+  noise->add_option("--evaluations", evaluations);
   CLI11_PARSE(app, argc, argv);
   try {
     if (sbs->parsed()) sideBySide(scene, init, seed, out, kl_max);
     if (study->parsed()) mlStudy(scene, seeds);
+    if (noise->parsed()) objectiveNoise(scene, init, seed, evaluations);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "noise_experiments: %s\n", e.what());
     return 1;

@@ -18,7 +18,9 @@ run exp1 noise_exp12 exp1_init
 run exp2 noise_exp12 exp2_init
 run exp3 noise_exp3 exp3_init
 run hard noise_hard hard_init
-for s in noise_exp12:exp2 noise_exp3:exp3 noise_hard:hard; do
+echo "objective-noise exp3" >&2
+"$BIN" objective-noise --scene data/scenes/noise_exp3.json --init data/noise/exp3_init.json >"$OUT/objective_noise_exp3.md"
+for s in noise_exp12:exp2 noise_exp3:exp3 noise_exp3_long:exp3_long noise_hard:hard; do
   echo "ml-study ${s#*:}" >&2
   "$BIN" ml-study --scene "data/scenes/${s%%:*}.json" --seeds 20 >"$OUT/ml_study_${s#*:}.md"
 done

@@ -7,6 +7,8 @@
 // A sweep without a move is a local minimum: the climber jumps to the best point plus a random
 // whole number of steps in [-jump_steps, jump_steps] per parameter and climbs on; after
 // `max_jumps` jumps in a row that did not improve the best point it stops (seed: 5 jumps).
+// Points live on the lattice start + step * integer, so a point reached along two paths is the
+// same point bit for bit (the seed's traces show the drift of repeated additions, 0.29900000000000004).
 
 #include <cstdint>
 #include <functional>
@@ -66,7 +68,8 @@ struct KlHillConfig {
 /// Result of noise estimation by KL hill climbing.
 struct KlHillResult {
   NoiseSetting noise;                ///< best setting found (process: as assumed unless climbed)
-  KlEvaluation at_best;              ///< objective parts at the best setting
+  KlEvaluation at_best;              ///< objective parts at the best setting, re-evaluated as evaluation 0
+                                     ///< (equal to climb.best_value with common random numbers only)
   HillClimbResult climb;             ///< trace and counts
   std::vector<std::string> parameter_names;  ///< name of each climbed parameter, e.g. "s0.range_var_m2"
 };

@@ -227,7 +227,7 @@ std::string writeNoisePlots(const std::filesystem::path& dir, const NoiseRun& ru
     gp << "set title \"ML (VCE): negative log-likelihood per iteration\"\nset ylabel \"-log L (nats, constants dropped)\"\n";
     gp << "plot " << gnuplotString((dir / "trace.dat").string()) << " using 1:2 with linespoints lw 2 title \"-log L\"\n";
   }
-  gp << "unset logscale y\n";
+  gp << "unset logscale y\nunset title\n";
   // Parameters: variances on top, means below (kl-hill with climbed means).
   std::vector<std::size_t> vars, means;
   for (std::size_t i = 0; i < params.names.size(); ++i)
@@ -237,7 +237,8 @@ std::string writeNoisePlots(const std::filesystem::path& dir, const NoiseRun& ru
   gp << "set multiplot layout " << panels << ",1 title "
      << gnuplotString(std::string(kl ? "best parameters so far" : "variance components") + (truth ? " (dashed: truth)" : "")) << "\n";
   auto panel = [&](const std::vector<std::size_t>& idx, const std::string& ylabel) {
-    gp << "set ylabel " << gnuplotString(ylabel) << "\nplot ";
+    gp << "set ylabel " << gnuplotString(ylabel) << "\nset title " << gnuplotString(ylabel.substr(0, ylabel.find(' ')) + "s")
+       << "\nplot ";
     for (std::size_t n = 0; n < idx.size(); ++n) {
       const std::size_t i = idx[n];
       gp << (n ? ", \\\n     " : "") << gnuplotString((dir / "params.dat").string()) << " using 1:" << i + 2
