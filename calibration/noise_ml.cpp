@@ -487,6 +487,17 @@ MlNoiseResult estimateNoiseMl(const NoiseProblem& problem, const MlNoiseConfig& 
       st.poses[static_cast<std::size_t>(k)] = Pose2{b[0], b[1], b[2]};
     }
 
+    // A landmark on top of a pose has no bearing and a singular Jacobian: the data hold a
+    // reading at (nearly) zero range, which the Gaussian model cannot explain.
+    for (const auto& o : problem.observations) {
+      const auto& l = st.landmarks[static_cast<std::size_t>(o.landmark)];
+      const Pose2& p = st.poses[static_cast<std::size_t>(o.stop)];
+      if (std::hypot(l[0] - p.x_m, l[1] - p.y_m) < 1e-4)
+        throw DataError("observations", "stop " + std::to_string(o.stop) + ", landmark " + std::to_string(problem.landmark_ids[static_cast<std::size_t>(o.landmark)]),
+                        "the adjustment put the landmark on the robot (reading range " + std::to_string(o.range_m) + " m)",
+                        "leave out readings at ranges the sensor cannot measure (below its minimum range)");
+    }
+
     // Variance components from the residuals and the redundancy numbers (Foerstner).
     const std::vector<double> res = residualsAt(problem, st, &group_of);
     std::vector<double> omega(static_cast<std::size_t>(G), 0.0);

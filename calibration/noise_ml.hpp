@@ -11,16 +11,17 @@
 //   2. per group g: Omega_g = sum of its squared residuals, r_g = n_g - tr(W_g A_g N^-1 A_g^T)
 //      (its redundancy: observations minus their share of the unknowns);
 //   3. var_g <- Omega_g / r_g (Foerstner), taken as a scoring step of the REML likelihood
-//      (scaled by r_g / sum r_ii^2, which speeds up components near zero); repeat until no
-//      variance changes by more than `tolerance` of itself or of its standard error.
+//      (lengthened by up to r_g / sum r_ii^2, which speeds up components near zero, and damped
+//      when the step changes sign); repeat until no variance changes by more than `tolerance`
+//      of itself or of its standard error.
 // The standard error of var_g is var_g sqrt(2 / sum r_ii^2) (~ var_g sqrt(2 / r_g) when the
 // redundancy numbers are near 1).
 //
 // Gauge and identifiability: pose 0 is the frame (fixed at the origin). Differences of biases
 // between sensors are fixed by the landmarks they share. The biases common to all sensors are
-// referenced to the odometry: a common range bias by the commanded translation lengths (with
-// unknown scale it would be a landmark radius), a common bearing bias by the commanded direction
-// of translation in the robot frame; with no translation they are not identifiable (DataError).
+// referenced to the odometry: a common range bias by the commanded translation lengths, a
+// common bearing bias by the commanded direction of travel in the robot frame; with no
+// translation they are not identifiable (DataError).
 
 #include <array>
 #include <string>

@@ -92,6 +92,27 @@ TEST_F(KlObjective, WithCommonRandomNumbersIsADeterministicFunctionOfTheParamete
   EXPECT_NE(f1, f2);
 }
 
+TEST_F(KlObjective, TermsAreTheClosedFormOfTheAssumedAndPredictedGaussiansInEachVariant) {
+  for (const bool faithful : {false, true}) {
+    SCOPED_TRACE(faithful);
+    KlObjectiveConfig config = faithful ? KlObjectiveConfig::faithful() : KlObjectiveConfig::sound();
+    config.filter.particles = 10;
+    const KlEvaluation e = evaluateKlObjective(problem, truth, config, 3, 0);
+    double total = 0.0;
+    for (std::size_t s = 0; s < truth.sensors.size(); ++s) {
+      const SensorNoise& a = truth.sensors[s];
+      // The seed's variant uses the variance value as the standard deviation: N(mean, var^2).
+      auto v = [&](double x) { return faithful ? x * x : x; };
+      EXPECT_DOUBLE_EQ(e.kl_range[s], gaussianKl(a.range_mean_m, v(a.range_var_m2), e.predicted_range[s].mean,
+                                                 v(e.predicted_range[s].var)));
+      EXPECT_DOUBLE_EQ(e.kl_bearing[s], gaussianKl(a.bearing_mean_rad, v(a.bearing_var_rad2), e.predicted_bearing[s].mean,
+                                                   v(e.predicted_bearing[s].var)));
+      total += e.kl_range[s] + e.kl_bearing[s];
+    }
+    EXPECT_DOUBLE_EQ(e.total, total);
+  }
+}
+
 TEST_F(KlObjective, HillClimbingOnItKeepsTheBestObjectiveAndReportsTheBestSetting) {
   KlHillConfig config;
   config.objective.filter.particles = 10;
