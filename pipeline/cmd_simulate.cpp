@@ -7,6 +7,7 @@
 #include <CLI/CLI.hpp>
 
 #include "io/atomic_file.hpp"
+#include "io/noise_json.hpp"
 #include "io/scene_io.hpp"
 #include "io/sequence.hpp"
 #include "io/true_ranges.hpp"
@@ -29,6 +30,10 @@ struct SimulateOptions {
 
 void runSimulate(const SimulateOptions& o) {
   namespace fs = std::filesystem;
+  if (io::readSceneKind(o.scene) == "observations") {  // observation-level scene (noise estimation)
+    simulateObservationScene(o.scene, o.out, o.seed, o.overwrite);
+    return;
+  }
   Scene scene = io::readScene(o.scene);
   if (o.stops > 0) scene.path.stops = o.stops;
   if (o.scans_per_stop > 0) scene.path.scans_per_stop = o.scans_per_stop;

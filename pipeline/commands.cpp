@@ -16,6 +16,8 @@ void registerCommands(CLI::App& app) {
   addImportCommand(app);
   addDetectCommand(app);
   addPlotCommand(app);
+  addNoiseConsistencyCommand(app);
+  addLandmarksToObservationsCommand(app);
 }
 
 std::filesystem::path dataDir() {

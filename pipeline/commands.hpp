@@ -3,7 +3,9 @@
 // pipeline/cmd_*.cpp: it maps command-line options into the stage config structs, calls
 // the stages and prints (the library never prints).
 
+#include <cstdint>
 #include <filesystem>
+#include <string>
 
 namespace CLI {
 class App;
@@ -22,6 +24,13 @@ void addRunCommand(CLI::App& app);
 void addImportCommand(CLI::App& app);
 void addDetectCommand(CLI::App& app);
 void addPlotCommand(CLI::App& app);
+void addNoiseConsistencyCommand(CLI::App& app);
+void addLandmarksToObservationsCommand(CLI::App& app);
+
+/// `lidarcal simulate` of a scene with "kind": "observations" (pipeline/cmd_observations.cpp):
+/// writes OUT/observations.csv, OUT/odometry.csv, OUT/noise_truth.json.
+void simulateObservationScene(const std::string& scene_file, const std::string& out_dir, std::uint64_t seed,
+                              bool overwrite);
 
 /// Directory of the bundled data (scenes, example): $LIDARCAL_DATA_DIR, the source tree's
 /// data/ for a build tree, or the installed share/lidarcal.

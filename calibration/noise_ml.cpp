@@ -1,0 +1,585 @@
+#include "calibration/noise_ml.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <memory>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
+#include <ceres/ceres.h>
+
+#include "common/errors.hpp"
+
+namespace lidarcal::calibration {
+namespace {
+
+// ---- The model: residuals and Jacobians (shared by Ceres and the redundancy computation) ----
+
+/// Linearised observation: residual (model - reading) and Jacobians of range (row 0) and
+/// bearing (row 1) w.r.t. the pose (x, y, theta) and the landmark (x, y). The bias enters with
+/// derivative 1 on its own component.
+struct ObservationLinear {
+  double res[2];
+  double d_pose[2][3];
+  double d_landmark[2][2];
+};
+
+void linearizeObservation(const Pose2& pose, const double* lm, const double* bias, const Observation& o,
+                          ObservationLinear& out) {
+  const double dx = lm[0] - pose.x_m, dy = lm[1] - pose.y_m;
+  const double q = std::max(dx * dx + dy * dy, 1e-18), rho = std::sqrt(q);
+  out.res[0] = rho + bias[0] - o.range_m;
+  out.res[1] = wrapAngle(std::atan2(dy, dx) - pose.yaw_rad + bias[1] - o.bearing_rad);
+  out.d_pose[0][0] = -dx / rho, out.d_pose[0][1] = -dy / rho, out.d_pose[0][2] = 0.0;
+  out.d_pose[1][0] = dy / q, out.d_pose[1][1] = -dx / q, out.d_pose[1][2] = -1.0;
+  out.d_landmark[0][0] = dx / rho, out.d_landmark[0][1] = dy / rho;
+  out.d_landmark[1][0] = -dy / q, out.d_landmark[1][1] = dx / q;
+}
+
+/// Linearised motion residual: relative pose of b in the frame of a, minus the command.
+struct OdometryLinear {
+  double res[3];
+  double d_a[3][3];
+  double d_b[3][3];
+};
+
+void linearizeOdometry(const Pose2& a, const Pose2& b, const OdometryStep& u, OdometryLinear& out) {
+  const double c = std::cos(a.yaw_rad), s = std::sin(a.yaw_rad);
+  const double ddx = b.x_m - a.x_m, ddy = b.y_m - a.y_m;
+  const double rx = c * ddx + s * ddy, ry = -s * ddx + c * ddy;
+  out.res[0] = rx - u.dx_m;
+  out.res[1] = ry - u.dy_m;
+  out.res[2] = wrapAngle(b.yaw_rad - a.yaw_rad - u.dtheta_rad);
+  const double da[3][3] = {{-c, -s, ry}, {s, -c, -rx}, {0.0, 0.0, -1.0}};
+  const double db[3][3] = {{c, s, 0.0}, {-s, c, 0.0}, {0.0, 0.0, 1.0}};
+  std::copy(&da[0][0], &da[0][0] + 9, &out.d_a[0][0]);
+  std::copy(&db[0][0], &db[0][0] + 9, &out.d_b[0][0]);
+}
+
+Pose2 poseOf(const double* p) { return Pose2{p[0], p[1], p[2]}; }
+
+// ---- Ceres cost functions: whitened by the current 1/sigma of their groups ----
+
+class ObservationCost final : public ceres::CostFunction {
+ public:
+  ObservationCost(const Observation& o, bool with_pose, const double* inv_sigma)
+      : o_(o), with_pose_(with_pose), inv_sigma_(inv_sigma) {
+    set_num_residuals(2);
+    if (with_pose_) mutable_parameter_block_sizes()->push_back(3);
+    mutable_parameter_block_sizes()->push_back(2);
+    mutable_parameter_block_sizes()->push_back(2);
+  }
+  bool Evaluate(double const* const* p, double* r, double** J) const override {
+    const int l = with_pose_ ? 1 : 0;
+    ObservationLinear lin;
+    linearizeObservation(with_pose_ ? poseOf(p[0]) : Pose2{}, p[l], p[l + 1], o_, lin);
+    const double w[2] = {inv_sigma_[0], inv_sigma_[1]};
+    for (int c = 0; c < 2; ++c) r[c] = w[c] * lin.res[c];
+    if (!J) return true;
+    for (int c = 0; c < 2; ++c) {
+      if (with_pose_ && J[0])
+        for (int i = 0; i < 3; ++i) J[0][c * 3 + i] = w[c] * lin.d_pose[c][i];
+      if (J[l])
+        for (int i = 0; i < 2; ++i) J[l][c * 2 + i] = w[c] * lin.d_landmark[c][i];
+      if (J[l + 1])
+        for (int i = 0; i < 2; ++i) J[l + 1][c * 2 + i] = i == c ? w[c] : 0.0;
+    }
+    return true;
+  }
+
+ private:
+  Observation o_;
+  bool with_pose_;
+  const double* inv_sigma_;  // range, bearing of this observation's sensor
+};
+
+class OdometryCost final : public ceres::CostFunction {
+ public:
+  OdometryCost(const OdometryStep& u, bool from_origin, const double* inv_sigma)
+      : u_(u), from_origin_(from_origin), inv_sigma_(inv_sigma) {
+    set_num_residuals(3);
+    if (!from_origin_) mutable_parameter_block_sizes()->push_back(3);
+    mutable_parameter_block_sizes()->push_back(3);
+  }
+  bool Evaluate(double const* const* p, double* r, double** J) const override {
+    const int b = from_origin_ ? 0 : 1;
+    OdometryLinear lin;
+    linearizeOdometry(from_origin_ ? Pose2{} : poseOf(p[0]), poseOf(p[b]), u_, lin);
+    for (int c = 0; c < 3; ++c) r[c] = inv_sigma_[c] * lin.res[c];
+    if (!J) return true;
+    for (int c = 0; c < 3; ++c)
+      for (int i = 0; i < 3; ++i) {
+        if (!from_origin_ && J[0]) J[0][c * 3 + i] = inv_sigma_[c] * lin.d_a[c][i];
+        if (J[b]) J[b][c * 3 + i] = inv_sigma_[c] * lin.d_b[c][i];
+      }
+    return true;
+  }
+
+ private:
+  OdometryStep u_;
+  bool from_origin_;
+  const double* inv_sigma_;  // dx, dy, dtheta
+};
+
+std::vector<std::string> groupNames(int sensors) {
+  std::vector<std::string> names;
+  for (int s = 0; s < sensors; ++s) {
+    names.push_back("s" + std::to_string(s) + ".range");
+    names.push_back("s" + std::to_string(s) + ".bearing");
+  }
+  for (const char* n : {"process.dx", "process.dy", "process.dtheta"}) names.push_back(n);
+  return names;
+}
+
+Pose2 compose(const Pose2& pose, const OdometryStep& u) {
+  Pose2 out;
+  pose.toWorld(u.dx_m, u.dy_m, out.x_m, out.y_m);
+  out.yaw_rad = wrapAngle(pose.yaw_rad + u.dtheta_rad);
+  return out;
+}
+
+using Mat3 = Eigen::Matrix3d;
+using Vec3 = Eigen::Vector3d;
+
+}  // namespace
+
+void MlNoiseConfig::validate() const {
+  if (max_iterations < 1) throw InputError("", "max_iterations", "must be at least 1");
+  if (!(tolerance > 0.0)) throw InputError("", "tolerance", "must be positive");
+  if (!(min_variance > 0.0)) throw InputError("", "min_variance", "must be positive");
+  if (solver_iterations < 1) throw InputError("", "solver_iterations", "must be at least 1");
+  for (const auto& s : initial.sensors)
+    if (!(s.range_var_m2 > 0.0) || !(s.bearing_var_rad2 > 0.0))
+      throw InputError("", "initial noise", "sensor variances must be positive");
+}
+
+MlState initialState(const NoiseProblem& problem) {
+  MlState st;
+  st.poses.push_back(Pose2{});
+  for (int k = 1; k < problem.stops; ++k)
+    st.poses.push_back(compose(st.poses.back(), problem.odometry[static_cast<std::size_t>(k)]));
+  st.landmarks.assign(static_cast<std::size_t>(problem.landmarks), {0.0, 0.0});
+  std::vector<int> count(static_cast<std::size_t>(problem.landmarks), 0);
+  for (const auto& o : problem.observations) {
+    const Pose2& p = st.poses[static_cast<std::size_t>(o.stop)];
+    double wx = 0.0, wy = 0.0;
+    p.toWorld(o.range_m * std::cos(o.bearing_rad), o.range_m * std::sin(o.bearing_rad), wx, wy);
+    auto& lm = st.landmarks[static_cast<std::size_t>(o.landmark)];
+    lm[0] += wx;
+    lm[1] += wy;
+    ++count[static_cast<std::size_t>(o.landmark)];
+  }
+  for (std::size_t j = 0; j < st.landmarks.size(); ++j) {
+    st.landmarks[j][0] /= count[j];
+    st.landmarks[j][1] /= count[j];
+  }
+  st.biases.assign(static_cast<std::size_t>(problem.sensors), {0.0, 0.0});
+  return st;
+}
+
+std::vector<double> residualsAt(const NoiseProblem& problem, const MlState& state, std::vector<int>* group) {
+  std::vector<double> r;
+  if (group) group->clear();
+  const int S = problem.sensors;
+  for (const auto& o : problem.observations) {
+    ObservationLinear lin;
+    linearizeObservation(state.poses[static_cast<std::size_t>(o.stop)], state.landmarks[static_cast<std::size_t>(o.landmark)].data(),
+                         state.biases[static_cast<std::size_t>(o.sensor)].data(), o, lin);
+    for (int c = 0; c < 2; ++c) {
+      r.push_back(lin.res[c]);
+      if (group) group->push_back(2 * o.sensor + c);
+    }
+  }
+  for (int k = 1; k < problem.stops; ++k) {
+    OdometryLinear lin;
+    linearizeOdometry(state.poses[static_cast<std::size_t>(k - 1)], state.poses[static_cast<std::size_t>(k)],
+                      problem.odometry[static_cast<std::size_t>(k)], lin);
+    for (int c = 0; c < 3; ++c) {
+      r.push_back(lin.res[c]);
+      if (group) group->push_back(2 * S + c);
+    }
+  }
+  return r;
+}
+
+namespace {
+
+struct AdjustmentAnalysis {
+  std::vector<double> redundancy;       // per group: sum of the redundancy numbers r_ii
+  std::vector<double> redundancy_sq;    // per group: sum of r_ii^2 (diagonal Fisher information of the variance)
+  double log_det_normal = 0.0;          // log det N (whitened normal matrix)
+  std::vector<double> bias_std;         // per sensor, range and bearing interleaved (NaN when not estimated)
+};
+
+AdjustmentAnalysis analyseAdjustment(const NoiseProblem& problem, const MlState& state,
+                                     const std::vector<double>& variances, bool with_biases) {
+  // Unknowns: poses 1..K-1 (y, 3 each, block-tridiagonal normal matrix D through the motion
+  // chain) and z = landmarks (2 each) then biases (2 each, when estimated). With B = N_yz and
+  // C = N_zz: E = D^-1 B, S = C - B^T E, and
+  //   (N^-1)_zz = S^-1, (N^-1)_yz = -E S^-1, (N^-1)_yy = D^-1 + E S^-1 E^T,
+  // of which only the diagonal and first off-diagonal pose blocks of D^-1 are needed (backward
+  // recursion over the chain). Leverage of a whitened row a: h = a^T N^-1 a; r_g = sum(1 - h).
+  const int S = problem.sensors, K = problem.stops, L = problem.landmarks;
+  const int P = K - 1;
+  const int m = 2 * L + (with_biases ? 2 * S : 0);
+  const auto uP = static_cast<std::size_t>(std::max(P, 0));
+  std::vector<Mat3> Dd(uP, Mat3::Zero()), Do(uP > 0 ? uP - 1 : 0, Mat3::Zero());
+  Eigen::MatrixXd B = Eigen::MatrixXd::Zero(3 * std::max(P, 0), m);
+  Eigen::MatrixXd C = Eigen::MatrixXd::Zero(m, m);
+  auto biasCol = [&](int s, int c) { return 2 * L + 2 * s + c; };
+
+  // One whitened observation row: pose part (3, when the stop is not 0) and z part (indices, values).
+  struct ObsRow {
+    int p;          // pose index (stop - 1) or -1
+    Vec3 ap;
+    int nz;
+    int cols[3];
+    double az[3];
+  };
+  std::vector<ObsRow> obs_rows;
+  obs_rows.reserve(problem.observations.size() * 2);
+  std::vector<int> obs_group;
+  for (const auto& o : problem.observations) {
+    ObservationLinear lin;
+    linearizeObservation(state.poses[static_cast<std::size_t>(o.stop)], state.landmarks[static_cast<std::size_t>(o.landmark)].data(),
+                         state.biases[static_cast<std::size_t>(o.sensor)].data(), o, lin);
+    for (int c = 0; c < 2; ++c) {
+      const int g = 2 * o.sensor + c;
+      const double w = 1.0 / std::sqrt(variances[static_cast<std::size_t>(g)]);
+      ObsRow row;
+      row.p = o.stop - 1;
+      row.ap = w * Vec3(lin.d_pose[c][0], lin.d_pose[c][1], lin.d_pose[c][2]);
+      row.nz = 2;
+      row.cols[0] = 2 * o.landmark, row.cols[1] = 2 * o.landmark + 1;
+      row.az[0] = w * lin.d_landmark[c][0], row.az[1] = w * lin.d_landmark[c][1];
+      if (with_biases) {
+        row.cols[2] = biasCol(o.sensor, c);
+        row.az[2] = w;
+        row.nz = 3;
+      }
+      if (row.p >= 0) {
+        Dd[static_cast<std::size_t>(row.p)] += row.ap * row.ap.transpose();
+        for (int i = 0; i < row.nz; ++i) B.block(3 * row.p, row.cols[i], 3, 1) += row.ap * row.az[i];
+      }
+      for (int i = 0; i < row.nz; ++i)
+        for (int j = 0; j < row.nz; ++j) C(row.cols[i], row.cols[j]) += row.az[i] * row.az[j];
+      obs_rows.push_back(row);
+      obs_group.push_back(g);
+    }
+  }
+  struct OdoRow {
+    int pa, pb;  // pose indices (pa = -1: from the fixed origin)
+    Vec3 aa, ab;
+  };
+  std::vector<OdoRow> odo_rows;
+  std::vector<int> odo_group;
+  for (int k = 1; k < K; ++k) {
+    OdometryLinear lin;
+    linearizeOdometry(state.poses[static_cast<std::size_t>(k - 1)], state.poses[static_cast<std::size_t>(k)],
+                      problem.odometry[static_cast<std::size_t>(k)], lin);
+    for (int c = 0; c < 3; ++c) {
+      const int g = 2 * S + c;
+      const double w = 1.0 / std::sqrt(variances[static_cast<std::size_t>(g)]);
+      OdoRow row{k - 2, k - 1, w * Vec3(lin.d_a[c][0], lin.d_a[c][1], lin.d_a[c][2]),
+                 w * Vec3(lin.d_b[c][0], lin.d_b[c][1], lin.d_b[c][2])};
+      Dd[static_cast<std::size_t>(row.pb)] += row.ab * row.ab.transpose();
+      if (row.pa >= 0) {
+        Dd[static_cast<std::size_t>(row.pa)] += row.aa * row.aa.transpose();
+        Do[static_cast<std::size_t>(row.pa)] += row.aa * row.ab.transpose();
+      }
+      odo_rows.push_back(row);
+      odo_group.push_back(g);
+    }
+  }
+
+  // Block-tridiagonal elimination of the pose chain (forward), then D^-1 B and the selected
+  // blocks of D^-1 (backward).
+  std::vector<Mat3> Pinv(uP);
+  double log_det = 0.0;  // log det N = sum log det(pose Schur blocks) + log det S
+  auto addLogDet = [&log_det](const auto& llt) {
+    for (Eigen::Index i = 0; i < llt.matrixLLT().rows(); ++i) log_det += 2.0 * std::log(llt.matrixLLT()(i, i));
+  };
+  for (std::size_t p = 0; p < uP; ++p) {
+    Mat3 schur = Dd[p];
+    if (p > 0) schur -= Do[p - 1].transpose() * Pinv[p - 1] * Do[p - 1];
+    Eigen::LLT<Mat3> llt(schur);
+    if (llt.info() != Eigen::Success)
+      throw DataError("", "pose " + std::to_string(p + 1), "is not determined by the data (singular normal matrix)",
+                      "check the odometry and that every stop is connected to the previous one");
+    addLogDet(llt);
+    Pinv[p] = llt.solve(Mat3::Identity());
+  }
+  Eigen::MatrixXd E = B;  // becomes D^-1 B
+  for (std::size_t p = 1; p < uP; ++p)
+    E.middleRows(3 * static_cast<Eigen::Index>(p), 3) -=
+        Do[p - 1].transpose() * Pinv[p - 1] * E.middleRows(3 * static_cast<Eigen::Index>(p - 1), 3);
+  for (std::size_t p = uP; p-- > 0;) {
+    Eigen::MatrixXd y = E.middleRows(3 * static_cast<Eigen::Index>(p), 3);
+    if (p + 1 < uP) y -= Do[p] * E.middleRows(3 * static_cast<Eigen::Index>(p + 1), 3);
+    E.middleRows(3 * static_cast<Eigen::Index>(p), 3) = Pinv[p] * y;
+  }
+  std::vector<Mat3> Gd(uP), Go(uP > 0 ? uP - 1 : 0);
+  for (std::size_t p = uP; p-- > 0;) {
+    if (p + 1 == uP) {
+      Gd[p] = Pinv[p];
+      continue;
+    }
+    Go[p] = -Pinv[p] * Do[p] * Gd[p + 1];
+    Gd[p] = Pinv[p] - Go[p] * Do[p].transpose() * Pinv[p];
+  }
+  Eigen::MatrixXd Sinv;
+  if (m > 0) {
+    const Eigen::MatrixXd Sz = C - B.transpose() * E;
+    Eigen::LLT<Eigen::MatrixXd> llt(Sz);
+    if (llt.info() != Eigen::Success)
+      throw DataError("", "landmarks and biases", "are not determined by the data (singular normal matrix)",
+                      "biases need translation in the odometry; every landmark needs an observation");
+    addLogDet(llt);
+    Sinv = llt.solve(Eigen::MatrixXd::Identity(m, m));
+  }
+  const Eigen::MatrixXd F = m > 0 ? Eigen::MatrixXd(E * Sinv) : Eigen::MatrixXd(3 * std::max(P, 0), 0);
+  // (N^-1) blocks of a pose with itself and with the next pose.
+  std::vector<Mat3> Mdiag(uP), Mnext(uP > 0 ? uP - 1 : 0);
+  for (std::size_t p = 0; p < uP; ++p) {
+    const auto ip = 3 * static_cast<Eigen::Index>(p);
+    Mdiag[p] = Gd[p];
+    if (m > 0) Mdiag[p] += F.middleRows(ip, 3) * E.middleRows(ip, 3).transpose();
+    if (p + 1 < uP) {
+      Mnext[p] = Go[p];
+      if (m > 0) Mnext[p] += F.middleRows(ip, 3) * E.middleRows(ip + 3, 3).transpose();
+    }
+  }
+
+  std::vector<double> redundancy(static_cast<std::size_t>(2 * S + 3), 0.0), redundancy_sq = redundancy;
+  for (std::size_t i = 0; i < obs_rows.size(); ++i) {
+    const ObsRow& row = obs_rows[i];
+    double h = 0.0;
+    for (int a = 0; a < row.nz; ++a)
+      for (int b = 0; b < row.nz; ++b) h += row.az[a] * Sinv(row.cols[a], row.cols[b]) * row.az[b];
+    if (row.p >= 0) {
+      h += row.ap.dot(Mdiag[static_cast<std::size_t>(row.p)] * row.ap);
+      for (int a = 0; a < row.nz; ++a) h -= 2.0 * row.ap.dot(F.block(3 * row.p, row.cols[a], 3, 1).col(0)) * row.az[a];
+    }
+    redundancy[static_cast<std::size_t>(obs_group[i])] += 1.0 - h;
+    redundancy_sq[static_cast<std::size_t>(obs_group[i])] += (1.0 - h) * (1.0 - h);
+  }
+  for (std::size_t i = 0; i < odo_rows.size(); ++i) {
+    const OdoRow& row = odo_rows[i];
+    double h = row.ab.dot(Mdiag[static_cast<std::size_t>(row.pb)] * row.ab);
+    if (row.pa >= 0)
+      h += row.aa.dot(Mdiag[static_cast<std::size_t>(row.pa)] * row.aa) +
+           2.0 * row.aa.dot(Mnext[static_cast<std::size_t>(row.pa)] * row.ab);
+    redundancy[static_cast<std::size_t>(odo_group[i])] += 1.0 - h;
+    redundancy_sq[static_cast<std::size_t>(odo_group[i])] += (1.0 - h) * (1.0 - h);
+  }
+  AdjustmentAnalysis out;
+  out.redundancy = std::move(redundancy);
+  out.redundancy_sq = std::move(redundancy_sq);
+  out.log_det_normal = log_det;
+  out.bias_std.assign(static_cast<std::size_t>(2 * S), std::numeric_limits<double>::quiet_NaN());
+  if (with_biases)
+    for (int s = 0; s < S; ++s)
+      for (int c = 0; c < 2; ++c)
+        out.bias_std[static_cast<std::size_t>(2 * s + c)] = std::sqrt(Sinv(biasCol(s, c), biasCol(s, c)));
+  return out;
+}
+
+}  // namespace
+
+std::vector<double> groupRedundancy(const NoiseProblem& problem, const MlState& state,
+                                    const std::vector<double>& variances, bool with_biases) {
+  return analyseAdjustment(problem, state, variances, with_biases).redundancy;
+}
+
+MlNoiseResult estimateNoiseMl(const NoiseProblem& problem, const MlNoiseConfig& config) {
+  config.validate();
+  const int S = problem.sensors, K = problem.stops, G = 2 * S + 3;
+  if (!config.initial.sensors.empty() && static_cast<int>(config.initial.sensors.size()) != S)
+    throw InputError("", "initial noise", "lists " + std::to_string(config.initial.sensors.size()) +
+                                              " sensors, the data " + std::to_string(S));
+  if (config.estimate_biases) {
+    double travel = 0.0;
+    for (const auto& u : problem.odometry) travel += std::hypot(u.dx_m, u.dy_m);
+    if (!(travel > 0.0))
+      throw DataError("odometry", "", "has no translation: sensor biases are not identifiable",
+                      "estimate without biases, or record while the robot moves");
+  }
+
+  // Variances: the initial setting, or 1 (m^2, rad^2) for the sensors and 0.01 for the process:
+  // readings start under-weighted against the odometry, which keeps the first adjustment near
+  // dead reckoning (over-weighted bearings can pull a landmark onto a pose); zeros start at 0.01.
+  std::vector<double> var(static_cast<std::size_t>(G), 1.0);
+  for (int c = 0; c < 3; ++c) var[static_cast<std::size_t>(2 * S + c)] = 0.01;
+  if (!config.initial.sensors.empty())
+    for (int s = 0; s < S; ++s) {
+      var[static_cast<std::size_t>(2 * s)] = config.initial.sensors[static_cast<std::size_t>(s)].range_var_m2;
+      var[static_cast<std::size_t>(2 * s + 1)] = config.initial.sensors[static_cast<std::size_t>(s)].bearing_var_rad2;
+    }
+  const ProcessNoise& q0 = config.initial.process;
+  const double q0v[3] = {q0.dx_var_m2, q0.dy_var_m2, q0.dtheta_var_rad2};
+  for (int c = 0; c < 3; ++c) {
+    double v = q0v[c];
+    if (config.estimate_process && !(v > 0.0)) v = 0.01;
+    var[static_cast<std::size_t>(2 * S + c)] = std::max(v, config.min_variance);
+  }
+  std::vector<double> inv_sigma(static_cast<std::size_t>(G));
+  auto setWeights = [&] {
+    for (int g = 0; g < G; ++g) inv_sigma[static_cast<std::size_t>(g)] = 1.0 / std::sqrt(var[static_cast<std::size_t>(g)]);
+  };
+  setWeights();
+
+  MlNoiseResult result;
+  result.state = initialState(problem);
+  MlState& st = result.state;
+  std::vector<std::array<double, 3>> pose_blocks(static_cast<std::size_t>(K));
+  for (int k = 0; k < K; ++k) {
+    const Pose2& p = st.poses[static_cast<std::size_t>(k)];
+    pose_blocks[static_cast<std::size_t>(k)] = {p.x_m, p.y_m, p.yaw_rad};
+  }
+
+  ceres::Problem::Options popts;
+  popts.cost_function_ownership = ceres::TAKE_OWNERSHIP;
+  ceres::Problem cp(popts);
+  for (const auto& o : problem.observations) {
+    const double* w = &inv_sigma[static_cast<std::size_t>(2 * o.sensor)];
+    double* lm = st.landmarks[static_cast<std::size_t>(o.landmark)].data();
+    double* bias = st.biases[static_cast<std::size_t>(o.sensor)].data();
+    if (o.stop == 0)
+      cp.AddResidualBlock(new ObservationCost(o, false, w), nullptr, lm, bias);
+    else
+      cp.AddResidualBlock(new ObservationCost(o, true, w), nullptr, pose_blocks[static_cast<std::size_t>(o.stop)].data(), lm, bias);
+  }
+  for (int k = 1; k < K; ++k) {
+    const double* w = &inv_sigma[static_cast<std::size_t>(2 * S)];
+    const OdometryStep& u = problem.odometry[static_cast<std::size_t>(k)];
+    if (k == 1)
+      cp.AddResidualBlock(new OdometryCost(u, true, w), nullptr, pose_blocks[1].data());
+    else
+      cp.AddResidualBlock(new OdometryCost(u, false, w), nullptr, pose_blocks[static_cast<std::size_t>(k - 1)].data(),
+                          pose_blocks[static_cast<std::size_t>(k)].data());
+  }
+  if (!config.estimate_biases)
+    for (auto& b : st.biases) cp.SetParameterBlockConstant(b.data());
+
+  ceres::Solver::Options sopts;
+  sopts.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+  sopts.max_num_iterations = config.solver_iterations;
+  sopts.num_threads = 1;
+  sopts.logging_type = ceres::SILENT;
+  sopts.minimizer_progress_to_stdout = false;
+  sopts.function_tolerance = 1e-10;
+  sopts.gradient_tolerance = 1e-10;
+  sopts.parameter_tolerance = 1e-10;
+
+  const std::vector<std::string> names = groupNames(S);
+  result.groups.resize(static_cast<std::size_t>(G));
+  std::vector<int> group_of;
+  std::vector<double> acceleration(static_cast<std::size_t>(G), 1.0), last_step(static_cast<std::size_t>(G), 0.0);
+  for (int it = 0; it < config.max_iterations; ++it) {
+    setWeights();
+    ceres::Solver::Summary summary;
+    ceres::Solve(sopts, &cp, &summary);
+    ++result.iterations;
+    result.solver_iterations += static_cast<int>(summary.iterations.size());
+    for (int k = 0; k < K; ++k) {
+      const auto& b = pose_blocks[static_cast<std::size_t>(k)];
+      st.poses[static_cast<std::size_t>(k)] = Pose2{b[0], b[1], b[2]};
+    }
+
+    // A landmark on top of a pose has no bearing and a singular Jacobian: the data hold a
+    // reading at (nearly) zero range, which the Gaussian model cannot explain.
+    for (const auto& o : problem.observations) {
+      const auto& l = st.landmarks[static_cast<std::size_t>(o.landmark)];
+      const Pose2& p = st.poses[static_cast<std::size_t>(o.stop)];
+      if (std::hypot(l[0] - p.x_m, l[1] - p.y_m) < 1e-4)
+        throw DataError("observations", "stop " + std::to_string(o.stop) + ", landmark " + std::to_string(problem.landmark_ids[static_cast<std::size_t>(o.landmark)]),
+                        "the adjustment put the landmark on the robot (reading range " + std::to_string(o.range_m) + " m)",
+                        "leave out readings at ranges the sensor cannot measure (below its minimum range)");
+    }
+
+    // Variance components from the residuals and the redundancy numbers (Foerstner).
+    const std::vector<double> res = residualsAt(problem, st, &group_of);
+    std::vector<double> omega(static_cast<std::size_t>(G), 0.0);
+    std::vector<std::size_t> count(static_cast<std::size_t>(G), 0);
+    for (std::size_t i = 0; i < res.size(); ++i) {
+      omega[static_cast<std::size_t>(group_of[i])] += res[i] * res[i];
+      ++count[static_cast<std::size_t>(group_of[i])];
+    }
+    const AdjustmentAnalysis an = analyseAdjustment(problem, st, var, config.estimate_biases);
+    // Restricted (REML) negative log-likelihood of the linearised model, constants dropped:
+    //   1/2 [ sum_g n_g log var_g + sum_g Omega_g / var_g + log det N ].
+    double nll = 0.5 * an.log_det_normal;
+    bool converged = true;
+    for (int g = 0; g < G; ++g) {
+      const auto ug = static_cast<std::size_t>(g);
+      MlGroup& grp = result.groups[ug];
+      grp.name = names[ug];
+      grp.count = count[ug];
+      grp.redundancy = an.redundancy[ug];
+      grp.sum_sq = omega[ug];
+      if (count[ug] > 0) nll += 0.5 * (omega[ug] / var[ug] + static_cast<double>(count[ug]) * std::log(var[ug]));
+      const bool fixed = g >= 2 * S && !config.estimate_process;
+      const double r = an.redundancy[ug], r2 = an.redundancy_sq[ug];
+      double updated = var[ug];
+      if (!fixed && count[ug] > 0 && r > 1e-12 && r2 > 1e-24) {
+        // Foerstner's update var <- Omega / r is a fixed-point step of the REML score
+        // (Omega / var - r) / (2 var) = 0; scaling it by the diagonal Fisher information
+        // sum r_ii^2 / (2 var^2) gives a scoring step that reaches a component near zero in a
+        // few iterations instead of ~1/n. Safeguard: at most a factor 10 per iteration.
+        // The diagonal information ignores correlations between residuals, so the step can
+        // overshoot: the extra factor is halved each time the step changes sign.
+        const double em_step = omega[ug] / r - var[ug];
+        if (em_step * last_step[ug] < 0.0) acceleration[ug] *= 0.5;
+        const double factor = 1.0 + acceleration[ug] * (r * r / r2 / r - 1.0);
+        const double ratio = std::clamp((var[ug] + factor * em_step) / var[ug], 0.1, 10.0);
+        updated = std::max(var[ug] * ratio, config.min_variance);
+        last_step[ug] = em_step;
+      }
+      const double se = updated * std::sqrt(2.0 / std::max(r2, 1e-24));
+      // Converged when the change is small against the variance or, for components near zero,
+      // against their standard error (the likelihood is flat there).
+      if (std::abs(updated - var[ug]) > config.tolerance * std::max(updated, se)) converged = false;
+      grp.variance = updated;
+      grp.standard_error = se;
+      grp.at_floor = updated <= config.min_variance;
+      var[ug] = updated;
+    }
+    result.objective_trace.push_back(nll);
+    result.variance_trace.push_back(var);
+    if (converged) {
+      result.converged = true;
+      break;
+    }
+  }
+  if (!result.converged)
+    result.message = "variances still changing after " + std::to_string(config.max_iterations) + " iterations";
+
+  // Final solve at the final variances so poses, landmarks and biases match them.
+  setWeights();
+  {
+    ceres::Solver::Summary summary;
+    ceres::Solve(sopts, &cp, &summary);
+    result.solver_iterations += static_cast<int>(summary.iterations.size());
+    for (int k = 0; k < K; ++k) {
+      const auto& b = pose_blocks[static_cast<std::size_t>(k)];
+      st.poses[static_cast<std::size_t>(k)] = Pose2{b[0], b[1], wrapAngle(b[2])};
+    }
+  }
+
+  result.noise.sensors.resize(static_cast<std::size_t>(S));
+  for (int s = 0; s < S; ++s) {
+    SensorNoise& n = result.noise.sensors[static_cast<std::size_t>(s)];
+    n.range_mean_m = st.biases[static_cast<std::size_t>(s)][0];
+    n.bearing_mean_rad = st.biases[static_cast<std::size_t>(s)][1];
+    n.range_var_m2 = var[static_cast<std::size_t>(2 * s)];
+    n.bearing_var_rad2 = var[static_cast<std::size_t>(2 * s + 1)];
+  }
+  result.noise.process.dx_var_m2 = var[static_cast<std::size_t>(2 * S)];
+  result.noise.process.dy_var_m2 = var[static_cast<std::size_t>(2 * S + 1)];
+  result.noise.process.dtheta_var_rad2 = var[static_cast<std::size_t>(2 * S + 2)];
+  result.bias_standard_error = analyseAdjustment(problem, st, var, config.estimate_biases).bias_std;
+  return result;
+}
+
+}  // namespace lidarcal::calibration

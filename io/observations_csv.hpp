@@ -1,0 +1,28 @@
+#pragma once
+// observations.csv and odometry.csv: the input of noise estimation (docs/FORMAT.md).
+
+#include <filesystem>
+#include <vector>
+
+#include "common/observation.hpp"
+
+namespace lidarcal::io {
+
+/// Header of observations.csv.
+inline constexpr const char* kObservationsHeader = "stop,sensor,landmark,range_m,bearing_rad";
+/// Header of odometry.csv.
+inline constexpr const char* kOdometryHeader = "stop,dx_m,dy_m,dtheta_rad";
+
+/// Reads observations.csv. Throws InputError (file, line, column, remedy) on a bad header, a
+/// malformed or non-finite field, a negative stop or sensor, or a landmark id below -1.
+std::vector<Observation> readObservations(const std::filesystem::path& file);
+/// Writes observations.csv atomically (rows in the order given).
+void writeObservations(const std::filesystem::path& file, const std::vector<Observation>& rows);
+
+/// Reads odometry.csv. Rows must be stops 0, 1, 2, ... in order; stop 0 (the start) must have
+/// zero motion. Throws InputError otherwise.
+std::vector<OdometryStep> readOdometry(const std::filesystem::path& file);
+/// Writes odometry.csv atomically.
+void writeOdometry(const std::filesystem::path& file, const std::vector<OdometryStep>& rows);
+
+}  // namespace lidarcal::io

@@ -1,0 +1,66 @@
+#pragma once
+// Composition of noise estimation for `lidarcal noise-consistency` and the benchmarks: runs the
+// KL hill climbing (seed 003) or the ML estimator on a NoiseProblem, times it, turns the result
+// into result.json (docs/FORMAT.md) and draws the traces with gnuplot.
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json_fwd.hpp>
+
+#include "calibration/noise_hill.hpp"
+#include "calibration/noise_ml.hpp"
+#include "calibration/noise_problem.hpp"
+#include "common/observation.hpp"
+
+namespace lidarcal::pipeline {
+
+enum class NoiseMethod { kl_hill, ml };
+
+struct NoiseRunOptions {
+  NoiseMethod method = NoiseMethod::ml;      ///< estimator
+  bool faithful = false;                     ///< kl-hill: label of the objective variant in `kl` (the seed's or ours)
+  std::uint64_t seed = 1;                    ///< kl-hill: jumps and particle filter streams
+  std::optional<NoiseSetting> initial;       ///< starting setting (kl-hill default: defaultInitialNoise)
+  calibration::KlHillConfig kl;              ///< kl-hill settings (kl.objective: KlObjectiveConfig::faithful() or sound())
+  calibration::MlNoiseConfig ml;             ///< ml settings (initial set from `initial` when given)
+};
+
+/// Starting setting of the hill climbing when none is given: means 0, variances 0.5 (m^2,
+/// rad^2), process variances 0.
+NoiseSetting defaultInitialNoise(int sensors);
+
+struct NoiseRun {
+  NoiseMethod method = NoiseMethod::ml;
+  bool faithful = false;
+  std::uint64_t seed = 0;
+  NoiseSetting noise;                        ///< the estimate
+  bool process_estimated = false;            ///< process variances estimated (else as assumed)
+  std::string status = "ok";                 ///< "ok" or "not_converged"
+  std::string message;                       ///< details when not ok
+  std::vector<double> objective_trace;       ///< kl-hill: best KL after each evaluation; ml: -log L per iteration
+  int evaluations = 0;                       ///< kl-hill: particle-filter runs; ml: adjustments solved
+  double time_s = 0.0;                       ///< wall time of the estimation (the only non-deterministic field)
+  std::optional<calibration::KlHillResult> kl;  ///< details of a kl-hill run
+  std::optional<calibration::MlNoiseResult> ml;  ///< details of an ml run
+};
+
+/// Runs the chosen estimator. `on_progress(done, total)` reports evaluations (kl-hill) or
+/// iterations (ml).
+NoiseRun runNoiseEstimation(const calibration::NoiseProblem& problem, const NoiseRunOptions& options,
+                            const std::function<void(std::size_t, std::size_t)>& on_progress = {});
+
+/// result.json (format lidarcal-noise-result/1).
+nlohmann::ordered_json noiseRunToJson(const NoiseRun& run, const calibration::NoiseProblem& problem);
+
+/// Writes the traces (trace.dat, params.dat) and their PNG plots (objective.png, params.png)
+/// into the existing directory `dir`, drawing `truth` as dashed lines when given. Returns an
+/// empty string, or why gnuplot failed (the data files are written anyway).
+std::string writeNoisePlots(const std::filesystem::path& dir, const NoiseRun& run,
+                            const std::optional<NoiseSetting>& truth);
+
+}  // namespace lidarcal::pipeline

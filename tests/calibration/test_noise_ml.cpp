@@ -1,0 +1,130 @@
+// Maximum-likelihood noise estimation (variance components in the batch adjustment).
+
+#include <cmath>
+#include <vector>
+
+#include <Eigen/Dense>
+#include <gtest/gtest.h>
+
+#include "calibration/noise_ml.hpp"
+#include "calibration/noise_problem.hpp"
+#include "calibration/noise_scenes.hpp"
+#include "common/errors.hpp"
+#include "simulation/observation_sim.hpp"
+
+namespace lidarcal::calibration {
+namespace {
+
+// Unknowns of the adjustment as one vector: poses 1..K-1, landmarks, biases.
+std::vector<double*> unknowns(MlState& st) {
+  std::vector<double*> x;
+  for (std::size_t k = 1; k < st.poses.size(); ++k) {
+    x.push_back(&st.poses[k].x_m);
+    x.push_back(&st.poses[k].y_m);
+    x.push_back(&st.poses[k].yaw_rad);
+  }
+  for (auto& l : st.landmarks) x.push_back(&l[0]), x.push_back(&l[1]);
+  for (auto& b : st.biases) x.push_back(&b[0]), x.push_back(&b[1]);
+  return x;
+}
+
+TEST(NoiseMlRedundancy, MatchesADenseComputationWithNumericalJacobians) {
+  const ObservationScene scene = test::squareScene(1, SensorNoise{0.1, 0.04, 0.02, 0.01}, SensorNoise{0.0, 0.09, 0.0, 0.02},
+                                                   ProcessNoise{0.01, 0.004, 0.001});
+  const auto sim = simulation::simulateObservations(scene, 2);
+  const NoiseProblem problem = makeNoiseProblem(sim.observations, sim.odometry);
+  MlState st = initialState(problem);
+  const std::vector<double> variances{0.04, 0.01, 0.09, 0.02, 0.01, 0.004, 0.001};
+
+  // Oracle: A by central differences of the residuals, N = A^T W A, r_i = 1 - (A N^-1 A^T W)_ii.
+  std::vector<int> group;
+  const std::vector<double> r0 = residualsAt(problem, st, &group);
+  std::vector<double*> x = unknowns(st);
+  Eigen::MatrixXd A(r0.size(), x.size());
+  for (std::size_t j = 0; j < x.size(); ++j) {
+    const double keep = *x[j], h = 1e-6;
+    *x[j] = keep + h;
+    const auto rp = residualsAt(problem, st);
+    *x[j] = keep - h;
+    const auto rm = residualsAt(problem, st);
+    *x[j] = keep;
+    for (std::size_t i = 0; i < r0.size(); ++i) A(i, j) = (rp[i] - rm[i]) / (2 * h);
+  }
+  Eigen::VectorXd w(r0.size());
+  for (std::size_t i = 0; i < r0.size(); ++i) w[i] = 1.0 / variances[group[i]];
+  const Eigen::MatrixXd N = A.transpose() * w.asDiagonal() * A;
+  const Eigen::MatrixXd Ninv = N.ldlt().solve(Eigen::MatrixXd::Identity(N.rows(), N.cols()));
+  std::vector<double> expected(variances.size(), 0.0);
+  for (std::size_t i = 0; i < r0.size(); ++i)
+    expected[group[i]] += 1.0 - w[i] * A.row(i).dot(Ninv * A.row(i).transpose());
+
+  const std::vector<double> got = groupRedundancy(problem, st, variances, true);
+  double total = 0.0;
+  for (std::size_t g = 0; g < variances.size(); ++g) {
+    SCOPED_TRACE(g);
+    EXPECT_NEAR(got[g], expected[g], 1e-4 * std::max(1.0, expected[g]));
+    total += got[g];
+  }
+  // Sum of redundancy numbers = observations - unknowns.
+  EXPECT_NEAR(total, static_cast<double>(r0.size()) - static_cast<double>(x.size()), 1e-6);
+}
+
+TEST(NoiseMl, RecoversVariancesAndBiasesWithinFourStandardErrors) {
+  // Truth the test controls: two sensors (one biased), process noise in all three components.
+  const SensorNoise s0{0.10, 0.04, 0.02, 0.01}, s1{0.0, 0.09, 0.0, 0.02};
+  const ProcessNoise q{0.01, 0.004, 0.002};
+  const ObservationScene scene = test::squareScene(6, s0, s1, q);
+  for (std::uint64_t seed = 1; seed <= 6; ++seed) {
+    SCOPED_TRACE(seed);
+    const auto sim = simulation::simulateObservations(scene, seed);
+    const MlNoiseResult r = estimateNoiseMl(makeNoiseProblem(sim.observations, sim.odometry), MlNoiseConfig{});
+    ASSERT_TRUE(r.converged) << r.message;
+    const double truth[] = {s0.range_var_m2, s0.bearing_var_rad2, s1.range_var_m2, s1.bearing_var_rad2,
+                            q.dx_var_m2,     q.dy_var_m2,         q.dtheta_var_rad2};
+    for (std::size_t g = 0; g < 7; ++g) {
+      SCOPED_TRACE(r.groups[g].name);
+      // Tolerance: 4 of the estimator's standard errors, sqrt(2 / sum r_ii^2) of the true variance.
+      const double se = r.groups[g].standard_error * truth[g] / r.groups[g].variance;
+      EXPECT_NEAR(r.groups[g].variance, truth[g], 4.0 * se);
+    }
+    const double bias[] = {s0.range_mean_m, s0.bearing_mean_rad, s1.range_mean_m, s1.bearing_mean_rad};
+    const double est[] = {r.noise.sensors[0].range_mean_m, r.noise.sensors[0].bearing_mean_rad,
+                          r.noise.sensors[1].range_mean_m, r.noise.sensors[1].bearing_mean_rad};
+    for (std::size_t b = 0; b < 4; ++b) EXPECT_NEAR(est[b], bias[b], 4.0 * r.bias_standard_error[b]) << b;
+  }
+}
+
+TEST(NoiseMl, ZeroProcessNoiseIsEstimatedNearZeroAndSensorVariancesStayUnbiased) {
+  const SensorNoise s0{0.0, 0.3, 0.0, 0.4}, s1{0.0, 0.5, 0.0, 0.6};  // seed 003 experiment 2
+  const ObservationScene scene = test::squareScene(4, s0, s1, ProcessNoise{});
+  const auto sim = simulation::simulateObservations(scene, 11);
+  const MlNoiseResult r = estimateNoiseMl(makeNoiseProblem(sim.observations, sim.odometry), MlNoiseConfig{});
+  ASSERT_TRUE(r.converged) << r.message;
+  for (int g = 4; g < 7; ++g) EXPECT_LT(r.groups[static_cast<std::size_t>(g)].variance, 1e-4) << r.groups[static_cast<std::size_t>(g)].name;
+  const double truth[] = {0.3, 0.4, 0.5, 0.6};
+  for (std::size_t g = 0; g < 4; ++g)
+    EXPECT_NEAR(r.groups[g].variance, truth[g], 4.0 * r.groups[g].standard_error * truth[g] / r.groups[g].variance) << g;
+}
+
+TEST(NoiseMl, BiasesWithoutTranslationAreADataError) {
+  std::vector<OdometryStep> odo{OdometryStep{0, 0, 0, 0}, OdometryStep{1, 0, 0, 0.5}};
+  std::vector<Observation> obs{{0, 0, 1, 2.0, 0.1}, {1, 0, 1, 2.0, -0.4}};
+  EXPECT_THROW(estimateNoiseMl(makeNoiseProblem(obs, odo), MlNoiseConfig{}), DataError);
+}
+
+TEST(NoiseProblem, RejectsStopsOutsideTheOdometryAndSensorGapsAndSkipsUnassociated) {
+  std::vector<OdometryStep> odo{OdometryStep{0, 0, 0, 0}, OdometryStep{1, 1, 0, 0}};
+  EXPECT_THROW(makeNoiseProblem({{2, 0, 1, 2.0, 0.1}}, odo), InputError);
+  EXPECT_THROW(makeNoiseProblem({{0, 1, 1, 2.0, 0.1}}, odo), DataError);  // sensor 0 has nothing
+  EXPECT_THROW(makeNoiseProblem({{0, 0, -1, 2.0, 0.1}}, odo), DataError);
+  const NoiseProblem p = makeNoiseProblem({{1, 0, 7, 2.0, 0.1}, {0, 0, -1, 1.0, 0.0}, {0, 0, 3, 2.0, 0.2}}, odo);
+  EXPECT_EQ(p.skipped_unassociated, 1u);
+  EXPECT_EQ(p.landmarks, 2);
+  ASSERT_EQ(p.observations.size(), 2u);
+  EXPECT_EQ(p.observations[0].stop, 0);  // sorted by stop
+  EXPECT_EQ(p.landmark_ids[static_cast<std::size_t>(p.observations[0].landmark)], 3);
+  EXPECT_EQ(p.stop_begin, (std::vector<std::size_t>{0, 1, 2}));
+}
+
+}  // namespace
+}  // namespace lidarcal::calibration
