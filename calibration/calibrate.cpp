@@ -158,6 +158,113 @@ Admissible invertibleOver(double range_min_m, double range_max_m) {
   };
 }
 
+/// RMS angle between the measured bearing lines and the triangulated centres (sigma_theta).
+double bearingScatter(const LandmarkObservations& obs, const std::vector<LandmarkEstimate>& tri) {
+  double s = 0.0;
+  std::size_t n = 0;
+  for (const auto& l : tri) {
+    if (!l.ok()) continue;
+    for (const auto& sb : stopBearings(obs, l.id)) {
+      const Pose2& p = obs.commanded[sb.stop];
+      const double predicted = std::atan2(l.y_m - p.y_m, l.x_m - p.x_m);
+      s += std::pow(wrapAngle(sb.bearing_world_rad - predicted), 2);
+      ++n;
+    }
+  }
+  return n ? std::sqrt(s / static_cast<double>(n)) : 0.0;
+}
+
+/// The joint refinement's result at the chosen order, the order table and the AIC's choice.
+struct JointStage {
+  JointResult result;
+  std::vector<OrderRow> rows;
+  std::size_t best_aic = 0;  ///< index (order - 1) of the smallest admissible AIC
+};
+
+/// Stage 3: pass 1 settles the geometry at order 2; pass 2 fits every order from there on one
+/// fixed set of readings (so their likelihoods compare the same data) and picks one by the
+/// rule; the covariance is computed at the chosen order.
+JointStage jointStage(const LandmarkObservations& obs, const CalibrationConfig& config,
+                      const std::vector<LandmarkEstimate>& tri, const OrderSelection& sel, double radius,
+                      const std::vector<double>& d, const std::vector<double>& y, const RangeModel& closed_form_model) {
+  // Start from the closed form's straight-line fit: a higher order chosen by AIC on noisy
+  // pairs can extrapolate wildly, a line is a safe start for the bias and the centres.
+  JointInit init;
+  init.poses = obs.commanded;
+  init.model = closed_form_model;
+  init.model.bias.alpha = sel.table[std::min<std::size_t>(1, sel.table.size() - 1)].alpha;
+  init.model.noise = fitNoiseLaw(config.noise, 1, init.model.bias, d, y);
+  init.centres = rangeBearingCentres(obs, tri, init.model, radius);
+  init.radius_m = radius;
+  JointConfig jc = config.joint;
+  jc.noise = config.noise;
+  jc.estimate_radius = !obs.landmark_radius_m.has_value();
+  auto alphaAt = [&](int n, std::vector<double> alpha) {
+    alpha.resize(static_cast<std::size_t>(n) + 1, 0.0);
+    return alpha;
+  };
+  // Pass 1: settle the geometry at order 2 (1 if max_order is 1).
+  jc.order = std::min(2, config.max_order);
+  init.model.bias.alpha = alphaAt(jc.order, init.model.bias.alpha);
+  const JointResult settled = refineJoint(obs, init, jc);
+  if (settled.poses.empty()) return JointStage{settled, {}, 0};
+  // Pass 2: every order from the settled geometry on one fixed set of readings, so that their
+  // information criteria compare likelihoods of the same data.
+  JointInit from = init;
+  from.poses = settled.poses;
+  from.centres = settled.centres;
+  from.radius_m = settled.radius_m;
+  from.model = settled.model;
+  jc.reselect = false;
+  jc.covariance = false;  // computed once, for the chosen order
+  jc.outer_iterations = std::min(jc.outer_iterations, 2);  // the noise law settled in pass 1
+  std::vector<JointResult> runs;
+  std::vector<OrderRow> rows;
+  for (int n = 1; n <= config.max_order; ++n) {
+    jc.order = n;
+    from.model.bias.alpha = alphaAt(n, settled.model.bias.alpha);
+    runs.push_back(refineJoint(obs, from, jc));
+    const auto& r = runs.back();
+    OrderRow row;
+    row.order = n;
+    row.alpha = r.model.bias.alpha;
+    row.aic = r.aic;
+    row.bic = r.bic;
+    row.validation_mse_m2 = row.test_mse_m2 = std::numeric_limits<double>::quiet_NaN();
+    rows.push_back(row);
+  }
+  const bool window_known = obs.range_max_m < 1e8;
+  const Admissible ok_order = window_known ? invertibleOver(obs.range_min_m, obs.range_max_m) : Admissible{};
+  for (auto& row : rows) row.invertible = !ok_order || ok_order(row.alpha);
+  std::size_t best_aic = 0, best_bic = 0;
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    if (!rows[i].invertible) continue;
+    if (!rows[best_aic].invertible || runs[i].aic < runs[best_aic].aic) best_aic = i;
+    if (!rows[best_bic].invertible || runs[i].bic < runs[best_bic].bic) best_bic = i;
+  }
+  std::size_t chosen = best_aic;
+  if (config.joint_rule == JointOrderRule::bic) chosen = best_bic;
+  if (config.joint_rule == JointOrderRule::aic_parsimonious)
+    for (std::size_t i = 0; i < runs.size(); ++i)
+      if (rows[i].invertible && runs[i].aic <= runs[best_aic].aic + 2.0) {
+        chosen = i;
+        break;
+      }
+  if (config.joint.covariance && !runs[chosen].poses.empty()) {
+    // Covariance at the chosen order: one more (already converged) solve with it switched on.
+    JointInit at = from;
+    at.poses = runs[chosen].poses;
+    at.centres = runs[chosen].centres;
+    at.radius_m = runs[chosen].radius_m;
+    at.model = runs[chosen].model;
+    jc.order = static_cast<int>(chosen) + 1;
+    jc.covariance = true;
+    jc.outer_iterations = 1;
+    runs[chosen] = refineJoint(obs, at, jc);
+  }
+  return JointStage{runs[chosen], rows, best_aic};
+}
+
 }  // namespace
 
 const char* toString(Method m) { return m == Method::closed_form ? "closed-form" : "joint"; }
@@ -299,111 +406,21 @@ CalibrationModel calibrate(const LandmarkObservations& obs, const CalibrationCon
   fillNoiseFits(m, order, d, y, batches);
   m.residual_rms_m = rmsResidual(m.model.bias, d, y);
   m.readings = d.size();
-  {  // sigma_theta: RMS distance of the bearing lines from the centres, over the distance
-    double s = 0.0;
-    std::size_t n = 0;
-    for (const auto& l : tri) {
-      if (!l.ok()) continue;
-      for (const auto& sb : stopBearings(obs, l.id)) {
-        const Pose2& p = obs.commanded[sb.stop];
-        const double predicted = std::atan2(l.y_m - p.y_m, l.x_m - p.x_m);
-        s += std::pow(wrapAngle(sb.bearing_world_rad - predicted), 2);
-        ++n;
-      }
-    }
-    m.sigma_theta_rad = n ? std::sqrt(s / static_cast<double>(n)) : 0.0;
-  }
+  m.sigma_theta_rad = bearingScatter(obs, tri);
   m.stop_poses = obs.commanded;
   if (config.method == Method::closed_form) return m;
 
-  // Stage 3: joint refinement for each order, from the closed form.
-  // Start from the closed form's straight-line fit: a higher order chosen by AIC on noisy
-  // pairs can extrapolate wildly, a line is a safe start for the bias and the centres.
-  JointInit init;
-  init.poses = obs.commanded;
-  init.model = m.model;
-  init.model.bias.alpha = sel.table[std::min<std::size_t>(1, sel.table.size() - 1)].alpha;
-  init.model.noise = fitNoiseLaw(config.noise, 1, init.model.bias, d, y);
-  init.centres = rangeBearingCentres(obs, tri, init.model, radius);
-  init.radius_m = radius;
-  JointConfig jc = config.joint;
-  jc.noise = config.noise;
-  jc.estimate_radius = !obs.landmark_radius_m.has_value();
-  auto alphaAt = [&](int n, std::vector<double> alpha) {
-    alpha.resize(static_cast<std::size_t>(n) + 1, 0.0);
-    return alpha;
-  };
-  // Pass 1: settle the geometry at order 2 (1 if max_order is 1).
-  jc.order = std::min(2, config.max_order);
-  init.model.bias.alpha = alphaAt(jc.order, init.model.bias.alpha);
-  const JointResult settled = refineJoint(obs, init, jc);
-  if (settled.poses.empty()) {
-    m.status = "joint_failed";
-    m.message = settled.message;
-    return m;
-  }
-  // Pass 2: every order from the settled geometry on one fixed set of readings, so that their
-  // information criteria compare likelihoods of the same data.
-  JointInit from = init;
-  from.poses = settled.poses;
-  from.centres = settled.centres;
-  from.radius_m = settled.radius_m;
-  from.model = settled.model;
-  jc.reselect = false;
-  jc.covariance = false;  // computed once, for the chosen order
-  jc.outer_iterations = std::min(jc.outer_iterations, 2);  // the noise law settled in pass 1
-  std::vector<JointResult> runs;
-  std::vector<OrderRow> rows;
-  for (int n = 1; n <= config.max_order; ++n) {
-    jc.order = n;
-    from.model.bias.alpha = alphaAt(n, settled.model.bias.alpha);
-    runs.push_back(refineJoint(obs, from, jc));
-    const auto& r = runs.back();
-    OrderRow row;
-    row.order = n;
-    row.alpha = r.model.bias.alpha;
-    row.aic = r.aic;
-    row.bic = r.bic;
-    row.validation_mse_m2 = row.test_mse_m2 = std::numeric_limits<double>::quiet_NaN();
-    rows.push_back(row);
-  }
-  const Admissible ok_order = window_known ? invertibleOver(obs.range_min_m, obs.range_max_m) : Admissible{};
-  for (auto& row : rows) row.invertible = !ok_order || ok_order(row.alpha);
-  std::size_t best_aic = 0, best_bic = 0;
-  for (std::size_t i = 0; i < runs.size(); ++i) {
-    if (!rows[i].invertible) continue;
-    if (!rows[best_aic].invertible || runs[i].aic < runs[best_aic].aic) best_aic = i;
-    if (!rows[best_bic].invertible || runs[i].bic < runs[best_bic].bic) best_bic = i;
-  }
-  std::size_t chosen = best_aic;
-  if (config.joint_rule == JointOrderRule::bic) chosen = best_bic;
-  if (config.joint_rule == JointOrderRule::aic_parsimonious)
-    for (std::size_t i = 0; i < runs.size(); ++i)
-      if (rows[i].invertible && runs[i].aic <= runs[best_aic].aic + 2.0) {
-        chosen = i;
-        break;
-      }
-  if (config.joint.covariance && !runs[chosen].poses.empty()) {
-    // Covariance at the chosen order: one more (already converged) solve with it switched on.
-    JointInit at = from;
-    at.poses = runs[chosen].poses;
-    at.centres = runs[chosen].centres;
-    at.radius_m = runs[chosen].radius_m;
-    at.model = runs[chosen].model;
-    jc.order = static_cast<int>(chosen) + 1;
-    jc.covariance = true;
-    jc.outer_iterations = 1;
-    runs[chosen] = refineJoint(obs, at, jc);
-  }
-  const JointResult& j = runs[chosen];
+  // Stage 3: joint refinement (ours), from the closed form.
+  const JointStage js = jointStage(obs, config, tri, sel, radius, d, y, m.model);
+  const JointResult& j = js.result;
   if (j.poses.empty()) {
     m.status = "joint_failed";
     m.message = j.message;
     return m;
   }
-  m.orders = rows;
+  m.orders = js.rows;
   m.order_rule = toString(config.joint_rule);
-  m.order_aic = static_cast<int>(best_aic) + 1;
+  m.order_aic = static_cast<int>(js.best_aic) + 1;
   m.order_validation = -1;
   m.model.bias = j.model.bias;
   m.model.noise = j.model.noise;
@@ -427,10 +444,7 @@ CalibrationModel calibrate(const LandmarkObservations& obs, const CalibrationCon
     if (cv != j.centre_covariance.end())
       c.covariance_m2 = {cv->second(0, 0), cv->second(0, 1), cv->second(1, 0), cv->second(1, 1)};
   }
-  if (!j.converged) {
-    m.status = "ok";
-    m.message = "joint refinement: " + j.message;
-  }
+  if (!j.converged) m.message = "joint refinement: " + j.message;  // usable, but say so
   return m;
 }
 
