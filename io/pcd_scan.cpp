@@ -46,6 +46,14 @@ std::vector<std::string> splitWords(const std::string& line) {
   return words;
 }
 
+/// A word of a damaged file as it can be shown in a message: at most 24 characters, anything
+/// but printable ASCII as '?'.
+std::string printable(const std::string& word) {
+  std::string out;
+  for (char c : word.substr(0, 24)) out += (c >= 0x20 && c < 0x7f) ? c : '?';
+  return word.size() > 24 ? out + "..." : out;
+}
+
 bool parseLong(const std::string& text, long long& value) {
   char* end = nullptr;
   errno = 0;
@@ -84,7 +92,7 @@ ParsedHeader parseHeader(const fs::path& file) {
     auto words = splitWords(line);
     if (words.empty()) continue;
     const std::string key = words[0];
-    const std::string item = "header line " + std::to_string(line_no) + " (" + key + ")";
+    const std::string item = "header line " + std::to_string(line_no) + " (" + printable(key) + ")";
     words.erase(words.begin());
     if (key == "VERSION") {
       continue;
@@ -111,7 +119,7 @@ ParsedHeader parseHeader(const fs::path& file) {
                          kFormatRemedy);
       for (int i = 0; i < 7; ++i)
         if (!parseDouble(words[static_cast<std::size_t>(i)], h.viewpoint[i]) || !std::isfinite(h.viewpoint[i]))
-          throw InputError(where, "VIEWPOINT", "value '" + words[static_cast<std::size_t>(i)] + "' is not a finite number",
+          throw InputError(where, "VIEWPOINT", "value '" + printable(words[static_cast<std::size_t>(i)]) + "' is not a finite number",
                            kFormatRemedy);
       h.has_viewpoint = true;
     } else if (key == "DATA") {
@@ -262,7 +270,9 @@ void trimPageTail(const fs::path& file, std::size_t data_bytes) {
   if (at == std::string::npos) throw std::runtime_error("PCL wrote a binary PCD without a DATA line: " + file.string());
   std::error_code ec;
   fs::resize_file(file, at + marker.size() + data_bytes, ec);
-  if (ec) throw InputError(file.string(), "", "could not finish the PCD file (" + ec.message() + ")", "check free space");
+  if (ec)
+    throw InputError(file.string(), "", "could not finish the PCD file (" + ec.message() + "; disk full?)",
+                     "free some space and run again");
 }
 
 }  // namespace
@@ -382,7 +392,9 @@ void writeScan(const fs::path& file, const Scan& scan, PcdEncoding encoding) {
     pcl::PCDWriter writer;
     const int rc = encoding == PcdEncoding::binary ? writer.writeBinary(tmp.string(), blob, origin, orientation)
                                                    : writer.writeASCII(tmp.string(), blob, origin, orientation, 9);
-    if (rc != 0) throw InputError(file.string(), "", "could not write the PCD file", "check free space and permissions");
+    if (rc != 0)
+      throw InputError(file.string(), "", "could not write the PCD file (disk full?)",
+                       "free some space and check permissions, then run again");
     if (encoding == PcdEncoding::binary) trimPageTail(tmp, blob.data.size());
   });
 }

@@ -29,6 +29,7 @@ struct SimulateOptions {
 
 void runSimulate(const SimulateOptions& o) {
   namespace fs = std::filesystem;
+  io::checkOutsideInput(o.scene, o.out);
   Scene scene = io::readScene(o.scene);
   if (o.stops > 0) scene.path.stops = o.stops;
   if (o.scans_per_stop > 0) scene.path.scans_per_stop = o.scans_per_stop;

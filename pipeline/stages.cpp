@@ -12,6 +12,18 @@ namespace lidarcal::pipeline {
 SequenceCalibration calibrateSequence(const io::Sequence& seq, const detectors::SequenceDetectionConfig& detection,
                                       const calibration::CalibrationConfig& config, const StageProgress& on_scan) {
   SequenceCalibration out;
+  // Triangulation needs every landmark seen from min_stops stops: with fewer stops in the whole
+  // sequence there is nothing to detect for.
+  const int min_stops = config.triangulation.min_stops;
+  if (seq.stops.size() < static_cast<std::size_t>(min_stops)) {
+    out.model.status = "too_few_stops";
+    out.model.message = "the sequence has " + std::to_string(seq.stops.size()) +
+                        " stop(s) (consecutive scans with one VIEWPOINT form a stop) and each landmark must be "
+                        "triangulated from at least " + std::to_string(min_stops) +
+                        " stops: record scans at " + std::to_string(min_stops) +
+                        " or more stops along a line, each with its own VIEWPOINT";
+    return out;
+  }
   out.detections = detectors::detectSequence(seq, detection, on_scan);
   out.observations = toLandmarkObservations(seq, out.detections);
   if (!seq.meta.range_max_m) {
@@ -23,10 +35,13 @@ SequenceCalibration calibrateSequence(const io::Sequence& seq, const detectors::
   }
   out.model = calibration::calibrate(out.observations, config);
   if (seq.meta.sensor_name) out.model.sensor_name = *seq.meta.sensor_name;
+  // A beam count only when every scan has it: a sensor whose count varies (YDLIDAR X4) gets a
+  // model without one, which `correct` applies to any scan.
+  const auto [fewest, most] = io::pointCountRange(seq);
   if (seq.meta.beams) out.model.beams = seq.meta.beams;
-  else if (!seq.scans.empty()) out.model.beams = static_cast<int>(seq.scans.front().points);
-  if (out.model.status == "ok" && out.detections.association.landmarks.empty())
-    out.model.message += (out.model.message.empty() ? "" : "; ") + out.detections.note;
+  else if (fewest == most && most > 0) out.model.beams = static_cast<int>(most);
+  if (out.detections.association.landmarks.empty())
+    out.model.message = out.detections.note + (out.model.message.empty() ? "" : "; ") + out.model.message;
   return out;
 }
 
@@ -50,6 +65,16 @@ CalibrationModel calibrateOracle(const io::Sequence& raw, const SimulationTruth&
     m.landmarks.push_back(l);
   }
   return m;
+}
+
+std::string beamCountWarning(const io::Sequence& seq) {
+  const auto [fewest, most] = io::pointCountRange(seq);
+  if (fewest == most) return {};
+  return seq.dir.string() + ": the number of points per scan varies from " + std::to_string(fewest) + " to " +
+         std::to_string(most) +
+         ": point i is not the same beam in every scan, so seed 004's noise-exponent test uses only the stops whose "
+         "scans agree, and the model records no beam count. Landmark fits are not affected. If the scans come from "
+         "different sensors, split them into one sequence per sensor";
 }
 
 void checkModelFits(const CalibrationModel& model, const io::Sequence& seq, const std::filesystem::path& model_file) {
