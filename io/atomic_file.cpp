@@ -1,6 +1,8 @@
 #include "io/atomic_file.hpp"
 
 #include <atomic>
+#include <cerrno>
+#include <cstring>
 #include <fstream>
 #include <unistd.h>
 
@@ -87,6 +89,15 @@ void checkOutputFile(const fs::path& file, bool overwrite) {
     throw InputError(file.string(), "--out", "exists and is not a regular file", "give the path of a new file");
   if (fs::exists(st) && !overwrite)
     throw InputError(file.string(), "--out", "already exists", "choose another file or pass --overwrite");
+  // Fail now rather than after the work: can a file be created there?
+  const fs::path probe = dir / ("." + file.filename().string() + ".probe-" + uniqueSuffix());
+  {
+    std::ofstream out(probe, std::ios::binary);
+    if (!out)
+      throw InputError(file.string(), "--out", "cannot be created (" + std::string(std::strerror(errno)) + ")",
+                       "check that " + dir.string() + " is writable");
+  }
+  fs::remove(probe, ec);
 }
 
 StagedDirectory::StagedDirectory(fs::path out, bool overwrite) : out_(std::move(out)), overwrite_(overwrite) {

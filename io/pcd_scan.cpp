@@ -202,6 +202,27 @@ void checkCoordinateField(const ParsedHeader& h, const std::string& name, bool r
     throw InputError(where, "field '" + name + "'", "must be a single float (TYPE F, SIZE 4 or 8, COUNT 1)", kFormatRemedy);
 }
 
+/// binary_compressed data starts with the compressed and the uncompressed size (uint32 each).
+/// PCL trusts the uncompressed size when unpacking: it must be what the header promises, and
+/// the compressed block must lie within the file.
+void checkCompressedBlock(const fs::path& file, const ParsedHeader& h, std::size_t promised, std::size_t data_bytes) {
+  const std::string where = file.string();
+  std::uint32_t sizes[2] = {0, 0};
+  std::ifstream in(file, std::ios::binary);
+  in.seekg(static_cast<std::streamoff>(h.data_offset));
+  if (data_bytes < 8 || !in.read(reinterpret_cast<char*>(sizes), sizeof sizes))
+    throw InputError(where, "DATA", "file is truncated: no compressed block after the header",
+                     "the recording was cut short; re-export or drop this file");
+  if (sizes[1] != promised)
+    throw InputError(where, "DATA", "the compressed block unpacks to " + std::to_string(sizes[1]) +
+                                        " bytes, the header promises " + std::to_string(promised) + " (damaged file)",
+                     "re-export the scan");
+  if (sizes[0] > data_bytes - 8)
+    throw InputError(where, "DATA", "file is truncated: the compressed block has " + std::to_string(sizes[0]) +
+                                        " bytes, the file holds " + std::to_string(data_bytes - 8),
+                     "the recording was cut short; re-export or drop this file");
+}
+
 ScanHeader toScanHeader(const fs::path& file, const ParsedHeader& h) {
   const std::string where = file.string();
   checkCoordinateField(h, "x", true, where);
@@ -214,14 +235,30 @@ ScanHeader toScanHeader(const fs::path& file, const ParsedHeader& h) {
   out.has_intensity = findField(h, "intensity") != nullptr;
   out.has_label = findField(h, "label") != nullptr;
   out.binary = h.data != "ascii";
-  if (h.data == "binary") {
-    std::size_t point_bytes = 0;
-    for (const auto& f : h.fields) point_bytes += static_cast<std::size_t>(f.size) * static_cast<std::size_t>(f.count);
-    std::error_code ec;
-    const auto file_size = fs::file_size(file, ec);
-    if (!ec && file_size < h.data_offset + point_bytes * out.points)
+  // The data must be able to hold what the header promises, before PCL allocates for it: binary
+  // data is point_bytes per point; ASCII needs at least two characters per value ("0 "); LZF
+  // (binary_compressed) expands at most about 100-fold (a 3-byte back reference yields up to
+  // 264 bytes).
+  std::size_t point_bytes = 0, values = 0;
+  for (const auto& f : h.fields) {
+    point_bytes += static_cast<std::size_t>(f.size) * static_cast<std::size_t>(f.count);
+    values += static_cast<std::size_t>(f.count);
+  }
+  std::error_code ec;
+  const auto file_size = fs::file_size(file, ec);
+  if (!ec) {
+    const std::size_t data_bytes = file_size > h.data_offset ? file_size - h.data_offset : 0;
+    const double promised = static_cast<double>(point_bytes) * static_cast<double>(out.points);
+    if (h.data == "binary" && file_size < h.data_offset + point_bytes * out.points)
       throw InputError(where, "DATA", "file is truncated: " + std::to_string(file_size) + " bytes, the header promises " +
                                           std::to_string(h.data_offset + point_bytes * out.points),
+                       "the recording was cut short; re-export or drop this file");
+    if (h.data == "binary_compressed" && out.points > 0) checkCompressedBlock(file, h, point_bytes * out.points, data_bytes);
+    if ((h.data == "ascii" && 2.0 * static_cast<double>(values) * static_cast<double>(out.points) > data_bytes + 1.0) ||
+        (h.data == "binary_compressed" && promised > 300.0 * static_cast<double>(data_bytes) + 4096.0))
+      throw InputError(where, "DATA", "file is truncated: " + std::to_string(data_bytes) +
+                                          " bytes of data cannot hold the " + std::to_string(out.points) +
+                                          " points the header promises",
                        "the recording was cut short; re-export or drop this file");
   }
   return out;

@@ -2,7 +2,7 @@
 
 #include <algorithm>
 #include <cctype>
-#include <map>
+#include <unordered_map>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -81,26 +81,27 @@ bool numberLess(const std::string& a, const std::string& b) {
 /// number are two recordings mixed in one directory (or a copy); numbers without zero padding
 /// (scan_2, scan_10) would be read out of order.
 void checkScanNumbers(const fs::path& dir, const std::vector<fs::path>& sorted) {
-  std::map<std::string, std::pair<std::string, std::string>> last;  // prefix -> (value, file name)
-  for (const auto& f : sorted) {
-    const std::string name = f.filename().string();
-    const auto n = scanNumber(name);
-    if (!n) continue;
-    auto it = last.find(n->prefix);
-    if (it != last.end()) {
-      const auto& [prev_value, prev_name] = it->second;
-      if (prev_value == n->value)
-        throw InputError(dir.string(), name,
-                         "has the same scan number as " + prev_name +
-                             " (written with different zero padding): two recordings or a copy mixed in one sequence",
-                         "keep one of the two files; a sequence directory holds one recording");
-      if (!numberLess(prev_value, n->value))
-        throw InputError(dir.string(), name,
-                         "sorts after " + prev_name + " but has a smaller scan number: the numbers are not zero-padded, "
-                         "so the scans would be read out of order (files are read in lexicographic order)",
-                         "rename the files with zero-padded numbers of one width (scan_000002.pcd, scan_000010.pcd)");
-    }
-    last[n->prefix] = {n->value, name};
+  std::vector<std::pair<std::string, ScanNumber>> numbered;  // (file name, number)
+  for (const auto& f : sorted)
+    if (auto n = scanNumber(f.filename().string())) numbered.emplace_back(f.filename().string(), std::move(*n));
+  std::unordered_map<std::string, const std::string*> first;  // prefix + '/' + value -> file name
+  for (const auto& [name, n] : numbered) {
+    const auto [it, fresh] = first.emplace(n.prefix + "/" + n.value, &name);
+    if (!fresh)
+      throw InputError(dir.string(), name,
+                       "has the same scan number as " + *it->second +
+                           " (written with different zero padding): two recordings or a copy mixed in one sequence",
+                       "keep one of the two files; a sequence directory holds one recording");
+  }
+  std::unordered_map<std::string, std::pair<std::string, std::string>> last;  // prefix -> (value, file name)
+  for (const auto& [name, n] : numbered) {
+    auto it = last.find(n.prefix);
+    if (it != last.end() && !numberLess(it->second.first, n.value))
+      throw InputError(dir.string(), name,
+                       "sorts after " + it->second.second + " but has a smaller scan number: the numbers are not "
+                       "zero-padded, so the scans would be read out of order (files are read in lexicographic order)",
+                       "rename the files with zero-padded numbers of one width (scan_000002.pcd, scan_000010.pcd)");
+    last[n.prefix] = {n.value, name};
   }
 }
 

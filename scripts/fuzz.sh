@@ -39,7 +39,7 @@ for t in "${TARGETS[@]}"; do
     tail -40 "build-fuzz/fuzz-$t.log" >&2
     status=1
   else
-    grep -E "stat::number_of_executed_runs|stat::peak_rss_mb" "build-fuzz/fuzz-$t.log" | tr '\n' ' '
+    grep -E "stat::number_of_executed_units|stat::average_exec_per_sec|stat::peak_rss_mb" "build-fuzz/fuzz-$t.log" | tr '\n' ' '
     echo
   fi
 done

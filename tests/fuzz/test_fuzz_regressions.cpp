@@ -36,7 +36,7 @@ TEST_P(FuzzRegressions, EveryCorpusAndRegressionInputIsReadOrRefusedCleanly) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Targets, FuzzRegressions, ::testing::ValuesIn(fuzz::targets()),
-                         [](const ::testing::TestParamInfo<fuzz::NamedTarget>& info) { return std::string(info.param.name); });
+                         [](const ::testing::TestParamInfo<fuzz::NamedTarget>& p) { return std::string(p.param.name); });
 
 }  // namespace
 }  // namespace lidarcal

@@ -19,6 +19,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
@@ -33,6 +34,25 @@
 #include "test_util.hpp"
 
 namespace lidarcal::test {
+
+/// A directory shared by the tests of one binary, built once and removed at exit (TempDir's
+/// name comes from the running test, so a TempDir made inside a test would be that test's).
+class SharedDir {
+ public:
+  explicit SharedDir(const std::string& name)
+      : path_(fs::temp_directory_path() / ("lidarcal-" + name + "-" + std::to_string(::getpid()))) {
+    fs::remove_all(path_);
+    fs::create_directories(path_);
+  }
+  ~SharedDir() {
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+  }
+  const fs::path& path() const { return path_; }
+
+ private:
+  fs::path path_;
+};
 
 /// Where one case runs.
 struct Ws {

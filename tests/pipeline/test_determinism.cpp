@@ -3,6 +3,8 @@
 // the others are run twice. Both runs write to the same path (the first result is moved aside)
 // because reports quote their output path. To cover a new command, add one row to kCommands.
 
+#include <memory>
+
 #include <gtest/gtest.h>
 
 #include "bad_input_util.hpp"
@@ -16,14 +18,14 @@ using namespace test;
 struct WritingCommand {
   const char* name;
   std::string args;  ///< placeholders: {IN} inputs (below), {OUT} output path, {SHARED} shared data
-  std::string skip_unless_exists;  ///< relative to {SHARED}: skip when absent (empty: always runs)
+  std::string skip_unless_exists = {};  ///< relative to {SHARED}: skip when absent (empty: always runs)
 };
 
 /// Inputs under IN: sim/ (paper field, 10 stops x 2 scans, with truth), model.json (calibrated
 /// on it), corrected/ (its correction), a CSV, a CARMEN and a YDLIDAR recording.
 const fs::path& inputs() {
-  static TempDir* dir = [] {
-    auto* d = new TempDir;
+  static SharedDir* dir = [] {
+    auto* d = new SharedDir("determinism-inputs");
     const fs::path in = d->path();
     const std::string scene = (sourceDir() / "data/scenes/paper_field.json").string();
     EXPECT_EQ(runCli("simulate -q --scene " + scene + " --out " + (in / "sim").string() + " --scans-per-stop 2 --seed 9")
@@ -49,6 +51,7 @@ const fs::path& inputs() {
     writeFile(in / "rec.dat", dat);
     return d;
   }();
+  static const std::unique_ptr<SharedDir> cleanup(dir);
   return dir->path();
 }
 
@@ -114,7 +117,7 @@ TEST_P(Determinism, SameInputGivesTheSameBytes) {
 }
 
 INSTANTIATE_TEST_SUITE_P(EveryWritingCommand, Determinism, ::testing::ValuesIn(kCommands),
-                         [](const ::testing::TestParamInfo<WritingCommand>& info) { return std::string(info.param.name); });
+                         [](const ::testing::TestParamInfo<WritingCommand>& p) { return std::string(p.param.name); });
 
 }  // namespace
 }  // namespace lidarcal
