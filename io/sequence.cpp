@@ -80,10 +80,10 @@ bool numberLess(const std::string& a, const std::string& b) {
 /// that order must be the numeric order and no number may appear twice: two files for one scan
 /// number are two recordings mixed in one directory (or a copy); numbers without zero padding
 /// (scan_2, scan_10) would be read out of order.
-void checkScanNumbers(const fs::path& dir, const std::vector<fs::path>& sorted) {
+void checkScanNumbers(const fs::path& dir, const std::vector<std::string>& sorted) {
   std::vector<std::pair<std::string, ScanNumber>> numbered;  // (file name, number)
-  for (const auto& f : sorted)
-    if (auto n = scanNumber(f.filename().string())) numbered.emplace_back(f.filename().string(), std::move(*n));
+  for (const auto& name : sorted)
+    if (auto n = scanNumber(name)) numbered.emplace_back(name, std::move(*n));
   std::unordered_map<std::string, const std::string*> first;  // prefix + '/' + value -> file name
   for (const auto& [name, n] : numbered) {
     const auto [it, fresh] = first.emplace(n.prefix + "/" + n.value, &name);
@@ -116,31 +116,32 @@ Sequence openSequence(const fs::path& dir, const StopTolerance& tol) {
                      "pass the directory that holds the scans");
   Sequence seq;
   seq.dir = dir;
-  std::vector<fs::path> files;
+  // File names only (a std::filesystem::path per file costs several hundred bytes: its
+  // components are paths too), then one path per scan header.
+  std::vector<std::string> files;
   for (const auto& entry : fs::directory_iterator(dir, ec)) {
     if (!entry.is_regular_file()) continue;
-    const fs::path& p = entry.path();
-    const std::string name = p.filename().string();
+    std::string name = entry.path().filename().string();
     if (name[0] == '.') continue;
     if (isPcdNameInOtherCase(name))
-      throw InputError(p.string(), "", "has the extension '" + name.substr(name.size() - 4) +
-                                           "': lidarcal reads only files ending in lower-case .pcd and would skip this scan",
+      throw InputError(entry.path().string(), "", "has the extension '" + name.substr(name.size() - 4) +
+                                                      "': lidarcal reads only files ending in lower-case .pcd and would skip this scan",
                        "rename it to end in .pcd (mind a file of that name already present)");
-    if (isPcdName(name)) files.push_back(p);
+    if (isPcdName(name)) files.push_back(std::move(name));
   }
   if (ec) throw InputError(dir.string(), "", "cannot list the directory (" + ec.message() + ")", "check its permissions");
   if (files.empty())
     throw InputError(dir.string(), "", "holds no .pcd file: an empty sequence",
                      "point to a directory of scans (see docs/FORMAT.md), or create one with `lidarcal simulate` or `lidarcal import`");
-  std::sort(files.begin(), files.end(),
-            [](const fs::path& a, const fs::path& b) { return a.filename().string() < b.filename().string(); });
+  std::sort(files.begin(), files.end());
   checkScanNumbers(dir, files);
   const fs::path meta = dir / "sequence.json";
   if (fs::exists(meta, ec)) seq.meta = readSequenceMeta(meta);
   seq.scans.reserve(files.size());
   std::vector<Pose2> viewpoints;
   viewpoints.reserve(files.size());
-  for (const auto& f : files) {
+  for (const auto& name : files) {
+    const fs::path f = dir / name;
     seq.scans.push_back(readScanHeader(f));
     const ScanHeader& h = seq.scans.back();
     if (seq.meta.beams && h.points != static_cast<std::size_t>(*seq.meta.beams))

@@ -2,6 +2,8 @@
 
 #include <cstdio>
 #include <exception>
+#include <regex>
+#include <string>
 
 #include <CLI/CLI.hpp>
 #include <pcl/console/print.h>
@@ -9,6 +11,18 @@
 #include "common/errors.hpp"
 #include "pipeline/commands.hpp"
 #include "pipeline/progress.hpp"
+
+namespace {
+
+/// Messages name the files a command was writing; while it writes they live in a hidden
+/// staging directory (`.OUT.partial-PID-N/`) or file (`.NAME.tmp-PID-N`). Show the user the
+/// final path instead.
+std::string userPaths(const std::string& message) {
+  static const std::regex staging(R"(/\.([^/]+)\.(partial|tmp|probe)-[0-9]+-[0-9]+)");
+  return std::regex_replace(message, staging, "/$1");
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   // PCL's readers print their own diagnostics; ours are clearer and name the file and field.
@@ -29,10 +43,10 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;
   } catch (const lidarcal::DataError& e) {
-    std::fprintf(stderr, "lidarcal: cannot proceed: %s\n", e.what());
+    std::fprintf(stderr, "lidarcal: cannot proceed: %s\n", userPaths(e.what()).c_str());
     return 3;
   } catch (const lidarcal::InputError& e) {
-    std::fprintf(stderr, "lidarcal: error: %s\n", e.what());
+    std::fprintf(stderr, "lidarcal: error: %s\n", userPaths(e.what()).c_str());
     return 2;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "lidarcal: internal error: %s\n(please report this with the command you ran)\n", e.what());

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include "calibration/filtering.hpp"
 #include "common/errors.hpp"
@@ -80,7 +81,8 @@ std::string beamCountWarning(const io::Sequence& seq) {
 void checkModelFits(const CalibrationModel& model, const io::Sequence& seq, const std::filesystem::path& model_file) {
   const std::string where = model_file.string();
   if (model.status != "ok")
-    throw DataError(where, "diagnostics.status", "the model is not usable (" + model.status + "): " + model.message,
+    throw DataError(where, "diagnostics.status",
+                    "the model is not usable (" + model.status + ")" + (model.message.empty() ? "" : ": " + model.message),
                     "calibrate again with more landmarks or stops");
   if (model.beams && !seq.scans.empty()) {
     for (const auto& h : seq.scans)
@@ -98,11 +100,26 @@ void checkModelFits(const CalibrationModel& model, const io::Sequence& seq, cons
                      "the model's range limits differ from the sequence's (" + seq.dir.string() + "/sequence.json)",
                      "the model belongs to another sensor; calibrate this one");
   double at = 0.0;
-  if (!calibration::invertsReadingWindow(model.model.bias, model.model.range_min_m, model.model.range_max_m, &at))
-    throw DataError(where, "bias.alpha",
-                    "the bias polynomial stops increasing at d = " + std::to_string(at) +
-                        " m before its readings reach the range limit, so a reading maps to more than one distance",
-                    "calibrate with a lower --max-order or with landmarks covering the whole range");
+  const BiasPolynomial& f = model.model.bias;
+  if (!calibration::invertsReadingWindow(f, model.model.range_min_m, model.model.range_max_m, &at)) {
+    // Where f stops rising (first d with f'(d) <= 0), for the message.
+    const int steps = 4000;
+    double peak = -1.0;
+    for (int i = 0; i <= steps && peak < 0.0; ++i) {
+      const double d = at * i / steps;
+      if (f.derivative(d) <= 0.0) peak = d;
+    }
+    char text[256];
+    if (peak >= 0.0)
+      std::snprintf(text, sizeof text,
+                    "the bias polynomial stops increasing at d = %.3f m (reading %.3f m), below the range limit %.3f m, "
+                    "so a reading maps to more than one distance", peak, f(peak), model.model.range_max_m);
+    else
+      std::snprintf(text, sizeof text,
+                    "the bias polynomial does not reach the range limit %.3f m (at d = %.1f m it reads %.3f m): readings "
+                    "near the limit have no distance", model.model.range_max_m, at, f(at));
+    throw DataError(where, "bias.alpha", text, "calibrate with a lower --max-order or with landmarks covering the whole range");
+  }
 }
 
 CorrectionStats correctSequence(const io::Sequence& seq, const CalibrationModel& model,

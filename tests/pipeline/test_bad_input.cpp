@@ -468,6 +468,8 @@ TEST_P(BadInput, FailsCleanlyNamingFileItemAndRemedy) {
   const CliResult r = runCliPrefixed(prefix, args);
   if (!prefix.empty()) ::chmod(w.out.parent_path().c_str(), 0755);
   SCOPED_TRACE("lidarcal " + args + "\nstderr: " + r.err);
+  // LIDARCAL_PRINT_MESSAGES=1 prints every message (to keep docs/ERRORS.md in step).
+  if (std::getenv("LIDARCAL_PRINT_MESSAGES")) std::printf("MESSAGE %s: %s", k.name, r.err.c_str());
 
   EXPECT_EQ(r.exit_code, k.exit_code);
   EXPECT_NE(r.err.find(k.exit_code == 3 ? "lidarcal: cannot proceed: " : "lidarcal: error: "), std::string::npos);
