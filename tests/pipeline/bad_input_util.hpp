@@ -35,24 +35,29 @@
 
 namespace lidarcal::test {
 
-/// A directory shared by the tests of one binary, built once and removed at exit (TempDir's
-/// name comes from the running test, so a TempDir made inside a test would be that test's).
-class SharedDir {
- public:
-  explicit SharedDir(const std::string& name)
-      : path_(fs::temp_directory_path() / ("lidarcal-" + name + "-" + std::to_string(::getpid()))) {
-    fs::remove_all(path_);
-    fs::create_directories(path_);
+/// A directory of test inputs built once by `build` and shared by every test process (ctest
+/// runs each test case in a process of its own): kept in the build tree, keyed by the `lidarcal`
+/// binary that made it (rebuilt when lidarcal changes), built under a temporary name and renamed
+/// into place, so that two processes building at once do not disturb each other.
+inline fs::path cachedFixture(const std::string& name, const std::function<void(const fs::path&)>& build) {
+  const fs::path exe = LIDARCAL_EXE;
+  const auto stamp = static_cast<unsigned long long>(fs::last_write_time(exe).time_since_epoch().count()) ^
+                     static_cast<unsigned long long>(fs::file_size(exe));
+  const fs::path dir = fs::path(LIDARCAL_TEST_FIXTURE_DIR) / (name + "-" + std::to_string(stamp));
+  if (fs::exists(dir)) return dir;
+  const fs::path tmp = dir.string() + ".tmp-" + std::to_string(::getpid());
+  fs::remove_all(tmp);
+  fs::create_directories(tmp);
+  build(tmp);
+  std::error_code ec;
+  if (::testing::Test::HasFailure()) {
+    fs::remove_all(tmp, ec);
+    return dir;
   }
-  ~SharedDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
+  fs::rename(tmp, dir, ec);  // fails when another process was first: use its copy
+  if (ec) fs::remove_all(tmp, ec);
+  return dir;
+}
 
 /// Where one case runs.
 struct Ws {

@@ -25,22 +25,19 @@ std::string scenePath(const char* name) { return (sourceDir() / "data/scenes" / 
 /// output failures are reached), FIX/ascii (the same in ASCII), FIX/model.json (calibrated on
 /// 10 stops x 2 scans of the paper's field).
 const fs::path& fixtures() {
-  static SharedDir* dir = [] {
-    auto* d = new SharedDir("bad-input-fixtures");
+  static const fs::path dir = cachedFixture("bad-input", [](const fs::path& d) {
     const std::string scene = scenePath("paper_field.json");
     for (const auto& [name, flags] : {std::pair<const char*, const char*>{"bin", ""}, {"ascii", " --ascii"}}) {
-      const auto r = runCli("simulate -q --scene " + scene + " --out " + (d->path() / name).string() +
+      const auto r = runCli("simulate -q --scene " + scene + " --out " + (d / name).string() +
                             " --stops 4 --scans-per-stop 2 --seed 3" + flags);
       EXPECT_EQ(r.exit_code, 0) << r.err;
     }
-    auto r = runCli("simulate -q --scene " + scene + " --out " + (d->path() / "cal").string() + " --scans-per-stop 2 --seed 4");
+    auto r = runCli("simulate -q --scene " + scene + " --out " + (d / "cal").string() + " --scans-per-stop 2 --seed 4");
     EXPECT_EQ(r.exit_code, 0) << r.err;
-    r = runCli("calibrate -q " + (d->path() / "cal/scans").string() + " --out " + (d->path() / "model.json").string());
+    r = runCli("calibrate -q " + (d / "cal/scans").string() + " --out " + (d / "model.json").string());
     EXPECT_EQ(r.exit_code, 0) << r.err;
-    return d;
-  }();
-  static const std::unique_ptr<SharedDir> cleanup(dir);
-  return dir->path();
+  });
+  return dir;
 }
 
 // ---- input builders

@@ -24,9 +24,8 @@ struct WritingCommand {
 /// Inputs under IN: sim/ (paper field, 10 stops x 2 scans, with truth), model.json (calibrated
 /// on it), corrected/ (its correction), a CSV, a CARMEN and a YDLIDAR recording.
 const fs::path& inputs() {
-  static SharedDir* dir = [] {
-    auto* d = new SharedDir("determinism-inputs");
-    const fs::path in = d->path();
+  static const fs::path dir = cachedFixture("determinism", [](const fs::path& d) {
+    const fs::path in = d;
     const std::string scene = (sourceDir() / "data/scenes/paper_field.json").string();
     EXPECT_EQ(runCli("simulate -q --scene " + scene + " --out " + (in / "sim").string() + " --scans-per-stop 2 --seed 9")
                   .exit_code, 0);
@@ -49,10 +48,8 @@ const fs::path& inputs() {
     writeFile(in / "rec.csv", csv);
     writeGzip(in / "rec.log.gz", carmen);
     writeFile(in / "rec.dat", dat);
-    return d;
-  }();
-  static const std::unique_ptr<SharedDir> cleanup(dir);
-  return dir->path();
+  });
+  return dir;
 }
 
 const std::vector<WritingCommand> kCommands = {
