@@ -1,5 +1,6 @@
 #include "io/pcd_scan.hpp"
 
+#include <cctype>
 #include <cmath>
 #include <cstring>
 #include <fstream>
@@ -65,6 +66,35 @@ bool parseDouble(const std::string& text, double& value) {
   char* end = nullptr;
   value = std::strtod(text.c_str(), &end);
   return end != text.c_str() && *end == '\0';
+}
+
+/// PCL's header reader does not stop at DATA: it goes on reading lines, skips empty ones and
+/// comments, and takes any line whose first word begins with a header keyword as more header
+/// (more FIELDS, another DATA), until a line that is none of these. Binary data that happens to
+/// read like that would make PCL load something else than the header we checked (found by
+/// fuzzing: a `COLUMNS` line at the start of binary data gave PCL one garbage field and no x).
+void checkNothingAfterData(std::istream& in, const std::string& where, std::size_t consumed) {
+  static const char* const kKeywords[] = {"VERSION", "FIELDS", "COLUMNS", "SIZE",   "TYPE", "COUNT",
+                                          "WIDTH",   "HEIGHT", "VIEWPOINT", "POINTS", "DATA"};
+  const auto space = [](char c) { return std::isspace(static_cast<unsigned char>(c)) != 0; };
+  std::string line;
+  while (consumed < kMaxHeaderBytes && std::getline(in, line)) {
+    consumed += line.size() + 1;
+    if (line.empty()) continue;
+    std::size_t b = 0;
+    while (b < line.size() && space(line[b])) ++b;
+    std::size_t e = b;
+    while (e < line.size() && !space(line[e])) ++e;
+    const std::string word = line.substr(b, e - b);
+    if (word.empty()) return;      // PCL stops at a blank line
+    if (word[0] == '#') continue;  // and skips comments
+    for (const char* k : kKeywords)
+      if (word.compare(0, std::strlen(k), k) == 0)
+        throw InputError(where, "DATA", "the data begins with a line PCL would read as more header ('" + printable(word) +
+                                            "'): a damaged file",
+                         "re-export the scan");
+    return;
+  }
 }
 
 ParsedHeader parseHeader(const fs::path& file) {
@@ -133,6 +163,7 @@ ParsedHeader parseHeader(const fs::path& file) {
     }
   }
   if (h.data.empty()) throw InputError(where, "DATA", "header has no DATA line: truncated or not a PCD file", kFormatRemedy);
+  checkNothingAfterData(in, where, consumed);
   if (!seen_fields || h.fields.empty()) throw InputError(where, "FIELDS", "missing", kFormatRemedy);
   if (!seen_size || sizes.size() != h.fields.size())
     throw InputError(where, "SIZE", "must give one size per field (" + std::to_string(h.fields.size()) + ")", kFormatRemedy);
@@ -341,6 +372,8 @@ Scan readScan(const fs::path& file) {
   const pcl::PCLPointField* fz = cloudField(blob, "z");
   const pcl::PCLPointField* fi = cloudField(blob, "intensity");
   const pcl::PCLPointField* fl = cloudField(blob, "label");
+  if (!fx || !fy)  // the header we checked has them; PCL must have read the same header
+    throw InputError(where, "FIELDS", "PCL read other fields than the header lists (a damaged file)", "re-export the scan");
 
   Scan scan;
   scan.name = file.filename().string();

@@ -2,10 +2,10 @@
 
 #include <algorithm>
 #include <cctype>
-#include <unordered_map>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <unordered_map>
 
 #include <nlohmann/json.hpp>
 

@@ -120,7 +120,26 @@ TEST(PcdHeader, PointsThatTheDataCannotHoldAreRefusedBeforeLoading) {
   EXPECT_NE(problemOf([&] { readScan(dir / "a.pcd"); }).find("cannot hold the 100000000 points"), std::string::npos);
   test::writeFile(dir / "c.pcd", head + "WIDTH 50000000\nHEIGHT 1\nPOINTS 50000000\nDATA binary_compressed\n" +
                                      std::string(64, '\x01'));
-  EXPECT_NE(problemOf([&] { readScan(dir / "c.pcd"); }).find("cannot hold"), std::string::npos);
+  // (the compressed block's own sizes give it away first)
+  EXPECT_NE(problemOf([&] { readScan(dir / "c.pcd"); }).find("c.pcd: DATA: the compressed block unpacks to"),
+            std::string::npos);
+}
+
+TEST(PcdHeader, DataThatPclWouldReadAsMoreHeaderIsRefused) {
+  // Found by fuzzing (tests/fuzz/regressions/pcd/): PCL reads on past DATA while lines look
+  // like header lines, and loaded a garbage field list instead of x y z.
+  const fs::path file = test::sourceDir() / "tests/fuzz/regressions/pcd/crash-columns-line-in-binary-data.pcd";
+  EXPECT_NE(problemOf([&] { readScan(file); }).find("DATA: the data begins with a line PCL would read as more header"),
+            std::string::npos);
+  // Comments and empty lines after DATA are skipped by PCL too and do not matter; binary data
+  // that does not read as a keyword loads.
+  TempDir dir;
+  const std::string head = "VERSION .7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 1\nHEIGHT 1\n"
+                           "VIEWPOINT 0 0 0 1 0 0 0\nPOINTS 1\nDATA ascii\n";
+  test::writeFile(dir / "a.pcd", head + "1 2 0\n");
+  EXPECT_NO_THROW(readScan(dir / "a.pcd"));
+  test::writeFile(dir / "b.pcd", head + "WIDTH 7\n1 2 0\n");
+  EXPECT_NE(problemOf([&] { readScan(dir / "b.pcd"); }).find("('WIDTH')"), std::string::npos);
 }
 
 TEST(TrueRangesCsv, RowsWithBadValuesNameTheColumn) {
