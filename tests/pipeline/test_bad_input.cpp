@@ -530,6 +530,18 @@ TEST(BadInputWarnings, ScansWithDifferentBeamCountsCalibrateWithAWarningAndAMode
   const auto c = runCli("correct -q " + (in / "scans").string() + " --model " + (dir / "m.json").string() + " --out " +
                         (dir / "c").string());
   EXPECT_EQ(c.exit_code, 0) << c.err;
+  EXPECT_NE(c.err.find("warning: "), std::string::npos) << c.err;
+  EXPECT_NE(c.err.find("varies from 359 to 360"), std::string::npos) << c.err;
+  // A model of one beam count refuses the scans with the other, naming the first.
+  auto fixed = nlohmann::json::parse(readFile(dir / "m.json"));
+  fixed["sensor"]["beams"] = 360;
+  writeFile(dir / "m360.json", fixed.dump());
+  const auto f = runCli("correct " + (in / "scans").string() + " --model " + (dir / "m360.json").string() + " --out " +
+                        (dir / "c360").string());
+  EXPECT_EQ(f.exit_code, 2);
+  EXPECT_NE(f.err.find("scan_000002.pcd: POINTS: has 359 beams"), std::string::npos) << f.err;
+  EXPECT_FALSE(fs::exists(dir / "c360"));
+  EXPECT_TRUE(snapshot(in) == before);
 }
 
 TEST(BadInputGeometry, LandmarksAllOnOneSideOfThePathStillCalibrate) {
