@@ -1,8 +1,8 @@
 // The `lidarcal` command: the only main, the only place that prints.
 
 #include <cstdio>
+#include <cstring>
 #include <exception>
-#include <regex>
 #include <string>
 
 #include <CLI/CLI.hpp>
@@ -18,8 +18,32 @@ namespace {
 /// staging directory (`.OUT.partial-PID-N/`) or file (`.NAME.tmp-PID-N`). Show the user the
 /// final path instead.
 std::string userPaths(const std::string& message) {
-  static const std::regex staging(R"(/\.([^/]+)\.(partial|tmp|probe)-[0-9]+-[0-9]+)");
-  return std::regex_replace(message, staging, "/$1");
+  std::string out;
+  std::size_t i = 0;
+  while (i < message.size()) {
+    // A component "/.NAME.KIND-PID-N" becomes "/NAME".
+    if (message.compare(i, 2, "/.") == 0) {
+      const std::size_t start = i + 2;
+      std::size_t end = message.find_first_of("/ :)", start);
+      if (end == std::string::npos) end = message.size();
+      const std::string component = message.substr(start, end - start);
+      for (const char* kind : {".partial-", ".tmp-", ".probe-"}) {
+        const std::size_t at = component.rfind(kind);
+        if (at == std::string::npos || at == 0) continue;
+        const std::string tail = component.substr(at + std::strlen(kind));  // PID-N
+        const std::size_t dash = tail.find('-');
+        const bool numbers = dash != std::string::npos && dash > 0 && dash + 1 < tail.size() &&
+                             tail.find_first_not_of("0123456789-") == std::string::npos;
+        if (!numbers) continue;
+        out += "/" + component.substr(0, at);
+        i = end;
+        break;
+      }
+      if (i == end) continue;
+    }
+    out += message[i++];
+  }
+  return out;
 }
 
 }  // namespace

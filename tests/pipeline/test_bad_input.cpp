@@ -424,7 +424,8 @@ std::vector<BadInputCase> cases() {
     }
   // Disk full, simulated without privileges: a file-size limit (ulimit -f, in KiB) with SIGXFSZ
   // ignored makes write() fail with EFBIG as a full disk fails with ENOSPC.
-  forEach(kWritingCommands, "disk_full", [](const Ws& w) { writableInputs(w); }, 2, {"disk full?", "free some space"});
+  forEach(kWritingCommands, "disk_full", [](const Ws& w) { writableInputs(w); }, 2,
+          {"outdir/result", "disk full?", "free some space"});  // the final path, not the staging one
   for (auto& k : c)
     if (std::string(k.name).rfind("disk_full_", 0) == 0) {
       // 1 KiB: model.json (~10 KB) and scans (~4.4 KB) cannot be written; small files can.
