@@ -68,7 +68,7 @@ struct Ws {
 };
 
 struct BadInputCase {
-  const char* name;                              ///< test name (and docs/ERRORS.md row)
+  std::string name;                              ///< test name (and docs/ERRORS.md row)
   std::string args;                              ///< command line after `lidarcal`, with placeholders
   std::function<void(const Ws&)> prepare;        ///< builds the inputs under Ws::in
   int exit_code = 2;                             ///< 2 bad input, 3 data cannot support the result

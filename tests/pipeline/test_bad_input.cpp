@@ -6,8 +6,6 @@
 #include <cmath>
 #include <limits>
 
-#include <memory>
-
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -130,7 +128,7 @@ std::vector<BadInputCase> cases() {
                            int code, std::vector<std::string> message) {
     for (const auto& [cmd, args] : commands) {
       BadInputCase k;
-      k.name = strdup((name + "_" + cmd).c_str());
+      k.name = name + "_" + cmd;
       k.args = args;
       k.prepare = prepare;
       k.exit_code = code;
@@ -392,8 +390,8 @@ std::vector<BadInputCase> cases() {
   forEach(kWritingCommands, "out_is_the_input",
           [](const Ws& w) { writableInputs(w); }, 2, {"--out", "inside it", "outside the input"});
   for (auto& k : c)
-    if (std::string(k.name).rfind("out_is_the_input_", 0) == 0) {
-      const std::string name = k.name;
+    if (k.name.rfind("out_is_the_input_", 0) == 0) {
+      const std::string& name = k.name;
       const std::string input = name.find("simulate") != std::string::npos ? "{IN}/scene.json"
                                 : name.find("import") != std::string::npos ? "{IN}/scans.csv"
                                                                            : "{SEQ}";
@@ -404,18 +402,18 @@ std::vector<BadInputCase> cases() {
   forEach(std::vector<std::pair<const char*, std::string>>(kWritingCommands.begin(), kWritingCommands.begin() + 4),
           "out_inside_the_input", [](const Ws& w) { writableInputs(w); }, 2, {"--out", "inside it", "outside the input"});
   for (auto& k : c)
-    if (std::string(k.name).rfind("out_inside_the_input_", 0) == 0) k.args = replaceAll(k.args, "--out {OUT}", "--out {SEQ}/out");
+    if (k.name.rfind("out_inside_the_input_", 0) == 0) k.args = replaceAll(k.args, "--out {OUT}", "--out {SEQ}/out");
   forEach(kWritingCommands, "out_parent_is_a_file", [](const Ws& w) { writableInputs(w); }, 2, {"--out", "not a directory"});
   for (auto& k : c)
-    if (std::string(k.name).rfind("out_parent_is_a_file_", 0) == 0)
+    if (k.name.rfind("out_parent_is_a_file_", 0) == 0)
       k.args = replaceAll(k.args, "--out {OUT}", "--out {IN}/file.txt/result");
   forEach(kWritingCommands, "out_in_proc", [](const Ws& w) { writableInputs(w); }, 2, {"/proc/result", "writable"});
   for (auto& k : c)
-    if (std::string(k.name).rfind("out_in_proc_", 0) == 0) k.args = replaceAll(k.args, "--out {OUT}", "--out /proc/result");
+    if (k.name.rfind("out_in_proc_", 0) == 0) k.args = replaceAll(k.args, "--out {OUT}", "--out /proc/result");
   forEach(kWritingCommands, "out_directory_not_writable", [](const Ws& w) { writableInputs(w); }, 2,
           {"result", "check that", "writable"});
   for (auto& k : c)
-    if (std::string(k.name).rfind("out_directory_not_writable_", 0) == 0) {
+    if (k.name.rfind("out_directory_not_writable_", 0) == 0) {
       k.shell_prefix = "chmod 0555 {OUTDIR}";
       k.skip = [](const Ws& w) -> std::string {
         return permissionsAreIgnored(w.in) ? "running as root: a read-only mode does not stop writes (the /proc case covers it)"
@@ -427,7 +425,7 @@ std::vector<BadInputCase> cases() {
   forEach(kWritingCommands, "disk_full", [](const Ws& w) { writableInputs(w); }, 2,
           {"outdir/result", "disk full?", "free some space"});  // the final path, not the staging one
   for (auto& k : c)
-    if (std::string(k.name).rfind("disk_full_", 0) == 0) {
+    if (k.name.rfind("disk_full_", 0) == 0) {
       // 1 KiB: model.json (~10 KB) and scans (~4.4 KB) cannot be written; small files can.
       k.shell_prefix = "trap '' XFSZ; ulimit -f 1";
     }
@@ -467,7 +465,7 @@ TEST_P(BadInput, FailsCleanlyNamingFileItemAndRemedy) {
   if (!prefix.empty()) ::chmod(w.out.parent_path().c_str(), 0755);
   SCOPED_TRACE("lidarcal " + args + "\nstderr: " + r.err);
   // LIDARCAL_PRINT_MESSAGES=1 prints every message (to keep docs/ERRORS.md in step).
-  if (std::getenv("LIDARCAL_PRINT_MESSAGES")) std::printf("MESSAGE %s: %s", k.name, r.err.c_str());
+  if (std::getenv("LIDARCAL_PRINT_MESSAGES")) std::printf("MESSAGE %s: %s", k.name.c_str(), r.err.c_str());
 
   EXPECT_EQ(r.exit_code, k.exit_code);
   EXPECT_NE(r.err.find(k.exit_code == 3 ? "lidarcal: cannot proceed: " : "lidarcal: error: "), std::string::npos);
@@ -489,7 +487,7 @@ TEST_P(BadInput, FailsCleanlyNamingFileItemAndRemedy) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Catalogue, BadInput, ::testing::ValuesIn(cases()),
-                         [](const ::testing::TestParamInfo<BadInputCase>& p) { return std::string(p.param.name); });
+                         [](const ::testing::TestParamInfo<BadInputCase>& p) { return p.param.name; });
 
 // ---- not errors, documented in docs/ERRORS.md as well
 

@@ -3,8 +3,6 @@
 // the others are run twice. Both runs write to the same path (the first result is moved aside)
 // because reports quote their output path. To cover a new command, add one row to kCommands.
 
-#include <memory>
-
 #include <gtest/gtest.h>
 
 #include "bad_input_util.hpp"
