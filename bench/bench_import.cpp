@@ -11,10 +11,6 @@
 // Add a step by appending to steps(); a step with `keep` writes to that directory and leaves it
 // for later steps (the detect step reads the kept Freiburg import). Numbers go to docs/RESULTS.md.
 
-#include <sys/resource.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -24,6 +20,8 @@
 #include <iterator>
 #include <string>
 #include <vector>
+
+#include "child_process.hpp"
 
 namespace {
 
@@ -38,39 +36,8 @@ struct Step {
   std::string keep;               // if set: write here instead of a scratch directory, and keep it for later steps
 };
 
-struct Measure {
-  double wall_s = 0.0;
-  double user_s = 0.0;    // user-space CPU time of the child (parsing, conversion, PCD encoding)
-  double system_s = 0.0;  // kernel CPU time of the child (file creation, I/O)
-  long max_rss_kib = 0;
-  int exit_code = -1;
-};
-
-Measure runChild(const std::string& exe, const std::vector<std::string>& args) {
-  std::vector<char*> argv;
-  argv.push_back(const_cast<char*>(exe.c_str()));
-  for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-  argv.push_back(nullptr);
-  const auto start = std::chrono::steady_clock::now();
-  const pid_t pid = fork();
-  if (pid == 0) {
-    // The command's own report would interleave with the table: discard it (errors still show).
-    if (FILE* null = std::fopen("/dev/null", "w")) dup2(fileno(null), STDOUT_FILENO);
-    execv(exe.c_str(), argv.data());
-    std::perror("execv");
-    _exit(127);
-  }
-  int status = 0;
-  rusage usage{};
-  wait4(pid, &status, 0, &usage);
-  Measure m;
-  m.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  m.max_rss_kib = usage.ru_maxrss;  // kilobytes on Linux
-  m.user_s = static_cast<double>(usage.ru_utime.tv_sec) + 1e-6 * static_cast<double>(usage.ru_utime.tv_usec);
-  m.system_s = static_cast<double>(usage.ru_stime.tv_sec) + 1e-6 * static_cast<double>(usage.ru_stime.tv_usec);
-  m.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return m;
-}
+using lidarcal::bench::Measure;
+using lidarcal::bench::runChild;
 
 /// Four copies of the Freiburg 079 log back to back (gzip members may be concatenated): a
 /// 19,164-scan recording, to show that memory does not grow with the length of the input.

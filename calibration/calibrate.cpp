@@ -336,7 +336,8 @@ std::vector<std::vector<double>> constantDistanceBatches(const LandmarkObservati
   std::map<std::tuple<std::size_t, int, std::uint32_t>, std::vector<std::pair<std::size_t, double>>> by_beam;
   for (const auto& s : obs.sightings)
     for (const auto& b : s.beams)
-      if (std::isfinite(b.range_m)) by_beam[{s.stop, s.landmark, b.beam}].push_back({s.scan, b.range_m});
+      if (std::isfinite(b.range_m) && b.beam != kUnknownBeam)
+        by_beam[{s.stop, s.landmark, b.beam}].push_back({s.scan, b.range_m});
   std::vector<std::vector<double>> batches;
   for (auto& [key, v] : by_beam) {
     std::sort(v.begin(), v.end());
@@ -373,7 +374,9 @@ CalibrationModel calibrate(const LandmarkObservations& obs, const CalibrationCon
   if (usable == 0) {
     m.status = "no_usable_landmark";
     m.message = tri.empty() ? "no landmark was observed: check that the poles are detected (lidarcal detect)"
-                            : "no landmark could be triangulated; see the landmarks' status";
+                            : "no landmark could be triangulated";
+    for (std::size_t i = 0; i < tri.size() && i < 3; ++i) m.message += "; landmark " + std::to_string(tri[i].id) + ": " + m.landmarks[i].status;
+    if (tri.size() > 3) m.message += "; and " + std::to_string(tri.size() - 3) + " more";
     return m;
   }
   if (!(radius > 0.0)) {

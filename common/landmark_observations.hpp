@@ -10,11 +10,15 @@
 
 namespace lidarcal {
 
+/// BeamReading::beam when point i of one scan is not the same beam as point i of the other
+/// scans of its stop (the beam count varies from scan to scan, e.g. YDLIDAR X4).
+constexpr std::uint32_t kUnknownBeam = 0xFFFFFFFFu;
+
 /// One raw beam reading on a landmark.
 struct BeamReading {
   double angle_rad = 0.0;   ///< nominal beam angle in the sensor frame, radians
   double range_m = 0.0;     ///< raw reading, metres
-  std::uint32_t beam = 0;   ///< index of the point in its scan
+  std::uint32_t beam = 0;   ///< index of the point in its scan; kUnknownBeam when not comparable across scans
 };
 
 /// One landmark seen in one scan.

@@ -39,7 +39,9 @@ enum class RadiusSource {
 const char* toString(RadiusSource source);
 
 struct SequenceDetections {
-  std::vector<ScanDetections> scans;  ///< per scan in sequence order (scan_index, stop set)
+  /// Per scan in sequence order (scan_index, stop set). `clusters` is left empty: the per-cluster
+  /// diagnostics of every scan would make memory grow with the sequence (detectScan has them).
+  std::vector<ScanDetections> scans;
   std::vector<Pose2> viewpoints;      ///< commanded pose of each scan
   Association association;            ///< landmarks and the id of every detection
   RadiusSource radius_source = RadiusSource::none;  ///< how radii were obtained

@@ -15,6 +15,11 @@ void writeAtomically(const std::filesystem::path& file, const std::function<void
 /// Writes `bytes` to `file` atomically.
 void writeTextAtomically(const std::filesystem::path& file, const std::string& bytes);
 
+/// Checks an output file path before any work is done: its directory exists, it is not a
+/// directory or a special file, and it does not exist unless `overwrite`. Throws InputError
+/// naming --out.
+void checkOutputFile(const std::filesystem::path& file, bool overwrite);
+
 /// Throws InputError when `out` is `input` or lies inside it (outputs never go into inputs).
 void checkOutsideInput(const std::filesystem::path& input, const std::filesystem::path& out);
 

@@ -63,9 +63,8 @@ void LandmarksCsvWriter::write(const LandmarkRow& r) {
 }
 
 void LandmarksCsvWriter::close() {
-  out_.flush();
-  if (!out_) throw InputError(file_.string(), "", "write failed (disk full?)", "free some space and run again");
   out_.close();
+  if (!out_) throw InputError(file_.string(), "", "write failed (disk full?)", "free some space and run again");
 }
 
 std::vector<LandmarkRow> readLandmarksCsv(const std::filesystem::path& file) {

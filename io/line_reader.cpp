@@ -30,7 +30,14 @@ LineReader::LineReader(const fs::path& file) : file_(file) {
   compressed_ = gzdirect(handle(gz_)) == 0;
   int err = Z_OK;
   const char* msg = gzerror(handle(gz_), &err);
-  if (err != Z_OK) fail(msg);
+  if (err != Z_OK) {
+    // The destructor does not run when the constructor throws: close here (found by fuzzing,
+    // tests/fuzz/regressions/carmen/).
+    const std::string text = msg;
+    gzclose(handle(gz_));
+    gz_ = nullptr;
+    fail(text);
+  }
 }
 
 LineReader::~LineReader() {

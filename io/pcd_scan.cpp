@@ -1,5 +1,6 @@
 #include "io/pcd_scan.hpp"
 
+#include <cctype>
 #include <cmath>
 #include <cstring>
 #include <fstream>
@@ -46,6 +47,14 @@ std::vector<std::string> splitWords(const std::string& line) {
   return words;
 }
 
+/// A word of a damaged file as it can be shown in a message: at most 24 characters, anything
+/// but printable ASCII as '?'.
+std::string printable(const std::string& word) {
+  std::string out;
+  for (char c : word.substr(0, 24)) out += (c >= 0x20 && c < 0x7f) ? c : '?';
+  return word.size() > 24 ? out + "..." : out;
+}
+
 bool parseLong(const std::string& text, long long& value) {
   char* end = nullptr;
   errno = 0;
@@ -57,6 +66,35 @@ bool parseDouble(const std::string& text, double& value) {
   char* end = nullptr;
   value = std::strtod(text.c_str(), &end);
   return end != text.c_str() && *end == '\0';
+}
+
+/// PCL's header reader does not stop at DATA: it goes on reading lines, skips empty ones and
+/// comments, and takes any line whose first word begins with a header keyword as more header
+/// (more FIELDS, another DATA), until a line that is none of these. Binary data that happens to
+/// read like that would make PCL load something else than the header we checked (found by
+/// fuzzing: a `COLUMNS` line at the start of binary data gave PCL one garbage field and no x).
+void checkNothingAfterData(std::istream& in, const std::string& where, std::size_t consumed) {
+  static const char* const kKeywords[] = {"VERSION", "FIELDS", "COLUMNS", "SIZE",   "TYPE", "COUNT",
+                                          "WIDTH",   "HEIGHT", "VIEWPOINT", "POINTS", "DATA"};
+  const auto space = [](char c) { return std::isspace(static_cast<unsigned char>(c)) != 0; };
+  std::string line;
+  while (consumed < kMaxHeaderBytes && std::getline(in, line)) {
+    consumed += line.size() + 1;
+    if (line.empty()) continue;
+    std::size_t b = 0;
+    while (b < line.size() && space(line[b])) ++b;
+    std::size_t e = b;
+    while (e < line.size() && !space(line[e])) ++e;
+    const std::string word = line.substr(b, e - b);
+    if (word.empty()) return;      // PCL stops at a blank line
+    if (word[0] == '#') continue;  // and skips comments
+    for (const char* k : kKeywords)
+      if (word.compare(0, std::strlen(k), k) == 0)
+        throw InputError(where, "DATA", "the data begins with a line PCL would read as more header ('" + printable(word) +
+                                            "'): a damaged file",
+                         "re-export the scan");
+    return;
+  }
 }
 
 ParsedHeader parseHeader(const fs::path& file) {
@@ -84,7 +122,7 @@ ParsedHeader parseHeader(const fs::path& file) {
     auto words = splitWords(line);
     if (words.empty()) continue;
     const std::string key = words[0];
-    const std::string item = "header line " + std::to_string(line_no) + " (" + key + ")";
+    const std::string item = "header line " + std::to_string(line_no) + " (" + printable(key) + ")";
     words.erase(words.begin());
     if (key == "VERSION") {
       continue;
@@ -111,7 +149,7 @@ ParsedHeader parseHeader(const fs::path& file) {
                          kFormatRemedy);
       for (int i = 0; i < 7; ++i)
         if (!parseDouble(words[static_cast<std::size_t>(i)], h.viewpoint[i]) || !std::isfinite(h.viewpoint[i]))
-          throw InputError(where, "VIEWPOINT", "value '" + words[static_cast<std::size_t>(i)] + "' is not a finite number",
+          throw InputError(where, "VIEWPOINT", "value '" + printable(words[static_cast<std::size_t>(i)]) + "' is not a finite number",
                            kFormatRemedy);
       h.has_viewpoint = true;
     } else if (key == "DATA") {
@@ -125,6 +163,7 @@ ParsedHeader parseHeader(const fs::path& file) {
     }
   }
   if (h.data.empty()) throw InputError(where, "DATA", "header has no DATA line: truncated or not a PCD file", kFormatRemedy);
+  checkNothingAfterData(in, where, consumed);
   if (!seen_fields || h.fields.empty()) throw InputError(where, "FIELDS", "missing", kFormatRemedy);
   if (!seen_size || sizes.size() != h.fields.size())
     throw InputError(where, "SIZE", "must give one size per field (" + std::to_string(h.fields.size()) + ")", kFormatRemedy);
@@ -194,6 +233,27 @@ void checkCoordinateField(const ParsedHeader& h, const std::string& name, bool r
     throw InputError(where, "field '" + name + "'", "must be a single float (TYPE F, SIZE 4 or 8, COUNT 1)", kFormatRemedy);
 }
 
+/// binary_compressed data starts with the compressed and the uncompressed size (uint32 each).
+/// PCL trusts the uncompressed size when unpacking: it must be what the header promises, and
+/// the compressed block must lie within the file.
+void checkCompressedBlock(const fs::path& file, const ParsedHeader& h, std::size_t promised, std::size_t data_bytes) {
+  const std::string where = file.string();
+  std::uint32_t sizes[2] = {0, 0};
+  std::ifstream in(file, std::ios::binary);
+  in.seekg(static_cast<std::streamoff>(h.data_offset));
+  if (data_bytes < 8 || !in.read(reinterpret_cast<char*>(sizes), sizeof sizes))
+    throw InputError(where, "DATA", "file is truncated: no compressed block after the header",
+                     "the recording was cut short; re-export or drop this file");
+  if (sizes[1] != promised)
+    throw InputError(where, "DATA", "the compressed block unpacks to " + std::to_string(sizes[1]) +
+                                        " bytes, the header promises " + std::to_string(promised) + " (damaged file)",
+                     "re-export the scan");
+  if (sizes[0] > data_bytes - 8)
+    throw InputError(where, "DATA", "file is truncated: the compressed block has " + std::to_string(sizes[0]) +
+                                        " bytes, the file holds " + std::to_string(data_bytes - 8),
+                     "the recording was cut short; re-export or drop this file");
+}
+
 ScanHeader toScanHeader(const fs::path& file, const ParsedHeader& h) {
   const std::string where = file.string();
   checkCoordinateField(h, "x", true, where);
@@ -206,14 +266,30 @@ ScanHeader toScanHeader(const fs::path& file, const ParsedHeader& h) {
   out.has_intensity = findField(h, "intensity") != nullptr;
   out.has_label = findField(h, "label") != nullptr;
   out.binary = h.data != "ascii";
-  if (h.data == "binary") {
-    std::size_t point_bytes = 0;
-    for (const auto& f : h.fields) point_bytes += static_cast<std::size_t>(f.size) * static_cast<std::size_t>(f.count);
-    std::error_code ec;
-    const auto file_size = fs::file_size(file, ec);
-    if (!ec && file_size < h.data_offset + point_bytes * out.points)
+  // The data must be able to hold what the header promises, before PCL allocates for it: binary
+  // data is point_bytes per point; ASCII needs at least two characters per value ("0 "); LZF
+  // (binary_compressed) expands at most about 100-fold (a 3-byte back reference yields up to
+  // 264 bytes).
+  std::size_t point_bytes = 0, values = 0;
+  for (const auto& f : h.fields) {
+    point_bytes += static_cast<std::size_t>(f.size) * static_cast<std::size_t>(f.count);
+    values += static_cast<std::size_t>(f.count);
+  }
+  std::error_code ec;
+  const auto file_size = fs::file_size(file, ec);
+  if (!ec) {
+    const std::size_t data_bytes = file_size > h.data_offset ? file_size - h.data_offset : 0;
+    const double promised = static_cast<double>(point_bytes) * static_cast<double>(out.points);
+    if (h.data == "binary" && file_size < h.data_offset + point_bytes * out.points)
       throw InputError(where, "DATA", "file is truncated: " + std::to_string(file_size) + " bytes, the header promises " +
                                           std::to_string(h.data_offset + point_bytes * out.points),
+                       "the recording was cut short; re-export or drop this file");
+    if (h.data == "binary_compressed" && out.points > 0) checkCompressedBlock(file, h, point_bytes * out.points, data_bytes);
+    if ((h.data == "ascii" && 2.0 * static_cast<double>(values) * static_cast<double>(out.points) > data_bytes + 1.0) ||
+        (h.data == "binary_compressed" && promised > 300.0 * static_cast<double>(data_bytes) + 4096.0))
+      throw InputError(where, "DATA", "file is truncated: " + std::to_string(data_bytes) +
+                                          " bytes of data cannot hold the " + std::to_string(out.points) +
+                                          " points the header promises",
                        "the recording was cut short; re-export or drop this file");
   }
   return out;
@@ -262,7 +338,9 @@ void trimPageTail(const fs::path& file, std::size_t data_bytes) {
   if (at == std::string::npos) throw std::runtime_error("PCL wrote a binary PCD without a DATA line: " + file.string());
   std::error_code ec;
   fs::resize_file(file, at + marker.size() + data_bytes, ec);
-  if (ec) throw InputError(file.string(), "", "could not finish the PCD file (" + ec.message() + ")", "check free space");
+  if (ec)
+    throw InputError(file.string(), "", "could not finish the PCD file (" + ec.message() + "; disk full?)",
+                     "free some space and run again");
 }
 
 }  // namespace
@@ -294,6 +372,8 @@ Scan readScan(const fs::path& file) {
   const pcl::PCLPointField* fz = cloudField(blob, "z");
   const pcl::PCLPointField* fi = cloudField(blob, "intensity");
   const pcl::PCLPointField* fl = cloudField(blob, "label");
+  if (!fx || !fy)  // the header we checked has them; PCL must have read the same header
+    throw InputError(where, "FIELDS", "PCL read other fields than the header lists (a damaged file)", "re-export the scan");
 
   Scan scan;
   scan.name = file.filename().string();
@@ -382,7 +462,9 @@ void writeScan(const fs::path& file, const Scan& scan, PcdEncoding encoding) {
     pcl::PCDWriter writer;
     const int rc = encoding == PcdEncoding::binary ? writer.writeBinary(tmp.string(), blob, origin, orientation)
                                                    : writer.writeASCII(tmp.string(), blob, origin, orientation, 9);
-    if (rc != 0) throw InputError(file.string(), "", "could not write the PCD file", "check free space and permissions");
+    if (rc != 0)
+      throw InputError(file.string(), "", "could not write the PCD file (disk full?)",
+                       "free some space and check permissions, then run again");
     if (encoding == PcdEncoding::binary) trimPageTail(tmp, blob.data.size());
   });
 }

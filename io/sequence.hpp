@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "common/pose2.hpp"
@@ -46,8 +47,14 @@ struct Sequence {
 std::vector<Stop> groupStops(const std::vector<Pose2>& viewpoints, const StopTolerance& tol = {});
 
 /// Lists and checks a sequence directory (headers and sequence.json only). Throws InputError
-/// when the directory is missing, holds no .pcd file, or a header is bad.
+/// when the directory is missing, holds no .pcd file, a header is bad, a scan file ends in
+/// `.PCD` (any case but `.pcd`), two names carry one scan number (`scan_1.pcd`, `scan_0001.pcd`)
+/// or numbers without zero padding would be read out of order (`scan_10.pcd` before
+/// `scan_2.pcd`), or a scan's point count differs from sequence.json `beams`.
 Sequence openSequence(const std::filesystem::path& dir, const StopTolerance& tol = {});
+
+/// Fewest and most points in a scan of the sequence (equal when every scan has one beam count).
+std::pair<std::size_t, std::size_t> pointCountRange(const Sequence& seq);
 
 /// Reads sequence.json (throws InputError on malformed content).
 SequenceMeta readSequenceMeta(const std::filesystem::path& file);

@@ -4,8 +4,10 @@
 #include <cstdio>
 #include <cstdlib>
 #include <limits>
+#include <string_view>
 
 #include "common/errors.hpp"
+#include "io/text_fields.hpp"
 
 namespace lidarcal::io {
 
@@ -39,34 +41,51 @@ void TrueRangesWriter::write(const TrueRange& r) {
 }
 
 void TrueRangesWriter::close() {
-  out_.flush();
-  if (!out_) throw InputError(file_.string(), "", "write failed (disk full?)", "free some space and run again");
   out_.close();
+  if (!out_) throw InputError(file_.string(), "", "write failed (disk full?)", "free some space and run again");
 }
 
 std::vector<TrueRange> readTrueRanges(const std::filesystem::path& file) {
+  constexpr const char* kRemedy = "see docs/FORMAT.md (true_ranges.csv); it is written by `lidarcal simulate`";
   std::ifstream in(file);
   if (!in) throw InputError(file.string(), "", "cannot be opened", "it is written by `lidarcal simulate` next to truth.json");
   std::string line;
   if (!std::getline(in, line) || line != kHeader)
     throw InputError(file.string(), "line 1", std::string("header must be `") + kHeader + "`", "see docs/FORMAT.md");
   std::vector<TrueRange> rows;
-  std::size_t line_no = 1;
-  while (std::getline(in, line)) {
-    ++line_no;
+  std::vector<std::string_view> f;
+  static const char* const kNames[] = {"scan", "beam", "true_range_m", "target", "target_id", "incidence_rad"};
+  for (std::size_t line_no = 2; std::getline(in, line); ++line_no) {
     if (line.empty()) continue;
+    const std::string where = "line " + std::to_string(line_no);
+    splitCommas(line, f);
+    if (f.size() != 6) throw InputError(file.string(), where, "expected 6 comma-separated values", kRemedy);
+    const auto fail = [&](std::size_t k, const std::string& problem) {
+      throw InputError(file.string(), where + ", column " + kNames[k], "`" + std::string(f[k]) + "` " + problem, kRemedy);
+    };
+    const auto number = [&](std::size_t k) {
+      double v = 0.0;
+      if (!parseNumber(f[k], v) || std::isinf(v)) fail(k, "is not a number (nan allowed)");
+      return v;
+    };
+    const auto index = [&](std::size_t k) {
+      const double v = number(k);
+      if (!(v >= 0.0) || v != std::floor(v) || v > 4294967295.0) fail(k, "is not an integer from 0 to 2^32-1");
+      return static_cast<std::uint32_t>(v);
+    };
     TrueRange r;
-    char target[16] = {0};
-    char range_text[32] = {0}, incidence_text[32] = {0};
-    if (std::sscanf(line.c_str(), "%u,%u,%31[^,],%15[^,],%d,%31s", &r.scan, &r.beam, range_text, target, &r.target_id,
-                    incidence_text) != 6)
-      throw InputError(file.string(), "line " + std::to_string(line_no), "expected 6 comma-separated values",
-                       "see docs/FORMAT.md");
-    r.range_m = std::strtod(range_text, nullptr);
-    r.incidence_rad = std::strtod(incidence_text, nullptr);
-    const std::string t = target;
+    r.scan = index(0);
+    r.beam = index(1);
+    r.range_m = number(2);
+    const std::string_view t = f[3];
     r.target = t == "landmark" ? TargetKind::landmark : t == "clutter" ? TargetKind::clutter
              : t == "wall"     ? TargetKind::wall     : TargetKind::none;
+    if (r.target == TargetKind::none && t != "none") fail(3, "is not one of none, landmark, clutter, wall");
+    const std::uint32_t id = index(4);
+    if (id > 2147483647u) fail(4, "is too large");
+    r.target_id = static_cast<int>(id);
+    r.incidence_rad = number(5);
+    if (r.range_m < 0.0) fail(2, "is negative");
     rows.push_back(r);
   }
   return rows;

@@ -2,6 +2,7 @@
 
 #include <cstdio>
 #include <memory>
+#include <optional>
 
 #include <CLI/CLI.hpp>
 
@@ -24,13 +25,15 @@ struct CalibrateCommand {
 };
 
 void runCalibrate(const CalibrateCommand& c) {
-  namespace fs = std::filesystem;
-  std::error_code ec;
-  if (fs::exists(c.out, ec) && !c.overwrite)
-    throw InputError(c.out, "--out", "already exists", "choose another file or pass --overwrite");
   io::checkOutsideInput(c.seq, c.out);
+  io::checkOutputFile(c.out, c.overwrite);
+  if (!c.report.empty()) io::checkOutsideInput(c.seq, c.report);
   const io::Sequence seq = io::openSequence(c.seq);
+  if (const std::string w = beamCountWarning(seq); !w.empty()) std::fprintf(stderr, "lidarcal: warning: %s\n", w.c_str());
   const auto config = calibrationConfig(*c.options);
+  // The report directory appears only with the model (staged, committed after model.json).
+  std::optional<io::StagedDirectory> report;
+  if (!c.report.empty()) report.emplace(c.report, c.overwrite);
   CalibrationModel model;
   if (!c.truth.empty()) {
     // Oracle (seed 004): fitted against the true distances; for comparison only.
@@ -43,7 +46,7 @@ void runCalibrate(const CalibrateCommand& c) {
         calibrateSequence(seq, detectionConfig(*c.options), config, [&](std::size_t done, std::size_t) { progress.update(done); });
     progress.finish();
     model = result.model;
-    if (!c.report.empty() && model.status == "ok") {
+    if (report && model.status == "ok") {
       ReportInputs in;
       in.sequence = c.seq;
       in.scans = seq.scans.size();
@@ -52,12 +55,13 @@ void runCalibrate(const CalibrateCommand& c) {
       in.observations = &result.observations;
       in.model = &model;
       in.command = "lidarcal calibrate " + c.seq + " --out " + c.out + " --method " + c.options->method;
-      writeReport(c.report, in);
+      writeReport(report->path(), in);
     }
   }
   if (model.status != "ok")
     throw DataError(c.seq, "calibration", model.status + ": " + model.message, "see docs/ERRORS.md");
   io::writeModel(c.out, model);
+  if (report) report->commit();
   if (!quiet())
     std::fprintf(stderr, "%s model of order %d written to %s\n", model.method.c_str(), model.model.bias.order(),
                  c.out.c_str());
@@ -70,14 +74,16 @@ void addCalibrateCommand(CLI::App& app) {
   CLI::App* sub = app.add_subcommand("calibrate", "Fit the range model of a sequence (no ground truth needed)");
   sub->add_option("SEQ", c->seq, "Sequence directory (docs/FORMAT.md)")->required();
   sub->add_option("--out", c->out, "model.json to write")->required();
-  sub->add_option("--truth", c->truth,
+  CLI::Option* truth = sub->add_option("--truth", c->truth,
                   "truth.json of a simulated sequence: fit against the true distances instead (the oracle, for comparison)");
   sub->add_option("--frame", c->frame,
                   "With --truth: true distances as they are (true), or scaled into the commanded frame (commanded): "
                   "the best a self-calibration can reach")
       ->check(CLI::IsMember({"true", "commanded"}))
       ->capture_default_str();
-  sub->add_option("--report", c->report, "Also write a report (Markdown + PNG plots) into this directory");
+  sub->add_option("--report", c->report,
+                  "Also write a report (Markdown + PNG plots) into this new directory (not with --truth)")
+      ->excludes(truth);
   sub->add_flag("--overwrite", c->overwrite, "Replace --out if it exists");
   addCalibrationOptions(sub, c->options);
   sub->callback([c] { runCalibrate(*c); });

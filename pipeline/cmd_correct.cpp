@@ -35,6 +35,11 @@ void addCorrectCommand(CLI::App& app) {
     const io::Sequence seq = io::openSequence(o->seq);
     const CalibrationModel model = io::readModel(o->model);
     checkModelFits(model, seq, o->model);
+    if (const auto [fewest, most] = io::pointCountRange(seq); fewest != most)
+      std::fprintf(stderr,
+                   "lidarcal: warning: %s: the number of points per scan varies from %zu to %zu; each point is corrected "
+                   "along its own beam, so this does not matter unless the scans come from different sensors\n",
+                   o->seq.c_str(), fewest, most);
     io::StagedDirectory out(o->out, o->overwrite);
     Progress progress("correct", seq.scans.size());
     const auto stats = correctSequence(

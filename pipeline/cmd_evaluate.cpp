@@ -46,6 +46,10 @@ void addEvaluateCommand(CLI::App& app) {
   sub->add_option("--out", o->out, "Also write the JSON to this file");
   sub->callback([o] {
     namespace fs = std::filesystem;
+    if (!o->out.empty()) {
+      io::checkOutsideInput(o->corrected, o->out);
+      io::checkOutputFile(o->out, true);
+    }
     const SimulationTruth truth = loadTruth(o->truth);
     const fs::path raw = o->raw.empty() ? fs::path(o->truth).parent_path() / "scans" : fs::path(o->raw);
     const Evaluation e = evaluate(io::openSequence(o->corrected), io::openSequence(raw), truth);

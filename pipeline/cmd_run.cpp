@@ -34,6 +34,7 @@ void runRun(const RunCommand& c) {
   if (c.seq.empty() && !quiet()) std::fprintf(stderr, "no sequence given: running on the bundled example %s\n", seq_dir.c_str());
   io::checkOutsideInput(seq_dir, c.out);
   const io::Sequence seq = io::openSequence(seq_dir);
+  if (const std::string w = beamCountWarning(seq); !w.empty()) std::fprintf(stderr, "lidarcal: warning: %s\n", w.c_str());
   // Truth: given, or found next to a simulated sequence (DIR/scans + DIR/truth.json).
   fs::path truth_file = c.truth;
   std::error_code ec;

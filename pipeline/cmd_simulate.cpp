@@ -30,6 +30,7 @@ struct SimulateOptions {
 
 void runSimulate(const SimulateOptions& o) {
   namespace fs = std::filesystem;
+  io::checkOutsideInput(o.scene, o.out);
   if (io::readSceneKind(o.scene) == "observations") {  // observation-level scene (noise estimation)
     simulateObservationScene(o.scene, o.out, o.seed, o.overwrite);
     return;

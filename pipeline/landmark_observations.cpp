@@ -10,6 +10,11 @@ LandmarkObservations toLandmarkObservations(const io::Sequence& seq, const detec
   if (det.known_radius_m) obs.landmark_radius_m = det.known_radius_m;
   obs.range_min_m = seq.meta.range_min_m.value_or(0.0);
   obs.range_max_m = seq.meta.range_max_m.value_or(1e9);
+  // Point i is beam i only when every scan of the stop has the same number of points.
+  std::vector<bool> same_beams(seq.stops.size(), true);
+  for (std::size_t k = 0; k < seq.stops.size(); ++k)
+    for (std::size_t i : seq.stops[k].scans)
+      same_beams[k] = same_beams[k] && seq.scans[i].points == seq.scans[seq.stops[k].scans.front()].points;
   for (std::size_t i = 0; i < det.scans.size(); ++i) {
     const auto& sd = det.scans[i];
     const auto& ids = det.association.ids.at(i);
@@ -33,7 +38,7 @@ LandmarkObservations toLandmarkObservations(const io::Sequence& seq, const detec
         // The point's direction is its beam's direction: the sensor measures range along it.
         s.beams.push_back(BeamReading{std::atan2(static_cast<double>(p.y), static_cast<double>(p.x)),
                                       std::hypot(static_cast<double>(p.x), static_cast<double>(p.y)),
-                                      static_cast<std::uint32_t>(idx)});
+                                      same_beams[s.stop] ? static_cast<std::uint32_t>(idx) : kUnknownBeam});
       }
       if (!s.beams.empty()) obs.sightings.push_back(std::move(s));
     }

@@ -1,7 +1,9 @@
 // The `lidarcal` command: the only main, the only place that prints.
 
 #include <cstdio>
+#include <cstring>
 #include <exception>
+#include <string>
 
 #include <CLI/CLI.hpp>
 #include <pcl/console/print.h>
@@ -9,6 +11,42 @@
 #include "common/errors.hpp"
 #include "pipeline/commands.hpp"
 #include "pipeline/progress.hpp"
+
+namespace {
+
+/// Messages name the files a command was writing; while it writes they live in a hidden
+/// staging directory (`.OUT.partial-PID-N/`) or file (`.NAME.tmp-PID-N`). Show the user the
+/// final path instead.
+std::string userPaths(const std::string& message) {
+  std::string out;
+  std::size_t i = 0;
+  while (i < message.size()) {
+    // A component "/.NAME.KIND-PID-N" becomes "/NAME".
+    if (message.compare(i, 2, "/.") == 0) {
+      const std::size_t start = i + 2;
+      std::size_t end = message.find_first_of("/ :)", start);
+      if (end == std::string::npos) end = message.size();
+      const std::string component = message.substr(start, end - start);
+      for (const char* kind : {".partial-", ".tmp-", ".probe-"}) {
+        const std::size_t at = component.rfind(kind);
+        if (at == std::string::npos || at == 0) continue;
+        const std::string tail = component.substr(at + std::strlen(kind));  // PID-N
+        const std::size_t dash = tail.find('-');
+        const bool numbers = dash != std::string::npos && dash > 0 && dash + 1 < tail.size() &&
+                             tail.find_first_not_of("0123456789-") == std::string::npos;
+        if (!numbers) continue;
+        out += "/" + component.substr(0, at);
+        i = end;
+        break;
+      }
+      if (i == end) continue;
+    }
+    out += message[i++];
+  }
+  return out;
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   // PCL's readers print their own diagnostics; ours are clearer and name the file and field.
@@ -29,10 +67,10 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;
   } catch (const lidarcal::DataError& e) {
-    std::fprintf(stderr, "lidarcal: cannot proceed: %s\n", e.what());
+    std::fprintf(stderr, "lidarcal: cannot proceed: %s\n", userPaths(e.what()).c_str());
     return 3;
   } catch (const lidarcal::InputError& e) {
-    std::fprintf(stderr, "lidarcal: error: %s\n", e.what());
+    std::fprintf(stderr, "lidarcal: error: %s\n", userPaths(e.what()).c_str());
     return 2;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "lidarcal: internal error: %s\n(please report this with the command you ran)\n", e.what());

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include "calibration/filtering.hpp"
 #include "common/errors.hpp"
@@ -12,6 +13,18 @@ namespace lidarcal::pipeline {
 SequenceCalibration calibrateSequence(const io::Sequence& seq, const detectors::SequenceDetectionConfig& detection,
                                       const calibration::CalibrationConfig& config, const StageProgress& on_scan) {
   SequenceCalibration out;
+  // Triangulation needs every landmark seen from min_stops stops: with fewer stops in the whole
+  // sequence there is nothing to detect for.
+  const int min_stops = config.triangulation.min_stops;
+  if (seq.stops.size() < static_cast<std::size_t>(min_stops)) {
+    out.model.status = "too_few_stops";
+    out.model.message = "the sequence has " + std::to_string(seq.stops.size()) +
+                        " stop(s) (consecutive scans with one VIEWPOINT form a stop) and each landmark must be "
+                        "triangulated from at least " + std::to_string(min_stops) +
+                        " stops: record scans at " + std::to_string(min_stops) +
+                        " or more stops along a line, each with its own VIEWPOINT";
+    return out;
+  }
   out.detections = detectors::detectSequence(seq, detection, on_scan);
   out.observations = toLandmarkObservations(seq, out.detections);
   if (!seq.meta.range_max_m) {
@@ -23,10 +36,13 @@ SequenceCalibration calibrateSequence(const io::Sequence& seq, const detectors::
   }
   out.model = calibration::calibrate(out.observations, config);
   if (seq.meta.sensor_name) out.model.sensor_name = *seq.meta.sensor_name;
+  // A beam count only when every scan has it: a sensor whose count varies (YDLIDAR X4) gets a
+  // model without one, which `correct` applies to any scan.
+  const auto [fewest, most] = io::pointCountRange(seq);
   if (seq.meta.beams) out.model.beams = seq.meta.beams;
-  else if (!seq.scans.empty()) out.model.beams = static_cast<int>(seq.scans.front().points);
-  if (out.model.status == "ok" && out.detections.association.landmarks.empty())
-    out.model.message += (out.model.message.empty() ? "" : "; ") + out.detections.note;
+  else if (fewest == most && most > 0) out.model.beams = static_cast<int>(most);
+  if (out.detections.association.landmarks.empty())
+    out.model.message = out.detections.note + (out.model.message.empty() ? "" : "; ") + out.model.message;
   return out;
 }
 
@@ -52,10 +68,21 @@ CalibrationModel calibrateOracle(const io::Sequence& raw, const SimulationTruth&
   return m;
 }
 
+std::string beamCountWarning(const io::Sequence& seq) {
+  const auto [fewest, most] = io::pointCountRange(seq);
+  if (fewest == most) return {};
+  return seq.dir.string() + ": the number of points per scan varies from " + std::to_string(fewest) + " to " +
+         std::to_string(most) +
+         ": point i is not the same beam in every scan, so seed 004's noise-exponent test uses only the stops whose "
+         "scans agree, and the model records no beam count. Landmark fits are not affected. If the scans come from "
+         "different sensors, split them into one sequence per sensor";
+}
+
 void checkModelFits(const CalibrationModel& model, const io::Sequence& seq, const std::filesystem::path& model_file) {
   const std::string where = model_file.string();
   if (model.status != "ok")
-    throw DataError(where, "diagnostics.status", "the model is not usable (" + model.status + "): " + model.message,
+    throw DataError(where, "diagnostics.status",
+                    "the model is not usable (" + model.status + ")" + (model.message.empty() ? "" : ": " + model.message),
                     "calibrate again with more landmarks or stops");
   if (model.beams && !seq.scans.empty()) {
     for (const auto& h : seq.scans)
@@ -73,11 +100,26 @@ void checkModelFits(const CalibrationModel& model, const io::Sequence& seq, cons
                      "the model's range limits differ from the sequence's (" + seq.dir.string() + "/sequence.json)",
                      "the model belongs to another sensor; calibrate this one");
   double at = 0.0;
-  if (!calibration::invertsReadingWindow(model.model.bias, model.model.range_min_m, model.model.range_max_m, &at))
-    throw DataError(where, "bias.alpha",
-                    "the bias polynomial stops increasing at d = " + std::to_string(at) +
-                        " m before its readings reach the range limit, so a reading maps to more than one distance",
-                    "calibrate with a lower --max-order or with landmarks covering the whole range");
+  const BiasPolynomial& f = model.model.bias;
+  if (!calibration::invertsReadingWindow(f, model.model.range_min_m, model.model.range_max_m, &at)) {
+    // Where f stops rising (first d with f'(d) <= 0), for the message.
+    const int steps = 4000;
+    double peak = -1.0;
+    for (int i = 0; i <= steps && peak < 0.0; ++i) {
+      const double d = at * i / steps;
+      if (f.derivative(d) <= 0.0) peak = d;
+    }
+    char text[256];
+    if (peak >= 0.0)
+      std::snprintf(text, sizeof text,
+                    "the bias polynomial stops increasing at d = %.3f m (reading %.3f m), below the range limit %.3f m, "
+                    "so a reading maps to more than one distance", peak, f(peak), model.model.range_max_m);
+    else
+      std::snprintf(text, sizeof text,
+                    "the bias polynomial does not reach the range limit %.3f m (at d = %.1f m it reads %.3f m): readings "
+                    "near the limit have no distance", model.model.range_max_m, at, f(at));
+    throw DataError(where, "bias.alpha", text, "calibrate with a lower --max-order or with landmarks covering the whole range");
+  }
 }
 
 CorrectionStats correctSequence(const io::Sequence& seq, const CalibrationModel& model,

@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <functional>
+#include <string>
 
 #include "calibration/calibrate.hpp"
 #include "calibration/inversion.hpp"
@@ -33,6 +34,10 @@ SequenceCalibration calibrateSequence(const io::Sequence& seq, const detectors::
 /// best any self-calibration can do, in the commanded frame).
 CalibrationModel calibrateOracle(const io::Sequence& raw, const SimulationTruth& truth, double scale,
                                  const calibration::CalibrationConfig& config);
+
+/// A warning for calibrate/run when the scans of `seq` differ in their number of points (empty
+/// when they agree). Not an error: some sensors (YDLIDAR X4) vary their beam count per sweep.
+std::string beamCountWarning(const io::Sequence& seq);
 
 /// Throws InputError when the model does not belong to the sequence's sensor (beam count,
 /// range limits) and DataError when its bias cannot be inverted unambiguously.

@@ -12,6 +12,7 @@ PACKAGES=(
   # ROS1 bag reading (importer; see docs/BUILDING.md for why each is listed)
   librosbag-storage-dev libsensor-msgs-dev libclass-loader-dev
   librcpputils-dev librcutils-dev libament-index-cpp-dev
+  clang-14 libclang-rt-14-dev      # libFuzzer targets (scripts/fuzz.sh): clang's -fsanitize=fuzzer and its runtime
 )
 
 missing=()

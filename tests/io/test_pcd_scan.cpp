@@ -156,7 +156,7 @@ INSTANTIATE_TEST_SUITE_P(
         BadPcdCase{"garbage", "\x7f" "ELF garbage\x01\x02\n", "header line 1", "unknown header keyword"},
         BadPcdCase{"empty", "", "DATA", "no DATA line"},
         BadPcdCase{"truncated binary", truncatedBinary(), "DATA", "truncated"},
-        BadPcdCase{"truncated ascii", header("x y z", "4 4 4", "F F F", 3) + "1 2 0\n", "DATA", "PCL could not read"},
+        BadPcdCase{"truncated ascii", header("x y z", "4 4 4", "F F F", 3) + "1 2 0\n", "DATA", "truncated"},
         BadPcdCase{"no x", header("a y z", "4 4 4", "F F F", 1) + "1 2 0\n", "FIELDS", "no 'x' field"},
         BadPcdCase{"no y", header("x b z", "4 4 4", "F F F", 1) + "1 2 0\n", "FIELDS", "no 'y' field"},
         BadPcdCase{"points != width*height", header("x y z", "4 4 4", "F F F", 3, "VIEWPOINT 0 0 0 1 0 0 0\n", "ascii", 2) +

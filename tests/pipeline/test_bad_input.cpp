@@ -1,0 +1,565 @@
+// The bad-input catalogue (docs/ERRORS.md), one row per case: every command that reads the
+// input refuses it with the documented exit code and a message naming the file, the item and
+// the remedy; the input is byte for byte unchanged and nothing is left at or beside the output
+// path. Harness and how to add rows: bad_input_util.hpp.
+
+#include <cmath>
+#include <limits>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "bad_input_util.hpp"
+#include "io/import_test_util.hpp"
+
+namespace lidarcal {
+namespace {
+
+using namespace test;
+
+std::string scenePath(const char* name) { return (sourceDir() / "data/scenes" / name).string(); }
+
+/// Shared fixtures, built once: FIX/bin (binary, 4 stops x 2 scans: enough to calibrate, so that
+/// output failures are reached), FIX/ascii (the same in ASCII), FIX/model.json (calibrated on
+/// 10 stops x 2 scans of the paper's field).
+const fs::path& fixtures() {
+  static const fs::path dir = cachedFixture("bad-input", [](const fs::path& d) {
+    const std::string scene = scenePath("paper_field.json");
+    for (const auto& [name, flags] : {std::pair<const char*, const char*>{"bin", ""}, {"ascii", " --ascii"}}) {
+      const auto r = runCli("simulate -q --scene " + scene + " --out " + (d / name).string() +
+                            " --stops 4 --scans-per-stop 2 --seed 3" + flags);
+      EXPECT_EQ(r.exit_code, 0) << r.err;
+    }
+    auto r = runCli("simulate -q --scene " + scene + " --out " + (d / "cal").string() + " --scans-per-stop 2 --seed 4");
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    r = runCli("calibrate -q " + (d / "cal/scans").string() + " --out " + (d / "model.json").string());
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+  });
+  return dir;
+}
+
+// ---- input builders
+
+void copySequence(const Ws& w) { copyTree(w.fix / "bin/scans", w.seq()); }
+void copyAsciiSequence(const Ws& w) { copyTree(w.fix / "ascii/scans", w.seq()); }
+
+/// Copies the binary sequence and edits one scan.
+std::function<void(const Ws&)> withScan(const char* file, std::function<void(std::string&)> edit) {
+  return [file, edit](const Ws& w) {
+    copySequence(w);
+    editFile(w.seq() / file, edit);
+  };
+}
+
+/// Copies the good model and edits its JSON.
+std::function<void(const Ws&)> withModel(std::function<void(nlohmann::json&)> edit) {
+  return [edit](const Ws& w) {
+    copySequence(w);
+    auto j = nlohmann::json::parse(readFile(w.fix / "model.json"));
+    edit(j);
+    writeFile(w.in / "model.json", j.dump(2));
+  };
+}
+
+/// Writes a scene (JSON text) and simulates it into IN/sim.
+std::function<void(const Ws&)> simulated(std::string scene_json, std::string flags = "") {
+  return [scene_json, flags](const Ws& w) {
+    fs::create_directories(w.in);
+    writeFile(w.in / "scene.json", scene_json);
+    const auto r = runCli("simulate -q --scene " + (w.in / "scene.json").string() + " --out " + (w.in / "sim").string() + " " + flags);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+  };
+}
+
+/// The paper's sensor and walls with the given landmarks and path.
+std::string scene(const std::string& landmarks, const std::string& path, const std::string& sensor_extra = "") {
+  return R"({"sensor": {"beams": 360, "range_min_m": 0.2, "range_max_m": 6.0, "bias_alpha": [0.0525, 0.8838, 0.0584],
+      "noise": {"kind": "squared", "sigma_e": 0.0019176})" + sensor_extra + R"(},
+    "path": )" + path + R"(, "landmarks": [)" + landmarks + R"(],
+    "walls": [{"x0_m": -1.5, "y0_m": -3.8, "x1_m": 5.0, "y1_m": -3.8}, {"x0_m": 5.0, "y0_m": -3.8, "x1_m": 5.0, "y1_m": 4.5},
+              {"x0_m": 5.0, "y0_m": 4.5, "x1_m": -1.5, "y1_m": 4.5}, {"x0_m": -1.5, "y0_m": 4.5, "x1_m": -1.5, "y1_m": -3.8}]})";
+}
+const char* kPaperPoles = R"({"x_m": 1.5, "y_m": 0.75, "radius_m": 0.12}, {"x_m": 0.3, "y_m": 2.2, "radius_m": 0.12},
+    {"x_m": 2.4, "y_m": 3.4, "radius_m": 0.12}, {"x_m": 3.9, "y_m": -1.3, "radius_m": 0.12}, {"x_m": 0.9, "y_m": -2.8, "radius_m": 0.12})";
+std::string path(int stops, int scans = 2) {
+  return R"({"step_m": 0.3, "sigma_s_m": 0.02, "sigma_psi_deg": 0.5, "stops": )" + std::to_string(stops) +
+         R"(, "scans_per_stop": )" + std::to_string(scans) + "}";
+}
+
+std::string flaserLine(int n, double r) {
+  std::string s = "FLASER " + std::to_string(n);
+  for (int i = 0; i < n; ++i) s += " " + std::to_string(r);
+  return s + " 0 0 0 0 0 0 1.5 host 1.5\n";
+}
+
+// Commands that read a scan sequence, for the PCD and sequence cases.
+const std::vector<std::pair<const char*, std::string>> kSequenceCommands = {
+    {"info", "info {SEQ}"},
+    {"detect", "detect {SEQ} --out {OUT}"},
+    {"calibrate", "calibrate {SEQ} --out {OUT}"},
+    {"correct", "correct {SEQ} --model {FIX}/model.json --out {OUT}"},
+    {"run", "run {SEQ} --no-truth --out {OUT}"},
+};
+
+// Commands that write an output, with an input to read, for the output cases.
+const std::vector<std::pair<const char*, std::string>> kWritingCommands = {
+    {"detect", "detect {SEQ} --out {OUT}"},
+    {"calibrate", "calibrate {SEQ} --out {OUT}"},
+    {"correct", "correct {SEQ} --model {FIX}/model.json --out {OUT}"},
+    {"run", "run {SEQ} --no-truth --out {OUT}"},
+    {"simulate", "simulate --scene {IN}/scene.json --out {OUT} --stops 2 --scans-per-stop 2"},
+    {"import", "import --from csv {IN}/scans.csv --out {OUT}"},
+};
+
+/// Inputs every writing command can read: the binary sequence, a scene and a CSV recording.
+void writableInputs(const Ws& w) {
+  copySequence(w);
+  fs::copy_file(scenePath("paper_field.json"), w.in / "scene.json");
+  std::string csv = "scan,x_m,y_m,yaw_rad,angle_rad,range_m\n";
+  for (int s = 0; s < 40; ++s)
+    for (int b = 0; b < 360; ++b) csv += std::to_string(s) + ",0,0,0," + std::to_string(b * 0.0174533) + ",2.5\n";
+  writeFile(w.in / "scans.csv", csv);
+  writeFile(w.in / "file.txt", "a file where a directory is expected\n");
+}
+
+std::vector<BadInputCase> cases() {
+  std::vector<BadInputCase> c;
+  const auto forEach = [&](const auto& commands, const std::string& name, std::function<void(const Ws&)> prepare,
+                           int code, std::vector<std::string> message) {
+    for (const auto& [cmd, args] : commands) {
+      BadInputCase k;
+      k.name = name + "_" + cmd;
+      k.args = args;
+      k.prepare = prepare;
+      k.exit_code = code;
+      k.message = message;
+      c.push_back(k);
+    }
+  };
+
+  // ---- scan files (every command that reads a sequence)
+  forEach(kSequenceCommands, "pcd_truncated", withScan("scan_000001.pcd", [](std::string& b) { b.resize(b.size() - 100); }),
+          2, {"scan_000001.pcd", "DATA", "truncated"});
+  forEach(kSequenceCommands, "pcd_truncated_ascii",
+          [](const Ws& w) {
+            copyAsciiSequence(w);
+            editFile(w.seq() / "scan_000002.pcd", [](std::string& b) { b.resize(b.size() / 2); });
+          },
+          2, {"scan_000002.pcd", "DATA", "re-export the scan"});
+  forEach(kSequenceCommands, "pcd_garbage",
+          [](const Ws& w) {
+            copySequence(w);
+            std::string junk;
+            std::uint32_t x = 12345;
+            for (int i = 0; i < 5000; ++i) junk += static_cast<char>((x = x * 1103515245u + 12345u) >> 24);
+            writeFile(w.seq() / "scan_000003.pcd", junk);
+          },
+          2, {"scan_000003.pcd", "header", "not a PCD file"});
+  forEach(kSequenceCommands, "pcd_fields_without_xy",
+          withScan("scan_000000.pcd", [](std::string& b) { setHeaderLine(b, "FIELDS", "FIELDS a b z"); }), 2,
+          {"scan_000000.pcd", "FIELDS", "no 'x' field"});
+  forEach(kSequenceCommands, "pcd_points_not_width_x_height",
+          withScan("scan_000000.pcd", [](std::string& b) { setHeaderLine(b, "POINTS", "POINTS 361"); }), 2,
+          {"scan_000000.pcd", "POINTS", "differs from WIDTH x HEIGHT"});
+  forEach(kSequenceCommands, "pcd_nan_in_one_coordinate",
+          withScan("scan_000001.pcd", [](std::string& b) { setFloat(b, firstReturn(b), 1, std::nanf("")); }), 2,
+          {"scan_000001.pcd", "point ", "only one of x, y is NaN", "without return must have x and y NaN"});
+  forEach(kSequenceCommands, "pcd_infinite_coordinate",
+          withScan("scan_000001.pcd",
+                   [](std::string& b) { setFloat(b, firstReturn(b), 0, std::numeric_limits<float>::infinity()); }),
+          2, {"scan_000001.pcd", "point ", "infinite", "write NaN"});
+  forEach(kSequenceCommands, "pcd_absurd_range",
+          withScan("scan_000002.pcd", [](std::string& b) { setFloat(b, firstReturn(b), 0, 1e30f); }), 2,
+          {"scan_000002.pcd", "point ", "beyond 100 km", "units"});
+  forEach(kSequenceCommands, "viewpoint_missing",
+          withScan("scan_000000.pcd", [](std::string& b) { setHeaderLine(b, "VIEWPOINT", ""); }), 2,
+          {"scan_000000.pcd", "VIEWPOINT", "missing", "VIEWPOINT tx ty 0 qw 0 0 qz"});
+  forEach(kSequenceCommands, "viewpoint_six_numbers",
+          withScan("scan_000000.pcd", [](std::string& b) { setHeaderLine(b, "VIEWPOINT", "VIEWPOINT 0 0 0 1 0 0"); }), 2,
+          {"scan_000000.pcd", "VIEWPOINT", "expected 7 numbers"});
+  forEach(kSequenceCommands, "viewpoint_not_a_number",
+          withScan("scan_000000.pcd", [](std::string& b) { setHeaderLine(b, "VIEWPOINT", "VIEWPOINT 0 0 0 one 0 0 0"); }),
+          2, {"scan_000000.pcd", "VIEWPOINT", "'one' is not a finite number"});
+  forEach(kSequenceCommands, "viewpoint_not_unit",
+          withScan("scan_000000.pcd", [](std::string& b) { setHeaderLine(b, "VIEWPOINT", "VIEWPOINT 0 0 0 2 0 0 0"); }), 2,
+          {"scan_000000.pcd", "VIEWPOINT", "not of unit length"});
+  forEach(kSequenceCommands, "viewpoint_roll",
+          withScan("scan_000000.pcd",
+                   [](std::string& b) { setHeaderLine(b, "VIEWPOINT", "VIEWPOINT 0 0 0 0.7071068 0.7071068 0 0"); }),
+          2, {"scan_000000.pcd", "VIEWPOINT", "roll/pitch"});
+
+  // ---- the sequence directory
+  forEach(kSequenceCommands, "sequence_empty",
+          [](const Ws& w) {
+            fs::create_directories(w.seq());
+            fs::copy_file(w.fix / "bin/scans/sequence.json", w.seq() / "sequence.json");
+          },
+          2, {"scans", "holds no .pcd file", "lidarcal simulate"});
+  forEach(kSequenceCommands, "sequence_missing", [](const Ws& w) { fs::create_directories(w.in); }, 2,
+          {"scans", "does not exist", "check the path"});
+  forEach(kSequenceCommands, "sequence_mixes_sensors",
+          [](const Ws& w) {
+            copySequence(w);
+            // A 180-beam scan of another sensor in a sequence whose sequence.json says 360 beams.
+            writeFile(w.in / "half.json", replaceAll(readFile(scenePath("paper_field.json")), "\"beams\": 360", "\"beams\": 180"));
+            ASSERT_EQ(runCli("simulate -q --scene " + (w.in / "half.json").string() + " --out " + (w.in / "other").string() +
+                             " --stops 1 --scans-per-stop 1").exit_code, 0);
+            fs::copy_file(w.in / "other/scans/scan_000000.pcd", w.seq() / "scan_000008.pcd");
+          },
+          2, {"scan_000008.pcd", "POINTS", "has 180 points", "beams = 360", "one sensor's scans per sequence"});
+  forEach(kSequenceCommands, "sequence_upper_case_extension",
+          [](const Ws& w) {
+            copySequence(w);
+            fs::copy_file(w.seq() / "scan_000003.pcd", w.seq() / "scan_000008.PCD");
+          },
+          2, {"scan_000008.PCD", "'.PCD'", "rename it"});
+  forEach(kSequenceCommands, "sequence_same_scan_number_twice",
+          [](const Ws& w) {
+            copySequence(w);
+            fs::copy_file(w.seq() / "scan_000003.pcd", w.seq() / "scan_3.pcd");
+          },
+          2, {"scans", "scan_3.pcd", "same scan number as scan_000003.pcd", "keep one"});
+  forEach(kSequenceCommands, "sequence_numbers_not_zero_padded",
+          [](const Ws& w) {
+            copySequence(w);
+            for (int i = 0; i < 8; ++i) fs::remove(w.seq() / ("scan_00000" + std::to_string(i) + ".pcd"));
+            const fs::path src = w.fix / "bin/scans";
+            fs::copy_file(src / "scan_000000.pcd", w.seq() / "s_2.pcd");
+            fs::copy_file(src / "scan_000001.pcd", w.seq() / "s_10.pcd");
+          },
+          2, {"s_2.pcd", "sorts after s_10.pcd", "zero-padded"});
+
+  // ---- data that cannot support a calibration (exit 3)
+  const std::vector<std::pair<const char*, std::string>> calibrating = {
+      {"calibrate", "calibrate {IN}/sim/scans --out {OUT}"}, {"run", "run {IN}/sim/scans --no-truth --out {OUT}"}};
+  forEach(calibrating, "one_single_stop", simulated(scene(kPaperPoles, path(1, 3))), 3,
+          {"sim/scans", "calibration", "too_few_stops", "has 1 stop(s)", "at least 3 stops", "its own VIEWPOINT"});
+  forEach(calibrating, "two_stops", simulated(scene(kPaperPoles, path(2, 3))), 3,
+          {"sim/scans", "calibration", "too_few_stops", "has 2 stop(s)", "at least 3 stops"});
+  // Five stops, but a 2 m sensor sees each pole from two of them only.
+  forEach(calibrating, "landmarks_at_fewer_than_3_stops",
+          simulated(R"({"sensor": {"beams": 360, "range_min_m": 0.2, "range_max_m": 2.0, "bias_alpha": [0.0525, 0.8838, 0.0584],
+              "noise": {"kind": "squared", "sigma_e": 0.0019176}},
+            "path": {"start": {"x_m": -1.0}, "step_m": 1.2, "stops": 5, "scans_per_stop": 2},
+            "landmarks": [{"x_m": -0.4, "y_m": 1.3, "radius_m": 0.12}, {"x_m": 2.0, "y_m": -1.3, "radius_m": 0.12},
+                          {"x_m": 3.2, "y_m": 1.3, "radius_m": 0.12}]})"),
+          3, {"sim/scans", "calibration", "no_usable_landmark", "3 or more stops", "zero landmarks"});
+  forEach(calibrating, "landmarks_on_the_path_line",
+          simulated(scene(R"({"x_m": 4.2, "y_m": 0.0, "radius_m": 0.12}, {"x_m": 5.5, "y_m": 0.0, "radius_m": 0.12})",
+                          path(6, 2))),
+          3, {"sim/scans", "calibration", "no_usable_landmark", "degenerate_geometry", "move it sideways"});
+  forEach(calibrating, "circles_with_too_few_points",
+          simulated(scene(R"({"x_m": 3.5, "y_m": 2.0, "radius_m": 0.02}, {"x_m": 3.0, "y_m": -2.5, "radius_m": 0.02},
+                             {"x_m": 4.5, "y_m": 0.8, "radius_m": 0.02})", path(6, 2))),
+          3, {"sim/scans", "calibration", "no_usable_landmark", "ERRORS.md"});
+
+  // ---- model files (correct)
+  const std::vector<std::pair<const char*, std::string>> correcting = {
+      {"correct", "correct {SEQ} --model {IN}/model.json --out {OUT}"}};
+  forEach(correcting, "model_bias_not_monotone",
+          withModel([](nlohmann::json& j) { j["bias"]["alpha"] = {0.0, 2.0, -0.3}; }), 3,
+          {"model.json", "bias.alpha", "more than one distance", "lower --max-order"});
+  forEach(correcting, "model_of_another_sensor_beams", withModel([](nlohmann::json& j) { j["sensor"]["beams"] = 720; }), 2,
+          {"scan_000000.pcd", "POINTS", "has 360 beams", "model.json", "720", "calibrated on this sensor"});
+  forEach(correcting, "model_of_another_sensor_range",
+          withModel([](nlohmann::json& j) { j["sensor"]["range_max_m"] = 12.0; }), 2,
+          {"model.json", "range_max_m", "range limits differ", "calibrate this one"});
+  forEach(correcting, "model_not_json",
+          [](const Ws& w) {
+            copySequence(w);
+            writeFile(w.in / "model.json", "{\"format\": \"lidarcal-model/1\",\n \"bias\": [1, 2,\n");
+          },
+          2, {"model.json", "line 3", "not valid JSON"});
+  forEach(correcting, "model_wrong_format", withModel([](nlohmann::json& j) { j["format"] = "something-else"; }), 2,
+          {"model.json", "format", "lidarcal calibrate"});
+  forEach(correcting, "model_bad_field", withModel([](nlohmann::json& j) { j["noise"]["kind"] = "pink"; }), 2,
+          {"model.json", "noise.kind", "unknown noise kind"});
+  forEach(correcting, "model_failed_calibration",
+          withModel([](nlohmann::json& j) { j["diagnostics"]["status"] = "joint_failed"; }), 3,
+          {"model.json", "diagnostics.status", "not usable", "calibrate again"});
+  forEach(correcting, "model_missing", [](const Ws& w) { copySequence(w); }, 2, {"model.json", "does not exist"});
+
+  // ---- scene files (simulate)
+  const std::vector<std::pair<const char*, std::string>> simulating = {
+      {"simulate", "simulate --scene {IN}/scene.json --out {OUT}"}};
+  forEach(simulating, "scene_not_json",
+          [](const Ws& w) {
+            fs::create_directories(w.in);
+            writeFile(w.in / "scene.json", "{\"sensor\": {\"beams\": 360,}\n}");
+          },
+          2, {"scene.json", "line 1", "not valid JSON"});
+  forEach(simulating, "scene_bad_field",
+          [](const Ws& w) {
+            fs::create_directories(w.in);
+            writeFile(w.in / "scene.json", R"({"sensor": {"range_min_m": 0.2, "range_max_m": "far"}, "path": {}})");
+          },
+          2, {"scene.json", "sensor.range_max_m", "must be a number", "FORMAT.md"});
+  forEach(simulating, "scene_too_many_scans",
+          [](const Ws& w) {
+            fs::create_directories(w.in);
+            writeFile(w.in / "scene.json", scene(kPaperPoles, R"({"stops": 100000, "scans_per_stop": 1000})"));
+          },
+          2, {"scene.json", "path.stops", "10 million"});
+
+  // ---- truth files (evaluate, detect --truth)
+  const auto simWithTruth = [](std::function<void(const fs::path&)> edit) {
+    return [edit](const Ws& w) {
+      copyTree(w.fix / "bin", w.in);
+      edit(w.in);
+    };
+  };
+  forEach(std::vector<std::pair<const char*, std::string>>{{"evaluate", "evaluate {SEQ} --truth {IN}/truth.json --out {OUT}"},
+                                                           {"detect", "detect {SEQ} --truth {IN}/truth.json --out {OUT}"}},
+          "truth_not_json", simWithTruth([](const fs::path& in) { writeFile(in / "truth.json", "[1, 2"); }), 2,
+          {"truth.json", "not valid JSON"});
+  forEach(std::vector<std::pair<const char*, std::string>>{{"evaluate", "evaluate {SEQ} --truth {IN}/truth.json --out {OUT}"},
+                                                           {"detect", "detect {SEQ} --truth {IN}/truth.json --out {OUT}"}},
+          "true_ranges_bad_value",
+          simWithTruth([](const fs::path& in) {
+            editFile(in / "true_ranges.csv", [](std::string& b) {
+              const auto at = b.find('\n', b.find('\n') + 1) + 1;  // line 3
+              b.insert(at, "0,1,abc,wall,1,0.1\n");
+            });
+          }),
+          2, {"true_ranges.csv", "line 3", "true_range_m", "`abc`"});
+
+  // ---- importers
+  const auto importing = [](const char* from, const char* file) {
+    return std::vector<std::pair<const char*, std::string>>{
+        {"import", std::string("import --from ") + from + " {IN}/" + file + " --out {OUT}"}};
+  };
+  forEach(importing("carmen", "cut.log.gz"), "carmen_gzip_cut_short",
+          [](const Ws& w) {
+            fs::create_directories(w.in);
+            std::string log;
+            for (int k = 0; k < 2000; ++k) log += flaserLine(181, 1.0 + 0.001 * k);
+            writeGzip(w.in / "full.log.gz", log);
+            const std::string gz = readFile(w.in / "full.log.gz");
+            fs::remove(w.in / "full.log.gz");
+            writeFile(w.in / "cut.log.gz", gz.substr(0, gz.size() * 2 / 3));
+          },
+          2, {"cut.log.gz", "after line", "gzip data is damaged or cut short", "gzip -t"});
+  forEach(importing("carmen", "bad.log"), "carmen_line_cut_short",
+          [](const Ws& w) {
+            fs::create_directories(w.in);
+            writeFile(w.in / "bad.log", flaserLine(181, 2.0) + "FLASER 181 1 2 3 0 0 0 0 0 0 1.5 host 1.5\n");
+          },
+          2, {"bad.log", "line 2 (FLASER)", "expected 191", "fix or delete the line"});
+  forEach(importing("carmen", "odom.log"), "carmen_no_laser_line",
+          [](const Ws& w) {
+            fs::create_directories(w.in);
+            writeFile(w.in / "odom.log", "ODOM 0 0 0 0 0 0 1.5 host 1.5\n");
+          },
+          2, {"odom.log", "not a CARMEN laser log", "check --from"});
+  forEach(importing("ydlidar", "x4.dat"), "ydlidar_bad_number",
+          [](const Ws& w) {
+            fs::create_directories(w.in);
+            writeFile(w.in / "x4.dat", "0,0,0.1,1.0,1.1,1.2\n5,1,0.1,1.0,x,1.2\n");
+          },
+          2, {"x4.dat", "line 2", "range 1 is 'x'"});
+  forEach(importing("csv", "a.csv"), "csv_missing_column",
+          [](const Ws& w) {
+            fs::create_directories(w.in);
+            writeFile(w.in / "a.csv", "scan,x_m,y_m,angle_rad,range_m\n0,0,0,0,1\n");
+          },
+          2, {"a.csv", "line 1 (header)", "no column 'yaw_rad'"});
+  forEach(importing("csv", "a.csv"), "csv_pose_changes_within_a_scan",
+          [](const Ws& w) {
+            fs::create_directories(w.in);
+            writeFile(w.in / "a.csv", "scan,x_m,y_m,yaw_rad,angle_rad,range_m\n0,0,0,0,0,1\n0,1,0,0,0.1,1\n");
+          },
+          2, {"a.csv", "line 3", "a scan has one sensor pose"});
+  forEach(importing("csv", "none.csv"), "import_input_missing", [](const Ws& w) { fs::create_directories(w.in); }, 2,
+          {"none.csv", "does not exist"});
+  {
+    BadInputCase k;
+    k.name = "rosbag_without_the_topic_import";
+    k.args = "import --from rosbag1 {SHARED}/rplidar_a2_room/rplidar_1.bag --topic /scan --out {OUT}";
+    k.prepare = [](const Ws& w) { fs::create_directories(w.in); };
+    k.message = {"rplidar_1.bag", "--topic /scan", "no such topic", "/scan_rplidar"};
+    k.skip = [](const Ws&) -> std::string {
+      if (!fs::exists(sharedData() / "rplidar_a2_room/rplidar_1.bag")) return "shared data absent";
+      const auto r = runCli("import --from rosbag1 " + (sharedData() / "rplidar_a2_room/rplidar_1.bag").string() + " --list-topics");
+      return r.exit_code == 0 ? "" : "built without ROS1 bag support";
+    };
+    k.also_unchanged = [](const Ws&) { return std::vector<fs::path>{sharedData() / "rplidar_a2_room"}; };
+    c.push_back(k);
+  }
+
+  // ---- where the output goes (every command that writes)
+  forEach(kWritingCommands, "out_is_the_input",
+          [](const Ws& w) { writableInputs(w); }, 2, {"--out", "inside it", "outside the input"});
+  for (auto& k : c)
+    if (k.name.rfind("out_is_the_input_", 0) == 0) {
+      const std::string& name = k.name;
+      const std::string input = name.find("simulate") != std::string::npos ? "{IN}/scene.json"
+                                : name.find("import") != std::string::npos ? "{IN}/scans.csv"
+                                                                           : "{SEQ}";
+      k.args = replaceAll(k.args, "--out {OUT}", "--out " + input);
+      // simulate reads a file, not a directory: its output may not be the scene file either.
+    }
+  // (simulate and import read a file: "inside" does not apply; out_is_the_input covers them.)
+  forEach(std::vector<std::pair<const char*, std::string>>(kWritingCommands.begin(), kWritingCommands.begin() + 4),
+          "out_inside_the_input", [](const Ws& w) { writableInputs(w); }, 2, {"--out", "inside it", "outside the input"});
+  for (auto& k : c)
+    if (k.name.rfind("out_inside_the_input_", 0) == 0) k.args = replaceAll(k.args, "--out {OUT}", "--out {SEQ}/out");
+  forEach(kWritingCommands, "out_parent_is_a_file", [](const Ws& w) { writableInputs(w); }, 2, {"--out", "not a directory"});
+  for (auto& k : c)
+    if (k.name.rfind("out_parent_is_a_file_", 0) == 0)
+      k.args = replaceAll(k.args, "--out {OUT}", "--out {IN}/file.txt/result");
+  forEach(kWritingCommands, "out_in_proc", [](const Ws& w) { writableInputs(w); }, 2, {"/proc/result", "writable"});
+  for (auto& k : c)
+    if (k.name.rfind("out_in_proc_", 0) == 0) k.args = replaceAll(k.args, "--out {OUT}", "--out /proc/result");
+  forEach(kWritingCommands, "out_directory_not_writable", [](const Ws& w) { writableInputs(w); }, 2,
+          {"result", "check that", "writable"});
+  for (auto& k : c)
+    if (k.name.rfind("out_directory_not_writable_", 0) == 0) {
+      k.shell_prefix = "chmod 0555 {OUTDIR}";
+      k.skip = [](const Ws& w) -> std::string {
+        return permissionsAreIgnored(w.in) ? "running as root: a read-only mode does not stop writes (the /proc case covers it)"
+                                           : "";
+      };
+    }
+  // Disk full, simulated without privileges: a file-size limit (ulimit -f, in KiB) with SIGXFSZ
+  // ignored makes write() fail with EFBIG as a full disk fails with ENOSPC.
+  forEach(kWritingCommands, "disk_full", [](const Ws& w) { writableInputs(w); }, 2,
+          {"outdir/result", "disk full?", "free some space"});  // the final path, not the staging one
+  for (auto& k : c)
+    if (k.name.rfind("disk_full_", 0) == 0) {
+      // 1 KiB: model.json (~10 KB) and scans (~4.4 KB) cannot be written; small files can.
+      k.shell_prefix = "trap '' XFSZ; ulimit -f 1";
+    }
+  forEach(std::vector<std::pair<const char*, std::string>>{{"calibrate", "calibrate {SEQ} --out {IN}"},
+                                                           {"evaluate", "evaluate {SEQ} --truth {IN}/truth.json --out {IN}"}},
+          "out_file_is_a_directory", [](const Ws& w) { copyTree(w.fix / "bin", w.in); }, 2, {"is a directory"});
+  forEach(std::vector<std::pair<const char*, std::string>>{{"detect", "detect {SEQ} --out {IN}/truth.json"}},
+          "out_directory_is_a_file", [](const Ws& w) { copyTree(w.fix / "bin", w.in); }, 2,
+          {"truth.json", "--out", "is a file"});
+  return c;
+}
+
+class BadInput : public ::testing::TestWithParam<BadInputCase> {};
+
+TEST_P(BadInput, FailsCleanlyNamingFileItemAndRemedy) {
+  const BadInputCase& k = GetParam();
+  TempDir dir;
+  Ws w{dir / "in", dir / "outdir/result", fixtures()};
+  fs::create_directories(w.out.parent_path());
+  ASSERT_NO_FATAL_FAILURE(k.prepare(w));
+  if (k.skip)
+    if (const std::string why = k.skip(w); !why.empty()) GTEST_SKIP() << why;
+  std::string args = replaceAll(k.args, "{SEQ}", w.seq().string());
+  args = replaceAll(args, "{IN}", w.in.string());
+  args = replaceAll(args, "{OUT}", w.out.string());
+  args = replaceAll(args, "{FIX}", w.fix.string());
+  args = replaceAll(args, "{SHARED}", sharedData().string());
+  const std::string prefix = replaceAll(k.shell_prefix, "{OUTDIR}", w.out.parent_path().string());
+  std::vector<fs::path> unchanged = {w.in};
+  if (k.also_unchanged)
+    for (const auto& p : k.also_unchanged(w)) unchanged.push_back(p);
+  std::vector<std::map<std::string, std::string>> before;
+  for (const auto& p : unchanged) before.push_back(snapshot(p));
+  const auto listing_before = listing(w.in);
+
+  const CliResult r = runCliPrefixed(prefix, args);
+  if (!prefix.empty()) ::chmod(w.out.parent_path().c_str(), 0755);
+  SCOPED_TRACE("lidarcal " + args + "\nstderr: " + r.err);
+  // LIDARCAL_PRINT_MESSAGES=1 prints every message (to keep docs/ERRORS.md in step).
+  if (std::getenv("LIDARCAL_PRINT_MESSAGES")) std::printf("MESSAGE %s: %s", k.name.c_str(), r.err.c_str());
+
+  EXPECT_EQ(r.exit_code, k.exit_code);
+  EXPECT_NE(r.err.find(k.exit_code == 3 ? "lidarcal: cannot proceed: " : "lidarcal: error: "), std::string::npos);
+  for (const auto& part : k.message) EXPECT_NE(r.err.find(part), std::string::npos) << "missing: " << part;
+  // The remedy closes the message in parentheses.
+  std::string last = r.err.substr(0, r.err.find_last_not_of('\n') + 1);
+  last = last.substr(last.rfind('\n') == std::string::npos ? 0 : last.rfind('\n') + 1);
+  EXPECT_TRUE(!last.empty() && last.back() == ')' && last.find(" (") != std::string::npos) << "no remedy: " << last;
+  EXPECT_EQ(r.out.find("internal error"), std::string::npos);
+  // Input unchanged, byte for byte and entry for entry.
+  for (std::size_t i = 0; i < unchanged.size(); ++i) EXPECT_TRUE(snapshot(unchanged[i]) == before[i]) << unchanged[i];
+  EXPECT_EQ(listing(w.in), listing_before);
+  // Nothing written: the output directory's parent is as it was (empty), no staging leftovers.
+  EXPECT_TRUE(listing(w.out.parent_path()).empty()) << "left behind in " << w.out.parent_path();
+  for (const auto& name : listing(dir.path()))
+    EXPECT_TRUE(name.find(".partial-") == std::string::npos && name.find(".tmp-") == std::string::npos &&
+                name.find(".old-") == std::string::npos && name.find(".probe-") == std::string::npos)
+        << "left behind: " << name;
+}
+
+INSTANTIATE_TEST_SUITE_P(Catalogue, BadInput, ::testing::ValuesIn(cases()),
+                         [](const ::testing::TestParamInfo<BadInputCase>& p) { return p.param.name; });
+
+// ---- not errors, documented in docs/ERRORS.md as well
+
+TEST(BadInputWarnings, ScansWithDifferentBeamCountsCalibrateWithAWarningAndAModelWithoutABeamCount) {
+  TempDir dir;
+  const fs::path in = dir / "in";
+  // The paper's field seen by a sensor whose beam count varies (YDLIDAR X4 does): odd stops
+  // with 360 beams, even stops with 359, and no `beams` in sequence.json.
+  const std::string paper = readFile(scenePath("paper_field.json"));
+  fs::create_directories(in / "scans");
+  writeFile(dir / "a.json", replaceAll(paper, "\"scans_per_stop\": 10", "\"scans_per_stop\": 2"));
+  writeFile(dir / "b.json", replaceAll(replaceAll(paper, "\"scans_per_stop\": 10", "\"scans_per_stop\": 2"),
+                                       "\"angle_increment_deg\": 1.0", "\"angle_increment_deg\": 1.0027855"));
+  writeFile(dir / "b.json", replaceAll(readFile(dir / "b.json"), "\"beams\": 360", "\"beams\": 359"));
+  for (const char* s : {"a", "b"})
+    ASSERT_EQ(runCli("simulate -q --scene " + (dir / (std::string(s) + ".json")).string() + " --out " + (dir / s).string() +
+                     " --seed 5").exit_code, 0);
+  for (int i = 0; i < 20; ++i) {
+    const std::string name = "scan_0000" + std::string(i < 10 ? "0" : "") + std::to_string(i) + ".pcd";
+    fs::copy_file(dir / ((i / 2) % 2 ? "b" : "a") / "scans" / name, in / "scans" / name);
+  }
+  auto meta = nlohmann::json::parse(readFile(dir / "a/scans/sequence.json"));
+  meta.erase("beams");
+  writeFile(in / "scans/sequence.json", meta.dump());
+  const auto before = snapshot(in);
+  const auto r = runCli("calibrate -q " + (in / "scans").string() + " --out " + (dir / "m.json").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("warning: "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("varies from 359 to 360"), std::string::npos) << r.err;
+  EXPECT_TRUE(snapshot(in) == before);
+  const auto model = nlohmann::json::parse(readFile(dir / "m.json"));
+  EXPECT_TRUE(model["sensor"]["beams"].is_null());
+  // The bias is still found: the simulated one is f(3) = 3.24 m.
+  const auto& a = model["bias"]["alpha"];
+  double f3 = 0.0;
+  for (std::size_t i = a.size(); i-- > 0;) f3 = f3 * 3.0 + a[i].get<double>();
+  EXPECT_NEAR(f3, 0.0525 + 0.8838 * 3 + 0.0584 * 9, 0.03);
+  // And the model corrects every scan of that sequence.
+  const auto c = runCli("correct -q " + (in / "scans").string() + " --model " + (dir / "m.json").string() + " --out " +
+                        (dir / "c").string());
+  EXPECT_EQ(c.exit_code, 0) << c.err;
+  EXPECT_NE(c.err.find("warning: "), std::string::npos) << c.err;
+  EXPECT_NE(c.err.find("varies from 359 to 360"), std::string::npos) << c.err;
+  // A model of one beam count refuses the scans with the other, naming the first.
+  auto fixed = nlohmann::json::parse(readFile(dir / "m.json"));
+  fixed["sensor"]["beams"] = 360;
+  writeFile(dir / "m360.json", fixed.dump());
+  const auto f = runCli("correct " + (in / "scans").string() + " --model " + (dir / "m360.json").string() + " --out " +
+                        (dir / "c360").string());
+  EXPECT_EQ(f.exit_code, 2);
+  EXPECT_NE(f.err.find("scan_000002.pcd: POINTS: has 359 beams"), std::string::npos) << f.err;
+  EXPECT_FALSE(fs::exists(dir / "c360"));
+  EXPECT_TRUE(snapshot(in) == before);
+}
+
+TEST(BadInputGeometry, LandmarksAllOnOneSideOfThePathStillCalibrate) {
+  // Seed 000 places poles on both sides of the path; on one side only, the bearing lines from
+  // the stops still cross at a wide angle, so this is not degenerate: the bias is recovered.
+  TempDir dir;
+  const Ws w{dir / "in", dir / "out", fixtures()};
+  ASSERT_NO_FATAL_FAILURE(simulated(scene(R"({"x_m": 1.5, "y_m": 0.75, "radius_m": 0.12}, {"x_m": 0.3, "y_m": 2.2, "radius_m": 0.12},
+      {"x_m": 2.4, "y_m": 3.4, "radius_m": 0.12}, {"x_m": 3.6, "y_m": 1.4, "radius_m": 0.12}, {"x_m": 1.2, "y_m": 3.9, "radius_m": 0.12})",
+                                          path(10, 3)))(w));
+  const auto r = runCli("calibrate -q " + (w.in / "sim/scans").string() + " --out " + (dir / "m.json").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto a = nlohmann::json::parse(readFile(dir / "m.json"))["bias"]["alpha"];
+  for (double d : {1.0, 2.0, 3.0}) {
+    double f = 0.0;
+    for (std::size_t i = a.size(); i-- > 0;) f = f * d + a[i].get<double>();
+    EXPECT_NEAR(f, 0.0525 + 0.8838 * d + 0.0584 * d * d, 0.03) << "d = " << d;
+  }
+}
+
+}  // namespace
+}  // namespace lidarcal
