@@ -170,7 +170,8 @@ JointResult refineJoint(const LandmarkObservations& obs, const JointInit& init, 
     if (outer == 0) problem.SetParameterBlockConstant(alpha.data());
 
     ceres::Solver::Options options;
-    options.linear_solver_type = ceres::DENSE_QR;
+    options.linear_solver_type =
+        config.linear_solver == JointLinearSolver::dense_schur ? ceres::DENSE_SCHUR : ceres::DENSE_QR;
     options.max_num_iterations = config.max_solver_iterations;
     options.function_tolerance = 1e-10;
     options.parameter_tolerance = 1e-10;
