@@ -14,6 +14,7 @@ void registerCommands(CLI::App& app) {
   addCorrectCommand(app);
   addEvaluateCommand(app);
   addImportCommand(app);
+  addDetectCommand(app);
 }
 
 std::filesystem::path dataDir() {

@@ -1,0 +1,54 @@
+// Calibration cost (docs/RESULTS.md, "Calibration"): the paper's closed form and our joint
+// refinement on the same data, 20 stops x 5 landmarks, one scan per stop and ten.
+//   build/bench/bench_calibration --benchmark_min_time=1
+
+#include <benchmark/benchmark.h>
+
+#include "calibration/calibrate.hpp"
+#include "simulation/landmark_level.hpp"
+
+namespace {
+
+using namespace lidarcal;
+
+simulation::LandmarkLevelSample sample(int scans_per_stop) {
+  simulation::LandmarkLevelConfig c;
+  c.landmarks = {{1.5, 0.75, 0.12}, {0.3, 2.2, 0.12}, {2.4, 3.4, 0.12}, {3.9, -1.3, 0.12}, {0.9, -2.8, 0.12}};
+  c.path.stops = 20;
+  c.path.step_m = 0.15;
+  c.path.scans_per_stop = scans_per_stop;
+  c.path.sigma_s_m = 0.02;
+  c.path.sigma_psi_rad = deg2rad(0.5);
+  c.model.bias.alpha = {0.0525, 0.8838, 0.0584};
+  c.model.noise.kind = NoiseKind::squared;
+  c.model.noise.sigma_e = 0.0019176;
+  c.model.range_min_m = 0.2;
+  c.model.range_max_m = 6.0;
+  c.sigma_theta_rad = deg2rad(0.2);
+  c.beams = true;
+  return simulation::simulateLandmarkLevel(c, 1);
+}
+
+void run(benchmark::State& state, calibration::Method method) {
+  const auto s = sample(static_cast<int>(state.range(0)));
+  calibration::CalibrationConfig config;
+  config.method = method;
+  std::size_t readings = 0;
+  for (const auto& sg : s.obs.sightings) readings += sg.beams.size();
+  for (auto _ : state) {
+    auto m = calibration::calibrate(s.obs, config);
+    benchmark::DoNotOptimize(m);
+  }
+  state.counters["readings"] = static_cast<double>(readings);
+  state.counters["sightings"] = static_cast<double>(s.obs.sightings.size());
+}
+
+void BM_ClosedForm(benchmark::State& state) { run(state, calibration::Method::closed_form); }
+void BM_Joint(benchmark::State& state) { run(state, calibration::Method::joint); }
+
+BENCHMARK(BM_ClosedForm)->Arg(1)->Arg(10)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Joint)->Arg(1)->Arg(10)->Unit(benchmark::kMillisecond);
+
+}  // namespace
+
+BENCHMARK_MAIN();

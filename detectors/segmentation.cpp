@@ -1,0 +1,71 @@
+#include "detectors/segmentation.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace lidarcal::detectors {
+
+void SegmentationConfig::validate() const {
+  auto fail = [](const char* field, const char* what) {
+    throw std::invalid_argument(std::string("SegmentationConfig.") + field + ": " + what);
+  };
+  if (!(gap_m > 0.0) || !std::isfinite(gap_m)) fail("gap_m", "must be > 0");
+  if (!(gap_per_m >= 0.0) || !std::isfinite(gap_per_m)) fail("gap_per_m", "must be >= 0");
+  if (max_missing_beams < 0) fail("max_missing_beams", "must be >= 0");
+}
+
+namespace {
+
+bool valid(const pcl::PointXYZI& p) { return std::isfinite(p.x) && std::isfinite(p.y); }
+
+bool neighbours(const pcl::PointXYZI& a, const pcl::PointXYZI& b, const SegmentationConfig& cfg) {
+  const double ra = std::hypot(a.x, a.y), rb = std::hypot(b.x, b.y);
+  const double gap = cfg.gap_m + cfg.gap_per_m * 0.5 * (ra + rb);
+  return std::hypot(double(a.x) - b.x, double(a.y) - b.y) <= gap;
+}
+
+}  // namespace
+
+std::vector<pcl::Indices> segmentScan(const pcl::PointCloud<pcl::PointXYZI>& cloud, const SegmentationConfig& cfg) {
+  cfg.validate();
+  std::vector<pcl::Indices> clusters;
+  const auto n = static_cast<int>(cloud.size());
+  int last = -1;
+  for (int i = 0; i < n; ++i) {
+    if (!valid(cloud[i])) continue;
+    const bool join = last >= 0 && i - last - 1 <= cfg.max_missing_beams && neighbours(cloud[last], cloud[i], cfg);
+    if (!join) clusters.emplace_back();
+    clusters.back().push_back(i);
+    last = i;
+  }
+  // Close the circle: the last cluster continues into the first one.
+  if (clusters.size() >= 2) {
+    const int first = clusters.front().front(), end = clusters.back().back();
+    if ((n - 1 - end) + first <= cfg.max_missing_beams && neighbours(cloud[end], cloud[first], cfg)) {
+      pcl::Indices merged = std::move(clusters.back());
+      merged.insert(merged.end(), clusters.front().begin(), clusters.front().end());
+      clusters.pop_back();
+      clusters.front() = std::move(merged);
+    }
+  }
+  return clusters;
+}
+
+double estimateAngularStep(const pcl::PointCloud<pcl::PointXYZI>& cloud) {
+  std::vector<double> steps;
+  steps.reserve(cloud.size());
+  for (std::size_t i = 1; i < cloud.size(); ++i) {
+    const auto &a = cloud[i - 1], &b = cloud[i];
+    if (!valid(a) || !valid(b)) continue;
+    const double d = std::atan2(double(a.x) * b.y - double(a.y) * b.x, double(a.x) * b.x + double(a.y) * b.y);
+    steps.push_back(std::abs(d));
+  }
+  if (steps.empty()) return 0.0;
+  const auto mid = steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2);
+  std::nth_element(steps.begin(), mid, steps.end());
+  return *mid;
+}
+
+}  // namespace lidarcal::detectors

@@ -1,0 +1,35 @@
+#pragma once
+// Splits a 2D scan into clusters of neighbouring returns, walking the beams in scan order: a new
+// cluster starts where two consecutive returns are farther apart than a range-dependent gap or
+// where more than a few beams in a row have no return. A 360-degree scan is closed: the last
+// cluster joins the first when the two ends are neighbours.
+
+#include <vector>
+
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+#include <pcl/types.h>
+
+namespace lidarcal::detectors {
+
+struct SegmentationConfig {
+  /// Consecutive returns farther apart than gap_m + gap_per_m * range split a cluster, metres. Default 0.10.
+  double gap_m = 0.10;
+  /// Growth of the gap with range (beam spacing and noise both grow with it), metres per metre. Default 0.06.
+  double gap_per_m = 0.06;
+  /// Beams without return (NaN) tolerated inside a cluster. Default 1.
+  int max_missing_beams = 1;
+
+  /// Throws std::invalid_argument naming the first bad field.
+  void validate() const;
+};
+
+/// Clusters of a scan: point indices in beam order (a cluster closed across the end of the scan
+/// continues from the last beams to the first ones). NaN points belong to no cluster.
+std::vector<pcl::Indices> segmentScan(const pcl::PointCloud<pcl::PointXYZI>& cloud, const SegmentationConfig& config);
+
+/// Median angular step between consecutive beams that both have a return, radians (0 when the
+/// scan has fewer than two neighbouring returns).
+double estimateAngularStep(const pcl::PointCloud<pcl::PointXYZI>& cloud);
+
+}  // namespace lidarcal::detectors

@@ -1,0 +1,166 @@
+// lidarcal detect SEQ --out OUT: landmarks in every scan, one id per landmark over the sequence.
+// Writes OUT/ (labelled copies of the scans, sequence.json, landmarks.csv); prints a summary.
+// Two passes over the files: detect + associate (one scan in memory at a time), then labels.
+
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <optional>
+
+#include <CLI/CLI.hpp>
+
+#include "common/errors.hpp"
+#include "detectors/evaluation.hpp"
+#include "detectors/sequence_detector.hpp"
+#include "io/atomic_file.hpp"
+#include "io/landmarks_csv.hpp"
+#include "io/scene_io.hpp"
+#include "io/sequence.hpp"
+#include "io/true_ranges.hpp"
+#include "pipeline/commands.hpp"
+#include "pipeline/progress.hpp"
+
+namespace lidarcal::pipeline {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct DetectOptions {
+  std::string seq;
+  std::string out;
+  bool overwrite = false;
+  bool ascii = false;
+  double radius_m = 0.0;       // 0: sequence.json or estimated
+  bool estimate_radius = false;
+  int min_stops = 3;
+  double link_distance_m = 0.35;
+  std::string truth;
+};
+
+void printEvaluation(const detectors::DetectionEvaluation& ev) {
+  std::printf("\n## Evaluation against the truth\n\n");
+  std::printf("| detections | true positives | false positives | precision | observable | detected | recall | purity | wrong ids | split ids |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|\n");
+  std::printf("| %zu | %zu | %zu | %.4f | %zu | %zu | %.4f | %.4f | %zu | %zu |\n", ev.detections, ev.true_positives,
+              ev.false_positives, ev.precision, ev.observable, ev.detected, ev.recall, ev.purity, ev.wrong_id,
+              ev.split_ids);
+  std::printf("\n| true range (m) | observable | detected | centre RMS (m) | bearing RMS (mrad) | range - (f(D-R)+R) mean (m) | free radius error mean (m) | free radius RMS (m) |\n");
+  std::printf("|---|---|---|---|---|---|---|---|\n");
+  for (const auto& b : ev.bins)
+    if (b.observable || b.detections)
+      std::printf("| %.0f-%.0f | %zu | %zu | %.4f | %.2f | %+.4f | %+.4f | %.4f |\n", b.lo_m, b.hi_m, b.observable,
+                  b.detected, b.centre_rms_m, b.bearing_rms_rad * 1e3, b.range_bias_m, b.free_radius_bias_m,
+                  b.free_radius_rms_m);
+}
+
+void runDetect(const DetectOptions& o) {
+  const io::Sequence seq = io::openSequence(o.seq);
+  io::checkOutsideInput(o.seq, o.out);
+
+  detectors::SequenceDetectionConfig cfg;
+  if (o.radius_m > 0.0) cfg.detection.landmark_radius_m = o.radius_m;
+  cfg.use_sequence_radius = !o.estimate_radius;
+  cfg.association.min_stops = o.min_stops;
+  cfg.association.link_distance_m = o.link_distance_m;
+  cfg.association.min_link_distance_m = std::min(cfg.association.min_link_distance_m, o.link_distance_m);
+
+  std::optional<Truth> truth;
+  std::map<std::size_t, std::vector<io::TrueRange>> true_ranges;
+  if (!o.truth.empty()) {
+    truth = io::readTruth(o.truth);
+    for (auto& r : io::readTrueRanges(fs::path(o.truth).parent_path() / truth->true_ranges_file))
+      true_ranges[r.scan].push_back(r);
+  }
+
+  io::StagedDirectory out(o.out, o.overwrite);
+  detectors::SequenceDetections result;
+  {
+    std::unique_ptr<Progress> progress;
+    result = detectors::detectSequence(seq, cfg, [&](std::size_t done, std::size_t total) {
+      if (!progress) progress = std::make_unique<Progress>("detect", total);
+      progress->update(done);
+    });
+    if (progress) progress->finish();
+  }
+
+  // Second pass: the same points in the same order, with a label per point.
+  const fs::path meta = seq.dir / "sequence.json";
+  if (fs::exists(meta)) fs::copy_file(meta, out.path() / "sequence.json");
+  io::LandmarksCsvWriter csv(out.path() / "landmarks.csv");
+  std::vector<detectors::ScanTruth> scan_truth;
+  Progress progress("label", seq.scans.size());
+  for (std::size_t i = 0; i < seq.scans.size(); ++i) {
+    io::Scan scan = io::readScan(seq.scans[i].path);
+    scan.labels = detectors::scanLabels(result, i, scan.cloud->size());
+    const std::string name = seq.scans[i].path.filename().string();
+    io::writeScan(out.path() / name, scan, o.ascii ? io::PcdEncoding::ascii : io::PcdEncoding::binary);
+    const auto& dets = result.scans[i].detections;
+    for (std::size_t j = 0; j < dets.size(); ++j) {
+      const int id = result.association.ids[i][j];
+      if (id == 0) continue;
+      const auto& d = dets[j];
+      csv.write(io::LandmarkRow{name, seq.stop_of_scan[i], id, d.bearing_rad, d.range_m, d.centre_x_m, d.centre_y_m,
+                                d.radius_m, d.inliers.size(), d.rms_m});
+    }
+    if (truth) {
+      auto it = true_ranges.find(i);
+      if (it == true_ranges.end())
+        throw InputError(o.truth, "scan " + std::to_string(i), "has no rows in the true ranges",
+                         "pass the truth.json written with this sequence");
+      scan_truth.push_back(detectors::makeScanTruth(*truth, i, std::move(it->second), *scan.cloud));
+    }
+    progress.update(i + 1);
+  }
+  progress.finish();
+  csv.close();
+  out.commit();
+
+  const auto& a = result.association;
+  std::size_t circles = 0;
+  for (const auto& s : result.scans) circles += s.detections.size();
+  std::printf("# Landmarks of %s\n\n", o.seq.c_str());
+  std::printf("- scans: %zu at %zu stops\n", seq.scans.size(), seq.stops.size());
+  std::printf("- radius: %s", detectors::toString(result.radius_source));
+  if (result.known_radius_m) std::printf(" (%.4f m)", *result.known_radius_m);
+  std::printf("\n- circle detections: %zu, given a landmark id: %zu (discarded: %zu at too few stops, %zu conflicts)\n",
+              circles, a.assigned, a.discarded_few_stops, a.discarded_conflicts);
+  std::printf("- %s\n", result.note.c_str());
+  if (!a.landmarks.empty()) {
+    std::printf("\n| id | x_m (world) | y_m (world) | radius_m | detections | stops | first scan |\n|---|---|---|---|---|---|---|\n");
+    for (const auto& l : a.landmarks)
+      std::printf("| %d | %.3f | %.3f | %.4f%s | %zu | %zu | %zu |\n", l.id, l.x_m, l.y_m, l.radius_m,
+                  l.radius_estimated ? " (estimated)" : "", l.detections, l.stops, l.first_scan);
+  }
+  std::printf("\nOutput: %s (labelled scans, sequence.json, landmarks.csv)\n", o.out.c_str());
+  if (truth) printEvaluation(detectors::evaluateDetections(result.scans, &a, scan_truth, *truth));
+}
+
+}  // namespace
+
+void addDetectCommand(CLI::App& app) {
+  auto o = std::make_shared<DetectOptions>();
+  CLI::App* sub = app.add_subcommand("detect", "Find the landmarks (poles) in every scan and label them across stops");
+  sub->add_option("SEQ", o->seq, "Sequence directory (.pcd files, see docs/FORMAT.md)")->required();
+  sub->add_option("--out", o->out, "Output directory: labelled scans, sequence.json, landmarks.csv")->required();
+  sub->add_flag("--overwrite", o->overwrite, "Replace OUT if it exists");
+  CLI::Option* radius =
+      sub->add_option("--radius", o->radius_m, "Landmark radius in metres (default: sequence.json, else estimated)")
+          ->check(CLI::PositiveNumber);
+  sub->add_flag("--estimate-radius", o->estimate_radius, "Ignore sequence.json's radius and estimate it per landmark")
+      ->excludes(radius);
+  sub->add_option("--min-stops", o->min_stops, "A landmark must be seen at this many stops (capped at the number of stops)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  sub->add_option("--link-distance", o->link_distance_m,
+                  "Detections closer than this in the world frame (metres) belong to one landmark")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  sub->add_flag("--ascii", o->ascii, "Write ASCII PCD instead of binary");
+  sub->add_option("--truth", o->truth,
+                  "Simulator truth (DIR/truth.json, with DIR/true_ranges.csv): also print precision, recall, purity "
+                  "and errors by range");
+  sub->callback([o] { runDetect(*o); });
+}
+
+}  // namespace lidarcal::pipeline

@@ -1,0 +1,216 @@
+// Whole sequences simulated from the paper's field scene: every landmark found with one id,
+// checked beam by beam against the simulator's truth; the radius estimated when not given;
+// odometry drift; a sequence without landmarks.
+
+#include <cmath>
+#include <map>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "detectors/evaluation.hpp"
+#include "detectors/landmark_radius.hpp"
+#include "detectors/sequence_detector.hpp"
+#include "io/scene_io.hpp"
+#include "simulation/simulator.hpp"
+#include "test_util.hpp"
+
+namespace lidarcal::detectors {
+namespace {
+
+struct Simulated {
+  Truth truth;
+  std::vector<simulation::SimulatedScan> scans;
+  std::vector<std::size_t> stop_of_scan;
+};
+
+Simulated simulateScene(const Scene& scene, std::uint64_t seed, std::vector<TruthStop> stops = {}) {
+  Simulated s;
+  s.truth.seed = seed;
+  s.truth.scene = scene;
+  s.truth.stops = stops.empty() ? simulation::planStops(scene, seed) : std::move(stops);
+  for (std::size_t k = 0; k < s.truth.stops.size(); ++k)
+    for (std::size_t i = 0; i < s.truth.stops[k].scans; ++i) {
+      s.scans.push_back(simulation::simulateScan(scene, s.truth.stops[k], s.truth.stops[k].first_scan + i, seed));
+      s.stop_of_scan.push_back(k);
+    }
+  return s;
+}
+
+SequenceDetections run(const Simulated& s, const SequenceDetectionConfig& cfg) {
+  return detectSequence(s.scans.size(), [&](std::size_t i) { return s.scans[i].scan; }, s.stop_of_scan, cfg);
+}
+
+Scene paperField() { return io::readScene(test::sourceDir() / "data/scenes/paper_field.json"); }
+
+/// Maps every id to the truth landmark nearest its world position and checks, beam by beam,
+/// that each labelled detection lies on that landmark.
+void expectAllLandmarksWithTheRightIds(const Simulated& s, const SequenceDetections& r) {
+  const auto& truth_l = s.truth.scene.landmarks;
+  ASSERT_EQ(r.association.landmarks.size(), truth_l.size());
+  std::map<int, int> truth_of_id;
+  std::vector<bool> taken(truth_l.size(), false);
+  for (const auto& l : r.association.landmarks) {
+    std::size_t best = 0;
+    for (std::size_t k = 1; k < truth_l.size(); ++k)
+      if (std::hypot(truth_l[k].x_m - l.x_m, truth_l[k].y_m - l.y_m) <
+          std::hypot(truth_l[best].x_m - l.x_m, truth_l[best].y_m - l.y_m))
+        best = k;
+    EXPECT_FALSE(taken[best]) << "two ids near truth landmark " << best + 1;
+    taken[best] = true;
+    truth_of_id[l.id] = static_cast<int>(best) + 1;
+  }
+  std::size_t labelled = 0;
+  for (std::size_t i = 0; i < r.scans.size(); ++i)
+    for (std::size_t j = 0; j < r.scans[i].detections.size(); ++j) {
+      const int id = r.association.ids[i][j];
+      if (id == 0) continue;
+      ++labelled;
+      for (auto b : r.scans[i].detections[j].inliers) {
+        const auto& t = s.scans[i].truth[static_cast<std::size_t>(b)];
+        EXPECT_EQ(t.target, io::TargetKind::landmark) << "scan " << i << " beam " << b;
+        EXPECT_EQ(t.target_id, truth_of_id[id]) << "scan " << i << " beam " << b << " id " << id;
+      }
+    }
+  EXPECT_GT(labelled, s.scans.size() * 4);  // most landmarks in most scans
+}
+
+TEST(DetectSequence, PaperFieldFindsAllFiveLandmarksWithTheRightIds) {
+  for (std::uint64_t seed : {1, 2, 3}) {
+    SCOPED_TRACE(seed);
+    const Simulated s = simulateScene(paperField(), seed);
+    SequenceDetectionConfig cfg;
+    cfg.detection.landmark_radius_m = 0.12;
+    const SequenceDetections r = run(s, cfg);
+    EXPECT_EQ(r.radius_source, RadiusSource::known);
+    expectAllLandmarksWithTheRightIds(s, r);
+  }
+}
+
+TEST(DetectSequence, RadiusIsEstimatedWhenNotGiven) {
+  const Simulated s = simulateScene(paperField(), 4);
+  const SequenceDetections r = run(s, SequenceDetectionConfig{});
+  EXPECT_EQ(r.radius_source, RadiusSource::estimated);
+  expectAllLandmarksWithTheRightIds(s, r);
+  for (const auto& l : r.association.landmarks) {
+    SCOPED_TRACE(l.id);
+    EXPECT_TRUE(l.radius_estimated);
+    EXPECT_NEAR(l.radius_m, 0.12, 0.01);
+  }
+}
+
+TEST(DetectSequence, SurvivesOdometryDriftOfSeveralCentimetresPerStop) {
+  Scene scene = paperField();
+  std::vector<TruthStop> stops = simulation::planStops(scene, 5);
+  for (std::size_t k = 0; k < stops.size(); ++k) {
+    // The robot drifts 4 cm sideways and 3 cm forward per stop, and turns 0.3 degrees.
+    stops[k].actual = stops[k].commanded;
+    stops[k].actual.x_m += 0.03 * static_cast<double>(k);
+    stops[k].actual.y_m += 0.04 * static_cast<double>(k);
+    stops[k].actual.yaw_rad += deg2rad(0.3) * static_cast<double>(k);
+  }
+  const Simulated s = simulateScene(scene, 5, stops);
+  SequenceDetectionConfig cfg;
+  cfg.detection.landmark_radius_m = 0.12;
+  expectAllLandmarksWithTheRightIds(s, run(s, cfg));
+}
+
+TEST(DetectSequence, EvaluationAgainstTheTruthMeetsTheTargetsAtNominalNoise) {
+  const Simulated s = simulateScene(paperField(), 6);
+  SequenceDetectionConfig cfg;
+  cfg.detection.landmark_radius_m = 0.12;
+  const SequenceDetections r = run(s, cfg);
+  std::vector<ScanTruth> truth;
+  for (std::size_t i = 0; i < s.scans.size(); ++i)
+    truth.push_back(makeScanTruth(s.truth, i, s.scans[i].truth, *s.scans[i].scan.cloud));
+  const DetectionEvaluation ev = evaluateDetections(r.scans, &r.association, truth, s.truth);
+  EXPECT_GE(ev.precision, 0.99);
+  EXPECT_GE(ev.recall, 0.99);
+  EXPECT_EQ(ev.wrong_id, 0u);
+  EXPECT_EQ(ev.split_ids, 0u);
+  EXPECT_GT(ev.observable, 400u);
+}
+
+TEST(DetectSequence, NoLandmarksIsAValidResultWithANote) {
+  Scene scene = paperField();
+  scene.landmarks.clear();
+  const Simulated s = simulateScene(scene, 1);
+  for (bool known : {true, false}) {
+    SequenceDetectionConfig cfg;
+    if (known) cfg.detection.landmark_radius_m = 0.12;
+    const SequenceDetections r = run(s, cfg);
+    EXPECT_TRUE(r.association.landmarks.empty());
+    EXPECT_EQ(r.radius_source, RadiusSource::none);
+    EXPECT_NE(r.note.find("zero landmarks"), std::string::npos) << r.note;
+    for (std::size_t i = 0; i < r.scans.size(); ++i)
+      for (auto label : scanLabels(r, i, s.scans[i].scan.cloud->size())) EXPECT_EQ(label, 0u);
+  }
+}
+
+// The clutter scene (two chairs, three boxes) with the radius known and unknown, and without
+// landmarks at all: no labelled point is ever on a wall, a box or a chair leg.
+TEST(DetectSequence, WallsChairsAndBoxesAreNeverLabelled) {
+  Scene with = io::readScene(test::sourceDir() / "data/scenes/field_clutter.json");
+  Scene without = with;
+  without.landmarks.clear();
+  for (std::uint64_t seed : {1, 2, 3}) {
+    for (const Scene* scene : {&with, &without}) {
+      const Simulated s = simulateScene(*scene, seed);
+      for (bool known : {true, false}) {
+        SCOPED_TRACE(std::to_string(seed) + (scene == &with ? " with" : " without") + " landmarks, radius known " +
+                     std::to_string(known));
+        SequenceDetectionConfig cfg;
+        if (known) cfg.detection.landmark_radius_m = 0.12;
+        const SequenceDetections r = run(s, cfg);
+        EXPECT_EQ(r.association.landmarks.size(), scene->landmarks.size());
+        for (std::size_t i = 0; i < r.scans.size(); ++i) {
+          const auto labels = scanLabels(r, i, s.scans[i].scan.cloud->size());
+          for (std::size_t b = 0; b < labels.size(); ++b)
+            if (labels[b] != 0) {
+              EXPECT_EQ(s.scans[i].truth[b].target, io::TargetKind::landmark) << "scan " << i << " beam " << b;
+            }
+        }
+      }
+    }
+  }
+}
+
+TEST(DetectSequence, SameInputSameOutput) {
+  const Simulated s = simulateScene(paperField(), 2);
+  const SequenceDetections a = run(s, SequenceDetectionConfig{}), b = run(s, SequenceDetectionConfig{});
+  ASSERT_EQ(a.association.ids, b.association.ids);
+  for (std::size_t i = 0; i < a.scans.size(); ++i)
+    for (std::size_t j = 0; j < a.scans[i].detections.size(); ++j) {
+      EXPECT_EQ(a.scans[i].detections[j].centre_x_m, b.scans[i].detections[j].centre_x_m);
+      EXPECT_EQ(a.scans[i].detections[j].inliers, b.scans[i].detections[j].inliers);
+    }
+}
+
+TEST(JointRadius, RecoversTheRadiusFromArcsSeenAtSeveralRanges) {
+  for (unsigned seed = 1; seed <= 10; ++seed) {
+    SCOPED_TRACE(seed);
+    std::mt19937_64 rng(seed);
+    std::normal_distribution<double> n(0.0, 1.0);
+    std::vector<ArcObservation> arcs;
+    for (double range : {0.7, 1.2, 2.0, 3.0}) {
+      ArcObservation a;
+      const double cx = range, cy = 0.3 * range, radius = 0.15, sigma = 0.001 * range * range;
+      const double facing = std::atan2(-cy, -cx);
+      for (int i = -4; i <= 4; ++i) {
+        const double ang = facing + 0.3 * i, r = radius + sigma * n(rng);
+        a.points.emplace_back(cx + r * std::cos(ang), cy + r * std::sin(ang));
+      }
+      a.start = Circle2{cx + 0.05, cy, 0.2};  // a poor start
+      arcs.push_back(a);
+    }
+    const RadiusEstimate est = estimateJointRadius(arcs, 0.03, 0.3);
+    ASSERT_EQ(est.status, FitStatus::ok);
+    EXPECT_NEAR(est.radius_m, 0.15, 0.002);
+    ASSERT_EQ(est.centres.size(), 4u);
+    EXPECT_NEAR(est.centres[0].x_m, 0.7, 0.003);
+  }
+  EXPECT_EQ(estimateJointRadius({}, 0.03, 0.3).status, FitStatus::too_few_points);
+}
+
+}  // namespace
+}  // namespace lidarcal::detectors
