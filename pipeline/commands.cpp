@@ -15,6 +15,7 @@ void registerCommands(CLI::App& app) {
   addEvaluateCommand(app);
   addImportCommand(app);
   addDetectCommand(app);
+  addMonteCarloCommand(app);
 }
 
 std::filesystem::path dataDir() {

@@ -209,6 +209,7 @@ void TrialConfig::validate() const {
   if (level == Level::scan && angle_noise != AngleNoise::heading)
     throw std::invalid_argument("TrialConfig: the scan level models the angle noise as heading noise only");
   if (scan_beams < 8) throw std::invalid_argument("TrialConfig: scan_beams must be >= 8");
+  if (!(noise_scale >= 0.0)) throw std::invalid_argument("TrialConfig: noise_scale must be >= 0");
   if (!(min_sigma_s_m > 0.0) || !(min_sigma_theta_rad > 0.0))
     throw std::invalid_argument("TrialConfig: the sigma floors must be positive");
   placement.validate();
@@ -255,15 +256,17 @@ TrialResult runTrial(const TrialConfig& config, const Cell& cell, const std::vec
   double bearing_noise = 0.0;
   if (config.angle_noise == AngleNoise::heading) path.sigma_psi_rad = cell.sigma_theta_rad;
   else bearing_noise = cell.sigma_theta_rad;
+  RangeModel sensor = config.sensor;
+  for (double& b : sensor.noise.beta) b *= config.noise_scale;
   const std::uint64_t calib_seed = deriveSeed(trial_seed, 0), test_seed = deriveSeed(trial_seed, 1);
   Draw calib, test;
   if (config.level == Level::landmark) {
-    calib = drawLandmarkLevel(layout, path, config.sensor, bearing_noise, calib_seed);
-    test = drawLandmarkLevel(layout, path, config.sensor, bearing_noise, test_seed);
+    calib = drawLandmarkLevel(layout, path, sensor, bearing_noise, calib_seed);
+    test = drawLandmarkLevel(layout, path, sensor, bearing_noise, test_seed);
   } else {
     const ScanLevelConfig sc = scanLevelConfig(config);
-    calib = drawScanLevel(layout, path, config.sensor, sc, calib_seed, true);
-    test = drawScanLevel(layout, path, config.sensor, sc, test_seed, false);
+    calib = drawScanLevel(layout, path, sensor, sc, calib_seed, true);
+    test = drawScanLevel(layout, path, sensor, sc, test_seed, false);
   }
   const TestSet tests = testSet(test);
 
