@@ -273,43 +273,68 @@ std::string gnuplotFig11(const std::vector<CellSummary>& cells, const StudyGrids
 
 // ---------------------------------------------------------------- summaries
 
-std::string summaryFig7(const std::vector<CellSummary>& cells, const StudyGrids& g) {
-  std::string s = "RMS position error in cm, triangulation (paper) / joint refinement (bias in brackets), L = " +
-                  std::to_string(g.fig7_landmarks) + ":\n\n";
+using CellText = std::function<std::string(const CellSummary&)>;
+
+/// Table of a sigma_s x sigma_theta grid at L landmarks ("-" for a cell not run).
+std::string gridTable(const std::vector<CellSummary>& cells, const StudyGrids& g, int L, const CellText& text) {
   std::vector<std::string> header = {"σ_s"};
   for (double t : g.sigma_theta_deg) header.push_back(thetaText(t));
   std::vector<std::vector<std::string>> rows;
   for (double ss : g.sigma_s_m) {
     std::vector<std::string> r = {num(ss * 100.0, 3) + " cm"};
     for (double t : g.sigma_theta_deg) {
-      const auto* c = find(cells, g.fig7_landmarks, ss, t);
-      if (!c) {
-        r.push_back("-");
-        continue;
-      }
-      const auto& a = positionOf(*c, PositionEstimator::triangulation);
-      const auto& b = positionOf(*c, PositionEstimator::joint);
-      r.push_back(cellText(a.rmse_m * 100.0) + " (" + cellText(a.bias_m * 100.0, 2) + ") / " + cellText(b.rmse_m * 100.0) +
-                  " (" + cellText(b.bias_m * 100.0, 2) + ")");
+      const auto* c = find(cells, L, ss, t);
+      r.push_back(c ? text(*c) : "-");
     }
     rows.push_back(r);
   }
-  s += table(header, rows);
+  return table(header, rows);
+}
+
+/// Table of an L x sigma_s grid at the figures' sigma_theta.
+std::string landmarkTable(const std::vector<CellSummary>& cells, const StudyGrids& g, const CellText& text) {
+  std::vector<std::string> header = {"L"};
+  for (double ss : g.sigma_s_vs_landmarks_m) header.push_back(sigmaText(ss));
+  std::vector<std::vector<std::string>> rows;
+  for (int L : g.landmarks) {
+    std::vector<std::string> r = {std::to_string(L)};
+    for (double ss : g.sigma_s_vs_landmarks_m) {
+      const auto* c = find(cells, L, ss, g.sigma_theta_vs_landmarks_deg);
+      r.push_back(c ? text(*c) : "-");
+    }
+    rows.push_back(r);
+  }
+  return table(header, rows);
+}
+
+std::string ratioText(const CellSummary& c) {
+  std::string s;
+  for (Estimator e : kRatioEstimators) s += (s.empty() ? "" : " / ") + cellText(ratioOf(c, e).mse_ratio.median);
+  return s;
+}
+
+std::string summaryFig7(const std::vector<CellSummary>& cells, const StudyGrids& g) {
+  std::string s = "RMS position error in cm, triangulation (paper) / joint refinement (bias in brackets), L = " +
+                  std::to_string(g.fig7_landmarks) + ":\n\n";
+  s += gridTable(cells, g, g.fig7_landmarks, [](const CellSummary& c) {
+    const auto& a = positionOf(c, PositionEstimator::triangulation);
+    const auto& b = positionOf(c, PositionEstimator::joint);
+    return cellText(a.rmse_m * 100.0) + " (" + cellText(a.bias_m * 100.0, 2) + ") / " + cellText(b.rmse_m * 100.0) + " (" +
+           cellText(b.bias_m * 100.0, 2) + ")";
+  });
   // The paper: sigma_s below 10 cm matters, below 1 cm does not.
   s += "\nPaper (section 4.1): keeping σ_s below 10 cm matters, below 1 cm is not necessary. Growth of the RMS "
-       "error of the triangulation between σ_s values:\n\n";
+       "error between σ_s values:\n\n";
   std::vector<std::vector<std::string>> claim;
   for (double t : g.sigma_theta_deg) {
-    const double e1 = rmse(find(cells, g.fig7_landmarks, 0.001, t), PositionEstimator::triangulation);
-    const double e10 = rmse(find(cells, g.fig7_landmarks, 0.01, t), PositionEstimator::triangulation);
-    const double e100 = rmse(find(cells, g.fig7_landmarks, 0.1, t), PositionEstimator::triangulation);
-    const double j1 = rmse(find(cells, g.fig7_landmarks, 0.001, t), PositionEstimator::joint);
-    const double j10 = rmse(find(cells, g.fig7_landmarks, 0.01, t), PositionEstimator::joint);
-    const double j100 = rmse(find(cells, g.fig7_landmarks, 0.1, t), PositionEstimator::joint);
-    const bool known = std::isfinite(e1 + e10 + e100);
+    auto at = [&](double ss, PositionEstimator e) { return rmse(find(cells, g.fig7_landmarks, ss, t), e); };
+    const double e1 = at(0.001, PositionEstimator::triangulation), e10 = at(0.01, PositionEstimator::triangulation),
+                 e100 = at(0.1, PositionEstimator::triangulation);
+    const double j1 = at(0.001, PositionEstimator::joint), j10 = at(0.01, PositionEstimator::joint),
+                 j100 = at(0.1, PositionEstimator::joint);
     claim.push_back({thetaText(t), cellText(e10 / e1, 3) + " / " + cellText(j10 / j1, 3),
                      cellText(e100 / e10, 3) + " / " + cellText(j100 / j10, 3),
-                     known ? verdict(e10 / e1 < 1.5 && e100 / e10 > 1.5) : "-"});
+                     std::isfinite(e1 + e10 + e100) ? verdict(e10 / e1 < 1.5 && e100 / e10 > 1.5) : "-"});
   }
   s += table({"σ_θ", "1 mm → 1 cm (paper / joint)", "1 cm → 10 cm (paper / joint)", "paper's claim for the triangulation"}, claim);
   s += "\nThe claim is taken to hold at a σ_θ when the triangulation's RMS error grows by less than 1.5× from "
@@ -320,20 +345,10 @@ std::string summaryFig7(const std::vector<CellSummary>& cells, const StudyGrids&
 std::string summaryFig8(const std::vector<CellSummary>& cells, const StudyGrids& g) {
   const double t = g.sigma_theta_vs_landmarks_deg;
   std::string s = "RMS position error in cm, triangulation (paper) / joint refinement, " + thetaText(t) + ":\n\n";
-  std::vector<std::string> header = {"L"};
-  for (double ss : g.sigma_s_vs_landmarks_m) header.push_back(sigmaText(ss));
-  std::vector<std::vector<std::string>> rows;
-  for (int L : g.landmarks) {
-    std::vector<std::string> r = {std::to_string(L)};
-    for (double ss : g.sigma_s_vs_landmarks_m) {
-      const auto* c = find(cells, L, ss, t);
-      r.push_back(c ? cellText(rmse(c, PositionEstimator::triangulation) * 100.0) + " / " +
-                          cellText(rmse(c, PositionEstimator::joint) * 100.0)
-                    : "-");
-    }
-    rows.push_back(r);
-  }
-  s += table(header, rows);
+  s += landmarkTable(cells, g, [](const CellSummary& c) {
+    return cellText(rmse(&c, PositionEstimator::triangulation) * 100.0) + " / " +
+           cellText(rmse(&c, PositionEstimator::joint) * 100.0);
+  });
   const int lo = g.landmarks.front(), hi = g.landmarks.back();
   s += "\nPaper (section 4.1): about 5 landmarks suffice. RMS error at L = " + std::to_string(hi) + " relative to L = " +
        std::to_string(lo) + " and to L = 5 (1 when L = 5 is the largest):\n\n";
@@ -354,37 +369,22 @@ std::string summaryFig8(const std::vector<CellSummary>& cells, const StudyGrids&
   return s;
 }
 
-std::string ratioCell(const CellSummary* c) {
-  if (!c) return "-";
-  std::string s;
-  for (Estimator e : kRatioEstimators) s += (s.empty() ? "" : " / ") + cellText(medianRatio(c, e));
-  return s;
-}
-
 std::string summaryFig9(const std::vector<CellSummary>& cells, const StudyGrids& g) {
   std::string s;
+  for (int L : g.fig9_landmarks)
+    s += "Median MSE ratio, closed form (paper) / joint refinement / oracle, L = " + std::to_string(L) + ":\n\n" +
+         gridTable(cells, g, L, ratioText) + "\n";
   double best = 0.0, worst = 1e300;
   std::string best_at;
-  for (int L : g.fig9_landmarks) {
-    s += "Median MSE ratio, closed form (paper) / joint refinement / oracle, L = " + std::to_string(L) + ":\n\n";
-    std::vector<std::string> header = {"σ_s"};
-    for (double t : g.sigma_theta_deg) header.push_back(thetaText(t));
-    std::vector<std::vector<std::string>> rows;
-    for (double ss : g.sigma_s_m) {
-      std::vector<std::string> r = {num(ss * 100.0, 3) + " cm"};
-      for (double t : g.sigma_theta_deg) {
-        const auto* c = find(cells, L, ss, t);
-        r.push_back(ratioCell(c));
-        const double m = medianRatio(c, Estimator::closed_form);
-        if (std::isfinite(m) && m > best) {
-          best = m;
-          best_at = "L = " + std::to_string(L) + ", " + sigmaText(ss) + ", " + thetaText(t);
-        }
-        if (std::isfinite(m)) worst = std::min(worst, m);
-      }
-      rows.push_back(r);
+  for (const auto& c : cells) {
+    const double m = ratioOf(c, Estimator::closed_form).mse_ratio.median;
+    if (!std::isfinite(m)) continue;
+    worst = std::min(worst, m);
+    if (m > best) {
+      best = m;
+      best_at = "L = " + std::to_string(c.cell.landmarks) + ", " + sigmaText(c.cell.sigma_s_m) + ", " +
+                thetaText(rad2deg(c.cell.sigma_theta_rad));
     }
-    s += table(header, rows) + "\n";
   }
   s += "Paper (section 4.2): the ratio decays gradually with the noise, without abrupt drops, and may reach 100 for "
        "realistic noise. Here the closed form's median ratio ranges from " + cellText(worst) + " to " + cellText(best) +
@@ -401,98 +401,71 @@ std::string summaryFig9(const std::vector<CellSummary>& cells, const StudyGrids&
   }
   std::vector<std::string> h = {""};
   for (Estimator e : kRatioEstimators) h.push_back(estimatorLabel(e));
-  s += table(h, claim);
-  return s;
+  return s + table(h, claim);
+}
+
+/// Fraction of a cell's models with an order below 2 (lower) or above 2 (higher).
+double lowRate(const RatioSummary& q) { return orderRate(q, 0) + orderRate(q, 1); }
+double highRate(const RatioSummary& q) {
+  double high = 0.0;
+  for (int n = 3; n < static_cast<int>(q.order_counts.size()); ++n) high += orderRate(q, n);
+  return high;
 }
 
 std::string summaryFig10(const std::vector<CellSummary>& cells, const StudyGrids& g) {
+  const int L = g.fig10_landmarks;
   std::string s = "Rate of n̂ = 2 (the true order), closed form (paper) / joint refinement / oracle, L = " +
-                  std::to_string(g.fig10_landmarks) + ":\n\n";
-  std::vector<std::string> header = {"σ_s"};
-  for (double t : g.sigma_theta_deg) header.push_back(thetaText(t));
-  std::vector<std::vector<std::string>> rows;
-  std::array<std::size_t, kEstimators> wrong{}, wrong_one{}, wrong_high{};
-  for (double ss : g.sigma_s_m) {
-    std::vector<std::string> r = {num(ss * 100.0, 3) + " cm"};
-    for (double t : g.sigma_theta_deg) {
-      const auto* c = find(cells, g.fig10_landmarks, ss, t);
-      if (!c) {
-        r.push_back("-");
-        continue;
-      }
-      std::string x;
-      for (Estimator e : kRatioEstimators) {
-        const auto& q = ratioOf(*c, e);
-        x += (x.empty() ? "" : " / ") + percent(orderRate(q, 2));
-        const auto k = static_cast<std::size_t>(e);
-        for (std::size_t n = 0; n < q.order_counts.size(); ++n) {
-          if (n == 2) continue;
+                  std::to_string(L) + ":\n\n";
+  s += gridTable(cells, g, L, [](const CellSummary& c) {
+    std::string x;
+    for (Estimator e : kRatioEstimators) x += (x.empty() ? "" : " / ") + percent(orderRate(ratioOf(c, e), 2));
+    return x;
+  });
+  std::array<std::size_t, kEstimators> wrong{}, wrong_low{};
+  for (const auto& c : cells)
+    for (Estimator e : kRatioEstimators) {
+      const auto& q = ratioOf(c, e);
+      const auto k = static_cast<std::size_t>(e);
+      for (std::size_t n = 0; n < q.order_counts.size(); ++n)
+        if (n != 2) {
           wrong[k] += q.order_counts[n];
-          if (n < 2) wrong_one[k] += q.order_counts[n];
-          else wrong_high[k] += q.order_counts[n];
+          if (n < 2) wrong_low[k] += q.order_counts[n];
         }
-      }
-      r.push_back(x);
     }
-    rows.push_back(r);
-  }
-  s += table(header, rows);
   s += "\nPaper (section 4.2): the order is right at low noise and, as the noise grows, the selection turns "
        "conservative: every wrong order was n̂ = 1. Of the wrong orders over this grid:\n\n";
   std::vector<std::vector<std::string>> claim;
   for (Estimator e : kRatioEstimators) {
     const auto k = static_cast<std::size_t>(e);
-    claim.push_back({estimatorLabel(e), std::to_string(wrong[k]),
-                     wrong[k] ? percent(static_cast<double>(wrong_one[k]) / static_cast<double>(wrong[k])) : "-",
-                     wrong[k] ? percent(static_cast<double>(wrong_high[k]) / static_cast<double>(wrong[k])) : "-"});
+    const double w = static_cast<double>(wrong[k]);
+    claim.push_back({estimatorLabel(e), std::to_string(wrong[k]), wrong[k] ? percent(wrong_low[k] / w) : "-",
+                     wrong[k] ? percent((wrong[k] - wrong_low[k]) / w) : "-"});
   }
   s += table({"estimator", "wrong orders", "of which lower (n̂ ≤ 1)", "of which higher (n̂ ≥ 3)"}, claim);
   s += "\nRate of n̂ ≤ 1 / n̂ ≥ 3 of the closed form (paper):\n\n";
-  std::vector<std::vector<std::string>> low_high;
-  for (double ss : g.sigma_s_m) {
-    std::vector<std::string> r = {num(ss * 100.0, 3) + " cm"};
-    for (double t : g.sigma_theta_deg) {
-      const auto* c = find(cells, g.fig10_landmarks, ss, t);
-      if (!c) {
-        r.push_back("-");
-        continue;
-      }
-      const auto& q = ratioOf(*c, Estimator::closed_form);
-      double high = 0.0;
-      for (int n = 3; n < static_cast<int>(q.order_counts.size()); ++n) high += orderRate(q, n);
-      r.push_back(percent(orderRate(q, 0) + orderRate(q, 1)) + " / " + percent(high));
-    }
-    low_high.push_back(r);
-  }
-  s += table(header, low_high);
+  s += gridTable(cells, g, L, [](const CellSummary& c) {
+    const auto& q = ratioOf(c, Estimator::closed_form);
+    return percent(lowRate(q)) + " / " + percent(highRate(q));
+  });
   const auto cf = static_cast<std::size_t>(Estimator::closed_form);
-  const auto* quiet = find(cells, g.fig10_landmarks, g.sigma_s_m.front(), g.sigma_theta_deg.front());
-  const auto* noisy = find(cells, g.fig10_landmarks, g.sigma_s_m.back(), g.sigma_theta_deg.back());
+  const auto* quiet = find(cells, L, g.sigma_s_m.front(), g.sigma_theta_deg.front());
+  const auto* noisy = find(cells, L, g.sigma_s_m.back(), g.sigma_theta_deg.back());
   if (quiet && noisy) {
     const auto& a = ratioOf(*quiet, Estimator::closed_form);
     const auto& b = ratioOf(*noisy, Estimator::closed_form);
-    const double low_a = orderRate(a, 0) + orderRate(a, 1), low_b = orderRate(b, 0) + orderRate(b, 1);
     s += "\n- The closed form picks n̂ = 2 at low noise (" + percent(orderRate(a, 2)) + " in the quietest cell): " +
          verdict(orderRate(a, 2) > 0.9) + ".\n";
-    s += "- It turns conservative as the noise grows (n̂ ≤ 1 from " + percent(low_a) + " in the quietest cell to " +
-         percent(low_b) + " in the noisiest): " + verdict(low_b > low_a + 0.1) + ".\n";
+    s += "- It turns conservative as the noise grows (n̂ ≤ 1 from " + percent(lowRate(a)) + " in the quietest cell to " +
+         percent(lowRate(b)) + " in the noisiest): " + verdict(lowRate(b) > lowRate(a) + 0.1) + ".\n";
   }
-  s += "- Its wrong orders are mostly n̂ ≤ 1: " + verdict(wrong[cf] == 0 || 2 * wrong_one[cf] > wrong[cf]) + ".\n";
+  s += "- Its wrong orders are mostly n̂ ≤ 1: " + verdict(wrong[cf] == 0 || 2 * wrong_low[cf] > wrong[cf]) + ".\n";
   return s;
 }
 
 std::string summaryFig11(const std::vector<CellSummary>& cells, const StudyGrids& g) {
   const double t = g.sigma_theta_vs_landmarks_deg;
   std::string s = "Median MSE ratio, closed form (paper) / joint refinement / oracle, " + thetaText(t) + ":\n\n";
-  std::vector<std::string> header = {"L"};
-  for (double ss : g.sigma_s_vs_landmarks_m) header.push_back(sigmaText(ss));
-  std::vector<std::vector<std::string>> rows;
-  for (int L : g.landmarks) {
-    std::vector<std::string> r = {std::to_string(L)};
-    for (double ss : g.sigma_s_vs_landmarks_m) r.push_back(ratioCell(find(cells, L, ss, t)));
-    rows.push_back(r);
-  }
-  s += table(header, rows);
+  s += landmarkTable(cells, g, ratioText);
   s += "\nPaper (section 4.2): going from 1 to 3 landmarks helps noticeably, more landmarks do not help much; a "
        "smaller σ_s always helps. Gains of the median ratio:\n\n";
   std::vector<std::vector<std::string>> claim;

@@ -15,7 +15,8 @@ void PlacementConfig::validate() const {
     throw std::invalid_argument("PlacementConfig: need 0 <= min_lateral_m < max_lateral_m");
   if (!(margin_m >= 0.0) || !(min_spread_rad >= 0.0) || !(min_separation_m >= 0.0) || !(min_gap_rad >= 0.0))
     throw std::invalid_argument("PlacementConfig: margins and angles must be non-negative");
-  if (max_attempts < 1) throw std::invalid_argument("PlacementConfig: max_attempts must be >= 1");
+  if (max_attempts < 1 || max_restarts < 0)
+    throw std::invalid_argument("PlacementConfig: max_attempts must be >= 1 and max_restarts >= 0");
 }
 
 namespace {
@@ -55,22 +56,24 @@ std::vector<Cylinder> placeLandmarks(const PathSpec& path, int count, const Plac
   std::uniform_real_distribution<double> along(-config.margin_m, length + config.margin_m);
   std::uniform_real_distribution<double> across(config.min_lateral_m, config.max_lateral_m);
   std::uniform_int_distribution<int> side(0, 1);
-  std::vector<Cylinder> out;
-  for (int l = 0; l < count; ++l) {
-    bool done = false;
-    for (int attempt = 0; attempt < config.max_attempts && !done; ++attempt) {
-      const double u = along(rng), v = across(rng) * (side(rng) ? 1.0 : -1.0);
-      const Cylinder cand{path.start.x_m + u * c - v * s, path.start.y_m + u * s + v * c, config.radius_m};
-      if (acceptable(cand, out, stops, config)) {
-        out.push_back(cand);
-        done = true;
+  for (int restart = 0; restart <= config.max_restarts; ++restart) {
+    std::vector<Cylinder> out;
+    for (int l = 0; l < count; ++l) {
+      bool placed = false;
+      for (int attempt = 0; attempt < config.max_attempts && !placed; ++attempt) {
+        const double u = along(rng), v = across(rng) * (side(rng) ? 1.0 : -1.0);
+        const Cylinder cand{path.start.x_m + u * c - v * s, path.start.y_m + u * s + v * c, config.radius_m};
+        if (acceptable(cand, out, stops, config)) {
+          out.push_back(cand);
+          placed = true;
+        }
       }
+      if (!placed) break;
     }
-    if (!done)
-      throw std::runtime_error("placeLandmarks: could not place landmark " + std::to_string(l + 1) + " in " +
-                               std::to_string(config.max_attempts) + " draws; widen the region or lower the count");
+    if (static_cast<int>(out.size()) == count) return out;
   }
-  return out;
+  throw std::runtime_error("placeLandmarks: could not place " + std::to_string(count) + " landmarks in " +
+                           std::to_string(config.max_restarts + 1) + " layouts; widen the region or lower the count");
 }
 
 }  // namespace lidarcal::studies

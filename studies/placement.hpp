@@ -23,12 +23,15 @@ struct PlacementConfig {
   double min_spread_rad = 0.35;      ///< angle the path subtends at the landmark (20 degrees): triangulable
   double min_separation_m = 0.5;     ///< centre-to-centre distance beyond two radii, metres
   double min_gap_rad = 0.035;        ///< free angle between two landmarks seen from any stop (2 degrees): no occlusion
-  int max_attempts = 100000;         ///< candidate draws per landmark before giving up
+  int max_attempts = 2000;           ///< candidate draws per landmark before the layout is started again
+  int max_restarts = 100;            ///< layouts started again before giving up
   void validate() const;             ///< throws std::invalid_argument
 };
 
 /// Draws `count` landmarks around the commanded stops of `path` (only its commanded poses are
-/// used). Throws std::runtime_error when a landmark cannot be placed in max_attempts draws.
+/// used). When the landmarks placed so far leave no room for the next one, the layout is drawn
+/// again from the same stream (so a layout that needed this is not an extension of the smaller
+/// ones). Throws std::runtime_error when max_restarts layouts fail.
 std::vector<Cylinder> placeLandmarks(const PathSpec& path, int count, const PlacementConfig& config, std::mt19937_64& rng);
 
 }  // namespace lidarcal::studies

