@@ -1,7 +1,10 @@
 // `lidarcal montecarlo` end to end: the files it promises, the same bytes with 1 and 2 threads,
 // refusals of bad options, and an interruption that leaves nothing behind.
 
+#include <fcntl.h>
+#include <signal.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cstdlib>
@@ -33,7 +36,9 @@ TEST(CliMonteCarlo, WritesEveryFileAndTheCsvDoesNotDependOnTheThreadCount) {
     ASSERT_TRUE(fs::exists(fs::path(a) / f));
     EXPECT_EQ(test::readFile(fs::path(a) / f), test::readFile(fs::path(b) / f));
   }
-  if (std::system("command -v gnuplot >/dev/null 2>&1") == 0) EXPECT_TRUE(fs::exists(fs::path(a) / "fig10.png"));
+  if (std::system("command -v gnuplot >/dev/null 2>&1") == 0) {
+    EXPECT_TRUE(fs::exists(fs::path(a) / "fig10.png"));
+  }
   // One row per cell of the quick grid (3 sigma_s x 3 sigma_theta) under the header.
   const std::string csv = test::readFile(fs::path(a) / "fig10.csv");
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 10);
@@ -60,14 +65,35 @@ TEST(CliMonteCarlo, InterruptStopsCleanlyAndWritesNothing) {
   TempDir dir;
   const fs::path out = dir / "o";
   const fs::path err = dir / "err.txt";
-  // A study far too long to finish, interrupted after two seconds.
-  const std::string cmd = "'" + std::string(LIDARCAL_EXE) + "' montecarlo -q --study fig9 --trials 100000 --threads 2 --out '" +
-                          out.string() + "' 2>'" + err.string() + "' & pid=$!; sleep 2; kill -INT $pid; wait $pid";
-  const int status = std::system(cmd.c_str());
-  ASSERT_TRUE(WIFEXITED(status));
+  // A study far too long to finish, interrupted once it has started (its staging directory
+  // exists: the SIGINT handler is installed before it is created).
+  const pid_t pid = ::fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    const int fd = ::open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    ::dup2(fd, 2);
+    ::execl(LIDARCAL_EXE, LIDARCAL_EXE, "montecarlo", "-q", "--study", "fig9", "--trials", "100000", "--threads", "2",
+            "--out", out.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  auto staging = [&] {
+    for (const auto& e : fs::directory_iterator(dir.path()))
+      if (e.path().filename().string().rfind(".o.partial", 0) == 0) return true;
+    return false;
+  };
+  bool started = false;
+  for (int i = 0; i < 1200 && !started; ++i) {  // up to two minutes on a loaded machine
+    started = staging();
+    if (!started) ::usleep(100000);
+  }
+  ::kill(pid, SIGINT);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  ASSERT_TRUE(started) << "the study never started";
+  ASSERT_TRUE(WIFEXITED(status)) << "killed by a signal";
   EXPECT_EQ(WEXITSTATUS(status), 130);
   EXPECT_NE(test::readFile(err).find("nothing was written"), std::string::npos) << test::readFile(err);
-  // Neither the output nor a staging directory is left.
+  // Neither the output nor the staging directory is left.
   for (const auto& e : fs::directory_iterator(dir.path())) EXPECT_EQ(e.path().filename(), "err.txt") << e.path();
 }
 
