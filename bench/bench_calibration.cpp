@@ -1,8 +1,15 @@
 // Calibration cost (docs/RESULTS.md, "Calibration"): the paper's closed form and our joint
-// refinement on the same data, 20 stops x 5 landmarks, one scan per stop and ten.
+// refinement on the same data, 20 stops x 5 landmarks, one scan per stop and ten; and
+// `lidarcal run` on the bundled example next to the time to only read and write its PCD files.
 //   build/bench/bench_calibration --benchmark_min_time=1
 
+#include <cstdlib>
+#include <filesystem>
+
 #include <benchmark/benchmark.h>
+
+#include "io/pcd_scan.hpp"
+#include "io/sequence.hpp"
 
 #include "calibration/calibrate.hpp"
 #include "simulation/landmark_level.hpp"
@@ -48,6 +55,31 @@ void BM_Joint(benchmark::State& state) { run(state, calibration::Method::joint);
 
 BENCHMARK(BM_ClosedForm)->Arg(1)->Arg(10)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Joint)->Arg(1)->Arg(10)->Unit(benchmark::kMillisecond);
+
+const std::filesystem::path kExample = std::filesystem::path(LIDARCAL_SOURCE_DIR) / "data/example/scans";
+
+/// The main job on the bundled example (detect, calibrate, correct, report), as a process.
+void BM_RunExample(benchmark::State& state) {
+  const auto out = std::filesystem::temp_directory_path() / "lidarcal-bench-run";
+  const std::string cmd = std::string(LIDARCAL_EXE) + " run -q --no-truth " + kExample.string() + " --out " +
+                          out.string() + " --overwrite >/dev/null";
+  for (auto _ : state)
+    if (std::system(cmd.c_str()) != 0) state.SkipWithError("lidarcal run failed");
+  std::filesystem::remove_all(out);
+}
+
+/// The I/O floor: read every scan of the example and write it again (what correct must do).
+void BM_ReadWriteExample(benchmark::State& state) {
+  const auto seq = io::openSequence(kExample);
+  const auto out = std::filesystem::temp_directory_path() / "lidarcal-bench-io";
+  std::filesystem::create_directories(out);
+  for (auto _ : state)
+    for (const auto& h : seq.scans) io::writeScan(out / h.path.filename(), io::readScan(h.path));
+  std::filesystem::remove_all(out);
+}
+
+BENCHMARK(BM_RunExample)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_ReadWriteExample)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
 

@@ -94,6 +94,7 @@ void fillOrders(CalibrationModel& m, const OrderSelection& sel, std::size_t n) {
   m.orders.clear();
   for (const auto& row : sel.table) {
     OrderRow o;
+    o.invertible = row.admissible;
     o.order = row.order;
     o.alpha = row.alpha;
     o.aic = row.aic;
@@ -147,6 +148,14 @@ std::map<int, Eigen::Vector2d> rangeBearingCentres(const LandmarkObservations& o
     out[l.id] = count[l.id] > 0 ? Eigen::Vector2d(sum[l.id] / count[l.id]) : Eigen::Vector2d(l.x_m, l.y_m);
   }
   return out;
+}
+
+/// Orders whose f cannot be inverted over the sensor's reading window are not candidates: the
+/// filtering stage could not use them (and they only arise from overfitting).
+Admissible invertibleOver(double range_min_m, double range_max_m) {
+  return [=](const std::vector<double>& alpha) {
+    return alpha.size() >= 2 && invertsReadingWindow(BiasPolynomial{alpha}, range_min_m, range_max_m);
+  };
 }
 
 }  // namespace
@@ -274,7 +283,9 @@ CalibrationModel calibrate(const LandmarkObservations& obs, const CalibrationCon
     m.message = "only " + std::to_string(pairs.size()) + " landmark-stop distances: add stops or landmarks";
     return m;
   }
-  const OrderSelection sel = selectOrder(pairs, config.max_order, config.closed_form_rule);
+  const bool window_known = obs.range_max_m < 1e8;
+  const OrderSelection sel = selectOrder(pairs, config.max_order, config.closed_form_rule,
+                                         window_known ? invertibleOver(obs.range_min_m, obs.range_max_m) : Admissible{});
   fillOrders(m, sel, pairs.size());
   std::vector<double> d, y;
   for (const auto& p : scan_pairs) {
@@ -339,6 +350,8 @@ CalibrationModel calibrate(const LandmarkObservations& obs, const CalibrationCon
   from.radius_m = settled.radius_m;
   from.model = settled.model;
   jc.reselect = false;
+  jc.covariance = false;  // computed once, for the chosen order
+  jc.outer_iterations = std::min(jc.outer_iterations, 2);  // the noise law settled in pass 1
   std::vector<JointResult> runs;
   std::vector<OrderRow> rows;
   for (int n = 1; n <= config.max_order; ++n) {
@@ -354,19 +367,34 @@ CalibrationModel calibrate(const LandmarkObservations& obs, const CalibrationCon
     row.validation_mse_m2 = row.test_mse_m2 = std::numeric_limits<double>::quiet_NaN();
     rows.push_back(row);
   }
+  const Admissible ok_order = window_known ? invertibleOver(obs.range_min_m, obs.range_max_m) : Admissible{};
+  for (auto& row : rows) row.invertible = !ok_order || ok_order(row.alpha);
   std::size_t best_aic = 0, best_bic = 0;
-  for (std::size_t i = 1; i < runs.size(); ++i) {
-    if (runs[i].aic < runs[best_aic].aic) best_aic = i;
-    if (runs[i].bic < runs[best_bic].bic) best_bic = i;
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    if (!rows[i].invertible) continue;
+    if (!rows[best_aic].invertible || runs[i].aic < runs[best_aic].aic) best_aic = i;
+    if (!rows[best_bic].invertible || runs[i].bic < runs[best_bic].bic) best_bic = i;
   }
   std::size_t chosen = best_aic;
   if (config.joint_rule == JointOrderRule::bic) chosen = best_bic;
   if (config.joint_rule == JointOrderRule::aic_parsimonious)
     for (std::size_t i = 0; i < runs.size(); ++i)
-      if (runs[i].aic <= runs[best_aic].aic + 2.0) {
+      if (rows[i].invertible && runs[i].aic <= runs[best_aic].aic + 2.0) {
         chosen = i;
         break;
       }
+  if (config.joint.covariance && !runs[chosen].poses.empty()) {
+    // Covariance at the chosen order: one more (already converged) solve with it switched on.
+    JointInit at = from;
+    at.poses = runs[chosen].poses;
+    at.centres = runs[chosen].centres;
+    at.radius_m = runs[chosen].radius_m;
+    at.model = runs[chosen].model;
+    jc.order = static_cast<int>(chosen) + 1;
+    jc.covariance = true;
+    jc.outer_iterations = 1;
+    runs[chosen] = refineJoint(obs, at, jc);
+  }
   const JointResult& j = runs[chosen];
   if (j.poses.empty()) {
     m.status = "joint_failed";
@@ -386,6 +414,8 @@ CalibrationModel calibrate(const LandmarkObservations& obs, const CalibrationCon
   m.stop_poses = j.poses;
   m.heading_scatter_rad = j.heading_scatter_rad;
   m.residual_rms_m = j.residual_rms_m;
+  // The noise estimators side by side, on the joint refinement's readings and distances.
+  fillNoiseFits(m, m.model.bias.order(), j.distances_m, j.readings_m, batches);
   m.alpha_covariance.assign(j.alpha_covariance.data(), j.alpha_covariance.data() + j.alpha_covariance.size());
   for (auto& c : m.landmarks) {
     auto it = j.centres.find(c.id);
@@ -405,28 +435,52 @@ CalibrationModel calibrate(const LandmarkObservations& obs, const CalibrationCon
 }
 
 CalibrationModel calibrateAgainstTruth(const std::vector<RangePair>& pairs, const CalibrationConfig& config,
-                                       const std::vector<std::vector<double>>& batches) {
+                                       const std::vector<std::vector<double>>& batches, double range_min_m,
+                                       double range_max_m) {
   config.validate();
   CalibrationModel m;
   m.method = "oracle";
+  m.model.range_min_m = range_min_m;
+  m.model.range_max_m = range_max_m;
   if (pairs.size() < static_cast<std::size_t>(config.max_order) + 3) {
     m.status = "too_few_observations";
     m.message = "too few readings with a known distance";
     return m;
   }
-  const OrderSelection sel = selectOrder(pairs, config.max_order, config.closed_form_rule);
+  const Admissible window = range_max_m < 1e8 ? invertibleOver(range_min_m, range_max_m) : Admissible{};
+  const OrderSelection sel = selectOrder(pairs, config.max_order, config.closed_form_rule, window);
   fillOrders(m, sel, pairs.size());
-  const int order = std::max(sel.chosen, 1);
   std::vector<double> d, y;
   for (const auto& p : pairs) {
     d.push_back(p.d_m);
     y.push_back(p.y_m);
   }
-  m.model.bias.alpha = sel.table[static_cast<std::size_t>(std::min<int>(order, static_cast<int>(sel.table.size()) - 1))].alpha;
+  int order = std::max(sel.chosen, 1);
+  if (config.noise == NoiseKind::squared) {
+    // With known distances the oracle is seed 004's estimator: full ML of model (1) for every
+    // order (eqs. 18-20, from the closed form eqs. 21-26) and the order by AIC on that likelihood.
+    double best = std::numeric_limits<double>::infinity();
+    for (auto& row : m.orders) {
+      if (row.order < 1) continue;
+      const Seed004Fit cf = fitSeed004ClosedForm(d, y, row.order);
+      const Seed004Fit ml = fitSeed004ML(d, y, cf.alpha);
+      const double k = row.order + 2.0;
+      row.alpha = ml.alpha;
+      row.aic = 2.0 * k + 2.0 * ml.neg_log_likelihood;
+      row.bic = k * std::log(static_cast<double>(d.size())) + 2.0 * ml.neg_log_likelihood;
+      row.invertible = !window || window(row.alpha);
+      if (row.invertible && row.aic < best) {
+        best = row.aic;
+        order = row.order;
+      }
+    }
+    m.order_aic = order;
+    m.order_rule = "aic (seed 004 ML)";
+    m.model.bias.alpha = m.orders[static_cast<std::size_t>(order)].alpha;
+  } else {
+    m.model.bias.alpha = sel.table[static_cast<std::size_t>(std::min<int>(order, static_cast<int>(sel.table.size()) - 1))].alpha;
+  }
   fillNoiseFits(m, order, d, y, batches);
-  // With known distances the oracle is seed 004's estimator: full ML of model (1) at the
-  // AIC order (eqs. 18-20) when the noise law is the squared one; least squares otherwise.
-  if (config.noise == NoiseKind::squared) m.model.bias.alpha = m.noise_fits.seed004_ml_alpha;
   m.model.noise = fitNoiseLaw(config.noise, order, m.model.bias, d, y);
   m.residual_rms_m = rmsResidual(m.model.bias, d, y);
   m.readings = d.size();

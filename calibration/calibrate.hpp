@@ -52,9 +52,11 @@ double landmarkRadius(const LandmarkObservations& obs);
 CalibrationModel calibrate(const LandmarkObservations& obs, const CalibrationConfig& config);
 
 /// The oracle of seed 004: the same fits against known distances (pairs' d_m are true).
-/// `batches` (optional) feed the noise-exponent test.
+/// `batches` (optional) feed the noise-exponent test; orders that cannot be inverted over the
+/// reading window [range_min_m, range_max_m] are not chosen (no check with the defaults).
 CalibrationModel calibrateAgainstTruth(const std::vector<RangePair>& pairs, const CalibrationConfig& config,
-                                       const std::vector<std::vector<double>>& batches = {});
+                                       const std::vector<std::vector<double>>& batches = {}, double range_min_m = 0.0,
+                                       double range_max_m = 1e9);
 
 /// Readings grouped by constant true distance: (stop, landmark, beam) across the scans of a stop.
 std::vector<std::vector<double>> constantDistanceBatches(const LandmarkObservations& obs);

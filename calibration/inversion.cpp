@@ -77,6 +77,35 @@ bool isMonotone(const BiasPolynomial& f, double d_min_m, double d_max_m, double*
   return true;
 }
 
+bool invertsReadingWindow(const BiasPolynomial& f, double y_min_m, double y_max_m, double* where) {
+  // Distances whose readings fall in the window: from where f first reaches y_min (or 0) to
+  // where it first reaches y_max. f must rise over all of it.
+  const double d_end = 4.0 * std::max(y_max_m, 0.1);
+  double d_start = 0.0;
+  if (f(0.0) < y_min_m) {
+    for (double r : realRoots([&] {
+           auto c = f.alpha;
+           c[0] -= y_min_m;
+           return c;
+         }()))
+      if (r > 0.0 && r < d_end) {
+        d_start = d_start == 0.0 ? r : std::min(d_start, r);
+      }
+  }
+  double d_stop = d_end;
+  {
+    auto c = f.alpha;
+    c[0] -= y_max_m;
+    for (double r : realRoots(c))
+      if (r > d_start && r < d_stop) d_stop = r;
+  }
+  if (d_stop == d_end && f(d_end) < y_max_m) {
+    if (where) *where = d_end;
+    return false;
+  }
+  return isMonotone(f, d_start, d_stop, where);
+}
+
 RangeInverter::RangeInverter(const RangeModel& model, const InversionConfig& config) : model_(model), config_(config) {
   if (model_.bias.order() < 1 || (model_.bias.order() == 1 && model_.bias.alpha[1] == 0.0))
     throw std::invalid_argument("RangeInverter: a bias polynomial of order 0 cannot be inverted");

@@ -43,7 +43,12 @@ class RangeInverter {
 };
 
 /// Whether f is strictly increasing on [d_min, d_max] (else the inversion is ambiguous);
-/// `where` receives a distance at which f' <= 0.
+/// `where` receives the first distance at which f' <= 0.
 bool isMonotone(const BiasPolynomial& f, double d_min_m, double d_max_m, double* where = nullptr);
+
+/// Whether every reading in [y_min, y_max] has exactly one distance: f increases from 0 until
+/// it passes y_max. `where` receives the first distance at which f' <= 0 while f < y_max (or
+/// the largest distance searched, 4 y_max, when f never reaches y_max).
+bool invertsReadingWindow(const BiasPolynomial& f, double y_min_m, double y_max_m, double* where = nullptr);
 
 }  // namespace lidarcal::calibration

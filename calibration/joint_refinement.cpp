@@ -133,7 +133,12 @@ JointResult refineJoint(const LandmarkObservations& obs, const JointInit& init, 
     return rayCircleDistance(p[0], p[1], p[2] + r.angle_rad, c[0], c[1], radius);
   };
 
-  double previous_scale = -1.0;
+  // Size of the noise law, to tell when its re-estimation has settled.
+  auto noiseScale = [&](const NoiseModel& n) {
+    if (n.kind == NoiseKind::polynomial) return n.beta.empty() ? 0.0 : std::abs(n.beta.front()) + std::abs(n.beta.back());
+    return n.sigma_e;
+  };
+  double previous_scale = noiseScale(out.model.noise);
   // Iteration 0 settles the geometry (poses, centres, radius) with the starting bias held;
   // later iterations free everything and re-estimate the noise law in between.
   for (int outer = 0; outer <= config.outer_iterations; ++outer) {
@@ -170,8 +175,7 @@ JointResult refineJoint(const LandmarkObservations& obs, const JointInit& init, 
     if (outer == 0) problem.SetParameterBlockConstant(alpha.data());
 
     ceres::Solver::Options options;
-    options.linear_solver_type =
-        config.linear_solver == JointLinearSolver::dense_schur ? ceres::DENSE_SCHUR : ceres::DENSE_QR;
+    options.linear_solver_type = ceres::DENSE_SCHUR;  // eliminates the pose or centre blocks
     options.max_num_iterations = config.max_solver_iterations;
     options.function_tolerance = 1e-10;
     options.parameter_tolerance = 1e-10;
@@ -199,7 +203,6 @@ JointResult refineJoint(const LandmarkObservations& obs, const JointInit& init, 
         rin.push_back(res);
       }
     }
-    double scale = 0.0;
     switch (config.noise) {
       case NoiseKind::squared: {
         double s = 0.0;
@@ -207,20 +210,18 @@ JointResult refineJoint(const LandmarkObservations& obs, const JointInit& init, 
           const double f = current.bias(din[i]);
           s += rin[i] * rin[i] / (f * f * f * f);
         }
-        out.model.noise.sigma_e = scale = std::sqrt(s / static_cast<double>(std::max<std::size_t>(din.size(), 1)));
+        out.model.noise.sigma_e = std::sqrt(s / static_cast<double>(std::max<std::size_t>(din.size(), 1)));
         break;
       }
       case NoiseKind::constant: {
         double s = 0.0;
         for (double v : rin) s += v * v;
-        out.model.noise.sigma_e = scale = std::sqrt(s / static_cast<double>(std::max<std::size_t>(rin.size(), 1)));
+        out.model.noise.sigma_e = std::sqrt(s / static_cast<double>(std::max<std::size_t>(rin.size(), 1)));
         break;
       }
-      default:
-        out.model.noise.beta = fitNoisePolynomial(din, rin, config.noise_order);
-        scale = std::abs(out.model.noise.beta[0]) + std::abs(out.model.noise.beta.back());
-        break;
+      default: out.model.noise.beta = fitNoisePolynomial(din, rin, config.noise_order); break;
     }
+    const double scale = noiseScale(out.model.noise);
     if (previous_scale > 0.0 && std::abs(scale - previous_scale) <= 1e-2 * previous_scale) break;
     previous_scale = scale;
     if (outer == config.outer_iterations) {
@@ -253,6 +254,9 @@ JointResult refineJoint(const LandmarkObservations& obs, const JointInit& init, 
     if (std::abs(r) > config.huber_sigmas * 2.0) ++out.outliers;
   }
   out.residual_rms_m = std::sqrt(out.residual_rms_m / static_cast<double>(readings.size()));
+  out.distances_m = d;
+  out.readings_m.reserve(readings.size());
+  for (const auto& r : readings) out.readings_m.push_back(r.y_m);
   const double k = static_cast<double>(config.order + 1) +
                    (config.noise == NoiseKind::polynomial ? config.noise_order + 1.0 : 1.0) + (config.estimate_radius ? 1.0 : 0.0);
   out.aic = 2.0 * k + 2.0 * out.neg_log_likelihood;

@@ -19,12 +19,6 @@
 
 namespace lidarcal::calibration {
 
-/// Linear solver of each Gauss-Newton step of the joint refinement.
-enum class JointLinearSolver {
-  dense_qr,     ///< dense QR of the whole Jacobian
-  dense_schur,  ///< Schur complement on an independent set of blocks (Ceres picks it): same solution, several times faster with many stops
-};
-
 struct JointConfig {
   int order = 2;                  ///< bias polynomial order n (>= 1)
   NoiseKind noise = NoiseKind::squared;  ///< noise law re-estimated between solves: squared, polynomial or constant
@@ -38,7 +32,6 @@ struct JointConfig {
   int outer_iterations = 6;       ///< noise re-estimations at most
   int max_solver_iterations = 200;  ///< Ceres iterations per solve
   bool covariance = true;         ///< compute the covariance of the bias coefficients
-  JointLinearSolver linear_solver = JointLinearSolver::dense_qr;  ///< see JointLinearSolver
   void validate() const;          ///< throws std::invalid_argument
 };
 
@@ -62,6 +55,8 @@ struct JointResult {
   double heading_scatter_rad = 0.0;        ///< RMS of refined minus commanded heading
   std::size_t readings = 0;                ///< beam readings used
   double residual_rms_m = 0.0;             ///< RMS of reading minus f(predicted distance)
+  std::vector<double> distances_m;         ///< predicted distance of every reading used, at the solution
+  std::vector<double> readings_m;          ///< the readings themselves (same order)
   std::size_t outliers = 0;                ///< readings beyond the Huber threshold at the end
   double neg_log_likelihood = 0.0;         ///< Gaussian NLL of the readings at the solution
   double aic = 0.0;                        ///< 2 k + 2 NLL, k = bias + noise + radius parameters

@@ -163,7 +163,7 @@ std::vector<double> fitPolynomial(const std::vector<double>& d, const std::vecto
   return unscale(c, mean, spread);
 }
 
-OrderSelection selectOrder(const std::vector<RangePair>& pairs, int n_max, OrderRule rule) {
+OrderSelection selectOrder(const std::vector<RangePair>& pairs, int n_max, OrderRule rule, const Admissible& admissible) {
   if (n_max < 0) throw std::invalid_argument("selectOrder: negative n_max");
   std::vector<double> d_all, y_all, d_fit, y_fit;
   for (const auto& p : pairs) {
@@ -196,11 +196,12 @@ OrderSelection selectOrder(const std::vector<RangePair>& pairs, int n_max, Order
     } else {
       row.validation_mse_m2 = row.test_mse_m2 = std::numeric_limits<double>::quiet_NaN();
     }
-    if (row.aic < best_aic) {
+    row.admissible = !admissible || admissible(row.alpha);
+    if (row.admissible && row.aic < best_aic) {
       best_aic = row.aic;
       sel.order_aic = order;
     }
-    if (row.validation_mse_m2 < best_val) {
+    if (row.admissible && row.validation_mse_m2 < best_val) {
       best_val = row.validation_mse_m2;
       sel.order_validation = order;
     }

@@ -3,6 +3,7 @@
 // linear least squares, eqs. 26-28; order by AIC or held-out validation) and seed 004
 // section 5 (noise sigma_e f(d)^2: closed-form approximation eqs. 21-26, full ML eqs. 18-20).
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -33,6 +34,7 @@ struct OrderFit {
   double aic = 0.0;                   ///< 2k + N (ln(2 pi RSS/N) + 1), k = n + 2 (eq. 4, Gaussian)
   double validation_mse_m2 = 0.0;     ///< fitted on part 0, mean squared error on part 1
   double test_mse_m2 = 0.0;           ///< fitted on part 0, mean squared error on part 2
+  bool admissible = true;             ///< passes the caller's test (e.g. invertible over the readings)
 };
 
 struct OrderSelection {
@@ -43,8 +45,12 @@ struct OrderSelection {
   OrderRule rule = OrderRule::aic;
 };
 
-/// Fits orders 0..n_max and selects one (needs at least n_max + 2 pairs in each part used).
-OrderSelection selectOrder(const std::vector<RangePair>& pairs, int n_max, OrderRule rule);
+/// Whether a fitted polynomial may be chosen (e.g. it must be invertible over the readings).
+using Admissible = std::function<bool(const std::vector<double>& alpha)>;
+
+/// Fits orders 0..n_max and selects one among the admissible (all, when no test is given).
+OrderSelection selectOrder(const std::vector<RangePair>& pairs, int n_max, OrderRule rule,
+                           const Admissible& admissible = {});
 
 /// Seed 000's noise form: sigma(d) = |sum_i beta_i d^i| fitted by maximum likelihood to
 /// residuals r_i = y_i - f(d_i) (Ceres, started from a least-squares fit of |r| sqrt(pi/2)).

@@ -20,6 +20,7 @@ struct OrderRow {
   double bic = 0.0;                ///< Bayesian information criterion (lower is better)
   double validation_mse_m2 = 0.0;  ///< fit on part 1 of 3, error on part 2 (NaN when not computed)
   double test_mse_m2 = 0.0;        ///< fit on part 1 of 3, error on part 3 (NaN when not computed)
+  bool invertible = true;          ///< f maps the sensor's reading window to distances one to one
 };
 
 /// A landmark as calibrated.

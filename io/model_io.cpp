@@ -34,7 +34,8 @@ void writeModel(const std::filesystem::path& file, const CalibrationModel& m) {
                            {"aic", number(o.aic)},
                            {"bic", number(o.bic)},
                            {"validation_mse_m2", number(o.validation_mse_m2)},
-                           {"test_mse_m2", number(o.test_mse_m2)}});
+                           {"test_mse_m2", number(o.test_mse_m2)},
+                           {"invertible", o.invertible}});
   ojson landmarks = ojson::array();
   for (const auto& l : m.landmarks)
     landmarks.push_back(ojson{{"id", l.id},

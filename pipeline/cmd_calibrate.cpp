@@ -6,6 +6,7 @@
 #include <CLI/CLI.hpp>
 
 #include "common/errors.hpp"
+#include "io/atomic_file.hpp"
 #include "io/model_io.hpp"
 #include "pipeline/cli_options.hpp"
 #include "pipeline/commands.hpp"

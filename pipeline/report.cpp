@@ -13,9 +13,11 @@
 namespace lidarcal::pipeline {
 namespace {
 
-std::string fmt(const char* f, double v) {
+/// v with `digits` decimals (and a sign when `sign`).
+std::string num(double v, int digits, bool sign = false) {
   char buf[64];
-  std::snprintf(buf, sizeof buf, f, v);
+  if (sign) std::snprintf(buf, sizeof buf, "%+.*f", digits, v);
+  else std::snprintf(buf, sizeof buf, "%.*f", digits, v);
   return buf;
 }
 
@@ -24,7 +26,7 @@ std::string polynomialText(const std::vector<double>& a) {
   for (std::size_t i = 0; i < a.size(); ++i) {
     if (i) s += a[i] < 0 ? " - " : " + ";
     else if (a[i] < 0) s += "-";
-    s += fmt("%.5f", std::abs(a[i]));
+    s += num(std::abs(a[i]), 5);
     if (i == 1) s += " d";
     if (i > 1) s += " d^" + std::to_string(i);
   }
@@ -34,10 +36,10 @@ std::string polynomialText(const std::vector<double>& a) {
 std::string noiseText(const NoiseModel& n, const BiasPolynomial& f) {
   switch (n.kind) {
     case NoiseKind::squared:
-      return "sigma(d) = " + fmt("%.5f", n.sigma_e) + " f(d)^2 (seed 004 eq. 1): " + fmt("%.1f", 1000 * n.stddev(1.0, f)) +
-             " mm at 1 m, " + fmt("%.1f", 1000 * n.stddev(3.0, f)) + " mm at 3 m";
+      return "sigma(d) = " + num(n.sigma_e, 5) + " f(d)^2 (seed 004 eq. 1): " + num(1000 * n.stddev(1.0, f), 1) +
+             " mm at 1 m, " + num(1000 * n.stddev(3.0, f), 1) + " mm at 3 m";
     case NoiseKind::polynomial: return "sigma(d) = |" + polynomialText(n.beta) + "| (seed 000 eq. 3)";
-    case NoiseKind::constant: return "sigma = " + fmt("%.4f", n.sigma_e) + " m";
+    case NoiseKind::constant: return "sigma = " + num(n.sigma_e, 4) + " m";
     default: return toString(n.kind);
   }
 }
@@ -116,16 +118,16 @@ PlotData plotData(const LandmarkObservations& obs, const CalibrationModel& m) {
   return p;
 }
 
-constexpr const char* kScript = R"(set terminal pngcairo size 900,650 font "DejaVu Sans,11"
+constexpr const char* kScript = R"GP(set terminal pngcairo size 900,650 font "DejaVu Sans,11"
 set grid
 set key top left
 set output "distance.png"
-set title "Readings against the distance estimated from the landmarks"
+set title "Range error of the raw readings against the distance estimated from the landmarks"
 set xlabel "estimated true distance d [m]"
-set ylabel "raw reading [m]"
-plot "distance.dat" using 1:2 with points pt 7 ps 0.3 lc rgb "#8899bb" title "readings on landmarks", \
-     "curve.dat" using 1:2 with lines lw 2 lc rgb "#cc3311" title "fitted f(d)", \
-     "curve.dat" using 1:3 with lines dt 2 lc rgb "black" title "ideal (reading = d)"
+set ylabel "raw reading - d [m]"
+plot "distance.dat" using 1:($2-$1) with points pt 7 ps 0.3 lc rgb "#8899bb" title "readings on landmarks", \
+     "curve.dat" using 1:($2-$1) with lines lw 2 lc rgb "#cc3311" title "fitted bias f(d) - d", \
+     0 with lines dt 2 lc rgb "black" title "ideal (no error)"
 set output "noise.png"
 set title "Noise against distance"
 set xlabel "estimated true distance d [m]"
@@ -142,14 +144,14 @@ plot "circles.dat" using 1:2 with lines lw 2 lc rgb "#999999" title "landmarks (
      "raw.dat" using 1:2 with points pt 2 ps 0.6 lc rgb "#cc3311" title "raw", \
      "corrected.dat" using 1:2 with points pt 6 ps 0.6 lc rgb "#009944" title "corrected", \
      "stops.dat" using 1:2 with points pt 7 ps 0.8 lc rgb "#0044aa" title "stops"
-)";
+)GP";
 
 std::string comparisonRow(const ComparedModel& c) {
   const auto& l = c.evaluation.landmarks;
   const auto& a = c.evaluation.all;
-  return "| " + c.name + " | " + std::to_string(c.model.model.bias.order()) + " | " + fmt("%.2f", l.mse_ratio) + " | " +
-         fmt("%.2f", a.mse_ratio) + " | " + fmt("%.2f", 1000 * std::sqrt(l.mse_corrected_m2)) + " | " +
-         fmt("%.5f", a.nmse_corrected) + " |\n";
+  return "| " + c.name + " | " + std::to_string(c.model.model.bias.order()) + " | " + num(l.mse_ratio, 2) + " | " +
+         num(a.mse_ratio, 2) + " | " + num(1000 * std::sqrt(l.mse_corrected_m2), 2) + " | " +
+         num(a.nmse_corrected, 5) + " |\n";
 }
 
 }  // namespace
@@ -172,18 +174,18 @@ void writeReport(const std::filesystem::path& dir, const ReportInputs& in) {
      << ")\n";
   md << "- bias: reading = f(d) = " << polynomialText(m.model.bias.alpha) << "  (d = true distance in metres)\n";
   md << "- noise: " << noiseText(m.model.noise, m.model.bias) << "\n";
-  md << "- bearing noise sigma_theta = " << fmt("%.3f", rad2deg(m.sigma_theta_rad)) << " deg";
+  md << "- bearing noise sigma_theta = " << num(rad2deg(m.sigma_theta_rad), 3) << " deg";
   if (m.method == "joint")
-    md << "; stop poses moved by " << fmt("%.1f", 1000 * m.pose_scatter_m) << " mm and "
-       << fmt("%.2f", rad2deg(m.heading_scatter_rad)) << " deg (RMS) from the commanded ones";
+    md << "; stop poses moved by " << num(1000 * m.pose_scatter_m, 1) << " mm and "
+       << num(rad2deg(m.heading_scatter_rad), 2) << " deg (RMS) from the commanded ones";
   md << "\n";
   if (!m.message.empty()) md << "- note: " << m.message << "\n";
   md << "\nWhat the raw sensor reads at a few true distances, and the error it makes:\n\n";
   md << "| true distance | raw reading | error | noise (1 sigma) |\n|---|---|---|---|\n";
   for (double d : {0.5, 1.0, 2.0, 3.0, 4.0, 5.0}) {
     if (d > m.model.range_max_m) break;
-    md << "| " << fmt("%.1f", d) << " m | " << fmt("%.3f", m.model.bias(d)) << " m | "
-       << fmt("%+.1f", 1000 * (m.model.bias(d) - d)) << " mm | " << fmt("%.1f", 1000 * m.model.noise.stddev(d, m.model.bias))
+    md << "| " << num(d, 1) << " m | " << num(m.model.bias(d), 3) << " m | "
+       << num(1000 * (m.model.bias(d) - d), 1, true) << " mm | " << num(1000 * m.model.noise.stddev(d, m.model.bias), 1)
        << " mm |\n";
   }
   md << "\n`lidarcal correct` inverts f for every point (seed 004 eq. 30) and moves it along its beam.\n";
@@ -193,8 +195,8 @@ void writeReport(const std::filesystem::path& dir, const ReportInputs& in) {
     md << "| model | order | MSE ratio, landmarks (eq. 31) | MSE ratio, all returns | RMS error after, landmarks [mm] | "
           "normalised MSE after (seed 004 eq. 31) |\n|---|---|---|---|---|---|\n";
     const auto& first = in.compared.front().evaluation;
-    md << "| raw readings | - | 1.00 | 1.00 | " << fmt("%.2f", 1000 * std::sqrt(first.landmarks.mse_raw_m2)) << " | "
-       << fmt("%.5f", first.all.nmse_raw) << " |\n";
+    md << "| raw readings | - | 1.00 | 1.00 | " << num(1000 * std::sqrt(first.landmarks.mse_raw_m2), 2) << " | "
+       << num(first.all.nmse_raw, 5) << " |\n";
     for (const auto& c : in.compared) md << comparisonRow(c);
   }
 
@@ -224,9 +226,9 @@ void writeReport(const std::filesystem::path& dir, const ReportInputs& in) {
 
   md << "\n## Order selection\n\n| order | alpha | AIC | BIC | validation MSE [mm^2] | test MSE [mm^2] |\n|---|---|---|---|---|---|\n";
   for (const auto& o : m.orders)
-    md << "| " << o.order << " | " << polynomialText(o.alpha) << " | " << fmt("%.1f", o.aic) << " | " << fmt("%.1f", o.bic)
-       << " | " << (std::isfinite(o.validation_mse_m2) ? fmt("%.2f", 1e6 * o.validation_mse_m2) : "-") << " | "
-       << (std::isfinite(o.test_mse_m2) ? fmt("%.2f", 1e6 * o.test_mse_m2) : "-") << " |\n";
+    md << "| " << o.order << " | " << polynomialText(o.alpha) << " | " << num(o.aic, 1) << " | " << num(o.bic, 1)
+       << " | " << (std::isfinite(o.validation_mse_m2) ? num(1e6 * o.validation_mse_m2, 2) : "-") << " | "
+       << (std::isfinite(o.test_mse_m2) ? num(1e6 * o.test_mse_m2, 2) : "-") << " |\n";
   md << "\nAIC picks order " << m.order_aic;
   if (m.order_validation >= 0) md << ", held-out validation order " << m.order_validation;
   md << ".\n";
@@ -236,18 +238,18 @@ void writeReport(const std::filesystem::path& dir, const ReportInputs& in) {
   md << "| estimator | result |\n|---|---|\n";
   md << "| seed 000 polynomial noise, ML | sigma(d) = |" << polynomialText(nf.seed000_beta) << "| |\n";
   md << "| seed 004 closed form (eqs. 21-26) | f = " << polynomialText(nf.seed004_cf_alpha) << ", sigma_e = "
-     << fmt("%.5f", nf.seed004_cf_sigma_e) << " |\n";
+     << num(nf.seed004_cf_sigma_e, 5) << " |\n";
   md << "| seed 004 full ML (eqs. 18-20) | f = " << polynomialText(nf.seed004_ml_alpha) << ", sigma_e = "
-     << fmt("%.5f", nf.seed004_ml_sigma_e) << " |\n";
+     << num(nf.seed004_ml_sigma_e, 5) << " |\n";
   if (nf.exponent_best >= 0) {
     md << "\nSeed 004's noise-exponent test (eqs. 10-15) on " << nf.exponent_batches
        << " constant-distance batches (one beam over the scans of a stop): log-likelihood of y = f + f^k e for k = 0..3: ";
-    for (int k = 0; k < 4; ++k) md << (k ? ", " : "") << fmt("%.1f", nf.exponent_loglik[static_cast<std::size_t>(k)]);
+    for (int k = 0; k < 4; ++k) md << (k ? ", " : "") << num(nf.exponent_loglik[static_cast<std::size_t>(k)], 1);
     md << "; best k = **" << nf.exponent_best << "**.\n";
   }
   md << "\n## Landmarks\n\n| id | x [m] | y [m] | radius [m] | stops | status |\n|---|---|---|---|---|---|\n";
   for (const auto& l : m.landmarks)
-    md << "| " << l.id << " | " << fmt("%.3f", l.x_m) << " | " << fmt("%.3f", l.y_m) << " | " << fmt("%.3f", l.radius_m)
+    md << "| " << l.id << " | " << num(l.x_m, 3) << " | " << num(l.y_m, 3) << " | " << num(l.radius_m, 3)
        << " | " << l.stops << " | " << l.status << " |\n";
   if (!in.command.empty()) md << "\nProduced by `" << in.command << "`.\n";
   io::writeTextAtomically(dir / "report.md", md.str());

@@ -33,10 +33,10 @@ SequenceCalibration calibrateSequence(const io::Sequence& seq, const detectors::
 CalibrationModel calibrateOracle(const io::Sequence& raw, const SimulationTruth& truth, double scale,
                                  const calibration::CalibrationConfig& config) {
   const auto pairs = truthPairs(raw, truth, scale);
-  CalibrationModel m = calibration::calibrateAgainstTruth(pairs, config, truthBatches(raw, truth));
+  const auto& sensor = truth.truth.scene.sensor.range;
+  CalibrationModel m =
+      calibration::calibrateAgainstTruth(pairs, config, truthBatches(raw, truth), sensor.range_min_m, sensor.range_max_m);
   m.method = scale == 1.0 ? "oracle" : "oracle-commanded";
-  m.model.range_min_m = truth.truth.scene.sensor.range.range_min_m;
-  m.model.range_max_m = truth.truth.scene.sensor.range.range_max_m;
   m.beams = truth.truth.scene.sensor.beams;
   m.sensor_name = truth.truth.scene.sensor.name;
   for (const auto& s : truth.truth.stops) m.stop_poses.push_back(scale == 1.0 ? s.actual : s.commanded);
@@ -73,11 +73,10 @@ void checkModelFits(const CalibrationModel& model, const io::Sequence& seq, cons
                      "the model's range limits differ from the sequence's (" + seq.dir.string() + "/sequence.json)",
                      "the model belongs to another sensor; calibrate this one");
   double at = 0.0;
-  const double lo = 0.5 * model.model.range_min_m, hi = 1.2 * model.model.range_max_m;
-  if (!calibration::isMonotone(model.model.bias, lo, hi, &at))
+  if (!calibration::invertsReadingWindow(model.model.bias, model.model.range_min_m, model.model.range_max_m, &at))
     throw DataError(where, "bias.alpha",
                     "the bias polynomial stops increasing at d = " + std::to_string(at) +
-                        " m inside the range limits, so a reading maps to more than one distance",
+                        " m before its readings reach the range limit, so a reading maps to more than one distance",
                     "calibrate with a lower --max-order or with landmarks covering the whole range");
 }
 

@@ -5,4 +5,5 @@ cd "$(dirname "$0")/.."
 ./scripts/install-deps.sh
 cmake -S . -B build -DLIDARCAL_WERROR=ON -DLIDARCAL_WITH_ROSBAG=ON
 cmake --build build -j"$(nproc)"
-./build/pipeline/lidarcal info data/example/scans
+./build/pipeline/lidarcal run --out build/example-run --overwrite
+echo "setup: the report is build/example-run/report/report.md"

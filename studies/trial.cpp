@@ -244,7 +244,6 @@ calibration::CalibrationConfig estimatorConfig(const TrialConfig& config, const 
   cc.joint.noise_order = std::max(1, static_cast<int>(config.sensor.noise.beta.size()) - 1);
   cc.joint.outer_iterations = config.joint_outer_iterations;
   cc.joint.covariance = false;
-  cc.joint.linear_solver = calibration::JointLinearSolver::dense_schur;
   return cc;
 }
 
@@ -296,7 +295,9 @@ TrialResult runTrial(const TrialConfig& config, const Cell& cell, const std::vec
   }
 
   EstimatorOutcome& orc = r.estimators[static_cast<std::size_t>(Estimator::oracle)];
-  const CalibrationModel om = guarded([&] { return calibration::calibrateAgainstTruth(oraclePairs(calib), cc); });
+  const CalibrationModel om = guarded([&] {
+    return calibration::calibrateAgainstTruth(oraclePairs(calib), cc, {}, calib.obs.range_min_m, calib.obs.range_max_m);
+  });
   orc.ran = true;
   score(orc, om, tests, calib.obs);
   orc.order = om.order_aic;

@@ -74,6 +74,17 @@ TEST(Inversion, NonMonotonePolynomialIsDetectedAndNaNStaysNaN) {
   EXPECT_FALSE(inv.invert(std::nan("")));
 }
 
+TEST(Inversion, ReadingWindowIsCheckedOnlyWhereReadingsCanFall) {
+  // f rises to 6.0 at d = 4 and falls after d = 5: every reading in [0.2, 6] has one distance.
+  BiasPolynomial peaked{{0.0, 2.5, -0.25}};  // f(4) = 6, peak f(5) = 6.25
+  EXPECT_TRUE(invertsReadingWindow(peaked, 0.2, 6.0));
+  double where = 0;
+  EXPECT_FALSE(invertsReadingWindow(peaked, 0.2, 6.5, &where));  // 6.25 is the most it reads
+  BiasPolynomial dip{{0.0, 1.0, -0.5, 0.06}};  // f' = 1 - d + 0.18 d^2 < 0 on (1.31, 4.25), where f is ~0.6
+  EXPECT_FALSE(invertsReadingWindow(dip, 0.2, 6.0, &where));
+  EXPECT_NEAR(where, (1.0 - std::sqrt(0.28)) / 0.36, 1e-9);
+}
+
 TEST(Inversion, OrderZeroCannotBeInverted) {
   RangeModel m;
   m.bias.alpha = {1.0};

@@ -280,7 +280,7 @@ TEST(Study, TinyStudyStatisticsAgreeWithADirectComputation) {
     }
     std::vector<calibration::RangePair> pairs;
     for (const auto& [k, a] : og) pairs.push_back({a[0] / a[2], a[1] / a[2], std::get<2>(k)});
-    CalibrationModel orc = calibration::calibrateAgainstTruth(pairs, cc);
+    CalibrationModel orc = calibration::calibrateAgainstTruth(pairs, cc, {}, calib.obs.range_min_m, calib.obs.range_max_m);
     ASSERT_EQ(orc.status, "ok") << orc.message;
     orc.model.range_min_m = calib.obs.range_min_m;
     orc.model.range_max_m = calib.obs.range_max_m;

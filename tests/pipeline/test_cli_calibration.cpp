@@ -1,0 +1,191 @@
+// `lidarcal run`, `calibrate`, `correct` and `evaluate` end to end on simulated sequences.
+
+#include <cmath>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "calibration/inversion.hpp"
+#include "io/model_io.hpp"
+#include "io/pcd_scan.hpp"
+#include "io/sequence.hpp"
+#include "test_util.hpp"
+
+namespace lidarcal {
+namespace {
+
+using test::runCli;
+using test::TempDir;
+
+std::string scene(const char* name = "paper_field.json") { return (test::sourceDir() / "data/scenes" / name).string(); }
+
+/// A small simulated sequence of the paper's field: 10 stops, 3 scans each.
+void simulate(const std::filesystem::path& dir, int seed, const char* scene_name = "paper_field.json") {
+  const auto r = runCli("simulate -q --scene " + scene(scene_name) + " --out " + dir.string() + " --seed " +
+                        std::to_string(seed) + " --scans-per-stop 3");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+}
+
+nlohmann::json json(const std::filesystem::path& p) { return nlohmann::json::parse(test::readFile(p)); }
+
+class CliCalibration : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new TempDir;
+    simulate(dir_->path() / "a", 21);
+    simulate(dir_->path() / "b", 22);
+  }
+  static void TearDownTestSuite() {
+    delete dir_;
+    dir_ = nullptr;
+  }
+  static std::filesystem::path a() { return dir_->path() / "a"; }
+  static std::filesystem::path b() { return dir_->path() / "b"; }
+  static TempDir* dir_;
+};
+TempDir* CliCalibration::dir_ = nullptr;
+
+TEST_F(CliCalibration, RunCalibratesCorrectsAndReportsWithTheTruthFoundNextToTheScans) {
+  TempDir out;
+  const auto before = test::snapshot(a());
+  const auto r = runCli("run -q " + (a() / "scans").string() + " --out " + (out / "o").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(before == test::snapshot(a()));  // input untouched
+  const auto model = io::readModel(out / "o/model.json");
+  EXPECT_EQ(model.method, "joint");
+  EXPECT_EQ(model.model.bias.order(), 2);
+  // The corrected sequence has the same files.
+  const auto raw = io::openSequence(a() / "scans");
+  const auto cor = io::openSequence(out / "o/corrected");
+  ASSERT_EQ(raw.scans.size(), cor.scans.size());
+  for (std::size_t i = 0; i < raw.scans.size(); ++i)
+    EXPECT_EQ(raw.scans[i].path.filename(), cor.scans[i].path.filename());
+  // Corrected ranges are far closer to the truth: the bias is 20 cm at 3 m, the noise 2 cm.
+  const auto summary = json(out / "o/summary.json");
+  EXPECT_GT(summary["evaluation"]["landmarks"]["mse_ratio"].get<double>(), 30.0);
+  const std::string report = test::readFile(out / "o/report/report.md");
+  EXPECT_NE(report.find("## The calibrated model"), std::string::npos);
+  EXPECT_NE(report.find("## Against the truth"), std::string::npos);
+  EXPECT_NE(report.find("## Order selection"), std::string::npos);
+}
+
+TEST_F(CliCalibration, CorrectMovesEveryPointAlongItsBeamToTheInverseOfTheBiasAndKeepsNaNAndOrder) {
+  TempDir out;
+  ASSERT_EQ(runCli("calibrate -q " + (a() / "scans").string() + " --out " + (out / "m.json").string()).exit_code, 0);
+  // Correct the other sequence (a different draw of the same sensor).
+  const auto r = runCli("correct -q " + (b() / "scans").string() + " --model " + (out / "m.json").string() + " --out " +
+                        (out / "c").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto model = io::readModel(out / "m.json");
+  const calibration::RangeInverter inv(model.model, calibration::inversionWindow(model.model, calibration::InversionMethod::ls));
+  const auto raw = io::openSequence(b() / "scans");
+  for (std::size_t i : {0u, 17u, 29u}) {
+    const io::Scan rs = io::readScan(raw.scans[i].path);
+    const io::Scan cs = io::readScan(out / "c" / raw.scans[i].path.filename());
+    ASSERT_EQ(rs.cloud->size(), cs.cloud->size());
+    EXPECT_NEAR(cs.viewpoint.x_m, rs.viewpoint.x_m, 1e-9);
+    for (std::size_t k = 0; k < rs.cloud->size(); ++k) {
+      const auto& p = (*rs.cloud)[k];
+      const auto& q = (*cs.cloud)[k];
+      if (!std::isfinite(p.x)) {
+        EXPECT_FALSE(std::isfinite(q.x));
+        continue;
+      }
+      ASSERT_TRUE(std::isfinite(q.x));
+      const double rr = std::hypot(p.x, p.y), rc = std::hypot(q.x, q.y);
+      EXPECT_NEAR(std::atan2(q.y, q.x), std::atan2(p.y, p.x), 1e-5);  // same beam
+      EXPECT_NEAR(rc, *inv.invert(rr), 1e-5);                            // corrected distance
+      EXPECT_NEAR(model.model.bias(rc), rr, 1e-5);                       // f(corrected) = raw
+    }
+  }
+  // Evaluate: the correction of an independent sequence beats the raw readings by far.
+  const auto e = runCli("evaluate " + (out / "c").string() + " --truth " + (b() / "truth.json").string());
+  ASSERT_EQ(e.exit_code, 0) << e.err;
+  const auto j = nlohmann::json::parse(e.out);
+  EXPECT_GT(j["landmarks"]["mse_ratio"].get<double>(), 30.0);
+  EXPECT_GT(j["walls"]["mse_ratio"].get<double>(), 10.0);  // walls were never used to calibrate
+  EXPECT_LT(j["all"]["nmse_corrected"].get<double>(), j["all"]["nmse_raw"].get<double>());
+}
+
+TEST_F(CliCalibration, OracleRecoversTheSimulatedBias) {
+  TempDir out;
+  ASSERT_EQ(runCli("calibrate -q " + (a() / "scans").string() + " --truth " + (a() / "truth.json").string() + " --out " +
+                   (out / "o.json").string())
+                .exit_code,
+            0);
+  const auto m = io::readModel(out / "o.json");
+  EXPECT_EQ(m.method, "oracle");
+  const BiasPolynomial truth{{0.0525, 0.8838, 0.0584}};
+  for (double d : {0.8, 1.5, 2.5, 3.5}) EXPECT_NEAR(m.model.bias(d), truth(d), 0.01) << d;
+}
+
+TEST_F(CliCalibration, SameInputGivesTheSameModelAndCorrectedBytes) {
+  TempDir out;
+  for (const char* n : {"x", "y"})
+    ASSERT_EQ(runCli("run -q " + (a() / "scans").string() + " --out " + (out / n).string()).exit_code, 0);
+  EXPECT_EQ(test::readFile(out / "x/model.json"), test::readFile(out / "y/model.json"));
+  EXPECT_TRUE(test::snapshot(out / "x/corrected") == test::snapshot(out / "y/corrected"));
+}
+
+TEST_F(CliCalibration, CorrectRefusesAModelOfAnotherSensor) {
+  TempDir out;
+  ASSERT_EQ(runCli("calibrate -q " + (a() / "scans").string() + " --out " + (out / "m.json").string()).exit_code, 0);
+  auto j = json(out / "m.json");
+  j["sensor"]["beams"] = 720;
+  test::writeFile(out / "beams.json", j.dump());
+  auto r = runCli("correct " + (b() / "scans").string() + " --model " + (out / "beams.json").string() + " --out " +
+                  (out / "c1").string());
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("has 360 beams"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(out / "c1"));
+  j = json(out / "m.json");
+  j["sensor"]["range_max_m"] = 12.0;
+  test::writeFile(out / "range.json", j.dump());
+  r = runCli("correct " + (b() / "scans").string() + " --model " + (out / "range.json").string() + " --out " +
+             (out / "c2").string());
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("range limits differ"), std::string::npos) << r.err;
+}
+
+TEST_F(CliCalibration, CorrectRefusesABiasThatCannotBeInvertedAndAMalformedModel) {
+  TempDir out;
+  ASSERT_EQ(runCli("calibrate -q " + (a() / "scans").string() + " --out " + (out / "m.json").string()).exit_code, 0);
+  auto j = json(out / "m.json");
+  j["bias"]["alpha"] = {0.0, 2.0, -0.3};  // peaks at d = 3.3 m with f = 3.3 m < 6 m
+  test::writeFile(out / "peak.json", j.dump());
+  auto r = runCli("correct " + (b() / "scans").string() + " --model " + (out / "peak.json").string() + " --out " +
+                  (out / "c").string());
+  EXPECT_EQ(r.exit_code, 3);
+  EXPECT_NE(r.err.find("bias.alpha"), std::string::npos) << r.err;
+  j = json(out / "m.json");
+  j["noise"]["kind"] = "pink";
+  test::writeFile(out / "bad.json", j.dump());
+  r = runCli("correct " + (b() / "scans").string() + " --model " + (out / "bad.json").string() + " --out " +
+             (out / "c").string());
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("noise.kind"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(out / "c"));
+}
+
+TEST_F(CliCalibration, OutputInsideTheInputIsRefused) {
+  const auto before = test::snapshot(a());
+  const auto r = runCli("run " + (a() / "scans").string() + " --out " + (a() / "scans/out").string());
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("inside it"), std::string::npos) << r.err;
+  EXPECT_TRUE(before == test::snapshot(a()));
+}
+
+TEST(CliCalibrationNoLandmark, ASequenceWithoutPolesCannotBeCalibrated) {
+  TempDir dir;
+  test::writeFile(dir / "walls.json", R"({"sensor": {"range_min_m": 0.2, "range_max_m": 6.0,
+      "bias_alpha": [0.0525, 0.8838, 0.0584]}, "path": {"stops": 4, "scans_per_stop": 1},
+      "walls": [{"x0_m": -2, "y0_m": -2, "x1_m": 3, "y1_m": -2}, {"x0_m": 3, "y0_m": -2, "x1_m": 3, "y1_m": 2}]})");
+  ASSERT_EQ(runCli("simulate -q --scene " + (dir / "walls.json").string() + " --out " + (dir / "s").string()).exit_code, 0);
+  const auto r = runCli("calibrate " + (dir / "s/scans").string() + " --out " + (dir / "m.json").string());
+  EXPECT_EQ(r.exit_code, 3);
+  EXPECT_NE(r.err.find("no landmark"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "m.json"));
+}
+
+}  // namespace
+}  // namespace lidarcal
