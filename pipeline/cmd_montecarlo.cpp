@@ -94,9 +94,9 @@ bool runMonteCarlo(const MonteCarloOptions& o) {
 
   studies::RunOptions run;
   // Defaults: the landmark level runs the paper's 1000 trials (100 with --quick), the joint
-  // refinement on the first 100 (10); the scan level 100 trials (10), the joint on the first 50 (5).
+  // refinement on the first 200 (10); the scan level 100 trials (10), the joint on the first 50 (5).
   run.trials = o.trials ? o.trials : (scan ? (o.quick ? 10 : 100) : (o.quick ? 100 : 1000));
-  run.joint_trials = o.no_joint ? 0 : (o.joint_trials ? o.joint_trials : (scan ? (o.quick ? 5 : 50) : (o.quick ? 10 : 100)));
+  run.joint_trials = o.no_joint ? 0 : (o.joint_trials ? o.joint_trials : (scan ? (o.quick ? 5 : 50) : (o.quick ? 10 : 200)));
   run.joint_trials = std::min(run.joint_trials, run.trials);
   run.threads = o.threads > 0 ? o.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   run.seed = o.seed;
@@ -155,7 +155,7 @@ void addMonteCarloCommand(CLI::App& app) {
                   "Trials per cell (default 1000 at the landmark level, 100 at the scan level; --quick: 100 / 10)")
       ->check(CLI::PositiveNumber);
   sub->add_option("--joint-trials", o->joint_trials,
-                  "Run the joint refinement on the first N trials of each cell (default 100 landmark level, 50 scan "
+                  "Run the joint refinement on the first N trials of each cell (default 200 landmark level, 50 scan "
                   "level; --quick: 10 / 5)")
       ->check(CLI::PositiveNumber);
   sub->add_flag("--no-joint", o->no_joint, "Skip the joint refinement");
