@@ -105,9 +105,11 @@ bool runMonteCarlo(const MonteCarloOptions& o) {
   // From here to the commit a SIGINT only sets the flag: the trials stop, nothing is committed.
   g_interrupted = false;
   InterruptGuard guard;
-  // Ceres logs (glog, WARNING) when a Levenberg-Marquardt step's linear solve fails and it retries
-  // with more damping; over thousands of trials these would bury the progress bar. Errors still show.
-  FLAGS_minloglevel = std::max(FLAGS_minloglevel, static_cast<int>(google::GLOG_ERROR));
+  // Ceres logs through glog when a solve struggles (WARNING: a step failed and is retried with more
+  // damping; ERROR: the solve gave up, and the estimator either reports a failure, counted in the
+  // CSV's *_failed columns, or goes on from its last usable solution). Over thousands of trials
+  // these lines would bury the progress bar.
+  FLAGS_minloglevel = std::max(FLAGS_minloglevel, static_cast<int>(google::GLOG_FATAL));
   io::StagedDirectory out(o.out, o.overwrite);
   const auto cells = studies::studyCells(figures, grids);
   if (!quiet())
