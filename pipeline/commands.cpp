@@ -18,6 +18,7 @@ void registerCommands(CLI::App& app) {
   addPlotCommand(app);
   addNoiseConsistencyCommand(app);
   addLandmarksToObservationsCommand(app);
+  addMonteCarloCommand(app);
 }
 
 std::filesystem::path dataDir() {

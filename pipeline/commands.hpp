@@ -31,6 +31,7 @@ void addLandmarksToObservationsCommand(CLI::App& app);
 /// writes OUT/observations.csv, OUT/odometry.csv, OUT/noise_truth.json.
 void simulateObservationScene(const std::string& scene_file, const std::string& out_dir, std::uint64_t seed,
                               bool overwrite);
+void addMonteCarloCommand(CLI::App& app);
 
 /// Directory of the bundled data (scenes, example): $LIDARCAL_DATA_DIR, the source tree's
 /// data/ for a build tree, or the installed share/lidarcal.

@@ -1,0 +1,91 @@
+#include "studies/runner.hpp"
+
+#include <chrono>
+#include <exception>
+#include <mutex>
+#include <stdexcept>
+#include <thread>
+
+namespace lidarcal::studies {
+
+void RunOptions::validate() const {
+  if (threads < 1) throw std::invalid_argument("RunOptions: threads must be >= 1");
+  if (trials < 1) throw std::invalid_argument("RunOptions: trials must be >= 1");
+}
+
+namespace {
+
+struct Item {
+  std::size_t cell, trial;
+};
+
+/// Work order: trials with the (slow) joint refinement spread evenly among the others, so the
+/// rate seen by the progress bar, and its estimate of the time left, stays steady.
+std::vector<Item> workOrder(std::size_t cells, std::size_t trials, std::size_t joint_trials) {
+  std::vector<Item> slow, fast;
+  for (std::size_t t = 0; t < trials; ++t)
+    for (std::size_t c = 0; c < cells; ++c) (t < joint_trials ? slow : fast).push_back({c, t});
+  std::vector<Item> out;
+  out.reserve(slow.size() + fast.size());
+  std::size_t i = 0, j = 0;
+  while (i < slow.size() || j < fast.size()) {
+    // Take from the list that is further behind its share.
+    const bool take_slow = j >= fast.size() || (i < slow.size() && i * fast.size() <= j * slow.size());
+    out.push_back(take_slow ? slow[i++] : fast[j++]);
+  }
+  return out;
+}
+
+}  // namespace
+
+StudyRun runCells(const TrialConfig& config, const std::vector<Cell>& cells, const RunOptions& options) {
+  config.validate();
+  options.validate();
+  StudyRun run;
+  run.results.assign(cells.size(), std::vector<TrialResult>(options.trials));
+  const std::vector<Item> order = workOrder(cells.size(), options.trials, options.joint_trials);
+  std::atomic<std::size_t> next{0}, done{0};
+  std::atomic<bool> failed{false};
+  std::exception_ptr error;
+  std::mutex error_mutex;
+  auto stopRequested = [&] { return failed.load() || (options.stop && options.stop->load()); };
+  auto worker = [&] {
+    for (;;) {
+      if (stopRequested()) return;
+      const std::size_t i = next.fetch_add(1);
+      if (i >= order.size()) return;
+      const Item& it = order[i];
+      try {
+        const Cell& cell = cells[it.cell];
+        const auto layout = trialLayout(config, options.seed, it.trial, cell.landmarks);
+        run.results[it.cell][it.trial] =
+            runTrial(config, cell, layout, trialSeed(options.seed, cell, it.trial), it.trial < options.joint_trials);
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(error_mutex);
+        if (!error) error = std::current_exception();
+        failed = true;
+        return;
+      }
+      ++done;
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int t = 0; t < options.threads; ++t) pool.emplace_back(worker);
+  // The calling thread reports progress until the workers are through.
+  auto last = std::chrono::steady_clock::now() - std::chrono::seconds(1);
+  while (done.load() < order.size() && !stopRequested()) {
+    const auto now = std::chrono::steady_clock::now();
+    if (options.on_progress && now - last >= std::chrono::milliseconds(200)) {
+      options.on_progress(done.load(), order.size());
+      last = now;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  for (auto& th : pool) th.join();
+  if (error) std::rethrow_exception(error);
+  if (options.on_progress) options.on_progress(done.load(), order.size());
+  run.interrupted = done.load() < order.size();
+  return run;
+}
+
+}  // namespace lidarcal::studies

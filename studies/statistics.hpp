@@ -1,0 +1,62 @@
+#pragma once
+// Per-cell statistics of a Monte Carlo study: medians and quartiles of each per-trial metric,
+// order-selection counts, and the bias and variance of the landmark position estimators
+// (seed 000 Figs. 7-8) over every (trial, landmark) sample of the cell.
+
+#include <array>
+#include <cstddef>
+#include <vector>
+
+#include "studies/trial.hpp"
+
+namespace lidarcal::studies {
+
+/// Quartiles of the finite values of a sample (linear interpolation between order statistics,
+/// Hyndman & Fan type 7: the default of R and NumPy). NaN when there is no finite value.
+struct Quartiles {
+  double q25 = 0.0;     ///< first quartile
+  double median = 0.0;  ///< median
+  double q75 = 0.0;     ///< third quartile
+};
+Quartiles quartiles(std::vector<double> values);
+
+/// The MSE-ratio metrics of one estimator over a cell's trials.
+struct RatioSummary {
+  std::size_t runs = 0;       ///< trials the estimator ran in
+  std::size_t failures = 0;   ///< of which it returned no model (excluded from the quartiles)
+  Quartiles mse_ratio;        ///< eq. 31, readings averaged per stop and beam
+  Quartiles mse_ratio_single; ///< eq. 31, single readings
+  std::vector<std::size_t> order_counts;  ///< trials (with a model) that chose order 0, 1, ..., n_max
+};
+
+/// Landmark position errors of one estimator over a cell's (trial, landmark) samples, in each
+/// landmark's radial/tangential frame (trial.hpp, PositionError).
+struct PositionSummary {
+  std::size_t samples = 0;       ///< landmark estimates scored
+  std::size_t missing = 0;       ///< landmarks the estimator did not place (excluded)
+  double mean_radial_m = 0.0;    ///< mean radial error, metres
+  double mean_tangential_m = 0.0;  ///< mean tangential error, metres
+  double bias_m = 0.0;           ///< length of the mean error vector, metres
+  double variance_m2 = 0.0;      ///< trace of the error covariance (sample, n - 1), m^2
+  double rmse_m = 0.0;           ///< root mean squared error length, metres
+  Quartiles error_m;             ///< length of the error vector, metres
+  Quartiles radial_m;            ///< radial error, metres
+};
+
+/// Position estimators of Figs. 7-8: the paper's triangulation and the joint refinement's centres.
+enum class PositionEstimator { triangulation = 0, joint = 1 };
+constexpr std::size_t kPositionEstimators = 2;
+const char* toString(PositionEstimator e);
+
+struct CellSummary {
+  Cell cell;                      ///< the parameters
+  std::size_t trials = 0;         ///< trials run
+  std::array<RatioSummary, kEstimators> ratio;            ///< indexed by Estimator
+  std::array<PositionSummary, kPositionEstimators> position;  ///< indexed by PositionEstimator
+  double detected_landmarks = 0.0;  ///< mean landmarks matched per trial (scan level; L at the landmark level)
+};
+
+/// Summarises one cell's trials, in trial order (the result does not depend on how they were run).
+CellSummary summarize(const Cell& cell, const std::vector<TrialResult>& trials, int max_order);
+
+}  // namespace lidarcal::studies

@@ -1,0 +1,358 @@
+// Monte Carlo study (seed 000 Figs. 7-11): layouts keep their constraints, per-stop averaging is
+// exact, quartiles follow their definition, the study is deterministic whatever the thread count,
+// and a tiny study's statistics agree with a direct computation done here from the simulator and
+// the estimators.
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <set>
+#include <sstream>
+#include <tuple>
+
+#include <gtest/gtest.h>
+
+#include "calibration/calibrate.hpp"
+#include "calibration/inversion.hpp"
+#include "common/rng.hpp"
+#include "simulation/landmark_level.hpp"
+#include "studies/draw.hpp"
+#include "studies/placement.hpp"
+#include "studies/runner.hpp"
+#include "studies/statistics.hpp"
+#include "studies/study.hpp"
+
+namespace lidarcal::studies {
+namespace {
+
+TEST(Placement, EveryLayoutKeepsItsConstraintsAndLayoutsAreNested) {
+  const PathSpec path = TrialConfig::defaultPath();
+  const PlacementConfig cfg;
+  std::vector<Pose2> stops;
+  for (int k = 0; k < path.stops; ++k) stops.push_back(commandedPose(path, k));
+  int nested = 0;
+  for (std::uint64_t seed = 1; seed <= 20; ++seed) {
+    SCOPED_TRACE(seed);
+    auto rng = makeRng(seed, 0);
+    const auto big = placeLandmarks(path, 8, cfg, rng);
+    ASSERT_EQ(big.size(), 8u);
+    for (std::size_t i = 0; i < big.size(); ++i) {
+      for (const Pose2& p : stops) {
+        const double d = std::hypot(big[i].x_m - p.x_m, big[i].y_m - p.y_m) - big[i].radius_m;
+        EXPECT_GE(d, cfg.min_surface_m);
+        EXPECT_LE(d, cfg.max_surface_m);
+      }
+      EXPECT_GE(std::abs(big[i].y_m - path.start.y_m), cfg.min_lateral_m);
+      for (std::size_t j = 0; j < i; ++j)
+        EXPECT_GE(std::hypot(big[i].x_m - big[j].x_m, big[i].y_m - big[j].y_m), 2 * cfg.radius_m + cfg.min_separation_m);
+    }
+    // The first L landmarks of a layout of 8 are the layout of L drawn from the same stream,
+    // unless the layout of 8 had to be drawn again (rare: 4 in 1000 trials of the default study).
+    auto rng3 = makeRng(seed, 0);
+    const auto small = placeLandmarks(path, 3, cfg, rng3);
+    bool same = true;
+    for (std::size_t i = 0; i < small.size(); ++i) same = same && small[i].x_m == big[i].x_m && small[i].y_m == big[i].y_m;
+    nested += same;
+  }
+  EXPECT_GE(nested, 18);
+}
+
+TEST(Placement, ImpossibleRegionThrows) {
+  PlacementConfig cfg;
+  cfg.max_surface_m = 0.4;  // no point is within 0.4 m of every stop of a 2.85 m path
+  cfg.max_attempts = 100;
+  cfg.max_restarts = 2;
+  auto rng = makeRng(1, 0);
+  EXPECT_THROW(placeLandmarks(TrialConfig::defaultPath(), 1, cfg, rng), std::runtime_error);
+}
+
+TEST(AverageScans, EachBeamIsTheMeanOfItsReadingsAtTheStop) {
+  simulation::LandmarkLevelConfig cfg;
+  cfg.landmarks = {{1.0, 1.0, 0.12}, {2.0, -1.5, 0.12}};
+  cfg.path.stops = 4;
+  cfg.path.scans_per_stop = 5;
+  cfg.model = TrialConfig::paperSensor();
+  cfg.sigma_theta_rad = 0.01;
+  cfg.beams = true;
+  const auto sample = simulation::simulateLandmarkLevel(cfg, 3);
+  const LandmarkObservations avg = averageScans(sample.obs);
+  std::map<std::tuple<std::size_t, int, std::uint32_t>, std::pair<double, int>> direct;
+  for (const auto& s : sample.obs.sightings)
+    for (const auto& b : s.beams) {
+      auto& a = direct[{s.stop, s.landmark, b.beam}];
+      a.first += b.range_m;
+      ++a.second;
+    }
+  std::size_t beams = 0;
+  for (const auto& s : avg.sightings) {
+    for (const auto& b : s.beams) {
+      const auto& a = direct.at({s.stop, s.landmark, b.beam});
+      EXPECT_NEAR(b.range_m, a.first / a.second, 1e-12);
+      ++beams;
+    }
+  }
+  EXPECT_EQ(beams, direct.size());
+  EXPECT_EQ(avg.sightings.size(), 4u * 2u);  // one per (stop, landmark)
+  EXPECT_EQ(avg.commanded.size(), sample.obs.commanded.size());
+}
+
+TEST(Quartiles, FollowTheType7Definition) {
+  // 1..5: order statistics exactly; 1..4: interpolated (R: quantile(1:4) = 1.75, 2.5, 3.25).
+  auto q = quartiles({5, 1, 4, 2, 3});
+  EXPECT_DOUBLE_EQ(q.q25, 2.0);
+  EXPECT_DOUBLE_EQ(q.median, 3.0);
+  EXPECT_DOUBLE_EQ(q.q75, 4.0);
+  q = quartiles({4, 3, 2, 1, std::nan("")});  // non-finite values are dropped
+  EXPECT_DOUBLE_EQ(q.q25, 1.75);
+  EXPECT_DOUBLE_EQ(q.median, 2.5);
+  EXPECT_DOUBLE_EQ(q.q75, 3.25);
+  EXPECT_TRUE(std::isnan(quartiles({}).median));
+}
+
+/// A small, fast configuration: 8 stops, 3 scans per stop.
+TrialConfig smallConfig() {
+  TrialConfig c;
+  c.path.stops = 8;
+  c.path.step_m = 0.3;
+  c.path.scans_per_stop = 3;
+  return c;
+}
+
+TEST(Study, OutputIsTheSameWithOneAndTwoThreads) {
+  StudyGrids g;
+  g.sigma_s_m = {0.003, 0.03};
+  g.sigma_theta_deg = {1.0};
+  g.fig9_landmarks = {2};
+  RunOptions o;
+  o.trials = 6;
+  o.joint_trials = 2;
+  o.seed = 7;
+  o.threads = 1;
+  const auto one = runStudy({Figure::fig9, Figure::fig10}, g, smallConfig(), o);
+  o.threads = 2;
+  const auto two = runStudy({Figure::fig9, Figure::fig10}, g, smallConfig(), o);
+  ASSERT_FALSE(one.interrupted);
+  ASSERT_EQ(one.files.size(), two.files.size());
+  for (std::size_t i = 0; i < one.files.size(); ++i) {
+    SCOPED_TRACE(one.files[i].first);
+    EXPECT_EQ(one.files[i].first, two.files[i].first);
+    EXPECT_EQ(one.files[i].second, two.files[i].second);
+  }
+  // A different seed gives different numbers (the CSV depends on the seed at all).
+  o.seed = 8;
+  const auto other = runStudy({Figure::fig9, Figure::fig10}, g, smallConfig(), o);
+  EXPECT_NE(one.files[0].second, other.files[0].second);
+}
+
+TEST(Study, AStopRequestInterruptsAndProducesNoFiles) {
+  std::atomic<bool> stop{true};
+  RunOptions o;
+  o.trials = 50;
+  o.stop = &stop;
+  StudyGrids g;
+  g.sigma_s_m = {0.01};
+  g.sigma_theta_deg = {1.0};
+  const auto out = runStudy({Figure::fig10}, g, smallConfig(), o);
+  EXPECT_TRUE(out.interrupted);
+  EXPECT_TRUE(out.files.empty());
+}
+
+// ------------------------------------------------------------------ direct computation
+
+/// CSV row of a one-cell figure as column name -> value.
+std::map<std::string, double> csvRow(const std::string& csv) {
+  std::istringstream in(csv);
+  std::string header, row;
+  std::getline(in, header);
+  std::getline(in, row);
+  std::vector<std::string> names, values;
+  for (std::istringstream h(header); std::getline(h, names.emplace_back(), ',');) {}
+  for (std::istringstream r(row); std::getline(r, values.emplace_back(), ',');) {}
+  std::map<std::string, double> out;
+  for (std::size_t i = 0; i < std::min(names.size(), values.size()); ++i)
+    if (!names[i].empty()) out[names[i]] = values[i] == "NaN" ? std::nan("") : std::atof(values[i].c_str());
+  return out;
+}
+
+/// Eq. 31 computed here: MSE of raw over MSE of corrected readings (LS inversion).
+double mseRatio(const RangeModel& model, const std::vector<double>& truth, const std::vector<double>& raw) {
+  const calibration::RangeInverter inv(model, calibration::inversionWindow(model, calibration::InversionMethod::ls));
+  double a = 0.0, b = 0.0;
+  for (std::size_t i = 0; i < truth.size(); ++i) {
+    const auto c = inv.invert(raw[i]);
+    const double corrected = c ? *c : raw[i];
+    a += (raw[i] - truth[i]) * (raw[i] - truth[i]);
+    b += (corrected - truth[i]) * (corrected - truth[i]);
+  }
+  return a / b;
+}
+
+TEST(Study, TinyStudyStatisticsAgreeWithADirectComputation) {
+  // One cell, 5 trials (quartiles are then order statistics 2, 3 and 4), no bearing noise (so
+  // a draw is exactly simulateLandmarkLevel's output), closed form and oracle.
+  const TrialConfig config = smallConfig();
+  const Cell cell{2, 0.01, 0.0};
+  const std::uint64_t seed = 11;
+  const std::size_t trials = 5;
+  StudyGrids g;
+  g.sigma_s_m = {cell.sigma_s_m};
+  g.sigma_theta_deg = {0.0};
+  g.fig10_landmarks = cell.landmarks;
+  RunOptions o;
+  o.trials = trials;
+  o.joint_trials = 0;
+  o.seed = seed;
+  o.threads = 2;
+  const auto out = runStudy({Figure::fig10}, g, config, o);
+  ASSERT_FALSE(out.interrupted);
+  const auto row = csvRow(out.files.at(0).second);
+
+  calibration::CalibrationConfig cc;
+  cc.max_order = 3;
+  cc.noise = NoiseKind::polynomial;
+  cc.closed_form_rule = calibration::OrderRule::aic;
+  cc.method = calibration::Method::closed_form;
+  cc.triangulation.sigma_s_m = 0.01;
+  cc.triangulation.sigma_theta_rad = deg2rad(0.1);  // the study's floor for a zero sigma_theta
+
+  std::vector<double> cf_ratio, oracle_ratio, cf_single;
+  std::vector<double> radial, tangential;
+  std::map<int, int> cf_orders;
+  for (std::size_t t = 0; t < trials; ++t) {
+    SCOPED_TRACE(t);
+    const auto layout = trialLayout(config, seed, t, cell.landmarks);
+    simulation::LandmarkLevelConfig sim;
+    sim.landmarks = layout;
+    sim.path = config.path;
+    sim.path.sigma_s_m = cell.sigma_s_m;
+    sim.model = config.sensor;
+    sim.beams = true;
+    const std::uint64_t ts = trialSeed(seed, cell, t);
+    const auto calib = simulation::simulateLandmarkLevel(sim, deriveSeed(ts, 0));
+    const auto test = simulation::simulateLandmarkLevel(sim, deriveSeed(ts, 1));
+
+    // Test set: readings of each (stop, landmark, beam) averaged; single central readings.
+    std::map<std::tuple<std::size_t, int, std::uint32_t>, std::array<double, 3>> groups;
+    std::vector<double> single_truth, single_raw;
+    for (std::size_t i = 0; i < test.obs.sightings.size(); ++i) {
+      const Sighting& s = test.obs.sightings[i];
+      for (std::size_t j = 0; j < s.beams.size(); ++j) {
+        auto& a = groups[{s.stop, s.landmark, s.beams[j].beam}];
+        a[0] += test.true_range_m[i][j];
+        a[1] += s.beams[j].range_m;
+        a[2] += 1.0;
+      }
+      // Without bearing noise the central beam is the one closest to the true bearing.
+      std::size_t best = 0;
+      for (std::size_t j = 1; j < s.beams.size(); ++j)
+        if (std::abs(wrapAngle(s.beams[j].angle_rad - s.bearing_rad)) < std::abs(wrapAngle(s.beams[best].angle_rad - s.bearing_rad)))
+          best = j;
+      single_truth.push_back(test.true_range_m[i][best]);
+      single_raw.push_back(s.beams[best].range_m);
+    }
+    std::vector<double> truth, raw;
+    for (const auto& [k, a] : groups) {
+      truth.push_back(a[0] / a[2]);
+      raw.push_back(a[1] / a[2]);
+    }
+
+    CalibrationModel cf = calibration::calibrate(calib.obs, cc);
+    ASSERT_EQ(cf.status, "ok") << cf.message;
+    cf.model.range_min_m = calib.obs.range_min_m;
+    cf.model.range_max_m = calib.obs.range_max_m;
+    cf_ratio.push_back(mseRatio(cf.model, truth, raw));
+    cf_single.push_back(mseRatio(cf.model, single_truth, single_raw));
+    ++cf_orders[cf.order_aic];
+
+    // Oracle: central readings with their true distances, averaged per (landmark, stop, third of the scans).
+    std::map<std::tuple<int, std::size_t, int>, std::array<double, 3>> og;
+    for (std::size_t i = 0; i < calib.obs.sightings.size(); ++i) {
+      const Sighting& s = calib.obs.sightings[i];
+      std::size_t best = 0;
+      for (std::size_t j = 1; j < s.beams.size(); ++j)
+        if (std::abs(wrapAngle(s.beams[j].angle_rad - s.bearing_rad)) < std::abs(wrapAngle(s.beams[best].angle_rad - s.bearing_rad)))
+          best = j;
+      const int part = static_cast<int>((s.scan - s.stop * 3) % 3);  // 3 scans per stop: scan position in its stop
+      auto& a = og[{s.landmark, s.stop, part}];
+      a[0] += calib.true_range_m[i][best];
+      a[1] += s.beams[best].range_m;
+      a[2] += 1.0;
+    }
+    std::vector<calibration::RangePair> pairs;
+    for (const auto& [k, a] : og) pairs.push_back({a[0] / a[2], a[1] / a[2], std::get<2>(k)});
+    CalibrationModel orc = calibration::calibrateAgainstTruth(pairs, cc, {}, calib.obs.range_min_m, calib.obs.range_max_m);
+    ASSERT_EQ(orc.status, "ok") << orc.message;
+    orc.model.range_min_m = calib.obs.range_min_m;
+    orc.model.range_max_m = calib.obs.range_max_m;
+    oracle_ratio.push_back(mseRatio(orc.model, truth, raw));
+
+    // Triangulated centres against the layout, in each landmark's radial/tangential frame.
+    double mx = 0.0, my = 0.0;
+    for (const Pose2& p : calib.obs.commanded) {
+      mx += p.x_m / static_cast<double>(calib.obs.commanded.size());
+      my += p.y_m / static_cast<double>(calib.obs.commanded.size());
+    }
+    for (const auto& l : cf.landmarks) {
+      const Cylinder& c = layout.at(static_cast<std::size_t>(l.id - 1));
+      const double ux = c.x_m - mx, uy = c.y_m - my, n = std::hypot(ux, uy);
+      radial.push_back(((l.x_m - c.x_m) * ux + (l.y_m - c.y_m) * uy) / n);
+      tangential.push_back((-(l.x_m - c.x_m) * uy + (l.y_m - c.y_m) * ux) / n);
+    }
+  }
+  auto q = [](std::vector<double> v, int i) {
+    std::sort(v.begin(), v.end());
+    return v.at(static_cast<std::size_t>(i));
+  };
+  const double tol = 1e-5;  // the CSV holds 6 significant digits
+  auto near = [&](double expected, const std::string& column) {
+    SCOPED_TRACE(column);
+    ASSERT_TRUE(row.count(column));
+    EXPECT_NEAR(row.at(column), expected, tol * std::abs(expected) + 1e-12);
+  };
+  near(q(cf_ratio, 1), "closed_form_ratio_q25");
+  near(q(cf_ratio, 2), "closed_form_ratio_median");
+  near(q(cf_ratio, 3), "closed_form_ratio_q75");
+  near(q(cf_single, 2), "closed_form_ratio1_median");
+  near(q(oracle_ratio, 1), "oracle_ratio_q25");
+  near(q(oracle_ratio, 2), "oracle_ratio_median");
+  near(q(oracle_ratio, 3), "oracle_ratio_q75");
+  for (int n = 0; n <= 3; ++n) near(cf_orders[n] / 5.0, "closed_form_order" + std::to_string(n) + "_rate");
+  EXPECT_EQ(row.at("joint_runs"), 0.0);
+  // Bias and variance over the 10 (trial, landmark) samples.
+  double mr = 0.0, mt = 0.0;
+  for (std::size_t i = 0; i < radial.size(); ++i) {
+    mr += radial[i] / static_cast<double>(radial.size());
+    mt += tangential[i] / static_cast<double>(radial.size());
+  }
+  double var = 0.0;
+  for (std::size_t i = 0; i < radial.size(); ++i) var += (std::pow(radial[i] - mr, 2) + std::pow(tangential[i] - mt, 2)) / (radial.size() - 1.0);
+  near(static_cast<double>(radial.size()), "pos_triangulation_samples");
+  near(std::hypot(mr, mt), "pos_triangulation_bias_m");
+  near(var, "pos_triangulation_variance_m2");
+  // Sanity of the physics: the oracle beats the raw readings.
+  EXPECT_GT(q(oracle_ratio, 2), 1.0);
+}
+
+TEST(ScanLevel, OneTrialFindsTheLandmarksAndCalibrates) {
+  TrialConfig c = smallConfig();
+  c.level = Level::scan;
+  c.angle_noise = AngleNoise::heading;
+  c.noise_scale = 0.2;  // the detector needs less noise than the paper's
+  const Cell cell{3, 0.005, deg2rad(0.2)};
+  for (std::size_t t = 0; t < 2; ++t) {
+    SCOPED_TRACE(t);
+    const auto layout = trialLayout(c, 5, t, cell.landmarks);
+    const TrialResult r = runTrial(c, cell, layout, trialSeed(5, cell, t), true);
+    EXPECT_EQ(r.detected_landmarks, 3);
+    for (const auto& e : r.estimators) {
+      EXPECT_TRUE(e.ran);
+      EXPECT_TRUE(e.ok);
+      EXPECT_GT(e.mse_ratio, 1.0);  // calibration helps
+    }
+    // Every matched landmark is placed within 10 cm by the triangulation.
+    for (const auto& e : r.estimators[0].landmarks) EXPECT_LT(std::hypot(e.radial_m, e.tangential_m), 0.1);
+  }
+}
+
+}  // namespace
+}  // namespace lidarcal::studies
