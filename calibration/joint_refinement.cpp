@@ -251,6 +251,25 @@ JointResult refineJoint(const LandmarkObservations& obs, const JointInit& init, 
   double scale = 0.0;                             // odometry scale
   double gamma = 0.0;                             // incidence noise exponent
   double mixed_fraction = fx.mixed_pixels ? 0.05 : 0.0;
+  {  // Start the terms that are on from the given estimates.
+    const JointEffectEstimates& e0 = init.effects;
+    if (fx.landmark_offsets && !offsets.empty() && !e0.landmark_offset_m.empty()) {
+      // Internally the first landmark is the reference: its reported offset moves into alpha_0.
+      auto first = e0.landmark_offset_m.find(offsets.begin()->first);
+      const double ref = first != e0.landmark_offset_m.end() ? first->second : 0.0;
+      for (auto& [id, o] : offsets) {
+        auto it = e0.landmark_offset_m.find(id);
+        o = (it != e0.landmark_offset_m.end() ? it->second : 0.0) - ref;
+      }
+      alpha[0] += ref;
+    }
+    if (fx.drift) globals[0] = e0.drift_m_per_scan;
+    if (fx.angle_offset) globals[1] = e0.angle_offset_rad;
+    if (fx.incidence_bias) globals[2] = e0.incidence_bias_m;
+    if (fx.odometry_scale) scale = e0.odometry_scale;
+    if (fx.incidence_noise) gamma = e0.incidence_noise_exponent;
+    if (fx.mixed_pixels && e0.mixed_pixel_fraction > 0.0) mixed_fraction = e0.mixed_pixel_fraction;
+  }
 
   // Reading window (outlier floor, mixed pixels).
   out.window_min_m = obs.range_min_m;
@@ -524,6 +543,16 @@ JointResult refineJoint(const LandmarkObservations& obs, const JointInit& init, 
     hs += std::pow(wrapAngle(poses[k][2] - obs.commanded[k].yaw_rad), 2);
   }
   out.pose_scatter_m = std::sqrt(ps / (2.0 * static_cast<double>(poses.size())));
+  {
+    const Pose2& c0 = obs.commanded.front();
+    const double s = fx.odometry_scale ? scale : 0.0;
+    for (std::size_t k = 0; k < poses.size(); ++k) {
+      const double ex = poses[k][0] - (c0.x_m + (1.0 + s) * (obs.commanded[k].x_m - c0.x_m));
+      const double ey = poses[k][1] - (c0.y_m + (1.0 + s) * (obs.commanded[k].y_m - c0.y_m));
+      out.prior_neg_log_likelihood += 0.5 * (ex * ex + ey * ey) / (config.sigma_s_m * config.sigma_s_m) + kLog2Pi +
+                                      2.0 * std::log(config.sigma_s_m);
+    }
+  }
   out.heading_scatter_rad = std::sqrt(hs / static_cast<double>(poses.size()));
   for (const auto& [id, c] : centres) out.centres[id] = Eigen::Vector2d(c[0], c[1]);
 

@@ -86,6 +86,7 @@ struct JointInit {
   std::map<int, Eigen::Vector2d> centres;  ///< landmark id -> centre (world frame)
   double radius_m = 0.1;                   ///< common landmark radius
   RangeModel model;                        ///< bias and noise to start from
+  JointEffectEstimates effects;            ///< effect terms to start from (used for the terms switched on)
 };
 
 struct JointResult {
@@ -104,6 +105,9 @@ struct JointResult {
   std::vector<double> readings_m;          ///< the readings themselves (same order)
   std::size_t outliers = 0;                ///< readings beyond the Huber threshold at the end
   double neg_log_likelihood = 0.0;         ///< Gaussian NLL of the readings at the solution
+  /// NLL of the commanded stop positions as measurements of the refined ones (seed 000 eq. 8,
+  /// sigma_s_m; with the odometry scale, of the scaled commanded path). Headings not included.
+  double prior_neg_log_likelihood = 0.0;
   double aic = 0.0;                        ///< 2 k + 2 NLL, k = bias + noise + radius parameters
   double bic = 0.0;                        ///< k ln N + 2 NLL
   int solver_iterations = 0;               ///< Ceres iterations, all solves

@@ -13,7 +13,7 @@ LandmarkLevelSample simulateLandmarkLevel(const LandmarkLevelConfig& config, std
   LandmarkLevelSample out;
   Scene scene;
   scene.path = config.path;
-  out.stops = planStops(scene, seed);  // eqs. 7-8, shared with the scan-level simulator
+  out.stops = config.stops.empty() ? planStops(scene, seed) : config.stops;  // eqs. 7-8, shared with the scan-level simulator
   out.obs.range_min_m = config.model.range_min_m;
   out.obs.range_max_m = config.model.range_max_m;
   if (config.publish_radius && !config.landmarks.empty()) out.obs.landmark_radius_m = config.landmarks.front().radius_m;
@@ -57,11 +57,12 @@ LandmarkLevelSample simulateLandmarkLevel(const LandmarkLevelConfig& config, std
         } else {
           const double half = std::asin(c.radius_m / centre);
           const double inc = config.angle_increment_rad;
-          const auto first = static_cast<long>(std::ceil((true_bearing - half) / inc));
-          const auto last = static_cast<long>(std::floor((true_bearing + half) / inc));
+          const double grid = config.angle_min_rad;
+          const auto first = static_cast<long>(std::ceil((true_bearing - half - grid) / inc));
+          const auto last = static_cast<long>(std::floor((true_bearing + half - grid) / inc));
           const long n = static_cast<long>(std::llround(2.0 * kPi / inc));
           auto rayAt = [&](long j) {
-            const double w = a.yaw_rad + mount + static_cast<double>(j) * inc;
+            const double w = a.yaw_rad + mount + grid + static_cast<double>(j) * inc;
             return Ray{a.x_m, a.y_m, std::cos(w), std::sin(w)};
           };
           // The beams that hit, then their readings (the outermost ones may be mixed pixels).
@@ -96,7 +97,7 @@ LandmarkLevelSample simulateLandmarkLevel(const LandmarkLevelConfig& config, std
                                            beam_noise[h], effect_rng);
             if (y < config.model.range_min_m || y > config.model.range_max_m) continue;
             const auto beam = static_cast<std::uint32_t>(((j % n) + n) % n);
-            s.beams.push_back(BeamReading{wrapAngle(static_cast<double>(j) * inc), y, beam});
+            s.beams.push_back(BeamReading{wrapAngle(grid + static_cast<double>(j) * inc), y, beam});
             truth.push_back(t);
           }
           if (s.beams.empty()) continue;

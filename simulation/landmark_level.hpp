@@ -24,6 +24,10 @@ struct LandmarkLevelConfig {
   RangeEffects effects;                 ///< effects beyond the seeds' model (common/range_effects.hpp); off by default
   double mount_yaw_rad = 0.0;           ///< lidar zero angle rotated against the robot (beams only), radians
   std::vector<Segment> walls;           ///< background behind the landmarks, for mixed pixels only (no occlusion)
+  double angle_min_rad = 0.0;           ///< beam j of the grid points at angle_min_rad + j * angle_increment_rad
+  /// When non-empty: these stops (commanded and actual poses, scans) instead of planStops(path);
+  /// parametric bootstrap of measured data (the same geometry as fitted).
+  std::vector<TruthStop> stops;
 };
 
 struct LandmarkLevelSample {
