@@ -51,8 +51,12 @@ struct DiagnoseConfig {
   double alpha = 0.01;            ///< family-wise error rate over the candidates (Holm)
   std::uint64_t seed = 1;         ///< bootstrap and simulation seed
   int max_order = 4;              ///< sequences: bias orders 1..max_order (order by the calibration's rule)
+  double sigma_s_m = 0.02;        ///< sequences: odometry, std. dev. of a stop's position around the commanded one (seed 000 eq. 8)
   double outlier_floor = 1e-3;    ///< weight of a uniform over the reading window in every likelihood
   int closeness_replicas = 4;     ///< replicas simulated from the extended model (closeness to the data)
+  /// Static data: scans per window. 0: the whole recording is one pose unless the beams show that
+  /// the sensor moved (then windows of 8 scans, each with a time trend per beam); -1: never windows.
+  int static_window = 0;
   std::vector<std::string> candidates;  ///< effects to test; empty: every candidate of the mode
   void validate() const;          ///< throws std::invalid_argument
 };

@@ -150,31 +150,21 @@ std::vector<Row> rows(const LandmarkObservations& obs, const JointResult& fit, c
   return out;
 }
 
-/// Score of a mean-type effect with covariate x (metres of reading per unit parameter): the
-/// clipped residuals against x / sigma, over its information (~N(0, 1) under the baseline).
+/// Score of a mean-type effect with covariate x (metres of reading per unit parameter).
 double meanScore(const std::vector<Row>& rs, const std::vector<double>& x) {
-  double u = 0.0, info = 0.0;
+  std::vector<double> psi(rs.size()), xs(rs.size());
   for (std::size_t i = 0; i < rs.size(); ++i) {
-    const double xs = x[i] / rs[i].r.sigma_m;
-    u += rs[i].psi * xs;
-    info += xs * xs;
+    psi[i] = rs[i].psi;
+    xs[i] = x[i] / rs[i].r.sigma_m;
   }
-  return info > 0.0 ? u / std::sqrt(info) : 0.0;
+  return calibration::meanScore(psi, xs);
 }
 
-/// Score of a variance-type effect with covariate g (log of the factor on sigma per unit
-/// parameter), centred: clipped squared residuals against g.
+/// Score of a variance-type effect with covariate g (log of the factor on sigma per unit).
 double spreadScore(const std::vector<Row>& rs, const std::vector<double>& g) {
-  double mean = 0.0;
-  for (double v : g) mean += v / static_cast<double>(std::max<std::size_t>(g.size(), 1));
-  const double c2 = clippedSquareMean(kClip), v2 = clippedSquareVariance(kClip);
-  double u = 0.0, info = 0.0;
-  for (std::size_t i = 0; i < rs.size(); ++i) {
-    const double gi = g[i] - mean;
-    u += (std::min(rs[i].z * rs[i].z, kClip * kClip) - c2) * gi;
-    info += v2 * gi * gi;
-  }
-  return info > 0.0 ? u / std::sqrt(info) : 0.0;
+  std::vector<double> z(rs.size());
+  for (std::size_t i = 0; i < rs.size(); ++i) z[i] = rs[i].z;
+  return calibration::spreadScore(z, g);
 }
 
 /// Sum over groups of (group score)^2 / information, with the overall mean removed (the bias
@@ -853,7 +843,15 @@ DiagnosisResult diagnoseSequence(const LandmarkObservations& obs, const Diagnose
   cc.method = Method::joint;
   cc.max_order = config.max_order;
   cc.joint.effects.estimate_heading = false;
-  const CalibrationModel cal = calibrate(obs, cc);
+  cc.joint.sigma_s_m = config.sigma_s_m;
+  cc.triangulation.sigma_s_m = config.sigma_s_m;
+  CalibrationModel cal;
+  try {
+    cal = calibrate(obs, cc);
+  } catch (const std::invalid_argument& e) {
+    cal.status = "calibration_failed";
+    cal.message = e.what();
+  }
   if (cal.status != "ok") {
     out.status = cal.status;
     out.message = "the baseline calibration failed: " + cal.message;

@@ -21,6 +21,7 @@ void DiagnoseConfig::validate() const {
   if (!(alpha > 0.0 && alpha < 1.0)) throw std::invalid_argument("DiagnoseConfig: alpha must be in (0, 1)");
   if (max_order < 1 || max_order > 6) throw std::invalid_argument("DiagnoseConfig: max_order must be 1..6");
   if (!(outlier_floor >= 0.0 && outlier_floor < 0.5)) throw std::invalid_argument("DiagnoseConfig: outlier_floor must be in [0, 0.5)");
+  if (!(sigma_s_m > 0.0)) throw std::invalid_argument("DiagnoseConfig: sigma_s_m must be positive");
   if (closeness_replicas < 1) throw std::invalid_argument("DiagnoseConfig: closeness_replicas must be >= 1");
 }
 
@@ -112,6 +113,31 @@ double cubeRootChi2(double chi2, double dof) {
 }
 
 double huberPsi(double z, double c) { return std::clamp(z, -c, c); }
+
+double meanScore(const std::vector<double>& psi, const std::vector<double>& xs) {
+  double u = 0.0, info = 0.0;
+  for (std::size_t i = 0; i < psi.size() && i < xs.size(); ++i) {
+    u += psi[i] * xs[i];
+    info += xs[i] * xs[i];
+  }
+  return info > 0.0 ? u / std::sqrt(info) : 0.0;
+}
+
+double spreadScore(const std::vector<double>& z, const std::vector<double>& g) {
+  constexpr double kClip = 3.0;
+  const std::size_t n = std::min(z.size(), g.size());
+  if (n == 0) return 0.0;
+  double mean = 0.0;
+  for (std::size_t i = 0; i < n; ++i) mean += g[i] / static_cast<double>(n);
+  const double c2 = clippedSquareMean(kClip), v2 = clippedSquareVariance(kClip);
+  double u = 0.0, info = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double gi = g[i] - mean;
+    u += (std::min(z[i] * z[i], kClip * kClip) - c2) * gi;
+    info += v2 * gi * gi;
+  }
+  return info > 0.0 ? u / std::sqrt(info) : 0.0;
+}
 
 double clippedSquareMean(double c) {
   // E[min(Z^2, c^2)] = P(|Z| < c) - 2 c phi(c) + c^2 P(|Z| > c).

@@ -34,6 +34,15 @@ double ksDistance(std::vector<double> a, std::vector<double> b);
 /// Cube root of a chi-square sum over its degrees of freedom (Wilson-Hilferty): close to normal.
 double cubeRootChi2(double chi2, double dof);
 
+/// Score statistic of a term in the mean: clipped standardised residuals psi against the
+/// term's covariate over sigma (xs), over the square root of its information; ~N(0, 1) under
+/// the model when the covariate is not absorbed by its parameters.
+double meanScore(const std::vector<double>& psi, const std::vector<double>& xs);
+
+/// Score statistic of a term in the log standard deviation: clipped squared residuals z^2 (at
+/// 3) against the centred covariate g; ~N(0, 1) under the model.
+double spreadScore(const std::vector<double>& z, const std::vector<double>& g);
+
 /// Huber's psi: z clipped to [-c, c].
 double huberPsi(double z, double c = 3.0);
 

@@ -15,6 +15,7 @@ void registerCommands(CLI::App& app) {
   addEvaluateCommand(app);
   addImportCommand(app);
   addDetectCommand(app);
+  addDiagnoseCommand(app);
 }
 
 std::filesystem::path dataDir() {

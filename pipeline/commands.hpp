@@ -21,6 +21,7 @@ void addEvaluateCommand(CLI::App& app);
 void addRunCommand(CLI::App& app);
 void addImportCommand(CLI::App& app);
 void addDetectCommand(CLI::App& app);
+void addDiagnoseCommand(CLI::App& app);
 
 /// Directory of the bundled data (scenes, example): $LIDARCAL_DATA_DIR, the source tree's
 /// data/ for a build tree, or the installed share/lidarcal.
