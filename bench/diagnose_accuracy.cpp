@@ -20,7 +20,7 @@ int main(int argc, char** argv) {
   using namespace lidarcal;
   CLI::App app("diagnose accuracy on hidden effects");
   std::string effect = "none";
-  int cases = 20, replicas = 29, first = 1;
+  int cases = 20, replicas = 19, first = 1;
   bool verbose = false;
   app.add_option("--effect", effect, "effect to hide (or none)");
   app.add_option("--cases", cases);

@@ -869,6 +869,14 @@ DiagnosisResult diagnoseSequence(const LandmarkObservations& obs, const Diagnose
   base.outer_iterations = 4;
   base.outlier_floor = config.outlier_floor;
   base.effects.estimate_heading = false;
+  // Fits that start from a converged solution (replicas, folds) skip the geometry pass and
+  // re-estimate the noise law at most twice.
+  auto warm = [](JointConfig c) {
+    c.settle_geometry = false;
+    c.outer_iterations = 2;
+    c.max_solver_iterations = 200;
+    return c;
+  };
   // Two starts, the better fit kept (readings and odometry): the calibration's refined solution,
   // and a neutral one that no range effect has bent (landmarks triangulated from bearings
   // alone, commanded poses, the closed form's bias).
@@ -900,9 +908,9 @@ DiagnosisResult diagnoseSequence(const LandmarkObservations& obs, const Diagnose
   auto total = [](const JointResult& r) {
     return r.poses.empty() ? std::numeric_limits<double>::infinity() : r.neg_log_likelihood + r.prior_neg_log_likelihood;
   };
-  auto bestOf = [&](const JointInit& a, const JointConfig& cfg) {
+  auto bestOf = [&](const JointInit& a, const JointConfig& cfg, bool both = true) {
     JointResult r = refineJoint(obs, a, cfg);
-    if (neutral) {
+    if (neutral && both) {
       JointResult other = refineJoint(obs, *neutral, cfg);
       if (total(other) < total(r)) r = std::move(other);
     }
@@ -935,7 +943,7 @@ DiagnosisResult diagnoseSequence(const LandmarkObservations& obs, const Diagnose
   for (int b = 0; b < config.replicas; ++b) {
     const LandmarkObservations rep =
         simulateReplica(plan0, obs, poseNoise(fit0, base), deriveSeed(config.seed, 1000 + static_cast<std::uint64_t>(b)));
-    const JointResult f = refineJoint(rep, initFrom(fit0), base);
+    const JointResult f = refineJoint(rep, initFrom(fit0), warm(base));
     if (f.poses.empty()) continue;
     const auto rr = rows(rep, f, base);
     for (const auto& [k, v] : statistics(rep, f, rr, base)) replica_stats[k].push_back(v);
@@ -996,7 +1004,8 @@ DiagnosisResult diagnoseSequence(const LandmarkObservations& obs, const Diagnose
       start.effects.angle_offset_rad = turn;
     }
     if (e == effect::kOdometryScale) start.effects.odometry_scale = measured_stats.at("path_scale") * base.sigma_s_m / sqrt_info;
-    fits.push_back(bestOf(start, cfgs.back()));
+    // The neutral start matters for the terms that bend the geometry the baseline settled in.
+    fits.push_back(bestOf(start, cfgs.back(), e == effect::kIncidenceBias || e == effect::kLandmarkBias));
   }
   const std::vector<int> fold = folds(obs, config.folds);
   std::vector<double> ll_base;                               // per held-out reading
@@ -1012,13 +1021,13 @@ DiagnosisResult diagnoseSequence(const LandmarkObservations& obs, const Diagnose
     }
     if (!any) continue;
     const LandmarkObservations tr = subset(obs, train), te = subset(obs, test);
-    const JointResult fb = refineJoint(tr, initFrom(fit0), base);
+    const JointResult fb = refineJoint(tr, initFrom(fit0), warm(base));
     if (fb.poses.empty()) continue;
     const auto eb = evaluateJoint(te, fb, base);
     std::vector<std::vector<JointReading>> ec(candidates.size());
     bool ok = true;
     for (std::size_t c = 0; c < candidates.size(); ++c) {
-      const JointResult fc = refineJoint(tr, fits[c].poses.empty() ? initFrom(fit0) : initFrom(fits[c]), cfgs[c]);
+      const JointResult fc = refineJoint(tr, fits[c].poses.empty() ? initFrom(fit0) : initFrom(fits[c]), warm(cfgs[c]));
       if (fc.poses.empty()) {
         ok = false;
         break;
@@ -1091,7 +1100,8 @@ DiagnosisResult diagnoseSequence(const LandmarkObservations& obs, const Diagnose
     for (const auto& [scan, v] : per_scan) ss += (v - mean_block) * (v - mean_block);
     const double nb = static_cast<double>(per_scan.size());
     r.heldout_gain_se = nb > 1 ? std::sqrt(ss / (nb - 1.0) * nb) / n_heldout : 0.0;
-    r.p_value = heldoutPValue(r.heldout_gain_nats_per_point, r.heldout_gain_se);
+    r.p_heldout = heldoutPValue(r.heldout_gain_nats_per_point, r.heldout_gain_se);
+    r.p_value = combinedPValue(r.p_heldout, r.score_p_value);
     r.parameters = fc.effect_parameters;
     r.delta_aic = 2.0 * r.parameters + 2.0 * (fc.neg_log_likelihood + fc.prior_neg_log_likelihood -
                                               fit0.neg_log_likelihood - fit0.prior_neg_log_likelihood);
@@ -1115,7 +1125,7 @@ DiagnosisResult diagnoseSequence(const LandmarkObservations& obs, const Diagnose
   if (true_range_m) out.calibration_mse_ratio_baseline = calibrationMseRatio(obs, fit0, base, *true_range_m);
 
   // 4. The cause. An angle offset is one heading shared by all stops (nested), handled by parsimony.
-  out.primary_cause = nameCause(out.candidates, config.alpha, out.decision);
+  out.primary_cause = nameCause(out.candidates, config.alpha, out.decision, {{effect::kAngleOffset, effect::kHeadingError}});
 
   // 5. The extended model and how close its simulation comes to the data.
   ZSample measured_z;
@@ -1140,7 +1150,7 @@ DiagnosisResult diagnoseSequence(const LandmarkObservations& obs, const Diagnose
     for (int b = 0; b < config.closeness_replicas; ++b) {
       const LandmarkObservations rep = simulateReplica(plan, obs, poseNoise(fc, cfgs[c]),
                                                        deriveSeed(config.seed, 5000 + static_cast<std::uint64_t>(b)));
-      const JointResult f = refineJoint(rep, initFrom(fit0), base);
+      const JointResult f = refineJoint(rep, initFrom(fit0), warm(base));
       if (f.poses.empty()) continue;
       const auto rr = rows(rep, f, base);
       for (const auto& w : rr) {

@@ -1084,7 +1084,8 @@ DiagnosisResult diagnoseStatic(const StaticScans& data, const DiagnoseConfig& co
     for (const auto& [key, v] : per_block) ss += (v - mean_block) * (v - mean_block);
     const double nb = static_cast<double>(per_block.size());
     r.heldout_gain_se = nb > 1 ? std::sqrt(ss / (nb - 1.0) * nb) / n_readings : 0.0;
-    r.p_value = heldoutPValue(r.heldout_gain_nats_per_point, r.heldout_gain_se);
+    r.p_heldout = heldoutPValue(r.heldout_gain_nats_per_point, r.heldout_gain_se);
+    r.p_value = combinedPValue(r.p_heldout, r.score_p_value);
     r.parameters = flags[c].parameters();
     double ll_in = inSample(flags[c], &full[c]);
     if (flags[c].wall_b && wb.ok && w0.ok) ll_in = ll_in_base + (wb.in_ll - w0.in_ll);  // only the walls' part differs

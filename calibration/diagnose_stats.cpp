@@ -76,6 +76,14 @@ double heldoutPValue(double gain, double se) {
   return 0.5 * std::erfc(gain / se / std::sqrt(2.0));
 }
 
+double combinedPValue(double p_heldout, double p_score) {
+  const bool a = std::isfinite(p_heldout), b = std::isfinite(p_score);
+  if (!a && !b) return std::numeric_limits<double>::quiet_NaN();
+  if (!a) return p_score;
+  if (!b) return p_heldout;
+  return std::min(1.0, 2.0 * std::min(p_heldout, p_score));
+}
+
 std::vector<double> holmAdjust(const std::vector<double>& p) {
   std::vector<std::size_t> idx;
   for (std::size_t i = 0; i < p.size(); ++i)
@@ -167,6 +175,7 @@ double gridResultant(const std::vector<double>& y, double q) {
 }
 
 std::string nameCause(std::vector<CandidateResult>& cands, double alpha, std::string& decision,
+                      const std::vector<std::pair<std::string, std::string>>& nested,
                       const std::vector<std::pair<std::string, std::string>>& indistinguishable) {
   std::vector<double> p;
   for (const auto& c : cands) p.push_back(c.applicable ? c.p_value : std::numeric_limits<double>::quiet_NaN());
@@ -192,20 +201,21 @@ std::string nameCause(std::vector<CandidateResult>& cands, double alpha, std::st
     const double se = std::hypot(cands[a].heldout_gain_se, cands[b].heldout_gain_se);
     return cands[b].heldout_gain_nats_per_point >= cands[a].heldout_gain_nats_per_point - 2.0 * se;
   };
-  // Parsimony: a significant effect with fewer parameters that explains as much.
+  // Parsimony: a significant effect nested in the top one that explains as much.
   std::size_t chosen = top;
   for (std::size_t i : sig)
-    if (i != top && cands[i].parameters < cands[chosen].parameters && close(top, i)) chosen = i;
+    for (const auto& [simpler, richer] : nested)
+      if (i != top && cands[i].effect == simpler && cands[top].effect == richer && close(top, i)) chosen = i;
   if (chosen != top)
     decision = cands[chosen].effect + " explains as much as " + cands[top].effect +
-               " (held-out gains within two standard errors) with fewer parameters";
+               " (held-out gains within two standard errors), which contains it, with fewer parameters";
   if (!cands[chosen].identifiable) {
     decision = cands[chosen].effect + " is significant but cannot be estimated apart from the baseline's parameters (" +
                cands[chosen].note + ")";
     return effect::kNotIdentifiable;
   }
   for (std::size_t i : sig) {
-    if (i == chosen || cands[i].parameters != cands[chosen].parameters || !close(chosen, i)) continue;
+    if (i == chosen || !close(chosen, i)) continue;
     for (const auto& [a, b] : indistinguishable)
       if ((a == cands[i].effect && b == cands[chosen].effect) || (b == cands[i].effect && a == cands[chosen].effect)) {
         decision = cands[chosen].effect + " and " + cands[i].effect +

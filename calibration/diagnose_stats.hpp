@@ -25,6 +25,13 @@ Discrepancy makeDiscrepancy(std::string name, std::string variable, std::string 
 /// a gain that is not positive, NaN without a standard error.
 double heldoutPValue(double gain, double se);
 
+/// p-value of a candidate from its two tests (Bonferroni): the held-out gain and the
+/// bootstrap-calibrated score statistic aimed at it, 2 min(p_heldout, p_score). The score test
+/// is the more powerful where the evidence is in few observations (the odometry of a handful of
+/// stops), the held-out test where the baseline's fit bent to absorb the effect. NaN entries
+/// are left out.
+double combinedPValue(double p_heldout, double p_score);
+
 /// Holm's step-down adjustment of p-values (NaN entries are left out and stay NaN).
 std::vector<double> holmAdjust(const std::vector<double>& p);
 
@@ -56,13 +63,14 @@ double gridResultant(const std::vector<double>& y_m, double q_m);
 
 /// Names the cause from the candidates (fills `significant` and the Holm p-values first):
 ///   significant = Holm-adjusted p < alpha and held-out gain > 0;
-///   none when none is; otherwise the largest held-out gain, replaced by a candidate with fewer
-///   parameters whose gain is within two standard errors (parsimony);
-///   not_identifiable when that effect is not identifiable, or when another significant effect
-///   with as many parameters is within two standard errors of it and the two cannot be told apart
-///   (the caller marks such pairs in `note` via `indistinguishable`).
+///   none when none is; otherwise the largest held-out gain, replaced by a significant effect
+///   nested in it (`nested`: pairs (simpler, richer), e.g. one zero-angle offset is the mean of
+///   per-stop headings) whose gain is within two standard errors (parsimony);
+///   not_identifiable when that effect is not identifiable, or when another significant effect is
+///   within two standard errors of it and the pair is declared `indistinguishable`.
 /// Returns the cause; `decision` receives the reason in words.
 std::string nameCause(std::vector<CandidateResult>& candidates, double alpha, std::string& decision,
+                      const std::vector<std::pair<std::string, std::string>>& nested = {},
                       const std::vector<std::pair<std::string, std::string>>& indistinguishable = {});
 
 }  // namespace lidarcal::calibration

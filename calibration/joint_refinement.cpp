@@ -425,7 +425,7 @@ JointResult refineJoint(const LandmarkObservations& obs, const JointInit& init, 
   weight.assign(readings.size(), 1.0);
   // Iteration 0 settles the geometry (poses, centres, radius) with the starting bias held;
   // later iterations free everything and re-estimate the noise law in between.
-  for (int outer = 0; outer <= config.outer_iterations; ++outer) {
+  for (int outer = config.settle_geometry ? 0 : 1; outer <= config.outer_iterations; ++outer) {
     out.outer_iterations = outer;
     if (outer > 0 && config.reselect && !config.keep_all_beams) selectReadings();
     currentGeometry();

@@ -73,6 +73,7 @@ struct JointConfig {
   bool covariance = true;         ///< compute the covariance of the bias coefficients
   JointEffects effects;           ///< effect terms (all off: the seeds' model plus per-stop poses)
   bool keep_all_beams = false;    ///< use every beam of every sighting (the caller selected them); ignores lateral_fraction
+  bool settle_geometry = true;    ///< first solve with the bias held (off when starting from a converged solution)
   /// Weight of a uniform density over the reading window mixed into every reading's likelihood
   /// (in the reported likelihood only, not in the fit), so that a few gross outliers cannot
   /// dominate a comparison of models. 0: plain Gaussian likelihood (default).

@@ -30,7 +30,7 @@ namespace {
 struct DiagnoseCommand {
   std::string data, out, model, mode = "auto", truth, candidates;
   std::uint64_t seed = 1;
-  int replicas = 29, folds = 4, stop = -1;
+  int replicas = 19, folds = 3, stop = -1;
   double alpha = 0.01, radius_m = 0.0, sigma_s_m = 0.02;
   bool overwrite = false;
   std::string command;
@@ -126,8 +126,17 @@ void runDiagnose(const DiagnoseCommand& c) {
                     "diagnose repeated scans of one pose with --mode static");
   }
 
+  auto checkCandidates = [&](const std::vector<std::string>& known, const char* kind) {
+    for (const auto& e : config.candidates)
+      if (std::find(known.begin(), known.end(), e) == known.end()) {
+        std::string list;
+        for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
+        throw InputError("", "--candidates", "'" + e + "' is not a candidate effect for " + kind, "use " + list);
+      }
+  };
   calibration::DiagnosisResult result;
   if (obs && mode != "static") {
+    checkCandidates(calibration::sequenceCandidates(), "a sequence");
     if (fix.inverter)
       for (auto& s : obs->sightings)
         for (auto& b : s.beams) b.range_m = fix.correct(b.range_m);
@@ -166,6 +175,7 @@ void runDiagnose(const DiagnoseCommand& c) {
     if (seq.stops.size() > 1)
       src.selection += "stop " + std::to_string(stop) + " of " + std::to_string(seq.stops.size()) + ", " +
                       std::to_string(seq.stops[stop].scans.size()) + " scans from one pose";
+    checkCandidates(calibration::staticCandidates(), "repeated scans of one pose");
     const calibration::StaticScans s = staticScans(seq, stop, fix);
     if (!quiet())
       std::fprintf(stderr, "diagnosing repeated scans of one pose: %zu scans, %zu readings (%d replicas)\n", s.scans,

@@ -166,6 +166,7 @@ nlohmann::ordered_json diagnosisJson(const DiagnosisResult& r, const DiagnosisSo
     ojson j{{"effect", c.effect},
             {"p_value", num(c.p_value)},
             {"p_holm", num(c.p_holm)},
+            {"p_heldout", num(c.p_heldout)},
             {"heldout_gain_nats_per_point", num(c.heldout_gain_nats_per_point)},
             {"heldout_gain_se", num(c.heldout_gain_se)},
             {"delta_aic", num(c.delta_aic)},
