@@ -14,7 +14,7 @@
 #include "calibration/diagnose_sequence.hpp"
 #include "common/rng.hpp"
 #include "simulation/landmark_level.hpp"
-#include "tests/calibration/diagnose_cases.hpp"
+#include "calibration/diagnose_cases.hpp"
 
 int main(int argc, char** argv) {
   using namespace lidarcal;

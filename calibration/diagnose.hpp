@@ -16,6 +16,7 @@
 // from one pose of any scene (diagnose_static.hpp). The statistics are in diagnose_stats.hpp.
 
 #include <cstdint>
+#include <limits>
 #include <map>
 #include <string>
 #include <vector>
@@ -57,6 +58,10 @@ struct DiagnoseConfig {
   /// Static data: scans per window. 0: the whole recording is one pose unless the beams show that
   /// the sensor moved (then windows of 8 scans, each with a time trend per beam); -1: never windows.
   int static_window = 0;
+  /// Static data: the range offset alpha_0 when known from elsewhere (a reference distance);
+  /// NaN: estimated from the straightness of the walls (then an incidence-dependent bias, which
+  /// bends walls much alike, is hard to tell from it).
+  double static_range_offset_m = std::numeric_limits<double>::quiet_NaN();
   std::vector<std::string> candidates;  ///< effects to test; empty: every candidate of the mode
   void validate() const;          ///< throws std::invalid_argument
 };
@@ -95,7 +100,8 @@ struct CandidateResult {
   double information_ratio = 1.0;         ///< information kept after the nuisance parameters (0..1)
   /// Standard error of the effect's parameter once the baseline's parameters are profiled out
   /// (unit of its estimate; RMS over components). Identifiable: below the smallest size worth
-  /// naming (1 cm, 1 degree, 1 % of the step, 0.5 in an exponent, 1 cm of drift over the data).
+  /// naming (1 cm, 1 degree, 1 % of the step, 0.5 in an exponent, 1 cm of drift over the data),
+  /// or below a quarter of the estimate (it stands clear of zero apart from the baseline).
   double standard_error = 0.0;
   std::string note;                       ///< why not identifiable / not applicable / competing effect
   std::map<std::string, double> estimates;  ///< the effect's fitted parameters (name with unit -> value)

@@ -764,6 +764,24 @@ double calibrationMseRatio(const LandmarkObservations& obs, const JointResult& f
   return compareRanges(t, raw, cor).mse_ratio;
 }
 
+/// Size of a fitted effect in the unit of its identifiability standard error (RMS over components).
+double effectSize(const std::string& e, const JointResult& f) {
+  const auto& x = f.effects;
+  if (e == effect::kLandmarkBias) {
+    double s = 0.0;
+    for (const auto& [id, o] : x.landmark_offset_m) s += o * o;
+    return x.landmark_offset_m.empty() ? 0.0 : std::sqrt(s / static_cast<double>(x.landmark_offset_m.size()));
+  }
+  if (e == effect::kHeadingError) return x.heading_rms_rad;
+  if (e == effect::kRangeDrift) return std::abs(x.drift_m_per_scan);
+  if (e == effect::kAngleOffset) return std::abs(x.angle_offset_rad);
+  if (e == effect::kIncidenceBias) return std::abs(x.incidence_bias_m);
+  if (e == effect::kOdometryScale) return std::abs(x.odometry_scale);
+  if (e == effect::kIncidenceNoise) return std::abs(x.incidence_noise_exponent);
+  if (e == effect::kRangeNoiseLaw) return std::abs(x.noise_exponent - 2.0);
+  return 0.0;
+}
+
 std::map<std::string, double> effectEstimates(const std::string& e, const JointResult& f) {
   const auto& x = f.effects;
   std::map<std::string, double> m;
@@ -869,6 +887,7 @@ DiagnosisResult diagnoseSequence(const LandmarkObservations& obs, const Diagnose
   base.outer_iterations = 4;
   base.outlier_floor = config.outlier_floor;
   base.effects.estimate_heading = false;
+  base.cauchy_loss = true;
   // Fits that start from a converged solution (replicas, folds) skip the geometry pass and
   // re-estimate the noise law at most twice.
   auto warm = [](JointConfig c) {
@@ -890,6 +909,7 @@ DiagnosisResult diagnoseSequence(const LandmarkObservations& obs, const Diagnose
       init.radius_m = l.radius_m;
     }
   std::optional<JointInit> neutral;
+  int closed_form_order = base.order;
   {
     CalibrationConfig cf = cc;
     cf.method = Method::closed_form;
@@ -901,22 +921,37 @@ DiagnosisResult diagnoseSequence(const LandmarkObservations& obs, const Diagnose
       for (const auto& l : m.landmarks)
         if (l.status == "ok") n.centres[l.id] = Eigen::Vector2d(l.x_m, l.y_m);
       n.model = m.model;
-      n.model.bias.alpha.resize(static_cast<std::size_t>(base.order) + 1, 0.0);
+      closed_form_order = std::max(m.model.bias.order(), 1);
       if (n.centres.size() == init.centres.size()) neutral = n;
     }
   }
   auto total = [](const JointResult& r) {
     return r.poses.empty() ? std::numeric_limits<double>::infinity() : r.neg_log_likelihood + r.prior_neg_log_likelihood;
   };
+  auto orderOf = [](JointInit i, int order) {
+    i.model.bias.alpha.resize(static_cast<std::size_t>(order) + 1, 0.0);
+    return i;
+  };
   auto bestOf = [&](const JointInit& a, const JointConfig& cfg, bool both = true) {
-    JointResult r = refineJoint(obs, a, cfg);
+    JointResult r = refineJoint(obs, orderOf(a, cfg.order), cfg);
     if (neutral && both) {
-      JointResult other = refineJoint(obs, *neutral, cfg);
+      JointResult other = refineJoint(obs, orderOf(*neutral, cfg.order), cfg);
       if (total(other) < total(r)) r = std::move(other);
     }
     return r;
   };
-  const JointResult fit0 = bestOf(init, base);
+  // The order: the calibration's, or the closed form's when they differ and it fits better by AIC
+  // (an effect the baseline lacks can drag the joint refinement to a wrong order).
+  JointResult fit0 = bestOf(init, base);
+  if (closed_form_order != base.order && neutral) {
+    JointConfig other = base;
+    other.order = closed_form_order;
+    JointResult alt = bestOf(init, other);
+    if (!alt.poses.empty() && 2.0 * (total(alt) - total(fit0)) + 2.0 * (other.order - base.order) < 0.0) {
+      fit0 = std::move(alt);
+      base = other;
+    }
+  }
   if (fit0.poses.empty()) {
     out.status = "baseline_failed";
     out.message = fit0.message;
@@ -1108,7 +1143,9 @@ DiagnosisResult diagnoseSequence(const LandmarkObservations& obs, const Diagnose
     if (const auto it = ident.find(r.effect); it != ident.end()) {
       r.information_ratio = it->second.ratio;
       r.standard_error = it->second.se;
-      r.identifiable = it->second.se < it->second.ref;
+      // Estimable at the smallest size worth naming, or the estimate stands 4 standard errors
+      // clear of zero once the baseline's parameters are free.
+      r.identifiable = it->second.se < std::max(it->second.ref, effectSize(r.effect, fc) / 4.0);
     }
     if (!r.identifiable) {
       if (r.effect == effect::kIncidenceBias && !out.radius_known)

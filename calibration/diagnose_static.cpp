@@ -336,9 +336,12 @@ struct WallFit {
   bool ok = false;
 };
 
-WallFit fitWalls(const Data& d, const std::vector<BinFit>& f, const std::vector<Line>& start, bool with_b) {
+WallFit fitWalls(const Data& d, const std::vector<BinFit>& f, const std::vector<Line>& start, bool with_b,
+                 double fixed_alpha0 = kNaN) {
   WallFit w;
   w.lines = start;
+  const bool alpha0_free = !std::isfinite(fixed_alpha0);
+  if (!alpha0_free) w.alpha0 = fixed_alpha0;
   for (std::size_t b = 0; b < d.bins.size(); ++b)
     if (d.bins[b].wall >= 0 && f[b].n > 0) w.bins.push_back(b);
   const int nl = static_cast<int>(start.size());
@@ -371,7 +374,9 @@ WallFit fitWalls(const Data& d, const std::vector<BinFit>& f, const std::vector<
         j(k, wl) = 1.0 / cu;
         j(k, wl + 1) = -l.p * std::sin(u) / (cu * cu) - w.b * std::sin(u);
       }
-      const Eigen::MatrixXd h = j.transpose() * wt.asDiagonal() * j;
+      if (!alpha0_free) j.col(0).setZero();
+      Eigen::MatrixXd h = j.transpose() * wt.asDiagonal() * j;
+      if (!alpha0_free) h(0, 0) = 1.0;
       const Eigen::VectorXd step = h.ldlt().solve(j.transpose() * wt.asDiagonal() * r);
       if (!step.allFinite()) return w;
       w.alpha0 += step(0);
@@ -413,9 +418,11 @@ WallFit fitWalls(const Data& d, const std::vector<BinFit>& f, const std::vector<
     r(k) = f[b].m - model(b, u, cu);
     wt(k) = 1.0 / (tau2 + f[b].s2 / f[b].n);
   }
-  const Eigen::MatrixXd h = j.transpose() * wt.asDiagonal() * j;
+  if (!alpha0_free) j.col(0).setZero();
+  Eigen::MatrixXd h = j.transpose() * wt.asDiagonal() * j;
+  if (!alpha0_free) h(0, 0) = 1e12;  // held: no uncertainty, no leverage
   const Eigen::MatrixXd cov = h.ldlt().solve(Eigen::MatrixXd::Identity(np, np));
-  w.alpha0_se = std::sqrt(std::max(cov(0, 0), 0.0));
+  w.alpha0_se = alpha0_free ? std::sqrt(std::max(cov(0, 0), 0.0)) : 0.0;
   if (with_b) w.b_se = std::sqrt(std::max(cov(1, 1), 0.0));
   w.loo_ll.resize(static_cast<std::size_t>(nb));
   w.resid.resize(static_cast<std::size_t>(nb));
@@ -873,8 +880,10 @@ DiagnosisResult diagnoseStatic(const StaticScans& data, const DiagnoseConfig& co
   std::vector<BinFit> f0;
   const Model base0 = fitModel(d, {}, Flags{}, 0.0, f0);
   const std::vector<Line> lines0 = findWalls(d, f0);
-  const WallFit w0 = fitWalls(d, f0, lines0, false);
-  const WallFit wb = fitWalls(d, f0, lines0, true);
+  const double given_a0 = config.static_range_offset_m;  // NaN: from the walls' straightness
+  const WallFit w0 = fitWalls(d, f0, lines0, false, given_a0);
+  const WallFit wb = fitWalls(d, f0, lines0, true, given_a0);
+  if (std::isfinite(given_a0)) out.baseline_extra["alpha0_given_m"] = given_a0;
   std::vector<double> used_y;
   for (std::size_t i = 0; i < d.y.size(); ++i)
     if (d.bin_of[i] >= 0) used_y.push_back(d.y[i]);
@@ -950,8 +959,8 @@ DiagnosisResult diagnoseStatic(const StaticScans& data, const DiagnoseConfig& co
     const Data rep = simulateStatic(d, f0, w0, base0, deriveSeed(config.seed, 2000 + static_cast<std::uint64_t>(b)), RangeEffects{});
     std::vector<BinFit> fr;
     const Model mr = fitModel(rep, {}, Flags{}, 0.0, fr);
-    const WallFit wr0 = fitWalls(rep, fr, w0.ok ? w0.lines : lines0, false);
-    const WallFit wrb = fitWalls(rep, fr, w0.ok ? w0.lines : lines0, true);
+    const WallFit wr0 = fitWalls(rep, fr, w0.ok ? w0.lines : lines0, false, given_a0);
+    const WallFit wrb = fitWalls(rep, fr, w0.ok ? w0.lines : lines0, true, given_a0);
     for (const auto& [k, v] : statistics(rep, fr, mr, wr0, wrb, q)) replica_stats[k].push_back(v);
     if (b < config.closeness_replicas) {
       for (const auto& r : recordsOf(rep, fr, mr)) sim_z.push_back(r.z);
@@ -1093,7 +1102,7 @@ DiagnosisResult diagnoseStatic(const StaticScans& data, const DiagnoseConfig& co
     // Identifiability.
     if (e == effect::kIncidenceBias) {
       r.standard_error = wb.ok ? wb.b_se : kInf;
-      r.identifiable = wb.ok && r.standard_error < 0.01;
+      r.identifiable = wb.ok && r.standard_error < std::max(0.01, std::abs(wb.b) / 4.0);
       if (!r.identifiable) r.note = "too few straight walls, or walls seen over too narrow a range of incidence";
     } else if (e == effect::kIncidenceNoise || e == effect::kRangeNoiseLaw) {
       double mm = 0.0, m2 = 0.0, n = 0.0;

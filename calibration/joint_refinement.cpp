@@ -353,7 +353,9 @@ JointResult refineJoint(const LandmarkObservations& obs, const JointInit& init, 
     for (std::size_t i = 0; i < readings.size(); ++i) {
       const auto& r = readings[i];
       const double inv = std::sqrt(std::max(weight[i], 1e-6)) / sigma[i];
-      ceres::LossFunction* loss = robust ? new ceres::HuberLoss(config.huber_sigmas) : nullptr;
+      ceres::LossFunction* loss = nullptr;
+      if (robust && config.cauchy_loss) loss = new ceres::CauchyLoss(config.huber_sigmas);
+      else if (robust) loss = new ceres::HuberLoss(config.huber_sigmas);
       if (fx.anyMean()) {
         problem.AddResidualBlock(effectCost(config.order, r.angle_rad, r.y_m, inv, static_cast<double>(r.scan) - t_ref),
                                  loss, poses[r.stop].data(), centres.at(r.landmark).data(), &radius, alpha.data(),

@@ -66,6 +66,9 @@ struct JointConfig {
   double sigma_psi_rad = 0.0087;  ///< prior std. dev. of each stop heading, radians (0.5 degree)
   bool estimate_radius = true;    ///< estimate one common landmark radius (else keep the initial one)
   double huber_sigmas = 2.0;      ///< Huber threshold, in standard deviations of the reading
+  /// Loss of the readings: false Huber (default), true Cauchy at the same scale (bounded
+  /// influence: gross outliers, e.g. grazing beams far noisier than the model says, stop pulling).
+  bool cauchy_loss = false;
   double lateral_fraction = 1.0;  ///< use beams passing within this fraction of the radius from the centre
   bool reselect = true;           ///< re-select the beams from the current estimate before every solve
   int outer_iterations = 6;       ///< noise re-estimations at most

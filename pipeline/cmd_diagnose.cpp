@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include <CLI/CLI.hpp>
+#include <glog/logging.h>
 
 #include "calibration/diagnose_sequence.hpp"
 #include "calibration/diagnose_static.hpp"
@@ -31,7 +32,7 @@ struct DiagnoseCommand {
   std::string data, out, model, mode = "auto", truth, candidates;
   std::uint64_t seed = 1;
   int replicas = 19, folds = 3, stop = -1;
-  double alpha = 0.01, radius_m = 0.0, sigma_s_m = 0.02;
+  double alpha = 0.01, radius_m = 0.0, sigma_s_m = 0.02, range_offset_m = std::nan("");
   bool overwrite = false;
   std::string command;
 };
@@ -70,6 +71,9 @@ calibration::StaticScans staticScans(const io::Sequence& seq, std::size_t stop, 
 
 void runDiagnose(const DiagnoseCommand& c) {
   namespace fs = std::filesystem;
+  // Ceres reports (through glog) the linear-solver failures its Levenberg-Marquardt steps recover
+  // from by themselves; the many fits of a diagnosis would fill the terminal with them.
+  FLAGS_minloglevel = google::GLOG_ERROR;
   io::checkOutsideInput(c.data, c.out);
   const io::Sequence seq = io::openSequence(c.data);
   calibration::DiagnoseConfig config;
@@ -78,6 +82,7 @@ void runDiagnose(const DiagnoseCommand& c) {
   config.folds = c.folds;
   config.alpha = c.alpha;
   config.sigma_s_m = c.sigma_s_m;
+  config.static_range_offset_m = c.range_offset_m;
   if (!c.candidates.empty()) {
     std::stringstream ss(c.candidates);
     std::string item;
@@ -219,6 +224,9 @@ void addDiagnoseCommand(CLI::App& app) {
   sub->add_option("--sigma-s", c->sigma_s_m, "Odometry: std. dev. of a stop's position around the commanded one (m)")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
+  sub->add_option("--range-offset", c->range_offset_m,
+                  "Static mode: the range offset alpha_0 (m) when known from a reference distance, instead of the walls' "
+                  "straightness");
   sub->add_flag("--overwrite", c->overwrite, "Replace --out if it exists");
   sub->callback([c, sub] {
     c->command = "lidarcal diagnose " + c->data + " --out " + c->out;
