@@ -5,7 +5,7 @@
 // over all scans) where the walls of the plan are, reproduces the six measurements in the scan
 // and estimates the lidar's range offset from them.
 //   build/pipeline/lidarcal import --from rosbag1 ../shared/data/rplidar_a2_room/rplidar_1.bag --out /tmp/rplidar
-//   build/bench/rplidar_reference /tmp/rplidar
+//   build/bench/rplidar_reference /tmp/rplidar [--plot DIR]   (DIR/rplidar_walls.png with gnuplot)
 //
 // The walls (beam index = degrees from angle_min = -180 degrees; see the plot made by
 // `lidarcal diagnose` and docs/FINDINGS.md): the plan's top wall, where the six lines start from,
@@ -15,6 +15,8 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <fstream>
 #include <map>
 #include <string>
 #include <vector>
@@ -149,6 +151,43 @@ int main(int argc, char** argv) {
   const double px = c.first + 0.60 * ux, py = c.second + 0.60 * uy;
   const double t = (bottom.d - (bottom.nx * px + bottom.ny * py)) / (bottom.nx * -top.nx + bottom.ny * -top.ny);
   std::printf("| 6 | (0.60 from the right wall) | 4.777 | %.4f | %+.4f | 4.8096 | +0.0396 |\n", t, t - 4.777);
+  if (argc >= 4 && std::string(argv[2]) == "--plot") {
+    const std::string dir = argv[3];
+    std::ofstream pts(dir + "/rplidar_mean_scan.dat"), lines(dir + "/rplidar_lines.dat"), meas(dir + "/rplidar_measurements.dat");
+    for (const auto& [b, q] : p) pts << q.first << ' ' << q.second << ' ' << b << '\n';
+    auto segment = [&](const Line& wall, int lo, int hi) {
+      // The line between the beams lo and hi (where they meet it).
+      for (int b : {lo, hi}) {
+        const double a = p.count(b) ? std::atan2(p.at(b).second, p.at(b).first) : 0.0;
+        const double r = wall.d / (wall.nx * std::cos(a) + wall.ny * std::sin(a));
+        lines << r * std::cos(a) << ' ' << r * std::sin(a) << '\n';
+      }
+      lines << "\n\n";
+    };
+    segment(top, 28, 68);
+    segment(left, 108, 135);
+    segment(right, 339, 350);
+    segment(cabinet, 290, 325);
+    segment(bottom, 205, 260);
+    for (const auto& r : refs) {
+      const Line m{top.nx, top.ny, top.d - r.from_top, 0, 0};
+      const auto u = intersect(m, left), v = intersect(m, *r.far);
+      meas << u.first << ' ' << u.second << '\n' << v.first << ' ' << v.second << "\n\n\n";
+    }
+    pts.close();
+    lines.close();
+    meas.close();
+    std::ofstream gp(dir + "/rplidar_walls.gp");
+    gp << "set terminal pngcairo size 900,900 font \"DejaVu Sans,10\"\nset output \"rplidar_walls.png\"\nset size ratio -1\nset grid\n"
+          "set title \"RPLIDAR A2 room: mean scan, wall lines, laser-meter lines 1-5\"\nset xlabel \"x [m]\"\nset ylabel \"y [m]\"\n"
+          "plot \"rplidar_mean_scan.dat\" using 1:2 with points pt 7 ps 0.4 lc rgb \"#777777\" title \"mean reading per beam\", "
+          "\"rplidar_lines.dat\" using 1:2 with lines lw 3 lc rgb \"#0077bb\" title \"wall lines (top, left, right, cabinet, bottom)\", "
+          "\"rplidar_measurements.dat\" using 1:2 with lines lw 1 dt 2 lc rgb \"#cc3311\" title \"measurement lines 1-5\", "
+          "\"<echo 0 0\" using 1:2 with points pt 9 ps 2 lc rgb \"black\" title \"lidar\"\n";
+    gp.close();
+    const std::string cmd = "cd '" + dir + "' && gnuplot rplidar_walls.gp";
+    if (std::system(cmd.c_str()) != 0) std::fprintf(stderr, "gnuplot failed\n");
+  }
   const double mean = sum / static_cast<double>(refs.size());
   double var = 0;
   for (double e : err) var += (e - mean) * (e - mean) / static_cast<double>(err.size() - 1);

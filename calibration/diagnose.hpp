@@ -111,8 +111,9 @@ struct CandidateResult {
 /// How close a simulation of a model comes to the measured data.
 struct Closeness {
   double ks_distance = 0.0;          ///< two-sample Kolmogorov-Smirnov distance of the standardised residuals
-  double variance_ratio_rms_log = 0.0;  ///< RMS over groups of ln(measured / simulated residual variance)
-  std::size_t groups = 0;            ///< groups in that RMS (sequence: landmark x stop x edge; static: beams)
+  /// Median over groups of |ln(measured / simulated residual variance)| (0: the spreads match)
+  double variance_ratio_median_abs_log = 0.0;
+  std::size_t groups = 0;            ///< groups compared (sequence: landmark x stop x edge; static: beams)
 };
 
 /// One residual of the measured data (or of a replica), with what it may depend on.

@@ -699,15 +699,18 @@ Closeness closeness(const ZSample& measured, const ZSample& simulated) {
     for (double x : v) s += (x - m) * (x - m);
     return s / static_cast<double>(v.size() - 1);
   };
-  double sum = 0.0;
+  std::vector<double> logs;
   for (const auto& [k, v] : g) {
     if (v.first.size() < 5 || v.second.size() < 5) continue;
     const double a = var(v.first), b = var(v.second);
     if (!(a > 0.0 && b > 0.0)) continue;
-    sum += std::pow(std::log(a / b), 2);
-    ++c.groups;
+    logs.push_back(std::abs(std::log(a / b)));
   }
-  c.variance_ratio_rms_log = c.groups ? std::sqrt(sum / static_cast<double>(c.groups)) : 0.0;
+  c.groups = logs.size();
+  if (!logs.empty()) {
+    std::nth_element(logs.begin(), logs.begin() + static_cast<long>(logs.size() / 2), logs.end());
+    c.variance_ratio_median_abs_log = logs[logs.size() / 2];
+  }
   return c;
 }
 

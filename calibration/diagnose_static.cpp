@@ -880,10 +880,16 @@ DiagnosisResult diagnoseStatic(const StaticScans& data, const DiagnoseConfig& co
   std::vector<BinFit> f0;
   const Model base0 = fitModel(d, {}, Flags{}, 0.0, f0);
   const std::vector<Line> lines0 = findWalls(d, f0);
-  const double given_a0 = config.static_range_offset_m;  // NaN: from the walls' straightness
-  const WallFit w0 = fitWalls(d, f0, lines0, false, given_a0);
+  double given_a0 = config.static_range_offset_m;  // NaN: from the walls' straightness
+  WallFit w0 = fitWalls(d, f0, lines0, false, given_a0);
+  // Walls too few or too short to bend measurably: alpha_0 stays unknown (held at 0).
+  const bool a0_identified = std::isfinite(given_a0) || (w0.ok && w0.alpha0_se <= 0.05);
+  if (!a0_identified) {
+    given_a0 = 0.0;
+    w0 = fitWalls(d, f0, lines0, false, given_a0);
+  }
   const WallFit wb = fitWalls(d, f0, lines0, true, given_a0);
-  if (std::isfinite(given_a0)) out.baseline_extra["alpha0_given_m"] = given_a0;
+  if (std::isfinite(config.static_range_offset_m)) out.baseline_extra["alpha0_given_m"] = given_a0;
   std::vector<double> used_y;
   for (std::size_t i = 0; i < d.y.size(); ++i)
     if (d.bin_of[i] >= 0) used_y.push_back(d.y[i]);
@@ -897,8 +903,8 @@ DiagnosisResult diagnoseStatic(const StaticScans& data, const DiagnoseConfig& co
   out.baseline_extra["beam_bins"] = static_cast<double>(d.bins.size());
   out.baseline_extra["wall_lines"] = static_cast<double>(lines0.size());
   out.baseline_extra["wall_bins"] = static_cast<double>(w0.bins.size());
-  out.baseline_extra["alpha0_m"] = w0.ok ? w0.alpha0 : kNaN;
-  out.baseline_extra["alpha0_se_m"] = w0.ok ? w0.alpha0_se : kNaN;
+  out.baseline_extra["alpha0_m"] = w0.ok && a0_identified ? w0.alpha0 : kNaN;
+  out.baseline_extra["alpha0_se_m"] = w0.ok && a0_identified && !std::isfinite(config.static_range_offset_m) ? w0.alpha0_se : kNaN;
   out.baseline_extra["wall_roughness_m"] = w0.ok ? w0.tau : kNaN;
   out.baseline_extra["reading_grid_m"] = q;
   std::size_t edges = 0;
@@ -1102,8 +1108,10 @@ DiagnosisResult diagnoseStatic(const StaticScans& data, const DiagnoseConfig& co
     // Identifiability.
     if (e == effect::kIncidenceBias) {
       r.standard_error = wb.ok ? wb.b_se : kInf;
-      r.identifiable = wb.ok && r.standard_error < std::max(0.01, std::abs(wb.b) / 4.0);
-      if (!r.identifiable) r.note = "too few straight walls, or walls seen over too narrow a range of incidence";
+      r.identifiable = a0_identified && wb.ok && r.standard_error < std::max(0.01, std::abs(wb.b) / 4.0);
+      if (!r.identifiable)
+        r.note = a0_identified ? "bends the walls almost as a range offset does: give the offset (--range-offset) from a reference distance"
+                               : "too few straight walls, or walls seen over too narrow a range of incidence";
     } else if (e == effect::kIncidenceNoise || e == effect::kRangeNoiseLaw) {
       double mm = 0.0, m2 = 0.0, n = 0.0;
       for (const auto& b : d.bins) {
@@ -1153,16 +1161,16 @@ DiagnosisResult diagnoseStatic(const StaticScans& data, const DiagnoseConfig& co
     std::vector<double> mz;
     for (const auto& r : out.measured) mz.push_back(r.z);
     c.ks_distance = ksDistance(mz, zs);
-    double s = 0.0;
+    std::vector<double> logs;
     for (std::size_t k = 0; k < d.bins.size(); ++k) {
       if (f0[k].n == 0 || vars[k].empty() || !(f0[k].s2 > 0.0)) continue;
       double mv = 0.0;
       for (double v : vars[k]) mv += v / static_cast<double>(vars[k].size());
       if (!(mv > 0.0)) continue;
-      s += std::pow(std::log(f0[k].s2 / mv), 2);
-      ++c.groups;
+      logs.push_back(std::abs(std::log(f0[k].s2 / mv)));
     }
-    c.variance_ratio_rms_log = c.groups ? std::sqrt(s / static_cast<double>(c.groups)) : 0.0;
+    c.groups = logs.size();
+    c.variance_ratio_median_abs_log = logs.empty() ? 0.0 : median(logs);
     return c;
   };
   out.closeness_baseline = closeness(sim_z, sim_var);

@@ -31,7 +31,7 @@ ojson numbers(const std::map<std::string, double>& m) {
 
 ojson closenessJson(const calibration::Closeness& c) {
   return ojson{{"ks_distance", num(c.ks_distance)},
-               {"variance_ratio_rms_log", num(c.variance_ratio_rms_log)},
+               {"variance_ratio_median_abs_log", num(c.variance_ratio_median_abs_log)},
                {"groups", c.groups}};
 }
 
@@ -300,10 +300,10 @@ void writeDiagnosis(const std::filesystem::path& dir, const DiagnosisResult& r, 
     for (const auto& [k, v] : r.extended_parameters) md << " " << k << " = " << fmt(v, 5) << ";";
     md << "\n\nScene keys that simulate it (`lidarcal simulate`, docs/FORMAT.md):\n\n";
     for (const auto& [k, v] : r.scene_keys) md << "- `" << k << "` = " << fmt(v, 6) << "\n";
-    md << "\n| simulation | KS distance of standardised residuals to the data | RMS ln(variance ratio) per group | groups |\n|---|---|---|---|\n";
-    md << "| baseline | " << fmt(r.closeness_baseline.ks_distance, 4) << " | " << fmt(r.closeness_baseline.variance_ratio_rms_log, 3)
+    md << "\n| simulation | KS distance of standardised residuals to the data | median abs ln(variance ratio) per group | groups |\n|---|---|---|---|\n";
+    md << "| baseline | " << fmt(r.closeness_baseline.ks_distance, 4) << " | " << fmt(r.closeness_baseline.variance_ratio_median_abs_log, 3)
        << " | " << r.closeness_baseline.groups << " |\n";
-    md << "| extended | " << fmt(r.closeness_extended.ks_distance, 4) << " | " << fmt(r.closeness_extended.variance_ratio_rms_log, 3)
+    md << "| extended | " << fmt(r.closeness_extended.ks_distance, 4) << " | " << fmt(r.closeness_extended.variance_ratio_median_abs_log, 3)
        << " | " << r.closeness_extended.groups << " |\n";
     if (r.calibration_mse_ratio_baseline > 0.0)
       md << "\nAgainst the truth: MSE ratio (seed 000 eq. 31) of the calibration " << fmt(r.calibration_mse_ratio_baseline, 1)
@@ -315,6 +315,21 @@ void writeDiagnosis(const std::filesystem::path& dir, const DiagnosisResult& r, 
   double tmax = 1.0;
   for (const auto& x : r.measured) tmax = std::max(tmax, x.time);
   const double time_bin = std::max(1.0, std::ceil(tmax / 40.0));
+  // The scatter's vertical range: the central 99 % of the residuals (a few gross ones would flatten the rest).
+  double ylo = -1.0, yhi = 1.0;
+  {
+    std::vector<double> mm;
+    for (const auto& x : r.measured)
+      if (std::isfinite(x.residual_m)) mm.push_back(1000.0 * x.residual_m);
+    if (mm.size() > 10) {
+      std::sort(mm.begin(), mm.end());
+      ylo = mm[mm.size() / 200];
+      yhi = mm[mm.size() - 1 - mm.size() / 200];
+      const double pad = 0.1 * (yhi - ylo) + 1e-3;
+      ylo -= pad;
+      yhi += pad;
+    }
+  }
   std::ostringstream gp;
   gp << "set terminal pngcairo size 900,760 font \"DejaVu Sans,10\"\nset grid\n";
   for (const auto& v : vars) {
@@ -334,11 +349,12 @@ void writeDiagnosis(const std::filesystem::path& dir, const DiagnosisResult& r, 
     io::writeTextAtomically(dir / ("binned_" + v.file + ".dat"), b.str());
     gp << "set output \"residuals_" << v.file << ".png\"\nset multiplot layout 2,1 title \"Residuals against " << v.title
        << ": measured vs simulated\"\n";
-    gp << "set xlabel \"" << v.label << "\"\nset ylabel \"residual [mm]\"\nset key top right\n";
+    gp << "set xlabel \"" << v.label << "\"\nset ylabel \"residual [mm] (central 99 %)\"\nset key top right\nset yrange ["
+       << ylo << ":" << yhi << "]\n";
     gp << "plot \"scatter_" << v.file << ".dat\" using 1:2 with points pt 7 ps 0.2 lc rgb \"#bbbbbb\" title \"measured readings\", "
        << "\"binned_" << v.file << ".dat\" using 1:2 with linespoints lw 2 pt 7 lc rgb \"#cc3311\" title \"measured, mean\", "
        << "\"binned_" << v.file << ".dat\" using 1:6 with linespoints lw 2 pt 6 dt 2 lc rgb \"#0077bb\" title \"simulated baseline, mean\"\n";
-    gp << "set ylabel \"sd of standardised residual\"\n";
+    gp << "set ylabel \"sd of standardised residual\"\nset yrange [*:*]\n";
     gp << "plot \"binned_" << v.file << ".dat\" using 1:3 with linespoints lw 2 pt 7 lc rgb \"#cc3311\" title \"measured\", "
        << "\"binned_" << v.file << ".dat\" using 1:4 with linespoints lw 2 pt 6 lc rgb \"#0077bb\" title \"simulated baseline\", "
        << "\"binned_" << v.file << ".dat\" using 1:5 with linespoints lw 2 pt 4 lc rgb \"#009944\" title \"simulated extended\", "
