@@ -357,15 +357,8 @@ std::map<std::string, double> statistics(const LandmarkObservations& obs, const 
   return st;
 }
 
-struct StatInfo {
-  const char* name;
-  const char* variable;
-  const char* description;
-  bool two_sided;
-};
-
-const std::vector<StatInfo>& statInfo() {
-  static const std::vector<StatInfo> info = {
+const std::vector<StatisticInfo>& statInfo() {
+  static const std::vector<StatisticInfo> info = {
       {"residual_vs_range", "range", "score of a range trend of the residuals beyond the bias polynomial (order n + 1), ~N(0,1)", true},
       {"spread_vs_range", "range", "score of the noise growing with log f(d) beyond the squared law (clipped squared residuals), ~N(0,1)", true},
       {"residual_vs_incidence", "incidence angle", "score of the residuals against 1 - cos(incidence), ~N(0,1)", true},
@@ -992,11 +985,7 @@ DiagnosisResult diagnoseSequence(const LandmarkObservations& obs, const Diagnose
       }
     if (b == 0) out.simulated_baseline = records(rr);
   }
-  for (const auto& s : statInfo()) {
-    auto it = measured_stats.find(s.name);
-    if (it == measured_stats.end()) continue;
-    out.battery.push_back(makeDiscrepancy(s.name, s.variable, s.description, it->second, replica_stats[s.name], s.two_sided));
-  }
+  out.battery = makeBattery(statInfo(), measured_stats, replica_stats);
   auto batteryOf = [&](const std::string& name) -> const Discrepancy* {
     for (const auto& d : out.battery)
       if (d.name == name) return &d;

@@ -714,15 +714,8 @@ std::map<std::string, double> statistics(const Data& d, const std::vector<BinFit
   return st;
 }
 
-struct StatInfo {
-  const char* name;
-  const char* variable;
-  const char* description;
-  bool two_sided;
-};
-
-const std::vector<StatInfo>& statInfo() {
-  static const std::vector<StatInfo> info = {
+const std::vector<StatisticInfo>& statInfo() {
+  static const std::vector<StatisticInfo> info = {
       {"spread_vs_range", "range", "score of the noise growing with ln(mean reading) beyond the squared law, ~N(0,1)", true},
       {"spread_vs_incidence", "incidence angle", "score of the noise growing with -ln cos(incidence), ~N(0,1)", true},
       {"spread_vs_bearing", "bearing", "cube root of chi^2 / 2 of the noise against cos and sin of the beam angle", false},
@@ -975,11 +968,7 @@ DiagnosisResult diagnoseStatic(const StaticScans& data, const DiagnoseConfig& co
     }
     if (b == 0) out.simulated_baseline = recordsOf(rep, fr, mr);
   }
-  for (const auto& s : statInfo()) {
-    auto it = measured_stats.find(s.name);
-    if (it == measured_stats.end()) continue;
-    out.battery.push_back(makeDiscrepancy(s.name, s.variable, s.description, it->second, replica_stats[s.name], s.two_sided));
-  }
+  out.battery = makeBattery(statInfo(), measured_stats, replica_stats);
 
   // 3. Candidates: held-out readings (folds by scan) and held-out wall bins (leave one out).
   std::vector<int> fold(data.scans);

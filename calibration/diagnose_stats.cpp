@@ -69,6 +69,19 @@ Discrepancy makeDiscrepancy(std::string name, std::string variable, std::string 
   return d;
 }
 
+std::vector<Discrepancy> makeBattery(const std::vector<StatisticInfo>& infos, const std::map<std::string, double>& measured,
+                                     const std::map<std::string, std::vector<double>>& replicas) {
+  std::vector<Discrepancy> out;
+  for (const auto& s : infos) {
+    const auto it = measured.find(s.name);
+    if (it == measured.end()) continue;
+    const auto rep = replicas.find(s.name);
+    out.push_back(makeDiscrepancy(s.name, s.variable, s.description, it->second,
+                                  rep != replicas.end() ? rep->second : std::vector<double>{}, s.two_sided));
+  }
+  return out;
+}
+
 double heldoutPValue(double gain, double se) {
   if (!std::isfinite(gain)) return std::numeric_limits<double>::quiet_NaN();
   if (gain <= 0.0) return 1.0;

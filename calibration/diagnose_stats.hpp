@@ -2,6 +2,7 @@
 // Statistics of the diagnosis (calibration/diagnose.hpp): p-values calibrated on bootstrap
 // replicas, multiple testing, distances between distributions, and the rule that names a cause.
 
+#include <map>
 #include <string>
 #include <vector>
 
@@ -31,6 +32,19 @@ double heldoutPValue(double gain, double se);
 /// stops), the held-out test where the baseline's fit bent to absorb the effect. NaN entries
 /// are left out.
 double combinedPValue(double p_heldout, double p_score);
+
+/// What a discrepancy statistic is, for the battery table.
+struct StatisticInfo {
+  const char* name;         ///< e.g. "spread_vs_incidence"
+  const char* variable;     ///< what the residuals are compared against
+  const char* description;  ///< how it is computed
+  bool two_sided;           ///< both directions count
+};
+
+/// The battery: each listed statistic's measured value against its values on the replicas
+/// (statistics missing from `measured` are left out).
+std::vector<Discrepancy> makeBattery(const std::vector<StatisticInfo>& infos, const std::map<std::string, double>& measured,
+                                     const std::map<std::string, std::vector<double>>& replicas);
 
 /// Holm's step-down adjustment of p-values (NaN entries are left out and stay NaN).
 std::vector<double> holmAdjust(const std::vector<double>& p);

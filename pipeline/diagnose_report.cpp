@@ -245,15 +245,18 @@ void writeDiagnosis(const std::filesystem::path& dir, const DiagnosisResult& r, 
 
   md << "## Baseline (the seeds' model)\n\n";
   md << "- bias f(d) = ";
-  for (std::size_t i = 0; i < r.baseline.bias.alpha.size(); ++i)
-    md << (i ? " + " : "") << fmt(r.baseline.bias.alpha[i], 5) << (i ? " d" : "") << (i > 1 ? "^" + std::to_string(i) : "");
+  for (std::size_t i = 0; i < r.baseline.bias.alpha.size(); ++i) {
+    const double a = r.baseline.bias.alpha[i];
+    md << (i ? (a < 0 ? " - " : " + ") : (a < 0 ? "-" : "")) << fmt(std::abs(a), 5) << (i ? " d" : "")
+       << (i > 1 ? "^" + std::to_string(i) : "");
+  }
   md << "\n- noise sigma = " << fmt(r.baseline.noise.sigma_e, 6) << " f(d)^2 (seed 004 eq. 1)";
   md << ": " << fmt(1000.0 * r.baseline.noise.stddev(1.0, r.baseline.bias), 1) << " mm at 1 m, "
      << fmt(1000.0 * r.baseline.noise.stddev(3.0, r.baseline.bias), 1) << " mm at 3 m\n";
   if (seq)
     md << "- landmark radius " << fmt(r.baseline_radius_m, 4) << " m (" << (r.radius_known ? "given" : "estimated")
        << "), sighting bearing noise " << fmt(rad2deg(r.baseline_sigma_theta_rad), 3) << " deg, stop headings at the commanded ones\n";
-  for (const auto& [k, v] : r.baseline_extra) md << "- " << k << ": " << fmt(v, 5) << "\n";
+  for (const auto& [k, v] : r.baseline_extra) md << "- " << k << ": " << (v == std::round(v) ? fmt(v, 0) : fmt(v, 5)) << "\n";
   md << "- held-out log-likelihood " << fmt(r.baseline_heldout_nats_per_point, 4) << " nats per point\n";
   if (!seq && !src.walls.empty()) {
     md << "\nWall lines fitted to the beam means (the geometric reference):\n\n| wall | normal [deg] | distance [m] | beams from [deg] | to [deg] | beams | RMS about the model [mm] |\n|---|---|---|---|---|---|---|\n";

@@ -63,8 +63,19 @@ inline HiddenEffectCase hiddenEffectCase(const std::string& effect, std::uint64_
     c.effects.incidence_bias_m = sign * (0.02 + 0.02 * u(rng));  // 2-4 cm at grazing incidence
     std::snprintf(buf, sizeof buf, "b %.3f m", c.effects.incidence_bias_m);
   } else if (effect == "landmark_bias") {
-    std::normal_distribution<double> n(0.0, 0.02);  // per-landmark offsets, sigma = 2 cm
-    for (auto& l : c.landmarks) l.range_offset_m = n(rng);
+    // Per-landmark offsets with sigma 2-2.5 cm: a random pattern scaled to that RMS about its
+    // mean (the mean is a common offset, which the bias polynomial's alpha_0 takes).
+    std::normal_distribution<double> n(0.0, 1.0);
+    const double sigma = 0.02 + 0.005 * u(rng);
+    double mean = 0.0, ss = 0.0;
+    for (auto& l : c.landmarks) {
+      l.range_offset_m = n(rng);
+      mean += l.range_offset_m / static_cast<double>(c.landmarks.size());
+    }
+    for (const auto& l : c.landmarks) ss += (l.range_offset_m - mean) * (l.range_offset_m - mean);
+    const double rms = std::sqrt(ss / static_cast<double>(c.landmarks.size()));
+    const double common = 0.02 * (u(rng) - 0.5);  // and a common part, up to +-1 cm
+    for (auto& l : c.landmarks) l.range_offset_m = common + (l.range_offset_m - mean) * sigma / rms;
     std::snprintf(buf, sizeof buf, "offsets %.3f %.3f %.3f %.3f %.3f m", c.landmarks[0].range_offset_m,
                   c.landmarks[1].range_offset_m, c.landmarks[2].range_offset_m, c.landmarks[3].range_offset_m,
                   c.landmarks[4].range_offset_m);

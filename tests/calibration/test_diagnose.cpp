@@ -20,7 +20,12 @@
 #include "calibration/joint_refinement.hpp"
 #include "calibration/diagnose_cases.hpp"
 #include "common/rng.hpp"
+#include "io/scene_io.hpp"
 #include "simulation/simulator.hpp"
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
 
 namespace lidarcal::calibration {
 namespace {
@@ -194,6 +199,42 @@ TEST(SimulatorEffects, MixedPixelsOnlyAtTheEdgesAndAtTheRequestedRate) {
   }
   EXPECT_EQ(inner_off, 0);
   EXPECT_NEAR(mixed_edges / edges, 0.3, 0.05);  // nearly every edge beam has a wall behind it here
+}
+
+TEST(SimulatorEffects, SceneKeysRoundTripAndStayAbsentWhenOff) {
+  const auto file = std::filesystem::temp_directory_path() / ("lidarcal-effects-" + std::to_string(::getpid()) + ".json");
+  {
+    std::ofstream out(file);
+    out << R"({"sensor": {"range_min_m": 0.1, "range_max_m": 8,
+                          "effects": {"incidence_noise_exponent": 1.5, "incidence_bias_m": 0.02,
+                                      "range_drift_m_per_scan": 0.0001, "mixed_pixel_fraction": 0.05,
+                                      "noise_student_dof": 4, "range_resolution_m": 0.001}},
+               "path": {"step_error_fraction": 0.03},
+               "landmarks": [{"x_m": 1, "y_m": 2, "radius_m": 0.1, "range_offset_m": 0.02}],
+               "walls": [{"x0_m": 0, "y0_m": 5, "x1_m": 3, "y1_m": 5, "range_offset_m": -0.01}]})";
+  }
+  const Scene s = io::readScene(file);
+  std::filesystem::remove(file);
+  EXPECT_EQ(s.sensor.effects.incidence_noise_exponent, 1.5);
+  EXPECT_EQ(s.sensor.effects.incidence_bias_m, 0.02);
+  EXPECT_EQ(s.sensor.effects.range_drift_m_per_scan, 0.0001);
+  EXPECT_EQ(s.sensor.effects.mixed_pixel_fraction, 0.05);
+  EXPECT_EQ(s.sensor.effects.noise_student_dof, 4.0);
+  EXPECT_EQ(s.sensor.effects.range_resolution_m, 0.001);
+  EXPECT_EQ(s.path.step_error_fraction, 0.03);
+  EXPECT_EQ(s.landmarks[0].range_offset_m, 0.02);
+  EXPECT_EQ(s.walls[0].range_offset_m, -0.01);
+  const auto j = io::sceneToJson(s);
+  EXPECT_EQ(j["sensor"]["effects"]["noise_student_dof"], 4.0);
+  EXPECT_EQ(j["walls"][0]["range_offset_m"], -0.01);
+  Scene off = s;
+  off.sensor.effects = RangeEffects{};
+  off.path.step_error_fraction = 0.0;
+  off.landmarks[0].range_offset_m = 0.0;
+  const auto k = io::sceneToJson(off);
+  EXPECT_FALSE(k["sensor"].contains("effects"));
+  EXPECT_FALSE(k["path"].contains("step_error_fraction"));
+  EXPECT_FALSE(k["landmarks"][0].contains("range_offset_m"));
 }
 
 TEST(SimulatorEffects, StepErrorScalesTheTruePath) {
