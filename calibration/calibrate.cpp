@@ -150,6 +150,24 @@ std::map<int, Eigen::Vector2d> rangeBearingCentres(const LandmarkObservations& o
   return out;
 }
 
+/// The estimated effect terms that were switched on, by name (model.json "effects").
+std::map<std::string, double> effectValues(const JointEffects& on, const JointEffectEstimates& e) {
+  std::map<std::string, double> m;
+  if (on.landmark_offsets)
+    for (const auto& [id, o] : e.landmark_offset_m) m["landmark_offset_m[" + std::to_string(id) + "]"] = o;
+  if (on.drift) {
+    m["range_drift_m_per_scan"] = e.drift_m_per_scan;
+    m["range_drift_reference_scan"] = e.drift_reference_scan;
+  }
+  if (on.angle_offset) m["angle_offset_rad"] = e.angle_offset_rad;
+  if (on.incidence_bias) m["incidence_bias_m"] = e.incidence_bias_m;
+  if (on.incidence_noise) m["incidence_noise_exponent"] = e.incidence_noise_exponent;
+  if (on.noise_exponent) m["noise_exponent"] = e.noise_exponent;
+  if (on.mixed_pixels) m["mixed_pixel_fraction"] = e.mixed_pixel_fraction;
+  if (on.odometry_scale) m["odometry_scale"] = e.odometry_scale;
+  return m;
+}
+
 /// Orders whose f cannot be inverted over the sensor's reading window are not candidates: the
 /// filtering stage could not use them (and they only arise from overfitting).
 Admissible invertibleOver(double range_min_m, double range_max_m) {
@@ -215,6 +233,7 @@ JointStage jointStage(const LandmarkObservations& obs, const CalibrationConfig& 
   from.centres = settled.centres;
   from.radius_m = settled.radius_m;
   from.model = settled.model;
+  from.effects = settled.effects;
   jc.reselect = false;
   jc.covariance = false;  // computed once, for the chosen order
   jc.outer_iterations = std::min(jc.outer_iterations, 2);  // the noise law settled in pass 1
@@ -257,6 +276,7 @@ JointStage jointStage(const LandmarkObservations& obs, const CalibrationConfig& 
     at.centres = runs[chosen].centres;
     at.radius_m = runs[chosen].radius_m;
     at.model = runs[chosen].model;
+    at.effects = runs[chosen].effects;
     jc.order = static_cast<int>(chosen) + 1;
     jc.covariance = true;
     jc.outer_iterations = 1;
@@ -437,6 +457,7 @@ CalibrationModel calibrate(const LandmarkObservations& obs, const CalibrationCon
   // The noise estimators side by side, on the joint refinement's readings and distances.
   fillNoiseFits(m, m.model.bias.order(), j.distances_m, j.readings_m, batches);
   m.alpha_covariance.assign(j.alpha_covariance.data(), j.alpha_covariance.data() + j.alpha_covariance.size());
+  m.effects = effectValues(config.joint.effects, j.effects);
   for (auto& c : m.landmarks) {
     auto it = j.centres.find(c.id);
     if (it == j.centres.end()) continue;

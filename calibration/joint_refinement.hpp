@@ -7,7 +7,17 @@
 // with priors tying each pose to its commanded value (sigma_s, sigma_psi; they also fix the
 // gauge: translation, rotation and scale of the world). Solved with Ceres (robust Huber loss);
 // the noise law is re-estimated from the residuals between solves (iteratively reweighted ML).
+//
+// Optional effect terms (JointEffects, all off by default; physical causes in docs/FORMAT.md,
+// "Effects") extend the model the way `lidarcal diagnose` finds necessary:
+//     y_i = f(d_i) + o_l + c (t_i - t_ref) + b (1 - cos phi_i) + sigma_i e_i,
+//     d_i along the beam at angle a_i + a_0,   sigma_i = sigma_e f(d_i)^kappa (1 / cos phi_i)^gamma,
+// with per-landmark offsets o_l, drift c per scan t, zero-angle offset a_0, incidence phi_i of
+// the beam on the pole; the outermost beam of each sighting may be a mixed pixel (a mixture with
+// a uniform over [f(d), range max]); per-stop headings may be held at the commanded ones (the
+// seeds' model) and the commanded steps may be scaled by (1 + s) (odometry scale).
 
+#include <cstdint>
 #include <map>
 #include <string>
 #include <vector>
@@ -19,6 +29,35 @@
 
 namespace lidarcal::calibration {
 
+/// Effect terms beyond the seeds' model. Defaults: the refinement as it always was.
+struct JointEffects {
+  bool estimate_heading = true;   ///< per-stop heading free with prior sigma_psi_rad; false: held at the commanded one
+  bool landmark_offsets = false;  ///< one range offset per landmark (surface, reflectivity), reported with mean zero
+  bool drift = false;             ///< reading grows linearly with the scan index (warm-up)
+  bool angle_offset = false;      ///< one zero-angle offset added to every beam angle (lidar mounted rotated)
+  bool incidence_bias = false;    ///< reading grows by b (1 - cos phi), phi the incidence on the pole
+  bool incidence_noise = false;   ///< noise grows as (1 / cos phi)^gamma, gamma estimated between solves
+  bool noise_exponent = false;    ///< noise sigma_e f(d)^kappa, kappa estimated between solves (squared law: 2)
+  bool mixed_pixels = false;      ///< outermost beams: mixture with a uniform, fraction estimated between solves (EM)
+  bool odometry_scale = false;    ///< commanded steps scaled by (1 + s), s estimated (the true step length differs)
+  /// Whether a term in the mean of the readings is on (they need the extended residual).
+  bool anyMean() const { return landmark_offsets || drift || angle_offset || incidence_bias; }
+};
+
+/// Estimates of the effect terms; neutral values for the terms that were off.
+struct JointEffectEstimates {
+  std::map<int, double> landmark_offset_m;  ///< per landmark id, mean zero over landmarks, metres
+  double drift_m_per_scan = 0.0;            ///< c, metres per scan
+  double drift_reference_scan = 0.0;        ///< t_ref: scan index where the drift term is zero (mean scan of the fit)
+  double angle_offset_rad = 0.0;            ///< a_0, radians
+  double incidence_bias_m = 0.0;            ///< b, metres
+  double incidence_noise_exponent = 0.0;    ///< gamma
+  double noise_exponent = 2.0;              ///< kappa of sigma_e f(d)^kappa (2: seed 004's law)
+  double mixed_pixel_fraction = 0.0;        ///< of the outermost beams of the sightings
+  double odometry_scale = 0.0;              ///< s: true steps are (1 + s) times the commanded ones
+  double heading_rms_rad = 0.0;             ///< RMS of the refined minus the commanded headings, radians
+};
+
 struct JointConfig {
   int order = 2;                  ///< bias polynomial order n (>= 1)
   NoiseKind noise = NoiseKind::squared;  ///< noise law re-estimated between solves: squared, polynomial or constant
@@ -27,11 +66,21 @@ struct JointConfig {
   double sigma_psi_rad = 0.0087;  ///< prior std. dev. of each stop heading, radians (0.5 degree)
   bool estimate_radius = true;    ///< estimate one common landmark radius (else keep the initial one)
   double huber_sigmas = 2.0;      ///< Huber threshold, in standard deviations of the reading
+  /// Loss of the readings: false Huber (default), true Cauchy at the same scale (bounded
+  /// influence: gross outliers, e.g. grazing beams far noisier than the model says, stop pulling).
+  bool cauchy_loss = false;
   double lateral_fraction = 1.0;  ///< use beams passing within this fraction of the radius from the centre
   bool reselect = true;           ///< re-select the beams from the current estimate before every solve
   int outer_iterations = 6;       ///< noise re-estimations at most
   int max_solver_iterations = 200;  ///< Ceres iterations per solve
   bool covariance = true;         ///< compute the covariance of the bias coefficients
+  JointEffects effects;           ///< effect terms (all off: the seeds' model plus per-stop poses)
+  bool keep_all_beams = false;    ///< use every beam of every sighting (the caller selected them); ignores lateral_fraction
+  bool settle_geometry = true;    ///< first solve with the bias held (off when starting from a converged solution)
+  /// Weight of a uniform density over the reading window mixed into every reading's likelihood
+  /// (in the reported likelihood only, not in the fit), so that a few gross outliers cannot
+  /// dominate a comparison of models. 0: plain Gaussian likelihood (default).
+  double outlier_floor = 0.0;
   void validate() const;          ///< throws std::invalid_argument
 };
 
@@ -41,6 +90,7 @@ struct JointInit {
   std::map<int, Eigen::Vector2d> centres;  ///< landmark id -> centre (world frame)
   double radius_m = 0.1;                   ///< common landmark radius
   RangeModel model;                        ///< bias and noise to start from
+  JointEffectEstimates effects;            ///< effect terms to start from (used for the terms switched on)
 };
 
 struct JointResult {
@@ -59,15 +109,51 @@ struct JointResult {
   std::vector<double> readings_m;          ///< the readings themselves (same order)
   std::size_t outliers = 0;                ///< readings beyond the Huber threshold at the end
   double neg_log_likelihood = 0.0;         ///< Gaussian NLL of the readings at the solution
+  /// NLL of the commanded stop positions as measurements of the refined ones (seed 000 eq. 8,
+  /// sigma_s_m; with the odometry scale, of the scaled commanded path). Headings not included.
+  double prior_neg_log_likelihood = 0.0;
   double aic = 0.0;                        ///< 2 k + 2 NLL, k = bias + noise + radius parameters
   double bic = 0.0;                        ///< k ln N + 2 NLL
   int solver_iterations = 0;               ///< Ceres iterations, all solves
   int outer_iterations = 0;                ///< noise re-estimations done
   bool converged = false;                  ///< last solve converged and the noise settled
   std::string message;                     ///< why not, when not
+  JointEffectEstimates effects;            ///< effect terms (neutral when off)
+  int effect_parameters = 0;               ///< parameters of the effect terms switched on (heading: one per stop)
+  double window_min_m = 0.0;               ///< reading window of the outlier floor and the mixed pixels, metres
+  double window_max_m = 0.0;               ///< (sensor window, or 1.25 x the largest reading when unknown)
 };
 
 JointResult refineJoint(const LandmarkObservations& obs, const JointInit& init, const JointConfig& config);
+
+/// One beam reading evaluated under a fitted joint model.
+struct JointReading {
+  std::size_t sighting = 0;     ///< index into LandmarkObservations::sightings
+  std::size_t stop = 0;         ///< stop index
+  std::size_t scan = 0;         ///< scan index
+  int landmark = 0;             ///< landmark id
+  std::uint32_t beam = 0;       ///< beam index in its scan
+  double angle_rad = 0.0;       ///< nominal beam angle in the sensor frame, radians
+  double y_m = 0.0;             ///< the reading, metres
+  double d_m = 0.0;             ///< predicted true distance along the beam, metres
+  double lateral = 0.0;         ///< signed miss distance of the beam from the centre over the radius (0 centre, +-1 tangent)
+  double cos_incidence = 1.0;   ///< cosine of the incidence on the pole (clamped at 0.05)
+  bool edge = false;            ///< first or last beam of its sighting (depth discontinuity next to it)
+  double mean_m = 0.0;          ///< predicted reading: f(d) plus the effect terms, metres
+  double sigma_m = 0.0;         ///< predicted standard deviation, metres
+  double log_likelihood = 0.0;  ///< of the reading under the model (with its mixed-pixel and outlier terms), nats
+};
+
+/// Every finite beam of the sightings of `obs` whose landmark and stop the fit knows, under the
+/// fitted model (poses, centres, radius, bias, noise, effects). Used for residuals and for
+/// held-out likelihoods (obs may hold scans the fit never saw, at stops it refined).
+std::vector<JointReading> evaluateJoint(const LandmarkObservations& obs, const JointResult& fit, const JointConfig& config);
+
+/// Log-likelihood of a reading y with predicted mean and standard deviation, as refineJoint
+/// reports it: Gaussian, mixed with a uniform over [mean, window_max] with weight
+/// `mixed_fraction` (mixed pixels) and with a uniform over the window with weight `outlier_floor`.
+double readingLogLikelihood(double y_m, double mean_m, double sigma_m, double mixed_fraction, double outlier_floor,
+                            double window_min_m, double window_max_m);
 
 /// Distance along a ray from (px, py) at angle a to the circle (cx, cy, r); for a ray that
 /// misses, the distance to the point of closest approach (continuous at the tangent).

@@ -3,6 +3,7 @@
 // (docs/FORMAT.md). Plain data: calibration/ fills it, io/ reads and writes it.
 
 #include <array>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -59,6 +60,10 @@ struct CalibrationModel {
   std::vector<CalibratedLandmark> landmarks;  ///< landmark map
   std::vector<Pose2> stop_poses;     ///< pose of each stop: refined (joint) or commanded (closed form)
   std::vector<double> alpha_covariance;       ///< row-major (n+1)x(n+1), empty when not computed
+  /// Effect terms the joint refinement estimated with them (`calibrate --effects`, name with
+  /// unit -> value, e.g. "range_drift_m_per_scan"); empty without effects. They describe the
+  /// calibration data; `correct` applies the bias only.
+  std::map<std::string, double> effects;
   // Diagnostics
   std::string status = "ok";         ///< ok or a reason
   std::string message;               ///< details a user can act on

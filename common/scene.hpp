@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "common/pose2.hpp"
+#include "common/range_effects.hpp"
 #include "common/range_model.hpp"
 
 namespace lidarcal {
@@ -17,12 +18,14 @@ struct Cylinder {
   double x_m = 0.0;       ///< centre x in the world frame, metres
   double y_m = 0.0;       ///< centre y in the world frame, metres
   double radius_m = 0.1;  ///< radius, metres (> 0)
+  double range_offset_m = 0.0;  ///< added to every reading on this surface (reflectivity, colour), metres
 };
 
 /// A straight wall segment in the world frame.
 struct Segment {
   double x0_m = 0.0, y0_m = 0.0;  ///< first end point, metres
   double x1_m = 1.0, y1_m = 0.0;  ///< second end point, metres
+  double range_offset_m = 0.0;    ///< added to every reading on this surface (reflectivity, colour), metres
 };
 
 /// The scanning lidar: beam layout, range model and angular noise.
@@ -34,6 +37,7 @@ struct SensorSpec {
   RangeModel range;                      ///< bias f(d), noise law and range window [min, max]
   double bearing_noise_rad = 0.0;        ///< std. dev. of per-beam angular jitter, radians
   double mount_yaw_rad = 0.0;            ///< lidar zero angle rotated against the robot, radians
+  RangeEffects effects;                  ///< effects beyond the seeds' model (all off by default)
 };
 
 /// The robot's path: stops at fixed steps along a straight line (seed 000 eqs. 7-8).
@@ -44,6 +48,8 @@ struct PathSpec {
   int scans_per_stop = 10;     ///< 360-degree sweeps recorded at each stop
   double sigma_s_m = 0.0;      ///< std. dev. of the true position around the commanded one (eq. 8), metres
   double sigma_psi_rad = 0.0;  ///< std. dev. of the true heading around the commanded one, radians
+  /// The true step is step_m (1 + step_error_fraction): an odometry scale error. 0 = off.
+  double step_error_fraction = 0.0;
 };
 
 /// Everything the simulator needs to produce a scan sequence.

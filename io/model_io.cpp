@@ -78,6 +78,11 @@ void writeModel(const std::filesystem::path& file, const CalibrationModel& m) {
                                 {"readings", m.readings},
                                 {"pose_scatter_m", m.pose_scatter_m},
                                 {"heading_scatter_rad", m.heading_scatter_rad}}}};
+  if (!m.effects.empty()) {
+    ojson fx = ojson::object();
+    for (const auto& [k, v] : m.effects) fx[k] = number(v);
+    j["effects"] = fx;
+  }
   writeTextAtomically(file, j.dump(2) + "\n");
 }
 
@@ -124,6 +129,12 @@ CalibrationModel readModel(const std::filesystem::path& file) {
       e.requireObject();
       m.stop_poses.push_back(Pose2{e.getNumber("x_m"), e.getNumber("y_m"), e.getNumber("yaw_rad")});
     }
+  if (root.has("effects")) {
+    const JsonView fx = root.child("effects");
+    fx.requireObject();
+    for (const auto& [k, v] : fx.json().items())
+      if (!v.is_null()) m.effects[k] = fx.getNumber(k);
+  }
   if (root.has("diagnostics")) {
     const JsonView d = root.child("diagnostics");
     m.status = d.getString("status", "ok");

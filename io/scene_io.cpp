@@ -19,7 +19,35 @@ Cylinder parseCylinder(const JsonView& v) {
   c.x_m = v.getNumber("x_m");
   c.y_m = v.getNumber("y_m");
   c.radius_m = v.getPositive("radius_m");
+  c.range_offset_m = v.getNumber("range_offset_m", 0.0);
   return c;
+}
+
+RangeEffects parseEffects(const JsonView& v) {
+  v.requireObject();
+  RangeEffects e;
+  e.incidence_noise_exponent = v.getNonNegative("incidence_noise_exponent", 0.0);
+  e.incidence_bias_m = v.getNumber("incidence_bias_m", 0.0);
+  e.range_drift_m_per_scan = v.getNumber("range_drift_m_per_scan", 0.0);
+  e.mixed_pixel_fraction = v.getNonNegative("mixed_pixel_fraction", 0.0);
+  if (e.mixed_pixel_fraction > 1.0) v.fail("mixed_pixel_fraction", "must lie in [0, 1]");
+  e.noise_student_dof = v.getNonNegative("noise_student_dof", 0.0);
+  if (e.noise_student_dof != 0.0 && e.noise_student_dof <= 2.0)
+    v.fail("noise_student_dof", "must be 0 (Gaussian noise) or above 2 (a Student t with finite variance)");
+  e.range_resolution_m = v.getNonNegative("range_resolution_m", 0.0);
+  return e;
+}
+
+/// The effects that are on (an empty object when none is).
+ojson effectsToJson(const RangeEffects& e) {
+  ojson j = ojson::object();
+  if (e.incidence_noise_exponent != 0.0) j["incidence_noise_exponent"] = e.incidence_noise_exponent;
+  if (e.incidence_bias_m != 0.0) j["incidence_bias_m"] = e.incidence_bias_m;
+  if (e.range_drift_m_per_scan != 0.0) j["range_drift_m_per_scan"] = e.range_drift_m_per_scan;
+  if (e.mixed_pixel_fraction != 0.0) j["mixed_pixel_fraction"] = e.mixed_pixel_fraction;
+  if (e.noise_student_dof != 0.0) j["noise_student_dof"] = e.noise_student_dof;
+  if (e.range_resolution_m != 0.0) j["range_resolution_m"] = e.range_resolution_m;
+  return j;
 }
 
 Pose2 parsePose(const JsonView& v) {
@@ -94,6 +122,7 @@ Scene parseScene(const JsonView& root) {
   else spec.range.noise.kind = NoiseKind::none;
   spec.bearing_noise_rad = deg2rad(sensor.getNonNegative("bearing_noise_deg", 0.0));
   spec.mount_yaw_rad = deg2rad(sensor.getNumber("mount_yaw_deg", 0.0));
+  if (sensor.has("effects")) spec.effects = parseEffects(sensor.child("effects"));
 
   const JsonView path = root.child("path");
   PathSpec& p = s.path;
@@ -105,6 +134,8 @@ Scene parseScene(const JsonView& root) {
     path.fail("stops", "stops x scans_per_stop exceeds 10 million scans");
   p.sigma_s_m = path.getNonNegative("sigma_s_m", 0.0);
   p.sigma_psi_rad = deg2rad(path.getNonNegative("sigma_psi_deg", 0.0));
+  p.step_error_fraction = path.getNumber("step_error_fraction", 0.0);
+  if (!(p.step_error_fraction > -1.0)) path.fail("step_error_fraction", "must be above -1");
 
   if (root.has("landmarks"))
     for (const auto& e : root.array("landmarks")) s.landmarks.push_back(parseCylinder(e));
@@ -113,7 +144,8 @@ Scene parseScene(const JsonView& root) {
   if (root.has("walls"))
     for (const auto& e : root.array("walls")) {
       e.requireObject();
-      Segment w{e.getNumber("x0_m"), e.getNumber("y0_m"), e.getNumber("x1_m"), e.getNumber("y1_m")};
+      Segment w{e.getNumber("x0_m"), e.getNumber("y0_m"), e.getNumber("x1_m"), e.getNumber("y1_m"),
+                e.getNumber("range_offset_m", 0.0)};
       if (std::hypot(w.x1_m - w.x0_m, w.y1_m - w.y0_m) <= 0.0) e.fail("", "wall has zero length");
       s.walls.push_back(w);
     }
@@ -139,19 +171,28 @@ nlohmann::ordered_json sceneToJson(const Scene& s) {
                {"noise", noiseToJson(s.sensor.range.noise)},
                {"bearing_noise_deg", rad2deg(s.sensor.bearing_noise_rad)},
                {"mount_yaw_deg", rad2deg(s.sensor.mount_yaw_rad)}};
+  // Keys of the effects only when set, so that scenes without effects keep their bytes.
+  if (s.sensor.effects.any()) sensor["effects"] = effectsToJson(s.sensor.effects);
   ojson path{{"start", ojson{{"x_m", s.path.start.x_m}, {"y_m", s.path.start.y_m}, {"yaw_deg", rad2deg(s.path.start.yaw_rad)}}},
              {"step_m", s.path.step_m},
              {"stops", s.path.stops},
              {"scans_per_stop", s.path.scans_per_stop},
              {"sigma_s_m", s.path.sigma_s_m},
              {"sigma_psi_deg", rad2deg(s.path.sigma_psi_rad)}};
+  if (s.path.step_error_fraction != 0.0) path["step_error_fraction"] = s.path.step_error_fraction;
   auto cylinders = [](const std::vector<Cylinder>& cs) {
     ojson a = ojson::array();
-    for (const auto& c : cs) a.push_back(ojson{{"x_m", c.x_m}, {"y_m", c.y_m}, {"radius_m", c.radius_m}});
+    for (const auto& c : cs) {
+      a.push_back(ojson{{"x_m", c.x_m}, {"y_m", c.y_m}, {"radius_m", c.radius_m}});
+      if (c.range_offset_m != 0.0) a.back()["range_offset_m"] = c.range_offset_m;
+    }
     return a;
   };
   ojson walls = ojson::array();
-  for (const auto& w : s.walls) walls.push_back(ojson{{"x0_m", w.x0_m}, {"y0_m", w.y0_m}, {"x1_m", w.x1_m}, {"y1_m", w.y1_m}});
+  for (const auto& w : s.walls) {
+    walls.push_back(ojson{{"x0_m", w.x0_m}, {"y0_m", w.y0_m}, {"x1_m", w.x1_m}, {"y1_m", w.y1_m}});
+    if (w.range_offset_m != 0.0) walls.back()["range_offset_m"] = w.range_offset_m;
+  }
   return ojson{{"name", s.name},       {"sensor", sensor},   {"path", path},
                {"landmarks", cylinders(s.landmarks)}, {"clutter", cylinders(s.clutter)}, {"walls", walls},
                {"publish_landmark_radius", s.publish_landmark_radius}};

@@ -39,6 +39,10 @@ void addCalibrationOptions(CLI::App* app, const std::shared_ptr<CalibrationOptio
   app->add_option("--min-stops", o->min_stops, "A landmark must be seen from at least this many stops")
       ->check(CLI::Range(2, 1000))
       ->capture_default_str();
+  app->add_option("--effects", o->effects,
+                  "Comma-separated effect terms for the joint refinement, as `lidarcal diagnose` names them: "
+                  "incidence_noise, incidence_bias, landmark_bias, range_drift, angle_offset, range_noise_law, mixed_pixels, "
+                  "odometry_scale (per-stop headings, heading_error, are always refined)");
 }
 
 calibration::CalibrationConfig calibrationConfig(const CalibrationOptions& o) {
@@ -55,6 +59,28 @@ calibration::CalibrationConfig calibrationConfig(const CalibrationOptions& o) {
   c.triangulation.min_stops = o.min_stops;
   c.joint.sigma_s_m = o.sigma_s_m;
   c.joint.sigma_psi_rad = deg2rad(o.sigma_psi_deg);
+  std::string rest = o.effects;
+  while (!rest.empty()) {
+    const auto comma = rest.find(',');
+    const std::string e = rest.substr(0, comma);
+    rest = comma == std::string::npos ? "" : rest.substr(comma + 1);
+    auto& fx = c.joint.effects;
+    if (e.empty() || e == "heading_error") continue;
+    if (e == "incidence_noise") fx.incidence_noise = true;
+    else if (e == "incidence_bias") fx.incidence_bias = true;
+    else if (e == "landmark_bias") fx.landmark_offsets = true;
+    else if (e == "range_drift") fx.drift = true;
+    else if (e == "angle_offset") fx.angle_offset = true;
+    else if (e == "range_noise_law") fx.noise_exponent = true;
+    else if (e == "mixed_pixels") fx.mixed_pixels = true;
+    else if (e == "odometry_scale") fx.odometry_scale = true;
+    else
+      throw InputError("", "--effects", "unknown effect '" + e + "'",
+                       "use incidence_noise, incidence_bias, landmark_bias, range_drift, angle_offset, range_noise_law, "
+                       "mixed_pixels or odometry_scale");
+  }
+  if ((c.joint.effects.incidence_noise || c.joint.effects.noise_exponent) && c.noise == NoiseKind::polynomial)
+    throw InputError("", "--effects", "incidence_noise and range_noise_law need --noise squared or constant");
   return c;
 }
 

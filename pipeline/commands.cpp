@@ -19,6 +19,7 @@ void registerCommands(CLI::App& app) {
   addNoiseConsistencyCommand(app);
   addLandmarksToObservationsCommand(app);
   addMonteCarloCommand(app);
+  addDiagnoseCommand(app);
 }
 
 std::filesystem::path dataDir() {

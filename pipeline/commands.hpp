@@ -32,6 +32,7 @@ void addLandmarksToObservationsCommand(CLI::App& app);
 void simulateObservationScene(const std::string& scene_file, const std::string& out_dir, std::uint64_t seed,
                               bool overwrite);
 void addMonteCarloCommand(CLI::App& app);
+void addDiagnoseCommand(CLI::App& app);
 
 /// Directory of the bundled data (scenes, example): $LIDARCAL_DATA_DIR, the source tree's
 /// data/ for a build tree, or the installed share/lidarcal.

@@ -13,19 +13,24 @@ LandmarkLevelSample simulateLandmarkLevel(const LandmarkLevelConfig& config, std
   LandmarkLevelSample out;
   Scene scene;
   scene.path = config.path;
-  out.stops = planStops(scene, seed);  // eqs. 7-8, shared with the scan-level simulator
+  out.stops = config.stops.empty() ? planStops(scene, seed) : config.stops;  // eqs. 7-8, shared with the scan-level simulator
   out.obs.range_min_m = config.model.range_min_m;
   out.obs.range_max_m = config.model.range_max_m;
   if (config.publish_radius && !config.landmarks.empty()) out.obs.landmark_radius_m = config.landmarks.front().radius_m;
   for (const auto& s : out.stops) out.obs.commanded.push_back(s.commanded);
 
   std::normal_distribution<double> normal(0.0, 1.0);
+  Scene background;  // what an edge beam may see behind its landmark (mixed pixels)
+  background.landmarks = config.landmarks;
+  background.walls = config.walls;
+  const double mount = config.mount_yaw_rad;
   for (std::size_t k = 0; k < out.stops.size(); ++k) {
     const TruthStop& stop = out.stops[k];
     const Pose2& a = stop.actual;
     for (std::size_t i = 0; i < stop.scans; ++i) {
       const std::size_t scan = stop.first_scan + i;
       auto rng = makeRng(seed, scan + 1);
+      auto effect_rng = effectRng(seed, scan);
       for (std::size_t l = 0; l < config.landmarks.size(); ++l) {
         const Cylinder& c = config.landmarks[l];
         const double dx = c.x_m - a.x_m, dy = c.y_m - a.y_m;
@@ -37,34 +42,63 @@ LandmarkLevelSample simulateLandmarkLevel(const LandmarkLevelConfig& config, std
         s.stop = k;
         s.scan = scan;
         s.landmark = static_cast<int>(l) + 1;
-        const double true_bearing = wrapAngle(std::atan2(dy, dx) - a.yaw_rad);
+        const double true_bearing = wrapAngle(std::atan2(dy, dx) - a.yaw_rad - mount);
         s.bearing_rad = wrapAngle(true_bearing + config.sigma_theta_rad * v);  // eq. 5
         s.centre_range_m = centre;
         s.radius_m = c.radius_m;
         std::vector<double> truth;
         if (!config.beams) {
           const double d = centre - c.radius_m;  // eq. 2 minus the radius
-          const double y = rangeReading(config.model, d, e);  // eq. 3
+          const double y = effectReading(config.model, config.effects, d, BeamContext{1.0, c.range_offset_m, scan}, e,
+                                         effect_rng);  // eq. 3
           if (y < config.model.range_min_m || y > config.model.range_max_m) continue;
           s.beams.push_back(BeamReading{s.bearing_rad, y, 0});
           truth.push_back(d);
         } else {
           const double half = std::asin(c.radius_m / centre);
           const double inc = config.angle_increment_rad;
-          const auto first = static_cast<long>(std::ceil((true_bearing - half) / inc));
-          const auto last = static_cast<long>(std::floor((true_bearing + half) / inc));
+          const double grid = config.angle_min_rad;
+          const auto first = static_cast<long>(std::ceil((true_bearing - half - grid) / inc));
+          const auto last = static_cast<long>(std::floor((true_bearing + half - grid) / inc));
+          const long n = static_cast<long>(std::llround(2.0 * kPi / inc));
+          auto rayAt = [&](long j) {
+            const double w = a.yaw_rad + mount + grid + static_cast<double>(j) * inc;
+            return Ray{a.x_m, a.y_m, std::cos(w), std::sin(w)};
+          };
+          // The beams that hit, then their readings (the outermost ones may be mixed pixels).
+          std::vector<std::pair<long, double>> hits;  // (grid index, true distance or NaN)
+          std::vector<double> beam_noise;
           for (long j = first; j <= last; ++j) {
-            const double angle = static_cast<double>(j) * inc;
-            const Ray ray{a.x_m, a.y_m, std::cos(a.yaw_rad + angle), std::sin(a.yaw_rad + angle)};
-            const auto t = intersectCircle(ray, c);
-            const double eb = normal(rng);
-            if (!t) continue;
-            const double y = rangeReading(config.model, *t, eb);
+            const auto t = intersectCircle(rayAt(j), c);
+            hits.emplace_back(j, t ? *t : std::nan(""));
+            beam_noise.push_back(normal(rng));  // drawn for every grid beam, as before effects existed
+          }
+          long first_hit = last + 1, last_hit = first - 1;
+          for (const auto& [j, t] : hits)
+            if (std::isfinite(t)) {
+              first_hit = std::min(first_hit, j);
+              last_hit = std::max(last_hit, j);
+            }
+          for (std::size_t h = 0; h < hits.size(); ++h) {
+            const auto [j, t] = hits[h];
+            if (!std::isfinite(t)) continue;
+            double back = std::nan("");
+            for (long nb : {j - 1, j + 1}) {
+              if ((nb == j - 1 && j != first_hit) || (nb == j + 1 && j != last_hit)) continue;
+              const RayHit bh = castRay(background, rayAt(nb));
+              if (bh.kind != io::TargetKind::none && bh.range_m > t && (std::isnan(back) || bh.range_m < back))
+                back = bh.range_m;
+            }
+            const double dm = mixedPixelDistance(config.effects, t, back, effect_rng);
+            const Ray ray = rayAt(j);
+            const double perp = (c.y_m - a.y_m) * ray.dx - (c.x_m - a.x_m) * ray.dy;
+            const double cos_inc = std::sqrt(std::max(0.0, 1.0 - (perp / c.radius_m) * (perp / c.radius_m)));
+            const double y = effectReading(config.model, config.effects, dm, BeamContext{cos_inc, c.range_offset_m, scan},
+                                           beam_noise[h], effect_rng);
             if (y < config.model.range_min_m || y > config.model.range_max_m) continue;
-            const long n = static_cast<long>(std::llround(2.0 * kPi / inc));
             const auto beam = static_cast<std::uint32_t>(((j % n) + n) % n);
-            s.beams.push_back(BeamReading{wrapAngle(angle), y, beam});
-            truth.push_back(*t);
+            s.beams.push_back(BeamReading{wrapAngle(grid + static_cast<double>(j) * inc), y, beam});
+            truth.push_back(t);
           }
           if (s.beams.empty()) continue;
         }

@@ -21,6 +21,13 @@ struct LandmarkLevelConfig {
   bool beams = false;                   ///< also ray-cast the beam grid on each landmark
   double angle_increment_rad = 0.017453292519943295;  ///< beam grid step (1 degree)
   bool publish_radius = true;           ///< set LandmarkObservations::landmark_radius_m
+  RangeEffects effects;                 ///< effects beyond the seeds' model (common/range_effects.hpp); off by default
+  double mount_yaw_rad = 0.0;           ///< lidar zero angle rotated against the robot (beams only), radians
+  std::vector<Segment> walls;           ///< background behind the landmarks, for mixed pixels only (no occlusion)
+  double angle_min_rad = 0.0;           ///< beam j of the grid points at angle_min_rad + j * angle_increment_rad
+  /// When non-empty: these stops (commanded and actual poses, scans) instead of planStops(path);
+  /// parametric bootstrap of measured data (the same geometry as fitted).
+  std::vector<TruthStop> stops;
 };
 
 struct LandmarkLevelSample {
@@ -29,7 +36,9 @@ struct LandmarkLevelSample {
   std::vector<std::vector<double>> true_range_m;  ///< per sighting, per beam: the true distance
 };
 
-/// One draw. Randomness: stream 0 for the poses, stream 1 + scan for each scan.
+/// One draw. Randomness: stream 0 for the poses, stream 1 + scan for each scan, effectRng()
+/// for the effects. Landmark offsets are Cylinder::range_offset_m; heading errors and odometry
+/// scale errors come with the path (sigma_psi_rad, step_error_fraction).
 LandmarkLevelSample simulateLandmarkLevel(const LandmarkLevelConfig& config, std::uint64_t seed);
 
 }  // namespace lidarcal::simulation

@@ -63,4 +63,14 @@ RayHit castRay(const Scene& scene, const Ray& ray) {
   return best;
 }
 
+double surfaceOffset(const Scene& scene, const RayHit& hit) {
+  const auto index = static_cast<std::size_t>(hit.id - 1);
+  switch (hit.kind) {
+    case io::TargetKind::landmark: return scene.landmarks.at(index).range_offset_m;
+    case io::TargetKind::clutter: return scene.clutter.at(index).range_offset_m;
+    case io::TargetKind::wall: return scene.walls.at(index).range_offset_m;
+    default: return 0.0;
+  }
+}
+
 }  // namespace lidarcal::simulation

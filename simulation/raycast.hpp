@@ -31,4 +31,7 @@ std::optional<double> intersectSegment(const Ray& ray, const Segment& segment);
 /// First surface of the scene on the ray (landmarks, clutter, walls).
 RayHit castRay(const Scene& scene, const Ray& ray);
 
+/// Range offset of the surface a ray hit (Cylinder/Segment::range_offset_m; 0 for no hit).
+double surfaceOffset(const Scene& scene, const RayHit& hit);
+
 }  // namespace lidarcal::simulation

@@ -13,6 +13,35 @@ double rangeReading(const RangeModel& model, double d_m, double unit_normal) {
   return model.bias(d_m) + model.noise.stddev(d_m, model.bias) * unit_normal;
 }
 
+std::mt19937_64 effectRng(std::uint64_t seed, std::size_t scan) {
+  return makeRng(deriveSeed(seed, 0xEFFEC75ULL), static_cast<std::uint64_t>(scan) + 1);
+}
+
+double effectReading(const RangeModel& model, const RangeEffects& fx, double d_m, const BeamContext& beam,
+                     double unit_normal, std::mt19937_64& effect_rng) {
+  if (!fx.any() && beam.surface_offset_m == 0.0) return rangeReading(model, d_m, unit_normal);
+  double e = unit_normal;
+  if (fx.noise_student_dof > 0.0) {
+    // t = z / sqrt(chi2_nu / nu), scaled to unit variance (nu > 2).
+    std::chi_squared_distribution<double> chi2(fx.noise_student_dof);
+    const double nu = fx.noise_student_dof;
+    e = unit_normal / std::sqrt(chi2(effect_rng) / nu) * std::sqrt((nu - 2.0) / nu);
+  }
+  const double c = clampCosIncidence(beam.cos_incidence);
+  const double sigma = model.noise.stddev(d_m, model.bias) * incidenceNoiseFactor(fx.incidence_noise_exponent, c);
+  const double y = model.bias(d_m) + fx.incidence_bias_m * (1.0 - c) + beam.surface_offset_m +
+                   fx.range_drift_m_per_scan * static_cast<double>(beam.scan) + sigma * e;
+  return quantise(y, fx.range_resolution_m);
+}
+
+double mixedPixelDistance(const RangeEffects& fx, double d_m, double background_m, std::mt19937_64& effect_rng) {
+  if (fx.mixed_pixel_fraction <= 0.0) return d_m;
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const double u = unit(effect_rng), w = unit(effect_rng);
+  if (!(background_m > d_m) || u >= fx.mixed_pixel_fraction) return d_m;
+  return w * d_m + (1.0 - w) * background_m;
+}
+
 std::vector<TruthStop> planStops(const Scene& scene, std::uint64_t seed) {
   auto rng = makeRng(seed, 0);
   std::normal_distribution<double> normal(0.0, 1.0);
@@ -22,6 +51,10 @@ std::vector<TruthStop> planStops(const Scene& scene, std::uint64_t seed) {
     TruthStop s;
     s.commanded = commandedPose(scene.path, k);
     s.actual = s.commanded;
+    // An odometry scale error: the robot really moves (1 + e) times the commanded step.
+    const double extra = k * scene.path.step_m * scene.path.step_error_fraction;
+    s.actual.x_m += extra * std::cos(scene.path.start.yaw_rad);
+    s.actual.y_m += extra * std::sin(scene.path.start.yaw_rad);
     // Eq. 8: the true position scatters around the commanded one, independently per stop.
     const double ex = normal(rng), ey = normal(rng), epsi = normal(rng);
     s.actual.x_m += scene.path.sigma_s_m * ex;
@@ -52,14 +85,23 @@ SimulatedScan simulateScan(const Scene& scene, const TruthStop& stop, std::size_
   out.truth.resize(n);
 
   constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+  // Cast every beam first (mixed pixels look at the neighbours), then read.
+  std::vector<RayHit> hits(n);
+  std::vector<double> unit_normal(n), beam_angle(n);
   for (std::size_t b = 0; b < n; ++b) {
     // Draw both numbers for every beam, hit or not, so streams stay aligned across scenes.
     const double jitter = normal(rng), e = normal(rng);
     const double beam_rad = sensor.angle_min_rad + static_cast<double>(b) * sensor.angle_increment_rad;
     const double world_rad = stop.actual.yaw_rad + sensor.mount_yaw_rad + beam_rad + sensor.bearing_noise_rad * jitter;
     const Ray ray{stop.actual.x_m, stop.actual.y_m, std::cos(world_rad), std::sin(world_rad)};
-    const RayHit hit = castRay(scene, ray);
-
+    hits[b] = castRay(scene, ray);
+    unit_normal[b] = e;
+    beam_angle[b] = beam_rad;
+  }
+  const bool full_circle = std::abs(static_cast<double>(n) * sensor.angle_increment_rad - 2.0 * kPi) < 1e-6;
+  auto effect_rng = effectRng(seed, scan_index);
+  for (std::size_t b = 0; b < n; ++b) {
+    const RayHit& hit = hits[b];
     io::TrueRange& t = out.truth[b];
     t.scan = static_cast<std::uint32_t>(scan_index);
     t.beam = static_cast<std::uint32_t>(b);
@@ -71,15 +113,29 @@ SimulatedScan simulateScan(const Scene& scene, const TruthStop& stop, std::size_
     auto& pt = (*out.scan.cloud)[b];
     pt.intensity = 0.0f;
     double reading = std::numeric_limits<double>::quiet_NaN();
-    if (hit.kind != io::TargetKind::none) reading = rangeReading(model, hit.range_m, e);
+    if (hit.kind != io::TargetKind::none) {
+      // Depth discontinuity: a neighbour beam on another surface farther away is the background.
+      double background = std::numeric_limits<double>::quiet_NaN();
+      for (long step : {-1L, 1L}) {
+        long j = static_cast<long>(b) + step;
+        if (full_circle) j = (j + static_cast<long>(n)) % static_cast<long>(n);
+        if (j < 0 || j >= static_cast<long>(n)) continue;
+        const RayHit& nb = hits[static_cast<std::size_t>(j)];
+        if (nb.kind == io::TargetKind::none || (nb.kind == hit.kind && nb.id == hit.id) || nb.range_m <= hit.range_m) continue;
+        if (std::isnan(background) || nb.range_m < background) background = nb.range_m;
+      }
+      const double d = mixedPixelDistance(sensor.effects, hit.range_m, background, effect_rng);
+      const BeamContext ctx{std::cos(hit.incidence_rad), surfaceOffset(scene, hit), scan_index};
+      reading = effectReading(model, sensor.effects, d, ctx, unit_normal[b], effect_rng);
+    }
     // The sensor reports only readings inside its window; anything else is a beam without return.
     if (!(reading >= model.range_min_m && reading <= model.range_max_m)) {
       pt.x = pt.y = pt.z = kNaN;
       out.scan.cloud->is_dense = false;
       continue;
     }
-    pt.x = static_cast<float>(reading * std::cos(beam_rad));
-    pt.y = static_cast<float>(reading * std::sin(beam_rad));
+    pt.x = static_cast<float>(reading * std::cos(beam_angle[b]));
+    pt.y = static_cast<float>(reading * std::sin(beam_angle[b]));
     pt.z = 0.0f;
   }
   return out;

@@ -10,6 +10,7 @@
 #include <random>
 #include <vector>
 
+#include "common/range_effects.hpp"
 #include "common/range_model.hpp"
 #include "common/scene.hpp"
 #include "common/truth.hpp"
@@ -20,6 +21,29 @@ namespace lidarcal::simulation {
 
 /// A reading for true distance d: f(d) + sigma(d) * unit_normal (seed 000 eq. 3 / seed 004 eq. 1).
 double rangeReading(const RangeModel& model, double d_m, double unit_normal);
+
+/// Where and when a beam met its surface: what the effects of common/range_effects.hpp depend on.
+struct BeamContext {
+  double cos_incidence = 1.0;     ///< cosine of the angle between the beam and the surface normal
+  double surface_offset_m = 0.0;  ///< range offset of the surface hit (Cylinder/Segment::range_offset_m), metres
+  std::size_t scan = 0;           ///< scan index in the sequence (drift)
+};
+
+/// Generator of the effects' own random numbers for scan `scan`: a stream apart from the
+/// scan's, so that switching effects on leaves every other draw of the sequence unchanged.
+std::mt19937_64 effectRng(std::uint64_t seed, std::size_t scan);
+
+/// A reading with effects: f(d) + b_inc (1 - cos phi) + offset + c_drift t + sigma(d) (1/cos phi)^gamma e,
+/// quantised. e is `unit_normal`, or with a Student-t noise a unit-variance t variate built from
+/// it and a chi-square draw from `effect_rng` (drawn only when that effect is on). With every
+/// effect off this is rangeReading().
+double effectReading(const RangeModel& model, const RangeEffects& effects, double d_m, const BeamContext& beam,
+                     double unit_normal, std::mt19937_64& effect_rng);
+
+/// Mixed pixel draw for one beam (two uniforms from `effect_rng` whenever the effect is on, so
+/// the stream stays aligned): the distance the beam reads at, w d + (1 - w) d_background with
+/// w ~ U(0, 1) when it is a mixed pixel, else d. `background_m` <= d (or NaN): no background, no mix.
+double mixedPixelDistance(const RangeEffects& effects, double d_m, double background_m, std::mt19937_64& effect_rng);
 
 /// Commanded and actual pose of every stop, and the scans that belong to it.
 std::vector<TruthStop> planStops(const Scene& scene, std::uint64_t seed);

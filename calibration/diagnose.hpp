@@ -1,0 +1,172 @@
+#pragma once
+// Model criticism (`lidarcal diagnose`): what the seeds' model gets wrong on measured data, the
+// physical cause, the model extended with it and the gain, measured out of sample.
+//   1. fit the baseline, the seeds' model: polynomial range bias, noise by range only
+//      (seed 004 eq. 1), independent bearing and stop-position errors (seed 000 A3-A4, eq. 8);
+//   2. parametric bootstrap: simulate the same geometry from the fitted baseline, refit, and
+//      calibrate a battery of discrepancy statistics (and one score statistic per candidate
+//      effect) on the replicas: p-value and effect size of each;
+//   3. fit the baseline extended by each candidate effect; gain out of sample (cross-validated
+//      by scan), delta AIC, identifiability (information left after the nuisance parameters);
+//   4. name the cause: the largest significant held-out gain, Holm-controlled across candidates;
+//      `none` when nothing is significant, `not_identifiable` when the data cannot tell;
+//   5. the extended model: its parameters, the scene keys that simulate it, how much closer its
+//      simulation comes to the data, and (with truth) the gain in calibration.
+// Two kinds of data: a sequence of scans of poles (diagnose_sequence.hpp) and repeated scans
+// from one pose of any scene (diagnose_static.hpp). The statistics are in diagnose_stats.hpp.
+
+#include <cstdint>
+#include <limits>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "common/range_model.hpp"
+
+namespace lidarcal::calibration {
+
+/// Candidate effect names, as they appear in diagnosis.json.
+namespace effect {
+inline constexpr const char* kIncidenceNoise = "incidence_noise";
+inline constexpr const char* kIncidenceBias = "incidence_bias";
+inline constexpr const char* kLandmarkBias = "landmark_bias";
+inline constexpr const char* kHeadingError = "heading_error";
+inline constexpr const char* kRangeDrift = "range_drift";
+inline constexpr const char* kMixedPixels = "mixed_pixels";
+inline constexpr const char* kAngleOffset = "angle_offset";
+inline constexpr const char* kRangeNoiseLaw = "range_noise_law";
+inline constexpr const char* kOdometryScale = "odometry_scale";  ///< beyond the issue's list: step length error
+inline constexpr const char* kHeavyTails = "heavy_tails";        ///< beyond the list: Student-t noise
+inline constexpr const char* kQuantisation = "quantisation";     ///< beyond the list: readings on a grid
+inline constexpr const char* kRangeOffset = "range_offset";      ///< static data: constant offset alpha_0
+inline constexpr const char* kNone = "none";
+inline constexpr const char* kNotIdentifiable = "not_identifiable";
+}  // namespace effect
+
+enum class DiagnoseMode { sequence, static_scene };
+const char* toString(DiagnoseMode mode);  ///< "sequence" or "static"
+
+struct DiagnoseConfig {
+  int replicas = 19;              ///< parametric bootstrap replicas (each is one baseline refit)
+  int folds = 3;                  ///< cross-validation folds (by scan)
+  double alpha = 0.01;            ///< family-wise error rate over the candidates (Holm)
+  std::uint64_t seed = 1;         ///< bootstrap and simulation seed
+  int max_order = 4;              ///< sequences: bias orders 1..max_order (order by the calibration's rule)
+  double sigma_s_m = 0.02;        ///< sequences: odometry, std. dev. of a stop's position around the commanded one (seed 000 eq. 8)
+  double outlier_floor = 1e-3;    ///< weight of a uniform over the reading window in every likelihood
+  int closeness_replicas = 4;     ///< replicas simulated from the extended model (closeness to the data)
+  /// Static data: scans per window. 0: the whole recording is one pose unless the beams show that
+  /// the sensor moved (then windows of 8 scans, each with a time trend per beam); -1: never windows.
+  int static_window = 0;
+  /// Static data: the range offset alpha_0 when known from elsewhere (a reference distance);
+  /// NaN: estimated from the straightness of the walls (then an incidence-dependent bias, which
+  /// bends walls much alike, is hard to tell from it).
+  double static_range_offset_m = std::numeric_limits<double>::quiet_NaN();
+  std::vector<std::string> candidates;  ///< effects to test; empty: every candidate of the mode
+  void validate() const;          ///< throws std::invalid_argument
+};
+
+/// One discrepancy statistic: measured value against its distribution over the replicas.
+struct Discrepancy {
+  std::string name;              ///< e.g. "spread_vs_incidence"
+  std::string variable;          ///< what the residuals are compared against
+  std::string description;       ///< how it is computed, with its unit
+  double value = 0.0;            ///< on the measured data
+  double replica_mean = 0.0;     ///< over the bootstrap replicas
+  double replica_sd = 0.0;
+  double effect_size = 0.0;      ///< (value - replica_mean) / replica_sd
+  double p_value = 1.0;          ///< from the replicas (Student-t predictive, see diagnose_stats.hpp)
+  bool two_sided = true;         ///< both directions count (else only values above the replicas)
+};
+
+/// One candidate effect.
+struct CandidateResult {
+  std::string effect;                     ///< name (effect::k...)
+  /// p-value of the effect: 2 min(p of the held-out gain, p of the score statistic aimed at it)
+  /// (Bonferroni over the two tests). NaN when not applicable.
+  double p_value = 1.0;
+  double p_heldout = 1.0;                 ///< one-sided p of the held-out gain over its standard error (normal)
+  double p_holm = 1.0;                    ///< Holm-adjusted across the candidates with a p-value
+  std::string statistic;                  ///< the battery's score statistic aimed at this effect
+  double score_p_value = 1.0;             ///< its p-value, calibrated on the bootstrap replicas
+  double effect_size = 0.0;               ///< its effect size, in replica standard deviations
+  double heldout_gain_nats_per_point = 0.0;  ///< mean held-out log-likelihood gain over the baseline
+  double heldout_gain_se = 0.0;           ///< its standard error (blocks: scans)
+  double delta_aic = 0.0;                 ///< AIC(extended) - AIC(baseline); negative favours the effect
+  int parameters = 0;                     ///< parameters the effect adds
+  bool significant = false;               ///< Holm p < alpha and a positive held-out gain
+  bool identifiable = true;               ///< the data can estimate it apart from the baseline's parameters
+  bool applicable = true;                 ///< the data can show it at all (e.g. no heading in a static scan)
+  double information_ratio = 1.0;         ///< information kept after the nuisance parameters (0..1)
+  /// Standard error of the effect's parameter once the baseline's parameters are profiled out
+  /// (unit of its estimate; RMS over components). Identifiable: below the smallest size worth
+  /// naming (1 cm, 1 degree, 1 % of the step, 0.5 in an exponent, 1 cm of drift over the data),
+  /// or below a quarter of the estimate (it stands clear of zero apart from the baseline).
+  double standard_error = 0.0;
+  std::string note;                       ///< why not identifiable / not applicable / competing effect
+  std::map<std::string, double> estimates;  ///< the effect's fitted parameters (name with unit -> value)
+  double calibration_mse_ratio = 0.0;     ///< with truth: MSE ratio (seed 000 eq. 31) of the extended calibration, 0 when not computed
+};
+
+/// How close a simulation of a model comes to the measured data.
+struct Closeness {
+  double ks_distance = 0.0;          ///< two-sample Kolmogorov-Smirnov distance of the standardised residuals
+  /// Median over groups of |ln(measured / simulated residual variance)| (0: the spreads match)
+  double variance_ratio_median_abs_log = 0.0;
+  std::size_t groups = 0;            ///< groups compared (sequence: landmark x stop x edge; static: beams)
+};
+
+/// One residual of the measured data (or of a replica), with what it may depend on.
+struct ResidualRecord {
+  double range_m = 0.0;       ///< predicted true distance (sequence) or mean reading (static)
+  double incidence_rad = 0.0; ///< incidence on the surface
+  double lateral = 0.0;       ///< sequence: signed position across the pole (-1..1); static: 1 at a depth discontinuity
+  int group = 0;              ///< landmark id (sequence) or wall id (static, 0: not on a fitted wall)
+  double time = 0.0;          ///< scan index
+  double bearing_rad = 0.0;   ///< beam angle in the sensor frame
+  int stop = 0;               ///< stop index (sequence)
+  bool edge = false;          ///< at a depth discontinuity
+  double residual_m = 0.0;    ///< reading minus the baseline's prediction
+  double z = 0.0;             ///< residual over the baseline's standard deviation
+};
+
+struct DiagnosisResult {
+  std::string status = "ok";          ///< ok, or why the data cannot be diagnosed
+  std::string message;                ///< what to do about it
+  DiagnoseMode mode = DiagnoseMode::sequence;
+  // Data
+  std::size_t scans = 0, stops = 0, readings = 0;  ///< size of the data diagnosed
+  std::size_t landmarks = 0;          ///< sequence: landmarks; static: fitted walls
+  // Baseline
+  RangeModel baseline;                ///< bias f, noise law (seed 004 squared), window
+  double baseline_sigma_theta_rad = 0.0;  ///< sequence: bearing noise of the sightings
+  double baseline_radius_m = 0.0;     ///< sequence: landmark radius
+  bool radius_known = false;          ///< sequence: radius given (not estimated)
+  double baseline_neg_log_likelihood = 0.0;  ///< in-sample, nats
+  double baseline_heldout_nats_per_point = 0.0;  ///< held-out log-likelihood per point
+  std::map<std::string, double> baseline_extra;  ///< further fitted quantities (name with unit -> value)
+  // Tests
+  std::vector<Discrepancy> battery;       ///< discrepancy statistics
+  std::vector<CandidateResult> candidates;  ///< one per candidate effect
+  std::string primary_cause = effect::kNone;  ///< an effect name, none or not_identifiable
+  std::string decision;               ///< why that cause (rule applied, competing effects)
+  // Extended model
+  std::map<std::string, double> extended_parameters;  ///< the named effect's parameters
+  std::map<std::string, double> scene_keys;           ///< scene JSON keys (docs/FORMAT.md) that simulate it
+  std::vector<double> extended_bias_alpha;            ///< bias of the extended fit
+  Closeness closeness_baseline;       ///< baseline simulation vs the data
+  Closeness closeness_extended;       ///< extended simulation vs the data
+  double gain_heldout_nats_per_point = 0.0;  ///< of the named effect
+  double gain_delta_aic = 0.0;               ///< of the named effect
+  double calibration_mse_ratio_baseline = 0.0;  ///< with truth: MSE ratio of the baseline calibration (0: no truth)
+  double calibration_mse_ratio_extended = 0.0;  ///< with truth: of the extended calibration
+  // Plot data
+  std::vector<ResidualRecord> measured;    ///< residuals of the data under the baseline
+  std::vector<ResidualRecord> simulated_baseline;  ///< of one baseline replica (refitted)
+  std::vector<ResidualRecord> simulated_extended;  ///< of one extended replica (refitted with the baseline)
+  std::uint64_t seed = 0;             ///< seed used
+  int replicas = 0;                   ///< bootstrap replicas used
+  int folds = 0;                      ///< folds used
+};
+
+}  // namespace lidarcal::calibration

@@ -1,0 +1,1226 @@
+#include "calibration/diagnose_static.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <numeric>
+#include <random>
+#include <set>
+#include <stdexcept>
+
+#include <Eigen/Dense>
+
+#include "calibration/diagnose_stats.hpp"
+#include "common/pose2.hpp"
+#include "common/rng.hpp"
+#include "simulation/simulator.hpp"
+
+namespace lidarcal::calibration {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr double kLog2Pi = 1.8378770664093453;
+
+std::vector<std::string> allCandidates() {
+  return {effect::kIncidenceNoise, effect::kIncidenceBias, effect::kLandmarkBias,  effect::kHeadingError,
+          effect::kRangeDrift,     effect::kMixedPixels,   effect::kAngleOffset,   effect::kRangeNoiseLaw,
+          effect::kOdometryScale,  effect::kHeavyTails,    effect::kQuantisation};
+}
+
+const char* statisticOf(const std::string& e) {
+  if (e == effect::kIncidenceNoise) return "spread_vs_incidence";
+  if (e == effect::kIncidenceBias) return "wall_curvature";
+  if (e == effect::kRangeDrift) return "residual_vs_time";
+  if (e == effect::kMixedPixels) return "edge_excess";
+  if (e == effect::kRangeNoiseLaw) return "spread_vs_range";
+  if (e == effect::kHeavyTails) return "tail_weight";
+  if (e == effect::kQuantisation) return "quantisation";
+  return "";
+}
+
+// ---------------------------------------------------------------------------------------------
+// Direction bins: a beam over the scans.
+
+struct Bin {
+  int window = 0;                   ///< window of scans it belongs to (0 when the whole recording is one pose)
+  double angle = 0.0;               ///< mean angle of its readings
+  std::vector<std::size_t> idx;     ///< its readings
+  bool slope = false;               ///< the angle varies within the bin (irregular beam grids)
+  int wall = -1;                    ///< wall line it lies on, -1 none
+  bool edge = false;                ///< next to a depth discontinuity
+  double near = 0.0, far = 0.0;     ///< at an edge: the depths on both sides
+  double cos_inc = 1.0;             ///< cosine of the incidence (1 when unknown)
+  bool inc_known = false;
+};
+
+/// Per-bin location fitted on a subset of the scans.
+struct BinFit {
+  double m = 0.0, g = 0.0, abar = 0.0, med = 0.0, s2 = 0.0;
+  double h = 0.0, tbar = 0.0;  ///< time trend (windows: the sensor creeping), metres per scan
+  double n = 0.0;
+  /// Location of a reading at angle a in scan t.
+  double at(double a, double t) const { return m + g * (a - abar) + h * (t - tbar); }
+};
+
+struct Data {
+  std::vector<double> a, y, t;  // angle, reading, scan
+  std::vector<Bin> bins;
+  std::vector<int> bin_of;      // reading -> bin (-1: not used)
+  double width = 0.0;           // bin width (0: fixed grid)
+  bool trend = false;           // windows: each bin has a time trend
+  double t_mean = 0.0;
+  double window_min = 0.0, window_max = 1.0;
+};
+
+double median(std::vector<double> v) {
+  if (v.empty()) return kNaN;
+  const std::size_t m = v.size() / 2;
+  std::nth_element(v.begin(), v.begin() + static_cast<long>(m), v.end());
+  return v[m];
+}
+
+Data makeBins(const StaticScans& s, std::size_t window) {
+  Data d;
+  const std::size_t n = s.readings.size();
+  d.a.resize(n);
+  d.y.resize(n);
+  d.t.resize(n);
+  double ymax = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    d.a[i] = wrapAngle(s.readings[i].angle_rad);
+    d.y[i] = s.readings[i].range_m;
+    d.t[i] = static_cast<double>(s.readings[i].scan);
+    ymax = std::max(ymax, d.y[i]);
+  }
+  d.window_min = s.range_min_m;
+  d.window_max = s.range_max_m < 1e8 ? s.range_max_m : 1.25 * ymax;
+  // A fixed beam grid (the same angles every scan) bins by angle exactly; otherwise bins as
+  // wide as the median beam spacing, with a linear trend in angle inside each.
+  std::set<long long> angles;
+  for (std::size_t i = 0; i < n; ++i) angles.insert(std::llround(d.a[i] * 1e7));
+  const double beams = s.beams_per_scan > 0 ? static_cast<double>(s.beams_per_scan) : 360.0;
+  const bool exact = static_cast<double>(angles.size()) <= 1.5 * beams;
+  if (!exact) d.width = 2.0 * kPi / beams;
+  d.trend = window > 0;
+  // Key: (window, angle).
+  std::map<std::pair<long long, long long>, std::vector<std::size_t>> groups;
+  for (std::size_t i = 0; i < n; ++i) {
+    const long long w = window > 0 ? static_cast<long long>(s.readings[i].scan / window) : 0;
+    const long long a = exact ? std::llround(d.a[i] * 1e7) : static_cast<long long>(std::floor((d.a[i] + kPi) / d.width));
+    groups[{w, a}].push_back(i);
+  }
+  const std::size_t scans_per_bin = window > 0 ? window : s.scans;
+  const std::size_t min_n = window > 0 ? std::max<std::size_t>(5, (3 * window) / 4) : std::max<std::size_t>(8, s.scans / 10);
+  d.bin_of.assign(n, -1);
+  for (auto& [key, idx] : groups) {
+    if (idx.size() < min_n) continue;
+    (void)scans_per_bin;
+    Bin b;
+    b.window = static_cast<int>(key.first);
+    double lo = kInf, hi = -kInf, sum = 0.0;
+    for (std::size_t i : idx) {
+      sum += d.a[i];
+      lo = std::min(lo, d.a[i]);
+      hi = std::max(hi, d.a[i]);
+    }
+    b.angle = sum / static_cast<double>(idx.size());
+    b.slope = hi - lo > 1e-6;
+    b.idx = std::move(idx);
+    for (std::size_t i : b.idx) d.bin_of[i] = static_cast<int>(d.bins.size());
+    d.bins.push_back(std::move(b));
+  }
+  double tw = 0.0;
+  std::size_t used = 0;
+  for (std::size_t i = 0; i < n; ++i)
+    if (d.bin_of[i] >= 0) {
+      tw += d.t[i];
+      ++used;
+    }
+  d.t_mean = used ? tw / static_cast<double>(used) : 0.0;
+  return d;
+}
+
+/// Location of every bin from the readings with train[scan] (all when empty), after removing
+/// a drift c (t - t_mean): mean, and linear terms in angle (irregular grids) and time (windows).
+std::vector<BinFit> fitBins(const Data& d, const std::vector<bool>& train, double drift) {
+  std::vector<BinFit> out(d.bins.size());
+  std::vector<double> ys;
+  for (std::size_t b = 0; b < d.bins.size(); ++b) {
+    const Bin& bin = d.bins[b];
+    BinFit& f = out[b];
+    double sa = 0.0, st = 0.0, n = 0.0;
+    ys.clear();
+    for (std::size_t i : bin.idx) {
+      if (!train.empty() && !train[static_cast<std::size_t>(d.t[i])]) continue;
+      sa += d.a[i];
+      st += d.t[i];
+      n += 1.0;
+      ys.push_back(d.y[i] - drift * (d.t[i] - d.t_mean));
+    }
+    const int p = 1 + (bin.slope ? 1 : 0) + (d.trend ? 1 : 0);
+    if (n < static_cast<double>(p) + 2.0) {
+      f.n = 0.0;
+      continue;
+    }
+    f.n = n;
+    f.abar = sa / n;
+    f.tbar = st / n;
+    // Least squares in the centred columns [1, a - abar, t - tbar].
+    Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d aty = Eigen::Vector3d::Zero();
+    std::size_t k = 0;
+    for (std::size_t i : bin.idx) {
+      if (!train.empty() && !train[static_cast<std::size_t>(d.t[i])]) continue;
+      const Eigen::Vector3d x(1.0, bin.slope ? d.a[i] - f.abar : 0.0, d.trend ? d.t[i] - f.tbar : 0.0);
+      ata += x * x.transpose();
+      aty += x * ys[k++];
+    }
+    for (int j = 0; j < 3; ++j)
+      if (ata(j, j) <= 0.0) ata(j, j) = 1.0;
+    const Eigen::Vector3d c = ata.ldlt().solve(aty);
+    f.m = c(0);
+    f.g = c(1);
+    f.h = c(2);
+    f.med = median(ys);
+    double ss = 0.0;
+    k = 0;
+    for (std::size_t i : bin.idx) {
+      if (!train.empty() && !train[static_cast<std::size_t>(d.t[i])]) continue;
+      const double r = ys[k++] - f.at(d.a[i], d.t[i]);
+      ss += r * r;
+    }
+    f.s2 = ss / std::max(n - static_cast<double>(p), 1.0);
+  }
+  return out;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Walls: straight runs of bin means (split and merge), incidences, depth discontinuities.
+
+struct Line {
+  double theta = 0.0, p = 0.0;  // normal direction and distance: x cos(theta) + y sin(theta) = p
+};
+
+Line fitLine(const std::vector<Eigen::Vector2d>& pts) {
+  Eigen::Vector2d c = Eigen::Vector2d::Zero();
+  for (const auto& q : pts) c += q;
+  c /= static_cast<double>(pts.size());
+  Eigen::Matrix2d s = Eigen::Matrix2d::Zero();
+  for (const auto& q : pts) s += (q - c) * (q - c).transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> es(s);
+  Eigen::Vector2d nrm = es.eigenvectors().col(0);  // smallest eigenvalue: the normal
+  double p = nrm.dot(c);
+  if (p < 0) {
+    nrm = -nrm;
+    p = -p;
+  }
+  return Line{std::atan2(nrm.y(), nrm.x()), p};
+}
+
+double lineDistance(const Line& l, const Eigen::Vector2d& q) { return q.x() * std::cos(l.theta) + q.y() * std::sin(l.theta) - l.p; }
+
+/// Finds the walls among the bins (fills wall, edge, near/far, incidence) from full-data means.
+std::vector<Line> findWalls(Data& d, const std::vector<BinFit>& f) {
+  std::vector<std::size_t> order(d.bins.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return d.bins[a].window != d.bins[b].window ? d.bins[a].window < d.bins[b].window : d.bins[a].angle < d.bins[b].angle;
+  });
+  const double step = d.width > 0.0 ? d.width : [&] {
+    std::vector<double> gaps;
+    for (std::size_t k = 1; k < order.size(); ++k) gaps.push_back(d.bins[order[k]].angle - d.bins[order[k - 1]].angle);
+    return gaps.empty() ? deg2rad(1.0) : median(gaps);
+  }();
+  auto point = [&](std::size_t b) { return Eigen::Vector2d(f[b].m * std::cos(d.bins[b].angle), f[b].m * std::sin(d.bins[b].angle)); };
+  // Runs: neighbours in angle whose points are close (no depth jump, no missing beam between).
+  std::vector<std::vector<std::size_t>> runs;
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    const std::size_t b = order[k];
+    if (f[b].n == 0) continue;
+    bool joins = false;
+    if (!runs.empty() && d.bins[runs.back().back()].window == d.bins[b].window) {
+      const std::size_t prev = runs.back().back();
+      const double da = d.bins[b].angle - d.bins[prev].angle;
+      const double gap = (point(b) - point(prev)).norm();
+      joins = da <= 2.5 * step && gap <= std::max(0.15, 4.0 * f[b].m * da);
+      if (!joins && da <= 2.5 * step && std::abs(f[b].m - f[prev].m) > 0.05) {
+        // A depth discontinuity between neighbouring beams: both sides may see mixed pixels.
+        for (std::size_t e : {b, prev}) {
+          d.bins[e].edge = true;
+          d.bins[e].near = std::min(f[b].m, f[prev].m);
+          d.bins[e].far = std::max(f[b].m, f[prev].m);
+        }
+      }
+    }
+    if (joins) runs.back().push_back(b);
+    else runs.push_back({b});
+  }
+  // Incidence from the local slope of the means (any surface): tan(phi) = |dm / da| / m.
+  for (const auto& run : runs) {
+    for (std::size_t k = 0; k < run.size(); ++k) {
+      if (run.size() < 3) break;
+      const std::size_t lo = run[k == 0 ? 0 : k - 1], hi = run[k + 1 == run.size() ? k : k + 1];
+      const double da = d.bins[hi].angle - d.bins[lo].angle;
+      if (!(da > 0.0)) continue;
+      const double slope = (f[hi].m - f[lo].m) / da;
+      Bin& b = d.bins[run[k]];
+      b.cos_inc = 1.0 / std::sqrt(1.0 + std::pow(slope / f[run[k]].m, 2));
+      b.inc_known = true;
+    }
+  }
+  // Split and merge each run into straight pieces (deviation <= 2.5 cm), at least 8 bins.
+  std::vector<Line> lines;
+  std::vector<std::vector<std::size_t>> pieces;
+  std::vector<std::pair<std::size_t, std::size_t>> stack;
+  for (const auto& run : runs) {
+    std::vector<std::size_t> inner(run.begin(), run.end());
+    // The outermost bins of a run border a discontinuity or a gap: not part of a wall.
+    if (inner.size() >= 3) inner = std::vector<std::size_t>(run.begin() + 1, run.end() - 1);
+    if (inner.size() < 8) continue;
+    stack.push_back({0, inner.size()});
+    while (!stack.empty()) {
+      const auto [lo, hi] = stack.back();
+      stack.pop_back();
+      if (hi - lo < 8) continue;
+      std::vector<Eigen::Vector2d> pts;
+      for (std::size_t k = lo; k < hi; ++k) pts.push_back(point(inner[k]));
+      const Line l = fitLine(pts);
+      double worst = 0.0;
+      std::size_t at = lo;
+      for (std::size_t k = lo; k < hi; ++k) {
+        const double dev = std::abs(lineDistance(l, pts[k - lo]));
+        if (dev > worst) {
+          worst = dev;
+          at = k;
+        }
+      }
+      if (worst <= 0.025) {
+        pieces.push_back(std::vector<std::size_t>(inner.begin() + static_cast<long>(lo), inner.begin() + static_cast<long>(hi)));
+      } else {
+        const std::size_t cut = std::clamp(at, lo + 1, hi - 1);
+        stack.push_back({cut, hi});
+        stack.push_back({lo, cut});
+      }
+    }
+  }
+  for (const auto& piece : pieces) {
+    std::vector<Eigen::Vector2d> pts;
+    for (std::size_t b : piece) pts.push_back(point(b));
+    const Line l = fitLine(pts);
+    const int w = static_cast<int>(lines.size());
+    lines.push_back(l);
+    for (std::size_t b : piece) {
+      d.bins[b].wall = w;
+      d.bins[b].cos_inc = std::abs(std::cos(d.bins[b].angle - l.theta));
+      d.bins[b].inc_known = true;
+    }
+  }
+  return lines;
+}
+
+// ---------------------------------------------------------------------------------------------
+// The wall model: bin means on walls = alpha_0 + b (1 - cos phi) + p / cos(a - theta), with
+// roughness tau. Gauss-Newton; leave-one-bin-out predictive log-likelihoods.
+
+struct WallFit {
+  double alpha0 = 0.0, b = 0.0, tau = 0.0;
+  double alpha0_se = kInf, b_se = kInf;
+  std::vector<Line> lines;
+  std::vector<double> loo_ll;    ///< per wall bin (order of `bins` below)
+  double in_ll = 0.0;            ///< in-sample log-likelihood of the wall bins' means
+  std::vector<std::size_t> bins;  ///< the wall bins
+  std::vector<double> resid;     ///< bin mean minus model, per wall bin
+  double rms = 0.0;
+  bool ok = false;
+};
+
+WallFit fitWalls(const Data& d, const std::vector<BinFit>& f, const std::vector<Line>& start, bool with_b,
+                 double fixed_alpha0 = kNaN) {
+  WallFit w;
+  w.lines = start;
+  const bool alpha0_free = !std::isfinite(fixed_alpha0);
+  if (!alpha0_free) w.alpha0 = fixed_alpha0;
+  for (std::size_t b = 0; b < d.bins.size(); ++b)
+    if (d.bins[b].wall >= 0 && f[b].n > 0) w.bins.push_back(b);
+  const int nl = static_cast<int>(start.size());
+  const int np = 1 + (with_b ? 1 : 0) + 2 * nl;
+  const int nb = static_cast<int>(w.bins.size());
+  if (nl == 0 || nb < np + 3) return w;
+  auto model = [&](std::size_t b, double& u, double& cu) {
+    const Line& l = w.lines[static_cast<std::size_t>(d.bins[b].wall)];
+    u = d.bins[b].angle - l.theta;
+    cu = std::max(std::cos(u), 0.05);
+    return w.alpha0 + w.b * (1.0 - cu) + l.p / cu;
+  };
+  Eigen::MatrixXd j(nb, np);
+  Eigen::VectorXd r(nb), wt(nb);
+  double tau2 = 1e-6;
+  for (int outer = 0; outer < 4; ++outer) {
+    for (int it = 0; it < 15; ++it) {
+      for (int k = 0; k < nb; ++k) {
+        const std::size_t b = w.bins[static_cast<std::size_t>(k)];
+        double u, cu;
+        const double mu = model(b, u, cu);
+        const Line& l = w.lines[static_cast<std::size_t>(d.bins[b].wall)];
+        r(k) = f[b].m - mu;
+        wt(k) = 1.0 / (tau2 + f[b].s2 / f[b].n);
+        j.row(k).setZero();
+        j(k, 0) = 1.0;
+        int c = 1;
+        if (with_b) j(k, c++) = 1.0 - cu;
+        const int wl = c + 2 * d.bins[b].wall;
+        j(k, wl) = 1.0 / cu;
+        j(k, wl + 1) = -l.p * std::sin(u) / (cu * cu) - w.b * std::sin(u);
+      }
+      if (!alpha0_free) j.col(0).setZero();
+      Eigen::MatrixXd h = j.transpose() * wt.asDiagonal() * j;
+      if (!alpha0_free) h(0, 0) = 1.0;
+      const Eigen::VectorXd step = h.ldlt().solve(j.transpose() * wt.asDiagonal() * r);
+      if (!step.allFinite()) return w;
+      w.alpha0 += step(0);
+      int c = 1;
+      if (with_b) w.b += step(c++);
+      for (int l = 0; l < nl; ++l) {
+        w.lines[static_cast<std::size_t>(l)].p += step(c + 2 * l);
+        w.lines[static_cast<std::size_t>(l)].theta += step(c + 2 * l + 1);
+      }
+      if (step.cwiseAbs().maxCoeff() < 1e-9) break;
+    }
+    // Roughness: ML of tau^2 given the residuals (golden section on log tau).
+    const double lt = [&] {
+      auto ll = [&](double log_tau) {
+        const double t2 = std::exp(2.0 * log_tau);
+        double s = 0.0;
+        for (int k = 0; k < nb; ++k) {
+          const std::size_t b = w.bins[static_cast<std::size_t>(k)];
+          const double v = t2 + f[b].s2 / f[b].n;
+          s -= 0.5 * (std::log(v) + r(k) * r(k) / v);
+        }
+        return s;
+      };
+      double lo = std::log(1e-5), hi = std::log(0.5);
+      for (int i = 0; i < 60; ++i) {
+        const double m1 = lo + (hi - lo) / 3.0, m2 = hi - (hi - lo) / 3.0;
+        if (ll(m1) < ll(m2)) lo = m1;
+        else hi = m2;
+      }
+      return 0.5 * (lo + hi);
+    }();
+    tau2 = std::exp(2.0 * lt);
+  }
+  w.tau = std::sqrt(tau2);
+  // Final residuals, standard errors and leave-one-out predictive log-likelihoods.
+  for (int k = 0; k < nb; ++k) {
+    const std::size_t b = w.bins[static_cast<std::size_t>(k)];
+    double u, cu;
+    r(k) = f[b].m - model(b, u, cu);
+    wt(k) = 1.0 / (tau2 + f[b].s2 / f[b].n);
+  }
+  if (!alpha0_free) j.col(0).setZero();
+  Eigen::MatrixXd h = j.transpose() * wt.asDiagonal() * j;
+  if (!alpha0_free) h(0, 0) = 1e12;  // held: no uncertainty, no leverage
+  const Eigen::MatrixXd cov = h.ldlt().solve(Eigen::MatrixXd::Identity(np, np));
+  w.alpha0_se = alpha0_free ? std::sqrt(std::max(cov(0, 0), 0.0)) : 0.0;
+  if (with_b) w.b_se = std::sqrt(std::max(cov(1, 1), 0.0));
+  w.loo_ll.resize(static_cast<std::size_t>(nb));
+  w.resid.resize(static_cast<std::size_t>(nb));
+  double ss = 0.0;
+  for (int k = 0; k < nb; ++k) {
+    const double hii = std::min(wt(k) * j.row(k).dot(cov * j.row(k).transpose()), 0.99);
+    const double v = (1.0 / wt(k)) / (1.0 - hii);
+    const double e = r(k) / (1.0 - hii);
+    w.loo_ll[static_cast<std::size_t>(k)] = -0.5 * (kLog2Pi + std::log(v) + e * e / v);
+    w.in_ll -= 0.5 * (kLog2Pi - std::log(wt(k)) + r(k) * r(k) * wt(k));
+    w.resid[static_cast<std::size_t>(k)] = r(k);
+    ss += r(k) * r(k);
+  }
+  w.rms = std::sqrt(ss / nb);
+  w.ok = true;
+  return w;
+}
+
+// ---------------------------------------------------------------------------------------------
+// The reading model: readings of a bin around its location.
+
+struct Model {
+  double sigma_e = 0.01;   ///< scale of sigma = sigma_e |m|^kappa (1 / cos phi)^gamma
+  double kappa = 2.0;      ///< range exponent (seed 004: 2)
+  double gamma = 0.0;      ///< incidence exponent
+  double drift = 0.0;      ///< metres per scan
+  double mixed = 0.0;      ///< fraction of mixed readings at edge bins
+  double dof = 0.0;        ///< Student t degrees of freedom (0: Gaussian)
+  double q = 0.0;          ///< quantisation step (0: densities)
+  bool robust_edges = false;  ///< edge bins centred on their median (mixed-pixel model)
+};
+
+struct Flags {
+  bool kappa = false, gamma = false, drift = false, mixed = false, dof = false, quant = false, wall_b = false;
+  int parameters() const { return kappa + gamma + drift + mixed + dof + quant + wall_b; }
+};
+
+Flags flagsOf(const std::string& e) {
+  Flags f;
+  if (e == effect::kRangeNoiseLaw) f.kappa = true;
+  else if (e == effect::kIncidenceNoise) f.gamma = true;
+  else if (e == effect::kRangeDrift) f.drift = true;
+  else if (e == effect::kMixedPixels) f.mixed = true;
+  else if (e == effect::kHeavyTails) f.dof = true;
+  else if (e == effect::kQuantisation) f.quant = true;
+  else if (e == effect::kIncidenceBias) f.wall_b = true;
+  return f;
+}
+
+double shapeOf(const Model& m, const Bin& b, double loc) {
+  return std::pow(std::max(std::abs(loc), 1e-3), m.kappa) * incidenceNoiseFactor(m.gamma, b.cos_inc);
+}
+
+double centreOf(const Model& m, const Bin& b, const BinFit& f) { return m.robust_edges && b.edge ? f.med : f.m; }
+
+/// Where a reading at angle a in scan t is expected (without the drift term).
+double expected(const Model& m, const Bin& b, const BinFit& f, double a, double t) {
+  return f.at(a, t) + (centreOf(m, b, f) - f.m);
+}
+
+/// Log-likelihood of one reading (predictive: the bin's location is known to 1 / n_train).
+double readingLL(const Model& m, const Data& d, const Bin& b, const BinFit& f, std::size_t i, double floor_weight) {
+  const double centre = expected(m, b, f, d.a[i], d.t[i]) + m.drift * (d.t[i] - d.t_mean);
+  const double sigma = std::max(m.sigma_e * shapeOf(m, b, centre) * std::sqrt(1.0 + 1.0 / std::max(f.n, 1.0)), 1e-6);
+  const double y = d.y[i];
+  const double z = (y - centre) / sigma;
+  double dens;
+  if (m.q > 0.0) {
+    const double hi = (y + 0.5 * m.q - centre) / sigma, lo = (y - 0.5 * m.q - centre) / sigma;
+    dens = std::max(0.5 * (std::erfc(-hi / std::sqrt(2.0)) - std::erfc(-lo / std::sqrt(2.0))), 1e-300) / m.q;
+  } else if (m.dof > 0.0) {
+    const double nu = m.dof, s = sigma * std::sqrt((nu - 2.0) / nu), x = (y - centre) / s;
+    dens = std::exp(std::lgamma(0.5 * (nu + 1.0)) - std::lgamma(0.5 * nu) - 0.5 * std::log(nu * kPi) -
+                    0.5 * (nu + 1.0) * std::log1p(x * x / nu)) / s;
+  } else {
+    dens = std::exp(-0.5 * z * z) / (sigma * std::sqrt(2.0 * kPi));
+  }
+  double mix = 0.0;
+  if (m.mixed > 0.0 && b.edge && b.far > b.near && y >= b.near && y <= b.far) mix = 1.0 / (b.far - b.near);
+  const double window = d.window_max > d.window_min ? 1.0 / (d.window_max - d.window_min) : 0.0;
+  const double total = (1.0 - floor_weight) * ((1.0 - m.mixed) * dens + m.mixed * mix) + floor_weight * window;
+  return std::log(std::max(total, 1e-300));
+}
+
+/// Fits the free parameters of a model on the readings of the training scans.
+Model fitModel(const Data& d, const std::vector<bool>& train, const Flags& fl, double q_detected, std::vector<BinFit>& fits) {
+  Model m;
+  m.robust_edges = fl.mixed;
+  if (fl.quant) m.q = q_detected;
+  fits = fitBins(d, train, 0.0);
+  std::vector<std::size_t> use;  // training readings in usable bins
+  for (std::size_t i = 0; i < d.y.size(); ++i) {
+    const int b = d.bin_of[i];
+    if (b < 0 || fits[static_cast<std::size_t>(b)].n == 0) continue;
+    if (!train.empty() && !train[static_cast<std::size_t>(d.t[i])]) continue;
+    use.push_back(i);
+  }
+  auto residual = [&](std::size_t i) {
+    const Bin& b = d.bins[static_cast<std::size_t>(d.bin_of[i])];
+    const BinFit& f = fits[static_cast<std::size_t>(d.bin_of[i])];
+    return d.y[i] - expected(m, b, f, d.a[i], d.t[i]) - m.drift * (d.t[i] - d.t_mean);
+  };
+  std::vector<double> weight(d.y.size(), 1.0);  // 1 - mixed-pixel responsibility
+  // The profile likelihood of the noise law works on per-bin sums (the law depends on the bin
+  // only): refreshed whenever residuals or weights change.
+  std::vector<double> bin_ss(d.bins.size()), bin_n(d.bins.size());
+  auto refresh = [&]() {
+    std::fill(bin_ss.begin(), bin_ss.end(), 0.0);
+    std::fill(bin_n.begin(), bin_n.end(), 0.0);
+    for (std::size_t i : use) {
+      if (weight[i] < 0.5) continue;
+      const auto b = static_cast<std::size_t>(d.bin_of[i]);
+      const double r = residual(i);
+      bin_ss[b] += r * r;
+      bin_n[b] += 1.0;
+    }
+  };
+  auto profile = [&](double kappa, double gamma, double* sigma_e) {
+    Model t = m;
+    t.kappa = kappa;
+    t.gamma = gamma;
+    double s2 = 0.0, logh = 0.0, n = 0.0;
+    for (std::size_t b = 0; b < d.bins.size(); ++b) {
+      if (bin_n[b] == 0.0) continue;
+      const double h = std::max(shapeOf(t, d.bins[b], centreOf(t, d.bins[b], fits[b])), 1e-9);
+      s2 += bin_ss[b] / (h * h);
+      logh += bin_n[b] * std::log(h);
+      n += bin_n[b];
+    }
+    s2 /= std::max(n, 1.0);
+    if (sigma_e) *sigma_e = std::sqrt(s2);
+    return -0.5 * n * std::log(std::max(s2, 1e-300)) - logh;
+  };
+  auto golden = [](auto fn, double lo, double hi) {
+    for (int i = 0; i < 50; ++i) {
+      const double m1 = lo + (hi - lo) / 3.0, m2 = hi - (hi - lo) / 3.0;
+      if (fn(m1) < fn(m2)) lo = m1;
+      else hi = m2;
+    }
+    return 0.5 * (lo + hi);
+  };
+  for (int pass = 0; pass < 3; ++pass) {
+    // Outliers beyond 6 sigma do not set the noise scale (they are the floor's business).
+    refresh();
+    profile(m.kappa, m.gamma, &m.sigma_e);
+    for (std::size_t i : use) {
+      const Bin& b = d.bins[static_cast<std::size_t>(d.bin_of[i])];
+      const BinFit& f = fits[static_cast<std::size_t>(d.bin_of[i])];
+      const double s = m.sigma_e * shapeOf(m, b, centreOf(m, b, f));
+      if (std::abs(residual(i)) > 6.0 * s) weight[i] = 0.0;
+      else if (!fl.mixed) weight[i] = 1.0;
+    }
+    refresh();
+    if (fl.kappa) m.kappa = golden([&](double k) { return profile(k, m.gamma, nullptr); }, -1.0, 5.0);
+    if (fl.gamma) m.gamma = golden([&](double g) { return profile(m.kappa, g, nullptr); }, -1.0, 4.0);
+    profile(m.kappa, m.gamma, &m.sigma_e);
+    if (fl.drift) {
+      double num = 0.0, den = 0.0;
+      for (std::size_t i : use) {
+        const Bin& b = d.bins[static_cast<std::size_t>(d.bin_of[i])];
+        const BinFit& f = fits[static_cast<std::size_t>(d.bin_of[i])];
+        const double s = m.sigma_e * shapeOf(m, b, centreOf(m, b, f));
+        if (weight[i] < 0.5) continue;
+        const double x = d.t[i] - d.t_mean;
+        num += x * (residual(i) + m.drift * x) / (s * s);
+        den += x * x / (s * s);
+      }
+      m.drift = den > 0.0 ? num / den : 0.0;
+      fits = fitBins(d, train, m.drift);
+      refresh();
+      profile(m.kappa, m.gamma, &m.sigma_e);
+    }
+    if (fl.mixed) {
+      if (m.mixed <= 0.0) m.mixed = 0.05;
+      double sum = 0.0, n = 0.0;
+      for (std::size_t i : use) {
+        const Bin& b = d.bins[static_cast<std::size_t>(d.bin_of[i])];
+        if (!b.edge) continue;
+        const BinFit& f = fits[static_cast<std::size_t>(d.bin_of[i])];
+        const double s = m.sigma_e * shapeOf(m, b, centreOf(m, b, f));
+        const double z = residual(i) / s;
+        const double nd = std::exp(-0.5 * z * z) / (s * std::sqrt(2.0 * kPi));
+        const double u = (b.far > b.near && d.y[i] >= b.near && d.y[i] <= b.far) ? 1.0 / (b.far - b.near) : 0.0;
+        const double resp = m.mixed * u / (m.mixed * u + (1.0 - m.mixed) * nd + 1e-300);
+        weight[i] = 1.0 - resp;
+        sum += resp;
+        n += 1.0;
+      }
+      m.mixed = n > 0 ? std::clamp(sum / n, 1e-4, 0.9) : 0.0;
+    }
+  }
+  if (fl.dof) {
+    auto ll = [&](double log_nu) {
+      Model t = m;
+      t.dof = 2.0 + std::exp(log_nu);
+      double s = 0.0;
+      for (std::size_t k = 0; k < use.size(); k += std::max<std::size_t>(1, use.size() / 20000)) {
+        const std::size_t i = use[k];
+        s += readingLL(t, d, d.bins[static_cast<std::size_t>(d.bin_of[i])], fits[static_cast<std::size_t>(d.bin_of[i])], i, 0.0);
+      }
+      return s;
+    };
+    m.dof = 2.0 + std::exp(golden(ll, std::log(0.1), std::log(300.0)));
+  }
+  return m;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Statistics (battery) under the baseline.
+
+struct Evaluated {
+  std::vector<double> z, psi, xs_time, logm, loginc, cosb, sinb;
+  std::vector<bool> edge, inc;
+  std::vector<std::size_t> idx;
+};
+
+std::map<std::string, double> statistics(const Data& d, const std::vector<BinFit>& f, const Model& m, const WallFit& w0,
+                                         const WallFit& wb, double q) {
+  std::map<std::string, double> st;
+  std::vector<double> z, psi, xs, logm, zi, loginc, zc, cb, sb;
+  double pos_e = 0, n_e = 0, pos_i = 0, n_i = 0, s_e = 0, s_i = 0;
+  double m2 = 0, m4 = 0, nk = 0;
+  std::vector<double> y;
+  for (std::size_t i = 0; i < d.y.size(); ++i) {
+    const int bi = d.bin_of[i];
+    if (bi < 0 || f[static_cast<std::size_t>(bi)].n == 0) continue;
+    const Bin& b = d.bins[static_cast<std::size_t>(bi)];
+    const BinFit& bf = f[static_cast<std::size_t>(bi)];
+    const double centre = bf.at(d.a[i], d.t[i]);
+    const double s = m.sigma_e * shapeOf(m, b, centre);
+    const double zz = (d.y[i] - centre) / s;
+    y.push_back(d.y[i]);
+    z.push_back(zz);
+    psi.push_back(huberPsi(zz));
+    xs.push_back((d.t[i] - d.t_mean) / s);
+    logm.push_back(std::log(std::max(bf.m, 1e-3)));
+    cb.push_back(std::cos(b.angle));
+    sb.push_back(std::sin(b.angle));
+    zc.push_back(zz);
+    if (b.inc_known && !b.edge) {
+      zi.push_back(zz);
+      loginc.push_back(-std::log(b.cos_inc));
+    }
+    const double z2 = std::min(zz * zz, 9.0);
+    if (b.edge) {
+      n_e += 1;
+      pos_e += std::abs(zz) > 3.0;
+      s_e += z2;
+    } else {
+      n_i += 1;
+      pos_i += std::abs(zz) > 3.0;
+      s_i += z2;
+      m2 += zz * zz;
+      m4 += zz * zz * zz * zz;
+      nk += 1;
+    }
+  }
+  st["spread_vs_range"] = spreadScore(z, logm);
+  st["spread_vs_incidence"] = spreadScore(zi, loginc);
+  st["residual_vs_time"] = meanScore(psi, xs);
+  {
+    const double a = spreadScore(zc, cb), b = spreadScore(zc, sb);
+    st["spread_vs_bearing"] = cubeRootChi2(a * a + b * b, 2.0);
+  }
+  st["edge_excess"] = n_e > 0 && n_i > 0 ? (pos_e - n_e * pos_i / n_i) / std::sqrt(n_e) : 0.0;
+  st["edge_vs_centre_spread"] = n_e > 0 && n_i > 0 ? s_e / n_e - s_i / n_i : 0.0;
+  st["tail_weight"] = nk > 0 ? (m4 / nk) / std::pow(m2 / nk, 2) - 3.0 : 0.0;
+  st["quantisation"] = gridResultant(y, q > 0.0 ? q : 1e-3);
+  // Lag-1 correlation over the scans of each bin (seed 004's independence check), pooled.
+  {
+    double num = 0.0, den = 0.0, n = 0.0;
+    for (std::size_t bi = 0; bi < d.bins.size(); ++bi) {
+      if (f[bi].n == 0) continue;
+      std::vector<std::pair<double, double>> r;
+      for (std::size_t i : d.bins[bi].idx) r.push_back({d.t[i], d.y[i] - f[bi].at(d.a[i], d.t[i])});
+      std::sort(r.begin(), r.end());
+      for (std::size_t k = 1; k < r.size(); ++k)
+        if (r[k].first == r[k - 1].first + 1.0) {
+          num += r[k].second * r[k - 1].second;
+          n += 1.0;
+        }
+      for (const auto& v : r) den += v.second * v.second;
+    }
+    st["lag1_correlation"] = den > 0.0 ? num / den * std::sqrt(std::max(n, 1.0)) : 0.0;
+  }
+  st["wall_curvature"] = wb.ok && wb.b_se > 0.0 && std::isfinite(wb.b_se) ? wb.b / wb.b_se : 0.0;
+  st["wall_roughness_mm"] = w0.ok ? 1000.0 * w0.tau : 0.0;
+  st["range_offset_mm"] = w0.ok ? 1000.0 * w0.alpha0 : 0.0;
+  return st;
+}
+
+const std::vector<StatisticInfo>& statInfo() {
+  static const std::vector<StatisticInfo> info = {
+      {"spread_vs_range", "range", "score of the noise growing with ln(mean reading) beyond the squared law, ~N(0,1)", true},
+      {"spread_vs_incidence", "incidence angle", "score of the noise growing with -ln cos(incidence), ~N(0,1)", true},
+      {"spread_vs_bearing", "bearing", "cube root of chi^2 / 2 of the noise against cos and sin of the beam angle", false},
+      {"residual_vs_time", "scan index", "score of a trend shared by all beams over the scans, ~N(0,1)", true},
+      {"lag1_correlation", "scan index", "pooled lag-1 correlation of successive readings of a beam, times sqrt(pairs)", true},
+      {"edge_excess", "position within the object", "|z| > 3 readings at depth discontinuities beyond the rate elsewhere, per sqrt(edge readings)", false},
+      {"edge_vs_centre_spread", "position within the object", "mean clipped z^2 at depth discontinuities minus elsewhere", true},
+      {"tail_weight", "residual", "excess kurtosis of the standardised residuals (away from discontinuities)", false},
+      {"quantisation", "reading", "resultant length of the readings' phase on the detected grid (1: on the grid)", false},
+      {"wall_curvature", "incidence angle", "incidence bias b (1 - cos phi) fitted on the wall lines, over its standard error", true},
+      {"wall_roughness_mm", "wall", "scatter of the beam means about the wall model, mm", false},
+      {"range_offset_mm", "wall", "range offset alpha_0 the walls' straightness implies, mm", true},
+  };
+  return info;
+}
+
+/// Coarsest grid the readings lie on (0 when none of 0.1, 0.25, 0.5, 1, 2, 5, 10 mm fits).
+double detectGrid(const std::vector<double>& y) {
+  double best = 0.0;
+  for (double q : {1e-4, 2.5e-4, 5e-4, 1e-3, 2e-3, 5e-3, 1e-2})
+    if (gridResultant(y, q) > 0.9) best = q;
+  return best;
+}
+
+/// The baseline's readings, simulated with the project's simulator (reading level): the same
+/// beams and scans, true distance from the bin's location (wall bins: the wall model with a
+/// roughness draw), the fitted range model, optionally with effects.
+Data simulateStatic(const Data& d, const std::vector<BinFit>& f, const WallFit& w, const Model& m, std::uint64_t seed,
+                    const RangeEffects& fx) {
+  Data r = d;
+  RangeModel rm;
+  rm.bias.alpha = {w.ok ? w.alpha0 : 0.0, 1.0};
+  rm.noise.kind = NoiseKind::power;
+  rm.noise.exponent = m.kappa;
+  rm.noise.sigma_e = m.sigma_e;
+  rm.range_min_m = -1e9;
+  rm.range_max_m = 1e9;
+  auto rough = makeRng(seed, 0x3A11ULL);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  std::vector<double> u(d.bins.size(), 0.0);
+  for (double& v : u) v = (w.ok ? w.tau : 0.0) * normal(rough);
+  std::map<std::size_t, std::size_t> wall_index;
+  for (std::size_t k = 0; k < w.bins.size(); ++k) wall_index[w.bins[k]] = k;
+  std::vector<std::mt19937_64> gens;
+  std::map<std::uint32_t, std::size_t> gen_of;
+  for (std::size_t i = 0; i < d.y.size(); ++i) {
+    const int bi = d.bin_of[i];
+    if (bi < 0 || f[static_cast<std::size_t>(bi)].n == 0) continue;
+    const Bin& b = d.bins[static_cast<std::size_t>(bi)];
+    const BinFit& bf = f[static_cast<std::size_t>(bi)];
+    double mean = bf.at(d.a[i], d.t[i]);
+    if (w.ok && b.wall >= 0 && wall_index.count(static_cast<std::size_t>(bi))) {
+      const Line& l = w.lines[static_cast<std::size_t>(b.wall)];
+      mean = w.alpha0 + l.p / std::max(std::cos(d.a[i] - l.theta), 0.05) + u[static_cast<std::size_t>(bi)];
+    }
+    const auto scan = static_cast<std::uint32_t>(d.t[i]);
+    auto it = gen_of.find(scan);
+    if (it == gen_of.end()) {
+      it = gen_of.emplace(scan, gens.size()).first;
+      gens.push_back(simulation::effectRng(seed, scan));
+    }
+    auto& gen = gens[it->second];
+    const double e = normal(gen);
+    double dist = mean - rm.bias.alpha[0];
+    if (fx.mixed_pixel_fraction > 0.0) {
+      // At a depth discontinuity the footprint may straddle both surfaces: a reading anywhere
+      // between them (the other side is the nearer or the farther one).
+      std::uniform_real_distribution<double> unit(0.0, 1.0);
+      const double u1 = unit(gen), share = unit(gen);
+      if (b.edge && u1 < fx.mixed_pixel_fraction) {
+        const double other = (std::abs(mean - b.near) < std::abs(mean - b.far) ? b.far : b.near) - rm.bias.alpha[0];
+        dist = share * dist + (1.0 - share) * other;
+      }
+    }
+    RangeEffects no_mix = fx;
+    no_mix.mixed_pixel_fraction = 0.0;
+    r.y[i] = simulation::effectReading(rm, no_mix, dist, simulation::BeamContext{b.cos_inc, 0.0, scan}, e, gen);
+  }
+  return r;
+}
+
+/// Whether the sensor moved during the recording: the beams' means in the first and second half
+/// of the scans differ beyond their noise, by different amounts (a drift moves them all alike).
+double movedFraction(const Data& d) {
+  double tmax = 0.0;
+  for (double t : d.t) tmax = std::max(tmax, t);
+  std::vector<bool> first(static_cast<std::size_t>(tmax) + 1), second(first.size());
+  for (std::size_t t = 0; t < first.size(); ++t) {
+    first[t] = static_cast<double>(t) <= tmax / 2.0;
+    second[t] = !first[t];
+  }
+  const auto a = fitBins(d, first, 0.0), b = fitBins(d, second, 0.0);
+  std::vector<double> diff, se;
+  for (std::size_t k = 0; k < d.bins.size(); ++k) {
+    if (a[k].n == 0 || b[k].n == 0) continue;
+    diff.push_back(b[k].m - a[k].m);
+    se.push_back(std::sqrt(a[k].s2 / a[k].n + b[k].s2 / b[k].n));
+  }
+  if (diff.empty()) return 1.0;
+  const double common = median(diff);
+  std::size_t moved = 0;
+  std::vector<double> dev;
+  for (std::size_t k = 0; k < diff.size(); ++k) {
+    moved += std::abs(diff[k] - common) > std::max(5.0 * se[k], 0.01);
+    dev.push_back(std::abs(diff[k] - common));
+  }
+  // Half the beams' means moved by more than 1 cm: the sensor moved, whatever the noise.
+  if (median(dev) > 0.01) return 1.0;
+  return static_cast<double>(moved) / static_cast<double>(diff.size());
+}
+
+}  // namespace
+
+std::vector<std::string> staticCandidates() { return allCandidates(); }
+
+DiagnosisResult diagnoseStatic(const StaticScans& data, const DiagnoseConfig& config, std::vector<WallLine>* walls_out) {
+  config.validate();
+  DiagnosisResult out;
+  out.mode = DiagnoseMode::static_scene;
+  out.seed = config.seed;
+  out.replicas = config.replicas;
+  out.folds = config.folds;
+  out.scans = data.scans;
+  out.stops = 1;
+  out.readings = data.readings.size();
+  const std::vector<std::string> candidates = config.candidates.empty() ? allCandidates() : config.candidates;
+  for (const auto& c : candidates)
+    if (std::find(allCandidates().begin(), allCandidates().end(), c) == allCandidates().end())
+      throw std::invalid_argument("diagnose: '" + c + "' is not a candidate effect for a static recording");
+  if (data.scans < static_cast<std::size_t>(2 * config.folds)) {
+    out.status = "too_few_scans";
+    out.message = "a static recording needs at least " + std::to_string(2 * config.folds) + " scans from the same pose";
+    return out;
+  }
+  // One pose for the whole recording, unless the beams show that the sensor moved: then short
+  // windows of scans, each a pose of its own, with a time trend per beam (the sensor creeping).
+  std::size_t window = config.static_window > 0 ? static_cast<std::size_t>(config.static_window) : 0;
+  Data d = makeBins(data, window);
+  if (config.static_window == 0) {
+    const double moved = movedFraction(d);
+    out.baseline_extra["beams_moved_fraction"] = moved;
+    if (moved > 0.3) {
+      window = 8;
+      d = makeBins(data, window);
+    }
+  }
+  out.baseline_extra["window_scans"] = static_cast<double>(window);
+  if (d.bins.size() < 10) {
+    out.status = "too_few_beams";
+    out.message = "fewer than 10 beam directions return in enough scans";
+    return out;
+  }
+
+  // 1. Baseline: bin locations, the squared noise law, the wall model with alpha_0.
+  std::vector<BinFit> f0;
+  const Model base0 = fitModel(d, {}, Flags{}, 0.0, f0);
+  const std::vector<Line> lines0 = findWalls(d, f0);
+  double given_a0 = config.static_range_offset_m;  // NaN: from the walls' straightness
+  WallFit w0 = fitWalls(d, f0, lines0, false, given_a0);
+  // Walls too few or too short to bend measurably: alpha_0 stays unknown (held at 0).
+  const bool a0_identified = std::isfinite(given_a0) || (w0.ok && w0.alpha0_se <= 0.05);
+  if (!a0_identified) {
+    given_a0 = 0.0;
+    w0 = fitWalls(d, f0, lines0, false, given_a0);
+  }
+  const WallFit wb = fitWalls(d, f0, lines0, true, given_a0);
+  if (std::isfinite(config.static_range_offset_m)) out.baseline_extra["alpha0_given_m"] = given_a0;
+  std::vector<double> used_y;
+  for (std::size_t i = 0; i < d.y.size(); ++i)
+    if (d.bin_of[i] >= 0) used_y.push_back(d.y[i]);
+  const double q = detectGrid(used_y);
+  out.landmarks = lines0.size();
+  out.baseline.bias.alpha = {w0.ok ? w0.alpha0 : 0.0, 1.0};
+  out.baseline.noise.kind = NoiseKind::squared;
+  out.baseline.noise.sigma_e = base0.sigma_e;
+  out.baseline.range_min_m = data.range_min_m;
+  out.baseline.range_max_m = data.range_max_m;
+  out.baseline_extra["beam_bins"] = static_cast<double>(d.bins.size());
+  out.baseline_extra["wall_lines"] = static_cast<double>(lines0.size());
+  out.baseline_extra["wall_bins"] = static_cast<double>(w0.bins.size());
+  out.baseline_extra["alpha0_m"] = w0.ok && a0_identified ? w0.alpha0 : kNaN;
+  out.baseline_extra["alpha0_se_m"] = w0.ok && a0_identified && !std::isfinite(config.static_range_offset_m) ? w0.alpha0_se : kNaN;
+  out.baseline_extra["wall_roughness_m"] = w0.ok ? w0.tau : kNaN;
+  out.baseline_extra["reading_grid_m"] = q;
+  std::size_t edges = 0;
+  for (const auto& b : d.bins) edges += b.edge;
+  out.baseline_extra["edge_bins"] = static_cast<double>(edges);
+  if (walls_out) {
+    walls_out->clear();
+    for (std::size_t l = 0; l < lines0.size(); ++l) {
+      WallLine wl;
+      const Line& line = w0.ok ? w0.lines[l] : lines0[l];
+      wl.normal_rad = wrapAngle(line.theta);
+      wl.distance_m = line.p;
+      double lo = kInf, hi = -kInf, ss = 0.0;
+      for (std::size_t k = 0; k < w0.bins.size(); ++k) {
+        const Bin& b = d.bins[w0.bins[k]];
+        if (b.wall != static_cast<int>(l)) continue;
+        lo = std::min(lo, b.angle);
+        hi = std::max(hi, b.angle);
+        ++wl.bins;
+        ss += w0.resid[k] * w0.resid[k];
+      }
+      wl.first_angle_rad = lo;
+      wl.last_angle_rad = hi;
+      wl.rms_m = wl.bins ? std::sqrt(ss / static_cast<double>(wl.bins)) : 0.0;
+      walls_out->push_back(wl);
+    }
+  }
+  const auto measured_stats = statistics(d, f0, base0, w0, wb, q);
+  auto recordsOf = [&](const Data& dd, const std::vector<BinFit>& ff, const Model& mm) {
+    std::vector<ResidualRecord> rec;
+    for (std::size_t i = 0; i < dd.y.size(); ++i) {
+      const int bi = dd.bin_of[i];
+      if (bi < 0 || ff[static_cast<std::size_t>(bi)].n == 0) continue;
+      const Bin& b = dd.bins[static_cast<std::size_t>(bi)];
+      const BinFit& bf = ff[static_cast<std::size_t>(bi)];
+      ResidualRecord r;
+      r.range_m = bf.m;
+      r.incidence_rad = b.inc_known ? std::acos(std::clamp(b.cos_inc, 0.0, 1.0)) : kNaN;
+      r.lateral = b.edge ? 1.0 : 0.0;
+      r.group = b.wall + 1;
+      r.time = dd.t[i];
+      r.bearing_rad = b.angle;
+      r.edge = b.edge;
+      const double centre = bf.at(dd.a[i], dd.t[i]);
+      r.residual_m = dd.y[i] - centre;
+      r.z = r.residual_m / (mm.sigma_e * shapeOf(mm, b, centre));
+      rec.push_back(r);
+    }
+    return rec;
+  };
+  out.measured = recordsOf(d, f0, base0);
+
+  // 2. Parametric bootstrap.
+  std::map<std::string, std::vector<double>> replica_stats;
+  std::vector<double> sim_z;
+  std::vector<std::vector<double>> sim_var(d.bins.size());
+  for (int b = 0; b < config.replicas; ++b) {
+    const Data rep = simulateStatic(d, f0, w0, base0, deriveSeed(config.seed, 2000 + static_cast<std::uint64_t>(b)), RangeEffects{});
+    std::vector<BinFit> fr;
+    const Model mr = fitModel(rep, {}, Flags{}, 0.0, fr);
+    const WallFit wr0 = fitWalls(rep, fr, w0.ok ? w0.lines : lines0, false, given_a0);
+    const WallFit wrb = fitWalls(rep, fr, w0.ok ? w0.lines : lines0, true, given_a0);
+    for (const auto& [k, v] : statistics(rep, fr, mr, wr0, wrb, q)) replica_stats[k].push_back(v);
+    if (b < config.closeness_replicas) {
+      for (const auto& r : recordsOf(rep, fr, mr)) sim_z.push_back(r.z);
+      for (std::size_t k = 0; k < fr.size(); ++k)
+        if (fr[k].n > 0) sim_var[k].push_back(fr[k].s2);
+    }
+    if (b == 0) out.simulated_baseline = recordsOf(rep, fr, mr);
+  }
+  out.battery = makeBattery(statInfo(), measured_stats, replica_stats);
+
+  // 3. Candidates: held-out readings (folds by scan) and held-out wall bins (leave one out).
+  std::vector<int> fold(data.scans);
+  for (std::size_t t = 0; t < data.scans; ++t) fold[t] = static_cast<int>(t % static_cast<std::size_t>(config.folds));
+  std::vector<Flags> flags;
+  for (const auto& e : candidates) flags.push_back(flagsOf(e));
+  std::vector<double> ll_base;
+  std::vector<std::vector<double>> ll_cand(candidates.size());
+  std::vector<std::size_t> block;
+  const double floor_w = config.outlier_floor;
+  for (int k = 0; k < config.folds; ++k) {
+    std::vector<bool> train(data.scans);
+    for (std::size_t t = 0; t < data.scans; ++t) train[t] = fold[t] != k;
+    std::vector<BinFit> fb;
+    const Model mb = fitModel(d, train, Flags{}, q, fb);
+    std::vector<std::vector<BinFit>> fc(candidates.size());
+    std::vector<Model> mc(candidates.size());
+    for (std::size_t c = 0; c < candidates.size(); ++c) mc[c] = fitModel(d, train, flags[c], q, fc[c]);
+    for (std::size_t i = 0; i < d.y.size(); ++i) {
+      const int bi = d.bin_of[i];
+      if (bi < 0 || train[static_cast<std::size_t>(d.t[i])] || fb[static_cast<std::size_t>(bi)].n == 0) continue;
+      const Bin& bin = d.bins[static_cast<std::size_t>(bi)];
+      ll_base.push_back(readingLL(mb, d, bin, fb[static_cast<std::size_t>(bi)], i, floor_w));
+      block.push_back(static_cast<std::size_t>(d.t[i]));
+      for (std::size_t c = 0; c < candidates.size(); ++c)
+        ll_cand[c].push_back(fc[c][static_cast<std::size_t>(bi)].n > 0
+                                 ? readingLL(mc[c], d, bin, fc[c][static_cast<std::size_t>(bi)], i, floor_w)
+                                 : kNaN);
+    }
+  }
+  const double n_readings = static_cast<double>(ll_base.size());
+  // Wall bins: the bin means given the wall model (baseline: alpha_0 and lines).
+  if (w0.ok) {
+    for (std::size_t k = 0; k < w0.loo_ll.size(); ++k) {
+      ll_base.push_back(w0.loo_ll[k]);
+      block.push_back(std::numeric_limits<std::size_t>::max() - k);
+      for (std::size_t c = 0; c < candidates.size(); ++c)
+        ll_cand[c].push_back(flags[c].wall_b && wb.ok ? wb.loo_ll[k] : w0.loo_ll[k]);
+    }
+  }
+  if (ll_base.empty()) {
+    out.status = "cross_validation_failed";
+    out.message = "no held-out reading";
+    return out;
+  }
+  {
+    double s = 0.0;
+    for (double v : ll_base) s += v;
+    out.baseline_heldout_nats_per_point = s / n_readings;
+  }
+  // In-sample likelihoods for delta AIC.
+  auto inSample = [&](const Flags& fl, Model* fitted) {
+    std::vector<BinFit> ff;
+    const Model mm = fitModel(d, {}, fl, q, ff);
+    if (fitted) *fitted = mm;
+    double s = 0.0;
+    for (std::size_t i = 0; i < d.y.size(); ++i) {
+      const int bi = d.bin_of[i];
+      if (bi < 0 || ff[static_cast<std::size_t>(bi)].n == 0) continue;
+      s += readingLL(mm, d, d.bins[static_cast<std::size_t>(bi)], ff[static_cast<std::size_t>(bi)], i, floor_w);
+    }
+    return s;
+  };
+  const double ll_in_base = inSample(Flags{}, nullptr);
+  out.baseline_neg_log_likelihood = -ll_in_base;
+  std::vector<Model> full(candidates.size());
+  for (std::size_t c = 0; c < candidates.size(); ++c) {
+    CandidateResult r;
+    r.effect = candidates[c];
+    r.statistic = statisticOf(r.effect);
+    const std::string& e = r.effect;
+    if (e == effect::kHeadingError || e == effect::kAngleOffset || e == effect::kOdometryScale) {
+      r.applicable = false;
+      r.identifiable = false;
+      r.p_value = r.p_holm = r.score_p_value = kNaN;
+      r.note = "one pose: nothing about stops or headings can be seen";
+      out.candidates.push_back(r);
+      continue;
+    }
+    if (e == effect::kLandmarkBias) {
+      r.identifiable = false;
+      r.applicable = true;
+      r.p_value = r.p_holm = r.score_p_value = kNaN;
+      r.information_ratio = 0.0;
+      r.standard_error = kInf;
+      r.note = "an offset of one surface moves its fitted wall line as a whole: each line absorbs it";
+      out.candidates.push_back(r);
+      continue;
+    }
+    for (const auto& dsc : out.battery)
+      if (dsc.name == r.statistic) {
+        r.score_p_value = dsc.p_value;
+        r.effect_size = dsc.effect_size;
+      }
+    std::map<std::size_t, double> per_block;
+    double sum = 0.0;
+    bool finite = true;
+    for (std::size_t i = 0; i < ll_base.size(); ++i) {
+      const double diff = ll_cand[c][i] - ll_base[i];
+      if (!std::isfinite(diff)) {
+        finite = false;
+        break;
+      }
+      sum += diff;
+      per_block[block[i]] += diff;
+    }
+    if (!finite) {
+      r.applicable = false;
+      r.p_value = kNaN;
+      r.note = "could not be fitted on every fold";
+      out.candidates.push_back(r);
+      continue;
+    }
+    r.heldout_gain_nats_per_point = sum / n_readings;
+    double ss = 0.0;
+    const double mean_block = sum / static_cast<double>(per_block.size());
+    for (const auto& [key, v] : per_block) ss += (v - mean_block) * (v - mean_block);
+    const double nb = static_cast<double>(per_block.size());
+    r.heldout_gain_se = nb > 1 ? std::sqrt(ss / (nb - 1.0) * nb) / n_readings : 0.0;
+    r.p_heldout = heldoutPValue(r.heldout_gain_nats_per_point, r.heldout_gain_se);
+    r.p_value = combinedPValue(r.p_heldout, r.score_p_value);
+    r.parameters = flags[c].parameters();
+    double ll_in = inSample(flags[c], &full[c]);
+    if (flags[c].wall_b && wb.ok && w0.ok) ll_in = ll_in_base + (wb.in_ll - w0.in_ll);  // only the walls' part differs
+    r.delta_aic = 2.0 * r.parameters - 2.0 * (ll_in - ll_in_base);
+    // Identifiability.
+    if (e == effect::kIncidenceBias) {
+      r.standard_error = wb.ok ? wb.b_se : kInf;
+      r.identifiable = a0_identified && wb.ok && r.standard_error < std::max(0.01, std::abs(wb.b) / 4.0);
+      if (!r.identifiable)
+        r.note = a0_identified ? "bends the walls almost as a range offset does: give the offset (--range-offset) from a reference distance"
+                               : "too few straight walls, or walls seen over too narrow a range of incidence";
+    } else if (e == effect::kIncidenceNoise || e == effect::kRangeNoiseLaw) {
+      double mm = 0.0, m2 = 0.0, n = 0.0;
+      for (const auto& b : d.bins) {
+        if (e == effect::kIncidenceNoise && !b.inc_known) continue;
+        const double g = e == effect::kIncidenceNoise ? -std::log(b.cos_inc)
+                                                      : std::log(std::max(f0[static_cast<std::size_t>(&b - d.bins.data())].m, 1e-3));
+        mm += g;
+        m2 += g * g;
+        n += static_cast<double>(b.idx.size());
+      }
+      const double nbins = static_cast<double>(d.bins.size());
+      const double var = nbins > 0 ? std::max(m2 / nbins - std::pow(mm / nbins, 2), 0.0) : 0.0;
+      r.information_ratio = var / (m2 / std::max(nbins, 1.0) + 1e-4);
+      r.standard_error = var > 0.0 ? 1.0 / std::sqrt(2.0 * n * var) : kInf;
+      r.identifiable = r.standard_error < 0.5;
+      if (!r.identifiable) r.note = e == effect::kIncidenceNoise ? "no spread of incidence angles" : "no spread of ranges";
+    } else if (e == effect::kRangeDrift && window > 0) {
+      r.identifiable = false;
+      r.note = "each window of scans has its own time trend per beam (the sensor moved), which absorbs a drift";
+    } else if (e == effect::kMixedPixels) {
+      r.identifiable = edges >= 3;
+      if (!r.identifiable) r.note = "fewer than 3 beams at depth discontinuities";
+    }
+    const Model& fm = full[c];
+    if (e == effect::kIncidenceNoise) r.estimates["incidence_noise_exponent"] = fm.gamma;
+    if (e == effect::kRangeNoiseLaw) r.estimates["noise_exponent"] = fm.kappa;
+    if (e == effect::kRangeDrift) {
+      r.estimates["range_drift_m_per_scan"] = fm.drift;
+      r.estimates["range_drift_over_recording_m"] = fm.drift * static_cast<double>(data.scans - 1);
+    }
+    if (e == effect::kMixedPixels) r.estimates["mixed_pixel_fraction"] = fm.mixed;
+    if (e == effect::kHeavyTails) r.estimates["student_dof"] = fm.dof;
+    if (e == effect::kQuantisation) r.estimates["grid_m"] = fm.q;
+    if (e == effect::kIncidenceBias) {
+      r.estimates["incidence_bias_m"] = wb.b;
+      r.estimates["alpha0_with_it_m"] = wb.alpha0;
+    }
+    out.candidates.push_back(r);
+  }
+
+  // 4. The cause.
+  out.primary_cause = nameCause(out.candidates, config.alpha, out.decision);
+
+  // 5. Extended model: closeness of its simulation, scene keys.
+  auto closeness = [&](const std::vector<double>& zs, const std::vector<std::vector<double>>& vars) {
+    Closeness c;
+    std::vector<double> mz;
+    for (const auto& r : out.measured) mz.push_back(r.z);
+    c.ks_distance = ksDistance(mz, zs);
+    std::vector<double> logs;
+    for (std::size_t k = 0; k < d.bins.size(); ++k) {
+      if (f0[k].n == 0 || vars[k].empty() || !(f0[k].s2 > 0.0)) continue;
+      double mv = 0.0;
+      for (double v : vars[k]) mv += v / static_cast<double>(vars[k].size());
+      if (!(mv > 0.0)) continue;
+      logs.push_back(std::abs(std::log(f0[k].s2 / mv)));
+    }
+    c.groups = logs.size();
+    c.variance_ratio_median_abs_log = logs.empty() ? 0.0 : median(logs);
+    return c;
+  };
+  out.closeness_baseline = closeness(sim_z, sim_var);
+  const auto named = std::find(candidates.begin(), candidates.end(), out.primary_cause);
+  if (named != candidates.end()) {
+    const std::size_t c = static_cast<std::size_t>(named - candidates.begin());
+    const CandidateResult& r = out.candidates[c];
+    const Model& fm = full[c];
+    out.extended_parameters = r.estimates;
+    out.gain_heldout_nats_per_point = r.heldout_gain_nats_per_point;
+    out.gain_delta_aic = r.delta_aic;
+    RangeEffects fx;
+    Model sim_model = base0;
+    const std::string& e = out.primary_cause;
+    if (e == effect::kIncidenceNoise) fx.incidence_noise_exponent = fm.gamma;
+    if (e == effect::kRangeDrift) fx.range_drift_m_per_scan = fm.drift;
+    if (e == effect::kMixedPixels) fx.mixed_pixel_fraction = fm.mixed;
+    if (e == effect::kHeavyTails) fx.noise_student_dof = std::max(fm.dof, 2.1);
+    if (e == effect::kQuantisation) fx.range_resolution_m = fm.q;
+    if (e == effect::kRangeNoiseLaw) sim_model.kappa = fm.kappa;
+    sim_model.sigma_e = fm.sigma_e;
+    WallFit w_sim = w0;
+    if (e == effect::kIncidenceBias && wb.ok) {
+      w_sim = wb;
+      fx.incidence_bias_m = wb.b;
+    }
+    const double a0 = w_sim.ok ? w_sim.alpha0 : 0.0;
+    out.extended_bias_alpha = {a0, 1.0};
+    out.scene_keys["sensor.bias_alpha[0]"] = a0;
+    out.scene_keys["sensor.bias_alpha[1]"] = 1.0;
+    if (sim_model.kappa != 2.0) out.scene_keys["sensor.noise.exponent (kind power)"] = sim_model.kappa;
+    out.scene_keys["sensor.noise.sigma_e"] = sim_model.sigma_e;
+    if (fx.incidence_noise_exponent != 0.0) out.scene_keys["sensor.effects.incidence_noise_exponent"] = fx.incidence_noise_exponent;
+    if (fx.incidence_bias_m != 0.0) out.scene_keys["sensor.effects.incidence_bias_m"] = fx.incidence_bias_m;
+    if (fx.range_drift_m_per_scan != 0.0) {
+      out.scene_keys["sensor.effects.range_drift_m_per_scan"] = fx.range_drift_m_per_scan;
+      out.scene_keys["sensor.bias_alpha[0]"] = a0 - fx.range_drift_m_per_scan * d.t_mean;
+    }
+    if (fx.mixed_pixel_fraction != 0.0) out.scene_keys["sensor.effects.mixed_pixel_fraction"] = fx.mixed_pixel_fraction;
+    if (fx.noise_student_dof != 0.0) out.scene_keys["sensor.effects.noise_student_dof"] = fx.noise_student_dof;
+    if (fx.range_resolution_m != 0.0) out.scene_keys["sensor.effects.range_resolution_m"] = fx.range_resolution_m;
+    // The simulator's drift term is c t; the fitted one is c (t - t_mean): same readings when
+    // alpha_0 takes the difference (done by the scene key above; the bins carry it here).
+    std::vector<BinFit> f_sim = f0;
+    if (fx.range_drift_m_per_scan != 0.0)
+      for (auto& bf : f_sim) bf.m -= fx.range_drift_m_per_scan * d.t_mean;
+    std::vector<double> ext_z;
+    std::vector<std::vector<double>> ext_var(d.bins.size());
+    for (int b = 0; b < config.closeness_replicas; ++b) {
+      const Data rep = simulateStatic(d, f_sim, w_sim, sim_model, deriveSeed(config.seed, 6000 + static_cast<std::uint64_t>(b)), fx);
+      std::vector<BinFit> fr;
+      const Model mr = fitModel(rep, {}, Flags{}, 0.0, fr);
+      const auto rec = recordsOf(rep, fr, mr);
+      for (const auto& x : rec) ext_z.push_back(x.z);
+      for (std::size_t k = 0; k < fr.size(); ++k)
+        if (fr[k].n > 0) ext_var[k].push_back(fr[k].s2);
+      if (b == 0) out.simulated_extended = rec;
+    }
+    out.closeness_extended = closeness(ext_z, ext_var);
+  }
+  return out;
+}
+
+}  // namespace lidarcal::calibration

@@ -1,0 +1,242 @@
+#include "calibration/diagnose_stats.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <stdexcept>
+
+#include <boost/math/distributions/normal.hpp>
+#include <boost/math/distributions/students_t.hpp>
+
+#include "common/pose2.hpp"
+
+namespace lidarcal::calibration {
+
+const char* toString(DiagnoseMode mode) { return mode == DiagnoseMode::sequence ? "sequence" : "static"; }
+
+void DiagnoseConfig::validate() const {
+  if (replicas < 5) throw std::invalid_argument("DiagnoseConfig: replicas must be >= 5");
+  if (folds < 2) throw std::invalid_argument("DiagnoseConfig: folds must be >= 2");
+  if (!(alpha > 0.0 && alpha < 1.0)) throw std::invalid_argument("DiagnoseConfig: alpha must be in (0, 1)");
+  if (max_order < 1 || max_order > 6) throw std::invalid_argument("DiagnoseConfig: max_order must be 1..6");
+  if (!(outlier_floor >= 0.0 && outlier_floor < 0.5)) throw std::invalid_argument("DiagnoseConfig: outlier_floor must be in [0, 0.5)");
+  if (!(sigma_s_m > 0.0)) throw std::invalid_argument("DiagnoseConfig: sigma_s_m must be positive");
+  if (closeness_replicas < 1) throw std::invalid_argument("DiagnoseConfig: closeness_replicas must be >= 1");
+}
+
+double replicaPValue(double value, const std::vector<double>& replicas, bool two_sided, double* effect_size) {
+  std::vector<double> r;
+  for (double v : replicas)
+    if (std::isfinite(v)) r.push_back(v);
+  if (effect_size) *effect_size = 0.0;
+  if (!std::isfinite(value) || r.size() < 3) return std::numeric_limits<double>::quiet_NaN();
+  const double n = static_cast<double>(r.size());
+  const double mean = std::accumulate(r.begin(), r.end(), 0.0) / n;
+  double var = 0.0;
+  for (double v : r) var += (v - mean) * (v - mean);
+  const double sd = std::sqrt(var / (n - 1.0));
+  if (!(sd > 0.0)) {
+    if (effect_size) *effect_size = value == mean ? 0.0 : std::copysign(std::numeric_limits<double>::infinity(), value - mean);
+    return value == mean || (!two_sided && value < mean) ? 1.0 : 0.0;
+  }
+  if (effect_size) *effect_size = (value - mean) / sd;
+  const double t = (value - mean) / (sd * std::sqrt(1.0 + 1.0 / n));
+  const boost::math::students_t dist(n - 1.0);
+  const double upper = boost::math::cdf(boost::math::complement(dist, std::abs(t)));
+  if (two_sided) return std::min(1.0, 2.0 * upper);
+  return t >= 0.0 ? upper : 1.0 - upper;
+}
+
+Discrepancy makeDiscrepancy(std::string name, std::string variable, std::string description, double value,
+                            const std::vector<double>& replicas, bool two_sided) {
+  Discrepancy d;
+  d.name = std::move(name);
+  d.variable = std::move(variable);
+  d.description = std::move(description);
+  d.value = value;
+  d.two_sided = two_sided;
+  std::vector<double> r;
+  for (double v : replicas)
+    if (std::isfinite(v)) r.push_back(v);
+  if (!r.empty()) {
+    d.replica_mean = std::accumulate(r.begin(), r.end(), 0.0) / static_cast<double>(r.size());
+    double var = 0.0;
+    for (double v : r) var += (v - d.replica_mean) * (v - d.replica_mean);
+    d.replica_sd = r.size() > 1 ? std::sqrt(var / static_cast<double>(r.size() - 1)) : 0.0;
+  }
+  d.p_value = replicaPValue(value, replicas, two_sided, &d.effect_size);
+  return d;
+}
+
+std::vector<Discrepancy> makeBattery(const std::vector<StatisticInfo>& infos, const std::map<std::string, double>& measured,
+                                     const std::map<std::string, std::vector<double>>& replicas) {
+  std::vector<Discrepancy> out;
+  for (const auto& s : infos) {
+    const auto it = measured.find(s.name);
+    if (it == measured.end()) continue;
+    const auto rep = replicas.find(s.name);
+    out.push_back(makeDiscrepancy(s.name, s.variable, s.description, it->second,
+                                  rep != replicas.end() ? rep->second : std::vector<double>{}, s.two_sided));
+  }
+  return out;
+}
+
+double heldoutPValue(double gain, double se) {
+  if (!std::isfinite(gain)) return std::numeric_limits<double>::quiet_NaN();
+  if (gain <= 0.0) return 1.0;
+  if (!(se > 0.0)) return std::numeric_limits<double>::quiet_NaN();
+  return 0.5 * std::erfc(gain / se / std::sqrt(2.0));
+}
+
+double combinedPValue(double p_heldout, double p_score) {
+  const bool a = std::isfinite(p_heldout), b = std::isfinite(p_score);
+  if (!a && !b) return std::numeric_limits<double>::quiet_NaN();
+  if (!a) return p_score;
+  if (!b) return p_heldout;
+  return std::min(1.0, 2.0 * std::min(p_heldout, p_score));
+}
+
+std::vector<double> holmAdjust(const std::vector<double>& p) {
+  std::vector<std::size_t> idx;
+  for (std::size_t i = 0; i < p.size(); ++i)
+    if (std::isfinite(p[i])) idx.push_back(i);
+  std::sort(idx.begin(), idx.end(), [&](std::size_t a, std::size_t b) { return p[a] < p[b]; });
+  std::vector<double> out(p.size(), std::numeric_limits<double>::quiet_NaN());
+  const double m = static_cast<double>(idx.size());
+  double running = 0.0;
+  for (std::size_t r = 0; r < idx.size(); ++r) {
+    running = std::max(running, std::min(1.0, (m - static_cast<double>(r)) * p[idx[r]]));
+    out[idx[r]] = running;
+  }
+  return out;
+}
+
+double ksDistance(std::vector<double> a, std::vector<double> b) {
+  if (a.empty() || b.empty()) return 0.0;
+  std::sort(a.begin(), a.end());
+  std::sort(b.begin(), b.end());
+  std::size_t i = 0, j = 0;
+  double best = 0.0;
+  const double na = static_cast<double>(a.size()), nb = static_cast<double>(b.size());
+  while (i < a.size() && j < b.size()) {
+    const double x = std::min(a[i], b[j]);
+    while (i < a.size() && a[i] <= x) ++i;
+    while (j < b.size() && b[j] <= x) ++j;
+    best = std::max(best, std::abs(static_cast<double>(i) / na - static_cast<double>(j) / nb));
+  }
+  return best;
+}
+
+double cubeRootChi2(double chi2, double dof) {
+  if (!(dof > 0.0)) return 0.0;
+  return std::cbrt(std::max(chi2, 0.0) / dof);
+}
+
+double huberPsi(double z, double c) { return std::clamp(z, -c, c); }
+
+double meanScore(const std::vector<double>& psi, const std::vector<double>& xs) {
+  double u = 0.0, info = 0.0;
+  for (std::size_t i = 0; i < psi.size() && i < xs.size(); ++i) {
+    u += psi[i] * xs[i];
+    info += xs[i] * xs[i];
+  }
+  return info > 0.0 ? u / std::sqrt(info) : 0.0;
+}
+
+double spreadScore(const std::vector<double>& z, const std::vector<double>& g) {
+  constexpr double kClip = 3.0;
+  const std::size_t n = std::min(z.size(), g.size());
+  if (n == 0) return 0.0;
+  double mean = 0.0;
+  for (std::size_t i = 0; i < n; ++i) mean += g[i] / static_cast<double>(n);
+  const double c2 = clippedSquareMean(kClip), v2 = clippedSquareVariance(kClip);
+  double u = 0.0, info = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double gi = g[i] - mean;
+    u += (std::min(z[i] * z[i], kClip * kClip) - c2) * gi;
+    info += v2 * gi * gi;
+  }
+  return info > 0.0 ? u / std::sqrt(info) : 0.0;
+}
+
+double clippedSquareMean(double c) {
+  // E[min(Z^2, c^2)] = P(|Z| < c) - 2 c phi(c) + c^2 P(|Z| > c).
+  const boost::math::normal n;
+  const double tail = 2.0 * boost::math::cdf(boost::math::complement(n, c));
+  return (1.0 - tail) - 2.0 * c * boost::math::pdf(n, c) + c * c * tail;
+}
+
+double clippedSquareVariance(double c) {
+  // E[min(Z^4, c^4)] = 3 P(|Z| < c) - 2 phi(c) (c^3 + 3 c) + c^4 P(|Z| > c).
+  const boost::math::normal n;
+  const double tail = 2.0 * boost::math::cdf(boost::math::complement(n, c));
+  const double m4 = 3.0 * (1.0 - tail) - 2.0 * boost::math::pdf(n, c) * (c * c * c + 3.0 * c) + c * c * c * c * tail;
+  const double m2 = clippedSquareMean(c);
+  return m4 - m2 * m2;
+}
+
+double gridResultant(const std::vector<double>& y, double q) {
+  if (y.empty() || !(q > 0.0)) return 0.0;
+  double c = 0.0, s = 0.0;
+  for (double v : y) {
+    const double a = 2.0 * kPi * (v / q - std::floor(v / q));
+    c += std::cos(a);
+    s += std::sin(a);
+  }
+  return std::hypot(c, s) / static_cast<double>(y.size());
+}
+
+std::string nameCause(std::vector<CandidateResult>& cands, double alpha, std::string& decision,
+                      const std::vector<std::pair<std::string, std::string>>& nested,
+                      const std::vector<std::pair<std::string, std::string>>& indistinguishable) {
+  std::vector<double> p;
+  for (const auto& c : cands) p.push_back(c.applicable ? c.p_value : std::numeric_limits<double>::quiet_NaN());
+  const auto adj = holmAdjust(p);
+  for (std::size_t i = 0; i < cands.size(); ++i) {
+    cands[i].p_holm = adj[i];
+    cands[i].significant = cands[i].applicable && std::isfinite(adj[i]) && adj[i] < alpha &&
+                           cands[i].heldout_gain_nats_per_point > 0.0;
+  }
+  std::vector<std::size_t> sig;
+  for (std::size_t i = 0; i < cands.size(); ++i)
+    if (cands[i].significant) sig.push_back(i);
+  if (sig.empty()) {
+    decision = "no candidate is significant (Holm-adjusted p < " + std::to_string(alpha) +
+               " with a positive held-out gain): the baseline describes the data";
+    return effect::kNone;
+  }
+  std::size_t top = sig.front();
+  for (std::size_t i : sig)
+    if (cands[i].heldout_gain_nats_per_point > cands[top].heldout_gain_nats_per_point) top = i;
+  decision = "largest held-out gain among the significant effects: " + cands[top].effect;
+  auto close = [&](std::size_t a, std::size_t b) {
+    const double se = std::hypot(cands[a].heldout_gain_se, cands[b].heldout_gain_se);
+    return cands[b].heldout_gain_nats_per_point >= cands[a].heldout_gain_nats_per_point - 2.0 * se;
+  };
+  // Parsimony: a significant effect nested in the top one that explains as much.
+  std::size_t chosen = top;
+  for (std::size_t i : sig)
+    for (const auto& [simpler, richer] : nested)
+      if (i != top && cands[i].effect == simpler && cands[top].effect == richer && close(top, i)) chosen = i;
+  if (chosen != top)
+    decision = cands[chosen].effect + " explains as much as " + cands[top].effect +
+               " (held-out gains within two standard errors), which contains it, with fewer parameters";
+  if (!cands[chosen].identifiable) {
+    decision = cands[chosen].effect + " is significant but cannot be estimated apart from the baseline's parameters (" +
+               cands[chosen].note + ")";
+    return effect::kNotIdentifiable;
+  }
+  for (std::size_t i : sig) {
+    if (i == chosen || !close(chosen, i)) continue;
+    for (const auto& [a, b] : indistinguishable)
+      if ((a == cands[i].effect && b == cands[chosen].effect) || (b == cands[i].effect && a == cands[chosen].effect)) {
+        decision = cands[chosen].effect + " and " + cands[i].effect +
+                   " are both significant, explain the data equally well and cannot be told apart here";
+        return effect::kNotIdentifiable;
+      }
+  }
+  return cands[chosen].effect;
+}
+
+}  // namespace lidarcal::calibration

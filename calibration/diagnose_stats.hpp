@@ -1,0 +1,90 @@
+#pragma once
+// Statistics of the diagnosis (calibration/diagnose.hpp): p-values calibrated on bootstrap
+// replicas, multiple testing, distances between distributions, and the rule that names a cause.
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "calibration/diagnose.hpp"
+
+namespace lidarcal::calibration {
+
+/// p-value of a measured statistic against the values it took on B bootstrap replicas of the
+/// fitted baseline. The replicas' mean m and standard deviation s give a Student-t predictive
+/// distribution with B - 1 degrees of freedom, t = (value - m) / (s sqrt(1 + 1/B)), so that
+/// p-values far below 1/B (needed after a multiple-testing correction) are available from a few
+/// dozen replicas. Statistics are built to be close to normal under the baseline (signed scores,
+/// cube roots of chi-square sums). `effect_size` receives (value - m) / s.
+double replicaPValue(double value, const std::vector<double>& replicas, bool two_sided, double* effect_size = nullptr);
+
+/// Fills a Discrepancy from its measured value and its replica values.
+Discrepancy makeDiscrepancy(std::string name, std::string variable, std::string description, double value,
+                            const std::vector<double>& replicas, bool two_sided);
+
+/// One-sided p-value of a held-out gain with standard error se: P(N(0, 1) >= gain / se); 1 for
+/// a gain that is not positive, NaN without a standard error.
+double heldoutPValue(double gain, double se);
+
+/// p-value of a candidate from its two tests (Bonferroni): the held-out gain and the
+/// bootstrap-calibrated score statistic aimed at it, 2 min(p_heldout, p_score). The score test
+/// is the more powerful where the evidence is in few observations (the odometry of a handful of
+/// stops), the held-out test where the baseline's fit bent to absorb the effect. NaN entries
+/// are left out.
+double combinedPValue(double p_heldout, double p_score);
+
+/// What a discrepancy statistic is, for the battery table.
+struct StatisticInfo {
+  const char* name;         ///< e.g. "spread_vs_incidence"
+  const char* variable;     ///< what the residuals are compared against
+  const char* description;  ///< how it is computed
+  bool two_sided;           ///< both directions count
+};
+
+/// The battery: each listed statistic's measured value against its values on the replicas
+/// (statistics missing from `measured` are left out).
+std::vector<Discrepancy> makeBattery(const std::vector<StatisticInfo>& infos, const std::map<std::string, double>& measured,
+                                     const std::map<std::string, std::vector<double>>& replicas);
+
+/// Holm's step-down adjustment of p-values (NaN entries are left out and stay NaN).
+std::vector<double> holmAdjust(const std::vector<double>& p);
+
+/// Two-sample Kolmogorov-Smirnov distance sup |F_a - F_b| (0 when either is empty).
+double ksDistance(std::vector<double> a, std::vector<double> b);
+
+/// Cube root of a chi-square sum over its degrees of freedom (Wilson-Hilferty): close to normal.
+double cubeRootChi2(double chi2, double dof);
+
+/// Score statistic of a term in the mean: clipped standardised residuals psi against the
+/// term's covariate over sigma (xs), over the square root of its information; ~N(0, 1) under
+/// the model when the covariate is not absorbed by its parameters.
+double meanScore(const std::vector<double>& psi, const std::vector<double>& xs);
+
+/// Score statistic of a term in the log standard deviation: clipped squared residuals z^2 (at
+/// 3) against the centred covariate g; ~N(0, 1) under the model.
+double spreadScore(const std::vector<double>& z, const std::vector<double>& g);
+
+/// Huber's psi: z clipped to [-c, c].
+double huberPsi(double z, double c = 3.0);
+
+/// E[min(Z^2, c^2)] and Var[min(Z^2, c^2)] for a standard normal Z.
+double clippedSquareMean(double c = 3.0);
+double clippedSquareVariance(double c = 3.0);
+
+/// Resultant length |mean exp(2 pi i y / q)| of readings y on a grid of step q: near 1 when the
+/// readings are multiples of q, about 1/sqrt(n) when they are not.
+double gridResultant(const std::vector<double>& y_m, double q_m);
+
+/// Names the cause from the candidates (fills `significant` and the Holm p-values first):
+///   significant = Holm-adjusted p < alpha and held-out gain > 0;
+///   none when none is; otherwise the largest held-out gain, replaced by a significant effect
+///   nested in it (`nested`: pairs (simpler, richer), e.g. one zero-angle offset is the mean of
+///   per-stop headings) whose gain is within two standard errors (parsimony);
+///   not_identifiable when that effect is not identifiable, or when another significant effect is
+///   within two standard errors of it and the pair is declared `indistinguishable`.
+/// Returns the cause; `decision` receives the reason in words.
+std::string nameCause(std::vector<CandidateResult>& candidates, double alpha, std::string& decision,
+                      const std::vector<std::pair<std::string, std::string>>& nested = {},
+                      const std::vector<std::pair<std::string, std::string>>& indistinguishable = {});
+
+}  // namespace lidarcal::calibration

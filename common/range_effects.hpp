@@ -1,0 +1,53 @@
+#pragma once
+// Effects beyond the seeds' range model (seed 000 A3-A4, seed 004 eq. 1), shared by the
+// simulator and the calibration: what `lidarcal diagnose` looks for in measured data. Every
+// effect is off by default (the seeds' model). Physical causes: docs/FORMAT.md ("Effects").
+//
+// A beam that hits a surface at true distance d with incidence phi (angle between the beam and
+// the surface normal) in scan t reads
+//   y = f(d) + b_inc (1 - cos phi) + o_surface + c_drift t + sigma(d) (1 / cos phi)^gamma e,
+// with e a unit normal (or a unit-variance Student t with `noise_student_dof` degrees of freedom),
+// rounded to a multiple of `range_resolution_m`; an edge beam (depth discontinuity next to it)
+// is a mixed pixel with probability `mixed_pixel_fraction`: it reads a distance drawn uniformly
+// between the foreground and the background.
+
+#include <algorithm>
+#include <cmath>
+
+namespace lidarcal {
+
+struct RangeEffects {
+  /// gamma: the noise grows as (1 / cos phi)^gamma with the incidence phi. 0 = off.
+  double incidence_noise_exponent = 0.0;
+  /// b_inc: the reading grows by b_inc (1 - cos phi), metres (b_inc at grazing incidence). 0 = off.
+  double incidence_bias_m = 0.0;
+  /// c_drift: the reading grows by this much per scan (warm-up, temperature), metres per scan. 0 = off.
+  double range_drift_m_per_scan = 0.0;
+  /// Probability that a beam at a depth discontinuity returns a mixed reading, [0, 1]. 0 = off.
+  double mixed_pixel_fraction = 0.0;
+  /// Degrees of freedom of a Student-t range noise (heavy tails), > 2; 0 = Gaussian.
+  double noise_student_dof = 0.0;
+  /// Readings are rounded to a multiple of this, metres (quantisation). 0 = off.
+  double range_resolution_m = 0.0;
+
+  /// Whether any effect is on.
+  bool any() const {
+    return incidence_noise_exponent != 0.0 || incidence_bias_m != 0.0 || range_drift_m_per_scan != 0.0 ||
+           mixed_pixel_fraction != 0.0 || noise_student_dof != 0.0 || range_resolution_m != 0.0;
+  }
+};
+
+/// cos phi kept away from 0: grazing beams are treated as at 87 degrees.
+inline double clampCosIncidence(double cos_phi) { return std::clamp(std::abs(cos_phi), 0.05, 1.0); }
+
+/// (1 / cos phi)^gamma: the factor on the noise standard deviation.
+inline double incidenceNoiseFactor(double gamma, double cos_phi) {
+  return gamma == 0.0 ? 1.0 : std::pow(1.0 / clampCosIncidence(cos_phi), gamma);
+}
+
+/// Rounds a reading to the sensor's resolution (no rounding for resolution 0).
+inline double quantise(double y_m, double resolution_m) {
+  return resolution_m > 0.0 ? resolution_m * std::round(y_m / resolution_m) : y_m;
+}
+
+}  // namespace lidarcal

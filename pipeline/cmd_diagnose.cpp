@@ -1,0 +1,242 @@
+// lidarcal diagnose DATA --out DIR [--model model.json] [--seed S] [--mode auto|sequence|static]
+// Model criticism: what the seeds' model gets wrong on the data, the named cause, the extended
+// model and its held-out gain (calibration/diagnose.hpp). Writes DIR/diagnosis.json, report.md
+// and plots (docs/FORMAT.md).
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <optional>
+#include <sstream>
+
+#include <CLI/CLI.hpp>
+#include <glog/logging.h>
+
+#include "calibration/diagnose_sequence.hpp"
+#include "calibration/diagnose_static.hpp"
+#include "calibration/inversion.hpp"
+#include "common/errors.hpp"
+#include "io/atomic_file.hpp"
+#include "io/model_io.hpp"
+#include "pipeline/commands.hpp"
+#include "pipeline/diagnose_report.hpp"
+#include "pipeline/landmark_observations.hpp"
+#include "pipeline/progress.hpp"
+#include "pipeline/truth_eval.hpp"
+
+namespace lidarcal::pipeline {
+namespace {
+
+struct DiagnoseCommand {
+  std::string data, out, model, mode = "auto", truth, candidates;
+  std::uint64_t seed = 1;
+  int replicas = 19, folds = 3, stop = -1;
+  double alpha = 0.01, radius_m = 0.0, sigma_s_m = 0.02, range_offset_m = std::nan("");
+  bool overwrite = false;
+  std::string command;
+};
+
+/// Readings corrected through a calibrated model (diagnose what the model still gets wrong).
+struct Corrector {
+  std::optional<calibration::RangeInverter> inverter;
+  double correct(double y) const {
+    if (!inverter) return y;
+    const auto d = inverter->invert(y);
+    return d ? *d : std::nan("");
+  }
+};
+
+calibration::StaticScans staticScans(const io::Sequence& seq, std::size_t stop, const Corrector& fix) {
+  calibration::StaticScans s;
+  const auto& scans = seq.stops.at(stop).scans;
+  s.scans = scans.size();
+  std::vector<std::size_t> counts;
+  for (std::size_t k = 0; k < scans.size(); ++k) {
+    const io::Scan scan = io::readScan(seq.scans[scans[k]].path);
+    counts.push_back(scan.cloud->size());
+    for (const auto& p : *scan.cloud) {
+      if (!std::isfinite(p.x) || !std::isfinite(p.y)) continue;
+      const double r = fix.correct(std::hypot(static_cast<double>(p.x), static_cast<double>(p.y)));
+      if (!(r > 0.0)) continue;
+      s.readings.push_back({std::atan2(static_cast<double>(p.y), static_cast<double>(p.x)), r, static_cast<std::uint32_t>(k)});
+    }
+  }
+  std::sort(counts.begin(), counts.end());
+  s.beams_per_scan = counts.empty() ? 0 : counts[counts.size() / 2];
+  s.range_min_m = seq.meta.range_min_m.value_or(0.0);
+  s.range_max_m = seq.meta.range_max_m.value_or(1e9);
+  return s;
+}
+
+void runDiagnose(const DiagnoseCommand& c) {
+  namespace fs = std::filesystem;
+  // Ceres reports (through glog) the linear-solver failures its Levenberg-Marquardt steps recover
+  // from by themselves; the many fits of a diagnosis would fill the terminal with them.
+  FLAGS_minloglevel = google::GLOG_ERROR;
+  io::checkOutsideInput(c.data, c.out);
+  const io::Sequence seq = io::openSequence(c.data);
+  calibration::DiagnoseConfig config;
+  config.seed = c.seed;
+  config.replicas = c.replicas;
+  config.folds = c.folds;
+  config.alpha = c.alpha;
+  config.sigma_s_m = c.sigma_s_m;
+  config.static_range_offset_m = c.range_offset_m;
+  if (!c.candidates.empty()) {
+    std::stringstream ss(c.candidates);
+    std::string item;
+    while (std::getline(ss, item, ','))
+      if (!item.empty()) config.candidates.push_back(item);
+  }
+  Corrector fix;
+  if (!c.model.empty()) {
+    const CalibrationModel m = io::readModel(c.model);
+    try {
+      fix.inverter.emplace(m.model, calibration::inversionWindow(m.model, calibration::InversionMethod::ls));
+    } catch (const std::invalid_argument& e) {
+      throw DataError(c.model, "bias.alpha", std::string("cannot be inverted: ") + e.what(), "calibrate again");
+    }
+  }
+  io::StagedDirectory out(c.out, c.overwrite);
+  DiagnosisSource src;
+  src.data = c.data;
+  src.sensor = seq.meta.sensor_name.value_or("");
+  src.model = c.model;
+  src.command = c.command;
+
+  // Mode: a sequence with landmarks seen from several stops, else repeated scans of one stop.
+  std::string mode = c.mode;
+  std::optional<LandmarkObservations> obs;
+  if (mode != "static" && seq.stops.size() >= 2) {
+    detectors::SequenceDetectionConfig dc;
+    if (c.radius_m > 0.0) dc.detection.landmark_radius_m = c.radius_m;
+    Progress progress("detect", seq.scans.size());
+    const auto det = detectors::detectSequence(seq, dc, [&](std::size_t d, std::size_t) { progress.update(d); });
+    progress.finish();
+    if (!det.association.landmarks.empty()) {
+      obs = toLandmarkObservations(seq, det);
+      if (!seq.meta.range_max_m) {
+        double max_reading = 0.0;
+        for (const auto& s : obs->sightings)
+          for (const auto& b : s.beams) max_reading = std::max(max_reading, b.range_m);
+        obs->range_max_m = max_reading > 0.0 ? 1.25 * max_reading : 1.0;
+      }
+    } else if (mode == "sequence") {
+      throw DataError(c.data, "landmarks", "no landmark was found in the sequence: " + det.note,
+                      "give the radius with --radius, or diagnose repeated scans of one pose with --mode static");
+    }
+  } else if (mode == "sequence") {
+    throw DataError(c.data, "stops", "a sequence diagnosis needs scans from at least two stops",
+                    "diagnose repeated scans of one pose with --mode static");
+  }
+
+  auto checkCandidates = [&](const std::vector<std::string>& known, const char* kind) {
+    for (const auto& e : config.candidates)
+      if (std::find(known.begin(), known.end(), e) == known.end()) {
+        std::string list;
+        for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
+        throw InputError("", "--candidates", "'" + e + "' is not a candidate effect for " + kind, "use " + list);
+      }
+  };
+  calibration::DiagnosisResult result;
+  if (obs && mode != "static") {
+    checkCandidates(calibration::sequenceCandidates(), "a sequence");
+    if (fix.inverter)
+      for (auto& s : obs->sightings)
+        for (auto& b : s.beams) b.range_m = fix.correct(b.range_m);
+    std::vector<std::vector<double>> truth_ranges;
+    if (!c.truth.empty()) {
+      const SimulationTruth truth = loadTruth(c.truth);
+      for (const auto& s : obs->sightings) {
+        std::vector<double> t;
+        for (const auto& b : s.beams)
+          t.push_back(s.scan * truth.beams + b.beam < truth.ranges.size() ? truth.at(s.scan, b.beam).range_m : std::nan(""));
+        truth_ranges.push_back(std::move(t));
+      }
+    }
+    if (!quiet()) std::fprintf(stderr, "diagnosing a sequence: %zu sightings (%d replicas)\n", obs->sightings.size(), c.replicas);
+    result = calibration::diagnoseSequence(*obs, config, c.truth.empty() ? nullptr : &truth_ranges);
+    if (result.status != "ok" && mode == "auto") {
+      // Poles were found but cannot carry a sequence diagnosis: look at one pose instead.
+      if (!quiet())
+        std::fprintf(stderr, "the sequence cannot be diagnosed (%s: %s); diagnosing repeated scans of one pose instead\n",
+                     result.status.c_str(), result.message.c_str());
+      src.selection = "sequence diagnosis failed (" + result.status + "), ";
+      obs.reset();
+    }
+  }
+  if (!obs || mode == "static") {
+    std::size_t stop = 0;
+    if (c.stop >= 0) {
+      if (static_cast<std::size_t>(c.stop) >= seq.stops.size())
+        throw InputError(c.data, "--stop", "the sequence has " + std::to_string(seq.stops.size()) + " stops",
+                         "give a stop index from 0");
+      stop = static_cast<std::size_t>(c.stop);
+    } else {
+      for (std::size_t k = 0; k < seq.stops.size(); ++k)
+        if (seq.stops[k].scans.size() > seq.stops[stop].scans.size()) stop = k;
+    }
+    if (seq.stops.size() > 1)
+      src.selection += "stop " + std::to_string(stop) + " of " + std::to_string(seq.stops.size()) + ", " +
+                      std::to_string(seq.stops[stop].scans.size()) + " scans from one pose";
+    checkCandidates(calibration::staticCandidates(), "repeated scans of one pose");
+    const calibration::StaticScans s = staticScans(seq, stop, fix);
+    if (!quiet())
+      std::fprintf(stderr, "diagnosing repeated scans of one pose: %zu scans, %zu readings (%d replicas)\n", s.scans,
+                   s.readings.size(), c.replicas);
+    result = calibration::diagnoseStatic(s, config, &src.walls);
+  }
+  writeDiagnosis(out.path(), result, src);
+  out.commit();
+  if (result.status != "ok")
+    throw DataError(c.data, "diagnosis", result.status + ": " + result.message, "see " + (fs::path(c.out) / "report.md").string());
+  if (!quiet())
+    std::fprintf(stderr, "%s: primary cause %s; report in %s\n", toString(result.mode), result.primary_cause.c_str(),
+                 (fs::path(c.out) / "report.md").c_str());
+  std::printf("%s\n", result.primary_cause.c_str());
+}
+
+}  // namespace
+
+void addDiagnoseCommand(CLI::App& app) {
+  auto c = std::make_shared<DiagnoseCommand>();
+  CLI::App* sub = app.add_subcommand(
+      "diagnose", "Show what the seeds' model gets wrong on measured data, name the cause, fit the extended model, measure the gain");
+  sub->add_option("DATA", c->data, "Sequence directory (docs/FORMAT.md): scans of poles from several stops, or repeated scans from one pose")
+      ->required();
+  sub->add_option("--out", c->out, "Output directory: diagnosis.json, report.md, plots")->required();
+  sub->add_option("--model", c->model, "Diagnose the readings corrected with this model.json (what the calibrated model still gets wrong)");
+  sub->add_option("--seed", c->seed, "Seed of the bootstrap replicas; the same data and seed give the same output")
+      ->capture_default_str();
+  sub->add_option("--mode", c->mode, "auto: a sequence when poles are found at two stops or more, else static")
+      ->check(CLI::IsMember({"auto", "sequence", "static"}))
+      ->capture_default_str();
+  sub->add_option("--replicas", c->replicas, "Parametric bootstrap replicas")->check(CLI::Range(5, 1000))->capture_default_str();
+  sub->add_option("--folds", c->folds, "Cross-validation folds (by scan)")->check(CLI::Range(2, 20))->capture_default_str();
+  sub->add_option("--alpha", c->alpha, "Family-wise error rate over the candidates (Holm)")
+      ->check(CLI::Range(1e-6, 0.5))
+      ->capture_default_str();
+  sub->add_option("--candidates", c->candidates, "Comma-separated effects to test (default: all of the mode)");
+  sub->add_option("--truth", c->truth, "truth.json of a simulated sequence: also measure the gain in calibration (MSE ratio)");
+  sub->add_option("--stop", c->stop, "Static mode: the stop to use (default: the one with the most scans)")->check(CLI::NonNegativeNumber);
+  sub->add_option("--radius", c->radius_m, "Landmark radius in metres (default: sequence.json, else estimated)")->check(CLI::PositiveNumber);
+  sub->add_option("--sigma-s", c->sigma_s_m, "Odometry: std. dev. of a stop's position around the commanded one (m)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  sub->add_option("--range-offset", c->range_offset_m,
+                  "Static mode: the range offset alpha_0 (m) when known from a reference distance, instead of the walls' "
+                  "straightness");
+  sub->add_flag("--overwrite", c->overwrite, "Replace --out if it exists");
+  sub->callback([c, sub] {
+    c->command = "lidarcal diagnose " + c->data + " --out " + c->out;
+    for (const auto* o : sub->get_options())
+      if (o->count() > 0 && !o->get_lnames().empty() && o->get_lnames().front() != "out" && o->get_lnames().front() != "help") {
+        c->command += " --" + o->get_lnames().front();
+        if (o->get_expected_max() != 0) c->command += " " + o->as<std::string>();
+      }
+    runDiagnose(*c);
+  });
+}
+
+}  // namespace lidarcal::pipeline

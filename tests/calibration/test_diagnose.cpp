@@ -1,0 +1,510 @@
+// Model criticism (calibration/diagnose*): the statistics against closed forms, the simulator's
+// effects against their definitions, the joint refinement's effect terms recover known values,
+// and diagnose names an effect hidden in simulated data (which one and its size drawn from a
+// case seed the assertion does not look at).
+//
+// Hidden-effect cases per effect: LIDARCAL_DIAGNOSE_CASES (default 2, all must be named);
+// with 20 (ctest -L long, configured with -DLIDARCAL_LONG_TESTS=ON) at least 19 must be.
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <numeric>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "calibration/diagnose_sequence.hpp"
+#include "calibration/diagnose_static.hpp"
+#include "calibration/diagnose_stats.hpp"
+#include "calibration/joint_refinement.hpp"
+#include "calibration/diagnose_cases.hpp"
+#include "common/rng.hpp"
+#include "io/scene_io.hpp"
+#include "simulation/simulator.hpp"
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+namespace lidarcal::calibration {
+namespace {
+
+int casesPerEffect() {
+  const char* env = std::getenv("LIDARCAL_DIAGNOSE_CASES");
+  return env && *env ? std::max(1, std::atoi(env)) : 2;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Statistics.
+
+TEST(DiagnoseStats, HolmMatchesTheStepDownByHand) {
+  // Sorted p: 0.01 (x4 = 0.04), 0.02 (x3 = 0.06), 0.03 (x2 = 0.06), 0.5 (x1 = 0.5).
+  const auto adj = holmAdjust({0.03, 0.5, 0.01, 0.02});
+  EXPECT_NEAR(adj[2], 0.04, 1e-12);
+  EXPECT_NEAR(adj[3], 0.06, 1e-12);
+  EXPECT_NEAR(adj[0], 0.06, 1e-12);  // monotone: max(0.06, 0.06)
+  EXPECT_NEAR(adj[1], 0.5, 1e-12);
+  const auto with_nan = holmAdjust({0.01, std::nan(""), 0.04});
+  EXPECT_NEAR(with_nan[0], 0.02, 1e-12);
+  EXPECT_TRUE(std::isnan(with_nan[1]));
+  EXPECT_NEAR(with_nan[2], 0.04, 1e-12);
+}
+
+TEST(DiagnoseStats, KolmogorovSmirnovDistance) {
+  EXPECT_DOUBLE_EQ(ksDistance({1, 2, 3}, {1, 2, 3}), 0.0);
+  EXPECT_DOUBLE_EQ(ksDistance({1, 2, 3}, {4, 5, 6}), 1.0);
+  EXPECT_NEAR(ksDistance({1, 2, 3, 4}, {3, 4, 5, 6}), 0.5, 1e-12);
+}
+
+TEST(DiagnoseStats, ReplicaPValueIsCalibratedForNormalStatistics) {
+  // Over many draws of (statistic, 19 replicas) from one normal law, p < 0.05 about 5 % of the time.
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> n(3.0, 2.0);
+  int below = 0;
+  constexpr int kTrials = 4000;
+  for (int t = 0; t < kTrials; ++t) {
+    std::vector<double> r(19);
+    for (double& v : r) v = n(rng);
+    below += replicaPValue(n(rng), r, true) < 0.05;
+  }
+  EXPECT_NEAR(static_cast<double>(below) / kTrials, 0.05, 0.012);
+  double es = 0.0;
+  EXPECT_LT(replicaPValue(100.0, {0, 1, -1, 0.5, -0.5}, false, &es), 1e-4);
+  EXPECT_GT(es, 50.0);
+  EXPECT_GT(replicaPValue(-100.0, {0, 1, -1, 0.5, -0.5}, false), 0.99);  // one-sided: below is fine
+}
+
+TEST(DiagnoseStats, GridResultantTellsQuantisedReadings) {
+  std::mt19937_64 rng(2);
+  std::uniform_real_distribution<double> u(1.0, 3.0);
+  std::vector<double> cont, grid;
+  for (int i = 0; i < 5000; ++i) {
+    cont.push_back(u(rng));
+    grid.push_back(quantise(cont.back(), 1e-3));
+  }
+  EXPECT_GT(gridResultant(grid, 1e-3), 0.999);
+  EXPECT_LT(gridResultant(cont, 1e-3), 0.05);
+  EXPECT_LT(gridResultant(grid, 2e-3), 0.05);  // a coarser grid than the readings' (half on it, half between)
+}
+
+TEST(DiagnoseStats, HeldOutPValue) {
+  EXPECT_DOUBLE_EQ(heldoutPValue(-0.1, 0.01), 1.0);
+  EXPECT_NEAR(heldoutPValue(0.02, 0.01), 0.5 * std::erfc(2.0 / std::sqrt(2.0)), 1e-12);
+  EXPECT_TRUE(std::isnan(heldoutPValue(0.02, 0.0)));
+}
+
+TEST(DiagnoseStats, CauseNamingRules) {
+  auto cand = [](const char* e, double p, double gain, double se, int k, bool id = true) {
+    CandidateResult c;
+    c.effect = e;
+    c.p_value = p;
+    c.heldout_gain_nats_per_point = gain;
+    c.heldout_gain_se = se;
+    c.parameters = k;
+    c.identifiable = id;
+    return c;
+  };
+  std::string why;
+  std::vector<CandidateResult> none = {cand("a", 0.2, 0.001, 0.001, 1), cand("b", 0.5, -0.01, 0.001, 1)};
+  EXPECT_EQ(nameCause(none, 0.01, why), effect::kNone);
+  // Largest significant gain wins.
+  std::vector<CandidateResult> two = {cand("a", 1e-9, 0.01, 0.001, 1), cand("b", 1e-12, 0.05, 0.001, 1)};
+  EXPECT_EQ(nameCause(two, 0.01, why), "b");
+  // A simpler effect nested in the top one, within two standard errors, is preferred (parsimony);
+  // one that is not nested is not.
+  std::vector<CandidateResult> nested = {cand("per_stop", 1e-12, 0.0105, 0.001, 10), cand("common", 1e-12, 0.0100, 0.001, 1)};
+  EXPECT_EQ(nameCause(nested, 0.01, why, {{"common", "per_stop"}}), "common");
+  EXPECT_EQ(nameCause(nested, 0.01, why), "per_stop");
+  // A significant effect that cannot be estimated apart from the baseline.
+  std::vector<CandidateResult> confounded = {cand("a", 1e-12, 0.05, 0.001, 1, false), cand("b", 1e-9, 0.01, 0.001, 1)};
+  EXPECT_EQ(nameCause(confounded, 0.01, why), effect::kNotIdentifiable);
+  // Two effects that explain the data alike and are declared indistinguishable.
+  std::vector<CandidateResult> twins = {cand("a", 1e-12, 0.0500, 0.002, 1), cand("b", 1e-12, 0.0495, 0.002, 1)};
+  EXPECT_EQ(nameCause(twins, 0.01, why, {}, {{"a", "b"}}), effect::kNotIdentifiable);
+  // Holm: p = 0.004 is not significant among four candidates at alpha 0.01.
+  std::vector<CandidateResult> holm = {cand("a", 0.004, 0.01, 0.001, 1), cand("b", 0.9, 0, 1, 1), cand("c", 0.9, 0, 1, 1),
+                                       cand("d", 0.9, 0, 1, 1)};
+  EXPECT_EQ(nameCause(holm, 0.01, why), effect::kNone);
+}
+
+// ---------------------------------------------------------------------------------------------
+// The simulator's effects against their definitions.
+
+TEST(SimulatorEffects, EffectReadingMatchesTheDefinition) {
+  RangeModel m;
+  m.bias.alpha = {0.05, 0.9, 0.05};
+  m.noise.kind = NoiseKind::squared;
+  m.noise.sigma_e = 0.002;
+  RangeEffects fx;
+  fx.incidence_noise_exponent = 1.0;
+  fx.incidence_bias_m = 0.03;
+  fx.range_drift_m_per_scan = 1e-4;
+  const double d = 2.5, cos_inc = 0.5;
+  std::mt19937_64 unused(1);
+  constexpr int kN = 20000;
+  std::normal_distribution<double> n(0.0, 1.0);
+  std::mt19937_64 rng(3);
+  std::vector<double> y(kN);
+  for (double& v : y) v = simulation::effectReading(m, fx, d, {cos_inc, 0.01, 100}, n(rng), unused);
+  const double mean = std::accumulate(y.begin(), y.end(), 0.0) / kN;
+  double var = 0.0;
+  for (double v : y) var += (v - mean) * (v - mean) / (kN - 1);
+  const double sigma = m.noise.stddev(d, m.bias) / cos_inc;  // gamma = 1
+  EXPECT_NEAR(mean, m.bias(d) + 0.03 * 0.5 + 0.01 + 1e-4 * 100, 4.5 * sigma / std::sqrt(kN));
+  EXPECT_NEAR(var / (sigma * sigma), 1.0, 4.5 * std::sqrt(2.0 / kN));
+  // Every effect off: exactly rangeReading().
+  EXPECT_DOUBLE_EQ(simulation::effectReading(m, RangeEffects{}, d, {0.3, 0.0, 7}, 0.7, unused),
+                   simulation::rangeReading(m, d, 0.7));
+}
+
+TEST(SimulatorEffects, StudentNoiseKeepsTheVarianceAndQuantisationTheGrid) {
+  RangeModel m;
+  m.noise.kind = NoiseKind::constant;
+  m.noise.sigma_e = 0.01;
+  RangeEffects fx;
+  fx.noise_student_dof = 4.0;
+  fx.range_resolution_m = 0.001;
+  std::mt19937_64 rng(9), fxrng(10);
+  std::normal_distribution<double> n(0.0, 1.0);
+  constexpr int kN = 40000;
+  double s2 = 0.0, s4 = 0.0;
+  for (int i = 0; i < kN; ++i) {
+    const double y = simulation::effectReading(m, fx, 2.0, {}, n(rng), fxrng);
+    EXPECT_NEAR(y / 0.001, std::round(y / 0.001), 1e-6);
+    s2 += (y - 2.0) * (y - 2.0) / kN;
+    s4 += std::pow(y - 2.0, 4) / kN;
+  }
+  EXPECT_NEAR(s2 / (0.01 * 0.01), 1.0, 0.1);           // unit-variance t (quantisation adds 1/12 mm^2)
+  EXPECT_GT(s4 / (s2 * s2), 4.0);                       // heavier tails than a normal (kurtosis 3)
+}
+
+TEST(SimulatorEffects, MixedPixelsOnlyAtTheEdgesAndAtTheRequestedRate) {
+  auto c = test::paperFieldLandmarkLevel();
+  c.effects.mixed_pixel_fraction = 0.3;
+  c.model.noise.sigma_e = 0.0;  // noise-free: a mixed reading is the only way to be off
+  const auto s = simulation::simulateLandmarkLevel(c, 4);
+  double edges = 0, mixed_edges = 0, inner_off = 0;
+  for (std::size_t i = 0; i < s.obs.sightings.size(); ++i) {
+    const auto& b = s.obs.sightings[i].beams;
+    for (std::size_t j = 0; j < b.size(); ++j) {
+      const bool off = std::abs(b[j].range_m - c.model.bias(s.true_range_m[i][j])) > 1e-9;
+      if (j == 0 || j + 1 == b.size()) {
+        edges += 1;
+        mixed_edges += off;
+      } else {
+        inner_off += off;
+      }
+    }
+  }
+  EXPECT_EQ(inner_off, 0);
+  EXPECT_NEAR(mixed_edges / edges, 0.3, 0.05);  // nearly every edge beam has a wall behind it here
+}
+
+TEST(SimulatorEffects, SceneKeysRoundTripAndStayAbsentWhenOff) {
+  const auto file = std::filesystem::temp_directory_path() / ("lidarcal-effects-" + std::to_string(::getpid()) + ".json");
+  {
+    std::ofstream out(file);
+    out << R"({"sensor": {"range_min_m": 0.1, "range_max_m": 8,
+                          "effects": {"incidence_noise_exponent": 1.5, "incidence_bias_m": 0.02,
+                                      "range_drift_m_per_scan": 0.0001, "mixed_pixel_fraction": 0.05,
+                                      "noise_student_dof": 4, "range_resolution_m": 0.001}},
+               "path": {"step_error_fraction": 0.03},
+               "landmarks": [{"x_m": 1, "y_m": 2, "radius_m": 0.1, "range_offset_m": 0.02}],
+               "walls": [{"x0_m": 0, "y0_m": 5, "x1_m": 3, "y1_m": 5, "range_offset_m": -0.01}]})";
+  }
+  const Scene s = io::readScene(file);
+  std::filesystem::remove(file);
+  EXPECT_EQ(s.sensor.effects.incidence_noise_exponent, 1.5);
+  EXPECT_EQ(s.sensor.effects.incidence_bias_m, 0.02);
+  EXPECT_EQ(s.sensor.effects.range_drift_m_per_scan, 0.0001);
+  EXPECT_EQ(s.sensor.effects.mixed_pixel_fraction, 0.05);
+  EXPECT_EQ(s.sensor.effects.noise_student_dof, 4.0);
+  EXPECT_EQ(s.sensor.effects.range_resolution_m, 0.001);
+  EXPECT_EQ(s.path.step_error_fraction, 0.03);
+  EXPECT_EQ(s.landmarks[0].range_offset_m, 0.02);
+  EXPECT_EQ(s.walls[0].range_offset_m, -0.01);
+  const auto j = io::sceneToJson(s);
+  EXPECT_EQ(j["sensor"]["effects"]["noise_student_dof"], 4.0);
+  EXPECT_EQ(j["walls"][0]["range_offset_m"], -0.01);
+  Scene off = s;
+  off.sensor.effects = RangeEffects{};
+  off.path.step_error_fraction = 0.0;
+  off.landmarks[0].range_offset_m = 0.0;
+  const auto k = io::sceneToJson(off);
+  EXPECT_FALSE(k["sensor"].contains("effects"));
+  EXPECT_FALSE(k["path"].contains("step_error_fraction"));
+  EXPECT_FALSE(k["landmarks"][0].contains("range_offset_m"));
+}
+
+TEST(SimulatorEffects, StepErrorScalesTheTruePath) {
+  Scene s;
+  s.path.stops = 5;
+  s.path.step_m = 0.4;
+  s.path.step_error_fraction = 0.05;
+  const auto stops = simulation::planStops(s, 1);
+  for (std::size_t k = 0; k < stops.size(); ++k) EXPECT_NEAR(stops[k].actual.x_m, 0.42 * static_cast<double>(k), 1e-12);
+}
+
+// ---------------------------------------------------------------------------------------------
+// The joint refinement's effect terms recover known values.
+
+struct Recovery {
+  const char* name;
+  void (*hide)(simulation::LandmarkLevelConfig&);
+  void (*enable)(JointEffects&);
+  double (*estimate)(const JointResult&);
+  double truth;
+  double tolerance;
+};
+
+class JointEffectRecovery : public ::testing::TestWithParam<Recovery> {};
+
+TEST_P(JointEffectRecovery, RecoversTheTermFromTheCommandedPoses) {
+  const Recovery& r = GetParam();
+  auto c = test::paperFieldLandmarkLevel();
+  r.hide(c);
+  const auto s = simulation::simulateLandmarkLevel(c, 11);
+  JointConfig jc;
+  jc.keep_all_beams = true;
+  jc.reselect = false;
+  jc.covariance = false;
+  jc.estimate_radius = false;
+  jc.effects.estimate_heading = false;
+  r.enable(jc.effects);
+  JointInit init;
+  for (const auto& st : s.stops) init.poses.push_back(st.commanded);
+  for (std::size_t l = 0; l < c.landmarks.size(); ++l)
+    init.centres[static_cast<int>(l) + 1] = Eigen::Vector2d(c.landmarks[l].x_m, c.landmarks[l].y_m);
+  init.radius_m = 0.12;
+  init.model = c.model;
+  init.model.noise.kind = NoiseKind::squared;
+  init.model.noise.sigma_e = 0.0019176;
+  const JointResult f = refineJoint(s.obs, init, jc);
+  ASSERT_FALSE(f.poses.empty()) << f.message;
+  EXPECT_NEAR(r.estimate(f), r.truth, r.tolerance) << r.name;
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    EachTerm, JointEffectRecovery,
+    ::testing::Values(
+        Recovery{"drift", [](auto& c) { c.effects.range_drift_m_per_scan = 3e-4; }, [](auto& e) { e.drift = true; },
+                 [](const JointResult& f) { return f.effects.drift_m_per_scan; }, 3e-4, 3e-5},
+        Recovery{"angle", [](auto& c) { c.mount_yaw_rad = deg2rad(2.0); }, [](auto& e) { e.angle_offset = true; },
+                 [](const JointResult& f) { return rad2deg(f.effects.angle_offset_rad); }, 2.0, 0.3},
+        Recovery{"incidence_bias", [](auto& c) { c.effects.incidence_bias_m = 0.03; }, [](auto& e) { e.incidence_bias = true; },
+                 [](const JointResult& f) { return f.effects.incidence_bias_m; }, 0.03, 0.005},
+        Recovery{"landmark_offset", [](auto& c) { c.landmarks[2].range_offset_m = 0.04; },
+                 [](auto& e) { e.landmark_offsets = true; },
+                 [](const JointResult& f) { return f.effects.landmark_offset_m.at(3) - f.effects.landmark_offset_m.at(1); }, 0.04,
+                 0.005},
+        Recovery{"incidence_noise", [](auto& c) { c.effects.incidence_noise_exponent = 1.0; },
+                 [](auto& e) { e.incidence_noise = true; },
+                 [](const JointResult& f) { return f.effects.incidence_noise_exponent; }, 1.0, 0.2},
+        Recovery{"noise_exponent",
+                 [](auto& c) {
+                   c.model.noise.kind = NoiseKind::power;
+                   c.model.noise.exponent = 1.0;
+                   c.model.noise.sigma_e = 0.006;
+                 },
+                 [](auto& e) { e.noise_exponent = true; }, [](const JointResult& f) { return f.effects.noise_exponent; }, 1.0, 0.2},
+        Recovery{"mixed_pixels", [](auto& c) { c.effects.mixed_pixel_fraction = 0.2; }, [](auto& e) { e.mixed_pixels = true; },
+                 [](const JointResult& f) { return f.effects.mixed_pixel_fraction; }, 0.2, 0.06}),
+    [](const auto& p) { return std::string(p.param.name); });
+
+// ---------------------------------------------------------------------------------------------
+// Hidden effects in sequences.
+
+class HiddenEffect : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(HiddenEffect, DiagnoseNamesIt) {
+  const std::string e = GetParam();
+  const int n = casesPerEffect();
+  int named = 0;
+  std::string misses;
+  for (int k = 1; k <= n; ++k) {
+    const auto h = test::hiddenEffectCase(e, static_cast<std::uint64_t>(k));
+    const auto s = simulation::simulateLandmarkLevel(h.config, h.seed);
+    DiagnoseConfig dc;
+    dc.seed = static_cast<std::uint64_t>(k);
+    const auto r = diagnoseSequence(s.obs, dc);
+    ASSERT_EQ(r.status, "ok") << r.message;
+    if (r.primary_cause == e) ++named;
+    else misses += " case " + std::to_string(k) + " (" + h.size + "): " + r.primary_cause + ";";
+  }
+  // All of a few cases; 19 of 20 (95 %) with the long run.
+  const int required = n >= 20 ? (19 * n + 19) / 20 : n;
+  EXPECT_GE(named, required) << e << ": named in " << named << " of " << n << ";" << misses;
+}
+
+INSTANTIATE_TEST_SUITE_P(Sequence, HiddenEffect,
+                         ::testing::Values("none", "incidence_noise", "incidence_bias", "landmark_bias", "heading_error",
+                                           "range_drift", "mixed_pixels", "angle_offset", "range_noise_law"),
+                         [](const auto& p) { return std::string(p.param); });
+
+TEST(DiagnoseSequence, ResultCarriesEveryCandidateAndTheExtendedModel) {
+  const auto h = test::hiddenEffectCase("landmark_bias", 3);
+  const auto s = simulation::simulateLandmarkLevel(h.config, h.seed);
+  DiagnoseConfig dc;
+  const auto r = diagnoseSequence(s.obs, dc, &s.true_range_m);
+  ASSERT_EQ(r.status, "ok");
+  EXPECT_EQ(r.mode, DiagnoseMode::sequence);
+  std::vector<std::string> names;
+  for (const auto& c : r.candidates) names.push_back(c.effect);
+  for (const char* e : {"incidence_noise", "incidence_bias", "landmark_bias", "heading_error", "range_drift", "mixed_pixels",
+                        "angle_offset", "range_noise_law"})
+    EXPECT_NE(std::find(names.begin(), names.end(), e), names.end()) << e;
+  ASSERT_EQ(r.primary_cause, "landmark_bias");
+  // The offsets are recovered (relative to their mean, as simulated).
+  double mean = 0.0;
+  for (const auto& l : h.config.landmarks) mean += l.range_offset_m / 5.0;
+  for (int id = 1; id <= 5; ++id)
+    EXPECT_NEAR(r.extended_parameters.at("landmark_offset_m[" + std::to_string(id) + "]"),
+                h.config.landmarks[static_cast<std::size_t>(id - 1)].range_offset_m - mean, 0.004);
+  EXPECT_TRUE(r.scene_keys.count("landmarks[0].range_offset_m (id 1)"));
+  // The extended simulation is closer to the data, and calibrating with the offsets is better.
+  EXPECT_LT(r.closeness_extended.variance_ratio_median_abs_log, r.closeness_baseline.variance_ratio_median_abs_log);
+  EXPECT_GT(r.calibration_mse_ratio_extended, r.calibration_mse_ratio_baseline);
+}
+
+TEST(DiagnoseSequence, AStepLengthErrorIsNotIdentifiableWithoutTheRadius) {
+  auto h = test::hiddenEffectCase("odometry_scale", 2);
+  h.config.publish_radius = false;
+  const auto s = simulation::simulateLandmarkLevel(h.config, h.seed);
+  DiagnoseConfig dc;
+  dc.candidates = {"odometry_scale", "range_drift"};
+  const auto r = diagnoseSequence(s.obs, dc);
+  ASSERT_EQ(r.status, "ok");
+  ASSERT_EQ(r.candidates.size(), 2u);
+  // The world's scale and the radius are free together: the bias polynomial absorbs the step error.
+  EXPECT_FALSE(r.candidates[0].identifiable) << "se " << r.candidates[0].standard_error;
+  EXPECT_FALSE(r.candidates[0].note.empty());
+  EXPECT_TRUE(r.candidates[1].identifiable);
+  EXPECT_NE(r.primary_cause, "odometry_scale");
+}
+
+TEST(DiagnoseSequence, NoLandmarkGivesAStatus) {
+  LandmarkObservations obs;
+  obs.commanded = {Pose2{}, Pose2{0.3, 0, 0}, Pose2{0.6, 0, 0}};
+  const auto r = diagnoseSequence(obs, DiagnoseConfig{});
+  EXPECT_NE(r.status, "ok");
+  EXPECT_FALSE(r.message.empty());
+}
+
+// ---------------------------------------------------------------------------------------------
+// Static recordings: a simulated room seen from one pose.
+
+StaticScans staticRoom(const RangeEffects& fx, const NoiseModel& noise, std::uint64_t seed, int scans = 150) {
+  Scene s;
+  s.sensor.beams = 360;
+  s.sensor.range.range_min_m = 0.15;
+  s.sensor.range.range_max_m = 12.0;
+  s.sensor.range.bias.alpha = {0.01, 1.0};
+  s.sensor.range.noise = noise;
+  s.sensor.effects = fx;
+  s.path.stops = 1;
+  s.path.scans_per_stop = scans;
+  s.path.start = Pose2{0.3, -0.2, 0.4};
+  // An irregular room: walls at several distances and incidences, a pillar, a box.
+  s.walls = {{-2.0, -3.0, 4.0, -3.0}, {4.0, -3.0, 4.0, 1.0}, {4.0, 1.0, 2.5, 3.5}, {2.5, 3.5, -2.0, 3.5}, {-2.0, 3.5, -2.0, -3.0}};
+  s.clutter = {{1.5, 1.0, 0.2}};
+  s.walls.push_back({-1.0, 0.8, -0.4, 1.6});
+  const auto stops = simulation::planStops(s, seed);
+  StaticScans out;
+  out.scans = static_cast<std::size_t>(scans);
+  out.beams_per_scan = 360;
+  out.range_min_m = 0.15;
+  out.range_max_m = 12.0;
+  for (std::size_t k = 0; k < out.scans; ++k) {
+    const auto sim = simulation::simulateScan(s, stops[0], k, seed);
+    for (const auto& p : *sim.scan.cloud)
+      if (std::isfinite(p.x))
+        out.readings.push_back({std::atan2(static_cast<double>(p.y), static_cast<double>(p.x)),
+                                std::hypot(static_cast<double>(p.x), static_cast<double>(p.y)), static_cast<std::uint32_t>(k)});
+  }
+  return out;
+}
+
+NoiseModel squared(double sigma_e) {
+  NoiseModel n;
+  n.kind = NoiseKind::squared;
+  n.sigma_e = sigma_e;
+  return n;
+}
+
+TEST(DiagnoseStatic, CleanRoomHasNoCauseAndFindsItsWalls) {
+  DiagnoseConfig dc;
+  dc.replicas = 9;
+  std::vector<WallLine> walls;
+  const auto r = diagnoseStatic(staticRoom({}, squared(0.0015), 3), dc, &walls);
+  ASSERT_EQ(r.status, "ok") << r.message;
+  EXPECT_EQ(r.mode, DiagnoseMode::static_scene);
+  EXPECT_EQ(r.primary_cause, effect::kNone) << r.decision;
+  EXPECT_GE(walls.size(), 4u);
+  EXPECT_NEAR(r.baseline_extra.at("alpha0_m"), 0.01, 4.0 * r.baseline_extra.at("alpha0_se_m") + 0.002);
+  EXPECT_NEAR(r.baseline.noise.sigma_e, 0.0015, 0.0002);
+  for (const auto& c : r.candidates) {
+    if (c.effect == "heading_error" || c.effect == "angle_offset") {
+      EXPECT_FALSE(c.applicable);
+    }
+  }
+}
+
+struct StaticCase {
+  const char* effect;
+  RangeEffects fx;
+  NoiseModel noise;
+};
+
+class StaticHiddenEffect : public ::testing::TestWithParam<StaticCase> {};
+
+TEST_P(StaticHiddenEffect, DiagnoseNamesIt) {
+  DiagnoseConfig dc;
+  dc.replicas = 9;
+  const auto r = diagnoseStatic(staticRoom(GetParam().fx, GetParam().noise, 7), dc);
+  ASSERT_EQ(r.status, "ok") << r.message;
+  EXPECT_EQ(r.primary_cause, GetParam().effect) << r.decision;
+}
+
+RangeEffects fxOf(double gamma, double drift, double dof) {
+  RangeEffects fx;
+  fx.incidence_noise_exponent = gamma;
+  fx.range_drift_m_per_scan = drift;
+  fx.noise_student_dof = dof;
+  return fx;
+}
+
+NoiseModel power(double k) {
+  NoiseModel n;
+  n.kind = NoiseKind::power;
+  n.exponent = k;
+  n.sigma_e = 0.0015 * std::pow(3.0, 2.0 - k);  // the same noise at 3 m
+  return n;
+}
+
+INSTANTIATE_TEST_SUITE_P(Room, StaticHiddenEffect,
+                         ::testing::Values(StaticCase{"incidence_noise", fxOf(1.0, 0.0, 0.0), squared(0.0015)},
+                                           StaticCase{"range_drift", fxOf(0.0, 2e-4, 0.0), squared(0.0015)},
+                                           StaticCase{"heavy_tails", fxOf(0.0, 0.0, 3.0), squared(0.0015)},
+                                           StaticCase{"range_noise_law", fxOf(0.0, 0.0, 0.0), power(0.5)}),
+                         [](const auto& p) { return std::string(p.param.effect); });
+
+TEST(DiagnoseStatic, AMovingSensorIsDiagnosedInWindows) {
+  StaticScans s = staticRoom({}, squared(0.0015), 5, 64);
+  // The sensor turns by 0.05 degree per scan: 3 degrees over the recording.
+  for (auto& r : s.readings) r.angle_rad += deg2rad(0.05) * r.scan;
+  DiagnoseConfig dc;
+  dc.replicas = 5;
+  const auto r = diagnoseStatic(s, dc);
+  ASSERT_EQ(r.status, "ok") << r.message;
+  EXPECT_EQ(r.baseline_extra.at("window_scans"), 8.0);
+}
+
+TEST(DiagnoseStatic, TooFewScansGiveAStatus) {
+  const auto r = diagnoseStatic(staticRoom({}, squared(0.0015), 1, 3), DiagnoseConfig{});
+  EXPECT_EQ(r.status, "too_few_scans");
+  EXPECT_FALSE(r.message.empty());
+}
+
+}  // namespace
+}  // namespace lidarcal::calibration

@@ -1,0 +1,195 @@
+// `lidarcal diagnose` end to end: simulated scans through the detector (sequence mode) and a
+// simulated room from one pose (static mode), the output files, determinism, errors; the
+// simulator reproduces the effects' scene keys; `calibrate --effects`; the RPLIDAR recording.
+
+#include <cmath>
+#include <filesystem>
+#include <functional>
+#include <set>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "io/model_io.hpp"
+#include "test_util.hpp"
+
+namespace lidarcal {
+namespace {
+
+using test::runCli;
+using test::TempDir;
+namespace fs = std::filesystem;
+
+nlohmann::json json(const fs::path& p) { return nlohmann::json::parse(test::readFile(p)); }
+
+/// The paper field (data/scenes/paper_field.json) without heading errors, modified by `edit`.
+fs::path writeScene(const fs::path& dir, const std::string& name, const std::function<void(nlohmann::json&)>& edit) {
+  nlohmann::json s = json(test::sourceDir() / "data/scenes/paper_field.json");
+  s["path"]["sigma_psi_deg"] = 0.0;
+  edit(s);
+  const fs::path file = dir / (name + ".json");
+  test::writeFile(file, s.dump(1));
+  return file;
+}
+
+void simulate(const fs::path& scene, const fs::path& out, int seed, const std::string& extra = "") {
+  const auto r = runCli("simulate -q --scene " + scene.string() + " --out " + out.string() + " --seed " + std::to_string(seed) +
+                        " " + extra);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+}
+
+class CliDiagnose : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new TempDir;
+    simulate(writeScene(dir_->path(), "heading", [](nlohmann::json& s) { s["path"]["sigma_psi_deg"] = 1.2; }),
+             dir_->path() / "heading", 5);
+    simulate(writeScene(dir_->path(), "clean", [](nlohmann::json&) {}), dir_->path() / "clean", 6);
+  }
+  static void TearDownTestSuite() {
+    delete dir_;
+    dir_ = nullptr;
+  }
+  static fs::path at(const std::string& p) { return dir_->path() / p; }
+  static TempDir* dir_;
+};
+TempDir* CliDiagnose::dir_ = nullptr;
+
+TEST_F(CliDiagnose, NamesAHeadingErrorInDetectedScansAndWritesTheReport) {
+  TempDir out;
+  const auto before = test::snapshot(at("heading"));
+  const auto r = runCli("diagnose -q " + at("heading/scans").string() + " --out " + (out / "d").string() + " --truth " +
+                        at("heading/truth.json").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.out, "heading_error\n");
+  EXPECT_TRUE(before == test::snapshot(at("heading")));  // input untouched
+  const auto j = json(out / "d/diagnosis.json");
+  EXPECT_EQ(j["format"], "lidarcal-diagnosis/1");
+  EXPECT_EQ(j["mode"], "sequence");
+  EXPECT_EQ(j["primary_cause"], "heading_error");
+  EXPECT_EQ(j["settings"]["multiple_testing"], "holm");
+  std::set<std::string> names;
+  for (const auto& c : j["candidates"]) {
+    names.insert(c["effect"].get<std::string>());
+    for (const char* key : {"effect", "p_value", "heldout_gain_nats_per_point", "delta_aic", "significant", "identifiable"})
+      EXPECT_TRUE(c.contains(key)) << key;
+  }
+  for (const char* e : {"incidence_noise", "incidence_bias", "landmark_bias", "heading_error", "range_drift", "mixed_pixels",
+                        "angle_offset", "range_noise_law"})
+    EXPECT_TRUE(names.count(e)) << e;
+  EXPECT_FALSE(j["battery"].empty());
+  ASSERT_TRUE(j["extended_model"].is_object());
+  EXPECT_EQ(j["extended_model"]["effect"], "heading_error");
+  EXPECT_NEAR(j["extended_model"]["scene_keys"]["path.sigma_psi_deg"].get<double>(), 1.2, 0.6);
+  EXPECT_GT(j["gain"]["heldout_nats_per_point"].get<double>(), 0.0);
+  EXPECT_GT(j["gain"]["calibration_mse_ratio"]["baseline"].get<double>(), 0.0);
+  EXPECT_TRUE(fs::exists(out / "d/report.md"));
+  if (std::system("command -v gnuplot >/dev/null 2>&1") == 0) {
+    EXPECT_TRUE(fs::exists(out / "d/residuals_range.png"));
+    EXPECT_TRUE(fs::exists(out / "d/residual_distribution.png"));
+  }
+}
+
+TEST_F(CliDiagnose, CleanDataHasNoCauseAndTheSameSeedGivesTheSameBytes) {
+  TempDir out;
+  const std::string args = " " + at("clean/scans").string() + " --replicas 9 --seed 4 --out ";
+  const auto r1 = runCli("diagnose -q" + args + (out / "a").string());
+  const auto r2 = runCli("diagnose -q" + args + (out / "b").string());
+  ASSERT_EQ(r1.exit_code, 0) << r1.err;
+  ASSERT_EQ(r2.exit_code, 0) << r2.err;
+  EXPECT_EQ(r1.out, "none\n");
+  const auto j = json(out / "a/diagnosis.json");
+  EXPECT_TRUE(j["extended_model"].is_null());
+  EXPECT_EQ(test::readFile(out / "a/diagnosis.json"), test::readFile(out / "b/diagnosis.json"));
+}
+
+TEST(CliDiagnoseStatic, ARoomFromOnePoseIsDiagnosedInStaticModeAndTheEffectNamed) {
+  TempDir dir;
+  const fs::path scene = writeScene(dir.path(), "room", [](nlohmann::json& s) {
+    s["landmarks"] = nlohmann::json::array();
+    s["path"]["stops"] = 1;
+    s["path"]["scans_per_stop"] = 120;
+    s["sensor"]["effects"] = {{"incidence_noise_exponent", 1.0}};
+    s["sensor"]["noise"]["sigma_e"] = 0.0015;
+    s["walls"].push_back({{"x0_m", 1.0}, {"y0_m", 1.0}, {"x1_m", 2.5}, {"y1_m", 2.5}});
+  });
+  simulate(scene, dir / "room", 3);
+  // The simulator kept the effect's key in the scene it simulated.
+  EXPECT_EQ(json(dir / "room/truth.json")["scene"]["sensor"]["effects"]["incidence_noise_exponent"], 1.0);
+  const auto r = runCli("diagnose -q " + (dir / "room/scans").string() + " --out " + (dir / "d").string() + " --replicas 9");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.out, "incidence_noise\n");
+  const auto j = json(dir / "d/diagnosis.json");
+  EXPECT_EQ(j["mode"], "static");
+  EXPECT_GE(j["baseline"]["walls"].size(), 4u);
+  EXPECT_NEAR(j["extended_model"]["scene_keys"]["sensor.effects.incidence_noise_exponent"].get<double>(), 1.0, 0.25);
+  for (const auto& c : j["candidates"]) {
+    if (c["effect"] == "heading_error") {
+      EXPECT_TRUE(c["p_value"].is_null());
+    }
+  }
+}
+
+TEST(CliDiagnoseErrors, BadInputsExplainThemselves) {
+  TempDir dir;
+  auto r = runCli("diagnose -q " + (dir / "missing").string() + " --out " + (dir / "d").string());
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  const fs::path scene = writeScene(dir.path(), "one", [](nlohmann::json& s) {
+    s["path"]["stops"] = 1;
+    s["path"]["scans_per_stop"] = 12;
+  });
+  simulate(scene, dir / "one", 1);
+  r = runCli("diagnose -q " + (dir / "one/scans").string() + " --out " + (dir / "d").string() + " --mode sequence");
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_NE(r.err.find("two stops"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "d"));
+  r = runCli("diagnose -q " + (dir / "one/scans").string() + " --out " + (dir / "d").string() + " --candidates wobble");
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("wobble"), std::string::npos) << r.err;
+}
+
+TEST(CliCalibrateEffects, TheCalibrationUsesAnEffectTermAndWritesIt) {
+  TempDir dir;
+  const fs::path scene = writeScene(dir.path(), "offsets", [](nlohmann::json& s) {
+    s["landmarks"][1]["range_offset_m"] = 0.04;
+    s["landmarks"][3]["range_offset_m"] = -0.03;
+  });
+  simulate(scene, dir / "s", 2, "--scans-per-stop 3");
+  auto r = runCli("calibrate -q " + (dir / "s/scans").string() + " --out " + (dir / "m.json").string() +
+                  " --effects landmark_bias");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto m = io::readModel(dir / "m.json");
+  ASSERT_EQ(m.effects.size(), 5u);
+  const double mean = (0.04 - 0.03) / 5.0;
+  // Landmark ids follow detection order; the offsets +0.04 and -0.03 are among them.
+  double hi = -1, lo = 1;
+  for (const auto& [k, v] : m.effects) {
+    hi = std::max(hi, v);
+    lo = std::min(lo, v);
+  }
+  EXPECT_NEAR(hi, 0.04 - mean, 0.01);
+  EXPECT_NEAR(lo, -0.03 - mean, 0.01);
+  r = runCli("calibrate -q " + (dir / "s/scans").string() + " --out " + (dir / "n.json").string() + " --effects wobble");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("wobble"), std::string::npos);
+}
+
+TEST(CliDiagnoseMeasured, RplidarRecordingIsAStaticRoom) {
+  const fs::path bag = test::sharedData() / "rplidar_a2_room/rplidar_1.bag";
+  if (!fs::exists(bag)) GTEST_SKIP() << "shared data absent: " << bag;
+  TempDir dir;
+  auto r = runCli("import -q --from rosbag1 " + bag.string() + " --out " + (dir / "seq").string() + " --max-scans 300");
+  if (r.exit_code != 0 && r.err.find("ROS") != std::string::npos) GTEST_SKIP() << "built without the ROS1 importer";
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = runCli("diagnose -q " + (dir / "seq").string() + " --out " + (dir / "d").string() + " --replicas 5 --folds 2");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto j = json(dir / "d/diagnosis.json");
+  EXPECT_EQ(j["mode"], "static");
+  EXPECT_EQ(j["baseline"]["fitted"]["window_scans"], 0.0);  // it did not move
+  EXPECT_GE(j["baseline"]["walls"].size(), 4u);
+  EXPECT_EQ(j["baseline"]["fitted"]["reading_grid_m"], 0.001);  // the bag's ranges are whole millimetres
+  EXPECT_NE(j["primary_cause"], "none");
+}
+
+}  // namespace
+}  // namespace lidarcal
