@@ -617,7 +617,11 @@ std::map<std::string, Identifiability> identifiability(const LandmarkObservation
   }
   const Eigen::MatrixXd jw = j.transpose() * w.asDiagonal();
   Eigen::MatrixXd h = jw * j;
-  h.diagonal().array() += 1e-9 * (h.diagonal().array().abs().maxCoeff() + 1.0);
+  // A ridge relative to each parameter's own information: an absolute one (scaled by the
+  // largest diagonal) would pin the weakly informed nuisance directions and make an effect
+  // that they absorb exactly (a step-length error with the radius free) look estimable.
+  h.diagonal().array() *= 1.0 + 1e-9;
+  h.diagonal().array() += 1e-300;
   const Eigen::LDLT<Eigen::MatrixXd> ldlt(h);
   auto assess = [&](const Eigen::MatrixXd& x, double ref) {
     Identifiability id;

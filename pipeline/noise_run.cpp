@@ -138,7 +138,6 @@ ojson noiseRunToJson(const NoiseRun& run, const calibration::NoiseProblem& probl
   j["objective"] = run.method == NoiseMethod::kl_hill ? "kl_total_nats" : "neg_log_likelihood_nats";
   j["objective_trace"] = run.objective_trace;
   j["evaluations"] = run.evaluations;
-  j["time_s"] = run.time_s;
   j["data"] = ojson{{"stops", problem.stops},
                     {"sensors", problem.sensors},
                     {"landmarks", problem.landmarks},

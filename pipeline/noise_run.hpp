@@ -44,7 +44,7 @@ struct NoiseRun {
   std::string message;                       ///< details when not ok
   std::vector<double> objective_trace;       ///< kl-hill: best KL after each evaluation; ml: -log L per iteration
   int evaluations = 0;                       ///< kl-hill: particle-filter runs; ml: adjustments solved
-  double time_s = 0.0;                       ///< wall time of the estimation (the only non-deterministic field)
+  double time_s = 0.0;                       ///< wall time of the estimation (printed, not written: outputs are deterministic)
   std::optional<calibration::KlHillResult> kl;  ///< details of a kl-hill run
   std::optional<calibration::MlNoiseResult> ml;  ///< details of an ml run
 };

@@ -12,6 +12,8 @@
 #include "io/import_ydlidar.hpp"
 #include "io/landmarks_csv.hpp"
 #include "io/model_io.hpp"
+#include "io/noise_json.hpp"
+#include "io/observations_csv.hpp"
 #include "io/pcd_scan.hpp"
 #include "io/scene_io.hpp"
 #include "io/sequence.hpp"
@@ -64,6 +66,9 @@ void json(const std::uint8_t* data, std::size_t size) {
   expectResultOrInputError([&] { io::readModel(p); });
   expectResultOrInputError([&] { io::readTruth(p); });
   expectResultOrInputError([&] { io::readSequenceMeta(p); });
+  expectResultOrInputError([&] { io::readObservationScene(p); });
+  expectResultOrInputError([&] { io::readNoiseSetting(p); });
+  expectResultOrInputError([&] { io::readNoiseTruth(p); });
 }
 
 void csv(const std::uint8_t* data, std::size_t size) {
@@ -71,6 +76,8 @@ void csv(const std::uint8_t* data, std::size_t size) {
   const auto& p = file.write(data, size);
   expectResultOrInputError([&] { io::readTrueRanges(p); });
   expectResultOrInputError([&] { io::readLandmarksCsv(p); });
+  expectResultOrInputError([&] { io::readObservations(p); });
+  expectResultOrInputError([&] { io::readOdometry(p); });
 }
 
 /// Every scan an importer hands on must be consistent (one angle per range).

@@ -323,6 +323,47 @@ std::vector<BadInputCase> cases() {
           }),
           2, {"true_ranges.csv", "line 3", "true_range_m", "`abc`"});
 
+  // ---- observation and odometry files (noise-consistency, docs/FORMAT.md "Noise estimation")
+  const std::vector<std::pair<const char*, std::string>> estimating = {
+      {"noise_consistency", "noise-consistency --observations {IN}/observations.csv --odometry {IN}/odometry.csv "
+                            "--method ml --out {OUT}"}};
+  // A valid pair (4 stops, one sensor, two landmarks), then one file edited.
+  const auto noiseFiles = [](std::string observations, std::string odometry) {
+    return [observations, odometry](const Ws& w) {
+      fs::create_directories(w.in);
+      writeFile(w.in / "observations.csv", observations);
+      writeFile(w.in / "odometry.csv", odometry);
+    };
+  };
+  const std::string good_obs =
+      "stop,sensor,landmark,range_m,bearing_rad\n0,0,1,2.0,0.5\n0,0,2,3.0,-0.5\n1,0,1,1.8,0.6\n1,0,2,2.9,-0.4\n"
+      "2,0,1,1.6,0.7\n2,0,2,2.8,-0.3\n3,0,1,1.4,0.8\n3,0,2,2.7,-0.2\n";
+  const std::string good_odo = "stop,dx_m,dy_m,dtheta_rad\n0,0,0,0\n1,0.3,0,0\n2,0.3,0,0\n3,0.3,0,0\n";
+  forEach(estimating, "observations_bad_header",
+          noiseFiles("stop,sensor,landmark,range,bearing\n0,0,1,2.0,0.5\n", good_odo), 2,
+          {"observations.csv", "line 1", "header must be", "FORMAT.md"});
+  forEach(estimating, "observations_not_a_number", noiseFiles("stop,sensor,landmark,range_m,bearing_rad\n0,0,1,2.0,0.5\n1,0,1,abc,0.5\n", good_odo),
+          2, {"observations.csv", "line 3", "range_m", "`abc`", "FORMAT.md"});
+  forEach(estimating, "observations_negative_sensor",
+          noiseFiles("stop,sensor,landmark,range_m,bearing_rad\n0,-1,1,2.0,0.5\n", good_odo), 2,
+          {"observations.csv", "line 2", "sensor", ">= 0"});
+  forEach(estimating, "observations_infinite_range",
+          noiseFiles("stop,sensor,landmark,range_m,bearing_rad\n0,0,1,inf,0.5\n", good_odo), 2,
+          {"observations.csv", "line 2", "range_m", "not a finite number"});
+  forEach(estimating, "observations_missing",
+          [good_odo](const Ws& w) {
+            fs::create_directories(w.in);
+            writeFile(w.in / "odometry.csv", good_odo);
+          },
+          2, {"observations.csv", "does not exist"});
+  forEach(estimating, "odometry_stops_out_of_order",
+          noiseFiles(good_obs, "stop,dx_m,dy_m,dtheta_rad\n0,0,0,0\n2,0.3,0,0\n1,0.3,0,0\n"), 2,
+          {"odometry.csv", "line 3", "stop", "in order"});
+  forEach(estimating, "odometry_start_moves", noiseFiles(good_obs, "stop,dx_m,dy_m,dtheta_rad\n0,1,0,0\n1,0.3,0,0\n"), 2,
+          {"odometry.csv", "line 2", "stop 0 is the start"});
+  forEach(estimating, "odometry_no_stop", noiseFiles(good_obs, "stop,dx_m,dy_m,dtheta_rad\n"), 2,
+          {"odometry.csv", "holds no stop"});
+
   // ---- importers
   const auto importing = [](const char* from, const char* file) {
     return std::vector<std::pair<const char*, std::string>>{

@@ -22,7 +22,7 @@ struct WritingCommand {
 /// Inputs under IN: sim/ (paper field, 10 stops x 2 scans, with truth), model.json (calibrated
 /// on it), corrected/ (its correction), a CSV, a CARMEN and a YDLIDAR recording.
 const fs::path& inputs() {
-  static const fs::path dir = cachedFixture("determinism", [](const fs::path& d) {
+  static const fs::path dir = cachedFixture("determinism-2", [](const fs::path& d) {
     const fs::path in = d;
     const std::string scene = (sourceDir() / "data/scenes/paper_field.json").string();
     EXPECT_EQ(runCli("simulate -q --scene " + scene + " --out " + (in / "sim").string() + " --scans-per-stop 2 --seed 9")
@@ -30,6 +30,9 @@ const fs::path& inputs() {
     EXPECT_EQ(runCli("calibrate -q " + (in / "sim/scans").string() + " --out " + (in / "model.json").string()).exit_code, 0);
     EXPECT_EQ(runCli("correct -q " + (in / "sim/scans").string() + " --model " + (in / "model.json").string() + " --out " +
                      (in / "corrected").string()).exit_code, 0);
+    EXPECT_EQ(runCli("detect -q " + (in / "sim/scans").string() + " --out " + (in / "detected").string()).exit_code, 0);
+    EXPECT_EQ(runCli("simulate -q --scene " + (sourceDir() / "data/scenes/noise_exp3.json").string() + " --out " +
+                     (in / "noise").string() + " --seed 2").exit_code, 0);
     std::string csv = "scan,x_m,y_m,yaw_rad,angle_rad,range_m,intensity\n", carmen, dat;
     for (int s = 0; s < 6; ++s) {
       std::string flaser = "FLASER 181", ranges;
@@ -66,6 +69,17 @@ const std::vector<WritingCommand> kCommands = {
     {"correct_ml", "correct -q {IN}/sim/scans --model {IN}/model.json --inversion ml --ascii --out {OUT}"},
     {"run", "run -q {IN}/sim/scans --out {OUT}"},
     {"evaluate", "evaluate {IN}/corrected --truth {IN}/sim/truth.json --out {OUT}"},
+    {"simulate_observations", "simulate -q --scene {SRC}/data/scenes/noise_exp12.json --out {OUT} --seed 5"},
+    {"landmarks_to_observations",
+     "landmarks-to-observations --landmarks {IN}/detected/landmarks.csv --sequence {IN}/sim/scans --out {OUT}"},
+    {"noise_consistency_ml",
+     "noise-consistency -q --observations {IN}/noise/observations.csv --odometry {IN}/noise/odometry.csv --method ml "
+     "--out {OUT}"},
+    {"noise_consistency_kl_hill",
+     "noise-consistency -q --observations {IN}/noise/observations.csv --odometry {IN}/noise/odometry.csv --method kl-hill "
+     "--particles 4 --max-evaluations 6 --seed 3 --out {OUT}"},
+    {"diagnose", "diagnose -q {IN}/sim/scans --replicas 5 --folds 2 --truth {IN}/sim/truth.json --out {OUT}"},
+    {"montecarlo", "montecarlo -q --study fig8 --quick --trials 4 --joint-trials 2 --out {OUT}"},
 };
 
 class Determinism : public ::testing::TestWithParam<WritingCommand> {};
