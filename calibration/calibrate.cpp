@@ -441,6 +441,21 @@ CalibrationModel calibrate(const LandmarkObservations& obs, const CalibrationCon
     m.message = j.message;
     return m;
   }
+  // A solution that puts a landmark where the sensor could not have read it (distances far
+  // beyond its range limit) has run away along a direction the data do not pin down (seen
+  // with a single landmark: its centre, the bias and the poses trade off). Refuse it rather
+  // than return a model fitted to impossible distances.
+  if (obs.range_max_m < 1e8) {
+    const double limit = 1.5 * obs.range_max_m + 0.5;
+    const auto far = std::max_element(j.distances_m.begin(), j.distances_m.end());
+    if (far != j.distances_m.end() && !(*far <= limit)) {
+      m.status = "joint_failed";
+      m.message = "the joint refinement ran away: it places a landmark " + std::to_string(*far) +
+                  " m from a stop, beyond the sensor's range limit of " + std::to_string(obs.range_max_m) +
+                  " m (too little geometry to pin it down: add landmarks or stops, or use --method closed-form)";
+      return m;
+    }
+  }
   m.orders = js.rows;
   m.order_rule = toString(config.joint_rule);
   m.order_aic = static_cast<int>(js.best_aic) + 1;

@@ -57,13 +57,14 @@ inline void writeFile(const fs::path& p, const std::string& bytes) {
   out << bytes;
 }
 
-/// Runs `lidarcal <args>` (args are passed to the shell as written) and captures its output.
-inline CliResult runCli(const std::string& args) {
+/// Runs `lidarcal <args>` (args are passed to the shell as written) after an optional shell
+/// `prefix` (e.g. `ulimit -f 0`), and captures its exit code, stdout and stderr.
+inline CliResult runCliPrefixed(const std::string& prefix, const std::string& args) {
   static int counter = 0;
   const fs::path base = fs::temp_directory_path() / ("lidarcal-cli-" + std::to_string(::getpid()) + "-" +
                                                      std::to_string(counter++));
-  const std::string cmd = std::string("'") + LIDARCAL_EXE + "' " + args + " >'" + base.string() + ".out' 2>'" +
-                          base.string() + ".err'";
+  const std::string cmd = (prefix.empty() ? std::string() : prefix + "; ") + "exec '" + LIDARCAL_EXE + "' " + args +
+                          " >'" + base.string() + ".out' 2>'" + base.string() + ".err'";
   const int status = std::system(cmd.c_str());
   CliResult r;
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
@@ -73,6 +74,9 @@ inline CliResult runCli(const std::string& args) {
   fs::remove(base.string() + ".err");
   return r;
 }
+
+/// Runs `lidarcal <args>` and captures its output.
+inline CliResult runCli(const std::string& args) { return runCliPrefixed("", args); }
 
 /// Content of every regular file under `dir`, keyed by relative path (for "input unchanged"
 /// and "same bytes" checks).

@@ -88,22 +88,6 @@ inline std::string replaceAll(std::string s, const std::string& from, const std:
   return s;
 }
 
-/// Runs `lidarcal <args>` after a shell prefix; captures exit code, stdout and stderr.
-inline CliResult runCliPrefixed(const std::string& prefix, const std::string& args) {
-  static int counter = 0;
-  const fs::path base = fs::temp_directory_path() / ("lidarcal-bad-" + std::to_string(::getpid()) + "-" +
-                                                     std::to_string(counter++));
-  const std::string cmd = (prefix.empty() ? std::string() : prefix + "; ") + "exec '" + LIDARCAL_EXE + "' " + args +
-                          " >'" + base.string() + ".out' 2>'" + base.string() + ".err'";
-  const int status = std::system(cmd.c_str());
-  CliResult r;
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.out = readFile(base.string() + ".out");
-  r.err = readFile(base.string() + ".err");
-  fs::remove(base.string() + ".out");
-  fs::remove(base.string() + ".err");
-  return r;
-}
 
 /// Every path under `dir` (files, directories, hidden entries), relative.
 inline std::set<std::string> listing(const fs::path& dir) {
