@@ -67,15 +67,16 @@ TEST(CliNoise, MlRecoversTheNoiseAndWritesTheResultAndPlots) {
     EXPECT_TRUE(std::filesystem::exists(dir / "plots" / f)) << f;
 }
 
-TEST(CliNoise, KlHillTraceNeverIncreasesAndTheSameSeedGivesTheSameResultButTheTime) {
+TEST(CliNoise, KlHillTraceNeverIncreasesAndTheSameSeedGivesTheSameResult) {
   TempDir dir;
   test::writeFile(dir / "scene.json", kScene);
   ASSERT_EQ(runCli("simulate -q --scene " + (dir / "scene.json").string() + " --out " + (dir / "sim").string() + " --seed 5").exit_code, 0);
-  nlohmann::json runs[2];
-  for (int i = 0; i < 2; ++i) {
+  nlohmann::json runs[3];
+  for (int i = 0; i < 3; ++i) {
     const std::string out = (dir / ("kl" + std::to_string(i) + ".json")).string();
     const auto r = runCli("noise-consistency -q --observations " + (dir / "sim/observations.csv").string() + " --odometry " +
-                          (dir / "sim/odometry.csv").string() + " --method kl-hill --particles 8 --max-evaluations 12 --seed 2 --out " + out);
+                          (dir / "sim/odometry.csv").string() + " --method kl-hill --particles 8 --max-evaluations 12 --seed 2 --out " +
+                          out + (i == 2 ? " --record-time" : ""));
     ASSERT_EQ(r.exit_code, 0) << r.err;
     runs[i] = readJson(out);
   }
@@ -84,6 +85,12 @@ TEST(CliNoise, KlHillTraceNeverIncreasesAndTheSameSeedGivesTheSameResultButTheTi
   for (std::size_t i = 1; i < trace.size(); ++i) EXPECT_LE(trace[i].get<double>(), trace[i - 1].get<double>());
   EXPECT_EQ(runs[0]["status"], "not_converged");  // stopped by the evaluation cap
   EXPECT_EQ(runs[0], runs[1]);
+  // --record-time adds the wall time and nothing else.
+  EXPECT_FALSE(runs[0].contains("time_s"));
+  ASSERT_TRUE(runs[2].contains("time_s"));
+  EXPECT_GT(runs[2]["time_s"].get<double>(), 0.0);
+  runs[2].erase("time_s");
+  EXPECT_EQ(runs[0], runs[2]);
 }
 
 TEST(CliNoise, BadInputIsReportedWithFileLineAndColumnAndNothingIsWritten) {
