@@ -82,10 +82,14 @@ struct Discrepancy {
 /// One candidate effect.
 struct CandidateResult {
   std::string effect;                     ///< name (effect::k...)
-  /// p-value of the effect: 2 min(p of the held-out gain, p of the score statistic aimed at it)
-  /// (Bonferroni over the two tests). NaN when not applicable.
+  /// p-value of the effect: m min(p of the held-out gain, p of the score statistic aimed at it,
+  /// p of the likelihood ratio where it applies) over the m tests that apply (Bonferroni). NaN
+  /// when none applies.
   double p_value = 1.0;
   double p_heldout = 1.0;                 ///< one-sided p of the held-out gain over its standard error (normal)
+  /// Sequence mode, one-parameter effects: p of the likelihood ratio on all the data (chi-square,
+  /// 1 degree of freedom); NaN otherwise.
+  double p_likelihood_ratio = std::numeric_limits<double>::quiet_NaN();
   double p_holm = 1.0;                    ///< Holm-adjusted across the candidates with a p-value
   std::string statistic;                  ///< the battery's score statistic aimed at this effect
   double score_p_value = 1.0;             ///< its p-value, calibrated on the bootstrap replicas

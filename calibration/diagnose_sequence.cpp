@@ -1132,10 +1132,15 @@ DiagnosisResult diagnoseSequence(const LandmarkObservations& obs, const Diagnose
     const double nb = static_cast<double>(per_scan.size());
     r.heldout_gain_se = nb > 1 ? std::sqrt(ss / (nb - 1.0) * nb) / n_heldout : 0.0;
     r.p_heldout = heldoutPValue(r.heldout_gain_nats_per_point, r.heldout_gain_se);
-    r.p_value = combinedPValue(r.p_heldout, r.score_p_value);
     r.parameters = fc.effect_parameters;
-    r.delta_aic = 2.0 * r.parameters + 2.0 * (fc.neg_log_likelihood + fc.prior_neg_log_likelihood -
-                                              fit0.neg_log_likelihood - fit0.prior_neg_log_likelihood);
+    const double lr = 2.0 * (fit0.neg_log_likelihood + fit0.prior_neg_log_likelihood - fc.neg_log_likelihood -
+                             fc.prior_neg_log_likelihood);
+    r.delta_aic = 2.0 * r.parameters - lr;
+    // In-sample evidence too, for one-parameter effects: where the baseline's parameters absorb
+    // most of an effect (a constant bearing rotation moves the poles) the held-out gain is small
+    // while the likelihood ratio on all the data is not. Naming still needs a positive held-out gain.
+    r.p_likelihood_ratio = likelihoodRatioPValue(lr, r.parameters);
+    r.p_value = combinedPValue(r.p_heldout, r.score_p_value, r.p_likelihood_ratio);
     if (const auto it = ident.find(r.effect); it != ident.end()) {
       r.information_ratio = it->second.ratio;
       r.standard_error = it->second.se;

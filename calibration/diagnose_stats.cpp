@@ -97,6 +97,24 @@ double combinedPValue(double p_heldout, double p_score) {
   return std::min(1.0, 2.0 * std::min(p_heldout, p_score));
 }
 
+double combinedPValue(double p_heldout, double p_score, double p_lr) {
+  double lowest = std::numeric_limits<double>::infinity();
+  int tests = 0;
+  for (const double p : {p_heldout, p_score, p_lr})
+    if (std::isfinite(p)) {
+      lowest = std::min(lowest, p);
+      ++tests;
+    }
+  if (tests == 0) return std::numeric_limits<double>::quiet_NaN();
+  return std::min(1.0, tests * lowest);
+}
+
+double likelihoodRatioPValue(double statistic, int parameters) {
+  if (parameters != 1 || !std::isfinite(statistic)) return std::numeric_limits<double>::quiet_NaN();
+  if (statistic <= 0.0) return 1.0;
+  return std::erfc(std::sqrt(statistic / 2.0));  // P(chi2_1 > s) = P(|N(0,1)| > sqrt(s))
+}
+
 std::vector<double> holmAdjust(const std::vector<double>& p) {
   std::vector<std::size_t> idx;
   for (std::size_t i = 0; i < p.size(); ++i)

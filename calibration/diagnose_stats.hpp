@@ -32,6 +32,14 @@ double heldoutPValue(double gain, double se);
 /// stops), the held-out test where the baseline's fit bent to absorb the effect. NaN entries
 /// are left out.
 double combinedPValue(double p_heldout, double p_score);
+/// The same over three tests: 3 min(p_heldout, p_score, p_lr), NaN entries left out (and the
+/// factor counting only the finite ones).
+double combinedPValue(double p_heldout, double p_score, double p_lr);
+
+/// p-value of a likelihood-ratio statistic 2 (nll_baseline - nll_extended) for an effect with one
+/// parameter (chi-square, one degree of freedom); NaN for other parameter counts. A statistic
+/// at or below 0 gives 1.
+double likelihoodRatioPValue(double statistic, int parameters);
 
 /// What a discrepancy statistic is, for the battery table.
 struct StatisticInfo {

@@ -167,6 +167,7 @@ nlohmann::ordered_json diagnosisJson(const DiagnosisResult& r, const DiagnosisSo
             {"p_value", num(c.p_value)},
             {"p_holm", num(c.p_holm)},
             {"p_heldout", num(c.p_heldout)},
+            {"p_likelihood_ratio", num(c.p_likelihood_ratio)},
             {"heldout_gain_nats_per_point", num(c.heldout_gain_nats_per_point)},
             {"heldout_gain_se", num(c.heldout_gain_se)},
             {"delta_aic", num(c.delta_aic)},

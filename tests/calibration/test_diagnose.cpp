@@ -51,6 +51,19 @@ TEST(DiagnoseStats, HolmMatchesTheStepDownByHand) {
   EXPECT_NEAR(with_nan[2], 0.04, 1e-12);
 }
 
+TEST(DiagnoseStats, LikelihoodRatioAndCombinedPValues) {
+  // Chi-square with one degree of freedom: the tabulated 5 % and 1 % points.
+  EXPECT_NEAR(likelihoodRatioPValue(3.841459, 1), 0.05, 1e-6);
+  EXPECT_NEAR(likelihoodRatioPValue(6.634897, 1), 0.01, 1e-6);
+  EXPECT_EQ(likelihoodRatioPValue(-0.5, 1), 1.0);
+  EXPECT_TRUE(std::isnan(likelihoodRatioPValue(10.0, 3)));  // one parameter only
+  // Bonferroni over the tests that apply.
+  EXPECT_NEAR(combinedPValue(0.2, 0.01, 0.003), 0.009, 1e-15);
+  EXPECT_NEAR(combinedPValue(0.2, 0.01, std::nan("")), 0.02, 1e-15);
+  EXPECT_NEAR(combinedPValue(0.9, 0.8, 0.7), 1.0, 1e-15);
+  EXPECT_TRUE(std::isnan(combinedPValue(std::nan(""), std::nan(""), std::nan(""))));
+}
+
 TEST(DiagnoseStats, KolmogorovSmirnovDistance) {
   EXPECT_DOUBLE_EQ(ksDistance({1, 2, 3}, {1, 2, 3}), 0.0);
   EXPECT_DOUBLE_EQ(ksDistance({1, 2, 3}, {4, 5, 6}), 1.0);
