@@ -260,7 +260,7 @@ ScanHeader toScanHeader(const fs::path& file, const ParsedHeader& h) {
   checkCoordinateField(h, "y", true, where);
   checkCoordinateField(h, "z", false, where);
   ScanHeader out;
-  out.path = file;
+  out.path = file.string();
   out.viewpoint = viewpointPose(h, where);
   out.points = static_cast<std::size_t>(h.points);
   out.has_intensity = findField(h, "intensity") != nullptr;

@@ -17,7 +17,9 @@ namespace lidarcal::io {
 
 /// What the header of a scan file says (read without loading the points).
 struct ScanHeader {
-  std::filesystem::path path;   ///< the file
+  /// The file. A string, not a std::filesystem::path: a sequence keeps one header per scan,
+  /// and a path also allocates its list of components (about 0.3 KB more per scan).
+  std::string path;
   Pose2 viewpoint;              ///< commanded pose from VIEWPOINT (yaw only)
   std::size_t points = 0;       ///< POINTS (= WIDTH x HEIGHT)
   bool has_intensity = false;   ///< an `intensity` field is present

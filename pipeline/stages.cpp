@@ -87,7 +87,7 @@ void checkModelFits(const CalibrationModel& model, const io::Sequence& seq, cons
   if (model.beams && !seq.scans.empty()) {
     for (const auto& h : seq.scans)
       if (h.points != static_cast<std::size_t>(*model.beams))
-        throw InputError(h.path.string(), "POINTS",
+        throw InputError(h.path, "POINTS",
                          "has " + std::to_string(h.points) + " beams, the model " + where + " was calibrated on a sensor with " +
                              std::to_string(*model.beams),
                          "use a model calibrated on this sensor");
@@ -131,7 +131,7 @@ CorrectionStats correctSequence(const io::Sequence& seq, const CalibrationModel&
     const io::Scan scan = io::readScan(seq.scans[i].path);
     calibration::FilteringStats f;
     const io::Scan out = calibration::correctScan(scan, inverter, &f);
-    io::writeScan(out_dir / seq.scans[i].path.filename(), out, encoding);
+    io::writeScan(out_dir / std::filesystem::path(seq.scans[i].path).filename(), out, encoding);
     ++stats.scans;
     stats.points += f.points;
     stats.corrected += f.corrected;

@@ -129,12 +129,12 @@ Evaluation evaluate(const io::Sequence& corrected, const io::Sequence& raw, cons
                                                      std::to_string(raw.scans.size()),
                      "evaluate the output of `lidarcal correct` on this raw sequence");
   return evaluate(raw, truth, [&](std::size_t i, const io::Scan& rs) {
-    if (raw.scans[i].path.filename() != corrected.scans[i].path.filename())
-      throw InputError(corrected.scans[i].path.string(), "", "does not match the raw scan " + raw.scans[i].path.string(),
+    if (std::filesystem::path(raw.scans[i].path).filename() != std::filesystem::path(corrected.scans[i].path).filename())
+      throw InputError(corrected.scans[i].path, "", "does not match the raw scan " + raw.scans[i].path,
                        "the corrected and raw sequences must hold the same file names");
     const io::Scan cs = io::readScan(corrected.scans[i].path);
     if (cs.cloud->size() != rs.cloud->size())
-      throw InputError(corrected.scans[i].path.string(), "POINTS", "differs from the raw scan", "re-run lidarcal correct");
+      throw InputError(corrected.scans[i].path, "POINTS", "differs from the raw scan", "re-run lidarcal correct");
     std::vector<double> r(cs.cloud->size());
     for (std::size_t b = 0; b < r.size(); ++b) {
       const auto& q = (*cs.cloud)[b];
