@@ -74,7 +74,7 @@ void BM_ReadWriteExample(benchmark::State& state) {
   const auto out = std::filesystem::temp_directory_path() / "lidarcal-bench-io";
   std::filesystem::create_directories(out);
   for (auto _ : state)
-    for (const auto& h : seq.scans) io::writeScan(out / std::filesystem::path(h.path).filename(), io::readScan(h.path));
+    for (const auto& h : seq.scans) io::writeScan(out / h.name(), io::readScan(h.path));
   std::filesystem::remove_all(out);
 }
 

@@ -90,11 +90,7 @@ double heldoutPValue(double gain, double se) {
 }
 
 double combinedPValue(double p_heldout, double p_score) {
-  const bool a = std::isfinite(p_heldout), b = std::isfinite(p_score);
-  if (!a && !b) return std::numeric_limits<double>::quiet_NaN();
-  if (!a) return p_score;
-  if (!b) return p_heldout;
-  return std::min(1.0, 2.0 * std::min(p_heldout, p_score));
+  return combinedPValue(p_heldout, p_score, std::numeric_limits<double>::quiet_NaN());
 }
 
 double combinedPValue(double p_heldout, double p_score, double p_lr) {

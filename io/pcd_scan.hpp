@@ -20,6 +20,8 @@ struct ScanHeader {
   /// The file. A string, not a std::filesystem::path: a sequence keeps one header per scan,
   /// and a path also allocates its list of components (about 0.3 KB more per scan).
   std::string path;
+  /// The file name without its directory.
+  std::string name() const { return std::filesystem::path(path).filename().string(); }
   Pose2 viewpoint;              ///< commanded pose from VIEWPOINT (yaw only)
   std::size_t points = 0;       ///< POINTS (= WIDTH x HEIGHT)
   bool has_intensity = false;   ///< an `intensity` field is present

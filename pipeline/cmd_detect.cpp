@@ -95,7 +95,7 @@ void runDetect(const DetectOptions& o) {
   for (std::size_t i = 0; i < seq.scans.size(); ++i) {
     io::Scan scan = io::readScan(seq.scans[i].path);
     scan.labels = detectors::scanLabels(result, i, scan.cloud->size());
-    const std::string name = std::filesystem::path(seq.scans[i].path).filename().string();
+    const std::string name = seq.scans[i].name();
     io::writeScan(out.path() / name, scan, o.ascii ? io::PcdEncoding::ascii : io::PcdEncoding::binary);
     const auto& dets = result.scans[i].detections;
     for (std::size_t j = 0; j < dets.size(); ++j) {

@@ -131,7 +131,7 @@ CorrectionStats correctSequence(const io::Sequence& seq, const CalibrationModel&
     const io::Scan scan = io::readScan(seq.scans[i].path);
     calibration::FilteringStats f;
     const io::Scan out = calibration::correctScan(scan, inverter, &f);
-    io::writeScan(out_dir / std::filesystem::path(seq.scans[i].path).filename(), out, encoding);
+    io::writeScan(out_dir / seq.scans[i].name(), out, encoding);
     ++stats.scans;
     stats.points += f.points;
     stats.corrected += f.corrected;

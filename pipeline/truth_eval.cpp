@@ -129,7 +129,7 @@ Evaluation evaluate(const io::Sequence& corrected, const io::Sequence& raw, cons
                                                      std::to_string(raw.scans.size()),
                      "evaluate the output of `lidarcal correct` on this raw sequence");
   return evaluate(raw, truth, [&](std::size_t i, const io::Scan& rs) {
-    if (std::filesystem::path(raw.scans[i].path).filename() != std::filesystem::path(corrected.scans[i].path).filename())
+    if (raw.scans[i].name() != corrected.scans[i].name())
       throw InputError(corrected.scans[i].path, "", "does not match the raw scan " + raw.scans[i].path,
                        "the corrected and raw sequences must hold the same file names");
     const io::Scan cs = io::readScan(corrected.scans[i].path);

@@ -55,7 +55,7 @@ TEST(CliDetect, LabelsEveryScanAndWritesTheLandmarkTable) {
   std::set<int> ids;
   for (std::size_t i = 0; i < in.scans.size(); ++i) {
     const io::Scan a = io::readScan(in.scans[i].path), b = io::readScan(labelled.scans[i].path);
-    EXPECT_EQ(fs::path(in.scans[i].path).filename(), fs::path(labelled.scans[i].path).filename());
+    EXPECT_EQ(in.scans[i].name(), labelled.scans[i].name());
     ASSERT_EQ(a.cloud->size(), b.cloud->size());
     ASSERT_EQ(b.labels.size(), b.cloud->size());
     EXPECT_NEAR(b.viewpoint.x_m, a.viewpoint.x_m, 1e-9);
@@ -68,7 +68,7 @@ TEST(CliDetect, LabelsEveryScanAndWritesTheLandmarkTable) {
         ids.insert(static_cast<int>(b.labels[k]));
       }
     }
-    const std::string name = fs::path(in.scans[i].path).filename().string();
+    const std::string name = in.scans[i].name();
     for (const auto& [id, n] : count) EXPECT_EQ(points_of[std::make_pair(name, id)], n) << name << " id " << id;
   }
   EXPECT_EQ(ids, (std::set<int>{1, 2, 3, 4, 5}));
