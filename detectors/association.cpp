@@ -27,9 +27,7 @@ void AssociationConfig::validate() const {
 
 namespace {
 
-/// Order-free identity of a node: (scan_index, stop, bearing in [0, 2 pi), world x, world y) of
-/// a detection, or of the first detection of a group. The input position is not part of it.
-using Key = std::tuple<std::size_t, std::size_t, double, double, double>;
+using Key = DetectionKey;
 
 /// A point to link: a detection (stage 1) or a stop cluster (stage 2).
 struct Node {
@@ -137,64 +135,81 @@ std::vector<std::vector<std::size_t>> link(const std::vector<Node>& nodes, const
   return out;
 }
 
-/// Detections of one landmark at one stop.
-struct StopCluster {
-  std::vector<std::size_t> items;  // detections (indices into the stage-1 nodes), sorted by key
-  std::size_t stop = 0;
-  bool strong = false;             // seen in at least min_scan_fraction of the stop's scans
-  Node node;                       // centroid, conflict = stop, key of the first detection
-};
+/// Weighted median: the value at position (total weight) / 2 of the expanded sorted list (the
+/// upper median of the detections when each cluster's detections share one value).
+double weightedMedian(std::vector<std::pair<double, std::size_t>> v) {
+  std::sort(v.begin(), v.end());
+  std::size_t total = 0;
+  for (const auto& e : v) total += e.second;
+  std::size_t seen = 0;
+  for (const auto& e : v) {
+    seen += e.second;
+    if (seen > total / 2) return e.first;
+  }
+  return v.empty() ? 0.0 : v.back().first;
+}
 
 }  // namespace
 
-Association associate(const std::vector<ScanDetections>& scans, const std::vector<Pose2>& viewpoints,
-                      const AssociationConfig& cfg) {
-  cfg.validate();
-  if (viewpoints.size() != scans.size()) throw std::invalid_argument("associate: one viewpoint per scan expected");
-  Association out;
-  out.ids.resize(scans.size());
+std::size_t clusterStop(const std::vector<const ScanDetections*>& scans, const std::vector<Pose2>& viewpoints,
+                        const AssociationConfig& cfg, std::vector<StopCluster>& out,
+                        std::vector<std::vector<int>>* cluster_of) {
+  if (viewpoints.size() != scans.size()) throw std::invalid_argument("clusterStop: one viewpoint per scan expected");
   std::vector<Node> items;
   std::vector<std::pair<std::size_t, std::size_t>> where;  // (scan, detection) of each item
-  std::map<std::size_t, std::size_t> scans_at_stop;
-  std::map<std::size_t, std::vector<std::size_t>> items_at_stop;
+  if (cluster_of) cluster_of->assign(scans.size(), {});
   for (std::size_t s = 0; s < scans.size(); ++s) {
-    ++scans_at_stop[scans[s].stop];
-    out.ids[s].assign(scans[s].detections.size(), 0);
-    for (std::size_t j = 0; j < scans[s].detections.size(); ++j) {
-      const Detection& d = scans[s].detections[j];
+    if (scans[s]->stop != scans.front()->stop) throw std::invalid_argument("clusterStop: scans of one stop expected");
+    if (cluster_of) (*cluster_of)[s].assign(scans[s]->detections.size(), -1);
+    for (std::size_t j = 0; j < scans[s]->detections.size(); ++j) {
+      const Detection& d = scans[s]->detections[j];
       Node n;
       viewpoints[s].toWorld(d.centre_x_m, d.centre_y_m, n.x, n.y);
       n.conflict = s;
       const double bearing = d.bearing_rad < 0.0 ? d.bearing_rad + 2.0 * kPi : d.bearing_rad;
-      n.key = Key{scans[s].scan_index, scans[s].stop, bearing, n.x, n.y};
-      items_at_stop[scans[s].stop].push_back(items.size());
+      n.key = Key{scans[s]->scan_index, scans[s]->stop, bearing, n.x, n.y};
       items.push_back(n);
       where.emplace_back(s, j);
     }
   }
-  out.detections = items.size();
-  const std::size_t min_stops = std::min<std::size_t>(static_cast<std::size_t>(cfg.min_stops), scans_at_stop.size());
-
-  // Stage 1: at each stop (one pose, only noise), the detections of one object, one per scan.
-  std::vector<StopCluster> clusters;
-  for (const auto& [stop, members] : items_at_stop)
-    for (auto& g : link(items, members, cfg.stop_link_distance_m, std::min(cfg.min_link_distance_m, cfg.stop_link_distance_m),
-                        out.discarded_conflicts)) {
-      StopCluster c;
-      c.stop = stop;
-      c.strong = static_cast<double>(g.size()) >= cfg.min_scan_fraction * static_cast<double>(scans_at_stop[stop]);
-      for (auto m : g) c.node.x += items[m].x, c.node.y += items[m].y;
-      c.node.x /= static_cast<double>(g.size());
-      c.node.y /= static_cast<double>(g.size());
-      c.node.conflict = stop;
-      c.node.key = items[g.front()].key;
-      c.items = std::move(g);
-      clusters.push_back(std::move(c));
+  std::vector<std::size_t> members(items.size());
+  std::iota(members.begin(), members.end(), 0);
+  std::size_t dropped = 0;
+  // At one stop (one pose, only noise), the detections of one object, one per scan.
+  for (auto& g : link(items, members, cfg.stop_link_distance_m, std::min(cfg.min_link_distance_m, cfg.stop_link_distance_m),
+                      dropped)) {
+    StopCluster c;
+    c.stop = scans.front()->stop;
+    c.strong = static_cast<double>(g.size()) >= cfg.min_scan_fraction * static_cast<double>(scans.size());
+    std::vector<std::pair<double, std::size_t>> radii;
+    for (auto m : g) {
+      c.x_m += items[m].x, c.y_m += items[m].y;
+      radii.emplace_back(scans[where[m].first]->detections[where[m].second].radius_m, 1);
+      if (cluster_of) (*cluster_of)[where[m].first][where[m].second] = static_cast<int>(out.size());
     }
+    c.detections = g.size();
+    c.x_m /= static_cast<double>(g.size());
+    c.y_m /= static_cast<double>(g.size());
+    c.radius_m = weightedMedian(std::move(radii));
+    c.first = items[g.front()].key;
+    out.push_back(c);
+  }
+  return dropped;
+}
+
+Association linkStopClusters(const std::vector<StopCluster>& clusters, std::size_t stops, std::size_t stage1_conflicts,
+                             const AssociationConfig& cfg, std::vector<int>& landmark_of) {
+  cfg.validate();
+  Association out;
+  out.discarded_conflicts = stage1_conflicts;
+  out.detections = stage1_conflicts;
+  for (const auto& c : clusters) out.detections += c.detections;
+  landmark_of.assign(clusters.size(), 0);
+  const std::size_t min_stops = std::min<std::size_t>(static_cast<std::size_t>(cfg.min_stops), stops);
   std::vector<Node> cnodes;
   std::vector<std::size_t> strong;
   for (std::size_t k = 0; k < clusters.size(); ++k) {
-    cnodes.push_back(clusters[k].node);
+    cnodes.push_back(Node{clusters[k].x_m, clusters[k].y_m, clusters[k].stop, clusters[k].first});
     if (clusters[k].strong) strong.push_back(k);
   }
 
@@ -207,7 +222,7 @@ Association associate(const std::vector<ScanDetections>& scans, const std::vecto
   std::vector<int> candidate_of(clusters.size(), -1);
   for (auto& g : link(cnodes, strong, cfg.link_distance_m, cfg.min_link_distance_m, out.discarded_conflicts)) {
     if (g.size() < min_stops) {
-      for (auto k : g) out.discarded_few_stops += clusters[k].items.size();
+      for (auto k : g) out.discarded_few_stops += clusters[k].detections;
       ++out.discarded_components;
       continue;
     }
@@ -247,26 +262,25 @@ Association associate(const std::vector<ScanDetections>& scans, const std::vecto
     candidates[c].clusters.push_back(k);
   }
   for (std::size_t k = 0; k < clusters.size(); ++k)
-    if (!clusters[k].strong && candidate_of[k] < 0) out.discarded_few_stops += clusters[k].items.size();
+    if (!clusters[k].strong && candidate_of[k] < 0) out.discarded_few_stops += clusters[k].detections;
 
   // Ids by first sighting, then bearing in that scan, then position (all order-free).
   std::vector<Landmark> found;
   for (auto& c : candidates) {
     Landmark l;
-    std::vector<double> radii;
+    std::vector<std::pair<double, std::size_t>> radii;
     c.first = cnodes[c.clusters.front()].key;
     for (auto k : c.clusters) {
       if (clusters[k].strong) ++l.stops;
       c.first = std::min(c.first, cnodes[k].key);
-      for (auto m : clusters[k].items) {
-        ++l.detections;
-        l.x_m += items[m].x, l.y_m += items[m].y;
-        radii.push_back(scans[where[m].first].detections[where[m].second].radius_m);
-      }
+      const auto n = static_cast<double>(clusters[k].detections);
+      l.detections += clusters[k].detections;
+      l.x_m += n * clusters[k].x_m, l.y_m += n * clusters[k].y_m;
+      radii.emplace_back(clusters[k].radius_m, clusters[k].detections);
     }
     l.x_m /= static_cast<double>(l.detections);
     l.y_m /= static_cast<double>(l.detections);
-    l.radius_m = median(radii);
+    l.radius_m = weightedMedian(std::move(radii));
     l.first_scan = std::get<0>(c.first);
     found.push_back(l);
   }
@@ -276,10 +290,41 @@ Association associate(const std::vector<ScanDetections>& scans, const std::vecto
   for (std::size_t rank = 0; rank < order.size(); ++rank) {
     Landmark l = found[order[rank]];
     l.id = static_cast<int>(rank + 1);
-    for (auto k : candidates[order[rank]].clusters)
-      for (auto m : clusters[k].items) out.ids[where[m].first][where[m].second] = l.id;
+    for (auto k : candidates[order[rank]].clusters) landmark_of[k] = l.id;
     out.assigned += l.detections;
     out.landmarks.push_back(l);
+  }
+  return out;
+}
+
+Association associate(const std::vector<ScanDetections>& scans, const std::vector<Pose2>& viewpoints,
+                      const AssociationConfig& cfg) {
+  cfg.validate();
+  if (viewpoints.size() != scans.size()) throw std::invalid_argument("associate: one viewpoint per scan expected");
+  std::map<std::size_t, std::vector<std::size_t>> scans_at_stop;
+  for (std::size_t s = 0; s < scans.size(); ++s) scans_at_stop[scans[s].stop].push_back(s);
+  std::vector<StopCluster> clusters;
+  std::vector<std::vector<std::vector<int>>> cluster_of;  // per stop, per scan of the stop, per detection
+  std::size_t conflicts = 0;
+  for (const auto& [stop, members] : scans_at_stop) {
+    std::vector<const ScanDetections*> ptrs;
+    std::vector<Pose2> poses;
+    for (auto s : members) ptrs.push_back(&scans[s]), poses.push_back(viewpoints[s]);
+    cluster_of.emplace_back();
+    conflicts += clusterStop(ptrs, poses, cfg, clusters, &cluster_of.back());
+  }
+  std::vector<int> landmark_of;
+  Association out = linkStopClusters(clusters, scans_at_stop.size(), conflicts, cfg, landmark_of);
+  out.ids.resize(scans.size());
+  std::size_t k = 0;
+  for (const auto& [stop, members] : scans_at_stop) {
+    for (std::size_t i = 0; i < members.size(); ++i) {
+      auto& ids = out.ids[members[i]];
+      ids.assign(scans[members[i]].detections.size(), 0);
+      for (std::size_t j = 0; j < ids.size(); ++j)
+        if (const int c = cluster_of[k][i][j]; c >= 0) ids[j] = landmark_of[static_cast<std::size_t>(c)];
+    }
+    ++k;
   }
   return out;
 }

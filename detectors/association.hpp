@@ -20,6 +20,7 @@
 
 #include <cstddef>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "common/pose2.hpp"
@@ -71,7 +72,41 @@ struct Association {
 };
 
 /// Groups the detections of all scans into landmarks. viewpoints[i] is the commanded pose of scan i.
+/// (Stage 1 per stop with clusterStop, then linkStopClusters.)
 Association associate(const std::vector<ScanDetections>& scans, const std::vector<Pose2>& viewpoints,
                       const AssociationConfig& config);
+
+// ---- The same in two steps, for streaming: stage 1 needs the detections of one stop only;
+// stages 2-3 need only the stop clusters (about 100 bytes per object per stop). ----
+
+/// Order-free identity of a detection: (scan_index, stop, bearing in [0, 2 pi), world x, world y).
+using DetectionKey = std::tuple<std::size_t, std::size_t, double, double, double>;
+
+/// Stage 1 summary: the detections of one object at one stop.
+struct StopCluster {
+  std::size_t stop = 0;
+  bool strong = false;         ///< found in at least min_scan_fraction of the stop's scans
+  double x_m = 0.0, y_m = 0.0;  ///< centroid of its detections, world frame, metres
+  std::size_t detections = 0;  ///< one per scan at most
+  double radius_m = 0.0;       ///< median radius of its detections, metres
+  DetectionKey first;          ///< key of its first detection
+};
+
+/// Stage 1 at one stop: `scans` are all the scans of one stop (ScanDetections::stop equal),
+/// viewpoints[i] the commanded pose of scans[i]. Appends the stop's clusters to `out` (in an
+/// order that depends only on the detections) and, when `cluster_of` is given, sets
+/// (*cluster_of)[i][j] to the index in `out` of detection j of scans[i] (-1: dropped as a second
+/// detection of its scan). Returns the number of detections dropped that way.
+std::size_t clusterStop(const std::vector<const ScanDetections*>& scans, const std::vector<Pose2>& viewpoints,
+                        const AssociationConfig& config, std::vector<StopCluster>& out,
+                        std::vector<std::vector<int>>* cluster_of = nullptr);
+
+/// Stages 2-3 over the clusters of every stop: `stops` distinct stops in the input (those without
+/// detections included), `stage1_conflicts` the sum of clusterStop's returns. Returns the
+/// landmarks (Association::ids left empty) and sets landmark_of[k] to the id of cluster k (0: none).
+/// A landmark's radius_m is the median radius of its detections (each cluster's median, weighted
+/// by its number of detections).
+Association linkStopClusters(const std::vector<StopCluster>& clusters, std::size_t stops, std::size_t stage1_conflicts,
+                             const AssociationConfig& config, std::vector<int>& landmark_of);
 
 }  // namespace lidarcal::detectors

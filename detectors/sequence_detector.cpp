@@ -4,6 +4,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "common/errors.hpp"
+
 #include "detectors/landmark_radius.hpp"
 
 namespace lidarcal::detectors {
@@ -35,108 +37,174 @@ void compact(ScanDetections& d) {
   for (auto& det : d.detections) det.inliers.shrink_to_fit();
 }
 
-/// Inlier points of a detection, kept while the radius is unknown (bounded by the detections).
-std::vector<Eigen::Vector2d> arcOf(const pcl::PointCloud<pcl::PointXYZI>& cloud, const Detection& d) {
-  std::vector<Eigen::Vector2d> arc;
-  arc.reserve(d.inliers.size());
-  for (auto i : d.inliers) arc.emplace_back(cloud[static_cast<std::size_t>(i)].x, cloud[static_cast<std::size_t>(i)].y);
-  return arc;
+/// An arc kept for the joint radius: its points and free circle (sensor frame) and the pose.
+struct KeptArc {
+  ArcObservation arc;
+  Pose2 viewpoint;
+};
+
+/// The detections of one stop, as they come.
+struct StopBlock {
+  std::size_t stop = 0;
+  std::vector<ScanDetections> scans;
+  std::vector<Pose2> viewpoints;
+  std::vector<std::vector<std::vector<Eigen::Vector2d>>> arcs;  // per scan, per detection (when collected)
+};
+
+/// Detection configuration of a scan at `viewpoint`: the landmarks' world radius hints moved
+/// into its sensor frame.
+DetectionConfig configFor(const DetectionConfig& base, const std::vector<RadiusHint>& world, const Pose2& viewpoint) {
+  DetectionConfig cfg = base;
+  for (const auto& h : world) {
+    RadiusHint local = h;
+    viewpoint.toSensor(h.x_m, h.y_m, local.x_m, local.y_m);
+    cfg.radius_hints.push_back(local);
+  }
+  return cfg;
 }
 
-void updateLandmarkPositions(SequenceDetections& r) {
-  for (auto& l : r.association.landmarks) l.x_m = l.y_m = 0.0;
-  for (std::size_t s = 0; s < r.scans.size(); ++s)
-    for (std::size_t j = 0; j < r.scans[s].detections.size(); ++j) {
-      const int id = r.association.ids[s][j];
-      if (id == 0) continue;
-      const Detection& d = r.scans[s].detections[j];
-      double wx = 0.0, wy = 0.0;
-      r.viewpoints[s].toWorld(d.centre_x_m, d.centre_y_m, wx, wy);
-      auto& l = r.association.landmarks[static_cast<std::size_t>(id - 1)];
-      l.x_m += wx, l.y_m += wy;
+/// Detects every scan with `base` (plus the hints), stop by stop, and hands each stop's
+/// detections to `on_stop` once its last scan is done. Only one stop is in memory.
+void detectByStop(std::size_t scan_count, const ScanLoader& load, const std::vector<std::size_t>& stop_of_scan,
+                  const DetectionConfig& base, const std::vector<RadiusHint>& hints_world, bool collect_arcs,
+                  const std::function<void(StopBlock&)>& on_stop, const std::function<void(std::size_t)>& on_scan) {
+  StopBlock block;
+  for (std::size_t i = 0; i < scan_count; ++i) {
+    if (i > 0 && stop_of_scan[i] < stop_of_scan[i - 1])
+      throw std::invalid_argument("detectSequence: stop_of_scan must be non-decreasing (the scans of a stop consecutive)");
+    const io::Scan scan = load(i);
+    ScanDetections d = detectScan(scan, configFor(base, hints_world, scan.viewpoint));
+    d.scan_index = i;
+    d.stop = stop_of_scan[i];
+    block.stop = d.stop;
+    if (collect_arcs) {
+      auto& arcs = block.arcs.emplace_back();
+      for (const auto& det : d.detections) {
+        auto& arc = arcs.emplace_back();
+        arc.reserve(det.inliers.size());
+        for (auto k : det.inliers) {
+          const auto& p = (*scan.cloud)[static_cast<std::size_t>(k)];
+          arc.emplace_back(p.x, p.y);
+        }
+      }
     }
-  for (auto& l : r.association.landmarks) {
-    l.x_m /= static_cast<double>(l.detections);
-    l.y_m /= static_cast<double>(l.detections);
+    compact(d);
+    block.scans.push_back(std::move(d));
+    block.viewpoints.push_back(scan.viewpoint);
+    if (on_scan) on_scan(i);
+    if (i + 1 == scan_count || stop_of_scan[i + 1] != stop_of_scan[i]) {
+      on_stop(block);
+      block = StopBlock{};
+    }
   }
 }
 
-/// Joint radius per landmark, then every detection's centre refitted with it.
-void estimateRadii(SequenceDetections& r, const std::vector<std::vector<std::vector<Eigen::Vector2d>>>& arcs,
-                   const DetectionConfig& cfg) {
+/// Stage 1 of one stop's block: its clusters appended to `clusters`, cluster_of per detection.
+std::size_t clusterBlock(const StopBlock& block, const AssociationConfig& cfg, std::vector<StopCluster>& clusters,
+                         std::vector<std::vector<int>>& cluster_of) {
+  std::vector<const ScanDetections*> ptrs;
+  for (const auto& d : block.scans) ptrs.push_back(&d);
+  return clusterStop(ptrs, block.viewpoints, cfg, clusters, &cluster_of);
+}
+
+/// One pass over the scans: stop clusters, the association, and (as asked) the kept scans and
+/// the arcs of each stop cluster.
+struct Pass {
+  std::vector<StopCluster> clusters;
+  std::vector<std::size_t> clusters_before_stop;
+  std::size_t conflicts = 0;
+  std::vector<std::vector<KeptArc>> arcs;  // per cluster (when collected)
+  std::vector<ScanDetections> scans;       // when kept
+  std::vector<Pose2> viewpoints;           // when kept
+  std::vector<int> landmark_of;
+  Association association;
+};
+
+Pass runPass(std::size_t scan_count, const ScanLoader& load, const std::vector<std::size_t>& stop_of_scan,
+             const DetectionConfig& base, const std::vector<RadiusHint>& hints_world, const SequenceDetectionConfig& config,
+             bool collect_arcs, bool keep_scans, const std::function<void(std::size_t)>& on_scan) {
+  Pass p;
+  std::vector<std::vector<int>> cluster_of_scan;  // kept scans: cluster of each detection
+  detectByStop(scan_count, load, stop_of_scan, base, hints_world, collect_arcs, [&](StopBlock& block) {
+    p.clusters_before_stop.push_back(p.clusters.size());
+    const std::size_t first = p.clusters.size();
+    std::vector<std::vector<int>> cluster_of;
+    p.conflicts += clusterBlock(block, config.association, p.clusters, cluster_of);
+    if (collect_arcs) {
+      // Up to arcs_per_stop_cluster arcs per cluster, spread evenly over its detections.
+      std::vector<std::vector<std::pair<std::size_t, std::size_t>>> members(p.clusters.size() - first);
+      for (std::size_t i = 0; i < cluster_of.size(); ++i)
+        for (std::size_t j = 0; j < cluster_of[i].size(); ++j)
+          if (cluster_of[i][j] >= 0) members[static_cast<std::size_t>(cluster_of[i][j]) - first].emplace_back(i, j);
+      for (const auto& m : members) {
+        auto& kept = p.arcs.emplace_back();
+        const std::size_t n = m.size(), k = std::min(n, config.arcs_per_stop_cluster);
+        for (std::size_t t = 0; t < k; ++t) {
+          const auto [i, j] = m[t * n / k];
+          const Detection& d = block.scans[i].detections[j];
+          kept.push_back(KeptArc{ArcObservation{std::move(block.arcs[i][j]), Circle2{d.centre_x_m, d.centre_y_m, d.radius_m}},
+                                 block.viewpoints[i]});
+        }
+      }
+    }
+    if (keep_scans) {
+      for (auto& c : cluster_of) cluster_of_scan.push_back(std::move(c));
+      for (auto& d : block.scans) p.scans.push_back(std::move(d));
+      for (const auto& v : block.viewpoints) p.viewpoints.push_back(v);
+    }
+  }, on_scan);
+  p.association = linkStopClusters(p.clusters, p.clusters_before_stop.size(), p.conflicts, config.association, p.landmark_of);
+  if (keep_scans) {
+    p.association.ids.resize(p.scans.size());
+    for (std::size_t s = 0; s < p.scans.size(); ++s) {
+      auto& ids = p.association.ids[s];
+      ids.assign(cluster_of_scan[s].size(), 0);
+      for (std::size_t j = 0; j < ids.size(); ++j)
+        if (const int c = cluster_of_scan[s][j]; c >= 0) ids[j] = p.landmark_of[static_cast<std::size_t>(c)];
+    }
+  }
+  return p;
+}
+
+/// Joint radius per landmark from the arcs kept in its stop clusters; the landmark's world
+/// position from the refitted centres. Returns the hints for the second pass.
+std::vector<RadiusHint> estimateRadii(SequenceDetections& r, const Pass& pass, const DetectionConfig& cfg) {
   const std::size_t L = r.association.landmarks.size();
-  std::vector<std::vector<std::pair<std::size_t, std::size_t>>> members(L);
-  for (std::size_t s = 0; s < r.scans.size(); ++s)
-    for (std::size_t j = 0; j < r.scans[s].detections.size(); ++j)
-      if (const int id = r.association.ids[s][j]; id > 0) members[static_cast<std::size_t>(id - 1)].emplace_back(s, j);
+  std::vector<std::vector<const KeptArc*>> arcs(L);
+  for (std::size_t k = 0; k < pass.clusters.size(); ++k)
+    if (const int id = pass.landmark_of[k]; id > 0)
+      for (const auto& a : pass.arcs[k]) arcs[static_cast<std::size_t>(id - 1)].push_back(&a);
+  std::vector<RadiusHint> world;
   for (std::size_t l = 0; l < L; ++l) {
     std::vector<ArcObservation> obs;
-    obs.reserve(members[l].size());
-    for (const auto& [s, j] : members[l]) {
-      const Detection& d = r.scans[s].detections[j];
-      ArcObservation a;
-      a.points = arcs[s][j];
-      a.start = Circle2{d.centre_x_m, d.centre_y_m, d.radius_m};
-      obs.push_back(std::move(a));
-    }
+    obs.reserve(arcs[l].size());
+    for (const KeptArc* a : arcs[l]) obs.push_back(a->arc);
     const RadiusEstimate est = estimateJointRadius(obs, cfg.radius_min_m, cfg.radius_max_m);
     if (est.status != FitStatus::ok) {
       ++r.radius_failures;
       continue;
     }
-    r.association.landmarks[l].radius_m = est.radius_m;
-    r.association.landmarks[l].radius_estimated = true;
-    for (std::size_t k = 0; k < members[l].size(); ++k) {
-      Detection& d = r.scans[members[l][k].first].detections[members[l][k].second];
-      setCentre(d, est.centres[k]);
-      d.radius_fixed = true;
-      d.rms_m = circleRms(obs[k].points, est.centres[k]);
+    auto& lm = r.association.landmarks[l];
+    lm.radius_m = est.radius_m;
+    lm.radius_estimated = true;
+    double x = 0.0, y = 0.0;
+    for (std::size_t k = 0; k < arcs[l].size(); ++k) {
+      double wx = 0.0, wy = 0.0;
+      arcs[l][k]->viewpoint.toWorld(est.centres[k].x_m, est.centres[k].y_m, wx, wy);
+      x += wx, y += wy;
     }
+    world.push_back(RadiusHint{x / static_cast<double>(arcs[l].size()), y / static_cast<double>(arcs[l].size()), est.radius_m});
   }
+  return world;
 }
 
-/// Second pass once radii are estimated: every scan again, with the landmarks expected in it as
-/// radius hints, so that arcs too short for a free radius (3-4 returns) are fitted with the
-/// estimated radius; then a fresh association.
-void redetectWithRadii(SequenceDetections& r, const ScanLoader& load, const SequenceDetectionConfig& config,
-                       const ProgressCallback& on_scan) {
-  std::vector<RadiusHint> world;
-  for (const auto& l : r.association.landmarks)
-    if (l.radius_estimated) world.push_back(RadiusHint{l.x_m, l.y_m, l.radius_m});
-  if (world.empty()) return;
-  DetectionConfig cfg = config.detection;
-  // Landmarks of one make (seed 000: cylinders of one radius): when every estimate agrees with
-  // their median, clusters near no known landmark are fitted with that radius too.
-  std::vector<double> radii;
-  for (const auto& h : world) radii.push_back(h.radius_m);
-  std::sort(radii.begin(), radii.end());
-  const double median = radii[radii.size() / 2];
-  if (radii.size() >= 2 && radii.front() >= median * (1.0 - config.common_radius_tolerance) &&
-      radii.back() <= median * (1.0 + config.common_radius_tolerance)) {
-    cfg.landmark_radius_m = median;
-    r.common_radius_m = median;
-  }
-  for (std::size_t i = 0; i < r.scans.size(); ++i) {
-    cfg.radius_hints.clear();
-    for (const auto& h : world) {
-      RadiusHint local = h;
-      r.viewpoints[i].toSensor(h.x_m, h.y_m, local.x_m, local.y_m);
-      cfg.radius_hints.push_back(local);
-    }
-    ScanDetections d = detectScan(load(i), cfg);
-    compact(d);
-    d.scan_index = r.scans[i].scan_index;
-    d.stop = r.scans[i].stop;
-    r.scans[i] = std::move(d);
-    if (on_scan) on_scan(r.scans.size() + i + 1, 2 * r.scans.size());
-  }
-  r.association = associate(r.scans, r.viewpoints, config.association);
-  for (auto& l : r.association.landmarks) {
-    // The radius came from the first pass when the landmark's detections were fitted with it.
-    l.radius_estimated = r.common_radius_m.has_value();
-    for (const auto& h : world)
-      if (std::abs(h.radius_m - l.radius_m) < 1e-12) l.radius_estimated = true;
-  }
+/// The pass's results into `r` (the clusters, their arcs and landmark ids stay in `pass`).
+void adopt(SequenceDetections& r, Pass& pass) {
+  r.scans = std::move(pass.scans);
+  r.viewpoints = std::move(pass.viewpoints);
+  r.association = std::move(pass.association);
+  r.replay.landmark_of_cluster = pass.landmark_of;
+  r.replay.clusters_before_stop = pass.clusters_before_stop;
 }
 
 }  // namespace
@@ -149,39 +217,49 @@ SequenceDetections detectSequence(std::size_t scan_count, const ScanLoader& load
   SequenceDetections r;
   const bool known = config.detection.landmark_radius_m.has_value();
   r.known_radius_m = config.detection.landmark_radius_m;
-  r.scans.reserve(scan_count);
-  r.viewpoints.reserve(scan_count);
-  std::vector<std::vector<std::vector<Eigen::Vector2d>>> arcs;  // only while the radius is unknown
-  for (std::size_t i = 0; i < scan_count; ++i) {
-    const io::Scan scan = load(i);
-    ScanDetections d = detectScan(scan, config.detection);
-    d.scan_index = i;
-    d.stop = stop_of_scan[i];
-    if (!known) {
-      arcs.emplace_back();
-      for (const auto& det : d.detections) arcs.back().push_back(arcOf(*scan.cloud, det));
+  r.replay.detection = config.detection;
+  r.replay.association = config.association;
+  const std::size_t total = known ? scan_count : 2 * scan_count;
+  auto progress = [&](std::size_t offset) {
+    return [&on_scan, offset, total](std::size_t i) {
+      if (on_scan) on_scan(offset + i + 1, total);
+    };
+  };
+  Pass first = runPass(scan_count, load, stop_of_scan, config.detection, {}, config, !known, config.keep_scans, progress(0));
+  adopt(r, first);
+  if (!known && !r.association.landmarks.empty()) {
+    // Second pass once radii are estimated: every scan again, with the landmarks expected in it
+    // as radius hints, so that arcs too short for a free radius (3-4 returns) are fitted with
+    // the estimated radius; then a fresh association.
+    const std::vector<RadiusHint> world = estimateRadii(r, first, config.detection);
+    if (!world.empty()) {
+      DetectionConfig cfg = config.detection;
+      // Landmarks of one make (seed 000: cylinders of one radius): when every estimate agrees
+      // with their median, clusters near no known landmark are fitted with that radius too.
+      std::vector<double> radii;
+      for (const auto& h : world) radii.push_back(h.radius_m);
+      std::sort(radii.begin(), radii.end());
+      const double median = radii[radii.size() / 2];
+      if (radii.size() >= 2 && radii.front() >= median * (1.0 - config.common_radius_tolerance) &&
+          radii.back() <= median * (1.0 + config.common_radius_tolerance)) {
+        cfg.landmark_radius_m = median;
+        r.common_radius_m = median;
+      }
+      Pass second = runPass(scan_count, load, stop_of_scan, cfg, world, config, false, config.keep_scans, progress(scan_count));
+      adopt(r, second);
+      r.replay.detection = cfg;
+      r.replay.hints_world = world;
+      for (auto& l : r.association.landmarks) {
+        // The radius came from the first pass when the landmark's detections were fitted with it.
+        l.radius_estimated = r.common_radius_m.has_value();
+        for (const auto& h : world)
+          if (std::abs(h.radius_m - l.radius_m) < 1e-12) l.radius_estimated = true;
+      }
     }
-    compact(d);
-    r.viewpoints.push_back(scan.viewpoint);
-    r.scans.push_back(std::move(d));
-    if (on_scan) on_scan(i + 1, known ? scan_count : 2 * scan_count);
   }
-  r.association = associate(r.scans, r.viewpoints, config.association);
-  if (!known && !arcs.empty()) {
-    // Arcs of detections that are not landmarks are not needed.
-    for (std::size_t s = 0; s < arcs.size(); ++s)
-      for (std::size_t j = 0; j < arcs[s].size(); ++j)
-        if (r.association.ids[s][j] == 0) std::vector<Eigen::Vector2d>().swap(arcs[s][j]);
-    estimateRadii(r, arcs, config.detection);
-    std::vector<std::vector<std::vector<Eigen::Vector2d>>>().swap(arcs);
-    updateLandmarkPositions(r);
-    redetectWithRadii(r, load, config, on_scan);
-  }
-  if (on_scan && !known) on_scan(2 * scan_count, 2 * scan_count);  // no second pass without landmarks
-  updateLandmarkPositions(r);
+  if (on_scan && !known) on_scan(total, total);  // no second pass without landmarks
 
-  std::size_t circles = 0;
-  for (const auto& s : r.scans) circles += s.detections.size();
+  const std::size_t circles = r.association.detections;
   if (r.association.landmarks.empty()) {
     r.radius_source = RadiusSource::none;
     r.note = circles == 0 ? "no circular object found in any scan: zero landmarks"
@@ -206,15 +284,65 @@ SequenceDetections detectSequence(const io::Sequence& sequence, const SequenceDe
       cfg, on_scan);
 }
 
-std::vector<std::uint32_t> scanLabels(const SequenceDetections& result, std::size_t scan, std::size_t points) {
+void forEachScan(const SequenceDetections& r, std::size_t scan_count, const ScanLoader& load,
+                 const std::vector<std::size_t>& stop_of_scan, const ScanVisitor& visit, const ProgressCallback& on_scan) {
+  if (!r.scans.empty() || scan_count == 0) {
+    if (r.scans.size() != scan_count)
+      throw std::invalid_argument("forEachScan: the result holds " + std::to_string(r.scans.size()) + " scans, not " +
+                                  std::to_string(scan_count));
+    for (std::size_t i = 0; i < scan_count; ++i) {
+      visit(i, r.scans[i], r.association.ids.at(i));
+      if (on_scan) on_scan(i + 1, scan_count);
+    }
+    return;
+  }
+  const auto& rp = r.replay;
+  std::size_t stop = 0;
+  auto changed = [](const std::string& what) {
+    return DataError("scans", "", "changed while they were being read (" + what + ")",
+                     "leave the sequence untouched while lidarcal reads it, then run again");
+  };
+  detectByStop(scan_count, load, stop_of_scan, rp.detection, rp.hints_world, false, [&](StopBlock& block) {
+    std::vector<StopCluster> clusters;
+    std::vector<std::vector<int>> cluster_of;
+    clusterBlock(block, rp.association, clusters, cluster_of);
+    if (stop >= rp.clusters_before_stop.size()) throw changed("more stops than before");
+    const std::size_t first = rp.clusters_before_stop[stop];
+    const std::size_t end = stop + 1 < rp.clusters_before_stop.size() ? rp.clusters_before_stop[stop + 1]
+                                                                      : rp.landmark_of_cluster.size();
+    if (end - first != clusters.size()) throw changed("other objects at stop " + std::to_string(block.stop));
+    ++stop;
+    for (std::size_t i = 0; i < block.scans.size(); ++i) {
+      std::vector<int> ids(cluster_of[i].size(), 0);
+      for (std::size_t j = 0; j < ids.size(); ++j)
+        if (const int c = cluster_of[i][j]; c >= 0) ids[j] = rp.landmark_of_cluster[first + static_cast<std::size_t>(c)];
+      visit(block.scans[i].scan_index, block.scans[i], ids);
+    }
+  }, [&](std::size_t i) {
+    if (on_scan) on_scan(i + 1, scan_count);
+  });
+}
+
+void forEachScan(const SequenceDetections& result, const io::Sequence& sequence, const ScanVisitor& visit,
+                 const ProgressCallback& on_scan) {
+  forEachScan(
+      result, sequence.scans.size(), [&](std::size_t i) { return io::readScan(sequence.scans[i].path); },
+      sequence.stop_of_scan, visit, on_scan);
+}
+
+std::vector<std::uint32_t> scanLabels(const ScanDetections& detections, const std::vector<int>& ids, std::size_t points) {
   std::vector<std::uint32_t> labels(points, 0u);
-  const auto& dets = result.scans.at(scan).detections;
+  const auto& dets = detections.detections;
   for (std::size_t j = 0; j < dets.size(); ++j) {
-    const int id = result.association.ids.at(scan).at(j);
+    const int id = ids.at(j);
     if (id <= 0) continue;
     for (auto i : dets[j].inliers) labels.at(static_cast<std::size_t>(i)) = static_cast<std::uint32_t>(id);
   }
   return labels;
+}
+
+std::vector<std::uint32_t> scanLabels(const SequenceDetections& result, std::size_t scan, std::size_t points) {
+  return scanLabels(result.scans.at(scan), result.association.ids.at(scan), points);
 }
 
 }  // namespace lidarcal::detectors

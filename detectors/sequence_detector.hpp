@@ -3,6 +3,12 @@
 // across stops, and, when the landmark radius is not known, estimate it jointly per landmark and
 // detect again with that radius fixed (a second pass over the scans). This is the in-process API the calibration
 // stage calls; `lidarcal detect` adds the labelled files.
+//
+// Memory. The scans are processed stop by stop: stage 1 of the association (association.hpp)
+// needs one stop's detections, stages 2-3 only the stop clusters. With `keep_scans` false the
+// result holds no per-scan data, so memory does not grow with the number of scans (only with the
+// objects seen per stop, ~100 bytes each, and with the arcs kept for the radius estimate);
+// forEachScan then gives each scan's detections by detecting each stop again.
 
 #include <cstddef>
 #include <functional>
@@ -25,6 +31,13 @@ struct SequenceDetectionConfig {
   /// median, the second pass fits clusters near no known landmark with that common radius
   /// (landmarks of one make). Default 0.15.
   double common_radius_tolerance = 0.15;
+  /// Keep every scan's detections in the result (SequenceDetections::scans, viewpoints and
+  /// association.ids). false: the result stays small whatever the number of scans, and
+  /// forEachScan detects each stop again to give them. Default true.
+  bool keep_scans = true;
+  /// With the radius estimated: the arcs kept per stop cluster for the joint radius (spread
+  /// evenly over its detections), which bounds what the estimate keeps per stop. Default 16.
+  std::size_t arcs_per_stop_cluster = 16;
 
   /// Throws std::invalid_argument naming the first bad field.
   void validate() const;
@@ -39,16 +52,26 @@ enum class RadiusSource {
 const char* toString(RadiusSource source);
 
 struct SequenceDetections {
-  /// Per scan in sequence order (scan_index, stop set). `clusters` is left empty: the per-cluster
-  /// diagnostics of every scan would make memory grow with the sequence (detectScan has them).
+  /// Per scan in sequence order (scan_index, stop set); empty unless keep_scans. `clusters` is
+  /// left empty: the per-cluster diagnostics of every scan would make memory grow with the
+  /// sequence (detectScan has them).
   std::vector<ScanDetections> scans;
-  std::vector<Pose2> viewpoints;      ///< commanded pose of each scan
-  Association association;            ///< landmarks and the id of every detection
+  std::vector<Pose2> viewpoints;      ///< commanded pose of each scan (empty unless keep_scans)
+  Association association;            ///< landmarks, and the id of every detection (ids: only with keep_scans)
   RadiusSource radius_source = RadiusSource::none;  ///< how radii were obtained
   std::optional<double> known_radius_m;  ///< the known radius, when radius_source is known
   std::optional<double> common_radius_m;  ///< common radius used in the second pass, when the estimates agreed
   std::size_t radius_failures = 0;    ///< landmarks whose joint radius could not be estimated (free fits kept)
   std::string note;                   ///< plain-language summary (e.g. why no landmark was found)
+
+  /// How to run the final pass again (forEachScan without kept scans).
+  struct Replay {
+    DetectionConfig detection;              ///< the final pass's configuration (radius hints excepted)
+    std::vector<RadiusHint> hints_world;    ///< estimated radii at their world positions (empty with a known radius)
+    AssociationConfig association;
+    std::vector<int> landmark_of_cluster;   ///< id of each stop cluster of the final pass (0: none)
+    std::vector<std::size_t> clusters_before_stop;  ///< per stop (in order): clusters of the earlier stops
+  } replay;
 };
 
 /// Loads scan i of a sequence (0 <= i < scan count).
@@ -59,7 +82,7 @@ using ScanLoader = std::function<io::Scan(std::size_t)>;
 using ProgressCallback = std::function<void(std::size_t done, std::size_t total)>;
 
 /// Runs detection and association over `scan_count` scans obtained from `load`; stop_of_scan[i]
-/// is the stop of scan i. With the radius unknown: free-radius detection, association, joint
+/// is the stop of scan i, non-decreasing (the scans of a stop are consecutive). With the radius unknown: free-radius detection, association, joint
 /// radius per landmark, then a second detection pass with those radii and a fresh association.
 SequenceDetections detectSequence(std::size_t scan_count, const ScanLoader& load,
                                   const std::vector<std::size_t>& stop_of_scan, const SequenceDetectionConfig& config,
@@ -69,7 +92,25 @@ SequenceDetections detectSequence(std::size_t scan_count, const ScanLoader& load
 SequenceDetections detectSequence(const io::Sequence& sequence, const SequenceDetectionConfig& config,
                                   const ProgressCallback& on_scan = {});
 
+/// Receives scan `scan`'s detections of the final pass and their landmark ids (0: none).
+using ScanVisitor = std::function<void(std::size_t scan, const ScanDetections& detections, const std::vector<int>& ids)>;
+
+/// Visits every scan in order with its detections and ids: from the result when the scans were
+/// kept, else by detecting each stop again with the final configuration (one stop's detections
+/// in memory; `on_scan` reports those detections). `scan_count`, `load` and `stop_of_scan` must
+/// be those given to detectSequence; throws DataError when the scans changed in between.
+void forEachScan(const SequenceDetections& result, std::size_t scan_count, const ScanLoader& load,
+                 const std::vector<std::size_t>& stop_of_scan, const ScanVisitor& visit,
+                 const ProgressCallback& on_scan = {});
+
+/// The same over a sequence directory.
+void forEachScan(const SequenceDetections& result, const io::Sequence& sequence, const ScanVisitor& visit,
+                 const ProgressCallback& on_scan = {});
+
 /// Labels of one scan: 0 background, the landmark id on the inliers of each associated detection.
+std::vector<std::uint32_t> scanLabels(const ScanDetections& detections, const std::vector<int>& ids, std::size_t points);
+
+/// The same for scan `scan` of a result whose scans were kept.
 std::vector<std::uint32_t> scanLabels(const SequenceDetections& result, std::size_t scan, std::size_t points);
 
 }  // namespace lidarcal::detectors

@@ -1,6 +1,7 @@
 // lidarcal detect SEQ --out OUT: landmarks in every scan, one id per landmark over the sequence.
 // Writes OUT/ (labelled copies of the scans, sequence.json, landmarks.csv); prints a summary.
-// Two passes over the files: detect + associate (one scan in memory at a time), then labels.
+// Two passes over the files: detect + associate (one scan in memory at a time), then labels
+// (each stop detected again: memory does not grow with the number of scans).
 
 #include <cstdio>
 #include <filesystem>
@@ -66,6 +67,9 @@ void runDetect(const DetectOptions& o) {
   cfg.association.link_distance_m = o.link_distance_m;
   cfg.detection.segmentation.max_missing_beams = o.max_missing_beams;
   cfg.association.min_link_distance_m = std::min(cfg.association.min_link_distance_m, o.link_distance_m);
+  // The evaluation against the truth needs every scan's detections at once; otherwise nothing
+  // per scan is kept and the labelling pass detects each stop again.
+  cfg.keep_scans = !o.truth.empty();
 
   std::optional<Truth> truth;
   std::map<std::size_t, std::vector<io::TrueRange>> true_ranges;
@@ -92,14 +96,14 @@ void runDetect(const DetectOptions& o) {
   io::LandmarksCsvWriter csv(out.path() / "landmarks.csv");
   std::vector<detectors::ScanTruth> scan_truth;
   Progress progress("label", seq.scans.size());
-  for (std::size_t i = 0; i < seq.scans.size(); ++i) {
+  auto write = [&](std::size_t i, const detectors::ScanDetections& sd, const std::vector<int>& ids) {
     io::Scan scan = io::readScan(seq.scans[i].path);
-    scan.labels = detectors::scanLabels(result, i, scan.cloud->size());
+    scan.labels = detectors::scanLabels(sd, ids, scan.cloud->size());
     const std::string name = seq.scans[i].name();
     io::writeScan(out.path() / name, scan, o.ascii ? io::PcdEncoding::ascii : io::PcdEncoding::binary);
-    const auto& dets = result.scans[i].detections;
+    const auto& dets = sd.detections;
     for (std::size_t j = 0; j < dets.size(); ++j) {
-      const int id = result.association.ids[i][j];
+      const int id = ids[j];
       if (id == 0) continue;
       const auto& d = dets[j];
       csv.write(io::LandmarkRow{name, seq.stop_of_scan[i], id, d.bearing_rad, d.range_m, d.centre_x_m, d.centre_y_m,
@@ -112,15 +116,14 @@ void runDetect(const DetectOptions& o) {
                          "pass the truth.json written with this sequence");
       scan_truth.push_back(detectors::makeScanTruth(*truth, i, std::move(it->second), *scan.cloud));
     }
-    progress.update(i + 1);
-  }
+  };
+  detectors::forEachScan(result, seq, write, [&](std::size_t done, std::size_t) { progress.update(done); });
   progress.finish();
   csv.close();
   out.commit();
 
   const auto& a = result.association;
-  std::size_t circles = 0;
-  for (const auto& s : result.scans) circles += s.detections.size();
+  const std::size_t circles = a.detections;
   std::printf("# Landmarks of %s\n\n", o.seq.c_str());
   std::printf("- scans: %zu at %zu stops\n", seq.scans.size(), seq.stops.size());
   std::printf("- radius: %s", detectors::toString(result.radius_source));

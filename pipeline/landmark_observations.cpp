@@ -15,12 +15,10 @@ LandmarkObservations toLandmarkObservations(const io::Sequence& seq, const detec
   for (std::size_t k = 0; k < seq.stops.size(); ++k)
     for (std::size_t i : seq.stops[k].scans)
       same_beams[k] = same_beams[k] && seq.scans[i].points == seq.scans[seq.stops[k].scans.front()].points;
-  for (std::size_t i = 0; i < det.scans.size(); ++i) {
-    const auto& sd = det.scans[i];
-    const auto& ids = det.association.ids.at(i);
+  detectors::forEachScan(det, seq, [&](std::size_t i, const detectors::ScanDetections& sd, const std::vector<int>& ids) {
     bool any = false;
     for (int id : ids) any = any || id > 0;
-    if (!any) continue;
+    if (!any) return;
     const io::Scan scan = io::readScan(seq.scans.at(i).path);
     for (std::size_t j = 0; j < sd.detections.size(); ++j) {
       if (ids[j] <= 0) continue;
@@ -42,7 +40,7 @@ LandmarkObservations toLandmarkObservations(const io::Sequence& seq, const detec
       }
       if (!s.beams.empty()) obs.sightings.push_back(std::move(s));
     }
-  }
+  });
   return obs;
 }
 

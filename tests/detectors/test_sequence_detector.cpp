@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include "common/errors.hpp"
 #include "detectors/evaluation.hpp"
 #include "detectors/landmark_radius.hpp"
 #include "detectors/sequence_detector.hpp"
@@ -97,6 +98,86 @@ TEST(DetectSequence, RadiusIsEstimatedWhenNotGiven) {
     EXPECT_TRUE(l.radius_estimated);
     EXPECT_NEAR(l.radius_m, 0.12, 0.01);
   }
+}
+
+// Bounding what the joint radius keeps (two arcs per stop cluster instead of all ten) still
+// gives the radius: the arcs of ten stops at different ranges pin it.
+TEST(DetectSequence, RadiusIsEstimatedFromAFewArcsPerStop) {
+  const Simulated s = simulateScene(paperField(), 6);
+  SequenceDetectionConfig cfg;
+  cfg.arcs_per_stop_cluster = 2;
+  const SequenceDetections r = run(s, cfg);
+  EXPECT_EQ(r.radius_source, RadiusSource::estimated);
+  expectAllLandmarksWithTheRightIds(s, r);
+  for (const auto& l : r.association.landmarks) {
+    SCOPED_TRACE(l.id);
+    EXPECT_TRUE(l.radius_estimated);
+    EXPECT_NEAR(l.radius_m, 0.12, 0.01);
+  }
+}
+
+// Without kept scans the result holds nothing per scan, and forEachScan (which detects each
+// stop again) gives exactly the detections and ids that keeping them gives; with spurious
+// circles (clutter), with the radius known and estimated.
+TEST(DetectSequence, WithoutKeptScansTheReplayGivesTheSameDetectionsAndIds) {
+  const Scene clutter = io::readScene(test::sourceDir() / "data/scenes/field_clutter.json");
+  for (std::uint64_t seed : {1, 2}) {
+    const Simulated s = simulateScene(clutter, seed);
+    for (bool known : {true, false}) {
+      SCOPED_TRACE(std::to_string(seed) + " radius known " + std::to_string(known));
+      SequenceDetectionConfig cfg;
+      if (known) cfg.detection.landmark_radius_m = 0.12;
+      const SequenceDetections kept = run(s, cfg);
+      cfg.keep_scans = false;
+      const SequenceDetections lean = run(s, cfg);
+      EXPECT_TRUE(lean.scans.empty());
+      EXPECT_TRUE(lean.viewpoints.empty());
+      EXPECT_TRUE(lean.association.ids.empty());
+      ASSERT_EQ(lean.association.landmarks.size(), kept.association.landmarks.size());
+      ASSERT_FALSE(kept.association.landmarks.empty());
+      for (std::size_t l = 0; l < kept.association.landmarks.size(); ++l) {
+        EXPECT_EQ(lean.association.landmarks[l].x_m, kept.association.landmarks[l].x_m);
+        EXPECT_EQ(lean.association.landmarks[l].radius_m, kept.association.landmarks[l].radius_m);
+        EXPECT_EQ(lean.association.landmarks[l].detections, kept.association.landmarks[l].detections);
+      }
+      EXPECT_EQ(lean.association.detections, kept.association.detections);
+      std::size_t visited = 0;
+      auto load = [&](std::size_t i) { return s.scans[i].scan; };
+      forEachScan(lean, s.scans.size(), load, s.stop_of_scan,
+                  [&](std::size_t i, const ScanDetections& d, const std::vector<int>& ids) {
+                    ASSERT_EQ(i, visited++);
+                    EXPECT_EQ(ids, kept.association.ids[i]);
+                    ASSERT_EQ(d.detections.size(), kept.scans[i].detections.size());
+                    for (std::size_t j = 0; j < d.detections.size(); ++j) {
+                      EXPECT_EQ(d.detections[j].centre_x_m, kept.scans[i].detections[j].centre_x_m);
+                      EXPECT_EQ(d.detections[j].inliers, kept.scans[i].detections[j].inliers);
+                    }
+                  });
+      EXPECT_EQ(visited, s.scans.size());
+    }
+  }
+}
+
+// Scans that change between detectSequence and forEachScan (here: the poles removed) cannot be
+// given the ids found before: an error says so.
+TEST(DetectSequence, ReplayRefusesScansThatChanged) {
+  const Simulated s = simulateScene(paperField(), 1);
+  Scene empty = paperField();
+  empty.landmarks.clear();
+  const Simulated other = simulateScene(empty, 1);
+  SequenceDetectionConfig cfg;
+  cfg.detection.landmark_radius_m = 0.12;
+  cfg.keep_scans = false;
+  const SequenceDetections r = run(s, cfg);
+  EXPECT_THROW(forEachScan(r, other.scans.size(), [&](std::size_t i) { return other.scans[i].scan; }, other.stop_of_scan,
+                           [](std::size_t, const ScanDetections&, const std::vector<int>&) {}),
+               DataError);
+}
+
+TEST(DetectSequence, TheScansOfAStopMustBeConsecutive) {
+  Simulated s = simulateScene(paperField(), 1);
+  std::swap(s.stop_of_scan.front(), s.stop_of_scan.back());
+  EXPECT_THROW(run(s, SequenceDetectionConfig{}), std::invalid_argument);
 }
 
 TEST(DetectSequence, SurvivesOdometryDriftOfSeveralCentimetresPerStop) {
