@@ -6,7 +6,9 @@
 //     result.json and its plots under DIR, and prints a Markdown table.
 //   noise_experiments ml-study --scene S.json --seeds 20
 //     runs the ML estimator on seeds 1..20 and prints, per variance, the median estimate and the
-//     median relative error against the truth.
+//     median relative error against the truth; with --seeds 40 or more also the mean, the spread
+//     against the estimator's own standard error, and how many disjoint 20-seed blocks have their
+//     median within 10 %.
 //   noise_experiments objective-noise --scene S.json --init I.json [--seed N] [--evaluations 20]
 //     spread of the KL objective at one setting over particle streams, per variant.
 
@@ -143,7 +145,7 @@ void mlStudy(const std::string& scene_file, int seeds) {
   const ObservationScene scene = io::readObservationScene(scene_file);
   const NoiseSetting truth = trueNoise(scene);
   const auto names = variances(truth);
-  std::vector<std::vector<double>> est(names.size());
+  std::vector<std::vector<double>> est(names.size()), reported_se(names.size());
   std::vector<std::vector<double>> bias_err(truth.sensors.size() * 2);
   std::vector<double> times, iterations;
   int not_converged = 0;
@@ -159,7 +161,10 @@ void mlStudy(const std::string& scene_file, int seeds) {
     const pipeline::NoiseRun run = pipeline::runNoiseEstimation(problem, o);
     if (run.status != "ok") ++not_converged;
     const auto v = variances(run.noise);
-    for (std::size_t i = 0; i < v.size(); ++i) est[i].push_back(v[i].second);
+    for (std::size_t i = 0; i < v.size(); ++i) {
+      est[i].push_back(v[i].second);
+      if (run.ml && i < run.ml->groups.size()) reported_se[i].push_back(run.ml->groups[i].standard_error);
+    }
     for (std::size_t s = 0; s < truth.sensors.size(); ++s) {
       bias_err[2 * s].push_back(std::abs(run.noise.sensors[s].range_mean_m - truth.sensors[s].range_mean_m));
       bias_err[2 * s + 1].push_back(std::abs(run.noise.sensors[s].bearing_mean_rad - truth.sensors[s].bearing_mean_rad));
@@ -185,6 +190,32 @@ void mlStudy(const std::string& scene_file, int seeds) {
     } else {
       std::printf("| %s | 0 | %s | (truth 0) | max %s | |\n", names[i].first.c_str(), fmt(med).c_str(),
                   fmt(*std::max_element(est[i].begin(), est[i].end())).c_str());
+    }
+  }
+  if (seeds >= 40) {
+    // The sampling spread of a 20-seed median: the seeds cut into consecutive blocks of 20.
+    const int blocks = seeds / 20;
+    std::printf("\nOver %d seeds: mean estimate, the spread of the estimates (standard deviation / truth) against the "
+                "estimator's own standard error (median over seeds, / truth), and the %d disjoint blocks of 20 seeds "
+                "(1-20, 21-40, ...) whose median estimate is within 10 %% of the truth.\n\n", seeds, blocks);
+    std::printf("| variance | mean estimate / truth − 1 | std of the estimates / truth | reported standard error / truth | "
+                "20-seed medians within 10 %% | range of the 20-seed medians / truth − 1 |\n|---|---|---|---|---|---|\n");
+    for (std::size_t i = 0; i < names.size(); ++i) {
+      const double t = names[i].second;
+      if (!(t > 0)) continue;
+      double mean = 0.0, var = 0.0;
+      for (double e : est[i]) mean += e / static_cast<double>(seeds);
+      for (double e : est[i]) var += (e - mean) * (e - mean) / static_cast<double>(seeds - 1);
+      int within = 0;
+      double lo = 1e300, hi = -1e300;
+      for (int b = 0; b < blocks; ++b) {
+        const double m = median(std::vector<double>(est[i].begin() + 20 * b, est[i].begin() + 20 * (b + 1))) / t - 1.0;
+        within += std::abs(m) <= 0.10;
+        lo = std::min(lo, m), hi = std::max(hi, m);
+      }
+      const std::string se = reported_se[i].empty() ? "" : std::to_string(median(reported_se[i]) / t).substr(0, 5);
+      std::printf("| %s | %+.1f %% | %.3f | %s | %d / %d | %+.1f %% .. %+.1f %% |\n", names[i].first.c_str(),
+                  100.0 * (mean / t - 1.0), std::sqrt(var) / t, se.c_str(), within, blocks, 100.0 * lo, 100.0 * hi);
     }
   }
   std::printf("\nMedian absolute bias error per sensor (range m, bearing rad):");

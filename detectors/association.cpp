@@ -152,7 +152,7 @@ double weightedMedian(std::vector<std::pair<double, std::size_t>> v) {
 }  // namespace
 
 std::size_t clusterStop(const std::vector<const ScanDetections*>& scans, const std::vector<Pose2>& viewpoints,
-                        const AssociationConfig& cfg, std::vector<StopCluster>& out,
+                        const AssociationConfig& cfg, StopClusters& out,
                         std::vector<std::vector<int>>* cluster_of) {
   if (viewpoints.size() != scans.size()) throw std::invalid_argument("clusterStop: one viewpoint per scan expected");
   std::vector<Node> items;
@@ -197,7 +197,7 @@ std::size_t clusterStop(const std::vector<const ScanDetections*>& scans, const s
   return dropped;
 }
 
-Association linkStopClusters(const std::vector<StopCluster>& clusters, std::size_t stops, std::size_t stage1_conflicts,
+Association linkStopClusters(const StopClusters& clusters, std::size_t stops, std::size_t stage1_conflicts,
                              const AssociationConfig& cfg, std::vector<int>& landmark_of) {
   cfg.validate();
   Association out;
@@ -208,6 +208,7 @@ Association linkStopClusters(const std::vector<StopCluster>& clusters, std::size
   const std::size_t min_stops = std::min<std::size_t>(static_cast<std::size_t>(cfg.min_stops), stops);
   std::vector<Node> cnodes;
   std::vector<std::size_t> strong;
+  cnodes.reserve(clusters.size());
   for (std::size_t k = 0; k < clusters.size(); ++k) {
     cnodes.push_back(Node{clusters[k].x_m, clusters[k].y_m, clusters[k].stop, clusters[k].first});
     if (clusters[k].strong) strong.push_back(k);
@@ -303,7 +304,7 @@ Association associate(const std::vector<ScanDetections>& scans, const std::vecto
   if (viewpoints.size() != scans.size()) throw std::invalid_argument("associate: one viewpoint per scan expected");
   std::map<std::size_t, std::vector<std::size_t>> scans_at_stop;
   for (std::size_t s = 0; s < scans.size(); ++s) scans_at_stop[scans[s].stop].push_back(s);
-  std::vector<StopCluster> clusters;
+  StopClusters clusters;
   std::vector<std::vector<std::vector<int>>> cluster_of;  // per stop, per scan of the stop, per detection
   std::size_t conflicts = 0;
   for (const auto& [stop, members] : scans_at_stop) {

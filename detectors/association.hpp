@@ -19,6 +19,7 @@
 // No ground truth is used.
 
 #include <cstddef>
+#include <deque>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -92,13 +93,17 @@ struct StopCluster {
   DetectionKey first;          ///< key of its first detection
 };
 
+/// The stop clusters of a sequence: a deque, which grows without copying (and without the
+/// doubled capacity of a vector: there are several per stop).
+using StopClusters = std::deque<StopCluster>;
+
 /// Stage 1 at one stop: `scans` are all the scans of one stop (ScanDetections::stop equal),
 /// viewpoints[i] the commanded pose of scans[i]. Appends the stop's clusters to `out` (in an
 /// order that depends only on the detections) and, when `cluster_of` is given, sets
 /// (*cluster_of)[i][j] to the index in `out` of detection j of scans[i] (-1: dropped as a second
 /// detection of its scan). Returns the number of detections dropped that way.
 std::size_t clusterStop(const std::vector<const ScanDetections*>& scans, const std::vector<Pose2>& viewpoints,
-                        const AssociationConfig& config, std::vector<StopCluster>& out,
+                        const AssociationConfig& config, StopClusters& out,
                         std::vector<std::vector<int>>* cluster_of = nullptr);
 
 /// Stages 2-3 over the clusters of every stop: `stops` distinct stops in the input (those without
@@ -106,7 +111,7 @@ std::size_t clusterStop(const std::vector<const ScanDetections*>& scans, const s
 /// landmarks (Association::ids left empty) and sets landmark_of[k] to the id of cluster k (0: none).
 /// A landmark's radius_m is the median radius of its detections (each cluster's median, weighted
 /// by its number of detections).
-Association linkStopClusters(const std::vector<StopCluster>& clusters, std::size_t stops, std::size_t stage1_conflicts,
+Association linkStopClusters(const StopClusters& clusters, std::size_t stops, std::size_t stage1_conflicts,
                              const AssociationConfig& config, std::vector<int>& landmark_of);
 
 }  // namespace lidarcal::detectors

@@ -100,7 +100,7 @@ void detectByStop(std::size_t scan_count, const ScanLoader& load, const std::vec
 }
 
 /// Stage 1 of one stop's block: its clusters appended to `clusters`, cluster_of per detection.
-std::size_t clusterBlock(const StopBlock& block, const AssociationConfig& cfg, std::vector<StopCluster>& clusters,
+std::size_t clusterBlock(const StopBlock& block, const AssociationConfig& cfg, StopClusters& clusters,
                          std::vector<std::vector<int>>& cluster_of) {
   std::vector<const ScanDetections*> ptrs;
   for (const auto& d : block.scans) ptrs.push_back(&d);
@@ -110,7 +110,7 @@ std::size_t clusterBlock(const StopBlock& block, const AssociationConfig& cfg, s
 /// One pass over the scans: stop clusters, the association, and (as asked) the kept scans and
 /// the arcs of each stop cluster.
 struct Pass {
-  std::vector<StopCluster> clusters;
+  StopClusters clusters;
   std::vector<std::size_t> clusters_before_stop;
   std::size_t conflicts = 0;
   std::vector<std::vector<KeptArc>> arcs;  // per cluster (when collected)
@@ -303,7 +303,7 @@ void forEachScan(const SequenceDetections& r, std::size_t scan_count, const Scan
                      "leave the sequence untouched while lidarcal reads it, then run again");
   };
   detectByStop(scan_count, load, stop_of_scan, rp.detection, rp.hints_world, false, [&](StopBlock& block) {
-    std::vector<StopCluster> clusters;
+    StopClusters clusters;
     std::vector<std::vector<int>> cluster_of;
     clusterBlock(block, rp.association, clusters, cluster_of);
     if (stop >= rp.clusters_before_stop.size()) throw changed("more stops than before");

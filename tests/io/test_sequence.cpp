@@ -18,10 +18,10 @@ TEST(GroupStops, ConsecutiveEqualViewpointsFormOneStop) {
                                 {0, 0, 0}};                                               // back at start: new stop 3
   const auto stops = groupStops(v);
   ASSERT_EQ(stops.size(), 4u);
-  EXPECT_EQ(stops[0].scans, (std::vector<std::size_t>{0, 1, 2}));
-  EXPECT_EQ(stops[1].scans, (std::vector<std::size_t>{3, 4}));
-  EXPECT_EQ(stops[2].scans, (std::vector<std::size_t>{5}));
-  EXPECT_EQ(stops[3].scans, (std::vector<std::size_t>{6}));
+  EXPECT_EQ(std::vector<std::size_t>(stops[0].scans.begin(), stops[0].scans.end()), (std::vector<std::size_t>{0, 1, 2}));
+  EXPECT_EQ(std::vector<std::size_t>(stops[1].scans.begin(), stops[1].scans.end()), (std::vector<std::size_t>{3, 4}));
+  EXPECT_EQ(std::vector<std::size_t>(stops[2].scans.begin(), stops[2].scans.end()), (std::vector<std::size_t>{5}));
+  EXPECT_EQ(std::vector<std::size_t>(stops[3].scans.begin(), stops[3].scans.end()), (std::vector<std::size_t>{6}));
 }
 
 TEST(GroupStops, PositionJustBeyondOneMillimetreStartsANewStop) {
@@ -59,6 +59,45 @@ TEST(OpenSequence, ListsPcdFilesLexicographicallyAndGroupsStops) {
   ASSERT_TRUE(seq.meta.landmark_radius_m);
   EXPECT_DOUBLE_EQ(*seq.meta.landmark_radius_m, 0.12);
   EXPECT_EQ(*seq.meta.sensor_name, "X");
+}
+
+// The compact header list gives back, field by field, what readScanHeader read from each file.
+TEST(OpenSequence, TheHeaderListGivesBackEveryHeaderAsRead) {
+  TempDir dir;
+  Scan a = tinyScan({0.25, -1.5, 0.3});
+  a.has_intensity = true;
+  Scan b = tinyScan({0.25, -1.5, 0.3});
+  b.cloud->resize(5);
+  b.labels.assign(5, 7u);
+  writeScan(dir / "scan_000.pcd", a);
+  writeScan(dir / "scan_001.pcd", b, PcdEncoding::ascii);
+  writeScan(dir / "a_much_longer_file_name_than_the_others.pcd", tinyScan({1, 2, -0.5}));
+  const Sequence seq = openSequence(dir.path());
+  ASSERT_EQ(seq.scans.size(), 3u);
+  std::size_t n = 0;
+  for (const ScanHeader& h : seq.scans) {
+    const ScanHeader r = readScanHeader(seq.dir / h.name());
+    EXPECT_EQ(h.path, r.path);
+    EXPECT_EQ(h.viewpoint.x_m, r.viewpoint.x_m);
+    EXPECT_EQ(h.viewpoint.y_m, r.viewpoint.y_m);
+    EXPECT_EQ(h.viewpoint.yaw_rad, r.viewpoint.yaw_rad);
+    EXPECT_EQ(h.points, r.points);
+    EXPECT_EQ(h.has_intensity, r.has_intensity);
+    EXPECT_EQ(h.has_label, r.has_label);
+    EXPECT_EQ(h.binary, r.binary);
+    ++n;
+  }
+  EXPECT_EQ(n, 3u);
+  EXPECT_EQ(seq.scans.front().name(), "a_much_longer_file_name_than_the_others.pcd");
+  EXPECT_EQ(seq.scans.back().points, 5u);
+  EXPECT_TRUE(seq.scans[1].has_intensity);
+  EXPECT_TRUE(seq.scans[2].has_label);
+  EXPECT_FALSE(seq.scans[2].binary);
+  EXPECT_THROW(seq.scans.at(3), std::out_of_range);
+  ScanList other = seq.scans;
+  ScanHeader elsewhere = seq.scans[0];
+  elsewhere.path = "/elsewhere/scan.pcd";
+  EXPECT_THROW(other.push_back(elsewhere), std::invalid_argument);
 }
 
 TEST(OpenSequence, EmptyDirectoryIsAnError) {
