@@ -24,3 +24,5 @@ for s in noise_exp12:exp2 noise_exp3:exp3 noise_exp3_long:exp3_long noise_hard:h
   echo "ml-study ${s#*:}" >&2
   "$BIN" ml-study --scene "data/scenes/${s%%:*}.json" --seeds 20 >"$OUT/ml_study_${s#*:}.md"
 done
+echo "ml-study exp3, 200 seeds" >&2
+"$BIN" ml-study --scene data/scenes/noise_exp3.json --seeds 200 >"$OUT/ml_study_exp3_200.md"

@@ -88,31 +88,22 @@ TEST(DetectSequence, PaperFieldFindsAllFiveLandmarksWithTheRightIds) {
   }
 }
 
+// The radius is estimated when not given; also when the joint estimate keeps only two arcs per
+// stop cluster instead of all ten (the arcs of ten stops at different ranges still pin it).
 TEST(DetectSequence, RadiusIsEstimatedWhenNotGiven) {
-  const Simulated s = simulateScene(paperField(), 4);
-  const SequenceDetections r = run(s, SequenceDetectionConfig{});
-  EXPECT_EQ(r.radius_source, RadiusSource::estimated);
-  expectAllLandmarksWithTheRightIds(s, r);
-  for (const auto& l : r.association.landmarks) {
-    SCOPED_TRACE(l.id);
-    EXPECT_TRUE(l.radius_estimated);
-    EXPECT_NEAR(l.radius_m, 0.12, 0.01);
-  }
-}
-
-// Bounding what the joint radius keeps (two arcs per stop cluster instead of all ten) still
-// gives the radius: the arcs of ten stops at different ranges pin it.
-TEST(DetectSequence, RadiusIsEstimatedFromAFewArcsPerStop) {
-  const Simulated s = simulateScene(paperField(), 6);
-  SequenceDetectionConfig cfg;
-  cfg.arcs_per_stop_cluster = 2;
-  const SequenceDetections r = run(s, cfg);
-  EXPECT_EQ(r.radius_source, RadiusSource::estimated);
-  expectAllLandmarksWithTheRightIds(s, r);
-  for (const auto& l : r.association.landmarks) {
-    SCOPED_TRACE(l.id);
-    EXPECT_TRUE(l.radius_estimated);
-    EXPECT_NEAR(l.radius_m, 0.12, 0.01);
+  for (const auto& [seed, arcs] : {std::pair<std::uint64_t, std::size_t>{4, 16}, {6, 2}}) {
+    SCOPED_TRACE("seed " + std::to_string(seed) + ", arcs per stop cluster " + std::to_string(arcs));
+    const Simulated s = simulateScene(paperField(), seed);
+    SequenceDetectionConfig cfg;
+    cfg.arcs_per_stop_cluster = arcs;
+    const SequenceDetections r = run(s, cfg);
+    EXPECT_EQ(r.radius_source, RadiusSource::estimated);
+    expectAllLandmarksWithTheRightIds(s, r);
+    for (const auto& l : r.association.landmarks) {
+      SCOPED_TRACE(l.id);
+      EXPECT_TRUE(l.radius_estimated);
+      EXPECT_NEAR(l.radius_m, 0.12, 0.01);
+    }
   }
 }
 
