@@ -26,3 +26,4 @@ for s in noise_exp12:exp2 noise_exp3:exp3 noise_exp3_long:exp3_long noise_hard:h
 done
 echo "ml-study exp3, 200 seeds" >&2
 "$BIN" ml-study --scene data/scenes/noise_exp3.json --seeds 200 >"$OUT/ml_study_exp3_200.md"
+"$BIN" ml-study --scene data/scenes/noise_exp3_long.json --seeds 60 >"$OUT/ml_study_exp3_long_60.md"
