@@ -213,9 +213,10 @@ void mlStudy(const std::string& scene_file, int seeds) {
         within += std::abs(m) <= 0.10;
         lo = std::min(lo, m), hi = std::max(hi, m);
       }
-      const std::string se = reported_se[i].empty() ? "" : std::to_string(median(reported_se[i]) / t).substr(0, 5);
+      char se[32] = "";
+      if (!reported_se[i].empty()) std::snprintf(se, sizeof se, "%.3f", median(reported_se[i]) / t);
       std::printf("| %s | %+.1f %% | %.3f | %s | %d / %d | %+.1f %% .. %+.1f %% |\n", names[i].first.c_str(),
-                  100.0 * (mean / t - 1.0), std::sqrt(var) / t, se.c_str(), within, blocks, 100.0 * lo, 100.0 * hi);
+                  100.0 * (mean / t - 1.0), std::sqrt(var) / t, se, within, blocks, 100.0 * lo, 100.0 * hi);
     }
   }
   std::printf("\nMedian absolute bias error per sensor (range m, bearing rad):");

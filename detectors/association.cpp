@@ -197,6 +197,13 @@ std::size_t clusterStop(const std::vector<const ScanDetections*>& scans, const s
   return dropped;
 }
 
+std::vector<int> landmarkIds(const std::vector<int>& cluster_of, const std::vector<int>& landmark_of, std::size_t first) {
+  std::vector<int> ids(cluster_of.size(), 0);
+  for (std::size_t j = 0; j < ids.size(); ++j)
+    if (cluster_of[j] >= 0) ids[j] = landmark_of.at(first + static_cast<std::size_t>(cluster_of[j]));
+  return ids;
+}
+
 Association linkStopClusters(const StopClusters& clusters, std::size_t stops, std::size_t stage1_conflicts,
                              const AssociationConfig& cfg, std::vector<int>& landmark_of) {
   cfg.validate();
@@ -319,12 +326,7 @@ Association associate(const std::vector<ScanDetections>& scans, const std::vecto
   out.ids.resize(scans.size());
   std::size_t k = 0;
   for (const auto& [stop, members] : scans_at_stop) {
-    for (std::size_t i = 0; i < members.size(); ++i) {
-      auto& ids = out.ids[members[i]];
-      ids.assign(scans[members[i]].detections.size(), 0);
-      for (std::size_t j = 0; j < ids.size(); ++j)
-        if (const int c = cluster_of[k][i][j]; c >= 0) ids[j] = landmark_of[static_cast<std::size_t>(c)];
-    }
+    for (std::size_t i = 0; i < members.size(); ++i) out.ids[members[i]] = landmarkIds(cluster_of[k][i], landmark_of);
     ++k;
   }
   return out;

@@ -106,6 +106,10 @@ std::size_t clusterStop(const std::vector<const ScanDetections*>& scans, const s
                         const AssociationConfig& config, StopClusters& out,
                         std::vector<std::vector<int>>* cluster_of = nullptr);
 
+/// Landmark ids of one scan's detections: cluster_of[j] is detection j's cluster (clusterStop),
+/// counted from `first` in landmark_of (linkStopClusters), or -1; id 0 for no landmark.
+std::vector<int> landmarkIds(const std::vector<int>& cluster_of, const std::vector<int>& landmark_of, std::size_t first = 0);
+
 /// Stages 2-3 over the clusters of every stop: `stops` distinct stops in the input (those without
 /// detections included), `stage1_conflicts` the sum of clusterStop's returns. Returns the
 /// landmarks (Association::ids left empty) and sets landmark_of[k] to the id of cluster k (0: none).

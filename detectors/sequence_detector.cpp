@@ -154,15 +154,8 @@ Pass runPass(std::size_t scan_count, const ScanLoader& load, const std::vector<s
     }
   }, on_scan);
   p.association = linkStopClusters(p.clusters, p.clusters_before_stop.size(), p.conflicts, config.association, p.landmark_of);
-  if (keep_scans) {
-    p.association.ids.resize(p.scans.size());
-    for (std::size_t s = 0; s < p.scans.size(); ++s) {
-      auto& ids = p.association.ids[s];
-      ids.assign(cluster_of_scan[s].size(), 0);
-      for (std::size_t j = 0; j < ids.size(); ++j)
-        if (const int c = cluster_of_scan[s][j]; c >= 0) ids[j] = p.landmark_of[static_cast<std::size_t>(c)];
-    }
-  }
+  if (keep_scans)
+    for (const auto& c : cluster_of_scan) p.association.ids.push_back(landmarkIds(c, p.landmark_of));
   return p;
 }
 
@@ -312,12 +305,8 @@ void forEachScan(const SequenceDetections& r, std::size_t scan_count, const Scan
                                                                       : rp.landmark_of_cluster.size();
     if (end - first != clusters.size()) throw changed("other objects at stop " + std::to_string(block.stop));
     ++stop;
-    for (std::size_t i = 0; i < block.scans.size(); ++i) {
-      std::vector<int> ids(cluster_of[i].size(), 0);
-      for (std::size_t j = 0; j < ids.size(); ++j)
-        if (const int c = cluster_of[i][j]; c >= 0) ids[j] = rp.landmark_of_cluster[first + static_cast<std::size_t>(c)];
-      visit(block.scans[i].scan_index, block.scans[i], ids);
-    }
+    for (std::size_t i = 0; i < block.scans.size(); ++i)
+      visit(block.scans[i].scan_index, block.scans[i], landmarkIds(cluster_of[i], rp.landmark_of_cluster, first));
   }, [&](std::size_t i) {
     if (on_scan) on_scan(i + 1, scan_count);
   });

@@ -170,13 +170,13 @@ void checkScanNumbers(const fs::path& dir, const std::vector<std::string>& sorte
   std::vector<std::size_t> by_number = numbered;
   std::stable_sort(by_number.begin(), by_number.end(), [&](std::size_t a, std::size_t b) { return key(a) < key(b); });
   std::size_t clash = sorted.size(), clash_first = 0;
-  for (std::size_t k = 1; k < by_number.size(); ++k)
-    if (key(by_number[k - 1]) == key(by_number[k])) {
-      // The first file of this number is the first of its run.
-      std::size_t first = k - 1;
-      while (first > 0 && key(by_number[first - 1]) == key(by_number[k])) --first;
-      if (by_number[k] < clash) clash = by_number[k], clash_first = by_number[first];
+  for (std::size_t k = 1, run = 0; k < by_number.size(); ++k) {
+    if (key(by_number[k - 1]) != key(by_number[k])) {
+      run = k;  // the first file of this number (reading order: the sort is stable)
+      continue;
     }
+    if (by_number[k] < clash) clash = by_number[k], clash_first = by_number[run];
+  }
   if (clash < sorted.size())
     throw InputError(dir.string(), sorted[clash],
                      "has the same scan number as " + sorted[clash_first] +
