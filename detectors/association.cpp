@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <limits>
 #include <map>
 #include <numeric>
@@ -197,111 +198,220 @@ std::size_t clusterStop(const std::vector<const ScanDetections*>& scans, const s
   return dropped;
 }
 
-std::vector<int> landmarkIds(const std::vector<int>& cluster_of, const std::vector<int>& landmark_of, std::size_t first) {
-  std::vector<int> ids(cluster_of.size(), 0);
-  for (std::size_t j = 0; j < ids.size(); ++j)
-    if (cluster_of[j] >= 0) ids[j] = landmark_of.at(first + static_cast<std::size_t>(cluster_of[j]));
-  return ids;
+int TrackIds::of(TrackSerial serial) const {
+  const auto it = std::lower_bound(ids.begin(), ids.end(), std::make_pair(serial, 0));
+  return it != ids.end() && it->first == serial ? it->second : 0;
 }
 
-Association linkStopClusters(const StopClusters& clusters, std::size_t stops, std::size_t stage1_conflicts,
-                             const AssociationConfig& cfg, std::vector<int>& landmark_of) {
-  cfg.validate();
-  Association out;
-  out.discarded_conflicts = stage1_conflicts;
-  out.detections = stage1_conflicts;
-  for (const auto& c : clusters) out.detections += c.detections;
-  landmark_of.assign(clusters.size(), 0);
-  const std::size_t min_stops = std::min<std::size_t>(static_cast<std::size_t>(cfg.min_stops), stops);
-  std::vector<Node> cnodes;
-  std::vector<std::size_t> strong;
-  cnodes.reserve(clusters.size());
-  for (std::size_t k = 0; k < clusters.size(); ++k) {
-    cnodes.push_back(Node{clusters[k].x_m, clusters[k].y_m, clusters[k].stop, clusters[k].first});
-    if (clusters[k].strong) strong.push_back(k);
-  }
+std::vector<int> landmarkIds(const std::vector<int>& cluster_of, const std::vector<TrackSerial>& track_of,
+                             const TrackIds& ids) {
+  std::vector<int> out(cluster_of.size(), 0);
+  for (std::size_t j = 0; j < out.size(); ++j)
+    if (cluster_of[j] >= 0) out[j] = ids.of(track_of.at(static_cast<std::size_t>(cluster_of[j])));
+  return out;
+}
 
-  // Stage 2: strong stop clusters linked across stops, one per stop in a landmark.
-  struct Candidate {
-    std::vector<std::size_t> clusters;  // indices into `clusters`
-    Key first;
+StopLinker::StopLinker(const AssociationConfig& config, std::size_t stops) : config_(config) {
+  config_.validate();
+  min_stops_ = std::max<std::size_t>(1, std::min<std::size_t>(static_cast<std::size_t>(config_.min_stops), stops));
+}
+
+void StopLinker::merge(Track& into, Track& from) {
+  for (std::size_t q = 0; q < std::min(from.sightings, from.recent.size()); ++q)  // the older sightings first
+    into.recent[into.sightings++ % into.recent.size()] = from.recent[q];
+  into.strong_stops += from.strong_stops;
+  into.detections += from.detections;
+  into.sum_x += from.sum_x, into.sum_y += from.sum_y;
+  into.first = std::min(into.first, from.first);
+  into.last_stop = std::max(into.last_stop, from.last_stop);
+  for (const auto& r : from.radii.items()) into.radii.offer(r);
+  into.aliases.push_back(from.serial);
+  into.aliases.insert(into.aliases.end(), from.aliases.begin(), from.aliases.end());
+  std::vector<TrackSerial> co;
+  std::set_union(into.co_seen.begin(), into.co_seen.end(), from.co_seen.begin(), from.co_seen.end(), std::back_inserter(co));
+  into.co_seen = std::move(co);
+  for (auto& t : tracks_) {  // who saw `from` close by saw `into`
+    auto it = std::lower_bound(t.co_seen.begin(), t.co_seen.end(), from.serial);
+    if (it == t.co_seen.end() || *it != from.serial) continue;
+    t.co_seen.erase(it);
+    if (&t != &into) t.co_seen.insert(std::lower_bound(t.co_seen.begin(), t.co_seen.end(), into.serial), into.serial);
+  }
+  merged_.emplace_back(from.serial, into.serial);
+  from.dead = true;
+}
+
+std::vector<TrackSerial> StopLinker::add(const StopClusters& clusters, std::size_t stage1_conflicts) {
+  forgotten_.clear();
+  merged_.clear();
+  totals_.discarded_conflicts += stage1_conflicts;
+  totals_.detections += stage1_conflicts;
+  std::vector<TrackSerial> serial_of(clusters.size(), 0);
+  if (clusters.empty()) return serial_of;
+  const std::size_t stop = clusters.front().stop;
+  for (const auto& c : clusters) {
+    if (c.stop != stop) throw std::invalid_argument("StopLinker::add: clusters of one stop expected");
+    totals_.detections += c.detections;
+  }
+  if (started_ && stop <= last_stop_) throw std::invalid_argument("StopLinker::add: stops must come in increasing order");
+  started_ = true;
+  last_stop_ = stop;
+
+  auto join = [&](std::size_t k, Track& t) {
+    const StopCluster& c = clusters[k];
+    serial_of[k] = t.serial;
+    if (c.strong) {
+      ++t.strong_stops;
+      t.recent[t.sightings++ % t.recent.size()] = {c.x_m, c.y_m};
+    }
+    t.last_stop = stop;
+    const auto n = static_cast<double>(c.detections);
+    t.detections += c.detections;
+    t.sum_x += n * c.x_m, t.sum_y += n * c.y_m;
+    t.first = std::min(t.first, c.first);
+    t.radii.offer({c.radius_m, c.detections});
   };
-  std::vector<Candidate> candidates;
-  std::vector<int> candidate_of(clusters.size(), -1);
-  for (auto& g : link(cnodes, strong, cfg.link_distance_m, cfg.min_link_distance_m, out.discarded_conflicts)) {
-    if (g.size() < min_stops) {
-      for (auto k : g) out.discarded_few_stops += clusters[k].detections;
-      ++out.discarded_components;
+  // Closest (cluster, track) pairs first within `reach`; ties by the cluster's key, then serial
+  // (both order-free). Tracks already taken at this stop are skipped.
+  std::vector<bool> taken(tracks_.size(), false);
+  auto assign = [&](bool strong, double reach) {
+    std::vector<std::tuple<double, DetectionKey, TrackSerial, std::size_t, std::size_t>> pairs;
+    for (std::size_t k = 0; k < clusters.size(); ++k) {
+      if (clusters[k].strong != strong) continue;
+      for (std::size_t t = 0; t < tracks_.size(); ++t) {
+        if (taken[t]) continue;
+        const Track& tr = tracks_[t];
+        double d = std::numeric_limits<double>::infinity();
+        for (std::size_t q = 0; q < std::min(tr.sightings, tr.recent.size()); ++q)
+          d = std::min(d, std::hypot(clusters[k].x_m - tr.recent[q].first, clusters[k].y_m - tr.recent[q].second));
+        if (d <= reach) pairs.emplace_back(d, clusters[k].first, tracks_[t].serial, k, t);
+      }
+    }
+    std::sort(pairs.begin(), pairs.end());
+    for (const auto& [d, key, serial, k, t] : pairs) {
+      if (serial_of[k] != 0 || taken[t]) continue;
+      taken[t] = true;
+      join(k, tracks_[t]);
+    }
+  };
+  // Stage 2: strong clusters continue tracks, or start new ones (in key order).
+  assign(true, config_.link_distance_m);
+  for (std::size_t k = 0; k < clusters.size(); ++k) {
+    if (!clusters[k].strong || serial_of[k] != 0) continue;
+    Track t;
+    t.serial = next_serial_++;
+    t.first = clusters[k].first;
+    tracks_.push_back(std::move(t));
+    join(k, tracks_.back());
+  }
+  taken.resize(tracks_.size(), true);  // seen strongly at this stop
+  // Tracks seen close to each other at this stop are two objects: never merged.
+  const double near = 2.0 * config_.link_distance_m;
+  auto index = [&](TrackSerial serial) {
+    for (std::size_t t = 0; t < tracks_.size(); ++t)
+      if (tracks_[t].serial == serial) return t;
+    throw std::logic_error("StopLinker: no track " + std::to_string(serial));
+  };
+  for (std::size_t a = 0; a < clusters.size(); ++a)
+    for (std::size_t b = 0; b < clusters.size(); ++b) {
+      if (a == b || serial_of[a] == 0 || serial_of[b] == 0 ||
+          std::hypot(clusters[a].x_m - clusters[b].x_m, clusters[a].y_m - clusters[b].y_m) > near)
+        continue;
+      auto& co = tracks_[index(serial_of[a])].co_seen;
+      const auto it = std::lower_bound(co.begin(), co.end(), serial_of[b]);
+      if (it == co.end() || *it != serial_of[b]) co.insert(it, serial_of[b]);
+    }
+  // One object found as two tracks: a strong cluster here within reach of a track not seen at
+  // this stop, never seen close to the cluster's track, joins them (into the older one).
+  for (std::size_t k = 0; k < clusters.size(); ++k) {
+    if (!clusters[k].strong) continue;
+    for (std::size_t t = 0; t < tracks_.size(); ++t) {
+      Track& other = tracks_[t];
+      if (taken[t] || other.dead) continue;
+      double d = std::numeric_limits<double>::infinity();
+      for (std::size_t q = 0; q < std::min(other.sightings, other.recent.size()); ++q)
+        d = std::min(d, std::hypot(clusters[k].x_m - other.recent[q].first, clusters[k].y_m - other.recent[q].second));
+      if (d > config_.link_distance_m) continue;
+      Track& mine = tracks_[index(serial_of[k])];
+      if (std::binary_search(mine.co_seen.begin(), mine.co_seen.end(), other.serial)) continue;
+      Track& into = mine.serial < other.serial ? mine : other;
+      Track& from = mine.serial < other.serial ? other : mine;
+      merge(into, from);
+      for (auto& s : serial_of)
+        if (s == from.serial) s = into.serial;
+      taken[index(into.serial)] = true;
+    }
+  }
+  {  // drop the merged tracks
+    std::size_t w = 0;
+    for (std::size_t t = 0; t < tracks_.size(); ++t) {
+      if (tracks_[t].dead) continue;
+      if (w != t) tracks_[w] = std::move(tracks_[t]), taken[w] = taken[t];
+      ++w;
+    }
+    tracks_.resize(w);
+    taken.resize(w);
+  }
+  // Stage 3: weak clusters join a track not seen strongly here.
+  assign(false, config_.stop_link_distance_m);
+  for (std::size_t k = 0; k < clusters.size(); ++k)
+    if (serial_of[k] == 0) totals_.discarded_few_stops += clusters[k].detections;
+
+  // Stage 4 (bounded memory): forget the tracks left behind before they were seen often enough.
+  std::size_t w = 0;
+  for (std::size_t t = 0; t < tracks_.size(); ++t) {
+    Track& tr = tracks_[t];
+    if (tr.strong_stops < min_stops_ && tr.last_stop + config_.forget_after_stops < stop) {
+      forgotten_.push_back(tr.serial);
+      forgotten_.insert(forgotten_.end(), tr.aliases.begin(), tr.aliases.end());
+      totals_.discarded_few_stops += tr.detections;
+      ++totals_.discarded_components;
       continue;
     }
-    for (auto k : g) candidate_of[k] = static_cast<int>(candidates.size());
-    candidates.push_back(Candidate{std::move(g), Key{}});
+    if (w != t) tracks_[w] = std::move(tr);
+    ++w;
   }
+  tracks_.resize(w);
+  if (!forgotten_.empty()) {
+    std::vector<TrackSerial> gone = forgotten_;
+    std::sort(gone.begin(), gone.end());
+    for (auto& t : tracks_)
+      t.co_seen.erase(std::remove_if(t.co_seen.begin(), t.co_seen.end(),
+                                     [&](TrackSerial s) { return std::binary_search(gone.begin(), gone.end(), s); }),
+                      t.co_seen.end());
+  }
+  return serial_of;
+}
 
-  // Stage 3: a weak stop cluster (a landmark found in few scans of a stop) joins the landmark
-  // whose strong cluster at the nearest stop (by index) lies within stop_link_distance_m, if
-  // that landmark has nothing else at this stop.
-  std::vector<std::tuple<double, Key, std::size_t, std::size_t>> offers;  // distance, key, cluster, candidate
-  for (std::size_t k = 0; k < clusters.size(); ++k) {
-    if (clusters[k].strong) continue;
-    for (std::size_t c = 0; c < candidates.size(); ++c) {
-      // Where the landmark appears at the nearest stops (by stop index: stops follow the path).
-      std::size_t gap = std::numeric_limits<std::size_t>::max();
-      for (auto q : candidates[c].clusters)
-        gap = std::min(gap, clusters[q].stop > clusters[k].stop ? clusters[q].stop - clusters[k].stop
-                                                                 : clusters[k].stop - clusters[q].stop);
-      double best = std::numeric_limits<double>::infinity();
-      for (auto q : candidates[c].clusters) {
-        const std::size_t g = clusters[q].stop > clusters[k].stop ? clusters[q].stop - clusters[k].stop
-                                                                   : clusters[k].stop - clusters[q].stop;
-        if (g == gap) best = std::min(best, std::hypot(cnodes[q].x - cnodes[k].x, cnodes[q].y - cnodes[k].y));
-      }
-      if (best <= cfg.stop_link_distance_m) offers.emplace_back(best, cnodes[k].key, k, c);
+Association StopLinker::finish(TrackIds& ids) const {
+  Association out = totals_;
+  std::vector<const Track*> kept;
+  for (const auto& t : tracks_) {
+    if (t.strong_stops >= min_stops_) {
+      kept.push_back(&t);
+    } else {
+      out.discarded_few_stops += t.detections;
+      ++out.discarded_components;
     }
   }
-  std::sort(offers.begin(), offers.end());
-  std::set<std::pair<std::size_t, std::size_t>> taken_stop;  // (candidate, stop)
-  for (std::size_t c = 0; c < candidates.size(); ++c)
-    for (auto q : candidates[c].clusters) taken_stop.emplace(c, clusters[q].stop);
-  for (const auto& [dist, key, k, c] : offers) {
-    if (candidate_of[k] >= 0 || taken_stop.count({c, clusters[k].stop})) continue;
-    candidate_of[k] = static_cast<int>(c);
-    taken_stop.emplace(c, clusters[k].stop);
-    candidates[c].clusters.push_back(k);
-  }
-  for (std::size_t k = 0; k < clusters.size(); ++k)
-    if (!clusters[k].strong && candidate_of[k] < 0) out.discarded_few_stops += clusters[k].detections;
-
   // Ids by first sighting, then bearing in that scan, then position (all order-free).
-  std::vector<Landmark> found;
-  for (auto& c : candidates) {
+  std::sort(kept.begin(), kept.end(), [](const Track* a, const Track* b) { return a->first < b->first; });
+  ids.ids.clear();
+  for (std::size_t rank = 0; rank < kept.size(); ++rank) {
+    const Track& t = *kept[rank];
     Landmark l;
-    std::vector<std::pair<double, std::size_t>> radii;
-    c.first = cnodes[c.clusters.front()].key;
-    for (auto k : c.clusters) {
-      if (clusters[k].strong) ++l.stops;
-      c.first = std::min(c.first, cnodes[k].key);
-      const auto n = static_cast<double>(clusters[k].detections);
-      l.detections += clusters[k].detections;
-      l.x_m += n * clusters[k].x_m, l.y_m += n * clusters[k].y_m;
-      radii.emplace_back(clusters[k].radius_m, clusters[k].detections);
-    }
-    l.x_m /= static_cast<double>(l.detections);
-    l.y_m /= static_cast<double>(l.detections);
-    l.radius_m = weightedMedian(std::move(radii));
-    l.first_scan = std::get<0>(c.first);
-    found.push_back(l);
-  }
-  std::vector<std::size_t> order(candidates.size());
-  std::iota(order.begin(), order.end(), 0);
-  std::sort(order.begin(), order.end(), [&](auto a, auto b) { return candidates[a].first < candidates[b].first; });
-  for (std::size_t rank = 0; rank < order.size(); ++rank) {
-    Landmark l = found[order[rank]];
     l.id = static_cast<int>(rank + 1);
-    for (auto k : candidates[order[rank]].clusters) landmark_of[k] = l.id;
+    l.detections = t.detections;
+    l.stops = t.strong_stops;
+    l.x_m = t.sum_x / static_cast<double>(t.detections);
+    l.y_m = t.sum_y / static_cast<double>(t.detections);
+    l.radius_m = weightedMedian(t.radii.items());
+    l.first_scan = std::get<0>(t.first);
     out.assigned += l.detections;
     out.landmarks.push_back(l);
+    ids.ids.emplace_back(t.serial, l.id);
+    for (auto a : t.aliases) ids.ids.emplace_back(a, l.id);
   }
+  std::sort(ids.ids.begin(), ids.ids.end());
   return out;
 }
 
@@ -311,24 +421,23 @@ Association associate(const std::vector<ScanDetections>& scans, const std::vecto
   if (viewpoints.size() != scans.size()) throw std::invalid_argument("associate: one viewpoint per scan expected");
   std::map<std::size_t, std::vector<std::size_t>> scans_at_stop;
   for (std::size_t s = 0; s < scans.size(); ++s) scans_at_stop[scans[s].stop].push_back(s);
-  StopClusters clusters;
-  std::vector<std::vector<std::vector<int>>> cluster_of;  // per stop, per scan of the stop, per detection
-  std::size_t conflicts = 0;
+  StopLinker linker(cfg, scans_at_stop.size());
+  std::vector<std::vector<int>> cluster_of(scans.size());  // per scan, per detection
+  std::vector<std::vector<TrackSerial>> track_of(scans.size());  // per scan: its stop's clusters' tracks
   for (const auto& [stop, members] : scans_at_stop) {
     std::vector<const ScanDetections*> ptrs;
     std::vector<Pose2> poses;
     for (auto s : members) ptrs.push_back(&scans[s]), poses.push_back(viewpoints[s]);
-    cluster_of.emplace_back();
-    conflicts += clusterStop(ptrs, poses, cfg, clusters, &cluster_of.back());
+    StopClusters clusters;
+    std::vector<std::vector<int>> of;
+    const std::size_t conflicts = clusterStop(ptrs, poses, cfg, clusters, &of);
+    const std::vector<TrackSerial> tracks = linker.add(clusters, conflicts);
+    for (std::size_t i = 0; i < members.size(); ++i) cluster_of[members[i]] = std::move(of[i]), track_of[members[i]] = tracks;
   }
-  std::vector<int> landmark_of;
-  Association out = linkStopClusters(clusters, scans_at_stop.size(), conflicts, cfg, landmark_of);
+  TrackIds ids;
+  Association out = linker.finish(ids);
   out.ids.resize(scans.size());
-  std::size_t k = 0;
-  for (const auto& [stop, members] : scans_at_stop) {
-    for (std::size_t i = 0; i < members.size(); ++i) out.ids[members[i]] = landmarkIds(cluster_of[k][i], landmark_of);
-    ++k;
-  }
+  for (std::size_t s = 0; s < scans.size(); ++s) out.ids[s] = landmarkIds(cluster_of[s], track_of[s], ids);
   return out;
 }
 

@@ -4,24 +4,34 @@
 //     stop_link_distance_m form stop clusters, one detection per scan; a cluster is strong when
 //     found in at least min_scan_fraction of the stop's scans (a pole is found in nearly every
 //     scan, a box corner that looks round now and then is not);
-//  2. strong stop clusters closer than link_distance_m are linked across stops (single linkage:
-//     connected components of a FLANN kd-tree radius graph), which follows a landmark whose
-//     apparent position creeps from stop to stop (range bias changing with distance, odometry
-//     drift); a group holding two clusters of one stop is split by relinking it with a shorter
-//     distance; groups with fewer than min_stops strong clusters are discarded (chair legs,
-//     spurious circles);
-//  3. a weak stop cluster joins a landmark whose strong cluster at the nearest stop (by index:
-//     stops follow the path) lies within stop_link_distance_m, if that landmark has nothing
-//     else at its stop.
-// The result does not depend on the order of the input: groups are properties of the set, and
-// ids are assigned by first sighting (smallest ScanDetections::scan_index), then by bearing in
-// that scan (counter-clockwise from the sensor's x axis), then by world position.
-// No ground truth is used.
+//  2. stop by stop along the path, each strong stop cluster continues the track (an object
+//     followed from stop to stop) with a strong sighting among its last 8 nearest to it, within
+//     link_distance_m; pairs are taken closest first, one cluster per track and stop, so that
+//     two poles closer than link_distance_m seen together stay two tracks; a strong cluster
+//     that continues no track starts one. Comparing with the recent sightings follows a
+//     landmark whose apparent position creeps from stop to stop (range bias changing with
+//     distance, odometry drift) and tolerates one odd sighting;
+//     When a strong cluster continuing one track also lies within link_distance_m of another
+//     track's recent sightings, and the two tracks were never seen at one stop (close to each
+//     other), they are one object found twice (a revisit, an odd sighting): they merge, as
+//     single linkage would join them;
+//  3. a weak stop cluster joins the track not seen strongly at this stop with a recent strong
+//     sighting within stop_link_distance_m (closest pairs first);
+//  4. tracks seen strongly at min_stops stops are the landmarks; the others (chair legs,
+//     spurious circles) are discarded, and forgotten once unseen for forget_after_stops stops,
+//     so that memory holds the landmarks and the recent objects, not the stops.
+// The result does not depend on the order of the scans or of the detections in a scan (stops
+// are taken in index order, the order of the path); ids are assigned by first sighting
+// (smallest ScanDetections::scan_index), then by bearing in that scan (counter-clockwise from
+// the sensor's x axis), then by world position. No ground truth is used.
 
+#include <algorithm>
+#include <array>
 #include <cstddef>
-#include <deque>
+#include <cstdint>
 #include <string>
 #include <tuple>
+#include <utility>
 #include <vector>
 
 #include "common/pose2.hpp"
@@ -44,6 +54,10 @@ struct AssociationConfig {
   /// A stop sees a landmark strongly when at least this fraction of its scans detected it.
   /// Default 0.5.
   double min_scan_fraction = 0.5;
+  /// A track not (yet) seen at min_stops stops is dropped once unseen for this many stops: its
+  /// object is left behind on the path. Bounds memory on long sequences; an object revisited
+  /// later than this before it reached min_stops starts a new track. Default 500.
+  std::size_t forget_after_stops = 500;
 
   /// Throws std::invalid_argument naming the first bad field.
   void validate() const;
@@ -73,12 +87,12 @@ struct Association {
 };
 
 /// Groups the detections of all scans into landmarks. viewpoints[i] is the commanded pose of scan i.
-/// (Stage 1 per stop with clusterStop, then linkStopClusters.)
+/// (Stage 1 per stop with clusterStop, then a StopLinker over the stops in index order.)
 Association associate(const std::vector<ScanDetections>& scans, const std::vector<Pose2>& viewpoints,
                       const AssociationConfig& config);
 
-// ---- The same in two steps, for streaming: stage 1 needs the detections of one stop only;
-// stages 2-3 need only the stop clusters (about 100 bytes per object per stop). ----
+// ---- The same in steps, for streaming: stage 1 needs the detections of one stop only;
+// stages 2-4 (StopLinker) the stop clusters of one stop and the tracks alive. ----
 
 /// Order-free identity of a detection: (scan_index, stop, bearing in [0, 2 pi), world x, world y).
 using DetectionKey = std::tuple<std::size_t, std::size_t, double, double, double>;
@@ -93,29 +107,112 @@ struct StopCluster {
   DetectionKey first;          ///< key of its first detection
 };
 
-/// The stop clusters of a sequence: a deque, which grows without copying (and without the
-/// doubled capacity of a vector: there are several per stop).
-using StopClusters = std::deque<StopCluster>;
+/// The stop clusters of one stop.
+using StopClusters = std::vector<StopCluster>;
 
 /// Stage 1 at one stop: `scans` are all the scans of one stop (ScanDetections::stop equal),
-/// viewpoints[i] the commanded pose of scans[i]. Appends the stop's clusters to `out` (in an
-/// order that depends only on the detections) and, when `cluster_of` is given, sets
-/// (*cluster_of)[i][j] to the index in `out` of detection j of scans[i] (-1: dropped as a second
-/// detection of its scan). Returns the number of detections dropped that way.
+/// viewpoints[i] the commanded pose of scans[i]. Appends the stop's clusters to `out`, ordered
+/// by their first key (an order that depends only on the detections) and, when `cluster_of`
+/// is given, sets (*cluster_of)[i][j] to the index in `out` of detection j of scans[i] (-1:
+/// dropped as a second detection of its scan). Returns the number of detections dropped that way.
 std::size_t clusterStop(const std::vector<const ScanDetections*>& scans, const std::vector<Pose2>& viewpoints,
                         const AssociationConfig& config, StopClusters& out,
                         std::vector<std::vector<int>>* cluster_of = nullptr);
 
-/// Landmark ids of one scan's detections: cluster_of[j] is detection j's cluster (clusterStop),
-/// counted from `first` in landmark_of (linkStopClusters), or -1; id 0 for no landmark.
-std::vector<int> landmarkIds(const std::vector<int>& cluster_of, const std::vector<int>& landmark_of, std::size_t first = 0);
+/// A track's serial number: 1, 2, ... in order of creation; 0 for "no track".
+using TrackSerial = std::uint64_t;
 
-/// Stages 2-3 over the clusters of every stop: `stops` distinct stops in the input (those without
-/// detections included), `stage1_conflicts` the sum of clusterStop's returns. Returns the
-/// landmarks (Association::ids left empty) and sets landmark_of[k] to the id of cluster k (0: none).
-/// A landmark's radius_m is the median radius of its detections (each cluster's median, weighted
-/// by its number of detections).
-Association linkStopClusters(const StopClusters& clusters, std::size_t stops, std::size_t stage1_conflicts,
-                             const AssociationConfig& config, std::vector<int>& landmark_of);
+/// Landmark id of each track that became a landmark: (serial, id) pairs sorted by serial.
+struct TrackIds {
+  std::vector<std::pair<TrackSerial, int>> ids;
+  /// The landmark id of track `serial`; 0 when it is no landmark (or serial is 0).
+  int of(TrackSerial serial) const;
+};
+
+/// Landmark ids of one scan's detections: cluster_of[j] is detection j's index in its stop's
+/// clusters (clusterStop) or -1, track_of[k] the track of cluster k (StopLinker::add).
+std::vector<int> landmarkIds(const std::vector<int>& cluster_of, const std::vector<TrackSerial>& track_of,
+                             const TrackIds& ids);
+
+/// A sample of at most `capacity` items spread evenly over all items offered (every item while
+/// fewer than `capacity` were offered; then every 2nd, 4th, ... one), in memory bounded by the
+/// capacity whatever the number offered. Deterministic.
+template <class T>
+class EvenSample {
+ public:
+  explicit EvenSample(std::size_t capacity = 64) : capacity_(std::max<std::size_t>(capacity, 2)) {}
+  void offer(T item) {
+    if (offered_++ % stride_ != 0) return;
+    kept_.push_back(std::move(item));
+    if (kept_.size() < capacity_) return;
+    std::size_t w = 0;  // keep items 0, 2, 4, ...: those at multiples of twice the stride
+    for (std::size_t r = 0; r < kept_.size(); r += 2) kept_[w++] = std::move(kept_[r]);
+    kept_.resize(w);
+    stride_ *= 2;
+  }
+  const std::vector<T>& items() const { return kept_; }
+  std::size_t offered() const { return offered_; }
+
+ private:
+  std::size_t capacity_, stride_ = 1, offered_ = 0;
+  std::vector<T> kept_;
+};
+
+/// Stages 2-4 over the stops of a sequence, one stop at a time (association.hpp header).
+/// Memory holds the tracks alive: the landmarks so far and the objects seen within the last
+/// forget_after_stops stops.
+class StopLinker {
+ public:
+  /// `stops`: the number of distinct stops in the whole input (those without detections
+  /// included), which caps min_stops.
+  StopLinker(const AssociationConfig& config, std::size_t stops);
+
+  /// Links the clusters of the next stop (all of one stop, whose index exceeds the previous
+  /// call's; clusterStop's order); `stage1_conflicts` is clusterStop's return for that stop.
+  /// Returns each cluster's track (0: a weak cluster near no track).
+  std::vector<TrackSerial> add(const StopClusters& clusters, std::size_t stage1_conflicts);
+
+  /// Tracks dropped by the last add() (forget_after_stops): they will not become landmarks.
+  const std::vector<TrackSerial>& forgotten() const { return forgotten_; }
+  /// Tracks merged by the last add(): (merged track, the track it joined), in order.
+  const std::vector<std::pair<TrackSerial, TrackSerial>>& merged() const { return merged_; }
+
+  /// The landmarks (Association::ids left empty) and the landmark id of each of their tracks.
+  /// A landmark's position is the mean of its detections; its radius_m the median radius of its
+  /// detections (each cluster's median weighted by its number of detections, over an even
+  /// sample of at most 64 clusters).
+  Association finish(TrackIds& ids) const;
+
+  /// Tracks created so far (the serial of the last one).
+  TrackSerial tracks() const { return next_serial_ - 1; }
+  /// Tracks held now.
+  std::size_t alive() const { return tracks_.size(); }
+
+ private:
+  struct Track {
+    TrackSerial serial = 0;
+    std::array<std::pair<double, double>, 8> recent{};  // last strong sightings (world, m), a ring
+    std::size_t sightings = 0;       // strong sightings so far (recent holds the last 8)
+    std::size_t last_stop = 0;       // stop of its last cluster, strong or weak
+    std::size_t strong_stops = 0;
+    std::size_t detections = 0;
+    double sum_x = 0.0, sum_y = 0.0;  // detections x cluster centroid, summed
+    DetectionKey first;
+    EvenSample<std::pair<double, std::size_t>> radii;  // (cluster median radius, detections)
+    std::vector<TrackSerial> aliases;    // tracks merged into this one
+    std::vector<TrackSerial> co_seen;    // tracks seen close to it at one of its stops (sorted): never merged
+    bool dead = false;                   // merged into another during this add()
+  };
+  void merge(Track& into, Track& from);
+  AssociationConfig config_;
+  std::size_t min_stops_ = 1;
+  std::vector<Track> tracks_;  // in order of serial
+  TrackSerial next_serial_ = 1;
+  std::vector<TrackSerial> forgotten_;
+  std::vector<std::pair<TrackSerial, TrackSerial>> merged_;
+  bool started_ = false;
+  std::size_t last_stop_ = 0;
+  Association totals_;  // counts only (detections, conflicts, discarded)
+};
 
 }  // namespace lidarcal::detectors

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <stdexcept>
 
 #include "common/errors.hpp"
@@ -24,6 +25,8 @@ void SequenceDetectionConfig::validate() const {
   association.validate();
   if (!(common_radius_tolerance >= 0.0 && common_radius_tolerance < 1.0))
     throw std::invalid_argument("SequenceDetectionConfig.common_radius_tolerance: must be in [0, 1)");
+  if (arcs_per_stop_cluster < 1) throw std::invalid_argument("SequenceDetectionConfig.arcs_per_stop_cluster: must be >= 1");
+  if (arcs_per_landmark < 2) throw std::invalid_argument("SequenceDetectionConfig.arcs_per_landmark: must be >= 2");
 }
 
 namespace {
@@ -107,16 +110,32 @@ std::size_t clusterBlock(const StopBlock& block, const AssociationConfig& cfg, S
   return clusterStop(ptrs, block.viewpoints, cfg, clusters, &cluster_of);
 }
 
-/// One pass over the scans: stop clusters, the association, and (as asked) the kept scans and
-/// the arcs of each stop cluster.
+/// Folds one stop's tracks into a fingerprint of the association (the replay checks that it
+/// meets the same stops and objects).
+void fingerprint(std::uint64_t& h, std::size_t stop, const std::vector<TrackSerial>& tracks) {
+  auto mix = [&h](std::uint64_t v) {  // FNV-1a over the value's bytes
+    for (int b = 0; b < 8; ++b) h = (h ^ ((v >> (8 * b)) & 0xffu)) * 0x100000001b3ull;
+  };
+  mix(stop);
+  mix(tracks.size());
+  for (auto t : tracks) mix(t);
+}
+
+/// Distinct stops in stop_of_scan (non-decreasing).
+std::size_t countStops(const std::vector<std::size_t>& stop_of_scan) {
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < stop_of_scan.size(); ++i) n += i == 0 || stop_of_scan[i] != stop_of_scan[i - 1];
+  return n;
+}
+
+/// One pass over the scans: the association stop by stop, and (as asked) the kept scans and an
+/// even sample of each track's arcs.
 struct Pass {
-  StopClusters clusters;
-  std::vector<std::size_t> clusters_before_stop;
-  std::size_t conflicts = 0;
-  std::vector<std::vector<KeptArc>> arcs;  // per cluster (when collected)
+  std::uint64_t fingerprint = 0xcbf29ce484222325ull;
+  std::map<TrackSerial, EvenSample<KeptArc>> arcs;  // per track alive (when collected)
   std::vector<ScanDetections> scans;       // when kept
   std::vector<Pose2> viewpoints;           // when kept
-  std::vector<int> landmark_of;
+  TrackIds ids;
   Association association;
 };
 
@@ -124,49 +143,63 @@ Pass runPass(std::size_t scan_count, const ScanLoader& load, const std::vector<s
              const DetectionConfig& base, const std::vector<RadiusHint>& hints_world, const SequenceDetectionConfig& config,
              bool collect_arcs, bool keep_scans, const std::function<void(std::size_t)>& on_scan) {
   Pass p;
-  std::vector<std::vector<int>> cluster_of_scan;  // kept scans: cluster of each detection
+  StopLinker linker(config.association, countStops(stop_of_scan));
+  std::vector<std::vector<int>> cluster_of_scan;         // kept scans: cluster of each detection
+  std::vector<std::vector<TrackSerial>> track_of_scan;   // kept scans: track of each of its stop's clusters
   detectByStop(scan_count, load, stop_of_scan, base, hints_world, collect_arcs, [&](StopBlock& block) {
-    p.clusters_before_stop.push_back(p.clusters.size());
-    const std::size_t first = p.clusters.size();
+    StopClusters clusters;
     std::vector<std::vector<int>> cluster_of;
-    p.conflicts += clusterBlock(block, config.association, p.clusters, cluster_of);
+    const std::size_t conflicts = clusterBlock(block, config.association, clusters, cluster_of);
+    const std::vector<TrackSerial> tracks = linker.add(clusters, conflicts);
+    fingerprint(p.fingerprint, block.stop, tracks);
     if (collect_arcs) {
-      // Up to arcs_per_stop_cluster arcs per cluster, spread evenly over its detections.
-      std::vector<std::vector<std::pair<std::size_t, std::size_t>>> members(p.clusters.size() - first);
+      for (const auto& [from, into] : linker.merged()) {
+        auto it = p.arcs.find(from);
+        if (it == p.arcs.end()) continue;
+        auto& sample = p.arcs.try_emplace(into, config.arcs_per_landmark).first->second;
+        for (const auto& a : it->second.items()) sample.offer(a);
+        p.arcs.erase(it);
+      }
+      // Up to arcs_per_stop_cluster arcs per cluster, spread evenly over its detections, into an
+      // even sample of the track's arcs.
+      std::vector<std::vector<std::pair<std::size_t, std::size_t>>> members(clusters.size());
       for (std::size_t i = 0; i < cluster_of.size(); ++i)
         for (std::size_t j = 0; j < cluster_of[i].size(); ++j)
-          if (cluster_of[i][j] >= 0) members[static_cast<std::size_t>(cluster_of[i][j]) - first].emplace_back(i, j);
-      for (const auto& m : members) {
-        auto& kept = p.arcs.emplace_back();
-        const std::size_t n = m.size(), k = std::min(n, config.arcs_per_stop_cluster);
+          if (cluster_of[i][j] >= 0) members[static_cast<std::size_t>(cluster_of[i][j])].emplace_back(i, j);
+      for (std::size_t c = 0; c < clusters.size(); ++c) {
+        if (tracks[c] == 0) continue;
+        auto& sample = p.arcs.try_emplace(tracks[c], config.arcs_per_landmark).first->second;
+        const std::size_t n = members[c].size(), k = std::min(n, config.arcs_per_stop_cluster);
         for (std::size_t t = 0; t < k; ++t) {
-          const auto [i, j] = m[t * n / k];
+          const auto [i, j] = members[c][t * n / k];
           const Detection& d = block.scans[i].detections[j];
-          kept.push_back(KeptArc{ArcObservation{std::move(block.arcs[i][j]), Circle2{d.centre_x_m, d.centre_y_m, d.radius_m}},
-                                 block.viewpoints[i]});
+          sample.offer(KeptArc{ArcObservation{std::move(block.arcs[i][j]), Circle2{d.centre_x_m, d.centre_y_m, d.radius_m}},
+                               block.viewpoints[i]});
         }
       }
+      for (auto t : linker.forgotten()) p.arcs.erase(t);
     }
     if (keep_scans) {
-      for (auto& c : cluster_of) cluster_of_scan.push_back(std::move(c));
+      for (auto& c : cluster_of) cluster_of_scan.push_back(std::move(c)), track_of_scan.push_back(tracks);
       for (auto& d : block.scans) p.scans.push_back(std::move(d));
       for (const auto& v : block.viewpoints) p.viewpoints.push_back(v);
     }
   }, on_scan);
-  p.association = linkStopClusters(p.clusters, p.clusters_before_stop.size(), p.conflicts, config.association, p.landmark_of);
+  p.association = linker.finish(p.ids);
   if (keep_scans)
-    for (const auto& c : cluster_of_scan) p.association.ids.push_back(landmarkIds(c, p.landmark_of));
+    for (std::size_t i = 0; i < cluster_of_scan.size(); ++i)
+      p.association.ids.push_back(landmarkIds(cluster_of_scan[i], track_of_scan[i], p.ids));
   return p;
 }
 
-/// Joint radius per landmark from the arcs kept in its stop clusters; the landmark's world
-/// position from the refitted centres. Returns the hints for the second pass.
+/// Joint radius per landmark from the arcs kept for its track; the landmark's world position
+/// from the refitted centres. Returns the hints for the second pass.
 std::vector<RadiusHint> estimateRadii(SequenceDetections& r, const Pass& pass, const DetectionConfig& cfg) {
   const std::size_t L = r.association.landmarks.size();
   std::vector<std::vector<const KeptArc*>> arcs(L);
-  for (std::size_t k = 0; k < pass.clusters.size(); ++k)
-    if (const int id = pass.landmark_of[k]; id > 0)
-      for (const auto& a : pass.arcs[k]) arcs[static_cast<std::size_t>(id - 1)].push_back(&a);
+  for (const auto& [serial, sample] : pass.arcs)
+    if (const int id = pass.ids.of(serial); id > 0)
+      for (const auto& a : sample.items()) arcs[static_cast<std::size_t>(id - 1)].push_back(&a);
   std::vector<RadiusHint> world;
   for (std::size_t l = 0; l < L; ++l) {
     std::vector<ArcObservation> obs;
@@ -191,13 +224,13 @@ std::vector<RadiusHint> estimateRadii(SequenceDetections& r, const Pass& pass, c
   return world;
 }
 
-/// The pass's results into `r` (the clusters, their arcs and landmark ids stay in `pass`).
+/// The pass's results into `r` (the arcs stay in `pass`).
 void adopt(SequenceDetections& r, Pass& pass) {
   r.scans = std::move(pass.scans);
   r.viewpoints = std::move(pass.viewpoints);
   r.association = std::move(pass.association);
-  r.replay.landmark_of_cluster = pass.landmark_of;
-  r.replay.clusters_before_stop = pass.clusters_before_stop;
+  r.replay.track_ids = pass.ids;
+  r.replay.fingerprint = pass.fingerprint;
 }
 
 }  // namespace
@@ -289,27 +322,25 @@ void forEachScan(const SequenceDetections& r, std::size_t scan_count, const Scan
     }
     return;
   }
+  // The association again, stop by stop: the same stops and objects give the same tracks, and
+  // the ids found at the end of the first run.
   const auto& rp = r.replay;
-  std::size_t stop = 0;
-  auto changed = [](const std::string& what) {
-    return DataError("scans", "", "changed while they were being read (" + what + ")",
-                     "leave the sequence untouched while lidarcal reads it, then run again");
-  };
+  StopLinker linker(rp.association, countStops(stop_of_scan));
+  std::uint64_t print = 0xcbf29ce484222325ull;
   detectByStop(scan_count, load, stop_of_scan, rp.detection, rp.hints_world, false, [&](StopBlock& block) {
     StopClusters clusters;
     std::vector<std::vector<int>> cluster_of;
-    clusterBlock(block, rp.association, clusters, cluster_of);
-    if (stop >= rp.clusters_before_stop.size()) throw changed("more stops than before");
-    const std::size_t first = rp.clusters_before_stop[stop];
-    const std::size_t end = stop + 1 < rp.clusters_before_stop.size() ? rp.clusters_before_stop[stop + 1]
-                                                                      : rp.landmark_of_cluster.size();
-    if (end - first != clusters.size()) throw changed("other objects at stop " + std::to_string(block.stop));
-    ++stop;
+    const std::size_t conflicts = clusterBlock(block, rp.association, clusters, cluster_of);
+    const std::vector<TrackSerial> tracks = linker.add(clusters, conflicts);
+    fingerprint(print, block.stop, tracks);
     for (std::size_t i = 0; i < block.scans.size(); ++i)
-      visit(block.scans[i].scan_index, block.scans[i], landmarkIds(cluster_of[i], rp.landmark_of_cluster, first));
+      visit(block.scans[i].scan_index, block.scans[i], landmarkIds(cluster_of[i], tracks, rp.track_ids));
   }, [&](std::size_t i) {
     if (on_scan) on_scan(i + 1, scan_count);
   });
+  if (print != rp.fingerprint)
+    throw DataError("scans", "", "changed while they were being read (other objects at some stop than before)",
+                    "leave the sequence untouched while lidarcal reads it, then run again");
 }
 
 void forEachScan(const SequenceDetections& result, const io::Sequence& sequence, const ScanVisitor& visit,

@@ -5,12 +5,15 @@
 // stage calls; `lidarcal detect` adds the labelled files.
 //
 // Memory. The scans are processed stop by stop: stage 1 of the association (association.hpp)
-// needs one stop's detections, stages 2-3 only the stop clusters. With `keep_scans` false the
-// result holds no per-scan data, so memory does not grow with the number of scans (only with the
-// objects seen per stop, ~100 bytes each, and with the arcs kept for the radius estimate);
-// forEachScan then gives each scan's detections by detecting each stop again.
+// needs one stop's detections, the tracking across stops only that stop's clusters and the
+// tracks alive. With `keep_scans` false the result holds no per-scan or per-stop data, so memory
+// does not grow with the length of the sequence (it grows with the landmarks and the objects
+// seen in the last AssociationConfig::forget_after_stops stops; the radius estimate keeps at
+// most arcs_per_landmark arcs per track); forEachScan then gives each scan's detections by
+// detecting each stop again.
 
 #include <cstddef>
+#include <cstdint>
 #include <functional>
 #include <optional>
 #include <string>
@@ -38,6 +41,9 @@ struct SequenceDetectionConfig {
   /// With the radius estimated: the arcs kept per stop cluster for the joint radius (spread
   /// evenly over its detections), which bounds what the estimate keeps per stop. Default 16.
   std::size_t arcs_per_stop_cluster = 16;
+  /// With the radius estimated: the arcs kept per track (an even sample over its stops), which
+  /// bounds what the estimate keeps per landmark however long the sequence. Default 1024.
+  std::size_t arcs_per_landmark = 1024;
 
   /// Throws std::invalid_argument naming the first bad field.
   void validate() const;
@@ -69,8 +75,8 @@ struct SequenceDetections {
     DetectionConfig detection;              ///< the final pass's configuration (radius hints excepted)
     std::vector<RadiusHint> hints_world;    ///< estimated radii at their world positions (empty with a known radius)
     AssociationConfig association;
-    std::vector<int> landmark_of_cluster;   ///< id of each stop cluster of the final pass (0: none)
-    std::vector<std::size_t> clusters_before_stop;  ///< per stop (in order): clusters of the earlier stops
+    TrackIds track_ids;                     ///< landmark id of each track of the final pass
+    std::uint64_t fingerprint = 0;          ///< of the final pass's tracks at every stop (changed scans)
   } replay;
 };
 

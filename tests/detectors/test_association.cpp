@@ -208,6 +208,99 @@ TEST(Associate, LandmarksCloserThanTheLinkDistanceAreSplit) {
   }
 }
 
+/// One strong stop cluster of one detection at (x, y), at `stop`.
+StopCluster cluster(std::size_t stop, double x, double y) {
+  StopCluster c;
+  c.stop = stop;
+  c.strong = true;
+  c.x_m = x, c.y_m = y;
+  c.detections = 1;
+  c.radius_m = 0.1;
+  c.first = DetectionKey{stop, stop, 0.0, x, y};
+  return c;
+}
+
+// One object first found as two tracks (its second sighting too far from the first), then seen
+// between them: the tracks merge, and every sighting gets the landmark's id (single linkage
+// would join all three too). Without the merge neither track reaches min_stops = 3.
+TEST(StopLinker, AnObjectFoundAsTwoTracksMergesWhenASightingBridgesThem) {
+  StopLinker linker(AssociationConfig{}, 3);
+  const auto a = linker.add({cluster(0, 0.0, 0.0)}, 0);
+  const auto b = linker.add({cluster(1, 0.5, 0.0)}, 0);
+  EXPECT_NE(a[0], b[0]);
+  const auto c = linker.add({cluster(2, 0.25, 0.0)}, 0);
+  ASSERT_EQ(linker.merged().size(), 1u);
+  TrackIds ids;
+  const Association r = linker.finish(ids);
+  ASSERT_EQ(r.landmarks.size(), 1u);
+  EXPECT_EQ(r.landmarks[0].stops, 3u);
+  EXPECT_NEAR(r.landmarks[0].x_m, 0.25, 1e-12);
+  for (auto t : {a[0], b[0], c[0]}) EXPECT_EQ(ids.of(t), 1);
+}
+
+// Two poles 0.28 m apart (closer than the link distance) seen together at five stops, then one
+// of them alone at a position within reach of both: still two landmarks, never merged.
+TEST(StopLinker, TracksSeenTogetherNeverMerge) {
+  StopLinker linker(AssociationConfig{}, 6);
+  for (std::size_t k = 0; k < 5; ++k) linker.add({cluster(k, 1.0, 0.0), cluster(k, 1.0, 0.28)}, 0);
+  linker.add({cluster(5, 1.0, 0.14)}, 0);
+  EXPECT_TRUE(linker.merged().empty());
+  TrackIds ids;
+  EXPECT_EQ(linker.finish(ids).landmarks.size(), 2u);
+}
+
+// Memory: over a long path past five poles with a new object seen at each stop (a chair leg
+// here, a bin there: seen strongly once, never again), the tracks held stay the poles plus the
+// objects of the last forget_after_stops stops, however long the path; the poles are found.
+TEST(StopLinker, TracksHeldStayBoundedOverALongSequence) {
+  AssociationConfig cfg;
+  cfg.forget_after_stops = 20;
+  const std::size_t stops = 3000;
+  StopLinker linker(cfg, stops);
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> noise(0.0, 0.01);
+  const std::vector<std::pair<double, double>> poles{{1.5, 0.75}, {0.3, 2.2}, {2.4, 3.4}, {3.9, -1.3}, {0.9, -2.8}};
+  std::size_t most = 0;
+  for (std::size_t k = 0; k < stops; ++k) {
+    StopClusters cs;
+    for (const auto& p : poles) cs.push_back(cluster(k, p.first + noise(rng), p.second + noise(rng)));
+    cs.push_back(cluster(k, 100.0 + static_cast<double>(k), 50.0));  // a new object, never seen again
+    std::sort(cs.begin(), cs.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    linker.add(cs, 0);
+    most = std::max(most, linker.alive());
+  }
+  EXPECT_LE(most, poles.size() + cfg.forget_after_stops + 2);
+  EXPECT_EQ(linker.tracks(), poles.size() + stops);  // every object got a track at some point
+  TrackIds ids;
+  const Association r = linker.finish(ids);
+  ASSERT_EQ(r.landmarks.size(), poles.size());
+  for (const auto& l : r.landmarks) EXPECT_EQ(l.stops, stops);
+  EXPECT_EQ(r.discarded_components, stops);
+}
+
+TEST(StopLinker, StopsMustComeInIncreasingOrder) {
+  StopLinker linker(AssociationConfig{}, 3);
+  linker.add({cluster(2, 0.0, 0.0)}, 0);
+  EXPECT_THROW(linker.add({cluster(1, 0.0, 0.0)}, 0), std::invalid_argument);
+  EXPECT_THROW(linker.add({cluster(3, 0.0, 0.0), cluster(4, 1.0, 0.0)}, 0), std::invalid_argument);
+}
+
+TEST(EvenSample, KeepsEveryItemUpToItsCapacityThenAnEvenSpread) {
+  EvenSample<int> s(8);
+  for (int i = 0; i < 7; ++i) s.offer(i);
+  EXPECT_EQ(s.items(), (std::vector<int>{0, 1, 2, 3, 4, 5, 6}));
+  for (int i = 7; i < 100; ++i) s.offer(i);
+  EXPECT_LT(s.items().size(), 8u);
+  EXPECT_EQ(s.offered(), 100u);
+  // Evenly spaced from the first item: one stride apart, the last within a stride of the end.
+  const auto& v = s.items();
+  ASSERT_GE(v.size(), 2u);
+  const int stride = v[1] - v[0];
+  EXPECT_EQ(v[0], 0);
+  for (std::size_t i = 1; i < v.size(); ++i) EXPECT_EQ(v[i] - v[i - 1], stride);
+  EXPECT_GT(v.back() + stride, 99 - stride);
+}
+
 TEST(Associate, EmptyInputAndBadConfiguration) {
   const Association a = associate({}, {}, AssociationConfig{});
   EXPECT_TRUE(a.landmarks.empty());
