@@ -4,7 +4,10 @@
 #include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
+#include <limits>
+#include <optional>
 #include <stdexcept>
 #include <string_view>
 #include <unordered_map>
@@ -43,73 +46,6 @@ std::vector<Stop> groupStops(const std::vector<Pose2>& viewpoints, const StopTol
   return stops;
 }
 
-std::string ScanList::path(std::size_t i) const {
-  const std::size_t begin = i == 0 ? 0 : static_cast<std::size_t>(name_end_.at(i - 1));
-  std::string p = dir_;
-  p.append(names_, begin, static_cast<std::size_t>(name_end_.at(i)) - begin);
-  return p;
-}
-
-ScanHeader ScanList::operator[](std::size_t i) const {
-  ScanHeader h;
-  h.path = path(i);
-  h.viewpoint = viewpoints_[i];
-  h.points = static_cast<std::size_t>(points_[i]);
-  h.has_intensity = (flags_[i] & 1u) != 0;
-  h.has_label = (flags_[i] & 2u) != 0;
-  h.binary = (flags_[i] & 4u) != 0;
-  return h;
-}
-
-ScanHeader ScanList::at(std::size_t i) const {
-  if (i >= size()) throw std::out_of_range("ScanList::at: scan " + std::to_string(i) + " of " + std::to_string(size()));
-  return (*this)[i];
-}
-
-ScanList::ScanList(std::string dir, const std::vector<std::string>& names) : dir_(std::move(dir)) {
-  std::size_t chars = 0;
-  for (const auto& n : names) chars += n.size();
-  names_.reserve(chars);
-  name_end_.reserve(names.size());
-  for (const auto& n : names) {
-    names_ += n;
-    name_end_.push_back(names_.size());
-  }
-}
-
-namespace {
-std::uint8_t flagsOf(const ScanHeader& h) {
-  return static_cast<std::uint8_t>((h.has_intensity ? 1u : 0u) | (h.has_label ? 2u : 0u) | (h.binary ? 4u : 0u));
-}
-}  // namespace
-
-void ScanList::setHeader(std::size_t i, const ScanHeader& h) {
-  if (h.path != path(i))
-    throw std::invalid_argument("ScanList: header of " + h.path + " given for scan " + std::to_string(i));
-  if (viewpoints_.size() != size()) {  // the headers' storage, on first use
-    viewpoints_.resize(size());
-    points_.resize(size());
-    flags_.resize(size());
-  }
-  viewpoints_[i] = h.viewpoint;
-  points_[i] = h.points;
-  flags_[i] = flagsOf(h);
-}
-
-void ScanList::push_back(const ScanHeader& h) {
-  const std::string name = h.name();
-  const std::string dir = h.path.substr(0, h.path.size() - name.size());
-  if (empty())
-    dir_ = dir;
-  else if (dir != dir_)
-    throw std::invalid_argument("ScanList: " + h.path + " is not in " + dir_);
-  names_ += name;
-  name_end_.push_back(names_.size());
-  viewpoints_.push_back(h.viewpoint);
-  points_.push_back(h.points);
-  flags_.push_back(flagsOf(h));
-}
-
 std::string scanFileName(std::size_t index) {
   char name[32];
   std::snprintf(name, sizeof name, "scan_%06zu.pcd", index);
@@ -118,7 +54,7 @@ std::string scanFileName(std::size_t index) {
 
 namespace {
 
-bool isPcdName(const std::string& name) {
+bool isPcdName(std::string_view name) {
   return name.size() > 4 && name.compare(name.size() - 4, 4, ".pcd") == 0;
 }
 
@@ -147,6 +83,249 @@ std::optional<ScanNumber> scanNumber(std::string_view name) {
   const std::size_t nz = digits.find_first_not_of('0');
   return ScanNumber{stem.substr(0, start), nz == std::string_view::npos ? std::string_view("0") : digits.substr(nz)};
 }
+
+std::uint8_t flagsOf(const ScanHeader& h) {
+  return static_cast<std::uint8_t>((h.has_intensity ? 1u : 0u) | (h.has_label ? 2u : 0u) | (h.binary ? 4u : 0u));
+}
+
+/// Bitwise, so that -0.0 and 0.0 stay apart: each scan gives back exactly what was read.
+bool sameBits(double a, double b) {
+  std::uint64_t x = 0, y = 0;
+  std::memcpy(&x, &a, sizeof x);
+  std::memcpy(&y, &b, sizeof y);
+  return x == y;
+}
+
+/// A name PREFIX<width digits>.pcd whose number fits in 64 bits.
+struct NumberedName {
+  std::string_view prefix;
+  std::size_t width = 0;
+  std::uint64_t number = 0;
+};
+
+std::optional<NumberedName> numberedName(std::string_view name) {
+  if (!isPcdName(name)) return std::nullopt;
+  const std::optional<ScanNumber> n = scanNumber(name);
+  if (!n) return std::nullopt;
+  NumberedName r;
+  r.prefix = n->prefix;
+  r.width = name.size() - 4 - n->prefix.size();
+  for (char c : n->value) {
+    const std::uint64_t d = static_cast<std::uint64_t>(c - '0');
+    if (r.number > (std::numeric_limits<std::uint64_t>::max() - d) / 10) return std::nullopt;
+    r.number = r.number * 10 + d;
+  }
+  return r;
+}
+
+/// Appends `number` zero-padded to `width` digits.
+void appendNumber(std::string& out, std::uint64_t number, std::size_t width) {
+  char digits[24];
+  std::size_t len = 0;
+  do {
+    digits[len++] = static_cast<char>('0' + number % 10);
+    number /= 10;
+  } while (number != 0);
+  if (width > len) out.append(width - len, '0');
+  while (len > 0) out += digits[--len];
+}
+
+std::string numberedFileName(std::string_view prefix, std::size_t width, std::uint64_t number) {
+  std::string name(prefix);
+  appendNumber(name, number, width);
+  name += ".pcd";
+  return name;
+}
+
+std::size_t digitCount(std::uint64_t v) {
+  std::size_t n = 1;
+  while (v >= 10) v /= 10, ++n;
+  return n;
+}
+
+/// The run holding scan i: the last whose start is <= i (runs are sorted by start, the first
+/// starts at 0).
+template <class Run>
+const Run& runOf(const std::vector<Run>& runs, std::size_t i) {
+  auto it = std::upper_bound(runs.begin(), runs.end(), i,
+                             [](std::size_t k, const Run& r) { return k < r.start; });
+  return *(it - 1);
+}
+
+}  // namespace
+
+std::string ScanList::path(std::size_t i) const {
+  if (i >= size_)
+    throw std::out_of_range("ScanList::path: scan " + std::to_string(i) + " of " + std::to_string(size_));
+  std::string p = dir_;
+  if (numbered_) {
+    const NameRun& r = runOf(name_runs_, i);
+    p.reserve(p.size() + prefix_.size() + std::max<std::size_t>(width_, 20) + 4);
+    p += prefix_;
+    appendNumber(p, r.first + (i - r.start), width_);
+    p += ".pcd";
+  } else {
+    const std::size_t begin = i == 0 ? 0 : static_cast<std::size_t>(name_end_[i - 1]);
+    p.append(names_, begin, static_cast<std::size_t>(name_end_[i]) - begin);
+  }
+  return p;
+}
+
+ScanHeader ScanList::operator[](std::size_t i) const {
+  if (i >= headers_)
+    throw std::logic_error("ScanList: the header of scan " + std::to_string(i) + " is not set");
+  const HeaderRun& r = runOf(header_runs_, i);
+  ScanHeader h;
+  h.path = path(i);
+  h.viewpoint = r.viewpoint;
+  h.points = static_cast<std::size_t>(r.points);
+  h.has_intensity = (r.flags & 1u) != 0;
+  h.has_label = (r.flags & 2u) != 0;
+  h.binary = (r.flags & 4u) != 0;
+  return h;
+}
+
+ScanHeader ScanList::at(std::size_t i) const {
+  if (i >= size()) throw std::out_of_range("ScanList::at: scan " + std::to_string(i) + " of " + std::to_string(size()));
+  return (*this)[i];
+}
+
+ScanList::ScanList(std::string dir, const std::vector<std::string>& names) : dir_(std::move(dir)) {
+  std::size_t chars = 0;
+  bool one_pattern = !names.empty();
+  std::optional<NumberedName> first;
+  for (const auto& n : names) {
+    chars += n.size();
+    const std::optional<NumberedName> num = numberedName(n);
+    if (!num || (first && (num->prefix != first->prefix || num->width != first->width))) one_pattern = false;
+    if (!first) first = num;
+  }
+  if (one_pattern) {
+    numbered_ = true;
+    prefix_ = std::string(first->prefix);
+    width_ = first->width;
+    for (const auto& n : names) addNumber(numberedName(n)->number);
+    name_runs_.shrink_to_fit();
+    return;
+  }
+  names_.reserve(chars);
+  name_end_.reserve(names.size());
+  for (const auto& n : names) {
+    names_ += n;
+    name_end_.push_back(names_.size());
+  }
+  size_ = names.size();
+}
+
+ScanList ScanList::numbered(std::string dir, std::string prefix, std::size_t width,
+                            const std::vector<std::uint64_t>& numbers) {
+  if (width == 0) throw std::invalid_argument("ScanList::numbered: width 0");
+  ScanList l;
+  l.dir_ = std::move(dir);
+  l.numbered_ = true;
+  l.prefix_ = std::move(prefix);
+  l.width_ = width;
+  for (std::uint64_t v : numbers) {
+    if (digitCount(v) > width)
+      throw std::invalid_argument("ScanList::numbered: " + std::to_string(v) + " has more than " +
+                                  std::to_string(width) + " digits");
+    l.addNumber(v);
+  }
+  l.name_runs_.shrink_to_fit();
+  return l;
+}
+
+void ScanList::appendName(const std::string& name) {
+  if (size_ == 0) {  // the first name picks the form (a numbered one keeps it while they fit)
+    names_.clear();
+    name_end_.clear();
+    name_runs_.clear();
+    const std::optional<NumberedName> n = numberedName(name);
+    numbered_ = n.has_value();
+    if (n) prefix_ = std::string(n->prefix), width_ = n->width;
+  }
+  if (numbered_) {
+    const std::optional<NumberedName> n = numberedName(name);
+    if (n && n->prefix == prefix_ && n->width == width_) {
+      addNumber(n->number);
+      return;
+    }
+    namesToText();
+  }
+  names_ += name;
+  name_end_.push_back(names_.size());
+  ++size_;
+}
+
+void ScanList::addNumber(std::uint64_t v) {
+  // v != 0: after the largest number (2^64 - 1), the count would wrap to 0
+  const bool next = !name_runs_.empty() && v != 0 &&
+                    name_runs_.back().first + (size_ - name_runs_.back().start) == v;
+  if (!next) name_runs_.push_back(NameRun{size_, v});
+  ++size_;
+}
+
+void ScanList::namesToText() {
+  std::vector<NameRun> runs;
+  runs.swap(name_runs_);
+  numbered_ = false;
+  name_end_.reserve(size_ + 1);
+  for (std::size_t k = 0; k < runs.size(); ++k) {
+    const std::size_t end = k + 1 < runs.size() ? static_cast<std::size_t>(runs[k + 1].start) : size_;
+    for (std::size_t i = static_cast<std::size_t>(runs[k].start); i < end; ++i) {
+      names_ += prefix_;
+      appendNumber(names_, runs[k].first + (i - runs[k].start), width_);
+      names_ += ".pcd";
+      name_end_.push_back(names_.size());
+    }
+  }
+  prefix_.clear();
+  width_ = 0;
+}
+
+void ScanList::appendHeader(const ScanHeader& h) {
+  const std::uint8_t flags = flagsOf(h);
+  const bool same = !header_runs_.empty() && [&] {
+    const HeaderRun& r = header_runs_.back();
+    return sameBits(r.viewpoint.x_m, h.viewpoint.x_m) && sameBits(r.viewpoint.y_m, h.viewpoint.y_m) &&
+           sameBits(r.viewpoint.yaw_rad, h.viewpoint.yaw_rad) && r.points == h.points && r.flags == flags;
+  }();
+  if (!same) header_runs_.push_back(HeaderRun{headers_, h.viewpoint, h.points, flags});
+  ++headers_;
+}
+
+void ScanList::setHeader(std::size_t i, const ScanHeader& h) {
+  const std::string p = path(i);
+  if (i != headers_)
+    throw std::invalid_argument("ScanList: header of scan " + std::to_string(i) + " given where that of scan " +
+                                std::to_string(headers_) + " is due (headers are set in index order, each once)");
+  if (h.path != p)
+    throw std::invalid_argument("ScanList: header of " + h.path + " given for scan " + std::to_string(i));
+  appendHeader(h);
+}
+
+void ScanList::push_back(const ScanHeader& h) {
+  if (headers_ != size_)
+    throw std::invalid_argument("ScanList::push_back: the header of scan " + std::to_string(headers_) +
+                                " is not set yet");
+  const std::string name = h.name();
+  const std::string dir = h.path.substr(0, h.path.size() - name.size());
+  if (empty())
+    dir_ = dir;
+  else if (dir != dir_)
+    throw std::invalid_argument("ScanList: " + h.path + " is not in " + dir_);
+  appendName(name);
+  appendHeader(h);
+}
+
+void ScanList::shrink_to_fit() {
+  name_runs_.shrink_to_fit();
+  names_.shrink_to_fit();
+  name_end_.shrink_to_fit();
+  header_runs_.shrink_to_fit();
+}
+
+namespace {
 
 /// Numbers compare by length, then text (no overflow however long).
 bool numberLess(std::string_view a, std::string_view b) {
@@ -207,8 +386,14 @@ Sequence openSequence(const fs::path& dir, const StopTolerance& tol) {
   Sequence seq;
   seq.dir = dir;
   // File names only (a std::filesystem::path per file costs several hundred bytes: its
-  // components are paths too), then one path per scan header.
+  // components are paths too), then one path per scan header. While every name reads
+  // PREFIX + digits of one width + .pcd (what lidarcal writes), only the numbers are kept (8 bytes
+  // a scan); the first name that does not fit turns them back into names.
   std::vector<std::string> files;
+  std::vector<std::uint64_t> numbers;
+  std::string prefix;
+  std::size_t width = 0;
+  bool one_pattern = true;
   for (const auto& entry : fs::directory_iterator(dir, ec)) {
     if (!entry.is_regular_file()) continue;
     std::string name = entry.path().filename().string();
@@ -217,22 +402,50 @@ Sequence openSequence(const fs::path& dir, const StopTolerance& tol) {
       throw InputError(entry.path().string(), "", "has the extension '" + name.substr(name.size() - 4) +
                                                       "': lidarcal reads only files ending in lower-case .pcd and would skip this scan",
                        "rename it to end in .pcd (mind a file of that name already present)");
-    if (isPcdName(name)) files.push_back(std::move(name));
+    if (!isPcdName(name)) continue;
+    if (one_pattern) {
+      const std::optional<NumberedName> num = numberedName(name);
+      if (num && (numbers.empty() || (num->prefix == prefix && num->width == width))) {
+        if (numbers.empty()) prefix = std::string(num->prefix), width = num->width;
+        numbers.push_back(num->number);
+        continue;
+      }
+      one_pattern = false;
+      files.reserve(numbers.size() + 1);
+      for (std::uint64_t v : numbers) files.push_back(numberedFileName(prefix, width, v));
+      std::vector<std::uint64_t>().swap(numbers);
+    }
+    files.push_back(std::move(name));
   }
   if (ec) throw InputError(dir.string(), "", "cannot list the directory (" + ec.message() + ")", "check its permissions");
-  if (files.empty())
+  if (files.empty() && numbers.empty())
     throw InputError(dir.string(), "", "holds no .pcd file: an empty sequence",
                      "point to a directory of scans (see docs/FORMAT.md), or create one with `lidarcal simulate` or `lidarcal import`");
-  std::sort(files.begin(), files.end());
-  checkScanNumbers(dir, files);
+  // The directory as ScanList wants it: the first path without its file name.
+  auto dirOf = [&](const std::string& first_name) {
+    const std::string first = (dir / first_name).string();
+    return first.substr(0, first.size() - first_name.size());
+  };
+  if (one_pattern) {
+    // One prefix, one width: numeric order is lexicographic order and no number can appear twice
+    // (same width and value = same name), so checkScanNumbers has nothing to report here.
+    std::sort(numbers.begin(), numbers.end());
+  } else {
+    std::sort(files.begin(), files.end());
+    checkScanNumbers(dir, files);
+  }
   const fs::path meta = dir / "sequence.json";
   if (fs::exists(meta, ec)) seq.meta = readSequenceMeta(meta);
-  // The names move into the compact list (and the vector of strings is freed) before the headers
-  // are read.
-  const fs::path first = dir / files.front();
-  seq.scans = ScanList(first.string().substr(0, first.string().size() - files.front().size()), files);
-  const std::size_t n = files.size();
-  std::vector<std::string>().swap(files);
+  // The names move into the compact list (and the numbers or the vector of strings are freed)
+  // before the headers are read.
+  const std::size_t n = one_pattern ? numbers.size() : files.size();
+  if (one_pattern) {
+    seq.scans = ScanList::numbered(dirOf(numberedFileName(prefix, width, numbers.front())), prefix, width, numbers);
+    std::vector<std::uint64_t>().swap(numbers);
+  } else {
+    seq.scans = ScanList(dirOf(files.front()), files);
+    std::vector<std::string>().swap(files);
+  }
   for (std::size_t i = 0; i < n; ++i) {
     const fs::path f = seq.scans.path(i);
     const ScanHeader h = readScanHeader(f);
@@ -246,6 +459,7 @@ Sequence openSequence(const fs::path& dir, const StopTolerance& tol) {
     addToStops(seq.stops, i, h.viewpoint, tol);
   }
   seq.stops.shrink_to_fit();
+  seq.scans.shrink_to_fit();
   seq.stop_of_scan.resize(n);
   for (std::size_t s = 0; s < seq.stops.size(); ++s)
     for (std::size_t i : seq.stops[s].scans) seq.stop_of_scan[i] = s;
