@@ -68,17 +68,21 @@ DetectionConfig configFor(const DetectionConfig& base, const std::vector<RadiusH
 
 /// Detects every scan with `base` (plus the hints), stop by stop, and hands each stop's
 /// detections to `on_stop` once its last scan is done. Only one stop is in memory.
-void detectByStop(std::size_t scan_count, const ScanLoader& load, const std::vector<std::size_t>& stop_of_scan,
+/// The stop of scan i (non-decreasing in i): a vector's entries, or a sequence's stops.
+using StopOf = std::function<std::size_t(std::size_t)>;
+
+void detectByStop(std::size_t scan_count, const ScanLoader& load, const StopOf& stop_of,
                   const DetectionConfig& base, const std::vector<RadiusHint>& hints_world, bool collect_arcs,
                   const std::function<void(StopBlock&)>& on_stop, const std::function<void(std::size_t)>& on_scan) {
   StopBlock block;
   for (std::size_t i = 0; i < scan_count; ++i) {
-    if (i > 0 && stop_of_scan[i] < stop_of_scan[i - 1])
+    const std::size_t stop = stop_of(i);
+    if (i > 0 && stop < block.stop)
       throw std::invalid_argument("detectSequence: stop_of_scan must be non-decreasing (the scans of a stop consecutive)");
     const io::Scan scan = load(i);
     ScanDetections d = detectScan(scan, configFor(base, hints_world, scan.viewpoint));
     d.scan_index = i;
-    d.stop = stop_of_scan[i];
+    d.stop = stop;
     block.stop = d.stop;
     if (collect_arcs) {
       auto& arcs = block.arcs.emplace_back();
@@ -95,7 +99,7 @@ void detectByStop(std::size_t scan_count, const ScanLoader& load, const std::vec
     block.scans.push_back(std::move(d));
     block.viewpoints.push_back(scan.viewpoint);
     if (on_scan) on_scan(i);
-    if (i + 1 == scan_count || stop_of_scan[i + 1] != stop_of_scan[i]) {
+    if (i + 1 == scan_count || stop_of(i + 1) != stop) {
       on_stop(block);
       block = StopBlock{};
     }
@@ -121,10 +125,14 @@ void fingerprint(std::uint64_t& h, std::size_t stop, const std::vector<TrackSeri
   for (auto t : tracks) mix(t);
 }
 
-/// Distinct stops in stop_of_scan (non-decreasing).
-std::size_t countStops(const std::vector<std::size_t>& stop_of_scan) {
+/// Distinct stops among the first scan_count scans (stop_of non-decreasing).
+std::size_t countStops(std::size_t scan_count, const StopOf& stop_of) {
   std::size_t n = 0;
-  for (std::size_t i = 0; i < stop_of_scan.size(); ++i) n += i == 0 || stop_of_scan[i] != stop_of_scan[i - 1];
+  for (std::size_t i = 0, previous = 0; i < scan_count; ++i) {
+    const std::size_t stop = stop_of(i);
+    n += i == 0 || stop != previous;
+    previous = stop;
+  }
   return n;
 }
 
@@ -139,14 +147,14 @@ struct Pass {
   Association association;
 };
 
-Pass runPass(std::size_t scan_count, const ScanLoader& load, const std::vector<std::size_t>& stop_of_scan,
+Pass runPass(std::size_t scan_count, const ScanLoader& load, const StopOf& stop_of,
              const DetectionConfig& base, const std::vector<RadiusHint>& hints_world, const SequenceDetectionConfig& config,
              bool collect_arcs, bool keep_scans, const std::function<void(std::size_t)>& on_scan) {
   Pass p;
-  StopLinker linker(config.association, countStops(stop_of_scan));
+  StopLinker linker(config.association, countStops(scan_count, stop_of));
   std::vector<std::vector<int>> cluster_of_scan;         // kept scans: cluster of each detection
   std::vector<std::vector<TrackSerial>> track_of_scan;   // kept scans: track of each of its stop's clusters
-  detectByStop(scan_count, load, stop_of_scan, base, hints_world, collect_arcs, [&](StopBlock& block) {
+  detectByStop(scan_count, load, stop_of, base, hints_world, collect_arcs, [&](StopBlock& block) {
     StopClusters clusters;
     std::vector<std::vector<int>> cluster_of;
     const std::size_t conflicts = clusterBlock(block, config.association, clusters, cluster_of);
@@ -235,11 +243,11 @@ void adopt(SequenceDetections& r, Pass& pass) {
 
 }  // namespace
 
-SequenceDetections detectSequence(std::size_t scan_count, const ScanLoader& load,
-                                  const std::vector<std::size_t>& stop_of_scan, const SequenceDetectionConfig& config,
-                                  const ProgressCallback& on_scan) {
+namespace {
+
+SequenceDetections detectSequenceImpl(std::size_t scan_count, const ScanLoader& load, const StopOf& stop_of,
+                                      const SequenceDetectionConfig& config, const ProgressCallback& on_scan) {
   config.validate();
-  if (stop_of_scan.size() != scan_count) throw std::invalid_argument("detectSequence: one stop index per scan expected");
   SequenceDetections r;
   const bool known = config.detection.landmark_radius_m.has_value();
   r.known_radius_m = config.detection.landmark_radius_m;
@@ -251,7 +259,7 @@ SequenceDetections detectSequence(std::size_t scan_count, const ScanLoader& load
       if (on_scan) on_scan(offset + i + 1, total);
     };
   };
-  Pass first = runPass(scan_count, load, stop_of_scan, config.detection, {}, config, !known, config.keep_scans, progress(0));
+  Pass first = runPass(scan_count, load, stop_of, config.detection, {}, config, !known, config.keep_scans, progress(0));
   adopt(r, first);
   if (!known && !r.association.landmarks.empty()) {
     // Second pass once radii are estimated: every scan again, with the landmarks expected in it
@@ -271,7 +279,7 @@ SequenceDetections detectSequence(std::size_t scan_count, const ScanLoader& load
         cfg.landmark_radius_m = median;
         r.common_radius_m = median;
       }
-      Pass second = runPass(scan_count, load, stop_of_scan, cfg, world, config, false, config.keep_scans, progress(scan_count));
+      Pass second = runPass(scan_count, load, stop_of, cfg, world, config, false, config.keep_scans, progress(scan_count));
       adopt(r, second);
       r.replay.detection = cfg;
       r.replay.hints_world = world;
@@ -300,18 +308,8 @@ SequenceDetections detectSequence(std::size_t scan_count, const ScanLoader& load
   return r;
 }
 
-SequenceDetections detectSequence(const io::Sequence& sequence, const SequenceDetectionConfig& config,
-                                  const ProgressCallback& on_scan) {
-  SequenceDetectionConfig cfg = config;
-  if (!cfg.detection.landmark_radius_m && cfg.use_sequence_radius && sequence.meta.landmark_radius_m)
-    cfg.detection.landmark_radius_m = sequence.meta.landmark_radius_m;
-  return detectSequence(
-      sequence.scans.size(), [&](std::size_t i) { return io::readScan(sequence.scans[i].path); }, sequence.stop_of_scan,
-      cfg, on_scan);
-}
-
-void forEachScan(const SequenceDetections& r, std::size_t scan_count, const ScanLoader& load,
-                 const std::vector<std::size_t>& stop_of_scan, const ScanVisitor& visit, const ProgressCallback& on_scan) {
+void forEachScanImpl(const SequenceDetections& r, std::size_t scan_count, const ScanLoader& load, const StopOf& stop_of,
+                     const ScanVisitor& visit, const ProgressCallback& on_scan) {
   if (!r.scans.empty() || scan_count == 0) {
     if (r.scans.size() != scan_count)
       throw std::invalid_argument("forEachScan: the result holds " + std::to_string(r.scans.size()) + " scans, not " +
@@ -325,9 +323,9 @@ void forEachScan(const SequenceDetections& r, std::size_t scan_count, const Scan
   // The association again, stop by stop: the same stops and objects give the same tracks, and
   // the ids found at the end of the first run.
   const auto& rp = r.replay;
-  StopLinker linker(rp.association, countStops(stop_of_scan));
+  StopLinker linker(rp.association, countStops(scan_count, stop_of));
   std::uint64_t print = 0xcbf29ce484222325ull;
-  detectByStop(scan_count, load, stop_of_scan, rp.detection, rp.hints_world, false, [&](StopBlock& block) {
+  detectByStop(scan_count, load, stop_of, rp.detection, rp.hints_world, false, [&](StopBlock& block) {
     StopClusters clusters;
     std::vector<std::vector<int>> cluster_of;
     const std::size_t conflicts = clusterBlock(block, rp.association, clusters, cluster_of);
@@ -343,11 +341,44 @@ void forEachScan(const SequenceDetections& r, std::size_t scan_count, const Scan
                     "leave the sequence untouched while lidarcal reads it, then run again");
 }
 
+/// A vector's entries as a StopOf, after checking its length.
+StopOf stopsOf(const std::vector<std::size_t>& stop_of_scan, std::size_t scan_count) {
+  if (stop_of_scan.size() != scan_count) throw std::invalid_argument("stop_of_scan: one stop index per scan expected");
+  return [&stop_of_scan](std::size_t i) { return stop_of_scan[i]; };
+}
+
+ScanLoader loaderOf(const io::Sequence& sequence) {
+  return [&sequence](std::size_t i) { return io::readScan(sequence.scans.path(i)); };
+}
+
+StopOf stopsOf(const io::Sequence& sequence) {
+  return [&sequence](std::size_t i) { return sequence.stopOf(i); };
+}
+
+}  // namespace
+
+SequenceDetections detectSequence(std::size_t scan_count, const ScanLoader& load,
+                                  const std::vector<std::size_t>& stop_of_scan, const SequenceDetectionConfig& config,
+                                  const ProgressCallback& on_scan) {
+  return detectSequenceImpl(scan_count, load, stopsOf(stop_of_scan, scan_count), config, on_scan);
+}
+
+SequenceDetections detectSequence(const io::Sequence& sequence, const SequenceDetectionConfig& config,
+                                  const ProgressCallback& on_scan) {
+  SequenceDetectionConfig cfg = config;
+  if (!cfg.detection.landmark_radius_m && cfg.use_sequence_radius && sequence.meta.landmark_radius_m)
+    cfg.detection.landmark_radius_m = sequence.meta.landmark_radius_m;
+  return detectSequenceImpl(sequence.scans.size(), loaderOf(sequence), stopsOf(sequence), cfg, on_scan);
+}
+
+void forEachScan(const SequenceDetections& r, std::size_t scan_count, const ScanLoader& load,
+                 const std::vector<std::size_t>& stop_of_scan, const ScanVisitor& visit, const ProgressCallback& on_scan) {
+  forEachScanImpl(r, scan_count, load, stopsOf(stop_of_scan, scan_count), visit, on_scan);
+}
+
 void forEachScan(const SequenceDetections& result, const io::Sequence& sequence, const ScanVisitor& visit,
                  const ProgressCallback& on_scan) {
-  forEachScan(
-      result, sequence.scans.size(), [&](std::size_t i) { return io::readScan(sequence.scans[i].path); },
-      sequence.stop_of_scan, visit, on_scan);
+  forEachScanImpl(result, sequence.scans.size(), loaderOf(sequence), stopsOf(sequence), visit, on_scan);
 }
 
 std::vector<std::uint32_t> scanLabels(const ScanDetections& detections, const std::vector<int>& ids, std::size_t points) {

@@ -460,10 +460,16 @@ Sequence openSequence(const fs::path& dir, const StopTolerance& tol) {
   }
   seq.stops.shrink_to_fit();
   seq.scans.shrink_to_fit();
-  seq.stop_of_scan.resize(n);
-  for (std::size_t s = 0; s < seq.stops.size(); ++s)
-    for (std::size_t i : seq.stops[s].scans) seq.stop_of_scan[i] = s;
   return seq;
+}
+
+std::size_t Sequence::stopOf(std::size_t i) const {
+  if (i >= scans.size())
+    throw std::out_of_range("Sequence::stopOf: scan " + std::to_string(i) + " of " + std::to_string(scans.size()));
+  // The last stop whose first scan is at or before i (stops cover the scans in order).
+  const auto it = std::upper_bound(stops.begin(), stops.end(), i,
+                                   [](std::size_t scan, const Stop& s) { return scan < s.scans.front(); });
+  return static_cast<std::size_t>(it - stops.begin()) - 1;
 }
 
 std::pair<std::size_t, std::size_t> pointCountRange(const Sequence& seq) {

@@ -164,8 +164,10 @@ struct Sequence {
   std::filesystem::path dir;          ///< the sequence directory
   ScanList scans;                     ///< one per .pcd file, lexicographic order
   std::vector<Stop> stops;            ///< consecutive scans with the same VIEWPOINT
-  std::vector<std::size_t> stop_of_scan;  ///< stop index of each scan
   SequenceMeta meta;                  ///< sequence.json, when present
+  /// Stop index of scan i (a binary search over the stops; nothing is kept per scan).
+  /// Throws std::out_of_range when i >= scans.size().
+  std::size_t stopOf(std::size_t i) const;
 };
 
 /// Groups consecutive viewpoints into stops.

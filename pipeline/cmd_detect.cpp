@@ -106,7 +106,7 @@ void runDetect(const DetectOptions& o) {
       const int id = ids[j];
       if (id == 0) continue;
       const auto& d = dets[j];
-      csv.write(io::LandmarkRow{name, seq.stop_of_scan[i], id, d.bearing_rad, d.range_m, d.centre_x_m, d.centre_y_m,
+      csv.write(io::LandmarkRow{name, seq.stopOf(i), id, d.bearing_rad, d.range_m, d.centre_x_m, d.centre_y_m,
                                 d.radius_m, d.inliers.size(), d.rms_m});
     }
     if (truth) {

@@ -24,7 +24,7 @@ LandmarkObservations toLandmarkObservations(const io::Sequence& seq, const detec
       if (ids[j] <= 0) continue;
       const auto& d = sd.detections[j];
       Sighting s;
-      s.stop = seq.stop_of_scan.at(i);
+      s.stop = seq.stopOf(i);
       s.scan = i;
       s.landmark = ids[j];
       s.bearing_rad = d.bearing_rad;

@@ -60,7 +60,10 @@ TEST(OpenSequence, ListsPcdFilesLexicographicallyAndGroupsStops) {
   EXPECT_EQ(seq.scans[0].name(), "b_000.pcd");
   EXPECT_EQ(seq.scans[2].name(), "b_002.pcd");
   ASSERT_EQ(seq.stops.size(), 2u);
-  EXPECT_EQ(seq.stop_of_scan, (std::vector<std::size_t>{0, 0, 1}));
+  EXPECT_EQ(seq.stopOf(0), 0u);
+  EXPECT_EQ(seq.stopOf(1), 0u);
+  EXPECT_EQ(seq.stopOf(2), 1u);
+  EXPECT_THROW(seq.stopOf(3), std::out_of_range);
   ASSERT_TRUE(seq.meta.landmark_radius_m);
   EXPECT_DOUBLE_EQ(*seq.meta.landmark_radius_m, 0.12);
   EXPECT_EQ(*seq.meta.sensor_name, "X");
@@ -143,7 +146,7 @@ TEST(OpenSequence, NumberedNamesWithGapsComeBackInOrder) {
   }
   EXPECT_EQ(seq.scans.nameRuns(), 3u);
   EXPECT_EQ(seq.scans.headerRuns(), 1u);
-  EXPECT_EQ(seq.stop_of_scan, std::vector<std::size_t>(names.size(), 0));
+  for (std::size_t i = 0; i < names.size(); ++i) EXPECT_EQ(seq.stopOf(i), 0u);
   EXPECT_THROW(seq.scans.path(names.size()), std::out_of_range);
 }
 
