@@ -360,7 +360,7 @@ std::vector<TrackSerial> StopLinker::add(const StopClusters& clusters, std::size
   std::size_t w = 0;
   for (std::size_t t = 0; t < tracks_.size(); ++t) {
     Track& tr = tracks_[t];
-    if (tr.strong_stops < min_stops_ && tr.last_stop + config_.forget_after_stops < stop) {
+    if (tr.strong_stops < min_stops_ && stop - tr.last_stop > config_.forget_after_stops) {
       forgotten_.push_back(tr.serial);
       forgotten_.insert(forgotten_.end(), tr.aliases.begin(), tr.aliases.end());
       totals_.discarded_few_stops += tr.detections;

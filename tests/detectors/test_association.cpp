@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <random>
 
@@ -276,6 +277,20 @@ TEST(StopLinker, TracksHeldStayBoundedOverALongSequence) {
   ASSERT_EQ(r.landmarks.size(), poles.size());
   for (const auto& l : r.landmarks) EXPECT_EQ(l.stops, stops);
   EXPECT_EQ(r.discarded_components, stops);
+}
+
+// forget_after_stops at its largest value never forgets (no overflow): a track seen at two
+// stops far apart still reaches min_stops.
+TEST(StopLinker, TheLargestForgettingWindowNeverForgets) {
+  AssociationConfig cfg;
+  cfg.forget_after_stops = std::numeric_limits<std::size_t>::max();
+  StopLinker linker(cfg, 3);
+  linker.add({cluster(0, 1.0, 0.0)}, 0);
+  linker.add({cluster(1000, 1.0, 0.0)}, 0);
+  EXPECT_TRUE(linker.forgotten().empty());
+  linker.add({cluster(2000, 1.0, 0.0)}, 0);
+  TrackIds ids;
+  EXPECT_EQ(linker.finish(ids).landmarks.size(), 1u);
 }
 
 TEST(StopLinker, StopsMustComeInIncreasingOrder) {
