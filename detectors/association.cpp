@@ -198,6 +198,13 @@ std::size_t clusterStop(const std::vector<const ScanDetections*>& scans, const s
   return dropped;
 }
 
+double StopLinker::Track::distanceTo(double x, double y) const {
+  double d = std::numeric_limits<double>::infinity();
+  for (std::size_t q = 0; q < std::min(sightings, recent.size()); ++q)
+    d = std::min(d, std::hypot(x - recent[q].first, y - recent[q].second));
+  return d;
+}
+
 int TrackIds::of(TrackSerial serial) const {
   const auto it = std::lower_bound(ids.begin(), ids.end(), std::make_pair(serial, 0));
   return it != ids.end() && it->first == serial ? it->second : 0;
@@ -279,10 +286,7 @@ std::vector<TrackSerial> StopLinker::add(const StopClusters& clusters, std::size
       if (clusters[k].strong != strong) continue;
       for (std::size_t t = 0; t < tracks_.size(); ++t) {
         if (taken[t]) continue;
-        const Track& tr = tracks_[t];
-        double d = std::numeric_limits<double>::infinity();
-        for (std::size_t q = 0; q < std::min(tr.sightings, tr.recent.size()); ++q)
-          d = std::min(d, std::hypot(clusters[k].x_m - tr.recent[q].first, clusters[k].y_m - tr.recent[q].second));
+        const double d = tracks_[t].distanceTo(clusters[k].x_m, clusters[k].y_m);
         if (d <= reach) pairs.emplace_back(d, clusters[k].first, tracks_[t].serial, k, t);
       }
     }
@@ -327,10 +331,7 @@ std::vector<TrackSerial> StopLinker::add(const StopClusters& clusters, std::size
     for (std::size_t t = 0; t < tracks_.size(); ++t) {
       Track& other = tracks_[t];
       if (taken[t] || other.dead) continue;
-      double d = std::numeric_limits<double>::infinity();
-      for (std::size_t q = 0; q < std::min(other.sightings, other.recent.size()); ++q)
-        d = std::min(d, std::hypot(clusters[k].x_m - other.recent[q].first, clusters[k].y_m - other.recent[q].second));
-      if (d > config_.link_distance_m) continue;
+      if (other.distanceTo(clusters[k].x_m, clusters[k].y_m) > config_.link_distance_m) continue;
       Track& mine = tracks_[index(serial_of[k])];
       if (std::binary_search(mine.co_seen.begin(), mine.co_seen.end(), other.serial)) continue;
       Track& into = mine.serial < other.serial ? mine : other;

@@ -202,6 +202,8 @@ class StopLinker {
     std::vector<TrackSerial> aliases;    // tracks merged into this one
     std::vector<TrackSerial> co_seen;    // tracks seen close to it at one of its stops (sorted): never merged
     bool dead = false;                   // merged into another during this add()
+    /// Distance from (x, y) to the nearest of its recent strong sightings, metres.
+    double distanceTo(double x, double y) const;
   };
   void merge(Track& into, Track& from);
   AssociationConfig config_;

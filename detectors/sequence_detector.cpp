@@ -46,6 +46,14 @@ struct KeptArc {
   Pose2 viewpoint;
 };
 
+/// Inlier points of a detection (sensor frame), kept while the radius is unknown.
+std::vector<Eigen::Vector2d> arcOf(const pcl::PointCloud<pcl::PointXYZI>& cloud, const Detection& d) {
+  std::vector<Eigen::Vector2d> arc;
+  arc.reserve(d.inliers.size());
+  for (auto i : d.inliers) arc.emplace_back(cloud[static_cast<std::size_t>(i)].x, cloud[static_cast<std::size_t>(i)].y);
+  return arc;
+}
+
 /// The detections of one stop, as they come.
 struct StopBlock {
   std::size_t stop = 0;
@@ -86,14 +94,7 @@ void detectByStop(std::size_t scan_count, const ScanLoader& load, const StopOf& 
     block.stop = d.stop;
     if (collect_arcs) {
       auto& arcs = block.arcs.emplace_back();
-      for (const auto& det : d.detections) {
-        auto& arc = arcs.emplace_back();
-        arc.reserve(det.inliers.size());
-        for (auto k : det.inliers) {
-          const auto& p = (*scan.cloud)[static_cast<std::size_t>(k)];
-          arc.emplace_back(p.x, p.y);
-        }
-      }
+      for (const auto& det : d.detections) arcs.push_back(arcOf(*scan.cloud, det));
     }
     compact(d);
     block.scans.push_back(std::move(d));
@@ -106,14 +107,6 @@ void detectByStop(std::size_t scan_count, const ScanLoader& load, const StopOf& 
   }
 }
 
-/// Stage 1 of one stop's block: its clusters appended to `clusters`, cluster_of per detection.
-std::size_t clusterBlock(const StopBlock& block, const AssociationConfig& cfg, StopClusters& clusters,
-                         std::vector<std::vector<int>>& cluster_of) {
-  std::vector<const ScanDetections*> ptrs;
-  for (const auto& d : block.scans) ptrs.push_back(&d);
-  return clusterStop(ptrs, block.viewpoints, cfg, clusters, &cluster_of);
-}
-
 /// Folds one stop's tracks into a fingerprint of the association (the replay checks that it
 /// meets the same stops and objects).
 void fingerprint(std::uint64_t& h, std::size_t stop, const std::vector<TrackSerial>& tracks) {
@@ -123,6 +116,19 @@ void fingerprint(std::uint64_t& h, std::size_t stop, const std::vector<TrackSeri
   mix(stop);
   mix(tracks.size());
   for (auto t : tracks) mix(t);
+}
+
+/// One stop's block through the association: stage 1 into `clusters` (cluster_of per
+/// detection), then the linker; folds the tracks into `print` and returns each cluster's track.
+std::vector<TrackSerial> linkBlock(const StopBlock& block, const AssociationConfig& cfg, StopLinker& linker,
+                                   std::uint64_t& print, StopClusters& clusters,
+                                   std::vector<std::vector<int>>& cluster_of) {
+  std::vector<const ScanDetections*> ptrs;
+  for (const auto& d : block.scans) ptrs.push_back(&d);
+  const std::size_t conflicts = clusterStop(ptrs, block.viewpoints, cfg, clusters, &cluster_of);
+  std::vector<TrackSerial> tracks = linker.add(clusters, conflicts);
+  fingerprint(print, block.stop, tracks);
+  return tracks;
 }
 
 /// Distinct stops among the first scan_count scans (stop_of non-decreasing).
@@ -157,9 +163,7 @@ Pass runPass(std::size_t scan_count, const ScanLoader& load, const StopOf& stop_
   detectByStop(scan_count, load, stop_of, base, hints_world, collect_arcs, [&](StopBlock& block) {
     StopClusters clusters;
     std::vector<std::vector<int>> cluster_of;
-    const std::size_t conflicts = clusterBlock(block, config.association, clusters, cluster_of);
-    const std::vector<TrackSerial> tracks = linker.add(clusters, conflicts);
-    fingerprint(p.fingerprint, block.stop, tracks);
+    const std::vector<TrackSerial> tracks = linkBlock(block, config.association, linker, p.fingerprint, clusters, cluster_of);
     if (collect_arcs) {
       for (const auto& [from, into] : linker.merged()) {
         auto it = p.arcs.find(from);
@@ -328,9 +332,7 @@ void forEachScanImpl(const SequenceDetections& r, std::size_t scan_count, const 
   detectByStop(scan_count, load, stop_of, rp.detection, rp.hints_world, false, [&](StopBlock& block) {
     StopClusters clusters;
     std::vector<std::vector<int>> cluster_of;
-    const std::size_t conflicts = clusterBlock(block, rp.association, clusters, cluster_of);
-    const std::vector<TrackSerial> tracks = linker.add(clusters, conflicts);
-    fingerprint(print, block.stop, tracks);
+    const std::vector<TrackSerial> tracks = linkBlock(block, rp.association, linker, print, clusters, cluster_of);
     for (std::size_t i = 0; i < block.scans.size(); ++i)
       visit(block.scans[i].scan_index, block.scans[i], landmarkIds(cluster_of[i], tracks, rp.track_ids));
   }, [&](std::size_t i) {

@@ -118,22 +118,23 @@ std::optional<NumberedName> numberedName(std::string_view name) {
   return r;
 }
 
-/// Appends `number` zero-padded to `width` digits.
-void appendNumber(std::string& out, std::uint64_t number, std::size_t width) {
+/// Appends the name PREFIX + `number` zero-padded to `width` digits + `.pcd`.
+void appendNumberedName(std::string& out, std::string_view prefix, std::size_t width, std::uint64_t number) {
   char digits[24];
   std::size_t len = 0;
   do {
     digits[len++] = static_cast<char>('0' + number % 10);
     number /= 10;
   } while (number != 0);
+  out += prefix;
   if (width > len) out.append(width - len, '0');
   while (len > 0) out += digits[--len];
+  out += ".pcd";
 }
 
 std::string numberedFileName(std::string_view prefix, std::size_t width, std::uint64_t number) {
-  std::string name(prefix);
-  appendNumber(name, number, width);
-  name += ".pcd";
+  std::string name;
+  appendNumberedName(name, prefix, width, number);
   return name;
 }
 
@@ -161,9 +162,7 @@ std::string ScanList::path(std::size_t i) const {
   if (numbered_) {
     const NameRun& r = runOf(name_runs_, i);
     p.reserve(p.size() + prefix_.size() + std::max<std::size_t>(width_, 20) + 4);
-    p += prefix_;
-    appendNumber(p, r.first + (i - r.start), width_);
-    p += ".pcd";
+    appendNumberedName(p, prefix_, width_, r.first + (i - r.start));
   } else {
     const std::size_t begin = i == 0 ? 0 : static_cast<std::size_t>(name_end_[i - 1]);
     p.append(names_, begin, static_cast<std::size_t>(name_end_[i]) - begin);
@@ -273,9 +272,7 @@ void ScanList::namesToText() {
   for (std::size_t k = 0; k < runs.size(); ++k) {
     const std::size_t end = k + 1 < runs.size() ? static_cast<std::size_t>(runs[k + 1].start) : size_;
     for (std::size_t i = static_cast<std::size_t>(runs[k].start); i < end; ++i) {
-      names_ += prefix_;
-      appendNumber(names_, runs[k].first + (i - runs[k].start), width_);
-      names_ += ".pcd";
+      appendNumberedName(names_, prefix_, width_, runs[k].first + (i - runs[k].start));
       name_end_.push_back(names_.size());
     }
   }
