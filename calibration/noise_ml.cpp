@@ -149,6 +149,7 @@ void MlNoiseConfig::validate() const {
   if (!(tolerance > 0.0)) throw InputError("", "tolerance", "must be positive");
   if (!(min_variance > 0.0)) throw InputError("", "min_variance", "must be positive");
   if (solver_iterations < 1) throw InputError("", "solver_iterations", "must be at least 1");
+  if (max_stops_for_information < 0) throw InputError("", "max_stops_for_information", "must be at least 0");
   for (const auto& s : initial.sensors)
     if (!(s.range_var_m2 > 0.0) || !(s.bearing_var_rad2 > 0.0))
       throw InputError("", "initial noise", "sensor variances must be positive");
@@ -210,10 +211,12 @@ struct AdjustmentAnalysis {
   std::vector<double> redundancy_sq;    // per group: sum of r_ii^2 (diagonal Fisher information of the variance)
   double log_det_normal = 0.0;          // log det N (whitened normal matrix)
   std::vector<double> bias_std;         // per sensor, range and bearing interleaved (NaN when not estimated)
+  Eigen::MatrixXd fisher;               // with_information: G x G information of the variances (see below)
 };
 
 AdjustmentAnalysis analyseAdjustment(const NoiseProblem& problem, const MlState& state,
-                                     const std::vector<double>& variances, bool with_biases) {
+                                     const std::vector<double>& variances, bool with_biases,
+                                     bool with_information = false) {
   // Unknowns: poses 1..K-1 (y, 3 each, block-tridiagonal normal matrix D through the motion
   // chain) and z = landmarks (2 each) then biases (2 each, when estimated). With B = N_yz and
   // C = N_zz: E = D^-1 B, S = C - B^T E, and
@@ -310,15 +313,19 @@ AdjustmentAnalysis analyseAdjustment(const NoiseProblem& problem, const MlState&
     addLogDet(llt);
     Pinv[p] = llt.solve(Mat3::Identity());
   }
+  // M <- D^-1 M for a 3P-row matrix: forward elimination, then back substitution.
+  auto solveChain = [&](Eigen::MatrixXd& M) {
+    for (std::size_t p = 1; p < uP; ++p)
+      M.middleRows(3 * static_cast<Eigen::Index>(p), 3) -=
+          Do[p - 1].transpose() * Pinv[p - 1] * M.middleRows(3 * static_cast<Eigen::Index>(p - 1), 3);
+    for (std::size_t p = uP; p-- > 0;) {
+      Eigen::MatrixXd y = M.middleRows(3 * static_cast<Eigen::Index>(p), 3);
+      if (p + 1 < uP) y -= Do[p] * M.middleRows(3 * static_cast<Eigen::Index>(p + 1), 3);
+      M.middleRows(3 * static_cast<Eigen::Index>(p), 3) = Pinv[p] * y;
+    }
+  };
   Eigen::MatrixXd E = B;  // becomes D^-1 B
-  for (std::size_t p = 1; p < uP; ++p)
-    E.middleRows(3 * static_cast<Eigen::Index>(p), 3) -=
-        Do[p - 1].transpose() * Pinv[p - 1] * E.middleRows(3 * static_cast<Eigen::Index>(p - 1), 3);
-  for (std::size_t p = uP; p-- > 0;) {
-    Eigen::MatrixXd y = E.middleRows(3 * static_cast<Eigen::Index>(p), 3);
-    if (p + 1 < uP) y -= Do[p] * E.middleRows(3 * static_cast<Eigen::Index>(p + 1), 3);
-    E.middleRows(3 * static_cast<Eigen::Index>(p), 3) = Pinv[p] * y;
-  }
+  solveChain(E);
   std::vector<Mat3> Gd(uP), Go(uP > 0 ? uP - 1 : 0);
   for (std::size_t p = uP; p-- > 0;) {
     if (p + 1 == uP) {
@@ -351,7 +358,9 @@ AdjustmentAnalysis analyseAdjustment(const NoiseProblem& problem, const MlState&
     }
   }
 
-  std::vector<double> redundancy(static_cast<std::size_t>(2 * S + 3), 0.0), redundancy_sq = redundancy;
+  const int G = 2 * S + 3;
+  std::vector<double> redundancy(static_cast<std::size_t>(G), 0.0), redundancy_sq = redundancy;
+  std::vector<double> leverage_sq = redundancy;  // per group: sum of h_i^2
   for (std::size_t i = 0; i < obs_rows.size(); ++i) {
     const ObsRow& row = obs_rows[i];
     double h = 0.0;
@@ -363,6 +372,7 @@ AdjustmentAnalysis analyseAdjustment(const NoiseProblem& problem, const MlState&
     }
     redundancy[static_cast<std::size_t>(obs_group[i])] += 1.0 - h;
     redundancy_sq[static_cast<std::size_t>(obs_group[i])] += (1.0 - h) * (1.0 - h);
+    leverage_sq[static_cast<std::size_t>(obs_group[i])] += h * h;
   }
   for (std::size_t i = 0; i < odo_rows.size(); ++i) {
     const OdoRow& row = odo_rows[i];
@@ -372,8 +382,73 @@ AdjustmentAnalysis analyseAdjustment(const NoiseProblem& problem, const MlState&
            2.0 * row.aa.dot(Mnext[static_cast<std::size_t>(row.pa)] * row.ab);
     redundancy[static_cast<std::size_t>(odo_group[i])] += 1.0 - h;
     redundancy_sq[static_cast<std::size_t>(odo_group[i])] += (1.0 - h) * (1.0 - h);
+    leverage_sq[static_cast<std::size_t>(odo_group[i])] += h * h;
   }
   AdjustmentAnalysis out;
+  if (with_information) {
+    // REML information of the variance components of the linearised model (Harville 1977;
+    // Koch, "Parameter Estimation and Hypothesis Testing in Linear Models", ch. 3.6): with
+    // whitened rows a_i, K_g = N^-1 N_g and t_g = tr K_g = n_g - r_g,
+    //   I_gh = 1/2 [delta_gh (n_g - 2 t_g) + tr(K_g K_h)] / (var_g var_h),
+    //   tr(K_g K_h) = sum over rows i of g and j of h of (a_i^T N^-1 a_j)^2.
+    // Rows of the motion chain are strongly correlated (a pose error persists), so every term
+    // with a process group is computed in full from X = N^-1 a_i over the 3(K-1) motion rows.
+    // Between readings only i = j is kept (sum h_i^2): each reading's neighbours share a pose
+    // or a landmark with many other readings, and for the sensor groups this reproduces the
+    // diagonal estimate, whose spread matches the seeds (docs/RESULTS.md).
+    Eigen::MatrixXd T = Eigen::MatrixXd::Zero(G, G);
+    for (int g = 0; g < 2 * S; ++g) T(g, g) = leverage_sq[static_cast<std::size_t>(g)];
+    const Eigen::Index n_motion = static_cast<Eigen::Index>(odo_rows.size());  // 3P, column c * P + k
+    if (n_motion > 0) {
+      // Motion rows have no landmark or bias part: x_z = -F^T a_y, x_y = D^-1 a_y - E x_z.
+      Eigen::MatrixXd Xy = Eigen::MatrixXd::Zero(3 * P, n_motion), Xz(m, n_motion);
+      for (std::size_t i = 0; i < odo_rows.size(); ++i) {
+        const OdoRow& row = odo_rows[i];
+        const Eigen::Index col = (odo_group[i] - 2 * S) * P + row.pb;
+        Xy.block(3 * row.pb, col, 3, 1) = row.ab;
+        if (row.pa >= 0) Xy.block(3 * row.pa, col, 3, 1) = row.aa;
+      }
+      if (m > 0) Xz.noalias() = -F.transpose() * Xy;
+      solveChain(Xy);
+      if (m > 0) Xy.noalias() -= E * Xz;
+      // Transposed so that the solution's entries of one unknown are contiguous.
+      Xy.transposeInPlace();  // square: no copy
+      const Eigen::MatrixXd& XyT = Xy;
+      const Eigen::MatrixXd XzT = Xz.transpose();
+      Eigen::VectorXd u(n_motion);
+      auto accumulate = [&](int g) {
+        for (int c = 0; c < 3; ++c) {
+          const double t = u.segment(static_cast<Eigen::Index>(c) * P, P).squaredNorm();
+          T(g, 2 * S + c) += t;
+          if (g < 2 * S) T(2 * S + c, g) += t;
+        }
+      };
+      for (std::size_t i = 0; i < obs_rows.size(); ++i) {
+        const ObsRow& row = obs_rows[i];
+        u.setZero();
+        if (row.p >= 0) u.noalias() += XyT.middleCols(3 * row.p, 3) * row.ap;
+        for (int a = 0; a < row.nz; ++a) u.noalias() += row.az[a] * XzT.col(row.cols[a]);
+        accumulate(obs_group[i]);
+      }
+      for (std::size_t i = 0; i < odo_rows.size(); ++i) {
+        const OdoRow& row = odo_rows[i];
+        u.noalias() = XyT.middleCols(3 * row.pb, 3) * row.ab;
+        if (row.pa >= 0) u.noalias() += XyT.middleCols(3 * row.pa, 3) * row.aa;
+        accumulate(odo_group[i]);
+      }
+    }
+    std::vector<std::size_t> count(static_cast<std::size_t>(G), 0);
+    for (int g : obs_group) ++count[static_cast<std::size_t>(g)];
+    for (int g : odo_group) ++count[static_cast<std::size_t>(g)];
+    out.fisher.resize(G, G);
+    for (int g = 0; g < G; ++g)
+      for (int h = 0; h < G; ++h) {
+        const auto ug = static_cast<std::size_t>(g);
+        double v = T(g, h);
+        if (g == h) v += static_cast<double>(count[ug]) - 2.0 * (static_cast<double>(count[ug]) - redundancy[ug]);
+        out.fisher(g, h) = 0.5 * v / (variances[ug] * variances[static_cast<std::size_t>(h)]);
+      }
+  }
   out.redundancy = std::move(redundancy);
   out.redundancy_sq = std::move(redundancy_sq);
   out.log_det_normal = log_det;
@@ -390,6 +465,11 @@ AdjustmentAnalysis analyseAdjustment(const NoiseProblem& problem, const MlState&
 std::vector<double> groupRedundancy(const NoiseProblem& problem, const MlState& state,
                                     const std::vector<double>& variances, bool with_biases) {
   return analyseAdjustment(problem, state, variances, with_biases).redundancy;
+}
+
+Eigen::MatrixXd groupInformation(const NoiseProblem& problem, const MlState& state, const std::vector<double>& variances,
+                                 bool with_biases) {
+  return analyseAdjustment(problem, state, variances, with_biases, true).fisher;
 }
 
 MlNoiseResult estimateNoiseMl(const NoiseProblem& problem, const MlNoiseConfig& config) {
@@ -578,7 +658,28 @@ MlNoiseResult estimateNoiseMl(const NoiseProblem& problem, const MlNoiseConfig& 
   result.noise.process.dx_var_m2 = var[static_cast<std::size_t>(2 * S)];
   result.noise.process.dy_var_m2 = var[static_cast<std::size_t>(2 * S + 1)];
   result.noise.process.dtheta_var_rad2 = var[static_cast<std::size_t>(2 * S + 2)];
-  result.bias_standard_error = analyseAdjustment(problem, st, var, config.estimate_biases).bias_std;
+  const bool full_information = K - 1 <= config.max_stops_for_information;
+  const AdjustmentAnalysis an = analyseAdjustment(problem, st, var, config.estimate_biases, full_information);
+  result.bias_standard_error = an.bias_std;
+  if (full_information) {
+    // Standard errors from the inverse information over the variances that were estimated and
+    // are away from the floor (fixed ones and those at the floor are held as known).
+    std::vector<int> free;
+    for (int g = 0; g < G; ++g) {
+      const MlGroup& grp = result.groups[static_cast<std::size_t>(g)];
+      if (!(g >= 2 * S && !config.estimate_process) && grp.count > 0 && !grp.at_floor) free.push_back(g);
+    }
+    Eigen::MatrixXd info(static_cast<Eigen::Index>(free.size()), static_cast<Eigen::Index>(free.size()));
+    for (std::size_t a = 0; a < free.size(); ++a)
+      for (std::size_t b = 0; b < free.size(); ++b) info(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b)) = an.fisher(free[a], free[b]);
+    Eigen::LLT<Eigen::MatrixXd> llt(info);
+    if (!free.empty() && llt.info() == Eigen::Success) {
+      const Eigen::MatrixXd cov = llt.solve(Eigen::MatrixXd::Identity(info.rows(), info.cols()));
+      for (std::size_t a = 0; a < free.size(); ++a)
+        result.groups[static_cast<std::size_t>(free[a])].standard_error = std::sqrt(cov(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(a)));
+      result.standard_error_method = "information";
+    }
+  }
   return result;
 }
 

@@ -27,6 +27,8 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Core>
+
 #include "calibration/noise_problem.hpp"
 #include "common/observation.hpp"
 #include "common/pose2.hpp"
@@ -41,6 +43,9 @@ struct MlNoiseConfig {
   bool estimate_process = true;   ///< estimate the process variances (else fixed at `initial.process`)
   NoiseSetting initial;           ///< starting variances; empty sensors: 1 for the sensors, 0.01 for the process
   int solver_iterations = 50;     ///< Ceres iterations per adjustment at most
+  /// Standard errors from the full information of the variances (cost grows with the square of
+  /// the stops: 3(K-1) solves) up to this many motions; beyond, the diagonal estimate.
+  int max_stops_for_information = 1500;
   void validate() const;          ///< throws InputError
 };
 
@@ -58,7 +63,7 @@ struct MlGroup {
   double redundancy = 0.0;   ///< r_g (sum of the group's redundancy numbers)
   double sum_sq = 0.0;       ///< Omega_g, sum of squared (unweighted) residuals, unit^2
   double variance = 0.0;     ///< estimate, unit^2
-  double standard_error = 0.0;  ///< of the variance, var sqrt(2 / sum r_ii^2), unit^2
+  double standard_error = 0.0;  ///< of the variance, unit^2 (MlNoiseResult::standard_error_method says how)
   bool at_floor = false;     ///< the estimate reached min_variance (true value ~0 or not identifiable)
 };
 
@@ -68,6 +73,11 @@ struct MlNoiseResult {
   NoiseSetting noise;                 ///< estimated biases (means) and variances
   std::vector<double> bias_standard_error;  ///< per sensor: range (m), bearing (rad), interleaved
   std::vector<MlGroup> groups;        ///< 2S + 3 variance components
+  /// "information": from the inverse REML information of the estimated variances (terms with a
+  /// process group in full); "diagonal": var sqrt(2 / sum r_ii^2) per group, which ignores the
+  /// correlation of the motion residuals along the chain and overstates the process errors
+  /// (used beyond max_stops_for_information, for fixed variances and those at the floor).
+  std::string standard_error_method = "diagonal";
   MlState state;                      ///< adjusted poses, landmarks, biases
   std::vector<double> objective_trace;  ///< restricted -log likelihood (nats, constants dropped) at each iteration's variances
   std::vector<std::vector<double>> variance_trace;  ///< variances (order of `groups`) after each iteration
@@ -93,5 +103,10 @@ std::vector<double> residualsAt(const NoiseProblem& problem, const MlState& stat
 /// `with_biases` false the biases are constants. Exposed for tests.
 std::vector<double> groupRedundancy(const NoiseProblem& problem, const MlState& state,
                                     const std::vector<double>& variances, bool with_biases);
+
+/// REML information matrix of the 2S + 3 variances at `state` (the one behind the standard
+/// errors; see standard_error_method). Exposed for tests.
+Eigen::MatrixXd groupInformation(const NoiseProblem& problem, const MlState& state, const std::vector<double>& variances,
+                                 bool with_biases);
 
 }  // namespace lidarcal::calibration

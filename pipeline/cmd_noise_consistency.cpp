@@ -43,6 +43,9 @@ void runNoiseConsistency(const NoiseOptions& o) {
   for (const std::string& input : {o.observations, o.odometry, o.init, o.truth})
     if (!input.empty() && fs::equivalent(input, o.out, ec))
       throw InputError(o.out, "--out", "is one of the inputs", "inputs are never overwritten; choose another --out");
+  if (o.fixed_process && o.init.empty())
+    throw InputError("--fixed-process", "", "keeps the process variances of --init, and no --init was given",
+                     "pass --init SETTING.json with the known `process_var` (e.g. a result.json or noise_truth.json)");
   if (!o.overwrite && fs::exists(o.out))
     throw InputError(o.out, "", "exists already", "choose another --out or pass --overwrite");
   const calibration::NoiseProblem problem =

@@ -177,6 +177,7 @@ ojson noiseRunToJson(const NoiseRun& run, const calibration::NoiseProblem& probl
     j["ml"] = ojson{{"converged", run.ml->converged},
                     {"iterations", run.ml->iterations},
                     {"solver_iterations", run.ml->solver_iterations},
+                    {"standard_error_method", run.ml->standard_error_method},
                     {"groups", groups}};
   }
   return j;

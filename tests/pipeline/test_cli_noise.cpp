@@ -63,8 +63,37 @@ TEST(CliNoise, MlRecoversTheNoiseAndWritesTheResultAndPlots) {
   EXPECT_NEAR(j["sensors"][0]["range_mean_m"].get<double>(), 0.2, 4 * j["sensors"][0]["range_mean_se_m"].get<double>());
   for (const char* key : {"process_var", "objective_trace", "evaluations"}) EXPECT_TRUE(j.contains(key)) << key;
   EXPECT_TRUE(j["process_var"].contains("dtheta_rad2"));
+  EXPECT_EQ(j["ml"]["standard_error_method"], "information");  // 145 stops: the full information
   for (const char* f : {"objective.png", "params.png", "trace.dat", "params.dat"})
     EXPECT_TRUE(std::filesystem::exists(dir / "plots" / f)) << f;
+}
+
+TEST(CliNoise, MlWithTheProcessNoiseGivenKeepsItAndNeedsItGiven) {
+  TempDir dir;
+  test::writeFile(dir / "scene.json", kScene);
+  ASSERT_EQ(runCli("simulate -q --scene " + (dir / "scene.json").string() + " --out " + (dir / "sim").string() + " --seed 6").exit_code, 0);
+  const std::string inputs = " --observations " + (dir / "sim/observations.csv").string() + " --odometry " +
+                             (dir / "sim/odometry.csv").string() + " --method ml --fixed-process";
+  // Without --init there is nothing to keep: an error, no output.
+  auto r = runCli("noise-consistency -q" + inputs + " --out " + (dir / "a.json").string());
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--init"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "a.json"));
+  // The truth's process variances given (its sensor variances are only the start).
+  r = runCli("noise-consistency -q" + inputs + " --init " + (dir / "sim/noise_truth.json").string() + " --out " +
+             (dir / "b.json").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto j = readJson(dir / "b.json");
+  EXPECT_FALSE(j["process_var_estimated"].get<bool>());
+  EXPECT_DOUBLE_EQ(j["process_var"]["dx_m2"].get<double>(), 0.004);
+  EXPECT_DOUBLE_EQ(j["process_var"]["dy_m2"].get<double>(), 0.004);
+  EXPECT_DOUBLE_EQ(j["process_var"]["dtheta_rad2"].get<double>(), 0.0005);
+  const double truth_var[2][2] = {{0.3, 0.4}, {0.5, 0.6}};
+  for (int s = 0; s < 2; ++s) {
+    const auto& e = j["sensors"][s];
+    EXPECT_NEAR(e["range_var_m2"].get<double>(), truth_var[s][0], 4 * e["range_var_se_m2"].get<double>());
+    EXPECT_NEAR(e["bearing_var_rad2"].get<double>(), truth_var[s][1], 4 * e["bearing_var_se_rad2"].get<double>());
+  }
 }
 
 TEST(CliNoise, KlHillTraceNeverIncreasesAndTheSameSeedGivesTheSameResult) {
