@@ -149,7 +149,7 @@ void MlNoiseConfig::validate() const {
   if (!(tolerance > 0.0)) throw InputError("", "tolerance", "must be positive");
   if (!(min_variance > 0.0)) throw InputError("", "min_variance", "must be positive");
   if (solver_iterations < 1) throw InputError("", "solver_iterations", "must be at least 1");
-  if (max_stops_for_information < 0) throw InputError("", "max_stops_for_information", "must be at least 0");
+  if (max_motions_for_information < 0) throw InputError("", "max_motions_for_information", "must be at least 0");
   for (const auto& s : initial.sensors)
     if (!(s.range_var_m2 > 0.0) || !(s.bearing_var_rad2 > 0.0))
       throw InputError("", "initial noise", "sensor variances must be positive");
@@ -386,16 +386,16 @@ AdjustmentAnalysis analyseAdjustment(const NoiseProblem& problem, const MlState&
   }
   AdjustmentAnalysis out;
   if (with_information) {
-    // REML information of the variance components of the linearised model (Harville 1977;
-    // Koch, "Parameter Estimation and Hypothesis Testing in Linear Models", ch. 3.6): with
-    // whitened rows a_i, K_g = N^-1 N_g and t_g = tr K_g = n_g - r_g,
+    // REML information of the variance components of the linearised model (Harville 1977,
+    // JASA 72(358)), 1/2 tr(P E_g P E_h) with P = W - W A N^-1 A^T W. With whitened rows a_i,
+    // K_g = N^-1 N_g and t_g = tr K_g = n_g - r_g it reads
     //   I_gh = 1/2 [delta_gh (n_g - 2 t_g) + tr(K_g K_h)] / (var_g var_h),
     //   tr(K_g K_h) = sum over rows i of g and j of h of (a_i^T N^-1 a_j)^2.
-    // Rows of the motion chain are strongly correlated (a pose error persists), so every term
-    // with a process group is computed in full from X = N^-1 a_i over the 3(K-1) motion rows.
-    // Between readings only i = j is kept (sum h_i^2): each reading's neighbours share a pose
-    // or a landmark with many other readings, and for the sensor groups this reproduces the
-    // diagonal estimate, whose spread matches the seeds (docs/RESULTS.md).
+    // Motion residuals along the chain are strongly correlated (a pose error persists), so
+    // every term with a process group is computed in full from X = N^-1 a_i over the 3(K-1)
+    // motion rows. Between readings only i = j is kept (sum h_i^2): a reading shares its pose
+    // and its landmark with many others, so each cross term is small, and as the terms left
+    // out are squares the sensors' information is a lower bound (tests: against the dense form).
     Eigen::MatrixXd T = Eigen::MatrixXd::Zero(G, G);
     for (int g = 0; g < 2 * S; ++g) T(g, g) = leverage_sq[static_cast<std::size_t>(g)];
     const Eigen::Index n_motion = static_cast<Eigen::Index>(odo_rows.size());  // 3P, column c * P + k
@@ -658,7 +658,7 @@ MlNoiseResult estimateNoiseMl(const NoiseProblem& problem, const MlNoiseConfig& 
   result.noise.process.dx_var_m2 = var[static_cast<std::size_t>(2 * S)];
   result.noise.process.dy_var_m2 = var[static_cast<std::size_t>(2 * S + 1)];
   result.noise.process.dtheta_var_rad2 = var[static_cast<std::size_t>(2 * S + 2)];
-  const bool full_information = K - 1 <= config.max_stops_for_information;
+  const bool full_information = K - 1 <= config.max_motions_for_information;
   const AdjustmentAnalysis an = analyseAdjustment(problem, st, var, config.estimate_biases, full_information);
   result.bias_standard_error = an.bias_std;
   if (full_information) {
@@ -669,14 +669,16 @@ MlNoiseResult estimateNoiseMl(const NoiseProblem& problem, const MlNoiseConfig& 
       const MlGroup& grp = result.groups[static_cast<std::size_t>(g)];
       if (!(g >= 2 * S && !config.estimate_process) && grp.count > 0 && !grp.at_floor) free.push_back(g);
     }
-    Eigen::MatrixXd info(static_cast<Eigen::Index>(free.size()), static_cast<Eigen::Index>(free.size()));
-    for (std::size_t a = 0; a < free.size(); ++a)
-      for (std::size_t b = 0; b < free.size(); ++b) info(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b)) = an.fisher(free[a], free[b]);
+    const auto n_free = static_cast<Eigen::Index>(free.size());
+    Eigen::MatrixXd info(n_free, n_free);
+    for (Eigen::Index a = 0; a < n_free; ++a)
+      for (Eigen::Index b = 0; b < n_free; ++b)
+        info(a, b) = an.fisher(free[static_cast<std::size_t>(a)], free[static_cast<std::size_t>(b)]);
     Eigen::LLT<Eigen::MatrixXd> llt(info);
-    if (!free.empty() && llt.info() == Eigen::Success) {
-      const Eigen::MatrixXd cov = llt.solve(Eigen::MatrixXd::Identity(info.rows(), info.cols()));
-      for (std::size_t a = 0; a < free.size(); ++a)
-        result.groups[static_cast<std::size_t>(free[a])].standard_error = std::sqrt(cov(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(a)));
+    if (n_free > 0 && llt.info() == Eigen::Success) {
+      const Eigen::MatrixXd cov = llt.solve(Eigen::MatrixXd::Identity(n_free, n_free));
+      for (Eigen::Index a = 0; a < n_free; ++a)
+        result.groups[static_cast<std::size_t>(free[static_cast<std::size_t>(a)])].standard_error = std::sqrt(cov(a, a));
       result.standard_error_method = "information";
     }
   }

@@ -43,9 +43,9 @@ struct MlNoiseConfig {
   bool estimate_process = true;   ///< estimate the process variances (else fixed at `initial.process`)
   NoiseSetting initial;           ///< starting variances; empty sensors: 1 for the sensors, 0.01 for the process
   int solver_iterations = 50;     ///< Ceres iterations per adjustment at most
-  /// Standard errors from the full information of the variances (cost grows with the square of
-  /// the stops: 3(K-1) solves) up to this many motions; beyond, the diagonal estimate.
-  int max_stops_for_information = 1500;
+  /// Standard errors from the full information of the variances up to this many motions (K - 1);
+  /// beyond, the diagonal estimate. Cost: 3(K-1) solves and a 3(K-1)^2 matrix (72 MB at 1000).
+  int max_motions_for_information = 1000;
   void validate() const;          ///< throws InputError
 };
 
@@ -76,7 +76,7 @@ struct MlNoiseResult {
   /// "information": from the inverse REML information of the estimated variances (terms with a
   /// process group in full); "diagonal": var sqrt(2 / sum r_ii^2) per group, which ignores the
   /// correlation of the motion residuals along the chain and overstates the process errors
-  /// (used beyond max_stops_for_information, for fixed variances and those at the floor).
+  /// (used beyond max_motions_for_information, for fixed variances and those at the floor).
   std::string standard_error_method = "diagonal";
   MlState state;                      ///< adjusted poses, landmarks, biases
   std::vector<double> objective_trace;  ///< restricted -log likelihood (nats, constants dropped) at each iteration's variances

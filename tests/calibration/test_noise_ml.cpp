@@ -179,7 +179,7 @@ TEST(NoiseMl, BeyondTheInformationCapTheStandardErrorsAreDiagonalAndTheEstimateI
   const NoiseProblem problem = makeNoiseProblem(sim.observations, sim.odometry);
   const MlNoiseResult full = estimateNoiseMl(problem, MlNoiseConfig{});
   MlNoiseConfig capped;
-  capped.max_stops_for_information = problem.stops - 2;  // one motion too many
+  capped.max_motions_for_information = problem.stops - 2;  // one motion too many
   const MlNoiseResult diagonal = estimateNoiseMl(problem, capped);
   EXPECT_EQ(full.standard_error_method, "information");
   EXPECT_EQ(diagonal.standard_error_method, "diagonal");
