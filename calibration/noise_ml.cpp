@@ -360,7 +360,6 @@ AdjustmentAnalysis analyseAdjustment(const NoiseProblem& problem, const MlState&
 
   const int G = 2 * S + 3;
   std::vector<double> redundancy(static_cast<std::size_t>(G), 0.0), redundancy_sq = redundancy;
-  std::vector<double> leverage_sq = redundancy;  // per group: sum of h_i^2
   for (std::size_t i = 0; i < obs_rows.size(); ++i) {
     const ObsRow& row = obs_rows[i];
     double h = 0.0;
@@ -372,7 +371,6 @@ AdjustmentAnalysis analyseAdjustment(const NoiseProblem& problem, const MlState&
     }
     redundancy[static_cast<std::size_t>(obs_group[i])] += 1.0 - h;
     redundancy_sq[static_cast<std::size_t>(obs_group[i])] += (1.0 - h) * (1.0 - h);
-    leverage_sq[static_cast<std::size_t>(obs_group[i])] += h * h;
   }
   for (std::size_t i = 0; i < odo_rows.size(); ++i) {
     const OdoRow& row = odo_rows[i];
@@ -382,7 +380,6 @@ AdjustmentAnalysis analyseAdjustment(const NoiseProblem& problem, const MlState&
            2.0 * row.aa.dot(Mnext[static_cast<std::size_t>(row.pa)] * row.ab);
     redundancy[static_cast<std::size_t>(odo_group[i])] += 1.0 - h;
     redundancy_sq[static_cast<std::size_t>(odo_group[i])] += (1.0 - h) * (1.0 - h);
-    leverage_sq[static_cast<std::size_t>(odo_group[i])] += h * h;
   }
   AdjustmentAnalysis out;
   if (with_information) {
@@ -393,11 +390,12 @@ AdjustmentAnalysis analyseAdjustment(const NoiseProblem& problem, const MlState&
     //   tr(K_g K_h) = sum over rows i of g and j of h of (a_i^T N^-1 a_j)^2.
     // Motion residuals along the chain are strongly correlated (a pose error persists), so
     // every term with a process group is computed in full from X = N^-1 a_i over the 3(K-1)
-    // motion rows. Between readings only i = j is kept (sum h_i^2): a reading shares its pose
-    // and its landmark with many others, so each cross term is small, and as the terms left
-    // out are squares the sensors' information is a lower bound (tests: against the dense form).
+    // motion rows. Between readings only i = j is kept (sum h_i^2), so a sensor's diagonal is
+    // n_g - 2 t_g + sum h_i^2 = sum (1 - h_i)^2 and its terms with other sensors are 0: a reading
+    // shares its pose and its landmark with many others, so each cross term is small, and as the
+    // terms left out are squares the sensors' information is a lower bound (tests: against the
+    // dense form).
     Eigen::MatrixXd T = Eigen::MatrixXd::Zero(G, G);
-    for (int g = 0; g < 2 * S; ++g) T(g, g) = leverage_sq[static_cast<std::size_t>(g)];
     const Eigen::Index n_motion = static_cast<Eigen::Index>(odo_rows.size());  // 3P, column c * P + k
     if (n_motion > 0) {
       // Motion rows have no landmark or bias part: x_z = -F^T a_y, x_y = D^-1 a_y - E x_z.
@@ -445,7 +443,8 @@ AdjustmentAnalysis analyseAdjustment(const NoiseProblem& problem, const MlState&
       for (int h = 0; h < G; ++h) {
         const auto ug = static_cast<std::size_t>(g);
         double v = T(g, h);
-        if (g == h) v += static_cast<double>(count[ug]) - 2.0 * (static_cast<double>(count[ug]) - redundancy[ug]);
+        if (g == h && g < 2 * S) v = redundancy_sq[ug];
+        else if (g == h) v += static_cast<double>(count[ug]) - 2.0 * (static_cast<double>(count[ug]) - redundancy[ug]);
         out.fisher(g, h) = 0.5 * v / (variances[ug] * variances[static_cast<std::size_t>(h)]);
       }
   }
@@ -503,6 +502,8 @@ MlNoiseResult estimateNoiseMl(const NoiseProblem& problem, const MlNoiseConfig& 
     if (config.estimate_process && !(v > 0.0)) v = 0.01;
     var[static_cast<std::size_t>(2 * S + c)] = std::max(v, config.min_variance);
   }
+  // A process variance is held at its start when the process noise is given.
+  auto fixedGroup = [&](int g) { return g >= 2 * S && !config.estimate_process; };
   std::vector<double> inv_sigma(static_cast<std::size_t>(G));
   auto setWeights = [&] {
     for (int g = 0; g < G; ++g) inv_sigma[static_cast<std::size_t>(g)] = 1.0 / std::sqrt(var[static_cast<std::size_t>(g)]);
@@ -599,7 +600,7 @@ MlNoiseResult estimateNoiseMl(const NoiseProblem& problem, const MlNoiseConfig& 
       grp.redundancy = an.redundancy[ug];
       grp.sum_sq = omega[ug];
       if (count[ug] > 0) nll += 0.5 * (omega[ug] / var[ug] + static_cast<double>(count[ug]) * std::log(var[ug]));
-      const bool fixed = g >= 2 * S && !config.estimate_process;
+      const bool fixed = fixedGroup(g);
       const double r = an.redundancy[ug], r2 = an.redundancy_sq[ug];
       double updated = var[ug];
       if (!fixed && count[ug] > 0 && r > 1e-12 && r2 > 1e-24) {
@@ -667,7 +668,7 @@ MlNoiseResult estimateNoiseMl(const NoiseProblem& problem, const MlNoiseConfig& 
     std::vector<int> free;
     for (int g = 0; g < G; ++g) {
       const MlGroup& grp = result.groups[static_cast<std::size_t>(g)];
-      if (!(g >= 2 * S && !config.estimate_process) && grp.count > 0 && !grp.at_floor) free.push_back(g);
+      if (!fixedGroup(g) && grp.count > 0 && !grp.at_floor) free.push_back(g);
     }
     const auto n_free = static_cast<Eigen::Index>(free.size());
     Eigen::MatrixXd info(n_free, n_free);

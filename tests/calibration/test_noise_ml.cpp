@@ -55,13 +55,20 @@ DenseModel denseModel(const NoiseProblem& problem, MlState st, const std::vector
   return d;
 }
 
-TEST(NoiseMlRedundancy, MatchesADenseComputationWithNumericalJacobians) {
+// One lap of the small square: two sensors (one biased), process noise in all three
+// components; the dense oracles evaluate at these variances (sensors, then process).
+NoiseProblem oneLapProblem(std::uint64_t seed) {
   const ObservationScene scene = test::squareScene(1, SensorNoise{0.1, 0.04, 0.02, 0.01}, SensorNoise{0.0, 0.09, 0.0, 0.02},
                                                    ProcessNoise{0.01, 0.004, 0.001});
-  const auto sim = simulation::simulateObservations(scene, 2);
-  const NoiseProblem problem = makeNoiseProblem(sim.observations, sim.odometry);
+  const auto sim = simulation::simulateObservations(scene, seed);
+  return makeNoiseProblem(sim.observations, sim.odometry);
+}
+const std::vector<double> kOneLapVariances{0.04, 0.01, 0.09, 0.02, 0.01, 0.004, 0.001};
+
+TEST(NoiseMlRedundancy, MatchesADenseComputationWithNumericalJacobians) {
+  const NoiseProblem problem = oneLapProblem(2);
   const MlState st = initialState(problem);
-  const std::vector<double> variances{0.04, 0.01, 0.09, 0.02, 0.01, 0.004, 0.001};
+  const std::vector<double>& variances = kOneLapVariances;
 
   // Oracle: A by central differences of the residuals, N = A^T W A, r_i = 1 - (A N^-1 A^T W)_ii.
   const DenseModel d = denseModel(problem, st, variances);
@@ -86,12 +93,9 @@ TEST(NoiseMlRedundancy, MatchesADenseComputationWithNumericalJacobians) {
 }
 
 TEST(NoiseMlInformation, MatchesTheDenseRemlInformationInEveryTermWithAProcessGroup) {
-  const ObservationScene scene = test::squareScene(1, SensorNoise{0.1, 0.04, 0.02, 0.01}, SensorNoise{0.0, 0.09, 0.0, 0.02},
-                                                   ProcessNoise{0.01, 0.004, 0.001});
-  const auto sim = simulation::simulateObservations(scene, 3);
-  const NoiseProblem problem = makeNoiseProblem(sim.observations, sim.odometry);
+  const NoiseProblem problem = oneLapProblem(3);
   const MlState st = initialState(problem);
-  const std::vector<double> variances{0.04, 0.01, 0.09, 0.02, 0.01, 0.004, 0.001};
+  const std::vector<double>& variances = kOneLapVariances;
 
   // Oracle: the REML information 1/2 tr(P E_g P E_h) with P = W - W A N^-1 A^T W, A by central
   // differences, E_g the selector of group g.

@@ -14,6 +14,17 @@ namespace lidarcal::io {
 namespace {
 
 using test::TempDir;
+
+// The InputError openSequence raises for `dir` (a test failure when it opens without one).
+InputError openError(const std::filesystem::path& dir) {
+  try {
+    openSequence(dir);
+  } catch (const InputError& e) {
+    return e;
+  }
+  ADD_FAILURE() << dir << ": opened without an error";
+  return InputError(dir.string(), "", "no error");
+}
 namespace fs = std::filesystem;
 
 TEST(GroupStops, ConsecutiveEqualViewpointsFormOneStop) {
@@ -177,24 +188,16 @@ TEST(OpenSequence, ScanNumberChecksRunWhenTheNamesLeaveThePattern) {
     TempDir dir;
     for (std::size_t i = 0; i < 20; ++i) test::writeFile(dir / scanFileName(i), "headers are not read");
     test::writeFile(dir / "scan_3.pcd", "headers are not read");
-    try {
-      openSequence(dir.path());
-      FAIL();
-    } catch (const InputError& e) {
-      EXPECT_NE(std::string(e.what()).find("scan_3.pcd"), std::string::npos) << e.what();
-      EXPECT_NE(std::string(e.what()).find("same scan number as scan_000003.pcd"), std::string::npos) << e.what();
-    }
+    const std::string what = openError(dir.path()).what();
+    EXPECT_NE(what.find("scan_3.pcd"), std::string::npos) << what;
+    EXPECT_NE(what.find("same scan number as scan_000003.pcd"), std::string::npos) << what;
   }
   {
     TempDir dir;
     for (std::size_t i = 10; i < 30; ++i) test::writeFile(dir / ("s_" + std::to_string(i) + ".pcd"), "x");
     test::writeFile(dir / "s_2.pcd", "x");
-    try {
-      openSequence(dir.path());
-      FAIL();
-    } catch (const InputError& e) {
-      EXPECT_NE(std::string(e.what()).find("s_2.pcd: sorts after s_19.pcd"), std::string::npos) << e.what();
-    }
+    const std::string what = openError(dir.path()).what();
+    EXPECT_NE(what.find("s_2.pcd: sorts after s_19.pcd"), std::string::npos) << what;
   }
 }
 
@@ -322,12 +325,7 @@ TEST(ScanList, NamesAndHeadersAsGiven) {
 
 TEST(OpenSequence, EmptyDirectoryIsAnError) {
   TempDir dir;
-  try {
-    openSequence(dir.path());
-    FAIL();
-  } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("holds no .pcd file"), std::string::npos);
-  }
+  EXPECT_NE(std::string(openError(dir.path()).what()).find("holds no .pcd file"), std::string::npos);
 }
 
 TEST(OpenSequence, MissingDirectoryIsAnError) {
@@ -338,20 +336,12 @@ TEST(OpenSequence, MalformedSequenceJsonNamesTheField) {
   TempDir dir;
   writeScan(dir / "a.pcd", tinyScan({0, 0, 0}));
   test::writeFile(dir / "sequence.json", R"({"landmark_radius_m": -1})");
-  try {
-    openSequence(dir.path());
-    FAIL();
-  } catch (const InputError& e) {
-    EXPECT_EQ(e.item(), "landmark_radius_m");
-    EXPECT_NE(e.problem().find("positive"), std::string::npos);
-  }
+  const InputError radius = openError(dir.path());
+  EXPECT_EQ(radius.item(), "landmark_radius_m");
+  EXPECT_NE(radius.problem().find("positive"), std::string::npos);
   test::writeFile(dir / "sequence.json", "{ \"beams\": 3,\n oops }");
-  try {
-    openSequence(dir.path());
-    FAIL();
-  } catch (const InputError& e) {
-    EXPECT_NE(e.item().find("line 2"), std::string::npos) << e.what();
-  }
+  const InputError syntax = openError(dir.path());
+  EXPECT_NE(syntax.item().find("line 2"), std::string::npos) << syntax.what();
 }
 
 }  // namespace
