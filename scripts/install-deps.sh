@@ -27,17 +27,19 @@ if [ ${#missing[@]} -eq 0 ]; then
   exit 0
 fi
 
-SUDO=""
+# As root, apt-get runs directly; otherwise through sudo (with -E so DEBIAN_FRONTEND reaches it).
+# An array, not a string: an empty prefix must vanish, not become an empty command word.
+as_root=()
 if [ "$(id -u)" -ne 0 ]; then
   if ! command -v sudo >/dev/null; then
     echo "install-deps: missing packages: ${missing[*]}" >&2
     echo "install-deps: run this script as root or install sudo" >&2
     exit 1
   fi
-  SUDO="sudo"
+  as_root=(sudo -E)
 fi
 
 echo "install-deps: installing ${#missing[@]} missing packages: ${missing[*]}"
 export DEBIAN_FRONTEND=noninteractive
-$SUDO apt-get update -qq
-$SUDO -E apt-get install -y -qq --no-install-recommends "${missing[@]}"
+"${as_root[@]}" apt-get update -qq
+"${as_root[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}"
