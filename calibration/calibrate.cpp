@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <map>
 #include <optional>
@@ -42,6 +43,30 @@ double median(std::vector<double> v) {
   return v.size() % 2 ? v[m] : 0.5 * (v[m - 1] + v[m]);
 }
 
+/// Largest distance between two stop positions (the triangulation baseline), metres.
+double pathExtent(const std::vector<Pose2>& poses) {
+  if (poses.empty()) return 0.0;
+  double min_x = poses.front().x_m, max_x = min_x, min_y = poses.front().y_m, max_y = min_y;
+  for (const auto& p : poses) {
+    min_x = std::min(min_x, p.x_m);
+    max_x = std::max(max_x, p.x_m);
+    min_y = std::min(min_y, p.y_m);
+    max_y = std::max(max_y, p.y_m);
+  }
+  return std::hypot(max_x - min_x, max_y - min_y);
+}
+
+/// "n thing" or "n things".
+std::string count(std::size_t n, const std::string& thing) {
+  return std::to_string(n) + " " + thing + (n == 1 ? "" : "s");
+}
+
+std::string metres(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.2f m", v);
+  return buf;
+}
+
 /// Noise parameters of the requested law for a given bias, from (d, y) pairs.
 NoiseModel fitNoiseLaw(NoiseKind kind, int order, const BiasPolynomial& f, const std::vector<double>& d,
                        const std::vector<double>& y) {
@@ -71,23 +96,46 @@ NoiseModel fitNoiseLaw(NoiseKind kind, int order, const BiasPolynomial& f, const
   return n;
 }
 
+/// Runs one informational side estimator; a failure (degenerate data) is recorded, not thrown:
+/// the calibration does not depend on it.
+template <class Fn>
+void sideEstimator(NoiseFits& nf, const char* name, Fn&& fn) {
+  try {
+    fn();
+  } catch (const std::exception& e) {
+    nf.unavailable[name] = e.what();
+  }
+}
+
 void fillNoiseFits(CalibrationModel& m, int order, const std::vector<double>& d, const std::vector<double>& y,
                    const std::vector<std::vector<double>>& batches) {
+  NoiseFits& nf = m.noise_fits;
+  nf = NoiseFits{};
   std::vector<double> r(d.size());
   for (std::size_t i = 0; i < d.size(); ++i) r[i] = y[i] - m.model.bias(d[i]);
   const int noise_order = std::max(order, 1);
-  m.noise_fits.seed000_beta = fitNoisePolynomial(d, r, noise_order);
+  sideEstimator(nf, "seed000_beta", [&] { nf.seed000_beta = fitNoisePolynomial(d, r, noise_order); });
   const int bias_order = std::max(order, 1);
-  const Seed004Fit cf = fitSeed004ClosedForm(d, y, bias_order);
-  m.noise_fits.seed004_cf_alpha = cf.alpha;
-  m.noise_fits.seed004_cf_sigma_e = cf.sigma_e;
-  const Seed004Fit ml = fitSeed004ML(d, y, cf.alpha);
-  m.noise_fits.seed004_ml_alpha = ml.alpha;
-  m.noise_fits.seed004_ml_sigma_e = ml.sigma_e;
-  const NoiseExponentTest t = testNoiseExponent(batches);
-  m.noise_fits.exponent_loglik = t.log_likelihood;
-  m.noise_fits.exponent_best = t.best;
-  m.noise_fits.exponent_batches = t.batches;
+  sideEstimator(nf, "seed004_closed_form", [&] {
+    const Seed004Fit cf = fitSeed004ClosedForm(d, y, bias_order);
+    nf.seed004_cf_alpha = cf.alpha;
+    nf.seed004_cf_sigma_e = cf.sigma_e;
+  });
+  if (!nf.seed004_cf_alpha.empty()) {
+    sideEstimator(nf, "seed004_ml", [&] {
+      const Seed004Fit ml = fitSeed004ML(d, y, nf.seed004_cf_alpha);
+      nf.seed004_ml_alpha = ml.alpha;
+      nf.seed004_ml_sigma_e = ml.sigma_e;
+    });
+  } else {
+    nf.unavailable["seed004_ml"] = "starts from the closed form, which could not run";
+  }
+  sideEstimator(nf, "exponent_test", [&] {
+    const NoiseExponentTest t = testNoiseExponent(batches);
+    nf.exponent_loglik = t.log_likelihood;
+    nf.exponent_best = t.best;
+    nf.exponent_batches = t.batches;
+  });
 }
 
 void fillOrders(CalibrationModel& m, const OrderSelection& sel, std::size_t n) {
@@ -335,6 +383,9 @@ std::vector<RangePair> closedFormPairs(const LandmarkObservations& obs, const st
     if (!std::isfinite(b.range_m)) continue;
     const Pose2& p = obs.commanded.at(s.stop);
     const double d = rayCircleDistance(p.x_m, p.y_m, p.yaw_rad + b.angle_rad, it->second->x_m, it->second->y_m, radius_m);
+    // A beam that meets the triangulated circle behind the stop (or at it) cannot have read this
+    // landmark: the triangulation placed it badly. Such a pair says nothing about f.
+    if (!(d > 0.0) || !std::isfinite(d)) continue;
     // The paper's split (seed 000 section 4.3) into fit / choose / test thirds: by scan within
     // the stop when a stop has at least three scans, else by (landmark, stop).
     const int part = per_stop.at(s.stop) >= 3 ? static_cast<int>(position.at(s.scan) % 3)
@@ -375,6 +426,18 @@ CalibrationModel calibrate(const LandmarkObservations& obs, const CalibrationCon
   m.model.range_min_m = obs.range_min_m;
   m.model.range_max_m = obs.range_max_m;
 
+  // Triangulating from bearings needs the sensor to translate: stops at one place (a sensor
+  // turning on the spot, or standing still) give every landmark the same bearing line.
+  const double baseline = pathExtent(obs.commanded);
+  if (!obs.sightings.empty() && baseline < config.min_baseline_m) {
+    m.status = "no_baseline";
+    m.message = "the " + count(obs.commanded.size(), "stop") + " lie within " + metres(baseline) +
+                " of each other (the sensor turned or stood still), so the landmarks cannot be placed from their "
+                "bearings: record stops along a straight line of at least 1 m (a quarter of the distance to the poles "
+                "or more), or give measured distances with --reference (docs/FORMAT.md)";
+    return m;
+  }
+
   // Stage 1: triangulation.
   const auto tri = triangulateAll(obs, config.triangulation);
   const double radius = landmarkRadius(obs);
@@ -409,8 +472,19 @@ CalibrationModel calibrate(const LandmarkObservations& obs, const CalibrationCon
   const auto pairs = closedFormPairs(obs, tri, radius, false);
   const auto scan_pairs = closedFormPairs(obs, tri, radius, true);
   if (pairs.size() < static_cast<std::size_t>(config.max_order) + 3) {
+    std::size_t read = 0;  // sightings with a finite central reading on a triangulated landmark
+    for (const auto& s : obs.sightings)
+      for (const auto& l : tri)
+        if (l.ok() && l.id == s.landmark && !s.beams.empty() && std::isfinite(s.beams[centralBeam(s)].range_m)) ++read;
     m.status = "too_few_observations";
-    m.message = "only " + std::to_string(pairs.size()) + " landmark-stop distances: add stops or landmarks";
+    m.message = "only " + count(pairs.size(), "landmark-stop distance") + " from " + count(static_cast<std::size_t>(usable), "triangulated landmark") +
+                " (at least " + std::to_string(config.max_order + 3) + " needed)";
+    if (read > 0 && pairs.empty())
+      m.message += ": none of the " + count(read, "reading") +
+                   " meets its triangulated landmark in front of the sensor, so the bearing-only positions are wrong "
+                   "(a path of " + metres(baseline) + " is short for landmarks this far)";
+    m.message += ": record more stops along a longer straight line past 3 or more poles, or give measured distances with "
+                 "--reference";
     return m;
   }
   const bool window_known = obs.range_max_m < 1e8;
@@ -438,7 +512,10 @@ CalibrationModel calibrate(const LandmarkObservations& obs, const CalibrationCon
   const JointResult& j = js.result;
   if (j.poses.empty()) {
     m.status = "joint_failed";
-    m.message = j.message;
+    m.message = j.message + " (" + count(static_cast<std::size_t>(usable), "landmark") + " triangulated over a path of " +
+                metres(baseline) + ": the beams that saw them do not meet the triangulated circles). Record stops along "
+                "a longer straight line past 3 or more poles, give the pole radius (--radius), or use --method "
+                "closed-form";
     return m;
   }
   // A solution that puts a landmark where the sensor could not have read it (distances far

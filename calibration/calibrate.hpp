@@ -36,6 +36,9 @@ struct CalibrationConfig {
   NoiseKind noise = NoiseKind::squared;               ///< noise law of the calibrated model
   TriangulationConfig triangulation;                  ///< stage 1 settings
   JointConfig joint;                                  ///< stage 3 settings (order is chosen here)
+  /// The stops must span at least this distance (metres) for the landmarks to be triangulated
+  /// from bearings; below it calibrate() returns status no_baseline. Default 0.1 m.
+  double min_baseline_m = 0.1;
   void validate() const;                              ///< throws std::invalid_argument
 };
 

@@ -74,6 +74,10 @@ struct JointConfig {
   int outer_iterations = 6;       ///< noise re-estimations at most
   int max_solver_iterations = 200;  ///< Ceres iterations per solve
   bool covariance = true;         ///< compute the covariance of the bias coefficients
+  /// Up to this many parameters the covariance comes from a dense SVD of the Jacobian (a
+  /// pseudo-inverse if the data leave a direction free); beyond, from a sparse QR, whose memory
+  /// grows with the poses instead of readings x parameters. Default 2000 (about 600 poses).
+  int dense_covariance_max_parameters = 2000;
   JointEffects effects;           ///< effect terms (all off: the seeds' model plus per-stop poses)
   bool keep_all_beams = false;    ///< use every beam of every sighting (the caller selected them); ignores lateral_fraction
   bool settle_geometry = true;    ///< first solve with the bias held (off when starting from a converged solution)

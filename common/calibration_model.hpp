@@ -44,6 +44,9 @@ struct NoiseFits {
   std::array<double, 4> exponent_loglik{};     ///< seed 004 eq. 15 for H0..H3
   int exponent_best = -1;                      ///< argmax of the above; -1 when not testable
   std::size_t exponent_batches = 0;            ///< constant-distance batches used
+  /// Estimators that could not run on these data, by name ("seed000_beta", "seed004_closed_form",
+  /// "seed004_ml", "exponent_test") -> why. They are informational: the calibration stands without them.
+  std::map<std::string, std::string> unavailable;
 };
 
 struct CalibrationModel {

@@ -78,6 +78,11 @@ void writeModel(const std::filesystem::path& file, const CalibrationModel& m) {
                                 {"readings", m.readings},
                                 {"pose_scatter_m", m.pose_scatter_m},
                                 {"heading_scatter_rad", m.heading_scatter_rad}}}};
+  if (!nf.unavailable.empty()) {
+    ojson na = ojson::object();
+    for (const auto& [k, v] : nf.unavailable) na[k] = v;
+    j["noise_estimators"]["unavailable"] = na;
+  }
   if (!m.effects.empty()) {
     ojson fx = ojson::object();
     for (const auto& [k, v] : m.effects) fx[k] = number(v);

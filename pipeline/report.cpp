@@ -241,6 +241,7 @@ void writeReport(const std::filesystem::path& dir, const ReportInputs& in) {
      << num(nf.seed004_cf_sigma_e, 5) << " |\n";
   md << "| seed 004 full ML (eqs. 18-20) | f = " << polynomialText(nf.seed004_ml_alpha) << ", sigma_e = "
      << num(nf.seed004_ml_sigma_e, 5) << " |\n";
+  for (const auto& [name, reason] : nf.unavailable) md << "| " << name << " | not available: " << reason << " |\n";
   if (nf.exponent_best >= 0) {
     md << "\nSeed 004's noise-exponent test (eqs. 10-15) on " << nf.exponent_batches
        << " constant-distance batches (one beam over the scans of a stop): log-likelihood of y = f + f^k e for k = 0..3: ";

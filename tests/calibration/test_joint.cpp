@@ -128,6 +128,36 @@ TEST(Calibrate, JointComesCloseToTheGroundTruthFitAndBeatsTheClosedFormUnderLarg
   }
 }
 
+TEST(JointRefinement, SparseAndDenseCovarianceAgree) {
+  // Long sequences take the sparse QR (memory linear in the poses); short ones the dense SVD.
+  // Both must give the same blocks where the Jacobian has full rank.
+  const auto cfg = paperField(0.02, 0.5, 0.0019176);
+  for (std::uint64_t seed = 1; seed <= 3; ++seed) {
+    SCOPED_TRACE(seed);
+    const auto sample = simulation::simulateLandmarkLevel(cfg, seed);
+    const auto tri = triangulateAll(sample.obs, TriangulationConfig{});
+    JointInit init;
+    init.poses = sample.obs.commanded;
+    for (const auto& l : tri) init.centres[l.id] = Eigen::Vector2d(l.x_m, l.y_m);
+    init.radius_m = 0.12;
+    init.model = cfg.model;
+    JointConfig jc;
+    jc.dense_covariance_max_parameters = 1 << 30;
+    const auto dense = refineJoint(sample.obs, init, jc);
+    jc.dense_covariance_max_parameters = 0;
+    const auto sparse = refineJoint(sample.obs, init, jc);
+    ASSERT_EQ(dense.alpha_covariance.rows(), 3);
+    ASSERT_EQ(sparse.alpha_covariance.rows(), 3);
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        EXPECT_NEAR(sparse.alpha_covariance(i, j), dense.alpha_covariance(i, j),
+                    1e-6 * std::sqrt(dense.alpha_covariance(i, i) * dense.alpha_covariance(j, j)));
+    ASSERT_EQ(sparse.centre_covariance.size(), dense.centre_covariance.size());
+    for (const auto& [id, c] : dense.centre_covariance)
+      EXPECT_LT((sparse.centre_covariance.at(id) - c).norm(), 1e-6 * c.norm()) << "landmark " << id;
+  }
+}
+
 TEST(Calibrate, NoLandmarkGivesAStatusNotACrash) {
   LandmarkObservations obs;
   obs.commanded = {Pose2{}, Pose2{0.3, 0, 0}, Pose2{0.6, 0, 0}};
