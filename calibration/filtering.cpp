@@ -1,11 +1,52 @@
 #include "calibration/filtering.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
 namespace lidarcal::calibration {
 
-io::Scan correctScan(const io::Scan& scan, const RangeInverter& inverter, FilteringStats* stats) {
+const char* toString(Outside o) {
+  switch (o) {
+    case Outside::keep: return "keep";
+    case Outside::extrapolate: return "extrapolate";
+    case Outside::drop: return "drop";
+  }
+  return "?";
+}
+
+bool parseOutside(const std::string& name, Outside& out) {
+  for (Outside o : {Outside::keep, Outside::extrapolate, Outside::drop})
+    if (name == toString(o)) {
+      out = o;
+      return true;
+    }
+  return false;
+}
+
+CorrectionWindow correctionWindow(const CalibrationModel& model, Outside outside) {
+  CorrectionWindow w;
+  w.outside = outside;
+  if (model.fitted_range_m && outside != Outside::extrapolate) {
+    w.reading_min_m = model.model.bias(model.fitted_range_m->first);
+    w.reading_max_m = model.model.bias(model.fitted_range_m->second);
+  }
+  return w;
+}
+
+RangeInverter modelInverter(const CalibrationModel& model, InversionMethod method, Outside outside) {
+  InversionConfig c = inversionWindow(model.model, method);
+  if (model.fitted_range_m && outside != Outside::extrapolate) {
+    const auto [lo, hi] = *model.fitted_range_m;
+    const double margin = 0.05 * (hi - lo);
+    c.d_min_m = std::max(0.0, lo - margin);
+    c.d_max_m = hi + margin;
+  }
+  return RangeInverter(model.model, c);
+}
+
+io::Scan correctScan(const io::Scan& scan, const RangeInverter& inverter, FilteringStats* stats,
+                     const CorrectionWindow& window) {
   io::Scan out;
   out.name = scan.name;
   out.viewpoint = scan.viewpoint;
@@ -19,6 +60,14 @@ io::Scan correctScan(const io::Scan& scan, const RangeInverter& inverter, Filter
   for (auto& p : *out.cloud) {
     if (!std::isfinite(p.x) || !std::isfinite(p.y)) continue;
     const double r = std::hypot(static_cast<double>(p.x), static_cast<double>(p.y));
+    if ((r < window.reading_min_m || r > window.reading_max_m) && window.outside != Outside::extrapolate) {
+      ++s.outside;
+      if (window.outside == Outside::drop) {
+        p.x = p.y = p.z = kNaN;
+        out.cloud->is_dense = false;
+      }
+      continue;
+    }
     const auto d = inverter.invert(r);
     if (!d || !(r > 0.0)) {
       p.x = p.y = p.z = kNaN;

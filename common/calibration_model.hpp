@@ -6,6 +6,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "common/pose2.hpp"
@@ -63,6 +64,12 @@ struct CalibrationModel {
   std::vector<CalibratedLandmark> landmarks;  ///< landmark map
   std::vector<Pose2> stop_poses;     ///< pose of each stop: refined (joint) or commanded (closed form)
   std::vector<double> alpha_covariance;       ///< row-major (n+1)x(n+1), empty when not computed
+  /// True distances the fit saw, [min, max] metres. The model says nothing outside: `correct`
+  /// leaves readings beyond f(min)..f(max) as they are unless told otherwise. Unset (models
+  /// written before it was recorded): the whole range window.
+  std::optional<std::pair<double, double>> fitted_range_m;
+  /// What a user should read before trusting the model (plausibility checks); empty when none.
+  std::vector<std::string> warnings;
   /// Effect terms the joint refinement estimated with them (`calibrate --effects`, name with
   /// unit -> value, e.g. "range_drift_m_per_scan"); empty without effects. They describe the
   /// calibration data; `correct` applies the bias only.

@@ -32,6 +32,15 @@ struct Sighting {
   std::vector<BeamReading> beams;  ///< raw readings of the beams on the landmark, in beam order
 };
 
+/// A flat surface (wall) found in one scan: the line fitted to its points, in the sensor frame.
+struct WallSighting {
+  std::size_t stop = 0;            ///< stop index (0-based)
+  std::size_t scan = 0;            ///< scan index in the sequence (0-based)
+  double normal_rad = 0.0;         ///< direction from the sensor to the nearest point of the line, radians
+  double distance_m = 0.0;         ///< perpendicular distance from the sensor to the line, metres
+  std::vector<BeamReading> beams;  ///< raw readings of the beams on the wall, in beam order
+};
+
 /// Everything calibration needs from a sequence.
 struct LandmarkObservations {
   std::vector<Pose2> commanded;           ///< commanded pose of each stop (VIEWPOINT)
@@ -39,6 +48,8 @@ struct LandmarkObservations {
   std::optional<double> landmark_radius_m;  ///< common landmark radius when known
   double range_min_m = 0.0;               ///< sensor reporting window, metres
   double range_max_m = 1e9;               ///< sensor reporting window, metres
+  /// Walls seen at the stops that a reference measures a wall at (empty otherwise).
+  std::vector<WallSighting> walls;
 };
 
 }  // namespace lidarcal

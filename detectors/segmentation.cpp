@@ -14,15 +14,32 @@ void SegmentationConfig::validate() const {
   if (!(gap_m > 0.0) || !std::isfinite(gap_m)) fail("gap_m", "must be > 0");
   if (!(gap_per_m >= 0.0) || !std::isfinite(gap_per_m)) fail("gap_per_m", "must be >= 0");
   if (max_missing_beams < 0) fail("max_missing_beams", "must be >= 0");
+  if (!(breakpoint_angle_rad >= 0.0 && breakpoint_angle_rad < 1.5707963267948966))
+    fail("breakpoint_angle_rad", "must be in [0, pi/2)");
+  if (!(breakpoint_noise_m >= 0.0) || !std::isfinite(breakpoint_noise_m)) fail("breakpoint_noise_m", "must be >= 0");
+  if (!(breakpoint_noise_per_m2 >= 0.0) || !std::isfinite(breakpoint_noise_per_m2))
+    fail("breakpoint_noise_per_m2", "must be >= 0");
 }
 
 namespace {
 
 bool valid(const pcl::PointXYZI& p) { return std::isfinite(p.x) && std::isfinite(p.y); }
 
+/// Angle between the beams of two returns, radians, in [0, pi].
+double beamAngle(const pcl::PointXYZI& a, const pcl::PointXYZI& b) {
+  return std::abs(std::atan2(double(a.x) * b.y - double(a.y) * b.x, double(a.x) * b.x + double(a.y) * b.y));
+}
+
 bool neighbours(const pcl::PointXYZI& a, const pcl::PointXYZI& b, const SegmentationConfig& cfg) {
   const double ra = std::hypot(a.x, a.y), rb = std::hypot(b.x, b.y);
-  const double gap = cfg.gap_m + cfg.gap_per_m * 0.5 * (ra + rb);
+  double gap = cfg.gap_m + cfg.gap_per_m * 0.5 * (ra + rb);
+  const double dphi = beamAngle(a, b);
+  if (cfg.breakpoint_angle_rad > 0.0 && dphi < cfg.breakpoint_angle_rad) {
+    const double r = std::min(ra, rb);
+    const double abd = r * std::sin(dphi) / std::sin(cfg.breakpoint_angle_rad - dphi) + cfg.breakpoint_noise_m +
+                       cfg.breakpoint_noise_per_m2 * r * r;
+    gap = std::min(gap, abd);
+  }
   return std::hypot(double(a.x) - b.x, double(a.y) - b.y) <= gap;
 }
 
@@ -59,8 +76,7 @@ double estimateAngularStep(const pcl::PointCloud<pcl::PointXYZI>& cloud) {
   for (std::size_t i = 1; i < cloud.size(); ++i) {
     const auto &a = cloud[i - 1], &b = cloud[i];
     if (!valid(a) || !valid(b)) continue;
-    const double d = std::atan2(double(a.x) * b.y - double(a.y) * b.x, double(a.x) * b.x + double(a.y) * b.y);
-    steps.push_back(std::abs(d));
+    steps.push_back(beamAngle(a, b));
   }
   if (steps.empty()) return 0.0;
   const auto mid = steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2);

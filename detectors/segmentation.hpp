@@ -1,6 +1,7 @@
 #pragma once
 // Splits a 2D scan into clusters of neighbouring returns, walking the beams in scan order: a new
-// cluster starts where two consecutive returns are farther apart than a range-dependent gap or
+// cluster starts where two consecutive returns are farther apart than a range-dependent gap (the
+// smaller of a fixed gap growing with range and the adaptive breakpoint of Borges & Aldon) or
 // where more than a few beams in a row have no return. A 360-degree scan is closed: the last
 // cluster joins the first when the two ends are neighbours.
 
@@ -19,6 +20,15 @@ struct SegmentationConfig {
   double gap_per_m = 0.06;
   /// Beams without return (NaN) tolerated inside a cluster. Default 1.
   int max_missing_beams = 1;
+  /// Adaptive breakpoint (Borges & Aldon 2004): neighbours at range r, dphi apart, also split
+  /// when farther apart than r sin(dphi) / sin(lambda - dphi) + the noise allowance below, i.e.
+  /// when the surface between them would be inclined less than lambda to the beams. On a sensor
+  /// with fine angular steps (0.25 degree) this cuts the mixed pixels that bridge a near target
+  /// and the wall behind it, which the fixed gap above lets through. lambda in radians; 0 turns
+  /// it off. Default 10 degrees.
+  double breakpoint_angle_rad = 0.17453292519943295;
+  double breakpoint_noise_m = 0.02;        ///< noise allowance at range 0, metres. Default 0.02
+  double breakpoint_noise_per_m2 = 0.005;  ///< its growth with range squared, 1/m. Default 0.005
 
   /// Throws std::invalid_argument naming the first bad field.
   void validate() const;

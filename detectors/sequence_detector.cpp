@@ -367,10 +367,15 @@ SequenceDetections detectSequence(std::size_t scan_count, const ScanLoader& load
 
 SequenceDetections detectSequence(const io::Sequence& sequence, const SequenceDetectionConfig& config,
                                   const ProgressCallback& on_scan) {
+  return detectSequence(sequence, loaderOf(sequence), config, on_scan);
+}
+
+SequenceDetections detectSequence(const io::Sequence& sequence, const ScanLoader& load,
+                                  const SequenceDetectionConfig& config, const ProgressCallback& on_scan) {
   SequenceDetectionConfig cfg = config;
   if (!cfg.detection.landmark_radius_m && cfg.use_sequence_radius && sequence.meta.landmark_radius_m)
     cfg.detection.landmark_radius_m = sequence.meta.landmark_radius_m;
-  return detectSequenceImpl(sequence.scans.size(), loaderOf(sequence), stopsOf(sequence), cfg, on_scan);
+  return detectSequenceImpl(sequence.scans.size(), load, stopsOf(sequence), cfg, on_scan);
 }
 
 void forEachScan(const SequenceDetections& r, std::size_t scan_count, const ScanLoader& load,
@@ -380,7 +385,12 @@ void forEachScan(const SequenceDetections& r, std::size_t scan_count, const Scan
 
 void forEachScan(const SequenceDetections& result, const io::Sequence& sequence, const ScanVisitor& visit,
                  const ProgressCallback& on_scan) {
-  forEachScanImpl(result, sequence.scans.size(), loaderOf(sequence), stopsOf(sequence), visit, on_scan);
+  forEachScan(result, sequence, loaderOf(sequence), visit, on_scan);
+}
+
+void forEachScan(const SequenceDetections& result, const io::Sequence& sequence, const ScanLoader& load,
+                 const ScanVisitor& visit, const ProgressCallback& on_scan) {
+  forEachScanImpl(result, sequence.scans.size(), load, stopsOf(sequence), visit, on_scan);
 }
 
 std::vector<std::uint32_t> scanLabels(const ScanDetections& detections, const std::vector<int>& ids, std::size_t points) {

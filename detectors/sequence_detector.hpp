@@ -98,6 +98,10 @@ SequenceDetections detectSequence(std::size_t scan_count, const ScanLoader& load
 SequenceDetections detectSequence(const io::Sequence& sequence, const SequenceDetectionConfig& config,
                                   const ProgressCallback& on_scan = {});
 
+/// The same with the scans of `sequence` obtained from `load` (e.g. corrected on the fly).
+SequenceDetections detectSequence(const io::Sequence& sequence, const ScanLoader& load,
+                                  const SequenceDetectionConfig& config, const ProgressCallback& on_scan = {});
+
 /// Receives scan `scan`'s detections of the final pass and their landmark ids (0: none).
 using ScanVisitor = std::function<void(std::size_t scan, const ScanDetections& detections, const std::vector<int>& ids)>;
 
@@ -112,6 +116,10 @@ void forEachScan(const SequenceDetections& result, std::size_t scan_count, const
 /// The same over a sequence directory.
 void forEachScan(const SequenceDetections& result, const io::Sequence& sequence, const ScanVisitor& visit,
                  const ProgressCallback& on_scan = {});
+
+/// The same with the scans obtained from `load` (the loader given to detectSequence).
+void forEachScan(const SequenceDetections& result, const io::Sequence& sequence, const detectors::ScanLoader& load,
+                 const ScanVisitor& visit, const ProgressCallback& on_scan = {});
 
 /// Labels of one scan: 0 background, the landmark id on the inliers of each associated detection.
 std::vector<std::uint32_t> scanLabels(const ScanDetections& detections, const std::vector<int>& ids, std::size_t points);

@@ -24,6 +24,18 @@ ojson noiseJson(const NoiseModel& n) {
   return j;
 }
 
+/// The bias with the standard error of each coefficient (from alpha_covariance, when computed).
+ojson biasJson(const CalibrationModel& m) {
+  ojson j{{"order", m.model.bias.order()}, {"alpha", m.model.bias.alpha}};
+  const std::size_t n = m.model.bias.alpha.size();
+  if (m.alpha_covariance.size() == n * n) {
+    ojson se = ojson::array();
+    for (std::size_t i = 0; i < n; ++i) se.push_back(number(std::sqrt(m.alpha_covariance[i * n + i])));
+    j["standard_error"] = se;
+  }
+  return j;
+}
+
 }  // namespace
 
 void writeModel(const std::filesystem::path& file, const CalibrationModel& m) {
@@ -53,7 +65,7 @@ void writeModel(const std::filesystem::path& file, const CalibrationModel& m) {
           {"method", m.method},
           {"sensor", ojson{{"name", m.sensor_name}, {"beams", m.beams ? ojson(*m.beams) : ojson(nullptr)},
                            {"range_min_m", m.model.range_min_m}, {"range_max_m", m.model.range_max_m}}},
-          {"bias", ojson{{"order", m.model.bias.order()}, {"alpha", m.model.bias.alpha}}},
+          {"bias", biasJson(m)},
           {"noise", noiseJson(m.model.noise)},
           {"sigma_theta_rad", m.sigma_theta_rad},
           {"alpha_covariance", m.alpha_covariance},
@@ -78,6 +90,12 @@ void writeModel(const std::filesystem::path& file, const CalibrationModel& m) {
                                 {"readings", m.readings},
                                 {"pose_scatter_m", m.pose_scatter_m},
                                 {"heading_scatter_rad", m.heading_scatter_rad}}}};
+  if (m.fitted_range_m) {
+    const auto [lo, hi] = *m.fitted_range_m;
+    j["fitted_range"] = ojson{{"d_min_m", lo}, {"d_max_m", hi}, {"reading_min_m", m.model.bias(lo)},
+                              {"reading_max_m", m.model.bias(hi)}};
+  }
+  if (!m.warnings.empty()) j["warnings"] = m.warnings;
   if (!nf.unavailable.empty()) {
     ojson na = ojson::object();
     for (const auto& [k, v] : nf.unavailable) na[k] = v;
@@ -134,6 +152,18 @@ CalibrationModel readModel(const std::filesystem::path& file) {
       e.requireObject();
       m.stop_poses.push_back(Pose2{e.getNumber("x_m"), e.getNumber("y_m"), e.getNumber("yaw_rad")});
     }
+  if (root.has("fitted_range")) {
+    const JsonView fr = root.child("fitted_range");
+    const double lo = fr.getNonNegative("d_min_m"), hi = fr.getPositive("d_max_m");
+    if (!(lo < hi)) fr.fail("d_min_m", "must be smaller than d_max_m");
+    m.fitted_range_m = std::make_pair(lo, hi);
+  }
+  if (root.has("warnings"))
+    for (const auto& w : root.array("warnings")) m.warnings.push_back(w.json().is_string() ? w.json().get<std::string>() : w.json().dump());
+  if (root.has("alpha_covariance")) {
+    const std::vector<double> c = root.getNumbers("alpha_covariance");
+    if (c.size() == m.model.bias.alpha.size() * m.model.bias.alpha.size()) m.alpha_covariance = c;
+  }
   if (root.has("effects")) {
     const JsonView fx = root.child("effects");
     fx.requireObject();

@@ -25,9 +25,10 @@ namespace {
 
 /// Takes scan i (at `v`) into the stops: the last stop's when within the tolerance of its
 /// commanded pose, else a new stop.
-void addToStops(std::vector<Stop>& stops, std::size_t i, const Pose2& v, const StopTolerance& tol) {
+void addToStops(std::vector<Stop>& stops, std::size_t i, const Pose2& v, const StopTolerance& tol,
+                bool starts_stop = false) {
   bool same = false;
-  if (!stops.empty()) {
+  if (!stops.empty() && !starts_stop) {
     const Pose2& c = stops.back().commanded;
     same = std::hypot(v.x_m - c.x_m, v.y_m - c.y_m) <= tol.position_m &&
            std::abs(wrapAngle(v.yaw_rad - c.yaw_rad)) <= tol.yaw_rad;
@@ -40,9 +41,11 @@ void addToStops(std::vector<Stop>& stops, std::size_t i, const Pose2& v, const S
 
 }  // namespace
 
-std::vector<Stop> groupStops(const std::vector<Pose2>& viewpoints, const StopTolerance& tol) {
+std::vector<Stop> groupStops(const std::vector<Pose2>& viewpoints, const StopTolerance& tol,
+                             const std::vector<std::size_t>& starts) {
   std::vector<Stop> stops;
-  for (std::size_t i = 0; i < viewpoints.size(); ++i) addToStops(stops, i, viewpoints[i], tol);
+  for (std::size_t i = 0; i < viewpoints.size(); ++i)
+    addToStops(stops, i, viewpoints[i], tol, std::binary_search(starts.begin(), starts.end(), i));
   return stops;
 }
 
@@ -443,9 +446,23 @@ Sequence openSequence(const fs::path& dir, const StopTolerance& tol) {
     seq.scans = ScanList(dirOf(files.front()), files);
     std::vector<std::string>().swap(files);
   }
+  std::size_t next_start = 0;  // the next of seq.meta.stop_starts (sorted) to meet
   for (std::size_t i = 0; i < n; ++i) {
     const fs::path f = seq.scans.path(i);
     const ScanHeader h = readScanHeader(f);
+    bool starts_stop = false;
+    if (next_start < seq.meta.stop_starts.size()) {
+      const std::string name = f.filename().string();
+      // Scans come in name order: a listed name before this one was not among them.
+      if (seq.meta.stop_starts[next_start] < name)
+        throw InputError((dir / "sequence.json").string(), "stop_starts",
+                         "names '" + seq.meta.stop_starts[next_start] + "', which is not a scan of this directory",
+                         "remove it from stop_starts or restore the scan");
+      if (seq.meta.stop_starts[next_start] == name) {
+        starts_stop = true;
+        ++next_start;
+      }
+    }
     seq.scans.setHeader(i, h);
     if (seq.meta.beams && h.points != static_cast<std::size_t>(*seq.meta.beams))
       throw InputError(f.string(), "POINTS",
@@ -453,8 +470,12 @@ Sequence openSequence(const fs::path& dir, const StopTolerance& tol) {
                            std::to_string(*seq.meta.beams) + ": scans of another sensor (or another mode) mixed in",
                        "keep one sensor's scans per sequence directory; if this sensor's beam count varies from scan "
                        "to scan, remove `beams` from sequence.json");
-    addToStops(seq.stops, i, h.viewpoint, tol);
+    addToStops(seq.stops, i, h.viewpoint, tol, starts_stop);
   }
+  if (next_start < seq.meta.stop_starts.size())
+    throw InputError((dir / "sequence.json").string(), "stop_starts",
+                     "names '" + seq.meta.stop_starts[next_start] + "', which is not a scan of this directory",
+                     "remove it from stop_starts or restore the scan");
   seq.stops.shrink_to_fit();
   seq.scans.shrink_to_fit();
   return seq;
@@ -489,6 +510,13 @@ SequenceMeta readSequenceMeta(const fs::path& file) {
   if (v.has("range_min_m")) m.range_min_m = v.getNonNegative("range_min_m");
   if (v.has("range_max_m")) m.range_max_m = v.getPositive("range_max_m");
   if (v.has("beams")) m.beams = v.getPositiveInt("beams");
+  if (v.has("stop_starts")) {
+    for (const auto& e : v.array("stop_starts")) m.stop_starts.push_back(e.json().is_string() ? e.json().get<std::string>() : "");
+    for (std::size_t k = 0; k < m.stop_starts.size(); ++k)
+      if (m.stop_starts[k].empty() || (k > 0 && !(m.stop_starts[k - 1] < m.stop_starts[k])))
+        throw InputError(file.string(), "stop_starts[" + std::to_string(k) + "]",
+                         "must be scan file names, each once, in sorted order", "fix sequence.json");
+  }
   if (m.range_min_m && m.range_max_m && *m.range_min_m >= *m.range_max_m)
     throw InputError(file.string(), "range_min_m", "must be smaller than range_max_m", "fix sequence.json");
   return m;
@@ -501,6 +529,7 @@ void writeSequenceMeta(const fs::path& file, const SequenceMeta& m) {
   if (m.range_min_m) j["range_min_m"] = *m.range_min_m;
   if (m.range_max_m) j["range_max_m"] = *m.range_max_m;
   if (m.beams) j["beams"] = *m.beams;
+  if (!m.stop_starts.empty()) j["stop_starts"] = m.stop_starts;
   writeTextAtomically(file, j.dump(2) + "\n");
 }
 

@@ -23,6 +23,10 @@ struct SequenceMeta {
   std::optional<double> range_min_m;            ///< smallest range the sensor reports
   std::optional<double> range_max_m;            ///< largest range the sensor reports
   std::optional<int> beams;                     ///< beams per scan
+  /// Scan files that begin a new stop even where the VIEWPOINT does not change (recordings
+  /// taken apart at one pose, e.g. `lidarcal import --stop-per-input`), sorted; empty: stops
+  /// by VIEWPOINT alone.
+  std::vector<std::string> stop_starts;
 };
 
 /// Scan indices first, first + 1, ..., first + size - 1 (a stop's scans are consecutive).
@@ -170,14 +174,17 @@ struct Sequence {
   std::size_t stopOf(std::size_t i) const;
 };
 
-/// Groups consecutive viewpoints into stops.
-std::vector<Stop> groupStops(const std::vector<Pose2>& viewpoints, const StopTolerance& tol = {});
+/// Groups consecutive viewpoints into stops; a scan whose index is in `starts` (sorted) begins
+/// a new stop whatever its viewpoint.
+std::vector<Stop> groupStops(const std::vector<Pose2>& viewpoints, const StopTolerance& tol = {},
+                             const std::vector<std::size_t>& starts = {});
 
 /// Lists and checks a sequence directory (headers and sequence.json only). Throws InputError
 /// when the directory is missing, holds no .pcd file, a header is bad, a scan file ends in
 /// `.PCD` (any case but `.pcd`), two names carry one scan number (`scan_1.pcd`, `scan_0001.pcd`)
 /// or numbers without zero padding would be read out of order (`scan_10.pcd` before
-/// `scan_2.pcd`), or a scan's point count differs from sequence.json `beams`.
+/// `scan_2.pcd`), a scan's point count differs from sequence.json `beams`, or a name in
+/// sequence.json `stop_starts` is not a scan of the directory.
 Sequence openSequence(const std::filesystem::path& dir, const StopTolerance& tol = {});
 
 /// Fewest and most points in a scan of the sequence (equal when every scan has one beam count).

@@ -60,6 +60,10 @@ bool SequenceWriter::add(const RawScan& raw) {
     }
   }
   scratch_.name = scanFileName(summary_.written);
+  if (start_next_) {
+    if (summary_.written > 0) stop_starts_.push_back(scratch_.name);  // the first scan begins a stop anyway
+    start_next_ = false;
+  }
   scratch_.viewpoint = raw.pose;
   scratch_.has_intensity = has_intensity;
   writeScan(dir_.path() / scratch_.name, scratch_, config_.encoding);
@@ -85,6 +89,7 @@ SequenceWriteSummary SequenceWriter::commit(const std::string& sensor_name) {
     meta.range_max_m = summary_.range_max_m;
   if (summary_.min_beams == summary_.max_beams && summary_.max_beams > 0)
     meta.beams = static_cast<int>(summary_.max_beams);
+  meta.stop_starts = stop_starts_;
   writeSequenceMeta(dir_.path() / "sequence.json", meta);
   dir_.commit();
   return summary_;

@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "io/atomic_file.hpp"
 #include "io/import.hpp"
@@ -50,6 +51,10 @@ class SequenceWriter {
   /// range limits) and written. Returns false once max_scans scans have been written.
   bool add(const RawScan& scan);
 
+  /// The next scan written begins a new stop even if its VIEWPOINT equals the previous one's
+  /// (recorded in sequence.json `stop_starts`).
+  void startStop() { start_next_ = true; }
+
   /// Writes sequence.json and moves the directory into place. Throws InputError when no scan was written.
   SequenceWriteSummary commit(const std::string& sensor_name);
 
@@ -60,6 +65,8 @@ class SequenceWriter {
   StagedDirectory dir_;
   SequenceWriteSummary summary_;
   Scan scratch_;  // reused for every scan: memory stays that of one scan
+  bool start_next_ = false;              // startStop() called since the last scan written
+  std::vector<std::string> stop_starts_;  // names of the scans that begin a stop (startStop)
 };
 
 }  // namespace lidarcal::io

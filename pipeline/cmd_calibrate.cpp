@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <memory>
 #include <optional>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 
@@ -13,13 +14,16 @@
 #include "pipeline/commands.hpp"
 #include "pipeline/progress.hpp"
 #include "pipeline/report.hpp"
+#include "pipeline/model_text.hpp"
+#include "pipeline/reference_stage.hpp"
 #include "pipeline/stages.hpp"
+#include "io/reference_io.hpp"
 
 namespace lidarcal::pipeline {
 namespace {
 
 struct CalibrateCommand {
-  std::string seq, out, truth, frame = "true", report;
+  std::string seq, out, truth, frame = "true", report, reference;
   bool overwrite = false;
   std::shared_ptr<CalibrationOptions> options = std::make_shared<CalibrationOptions>();
 };
@@ -35,7 +39,18 @@ void runCalibrate(const CalibrateCommand& c) {
   std::optional<io::StagedDirectory> report;
   if (!c.report.empty()) report.emplace(c.report, c.overwrite);
   CalibrationModel model;
-  if (!c.truth.empty()) {
+  std::vector<calibration::ReferenceMatch> matches;
+  if (!c.reference.empty()) {
+    // Against what the user measured (seed 004 section 5).
+    const Reference ref = io::readReference(c.reference);
+    io::checkReference(ref, seq.stops.size(), c.reference);
+    Progress progress("detect", seq.scans.size());
+    const SequenceCalibration result = calibrateSequenceWithReference(
+        seq, ref, c.reference, detectionConfig(*c.options), config, &matches,
+        [&](std::size_t done, std::size_t) { progress.update(done); });
+    progress.finish();
+    model = result.model;
+  } else if (!c.truth.empty()) {
     // Oracle (seed 004): fitted against the true distances; for comparison only.
     const SimulationTruth truth = loadTruth(c.truth);
     const double scale = c.frame == "commanded" ? commandedScale(truth.truth) : 1.0;
@@ -62,6 +77,8 @@ void runCalibrate(const CalibrateCommand& c) {
     throw DataError(c.seq, "calibration", model.status + ": " + model.message, "see docs/ERRORS.md");
   io::writeModel(c.out, model);
   if (report) report->commit();
+  if (!matches.empty()) std::fputs(referenceTable(matches).c_str(), stdout);
+  std::fputs(modelSummary(model).c_str(), stdout);
   if (!quiet())
     std::fprintf(stderr, "%s model of order %d written to %s\n", model.method.c_str(), model.model.bias.order(),
                  c.out.c_str());
@@ -81,6 +98,10 @@ void addCalibrateCommand(CLI::App& app) {
                   "the best a self-calibration can reach")
       ->check(CLI::IsMember({"true", "commanded"}))
       ->capture_default_str();
+  sub->add_option("--reference", c->reference,
+                  "REF.json with distances you measured (tape, laser meter): fit the range model to them "
+                  "(Alhashimi et al. 2016, section 5; docs/FORMAT.md, \"Reference measurements\")")
+      ->excludes(truth);
   sub->add_option("--report", c->report,
                   "Also write a report (Markdown + PNG plots) into this new directory (not with --truth)")
       ->excludes(truth);

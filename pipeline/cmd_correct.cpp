@@ -15,7 +15,7 @@ namespace lidarcal::pipeline {
 
 void addCorrectCommand(CLI::App& app) {
   struct Options {
-    std::string seq, model, out, inversion = "ls";
+    std::string seq, model, out, inversion = "ls", outside = "keep";
     bool ascii = false, overwrite = false;
   };
   auto o = std::make_shared<Options>();
@@ -28,13 +28,20 @@ void addCorrectCommand(CLI::App& app) {
                   "squared noise law only)")
       ->check(CLI::IsMember({"ls", "ml"}))
       ->capture_default_str();
+  sub->add_option("--outside", o->outside,
+                  "Readings outside the range the model was fitted over (model.json fitted_range): keep them as they "
+                  "are, extrapolate the polynomial, or drop them (no return)")
+      ->check(CLI::IsMember({"keep", "extrapolate", "drop"}))
+      ->capture_default_str();
   sub->add_flag("--ascii", o->ascii, "Write ASCII PCD instead of binary");
   sub->add_flag("--overwrite", o->overwrite, "Replace OUT if it exists");
   sub->callback([o] {
     io::checkOutsideInput(o->seq, o->out);
     const io::Sequence seq = io::openSequence(o->seq);
     const CalibrationModel model = io::readModel(o->model);
-    checkModelFits(model, seq, o->model);
+    calibration::Outside outside = calibration::Outside::keep;
+    calibration::parseOutside(o->outside, outside);
+    checkModelFits(model, seq, o->model, outside);
     if (const auto [fewest, most] = io::pointCountRange(seq); fewest != most)
       std::fprintf(stderr,
                    "lidarcal: warning: %s: the number of points per scan varies from %zu to %zu; each point is corrected "
@@ -45,12 +52,15 @@ void addCorrectCommand(CLI::App& app) {
     const auto stats = correctSequence(
         seq, model, o->inversion == "ml" ? calibration::InversionMethod::ml : calibration::InversionMethod::ls, out.path(),
         o->ascii ? io::PcdEncoding::ascii : io::PcdEncoding::binary,
-        [&](std::size_t done, std::size_t) { progress.update(done); });
+        [&](std::size_t done, std::size_t) { progress.update(done); }, outside);
     progress.finish();
     out.commit();
     if (!quiet())
       std::fprintf(stderr, "corrected %zu returns in %zu scans into %s (%zu without a distance in the window)\n",
                    stats.corrected, stats.scans, o->out.c_str(), stats.unresolved);
+    if (stats.outside > 0 && !quiet())
+      std::fprintf(stderr, "%zu returns lie outside the readings the model was fitted on (%s): %s (--outside)\n",
+                   stats.outside, o->model.c_str(), outside == calibration::Outside::drop ? "dropped" : "kept as they are");
   });
 }
 

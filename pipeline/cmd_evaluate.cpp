@@ -1,12 +1,21 @@
 // lidarcal evaluate OUT --truth truth.json [--raw RAW]: MSE ratio of raw vs corrected ranges.
 
+#include <cmath>
 #include <cstdio>
+#include <optional>
 #include <memory>
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "common/errors.hpp"
 #include "io/atomic_file.hpp"
+#include "io/model_io.hpp"
+#include "io/reference_io.hpp"
+#include "pipeline/cli_options.hpp"
+#include "pipeline/model_text.hpp"
+#include "pipeline/progress.hpp"
+#include "pipeline/reference_stage.hpp"
 #include "pipeline/commands.hpp"
 #include "pipeline/truth_eval.hpp"
 
@@ -32,17 +41,101 @@ nlohmann::ordered_json evaluationJson(const Evaluation& e) {
                                 {"all", toJson(e.all)}};
 }
 
+namespace {
+
+nlohmann::ordered_json matchJson(const calibration::ReferenceMatch& m) {
+  nlohmann::ordered_json j{{"entry", m.entry}, {"stop", m.stop},
+                           {"target", m.target == ReferenceTarget::wall ? "wall" : "landmark"},
+                           {"reference_m", m.reference_m}, {"status", m.status}};
+  if (m.ok()) {
+    j["measured_m"] = m.measured_m;
+    j["measured_se_m"] = std::isfinite(m.measured_se_m) ? nlohmann::ordered_json(m.measured_se_m) : nlohmann::ordered_json(nullptr);
+    j["error_m"] = m.measured_m - m.reference_m;
+    j["scans"] = m.sightings;
+    j["readings"] = m.readings;
+  }
+  return j;
+}
+
+/// RMS of measured - reference over the matched entries (NaN when none).
+double rmsError(const std::vector<calibration::ReferenceMatch>& matches) {
+  double s = 0.0;
+  std::size_t n = 0;
+  for (const auto& m : matches)
+    if (m.ok()) s += std::pow(m.measured_m - m.reference_m, 2), ++n;
+  return n ? std::sqrt(s / static_cast<double>(n)) : std::nan("");
+}
+
+/// evaluate SEQ --reference REF.json [--model model.json]: what the scans measure at the
+/// reference distances, raw and corrected.
+void evaluateReference(const std::string& seq_dir, const std::string& ref_file, const std::string& model_file,
+                       const std::string& inversion, const std::string& outside_name, double radius_m,
+                       const std::string& out) {
+  const io::Sequence seq = io::openSequence(seq_dir);
+  const Reference ref = io::readReference(ref_file);
+  io::checkReference(ref, seq.stops.size(), ref_file);
+  CalibrationOptions options;
+  options.radius_m = radius_m;
+  const auto detection = referenceDetection(detectionConfig(options));
+  Progress raw_progress("measure (raw)", seq.scans.size());
+  const auto raw = observeReference(seq, ref, detection, scanLoader(seq),
+                                    [&](std::size_t d, std::size_t) { raw_progress.update(d); });
+  raw_progress.finish();
+  nlohmann::ordered_json j{{"sequence", seq_dir}, {"reference", ref_file}};
+  auto raw_json = nlohmann::ordered_json::array();
+  for (const auto& m : raw.known.matches) raw_json.push_back(matchJson(m));
+  j["raw"] = {{"rms_error_m", rmsError(raw.known.matches)}, {"entries", raw_json}};
+  std::optional<ReferenceObservations> corrected;
+  if (!model_file.empty()) {
+    const CalibrationModel model = io::readModel(model_file);
+    calibration::Outside outside = calibration::Outside::keep;
+    calibration::parseOutside(outside_name, outside);
+    checkModelFits(model, seq, model_file, outside);
+    const auto method = inversion == "ml" ? calibration::InversionMethod::ml : calibration::InversionMethod::ls;
+    const ScanCorrection correction{calibration::modelInverter(model, method, outside),
+                                    calibration::correctionWindow(model, outside)};
+    Progress cor_progress("measure (corrected)", seq.scans.size());
+    corrected = observeReference(seq, ref, detection, scanLoader(seq, &correction),
+                                 [&](std::size_t d, std::size_t) { cor_progress.update(d); });
+    cor_progress.finish();
+    auto cor_json = nlohmann::ordered_json::array();
+    for (const auto& m : corrected->known.matches) cor_json.push_back(matchJson(m));
+    j["model"] = model_file;
+    j["corrected"] = {{"rms_error_m", rmsError(corrected->known.matches)}, {"entries", cor_json}};
+  }
+  std::fputs(referenceTable(raw.known.matches, corrected ? &corrected->known.matches : nullptr).c_str(), stdout);
+  if (!out.empty()) io::writeTextAtomically(out, j.dump(2) + "\n");
+}
+
+}  // namespace
+
 void addEvaluateCommand(CLI::App& app) {
   struct Options {
-    std::string corrected, truth, raw, out;
+    std::string corrected, truth, raw, out, reference, model, inversion = "ls", outside = "keep";
+    double radius_m = 0.0;
   };
   auto o = std::make_shared<Options>();
   CLI::App* sub = app.add_subcommand(
-      "evaluate", "Compare corrected and raw ranges of a simulated sequence with the truth: MSE ratio (seed 000 eq. 31) "
-                  "and normalised MSE (seed 004 eqs. 31-32), as JSON");
-  sub->add_option("OUT", o->corrected, "Corrected sequence (from lidarcal correct)")->required();
-  sub->add_option("--truth", o->truth, "truth.json written by lidarcal simulate")->required();
-  sub->add_option("--raw", o->raw, "Raw sequence (default: the scans/ directory next to truth.json)");
+      "evaluate", "Compare a sequence with the truth: with --truth, corrected vs raw ranges of a simulated sequence (MSE "
+                  "ratio, Alhashimi et al. 2021 eq. 31; normalised MSE, Alhashimi et al. 2016 eqs. 31-32); with "
+                  "--reference, what the scans measure at distances you measured, raw and (with --model) corrected");
+  sub->add_option("SEQ", o->corrected, "With --truth: the corrected sequence (from lidarcal correct); with --reference: "
+                                       "the raw sequence")->required();
+  auto* truth_option = sub->add_option("--truth", o->truth, "truth.json written by lidarcal simulate");
+  auto* reference = sub->add_option("--reference", o->reference,
+                                    "REF.json of measured distances (docs/FORMAT.md, \"Reference measurements\")")
+                        ->excludes(truth_option);
+  sub->add_option("--model", o->model, "With --reference: also measure with the scans corrected by this model.json")
+      ->needs(reference);
+  sub->add_option("--inversion", o->inversion, "With --model: ls or ml (see lidarcal correct --help)")
+      ->check(CLI::IsMember({"ls", "ml"}))
+      ->capture_default_str();
+  sub->add_option("--outside", o->outside, "With --model: keep, extrapolate or drop readings outside the fitted range")
+      ->check(CLI::IsMember({"keep", "extrapolate", "drop"}))
+      ->capture_default_str();
+  sub->add_option("--radius", o->radius_m, "With --reference: pole radius in metres (default: sequence.json, else estimated)")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--raw", o->raw, "With --truth: raw sequence (default: the scans/ directory next to truth.json)");
   sub->add_option("--out", o->out, "Also write the JSON to this file");
   sub->callback([o] {
     namespace fs = std::filesystem;
@@ -50,6 +143,9 @@ void addEvaluateCommand(CLI::App& app) {
       io::checkOutsideInput(o->corrected, o->out);
       io::checkOutputFile(o->out, true);
     }
+    if (!o->reference.empty())
+      return evaluateReference(o->corrected, o->reference, o->model, o->inversion, o->outside, o->radius_m, o->out);
+    if (o->truth.empty()) throw InputError("", "--truth", "evaluate needs --truth or --reference", "give one of them");
     const SimulationTruth truth = loadTruth(o->truth);
     const fs::path raw = o->raw.empty() ? fs::path(o->truth).parent_path() / "scans" : fs::path(o->raw);
     const Evaluation e = evaluate(io::openSequence(o->corrected), io::openSequence(raw), truth);

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 
@@ -19,7 +20,8 @@ namespace {
 
 struct ImportOptions {
   std::string from;
-  std::string input;
+  std::vector<std::string> inputs;
+  bool stop_per_input = false;
   std::string out;
   std::string topic;
   bool list_topics = false;
@@ -37,7 +39,7 @@ void listTopics(const ImportOptions& o) {
   if (parseImportFormat(o.from) != ImportFormat::rosbag1)
     throw InputError("", "--list-topics", "applies to --from rosbag1 only", "drop --list-topics");
   std::printf("| topic | type | messages |\n|---|---|---|\n");
-  for (const io::BagTopic& t : io::listBagTopics(o.input))
+  for (const io::BagTopic& t : io::listBagTopics(o.inputs.front()))
     std::printf("| %s | %s | %zu |\n", t.topic.c_str(), t.datatype.c_str(), t.messages);
 }
 
@@ -46,7 +48,8 @@ void runImport(const ImportOptions& o, const CLI::App& sub) {
   if (o.out.empty()) throw InputError("", "--out", "is required", "give the sequence directory to create");
   ImportSettings s;
   s.format = parseImportFormat(o.from);
-  s.input = o.input;
+  s.inputs.assign(o.inputs.begin(), o.inputs.end());
+  s.stop_per_input = o.stop_per_input;
   s.out = o.out;
   s.topic = o.topic;
   s.writer.every = o.every;
@@ -61,10 +64,14 @@ void runImport(const ImportOptions& o, const CLI::App& sub) {
   if (sub.count("--range-max")) s.range_max_m = o.range_max_m;
   s.sensor_name = o.sensor_name;
 
-  // Progress in KiB of the input read (the number of scans is not known before the end).
-  std::error_code ec;
-  const auto bytes = std::filesystem::file_size(s.input, ec);
-  const std::size_t kib = ec ? 1 : std::max<std::size_t>(1, static_cast<std::size_t>(bytes / 1024));
+  // Progress in KiB of the inputs read (the number of scans is not known before the end).
+  std::uintmax_t bytes = 0;
+  for (const auto& input : s.inputs) {
+    std::error_code ec;
+    const auto size = std::filesystem::file_size(input, ec);
+    if (!ec) bytes += size;
+  }
+  const std::size_t kib = std::max<std::size_t>(1, static_cast<std::size_t>(bytes / 1024));
   Progress progress("import (KiB read)", kib);
   const ImportResult r = importRecording(s, [&](double fraction) {
     progress.update(static_cast<std::size_t>(fraction * static_cast<double>(kib)));
@@ -72,8 +79,11 @@ void runImport(const ImportOptions& o, const CLI::App& sub) {
   progress.finish();
 
   const auto& w = r.written;
-  std::printf("imported %zu of %zu scans from %s (%s) into %s\n", w.written, r.read.scans, o.input.c_str(),
+  const std::string from = o.inputs.size() == 1 ? o.inputs.front() : std::to_string(o.inputs.size()) + " recordings";
+  std::printf("imported %zu of %zu scans from %s (%s) into %s\n", w.written, r.read.scans, from.c_str(),
               toString(s.format), w.out.c_str());
+  if (o.stop_per_input)
+    std::printf("  one stop per recording (%zu; sequence.json stop_starts)\n", o.inputs.size());
   if (w.min_beams == w.max_beams) std::printf("  beams per scan: %zu\n", w.max_beams);
   else std::printf("  beams per scan: %zu-%zu (sequence.json has no `beams`)\n", w.min_beams, w.max_beams);
   std::printf("  returns: %zu of %zu points; %zu without return in the source, %zu outside the range limits\n",
@@ -93,8 +103,13 @@ void addImportCommand(CLI::App& app) {
   sub->add_option("--from", o->from, "Input format")
       ->required()
       ->check(CLI::IsMember({"rosbag1", "carmen", "ydlidar", "csv"}));
-  sub->add_option("INPUT", o->input, "The recording (.bag; CARMEN .log or .log.gz; .dat; .csv; text inputs may be gzip)")
+  sub->add_option("INPUT", o->inputs,
+                  "The recording(s) (.bag; CARMEN .log or .log.gz; .dat; .csv; text inputs may be gzip), imported one "
+                  "after the other into one sequence")
       ->required();
+  sub->add_flag("--stop-per-input", o->stop_per_input,
+                "Each recording is one stop, even where their poses are equal (e.g. a static sensor recorded at "
+                "several measured target distances; sequence.json stop_starts, docs/FORMAT.md)");
   sub->add_option("--out", o->out, "Sequence directory to create (scan_NNNNNN.pcd + sequence.json)");
   sub->add_option("--topic", o->topic, "rosbag1: sensor_msgs/LaserScan topic (default: the bag's only one)");
   sub->add_flag("--list-topics", o->list_topics, "rosbag1: list the bag's topics and exit");

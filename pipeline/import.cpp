@@ -1,5 +1,6 @@
 #include "pipeline/import.hpp"
 
+#include <algorithm>
 #include <limits>
 
 #include "common/errors.hpp"
@@ -28,50 +29,72 @@ const char* toString(ImportFormat format) {
   return "?";
 }
 
-ImportResult importRecording(const ImportSettings& s, const std::function<void(double)>& on_progress) {
-  if (s.format != ImportFormat::rosbag1 && !s.topic.empty())
-    throw InputError("", "--topic", "applies to --from rosbag1 only", "drop --topic");
-  if (s.format == ImportFormat::rosbag1) io::requireRosbagSupport(s.input);
-  io::checkOutsideInput(s.input, s.out);
-  io::SequenceWriter writer(s.out, s.writer);
-  const io::ScanCallback on_scan = [&](const io::RawScan& scan) {
-    const bool more = writer.add(scan);
-    if (on_progress) on_progress(scan.progress);
-    return more;
-  };
+namespace {
+
+/// Reads one recording into the writer's callback.
+io::ImportReport readOne(const ImportSettings& s, const std::filesystem::path& input, const io::ScanCallback& on_scan) {
   const double inf = std::numeric_limits<double>::infinity();
-  ImportResult result;
   switch (s.format) {
     case ImportFormat::rosbag1: {
       io::RosbagConfig c;
       c.topic = s.topic;
       c.range_min_m = s.range_min_m;
       c.range_max_m = s.range_max_m;
-      result.read = io::readRosbag(s.input, c, on_scan);
-      break;
+      return io::readRosbag(input, c, on_scan);
     }
     case ImportFormat::carmen: {
       io::CarmenConfig c;
       c.pose = s.carmen_pose;
       c.range_min_m = s.range_min_m.value_or(c.range_min_m);
       c.range_max_m = s.range_max_m;
-      result.read = io::readCarmenLog(s.input, c, on_scan);
-      break;
+      return io::readCarmenLog(input, c, on_scan);
     }
     case ImportFormat::ydlidar: {
       io::YdlidarConfig c;
       c.range_min_m = s.range_min_m.value_or(c.range_min_m);
       c.range_max_m = s.range_max_m.value_or(c.range_max_m);
-      result.read = io::readYdlidarDat(s.input, c, on_scan);
-      break;
+      return io::readYdlidarDat(input, c, on_scan);
     }
     case ImportFormat::csv: {
       io::CsvConfig c;
       c.range_min_m = s.range_min_m.value_or(0.0);
       c.range_max_m = s.range_max_m.value_or(inf);
-      result.read = io::readCsvScans(s.input, c, on_scan);
-      break;
+      return io::readCsvScans(input, c, on_scan);
     }
+  }
+  return {};
+}
+
+}  // namespace
+
+ImportResult importRecording(const ImportSettings& s, const std::function<void(double)>& on_progress) {
+  if (s.inputs.empty()) throw InputError("", "INPUT", "no recording given", "name one or more recordings to import");
+  if (s.format != ImportFormat::rosbag1 && !s.topic.empty())
+    throw InputError("", "--topic", "applies to --from rosbag1 only", "drop --topic");
+  for (const auto& input : s.inputs) {
+    if (s.format == ImportFormat::rosbag1) io::requireRosbagSupport(input);
+    io::checkOutsideInput(input, s.out);
+  }
+  io::SequenceWriter writer(s.out, s.writer);
+  ImportResult result;
+  const double share = 1.0 / static_cast<double>(s.inputs.size());
+  for (std::size_t k = 0; k < s.inputs.size(); ++k) {
+    if (s.stop_per_input) writer.startStop();
+    bool more = true;
+    const io::ScanCallback on_scan = [&](const io::RawScan& scan) {
+      more = writer.add(scan);
+      if (on_progress) on_progress((static_cast<double>(k) + scan.progress) * share);
+      return more;
+    };
+    const io::ImportReport read = readOne(s, s.inputs[k], on_scan);
+    result.read.scans += read.scans;
+    result.read.other_records += read.other_records;
+    result.read.stopped_early = read.stopped_early;
+    if (result.read.sensor_name.empty()) result.read.sensor_name = read.sensor_name;
+    for (const auto& note : read.notes)
+      if (std::find(result.read.notes.begin(), result.read.notes.end(), note) == result.read.notes.end())
+        result.read.notes.push_back(note);
+    if (!more) break;  // --max-scans reached
   }
   result.written = writer.commit(s.sensor_name.empty() ? result.read.sensor_name : s.sensor_name);
   return result;

@@ -6,6 +6,7 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "io/import.hpp"
 #include "io/import_carmen.hpp"
@@ -21,7 +22,10 @@ const char* toString(ImportFormat format);
 
 struct ImportSettings {
   ImportFormat format = ImportFormat::csv;   ///< what the input is
-  std::filesystem::path input;               ///< the recording (read only)
+  std::vector<std::filesystem::path> inputs;  ///< the recordings (read only), imported one after the other
+  /// Each input begins a new stop, even where the poses of consecutive inputs are equal
+  /// (recordings taken apart at one pose; sequence.json `stop_starts`). Default false.
+  bool stop_per_input = false;
   std::filesystem::path out;                 ///< the sequence directory to create
   io::SequenceWriterConfig writer;           ///< --every, --max-scans, --overwrite, encoding
   std::string topic;                         ///< rosbag1: LaserScan topic; empty = the only one
@@ -36,8 +40,8 @@ struct ImportResult {
   io::SequenceWriteSummary written;    ///< what was written
 };
 
-/// Imports settings.input into settings.out. `on_progress` (optional) receives the fraction of
-/// the input read, 0..1. Nothing appears at settings.out unless the whole import succeeds.
+/// Imports settings.inputs into settings.out, in the order given. `on_progress` (optional)
+/// receives the fraction of the inputs read, 0..1 (each input an equal share). Nothing appears at settings.out unless the whole import succeeds.
 /// Throws InputError for bad input or options.
 ImportResult importRecording(const ImportSettings& settings, const std::function<void(double)>& on_progress = {});
 

@@ -5,6 +5,11 @@
 namespace lidarcal::pipeline {
 
 LandmarkObservations toLandmarkObservations(const io::Sequence& seq, const detectors::SequenceDetections& det) {
+  return toLandmarkObservations(seq, det, [&seq](std::size_t i) { return io::readScan(seq.scans.at(i).path); });
+}
+
+LandmarkObservations toLandmarkObservations(const io::Sequence& seq, const detectors::SequenceDetections& det,
+                                            const detectors::ScanLoader& load) {
   LandmarkObservations obs;
   for (const auto& stop : seq.stops) obs.commanded.push_back(stop.commanded);
   if (det.known_radius_m) obs.landmark_radius_m = det.known_radius_m;
@@ -15,11 +20,11 @@ LandmarkObservations toLandmarkObservations(const io::Sequence& seq, const detec
   for (std::size_t k = 0; k < seq.stops.size(); ++k)
     for (std::size_t i : seq.stops[k].scans)
       same_beams[k] = same_beams[k] && seq.scans[i].points == seq.scans[seq.stops[k].scans.front()].points;
-  detectors::forEachScan(det, seq, [&](std::size_t i, const detectors::ScanDetections& sd, const std::vector<int>& ids) {
+  detectors::forEachScan(det, seq, load, [&](std::size_t i, const detectors::ScanDetections& sd, const std::vector<int>& ids) {
     bool any = false;
     for (int id : ids) any = any || id > 0;
     if (!any) return;
-    const io::Scan scan = io::readScan(seq.scans.at(i).path);
+    const io::Scan scan = load(i);
     for (std::size_t j = 0; j < sd.detections.size(); ++j) {
       if (ids[j] <= 0) continue;
       const auto& d = sd.detections[j];

@@ -11,4 +11,8 @@ namespace lidarcal::pipeline {
 /// Re-reads the scans (one at a time) to collect the readings of every associated detection.
 LandmarkObservations toLandmarkObservations(const io::Sequence& seq, const detectors::SequenceDetections& det);
 
+/// The same with the scans obtained from `load` (the loader given to detectSequence).
+LandmarkObservations toLandmarkObservations(const io::Sequence& seq, const detectors::SequenceDetections& det,
+                                            const detectors::ScanLoader& load);
+
 }  // namespace lidarcal::pipeline

@@ -78,7 +78,8 @@ std::string beamCountWarning(const io::Sequence& seq) {
          "different sensors, split them into one sequence per sensor";
 }
 
-void checkModelFits(const CalibrationModel& model, const io::Sequence& seq, const std::filesystem::path& model_file) {
+void checkModelFits(const CalibrationModel& model, const io::Sequence& seq, const std::filesystem::path& model_file,
+                    calibration::Outside outside) {
   const std::string where = model_file.string();
   if (model.status != "ok")
     throw DataError(where, "diagnostics.status",
@@ -101,6 +102,17 @@ void checkModelFits(const CalibrationModel& model, const io::Sequence& seq, cons
                      "the model belongs to another sensor; calibrate this one");
   double at = 0.0;
   const BiasPolynomial& f = model.model.bias;
+  if (model.fitted_range_m && outside != calibration::Outside::extrapolate) {
+    // Only the fitted range is corrected: f must rise over it.
+    const auto [lo, hi] = *model.fitted_range_m;
+    if (!calibration::isMonotone(f, lo, hi, &at)) {
+      char text[200];
+      std::snprintf(text, sizeof text, "the bias polynomial stops increasing at d = %.3f m inside its fitted range %.3f-%.3f m",
+                    at, lo, hi);
+      throw DataError(where, "bias.alpha", text, "calibrate with a lower --max-order");
+    }
+    return;
+  }
   if (!calibration::invertsReadingWindow(f, model.model.range_min_m, model.model.range_max_m, &at)) {
     // Where f stops rising (first d with f'(d) <= 0), for the message.
     const int steps = 4000;
@@ -124,18 +136,20 @@ void checkModelFits(const CalibrationModel& model, const io::Sequence& seq, cons
 
 CorrectionStats correctSequence(const io::Sequence& seq, const CalibrationModel& model,
                                 calibration::InversionMethod method, const std::filesystem::path& out_dir,
-                                io::PcdEncoding encoding, const StageProgress& on_scan) {
-  const calibration::RangeInverter inverter(model.model, calibration::inversionWindow(model.model, method));
+                                io::PcdEncoding encoding, const StageProgress& on_scan, calibration::Outside outside) {
+  const calibration::RangeInverter inverter = calibration::modelInverter(model, method, outside);
+  const calibration::CorrectionWindow window = calibration::correctionWindow(model, outside);
   CorrectionStats stats;
   for (std::size_t i = 0; i < seq.scans.size(); ++i) {
     const io::Scan scan = io::readScan(seq.scans[i].path);
     calibration::FilteringStats f;
-    const io::Scan out = calibration::correctScan(scan, inverter, &f);
+    const io::Scan out = calibration::correctScan(scan, inverter, &f, window);
     io::writeScan(out_dir / seq.scans[i].name(), out, encoding);
     ++stats.scans;
     stats.points += f.points;
     stats.corrected += f.corrected;
     stats.unresolved += f.unresolved;
+    stats.outside += f.outside;
     if (on_scan) on_scan(i + 1, seq.scans.size());
   }
   const auto meta = seq.dir / "sequence.json";

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "calibration/calibrate.hpp"
+#include "calibration/filtering.hpp"
 #include "calibration/inversion.hpp"
 #include "common/calibration_model.hpp"
 #include "detectors/sequence_detector.hpp"
@@ -41,16 +42,20 @@ std::string beamCountWarning(const io::Sequence& seq);
 
 /// Throws InputError when the model does not belong to the sequence's sensor (beam count,
 /// range limits) and DataError when its bias cannot be inverted unambiguously.
-void checkModelFits(const CalibrationModel& model, const io::Sequence& seq, const std::filesystem::path& model_file);
+/// With `outside` other than extrapolate, f must be invertible over the fitted range only.
+void checkModelFits(const CalibrationModel& model, const io::Sequence& seq, const std::filesystem::path& model_file,
+                    calibration::Outside outside = calibration::Outside::keep);
 
 struct CorrectionStats {
   std::size_t scans = 0, points = 0, corrected = 0, unresolved = 0;
+  std::size_t outside = 0;  ///< returns outside the fitted reading range (kept or dropped)
 };
 
 /// Streams every scan through the filtering stage into `out_dir` (an existing, empty staging
 /// directory); copies sequence.json.
 CorrectionStats correctSequence(const io::Sequence& seq, const CalibrationModel& model,
                                 calibration::InversionMethod method, const std::filesystem::path& out_dir,
-                                io::PcdEncoding encoding, const StageProgress& on_scan = {});
+                                io::PcdEncoding encoding, const StageProgress& on_scan = {},
+                                calibration::Outside outside = calibration::Outside::keep);
 
 }  // namespace lidarcal::pipeline

@@ -87,7 +87,7 @@ TEST(SequenceBeams, ScansDisagreeingWithSequenceJsonBeamsAreRefused) {
   four.cloud->resize(4);
   writeScan(dir / "b.pcd", four);
   EXPECT_EQ(pointCountRange(openSequence(dir.path())), (std::pair<std::size_t, std::size_t>{3, 4}));
-  writeSequenceMeta(dir / "sequence.json", SequenceMeta{{}, {}, {}, {}, 3});
+  writeSequenceMeta(dir / "sequence.json", SequenceMeta{{}, {}, {}, {}, 3, {}});
   EXPECT_NE(problemOf([&] { openSequence(dir.path()); }).find("b.pcd: POINTS: has 4 points, but sequence.json says"),
             std::string::npos);
 }

@@ -59,13 +59,49 @@ Scan tinyScan(const Pose2& vp) {
   return s;
 }
 
+TEST(GroupStops, ListedStartsSplitEqualViewpoints) {
+  const std::vector<Pose2> v(5, Pose2{1.0, 2.0, 0.5});
+  const auto stops = groupStops(v, StopTolerance{}, {2, 3});
+  ASSERT_EQ(stops.size(), 3u);
+  EXPECT_EQ(stops[0].scans.size(), 2u);
+  EXPECT_EQ(stops[1].scans.front(), 2u);
+  EXPECT_EQ(stops[1].scans.size(), 1u);
+  EXPECT_EQ(stops[2].scans.front(), 3u);
+  EXPECT_EQ(stops[2].scans.size(), 2u);
+}
+
+TEST(OpenSequence, StopStartsInSequenceJsonBeginStopsAtOnePose) {
+  // Recordings taken apart at one pose (import --stop-per-input): the scans listed in
+  // stop_starts begin stops although every VIEWPOINT is the same; names survive a rewrite.
+  TempDir dir;
+  for (int i = 0; i < 6; ++i) writeScan(dir / scanFileName(static_cast<std::size_t>(i)), tinyScan({0, 0, 0}));
+  SequenceMeta meta;
+  meta.stop_starts = {scanFileName(2), scanFileName(5)};
+  writeSequenceMeta(dir / "sequence.json", meta);
+  const Sequence seq = openSequence(dir.path());
+  ASSERT_EQ(seq.stops.size(), 3u);
+  EXPECT_EQ(seq.stops[1].scans.front(), 2u);
+  EXPECT_EQ(seq.stops[2].scans.front(), 5u);
+  EXPECT_EQ(seq.stopOf(4), 1u);
+  EXPECT_EQ(readSequenceMeta(dir / "sequence.json").stop_starts, meta.stop_starts);
+
+  meta.stop_starts = {scanFileName(2), "scan_000009.pcd"};  // no such scan
+  writeSequenceMeta(dir / "sequence.json", meta);
+  EXPECT_NE(std::string(openError(dir.path()).what()).find("stop_starts"), std::string::npos);
+  meta.stop_starts = {"scan_000001x.pcd"};  // between two scans, not one of them
+  writeSequenceMeta(dir / "sequence.json", meta);
+  EXPECT_NE(std::string(openError(dir.path()).what()).find("not a scan"), std::string::npos);
+  test::writeFile(dir / "sequence.json", R"({"stop_starts": ["scan_000005.pcd", "scan_000002.pcd"]})");
+  EXPECT_NE(std::string(openError(dir.path()).what()).find("sorted"), std::string::npos);
+}
+
 TEST(OpenSequence, ListsPcdFilesLexicographicallyAndGroupsStops) {
   TempDir dir;
   writeScan(dir / "b_002.pcd", tinyScan({0.3, 0, 0}));
   writeScan(dir / "b_000.pcd", tinyScan({0, 0, 0}));
   writeScan(dir / "b_001.pcd", tinyScan({0, 0, 0}));
   test::writeFile(dir / "notes.txt", "not a scan");
-  writeSequenceMeta(dir / "sequence.json", SequenceMeta{std::string("X"), 0.12, 0.2, 6.0, 4});
+  writeSequenceMeta(dir / "sequence.json", SequenceMeta{std::string("X"), 0.12, 0.2, 6.0, 4, {}});
   const Sequence seq = openSequence(dir.path());
   ASSERT_EQ(seq.scans.size(), 3u);
   EXPECT_EQ(seq.scans[0].name(), "b_000.pcd");

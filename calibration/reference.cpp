@@ -1,0 +1,380 @@
+#include "calibration/reference.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <map>
+#include <set>
+#include <stdexcept>
+
+#include <Eigen/Dense>
+
+#include "calibration/inversion.hpp"
+#include "calibration/joint_refinement.hpp"
+#include "calibration/noise_exponent.hpp"
+#include "calibration/range_model_fit.hpp"
+
+namespace lidarcal::calibration {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+double median(std::vector<double> v) {
+  if (v.empty()) return kNaN;
+  std::sort(v.begin(), v.end());
+  const std::size_t m = v.size() / 2;
+  return v.size() % 2 ? v[m] : 0.5 * (v[m - 1] + v[m]);
+}
+
+/// v with `digits` decimals.
+std::string fixed(double v, int digits) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", digits, v);
+  return buf;
+}
+
+/// Running mean and spread of a quantity over the scans of a stop, with a circular mean of an angle.
+struct Tally {
+  std::size_t n = 0;
+  double sum = 0.0, sum2 = 0.0, sin = 0.0, cos = 0.0;
+  std::vector<double> radii;
+  void add(double value, double angle_rad) {
+    ++n;
+    sum += value;
+    sum2 += value * value;
+    sin += std::sin(angle_rad);
+    cos += std::cos(angle_rad);
+  }
+  double mean() const { return sum / static_cast<double>(n); }
+  double standardError() const {
+    if (n < 2) return kNaN;
+    const double var = std::max(0.0, (sum2 - sum * sum / static_cast<double>(n)) / static_cast<double>(n - 1));
+    return std::sqrt(var / static_cast<double>(n));
+  }
+  double angle() const { return std::atan2(sin, cos); }
+};
+
+/// The key of `tallies` that matches the entry best (by bearing when given, else by distance),
+/// or none when nothing lies within the tolerance; `why` says what was found instead.
+template <class Key>
+std::optional<Key> choose(const std::map<Key, Tally>& tallies, const ReferenceDistance& e, const ReferenceConfig& c,
+                          std::string& why) {
+  std::optional<Key> best;
+  double best_error = std::numeric_limits<double>::infinity();
+  for (const auto& [key, t] : tallies) {
+    const double error = e.bearing_rad ? std::abs(wrapAngle(t.angle() - *e.bearing_rad)) : std::abs(t.mean() - e.distance_m);
+    if (error < best_error) {
+      best_error = error;
+      best = key;
+    }
+  }
+  if (!best) return best;
+  const Tally& t = tallies.at(*best);
+  const double limit = e.bearing_rad ? c.max_bearing_error_rad : 0.1 + c.max_distance_error_fraction * e.distance_m;
+  if (best_error <= limit) return best;
+  why = e.bearing_rad ? "the nearest is at bearing " + fixed(t.angle(), 3) + " rad, more than " +
+                            fixed(c.max_bearing_error_rad, 2) + " rad from bearing_rad"
+                      : "the nearest measures " + fixed(t.mean(), 3) + " m, too far from distance_m";
+  return std::nullopt;
+}
+
+void landmarkReadings(const LandmarkObservations& obs, const ReferenceDistance& e, double radius_m,
+                      const ReferenceConfig& c, ReferenceMatch& m, std::vector<KnownReading>& out) {
+  std::map<int, Tally> tallies;
+  for (const auto& s : obs.sightings) {
+    if (s.stop != e.stop) continue;
+    Tally& t = tallies[s.landmark];
+    t.add(s.centre_range_m, s.bearing_rad);
+    t.radii.push_back(s.radius_m);
+  }
+  if (tallies.empty()) {
+    m.status = "no pole was detected at stop " + std::to_string(e.stop) +
+               " (check it with lidarcal detect; give the pole radius with --radius)";
+    return;
+  }
+  std::string why;
+  const auto id = choose(tallies, e, c, why);
+  if (!id) {
+    m.status = "no pole at stop " + std::to_string(e.stop) + " matches this entry: " + why;
+    return;
+  }
+  const Tally& t = tallies.at(*id);
+  m.landmark = *id;
+  m.sightings = t.n;
+  m.measured_m = t.mean();
+  m.measured_se_m = t.standardError();
+  m.bearing_rad = t.angle();
+  const double r = radius_m > 0.0 ? radius_m : median(t.radii);
+  // The measured centre, on the detected bearing (a pole's arc is symmetric about it, whatever
+  // the range bias): every beam's true distance follows from it.
+  const double cx = e.distance_m * std::cos(m.bearing_rad), cy = e.distance_m * std::sin(m.bearing_rad);
+  for (const auto& s : obs.sightings) {
+    if (s.stop != e.stop || s.landmark != *id) continue;
+    for (const auto& b : s.beams) {
+      if (!std::isfinite(b.range_m)) continue;
+      const double perp = cy * std::cos(b.angle_rad) - cx * std::sin(b.angle_rad);
+      if (std::abs(perp) > c.lateral_fraction * r) continue;
+      const double d = rayCircleDistance(0.0, 0.0, b.angle_rad, cx, cy, r);
+      if (!(d > 0.0)) continue;
+      out.push_back({m.entry, s.stop, s.scan, b.beam, d, b.range_m});
+      ++m.readings;
+    }
+  }
+  if (m.readings == 0) m.status = "the pole matched at stop " + std::to_string(e.stop) + " has no beam near its centre";
+}
+
+void wallReadings(const LandmarkObservations& obs, const ReferenceDistance& e, const ReferenceConfig& c,
+                  ReferenceMatch& m, std::vector<KnownReading>& out) {
+  // Per scan, the wall that matches the entry best; then over the stop.
+  std::map<std::size_t, std::map<std::size_t, Tally>> by_scan;  // scan -> wall index -> tally of one
+  for (std::size_t w = 0; w < obs.walls.size(); ++w) {
+    const WallSighting& ws = obs.walls[w];
+    if (ws.stop != e.stop) continue;
+    by_scan[ws.scan][w].add(ws.distance_m, ws.normal_rad);
+  }
+  if (by_scan.empty()) {
+    m.status = "no wall was found at stop " + std::to_string(e.stop);
+    return;
+  }
+  Tally stop_tally;
+  std::vector<std::size_t> chosen;
+  std::string why;
+  for (const auto& [scan, walls] : by_scan) {
+    const auto w = choose(walls, e, c, why);
+    if (!w) continue;
+    chosen.push_back(*w);
+    stop_tally.add(obs.walls[*w].distance_m, obs.walls[*w].normal_rad);
+  }
+  if (chosen.empty()) {
+    m.status = "no wall at stop " + std::to_string(e.stop) + " matches this entry: " + why;
+    return;
+  }
+  m.sightings = stop_tally.n;
+  m.measured_m = stop_tally.mean();
+  m.measured_se_m = stop_tally.standardError();
+  m.bearing_rad = stop_tally.angle();
+  for (std::size_t w : chosen) {
+    const WallSighting& ws = obs.walls[w];
+    for (const auto& b : ws.beams) {
+      const double incidence = wrapAngle(b.angle_rad - m.bearing_rad);
+      if (!std::isfinite(b.range_m) || std::abs(incidence) > c.max_wall_incidence_rad) continue;
+      out.push_back({m.entry, ws.stop, ws.scan, b.beam, e.distance_m / std::cos(incidence), b.range_m});
+      ++m.readings;
+    }
+  }
+  if (m.readings == 0) m.status = "the wall matched at stop " + std::to_string(e.stop) + " has no beam within the incidence limit";
+}
+
+Eigen::VectorXd powers(double d, int order) {
+  Eigen::VectorXd x(order + 1);
+  double p = 1.0;
+  for (int i = 0; i <= order; ++i, p *= d) x(i) = p;
+  return x;
+}
+
+double polyAt(const std::vector<double>& a, double d) {
+  double f = 0.0;
+  for (std::size_t i = a.size(); i-- > 0;) f = f * d + a[i];
+  return f;
+}
+
+/// Weights of the noise law at the current f: 1 / f(d)^(2k) (f floored at 1 mm).
+std::vector<double> lawWeights(const std::vector<double>& alpha, const std::vector<double>& d, double exponent,
+                               const std::vector<bool>& use) {
+  std::vector<double> w(d.size(), 0.0);
+  for (std::size_t i = 0; i < d.size(); ++i)
+    if (use[i]) w[i] = exponent == 0.0 ? 1.0 : std::pow(std::max(std::abs(polyAt(alpha, d[i])), 1e-3), -2.0 * exponent);
+  return w;
+}
+
+/// Iterated weighted least squares on the readings with use[i].
+std::vector<double> iteratedFit(const std::vector<double>& d, const std::vector<double>& y, const std::vector<bool>& use,
+                                int order, double exponent) {
+  std::vector<double> dd, yy, ww;
+  std::vector<double> alpha(static_cast<std::size_t>(order) + 1, 0.0);
+  alpha[1] = 1.0;  // f(d) = d to start the weights
+  for (int it = 0; it < (exponent == 0.0 ? 1 : 20); ++it) {
+    const std::vector<double> w = lawWeights(alpha, d, exponent, use);
+    dd.clear(), yy.clear(), ww.clear();
+    for (std::size_t i = 0; i < d.size(); ++i)
+      if (use[i]) dd.push_back(d[i]), yy.push_back(y[i]), ww.push_back(w[i]);
+    std::vector<double> next = fitPolynomial(dd, yy, order, ww);
+    double change = 0.0;
+    for (std::size_t i = 0; i < next.size(); ++i) change = std::max(change, std::abs(next[i] - alpha[i]));
+    alpha = std::move(next);
+    if (change < 1e-12) break;
+  }
+  return alpha;
+}
+
+}  // namespace
+
+void ReferenceConfig::validate() const {
+  if (!(lateral_fraction > 0.0 && lateral_fraction <= 1.0))
+    throw std::invalid_argument("ReferenceConfig: lateral_fraction must be in (0, 1]");
+  if (!(max_wall_incidence_rad > 0.0 && max_wall_incidence_rad < 1.5))
+    throw std::invalid_argument("ReferenceConfig: max_wall_incidence_rad must be in (0, 1.5)");
+  if (!(max_bearing_error_rad > 0.0)) throw std::invalid_argument("ReferenceConfig: max_bearing_error_rad must be positive");
+  if (!(max_distance_error_fraction > 0.0))
+    throw std::invalid_argument("ReferenceConfig: max_distance_error_fraction must be positive");
+}
+
+ReferenceReadings knownReadings(const LandmarkObservations& obs, const Reference& ref, double radius_m,
+                                const ReferenceConfig& config) {
+  config.validate();
+  ReferenceReadings out;
+  for (std::size_t k = 0; k < ref.distances.size(); ++k) {
+    const ReferenceDistance& e = ref.distances[k];
+    ReferenceMatch m;
+    m.entry = k;
+    m.stop = e.stop;
+    m.target = e.target;
+    m.reference_m = e.distance_m;
+    if (e.target == ReferenceTarget::landmark) landmarkReadings(obs, e, radius_m, config, m, out.readings);
+    else wallReadings(obs, e, config, m, out.readings);
+    out.matches.push_back(m);
+  }
+  return out;
+}
+
+ClusteredFit fitClustered(const std::vector<double>& d, const std::vector<double>& y,
+                          const std::vector<std::size_t>& cluster, int order, double exponent) {
+  if (d.size() != y.size() || d.size() != cluster.size()) throw std::invalid_argument("fitClustered: sizes differ");
+  const std::vector<bool> all(d.size(), true);
+  ClusteredFit fit;
+  fit.alpha = iteratedFit(d, y, all, order, exponent);
+  const std::vector<double> w = lawWeights(fit.alpha, d, exponent, all);
+  const int p = order + 1;
+  Eigen::MatrixXd bread = Eigen::MatrixXd::Zero(p, p);
+  std::map<std::size_t, Eigen::VectorXd> score;  // per cluster: sum of w r x
+  double s2 = 0.0;
+  for (std::size_t i = 0; i < d.size(); ++i) {
+    const Eigen::VectorXd x = powers(d[i], order);
+    const double r = y[i] - polyAt(fit.alpha, d[i]);
+    bread += w[i] * x * x.transpose();
+    auto it = score.find(cluster[i]);
+    if (it == score.end()) it = score.emplace(cluster[i], Eigen::VectorXd::Zero(p)).first;
+    it->second += w[i] * r * x;
+    s2 += w[i] * r * r;
+  }
+  const double n = static_cast<double>(d.size());
+  fit.sigma_e = std::sqrt(s2 / n);
+  Eigen::MatrixXd meat = Eigen::MatrixXd::Zero(p, p);
+  for (const auto& [g, sc] : score) meat += sc * sc.transpose();
+  const double groups = static_cast<double>(score.size());
+  const Eigen::MatrixXd inv = bread.ldlt().solve(Eigen::MatrixXd::Identity(p, p));
+  fit.covariance = inv * meat * inv * (groups > 1.0 ? groups / (groups - 1.0) : 1.0);
+  // Gaussian NLL of y ~ N(f(d), sigma_e^2 f(d)^(2k)).
+  constexpr double kLog2Pi = 1.8378770664093453;
+  fit.neg_log_likelihood = 0.0;
+  for (std::size_t i = 0; i < d.size(); ++i) {
+    const double sigma = fit.sigma_e / std::sqrt(w[i]);
+    const double r = y[i] - polyAt(fit.alpha, d[i]);
+    fit.neg_log_likelihood += 0.5 * (kLog2Pi + 2.0 * std::log(sigma) + r * r / (sigma * sigma));
+  }
+  // Leave one cluster out: fit on the others, the weighted squared error on it.
+  double cv = 0.0, cv_w = 0.0;
+  for (const auto& [g, sc] : score) {
+    std::vector<bool> use(d.size());
+    for (std::size_t i = 0; i < d.size(); ++i) use[i] = cluster[i] != g;
+    const std::vector<double> a = iteratedFit(d, y, use, order, exponent);
+    for (std::size_t i = 0; i < d.size(); ++i)
+      if (!use[i]) {
+        const double r = y[i] - polyAt(a, d[i]);
+        cv += w[i] * r * r;
+        cv_w += w[i];
+      }
+  }
+  fit.cv_mse_m2 = cv_w > 0.0 ? cv / cv_w : kNaN;
+  return fit;
+}
+
+CalibrationModel calibrateWithReference(const std::vector<KnownReading>& readings, const CalibrationConfig& config,
+                                        double range_min_m, double range_max_m) {
+  config.validate();
+  CalibrationModel m;
+  m.method = "reference";
+  m.model.range_min_m = range_min_m;
+  m.model.range_max_m = range_max_m;
+  std::vector<double> d, y;
+  std::vector<std::size_t> stop;
+  std::set<std::size_t> stops;
+  for (const auto& r : readings) {
+    d.push_back(r.d_m);
+    y.push_back(r.y_m);
+    stop.push_back(r.stop);
+    stops.insert(r.stop);
+  }
+  const std::size_t groups = stops.size();
+  if (groups < 3) {
+    m.status = "too_few_reference_stops";
+    m.message = "known distances at " + std::to_string(groups) +
+                " stop(s): a range model needs measured distances at 3 or more stops (better 10 or more, spread over "
+                "the range you will use the sensor at)";
+    return m;
+  }
+  // Seed 004's noise-exponent test on the repeated readings of one beam at one stop.
+  std::map<std::pair<std::size_t, std::uint32_t>, std::vector<std::pair<std::size_t, double>>> by_beam;
+  for (const auto& r : readings)
+    if (r.beam != kUnknownBeam) by_beam[{r.stop, r.beam}].push_back({r.scan, r.y_m});
+  std::vector<std::vector<double>> batches;
+  for (auto& [key, v] : by_beam) {
+    std::sort(v.begin(), v.end());
+    std::vector<double> b;
+    for (const auto& [scan, value] : v) b.push_back(value);
+    batches.push_back(std::move(b));
+  }
+  const NoiseExponentTest test = testNoiseExponent(batches);
+  m.noise_fits.exponent_loglik = test.log_likelihood;
+  m.noise_fits.exponent_best = test.best;
+  m.noise_fits.exponent_batches = test.batches;
+  const double exponent = test.best >= 0 ? test.best : (config.noise == NoiseKind::constant ? 0.0 : 2.0);
+  if (test.best < 0) m.noise_fits.unavailable["exponent_test"] = "no beam was read repeatedly at one stop";
+
+  // Every order the stops can support (leave-one-out needs more stops than coefficients).
+  const double d_lo = *std::min_element(d.begin(), d.end()), d_hi = *std::max_element(d.begin(), d.end());
+  std::vector<ClusteredFit> fits;
+  int best = -1;
+  for (int n = 1; n <= config.max_order && static_cast<std::size_t>(n) + 2 <= groups; ++n) {
+    fits.push_back(fitClustered(d, y, stop, n, exponent));
+    const ClusteredFit& f = fits.back();
+    OrderRow row;
+    row.order = n;
+    row.alpha = f.alpha;
+    const double k = n + 2.0;
+    row.aic = 2.0 * k + 2.0 * f.neg_log_likelihood;
+    row.bic = k * std::log(static_cast<double>(d.size())) + 2.0 * f.neg_log_likelihood;
+    row.validation_mse_m2 = f.cv_mse_m2;
+    row.test_mse_m2 = kNaN;
+    row.invertible = isMonotone(BiasPolynomial{f.alpha}, d_lo, d_hi);
+    m.orders.push_back(row);
+    if (row.invertible && (best < 0 || f.cv_mse_m2 < fits[static_cast<std::size_t>(best)].cv_mse_m2)) best = n - 1;
+  }
+  if (best < 0) {
+    m.status = "no_invertible_order";
+    m.message = "no polynomial order fitted to the known distances increases over " + fixed(d_lo, 3) + "-" +
+                fixed(d_hi, 3) + " m: measure more distances across that range";
+    return m;
+  }
+  int order_aic = -1;
+  for (const auto& row : m.orders)
+    if (row.invertible && (order_aic < 0 || row.aic < m.orders[static_cast<std::size_t>(order_aic - 1)].aic)) order_aic = row.order;
+  const ClusteredFit& f = fits[static_cast<std::size_t>(best)];
+  m.order_rule = "leave-one-stop-out cross-validation";
+  m.order_aic = order_aic;
+  m.order_validation = best + 1;
+  m.model.bias.alpha = f.alpha;
+  m.model.noise.kind = exponent == 0.0 ? NoiseKind::constant : exponent == 2.0 ? NoiseKind::squared : NoiseKind::power;
+  m.model.noise.sigma_e = f.sigma_e;
+  m.model.noise.exponent = exponent;
+  m.alpha_covariance.assign(f.covariance.data(), f.covariance.data() + f.covariance.size());
+  m.fitted_range_m = std::make_pair(d_lo, d_hi);
+  m.readings = d.size();
+  double s = 0.0;
+  for (std::size_t i = 0; i < d.size(); ++i) s += std::pow(y[i] - polyAt(f.alpha, d[i]), 2);
+  m.residual_rms_m = std::sqrt(s / static_cast<double>(d.size()));
+  return m;
+}
+
+}  // namespace lidarcal::calibration

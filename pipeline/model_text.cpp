@@ -1,0 +1,124 @@
+#include "pipeline/model_text.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <algorithm>
+#include <limits>
+#include <tuple>
+
+namespace lidarcal::pipeline {
+namespace {
+
+std::string fixed(double v, int digits, bool sign = false) {
+  char buf[64];
+  if (sign) std::snprintf(buf, sizeof buf, "%+.*f", digits, v);
+  else std::snprintf(buf, sizeof buf, "%.*f", digits, v);
+  return buf;
+}
+
+}  // namespace
+
+std::vector<double> coefficientErrors(const CalibrationModel& m) {
+  const std::size_t n = m.model.bias.alpha.size();
+  std::vector<double> se(n, std::numeric_limits<double>::quiet_NaN());
+  if (m.alpha_covariance.size() != n * n) return se;
+  for (std::size_t i = 0; i < n; ++i) se[i] = std::sqrt(std::max(0.0, m.alpha_covariance[i * n + i]));
+  return se;
+}
+
+double biasError(const CalibrationModel& m, double d) {
+  const std::size_t n = m.model.bias.alpha.size();
+  if (m.alpha_covariance.size() != n * n) return std::numeric_limits<double>::quiet_NaN();
+  std::vector<double> x(n);
+  double p = 1.0;
+  for (std::size_t i = 0; i < n; ++i, p *= d) x[i] = p;
+  double v = 0.0;
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = 0; j < n; ++j) v += x[i] * m.alpha_covariance[i * n + j] * x[j];
+  return std::sqrt(std::max(0.0, v));
+}
+
+std::string polynomialWithErrors(const CalibrationModel& m) {
+  const auto& a = m.model.bias.alpha;
+  const auto se = coefficientErrors(m);
+  std::string s;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    if (i) s += a[i] < 0 ? " - " : " + ";
+    else if (a[i] < 0) s += "-";
+    s += fixed(std::abs(a[i]), 5);
+    if (std::isfinite(se[i])) s += " (+-" + fixed(se[i], 5) + ")";
+    if (i == 1) s += " d";
+    if (i > 1) s += " d^" + std::to_string(i);
+  }
+  return s;
+}
+
+std::vector<double> tableDistances(const CalibrationModel& m) {
+  double lo = m.model.range_min_m, hi = std::min(m.model.range_max_m, 10.0);
+  if (m.fitted_range_m) std::tie(lo, hi) = *m.fitted_range_m;
+  if (!(hi > lo)) return {};
+  // About five round distances inside [lo, hi], on a 1-2-5 step.
+  double step = 0.1;
+  for (double s : {0.1, 0.2, 0.25, 0.5, 1.0, 2.0, 5.0, 10.0}) {
+    step = s;
+    if ((hi - lo) / s <= 6.0) break;
+  }
+  std::vector<double> d;
+  for (double v = std::ceil(lo / step - 1e-9) * step; v <= hi + 1e-9; v += step)
+    if (v > 0.0) d.push_back(v);
+  if (d.empty()) d.push_back(0.5 * (lo + hi));
+  return d;
+}
+
+std::string modelSummary(const CalibrationModel& m) {
+  std::string s;
+  s += "  range model (" + m.method + ", order " + std::to_string(m.model.bias.order()) + "): reading = " +
+       polynomialWithErrors(m) + "   (d in m; +- one standard error)\n";
+  if (m.fitted_range_m)
+    s += "  fitted over true distances " + fixed(m.fitted_range_m->first, 3) + "-" + fixed(m.fitted_range_m->second, 3) +
+         " m (readings " + fixed(m.model.bias(m.fitted_range_m->first), 3) + "-" +
+         fixed(m.model.bias(m.fitted_range_m->second), 3) + " m); `correct` leaves readings outside as they are\n";
+  const bool errors = m.alpha_covariance.size() == m.model.bias.alpha.size() * m.model.bias.alpha.size();
+  s += "  error of the raw reading (f(d) - d)" + std::string(errors ? " +- its standard error" : "") + ":";
+  for (double d : tableDistances(m)) {
+    s += "  " + fixed(d, 2) + " m: " + fixed(1000.0 * (m.model.bias(d) - d), 1, true);
+    if (errors) s += " +- " + fixed(1000.0 * biasError(m, d), 1);
+    s += " mm;";
+  }
+  if (!s.empty() && s.back() == ';') s.pop_back();
+  s += "\n";
+  for (const auto& w : m.warnings) s += "  warning: " + w + "\n";
+  return s;
+}
+
+std::string referenceTable(const std::vector<calibration::ReferenceMatch>& raw,
+                           const std::vector<calibration::ReferenceMatch>* corrected) {
+  std::string s = "| entry | stop | target | reference [m] | raw [m] | raw - reference [mm] |";
+  if (corrected) s += " corrected [m] | corrected - reference [mm] |";
+  s += " scans | readings |\n|---|---|---|---|---|---|";
+  if (corrected) s += "---|---|";
+  s += "---|---|\n";
+  double sum_raw = 0.0, sum_cor = 0.0;
+  std::size_t n_raw = 0, n_cor = 0;
+  auto cell = [](const calibration::ReferenceMatch& m, double& sum, std::size_t& n) {
+    if (!m.ok()) return std::string(" not found | - |");
+    const double e = m.measured_m - m.reference_m;
+    sum += e * e;
+    ++n;
+    return " " + fixed(m.measured_m, 4) + " +- " + fixed(m.measured_se_m, 4) + " | " + fixed(1000.0 * e, 1, true) + " |";
+  };
+  for (std::size_t k = 0; k < raw.size(); ++k) {
+    const auto& m = raw[k];
+    s += "| " + std::to_string(m.entry) + " | " + std::to_string(m.stop) + " | " +
+         (m.target == ReferenceTarget::wall ? "wall" : "landmark " + std::to_string(m.landmark)) + " | " +
+         fixed(m.reference_m, 3) + " |" + cell(m, sum_raw, n_raw);
+    if (corrected) s += k < corrected->size() ? cell((*corrected)[k], sum_cor, n_cor) : std::string(" - | - |");
+    s += " " + std::to_string(m.sightings) + " | " + std::to_string(m.readings) + " |\n";
+  }
+  s += "\nRMS of measured - reference: raw " + (n_raw ? fixed(1000.0 * std::sqrt(sum_raw / static_cast<double>(n_raw)), 1) : std::string("-")) + " mm";
+  if (corrected) s += ", corrected " + (n_cor ? fixed(1000.0 * std::sqrt(sum_cor / static_cast<double>(n_cor)), 1) : std::string("-")) + " mm";
+  s += " (over " + std::to_string(n_raw) + " entries)\n";
+  return s;
+}
+
+}  // namespace lidarcal::pipeline

@@ -1,0 +1,37 @@
+#pragma once
+// A calibrated model in words, for stdout and the report: every coefficient with its standard
+// error, the correction at a few distances inside the fitted range (with its standard error),
+// the range the model was fitted over, and the plausibility warnings.
+
+#include <string>
+#include <vector>
+
+#include "calibration/reference.hpp"
+#include "common/calibration_model.hpp"
+
+namespace lidarcal::pipeline {
+
+/// Standard error of each bias coefficient (NaN when the covariance was not computed).
+std::vector<double> coefficientErrors(const CalibrationModel& m);
+
+/// Standard error of f(d) at distance d from the covariance of alpha (NaN without it).
+double biasError(const CalibrationModel& m, double d_m);
+
+/// "0.05250 (+-0.00110) + 0.88380 (+-0.00090) d + ..." (no errors when not computed).
+std::string polynomialWithErrors(const CalibrationModel& m);
+
+/// Distances at which to show the correction: inside the fitted range (or the sensor window
+/// when the fitted range is unknown), about five of them, rounded.
+std::vector<double> tableDistances(const CalibrationModel& m);
+
+/// Several lines of plain text: method, f with errors, fitted range, noise, corrections at
+/// tableDistances() with errors, warnings.
+std::string modelSummary(const CalibrationModel& m);
+
+/// The reference distances as matched: stop, target, measured (tape) distance, what the scans
+/// read there (mean over the scans, its standard error), the difference, and the readings used
+/// (Markdown table). With `corrected`, a second column set for the corrected scans.
+std::string referenceTable(const std::vector<calibration::ReferenceMatch>& raw,
+                           const std::vector<calibration::ReferenceMatch>* corrected = nullptr);
+
+}  // namespace lidarcal::pipeline
