@@ -240,6 +240,46 @@ double bearingScatter(const LandmarkObservations& obs, const std::vector<Landmar
   return n ? std::sqrt(s / static_cast<double>(n)) : 0.0;
 }
 
+/// What a user should know before trusting a self-calibrated model (model.warnings).
+void addPlausibilityWarnings(CalibrationModel& m, const JointResult* j) {
+  const std::size_t n = m.model.bias.alpha.size();
+  char text[512];
+  // An offset that trades off against the pole radius is not determined by the data: the
+  // central beam reads alpha_0 + alpha_1 (|c - p| - r), and only the arcs' curvature tells r.
+  if (j && j->alpha_radius_covariance.size() == static_cast<Eigen::Index>(n) && j->radius_variance > 0.0 &&
+      m.alpha_covariance.size() == n * n && m.alpha_covariance[0] > 0.0) {
+    const double corr = j->alpha_radius_covariance(0) / std::sqrt(m.alpha_covariance[0] * j->radius_variance);
+    m.offset_radius_correlation = corr;
+    if (std::abs(corr) > 0.9) {
+      std::snprintf(text, sizeof text,
+                    "the offset alpha_0 = %.1f mm (+-%.1f) trades off against the estimated pole radius %.1f mm "
+                    "(correlation %.2f): the data do not separate them, so the offset is not determined; measure the "
+                    "poles' radius and give it with --radius (or calibrate against measured distances, --reference)",
+                    1000.0 * m.model.bias.alpha[0], 1000.0 * std::sqrt(m.alpha_covariance[0]), 1000.0 * j->radius_m, corr);
+      m.warnings.push_back(text);
+    }
+  }
+  // Corrections far beyond what lidars are built to: more often landmarks that are not round
+  // poles of one radius (corners, door frames) than a sensor that far off.
+  if (m.fitted_range_m) {
+    const auto [lo, hi] = *m.fitted_range_m;
+    double worst = 0.0, at = lo;
+    for (int i = 0; i <= 50; ++i) {
+      const double d = lo + (hi - lo) * i / 50.0;
+      const double rel = std::abs(m.model.bias(d) - d) / std::max(d, 0.5);
+      if (rel > worst) worst = rel, at = d;
+    }
+    if (worst > 0.10) {
+      std::snprintf(text, sizeof text,
+                    "the model changes readings by up to %.0f %% (%.0f mm at %.2f m): more than the range error of "
+                    "most lidars; check that the landmarks lidarcal detect finds are round poles of one radius (not "
+                    "corners, door frames or legs of different sizes) before using it",
+                    100.0 * worst, 1000.0 * std::abs(m.model.bias(at) - at), at);
+      m.warnings.push_back(text);
+    }
+  }
+}
+
 /// The joint refinement's result at the chosen order, the order table and the AIC's choice.
 struct JointStage {
   JointResult result;
@@ -355,6 +395,15 @@ void CalibrationConfig::validate() const {
   j.validate();
 }
 
+std::optional<std::string> baselineProblem(const std::vector<Pose2>& stops, const CalibrationConfig& config) {
+  const double baseline = pathExtent(stops);
+  if (stops.size() < 2 || baseline >= config.min_baseline_m) return std::nullopt;
+  return "the " + count(stops.size(), "stop") + " lie within " + metres(baseline) +
+         " of each other (the sensor turned or stood still), so the landmarks cannot be placed from their bearings: "
+         "record stops along a straight line of at least 1 m (a quarter of the distance to the poles or more), or "
+         "give measured distances with --reference (docs/FORMAT.md)";
+}
+
 double landmarkRadius(const LandmarkObservations& obs) {
   if (obs.landmark_radius_m) return *obs.landmark_radius_m;
   std::vector<double> r;
@@ -429,12 +478,9 @@ CalibrationModel calibrate(const LandmarkObservations& obs, const CalibrationCon
   // Triangulating from bearings needs the sensor to translate: stops at one place (a sensor
   // turning on the spot, or standing still) give every landmark the same bearing line.
   const double baseline = pathExtent(obs.commanded);
-  if (!obs.sightings.empty() && baseline < config.min_baseline_m) {
+  if (const auto problem = baselineProblem(obs.commanded, config); problem && !obs.sightings.empty()) {
     m.status = "no_baseline";
-    m.message = "the " + count(obs.commanded.size(), "stop") + " lie within " + metres(baseline) +
-                " of each other (the sensor turned or stood still), so the landmarks cannot be placed from their "
-                "bearings: record stops along a straight line of at least 1 m (a quarter of the distance to the poles "
-                "or more), or give measured distances with --reference (docs/FORMAT.md)";
+    m.message = *problem;
     return m;
   }
 
@@ -456,10 +502,13 @@ CalibrationModel calibrate(const LandmarkObservations& obs, const CalibrationCon
   }
   if (usable == 0) {
     m.status = "no_usable_landmark";
-    m.message = tri.empty() ? "no landmark was observed: check that the poles are detected (lidarcal detect)"
+    m.message = tri.empty() ? "no landmark was observed (check what lidarcal detect finds)"
                             : "no landmark could be triangulated";
     for (std::size_t i = 0; i < tri.size() && i < 3; ++i) m.message += "; landmark " + std::to_string(tri[i].id) + ": " + m.landmarks[i].status;
     if (tri.size() > 3) m.message += "; and " + std::to_string(tri.size() - 3) + " more";
+    m.message += ". Record 3 or more stops along a straight line past 3 or more poles (cylinders 5-30 cm across, "
+                 "free-standing, 0.5-4 m away), give their radius with --radius if they are thinner, or give measured "
+                 "distances with --reference";
     return m;
   }
   if (!(radius > 0.0)) {
@@ -505,7 +554,11 @@ CalibrationModel calibrate(const LandmarkObservations& obs, const CalibrationCon
   m.readings = d.size();
   m.sigma_theta_rad = bearingScatter(obs, tri);
   m.stop_poses = obs.commanded;
-  if (config.method == Method::closed_form) return m;
+  m.fitted_range_m = std::make_pair(*std::min_element(d.begin(), d.end()), *std::max_element(d.begin(), d.end()));
+  if (config.method == Method::closed_form) {
+    addPlausibilityWarnings(m, nullptr);
+    return m;
+  }
 
   // Stage 3: joint refinement (ours), from the closed form.
   const JointStage js = jointStage(obs, config, tri, sel, radius, d, y, m.model);
@@ -560,7 +613,11 @@ CalibrationModel calibrate(const LandmarkObservations& obs, const CalibrationCon
     if (cv != j.centre_covariance.end())
       c.covariance_m2 = {cv->second(0, 0), cv->second(0, 1), cv->second(1, 0), cv->second(1, 1)};
   }
+  if (!j.distances_m.empty())
+    m.fitted_range_m = std::make_pair(*std::min_element(j.distances_m.begin(), j.distances_m.end()),
+                                      *std::max_element(j.distances_m.begin(), j.distances_m.end()));
   if (!j.converged) m.message = "joint refinement: " + j.message;  // usable, but say so
+  addPlausibilityWarnings(m, &j);
   return m;
 }
 

@@ -7,6 +7,8 @@
 //   3. (method joint) refine poses, landmarks, radius and bias together from every reading.
 // And the oracle: the same fits against true distances.
 
+#include <optional>
+#include <string>
 #include <vector>
 
 #include "calibration/joint_refinement.hpp"
@@ -50,6 +52,10 @@ std::vector<RangePair> closedFormPairs(const LandmarkObservations& obs, const st
 
 /// Common radius: the known one, else the median of the fitted radii.
 double landmarkRadius(const LandmarkObservations& obs);
+
+/// Why stops at these poses cannot triangulate landmarks (they span less than
+/// config.min_baseline_m: the sensor turned or stood still), or nothing when they can.
+std::optional<std::string> baselineProblem(const std::vector<Pose2>& stops, const CalibrationConfig& config);
 
 /// Calibrates. The result's status is "ok" or says why the data cannot support a model.
 CalibrationModel calibrate(const LandmarkObservations& obs, const CalibrationConfig& config);

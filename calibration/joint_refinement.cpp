@@ -636,12 +636,22 @@ JointResult refineJoint(const LandmarkObservations& obs, const JointInit& init, 
     }
     ceres::Covariance cov(copt);
     std::vector<std::pair<const double*, const double*>> blocks = {{alpha.data(), alpha.data()}};
+    const bool radius_free = config.estimate_radius && problem.HasParameterBlock(&radius);
+    if (radius_free) {
+      blocks.emplace_back(alpha.data(), &radius);
+      blocks.emplace_back(&radius, &radius);
+    }
     for (auto& [id, c] : centres)
       if (problem.HasParameterBlock(c.data())) blocks.emplace_back(c.data(), c.data());
     if (problem.HasParameterBlock(alpha.data()) && cov.Compute(blocks, &problem)) {
       const int n = config.order + 1;
       out.alpha_covariance.resize(n, n);
       cov.GetCovarianceBlock(alpha.data(), alpha.data(), out.alpha_covariance.data());
+      if (radius_free) {
+        out.alpha_radius_covariance.resize(n);
+        cov.GetCovarianceBlock(alpha.data(), &radius, out.alpha_radius_covariance.data());
+        cov.GetCovarianceBlock(&radius, &radius, &out.radius_variance);
+      }
       for (auto& [id, c] : centres) {
         if (!problem.HasParameterBlock(c.data())) continue;
         Eigen::Matrix2d m;

@@ -104,6 +104,11 @@ struct JointResult {
   double radius_m = 0.0;                   ///< refined common radius
   RangeModel model;                        ///< bias (order n) and noise law
   Eigen::MatrixXd alpha_covariance;        ///< covariance of alpha_0..alpha_n, gauge fixed by the pose priors
+  /// Covariance of the estimated radius with alpha_0..alpha_n, m^2 (empty when the radius was
+  /// held or the covariance not computed): an offset that trades off against the radius is not
+  /// determined by the data.
+  Eigen::VectorXd alpha_radius_covariance;
+  double radius_variance = 0.0;            ///< variance of the estimated radius, m^2 (0 when held)
   double sigma_theta_rad = 0.0;            ///< RMS of centre-bearing residuals after refinement
   double pose_scatter_m = 0.0;             ///< RMS of refined minus commanded position (per coordinate)
   double heading_scatter_rad = 0.0;        ///< RMS of refined minus commanded heading

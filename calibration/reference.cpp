@@ -7,6 +7,7 @@
 #include <map>
 #include <set>
 #include <stdexcept>
+#include <tuple>
 
 #include <Eigen/Dense>
 
@@ -55,27 +56,35 @@ struct Tally {
   double angle() const { return std::atan2(sin, cos); }
 };
 
-/// The key of `tallies` that matches the entry best (by bearing when given, else by distance),
-/// or none when nothing lies within the tolerance; `why` says what was found instead.
+/// The key of `tallies` that matches the entry: among the targets within the bearing tolerance
+/// (all of them without a bearing), the one whose measured distance is nearest distance_m, if
+/// that is within the distance tolerance; `why` says what was found instead. (Two poles on one
+/// bearing: the distance tells them apart.)
 template <class Key>
 std::optional<Key> choose(const std::map<Key, Tally>& tallies, const ReferenceDistance& e, const ReferenceConfig& c,
                           std::string& why) {
   std::optional<Key> best;
-  double best_error = std::numeric_limits<double>::infinity();
+  double best_error = std::numeric_limits<double>::infinity(), nearest_bearing = best_error;
   for (const auto& [key, t] : tallies) {
-    const double error = e.bearing_rad ? std::abs(wrapAngle(t.angle() - *e.bearing_rad)) : std::abs(t.mean() - e.distance_m);
+    if (e.bearing_rad) {
+      const double off = std::abs(wrapAngle(t.angle() - *e.bearing_rad));
+      nearest_bearing = std::min(nearest_bearing, off);
+      if (off > c.max_bearing_error_rad) continue;
+    }
+    const double error = std::abs(t.mean() - e.distance_m);
     if (error < best_error) {
       best_error = error;
       best = key;
     }
   }
-  if (!best) return best;
-  const Tally& t = tallies.at(*best);
-  const double limit = e.bearing_rad ? c.max_bearing_error_rad : 0.1 + c.max_distance_error_fraction * e.distance_m;
-  if (best_error <= limit) return best;
-  why = e.bearing_rad ? "the nearest is at bearing " + fixed(t.angle(), 3) + " rad, more than " +
-                            fixed(c.max_bearing_error_rad, 2) + " rad from bearing_rad"
-                      : "the nearest measures " + fixed(t.mean(), 3) + " m, too far from distance_m";
+  if (!best) {
+    why = "the nearest is " + fixed(nearest_bearing, 3) + " rad from bearing_rad (more than " +
+          fixed(c.max_bearing_error_rad, 2) + " rad)";
+    return best;
+  }
+  if (best_error <= 0.1 + c.max_distance_error_fraction * e.distance_m) return best;
+  why = std::string(e.bearing_rad ? "the nearest in distance at that bearing" : "the nearest") + " measures " +
+        fixed(tallies.at(*best).mean(), 3) + " m, too far from distance_m";
   return std::nullopt;
 }
 
@@ -315,9 +324,10 @@ CalibrationModel calibrateWithReference(const std::vector<KnownReading>& reading
     return m;
   }
   // Seed 004's noise-exponent test on the repeated readings of one beam at one stop.
-  std::map<std::pair<std::size_t, std::uint32_t>, std::vector<std::pair<std::size_t, double>>> by_beam;
+  // One batch: one beam on one target at one stop (a constant true distance).
+  std::map<std::tuple<std::size_t, std::size_t, std::uint32_t>, std::vector<std::pair<std::size_t, double>>> by_beam;
   for (const auto& r : readings)
-    if (r.beam != kUnknownBeam) by_beam[{r.stop, r.beam}].push_back({r.scan, r.y_m});
+    if (r.beam != kUnknownBeam) by_beam[{r.stop, r.entry, r.beam}].push_back({r.scan, r.y_m});
   std::vector<std::vector<double>> batches;
   for (auto& [key, v] : by_beam) {
     std::sort(v.begin(), v.end());

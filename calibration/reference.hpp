@@ -37,8 +37,8 @@ struct ReferenceConfig {
   double max_wall_incidence_rad = 1.0;
   /// With a bearing given, the target's detected bearing must lie within this, radians. Default 0.2.
   double max_bearing_error_rad = 0.2;
-  /// Without a bearing, the target's measured distance must lie within this fraction of the
-  /// reference distance plus 0.1 m. Default 0.25.
+  /// The target's measured distance must lie within this fraction of the reference distance
+  /// plus 0.1 m (with or without a bearing). Default 0.25.
   double max_distance_error_fraction = 0.25;
   void validate() const;  ///< throws std::invalid_argument
 };

@@ -3,6 +3,7 @@
 // (docs/FORMAT.md). Plain data: calibration/ fills it, io/ reads and writes it.
 
 #include <array>
+#include <limits>
 #include <map>
 #include <optional>
 #include <string>
@@ -82,6 +83,9 @@ struct CalibrationModel {
   std::size_t readings = 0;          ///< readings used
   double pose_scatter_m = 0.0;       ///< joint: refined vs commanded stop positions (RMS per coordinate)
   double heading_scatter_rad = 0.0;  ///< joint: refined vs commanded headings (RMS)
+  /// joint with the radius estimated: correlation of alpha_0 with the pole radius (NaN otherwise);
+  /// near +-1 the offset is not determined by the data.
+  double offset_radius_correlation = std::numeric_limits<double>::quiet_NaN();
 };
 
 }  // namespace lidarcal

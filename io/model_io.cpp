@@ -89,7 +89,8 @@ void writeModel(const std::filesystem::path& file, const CalibrationModel& m) {
                                 {"residual_rms_m", m.residual_rms_m},
                                 {"readings", m.readings},
                                 {"pose_scatter_m", m.pose_scatter_m},
-                                {"heading_scatter_rad", m.heading_scatter_rad}}}};
+                                {"heading_scatter_rad", m.heading_scatter_rad},
+                                {"offset_radius_correlation", number(m.offset_radius_correlation)}}}};
   if (m.fitted_range_m) {
     const auto [lo, hi] = *m.fitted_range_m;
     j["fitted_range"] = ojson{{"d_min_m", lo}, {"d_max_m", hi}, {"reading_min_m", m.model.bias(lo)},

@@ -43,13 +43,23 @@ nlohmann::ordered_json evaluationJson(const Evaluation& e) {
 
 namespace {
 
-nlohmann::ordered_json matchJson(const calibration::ReferenceMatch& m) {
+nlohmann::ordered_json number(double v) { return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(nullptr); }
+
+/// Whether a reference distance lies within the distances the model was fitted over (all do
+/// without a model or a recorded range).
+bool inFittedRange(const calibration::ReferenceMatch& m, const CalibrationModel* model) {
+  if (!model || !model->fitted_range_m) return true;
+  return m.reference_m >= model->fitted_range_m->first && m.reference_m <= model->fitted_range_m->second;
+}
+
+nlohmann::ordered_json matchJson(const calibration::ReferenceMatch& m, const CalibrationModel* model) {
   nlohmann::ordered_json j{{"entry", m.entry}, {"stop", m.stop},
                            {"target", m.target == ReferenceTarget::wall ? "wall" : "landmark"},
-                           {"reference_m", m.reference_m}, {"status", m.status}};
+                           {"reference_m", m.reference_m}, {"in_fitted_range", inFittedRange(m, model)},
+                           {"status", m.status}};
   if (m.ok()) {
     j["measured_m"] = m.measured_m;
-    j["measured_se_m"] = std::isfinite(m.measured_se_m) ? nlohmann::ordered_json(m.measured_se_m) : nlohmann::ordered_json(nullptr);
+    j["measured_se_m"] = number(m.measured_se_m);
     j["error_m"] = m.measured_m - m.reference_m;
     j["scans"] = m.sightings;
     j["readings"] = m.readings;
@@ -57,14 +67,16 @@ nlohmann::ordered_json matchJson(const calibration::ReferenceMatch& m) {
   return j;
 }
 
-/// RMS of measured - reference over the matched entries (NaN when none).
-double rmsError(const std::vector<calibration::ReferenceMatch>& matches) {
+/// RMS of measured - reference over the matched entries (with `model`: those inside its fitted
+/// range only; NaN when none).
+double rmsError(const std::vector<calibration::ReferenceMatch>& matches, const CalibrationModel* model = nullptr) {
   double s = 0.0;
   std::size_t n = 0;
   for (const auto& m : matches)
-    if (m.ok()) s += std::pow(m.measured_m - m.reference_m, 2), ++n;
+    if (m.ok() && inFittedRange(m, model)) s += std::pow(m.measured_m - m.reference_m, 2), ++n;
   return n ? std::sqrt(s / static_cast<double>(n)) : std::nan("");
 }
+
 
 /// evaluate SEQ --reference REF.json [--model model.json]: what the scans measure at the
 /// reference distances, raw and corrected.
@@ -82,28 +94,34 @@ void evaluateReference(const std::string& seq_dir, const std::string& ref_file, 
                                     [&](std::size_t d, std::size_t) { raw_progress.update(d); });
   raw_progress.finish();
   nlohmann::ordered_json j{{"sequence", seq_dir}, {"reference", ref_file}};
+  std::optional<CalibrationModel> model;
+  if (!model_file.empty()) model = io::readModel(model_file);
+  const CalibrationModel* fitted = model ? &*model : nullptr;
   auto raw_json = nlohmann::ordered_json::array();
-  for (const auto& m : raw.known.matches) raw_json.push_back(matchJson(m));
-  j["raw"] = {{"rms_error_m", rmsError(raw.known.matches)}, {"entries", raw_json}};
+  for (const auto& m : raw.known.matches) raw_json.push_back(matchJson(m, fitted));
+  // With a model, the RMS over the entries inside its fitted range (readings outside are kept
+  // raw by default) and over all of them.
+  j["raw"] = {{"rms_error_m", number(rmsError(raw.known.matches, fitted))},
+              {"rms_error_all_m", number(rmsError(raw.known.matches))}, {"entries", raw_json}};
   std::optional<ReferenceObservations> corrected;
-  if (!model_file.empty()) {
-    const CalibrationModel model = io::readModel(model_file);
+  if (model) {
     calibration::Outside outside = calibration::Outside::keep;
     calibration::parseOutside(outside_name, outside);
-    checkModelFits(model, seq, model_file, outside);
+    checkModelFits(*model, seq, model_file, outside);
     const auto method = inversion == "ml" ? calibration::InversionMethod::ml : calibration::InversionMethod::ls;
-    const ScanCorrection correction{calibration::modelInverter(model, method, outside),
-                                    calibration::correctionWindow(model, outside)};
+    const ScanCorrection correction{calibration::modelInverter(*model, method, outside),
+                                    calibration::correctionWindow(*model, outside)};
     Progress cor_progress("measure (corrected)", seq.scans.size());
     corrected = observeReference(seq, ref, detection, scanLoader(seq, &correction),
                                  [&](std::size_t d, std::size_t) { cor_progress.update(d); });
     cor_progress.finish();
     auto cor_json = nlohmann::ordered_json::array();
-    for (const auto& m : corrected->known.matches) cor_json.push_back(matchJson(m));
+    for (const auto& m : corrected->known.matches) cor_json.push_back(matchJson(m, fitted));
     j["model"] = model_file;
-    j["corrected"] = {{"rms_error_m", rmsError(corrected->known.matches)}, {"entries", cor_json}};
+    j["corrected"] = {{"rms_error_m", number(rmsError(corrected->known.matches, fitted))},
+                      {"rms_error_all_m", number(rmsError(corrected->known.matches))}, {"entries", cor_json}};
   }
-  std::fputs(referenceTable(raw.known.matches, corrected ? &corrected->known.matches : nullptr).c_str(), stdout);
+  std::fputs(referenceTable(raw.known.matches, corrected ? &corrected->known.matches : nullptr, fitted).c_str(), stdout);
   if (!out.empty()) io::writeTextAtomically(out, j.dump(2) + "\n");
 }
 

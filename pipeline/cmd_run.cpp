@@ -12,6 +12,7 @@
 #include "io/model_io.hpp"
 #include "pipeline/cli_options.hpp"
 #include "pipeline/commands.hpp"
+#include "pipeline/model_text.hpp"
 #include "pipeline/progress.hpp"
 #include "pipeline/report.hpp"
 #include "pipeline/stages.hpp"
@@ -103,16 +104,7 @@ void runRun(const RunCommand& c) {
 
   std::printf("lidarcal run: %zu scans, %zu stops, %zu landmarks found\n", seq.scans.size(), seq.stops.size(),
               cal.detections.association.landmarks.size());
-  std::string poly;
-  for (std::size_t i = 0; i < cal.model.model.bias.alpha.size(); ++i) {
-    char term[48];
-    std::snprintf(term, sizeof term, "%s%.5f", i ? " + " : "", cal.model.model.bias.alpha[i]);
-    poly += term;
-    if (i == 1) poly += " d";
-    if (i > 1) poly += " d^" + std::to_string(i);
-  }
-  std::printf("  range model (%s, order %d): reading = %s\n", cal.model.method.c_str(), cal.model.model.bias.order(),
-              poly.c_str());
+  std::fputs(modelSummary(cal.model).c_str(), stdout);
   if (!in.compared.empty())
     for (const auto& m : in.compared)
       std::printf("  MSE ratio on landmark returns, %-62s %8.2f\n", (m.name + ":").c_str(), m.evaluation.landmarks.mse_ratio);

@@ -92,32 +92,41 @@ std::string modelSummary(const CalibrationModel& m) {
 }
 
 std::string referenceTable(const std::vector<calibration::ReferenceMatch>& raw,
-                           const std::vector<calibration::ReferenceMatch>* corrected) {
+                           const std::vector<calibration::ReferenceMatch>* corrected, const CalibrationModel* model) {
+  auto inside = [&](const calibration::ReferenceMatch& m) {
+    return !model || !model->fitted_range_m ||
+           (m.reference_m >= model->fitted_range_m->first && m.reference_m <= model->fitted_range_m->second);
+  };
   std::string s = "| entry | stop | target | reference [m] | raw [m] | raw - reference [mm] |";
   if (corrected) s += " corrected [m] | corrected - reference [mm] |";
   s += " scans | readings |\n|---|---|---|---|---|---|";
   if (corrected) s += "---|---|";
   s += "---|---|\n";
   double sum_raw = 0.0, sum_cor = 0.0;
-  std::size_t n_raw = 0, n_cor = 0;
-  auto cell = [](const calibration::ReferenceMatch& m, double& sum, std::size_t& n) {
+  std::size_t n_raw = 0, n_cor = 0, outside = 0;
+  auto cell = [](const calibration::ReferenceMatch& m, bool counted, double& sum, std::size_t& n) {
     if (!m.ok()) return std::string(" not found | - |");
     const double e = m.measured_m - m.reference_m;
-    sum += e * e;
-    ++n;
-    return " " + fixed(m.measured_m, 4) + " +- " + fixed(m.measured_se_m, 4) + " | " + fixed(1000.0 * e, 1, true) + " |";
+    if (counted) sum += e * e, ++n;
+    const std::string se = std::isfinite(m.measured_se_m) ? " +- " + fixed(m.measured_se_m, 4) : std::string();
+    return " " + fixed(m.measured_m, 4) + se + " | " + fixed(1000.0 * e, 1, true) + " |";
   };
   for (std::size_t k = 0; k < raw.size(); ++k) {
     const auto& m = raw[k];
-    s += "| " + std::to_string(m.entry) + " | " + std::to_string(m.stop) + " | " +
-         (m.target == ReferenceTarget::wall ? "wall" : "landmark " + std::to_string(m.landmark)) + " | " +
-         fixed(m.reference_m, 3) + " |" + cell(m, sum_raw, n_raw);
-    if (corrected) s += k < corrected->size() ? cell((*corrected)[k], sum_cor, n_cor) : std::string(" - | - |");
+    const bool in = inside(m);
+    outside += !in;
+    s += "| " + std::to_string(m.entry) + (in ? "" : " (outside the fitted range)") + " | " + std::to_string(m.stop) +
+         " | " + (m.target == ReferenceTarget::wall ? "wall" : "landmark " + std::to_string(m.landmark)) + " | " +
+         fixed(m.reference_m, 3) + " |" + cell(m, in, sum_raw, n_raw);
+    if (corrected) s += k < corrected->size() ? cell((*corrected)[k], in, sum_cor, n_cor) : std::string(" - | - |");
     s += " " + std::to_string(m.sightings) + " | " + std::to_string(m.readings) + " |\n";
   }
-  s += "\nRMS of measured - reference: raw " + (n_raw ? fixed(1000.0 * std::sqrt(sum_raw / static_cast<double>(n_raw)), 1) : std::string("-")) + " mm";
-  if (corrected) s += ", corrected " + (n_cor ? fixed(1000.0 * std::sqrt(sum_cor / static_cast<double>(n_cor)), 1) : std::string("-")) + " mm";
-  s += " (over " + std::to_string(n_raw) + " entries)\n";
+  auto rms = [](double sum, std::size_t n) { return n ? fixed(1000.0 * std::sqrt(sum / static_cast<double>(n)), 1) : std::string("-"); };
+  s += "\nRMS of measured - reference: raw " + rms(sum_raw, n_raw) + " mm";
+  if (corrected) s += ", corrected " + rms(sum_cor, n_cor) + " mm";
+  s += " (over " + std::to_string(n_raw) + " entries";
+  if (outside) s += "; " + std::to_string(outside) + " outside the fitted range left out: their readings are not corrected";
+  s += ")\n";
   return s;
 }
 

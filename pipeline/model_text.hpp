@@ -30,8 +30,11 @@ std::string modelSummary(const CalibrationModel& m);
 
 /// The reference distances as matched: stop, target, measured (tape) distance, what the scans
 /// read there (mean over the scans, its standard error), the difference, and the readings used
-/// (Markdown table). With `corrected`, a second column set for the corrected scans.
+/// (Markdown table). With `corrected`, a second column set for the corrected scans; with
+/// `model`, entries outside its fitted range are marked and left out of the RMS (their readings
+/// are not corrected by default).
 std::string referenceTable(const std::vector<calibration::ReferenceMatch>& raw,
-                           const std::vector<calibration::ReferenceMatch>* corrected = nullptr);
+                           const std::vector<calibration::ReferenceMatch>* corrected = nullptr,
+                           const CalibrationModel* model = nullptr);
 
 }  // namespace lidarcal::pipeline

@@ -25,6 +25,17 @@ SequenceCalibration calibrateSequence(const io::Sequence& seq, const detectors::
                         " or more stops along a line, each with its own VIEWPOINT";
     return out;
   }
+  // A sensor that only turned or stood still cannot triangulate: say so before detecting.
+  {
+    std::vector<Pose2> poses;
+    poses.reserve(seq.stops.size());
+    for (const auto& stop : seq.stops) poses.push_back(stop.commanded);
+    if (const auto problem = calibration::baselineProblem(poses, config)) {
+      out.model.status = "no_baseline";
+      out.model.message = *problem;
+      return out;
+    }
+  }
   out.detections = detectors::detectSequence(seq, detection, on_scan);
   out.observations = toLandmarkObservations(seq, out.detections);
   if (!seq.meta.range_max_m) {

@@ -65,8 +65,12 @@ std::string toMarkdown(const io::Sequence& seq, const SequenceSummary& s) {
   o << "| commanded path | " << s.path_length_m << " m, steps " << s.min_step_m << " - " << s.max_step_m << " m |\n";
   const auto& m = seq.meta;
   if (m.sensor_name) o << "| sensor | " << *m.sensor_name << " |\n";
-  if (m.range_min_m || m.range_max_m)
-    o << "| sensor range limits | " << m.range_min_m.value_or(0.0) << " - " << m.range_max_m.value_or(0.0) << " m |\n";
+  if (m.range_max_m)
+    o << "| sensor range limits | " << m.range_min_m.value_or(0.0) << " - " << *m.range_max_m << " m |\n";
+  else if (m.range_min_m)
+    o << "| sensor range limits | from " << *m.range_min_m << " m (no upper limit recorded) |\n";
+  if (seq.stops.size() < seq.scans.size() && !m.stop_starts.empty())
+    o << "| stops begun by sequence.json | " << m.stop_starts.size() << " (stop_starts: recordings taken apart at one pose) |\n";
   if (m.landmark_radius_m) o << "| landmark radius | " << *m.landmark_radius_m << " m |\n";
   return o.str();
 }
