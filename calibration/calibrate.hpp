@@ -7,6 +7,8 @@
 //   3. (method joint) refine poses, landmarks, radius and bias together from every reading.
 // And the oracle: the same fits against true distances.
 
+#include <cstddef>
+#include <functional>
 #include <vector>
 
 #include "calibration/joint_refinement.hpp"
@@ -36,6 +38,10 @@ struct CalibrationConfig {
   NoiseKind noise = NoiseKind::squared;               ///< noise law of the calibrated model
   TriangulationConfig triangulation;                  ///< stage 1 settings
   JointConfig joint;                                  ///< stage 3 settings (order is chosen here)
+  /// Progress of the joint refinement for a display (the library never prints): called with the
+  /// stage name ("joint refinement"), the solves done and the solves in all (the settling pass,
+  /// one per order, the covariance). Default empty: not called.
+  std::function<void(const char* stage, std::size_t done, std::size_t total)> progress;
   void validate() const;                              ///< throws std::invalid_argument
 };
 

@@ -494,14 +494,18 @@ SequenceMeta readSequenceMeta(const fs::path& file) {
   return m;
 }
 
-void writeSequenceMeta(const fs::path& file, const SequenceMeta& m) {
+nlohmann::ordered_json sequenceMetaJson(const SequenceMeta& m) {
   nlohmann::ordered_json j = nlohmann::ordered_json::object();
   if (m.sensor_name) j["sensor_name"] = *m.sensor_name;
   if (m.landmark_radius_m) j["landmark_radius_m"] = *m.landmark_radius_m;
   if (m.range_min_m) j["range_min_m"] = *m.range_min_m;
   if (m.range_max_m) j["range_max_m"] = *m.range_max_m;
   if (m.beams) j["beams"] = *m.beams;
-  writeTextAtomically(file, j.dump(2) + "\n");
+  return j;
+}
+
+void writeSequenceMeta(const fs::path& file, const SequenceMeta& m) {
+  writeTextAtomically(file, sequenceMetaJson(m).dump(2) + "\n");
 }
 
 }  // namespace lidarcal::io

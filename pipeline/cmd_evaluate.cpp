@@ -8,6 +8,7 @@
 
 #include "io/atomic_file.hpp"
 #include "pipeline/commands.hpp"
+#include "pipeline/papers.hpp"
 #include "pipeline/truth_eval.hpp"
 
 namespace lidarcal::pipeline {
@@ -38,12 +39,13 @@ void addEvaluateCommand(CLI::App& app) {
   };
   auto o = std::make_shared<Options>();
   CLI::App* sub = app.add_subcommand(
-      "evaluate", "Compare corrected and raw ranges of a simulated sequence with the truth: MSE ratio (seed 000 eq. 31) "
-                  "and normalised MSE (seed 004 eqs. 31-32), as JSON");
+      "evaluate", std::string("Compare corrected and raw ranges of a simulated sequence with the truth: MSE ratio (raw MSE / "
+                              "corrected MSE, higher is better; ") +
+                      papers::kLandmarks + ", eq. 31) and normalised MSE (" + papers::kTriangulation + ", eqs. 31-32), as JSON");
   sub->add_option("OUT", o->corrected, "Corrected sequence (from lidarcal correct)")->required();
   sub->add_option("--truth", o->truth, "truth.json written by lidarcal simulate")->required();
   sub->add_option("--raw", o->raw, "Raw sequence (default: the scans/ directory next to truth.json)");
-  sub->add_option("--out", o->out, "Also write the JSON to this file");
+  sub->add_option("-o,--out", o->out, "Also write the JSON to this file");
   sub->callback([o] {
     namespace fs = std::filesystem;
     if (!o->out.empty()) {
