@@ -174,8 +174,8 @@ PlotData plotData(const LandmarkObservations& obs, const CalibrationModel& m, co
 }
 
 /// The gnuplot script of the report. Distance plots share the x range of the fitted data;
-/// legends sit outside the plotting area.
-std::string reportScript(const FittedRange& fitted, bool histogram, bool truth) {
+/// legends sit outside the plotting area; every label_every-th of `stops` stops is numbered.
+std::string reportScript(const FittedRange& fitted, bool histogram, bool truth, std::size_t stops) {
   const auto [lo, hi] = plotRange(fitted);
   std::ostringstream g;
   g.precision(6);
@@ -185,6 +185,8 @@ std::string reportScript(const FittedRange& fitted, bool histogram, bool truth) 
        "set xrange ["
     << lo << ":" << hi << "]\n"
     << "fit_min = " << fitted.min_m << "\nfit_max = " << fitted.max_m << "\n"
+    // About 20 stop numbers on the map at most (a long recording has a stop per scan).
+    << "label_every = " << std::max<std::size_t>(1, (stops + 19) / 20) << "\n"
     << R"GP(set arrow 1 from fit_min, graph 0 to fit_min, graph 1 nohead dt 3 lc rgb "#666666"
 set arrow 2 from fit_max, graph 0 to fit_max, graph 1 nohead dt 3 lc rgb "#666666"
 set output "distance.png"
@@ -230,7 +232,7 @@ plot "circles.dat" using 1:2 with lines lw 2 lc rgb "#999999" title "landmarks (
   g << R"GP(     "raw.dat" using 1:2 with points pt 2 ps 0.6 lc rgb "#cc3311" title "raw", \
      "corrected.dat" using 1:2 with points pt 6 ps 0.6 lc rgb "#009944" title "corrected", \
      "stops.dat" using 1:2 with points pt 7 ps 0.8 lc rgb "#0044aa" title "stops (numbered)", \
-     "stops.dat" using 1:2:(sprintf("%d", $3)) with labels offset 0.8,0.8 font ",9" tc rgb "#0044aa" notitle
+     "stops.dat" using 1:2:(int($3) % label_every == 0 ? sprintf("%d", $3) : "") with labels offset 0.8,0.8 font ",9" tc rgb "#0044aa" notitle
 )GP";
   return g.str();
 }
@@ -323,7 +325,7 @@ void writeReport(const std::filesystem::path& dir, const ReportInputs& in) {
     io::writeTextAtomically(dir / "stops.dat", p->stops);
     if (!p->histogram.empty()) io::writeTextAtomically(dir / "histogram.dat", p->histogram);
     if (!p->truth.empty()) io::writeTextAtomically(dir / "truth.dat", p->truth);
-    io::writeTextAtomically(dir / "plots.gp", reportScript(fitted, !p->histogram.empty(), !p->truth.empty()));
+    io::writeTextAtomically(dir / "plots.gp", reportScript(fitted, !p->histogram.empty(), !p->truth.empty(), m.stop_poses.size()));
     plotted = runGnuplot(dir, "plots.gp", &why);
   }
   md << "\n## Plots\n\n";

@@ -223,6 +223,7 @@ TEST_F(FirstHour, ReportPlotsTheFittedRangeWithResidualsAfterCorrectionAndMarksE
   ASSERT_EQ(stops.size(), 10u);
   for (std::size_t k = 0; k < stops.size(); ++k) EXPECT_EQ(stops[k][2], static_cast<double>(k));
   EXPECT_TRUE(contains(gp, "with labels")) << gp;
+  EXPECT_TRUE(contains(gp, "label_every = 1\n")) << gp;  // 10 stops: every one numbered
   // No truth was given: no true landmarks.
   EXPECT_FALSE(fs::exists(rep / "truth.dat"));
   // The error table: rows beyond the fitted range are marked extrapolated, those inside fitted.
