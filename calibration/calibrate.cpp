@@ -309,10 +309,17 @@ JointStage jointStage(const LandmarkObservations& obs, const CalibrationConfig& 
     alpha.resize(static_cast<std::size_t>(n) + 1, 0.0);
     return alpha;
   };
+  // Progress: the settling pass, one solve per order, the covariance.
+  const std::size_t solves = 1 + static_cast<std::size_t>(config.max_order) + (config.joint.covariance ? 1 : 0);
+  auto report = [&](std::size_t done) {
+    if (config.progress) config.progress("joint refinement", done, solves);
+  };
+  report(0);
   // Pass 1: settle the geometry at order 2 (1 if max_order is 1).
   jc.order = std::min(2, config.max_order);
   init.model.bias.alpha = alphaAt(jc.order, init.model.bias.alpha);
   const JointResult settled = refineJoint(obs, init, jc);
+  report(1);
   if (settled.poses.empty()) return JointStage{settled, {}, 0};
   // Pass 2: every order from the settled geometry on one fixed set of readings, so that their
   // information criteria compare likelihoods of the same data.
@@ -331,6 +338,7 @@ JointStage jointStage(const LandmarkObservations& obs, const CalibrationConfig& 
     jc.order = n;
     from.model.bias.alpha = alphaAt(n, settled.model.bias.alpha);
     runs.push_back(refineJoint(obs, from, jc));
+    report(1 + static_cast<std::size_t>(n));
     const auto& r = runs.back();
     OrderRow row;
     row.order = n;
@@ -370,6 +378,7 @@ JointStage jointStage(const LandmarkObservations& obs, const CalibrationConfig& 
     jc.outer_iterations = 1;
     runs[chosen] = refineJoint(obs, at, jc);
   }
+  report(solves);
   return JointStage{runs[chosen], rows, best_aic};
 }
 

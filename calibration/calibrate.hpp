@@ -7,6 +7,8 @@
 //   3. (method joint) refine poses, landmarks, radius and bias together from every reading.
 // And the oracle: the same fits against true distances.
 
+#include <cstddef>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -41,6 +43,10 @@ struct CalibrationConfig {
   /// The stops must span at least this distance (metres) for the landmarks to be triangulated
   /// from bearings; below it calibrate() returns status no_baseline. Default 0.1 m.
   double min_baseline_m = 0.1;
+  /// Progress of the joint refinement for a display (the library never prints): called with the
+  /// stage name ("joint refinement"), the solves done and the solves in all (the settling pass,
+  /// one per order, the covariance). Default empty: not called.
+  std::function<void(const char* stage, std::size_t done, std::size_t total)> progress;
   void validate() const;                              ///< throws std::invalid_argument
 };
 

@@ -90,14 +90,17 @@ ObservationScene parseObservationScene(const JsonView& root) {
   return s;
 }
 
-NoiseSetting parseNoiseSetting(const JsonView& root) {
+NoiseSetting parseNoiseSetting(const JsonView& root, const std::vector<int>* labels) {
   root.requireObject();
   NoiseSetting n;
   const auto sensors = root.array("sensors");
   for (std::size_t i = 0; i < sensors.size(); ++i) {
     sensors[i].requireObject();
-    if (sensors[i].getInt("sensor", static_cast<int>(i)) != static_cast<int>(i))
-      sensors[i].fail("sensor", "sensors must be listed in order 0, 1, 2, ...");
+    const int label = labels && i < labels->size() ? (*labels)[i] : static_cast<int>(i);
+    if (sensors[i].getInt("sensor", label) != label)
+      sensors[i].fail("sensor", labels ? "sensors must be listed in the ascending order of their ids in the observations ("
+                                             + std::to_string(label) + " here)"
+                                       : "sensors must be listed in order 0, 1, 2, ...");
     n.sensors.push_back(parseSensorNoise(sensors[i]));
   }
   if (root.has("process_var")) n.process = parseProcessVar(root.child("process_var"));
@@ -156,9 +159,9 @@ ojson noiseSettingToJson(const NoiseSetting& setting) {
   return ojson{{"sensors", sensors}, {"process_var", processVarToJson(setting.process)}};
 }
 
-NoiseSetting readNoiseSetting(const std::filesystem::path& file) {
+NoiseSetting readNoiseSetting(const std::filesystem::path& file, const std::vector<int>* sensor_labels) {
   const nlohmann::json j = readJsonFile(file);
-  return parseNoiseSetting(JsonView(file.string(), j));
+  return parseNoiseSetting(JsonView(file.string(), j), sensor_labels);
 }
 
 void writeNoiseTruth(const std::filesystem::path& file, const NoiseTruth& t) {

@@ -28,8 +28,10 @@ nlohmann::ordered_json observationSceneToJson(const ObservationScene& scene);
 /// bearing_var_rad2}], "process_var": {dx_m2, dy_m2, dtheta_rad2}}.
 nlohmann::ordered_json noiseSettingToJson(const NoiseSetting& setting);
 /// Reads a noise setting from a JSON file with that schema (other keys are ignored, so a
-/// result.json or noise_truth.json can be read as a setting). Throws InputError.
-NoiseSetting readNoiseSetting(const std::filesystem::path& file);
+/// result.json or noise_truth.json can be read as a setting). Entry i is sensor i, or with
+/// `sensor_labels` the sensor labelled (*sensor_labels)[i] (observations.csv's ids). Throws
+/// InputError.
+NoiseSetting readNoiseSetting(const std::filesystem::path& file, const std::vector<int>* sensor_labels = nullptr);
 
 /// Truth of an observation simulation.
 struct NoiseTruth {

@@ -2,6 +2,7 @@
 
 #include <cstdio>
 #include <limits>
+#include <map>
 #include <string>
 
 #include "common/errors.hpp"
@@ -15,26 +16,51 @@ constexpr const char* kRemedy = "see docs/FORMAT.md, section observations.csv an
 
 int checkedIndex(const CsvReader& csv, std::size_t column, const char* name, long long lowest) {
   const long long v = csv.integer(column, name);
-  if (v < lowest) csv.fail(name, "must be >= " + std::to_string(lowest));
+  if (v < lowest) {
+    if (lowest == std::numeric_limits<int>::min()) csv.fail(name, "is too small");
+    csv.fail(name, "must be >= " + std::to_string(lowest));
+  }
   if (v > std::numeric_limits<int>::max()) csv.fail(name, "is too large");
   return static_cast<int>(v);
 }
 
+/// Replaces each row's `field` by the index of its value among the values sorted ascending
+/// (0..N-1) and returns those values. With `keep_unknown`, -1 (unknown association) stays -1.
+std::vector<int> relabel(std::vector<Observation>& rows, int Observation::*field, bool keep_unknown) {
+  std::map<int, int> index;
+  for (const auto& o : rows)
+    if (!(keep_unknown && o.*field == -1)) index.emplace(o.*field, 0);
+  std::vector<int> labels;
+  for (auto& [label, i] : index) {
+    i = static_cast<int>(labels.size());
+    labels.push_back(label);
+  }
+  for (auto& o : rows)
+    if (!(keep_unknown && o.*field == -1)) o.*field = index[o.*field];
+  return labels;
+}
+
 }  // namespace
 
-std::vector<Observation> readObservations(const std::filesystem::path& file) {
+std::vector<Observation> readObservations(const std::filesystem::path& file, std::vector<int>* sensor_labels,
+                                          std::vector<int>* landmark_labels) {
   CsvReader csv(file, kRemedy);
   csv.expectHeader(kObservationsHeader);
+  constexpr long long kAnyInt = std::numeric_limits<int>::min();
   std::vector<Observation> rows;
   while (csv.next(5)) {
     Observation o;
     o.stop = checkedIndex(csv, 0, "stop", 0);
-    o.sensor = checkedIndex(csv, 1, "sensor", 0);
-    o.landmark = checkedIndex(csv, 2, "landmark", -1);
+    o.sensor = checkedIndex(csv, 1, "sensor", kAnyInt);
+    o.landmark = checkedIndex(csv, 2, "landmark", kAnyInt);
     o.range_m = csv.number(3, "range_m");
     o.bearing_rad = csv.number(4, "bearing_rad");
     rows.push_back(o);
   }
+  std::vector<int> sensors = relabel(rows, &Observation::sensor, false);
+  std::vector<int> landmarks = relabel(rows, &Observation::landmark, true);
+  if (sensor_labels) *sensor_labels = std::move(sensors);
+  if (landmark_labels) *landmark_labels = std::move(landmarks);
   return rows;
 }
 

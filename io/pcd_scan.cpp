@@ -1,5 +1,7 @@
 #include "io/pcd_scan.hpp"
 
+#include <algorithm>
+
 #include <cctype>
 #include <cmath>
 #include <cstring>
@@ -99,6 +101,17 @@ void checkNothingAfterData(std::istream& in, const std::string& where, std::size
 
 ParsedHeader parseHeader(const fs::path& file) {
   const std::string where = file.string();
+  std::error_code dir_ec;
+  if (fs::is_directory(file, dir_ec)) {
+    // A sequence directory where a scan file is expected: name one of its scans.
+    fs::path example = file / "scan_000000.pcd";
+    std::vector<fs::path> pcds;
+    for (const auto& e : fs::directory_iterator(file, dir_ec))
+      if (e.path().extension() == ".pcd") pcds.push_back(e.path());
+    if (!pcds.empty()) example = *std::min_element(pcds.begin(), pcds.end());
+    throw InputError(where, "", "is a directory; give a .pcd file (e.g. " + example.string() + ")",
+                     "commands that read a whole sequence (info, detect, calibrate, correct, run) take the directory");
+  }
   std::ifstream in(file, std::ios::binary);
   if (!in) {
     std::error_code ec;
@@ -259,6 +272,14 @@ ScanHeader toScanHeader(const fs::path& file, const ParsedHeader& h) {
   checkCoordinateField(h, "x", true, where);
   checkCoordinateField(h, "y", true, where);
   checkCoordinateField(h, "z", false, where);
+  if (h.height > 1)
+    throw InputError(where, "HEIGHT",
+                     "this is a 3D organised cloud (" + std::to_string(h.width) + "x" + std::to_string(h.height) +
+                         " points), not a 2D lidar scan; lidarcal's 2D commands need one planar scan per file "
+                         "(HEIGHT 1, the sensor's pose in VIEWPOINT, docs/FORMAT.md)",
+                     "import a 2D lidar recording with lidarcal import; for cylinders in a 3D cloud use the library "
+                     "function lidarcal::detectors::detectCylinder (detectors/cylinder.hpp, PCL's cylinder "
+                     "segmentation)");
   ScanHeader out;
   out.path = file.string();
   out.viewpoint = viewpointPose(h, where);

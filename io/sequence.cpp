@@ -522,7 +522,7 @@ SequenceMeta readSequenceMeta(const fs::path& file) {
   return m;
 }
 
-void writeSequenceMeta(const fs::path& file, const SequenceMeta& m) {
+nlohmann::ordered_json sequenceMetaJson(const SequenceMeta& m) {
   nlohmann::ordered_json j = nlohmann::ordered_json::object();
   if (m.sensor_name) j["sensor_name"] = *m.sensor_name;
   if (m.landmark_radius_m) j["landmark_radius_m"] = *m.landmark_radius_m;
@@ -530,7 +530,11 @@ void writeSequenceMeta(const fs::path& file, const SequenceMeta& m) {
   if (m.range_max_m) j["range_max_m"] = *m.range_max_m;
   if (m.beams) j["beams"] = *m.beams;
   if (!m.stop_starts.empty()) j["stop_starts"] = m.stop_starts;
-  writeTextAtomically(file, j.dump(2) + "\n");
+  return j;
+}
+
+void writeSequenceMeta(const fs::path& file, const SequenceMeta& m) {
+  writeTextAtomically(file, sequenceMetaJson(m).dump(2) + "\n");
 }
 
 }  // namespace lidarcal::io

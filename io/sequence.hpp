@@ -11,6 +11,8 @@
 #include <utility>
 #include <vector>
 
+#include <nlohmann/json_fwd.hpp>
+
 #include "common/pose2.hpp"
 #include "io/pcd_scan.hpp"
 
@@ -194,6 +196,8 @@ std::pair<std::size_t, std::size_t> pointCountRange(const Sequence& seq);
 SequenceMeta readSequenceMeta(const std::filesystem::path& file);
 /// Writes sequence.json atomically; absent fields are omitted.
 void writeSequenceMeta(const std::filesystem::path& file, const SequenceMeta& meta);
+/// sequence.json's content: the items of `meta` that are set.
+nlohmann::ordered_json sequenceMetaJson(const SequenceMeta& meta);
 
 /// Name of scan file `index` in a sequence written by lidarcal: scan_000000.pcd, ...
 std::string scanFileName(std::size_t index);

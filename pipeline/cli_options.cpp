@@ -3,12 +3,14 @@
 #include <CLI/CLI.hpp>
 
 #include "common/errors.hpp"
+#include "pipeline/papers.hpp"
 
 namespace lidarcal::pipeline {
 
 void addCalibrationOptions(CLI::App* app, const std::shared_ptr<CalibrationOptions>& o) {
   app->add_option("--method", o->method,
-                  "closed-form: the paper's triangulation + least squares (seed 000); joint: refine poses, landmarks "
+                  std::string("closed-form: triangulation + least squares as in ") + papers::kLandmarks +
+                      "; joint: refine poses, landmarks "
                   "and bias together from every reading")
       ->check(CLI::IsMember({"closed-form", "joint"}))
       ->capture_default_str();
@@ -22,7 +24,8 @@ void addCalibrationOptions(CLI::App* app, const std::shared_ptr<CalibrationOptio
                   "Order rule of the joint refinement: aic, aic-parsimonious (smallest order within 2 of the best AIC) or bic")
       ->check(CLI::IsMember({"aic", "aic-parsimonious", "bic"}))
       ->capture_default_str();
-  app->add_option("--noise", o->noise, "Noise law: squared (seed 004: sigma_e f(d)^2), polynomial (seed 000), constant")
+  app->add_option("--noise", o->noise, std::string("Noise law: squared (") + papers::kTriangulation + ": sigma_e f(d)^2), polynomial (" +
+                      papers::kLandmarks + "), constant")
       ->check(CLI::IsMember({"squared", "polynomial", "constant"}))
       ->capture_default_str();
   app->add_option("--sigma-s", o->sigma_s_m, "How far a stop may be from its commanded position (std. dev., m)")

@@ -56,9 +56,8 @@ void runCalibrate(const CalibrateCommand& c) {
     const double scale = c.frame == "commanded" ? commandedScale(truth.truth) : 1.0;
     model = calibrateOracle(seq, truth, scale, config);
   } else {
-    Progress progress("detect", seq.scans.size());
-    const SequenceCalibration result =
-        calibrateSequence(seq, detectionConfig(*c.options), config, [&](std::size_t done, std::size_t) { progress.update(done); });
+    StageBars progress;
+    const SequenceCalibration result = calibrateSequence(seq, detectionConfig(*c.options), config, std::ref(progress));
     progress.finish();
     model = result.model;
     if (report && model.status == "ok") {
@@ -90,7 +89,7 @@ void addCalibrateCommand(CLI::App& app) {
   auto c = std::make_shared<CalibrateCommand>();
   CLI::App* sub = app.add_subcommand("calibrate", "Fit the range model of a sequence (no ground truth needed)");
   sub->add_option("SEQ", c->seq, "Sequence directory (docs/FORMAT.md)")->required();
-  sub->add_option("--out", c->out, "model.json to write")->required();
+  sub->add_option("-o,--out", c->out, "model.json to write")->required();
   CLI::Option* truth = sub->add_option("--truth", c->truth,
                   "truth.json of a simulated sequence: fit against the true distances instead (the oracle, for comparison)");
   sub->add_option("--frame", c->frame,

@@ -21,6 +21,7 @@
 #include "io/true_ranges.hpp"
 #include "pipeline/commands.hpp"
 #include "pipeline/progress.hpp"
+#include "pipeline/words.hpp"
 
 namespace lidarcal::pipeline {
 namespace {
@@ -85,7 +86,7 @@ void runDetect(const DetectOptions& o) {
     std::unique_ptr<Progress> progress;
     result = detectors::detectSequence(seq, cfg, [&](std::size_t done, std::size_t total) {
       if (!progress) progress = std::make_unique<Progress>("detect", total);
-      progress->update(done);
+      progress->update(done, total);
     });
     if (progress) progress->finish();
   }
@@ -125,9 +126,15 @@ void runDetect(const DetectOptions& o) {
   const auto& a = result.association;
   const std::size_t circles = a.detections;
   std::printf("# Landmarks of %s\n\n", o.seq.c_str());
-  std::printf("- scans: %zu at %zu stops\n", seq.scans.size(), seq.stops.size());
-  std::printf("- radius: %s", detectors::toString(result.radius_source));
-  if (result.known_radius_m) std::printf(" (%.4f m)", *result.known_radius_m);
+  std::printf("- scans: %s at %s\n", plural(seq.scans.size(), "scan").c_str(), plural(seq.stops.size(), "stop").c_str());
+  switch (result.radius_source) {
+    case detectors::RadiusSource::known: std::printf("- radius: given (%.4f m)", result.known_radius_m.value_or(0.0)); break;
+    case detectors::RadiusSource::estimated:
+      std::printf("- radius: estimated from the data");
+      if (result.common_radius_m) std::printf(" (common to all landmarks: %.4f m)", *result.common_radius_m);
+      break;
+    case detectors::RadiusSource::none: std::printf("- radius: unknown (no landmark to estimate it from)"); break;
+  }
   std::printf("\n- circle detections: %zu, given a landmark id: %zu (discarded: %zu at too few stops, %zu conflicts)\n",
               circles, a.assigned, a.discarded_few_stops, a.discarded_conflicts);
   std::printf("- %s\n", result.note.c_str());
@@ -147,7 +154,7 @@ void addDetectCommand(CLI::App& app) {
   auto o = std::make_shared<DetectOptions>();
   CLI::App* sub = app.add_subcommand("detect", "Find the landmarks (poles) in every scan and label them across stops");
   sub->add_option("SEQ", o->seq, "Sequence directory (.pcd files, see docs/FORMAT.md)")->required();
-  sub->add_option("--out", o->out, "Output directory: labelled scans, sequence.json, landmarks.csv")->required();
+  sub->add_option("-o,--out", o->out, "Output directory: labelled scans, sequence.json, landmarks.csv")->required();
   sub->add_flag("--overwrite", o->overwrite, "Replace OUT if it exists");
   CLI::Option* radius =
       sub->add_option("--radius", o->radius_m, "Landmark radius in metres (default: sequence.json, else estimated)")

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <sstream>
@@ -24,6 +25,7 @@
 #include "pipeline/landmark_observations.hpp"
 #include "pipeline/progress.hpp"
 #include "pipeline/truth_eval.hpp"
+#include "pipeline/words.hpp"
 
 namespace lidarcal::pipeline {
 namespace {
@@ -47,7 +49,8 @@ struct Corrector {
   }
 };
 
-calibration::StaticScans staticScans(const io::Sequence& seq, std::size_t stop, const Corrector& fix) {
+calibration::StaticScans staticScans(const io::Sequence& seq, std::size_t stop, const Corrector& fix,
+                                     const std::function<void(std::size_t)>& on_scan) {
   calibration::StaticScans s;
   const auto& scans = seq.stops.at(stop).scans;
   s.scans = scans.size();
@@ -61,6 +64,7 @@ calibration::StaticScans staticScans(const io::Sequence& seq, std::size_t stop, 
       if (!(r > 0.0)) continue;
       s.readings.push_back({std::atan2(static_cast<double>(p.y), static_cast<double>(p.x)), r, static_cast<std::uint32_t>(k)});
     }
+    on_scan(k + 1);
   }
   std::sort(counts.begin(), counts.end());
   s.beams_per_scan = counts.empty() ? 0 : counts[counts.size() / 2];
@@ -112,7 +116,7 @@ void runDiagnose(const DiagnoseCommand& c) {
     detectors::SequenceDetectionConfig dc;
     if (c.radius_m > 0.0) dc.detection.landmark_radius_m = c.radius_m;
     Progress progress("detect", seq.scans.size());
-    const auto det = detectors::detectSequence(seq, dc, [&](std::size_t d, std::size_t) { progress.update(d); });
+    const auto det = detectors::detectSequence(seq, dc, [&](std::size_t d, std::size_t t) { progress.update(d, t); });
     progress.finish();
     if (!det.association.landmarks.empty()) {
       obs = toLandmarkObservations(seq, det);
@@ -156,7 +160,9 @@ void runDiagnose(const DiagnoseCommand& c) {
       }
     }
     if (!quiet()) std::fprintf(stderr, "diagnosing a sequence: %zu sightings (%d replicas)\n", obs->sightings.size(), c.replicas);
+    Activity activity("diagnose (sequence)");
     result = calibration::diagnoseSequence(*obs, config, c.truth.empty() ? nullptr : &truth_ranges);
+    activity.finish();
     if (result.status != "ok" && mode == "auto") {
       // Poles were found but cannot carry a sequence diagnosis: look at one pose instead.
       if (!quiet())
@@ -170,7 +176,7 @@ void runDiagnose(const DiagnoseCommand& c) {
     std::size_t stop = 0;
     if (c.stop >= 0) {
       if (static_cast<std::size_t>(c.stop) >= seq.stops.size())
-        throw InputError(c.data, "--stop", "the sequence has " + std::to_string(seq.stops.size()) + " stops",
+        throw InputError(c.data, "--stop", "the sequence has " + plural(seq.stops.size(), "stop"),
                          "give a stop index from 0");
       stop = static_cast<std::size_t>(c.stop);
     } else {
@@ -179,13 +185,17 @@ void runDiagnose(const DiagnoseCommand& c) {
     }
     if (seq.stops.size() > 1)
       src.selection += "stop " + std::to_string(stop) + " of " + std::to_string(seq.stops.size()) + ", " +
-                      std::to_string(seq.stops[stop].scans.size()) + " scans from one pose";
+                      plural(seq.stops[stop].scans.size(), "scan") + " from one pose";
     checkCandidates(calibration::staticCandidates(), "repeated scans of one pose");
-    const calibration::StaticScans s = staticScans(seq, stop, fix);
+    Progress reading("read the scans of stop " + std::to_string(stop), seq.stops[stop].scans.size());
+    const calibration::StaticScans s = staticScans(seq, stop, fix, [&](std::size_t done) { reading.update(done); });
+    reading.finish();
     if (!quiet())
       std::fprintf(stderr, "diagnosing repeated scans of one pose: %zu scans, %zu readings (%d replicas)\n", s.scans,
                    s.readings.size(), c.replicas);
+    Activity activity("diagnose (repeated scans of one pose)");
     result = calibration::diagnoseStatic(s, config, &src.walls);
+    activity.finish();
   }
   writeDiagnosis(out.path(), result, src);
   out.commit();
@@ -202,10 +212,10 @@ void runDiagnose(const DiagnoseCommand& c) {
 void addDiagnoseCommand(CLI::App& app) {
   auto c = std::make_shared<DiagnoseCommand>();
   CLI::App* sub = app.add_subcommand(
-      "diagnose", "Show what the seeds' model gets wrong on measured data, name the cause, fit the extended model, measure the gain");
+      "diagnose", "Show what the published range model gets wrong on measured data, name the cause, fit the extended model, measure the gain");
   sub->add_option("DATA", c->data, "Sequence directory (docs/FORMAT.md): scans of poles from several stops, or repeated scans from one pose")
       ->required();
-  sub->add_option("--out", c->out, "Output directory: diagnosis.json, report.md, plots")->required();
+  sub->add_option("-o,--out", c->out, "Output directory: diagnosis.json, report.md, plots")->required();
   sub->add_option("--model", c->model, "Diagnose the readings corrected with this model.json (what the calibrated model still gets wrong)");
   sub->add_option("--seed", c->seed, "Seed of the bootstrap replicas; the same data and seed give the same output")
       ->capture_default_str();

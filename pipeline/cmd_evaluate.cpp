@@ -17,6 +17,7 @@
 #include "pipeline/progress.hpp"
 #include "pipeline/reference_stage.hpp"
 #include "pipeline/commands.hpp"
+#include "pipeline/papers.hpp"
 #include "pipeline/truth_eval.hpp"
 
 namespace lidarcal::pipeline {
@@ -107,7 +108,8 @@ void evaluateReference(const std::string& seq_dir, const std::string& ref_file, 
   if (model) {
     calibration::Outside outside = calibration::Outside::keep;
     calibration::parseOutside(outside_name, outside);
-    checkModelFits(*model, seq, model_file, outside);
+    if (const std::string w = checkModelFits(*model, seq, model_file, false, outside); !w.empty())
+      std::fprintf(stderr, "lidarcal: warning: %s\n", w.c_str());
     const auto method = inversion == "ml" ? calibration::InversionMethod::ml : calibration::InversionMethod::ls;
     const ScanCorrection correction{calibration::modelInverter(*model, method, outside),
                                     calibration::correctionWindow(*model, outside)};
@@ -134,9 +136,11 @@ void addEvaluateCommand(CLI::App& app) {
   };
   auto o = std::make_shared<Options>();
   CLI::App* sub = app.add_subcommand(
-      "evaluate", "Compare a sequence with the truth: with --truth, corrected vs raw ranges of a simulated sequence (MSE "
-                  "ratio, Alhashimi et al. 2021 eq. 31; normalised MSE, Alhashimi et al. 2016 eqs. 31-32); with "
-                  "--reference, what the scans measure at distances you measured, raw and (with --model) corrected");
+      "evaluate", std::string("Compare a sequence with the truth: with --truth, corrected vs raw ranges of a simulated "
+                              "sequence (MSE ratio = raw MSE / corrected MSE, higher is better; ") +
+                      papers::kLandmarks + ", eq. 31; normalised MSE, " + papers::kTriangulation +
+                      ", eqs. 31-32), as JSON; with --reference, what the scans measure at distances you measured, raw "
+                      "and (with --model) corrected");
   sub->add_option("SEQ", o->corrected, "With --truth: the corrected sequence (from lidarcal correct); with --reference: "
                                        "the raw sequence")->required();
   auto* truth_option = sub->add_option("--truth", o->truth, "truth.json written by lidarcal simulate");
@@ -154,7 +158,7 @@ void addEvaluateCommand(CLI::App& app) {
   sub->add_option("--radius", o->radius_m, "With --reference: pole radius in metres (default: sequence.json, else estimated)")
       ->check(CLI::PositiveNumber);
   sub->add_option("--raw", o->raw, "With --truth: raw sequence (default: the scans/ directory next to truth.json)");
-  sub->add_option("--out", o->out, "Also write the JSON to this file");
+  sub->add_option("-o,--out", o->out, "Also write the JSON to this file");
   sub->callback([o] {
     namespace fs = std::filesystem;
     if (!o->out.empty()) {

@@ -1,4 +1,4 @@
-// lidarcal import --from rosbag1|carmen|ydlidar|csv INPUT --out SEQ [options]
+// lidarcal import [--from rosbag1|carmen|ydlidar|csv] INPUT --out SEQ [options]
 // Streams a recording into a PCD scan sequence (docs/FORMAT.md, "Importing recordings").
 
 #include <algorithm>
@@ -10,6 +10,7 @@
 #include <CLI/CLI.hpp>
 
 #include "common/errors.hpp"
+#include "io/detect_format.hpp"
 #include "io/import_rosbag.hpp"
 #include "pipeline/commands.hpp"
 #include "pipeline/import.hpp"
@@ -35,8 +36,39 @@ struct ImportOptions {
   std::string sensor_name;
 };
 
+/// --from, else what the content says (a message for formats that cannot be read).
+/// The format of one recording, from its content.
+ImportFormat detectedFormat(const std::string& input) {
+  const io::DetectedFormat d = io::detectRecordingFormat(input);
+  switch (d.kind) {
+    case io::RecordingKind::rosbag1: return ImportFormat::rosbag1;
+    case io::RecordingKind::carmen: return ImportFormat::carmen;
+    case io::RecordingKind::ydlidar: return ImportFormat::ydlidar;
+    case io::RecordingKind::csv: return ImportFormat::csv;
+    case io::RecordingKind::mcap:
+      throw InputError(input, "", "is an MCAP file (ROS 2): reading MCAP is not supported yet",
+                       "convert it to a ROS1 bag (e.g. with the rosbags tools) or to lidarcal's CSV (docs/FORMAT.md)");
+    case io::RecordingKind::unknown: break;
+  }
+  throw InputError(input, "", std::string("cannot tell the recording's format from its content") +
+                                    (d.gzip ? " (gzip-compressed)" : "") +
+                                    ": not a ROS1 bag, a CARMEN log, a YDLIDAR X4 .dat or a CSV with a header",
+                   "name the format with --from rosbag1|carmen|ydlidar|csv (docs/FORMAT.md)");
+}
+
+/// --from, or the format every input's content shows (they must agree).
+ImportFormat inputFormat(const ImportOptions& o) {
+  if (!o.from.empty()) return parseImportFormat(o.from);
+  const ImportFormat first = detectedFormat(o.inputs.front());
+  for (const auto& input : o.inputs)
+    if (const ImportFormat f = detectedFormat(input); f != first)
+      throw InputError(input, "", std::string("reads as ") + toString(f) + " but " + o.inputs.front() + " as " + toString(first),
+                       "import recordings of one format together (or give --from)");
+  return first;
+}
+
 void listTopics(const ImportOptions& o) {
-  if (parseImportFormat(o.from) != ImportFormat::rosbag1)
+  if (inputFormat(o) != ImportFormat::rosbag1)
     throw InputError("", "--list-topics", "applies to --from rosbag1 only", "drop --list-topics");
   std::printf("| topic | type | messages |\n|---|---|---|\n");
   for (const io::BagTopic& t : io::listBagTopics(o.inputs.front()))
@@ -47,7 +79,9 @@ void runImport(const ImportOptions& o, const CLI::App& sub) {
   if (o.list_topics) return listTopics(o);
   if (o.out.empty()) throw InputError("", "--out", "is required", "give the sequence directory to create");
   ImportSettings s;
-  s.format = parseImportFormat(o.from);
+  s.format = inputFormat(o);
+  if (o.from.empty() && !quiet()) std::fprintf(stderr, "import: reading %s as %s (from its content; --from overrides)\n",
+                                               o.inputs.front().c_str(), toString(s.format));
   s.inputs.assign(o.inputs.begin(), o.inputs.end());
   s.stop_per_input = o.stop_per_input;
   s.out = o.out;
@@ -99,9 +133,9 @@ void runImport(const ImportOptions& o, const CLI::App& sub) {
 void addImportCommand(CLI::App& app) {
   auto o = std::make_shared<ImportOptions>();
   CLI::App* sub = app.add_subcommand(
-      "import", "Convert a recording (ROS1 bag, CARMEN log, YDLIDAR X4 .dat, CSV) into a scan sequence, streaming");
-  sub->add_option("--from", o->from, "Input format")
-      ->required()
+      "import", "Convert a recording (ROS1 bag, CARMEN log, YDLIDAR X4 .dat, CSV; format detected from the content) "
+                "into a scan sequence, streaming");
+  sub->add_option("--from", o->from, "Input format (default: detected from the content)")
       ->check(CLI::IsMember({"rosbag1", "carmen", "ydlidar", "csv"}));
   sub->add_option("INPUT", o->inputs,
                   "The recording(s) (.bag; CARMEN .log or .log.gz; .dat; .csv; text inputs may be gzip), imported one "
@@ -110,7 +144,7 @@ void addImportCommand(CLI::App& app) {
   sub->add_flag("--stop-per-input", o->stop_per_input,
                 "Each recording is one stop, even where their poses are equal (e.g. a static sensor recorded at "
                 "several measured target distances; sequence.json stop_starts, docs/FORMAT.md)");
-  sub->add_option("--out", o->out, "Sequence directory to create (scan_NNNNNN.pcd + sequence.json)");
+  sub->add_option("-o,--out", o->out, "Sequence directory to create (scan_NNNNNN.pcd + sequence.json)");
   sub->add_option("--topic", o->topic, "rosbag1: sensor_msgs/LaserScan topic (default: the bag's only one)");
   sub->add_flag("--list-topics", o->list_topics, "rosbag1: list the bag's topics and exit");
   sub->add_option("--every", o->every, "Keep every N-th scan")->check(CLI::PositiveNumber)->capture_default_str();

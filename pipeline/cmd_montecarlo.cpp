@@ -148,11 +148,11 @@ void addMonteCarloCommand(CLI::App& app) {
   auto o = std::make_shared<MonteCarloOptions>();
   CLI::App* sub = app.add_subcommand(
       "montecarlo",
-      "Monte Carlo study of seed 000 (Figs. 7-11): the paper's closed form, the joint refinement and the oracle "
+      "Monte Carlo study of Alhashimi et al. 2021 (Figs. 7-11): the paper's closed form, the joint refinement and the oracle "
       "over noise levels and landmark counts. Ctrl-C stops cleanly and writes nothing (OUT appears only when "
       "complete).");
   sub->add_option("--study", o->study, "fig7, fig8, fig9, fig10, fig11 or all")->capture_default_str();
-  sub->add_option("--out", o->out, "Output directory (created whole at the end; see docs/FORMAT.md)")->required();
+  sub->add_option("-o,--out", o->out, "Output directory (created whole at the end; see docs/FORMAT.md)")->required();
   sub->add_option("--trials", o->trials,
                   "Trials per cell (default 1000 at the landmark level, 100 at the scan level; --quick: 100 / 10)")
       ->check(CLI::PositiveNumber);
@@ -165,7 +165,7 @@ void addMonteCarloCommand(CLI::App& app) {
       ->check(CLI::PositiveNumber);
   sub->add_option("--seed", o->seed, "Study seed; the same seed and options give the same bytes")->capture_default_str();
   sub->add_option("--level", o->level,
-                  "landmark: seed 000 eqs. 3, 5, 8 with beams ray-cast on each landmark (fast); scan: whole scans "
+                  "landmark: Alhashimi et al. 2021 eqs. 3, 5, 8 with beams ray-cast on each landmark (fast); scan: whole scans "
                   "ray-cast and the detector in the loop")
       ->capture_default_str();
   sub->add_option("--angle-noise", o->angle_noise,

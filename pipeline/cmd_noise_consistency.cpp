@@ -17,6 +17,7 @@
 #include "io/observations_csv.hpp"
 #include "pipeline/commands.hpp"
 #include "pipeline/noise_run.hpp"
+#include "pipeline/papers.hpp"
 #include "pipeline/progress.hpp"
 
 namespace lidarcal::pipeline {
@@ -48,19 +49,20 @@ void runNoiseConsistency(const NoiseOptions& o) {
                      "pass --init SETTING.json with the known `process_var` (e.g. a result.json or noise_truth.json)");
   if (!o.overwrite && fs::exists(o.out))
     throw InputError(o.out, "", "exists already", "choose another --out or pass --overwrite");
+  std::vector<int> sensor_labels;  // observations.csv's sensor ids, in the order of the indices 0..S-1
   const calibration::NoiseProblem problem =
-      calibration::makeNoiseProblem(io::readObservations(o.observations), io::readOdometry(o.odometry));
+      calibration::makeNoiseProblem(io::readObservations(o.observations, &sensor_labels), io::readOdometry(o.odometry));
 
   NoiseRunOptions opts;
   opts.method = o.method == "kl-hill" ? NoiseMethod::kl_hill : NoiseMethod::ml;
   opts.faithful = o.variant == "faithful";
   opts.seed = o.seed;
   if (!o.init.empty()) {
-    opts.initial = io::readNoiseSetting(o.init);
+    opts.initial = io::readNoiseSetting(o.init, &sensor_labels);
     if (static_cast<int>(opts.initial->sensors.size()) != problem.sensors)
       throw InputError(o.init, "sensors", "lists " + std::to_string(opts.initial->sensors.size()) +
                                               " sensors but the observations have " + std::to_string(problem.sensors),
-                       "give one entry per sensor id 0.." + std::to_string(problem.sensors - 1));
+                       "give one entry per sensor of observations.csv, in the ascending order of their ids");
   }
   opts.kl.objective = opts.faithful ? calibration::KlObjectiveConfig::faithful() : calibration::KlObjectiveConfig::sound();
   opts.kl.objective.filter.particles = o.particles;
@@ -72,17 +74,18 @@ void runNoiseConsistency(const NoiseOptions& o) {
   opts.ml.estimate_biases = !o.no_biases;
   opts.ml.estimate_process = !o.fixed_process;
   std::optional<NoiseSetting> truth;
-  if (!o.truth.empty()) truth = io::readNoiseSetting(o.truth);
+  if (!o.truth.empty()) truth = io::readNoiseSetting(o.truth, &sensor_labels);
 
   std::optional<io::StagedDirectory> plot_dir;
   if (!o.plot.empty()) plot_dir.emplace(o.plot, o.overwrite);
 
   const bool kl = opts.method == NoiseMethod::kl_hill;
-  Progress progress(kl ? "kl-hill evaluations" : "ml iterations", kl ? static_cast<std::size_t>(o.max_evaluations) : 1);
-  const NoiseRun run = runNoiseEstimation(problem, opts, [&](std::size_t done, std::size_t) { progress.update(done); });
+  Progress progress(kl ? "kl-hill evaluations" : "ml iterations", kl ? static_cast<std::size_t>(o.max_evaluations) : 0);
+  const NoiseRun run =
+      runNoiseEstimation(problem, opts, [&](std::size_t done, std::size_t total) { progress.update(done, total); });
   progress.finish();
 
-  auto result = noiseRunToJson(run, problem);
+  auto result = noiseRunToJson(run, problem, sensor_labels);
   // Off by default: the same input and seed give byte-identical files; the time is printed.
   if (o.record_time) result["time_s"] = run.time_s;
   io::writeTextAtomically(o.out, result.dump(2) + "\n");
@@ -96,7 +99,8 @@ void runNoiseConsistency(const NoiseOptions& o) {
                  kl ? "evaluations" : "iterations", run.time_s);
     for (std::size_t s = 0; s < run.noise.sensors.size(); ++s) {
       const SensorNoise& n = run.noise.sensors[s];
-      std::fprintf(stderr, "  sensor %zu: range mean %+.4f m var %.5f m^2, bearing mean %+.4f rad var %.5f rad^2\n", s,
+      std::fprintf(stderr, "  sensor %d: range mean %+.4f m var %.5f m^2, bearing mean %+.4f rad var %.5f rad^2\n",
+                   s < sensor_labels.size() ? sensor_labels[s] : static_cast<int>(s),
                    n.range_mean_m, n.range_var_m2, n.bearing_mean_rad, n.bearing_var_rad2);
     }
     const ProcessNoise& q = run.noise.process;
@@ -111,14 +115,16 @@ void addNoiseConsistencyCommand(CLI::App& app) {
   auto o = std::make_shared<NoiseOptions>();
   CLI::App* sub = app.add_subcommand(
       "noise-consistency",
-      "Estimate each sensor's range/bearing noise and the process noise without ground truth (seed 003's KL hill "
-      "climbing, or maximum likelihood)");
+      std::string("Estimate each sensor's range/bearing noise and the process noise without ground truth (") +
+          papers::kNoiseConsistency + ": KL hill climbing, or maximum likelihood)");
   sub->add_option("--observations", o->observations, "observations.csv (docs/FORMAT.md)")->required();
   sub->add_option("--odometry", o->odometry, "odometry.csv (docs/FORMAT.md)")->required();
-  sub->add_option("--method", o->method, "kl-hill: seed 003 (particle filter + KL + hill climbing); ml: variance components")
+  sub->add_option("--method", o->method,
+                  std::string("kl-hill: ") + papers::kNoiseConsistency +
+                      " (particle filter + KL + hill climbing); ml: maximum likelihood by variance components")
       ->check(CLI::IsMember({"kl-hill", "ml"}))
       ->capture_default_str();
-  sub->add_option("--out", o->out, "result.json (docs/FORMAT.md)")->required();
+  sub->add_option("-o,--out", o->out, "result.json (docs/FORMAT.md)")->required();
   sub->add_flag("--record-time", o->record_time,
                 "Also write the wall time of the estimation (time_s) into the result: the file then differs between runs");
   sub->add_option("--seed", o->seed, "kl-hill: seed of the particle filter and the random jumps")->capture_default_str();
@@ -128,7 +134,7 @@ void addNoiseConsistencyCommand(CLI::App& app) {
                   "default: means 0, variances 0.5, process 0. The process variances are the assumed ones unless "
                   "estimated");
   sub->add_option("--truth", o->truth, "noise_truth.json of a simulation: drawn as dashed lines in the plots");
-  sub->add_option("--variant", o->variant, "kl-hill objective: sound (ours) or faithful (the seed's)")
+  sub->add_option("--variant", o->variant, "kl-hill objective: sound (ours) or faithful (as the method was published)")
       ->check(CLI::IsMember({"sound", "faithful"}))
       ->capture_default_str();
   sub->add_option("--particles", o->particles, "kl-hill: particles of the filter")->check(CLI::Range(1, 1000000))->capture_default_str();
@@ -139,7 +145,7 @@ void addNoiseConsistencyCommand(CLI::App& app) {
   sub->add_option("--max-evaluations", o->max_evaluations, "kl-hill: cap on objective evaluations")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
-  sub->add_flag("--climb-process", o->climb_process, "kl-hill: also climb the process variances (the seed does not)");
+  sub->add_flag("--climb-process", o->climb_process, "kl-hill: also climb the process variances (the published method does not)");
   sub->add_flag("--fixed-means", o->fixed_means, "kl-hill: climb the variances only, means fixed at --init");
   sub->add_flag("--no-biases", o->no_biases, "ml: fix every bias at 0 instead of estimating it");
   sub->add_flag("--fixed-process", o->fixed_process, "ml: keep the process variances at --init instead of estimating them");

@@ -70,7 +70,7 @@ void addLandmarksToObservationsCommand(CLI::App& app) {
   sub->add_option("--landmarks", o->landmarks, "landmarks.csv written by `lidarcal detect`")->required();
   sub->add_option("--sequence", o->sequence, "The sequence the landmarks were detected in (its VIEWPOINTs give the odometry)")
       ->required();
-  sub->add_option("--out", o->out, "Output directory: OUT/observations.csv, OUT/odometry.csv")->required();
+  sub->add_option("-o,--out", o->out, "Output directory: OUT/observations.csv, OUT/odometry.csv")->required();
   sub->add_option("--range-to", o->range_to, "centre: range to the landmark's centre; surface: minus its radius")
       ->check(CLI::IsMember({"centre", "surface"}))
       ->capture_default_str();

@@ -1,6 +1,7 @@
 // lidarcal run [SEQ] --out OUT: the main job. Detect the poles, calibrate, correct every scan,
 // and write a report. With no SEQ it runs on the bundled example.
 
+#include <cmath>
 #include <cstdio>
 #include <memory>
 
@@ -13,9 +14,11 @@
 #include "pipeline/cli_options.hpp"
 #include "pipeline/commands.hpp"
 #include "pipeline/model_text.hpp"
+#include "pipeline/papers.hpp"
 #include "pipeline/progress.hpp"
 #include "pipeline/report.hpp"
 #include "pipeline/stages.hpp"
+#include "pipeline/words.hpp"
 
 namespace lidarcal::pipeline {
 
@@ -45,9 +48,8 @@ void runRun(const RunCommand& c) {
 
   io::StagedDirectory out(c.out, c.overwrite);
   const auto config = calibrationConfig(*c.options);
-  Progress progress("detect", seq.scans.size());
-  const SequenceCalibration cal =
-      calibrateSequence(seq, detectionConfig(*c.options), config, [&](std::size_t d, std::size_t) { progress.update(d); });
+  StageBars progress;
+  const SequenceCalibration cal = calibrateSequence(seq, detectionConfig(*c.options), config, std::ref(progress));
   progress.finish();
   if (cal.model.status != "ok")
     throw DataError(seq_dir.string(), "calibration", cal.model.status + ": " + cal.model.message, "see docs/ERRORS.md");
@@ -77,7 +79,9 @@ void runRun(const RunCommand& c) {
                                  {"alpha", cal.model.model.bias.alpha},
                                  {"corrected_returns", stats.corrected}};
   if (!truth_file.empty()) {
+    Activity activity("evaluate against the truth");
     const SimulationTruth truth = loadTruth(truth_file);
+    in.true_landmarks = truth.truth.scene.landmarks;
     auto cf_config = config;
     cf_config.method = calibration::Method::closed_form;
     ComparedModel ours{"lidarcal " + cal.model.method + " (no ground truth)", cal.model, evaluate(cal.model, method, seq, truth)};
@@ -88,26 +92,37 @@ void runRun(const RunCommand& c) {
     CalibrationModel oracle = calibrateOracle(seq, truth, 1.0, config);
     in.compared.push_back(ours);
     if (cal.model.method != "closed-form" && cf.status == "ok")
-      in.compared.push_back({"closed form of seed 000 (no ground truth)", cf, evaluate(cf, method, seq, truth)});
+      in.compared.push_back({std::string("closed form of ") + papers::kLandmarks + " (no ground truth)", cf,
+                             evaluate(cf, method, seq, truth)});
     in.compared.push_back({"ground truth in the commanded frame (best without ground truth)", bound,
                            evaluate(bound, method, seq, truth)});
-    in.compared.push_back({"ground truth (oracle, seed 004 ML)", oracle, evaluate(oracle, method, seq, truth)});
+    in.compared.push_back({std::string("ground truth (oracle, ") + papers::kTriangulation + " ML)", oracle,
+                           evaluate(oracle, method, seq, truth)});
     in.truth_note = "Evaluated on the calibration sequence itself against " + truth_file.string() +
                     " (simulator truth; calibration did not use it). The commanded-frame row fits the true distances "
                     "scaled by the odometry scale error (" + std::to_string(commandedScale(truth.truth)) +
                     "), which no self-calibration can see.";
     summary["evaluation"] = evaluationJson(in.compared.front().evaluation);
   }
-  writeReport(out.path() / "report", in);
+  {
+    Activity activity("report");
+    writeReport(out.path() / "report", in);
+  }
   io::writeTextAtomically(out.path() / "summary.json", summary.dump(2) + "\n");
   out.commit();
 
-  std::printf("lidarcal run: %zu scans, %zu stops, %zu landmarks found\n", seq.scans.size(), seq.stops.size(),
-              cal.detections.association.landmarks.size());
+  std::printf("lidarcal run: %s, %s, %s found\n", plural(seq.scans.size(), "scan").c_str(),
+              plural(seq.stops.size(), "stop").c_str(), plural(cal.detections.association.landmarks.size(), "landmark").c_str());
   std::fputs(modelSummary(cal.model).c_str(), stdout);
-  if (!in.compared.empty())
+  if (!in.compared.empty()) {
+    const auto& raw = in.compared.front().evaluation.landmarks;
+    std::printf("  against the truth, on landmark returns (MSE ratio = raw MSE / corrected MSE: higher is better, 1 = no "
+                "gain):\n");
+    std::printf("    %-66s RMS %7.1f mm\n", "raw readings:", 1000.0 * std::sqrt(raw.mse_raw_m2));
     for (const auto& m : in.compared)
-      std::printf("  MSE ratio on landmark returns, %-62s %8.2f\n", (m.name + ":").c_str(), m.evaluation.landmarks.mse_ratio);
+      std::printf("    %-66s RMS %7.1f mm, MSE ratio %8.2f\n", (m.name + ":").c_str(),
+                  1000.0 * std::sqrt(m.evaluation.landmarks.mse_corrected_m2), m.evaluation.landmarks.mse_ratio);
+  }
   std::printf("  model:     %s\n  corrected: %s\n  report:    %s\n", (fs::path(c.out) / "model.json").c_str(),
               (fs::path(c.out) / "corrected").c_str(), (fs::path(c.out) / "report/report.md").c_str());
 }
@@ -118,14 +133,14 @@ void addRunCommand(CLI::App& app) {
   auto c = std::make_shared<RunCommand>();
   CLI::App* sub = app.add_subcommand("run", "The main job: detect, calibrate, correct and report (default: the bundled example)");
   sub->add_option("SEQ", c->seq, "Sequence directory (default: the bundled example)");
-  sub->add_option("--out", c->out, "Output directory: model.json, corrected/, report/, summary.json")->capture_default_str();
+  sub->add_option("-o,--out", c->out, "Output directory: model.json, corrected/, report/, summary.json")->capture_default_str();
   sub->add_option("--truth", c->truth, "truth.json of a simulated sequence, to evaluate against (found automatically next "
                                        "to DIR/scans)");
   sub->add_flag("--no-truth", c->no_truth, "Do not look for a truth.json next to the sequence");
   sub->add_option("--inversion", c->inversion, "ls or ml (see lidarcal correct --help)")
       ->check(CLI::IsMember({"ls", "ml"}))
       ->capture_default_str();
-  sub->add_flag("--overwrite", c->overwrite, "Replace OUT if it exists");
+  sub->add_flag("--overwrite", c->overwrite, "Replace OUT if it exists (needed to run again into the same OUT)");
   addCalibrationOptions(sub, c->options);
   sub->callback([c] { runRun(*c); });
 }

@@ -87,7 +87,7 @@ void addSimulateCommand(CLI::App& app) {
   auto o = std::make_shared<SimulateOptions>();
   CLI::App* sub = app.add_subcommand("simulate", "Simulate a scan sequence of a scene, with its ground truth");
   sub->add_option("--scene", o->scene, "Scene file (JSON, see docs/FORMAT.md and data/scenes/)")->required();
-  sub->add_option("--out", o->out, "Output directory: OUT/scans/ (sequence), OUT/truth.json, OUT/true_ranges.csv")
+  sub->add_option("-o,--out", o->out, "Output directory: OUT/scans/ (sequence), OUT/truth.json, OUT/true_ranges.csv")
       ->required();
   sub->add_option("--seed", o->seed, "Random seed; the same scene and seed give the same bytes")->capture_default_str();
   sub->add_option("--stops", o->stops, "Override the scene's number of stops")->check(CLI::PositiveNumber);

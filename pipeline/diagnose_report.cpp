@@ -244,14 +244,14 @@ void writeDiagnosis(const std::filesystem::path& dir, const DiagnosisResult& r, 
        << fmt(r.gain_delta_aic, 1) << ".\n\n";
   }
 
-  md << "## Baseline (the seeds' model)\n\n";
+  md << "## Baseline (the published model: Alhashimi et al. 2016 and 2021)\n\n";
   md << "- bias f(d) = ";
   for (std::size_t i = 0; i < r.baseline.bias.alpha.size(); ++i) {
     const double a = r.baseline.bias.alpha[i];
     md << (i ? (a < 0 ? " - " : " + ") : (a < 0 ? "-" : "")) << fmt(std::abs(a), 5) << (i ? " d" : "")
        << (i > 1 ? "^" + std::to_string(i) : "");
   }
-  md << "\n- noise sigma = " << fmt(r.baseline.noise.sigma_e, 6) << " f(d)^2 (seed 004 eq. 1)";
+  md << "\n- noise sigma = " << fmt(r.baseline.noise.sigma_e, 6) << " f(d)^2 (Alhashimi et al. 2016, eq. 1)";
   md << ": " << fmt(1000.0 * r.baseline.noise.stddev(1.0, r.baseline.bias), 1) << " mm at 1 m, "
      << fmt(1000.0 * r.baseline.noise.stddev(3.0, r.baseline.bias), 1) << " mm at 3 m\n";
   if (seq)
@@ -310,7 +310,7 @@ void writeDiagnosis(const std::filesystem::path& dir, const DiagnosisResult& r, 
     md << "| extended | " << fmt(r.closeness_extended.ks_distance, 4) << " | " << fmt(r.closeness_extended.variance_ratio_median_abs_log, 3)
        << " | " << r.closeness_extended.groups << " |\n";
     if (r.calibration_mse_ratio_baseline > 0.0)
-      md << "\nAgainst the truth: MSE ratio (seed 000 eq. 31) of the calibration " << fmt(r.calibration_mse_ratio_baseline, 1)
+      md << "\nAgainst the truth: MSE ratio (raw MSE / corrected MSE, higher is better; Alhashimi et al. 2021, eq. 31) of the calibration " << fmt(r.calibration_mse_ratio_baseline, 1)
          << " with the baseline, " << fmt(r.calibration_mse_ratio_extended, 1) << " with the extended model.\n";
   }
 

@@ -1,6 +1,7 @@
 #include "pipeline/gnuplot.hpp"
 
 #include <cstdlib>
+#include <string_view>
 
 namespace lidarcal::pipeline {
 
@@ -17,6 +18,18 @@ bool runGnuplot(const std::filesystem::path& dir, const std::string& script, std
   std::error_code ec;
   std::filesystem::remove(dir / "gnuplot.log", ec);
   return true;
+}
+
+std::string gnuplotString(const std::string& text, bool enhanced) {
+  // A backslash escapes inside a double-quoted gnuplot string; enhanced text then reads the
+  // resulting `\_` as a literal `_`.
+  std::string out = "\"";
+  for (char c : text) {
+    if (c == '"' || c == '\\') out += '\\';
+    else if (enhanced && std::string_view("_^{}@&~").find(c) != std::string_view::npos) out += "\\\\";
+    out += c;
+  }
+  return out + "\"";
 }
 
 }  // namespace lidarcal::pipeline

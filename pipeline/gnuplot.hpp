@@ -10,4 +10,9 @@ namespace lidarcal::pipeline {
 /// Runs `gnuplot script` in `dir`. Returns false (with a reason) when gnuplot is missing or fails.
 bool runGnuplot(const std::filesystem::path& dir, const std::string& script, std::string* why = nullptr);
 
+/// `text` as a double-quoted gnuplot string that shows as written. `enhanced`: the terminal uses
+/// enhanced text mode, so its markup characters (_ ^ { } @ & ~) are escaped too (a file name
+/// like scan_000000.pcd would otherwise turn into a subscript).
+std::string gnuplotString(const std::string& text, bool enhanced = false);
+
 }  // namespace lidarcal::pipeline

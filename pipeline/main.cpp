@@ -11,6 +11,7 @@
 #include "common/errors.hpp"
 #include "pipeline/commands.hpp"
 #include "pipeline/progress.hpp"
+#include "pipeline/words.hpp"
 
 namespace {
 
@@ -49,12 +50,17 @@ std::string userPaths(const std::string& message) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  using lidarcal::pipeline::userWords;
   // PCL's readers print their own diagnostics; ours are clearer and name the file and field.
   pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);
 
   CLI::App app{"lidarcal: calibrate cheap 2D lidars against fixed landmarks in unknown positions, without ground truth.\n"
                "Formats: docs/FORMAT.md. Exit codes: 0 ok, 1 internal error, 2 bad input, 3 data cannot support the result."};
   app.set_version_flag("--version", LIDARCAL_VERSION);
+  app.footer("Method: Alhashimi et al. 2021, \"Calibrating Range Measurements of Lidars Using Fixed Landmarks in Unknown "
+             "Positions\" (Sensors); Alhashimi et al. 2016, \"Statistical Modeling and Calibration of Triangulation "
+             "Lidars\" (ICINCO); and the noise-consistency method for noise without ground truth. Equation numbers in "
+             "the help and the reports are those of these papers.");
   bool quiet = false;
   app.add_flag("-q,--quiet", quiet, "No progress output on stderr");
   app.require_subcommand(1);
@@ -67,10 +73,10 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;
   } catch (const lidarcal::DataError& e) {
-    std::fprintf(stderr, "lidarcal: cannot proceed: %s\n", userPaths(e.what()).c_str());
+    std::fprintf(stderr, "lidarcal: cannot proceed: %s\n", userWords(userPaths(e.what())).c_str());
     return 3;
   } catch (const lidarcal::InputError& e) {
-    std::fprintf(stderr, "lidarcal: error: %s\n", userPaths(e.what()).c_str());
+    std::fprintf(stderr, "lidarcal: error: %s\n", userWords(userPaths(e.what())).c_str());
     return 2;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "lidarcal: internal error: %s\n(please report this with the command you ran)\n", e.what());

@@ -9,6 +9,7 @@
 
 #include "io/atomic_file.hpp"
 #include "io/noise_json.hpp"
+#include "pipeline/gnuplot.hpp"
 
 namespace lidarcal::pipeline {
 namespace {
@@ -54,15 +55,6 @@ double valueOf(const NoiseSetting& n, const std::string& name) {
   if (field == "range_var_m2") return sn.range_var_m2;
   if (field == "bearing_mean_rad") return sn.bearing_mean_rad;
   return sn.bearing_var_rad2;
-}
-
-std::string gnuplotString(const std::string& s) {
-  std::string out = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\') out += '\\';
-    out += c;
-  }
-  return out + "\"";
 }
 
 }  // namespace
@@ -113,7 +105,8 @@ NoiseRun runNoiseEstimation(const calibration::NoiseProblem& problem, const Nois
   return run;
 }
 
-ojson noiseRunToJson(const NoiseRun& run, const calibration::NoiseProblem& problem) {
+ojson noiseRunToJson(const NoiseRun& run, const calibration::NoiseProblem& problem, const std::vector<int>& sensor_labels) {
+  auto label = [&](std::size_t s) { return s < sensor_labels.size() ? sensor_labels[s] : static_cast<int>(s); };
   ojson j{{"format", "lidarcal-noise-result/1"},
           {"method", run.method == NoiseMethod::kl_hill ? "kl-hill" : "ml"}};
   if (run.method == NoiseMethod::kl_hill) {
@@ -124,6 +117,7 @@ ojson noiseRunToJson(const NoiseRun& run, const calibration::NoiseProblem& probl
   j["message"] = run.message;
   const ojson setting = io::noiseSettingToJson(run.noise);
   j["sensors"] = setting["sensors"];
+  for (std::size_t s = 0; s < j["sensors"].size(); ++s) j["sensors"][s]["sensor"] = label(s);
   if (run.ml)
     for (std::size_t s = 0; s < j["sensors"].size(); ++s) {
       const auto& g = run.ml->groups;
@@ -147,7 +141,7 @@ ojson noiseRunToJson(const NoiseRun& run, const calibration::NoiseProblem& probl
     const auto& k = *run.kl;
     ojson at_best = ojson::array();
     for (std::size_t s = 0; s < k.at_best.kl_range.size(); ++s)
-      at_best.push_back(ojson{{"sensor", s},
+      at_best.push_back(ojson{{"sensor", label(s)},
                               {"predicted_range_mean_m", k.at_best.predicted_range[s].mean},
                               {"predicted_range_var_m2", k.at_best.predicted_range[s].var},
                               {"predicted_bearing_mean_rad", k.at_best.predicted_bearing[s].mean},
@@ -219,7 +213,7 @@ std::string writeNoisePlots(const std::filesystem::path& dir, const NoiseRun& ru
   gp << "set xlabel " << gnuplotString(xlabel) << "\n";
   gp << "set output " << gnuplotString((dir / "objective.png").string()) << "\n";
   if (kl) {
-    gp << "set title " << gnuplotString(std::string("KL noise consistency (") + (run.faithful ? "seed's variant" : "our variant") + "), seed " + std::to_string(run.seed)) << "\n";
+    gp << "set title " << gnuplotString(std::string("KL noise consistency (") + (run.faithful ? "published variant" : "our variant") + "), seed " + std::to_string(run.seed)) << "\n";
     gp << "set ylabel \"total KL divergence (nats)\"\nset logscale y\n";
     gp << "plot " << gnuplotString((dir / "trace.dat").string()) << " using 1:2 with points pt 7 ps 0.4 lc rgb \"#999999\" title \"evaluated\", \\\n"
        << "     '' using 1:3 with steps lw 2 lc rgb \"#c00000\" title \"best so far\"\n";

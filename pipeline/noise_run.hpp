@@ -54,8 +54,10 @@ struct NoiseRun {
 NoiseRun runNoiseEstimation(const calibration::NoiseProblem& problem, const NoiseRunOptions& options,
                             const std::function<void(std::size_t, std::size_t)>& on_progress = {});
 
-/// result.json (format lidarcal-noise-result/1).
-nlohmann::ordered_json noiseRunToJson(const NoiseRun& run, const calibration::NoiseProblem& problem);
+/// result.json (format lidarcal-noise-result/1). `sensor_labels[i]` names sensor i as
+/// observations.csv did (empty: 0..S-1).
+nlohmann::ordered_json noiseRunToJson(const NoiseRun& run, const calibration::NoiseProblem& problem,
+                                      const std::vector<int>& sensor_labels = {});
 
 /// Writes the traces (trace.dat, params.dat) and their PNG plots (objective.png, params.png)
 /// into the existing directory `dir`, drawing `truth` as dashed lines when given. Returns an

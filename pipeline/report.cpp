@@ -1,14 +1,19 @@
 #include "pipeline/report.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <cstdio>
 #include <map>
+#include <optional>
 #include <sstream>
 
 #include "calibration/inversion.hpp"
 #include "calibration/joint_refinement.hpp"
 #include "io/atomic_file.hpp"
 #include "pipeline/gnuplot.hpp"
+#include "pipeline/papers.hpp"
+#include "pipeline/words.hpp"
 
 namespace lidarcal::pipeline {
 namespace {
@@ -36,24 +41,60 @@ std::string polynomialText(const std::vector<double>& a) {
 std::string noiseText(const NoiseModel& n, const BiasPolynomial& f) {
   switch (n.kind) {
     case NoiseKind::squared:
-      return "sigma(d) = " + num(n.sigma_e, 5) + " f(d)^2 (seed 004 eq. 1): " + num(1000 * n.stddev(1.0, f), 1) +
+      return "sigma(d) = " + num(n.sigma_e, 5) + " f(d)^2 (" + std::string(papers::kTriangulation) + ", eq. 1): " + num(1000 * n.stddev(1.0, f), 1) +
              " mm at 1 m, " + num(1000 * n.stddev(3.0, f), 1) + " mm at 3 m";
-    case NoiseKind::polynomial: return "sigma(d) = |" + polynomialText(n.beta) + "| (seed 000 eq. 3)";
+    case NoiseKind::polynomial: return "sigma(d) = |" + polynomialText(n.beta) + "| (" + std::string(papers::kLandmarks) + ", eq. 3)";
     case NoiseKind::constant: return "sigma = " + num(n.sigma_e, 4) + " m";
     default: return toString(n.kind);
   }
 }
 
 struct PlotData {
-  std::string distance, curve, noise, raw, corrected, circles, stops;
+  std::string distance, curve, noise, raw, corrected, circles, stops, histogram, truth;
+  FittedRange fitted;
 };
 
-PlotData plotData(const LandmarkObservations& obs, const CalibrationModel& m) {
+/// Counts of raw and corrected errors in common bins over the central 99 % of both.
+std::string histogram(std::vector<double> raw, std::vector<double> cor) {
+  std::vector<double> all = raw;
+  all.insert(all.end(), cor.begin(), cor.end());
+  if (all.size() < 2) return {};
+  std::sort(all.begin(), all.end());
+  const double lo = all[all.size() / 200], hi = all[all.size() - 1 - all.size() / 200];
+  if (!(hi > lo)) return {};
+  constexpr int kBins = 50;
+  const double width = (hi - lo) / kBins;
+  std::vector<std::size_t> nr(kBins, 0), nc(kBins, 0);
+  auto add = [&](const std::vector<double>& v, std::vector<std::size_t>& n) {
+    for (double e : v) {
+      const int b = static_cast<int>(std::floor((e - lo) / width));
+      if (b >= 0 && b < kBins) ++n[static_cast<std::size_t>(b)];
+      else if (e == hi) ++n[kBins - 1];
+    }
+  };
+  add(raw, nr);
+  add(cor, nc);
+  std::ostringstream o;
+  o.precision(6);
+  for (int b = 0; b < kBins; ++b)
+    o << lo + (b + 0.5) * width << ' ' << nr[static_cast<std::size_t>(b)] << ' ' << nc[static_cast<std::size_t>(b)] << '\n';
+  return o.str();
+}
+
+std::string circleLines(double x, double y, double r) {
+  std::ostringstream o;
+  o.precision(6);
+  for (int i = 0; i <= 72; ++i) {
+    const double a = 2.0 * kPi * i / 72.0;
+    o << x + r * std::cos(a) << ' ' << y + r * std::sin(a) << '\n';
+  }
+  return o.str() + "\n";
+}
+
+PlotData plotData(const LandmarkObservations& obs, const CalibrationModel& m, const std::vector<Cylinder>& truth) {
   PlotData p;
-  std::ostringstream dist, raw, cor, noise, curve, circles, stops;
-  dist.precision(6);
-  raw.precision(6);
-  cor.precision(6);
+  std::ostringstream dist, raw, cor, noise, curve, circles, stops, true_circles;
+  for (auto* o : {&dist, &raw, &cor, &noise, &curve, &stops}) o->precision(6);
   std::map<int, const CalibratedLandmark*> lm;
   for (const auto& l : m.landmarks)
     if (l.status == "ok") lm[l.id] = &l;
@@ -69,6 +110,8 @@ PlotData plotData(const LandmarkObservations& obs, const CalibrationModel& m) {
     auto f = first_scan_of_stop.find(s.stop);
     if (f == first_scan_of_stop.end() || s.scan < f->second) first_scan_of_stop[s.stop] = s.scan;
   }
+  std::vector<double> raw_errors, corrected_errors;
+  double d_min = std::numeric_limits<double>::infinity(), d_max = 0.0;
   for (const auto& s : obs.sightings) {
     auto it = lm.find(s.landmark);
     if (it == lm.end() || s.stop >= m.stop_poses.size() || s.stop >= obs.commanded.size()) continue;
@@ -78,7 +121,16 @@ PlotData plotData(const LandmarkObservations& obs, const CalibrationModel& m) {
     for (const auto& b : s.beams) {
       const double d = calibration::rayCircleDistance(est.x_m, est.y_m, est.yaw_rad + b.angle_rad, it->second->x_m,
                                                       it->second->y_m, it->second->radius_m);
-      dist << d << ' ' << b.range_m << '\n';
+      if (!std::isfinite(d)) continue;
+      d_min = std::min(d_min, d);
+      d_max = std::max(d_max, d);
+      // Corrected reading: NaN where the model has no distance for it.
+      double c = std::nan("");
+      if (inv)
+        if (const auto found = inv->invert(b.range_m)) c = *found;
+      dist << d << ' ' << b.range_m << ' ' << c << '\n';
+      raw_errors.push_back(b.range_m - d);
+      if (std::isfinite(c)) corrected_errors.push_back(c - d);
       const double r = b.range_m - m.model.bias(d);
       const int bin = static_cast<int>(std::floor(d / 0.25));
       bins[bin].first += d;
@@ -87,27 +139,28 @@ PlotData plotData(const LandmarkObservations& obs, const CalibrationModel& m) {
       if (!map_scan) continue;
       const double ar = cmd.yaw_rad + b.angle_rad;
       raw << cmd.x_m + b.range_m * std::cos(ar) << ' ' << cmd.y_m + b.range_m * std::sin(ar) << '\n';
-      if (inv) {
-        if (const auto c = inv->invert(b.range_m)) {
-          const double ac = est.yaw_rad + b.angle_rad;
-          cor << est.x_m + *c * std::cos(ac) << ' ' << est.y_m + *c * std::sin(ac) << '\n';
-        }
+      if (std::isfinite(c)) {
+        const double ac = est.yaw_rad + b.angle_rad;
+        cor << est.x_m + c * std::cos(ac) << ' ' << est.y_m + c * std::sin(ac) << '\n';
       }
     }
   }
+  if (d_max > 0.0) p.fitted = {d_min, d_max};
   for (const auto& [bin, v] : bins)
     if (v.second >= 5)
       noise << v.first / v.second << ' ' << std::sqrt(bin_sum2[bin] / v.second) << ' '
             << m.model.noise.stddev(v.first / v.second, m.model.bias) << '\n';
-  for (double d = 0.0; d <= m.model.range_max_m + 1e-9; d += 0.05) curve << d << ' ' << m.model.bias(d) << ' ' << d << '\n';
-  for (const auto& [id, l] : lm) {
-    for (int i = 0; i <= 72; ++i) {
-      const double a = 2.0 * kPi * i / 72.0;
-      circles << l->x_m + l->radius_m * std::cos(a) << ' ' << l->y_m + l->radius_m * std::sin(a) << '\n';
-    }
-    circles << "\n";
+  // The fitted curve over the plotted range only (beyond it the polynomial is extrapolated).
+  const auto [lo, hi] = plotRange(p.fitted);
+  const int steps = 200;
+  for (int i = 0; i <= steps; ++i) {
+    const double d = lo + (hi - lo) * i / steps;
+    curve << d << ' ' << m.model.bias(d) << ' ' << d << '\n';
   }
-  for (const auto& s : m.stop_poses) stops << s.x_m << ' ' << s.y_m << '\n';
+  for (const auto& [id, l] : lm) circles << circleLines(l->x_m, l->y_m, l->radius_m);
+  for (std::size_t k = 0; k < m.stop_poses.size(); ++k)
+    stops << m.stop_poses[k].x_m << ' ' << m.stop_poses[k].y_m << ' ' << k << '\n';
+  for (const auto& c : truth) true_circles << circleLines(c.x_m, c.y_m, c.radius_m);
   p.distance = dist.str();
   p.curve = curve.str();
   p.noise = noise.str();
@@ -115,36 +168,74 @@ PlotData plotData(const LandmarkObservations& obs, const CalibrationModel& m) {
   p.corrected = cor.str();
   p.circles = circles.str();
   p.stops = stops.str();
+  p.histogram = histogram(std::move(raw_errors), std::move(corrected_errors));
+  p.truth = true_circles.str();
   return p;
 }
 
-constexpr const char* kScript = R"GP(set terminal pngcairo size 900,650 font "DejaVu Sans,11"
-set grid
-set key top left
+/// The gnuplot script of the report. Distance plots share the x range of the fitted data;
+/// legends sit outside the plotting area; every label_every-th of `stops` stops is numbered.
+std::string reportScript(const FittedRange& fitted, bool histogram, bool truth, std::size_t stops) {
+  const auto [lo, hi] = plotRange(fitted);
+  std::ostringstream g;
+  g.precision(6);
+  g << "set terminal pngcairo size 1000,650 font \"DejaVu Sans,11\"\n"
+       "set grid\n"
+       "set key outside below horizontal\n"
+       "set xrange ["
+    << lo << ":" << hi << "]\n"
+    << "fit_min = " << fitted.min_m << "\nfit_max = " << fitted.max_m << "\n"
+    // About 20 stop numbers on the map at most (a long recording has a stop per scan).
+    << "label_every = " << std::max<std::size_t>(1, (stops + 19) / 20) << "\n"
+    << R"GP(set arrow 1 from fit_min, graph 0 to fit_min, graph 1 nohead dt 3 lc rgb "#666666"
+set arrow 2 from fit_max, graph 0 to fit_max, graph 1 nohead dt 3 lc rgb "#666666"
 set output "distance.png"
-set title "Range error of the raw readings against the distance estimated from the landmarks"
+set title "Raw range error against the distance estimated from the landmarks (dotted: fitted range)"
 set xlabel "estimated true distance d [m]"
 set ylabel "raw reading - d [m]"
 plot "distance.dat" using 1:($2-$1) with points pt 7 ps 0.3 lc rgb "#8899bb" title "readings on landmarks", \
      "curve.dat" using 1:($2-$1) with lines lw 2 lc rgb "#cc3311" title "fitted bias f(d) - d", \
      0 with lines dt 2 lc rgb "black" title "ideal (no error)"
+set output "residuals.png"
+set title "Error before and after correction against the estimated distance"
+set ylabel "reading - d [mm]"
+plot "distance.dat" using 1:(1000*($2-$1)) with points pt 7 ps 0.3 lc rgb "#cc3311" title "raw", \
+     "distance.dat" using 1:(1000*($3-$1)) with points pt 7 ps 0.3 lc rgb "#009944" title "corrected", \
+     0 with lines dt 2 lc rgb "black" title "no error"
 set output "noise.png"
 set title "Noise against distance"
-set xlabel "estimated true distance d [m]"
 set ylabel "standard deviation of the reading [mm]"
 plot "noise.dat" using 1:($2*1000) with points pt 7 ps 1 lc rgb "#0077bb" title "measured (RMS residual, 0.25 m bins)", \
      "noise.dat" using 1:($3*1000) with lines lw 2 lc rgb "#cc3311" title "noise model"
+unset arrow 1
+unset arrow 2
+)GP";
+  if (histogram)
+    g << R"GP(set output "histogram.png"
+set title "Error of the readings on landmarks, before and after correction"
+set autoscale x
+set xlabel "reading - estimated distance [mm]"
+set ylabel "readings"
+plot "histogram.dat" using (1000*$1):2 with histeps lw 2 lc rgb "#cc3311" title "raw", \
+     "histogram.dat" using (1000*$1):3 with histeps lw 2 lc rgb "#009944" title "corrected"
+)GP";
+  g << R"GP(set terminal pngcairo size 900,900 font "DejaVu Sans,11"
 set output "map.png"
-set title "Landmarks with raw (red) and corrected (green) points, one scan per stop"
+set title "Landmarks with raw and corrected points, one scan per stop"
+set autoscale x
 set xlabel "x [m]"
 set ylabel "y [m]"
 set size ratio -1
-set key outside bottom center horizontal
 plot "circles.dat" using 1:2 with lines lw 2 lc rgb "#999999" title "landmarks (estimated)", \
-     "raw.dat" using 1:2 with points pt 2 ps 0.6 lc rgb "#cc3311" title "raw", \
-     "corrected.dat" using 1:2 with points pt 6 ps 0.6 lc rgb "#009944" title "corrected", \
-     "stops.dat" using 1:2 with points pt 7 ps 0.8 lc rgb "#0044aa" title "stops"
 )GP";
+  if (truth) g << "     \"truth.dat\" using 1:2 with lines lw 1 dt 2 lc rgb \"black\" title \"landmarks (truth)\", \\\n";
+  g << R"GP(     "raw.dat" using 1:2 with points pt 2 ps 0.6 lc rgb "#cc3311" title "raw", \
+     "corrected.dat" using 1:2 with points pt 6 ps 0.6 lc rgb "#009944" title "corrected", \
+     "stops.dat" using 1:2 with points pt 7 ps 0.8 lc rgb "#0044aa" title "stops (numbered)", \
+     "stops.dat" using 1:2:(int($3) % label_every == 0 ? sprintf("%d", $3) : "") with labels offset 0.8,0.8 font ",9" tc rgb "#0044aa" notitle
+)GP";
+  return g.str();
+}
 
 std::string comparisonRow(const ComparedModel& c) {
   const auto& l = c.evaluation.landmarks;
@@ -156,22 +247,32 @@ std::string comparisonRow(const ComparedModel& c) {
 
 }  // namespace
 
+std::pair<double, double> plotRange(const FittedRange& fitted) {
+  const double margin = std::max(0.1, 0.1 * (fitted.max_m - fitted.min_m));
+  return {std::max(0.0, fitted.min_m - margin), fitted.max_m + margin};
+}
+
 void writeReport(const std::filesystem::path& dir, const ReportInputs& in) {
   namespace fs = std::filesystem;
+  using papers::kLandmarks;
+  using papers::kTriangulation;
   fs::create_directories(dir);
   const CalibrationModel& m = *in.model;
   std::ostringstream md;
   md << "# lidarcal calibration report\n\n";
-  md << "Sequence `" << in.sequence.string() << "`: " << in.scans << " scans at " << in.stops << " stops, "
-     << m.landmarks.size() << " landmarks in " << in.detections << " detections.\n\n";
+  md << "Sequence `" << in.sequence.string() << "`: " << plural(in.scans, "scan") << " at " << plural(in.stops, "stop")
+     << ", " << plural(m.landmarks.size(), "landmark") << " in " << plural(in.detections, "detection") << ".\n\n";
   if (m.status != "ok") {
-    md << "**Calibration failed: " << m.status << ".** " << m.message << "\n";
+    md << "**Calibration failed: " << m.status << ".** " << userWords(m.message) << "\n";
     io::writeTextAtomically(dir / "report.md", md.str());
     return;
   }
+  const std::optional<PlotData> p =
+      in.observations ? std::optional<PlotData>(plotData(*in.observations, m, in.true_landmarks)) : std::nullopt;
+  const FittedRange fitted = p ? p->fitted : FittedRange{};
   md << "## The calibrated model\n\n";
-  md << "- method: **" << m.method << "**, bias order n = " << m.model.bias.order() << " (chosen by " << m.order_rule
-     << ")\n";
+  md << "- method: **" << m.method << "**, bias order n = " << m.model.bias.order() << " (chosen by "
+     << userWords(m.order_rule) << ")\n";
   md << "- bias: reading = f(d) = " << polynomialText(m.model.bias.alpha) << "  (d = true distance in metres)\n";
   md << "- noise: " << noiseText(m.model.noise, m.model.bias) << "\n";
   md << "- bearing noise sigma_theta = " << num(rad2deg(m.sigma_theta_rad), 3) << " deg";
@@ -179,49 +280,64 @@ void writeReport(const std::filesystem::path& dir, const ReportInputs& in) {
     md << "; stop poses moved by " << num(1000 * m.pose_scatter_m, 1) << " mm and "
        << num(rad2deg(m.heading_scatter_rad), 2) << " deg (RMS) from the commanded ones";
   md << "\n";
-  if (!m.message.empty()) md << "- note: " << m.message << "\n";
-  md << "\nWhat the raw sensor reads at a few true distances, and the error it makes:\n\n";
-  md << "| true distance | raw reading | error | noise (1 sigma) |\n|---|---|---|---|\n";
-  for (double d : {0.5, 1.0, 2.0, 3.0, 4.0, 5.0}) {
-    if (d > m.model.range_max_m) break;
-    md << "| " << num(d, 1) << " m | " << num(m.model.bias(d), 3) << " m | "
+  if (fitted.max_m > 0.0)
+    md << "- fitted on landmark readings at estimated distances from " << num(fitted.min_m, 2) << " to "
+       << num(fitted.max_m, 2) << " m (the sensor reads up to " << num(m.model.range_max_m, 1)
+       << " m: beyond the fitted range the polynomial is extrapolated)\n";
+  if (!m.message.empty()) md << "- note: " << userWords(m.message) << "\n";
+  md << "\nWhat the raw sensor reads at a few true distances, and the error it makes";
+  if (fitted.max_m > 0.0) md << " (rows outside the fitted range are extrapolated, marked *)";
+  md << ":\n\n";
+  md << "| true distance | raw reading | error | noise (1 sigma) | data |\n|---|---|---|---|---|\n";
+  const double last = std::min(m.model.range_max_m, std::max(5.0, fitted.max_m));
+  for (double d : {0.25, 0.5, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 8.0, 10.0, 12.0, 15.0, 20.0, 25.0, 30.0, 40.0, 50.0, 60.0, 80.0}) {
+    if (d > last) break;
+    if (d < m.model.range_min_m) continue;
+    const bool inside = fitted.max_m <= 0.0 || fitted.contains(d);
+    md << "| " << num(d, 2) << " m" << (inside ? "" : " *") << " | " << num(m.model.bias(d), 3) << " m | "
        << num(1000 * (m.model.bias(d) - d), 1, true) << " mm | " << num(1000 * m.model.noise.stddev(d, m.model.bias), 1)
-       << " mm |\n";
+       << " mm | " << (inside ? "fitted" : "extrapolated") << " |\n";
   }
-  md << "\n`lidarcal correct` inverts f for every point (seed 004 eq. 30) and moves it along its beam.\n";
+  md << "\n`lidarcal correct` inverts f for every point (" << kTriangulation
+     << ", eq. 30) and moves it along its beam.\n";
 
   if (!in.compared.empty()) {
     md << "\n## Against the truth\n\n" << in.truth_note << "\n\n";
-    md << "| model | order | MSE ratio, landmarks (eq. 31) | MSE ratio, all returns | RMS error after, landmarks [mm] | "
-          "normalised MSE after (seed 004 eq. 31) |\n|---|---|---|---|---|---|\n";
+    md << "The MSE ratio is the raw readings' mean squared error divided by the corrected ones' (" << kLandmarks
+       << ", eq. 31): higher is better, 1 means no gain.\n\n";
+    md << "| model | order | MSE ratio, landmarks | MSE ratio, all returns | RMS error after, landmarks [mm] | "
+          "normalised MSE after (" << kTriangulation << ", eq. 31) |\n|---|---|---|---|---|---|\n";
     const auto& first = in.compared.front().evaluation;
     md << "| raw readings | - | 1.00 | 1.00 | " << num(1000 * std::sqrt(first.landmarks.mse_raw_m2), 2) << " | "
        << num(first.all.nmse_raw, 5) << " |\n";
     for (const auto& c : in.compared) md << comparisonRow(c);
   }
 
-  const bool plots = in.observations != nullptr;
   std::string why;
   bool plotted = false;
-  if (plots) {
-    const PlotData p = plotData(*in.observations, m);
-    io::writeTextAtomically(dir / "distance.dat", p.distance);
-    io::writeTextAtomically(dir / "curve.dat", p.curve);
-    io::writeTextAtomically(dir / "noise.dat", p.noise);
-    io::writeTextAtomically(dir / "raw.dat", p.raw);
-    io::writeTextAtomically(dir / "corrected.dat", p.corrected);
-    io::writeTextAtomically(dir / "circles.dat", p.circles);
-    io::writeTextAtomically(dir / "stops.dat", p.stops);
-    io::writeTextAtomically(dir / "plots.gp", kScript);
+  if (p) {
+    io::writeTextAtomically(dir / "distance.dat", p->distance);
+    io::writeTextAtomically(dir / "curve.dat", p->curve);
+    io::writeTextAtomically(dir / "noise.dat", p->noise);
+    io::writeTextAtomically(dir / "raw.dat", p->raw);
+    io::writeTextAtomically(dir / "corrected.dat", p->corrected);
+    io::writeTextAtomically(dir / "circles.dat", p->circles);
+    io::writeTextAtomically(dir / "stops.dat", p->stops);
+    if (!p->histogram.empty()) io::writeTextAtomically(dir / "histogram.dat", p->histogram);
+    if (!p->truth.empty()) io::writeTextAtomically(dir / "truth.dat", p->truth);
+    io::writeTextAtomically(dir / "plots.gp", reportScript(fitted, !p->histogram.empty(), !p->truth.empty(), m.stop_poses.size()));
     plotted = runGnuplot(dir, "plots.gp", &why);
   }
   md << "\n## Plots\n\n";
   if (plotted) {
-    md << "![readings against estimated distance](distance.png)\n\n";
+    md << "![raw readings against estimated distance](distance.png)\n\n";
+    md << "![error before and after correction against distance](residuals.png)\n\n";
+    if (!p->histogram.empty()) md << "![error before and after correction](histogram.png)\n\n";
     md << "![noise against distance](noise.png)\n\n";
-    md << "![landmark map, raw and corrected points](map.png)\n";
+    md << "![landmark map with numbered stops, raw and corrected points" << (p->truth.empty() ? "" : ", true landmarks")
+       << " (" << kLandmarks << ", Fig. 13)](map.png)\n";
   } else {
-    md << "(" << (plots ? why : std::string("no plot data")) << ")\n";
+    md << "(" << (p ? why : std::string("no plot data")) << ")\n";
   }
 
   md << "\n## Order selection\n\n| order | alpha | AIC | BIC | validation MSE [mm^2] | test MSE [mm^2] |\n|---|---|---|---|---|---|\n";
@@ -236,14 +352,20 @@ void writeReport(const std::filesystem::path& dir, const ReportInputs& in) {
   const auto& nf = m.noise_fits;
   md << "\n## Noise estimators side by side\n\n";
   md << "| estimator | result |\n|---|---|\n";
-  md << "| seed 000 polynomial noise, ML | sigma(d) = |" << polynomialText(nf.seed000_beta) << "| |\n";
-  md << "| seed 004 closed form (eqs. 21-26) | f = " << polynomialText(nf.seed004_cf_alpha) << ", sigma_e = "
-     << num(nf.seed004_cf_sigma_e, 5) << " |\n";
-  md << "| seed 004 full ML (eqs. 18-20) | f = " << polynomialText(nf.seed004_ml_alpha) << ", sigma_e = "
-     << num(nf.seed004_ml_sigma_e, 5) << " |\n";
-  for (const auto& [name, reason] : nf.unavailable) md << "| " << name << " | not available: " << reason << " |\n";
+  md << "| " << kLandmarks << ", polynomial noise, ML | sigma(d) = |" << polynomialText(nf.seed000_beta) << "| |\n";
+  md << "| " << kTriangulation << ", closed form (eqs. 21-26) | f = " << polynomialText(nf.seed004_cf_alpha)
+     << ", sigma_e = " << num(nf.seed004_cf_sigma_e, 5) << " |\n";
+  md << "| " << kTriangulation << ", full ML (eqs. 18-20) | f = " << polynomialText(nf.seed004_ml_alpha)
+     << ", sigma_e = " << num(nf.seed004_ml_sigma_e, 5) << " |\n";
+  for (const auto& [name, reason] : nf.unavailable) {
+    const std::string label = name == "seed000_beta"          ? std::string(kLandmarks) + ", polynomial noise"
+                              : name == "seed004_closed_form" ? std::string(kTriangulation) + ", closed form"
+                              : name == "seed004_ml"          ? std::string(kTriangulation) + ", full ML"
+                                                              : std::string("noise-exponent test");
+    md << "| " << label << " | not available: " << reason << " |\n";
+  }
   if (nf.exponent_best >= 0) {
-    md << "\nSeed 004's noise-exponent test (eqs. 10-15) on " << nf.exponent_batches
+    md << "\nThe noise-exponent test of " << kTriangulation << " (eqs. 10-15) on " << nf.exponent_batches
        << " constant-distance batches (one beam over the scans of a stop): log-likelihood of y = f + f^k e for k = 0..3: ";
     for (int k = 0; k < 4; ++k) md << (k ? ", " : "") << num(nf.exponent_loglik[static_cast<std::size_t>(k)], 1);
     md << "; best k = **" << nf.exponent_best << "**.\n";
@@ -252,6 +374,7 @@ void writeReport(const std::filesystem::path& dir, const ReportInputs& in) {
   for (const auto& l : m.landmarks)
     md << "| " << l.id << " | " << num(l.x_m, 3) << " | " << num(l.y_m, 3) << " | " << num(l.radius_m, 3)
        << " | " << l.stops << " | " << l.status << " |\n";
+  md << "\n## References\n\n" << papers::kReferences;
   if (!in.command.empty()) md << "\nProduced by `" << in.command << "`.\n";
   io::writeTextAtomically(dir / "report.md", md.str());
 }

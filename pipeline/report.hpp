@@ -10,6 +10,7 @@
 
 #include "common/calibration_model.hpp"
 #include "common/landmark_observations.hpp"
+#include "common/scene.hpp"
 #include "pipeline/truth_eval.hpp"
 
 namespace lidarcal::pipeline {
@@ -29,10 +30,26 @@ struct ReportInputs {
   const CalibrationModel* model = nullptr;  ///< the result
   std::vector<ComparedModel> compared;      ///< with truth: this model and its baselines
   std::string truth_note;                   ///< where the evaluation data came from
+  std::vector<Cylinder> true_landmarks;     ///< simulator truth: drawn on the map when given
   std::string command;                      ///< command line that produced the report
 };
 
-/// Writes DIR/report.md and DIR/*.png (plots skipped with a note when gnuplot is missing).
+/// Distances the model was fitted on: the smallest and largest estimated distance of the
+/// landmark readings (0, 0 when there are none).
+struct FittedRange {
+  double min_m = 0.0, max_m = 0.0;
+  bool contains(double d) const { return d >= min_m && d <= max_m; }
+};
+
+/// The x range of the distance plots: the fitted range with a margin of 10 % of its span (at
+/// least 0.1 m), never below 0.
+std::pair<double, double> plotRange(const FittedRange& fitted);
+
+/// Writes DIR/report.md and DIR/*.png (plots skipped with a note when gnuplot is missing):
+/// readings and residuals before/after correction against the distance over the fitted range,
+/// their histograms, noise against distance, and the map (estimated landmarks, numbered stops,
+/// raw and corrected points, the true landmarks when given). The plot data (*.dat) and the
+/// gnuplot script (plots.gp) stay beside the pictures.
 void writeReport(const std::filesystem::path& dir, const ReportInputs& in);
 
 }  // namespace lidarcal::pipeline

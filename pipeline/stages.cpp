@@ -11,7 +11,7 @@
 namespace lidarcal::pipeline {
 
 SequenceCalibration calibrateSequence(const io::Sequence& seq, const detectors::SequenceDetectionConfig& detection,
-                                      const calibration::CalibrationConfig& config, const StageProgress& on_scan) {
+                                      const calibration::CalibrationConfig& config, const NamedProgress& progress) {
   SequenceCalibration out;
   // Triangulation needs every landmark seen from min_stops stops: with fewer stops in the whole
   // sequence there is nothing to detect for.
@@ -36,7 +36,9 @@ SequenceCalibration calibrateSequence(const io::Sequence& seq, const detectors::
       return out;
     }
   }
-  out.detections = detectors::detectSequence(seq, detection, on_scan);
+  out.detections = detectors::detectSequence(seq, detection, [&](std::size_t done, std::size_t total) {
+    if (progress) progress("detect", done, total);
+  });
   out.observations = toLandmarkObservations(seq, out.detections);
   if (!seq.meta.range_max_m) {
     // No sensor window in sequence.json: take the largest landmark reading, with margin.
@@ -45,7 +47,12 @@ SequenceCalibration calibrateSequence(const io::Sequence& seq, const detectors::
       for (const auto& b : s.beams) max_reading = std::max(max_reading, b.range_m);
     out.observations.range_max_m = max_reading > 0.0 ? 1.25 * max_reading : 1.0;
   }
-  out.model = calibration::calibrate(out.observations, config);
+  calibration::CalibrationConfig reporting = config;
+  reporting.progress = [&](const char* stage, std::size_t done, std::size_t total) {
+    if (config.progress) config.progress(stage, done, total);
+    if (progress) progress(stage, done, total);
+  };
+  out.model = calibration::calibrate(out.observations, reporting);
   if (seq.meta.sensor_name) out.model.sensor_name = *seq.meta.sensor_name;
   // A beam count only when every scan has it: a sensor whose count varies (YDLIDAR X4) gets a
   // model without one, which `correct` applies to any scan.
@@ -84,14 +91,15 @@ std::string beamCountWarning(const io::Sequence& seq) {
   if (fewest == most) return {};
   return seq.dir.string() + ": the number of points per scan varies from " + std::to_string(fewest) + " to " +
          std::to_string(most) +
-         ": point i is not the same beam in every scan, so seed 004's noise-exponent test uses only the stops whose "
+         ": point i is not the same beam in every scan, so the noise-exponent test (Alhashimi et al. 2016) uses only the stops whose "
          "scans agree, and the model records no beam count. Landmark fits are not affected. If the scans come from "
          "different sensors, split them into one sequence per sensor";
 }
 
-void checkModelFits(const CalibrationModel& model, const io::Sequence& seq, const std::filesystem::path& model_file,
-                    calibration::Outside outside) {
+std::string checkModelFits(const CalibrationModel& model, const io::Sequence& seq, const std::filesystem::path& model_file,
+                           bool force, calibration::Outside outside) {
   const std::string where = model_file.string();
+  std::string warning;
   if (model.status != "ok")
     throw DataError(where, "diagnostics.status",
                     "the model is not usable (" + model.status + ")" + (model.message.empty() ? "" : ": " + model.message),
@@ -105,12 +113,29 @@ void checkModelFits(const CalibrationModel& model, const io::Sequence& seq, cons
                          "use a model calibrated on this sensor");
   }
   const auto& m = seq.meta;
+  const std::string meta_file = (seq.dir / "sequence.json").string();
+  if (m.sensor_name && !model.sensor_name.empty() && *m.sensor_name != model.sensor_name)
+    throw InputError(where, "sensor_name",
+                     "the model was calibrated on '" + model.sensor_name + "', the sequence comes from '" +
+                         *m.sensor_name + "' (" + meta_file + ")",
+                     "the model belongs to another sensor; calibrate this one");
   auto differs = [](double a, double b) { return std::abs(a - b) > 1e-6 * std::max(1.0, std::abs(b)); };
   if ((m.range_min_m && differs(*m.range_min_m, model.model.range_min_m)) ||
-      (m.range_max_m && differs(*m.range_max_m, model.model.range_max_m)))
-    throw InputError(where, "sensor.range_min_m/range_max_m",
-                     "the model's range limits differ from the sequence's (" + seq.dir.string() + "/sequence.json)",
-                     "the model belongs to another sensor; calibrate this one");
+      (m.range_max_m && differs(*m.range_max_m, model.model.range_max_m))) {
+    char values[160];
+    std::snprintf(values, sizeof values, "%g-%g m against %g-%g m", model.model.range_min_m, model.model.range_max_m,
+                  m.range_min_m.value_or(model.model.range_min_m), m.range_max_m.value_or(model.model.range_max_m));
+    const std::string limits =
+        "the model's range limits differ from the sequence's: " + std::string(values) + " (" + meta_file + ")";
+    const std::string same = model.sensor_name.empty() ? "" : " ('" + model.sensor_name + "')";
+    if (!force)
+      throw InputError(where, "sensor.range_min_m/range_max_m", limits,
+                       "if this is the same sensor" + same +
+                           " with other limits set, pass --force to apply the model anyway (readings outside the "
+                           "model's limits are left without a distance); otherwise the model belongs to another "
+                           "sensor: calibrate this one");
+    warning = limits + "; applied anyway (--force): readings outside the model's limits get no distance";
+  }
   double at = 0.0;
   const BiasPolynomial& f = model.model.bias;
   if (model.fitted_range_m && outside != calibration::Outside::extrapolate) {
@@ -118,11 +143,12 @@ void checkModelFits(const CalibrationModel& model, const io::Sequence& seq, cons
     const auto [lo, hi] = *model.fitted_range_m;
     if (!calibration::isMonotone(f, lo, hi, &at)) {
       char text[200];
-      std::snprintf(text, sizeof text, "the bias polynomial stops increasing at d = %.3f m inside its fitted range %.3f-%.3f m",
+      std::snprintf(text, sizeof text, "the bias polynomial stops increasing at d = %.3f m inside its fitted range %.3f-%.3f m, so a "
+                    "reading maps to more than one distance",
                     at, lo, hi);
       throw DataError(where, "bias.alpha", text, "calibrate with a lower --max-order");
     }
-    return;
+    return warning;
   }
   if (!calibration::invertsReadingWindow(f, model.model.range_min_m, model.model.range_max_m, &at)) {
     // Where f stops rising (first d with f'(d) <= 0), for the message.
@@ -143,6 +169,7 @@ void checkModelFits(const CalibrationModel& model, const io::Sequence& seq, cons
                     "near the limit have no distance", model.model.range_max_m, at, f(at));
     throw DataError(where, "bias.alpha", text, "calibrate with a lower --max-order or with landmarks covering the whole range");
   }
+  return warning;
 }
 
 CorrectionStats correctSequence(const io::Sequence& seq, const CalibrationModel& model,

@@ -19,6 +19,8 @@
 namespace lidarcal::pipeline {
 
 using StageProgress = std::function<void(std::size_t done, std::size_t total)>;
+/// Progress of several named stages ("detect", "joint refinement"): steps done of the stage's total.
+using NamedProgress = std::function<void(const std::string& stage, std::size_t done, std::size_t total)>;
 
 struct SequenceCalibration {
   detectors::SequenceDetections detections;  ///< circles per scan and landmark ids
@@ -26,9 +28,11 @@ struct SequenceCalibration {
   CalibrationModel model;                    ///< the result (status says whether it is usable)
 };
 
-/// Detection, association and calibration of a sequence.
+/// Detection, association and calibration of a sequence. `progress` hears of "detect" (scans,
+/// twice the scans when the radius is estimated: the detector makes a second pass) and of the
+/// calibration's own stages (config.progress, which is called as well).
 SequenceCalibration calibrateSequence(const io::Sequence& seq, const detectors::SequenceDetectionConfig& detection,
-                                      const calibration::CalibrationConfig& config, const StageProgress& on_scan = {});
+                                      const calibration::CalibrationConfig& config, const NamedProgress& progress = {});
 
 /// The oracle of seed 004 on a simulated sequence: the range model fitted against the true
 /// distances of the landmark beams, scaled by `scale` (1: plain oracle; commandedScale(): the
@@ -40,11 +44,13 @@ CalibrationModel calibrateOracle(const io::Sequence& raw, const SimulationTruth&
 /// when they agree). Not an error: some sensors (YDLIDAR X4) vary their beam count per sweep.
 std::string beamCountWarning(const io::Sequence& seq);
 
-/// Throws InputError when the model does not belong to the sequence's sensor (beam count,
-/// range limits) and DataError when its bias cannot be inverted unambiguously.
-/// With `outside` other than extrapolate, f must be invertible over the fitted range only.
-void checkModelFits(const CalibrationModel& model, const io::Sequence& seq, const std::filesystem::path& model_file,
-                    calibration::Outside outside = calibration::Outside::keep);
+/// Throws InputError when the model does not belong to the sequence's sensor (beam count, sensor
+/// name, range limits) and DataError when its bias cannot be inverted unambiguously. Range limits
+/// that differ on a sensor of the same name (or unnamed) are refused unless `force`; then the
+/// returned text is a warning to print (empty when everything fits). With `outside` other than
+/// extrapolate, f must be invertible over the fitted range only.
+std::string checkModelFits(const CalibrationModel& model, const io::Sequence& seq, const std::filesystem::path& model_file,
+                           bool force = false, calibration::Outside outside = calibration::Outside::keep);
 
 struct CorrectionStats {
   std::size_t scans = 0, points = 0, corrected = 0, unresolved = 0;

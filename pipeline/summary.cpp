@@ -5,6 +5,8 @@
 #include <limits>
 #include <sstream>
 
+#include <nlohmann/json.hpp>
+
 namespace lidarcal::pipeline {
 
 SequenceSummary summarize(const io::Sequence& seq, const std::function<void(std::size_t)>& on_scan) {
@@ -56,7 +58,9 @@ std::string toMarkdown(const io::Sequence& seq, const SequenceSummary& s) {
   o << "# Sequence " << seq.dir.string() << "\n\n";
   o << "| item | value |\n|---|---|\n";
   o << "| scans | " << s.scans << " |\n";
-  o << "| stops | " << s.stops << " (" << s.min_scans_per_stop << "-" << s.max_scans_per_stop << " scans each) |\n";
+  o << "| stops | " << s.stops << " (" << s.min_scans_per_stop
+    << (s.min_scans_per_stop != s.max_scans_per_stop ? "-" + std::to_string(s.max_scans_per_stop) : "")
+    << (s.max_scans_per_stop == 1 ? " scan" : " scans") << " each) |\n";
   o << "| beams per scan | " << s.min_beams << (s.min_beams != s.max_beams ? "-" + std::to_string(s.max_beams) : "")
     << " |\n";
   o << "| returns | " << s.returns << " of " << s.points << " points ("
@@ -73,6 +77,21 @@ std::string toMarkdown(const io::Sequence& seq, const SequenceSummary& s) {
     o << "| stops begun by sequence.json | " << m.stop_starts.size() << " (stop_starts: recordings taken apart at one pose) |\n";
   if (m.landmark_radius_m) o << "| landmark radius | " << *m.landmark_radius_m << " m |\n";
   return o.str();
+}
+
+nlohmann::ordered_json toJson(const io::Sequence& seq, const SequenceSummary& s) {
+  nlohmann::ordered_json j{{"sequence", seq.dir.string()},
+                           {"scans", s.scans},
+                           {"stops", s.stops},
+                           {"scans_per_stop", {{"min", s.min_scans_per_stop}, {"max", s.max_scans_per_stop}}},
+                           {"beams_per_scan", {{"min", s.min_beams}, {"max", s.max_beams}}},
+                           {"points", s.points},
+                           {"returns", s.returns},
+                           {"range_of_returns_m", {{"min", s.min_range_m}, {"max", s.max_range_m}, {"mean", s.mean_range_m}}},
+                           {"commanded_path_m", s.path_length_m},
+                           {"step_between_stops_m", {{"min", s.min_step_m}, {"max", s.max_step_m}}}};
+  j["sequence_json"] = io::sequenceMetaJson(seq.meta);
+  return j;
 }
 
 }  // namespace lidarcal::pipeline

@@ -5,6 +5,8 @@
 #include <functional>
 #include <string>
 
+#include <nlohmann/json_fwd.hpp>
+
 #include "io/sequence.hpp"
 
 namespace lidarcal::pipeline {
@@ -26,5 +28,9 @@ SequenceSummary summarize(const io::Sequence& seq, const std::function<void(std:
 
 /// Human-readable summary (Markdown).
 std::string toMarkdown(const io::Sequence& seq, const SequenceSummary& s);
+
+/// The same for scripts (`lidarcal info --json`): every field of the summary under its name
+/// with its unit, and the sequence.json items that are set (docs/FORMAT.md).
+nlohmann::ordered_json toJson(const io::Sequence& seq, const SequenceSummary& s);
 
 }  // namespace lidarcal::pipeline

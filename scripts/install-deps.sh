@@ -8,6 +8,7 @@ PACKAGES=(
   libpcl-dev libeigen3-dev libflann-dev libceres-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libcli11-dev nlohmann-json3-dev gnuplot-nox
+  pcl-tools                        # pcl_viewer, to look at scans (docs/FORMAT.md)
   zlib1g-dev                       # gzip-compressed CARMEN logs (importer)
   # ROS1 bag reading (importer; see docs/BUILDING.md for why each is listed)
   librosbag-storage-dev libsensor-msgs-dev libclass-loader-dev

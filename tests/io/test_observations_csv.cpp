@@ -29,12 +29,13 @@ TEST(ObservationsCsv, RoundTripsExactlyEnoughAndKeepsTheOrder) {
   TempDir dir;
   const std::vector<Observation> rows{{0, 0, 3, 2.5, -0.25}, {0, 1, -1, 7.123456789012, 3.1}, {4, 0, 12, -0.01, 1e-9}};
   writeObservations(dir / "o.csv", rows);
-  const auto back = readObservations(dir / "o.csv");
+  std::vector<int> sensors, landmarks;
+  const auto back = readObservations(dir / "o.csv", &sensors, &landmarks);
   ASSERT_EQ(back.size(), rows.size());
   for (std::size_t i = 0; i < rows.size(); ++i) {
     EXPECT_EQ(back[i].stop, rows[i].stop);
-    EXPECT_EQ(back[i].sensor, rows[i].sensor);
-    EXPECT_EQ(back[i].landmark, rows[i].landmark);
+    EXPECT_EQ(sensors.at(static_cast<std::size_t>(back[i].sensor)), rows[i].sensor);
+    EXPECT_EQ(back[i].landmark < 0 ? -1 : landmarks.at(static_cast<std::size_t>(back[i].landmark)), rows[i].landmark);
     EXPECT_NEAR(back[i].range_m, rows[i].range_m, 1e-11 * std::max(1.0, std::abs(rows[i].range_m)));
     EXPECT_NEAR(back[i].bearing_rad, rows[i].bearing_rad, 1e-11);
   }
@@ -55,13 +56,45 @@ TEST(ObservationsCsv, ErrorsNameTheFileLineColumnAndRemedy) {
   const std::string e = errorOf([&] { readObservations(f); });
   EXPECT_NE(e.find(f.string() + ": line 3, column range_m: `far` is not a number"), std::string::npos) << e;
   EXPECT_NE(e.find("docs/FORMAT.md"), std::string::npos) << e;
-  writeFile(f, "stop,sensor,landmark,range_m,bearing_rad\n0,0,-2,2.0,0.1\n");
-  EXPECT_NE(errorOf([&] { readObservations(f); }).find("line 2, column landmark: must be >= -1"), std::string::npos);
+  writeFile(f, "stop,sensor,landmark,range_m,bearing_rad\n0,0,99999999999,2.0,0.1\n");
+  EXPECT_NE(errorOf([&] { readObservations(f); }).find("line 2, column landmark: is too large"), std::string::npos);
+  writeFile(f, "stop,sensor,landmark,range_m,bearing_rad\n-1,0,1,2.0,0.1\n");
+  EXPECT_NE(errorOf([&] { readObservations(f); }).find("line 2, column stop: must be >= 0"), std::string::npos);
   writeFile(f, "stop,sensor,landmark,range_m,bearing_rad\n0,0,1,2.0\n");
   EXPECT_NE(errorOf([&] { readObservations(f); }).find("line 2: expected 5 comma-separated values, found 4"), std::string::npos);
   writeFile(f, "stop,sensor,landmark,range_m,bearing_rad\n0,0,1,nan,0.1\n");
   EXPECT_NE(errorOf([&] { readObservations(f); }).find("column range_m: `nan` is not a finite number"), std::string::npos);
   EXPECT_NE(errorOf([&] { readObservations(dir / "missing.csv"); }).find("file does not exist"), std::string::npos);
+}
+
+TEST(ObservationsCsv, SensorIdsAreLabelsNumberedInAscendingOrder) {
+  TempDir dir;
+  const auto f = dir / "o.csv";
+  // Sensors 7, -3 and 12 (in file order), landmarks with any ids: -1 stays "unknown".
+  writeFile(f, "stop,sensor,landmark,range_m,bearing_rad\n0,7,100,1.0,0.1\n0,-3,-5,2.0,0.2\n1,12,-1,3.0,0.3\n"
+               "1,7,2000000000,4.0,0.4\n");
+  std::vector<int> labels, landmarks;
+  const auto rows = readObservations(f, &labels, &landmarks);
+  EXPECT_EQ(labels, (std::vector<int>{-3, 7, 12}));
+  EXPECT_EQ(landmarks, (std::vector<int>{-5, 100, 2000000000}));
+  ASSERT_EQ(rows.size(), 4u);
+  EXPECT_EQ(rows[0].sensor, 1);
+  EXPECT_EQ(rows[1].sensor, 0);
+  EXPECT_EQ(rows[2].sensor, 2);
+  EXPECT_EQ(rows[3].sensor, 1);
+  EXPECT_EQ(rows[0].landmark, 1);
+  EXPECT_EQ(rows[1].landmark, 0);
+  EXPECT_EQ(rows[2].landmark, -1);
+  EXPECT_EQ(rows[3].landmark, 2);
+  // Ids already 0..N-1 keep their numbers.
+  writeFile(f, "stop,sensor,landmark,range_m,bearing_rad\n0,1,1,1.0,0.1\n0,0,0,2.0,0.2\n");
+  const auto dense = readObservations(f, &labels, &landmarks);
+  EXPECT_EQ(labels, (std::vector<int>{0, 1}));
+  EXPECT_EQ(landmarks, (std::vector<int>{0, 1}));
+  EXPECT_EQ(dense[0].sensor, 1);
+  EXPECT_EQ(dense[0].landmark, 1);
+  EXPECT_EQ(dense[1].sensor, 0);
+  EXPECT_EQ(dense[1].landmark, 0);
 }
 
 TEST(OdometryCsv, StopsMustRunFromZeroInOrderAndStopZeroIsTheStart) {

@@ -344,9 +344,9 @@ std::vector<BadInputCase> cases() {
           {"observations.csv", "line 1", "header must be", "FORMAT.md"});
   forEach(estimating, "observations_not_a_number", noiseFiles("stop,sensor,landmark,range_m,bearing_rad\n0,0,1,2.0,0.5\n1,0,1,abc,0.5\n", good_odo),
           2, {"observations.csv", "line 3", "range_m", "`abc`", "FORMAT.md"});
-  forEach(estimating, "observations_negative_sensor",
-          noiseFiles("stop,sensor,landmark,range_m,bearing_rad\n0,-1,1,2.0,0.5\n", good_odo), 2,
-          {"observations.csv", "line 2", "sensor", ">= 0"});
+  forEach(estimating, "observations_sensor_id_too_large",
+          noiseFiles("stop,sensor,landmark,range_m,bearing_rad\n0,4294967296,1,2.0,0.5\n", good_odo), 2,
+          {"observations.csv", "line 2", "sensor", "too large"});
   forEach(estimating, "observations_infinite_range",
           noiseFiles("stop,sensor,landmark,range_m,bearing_rad\n0,0,1,inf,0.5\n", good_odo), 2,
           {"observations.csv", "line 2", "range_m", "not a finite number"});

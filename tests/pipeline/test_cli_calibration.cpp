@@ -70,6 +70,8 @@ TEST_F(CliCalibration, RunCalibratesCorrectsAndReportsWithTheTruthFoundNextToThe
 }
 
 TEST_F(CliCalibration, CorrectMovesEveryPointAlongItsBeamToTheInverseOfTheBiasAndKeepsNaNAndOrder) {
+  // Readings outside the range the model was fitted over (model.json fitted_range) stay as they
+  // are (correct --outside keep, the default); the others move to f^-1 of the reading.
   TempDir out;
   ASSERT_EQ(runCli("calibrate -q " + (a() / "scans").string() + " --out " + (out / "m.json").string()).exit_code, 0);
   // Correct the other sequence (a different draw of the same sensor).
@@ -79,6 +81,7 @@ TEST_F(CliCalibration, CorrectMovesEveryPointAlongItsBeamToTheInverseOfTheBiasAn
   const auto model = io::readModel(out / "m.json");
   const calibration::RangeInverter inv(model.model, calibration::inversionWindow(model.model, calibration::InversionMethod::ls));
   const auto raw = io::openSequence(b() / "scans");
+  std::size_t kept = 0, moved = 0;
   for (std::size_t i : {0u, 17u, 29u}) {
     const io::Scan rs = io::readScan(raw.scans[i].path);
     const io::Scan cs = io::readScan(out / "c" / raw.scans[i].name());
@@ -94,17 +97,33 @@ TEST_F(CliCalibration, CorrectMovesEveryPointAlongItsBeamToTheInverseOfTheBiasAn
       ASSERT_TRUE(std::isfinite(q.x));
       const double rr = std::hypot(p.x, p.y), rc = std::hypot(q.x, q.y);
       EXPECT_NEAR(std::atan2(q.y, q.x), std::atan2(p.y, p.x), 1e-5);  // same beam
+      ASSERT_TRUE(model.fitted_range_m.has_value());
+      if (rr < model.model.bias(model.fitted_range_m->first) || rr > model.model.bias(model.fitted_range_m->second)) {
+        EXPECT_NEAR(rc, rr, 1e-5);  // outside the fitted range: kept
+        ++kept;
+        continue;
+      }
+      ++moved;
       EXPECT_NEAR(rc, *inv.invert(rr), 1e-5);                            // corrected distance
       EXPECT_NEAR(model.model.bias(rc), rr, 1e-5);                       // f(corrected) = raw
     }
   }
+  EXPECT_GT(moved, 100u);
+  EXPECT_GT(kept, 10u);  // the walls beyond the farthest pole
   // Evaluate: the correction of an independent sequence beats the raw readings by far.
   const auto e = runCli("evaluate " + (out / "c").string() + " --truth " + (b() / "truth.json").string());
   ASSERT_EQ(e.exit_code, 0) << e.err;
   const auto j = nlohmann::json::parse(e.out);
   EXPECT_GT(j["landmarks"]["mse_ratio"].get<double>(), 30.0);
-  EXPECT_GT(j["walls"]["mse_ratio"].get<double>(), 10.0);  // walls were never used to calibrate
   EXPECT_LT(j["all"]["nmse_corrected"].get<double>(), j["all"]["nmse_raw"].get<double>());
+  // The walls lie mostly beyond the farthest pole: kept as read by default, corrected when the
+  // polynomial is extrapolated (right here, where the simulated sensor follows it exactly).
+  EXPECT_LT(j["walls"]["mse_ratio"].get<double>(), 3.0);
+  ASSERT_EQ(runCli("correct -q " + (b() / "scans").string() + " --model " + (out / "m.json").string() +
+                   " --outside extrapolate --out " + (out / "x").string()).exit_code, 0);
+  const auto x = runCli("evaluate " + (out / "x").string() + " --truth " + (b() / "truth.json").string());
+  ASSERT_EQ(x.exit_code, 0) << x.err;
+  EXPECT_GT(nlohmann::json::parse(x.out)["walls"]["mse_ratio"].get<double>(), 10.0);  // walls were never used to calibrate
 }
 
 TEST_F(CliCalibration, OracleRecoversTheSimulatedBias) {

@@ -1,0 +1,30 @@
+#pragma once
+// What kind of recording a file holds, from its content (not its name): `lidarcal import`
+// without --from. Reads at most the first 64 KiB (after gzip decompression for gzip files).
+
+#include <filesystem>
+#include <string>
+
+namespace lidarcal::io {
+
+enum class RecordingKind {
+  unknown,  ///< none of the below
+  rosbag1,  ///< ROS1 bag: starts with `#ROSBAG V2.0`
+  mcap,     ///< MCAP (ROS 2 and others): starts with the magic `\x89MCAP0\r\n`; not readable yet
+  carmen,   ///< CARMEN log (plain or gzip): its first record line starts with a CARMEN keyword (FLASER, ODOM, PARAM, ...)
+  ydlidar,  ///< YDLIDAR X4 dataset `.dat` (plain or gzip): rows of at least 4 comma-separated numbers, no header
+  csv,      ///< lidarcal's CSV (plain or gzip): a header naming range_m and angle_rad
+};
+const char* toString(RecordingKind kind);
+
+struct DetectedFormat {
+  RecordingKind kind = RecordingKind::unknown;
+  bool gzip = false;     ///< the file is gzip-compressed (the kinds above are those of the content)
+  std::string evidence;  ///< what decided it, for messages (e.g. "first record line starts with FLASER")
+};
+
+/// Looks at the start of `file`. Throws InputError when it cannot be read (missing, a
+/// directory, no permission); an unrecognised content is kind unknown, not an error.
+DetectedFormat detectRecordingFormat(const std::filesystem::path& file);
+
+}  // namespace lidarcal::io

@@ -1,0 +1,23 @@
+#pragma once
+// How user-facing text (--help, reports, printed summaries) names the method's sources. Code
+// comments cite them as seed 000 / 004 / 003 (/work/shared/seeds); users never saw those names.
+
+namespace lidarcal::pipeline::papers {
+
+/// Seed 000: the calibration against fixed landmarks in unknown positions.
+inline constexpr const char* kLandmarks = "Alhashimi et al. 2021";
+/// Seed 004: the statistical model of triangulation lidars (bias polynomial, noise law, inversion).
+inline constexpr const char* kTriangulation = "Alhashimi et al. 2016";
+/// Seed 003: noise estimation by noise consistency.
+inline constexpr const char* kNoiseConsistency = "the noise-consistency method";
+
+/// Full references, one Markdown list item each.
+inline constexpr const char* kReferences =
+    "- Alhashimi et al. 2021: A. Alhashimi, M. Magnusson, S. Knorn, D. Varagnolo, \"Calibrating Range Measurements "
+    "of Lidars Using Fixed Landmarks in Unknown Positions\", Sensors, 2021.\n"
+    "- Alhashimi et al. 2016: A. Alhashimi, D. Varagnolo, T. Gustafsson, \"Statistical Modeling and Calibration of "
+    "Triangulation Lidars\", ICINCO 2016.\n"
+    "- The noise-consistency method: S. V. Sharma, \"In-situ Sensor Calibration Using Noise Consistency\", MSc "
+    "thesis, University of Texas at Arlington, 2020.\n";
+
+}  // namespace lidarcal::pipeline::papers
