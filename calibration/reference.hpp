@@ -11,7 +11,7 @@
 //   - the order by leave-one-stop-out cross-validation: the readings of one stop share the
 //     error of its one tape measurement (and whatever the model misses at that distance), so
 //     the stop, not the reading, is the unit of independent information;
-//   - the covariance of alpha clustered by stop (a sandwich estimator), for the same reason.
+//   - the covariance of alpha clustered by stop (the jackknife over the stops), for the same reason.
 
 #include <cstddef>
 #include <cstdint>
@@ -49,6 +49,9 @@ struct ReferenceMatch {
   std::size_t stop = 0;         ///< its stop
   ReferenceTarget target = ReferenceTarget::landmark;
   double reference_m = 0.0;     ///< the measured (tape) distance, metres
+  /// Nearest true distance of a beam on the target, metres: reference_m less the pole's radius
+  /// (what the range model sees), reference_m for a wall.
+  double surface_m = 0.0;
   int landmark = 0;             ///< matched landmark id (landmark targets), 0 otherwise
   std::size_t sightings = 0;    ///< scans of the stop in which the target was found
   double measured_m = 0.0;      ///< what the scans say: mean detected centre range, or mean perpendicular wall distance, metres
@@ -83,14 +86,14 @@ ReferenceReadings knownReadings(const LandmarkObservations& obs, const Reference
 /// A polynomial range model fitted to readings grouped in clusters (the stops).
 struct ClusteredFit {
   std::vector<double> alpha;         ///< alpha_0..alpha_n
-  Eigen::MatrixXd covariance;        ///< of alpha, clustered by stop (sandwich, G/(G-1) corrected)
+  Eigen::MatrixXd covariance;        ///< of alpha, clustered by stop: leave-one-stop-out jackknife (the sandwich when fewer than 2 stops)
   double sigma_e = 0.0;              ///< noise scale of sigma = sigma_e f(d)^k
   double neg_log_likelihood = 0.0;   ///< Gaussian NLL of the readings under the fit
   double cv_mse_m2 = 0.0;            ///< leave-one-stop-out mean squared error (weighted by the noise law), NaN when not computed
 };
 
 /// Weighted least squares of y on 1, d, ..., d^order with weights 1 / f(d)^(2 exponent),
-/// iterated to a fixed point, and the clustered covariance. `cluster[i]` labels reading i.
+/// iterated to a fixed point, and its covariance clustered by `cluster` (jackknife). `cluster[i]` labels reading i.
 ClusteredFit fitClustered(const std::vector<double>& d, const std::vector<double>& y,
                           const std::vector<std::size_t>& cluster, int order, double exponent);
 

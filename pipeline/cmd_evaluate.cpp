@@ -50,7 +50,7 @@ nlohmann::ordered_json number(double v) { return std::isfinite(v) ? nlohmann::or
 /// without a model or a recorded range).
 bool inFittedRange(const calibration::ReferenceMatch& m, const CalibrationModel* model) {
   if (!model || !model->fitted_range_m) return true;
-  return m.reference_m >= model->fitted_range_m->first && m.reference_m <= model->fitted_range_m->second;
+  return m.surface_m >= model->fitted_range_m->first - 1e-3 && m.surface_m <= model->fitted_range_m->second + 1e-3;
 }
 
 nlohmann::ordered_json matchJson(const calibration::ReferenceMatch& m, const CalibrationModel* model) {

@@ -95,7 +95,7 @@ std::string referenceTable(const std::vector<calibration::ReferenceMatch>& raw,
                            const std::vector<calibration::ReferenceMatch>* corrected, const CalibrationModel* model) {
   auto inside = [&](const calibration::ReferenceMatch& m) {
     return !model || !model->fitted_range_m ||
-           (m.reference_m >= model->fitted_range_m->first && m.reference_m <= model->fitted_range_m->second);
+           (m.surface_m >= model->fitted_range_m->first - 1e-3 && m.surface_m <= model->fitted_range_m->second + 1e-3);
   };
   std::string s = "| entry | stop | target | reference [m] | raw [m] | raw - reference [mm] |";
   if (corrected) s += " corrected [m] | corrected - reference [mm] |";

@@ -12,6 +12,7 @@
 #include "calibration/joint_refinement.hpp"
 #include "io/atomic_file.hpp"
 #include "pipeline/gnuplot.hpp"
+#include "pipeline/model_text.hpp"
 #include "pipeline/papers.hpp"
 #include "pipeline/words.hpp"
 
@@ -146,6 +147,7 @@ PlotData plotData(const LandmarkObservations& obs, const CalibrationModel& m, co
     }
   }
   if (d_max > 0.0) p.fitted = {d_min, d_max};
+  if (m.fitted_range_m) p.fitted = {m.fitted_range_m->first, m.fitted_range_m->second};  // what the fit saw
   for (const auto& [bin, v] : bins)
     if (v.second >= 5)
       noise << v.first / v.second << ' ' << std::sqrt(bin_sum2[bin] / v.second) << ' '
@@ -273,29 +275,37 @@ void writeReport(const std::filesystem::path& dir, const ReportInputs& in) {
   md << "## The calibrated model\n\n";
   md << "- method: **" << m.method << "**, bias order n = " << m.model.bias.order() << " (chosen by "
      << userWords(m.order_rule) << ")\n";
-  md << "- bias: reading = f(d) = " << polynomialText(m.model.bias.alpha) << "  (d = true distance in metres)\n";
+  md << "- bias: reading = f(d) = " << polynomialWithErrors(m) << "  (d = true distance in metres"
+     << (coefficientErrors(m).empty() || !std::isfinite(coefficientErrors(m)[0]) ? "" : "; +- one standard error") << ")\n";
   md << "- noise: " << noiseText(m.model.noise, m.model.bias) << "\n";
   md << "- bearing noise sigma_theta = " << num(rad2deg(m.sigma_theta_rad), 3) << " deg";
   if (m.method == "joint")
     md << "; stop poses moved by " << num(1000 * m.pose_scatter_m, 1) << " mm and "
        << num(rad2deg(m.heading_scatter_rad), 2) << " deg (RMS) from the commanded ones";
   md << "\n";
-  if (fitted.max_m > 0.0)
+  if (m.fitted_range_m)
+    md << "- fitted on readings at true distances from " << num(m.fitted_range_m->first, 2) << " to "
+       << num(m.fitted_range_m->second, 2) << " m (the sensor reads up to " << num(m.model.range_max_m, 1)
+       << " m): `lidarcal correct` leaves readings outside the fitted range as they are (`--outside extrapolate` "
+          "applies the polynomial there too)\n";
+  else if (fitted.max_m > 0.0)
     md << "- fitted on landmark readings at estimated distances from " << num(fitted.min_m, 2) << " to "
-       << num(fitted.max_m, 2) << " m (the sensor reads up to " << num(m.model.range_max_m, 1)
-       << " m: beyond the fitted range the polynomial is extrapolated)\n";
+       << num(fitted.max_m, 2) << " m (the sensor reads up to " << num(m.model.range_max_m, 1) << " m)\n";
   if (!m.message.empty()) md << "- note: " << userWords(m.message) << "\n";
+  for (const auto& w : m.warnings) md << "- **warning**: " << w << "\n";
   md << "\nWhat the raw sensor reads at a few true distances, and the error it makes";
   if (fitted.max_m > 0.0) md << " (rows outside the fitted range are extrapolated, marked *)";
   md << ":\n\n";
-  md << "| true distance | raw reading | error | noise (1 sigma) | data |\n|---|---|---|---|---|\n";
+  md << "| true distance | raw reading | error (+- standard error) | noise (1 sigma) | data |\n|---|---|---|---|---|\n";
   const double last = std::min(m.model.range_max_m, std::max(5.0, fitted.max_m));
   for (double d : {0.25, 0.5, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 8.0, 10.0, 12.0, 15.0, 20.0, 25.0, 30.0, 40.0, 50.0, 60.0, 80.0}) {
     if (d > last) break;
     if (d < m.model.range_min_m) continue;
     const bool inside = fitted.max_m <= 0.0 || fitted.contains(d);
     md << "| " << num(d, 2) << " m" << (inside ? "" : " *") << " | " << num(m.model.bias(d), 3) << " m | "
-       << num(1000 * (m.model.bias(d) - d), 1, true) << " mm | " << num(1000 * m.model.noise.stddev(d, m.model.bias), 1)
+       << num(1000 * (m.model.bias(d) - d), 1, true)
+       << (std::isfinite(biasError(m, d)) ? " +- " + num(1000 * biasError(m, d), 1) : std::string()) << " mm | "
+       << num(1000 * m.model.noise.stddev(d, m.model.bias), 1)
        << " mm | " << (inside ? "fitted" : "extrapolated") << " |\n";
   }
   md << "\n`lidarcal correct` inverts f for every point (" << kTriangulation

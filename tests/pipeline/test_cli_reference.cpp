@@ -9,7 +9,10 @@
 #include <nlohmann/json.hpp>
 
 #include "io/model_io.hpp"
+#include "io/reference_io.hpp"
+#include "io/scene_io.hpp"
 #include "io/sequence.hpp"
+#include "simulation/tape_reference.hpp"
 #include "test_util.hpp"
 
 namespace lidarcal {
@@ -27,32 +30,10 @@ void simulate(const fs::path& dir, int seed) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
 }
 
-/// REF.json a user with a tape would write for a simulated sequence: the distance from the
-/// sensor's true position at each stop to each pole it sees whole (no pole in front of it or
-/// within two beams of its edge; within 4 m, where a 0.12 m pole still spans several 1-degree
-/// beams), with the pole's bearing.
+/// REF.json a user with a tape would write for a simulated sequence (exact distances from the
+/// true stop positions to the poles seen whole within 4 m, with their bearings).
 void writeTapeReference(const fs::path& truth_file, const fs::path& ref_file) {
-  const auto t = json(truth_file);
-  nlohmann::json distances = nlohmann::json::array();
-  for (const auto& stop : t["stops"]) {
-    const double x = stop["actual"]["x_m"], y = stop["actual"]["y_m"], yaw = stop["actual"]["yaw_rad"];
-    for (const auto& l : t["landmarks"]) {
-      const double dl = std::hypot(double(l["x_m"]) - x, double(l["y_m"]) - y);
-      const double bl = std::atan2(double(l["y_m"]) - y, double(l["x_m"]) - x);
-      bool hidden = false;
-      for (const auto& o : t["landmarks"]) {
-        const double d = std::hypot(double(o["x_m"]) - x, double(o["y_m"]) - y);
-        const double b = std::atan2(double(o["y_m"]) - y, double(o["x_m"]) - x);
-        hidden = hidden || (d < dl && std::abs(std::remainder(b - bl, 2 * M_PI)) < std::asin(double(o["radius_m"]) / d) +
-                                                                                     std::asin(double(l["radius_m"]) / dl) +
-                                                                                     2.0 * M_PI / 180.0);
-      }
-      if (hidden || dl > 4.0) continue;
-      distances.push_back({{"stop", stop["stop"]}, {"target", "landmark"}, {"distance_m", dl},
-                           {"bearing_rad", std::remainder(bl - yaw, 2 * M_PI)}});
-    }
-  }
-  std::ofstream(ref_file) << nlohmann::json{{"format", "lidarcal-reference/1"}, {"distances", distances}}.dump(1);
+  io::writeReference(ref_file, tapeReference(io::readTruth(truth_file)));
 }
 
 TEST(CliReference, CalibratesAgainstTapeDistancesAndHalvesTheErrorOnAnotherRecording) {

@@ -1,0 +1,163 @@
+// Do the standard errors mean what they say? For each seed: simulate a calibration sequence,
+// calibrate it through the command line (the joint refinement without ground truth, and against
+// tape distances taken from the simulator's truth: `calibrate --reference`), and check whether
+// the 95 % interval f(d) +- 1.96 SE(f(d)) holds the simulated sensor's true f(d) at a few
+// distances inside the fitted range, and each coefficient's interval its true value
+// (docs/RESULTS.md, "Standard errors").
+//
+//   build/bench/coverage --scene data/scenes/paper_field.json --seeds 100 [--first-seed 1001]
+//       [--scans-per-stop 10] [--work /tmp/coverage]
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include "io/reference_io.hpp"
+#include "io/scene_io.hpp"
+#include "simulation/tape_reference.hpp"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+bool sh(const std::string& cmd) { return std::system((cmd + " >/dev/null 2>&1").c_str()) == 0; }
+
+nlohmann::json readJson(const fs::path& p) {
+  std::ifstream in(p);
+  return nlohmann::json::parse(in);
+}
+
+/// REF.json a user with a tape would write: each visible pole's distance from the true pose of
+/// every stop, with its bearing (poles within 4 m, none in front of another); each distance
+/// with a tape error drawn from N(0, tape_sigma_m^2) (0: exact).
+void tapeReference(const fs::path& truth, const fs::path& out, double tape_sigma_m, std::uint64_t seed) {
+  lidarcal::TapeConfig config;
+  config.sigma_m = tape_sigma_m;
+  config.seed = seed;
+  lidarcal::io::writeReference(out, lidarcal::tapeReference(lidarcal::io::readTruth(truth), config));
+}
+
+double poly(const std::vector<double>& a, double d) {
+  double f = 0.0;
+  for (std::size_t i = a.size(); i-- > 0;) f = f * d + a[i];
+  return f;
+}
+
+struct Tally {
+  std::vector<int> covered_f, n_f;
+  int covered_alpha = 0, n_alpha = 0, fits = 0, failed = 0;
+  double sum_z2 = 0.0;
+  int n_z = 0;
+};
+
+/// Checks one model.json against the true bias.
+void check(const nlohmann::json& m, const std::vector<double>& truth, const std::vector<double>& at, Tally& t) {
+  const std::vector<double> a = m["bias"]["alpha"];
+  const std::vector<double> c = m["alpha_covariance"];
+  const std::size_t n = a.size();
+  if (c.size() != n * n) {
+    ++t.failed;
+    return;
+  }
+  ++t.fits;
+  const double lo = m["fitted_range"]["d_min_m"], hi = m["fitted_range"]["d_max_m"];
+  for (std::size_t k = 0; k < at.size(); ++k) {
+    if (at[k] < lo || at[k] > hi) continue;
+    double v = 0.0;
+    for (std::size_t i = 0; i < n; ++i)
+      for (std::size_t j = 0; j < n; ++j) v += std::pow(at[k], double(i)) * c[i * n + j] * std::pow(at[k], double(j));
+    const double z = (poly(a, at[k]) - poly(truth, at[k])) / std::sqrt(v);
+    t.covered_f[k] += std::abs(z) <= 1.96;
+    ++t.n_f[k];
+    t.sum_z2 += z * z;
+    ++t.n_z;
+  }
+  // Coefficients only when the chosen order is the true one (else they estimate something else).
+  if (n == truth.size())
+    for (std::size_t i = 0; i < n; ++i) {
+      t.covered_alpha += std::abs(a[i] - truth[i]) <= 1.96 * std::sqrt(c[i * n + i]);
+      ++t.n_alpha;
+    }
+}
+
+void print(const char* name, const Tally& t, const std::vector<double>& at) {
+  std::printf("| %s | %d (%d without) |", name, t.fits, t.failed);
+  for (std::size_t k = 0; k < at.size(); ++k)
+    if (t.n_f[k]) std::printf(" %d/%d = %.0f %% |", t.covered_f[k], t.n_f[k], 100.0 * t.covered_f[k] / t.n_f[k]);
+    else std::printf(" - |");
+  if (t.n_alpha) std::printf(" %d/%d = %.0f %% |", t.covered_alpha, t.n_alpha, 100.0 * t.covered_alpha / t.n_alpha);
+  else std::printf(" - |");
+  std::printf(" %.2f |\n", t.n_z ? std::sqrt(t.sum_z2 / t.n_z) : std::nan(""));
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Coverage of the 95 % intervals of the calibrated range model over simulated seeds"};
+  std::string scene = "data/scenes/paper_field.json", work = "/tmp/lidarcal-coverage";
+  int seeds = 100, first = 1001, scans = 10;
+  double tape_sigma = 0.002;
+  app.add_option("--scene", scene)->capture_default_str();
+  app.add_option("--seeds", seeds)->capture_default_str();
+  app.add_option("--first-seed", first, "Seeds first .. first + seeds - 1 (disjoint from those the tests use)")->capture_default_str();
+  app.add_option("--scans-per-stop", scans)->capture_default_str();
+  app.add_option("--work", work)->capture_default_str();
+  app.add_option("--tape-sigma", tape_sigma, "Standard deviation of the simulated tape error, metres")->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
+  const std::string exe = LIDARCAL_EXE;
+  const std::vector<double> at = {1.0, 2.0, 3.0};
+  Tally joint{std::vector<int>(at.size()), std::vector<int>(at.size())};
+  Tally reference = joint, taped = joint;
+  fs::create_directories(work);
+  for (int seed = first; seed < first + seeds; ++seed) {
+    const fs::path dir = fs::path(work) / ("s" + std::to_string(seed));
+    if (!sh(exe + " simulate -q --scene " + scene + " --out " + dir.string() + " --seed " + std::to_string(seed) +
+            " --scans-per-stop " + std::to_string(scans) + " --overwrite")) {
+      std::fprintf(stderr, "simulate failed for seed %d\n", seed);
+      return 1;
+    }
+    const auto truth_json = readJson(dir / "truth.json");
+    const std::vector<double> truth = truth_json["model"]["bias_alpha"];
+    if (sh(exe + " calibrate -q " + (dir / "scans").string() + " -o " + (dir / "joint.json").string() + " --overwrite"))
+      check(readJson(dir / "joint.json"), truth, at, joint);
+    else
+      ++joint.failed;
+    tapeReference(dir / "truth.json", dir / "ref.json", 0.0, 0);
+    if (sh(exe + " calibrate -q " + (dir / "scans").string() + " --reference " + (dir / "ref.json").string() + " -o " +
+           (dir / "ref-model.json").string() + " --overwrite"))
+      check(readJson(dir / "ref-model.json"), truth, at, reference);
+    else
+      ++reference.failed;
+    tapeReference(dir / "truth.json", dir / "tape.json", tape_sigma, static_cast<std::uint64_t>(seed));
+    if (sh(exe + " calibrate -q " + (dir / "scans").string() + " --reference " + (dir / "tape.json").string() + " -o " +
+           (dir / "tape-model.json").string() + " --overwrite"))
+      check(readJson(dir / "tape-model.json"), truth, at, taped);
+    else
+      ++taped.failed;
+    std::fprintf(stderr, "\rseed %d of %d", seed - first + 1, seeds);
+    fs::remove_all(dir / "scans");
+  }
+  std::fprintf(stderr, "\n");
+  std::printf("Coverage of the 95 %% intervals, %s, seeds %d-%d, %d scans per stop\n\n", scene.c_str(), first,
+              first + seeds - 1, scans);
+  std::printf("| method | fits (without SE) |");
+  for (double d : at) std::printf(" f(%.0f m) |", d);
+  std::printf(" alpha_i (true order chosen) | RMS of z = error / SE |\n|---|---|");
+  for (std::size_t k = 0; k < at.size(); ++k) std::printf("---|");
+  std::printf("---|---|\n");
+  print("joint refinement (no ground truth)", joint, at);
+  print("against exact distances (--reference)", reference, at);
+  char name[96];
+  std::snprintf(name, sizeof name, "against tape distances, tape error %.1f mm (--reference)", 1000.0 * tape_sigma);
+  print(name, taped, at);
+  return 0;
+}
