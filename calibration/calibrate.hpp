@@ -66,6 +66,16 @@ std::optional<std::string> baselineProblem(const std::vector<Pose2>& stops, cons
 /// Calibrates. The result's status is "ok" or says why the data cannot support a model.
 CalibrationModel calibrate(const LandmarkObservations& obs, const CalibrationConfig& config);
 
+/// Corrections beyond this fraction of the distance (at 0.5 m or more) inside the fitted range
+/// draw a warning.
+inline constexpr double kImplausibleCorrection = 0.25;
+
+/// What a user should know before trusting a self-calibrated model, appended to m.warnings:
+/// an offset whose correlation with the estimated pole radius exceeds 0.9 in magnitude (from
+/// `j`, which may be null; sets m.offset_radius_correlation), and corrections |f(d) - d| above
+/// kImplausibleCorrection of max(d, 0.5 m) inside m.fitted_range_m.
+void addPlausibilityWarnings(CalibrationModel& m, const JointResult* j);
+
 /// The oracle of seed 004: the same fits against known distances (pairs' d_m are true).
 /// `batches` (optional) feed the noise-exponent test; orders that cannot be inverted over the
 /// reading window [range_min_m, range_max_m] are not chosen (no check with the defaults).
