@@ -81,6 +81,10 @@ struct JointConfig {
   JointEffects effects;           ///< effect terms (all off: the seeds' model plus per-stop poses)
   bool keep_all_beams = false;    ///< use every beam of every sighting (the caller selected them); ignores lateral_fraction
   bool settle_geometry = true;    ///< first solve with the bias held (off when starting from a converged solution)
+  /// One residual per beam, landmark and stop instead of one per reading: repeated scans from
+  /// one pose summarised by their count and mean (the Gaussian likelihood unchanged, the cost
+  /// independent of the scans per stop; issue 19). Not with drift or mixed pixels. Default true.
+  bool pool_repeated_scans = true;
   /// Weight of a uniform density over the reading window mixed into every reading's likelihood
   /// (in the reported likelihood only, not in the fit), so that a few gross outliers cannot
   /// dominate a comparison of models. 0: plain Gaussian likelihood (default).
@@ -113,6 +117,7 @@ struct JointResult {
   double pose_scatter_m = 0.0;             ///< RMS of refined minus commanded position (per coordinate)
   double heading_scatter_rad = 0.0;        ///< RMS of refined minus commanded heading
   std::size_t readings = 0;                ///< beam readings used
+  std::size_t reading_residuals = 0;       ///< residuals they made in the last solve (fewer when repeated scans are pooled)
   double residual_rms_m = 0.0;             ///< RMS of reading minus f(predicted distance)
   std::vector<double> distances_m;         ///< predicted distance of every reading used, at the solution
   std::vector<double> readings_m;          ///< the readings themselves (same order)

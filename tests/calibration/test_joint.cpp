@@ -158,6 +158,45 @@ TEST(JointRefinement, SparseAndDenseCovarianceAgree) {
   }
 }
 
+TEST(JointRefinement, PoolingRepeatedScansLeavesTheEstimatesUnchanged) {
+  // 20 scans per stop: one residual per beam, landmark and stop carries the same Gaussian
+  // likelihood as one per reading. With the loss made quadratic (Huber threshold far beyond any
+  // residual) both forms minimise the same function: the estimates agree to solver tolerance.
+  auto cfg = paperField(0.02, 0.5, 0.0019176);
+  cfg.path.scans_per_stop = 20;
+  for (std::uint64_t seed = 1; seed <= 2; ++seed) {
+    SCOPED_TRACE(seed);
+    const auto sample = simulation::simulateLandmarkLevel(cfg, seed);
+    const auto tri = triangulateAll(sample.obs, TriangulationConfig{});
+    JointInit init;
+    init.poses = sample.obs.commanded;
+    for (const auto& l : tri) init.centres[l.id] = Eigen::Vector2d(l.x_m, l.y_m);
+    init.radius_m = 0.12;
+    init.model = cfg.model;
+    init.model.bias.alpha = {0.0, 1.0, 0.0};
+    JointConfig jc;
+    jc.huber_sigmas = 1e4;
+    jc.pool_repeated_scans = true;
+    const auto pooled = refineJoint(sample.obs, init, jc);
+    jc.pool_repeated_scans = false;
+    const auto each = refineJoint(sample.obs, init, jc);
+    ASSERT_FALSE(pooled.poses.empty()) << pooled.message;
+    ASSERT_FALSE(each.poses.empty()) << each.message;
+    EXPECT_EQ(pooled.readings, each.readings);
+    // The scans of a stop repeat the same beams: about 20 readings per residual.
+    EXPECT_LE(pooled.reading_residuals * 10, each.reading_residuals);
+    ASSERT_EQ(pooled.model.bias.alpha.size(), each.model.bias.alpha.size());
+    for (std::size_t i = 0; i < each.model.bias.alpha.size(); ++i)
+      EXPECT_NEAR(pooled.model.bias.alpha[i], each.model.bias.alpha[i],
+                  1e-3 * std::sqrt(each.alpha_covariance(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(i))))
+          << "alpha_" << i;
+    EXPECT_NEAR(pooled.model.noise.sigma_e, each.model.noise.sigma_e, 1e-6 * each.model.noise.sigma_e);
+    EXPECT_NEAR(pooled.radius_m, each.radius_m, 1e-7);
+    for (int i = 0; i < 3; ++i)
+      EXPECT_NEAR(pooled.alpha_covariance(i, i), each.alpha_covariance(i, i), 1e-4 * each.alpha_covariance(i, i));
+  }
+}
+
 TEST(Calibrate, NoLandmarkGivesAStatusNotACrash) {
   LandmarkObservations obs;
   obs.commanded = {Pose2{}, Pose2{0.3, 0, 0}, Pose2{0.6, 0, 0}};
