@@ -8,6 +8,7 @@
 // And the static cases: a room seen from one pose (or a sensor turning in place), one effect
 // each, with the causes the truth allows.
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <random>
@@ -165,18 +166,23 @@ inline NoiseModel squaredNoise(double sigma_e) {
 /// One static case: an effect hidden in the room and the causes the truth allows.
 struct StaticCase {
   const char* name;      ///< case name
-  const char* effect;    ///< the cause the truth allows
-  const char* also = nullptr;  ///< a second cause the truth allows (or nullptr)
+  const char* effect;    ///< the cause the truth allows (the hidden effect, or "none")
+  std::vector<std::string> also;  ///< other causes the truth allows (none: only `effect`)
   RangeEffects fx;
   NoiseModel noise = squaredNoise(0.0015);
   /// alpha_0 given to the diagnosis as a reference distance would give it (NaN: not given).
   double known_offset_m = std::numeric_limits<double>::quiet_NaN();
   double step_error_fraction = 0.0;  ///< odometry scale error of the (one-stop) path
+  /// Whether the truth allows `cause` to be named.
+  bool allows(const std::string& cause) const {
+    return cause == effect || std::find(also.begin(), also.end(), cause) != also.end();
+  }
 };
 
 /// The static cases. The room's alpha_0 is 0.01 m. An incidence-dependent bias bends straight walls
 /// almost as an offset does: with the offset given (a reference distance) it is named; without it
-/// the truth allows no more than "not identifiable" (or nothing named). A step-length error
+/// the truth allows it, "not identifiable" or nothing named (over seeds 101-110 it is named in 5
+/// of 10, docs/RESULTS.md), but no other cause. A step-length error
 /// cannot exist with one pose (nothing moves): the data are clean. Quantisation: a 2 mm grid, as
 /// coarse as the noise at 1-2 m (docs/RESULTS.md gives the rates for coarser grids).
 inline std::vector<StaticCase> staticCases() {
@@ -191,16 +197,16 @@ inline std::vector<StaticCase> staticCases() {
   half_power.sigma_e = 0.0015 * std::pow(3.0, 1.5);
   const double none = std::numeric_limits<double>::quiet_NaN();
   return {
-      {"incidence_noise", "incidence_noise", nullptr, fx([](RangeEffects& e) { e.incidence_noise_exponent = 1.0; })},
-      {"range_drift", "range_drift", nullptr, fx([](RangeEffects& e) { e.range_drift_m_per_scan = 2e-4; })},
-      {"heavy_tails", "heavy_tails", nullptr, fx([](RangeEffects& e) { e.noise_student_dof = 3.0; })},
-      {"range_noise_law", "range_noise_law", nullptr, RangeEffects{}, half_power},
-      {"incidence_bias_offset_given", "incidence_bias", nullptr, fx([](RangeEffects& e) { e.incidence_bias_m = 0.05; }),
+      {"incidence_noise", "incidence_noise", {}, fx([](RangeEffects& e) { e.incidence_noise_exponent = 1.0; })},
+      {"range_drift", "range_drift", {}, fx([](RangeEffects& e) { e.range_drift_m_per_scan = 2e-4; })},
+      {"heavy_tails", "heavy_tails", {}, fx([](RangeEffects& e) { e.noise_student_dof = 3.0; })},
+      {"range_noise_law", "range_noise_law", {}, RangeEffects{}, half_power},
+      {"incidence_bias_offset_given", "incidence_bias", {}, fx([](RangeEffects& e) { e.incidence_bias_m = 0.05; }),
        squaredNoise(0.0015), 0.01},
-      {"incidence_bias_offset_unknown", "not_identifiable", "none", fx([](RangeEffects& e) { e.incidence_bias_m = 0.05; })},
-      {"mixed_pixels", "mixed_pixels", nullptr, fx([](RangeEffects& e) { e.mixed_pixel_fraction = 0.08; })},
-      {"quantisation", "quantisation", nullptr, fx([](RangeEffects& e) { e.range_resolution_m = 0.002; })},
-      {"odometry_scale_cannot_exist", "none", nullptr, RangeEffects{}, squaredNoise(0.0015), none, 0.04},
+      {"incidence_bias_offset_unknown", "incidence_bias", {"not_identifiable", "none"}, fx([](RangeEffects& e) { e.incidence_bias_m = 0.05; })},
+      {"mixed_pixels", "mixed_pixels", {}, fx([](RangeEffects& e) { e.mixed_pixel_fraction = 0.08; })},
+      {"quantisation", "quantisation", {}, fx([](RangeEffects& e) { e.range_resolution_m = 0.002; })},
+      {"odometry_scale_cannot_exist", "none", {}, RangeEffects{}, squaredNoise(0.0015), none, 0.04},
   };
 }
 
