@@ -66,7 +66,8 @@ void BM_JointInput(benchmark::State& state) {
   const auto layout = trialLayout(config, 1, 0, 5);
   PathSpec path = config.path;
   path.sigma_s_m = cell.sigma_s_m;
-  const Draw d = drawLandmarkLevel(layout, path, config.sensor, cell.sigma_theta_rad, 1);
+  path.sigma_psi_rad = cell.sigma_theta_rad;  // the study's default angle noise: the heading per stop
+  const Draw d = drawLandmarkLevel(layout, path, config.sensor, 0.0, 1, false);
   const LandmarkObservations input = state.range(0) ? averageScans(d.obs) : d.obs;
   calibration::CalibrationConfig cc = estimatorConfig(config, cell);
   cc.method = calibration::Method::joint;

@@ -1,13 +1,19 @@
 // lidarcal montecarlo --study fig7|fig8|fig9|fig10|fig11|all --trials N --out DIR: the Monte Carlo
 // study of seed 000 (sections 4.1-4.2, Figs. 7-11) with the paper's closed form, our joint
 // refinement and the oracle side by side. Writes DIR/<fig>.csv, <fig>.gp, <fig>.png, <fig>.md and
-// DIR/summary.md. Interrupting (Ctrl-C) stops after the trials in progress and writes nothing.
+// DIR/summary.md. Interrupting (Ctrl-C) stops after the trials in progress and writes nothing; a
+// plot gnuplot cannot draw fails the command (nothing written); without gnuplot the plots are skipped
+// and the command says so.
 
 #include <atomic>
 #include <chrono>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <stdexcept>
 #include <memory>
 #include <thread>
 
@@ -33,7 +39,10 @@ struct MonteCarloOptions {
   int threads = 0;               // 0: all cores
   std::uint64_t seed = 1;
   std::string level = "landmark";
-  std::string angle_noise;       // empty: default of the level
+  std::string angle_noise = "heading";
+  std::string noise_law = "paper";
+  double max_distance_m = 4.0;   // landmarks' farthest surface from any stop
+  double range_max_m = 6.0;      // the sensor's reading window, upper end
   int scans_per_stop = 10;
   int stops = 20;
   double step_m = 0.15;
@@ -67,6 +76,24 @@ std::vector<studies::Figure> figuresOf(const std::string& name) {
   return {f};
 }
 
+/// Runs every figure's gnuplot script in `dir`. A missing gnuplot is reported (the returned text,
+/// empty when every plot was drawn); a script that fails is an error: the command fails and writes
+/// nothing, rather than leave a partial picture behind (gnuplot stops at the first failing panel).
+std::string drawPlots(const std::filesystem::path& dir, const std::vector<std::string>& scripts) {
+  if (std::system("command -v gnuplot >/dev/null 2>&1") != 0)
+    return "skipped, gnuplot is not installed (apt-get install gnuplot-nox); run gnuplot on the .gp files later";
+  for (const auto& script : scripts) {
+    std::string why;
+    if (!runGnuplot(dir, script, &why)) {
+      std::ifstream in(dir / "gnuplot.log");  // gnuplot's own messages, kept by runGnuplot on failure
+      std::string log((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+      if (log.size() > 2000) log = log.substr(0, 2000) + "...";
+      throw std::runtime_error("montecarlo: gnuplot failed on " + script + ", nothing was written:\n" + log);
+    }
+  }
+  return "";
+}
+
 /// Returns false when interrupted (nothing written).
 bool runMonteCarlo(const MonteCarloOptions& o) {
   const auto figures = figuresOf(o.study);
@@ -74,9 +101,10 @@ bool runMonteCarlo(const MonteCarloOptions& o) {
   if (!studies::parseLevel(o.level, config.level))
     throw InputError("", "--level", "unknown level '" + o.level + "'", "use landmark or scan");
   const bool scan = config.level == studies::Level::scan;
-  config.angle_noise = scan ? studies::AngleNoise::heading : studies::AngleNoise::bearing;
-  if (!o.angle_noise.empty() && !studies::parseAngleNoise(o.angle_noise, config.angle_noise))
-    throw InputError("", "--angle-noise", "unknown model '" + o.angle_noise + "'", "use bearing or heading");
+  if (!studies::parseAngleNoise(o.angle_noise, config.angle_noise))
+    throw InputError("", "--angle-noise", "unknown model '" + o.angle_noise + "'", "use heading, beams or bearing");
+  if (!studies::parseNoiseLaw(o.noise_law, config.noise_law))
+    throw InputError("", "--noise-law", "unknown law '" + o.noise_law + "'", "use paper or squared");
   if (scan && config.angle_noise != studies::AngleNoise::heading)
     throw InputError("", "--angle-noise", "the scan level models the angle noise as heading noise only",
                      "drop --angle-noise or use heading");
@@ -84,6 +112,8 @@ bool runMonteCarlo(const MonteCarloOptions& o) {
   config.path.stops = o.stops;
   config.path.step_m = o.step_m;
   config.max_order = o.max_order;
+  config.placement.max_surface_m = o.max_distance_m;
+  config.sensor.range_max_m = o.range_max_m;
   config.noise_scale = o.noise_scale >= 0.0 ? o.noise_scale : (scan ? 0.2 : 1.0);
   try {
     config.validate();
@@ -127,18 +157,14 @@ bool runMonteCarlo(const MonteCarloOptions& o) {
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
   for (const auto& [name, text] : result.files) io::writeTextAtomically(out.path() / name, text);
-  std::string why;
-  for (const auto& script : result.gnuplot_scripts)
-    if (!runGnuplot(out.path(), script, &why)) {
-      std::fprintf(stderr, "montecarlo: %s\n", why.c_str());
-      break;
-    }
+  const std::string plots = drawPlots(out.path(), result.gnuplot_scripts);
   if (g_interrupted) return false;
   out.commit();
   const double trials = static_cast<double>(cells.size() * run.trials);
   std::printf("Monte Carlo study: %zu cells x %zu trials in %.1f s (%.1f trials/s, %d thread(s))\n", cells.size(),
               run.trials, seconds, trials / seconds, run.threads);
   std::printf("Output: %s (summary.md; per figure .csv, .png, .gp, .md)\n", o.out.c_str());
+  if (!plots.empty()) std::printf("Plots: %s\n", plots.c_str());
   return true;
 }
 
@@ -169,8 +195,22 @@ void addMonteCarloCommand(CLI::App& app) {
                   "ray-cast and the detector in the loop")
       ->capture_default_str();
   sub->add_option("--angle-noise", o->angle_noise,
-                  "What sigma_theta perturbs: bearing (eq. 5, per landmark and stop; landmark level default) or "
-                  "heading (per stop; the scan level's only model)");
+                  "What sigma_theta perturbs: heading (the robot's heading at each stop: every beam of the stop "
+                  "turns; default, the scan level's only model), beams (eq. 5: each landmark's centre bearing and "
+                  "beam angles at each stop) or bearing (eq. 5 on the centre bearing only: the joint refinement, "
+                  "which fits beam angles, does not see it)")
+      ->capture_default_str();
+  sub->add_option("--noise-law", o->noise_law,
+                  "Simulated range noise: paper (seed 000: 5 % of f(d)) or squared (seed 004: sigma_e f(d)^2, the "
+                  "same at 3 m)")
+      ->capture_default_str();
+  sub->add_option("--max-distance", o->max_distance_m,
+                  "Farthest landmark surface from any stop, metres (seed 000 section 4.3 keeps them within 5 m)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.5, 100.0));
+  sub->add_option("--range-max", o->range_max_m, "Upper end of the sensor's reading window, metres")
+      ->capture_default_str()
+      ->check(CLI::Range(1.0, 1000.0));
   sub->add_option("--scans-per-stop", o->scans_per_stop, "Scans averaged at each stop")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);

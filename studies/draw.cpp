@@ -17,7 +17,7 @@ constexpr std::uint64_t kBearingStream = 0xbea7000000000000ULL;
 }  // namespace
 
 Draw drawLandmarkLevel(const std::vector<Cylinder>& landmarks, const PathSpec& path, const RangeModel& sensor,
-                       double sigma_theta_rad, std::uint64_t seed) {
+                       double sigma_theta_rad, std::uint64_t seed, bool rotate_beams) {
   simulation::LandmarkLevelConfig cfg;
   cfg.landmarks = landmarks;
   cfg.path = path;
@@ -32,8 +32,12 @@ Draw drawLandmarkLevel(const std::vector<Cylinder>& landmarks, const PathSpec& p
   auto rng = makeRng(seed, kBearingStream);
   std::normal_distribution<double> normal(0.0, 1.0);
   for (double& x : v) x = sigma_theta_rad * normal(rng);
-  for (Sighting& s : sample.obs.sightings)
-    s.bearing_rad = wrapAngle(s.bearing_rad + v[s.stop * L + static_cast<std::size_t>(s.landmark - 1)]);
+  for (Sighting& s : sample.obs.sightings) {
+    const double v_lk = v[s.stop * L + static_cast<std::size_t>(s.landmark - 1)];
+    s.bearing_rad = wrapAngle(s.bearing_rad + v_lk);
+    if (rotate_beams)
+      for (BeamReading& b : s.beams) b.angle_rad = wrapAngle(b.angle_rad + v_lk);
+  }
   Draw d;
   d.obs = std::move(sample.obs);
   d.truth_m = std::move(sample.true_range_m);

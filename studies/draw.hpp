@@ -33,9 +33,11 @@ struct Draw {
 /// Landmark-level draw (simulation/landmark_level.hpp with beams): sighting ids are the true ids.
 /// Eq. 5: the centre bearing of landmark l at stop k is off by one v_lk ~ N(0, sigma_theta_rad^2),
 /// the same in every scan of the stop (so the stop's mean bearing has exactly that noise and the
-/// range readings, drawn along the true beams, do not depend on it).
+/// range readings, drawn along the true beams, do not depend on it). `rotate_beams`: the angles
+/// of the sighting's beams turn by the same v_lk (the sensor reports the whole landmark turned);
+/// otherwise they stay exact. Heading noise comes with the path (sigma_psi_rad) instead.
 Draw drawLandmarkLevel(const std::vector<Cylinder>& landmarks, const PathSpec& path, const RangeModel& sensor,
-                       double sigma_theta_rad, std::uint64_t seed);
+                       double sigma_theta_rad, std::uint64_t seed, bool rotate_beams);
 
 /// Every landmark reading of a draw with its truth (the test set of the MSE ratio).
 std::vector<TruthReading> truthReadings(const Draw& draw);

@@ -38,14 +38,38 @@ const CellSummary* find(const std::vector<CellSummary>& cells, int L, double sig
 const RatioSummary& ratioOf(const CellSummary& c, Estimator e) { return c.ratio[static_cast<std::size_t>(e)]; }
 const PositionSummary& positionOf(const CellSummary& c, PositionEstimator e) { return c.position[static_cast<std::size_t>(e)]; }
 
-double orderRate(const RatioSummary& r, int order) {
+/// The MSE-ratio statistics of an estimator (AIC unless said: the rule the paper uses).
+const SampleStats& ratioStats(const CellSummary& c, Estimator e, Rule rule = Rule::aic, TestSet set = TestSet::beams) {
+  return ratioOf(c, e).rules[static_cast<std::size_t>(rule)].ratio[static_cast<std::size_t>(set)];
+}
+
+double orderRate(const RatioSummary& r, int order, Rule rule = Rule::aic) {
   const std::size_t ok = r.runs - r.failures;
-  if (ok == 0 || order < 0 || static_cast<std::size_t>(order) >= r.order_counts.size()) return kNaN;
-  return static_cast<double>(r.order_counts[static_cast<std::size_t>(order)]) / static_cast<double>(ok);
+  const auto& counts = r.rules[static_cast<std::size_t>(rule)].order_counts;
+  if (ok == 0 || order < 0 || static_cast<std::size_t>(order) >= counts.size()) return kNaN;
+  return static_cast<double>(counts[static_cast<std::size_t>(order)]) / static_cast<double>(ok);
 }
 
 const std::vector<Estimator> kRatioEstimators = {Estimator::closed_form, Estimator::joint, Estimator::oracle};
 const std::vector<PositionEstimator> kPositionOrder = {PositionEstimator::triangulation, PositionEstimator::joint};
+const std::vector<Rule> kRuleOrder = {Rule::aic, Rule::aic_parsimonious};
+
+/// Whether an estimator ran in any cell (the joint refinement does not with --no-joint): plots
+/// leave out what did not run, as gnuplot cannot draw a panel without a single point.
+bool ran(const std::vector<CellSummary>& cells, Estimator e) {
+  return std::any_of(cells.begin(), cells.end(), [&](const CellSummary& c) { return ratioOf(c, e).runs > 0; });
+}
+std::vector<Estimator> ranEstimators(const std::vector<CellSummary>& cells) {
+  std::vector<Estimator> out;
+  for (Estimator e : kRatioEstimators)
+    if (ran(cells, e)) out.push_back(e);
+  return out;
+}
+std::vector<PositionEstimator> ranPositionEstimators(const std::vector<CellSummary>& cells) {
+  std::vector<PositionEstimator> out = {PositionEstimator::triangulation};
+  if (ran(cells, Estimator::joint)) out.push_back(PositionEstimator::joint);
+  return out;
+}
 
 std::string estimatorLabel(Estimator e) {
   switch (e) {
@@ -68,7 +92,9 @@ std::string settingsText(const StudyMeta& m) {
        std::to_string(c.path.scans_per_stop) + " scans per stop, noise " + num(c.noise_scale, 3) +
        " x the paper's (beta = " + num(0.05 * c.noise_scale, 3) + " alpha), n_max " + std::to_string(c.max_order) + ", " +
        std::to_string(m.trials) + " trials per cell (joint refinement on the first " +
-       std::to_string(std::min(m.joint_trials, m.trials)) + "), seed " + std::to_string(m.seed);
+       std::to_string(std::min(m.joint_trials, m.trials)) + "), seed " + std::to_string(m.seed) + ", landmarks " +
+       num(c.placement.min_surface_m, 3) + "-" + num(c.placement.max_surface_m, 3) + " m from every stop, noise law " +
+       toString(c.noise_law) + ", reading window " + num(c.sensor.range_min_m, 3) + "-" + num(c.sensor.range_max_m, 3) + " m";
   return s;
 }
 
@@ -143,7 +169,8 @@ std::string table(const std::vector<std::string>& header, const std::vector<std:
 std::string verdict(bool agrees) { return agrees ? "**agrees**" : "**differs**"; }
 
 double rmse(const CellSummary* c, PositionEstimator e) { return c ? positionOf(*c, e).rmse_m : kNaN; }
-double medianRatio(const CellSummary* c, Estimator e) { return c ? ratioOf(*c, e).mse_ratio.median : kNaN; }
+double medianRatio(const CellSummary* c, Estimator e) { return c ? ratioStats(*c, e).q.median : kNaN; }
+double meanRatio(const CellSummary* c, Estimator e) { return c ? ratioStats(*c, e).mean : kNaN; }
 
 // ---------------------------------------------------------------- figures
 
@@ -153,7 +180,7 @@ std::string gnuplotFig7or8(Figure f, const std::vector<CellSummary>& cells, cons
   std::vector<Series> bias, variance, median;
   const std::size_t curves = vsL ? g.sigma_s_vs_landmarks_m.size() : g.sigma_theta_deg.size();
   for (std::size_t i = 0; i < curves; ++i)
-    for (PositionEstimator e : kPositionOrder) {
+    for (PositionEstimator e : ranPositionEstimators(cells)) {
       std::vector<std::vector<double>> rows;
       if (vsL) {
         for (int L : g.landmarks)
@@ -177,7 +204,7 @@ std::string gnuplotFig7or8(Figure f, const std::vector<CellSummary>& cells, cons
     }
   const std::string title = vsL ? "Fig. 8: landmark position vs L (" + thetaText(g.sigma_theta_vs_landmarks_deg) + ")"
                                 : "Fig. 7: landmark position vs σ_s (L = " + std::to_string(g.fig7_landmarks) + ")";
-  s += "set multiplot layout 1,3 title \"" + title + "; solid: paper, dashed: joint; " +
+  s += "set multiplot layout 1,3 title \"" + title + (ran(cells, Estimator::joint) ? "; solid: paper, dashed: joint; " : "; ") +
        std::to_string(meta.config.path.scans_per_stop) + " scans/stop\"\n";
   const std::string x =
       vsL ? "set xlabel \"landmarks L\"\nset xtics 1\nset logscale y\n" : "set xlabel \"σ_s (cm)\"\nset logscale xy\n";
@@ -189,21 +216,23 @@ std::string gnuplotFig7or8(Figure f, const std::vector<CellSummary>& cells, cons
 
 std::string gnuplotFig9(const std::vector<CellSummary>& cells, const StudyGrids& g) {
   const int rows = static_cast<int>(g.fig9_landmarks.size());
-  std::string s = preamble("fig9.png", 1500, 450 * rows);
+  const std::vector<Estimator> estimators = ranEstimators(cells);
+  const int columns = static_cast<int>(estimators.size());
+  std::string s = preamble("fig9.png", 500 * columns, 450 * rows);
   std::string body;
   std::size_t id = 0;
   std::vector<double> all;
   for (const auto& c : cells)
-    for (Estimator e : kRatioEstimators) all.push_back(ratioOf(c, e).mse_ratio.median);
+    for (Estimator e : estimators) all.push_back(ratioStats(c, e).q.median);
   const std::string range = decadeRange(all);
   for (int L : g.fig9_landmarks)
-    for (Estimator e : kRatioEstimators) {
+    for (Estimator e : estimators) {
       std::vector<Series> series;
       for (std::size_t i = 0; i < g.sigma_theta_deg.size(); ++i) {
         std::vector<std::vector<double>> data;
         for (double ss : g.sigma_s_m)
           if (const auto* c = find(cells, L, ss, g.sigma_theta_deg[i])) {
-            const auto& q = ratioOf(*c, e).mse_ratio;
+            const auto& q = ratioStats(*c, e).q;
             data.push_back({ss * 100.0, q.median, q.q25, q.q75});
           }
         const std::string name = "r" + std::to_string(id++);
@@ -214,15 +243,17 @@ std::string gnuplotFig9(const std::vector<CellSummary>& cells, const StudyGrids&
       body += panel(estimatorLabel(e) + ", L = " + std::to_string(L),
                     "set logscale xy\nset xlabel \"σ_s (cm)\"\nset ylabel \"median MSE ratio\"\n" + range, series);
     }
-  s += "set multiplot layout " + std::to_string(rows) + ",3 title \"Fig. 9: MSE ratio (eq. 31) over σ_θ × σ_s\"\n";
+  s += "set multiplot layout " + std::to_string(rows) + "," + std::to_string(columns) +
+       " title \"Fig. 9: MSE ratio (eq. 31) over σ_θ × σ_s\"\n";
   return s + body + "unset multiplot\n";
 }
 
 std::string gnuplotFig10(const std::vector<CellSummary>& cells, const StudyGrids& g) {
-  std::string s = preamble("fig10.png", 1500, 480);
+  const std::vector<Estimator> estimators = ranEstimators(cells);
+  std::string s = preamble("fig10.png", 500 * static_cast<int>(estimators.size()), 480);
   std::string body;
   std::size_t id = 0;
-  for (Estimator e : kRatioEstimators) {
+  for (Estimator e : estimators) {
     std::vector<Series> series;
     for (std::size_t i = 0; i < g.sigma_theta_deg.size(); ++i) {
       std::vector<std::vector<double>> data;
@@ -238,28 +269,30 @@ std::string gnuplotFig10(const std::vector<CellSummary>& cells, const StudyGrids
     body += panel(estimatorLabel(e), "set logscale x\nset xlabel \"σ_s (cm)\"\nset ylabel \"rate\"\nset yrange [0:1.05]\nset key center left\n", series);
     body += "set yrange [*:*]\n";
   }
-  s += "set multiplot layout 1,3 title \"Fig. 10: selected model order (true n = 2), L = " + std::to_string(g.fig10_landmarks) + "\"\n";
+  s += "set multiplot layout 1," + std::to_string(estimators.size()) + " title \"Fig. 10: selected model order by AIC (true n = 2), L = " +
+       std::to_string(g.fig10_landmarks) + "\"\n";
   return s + body + "unset multiplot\n";
 }
 
 std::string gnuplotFig11(const std::vector<CellSummary>& cells, const StudyGrids& g) {
-  std::string s = preamble("fig11.png", 1500, 480);
+  const std::vector<Estimator> estimators = ranEstimators(cells);
+  std::string s = preamble("fig11.png", 500 * static_cast<int>(estimators.size()), 480);
   std::string body;
   std::size_t id = 0;
   std::vector<double> all;
   for (const auto& c : cells)
-    for (Estimator e : kRatioEstimators) {
-      all.push_back(ratioOf(c, e).mse_ratio.q25);
-      all.push_back(ratioOf(c, e).mse_ratio.q75);
+    for (Estimator e : estimators) {
+      all.push_back(ratioStats(c, e).q.q25);
+      all.push_back(ratioStats(c, e).q.q75);
     }
   const std::string range = decadeRange(all);
-  for (Estimator e : kRatioEstimators) {
+  for (Estimator e : estimators) {
     std::vector<Series> series;
     for (std::size_t i = 0; i < g.sigma_s_vs_landmarks_m.size(); ++i) {
       std::vector<std::vector<double>> data;
       for (int L : g.landmarks)
         if (const auto* c = find(cells, L, g.sigma_s_vs_landmarks_m[i], g.sigma_theta_vs_landmarks_deg)) {
-          const auto& q = ratioOf(*c, e).mse_ratio;
+          const auto& q = ratioStats(*c, e).q;
           data.push_back({static_cast<double>(L), q.median, q.q25, q.q75});
         }
       const std::string name = "l" + std::to_string(id++);
@@ -270,7 +303,8 @@ std::string gnuplotFig11(const std::vector<CellSummary>& cells, const StudyGrids
     body += panel(estimatorLabel(e), "set logscale y\nset xtics 1\nset xlabel \"landmarks L\"\nset ylabel \"MSE ratio (median, quartiles)\"\n" + range,
                   series);
   }
-  s += "set multiplot layout 1,3 title \"Fig. 11: MSE ratio vs L (" + thetaText(g.sigma_theta_vs_landmarks_deg) + ")\"\n";
+  s += "set multiplot layout 1," + std::to_string(estimators.size()) + " title \"Fig. 11: MSE ratio vs L (" +
+       thetaText(g.sigma_theta_vs_landmarks_deg) + ")\"\n";
   return s + body + "unset multiplot\n";
 }
 
@@ -321,10 +355,18 @@ std::string positionText(const CellSummary& c) {
   return s;
 }
 
+/// Median ratios: closed form / joint / oracle / ceiling (the true model).
 std::string ratioText(const CellSummary& c) {
   std::string s;
-  for (Estimator e : kRatioEstimators) s += (s.empty() ? "" : " / ") + cellText(ratioOf(c, e).mse_ratio.median);
-  return s;
+  for (Estimator e : kRatioEstimators) s += (s.empty() ? "" : " / ") + cellText(ratioStats(c, e).q.median);
+  return s + " / " + cellText(c.ceiling[0].q.median);
+}
+
+/// Mean ratios, the same order.
+std::string meanText(const CellSummary& c) {
+  std::string s;
+  for (Estimator e : kRatioEstimators) s += (s.empty() ? "" : " / ") + cellText(ratioStats(c, e).mean);
+  return s + " / " + cellText(c.ceiling[0].mean);
 }
 
 std::string summaryFig7(const std::vector<CellSummary>& cells, const StudyGrids& g) {
@@ -377,15 +419,33 @@ std::string summaryFig8(const std::vector<CellSummary>& cells, const StudyGrids&
   return s;
 }
 
+/// The Monte Carlo uncertainty of a cell's ratios: the largest standard error of a median and of
+/// a mean, relative to the value, over the estimators that ran.
+std::string uncertaintyText(const std::vector<CellSummary>& cells) {
+  double median_rel = 0.0, mean_rel = 0.0;
+  for (const auto& c : cells)
+    for (Estimator e : kRatioEstimators) {
+      const SampleStats& x = ratioStats(c, e);
+      if (std::isfinite(x.median_se / x.q.median)) median_rel = std::max(median_rel, x.median_se / x.q.median);
+      if (std::isfinite(x.mean_se / x.mean)) mean_rel = std::max(mean_rel, x.mean_se / x.mean);
+    }
+  return "Monte Carlo standard errors (CSV columns *_median_se, *_mean_se): at most " + percent(median_rel) +
+         " of a median and " + percent(mean_rel) + " of a mean in this figure.";
+}
+
 std::string summaryFig9(const std::vector<CellSummary>& cells, const StudyGrids& g) {
   std::string s;
-  for (int L : g.fig9_landmarks)
-    s += "Median MSE ratio, closed form (paper) / joint refinement / oracle, L = " + std::to_string(L) + ":\n\n" +
-         gridTable(cells, g, L, ratioText) + "\n";
+  for (int L : g.fig9_landmarks) {
+    s += "Median MSE ratio, closed form (paper) / joint refinement / oracle / ceiling (the true model), L = " +
+         std::to_string(L) + ":\n\n" + gridTable(cells, g, L, ratioText) + "\n";
+    s += "Mean MSE ratio (the paper plots means), same order, L = " + std::to_string(L) + ":\n\n" +
+         gridTable(cells, g, L, meanText) + "\n";
+  }
+  s += uncertaintyText(cells) + "\n\n";
   double best = 0.0, worst = 1e300;
   std::string best_at;
   for (const auto& c : cells) {
-    const double m = ratioOf(c, Estimator::closed_form).mse_ratio.median;
+    const double m = ratioStats(c, Estimator::closed_form).q.median;
     if (!std::isfinite(m)) continue;
     worst = std::min(worst, m);
     if (m > best) {
@@ -396,15 +456,18 @@ std::string summaryFig9(const std::vector<CellSummary>& cells, const StudyGrids&
   }
   s += "Paper (section 4.2): the ratio decays gradually with the noise, without abrupt drops, and may reach 100 for "
        "realistic noise. Here the closed form's median ratio ranges from " + cellText(worst) + " to " + cellText(best) +
-       " (at " + best_at + "); below 1 the calibration makes the readings worse. The ratio is bounded by how much "
-       "averaging the test readings get (the MSE ratio of single readings is in the CSV, columns *_ratio1_*). From "
-       "the quietest to the noisiest cell of the grid the median ratio goes:\n\n";
+       " (at " + best_at + "); below 1 the calibration makes the readings worse. No estimator can expect more than the "
+       "ceiling, the ratio the simulated sensor's own bias gives (set by the layout, the noise and the averaging of "
+       "the test readings; single readings: CSV columns *_ratio1_*). From the quietest to the noisiest cell of the "
+       "grid the median (mean) ratio goes:\n\n";
   std::vector<std::vector<std::string>> claim;
   for (int L : g.fig9_landmarks) {
     const auto* q = find(cells, L, g.sigma_s_m.front(), g.sigma_theta_deg.front());
     const auto* n = find(cells, L, g.sigma_s_m.back(), g.sigma_theta_deg.back());
     std::vector<std::string> r = {"L = " + std::to_string(L)};
-    for (Estimator e : kRatioEstimators) r.push_back(cellText(medianRatio(q, e)) + " → " + cellText(medianRatio(n, e)));
+    for (Estimator e : kRatioEstimators)
+      r.push_back(cellText(medianRatio(q, e)) + " (" + cellText(meanRatio(q, e)) + ") → " + cellText(medianRatio(n, e)) + " (" +
+                  cellText(meanRatio(n, e)) + ")");
     claim.push_back(r);
   }
   std::vector<std::string> h = {""};
@@ -416,32 +479,56 @@ std::string summaryFig9(const std::vector<CellSummary>& cells, const StudyGrids&
 double lowRate(const RatioSummary& q) { return orderRate(q, 0) + orderRate(q, 1); }
 double highRate(const RatioSummary& q) {
   double high = 0.0;
-  for (int n = 3; n < static_cast<int>(q.order_counts.size()); ++n) high += orderRate(q, n);
+  for (int n = 3; n < static_cast<int>(q.rules[0].order_counts.size()); ++n) high += orderRate(q, n);
   return high;
+}
+
+/// Rates of n = 2 of the three estimators under one rule.
+std::string orderText(const CellSummary& c, Rule rule) {
+  std::string x;
+  for (Estimator e : kRatioEstimators) x += (x.empty() ? "" : " / ") + percent(orderRate(ratioOf(c, e), 2, rule));
+  return x;
 }
 
 std::string summaryFig10(const std::vector<CellSummary>& cells, const StudyGrids& g) {
   const int L = g.fig10_landmarks;
-  std::string s = "Rate of n̂ = 2 (the true order), closed form (paper) / joint refinement / oracle, L = " +
-                  std::to_string(L) + ":\n\n";
-  s += gridTable(cells, g, L, [](const CellSummary& c) {
-    std::string x;
-    for (Estimator e : kRatioEstimators) x += (x.empty() ? "" : " / ") + percent(orderRate(ratioOf(c, e), 2));
-    return x;
-  });
+  std::string s;
+  for (Rule rule : kRuleOrder)
+    s += std::string("Rate of n̂ = 2 (the true order) with the order by ") +
+         (rule == Rule::aic ? "AIC (the paper's rule)" : "parsimonious AIC (the smallest order within 2 of the smallest AIC)") +
+         ", closed form (paper) / joint refinement / oracle, L = " + std::to_string(L) + ":\n\n" +
+         gridTable(cells, g, L, [rule](const CellSummary& c) { return orderText(c, rule); }) + "\n";
+  s += "Over the whole grid, rate of n̂ = 2 under each rule (every estimator's table of fitted orders read with both):\n\n";
+  std::vector<std::vector<std::string>> overall;
+  for (Estimator e : kRatioEstimators) {
+    std::vector<std::string> row = {estimatorLabel(e)};
+    for (Rule rule : kRuleOrder) {
+      std::size_t two = 0, all = 0;
+      for (const auto& c : cells) {
+        const auto& counts = ratioOf(c, e).rules[static_cast<std::size_t>(rule)].order_counts;
+        for (std::size_t n = 0; n < counts.size(); ++n) {
+          all += counts[n];
+          if (n == 2) two += counts[n];
+        }
+      }
+      row.push_back(all ? percent(static_cast<double>(two) / static_cast<double>(all)) : "-");
+    }
+    overall.push_back(row);
+  }
+  s += table({"estimator", "AIC", "parsimonious AIC"}, overall);
   std::array<std::size_t, kEstimators> wrong{}, wrong_low{};
   for (const auto& c : cells)
     for (Estimator e : kRatioEstimators) {
-      const auto& q = ratioOf(c, e);
+      const auto& counts = ratioOf(c, e).rules[static_cast<std::size_t>(Rule::aic)].order_counts;
       const auto k = static_cast<std::size_t>(e);
-      for (std::size_t n = 0; n < q.order_counts.size(); ++n)
+      for (std::size_t n = 0; n < counts.size(); ++n)
         if (n != 2) {
-          wrong[k] += q.order_counts[n];
-          if (n < 2) wrong_low[k] += q.order_counts[n];
+          wrong[k] += counts[n];
+          if (n < 2) wrong_low[k] += counts[n];
         }
     }
   s += "\nPaper (section 4.2): the order is right at low noise and, as the noise grows, the selection turns "
-       "conservative: every wrong order was n̂ = 1. Of the wrong orders over this grid:\n\n";
+       "conservative: every wrong order was n̂ = 1. Of the wrong orders by AIC over this grid:\n\n";
   std::vector<std::vector<std::string>> claim;
   for (Estimator e : kRatioEstimators) {
     const auto k = static_cast<std::size_t>(e);
@@ -450,7 +537,7 @@ std::string summaryFig10(const std::vector<CellSummary>& cells, const StudyGrids
                      wrong[k] ? percent((wrong[k] - wrong_low[k]) / w) : "-"});
   }
   s += table({"estimator", "wrong orders", "of which lower (n̂ ≤ 1)", "of which higher (n̂ ≥ 3)"}, claim);
-  s += "\nRate of n̂ ≤ 1 / n̂ ≥ 3 of the closed form (paper):\n\n";
+  s += "\nRate of n̂ ≤ 1 / n̂ ≥ 3 of the closed form (paper), AIC:\n\n";
   s += gridTable(cells, g, L, [](const CellSummary& c) {
     const auto& q = ratioOf(c, Estimator::closed_form);
     return percent(lowRate(q)) + " / " + percent(highRate(q));
@@ -472,8 +559,11 @@ std::string summaryFig10(const std::vector<CellSummary>& cells, const StudyGrids
 
 std::string summaryFig11(const std::vector<CellSummary>& cells, const StudyGrids& g) {
   const double t = g.sigma_theta_vs_landmarks_deg;
-  std::string s = "Median MSE ratio, closed form (paper) / joint refinement / oracle, " + thetaText(t) + ":\n\n";
+  std::string s = "Median MSE ratio, closed form (paper) / joint refinement / oracle / ceiling (the true model), " +
+                  thetaText(t) + ":\n\n";
   s += landmarkTable(cells, g, ratioText);
+  s += "\nMean MSE ratio, same order:\n\n" + landmarkTable(cells, g, meanText);
+  s += "\n" + uncertaintyText(cells) + "\n";
   s += "\nPaper (section 4.2): going from 1 to 3 landmarks helps noticeably, more landmarks do not help much; a "
        "smaller σ_s always helps. Gains of the median ratio:\n\n";
   std::vector<std::vector<std::string>> claim;
@@ -566,27 +656,41 @@ std::vector<Cell> figureCells(Figure f, const StudyGrids& g) {
 
 std::string figureCsv(Figure f, const std::vector<CellSummary>& cells, const StudyMeta& meta) {
   const int n_max = meta.config.max_order;
-  std::string s = "figure,level,angle_noise,noise_scale,stops,step_m,scans_per_stop,landmarks,sigma_s_m,sigma_theta_deg,trials,detected_landmarks";
+  std::string s = "figure,level,angle_noise,noise_scale,noise_law,max_surface_m,range_max_m,stops,step_m,scans_per_stop,"
+                  "landmarks,sigma_s_m,sigma_theta_deg,trials,detected_landmarks";
   for (PositionEstimator e : kPositionOrder) {
     const std::string p = std::string("pos_") + toString(e) + "_";
     s += "," + p + "samples," + p + "missing," + p + "bias_m," + p + "mean_radial_m," + p + "mean_tangential_m," + p +
          "variance_m2," + p + "rmse_m," + p + "error_q25_m," + p + "error_median_m," + p + "error_q75_m," + p +
          "radial_q25_m," + p + "radial_median_m," + p + "radial_q75_m";
   }
+  // Ratio statistics of one test set: quartiles, median's standard error, mean and its standard error.
+  auto statColumns = [](const std::string& p) {
+    return "," + p + "_q25," + p + "_median," + p + "_q75," + p + "_median_se," + p + "_mean," + p + "_mean_se";
+  };
+  auto statValues = [](const SampleStats& x) {
+    return "," + num(x.q.q25) + "," + num(x.q.median) + "," + num(x.q.q75) + "," + num(x.median_se) + "," + num(x.mean) + "," +
+           num(x.mean_se);
+  };
+  const std::array<std::string, kTestSets> set_names = {"ratio", "ratioc", "ratio1"};
   for (Estimator e : kRatioEstimators) {
     const std::string p = std::string(toString(e)) + "_";
-    s += "," + p + "runs," + p + "failed," + p + "ratio_q25," + p + "ratio_median," + p + "ratio_q75," + p + "ratio1_q25," +
-         p + "ratio1_median," + p + "ratio1_q75";
-    for (int n = 0; n <= n_max; ++n) s += "," + p + "order" + std::to_string(n) + "_rate";
+    s += "," + p + "runs," + p + "failed";
+    for (Rule rule : kRuleOrder) {
+      const std::string r = p + (rule == Rule::aic ? "" : "pars_");
+      for (const auto& set : set_names) s += statColumns(r + set);
+      for (int n = 0; n <= n_max; ++n) s += "," + r + "order" + std::to_string(n) + "_rate";
+    }
   }
+  for (const auto& set : set_names) s += statColumns("ceiling_" + set);
   s += "\n";
   const TrialConfig& c = meta.config;
   for (const CellSummary& x : cells) {
     s += std::string(toString(f)) + "," + toString(c.level) + "," + toString(c.angle_noise) + "," + num(c.noise_scale) + "," +
-         std::to_string(c.path.stops) +
-         "," + num(c.path.step_m) + "," + std::to_string(c.path.scans_per_stop) + "," + std::to_string(x.cell.landmarks) + "," +
-         num(x.cell.sigma_s_m) + "," + num(rad2deg(x.cell.sigma_theta_rad)) + "," + std::to_string(x.trials) + "," +
-         num(x.detected_landmarks);
+         toString(c.noise_law) + "," + num(c.placement.max_surface_m) + "," + num(c.sensor.range_max_m) + "," +
+         std::to_string(c.path.stops) + "," + num(c.path.step_m) + "," + std::to_string(c.path.scans_per_stop) + "," +
+         std::to_string(x.cell.landmarks) + "," + num(x.cell.sigma_s_m) + "," + num(rad2deg(x.cell.sigma_theta_rad)) + "," +
+         std::to_string(x.trials) + "," + num(x.detected_landmarks);
     for (PositionEstimator e : kPositionOrder) {
       const PositionSummary& p = positionOf(x, e);
       s += "," + std::to_string(p.samples) + "," + std::to_string(p.missing) + "," + num(p.bias_m) + "," + num(p.mean_radial_m) +
@@ -596,11 +700,13 @@ std::string figureCsv(Figure f, const std::vector<CellSummary>& cells, const Stu
     }
     for (Estimator e : kRatioEstimators) {
       const RatioSummary& r = ratioOf(x, e);
-      s += "," + std::to_string(r.runs) + "," + std::to_string(r.failures) + "," + num(r.mse_ratio.q25) + "," +
-           num(r.mse_ratio.median) + "," + num(r.mse_ratio.q75) + "," + num(r.mse_ratio_single.q25) + "," +
-           num(r.mse_ratio_single.median) + "," + num(r.mse_ratio_single.q75);
-      for (int n = 0; n <= n_max; ++n) s += "," + num(orderRate(r, n));
+      s += "," + std::to_string(r.runs) + "," + std::to_string(r.failures);
+      for (Rule rule : kRuleOrder) {
+        for (std::size_t set = 0; set < kTestSets; ++set) s += statValues(r.rules[static_cast<std::size_t>(rule)].ratio[set]);
+        for (int n = 0; n <= n_max; ++n) s += "," + num(orderRate(r, n, rule));
+      }
     }
+    for (std::size_t set = 0; set < kTestSets; ++set) s += statValues(x.ceiling[set]);
     s += "\n";
   }
   return s;

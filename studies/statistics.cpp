@@ -49,11 +49,29 @@ PositionSummary positionSummary(const std::vector<PositionError>& e, std::size_t
 
 }  // namespace
 
-Quartiles quartiles(std::vector<double> values) {
+Quartiles quartiles(std::vector<double> values) { return sampleStats(std::move(values)).q; }
+
+SampleStats sampleStats(std::vector<double> values) {
   values.erase(std::remove_if(values.begin(), values.end(), [](double v) { return !std::isfinite(v); }), values.end());
-  if (values.empty()) return Quartiles{kNaN, kNaN, kNaN};
+  SampleStats s;
+  s.n = values.size();
+  if (values.empty()) {
+    s.q = Quartiles{kNaN, kNaN, kNaN};
+    s.mean = s.mean_se = s.median_se = kNaN;
+    return s;
+  }
   std::sort(values.begin(), values.end());
-  return Quartiles{quantile(values, 0.25), quantile(values, 0.5), quantile(values, 0.75)};
+  s.q = Quartiles{quantile(values, 0.25), quantile(values, 0.5), quantile(values, 0.75)};
+  const double n = static_cast<double>(values.size());
+  double sum = 0.0;
+  for (double v : values) sum += v;
+  s.mean = sum / n;
+  double ss = 0.0;
+  for (double v : values) ss += (v - s.mean) * (v - s.mean);
+  s.mean_se = values.size() > 1 ? std::sqrt(ss / (n - 1.0) / n) : kNaN;
+  const double half = 0.5 / std::sqrt(n);  // the median's rank scatters by sqrt(n)/2 of n
+  s.median_se = values.size() > 1 ? 0.5 * (quantile(values, 0.5 + half) - quantile(values, 0.5 - half)) : kNaN;
+  return s;
 }
 
 const char* toString(PositionEstimator e) { return e == PositionEstimator::triangulation ? "triangulation" : "joint"; }
@@ -64,8 +82,8 @@ CellSummary summarize(const Cell& cell, const std::vector<TrialResult>& trials, 
   s.trials = trials.size();
   for (std::size_t k = 0; k < kEstimators; ++k) {
     RatioSummary& r = s.ratio[k];
-    r.order_counts.assign(static_cast<std::size_t>(max_order) + 1, 0);
-    std::vector<double> ratio, single;
+    std::array<std::array<std::vector<double>, kTestSets>, kRules> values;
+    for (auto& rule : r.rules) rule.order_counts.assign(static_cast<std::size_t>(max_order) + 1, 0);
     for (const TrialResult& t : trials) {
       const EstimatorOutcome& o = t.estimators[k];
       if (!o.ran) continue;
@@ -74,12 +92,19 @@ CellSummary summarize(const Cell& cell, const std::vector<TrialResult>& trials, 
         ++r.failures;
         continue;
       }
-      ratio.push_back(o.mse_ratio);
-      single.push_back(o.mse_ratio_single);
-      if (o.order >= 0 && o.order <= max_order) ++r.order_counts[static_cast<std::size_t>(o.order)];
+      for (std::size_t rule = 0; rule < kRules; ++rule) {
+        const RuleOutcome& x = o.rules[rule];
+        for (std::size_t set = 0; set < kTestSets; ++set) values[rule][set].push_back(x.mse_ratio[set]);
+        if (x.order >= 0 && x.order <= max_order) ++r.rules[rule].order_counts[static_cast<std::size_t>(x.order)];
+      }
     }
-    r.mse_ratio = quartiles(std::move(ratio));
-    r.mse_ratio_single = quartiles(std::move(single));
+    for (std::size_t rule = 0; rule < kRules; ++rule)
+      for (std::size_t set = 0; set < kTestSets; ++set) r.rules[rule].ratio[set] = sampleStats(std::move(values[rule][set]));
+  }
+  for (std::size_t set = 0; set < kTestSets; ++set) {
+    std::vector<double> v;
+    for (const TrialResult& t : trials) v.push_back(t.ceiling[set]);
+    s.ceiling[set] = sampleStats(std::move(v));
   }
   const std::array<Estimator, kPositionEstimators> source = {Estimator::closed_form, Estimator::joint};
   for (std::size_t p = 0; p < kPositionEstimators; ++p) {

@@ -1,7 +1,8 @@
 #pragma once
-// Per-cell statistics of a Monte Carlo study: medians and quartiles of each per-trial metric,
-// order-selection counts, and the bias and variance of the landmark position estimators
-// (seed 000 Figs. 7-8) over every (trial, landmark) sample of the cell.
+// Per-cell statistics of a Monte Carlo study: quartiles and means of each per-trial metric with
+// their Monte Carlo standard errors, order-selection counts under each order rule, and the bias
+// and variance of the landmark position estimators (seed 000 Figs. 7-8) over every (trial,
+// landmark) sample of the cell.
 
 #include <array>
 #include <cstddef>
@@ -20,13 +21,29 @@ struct Quartiles {
 };
 Quartiles quartiles(std::vector<double> values);
 
+/// A sample's quartiles, mean and the Monte Carlo uncertainty of both (finite values only).
+struct SampleStats {
+  std::size_t n = 0;      ///< finite values
+  Quartiles q;            ///< quartiles (type 7)
+  double mean = 0.0;      ///< mean (the paper plots means over its simulations)
+  double mean_se = 0.0;   ///< standard error of the mean, sd / sqrt(n)
+  /// Standard error of the median, distribution-free: half the distance between the order
+  /// statistics of ranks n/2 -+ sqrt(n)/2 (the median's rank scatters by sqrt(n)/2).
+  double median_se = 0.0;
+};
+SampleStats sampleStats(std::vector<double> values);
+
+/// One estimator's MSE ratios and orders under one order rule.
+struct RuleSummary {
+  std::array<SampleStats, kTestSets> ratio;  ///< eq. 31 on each test set (TestSet)
+  std::vector<std::size_t> order_counts;     ///< trials (with a model) that chose order 0, 1, ..., n_max
+};
+
 /// The MSE-ratio metrics of one estimator over a cell's trials.
 struct RatioSummary {
   std::size_t runs = 0;       ///< trials the estimator ran in
-  std::size_t failures = 0;   ///< of which it returned no model (excluded from the quartiles)
-  Quartiles mse_ratio;        ///< eq. 31, readings averaged per stop and beam
-  Quartiles mse_ratio_single; ///< eq. 31, single readings
-  std::vector<std::size_t> order_counts;  ///< trials (with a model) that chose order 0, 1, ..., n_max
+  std::size_t failures = 0;   ///< of which it returned no model (excluded from the statistics)
+  std::array<RuleSummary, kRules> rules;  ///< indexed by Rule
 };
 
 /// Landmark position errors of one estimator over a cell's (trial, landmark) samples, in each
@@ -52,6 +69,7 @@ struct CellSummary {
   Cell cell;                      ///< the parameters
   std::size_t trials = 0;         ///< trials run
   std::array<RatioSummary, kEstimators> ratio;            ///< indexed by Estimator
+  std::array<SampleStats, kTestSets> ceiling;             ///< eq. 31 with the true sensor model, per test set
   std::array<PositionSummary, kPositionEstimators> position;  ///< indexed by PositionEstimator
   double detected_landmarks = 0.0;  ///< mean landmarks matched per trial (scan level; L at the landmark level)
 };

@@ -1,6 +1,7 @@
 #include "studies/trial.hpp"
 
 #include <cmath>
+#include <initializer_list>
 #include <limits>
 #include <map>
 #include <set>
@@ -56,38 +57,52 @@ std::vector<calibration::RangePair> oraclePairs(const Draw& draw) {
   return pairs;
 }
 
-/// The test set: every landmark beam's readings averaged per (stop, landmark, beam) (one beam at
-/// one stop keeps its true distance over the stop's scans), and single readings of the beam
-/// nearest each centre (one reading per landmark and scan, as eq. 3 draws them).
-struct TestSet {
-  std::vector<double> truth, raw;          ///< single readings
-  std::vector<double> avg_truth, avg_raw;  ///< per (stop, landmark, beam) means
+/// The test sets (TestSet): truth and raw readings of each. Every landmark beam's readings
+/// averaged per (stop, landmark, beam) (one beam at one stop keeps its true distance over the
+/// stop's scans); the beam nearest each centre by the truth, averaged per (stop, landmark); single
+/// readings of the beam nearest each detected centre (one per landmark and scan, as eq. 3 draws
+/// them).
+struct TestReadings {
+  std::vector<double> truth, raw;
 };
+using TestSets = std::array<TestReadings, kTestSets>;
 
-TestSet testSet(const Draw& draw) {
-  TestSet t;
+TestSets testSets(const Draw& draw) {
+  TestSets t;
   struct Acc {
     double d = 0.0, y = 0.0;
     int n = 0;
+    void add(double truth, double reading) {
+      d += truth;
+      y += reading;
+      ++n;
+    }
   };
-  std::map<std::tuple<std::size_t, int, std::uint32_t>, Acc> groups;
-  for (const TruthReading& r : truthReadings(draw)) {
-    Acc& a = groups[{r.stop, r.landmark, r.beam}];
-    a.d += r.true_m;
-    a.y += r.range_m;
-    ++a.n;
+  std::map<std::tuple<std::size_t, int, std::uint32_t>, Acc> beams;
+  for (const TruthReading& r : truthReadings(draw)) beams[{r.stop, r.landmark, r.beam}].add(r.true_m, r.range_m);
+  for (const auto& [key, a] : beams) {
+    t[static_cast<std::size_t>(TestSet::beams)].truth.push_back(a.d / a.n);
+    t[static_cast<std::size_t>(TestSet::beams)].raw.push_back(a.y / a.n);
   }
-  for (const auto& [key, a] : groups) {
-    t.avg_truth.push_back(a.d / a.n);
-    t.avg_raw.push_back(a.y / a.n);
-  }
+  std::map<std::pair<std::size_t, int>, Acc> centres;
   for (std::size_t i = 0; i < draw.obs.sightings.size(); ++i) {
     const Sighting& s = draw.obs.sightings[i];
     if (s.beams.empty()) continue;
+    const int id = s.landmark > 0 && static_cast<std::size_t>(s.landmark) < draw.true_id.size() ? draw.true_id[s.landmark] : 0;
+    std::size_t nearest = s.beams.size();  // smallest true distance: the beam through the centre
+    for (std::size_t j = 0; j < s.beams.size(); ++j)
+      if (std::isfinite(draw.truth_m[i][j]) && std::isfinite(s.beams[j].range_m) &&
+          (nearest == s.beams.size() || draw.truth_m[i][j] < draw.truth_m[i][nearest]))
+        nearest = j;
+    if (id > 0 && nearest < s.beams.size()) centres[{s.stop, id}].add(draw.truth_m[i][nearest], s.beams[nearest].range_m);
     const std::size_t j = calibration::centralBeam(s);
     if (!std::isfinite(draw.truth_m[i][j]) || !std::isfinite(s.beams[j].range_m)) continue;
-    t.truth.push_back(draw.truth_m[i][j]);
-    t.raw.push_back(s.beams[j].range_m);
+    t[static_cast<std::size_t>(TestSet::single)].truth.push_back(draw.truth_m[i][j]);
+    t[static_cast<std::size_t>(TestSet::single)].raw.push_back(s.beams[j].range_m);
+  }
+  for (const auto& [key, a] : centres) {
+    t[static_cast<std::size_t>(TestSet::centre)].truth.push_back(a.d / a.n);
+    t[static_cast<std::size_t>(TestSet::centre)].raw.push_back(a.y / a.n);
   }
   return t;
 }
@@ -103,18 +118,30 @@ std::vector<double> correct(const calibration::RangeInverter& inv, const std::ve
   return out;
 }
 
-void score(EstimatorOutcome& o, const CalibrationModel& m, const TestSet& test, const LandmarkObservations& obs) {
-  o.ok = m.status == "ok";
-  if (!o.ok) {
-    o.mse_ratio = o.mse_ratio_single = kNaN;
-    return;
-  }
-  RangeModel model = m.model;
+/// Eq. 31 of a bias polynomial on every test set.
+std::array<double, kTestSets> ratios(const std::vector<double>& alpha, const TestSets& tests, const LandmarkObservations& obs) {
+  RangeModel model;
+  model.bias.alpha = alpha;
   model.range_min_m = obs.range_min_m;
   model.range_max_m = obs.range_max_m;
   const calibration::RangeInverter inv(model, calibration::inversionWindow(model, calibration::InversionMethod::ls));
-  o.mse_ratio = calibration::compareRanges(test.avg_truth, test.avg_raw, correct(inv, test.avg_raw)).mse_ratio;
-  o.mse_ratio_single = calibration::compareRanges(test.truth, test.raw, correct(inv, test.raw)).mse_ratio;
+  std::array<double, kTestSets> out{};
+  for (std::size_t k = 0; k < kTestSets; ++k)
+    out[k] = calibration::compareRanges(tests[k].truth, tests[k].raw, correct(inv, tests[k].raw)).mse_ratio;
+  return out;
+}
+
+/// Scores a model with both order rules: the bias of the order each picks from the model's table.
+void score(EstimatorOutcome& o, const CalibrationModel& m, const TestSets& tests, const LandmarkObservations& obs) {
+  o.ok = m.status == "ok";
+  if (!o.ok) return;
+  for (std::size_t r = 0; r < kRules; ++r) {
+    RuleOutcome& out = o.rules[r];
+    out.order = ruleOrder(m, static_cast<Rule>(r));
+    const int used = std::max(out.order, 1);  // order 0 cannot be inverted: the calibration uses order 1
+    for (const OrderRow& row : m.orders)
+      if (row.order == used) out.mse_ratio = ratios(row.alpha, tests, obs);
+  }
 }
 
 /// Position errors of a model's landmarks against the layout, in each landmark's frame.
@@ -164,13 +191,62 @@ bool parseLevel(const std::string& name, Level& level) {
   return true;
 }
 
-const char* toString(AngleNoise noise) { return noise == AngleNoise::bearing ? "bearing" : "heading"; }
+const char* toString(AngleNoise noise) {
+  switch (noise) {
+    case AngleNoise::heading: return "heading";
+    case AngleNoise::beams: return "beams";
+    case AngleNoise::bearing: return "bearing";
+  }
+  return "unknown";
+}
+
+namespace {
+/// The value of `all` whose name is `name`, if any.
+template <typename E>
+bool parseByName(const std::string& name, std::initializer_list<E> all, E& out) {
+  for (E e : all)
+    if (name == toString(e)) {
+      out = e;
+      return true;
+    }
+  return false;
+}
+}  // namespace
 
 bool parseAngleNoise(const std::string& name, AngleNoise& noise) {
-  if (name == "bearing") noise = AngleNoise::bearing;
-  else if (name == "heading") noise = AngleNoise::heading;
-  else return false;
-  return true;
+  return parseByName(name, {AngleNoise::heading, AngleNoise::beams, AngleNoise::bearing}, noise);
+}
+
+const char* toString(NoiseLaw law) { return law == NoiseLaw::paper ? "paper" : "squared"; }
+
+bool parseNoiseLaw(const std::string& name, NoiseLaw& law) { return parseByName(name, {NoiseLaw::paper, NoiseLaw::squared}, law); }
+
+const char* toString(Rule r) { return r == Rule::aic ? "aic" : "aic-parsimonious"; }
+
+int ruleOrder(const CalibrationModel& model, Rule rule) {
+  const OrderRow* best = nullptr;
+  for (const OrderRow& row : model.orders)
+    if (row.invertible && std::isfinite(row.aic) && (!best || row.aic < best->aic)) best = &row;
+  if (!best) return -1;
+  if (rule == Rule::aic) return best->order;
+  int order = best->order;
+  for (const OrderRow& row : model.orders)
+    if (row.invertible && row.aic <= best->aic + 2.0) order = std::min(order, row.order);
+  return order;
+}
+
+RangeModel simulatedSensor(const TrialConfig& config) {
+  RangeModel sensor = config.sensor;
+  if (config.noise_law == NoiseLaw::squared) {
+    const double at3 = sensor.noise.stddev(3.0, sensor.bias);
+    const double f3 = sensor.bias(3.0);
+    sensor.noise = NoiseModel{};
+    sensor.noise.kind = NoiseKind::squared;
+    sensor.noise.sigma_e = at3 / (f3 * f3);
+  }
+  for (double& b : sensor.noise.beta) b *= config.noise_scale;
+  sensor.noise.sigma_e *= config.noise_scale;
+  return sensor;
 }
 
 const char* toString(Estimator e) {
@@ -235,6 +311,7 @@ calibration::CalibrationConfig estimatorConfig(const TrialConfig& config, const 
   cc.max_order = config.max_order;
   cc.noise = NoiseKind::polynomial;  // the paper's noise law (eq. 3)
   cc.closed_form_rule = calibration::OrderRule::aic;
+  cc.joint_rule = calibration::JointOrderRule::aic;  // the model's own order; both rules are read from its table
   const double s = std::max(cell.sigma_s_m, config.min_sigma_s_m);
   const double a = std::max(cell.sigma_theta_rad, config.min_sigma_theta_rad);
   cc.triangulation.sigma_s_m = s;
@@ -251,26 +328,25 @@ TrialResult runTrial(const TrialConfig& config, const Cell& cell, const std::vec
                      std::uint64_t trial_seed, bool run_joint) {
   PathSpec path = config.path;
   path.sigma_s_m = cell.sigma_s_m;
-  path.sigma_psi_rad = 0.0;
-  double bearing_noise = 0.0;
-  if (config.angle_noise == AngleNoise::heading) path.sigma_psi_rad = cell.sigma_theta_rad;
-  else bearing_noise = cell.sigma_theta_rad;
-  RangeModel sensor = config.sensor;
-  for (double& b : sensor.noise.beta) b *= config.noise_scale;
+  path.sigma_psi_rad = config.angle_noise == AngleNoise::heading ? cell.sigma_theta_rad : 0.0;
+  const double bearing_noise = config.angle_noise == AngleNoise::heading ? 0.0 : cell.sigma_theta_rad;
+  const bool rotate_beams = config.angle_noise == AngleNoise::beams;
+  const RangeModel sensor = simulatedSensor(config);
   const std::uint64_t calib_seed = deriveSeed(trial_seed, 0), test_seed = deriveSeed(trial_seed, 1);
   Draw calib, test;
   if (config.level == Level::landmark) {
-    calib = drawLandmarkLevel(layout, path, sensor, bearing_noise, calib_seed);
-    test = drawLandmarkLevel(layout, path, sensor, bearing_noise, test_seed);
+    calib = drawLandmarkLevel(layout, path, sensor, bearing_noise, calib_seed, rotate_beams);
+    test = drawLandmarkLevel(layout, path, sensor, bearing_noise, test_seed, rotate_beams);
   } else {
     const ScanLevelConfig sc = scanLevelConfig(config);
     calib = drawScanLevel(layout, path, sensor, sc, calib_seed, true);
     test = drawScanLevel(layout, path, sensor, sc, test_seed, false);
   }
-  const TestSet tests = testSet(test);
+  const TestSets tests = testSets(test);
 
   TrialResult r;
   for (std::size_t l = 1; l < calib.true_id.size(); ++l) r.detected_landmarks += calib.true_id[l] > 0;
+  r.ceiling = ratios(sensor.bias.alpha, tests, calib.obs);
   calibration::CalibrationConfig cc = estimatorConfig(config, cell);
 
   EstimatorOutcome& cf = r.estimators[static_cast<std::size_t>(Estimator::closed_form)];
@@ -278,7 +354,6 @@ TrialResult runTrial(const TrialConfig& config, const Cell& cell, const std::vec
   const CalibrationModel cfm = guarded([&] { return calibration::calibrate(calib.obs, cc); });
   cf.ran = true;
   score(cf, cfm, tests, calib.obs);
-  cf.order = cfm.order_aic;
   cf.landmarks = positionErrors(cfm, calib, layout);
 
   EstimatorOutcome& jt = r.estimators[static_cast<std::size_t>(Estimator::joint)];
@@ -289,7 +364,6 @@ TrialResult runTrial(const TrialConfig& config, const Cell& cell, const std::vec
     });
     jt.ran = true;
     score(jt, jm, tests, calib.obs);
-    jt.order = jm.status == "ok" ? jm.model.bias.order() : -1;
     if (jm.status == "ok") jt.landmarks = positionErrors(jm, calib, layout);
     else jt.landmarks.assign(layout.size(), PositionError{kNaN, kNaN});
   }
@@ -300,7 +374,6 @@ TrialResult runTrial(const TrialConfig& config, const Cell& cell, const std::vec
   });
   orc.ran = true;
   score(orc, om, tests, calib.obs);
-  orc.order = om.order_aic;
   return r;
 }
 

@@ -2,11 +2,14 @@
 // One Monte Carlo trial of the seed 000 study (sections 4.1-4.2): simulate a calibration run
 // over a landmark layout, calibrate it with the paper's closed form (triangulation + LS + AIC),
 // our joint refinement and the oracle (the same LS + AIC against the true distances), and score
-// each on a fresh draw of the same layout with the MSE ratio (eq. 31). The landmark positions
+// each on a fresh draw of the same layout with the MSE ratio (eq. 31) on three test sets, with
+// the order by AIC and by parsimonious AIC read from each estimator's table of fitted orders,
+// beside the ratio the simulated sensor's own bias gives (the ceiling). The landmark positions
 // of the triangulation (section 3.1) and of the joint refinement are scored against the truth.
 
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -24,13 +27,50 @@ enum class Level {
 const char* toString(Level level);
 bool parseLevel(const std::string& name, Level& level);
 
-/// What the angular noise sigma_theta of a cell perturbs.
+/// What the angular noise sigma_theta of a cell perturbs, and so what each estimator sees.
 enum class AngleNoise {
-  bearing,  ///< eq. 5: each landmark's centre bearing at each stop, independently (the paper's model)
-  heading,  ///< the robot's heading at each stop: shared by every landmark and beam of the stop
+  /// The robot's heading at each stop (default): every beam and every centre bearing of the stop
+  /// turns with it, as on a real robot. The closed form sees, per landmark, independent bearing
+  /// errors across stops (eq. 5); the joint refinement sees the same beams and estimates one
+  /// heading per stop, shared by the landmarks.
+  heading,
+  /// Eq. 5 on everything the sensor reports of landmark l at stop k: its centre bearing and the
+  /// angle of each of its beams turn by one v_lk ~ N(0, sigma_theta^2), independently per
+  /// landmark and stop. Both estimators see it; neither model has a term for it.
+  beams,
+  /// Eq. 5 on the detected centre bearing only; the beams' angles stay exact. The closed form
+  /// (which triangulates centre bearings) sees the noise; the joint refinement, which fits the
+  /// beam angles, does not (its ratio cannot depend on sigma_theta). Kept for comparison: it was
+  /// the landmark level's default before, and no real sensor works this way.
+  bearing,
 };
 const char* toString(AngleNoise noise);
 bool parseAngleNoise(const std::string& name, AngleNoise& noise);
+
+/// The simulated sensor's noise law.
+enum class NoiseLaw {
+  paper,    ///< seed 000 section 4.1: sigma(d) = |sum beta_i d^i|, beta = 0.05 alpha (5 % of f(d))
+  squared,  ///< seed 004 eq. 1: sigma(d) = sigma_e f(d)^2, sigma_e so that sigma(3 m) is the paper law's
+};
+const char* toString(NoiseLaw law);
+bool parseNoiseLaw(const std::string& name, NoiseLaw& law);
+
+/// Order rules the estimators are compared under: each estimator's table of fitted orders is
+/// read with both, so the three are always compared under the same rule.
+enum class Rule {
+  aic = 0,               ///< smallest AIC (seed 000 section 3.2)
+  aic_parsimonious = 1,  ///< smallest order whose AIC is within 2 of the smallest (Burnham & Anderson)
+};
+constexpr std::size_t kRules = 2;
+const char* toString(Rule r);
+
+/// The test sets eq. 31 is evaluated on: readings of a fresh draw of the same layout.
+enum class TestSet {
+  beams = 0,   ///< every beam on a landmark, its readings averaged over the stop's scans
+  centre = 1,  ///< the beam nearest each landmark's centre (by the truth), averaged over the stop's scans
+  single = 2,  ///< single readings of the beam nearest each detected centre (one per landmark and scan)
+};
+constexpr std::size_t kTestSets = 3;
 
 /// One point of a study grid.
 struct Cell {
@@ -46,11 +86,12 @@ const char* toString(Estimator e);
 
 struct TrialConfig {
   Level level = Level::landmark;               ///< simulation level
-  /// Angle-noise model. The landmark level defaults to the paper's (bearing); the scan level
-  /// supports heading only (the detector's bearings carry their own noise).
-  AngleNoise angle_noise = AngleNoise::bearing;
+  /// Angle-noise model (default heading). The scan level supports heading only (the detector's
+  /// bearings carry their own noise).
+  AngleNoise angle_noise = AngleNoise::heading;
   PathSpec path = defaultPath();               ///< stops (20), step (0.15 m), scans per stop (10); sigmas from the cell
   RangeModel sensor = paperSensor();           ///< seed 000 section 4.1: n = 2, alpha, beta = 0.05 alpha; window 0.2-6 m
+  NoiseLaw noise_law = NoiseLaw::paper;        ///< the law of the simulated noise (sensor.noise is replaced for squared)
   /// Multiplies the noise coefficients beta of `sensor` (1: the paper's 5 % of the range). The
   /// detector cannot find 12 cm poles through that much noise beyond about a metre, so scan-level
   /// studies run with less (the command's default there is 0.2).
@@ -76,12 +117,19 @@ struct PositionError {
   double tangential_m = 0.0;  ///< metres
 };
 
+/// One estimator's model read with one order rule.
+struct RuleOutcome {
+  int order = -1;  ///< order the rule picks (closed form and oracle 0..n_max, joint 1..n_max); -1: no model
+  /// Eq. 31 on each test set (TestSet), with the fitted order's bias (order 0: order 1's, which
+  /// can be inverted); NaN without a model.
+  std::array<double, kTestSets> mse_ratio{std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN(),
+                                          std::numeric_limits<double>::quiet_NaN()};
+};
+
 struct EstimatorOutcome {
   bool ran = false;                ///< the estimator was run in this trial
   bool ok = false;                 ///< it produced a model (status ok)
-  double mse_ratio = 0.0;          ///< eq. 31 on the test draw's readings averaged per stop and beam
-  double mse_ratio_single = 0.0;   ///< eq. 31 on single readings of the test draw (beam nearest each centre)
-  int order = -1;                  ///< order chosen (closed form and oracle 0..n_max by AIC; joint 1..n_max)
+  std::array<RuleOutcome, kRules> rules;  ///< indexed by Rule
   /// Per true landmark (index id - 1): closed form = triangulation (section 3.1), joint = refined
   /// centre; empty for the oracle; NaN components where the landmark was not estimated.
   std::vector<PositionError> landmarks;
@@ -89,6 +137,10 @@ struct EstimatorOutcome {
 
 struct TrialResult {
   std::array<EstimatorOutcome, kEstimators> estimators;  ///< indexed by Estimator
+  /// Eq. 31 on each test set with the simulated sensor's own bias (LS inversion): what a perfect
+  /// calibration would give, the ceiling of every estimator.
+  std::array<double, kTestSets> ceiling{std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN(),
+                                        std::numeric_limits<double>::quiet_NaN()};
   int detected_landmarks = 0;      ///< landmarks matched to the truth (= L at the landmark level)
 };
 
@@ -104,6 +156,13 @@ std::uint64_t trialSeed(std::uint64_t seed, const Cell& cell, std::size_t trial)
 /// deriveSeed(trial_seed, 1) (same layout and commanded path, fresh poses and noise) is the test set.
 TrialResult runTrial(const TrialConfig& config, const Cell& cell, const std::vector<Cylinder>& layout,
                      std::uint64_t trial_seed, bool run_joint);
+
+/// The simulated sensor of a configuration (noise law and noise_scale applied).
+RangeModel simulatedSensor(const TrialConfig& config);
+
+/// The order `rule` picks from a model's table of fitted orders (admissible rows only); -1 when
+/// the table is empty.
+int ruleOrder(const CalibrationModel& model, Rule rule);
 
 /// The calibration settings given to the estimators in a cell.
 calibration::CalibrationConfig estimatorConfig(const TrialConfig& config, const Cell& cell);

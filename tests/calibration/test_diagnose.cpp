@@ -3,12 +3,17 @@
 // and diagnose names an effect hidden in simulated data (which one and its size drawn from a
 // case seed the assertion does not look at).
 //
-// Hidden-effect cases per effect: LIDARCAL_DIAGNOSE_CASES (default 2, all must be named);
-// with 20 (ctest -L long, configured with -DLIDARCAL_LONG_TESTS=ON) at least 19 must be.
+// Hidden-effect cases per effect: LIDARCAL_DIAGNOSE_CASES (default 10 for the clean data and
+// angle_offset, at least 9 named; 5 for the other effects, at least 4 named), case seeds from
+// LIDARCAL_DIAGNOSE_FIRST (default 21: disjoint from the seeds 1-20 the method was developed on),
+// LIDARCAL_DIAGNOSE_REPLICAS bootstrap replicas (default 5); with 20 cases and 19 replicas
+// (ctest -L long, configured with -DLIDARCAL_LONG_TESTS=ON) at least 19 named.
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
+#include <limits>
 #include <numeric>
 #include <random>
 
@@ -30,9 +35,30 @@
 namespace lidarcal::calibration {
 namespace {
 
-int casesPerEffect() {
+/// Hidden-effect cases of `effect` (LIDARCAL_DIAGNOSE_CASES for every effect). By default 10 for
+/// the clean data and angle_offset, the two whose fresh rate is below 20 of 20 (docs/RESULTS.md),
+/// and 5 for the others: a case costs about 4 s of CPU (candidate fits and cross-validation, not
+/// the replicas), and 10 for every effect made the default suite about 60 % longer than before
+/// issue 22, against a budget of 30 %. A deliberate bug that breaks an effect's likelihood ratio
+/// or its sign fails its check in every case, so 5 cases catch it as surely as 10.
+int casesPerEffect(const std::string& effect) {
   const char* env = std::getenv("LIDARCAL_DIAGNOSE_CASES");
-  return env && *env ? std::max(1, std::atoi(env)) : 2;
+  if (env && *env) return std::max(1, std::atoi(env));
+  return effect == "none" || effect == "angle_offset" ? 10 : 5;
+}
+
+/// Bootstrap replicas of the hidden-effect runs (LIDARCAL_DIAGNOSE_REPLICAS). The default run
+/// takes the fewest the method allows (5) to keep the suite's time; the long run and
+/// docs/RESULTS.md take the command's default (19).
+int replicasPerCase() {
+  const char* env = std::getenv("LIDARCAL_DIAGNOSE_REPLICAS");
+  return env && *env ? std::max(5, std::atoi(env)) : 5;
+}
+
+/// First case seed of the hidden-effect runs (LIDARCAL_DIAGNOSE_FIRST, default 21).
+int firstCase() {
+  const char* env = std::getenv("LIDARCAL_DIAGNOSE_FIRST");
+  return env && *env ? std::max(1, std::atoi(env)) : 21;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -144,28 +170,40 @@ TEST(DiagnoseStats, CauseNamingRules) {
 // ---------------------------------------------------------------------------------------------
 // The simulator's effects against their definitions.
 
-TEST(SimulatorEffects, EffectReadingMatchesTheDefinition) {
+TEST(SimulatorEffects, EffectReadingMatchesTheDefinitionAtEveryIncidence) {
+  // y = f(d) + b (1 - cos phi) + offset + c t + sigma(d) (1 / cos phi)^gamma e is linear in e:
+  // the reading at e = 0 is the mean and y(e = 1) - y(e = 0) the standard deviation, exactly.
+  // Several incidences, so that no single one can hide a wrong form (at cos phi = 0.5,
+  // 1 - cos phi equals cos phi and 1 / cos phi - 1 equals 1).
   RangeModel m;
   m.bias.alpha = {0.05, 0.9, 0.05};
   m.noise.kind = NoiseKind::squared;
   m.noise.sigma_e = 0.002;
-  RangeEffects fx;
-  fx.incidence_noise_exponent = 1.0;
-  fx.incidence_bias_m = 0.03;
-  fx.range_drift_m_per_scan = 1e-4;
-  const double d = 2.5, cos_inc = 0.5;
   std::mt19937_64 unused(1);
-  constexpr int kN = 20000;
-  std::normal_distribution<double> n(0.0, 1.0);
-  std::mt19937_64 rng(3);
-  std::vector<double> y(kN);
-  for (double& v : y) v = simulation::effectReading(m, fx, d, {cos_inc, 0.01, 100}, n(rng), unused);
-  const double mean = std::accumulate(y.begin(), y.end(), 0.0) / kN;
-  double var = 0.0;
-  for (double v : y) var += (v - mean) * (v - mean) / (kN - 1);
-  const double sigma = m.noise.stddev(d, m.bias) / cos_inc;  // gamma = 1
-  EXPECT_NEAR(mean, m.bias(d) + 0.03 * 0.5 + 0.01 + 1e-4 * 100, 4.5 * sigma / std::sqrt(kN));
-  EXPECT_NEAR(var / (sigma * sigma), 1.0, 4.5 * std::sqrt(2.0 / kN));
+  const double d = 2.5;
+  for (double b : {0.03, -0.02}) {
+    for (double gamma : {1.0, 1.5}) {
+      RangeEffects fx;
+      fx.incidence_noise_exponent = gamma;
+      fx.incidence_bias_m = b;
+      fx.range_drift_m_per_scan = 1e-4;
+      for (double cos_inc : {1.0, 0.95, 0.8, 0.5, 0.3, 0.1}) {
+        SCOPED_TRACE(testing::Message() << "b " << b << ", gamma " << gamma << ", cos phi " << cos_inc);
+        const double mean = m.bias(d) + b * (1.0 - cos_inc) + 0.01 + 1e-4 * 100;
+        const double y0 = simulation::effectReading(m, fx, d, {cos_inc, 0.01, 100}, 0.0, unused);
+        const double y1 = simulation::effectReading(m, fx, d, {cos_inc, 0.01, 100}, 1.0, unused);
+        EXPECT_NEAR(y0, mean, 1e-12);
+        EXPECT_NEAR(y1 - y0, m.noise.stddev(d, m.bias) * std::pow(1.0 / cos_inc, gamma), 1e-12);
+      }
+      // Grazing beams are treated as at cos phi = 0.05 (87 degrees).
+      EXPECT_NEAR(simulation::effectReading(m, fx, d, {0.01, 0.0, 0}, 0.0, unused), m.bias(d) + b * 0.95, 1e-12);
+    }
+  }
+  // The bias grows away from normal incidence (b > 0: longer readings at grazing incidence).
+  RangeEffects fx;
+  fx.incidence_bias_m = 0.03;
+  EXPECT_GT(simulation::effectReading(m, fx, d, {0.2, 0.0, 0}, 0.0, unused),
+            simulation::effectReading(m, fx, d, {0.9, 0.0, 0}, 0.0, unused));
   // Every effect off: exactly rangeReading().
   EXPECT_DOUBLE_EQ(simulation::effectReading(m, RangeEffects{}, d, {0.3, 0.0, 7}, 0.7, unused),
                    simulation::rangeReading(m, d, 0.7));
@@ -296,6 +334,9 @@ TEST_P(JointEffectRecovery, RecoversTheTermFromTheCommandedPoses) {
   const JointResult f = refineJoint(s.obs, init, jc);
   ASSERT_FALSE(f.poses.empty()) << f.message;
   EXPECT_NEAR(r.estimate(f), r.truth, r.tolerance) << r.name;
+  // Signed terms: the fitted sign is the hidden one (the tolerance is below the size, so the
+  // check above implies it; stated on its own for the message).
+  EXPECT_EQ(std::signbit(r.estimate(f)), std::signbit(r.truth)) << r.name << ": fitted " << r.estimate(f);
 }
 
 INSTANTIATE_TEST_SUITE_P(
@@ -307,6 +348,18 @@ INSTANTIATE_TEST_SUITE_P(
                  [](const JointResult& f) { return rad2deg(f.effects.angle_offset_rad); }, 2.0, 0.3},
         Recovery{"incidence_bias", [](auto& c) { c.effects.incidence_bias_m = 0.03; }, [](auto& e) { e.incidence_bias = true; },
                  [](const JointResult& f) { return f.effects.incidence_bias_m; }, 0.03, 0.005},
+        // Every signed term also with the other sign.
+        Recovery{"drift_negative", [](auto& c) { c.effects.range_drift_m_per_scan = -3e-4; }, [](auto& e) { e.drift = true; },
+                 [](const JointResult& f) { return f.effects.drift_m_per_scan; }, -3e-4, 3e-5},
+        Recovery{"angle_negative", [](auto& c) { c.mount_yaw_rad = deg2rad(-2.0); }, [](auto& e) { e.angle_offset = true; },
+                 [](const JointResult& f) { return rad2deg(f.effects.angle_offset_rad); }, -2.0, 0.3},
+        Recovery{"incidence_bias_negative", [](auto& c) { c.effects.incidence_bias_m = -0.03; },
+                 [](auto& e) { e.incidence_bias = true; }, [](const JointResult& f) { return f.effects.incidence_bias_m; }, -0.03,
+                 0.005},
+        Recovery{"landmark_offset_negative", [](auto& c) { c.landmarks[2].range_offset_m = -0.04; },
+                 [](auto& e) { e.landmark_offsets = true; },
+                 [](const JointResult& f) { return f.effects.landmark_offset_m.at(3) - f.effects.landmark_offset_m.at(1); }, -0.04,
+                 0.005},
         Recovery{"landmark_offset", [](auto& c) { c.landmarks[2].range_offset_m = 0.04; },
                  [](auto& e) { e.landmark_offsets = true; },
                  [](const JointResult& f) { return f.effects.landmark_offset_m.at(3) - f.effects.landmark_offset_m.at(1); }, 0.04,
@@ -330,24 +383,56 @@ INSTANTIATE_TEST_SUITE_P(
 
 class HiddenEffect : public ::testing::TestWithParam<const char*> {};
 
-TEST_P(HiddenEffect, DiagnoseNamesIt) {
+/// The hidden size of a signed effect (0: not signed) and the key of its estimate.
+std::pair<double, const char*> signedTruth(const std::string& e, const test::HiddenEffectCase& h) {
+  if (e == "incidence_bias") return {h.config.effects.incidence_bias_m, "incidence_bias_m"};
+  if (e == "range_drift") return {h.config.effects.range_drift_m_per_scan, "range_drift_m_per_scan"};
+  if (e == "angle_offset") return {h.config.mount_yaw_rad, "angle_offset_deg"};
+  return {0.0, ""};
+}
+
+TEST_P(HiddenEffect, DiagnoseNamesItAndItsSignAndItsLikelihoodRatio) {
+  // Case seeds from 21 on: disjoint from the seeds 1-20 the method was developed on.
   const std::string e = GetParam();
-  const int n = casesPerEffect();
-  int named = 0;
+  const int n = casesPerEffect(e);
+  const int first = firstCase();
+  int named = 0, signs = 0, signed_cases = 0, lr_significant = 0, lr_cases = 0;
   std::string misses;
-  for (int k = 1; k <= n; ++k) {
+  for (int k = first; k < first + n; ++k) {
+    SCOPED_TRACE(k);
     const auto h = test::hiddenEffectCase(e, static_cast<std::uint64_t>(k));
     const auto s = simulation::simulateLandmarkLevel(h.config, h.seed);
     DiagnoseConfig dc;
     dc.seed = static_cast<std::uint64_t>(k);
+    dc.replicas = replicasPerCase();
+    dc.closeness_replicas = 1;  // how close the extended simulation comes is not looked at here
     const auto r = diagnoseSequence(s.obs, dc);
     ASSERT_EQ(r.status, "ok") << r.message;
     if (r.primary_cause == e) ++named;
     else misses += " case " + std::to_string(k) + " (" + h.size + "): " + r.primary_cause + ";";
+    const auto c = std::find_if(r.candidates.begin(), r.candidates.end(), [&](const CandidateResult& x) { return x.effect == e; });
+    if (c == r.candidates.end()) continue;  // none
+    // One-parameter effects: the likelihood ratio of the nested fits (extended against the
+    // seeds' model) on all the data finds the hidden effect.
+    if (std::isfinite(c->p_likelihood_ratio)) {
+      ++lr_cases;
+      lr_significant += c->p_likelihood_ratio < 0.01;
+    }
+    // Signed effects: the fitted sign is the hidden one.
+    const auto [truth, key] = signedTruth(e, h);
+    if (truth != 0.0) {
+      ++signed_cases;
+      ASSERT_TRUE(c->estimates.count(key)) << key;
+      signs += std::signbit(c->estimates.at(key)) == std::signbit(truth);
+    }
   }
-  // All of a few cases; 19 of 20 (95 %) with the long run.
-  const int required = n >= 20 ? (19 * n + 19) / 20 : n;
-  EXPECT_GE(named, required) << e << ": named in " << named << " of " << n << ";" << misses;
+  // Binomial allowance: at least n - 1 of n. A method that is right with probability 0.99 per
+  // case fails 9 of 10 with probability 0.4 % (4 of 5: 0.1 %), one right with 0.95 with 8.6 %
+  // (2.3 %); the long run (20 cases, ctest -L long) asks 19 of 20. Fewer than 5 cases: all.
+  auto required = [](int cases) { return cases >= 20 ? (19 * cases + 19) / 20 : cases >= 5 ? cases - 1 : cases; };
+  EXPECT_GE(named, required(n)) << e << ": named in " << named << " of " << n << ";" << misses;
+  EXPECT_GE(lr_significant, required(lr_cases)) << e << ": likelihood ratio p < 0.01 in " << lr_significant << " of " << lr_cases;
+  EXPECT_GE(signs, required(signed_cases)) << e << ": fitted sign right in " << signs << " of " << signed_cases;
 }
 
 INSTANTIATE_TEST_SUITE_P(Sequence, HiddenEffect,
@@ -414,43 +499,8 @@ TEST(DiagnoseSequence, NoLandmarkGivesAStatus) {
 // ---------------------------------------------------------------------------------------------
 // Static recordings: a simulated room seen from one pose.
 
-StaticScans staticRoom(const RangeEffects& fx, const NoiseModel& noise, std::uint64_t seed, int scans = 150) {
-  Scene s;
-  s.sensor.beams = 360;
-  s.sensor.range.range_min_m = 0.15;
-  s.sensor.range.range_max_m = 12.0;
-  s.sensor.range.bias.alpha = {0.01, 1.0};
-  s.sensor.range.noise = noise;
-  s.sensor.effects = fx;
-  s.path.stops = 1;
-  s.path.scans_per_stop = scans;
-  s.path.start = Pose2{0.3, -0.2, 0.4};
-  // An irregular room: walls at several distances and incidences, a pillar, a box.
-  s.walls = {{-2.0, -3.0, 4.0, -3.0}, {4.0, -3.0, 4.0, 1.0}, {4.0, 1.0, 2.5, 3.5}, {2.5, 3.5, -2.0, 3.5}, {-2.0, 3.5, -2.0, -3.0}};
-  s.clutter = {{1.5, 1.0, 0.2}};
-  s.walls.push_back({-1.0, 0.8, -0.4, 1.6});
-  const auto stops = simulation::planStops(s, seed);
-  StaticScans out;
-  out.scans = static_cast<std::size_t>(scans);
-  out.beams_per_scan = 360;
-  out.range_min_m = 0.15;
-  out.range_max_m = 12.0;
-  for (std::size_t k = 0; k < out.scans; ++k) {
-    const auto sim = simulation::simulateScan(s, stops[0], k, seed);
-    for (const auto& p : *sim.scan.cloud)
-      if (std::isfinite(p.x))
-        out.readings.push_back({std::atan2(static_cast<double>(p.y), static_cast<double>(p.x)),
-                                std::hypot(static_cast<double>(p.x), static_cast<double>(p.y)), static_cast<std::uint32_t>(k)});
-  }
-  return out;
-}
-
-NoiseModel squared(double sigma_e) {
-  NoiseModel n;
-  n.kind = NoiseKind::squared;
-  n.sigma_e = sigma_e;
-  return n;
-}
+using test::staticRoom;
+NoiseModel squared(double sigma_e) { return test::squaredNoise(sigma_e); }
 
 TEST(DiagnoseStatic, CleanRoomHasNoCauseAndFindsItsWalls) {
   DiagnoseConfig dc;
@@ -470,54 +520,67 @@ TEST(DiagnoseStatic, CleanRoomHasNoCauseAndFindsItsWalls) {
   }
 }
 
-struct StaticCase {
-  const char* effect;
-  RangeEffects fx;
-  NoiseModel noise;
-};
+class StaticHiddenEffect : public ::testing::TestWithParam<test::StaticCase> {};
 
-class StaticHiddenEffect : public ::testing::TestWithParam<StaticCase> {};
-
-TEST_P(StaticHiddenEffect, DiagnoseNamesIt) {
+TEST_P(StaticHiddenEffect, DiagnoseNamesWhatTheTruthAllows) {
+  const test::StaticCase& c = GetParam();
   DiagnoseConfig dc;
   dc.replicas = 9;
-  const auto r = diagnoseStatic(staticRoom(GetParam().fx, GetParam().noise, 7), dc);
+  dc.static_range_offset_m = c.known_offset_m;
+  const auto r = diagnoseStatic(staticRoom(c.fx, c.noise, 7, 150, c.step_error_fraction), dc);
   ASSERT_EQ(r.status, "ok") << r.message;
-  EXPECT_EQ(r.primary_cause, GetParam().effect) << r.decision;
+  if (!c.also.empty()) {
+    EXPECT_TRUE(c.allows(r.primary_cause)) << r.primary_cause << ": " << r.decision;
+  } else {
+    EXPECT_EQ(r.primary_cause, c.effect) << r.decision;
+  }
+  for (const auto& k : r.candidates) {
+    if (k.effect == "heading_error" || k.effect == "angle_offset" || k.effect == "odometry_scale") {
+      EXPECT_FALSE(k.applicable) << k.effect;  // one pose: no stops, no headings
+    }
+  }
 }
 
-RangeEffects fxOf(double gamma, double drift, double dof) {
-  RangeEffects fx;
-  fx.incidence_noise_exponent = gamma;
-  fx.range_drift_m_per_scan = drift;
-  fx.noise_student_dof = dof;
-  return fx;
-}
+INSTANTIATE_TEST_SUITE_P(Room, StaticHiddenEffect, ::testing::ValuesIn(test::staticCases()),
+                         [](const auto& p) { return std::string(p.param.name); });
 
-NoiseModel power(double k) {
-  NoiseModel n;
-  n.kind = NoiseKind::power;
-  n.exponent = k;
-  n.sigma_e = 0.0015 * std::pow(3.0, 2.0 - k);  // the same noise at 3 m
-  return n;
-}
-
-INSTANTIATE_TEST_SUITE_P(Room, StaticHiddenEffect,
-                         ::testing::Values(StaticCase{"incidence_noise", fxOf(1.0, 0.0, 0.0), squared(0.0015)},
-                                           StaticCase{"range_drift", fxOf(0.0, 2e-4, 0.0), squared(0.0015)},
-                                           StaticCase{"heavy_tails", fxOf(0.0, 0.0, 3.0), squared(0.0015)},
-                                           StaticCase{"range_noise_law", fxOf(0.0, 0.0, 0.0), power(0.5)}),
-                         [](const auto& p) { return std::string(p.param.effect); });
-
-TEST(DiagnoseStatic, AMovingSensorIsDiagnosedInWindows) {
-  StaticScans s = staticRoom({}, squared(0.0015), 5, 64);
-  // The sensor turns by 0.05 degree per scan: 3 degrees over the recording.
-  for (auto& r : s.readings) r.angle_rad += deg2rad(0.05) * r.scan;
+TEST(DiagnoseStatic, ATurningSensorIsDiagnosedInWindowsAndItsEdgesNamed) {
+  // The sensor turns in place by 0.05 degree per scan (3 degrees over the recording); its readings
+  // follow the seeds' model exactly. The diagnosis sees the motion (windows of 8 scans, each with a
+  // time trend per beam), and what the motion does to the data: a beam that sweeps across the
+  // pillar's or the box's edge within a window reads now the near, now the far surface, which is
+  // what the mixed-pixel candidate describes. No range effect of the sensor may be named.
+  const StaticScans s = staticRoom({}, squared(0.0015), 5, 64, 0.0, deg2rad(0.05));
   DiagnoseConfig dc;
   dc.replicas = 5;
   const auto r = diagnoseStatic(s, dc);
   ASSERT_EQ(r.status, "ok") << r.message;
   EXPECT_EQ(r.baseline_extra.at("window_scans"), 8.0);
+  EXPECT_EQ(r.primary_cause, effect::kMixedPixels) << r.decision;
+}
+
+/// Static clean-room runs over many seeds (LIDARCAL_STATIC_CLEAN_SEEDS; the long run registers 20):
+/// how often clean data get a cause. Skipped when the variable is unset.
+TEST(DiagnoseStatic, CleanRoomFalsePositiveRateOverSeeds) {
+  const char* env = std::getenv("LIDARCAL_STATIC_CLEAN_SEEDS");
+  const int n = env && *env ? std::atoi(env) : 0;
+  if (n <= 0) GTEST_SKIP() << "set LIDARCAL_STATIC_CLEAN_SEEDS (ctest -L long runs 20)";
+  int named = 0;
+  std::string which;
+  for (int seed = 101; seed < 101 + n; ++seed) {
+    DiagnoseConfig dc;
+    dc.seed = static_cast<std::uint64_t>(seed);
+    const auto r = diagnoseStatic(staticRoom({}, squared(0.0015), static_cast<std::uint64_t>(seed)), dc);
+    ASSERT_EQ(r.status, "ok") << r.message;
+    if (r.primary_cause != effect::kNone) {
+      ++named;
+      which += " seed " + std::to_string(seed) + ": " + r.primary_cause + ";";
+    }
+  }
+  std::printf("static clean room: a cause named in %d of %d seeds;%s\n", named, n, which.c_str());
+  // Holm at alpha = 0.01 over the candidates: at most 1 % of clean recordings should get a cause.
+  // Allowance: at most 1 in 20 (a method at exactly 1 % exceeds it with probability 1.7 %).
+  EXPECT_LE(named, std::max(1, n / 20)) << which;
 }
 
 TEST(DiagnoseStatic, TooFewScansGiveAStatus) {
@@ -528,3 +591,5 @@ TEST(DiagnoseStatic, TooFewScansGiveAStatus) {
 
 }  // namespace
 }  // namespace lidarcal::calibration
+
+

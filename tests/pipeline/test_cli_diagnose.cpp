@@ -80,7 +80,21 @@ TEST_F(CliDiagnose, NamesAHeadingErrorInDetectedScansAndWritesTheReport) {
   EXPECT_FALSE(j["battery"].empty());
   ASSERT_TRUE(j["extended_model"].is_object());
   EXPECT_EQ(j["extended_model"]["effect"], "heading_error");
-  EXPECT_NEAR(j["extended_model"]["scene_keys"]["path.sigma_psi_deg"].get<double>(), 1.2, 0.6);
+  // The estimate is the RMS of the refined headings about the commanded ones; the truth is the
+  // ten headings the simulator drew (truth.json), whose RMS is itself 1.2 degrees only on average
+  // (it scatters by 22 % over 10 draws): compare with the realised RMS (1.40 degrees here). Each
+  // stop's heading is pinned by five poles to a few hundredths of a degree, but the heading
+  // model's 2-degree prior pulls the refined headings towards the commanded ones (measured: 19 %
+  // below the realised RMS); allow 25 % (was 50 % of the nominal 1.2).
+  double ss = 0.0;
+  const auto truth = json(at("heading/truth.json"));
+  for (const auto& st : truth["stops"]) {
+    const double psi = st["actual"]["yaw_rad"].get<double>() - st["commanded"]["yaw_rad"].get<double>();
+    ss += psi * psi;
+  }
+  const double realised_deg = std::sqrt(ss / static_cast<double>(truth["stops"].size())) * 180.0 / M_PI;
+  EXPECT_NEAR(j["extended_model"]["scene_keys"]["path.sigma_psi_deg"].get<double>(), realised_deg, 0.25 * realised_deg)
+      << "realised " << realised_deg << " degrees";
   EXPECT_GT(j["gain"]["heldout_nats_per_point"].get<double>(), 0.0);
   EXPECT_GT(j["gain"]["calibration_mse_ratio"]["baseline"].get<double>(), 0.0);
   EXPECT_TRUE(fs::exists(out / "d/report.md"));
@@ -188,7 +202,16 @@ TEST(CliDiagnoseMeasured, RplidarRecordingIsAStaticRoom) {
   EXPECT_EQ(j["baseline"]["fitted"]["window_scans"], 0.0);  // it did not move
   EXPECT_GE(j["baseline"]["walls"].size(), 4u);
   EXPECT_EQ(j["baseline"]["fitted"]["reading_grid_m"], 0.001);  // the bag's ranges are whole millimetres
-  EXPECT_NE(j["primary_cause"], "none");
+  // What is established about this recording (docs/FINDINGS.md, on all 1319 scans): its noise has
+  // heavy tails (a few readings up to 1.3 m off at depth discontinuities and dark furniture) and
+  // grows with the incidence on the walls; the 1 mm grid is certain but far finer than the noise.
+  // The named cause must be one of the two noise departures, and both must be significant.
+  const std::string cause = j["primary_cause"];
+  EXPECT_TRUE(cause == "heavy_tails" || cause == "incidence_noise") << cause;
+  for (const auto& c : j["candidates"])
+    if (c["effect"] == "heavy_tails" || c["effect"] == "incidence_noise") {
+      EXPECT_TRUE(c["significant"].get<bool>()) << c["effect"];
+    }
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
 // `lidarcal montecarlo` end to end: the files it promises, the same bytes with 1 and 2 threads,
-// refusals of bad options, and an interruption that leaves nothing behind.
+// every plot drawn without the joint refinement, a failing plot that fails the command, refusals
+// of bad options, and an interruption that leaves nothing behind.
 
 #include <fcntl.h>
 #include <signal.h>
@@ -48,12 +49,64 @@ TEST(CliMonteCarlo, WritesEveryFileAndTheCsvDoesNotDependOnTheThreadCount) {
   EXPECT_NE(again.exit_code, 0);
 }
 
+bool haveGnuplot() { return std::system("command -v gnuplot >/dev/null 2>&1") == 0; }
+
+TEST(CliMonteCarlo, WithoutTheJointRefinementEveryPlotIsDrawnFromWhatRan) {
+  // --no-joint: no trial runs the joint refinement. A panel for it would have no point to draw
+  // (gnuplot stops the whole figure there); the figures leave it out and every plot is drawn.
+  if (!haveGnuplot()) GTEST_SKIP() << "gnuplot not installed";
+  TempDir dir;
+  const fs::path out = dir / "o";
+  const auto r = runCli(kSmall + " --study all --no-joint --threads 2 --out " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err, "");
+  EXPECT_EQ(r.out.find("Plots:"), std::string::npos) << r.out;  // nothing skipped or failed
+  for (const char* fig : {"fig7", "fig8", "fig9", "fig10", "fig11"}) {
+    SCOPED_TRACE(fig);
+    EXPECT_TRUE(fs::exists(out / (std::string(fig) + ".png")));
+    const std::string gp = test::readFile(out / (std::string(fig) + ".gp"));
+    // No panel or series of an estimator that did not run.
+    EXPECT_EQ(gp.find("title \"joint"), std::string::npos);
+    EXPECT_EQ(gp.find(", joint refinement\""), std::string::npos);
+  }
+  EXPECT_FALSE(fs::exists(out / "gnuplot.log"));
+  // fig9: two rows (L = 2, 5) of two panels (closed form, oracle).
+  EXPECT_NE(test::readFile(out / "fig9.gp").find("set multiplot layout 2,2"), std::string::npos);
+}
+
+TEST(CliMonteCarlo, APlotThatFailsFailsTheCommandAndWritesNothing) {
+  // A gnuplot that fails (here a stand-in on the PATH that reports an error) must not leave a
+  // successful run with a broken figure behind.
+  TempDir dir;
+  const fs::path bin = dir / "bin";
+  fs::create_directories(bin);
+  test::writeFile(bin / "gnuplot", "#!/bin/sh\necho 'line 12: x range is invalid' >&2\nexit 1\n");
+  fs::permissions(bin / "gnuplot", fs::perms::owner_all);
+  const fs::path out = dir / "o";
+  const auto r = test::runCliPrefixed("export PATH='" + bin.string() + "':\"$PATH\"", kSmall + " --study fig10 --out " + out.string());
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("gnuplot failed on fig10.gp"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("x range is invalid"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out));
+  // No gnuplot at all: the study is written and the command says the plots were skipped.
+  const fs::path empty = dir / "empty";
+  fs::create_directories(empty);
+  const fs::path out2 = dir / "o2";
+  const auto r2 = test::runCliPrefixed("export PATH='" + empty.string() + "'", kSmall + " --study fig10 --out " + out2.string());
+  ASSERT_EQ(r2.exit_code, 0) << r2.err;
+  EXPECT_NE(r2.out.find("Plots: skipped, gnuplot is not installed"), std::string::npos) << r2.out;
+  EXPECT_TRUE(fs::exists(out2 / "fig10.csv"));
+  EXPECT_FALSE(fs::exists(out2 / "fig10.png"));
+}
+
 TEST(CliMonteCarlo, RefusesBadOptions) {
   TempDir dir;
   const std::string out = (dir / "o").string();
   EXPECT_EQ(runCli("montecarlo --study fig12 --out " + out).exit_code, 2);
   EXPECT_EQ(runCli("montecarlo --level photons --out " + out).exit_code, 2);
   EXPECT_EQ(runCli("montecarlo --level scan --angle-noise bearing --out " + out).exit_code, 2);
+  EXPECT_EQ(runCli("montecarlo --angle-noise wobble --out " + out).exit_code, 2);
+  EXPECT_EQ(runCli("montecarlo --noise-law cubic --out " + out).exit_code, 2);
   EXPECT_EQ(runCli("montecarlo --trials 0 --out " + out).exit_code, 2);
   EXPECT_FALSE(fs::exists(out));
   const auto help = runCli("montecarlo --help");
