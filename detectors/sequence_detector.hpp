@@ -44,6 +44,12 @@ struct SequenceDetectionConfig {
   /// With the radius estimated: the arcs kept per track (an even sample over its stops), which
   /// bounds what the estimate keeps per landmark however long the sequence. Default 1024.
   std::size_t arcs_per_landmark = 1024;
+  /// Continuous motion (the robot never stopped: at least continuous_min_stops stops and more
+  /// than half of them one scan each, as imports of odometry give): the association's
+  /// drift_per_m, the growth of a track's reach per metre travelled since its last sighting
+  /// (association.hpp). Stop and go keeps association.drift_per_m. Default 0.2.
+  double continuous_drift_per_m = 0.2;
+  int continuous_min_stops = 20;  ///< see continuous_drift_per_m. Default 20
 
   /// Throws std::invalid_argument naming the first bad field.
   void validate() const;
@@ -68,6 +74,7 @@ struct SequenceDetections {
   std::optional<double> known_radius_m;  ///< the known radius, when radius_source is known
   std::optional<double> common_radius_m;  ///< common radius used in the second pass, when the estimates agreed
   std::size_t radius_failures = 0;    ///< landmarks whose joint radius could not be estimated (free fits kept)
+  bool continuous = false;            ///< the sequence was taken as continuous motion (continuous_drift_per_m used)
   std::string note;                   ///< plain-language summary (e.g. why no landmark was found)
 
   /// How to run the final pass again (forEachScan without kept scans).

@@ -42,6 +42,11 @@ void addCalibrationOptions(CLI::App* app, const std::shared_ptr<CalibrationOptio
   app->add_option("--min-stops", o->min_stops, "A landmark must be seen from at least this many stops")
       ->check(CLI::Range(2, 1000))
       ->capture_default_str();
+  app->add_option("--motion-prior", o->motion_prior,
+                  "Odometry between consecutive stops as a prior of the joint refinement: auto (on when the robot never "
+                  "stopped: at least 20 stops, most of one scan each), on, or off (every stop tied to its own commanded pose)")
+      ->check(CLI::IsMember({"auto", "on", "off"}))
+      ->capture_default_str();
   app->add_option("--effects", o->effects,
                   "Comma-separated effect terms for the joint refinement, as `lidarcal diagnose` names them: "
                   "incidence_noise, incidence_bias, landmark_bias, range_drift, angle_offset, range_noise_law, mixed_pixels, "
@@ -62,6 +67,9 @@ calibration::CalibrationConfig calibrationConfig(const CalibrationOptions& o) {
   c.triangulation.min_stops = o.min_stops;
   c.joint.sigma_s_m = o.sigma_s_m;
   c.joint.sigma_psi_rad = deg2rad(o.sigma_psi_deg);
+  c.joint.motion = o.motion_prior == "on"    ? calibration::MotionPrior::on
+                   : o.motion_prior == "off" ? calibration::MotionPrior::off
+                                             : calibration::MotionPrior::automatic;
   std::string rest = o.effects;
   while (!rest.empty()) {
     const auto comma = rest.find(',');

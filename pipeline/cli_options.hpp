@@ -24,6 +24,7 @@ struct CalibrationOptions {
   double sigma_theta_deg = 1.0;
   double radius_m = 0.0;  // 0: from sequence.json or estimated
   int min_stops = 3;
+  std::string motion_prior = "auto";  // auto, on, off (JointConfig::motion)
   std::string effects;  // comma-separated effect terms of the joint refinement (lidarcal diagnose's names)
 };
 

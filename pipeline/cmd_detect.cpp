@@ -127,6 +127,10 @@ void runDetect(const DetectOptions& o) {
   const std::size_t circles = a.detections;
   std::printf("# Landmarks of %s\n\n", o.seq.c_str());
   std::printf("- scans: %s at %s\n", plural(seq.scans.size(), "scan").c_str(), plural(seq.stops.size(), "stop").c_str());
+  if (result.continuous)
+    std::printf("- continuous motion (nearly every scan its own pose): a landmark's reach grows by %.2f m per metre "
+                "travelled since it was last seen, up to %.2f m\n",
+                cfg.continuous_drift_per_m, std::max(cfg.association.max_link_distance_m, cfg.association.link_distance_m));
   switch (result.radius_source) {
     case detectors::RadiusSource::known: std::printf("- radius: given (%.4f m)", result.known_radius_m.value_or(0.0)); break;
     case detectors::RadiusSource::estimated:
