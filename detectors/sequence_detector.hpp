@@ -1,8 +1,10 @@
 #pragma once
-// A whole sequence: detect in every scan (streaming, one scan in memory at a time), associate
-// across stops, and, when the landmark radius is not known, estimate it jointly per landmark and
-// detect again with that radius fixed (a second pass over the scans). This is the in-process API the calibration
-// stage calls; `lidarcal detect` adds the labelled files.
+// A whole sequence: detect in every scan (streaming, the scans of one stop in memory at a
+// time), associate across stops, and, when the landmark radius is not known, estimate it
+// jointly per landmark and detect again with that radius fixed (a second pass over the scans).
+// In the first pass, objects that no single arc of a stop determines (thin far poles, 3-9
+// beams) are fitted with the radius of the stop's scans pooled (stop_radius.hpp). This is the
+// in-process API the calibration stage calls; `lidarcal detect` adds the labelled files.
 //
 // Memory. The scans are processed stop by stop: stage 1 of the association (association.hpp)
 // needs one stop's detections, the tracking across stops only that stop's clusters and the

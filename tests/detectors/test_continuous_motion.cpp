@@ -149,7 +149,6 @@ SequenceDetectionConfig tofConfig() {
   cfg.use_sequence_radius = false;
   cfg.detection.threshold_m = 0.01;
   cfg.detection.threshold_per_m2 = 0.0005;
-  cfg.detection.radius_min_m = 0.015;
   return cfg;
 }
 
