@@ -606,6 +606,7 @@ CalibrationModel calibrate(const LandmarkObservations& obs, const CalibrationCon
   m.iterations = j.solver_iterations;
   m.readings = j.readings;
   m.pose_scatter_m = j.pose_scatter_m;
+  m.motion_prior = j.motion_prior;
   m.stop_poses = j.poses;
   m.heading_scatter_rad = j.heading_scatter_rad;
   m.residual_rms_m = j.residual_rms_m;

@@ -97,6 +97,33 @@ struct ScaledPosePriorCost {
   }
 };
 
+/// Motion prior between consecutive stops a -> b: the step from a to b in a's frame against
+/// the commanded step (dx, dy, dpsi), its translation scaled by (1 + s) (odometry scale).
+struct MotionPriorCost {
+  double dx, dy, dpsi, inv_t, inv_psi;
+  template <typename T>
+  bool operator()(const T* a, const T* b, const T* scale, T* residual) const {
+    using std::cos;
+    using std::sin;
+    const T c = cos(a[2]), s = sin(a[2]);
+    const T ex = b[0] - a[0], ey = b[1] - a[1];
+    const T f = T(1) + scale[0];
+    residual[0] = (c * ex + s * ey - f * T(dx)) * T(inv_t);
+    residual[1] = (c * ey - s * ex - f * T(dy)) * T(inv_t);
+    // Like the pose prior: dpsi is unwrapped next to the estimate when the residual is built.
+    residual[2] = (b[2] - a[2] - T(dpsi)) * T(inv_psi);
+    return true;
+  }
+};
+
+/// The commanded step from stop a to stop b, in a's frame.
+Pose2 commandedStep(const Pose2& a, const Pose2& b) {
+  Pose2 d;
+  a.toSensor(b.x_m, b.y_m, d.x_m, d.y_m);
+  d.yaw_rad = wrapAngle(b.yaw_rad - a.yaw_rad);
+  return d;
+}
+
 template <int N>
 ceres::CostFunction* makeBeamCost(double angle, double y, double inv_sigma) {
   return new ceres::AutoDiffCostFunction<BeamRangeCost<N>, 1, 3, 2, 1, N>(new BeamRangeCost<N>{angle, y, inv_sigma});
@@ -200,6 +227,31 @@ double goldenMax(F&& fn, double lo, double hi, int iterations = 40) {
 
 }  // namespace
 
+const char* toString(MotionPrior m) {
+  switch (m) {
+    case MotionPrior::automatic: return "automatic";
+    case MotionPrior::off: return "off";
+    case MotionPrior::on: return "on";
+  }
+  return "unknown";
+}
+
+bool continuousMotion(const LandmarkObservations& obs, const JointConfig& config) {
+  if (obs.commanded.size() < static_cast<std::size_t>(std::max(config.motion_min_stops, 1))) return false;
+  // Distinct scans with sightings per stop (sightings come scan by scan, but do not rely on it).
+  std::vector<std::vector<std::size_t>> scans(obs.commanded.size());
+  for (const auto& s : obs.sightings)
+    if (s.stop < scans.size()) scans[s.stop].push_back(s.scan);
+  std::size_t seen = 0, single = 0;
+  for (auto& v : scans) {
+    if (v.empty()) continue;
+    std::sort(v.begin(), v.end());
+    ++seen;
+    single += v.front() == v.back();
+  }
+  return seen > 0 && 2 * single > seen;
+}
+
 void JointConfig::validate() const {
   if (order < 1 || order > 6) throw std::invalid_argument("JointConfig: order must be 1..6");
   if (noise != NoiseKind::squared && noise != NoiseKind::polynomial && noise != NoiseKind::constant &&
@@ -213,6 +265,10 @@ void JointConfig::validate() const {
     throw std::invalid_argument("JointConfig: lateral_fraction must be in (0, 1]");
   if (outer_iterations < 1) throw std::invalid_argument("JointConfig: outer_iterations must be >= 1");
   if (!(outlier_floor >= 0.0 && outlier_floor < 1.0)) throw std::invalid_argument("JointConfig: outlier_floor must be in [0, 1)");
+  if (!(motion_sigma_fraction >= 0.0) || !(motion_heading_sigma_rad_per_m >= 0.0) || !(motion_sigma_floor_m > 0.0) ||
+      !(motion_heading_floor_rad > 0.0) || !std::isfinite(motion_sigma_fraction + motion_heading_sigma_rad_per_m +
+                                                          motion_sigma_floor_m + motion_heading_floor_rad))
+    throw std::invalid_argument("JointConfig: motion prior sigmas must be finite, fractions >= 0, floors > 0");
 }
 
 double readingLogLikelihood(double y, double mean, double sigma, double mixed_fraction, double outlier_floor,
@@ -239,6 +295,9 @@ JointResult refineJoint(const LandmarkObservations& obs, const JointInit& init, 
   const JointEffects& fx = config.effects;
 
   JointResult out;
+  out.motion_prior = config.motion == MotionPrior::on ||
+                     (config.motion == MotionPrior::automatic && continuousMotion(obs, config));
+  const bool motion = out.motion_prior && init.poses.size() >= 2;
   out.model = init.model;
   out.model.bias.alpha.resize(static_cast<std::size_t>(config.order) + 1, 0.0);
   out.model.noise.kind = config.noise;
@@ -419,7 +478,20 @@ JointResult refineJoint(const LandmarkObservations& obs, const JointInit& init, 
     for (std::size_t k = 0; k < poses.size(); ++k) {
       const Pose2& c = obs.commanded[k];
       const double yaw = poses[k][2] + wrapAngle(c.yaw_rad - poses[k][2]);  // unwrapped next to the estimate
-      if (fx.odometry_scale) {
+      if (motion && k > 0) {
+        // Continuous motion: the commanded step from the previous stop (the first stop's prior
+        // below fixes the gauge).
+        const Pose2 step = commandedStep(obs.commanded[k - 1], c);
+        const double now = poses[k][2] - poses[k - 1][2];
+        const double len = std::hypot(step.x_m, step.y_m);
+        problem.AddResidualBlock(
+            new ceres::AutoDiffCostFunction<MotionPriorCost, 3, 3, 3, 1>(new MotionPriorCost{
+                step.x_m, step.y_m, now + wrapAngle(step.yaw_rad - now),
+                1.0 / (config.motion_sigma_fraction * len + config.motion_sigma_floor_m),
+                1.0 / (config.motion_heading_sigma_rad_per_m * len + config.motion_heading_floor_rad)}),
+            nullptr, poses[k - 1].data(), poses[k].data(), &scale);
+        if (!fx.odometry_scale) problem.SetParameterBlockConstant(&scale);
+      } else if (fx.odometry_scale) {
         problem.AddResidualBlock(new ceres::AutoDiffCostFunction<ScaledPosePriorCost, 3, 3, 1>(new ScaledPosePriorCost{
                                      c.x_m, c.y_m, yaw, c0.x_m, c0.y_m, 1.0 / config.sigma_s_m, 1.0 / config.sigma_psi_rad}),
                                  nullptr, poses[k].data(), &scale);
@@ -499,7 +571,11 @@ JointResult refineJoint(const LandmarkObservations& obs, const JointInit& init, 
     if (outer == 0) problem.SetParameterBlockConstant(alpha.data());
 
     ceres::Solver::Options options;
-    options.linear_solver_type = ceres::DENSE_SCHUR;  // eliminates the pose or centre blocks
+    // Stop and go: the poses are independent of each other and the Schur complement eliminates
+    // them (a dense reduced system over the centres and the model). Chained by the motion prior
+    // they are not; a sparse Cholesky of the whole normal matrix (SuiteSparse, fill-reducing
+    // ordering) keeps time and memory linear in the poses.
+    options.linear_solver_type = motion ? ceres::SPARSE_NORMAL_CHOLESKY : ceres::DENSE_SCHUR;
     options.max_num_iterations = config.max_solver_iterations;
     options.function_tolerance = 1e-10;
     options.parameter_tolerance = 1e-10;
@@ -598,11 +674,19 @@ JointResult refineJoint(const LandmarkObservations& obs, const JointInit& init, 
   {
     const Pose2& c0 = obs.commanded.front();
     const double s = fx.odometry_scale ? scale : 0.0;
+    auto add = [&](double ex, double ey, double sd) {
+      out.prior_neg_log_likelihood += 0.5 * (ex * ex + ey * ey) / (sd * sd) + kLog2Pi + 2.0 * std::log(sd);
+    };
     for (std::size_t k = 0; k < poses.size(); ++k) {
-      const double ex = poses[k][0] - (c0.x_m + (1.0 + s) * (obs.commanded[k].x_m - c0.x_m));
-      const double ey = poses[k][1] - (c0.y_m + (1.0 + s) * (obs.commanded[k].y_m - c0.y_m));
-      out.prior_neg_log_likelihood += 0.5 * (ex * ex + ey * ey) / (config.sigma_s_m * config.sigma_s_m) + kLog2Pi +
-                                      2.0 * std::log(config.sigma_s_m);
+      if (motion && k > 0) {
+        const Pose2 step = commandedStep(obs.commanded[k - 1], obs.commanded[k]);
+        const Pose2 est = commandedStep(out.poses[k - 1], out.poses[k]);
+        add(est.x_m - (1.0 + s) * step.x_m, est.y_m - (1.0 + s) * step.y_m,
+            config.motion_sigma_fraction * std::hypot(step.x_m, step.y_m) + config.motion_sigma_floor_m);
+        continue;
+      }
+      add(poses[k][0] - (c0.x_m + (1.0 + s) * (obs.commanded[k].x_m - c0.x_m)),
+          poses[k][1] - (c0.y_m + (1.0 + s) * (obs.commanded[k].y_m - c0.y_m)), config.sigma_s_m);
     }
   }
   out.heading_scatter_rad = std::sqrt(hs / static_cast<double>(poses.size()));

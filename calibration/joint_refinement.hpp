@@ -5,7 +5,9 @@
 // landmark l is modelled as
 //     y_i = f(d_i) + sigma(d_i) e_i,   d_i = distance along the beam from pose k to circle l,
 // with priors tying each pose to its commanded value (sigma_s, sigma_psi; they also fix the
-// gauge: translation, rotation and scale of the world). Solved with Ceres (robust Huber loss);
+// gauge: translation, rotation and scale of the world), or, for a robot that never stops, the
+// first pose to its commanded value and each later one to the commanded step from the one
+// before (motion prior, JointConfig::motion). Solved with Ceres (robust Huber loss);
 // the noise law is re-estimated from the residuals between solves (iteratively reweighted ML).
 //
 // Optional effect terms (JointEffects, all off by default; physical causes in docs/FORMAT.md,
@@ -58,6 +60,14 @@ struct JointEffectEstimates {
   double heading_rms_rad = 0.0;             ///< RMS of the refined minus the commanded headings, radians
 };
 
+/// Whether the odometry between consecutive stops enters as a motion prior.
+enum class MotionPrior {
+  automatic,  ///< on when continuousMotion() says the sequence never stopped (default)
+  off,        ///< every stop tied to its commanded pose (stop and go, seed 000 eq. 8)
+  on,         ///< the first stop tied to its commanded pose, every later one to the commanded step from the one before
+};
+const char* toString(MotionPrior m);
+
 struct JointConfig {
   int order = 2;                  ///< bias polynomial order n (>= 1)
   NoiseKind noise = NoiseKind::squared;  ///< noise law re-estimated between solves: squared, polynomial or constant
@@ -85,12 +95,35 @@ struct JointConfig {
   /// one pose summarised by their count and mean (the Gaussian likelihood unchanged, the cost
   /// independent of the scans per stop; issue 19). Not with drift or mixed pixels. Default true.
   bool pool_repeated_scans = true;
+  /// Motion prior (continuous motion: each scan its own stop, the robot driving between them).
+  /// On, the first stop keeps the prior around its commanded pose (sigma_s_m, sigma_psi_rad: it
+  /// fixes the gauge) and every later stop k is tied to stop k - 1 by the commanded step between
+  /// them (robot frame of k - 1): each coordinate with std. dev. motion_sigma_fraction s +
+  /// motion_sigma_floor_m, the heading change with motion_heading_sigma_rad_per_m s +
+  /// motion_heading_floor_rad, s the commanded step length. Odometry drift then accumulates
+  /// along the path as it does on a real robot instead of being pulled back to the commanded
+  /// poses. Default automatic.
+  MotionPrior motion = MotionPrior::automatic;
+  double motion_sigma_fraction = 0.1;            ///< std. dev. of each step coordinate per metre of step. Default 0.1
+  double motion_sigma_floor_m = 0.002;           ///< plus this, metres. Default 0.002
+  double motion_heading_sigma_rad_per_m = 0.1;   ///< std. dev. of the heading change per metre of step, rad/m. Default 0.1 (5.7 deg/m)
+  double motion_heading_floor_rad = 0.002;       ///< plus this, radians. Default 0.002 (0.11 deg)
+  /// automatic: the fewest stops a continuous sequence has (below, stop and go is assumed).
+  /// Default 20.
+  int motion_min_stops = 20;
   /// Weight of a uniform density over the reading window mixed into every reading's likelihood
   /// (in the reported likelihood only, not in the fit), so that a few gross outliers cannot
   /// dominate a comparison of models. 0: plain Gaussian likelihood (default).
   double outlier_floor = 0.0;
   void validate() const;          ///< throws std::invalid_argument
 };
+
+/// The rule of MotionPrior::automatic: a sequence is continuous (the robot never stopped, each
+/// scan its own stop, as imports from CARMEN, YDLIDAR or CSV odometry give) when it has at least
+/// config.motion_min_stops stops and more than half of the stops with sightings have them from
+/// one scan only. Stop-and-go recordings hold several scans per stop; a few stops of one scan
+/// each (short tests, seed 000's study with one scan per stop) stay stop and go.
+bool continuousMotion(const LandmarkObservations& obs, const JointConfig& config);
 
 /// Starting point (normally the closed-form calibration).
 struct JointInit {
@@ -124,8 +157,10 @@ struct JointResult {
   std::size_t outliers = 0;                ///< readings beyond the Huber threshold at the end
   double neg_log_likelihood = 0.0;         ///< Gaussian NLL of the readings at the solution
   /// NLL of the commanded stop positions as measurements of the refined ones (seed 000 eq. 8,
-  /// sigma_s_m; with the odometry scale, of the scaled commanded path). Headings not included.
+  /// sigma_s_m; with the odometry scale, of the scaled commanded path); with the motion prior,
+  /// of the first stop's position and of the commanded steps' translations. Headings not included.
   double prior_neg_log_likelihood = 0.0;
+  bool motion_prior = false;               ///< the motion prior was used (JointConfig::motion)
   double aic = 0.0;                        ///< 2 k + 2 NLL, k = bias + noise + radius parameters
   double bic = 0.0;                        ///< k ln N + 2 NLL
   int solver_iterations = 0;               ///< Ceres iterations, all solves

@@ -82,6 +82,7 @@ struct CalibrationModel {
   double residual_rms_m = 0.0;       ///< RMS of range residuals
   std::size_t readings = 0;          ///< readings used
   double pose_scatter_m = 0.0;       ///< joint: refined vs commanded stop positions (RMS per coordinate)
+  bool motion_prior = false;         ///< joint: odometry between consecutive stops was a prior (continuous motion)
   double heading_scatter_rad = 0.0;  ///< joint: refined vs commanded headings (RMS)
   /// joint with the radius estimated: correlation of alpha_0 with the pole radius (NaN otherwise);
   /// near +-1 the offset is not determined by the data.

@@ -1,7 +1,7 @@
 #pragma once
-// A simulated world: a 2D scanning lidar on a robot that stops along a straight line among
-// vertical cylinders (landmarks, clutter) and wall segments. Plain data; io/scene_io reads it
-// from JSON, simulation/ ray-casts it.
+// A simulated world: a 2D scanning lidar on a robot that stops along a straight line (or drives
+// along a route without stopping) among vertical cylinders (landmarks, clutter) and wall
+// segments. Plain data; io/scene_io reads it from JSON, simulation/ ray-casts it.
 
 #include <cstdint>
 #include <string>
@@ -40,16 +40,55 @@ struct SensorSpec {
   RangeEffects effects;                  ///< effects beyond the seeds' model (all off by default)
 };
 
-/// The robot's path: stops at fixed steps along a straight line (seed 000 eqs. 7-8).
+/// How the robot moves through the scene.
+enum class PathKind {
+  stops,    ///< stop and go along a straight line (seed 000 eqs. 7-8); the default
+  driving,  ///< never stops: a pose per scan along a smooth route, VIEWPOINT from noisy odometry
+};
+
+/// One piece of a driving route: `length_m` of travel over which the heading turns by
+/// `turn_rad` at a constant rate (an arc of radius length_m / |turn_rad|; 0: a straight line).
+struct RouteSegment {
+  double length_m = 1.0;  ///< travel along the piece, metres (> 0). Default 1
+  double turn_rad = 0.0;  ///< heading change over the piece, radians, counter-clockwise positive. Default 0
+};
+
+/// Odometry of a driving robot: every step between consecutive poses is measured with errors
+/// that grow with the motion, and the measured steps are chained into the commanded poses
+/// (VIEWPOINT), so their error is a random walk along the route. For a true step of length s
+/// turning by dpsi (robot frame), the measured step is
+///   along  = s_along / (1 + step_error_fraction) + translation_fraction s e1,
+///   across = s_across / (1 + step_error_fraction) + translation_fraction s e2,
+///   turn   = dpsi + (heading_rad_per_m s + heading_fraction |dpsi|) e3,   e1..e3 ~ N(0, 1).
+struct OdometryNoise {
+  double translation_fraction = 0.0;  ///< std. dev. of the measured step along and across the motion per metre of step. Default 0
+  double heading_rad_per_m = 0.0;     ///< std. dev. of the measured heading change per metre of step, rad/m. Default 0
+  double heading_fraction = 0.0;      ///< std. dev. of the measured heading change per radian turned. Default 0
+};
+
+/// A driving robot (PathKind::driving).
+struct DrivingSpec {
+  /// The route, followed from PathSpec::start piece by piece, from the first piece again after
+  /// the last (a closed route loops). Default: one straight metre.
+  std::vector<RouteSegment> route{RouteSegment{}};
+  double speed_m_per_scan = 0.02;  ///< travel between consecutive poses, metres (> 0). Default 0.02
+  OdometryNoise odometry;          ///< how the commanded poses drift from the true ones
+};
+
+/// The robot's path: stops at fixed steps along a straight line (seed 000 eqs. 7-8), or (kind
+/// driving) a pose every speed_m_per_scan along a route, stops = poses.
 struct PathSpec {
-  Pose2 start;                 ///< commanded pose of stop 0; the robot moves along start.yaw
-  double step_m = 0.30;        ///< commanded distance between consecutive stops, metres
-  int stops = 10;              ///< number of stops K
-  int scans_per_stop = 10;     ///< 360-degree sweeps recorded at each stop
-  double sigma_s_m = 0.0;      ///< std. dev. of the true position around the commanded one (eq. 8), metres
-  double sigma_psi_rad = 0.0;  ///< std. dev. of the true heading around the commanded one, radians
+  PathKind kind = PathKind::stops;  ///< stop and go (default) or driving
+  Pose2 start;                 ///< commanded (and true) pose of stop 0; stop and go moves along start.yaw
+  double step_m = 0.30;        ///< commanded distance between consecutive stops, metres (stop and go)
+  int stops = 10;              ///< number of stops K (driving: of poses along the route)
+  int scans_per_stop = 10;     ///< 360-degree sweeps recorded at each stop (driving: per pose, default 1)
+  double sigma_s_m = 0.0;      ///< std. dev. of the true position around the commanded one (eq. 8), metres (stop and go)
+  double sigma_psi_rad = 0.0;  ///< std. dev. of the true heading around the commanded one, radians (stop and go)
   /// The true step is step_m (1 + step_error_fraction): an odometry scale error. 0 = off.
+  /// Driving: the odometry reports every true step divided by (1 + step_error_fraction).
   double step_error_fraction = 0.0;
+  DrivingSpec driving;         ///< route, speed and odometry noise (kind driving only)
 };
 
 /// Everything the simulator needs to produce a scan sequence.
@@ -63,7 +102,8 @@ struct Scene {
   bool publish_landmark_radius = true; ///< write the landmarks' common radius into sequence.json
 };
 
-/// Commanded pose of stop k: start + k * step along the start heading (seed 000 eq. 7).
+/// Commanded pose of stop k of a stop-and-go path: start + k * step along the start heading
+/// (seed 000 eq. 7). (Driving paths: simulation::planStops.)
 inline Pose2 commandedPose(const PathSpec& path, int stop) {
   Pose2 pose = path.start;
   pose.x_m += stop * path.step_m * std::cos(path.start.yaw_rad);

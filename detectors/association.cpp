@@ -24,6 +24,8 @@ void AssociationConfig::validate() const {
     fail("min_link_distance_m", "must be in (0, link_distance_m]");
   if (min_stops < 1) fail("min_stops", "must be >= 1");
   if (!(min_scan_fraction >= 0.0 && min_scan_fraction <= 1.0)) fail("min_scan_fraction", "must be in [0, 1]");
+  if (!(drift_per_m >= 0.0) || !std::isfinite(drift_per_m)) fail("drift_per_m", "must be >= 0");
+  if (!(max_link_distance_m > 0.0) || !std::isfinite(max_link_distance_m)) fail("max_link_distance_m", "must be > 0");
 }
 
 namespace {
@@ -205,6 +207,19 @@ double StopLinker::Track::distanceTo(double x, double y) const {
   return d;
 }
 
+double StopLinker::reach(const Track& t) const {
+  if (config_.drift_per_m == 0.0) return config_.link_distance_m;
+  return std::min(config_.link_distance_m + config_.drift_per_m * (travel_m_ - t.seen_at_m),
+                  std::max(config_.max_link_distance_m, config_.link_distance_m));
+}
+
+void StopLinker::moveTo(const Pose2& pose) {
+  if (pose_)
+    travel_m_ += std::hypot(pose.x_m - pose_->x_m, pose.y_m - pose_->y_m) +
+                 1.0 * std::abs(wrapAngle(pose.yaw_rad - pose_->yaw_rad));  // 1 m per radian turned
+  pose_ = pose;
+}
+
 int TrackIds::of(TrackSerial serial) const {
   const auto it = std::lower_bound(ids.begin(), ids.end(), std::make_pair(serial, 0));
   return it != ids.end() && it->first == serial ? it->second : 0;
@@ -231,6 +246,7 @@ void StopLinker::merge(Track& into, Track& from) {
   into.sum_x += from.sum_x, into.sum_y += from.sum_y;
   into.first = std::min(into.first, from.first);
   into.last_stop = std::max(into.last_stop, from.last_stop);
+  into.seen_at_m = std::max(into.seen_at_m, from.seen_at_m);
   for (const auto& r : from.radii.items()) into.radii.offer(r);
   into.aliases.push_back(from.serial);
   into.aliases.insert(into.aliases.end(), from.aliases.begin(), from.aliases.end());
@@ -269,6 +285,7 @@ std::vector<TrackSerial> StopLinker::add(const StopClusters& clusters, std::size
     if (c.strong) {
       ++t.strong_stops;
       t.recent[t.sightings++ % t.recent.size()] = {c.x_m, c.y_m};
+      t.seen_at_m = travel_m_;
     }
     t.last_stop = stop;
     const auto n = static_cast<double>(c.detections);
@@ -280,14 +297,16 @@ std::vector<TrackSerial> StopLinker::add(const StopClusters& clusters, std::size
   // Closest (cluster, track) pairs first within `reach`; ties by the cluster's key, then serial
   // (both order-free). Tracks already taken at this stop are skipped.
   std::vector<bool> taken(tracks_.size(), false);
-  auto assign = [&](bool strong, double reach) {
+  // `fixed_reach` < 0: each track's own reach (stage 2).
+  auto assign = [&](bool strong, double fixed_reach) {
     std::vector<std::tuple<double, DetectionKey, TrackSerial, std::size_t, std::size_t>> pairs;
     for (std::size_t k = 0; k < clusters.size(); ++k) {
       if (clusters[k].strong != strong) continue;
       for (std::size_t t = 0; t < tracks_.size(); ++t) {
         if (taken[t]) continue;
         const double d = tracks_[t].distanceTo(clusters[k].x_m, clusters[k].y_m);
-        if (d <= reach) pairs.emplace_back(d, clusters[k].first, tracks_[t].serial, k, t);
+        if (d <= (fixed_reach < 0.0 ? reach(tracks_[t]) : fixed_reach))
+          pairs.emplace_back(d, clusters[k].first, tracks_[t].serial, k, t);
       }
     }
     std::sort(pairs.begin(), pairs.end());
@@ -298,7 +317,7 @@ std::vector<TrackSerial> StopLinker::add(const StopClusters& clusters, std::size
     }
   };
   // Stage 2: strong clusters continue tracks, or start new ones (in key order).
-  assign(true, config_.link_distance_m);
+  assign(true, -1.0);
   for (std::size_t k = 0; k < clusters.size(); ++k) {
     if (!clusters[k].strong || serial_of[k] != 0) continue;
     Track t;
@@ -432,6 +451,7 @@ Association associate(const std::vector<ScanDetections>& scans, const std::vecto
     StopClusters clusters;
     std::vector<std::vector<int>> of;
     const std::size_t conflicts = clusterStop(ptrs, poses, cfg, clusters, &of);
+    linker.moveTo(poses.front());
     const std::vector<TrackSerial> tracks = linker.add(clusters, conflicts);
     for (std::size_t i = 0; i < members.size(); ++i) cluster_of[members[i]] = std::move(of[i]), track_of[members[i]] = tracks;
   }

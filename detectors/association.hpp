@@ -17,6 +17,11 @@
 //     single linkage would join them;
 //  3. a weak stop cluster joins the track not seen strongly at this stop with a recent strong
 //     sighting within stop_link_distance_m (closest pairs first);
+//     Continuous motion (drift_per_m > 0: every scan its own pose): the reach of a track grows
+//     with the distance the robot travelled since its last strong sighting, link_distance_m +
+//     drift_per_m x travel (capped at max_link_distance_m), because the odometry's error between
+//     two sightings of one pole grows with the motion between them (scene.hpp, OdometryNoise): a
+//     pole seen again after a loop keeps its id instead of starting a new track;
 //  4. tracks seen strongly at min_stops stops are the landmarks; the others (chair legs,
 //     spurious circles) are discarded, and forgotten once unseen for forget_after_stops stops,
 //     so that memory holds the landmarks and the recent objects, not the stops.
@@ -29,6 +34,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <tuple>
 #include <utility>
@@ -58,6 +64,12 @@ struct AssociationConfig {
   /// object is left behind on the path. Bounds memory on long sequences; an object revisited
   /// later than this before it reached min_stops starts a new track. Default 500.
   std::size_t forget_after_stops = 500;
+  /// Continuous motion: growth of a track's reach per metre travelled since its last strong
+  /// sighting (travel: path length plus 1 m per radian turned, StopLinker::moveTo), metres per
+  /// metre. 0 (default): the reach stays link_distance_m (stop and go).
+  double drift_per_m = 0.0;
+  /// Largest reach with drift_per_m > 0, metres (link_distance_m when that is larger). Default 0.7.
+  double max_link_distance_m = 0.7;
 
   /// Throws std::invalid_argument naming the first bad field.
   void validate() const;
@@ -172,6 +184,11 @@ class StopLinker {
   /// Returns each cluster's track (0: a weak cluster near no track).
   std::vector<TrackSerial> add(const StopClusters& clusters, std::size_t stage1_conflicts);
 
+  /// The pose (VIEWPOINT) of the next stop, before its add(): the travel since the previous
+  /// pose (path length plus 1 m per radian turned) grows the reach of the tracks not seen since
+  /// (AssociationConfig::drift_per_m). Without calls the travel stays 0.
+  void moveTo(const Pose2& pose);
+
   /// Tracks dropped by the last add() (forget_after_stops): they will not become landmarks.
   const std::vector<TrackSerial>& forgotten() const { return forgotten_; }
   /// Tracks merged by the last add(): (merged track, the track it joined), in order.
@@ -194,6 +211,7 @@ class StopLinker {
     std::array<std::pair<double, double>, 8> recent{};  // last strong sightings (world, m), a ring
     std::size_t sightings = 0;       // strong sightings so far (recent holds the last 8)
     std::size_t last_stop = 0;       // stop of its last cluster, strong or weak
+    double seen_at_m = 0.0;          // travel (moveTo) at its last strong sighting
     std::size_t strong_stops = 0;
     std::size_t detections = 0;
     double sum_x = 0.0, sum_y = 0.0;  // detections x cluster centroid, summed
@@ -206,6 +224,8 @@ class StopLinker {
     double distanceTo(double x, double y) const;
   };
   void merge(Track& into, Track& from);
+  /// How far from its recent sightings a strong cluster may continue track t, metres.
+  double reach(const Track& t) const;
   AssociationConfig config_;
   std::size_t min_stops_ = 1;
   std::vector<Track> tracks_;  // in order of serial
@@ -214,6 +234,8 @@ class StopLinker {
   std::vector<std::pair<TrackSerial, TrackSerial>> merged_;
   bool started_ = false;
   std::size_t last_stop_ = 0;
+  double travel_m_ = 0.0;              // odometer of moveTo
+  std::optional<Pose2> pose_;          // the last pose given to moveTo
   Association totals_;  // counts only (detections, conflicts, discarded)
 };
 

@@ -42,7 +42,7 @@ struct DetectionConfig {
   /// Known landmark radius, metres (sequence.json `landmark_radius_m`). Unset: free fits within
   /// [radius_min_m, radius_max_m], radius estimated later over all observations. Default unset.
   std::optional<double> landmark_radius_m;
-  double radius_min_m = 0.03;                   ///< smallest landmark radius when unknown, metres. Default 0.03
+  double radius_min_m = 0.02;                   ///< smallest landmark radius when unknown, metres (55 mm poles: 0.0275). Default 0.02
   double radius_max_m = 0.30;                   ///< largest landmark radius when unknown, metres. Default 0.30
   double known_radius_min_factor = 0.5;         ///< free fit must be >= factor R when R is known. Default 0.5
   double known_radius_max_factor = 2.0;         ///< free fit must be <= factor R when R is known. Default 2.0

@@ -8,6 +8,7 @@
 #include "common/errors.hpp"
 
 #include "detectors/landmark_radius.hpp"
+#include "detectors/stop_radius.hpp"
 
 namespace lidarcal::detectors {
 
@@ -26,6 +27,8 @@ void SequenceDetectionConfig::validate() const {
   if (!(common_radius_tolerance >= 0.0 && common_radius_tolerance < 1.0))
     throw std::invalid_argument("SequenceDetectionConfig.common_radius_tolerance: must be in [0, 1)");
   if (arcs_per_stop_cluster < 1) throw std::invalid_argument("SequenceDetectionConfig.arcs_per_stop_cluster: must be >= 1");
+  if (!(continuous_drift_per_m >= 0.0) || !std::isfinite(continuous_drift_per_m))
+    throw std::invalid_argument("SequenceDetectionConfig.continuous_drift_per_m: must be >= 0");
   if (arcs_per_landmark < 2) throw std::invalid_argument("SequenceDetectionConfig.arcs_per_landmark: must be >= 2");
 }
 
@@ -82,28 +85,57 @@ using StopOf = std::function<std::size_t(std::size_t)>;
 void detectByStop(std::size_t scan_count, const ScanLoader& load, const StopOf& stop_of,
                   const DetectionConfig& base, const std::vector<RadiusHint>& hints_world, bool collect_arcs,
                   const std::function<void(StopBlock&)>& on_stop, const std::function<void(std::size_t)>& on_scan) {
-  StopBlock block;
+  std::vector<io::Scan> loaded;  // the scans of the current stop (one stop in memory)
+  std::vector<std::size_t> index;
   for (std::size_t i = 0; i < scan_count; ++i) {
     const std::size_t stop = stop_of(i);
-    if (i > 0 && stop < block.stop)
+    if (i > 0 && stop < stop_of(i - 1))
       throw std::invalid_argument("detectSequence: stop_of_scan must be non-decreasing (the scans of a stop consecutive)");
-    const io::Scan scan = load(i);
-    ScanDetections d = detectScan(scan, configFor(base, hints_world, scan.viewpoint));
-    d.scan_index = i;
-    d.stop = stop;
-    block.stop = d.stop;
-    if (collect_arcs) {
-      auto& arcs = block.arcs.emplace_back();
-      for (const auto& det : d.detections) arcs.push_back(arcOf(*scan.cloud, det));
+    loaded.push_back(load(i));
+    index.push_back(i);
+    if (i + 1 < scan_count && stop_of(i + 1) == stop) continue;
+    StopBlock block;
+    block.stop = stop;
+    std::vector<ScanDetections> found;
+    for (const auto& scan : loaded) found.push_back(detectScan(scan, configFor(base, hints_world, scan.viewpoint)));
+    if (collect_arcs && !base.landmark_radius_m && loaded.size() >= 2) {
+      // The radius unknown (first pass): thin far poles that no single arc determines are
+      // fitted with the radius of the stop's scans pooled (stop_radius.hpp). Only objects no
+      // scan of the stop found already: elsewhere the detections stay as they were.
+      std::vector<const pcl::PointCloud<pcl::PointXYZI>*> clouds;
+      for (const auto& sc : loaded) clouds.push_back(sc.cloud.get());
+      std::vector<RadiusHint> pooled;
+      for (const RadiusHint& h : pooledStopRadii(clouds, base)) {
+        bool known = false;
+        for (const auto& f : found)
+          for (const auto& det : f.detections)
+            known = known || std::hypot(det.centre_x_m - h.x_m, det.centre_y_m - h.y_m) < det.radius_m + h.radius_m;
+        if (!known) pooled.push_back(h);
+      }
+      if (!pooled.empty())
+        for (std::size_t k = 0; k < loaded.size(); ++k) {
+          DetectionConfig cfg = configFor(base, hints_world, loaded[k].viewpoint);
+          cfg.radius_hints.insert(cfg.radius_hints.end(), pooled.begin(), pooled.end());
+          found[k] = detectScan(loaded[k], cfg);
+        }
     }
-    compact(d);
-    block.scans.push_back(std::move(d));
-    block.viewpoints.push_back(scan.viewpoint);
-    if (on_scan) on_scan(i);
-    if (i + 1 == scan_count || stop_of(i + 1) != stop) {
-      on_stop(block);
-      block = StopBlock{};
+    for (std::size_t k = 0; k < loaded.size(); ++k) {
+      const io::Scan& scan = loaded[k];
+      ScanDetections& d = found[k];
+      d.scan_index = index[k];
+      d.stop = stop;
+      if (collect_arcs) {
+        auto& arcs = block.arcs.emplace_back();
+        for (const auto& det : d.detections) arcs.push_back(arcOf(*scan.cloud, det));
+      }
+      compact(d);
+      block.scans.push_back(std::move(d));
+      block.viewpoints.push_back(scan.viewpoint);
+      if (on_scan) on_scan(index[k]);
     }
+    loaded.clear();
+    index.clear();
+    on_stop(block);
   }
 }
 
@@ -126,6 +158,7 @@ std::vector<TrackSerial> linkBlock(const StopBlock& block, const AssociationConf
   std::vector<const ScanDetections*> ptrs;
   for (const auto& d : block.scans) ptrs.push_back(&d);
   const std::size_t conflicts = clusterStop(ptrs, block.viewpoints, cfg, clusters, &cluster_of);
+  linker.moveTo(block.viewpoints.front());
   std::vector<TrackSerial> tracks = linker.add(clusters, conflicts);
   fingerprint(print, block.stop, tracks);
   return tracks;
@@ -140,6 +173,20 @@ std::size_t countStops(std::size_t scan_count, const StopOf& stop_of) {
     previous = stop;
   }
   return n;
+}
+
+/// Continuous motion: at least min_stops stops and more than half of them of one scan.
+bool continuousStops(std::size_t scan_count, const StopOf& stop_of, int min_stops) {
+  std::size_t stops = 0, single = 0, run = 0;
+  for (std::size_t i = 0; i < scan_count; ++i) {
+    ++run;
+    if (i + 1 == scan_count || stop_of(i + 1) != stop_of(i)) {
+      ++stops;
+      single += run == 1;
+      run = 0;
+    }
+  }
+  return stops >= static_cast<std::size_t>(std::max(min_stops, 1)) && 2 * single > stops;
 }
 
 /// One pass over the scans: the association stop by stop, and (as asked) the kept scans and an
@@ -250,9 +297,14 @@ void adopt(SequenceDetections& r, Pass& pass) {
 namespace {
 
 SequenceDetections detectSequenceImpl(std::size_t scan_count, const ScanLoader& load, const StopOf& stop_of,
-                                      const SequenceDetectionConfig& config, const ProgressCallback& on_scan) {
-  config.validate();
+                                      const SequenceDetectionConfig& given, const ProgressCallback& on_scan) {
+  given.validate();
   SequenceDetections r;
+  SequenceDetectionConfig config = given;  // a copy: the association's reach for continuous motion
+  r.continuous = continuousStops(scan_count, stop_of, config.continuous_min_stops);
+  if (r.continuous && config.continuous_drift_per_m > 0.0) {
+    config.association.drift_per_m = config.continuous_drift_per_m;
+  }
   const bool known = config.detection.landmark_radius_m.has_value();
   r.known_radius_m = config.detection.landmark_radius_m;
   r.replay.detection = config.detection;

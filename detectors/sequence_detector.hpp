@@ -1,8 +1,10 @@
 #pragma once
-// A whole sequence: detect in every scan (streaming, one scan in memory at a time), associate
-// across stops, and, when the landmark radius is not known, estimate it jointly per landmark and
-// detect again with that radius fixed (a second pass over the scans). This is the in-process API the calibration
-// stage calls; `lidarcal detect` adds the labelled files.
+// A whole sequence: detect in every scan (streaming, the scans of one stop in memory at a
+// time), associate across stops, and, when the landmark radius is not known, estimate it
+// jointly per landmark and detect again with that radius fixed (a second pass over the scans).
+// In the first pass, objects that no single arc of a stop determines (thin far poles, 3-9
+// beams) are fitted with the radius of the stop's scans pooled (stop_radius.hpp). This is the
+// in-process API the calibration stage calls; `lidarcal detect` adds the labelled files.
 //
 // Memory. The scans are processed stop by stop: stage 1 of the association (association.hpp)
 // needs one stop's detections, the tracking across stops only that stop's clusters and the
@@ -44,6 +46,12 @@ struct SequenceDetectionConfig {
   /// With the radius estimated: the arcs kept per track (an even sample over its stops), which
   /// bounds what the estimate keeps per landmark however long the sequence. Default 1024.
   std::size_t arcs_per_landmark = 1024;
+  /// Continuous motion (the robot never stopped: at least continuous_min_stops stops and more
+  /// than half of them one scan each, as imports of odometry give): the association's
+  /// drift_per_m, the growth of a track's reach per metre travelled since its last sighting
+  /// (association.hpp). Stop and go keeps association.drift_per_m. Default 0.2.
+  double continuous_drift_per_m = 0.2;
+  int continuous_min_stops = 20;  ///< see continuous_drift_per_m. Default 20
 
   /// Throws std::invalid_argument naming the first bad field.
   void validate() const;
@@ -68,6 +76,7 @@ struct SequenceDetections {
   std::optional<double> known_radius_m;  ///< the known radius, when radius_source is known
   std::optional<double> common_radius_m;  ///< common radius used in the second pass, when the estimates agreed
   std::size_t radius_failures = 0;    ///< landmarks whose joint radius could not be estimated (free fits kept)
+  bool continuous = false;            ///< the sequence was taken as continuous motion (continuous_drift_per_m used)
   std::string note;                   ///< plain-language summary (e.g. why no landmark was found)
 
   /// How to run the final pass again (forEachScan without kept scans).

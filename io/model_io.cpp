@@ -96,6 +96,8 @@ void writeModel(const std::filesystem::path& file, const CalibrationModel& m) {
     j["fitted_range"] = ojson{{"d_min_m", lo}, {"d_max_m", hi}, {"reading_min_m", m.model.bias(lo)},
                               {"reading_max_m", m.model.bias(hi)}};
   }
+  // Only when used, so that stop-and-go models keep their bytes.
+  if (m.motion_prior) j["diagnostics"]["motion_prior"] = true;
   if (!m.warnings.empty()) j["warnings"] = m.warnings;
   if (!nf.unavailable.empty()) {
     ojson na = ojson::object();

@@ -100,6 +100,90 @@ ojson noiseToJson(const NoiseModel& n) {
   return j;
 }
 
+/// A driving path's keys (docs/FORMAT.md, "Driving"): the route, speed and odometry noise.
+void parseDriving(const JsonView& path, PathSpec& p) {
+  for (const char* key : {"step_m", "stops", "scans_per_stop", "sigma_s_m", "sigma_psi_deg"})
+    if (path.has(key))
+      path.fail(key, "is a key of stop-and-go paths; a driving path takes scans, speed_m_per_scan, route and odometry");
+  p.stops = path.getPositiveInt("scans");
+  p.scans_per_stop = path.getPositiveInt("scans_per_pose", 1);
+  if (static_cast<long long>(p.stops) * p.scans_per_stop > 10'000'000)
+    path.fail("scans", "scans x scans_per_pose exceeds 10 million scans");
+  DrivingSpec& d = p.driving;
+  d.speed_m_per_scan = path.getPositive("speed_m_per_scan", d.speed_m_per_scan);
+  if (path.has("route")) {
+    d.route.clear();
+    for (const auto& e : path.array("route")) {
+      e.requireObject();
+      RouteSegment r;
+      r.length_m = e.getPositive("length_m");
+      r.turn_rad = deg2rad(e.getNumber("turn_deg", 0.0));
+      d.route.push_back(r);
+    }
+    if (d.route.empty()) path.fail("route", "needs at least one piece");
+  }
+  if (path.has("odometry")) {
+    const JsonView o = path.child("odometry");
+    o.requireObject();
+    d.odometry.translation_fraction = o.getNonNegative("translation_fraction", 0.0);
+    d.odometry.heading_rad_per_m = deg2rad(o.getNonNegative("heading_deg_per_m", 0.0));
+    d.odometry.heading_fraction = o.getNonNegative("heading_fraction", 0.0);
+  }
+}
+
+PathSpec parsePath(const JsonView& path) {
+  path.requireObject();
+  PathSpec p;
+  const std::string kind = path.getString("kind", "stops");
+  if (kind != "stops" && kind != "driving") path.fail("kind", "unknown path kind '" + kind + "' (expected stops or driving)");
+  p.kind = kind == "driving" ? PathKind::driving : PathKind::stops;
+  if (path.has("start")) p.start = parsePose(path.child("start"));
+  if (p.kind == PathKind::driving) {
+    parseDriving(path, p);
+  } else {
+    p.step_m = path.getNumber("step_m", p.step_m);
+    p.stops = path.getPositiveInt("stops", p.stops);
+    p.scans_per_stop = path.getPositiveInt("scans_per_stop", p.scans_per_stop);
+    if (static_cast<long long>(p.stops) * p.scans_per_stop > 10'000'000)
+      path.fail("stops", "stops x scans_per_stop exceeds 10 million scans");
+    p.sigma_s_m = path.getNonNegative("sigma_s_m", 0.0);
+    p.sigma_psi_rad = deg2rad(path.getNonNegative("sigma_psi_deg", 0.0));
+  }
+  p.step_error_fraction = path.getNumber("step_error_fraction", 0.0);
+  if (!(p.step_error_fraction > -1.0)) path.fail("step_error_fraction", "must be above -1");
+  return p;
+}
+
+/// The path as JSON: a stop-and-go path with exactly the keys it always had (scenes keep their
+/// bytes), a driving path with its own keys.
+ojson pathToJson(const PathSpec& p) {
+  const ojson start{{"x_m", p.start.x_m}, {"y_m", p.start.y_m}, {"yaw_deg", rad2deg(p.start.yaw_rad)}};
+  ojson path;
+  if (p.kind == PathKind::driving) {
+    ojson route = ojson::array();
+    for (const auto& r : p.driving.route) route.push_back(ojson{{"length_m", r.length_m}, {"turn_deg", rad2deg(r.turn_rad)}});
+    const OdometryNoise& o = p.driving.odometry;
+    path = ojson{{"kind", "driving"},
+                 {"start", start},
+                 {"scans", p.stops},
+                 {"scans_per_pose", p.scans_per_stop},
+                 {"speed_m_per_scan", p.driving.speed_m_per_scan},
+                 {"route", route},
+                 {"odometry", ojson{{"translation_fraction", o.translation_fraction},
+                                    {"heading_deg_per_m", rad2deg(o.heading_rad_per_m)},
+                                    {"heading_fraction", o.heading_fraction}}}};
+  } else {
+    path = ojson{{"start", start},
+                 {"step_m", p.step_m},
+                 {"stops", p.stops},
+                 {"scans_per_stop", p.scans_per_stop},
+                 {"sigma_s_m", p.sigma_s_m},
+                 {"sigma_psi_deg", rad2deg(p.sigma_psi_rad)}};
+  }
+  if (p.step_error_fraction != 0.0) path["step_error_fraction"] = p.step_error_fraction;
+  return path;
+}
+
 Scene parseScene(const JsonView& root) {
   root.requireObject();
   Scene s;
@@ -124,18 +208,7 @@ Scene parseScene(const JsonView& root) {
   spec.mount_yaw_rad = deg2rad(sensor.getNumber("mount_yaw_deg", 0.0));
   if (sensor.has("effects")) spec.effects = parseEffects(sensor.child("effects"));
 
-  const JsonView path = root.child("path");
-  PathSpec& p = s.path;
-  if (path.has("start")) p.start = parsePose(path.child("start"));
-  p.step_m = path.getNumber("step_m", p.step_m);
-  p.stops = path.getPositiveInt("stops", p.stops);
-  p.scans_per_stop = path.getPositiveInt("scans_per_stop", p.scans_per_stop);
-  if (static_cast<long long>(p.stops) * p.scans_per_stop > 10'000'000)
-    path.fail("stops", "stops x scans_per_stop exceeds 10 million scans");
-  p.sigma_s_m = path.getNonNegative("sigma_s_m", 0.0);
-  p.sigma_psi_rad = deg2rad(path.getNonNegative("sigma_psi_deg", 0.0));
-  p.step_error_fraction = path.getNumber("step_error_fraction", 0.0);
-  if (!(p.step_error_fraction > -1.0)) path.fail("step_error_fraction", "must be above -1");
+  s.path = parsePath(root.child("path"));
 
   if (root.has("landmarks"))
     for (const auto& e : root.array("landmarks")) s.landmarks.push_back(parseCylinder(e));
@@ -173,13 +246,7 @@ nlohmann::ordered_json sceneToJson(const Scene& s) {
                {"mount_yaw_deg", rad2deg(s.sensor.mount_yaw_rad)}};
   // Keys of the effects only when set, so that scenes without effects keep their bytes.
   if (s.sensor.effects.any()) sensor["effects"] = effectsToJson(s.sensor.effects);
-  ojson path{{"start", ojson{{"x_m", s.path.start.x_m}, {"y_m", s.path.start.y_m}, {"yaw_deg", rad2deg(s.path.start.yaw_rad)}}},
-             {"step_m", s.path.step_m},
-             {"stops", s.path.stops},
-             {"scans_per_stop", s.path.scans_per_stop},
-             {"sigma_s_m", s.path.sigma_s_m},
-             {"sigma_psi_deg", rad2deg(s.path.sigma_psi_rad)}};
-  if (s.path.step_error_fraction != 0.0) path["step_error_fraction"] = s.path.step_error_fraction;
+  const ojson path = pathToJson(s.path);
   auto cylinders = [](const std::vector<Cylinder>& cs) {
     ojson a = ojson::array();
     for (const auto& c : cs) {

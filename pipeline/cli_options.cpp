@@ -42,6 +42,16 @@ void addCalibrationOptions(CLI::App* app, const std::shared_ptr<CalibrationOptio
   app->add_option("--min-stops", o->min_stops, "A landmark must be seen from at least this many stops")
       ->check(CLI::Range(2, 1000))
       ->capture_default_str();
+  app->add_option("--inlier-threshold", o->inlier_threshold, "Inlier threshold of the circle and line fits, t(r) = A + B r^2 metres (r: range), as A,B; about three standard deviations of the sensor's range noise. Default 0.01,0.005 (a triangulation lidar, noise growing with range squared; poles count as too far once t exceeds twice their radius); a time-of-flight sensor with millimetre noise: e.g. 0.01,0.0005")
+      ->expected(2)
+      ->delimiter(',')
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  app->add_option("--motion-prior", o->motion_prior,
+                  "Odometry between consecutive stops as a prior of the joint refinement: auto (on when the robot never "
+                  "stopped: at least 20 stops, most of one scan each), on, or off (every stop tied to its own commanded pose)")
+      ->check(CLI::IsMember({"auto", "on", "off"}))
+      ->capture_default_str();
   app->add_option("--effects", o->effects,
                   "Comma-separated effect terms for the joint refinement, as `lidarcal diagnose` names them: "
                   "incidence_noise, incidence_bias, landmark_bias, range_drift, angle_offset, range_noise_law, mixed_pixels, "
@@ -62,6 +72,9 @@ calibration::CalibrationConfig calibrationConfig(const CalibrationOptions& o) {
   c.triangulation.min_stops = o.min_stops;
   c.joint.sigma_s_m = o.sigma_s_m;
   c.joint.sigma_psi_rad = deg2rad(o.sigma_psi_deg);
+  c.joint.motion = o.motion_prior == "on"    ? calibration::MotionPrior::on
+                   : o.motion_prior == "off" ? calibration::MotionPrior::off
+                                             : calibration::MotionPrior::automatic;
   std::string rest = o.effects;
   while (!rest.empty()) {
     const auto comma = rest.find(',');
@@ -91,6 +104,10 @@ detectors::SequenceDetectionConfig detectionConfig(const CalibrationOptions& o) 
   detectors::SequenceDetectionConfig c;
   if (o.radius_m > 0.0) c.detection.landmark_radius_m = o.radius_m;
   c.association.min_stops = o.min_stops;
+  if (!(o.inlier_threshold.at(0) > 0.0))
+    throw InputError("", "--inlier-threshold", "A (the threshold at range 0) must be > 0");
+  c.detection.threshold_m = o.inlier_threshold.at(0);
+  c.detection.threshold_per_m2 = o.inlier_threshold.at(1);
   return c;
 }
 

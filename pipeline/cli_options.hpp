@@ -3,6 +3,7 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "calibration/calibrate.hpp"
 #include "detectors/sequence_detector.hpp"
@@ -24,6 +25,8 @@ struct CalibrationOptions {
   double sigma_theta_deg = 1.0;
   double radius_m = 0.0;  // 0: from sequence.json or estimated
   int min_stops = 3;
+  std::vector<double> inlier_threshold{0.01, 0.005};  // A, B of the detector's t(r) = A + B r^2, metres
+  std::string motion_prior = "auto";  // auto, on, off (JointConfig::motion)
   std::string effects;  // comma-separated effect terms of the joint refinement (lidarcal diagnose's names)
 };
 

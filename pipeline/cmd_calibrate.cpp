@@ -78,6 +78,9 @@ void runCalibrate(const CalibrateCommand& c) {
   if (report) report->commit();
   if (!matches.empty()) std::fputs(referenceTable(matches).c_str(), stdout);
   std::fputs(modelSummary(model).c_str(), stdout);
+  if (!quiet() && model.motion_prior)
+    std::fprintf(stderr, "continuous motion: the odometry between consecutive stops entered the joint refinement as a "
+                         "motion prior (--motion-prior off to tie every stop to its own commanded pose)\n");
   if (!quiet())
     std::fprintf(stderr, "%s model of order %d written to %s\n", model.method.c_str(), model.model.bias.order(),
                  c.out.c_str());

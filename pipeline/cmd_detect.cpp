@@ -1,6 +1,6 @@
 // lidarcal detect SEQ --out OUT: landmarks in every scan, one id per landmark over the sequence.
 // Writes OUT/ (labelled copies of the scans, sequence.json, landmarks.csv); prints a summary.
-// Two passes over the files: detect + associate (one scan in memory at a time), then labels
+// Two passes over the files: detect + associate (the scans of one stop in memory at a time), then labels
 // (each stop detected again: memory does not grow with the number of scans).
 
 #include <cstdio>
@@ -38,6 +38,7 @@ struct DetectOptions {
   int min_stops = 3;
   double link_distance_m = 0.35;
   int max_missing_beams = 1;
+  std::vector<double> inlier_threshold{0.01, 0.005};  // A, B of t(r) = A + B r^2
   std::string truth;
 };
 
@@ -67,6 +68,10 @@ void runDetect(const DetectOptions& o) {
   cfg.association.min_stops = o.min_stops;
   cfg.association.link_distance_m = o.link_distance_m;
   cfg.detection.segmentation.max_missing_beams = o.max_missing_beams;
+  if (!(o.inlier_threshold.at(0) > 0.0))
+    throw InputError("", "--inlier-threshold", "A (the threshold at range 0) must be > 0");
+  cfg.detection.threshold_m = o.inlier_threshold.at(0);
+  cfg.detection.threshold_per_m2 = o.inlier_threshold.at(1);
   cfg.association.min_link_distance_m = std::min(cfg.association.min_link_distance_m, o.link_distance_m);
   // The evaluation against the truth needs every scan's detections at once; otherwise nothing
   // per scan is kept and the labelling pass detects each stop again.
@@ -127,6 +132,10 @@ void runDetect(const DetectOptions& o) {
   const std::size_t circles = a.detections;
   std::printf("# Landmarks of %s\n\n", o.seq.c_str());
   std::printf("- scans: %s at %s\n", plural(seq.scans.size(), "scan").c_str(), plural(seq.stops.size(), "stop").c_str());
+  if (result.continuous)
+    std::printf("- continuous motion (nearly every scan its own pose): a landmark's reach grows by %.2f m per metre "
+                "travelled since it was last seen, up to %.2f m\n",
+                cfg.continuous_drift_per_m, std::max(cfg.association.max_link_distance_m, cfg.association.link_distance_m));
   switch (result.radius_source) {
     case detectors::RadiusSource::known: std::printf("- radius: given (%.4f m)", result.known_radius_m.value_or(0.0)); break;
     case detectors::RadiusSource::estimated:
@@ -172,6 +181,11 @@ void addDetectCommand(CLI::App& app) {
                   "Beams without return tolerated inside an object (raise to 2-3 for sensors that drop many returns, "
                   "such as the YDLIDAR X4)")
       ->check(CLI::Range(0, 50))
+      ->capture_default_str();
+  sub->add_option("--inlier-threshold", o->inlier_threshold, "Inlier threshold of the circle and line fits, t(r) = A + B r^2 metres (r: range), as A,B; about three standard deviations of the sensor's range noise. Default 0.01,0.005 (a triangulation lidar, noise growing with range squared; poles count as too far once t exceeds twice their radius); a time-of-flight sensor with millimetre noise: e.g. 0.01,0.0005")
+      ->expected(2)
+      ->delimiter(',')
+      ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   sub->add_flag("--ascii", o->ascii, "Write ASCII PCD instead of binary");
   sub->add_option("--truth", o->truth,

@@ -1,7 +1,9 @@
 #include "simulation/simulator.hpp"
 
 #include <cmath>
+#include <algorithm>
 #include <limits>
+#include <stdexcept>
 
 #include "common/rng.hpp"
 #include "io/sequence.hpp"
@@ -42,7 +44,101 @@ double mixedPixelDistance(const RangeEffects& fx, double d_m, double background_
   return w * d_m + (1.0 - w) * background_m;
 }
 
+namespace {
+
+/// Pose b seen from pose a: the step from a to b in a's frame.
+Pose2 stepBetween(const Pose2& a, const Pose2& b) {
+  Pose2 d;
+  a.toSensor(b.x_m, b.y_m, d.x_m, d.y_m);
+  d.yaw_rad = wrapAngle(b.yaw_rad - a.yaw_rad);
+  return d;
+}
+
+/// Pose a followed by the step d (given in a's frame).
+Pose2 compose(const Pose2& a, const Pose2& d) {
+  Pose2 out;
+  a.toWorld(d.x_m, d.y_m, out.x_m, out.y_m);
+  out.yaw_rad = wrapAngle(a.yaw_rad + d.yaw_rad);
+  return out;
+}
+
+/// Walks a route piece by piece (each an arc of constant curvature, or straight), looping.
+class RouteWalker {
+ public:
+  explicit RouteWalker(const std::vector<RouteSegment>& route) : route_(route) {
+    if (route_.empty()) throw std::invalid_argument("planStops: a driving route needs at least one piece");
+    for (const auto& r : route_)
+      if (!(r.length_m > 0.0) || !std::isfinite(r.length_m) || !std::isfinite(r.turn_rad))
+        throw std::invalid_argument("planStops: route pieces need a finite length > 0 and a finite turn");
+  }
+  /// Moves `pose` forward by `distance_m` along the route.
+  void advance(Pose2& pose, double distance_m) {
+    while (distance_m > 0.0) {
+      const RouteSegment& piece = route_[piece_];
+      const double ds = std::min(distance_m, piece.length_m - done_m_);
+      const double curvature = piece.turn_rad / piece.length_m;
+      const double turn = curvature * ds;
+      // Exact arc: chord (sin(turn), 1 - cos(turn)) / curvature; a straight step when it does not turn.
+      const Pose2 step = std::abs(turn) < 1e-12 ? Pose2{ds, 0.0, 0.0}
+                                                : Pose2{std::sin(turn) / curvature, (1.0 - std::cos(turn)) / curvature, turn};
+      pose = compose(pose, step);
+      done_m_ += ds;
+      distance_m -= ds;
+      if (done_m_ >= piece.length_m) {
+        done_m_ = 0.0;
+        piece_ = (piece_ + 1) % route_.size();
+      }
+    }
+  }
+
+ private:
+  const std::vector<RouteSegment>& route_;
+  std::size_t piece_ = 0;
+  double done_m_ = 0.0;  // travelled on the current piece
+};
+
+/// A driving robot: the true poses every speed_m_per_scan along the route; the commanded ones
+/// chain the odometry's noisy measurements of each true step (scene.hpp, OdometryNoise).
+std::vector<TruthStop> planDriving(const Scene& scene, std::uint64_t seed) {
+  const PathSpec& path = scene.path;
+  const DrivingSpec& drive = path.driving;
+  const OdometryNoise& odo = drive.odometry;
+  if (!(drive.speed_m_per_scan > 0.0) || !std::isfinite(drive.speed_m_per_scan))
+    throw std::invalid_argument("planStops: speed_m_per_scan must be > 0");
+  auto rng = makeRng(seed, 0);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  RouteWalker walker(drive.route);
+  const double reported = 1.0 / (1.0 + path.step_error_fraction);  // odometry scale error
+  Pose2 actual = path.start, commanded = path.start;
+  std::vector<TruthStop> stops;
+  stops.reserve(static_cast<std::size_t>(path.stops));
+  for (int k = 0; k < path.stops; ++k) {
+    if (k > 0) {
+      Pose2 next = actual;
+      walker.advance(next, drive.speed_m_per_scan);
+      const Pose2 step = stepBetween(actual, next);
+      const double s = std::hypot(step.x_m, step.y_m);
+      const double e1 = normal(rng), e2 = normal(rng), e3 = normal(rng);
+      const Pose2 measured{reported * step.x_m + odo.translation_fraction * s * e1,
+                           reported * step.y_m + odo.translation_fraction * s * e2,
+                           step.yaw_rad + (odo.heading_rad_per_m * s + odo.heading_fraction * std::abs(step.yaw_rad)) * e3};
+      commanded = compose(commanded, measured);
+      actual = next;
+    }
+    TruthStop t;
+    t.commanded = commanded;
+    t.actual = actual;
+    t.first_scan = static_cast<std::size_t>(k) * static_cast<std::size_t>(path.scans_per_stop);
+    t.scans = static_cast<std::size_t>(path.scans_per_stop);
+    stops.push_back(t);
+  }
+  return stops;
+}
+
+}  // namespace
+
 std::vector<TruthStop> planStops(const Scene& scene, std::uint64_t seed) {
+  if (scene.path.kind == PathKind::driving) return planDriving(scene, seed);
   auto rng = makeRng(seed, 0);
   std::normal_distribution<double> normal(0.0, 1.0);
   std::vector<TruthStop> stops;

@@ -1,5 +1,6 @@
 #pragma once
-// Scan-level simulator: the robot stops along a straight line (seed 000 eqs. 7-8), the lidar
+// Scan-level simulator: the robot stops along a straight line (seed 000 eqs. 7-8) or drives
+// along a route (a pose per scan, odometry drifting as a random walk), the lidar
 // sweeps its beams, each beam is ray-cast against the scene and its reading drawn from the
 // range model (seed 000 eq. 3 or seed 004 eq. 1).
 //
@@ -45,7 +46,10 @@ double effectReading(const RangeModel& model, const RangeEffects& effects, doubl
 /// w ~ U(0, 1) when it is a mixed pixel, else d. `background_m` <= d (or NaN): no background, no mix.
 double mixedPixelDistance(const RangeEffects& effects, double d_m, double background_m, std::mt19937_64& effect_rng);
 
-/// Commanded and actual pose of every stop, and the scans that belong to it.
+/// Commanded and actual pose of every stop, and the scans that belong to it. Stop and go: seed
+/// 000 eqs. 7-8. Driving: the true poses every speed_m_per_scan along the route, the commanded
+/// ones the odometry's noisy steps chained from the start (common/scene.hpp, OdometryNoise); a
+/// scan is taken at one pose (the motion during a sweep is not simulated).
 std::vector<TruthStop> planStops(const Scene& scene, std::uint64_t seed);
 
 /// One simulated scan with the truth of each of its beams.
