@@ -426,17 +426,22 @@ JointResult refineJoint(const LandmarkObservations& obs, const JointInit& init, 
   // their geometry, so (Gaussian) sum_i (y_i - f)^2 = n (ybar - f)^2 + sum_i (y_i - ybar)^2, and
   // one residual sqrt(n) (ybar - f) / sigma carries all they say about the parameters: the cost
   // of a solve no longer grows with the scans per stop. Not when a term depends on the scan
-  // (drift) or on each reading (mixed-pixel weights); the robust loss then acts on the group.
+  // (drift) or on each reading (mixed-pixel weights). The robust loss acts on the group.
   const bool pool = config.pool_repeated_scans && !fx.drift && !fx.mixed_pixels;
   struct Pooled {
     std::size_t first = 0, n = 0;
     double sum_y = 0.0, sum_angle = 0.0;
   };
   auto addResiduals = [&](ceres::Problem& problem, bool robust) {
-    auto add = [&](const Reading& r, double angle, double y, double inv) {
+    // `count` readings behind one residual: the loss's threshold scales with sqrt(count), so a
+    // pooled residual is down-weighted when its mean is off by huber_sigmas standard deviations
+    // of one reading, as a single reading would be (not when it is off by that many standard
+    // errors of the mean: a millimetre of geometry error would then put every group there).
+    auto add = [&](const Reading& r, double angle, double y, double inv, double count) {
       ceres::LossFunction* loss = nullptr;
-      if (robust && config.cauchy_loss) loss = new ceres::CauchyLoss(config.huber_sigmas);
-      else if (robust) loss = new ceres::HuberLoss(config.huber_sigmas);
+      const double threshold = config.huber_sigmas * std::sqrt(count);
+      if (robust && config.cauchy_loss) loss = new ceres::CauchyLoss(threshold);
+      else if (robust) loss = new ceres::HuberLoss(threshold);
       if (fx.anyMean()) {
         problem.AddResidualBlock(effectCost(config.order, angle, y, inv, static_cast<double>(r.scan) - t_ref), loss,
                                  poses[r.stop].data(), centres.at(r.landmark).data(), &radius, alpha.data(),
@@ -464,14 +469,14 @@ JointResult refineJoint(const LandmarkObservations& obs, const JointInit& init, 
       if (pooled) {
         for (const auto& [key, g] : groups) {
           const double n = static_cast<double>(g.n);
-          add(readings[g.first], g.sum_angle / n, g.sum_y / n, std::sqrt(n) / sigma[g.first]);
+          add(readings[g.first], g.sum_angle / n, g.sum_y / n, std::sqrt(n) / sigma[g.first], n);
         }
         out.reading_residuals = groups.size();
       }
     }
     if (!pooled) {
       for (std::size_t i = 0; i < readings.size(); ++i)
-        add(readings[i], readings[i].angle_rad, readings[i].y_m, std::sqrt(std::max(weight[i], 1e-6)) / sigma[i]);
+        add(readings[i], readings[i].angle_rad, readings[i].y_m, std::sqrt(std::max(weight[i], 1e-6)) / sigma[i], 1.0);
       out.reading_residuals = readings.size();
     }
     const Pose2& c0 = obs.commanded.front();

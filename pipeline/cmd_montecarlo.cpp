@@ -201,11 +201,11 @@ void addMonteCarloCommand(CLI::App& app) {
                   "which fits beam angles, does not see it)")
       ->capture_default_str();
   sub->add_option("--noise-law", o->noise_law,
-                  "Simulated range noise: paper (seed 000: 5 % of f(d)) or squared (seed 004: sigma_e f(d)^2, the "
+                  "Simulated range noise: paper (Alhashimi et al. 2021: 5 % of f(d)) or squared (Alhashimi et al. 2016: sigma_e f(d)^2, the "
                   "same at 3 m)")
       ->capture_default_str();
   sub->add_option("--max-distance", o->max_distance_m,
-                  "Farthest landmark surface from any stop, metres (seed 000 section 4.3 keeps them within 5 m)")
+                  "Farthest landmark surface from any stop, metres (Alhashimi et al. 2021, section 4.3, keeps them within 5 m)")
       ->capture_default_str()
       ->check(CLI::Range(0.5, 100.0));
   sub->add_option("--range-max", o->range_max_m, "Upper end of the sensor's reading window, metres")
