@@ -1,4 +1,5 @@
-# Finds Debian's ROS1 bag-reading libraries (librosbag-storage-dev, libsensor-msgs-dev and the
+# Finds Debian's ROS1 bag-reading libraries (librosbag-storage-dev, libsensor-msgs-dev,
+# libnav-msgs-dev and libtf2-msgs-dev for `import --pose odom:|tf:`, and the
 # packages Debian forgets to pull in: libclass-loader-dev, librcpputils-dev, librcutils-dev,
 # libament-index-cpp-dev). rosbag_storage's pkg-config file is broken on Debian 12 (it requires
 # a pluginlib.pc that is not shipped), so headers and libraries are looked up one by one.
@@ -14,6 +15,8 @@ set(LidarcalRosbag_LIBRARIES "")
 foreach(pair
     "rosbag/view.h;"
     "sensor_msgs/LaserScan.h;"
+    "nav_msgs/Odometry.h;"
+    "tf2_msgs/TFMessage.h;"
     "pluginlib/class_loader.hpp;pluginlib"
     "class_loader/class_loader.hpp;class_loader"
     "rcpputils/filesystem_helper.hpp;rcpputils"
