@@ -45,6 +45,21 @@ RangeInverter modelInverter(const CalibrationModel& model, InversionMethod metho
   return RangeInverter(model.model, c);
 }
 
+CorrectedReading correctReading(double r, const RangeInverter& inverter, const CorrectionWindow& window) {
+  constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+  if ((r < window.reading_min_m || r > window.reading_max_m) && window.outside != Outside::extrapolate) {
+    if (window.outside == Outside::drop) return {kNaN, ReadingFate::outside_dropped};
+    return {r, ReadingFate::outside_kept};
+  }
+  const auto d = inverter.invert(r);
+  if (!d || !(r > 0.0)) return {kNaN, ReadingFate::unresolved};
+  return {*d, ReadingFate::corrected};
+}
+
+ReadingCorrector readingCorrector(const CalibrationModel& model, InversionMethod method, Outside outside) {
+  return {modelInverter(model, method, outside), correctionWindow(model, outside)};
+}
+
 io::Scan correctScan(const io::Scan& scan, const RangeInverter& inverter, FilteringStats* stats,
                      const CorrectionWindow& window) {
   io::Scan out;
@@ -60,25 +75,21 @@ io::Scan correctScan(const io::Scan& scan, const RangeInverter& inverter, Filter
   for (auto& p : *out.cloud) {
     if (!std::isfinite(p.x) || !std::isfinite(p.y)) continue;
     const double r = std::hypot(static_cast<double>(p.x), static_cast<double>(p.y));
-    if ((r < window.reading_min_m || r > window.reading_max_m) && window.outside != Outside::extrapolate) {
-      ++s.outside;
-      if (window.outside == Outside::drop) {
-        p.x = p.y = p.z = kNaN;
-        out.cloud->is_dense = false;
+    const CorrectedReading c = correctReading(r, inverter, window);
+    switch (c.fate) {
+      case ReadingFate::outside_kept: ++s.outside; continue;
+      case ReadingFate::outside_dropped: ++s.outside; break;
+      case ReadingFate::unresolved: ++s.unresolved; break;
+      case ReadingFate::corrected: {
+        const double k = c.range_m / r;  // move the point along its beam
+        p.x = static_cast<float>(p.x * k);
+        p.y = static_cast<float>(p.y * k);
+        ++s.corrected;
+        continue;
       }
-      continue;
     }
-    const auto d = inverter.invert(r);
-    if (!d || !(r > 0.0)) {
-      p.x = p.y = p.z = kNaN;
-      out.cloud->is_dense = false;
-      ++s.unresolved;
-      continue;
-    }
-    const double k = *d / r;  // move the point along its beam
-    p.x = static_cast<float>(p.x * k);
-    p.y = static_cast<float>(p.y * k);
-    ++s.corrected;
+    p.x = p.y = p.z = kNaN;  // dropped or unresolved: a beam without return
+    out.cloud->is_dense = false;
   }
   if (stats) *stats = s;
   return out;

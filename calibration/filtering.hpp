@@ -41,6 +41,33 @@ CorrectionWindow correctionWindow(const CalibrationModel& model, Outside outside
 /// like RangeInverter.
 RangeInverter modelInverter(const CalibrationModel& model, InversionMethod method, Outside outside);
 
+/// What happened to one reading.
+enum class ReadingFate {
+  corrected,        ///< moved to the distance the model gives
+  outside_kept,     ///< outside the correction window, left as it is (Outside::keep)
+  outside_dropped,  ///< outside the correction window, made a beam without return (Outside::drop)
+  unresolved,       ///< no distance in the inverter's window (a beam without return)
+};
+
+/// One reading after correction.
+struct CorrectedReading {
+  double range_m = 0.0;                     ///< corrected distance, metres; NaN for dropped and unresolved readings
+  ReadingFate fate = ReadingFate::corrected;  ///< what happened to it
+};
+
+/// Corrects one positive, finite reading (metres): the single rule behind `correct`, corrected
+/// bags, the ROS node and the exported lookup table.
+CorrectedReading correctReading(double reading_m, const RangeInverter& inverter, const CorrectionWindow& window);
+
+/// A model ready to correct readings: its inverter and its window.
+struct ReadingCorrector {
+  RangeInverter inverter;   ///< modelInverter(model, method, outside)
+  CorrectionWindow window;  ///< correctionWindow(model, outside)
+  CorrectedReading operator()(double reading_m) const { return correctReading(reading_m, inverter, window); }
+};
+/// Throws std::invalid_argument like RangeInverter.
+ReadingCorrector readingCorrector(const CalibrationModel& model, InversionMethod method, Outside outside);
+
 /// Returns the corrected scan. The input is not modified.
 io::Scan correctScan(const io::Scan& scan, const RangeInverter& inverter, FilteringStats* stats = nullptr,
                      const CorrectionWindow& window = {});

@@ -43,4 +43,8 @@ struct ImportReport {
 /// be infinite). Throws InputError naming --range-min / --range-max.
 void checkRangeLimits(double range_min_m, double range_max_m);
 
+/// A float32 value as the decimal it was written as (0.15f -> 0.15, not 0.15000000596...):
+/// seven significant digits are what a float holds. ROS range limits go through it.
+double float32Decimal(float value);
+
 }  // namespace lidarcal::io

@@ -1,6 +1,7 @@
 // Stand-in for import_rosbag.cpp when lidarcal is built without the ROS1 libraries.
 
 #include "io/import_rosbag.hpp"
+#include "io/rosbag_rewrite.hpp"
 
 #include "common/errors.hpp"
 
@@ -23,5 +24,10 @@ void RosbagConfig::validate() const {
 std::vector<BagTopic> listBagTopics(const std::filesystem::path& bag) { unavailable(bag); }
 
 ImportReport readRosbag(const std::filesystem::path& bag, const RosbagConfig&, const ScanCallback&) { unavailable(bag); }
+
+BagRewriteReport rewriteRosbag(const std::filesystem::path& in, const std::filesystem::path&, const std::string&,
+                               const RangesCallback&) {
+  unavailable(in);
+}
 
 }  // namespace lidarcal::io

@@ -111,4 +111,28 @@ detectors::SequenceDetectionConfig detectionConfig(const CalibrationOptions& o) 
   return c;
 }
 
+calibration::InversionMethod CorrectionOptions::method() const {
+  return inversion == "ml" ? calibration::InversionMethod::ml : calibration::InversionMethod::ls;
+}
+
+calibration::Outside CorrectionOptions::outsidePolicy() const {
+  calibration::Outside o = calibration::Outside::keep;
+  if (!calibration::parseOutside(outside, o))
+    throw InputError("", "--outside", "unknown policy '" + outside + "'", "use keep, extrapolate or drop");
+  return o;
+}
+
+void addCorrectionOptions(CLI::App* app, const std::shared_ptr<CorrectionOptions>& o) {
+  app->add_option("--inversion", o->inversion,
+                  "ls: the distance whose f equals the reading (" + std::string(papers::kTriangulation) +
+                      ", eq. 30); ml: the most likely distance (eq. 28, squared noise law only)")
+      ->check(CLI::IsMember({"ls", "ml"}))
+      ->capture_default_str();
+  app->add_option("--outside", o->outside,
+                  "Readings outside the range the model was fitted over (model.json fitted_range): keep them as they "
+                  "are, extrapolate the polynomial, or drop them (no return)")
+      ->check(CLI::IsMember({"keep", "extrapolate", "drop"}))
+      ->capture_default_str();
+}
+
 }  // namespace lidarcal::pipeline

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "calibration/calibrate.hpp"
+#include "calibration/filtering.hpp"
 #include "detectors/sequence_detector.hpp"
 
 namespace CLI {
@@ -35,5 +36,15 @@ void addCalibrationOptions(CLI::App* app, const std::shared_ptr<CalibrationOptio
 /// Maps them into the stage configs (throws InputError for a bad value).
 calibration::CalibrationConfig calibrationConfig(const CalibrationOptions& o);
 detectors::SequenceDetectionConfig detectionConfig(const CalibrationOptions& o);
+
+/// How readings are corrected: `correct`, `export` and the ROS node share these options.
+struct CorrectionOptions {
+  std::string inversion = "ls";  ///< --inversion ls|ml
+  std::string outside = "keep";  ///< --outside keep|extrapolate|drop
+  calibration::InversionMethod method() const;
+  calibration::Outside outsidePolicy() const;
+};
+/// Adds --inversion and --outside (with their help text) to a subcommand.
+void addCorrectionOptions(CLI::App* app, const std::shared_ptr<CorrectionOptions>& o);
 
 }  // namespace lidarcal::pipeline

@@ -1,12 +1,18 @@
 // lidarcal correct SEQ --model model.json --out OUT
+// lidarcal correct IN.bag --model model.json --out OUT.bag [--topic T]
 
 #include <cstdio>
 #include <memory>
 
 #include <CLI/CLI.hpp>
 
+#include "common/errors.hpp"
 #include "io/atomic_file.hpp"
+#include "io/detect_format.hpp"
+#include "io/import_rosbag.hpp"
 #include "io/model_io.hpp"
+#include "pipeline/bag_correct.hpp"
+#include "pipeline/cli_options.hpp"
 #include "pipeline/commands.hpp"
 #include "pipeline/papers.hpp"
 #include "pipeline/progress.hpp"
@@ -15,37 +21,74 @@
 
 namespace lidarcal::pipeline {
 
+namespace {
+
+bool isRosbag(const std::string& input) {
+  std::error_code ec;
+  return std::filesystem::is_regular_file(input, ec) &&
+         io::detectRecordingFormat(input).kind == io::RecordingKind::rosbag1;
+}
+
+void printStats(const CorrectionStats& stats, const std::string& out, const std::string& model_file,
+                calibration::Outside outside) {
+  if (quiet()) return;
+  std::fprintf(stderr, "corrected %s in %s into %s (%zu without a distance in the window)\n",
+               plural(stats.corrected, "return").c_str(), plural(stats.scans, "scan").c_str(), out.c_str(), stats.unresolved);
+  if (stats.outside > 0)
+    std::fprintf(stderr, "%zu returns lie outside the readings the model was fitted on (%s): %s (--outside)\n",
+                 stats.outside, model_file.c_str(), outside == calibration::Outside::drop ? "dropped" : "kept as they are");
+}
+
+/// correct IN.bag --out OUT.bag: every message copied, the topic's ranges corrected.
+void correctBag(const std::string& in, const std::string& model_file, const std::string& out, const std::string& topic,
+                const CorrectionOptions& c, bool overwrite, bool force) {
+  io::requireRosbagSupport(in);
+  io::checkOutsideInput(in, out);
+  io::checkOutputFile(out, overwrite);
+  const CalibrationModel model = io::readModel(model_file);
+  const calibration::Outside outside = c.outsidePolicy();
+  if (const std::string w = checkModelFitsSensor(model, bagSensorFacts(in, topic), model_file, force, outside); !w.empty())
+    std::fprintf(stderr, "lidarcal: warning: %s\n", w.c_str());
+  const calibration::ReadingCorrector correct = modelCorrector(model, c.method(), outside, model_file);
+  CorrectionStats stats;
+  io::writeAtomically(out, [&](const std::filesystem::path& tmp) {
+    stats = correctRosbag(in, tmp, topic, model, correct, model_file);
+  });
+  printStats(stats, out, model_file, outside);
+}
+
+}  // namespace
+
 void addCorrectCommand(CLI::App& app) {
   struct Options {
-    std::string seq, model, out, inversion = "ls", outside = "keep";
+    std::string seq, model, out, topic;
     bool ascii = false, overwrite = false, force = false;
   };
   auto o = std::make_shared<Options>();
-  CLI::App* sub = app.add_subcommand("correct", "Rewrite every scan of a sequence with calibrated ranges");
-  sub->add_option("SEQ", o->seq, "Sequence directory (any sequence of the calibrated sensor)")->required();
+  auto c = std::make_shared<CorrectionOptions>();
+  CLI::App* sub = app.add_subcommand("correct", "Rewrite every scan of a sequence (or every LaserScan of a ROS1 bag) with calibrated ranges");
+  sub->add_option("SEQ", o->seq, "Sequence directory (any sequence of the calibrated sensor), or a ROS1 bag")->required();
   sub->add_option("--model", o->model, "model.json from lidarcal calibrate")->required();
-  sub->add_option("-o,--out", o->out, "Output sequence directory")->required();
-  sub->add_option("--inversion", o->inversion,
-                  "ls: the distance whose f equals the reading (" + std::string(papers::kTriangulation) +
-                      ", eq. 30); ml: the most likely distance (eq. 28, squared noise law only)")
-      ->check(CLI::IsMember({"ls", "ml"}))
-      ->capture_default_str();
-  sub->add_option("--outside", o->outside,
-                  "Readings outside the range the model was fitted over (model.json fitted_range): keep them as they "
-                  "are, extrapolate the polynomial, or drop them (no return)")
-      ->check(CLI::IsMember({"keep", "extrapolate", "drop"}))
-      ->capture_default_str();
+  sub->add_option("-o,--out", o->out, "Output sequence directory (a .bag file for a bag: every message copied, only the topic's ranges changed)")->required();
+  addCorrectionOptions(sub, c);
+  sub->add_option("--topic", o->topic, "IN.bag: the sensor_msgs/LaserScan topic to correct (default: the bag's only one)");
   sub->add_flag("--ascii", o->ascii, "Write ASCII PCD instead of binary");
   sub->add_flag("--overwrite", o->overwrite, "Replace OUT if it exists");
   sub->add_flag("--force", o->force,
                 "Apply a model whose range limits differ from the sequence's (same sensor, other limits set), with a "
                 "warning");
-  sub->callback([o] {
+  sub->callback([o, c, sub] {
+    if (isRosbag(o->seq)) {
+      if (o->ascii) throw InputError("", "--ascii", "applies to sequences, not to bags", "drop --ascii");
+      correctBag(o->seq, o->model, o->out, o->topic, *c, o->overwrite, o->force);
+      return;
+    }
+    if (sub->count("--topic") > 0)
+      throw InputError(o->seq, "--topic", "applies to ROS1 bags only (this is not one)", "drop --topic");
     io::checkOutsideInput(o->seq, o->out);
     const io::Sequence seq = io::openSequence(o->seq);
     const CalibrationModel model = io::readModel(o->model);
-    calibration::Outside outside = calibration::Outside::keep;
-    calibration::parseOutside(o->outside, outside);
+    const calibration::Outside outside = c->outsidePolicy();
     if (const std::string w = checkModelFits(model, seq, o->model, o->force, outside); !w.empty())
       std::fprintf(stderr, "lidarcal: warning: %s\n", w.c_str());
     if (const auto [fewest, most] = io::pointCountRange(seq); fewest != most)
@@ -56,18 +99,12 @@ void addCorrectCommand(CLI::App& app) {
     io::StagedDirectory out(o->out, o->overwrite);
     Progress progress("correct", seq.scans.size());
     const auto stats = correctSequence(
-        seq, model, o->inversion == "ml" ? calibration::InversionMethod::ml : calibration::InversionMethod::ls, out.path(),
+        seq, model, c->method(), out.path(),
         o->ascii ? io::PcdEncoding::ascii : io::PcdEncoding::binary,
         [&](std::size_t done, std::size_t) { progress.update(done); }, outside);
     progress.finish();
     out.commit();
-    if (!quiet())
-      std::fprintf(stderr, "corrected %s in %s into %s (%zu without a distance in the window)\n",
-                   plural(stats.corrected, "return").c_str(), plural(stats.scans, "scan").c_str(), o->out.c_str(),
-                   stats.unresolved);
-    if (stats.outside > 0 && !quiet())
-      std::fprintf(stderr, "%zu returns lie outside the readings the model was fitted on (%s): %s (--outside)\n",
-                   stats.outside, o->model.c_str(), outside == calibration::Outside::drop ? "dropped" : "kept as they are");
+    printStats(stats, o->out, o->model, outside);
   });
 }
 

@@ -34,7 +34,27 @@ struct ImportOptions {
   double range_min_m = 0.0;
   double range_max_m = 0.0;
   std::string sensor_name;
+  double still_m = io::BagPoseConfig{}.still_m;
+  double still_deg = rad2deg(io::BagPoseConfig{}.still_rad);
 };
+
+/// rosbag1 --pose odom:TOPIC | tf:FRAME.
+io::BagPoseConfig bagPose(const ImportOptions& o, const CLI::App& sub) {
+  io::BagPoseConfig p;
+  const auto colon = o.pose.find(':');
+  const std::string kind = o.pose.substr(0, colon);
+  if (colon == std::string::npos || (kind != "odom" && kind != "tf") || colon + 1 == o.pose.size())
+    throw InputError("", "--pose " + o.pose, "for a ROS1 bag, --pose is odom:TOPIC (nav_msgs/Odometry) or tf:FIXED_FRAME",
+                     "e.g. --pose odom:/odom or --pose tf:map");
+  p.kind = kind == "odom" ? io::BagPoseConfig::Kind::odom : io::BagPoseConfig::Kind::tf;
+  p.name = o.pose.substr(colon + 1);
+  if (kind == "tf" && p.name.front() == '/') p.name.erase(0, 1);  // tf frames have no leading slash
+  if (!(o.still_m >= 0.0)) throw InputError("", "--still-m", "must be >= 0", "give a distance in metres");
+  if (!(o.still_deg >= 0.0)) throw InputError("", "--still-deg", "must be >= 0", "give an angle in degrees");
+  if (sub.count("--still-m")) p.still_m = o.still_m;
+  if (sub.count("--still-deg")) p.still_rad = deg2rad(o.still_deg);
+  return p;
+}
 
 /// --from, else what the content says (a message for formats that cannot be read).
 /// The format of one recording, from its content.
@@ -90,10 +110,18 @@ void runImport(const ImportOptions& o, const CLI::App& sub) {
   s.writer.max_scans = o.max_scans;
   s.writer.overwrite = o.overwrite;
   s.writer.encoding = o.ascii ? io::PcdEncoding::ascii : io::PcdEncoding::binary;
-  if (sub.count("--pose")) {
-    if (s.format != ImportFormat::carmen) throw InputError("", "--pose", "applies to --from carmen only", "drop --pose");
+  if (sub.count("--pose") && s.format == ImportFormat::rosbag1) {
+    s.bag_pose = bagPose(o, sub);
+  } else if (sub.count("--pose")) {
+    if (s.format != ImportFormat::carmen)
+      throw InputError("", "--pose", "applies to --from carmen and rosbag1 only", "drop --pose");
+    if (o.pose != "corrected" && o.pose != "odometry")
+      throw InputError("", "--pose " + o.pose, "for a CARMEN log, --pose is corrected or odometry", "e.g. --pose odometry");
     s.carmen_pose = o.pose == "odometry" ? io::CarmenPose::odometry : io::CarmenPose::corrected;
   }
+  if ((sub.count("--still-m") || sub.count("--still-deg")) && s.bag_pose.kind == io::BagPoseConfig::Kind::none)
+    throw InputError("", "--still-m/--still-deg", "apply to a ROS1 bag with --pose odom:TOPIC or tf:FRAME only",
+                     "drop them, or give --pose");
   if (sub.count("--range-min")) s.range_min_m = o.range_min_m;
   if (sub.count("--range-max")) s.range_max_m = o.range_max_m;
   s.sensor_name = o.sensor_name;
@@ -151,8 +179,15 @@ void addImportCommand(CLI::App& app) {
   sub->add_option("--max-scans", o->max_scans, "Stop after writing N scans (0 = all)")->capture_default_str();
   sub->add_option("--pose", o->pose,
                   "carmen: VIEWPOINT from the laser pose (`corrected`: FLASER x y theta) or the odometry "
-                  "(`odometry`: FLASER odom_x odom_y odom_theta)")
-      ->check(CLI::IsMember({"corrected", "odometry"}))
+                  "(`odometry`: FLASER odom_x odom_y odom_theta). rosbag1: `odom:TOPIC` (nav_msgs/Odometry, composed "
+                  "with the sensor's mount from /tf_static) or `tf:FIXED_FRAME` (the scan frame's pose through /tf and "
+                  "/tf_static), interpolated at each scan's stamp")
+      ->capture_default_str();
+  sub->add_option("--still-m", o->still_m,
+                  "rosbag1 with --pose: poses within this distance (m) of a stop's first pose are that pose (the "
+                  "scans form one stop)")
+      ->capture_default_str();
+  sub->add_option("--still-deg", o->still_deg, "rosbag1 with --pose: ... and within this heading change (degrees)")
       ->capture_default_str();
   sub->add_option("--range-min", o->range_min_m, "Readings below this (m) become beams without return (default: per format)");
   sub->add_option("--range-max", o->range_max_m, "Readings above this (m) become beams without return (default: per format)");

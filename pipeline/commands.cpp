@@ -12,6 +12,7 @@ void registerCommands(CLI::App& app) {
   addRunCommand(app);
   addCalibrateCommand(app);
   addCorrectCommand(app);
+  addExportCommand(app);
   addEvaluateCommand(app);
   addImportCommand(app);
   addDetectCommand(app);

@@ -19,6 +19,7 @@ void addSimulateCommand(CLI::App& app);
 void addInfoCommand(CLI::App& app);
 void addCalibrateCommand(CLI::App& app);
 void addCorrectCommand(CLI::App& app);
+void addExportCommand(CLI::App& app);
 void addEvaluateCommand(CLI::App& app);
 void addRunCommand(CLI::App& app);
 void addImportCommand(CLI::App& app);

@@ -40,6 +40,7 @@ io::ImportReport readOne(const ImportSettings& s, const std::filesystem::path& i
       c.topic = s.topic;
       c.range_min_m = s.range_min_m;
       c.range_max_m = s.range_max_m;
+      c.pose = s.bag_pose;
       return io::readRosbag(input, c, on_scan);
     }
     case ImportFormat::carmen: {

@@ -10,6 +10,7 @@
 
 #include "io/import.hpp"
 #include "io/import_carmen.hpp"
+#include "io/import_rosbag.hpp"
 #include "io/sequence_writer.hpp"
 
 namespace lidarcal::pipeline {
@@ -30,6 +31,7 @@ struct ImportSettings {
   io::SequenceWriterConfig writer;           ///< --every, --max-scans, --overwrite, encoding
   std::string topic;                         ///< rosbag1: LaserScan topic; empty = the only one
   io::CarmenPose carmen_pose = io::CarmenPose::corrected;  ///< carmen: pose written to VIEWPOINT
+  io::BagPoseConfig bag_pose;                ///< rosbag1: VIEWPOINT source (default: identity)
   std::optional<double> range_min_m;         ///< overrides the format's lower range limit, metres
   std::optional<double> range_max_m;         ///< overrides the format's upper range limit, metres
   std::string sensor_name;                   ///< sensor_name for sequence.json; empty = what the input says

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <stdexcept>
 
 #include "calibration/filtering.hpp"
 #include "common/errors.hpp"
@@ -96,46 +97,16 @@ std::string beamCountWarning(const io::Sequence& seq) {
          "different sensors, split them into one sequence per sensor";
 }
 
-std::string checkModelFits(const CalibrationModel& model, const io::Sequence& seq, const std::filesystem::path& model_file,
-                           bool force, calibration::Outside outside) {
-  const std::string where = model_file.string();
-  std::string warning;
+namespace {
+
+void checkModelStatus(const CalibrationModel& model, const std::string& where) {
   if (model.status != "ok")
     throw DataError(where, "diagnostics.status",
                     "the model is not usable (" + model.status + ")" + (model.message.empty() ? "" : ": " + model.message),
                     "calibrate again with more landmarks or stops");
-  if (model.beams && !seq.scans.empty()) {
-    for (const auto& h : seq.scans)
-      if (h.points != static_cast<std::size_t>(*model.beams))
-        throw InputError(h.path, "POINTS",
-                         "has " + std::to_string(h.points) + " beams, the model " + where + " was calibrated on a sensor with " +
-                             std::to_string(*model.beams),
-                         "use a model calibrated on this sensor");
-  }
-  const auto& m = seq.meta;
-  const std::string meta_file = (seq.dir / "sequence.json").string();
-  if (m.sensor_name && !model.sensor_name.empty() && *m.sensor_name != model.sensor_name)
-    throw InputError(where, "sensor_name",
-                     "the model was calibrated on '" + model.sensor_name + "', the sequence comes from '" +
-                         *m.sensor_name + "' (" + meta_file + ")",
-                     "the model belongs to another sensor; calibrate this one");
-  auto differs = [](double a, double b) { return std::abs(a - b) > 1e-6 * std::max(1.0, std::abs(b)); };
-  if ((m.range_min_m && differs(*m.range_min_m, model.model.range_min_m)) ||
-      (m.range_max_m && differs(*m.range_max_m, model.model.range_max_m))) {
-    char values[160];
-    std::snprintf(values, sizeof values, "%g-%g m against %g-%g m", model.model.range_min_m, model.model.range_max_m,
-                  m.range_min_m.value_or(model.model.range_min_m), m.range_max_m.value_or(model.model.range_max_m));
-    const std::string limits =
-        "the model's range limits differ from the sequence's: " + std::string(values) + " (" + meta_file + ")";
-    const std::string same = model.sensor_name.empty() ? "" : " ('" + model.sensor_name + "')";
-    if (!force)
-      throw InputError(where, "sensor.range_min_m/range_max_m", limits,
-                       "if this is the same sensor" + same +
-                           " with other limits set, pass --force to apply the model anyway (readings outside the "
-                           "model's limits are left without a distance); otherwise the model belongs to another "
-                           "sensor: calibrate this one");
-    warning = limits + "; applied anyway (--force): readings outside the model's limits get no distance";
-  }
+}
+
+void checkBiasInvertible(const CalibrationModel& model, const std::string& where, calibration::Outside outside) {
   double at = 0.0;
   const BiasPolynomial& f = model.model.bias;
   if (model.fitted_range_m && outside != calibration::Outside::extrapolate) {
@@ -148,7 +119,7 @@ std::string checkModelFits(const CalibrationModel& model, const io::Sequence& se
                     at, lo, hi);
       throw DataError(where, "bias.alpha", text, "calibrate with a lower --max-order");
     }
-    return warning;
+    return;
   }
   if (!calibration::invertsReadingWindow(f, model.model.range_min_m, model.model.range_max_m, &at)) {
     // Where f stops rising (first d with f'(d) <= 0), for the message.
@@ -169,7 +140,74 @@ std::string checkModelFits(const CalibrationModel& model, const io::Sequence& se
                     "near the limit have no distance", model.model.range_max_m, at, f(at));
     throw DataError(where, "bias.alpha", text, "calibrate with a lower --max-order or with landmarks covering the whole range");
   }
+}
+
+}  // namespace
+
+calibration::ReadingCorrector modelCorrector(const CalibrationModel& model, calibration::InversionMethod method,
+                                             calibration::Outside outside, const std::filesystem::path& model_file) {
+  try {
+    return calibration::readingCorrector(model, method, outside);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(model_file.string(), "--inversion " + std::string(calibration::toString(method)),
+                     std::string("the model cannot be inverted this way (") + e.what() + ")",
+                     "use --inversion ls, or a model fitted with the squared noise law for ml");
+  }
+}
+
+void checkModelInvertible(const CalibrationModel& model, const std::filesystem::path& model_file,
+                          calibration::Outside outside) {
+  checkModelStatus(model, model_file.string());
+  checkBiasInvertible(model, model_file.string(), outside);
+}
+
+void checkModelBeams(const CalibrationModel& model, std::size_t beams, const std::string& where,
+                     const std::filesystem::path& model_file) {
+  if (model.beams && beams != static_cast<std::size_t>(*model.beams))
+    throw InputError(where, "POINTS",
+                     "has " + std::to_string(beams) + " beams, the model " + model_file.string() +
+                         " was calibrated on a sensor with " + std::to_string(*model.beams),
+                     "use a model calibrated on this sensor");
+}
+
+std::string checkModelFitsSensor(const CalibrationModel& model, const SensorFacts& facts,
+                                 const std::filesystem::path& model_file, bool force, calibration::Outside outside) {
+  const std::string where = model_file.string();
+  checkModelStatus(model, where);
+  std::string warning;
+  if (facts.sensor_name && !model.sensor_name.empty() && *facts.sensor_name != model.sensor_name)
+    throw InputError(where, "sensor_name",
+                     "the model was calibrated on '" + model.sensor_name + "', the " + facts.noun + " comes from '" +
+                         *facts.sensor_name + "' (" + facts.source + ")",
+                     "the model belongs to another sensor; calibrate this one");
+  auto differs = [](double a, double b) { return std::abs(a - b) > 1e-6 * std::max(1.0, std::abs(b)); };
+  if ((facts.range_min_m && differs(*facts.range_min_m, model.model.range_min_m)) ||
+      (facts.range_max_m && differs(*facts.range_max_m, model.model.range_max_m))) {
+    char values[160];
+    std::snprintf(values, sizeof values, "%g-%g m against %g-%g m", model.model.range_min_m, model.model.range_max_m,
+                  facts.range_min_m.value_or(model.model.range_min_m), facts.range_max_m.value_or(model.model.range_max_m));
+    const std::string limits =
+        "the model's range limits differ from the " + facts.noun + "'s: " + std::string(values) + " (" + facts.source + ")";
+    const std::string same = model.sensor_name.empty() ? "" : " ('" + model.sensor_name + "')";
+    if (!force)
+      throw InputError(where, "sensor.range_min_m/range_max_m", limits,
+                       "if this is the same sensor" + same +
+                           " with other limits set, pass --force to apply the model anyway (readings outside the "
+                           "model's limits are left without a distance); otherwise the model belongs to another "
+                           "sensor: calibrate this one");
+    warning = limits + "; applied anyway (--force): readings outside the model's limits get no distance";
+  }
+  checkBiasInvertible(model, where, outside);
   return warning;
+}
+
+std::string checkModelFits(const CalibrationModel& model, const io::Sequence& seq, const std::filesystem::path& model_file,
+                           bool force, calibration::Outside outside) {
+  checkModelStatus(model, model_file.string());
+  for (const auto& h : seq.scans) checkModelBeams(model, h.points, h.path, model_file);
+  const auto& m = seq.meta;
+  return checkModelFitsSensor(model, {m.sensor_name, m.range_min_m, m.range_max_m, (seq.dir / "sequence.json").string(), "sequence"},
+                              model_file, force, outside);
 }
 
 CorrectionStats correctSequence(const io::Sequence& seq, const CalibrationModel& model,

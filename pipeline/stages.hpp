@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <functional>
+#include <optional>
 #include <string>
 
 #include "calibration/calibrate.hpp"
@@ -51,6 +52,36 @@ std::string beamCountWarning(const io::Sequence& seq);
 /// extrapolate, f must be invertible over the fitted range only.
 std::string checkModelFits(const CalibrationModel& model, const io::Sequence& seq, const std::filesystem::path& model_file,
                            bool force = false, calibration::Outside outside = calibration::Outside::keep);
+
+/// What a recording says about its sensor (sequence.json, a bag's LaserScan messages).
+struct SensorFacts {
+  std::optional<std::string> sensor_name;  ///< sensor name as import writes it; unset when unknown
+  std::optional<double> range_min_m;       ///< smallest valid reading, metres; unset when unknown
+  std::optional<double> range_max_m;       ///< largest valid reading, metres; unset when unknown
+  std::string source;                      ///< where the facts come from (a file), for messages
+  std::string noun = "recording";          ///< what the source is ("sequence", "bag"), for messages
+};
+
+/// checkModelFits without the beam count: status, sensor name, range limits (refused unless
+/// `force`; the warning is returned) and invertibility. Same errors.
+std::string checkModelFitsSensor(const CalibrationModel& model, const SensorFacts& facts,
+                                 const std::filesystem::path& model_file, bool force = false,
+                                 calibration::Outside outside = calibration::Outside::keep);
+
+/// Throws InputError naming `where` when a scan of `beams` beams does not match the model's beam count.
+void checkModelBeams(const CalibrationModel& model, std::size_t beams, const std::string& where,
+                     const std::filesystem::path& model_file);
+
+/// Throws DataError when the model is not usable (diagnostics.status is not ok) or its bias
+/// cannot be inverted unambiguously over the readings it corrects (the checks of checkModelFits
+/// that need no recording: `export`).
+/// The model's reading corrector (calibration::readingCorrector); throws InputError naming
+/// --inversion when the model cannot be inverted that way (ML without the squared noise law).
+calibration::ReadingCorrector modelCorrector(const CalibrationModel& model, calibration::InversionMethod method,
+                                             calibration::Outside outside, const std::filesystem::path& model_file);
+
+void checkModelInvertible(const CalibrationModel& model, const std::filesystem::path& model_file,
+                          calibration::Outside outside = calibration::Outside::keep);
 
 struct CorrectionStats {
   std::size_t scans = 0, points = 0, corrected = 0, unresolved = 0;

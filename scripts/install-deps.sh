@@ -13,6 +13,8 @@ PACKAGES=(
   # ROS1 bag reading (importer; see docs/BUILDING.md for why each is listed)
   librosbag-storage-dev libsensor-msgs-dev libclass-loader-dev
   librcpputils-dev librcutils-dev libament-index-cpp-dev
+  libnav-msgs-dev libtf2-msgs-dev  # odometry and tf in bags (import --pose odom:|tf:)
+  libroscpp-dev python3-rosmaster  # lidarcal_node (roscpp) and the rosmaster its test starts
   clang-14 libclang-rt-14-dev      # libFuzzer targets (scripts/fuzz.sh): clang's -fsanitize=fuzzer and its runtime
 )
 

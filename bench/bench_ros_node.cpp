@@ -1,0 +1,81 @@
+// Per-scan work of lidarcal_node (issue 21 budget: <= 0.2 ms per 360-beam scan, <= 1 ms per
+// 1081-beam scan): copy the received ranges and correct them with pipeline::correctLaserRanges,
+// as the node's callback does (the ROS transport itself is not included). Bias polynomials of
+// order 2 (closed-form LS) and 3 (polynomial roots), LS and ML inversion; readings spread over
+// 0.3-10 m with a fitted range of 0.5-8 m (some readings outside, kept), quantised to 1 mm as
+// the sensors report them. `Steady`: the node after its first scans (the MemoCorrector has seen
+// the readings); `Cold`: a fresh corrector per scan (the first scans after start, every
+// reading a root search).
+//
+//   build/bench/bench_ros_node        (Time = per scan)
+// Measured (Release, 2 shared cores, time per scan): steady 8-9 us / 360 beams and 25 us / 1081
+// beams whatever the model; cold, LS order 2: 45 / 113 us; LS order 3: 0.45 / 1.3 ms; ML order
+// 3: 1.4 / 4.0 ms.
+
+#include <benchmark/benchmark.h>
+
+#include <random>
+#include <vector>
+
+#include "pipeline/bag_correct.hpp"
+
+namespace {
+
+using namespace lidarcal;
+
+CalibrationModel model(int order) {
+  CalibrationModel m;
+  m.model.bias.alpha = order == 2 ? std::vector<double>{0.03, 0.98, 0.004} : std::vector<double>{0.03, 0.98, 0.004, -0.0001};
+  m.model.noise.kind = NoiseKind::squared;
+  m.model.noise.sigma_e = 0.002;
+  m.model.range_min_m = 0.15;
+  m.model.range_max_m = 12.0;
+  m.fitted_range_m = std::make_pair(0.5, 8.0);
+  return m;
+}
+
+void correctScan(benchmark::State& state, int order, calibration::InversionMethod method, bool cold) {
+  const auto beams = static_cast<std::size_t>(state.range(0));
+  const CalibrationModel m = model(order);
+  const calibration::ReadingCorrector correct = calibration::readingCorrector(m, method, calibration::Outside::keep);
+  std::mt19937 rng(1);
+  std::uniform_int_distribution<int> reading_mm(300, 10000);
+  // 200 scans of a sensor whose readings are whole millimetres.
+  std::vector<std::vector<float>> received(200, std::vector<float>(beams));
+  for (auto& scan : received)
+    for (float& r : scan) r = static_cast<float>(reading_mm(rng)) * 0.001f;
+  pipeline::CorrectionStats stats;
+  pipeline::MemoCorrector warm(correct);
+  for (const auto& scan : received) {  // the node's first 200 scans
+    std::vector<float> ranges = scan;
+    pipeline::correctLaserRanges(ranges, 0.15, 12.0, warm, stats);
+  }
+  std::size_t k = 0;
+  for (auto _ : state) {
+    std::vector<float> ranges = received[k++ % received.size()];  // the node copies the received message
+    if (cold) {
+      pipeline::MemoCorrector fresh(correct);
+      pipeline::correctLaserRanges(ranges, 0.15, 12.0, fresh, stats);
+    } else {
+      pipeline::correctLaserRanges(ranges, 0.15, 12.0, warm, stats);
+    }
+    benchmark::DoNotOptimize(ranges.data());
+  }
+}
+
+void SteadyLsOrder2(benchmark::State& s) { correctScan(s, 2, calibration::InversionMethod::ls, false); }
+void SteadyLsOrder3(benchmark::State& s) { correctScan(s, 3, calibration::InversionMethod::ls, false); }
+void SteadyMlOrder3(benchmark::State& s) { correctScan(s, 3, calibration::InversionMethod::ml, false); }
+void ColdLsOrder2(benchmark::State& s) { correctScan(s, 2, calibration::InversionMethod::ls, true); }
+void ColdLsOrder3(benchmark::State& s) { correctScan(s, 3, calibration::InversionMethod::ls, true); }
+void ColdMlOrder3(benchmark::State& s) { correctScan(s, 3, calibration::InversionMethod::ml, true); }
+
+}  // namespace
+
+BENCHMARK(SteadyLsOrder2)->Arg(360)->Arg(1081)->Unit(benchmark::kMicrosecond);
+BENCHMARK(SteadyLsOrder3)->Arg(360)->Arg(1081)->Unit(benchmark::kMicrosecond);
+BENCHMARK(SteadyMlOrder3)->Arg(360)->Arg(1081)->Unit(benchmark::kMicrosecond);
+BENCHMARK(ColdLsOrder2)->Arg(360)->Arg(1081)->Unit(benchmark::kMicrosecond);
+BENCHMARK(ColdLsOrder3)->Arg(360)->Arg(1081)->Unit(benchmark::kMicrosecond);
+BENCHMARK(ColdMlOrder3)->Arg(360)->Arg(1081)->Unit(benchmark::kMicrosecond);
+BENCHMARK_MAIN();

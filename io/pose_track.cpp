@@ -1,0 +1,109 @@
+#include "io/pose_track.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+
+namespace lidarcal::io {
+
+Pose2 planarPose(const Transform3& t) {
+  const Eigen::Vector3d x_axis = t.rotation * Eigen::Vector3d::UnitX();
+  return {t.translation.x(), t.translation.y(), std::atan2(x_axis.y(), x_axis.x())};
+}
+
+bool isUpsideDown(const Transform3& t) { return (t.rotation * Eigen::Vector3d::UnitZ()).z() < 0.0; }
+
+void TransformTrack::add(double stamp_s, const Transform3& t) {
+  if (!samples_.empty() && stamp_s < samples_.back().first) sorted_ = false;
+  samples_.emplace_back(stamp_s, t);
+}
+
+void TransformTrack::sort() const {
+  if (sorted_) return;
+  std::stable_sort(samples_.begin(), samples_.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  sorted_ = true;
+}
+
+std::pair<double, double> TransformTrack::span() const {
+  sort();
+  return {samples_.front().first, samples_.back().first};
+}
+
+std::optional<Transform3> TransformTrack::at(double stamp_s, double hold_s) const {
+  if (samples_.empty() || !std::isfinite(stamp_s)) return std::nullopt;
+  sort();
+  const auto after = std::lower_bound(samples_.begin(), samples_.end(), stamp_s,
+                                      [](const auto& s, double t) { return s.first < t; });
+  if (after == samples_.begin())
+    return stamp_s >= after->first - hold_s ? std::optional<Transform3>(after->second) : std::nullopt;
+  if (after == samples_.end()) {
+    const auto& last = samples_.back();
+    return stamp_s <= last.first + hold_s ? std::optional<Transform3>(last.second) : std::nullopt;
+  }
+  const auto& [t1, b] = *after;
+  const auto& [t0, a] = *std::prev(after);
+  const double u = t1 > t0 ? (stamp_s - t0) / (t1 - t0) : 1.0;
+  return Transform3{a.translation + u * (b.translation - a.translation), a.rotation.slerp(u, b.rotation)};
+}
+
+void TransformTree::addStatic(const std::string& parent, const std::string& child, const Transform3& t) {
+  Edge& e = parent_of_[child];
+  e.parent = parent;
+  e.fixed = t;
+}
+
+void TransformTree::addDynamic(const std::string& parent, const std::string& child, double stamp_s, const Transform3& t) {
+  Edge& e = parent_of_[child];
+  if (e.parent != parent) e.track = TransformTrack();  // re-parented: the last parent wins (tf does the same)
+  e.parent = parent;
+  e.track.add(stamp_s, t);
+}
+
+std::optional<Transform3> TransformTree::lookup(const std::string& fixed, const std::string& frame, double stamp_s,
+                                                double hold_s, std::string* why) const {
+  Transform3 pose;  // frame -> current
+  std::string current = frame;
+  for (std::size_t depth = 0; current != fixed; ++depth) {
+    const auto it = parent_of_.find(current);
+    if (it == parent_of_.end() || depth > parent_of_.size()) {
+      if (why) *why = "frame '" + frame + "' is not connected to '" + fixed + "' (the chain ends at '" + current + "')";
+      return std::nullopt;
+    }
+    const Edge& e = it->second;
+    std::optional<Transform3> step = e.fixed;
+    if (!e.track.empty()) step = e.track.at(stamp_s, hold_s);
+    if (!step) {
+      if (why) {
+        const auto [first, last] = e.track.span();
+        char text[160];
+        std::snprintf(text, sizeof text, "at %.3f s: the transform %s -> %s is recorded from %.3f to %.3f s only", stamp_s,
+                      e.parent.c_str(), current.c_str(), first, last);
+        *why = text;
+      }
+      return std::nullopt;
+    }
+    pose = *step * pose;
+    current = e.parent;
+  }
+  return pose;
+}
+
+std::vector<std::string> TransformTree::frames() const {
+  std::set<std::string> names;
+  for (const auto& [child, e] : parent_of_) {
+    names.insert(child);
+    names.insert(e.parent);
+  }
+  return {names.begin(), names.end()};
+}
+
+Pose2 StillPoseFilter::apply(const Pose2& p) {
+  if (held_ && std::hypot(p.x_m - held_->x_m, p.y_m - held_->y_m) <= tol_m_ &&
+      std::abs(wrapAngle(p.yaw_rad - held_->yaw_rad)) <= tol_rad_)
+    return *held_;
+  held_ = p;
+  ++stops_;
+  return p;
+}
+
+}  // namespace lidarcal::io

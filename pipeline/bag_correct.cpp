@@ -1,0 +1,68 @@
+#include "pipeline/bag_correct.hpp"
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+#include "io/import_rosbag.hpp"
+#include "io/rosbag_rewrite.hpp"
+
+namespace lidarcal::pipeline {
+
+calibration::CorrectedReading MemoCorrector::operator()(float reading_m) {
+  std::uint32_t key = 0;
+  std::memcpy(&key, &reading_m, sizeof key);
+  if (const auto it = memo_.find(key); it != memo_.end()) return it->second;
+  const calibration::CorrectedReading c = correct_(static_cast<double>(reading_m));
+  if (memo_.size() < capacity_) memo_.emplace(key, c);
+  return c;
+}
+
+void correctLaserRanges(std::vector<float>& ranges_m, double range_min_m, double range_max_m, MemoCorrector& correct,
+                        CorrectionStats& stats) {
+  stats.points += ranges_m.size();
+  for (float& r : ranges_m) {
+    // The importer's rule for a return (io/sequence_writer.cpp): anything else is not a reading.
+    if (!std::isfinite(r) || !(r > 0.0f) || r < range_min_m || r > range_max_m) continue;
+    const calibration::CorrectedReading c = correct(r);
+    switch (c.fate) {
+      case calibration::ReadingFate::corrected: ++stats.corrected; break;
+      case calibration::ReadingFate::outside_kept: ++stats.outside; continue;
+      case calibration::ReadingFate::outside_dropped: ++stats.outside; break;
+      case calibration::ReadingFate::unresolved: ++stats.unresolved; break;
+    }
+    r = static_cast<float>(c.range_m);  // NaN when dropped or unresolved
+  }
+}
+
+SensorFacts bagSensorFacts(const std::filesystem::path& bag, const std::string& topic) {
+  SensorFacts facts;
+  io::RosbagConfig config;
+  config.topic = topic;
+  const io::ImportReport report = io::readRosbag(bag, config, [&](const io::RawScan& scan) {
+    facts.range_min_m = scan.range_min_m;
+    facts.range_max_m = scan.range_max_m;
+    return false;  // the first message is enough
+  });
+  facts.sensor_name = report.sensor_name;
+  facts.source = bag.string();
+  facts.noun = "bag";
+  return facts;
+}
+
+CorrectionStats correctRosbag(const std::filesystem::path& in, const std::filesystem::path& out, const std::string& topic,
+                              const CalibrationModel& model, const calibration::ReadingCorrector& correct,
+                              const std::filesystem::path& model_file) {
+  CorrectionStats stats;
+  MemoCorrector memo(correct);
+  const io::BagRewriteReport report =
+      io::rewriteRosbag(in, out, topic, [&](std::vector<float>& ranges, const io::RawScan& scan) {
+        checkModelBeams(model, ranges.size(), in.string() + " (LaserScan " + std::to_string(scan.source_index) + ")",
+                        model_file);
+        correctLaserRanges(ranges, scan.range_min_m, scan.range_max_m, memo, stats);
+      });
+  stats.scans = report.scans;
+  return stats;
+}
+
+}  // namespace lidarcal::pipeline

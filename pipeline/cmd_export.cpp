@@ -1,0 +1,59 @@
+// lidarcal export model.json --format yaml|lut [-o FILE] [--step S]
+
+#include <cstdio>
+#include <memory>
+
+#include <CLI/CLI.hpp>
+
+#include "common/errors.hpp"
+#include "io/atomic_file.hpp"
+#include "io/model_io.hpp"
+#include "pipeline/cli_options.hpp"
+#include "pipeline/commands.hpp"
+#include "pipeline/model_export.hpp"
+#include "pipeline/stages.hpp"
+
+namespace lidarcal::pipeline {
+
+void addExportCommand(CLI::App& app) {
+  struct Options {
+    std::string model, format, out;
+    double step_m = 0.001;
+    bool overwrite = false;
+  };
+  auto o = std::make_shared<Options>();
+  auto c = std::make_shared<CorrectionOptions>();
+  CLI::App* sub = app.add_subcommand(
+      "export", "Write a model.json for a ROS driver: ROS parameters (yaml) or a lookup table reading -> range (lut)");
+  sub->add_option("MODEL", o->model, "model.json from lidarcal calibrate")->required();
+  sub->add_option("--format", o->format,
+                  "yaml: ROS parameter file (bias polynomial, the readings it corrects, inversion); lut: CSV "
+                  "reading_m,range_m over those readings, each row what `lidarcal correct` gives")
+      ->check(CLI::IsMember({"yaml", "lut"}))
+      ->required();
+  sub->add_option("-o,--out", o->out, "Output file (default: standard output)");
+  sub->add_option("--step", o->step_m, "lut: reading step, metres")->capture_default_str();
+  addCorrectionOptions(sub, c);
+  sub->add_flag("--overwrite", o->overwrite, "Replace the output file if it exists");
+  sub->callback([o, c, sub] {
+    if (o->format != "lut" && sub->count("--step") > 0)
+      throw InputError("", "--step", "applies to --format lut only", "drop --step");
+    if (!o->out.empty()) io::checkOutputFile(o->out, o->overwrite);
+    const CalibrationModel model = io::readModel(o->model);
+    ExportConfig config;
+    config.inversion = c->method();
+    config.outside = c->outsidePolicy();
+    config.step_m = o->step_m;
+    config.source = o->model;
+    checkModelInvertible(model, o->model, config.outside);
+    modelCorrector(model, config.inversion, config.outside, o->model);  // refuses ml without the squared law
+    const std::string text = o->format == "yaml" ? exportYaml(model, config) : exportLut(model, config);
+    if (o->out.empty()) {
+      std::fwrite(text.data(), 1, text.size(), stdout);
+      return;
+    }
+    io::writeTextAtomically(o->out, text);
+  });
+}
+
+}  // namespace lidarcal::pipeline

@@ -1,0 +1,140 @@
+// lidarcal_node: corrects a sensor_msgs/LaserScan topic live with a model.json (issue 21).
+//   ~model      model.json from `lidarcal calibrate` (required)
+//   ~input      LaserScan topic to read (default "scan")
+//   ~output     topic for the corrected scans (default "scan_corrected")
+//   ~inversion  ls | ml, as `lidarcal correct --inversion` (default ls)
+//   ~outside    keep | extrapolate | drop, as `lidarcal correct --outside` (default keep)
+//   ~sensor_name  optional: the sensor's name as in model.json; another name is refused at start
+//   ~force      apply a model whose range limits differ from the scans' (default false)
+// Each scan is republished with the same header and beams; its ranges go through the rule of
+// `lidarcal correct IN.bag` (pipeline::correctLaserRanges), so the node and a corrected bag agree
+// bit for bit. A model of another sensor (beam count, range limits, name) is refused with a
+// ROS_FATAL line and the node exits with status 2 (3: the model itself cannot correct).
+
+#include <cstdio>
+#include <optional>
+#include <string>
+
+#include <ros/ros.h>
+#include <sensor_msgs/LaserScan.h>
+
+#include "common/errors.hpp"
+#include "io/import.hpp"
+#include "io/model_io.hpp"
+#include "pipeline/bag_correct.hpp"
+#include "pipeline/stages.hpp"
+
+namespace {
+
+using namespace lidarcal;
+
+struct NodeSettings {
+  std::string model_file, input = "scan", output = "scan_corrected", inversion = "ls", outside = "keep";
+  std::optional<std::string> sensor_name;
+  bool force = false;
+};
+
+class CorrectionNode {
+ public:
+  CorrectionNode(ros::NodeHandle& nh, const NodeSettings& s, const CalibrationModel& model,
+                 const calibration::ReadingCorrector& correct, calibration::Outside outside)
+      : settings_(s), model_(model), correct_(correct), outside_(outside) {  // correct_: a MemoCorrector
+    pub_ = nh.advertise<sensor_msgs::LaserScan>(s.output, 10);
+    sub_ = nh.subscribe(s.input, 10, &CorrectionNode::onScan, this, ros::TransportHints().tcpNoDelay());
+  }
+  int exitCode() const { return exit_code_; }
+  const pipeline::CorrectionStats& stats() const { return stats_; }
+
+ private:
+  void onScan(const sensor_msgs::LaserScan::ConstPtr& msg) {
+    if (exit_code_ != 0) return;
+    const double range_min = io::float32Decimal(msg->range_min), range_max = io::float32Decimal(msg->range_max);
+    try {
+      pipeline::checkModelBeams(model_, msg->ranges.size(), "topic " + sub_.getTopic(), settings_.model_file);
+      if (!checked_) {
+        const pipeline::SensorFacts facts{settings_.sensor_name, range_min, range_max,
+                                          "topic " + sub_.getTopic() + " (frame " + msg->header.frame_id + ")", "topic"};
+        const std::string warning = pipeline::checkModelFitsSensor(model_, facts, settings_.model_file, settings_.force, outside_);
+        if (!warning.empty()) ROS_WARN("lidarcal_node: %s", warning.c_str());
+        checked_ = true;
+      }
+    } catch (const std::exception& e) {
+      ROS_FATAL("lidarcal_node: refusing to correct %s with %s (a model of another sensor?): %s", sub_.getTopic().c_str(),
+                settings_.model_file.c_str(), e.what());
+      exit_code_ = 2;
+      ros::shutdown();
+      return;
+    }
+    sensor_msgs::LaserScan out = *msg;  // a deliberate copy: the received message is shared and const
+    pipeline::correctLaserRanges(out.ranges, range_min, range_max, correct_, stats_);
+    ++stats_.scans;
+    pub_.publish(out);
+  }
+
+  NodeSettings settings_;
+  CalibrationModel model_;
+  pipeline::MemoCorrector correct_;  // remembers the readings seen: a lookup per beam after the first scans
+  calibration::Outside outside_;
+  ros::Publisher pub_;
+  ros::Subscriber sub_;
+  pipeline::CorrectionStats stats_;
+  bool checked_ = false;
+  int exit_code_ = 0;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  ros::init(argc, argv, "lidarcal_node");
+  ros::NodeHandle nh, pnh("~");
+  NodeSettings s;
+  if (!pnh.getParam("model", s.model_file) || s.model_file.empty()) {
+    ROS_FATAL("lidarcal_node: parameter ~model is not set: give this sensor's model.json (e.g. _model:=/path/model.json)");
+    return 2;
+  }
+  pnh.param("input", s.input, s.input);
+  pnh.param("output", s.output, s.output);
+  pnh.param("inversion", s.inversion, s.inversion);
+  pnh.param("outside", s.outside, s.outside);
+  pnh.param("force", s.force, s.force);
+  if (std::string name; pnh.getParam("sensor_name", name)) s.sensor_name = name;
+  calibration::Outside outside = calibration::Outside::keep;
+  if (s.inversion != "ls" && s.inversion != "ml") {
+    ROS_FATAL("lidarcal_node: ~inversion is '%s': use ls or ml", s.inversion.c_str());
+    return 2;
+  }
+  if (!calibration::parseOutside(s.outside, outside)) {
+    ROS_FATAL("lidarcal_node: ~outside is '%s': use keep, extrapolate or drop", s.outside.c_str());
+    return 2;
+  }
+  const auto method = s.inversion == "ml" ? calibration::InversionMethod::ml : calibration::InversionMethod::ls;
+  try {
+    const CalibrationModel model = io::readModel(s.model_file);
+    pipeline::checkModelInvertible(model, s.model_file, outside);
+    if (s.sensor_name)  // refused at start when the name is given; beams and limits at the first scan
+      pipeline::checkModelFitsSensor(model, {s.sensor_name, std::nullopt, std::nullopt, "~sensor_name", "node"}, s.model_file,
+                                     s.force, outside);
+    const calibration::ReadingCorrector correct = pipeline::modelCorrector(model, method, outside, s.model_file);
+    CorrectionNode node(nh, s, model, correct, outside);
+    const std::string fitted =
+        model.fitted_range_m ? std::to_string(model.fitted_range_m->first) + "-" + std::to_string(model.fitted_range_m->second) + " m"
+                             : std::string("not recorded");
+    ROS_INFO("lidarcal_node: correcting %s -> %s with %s (sensor '%s', %s beams, fitted %s; inversion %s, outside %s)",
+             ros::names::resolve(s.input).c_str(), ros::names::resolve(s.output).c_str(), s.model_file.c_str(),
+             model.sensor_name.c_str(), model.beams ? std::to_string(*model.beams).c_str() : "any", fitted.c_str(),
+             s.inversion.c_str(), s.outside.c_str());
+    ros::spin();
+    const auto& st = node.stats();
+    // After ros::spin() the ROS logger may be shut down already: plain stdout.
+    std::printf("lidarcal_node: %zu scans, %zu returns corrected, %zu outside the fitted readings, %zu without a distance\n",
+                st.scans, st.corrected, st.outside, st.unresolved);
+    std::fflush(stdout);
+    return node.exitCode();
+  } catch (const DataError& e) {
+    ROS_FATAL("lidarcal_node: %s", e.what());
+    return 3;
+  } catch (const InputError& e) {
+    ROS_FATAL("lidarcal_node: refusing the model: %s", e.what());
+    return 2;
+  }
+}
