@@ -319,6 +319,9 @@ calibration::CalibrationConfig estimatorConfig(const TrialConfig& config, const 
   cc.joint.sigma_s_m = s;
   cc.joint.sigma_psi_rad = config.angle_noise == AngleNoise::heading ? a : config.min_sigma_theta_rad;
   cc.joint.noise_order = std::max(1, static_cast<int>(config.sensor.noise.beta.size()) - 1);
+  // Stop and go by construction: the per-stop averages (averageScans) hold one scan per stop,
+  // which the automatic rule would take for continuous motion.
+  cc.joint.motion = calibration::MotionPrior::off;
   cc.joint.outer_iterations = config.joint_outer_iterations;
   cc.joint.covariance = false;
   return cc;

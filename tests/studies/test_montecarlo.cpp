@@ -414,13 +414,10 @@ TEST(AngleNoise, TheJointRefinementHardlySeesTheBearingModeAndSeesTheOthers) {
     // 2.2-3.3 in every mode; joint 0.007 bearing, 0.11 heading, 2.1 beams).
     EXPECT_GT(cf_change, 1.0);  // the closed form loses more than a factor e in every mode
     if (mode == AngleNoise::bearing) {
-      // Its input beams are the same; only its start (from the closed form) moves. On branch
-      // `honest` every trial moved by under 3 %; after merging it with the reference-calibration
-      // and continuous-motion work (2026-11-24) all four move by 8-97 % (printed above): the
-      // joint refinement's result now depends on the closed form's start. A regression not yet
-      // located (not the pooling of repeated scans: the same numbers with it off), reported on
-      // issue 22; until then this mode is recorded, not asserted.
-      std::printf("bearing mode: %d of 4 trials within 3 %% (KNOWN REGRESSION, see issue 22)\n", joint_steady);
+      // Its input beams are the same; only its start (from the closed form) moves. (Broken once
+      // by the continuous-motion rule taking the per-stop averages for a robot that never stops.)
+      EXPECT_EQ(joint_steady, 4);
+      EXPECT_LT(joint_change, 0.03);
     } else if (mode == AngleNoise::heading) {
       EXPECT_GT(joint_change, 0.05);  // it estimates one heading per stop, shared by the landmarks
     } else {
