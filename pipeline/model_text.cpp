@@ -7,16 +7,25 @@
 #include <tuple>
 
 namespace lidarcal::pipeline {
-namespace {
-
-std::string fixed(double v, int digits, bool sign = false) {
+std::string fixed(double v, int digits, bool sign) {
   char buf[64];
   if (sign) std::snprintf(buf, sizeof buf, "%+.*f", digits, v);
   else std::snprintf(buf, sizeof buf, "%.*f", digits, v);
   return buf;
 }
 
-}  // namespace
+std::string polynomialText(const std::vector<double>& a, const std::vector<double>& se) {
+  std::string s;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    if (i) s += a[i] < 0 ? " - " : " + ";
+    else if (a[i] < 0) s += "-";
+    s += fixed(std::abs(a[i]), 5);
+    if (i < se.size() && std::isfinite(se[i])) s += " (+-" + fixed(se[i], 5) + ")";
+    if (i == 1) s += " d";
+    if (i > 1) s += " d^" + std::to_string(i);
+  }
+  return s;
+}
 
 std::vector<double> coefficientErrors(const CalibrationModel& m) {
   const std::size_t n = m.model.bias.alpha.size();
@@ -39,18 +48,7 @@ double biasError(const CalibrationModel& m, double d) {
 }
 
 std::string polynomialWithErrors(const CalibrationModel& m) {
-  const auto& a = m.model.bias.alpha;
-  const auto se = coefficientErrors(m);
-  std::string s;
-  for (std::size_t i = 0; i < a.size(); ++i) {
-    if (i) s += a[i] < 0 ? " - " : " + ";
-    else if (a[i] < 0) s += "-";
-    s += fixed(std::abs(a[i]), 5);
-    if (std::isfinite(se[i])) s += " (+-" + fixed(se[i], 5) + ")";
-    if (i == 1) s += " d";
-    if (i > 1) s += " d^" + std::to_string(i);
-  }
-  return s;
+  return polynomialText(m.model.bias.alpha, coefficientErrors(m));
 }
 
 std::vector<double> tableDistances(const CalibrationModel& m) {

@@ -11,6 +11,13 @@
 
 namespace lidarcal::pipeline {
 
+/// v with `digits` decimals (and a sign when `sign`).
+std::string fixed(double v, int digits, bool sign = false);
+
+/// "0.05250 + 0.88380 d + 0.05840 d^2"; with `se` (one per coefficient, NaN to leave one out),
+/// each coefficient followed by " (+-SE)".
+std::string polynomialText(const std::vector<double>& a, const std::vector<double>& se = {});
+
 /// Standard error of each bias coefficient (NaN when the covariance was not computed).
 std::vector<double> coefficientErrors(const CalibrationModel& m);
 

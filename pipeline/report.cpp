@@ -19,33 +19,13 @@
 namespace lidarcal::pipeline {
 namespace {
 
-/// v with `digits` decimals (and a sign when `sign`).
-std::string num(double v, int digits, bool sign = false) {
-  char buf[64];
-  if (sign) std::snprintf(buf, sizeof buf, "%+.*f", digits, v);
-  else std::snprintf(buf, sizeof buf, "%.*f", digits, v);
-  return buf;
-}
-
-std::string polynomialText(const std::vector<double>& a) {
-  std::string s;
-  for (std::size_t i = 0; i < a.size(); ++i) {
-    if (i) s += a[i] < 0 ? " - " : " + ";
-    else if (a[i] < 0) s += "-";
-    s += num(std::abs(a[i]), 5);
-    if (i == 1) s += " d";
-    if (i > 1) s += " d^" + std::to_string(i);
-  }
-  return s;
-}
-
 std::string noiseText(const NoiseModel& n, const BiasPolynomial& f) {
   switch (n.kind) {
     case NoiseKind::squared:
-      return "sigma(d) = " + num(n.sigma_e, 5) + " f(d)^2 (" + std::string(papers::kTriangulation) + ", eq. 1): " + num(1000 * n.stddev(1.0, f), 1) +
-             " mm at 1 m, " + num(1000 * n.stddev(3.0, f), 1) + " mm at 3 m";
+      return "sigma(d) = " + fixed(n.sigma_e, 5) + " f(d)^2 (" + std::string(papers::kTriangulation) + ", eq. 1): " + fixed(1000 * n.stddev(1.0, f), 1) +
+             " mm at 1 m, " + fixed(1000 * n.stddev(3.0, f), 1) + " mm at 3 m";
     case NoiseKind::polynomial: return "sigma(d) = |" + polynomialText(n.beta) + "| (" + std::string(papers::kLandmarks) + ", eq. 3)";
-    case NoiseKind::constant: return "sigma = " + num(n.sigma_e, 4) + " m";
+    case NoiseKind::constant: return "sigma = " + fixed(n.sigma_e, 4) + " m";
     default: return toString(n.kind);
   }
 }
@@ -242,9 +222,9 @@ plot "circles.dat" using 1:2 with lines lw 2 lc rgb "#999999" title "landmarks (
 std::string comparisonRow(const ComparedModel& c) {
   const auto& l = c.evaluation.landmarks;
   const auto& a = c.evaluation.all;
-  return "| " + c.name + " | " + std::to_string(c.model.model.bias.order()) + " | " + num(l.mse_ratio, 2) + " | " +
-         num(a.mse_ratio, 2) + " | " + num(1000 * std::sqrt(l.mse_corrected_m2), 2) + " | " +
-         num(a.nmse_corrected, 5) + " |\n";
+  return "| " + c.name + " | " + std::to_string(c.model.model.bias.order()) + " | " + fixed(l.mse_ratio, 2) + " | " +
+         fixed(a.mse_ratio, 2) + " | " + fixed(1000 * std::sqrt(l.mse_corrected_m2), 2) + " | " +
+         fixed(a.nmse_corrected, 5) + " |\n";
 }
 
 }  // namespace
@@ -278,19 +258,19 @@ void writeReport(const std::filesystem::path& dir, const ReportInputs& in) {
   md << "- bias: reading = f(d) = " << polynomialWithErrors(m) << "  (d = true distance in metres"
      << (coefficientErrors(m).empty() || !std::isfinite(coefficientErrors(m)[0]) ? "" : "; +- one standard error") << ")\n";
   md << "- noise: " << noiseText(m.model.noise, m.model.bias) << "\n";
-  md << "- bearing noise sigma_theta = " << num(rad2deg(m.sigma_theta_rad), 3) << " deg";
+  md << "- bearing noise sigma_theta = " << fixed(rad2deg(m.sigma_theta_rad), 3) << " deg";
   if (m.method == "joint")
-    md << "; stop poses moved by " << num(1000 * m.pose_scatter_m, 1) << " mm and "
-       << num(rad2deg(m.heading_scatter_rad), 2) << " deg (RMS) from the commanded ones";
+    md << "; stop poses moved by " << fixed(1000 * m.pose_scatter_m, 1) << " mm and "
+       << fixed(rad2deg(m.heading_scatter_rad), 2) << " deg (RMS) from the commanded ones";
   md << "\n";
   if (m.fitted_range_m)
-    md << "- fitted on readings at true distances from " << num(m.fitted_range_m->first, 2) << " to "
-       << num(m.fitted_range_m->second, 2) << " m (the sensor reads up to " << num(m.model.range_max_m, 1)
+    md << "- fitted on readings at true distances from " << fixed(m.fitted_range_m->first, 2) << " to "
+       << fixed(m.fitted_range_m->second, 2) << " m (the sensor reads up to " << fixed(m.model.range_max_m, 1)
        << " m): `lidarcal correct` leaves readings outside the fitted range as they are (`--outside extrapolate` "
           "applies the polynomial there too)\n";
   else if (fitted.max_m > 0.0)
-    md << "- fitted on landmark readings at estimated distances from " << num(fitted.min_m, 2) << " to "
-       << num(fitted.max_m, 2) << " m (the sensor reads up to " << num(m.model.range_max_m, 1) << " m)\n";
+    md << "- fitted on landmark readings at estimated distances from " << fixed(fitted.min_m, 2) << " to "
+       << fixed(fitted.max_m, 2) << " m (the sensor reads up to " << fixed(m.model.range_max_m, 1) << " m)\n";
   if (!m.message.empty()) md << "- note: " << userWords(m.message) << "\n";
   for (const auto& w : m.warnings) md << "- **warning**: " << w << "\n";
   md << "\nWhat the raw sensor reads at a few true distances, and the error it makes";
@@ -302,10 +282,10 @@ void writeReport(const std::filesystem::path& dir, const ReportInputs& in) {
     if (d > last) break;
     if (d < m.model.range_min_m) continue;
     const bool inside = fitted.max_m <= 0.0 || fitted.contains(d);
-    md << "| " << num(d, 2) << " m" << (inside ? "" : " *") << " | " << num(m.model.bias(d), 3) << " m | "
-       << num(1000 * (m.model.bias(d) - d), 1, true)
-       << (std::isfinite(biasError(m, d)) ? " +- " + num(1000 * biasError(m, d), 1) : std::string()) << " mm | "
-       << num(1000 * m.model.noise.stddev(d, m.model.bias), 1)
+    md << "| " << fixed(d, 2) << " m" << (inside ? "" : " *") << " | " << fixed(m.model.bias(d), 3) << " m | "
+       << fixed(1000 * (m.model.bias(d) - d), 1, true)
+       << (std::isfinite(biasError(m, d)) ? " +- " + fixed(1000 * biasError(m, d), 1) : std::string()) << " mm | "
+       << fixed(1000 * m.model.noise.stddev(d, m.model.bias), 1)
        << " mm | " << (inside ? "fitted" : "extrapolated") << " |\n";
   }
   md << "\n`lidarcal correct` inverts f for every point (" << kTriangulation
@@ -318,8 +298,8 @@ void writeReport(const std::filesystem::path& dir, const ReportInputs& in) {
     md << "| model | order | MSE ratio, landmarks | MSE ratio, all returns | RMS error after, landmarks [mm] | "
           "normalised MSE after (" << kTriangulation << ", eq. 31) |\n|---|---|---|---|---|---|\n";
     const auto& first = in.compared.front().evaluation;
-    md << "| raw readings | - | 1.00 | 1.00 | " << num(1000 * std::sqrt(first.landmarks.mse_raw_m2), 2) << " | "
-       << num(first.all.nmse_raw, 5) << " |\n";
+    md << "| raw readings | - | 1.00 | 1.00 | " << fixed(1000 * std::sqrt(first.landmarks.mse_raw_m2), 2) << " | "
+       << fixed(first.all.nmse_raw, 5) << " |\n";
     for (const auto& c : in.compared) md << comparisonRow(c);
   }
 
@@ -352,9 +332,9 @@ void writeReport(const std::filesystem::path& dir, const ReportInputs& in) {
 
   md << "\n## Order selection\n\n| order | alpha | AIC | BIC | validation MSE [mm^2] | test MSE [mm^2] |\n|---|---|---|---|---|---|\n";
   for (const auto& o : m.orders)
-    md << "| " << o.order << " | " << polynomialText(o.alpha) << " | " << num(o.aic, 1) << " | " << num(o.bic, 1)
-       << " | " << (std::isfinite(o.validation_mse_m2) ? num(1e6 * o.validation_mse_m2, 2) : "-") << " | "
-       << (std::isfinite(o.test_mse_m2) ? num(1e6 * o.test_mse_m2, 2) : "-") << " |\n";
+    md << "| " << o.order << " | " << polynomialText(o.alpha) << " | " << fixed(o.aic, 1) << " | " << fixed(o.bic, 1)
+       << " | " << (std::isfinite(o.validation_mse_m2) ? fixed(1e6 * o.validation_mse_m2, 2) : "-") << " | "
+       << (std::isfinite(o.test_mse_m2) ? fixed(1e6 * o.test_mse_m2, 2) : "-") << " |\n";
   md << "\nAIC picks order " << m.order_aic;
   if (m.order_validation >= 0) md << ", held-out validation order " << m.order_validation;
   md << ".\n";
@@ -364,9 +344,9 @@ void writeReport(const std::filesystem::path& dir, const ReportInputs& in) {
   md << "| estimator | result |\n|---|---|\n";
   md << "| " << kLandmarks << ", polynomial noise, ML | sigma(d) = |" << polynomialText(nf.seed000_beta) << "| |\n";
   md << "| " << kTriangulation << ", closed form (eqs. 21-26) | f = " << polynomialText(nf.seed004_cf_alpha)
-     << ", sigma_e = " << num(nf.seed004_cf_sigma_e, 5) << " |\n";
+     << ", sigma_e = " << fixed(nf.seed004_cf_sigma_e, 5) << " |\n";
   md << "| " << kTriangulation << ", full ML (eqs. 18-20) | f = " << polynomialText(nf.seed004_ml_alpha)
-     << ", sigma_e = " << num(nf.seed004_ml_sigma_e, 5) << " |\n";
+     << ", sigma_e = " << fixed(nf.seed004_ml_sigma_e, 5) << " |\n";
   for (const auto& [name, reason] : nf.unavailable) {
     const std::string label = name == "seed000_beta"          ? std::string(kLandmarks) + ", polynomial noise"
                               : name == "seed004_closed_form" ? std::string(kTriangulation) + ", closed form"
@@ -377,12 +357,12 @@ void writeReport(const std::filesystem::path& dir, const ReportInputs& in) {
   if (nf.exponent_best >= 0) {
     md << "\nThe noise-exponent test of " << kTriangulation << " (eqs. 10-15) on " << nf.exponent_batches
        << " constant-distance batches (one beam over the scans of a stop): log-likelihood of y = f + f^k e for k = 0..3: ";
-    for (int k = 0; k < 4; ++k) md << (k ? ", " : "") << num(nf.exponent_loglik[static_cast<std::size_t>(k)], 1);
+    for (int k = 0; k < 4; ++k) md << (k ? ", " : "") << fixed(nf.exponent_loglik[static_cast<std::size_t>(k)], 1);
     md << "; best k = **" << nf.exponent_best << "**.\n";
   }
   md << "\n## Landmarks\n\n| id | x [m] | y [m] | radius [m] | stops | status |\n|---|---|---|---|---|---|\n";
   for (const auto& l : m.landmarks)
-    md << "| " << l.id << " | " << num(l.x_m, 3) << " | " << num(l.y_m, 3) << " | " << num(l.radius_m, 3)
+    md << "| " << l.id << " | " << fixed(l.x_m, 3) << " | " << fixed(l.y_m, 3) << " | " << fixed(l.radius_m, 3)
        << " | " << l.stops << " | " << l.status << " |\n";
   md << "\n## References\n\n" << papers::kReferences;
   if (!in.command.empty()) md << "\nProduced by `" << in.command << "`.\n";

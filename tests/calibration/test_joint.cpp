@@ -30,6 +30,17 @@ simulation::LandmarkLevelConfig paperField(double sigma_s, double sigma_psi_deg,
   return c;
 }
 
+/// The joint refinement's start on a simulated sample: commanded poses, triangulated centres,
+/// the poles' true radius and `model`.
+JointInit triangulatedStart(const simulation::LandmarkLevelSample& sample, const RangeModel& model) {
+  JointInit init;
+  init.poses = sample.obs.commanded;
+  for (const auto& l : triangulateAll(sample.obs, TriangulationConfig{})) init.centres[l.id] = Eigen::Vector2d(l.x_m, l.y_m);
+  init.radius_m = 0.12;
+  init.model = model;
+  return init;
+}
+
 CalibrationConfig configFor(double sigma_s, double sigma_psi_deg) {
   CalibrationConfig cc;
   cc.joint.sigma_s_m = std::max(sigma_s, 0.005);
@@ -43,12 +54,7 @@ TEST(JointRefinement, RecoversAKnownHeadingErrorPerStop) {
   for (std::uint64_t seed = 1; seed <= 3; ++seed) {
     SCOPED_TRACE(seed);
     const auto sample = simulation::simulateLandmarkLevel(cfg, seed);
-    const auto tri = triangulateAll(sample.obs, TriangulationConfig{});
-    JointInit init;
-    init.poses = sample.obs.commanded;
-    for (const auto& l : tri) init.centres[l.id] = Eigen::Vector2d(l.x_m, l.y_m);
-    init.radius_m = 0.12;
-    init.model = cfg.model;
+    JointInit init = triangulatedStart(sample, cfg.model);
     init.model.bias.alpha = {0.0, 1.0, 0.0};  // start from no knowledge of the bias
     init.model.noise.sigma_e = 0.002;
     JointConfig jc;
@@ -135,12 +141,7 @@ TEST(JointRefinement, SparseAndDenseCovarianceAgree) {
   for (std::uint64_t seed = 1; seed <= 3; ++seed) {
     SCOPED_TRACE(seed);
     const auto sample = simulation::simulateLandmarkLevel(cfg, seed);
-    const auto tri = triangulateAll(sample.obs, TriangulationConfig{});
-    JointInit init;
-    init.poses = sample.obs.commanded;
-    for (const auto& l : tri) init.centres[l.id] = Eigen::Vector2d(l.x_m, l.y_m);
-    init.radius_m = 0.12;
-    init.model = cfg.model;
+    JointInit init = triangulatedStart(sample, cfg.model);
     JointConfig jc;
     jc.dense_covariance_max_parameters = 1 << 30;
     const auto dense = refineJoint(sample.obs, init, jc);
@@ -167,12 +168,7 @@ TEST(JointRefinement, PoolingRepeatedScansLeavesTheEstimatesUnchanged) {
   for (std::uint64_t seed = 1; seed <= 2; ++seed) {
     SCOPED_TRACE(seed);
     const auto sample = simulation::simulateLandmarkLevel(cfg, seed);
-    const auto tri = triangulateAll(sample.obs, TriangulationConfig{});
-    JointInit init;
-    init.poses = sample.obs.commanded;
-    for (const auto& l : tri) init.centres[l.id] = Eigen::Vector2d(l.x_m, l.y_m);
-    init.radius_m = 0.12;
-    init.model = cfg.model;
+    JointInit init = triangulatedStart(sample, cfg.model);
     init.model.bias.alpha = {0.0, 1.0, 0.0};
     JointConfig jc;
     jc.huber_sigmas = 1e4;
