@@ -8,9 +8,9 @@
 #include <benchmark/benchmark.h>
 
 #include "calibration/calibrate.hpp"
-#include "calibration/diagnose_cases.hpp"
-#include "calibration/diagnose_sequence.hpp"
-#include "calibration/diagnose_static.hpp"
+#include "diagnosis/diagnose_cases.hpp"
+#include "diagnosis/sequence.hpp"
+#include "diagnosis/static_scene.hpp"
 #include "simulation/simulator.hpp"
 
 namespace {
@@ -36,11 +36,11 @@ void BM_CalibrateJoint(benchmark::State& state) {
 
 void BM_DiagnoseSequence(benchmark::State& state) {
   const auto& s = paperField();
-  calibration::DiagnoseConfig c;
+  diagnosis::DiagnoseConfig c;
   c.replicas = static_cast<int>(state.range(0));
   std::string cause;
   for (auto _ : state) {
-    const auto r = calibration::diagnoseSequence(s.obs, c);
+    const auto r = diagnosis::diagnoseSequence(s.obs, c);
     cause = r.primary_cause;
     benchmark::DoNotOptimize(r);
   }
@@ -58,7 +58,7 @@ void BM_DiagnoseStaticRoom(benchmark::State& state) {
   scene.path.scans_per_stop = 150;
   scene.walls = {{-2.0, -3.0, 4.0, -3.0}, {4.0, -3.0, 4.0, 1.0}, {4.0, 1.0, 2.5, 3.5}, {2.5, 3.5, -2.0, 3.5}, {-2.0, 3.5, -2.0, -3.0}};
   const auto stops = simulation::planStops(scene, 1);
-  calibration::StaticScans data;
+  diagnosis::StaticScans data;
   data.scans = 150;
   data.beams_per_scan = 360;
   data.range_min_m = 0.15;
@@ -68,8 +68,8 @@ void BM_DiagnoseStaticRoom(benchmark::State& state) {
       if (std::isfinite(p.x))
         data.readings.push_back({std::atan2(static_cast<double>(p.y), static_cast<double>(p.x)),
                                  std::hypot(static_cast<double>(p.x), static_cast<double>(p.y)), static_cast<std::uint32_t>(k)});
-  calibration::DiagnoseConfig c;
-  for (auto _ : state) benchmark::DoNotOptimize(calibration::diagnoseStatic(data, c));
+  diagnosis::DiagnoseConfig c;
+  for (auto _ : state) benchmark::DoNotOptimize(diagnosis::diagnoseStatic(data, c));
   state.counters["readings"] = static_cast<double>(data.readings.size());
 }
 

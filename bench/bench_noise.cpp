@@ -9,7 +9,7 @@
 
 #include <benchmark/benchmark.h>
 
-#include "calibration/noise_problem.hpp"
+#include "noise/problem.hpp"
 #include "io/noise_json.hpp"
 #include "pipeline/noise_run.hpp"
 #include "simulation/observation_sim.hpp"
@@ -19,14 +19,14 @@ namespace {
 using namespace lidarcal;
 
 struct Data {
-  calibration::NoiseProblem problem;
+  noise::NoiseProblem problem;
   NoiseSetting init;
 };
 
 Data load(const char* scene, const char* init) {
   const std::string root = LIDARCAL_SOURCE_DIR;
   const auto sim = simulation::simulateObservations(io::readObservationScene(root + "/data/scenes/" + scene), 1);
-  return Data{calibration::makeNoiseProblem(sim.observations, sim.odometry), io::readNoiseSetting(root + "/data/noise/" + init)};
+  return Data{noise::makeNoiseProblem(sim.observations, sim.odometry), io::readNoiseSetting(root + "/data/noise/" + init)};
 }
 
 void run(benchmark::State& state, const Data& d, pipeline::NoiseMethod method, bool literal = false,

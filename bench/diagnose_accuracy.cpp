@@ -11,10 +11,10 @@
 
 #include <CLI/CLI.hpp>
 
-#include "calibration/diagnose_sequence.hpp"
+#include "diagnosis/sequence.hpp"
 #include "common/rng.hpp"
 #include "simulation/landmark_level.hpp"
-#include "calibration/diagnose_cases.hpp"
+#include "diagnosis/diagnose_cases.hpp"
 
 int main(int argc, char** argv) {
   using namespace lidarcal;
@@ -34,11 +34,11 @@ int main(int argc, char** argv) {
   for (int c = first; c < first + cases; ++c) {
     const auto hidden = test::hiddenEffectCase(effect, static_cast<std::uint64_t>(c));
     const auto sample = simulation::simulateLandmarkLevel(hidden.config, hidden.seed);
-    calibration::DiagnoseConfig dc;
+    diagnosis::DiagnoseConfig dc;
     dc.replicas = replicas;
     dc.seed = static_cast<std::uint64_t>(c);
     const auto t0 = std::chrono::steady_clock::now();
-    const auto r = calibration::diagnoseSequence(sample.obs, dc, &sample.true_range_m);
+    const auto r = diagnosis::diagnoseSequence(sample.obs, dc, &sample.true_range_m);
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     total_s += s;
     ++named[r.primary_cause];

@@ -1,5 +1,5 @@
 // How often `diagnose` (static mode) names what the truth allows in a room seen from one pose
-// (docs/RESULTS.md, "Diagnosis", static mode): every case of tests/calibration/diagnose_cases.hpp,
+// (docs/RESULTS.md, "Diagnosis", static mode): every case of tests/diagnosis/diagnose_cases.hpp,
 // coarser quantisation grids, and the clean room (its false-positive rate), over many seeds.
 //   build/bench/diagnose_static_accuracy [--seeds 10] [--clean-seeds 20] [--first 101] [--replicas 19]
 
@@ -10,8 +10,8 @@
 
 #include <CLI/CLI.hpp>
 
-#include "calibration/diagnose_cases.hpp"
-#include "calibration/diagnose_static.hpp"
+#include "diagnosis/diagnose_cases.hpp"
+#include "diagnosis/static_scene.hpp"
 
 int main(int argc, char** argv) {
   using namespace lidarcal;
@@ -36,11 +36,11 @@ int main(int argc, char** argv) {
     std::map<std::string, int> named;
     int right = 0;
     for (int seed = first; seed < first + n; ++seed) {
-      calibration::DiagnoseConfig dc;
+      diagnosis::DiagnoseConfig dc;
       dc.replicas = replicas;
       dc.seed = static_cast<std::uint64_t>(seed);
       dc.static_range_offset_m = c.known_offset_m;
-      const auto r = calibration::diagnoseStatic(test::staticRoom(c.fx, c.noise, static_cast<std::uint64_t>(seed), 150, c.step_error_fraction), dc);
+      const auto r = diagnosis::diagnoseStatic(test::staticRoom(c.fx, c.noise, static_cast<std::uint64_t>(seed), 150, c.step_error_fraction), dc);
       const bool ok = c.allows(r.primary_cause);
       right += ok;
       if (!ok) ++named[r.primary_cause];

@@ -23,7 +23,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
-#include "calibration/noise_problem.hpp"
+#include "noise/problem.hpp"
 #include "io/atomic_file.hpp"
 #include "io/noise_json.hpp"
 #include "pipeline/noise_run.hpp"
@@ -79,7 +79,7 @@ void sideBySide(const std::string& scene_file, const std::string& init_file, std
   const NoiseSetting truth = trueNoise(scene);
   const NoiseSetting init = io::readNoiseSetting(init_file);
   const auto sim = simulation::simulateObservations(scene, seed);
-  const calibration::NoiseProblem problem = calibration::makeNoiseProblem(sim.observations, sim.odometry);
+  const noise::NoiseProblem problem = noise::makeNoiseProblem(sim.observations, sim.odometry);
   fs::create_directories(out);
 
   struct Row {
@@ -96,7 +96,7 @@ void sideBySide(const std::string& scene_file, const std::string& init_file, std
       r.options.faithful = faithful;
       r.options.seed = seed;
       r.options.initial = init;
-      r.options.kl.objective = faithful ? calibration::KlObjectiveConfig::faithful() : calibration::KlObjectiveConfig::sound();
+      r.options.kl.objective = faithful ? noise::KlObjectiveConfig::faithful() : noise::KlObjectiveConfig::sound();
       r.options.kl.climb_means = means;
       r.options.kl.climb.max_evaluations = kl_max;
       rows.push_back(r);
@@ -108,7 +108,7 @@ void sideBySide(const std::string& scene_file, const std::string& init_file, std
     r.options.method = pipeline::NoiseMethod::kl_hill;
     r.options.seed = seed;
     r.options.initial = init;
-    r.options.kl.objective = calibration::KlObjectiveConfig::sound();
+    r.options.kl.objective = noise::KlObjectiveConfig::sound();
     r.options.kl.climb_means = false;
     r.options.kl.climb_process = true;
     r.options.kl.climb.max_evaluations = kl_max;
@@ -162,7 +162,7 @@ void mlStudy(const std::string& scene_file, int seeds, bool process_given) {
   int stops = 0;
   for (int seed = 1; seed <= seeds; ++seed) {
     const auto sim = simulation::simulateObservations(scene, static_cast<std::uint64_t>(seed));
-    const calibration::NoiseProblem problem = calibration::makeNoiseProblem(sim.observations, sim.odometry);
+    const noise::NoiseProblem problem = noise::makeNoiseProblem(sim.observations, sim.odometry);
     observations = problem.observations.size();
     stops = problem.stops;
     pipeline::NoiseRunOptions o;
@@ -246,17 +246,17 @@ void mlStudy(const std::string& scene_file, int seeds, bool process_given) {
 void objectiveNoise(const std::string& scene_file, const std::string& init_file, std::uint64_t seed, int n) {
   const ObservationScene scene = io::readObservationScene(scene_file);
   const auto sim = simulation::simulateObservations(scene, seed);
-  const calibration::NoiseProblem problem = calibration::makeNoiseProblem(sim.observations, sim.odometry);
+  const noise::NoiseProblem problem = noise::makeNoiseProblem(sim.observations, sim.odometry);
   const NoiseSetting init = io::readNoiseSetting(init_file);
   NoiseSetting neighbour = init;
   neighbour.sensors[0].range_var_m2 += 0.01;
   std::printf("| variant | objective at the start: mean | std over %d evaluations | neighbour (sensor 0 range var + 0.01) − start |\n|---|---|---|---|\n", n);
   for (const bool faithful : {true, false}) {
-    const auto config = faithful ? calibration::KlObjectiveConfig::faithful() : calibration::KlObjectiveConfig::sound();
+    const auto config = faithful ? noise::KlObjectiveConfig::faithful() : noise::KlObjectiveConfig::sound();
     std::vector<double> v, d;
     for (int e = 0; e < n; ++e) {
-      const double a = calibration::evaluateKlObjective(problem, init, config, seed, 2 * static_cast<std::uint64_t>(e)).total;
-      const double b = calibration::evaluateKlObjective(problem, neighbour, config, seed, 2 * static_cast<std::uint64_t>(e) + 1).total;
+      const double a = noise::evaluateKlObjective(problem, init, config, seed, 2 * static_cast<std::uint64_t>(e)).total;
+      const double b = noise::evaluateKlObjective(problem, neighbour, config, seed, 2 * static_cast<std::uint64_t>(e) + 1).total;
       v.push_back(a);
       d.push_back(b - a);
     }

@@ -1,6 +1,6 @@
 // lidarcal diagnose DATA --out DIR [--model model.json] [--seed S] [--mode auto|sequence|static]
 // Model criticism: what the seeds' model gets wrong on the data, the named cause, the extended
-// model and its held-out gain (calibration/diagnose.hpp). Writes DIR/diagnosis.json, report.md
+// model and its held-out gain (diagnosis/diagnosis.hpp). Writes DIR/diagnosis.json, report.md
 // and plots (docs/FORMAT.md).
 
 #include <algorithm>
@@ -14,8 +14,8 @@
 #include <CLI/CLI.hpp>
 #include <glog/logging.h>
 
-#include "calibration/diagnose_sequence.hpp"
-#include "calibration/diagnose_static.hpp"
+#include "diagnosis/sequence.hpp"
+#include "diagnosis/static_scene.hpp"
 #include "calibration/inversion.hpp"
 #include "common/errors.hpp"
 #include "io/atomic_file.hpp"
@@ -49,9 +49,9 @@ struct Corrector {
   }
 };
 
-calibration::StaticScans staticScans(const io::Sequence& seq, std::size_t stop, const Corrector& fix,
+diagnosis::StaticScans staticScans(const io::Sequence& seq, std::size_t stop, const Corrector& fix,
                                      const std::function<void(std::size_t)>& on_scan) {
-  calibration::StaticScans s;
+  diagnosis::StaticScans s;
   const auto& scans = seq.stops.at(stop).scans;
   s.scans = scans.size();
   std::vector<std::size_t> counts;
@@ -80,7 +80,7 @@ void runDiagnose(const DiagnoseCommand& c) {
   FLAGS_minloglevel = google::GLOG_ERROR;
   io::checkOutsideInput(c.data, c.out);
   const io::Sequence seq = io::openSequence(c.data);
-  calibration::DiagnoseConfig config;
+  diagnosis::DiagnoseConfig config;
   config.seed = c.seed;
   config.replicas = c.replicas;
   config.folds = c.folds;
@@ -143,9 +143,9 @@ void runDiagnose(const DiagnoseCommand& c) {
         throw InputError("", "--candidates", "'" + e + "' is not a candidate effect for " + kind, "use " + list);
       }
   };
-  calibration::DiagnosisResult result;
+  diagnosis::DiagnosisResult result;
   if (obs && mode != "static") {
-    checkCandidates(calibration::sequenceCandidates(), "a sequence");
+    checkCandidates(diagnosis::sequenceCandidates(), "a sequence");
     if (fix.inverter)
       for (auto& s : obs->sightings)
         for (auto& b : s.beams) b.range_m = fix.correct(b.range_m);
@@ -161,7 +161,7 @@ void runDiagnose(const DiagnoseCommand& c) {
     }
     if (!quiet()) std::fprintf(stderr, "diagnosing a sequence: %zu sightings (%d replicas)\n", obs->sightings.size(), c.replicas);
     Activity activity("diagnose (sequence)");
-    result = calibration::diagnoseSequence(*obs, config, c.truth.empty() ? nullptr : &truth_ranges);
+    result = diagnosis::diagnoseSequence(*obs, config, c.truth.empty() ? nullptr : &truth_ranges);
     activity.finish();
     if (result.status != "ok" && mode == "auto") {
       // Poles were found but cannot carry a sequence diagnosis: look at one pose instead.
@@ -186,15 +186,15 @@ void runDiagnose(const DiagnoseCommand& c) {
     if (seq.stops.size() > 1)
       src.selection += "stop " + std::to_string(stop) + " of " + std::to_string(seq.stops.size()) + ", " +
                       plural(seq.stops[stop].scans.size(), "scan") + " from one pose";
-    checkCandidates(calibration::staticCandidates(), "repeated scans of one pose");
+    checkCandidates(diagnosis::staticCandidates(), "repeated scans of one pose");
     Progress reading("read the scans of stop " + std::to_string(stop), seq.stops[stop].scans.size());
-    const calibration::StaticScans s = staticScans(seq, stop, fix, [&](std::size_t done) { reading.update(done); });
+    const diagnosis::StaticScans s = staticScans(seq, stop, fix, [&](std::size_t done) { reading.update(done); });
     reading.finish();
     if (!quiet())
       std::fprintf(stderr, "diagnosing repeated scans of one pose: %zu scans, %zu readings (%d replicas)\n", s.scans,
                    s.readings.size(), c.replicas);
     Activity activity("diagnose (repeated scans of one pose)");
-    result = calibration::diagnoseStatic(s, config, &src.walls);
+    result = diagnosis::diagnoseStatic(s, config, &src.walls);
     activity.finish();
   }
   writeDiagnosis(out.path(), result, src);

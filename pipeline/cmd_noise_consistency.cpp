@@ -10,7 +10,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
-#include "calibration/noise_problem.hpp"
+#include "noise/problem.hpp"
 #include "common/errors.hpp"
 #include "io/atomic_file.hpp"
 #include "io/noise_json.hpp"
@@ -50,8 +50,8 @@ void runNoiseConsistency(const NoiseOptions& o) {
   if (!o.overwrite && fs::exists(o.out))
     throw InputError(o.out, "", "exists already", "choose another --out or pass --overwrite");
   std::vector<int> sensor_labels;  // observations.csv's sensor ids, in the order of the indices 0..S-1
-  const calibration::NoiseProblem problem =
-      calibration::makeNoiseProblem(io::readObservations(o.observations, &sensor_labels), io::readOdometry(o.odometry));
+  const noise::NoiseProblem problem =
+      noise::makeNoiseProblem(io::readObservations(o.observations, &sensor_labels), io::readOdometry(o.odometry));
 
   NoiseRunOptions opts;
   opts.method = o.method == "kl-hill" ? NoiseMethod::kl_hill : NoiseMethod::ml;
@@ -64,7 +64,7 @@ void runNoiseConsistency(const NoiseOptions& o) {
                                               " sensors but the observations have " + std::to_string(problem.sensors),
                        "give one entry per sensor of observations.csv, in the ascending order of their ids");
   }
-  opts.kl.objective = opts.faithful ? calibration::KlObjectiveConfig::faithful() : calibration::KlObjectiveConfig::sound();
+  opts.kl.objective = opts.faithful ? noise::KlObjectiveConfig::faithful() : noise::KlObjectiveConfig::sound();
   opts.kl.objective.filter.particles = o.particles;
   opts.kl.climb.step = o.step;
   opts.kl.climb.max_jumps = o.jumps;

@@ -17,8 +17,8 @@ namespace lidarcal::pipeline {
 namespace {
 
 using ojson = nlohmann::ordered_json;
-using calibration::DiagnosisResult;
-using calibration::ResidualRecord;
+using diagnosis::DiagnosisResult;
+using diagnosis::ResidualRecord;
 
 /// A number, or null when it is not finite (JSON has no NaN).
 ojson num(double v) { return std::isfinite(v) ? ojson(v) : ojson(nullptr); }
@@ -29,7 +29,7 @@ ojson numbers(const std::map<std::string, double>& m) {
   return j;
 }
 
-ojson closenessJson(const calibration::Closeness& c) {
+ojson closenessJson(const diagnosis::Closeness& c) {
   return ojson{{"ks_distance", num(c.ks_distance)},
                {"variance_ratio_median_abs_log", num(c.variance_ratio_median_abs_log)},
                {"groups", c.groups}};
@@ -57,12 +57,12 @@ struct Variable {
   double bin = 0.0;  ///< bin width (0: integer groups)
 };
 
-std::vector<Variable> variables(calibration::DiagnoseMode mode) {
+std::vector<Variable> variables(diagnosis::DiagnoseMode mode) {
   std::vector<Variable> v;
   v.push_back({"range", "range", "range (predicted true distance or mean reading) [m]", [](const ResidualRecord& r) { return r.range_m; }, 0.25});
   v.push_back({"incidence", "incidence angle", "incidence angle on the surface [deg]",
                [](const ResidualRecord& r) { return rad2deg(r.incidence_rad); }, 5.0});
-  if (mode == calibration::DiagnoseMode::sequence)
+  if (mode == diagnosis::DiagnoseMode::sequence)
     v.push_back({"lateral", "position across the pole", "beam's miss distance from the centre / radius (0 centre, +-1 edge)",
                  [](const ResidualRecord& r) { return r.lateral; }, 0.1});
   else
@@ -70,10 +70,10 @@ std::vector<Variable> variables(calibration::DiagnoseMode mode) {
                  [](const ResidualRecord& r) { return r.edge ? 1.0 : 0.0; }, 0.0});
   v.push_back({"time", "scan index (time)", "scan index", [](const ResidualRecord& r) { return r.time; }, 0.0});
   v.push_back({"bearing", "beam angle", "beam angle in the sensor frame [deg]", [](const ResidualRecord& r) { return rad2deg(r.bearing_rad); }, 10.0});
-  v.push_back({"group", mode == calibration::DiagnoseMode::sequence ? "landmark" : "wall",
-               mode == calibration::DiagnoseMode::sequence ? "landmark id" : "wall line (0: not on a fitted wall)",
+  v.push_back({"group", mode == diagnosis::DiagnoseMode::sequence ? "landmark" : "wall",
+               mode == diagnosis::DiagnoseMode::sequence ? "landmark id" : "wall line (0: not on a fitted wall)",
                [](const ResidualRecord& r) { return static_cast<double>(r.group); }, 0.0});
-  if (mode == calibration::DiagnoseMode::sequence)
+  if (mode == diagnosis::DiagnoseMode::sequence)
     v.push_back({"stop", "stop", "stop index", [](const ResidualRecord& r) { return static_cast<double>(r.stop); }, 0.0});
   return v;
 }
@@ -135,7 +135,7 @@ nlohmann::ordered_json diagnosisJson(const DiagnosisResult& r, const DiagnosisSo
                  {"neg_log_likelihood", num(r.baseline_neg_log_likelihood)},
                  {"heldout_nats_per_point", num(r.baseline_heldout_nats_per_point)},
                  {"fitted", numbers(r.baseline_extra)}};
-  if (r.mode == calibration::DiagnoseMode::sequence) {
+  if (r.mode == diagnosis::DiagnoseMode::sequence) {
     baseline["sigma_theta_rad"] = num(r.baseline_sigma_theta_rad);
     baseline["landmark_radius_m"] = num(r.baseline_radius_m);
     baseline["landmark_radius_known"] = r.radius_known;
@@ -199,7 +199,7 @@ nlohmann::ordered_json diagnosisJson(const DiagnosisResult& r, const DiagnosisSo
     gain["calibration_mse_ratio"] = ojson{{"baseline", num(r.calibration_mse_ratio_baseline)},
                                           {"extended", named ? num(r.calibration_mse_ratio_extended) : ojson(nullptr)}};
   ojson data{{"path", src.data.string()}, {"scans", r.scans}, {"stops", r.stops}, {"readings", r.readings}};
-  data[r.mode == calibration::DiagnoseMode::sequence ? "landmarks" : "walls"] = r.landmarks;
+  data[r.mode == diagnosis::DiagnoseMode::sequence ? "landmarks" : "walls"] = r.landmarks;
   if (!src.sensor.empty()) data["sensor"] = src.sensor;
   if (!src.selection.empty()) data["selection"] = src.selection;
   if (!src.model.empty()) data["corrected_with_model"] = src.model;
@@ -223,7 +223,7 @@ nlohmann::ordered_json diagnosisJson(const DiagnosisResult& r, const DiagnosisSo
 
 void writeDiagnosis(const std::filesystem::path& dir, const DiagnosisResult& r, const DiagnosisSource& src) {
   io::writeTextAtomically(dir / "diagnosis.json", diagnosisJson(r, src).dump(2) + "\n");
-  const bool seq = r.mode == calibration::DiagnoseMode::sequence;
+  const bool seq = r.mode == diagnosis::DiagnoseMode::sequence;
   std::ostringstream md;
   md << "# lidarcal diagnosis\n\n";
   md << "Data: `" << src.data.string() << "`" << (src.sensor.empty() ? "" : " (" + src.sensor + ")") << ", **"

@@ -8,8 +8,8 @@
 
 #include <nlohmann/json_fwd.hpp>
 
-#include "calibration/diagnose.hpp"
-#include "calibration/diagnose_static.hpp"
+#include "diagnosis/diagnosis.hpp"
+#include "diagnosis/static_scene.hpp"
 
 namespace lidarcal::pipeline {
 
@@ -20,13 +20,13 @@ struct DiagnosisSource {
   std::string selection;                ///< e.g. "stop 3 (402 scans)" for static data of a longer sequence
   std::string model;                    ///< --model file, when the readings were corrected first
   std::string command;                  ///< command line
-  std::vector<calibration::WallLine> walls;  ///< static: the fitted wall lines
+  std::vector<diagnosis::WallLine> walls;  ///< static: the fitted wall lines
 };
 
 /// diagnosis.json content.
-nlohmann::ordered_json diagnosisJson(const calibration::DiagnosisResult& r, const DiagnosisSource& src);
+nlohmann::ordered_json diagnosisJson(const diagnosis::DiagnosisResult& r, const DiagnosisSource& src);
 
 /// Writes DIR/diagnosis.json, DIR/report.md and the plots (skipped with a note without gnuplot).
-void writeDiagnosis(const std::filesystem::path& dir, const calibration::DiagnosisResult& r, const DiagnosisSource& src);
+void writeDiagnosis(const std::filesystem::path& dir, const diagnosis::DiagnosisResult& r, const DiagnosisSource& src);
 
 }  // namespace lidarcal::pipeline

@@ -65,7 +65,7 @@ NoiseSetting defaultInitialNoise(int sensors) {
   return n;
 }
 
-NoiseRun runNoiseEstimation(const calibration::NoiseProblem& problem, const NoiseRunOptions& options,
+NoiseRun runNoiseEstimation(const noise::NoiseProblem& problem, const NoiseRunOptions& options,
                             const std::function<void(std::size_t, std::size_t)>& on_progress) {
   NoiseRun run;
   run.method = options.method;
@@ -73,10 +73,10 @@ NoiseRun runNoiseEstimation(const calibration::NoiseProblem& problem, const Nois
   run.seed = options.seed;
   const auto t0 = std::chrono::steady_clock::now();
   if (options.method == NoiseMethod::kl_hill) {
-    const calibration::KlHillConfig& config = options.kl;
+    const noise::KlHillConfig& config = options.kl;
     const NoiseSetting initial = options.initial ? *options.initial : defaultInitialNoise(problem.sensors);
     const auto total = static_cast<std::size_t>(config.climb.max_evaluations);
-    run.kl = calibration::estimateNoiseKlHill(problem, initial, config, options.seed, [&](int done, double) {
+    run.kl = noise::estimateNoiseKlHill(problem, initial, config, options.seed, [&](int done, double) {
       if (on_progress) on_progress(static_cast<std::size_t>(done), total);
     });
     run.noise = run.kl->noise;
@@ -88,9 +88,9 @@ NoiseRun runNoiseEstimation(const calibration::NoiseProblem& problem, const Nois
       run.message = "stopped at the evaluation cap (" + std::to_string(config.climb.max_evaluations) + ")";
     }
   } else {
-    calibration::MlNoiseConfig config = options.ml;
+    noise::MlNoiseConfig config = options.ml;
     if (options.initial) config.initial = *options.initial;
-    run.ml = calibration::estimateNoiseMl(problem, config);
+    run.ml = noise::estimateNoiseMl(problem, config);
     if (on_progress) on_progress(static_cast<std::size_t>(run.ml->iterations), static_cast<std::size_t>(run.ml->iterations));
     run.noise = run.ml->noise;
     run.process_estimated = config.estimate_process;
@@ -105,7 +105,7 @@ NoiseRun runNoiseEstimation(const calibration::NoiseProblem& problem, const Nois
   return run;
 }
 
-ojson noiseRunToJson(const NoiseRun& run, const calibration::NoiseProblem& problem, const std::vector<int>& sensor_labels) {
+ojson noiseRunToJson(const NoiseRun& run, const noise::NoiseProblem& problem, const std::vector<int>& sensor_labels) {
   auto label = [&](std::size_t s) { return s < sensor_labels.size() ? sensor_labels[s] : static_cast<int>(s); };
   ojson j{{"format", "lidarcal-noise-result/1"},
           {"method", run.method == NoiseMethod::kl_hill ? "kl-hill" : "ml"}};

@@ -12,9 +12,9 @@
 
 #include <nlohmann/json_fwd.hpp>
 
-#include "calibration/noise_hill.hpp"
-#include "calibration/noise_ml.hpp"
-#include "calibration/noise_problem.hpp"
+#include "noise/hill.hpp"
+#include "noise/ml.hpp"
+#include "noise/problem.hpp"
 #include "common/observation.hpp"
 
 namespace lidarcal::pipeline {
@@ -26,8 +26,8 @@ struct NoiseRunOptions {
   bool faithful = false;                     ///< kl-hill: label of the objective variant in `kl` (the seed's or ours)
   std::uint64_t seed = 1;                    ///< kl-hill: jumps and particle filter streams
   std::optional<NoiseSetting> initial;       ///< starting setting (kl-hill default: defaultInitialNoise)
-  calibration::KlHillConfig kl;              ///< kl-hill settings (kl.objective: KlObjectiveConfig::faithful() or sound())
-  calibration::MlNoiseConfig ml;             ///< ml settings (initial set from `initial` when given)
+  noise::KlHillConfig kl;              ///< kl-hill settings (kl.objective: KlObjectiveConfig::faithful() or sound())
+  noise::MlNoiseConfig ml;             ///< ml settings (initial set from `initial` when given)
 };
 
 /// Starting setting of the hill climbing when none is given: means 0, variances 0.5 (m^2,
@@ -45,18 +45,18 @@ struct NoiseRun {
   std::vector<double> objective_trace;       ///< kl-hill: best KL after each evaluation; ml: -log L per iteration
   int evaluations = 0;                       ///< kl-hill: particle-filter runs; ml: adjustments solved
   double time_s = 0.0;                       ///< wall time of the estimation (printed, not written: outputs are deterministic)
-  std::optional<calibration::KlHillResult> kl;  ///< details of a kl-hill run
-  std::optional<calibration::MlNoiseResult> ml;  ///< details of an ml run
+  std::optional<noise::KlHillResult> kl;  ///< details of a kl-hill run
+  std::optional<noise::MlNoiseResult> ml;  ///< details of an ml run
 };
 
 /// Runs the chosen estimator. `on_progress(done, total)` reports evaluations (kl-hill) or
 /// iterations (ml).
-NoiseRun runNoiseEstimation(const calibration::NoiseProblem& problem, const NoiseRunOptions& options,
+NoiseRun runNoiseEstimation(const noise::NoiseProblem& problem, const NoiseRunOptions& options,
                             const std::function<void(std::size_t, std::size_t)>& on_progress = {});
 
 /// result.json (format lidarcal-noise-result/1). `sensor_labels[i]` names sensor i as
 /// observations.csv did (empty: 0..S-1).
-nlohmann::ordered_json noiseRunToJson(const NoiseRun& run, const calibration::NoiseProblem& problem,
+nlohmann::ordered_json noiseRunToJson(const NoiseRun& run, const noise::NoiseProblem& problem,
                                       const std::vector<int>& sensor_labels = {});
 
 /// Writes the traces (trace.dat, params.dat) and their PNG plots (objective.png, params.png)

@@ -4,7 +4,7 @@
 
 #include <gtest/gtest.h>
 
-#include "calibration/noise_scenes.hpp"
+#include "noise/noise_scenes.hpp"
 #include "simulation/observation_sim.hpp"
 
 namespace lidarcal::simulation {

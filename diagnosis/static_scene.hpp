@@ -1,5 +1,5 @@
 #pragma once
-// Diagnosis of repeated scans from one pose of any scene (calibration/diagnose.hpp): seed 004's
+// Diagnosis of repeated scans from one pose of any scene (diagnosis/diagnosis.hpp): seed 004's
 // characterisation setting, where each beam over the scans is a batch at a constant distance.
 //
 // Without a true distance, what is identifiable:
@@ -22,9 +22,9 @@
 #include <cstdint>
 #include <vector>
 
-#include "calibration/diagnose.hpp"
+#include "diagnosis/diagnosis.hpp"
 
-namespace lidarcal::calibration {
+namespace lidarcal::diagnosis {
 
 /// Repeated scans from one pose: every reading with its beam angle and scan.
 struct StaticScans {
@@ -55,4 +55,4 @@ std::vector<std::string> staticCandidates();
 /// Diagnoses. `walls` (optional) receives the fitted wall lines (the geometric reference).
 DiagnosisResult diagnoseStatic(const StaticScans& data, const DiagnoseConfig& config, std::vector<WallLine>* walls = nullptr);
 
-}  // namespace lidarcal::calibration
+}  // namespace lidarcal::diagnosis

@@ -1,4 +1,4 @@
-#include "calibration/noise_problem.hpp"
+#include "noise/problem.hpp"
 
 #include <algorithm>
 #include <map>
@@ -6,7 +6,7 @@
 
 #include "common/errors.hpp"
 
-namespace lidarcal::calibration {
+namespace lidarcal::noise {
 
 NoiseProblem makeNoiseProblem(const std::vector<Observation>& observations, const std::vector<OdometryStep>& odometry) {
   NoiseProblem p;
@@ -57,4 +57,4 @@ NoiseProblem makeNoiseProblem(const std::vector<Observation>& observations, cons
   return p;
 }
 
-}  // namespace lidarcal::calibration
+}  // namespace lidarcal::noise

@@ -6,13 +6,13 @@
 #include <Eigen/Dense>
 #include <gtest/gtest.h>
 
-#include "calibration/noise_ml.hpp"
-#include "calibration/noise_problem.hpp"
-#include "calibration/noise_scenes.hpp"
+#include "noise/ml.hpp"
+#include "noise/problem.hpp"
+#include "noise/noise_scenes.hpp"
 #include "common/errors.hpp"
 #include "simulation/observation_sim.hpp"
 
-namespace lidarcal::calibration {
+namespace lidarcal::noise {
 namespace {
 
 // Unknowns of the adjustment as one vector: poses 1..K-1, landmarks, biases.
@@ -226,4 +226,4 @@ TEST(NoiseProblem, RejectsStopsOutsideTheOdometryAndSensorGapsAndSkipsUnassociat
 }
 
 }  // namespace
-}  // namespace lidarcal::calibration
+}  // namespace lidarcal::noise

@@ -6,14 +6,14 @@
 
 #include <gtest/gtest.h>
 
-#include "calibration/noise_hill.hpp"
-#include "calibration/noise_kl.hpp"
-#include "calibration/noise_problem.hpp"
-#include "calibration/noise_scenes.hpp"
+#include "noise/hill.hpp"
+#include "noise/kl.hpp"
+#include "noise/problem.hpp"
+#include "noise/noise_scenes.hpp"
 #include "common/rng.hpp"
 #include "simulation/observation_sim.hpp"
 
-namespace lidarcal::calibration {
+namespace lidarcal::noise {
 namespace {
 
 TEST(HillClimb, BestObjectiveNeverIncreasesEvenOnANoisyObjective) {
@@ -130,4 +130,4 @@ TEST_F(KlObjective, HillClimbingOnItKeepsTheBestObjectiveAndReportsTheBestSettin
 }
 
 }  // namespace
-}  // namespace lidarcal::calibration
+}  // namespace lidarcal::noise

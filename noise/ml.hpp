@@ -29,11 +29,11 @@
 
 #include <Eigen/Core>
 
-#include "calibration/noise_problem.hpp"
+#include "noise/problem.hpp"
 #include "common/observation.hpp"
 #include "common/pose2.hpp"
 
-namespace lidarcal::calibration {
+namespace lidarcal::noise {
 
 struct MlNoiseConfig {
   int max_iterations = 100;       ///< VCE iterations (adjustments) at most
@@ -109,4 +109,4 @@ std::vector<double> groupRedundancy(const NoiseProblem& problem, const MlState& 
 Eigen::MatrixXd groupInformation(const NoiseProblem& problem, const MlState& state, const std::vector<double>& variances,
                                  bool with_biases);
 
-}  // namespace lidarcal::calibration
+}  // namespace lidarcal::noise

@@ -16,11 +16,11 @@
 #include <string>
 #include <vector>
 
-#include "calibration/noise_kl.hpp"
-#include "calibration/noise_problem.hpp"
+#include "noise/kl.hpp"
+#include "noise/problem.hpp"
 #include "common/observation.hpp"
 
-namespace lidarcal::calibration {
+namespace lidarcal::noise {
 
 struct HillClimbConfig {
   double step = 0.01;         ///< step of every parameter, in its unit (seed 003 ch. 5: 0.01)
@@ -84,4 +84,4 @@ NoiseSetting unpackNoise(const std::vector<double>& x, const NoiseSetting& base,
 KlHillResult estimateNoiseKlHill(const NoiseProblem& problem, const NoiseSetting& initial, const KlHillConfig& config,
                                  std::uint64_t seed, const std::function<void(int, double)>& on_evaluation = {});
 
-}  // namespace lidarcal::calibration
+}  // namespace lidarcal::noise

@@ -15,11 +15,11 @@
 #include <cstdint>
 #include <vector>
 
-#include "calibration/fastslam.hpp"
-#include "calibration/noise_problem.hpp"
+#include "noise/fastslam.hpp"
+#include "noise/problem.hpp"
 #include "common/observation.hpp"
 
-namespace lidarcal::calibration {
+namespace lidarcal::noise {
 
 /// KL(p || q) of univariate Gaussians given by mean and variance, nats (closed form):
 ///   1/2 [ log(var_q / var_p) + (var_p + (mean_p - mean_q)^2) / var_q - 1 ].
@@ -73,4 +73,4 @@ ErrorGaussian fitErrors(const std::vector<double>& e, const std::vector<double>&
 KlEvaluation evaluateKlObjective(const NoiseProblem& problem, const NoiseSetting& assumed,
                                  const KlObjectiveConfig& config, std::uint64_t seed, std::uint64_t evaluation);
 
-}  // namespace lidarcal::calibration
+}  // namespace lidarcal::noise

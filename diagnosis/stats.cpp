@@ -1,4 +1,4 @@
-#include "calibration/diagnose_stats.hpp"
+#include "diagnosis/stats.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -11,7 +11,7 @@
 
 #include "common/pose2.hpp"
 
-namespace lidarcal::calibration {
+namespace lidarcal::diagnosis {
 
 const char* toString(DiagnoseMode mode) { return mode == DiagnoseMode::sequence ? "sequence" : "static"; }
 
@@ -253,4 +253,4 @@ std::string nameCause(std::vector<CandidateResult>& cands, double alpha, std::st
   return cands[chosen].effect;
 }
 
-}  // namespace lidarcal::calibration
+}  // namespace lidarcal::diagnosis

@@ -1,4 +1,4 @@
-#include "calibration/noise_hill.hpp"
+#include "noise/hill.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -7,7 +7,7 @@
 #include "common/errors.hpp"
 #include "common/rng.hpp"
 
-namespace lidarcal::calibration {
+namespace lidarcal::noise {
 
 void HillClimbConfig::validate() const {
   if (!(step > 0.0) || !std::isfinite(step)) throw InputError("", "step", "must be positive", "the seed uses 0.01");
@@ -176,4 +176,4 @@ KlHillResult estimateNoiseKlHill(const NoiseProblem& problem, const NoiseSetting
   return result;
 }
 
-}  // namespace lidarcal::calibration
+}  // namespace lidarcal::noise

@@ -1,5 +1,5 @@
 #pragma once
-// Diagnosis of a scan sequence with landmarks (calibration/diagnose.hpp), on what calibration
+// Diagnosis of a scan sequence with landmarks (diagnosis/diagnosis.hpp), on what calibration
 // consumes: the beams of every landmark sighting.
 //   baseline   calibrate() (joint refinement, order by its rule) with every heading held at the
 //              commanded one and the seed 004 squared noise law; then one refinement on every
@@ -15,10 +15,10 @@
 
 #include <vector>
 
-#include "calibration/diagnose.hpp"
+#include "diagnosis/diagnosis.hpp"
 #include "common/landmark_observations.hpp"
 
-namespace lidarcal::calibration {
+namespace lidarcal::diagnosis {
 
 /// Effects a sequence can show, in output order.
 std::vector<std::string> sequenceCandidates();
@@ -29,4 +29,4 @@ std::vector<std::string> sequenceCandidates();
 DiagnosisResult diagnoseSequence(const LandmarkObservations& obs, const DiagnoseConfig& config,
                                  const std::vector<std::vector<double>>* true_range_m = nullptr);
 
-}  // namespace lidarcal::calibration
+}  // namespace lidarcal::diagnosis

@@ -1,9 +1,9 @@
-#include "calibration/noise_kl.hpp"
+#include "noise/kl.hpp"
 
 #include <cmath>
 #include <limits>
 
-namespace lidarcal::calibration {
+namespace lidarcal::noise {
 
 double gaussianKl(double mean_p, double var_p, double mean_q, double var_q) {
   if (!(var_p > 0.0) || !(var_q > 0.0)) return std::numeric_limits<double>::infinity();
@@ -70,4 +70,4 @@ KlEvaluation evaluateKlObjective(const NoiseProblem& problem, const NoiseSetting
   return out;
 }
 
-}  // namespace lidarcal::calibration
+}  // namespace lidarcal::noise

@@ -4,12 +4,12 @@
 
 #include <gtest/gtest.h>
 
-#include "calibration/fastslam.hpp"
-#include "calibration/noise_problem.hpp"
-#include "calibration/noise_scenes.hpp"
+#include "noise/fastslam.hpp"
+#include "noise/problem.hpp"
+#include "noise/noise_scenes.hpp"
 #include "simulation/observation_sim.hpp"
 
-namespace lidarcal::calibration {
+namespace lidarcal::noise {
 namespace {
 
 TEST(FastSlam, TracksTheTrueTrajectoryBetterThanDeadReckoning) {
@@ -68,4 +68,4 @@ TEST(FastSlam, SkippingInitialisingReadingsDropsOneSamplePerLandmark) {
 }
 
 }  // namespace
-}  // namespace lidarcal::calibration
+}  // namespace lidarcal::noise

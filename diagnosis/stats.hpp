@@ -1,14 +1,14 @@
 #pragma once
-// Statistics of the diagnosis (calibration/diagnose.hpp): p-values calibrated on bootstrap
+// Statistics of the diagnosis (diagnosis/diagnosis.hpp): p-values calibrated on bootstrap
 // replicas, multiple testing, distances between distributions, and the rule that names a cause.
 
 #include <map>
 #include <string>
 #include <vector>
 
-#include "calibration/diagnose.hpp"
+#include "diagnosis/diagnosis.hpp"
 
-namespace lidarcal::calibration {
+namespace lidarcal::diagnosis {
 
 /// p-value of a measured statistic against the values it took on B bootstrap replicas of the
 /// fitted baseline. The replicas' mean m and standard deviation s give a Student-t predictive
@@ -95,4 +95,4 @@ std::string nameCause(std::vector<CandidateResult>& candidates, double alpha, st
                       const std::vector<std::pair<std::string, std::string>>& nested = {},
                       const std::vector<std::pair<std::string, std::string>>& indistinguishable = {});
 
-}  // namespace lidarcal::calibration
+}  // namespace lidarcal::diagnosis

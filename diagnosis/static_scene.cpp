@@ -1,4 +1,4 @@
-#include "calibration/diagnose_static.hpp"
+#include "diagnosis/static_scene.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -11,12 +11,12 @@
 
 #include <Eigen/Dense>
 
-#include "calibration/diagnose_stats.hpp"
+#include "diagnosis/stats.hpp"
 #include "common/pose2.hpp"
 #include "common/rng.hpp"
 #include "simulation/simulator.hpp"
 
-namespace lidarcal::calibration {
+namespace lidarcal::diagnosis {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
@@ -1223,4 +1223,4 @@ DiagnosisResult diagnoseStatic(const StaticScans& data, const DiagnoseConfig& co
   return out;
 }
 
-}  // namespace lidarcal::calibration
+}  // namespace lidarcal::diagnosis

@@ -8,7 +8,7 @@
 
 #include "common/observation.hpp"
 
-namespace lidarcal::calibration {
+namespace lidarcal::noise {
 
 struct NoiseProblem {
   int stops = 0;      ///< K: stops 0..K-1 (stop 0 is the start, the frame of the map)
@@ -28,4 +28,4 @@ struct NoiseProblem {
 /// nothing is left after removing unassociated observations.
 NoiseProblem makeNoiseProblem(const std::vector<Observation>& observations, const std::vector<OdometryStep>& odometry);
 
-}  // namespace lidarcal::calibration
+}  // namespace lidarcal::noise

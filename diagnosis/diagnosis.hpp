@@ -23,7 +23,7 @@
 
 #include "common/range_model.hpp"
 
-namespace lidarcal::calibration {
+namespace lidarcal::diagnosis {
 
 /// Candidate effect names, as they appear in diagnosis.json.
 namespace effect {
@@ -173,4 +173,4 @@ struct DiagnosisResult {
   int folds = 0;                      ///< folds used
 };
 
-}  // namespace lidarcal::calibration
+}  // namespace lidarcal::diagnosis

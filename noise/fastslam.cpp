@@ -1,4 +1,4 @@
-#include "calibration/fastslam.hpp"
+#include "noise/fastslam.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -11,7 +11,7 @@
 #include "common/errors.hpp"
 #include "common/rng.hpp"
 
-namespace lidarcal::calibration {
+namespace lidarcal::noise {
 namespace {
 
 struct LandmarkEkf {
@@ -219,4 +219,4 @@ FastSlamResult runFastSlam(const NoiseProblem& problem, const NoiseSetting& assu
   return result;
 }
 
-}  // namespace lidarcal::calibration
+}  // namespace lidarcal::noise

@@ -5,9 +5,9 @@
 
 #include <gtest/gtest.h>
 
-#include "calibration/noise_kl.hpp"
+#include "noise/kl.hpp"
 
-namespace lidarcal::calibration {
+namespace lidarcal::noise {
 namespace {
 
 // KL(p || q) by numerical integration of p log(p / q) (trapezoid rule over +-12 sigma_p).
@@ -60,4 +60,4 @@ TEST(FitErrors, CentralStatisticsAreTheMeanAndVarianceAndSquaredErrorsLeakTheMea
 }
 
 }  // namespace
-}  // namespace lidarcal::calibration
+}  // namespace lidarcal::noise

@@ -1,4 +1,4 @@
-// Model criticism (calibration/diagnose*): the statistics against closed forms, the simulator's
+// Model criticism (diagnosis/): the statistics against closed forms, the simulator's
 // effects against their definitions, the joint refinement's effect terms recover known values,
 // and diagnose names an effect hidden in simulated data (which one and its size drawn from a
 // case seed the assertion does not look at).
@@ -19,11 +19,11 @@
 
 #include <gtest/gtest.h>
 
-#include "calibration/diagnose_sequence.hpp"
-#include "calibration/diagnose_static.hpp"
-#include "calibration/diagnose_stats.hpp"
+#include "diagnosis/sequence.hpp"
+#include "diagnosis/static_scene.hpp"
+#include "diagnosis/stats.hpp"
 #include "calibration/joint_refinement.hpp"
-#include "calibration/diagnose_cases.hpp"
+#include "diagnosis/diagnose_cases.hpp"
 #include "common/rng.hpp"
 #include "io/scene_io.hpp"
 #include "simulation/simulator.hpp"
@@ -32,7 +32,8 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
-namespace lidarcal::calibration {
+namespace lidarcal::diagnosis {
+using namespace lidarcal::calibration;  // the joint refinement the diagnosis refits with
 namespace {
 
 /// Hidden-effect cases of `effect` (LIDARCAL_DIAGNOSE_CASES for every effect). By default 10 for
@@ -590,6 +591,6 @@ TEST(DiagnoseStatic, TooFewScansGiveAStatus) {
 }
 
 }  // namespace
-}  // namespace lidarcal::calibration
+}  // namespace lidarcal::diagnosis
 
 

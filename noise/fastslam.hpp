@@ -19,11 +19,11 @@
 #include <cstdint>
 #include <vector>
 
-#include "calibration/noise_problem.hpp"
+#include "noise/problem.hpp"
 #include "common/observation.hpp"
 #include "common/pose2.hpp"
 
-namespace lidarcal::calibration {
+namespace lidarcal::noise {
 
 struct FastSlamConfig {
   /// Number of particles. Default 80 (seed 003 ch. 5, all experiments).
@@ -64,4 +64,4 @@ struct FastSlamResult {
 FastSlamResult runFastSlam(const NoiseProblem& problem, const NoiseSetting& assumed, const FastSlamConfig& config,
                            std::uint64_t seed, std::uint64_t stream);
 
-}  // namespace lidarcal::calibration
+}  // namespace lidarcal::noise

@@ -1,4 +1,4 @@
-#include "calibration/noise_ml.hpp"
+#include "noise/ml.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -11,7 +11,7 @@
 
 #include "common/errors.hpp"
 
-namespace lidarcal::calibration {
+namespace lidarcal::noise {
 namespace {
 
 // ---- The model: residuals and Jacobians (shared by Ceres and the redundancy computation) ----
@@ -686,4 +686,4 @@ MlNoiseResult estimateNoiseMl(const NoiseProblem& problem, const MlNoiseConfig& 
   return result;
 }
 
-}  // namespace lidarcal::calibration
+}  // namespace lidarcal::noise

@@ -18,7 +18,7 @@
 #include <limits>
 #include <vector>
 
-#include "calibration/diagnose_static.hpp"
+#include "diagnosis/static_scene.hpp"
 #include "common/rng.hpp"
 #include "simulation/landmark_level.hpp"
 #include "simulation/simulator.hpp"
@@ -121,7 +121,7 @@ inline HiddenEffectCase hiddenEffectCase(const std::string& effect, std::uint64_
 /// A simulated room seen from one pose: walls at several distances and incidences, a pillar and
 /// a box (depth discontinuities), bias 0.01 + d, `scans` scans. `turn_rad_per_scan`: the sensor
 /// turns in place by this much per scan (the scans are cast from the turned heading).
-inline calibration::StaticScans staticRoom(const RangeEffects& fx, const NoiseModel& noise, std::uint64_t seed, int scans = 150,
+inline diagnosis::StaticScans staticRoom(const RangeEffects& fx, const NoiseModel& noise, std::uint64_t seed, int scans = 150,
                                            double step_error_fraction = 0.0, double turn_rad_per_scan = 0.0) {
   Scene s;
   s.sensor.beams = 360;
@@ -139,7 +139,7 @@ inline calibration::StaticScans staticRoom(const RangeEffects& fx, const NoiseMo
   s.clutter = {{1.5, 1.0, 0.2}};
   s.walls.push_back({-1.0, 0.8, -0.4, 1.6});
   const auto stops = simulation::planStops(s, seed);
-  calibration::StaticScans out;
+  diagnosis::StaticScans out;
   out.scans = static_cast<std::size_t>(scans);
   out.beams_per_scan = 360;
   out.range_min_m = 0.15;

@@ -1,4 +1,4 @@
-#include "calibration/diagnose_sequence.hpp"
+#include "diagnosis/sequence.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -11,14 +11,16 @@
 #include <Eigen/Dense>
 
 #include "calibration/calibrate.hpp"
-#include "calibration/diagnose_stats.hpp"
+#include "diagnosis/stats.hpp"
 #include "calibration/evaluation.hpp"
 #include "calibration/inversion.hpp"
 #include "calibration/joint_refinement.hpp"
 #include "common/rng.hpp"
 #include "simulation/landmark_level.hpp"
 
-namespace lidarcal::calibration {
+namespace lidarcal::diagnosis {
+// The diagnosis refits with the calibration stages (joint refinement, range model, inversion).
+using namespace lidarcal::calibration;
 namespace {
 
 constexpr double kClip = 3.0;  // Huber clipping of standardised residuals in the score statistics
@@ -157,14 +159,14 @@ double meanScore(const std::vector<Row>& rs, const std::vector<double>& x) {
     psi[i] = rs[i].psi;
     xs[i] = x[i] / rs[i].r.sigma_m;
   }
-  return calibration::meanScore(psi, xs);
+  return diagnosis::meanScore(psi, xs);
 }
 
 /// Score of a variance-type effect with covariate g (log of the factor on sigma per unit).
 double spreadScore(const std::vector<Row>& rs, const std::vector<double>& g) {
   std::vector<double> z(rs.size());
   for (std::size_t i = 0; i < rs.size(); ++i) z[i] = rs[i].z;
-  return calibration::spreadScore(z, g);
+  return diagnosis::spreadScore(z, g);
 }
 
 /// Sum over groups of (group score)^2 / information, with the overall mean removed (the bias
@@ -1202,4 +1204,4 @@ DiagnosisResult diagnoseSequence(const LandmarkObservations& obs, const Diagnose
   return out;
 }
 
-}  // namespace lidarcal::calibration
+}  // namespace lidarcal::diagnosis
