@@ -3,8 +3,12 @@
 # the architecture step): runs one fixed set of commands with a given lidarcal binary and
 # prints a SHA-256 per output file; run it with the binary before and after and compare.
 #
-#   bench/identical_outputs.sh [--quick] [LIDARCAL] > sums.txt
+#   bench/identical_outputs.sh [--quick] [--keep DIR] [LIDARCAL] > sums.txt
 #   bench/identical_outputs.sh --compare BEFORE_BINARY AFTER_BINARY [--quick]
+#
+# --compare keeps both output trees and compares them with bench/compare_outputs.py: every file
+# byte-identical, except JSON numbers equal to 12 significant digits (the last digits of a
+# Ceres covariance follow the memory addresses of the parameter blocks; the tool lists them).
 #
 # The set: the bundled example through `run`; each scene of data/scenes/ (seed 1) through
 # simulate, detect, calibrate (joint and closed form), correct and diagnose; the noise
@@ -21,23 +25,30 @@ if [ "${1:-}" = "--compare" ]; then
   before=$2 after=$3
   [ "${4:-}" = "--quick" ] && quick=1
   q=(); [ $quick = 1 ] && q=(--quick)
-  a=$(mktemp) b=$(mktemp)
-  trap 'rm -f "$a" "$b"' EXIT
-  "$0" "${q[@]}" "$before" > "$a"
-  "$0" "${q[@]}" "$after" > "$b"
-  if diff -u "$a" "$b"; then
-    echo "identical: $(wc -l < "$a") outputs"
-    exit 0
+  k=$(mktemp -d)
+  trap 'rm -rf "$k"' EXIT
+  "$0" "${q[@]}" --keep "$k/before" "$before" > "$k/before.sums"
+  "$0" "${q[@]}" --keep "$k/after" "$after" > "$k/after.sums"
+  # Exit codes of every step must match exactly.
+  if ! diff -u <(grep '^exit ' "$k/before.sums") <(grep '^exit ' "$k/after.sums"); then
+    echo "exit codes differ (lines above: - before, + after)" >&2
+    exit 1
   fi
-  echo "outputs differ (lines above: - before, + after)" >&2
-  exit 1
+  python3 "$(dirname "$0")/compare_outputs.py" "$k/before" "$k/after"
+  exit $?
 fi
 [ "${1:-}" = "--quick" ] && { quick=1; shift; }
+keep=
+[ "${1:-}" = "--keep" ] && { keep=$2; shift 2; }
 L=$(readlink -f "${1:-build/pipeline/lidarcal}")
 [ -x "$L" ] || { echo "identical_outputs: $L is not an executable" >&2; exit 2; }
 DATA=${LIDARCAL_SHARED_DATA:-../shared/data}
-W=$(mktemp -d)
-trap 'rm -rf "$W"' EXIT
+if [ -n "$keep" ]; then
+  mkdir -p "$keep" && W=$(readlink -f "$keep")
+else
+  W=$(mktemp -d)
+  trap 'rm -rf "$W"' EXIT
+fi
 
 # Runs a command; records its exit code (a changed refusal is a changed behaviour too).
 step() {  # name, args...

@@ -478,25 +478,10 @@ std::vector<std::vector<double>> constantDistanceBatches(const LandmarkObservati
   return batches;
 }
 
-CalibrationModel calibrate(const LandmarkObservations& obs, const CalibrationConfig& config) {
-  config.validate();
-  CalibrationModel m;
-  m.method = toString(config.method);
-  m.model.range_min_m = obs.range_min_m;
-  m.model.range_max_m = obs.range_max_m;
+namespace {
 
-  // Triangulating from bearings needs the sensor to translate: stops at one place (a sensor
-  // turning on the spot, or standing still) give every landmark the same bearing line.
-  const double baseline = pathExtent(obs.commanded);
-  if (const auto problem = baselineProblem(obs.commanded, config); problem && !obs.sightings.empty()) {
-    m.status = "no_baseline";
-    m.message = *problem;
-    return m;
-  }
-
-  // Stage 1: triangulation.
-  const auto tri = triangulateAll(obs, config.triangulation);
-  const double radius = landmarkRadius(obs);
+/// Stage 1 into the model: one landmark per triangulated one; returns how many are usable.
+int addTriangulated(CalibrationModel& m, const std::vector<LandmarkEstimate>& tri, double radius) {
   int usable = 0;
   for (const auto& l : tri) {
     CalibratedLandmark c;
@@ -510,47 +495,47 @@ CalibrationModel calibrate(const LandmarkObservations& obs, const CalibrationCon
     m.landmarks.push_back(c);
     usable += l.ok();
   }
-  if (usable == 0) {
-    m.status = "no_usable_landmark";
-    m.message = tri.empty() ? "no landmark was observed (check what lidarcal detect finds)"
-                            : "no landmark could be triangulated";
-    for (std::size_t i = 0; i < tri.size() && i < 3; ++i) m.message += "; landmark " + std::to_string(tri[i].id) + ": " + m.landmarks[i].status;
-    if (tri.size() > 3) m.message += "; and " + std::to_string(tri.size() - 3) + " more";
-    m.message += ". Record 3 or more stops along a straight line past 3 or more poles (cylinders 5-30 cm across, "
-                 "free-standing, 0.5-4 m away), give their radius with --radius if they are thinner, or give measured "
-                 "distances with --reference";
-    return m;
-  }
-  if (!(radius > 0.0)) {
-    m.status = "no_radius";
-    m.message = "the landmark radius is unknown and could not be estimated";
-    return m;
-  }
+  return usable;
+}
 
-  // Stage 2: the paper's closed form.
-  const auto pairs = closedFormPairs(obs, tri, radius, false);
-  const auto scan_pairs = closedFormPairs(obs, tri, radius, true);
-  if (pairs.size() < static_cast<std::size_t>(config.max_order) + 3) {
-    std::size_t read = 0;  // sightings with a finite central reading on a triangulated landmark
-    for (const auto& s : obs.sightings)
-      for (const auto& l : tri)
-        if (l.ok() && l.id == s.landmark && !s.beams.empty() && std::isfinite(s.beams[centralBeam(s)].range_m)) ++read;
-    m.status = "too_few_observations";
-    m.message = "only " + count(pairs.size(), "landmark-stop distance") + " from " + count(static_cast<std::size_t>(usable), "triangulated landmark") +
-                " (at least " + std::to_string(config.max_order + 3) + " needed)";
-    if (read > 0 && pairs.empty())
-      m.message += ": none of the " + count(read, "reading") +
-                   " meets its triangulated landmark in front of the sensor, so the bearing-only positions are wrong "
-                   "(a path of " + metres(baseline) + " is short for landmarks this far)";
-    m.message += ": record more stops along a longer straight line past 3 or more poles, or give measured distances with "
-                 "--reference";
-    return m;
-  }
-  const bool window_known = obs.range_max_m < 1e8;
-  const OrderSelection sel = selectOrder(pairs, config.max_order, config.closed_form_rule,
-                                         window_known ? invertibleOver(obs.range_min_m, obs.range_max_m) : Admissible{});
-  fillOrders(m, sel, pairs.size());
-  std::vector<double> d, y;
+/// The refusal when no landmark could be triangulated: the first three reasons, what to record.
+void refuseNoUsableLandmark(CalibrationModel& m, const std::vector<LandmarkEstimate>& tri) {
+  m.status = "no_usable_landmark";
+  m.message = tri.empty() ? "no landmark was observed (check what lidarcal detect finds)"
+                          : "no landmark could be triangulated";
+  for (std::size_t i = 0; i < tri.size() && i < 3; ++i) m.message += "; landmark " + std::to_string(tri[i].id) + ": " + m.landmarks[i].status;
+  if (tri.size() > 3) m.message += "; and " + std::to_string(tri.size() - 3) + " more";
+  m.message += ". Record 3 or more stops along a straight line past 3 or more poles (cylinders 5-30 cm across, "
+               "free-standing, 0.5-4 m away), give their radius with --radius if they are thinner, or give measured "
+               "distances with --reference";
+}
+
+/// The refusal when too few landmark-stop distances came out of the triangulation.
+void refuseTooFewObservations(CalibrationModel& m, const LandmarkObservations& obs, const CalibrationConfig& config,
+                              const std::vector<LandmarkEstimate>& tri, std::size_t pairs, int usable,
+                              double baseline) {
+  std::size_t read = 0;  // sightings with a finite central reading on a triangulated landmark
+  for (const auto& s : obs.sightings)
+    for (const auto& l : tri)
+      if (l.ok() && l.id == s.landmark && !s.beams.empty() && std::isfinite(s.beams[centralBeam(s)].range_m)) ++read;
+  m.status = "too_few_observations";
+  m.message = "only " + count(pairs, "landmark-stop distance") + " from " + count(static_cast<std::size_t>(usable), "triangulated landmark") +
+              " (at least " + std::to_string(config.max_order + 3) + " needed)";
+  if (read > 0 && pairs == 0)
+    m.message += ": none of the " + count(read, "reading") +
+                 " meets its triangulated landmark in front of the sensor, so the bearing-only positions are wrong "
+                 "(a path of " + metres(baseline) + " is short for landmarks this far)";
+  m.message += ": record more stops along a longer straight line past 3 or more poles, or give measured distances with "
+               "--reference";
+}
+
+/// Stage 2 into the model: order, bias, noise law and the side estimators from the per-scan
+/// landmark-stop pairs (d, y), which it returns for the joint refinement.
+void fillClosedForm(CalibrationModel& m, const LandmarkObservations& obs, const std::vector<LandmarkEstimate>& tri,
+                    const OrderSelection& sel, std::size_t n_pairs, const std::vector<RangePair>& scan_pairs,
+                    const CalibrationConfig& config, const std::vector<std::vector<double>>& batches,
+                    std::vector<double>& d, std::vector<double>& y) {
+  fillOrders(m, sel, n_pairs);
   for (const auto& p : scan_pairs) {
     d.push_back(p.d_m);
     y.push_back(p.y_m);
@@ -558,44 +543,43 @@ CalibrationModel calibrate(const LandmarkObservations& obs, const CalibrationCon
   const int order = std::max(sel.chosen, 1);  // order 0 cannot be inverted
   m.model.bias.alpha = sel.table[static_cast<std::size_t>(std::min<int>(order, static_cast<int>(sel.table.size()) - 1))].alpha;
   m.model.noise = fitNoiseLaw(config.noise, order, m.model.bias, d, y);
-  const auto batches = constantDistanceBatches(obs);
   fillNoiseFits(m, order, d, y, batches);
   m.residual_rms_m = rmsResidual(m.model.bias, d, y);
   m.readings = d.size();
   m.sigma_theta_rad = bearingScatter(obs, tri);
   m.stop_poses = obs.commanded;
   m.fitted_range_m = std::make_pair(*std::min_element(d.begin(), d.end()), *std::max_element(d.begin(), d.end()));
-  if (config.method == Method::closed_form) {
-    addPlausibilityWarnings(m, nullptr);
-    return m;
-  }
+}
 
-  // Stage 3: joint refinement (ours), from the closed form.
-  const JointStage js = jointStage(obs, config, tri, sel, radius, d, y, m.model);
-  const JointResult& j = js.result;
+/// Refuses a joint refinement that failed, or that ran away: a solution placing a landmark where
+/// the sensor could not have read it (distances far beyond its range limit) has moved along a
+/// direction the data do not pin down (seen with a single landmark: its centre, the bias and the
+/// poses trade off). True when refused.
+bool refuseJoint(CalibrationModel& m, const JointResult& j, const LandmarkObservations& obs, int usable,
+                 double baseline) {
   if (j.poses.empty()) {
     m.status = "joint_failed";
     m.message = j.message + " (" + count(static_cast<std::size_t>(usable), "landmark") + " triangulated over a path of " +
                 metres(baseline) + ": the beams that saw them do not meet the triangulated circles). Record stops along "
                 "a longer straight line past 3 or more poles, give the pole radius (--radius), or use --method "
                 "closed-form";
-    return m;
+    return true;
   }
-  // A solution that puts a landmark where the sensor could not have read it (distances far
-  // beyond its range limit) has run away along a direction the data do not pin down (seen
-  // with a single landmark: its centre, the bias and the poses trade off). Refuse it rather
-  // than return a model fitted to impossible distances.
-  if (obs.range_max_m < 1e8) {
-    const double limit = 1.5 * obs.range_max_m + 0.5;
-    const auto far = std::max_element(j.distances_m.begin(), j.distances_m.end());
-    if (far != j.distances_m.end() && !(*far <= limit)) {
-      m.status = "joint_failed";
-      m.message = "the joint refinement ran away: it places a landmark " + std::to_string(*far) +
-                  " m from a stop, beyond the sensor's range limit of " + std::to_string(obs.range_max_m) +
-                  " m (too little geometry to pin it down: add landmarks or stops, or use --method closed-form)";
-      return m;
-    }
-  }
+  if (!(obs.range_max_m < 1e8)) return false;
+  const double limit = 1.5 * obs.range_max_m + 0.5;
+  const auto far = std::max_element(j.distances_m.begin(), j.distances_m.end());
+  if (far == j.distances_m.end() || *far <= limit) return false;
+  m.status = "joint_failed";
+  m.message = "the joint refinement ran away: it places a landmark " + std::to_string(*far) +
+              " m from a stop, beyond the sensor's range limit of " + std::to_string(obs.range_max_m) +
+              " m (too little geometry to pin it down: add landmarks or stops, or use --method closed-form)";
+  return true;
+}
+
+/// Stage 3 into the model: the joint refinement's model, poses, landmarks and diagnostics.
+void fillJoint(CalibrationModel& m, const JointStage& js, const CalibrationConfig& config,
+               const std::vector<std::vector<double>>& batches) {
+  const JointResult& j = js.result;
   m.orders = js.rows;
   m.order_rule = toString(config.joint_rule);
   m.order_aic = static_cast<int>(js.best_aic) + 1;
@@ -628,7 +612,63 @@ CalibrationModel calibrate(const LandmarkObservations& obs, const CalibrationCon
     m.fitted_range_m = std::make_pair(*std::min_element(j.distances_m.begin(), j.distances_m.end()),
                                       *std::max_element(j.distances_m.begin(), j.distances_m.end()));
   if (!j.converged) m.message = "joint refinement: " + j.message;  // usable, but say so
-  addPlausibilityWarnings(m, &j);
+}
+
+}  // namespace
+
+CalibrationModel calibrate(const LandmarkObservations& obs, const CalibrationConfig& config) {
+  config.validate();
+  CalibrationModel m;
+  m.method = toString(config.method);
+  m.model.range_min_m = obs.range_min_m;
+  m.model.range_max_m = obs.range_max_m;
+
+  // Triangulating from bearings needs the sensor to translate: stops at one place (a sensor
+  // turning on the spot, or standing still) give every landmark the same bearing line.
+  const double baseline = pathExtent(obs.commanded);
+  if (const auto problem = baselineProblem(obs.commanded, config); problem && !obs.sightings.empty()) {
+    m.status = "no_baseline";
+    m.message = *problem;
+    return m;
+  }
+
+  // Stage 1: triangulation.
+  const auto tri = triangulateAll(obs, config.triangulation);
+  const double radius = landmarkRadius(obs);
+  const int usable = addTriangulated(m, tri, radius);
+  if (usable == 0) {
+    refuseNoUsableLandmark(m, tri);
+    return m;
+  }
+  if (!(radius > 0.0)) {
+    m.status = "no_radius";
+    m.message = "the landmark radius is unknown and could not be estimated";
+    return m;
+  }
+
+  // Stage 2: the paper's closed form.
+  const auto pairs = closedFormPairs(obs, tri, radius, false);
+  const auto scan_pairs = closedFormPairs(obs, tri, radius, true);
+  if (pairs.size() < static_cast<std::size_t>(config.max_order) + 3) {
+    refuseTooFewObservations(m, obs, config, tri, pairs.size(), usable, baseline);
+    return m;
+  }
+  const bool window_known = obs.range_max_m < 1e8;
+  const OrderSelection sel = selectOrder(pairs, config.max_order, config.closed_form_rule,
+                                         window_known ? invertibleOver(obs.range_min_m, obs.range_max_m) : Admissible{});
+  const auto batches = constantDistanceBatches(obs);
+  std::vector<double> d, y;
+  fillClosedForm(m, obs, tri, sel, pairs.size(), scan_pairs, config, batches, d, y);
+  if (config.method == Method::closed_form) {
+    addPlausibilityWarnings(m, nullptr);
+    return m;
+  }
+
+  // Stage 3: joint refinement (ours), from the closed form.
+  const JointStage js = jointStage(obs, config, tri, sel, radius, d, y, m.model);
+  if (refuseJoint(m, js.result, obs, usable, baseline)) return m;
+  fillJoint(m, js, config, batches);
+  addPlausibilityWarnings(m, &js.result);
   return m;
 }
 

@@ -45,6 +45,24 @@ inline double incidenceNoiseFactor(double gamma, double cos_phi) {
   return gamma == 0.0 ? 1.0 : std::pow(1.0 / clampCosIncidence(cos_phi), gamma);
 }
 
+/// The mean reading of a beam (the equation at the top of this file without the noise):
+/// f(d) + o + c t + b (1 - cos phi), f_d = f(d), o the surface offset, c the drift per scan at
+/// scan t (from whatever origin the caller uses: the simulator the first scan, the joint
+/// refinement the mean scan), b the incidence bias, cos_phi the clamped cosine of the incidence.
+/// The one expression of it, for the simulator, the Ceres residuals (T a jet) and the
+/// evaluation; the terms are summed in this order everywhere.
+template <typename T>
+T expectedReading(const T& f_d, const T& offset, const T& drift_per_scan, const T& t, const T& incidence_bias,
+                  const T& cos_phi) {
+  return f_d + offset + drift_per_scan * t + incidence_bias * (T(1) - cos_phi);
+}
+
+/// cos^2 phi kept at or above 0.05^2 (clampCosIncidence for a squared cosine, any scalar type).
+template <typename T>
+T clampCosIncidenceSquared(const T& cos2_phi) {
+  return cos2_phi < T(0.0025) ? T(0.0025) : cos2_phi;
+}
+
 /// Rounds a reading to the sensor's resolution (no rounding for resolution 0).
 inline double quantise(double y_m, double resolution_m) {
   return resolution_m > 0.0 ? resolution_m * std::round(y_m / resolution_m) : y_m;

@@ -12,6 +12,15 @@
 
 namespace lidarcal {
 
+/// alpha_0 + alpha_1 d + ... + alpha_{N-1} d^(N-1) by Horner's rule (seed 004 eq. 1's f), for any
+/// scalar type (the Ceres residuals evaluate it on jets).
+template <int N, typename T>
+T evaluatePolynomial(const T* alpha, const T& d) {
+  T f = alpha[N - 1];
+  for (int i = N - 2; i >= 0; --i) f = f * d + alpha[i];
+  return f;
+}
+
 /// Polynomial f(d) = sum_i alpha[i] d^i (seed 000 eq. 3, seed 004 eq. 3). d and f in metres.
 struct BiasPolynomial {
   /// Coefficients alpha_0..alpha_n (alpha_i in m^(1-i)). Default: identity f(d) = d.

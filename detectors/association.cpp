@@ -268,8 +268,27 @@ std::vector<TrackSerial> StopLinker::add(const StopClusters& clusters, std::size
   merged_.clear();
   totals_.discarded_conflicts += stage1_conflicts;
   totals_.detections += stage1_conflicts;
-  std::vector<TrackSerial> serial_of(clusters.size(), 0);
-  if (clusters.empty()) return serial_of;
+  if (clusters.empty()) return {};
+  StopWork w{clusters, beginStop(clusters), std::vector<TrackSerial>(clusters.size(), 0),
+             std::vector<bool>(tracks_.size(), false)};
+  // Stage 2: strong clusters continue tracks, or start new ones (in key order).
+  assign(w, true, -1.0);
+  startTracks(w);
+  w.taken.resize(tracks_.size(), true);  // seen strongly at this stop
+  recordCoSeen(w);
+  mergeSplitTracks(w);
+  dropMerged(w);
+  // Stage 3: weak clusters join a track not seen strongly here.
+  assign(w, false, config_.stop_link_distance_m);
+  for (std::size_t k = 0; k < clusters.size(); ++k)
+    if (w.serial_of[k] == 0) totals_.discarded_few_stops += clusters[k].detections;
+  // Stage 4 (bounded memory).
+  forgetStale(w.stop);
+  return w.serial_of;
+}
+
+/// Checks that the clusters are of one stop, later than the last one; returns the stop.
+std::size_t StopLinker::beginStop(const StopClusters& clusters) {
   const std::size_t stop = clusters.front().stop;
   for (const auto& c : clusters) {
     if (c.stop != stop) throw std::invalid_argument("StopLinker::add: clusters of one stop expected");
@@ -278,105 +297,116 @@ std::vector<TrackSerial> StopLinker::add(const StopClusters& clusters, std::size
   if (started_ && stop <= last_stop_) throw std::invalid_argument("StopLinker::add: stops must come in increasing order");
   started_ = true;
   last_stop_ = stop;
+  return stop;
+}
 
-  auto join = [&](std::size_t k, Track& t) {
-    const StopCluster& c = clusters[k];
-    serial_of[k] = t.serial;
-    if (c.strong) {
-      ++t.strong_stops;
-      t.recent[t.sightings++ % t.recent.size()] = {c.x_m, c.y_m};
-      t.seen_at_m = travel_m_;
+/// Cluster k joins track t.
+void StopLinker::join(StopWork& w, std::size_t k, Track& t) {
+  const StopCluster& c = w.clusters[k];
+  w.serial_of[k] = t.serial;
+  if (c.strong) {
+    ++t.strong_stops;
+    t.recent[t.sightings++ % t.recent.size()] = {c.x_m, c.y_m};
+    t.seen_at_m = travel_m_;
+  }
+  t.last_stop = w.stop;
+  const auto n = static_cast<double>(c.detections);
+  t.detections += c.detections;
+  t.sum_x += n * c.x_m, t.sum_y += n * c.y_m;
+  t.first = std::min(t.first, c.first);
+  t.radii.offer({c.radius_m, c.detections});
+}
+
+/// Joins the strong (or weak) clusters to tracks: closest (cluster, track) pairs first within
+/// reach, `fixed_reach` or, when negative, each track's own reach (stage 2); ties by the
+/// cluster's key, then serial (both order-free). Tracks already taken at this stop are skipped.
+void StopLinker::assign(StopWork& w, bool strong, double fixed_reach) {
+  std::vector<std::tuple<double, DetectionKey, TrackSerial, std::size_t, std::size_t>> pairs;
+  for (std::size_t k = 0; k < w.clusters.size(); ++k) {
+    if (w.clusters[k].strong != strong) continue;
+    for (std::size_t t = 0; t < tracks_.size(); ++t) {
+      if (w.taken[t]) continue;
+      const double d = tracks_[t].distanceTo(w.clusters[k].x_m, w.clusters[k].y_m);
+      if (d <= (fixed_reach < 0.0 ? reach(tracks_[t]) : fixed_reach))
+        pairs.emplace_back(d, w.clusters[k].first, tracks_[t].serial, k, t);
     }
-    t.last_stop = stop;
-    const auto n = static_cast<double>(c.detections);
-    t.detections += c.detections;
-    t.sum_x += n * c.x_m, t.sum_y += n * c.y_m;
-    t.first = std::min(t.first, c.first);
-    t.radii.offer({c.radius_m, c.detections});
-  };
-  // Closest (cluster, track) pairs first within `reach`; ties by the cluster's key, then serial
-  // (both order-free). Tracks already taken at this stop are skipped.
-  std::vector<bool> taken(tracks_.size(), false);
-  // `fixed_reach` < 0: each track's own reach (stage 2).
-  auto assign = [&](bool strong, double fixed_reach) {
-    std::vector<std::tuple<double, DetectionKey, TrackSerial, std::size_t, std::size_t>> pairs;
-    for (std::size_t k = 0; k < clusters.size(); ++k) {
-      if (clusters[k].strong != strong) continue;
-      for (std::size_t t = 0; t < tracks_.size(); ++t) {
-        if (taken[t]) continue;
-        const double d = tracks_[t].distanceTo(clusters[k].x_m, clusters[k].y_m);
-        if (d <= (fixed_reach < 0.0 ? reach(tracks_[t]) : fixed_reach))
-          pairs.emplace_back(d, clusters[k].first, tracks_[t].serial, k, t);
-      }
-    }
-    std::sort(pairs.begin(), pairs.end());
-    for (const auto& [d, key, serial, k, t] : pairs) {
-      if (serial_of[k] != 0 || taken[t]) continue;
-      taken[t] = true;
-      join(k, tracks_[t]);
-    }
-  };
-  // Stage 2: strong clusters continue tracks, or start new ones (in key order).
-  assign(true, -1.0);
-  for (std::size_t k = 0; k < clusters.size(); ++k) {
-    if (!clusters[k].strong || serial_of[k] != 0) continue;
+  }
+  std::sort(pairs.begin(), pairs.end());
+  for (const auto& [d, key, serial, k, t] : pairs) {
+    if (w.serial_of[k] != 0 || w.taken[t]) continue;
+    w.taken[t] = true;
+    join(w, k, tracks_[t]);
+  }
+}
+
+/// Strong clusters that joined no track start one each (in key order).
+void StopLinker::startTracks(StopWork& w) {
+  for (std::size_t k = 0; k < w.clusters.size(); ++k) {
+    if (!w.clusters[k].strong || w.serial_of[k] != 0) continue;
     Track t;
     t.serial = next_serial_++;
-    t.first = clusters[k].first;
+    t.first = w.clusters[k].first;
     tracks_.push_back(std::move(t));
-    join(k, tracks_.back());
+    join(w, k, tracks_.back());
   }
-  taken.resize(tracks_.size(), true);  // seen strongly at this stop
-  // Tracks seen close to each other at this stop are two objects: never merged.
+}
+
+std::size_t StopLinker::index(TrackSerial serial) const {
+  for (std::size_t t = 0; t < tracks_.size(); ++t)
+    if (tracks_[t].serial == serial) return t;
+  throw std::logic_error("StopLinker: no track " + std::to_string(serial));
+}
+
+/// Tracks seen close to each other at this stop are two objects: never merged.
+void StopLinker::recordCoSeen(const StopWork& w) {
   const double near = 2.0 * config_.link_distance_m;
-  auto index = [&](TrackSerial serial) {
-    for (std::size_t t = 0; t < tracks_.size(); ++t)
-      if (tracks_[t].serial == serial) return t;
-    throw std::logic_error("StopLinker: no track " + std::to_string(serial));
-  };
+  const StopClusters& clusters = w.clusters;
   for (std::size_t a = 0; a < clusters.size(); ++a)
     for (std::size_t b = 0; b < clusters.size(); ++b) {
-      if (a == b || serial_of[a] == 0 || serial_of[b] == 0 ||
+      if (a == b || w.serial_of[a] == 0 || w.serial_of[b] == 0 ||
           std::hypot(clusters[a].x_m - clusters[b].x_m, clusters[a].y_m - clusters[b].y_m) > near)
         continue;
-      auto& co = tracks_[index(serial_of[a])].co_seen;
-      const auto it = std::lower_bound(co.begin(), co.end(), serial_of[b]);
-      if (it == co.end() || *it != serial_of[b]) co.insert(it, serial_of[b]);
+      auto& co = tracks_[index(w.serial_of[a])].co_seen;
+      const auto it = std::lower_bound(co.begin(), co.end(), w.serial_of[b]);
+      if (it == co.end() || *it != w.serial_of[b]) co.insert(it, w.serial_of[b]);
     }
-  // One object found as two tracks: a strong cluster here within reach of a track not seen at
-  // this stop, never seen close to the cluster's track, joins them (into the older one).
-  for (std::size_t k = 0; k < clusters.size(); ++k) {
-    if (!clusters[k].strong) continue;
+}
+
+/// One object found as two tracks: a strong cluster here within reach of a track not seen at
+/// this stop, never seen close to the cluster's track, joins them (into the older one).
+void StopLinker::mergeSplitTracks(StopWork& w) {
+  for (std::size_t k = 0; k < w.clusters.size(); ++k) {
+    if (!w.clusters[k].strong) continue;
     for (std::size_t t = 0; t < tracks_.size(); ++t) {
       Track& other = tracks_[t];
-      if (taken[t] || other.dead) continue;
-      if (other.distanceTo(clusters[k].x_m, clusters[k].y_m) > config_.link_distance_m) continue;
-      Track& mine = tracks_[index(serial_of[k])];
+      if (w.taken[t] || other.dead) continue;
+      if (other.distanceTo(w.clusters[k].x_m, w.clusters[k].y_m) > config_.link_distance_m) continue;
+      Track& mine = tracks_[index(w.serial_of[k])];
       if (std::binary_search(mine.co_seen.begin(), mine.co_seen.end(), other.serial)) continue;
       Track& into = mine.serial < other.serial ? mine : other;
       Track& from = mine.serial < other.serial ? other : mine;
       merge(into, from);
-      for (auto& s : serial_of)
+      for (auto& s : w.serial_of)
         if (s == from.serial) s = into.serial;
-      taken[index(into.serial)] = true;
+      w.taken[index(into.serial)] = true;
     }
   }
-  {  // drop the merged tracks
-    std::size_t w = 0;
-    for (std::size_t t = 0; t < tracks_.size(); ++t) {
-      if (tracks_[t].dead) continue;
-      if (w != t) tracks_[w] = std::move(tracks_[t]), taken[w] = taken[t];
-      ++w;
-    }
-    tracks_.resize(w);
-    taken.resize(w);
-  }
-  // Stage 3: weak clusters join a track not seen strongly here.
-  assign(false, config_.stop_link_distance_m);
-  for (std::size_t k = 0; k < clusters.size(); ++k)
-    if (serial_of[k] == 0) totals_.discarded_few_stops += clusters[k].detections;
+}
 
-  // Stage 4 (bounded memory): forget the tracks left behind before they were seen often enough.
+/// Drops the tracks merged into others.
+void StopLinker::dropMerged(StopWork& w) {
+  std::size_t kept = 0;
+  for (std::size_t t = 0; t < tracks_.size(); ++t) {
+    if (tracks_[t].dead) continue;
+    if (kept != t) tracks_[kept] = std::move(tracks_[t]), w.taken[kept] = w.taken[t];
+    ++kept;
+  }
+  tracks_.resize(kept);
+  w.taken.resize(kept);
+}
+
+/// Forgets the tracks left behind before they were seen often enough (bounded memory).
+void StopLinker::forgetStale(std::size_t stop) {
   std::size_t w = 0;
   for (std::size_t t = 0; t < tracks_.size(); ++t) {
     Track& tr = tracks_[t];
@@ -391,15 +421,13 @@ std::vector<TrackSerial> StopLinker::add(const StopClusters& clusters, std::size
     ++w;
   }
   tracks_.resize(w);
-  if (!forgotten_.empty()) {
-    std::vector<TrackSerial> gone = forgotten_;
-    std::sort(gone.begin(), gone.end());
-    for (auto& t : tracks_)
-      t.co_seen.erase(std::remove_if(t.co_seen.begin(), t.co_seen.end(),
-                                     [&](TrackSerial s) { return std::binary_search(gone.begin(), gone.end(), s); }),
-                      t.co_seen.end());
-  }
-  return serial_of;
+  if (forgotten_.empty()) return;
+  std::vector<TrackSerial> gone = forgotten_;
+  std::sort(gone.begin(), gone.end());
+  for (auto& t : tracks_)
+    t.co_seen.erase(std::remove_if(t.co_seen.begin(), t.co_seen.end(),
+                                   [&](TrackSerial s) { return std::binary_search(gone.begin(), gone.end(), s); }),
+                    t.co_seen.end());
 }
 
 Association StopLinker::finish(TrackIds& ids) const {

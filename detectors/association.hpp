@@ -223,6 +223,23 @@ class StopLinker {
     /// Distance from (x, y) to the nearest of its recent strong sightings, metres.
     double distanceTo(double x, double y) const;
   };
+  /// The work of one add(): the stop's clusters, the track each joined (0: none yet) and which
+  /// tracks were given a cluster at this stop.
+  struct StopWork {
+    const StopClusters& clusters;
+    std::size_t stop;
+    std::vector<TrackSerial> serial_of;
+    std::vector<bool> taken;
+  };
+  std::size_t beginStop(const StopClusters& clusters);
+  void join(StopWork& w, std::size_t k, Track& t);
+  void assign(StopWork& w, bool strong, double fixed_reach);
+  void startTracks(StopWork& w);
+  std::size_t index(TrackSerial serial) const;
+  void recordCoSeen(const StopWork& w);
+  void mergeSplitTracks(StopWork& w);
+  void dropMerged(StopWork& w);
+  void forgetStale(std::size_t stop);
   void merge(Track& into, Track& from);
   /// How far from its recent sightings a strong cluster may continue track t, metres.
   double reach(const Track& t) const;

@@ -241,25 +241,106 @@ bool ransacCircle(const std::vector<Eigen::Vector2d>& pts, const Eigen::Vector2d
   return true;
 }
 
-CircleFit fitPoints(const std::vector<Eigen::Vector2d>& pts, const pcl::Indices& idx, const CircleFitConfig& cfg) {
-  cfg.validate();
-  CircleFit out;
-  const std::size_t n = pts.size();
-  if (n < 3) {
+/// Refuses fewer than 3 points, fewer than 3 distinct ones, or collinear ones. True when refused.
+bool refuseDegenerate(const std::vector<Eigen::Vector2d>& pts, CircleFit& out) {
+  if (pts.size() < 3) {
     out.status = out.free_status = FitStatus::too_few_points;
-    out.message = "a circle needs at least 3 finite points, got " + std::to_string(n);
-    return out;
+    out.message = "a circle needs at least 3 finite points, got " + std::to_string(pts.size());
+    return true;
   }
   if (distinctCount(pts) < 3) {
     out.status = out.free_status = FitStatus::degenerate;
     out.message = "fewer than 3 distinct points (duplicates)";
-    return out;
+    return true;
   }
   if (collinear(pts)) {
     out.status = out.free_status = FitStatus::degenerate;
     out.message = "the points are collinear";
-    return out;
+    return true;
   }
+  return false;
+}
+
+/// Free-radius fit of `sub`: Taubin start, geometric refinement; falls back to RANSAC's own model
+/// when the refinement leaves the radius limits.
+void fitFreeRadius(const std::vector<Eigen::Vector2d>& sub, const std::optional<Circle2>& ransac_model,
+                   const CircleFitConfig& cfg, CircleFit& out) {
+  out.free_status = FitStatus::degenerate;
+  if (const auto start = taubinCircle(sub)) {
+    const GeometricFit g = refineCircle(sub, *start, std::nullopt, cfg.refine_iterations);
+    out.free_circle = g.circle;
+    out.free_radius_sensitivity = g.sensitivity[2];
+    out.free_status = FitStatus::ok;
+    out.iterations = g.iterations;
+    if (!withinLimits(g.circle, cfg)) {
+      if (ransac_model && withinLimits(*ransac_model, cfg)) {
+        out.free_circle = *ransac_model;
+        out.refinement_rejected = true;
+      } else {
+        out.free_status = FitStatus::radius_out_of_limits;
+      }
+    }
+  }
+  out.free_rms_m = circleRms(sub, out.free_circle);
+}
+
+/// Fixed-radius fit of `sub` (cfg.fixed_radius_m), from behind the arc along the line of sight,
+/// else from the free fit, else from the centroid of all points.
+void fitFixedRadius(const std::vector<Eigen::Vector2d>& sub, const Eigen::Vector2d& centroid,
+                    const CircleFitConfig& cfg, CircleFit& out) {
+  Circle2 start{centroid.x(), centroid.y(), *cfg.fixed_radius_m};
+  Eigen::Vector2d m = Eigen::Vector2d::Zero();
+  for (const auto& p : sub) m += p;
+  m /= static_cast<double>(sub.size());
+  if (cfg.seen_from) {
+    // Start behind the arc, one radius beyond its mean along the line of sight.
+    const Eigen::Vector2d dir = (m - *cfg.seen_from).normalized();
+    start.x_m = m.x() + *cfg.fixed_radius_m * dir.x();
+    start.y_m = m.y() + *cfg.fixed_radius_m * dir.y();
+  } else if (out.free_status == FitStatus::ok) {
+    start.x_m = out.free_circle.x_m, start.y_m = out.free_circle.y_m;
+  }
+  const GeometricFit g = refineCircle(sub, start, cfg.fixed_radius_m, cfg.refine_iterations);
+  out.circle = g.circle;
+  out.iterations = g.iterations;
+}
+
+/// Both fits on the points `sel`.
+void fitSelection(const std::vector<Eigen::Vector2d>& pts, const std::vector<std::size_t>& sel,
+                  const Eigen::Vector2d& centroid, const std::optional<Circle2>& ransac_model,
+                  const CircleFitConfig& cfg, CircleFit& out) {
+  const auto sub = subset(pts, sel);
+  fitFreeRadius(sub, ransac_model, cfg, out);
+  if (cfg.fixed_radius_m) fitFixedRadius(sub, centroid, cfg, out);
+  else out.circle = out.free_circle;
+  out.rms_m = circleRms(sub, out.circle);
+}
+
+/// Indices of the points within the inlier threshold of `c`.
+std::vector<std::size_t> pointsOn(const std::vector<Eigen::Vector2d>& pts, const Circle2& c, double threshold_m) {
+  std::vector<std::size_t> on;
+  for (std::size_t k = 0; k < pts.size(); ++k) {
+    const double r = std::hypot(pts[k].x() - c.x_m, pts[k].y() - c.y_m) - c.radius_m;
+    if (std::abs(r) <= threshold_m) on.push_back(k);
+  }
+  return on;
+}
+
+/// Whether the centre lies in front of the arc `sel` seen from `from` (a concave surface).
+bool concave(const std::vector<Eigen::Vector2d>& pts, const std::vector<std::size_t>& sel, const Circle2& circle,
+             const Eigen::Vector2d& from) {
+  Eigen::Vector2d m = Eigen::Vector2d::Zero();
+  for (auto k : sel) m += pts[k];
+  m /= static_cast<double>(sel.size());
+  const Eigen::Vector2d c(circle.x_m, circle.y_m);
+  return (c - from).norm() <= (m - from).norm();
+}
+
+CircleFit fitPoints(const std::vector<Eigen::Vector2d>& pts, const pcl::Indices& idx, const CircleFitConfig& cfg) {
+  cfg.validate();
+  CircleFit out;
+  if (refuseDegenerate(pts, out)) return out;
+  const std::size_t n = pts.size();
   Eigen::Vector2d centroid = Eigen::Vector2d::Zero();
   for (const auto& p : pts) centroid += p;
   centroid /= static_cast<double>(n);
@@ -283,49 +364,8 @@ CircleFit fitPoints(const std::vector<Eigen::Vector2d>& pts, const pcl::Indices&
     }
   }
 
-  // 2. Free-radius fit: Taubin start, geometric refinement; fall back to RANSAC's own model when
-  //    the refinement leaves the radius limits.
-  auto fitOn = [&](const std::vector<std::size_t>& s) {
-    const auto sub = subset(pts, s);
-    out.free_status = FitStatus::degenerate;
-    if (const auto start = taubinCircle(sub)) {
-      const GeometricFit g = refineCircle(sub, *start, std::nullopt, cfg.refine_iterations);
-      out.free_circle = g.circle;
-      out.free_radius_sensitivity = g.sensitivity[2];
-      out.free_status = FitStatus::ok;
-      out.iterations = g.iterations;
-      if (!withinLimits(g.circle, cfg)) {
-        if (ransac_model && withinLimits(*ransac_model, cfg)) {
-          out.free_circle = *ransac_model;
-          out.refinement_rejected = true;
-        } else {
-          out.free_status = FitStatus::radius_out_of_limits;
-        }
-      }
-    }
-    out.free_rms_m = circleRms(sub, out.free_circle);
-    if (cfg.fixed_radius_m) {
-      Circle2 start{centroid.x(), centroid.y(), *cfg.fixed_radius_m};
-      Eigen::Vector2d m = Eigen::Vector2d::Zero();
-      for (const auto& p : sub) m += p;
-      m /= static_cast<double>(sub.size());
-      if (cfg.seen_from) {
-        // Start behind the arc, one radius beyond its mean along the line of sight.
-        const Eigen::Vector2d dir = (m - *cfg.seen_from).normalized();
-        start.x_m = m.x() + *cfg.fixed_radius_m * dir.x();
-        start.y_m = m.y() + *cfg.fixed_radius_m * dir.y();
-      } else if (out.free_status == FitStatus::ok) {
-        start.x_m = out.free_circle.x_m, start.y_m = out.free_circle.y_m;
-      }
-      const GeometricFit g = refineCircle(sub, start, cfg.fixed_radius_m, cfg.refine_iterations);
-      out.circle = g.circle;
-      out.iterations = g.iterations;
-    } else {
-      out.circle = out.free_circle;
-    }
-    out.rms_m = circleRms(sub, out.circle);
-  };
-  fitOn(sel);
+  // 2. Free- (and fixed-) radius fit on the consensus set.
+  fitSelection(pts, sel, centroid, ransac_model, cfg, out);
   if (!cfg.fixed_radius_m && out.free_status != FitStatus::ok) {
     out.status = out.free_status;
     out.message = out.free_status == FitStatus::radius_out_of_limits
@@ -337,29 +377,19 @@ CircleFit fitPoints(const std::vector<Eigen::Vector2d>& pts, const pcl::Indices&
 
   // 3. Inliers of the refined circle among all points; refit once if the set grew. Never let the
   //    refined model shrink the consensus set (PCL's zero-inlier trap).
-  std::vector<std::size_t> again;
-  for (std::size_t k = 0; k < n; ++k) {
-    const double r = std::hypot(pts[k].x() - out.circle.x_m, pts[k].y() - out.circle.y_m) - out.circle.radius_m;
-    if (std::abs(r) <= cfg.inlier_threshold_m) again.push_back(k);
-  }
+  std::vector<std::size_t> again = pointsOn(pts, out.circle, cfg.inlier_threshold_m);
   if (again.size() > sel.size()) {
     sel = std::move(again);
-    fitOn(sel);
+    fitSelection(pts, sel, centroid, ransac_model, cfg, out);
   }
   out.inliers.reserve(sel.size());
   for (auto k : sel) out.inliers.push_back(idx[k]);
   std::sort(out.inliers.begin(), out.inliers.end());
 
-  if (cfg.seen_from) {
-    Eigen::Vector2d m = Eigen::Vector2d::Zero();
-    for (auto k : sel) m += pts[k];
-    m /= static_cast<double>(sel.size());
-    const Eigen::Vector2d c(out.circle.x_m, out.circle.y_m);
-    if ((c - *cfg.seen_from).norm() <= (m - *cfg.seen_from).norm()) {
-      out.status = FitStatus::wrong_side;
-      out.message = "the circle's centre lies in front of the arc (a concave surface)";
-      return out;
-    }
+  if (cfg.seen_from && concave(pts, sel, out.circle, *cfg.seen_from)) {
+    out.status = FitStatus::wrong_side;
+    out.message = "the circle's centre lies in front of the arc (a concave surface)";
+    return out;
   }
   out.status = FitStatus::ok;
   return out;

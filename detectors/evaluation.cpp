@@ -69,6 +69,167 @@ std::vector<bool> partlyHidden(const ScanTruth& t, std::size_t landmarks) {
   return hidden;
 }
 
+/// The target a detection's inliers voted for most: its kind and id (0 when none).
+std::pair<io::TargetKind, int> votedTarget(const Detection& d, const ScanTruth& t) {
+  std::map<std::pair<int, int>, std::size_t> votes;
+  for (auto i : d.inliers) {
+    const auto& b = t.beams.at(static_cast<std::size_t>(i));
+    ++votes[{static_cast<int>(b.target), b.target_id}];
+  }
+  std::pair<int, int> best{0, 0};
+  std::size_t best_n = 0;
+  for (const auto& [k, n] : votes)
+    if (n > best_n) best = k, best_n = n;
+  return {static_cast<io::TargetKind>(best.first), best.second};
+}
+
+/// The true landmarks in one scan's sensor frame: position and distance, index 1..L.
+struct LandmarksSeen {
+  std::vector<double> x, y, dist;
+};
+
+LandmarksSeen landmarksInSensorFrame(const ScanTruth& t, const std::vector<Cylinder>& landmarks) {
+  const std::size_t L = landmarks.size();
+  LandmarksSeen seen{std::vector<double>(L + 1), std::vector<double>(L + 1), std::vector<double>(L + 1)};
+  for (std::size_t l = 1; l <= L; ++l) {
+    t.sensor.toSensor(landmarks[l - 1].x_m, landmarks[l - 1].y_m, seen.x[l], seen.y[l]);
+    seen.dist[l] = std::hypot(seen.x[l], seen.y[l]);
+  }
+  return seen;
+}
+
+/// Adds the errors of a true detection of landmark l (radius R, reading bias f) to its bin.
+void addDetectionErrors(BinSums& bs, const Detection& d, const LandmarksSeen& seen, std::size_t l, double R,
+                        const BiasPolynomial& f) {
+  const double expected = f(seen.dist[l] - R) + R;
+  ++bs.n;
+  bs.centre2 += std::pow(d.centre_x_m - seen.x[l], 2) + std::pow(d.centre_y_m - seen.y[l], 2);
+  bs.bearing2 += std::pow(wrapAngle(d.bearing_rad - std::atan2(seen.y[l], seen.x[l])), 2);
+  bs.range += d.range_m - expected;
+  bs.range2 += std::pow(d.range_m - expected, 2);
+  bs.radius += d.radius_m - R;
+  if (d.free_status == FitStatus::ok) {
+    ++bs.n_free;
+    bs.free += d.free_radius_m - R;
+    bs.free2 += std::pow(d.free_radius_m - R, 2);
+  }
+}
+
+/// Everything evaluateDetections accumulates over the scans.
+struct Tally {
+  DetectionEvaluation ev;
+  std::vector<BinSums> bins;
+  std::vector<std::pair<int, int>> id_truth;  ///< (id, truth landmark or 0) per detection with an id
+};
+
+/// Scores the detections of scan s against its truth; returns which landmarks were detected.
+std::vector<bool> scoreDetections(Tally& tally, const std::vector<ScanDetections>& scans, std::size_t s,
+                                  const Association* association, const ScanTruth& t, const LandmarksSeen& seen,
+                                  const Scene& scene, const EvaluationConfig& cfg) {
+  const std::size_t L = scene.landmarks.size();
+  std::vector<bool> detected(L + 1, false);
+  for (std::size_t j = 0; j < scans[s].detections.size(); ++j) {
+    const Detection& d = scans[s].detections[j];
+    const int id = association ? association->ids[s][j] : 0;
+    if (association && id == 0) continue;
+    ++tally.ev.detections;
+    const auto [kind, target] = votedTarget(d, t);
+    int truth_l = 0;
+    if (kind == io::TargetKind::landmark && target >= 1 && static_cast<std::size_t>(target) <= L) {
+      truth_l = target;
+      ++tally.ev.true_positives;
+      const auto l = static_cast<std::size_t>(truth_l);
+      detected[l] = true;
+      const std::size_t b = binOf(cfg.range_edges_m, seen.dist[l]);
+      if (b < tally.bins.size())
+        addDetectionErrors(tally.bins[b], d, seen, l, scene.landmarks[l - 1].radius_m, scene.sensor.range.bias);
+    } else {
+      ++tally.ev.false_positives;
+      if (kind == io::TargetKind::clutter) ++tally.ev.false_on_clutter;
+      if (kind == io::TargetKind::wall) ++tally.ev.false_on_walls;
+    }
+    if (association) tally.id_truth.emplace_back(id, truth_l);
+  }
+  return detected;
+}
+
+/// Counts the landmarks of one scan that were observable (enough beams on them, not partly
+/// hidden) and which of them were detected.
+void countObservable(Tally& tally, const ScanTruth& t, const LandmarksSeen& seen, const std::vector<bool>& detected,
+                     std::size_t L, const EvaluationConfig& cfg) {
+  std::vector<std::size_t> beams_on(L + 1, 0);
+  for (std::size_t i = 0; i < t.beams.size(); ++i)
+    if (t.returned[i] && t.beams[i].target == io::TargetKind::landmark && t.beams[i].target_id >= 1 &&
+        static_cast<std::size_t>(t.beams[i].target_id) <= L)
+      ++beams_on[static_cast<std::size_t>(t.beams[i].target_id)];
+  const std::vector<bool> hidden = partlyHidden(t, L);
+  DetectionEvaluation& ev = tally.ev;
+  for (std::size_t l = 1; l <= L; ++l) {
+    if (beams_on[l] < static_cast<std::size_t>(cfg.min_beams)) continue;
+    if (hidden[l]) {
+      ++ev.partly_hidden;
+      if (detected[l]) ++ev.partly_hidden_detected;
+      continue;
+    }
+    ++ev.observable;
+    if (detected[l]) ++ev.detected;
+    const std::size_t b = binOf(cfg.range_edges_m, seen.dist[l]);
+    if (b < tally.bins.size()) {
+      ++tally.bins[b].observable;
+      if (detected[l]) ++tally.bins[b].detected;
+    }
+  }
+}
+
+/// Ids: each id's truth landmark by majority; split ids (two ids on one landmark) and
+/// detections whose id's landmark is not theirs.
+void scoreIds(DetectionEvaluation& ev, const Association& association, const std::vector<std::pair<int, int>>& id_truth,
+              std::size_t L) {
+  ev.ids = association.landmarks.size();
+  std::vector<std::map<int, std::size_t>> votes(ev.ids);
+  for (const auto& [id, l] : id_truth)
+    if (l > 0) ++votes[static_cast<std::size_t>(id - 1)][l];
+  ev.truth_of_id.assign(ev.ids, 0);
+  std::vector<bool> taken(L + 1, false);
+  for (std::size_t k = 0; k < ev.ids; ++k) {
+    std::size_t best_n = 0;
+    for (const auto& [l, n] : votes[k])
+      if (n > best_n) ev.truth_of_id[k] = l, best_n = n;
+    const int l = ev.truth_of_id[k];
+    if (l > 0) {
+      if (taken[static_cast<std::size_t>(l)]) ++ev.split_ids;
+      taken[static_cast<std::size_t>(l)] = true;
+    }
+  }
+  ev.with_id = id_truth.size();
+  for (const auto& [id, l] : id_truth)
+    if (l == 0 || ev.truth_of_id[static_cast<std::size_t>(id - 1)] != l) ++ev.wrong_id;
+  ev.purity = ev.with_id ? 1.0 - double(ev.wrong_id) / double(ev.with_id) : 1.0;
+}
+
+RangeBin summariseBin(const BinSums& s, double lo_m, double hi_m) {
+  RangeBin r;
+  r.lo_m = lo_m;
+  r.hi_m = hi_m;
+  r.observable = s.observable;
+  r.detected = s.detected;
+  r.detections = s.n;
+  r.free_radii = s.n_free;
+  if (s.n) {
+    const double n = double(s.n);
+    r.centre_rms_m = std::sqrt(s.centre2 / n);
+    r.bearing_rms_rad = std::sqrt(s.bearing2 / n);
+    r.range_bias_m = s.range / n;
+    r.range_rms_m = std::sqrt(s.range2 / n);
+    r.radius_bias_m = s.radius / n;
+  }
+  if (s.n_free) {
+    r.free_radius_bias_m = s.free / double(s.n_free);
+    r.free_radius_rms_m = std::sqrt(s.free2 / double(s.n_free));
+  }
+  return r;
+}
+
 }  // namespace
 
 DetectionEvaluation evaluateDetections(const std::vector<ScanDetections>& scans, const Association* association,
@@ -77,138 +238,22 @@ DetectionEvaluation evaluateDetections(const std::vector<ScanDetections>& scans,
   if (truth.size() != scans.size()) throw std::invalid_argument("evaluateDetections: one ScanTruth per scan expected");
   if (association && association->ids.size() != scans.size())
     throw std::invalid_argument("evaluateDetections: association of another scan list");
-  const auto& landmarks = scene_truth.scene.landmarks;
-  const std::size_t L = landmarks.size();
-  const BiasPolynomial& f = scene_truth.scene.sensor.range.bias;
-  DetectionEvaluation ev;
-  ev.scans = scans.size();
-  std::vector<BinSums> bins(cfg.range_edges_m.size() > 1 ? cfg.range_edges_m.size() - 1 : 0);
-  std::vector<std::pair<int, int>> id_truth;  // (id, truth landmark or 0) per detection with an id
-
+  const Scene& scene = scene_truth.scene;
+  const std::size_t L = scene.landmarks.size();
+  Tally tally;
+  tally.ev.scans = scans.size();
+  tally.bins.resize(cfg.range_edges_m.size() > 1 ? cfg.range_edges_m.size() - 1 : 0);
   for (std::size_t s = 0; s < scans.size(); ++s) {
-    const ScanTruth& t = truth[s];
-    std::vector<std::size_t> beams_on(L + 1, 0);
-    for (std::size_t i = 0; i < t.beams.size(); ++i)
-      if (t.returned[i] && t.beams[i].target == io::TargetKind::landmark && t.beams[i].target_id >= 1 &&
-          static_cast<std::size_t>(t.beams[i].target_id) <= L)
-        ++beams_on[static_cast<std::size_t>(t.beams[i].target_id)];
-    const std::vector<bool> hidden = partlyHidden(t, L);
-    std::vector<double> sx(L + 1), sy(L + 1), dist(L + 1);
-    for (std::size_t l = 1; l <= L; ++l) {
-      t.sensor.toSensor(landmarks[l - 1].x_m, landmarks[l - 1].y_m, sx[l], sy[l]);
-      dist[l] = std::hypot(sx[l], sy[l]);
-    }
-    std::vector<bool> detected(L + 1, false);
-    for (std::size_t j = 0; j < scans[s].detections.size(); ++j) {
-      const Detection& d = scans[s].detections[j];
-      const int id = association ? association->ids[s][j] : 0;
-      if (association && id == 0) continue;
-      ++ev.detections;
-      std::map<std::pair<int, int>, std::size_t> votes;
-      for (auto i : d.inliers) {
-        const auto& b = t.beams.at(static_cast<std::size_t>(i));
-        ++votes[{static_cast<int>(b.target), b.target_id}];
-      }
-      std::pair<int, int> best{0, 0};
-      std::size_t best_n = 0;
-      for (const auto& [k, n] : votes)
-        if (n > best_n) best = k, best_n = n;
-      const auto kind = static_cast<io::TargetKind>(best.first);
-      int truth_l = 0;
-      if (kind == io::TargetKind::landmark && best.second >= 1 && static_cast<std::size_t>(best.second) <= L) {
-        truth_l = best.second;
-        ++ev.true_positives;
-        detected[static_cast<std::size_t>(truth_l)] = true;
-        const auto l = static_cast<std::size_t>(truth_l);
-        const std::size_t b = binOf(cfg.range_edges_m, dist[l]);
-        if (b < bins.size()) {
-          const double R = landmarks[l - 1].radius_m;
-          const double expected = f(dist[l] - R) + R;
-          auto& bs = bins[b];
-          ++bs.n;
-          bs.centre2 += std::pow(d.centre_x_m - sx[l], 2) + std::pow(d.centre_y_m - sy[l], 2);
-          bs.bearing2 += std::pow(wrapAngle(d.bearing_rad - std::atan2(sy[l], sx[l])), 2);
-          bs.range += d.range_m - expected;
-          bs.range2 += std::pow(d.range_m - expected, 2);
-          bs.radius += d.radius_m - R;
-          if (d.free_status == FitStatus::ok) {
-            ++bs.n_free;
-            bs.free += d.free_radius_m - R;
-            bs.free2 += std::pow(d.free_radius_m - R, 2);
-          }
-        }
-      } else {
-        ++ev.false_positives;
-        if (kind == io::TargetKind::clutter) ++ev.false_on_clutter;
-        if (kind == io::TargetKind::wall) ++ev.false_on_walls;
-      }
-      if (association) id_truth.emplace_back(id, truth_l);
-    }
-    for (std::size_t l = 1; l <= L; ++l) {
-      if (beams_on[l] < static_cast<std::size_t>(cfg.min_beams)) continue;
-      if (hidden[l]) {
-        ++ev.partly_hidden;
-        if (detected[l]) ++ev.partly_hidden_detected;
-        continue;
-      }
-      ++ev.observable;
-      if (detected[l]) ++ev.detected;
-      const std::size_t b = binOf(cfg.range_edges_m, dist[l]);
-      if (b < bins.size()) {
-        ++bins[b].observable;
-        if (detected[l]) ++bins[b].detected;
-      }
-    }
+    const LandmarksSeen seen = landmarksInSensorFrame(truth[s], scene.landmarks);
+    const std::vector<bool> detected = scoreDetections(tally, scans, s, association, truth[s], seen, scene, cfg);
+    countObservable(tally, truth[s], seen, detected, L, cfg);
   }
+  DetectionEvaluation& ev = tally.ev;
   ev.precision = ev.detections ? double(ev.true_positives) / double(ev.detections) : 1.0;
   ev.recall = ev.observable ? double(ev.detected) / double(ev.observable) : 1.0;
-
-  if (association) {
-    ev.ids = association->landmarks.size();
-    std::vector<std::map<int, std::size_t>> votes(ev.ids);
-    for (const auto& [id, l] : id_truth)
-      if (l > 0) ++votes[static_cast<std::size_t>(id - 1)][l];
-    ev.truth_of_id.assign(ev.ids, 0);
-    std::vector<bool> taken(L + 1, false);
-    for (std::size_t k = 0; k < ev.ids; ++k) {
-      std::size_t best_n = 0;
-      for (const auto& [l, n] : votes[k])
-        if (n > best_n) ev.truth_of_id[k] = l, best_n = n;
-      const int l = ev.truth_of_id[k];
-      if (l > 0) {
-        if (taken[static_cast<std::size_t>(l)]) ++ev.split_ids;
-        taken[static_cast<std::size_t>(l)] = true;
-      }
-    }
-    ev.with_id = id_truth.size();
-    for (const auto& [id, l] : id_truth)
-      if (l == 0 || ev.truth_of_id[static_cast<std::size_t>(id - 1)] != l) ++ev.wrong_id;
-    ev.purity = ev.with_id ? 1.0 - double(ev.wrong_id) / double(ev.with_id) : 1.0;
-  }
-
-  for (std::size_t b = 0; b < bins.size(); ++b) {
-    const BinSums& s = bins[b];
-    RangeBin r;
-    r.lo_m = cfg.range_edges_m[b];
-    r.hi_m = cfg.range_edges_m[b + 1];
-    r.observable = s.observable;
-    r.detected = s.detected;
-    r.detections = s.n;
-    r.free_radii = s.n_free;
-    if (s.n) {
-      const double n = double(s.n);
-      r.centre_rms_m = std::sqrt(s.centre2 / n);
-      r.bearing_rms_rad = std::sqrt(s.bearing2 / n);
-      r.range_bias_m = s.range / n;
-      r.range_rms_m = std::sqrt(s.range2 / n);
-      r.radius_bias_m = s.radius / n;
-    }
-    if (s.n_free) {
-      r.free_radius_bias_m = s.free / double(s.n_free);
-      r.free_radius_rms_m = std::sqrt(s.free2 / double(s.n_free));
-    }
-    ev.bins.push_back(r);
-  }
+  if (association) scoreIds(ev, *association, tally.id_truth, L);
+  for (std::size_t b = 0; b < tally.bins.size(); ++b)
+    ev.bins.push_back(summariseBin(tally.bins[b], cfg.range_edges_m[b], cfg.range_edges_m[b + 1]));
   return ev;
 }
 

@@ -234,24 +234,10 @@ std::pair<double, double> plotRange(const FittedRange& fitted) {
   return {std::max(0.0, fitted.min_m - margin), fitted.max_m + margin};
 }
 
-void writeReport(const std::filesystem::path& dir, const ReportInputs& in) {
-  namespace fs = std::filesystem;
-  using papers::kLandmarks;
-  using papers::kTriangulation;
-  fs::create_directories(dir);
-  const CalibrationModel& m = *in.model;
-  std::ostringstream md;
-  md << "# lidarcal calibration report\n\n";
-  md << "Sequence `" << in.sequence.string() << "`: " << plural(in.scans, "scan") << " at " << plural(in.stops, "stop")
-     << ", " << plural(m.landmarks.size(), "landmark") << " in " << plural(in.detections, "detection") << ".\n\n";
-  if (m.status != "ok") {
-    md << "**Calibration failed: " << m.status << ".** " << userWords(m.message) << "\n";
-    io::writeTextAtomically(dir / "report.md", md.str());
-    return;
-  }
-  const std::optional<PlotData> p =
-      in.observations ? std::optional<PlotData>(plotData(*in.observations, m, in.true_landmarks)) : std::nullopt;
-  const FittedRange fitted = p ? p->fitted : FittedRange{};
+namespace {
+
+/// The model in words: bias with its standard errors, noise, bearing noise, range, notes.
+void writeModelSection(std::ostringstream& md, const CalibrationModel& m, const FittedRange& fitted) {
   md << "## The calibrated model\n\n";
   md << "- method: **" << m.method << "**, bias order n = " << m.model.bias.order() << " (chosen by "
      << userWords(m.order_rule) << ")\n";
@@ -273,6 +259,11 @@ void writeReport(const std::filesystem::path& dir, const ReportInputs& in) {
        << fixed(fitted.max_m, 2) << " m (the sensor reads up to " << fixed(m.model.range_max_m, 1) << " m)\n";
   if (!m.message.empty()) md << "- note: " << userWords(m.message) << "\n";
   for (const auto& w : m.warnings) md << "- **warning**: " << w << "\n";
+}
+
+/// What the raw sensor reads at a few true distances, with the error and its standard error.
+void writeErrorTable(std::ostringstream& md, const CalibrationModel& m, const FittedRange& fitted) {
+  using papers::kTriangulation;
   md << "\nWhat the raw sensor reads at a few true distances, and the error it makes";
   if (fitted.max_m > 0.0) md << " (rows outside the fitted range are extrapolated, marked *)";
   md << ":\n\n";
@@ -291,6 +282,12 @@ void writeReport(const std::filesystem::path& dir, const ReportInputs& in) {
   md << "\n`lidarcal correct` inverts f for every point (" << kTriangulation
      << ", eq. 30) and moves it along its beam.\n";
 
+}
+
+/// The MSE ratios against the truth, when there is one.
+void writeTruthSection(std::ostringstream& md, const ReportInputs& in) {
+  using papers::kLandmarks;
+  using papers::kTriangulation;
   if (!in.compared.empty()) {
     md << "\n## Against the truth\n\n" << in.truth_note << "\n\n";
     md << "The MSE ratio is the raw readings' mean squared error divided by the corrected ones' (" << kLandmarks
@@ -303,6 +300,12 @@ void writeReport(const std::filesystem::path& dir, const ReportInputs& in) {
     for (const auto& c : in.compared) md << comparisonRow(c);
   }
 
+}
+
+/// The plot data, the gnuplot script and the plots (or why there are none).
+void writePlotsSection(std::ostringstream& md, const std::filesystem::path& dir, const CalibrationModel& m,
+                       const std::optional<PlotData>& p, const FittedRange& fitted) {
+  using papers::kLandmarks;
   std::string why;
   bool plotted = false;
   if (p) {
@@ -330,6 +333,9 @@ void writeReport(const std::filesystem::path& dir, const ReportInputs& in) {
     md << "(" << (p ? why : std::string("no plot data")) << ")\n";
   }
 
+}
+
+void writeOrderSection(std::ostringstream& md, const CalibrationModel& m) {
   md << "\n## Order selection\n\n| order | alpha | AIC | BIC | validation MSE [mm^2] | test MSE [mm^2] |\n|---|---|---|---|---|---|\n";
   for (const auto& o : m.orders)
     md << "| " << o.order << " | " << polynomialText(o.alpha) << " | " << fixed(o.aic, 1) << " | " << fixed(o.bic, 1)
@@ -339,6 +345,12 @@ void writeReport(const std::filesystem::path& dir, const ReportInputs& in) {
   if (m.order_validation >= 0) md << ", held-out validation order " << m.order_validation;
   md << ".\n";
 
+}
+
+/// The seeds' noise estimators side by side and the noise-exponent test.
+void writeNoiseSection(std::ostringstream& md, const CalibrationModel& m) {
+  using papers::kLandmarks;
+  using papers::kTriangulation;
   const auto& nf = m.noise_fits;
   md << "\n## Noise estimators side by side\n\n";
   md << "| estimator | result |\n|---|---|\n";
@@ -360,10 +372,40 @@ void writeReport(const std::filesystem::path& dir, const ReportInputs& in) {
     for (int k = 0; k < 4; ++k) md << (k ? ", " : "") << fixed(nf.exponent_loglik[static_cast<std::size_t>(k)], 1);
     md << "; best k = **" << nf.exponent_best << "**.\n";
   }
+}
+
+void writeLandmarksSection(std::ostringstream& md, const CalibrationModel& m) {
   md << "\n## Landmarks\n\n| id | x [m] | y [m] | radius [m] | stops | status |\n|---|---|---|---|---|---|\n";
   for (const auto& l : m.landmarks)
     md << "| " << l.id << " | " << fixed(l.x_m, 3) << " | " << fixed(l.y_m, 3) << " | " << fixed(l.radius_m, 3)
        << " | " << l.stops << " | " << l.status << " |\n";
+}
+
+}  // namespace
+
+void writeReport(const std::filesystem::path& dir, const ReportInputs& in) {
+  namespace fs = std::filesystem;
+  fs::create_directories(dir);
+  const CalibrationModel& m = *in.model;
+  std::ostringstream md;
+  md << "# lidarcal calibration report\n\n";
+  md << "Sequence `" << in.sequence.string() << "`: " << plural(in.scans, "scan") << " at " << plural(in.stops, "stop")
+     << ", " << plural(m.landmarks.size(), "landmark") << " in " << plural(in.detections, "detection") << ".\n\n";
+  if (m.status != "ok") {
+    md << "**Calibration failed: " << m.status << ".** " << userWords(m.message) << "\n";
+    io::writeTextAtomically(dir / "report.md", md.str());
+    return;
+  }
+  const std::optional<PlotData> p =
+      in.observations ? std::optional<PlotData>(plotData(*in.observations, m, in.true_landmarks)) : std::nullopt;
+  const FittedRange fitted = p ? p->fitted : FittedRange{};
+  writeModelSection(md, m, fitted);
+  writeErrorTable(md, m, fitted);
+  writeTruthSection(md, in);
+  writePlotsSection(md, dir, m, p, fitted);
+  writeOrderSection(md, m);
+  writeNoiseSection(md, m);
+  writeLandmarksSection(md, m);
   md << "\n## References\n\n" << papers::kReferences;
   if (!in.command.empty()) md << "\nProduced by `" << in.command << "`.\n";
   io::writeTextAtomically(dir / "report.md", md.str());

@@ -31,8 +31,11 @@ double effectReading(const RangeModel& model, const RangeEffects& fx, double d_m
   }
   const double c = clampCosIncidence(beam.cos_incidence);
   const double sigma = model.noise.stddev(d_m, model.bias) * incidenceNoiseFactor(fx.incidence_noise_exponent, c);
-  const double y = model.bias(d_m) + fx.incidence_bias_m * (1.0 - c) + beam.surface_offset_m +
-                   fx.range_drift_m_per_scan * static_cast<double>(beam.scan) + sigma * e;
+  // The mean reading as the joint refinement models it (common/range_effects.hpp); the drift
+  // counts scans from the first one.
+  const double y = expectedReading(model.bias(d_m), beam.surface_offset_m, fx.range_drift_m_per_scan,
+                                   static_cast<double>(beam.scan), fx.incidence_bias_m, c) +
+                   sigma * e;
   return quantise(y, fx.range_resolution_m);
 }
 

@@ -1,0 +1,132 @@
+#pragma once
+// Internal to the joint refinement (joint_problem.cpp, joint_refinement.cpp): the Ceres
+// residuals of one beam reading and of the pose priors, and the geometry of a beam at an
+// estimate. The model they implement is documented in joint_refinement.hpp.
+
+#include <array>
+#include <cmath>
+
+#include <ceres/ceres.h>
+
+#include "calibration/joint_refinement.hpp"
+#include "common/range_effects.hpp"
+
+namespace lidarcal::calibration::joint {
+
+/// Residual of one beam reading: (y - f(d(pose, centre, radius))) / sigma_i, N = order + 1.
+template <int N>
+struct BeamRangeCost {
+  double angle_rad, y_m, inv_sigma;
+  template <typename T>
+  bool operator()(const T* pose, const T* centre, const T* radius, const T* alpha, T* residual) const {
+    const T a = pose[2] + T(angle_rad);
+    const T d = rayCircleDistance(pose[0], pose[1], a, centre[0], centre[1], radius[0]);
+    residual[0] = (T(y_m) - evaluatePolynomial<N>(alpha, d)) * T(inv_sigma);
+    return true;
+  }
+};
+
+/// The same with the effect terms in the mean: landmark offset o, and g = (drift c, zero-angle
+/// offset a_0, incidence bias b); t_rel = t - t_ref.
+template <int N>
+struct EffectBeamCost {
+  double angle_rad, y_m, inv_sigma, t_rel;
+  template <typename T>
+  bool operator()(const T* pose, const T* centre, const T* radius, const T* alpha, const T* offset, const T* g,
+                  T* residual) const {
+    using std::cos;
+    using std::sin;
+    using std::sqrt;
+    const T a = pose[2] + T(angle_rad) + g[1];
+    const T d = rayCircleDistance(pose[0], pose[1], a, centre[0], centre[1], radius[0]);
+    const T perp = (centre[1] - pose[1]) * cos(a) - (centre[0] - pose[0]) * sin(a);
+    const T u = perp / radius[0];
+    const T cos_phi = sqrt(clampCosIncidenceSquared(T(1) - u * u));
+    const T mean = expectedReading(evaluatePolynomial<N>(alpha, d), offset[0], g[0], T(t_rel), g[2], cos_phi);
+    residual[0] = (T(y_m) - mean) * T(inv_sigma);
+    return true;
+  }
+};
+
+/// A weak prior of a point (a landmark centre) at (x, y) with standard deviation sigma.
+struct WeakPointPriorCost {
+  double x, y, sigma;
+  template <typename T>
+  bool operator()(const T* p, T* residual) const {
+    residual[0] = (p[0] - T(x)) / T(sigma);
+    residual[1] = (p[1] - T(y)) / T(sigma);
+    return true;
+  }
+};
+
+/// Prior of a stop pose around its commanded value.
+struct PosePriorCost {
+  double x, y, yaw, inv_s, inv_psi;
+  template <typename T>
+  bool operator()(const T* pose, T* residual) const {
+    residual[0] = (pose[0] - T(x)) * T(inv_s);
+    residual[1] = (pose[1] - T(y)) * T(inv_s);
+    // Headings stay within a few degrees of the command: a plain difference is fine once the
+    // commanded value is unwrapped next to the estimate (done when the pose is initialised).
+    residual[2] = (pose[2] - T(yaw)) * T(inv_psi);
+    return true;
+  }
+};
+
+/// Prior of a stop pose around the commanded one with the step from stop 0 scaled by (1 + s).
+struct ScaledPosePriorCost {
+  double x, y, yaw, x0, y0, inv_s, inv_psi;
+  template <typename T>
+  bool operator()(const T* pose, const T* scale, T* residual) const {
+    residual[0] = (pose[0] - (T(x0) + (T(1) + scale[0]) * T(x - x0))) * T(inv_s);
+    residual[1] = (pose[1] - (T(y0) + (T(1) + scale[0]) * T(y - y0))) * T(inv_s);
+    residual[2] = (pose[2] - T(yaw)) * T(inv_psi);
+    return true;
+  }
+};
+
+/// Motion prior between consecutive stops a -> b: the step from a to b in a's frame against
+/// the commanded step (dx, dy, dpsi), its translation scaled by (1 + s) (odometry scale).
+struct MotionPriorCost {
+  double dx, dy, dpsi, inv_t, inv_psi;
+  template <typename T>
+  bool operator()(const T* a, const T* b, const T* scale, T* residual) const {
+    using std::cos;
+    using std::sin;
+    const T c = cos(a[2]), s = sin(a[2]);
+    const T ex = b[0] - a[0], ey = b[1] - a[1];
+    const T f = T(1) + scale[0];
+    residual[0] = (c * ex + s * ey - f * T(dx)) * T(inv_t);
+    residual[1] = (c * ey - s * ex - f * T(dy)) * T(inv_t);
+    // Like the pose prior: dpsi is unwrapped next to the estimate when the residual is built.
+    residual[2] = (b[2] - a[2] - T(dpsi)) * T(inv_psi);
+    return true;
+  }
+};
+
+/// The residual of one reading (angle, reading y, 1 / sigma; t_rel the scan index minus the drift
+/// reference): BeamRangeCost, or EffectBeamCost when a term of the mean is on. Throws
+/// std::invalid_argument for an order outside 1..6.
+ceres::CostFunction* beamCost(int order, double angle, double y, double inv_sigma);
+ceres::CostFunction* effectCost(int order, double angle, double y, double inv_sigma, double t_rel);
+
+/// The commanded step from stop a to stop b, in a's frame.
+Pose2 commandedStep(const Pose2& a, const Pose2& b);
+
+/// Geometry of a beam at the current estimate (pose x, y, heading; centre x, y): distance, cosine
+/// of the incidence, lateral offset.
+struct BeamGeometry {
+  double d = 0.0, cos_inc = 1.0, lateral = 0.0;
+};
+BeamGeometry beamGeometry(const double* pose, double angle, const double* centre, double radius);
+
+/// Noise shape h (sigma = scale * h) of a reading: the law's dependence on d and the incidence.
+double noiseShape(const NoiseModel& n, const BiasPolynomial& f, double d, double cos_inc, double gamma);
+/// The scale that multiplies the shape: sigma_e, or 1 for the polynomial law (its beta carry the scale).
+inline double noiseScale(const NoiseModel& n) { return n.kind == NoiseKind::polynomial ? 1.0 : n.sigma_e; }
+/// sigma_i = scale * h_i.
+inline double readingSigma(const NoiseModel& n, const BiasPolynomial& f, double d, double cos_inc, double gamma) {
+  return noiseScale(n) * noiseShape(n, f, d, cos_inc, gamma);
+}
+
+}  // namespace lidarcal::calibration::joint
