@@ -12,8 +12,9 @@
 //      `none` when nothing is significant, `not_identifiable` when the data cannot tell;
 //   5. the extended model: its parameters, the scene keys that simulate it, how much closer its
 //      simulation comes to the data, and (with truth) the gain in calibration.
-// Two kinds of data: a sequence of scans of poles (diagnose_sequence.hpp) and repeated scans
-// from one pose of any scene (diagnose_static.hpp). The statistics are in diagnose_stats.hpp.
+// Two kinds of data: a sequence of scans of poles (diagnosis/sequence.hpp) and repeated scans
+// from one pose of any scene (diagnosis/static_scene.hpp), both run by the same five steps
+// (diagnosis/skeleton.hpp). The statistics are in diagnosis/stats.hpp.
 
 #include <cstdint>
 #include <limits>

@@ -11,11 +11,13 @@
 #include <Eigen/Dense>
 
 #include "calibration/calibrate.hpp"
+#include "diagnosis/skeleton.hpp"
 #include "diagnosis/stats.hpp"
 #include "calibration/evaluation.hpp"
 #include "calibration/inversion.hpp"
 #include "calibration/joint_refinement.hpp"
 #include "common/rng.hpp"
+#include "common/stats_util.hpp"
 #include "simulation/landmark_level.hpp"
 
 namespace lidarcal::diagnosis {
@@ -24,7 +26,6 @@ using namespace lidarcal::calibration;
 namespace {
 
 constexpr double kClip = 3.0;  // Huber clipping of standardised residuals in the score statistics
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 std::vector<std::string> allCandidates() {
   return {effect::kIncidenceNoise, effect::kIncidenceBias, effect::kLandmarkBias, effect::kHeadingError,
@@ -221,61 +222,61 @@ std::vector<double> orthogonalise(const std::vector<double>& x, const std::vecto
   return out;
 }
 
-/// Every statistic of the battery (and the candidates' scores) under a baseline fit.
-std::map<std::string, double> statistics(const LandmarkObservations& obs, const JointResult& fit, const std::vector<Row>& rs,
-                                         const JointConfig& cfg) {
-  std::map<std::string, double> st;
+using Statistics = std::map<std::string, double>;
+
+/// Range and incidence: the residuals' trend beyond the bias polynomial, and their spread
+/// (noise law). `d`: predicted distances, `w`: weights 1 / sigma^2.
+void rangeStatistics(const JointResult& fit, const std::vector<Row>& rs, const std::vector<double>& d,
+                     const std::vector<double>& w, Statistics& st) {
   const std::size_t n = rs.size();
-  if (n == 0) return st;
-  std::vector<double> d(n), w(n), x(n), g(n);
-  std::vector<int> grp(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    d[i] = rs[i].r.d_m;
-    w[i] = 1.0 / (rs[i].r.sigma_m * rs[i].r.sigma_m);
-  }
+  std::vector<double> x(n), g(n);
   const int order = fit.model.bias.order();
-  // Range: the residuals' trend beyond the bias polynomial, and their spread (noise law).
   for (std::size_t i = 0; i < n; ++i) x[i] = std::pow(d[i], order + 1);
   st["residual_vs_range"] = meanScore(rs, orthogonalise(x, d, w, order));
   for (std::size_t i = 0; i < n; ++i) g[i] = std::log(std::max(std::abs(fit.model.bias(d[i])), 1e-3));
   st["spread_vs_range"] = spreadScore(rs, g);
-  // Incidence.
   for (std::size_t i = 0; i < n; ++i) x[i] = 1.0 - rs[i].r.cos_incidence;
   st["residual_vs_incidence"] = meanScore(rs, orthogonalise(x, d, w, 0));
   for (std::size_t i = 0; i < n; ++i) g[i] = -std::log(rs[i].r.cos_incidence);
   st["spread_vs_incidence"] = spreadScore(rs, g);
-  // Position within the object: outermost beams against the others.
-  {
-    double pos_edge = 0, neg_edge = 0, n_edge = 0, pos_in = 0, neg_in = 0, n_in = 0, s_edge = 0, s_in = 0;
-    for (const auto& r : rs) {
-      const double z2 = std::min(r.z * r.z, kClip * kClip);
-      if (r.r.edge) {
-        n_edge += 1;
-        pos_edge += r.z > kClip;
-        neg_edge += r.z < -kClip;
-        s_edge += z2;
-      } else {
-        n_in += 1;
-        pos_in += r.z > kClip;
-        neg_in += r.z < -kClip;
-        s_in += z2;
-      }
+}
+
+/// Position within the object: outermost beams against the others.
+void edgeStatistics(const std::vector<Row>& rs, Statistics& st) {
+  double pos_edge = 0, neg_edge = 0, n_edge = 0, pos_in = 0, neg_in = 0, n_in = 0, s_edge = 0, s_in = 0;
+  for (const auto& r : rs) {
+    const double z2 = std::min(r.z * r.z, kClip * kClip);
+    if (r.r.edge) {
+      n_edge += 1;
+      pos_edge += r.z > kClip;
+      neg_edge += r.z < -kClip;
+      s_edge += z2;
+    } else {
+      n_in += 1;
+      pos_in += r.z > kClip;
+      neg_in += r.z < -kClip;
+      s_in += z2;
     }
-    const double expected = n_in > 0 ? n_edge * (pos_in - neg_in) / n_in : 0.0;
-    st["edge_excess"] = n_edge > 0 ? (pos_edge - neg_edge - expected) / std::sqrt(n_edge) : 0.0;
-    st["edge_vs_centre_spread"] = (n_edge > 0 && n_in > 0) ? s_edge / n_edge - s_in / n_in : 0.0;
   }
-  // Landmark identity (offsets beyond the common bias), stop identity.
-  std::vector<double> one(n, 1.0);
+  const double expected = n_in > 0 ? n_edge * (pos_in - neg_in) / n_in : 0.0;
+  st["edge_excess"] = n_edge > 0 ? (pos_edge - neg_edge - expected) / std::sqrt(n_edge) : 0.0;
+  st["edge_vs_centre_spread"] = (n_edge > 0 && n_in > 0) ? s_edge / n_edge - s_in / n_in : 0.0;
+}
+
+/// Landmark and stop identity (offsets beyond the common bias), rotations per stop (heading
+/// errors) and common (zero-angle offset), time, bearing in the sensor frame.
+void groupStatistics(const std::vector<Row>& rs, const std::vector<double>& d, const std::vector<double>& w,
+                     Statistics& st) {
+  const std::size_t n = rs.size();
+  std::vector<double> x(n), one(n, 1.0);
+  std::vector<int> grp(n);
   for (std::size_t i = 0; i < n; ++i) grp[i] = rs[i].r.landmark;
   st["landmark_identity"] = groupChi2(rs, grp, one, true);
   for (std::size_t i = 0; i < n; ++i) grp[i] = static_cast<int>(rs[i].r.stop);
   st["stop_identity"] = groupChi2(rs, grp, one, true);
-  // Rotations: per stop (heading errors) and common (zero-angle offset).
   for (std::size_t i = 0; i < n; ++i) x[i] = rs[i].dmu_da;
   st["heading_within_stop"] = groupChi2(rs, grp, x, false);
   st["common_rotation"] = meanScore(rs, x);
-  // Time.
   double tm = 0.0, tw = 0.0;
   for (std::size_t i = 0; i < n; ++i) {
     tm += w[i] * static_cast<double>(rs[i].r.scan);
@@ -284,78 +285,96 @@ std::map<std::string, double> statistics(const LandmarkObservations& obs, const 
   for (std::size_t i = 0; i < n; ++i) x[i] = static_cast<double>(rs[i].r.scan) - tm / tw;
   st["residual_vs_time"] = meanScore(rs, x);
   // Bearing in the sensor frame: first harmonics.
-  {
-    std::vector<double> xc(n), xs(n);
-    for (std::size_t i = 0; i < n; ++i) {
-      xc[i] = std::cos(rs[i].r.angle_rad);
-      xs[i] = std::sin(rs[i].r.angle_rad);
-    }
-    const double a = meanScore(rs, orthogonalise(xc, d, w, 0)), b = meanScore(rs, orthogonalise(xs, d, w, 0));
-    st["residual_vs_bearing"] = cubeRootChi2(a * a + b * b, 2.0);
+  std::vector<double> xc(n), xs(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    xc[i] = std::cos(rs[i].r.angle_rad);
+    xs[i] = std::sin(rs[i].r.angle_rad);
   }
-  // The refined path against the commanded one, about its centroid: rotated (a zero-angle
-  // offset turns the path the data see against the headings) or stretched (step length).
-  {
-    double cx = 0.0, cy = 0.0;
-    const std::size_t k_stops = std::min(fit.poses.size(), obs.commanded.size());
-    for (std::size_t k = 0; k < k_stops; ++k) {
-      cx += obs.commanded[k].x_m / static_cast<double>(k_stops);
-      cy += obs.commanded[k].y_m / static_cast<double>(k_stops);
-    }
-    double rot = 0.0, str = 0.0, info = 0.0;
-    for (std::size_t k = 0; k < k_stops; ++k) {
-      const double ex = obs.commanded[k].x_m - cx, ey = obs.commanded[k].y_m - cy;
-      const double dx = fit.poses[k].x_m - obs.commanded[k].x_m, dy = fit.poses[k].y_m - obs.commanded[k].y_m;
-      rot += ex * dy - ey * dx;
-      str += ex * dx + ey * dy;
-      info += ex * ex + ey * ey;
-    }
-    st["path_rotation"] = info > 0.0 ? rot / (cfg.sigma_s_m * std::sqrt(info)) : 0.0;
-    st["path_scale"] = info > 0.0 ? str / (cfg.sigma_s_m * std::sqrt(info)) : 0.0;
+  const double a = meanScore(rs, orthogonalise(xc, d, w, 0)), b = meanScore(rs, orthogonalise(xs, d, w, 0));
+  st["residual_vs_bearing"] = cubeRootChi2(a * a + b * b, 2.0);
+}
+
+/// The refined path against the commanded one, about its centroid: rotated (a zero-angle
+/// offset turns the path the data see against the headings) or stretched (step length).
+void pathStatistics(const LandmarkObservations& obs, const JointResult& fit, const JointConfig& cfg, Statistics& st) {
+  double cx = 0.0, cy = 0.0;
+  const std::size_t k_stops = std::min(fit.poses.size(), obs.commanded.size());
+  for (std::size_t k = 0; k < k_stops; ++k) {
+    cx += obs.commanded[k].x_m / static_cast<double>(k_stops);
+    cy += obs.commanded[k].y_m / static_cast<double>(k_stops);
   }
-  // Sighting bearings: shared shifts within a stop (F ratio of stop means, log).
-  {
-    std::map<std::size_t, std::vector<double>> by_stop;
-    for (const auto& s : obs.sightings) {
-      auto c = fit.centres.find(s.landmark);
-      if (c == fit.centres.end() || s.stop >= fit.poses.size()) continue;
-      const Pose2& p = fit.poses[s.stop];
-      const double predicted =
-          std::atan2(c->second.y() - p.y_m, c->second.x() - p.x_m) - p.yaw_rad - fit.effects.angle_offset_rad;
-      by_stop[s.stop].push_back(wrapAngle(s.bearing_rad - predicted));
-    }
-    double grand = 0.0, total = 0.0;
-    for (const auto& [k, v] : by_stop)
-      for (double b : v) {
-        grand += b;
-        total += 1.0;
-      }
-    grand /= std::max(total, 1.0);
-    double between = 0.0, within = 0.0;
-    for (const auto& [k, v] : by_stop) {
-      double m = 0.0;
-      for (double b : v) m += b / static_cast<double>(v.size());
-      between += static_cast<double>(v.size()) * (m - grand) * (m - grand);
-      for (double b : v) within += (b - m) * (b - m);
-    }
-    const double dfb = static_cast<double>(by_stop.size()) - 1.0, dfw = total - static_cast<double>(by_stop.size());
-    st["bearing_within_stop_correlation"] =
-        (dfb > 0 && dfw > 0 && within > 0) ? std::log((between / dfb) / (within / dfw)) : 0.0;
+  double rot = 0.0, str = 0.0, info = 0.0;
+  for (std::size_t k = 0; k < k_stops; ++k) {
+    const double ex = obs.commanded[k].x_m - cx, ey = obs.commanded[k].y_m - cy;
+    const double dx = fit.poses[k].x_m - obs.commanded[k].x_m, dy = fit.poses[k].y_m - obs.commanded[k].y_m;
+    rot += ex * dy - ey * dx;
+    str += ex * dx + ey * dy;
+    info += ex * ex + ey * ey;
   }
-  // Tails and quantisation.
-  {
-    double m2 = 0.0, m4 = 0.0;
-    for (const auto& r : rs) {
-      m2 += r.z * r.z;
-      m4 += r.z * r.z * r.z * r.z;
-    }
-    m2 /= static_cast<double>(n);
-    m4 /= static_cast<double>(n);
-    st["tail_weight"] = m4 / (m2 * m2) - 3.0;
-    std::vector<double> y(n);
-    for (std::size_t i = 0; i < n; ++i) y[i] = rs[i].r.y_m;
-    st["quantisation_1mm"] = gridResultant(y, 1e-3);
+  st["path_rotation"] = info > 0.0 ? rot / (cfg.sigma_s_m * std::sqrt(info)) : 0.0;
+  st["path_scale"] = info > 0.0 ? str / (cfg.sigma_s_m * std::sqrt(info)) : 0.0;
+}
+
+/// Sighting bearings: shared shifts within a stop (F ratio of stop means, log).
+void bearingStatistics(const LandmarkObservations& obs, const JointResult& fit, Statistics& st) {
+  std::map<std::size_t, std::vector<double>> by_stop;
+  for (const auto& s : obs.sightings) {
+    auto c = fit.centres.find(s.landmark);
+    if (c == fit.centres.end() || s.stop >= fit.poses.size()) continue;
+    const Pose2& p = fit.poses[s.stop];
+    const double predicted = std::atan2(c->second.y() - p.y_m, c->second.x() - p.x_m) - p.yaw_rad - fit.effects.angle_offset_rad;
+    by_stop[s.stop].push_back(wrapAngle(s.bearing_rad - predicted));
   }
+  double grand = 0.0, total = 0.0;
+  for (const auto& [k, v] : by_stop)
+    for (double b : v) {
+      grand += b;
+      total += 1.0;
+    }
+  grand /= std::max(total, 1.0);
+  double between = 0.0, within = 0.0;
+  for (const auto& [k, v] : by_stop) {
+    double m = 0.0;
+    for (double b : v) m += b / static_cast<double>(v.size());
+    between += static_cast<double>(v.size()) * (m - grand) * (m - grand);
+    for (double b : v) within += (b - m) * (b - m);
+  }
+  const double dfb = static_cast<double>(by_stop.size()) - 1.0, dfw = total - static_cast<double>(by_stop.size());
+  st["bearing_within_stop_correlation"] = (dfb > 0 && dfw > 0 && within > 0) ? std::log((between / dfb) / (within / dfw)) : 0.0;
+}
+
+/// Tails and quantisation.
+void shapeStatistics(const std::vector<Row>& rs, Statistics& st) {
+  const std::size_t n = rs.size();
+  double m2 = 0.0, m4 = 0.0;
+  for (const auto& r : rs) {
+    m2 += r.z * r.z;
+    m4 += r.z * r.z * r.z * r.z;
+  }
+  m2 /= static_cast<double>(n);
+  m4 /= static_cast<double>(n);
+  st["tail_weight"] = m4 / (m2 * m2) - 3.0;
+  std::vector<double> y(n);
+  for (std::size_t i = 0; i < n; ++i) y[i] = rs[i].r.y_m;
+  st["quantisation_1mm"] = gridResultant(y, 1e-3);
+}
+
+/// Every statistic of the battery (and the candidates' scores) under a baseline fit.
+Statistics statistics(const LandmarkObservations& obs, const JointResult& fit, const std::vector<Row>& rs, const JointConfig& cfg) {
+  Statistics st;
+  const std::size_t n = rs.size();
+  if (n == 0) return st;
+  std::vector<double> d(n), w(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    d[i] = rs[i].r.d_m;
+    w[i] = 1.0 / (rs[i].r.sigma_m * rs[i].r.sigma_m);
+  }
+  rangeStatistics(fit, rs, d, w, st);
+  edgeStatistics(rs, st);
+  groupStatistics(rs, d, w, st);
+  pathStatistics(obs, fit, cfg, st);
+  bearingStatistics(obs, fit, st);
+  shapeStatistics(rs, st);
   return st;
 }
 
@@ -380,6 +399,30 @@ const std::vector<StatisticInfo>& statInfo() {
       {"quantisation_1mm", "reading", "resultant length of the readings' phase on a 1 mm grid (1: on the grid)", false},
   };
   return info;
+}
+
+/// Centroid (x, y) of a path's positions, metres.
+std::pair<double, double> pathCentroid(const std::vector<Pose2>& path) {
+  double cx = 0.0, cy = 0.0;
+  for (const auto& p : path) {
+    cx += p.x_m / static_cast<double>(path.size());
+    cy += p.y_m / static_cast<double>(path.size());
+  }
+  return {cx, cy};
+}
+
+/// Beam grid of the data: the step between neighbouring beams, and its origin.
+void setBeamGrid(const LandmarkObservations& obs, simulation::LandmarkLevelConfig& c) {
+  std::vector<double> steps, origins;
+  for (const auto& s : obs.sightings)
+    for (std::size_t j = 1; j < s.beams.size(); ++j) {
+      const auto db = static_cast<double>(s.beams[j].beam) - static_cast<double>(s.beams[j - 1].beam);
+      if (db >= 1.0 && db <= 3.0) steps.push_back(wrapAngle(s.beams[j].angle_rad - s.beams[j - 1].angle_rad) / db);
+    }
+  if (!steps.empty()) c.angle_increment_rad = upperMedian(steps);
+  for (const auto& s : obs.sightings)
+    for (const auto& b : s.beams) origins.push_back(wrapAngle(b.angle_rad - static_cast<double>(b.beam) * c.angle_increment_rad));
+  if (!origins.empty()) c.angle_min_rad = upperMedian(origins);
 }
 
 /// Landmark-level simulation of the measured geometry from a fit (ids mapped to the fit's).
@@ -431,32 +474,12 @@ ReplicaPlan replicaPlan(const LandmarkObservations& obs, const JointResult& fit,
   c.mount_yaw_rad = fit.effects.angle_offset_rad;
   if (c.effects.mixed_pixel_fraction > 0.0) {
     // The fitted mixed pixels read uniformly up to the window's end: a background that far.
-    double cx = 0.0, cy = 0.0;
-    for (const auto& p : obs.commanded) {
-      cx += p.x_m / static_cast<double>(obs.commanded.size());
-      cy += p.y_m / static_cast<double>(obs.commanded.size());
-    }
+    const auto [cx, cy] = pathCentroid(obs.commanded);
     const double r = fit.window_max_m;
     c.walls = {Segment{cx - r, cy - r, cx + r, cy - r}, Segment{cx + r, cy - r, cx + r, cy + r},
                Segment{cx + r, cy + r, cx - r, cy + r}, Segment{cx - r, cy + r, cx - r, cy - r}};
   }
-  // Beam grid of the data: the step between neighbouring beams, and its origin.
-  std::vector<double> steps, origins;
-  for (const auto& s : obs.sightings)
-    for (std::size_t j = 1; j < s.beams.size(); ++j) {
-      const auto db = static_cast<double>(s.beams[j].beam) - static_cast<double>(s.beams[j - 1].beam);
-      if (db >= 1.0 && db <= 3.0) steps.push_back(wrapAngle(s.beams[j].angle_rad - s.beams[j - 1].angle_rad) / db);
-    }
-  if (!steps.empty()) {
-    std::nth_element(steps.begin(), steps.begin() + static_cast<long>(steps.size() / 2), steps.end());
-    c.angle_increment_rad = steps[steps.size() / 2];
-  }
-  for (const auto& s : obs.sightings)
-    for (const auto& b : s.beams) origins.push_back(wrapAngle(b.angle_rad - static_cast<double>(b.beam) * c.angle_increment_rad));
-  if (!origins.empty()) {
-    std::nth_element(origins.begin(), origins.begin() + static_cast<long>(origins.size() / 2), origins.end());
-    c.angle_min_rad = origins[origins.size() / 2];
-  }
+  setBeamGrid(obs, c);
   return plan;
 }
 
@@ -552,39 +575,44 @@ struct Identifiability {
   double ref = 0.0;    ///< the smallest size worth naming (same unit); identifiable when se < ref
 };
 
-/// Mean-type effects: the model's Jacobian in the nuisance parameters (bias, radius when
-/// estimated, centres, stop positions with their priors) and in the effect; I_eff is the
-/// information on the effect left after profiling the nuisance out. Variance-type effects:
-/// the variety of their covariate beyond a constant (the noise scale).
-std::map<std::string, Identifiability> identifiability(const LandmarkObservations& obs, const JointResult& fit,
-                                                       const std::vector<Row>& rs, const JointConfig& cfg) {
-  const int na = fit.model.bias.order() + 1;
-  std::map<int, int> lm;  // landmark id -> column index (x; y at +1)
+/// The linearised model for identifiability: the Jacobian in the nuisance parameters (bias,
+/// radius when estimated, centres, stop positions with their priors, rows n.. for the priors),
+/// the weights, and each mean-type effect's columns.
+struct Design {
+  Eigen::MatrixXd j;
+  Eigen::VectorXd w;
+  Eigen::MatrixXd x_lm, x_head, x_drift, x_angle, x_inc, x_scale;
+  std::size_t landmarks = 0;
+  double tmin = 0.0, tmax = 0.0;  ///< scan range of the readings
+};
+
+/// Landmark id -> column of its centre's x (y at +1), from column `col` on.
+std::map<int, int> centreColumns(const JointResult& fit, int col) {
+  std::map<int, int> lm;
   for (const auto& [id, c] : fit.centres) lm[id] = 0;
-  const int k_stops = static_cast<int>(fit.poses.size());
-  int col = na + (cfg.estimate_radius ? 1 : 0);
   for (auto& [id, c] : lm) {
     c = col;
     col += 2;
   }
-  const int pose0 = col;
-  const int p = pose0 + 2 * k_stops;
+  return lm;
+}
+
+/// The readings' rows of the design.
+void readingRows(const JointResult& fit, const std::vector<Row>& rs, const JointConfig& cfg, const std::map<int, int>& lm,
+                 int pose0, Design& x) {
+  const int na = fit.model.bias.order() + 1;
   const int n = static_cast<int>(rs.size());
-  const int rows_total = n + 2 * k_stops;
-  Eigen::MatrixXd j = Eigen::MatrixXd::Zero(rows_total, p);
-  Eigen::VectorXd w = Eigen::VectorXd::Ones(rows_total);
-  Eigen::MatrixXd x_lm = Eigen::MatrixXd::Zero(rows_total, std::max<int>(static_cast<int>(lm.size()) - 1, 1));
-  Eigen::MatrixXd x_head = Eigen::MatrixXd::Zero(rows_total, k_stops);
-  Eigen::MatrixXd x_drift = Eigen::MatrixXd::Zero(rows_total, 1), x_angle = x_drift, x_inc = x_drift, x_scale = x_drift;
-  double tmean = 0.0, tmin = std::numeric_limits<double>::infinity(), tmax = -tmin;
+  double tmean = 0.0;
+  x.tmin = std::numeric_limits<double>::infinity();
+  x.tmax = -x.tmin;
   for (const auto& r : rs) {
     tmean += static_cast<double>(r.r.scan) / static_cast<double>(n);
-    tmin = std::min(tmin, static_cast<double>(r.r.scan));
-    tmax = std::max(tmax, static_cast<double>(r.r.scan));
+    x.tmin = std::min(x.tmin, static_cast<double>(r.r.scan));
+    x.tmax = std::max(x.tmax, static_cast<double>(r.r.scan));
   }
   for (int i = 0; i < n; ++i) {
     const auto& r = rs[static_cast<std::size_t>(i)].r;
-    w(i) = 1.0 / (r.sigma_m * r.sigma_m);
+    x.w(i) = 1.0 / (r.sigma_m * r.sigma_m);
     const Pose2& ps = fit.poses[r.stop];
     const auto& c = fit.centres.at(r.landmark);
     const RayGradient g = rayGradient(ps.x_m, ps.y_m, ps.yaw_rad + r.angle_rad + fit.effects.angle_offset_rad, c.x(), c.y(),
@@ -592,83 +620,127 @@ std::map<std::string, Identifiability> identifiability(const LandmarkObservation
     const double fp = fit.model.bias.derivative(g.d);
     double v = 1.0;
     for (int a = 0; a < na; ++a) {
-      j(i, a) = v;
+      x.j(i, a) = v;
       v *= g.d;
     }
-    if (cfg.estimate_radius) j(i, na) = fp * g.dr;
+    if (cfg.estimate_radius) x.j(i, na) = fp * g.dr;
     const int cc = lm.at(r.landmark);
-    j(i, cc) = fp * g.dcx;
-    j(i, cc + 1) = fp * g.dcy;
+    x.j(i, cc) = fp * g.dcx;
+    x.j(i, cc + 1) = fp * g.dcy;
     const int pc = pose0 + 2 * static_cast<int>(r.stop);
-    j(i, pc) = -fp * g.dcx;
-    j(i, pc + 1) = -fp * g.dcy;
+    x.j(i, pc) = -fp * g.dcx;
+    x.j(i, pc + 1) = -fp * g.dcy;
     const int li = static_cast<int>(std::distance(lm.begin(), lm.find(r.landmark)));
-    if (li > 0) x_lm(i, li - 1) = 1.0;
-    x_head(i, static_cast<int>(r.stop)) = fp * g.da;
-    x_angle(i, 0) = fp * g.da;
-    x_drift(i, 0) = static_cast<double>(r.scan) - tmean;
-    x_inc(i, 0) = 1.0 - r.cos_incidence;
+    if (li > 0) x.x_lm(i, li - 1) = 1.0;
+    x.x_head(i, static_cast<int>(r.stop)) = fp * g.da;
+    x.x_angle(i, 0) = fp * g.da;
+    x.x_drift(i, 0) = static_cast<double>(r.scan) - tmean;
+    x.x_inc(i, 0) = 1.0 - r.cos_incidence;
   }
+}
+
+Design design(const LandmarkObservations& obs, const JointResult& fit, const std::vector<Row>& rs, const JointConfig& cfg) {
+  const int na = fit.model.bias.order() + 1;
+  const std::map<int, int> lm = centreColumns(fit, na + (cfg.estimate_radius ? 1 : 0));
+  const int k_stops = static_cast<int>(fit.poses.size());
+  const int pose0 = na + (cfg.estimate_radius ? 1 : 0) + 2 * static_cast<int>(lm.size());
+  const int p = pose0 + 2 * k_stops;
+  const int n = static_cast<int>(rs.size());
+  const int rows_total = n + 2 * k_stops;
+  Design x;
+  x.landmarks = lm.size();
+  x.j = Eigen::MatrixXd::Zero(rows_total, p);
+  x.w = Eigen::VectorXd::Ones(rows_total);
+  x.x_lm = Eigen::MatrixXd::Zero(rows_total, std::max<int>(static_cast<int>(lm.size()) - 1, 1));
+  x.x_head = Eigen::MatrixXd::Zero(rows_total, k_stops);
+  x.x_drift = Eigen::MatrixXd::Zero(rows_total, 1), x.x_angle = x.x_drift, x.x_inc = x.x_drift, x.x_scale = x.x_drift;
+  readingRows(fit, rs, cfg, lm, pose0, x);
   const Pose2& c0 = obs.commanded.front();
   for (int k = 0; k < k_stops; ++k) {
     const double inv = 1.0 / cfg.sigma_s_m;
-    j(n + 2 * k, pose0 + 2 * k) = inv;
-    j(n + 2 * k + 1, pose0 + 2 * k + 1) = inv;
-    x_scale(n + 2 * k, 0) = -(obs.commanded[static_cast<std::size_t>(k)].x_m - c0.x_m) * inv;
-    x_scale(n + 2 * k + 1, 0) = -(obs.commanded[static_cast<std::size_t>(k)].y_m - c0.y_m) * inv;
+    x.j(n + 2 * k, pose0 + 2 * k) = inv;
+    x.j(n + 2 * k + 1, pose0 + 2 * k + 1) = inv;
+    x.x_scale(n + 2 * k, 0) = -(obs.commanded[static_cast<std::size_t>(k)].x_m - c0.x_m) * inv;
+    x.x_scale(n + 2 * k + 1, 0) = -(obs.commanded[static_cast<std::size_t>(k)].y_m - c0.y_m) * inv;
   }
-  const Eigen::MatrixXd jw = j.transpose() * w.asDiagonal();
-  Eigen::MatrixXd h = jw * j;
+  return x;
+}
+
+/// The nuisance parameters' information, factorised once for every mean-type effect.
+struct Nuisance {
+  Eigen::MatrixXd jw;               ///< J^T W
+  Eigen::LDLT<Eigen::MatrixXd> ldlt;  ///< of J^T W J with a relative ridge
+};
+
+Nuisance nuisance(const Design& x) {
+  Nuisance nu;
+  nu.jw = x.j.transpose() * x.w.asDiagonal();
+  Eigen::MatrixXd h = nu.jw * x.j;
   // A ridge relative to each parameter's own information: an absolute one (scaled by the
   // largest diagonal) would pin the weakly informed nuisance directions and make an effect
   // that they absorb exactly (a step-length error with the radius free) look estimable.
   h.diagonal().array() *= 1.0 + 1e-9;
   h.diagonal().array() += 1e-300;
-  const Eigen::LDLT<Eigen::MatrixXd> ldlt(h);
-  auto assess = [&](const Eigen::MatrixXd& x, double ref) {
-    Identifiability id;
-    id.ref = ref;
-    const Eigen::MatrixXd raw = x.transpose() * w.asDiagonal() * x;
-    const Eigen::MatrixXd c = jw * x;
-    Eigen::MatrixXd eff = raw - c.transpose() * ldlt.solve(c);
-    const double tr = raw.trace();
-    id.ratio = tr > 0.0 ? std::clamp(eff.trace() / tr, 0.0, 1.0) : 0.0;
-    // Standard errors: diagonal of I_eff^-1 (a small ridge keeps a singular I_eff finite and huge).
-    eff.diagonal().array() += 1e-12 * (raw.diagonal().array().abs().maxCoeff() + 1e-300);
-    const Eigen::MatrixXd cov = eff.ldlt().solve(Eigen::MatrixXd::Identity(eff.rows(), eff.cols()));
-    double s = 0.0;
-    for (Eigen::Index i = 0; i < cov.rows(); ++i) s += std::max(cov(i, i), 0.0);
-    id.se = std::sqrt(s / static_cast<double>(cov.rows()));
-    if (!(tr > 0.0)) id.se = std::numeric_limits<double>::infinity();
-    return id;
-  };
+  nu.ldlt.compute(h);
+  return nu;
+}
+
+/// A mean-type effect with columns `xe`: information left after profiling the nuisance out.
+Identifiability assess(const Design& x, const Nuisance& nu, const Eigen::MatrixXd& xe, double ref) {
+  Identifiability id;
+  id.ref = ref;
+  const Eigen::MatrixXd raw = xe.transpose() * x.w.asDiagonal() * xe;
+  const Eigen::MatrixXd c = nu.jw * xe;
+  Eigen::MatrixXd eff = raw - c.transpose() * nu.ldlt.solve(c);
+  const double tr = raw.trace();
+  id.ratio = tr > 0.0 ? std::clamp(eff.trace() / tr, 0.0, 1.0) : 0.0;
+  // Standard errors: diagonal of I_eff^-1 (a small ridge keeps a singular I_eff finite and huge).
+  eff.diagonal().array() += 1e-12 * (raw.diagonal().array().abs().maxCoeff() + 1e-300);
+  const Eigen::MatrixXd cov = eff.ldlt().solve(Eigen::MatrixXd::Identity(eff.rows(), eff.cols()));
+  double s = 0.0;
+  for (Eigen::Index i = 0; i < cov.rows(); ++i) s += std::max(cov(i, i), 0.0);
+  id.se = std::sqrt(s / static_cast<double>(cov.rows()));
+  if (!(tr > 0.0)) id.se = std::numeric_limits<double>::infinity();
+  return id;
+}
+
+/// A variance-type effect: variety of its covariate beyond a constant (sigma_e).
+template <class Covariate>
+Identifiability variety(const std::vector<Row>& rs, Covariate covariate, double ref) {
+  const int n = static_cast<int>(rs.size());
+  double m = 0.0, m2 = 0.0;
+  for (const auto& r : rs) {
+    const double g = covariate(r.r);
+    m += g / static_cast<double>(n);
+    m2 += g * g / static_cast<double>(n);
+  }
+  Identifiability id;
+  id.ratio = std::clamp((m2 - m * m) / (m2 + 1e-4), 0.0, 1.0);
+  // sigma of the exponent: 1 / sqrt(2 n var(g)) (Fisher information of a log-sigma slope).
+  const double v = std::max(m2 - m * m, 0.0);
+  id.se = v > 0.0 ? 1.0 / std::sqrt(2.0 * static_cast<double>(n) * v) : std::numeric_limits<double>::infinity();
+  id.ref = ref;
+  return id;
+}
+
+/// Mean-type effects: the model's Jacobian in the nuisance parameters and in the effect; I_eff
+/// is the information on the effect left after profiling the nuisance out. Variance-type
+/// effects: the variety of their covariate beyond a constant (the noise scale).
+std::map<std::string, Identifiability> identifiability(const LandmarkObservations& obs, const JointResult& fit,
+                                                       const std::vector<Row>& rs, const JointConfig& cfg) {
+  const Design x = design(obs, fit, rs, cfg);
+  const Nuisance nu = nuisance(x);
   std::map<std::string, Identifiability> out;
-  if (lm.size() >= 2) out[effect::kLandmarkBias] = assess(x_lm, 0.01);
+  if (x.landmarks >= 2) out[effect::kLandmarkBias] = assess(x, nu, x.x_lm, 0.01);
   else out[effect::kLandmarkBias] = Identifiability{0.0, std::numeric_limits<double>::infinity(), 0.01};
-  out[effect::kHeadingError] = assess(x_head, deg2rad(1.0));
-  out[effect::kAngleOffset] = assess(x_angle, deg2rad(1.0));
-  out[effect::kRangeDrift] = assess(x_drift, tmax > tmin ? 0.01 / (tmax - tmin) : 0.0);
-  out[effect::kIncidenceBias] = assess(x_inc, 0.01);
-  out[effect::kOdometryScale] = assess(x_scale, 0.01);
-  // Variance-type effects: variety of the covariate beyond a constant (sigma_e).
-  auto variety = [&](auto covariate, double ref) {
-    double m = 0.0, m2 = 0.0;
-    for (const auto& r : rs) {
-      const double g = covariate(r.r);
-      m += g / static_cast<double>(n);
-      m2 += g * g / static_cast<double>(n);
-    }
-    Identifiability id;
-    id.ratio = std::clamp((m2 - m * m) / (m2 + 1e-4), 0.0, 1.0);
-    // sigma of the exponent: 1 / sqrt(2 n var(g)) (Fisher information of a log-sigma slope).
-    const double v = std::max(m2 - m * m, 0.0);
-    id.se = v > 0.0 ? 1.0 / std::sqrt(2.0 * static_cast<double>(n) * v) : std::numeric_limits<double>::infinity();
-    id.ref = ref;
-    return id;
-  };
-  out[effect::kIncidenceNoise] = variety([](const JointReading& r) { return -std::log(r.cos_incidence); }, 0.5);
+  out[effect::kHeadingError] = assess(x, nu, x.x_head, deg2rad(1.0));
+  out[effect::kAngleOffset] = assess(x, nu, x.x_angle, deg2rad(1.0));
+  out[effect::kRangeDrift] = assess(x, nu, x.x_drift, x.tmax > x.tmin ? 0.01 / (x.tmax - x.tmin) : 0.0);
+  out[effect::kIncidenceBias] = assess(x, nu, x.x_inc, 0.01);
+  out[effect::kOdometryScale] = assess(x, nu, x.x_scale, 0.01);
+  out[effect::kIncidenceNoise] = variety(rs, [](const JointReading& r) { return -std::log(r.cos_incidence); }, 0.5);
   out[effect::kRangeNoiseLaw] =
-      variety([&](const JointReading& r) { return std::log(std::max(fit.model.bias(r.d_m), 1e-3)); }, 0.5);
+      variety(rs, [&](const JointReading& r) { return std::log(std::max(fit.model.bias(r.d_m), 1e-3)); }, 0.5);
   std::size_t edges = 0;
   for (const auto& r : rs) edges += r.r.edge;
   const bool both = edges >= 10 && rs.size() - edges >= 10;
@@ -706,10 +778,7 @@ Closeness closeness(const ZSample& measured, const ZSample& simulated) {
     logs.push_back(std::abs(std::log(a / b)));
   }
   c.groups = logs.size();
-  if (!logs.empty()) {
-    std::nth_element(logs.begin(), logs.begin() + static_cast<long>(logs.size() / 2), logs.end());
-    c.variance_ratio_median_abs_log = logs[logs.size() / 2];
-  }
+  if (!logs.empty()) c.variance_ratio_median_abs_log = upperMedian(logs);
   return c;
 }
 
@@ -828,55 +897,62 @@ std::map<std::string, double> sceneKeys(const std::string& e, const JointResult&
   return k;
 }
 
-}  // namespace
+// ---------------------------------------------------------------------------------------------
+// The diagnosis of a sequence: the steps of diagnosis/skeleton.hpp on joint refinements.
 
-std::vector<std::string> sequenceCandidates() { return allCandidates(); }
+/// Fits that start from a converged solution (replicas, folds) skip the geometry pass and
+/// re-estimate the noise law at most twice.
+JointConfig warm(JointConfig c) {
+  c.settle_geometry = false;
+  c.outer_iterations = 2;
+  c.max_solver_iterations = 200;
+  return c;
+}
 
-DiagnosisResult diagnoseSequence(const LandmarkObservations& obs, const DiagnoseConfig& config,
-                                 const std::vector<std::vector<double>>* true_range_m) {
-  config.validate();
-  DiagnosisResult out;
-  out.mode = DiagnoseMode::sequence;
-  out.seed = config.seed;
-  out.replicas = config.replicas;
-  out.folds = config.folds;
-  std::vector<std::string> candidates = config.candidates.empty() ? allCandidates() : config.candidates;
-  for (const auto& c : candidates)
-    if (std::find(allCandidates().begin(), allCandidates().end(), c) == allCandidates().end())
-      throw std::invalid_argument("diagnose: '" + c + "' is not a candidate effect for a sequence");
-  {
-    std::set<std::size_t> scans, stops;
-    std::set<int> ids;
-    for (const auto& s : obs.sightings) {
-      scans.insert(s.scan);
-      stops.insert(s.stop);
-      ids.insert(s.landmark);
-      out.readings += s.beams.size();
-    }
-    out.scans = scans.size();
-    out.stops = stops.size();
-    out.landmarks = ids.size();
-  }
+/// Negative log-likelihood of the readings and the odometry (infinite for a failed fit).
+double total(const JointResult& r) {
+  return r.poses.empty() ? std::numeric_limits<double>::infinity() : r.neg_log_likelihood + r.prior_neg_log_likelihood;
+}
 
-  // 1. Baseline: the seeds' model.
-  CalibrationConfig cc;
-  cc.method = Method::joint;
-  cc.max_order = config.max_order;
-  cc.joint.effects.estimate_heading = false;
-  cc.joint.sigma_s_m = config.sigma_s_m;
-  cc.triangulation.sigma_s_m = config.sigma_s_m;
-  CalibrationModel cal;
-  try {
-    cal = calibrate(obs, cc);
-  } catch (const std::invalid_argument& e) {
-    cal.status = "calibration_failed";
-    cal.message = e.what();
+JointInit withOrder(JointInit i, int order) {
+  i.model.bias.alpha.resize(static_cast<std::size_t>(order) + 1, 0.0);
+  return i;
+}
+
+void append(ZSample& sample, const std::vector<Row>& rs) {
+  for (const auto& r : rs) {
+    sample.z.push_back(r.z);
+    sample.group.push_back(groupKey(r.r));
   }
-  if (cal.status != "ok") {
-    out.status = cal.status;
-    out.message = "the baseline calibration failed: " + cal.message;
-    return out;
-  }
+}
+
+/// Sum of squared distances of the commanded positions from their centroid, m^2.
+double pathSpread(const std::vector<Pose2>& path) {
+  const auto [cx, cy] = pathCentroid(path);
+  double info = 0.0;
+  for (const auto& c : path) info += (c.x_m - cx) * (c.x_m - cx) + (c.y_m - cy) * (c.y_m - cy);
+  return info;
+}
+
+/// Turns a start's world (poses and centres) by `turn` about the commanded path's centroid and
+/// gives the beams the opposite turn (the zero-angle offset).
+void turnStart(JointInit& start, double turn, const std::vector<Pose2>& path) {
+  const auto [cx, cy] = pathCentroid(path);
+  const double ct = std::cos(turn), st = std::sin(turn);
+  auto rotate = [&](double& x, double& y) {
+    const double dx = x - cx, dy = y - cy;
+    x = cx + ct * dx - st * dy;
+    y = cy + st * dx + ct * dy;
+  };
+  for (auto& p : start.poses) rotate(p.x_m, p.y_m);
+  for (auto& [id, c] : start.centres) rotate(c.x(), c.y());
+  start.effects.angle_offset_rad = turn;
+}
+
+/// The baseline's joint refinement: the seeds' model (squared noise law, headings at the
+/// commanded ones) on every beam of every sighting.
+JointConfig baselineConfig(const CalibrationModel& cal, const CalibrationConfig& cc, const LandmarkObservations& obs,
+                           const DiagnoseConfig& config) {
   JointConfig base;
   base.order = std::max(cal.model.bias.order(), 1);
   base.noise = NoiseKind::squared;
@@ -890,317 +966,363 @@ DiagnosisResult diagnoseSequence(const LandmarkObservations& obs, const Diagnose
   base.outlier_floor = config.outlier_floor;
   base.effects.estimate_heading = false;
   base.cauchy_loss = true;
-  // Fits that start from a converged solution (replicas, folds) skip the geometry pass and
-  // re-estimate the noise law at most twice.
-  auto warm = [](JointConfig c) {
-    c.settle_geometry = false;
-    c.outer_iterations = 2;
-    c.max_solver_iterations = 200;
-    return c;
-  };
-  // Two starts, the better fit kept (readings and odometry): the calibration's refined solution,
-  // and a neutral one that no range effect has bent (landmarks triangulated from bearings
-  // alone, commanded poses, the closed form's bias).
-  JointInit init;
-  init.poses = cal.stop_poses;
-  init.model = cal.model;
-  init.radius_m = landmarkRadius(obs);
-  for (const auto& l : cal.landmarks)
-    if (l.status == "ok") {
-      init.centres[l.id] = Eigen::Vector2d(l.x_m, l.y_m);
-      init.radius_m = l.radius_m;
-    }
-  std::optional<JointInit> neutral;
-  int closed_form_order = base.order;
-  {
-    CalibrationConfig cf = cc;
-    cf.method = Method::closed_form;
-    const CalibrationModel m = calibrate(obs, cf);
-    if (m.status == "ok") {
-      JointInit n;
-      n.poses = obs.commanded;
-      n.radius_m = init.radius_m;
-      for (const auto& l : m.landmarks)
-        if (l.status == "ok") n.centres[l.id] = Eigen::Vector2d(l.x_m, l.y_m);
-      n.model = m.model;
-      closed_form_order = std::max(m.model.bias.order(), 1);
-      if (n.centres.size() == init.centres.size()) neutral = n;
-    }
-  }
-  auto total = [](const JointResult& r) {
-    return r.poses.empty() ? std::numeric_limits<double>::infinity() : r.neg_log_likelihood + r.prior_neg_log_likelihood;
-  };
-  auto orderOf = [](JointInit i, int order) {
-    i.model.bias.alpha.resize(static_cast<std::size_t>(order) + 1, 0.0);
-    return i;
-  };
-  auto bestOf = [&](const JointInit& a, const JointConfig& cfg, bool both = true) {
-    JointResult r = refineJoint(obs, orderOf(a, cfg.order), cfg);
-    if (neutral && both) {
-      JointResult other = refineJoint(obs, orderOf(*neutral, cfg.order), cfg);
-      if (total(other) < total(r)) r = std::move(other);
-    }
-    return r;
-  };
-  // The order: the calibration's, or the closed form's when they differ and it fits better by AIC
-  // (an effect the baseline lacks can drag the joint refinement to a wrong order).
-  JointResult fit0 = bestOf(init, base);
-  if (closed_form_order != base.order && neutral) {
-    JointConfig other = base;
-    other.order = closed_form_order;
-    JointResult alt = bestOf(init, other);
-    if (!alt.poses.empty() && 2.0 * (total(alt) - total(fit0)) + 2.0 * (other.order - base.order) < 0.0) {
-      fit0 = std::move(alt);
-      base = other;
-    }
-  }
-  if (fit0.poses.empty()) {
+  return base;
+}
+
+/// A scan sequence with landmarks, diagnosed with joint refinements (the problem object of
+/// runDiagnosis; its steps in the order they run).
+class SequenceDiagnosis {
+ public:
+  SequenceDiagnosis(const LandmarkObservations& obs, const DiagnoseConfig& config, const std::vector<std::string>& candidates,
+                    const std::vector<std::vector<double>>* truth)
+      : obs_(obs), config_(config), candidates_(candidates), truth_(truth) {}
+
+  bool fitBaseline(DiagnosisResult& out);
+  std::map<std::string, double> measuredStatistics(DiagnosisResult& out);
+  void replica(int b, std::map<std::string, std::vector<double>>& stats, DiagnosisResult& out);
+  const std::vector<StatisticInfo>& statisticInfo() const { return statInfo(); }
+  void heldOut(HeldOut& held);
+  const char* noHeldOut() const { return "no fold could be fitted: too few scans or landmarks"; }
+  void beforeCandidates(DiagnosisResult&) { ident_ = identifiability(obs_, fit0_, measured_rows_, base_); }
+  CandidateResult candidate(std::size_t c, const HeldOut& held, const DiagnosisResult& out) const;
+  void afterCandidates(DiagnosisResult& out) const;
+  /// An angle offset is one heading shared by all stops (nested), handled by parsimony.
+  std::vector<std::pair<std::string, std::string>> nestedEffects() const { return {{effect::kAngleOffset, effect::kHeadingError}}; }
+  Closeness closenessBaseline(const DiagnosisResult&) const { return closeness(measured_z_, sim_base_); }
+  void extend(std::size_t c, DiagnosisResult& out) const;
+
+ private:
+  bool calibrateBaseline(DiagnosisResult& out);
+  void findStarts();
+  JointResult bestOf(const JointInit& start, const JointConfig& cfg, bool both = true) const;
+  void chooseOrder();
+  void describeBaseline(DiagnosisResult& out) const;
+  JointInit candidateStart(const std::string& e) const;
+  void foldLikelihoods(HeldOut& held) const;
+  void odometryLikelihoods(HeldOut& held) const;
+  void setIdentifiability(CandidateResult& r, const JointResult& fc, bool radius_known) const;
+
+  const LandmarkObservations& obs_;
+  const DiagnoseConfig& config_;
+  const std::vector<std::string>& candidates_;
+  const std::vector<std::vector<double>>* truth_;  // true ranges, aligned with the beams (optional)
+  CalibrationConfig cc_;               // the calibration that starts the baseline
+  CalibrationModel cal_;
+  JointConfig base_;                   // the baseline's refinement
+  JointInit init_;                     // start: the calibration's refined solution
+  std::optional<JointInit> neutral_;   // start that no range effect has bent (when available)
+  int closed_form_order_ = 1;
+  JointResult fit0_;                   // the baseline fit
+  std::vector<Row> measured_rows_;
+  std::map<std::string, double> measured_stats_;
+  ZSample measured_z_;
+  ReplicaPlan plan0_;                  // replicas of the baseline
+  ZSample sim_base_;                   // residuals of the first replicas (closeness)
+  std::vector<JointConfig> cfgs_;      // per candidate: its refinement
+  std::vector<JointResult> fits_;      // per candidate: fit on all the data
+  std::map<std::string, Identifiability> ident_;
+};
+
+bool SequenceDiagnosis::fitBaseline(DiagnosisResult& out) {
+  if (!calibrateBaseline(out)) return false;
+  base_ = baselineConfig(cal_, cc_, obs_, config_);
+  findStarts();
+  chooseOrder();
+  if (fit0_.poses.empty()) {
     out.status = "baseline_failed";
-    out.message = fit0.message;
-    return out;
+    out.message = fit0_.message;
+    return false;
   }
-  out.baseline = fit0.model;
-  out.baseline.range_min_m = obs.range_min_m;
-  out.baseline.range_max_m = obs.range_max_m;
-  out.baseline_sigma_theta_rad = fit0.sigma_theta_rad;
-  out.baseline_radius_m = fit0.radius_m;
-  out.radius_known = obs.landmark_radius_m.has_value();
-  out.baseline_neg_log_likelihood = fit0.neg_log_likelihood + fit0.prior_neg_log_likelihood;
-  out.baseline_extra["pose_scatter_m"] = fit0.pose_scatter_m;
-  out.baseline_extra["sigma_s_prior_m"] = base.sigma_s_m;
-  out.baseline_extra["readings_used"] = static_cast<double>(fit0.readings);
-  const std::vector<Row> measured_rows = rows(obs, fit0, base);
-  const auto measured_stats = statistics(obs, fit0, measured_rows, base);
-  out.measured = records(measured_rows);
+  describeBaseline(out);
+  return true;
+}
 
-  // 2. Parametric bootstrap from the fitted baseline.
-  const ReplicaPlan plan0 = replicaPlan(obs, fit0, out.radius_known);
-  std::map<std::string, std::vector<double>> replica_stats;
-  ZSample sim_base;
-  for (int b = 0; b < config.replicas; ++b) {
-    const LandmarkObservations rep =
-        simulateReplica(plan0, obs, poseNoise(fit0, base), deriveSeed(config.seed, 1000 + static_cast<std::uint64_t>(b)));
-    const JointResult f = refineJoint(rep, initFrom(fit0), warm(base));
-    if (f.poses.empty()) continue;
-    const auto rr = rows(rep, f, base);
-    for (const auto& [k, v] : statistics(rep, f, rr, base)) replica_stats[k].push_back(v);
-    if (b < config.closeness_replicas)
-      for (const auto& r : rr) {
-        sim_base.z.push_back(r.z);
-        sim_base.group.push_back(groupKey(r.r));
-      }
-    if (b == 0) out.simulated_baseline = records(rr);
+bool SequenceDiagnosis::calibrateBaseline(DiagnosisResult& out) {
+  cc_.method = Method::joint;
+  cc_.max_order = config_.max_order;
+  cc_.joint.effects.estimate_heading = false;
+  cc_.joint.sigma_s_m = config_.sigma_s_m;
+  cc_.triangulation.sigma_s_m = config_.sigma_s_m;
+  try {
+    cal_ = calibrate(obs_, cc_);
+  } catch (const std::invalid_argument& e) {
+    cal_.status = "calibration_failed";
+    cal_.message = e.what();
   }
-  out.battery = makeBattery(statInfo(), measured_stats, replica_stats);
-  auto batteryOf = [&](const std::string& name) -> const Discrepancy* {
-    for (const auto& d : out.battery)
-      if (d.name == name) return &d;
-    return nullptr;
-  };
+  if (cal_.status != "ok") {
+    out.status = cal_.status;
+    out.message = "the baseline calibration failed: " + cal_.message;
+    return false;
+  }
+  return true;
+}
 
-  // 3. Candidates: full fits, held-out likelihoods (folds by scan), identifiability.
-  std::vector<JointConfig> cfgs;
-  std::vector<JointResult> fits;
-  // The path terms start from what the baseline's refined path shows (the baseline's optimum is
-  // a stationary point of the extended models along them): its rotation and stretch against
-  // the commanded path.
-  const double path_info = [&] {
-    double cx = 0.0, cy = 0.0, info = 0.0;
-    for (const auto& c : obs.commanded) {
-      cx += c.x_m / static_cast<double>(obs.commanded.size());
-      cy += c.y_m / static_cast<double>(obs.commanded.size());
+/// Two starts, the better fit kept (readings and odometry): the calibration's refined solution,
+/// and a neutral one that no range effect has bent (landmarks triangulated from bearings alone,
+/// commanded poses, the closed form's bias).
+void SequenceDiagnosis::findStarts() {
+  init_.poses = cal_.stop_poses;
+  init_.model = cal_.model;
+  init_.radius_m = landmarkRadius(obs_);
+  for (const auto& l : cal_.landmarks)
+    if (l.status == "ok") {
+      init_.centres[l.id] = Eigen::Vector2d(l.x_m, l.y_m);
+      init_.radius_m = l.radius_m;
     }
-    for (const auto& c : obs.commanded) info += (c.x_m - cx) * (c.x_m - cx) + (c.y_m - cy) * (c.y_m - cy);
-    return info;
-  }();
-  const double sqrt_info = std::sqrt(std::max(path_info, 1e-12));
-  for (const auto& e : candidates) {
-    cfgs.push_back(effectConfig(base, e));
-    JointInit start = initFrom(fit0);
-    if (e == effect::kAngleOffset) {
-      // Turn the baseline's world (which turned to absorb the offset) back onto the commanded
-      // path, and let the beams turn instead.
-      const double turn = -measured_stats.at("path_rotation") * base.sigma_s_m / sqrt_info;
-      double cx = 0.0, cy = 0.0;
-      for (const auto& c : obs.commanded) {
-        cx += c.x_m / static_cast<double>(obs.commanded.size());
-        cy += c.y_m / static_cast<double>(obs.commanded.size());
-      }
-      const double ct = std::cos(turn), st = std::sin(turn);
-      auto rotate = [&](double& x, double& y) {
-        const double dx = x - cx, dy = y - cy;
-        x = cx + ct * dx - st * dy;
-        y = cy + st * dx + ct * dy;
-      };
-      for (auto& p : start.poses) rotate(p.x_m, p.y_m);
-      for (auto& [id, c] : start.centres) rotate(c.x(), c.y());
-      start.effects.angle_offset_rad = turn;
-    }
-    if (e == effect::kOdometryScale) start.effects.odometry_scale = measured_stats.at("path_scale") * base.sigma_s_m / sqrt_info;
+  closed_form_order_ = base_.order;
+  CalibrationConfig cf = cc_;
+  cf.method = Method::closed_form;
+  const CalibrationModel m = calibrate(obs_, cf);
+  if (m.status != "ok") return;
+  JointInit n;
+  n.poses = obs_.commanded;
+  n.radius_m = init_.radius_m;
+  for (const auto& l : m.landmarks)
+    if (l.status == "ok") n.centres[l.id] = Eigen::Vector2d(l.x_m, l.y_m);
+  n.model = m.model;
+  closed_form_order_ = std::max(m.model.bias.order(), 1);
+  if (n.centres.size() == init_.centres.size()) neutral_ = n;
+}
+
+JointResult SequenceDiagnosis::bestOf(const JointInit& start, const JointConfig& cfg, bool both) const {
+  JointResult r = refineJoint(obs_, withOrder(start, cfg.order), cfg);
+  if (neutral_ && both) {
+    JointResult other = refineJoint(obs_, withOrder(*neutral_, cfg.order), cfg);
+    if (total(other) < total(r)) r = std::move(other);
+  }
+  return r;
+}
+
+/// The order: the calibration's, or the closed form's when they differ and it fits better by AIC
+/// (an effect the baseline lacks can drag the joint refinement to a wrong order).
+void SequenceDiagnosis::chooseOrder() {
+  fit0_ = bestOf(init_, base_);
+  if (closed_form_order_ == base_.order || !neutral_) return;
+  JointConfig other = base_;
+  other.order = closed_form_order_;
+  JointResult alt = bestOf(init_, other);
+  if (!alt.poses.empty() && 2.0 * (total(alt) - total(fit0_)) + 2.0 * (other.order - base_.order) < 0.0) {
+    fit0_ = std::move(alt);
+    base_ = other;
+  }
+}
+
+void SequenceDiagnosis::describeBaseline(DiagnosisResult& out) const {
+  out.baseline = fit0_.model;
+  out.baseline.range_min_m = obs_.range_min_m;
+  out.baseline.range_max_m = obs_.range_max_m;
+  out.baseline_sigma_theta_rad = fit0_.sigma_theta_rad;
+  out.baseline_radius_m = fit0_.radius_m;
+  out.radius_known = obs_.landmark_radius_m.has_value();
+  out.baseline_neg_log_likelihood = fit0_.neg_log_likelihood + fit0_.prior_neg_log_likelihood;
+  out.baseline_extra["pose_scatter_m"] = fit0_.pose_scatter_m;
+  out.baseline_extra["sigma_s_prior_m"] = base_.sigma_s_m;
+  out.baseline_extra["readings_used"] = static_cast<double>(fit0_.readings);
+}
+
+std::map<std::string, double> SequenceDiagnosis::measuredStatistics(DiagnosisResult& out) {
+  measured_rows_ = rows(obs_, fit0_, base_);
+  measured_stats_ = statistics(obs_, fit0_, measured_rows_, base_);
+  out.measured = records(measured_rows_);
+  append(measured_z_, measured_rows_);
+  plan0_ = replicaPlan(obs_, fit0_, out.radius_known);
+  return measured_stats_;
+}
+
+/// One bootstrap replica: simulated from the fitted baseline, refitted from it.
+void SequenceDiagnosis::replica(int b, std::map<std::string, std::vector<double>>& stats, DiagnosisResult& out) {
+  const LandmarkObservations rep =
+      simulateReplica(plan0_, obs_, poseNoise(fit0_, base_), deriveSeed(config_.seed, 1000 + static_cast<std::uint64_t>(b)));
+  const JointResult f = refineJoint(rep, initFrom(fit0_), warm(base_));
+  if (f.poses.empty()) return;
+  const auto rr = rows(rep, f, base_);
+  for (const auto& [k, v] : statistics(rep, f, rr, base_)) stats[k].push_back(v);
+  if (b < config_.closeness_replicas) append(sim_base_, rr);
+  if (b == 0) out.simulated_baseline = records(rr);
+}
+
+/// The path terms start from what the baseline's refined path shows (the baseline's optimum is
+/// a stationary point of the extended models along them): its rotation and stretch against
+/// the commanded path.
+JointInit SequenceDiagnosis::candidateStart(const std::string& e) const {
+  const double sqrt_info = std::sqrt(std::max(pathSpread(obs_.commanded), 1e-12));
+  JointInit start = initFrom(fit0_);
+  // Turn the baseline's world (which turned to absorb the offset) back onto the commanded
+  // path, and let the beams turn instead.
+  if (e == effect::kAngleOffset)
+    turnStart(start, -measured_stats_.at("path_rotation") * base_.sigma_s_m / sqrt_info, obs_.commanded);
+  if (e == effect::kOdometryScale) start.effects.odometry_scale = measured_stats_.at("path_scale") * base_.sigma_s_m / sqrt_info;
+  return start;
+}
+
+/// Full fits of the candidates, then held-out likelihoods: folds by scan, odometry by stop.
+void SequenceDiagnosis::heldOut(HeldOut& held) {
+  for (const auto& e : candidates_) {
+    cfgs_.push_back(effectConfig(base_, e));
     // The neutral start matters for the terms that bend the geometry the baseline settled in.
-    fits.push_back(bestOf(start, cfgs.back(), e == effect::kIncidenceBias || e == effect::kLandmarkBias));
+    fits_.push_back(bestOf(candidateStart(e), cfgs_.back(), e == effect::kIncidenceBias || e == effect::kLandmarkBias));
   }
-  const std::vector<int> fold = folds(obs, config.folds);
-  std::vector<double> ll_base;                               // per held-out reading
-  std::vector<std::vector<double>> ll_cand(candidates.size());
-  std::vector<std::size_t> block;                             // scan of each held-out reading
-  for (int f = 0; f < config.folds; ++f) {
-    std::vector<bool> train(obs.sightings.size()), test(obs.sightings.size());
+  foldLikelihoods(held);
+  odometryLikelihoods(held);
+  held.points = static_cast<double>(held.base.size());
+}
+
+/// Readings of each fold's sightings under the models fitted on the other folds (block: scan).
+void SequenceDiagnosis::foldLikelihoods(HeldOut& held) const {
+  const std::vector<int> fold = folds(obs_, config_.folds);
+  for (int f = 0; f < config_.folds; ++f) {
+    std::vector<bool> train(obs_.sightings.size()), test(obs_.sightings.size());
     bool any = false;
-    for (std::size_t i = 0; i < obs.sightings.size(); ++i) {
+    for (std::size_t i = 0; i < obs_.sightings.size(); ++i) {
       train[i] = fold[i] != f;
       test[i] = fold[i] == f;
       any = any || test[i];
     }
     if (!any) continue;
-    const LandmarkObservations tr = subset(obs, train), te = subset(obs, test);
-    const JointResult fb = refineJoint(tr, initFrom(fit0), warm(base));
+    const LandmarkObservations tr = subset(obs_, train), te = subset(obs_, test);
+    const JointResult fb = refineJoint(tr, initFrom(fit0_), warm(base_));
     if (fb.poses.empty()) continue;
-    const auto eb = evaluateJoint(te, fb, base);
-    std::vector<std::vector<JointReading>> ec(candidates.size());
+    const auto eb = evaluateJoint(te, fb, base_);
+    std::vector<std::vector<JointReading>> ec(candidates_.size());
     bool ok = true;
-    for (std::size_t c = 0; c < candidates.size(); ++c) {
-      const JointResult fc = refineJoint(tr, fits[c].poses.empty() ? initFrom(fit0) : initFrom(fits[c]), warm(cfgs[c]));
+    for (std::size_t c = 0; c < candidates_.size(); ++c) {
+      const JointResult fc = refineJoint(tr, fits_[c].poses.empty() ? initFrom(fit0_) : initFrom(fits_[c]), warm(cfgs_[c]));
       if (fc.poses.empty()) {
         ok = false;
         break;
       }
-      ec[c] = evaluateJoint(te, fc, cfgs[c]);
+      ec[c] = evaluateJoint(te, fc, cfgs_[c]);
       if (ec[c].size() != eb.size()) ok = false;
     }
     if (!ok) continue;
     for (std::size_t i = 0; i < eb.size(); ++i) {
-      ll_base.push_back(eb[i].log_likelihood);
-      block.push_back(eb[i].scan);
-      for (std::size_t c = 0; c < candidates.size(); ++c) ll_cand[c].push_back(ec[c][i].log_likelihood);
+      held.base.push_back(eb[i].log_likelihood);
+      held.block.push_back(eb[i].scan);
+      for (std::size_t c = 0; c < candidates_.size(); ++c) held.cand[c].push_back(ec[c][i].log_likelihood);
     }
   }
-  // Odometry, leave one stop out (full-data fits).
-  {
-    const auto ob = odometryHeldOut(obs, fit0, base);
-    std::vector<std::vector<double>> oc(candidates.size());
-    for (std::size_t c = 0; c < candidates.size(); ++c)
-      oc[c] = fits[c].poses.empty() ? std::vector<double>(ob.size(), kNaN) : odometryHeldOut(obs, fits[c], cfgs[c]);
-    for (std::size_t k = 0; k < ob.size() && !ll_base.empty(); ++k) {
-      // One block per stop, after the scans' blocks; two observations (x, y) per stop.
-      const std::size_t key = std::numeric_limits<std::size_t>::max() - k;
-      for (int twice = 0; twice < 2; ++twice) {
-        ll_base.push_back(0.5 * ob[k]);
-        block.push_back(key);
-        for (std::size_t c = 0; c < candidates.size(); ++c) ll_cand[c].push_back(0.5 * oc[c][k]);
-      }
-    }
-  }
-  if (ll_base.empty()) {
-    out.status = "cross_validation_failed";
-    out.message = "no fold could be fitted: too few scans or landmarks";
-    return out;
-  }
-  const double n_heldout = static_cast<double>(ll_base.size());
-  {
-    double s = 0.0;
-    for (double v : ll_base) s += v;
-    out.baseline_heldout_nats_per_point = s / n_heldout;
-  }
-  const auto ident = identifiability(obs, fit0, measured_rows, base);
-  for (std::size_t c = 0; c < candidates.size(); ++c) {
-    CandidateResult r;
-    r.effect = candidates[c];
-    r.statistic = statisticOf(r.effect);
-    if (const Discrepancy* d = batteryOf(r.statistic)) {
-      r.score_p_value = d->p_value;
-      r.effect_size = d->effect_size;
-    }
-    const JointResult& fc = fits[c];
-    if (fc.poses.empty()) {
-      r.applicable = false;
-      r.note = "the extended fit failed: " + fc.message;
-      r.p_value = kNaN;
-      out.candidates.push_back(r);
-      continue;
-    }
-    // Held-out gain per point, standard error from per-scan blocks.
-    std::map<std::size_t, double> per_scan;
-    double sum = 0.0;
-    for (std::size_t i = 0; i < ll_base.size(); ++i) {
-      const double diff = ll_cand[c][i] - ll_base[i];
-      sum += diff;
-      per_scan[block[i]] += diff;
-    }
-    r.heldout_gain_nats_per_point = sum / n_heldout;
-    double ss = 0.0;
-    const double mean_block = sum / static_cast<double>(per_scan.size());
-    for (const auto& [scan, v] : per_scan) ss += (v - mean_block) * (v - mean_block);
-    const double nb = static_cast<double>(per_scan.size());
-    r.heldout_gain_se = nb > 1 ? std::sqrt(ss / (nb - 1.0) * nb) / n_heldout : 0.0;
-    r.p_heldout = heldoutPValue(r.heldout_gain_nats_per_point, r.heldout_gain_se);
-    r.parameters = fc.effect_parameters;
-    const double lr = 2.0 * (fit0.neg_log_likelihood + fit0.prior_neg_log_likelihood - fc.neg_log_likelihood -
-                             fc.prior_neg_log_likelihood);
-    r.delta_aic = 2.0 * r.parameters - lr;
-    // In-sample evidence too, for one-parameter effects: where the baseline's parameters absorb
-    // most of an effect (a constant bearing rotation moves the poles) the held-out gain is small
-    // while the likelihood ratio on all the data is not. Naming still needs a positive held-out gain.
-    r.p_likelihood_ratio = likelihoodRatioPValue(lr, r.parameters);
-    r.p_value = combinedPValue(r.p_heldout, r.score_p_value, r.p_likelihood_ratio);
-    if (const auto it = ident.find(r.effect); it != ident.end()) {
-      r.information_ratio = it->second.ratio;
-      r.standard_error = it->second.se;
-      // Estimable at the smallest size worth naming, or the estimate stands 4 standard errors
-      // clear of zero once the baseline's parameters are free.
-      r.identifiable = it->second.se < std::max(it->second.ref, effectSize(r.effect, fc) / 4.0);
-    }
-    if (!r.identifiable) {
-      if (r.effect == effect::kIncidenceBias && !out.radius_known)
-        r.note = "confounded with the landmark radius and alpha_0 (radius estimated; give landmark_radius_m)";
-      else if (r.effect == effect::kOdometryScale && !out.radius_known)
-        r.note = "a step-length error is a change of the world's scale, which the bias polynomial absorbs when the radius is unknown";
-      else if (r.effect == effect::kMixedPixels) r.note = "too few outermost or inner beams";
-      else r.note = "the baseline's parameters absorb it (standard error " + std::to_string(r.standard_error) + " after them)";
-    }
-    r.estimates = effectEstimates(r.effect, fc);
-    if (true_range_m) r.calibration_mse_ratio = calibrationMseRatio(obs, fc, cfgs[c], *true_range_m);
-    out.candidates.push_back(r);
-  }
-  if (true_range_m) out.calibration_mse_ratio_baseline = calibrationMseRatio(obs, fit0, base, *true_range_m);
+}
 
-  // 4. The cause. An angle offset is one heading shared by all stops (nested), handled by parsimony.
-  out.primary_cause = nameCause(out.candidates, config.alpha, out.decision, {{effect::kAngleOffset, effect::kHeadingError}});
-
-  // 5. The extended model and how close its simulation comes to the data.
-  ZSample measured_z;
-  for (const auto& r : measured_rows) {
-    measured_z.z.push_back(r.z);
-    measured_z.group.push_back(groupKey(r.r));
-  }
-  out.closeness_baseline = closeness(measured_z, sim_base);
-  const auto named = std::find(candidates.begin(), candidates.end(), out.primary_cause);
-  if (named != candidates.end()) {
-    const std::size_t c = static_cast<std::size_t>(named - candidates.begin());
-    const JointResult& fc = fits[c];
-    const CandidateResult& r = out.candidates[c];
-    out.extended_parameters = r.estimates;
-    out.extended_bias_alpha = fc.model.bias.alpha;
-    out.gain_heldout_nats_per_point = r.heldout_gain_nats_per_point;
-    out.gain_delta_aic = r.delta_aic;
-    out.calibration_mse_ratio_extended = r.calibration_mse_ratio;
-    const ReplicaPlan plan = replicaPlan(obs, fc, out.radius_known);
-    out.scene_keys = sceneKeys(out.primary_cause, fc, plan);
-    ZSample sim_ext;
-    for (int b = 0; b < config.closeness_replicas; ++b) {
-      const LandmarkObservations rep = simulateReplica(plan, obs, poseNoise(fc, cfgs[c]),
-                                                       deriveSeed(config.seed, 5000 + static_cast<std::uint64_t>(b)));
-      const JointResult f = refineJoint(rep, initFrom(fit0), warm(base));
-      if (f.poses.empty()) continue;
-      const auto rr = rows(rep, f, base);
-      for (const auto& w : rr) {
-        sim_ext.z.push_back(w.z);
-        sim_ext.group.push_back(groupKey(w.r));
-      }
-      if (out.simulated_extended.empty()) out.simulated_extended = records(rr);
+/// Odometry, leave one stop out (full-data fits).
+void SequenceDiagnosis::odometryLikelihoods(HeldOut& held) const {
+  const auto ob = odometryHeldOut(obs_, fit0_, base_);
+  std::vector<std::vector<double>> oc(candidates_.size());
+  for (std::size_t c = 0; c < candidates_.size(); ++c)
+    oc[c] = fits_[c].poses.empty() ? std::vector<double>(ob.size(), kNaN) : odometryHeldOut(obs_, fits_[c], cfgs_[c]);
+  for (std::size_t k = 0; k < ob.size() && !held.base.empty(); ++k) {
+    // One block per stop, after the scans' blocks; two observations (x, y) per stop.
+    const std::size_t key = std::numeric_limits<std::size_t>::max() - k;
+    for (int twice = 0; twice < 2; ++twice) {
+      held.base.push_back(0.5 * ob[k]);
+      held.block.push_back(key);
+      for (std::size_t c = 0; c < candidates_.size(); ++c) held.cand[c].push_back(0.5 * oc[c][k]);
     }
-    out.closeness_extended = closeness(measured_z, sim_ext);
   }
+}
+
+CandidateResult SequenceDiagnosis::candidate(std::size_t c, const HeldOut& held, const DiagnosisResult& out) const {
+  CandidateResult r;
+  r.effect = candidates_[c];
+  r.statistic = statisticOf(r.effect);
+  setScore(r, out.battery);
+  const JointResult& fc = fits_[c];
+  if (fc.poses.empty()) {
+    r.applicable = false;
+    r.note = "the extended fit failed: " + fc.message;
+    r.p_value = kNaN;
+    return r;
+  }
+  // Held-out gain per point, standard error from per-scan blocks.
+  setHeldOutGain(r, heldOutGain(held, c));
+  r.parameters = fc.effect_parameters;
+  const double lr = 2.0 * (fit0_.neg_log_likelihood + fit0_.prior_neg_log_likelihood - fc.neg_log_likelihood -
+                           fc.prior_neg_log_likelihood);
+  r.delta_aic = 2.0 * r.parameters - lr;
+  // In-sample evidence too, for one-parameter effects: where the baseline's parameters absorb
+  // most of an effect (a constant bearing rotation moves the poles) the held-out gain is small
+  // while the likelihood ratio on all the data is not. Naming still needs a positive held-out gain.
+  r.p_likelihood_ratio = likelihoodRatioPValue(lr, r.parameters);
+  r.p_value = combinedPValue(r.p_heldout, r.score_p_value, r.p_likelihood_ratio);
+  setIdentifiability(r, fc, out.radius_known);
+  r.estimates = effectEstimates(r.effect, fc);
+  if (truth_) r.calibration_mse_ratio = calibrationMseRatio(obs_, fc, cfgs_[c], *truth_);
+  return r;
+}
+
+void SequenceDiagnosis::setIdentifiability(CandidateResult& r, const JointResult& fc, bool radius_known) const {
+  if (const auto it = ident_.find(r.effect); it != ident_.end()) {
+    r.information_ratio = it->second.ratio;
+    r.standard_error = it->second.se;
+    // Estimable at the smallest size worth naming, or the estimate stands 4 standard errors
+    // clear of zero once the baseline's parameters are free.
+    r.identifiable = it->second.se < std::max(it->second.ref, effectSize(r.effect, fc) / 4.0);
+  }
+  if (r.identifiable) return;
+  if (r.effect == effect::kIncidenceBias && !radius_known)
+    r.note = "confounded with the landmark radius and alpha_0 (radius estimated; give landmark_radius_m)";
+  else if (r.effect == effect::kOdometryScale && !radius_known)
+    r.note = "a step-length error is a change of the world's scale, which the bias polynomial absorbs when the radius is unknown";
+  else if (r.effect == effect::kMixedPixels) r.note = "too few outermost or inner beams";
+  else r.note = "the baseline's parameters absorb it (standard error " + std::to_string(r.standard_error) + " after them)";
+}
+
+void SequenceDiagnosis::afterCandidates(DiagnosisResult& out) const {
+  if (truth_) out.calibration_mse_ratio_baseline = calibrationMseRatio(obs_, fit0_, base_, *truth_);
+}
+
+/// The named effect's model: its scene keys, and its simulation refitted with the baseline.
+void SequenceDiagnosis::extend(std::size_t c, DiagnosisResult& out) const {
+  const JointResult& fc = fits_[c];
+  out.extended_bias_alpha = fc.model.bias.alpha;
+  out.calibration_mse_ratio_extended = out.candidates[c].calibration_mse_ratio;
+  const ReplicaPlan plan = replicaPlan(obs_, fc, out.radius_known);
+  out.scene_keys = sceneKeys(out.primary_cause, fc, plan);
+  ZSample sim_ext;
+  for (int b = 0; b < config_.closeness_replicas; ++b) {
+    const LandmarkObservations rep =
+        simulateReplica(plan, obs_, poseNoise(fc, cfgs_[c]), deriveSeed(config_.seed, 5000 + static_cast<std::uint64_t>(b)));
+    const JointResult f = refineJoint(rep, initFrom(fit0_), warm(base_));
+    if (f.poses.empty()) continue;
+    const auto rr = rows(rep, f, base_);
+    append(sim_ext, rr);
+    if (out.simulated_extended.empty()) out.simulated_extended = records(rr);
+  }
+  out.closeness_extended = closeness(measured_z_, sim_ext);
+}
+
+/// Size of the data: scans, stops, landmarks, readings.
+void countData(const LandmarkObservations& obs, DiagnosisResult& out) {
+  std::set<std::size_t> scans, stops;
+  std::set<int> ids;
+  for (const auto& s : obs.sightings) {
+    scans.insert(s.scan);
+    stops.insert(s.stop);
+    ids.insert(s.landmark);
+    out.readings += s.beams.size();
+  }
+  out.scans = scans.size();
+  out.stops = stops.size();
+  out.landmarks = ids.size();
+}
+
+}  // namespace
+
+std::vector<std::string> sequenceCandidates() {
+  return allCandidates();
+}
+
+DiagnosisResult diagnoseSequence(const LandmarkObservations& obs, const DiagnoseConfig& config,
+                                 const std::vector<std::vector<double>>* true_range_m) {
+  config.validate();
+  DiagnosisResult out;
+  out.mode = DiagnoseMode::sequence;
+  out.seed = config.seed;
+  out.replicas = config.replicas;
+  out.folds = config.folds;
+  const std::vector<std::string> candidates = candidateList(config, allCandidates(), "a sequence");
+  countData(obs, out);
+  SequenceDiagnosis problem(obs, config, candidates, true_range_m);
+  runDiagnosis(problem, config, candidates, out);
   return out;
 }
 

@@ -11,17 +11,15 @@
 
 #include <Eigen/Dense>
 
+#include "diagnosis/skeleton.hpp"
 #include "diagnosis/stats.hpp"
 #include "common/pose2.hpp"
 #include "common/rng.hpp"
+#include "common/stats_util.hpp"
 #include "simulation/simulator.hpp"
 
 namespace lidarcal::diagnosis {
 namespace {
-
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr double kInf = std::numeric_limits<double>::infinity();
-constexpr double kLog2Pi = 1.8378770664093453;
 
 std::vector<std::string> allCandidates() {
   return {effect::kIncidenceNoise, effect::kIncidenceBias, effect::kLandmarkBias,  effect::kHeadingError,
@@ -74,11 +72,25 @@ struct Data {
   double window_min = 0.0, window_max = 1.0;
 };
 
-double median(std::vector<double> v) {
-  if (v.empty()) return kNaN;
-  const std::size_t m = v.size() / 2;
-  std::nth_element(v.begin(), v.begin() + static_cast<long>(m), v.end());
-  return v[m];
+/// Maximum of a unimodal function on [lo, hi]: ternary search, `iterations` thirds dropped.
+template <class Fn>
+double goldenMax(Fn fn, double lo, double hi, int iterations) {
+  for (int i = 0; i < iterations; ++i) {
+    const double m1 = lo + (hi - lo) / 3.0, m2 = hi - (hi - lo) / 3.0;
+    if (fn(m1) < fn(m2)) lo = m1;
+    else hi = m2;
+  }
+  return 0.5 * (lo + hi);
+}
+
+/// Calls fn(i, bin, fit) for every reading i in a bin that has a location fit, in reading order.
+template <class Fn>
+void forEachFitted(const Data& d, const std::vector<BinFit>& f, Fn fn) {
+  for (std::size_t i = 0; i < d.y.size(); ++i) {
+    const int bi = d.bin_of[i];
+    if (bi < 0 || f[static_cast<std::size_t>(bi)].n == 0) continue;
+    fn(i, d.bins[static_cast<std::size_t>(bi)], f[static_cast<std::size_t>(bi)]);
+  }
 }
 
 Data makeBins(const StaticScans& s, std::size_t window) {
@@ -183,7 +195,7 @@ std::vector<BinFit> fitBins(const Data& d, const std::vector<bool>& train, doubl
     f.m = c(0);
     f.g = c(1);
     f.h = c(2);
-    f.med = median(ys);
+    f.med = upperMedian(ys);
     double ss = 0.0;
     k = 0;
     for (std::size_t i : bin.idx) {
@@ -219,22 +231,37 @@ Line fitLine(const std::vector<Eigen::Vector2d>& pts) {
   return Line{std::atan2(nrm.y(), nrm.x()), p};
 }
 
-double lineDistance(const Line& l, const Eigen::Vector2d& q) { return q.x() * std::cos(l.theta) + q.y() * std::sin(l.theta) - l.p; }
+double lineDistance(const Line& l, const Eigen::Vector2d& q) {
+  return q.x() * std::cos(l.theta) + q.y() * std::sin(l.theta) - l.p;
+}
 
-/// Finds the walls among the bins (fills wall, edge, near/far, incidence) from full-data means.
-std::vector<Line> findWalls(Data& d, const std::vector<BinFit>& f) {
+/// The bin mean's point in the sensor frame.
+Eigen::Vector2d binPoint(const Data& d, const std::vector<BinFit>& f, std::size_t b) {
+  return Eigen::Vector2d(f[b].m * std::cos(d.bins[b].angle), f[b].m * std::sin(d.bins[b].angle));
+}
+
+/// Bins by window, then by angle.
+std::vector<std::size_t> binOrder(const Data& d) {
   std::vector<std::size_t> order(d.bins.size());
   std::iota(order.begin(), order.end(), 0);
   std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
     return d.bins[a].window != d.bins[b].window ? d.bins[a].window < d.bins[b].window : d.bins[a].angle < d.bins[b].angle;
   });
-  const double step = d.width > 0.0 ? d.width : [&] {
-    std::vector<double> gaps;
-    for (std::size_t k = 1; k < order.size(); ++k) gaps.push_back(d.bins[order[k]].angle - d.bins[order[k - 1]].angle);
-    return gaps.empty() ? deg2rad(1.0) : median(gaps);
-  }();
-  auto point = [&](std::size_t b) { return Eigen::Vector2d(f[b].m * std::cos(d.bins[b].angle), f[b].m * std::sin(d.bins[b].angle)); };
-  // Runs: neighbours in angle whose points are close (no depth jump, no missing beam between).
+  return order;
+}
+
+/// Angular step between neighbouring bins: the bin width, else the median gap.
+double binStep(const Data& d, const std::vector<std::size_t>& order) {
+  if (d.width > 0.0) return d.width;
+  std::vector<double> gaps;
+  for (std::size_t k = 1; k < order.size(); ++k) gaps.push_back(d.bins[order[k]].angle - d.bins[order[k - 1]].angle);
+  return gaps.empty() ? deg2rad(1.0) : upperMedian(gaps);
+}
+
+/// Runs: neighbours in angle whose points are close (no depth jump, no missing beam between).
+/// Marks the bins on both sides of a depth discontinuity as edges.
+std::vector<std::vector<std::size_t>> findRuns(Data& d, const std::vector<BinFit>& f, const std::vector<std::size_t>& order,
+                                               double step) {
   std::vector<std::vector<std::size_t>> runs;
   for (std::size_t k = 0; k < order.size(); ++k) {
     const std::size_t b = order[k];
@@ -243,7 +270,7 @@ std::vector<Line> findWalls(Data& d, const std::vector<BinFit>& f) {
     if (!runs.empty() && d.bins[runs.back().back()].window == d.bins[b].window) {
       const std::size_t prev = runs.back().back();
       const double da = d.bins[b].angle - d.bins[prev].angle;
-      const double gap = (point(b) - point(prev)).norm();
+      const double gap = (binPoint(d, f, b) - binPoint(d, f, prev)).norm();
       joins = da <= 2.5 * step && gap <= std::max(0.15, 4.0 * f[b].m * da);
       if (!joins && da <= 2.5 * step && std::abs(f[b].m - f[prev].m) > 0.05) {
         // A depth discontinuity between neighbouring beams: both sides may see mixed pixels.
@@ -257,7 +284,11 @@ std::vector<Line> findWalls(Data& d, const std::vector<BinFit>& f) {
     if (joins) runs.back().push_back(b);
     else runs.push_back({b});
   }
-  // Incidence from the local slope of the means (any surface): tan(phi) = |dm / da| / m.
+  return runs;
+}
+
+/// Incidence from the local slope of the means (any surface): tan(phi) = |dm / da| / m.
+void setIncidences(Data& d, const std::vector<BinFit>& f, const std::vector<std::vector<std::size_t>>& runs) {
   for (const auto& run : runs) {
     for (std::size_t k = 0; k < run.size(); ++k) {
       if (run.size() < 3) break;
@@ -270,8 +301,11 @@ std::vector<Line> findWalls(Data& d, const std::vector<BinFit>& f) {
       b.inc_known = true;
     }
   }
-  // Split and merge each run into straight pieces (deviation <= 2.5 cm), at least 8 bins.
-  std::vector<Line> lines;
+}
+
+/// Split and merge each run into straight pieces (deviation <= 2.5 cm), at least 8 bins.
+std::vector<std::vector<std::size_t>> straightPieces(const Data& d, const std::vector<BinFit>& f,
+                                                     const std::vector<std::vector<std::size_t>>& runs) {
   std::vector<std::vector<std::size_t>> pieces;
   std::vector<std::pair<std::size_t, std::size_t>> stack;
   for (const auto& run : runs) {
@@ -285,7 +319,7 @@ std::vector<Line> findWalls(Data& d, const std::vector<BinFit>& f) {
       stack.pop_back();
       if (hi - lo < 8) continue;
       std::vector<Eigen::Vector2d> pts;
-      for (std::size_t k = lo; k < hi; ++k) pts.push_back(point(inner[k]));
+      for (std::size_t k = lo; k < hi; ++k) pts.push_back(binPoint(d, f, inner[k]));
       const Line l = fitLine(pts);
       double worst = 0.0;
       std::size_t at = lo;
@@ -305,9 +339,18 @@ std::vector<Line> findWalls(Data& d, const std::vector<BinFit>& f) {
       }
     }
   }
-  for (const auto& piece : pieces) {
+  return pieces;
+}
+
+/// Finds the walls among the bins (fills wall, edge, near/far, incidence) from full-data means.
+std::vector<Line> findWalls(Data& d, const std::vector<BinFit>& f) {
+  const std::vector<std::size_t> order = binOrder(d);
+  const auto runs = findRuns(d, f, order, binStep(d, order));
+  setIncidences(d, f, runs);
+  std::vector<Line> lines;
+  for (const auto& piece : straightPieces(d, f, runs)) {
     std::vector<Eigen::Vector2d> pts;
-    for (std::size_t b : piece) pts.push_back(point(b));
+    for (std::size_t b : piece) pts.push_back(binPoint(d, f, b));
     const Line l = fitLine(pts);
     const int w = static_cast<int>(lines.size());
     lines.push_back(l);
@@ -336,6 +379,115 @@ struct WallFit {
   bool ok = false;
 };
 
+/// The wall model's mean of bin b (u: beam angle from the wall's normal, cu: its cosine, held
+/// away from 0).
+double wallMean(const Data& d, const WallFit& w, std::size_t b, double& u, double& cu) {
+  const Line& l = w.lines[static_cast<std::size_t>(d.bins[b].wall)];
+  u = d.bins[b].angle - l.theta;
+  cu = std::max(std::cos(u), 0.05);
+  return w.alpha0 + w.b * (1.0 - cu) + l.p / cu;
+}
+
+/// The wall model's least-squares system at its current parameters: Jacobian (alpha_0, b when
+/// fitted, then p and theta of each line), residuals and weights of the wall bins.
+struct WallSystem {
+  Eigen::MatrixXd j;
+  Eigen::VectorXd r, wt;
+};
+
+/// Residuals and weights of the wall bins (roughness tau2 plus the bin mean's variance).
+void wallResiduals(const Data& d, const std::vector<BinFit>& f, const WallFit& w, double tau2, WallSystem& s) {
+  for (int k = 0; k < static_cast<int>(w.bins.size()); ++k) {
+    const std::size_t b = w.bins[static_cast<std::size_t>(k)];
+    double u, cu;
+    s.r(k) = f[b].m - wallMean(d, w, b, u, cu);
+    s.wt(k) = 1.0 / (tau2 + f[b].s2 / f[b].n);
+  }
+}
+
+/// Gauss-Newton on the wall model at fixed roughness (at most 15 steps); false when a step is
+/// not finite.
+bool wallGaussNewton(const Data& d, const std::vector<BinFit>& f, WallFit& w, bool with_b, bool alpha0_free, double tau2,
+                     WallSystem& s) {
+  const int nb = static_cast<int>(w.bins.size()), nl = static_cast<int>(w.lines.size());
+  for (int it = 0; it < 15; ++it) {
+    for (int k = 0; k < nb; ++k) {
+      const std::size_t b = w.bins[static_cast<std::size_t>(k)];
+      double u, cu;
+      const double mu = wallMean(d, w, b, u, cu);
+      const Line& l = w.lines[static_cast<std::size_t>(d.bins[b].wall)];
+      s.r(k) = f[b].m - mu;
+      s.wt(k) = 1.0 / (tau2 + f[b].s2 / f[b].n);
+      s.j.row(k).setZero();
+      s.j(k, 0) = 1.0;
+      int c = 1;
+      if (with_b) s.j(k, c++) = 1.0 - cu;
+      const int wl = c + 2 * d.bins[b].wall;
+      s.j(k, wl) = 1.0 / cu;
+      s.j(k, wl + 1) = -l.p * std::sin(u) / (cu * cu) - w.b * std::sin(u);
+    }
+    if (!alpha0_free) s.j.col(0).setZero();
+    Eigen::MatrixXd h = s.j.transpose() * s.wt.asDiagonal() * s.j;
+    if (!alpha0_free) h(0, 0) = 1.0;
+    const Eigen::VectorXd step = h.ldlt().solve(s.j.transpose() * s.wt.asDiagonal() * s.r);
+    if (!step.allFinite()) return false;
+    w.alpha0 += step(0);
+    int c = 1;
+    if (with_b) w.b += step(c++);
+    for (int l = 0; l < nl; ++l) {
+      w.lines[static_cast<std::size_t>(l)].p += step(c + 2 * l);
+      w.lines[static_cast<std::size_t>(l)].theta += step(c + 2 * l + 1);
+    }
+    if (step.cwiseAbs().maxCoeff() < 1e-9) break;
+  }
+  return true;
+}
+
+/// Roughness: ML of tau^2 given the residuals (golden section on log tau).
+double wallRoughness(const std::vector<BinFit>& f, const WallFit& w, const Eigen::VectorXd& r) {
+  auto ll = [&](double log_tau) {
+    const double t2 = std::exp(2.0 * log_tau);
+    double s = 0.0;
+    for (int k = 0; k < static_cast<int>(w.bins.size()); ++k) {
+      const std::size_t b = w.bins[static_cast<std::size_t>(k)];
+      const double v = t2 + f[b].s2 / f[b].n;
+      s -= 0.5 * (std::log(v) + r(k) * r(k) / v);
+    }
+    return s;
+  };
+  const double lt = goldenMax(ll, std::log(1e-5), std::log(0.5), 60);
+  return std::exp(2.0 * lt);
+}
+
+/// Final residuals, standard errors and leave-one-out predictive log-likelihoods (the
+/// Jacobian is the last Gauss-Newton step's).
+void finishWalls(const Data& d, const std::vector<BinFit>& f, WallFit& w, bool with_b, bool alpha0_free, double tau2,
+                 WallSystem& s) {
+  const int nb = static_cast<int>(w.bins.size());
+  const auto np = static_cast<int>(s.j.cols());
+  wallResiduals(d, f, w, tau2, s);
+  if (!alpha0_free) s.j.col(0).setZero();
+  Eigen::MatrixXd h = s.j.transpose() * s.wt.asDiagonal() * s.j;
+  if (!alpha0_free) h(0, 0) = 1e12;  // held: no uncertainty, no leverage
+  const Eigen::MatrixXd cov = h.ldlt().solve(Eigen::MatrixXd::Identity(np, np));
+  w.alpha0_se = alpha0_free ? std::sqrt(std::max(cov(0, 0), 0.0)) : 0.0;
+  if (with_b) w.b_se = std::sqrt(std::max(cov(1, 1), 0.0));
+  w.loo_ll.resize(static_cast<std::size_t>(nb));
+  w.resid.resize(static_cast<std::size_t>(nb));
+  double ss = 0.0;
+  for (int k = 0; k < nb; ++k) {
+    const double hii = std::min(s.wt(k) * s.j.row(k).dot(cov * s.j.row(k).transpose()), 0.99);
+    const double v = (1.0 / s.wt(k)) / (1.0 - hii);
+    const double e = s.r(k) / (1.0 - hii);
+    w.loo_ll[static_cast<std::size_t>(k)] = -0.5 * (kLog2Pi + std::log(v) + e * e / v);
+    w.in_ll -= 0.5 * (kLog2Pi - std::log(s.wt(k)) + s.r(k) * s.r(k) * s.wt(k));
+    w.resid[static_cast<std::size_t>(k)] = s.r(k);
+    ss += s.r(k) * s.r(k);
+  }
+  w.rms = std::sqrt(ss / nb);
+  w.ok = true;
+}
+
 WallFit fitWalls(const Data& d, const std::vector<BinFit>& f, const std::vector<Line>& start, bool with_b,
                  double fixed_alpha0 = kNaN) {
   WallFit w;
@@ -348,98 +500,17 @@ WallFit fitWalls(const Data& d, const std::vector<BinFit>& f, const std::vector<
   const int np = 1 + (with_b ? 1 : 0) + 2 * nl;
   const int nb = static_cast<int>(w.bins.size());
   if (nl == 0 || nb < np + 3) return w;
-  auto model = [&](std::size_t b, double& u, double& cu) {
-    const Line& l = w.lines[static_cast<std::size_t>(d.bins[b].wall)];
-    u = d.bins[b].angle - l.theta;
-    cu = std::max(std::cos(u), 0.05);
-    return w.alpha0 + w.b * (1.0 - cu) + l.p / cu;
-  };
-  Eigen::MatrixXd j(nb, np);
-  Eigen::VectorXd r(nb), wt(nb);
+  WallSystem s{Eigen::MatrixXd(nb, np), Eigen::VectorXd(nb), Eigen::VectorXd(nb)};
   double tau2 = 1e-6;
   for (int outer = 0; outer < 4; ++outer) {
-    for (int it = 0; it < 15; ++it) {
-      for (int k = 0; k < nb; ++k) {
-        const std::size_t b = w.bins[static_cast<std::size_t>(k)];
-        double u, cu;
-        const double mu = model(b, u, cu);
-        const Line& l = w.lines[static_cast<std::size_t>(d.bins[b].wall)];
-        r(k) = f[b].m - mu;
-        wt(k) = 1.0 / (tau2 + f[b].s2 / f[b].n);
-        j.row(k).setZero();
-        j(k, 0) = 1.0;
-        int c = 1;
-        if (with_b) j(k, c++) = 1.0 - cu;
-        const int wl = c + 2 * d.bins[b].wall;
-        j(k, wl) = 1.0 / cu;
-        j(k, wl + 1) = -l.p * std::sin(u) / (cu * cu) - w.b * std::sin(u);
-      }
-      if (!alpha0_free) j.col(0).setZero();
-      Eigen::MatrixXd h = j.transpose() * wt.asDiagonal() * j;
-      if (!alpha0_free) h(0, 0) = 1.0;
-      const Eigen::VectorXd step = h.ldlt().solve(j.transpose() * wt.asDiagonal() * r);
-      if (!step.allFinite()) return w;
-      w.alpha0 += step(0);
-      int c = 1;
-      if (with_b) w.b += step(c++);
-      for (int l = 0; l < nl; ++l) {
-        w.lines[static_cast<std::size_t>(l)].p += step(c + 2 * l);
-        w.lines[static_cast<std::size_t>(l)].theta += step(c + 2 * l + 1);
-      }
-      if (step.cwiseAbs().maxCoeff() < 1e-9) break;
-    }
-    // Roughness: ML of tau^2 given the residuals (golden section on log tau).
-    const double lt = [&] {
-      auto ll = [&](double log_tau) {
-        const double t2 = std::exp(2.0 * log_tau);
-        double s = 0.0;
-        for (int k = 0; k < nb; ++k) {
-          const std::size_t b = w.bins[static_cast<std::size_t>(k)];
-          const double v = t2 + f[b].s2 / f[b].n;
-          s -= 0.5 * (std::log(v) + r(k) * r(k) / v);
-        }
-        return s;
-      };
-      double lo = std::log(1e-5), hi = std::log(0.5);
-      for (int i = 0; i < 60; ++i) {
-        const double m1 = lo + (hi - lo) / 3.0, m2 = hi - (hi - lo) / 3.0;
-        if (ll(m1) < ll(m2)) lo = m1;
-        else hi = m2;
-      }
-      return 0.5 * (lo + hi);
-    }();
-    tau2 = std::exp(2.0 * lt);
+    if (!wallGaussNewton(d, f, w, with_b, alpha0_free, tau2, s)) return w;
+    tau2 = wallRoughness(f, w, s.r);
   }
   w.tau = std::sqrt(tau2);
-  // Final residuals, standard errors and leave-one-out predictive log-likelihoods.
-  for (int k = 0; k < nb; ++k) {
-    const std::size_t b = w.bins[static_cast<std::size_t>(k)];
-    double u, cu;
-    r(k) = f[b].m - model(b, u, cu);
-    wt(k) = 1.0 / (tau2 + f[b].s2 / f[b].n);
-  }
-  if (!alpha0_free) j.col(0).setZero();
-  Eigen::MatrixXd h = j.transpose() * wt.asDiagonal() * j;
-  if (!alpha0_free) h(0, 0) = 1e12;  // held: no uncertainty, no leverage
-  const Eigen::MatrixXd cov = h.ldlt().solve(Eigen::MatrixXd::Identity(np, np));
-  w.alpha0_se = alpha0_free ? std::sqrt(std::max(cov(0, 0), 0.0)) : 0.0;
-  if (with_b) w.b_se = std::sqrt(std::max(cov(1, 1), 0.0));
-  w.loo_ll.resize(static_cast<std::size_t>(nb));
-  w.resid.resize(static_cast<std::size_t>(nb));
-  double ss = 0.0;
-  for (int k = 0; k < nb; ++k) {
-    const double hii = std::min(wt(k) * j.row(k).dot(cov * j.row(k).transpose()), 0.99);
-    const double v = (1.0 / wt(k)) / (1.0 - hii);
-    const double e = r(k) / (1.0 - hii);
-    w.loo_ll[static_cast<std::size_t>(k)] = -0.5 * (kLog2Pi + std::log(v) + e * e / v);
-    w.in_ll -= 0.5 * (kLog2Pi - std::log(wt(k)) + r(k) * r(k) * wt(k));
-    w.resid[static_cast<std::size_t>(k)] = r(k);
-    ss += r(k) * r(k);
-  }
-  w.rms = std::sqrt(ss / nb);
-  w.ok = true;
+  finishWalls(d, f, w, with_b, alpha0_free, tau2, s);
   return w;
 }
+
 
 // ---------------------------------------------------------------------------------------------
 // The reading model: readings of a bin around its location.
@@ -507,137 +578,184 @@ double readingLL(const Model& m, const Data& d, const Bin& b, const BinFit& f, s
   return std::log(std::max(total, 1e-300));
 }
 
-/// Fits the free parameters of a model on the readings of the training scans.
-Model fitModel(const Data& d, const std::vector<bool>& train, const Flags& fl, double q_detected, std::vector<BinFit>& fits) {
-  Model m;
-  m.robust_edges = fl.mixed;
-  if (fl.quant) m.q = q_detected;
-  fits = fitBins(d, train, 0.0);
-  std::vector<std::size_t> use;  // training readings in usable bins
-  for (std::size_t i = 0; i < d.y.size(); ++i) {
-    const int b = d.bin_of[i];
-    if (b < 0 || fits[static_cast<std::size_t>(b)].n == 0) continue;
-    if (!train.empty() && !train[static_cast<std::size_t>(d.t[i])]) continue;
-    use.push_back(i);
-  }
-  auto residual = [&](std::size_t i) {
-    const Bin& b = d.bins[static_cast<std::size_t>(d.bin_of[i])];
-    const BinFit& f = fits[static_cast<std::size_t>(d.bin_of[i])];
-    return d.y[i] - expected(m, b, f, d.a[i], d.t[i]) - m.drift * (d.t[i] - d.t_mean);
-  };
-  std::vector<double> weight(d.y.size(), 1.0);  // 1 - mixed-pixel responsibility
+/// Fits the free parameters of a reading model on the training scans' readings: the noise law
+/// (profile likelihood on per-bin sums), drift, mixed-pixel fraction (EM), Student-t dof.
+class ModelFitter {
+ public:
+  ModelFitter(const Data& d, const std::vector<bool>& train, const Flags& fl, std::vector<BinFit>& fits);
+  Model fit(double q_detected);
+
+ private:
+  const Bin& binOf(std::size_t i) const { return d_.bins[static_cast<std::size_t>(d_.bin_of[i])]; }
+  const BinFit& fitOf(std::size_t i) const { return fits_[static_cast<std::size_t>(d_.bin_of[i])]; }
+  double residual(std::size_t i) const;
+  double sigmaOf(std::size_t i) const { return m_.sigma_e * shapeOf(m_, binOf(i), centreOf(m_, binOf(i), fitOf(i))); }
+  void refresh();
+  double profile(double kappa, double gamma, double* sigma_e) const;
+  void dropOutliers();
+  void fitDrift();
+  void fitMixed();
+  void fitDof();
+
+  const Data& d_;
+  const std::vector<bool>& train_;
+  const Flags fl_;
+  std::vector<BinFit>& fits_;
+  Model m_;
+  std::vector<std::size_t> use_;  // training readings in usable bins
+  std::vector<double> weight_;    // 1 - mixed-pixel responsibility
   // The profile likelihood of the noise law works on per-bin sums (the law depends on the bin
   // only): refreshed whenever residuals or weights change.
-  std::vector<double> bin_ss(d.bins.size()), bin_n(d.bins.size());
-  auto refresh = [&]() {
-    std::fill(bin_ss.begin(), bin_ss.end(), 0.0);
-    std::fill(bin_n.begin(), bin_n.end(), 0.0);
-    for (std::size_t i : use) {
-      if (weight[i] < 0.5) continue;
-      const auto b = static_cast<std::size_t>(d.bin_of[i]);
-      const double r = residual(i);
-      bin_ss[b] += r * r;
-      bin_n[b] += 1.0;
-    }
-  };
-  auto profile = [&](double kappa, double gamma, double* sigma_e) {
-    Model t = m;
-    t.kappa = kappa;
-    t.gamma = gamma;
-    double s2 = 0.0, logh = 0.0, n = 0.0;
-    for (std::size_t b = 0; b < d.bins.size(); ++b) {
-      if (bin_n[b] == 0.0) continue;
-      const double h = std::max(shapeOf(t, d.bins[b], centreOf(t, d.bins[b], fits[b])), 1e-9);
-      s2 += bin_ss[b] / (h * h);
-      logh += bin_n[b] * std::log(h);
-      n += bin_n[b];
-    }
-    s2 /= std::max(n, 1.0);
-    if (sigma_e) *sigma_e = std::sqrt(s2);
-    return -0.5 * n * std::log(std::max(s2, 1e-300)) - logh;
-  };
-  auto golden = [](auto fn, double lo, double hi) {
-    for (int i = 0; i < 50; ++i) {
-      const double m1 = lo + (hi - lo) / 3.0, m2 = hi - (hi - lo) / 3.0;
-      if (fn(m1) < fn(m2)) lo = m1;
-      else hi = m2;
-    }
-    return 0.5 * (lo + hi);
-  };
-  for (int pass = 0; pass < 3; ++pass) {
-    // Outliers beyond 6 sigma do not set the noise scale (they are the floor's business).
-    refresh();
-    profile(m.kappa, m.gamma, &m.sigma_e);
-    for (std::size_t i : use) {
-      const Bin& b = d.bins[static_cast<std::size_t>(d.bin_of[i])];
-      const BinFit& f = fits[static_cast<std::size_t>(d.bin_of[i])];
-      const double s = m.sigma_e * shapeOf(m, b, centreOf(m, b, f));
-      if (std::abs(residual(i)) > 6.0 * s) weight[i] = 0.0;
-      else if (!fl.mixed) weight[i] = 1.0;
-    }
-    refresh();
-    if (fl.kappa) m.kappa = golden([&](double k) { return profile(k, m.gamma, nullptr); }, -1.0, 5.0);
-    if (fl.gamma) m.gamma = golden([&](double g) { return profile(m.kappa, g, nullptr); }, -1.0, 4.0);
-    profile(m.kappa, m.gamma, &m.sigma_e);
-    if (fl.drift) {
-      double num = 0.0, den = 0.0;
-      for (std::size_t i : use) {
-        const Bin& b = d.bins[static_cast<std::size_t>(d.bin_of[i])];
-        const BinFit& f = fits[static_cast<std::size_t>(d.bin_of[i])];
-        const double s = m.sigma_e * shapeOf(m, b, centreOf(m, b, f));
-        if (weight[i] < 0.5) continue;
-        const double x = d.t[i] - d.t_mean;
-        num += x * (residual(i) + m.drift * x) / (s * s);
-        den += x * x / (s * s);
-      }
-      m.drift = den > 0.0 ? num / den : 0.0;
-      fits = fitBins(d, train, m.drift);
-      refresh();
-      profile(m.kappa, m.gamma, &m.sigma_e);
-    }
-    if (fl.mixed) {
-      if (m.mixed <= 0.0) m.mixed = 0.05;
-      double sum = 0.0, n = 0.0;
-      for (std::size_t i : use) {
-        const Bin& b = d.bins[static_cast<std::size_t>(d.bin_of[i])];
-        if (!b.edge) continue;
-        const BinFit& f = fits[static_cast<std::size_t>(d.bin_of[i])];
-        const double s = m.sigma_e * shapeOf(m, b, centreOf(m, b, f));
-        const double z = residual(i) / s;
-        const double nd = std::exp(-0.5 * z * z) / (s * std::sqrt(2.0 * kPi));
-        const double u = (b.far > b.near && d.y[i] >= b.near && d.y[i] <= b.far) ? 1.0 / (b.far - b.near) : 0.0;
-        const double resp = m.mixed * u / (m.mixed * u + (1.0 - m.mixed) * nd + 1e-300);
-        weight[i] = 1.0 - resp;
-        sum += resp;
-        n += 1.0;
-      }
-      m.mixed = n > 0 ? std::clamp(sum / n, 1e-4, 0.9) : 0.0;
-    }
-  }
-  if (fl.dof) {
-    auto ll = [&](double log_nu) {
-      Model t = m;
-      t.dof = 2.0 + std::exp(log_nu);
-      double s = 0.0;
-      for (std::size_t k = 0; k < use.size(); k += std::max<std::size_t>(1, use.size() / 20000)) {
-        const std::size_t i = use[k];
-        s += readingLL(t, d, d.bins[static_cast<std::size_t>(d.bin_of[i])], fits[static_cast<std::size_t>(d.bin_of[i])], i, 0.0);
-      }
-      return s;
-    };
-    m.dof = 2.0 + std::exp(golden(ll, std::log(0.1), std::log(300.0)));
-  }
-  return m;
+  std::vector<double> bin_ss_, bin_n_;
+};
+
+ModelFitter::ModelFitter(const Data& d, const std::vector<bool>& train, const Flags& fl, std::vector<BinFit>& fits)
+    : d_(d), train_(train), fl_(fl), fits_(fits), weight_(d.y.size(), 1.0), bin_ss_(d.bins.size()), bin_n_(d.bins.size()) {}
+
+double ModelFitter::residual(std::size_t i) const {
+  return d_.y[i] - expected(m_, binOf(i), fitOf(i), d_.a[i], d_.t[i]) - m_.drift * (d_.t[i] - d_.t_mean);
 }
+
+void ModelFitter::refresh() {
+  std::fill(bin_ss_.begin(), bin_ss_.end(), 0.0);
+  std::fill(bin_n_.begin(), bin_n_.end(), 0.0);
+  for (std::size_t i : use_) {
+    if (weight_[i] < 0.5) continue;
+    const auto b = static_cast<std::size_t>(d_.bin_of[i]);
+    const double r = residual(i);
+    bin_ss_[b] += r * r;
+    bin_n_[b] += 1.0;
+  }
+}
+
+/// Profile log-likelihood of the noise law's exponents (sigma_e at its ML value).
+double ModelFitter::profile(double kappa, double gamma, double* sigma_e) const {
+  Model t = m_;
+  t.kappa = kappa;
+  t.gamma = gamma;
+  double s2 = 0.0, logh = 0.0, n = 0.0;
+  for (std::size_t b = 0; b < d_.bins.size(); ++b) {
+    if (bin_n_[b] == 0.0) continue;
+    const double h = std::max(shapeOf(t, d_.bins[b], centreOf(t, d_.bins[b], fits_[b])), 1e-9);
+    s2 += bin_ss_[b] / (h * h);
+    logh += bin_n_[b] * std::log(h);
+    n += bin_n_[b];
+  }
+  s2 /= std::max(n, 1.0);
+  if (sigma_e) *sigma_e = std::sqrt(s2);
+  return -0.5 * n * std::log(std::max(s2, 1e-300)) - logh;
+}
+
+/// Outliers beyond 6 sigma do not set the noise scale (they are the floor's business).
+void ModelFitter::dropOutliers() {
+  for (std::size_t i : use_) {
+    const double s = sigmaOf(i);
+    if (std::abs(residual(i)) > 6.0 * s) weight_[i] = 0.0;
+    else if (!fl_.mixed) weight_[i] = 1.0;
+  }
+}
+
+void ModelFitter::fitDrift() {
+  double num = 0.0, den = 0.0;
+  for (std::size_t i : use_) {
+    const double s = sigmaOf(i);
+    if (weight_[i] < 0.5) continue;
+    const double x = d_.t[i] - d_.t_mean;
+    num += x * (residual(i) + m_.drift * x) / (s * s);
+    den += x * x / (s * s);
+  }
+  m_.drift = den > 0.0 ? num / den : 0.0;
+  fits_ = fitBins(d_, train_, m_.drift);
+  refresh();
+  profile(m_.kappa, m_.gamma, &m_.sigma_e);
+}
+
+/// One EM step of the mixed-pixel fraction at edge bins (readings between the two depths).
+void ModelFitter::fitMixed() {
+  if (m_.mixed <= 0.0) m_.mixed = 0.05;
+  double sum = 0.0, n = 0.0;
+  for (std::size_t i : use_) {
+    const Bin& b = binOf(i);
+    if (!b.edge) continue;
+    const double s = sigmaOf(i);
+    const double z = residual(i) / s;
+    const double nd = std::exp(-0.5 * z * z) / (s * std::sqrt(2.0 * kPi));
+    const double u = (b.far > b.near && d_.y[i] >= b.near && d_.y[i] <= b.far) ? 1.0 / (b.far - b.near) : 0.0;
+    const double resp = m_.mixed * u / (m_.mixed * u + (1.0 - m_.mixed) * nd + 1e-300);
+    weight_[i] = 1.0 - resp;
+    sum += resp;
+    n += 1.0;
+  }
+  m_.mixed = n > 0 ? std::clamp(sum / n, 1e-4, 0.9) : 0.0;
+}
+
+void ModelFitter::fitDof() {
+  auto ll = [&](double log_nu) {
+    Model t = m_;
+    t.dof = 2.0 + std::exp(log_nu);
+    double s = 0.0;
+    for (std::size_t k = 0; k < use_.size(); k += std::max<std::size_t>(1, use_.size() / 20000)) {
+      const std::size_t i = use_[k];
+      s += readingLL(t, d_, binOf(i), fitOf(i), i, 0.0);
+    }
+    return s;
+  };
+  m_.dof = 2.0 + std::exp(goldenMax(ll, std::log(0.1), std::log(300.0), 50));
+}
+
+Model ModelFitter::fit(double q_detected) {
+  m_.robust_edges = fl_.mixed;
+  if (fl_.quant) m_.q = q_detected;
+  fits_ = fitBins(d_, train_, 0.0);
+  for (std::size_t i = 0; i < d_.y.size(); ++i) {
+    const int b = d_.bin_of[i];
+    if (b < 0 || fits_[static_cast<std::size_t>(b)].n == 0) continue;
+    if (!train_.empty() && !train_[static_cast<std::size_t>(d_.t[i])]) continue;
+    use_.push_back(i);
+  }
+  for (int pass = 0; pass < 3; ++pass) {
+    refresh();
+    profile(m_.kappa, m_.gamma, &m_.sigma_e);
+    dropOutliers();
+    refresh();
+    if (fl_.kappa) m_.kappa = goldenMax([&](double k) { return profile(k, m_.gamma, nullptr); }, -1.0, 5.0, 50);
+    if (fl_.gamma) m_.gamma = goldenMax([&](double g) { return profile(m_.kappa, g, nullptr); }, -1.0, 4.0, 50);
+    profile(m_.kappa, m_.gamma, &m_.sigma_e);
+    if (fl_.drift) fitDrift();
+    if (fl_.mixed) fitMixed();
+  }
+  if (fl_.dof) fitDof();
+  return m_;
+}
+
+/// Fits the free parameters of a model on the readings of the training scans (`fits`: the bin
+/// locations it ends with).
+Model fitModel(const Data& d, const std::vector<bool>& train, const Flags& fl, double q_detected, std::vector<BinFit>& fits) {
+  return ModelFitter(d, train, fl, fits).fit(q_detected);
+}
+
 
 // ---------------------------------------------------------------------------------------------
 // Statistics (battery) under the baseline.
 
-struct Evaluated {
-  std::vector<double> z, psi, xs_time, logm, loginc, cosb, sinb;
-  std::vector<bool> edge, inc;
-  std::vector<std::size_t> idx;
-};
+/// Lag-1 correlation over the scans of each bin (seed 004's independence check), pooled, times
+/// sqrt(pairs).
+double lag1Correlation(const Data& d, const std::vector<BinFit>& f) {
+  double num = 0.0, den = 0.0, n = 0.0;
+  for (std::size_t bi = 0; bi < d.bins.size(); ++bi) {
+    if (f[bi].n == 0) continue;
+    std::vector<std::pair<double, double>> r;
+    for (std::size_t i : d.bins[bi].idx) r.push_back({d.t[i], d.y[i] - f[bi].at(d.a[i], d.t[i])});
+    std::sort(r.begin(), r.end());
+    for (std::size_t k = 1; k < r.size(); ++k)
+      if (r[k].first == r[k - 1].first + 1.0) {
+        num += r[k].second * r[k - 1].second;
+        n += 1.0;
+      }
+    for (const auto& v : r) den += v.second * v.second;
+  }
+  return den > 0.0 ? num / den * std::sqrt(std::max(n, 1.0)) : 0.0;
+}
 
 std::map<std::string, double> statistics(const Data& d, const std::vector<BinFit>& f, const Model& m, const WallFit& w0,
                                          const WallFit& wb, double q) {
@@ -646,11 +764,7 @@ std::map<std::string, double> statistics(const Data& d, const std::vector<BinFit
   double pos_e = 0, n_e = 0, pos_i = 0, n_i = 0, s_e = 0, s_i = 0;
   double m2 = 0, m4 = 0, nk = 0;
   std::vector<double> y;
-  for (std::size_t i = 0; i < d.y.size(); ++i) {
-    const int bi = d.bin_of[i];
-    if (bi < 0 || f[static_cast<std::size_t>(bi)].n == 0) continue;
-    const Bin& b = d.bins[static_cast<std::size_t>(bi)];
-    const BinFit& bf = f[static_cast<std::size_t>(bi)];
+  forEachFitted(d, f, [&](std::size_t i, const Bin& b, const BinFit& bf) {
     const double centre = bf.at(d.a[i], d.t[i]);
     const double s = m.sigma_e * shapeOf(m, b, centre);
     const double zz = (d.y[i] - centre) / s;
@@ -679,7 +793,7 @@ std::map<std::string, double> statistics(const Data& d, const std::vector<BinFit
       m4 += zz * zz * zz * zz;
       nk += 1;
     }
-  }
+  });
   st["spread_vs_range"] = spreadScore(z, logm);
   st["spread_vs_incidence"] = spreadScore(zi, loginc);
   st["residual_vs_time"] = meanScore(psi, xs);
@@ -691,23 +805,7 @@ std::map<std::string, double> statistics(const Data& d, const std::vector<BinFit
   st["edge_vs_centre_spread"] = n_e > 0 && n_i > 0 ? s_e / n_e - s_i / n_i : 0.0;
   st["tail_weight"] = nk > 0 ? (m4 / nk) / std::pow(m2 / nk, 2) - 3.0 : 0.0;
   st["quantisation"] = gridResultant(y, q > 0.0 ? q : 1e-3);
-  // Lag-1 correlation over the scans of each bin (seed 004's independence check), pooled.
-  {
-    double num = 0.0, den = 0.0, n = 0.0;
-    for (std::size_t bi = 0; bi < d.bins.size(); ++bi) {
-      if (f[bi].n == 0) continue;
-      std::vector<std::pair<double, double>> r;
-      for (std::size_t i : d.bins[bi].idx) r.push_back({d.t[i], d.y[i] - f[bi].at(d.a[i], d.t[i])});
-      std::sort(r.begin(), r.end());
-      for (std::size_t k = 1; k < r.size(); ++k)
-        if (r[k].first == r[k - 1].first + 1.0) {
-          num += r[k].second * r[k - 1].second;
-          n += 1.0;
-        }
-      for (const auto& v : r) den += v.second * v.second;
-    }
-    st["lag1_correlation"] = den > 0.0 ? num / den * std::sqrt(std::max(n, 1.0)) : 0.0;
-  }
+  st["lag1_correlation"] = lag1Correlation(d, f);
   st["wall_curvature"] = wb.ok && wb.b_se > 0.0 && std::isfinite(wb.b_se) ? wb.b / wb.b_se : 0.0;
   st["wall_roughness_mm"] = w0.ok ? 1000.0 * w0.tau : 0.0;
   st["range_offset_mm"] = w0.ok ? 1000.0 * w0.alpha0 : 0.0;
@@ -815,7 +913,7 @@ double movedFraction(const Data& d) {
     se.push_back(std::sqrt(a[k].s2 / a[k].n + b[k].s2 / b[k].n));
   }
   if (diff.empty()) return 1.0;
-  const double common = median(diff);
+  const double common = upperMedian(diff);
   std::size_t moved = 0;
   std::vector<double> dev;
   for (std::size_t k = 0; k < diff.size(); ++k) {
@@ -823,13 +921,454 @@ double movedFraction(const Data& d) {
     dev.push_back(std::abs(diff[k] - common));
   }
   // Half the beams' means moved by more than 1 cm: the sensor moved, whatever the noise.
-  if (median(dev) > 0.01) return 1.0;
+  if (upperMedian(dev) > 0.01) return 1.0;
   return static_cast<double>(moved) / static_cast<double>(diff.size());
+}
+
+// ---------------------------------------------------------------------------------------------
+// The diagnosis of repeated scans: the steps of diagnosis/skeleton.hpp on the bin and wall models.
+
+/// Residual records of a data set under a fit (measured or simulated).
+std::vector<ResidualRecord> recordsOf(const Data& dd, const std::vector<BinFit>& ff, const Model& mm) {
+  std::vector<ResidualRecord> rec;
+  forEachFitted(dd, ff, [&](std::size_t i, const Bin& b, const BinFit& bf) {
+    ResidualRecord r;
+    r.range_m = bf.m;
+    r.incidence_rad = b.inc_known ? std::acos(std::clamp(b.cos_inc, 0.0, 1.0)) : kNaN;
+    r.lateral = b.edge ? 1.0 : 0.0;
+    r.group = b.wall + 1;
+    r.time = dd.t[i];
+    r.bearing_rad = b.angle;
+    r.edge = b.edge;
+    const double centre = bf.at(dd.a[i], dd.t[i]);
+    r.residual_m = dd.y[i] - centre;
+    r.z = r.residual_m / (mm.sigma_e * shapeOf(mm, b, centre));
+    rec.push_back(r);
+  });
+  return rec;
+}
+
+/// Standardised residuals and per-bin variances of simulations refitted with the baseline.
+struct SimSample {
+  std::vector<double> z;
+  std::vector<std::vector<double>> var;  ///< per bin, over the simulations
+  void add(const std::vector<ResidualRecord>& rec, const std::vector<BinFit>& fr) {
+    for (const auto& r : rec) z.push_back(r.z);
+    for (std::size_t k = 0; k < fr.size(); ++k)
+      if (fr[k].n > 0) var[k].push_back(fr[k].s2);
+  }
+};
+
+/// Repeated scans from one pose, diagnosed with the bin and wall models (the problem object of
+/// runDiagnosis; its steps in the order they run).
+class StaticDiagnosis {
+ public:
+  StaticDiagnosis(const StaticScans& data, const DiagnoseConfig& config, const std::vector<std::string>& candidates,
+                  std::vector<WallLine>* walls_out)
+      : data_(data), config_(config), candidates_(candidates), walls_out_(walls_out) {}
+
+  bool fitBaseline(DiagnosisResult& out);
+  std::map<std::string, double> measuredStatistics(DiagnosisResult& out);
+  void replica(int b, std::map<std::string, std::vector<double>>& stats, DiagnosisResult& out);
+  const std::vector<StatisticInfo>& statisticInfo() const { return statInfo(); }
+  void heldOut(HeldOut& held);
+  const char* noHeldOut() const { return "no held-out reading"; }
+  void beforeCandidates(DiagnosisResult& out);
+  CandidateResult candidate(std::size_t c, const HeldOut& held, const DiagnosisResult& out);
+  void afterCandidates(DiagnosisResult&) const {}
+  std::vector<std::pair<std::string, std::string>> nestedEffects() const { return {}; }
+  Closeness closenessBaseline(const DiagnosisResult& out) const { return closenessOf(out.measured, sim_base_); }
+  void extend(std::size_t c, DiagnosisResult& out) const;
+
+ private:
+  bool makeData(DiagnosisResult& out);
+  void fitWallModel();
+  void describeBaseline(DiagnosisResult& out) const;
+  void reportWalls() const;
+  void foldLikelihoods(int k, const std::vector<int>& fold, HeldOut& held) const;
+  void wallLikelihoods(HeldOut& held) const;
+  double inSample(const Flags& fl, Model* fitted) const;
+  bool notApplicable(CandidateResult& r) const;
+  void setIdentifiability(CandidateResult& r) const;
+  void setEstimates(CandidateResult& r, const Model& fm) const;
+  void setSceneKeys(DiagnosisResult& out, double a0, const Model& sim_model, const RangeEffects& fx) const;
+  Closeness closenessOf(const std::vector<ResidualRecord>& measured, const SimSample& sim) const;
+
+  const StaticScans& data_;
+  const DiagnoseConfig& config_;
+  const std::vector<std::string>& candidates_;
+  std::vector<WallLine>* walls_out_;
+  std::size_t window_ = 0;        // scans per window (0: one pose)
+  Data d_;                        // readings in direction bins
+  std::vector<BinFit> f0_;        // the baseline's bin locations
+  Model base0_;                   // the baseline's reading model
+  std::vector<Line> lines0_;      // wall lines found in the bin means
+  double given_a0_ = kNaN;        // alpha_0 held (NaN: from the walls' straightness)
+  bool a0_identified_ = false;
+  WallFit w0_, wb_;               // the wall model without and with the incidence bias
+  double q_ = 0.0;                // reading grid (0: none)
+  std::size_t edges_ = 0;         // bins at depth discontinuities
+  SimSample sim_base_;            // baseline replicas (closeness)
+  std::vector<Flags> flags_;      // per candidate
+  double ll_in_base_ = 0.0;       // in-sample log-likelihood of the baseline
+  std::vector<Model> full_;       // per candidate: fitted on all the data
+};
+
+bool StaticDiagnosis::fitBaseline(DiagnosisResult& out) {
+  if (!makeData(out)) return false;
+  // 1. Baseline: bin locations, the squared noise law, the wall model with alpha_0.
+  fitWallModel();
+  if (std::isfinite(config_.static_range_offset_m)) out.baseline_extra["alpha0_given_m"] = given_a0_;
+  std::vector<double> used_y;
+  for (std::size_t i = 0; i < d_.y.size(); ++i)
+    if (d_.bin_of[i] >= 0) used_y.push_back(d_.y[i]);
+  q_ = detectGrid(used_y);
+  for (const auto& b : d_.bins) edges_ += b.edge;
+  describeBaseline(out);
+  if (walls_out_) reportWalls();
+  return true;
+}
+
+/// One pose for the whole recording, unless the beams show that the sensor moved: then short
+/// windows of scans, each a pose of its own, with a time trend per beam (the sensor creeping).
+bool StaticDiagnosis::makeData(DiagnosisResult& out) {
+  if (data_.scans < static_cast<std::size_t>(2 * config_.folds)) {
+    out.status = "too_few_scans";
+    out.message = "a static recording needs at least " + std::to_string(2 * config_.folds) + " scans from the same pose";
+    return false;
+  }
+  window_ = config_.static_window > 0 ? static_cast<std::size_t>(config_.static_window) : 0;
+  d_ = makeBins(data_, window_);
+  if (config_.static_window == 0) {
+    const double moved = movedFraction(d_);
+    out.baseline_extra["beams_moved_fraction"] = moved;
+    if (moved > 0.3) {
+      window_ = 8;
+      d_ = makeBins(data_, window_);
+    }
+  }
+  out.baseline_extra["window_scans"] = static_cast<double>(window_);
+  if (d_.bins.size() < 10) {
+    out.status = "too_few_beams";
+    out.message = "fewer than 10 beam directions return in enough scans";
+    return false;
+  }
+  return true;
+}
+
+void StaticDiagnosis::fitWallModel() {
+  base0_ = fitModel(d_, {}, Flags{}, 0.0, f0_);
+  lines0_ = findWalls(d_, f0_);
+  given_a0_ = config_.static_range_offset_m;  // NaN: from the walls' straightness
+  w0_ = fitWalls(d_, f0_, lines0_, false, given_a0_);
+  // Walls too few or too short to bend measurably: alpha_0 stays unknown (held at 0).
+  a0_identified_ = std::isfinite(given_a0_) || (w0_.ok && w0_.alpha0_se <= 0.05);
+  if (!a0_identified_) {
+    given_a0_ = 0.0;
+    w0_ = fitWalls(d_, f0_, lines0_, false, given_a0_);
+  }
+  wb_ = fitWalls(d_, f0_, lines0_, true, given_a0_);
+}
+
+void StaticDiagnosis::describeBaseline(DiagnosisResult& out) const {
+  out.landmarks = lines0_.size();
+  out.baseline.bias.alpha = {w0_.ok ? w0_.alpha0 : 0.0, 1.0};
+  out.baseline.noise.kind = NoiseKind::squared;
+  out.baseline.noise.sigma_e = base0_.sigma_e;
+  out.baseline.range_min_m = data_.range_min_m;
+  out.baseline.range_max_m = data_.range_max_m;
+  auto& extra = out.baseline_extra;
+  extra["beam_bins"] = static_cast<double>(d_.bins.size());
+  extra["wall_lines"] = static_cast<double>(lines0_.size());
+  extra["wall_bins"] = static_cast<double>(w0_.bins.size());
+  extra["alpha0_m"] = w0_.ok && a0_identified_ ? w0_.alpha0 : kNaN;
+  extra["alpha0_se_m"] = w0_.ok && a0_identified_ && !std::isfinite(config_.static_range_offset_m) ? w0_.alpha0_se : kNaN;
+  extra["wall_roughness_m"] = w0_.ok ? w0_.tau : kNaN;
+  extra["reading_grid_m"] = q_;
+  extra["edge_bins"] = static_cast<double>(edges_);
+}
+
+/// The fitted wall lines, for the caller (the geometric reference).
+void StaticDiagnosis::reportWalls() const {
+  walls_out_->clear();
+  for (std::size_t l = 0; l < lines0_.size(); ++l) {
+    WallLine wl;
+    const Line& line = w0_.ok ? w0_.lines[l] : lines0_[l];
+    wl.normal_rad = wrapAngle(line.theta);
+    wl.distance_m = line.p;
+    double lo = kInf, hi = -kInf, ss = 0.0;
+    for (std::size_t k = 0; k < w0_.bins.size(); ++k) {
+      const Bin& b = d_.bins[w0_.bins[k]];
+      if (b.wall != static_cast<int>(l)) continue;
+      lo = std::min(lo, b.angle);
+      hi = std::max(hi, b.angle);
+      ++wl.bins;
+      ss += w0_.resid[k] * w0_.resid[k];
+    }
+    wl.first_angle_rad = lo;
+    wl.last_angle_rad = hi;
+    wl.rms_m = wl.bins ? std::sqrt(ss / static_cast<double>(wl.bins)) : 0.0;
+    walls_out_->push_back(wl);
+  }
+}
+
+std::map<std::string, double> StaticDiagnosis::measuredStatistics(DiagnosisResult& out) {
+  const auto measured_stats = statistics(d_, f0_, base0_, w0_, wb_, q_);
+  out.measured = recordsOf(d_, f0_, base0_);
+  sim_base_.var.resize(d_.bins.size());
+  return measured_stats;
+}
+
+/// One bootstrap replica: simulated from the fitted baseline, refitted from it.
+void StaticDiagnosis::replica(int b, std::map<std::string, std::vector<double>>& stats, DiagnosisResult& out) {
+  const Data rep = simulateStatic(d_, f0_, w0_, base0_, deriveSeed(config_.seed, 2000 + static_cast<std::uint64_t>(b)), RangeEffects{});
+  std::vector<BinFit> fr;
+  const Model mr = fitModel(rep, {}, Flags{}, 0.0, fr);
+  const WallFit wr0 = fitWalls(rep, fr, w0_.ok ? w0_.lines : lines0_, false, given_a0_);
+  const WallFit wrb = fitWalls(rep, fr, w0_.ok ? w0_.lines : lines0_, true, given_a0_);
+  for (const auto& [k, v] : statistics(rep, fr, mr, wr0, wrb, q_)) stats[k].push_back(v);
+  if (b >= config_.closeness_replicas && b != 0) return;
+  const auto rec = recordsOf(rep, fr, mr);
+  if (b < config_.closeness_replicas) sim_base_.add(rec, fr);
+  if (b == 0) out.simulated_baseline = rec;
+}
+
+/// Held-out readings (folds by scan) and held-out wall bins (leave one out).
+void StaticDiagnosis::heldOut(HeldOut& held) {
+  std::vector<int> fold(data_.scans);
+  for (std::size_t t = 0; t < data_.scans; ++t) fold[t] = static_cast<int>(t % static_cast<std::size_t>(config_.folds));
+  for (const auto& e : candidates_) flags_.push_back(flagsOf(e));
+  for (int k = 0; k < config_.folds; ++k) foldLikelihoods(k, fold, held);
+  held.points = static_cast<double>(held.base.size());
+  wallLikelihoods(held);
+}
+
+/// Readings of fold k's scans under the models fitted on the other scans (block: scan).
+void StaticDiagnosis::foldLikelihoods(int k, const std::vector<int>& fold, HeldOut& held) const {
+  const double floor_w = config_.outlier_floor;
+  std::vector<bool> train(data_.scans);
+  for (std::size_t t = 0; t < data_.scans; ++t) train[t] = fold[t] != k;
+  std::vector<BinFit> fb;
+  const Model mb = fitModel(d_, train, Flags{}, q_, fb);
+  std::vector<std::vector<BinFit>> fc(candidates_.size());
+  std::vector<Model> mc(candidates_.size());
+  for (std::size_t c = 0; c < candidates_.size(); ++c) mc[c] = fitModel(d_, train, flags_[c], q_, fc[c]);
+  for (std::size_t i = 0; i < d_.y.size(); ++i) {
+    const int bi = d_.bin_of[i];
+    if (bi < 0 || train[static_cast<std::size_t>(d_.t[i])] || fb[static_cast<std::size_t>(bi)].n == 0) continue;
+    const Bin& bin = d_.bins[static_cast<std::size_t>(bi)];
+    held.base.push_back(readingLL(mb, d_, bin, fb[static_cast<std::size_t>(bi)], i, floor_w));
+    held.block.push_back(static_cast<std::size_t>(d_.t[i]));
+    for (std::size_t c = 0; c < candidates_.size(); ++c)
+      held.cand[c].push_back(fc[c][static_cast<std::size_t>(bi)].n > 0
+                                 ? readingLL(mc[c], d_, bin, fc[c][static_cast<std::size_t>(bi)], i, floor_w)
+                                 : kNaN);
+  }
+}
+
+/// Wall bins: the bin means given the wall model (baseline: alpha_0 and lines).
+void StaticDiagnosis::wallLikelihoods(HeldOut& held) const {
+  if (!w0_.ok) return;
+  for (std::size_t k = 0; k < w0_.loo_ll.size(); ++k) {
+    held.base.push_back(w0_.loo_ll[k]);
+    held.block.push_back(std::numeric_limits<std::size_t>::max() - k);
+    for (std::size_t c = 0; c < candidates_.size(); ++c)
+      held.cand[c].push_back(flags_[c].wall_b && wb_.ok ? wb_.loo_ll[k] : w0_.loo_ll[k]);
+  }
+}
+
+/// In-sample log-likelihood of a model fitted on all the data (for delta AIC).
+double StaticDiagnosis::inSample(const Flags& fl, Model* fitted) const {
+  std::vector<BinFit> ff;
+  const Model mm = fitModel(d_, {}, fl, q_, ff);
+  if (fitted) *fitted = mm;
+  double s = 0.0;
+  forEachFitted(d_, ff, [&](std::size_t i, const Bin& b, const BinFit& bf) { s += readingLL(mm, d_, b, bf, i, config_.outlier_floor); });
+  return s;
+}
+
+void StaticDiagnosis::beforeCandidates(DiagnosisResult& out) {
+  ll_in_base_ = inSample(Flags{}, nullptr);
+  out.baseline_neg_log_likelihood = -ll_in_base_;
+  full_.resize(candidates_.size());
+}
+
+CandidateResult StaticDiagnosis::candidate(std::size_t c, const HeldOut& held, const DiagnosisResult& out) {
+  CandidateResult r;
+  r.effect = candidates_[c];
+  r.statistic = statisticOf(r.effect);
+  if (notApplicable(r)) return r;
+  setScore(r, out.battery);
+  const HeldOutGain gain = heldOutGain(held, c);
+  if (!gain.finite) {
+    r.applicable = false;
+    r.p_value = kNaN;
+    r.note = "could not be fitted on every fold";
+    return r;
+  }
+  setHeldOutGain(r, gain);
+  r.p_value = combinedPValue(r.p_heldout, r.score_p_value);
+  r.parameters = flags_[c].parameters();
+  double ll_in = inSample(flags_[c], &full_[c]);
+  if (flags_[c].wall_b && wb_.ok && w0_.ok) ll_in = ll_in_base_ + (wb_.in_ll - w0_.in_ll);  // only the walls' part differs
+  r.delta_aic = 2.0 * r.parameters - 2.0 * (ll_in - ll_in_base_);
+  setIdentifiability(r);
+  setEstimates(r, full_[c]);
+  return r;
+}
+
+/// Effects one pose cannot show, or that each wall line absorbs: no test.
+bool StaticDiagnosis::notApplicable(CandidateResult& r) const {
+  const std::string& e = r.effect;
+  if (e == effect::kHeadingError || e == effect::kAngleOffset || e == effect::kOdometryScale) {
+    r.applicable = false;
+    r.identifiable = false;
+    r.p_value = r.p_holm = r.score_p_value = kNaN;
+    r.note = "one pose: nothing about stops or headings can be seen";
+    return true;
+  }
+  if (e == effect::kLandmarkBias) {
+    r.identifiable = false;
+    r.applicable = true;
+    r.p_value = r.p_holm = r.score_p_value = kNaN;
+    r.information_ratio = 0.0;
+    r.standard_error = kInf;
+    r.note = "an offset of one surface moves its fitted wall line as a whole: each line absorbs it";
+    return true;
+  }
+  return false;
+}
+
+void StaticDiagnosis::setIdentifiability(CandidateResult& r) const {
+  const std::string& e = r.effect;
+  if (e == effect::kIncidenceBias) {
+    r.standard_error = wb_.ok ? wb_.b_se : kInf;
+    r.identifiable = a0_identified_ && wb_.ok && r.standard_error < std::max(0.01, std::abs(wb_.b) / 4.0);
+    if (!r.identifiable)
+      r.note = a0_identified_ ? "bends the walls almost as a range offset does: give the offset (--range-offset) from a reference distance"
+                              : "too few straight walls, or walls seen over too narrow a range of incidence";
+  } else if (e == effect::kIncidenceNoise || e == effect::kRangeNoiseLaw) {
+    double mm = 0.0, m2 = 0.0, n = 0.0;
+    for (const auto& b : d_.bins) {
+      if (e == effect::kIncidenceNoise && !b.inc_known) continue;
+      const double g = e == effect::kIncidenceNoise ? -std::log(b.cos_inc)
+                                                    : std::log(std::max(f0_[static_cast<std::size_t>(&b - d_.bins.data())].m, 1e-3));
+      mm += g;
+      m2 += g * g;
+      n += static_cast<double>(b.idx.size());
+    }
+    const double nbins = static_cast<double>(d_.bins.size());
+    const double var = nbins > 0 ? std::max(m2 / nbins - std::pow(mm / nbins, 2), 0.0) : 0.0;
+    r.information_ratio = var / (m2 / std::max(nbins, 1.0) + 1e-4);
+    r.standard_error = var > 0.0 ? 1.0 / std::sqrt(2.0 * n * var) : kInf;
+    r.identifiable = r.standard_error < 0.5;
+    if (!r.identifiable) r.note = e == effect::kIncidenceNoise ? "no spread of incidence angles" : "no spread of ranges";
+  } else if (e == effect::kRangeDrift && window_ > 0) {
+    r.identifiable = false;
+    r.note = "each window of scans has its own time trend per beam (the sensor moved), which absorbs a drift";
+  } else if (e == effect::kMixedPixels) {
+    r.identifiable = edges_ >= 3;
+    if (!r.identifiable) r.note = "fewer than 3 beams at depth discontinuities";
+  }
+}
+
+void StaticDiagnosis::setEstimates(CandidateResult& r, const Model& fm) const {
+  const std::string& e = r.effect;
+  if (e == effect::kIncidenceNoise) r.estimates["incidence_noise_exponent"] = fm.gamma;
+  if (e == effect::kRangeNoiseLaw) r.estimates["noise_exponent"] = fm.kappa;
+  if (e == effect::kRangeDrift) {
+    r.estimates["range_drift_m_per_scan"] = fm.drift;
+    r.estimates["range_drift_over_recording_m"] = fm.drift * static_cast<double>(data_.scans - 1);
+  }
+  if (e == effect::kMixedPixels) r.estimates["mixed_pixel_fraction"] = fm.mixed;
+  if (e == effect::kHeavyTails) r.estimates["student_dof"] = fm.dof;
+  if (e == effect::kQuantisation) r.estimates["grid_m"] = fm.q;
+  if (e == effect::kIncidenceBias) {
+    r.estimates["incidence_bias_m"] = wb_.b;
+    r.estimates["alpha0_with_it_m"] = wb_.alpha0;
+  }
+}
+
+/// How close simulations come to the measured residuals: KS distance of z, per-bin variances.
+Closeness StaticDiagnosis::closenessOf(const std::vector<ResidualRecord>& measured, const SimSample& sim) const {
+  Closeness c;
+  std::vector<double> mz;
+  for (const auto& r : measured) mz.push_back(r.z);
+  c.ks_distance = ksDistance(mz, sim.z);
+  std::vector<double> logs;
+  for (std::size_t k = 0; k < d_.bins.size(); ++k) {
+    if (f0_[k].n == 0 || sim.var[k].empty() || !(f0_[k].s2 > 0.0)) continue;
+    double mv = 0.0;
+    for (double v : sim.var[k]) mv += v / static_cast<double>(sim.var[k].size());
+    if (!(mv > 0.0)) continue;
+    logs.push_back(std::abs(std::log(f0_[k].s2 / mv)));
+  }
+  c.groups = logs.size();
+  c.variance_ratio_median_abs_log = logs.empty() ? 0.0 : upperMedian(logs);
+  return c;
+}
+
+/// The named effect's model: its scene keys, and its simulation refitted with the baseline.
+void StaticDiagnosis::extend(std::size_t c, DiagnosisResult& out) const {
+  const Model& fm = full_[c];
+  RangeEffects fx;
+  Model sim_model = base0_;
+  const std::string& e = out.primary_cause;
+  if (e == effect::kIncidenceNoise) fx.incidence_noise_exponent = fm.gamma;
+  if (e == effect::kRangeDrift) fx.range_drift_m_per_scan = fm.drift;
+  if (e == effect::kMixedPixels) fx.mixed_pixel_fraction = fm.mixed;
+  if (e == effect::kHeavyTails) fx.noise_student_dof = std::max(fm.dof, 2.1);
+  if (e == effect::kQuantisation) fx.range_resolution_m = fm.q;
+  if (e == effect::kRangeNoiseLaw) sim_model.kappa = fm.kappa;
+  sim_model.sigma_e = fm.sigma_e;
+  WallFit w_sim = w0_;
+  if (e == effect::kIncidenceBias && wb_.ok) {
+    w_sim = wb_;
+    fx.incidence_bias_m = wb_.b;
+  }
+  const double a0 = w_sim.ok ? w_sim.alpha0 : 0.0;
+  out.extended_bias_alpha = {a0, 1.0};
+  setSceneKeys(out, a0, sim_model, fx);
+  // The simulator's drift term is c t; the fitted one is c (t - t_mean): same readings when
+  // alpha_0 takes the difference (done by the scene key; the bins carry it here).
+  std::vector<BinFit> f_sim = f0_;
+  if (fx.range_drift_m_per_scan != 0.0)
+    for (auto& bf : f_sim) bf.m -= fx.range_drift_m_per_scan * d_.t_mean;
+  SimSample ext;
+  ext.var.resize(d_.bins.size());
+  for (int b = 0; b < config_.closeness_replicas; ++b) {
+    const Data rep = simulateStatic(d_, f_sim, w_sim, sim_model, deriveSeed(config_.seed, 6000 + static_cast<std::uint64_t>(b)), fx);
+    std::vector<BinFit> fr;
+    const Model mr = fitModel(rep, {}, Flags{}, 0.0, fr);
+    const auto rec = recordsOf(rep, fr, mr);
+    ext.add(rec, fr);
+    if (b == 0) out.simulated_extended = rec;
+  }
+  out.closeness_extended = closenessOf(out.measured, ext);
+}
+
+void StaticDiagnosis::setSceneKeys(DiagnosisResult& out, double a0, const Model& sim_model, const RangeEffects& fx) const {
+  auto& keys = out.scene_keys;
+  keys["sensor.bias_alpha[0]"] = a0;
+  keys["sensor.bias_alpha[1]"] = 1.0;
+  if (sim_model.kappa != 2.0) keys["sensor.noise.exponent (kind power)"] = sim_model.kappa;
+  keys["sensor.noise.sigma_e"] = sim_model.sigma_e;
+  if (fx.incidence_noise_exponent != 0.0) keys["sensor.effects.incidence_noise_exponent"] = fx.incidence_noise_exponent;
+  if (fx.incidence_bias_m != 0.0) keys["sensor.effects.incidence_bias_m"] = fx.incidence_bias_m;
+  if (fx.range_drift_m_per_scan != 0.0) {
+    keys["sensor.effects.range_drift_m_per_scan"] = fx.range_drift_m_per_scan;
+    keys["sensor.bias_alpha[0]"] = a0 - fx.range_drift_m_per_scan * d_.t_mean;
+  }
+  if (fx.mixed_pixel_fraction != 0.0) keys["sensor.effects.mixed_pixel_fraction"] = fx.mixed_pixel_fraction;
+  if (fx.noise_student_dof != 0.0) keys["sensor.effects.noise_student_dof"] = fx.noise_student_dof;
+  if (fx.range_resolution_m != 0.0) keys["sensor.effects.range_resolution_m"] = fx.range_resolution_m;
 }
 
 }  // namespace
 
-std::vector<std::string> staticCandidates() { return allCandidates(); }
+std::vector<std::string> staticCandidates() {
+  return allCandidates();
+}
 
 DiagnosisResult diagnoseStatic(const StaticScans& data, const DiagnoseConfig& config, std::vector<WallLine>* walls_out) {
   config.validate();
@@ -841,385 +1380,9 @@ DiagnosisResult diagnoseStatic(const StaticScans& data, const DiagnoseConfig& co
   out.scans = data.scans;
   out.stops = 1;
   out.readings = data.readings.size();
-  const std::vector<std::string> candidates = config.candidates.empty() ? allCandidates() : config.candidates;
-  for (const auto& c : candidates)
-    if (std::find(allCandidates().begin(), allCandidates().end(), c) == allCandidates().end())
-      throw std::invalid_argument("diagnose: '" + c + "' is not a candidate effect for a static recording");
-  if (data.scans < static_cast<std::size_t>(2 * config.folds)) {
-    out.status = "too_few_scans";
-    out.message = "a static recording needs at least " + std::to_string(2 * config.folds) + " scans from the same pose";
-    return out;
-  }
-  // One pose for the whole recording, unless the beams show that the sensor moved: then short
-  // windows of scans, each a pose of its own, with a time trend per beam (the sensor creeping).
-  std::size_t window = config.static_window > 0 ? static_cast<std::size_t>(config.static_window) : 0;
-  Data d = makeBins(data, window);
-  if (config.static_window == 0) {
-    const double moved = movedFraction(d);
-    out.baseline_extra["beams_moved_fraction"] = moved;
-    if (moved > 0.3) {
-      window = 8;
-      d = makeBins(data, window);
-    }
-  }
-  out.baseline_extra["window_scans"] = static_cast<double>(window);
-  if (d.bins.size() < 10) {
-    out.status = "too_few_beams";
-    out.message = "fewer than 10 beam directions return in enough scans";
-    return out;
-  }
-
-  // 1. Baseline: bin locations, the squared noise law, the wall model with alpha_0.
-  std::vector<BinFit> f0;
-  const Model base0 = fitModel(d, {}, Flags{}, 0.0, f0);
-  const std::vector<Line> lines0 = findWalls(d, f0);
-  double given_a0 = config.static_range_offset_m;  // NaN: from the walls' straightness
-  WallFit w0 = fitWalls(d, f0, lines0, false, given_a0);
-  // Walls too few or too short to bend measurably: alpha_0 stays unknown (held at 0).
-  const bool a0_identified = std::isfinite(given_a0) || (w0.ok && w0.alpha0_se <= 0.05);
-  if (!a0_identified) {
-    given_a0 = 0.0;
-    w0 = fitWalls(d, f0, lines0, false, given_a0);
-  }
-  const WallFit wb = fitWalls(d, f0, lines0, true, given_a0);
-  if (std::isfinite(config.static_range_offset_m)) out.baseline_extra["alpha0_given_m"] = given_a0;
-  std::vector<double> used_y;
-  for (std::size_t i = 0; i < d.y.size(); ++i)
-    if (d.bin_of[i] >= 0) used_y.push_back(d.y[i]);
-  const double q = detectGrid(used_y);
-  out.landmarks = lines0.size();
-  out.baseline.bias.alpha = {w0.ok ? w0.alpha0 : 0.0, 1.0};
-  out.baseline.noise.kind = NoiseKind::squared;
-  out.baseline.noise.sigma_e = base0.sigma_e;
-  out.baseline.range_min_m = data.range_min_m;
-  out.baseline.range_max_m = data.range_max_m;
-  out.baseline_extra["beam_bins"] = static_cast<double>(d.bins.size());
-  out.baseline_extra["wall_lines"] = static_cast<double>(lines0.size());
-  out.baseline_extra["wall_bins"] = static_cast<double>(w0.bins.size());
-  out.baseline_extra["alpha0_m"] = w0.ok && a0_identified ? w0.alpha0 : kNaN;
-  out.baseline_extra["alpha0_se_m"] = w0.ok && a0_identified && !std::isfinite(config.static_range_offset_m) ? w0.alpha0_se : kNaN;
-  out.baseline_extra["wall_roughness_m"] = w0.ok ? w0.tau : kNaN;
-  out.baseline_extra["reading_grid_m"] = q;
-  std::size_t edges = 0;
-  for (const auto& b : d.bins) edges += b.edge;
-  out.baseline_extra["edge_bins"] = static_cast<double>(edges);
-  if (walls_out) {
-    walls_out->clear();
-    for (std::size_t l = 0; l < lines0.size(); ++l) {
-      WallLine wl;
-      const Line& line = w0.ok ? w0.lines[l] : lines0[l];
-      wl.normal_rad = wrapAngle(line.theta);
-      wl.distance_m = line.p;
-      double lo = kInf, hi = -kInf, ss = 0.0;
-      for (std::size_t k = 0; k < w0.bins.size(); ++k) {
-        const Bin& b = d.bins[w0.bins[k]];
-        if (b.wall != static_cast<int>(l)) continue;
-        lo = std::min(lo, b.angle);
-        hi = std::max(hi, b.angle);
-        ++wl.bins;
-        ss += w0.resid[k] * w0.resid[k];
-      }
-      wl.first_angle_rad = lo;
-      wl.last_angle_rad = hi;
-      wl.rms_m = wl.bins ? std::sqrt(ss / static_cast<double>(wl.bins)) : 0.0;
-      walls_out->push_back(wl);
-    }
-  }
-  const auto measured_stats = statistics(d, f0, base0, w0, wb, q);
-  auto recordsOf = [&](const Data& dd, const std::vector<BinFit>& ff, const Model& mm) {
-    std::vector<ResidualRecord> rec;
-    for (std::size_t i = 0; i < dd.y.size(); ++i) {
-      const int bi = dd.bin_of[i];
-      if (bi < 0 || ff[static_cast<std::size_t>(bi)].n == 0) continue;
-      const Bin& b = dd.bins[static_cast<std::size_t>(bi)];
-      const BinFit& bf = ff[static_cast<std::size_t>(bi)];
-      ResidualRecord r;
-      r.range_m = bf.m;
-      r.incidence_rad = b.inc_known ? std::acos(std::clamp(b.cos_inc, 0.0, 1.0)) : kNaN;
-      r.lateral = b.edge ? 1.0 : 0.0;
-      r.group = b.wall + 1;
-      r.time = dd.t[i];
-      r.bearing_rad = b.angle;
-      r.edge = b.edge;
-      const double centre = bf.at(dd.a[i], dd.t[i]);
-      r.residual_m = dd.y[i] - centre;
-      r.z = r.residual_m / (mm.sigma_e * shapeOf(mm, b, centre));
-      rec.push_back(r);
-    }
-    return rec;
-  };
-  out.measured = recordsOf(d, f0, base0);
-
-  // 2. Parametric bootstrap.
-  std::map<std::string, std::vector<double>> replica_stats;
-  std::vector<double> sim_z;
-  std::vector<std::vector<double>> sim_var(d.bins.size());
-  for (int b = 0; b < config.replicas; ++b) {
-    const Data rep = simulateStatic(d, f0, w0, base0, deriveSeed(config.seed, 2000 + static_cast<std::uint64_t>(b)), RangeEffects{});
-    std::vector<BinFit> fr;
-    const Model mr = fitModel(rep, {}, Flags{}, 0.0, fr);
-    const WallFit wr0 = fitWalls(rep, fr, w0.ok ? w0.lines : lines0, false, given_a0);
-    const WallFit wrb = fitWalls(rep, fr, w0.ok ? w0.lines : lines0, true, given_a0);
-    for (const auto& [k, v] : statistics(rep, fr, mr, wr0, wrb, q)) replica_stats[k].push_back(v);
-    if (b < config.closeness_replicas) {
-      for (const auto& r : recordsOf(rep, fr, mr)) sim_z.push_back(r.z);
-      for (std::size_t k = 0; k < fr.size(); ++k)
-        if (fr[k].n > 0) sim_var[k].push_back(fr[k].s2);
-    }
-    if (b == 0) out.simulated_baseline = recordsOf(rep, fr, mr);
-  }
-  out.battery = makeBattery(statInfo(), measured_stats, replica_stats);
-
-  // 3. Candidates: held-out readings (folds by scan) and held-out wall bins (leave one out).
-  std::vector<int> fold(data.scans);
-  for (std::size_t t = 0; t < data.scans; ++t) fold[t] = static_cast<int>(t % static_cast<std::size_t>(config.folds));
-  std::vector<Flags> flags;
-  for (const auto& e : candidates) flags.push_back(flagsOf(e));
-  std::vector<double> ll_base;
-  std::vector<std::vector<double>> ll_cand(candidates.size());
-  std::vector<std::size_t> block;
-  const double floor_w = config.outlier_floor;
-  for (int k = 0; k < config.folds; ++k) {
-    std::vector<bool> train(data.scans);
-    for (std::size_t t = 0; t < data.scans; ++t) train[t] = fold[t] != k;
-    std::vector<BinFit> fb;
-    const Model mb = fitModel(d, train, Flags{}, q, fb);
-    std::vector<std::vector<BinFit>> fc(candidates.size());
-    std::vector<Model> mc(candidates.size());
-    for (std::size_t c = 0; c < candidates.size(); ++c) mc[c] = fitModel(d, train, flags[c], q, fc[c]);
-    for (std::size_t i = 0; i < d.y.size(); ++i) {
-      const int bi = d.bin_of[i];
-      if (bi < 0 || train[static_cast<std::size_t>(d.t[i])] || fb[static_cast<std::size_t>(bi)].n == 0) continue;
-      const Bin& bin = d.bins[static_cast<std::size_t>(bi)];
-      ll_base.push_back(readingLL(mb, d, bin, fb[static_cast<std::size_t>(bi)], i, floor_w));
-      block.push_back(static_cast<std::size_t>(d.t[i]));
-      for (std::size_t c = 0; c < candidates.size(); ++c)
-        ll_cand[c].push_back(fc[c][static_cast<std::size_t>(bi)].n > 0
-                                 ? readingLL(mc[c], d, bin, fc[c][static_cast<std::size_t>(bi)], i, floor_w)
-                                 : kNaN);
-    }
-  }
-  const double n_readings = static_cast<double>(ll_base.size());
-  // Wall bins: the bin means given the wall model (baseline: alpha_0 and lines).
-  if (w0.ok) {
-    for (std::size_t k = 0; k < w0.loo_ll.size(); ++k) {
-      ll_base.push_back(w0.loo_ll[k]);
-      block.push_back(std::numeric_limits<std::size_t>::max() - k);
-      for (std::size_t c = 0; c < candidates.size(); ++c)
-        ll_cand[c].push_back(flags[c].wall_b && wb.ok ? wb.loo_ll[k] : w0.loo_ll[k]);
-    }
-  }
-  if (ll_base.empty()) {
-    out.status = "cross_validation_failed";
-    out.message = "no held-out reading";
-    return out;
-  }
-  {
-    double s = 0.0;
-    for (double v : ll_base) s += v;
-    out.baseline_heldout_nats_per_point = s / n_readings;
-  }
-  // In-sample likelihoods for delta AIC.
-  auto inSample = [&](const Flags& fl, Model* fitted) {
-    std::vector<BinFit> ff;
-    const Model mm = fitModel(d, {}, fl, q, ff);
-    if (fitted) *fitted = mm;
-    double s = 0.0;
-    for (std::size_t i = 0; i < d.y.size(); ++i) {
-      const int bi = d.bin_of[i];
-      if (bi < 0 || ff[static_cast<std::size_t>(bi)].n == 0) continue;
-      s += readingLL(mm, d, d.bins[static_cast<std::size_t>(bi)], ff[static_cast<std::size_t>(bi)], i, floor_w);
-    }
-    return s;
-  };
-  const double ll_in_base = inSample(Flags{}, nullptr);
-  out.baseline_neg_log_likelihood = -ll_in_base;
-  std::vector<Model> full(candidates.size());
-  for (std::size_t c = 0; c < candidates.size(); ++c) {
-    CandidateResult r;
-    r.effect = candidates[c];
-    r.statistic = statisticOf(r.effect);
-    const std::string& e = r.effect;
-    if (e == effect::kHeadingError || e == effect::kAngleOffset || e == effect::kOdometryScale) {
-      r.applicable = false;
-      r.identifiable = false;
-      r.p_value = r.p_holm = r.score_p_value = kNaN;
-      r.note = "one pose: nothing about stops or headings can be seen";
-      out.candidates.push_back(r);
-      continue;
-    }
-    if (e == effect::kLandmarkBias) {
-      r.identifiable = false;
-      r.applicable = true;
-      r.p_value = r.p_holm = r.score_p_value = kNaN;
-      r.information_ratio = 0.0;
-      r.standard_error = kInf;
-      r.note = "an offset of one surface moves its fitted wall line as a whole: each line absorbs it";
-      out.candidates.push_back(r);
-      continue;
-    }
-    for (const auto& dsc : out.battery)
-      if (dsc.name == r.statistic) {
-        r.score_p_value = dsc.p_value;
-        r.effect_size = dsc.effect_size;
-      }
-    std::map<std::size_t, double> per_block;
-    double sum = 0.0;
-    bool finite = true;
-    for (std::size_t i = 0; i < ll_base.size(); ++i) {
-      const double diff = ll_cand[c][i] - ll_base[i];
-      if (!std::isfinite(diff)) {
-        finite = false;
-        break;
-      }
-      sum += diff;
-      per_block[block[i]] += diff;
-    }
-    if (!finite) {
-      r.applicable = false;
-      r.p_value = kNaN;
-      r.note = "could not be fitted on every fold";
-      out.candidates.push_back(r);
-      continue;
-    }
-    r.heldout_gain_nats_per_point = sum / n_readings;
-    double ss = 0.0;
-    const double mean_block = sum / static_cast<double>(per_block.size());
-    for (const auto& [key, v] : per_block) ss += (v - mean_block) * (v - mean_block);
-    const double nb = static_cast<double>(per_block.size());
-    r.heldout_gain_se = nb > 1 ? std::sqrt(ss / (nb - 1.0) * nb) / n_readings : 0.0;
-    r.p_heldout = heldoutPValue(r.heldout_gain_nats_per_point, r.heldout_gain_se);
-    r.p_value = combinedPValue(r.p_heldout, r.score_p_value);
-    r.parameters = flags[c].parameters();
-    double ll_in = inSample(flags[c], &full[c]);
-    if (flags[c].wall_b && wb.ok && w0.ok) ll_in = ll_in_base + (wb.in_ll - w0.in_ll);  // only the walls' part differs
-    r.delta_aic = 2.0 * r.parameters - 2.0 * (ll_in - ll_in_base);
-    // Identifiability.
-    if (e == effect::kIncidenceBias) {
-      r.standard_error = wb.ok ? wb.b_se : kInf;
-      r.identifiable = a0_identified && wb.ok && r.standard_error < std::max(0.01, std::abs(wb.b) / 4.0);
-      if (!r.identifiable)
-        r.note = a0_identified ? "bends the walls almost as a range offset does: give the offset (--range-offset) from a reference distance"
-                               : "too few straight walls, or walls seen over too narrow a range of incidence";
-    } else if (e == effect::kIncidenceNoise || e == effect::kRangeNoiseLaw) {
-      double mm = 0.0, m2 = 0.0, n = 0.0;
-      for (const auto& b : d.bins) {
-        if (e == effect::kIncidenceNoise && !b.inc_known) continue;
-        const double g = e == effect::kIncidenceNoise ? -std::log(b.cos_inc)
-                                                      : std::log(std::max(f0[static_cast<std::size_t>(&b - d.bins.data())].m, 1e-3));
-        mm += g;
-        m2 += g * g;
-        n += static_cast<double>(b.idx.size());
-      }
-      const double nbins = static_cast<double>(d.bins.size());
-      const double var = nbins > 0 ? std::max(m2 / nbins - std::pow(mm / nbins, 2), 0.0) : 0.0;
-      r.information_ratio = var / (m2 / std::max(nbins, 1.0) + 1e-4);
-      r.standard_error = var > 0.0 ? 1.0 / std::sqrt(2.0 * n * var) : kInf;
-      r.identifiable = r.standard_error < 0.5;
-      if (!r.identifiable) r.note = e == effect::kIncidenceNoise ? "no spread of incidence angles" : "no spread of ranges";
-    } else if (e == effect::kRangeDrift && window > 0) {
-      r.identifiable = false;
-      r.note = "each window of scans has its own time trend per beam (the sensor moved), which absorbs a drift";
-    } else if (e == effect::kMixedPixels) {
-      r.identifiable = edges >= 3;
-      if (!r.identifiable) r.note = "fewer than 3 beams at depth discontinuities";
-    }
-    const Model& fm = full[c];
-    if (e == effect::kIncidenceNoise) r.estimates["incidence_noise_exponent"] = fm.gamma;
-    if (e == effect::kRangeNoiseLaw) r.estimates["noise_exponent"] = fm.kappa;
-    if (e == effect::kRangeDrift) {
-      r.estimates["range_drift_m_per_scan"] = fm.drift;
-      r.estimates["range_drift_over_recording_m"] = fm.drift * static_cast<double>(data.scans - 1);
-    }
-    if (e == effect::kMixedPixels) r.estimates["mixed_pixel_fraction"] = fm.mixed;
-    if (e == effect::kHeavyTails) r.estimates["student_dof"] = fm.dof;
-    if (e == effect::kQuantisation) r.estimates["grid_m"] = fm.q;
-    if (e == effect::kIncidenceBias) {
-      r.estimates["incidence_bias_m"] = wb.b;
-      r.estimates["alpha0_with_it_m"] = wb.alpha0;
-    }
-    out.candidates.push_back(r);
-  }
-
-  // 4. The cause.
-  out.primary_cause = nameCause(out.candidates, config.alpha, out.decision);
-
-  // 5. Extended model: closeness of its simulation, scene keys.
-  auto closeness = [&](const std::vector<double>& zs, const std::vector<std::vector<double>>& vars) {
-    Closeness c;
-    std::vector<double> mz;
-    for (const auto& r : out.measured) mz.push_back(r.z);
-    c.ks_distance = ksDistance(mz, zs);
-    std::vector<double> logs;
-    for (std::size_t k = 0; k < d.bins.size(); ++k) {
-      if (f0[k].n == 0 || vars[k].empty() || !(f0[k].s2 > 0.0)) continue;
-      double mv = 0.0;
-      for (double v : vars[k]) mv += v / static_cast<double>(vars[k].size());
-      if (!(mv > 0.0)) continue;
-      logs.push_back(std::abs(std::log(f0[k].s2 / mv)));
-    }
-    c.groups = logs.size();
-    c.variance_ratio_median_abs_log = logs.empty() ? 0.0 : median(logs);
-    return c;
-  };
-  out.closeness_baseline = closeness(sim_z, sim_var);
-  const auto named = std::find(candidates.begin(), candidates.end(), out.primary_cause);
-  if (named != candidates.end()) {
-    const std::size_t c = static_cast<std::size_t>(named - candidates.begin());
-    const CandidateResult& r = out.candidates[c];
-    const Model& fm = full[c];
-    out.extended_parameters = r.estimates;
-    out.gain_heldout_nats_per_point = r.heldout_gain_nats_per_point;
-    out.gain_delta_aic = r.delta_aic;
-    RangeEffects fx;
-    Model sim_model = base0;
-    const std::string& e = out.primary_cause;
-    if (e == effect::kIncidenceNoise) fx.incidence_noise_exponent = fm.gamma;
-    if (e == effect::kRangeDrift) fx.range_drift_m_per_scan = fm.drift;
-    if (e == effect::kMixedPixels) fx.mixed_pixel_fraction = fm.mixed;
-    if (e == effect::kHeavyTails) fx.noise_student_dof = std::max(fm.dof, 2.1);
-    if (e == effect::kQuantisation) fx.range_resolution_m = fm.q;
-    if (e == effect::kRangeNoiseLaw) sim_model.kappa = fm.kappa;
-    sim_model.sigma_e = fm.sigma_e;
-    WallFit w_sim = w0;
-    if (e == effect::kIncidenceBias && wb.ok) {
-      w_sim = wb;
-      fx.incidence_bias_m = wb.b;
-    }
-    const double a0 = w_sim.ok ? w_sim.alpha0 : 0.0;
-    out.extended_bias_alpha = {a0, 1.0};
-    out.scene_keys["sensor.bias_alpha[0]"] = a0;
-    out.scene_keys["sensor.bias_alpha[1]"] = 1.0;
-    if (sim_model.kappa != 2.0) out.scene_keys["sensor.noise.exponent (kind power)"] = sim_model.kappa;
-    out.scene_keys["sensor.noise.sigma_e"] = sim_model.sigma_e;
-    if (fx.incidence_noise_exponent != 0.0) out.scene_keys["sensor.effects.incidence_noise_exponent"] = fx.incidence_noise_exponent;
-    if (fx.incidence_bias_m != 0.0) out.scene_keys["sensor.effects.incidence_bias_m"] = fx.incidence_bias_m;
-    if (fx.range_drift_m_per_scan != 0.0) {
-      out.scene_keys["sensor.effects.range_drift_m_per_scan"] = fx.range_drift_m_per_scan;
-      out.scene_keys["sensor.bias_alpha[0]"] = a0 - fx.range_drift_m_per_scan * d.t_mean;
-    }
-    if (fx.mixed_pixel_fraction != 0.0) out.scene_keys["sensor.effects.mixed_pixel_fraction"] = fx.mixed_pixel_fraction;
-    if (fx.noise_student_dof != 0.0) out.scene_keys["sensor.effects.noise_student_dof"] = fx.noise_student_dof;
-    if (fx.range_resolution_m != 0.0) out.scene_keys["sensor.effects.range_resolution_m"] = fx.range_resolution_m;
-    // The simulator's drift term is c t; the fitted one is c (t - t_mean): same readings when
-    // alpha_0 takes the difference (done by the scene key above; the bins carry it here).
-    std::vector<BinFit> f_sim = f0;
-    if (fx.range_drift_m_per_scan != 0.0)
-      for (auto& bf : f_sim) bf.m -= fx.range_drift_m_per_scan * d.t_mean;
-    std::vector<double> ext_z;
-    std::vector<std::vector<double>> ext_var(d.bins.size());
-    for (int b = 0; b < config.closeness_replicas; ++b) {
-      const Data rep = simulateStatic(d, f_sim, w_sim, sim_model, deriveSeed(config.seed, 6000 + static_cast<std::uint64_t>(b)), fx);
-      std::vector<BinFit> fr;
-      const Model mr = fitModel(rep, {}, Flags{}, 0.0, fr);
-      const auto rec = recordsOf(rep, fr, mr);
-      for (const auto& x : rec) ext_z.push_back(x.z);
-      for (std::size_t k = 0; k < fr.size(); ++k)
-        if (fr[k].n > 0) ext_var[k].push_back(fr[k].s2);
-      if (b == 0) out.simulated_extended = rec;
-    }
-    out.closeness_extended = closeness(ext_z, ext_var);
-  }
+  const std::vector<std::string> candidates = candidateList(config, allCandidates(), "a static recording");
+  StaticDiagnosis problem(data, config, candidates, walls_out);
+  runDiagnosis(problem, config, candidates, out);
   return out;
 }
 

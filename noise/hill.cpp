@@ -22,82 +22,122 @@ void KlHillConfig::validate() const {
   if (!(min_variance > 0.0)) throw InputError("", "min_variance", "must be positive");
 }
 
+namespace {
+
+/// Hill climbing on the lattice start + step * index (integers), so a point reached along two
+/// paths is the same point bit for bit (no drift of repeated additions).
+class LatticeClimber {
+ public:
+  using Index = std::vector<long long>;
+  LatticeClimber(const std::function<double(const std::vector<double>&)>& objective, const std::vector<double>& start,
+                 const std::vector<double>& lower, const HillClimbConfig& config,
+                 const std::function<void(int, double)>& on_evaluation)
+      : objective_(objective), start_(start), lower_(lower), config_(config), on_evaluation_(on_evaluation), n_(start.size()) {}
+  HillClimbResult run(std::mt19937_64& rng);
+
+ private:
+  std::vector<double> at(const Index& idx) const;
+  long long lowest(std::size_t i) const;
+  double evaluate(const Index& idx, bool jump);
+  bool sweep();
+  bool budgetLeft() const { return r_.evaluations < config_.max_evaluations; }
+
+  const std::function<double(const std::vector<double>&)>& objective_;
+  const std::vector<double>& start_;
+  const std::vector<double>& lower_;
+  const HillClimbConfig& config_;
+  const std::function<void(int, double)>& on_evaluation_;
+  const std::size_t n_;
+  HillClimbResult r_;
+  Index best_idx_, current_;
+  double current_value_ = 0.0;
+};
+
+std::vector<double> LatticeClimber::at(const Index& idx) const {
+  std::vector<double> x(n_);
+  for (std::size_t i = 0; i < n_; ++i) x[i] = start_[i] + config_.step * static_cast<double>(idx[i]);
+  return x;
+}
+
+/// Smallest index whose value is >= lower[i].
+long long LatticeClimber::lowest(std::size_t i) const {
+  if (!std::isfinite(lower_[i])) return std::numeric_limits<long long>::min();
+  return static_cast<long long>(std::ceil((lower_[i] - start_[i]) / config_.step - 1e-9));
+}
+
+double LatticeClimber::evaluate(const Index& idx, bool jump) {
+  const std::vector<double> x = at(idx);
+  const double v = objective_(x);
+  ++r_.evaluations;
+  if (v < r_.best_value) {
+    r_.best_value = v;
+    r_.best = x;
+    best_idx_ = idx;
+  }
+  r_.trace.push_back(HillClimbRecord{v, r_.best_value, r_.best, jump});
+  if (on_evaluation_) on_evaluation_(r_.evaluations, r_.best_value);
+  return v;
+}
+
+/// Seed 003 ch. 3.4: neighbours value +- step of every parameter, accepted when better; true
+/// when the current point moved.
+bool LatticeClimber::sweep() {
+  bool moved = false;
+  for (std::size_t i = 0; i < n_ && budgetLeft(); ++i) {
+    for (const int dir : {+1, -1}) {
+      if (!budgetLeft()) break;
+      Index candidate = current_;
+      candidate[i] += dir;
+      if (candidate[i] < lowest(i)) continue;
+      const double v = evaluate(candidate, false);
+      if (v < current_value_) {
+        current_ = std::move(candidate);
+        current_value_ = v;
+        moved = true;
+      }
+    }
+  }
+  return moved;
+}
+
+HillClimbResult LatticeClimber::run(std::mt19937_64& rng) {
+  r_.best_value = std::numeric_limits<double>::infinity();
+  best_idx_.assign(n_, 0);
+  for (std::size_t i = 0; i < n_; ++i) best_idx_[i] = std::max(best_idx_[i], lowest(i));
+  current_ = best_idx_;
+  current_value_ = evaluate(current_, false);
+  int jumps_in_a_row = 0;
+  std::uniform_int_distribution<int> offset(-config_.jump_steps, config_.jump_steps);
+  while (budgetLeft()) {
+    ++r_.sweeps;
+    const double best_before = r_.best_value;
+    const bool moved = sweep();
+    if (r_.best_value < best_before) jumps_in_a_row = 0;
+    if (moved) continue;
+    // Stuck: random jump from the best point, unless max_jumps jumps in a row gave nothing.
+    if (jumps_in_a_row >= config_.max_jumps) {
+      r_.converged = true;
+      break;
+    }
+    if (!budgetLeft()) break;
+    ++jumps_in_a_row;
+    ++r_.jumps;
+    current_ = best_idx_;
+    for (std::size_t i = 0; i < n_; ++i) current_[i] = std::max(lowest(i), current_[i] + offset(rng));
+    current_value_ = evaluate(current_, true);
+    if (current_value_ < best_before) jumps_in_a_row = 0;
+  }
+  return std::move(r_);
+}
+
+}  // namespace
+
 HillClimbResult hillClimb(const std::function<double(const std::vector<double>&)>& objective,
                           const std::vector<double>& start, const std::vector<double>& lower,
                           const HillClimbConfig& config, std::mt19937_64& rng,
                           const std::function<void(int, double)>& on_evaluation) {
   config.validate();
-  // Points live on the lattice start + step * index (integers), so a point reached along two
-  // paths is the same point bit for bit (no drift of repeated additions).
-  const std::size_t n = start.size();
-  using Index = std::vector<long long>;
-  auto at = [&](const Index& idx) {
-    std::vector<double> x(n);
-    for (std::size_t i = 0; i < n; ++i) x[i] = start[i] + config.step * static_cast<double>(idx[i]);
-    return x;
-  };
-  auto lowest = [&](std::size_t i) {  // smallest index whose value is >= lower[i]
-    if (!std::isfinite(lower[i])) return std::numeric_limits<long long>::min();
-    return static_cast<long long>(std::ceil((lower[i] - start[i]) / config.step - 1e-9));
-  };
-  HillClimbResult r;
-  r.best_value = std::numeric_limits<double>::infinity();
-  Index best_idx(n, 0);
-  for (std::size_t i = 0; i < n; ++i) best_idx[i] = std::max(best_idx[i], lowest(i));
-
-  auto evaluate = [&](const Index& idx, bool jump) {
-    const std::vector<double> x = at(idx);
-    const double v = objective(x);
-    ++r.evaluations;
-    if (v < r.best_value) {
-      r.best_value = v;
-      r.best = x;
-      best_idx = idx;
-    }
-    r.trace.push_back(HillClimbRecord{v, r.best_value, r.best, jump});
-    if (on_evaluation) on_evaluation(r.evaluations, r.best_value);
-    return v;
-  };
-
-  Index current = best_idx;
-  double current_value = evaluate(current, false);
-  int jumps_in_a_row = 0;
-  std::uniform_int_distribution<int> offset(-config.jump_steps, config.jump_steps);
-  while (r.evaluations < config.max_evaluations) {
-    ++r.sweeps;
-    const double best_before = r.best_value;
-    bool moved = false;
-    // Seed 003 ch. 3.4: neighbours value +- step of every parameter, accepted when better.
-    for (std::size_t i = 0; i < n && r.evaluations < config.max_evaluations; ++i) {
-      for (const int dir : {+1, -1}) {
-        if (r.evaluations >= config.max_evaluations) break;
-        Index candidate = current;
-        candidate[i] += dir;
-        if (candidate[i] < lowest(i)) continue;
-        const double v = evaluate(candidate, false);
-        if (v < current_value) {
-          current = std::move(candidate);
-          current_value = v;
-          moved = true;
-        }
-      }
-    }
-    if (r.best_value < best_before) jumps_in_a_row = 0;
-    if (moved) continue;
-    // Stuck: random jump from the best point, unless max_jumps jumps in a row gave nothing.
-    if (jumps_in_a_row >= config.max_jumps) {
-      r.converged = true;
-      break;
-    }
-    if (r.evaluations >= config.max_evaluations) break;
-    ++jumps_in_a_row;
-    ++r.jumps;
-    current = best_idx;
-    for (std::size_t i = 0; i < n; ++i) current[i] = std::max(lowest(i), current[i] + offset(rng));
-    current_value = evaluate(current, true);
-    if (current_value < best_before) jumps_in_a_row = 0;
-  }
-  return r;
+  return LatticeClimber(objective, start, lower, config, on_evaluation).run(rng);
 }
 
 std::vector<double> packNoise(const NoiseSetting& n, const KlHillConfig& config) {

@@ -73,13 +73,7 @@ diagnosis::StaticScans staticScans(const io::Sequence& seq, std::size_t stop, co
   return s;
 }
 
-void runDiagnose(const DiagnoseCommand& c) {
-  namespace fs = std::filesystem;
-  // Ceres reports (through glog) the linear-solver failures its Levenberg-Marquardt steps recover
-  // from by themselves; the many fits of a diagnosis would fill the terminal with them.
-  FLAGS_minloglevel = google::GLOG_ERROR;
-  io::checkOutsideInput(c.data, c.out);
-  const io::Sequence seq = io::openSequence(c.data);
+diagnosis::DiagnoseConfig diagnoseConfig(const DiagnoseCommand& c) {
   diagnosis::DiagnoseConfig config;
   config.seed = c.seed;
   config.replicas = c.replicas;
@@ -93,77 +87,142 @@ void runDiagnose(const DiagnoseCommand& c) {
     while (std::getline(ss, item, ','))
       if (!item.empty()) config.candidates.push_back(item);
   }
+  return config;
+}
+
+/// The model's inverse when --model is given (else readings pass unchanged).
+Corrector makeCorrector(const std::string& model) {
   Corrector fix;
-  if (!c.model.empty()) {
-    const CalibrationModel m = io::readModel(c.model);
-    try {
-      fix.inverter.emplace(m.model, calibration::inversionWindow(m.model, calibration::InversionMethod::ls));
-    } catch (const std::invalid_argument& e) {
-      throw DataError(c.model, "bias.alpha", std::string("cannot be inverted: ") + e.what(), "calibrate again");
-    }
+  if (model.empty()) return fix;
+  const CalibrationModel m = io::readModel(model);
+  try {
+    fix.inverter.emplace(m.model, calibration::inversionWindow(m.model, calibration::InversionMethod::ls));
+  } catch (const std::invalid_argument& e) {
+    throw DataError(model, "bias.alpha", std::string("cannot be inverted: ") + e.what(), "calibrate again");
   }
+  return fix;
+}
+
+/// Mode: a sequence with landmarks seen from several stops (the landmarks' observations), else
+/// none (repeated scans of one stop).
+std::optional<LandmarkObservations> findLandmarks(const DiagnoseCommand& c, const io::Sequence& seq) {
+  std::optional<LandmarkObservations> obs;
+  if (c.mode == "static" || seq.stops.size() < 2) {
+    if (c.mode == "sequence")
+      throw DataError(c.data, "stops", "a sequence diagnosis needs scans from at least two stops",
+                      "diagnose repeated scans of one pose with --mode static");
+    return obs;
+  }
+  detectors::SequenceDetectionConfig dc;
+  if (c.radius_m > 0.0) dc.detection.landmark_radius_m = c.radius_m;
+  Progress progress("detect", seq.scans.size());
+  const auto det = detectors::detectSequence(seq, dc, [&](std::size_t d, std::size_t t) { progress.update(d, t); });
+  progress.finish();
+  if (!det.association.landmarks.empty()) {
+    obs = toLandmarkObservations(seq, det);
+    if (!seq.meta.range_max_m) {
+      double max_reading = 0.0;
+      for (const auto& s : obs->sightings)
+        for (const auto& b : s.beams) max_reading = std::max(max_reading, b.range_m);
+      obs->range_max_m = max_reading > 0.0 ? 1.25 * max_reading : 1.0;
+    }
+  } else if (c.mode == "sequence") {
+    throw DataError(c.data, "landmarks", "no landmark was found in the sequence: " + det.note,
+                    "give the radius with --radius, or diagnose repeated scans of one pose with --mode static");
+  }
+  return obs;
+}
+
+void checkCandidates(const diagnosis::DiagnoseConfig& config, const std::vector<std::string>& known, const char* kind) {
+  for (const auto& e : config.candidates)
+    if (std::find(known.begin(), known.end(), e) == known.end()) {
+      std::string list;
+      for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
+      throw InputError("", "--candidates", "'" + e + "' is not a candidate effect for " + kind, "use " + list);
+    }
+}
+
+/// True range of every beam of every sighting from truth.json (NaN where the truth has none).
+std::vector<std::vector<double>> truthRanges(const std::string& path, const LandmarkObservations& obs) {
+  const SimulationTruth truth = loadTruth(path);
+  std::vector<std::vector<double>> ranges;
+  for (const auto& s : obs.sightings) {
+    std::vector<double> t;
+    for (const auto& b : s.beams)
+      t.push_back(s.scan * truth.beams + b.beam < truth.ranges.size() ? truth.at(s.scan, b.beam).range_m : std::nan(""));
+    ranges.push_back(std::move(t));
+  }
+  return ranges;
+}
+
+diagnosis::DiagnosisResult diagnoseLandmarks(const DiagnoseCommand& c, const diagnosis::DiagnoseConfig& config,
+                                             const Corrector& fix, LandmarkObservations& obs) {
+  checkCandidates(config, diagnosis::sequenceCandidates(), "a sequence");
+  if (fix.inverter)
+    for (auto& s : obs.sightings)
+      for (auto& b : s.beams) b.range_m = fix.correct(b.range_m);
+  std::vector<std::vector<double>> truth_ranges;
+  if (!c.truth.empty()) truth_ranges = truthRanges(c.truth, obs);
+  if (!quiet()) std::fprintf(stderr, "diagnosing a sequence: %zu sightings (%d replicas)\n", obs.sightings.size(), c.replicas);
+  Activity activity("diagnose (sequence)");
+  diagnosis::DiagnosisResult result = diagnosis::diagnoseSequence(obs, config, c.truth.empty() ? nullptr : &truth_ranges);
+  activity.finish();
+  return result;
+}
+
+/// Static mode: --stop, else the stop with the most scans.
+std::size_t pickStop(const DiagnoseCommand& c, const io::Sequence& seq) {
+  std::size_t stop = 0;
+  if (c.stop >= 0) {
+    if (static_cast<std::size_t>(c.stop) >= seq.stops.size())
+      throw InputError(c.data, "--stop", "the sequence has " + plural(seq.stops.size(), "stop"), "give a stop index from 0");
+    return static_cast<std::size_t>(c.stop);
+  }
+  for (std::size_t k = 0; k < seq.stops.size(); ++k)
+    if (seq.stops[k].scans.size() > seq.stops[stop].scans.size()) stop = k;
+  return stop;
+}
+
+diagnosis::DiagnosisResult diagnoseOnePose(const DiagnoseCommand& c, const io::Sequence& seq,
+                                           const diagnosis::DiagnoseConfig& config, const Corrector& fix,
+                                           DiagnosisSource& src) {
+  const std::size_t stop = pickStop(c, seq);
+  if (seq.stops.size() > 1)
+    src.selection += "stop " + std::to_string(stop) + " of " + std::to_string(seq.stops.size()) + ", " +
+                     plural(seq.stops[stop].scans.size(), "scan") + " from one pose";
+  checkCandidates(config, diagnosis::staticCandidates(), "repeated scans of one pose");
+  Progress reading("read the scans of stop " + std::to_string(stop), seq.stops[stop].scans.size());
+  const diagnosis::StaticScans s = staticScans(seq, stop, fix, [&](std::size_t done) { reading.update(done); });
+  reading.finish();
+  if (!quiet())
+    std::fprintf(stderr, "diagnosing repeated scans of one pose: %zu scans, %zu readings (%d replicas)\n", s.scans,
+                 s.readings.size(), c.replicas);
+  Activity activity("diagnose (repeated scans of one pose)");
+  diagnosis::DiagnosisResult result = diagnosis::diagnoseStatic(s, config, &src.walls);
+  activity.finish();
+  return result;
+}
+
+void runDiagnose(const DiagnoseCommand& c) {
+  namespace fs = std::filesystem;
+  // Ceres reports (through glog) the linear-solver failures its Levenberg-Marquardt steps recover
+  // from by themselves; the many fits of a diagnosis would fill the terminal with them.
+  FLAGS_minloglevel = google::GLOG_ERROR;
+  io::checkOutsideInput(c.data, c.out);
+  const io::Sequence seq = io::openSequence(c.data);
+  const diagnosis::DiagnoseConfig config = diagnoseConfig(c);
+  const Corrector fix = makeCorrector(c.model);
   io::StagedDirectory out(c.out, c.overwrite);
   DiagnosisSource src;
   src.data = c.data;
   src.sensor = seq.meta.sensor_name.value_or("");
   src.model = c.model;
   src.command = c.command;
-
-  // Mode: a sequence with landmarks seen from several stops, else repeated scans of one stop.
-  std::string mode = c.mode;
-  std::optional<LandmarkObservations> obs;
-  if (mode != "static" && seq.stops.size() >= 2) {
-    detectors::SequenceDetectionConfig dc;
-    if (c.radius_m > 0.0) dc.detection.landmark_radius_m = c.radius_m;
-    Progress progress("detect", seq.scans.size());
-    const auto det = detectors::detectSequence(seq, dc, [&](std::size_t d, std::size_t t) { progress.update(d, t); });
-    progress.finish();
-    if (!det.association.landmarks.empty()) {
-      obs = toLandmarkObservations(seq, det);
-      if (!seq.meta.range_max_m) {
-        double max_reading = 0.0;
-        for (const auto& s : obs->sightings)
-          for (const auto& b : s.beams) max_reading = std::max(max_reading, b.range_m);
-        obs->range_max_m = max_reading > 0.0 ? 1.25 * max_reading : 1.0;
-      }
-    } else if (mode == "sequence") {
-      throw DataError(c.data, "landmarks", "no landmark was found in the sequence: " + det.note,
-                      "give the radius with --radius, or diagnose repeated scans of one pose with --mode static");
-    }
-  } else if (mode == "sequence") {
-    throw DataError(c.data, "stops", "a sequence diagnosis needs scans from at least two stops",
-                    "diagnose repeated scans of one pose with --mode static");
-  }
-
-  auto checkCandidates = [&](const std::vector<std::string>& known, const char* kind) {
-    for (const auto& e : config.candidates)
-      if (std::find(known.begin(), known.end(), e) == known.end()) {
-        std::string list;
-        for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
-        throw InputError("", "--candidates", "'" + e + "' is not a candidate effect for " + kind, "use " + list);
-      }
-  };
+  std::optional<LandmarkObservations> obs = findLandmarks(c, seq);
   diagnosis::DiagnosisResult result;
-  if (obs && mode != "static") {
-    checkCandidates(diagnosis::sequenceCandidates(), "a sequence");
-    if (fix.inverter)
-      for (auto& s : obs->sightings)
-        for (auto& b : s.beams) b.range_m = fix.correct(b.range_m);
-    std::vector<std::vector<double>> truth_ranges;
-    if (!c.truth.empty()) {
-      const SimulationTruth truth = loadTruth(c.truth);
-      for (const auto& s : obs->sightings) {
-        std::vector<double> t;
-        for (const auto& b : s.beams)
-          t.push_back(s.scan * truth.beams + b.beam < truth.ranges.size() ? truth.at(s.scan, b.beam).range_m : std::nan(""));
-        truth_ranges.push_back(std::move(t));
-      }
-    }
-    if (!quiet()) std::fprintf(stderr, "diagnosing a sequence: %zu sightings (%d replicas)\n", obs->sightings.size(), c.replicas);
-    Activity activity("diagnose (sequence)");
-    result = diagnosis::diagnoseSequence(*obs, config, c.truth.empty() ? nullptr : &truth_ranges);
-    activity.finish();
-    if (result.status != "ok" && mode == "auto") {
+  if (obs && c.mode != "static") {
+    result = diagnoseLandmarks(c, config, fix, *obs);
+    if (result.status != "ok" && c.mode == "auto") {
       // Poles were found but cannot carry a sequence diagnosis: look at one pose instead.
       if (!quiet())
         std::fprintf(stderr, "the sequence cannot be diagnosed (%s: %s); diagnosing repeated scans of one pose instead\n",
@@ -172,31 +231,7 @@ void runDiagnose(const DiagnoseCommand& c) {
       obs.reset();
     }
   }
-  if (!obs || mode == "static") {
-    std::size_t stop = 0;
-    if (c.stop >= 0) {
-      if (static_cast<std::size_t>(c.stop) >= seq.stops.size())
-        throw InputError(c.data, "--stop", "the sequence has " + plural(seq.stops.size(), "stop"),
-                         "give a stop index from 0");
-      stop = static_cast<std::size_t>(c.stop);
-    } else {
-      for (std::size_t k = 0; k < seq.stops.size(); ++k)
-        if (seq.stops[k].scans.size() > seq.stops[stop].scans.size()) stop = k;
-    }
-    if (seq.stops.size() > 1)
-      src.selection += "stop " + std::to_string(stop) + " of " + std::to_string(seq.stops.size()) + ", " +
-                      plural(seq.stops[stop].scans.size(), "scan") + " from one pose";
-    checkCandidates(diagnosis::staticCandidates(), "repeated scans of one pose");
-    Progress reading("read the scans of stop " + std::to_string(stop), seq.stops[stop].scans.size());
-    const diagnosis::StaticScans s = staticScans(seq, stop, fix, [&](std::size_t done) { reading.update(done); });
-    reading.finish();
-    if (!quiet())
-      std::fprintf(stderr, "diagnosing repeated scans of one pose: %zu scans, %zu readings (%d replicas)\n", s.scans,
-                   s.readings.size(), c.replicas);
-    Activity activity("diagnose (repeated scans of one pose)");
-    result = diagnosis::diagnoseStatic(s, config, &src.walls);
-    activity.finish();
-  }
+  if (!obs || c.mode == "static") result = diagnoseOnePose(c, seq, config, fix, src);
   writeDiagnosis(out.path(), result, src);
   out.commit();
   if (result.status != "ok")

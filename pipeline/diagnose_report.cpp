@@ -125,9 +125,7 @@ std::string histogram(const std::vector<ResidualRecord>& rs) {
   return s.str();
 }
 
-}  // namespace
-
-nlohmann::ordered_json diagnosisJson(const DiagnosisResult& r, const DiagnosisSource& src) {
+ojson baselineJson(const DiagnosisResult& r, const DiagnosisSource& src) {
   ojson baseline{{"bias_alpha", r.baseline.bias.alpha},
                  {"noise", ojson{{"kind", toString(r.baseline.noise.kind)}, {"sigma_e", num(r.baseline.noise.sigma_e)}}},
                  {"range_min_m", r.baseline.range_min_m},
@@ -150,47 +148,50 @@ nlohmann::ordered_json diagnosisJson(const DiagnosisResult& r, const DiagnosisSo
                             {"rms_m", num(w.rms_m)}});
     baseline["walls"] = walls;
   }
-  ojson battery = ojson::array();
-  for (const auto& d : r.battery)
-    battery.push_back(ojson{{"name", d.name},
-                            {"variable", d.variable},
-                            {"value", num(d.value)},
-                            {"replica_mean", num(d.replica_mean)},
-                            {"replica_sd", num(d.replica_sd)},
-                            {"effect_size", num(d.effect_size)},
-                            {"p_value", num(d.p_value)},
-                            {"two_sided", d.two_sided},
-                            {"description", d.description}});
-  ojson candidates = ojson::array();
-  for (const auto& c : r.candidates) {
-    ojson j{{"effect", c.effect},
-            {"p_value", num(c.p_value)},
-            {"p_holm", num(c.p_holm)},
-            {"p_heldout", num(c.p_heldout)},
-            {"p_likelihood_ratio", num(c.p_likelihood_ratio)},
-            {"heldout_gain_nats_per_point", num(c.heldout_gain_nats_per_point)},
-            {"heldout_gain_se", num(c.heldout_gain_se)},
-            {"delta_aic", num(c.delta_aic)},
-            {"parameters", c.parameters},
-            {"significant", c.significant},
-            {"identifiable", c.identifiable},
-            {"applicable", c.applicable},
-            {"information_ratio", num(c.information_ratio)},
-            {"standard_error", num(c.standard_error)},
-            {"statistic", c.statistic},
-            {"statistic_p_value", num(c.score_p_value)},
-            {"statistic_effect_size", num(c.effect_size)},
-            {"estimates", numbers(c.estimates)}};
-    if (c.calibration_mse_ratio > 0.0) j["calibration_mse_ratio"] = num(c.calibration_mse_ratio);
-    if (!c.note.empty()) j["note"] = c.note;
-    candidates.push_back(j);
-  }
-  const bool named = !r.extended_parameters.empty() || !r.scene_keys.empty();
-  ojson extended = named ? ojson{{"effect", r.primary_cause},
-                                 {"parameters", numbers(r.extended_parameters)},
-                                 {"bias_alpha", r.extended_bias_alpha},
-                                 {"scene_keys", numbers(r.scene_keys)}}
-                         : ojson(nullptr);
+  return baseline;
+}
+
+ojson batteryJson(const std::vector<diagnosis::Discrepancy>& battery) {
+  ojson out = ojson::array();
+  for (const auto& d : battery)
+    out.push_back(ojson{{"name", d.name},
+                        {"variable", d.variable},
+                        {"value", num(d.value)},
+                        {"replica_mean", num(d.replica_mean)},
+                        {"replica_sd", num(d.replica_sd)},
+                        {"effect_size", num(d.effect_size)},
+                        {"p_value", num(d.p_value)},
+                        {"two_sided", d.two_sided},
+                        {"description", d.description}});
+  return out;
+}
+
+ojson candidateJson(const diagnosis::CandidateResult& c) {
+  ojson j{{"effect", c.effect},
+          {"p_value", num(c.p_value)},
+          {"p_holm", num(c.p_holm)},
+          {"p_heldout", num(c.p_heldout)},
+          {"p_likelihood_ratio", num(c.p_likelihood_ratio)},
+          {"heldout_gain_nats_per_point", num(c.heldout_gain_nats_per_point)},
+          {"heldout_gain_se", num(c.heldout_gain_se)},
+          {"delta_aic", num(c.delta_aic)},
+          {"parameters", c.parameters},
+          {"significant", c.significant},
+          {"identifiable", c.identifiable},
+          {"applicable", c.applicable},
+          {"information_ratio", num(c.information_ratio)},
+          {"standard_error", num(c.standard_error)},
+          {"statistic", c.statistic},
+          {"statistic_p_value", num(c.score_p_value)},
+          {"statistic_effect_size", num(c.effect_size)},
+          {"estimates", numbers(c.estimates)}};
+  if (c.calibration_mse_ratio > 0.0) j["calibration_mse_ratio"] = num(c.calibration_mse_ratio);
+  if (!c.note.empty()) j["note"] = c.note;
+  return j;
+}
+
+/// The named effect's gain: held out, delta AIC, closeness of simulations, calibration.
+ojson gainJson(const DiagnosisResult& r, bool named) {
   ojson gain{{"heldout_nats_per_point", named ? num(r.gain_heldout_nats_per_point) : ojson(nullptr)},
              {"delta_aic", named ? num(r.gain_delta_aic) : ojson(nullptr)},
              {"closeness", ojson{{"baseline_simulation", closenessJson(r.closeness_baseline)},
@@ -198,33 +199,22 @@ nlohmann::ordered_json diagnosisJson(const DiagnosisResult& r, const DiagnosisSo
   if (r.calibration_mse_ratio_baseline > 0.0)
     gain["calibration_mse_ratio"] = ojson{{"baseline", num(r.calibration_mse_ratio_baseline)},
                                           {"extended", named ? num(r.calibration_mse_ratio_extended) : ojson(nullptr)}};
+  return gain;
+}
+
+ojson dataJson(const DiagnosisResult& r, const DiagnosisSource& src) {
   ojson data{{"path", src.data.string()}, {"scans", r.scans}, {"stops", r.stops}, {"readings", r.readings}};
   data[r.mode == diagnosis::DiagnoseMode::sequence ? "landmarks" : "walls"] = r.landmarks;
   if (!src.sensor.empty()) data["sensor"] = src.sensor;
   if (!src.selection.empty()) data["selection"] = src.selection;
   if (!src.model.empty()) data["corrected_with_model"] = src.model;
-  return ojson{{"format", "lidarcal-diagnosis/1"},
-               {"mode", toString(r.mode)},
-               {"status", r.status},
-               {"message", r.message},
-               {"data", data},
-               {"settings", ojson{{"seed", r.seed},
-                                  {"replicas", r.replicas},
-                                  {"folds", r.folds},
-                                  {"multiple_testing", "holm"}}},
-               {"baseline", baseline},
-               {"battery", battery},
-               {"candidates", candidates},
-               {"primary_cause", r.primary_cause},
-               {"decision", r.decision},
-               {"extended_model", extended},
-               {"gain", gain}};
+  return data;
 }
 
-void writeDiagnosis(const std::filesystem::path& dir, const DiagnosisResult& r, const DiagnosisSource& src) {
-  io::writeTextAtomically(dir / "diagnosis.json", diagnosisJson(r, src).dump(2) + "\n");
+// ---- report.md, section by section ----
+
+void writeDataLine(std::ostream& md, const DiagnosisResult& r, const DiagnosisSource& src) {
   const bool seq = r.mode == diagnosis::DiagnoseMode::sequence;
-  std::ostringstream md;
   md << "# lidarcal diagnosis\n\n";
   md << "Data: `" << src.data.string() << "`" << (src.sensor.empty() ? "" : " (" + src.sensor + ")") << ", **"
      << toString(r.mode) << "** mode: " << r.scans << " scans";
@@ -233,17 +223,28 @@ void writeDiagnosis(const std::filesystem::path& dir, const DiagnosisResult& r, 
   md << ", " << r.readings << " readings.";
   if (!src.model.empty()) md << " Readings first corrected with `" << src.model << "`.";
   md << "\n\n";
-  if (r.status != "ok") {
-    md << "**Not diagnosed: " << r.status << ".** " << r.message << "\n";
-    io::writeTextAtomically(dir / "report.md", md.str());
-    return;
-  }
+}
+
+void writeVerdict(std::ostream& md, const DiagnosisResult& r) {
   md << "## Verdict\n\n**Primary cause: `" << r.primary_cause << "`.** " << r.decision << ".\n\n";
   if (!r.extended_parameters.empty()) {
     md << "Held-out gain of the extended model: " << fmt(r.gain_heldout_nats_per_point, 4) << " nats per point; delta AIC "
        << fmt(r.gain_delta_aic, 1) << ".\n\n";
   }
+}
 
+void writeWallTable(std::ostream& md, const std::vector<diagnosis::WallLine>& walls) {
+  md << "\nWall lines fitted to the beam means (the geometric reference):\n\n| wall | normal [deg] | distance [m] | beams from [deg] | to [deg] | beams | RMS about the model [mm] |\n|---|---|---|---|---|---|---|\n";
+  for (std::size_t i = 0; i < walls.size(); ++i) {
+    const auto& w = walls[i];
+    md << "| " << i + 1 << " | " << fmt(rad2deg(w.normal_rad), 2) << " | " << fmt(w.distance_m, 4) << " | "
+       << fmt(rad2deg(w.first_angle_rad), 1) << " | " << fmt(rad2deg(w.last_angle_rad), 1) << " | " << w.bins << " | "
+       << fmt(1000.0 * w.rms_m, 2) << " |\n";
+  }
+}
+
+void writeBaseline(std::ostream& md, const DiagnosisResult& r, const DiagnosisSource& src) {
+  const bool seq = r.mode == diagnosis::DiagnoseMode::sequence;
   md << "## Baseline (the published model: Alhashimi et al. 2016 and 2021)\n\n";
   md << "- bias f(d) = ";
   for (std::size_t i = 0; i < r.baseline.bias.alpha.size(); ++i) {
@@ -259,16 +260,10 @@ void writeDiagnosis(const std::filesystem::path& dir, const DiagnosisResult& r, 
        << "), sighting bearing noise " << fmt(rad2deg(r.baseline_sigma_theta_rad), 3) << " deg, stop headings at the commanded ones\n";
   for (const auto& [k, v] : r.baseline_extra) md << "- " << k << ": " << (v == std::round(v) ? fmt(v, 0) : fmt(v, 5)) << "\n";
   md << "- held-out log-likelihood " << fmt(r.baseline_heldout_nats_per_point, 4) << " nats per point\n";
-  if (!seq && !src.walls.empty()) {
-    md << "\nWall lines fitted to the beam means (the geometric reference):\n\n| wall | normal [deg] | distance [m] | beams from [deg] | to [deg] | beams | RMS about the model [mm] |\n|---|---|---|---|---|---|---|\n";
-    for (std::size_t i = 0; i < src.walls.size(); ++i) {
-      const auto& w = src.walls[i];
-      md << "| " << i + 1 << " | " << fmt(rad2deg(w.normal_rad), 2) << " | " << fmt(w.distance_m, 4) << " | "
-         << fmt(rad2deg(w.first_angle_rad), 1) << " | " << fmt(rad2deg(w.last_angle_rad), 1) << " | " << w.bins << " | "
-         << fmt(1000.0 * w.rms_m, 2) << " |\n";
-    }
-  }
+  if (!seq && !src.walls.empty()) writeWallTable(md, src.walls);
+}
 
+void writeBattery(std::ostream& md, const DiagnosisResult& r) {
   md << "\n## What the baseline gets wrong: discrepancy statistics\n\n";
   md << "Each statistic on the data against " << r.replicas
      << " parametric bootstrap replicas (the same geometry simulated from the fitted baseline and refitted); p-value from the "
@@ -280,7 +275,10 @@ void writeDiagnosis(const std::filesystem::path& dir, const DiagnosisResult& r, 
   md << "\n<details><summary>How each statistic is computed</summary>\n\n";
   for (const auto& d : r.battery) md << "- `" << d.name << "`: " << d.description << "\n";
   md << "\n</details>\n";
+}
 
+void writeCandidates(std::ostream& md, const DiagnosisResult& r) {
+  const bool seq = r.mode == diagnosis::DiagnoseMode::sequence;
   md << "\n## Candidate effects\n\n";
   md << "Each effect added to the baseline and fitted; held-out log-likelihood gain per point (" << r.folds
      << " folds by scan" << (seq ? ", odometry leave-one-stop-out" : ", wall beams leave-one-out")
@@ -295,76 +293,84 @@ void writeDiagnosis(const std::filesystem::path& dir, const DiagnosisResult& r, 
        << (c.applicable ? fmt(c.delta_aic, 1) : "-") << " | " << c.parameters << " | " << (c.significant ? "**yes**" : "no")
        << " | " << (c.identifiable ? "yes" : "no") << " | " << est << " | " << c.note << " |\n";
   }
+}
 
+void writeExtended(std::ostream& md, const DiagnosisResult& r) {
   md << "\n## The extended model\n\n";
   if (r.extended_parameters.empty() && r.scene_keys.empty()) {
     md << "No effect was named: the baseline stays.\n";
-  } else {
-    md << "Effect `" << r.primary_cause << "`:";
-    for (const auto& [k, v] : r.extended_parameters) md << " " << k << " = " << fmt(v, 5) << ";";
-    md << "\n\nScene keys that simulate it (`lidarcal simulate`, docs/FORMAT.md):\n\n";
-    for (const auto& [k, v] : r.scene_keys) md << "- `" << k << "` = " << fmt(v, 6) << "\n";
-    md << "\n| simulation | KS distance of standardised residuals to the data | median abs ln(variance ratio) per group | groups |\n|---|---|---|---|\n";
-    md << "| baseline | " << fmt(r.closeness_baseline.ks_distance, 4) << " | " << fmt(r.closeness_baseline.variance_ratio_median_abs_log, 3)
-       << " | " << r.closeness_baseline.groups << " |\n";
-    md << "| extended | " << fmt(r.closeness_extended.ks_distance, 4) << " | " << fmt(r.closeness_extended.variance_ratio_median_abs_log, 3)
-       << " | " << r.closeness_extended.groups << " |\n";
-    if (r.calibration_mse_ratio_baseline > 0.0)
-      md << "\nAgainst the truth: MSE ratio (raw MSE / corrected MSE, higher is better; Alhashimi et al. 2021, eq. 31) of the calibration " << fmt(r.calibration_mse_ratio_baseline, 1)
-         << " with the baseline, " << fmt(r.calibration_mse_ratio_extended, 1) << " with the extended model.\n";
+    return;
   }
+  md << "Effect `" << r.primary_cause << "`:";
+  for (const auto& [k, v] : r.extended_parameters) md << " " << k << " = " << fmt(v, 5) << ";";
+  md << "\n\nScene keys that simulate it (`lidarcal simulate`, docs/FORMAT.md):\n\n";
+  for (const auto& [k, v] : r.scene_keys) md << "- `" << k << "` = " << fmt(v, 6) << "\n";
+  md << "\n| simulation | KS distance of standardised residuals to the data | median abs ln(variance ratio) per group | groups |\n|---|---|---|---|\n";
+  md << "| baseline | " << fmt(r.closeness_baseline.ks_distance, 4) << " | " << fmt(r.closeness_baseline.variance_ratio_median_abs_log, 3)
+     << " | " << r.closeness_baseline.groups << " |\n";
+  md << "| extended | " << fmt(r.closeness_extended.ks_distance, 4) << " | " << fmt(r.closeness_extended.variance_ratio_median_abs_log, 3)
+     << " | " << r.closeness_extended.groups << " |\n";
+  if (r.calibration_mse_ratio_baseline > 0.0)
+    md << "\nAgainst the truth: MSE ratio (raw MSE / corrected MSE, higher is better; Alhashimi et al. 2021, eq. 31) of the calibration " << fmt(r.calibration_mse_ratio_baseline, 1)
+       << " with the baseline, " << fmt(r.calibration_mse_ratio_extended, 1) << " with the extended model.\n";
+}
 
-  // Plots.
-  const auto vars = variables(r.mode);
-  double tmax = 1.0;
-  for (const auto& x : r.measured) tmax = std::max(tmax, x.time);
-  const double time_bin = std::max(1.0, std::ceil(tmax / 40.0));
-  // The scatter's vertical range: the central 99 % of the residuals (a few gross ones would flatten the rest).
+// ---- Plots ----
+
+/// The scatter's vertical range: the central 99 % of the residuals (a few gross ones would
+/// flatten the rest), mm.
+std::pair<double, double> residualRange(const std::vector<ResidualRecord>& measured) {
   double ylo = -1.0, yhi = 1.0;
-  {
-    std::vector<double> mm;
-    for (const auto& x : r.measured)
-      if (std::isfinite(x.residual_m)) mm.push_back(1000.0 * x.residual_m);
-    if (mm.size() > 10) {
-      std::sort(mm.begin(), mm.end());
-      ylo = mm[mm.size() / 200];
-      yhi = mm[mm.size() - 1 - mm.size() / 200];
-      const double pad = 0.1 * (yhi - ylo) + 1e-3;
-      ylo -= pad;
-      yhi += pad;
-    }
+  std::vector<double> mm;
+  for (const auto& x : measured)
+    if (std::isfinite(x.residual_m)) mm.push_back(1000.0 * x.residual_m);
+  if (mm.size() > 10) {
+    std::sort(mm.begin(), mm.end());
+    ylo = mm[mm.size() / 200];
+    yhi = mm[mm.size() - 1 - mm.size() / 200];
+    const double pad = 0.1 * (yhi - ylo) + 1e-3;
+    ylo -= pad;
+    yhi += pad;
   }
-  std::ostringstream gp;
-  gp << "set terminal pngcairo size 900,760 font \"DejaVu Sans,10\"\nset grid\n";
-  for (const auto& v : vars) {
-    io::writeTextAtomically(dir / ("scatter_" + v.file + ".dat"), scatter(r.measured, v, 12000));
-    std::ostringstream b;
-    b.precision(6);
-    const auto m = binned(r.measured, v, time_bin), sb = binned(r.simulated_baseline, v, time_bin),
-               se = binned(r.simulated_extended, v, time_bin);
-    for (const auto& [k, a] : m) {
-      b << k << ' ' << a[0] << ' ' << a[2];
-      auto ib = sb.find(k);
-      b << ' ' << (ib != sb.end() ? fmt(ib->second[2], 5) : "NaN");
-      auto ie = se.find(k);
-      b << ' ' << (ie != se.end() ? fmt(ie->second[2], 5) : "NaN");
-      b << ' ' << (ib != sb.end() ? fmt(ib->second[0], 5) : "NaN") << '\n';
-    }
-    io::writeTextAtomically(dir / ("binned_" + v.file + ".dat"), b.str());
-    gp << "set output \"residuals_" << v.file << ".png\"\nset multiplot layout 2,1 title \"Residuals against " << v.title
-       << ": measured vs simulated\"\n";
-    gp << "set xlabel \"" << v.label << "\"\nset ylabel \"residual [mm] (central 99 %)\"\nset key top right\nset yrange ["
-       << ylo << ":" << yhi << "]\n";
-    gp << "plot \"scatter_" << v.file << ".dat\" using 1:2 with points pt 7 ps 0.2 lc rgb \"#bbbbbb\" title \"measured readings\", "
-       << "\"binned_" << v.file << ".dat\" using 1:2 with linespoints lw 2 pt 7 lc rgb \"#cc3311\" title \"measured, mean\", "
-       << "\"binned_" << v.file << ".dat\" using 1:6 with linespoints lw 2 pt 6 dt 2 lc rgb \"#0077bb\" title \"simulated baseline, mean\"\n";
-    gp << "set ylabel \"sd of standardised residual\"\nset yrange [*:*]\n";
-    gp << "plot \"binned_" << v.file << ".dat\" using 1:3 with linespoints lw 2 pt 7 lc rgb \"#cc3311\" title \"measured\", "
-       << "\"binned_" << v.file << ".dat\" using 1:4 with linespoints lw 2 pt 6 lc rgb \"#0077bb\" title \"simulated baseline\", "
-       << "\"binned_" << v.file << ".dat\" using 1:5 with linespoints lw 2 pt 4 lc rgb \"#009944\" title \"simulated extended\", "
-       << "1 with lines dt 2 lc rgb \"black\" notitle\n";
-    gp << "unset multiplot\n";
+  return {ylo, yhi};
+}
+
+/// binned_<v>.dat: x, measured mean residual and z spread, simulated spreads, simulated baseline mean.
+std::string binnedTable(const DiagnosisResult& r, const Variable& v, double time_bin) {
+  std::ostringstream b;
+  b.precision(6);
+  const auto m = binned(r.measured, v, time_bin), sb = binned(r.simulated_baseline, v, time_bin),
+             se = binned(r.simulated_extended, v, time_bin);
+  for (const auto& [k, a] : m) {
+    b << k << ' ' << a[0] << ' ' << a[2];
+    auto ib = sb.find(k);
+    b << ' ' << (ib != sb.end() ? fmt(ib->second[2], 5) : "NaN");
+    auto ie = se.find(k);
+    b << ' ' << (ie != se.end() ? fmt(ie->second[2], 5) : "NaN");
+    b << ' ' << (ib != sb.end() ? fmt(ib->second[0], 5) : "NaN") << '\n';
   }
+  return b.str();
+}
+
+/// The gnuplot commands of one variable's residual plot (scatter and means, spreads).
+void residualPlot(std::ostream& gp, const Variable& v, double ylo, double yhi) {
+  gp << "set output \"residuals_" << v.file << ".png\"\nset multiplot layout 2,1 title \"Residuals against " << v.title
+     << ": measured vs simulated\"\n";
+  gp << "set xlabel \"" << v.label << "\"\nset ylabel \"residual [mm] (central 99 %)\"\nset key top right\nset yrange ["
+     << ylo << ":" << yhi << "]\n";
+  gp << "plot \"scatter_" << v.file << ".dat\" using 1:2 with points pt 7 ps 0.2 lc rgb \"#bbbbbb\" title \"measured readings\", "
+     << "\"binned_" << v.file << ".dat\" using 1:2 with linespoints lw 2 pt 7 lc rgb \"#cc3311\" title \"measured, mean\", "
+     << "\"binned_" << v.file << ".dat\" using 1:6 with linespoints lw 2 pt 6 dt 2 lc rgb \"#0077bb\" title \"simulated baseline, mean\"\n";
+  gp << "set ylabel \"sd of standardised residual\"\nset yrange [*:*]\n";
+  gp << "plot \"binned_" << v.file << ".dat\" using 1:3 with linespoints lw 2 pt 7 lc rgb \"#cc3311\" title \"measured\", "
+     << "\"binned_" << v.file << ".dat\" using 1:4 with linespoints lw 2 pt 6 lc rgb \"#0077bb\" title \"simulated baseline\", "
+     << "\"binned_" << v.file << ".dat\" using 1:5 with linespoints lw 2 pt 4 lc rgb \"#009944\" title \"simulated extended\", "
+     << "1 with lines dt 2 lc rgb \"black\" notitle\n";
+  gp << "unset multiplot\n";
+}
+
+/// The distribution plot's data files and gnuplot commands.
+void distributionPlot(const std::filesystem::path& dir, const DiagnosisResult& r, std::ostream& gp) {
   io::writeTextAtomically(dir / "hist_measured.dat", histogram(r.measured));
   io::writeTextAtomically(dir / "hist_baseline.dat", histogram(r.simulated_baseline));
   io::writeTextAtomically(dir / "hist_extended.dat", histogram(r.simulated_extended));
@@ -375,19 +381,82 @@ void writeDiagnosis(const std::filesystem::path& dir, const DiagnosisResult& r, 
      << "\"hist_baseline.dat\" using 1:2 with steps lw 2 lc rgb \"#0077bb\" title \"simulated baseline\", "
      << "\"hist_extended.dat\" using 1:2 with steps lw 2 lc rgb \"#009944\" title \"simulated extended\", "
      << "exp(-x*x/2)/sqrt(2*pi) with lines dt 2 lc rgb \"black\" title \"N(0,1)\"\nunset logscale y\n";
+}
+
+/// Writes the plots' data and plots.gp, runs gnuplot and adds the Plots section.
+void writePlots(const std::filesystem::path& dir, const DiagnosisResult& r, std::ostream& md) {
+  const auto vars = variables(r.mode);
+  double tmax = 1.0;
+  for (const auto& x : r.measured) tmax = std::max(tmax, x.time);
+  const double time_bin = std::max(1.0, std::ceil(tmax / 40.0));
+  const auto [ylo, yhi] = residualRange(r.measured);
+  std::ostringstream gp;
+  gp << "set terminal pngcairo size 900,760 font \"DejaVu Sans,10\"\nset grid\n";
+  for (const auto& v : vars) {
+    io::writeTextAtomically(dir / ("scatter_" + v.file + ".dat"), scatter(r.measured, v, 12000));
+    io::writeTextAtomically(dir / ("binned_" + v.file + ".dat"), binnedTable(r, v, time_bin));
+    residualPlot(gp, v, ylo, yhi);
+  }
+  distributionPlot(dir, r, gp);
   io::writeTextAtomically(dir / "plots.gp", gp.str());
   std::string why;
   const bool plotted = runGnuplot(dir, "plots.gp", &why);
   md << "\n## Plots\n\n";
   if (!plotted) {
     md << "(" << why << ")\n";
-  } else {
-    md << "Top: residuals of the measured readings under the baseline (grey), their mean per bin (red) and the same for a "
-          "simulated replica of the baseline (blue). Bottom: spread of the standardised residuals per bin, measured and "
-          "simulated from the baseline and from the extended model (1 = the model's noise).\n\n";
-    for (const auto& v : vars) md << "![residuals against " << v.title << "](residuals_" << v.file << ".png)\n\n";
-    md << "![distribution of the standardised residuals](residual_distribution.png)\n";
+    return;
   }
+  md << "Top: residuals of the measured readings under the baseline (grey), their mean per bin (red) and the same for a "
+        "simulated replica of the baseline (blue). Bottom: spread of the standardised residuals per bin, measured and "
+        "simulated from the baseline and from the extended model (1 = the model's noise).\n\n";
+  for (const auto& v : vars) md << "![residuals against " << v.title << "](residuals_" << v.file << ".png)\n\n";
+  md << "![distribution of the standardised residuals](residual_distribution.png)\n";
+}
+
+}  // namespace
+
+nlohmann::ordered_json diagnosisJson(const DiagnosisResult& r, const DiagnosisSource& src) {
+  ojson candidates = ojson::array();
+  for (const auto& c : r.candidates) candidates.push_back(candidateJson(c));
+  const bool named = !r.extended_parameters.empty() || !r.scene_keys.empty();
+  ojson extended = named ? ojson{{"effect", r.primary_cause},
+                                 {"parameters", numbers(r.extended_parameters)},
+                                 {"bias_alpha", r.extended_bias_alpha},
+                                 {"scene_keys", numbers(r.scene_keys)}}
+                         : ojson(nullptr);
+  return ojson{{"format", "lidarcal-diagnosis/1"},
+               {"mode", toString(r.mode)},
+               {"status", r.status},
+               {"message", r.message},
+               {"data", dataJson(r, src)},
+               {"settings", ojson{{"seed", r.seed},
+                                  {"replicas", r.replicas},
+                                  {"folds", r.folds},
+                                  {"multiple_testing", "holm"}}},
+               {"baseline", baselineJson(r, src)},
+               {"battery", batteryJson(r.battery)},
+               {"candidates", candidates},
+               {"primary_cause", r.primary_cause},
+               {"decision", r.decision},
+               {"extended_model", extended},
+               {"gain", gainJson(r, named)}};
+}
+
+void writeDiagnosis(const std::filesystem::path& dir, const DiagnosisResult& r, const DiagnosisSource& src) {
+  io::writeTextAtomically(dir / "diagnosis.json", diagnosisJson(r, src).dump(2) + "\n");
+  std::ostringstream md;
+  writeDataLine(md, r, src);
+  if (r.status != "ok") {
+    md << "**Not diagnosed: " << r.status << ".** " << r.message << "\n";
+    io::writeTextAtomically(dir / "report.md", md.str());
+    return;
+  }
+  writeVerdict(md, r);
+  writeBaseline(md, r, src);
+  writeBattery(md, r);
+  writeCandidates(md, r);
+  writeExtended(md, r);
+  writePlots(dir, r, md);
   if (!src.command.empty()) md << "\nProduced by `" << src.command << "`.\n";
   io::writeTextAtomically(dir / "report.md", md.str());
 }

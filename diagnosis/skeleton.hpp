@@ -1,0 +1,97 @@
+#pragma once
+// The steps of a diagnosis (diagnosis/diagnosis.hpp) shared by both kinds of data: the candidate
+// list, the held-out likelihoods and their gain, the battery's score of a candidate, and the
+// driver that runs the five steps on a mode's problem object (sequence.cpp, static_scene.cpp).
+// Internal to the diagnosis library.
+
+#include <cstddef>
+#include <map>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "diagnosis/diagnosis.hpp"
+#include "diagnosis/stats.hpp"
+
+namespace lidarcal::diagnosis {
+
+/// The candidates to test: `config.candidates`, or all of the mode when empty. Throws
+/// std::invalid_argument for a name that is not in `all` ("... for <what>").
+std::vector<std::string> candidateList(const DiagnoseConfig& config, const std::vector<std::string>& all,
+                                       const std::string& what);
+
+/// Held-out log-likelihoods, point by point: of the baseline, of each candidate, and the block
+/// (scan, stop or wall bin) each point belongs to; the standard error of a gain is over blocks.
+struct HeldOut {
+  std::vector<double> base;                 ///< baseline, per held-out point, nats
+  std::vector<std::vector<double>> cand;    ///< per candidate, aligned with `base`
+  std::vector<std::size_t> block;           ///< block of each point
+  double points = 0.0;                      ///< the count the gains are divided by ("per point")
+  explicit HeldOut(std::size_t candidates) : cand(candidates) {}
+  /// Mean baseline log-likelihood per point.
+  double baselineMean() const;
+};
+
+/// Held-out gain of one candidate over the baseline.
+struct HeldOutGain {
+  double gain = 0.0;    ///< sum of the differences over `points`, nats per point
+  double se = 0.0;      ///< its standard error from the per-block sums
+  bool finite = true;   ///< every difference was finite
+};
+HeldOutGain heldOutGain(const HeldOut& held, std::size_t candidate);
+
+/// Sets the candidate's held-out gain, its standard error and one-sided p-value.
+void setHeldOutGain(CandidateResult& r, const HeldOutGain& g);
+
+/// The battery's score statistic aimed at the candidate (r.statistic): its p-value and effect size.
+void setScore(CandidateResult& r, const std::vector<Discrepancy>& battery);
+
+/// Runs the five steps of diagnosis.hpp on a mode's problem object, which provides:
+///   bool fitBaseline(DiagnosisResult&)                 1. false: out.status says why not
+///   std::map<std::string, double> measuredStatistics(DiagnosisResult&)   (and out.measured)
+///   void replica(int b, std::map<std::string, std::vector<double>>&, DiagnosisResult&)   2.
+///   const std::vector<StatisticInfo>& statisticInfo()
+///   std::size_t candidateCount(); void heldOut(HeldOut&); const char* noHeldOut()   3.
+///   void beforeCandidates(DiagnosisResult&); CandidateResult candidate(std::size_t, const HeldOut&, const DiagnosisResult&);
+///   void afterCandidates(DiagnosisResult&)
+///   std::vector<std::pair<std::string, std::string>> nestedEffects()    4. (see nameCause)
+///   Closeness closenessBaseline(const DiagnosisResult&); void extend(std::size_t, DiagnosisResult&)   5.
+/// Steps run in this order; what a mode draws at random is seeded per replica.
+template <class Mode>
+void runDiagnosis(Mode& mode, const DiagnoseConfig& config, const std::vector<std::string>& candidates,
+                  DiagnosisResult& out) {
+  // 1. Baseline: the seeds' model.
+  if (!mode.fitBaseline(out)) return;
+  const std::map<std::string, double> measured = mode.measuredStatistics(out);
+  // 2. Parametric bootstrap from the fitted baseline: the battery's p-values.
+  std::map<std::string, std::vector<double>> replica_stats;
+  for (int b = 0; b < config.replicas; ++b) mode.replica(b, replica_stats, out);
+  out.battery = makeBattery(mode.statisticInfo(), measured, replica_stats);
+  // 3. Candidates: held-out gain, delta AIC, identifiability.
+  HeldOut held(candidates.size());
+  mode.heldOut(held);
+  if (held.base.empty()) {
+    out.status = "cross_validation_failed";
+    out.message = mode.noHeldOut();
+    return;
+  }
+  out.baseline_heldout_nats_per_point = held.baselineMean();
+  mode.beforeCandidates(out);
+  for (std::size_t c = 0; c < candidates.size(); ++c) out.candidates.push_back(mode.candidate(c, held, out));
+  mode.afterCandidates(out);
+  // 4. The cause.
+  out.primary_cause = nameCause(out.candidates, config.alpha, out.decision, mode.nestedEffects());
+  // 5. The extended model and how close its simulation comes to the data.
+  out.closeness_baseline = mode.closenessBaseline(out);
+  for (std::size_t c = 0; c < candidates.size(); ++c) {
+    if (candidates[c] != out.primary_cause) continue;
+    const CandidateResult& r = out.candidates[c];
+    out.extended_parameters = r.estimates;
+    out.gain_heldout_nats_per_point = r.heldout_gain_nats_per_point;
+    out.gain_delta_aic = r.delta_aic;
+    mode.extend(c, out);
+    break;
+  }
+}
+
+}  // namespace lidarcal::diagnosis
