@@ -33,7 +33,7 @@ void openBag(rosbag::Bag& bag, const fs::path& file) {
   } catch (const ros::Exception& e) {
     throw InputError(file.string(), "", std::string("cannot be read as a ROS1 bag (rosbag: ") + e.what() + ")",
                      "a truncated or unindexed bag (recording interrupted) can be repaired on a copy with "
-                     "`rosbag reindex`; a ROS2 bag (.db3/.mcap) needs `rosbags-convert` first");
+                     "`rosbag reindex`; a ROS 2 bag (directory, .mcap or .db3) is read with --from rosbag2");
   }
 }
 

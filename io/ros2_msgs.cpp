@@ -6,10 +6,17 @@ namespace lidarcal::io {
 namespace {
 
 /// std_msgs/msg/Header: builtin_interfaces/msg/Time (int32 sec, uint32 nanosec), string frame_id.
-double readHeader(CdrReader& in, std::string& frame_id) {
-  const std::int32_t sec = in.i32();
-  const std::uint32_t nanosec = in.u32();
+void readHeader(CdrReader& in, std::int32_t& sec, std::uint32_t& nanosec, std::string& frame_id) {
+  sec = in.i32();
+  nanosec = in.u32();
   frame_id = in.str();
+}
+
+/// The header's stamp in seconds (sec + 1e-9 nanosec), its frame_id in `frame_id`.
+double readHeader(CdrReader& in, std::string& frame_id) {
+  std::int32_t sec = 0;
+  std::uint32_t nanosec = 0;
+  readHeader(in, sec, nanosec, frame_id);
   return static_cast<double>(sec) + 1e-9 * static_cast<double>(nanosec);
 }
 
@@ -39,9 +46,7 @@ LaserScanView Ros2LaserScan::view() const {
 
 void decodeLaserScan(const std::uint8_t* data, std::size_t size, Ros2LaserScan& msg) {
   CdrReader in(data, size);
-  msg.stamp_sec = in.i32();
-  msg.stamp_nanosec = in.u32();
-  msg.frame_id = in.str();
+  readHeader(in, msg.stamp_sec, msg.stamp_nanosec, msg.frame_id);
   msg.angle_min = in.f32();
   msg.angle_max = in.f32();
   msg.angle_increment = in.f32();

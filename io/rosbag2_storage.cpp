@@ -50,12 +50,12 @@ class Db3File : public Rosbag2File {
   explicit Db3File(const fs::path& file) : name_(file.string()) {
     std::error_code ec;
     if (!fs::is_regular_file(file, ec)) throw InputError(name_, "", "file does not exist", "check the path");
-    if (sqlite3_open_v2(name_.c_str(), &db_, SQLITE_OPEN_READONLY, nullptr) != SQLITE_OK) fail("", "cannot be opened");
+    sqlite3* db = nullptr;
+    const int rc = sqlite3_open_v2(name_.c_str(), &db, SQLITE_OPEN_READONLY, nullptr);
+    db_.reset(db);  // closed on every path, also when the constructor throws (sqlite3_open_v2 may allocate on failure)
+    if (rc != SQLITE_OK) fail("", "cannot be opened");
     readTopics();
   }
-  ~Db3File() override { sqlite3_close(db_); }
-  Db3File(const Db3File&) = delete;
-  Db3File& operator=(const Db3File&) = delete;
 
   std::vector<Rosbag2Topic> topics() const override { return topics_; }
 
@@ -81,10 +81,10 @@ class Db3File : public Rosbag2File {
 
  private:
   [[noreturn]] void fail(const std::string& item, const std::string& problem) const {
-    throw InputError(name_, item, problem + " (sqlite: " + (db_ ? sqlite3_errmsg(db_) : "out of memory") + ")", kDb3Remedy);
+    throw InputError(name_, item, problem + " (sqlite: " + (db_ ? sqlite3_errmsg(db_.get()) : "out of memory") + ")", kDb3Remedy);
   }
   void prepare(Statement& st, const std::string& sql, const std::string& table) const {
-    if (sqlite3_prepare_v2(db_, sql.c_str(), -1, &st.s, nullptr) != SQLITE_OK) fail("table " + table, "cannot be read");
+    if (sqlite3_prepare_v2(db_.get(), sql.c_str(), -1, &st.s, nullptr) != SQLITE_OK) fail("table " + table, "cannot be read");
   }
   /// topics(id, name, type, serialization_format) and the message count of each.
   void readTopics() {
@@ -111,8 +111,11 @@ class Db3File : public Rosbag2File {
     if (rc != SQLITE_DONE) fail("table messages", "cannot be read");
   }
 
+  struct Close {
+    void operator()(sqlite3* db) const { sqlite3_close(db); }
+  };
   std::string name_;
-  sqlite3* db_ = nullptr;
+  std::unique_ptr<sqlite3, Close> db_;
   std::vector<Rosbag2Topic> topics_;
   std::map<std::int64_t, std::string> names_;  // topic id -> name
 };

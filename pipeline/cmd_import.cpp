@@ -181,7 +181,8 @@ void addImportCommand(CLI::App& app) {
                 "Each recording is one stop, even where their poses are equal (e.g. a static sensor recorded at "
                 "several measured target distances; sequence.json stop_starts, docs/FORMAT.md)");
   sub->add_option("-o,--out", o->out, "Sequence directory to create (scan_NNNNNN.pcd + sequence.json)");
-  sub->add_option("--topic", o->topic, "rosbag1/rosbag2: sensor_msgs/LaserScan topic (default: the bag's only one)");
+  sub->add_option("--topic", o->topic, "rosbag1/rosbag2: the LaserScan topic (sensor_msgs/LaserScan, sensor_msgs/msg/LaserScan; default: the "
+                  "bag's only one)");
   sub->add_flag("--list-topics", o->list_topics, "rosbag1/rosbag2: list the bag's topics and exit");
   sub->add_option("--every", o->every, "Keep every N-th scan")->check(CLI::PositiveNumber)->capture_default_str();
   sub->add_option("--max-scans", o->max_scans, "Stop after writing N scans (0 = all)")->capture_default_str();

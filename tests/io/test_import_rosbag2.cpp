@@ -75,6 +75,18 @@ void expectPoints(const Scan& got, const TestScan& want) {
   }
 }
 
+/// `lidarcal import -q ARGS -o OUT` succeeds and scan k of OUT holds the points of want(k).
+void importAndExpectPoints(const std::string& args, const fs::path& out, TestScan (*want)(int), std::size_t scans) {
+  const auto r = test::runCli("import -q " + args + " -o " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Sequence seq = openSequence(out);
+  ASSERT_EQ(seq.scans.size(), scans);
+  for (std::size_t k = 0; k < scans; ++k) {
+    SCOPED_TRACE(k);
+    expectPoints(readScan(seq.scans[k].path), want(static_cast<int>(k)));
+  }
+}
+
 struct McapCase {
   std::string first, second;  // compressions of the two chunks
   bool big_endian;
@@ -133,19 +145,8 @@ TEST_P(Rosbag2Mcap, TheCommandWritesThePointsTheTestComputes) {
   TempDir dir;
   const fs::path bag = dir / "recording";  // no extension: the content decides
   test::writeFile(bag, mcapBag(GetParam()));
-  const auto r = test::runCli("import -q " + bag.string() + " --topic /scan -o " + (dir / "seq").string());
-  ASSERT_EQ(r.exit_code, 0) << r.err;
-  const Sequence seq = openSequence(dir / "seq");
-  ASSERT_EQ(seq.scans.size(), 7u);
-  for (std::size_t k = 0; k < 7; ++k) {
-    SCOPED_TRACE(k);
-    expectPoints(readScan(seq.scans[k].path), scanA(static_cast<int>(k)));
-  }
-  const auto b = test::runCli("import -q --from rosbag2 " + bag.string() + " --topic /scan_b -o " + (dir / "seq_b").string());
-  ASSERT_EQ(b.exit_code, 0) << b.err;
-  const Sequence seq_b = openSequence(dir / "seq_b");
-  ASSERT_EQ(seq_b.scans.size(), 3u);
-  for (std::size_t k = 0; k < 3; ++k) expectPoints(readScan(seq_b.scans[k].path), scanB(static_cast<int>(k)));
+  importAndExpectPoints(bag.string() + " --topic /scan", dir / "seq", scanA, 7);
+  importAndExpectPoints("--from rosbag2 " + bag.string() + " --topic /scan_b", dir / "seq_b", scanB, 3);
 }
 
 INSTANTIATE_TEST_SUITE_P(Compressions, Rosbag2Mcap,
@@ -195,12 +196,17 @@ std::string mcapWithOdometry() {
   return mcapHead() + chunkRecord(records, "zstd", 0, 750) + mcapTail();
 }
 
+RosbagConfig withPose(BagPoseConfig::Kind kind, const std::string& name) {
+  RosbagConfig config;
+  config.pose.kind = kind;
+  config.pose.name = name;
+  return config;
+}
+
 TEST(Rosbag2Pose, OdometryGivesEachScanTheInterpolatedPose) {
   TempDir dir;
   test::writeFile(dir / "bag.mcap", mcapWithOdometry());
-  RosbagConfig config;
-  config.pose.kind = BagPoseConfig::Kind::odom;
-  config.pose.name = "/odom";
+  RosbagConfig config = withPose(BagPoseConfig::Kind::odom, "/odom");
   Collector got;
   const ImportReport r = readRosbag2(dir / "bag.mcap", config, got.callback());
   ASSERT_EQ(got.scans.size(), 5u);
@@ -231,9 +237,7 @@ std::string mcapWithTf() {
 TEST(Rosbag2Pose, TfChainGivesTheScanFramesPoseInTheFixedFrame) {
   TempDir dir;
   test::writeFile(dir / "bag.mcap", mcapWithTf());
-  RosbagConfig config;
-  config.pose.kind = BagPoseConfig::Kind::tf;
-  config.pose.name = "map";
+  RosbagConfig config = withPose(BagPoseConfig::Kind::tf, "map");
   Collector got;
   readRosbag2(dir / "bag.mcap", config, got.callback());
   ASSERT_EQ(got.scans.size(), 5u);
@@ -307,14 +311,7 @@ TEST(Rosbag2Db3, DirectoryOfTwoFilesGivesTheScansInTimeOrderAndTheTestsPoints) {
   ASSERT_EQ(topics.size(), 2u);
   EXPECT_EQ(topics[1].topic, "/scan");
   EXPECT_EQ(topics[1].messages, 7u);
-  const auto r = test::runCli("import -q " + bag.string() + " -o " + (dir / "seq").string());
-  ASSERT_EQ(r.exit_code, 0) << r.err;
-  const Sequence seq = openSequence(dir / "seq");
-  ASSERT_EQ(seq.scans.size(), 7u);
-  for (std::size_t k = 0; k < 7; ++k) {
-    SCOPED_TRACE(k);
-    expectPoints(readScan(seq.scans[k].path), scanA(static_cast<int>(k)));
-  }
+  importAndExpectPoints(bag.string(), dir / "seq", scanA, 7);
   // One .db3 file on its own (big-endian CDR this time).
   TempDir other;
   const fs::path bag2 = db3Bag(other, true);
