@@ -94,13 +94,14 @@ struct McapCase {
 void PrintTo(const McapCase& c, std::ostream* os) { *os << "'" << c.first << "' + '" << c.second << "'" << (c.big_endian ? " big-endian" : ""); }
 
 /// /scan: scans 0..5 in two chunks with interleaved log times (even k in the first chunk, odd k
-/// in the second), scan 6 as a message outside chunks; /scan_b: 3 scans; /chatter: 2 strings.
+/// in the second, each chunk's in reverse time order), scan 6 as a message outside chunks;
+/// /scan_b: 3 scans; /chatter: 2 strings.
 std::string mcapBag(const McapCase& c) {
   using namespace test;
   const auto t = [](int k) { return std::uint64_t{1000} + 10u * static_cast<unsigned>(k); };
   std::string a = schemaRecord(1, "sensor_msgs/msg/LaserScan") + channelRecord(1, 1, "/scan") + channelRecord(3, 1, "/scan_b");
   std::string b = schemaRecord(2, "std_msgs/msg/String") + channelRecord(2, 2, "/chatter");
-  for (int k = 0; k < 6; ++k) (k % 2 ? b : a) += messageRecord(1, t(k), laserScanCdr(scanA(k), c.big_endian));
+  for (int k = 5; k >= 0; --k) (k % 2 ? b : a) += messageRecord(1, t(k), laserScanCdr(scanA(k), c.big_endian));
   for (int k = 0; k < 3; ++k) a += messageRecord(3, t(k) + 1, laserScanCdr(scanB(k), c.big_endian));
   b += messageRecord(2, 1001, "\0\1\0\0\3\0\0\0hi\0"s) + messageRecord(2, 1051, "\0\1\0\0\3\0\0\0hi\0"s);
   return mcapHead() + chunkRecord(a, c.first, t(0), t(4)) + chunkRecord(b, c.second, t(1), 1051) +
