@@ -103,6 +103,7 @@ const char* toString(RecordingKind kind) {
   switch (kind) {
     case RecordingKind::rosbag1: return "rosbag1";
     case RecordingKind::mcap: return "mcap";
+    case RecordingKind::rosbag2: return "rosbag2";
     case RecordingKind::carmen: return "carmen";
     case RecordingKind::ydlidar: return "ydlidar";
     case RecordingKind::csv: return "csv";
@@ -113,8 +114,15 @@ const char* toString(RecordingKind kind) {
 
 DetectedFormat detectRecordingFormat(const std::filesystem::path& file) {
   std::error_code ec;
-  if (std::filesystem::is_directory(file, ec))
-    throw InputError(file.string(), "", "is a directory, expected a recording file", "give the path of the recording");
+  DetectedFormat d;
+  if (std::filesystem::is_directory(file, ec)) {
+    if (!std::filesystem::is_regular_file(file / "metadata.yaml", ec))
+      throw InputError(file.string(), "", "is a directory without metadata.yaml (not a ROS 2 bag), expected a recording file",
+                       "give the path of the recording");
+    d.kind = RecordingKind::rosbag2;
+    d.evidence = "it is a directory with metadata.yaml (a ROS 2 bag)";
+    return d;
+  }
   std::ifstream in(file, std::ios::binary);
   if (!in) {
     if (!std::filesystem::exists(file, ec)) throw InputError(file.string(), "", "file does not exist", "check the path");
@@ -123,7 +131,6 @@ DetectedFormat detectRecordingFormat(const std::filesystem::path& file) {
   char head[16] = {};
   in.read(head, sizeof head);
   const std::string magic(head, static_cast<std::size_t>(in.gcount()));
-  DetectedFormat d;
   if (magic.rfind("#ROSBAG V2.0", 0) == 0) {
     d.kind = RecordingKind::rosbag1;
     d.evidence = "it starts with #ROSBAG V2.0";
@@ -132,6 +139,11 @@ DetectedFormat detectRecordingFormat(const std::filesystem::path& file) {
   if (magic.rfind("\x89MCAP0\r\n", 0) == 0) {
     d.kind = RecordingKind::mcap;
     d.evidence = "it starts with the MCAP magic";
+    return d;
+  }
+  if (magic == std::string("SQLite format 3\0", 16)) {
+    d.kind = RecordingKind::rosbag2;
+    d.evidence = "it is an SQLite database (a ROS 2 .db3 bag file)";
     return d;
   }
   d.gzip = magic.size() >= 2 && static_cast<unsigned char>(magic[0]) == 0x1f && static_cast<unsigned char>(magic[1]) == 0x8b;

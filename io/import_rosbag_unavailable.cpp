@@ -17,10 +17,6 @@ namespace {
 bool rosbagSupported() { return false; }
 void requireRosbagSupport(const std::filesystem::path& bag) { unavailable(bag); }
 
-void RosbagConfig::validate() const {
-  checkRangeLimits(range_min_m.value_or(0.0), range_max_m.value_or(std::numeric_limits<double>::infinity()));
-}
-
 std::vector<BagTopic> listBagTopics(const std::filesystem::path& bag) { unavailable(bag); }
 
 ImportReport readRosbag(const std::filesystem::path& bag, const RosbagConfig&, const ScanCallback&) { unavailable(bag); }

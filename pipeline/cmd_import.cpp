@@ -1,4 +1,4 @@
-// lidarcal import [--from rosbag1|carmen|ydlidar|csv] INPUT --out SEQ [options]
+// lidarcal import [--from rosbag1|rosbag2|carmen|ydlidar|csv] INPUT --out SEQ [options]
 // Streams a recording into a PCD scan sequence (docs/FORMAT.md, "Importing recordings").
 
 #include <algorithm>
@@ -38,13 +38,13 @@ struct ImportOptions {
   double still_deg = rad2deg(io::BagPoseConfig{}.still_rad);
 };
 
-/// rosbag1 --pose odom:TOPIC | tf:FRAME.
+/// rosbag1/rosbag2 --pose odom:TOPIC | tf:FRAME.
 io::BagPoseConfig bagPose(const ImportOptions& o, const CLI::App& sub) {
   io::BagPoseConfig p;
   const auto colon = o.pose.find(':');
   const std::string kind = o.pose.substr(0, colon);
   if (colon == std::string::npos || (kind != "odom" && kind != "tf") || colon + 1 == o.pose.size())
-    throw InputError("", "--pose " + o.pose, "for a ROS1 bag, --pose is odom:TOPIC (nav_msgs/Odometry) or tf:FIXED_FRAME",
+    throw InputError("", "--pose " + o.pose, "for a ROS bag, --pose is odom:TOPIC (nav_msgs/Odometry) or tf:FIXED_FRAME",
                      "e.g. --pose odom:/odom or --pose tf:map");
   p.kind = kind == "odom" ? io::BagPoseConfig::Kind::odom : io::BagPoseConfig::Kind::tf;
   p.name = o.pose.substr(colon + 1);
@@ -62,18 +62,17 @@ ImportFormat detectedFormat(const std::string& input) {
   const io::DetectedFormat d = io::detectRecordingFormat(input);
   switch (d.kind) {
     case io::RecordingKind::rosbag1: return ImportFormat::rosbag1;
+    case io::RecordingKind::mcap:
+    case io::RecordingKind::rosbag2: return ImportFormat::rosbag2;
     case io::RecordingKind::carmen: return ImportFormat::carmen;
     case io::RecordingKind::ydlidar: return ImportFormat::ydlidar;
     case io::RecordingKind::csv: return ImportFormat::csv;
-    case io::RecordingKind::mcap:
-      throw InputError(input, "", "is an MCAP file (ROS 2): reading MCAP is not supported yet",
-                       "convert it to a ROS1 bag (e.g. with the rosbags tools) or to lidarcal's CSV (docs/FORMAT.md)");
     case io::RecordingKind::unknown: break;
   }
   throw InputError(input, "", std::string("cannot tell the recording's format from its content") +
                                     (d.gzip ? " (gzip-compressed)" : "") +
-                                    ": not a ROS1 bag, a CARMEN log, a YDLIDAR X4 .dat or a CSV with a header",
-                   "name the format with --from rosbag1|carmen|ydlidar|csv (docs/FORMAT.md)");
+                                    ": not a ROS1 or ROS 2 bag, a CARMEN log, a YDLIDAR X4 .dat or a CSV with a header",
+                   "name the format with --from rosbag1|rosbag2|carmen|ydlidar|csv (docs/FORMAT.md)");
 }
 
 /// --from, or the format every input's content shows (they must agree).
@@ -87,16 +86,28 @@ ImportFormat inputFormat(const ImportOptions& o) {
   return first;
 }
 
-void listTopics(const ImportOptions& o) {
-  if (inputFormat(o) != ImportFormat::rosbag1)
-    throw InputError("", "--list-topics", "applies to --from rosbag1 only", "drop --list-topics");
+void printTopics(const ImportOptions& o) {
+  const std::vector<io::BagTopic> topics = listTopics(inputFormat(o), o.inputs.front());
   std::printf("| topic | type | messages |\n|---|---|---|\n");
-  for (const io::BagTopic& t : io::listBagTopics(o.inputs.front()))
+  for (const io::BagTopic& t : topics)
     std::printf("| %s | %s | %zu |\n", t.topic.c_str(), t.datatype.c_str(), t.messages);
 }
 
+/// Bytes of an input for the progress display (a ROS 2 bag directory: its files).
+std::uintmax_t inputBytes(const std::filesystem::path& input) {
+  std::error_code ec;
+  if (!std::filesystem::is_directory(input, ec)) {
+    const auto size = std::filesystem::file_size(input, ec);
+    return ec ? 0 : size;
+  }
+  std::uintmax_t bytes = 0;
+  for (const auto& e : std::filesystem::directory_iterator(input, ec))
+    if (e.is_regular_file(ec)) bytes += e.file_size(ec);
+  return bytes;
+}
+
 void runImport(const ImportOptions& o, const CLI::App& sub) {
-  if (o.list_topics) return listTopics(o);
+  if (o.list_topics) return printTopics(o);
   if (o.out.empty()) throw InputError("", "--out", "is required", "give the sequence directory to create");
   ImportSettings s;
   s.format = inputFormat(o);
@@ -110,17 +121,17 @@ void runImport(const ImportOptions& o, const CLI::App& sub) {
   s.writer.max_scans = o.max_scans;
   s.writer.overwrite = o.overwrite;
   s.writer.encoding = o.ascii ? io::PcdEncoding::ascii : io::PcdEncoding::binary;
-  if (sub.count("--pose") && s.format == ImportFormat::rosbag1) {
+  if (sub.count("--pose") && isBag(s.format)) {
     s.bag_pose = bagPose(o, sub);
   } else if (sub.count("--pose")) {
     if (s.format != ImportFormat::carmen)
-      throw InputError("", "--pose", "applies to --from carmen and rosbag1 only", "drop --pose");
+      throw InputError("", "--pose", "applies to --from carmen, rosbag1 and rosbag2 only", "drop --pose");
     if (o.pose != "corrected" && o.pose != "odometry")
       throw InputError("", "--pose " + o.pose, "for a CARMEN log, --pose is corrected or odometry", "e.g. --pose odometry");
     s.carmen_pose = o.pose == "odometry" ? io::CarmenPose::odometry : io::CarmenPose::corrected;
   }
   if ((sub.count("--still-m") || sub.count("--still-deg")) && s.bag_pose.kind == io::BagPoseConfig::Kind::none)
-    throw InputError("", "--still-m/--still-deg", "apply to a ROS1 bag with --pose odom:TOPIC or tf:FRAME only",
+    throw InputError("", "--still-m/--still-deg", "apply to a ROS bag with --pose odom:TOPIC or tf:FRAME only",
                      "drop them, or give --pose");
   if (sub.count("--range-min")) s.range_min_m = o.range_min_m;
   if (sub.count("--range-max")) s.range_max_m = o.range_max_m;
@@ -128,11 +139,7 @@ void runImport(const ImportOptions& o, const CLI::App& sub) {
 
   // Progress in KiB of the inputs read (the number of scans is not known before the end).
   std::uintmax_t bytes = 0;
-  for (const auto& input : s.inputs) {
-    std::error_code ec;
-    const auto size = std::filesystem::file_size(input, ec);
-    if (!ec) bytes += size;
-  }
+  for (const auto& input : s.inputs) bytes += inputBytes(input);
   const std::size_t kib = std::max<std::size_t>(1, static_cast<std::size_t>(bytes / 1024));
   Progress progress("import (KiB read)", kib);
   const ImportResult r = importRecording(s, [&](double fraction) {
@@ -161,33 +168,35 @@ void runImport(const ImportOptions& o, const CLI::App& sub) {
 void addImportCommand(CLI::App& app) {
   auto o = std::make_shared<ImportOptions>();
   CLI::App* sub = app.add_subcommand(
-      "import", "Convert a recording (ROS1 bag, CARMEN log, YDLIDAR X4 .dat, CSV; format detected from the content) "
+      "import", "Convert a recording (ROS1 bag, ROS 2 bag, CARMEN log, YDLIDAR X4 .dat, CSV; format detected from the content) "
                 "into a scan sequence, streaming");
   sub->add_option("--from", o->from, "Input format (default: detected from the content)")
-      ->check(CLI::IsMember({"rosbag1", "carmen", "ydlidar", "csv"}));
+      ->check(CLI::IsMember({"rosbag1", "rosbag2", "carmen", "ydlidar", "csv"}));
   sub->add_option("INPUT", o->inputs,
-                  "The recording(s) (.bag; CARMEN .log or .log.gz; .dat; .csv; text inputs may be gzip), imported one "
+                  "The recording(s) (.bag; ROS 2 bag directory, .mcap or .db3; CARMEN .log or .log.gz; .dat; .csv; text inputs "
+                  "may be gzip), imported one "
                   "after the other into one sequence")
       ->required();
   sub->add_flag("--stop-per-input", o->stop_per_input,
                 "Each recording is one stop, even where their poses are equal (e.g. a static sensor recorded at "
                 "several measured target distances; sequence.json stop_starts, docs/FORMAT.md)");
   sub->add_option("-o,--out", o->out, "Sequence directory to create (scan_NNNNNN.pcd + sequence.json)");
-  sub->add_option("--topic", o->topic, "rosbag1: sensor_msgs/LaserScan topic (default: the bag's only one)");
-  sub->add_flag("--list-topics", o->list_topics, "rosbag1: list the bag's topics and exit");
+  sub->add_option("--topic", o->topic, "rosbag1/rosbag2: the LaserScan topic (sensor_msgs/LaserScan, sensor_msgs/msg/LaserScan; default: the "
+                  "bag's only one)");
+  sub->add_flag("--list-topics", o->list_topics, "rosbag1/rosbag2: list the bag's topics and exit");
   sub->add_option("--every", o->every, "Keep every N-th scan")->check(CLI::PositiveNumber)->capture_default_str();
   sub->add_option("--max-scans", o->max_scans, "Stop after writing N scans (0 = all)")->capture_default_str();
   sub->add_option("--pose", o->pose,
                   "carmen: VIEWPOINT from the laser pose (`corrected`: FLASER x y theta) or the odometry "
-                  "(`odometry`: FLASER odom_x odom_y odom_theta). rosbag1: `odom:TOPIC` (nav_msgs/Odometry, composed "
+                  "(`odometry`: FLASER odom_x odom_y odom_theta). rosbag1/rosbag2: `odom:TOPIC` (nav_msgs/Odometry, composed "
                   "with the sensor's mount from /tf_static) or `tf:FIXED_FRAME` (the scan frame's pose through /tf and "
                   "/tf_static), interpolated at each scan's stamp")
       ->capture_default_str();
   sub->add_option("--still-m", o->still_m,
-                  "rosbag1 with --pose: poses within this distance (m) of a stop's first pose are that pose (the "
+                  "rosbag1/rosbag2 with --pose: poses within this distance (m) of a stop's first pose are that pose (the "
                   "scans form one stop)")
       ->capture_default_str();
-  sub->add_option("--still-deg", o->still_deg, "rosbag1 with --pose: ... and within this heading change (degrees)")
+  sub->add_option("--still-deg", o->still_deg, "rosbag1/rosbag2 with --pose: ... and within this heading change (degrees)")
       ->capture_default_str();
   sub->add_option("--range-min", o->range_min_m, "Readings below this (m) become beams without return (default: per format)");
   sub->add_option("--range-max", o->range_max_m, "Readings above this (m) become beams without return (default: per format)");
@@ -195,7 +204,7 @@ void addImportCommand(CLI::App& app) {
   sub->add_flag("--ascii", o->ascii, "Write ASCII PCD instead of binary");
   sub->add_flag("--overwrite", o->overwrite, "Replace SEQ if it exists");
   sub->footer(std::string("ROS1 bag support in this build: ") + (io::rosbagSupported() ? "yes" : "no") +
-              ". Formats, conventions and range limits: docs/FORMAT.md.");
+              "; ROS 2 bags (.mcap, .db3, bag directories) are always read. Formats, conventions and range limits: docs/FORMAT.md.");
   sub->callback([o, sub] { runImport(*o, *sub); });
 }
 

@@ -7,21 +7,24 @@
 #include "io/atomic_file.hpp"
 #include "io/import_csv.hpp"
 #include "io/import_rosbag.hpp"
+#include "io/import_rosbag2.hpp"
 #include "io/import_ydlidar.hpp"
 
 namespace lidarcal::pipeline {
 
 ImportFormat parseImportFormat(const std::string& name) {
   if (name == "rosbag1") return ImportFormat::rosbag1;
+  if (name == "rosbag2") return ImportFormat::rosbag2;
   if (name == "carmen") return ImportFormat::carmen;
   if (name == "ydlidar") return ImportFormat::ydlidar;
   if (name == "csv") return ImportFormat::csv;
-  throw InputError("", "--from", "unknown input format '" + name + "'", "use rosbag1, carmen, ydlidar or csv");
+  throw InputError("", "--from", "unknown input format '" + name + "'", "use rosbag1, rosbag2, carmen, ydlidar or csv");
 }
 
 const char* toString(ImportFormat format) {
   switch (format) {
     case ImportFormat::rosbag1: return "rosbag1";
+    case ImportFormat::rosbag2: return "rosbag2";
     case ImportFormat::carmen: return "carmen";
     case ImportFormat::ydlidar: return "ydlidar";
     case ImportFormat::csv: return "csv";
@@ -35,13 +38,14 @@ namespace {
 io::ImportReport readOne(const ImportSettings& s, const std::filesystem::path& input, const io::ScanCallback& on_scan) {
   const double inf = std::numeric_limits<double>::infinity();
   switch (s.format) {
-    case ImportFormat::rosbag1: {
+    case ImportFormat::rosbag1:
+    case ImportFormat::rosbag2: {
       io::RosbagConfig c;
       c.topic = s.topic;
       c.range_min_m = s.range_min_m;
       c.range_max_m = s.range_max_m;
       c.pose = s.bag_pose;
-      return io::readRosbag(input, c, on_scan);
+      return s.format == ImportFormat::rosbag1 ? io::readRosbag(input, c, on_scan) : io::readRosbag2(input, c, on_scan);
     }
     case ImportFormat::carmen: {
       io::CarmenConfig c;
@@ -68,10 +72,18 @@ io::ImportReport readOne(const ImportSettings& s, const std::filesystem::path& i
 
 }  // namespace
 
+bool isBag(ImportFormat format) { return format == ImportFormat::rosbag1 || format == ImportFormat::rosbag2; }
+
+std::vector<io::BagTopic> listTopics(ImportFormat format, const std::filesystem::path& bag) {
+  if (format == ImportFormat::rosbag2) return io::listRosbag2Topics(bag);
+  if (format == ImportFormat::rosbag1) return io::listBagTopics(bag);
+  throw InputError("", "--list-topics", "applies to --from rosbag1 and rosbag2 only", "drop --list-topics");
+}
+
 ImportResult importRecording(const ImportSettings& s, const std::function<void(double)>& on_progress) {
   if (s.inputs.empty()) throw InputError("", "INPUT", "no recording given", "name one or more recordings to import");
-  if (s.format != ImportFormat::rosbag1 && !s.topic.empty())
-    throw InputError("", "--topic", "applies to --from rosbag1 only", "drop --topic");
+  if (!isBag(s.format) && !s.topic.empty())
+    throw InputError("", "--topic", "applies to --from rosbag1 and rosbag2 only", "drop --topic");
   for (const auto& input : s.inputs) {
     if (s.format == ImportFormat::rosbag1) io::requireRosbagSupport(input);
     io::checkOutsideInput(input, s.out);

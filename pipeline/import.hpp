@@ -1,5 +1,5 @@
 #pragma once
-// `lidarcal import`: a recording (ROS1 bag, CARMEN log, YDLIDAR X4 .dat, CSV) streamed scan by
+// `lidarcal import`: a recording (ROS1 bag, ROS 2 bag, CARMEN log, YDLIDAR X4 .dat, CSV) streamed scan by
 // scan into a PCD scan sequence. Composition of an io importer and io::SequenceWriter.
 
 #include <filesystem>
@@ -15,9 +15,9 @@
 
 namespace lidarcal::pipeline {
 
-enum class ImportFormat { rosbag1, carmen, ydlidar, csv };
+enum class ImportFormat { rosbag1, rosbag2, carmen, ydlidar, csv };
 
-/// Parses "rosbag1", "carmen", "ydlidar" or "csv"; throws InputError otherwise.
+/// Parses "rosbag1", "rosbag2", "carmen", "ydlidar" or "csv"; throws InputError otherwise.
 ImportFormat parseImportFormat(const std::string& name);
 const char* toString(ImportFormat format);
 
@@ -29,9 +29,9 @@ struct ImportSettings {
   bool stop_per_input = false;
   std::filesystem::path out;                 ///< the sequence directory to create
   io::SequenceWriterConfig writer;           ///< --every, --max-scans, --overwrite, encoding
-  std::string topic;                         ///< rosbag1: LaserScan topic; empty = the only one
+  std::string topic;                         ///< rosbag1/rosbag2: LaserScan topic; empty = the only one
   io::CarmenPose carmen_pose = io::CarmenPose::corrected;  ///< carmen: pose written to VIEWPOINT
-  io::BagPoseConfig bag_pose;                ///< rosbag1: VIEWPOINT source (default: identity)
+  io::BagPoseConfig bag_pose;                ///< rosbag1/rosbag2: VIEWPOINT source (default: identity)
   std::optional<double> range_min_m;         ///< overrides the format's lower range limit, metres
   std::optional<double> range_max_m;         ///< overrides the format's upper range limit, metres
   std::string sensor_name;                   ///< sensor_name for sequence.json; empty = what the input says
@@ -46,5 +46,10 @@ struct ImportResult {
 /// receives the fraction of the inputs read, 0..1 (each input an equal share). Nothing appears at settings.out unless the whole import succeeds.
 /// Throws InputError for bad input or options.
 ImportResult importRecording(const ImportSettings& settings, const std::function<void(double)>& on_progress = {});
+
+/// True for the bag formats (rosbag1, rosbag2): --topic, --list-topics and --pose odom:|tf: apply.
+bool isBag(ImportFormat format);
+/// The topics of a bag of either format (`import --list-topics`).
+std::vector<io::BagTopic> listTopics(ImportFormat format, const std::filesystem::path& bag);
 
 }  // namespace lidarcal::pipeline

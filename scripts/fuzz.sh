@@ -7,13 +7,13 @@
 #
 #   scripts/fuzz.sh [SECONDS_PER_TARGET (default 60)] [TARGET ...]   # default: every target
 #
-# Six targets at 60 s each plus the build take about 10 minutes on two cores.
+# Eight targets at 60 s each plus the build take about 12 minutes on two cores.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 SECONDS_PER_TARGET="${1:-60}"
 shift || true
 TARGETS=("$@")
-[ ${#TARGETS[@]} -gt 0 ] || TARGETS=(pcd json csv carmen ydlidar csv_import)
+[ ${#TARGETS[@]} -gt 0 ] || TARGETS=(pcd json csv carmen ydlidar csv_import mcap cdr)
 JOBS="${JOBS:-2}"
 
 ./scripts/install-deps.sh

@@ -10,6 +10,7 @@ PACKAGES=(
   libcli11-dev nlohmann-json3-dev gnuplot-nox
   pcl-tools                        # pcl_viewer, to look at scans (docs/FORMAT.md)
   zlib1g-dev                       # gzip-compressed CARMEN logs (importer)
+  libzstd-dev liblz4-dev libsqlite3-dev  # ROS 2 bags: MCAP chunk compression, .db3 files (importer)
   # ROS1 bag reading (importer; see docs/BUILDING.md for why each is listed)
   librosbag-storage-dev libsensor-msgs-dev libclass-loader-dev
   librcpputils-dev librcutils-dev libament-index-cpp-dev

@@ -5,16 +5,20 @@
 #include <atomic>
 #include <filesystem>
 #include <fstream>
+#include <set>
 
 #include "common/errors.hpp"
 #include "io/import_carmen.hpp"
 #include "io/import_csv.hpp"
+#include "io/import_rosbag2.hpp"
 #include "io/import_ydlidar.hpp"
 #include "io/landmarks_csv.hpp"
+#include "io/mcap_reader.hpp"
 #include "io/model_io.hpp"
 #include "io/noise_json.hpp"
 #include "io/observations_csv.hpp"
 #include "io/pcd_scan.hpp"
+#include "io/ros2_msgs.hpp"
 #include "io/scene_io.hpp"
 #include "io/sequence.hpp"
 #include "io/true_ranges.hpp"
@@ -109,11 +113,42 @@ void csvImport(const std::uint8_t* data, std::size_t size) {
   expectResultOrInputError([&] { io::readCsvScans(p, io::CsvConfig{}, checkScan); });
 }
 
+/// The MCAP reader (every message of every channel, merged in log-time order) and the ROS 2
+/// importer on it: the only LaserScan topic, and with --pose odom:/odom.
+void mcap(const std::uint8_t* data, std::size_t size) {
+  static Scratch file("bag.mcap");
+  const auto& p = file.write(data, size);
+  expectResultOrInputError([&] {
+    const io::McapReader reader(p);
+    std::set<std::string> all;
+    for (const auto& c : reader.channels()) all.insert(c.topic);
+    std::uint64_t sum = 0;
+    reader.forEachMessage(all, [&](const io::McapMessage& m) {
+      for (std::size_t i = 0; i < m.size; ++i) sum += m.data[i];  // every byte handed on must be readable (ASan)
+      return true;
+    });
+  });
+  expectResultOrInputError([&] { io::readRosbag2(p, io::RosbagConfig{}, checkScan); });
+  io::RosbagConfig odom;
+  odom.pose.kind = io::BagPoseConfig::Kind::odom;
+  odom.pose.name = "/odom";
+  expectResultOrInputError([&] { io::readRosbag2(p, odom, checkScan); });
+}
+
+/// The CDR decoders of the three ROS 2 messages read, on the same bytes.
+void cdr(const std::uint8_t* data, std::size_t size) {
+  io::Ros2LaserScan scan;
+  expectResultOrInputError([&] { io::decodeLaserScan(data, size, scan); });
+  expectResultOrInputError([&] { io::decodeOdometry(data, size); });
+  expectResultOrInputError([&] { io::decodeTfMessage(data, size); });
+}
+
 }  // namespace
 
 const std::vector<NamedTarget>& targets() {
   static const std::vector<NamedTarget> all = {{"pcd", pcd},         {"json", json},       {"csv", csv},
-                                               {"carmen", carmen}, {"ydlidar", ydlidar}, {"csv_import", csvImport}};
+                                               {"carmen", carmen}, {"ydlidar", ydlidar}, {"csv_import", csvImport},
+                                               {"mcap", mcap},     {"cdr", cdr}};
   return all;
 }
 

@@ -423,12 +423,13 @@ TEST(ImportFormat, ImportWithoutFromGivesWhatFromGives) {
   // --from still overrides: the log read as CSV fails on the CSV header.
   const auto forced = runCli("import -q --from csv " + (dir / "rec.log").string() + " -o " + (dir / "s3").string());
   EXPECT_EQ(forced.exit_code, 2);
-  // MCAP and unknown content: exit 2 with what to do.
+  // A damaged MCAP file (read as a ROS 2 bag) and unknown content: exit 2 with what to do.
   writeFile(dir / "rec.mcap", std::string("\x89MCAP0\r\n", 8) + "rest");
   const auto mcap = runCli("import " + (dir / "rec.mcap").string() + " -o " + (dir / "s4").string());
   EXPECT_EQ(mcap.exit_code, 2);
-  EXPECT_TRUE(contains(mcap.err, "MCAP")) << mcap.err;
-  EXPECT_TRUE(contains(mcap.err, "not supported yet")) << mcap.err;
+  EXPECT_TRUE(contains(mcap.err, "as rosbag2")) << mcap.err;
+  EXPECT_TRUE(contains(mcap.err, "without a Footer")) << mcap.err;
+  EXPECT_TRUE(contains(mcap.err, "mcap recover")) << mcap.err;
   writeFile(dir / "notes.txt", "hello\n");
   const auto unknown = runCli("import " + (dir / "notes.txt").string() + " -o " + (dir / "s5").string());
   EXPECT_EQ(unknown.exit_code, 2);

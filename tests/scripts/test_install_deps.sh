@@ -116,5 +116,11 @@ expect nothing-missing "message" "install-deps: all ${#packages[@]} packages pre
 if printf '%s\n' "${packages[@]}" | "$grep_bin" -qx pcl-tools; then echo "ok   pcl-tools listed (pcl_viewer)"
 else echo "FAIL pcl-tools (pcl_viewer, mentioned in docs/FORMAT.md) is not in PACKAGES"; failures=$((failures + 1)); fi
 
+# The build needs them for ROS 2 bags (io/CMakeLists.txt stops without them).
+for p in libzstd-dev liblz4-dev libsqlite3-dev; do
+  if printf '%s\n' "${packages[@]}" | "$grep_bin" -qx "$p"; then echo "ok   $p listed (ROS 2 bag import)"
+  else echo "FAIL $p (needed to build io/ for ROS 2 bags) is not in PACKAGES"; failures=$((failures + 1)); fi
+done
+
 [ "$failures" -eq 0 ] && echo "all cases passed" || echo "$failures failure(s)"
 exit $((failures != 0))
