@@ -12,6 +12,7 @@
 
 #include "calibration/inversion.hpp"
 #include "calibration/noise_exponent.hpp"
+#include "common/stats_util.hpp"
 
 namespace lidarcal::calibration {
 namespace {
@@ -34,13 +35,6 @@ std::map<std::size_t, std::size_t> scansPerStop(const LandmarkObservations& obs)
   std::map<std::size_t, std::size_t> n;
   for (const auto& [stop, scans] : scans_of_stop) n[stop] = scans.size();
   return n;
-}
-
-double median(std::vector<double> v) {
-  if (v.empty()) return std::numeric_limits<double>::quiet_NaN();
-  std::sort(v.begin(), v.end());
-  const std::size_t m = v.size() / 2;
-  return v.size() % 2 ? v[m] : 0.5 * (v[m - 1] + v[m]);
 }
 
 /// Largest distance between two stop positions (the triangulation baseline), metres.

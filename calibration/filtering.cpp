@@ -1,4 +1,5 @@
 #include "calibration/filtering.hpp"
+#include "common/stats_util.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -46,7 +47,6 @@ RangeInverter modelInverter(const CalibrationModel& model, InversionMethod metho
 }
 
 CorrectedReading correctReading(double r, const RangeInverter& inverter, const CorrectionWindow& window) {
-  constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
   if ((r < window.reading_min_m || r > window.reading_max_m) && window.outside != Outside::extrapolate) {
     if (window.outside == Outside::drop) return {kNaN, ReadingFate::outside_dropped};
     return {r, ReadingFate::outside_kept};

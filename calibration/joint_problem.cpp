@@ -8,11 +8,11 @@
 #include <tuple>
 
 #include "calibration/range_model_fit.hpp"
+#include "common/stats_util.hpp"
 
 namespace lidarcal::calibration::joint {
 namespace {
 
-constexpr double kLog2Pi = 1.8378770664093453;
 constexpr double kWeakCentrePriorSigmaM = 100.0;
 
 /// Size of a noise law, to tell when its re-estimation has settled.

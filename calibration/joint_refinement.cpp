@@ -13,14 +13,9 @@
 
 #include "calibration/joint_problem.hpp"
 #include "common/range_effects.hpp"
+#include "common/stats_util.hpp"
 
 namespace lidarcal::calibration {
-namespace {
-
-constexpr double kLog2Pi = 1.8378770664093453;
-
-}  // namespace
-
 const char* toString(MotionPrior m) {
   switch (m) {
     case MotionPrior::automatic: return "automatic";

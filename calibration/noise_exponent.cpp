@@ -1,4 +1,5 @@
 #include "calibration/noise_exponent.hpp"
+#include "common/stats_util.hpp"
 
 #include <cmath>
 #include <numeric>
@@ -19,7 +20,6 @@ NoiseExponentTest testNoiseExponent(const std::vector<std::vector<double>>& batc
   }
   t.batches = used.size();
   if (used.size() < 2) return t;
-  constexpr double kLog2Pi = 1.8378770664093453;
   for (int k = 0; k <= 3; ++k) {
     // Eq. 14 from successive differences, which cancel f(d): var(y_k - y_k-1) = 2 f^2k sigma_e^2.
     // (We divide by the |B_b| - 1 differences a batch has; eq. 14 prints |B_b|.)

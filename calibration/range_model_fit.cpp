@@ -1,6 +1,7 @@
 #include "calibration/range_model_fit.hpp"
 
 #include "common/pose2.hpp"
+#include "common/stats_util.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -14,7 +15,6 @@
 namespace lidarcal::calibration {
 namespace {
 
-constexpr double kLog2Pi = 1.8378770664093453;
 
 double evalPoly(const std::vector<double>& c, double x) {
   double v = 0.0;

@@ -15,18 +15,10 @@
 #include "calibration/joint_refinement.hpp"
 #include "calibration/noise_exponent.hpp"
 #include "calibration/range_model_fit.hpp"
+#include "common/stats_util.hpp"
 
 namespace lidarcal::calibration {
 namespace {
-
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-double median(std::vector<double> v) {
-  if (v.empty()) return kNaN;
-  std::sort(v.begin(), v.end());
-  const std::size_t m = v.size() / 2;
-  return v.size() % 2 ? v[m] : 0.5 * (v[m - 1] + v[m]);
-}
 
 /// v with `digits` decimals.
 std::string fixed(double v, int digits) {
@@ -277,7 +269,6 @@ ClusteredFit fitClustered(const std::vector<double>& d, const std::vector<double
   const Eigen::MatrixXd inv = bread.ldlt().solve(Eigen::MatrixXd::Identity(p, p));
   fit.covariance = inv * meat * inv * (groups > 1.0 ? groups / (groups - 1.0) : 1.0);
   // Gaussian NLL of y ~ N(f(d), sigma_e^2 f(d)^(2k)).
-  constexpr double kLog2Pi = 1.8378770664093453;
   fit.neg_log_likelihood = 0.0;
   for (std::size_t i = 0; i < d.size(); ++i) {
     const double sigma = fit.sigma_e / std::sqrt(w[i]);

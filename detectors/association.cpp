@@ -1,4 +1,5 @@
 #include "detectors/association.hpp"
+#include "common/stats_util.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -93,12 +94,6 @@ bool hasConflict(const std::vector<Node>& nodes, const std::vector<std::size_t>&
   return false;
 }
 
-double median(std::vector<double> v) {
-  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  return *mid;
-}
-
 /// Splits a group until no two of its nodes conflict, relinking with a shorter distance; past
 /// min_eps keeps, per conflict value, the node nearest the group's median.
 void split(const std::vector<Node>& nodes, std::vector<std::size_t> group, double eps, double min_eps,
@@ -114,7 +109,7 @@ void split(const std::vector<Node>& nodes, std::vector<std::size_t> group, doubl
   }
   std::vector<double> xs, ys;
   for (auto m : group) xs.push_back(nodes[m].x), ys.push_back(nodes[m].y);
-  const double mx = median(xs), my = median(ys);
+  const double mx = upperMedian(xs), my = upperMedian(ys);
   auto dist = [&](std::size_t m) { return std::hypot(nodes[m].x - mx, nodes[m].y - my); };
   std::vector<std::size_t> order = group;
   std::stable_sort(order.begin(), order.end(), [&](auto a, auto b) { return dist(a) < dist(b); });

@@ -1,4 +1,5 @@
 #include "studies/figures.hpp"
+#include "common/stats_util.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -10,7 +11,6 @@
 namespace lidarcal::studies {
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 /// Number with %.*g, "NaN" when not finite (gnuplot and spreadsheets read both).
 std::string num(double v, int digits = 6) {

@@ -9,11 +9,11 @@
 #include "detectors/sequence_detector.hpp"
 #include "simulation/simulator.hpp"
 #include "studies/trial.hpp"
+#include "common/stats_util.hpp"
 
 namespace lidarcal::studies {
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 Scene sceneOf(const std::vector<Cylinder>& layout, const PathSpec& path, const RangeModel& sensor, const ScanLevelConfig& c) {
   Scene scene;

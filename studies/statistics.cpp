@@ -1,4 +1,5 @@
 #include "studies/statistics.hpp"
+#include "common/stats_util.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -6,7 +7,6 @@
 
 namespace lidarcal::studies {
 namespace {
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 /// Type 7 quantile of sorted values.
 double quantile(const std::vector<double>& sorted, double p) {

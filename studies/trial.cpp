@@ -13,11 +13,11 @@
 #include "common/rng.hpp"
 #include "studies/draw.hpp"
 #include "studies/scan_level.hpp"
+#include "common/stats_util.hpp"
 
 namespace lidarcal::studies {
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 /// Stream tags, so the layout, the cells and the draws never share a random stream.
 constexpr std::uint64_t kLayoutTag = 0x6c61796f7574ULL;  // "layout"

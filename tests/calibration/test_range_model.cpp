@@ -9,11 +9,11 @@
 
 #include "calibration/noise_exponent.hpp"
 #include "calibration/range_model_fit.hpp"
+#include "common/stats_util.hpp"
 
 namespace lidarcal::calibration {
 namespace {
 
-constexpr double kLog2Pi = 1.8378770664093453;
 
 TEST(FitPolynomial, RecoversAnExactPolynomialOfEveryOrder) {
   for (int order = 0; order <= 5; ++order) {
