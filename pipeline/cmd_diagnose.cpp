@@ -22,7 +22,7 @@
 #include "io/model_io.hpp"
 #include "pipeline/commands.hpp"
 #include "pipeline/diagnose_report.hpp"
-#include "pipeline/landmark_observations.hpp"
+#include "pipeline/collect_sightings.hpp"
 #include "pipeline/progress.hpp"
 #include "pipeline/truth_eval.hpp"
 #include "pipeline/words.hpp"

@@ -12,6 +12,7 @@
 #include "io/atomic_file.hpp"
 #include "io/model_io.hpp"
 #include "io/reference_io.hpp"
+#include "pipeline/evaluation_json.hpp"
 #include "pipeline/cli_options.hpp"
 #include "pipeline/model_text.hpp"
 #include "pipeline/progress.hpp"

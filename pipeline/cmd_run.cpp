@@ -13,6 +13,7 @@
 #include "io/model_io.hpp"
 #include "pipeline/cli_options.hpp"
 #include "pipeline/commands.hpp"
+#include "pipeline/evaluation_json.hpp"
 #include "pipeline/model_text.hpp"
 #include "pipeline/papers.hpp"
 #include "pipeline/progress.hpp"
@@ -21,8 +22,6 @@
 #include "pipeline/words.hpp"
 
 namespace lidarcal::pipeline {
-
-nlohmann::ordered_json evaluationJson(const Evaluation& e);  // cmd_evaluate.cpp
 
 namespace {
 

@@ -7,7 +7,7 @@
 
 #include "calibration/filtering.hpp"
 #include "common/errors.hpp"
-#include "pipeline/landmark_observations.hpp"
+#include "pipeline/collect_sightings.hpp"
 
 namespace lidarcal::pipeline {
 

@@ -1,4 +1,4 @@
-#include "pipeline/landmark_observations.hpp"
+#include "pipeline/collect_sightings.hpp"
 
 #include <cmath>
 

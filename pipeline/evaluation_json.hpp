@@ -1,0 +1,14 @@
+#pragma once
+// The JSON of an evaluation against the truth, shared by `lidarcal evaluate` (cmd_evaluate.cpp,
+// where it is defined) and `lidarcal run`'s summary.
+
+#include <nlohmann/json.hpp>
+
+#include "pipeline/truth_eval.hpp"
+
+namespace lidarcal::pipeline {
+
+/// Scans, lost returns and the MSE comparisons (landmarks, walls, all returns) of `e`.
+nlohmann::ordered_json evaluationJson(const Evaluation& e);
+
+}  // namespace lidarcal::pipeline
