@@ -7,7 +7,7 @@
 #   bench/identical_outputs.sh --compare BEFORE_BINARY AFTER_BINARY [--quick]
 #
 # --compare keeps both output trees and compares them with bench/compare_outputs.py: every file
-# byte-identical, except JSON numbers equal to 12 significant digits (the last digits of a
+# byte-identical, except covariance-derived JSON numbers equal to 10 significant digits (the last digits of a
 # Ceres covariance follow the memory addresses of the parameter blocks; the tool lists them).
 #
 # The set: the bundled example through `run`; each scene of data/scenes/ (seed 1) through
