@@ -6,14 +6,19 @@
 # each) and the ratio of each to the floor (pcd_floor: read and write the same PCD files with
 # PCL), each pair timed in turn (farm-bench --vs) so that the ratio holds on a busy machine.
 #
-#   bench/speed.sh [RUNS]       (default 3; needs build/pipeline/lidarcal and build/bench/pcd_floor)
+#   bench/speed.sh [RUNS] [DIR] (default 3 runs, work files under DIR (default: mktemp's, on disk);
+#                               needs build/pipeline/lidarcal and build/bench/pcd_floor)
+#
+# DIR on tmpfs (/dev/shm) measures the computation alone; on a disk the file system's cost of
+# creating a thousand files in a fresh directory (which every command and the floor pay) varies
+# from run to run by a factor of 3 on ext4 here, and dominates both.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 L=$(readlink -f build/pipeline/lidarcal)
 F=$(readlink -f build/bench/pcd_floor)
 RUNS=${1:-3}
 DATA=${LIDARCAL_SHARED_DATA:-../shared/data}
-W=$(mktemp -d)
+if [ -n "${2:-}" ]; then W=$(mktemp -d -p "$2"); else W=$(mktemp -d); fi
 trap 'rm -rf "$W"' EXIT
 
 "$L" simulate -q --scene data/scenes/paper_field.json --stops 20 --scans-per-stop 50 --seed 3 -o "$W/s1000"

@@ -1,4 +1,5 @@
 #include "detectors/circle_fit.hpp"
+#include "detectors/ransac.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -6,11 +7,6 @@
 #include <stdexcept>
 
 #include <Eigen/Dense>
-#include <pcl/ModelCoefficients.h>
-#include <pcl/PointIndices.h>
-#include <pcl/sample_consensus/method_types.h>
-#include <pcl/sample_consensus/model_types.h>
-#include <pcl/segmentation/sac_segmentation.h>
 
 namespace lidarcal::detectors {
 
@@ -223,21 +219,14 @@ bool ransacCircle(const std::vector<Eigen::Vector2d>& pts, const Eigen::Vector2d
   centred->reserve(pts.size());
   for (const auto& p : pts)
     centred->push_back(pcl::PointXYZ(static_cast<float>(p.x() - origin.x()), static_cast<float>(p.y() - origin.y()), 0.0f));
-  pcl::SACSegmentation<pcl::PointXYZ> seg(/*random=*/false);  // fixed seed 12345 inside PCL
-  seg.setModelType(pcl::SACMODEL_CIRCLE2D);
-  seg.setMethodType(pcl::SAC_RANSAC);
-  seg.setDistanceThreshold(cfg.inlier_threshold_m);
-  seg.setMaxIterations(cfg.max_iterations);
-  seg.setProbability(cfg.probability);
-  seg.setRadiusLimits(cfg.radius_min_m, cfg.radius_max_m);
-  seg.setOptimizeCoefficients(false);  // refined below in double precision
-  seg.setInputCloud(centred);
-  pcl::PointIndices inliers;
-  pcl::ModelCoefficients coefficients;
-  seg.segment(inliers, coefficients);
-  if (inliers.indices.size() < 3 || coefficients.values.size() != 3) return false;
-  consensus.assign(inliers.indices.begin(), inliers.indices.end());
-  model = Circle2{coefficients.values[0] + origin.x(), coefficients.values[1] + origin.y(), coefficients.values[2]};
+  pcl::Indices inliers;
+  Eigen::VectorXf coefficients;
+  const RansacSettings settings{cfg.inlier_threshold_m, cfg.max_iterations, cfg.probability};
+  if (!ransacCircle2D(centred, settings, cfg.radius_min_m, cfg.radius_max_m, inliers, coefficients) ||
+      inliers.size() < 3 || coefficients.size() != 3)
+    return false;
+  consensus.assign(inliers.begin(), inliers.end());
+  model = Circle2{coefficients[0] + origin.x(), coefficients[1] + origin.y(), coefficients[2]};
   return true;
 }
 

@@ -1,15 +1,11 @@
 #include "detectors/line_fit.hpp"
+#include "detectors/ransac.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
 #include <Eigen/Dense>
-#include <pcl/ModelCoefficients.h>
-#include <pcl/PointIndices.h>
-#include <pcl/sample_consensus/method_types.h>
-#include <pcl/sample_consensus/model_types.h>
-#include <pcl/segmentation/sac_segmentation.h>
 
 namespace lidarcal::detectors {
 
@@ -74,23 +70,16 @@ LineFit fitLine(const pcl::PointCloud<pcl::PointXYZI>& cloud, const pcl::Indices
     centred->reserve(pts.size());
     for (const auto& p : pts)
       centred->push_back(pcl::PointXYZ(static_cast<float>(p.x() - centroid.x()), static_cast<float>(p.y() - centroid.y()), 0.0f));
-    pcl::SACSegmentation<pcl::PointXYZ> seg(/*random=*/false);
-    seg.setModelType(pcl::SACMODEL_LINE);
-    seg.setMethodType(pcl::SAC_RANSAC);
-    seg.setDistanceThreshold(cfg.inlier_threshold_m);
-    seg.setMaxIterations(cfg.max_iterations);
-    seg.setProbability(cfg.probability);
-    seg.setOptimizeCoefficients(false);
-    seg.setInputCloud(centred);
-    pcl::PointIndices inliers;
-    pcl::ModelCoefficients coefficients;
-    seg.segment(inliers, coefficients);
-    if (inliers.indices.size() < 2) {
+    pcl::Indices inliers;
+    Eigen::VectorXf coefficients;
+    const RansacSettings settings{cfg.inlier_threshold_m, cfg.max_iterations, cfg.probability};
+    ransacLine(centred, settings, inliers, coefficients);
+    if (inliers.size() < 2) {
       out.status = FitStatus::no_consensus;
       out.message = "RANSAC found no line";
       return out;
     }
-    sel.assign(inliers.indices.begin(), inliers.indices.end());
+    sel.assign(inliers.begin(), inliers.end());
     out.used_ransac = true;
   }
   std::vector<Eigen::Vector2d> sub;

@@ -7,6 +7,7 @@
 
 #include "common/errors.hpp"
 
+#include "detectors/detection_log.hpp"
 #include "detectors/landmark_radius.hpp"
 #include "detectors/stop_radius.hpp"
 
@@ -60,6 +61,7 @@ std::vector<Eigen::Vector2d> arcOf(const pcl::PointCloud<pcl::PointXYZI>& cloud,
 /// The detections of one stop, as they come.
 struct StopBlock {
   std::size_t stop = 0;
+  const std::vector<io::Scan>* loaded = nullptr;  // the stop's scans as loaded, in order
   std::vector<ScanDetections> scans;
   std::vector<Pose2> viewpoints;
   std::vector<std::vector<std::vector<Eigen::Vector2d>>> arcs;  // per scan, per detection (when collected)
@@ -133,9 +135,10 @@ void detectByStop(std::size_t scan_count, const ScanLoader& load, const StopOf& 
       block.viewpoints.push_back(scan.viewpoint);
       if (on_scan) on_scan(index[k]);
     }
+    block.loaded = &loaded;
+    on_stop(block);
     loaded.clear();
     index.clear();
-    on_stop(block);
   }
 }
 
@@ -189,6 +192,30 @@ bool continuousStops(std::size_t scan_count, const StopOf& stop_of, int min_stop
   return stops >= static_cast<std::size_t>(std::max(min_stops, 1)) && 2 * single > stops;
 }
 
+/// The inliers' coordinates into each detection of a stop (kept scans).
+void keepInlierPoints(StopBlock& block) {
+  for (std::size_t i = 0; i < block.scans.size(); ++i) {
+    const auto& cloud = *block.loaded->at(i).cloud;
+    for (auto& d : block.scans[i].detections) {
+      d.inlier_xy.clear();
+      d.inlier_xy.reserve(d.inliers.size());
+      for (auto k : d.inliers) d.inlier_xy.push_back({cloud[static_cast<std::size_t>(k)].x, cloud[static_cast<std::size_t>(k)].y});
+    }
+  }
+}
+
+/// A stop's detections and the track of each into the log; the log dropped when it cannot be
+/// written (then forEachScan detects again: the log only saves time).
+void logBlock(std::shared_ptr<DetectionLog>& log, const StopBlock& block, const std::vector<std::vector<int>>& cluster_of,
+              const std::vector<TrackSerial>& tracks) {
+  for (std::size_t i = 0; log && i < block.scans.size(); ++i) {
+    std::vector<TrackSerial> of(cluster_of[i].size(), 0);
+    for (std::size_t j = 0; j < of.size(); ++j)
+      if (cluster_of[i][j] >= 0) of[j] = tracks.at(static_cast<std::size_t>(cluster_of[i][j]));
+    if (!log->append(block.scans[i], of, pointsPrint(*block.loaded->at(i).cloud))) log.reset();
+  }
+}
+
 /// One pass over the scans: the association stop by stop, and (as asked) the kept scans and an
 /// even sample of each track's arcs.
 struct Pass {
@@ -196,6 +223,7 @@ struct Pass {
   std::map<TrackSerial, EvenSample<KeptArc>> arcs;  // per track alive (when collected)
   std::vector<ScanDetections> scans;       // when kept
   std::vector<Pose2> viewpoints;           // when kept
+  std::shared_ptr<DetectionLog> log;       // when not kept: every scan's detections and tracks
   TrackIds ids;
   Association association;
 };
@@ -207,6 +235,7 @@ Pass runPass(std::size_t scan_count, const ScanLoader& load, const StopOf& stop_
   StopLinker linker(config.association, countStops(scan_count, stop_of));
   std::vector<std::vector<int>> cluster_of_scan;         // kept scans: cluster of each detection
   std::vector<std::vector<TrackSerial>> track_of_scan;   // kept scans: track of each of its stop's clusters
+  if (!keep_scans) p.log = DetectionLog::create();
   detectByStop(scan_count, load, stop_of, base, hints_world, collect_arcs, [&](StopBlock& block) {
     StopClusters clusters;
     std::vector<std::vector<int>> cluster_of;
@@ -238,12 +267,15 @@ Pass runPass(std::size_t scan_count, const ScanLoader& load, const StopOf& stop_
       }
       for (auto t : linker.forgotten()) p.arcs.erase(t);
     }
+    if (p.log) logBlock(p.log, block, cluster_of, tracks);
     if (keep_scans) {
+      keepInlierPoints(block);
       for (auto& c : cluster_of) cluster_of_scan.push_back(std::move(c)), track_of_scan.push_back(tracks);
       for (auto& d : block.scans) p.scans.push_back(std::move(d));
       for (const auto& v : block.viewpoints) p.viewpoints.push_back(v);
     }
   }, on_scan);
+  if (p.log && !p.log->finish()) p.log.reset();
   p.association = linker.finish(p.ids);
   if (keep_scans)
     for (std::size_t i = 0; i < cluster_of_scan.size(); ++i)
@@ -290,6 +322,7 @@ void adopt(SequenceDetections& r, Pass& pass) {
   r.association = std::move(pass.association);
   r.replay.track_ids = pass.ids;
   r.replay.fingerprint = pass.fingerprint;
+  r.log = std::move(pass.log);
 }
 
 }  // namespace
@@ -364,20 +397,46 @@ SequenceDetections detectSequenceImpl(std::size_t scan_count, const ScanLoader& 
   return r;
 }
 
-void forEachScanImpl(const SequenceDetections& r, std::size_t scan_count, const ScanLoader& load, const StopOf& stop_of,
-                     const ScanVisitor& visit, const ProgressCallback& on_scan) {
-  if (!r.scans.empty() || scan_count == 0) {
-    if (r.scans.size() != scan_count)
-      throw std::invalid_argument("forEachScan: the result holds " + std::to_string(r.scans.size()) + " scans, not " +
-                                  std::to_string(scan_count));
-    for (std::size_t i = 0; i < scan_count; ++i) {
-      visit(i, r.scans[i], r.association.ids.at(i));
-      if (on_scan) on_scan(i + 1, scan_count);
-    }
-    return;
+/// The kept scans, loading each only when the visitor wants it.
+void visitKept(const SequenceDetections& r, std::size_t scan_count, const ScanLoader& load, bool with_scan,
+               const LoadedScanVisitor& visit, const ProgressCallback& on_scan) {
+  if (r.scans.size() != scan_count)
+    throw std::invalid_argument("forEachScan: the result holds " + std::to_string(r.scans.size()) + " scans, not " +
+                                std::to_string(scan_count));
+  const io::Scan none;
+  for (std::size_t i = 0; i < scan_count; ++i) {
+    visit(i, with_scan ? load(i) : none, r.scans[i], r.association.ids.at(i));
+    if (on_scan) on_scan(i + 1, scan_count);
   }
-  // The association again, stop by stop: the same stops and objects give the same tracks, and
-  // the ids found at the end of the first run.
+}
+
+/// The final pass read back from its log; each scan loaded once, and refused when its points
+/// are not those detected.
+void visitLogged(const SequenceDetections& r, std::size_t scan_count, const ScanLoader& load,
+                 const LoadedScanVisitor& visit, const ProgressCallback& on_scan) {
+  DetectionLog& log = *r.log;
+  log.rewind();
+  ScanDetections sd;
+  std::vector<TrackSerial> tracks;
+  std::uint64_t print = 0;
+  for (std::size_t i = 0; i < scan_count; ++i) {
+    if (!log.next(sd, tracks, print) || sd.scan_index != i)
+      throw std::invalid_argument("forEachScan: scan " + std::to_string(i) + " is not among those detected");
+    const io::Scan scan = load(i);
+    if (!scan.cloud || pointsPrint(*scan.cloud) != print)
+      throw DataError("scans", "scan " + std::to_string(i), "changed while they were being read (other points than before)",
+                      "leave the sequence untouched while lidarcal reads it, then run again");
+    std::vector<int> ids(tracks.size(), 0);
+    for (std::size_t j = 0; j < tracks.size(); ++j) ids[j] = r.replay.track_ids.of(tracks[j]);
+    visit(i, scan, sd, ids);
+    if (on_scan) on_scan(i + 1, scan_count);
+  }
+}
+
+/// The final pass run again stop by stop: the same stops and objects give the same tracks, and
+/// the ids found at the end of the first run.
+void visitReplayed(const SequenceDetections& r, std::size_t scan_count, const ScanLoader& load, const StopOf& stop_of,
+                   const LoadedScanVisitor& visit, const ProgressCallback& on_scan) {
   const auto& rp = r.replay;
   StopLinker linker(rp.association, countStops(scan_count, stop_of));
   std::uint64_t print = 0xcbf29ce484222325ull;
@@ -386,13 +445,26 @@ void forEachScanImpl(const SequenceDetections& r, std::size_t scan_count, const 
     std::vector<std::vector<int>> cluster_of;
     const std::vector<TrackSerial> tracks = linkBlock(block, rp.association, linker, print, clusters, cluster_of);
     for (std::size_t i = 0; i < block.scans.size(); ++i)
-      visit(block.scans[i].scan_index, block.scans[i], landmarkIds(cluster_of[i], tracks, rp.track_ids));
+      visit(block.scans[i].scan_index, block.loaded->at(i), block.scans[i], landmarkIds(cluster_of[i], tracks, rp.track_ids));
   }, [&](std::size_t i) {
     if (on_scan) on_scan(i + 1, scan_count);
   });
   if (print != rp.fingerprint)
     throw DataError("scans", "", "changed while they were being read (other objects at some stop than before)",
                     "leave the sequence untouched while lidarcal reads it, then run again");
+}
+
+/// Every scan with its detections: kept, logged or replayed, whichever the result allows.
+void forEachScanImpl(const SequenceDetections& r, std::size_t scan_count, const ScanLoader& load, const StopOf& stop_of,
+                     bool with_scan, const LoadedScanVisitor& visit, const ProgressCallback& on_scan) {
+  if (!r.scans.empty() || scan_count == 0) return visitKept(r, scan_count, load, with_scan, visit, on_scan);
+  if (r.log) return visitLogged(r, scan_count, load, visit, on_scan);
+  visitReplayed(r, scan_count, load, stop_of, visit, on_scan);
+}
+
+/// A visitor of detections as a visitor of loaded scans.
+LoadedScanVisitor ignoringScan(const ScanVisitor& visit) {
+  return [&visit](std::size_t i, const io::Scan&, const ScanDetections& d, const std::vector<int>& ids) { visit(i, d, ids); };
 }
 
 /// A vector's entries as a StopOf, after checking its length.
@@ -432,7 +504,7 @@ SequenceDetections detectSequence(const io::Sequence& sequence, const ScanLoader
 
 void forEachScan(const SequenceDetections& r, std::size_t scan_count, const ScanLoader& load,
                  const std::vector<std::size_t>& stop_of_scan, const ScanVisitor& visit, const ProgressCallback& on_scan) {
-  forEachScanImpl(r, scan_count, load, stopsOf(stop_of_scan, scan_count), visit, on_scan);
+  forEachScanImpl(r, scan_count, load, stopsOf(stop_of_scan, scan_count), false, ignoringScan(visit), on_scan);
 }
 
 void forEachScan(const SequenceDetections& result, const io::Sequence& sequence, const ScanVisitor& visit,
@@ -442,7 +514,18 @@ void forEachScan(const SequenceDetections& result, const io::Sequence& sequence,
 
 void forEachScan(const SequenceDetections& result, const io::Sequence& sequence, const ScanLoader& load,
                  const ScanVisitor& visit, const ProgressCallback& on_scan) {
-  forEachScanImpl(result, sequence.scans.size(), load, stopsOf(sequence), visit, on_scan);
+  forEachScanImpl(result, sequence.scans.size(), load, stopsOf(sequence), false, ignoringScan(visit), on_scan);
+}
+
+void forEachLoadedScan(const SequenceDetections& result, std::size_t scan_count, const ScanLoader& load,
+                       const std::vector<std::size_t>& stop_of_scan, const LoadedScanVisitor& visit,
+                       const ProgressCallback& on_scan) {
+  forEachScanImpl(result, scan_count, load, stopsOf(stop_of_scan, scan_count), true, visit, on_scan);
+}
+
+void forEachLoadedScan(const SequenceDetections& result, const io::Sequence& sequence, const LoadedScanVisitor& visit,
+                       const ProgressCallback& on_scan) {
+  forEachScanImpl(result, sequence.scans.size(), loaderOf(sequence), stopsOf(sequence), true, visit, on_scan);
 }
 
 std::vector<std::uint32_t> scanLabels(const ScanDetections& detections, const std::vector<int>& ids, std::size_t points) {

@@ -11,12 +11,14 @@
 // tracks alive. With `keep_scans` false the result holds no per-scan or per-stop data, so memory
 // does not grow with the length of the sequence (it grows with the landmarks and the objects
 // seen in the last AssociationConfig::forget_after_stops stops; the radius estimate keeps at
-// most arcs_per_landmark arcs per track); forEachScan then gives each scan's detections by
-// detecting each stop again.
+// most arcs_per_landmark arcs per track); the final pass's detections go to a temporary file
+// (detection_log.hpp), from which forEachScan gives each scan's detections without detecting
+// again (and, when no temporary file can be made, by detecting each stop again).
 
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -26,6 +28,8 @@
 #include "io/sequence.hpp"
 
 namespace lidarcal::detectors {
+
+class DetectionLog;
 
 struct SequenceDetectionConfig {
   DetectionConfig detection;      ///< per-scan detection; landmark_radius_m overrides sequence.json
@@ -38,7 +42,7 @@ struct SequenceDetectionConfig {
   double common_radius_tolerance = 0.15;
   /// Keep every scan's detections in the result (SequenceDetections::scans, viewpoints and
   /// association.ids). false: the result stays small whatever the number of scans, and
-  /// forEachScan detects each stop again to give them. Default true.
+  /// forEachScan reads them back from a temporary file. Default true.
   bool keep_scans = true;
   /// With the radius estimated: the arcs kept per stop cluster for the joint radius (spread
   /// evenly over its detections), which bounds what the estimate keeps per stop. Default 16.
@@ -87,6 +91,9 @@ struct SequenceDetections {
     TrackIds track_ids;                     ///< landmark id of each track of the final pass
     std::uint64_t fingerprint = 0;          ///< of the final pass's tracks at every stop (changed scans)
   } replay;
+  /// Without kept scans: the final pass's detections and tracks in a temporary file, which
+  /// forEachScan reads instead of detecting again; null when no temporary file could be made.
+  std::shared_ptr<DetectionLog> log;
 };
 
 /// Loads scan i of a sequence (0 <= i < scan count).
@@ -115,9 +122,10 @@ SequenceDetections detectSequence(const io::Sequence& sequence, const ScanLoader
 using ScanVisitor = std::function<void(std::size_t scan, const ScanDetections& detections, const std::vector<int>& ids)>;
 
 /// Visits every scan in order with its detections and ids: from the result when the scans were
-/// kept, else by detecting each stop again with the final configuration (one stop's detections
-/// in memory; `on_scan` reports those detections). `scan_count`, `load` and `stop_of_scan` must
-/// be those given to detectSequence; throws DataError when the scans changed in between.
+/// kept, else from the result's log (each scan loaded to check that its points are those
+/// detected), else by detecting each stop again with the final configuration (one stop's
+/// detections in memory). `scan_count`, `load` and `stop_of_scan` must be those given to
+/// detectSequence; throws DataError when the scans changed in between.
 void forEachScan(const SequenceDetections& result, std::size_t scan_count, const ScanLoader& load,
                  const std::vector<std::size_t>& stop_of_scan, const ScanVisitor& visit,
                  const ProgressCallback& on_scan = {});
@@ -129,6 +137,21 @@ void forEachScan(const SequenceDetections& result, const io::Sequence& sequence,
 /// The same with the scans obtained from `load` (the loader given to detectSequence).
 void forEachScan(const SequenceDetections& result, const io::Sequence& sequence, const detectors::ScanLoader& load,
                  const ScanVisitor& visit, const ProgressCallback& on_scan = {});
+
+/// Receives scan `scan` as loaded, its detections of the final pass and their landmark ids.
+using LoadedScanVisitor = std::function<void(std::size_t scan, const io::Scan& loaded, const ScanDetections& detections,
+                                             const std::vector<int>& ids)>;
+
+/// As forEachScan, with each scan loaded once and given to the visitor (a stop's scans when
+/// detecting again; otherwise one at a time). Throws DataError when a scan's points are not
+/// those detected.
+void forEachLoadedScan(const SequenceDetections& result, std::size_t scan_count, const ScanLoader& load,
+                       const std::vector<std::size_t>& stop_of_scan, const LoadedScanVisitor& visit,
+                       const ProgressCallback& on_scan = {});
+
+/// The same over a sequence directory.
+void forEachLoadedScan(const SequenceDetections& result, const io::Sequence& sequence, const LoadedScanVisitor& visit,
+                       const ProgressCallback& on_scan = {});
 
 /// Labels of one scan: 0 background, the landmark id on the inliers of each associated detection.
 std::vector<std::uint32_t> scanLabels(const ScanDetections& detections, const std::vector<int>& ids, std::size_t points);

@@ -43,9 +43,17 @@ struct ParsedHeader {
 };
 
 std::vector<std::string> splitWords(const std::string& line) {
-  std::istringstream in(line);
+  // Words separated by white space, as `>>` splits them (without a stream per line: every scan's
+  // header is parsed when a sequence is opened and again when the scan is read).
+  const auto space = [](char c) { return std::isspace(static_cast<unsigned char>(c)) != 0; };
   std::vector<std::string> words;
-  for (std::string w; in >> w;) words.push_back(w);
+  for (std::size_t i = 0; i < line.size();) {
+    while (i < line.size() && space(line[i])) ++i;
+    std::size_t e = i;
+    while (e < line.size() && !space(line[e])) ++e;
+    if (e > i) words.emplace_back(line, i, e - i);
+    i = e;
+  }
   return words;
 }
 
@@ -99,7 +107,14 @@ void checkNothingAfterData(std::istream& in, const std::string& where, std::size
   }
 }
 
-ParsedHeader parseHeader(const fs::path& file) {
+/// A scan file opened for reading: the stream and the file's size in bytes.
+struct PcdFile {
+  std::ifstream in;
+  std::size_t size = 0;
+};
+
+/// Opens a scan file once for everything read from it (header, checks, data).
+PcdFile openPcd(const fs::path& file) {
   const std::string where = file.string();
   std::error_code dir_ec;
   if (fs::is_directory(file, dir_ec)) {
@@ -112,12 +127,23 @@ ParsedHeader parseHeader(const fs::path& file) {
     throw InputError(where, "", "is a directory; give a .pcd file (e.g. " + example.string() + ")",
                      "commands that read a whole sequence (info, detect, calibrate, correct, run) take the directory");
   }
-  std::ifstream in(file, std::ios::binary);
-  if (!in) {
+  PcdFile f;
+  f.in.open(file, std::ios::binary);
+  if (!f.in) {
     std::error_code ec;
     if (!fs::exists(file, ec)) throw InputError(where, "", "file does not exist", "check the path");
     throw InputError(where, "", "cannot be opened for reading", "check its permissions");
   }
+  f.in.seekg(0, std::ios::end);
+  const std::streamoff size = f.in.tellg();
+  f.in.seekg(0, std::ios::beg);
+  if (size < 0) throw InputError(where, "", "cannot be read (no size)", "check that it is a regular file");
+  f.size = static_cast<std::size_t>(size);
+  return f;
+}
+
+/// The header's lines up to DATA, checked (the stream positioned at its start).
+ParsedHeader parseHeader(std::istream& in, const std::string& where) {
   ParsedHeader h;
   std::vector<std::string> sizes, types, counts;
   bool seen_fields = false, seen_size = false, seen_type = false;
@@ -249,10 +275,10 @@ void checkCoordinateField(const ParsedHeader& h, const std::string& name, bool r
 /// binary_compressed data starts with the compressed and the uncompressed size (uint32 each).
 /// PCL trusts the uncompressed size when unpacking: it must be what the header promises, and
 /// the compressed block must lie within the file.
-void checkCompressedBlock(const fs::path& file, const ParsedHeader& h, std::size_t promised, std::size_t data_bytes) {
-  const std::string where = file.string();
+void checkCompressedBlock(const std::string& where, const ParsedHeader& h, std::size_t promised, std::size_t data_bytes,
+                          std::istream& in) {
   std::uint32_t sizes[2] = {0, 0};
-  std::ifstream in(file, std::ios::binary);
+  in.clear();
   in.seekg(static_cast<std::streamoff>(h.data_offset));
   if (data_bytes < 8 || !in.read(reinterpret_cast<char*>(sizes), sizeof sizes))
     throw InputError(where, "DATA", "file is truncated: no compressed block after the header",
@@ -267,7 +293,8 @@ void checkCompressedBlock(const fs::path& file, const ParsedHeader& h, std::size
                      "the recording was cut short; re-export or drop this file");
 }
 
-ScanHeader toScanHeader(const fs::path& file, const ParsedHeader& h) {
+/// The checked header of `file` (`file_size` bytes; `in` its stream, for the compressed block).
+ScanHeader toScanHeader(const fs::path& file, const ParsedHeader& h, std::size_t file_size, std::istream& in) {
   const std::string where = file.string();
   checkCoordinateField(h, "x", true, where);
   checkCoordinateField(h, "y", true, where);
@@ -296,16 +323,14 @@ ScanHeader toScanHeader(const fs::path& file, const ParsedHeader& h) {
     point_bytes += static_cast<std::size_t>(f.size) * static_cast<std::size_t>(f.count);
     values += static_cast<std::size_t>(f.count);
   }
-  std::error_code ec;
-  const auto file_size = fs::file_size(file, ec);
-  if (!ec) {
+  {
     const std::size_t data_bytes = file_size > h.data_offset ? file_size - h.data_offset : 0;
     const double promised = static_cast<double>(point_bytes) * static_cast<double>(out.points);
     if (h.data == "binary" && file_size < h.data_offset + point_bytes * out.points)
       throw InputError(where, "DATA", "file is truncated: " + std::to_string(file_size) + " bytes, the header promises " +
                                           std::to_string(h.data_offset + point_bytes * out.points),
                        "the recording was cut short; re-export or drop this file");
-    if (h.data == "binary_compressed" && out.points > 0) checkCompressedBlock(file, h, point_bytes * out.points, data_bytes);
+    if (h.data == "binary_compressed" && out.points > 0) checkCompressedBlock(where, h, point_bytes * out.points, data_bytes, in);
     if ((h.data == "ascii" && 2.0 * static_cast<double>(values) * static_cast<double>(out.points) > data_bytes + 1.0) ||
         (h.data == "binary_compressed" && promised > 300.0 * static_cast<double>(data_bytes) + 4096.0))
       throw InputError(where, "DATA", "file is truncated: " + std::to_string(data_bytes) +
@@ -347,23 +372,6 @@ void appendField(pcl::PCLPointCloud2& cloud, const std::string& name, std::uint8
   cloud.point_step += size;
 }
 
-/// PCL's writeBinary stretches the file to one memory page plus the data and leaves the unused
-/// part of the page as zeros after the data. Cut the file back to header + data.
-void trimPageTail(const fs::path& file, std::size_t data_bytes) {
-  std::ifstream in(file, std::ios::binary);
-  std::string head(kMaxHeaderBytes, '\0');
-  in.read(head.data(), static_cast<std::streamsize>(head.size()));
-  head.resize(static_cast<std::size_t>(in.gcount()));
-  const std::string marker = "\nDATA binary\n";
-  const auto at = head.find(marker);
-  if (at == std::string::npos) throw std::runtime_error("PCL wrote a binary PCD without a DATA line: " + file.string());
-  std::error_code ec;
-  fs::resize_file(file, at + marker.size() + data_bytes, ec);
-  if (ec)
-    throw InputError(file.string(), "", "could not finish the PCD file (" + ec.message() + "; disk full?)",
-                     "free some space and run again");
-}
-
 }  // namespace
 
 void yawToQuaternion(double yaw_rad, double& qw, double& qz) {
@@ -371,19 +379,55 @@ void yawToQuaternion(double yaw_rad, double& qw, double& qz) {
   qz = std::sin(0.5 * yaw_rad);
 }
 
-ScanHeader readScanHeader(const fs::path& file) { return toScanHeader(file, parseHeader(file)); }
+ScanHeader readScanHeader(const fs::path& file) {
+  PcdFile f = openPcd(file);
+  const ParsedHeader h = parseHeader(f.in, file.string());
+  return toScanHeader(file, h, f.size, f.in);
+}
 
-Scan readScan(const fs::path& file) {
-  const std::string where = file.string();
-  const ScanHeader header = readScanHeader(file);
+namespace {
+
+/// The point data of a checked file, read by PCL from the file's bytes in memory (the file is
+/// opened once: header, checks and data).
+pcl::PCLPointCloud2 readBlob(PcdFile& f, const ParsedHeader& h, const std::string& where) {
+  std::string bytes(f.size, '\0');
+  f.in.clear();
+  f.in.seekg(0);
+  if (!f.in.read(bytes.data(), static_cast<std::streamsize>(bytes.size())))
+    throw InputError(where, "DATA", "could not be read to its end (the file changed or the disk failed)", "run again");
   pcl::PCLPointCloud2 blob;
   Eigen::Vector4f origin;
   Eigen::Quaternionf orientation;
-  int version = 0;
+  int version = 0, data_type = 0;
+  unsigned int data_idx = 0;
   pcl::PCDReader reader;
-  if (reader.read(file.string(), blob, origin, orientation, version) < 0)
+  std::istringstream stream(bytes);
+  int rc = reader.readHeader(stream, blob, origin, orientation, version, data_type, data_idx);
+  // Our header check and PCL's must agree on where the data begins (checkNothingAfterData), and
+  // the binary data must lie within the bytes (PCL's body reader takes no length).
+  if (rc >= 0 && data_idx != h.data_offset) rc = -1;
+  if (rc >= 0 && data_type == 1 && data_idx + blob.data.size() > bytes.size()) rc = -1;
+  if (rc >= 0 && data_type == 0) {
+    stream.clear();
+    stream.seekg(data_idx);
+    rc = reader.readBodyASCII(stream, blob, version);
+  } else if (rc >= 0) {
+    rc = reader.readBodyBinary(reinterpret_cast<const unsigned char*>(bytes.data()), blob, version, data_type == 2, data_idx);
+  }
+  if (rc < 0)
     throw InputError(where, "DATA", "PCL could not read the point data (truncated or garbled file)",
                      "re-export the scan; the header is valid but the data is not");
+  return blob;
+}
+
+}  // namespace
+
+Scan readScan(const fs::path& file) {
+  const std::string where = file.string();
+  PcdFile f = openPcd(file);
+  const ParsedHeader parsed = parseHeader(f.in, where);
+  const ScanHeader header = toScanHeader(file, parsed, f.size, f.in);
+  const pcl::PCLPointCloud2 blob = readBlob(f, parsed, where);
   const std::size_t n = static_cast<std::size_t>(blob.width) * blob.height;
   if (n != header.points || blob.data.size() < n * blob.point_step)
     throw InputError(where, "DATA", "holds fewer points than the header's POINTS", "re-export the scan");
@@ -412,16 +456,16 @@ Scan readScan(const fs::path& file) {
     const double y = readValue(p + fy->offset, fy->datatype);
     const double z = fz ? readValue(p + fz->offset, fz->datatype) : 0.0;
     const bool nan_x = std::isnan(x), nan_y = std::isnan(y);
-    const std::string item = "point " + std::to_string(i);
+    const auto item = [i] { return "point " + std::to_string(i); };
     if (nan_x != nan_y)
-      throw InputError(where, item, "only one of x, y is NaN: a beam without return must have x and y NaN",
+      throw InputError(where, item(), "only one of x, y is NaN: a beam without return must have x and y NaN",
                        kFormatRemedy);
     if (!nan_x) {
       if (!std::isfinite(x) || !std::isfinite(y) || (!std::isnan(z) && !std::isfinite(z)))
-        throw InputError(where, item, "coordinate is infinite", "write NaN for a beam with no return");
+        throw InputError(where, item(), "coordinate is infinite", "write NaN for a beam with no return");
       if (std::abs(x) > kMaxAbsCoordinate_m || std::abs(y) > kMaxAbsCoordinate_m ||
           (!std::isnan(z) && std::abs(z) > kMaxAbsCoordinate_m))
-        throw InputError(where, item, "coordinate beyond 100 km: not a lidar reading",
+        throw InputError(where, item(), "coordinate beyond 100 km: not a lidar reading",
                          "check the units (metres) or write NaN for a beam with no return");
     } else {
       scan.cloud->is_dense = false;
@@ -434,7 +478,7 @@ Scan readScan(const fs::path& file) {
     if (fl) {
       const double label = readValue(p + fl->offset, fl->datatype);
       if (!(label >= 0.0) || label > 4294967295.0)
-        throw InputError(where, item, "label is not a non-negative integer", kFormatRemedy);
+        throw InputError(where, item(), "label is not a non-negative integer", kFormatRemedy);
       scan.labels[i] = static_cast<std::uint32_t>(label);
     }
   }
@@ -481,12 +525,22 @@ void writeScan(const fs::path& file, const Scan& scan, PcdEncoding encoding) {
 
   writeAtomically(file, [&](const fs::path& tmp) {
     pcl::PCDWriter writer;
-    const int rc = encoding == PcdEncoding::binary ? writer.writeBinary(tmp.string(), blob, origin, orientation)
-                                                   : writer.writeASCII(tmp.string(), blob, origin, orientation, 9);
-    if (rc != 0)
+    bool ok = true;
+    if (encoding == PcdEncoding::binary) {
+      // PCL's header followed by the packed data: the bytes of PCL's writeBinary without the
+      // page of padding it stretches the file by, in one open and one write (issue 19).
+      const std::string header = writer.generateHeaderBinary(blob, origin, orientation) + "DATA binary\n";
+      std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+      out.write(header.data(), static_cast<std::streamsize>(header.size()));
+      out.write(reinterpret_cast<const char*>(blob.data.data()), static_cast<std::streamsize>(blob.data.size()));
+      out.close();
+      ok = !out.fail();
+    } else {
+      ok = writer.writeASCII(tmp.string(), blob, origin, orientation, 9) == 0;
+    }
+    if (!ok)
       throw InputError(file.string(), "", "could not write the PCD file (disk full?)",
                        "free some space and check permissions, then run again");
-    if (encoding == PcdEncoding::binary) trimPageTail(tmp, blob.data.size());
   });
 }
 

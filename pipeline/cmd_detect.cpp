@@ -74,7 +74,8 @@ void runDetect(const DetectOptions& o) {
   cfg.detection.threshold_per_m2 = o.inlier_threshold.at(1);
   cfg.association.min_link_distance_m = std::min(cfg.association.min_link_distance_m, o.link_distance_m);
   // The evaluation against the truth needs every scan's detections at once; otherwise nothing
-  // per scan is kept and the labelling pass detects each stop again.
+  // per scan is kept in memory and the labelling pass reads the detections back from a
+  // temporary file (detectors/detection_log.hpp).
   cfg.keep_scans = !o.truth.empty();
 
   std::optional<Truth> truth;
@@ -102,8 +103,8 @@ void runDetect(const DetectOptions& o) {
   io::LandmarksCsvWriter csv(out.path() / "landmarks.csv");
   std::vector<detectors::ScanTruth> scan_truth;
   Progress progress("label", seq.scans.size());
-  auto write = [&](std::size_t i, const detectors::ScanDetections& sd, const std::vector<int>& ids) {
-    io::Scan scan = io::readScan(seq.scans[i].path);
+  auto write = [&](std::size_t i, const io::Scan& loaded, const detectors::ScanDetections& sd, const std::vector<int>& ids) {
+    io::Scan scan = loaded;
     scan.labels = detectors::scanLabels(sd, ids, scan.cloud->size());
     const std::string name = seq.scans[i].name();
     io::writeScan(out.path() / name, scan, o.ascii ? io::PcdEncoding::ascii : io::PcdEncoding::binary);
@@ -123,7 +124,7 @@ void runDetect(const DetectOptions& o) {
       scan_truth.push_back(detectors::makeScanTruth(*truth, i, std::move(it->second), *scan.cloud));
     }
   };
-  detectors::forEachScan(result, seq, write, [&](std::size_t done, std::size_t) { progress.update(done); });
+  detectors::forEachLoadedScan(result, seq, write, [&](std::size_t done, std::size_t) { progress.update(done); });
   progress.finish();
   csv.close();
   out.commit();

@@ -21,10 +21,12 @@ LandmarkObservations toLandmarkObservations(const io::Sequence& seq, const detec
     for (std::size_t i : seq.stops[k].scans)
       same_beams[k] = same_beams[k] && seq.scans[i].points == seq.scans[seq.stops[k].scans.front()].points;
   detectors::forEachScan(det, seq, load, [&](std::size_t i, const detectors::ScanDetections& sd, const std::vector<int>& ids) {
-    bool any = false;
-    for (int id : ids) any = any || id > 0;
+    bool any = false, kept_points = true;
+    for (std::size_t j = 0; j < ids.size(); ++j)
+      if (ids[j] > 0) any = true, kept_points = kept_points && sd.detections[j].inlier_xy.size() == sd.detections[j].inliers.size();
     if (!any) return;
-    const io::Scan scan = load(i);
+    // The inliers' coordinates kept by the detection, else the scan read again.
+    const io::Scan scan = kept_points ? io::Scan{} : load(i);
     for (std::size_t j = 0; j < sd.detections.size(); ++j) {
       if (ids[j] <= 0) continue;
       const auto& d = sd.detections[j];
@@ -35,12 +37,14 @@ LandmarkObservations toLandmarkObservations(const io::Sequence& seq, const detec
       s.bearing_rad = d.bearing_rad;
       s.centre_range_m = d.range_m;
       s.radius_m = d.radius_m;
-      for (const auto idx : d.inliers) {
-        const auto& p = (*scan.cloud)[static_cast<std::size_t>(idx)];
-        if (!std::isfinite(p.x)) continue;
+      for (std::size_t k = 0; k < d.inliers.size(); ++k) {
+        const auto idx = d.inliers[k];
+        const float x = kept_points ? d.inlier_xy[k][0] : (*scan.cloud)[static_cast<std::size_t>(idx)].x;
+        const float y = kept_points ? d.inlier_xy[k][1] : (*scan.cloud)[static_cast<std::size_t>(idx)].y;
+        if (!std::isfinite(x)) continue;
         // The point's direction is its beam's direction: the sensor measures range along it.
-        s.beams.push_back(BeamReading{std::atan2(static_cast<double>(p.y), static_cast<double>(p.x)),
-                                      std::hypot(static_cast<double>(p.x), static_cast<double>(p.y)),
+        s.beams.push_back(BeamReading{std::atan2(static_cast<double>(y), static_cast<double>(x)),
+                                      std::hypot(static_cast<double>(x), static_cast<double>(y)),
                                       same_beams[s.stop] ? static_cast<std::uint32_t>(idx) : kUnknownBeam});
       }
       if (!s.beams.empty()) obs.sightings.push_back(std::move(s));

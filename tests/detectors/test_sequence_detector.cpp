@@ -107,10 +107,30 @@ TEST(DetectSequence, RadiusIsEstimatedWhenNotGiven) {
   }
 }
 
-// Without kept scans the result holds nothing per scan, and forEachScan (which detects each
-// stop again) gives exactly the detections and ids that keeping them gives; with spurious
-// circles (clutter), with the radius known and estimated.
-TEST(DetectSequence, WithoutKeptScansTheReplayGivesTheSameDetectionsAndIds) {
+// Without kept scans the result holds nothing per scan in memory, and forEachScan gives exactly
+// the detections and ids that keeping them gives: read back from the detection log, and (when
+// no log could be made) by detecting each stop again; forEachLoadedScan gives the very scans
+// loaded. With spurious circles (clutter), with the radius known and estimated.
+void expectSameAsKept(const Simulated& s, const SequenceDetections& lean, const SequenceDetections& kept) {
+  std::size_t visited = 0;
+  auto load = [&](std::size_t i) { return s.scans[i].scan; };
+  forEachLoadedScan(lean, s.scans.size(), load, s.stop_of_scan,
+                    [&](std::size_t i, const io::Scan& scan, const ScanDetections& d, const std::vector<int>& ids) {
+                      ASSERT_EQ(i, visited++);
+                      EXPECT_EQ(scan.cloud, s.scans[i].scan.cloud);  // the scan itself, not another one
+                      EXPECT_EQ(ids, kept.association.ids[i]);
+                      ASSERT_EQ(d.detections.size(), kept.scans[i].detections.size());
+                      for (std::size_t j = 0; j < d.detections.size(); ++j) {
+                        EXPECT_EQ(d.detections[j].centre_x_m, kept.scans[i].detections[j].centre_x_m);
+                        EXPECT_EQ(d.detections[j].radius_m, kept.scans[i].detections[j].radius_m);
+                        EXPECT_EQ(d.detections[j].rms_m, kept.scans[i].detections[j].rms_m);
+                        EXPECT_EQ(d.detections[j].inliers, kept.scans[i].detections[j].inliers);
+                      }
+                    });
+  EXPECT_EQ(visited, s.scans.size());
+}
+
+TEST(DetectSequence, WithoutKeptScansTheLogAndTheReplayGiveTheSameDetectionsAndIds) {
   const Scene clutter = io::readScene(test::sourceDir() / "data/scenes/field_clutter.json");
   for (std::uint64_t seed : {1, 2}) {
     const Simulated s = simulateScene(clutter, seed);
@@ -120,10 +140,11 @@ TEST(DetectSequence, WithoutKeptScansTheReplayGivesTheSameDetectionsAndIds) {
       if (known) cfg.detection.landmark_radius_m = 0.12;
       const SequenceDetections kept = run(s, cfg);
       cfg.keep_scans = false;
-      const SequenceDetections lean = run(s, cfg);
+      SequenceDetections lean = run(s, cfg);
       EXPECT_TRUE(lean.scans.empty());
       EXPECT_TRUE(lean.viewpoints.empty());
       EXPECT_TRUE(lean.association.ids.empty());
+      ASSERT_NE(lean.log, nullptr);
       ASSERT_EQ(lean.association.landmarks.size(), kept.association.landmarks.size());
       ASSERT_FALSE(kept.association.landmarks.empty());
       for (std::size_t l = 0; l < kept.association.landmarks.size(); ++l) {
@@ -132,25 +153,44 @@ TEST(DetectSequence, WithoutKeptScansTheReplayGivesTheSameDetectionsAndIds) {
         EXPECT_EQ(lean.association.landmarks[l].detections, kept.association.landmarks[l].detections);
       }
       EXPECT_EQ(lean.association.detections, kept.association.detections);
-      std::size_t visited = 0;
-      auto load = [&](std::size_t i) { return s.scans[i].scan; };
-      forEachScan(lean, s.scans.size(), load, s.stop_of_scan,
-                  [&](std::size_t i, const ScanDetections& d, const std::vector<int>& ids) {
-                    ASSERT_EQ(i, visited++);
-                    EXPECT_EQ(ids, kept.association.ids[i]);
-                    ASSERT_EQ(d.detections.size(), kept.scans[i].detections.size());
-                    for (std::size_t j = 0; j < d.detections.size(); ++j) {
-                      EXPECT_EQ(d.detections[j].centre_x_m, kept.scans[i].detections[j].centre_x_m);
-                      EXPECT_EQ(d.detections[j].inliers, kept.scans[i].detections[j].inliers);
-                    }
-                  });
-      EXPECT_EQ(visited, s.scans.size());
+      {
+        SCOPED_TRACE("from the log");
+        expectSameAsKept(s, lean, kept);
+        expectSameAsKept(s, lean, kept);  // a second visit reads the log from its start again
+      }
+      lean.log.reset();
+      {
+        SCOPED_TRACE("detected again");
+        expectSameAsKept(s, lean, kept);
+      }
     }
   }
 }
 
+// The kept detections carry their inliers' coordinates as the scan holds them (the sightings
+// are built from them without reading the scans again).
+TEST(DetectSequence, KeptDetectionsCarryTheirInliersCoordinates) {
+  const Simulated s = simulateScene(paperField(), 1);
+  SequenceDetectionConfig cfg;
+  cfg.detection.landmark_radius_m = 0.12;
+  const SequenceDetections r = run(s, cfg);
+  std::size_t checked = 0;
+  for (std::size_t i = 0; i < r.scans.size(); ++i)
+    for (const auto& d : r.scans[i].detections) {
+      ASSERT_EQ(d.inlier_xy.size(), d.inliers.size());
+      for (std::size_t k = 0; k < d.inliers.size(); ++k) {
+        const auto& p = (*s.scans[i].scan.cloud)[static_cast<std::size_t>(d.inliers[k])];
+        EXPECT_EQ(d.inlier_xy[k][0], p.x);
+        EXPECT_EQ(d.inlier_xy[k][1], p.y);
+        ++checked;
+      }
+    }
+  EXPECT_GT(checked, 1000u);
+}
+
 // Scans that change between detectSequence and forEachScan (here: the poles removed) cannot be
-// given the ids found before: an error says so.
+// given the ids found before: an error says so, whether the detections come from the log or
+// are detected again.
 TEST(DetectSequence, ReplayRefusesScansThatChanged) {
   const Simulated s = simulateScene(paperField(), 1);
   Scene empty = paperField();
@@ -159,10 +199,13 @@ TEST(DetectSequence, ReplayRefusesScansThatChanged) {
   SequenceDetectionConfig cfg;
   cfg.detection.landmark_radius_m = 0.12;
   cfg.keep_scans = false;
-  const SequenceDetections r = run(s, cfg);
-  EXPECT_THROW(forEachScan(r, other.scans.size(), [&](std::size_t i) { return other.scans[i].scan; }, other.stop_of_scan,
-                           [](std::size_t, const ScanDetections&, const std::vector<int>&) {}),
-               DataError);
+  SequenceDetections r = run(s, cfg);
+  ASSERT_NE(r.log, nullptr);
+  auto load_other = [&](std::size_t i) { return other.scans[i].scan; };
+  auto nothing = [](std::size_t, const ScanDetections&, const std::vector<int>&) {};
+  EXPECT_THROW(forEachScan(r, other.scans.size(), load_other, other.stop_of_scan, nothing), DataError);
+  r.log.reset();
+  EXPECT_THROW(forEachScan(r, other.scans.size(), load_other, other.stop_of_scan, nothing), DataError);
 }
 
 TEST(DetectSequence, TheScansOfAStopMustBeConsecutive) {
