@@ -176,13 +176,18 @@ void JointProblem::initialiseParameters() {
     next += n;
     return block;
   };
-  for (const Pose2& p : init_.poses) {
+  for (std::size_t k = 0; k < n_poses; ++k) {
+    // A measured pose replaces the start and is held there (fixInactiveTerms).
+    const auto known = config_.known_poses.find(k);
+    const Pose2& p = known != config_.known_poses.end() ? known->second : init_.poses[k];
     poses_.push_back(take(3));
     poses_.back()[0] = p.x_m;
     poses_.back()[1] = p.y_m;
     poses_.back()[2] = p.yaw_rad;
   }
-  for (const auto& [id, c] : init_.centres) {
+  for (const auto& [id, start] : init_.centres) {
+    const auto known = config_.known_centres.find(id);
+    const Eigen::Vector2d& c = known != config_.known_centres.end() ? known->second : start;
     double* block = centres_[id] = take(2);
     block[0] = c.x();
     block[1] = c.y();
@@ -326,6 +331,7 @@ void JointProblem::addResiduals(ceres::Problem& problem, bool robust) {
   }
   addPosePriors(problem);
   if (fx_.anyMean()) fixInactiveTerms(problem);
+  fixKnownGeometry(problem);
   if (!config_.estimate_radius && problem.HasParameterBlock(radius_)) problem.SetParameterBlockConstant(radius_);
 }
 
@@ -425,6 +431,15 @@ void JointProblem::fixInactiveTerms(ceres::Problem& problem) {
   if (!fx_.incidence_bias) fixed.push_back(2);
   if (fixed.size() == 3) problem.SetParameterBlockConstant(globals_);
   else if (!fixed.empty()) problem.SetManifold(globals_, new ceres::SubsetManifold(3, fixed));
+}
+
+/// Surveyed centres and measured poses are known, not estimated.
+void JointProblem::fixKnownGeometry(ceres::Problem& problem) {
+  for (const auto& [id, c] : config_.known_centres)
+    if (auto it = centres_.find(id); it != centres_.end() && problem.HasParameterBlock(it->second))
+      problem.SetParameterBlockConstant(it->second);
+  for (const auto& [k, p] : config_.known_poses)
+    if (k < poses_.size() && problem.HasParameterBlock(poses_[k])) problem.SetParameterBlockConstant(poses_[k]);
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -61,6 +61,7 @@ class JointProblem {
   bool addPooledReadings(ceres::Problem& problem, bool robust);
   void addPosePriors(ceres::Problem& problem);
   void fixInactiveTerms(ceres::Problem& problem);
+  void fixKnownGeometry(ceres::Problem& problem);
 
   // solve loop
   bool solve(int outer);

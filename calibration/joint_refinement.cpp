@@ -58,6 +58,11 @@ void JointConfig::validate() const {
       !(motion_heading_floor_rad > 0.0) || !std::isfinite(motion_sigma_fraction + motion_heading_sigma_rad_per_m +
                                                           motion_sigma_floor_m + motion_heading_floor_rad))
     throw std::invalid_argument("JointConfig: motion prior sigmas must be finite, fractions >= 0, floors > 0");
+  for (const auto& [id, c] : known_centres)
+    if (!c.allFinite()) throw std::invalid_argument("JointConfig: known centre of landmark " + std::to_string(id) + " not finite");
+  for (const auto& [k, p] : known_poses)
+    if (!std::isfinite(p.x_m + p.y_m + p.yaw_rad))
+      throw std::invalid_argument("JointConfig: known pose of stop " + std::to_string(k) + " not finite");
 }
 
 double readingLogLikelihood(double y, double mean, double sigma, double mixed_fraction, double outlier_floor,

@@ -115,6 +115,12 @@ struct JointConfig {
   /// (in the reported likelihood only, not in the fit), so that a few gross outliers cannot
   /// dominate a comparison of models. 0: plain Gaussian likelihood (default).
   double outlier_floor = 0.0;
+  /// Surveyed landmark centres (landmark id -> centre in the frame of the commanded poses, metres),
+  /// held fixed: measured geometry gives the refinement the absolute scale that self-calibration
+  /// lacks (an odometry scale error is otherwise absorbed by the bias; REF.json `landmarks`).
+  std::map<int, Eigen::Vector2d> known_centres;
+  /// Measured sensor poses (stop index -> pose), held fixed (REF.json `stops`).
+  std::map<std::size_t, Pose2> known_poses;
   void validate() const;          ///< throws std::invalid_argument
 };
 

@@ -40,10 +40,26 @@ void runCalibrate(const CalibrateCommand& c) {
   if (!c.report.empty()) report.emplace(c.report, c.overwrite);
   CalibrationModel model;
   std::vector<calibration::ReferenceMatch> matches;
-  if (!c.reference.empty()) {
-    // Against what the user measured (seed 004 section 5).
+  std::string survey;
+  if (!c.reference.empty() && io::readReference(c.reference).distances.empty()) {
+    // Surveyed landmarks or measured poses only: self-calibration with them held fixed.
     const Reference ref = io::readReference(c.reference);
     io::checkReference(ref, seq.stops.size(), c.reference);
+    StageBars progress;
+    std::vector<SurveyMatch> found;
+    const SequenceCalibration result = calibrateSequenceWithSurvey(seq, ref, c.reference, detectionConfig(*c.options),
+                                                                   config, &found, std::ref(progress));
+    progress.finish();
+    model = result.model;
+    survey = surveyTable(found, ref);
+  } else if (!c.reference.empty()) {
+    // Against the distances the user measured (seed 004 section 5).
+    const Reference ref = io::readReference(c.reference);
+    io::checkReference(ref, seq.stops.size(), c.reference);
+    if (!ref.landmarks.empty() || !ref.stops.empty())
+      std::fprintf(stderr, "lidarcal: warning: %s: with distances given, the surveyed landmarks and measured stops are "
+                           "checked but not used (combining both is not implemented); remove the distances to use them\n",
+                   c.reference.c_str());
     Progress progress("detect", seq.scans.size());
     const SequenceCalibration result = calibrateSequenceWithReference(
         seq, ref, c.reference, detectionConfig(*c.options), config, &matches,
@@ -77,6 +93,7 @@ void runCalibrate(const CalibrateCommand& c) {
   io::writeModel(c.out, model);
   if (report) report->commit();
   if (!matches.empty()) std::fputs(referenceTable(matches).c_str(), stdout);
+  if (!survey.empty()) std::fputs(survey.c_str(), stdout);
   std::fputs(modelSummary(model).c_str(), stdout);
   if (!quiet() && model.motion_prior)
     std::fprintf(stderr, "continuous motion: the odometry between consecutive stops entered the joint refinement as a "
@@ -101,8 +118,9 @@ void addCalibrateCommand(CLI::App& app) {
       ->check(CLI::IsMember({"true", "commanded"}))
       ->capture_default_str();
   sub->add_option("--reference", c->reference,
-                  "REF.json with distances you measured (tape, laser meter): fit the range model to them "
-                  "(Alhashimi et al. 2016, section 5; docs/FORMAT.md, \"Reference measurements\")")
+                  "REF.json with what you measured (docs/FORMAT.md, \"Reference measurements\"): distances (tape, "
+                  "laser meter) fit the range model to them (Alhashimi et al. 2016, section 5); without distances, "
+                  "surveyed landmark centres and measured stop poses are held fixed in the self-calibration")
       ->excludes(truth);
   sub->add_option("--report", c->report,
                   "Also write a report (Markdown + PNG plots) into this new directory (not with --truth)")

@@ -1,5 +1,10 @@
 #include "pipeline/reference_stage.hpp"
 
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <optional>
+
 #include <set>
 
 #include "calibration/filtering.hpp"
@@ -110,6 +115,102 @@ SequenceCalibration calibrateSequenceWithReference(const io::Sequence& seq, cons
   else if (fewest == most && most > 0) out.model.beams = static_cast<int>(most);
   out.detections.association.assigned = ro.known.readings.size();
   return out;
+}
+
+namespace {
+
+/// Surveyed centres matched to detected landmarks: the closest pairs first, one to one, within
+/// kSurveyGateM. Unmatched entries get id 0.
+std::vector<SurveyMatch> matchSurvey(const std::vector<ReferenceLandmark>& surveyed,
+                                     const std::vector<detectors::Landmark>& detected) {
+  struct Pair {
+    double d;
+    std::size_t s, l;
+  };
+  std::vector<Pair> pairs;
+  for (std::size_t s = 0; s < surveyed.size(); ++s)
+    for (std::size_t l = 0; l < detected.size(); ++l) {
+      const double d = std::hypot(surveyed[s].x_m - detected[l].x_m, surveyed[s].y_m - detected[l].y_m);
+      if (d <= kSurveyGateM) pairs.push_back({d, s, l});
+    }
+  std::stable_sort(pairs.begin(), pairs.end(), [](const Pair& a, const Pair& b) { return a.d < b.d; });
+  std::vector<SurveyMatch> out(surveyed.size());
+  std::vector<bool> taken(detected.size(), false);
+  for (std::size_t s = 0; s < surveyed.size(); ++s) out[s].entry = s;
+  for (const Pair& p : pairs) {
+    if (out[p.s].id != 0 || taken[p.l]) continue;
+    out[p.s].id = detected[p.l].id;
+    out[p.s].distance_m = p.d;
+    taken[p.l] = true;
+  }
+  return out;
+}
+
+/// The radius the surveyed landmarks agree on (within 1 mm), if every one gives it.
+std::optional<double> surveyedRadius(const std::vector<ReferenceLandmark>& surveyed) {
+  std::optional<double> lo, hi;
+  for (const auto& l : surveyed) {
+    if (!l.radius_m) return std::nullopt;
+    lo = std::min(lo.value_or(*l.radius_m), *l.radius_m);
+    hi = std::max(hi.value_or(*l.radius_m), *l.radius_m);
+  }
+  if (!lo || *hi - *lo > 1e-3) return std::nullopt;
+  return 0.5 * (*lo + *hi);
+}
+
+}  // namespace
+
+SequenceCalibration calibrateSequenceWithSurvey(const io::Sequence& seq, const Reference& ref,
+                                                const std::filesystem::path& ref_file,
+                                                const detectors::SequenceDetectionConfig& detection,
+                                                const calibration::CalibrationConfig& config,
+                                                std::vector<SurveyMatch>* matches, const NamedProgress& progress) {
+  detectors::SequenceDetectionConfig det = detection;
+  if (!det.detection.landmark_radius_m && !seq.meta.landmark_radius_m)
+    if (const auto r = surveyedRadius(ref.landmarks)) det.detection.landmark_radius_m = *r;
+  calibration::CalibrationConfig cfg = config;
+  for (const auto& s : ref.stops) cfg.joint.known_poses[s.stop] = s.pose;
+  std::vector<SurveyMatch> found;
+  const auto adjust = [&](const detectors::SequenceDetections& d, calibration::CalibrationConfig& c) {
+    found = matchSurvey(ref.landmarks, d.association.landmarks);
+    std::string unmatched;
+    for (const auto& m : found) {
+      if (m.id != 0) {
+        c.joint.known_centres[m.id] = Eigen::Vector2d(ref.landmarks[m.entry].x_m, ref.landmarks[m.entry].y_m);
+        continue;
+      }
+      char text[160];
+      std::snprintf(text, sizeof text, "%slandmarks[%zu] (%.3f, %.3f)", unmatched.empty() ? "" : "; ", m.entry,
+                    ref.landmarks[m.entry].x_m, ref.landmarks[m.entry].y_m);
+      unmatched += text;
+    }
+    char why[96];
+    std::snprintf(why, sizeof why, ": no detected landmark within %.1f m (%zu detected)", kSurveyGateM,
+                  d.association.landmarks.size());
+    if (!unmatched.empty())
+      throw DataError(ref_file.string(), "landmarks", unmatched + why,
+                      "give the centres in the frame of the VIEWPOINTs (`lidarcal detect` lists the detected "
+                      "landmarks' positions), or remove the entry");
+  };
+  SequenceCalibration out = calibrateSequence(seq, det, cfg, progress, adjust);
+  if (matches) *matches = found;
+  return out;
+}
+
+std::string surveyTable(const std::vector<SurveyMatch>& matches, const Reference& ref) {
+  std::string t;
+  if (!matches.empty())
+    t += "surveyed landmarks held fixed (REF.json; off by: from the position detect found with the commanded poses "
+         "and raw ranges):\n\n| entry | x_m | y_m | detected id | off by [m] |\n|---|---|---|---|---|\n";
+  char row[160];
+  for (const auto& m : matches) {
+    std::snprintf(row, sizeof row, "| landmarks[%zu] | %.3f | %.3f | %d | %.3f |\n", m.entry, ref.landmarks[m.entry].x_m,
+                  ref.landmarks[m.entry].y_m, m.id, m.distance_m);
+    t += row;
+  }
+  if (!matches.empty()) t += "\n";
+  if (!ref.stops.empty()) t += "measured stop poses held fixed: " + std::to_string(ref.stops.size()) + "\n\n";
+  return t;
 }
 
 }  // namespace lidarcal::pipeline

@@ -4,6 +4,8 @@
 // of known true distance, and the range model fitted to them (calibration/reference.hpp).
 
 #include <cstddef>
+#include <filesystem>
+#include <string>
 #include <vector>
 
 #include "calibration/filtering.hpp"
@@ -49,5 +51,30 @@ SequenceCalibration calibrateSequenceWithReference(const io::Sequence& seq, cons
                                            const calibration::CalibrationConfig& config,
                                            std::vector<calibration::ReferenceMatch>* matches = nullptr,
                                            const StageProgress& on_scan = {});
+
+/// A surveyed landmark (REF.json `landmarks[entry]`) and the detected landmark it stands for.
+struct SurveyMatch {
+  std::size_t entry = 0;       ///< index in REF.json's landmarks
+  int id = 0;                  ///< detected landmark id
+  double distance_m = 0.0;     ///< from the surveyed centre to the detected landmark's position
+};
+
+/// Farthest a surveyed centre may lie from the detected landmark it is matched to (the detected
+/// positions come from the commanded poses and a raw, biased range: decimetres off are common).
+inline constexpr double kSurveyGateM = 0.5;
+
+/// Self-calibration (detection, triangulation, joint refinement) with the surveyed landmark
+/// centres and the measured stop poses of `ref` held fixed (REF.json without distances). Each
+/// surveyed landmark is matched to the nearest detected one (one to one, within kSurveyGateM);
+/// throws DataError naming the entries that match none.
+SequenceCalibration calibrateSequenceWithSurvey(const io::Sequence& seq, const Reference& ref,
+                                                const std::filesystem::path& ref_file,
+                                                const detectors::SequenceDetectionConfig& detection,
+                                                const calibration::CalibrationConfig& config,
+                                                std::vector<SurveyMatch>* matches = nullptr,
+                                                const NamedProgress& progress = {});
+
+/// The matches as a Markdown table for stdout.
+std::string surveyTable(const std::vector<SurveyMatch>& matches, const Reference& ref);
 
 }  // namespace lidarcal::pipeline

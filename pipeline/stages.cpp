@@ -12,7 +12,8 @@
 namespace lidarcal::pipeline {
 
 SequenceCalibration calibrateSequence(const io::Sequence& seq, const detectors::SequenceDetectionConfig& detection,
-                                      const calibration::CalibrationConfig& config, const NamedProgress& progress) {
+                                      const calibration::CalibrationConfig& config, const NamedProgress& progress,
+                                      const CalibrationAdjust& adjust) {
   SequenceCalibration out;
   // Triangulation needs every landmark seen from min_stops stops: with fewer stops in the whole
   // sequence there is nothing to detect for.
@@ -49,6 +50,7 @@ SequenceCalibration calibrateSequence(const io::Sequence& seq, const detectors::
     out.observations.range_max_m = max_reading > 0.0 ? 1.25 * max_reading : 1.0;
   }
   calibration::CalibrationConfig reporting = config;
+  if (adjust) adjust(out.detections, reporting);
   reporting.progress = [&](const char* stage, std::size_t done, std::size_t total) {
     if (config.progress) config.progress(stage, done, total);
     if (progress) progress(stage, done, total);

@@ -32,8 +32,12 @@ struct SequenceCalibration {
 /// Detection, association and calibration of a sequence. `progress` hears of "detect" (scans,
 /// twice the scans when the radius is estimated: the detector makes a second pass) and of the
 /// calibration's own stages (config.progress, which is called as well).
+/// `adjust`, when given, may change the calibration's configuration once the landmarks are
+/// known (e.g. hold surveyed landmarks fixed by their ids).
+using CalibrationAdjust = std::function<void(const detectors::SequenceDetections&, calibration::CalibrationConfig&)>;
 SequenceCalibration calibrateSequence(const io::Sequence& seq, const detectors::SequenceDetectionConfig& detection,
-                                      const calibration::CalibrationConfig& config, const NamedProgress& progress = {});
+                                      const calibration::CalibrationConfig& config, const NamedProgress& progress = {},
+                                      const CalibrationAdjust& adjust = {});
 
 /// The oracle of seed 004 on a simulated sequence: the range model fitted against the true
 /// distances of the landmark beams, scaled by `scale` (1: plain oracle; commandedScale(): the

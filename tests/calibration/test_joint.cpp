@@ -134,6 +134,65 @@ TEST(Calibrate, JointComesCloseToTheGroundTruthFitAndBeatsTheClosedFormUnderLarg
   }
 }
 
+// An odometry scale error with the pole radius unknown: self-calibration cannot tell a longer
+// path from a stretched range (the bias absorbs it), surveyed landmark centres or measured stop
+// poses can (REF.json `landmarks`, `stops`; issue 17). The survey is taken from the truth the
+// test controls; a survey scaled by 3 % must move the fitted bias with it (it is really used).
+TEST(Calibrate, SurveyedCentresOrMeasuredPosesGiveTheScaleAnOdometryScaleErrorHides) {
+  auto cfg = paperField(0.005, 0.2, 0.0005);
+  cfg.path.step_error_fraction = 0.06;
+  cfg.publish_radius = false;
+  const auto bias = [](const CalibrationModel& m, double d) { return m.model.bias(d) - d; };
+  const auto truthBias = [&](double d) { return cfg.model.bias(d) - d; };
+  const auto standardError = [](const CalibrationModel& m, double d) {  // of f(d), from the alpha covariance
+    const std::size_t n = m.model.bias.alpha.size();
+    if (m.alpha_covariance.size() != n * n) return 0.0;
+    double v = 0.0;
+    for (std::size_t i = 0; i < n; ++i)
+      for (std::size_t j = 0; j < n; ++j) v += std::pow(d, i) * std::pow(d, j) * m.alpha_covariance[i * n + j];
+    return std::sqrt(v);
+  };
+  for (std::uint64_t seed = 1; seed <= 3; ++seed) {
+    SCOPED_TRACE(seed);
+    const auto sample = simulation::simulateLandmarkLevel(cfg, seed);
+    CalibrationConfig cc = configFor(0.005, 0.2);
+    cc.joint.sigma_s_m = 0.2;  // the odometry is known to be poor: let the poses move
+    const CalibrationModel self = calibrate(sample.obs, cc);
+    CalibrationConfig surveyed = cc, scaled = cc, posed = cc;
+    for (std::size_t l = 0; l < cfg.landmarks.size(); ++l) {
+      const Eigen::Vector2d c(cfg.landmarks[l].x_m, cfg.landmarks[l].y_m);
+      surveyed.joint.known_centres[static_cast<int>(l) + 1] = c;
+      scaled.joint.known_centres[static_cast<int>(l) + 1] = 1.03 * c;
+    }
+    for (std::size_t k = 0; k < sample.stops.size(); ++k) posed.joint.known_poses[k] = sample.stops[k].actual;
+    const CalibrationModel with_centres = calibrate(sample.obs, surveyed);
+    const CalibrationModel with_poses = calibrate(sample.obs, posed);
+    const CalibrationModel with_scaled = calibrate(sample.obs, scaled);
+    for (const auto* m : {&self, &with_centres, &with_poses, &with_scaled}) ASSERT_EQ(m->status, "ok") << m->message;
+    for (double d : {1.0, 2.0, 3.0}) {
+      SCOPED_TRACE(d);
+      const double e_self = std::abs(bias(self, d) - truthBias(d));
+      // Within 1 mm + 3 standard errors of the truth, and several times closer than without.
+      for (const auto* m : {&with_centres, &with_poses}) {
+        const double e = std::abs(bias(*m, d) - truthBias(d));
+        EXPECT_LT(e, 1e-3 + 3.0 * standardError(*m, d));
+        if (d >= 2.0) {
+          EXPECT_LT(3.0 * e, e_self);
+        }
+      }
+      // A survey 3 % too large reads as ranges 3 % too short: the fitted bias follows it.
+      if (d >= 2.0) {
+        EXPECT_GT(bias(with_centres, d) - bias(with_scaled, d), 0.02 * d);
+      }
+    }
+    // The surveyed centres are what the model reports.
+    for (const auto& l : with_centres.landmarks) {
+      EXPECT_DOUBLE_EQ(l.x_m, cfg.landmarks[static_cast<std::size_t>(l.id) - 1].x_m);
+      EXPECT_DOUBLE_EQ(l.y_m, cfg.landmarks[static_cast<std::size_t>(l.id) - 1].y_m);
+    }
+  }
+}
+
 TEST(JointRefinement, SparseAndDenseCovarianceAgree) {
   // Long sequences take the sparse QR (memory linear in the poses); short ones the dense SVD.
   // Both must give the same blocks where the Jacobian has full rank.

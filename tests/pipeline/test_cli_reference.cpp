@@ -128,6 +128,50 @@ TEST(CliReference, AnEntryWithoutItsTargetIsRefusedWithExitThreeNamingIt) {
   EXPECT_FALSE(fs::exists(dir / "m.json"));
 }
 
+// Surveyed pole centres and measured stop poses (REF.json without distances): self-calibration
+// with them held fixed. The truth plays the survey; a pole surveyed where none was detected is
+// refused with exit 3 naming the entry, and nothing is written.
+TEST(CliReference, SurveyedLandmarksAndStopsAreHeldFixed) {
+  TempDir dir;
+  simulate(dir / "s", 35);
+  const Truth truth = io::readTruth(dir / "s/truth.json");
+  nlohmann::json landmarks = nlohmann::json::array(), stops = nlohmann::json::array();
+  for (const auto& l : truth.scene.landmarks) landmarks.push_back({{"x_m", l.x_m}, {"y_m", l.y_m}, {"radius_m", l.radius_m}});
+  for (std::size_t k = 0; k < truth.stops.size(); ++k)
+    stops.push_back({{"stop", k}, {"x_m", truth.stops[k].actual.x_m}, {"y_m", truth.stops[k].actual.y_m},
+                     {"yaw_rad", truth.stops[k].actual.yaw_rad}});
+  test::writeFile(dir / "lm.json", nlohmann::json{{"format", "lidarcal-reference/1"}, {"landmarks", landmarks}}.dump());
+  test::writeFile(dir / "st.json", nlohmann::json{{"format", "lidarcal-reference/1"}, {"stops", stops}}.dump());
+  auto r = runCli("calibrate -q " + (dir / "s/scans").string() + " --reference " + (dir / "lm.json").string() +
+                  " --out " + (dir / "lm_model.json").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("| landmarks[4] |"), std::string::npos) << r.out;
+  const nlohmann::json m = json(dir / "lm_model.json");
+  ASSERT_EQ(m["landmarks"].size(), truth.scene.landmarks.size());
+  for (const auto& l : m["landmarks"]) {  // every pole at a surveyed centre
+    double nearest = 1e9;
+    for (const auto& t : truth.scene.landmarks)
+      nearest = std::min(nearest, std::hypot(l["x_m"].get<double>() - t.x_m, l["y_m"].get<double>() - t.y_m));
+    EXPECT_LT(nearest, 1e-9);
+  }
+  r = runCli("calibrate -q " + (dir / "s/scans").string() + " --reference " + (dir / "st.json").string() + " --out " +
+             (dir / "st_model.json").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("measured stop poses held fixed: " + std::to_string(truth.stops.size())), std::string::npos) << r.out;
+  const nlohmann::json st = json(dir / "st_model.json");
+  ASSERT_EQ(st["stops"].size(), truth.stops.size());
+  EXPECT_NEAR(st["stops"][3]["x_m"].get<double>(), truth.stops[3].actual.x_m, 1e-9);
+
+  landmarks.push_back({{"x_m", 20.0}, {"y_m", 20.0}});
+  test::writeFile(dir / "far.json", nlohmann::json{{"format", "lidarcal-reference/1"}, {"landmarks", landmarks}}.dump());
+  r = runCli("calibrate -q " + (dir / "s/scans").string() + " --reference " + (dir / "far.json").string() + " --out " +
+             (dir / "far_model.json").string());
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_NE(r.err.find("landmarks[5]"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("landmarks[4]"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "far_model.json"));
+}
+
 // ---- Real data: the Hokuyo UST-30LX looking at a 45 mm (radius) reflector at tape-measured
 // centre distances 0.129-2.95 m (../shared/data/hokuyo_ust30lx_reflector/range_sweep). ----
 
