@@ -14,6 +14,7 @@
 #include "common/errors.hpp"
 #include "io/import_rosbag.hpp"
 #include "import_test_util.hpp"
+#include "ros/laser_scan_util.hpp"
 #include "test_util.hpp"
 
 namespace lidarcal::io {
@@ -24,20 +25,11 @@ using test::TempDir;
 constexpr float kInf = std::numeric_limits<float>::infinity();
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 
+/// Scan k of n beams: readings 1 + 0.01 i + k metres, intensities i mod 50 when asked.
 sensor_msgs::LaserScan laserScan(int k, std::size_t n, bool intensities) {
-  sensor_msgs::LaserScan m;
-  m.header.stamp = ros::Time(100 + k, 5000000);
-  m.header.frame_id = "laser";
-  m.angle_min = -3.1f;
-  m.angle_increment = 0.0175f;
-  m.angle_max = m.angle_min + m.angle_increment * static_cast<float>(n - 1);
-  m.range_min = 0.15f;
-  m.range_max = 12.0f;
-  for (std::size_t i = 0; i < n; ++i) {
-    m.ranges.push_back(1.0f + 0.01f * static_cast<float>(i) + static_cast<float>(k));
-    if (intensities) m.intensities.push_back(static_cast<float>(i % 50));
-  }
-  return m;
+  return test::laserScanOf(
+      ros::Time(100 + k, 5000000), n, 0.0175f,
+      [k](std::size_t i) { return 1.0f + 0.01f * static_cast<float>(i) + static_cast<float>(k); }, intensities ? 50 : 0);
 }
 
 /// /scan_a: 5 LaserScans of 12 beams with intensities (some readings invalid); /scan_b: 3

@@ -3,6 +3,7 @@
 // built with the ROS libraries include this).
 
 #include <cstddef>
+#include <cstdint>
 #include <limits>
 
 #include <cmath>
@@ -12,23 +13,34 @@
 
 namespace lidarcal::test {
 
-/// Scan k of n beams in frame "laser": readings 0.2 + 0.11 i + 0.01 k metres (0.2-11.1 m for
-/// 100 beams), limits 0.15-12 m, intensities i mod 7; beams 1-5 hold what is not a reading:
-/// inf, NaN, 0, below range_min, above range_max.
-inline sensor_msgs::LaserScan laserScan(int k, std::size_t n) {
+/// A LaserScan of n beams in frame "laser" stamped `stamp`: angles from -3.1 rad by `increment`,
+/// limits 0.15-12 m, reading i = range(i), intensity i = intensity(i) (none when intensity_mod 0:
+/// i mod intensity_mod otherwise).
+template <class Range>
+sensor_msgs::LaserScan laserScanOf(ros::Time stamp, std::size_t n, float increment, Range range, unsigned intensity_mod) {
   sensor_msgs::LaserScan m;
-  m.header.stamp = ros::Time(100 + k, 1000 * k);
-  m.header.seq = static_cast<std::uint32_t>(k);
+  m.header.stamp = stamp;
   m.header.frame_id = "laser";
   m.angle_min = -3.1f;
-  m.angle_increment = 0.06f;
+  m.angle_increment = increment;
   m.angle_max = m.angle_min + m.angle_increment * static_cast<float>(n - 1);
   m.range_min = 0.15f;
   m.range_max = 12.0f;
   for (std::size_t i = 0; i < n; ++i) {
-    m.ranges.push_back(0.2f + 0.11f * static_cast<float>(i) + 0.01f * static_cast<float>(k));
-    m.intensities.push_back(static_cast<float>(i % 7));
+    m.ranges.push_back(range(i));
+    if (intensity_mod != 0) m.intensities.push_back(static_cast<float>(i % intensity_mod));
   }
+  return m;
+}
+
+/// Scan k of n beams: readings 0.2 + 0.11 i + 0.01 k metres (0.2-11.1 m for 100 beams),
+/// intensities i mod 7; beams 1-5 hold what is not a reading: inf, NaN, 0, below range_min,
+/// above range_max.
+inline sensor_msgs::LaserScan laserScan(int k, std::size_t n) {
+  sensor_msgs::LaserScan m = laserScanOf(
+      ros::Time(100 + k, 1000 * k), n, 0.06f,
+      [k](std::size_t i) { return 0.2f + 0.11f * static_cast<float>(i) + 0.01f * static_cast<float>(k); }, 7);
+  m.header.seq = static_cast<std::uint32_t>(k);
   m.ranges[1] = std::numeric_limits<float>::infinity();
   m.ranges[2] = std::numeric_limits<float>::quiet_NaN();
   m.ranges[3] = 0.0f;
