@@ -387,32 +387,63 @@ ScanHeader readScanHeader(const fs::path& file) {
 
 namespace {
 
-/// The point data of a checked file, read by PCL from the file's bytes in memory (the file is
-/// opened once: header, checks and data).
+/// PCL's datatype for a checked header field (TYPE F/I/U, SIZE 1/2/4/8), as PCL's header reader
+/// maps them.
+std::uint8_t datatypeOf(const HeaderField& f) {
+  using P = pcl::PCLPointField;
+  switch (f.type) {
+    case 'F': return f.size == 8 ? P::FLOAT64 : P::FLOAT32;
+    case 'I': return f.size == 1 ? P::INT8 : f.size == 2 ? P::INT16 : f.size == 4 ? P::INT32 : P::INT64;
+    default: return f.size == 1 ? P::UINT8 : f.size == 2 ? P::UINT16 : f.size == 4 ? P::UINT32 : P::UINT64;
+  }
+}
+
+/// The blob's layout from the checked header (what PCL's readHeader would set up: fields at
+/// packed offsets, the data sized for every point), so that PCL's body reader can fill it
+/// without parsing the header a second time.
+pcl::PCLPointCloud2 blobLayout(const ParsedHeader& h) {
+  pcl::PCLPointCloud2 blob;
+  std::uint32_t offset = 0;
+  for (const auto& f : h.fields) {
+    pcl::PCLPointField pf;
+    pf.name = f.name;
+    pf.offset = offset;
+    pf.datatype = datatypeOf(f);
+    pf.count = static_cast<std::uint32_t>(f.count);
+    blob.fields.push_back(pf);
+    offset += static_cast<std::uint32_t>(f.size * f.count);
+  }
+  blob.point_step = offset;
+  blob.width = static_cast<std::uint32_t>(h.width);
+  blob.height = static_cast<std::uint32_t>(h.height);
+  blob.row_step = blob.point_step * blob.width;
+  blob.data.resize(static_cast<std::size_t>(blob.row_step) * blob.height);
+  return blob;
+}
+
+/// The point data of a checked file, read by PCL's body reader from the file's bytes in memory
+/// (the file is opened once: header, checks and data; the header parsed once, by parseHeader).
 pcl::PCLPointCloud2 readBlob(PcdFile& f, const ParsedHeader& h, const std::string& where) {
   std::string bytes(f.size, '\0');
   f.in.clear();
   f.in.seekg(0);
   if (!f.in.read(bytes.data(), static_cast<std::streamsize>(bytes.size())))
     throw InputError(where, "DATA", "could not be read to its end (the file changed or the disk failed)", "run again");
-  pcl::PCLPointCloud2 blob;
-  Eigen::Vector4f origin;
-  Eigen::Quaternionf orientation;
-  int version = 0, data_type = 0;
-  unsigned int data_idx = 0;
+  pcl::PCLPointCloud2 blob = blobLayout(h);
   pcl::PCDReader reader;
-  std::istringstream stream(bytes);
-  int rc = reader.readHeader(stream, blob, origin, orientation, version, data_type, data_idx);
-  // Our header check and PCL's must agree on where the data begins (checkNothingAfterData), and
-  // the binary data must lie within the bytes (PCL's body reader takes no length).
-  if (rc >= 0 && data_idx != h.data_offset) rc = -1;
-  if (rc >= 0 && data_type == 1 && data_idx + blob.data.size() > bytes.size()) rc = -1;
-  if (rc >= 0 && data_type == 0) {
-    stream.clear();
-    stream.seekg(data_idx);
-    rc = reader.readBodyASCII(stream, blob, version);
-  } else if (rc >= 0) {
-    rc = reader.readBodyBinary(reinterpret_cast<const unsigned char*>(bytes.data()), blob, version, data_type == 2, data_idx);
+  const auto data_idx = static_cast<unsigned int>(h.data_offset);
+  int rc = 0;
+  if (h.data == "ascii") {
+    std::istringstream stream(bytes);
+    stream.seekg(static_cast<std::streamoff>(data_idx));
+    rc = reader.readBodyASCII(stream, blob, pcl::PCDReader::PCD_V7);
+  } else {
+    // PCL's body reader takes no length: the data must lie within the bytes (toScanHeader
+    // checked binary data against the file size and the compressed block's sizes).
+    if (h.data == "binary" && data_idx + blob.data.size() > bytes.size()) rc = -1;
+    if (rc == 0)
+      rc = reader.readBodyBinary(reinterpret_cast<const unsigned char*>(bytes.data()), blob, pcl::PCDReader::PCD_V7,
+                                 h.data == "binary_compressed", data_idx);
   }
   if (rc < 0)
     throw InputError(where, "DATA", "PCL could not read the point data (truncated or garbled file)",
