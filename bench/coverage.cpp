@@ -116,7 +116,7 @@ int main(int argc, char** argv) {
   const std::string exe = LIDARCAL_EXE;
   const std::vector<double> at = {1.0, 2.0, 3.0};
   Tally joint{std::vector<int>(at.size()), std::vector<int>(at.size())};
-  Tally reference = joint, taped = joint;
+  Tally reference = joint, taped = joint, closed = joint;
   fs::create_directories(work);
   for (int seed = first; seed < first + seeds; ++seed) {
     const fs::path dir = fs::path(work) / ("s" + std::to_string(seed));
@@ -131,6 +131,11 @@ int main(int argc, char** argv) {
       check(readJson(dir / "joint.json"), truth, at, joint);
     else
       ++joint.failed;
+    if (sh(exe + " calibrate -q --method closed-form " + (dir / "scans").string() + " -o " + (dir / "cf.json").string() +
+           " --overwrite"))
+      check(readJson(dir / "cf.json"), truth, at, closed);
+    else
+      ++closed.failed;
     tapeReference(dir / "truth.json", dir / "ref.json", 0.0, 0);
     if (sh(exe + " calibrate -q " + (dir / "scans").string() + " --reference " + (dir / "ref.json").string() + " -o " +
            (dir / "ref-model.json").string() + " --overwrite"))
@@ -155,6 +160,7 @@ int main(int argc, char** argv) {
   for (std::size_t k = 0; k < at.size(); ++k) std::printf("---|");
   std::printf("---|---|\n");
   print("joint refinement (no ground truth)", joint, at);
+  print("closed form of seed 000, jackknife SE (no ground truth)", closed, at);
   print("against exact distances (--reference)", reference, at);
   char name[96];
   std::snprintf(name, sizeof name, "against tape distances, tape error %.1f mm (--reference)", 1000.0 * tape_sigma);

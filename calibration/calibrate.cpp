@@ -10,6 +10,8 @@
 #include <stdexcept>
 #include <tuple>
 
+#include <Eigen/Dense>
+
 #include "calibration/inversion.hpp"
 #include "calibration/noise_exponent.hpp"
 #include "common/stats_util.hpp"
@@ -545,6 +547,50 @@ void fillClosedForm(CalibrationModel& m, const LandmarkObservations& obs, const 
   m.fitted_range_m = std::make_pair(*std::min_element(d.begin(), d.end()), *std::max_element(d.begin(), d.end()));
 }
 
+/// Groups of the delete-a-group jackknife of the closed form: at most this many, each a run of
+/// consecutive stops (a stop each when there are fewer stops).
+constexpr std::size_t kClosedFormJackknifeGroups = 20;
+
+/// Covariance of the closed form's bias at `order` (row-major): the delete-a-group jackknife over
+/// the stops, (G - 1)/G sum_g (alpha_-g - mean)(alpha_-g - mean)^T, each alpha_-g from the
+/// triangulation and the fit redone without group g. Seed 000's closed form has no covariance
+/// of its own (its distances are themselves estimated from the same data); this one includes
+/// the triangulation's error. Empty when fewer than 3 groups leave enough pairs.
+std::vector<double> closedFormCovariance(const LandmarkObservations& obs, const CalibrationConfig& config, double radius,
+                                         int order) {
+  std::vector<std::size_t> stops;
+  for (const auto& s : obs.sightings) stops.push_back(s.stop);
+  std::sort(stops.begin(), stops.end());
+  stops.erase(std::unique(stops.begin(), stops.end()), stops.end());
+  const std::size_t G = std::min(stops.size(), kClosedFormJackknifeGroups);
+  if (G < 3) return {};
+  std::map<std::size_t, std::size_t> group;  // stop -> group
+  for (std::size_t k = 0; k < stops.size(); ++k) group[stops[k]] = k * G / stops.size();
+  const std::size_t n = static_cast<std::size_t>(order) + 1;
+  std::vector<Eigen::VectorXd> alphas;
+  for (std::size_t g = 0; g < G; ++g) {
+    LandmarkObservations without = obs;
+    without.sightings.clear();
+    for (const auto& s : obs.sightings)
+      if (group[s.stop] != g) without.sightings.push_back(s);
+    const auto pairs = closedFormPairs(without, triangulateAll(without, config.triangulation), radius, false);
+    if (pairs.size() < n + 2) return {};
+    const OrderSelection sel = selectOrder(pairs, order, config.closed_form_rule);
+    const auto& a = sel.table[static_cast<std::size_t>(order)].alpha;
+    if (a.size() != n) return {};
+    alphas.push_back(Eigen::Map<const Eigen::VectorXd>(a.data(), static_cast<Eigen::Index>(n)));
+  }
+  Eigen::VectorXd mean = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(n));
+  for (const auto& a : alphas) mean += a / static_cast<double>(G);
+  Eigen::MatrixXd cov = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
+  for (const auto& a : alphas) cov += (a - mean) * (a - mean).transpose();
+  cov *= static_cast<double>(G - 1) / static_cast<double>(G);
+  std::vector<double> out(n * n);
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = 0; j < n; ++j) out[i * n + j] = cov(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j));
+  return out;
+}
+
 /// Refuses a joint refinement that failed, or that ran away: a solution placing a landmark where
 /// the sensor could not have read it (distances far beyond its range limit) has moved along a
 /// direction the data do not pin down (seen with a single landmark: its centre, the bias and the
@@ -654,6 +700,7 @@ CalibrationModel calibrate(const LandmarkObservations& obs, const CalibrationCon
   std::vector<double> d, y;
   fillClosedForm(m, obs, tri, sel, pairs.size(), scan_pairs, config, batches, d, y);
   if (config.method == Method::closed_form) {
+    m.alpha_covariance = closedFormCovariance(obs, config, radius, static_cast<int>(m.model.bias.alpha.size()) - 1);
     addPlausibilityWarnings(m, nullptr);
     return m;
   }
