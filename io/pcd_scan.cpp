@@ -1,6 +1,7 @@
 #include "io/pcd_scan.hpp"
 
 #include <algorithm>
+#include <cerrno>
 
 #include <cctype>
 #include <cmath>
@@ -8,6 +9,10 @@
 #include <fstream>
 #include <limits>
 #include <sstream>
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <pcl/PCLPointCloud2.h>
 #include <pcl/io/pcd_io.h>
@@ -107,39 +112,87 @@ void checkNothingAfterData(std::istream& in, const std::string& where, std::size
   }
 }
 
-/// A scan file opened for reading: the stream and the file's size in bytes.
-struct PcdFile {
-  std::ifstream in;
-  std::size_t size = 0;
+/// A scan file opened for reading (one open, one fstat), its bytes read as far as needed (issue
+/// 19: a stream's seeks and buffered reads cost more system calls than the file itself).
+class PcdFile {
+ public:
+  explicit PcdFile(const fs::path& file);
+  ~PcdFile() { ::close(fd_); }
+  PcdFile(const PcdFile&) = delete;
+  PcdFile& operator=(const PcdFile&) = delete;
+  /// Reads on until the first min(n, size) bytes are in bytes().
+  void readUpTo(std::size_t n);
+  const std::string& bytes() const { return bytes_; }
+  std::size_t size() const { return size_; }
+
+ private:
+  std::string where_;
+  int fd_ = -1;
+  std::size_t size_ = 0;
+  std::string bytes_;
 };
 
-/// Opens a scan file once for everything read from it (header, checks, data).
-PcdFile openPcd(const fs::path& file) {
-  const std::string where = file.string();
-  std::error_code dir_ec;
-  if (fs::is_directory(file, dir_ec)) {
-    // A sequence directory where a scan file is expected: name one of its scans.
-    fs::path example = file / "scan_000000.pcd";
-    std::vector<fs::path> pcds;
-    for (const auto& e : fs::directory_iterator(file, dir_ec))
-      if (e.path().extension() == ".pcd") pcds.push_back(e.path());
-    if (!pcds.empty()) example = *std::min_element(pcds.begin(), pcds.end());
-    throw InputError(where, "", "is a directory; give a .pcd file (e.g. " + example.string() + ")",
-                     "commands that read a whole sequence (info, detect, calibrate, correct, run) take the directory");
+/// A read-only stream over bytes in memory (no copy), seekable for PCL's ASCII body reader.
+class MemoryBuffer : public std::streambuf {
+ public:
+  explicit MemoryBuffer(const std::string& bytes) {
+    char* p = const_cast<char*>(bytes.data());  // only read: no put area
+    setg(p, p, p + bytes.size());
   }
-  PcdFile f;
-  f.in.open(file, std::ios::binary);
-  if (!f.in) {
-    std::error_code ec;
-    if (!fs::exists(file, ec)) throw InputError(where, "", "file does not exist", "check the path");
-    throw InputError(where, "", "cannot be opened for reading", "check its permissions");
+
+ protected:
+  pos_type seekoff(off_type off, std::ios_base::seekdir dir, std::ios_base::openmode) override {
+    const off_type base = dir == std::ios_base::beg ? 0 : dir == std::ios_base::cur ? gptr() - eback() : egptr() - eback();
+    return seekpos(pos_type(base + off), std::ios_base::in);
   }
-  f.in.seekg(0, std::ios::end);
-  const std::streamoff size = f.in.tellg();
-  f.in.seekg(0, std::ios::beg);
-  if (size < 0) throw InputError(where, "", "cannot be read (no size)", "check that it is a regular file");
-  f.size = static_cast<std::size_t>(size);
-  return f;
+  pos_type seekpos(pos_type pos, std::ios_base::openmode) override {
+    if (pos < 0 || pos > egptr() - eback()) return pos_type(off_type(-1));
+    setg(eback(), eback() + static_cast<off_type>(pos), egptr());
+    return pos;
+  }
+};
+
+/// A directory where a scan file is expected: name one of its scans.
+[[noreturn]] void refuseDirectory(const fs::path& file) {
+  std::error_code ec;
+  fs::path example = file / "scan_000000.pcd";
+  std::vector<fs::path> pcds;
+  for (const auto& e : fs::directory_iterator(file, ec))
+    if (e.path().extension() == ".pcd") pcds.push_back(e.path());
+  if (!pcds.empty()) example = *std::min_element(pcds.begin(), pcds.end());
+  throw InputError(file.string(), "", "is a directory; give a .pcd file (e.g. " + example.string() + ")",
+                   "commands that read a whole sequence (info, detect, calibrate, correct, run) take the directory");
+}
+
+PcdFile::PcdFile(const fs::path& file) : where_(file.string()) {
+  fd_ = ::open(file.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd_ < 0) {
+    if (errno == ENOENT) throw InputError(where_, "", "file does not exist", "check the path");
+    throw InputError(where_, "", "cannot be opened for reading", "check its permissions");
+  }
+  struct stat st {};
+  const bool stated = ::fstat(fd_, &st) == 0;
+  if (!stated || !S_ISREG(st.st_mode)) {
+    ::close(fd_);
+    if (stated && S_ISDIR(st.st_mode)) refuseDirectory(file);
+    throw InputError(where_, "", "cannot be read (not a regular file)", "give the path of a .pcd file");
+  }
+  size_ = static_cast<std::size_t>(st.st_size);
+}
+
+void PcdFile::readUpTo(std::size_t n) {
+  const std::size_t want = std::min(n, size_);
+  std::size_t got = bytes_.size();
+  if (got >= want) return;
+  bytes_.resize(want);
+  while (got < want) {
+    const ssize_t r = ::read(fd_, bytes_.data() + got, want - got);
+    if (r < 0 && errno == EINTR) continue;
+    if (r <= 0) break;
+    got += static_cast<std::size_t>(r);
+  }
+  if (got < want)
+    throw InputError(where_, "DATA", "could not be read to its end (the file changed or the disk failed)", "run again");
 }
 
 /// The header's lines up to DATA, checked (the stream positioned at its start).
@@ -276,13 +329,12 @@ void checkCoordinateField(const ParsedHeader& h, const std::string& name, bool r
 /// PCL trusts the uncompressed size when unpacking: it must be what the header promises, and
 /// the compressed block must lie within the file.
 void checkCompressedBlock(const std::string& where, const ParsedHeader& h, std::size_t promised, std::size_t data_bytes,
-                          std::istream& in) {
+                          const std::string& bytes) {
   std::uint32_t sizes[2] = {0, 0};
-  in.clear();
-  in.seekg(static_cast<std::streamoff>(h.data_offset));
-  if (data_bytes < 8 || !in.read(reinterpret_cast<char*>(sizes), sizeof sizes))
+  if (data_bytes < 8 || h.data_offset + sizeof sizes > bytes.size())
     throw InputError(where, "DATA", "file is truncated: no compressed block after the header",
                      "the recording was cut short; re-export or drop this file");
+  std::memcpy(sizes, bytes.data() + h.data_offset, sizeof sizes);
   if (sizes[1] != promised)
     throw InputError(where, "DATA", "the compressed block unpacks to " + std::to_string(sizes[1]) +
                                         " bytes, the header promises " + std::to_string(promised) + " (damaged file)",
@@ -293,8 +345,8 @@ void checkCompressedBlock(const std::string& where, const ParsedHeader& h, std::
                      "the recording was cut short; re-export or drop this file");
 }
 
-/// The checked header of `file` (`file_size` bytes; `in` its stream, for the compressed block).
-ScanHeader toScanHeader(const fs::path& file, const ParsedHeader& h, std::size_t file_size, std::istream& in) {
+/// The checked header of `file` (`file_size` bytes, `bytes` its first ones: the compressed block's sizes).
+ScanHeader toScanHeader(const fs::path& file, const ParsedHeader& h, std::size_t file_size, const std::string& bytes) {
   const std::string where = file.string();
   checkCoordinateField(h, "x", true, where);
   checkCoordinateField(h, "y", true, where);
@@ -330,7 +382,7 @@ ScanHeader toScanHeader(const fs::path& file, const ParsedHeader& h, std::size_t
       throw InputError(where, "DATA", "file is truncated: " + std::to_string(file_size) + " bytes, the header promises " +
                                           std::to_string(h.data_offset + point_bytes * out.points),
                        "the recording was cut short; re-export or drop this file");
-    if (h.data == "binary_compressed" && out.points > 0) checkCompressedBlock(where, h, point_bytes * out.points, data_bytes, in);
+    if (h.data == "binary_compressed" && out.points > 0) checkCompressedBlock(where, h, point_bytes * out.points, data_bytes, bytes);
     if ((h.data == "ascii" && 2.0 * static_cast<double>(values) * static_cast<double>(out.points) > data_bytes + 1.0) ||
         (h.data == "binary_compressed" && promised > 300.0 * static_cast<double>(data_bytes) + 4096.0))
       throw InputError(where, "DATA", "file is truncated: " + std::to_string(data_bytes) +
@@ -380,9 +432,13 @@ void yawToQuaternion(double yaw_rad, double& qw, double& qz) {
 }
 
 ScanHeader readScanHeader(const fs::path& file) {
-  PcdFile f = openPcd(file);
-  const ParsedHeader h = parseHeader(f.in, file.string());
-  return toScanHeader(file, h, f.size, f.in);
+  // The header fits in kMaxHeaderBytes (parseHeader refuses more), then the compressed block's sizes.
+  PcdFile f(file);
+  f.readUpTo(kMaxHeaderBytes + 8);
+  MemoryBuffer buffer(f.bytes());
+  std::istream in(&buffer);
+  const ParsedHeader h = parseHeader(in, file.string());
+  return toScanHeader(file, h, f.size(), f.bytes());
 }
 
 namespace {
@@ -421,29 +477,44 @@ pcl::PCLPointCloud2 blobLayout(const ParsedHeader& h) {
   return blob;
 }
 
+/// The size of a binary_compressed block (its first uint32, at byte `at`); 0 when the bytes end
+/// before it.
+std::size_t compressedBlockSize(const std::string& bytes, std::size_t at) {
+  std::uint32_t size = 0;
+  if (bytes.size() >= at + 8) std::memcpy(&size, bytes.data() + at, sizeof size);
+  return size;
+}
+
 /// The point data of a checked file, read by PCL's body reader from the file's bytes in memory
 /// (the file is opened once: header, checks and data; the header parsed once, by parseHeader).
 pcl::PCLPointCloud2 readBlob(PcdFile& f, const ParsedHeader& h, const std::string& where) {
-  std::string bytes(f.size, '\0');
-  f.in.clear();
-  f.in.seekg(0);
-  if (!f.in.read(bytes.data(), static_cast<std::streamsize>(bytes.size())))
-    throw InputError(where, "DATA", "could not be read to its end (the file changed or the disk failed)", "run again");
+  // The checked header says how far the data goes (toScanHeader: binary data within the file,
+  // the compressed block's sizes); ASCII data runs to the end.
   pcl::PCLPointCloud2 blob = blobLayout(h);
+  std::size_t end = f.size();
+  if (h.data == "binary") end = h.data_offset + blob.data.size();
+  if (h.data == "binary_compressed") end = h.data_offset + 8 + compressedBlockSize(f.bytes(), h.data_offset);
+  f.readUpTo(end);
+  const std::string& bytes = f.bytes();
   pcl::PCDReader reader;
   const auto data_idx = static_cast<unsigned int>(h.data_offset);
   int rc = 0;
   if (h.data == "ascii") {
-    std::istringstream stream(bytes);
+    MemoryBuffer buffer(bytes);
+    std::istream stream(&buffer);
     stream.seekg(static_cast<std::streamoff>(data_idx));
     rc = reader.readBodyASCII(stream, blob, pcl::PCDReader::PCD_V7);
   } else {
     // PCL's body reader takes no length: the data must lie within the bytes (toScanHeader
     // checked binary data against the file size and the compressed block's sizes).
-    if (h.data == "binary" && data_idx + blob.data.size() > bytes.size()) rc = -1;
+    const bool compressed = h.data == "binary_compressed";
+    std::size_t need = data_idx + blob.data.size();
+    if (compressed && blob.data.empty()) return blob;  // no points: no block to unpack
+    if (compressed) need = data_idx + 8 + compressedBlockSize(bytes, data_idx);
+    if (need > bytes.size()) rc = -1;
     if (rc == 0)
       rc = reader.readBodyBinary(reinterpret_cast<const unsigned char*>(bytes.data()), blob, pcl::PCDReader::PCD_V7,
-                                 h.data == "binary_compressed", data_idx);
+                                 compressed, data_idx);
   }
   if (rc < 0)
     throw InputError(where, "DATA", "PCL could not read the point data (truncated or garbled file)",
@@ -455,9 +526,15 @@ pcl::PCLPointCloud2 readBlob(PcdFile& f, const ParsedHeader& h, const std::strin
 
 Scan readScan(const fs::path& file) {
   const std::string where = file.string();
-  PcdFile f = openPcd(file);
-  const ParsedHeader parsed = parseHeader(f.in, where);
-  const ScanHeader header = toScanHeader(file, parsed, f.size, f.in);
+  PcdFile f(file);
+  f.readUpTo(kMaxHeaderBytes + 8);
+  ParsedHeader parsed;
+  {
+    MemoryBuffer buffer(f.bytes());
+    std::istream in(&buffer);
+    parsed = parseHeader(in, where);
+  }
+  const ScanHeader header = toScanHeader(file, parsed, f.size(), f.bytes());
   const pcl::PCLPointCloud2 blob = readBlob(f, parsed, where);
   const std::size_t n = static_cast<std::size_t>(blob.width) * blob.height;
   if (n != header.points || blob.data.size() < n * blob.point_step)
