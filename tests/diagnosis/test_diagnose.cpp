@@ -22,6 +22,7 @@
 #include "diagnosis/sequence.hpp"
 #include "diagnosis/static_scene.hpp"
 #include "diagnosis/stats.hpp"
+#include "diagnosis/tails.hpp"
 #include "calibration/joint_refinement.hpp"
 #include "diagnosis/diagnose_cases.hpp"
 #include "common/rng.hpp"
@@ -588,6 +589,118 @@ TEST(DiagnoseStatic, TooFewScansGiveAStatus) {
   const auto r = diagnoseStatic(staticRoom({}, squared(0.0015), 1, 3), DiagnoseConfig{});
   EXPECT_EQ(r.status, "too_few_scans");
   EXPECT_FALSE(r.message.empty());
+}
+
+// ---------------------------------------------------------------------------------------------
+// Tails explained by covariates (diagnosis/tails.hpp, issue 20).
+
+/// Residuals drawn from the tail model itself: the EM recovers its parameters (oracle: the truth).
+TEST(DiagnoseTails, EmRecoversTheContaminationModelFromItsOwnDraws) {
+  for (std::uint64_t seed : {1u, 2u, 3u}) {
+    SCOPED_TRACE(seed);
+    auto rng = makeRng(seed, 17);
+    std::normal_distribution<double> normal(0.0, 1.0);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    TailModel truth;
+    truth.sigma_e = 0.002;
+    truth.gamma = 1.0;
+    truth.wide = 8.0;
+    truth.beta = {-4.0, 3.0, 0.0, 0.0, 0.0};
+    truth.spec.covariate[kTailEdge] = true;
+    std::vector<TailBeam> beams(200);
+    std::vector<TailReading> readings;
+    for (std::size_t b = 0; b < beams.size(); ++b) {
+      beams[b].log_range = std::log(1.0 + 3.0 * unit(rng));
+      beams[b].log_sec_inc = -std::log(std::cos(deg2rad(70.0) * unit(rng)));
+      beams[b].x = {b % 2 == 0 ? 1.0 : 0.0, beams[b].log_sec_inc, beams[b].log_range - 0.8, 0.0};
+      for (int k = 0; k < 200; ++k) {
+        const double s = truth.sigma(beams[b]) * (unit(rng) < truth.tailProbability(beams[b]) ? truth.wide : 1.0);
+        readings.push_back({b, s * normal(rng), 1.0});
+      }
+    }
+    TailSpec spec;
+    spec.covariate = {true, true, true, false};
+    spec.gamma = true;
+    const TailModel m = fitTailModel(beams, readings, spec, 0.01, 1e-3, 1.0 / 12.0);
+    EXPECT_TRUE(m.converged);
+    EXPECT_NEAR(m.sigma_e, 0.002, 0.0001);
+    EXPECT_NEAR(m.gamma, 1.0, 0.05);
+    EXPECT_NEAR(m.wide, 8.0, 0.5);
+    EXPECT_NEAR(m.beta[0], -4.0, 0.3);
+    EXPECT_NEAR(m.beta[1 + kTailEdge], 3.0, 0.3);
+    EXPECT_NEAR(m.beta[1 + kTailGrazing], 0.0, 0.3);  // covariates without effect stay near 0
+    EXPECT_NEAR(m.beta[1 + kTailRange], 0.0, 0.3);
+  }
+}
+
+/// Where the test puts the extra-wide errors, and what the diagnosis must say about them.
+struct TailTruth {
+  const char* name;
+  test::TailWhere where;
+  const char* effect;  ///< the physical cause to name
+  const char* cls;     ///< the class of beams holding most of the tail readings
+};
+
+class StaticTails : public ::testing::TestWithParam<TailTruth> {};
+
+/// Extra-wide errors (10 % of the readings of one class of beams, 5 cm) only at grazing incidence,
+/// only at depth edges or only on a dark wall: named by the physical effect (not heavy_tails), the
+/// tails put in that class. Four seeds the method was not tuned on; at least 3 right (a method
+/// right 95 % of the time passes with probability 0.99).
+TEST_P(StaticTails, NamesThePhysicalCauseAndTheBeamsThatCarryTheTails) {
+  const TailTruth& c = GetParam();
+  int right = 0;
+  std::string log;
+  for (std::uint64_t seed = 301; seed < 305; ++seed) {
+    DiagnoseConfig dc;
+    dc.replicas = 5;
+    dc.seed = seed;
+    const auto r = diagnoseStatic(test::staticRoomWithTails(c.where, 0.10, 0.05, seed), dc);
+    ASSERT_EQ(r.status, "ok") << r.message;
+    ASSERT_TRUE(r.tails.fitted) << r.tails.note;
+    std::string top;
+    double most = -1.0;
+    for (const auto& [k, v] : r.tails.tail_readings_by_class)
+      if (v > most) {
+        most = v;
+        top = k;
+      }
+    right += r.primary_cause == c.effect && r.tails.cause == c.effect && top == c.cls;
+    log += " seed " + std::to_string(seed) + ": " + r.primary_cause + ", tails " + r.tails.cause + ", class " + top + ";";
+  }
+  std::printf("%s:%s\n", c.name, log.c_str());
+  EXPECT_GE(right, 3) << log;
+}
+
+INSTANTIATE_TEST_SUITE_P(Room, StaticTails,
+                         ::testing::Values(TailTruth{"grazing", test::TailWhere::grazing, "incidence_noise", "grazing"},
+                                           TailTruth{"edge", test::TailWhere::edge, "mixed_pixels", "edge"},
+                                           TailTruth{"dark", test::TailWhere::dark, "dark_surface", "dark"}),
+                         [](const auto& p) { return std::string(p.param.name); });
+
+/// Tails everywhere (5 % of all readings 5 cm off) over a noise growing as (1 / cos phi)^1: the
+/// incidence exponent fitted under the contamination comes out near 1; no covariate explains
+/// tails that are everywhere, so none is named for them.
+TEST(DiagnoseStatic, IncidenceExponentIsRecoveredUnderContamination) {
+  RangeEffects fx;
+  fx.incidence_noise_exponent = 1.0;
+  for (std::uint64_t seed = 311; seed < 314; ++seed) {
+    SCOPED_TRACE(seed);
+    DiagnoseConfig dc;
+    dc.replicas = 5;
+    dc.seed = seed;
+    const auto r = diagnoseStatic(test::staticRoomWithTails(test::TailWhere::everywhere, 0.05, 0.05, seed, fx), dc);
+    ASSERT_EQ(r.status, "ok") << r.message;
+    ASSERT_TRUE(r.tails.fitted) << r.tails.note;
+    const double robust = r.tails.robust.at("incidence_noise_exponent");
+    double gaussian = std::numeric_limits<double>::quiet_NaN();
+    for (const auto& k : r.candidates)
+      if (k.effect == "incidence_noise") gaussian = k.estimates.at("incidence_noise_exponent");
+    std::printf("seed %d: incidence exponent %.3f under the contamination, %.3f under the Gaussian; named %s\n",
+                static_cast<int>(seed), robust, gaussian, r.primary_cause.c_str());
+    EXPECT_NEAR(robust, 1.0, 0.25);
+    EXPECT_GT(r.tails.robust.at("incidence_noise_exponent_gain"), 0.0);
+  }
 }
 
 }  // namespace
