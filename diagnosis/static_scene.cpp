@@ -998,9 +998,12 @@ std::vector<TailBeam> tailBeams(const Data& d, const std::vector<BinFit>& f) {
     const Bin& b = d.bins[k];
     TailBeam& t = beams[k];
     t.log_range = std::log(std::max(std::abs(f[k].m), 1e-3));
+    // At a depth edge the tails are the edge's (the bin's mean mixes both surfaces, and the slope
+    // it makes with its neighbour may be the jump's): no grazing covariate there. The noise law
+    // keeps the incidence (a pillar's silhouette is seen at grazing incidence).
     t.log_sec_inc = b.inc_known ? -std::log(clampCosIncidence(b.cos_inc)) : 0.0;
     t.x[kTailEdge] = b.edge ? 1.0 : 0.0;
-    t.x[kTailGrazing] = t.log_sec_inc;
+    t.x[kTailGrazing] = b.edge ? 0.0 : t.log_sec_inc;
     t.x[kTailRange] = t.log_range - mean_lr;
     // Darkness: how much weaker than the median beam's the return is, ln(I_median / I), >= 0.
     t.x[kTailDark] = std::isfinite(b.intensity) ? std::max(0.0, med_i - std::log(b.intensity)) : 0.0;
@@ -1134,6 +1137,7 @@ class StaticDiagnosis {
   void afterCandidates(DiagnosisResult& out);
   std::vector<std::pair<std::string, std::string>> nestedEffects() const { return {}; }
   void refineCause(DiagnosisResult& out);
+  void reRankUnderTails(DiagnosisResult& out);
   Closeness closenessBaseline(const DiagnosisResult& out) const { return closenessOf(out.measured, sim_base_); }
   void extend(std::size_t c, DiagnosisResult& out) const;
 
@@ -1434,6 +1438,7 @@ void StaticDiagnosis::tailFullData(TailAttribution& ta, const std::vector<TailRe
   ta.model["wide_scale"] = full.wide;
   ta.model["logit_intercept"] = full.beta[0];
   ta.model["em_iterations"] = full.iterations;
+  ta.model["em_converged"] = full.converged ? 1.0 : 0.0;
   for (auto& c : ta.covariates) {
     int j = 0;
     while (c.covariate != tailCovariateName(j)) ++j;
@@ -1499,10 +1504,51 @@ void StaticDiagnosis::tailRobust(DiagnosisResult& out, const std::vector<TailRea
     out.tails.robust[key] = value;
     out.tails.robust[key + "_gain"] = g.gain;
     out.tails.robust[key + "_gain_se"] = g.se;
+    out.tails.robust[key + "_p"] = g.finite ? heldoutPValue(g.gain, g.se) : 1.0;
     robust_[it.effect] = value;
     for (auto& c : out.candidates)
       if (c.effect == it.effect) c.estimates[key + "_robust"] = value;
   }
+}
+
+/// The effects fitted under the pooled contamination (StaticDiagnosis::tailRobust): their key in
+/// TailAttribution::robust, or nullptr.
+const char* robustEffectOf(const std::string& e) {
+  if (e == effect::kIncidenceNoise) return "incidence_noise_exponent";
+  if (e == effect::kRangeNoiseLaw) return "noise_exponent";
+  if (e == effect::kMixedPixels) return "mixed_pixel_fraction";
+  return nullptr;
+}
+
+/// A noise law or mixed pixels named while the tails are significant: the Gaussian likelihood the
+/// ranking came from is dominated by the tails, so the three are ranked again by their held-out
+/// gains over the pooled contamination (Holm across them); the largest significant one is named.
+void StaticDiagnosis::reRankUnderTails(DiagnosisResult& out) {
+  named_by_tails_ = true;  // its simulation takes the exponent fitted beside the contamination
+  const auto& rob = out.tails.robust;
+  std::vector<std::string> effects;
+  std::vector<double> p;
+  for (const char* e : {effect::kIncidenceNoise, effect::kRangeNoiseLaw, effect::kMixedPixels}) {
+    const std::string key = robustEffectOf(e);
+    if (!rob.count(key + "_p")) continue;
+    effects.push_back(e);
+    p.push_back(rob.at(key + "_p"));
+  }
+  const auto adj = holmAdjust(p);
+  std::string best;
+  double best_gain = 0.0;
+  for (std::size_t k = 0; k < effects.size(); ++k) {
+    const double gain = rob.at(std::string(robustEffectOf(effects[k])) + "_gain");
+    if (adj[k] < config_.alpha && gain > best_gain) {
+      best_gain = gain;
+      best = effects[k];
+    }
+  }
+  if (best.empty() || best == out.primary_cause) return;
+  out.decision = "the tails are significant and dominate the Gaussian likelihood that ranked " + out.primary_cause +
+                 " first; fitted beside a pooled contamination, " + best + " has the largest significant held-out gain (+" +
+                 std::to_string(best_gain) + " nats per reading)";
+  out.primary_cause = best;
 }
 
 /// Step 4 for the tails: when the named cause is the pooled symptom (heavy_tails) or nothing while
@@ -1518,8 +1564,12 @@ void StaticDiagnosis::refineCause(DiagnosisResult& out) {
     heavy = heavy || (c.effect == effect::kHeavyTails && c.significant);
   }
   ta.significant = heavy || std::min(1.0, tested * ta.p_value) < config_.alpha;
-  const bool symptom = out.primary_cause == effect::kHeavyTails || out.primary_cause == effect::kNone;
-  if (!ta.significant || !symptom) return;
+  if (!ta.significant) return;
+  if (robustEffectOf(out.primary_cause)) {
+    reRankUnderTails(out);
+    return;
+  }
+  if (out.primary_cause != effect::kHeavyTails && out.primary_cause != effect::kNone) return;
   if (ta.cause == "unknown") {
     if (out.primary_cause == effect::kNone)
       out.decision = "the tails are significant (a contamination mixture predicts held-out readings better, p " +

@@ -11,6 +11,10 @@ namespace {
 
 constexpr double kSqrt2Pi = 2.5066282746310002;
 constexpr int kBeta = 1 + kTailCovariates;
+/// Smallest k: a broad component narrower than 4 core standard deviations would mimic a smooth
+/// noise law (readings at grazing incidence twice as spread) instead of wild readings, and pull
+/// the exponents fitted beside it (simulated gamma = 1 came out 0.85 with k >= 2).
+constexpr double kMinWide = 4.0;
 
 double logistic(double v) { return 1.0 / (1.0 + std::exp(-v)); }
 
@@ -21,7 +25,7 @@ struct Parts {
 };
 
 Parts partsOf(const TailModel& m, const TailBeam& b, double r, double c, double fw, double fd) {
-  const double s = std::max(m.sigma(b) * c, 1e-7), ks = m.wide * s;
+  const double s = std::max(m.sigma(b) * c, 1e-7), ks = std::max(m.broadSigma(b) * c, 1e-7);
   const double pi = m.tailProbability(b);
   const bool can_mix = m.spec.mixed && b.mix_hi > b.mix_lo;
   const double eta = can_mix ? m.mixed : 0.0;
@@ -66,16 +70,19 @@ double expectation(const TailModel& m, const std::vector<TailBeam>& beams, const
   return ll;
 }
 
-/// Profile log-likelihood of the exponents (sigma_e at its ML value given k).
-double profileExponents(const std::vector<TailBeam>& beams, const std::vector<BeamSums>& sums, double wide, double kappa,
-                        double gamma, double* sigma_e) {
+/// Expected complete log-likelihood of the scales (up to constants), sigma_e at its ML value:
+/// core ln s_b = ln sigma_e + kappa l_b + gamma c_b, broad ln s_b + ln k + (rho - kappa)(l_b - l_ref)
+/// (l: ln range, c: ln 1/cos phi).
+double profileScales(const TailModel& m, const std::vector<TailBeam>& beams, const std::vector<BeamSums>& sums,
+                     double* sigma_e) {
   double ss = 0.0, w = 0.0, logh = 0.0;
   for (std::size_t b = 0; b < beams.size(); ++b) {
     if (sums[b].a <= 0.0) continue;
-    const double lh = kappa * beams[b].log_range + gamma * beams[b].log_sec_inc;
-    ss += (sums[b].s_core + sums[b].s_wide / (wide * wide)) * std::exp(-2.0 * lh);
+    const double lc = m.kappa * beams[b].log_range + m.gamma * beams[b].log_sec_inc;
+    const double lw = lc + std::log(m.wide) + (m.wide_exponent - m.kappa) * (beams[b].log_range - m.ref_log_range);
+    ss += sums[b].s_core * std::exp(-2.0 * lc) + sums[b].s_wide * std::exp(-2.0 * lw);
     w += sums[b].a;
-    logh += sums[b].a * lh;
+    logh += (sums[b].a - sums[b].t) * lc + sums[b].t * lw;
   }
   const double s2 = std::max(ss / std::max(w, 1e-300), 1e-300);
   if (sigma_e) *sigma_e = std::sqrt(s2);
@@ -92,21 +99,27 @@ double goldenArgMax(Fn fn, double lo, double hi, int iterations) {
   return 0.5 * (lo + hi);
 }
 
-/// M-step of the noise law and the broad scale: exponents (when free), sigma_e, k.
+/// One coordinate of the scales by golden section on the profile (`field` set in a copy).
+template <class Set>
+void maximiseCoordinate(TailModel& m, const std::vector<TailBeam>& beams, const std::vector<BeamSums>& sums, double lo,
+                        double hi, Set set) {
+  TailModel t = m;
+  const double best = goldenArgMax([&](double v) { set(t, v); return profileScales(t, beams, sums, nullptr); }, lo, hi, 40);
+  set(m, best);
+}
+
+/// M-step of the noise law and the broad component: exponents (when free), the broad width's
+/// ratio k (>= kMinWide at the reference range) and its own range exponent rho, sigma_e.
 void maximiseScales(TailModel& m, const std::vector<TailBeam>& beams, const std::vector<BeamSums>& sums) {
-  if (m.spec.kappa)
-    m.kappa = goldenArgMax([&](double k) { return profileExponents(beams, sums, m.wide, k, m.gamma, nullptr); }, -1.0, 5.0, 40);
-  if (m.spec.gamma)
-    m.gamma = goldenArgMax([&](double g) { return profileExponents(beams, sums, m.wide, m.kappa, g, nullptr); }, -1.0, 4.0, 40);
-  profileExponents(beams, sums, m.wide, m.kappa, m.gamma, &m.sigma_e);
-  double num = 0.0, den = 0.0;
-  for (std::size_t b = 0; b < beams.size(); ++b) {
-    if (sums[b].t <= 0.0) continue;
-    num += sums[b].s_wide / std::pow(m.sigma(beams[b]), 2);
-    den += sums[b].t;
+  if (m.spec.kappa) maximiseCoordinate(m, beams, sums, -1.0, 5.0, [](TailModel& t, double v) { t.kappa = v; });
+  if (m.spec.gamma) maximiseCoordinate(m, beams, sums, -1.0, 4.0, [](TailModel& t, double v) { t.gamma = v; });
+  double tail = 0.0;
+  for (const auto& s : sums) tail += s.t;
+  if (tail > 1e-6) {
+    maximiseCoordinate(m, beams, sums, -1.0, 5.0, [](TailModel& t, double v) { t.wide_exponent = v; });
+    maximiseCoordinate(m, beams, sums, std::log(kMinWide), std::log(1e3), [](TailModel& t, double v) { t.wide = std::exp(v); });
   }
-  if (den > 1e-9) m.wide = std::sqrt(std::clamp(num / den, 4.0, 1e6));
-  profileExponents(beams, sums, m.wide, m.kappa, m.gamma, &m.sigma_e);
+  profileScales(m, beams, sums, &m.sigma_e);
 }
 
 /// M-step of the logit coefficients: Newton steps on the expected complete log-likelihood of the
@@ -168,6 +181,10 @@ double TailModel::sigma(const TailBeam& b) const {
   return sigma_e * std::exp(kappa * b.log_range + gamma * b.log_sec_inc);
 }
 
+double TailModel::broadSigma(const TailBeam& b) const {
+  return sigma(b) * wide * std::exp((wide_exponent - kappa) * (b.log_range - ref_log_range));
+}
+
 double TailModel::logDensity(const TailBeam& b, double residual_m, double inflation, double floor_w, double floor_density) const {
   return std::log(std::max(partsOf(*this, b, residual_m, inflation, floor_w, floor_density).total(), 1e-300));
 }
@@ -183,6 +200,14 @@ TailModel fitTailModel(const std::vector<TailBeam>& beams, const std::vector<Tai
   m.spec = spec;
   m.sigma_e = sigma_e_start > 0.0 ? sigma_e_start : 0.01;
   m.beta[0] = std::log(0.02 / 0.98);
+  m.wide = std::max(m.wide, kMinWide);
+  m.wide_exponent = m.kappa;
+  double lr = 0.0, nr = 0.0;
+  for (const auto& rd : readings) {
+    lr += beams[rd.beam].log_range;
+    nr += 1.0;
+  }
+  m.ref_log_range = nr > 0.0 ? lr / nr : 0.0;
   m.mixed = spec.mixed ? 0.05 : 0.0;
   std::vector<BeamSums> sums;
   double prev = -std::numeric_limits<double>::infinity();

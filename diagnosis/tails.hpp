@@ -2,13 +2,16 @@
 // Tails explained by physical covariates (issue 20): a per-reading contamination mixture whose
 // probability depends on what the beam sees. A residual r of beam b (reading minus the beam's
 // location) has the density
-//   p(r) = (1 - eta_b) [(1 - pi_b) N(r; 0, s_b^2) + pi_b N(r; 0, (k s_b)^2)] + eta_b U(r; lo_b, hi_b)
+//   p(r) = (1 - eta_b) [(1 - pi_b) N(r; 0, s_b^2) + pi_b N(r; 0, w_b^2)] + eta_b U(r; lo_b, hi_b)
 //   s_b = sigma_e m_b^kappa (1 / cos phi_b)^gamma        seed 004 eq. 1 with free exponents
+//   w_b = k s_b (m_b / m_ref)^(rho - kappa)              the broad width, its own range law
 //   logit pi_b = beta_0 + sum_j beta_j x_bj              x: depth edge, ln(1/cos phi), ln m, darkness
-// k the broad component's scale (>= 2), eta_b the mixed-pixel fraction at depth edges (a reading
+// k the broad component's width over the core's at the reference range m_ref (>= 4), rho its
+// range exponent (wild readings need not grow with range as the core noise does: a fixed width in
+// metres is rho = 0, a scale mixture of the core rho = kappa), eta_b the mixed-pixel fraction at depth edges (a reading
 // anywhere between the two surfaces; 0 elsewhere). With every beta_j = 0 the broad component is a
 // pooled tail (a symptom, like a Student t); a covariate with a significant beta_j names a cause.
-// Fitted by EM: closed-form sigma_e, k and eta, golden-section on the exponents (profile in
+// Fitted by EM: closed-form sigma_e and eta, golden-section on the exponents and k (profile in
 // sigma_e, per-beam sums), Newton steps (IRLS) on beta with the responsibilities as soft labels.
 // Internal to the diagnosis library (static mode).
 
@@ -55,7 +58,9 @@ struct TailModel {
   double sigma_e = 0.01;  ///< noise scale, metres at 1 m
   double kappa = 2.0;     ///< range exponent
   double gamma = 0.0;     ///< incidence exponent
-  double wide = 5.0;      ///< k: the broad component's scale over the core's
+  double wide = 5.0;      ///< k: the broad component's width over the core's at the reference range
+  double wide_exponent = 2.0;  ///< rho: range exponent of the broad width
+  double ref_log_range = 0.0;  ///< ln m_ref: mean ln range of the readings fitted
   double mixed = 0.0;     ///< eta: mixed-pixel fraction at edge beams
   std::array<double, 1 + kTailCovariates> beta{};  ///< logit intercept, then the covariates' coefficients
   TailSpec spec;          ///< what was free
@@ -64,6 +69,7 @@ struct TailModel {
 
   double tailProbability(const TailBeam& b) const;  ///< pi_b
   double sigma(const TailBeam& b) const;            ///< s_b, metres
+  double broadSigma(const TailBeam& b) const;       ///< w_b, metres
   /// Log density of a residual, with a uniform floor of weight floor_w and density floor_density.
   double logDensity(const TailBeam& b, double residual_m, double inflation, double floor_w, double floor_density) const;
   /// Posterior probability that the residual came from the broad component.

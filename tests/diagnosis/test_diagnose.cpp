@@ -647,7 +647,7 @@ class StaticTails : public ::testing::TestWithParam<TailTruth> {};
 /// only at depth edges or only on a dark wall: named by the physical effect (not heavy_tails), the
 /// tails put in that class. Four seeds the method was not tuned on; at least 3 right (a method
 /// right 95 % of the time passes with probability 0.99).
-TEST_P(StaticTails, NamesThePhysicalCauseAndTheBeamsThatCarryTheTails) {
+TEST_P(StaticTails, DiagnoseNamesThePhysicalCauseAndTheBeamsThatCarryTheTails) {
   const TailTruth& c = GetParam();
   int right = 0;
   std::string log;
@@ -679,8 +679,8 @@ INSTANTIATE_TEST_SUITE_P(Room, StaticTails,
                          [](const auto& p) { return std::string(p.param.name); });
 
 /// Tails everywhere (5 % of all readings 5 cm off) over a noise growing as (1 / cos phi)^1: the
-/// incidence exponent fitted under the contamination comes out near 1; no covariate explains
-/// tails that are everywhere, so none is named for them.
+/// incidence exponent fitted under the contamination comes out near 1 (under the Gaussian
+/// likelihood 0.73-0.88 on these seeds), and incidence_noise is named.
 TEST(DiagnoseStatic, IncidenceExponentIsRecoveredUnderContamination) {
   RangeEffects fx;
   fx.incidence_noise_exponent = 1.0;
@@ -696,9 +696,15 @@ TEST(DiagnoseStatic, IncidenceExponentIsRecoveredUnderContamination) {
     double gaussian = std::numeric_limits<double>::quiet_NaN();
     for (const auto& k : r.candidates)
       if (k.effect == "incidence_noise") gaussian = k.estimates.at("incidence_noise_exponent");
-    std::printf("seed %d: incidence exponent %.3f under the contamination, %.3f under the Gaussian; named %s\n",
-                static_cast<int>(seed), robust, gaussian, r.primary_cause.c_str());
-    EXPECT_NEAR(robust, 1.0, 0.25);
+    std::printf("seed %d: incidence exponent %.3f under the contamination, %.3f under the Gaussian; named %s; robust gains: "
+                "gamma %.4f +- %.4f, kappa %.4f +- %.4f\n",
+                static_cast<int>(seed), robust, gaussian, r.primary_cause.c_str(), r.tails.robust.at("incidence_noise_exponent_gain"),
+                r.tails.robust.at("incidence_noise_exponent_gain_se"), r.tails.robust.at("noise_exponent_gain"),
+                r.tails.robust.at("noise_exponent_gain_se"));
+    EXPECT_NEAR(robust, 1.0, 0.15);
+    // The Gaussian ranking, dominated by the tails, puts a range law first; ranked beside the
+    // contamination the incidence noise comes first.
+    EXPECT_EQ(r.primary_cause, "incidence_noise") << r.decision << " tails significant " << r.tails.significant << " p " << r.tails.p_value;
     EXPECT_GT(r.tails.robust.at("incidence_noise_exponent_gain"), 0.0);
   }
 }
