@@ -1436,6 +1436,8 @@ void StaticDiagnosis::tailFullData(TailAttribution& ta, const std::vector<TailRe
   const TailModel full = fitTailModel(tails_.beams, all, tails_.specs[1], base0_.sigma_e, fw, fd);
   ta.model["sigma_e"] = full.sigma_e;
   ta.model["wide_scale"] = full.wide;
+  ta.model["wide_range_exponent"] = full.wide_exponent;
+  ta.model["reference_range_m"] = std::exp(full.ref_log_range);
   ta.model["logit_intercept"] = full.beta[0];
   ta.model["em_iterations"] = full.iterations;
   ta.model["em_converged"] = full.converged ? 1.0 : 0.0;

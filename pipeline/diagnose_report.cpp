@@ -345,19 +345,26 @@ void writeTails(std::ostream& md, const DiagnosisResult& r) {
   md << "\n## What the tails are made of\n\n";
   md << "A contamination mixture (diagnosis/tails.hpp): pooled, a fraction " << fmt(t.pooled_fraction, 4)
      << " of readings " << fmt(t.pooled_wide_scale, 3) << " times as wide as the core, held-out gain "
-     << fmt(t.pooled_gain_nats_per_point, 4) << " +- " << fmt(t.pooled_gain_se, 2)
+     << fmt(t.pooled_gain_nats_per_point, 4) << " +- " << fmt(t.pooled_gain_se, 4)
      << " nats per reading over the Gaussian baseline; with its probability depending on the covariates, a further "
-     << fmt(t.explained_gain_nats_per_point, 4) << " +- " << fmt(t.explained_gain_se, 2) << ". Cause: `" << t.cause << "`.\n\n";
+     << fmt(t.explained_gain_nats_per_point, 4) << " +- " << fmt(t.explained_gain_se, 4) << ". Cause: `" << t.cause << "`.\n\n";
   md << "| covariate | effect | coefficient | unique held-out gain [nats/pt] | se | Holm p | share | significant |\n"
         "|---|---|---|---|---|---|---|---|\n";
   for (const auto& c : t.covariates)
     md << "| " << c.covariate << " | `" << c.effect << "` | " << fmt(c.coefficient, 3) << " | "
-       << fmt(c.unique_gain_nats_per_point, 5) << " | " << fmt(c.unique_gain_se, 2) << " | " << pfmt(c.p_holm) << " | "
+       << fmt(c.unique_gain_nats_per_point, 5) << " | " << fmt(c.unique_gain_se, 5) << " | " << pfmt(c.p_holm) << " | "
        << fmt(100.0 * c.share, 1) << " % | " << (c.significant ? "**yes**" : "no") << " |\n";
   md << "\nTail readings (posterior sums) by class of beam, of " << fmt(t.tail_readings, 1) << ":";
   for (const auto& [k, v] : t.tail_readings_by_class)
     md << " " << k << " " << fmt(v, 1) << " of " << fmt(t.readings_by_class.at(k), 0) << ";";
-  md << "\n\nUnder the pooled contamination:";
+  md << "\n\n| beam [deg] | range [m] | incidence [deg] | intensity | edge | readings | tail fraction | fitted pi | class |\n"
+        "|---|---|---|---|---|---|---|---|---|\n";
+  for (const auto& b : t.top_beams)
+    md << "| " << fmt(rad2deg(b.bearing_rad), 1) << " | " << fmt(b.range_m, 3) << " | "
+       << (std::isfinite(b.incidence_rad) ? fmt(rad2deg(b.incidence_rad), 1) : "-") << " | "
+       << (std::isfinite(b.intensity) ? fmt(b.intensity, 1) : "-") << " | " << (b.edge ? "yes" : "no") << " | " << b.readings
+       << " | " << fmt(b.tail_fraction, 3) << " | " << fmt(b.tail_probability, 3) << " | " << b.cls << " |\n";
+  md << "\nUnder the pooled contamination:";
   for (const auto& [k, v] : t.robust) md << " " << k << " = " << fmt(v, 4) << ";";
   md << "\n";
 }
