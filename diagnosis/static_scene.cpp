@@ -1182,6 +1182,7 @@ class StaticDiagnosis {
   bool tails_on_ = false;         // the tail study runs (heavy_tails is a candidate)
   TailStudy tails_;               // the tail models and their held-out log-likelihoods
   std::map<std::string, double> robust_;  // effect -> its parameter fitted under the pooled contamination
+  std::map<std::string, double> robust_sigma_;  // effect -> the core's sigma_e fitted with it
   bool named_by_tails_ = false;   // the cause was named from the tails' covariates
 };
 
@@ -1508,6 +1509,7 @@ void StaticDiagnosis::tailRobust(DiagnosisResult& out, const std::vector<TailRea
     out.tails.robust[key + "_gain_se"] = g.se;
     out.tails.robust[key + "_p"] = g.finite ? heldoutPValue(g.gain, g.se) : 1.0;
     robust_[it.effect] = value;
+    robust_sigma_[it.effect] = m.sigma_e;
     for (auto& c : out.candidates)
       if (c.effect == it.effect) c.estimates[key + "_robust"] = value;
   }
@@ -1754,6 +1756,9 @@ void StaticDiagnosis::extend(std::size_t c, DiagnosisResult& out) const {
   if (e == effect::kQuantisation) fx.range_resolution_m = fm.q;
   if (e == effect::kRangeNoiseLaw) sim_model.kappa = named_by_tails_ && robust_.count(e) ? robust_.at(e) : fm.kappa;
   sim_model.sigma_e = fm.sigma_e;
+  // Named from the tails: the core noise fitted beside the contamination (its wild readings are
+  // not simulated: the simulator has no covariate-dependent contamination).
+  if (named_by_tails_ && robust_sigma_.count(e)) sim_model.sigma_e = robust_sigma_.at(e);
   WallFit w_sim = w0_;
   if (e == effect::kIncidenceBias && wb_.ok) {
     w_sim = wb_;
