@@ -209,6 +209,7 @@ TailModel fitTailModel(const std::vector<TailBeam>& beams, const std::vector<Tai
   }
   m.ref_log_range = nr > 0.0 ? lr / nr : 0.0;
   m.mixed = spec.mixed ? 0.05 : 0.0;
+  if (readings.empty()) return m;  // nothing to fit: the start, not converged
   std::vector<BeamSums> sums;
   double prev = -std::numeric_limits<double>::infinity();
   const double n = std::max<double>(static_cast<double>(readings.size()), 1.0);

@@ -76,8 +76,8 @@ struct TailModel {
   double responsibility(const TailBeam& b, double residual_m, double inflation, double floor_w, double floor_density) const;
 };
 
-/// Fits the model by EM from `start` (its sigma_e is the initial scale; the other free
-/// parameters start at a 2 % pooled tail of scale 5, eta 5 %). Deterministic.
+/// Fits the model by EM (sigma_e_start is the initial scale; the other free parameters start at a
+/// 2 % pooled tail of width 5, eta 5 %). Deterministic. No readings: the start, converged = false.
 TailModel fitTailModel(const std::vector<TailBeam>& beams, const std::vector<TailReading>& readings, const TailSpec& spec,
                        double sigma_e_start, double floor_w, double floor_density, int max_iterations = 60);
 

@@ -633,6 +633,23 @@ TEST(DiagnoseTails, EmRecoversTheContaminationModelFromItsOwnDraws) {
   }
 }
 
+/// Degenerate inputs: no readings, or every residual zero (a sensor that repeats itself): finite
+/// parameters, no crash; no readings is reported as not converged.
+TEST(DiagnoseTails, DegenerateInputsGiveFiniteParameters) {
+  std::vector<TailBeam> beams(3);
+  TailSpec spec;
+  spec.covariate = {true, true, true, true};
+  spec.kappa = spec.gamma = spec.mixed = true;
+  const TailModel none = fitTailModel(beams, {}, spec, 0.01, 1e-3, 0.1);
+  EXPECT_FALSE(none.converged);
+  std::vector<TailReading> zeros;
+  for (std::size_t b = 0; b < beams.size(); ++b)
+    for (int k = 0; k < 20; ++k) zeros.push_back({b, 0.0, 1.0});
+  const TailModel flat = fitTailModel(beams, zeros, spec, 0.01, 1e-3, 0.1);
+  for (double v : {flat.sigma_e, flat.kappa, flat.gamma, flat.wide, flat.mixed, flat.beta[0]}) EXPECT_TRUE(std::isfinite(v));
+  EXPECT_TRUE(std::isfinite(flat.logDensity(beams[0], 0.001, 1.0, 1e-3, 0.1)));
+}
+
 /// Where the test puts the extra-wide errors, and what the diagnosis must say about them.
 struct TailTruth {
   const char* name;
