@@ -1151,9 +1151,9 @@ class StaticDiagnosis {
   void startTails();
   void tailFold(int k, const std::vector<int>& fold);
   void tailCovariateGains(TailAttribution& ta) const;
-  void tailFullData(TailAttribution& ta, const std::vector<TailReading>& all) const;
+  TailModel tailFullData(TailAttribution& ta, const std::vector<TailReading>& all) const;
   void tailClasses(TailAttribution& ta, const TailModel& full, const std::vector<TailReading>& all) const;
-  void tailRobust(DiagnosisResult& out, const std::vector<TailReading>& all);
+  void tailRobust(DiagnosisResult& out, const std::vector<TailReading>& all, const TailModel& pooled);
   double inSample(const Flags& fl, Model* fitted) const;
   bool notApplicable(CandidateResult& r) const;
   void setIdentifiability(CandidateResult& r) const;
@@ -1364,11 +1364,16 @@ void StaticDiagnosis::tailFold(int k, const std::vector<int>& fold) {
   const std::vector<BinFit> fits = fitBins(d_, train, 0.0);
   const auto fit_on = tailResiduals(d_, fits, train, false, nullptr);
   const auto test = tailResiduals(d_, fits, train, true, &tails_.block);
+  // Warm starts: the full model from the pooled one, each model without a covariate from the
+  // full one, the robust effects from the pooled one.
+  std::vector<TailModel> models;
   for (std::size_t s = 0; s < tails_.specs.size(); ++s) {
-    const TailModel m =
-        fitTailModel(tails_.beams, fit_on, tails_.specs[s], base0_.sigma_e, tails_.floor_w, tails_.floor_density);
+    const TailModel* warm = s == 0 ? nullptr : tails_.dropped[s] >= 0 ? &models[1] : &models[0];
+    models.push_back(
+        fitTailModel(tails_.beams, fit_on, tails_.specs[s], base0_.sigma_e, tails_.floor_w, tails_.floor_density, 60, warm));
     for (const auto& r : test)
-      tails_.ll[s].push_back(m.logDensity(tails_.beams[r.beam], r.residual_m, r.inflation, tails_.floor_w, tails_.floor_density));
+      tails_.ll[s].push_back(
+          models[s].logDensity(tails_.beams[r.beam], r.residual_m, r.inflation, tails_.floor_w, tails_.floor_density));
   }
 }
 
@@ -1395,8 +1400,8 @@ void StaticDiagnosis::afterCandidates(DiagnosisResult& out) {
   ta.p_value = total.finite ? heldoutPValue(total.gain, total.se) : 1.0;
   tailCovariateGains(ta);
   const auto all = tailResiduals(d_, f0_, {}, false, nullptr);
-  tailFullData(ta, all);
-  tailRobust(out, all);
+  const TailModel pooled_all = tailFullData(ta, all);
+  tailRobust(out, all, pooled_all);
 }
 
 /// Each covariate's unique held-out gain (the full model over the model without it), Holm across
@@ -1428,13 +1433,14 @@ void StaticDiagnosis::tailCovariateGains(TailAttribution& ta) const {
   ta.cause = top ? top->effect : "unknown";
 }
 
-/// The pooled and the full tail models on all the data: parameters, and which beams carry the tails.
-void StaticDiagnosis::tailFullData(TailAttribution& ta, const std::vector<TailReading>& all) const {
+/// The pooled and the full tail models on all the data: parameters, and which beams carry the
+/// tails. Returns the pooled model (the robust effects start from it).
+TailModel StaticDiagnosis::tailFullData(TailAttribution& ta, const std::vector<TailReading>& all) const {
   const double fw = tails_.floor_w, fd = tails_.floor_density;
   const TailModel pooled = fitTailModel(tails_.beams, all, tails_.specs[0], base0_.sigma_e, fw, fd);
   ta.pooled_fraction = pooled.tailProbability(TailBeam{});
   ta.pooled_wide_scale = pooled.wide;
-  const TailModel full = fitTailModel(tails_.beams, all, tails_.specs[1], base0_.sigma_e, fw, fd);
+  const TailModel full = fitTailModel(tails_.beams, all, tails_.specs[1], base0_.sigma_e, fw, fd, 60, &pooled);
   ta.model["sigma_e"] = full.sigma_e;
   ta.model["wide_scale"] = full.wide;
   ta.model["wide_range_exponent"] = full.wide_exponent;
@@ -1449,6 +1455,7 @@ void StaticDiagnosis::tailFullData(TailAttribution& ta, const std::vector<TailRe
     ta.model["logit_" + c.covariate] = c.coefficient;
   }
   tailClasses(ta, full, all);
+  return pooled;
 }
 
 /// Tail readings (posterior sums) by class of beam, and the beams with the largest tail fraction.
@@ -1489,7 +1496,7 @@ void StaticDiagnosis::tailClasses(TailAttribution& ta, const TailModel& full, co
 
 /// Incidence exponent, range exponent and mixed-pixel fraction fitted under the pooled
 /// contamination (the tails do not drag them), with their held-out gains over the pooled model.
-void StaticDiagnosis::tailRobust(DiagnosisResult& out, const std::vector<TailReading>& all) {
+void StaticDiagnosis::tailRobust(DiagnosisResult& out, const std::vector<TailReading>& all, const TailModel& pooled) {
   struct Item {
     std::size_t spec;
     const char* effect;
@@ -1500,7 +1507,8 @@ void StaticDiagnosis::tailRobust(DiagnosisResult& out, const std::vector<TailRea
                         {tails_.mixed, effect::kMixedPixels, "mixed_pixel_fraction"}};
   for (const Item& it : items) {
     if (it.spec == 0) continue;
-    const TailModel m = fitTailModel(tails_.beams, all, tails_.specs[it.spec], base0_.sigma_e, tails_.floor_w, tails_.floor_density);
+    const TailModel m =
+        fitTailModel(tails_.beams, all, tails_.specs[it.spec], base0_.sigma_e, tails_.floor_w, tails_.floor_density, 60, &pooled);
     const double value = it.spec == tails_.gamma ? m.gamma : it.spec == tails_.kappa ? m.kappa : m.mixed;
     const HeldOutGain g = gainOf(tails_.ll[it.spec], tails_.ll[0], tails_.block);
     const std::string key = it.key;

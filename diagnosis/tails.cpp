@@ -194,21 +194,43 @@ double TailModel::responsibility(const TailBeam& b, double residual_m, double in
   return p.wide / std::max(p.total(), 1e-300);
 }
 
-TailModel fitTailModel(const std::vector<TailBeam>& beams, const std::vector<TailReading>& readings, const TailSpec& spec,
-                       double sigma_e_start, double floor_w, double floor_density, int max_iterations) {
+namespace {
+
+/// The starting point: a fitted model's parameters (what `spec` holds fixed reset), or the defaults.
+TailModel startOf(const TailSpec& spec, double sigma_e_start, const TailModel* warm) {
   TailModel m;
+  if (warm) {
+    m = *warm;
+    m.iterations = 0;
+    m.converged = false;
+    if (!spec.kappa) m.kappa = 2.0;
+    if (!spec.gamma) m.gamma = 0.0;
+    if (spec.mixed && !warm->spec.mixed) m.mixed = 0.05;
+    if (!spec.mixed) m.mixed = 0.0;
+    for (int j = 0; j < kTailCovariates; ++j)
+      if (!spec.covariate[static_cast<std::size_t>(j)]) m.beta[static_cast<std::size_t>(1 + j)] = 0.0;
+  } else {
+    m.sigma_e = sigma_e_start > 0.0 ? sigma_e_start : 0.01;
+    m.beta[0] = std::log(0.02 / 0.98);
+    m.wide = std::max(m.wide, kMinWide);
+    m.wide_exponent = m.kappa;
+    m.mixed = spec.mixed ? 0.05 : 0.0;
+  }
   m.spec = spec;
-  m.sigma_e = sigma_e_start > 0.0 ? sigma_e_start : 0.01;
-  m.beta[0] = std::log(0.02 / 0.98);
-  m.wide = std::max(m.wide, kMinWide);
-  m.wide_exponent = m.kappa;
+  return m;
+}
+
+}  // namespace
+
+TailModel fitTailModel(const std::vector<TailBeam>& beams, const std::vector<TailReading>& readings, const TailSpec& spec,
+                       double sigma_e_start, double floor_w, double floor_density, int max_iterations, const TailModel* warm) {
+  TailModel m = startOf(spec, sigma_e_start, warm);
   double lr = 0.0, nr = 0.0;
   for (const auto& rd : readings) {
     lr += beams[rd.beam].log_range;
     nr += 1.0;
   }
   m.ref_log_range = nr > 0.0 ? lr / nr : 0.0;
-  m.mixed = spec.mixed ? 0.05 : 0.0;
   if (readings.empty()) return m;  // nothing to fit: the start, not converged
   std::vector<BeamSums> sums;
   double prev = -std::numeric_limits<double>::infinity();
@@ -216,7 +238,7 @@ TailModel fitTailModel(const std::vector<TailBeam>& beams, const std::vector<Tai
   for (int it = 0; it < max_iterations; ++it) {
     const double ll = expectation(m, beams, readings, floor_w, floor_density, sums);
     m.iterations = it + 1;
-    if (std::abs(ll - prev) < 1e-7 * n) {
+    if (std::abs(ll - prev) < 1e-6 * n) {
       m.converged = true;
       break;
     }

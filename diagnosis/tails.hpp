@@ -65,7 +65,7 @@ struct TailModel {
   std::array<double, 1 + kTailCovariates> beta{};  ///< logit intercept, then the covariates' coefficients
   TailSpec spec;          ///< what was free
   int iterations = 0;     ///< EM iterations run
-  bool converged = false; ///< log-likelihood change below 1e-7 nats per reading
+  bool converged = false; ///< log-likelihood change below 1e-6 nats per reading
 
   double tailProbability(const TailBeam& b) const;  ///< pi_b
   double sigma(const TailBeam& b) const;            ///< s_b, metres
@@ -77,8 +77,10 @@ struct TailModel {
 };
 
 /// Fits the model by EM (sigma_e_start is the initial scale; the other free parameters start at a
-/// 2 % pooled tail of width 5, eta 5 %). Deterministic. No readings: the start, converged = false.
+/// 2 % pooled tail of width 5, eta 5 %; or, with `warm`, at that fitted model's parameters, those
+/// `spec` holds fixed reset). Deterministic. No readings: the start, converged = false.
 TailModel fitTailModel(const std::vector<TailBeam>& beams, const std::vector<TailReading>& readings, const TailSpec& spec,
-                       double sigma_e_start, double floor_w, double floor_density, int max_iterations = 60);
+                       double sigma_e_start, double floor_w, double floor_density, int max_iterations = 60,
+                       const TailModel* warm = nullptr);
 
 }  // namespace lidarcal::diagnosis
