@@ -9,7 +9,10 @@
 //   3. fit the baseline extended by each candidate effect; gain out of sample (cross-validated
 //      by scan), delta AIC, identifiability (information left after the nuisance parameters);
 //   4. name the cause: the largest significant held-out gain, Holm-controlled across candidates;
-//      `none` when nothing is significant, `not_identifiable` when the data cannot tell;
+//      `none` when nothing is significant, `not_identifiable` when the data cannot tell; static
+//      data: when the tails are significant, a symptom (heavy_tails, or none) gives way to the
+//      physical effect whose covariate explains most of them, and a noise law is ranked beside
+//      the contamination (diagnosis/tails.hpp, TailAttribution);
 //   5. the extended model: its parameters, the scene keys that simulate it, how much closer its
 //      simulation comes to the data, and (with truth) the gain in calibration.
 // Two kinds of data: a sequence of scans of poles (diagnosis/sequence.hpp) and repeated scans
