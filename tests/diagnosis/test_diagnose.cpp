@@ -695,6 +695,25 @@ INSTANTIATE_TEST_SUITE_P(Room, StaticTails,
                                            TailTruth{"dark", test::TailWhere::dark, "dark_surface", "dark"}),
                          [](const auto& p) { return std::string(p.param.name); });
 
+/// The tail study gives the same numbers, to the last bit, when run again with the same seed.
+TEST(DiagnoseStatic, TailStudyIsDeterministic) {
+  DiagnoseConfig dc;
+  dc.replicas = 5;
+  const StaticScans s = test::staticRoomWithTails(test::TailWhere::edge, 0.10, 0.05, 331);
+  const auto a = diagnoseStatic(s, dc), b = diagnoseStatic(s, dc);
+  ASSERT_TRUE(a.tails.fitted);
+  EXPECT_EQ(a.primary_cause, b.primary_cause);
+  EXPECT_EQ(a.tails.model, b.tails.model);
+  EXPECT_EQ(a.tails.robust, b.tails.robust);
+  EXPECT_EQ(a.tails.tail_readings_by_class, b.tails.tail_readings_by_class);
+  ASSERT_EQ(a.tails.covariates.size(), b.tails.covariates.size());
+  for (std::size_t k = 0; k < a.tails.covariates.size(); ++k)
+    EXPECT_EQ(a.tails.covariates[k].unique_gain_nats_per_point, b.tails.covariates[k].unique_gain_nats_per_point);
+  ASSERT_EQ(a.tails.top_beams.size(), b.tails.top_beams.size());
+  for (std::size_t k = 0; k < a.tails.top_beams.size(); ++k)
+    EXPECT_EQ(a.tails.top_beams[k].bearing_rad, b.tails.top_beams[k].bearing_rad);
+}
+
 /// Mixed pixels at 2-10 % of the edge readings (issue 20, item 3; a fraction drawn per seed): the
 /// readings between the two surfaces are tails on the edge beams, so mixed_pixels is named (by its
 /// own candidate, or from the tails' edge covariate). Four seeds, at least 3.
