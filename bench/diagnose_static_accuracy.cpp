@@ -1,6 +1,8 @@
 // How often `diagnose` (static mode) names what the truth allows in a room seen from one pose
 // (docs/RESULTS.md, "Diagnosis", static mode): every case of tests/diagnosis/diagnose_cases.hpp,
-// coarser quantisation grids, and the clean room (its false-positive rate), over many seeds.
+// coarser quantisation grids, the clean room (its false-positive rate), and the tail cases of
+// issue 20 (extra-wide errors only at grazing beams, at depth edges, on a dark wall; tests use
+// seeds 301-304), over many seeds.
 //   build/bench/diagnose_static_accuracy [--seeds 10] [--clean-seeds 20] [--first 101] [--replicas 19]
 
 #include <cstdio>
@@ -12,6 +14,45 @@
 
 #include "diagnosis/diagnose_cases.hpp"
 #include "diagnosis/static_scene.hpp"
+
+/// Extra-wide errors (10 % of the readings of one class of beams, 5 cm): how often the physical
+/// cause is named and the tails put in the right class of beams.
+void tailCases(int seeds, int first, int replicas) {
+  using namespace lidarcal;
+  struct Case {
+    const char* name;
+    test::TailWhere where;
+    const char* effect;
+    const char* cls;
+  };
+  for (const Case& c : {Case{"tails_grazing", test::TailWhere::grazing, "incidence_noise", "grazing"},
+                        Case{"tails_edge", test::TailWhere::edge, "mixed_pixels", "edge"},
+                        Case{"tails_dark", test::TailWhere::dark, "dark_surface", "dark"}}) {
+    std::map<std::string, int> named;
+    int right = 0, cls_right = 0;
+    for (int seed = first; seed < first + seeds; ++seed) {
+      diagnosis::DiagnoseConfig dc;
+      dc.replicas = replicas;
+      dc.seed = static_cast<std::uint64_t>(seed);
+      const auto r = diagnosis::diagnoseStatic(test::staticRoomWithTails(c.where, 0.10, 0.05, static_cast<std::uint64_t>(seed)), dc);
+      std::string top;
+      double most = -1.0;
+      for (const auto& [k, v] : r.tails.tail_readings_by_class)
+        if (v > most) {
+          most = v;
+          top = k;
+        }
+      right += r.primary_cause == c.effect;
+      cls_right += top == c.cls;
+      if (r.primary_cause != c.effect) ++named[r.primary_cause];
+    }
+    std::string other;
+    for (const auto& [k, v] : named) other += (other.empty() ? "" : ", ") + k + " " + std::to_string(v);
+    std::printf("| %s | %s | %d | %d / %d (tails in class %s: %d / %d) | %s |\n", c.name, c.effect, seeds, right, seeds, c.cls,
+                cls_right, seeds, other.empty() ? "-" : other.c_str());
+    std::fflush(stdout);
+  }
+}
 
 int main(int argc, char** argv) {
   using namespace lidarcal;
@@ -53,5 +94,6 @@ int main(int argc, char** argv) {
                 other.empty() ? "-" : other.c_str());
     std::fflush(stdout);
   }
+  tailCases(seeds, first, replicas);
   return 0;
 }

@@ -9,7 +9,10 @@
 //   3. fit the baseline extended by each candidate effect; gain out of sample (cross-validated
 //      by scan), delta AIC, identifiability (information left after the nuisance parameters);
 //   4. name the cause: the largest significant held-out gain, Holm-controlled across candidates;
-//      `none` when nothing is significant, `not_identifiable` when the data cannot tell;
+//      `none` when nothing is significant, `not_identifiable` when the data cannot tell; static
+//      data: when the tails are significant, a symptom (heavy_tails, or none) gives way to the
+//      physical effect whose covariate explains most of them, and a noise law is ranked beside
+//      the contamination (diagnosis/tails.hpp, TailAttribution);
 //   5. the extended model: its parameters, the scene keys that simulate it, how much closer its
 //      simulation comes to the data, and (with truth) the gain in calibration.
 // Two kinds of data: a sequence of scans of poles (diagnosis/sequence.hpp) and repeated scans
@@ -40,6 +43,7 @@ inline constexpr const char* kOdometryScale = "odometry_scale";  ///< beyond the
 inline constexpr const char* kHeavyTails = "heavy_tails";        ///< beyond the list: Student-t noise
 inline constexpr const char* kQuantisation = "quantisation";     ///< beyond the list: readings on a grid
 inline constexpr const char* kRangeOffset = "range_offset";      ///< static data: constant offset alpha_0
+inline constexpr const char* kDarkSurface = "dark_surface";      ///< static data with intensity: dark surfaces return wide errors
 inline constexpr const char* kNone = "none";
 inline constexpr const char* kNotIdentifiable = "not_identifiable";
 }  // namespace effect
@@ -135,6 +139,59 @@ struct ResidualRecord {
   double z = 0.0;             ///< residual over the baseline's standard deviation
 };
 
+/// One covariate of the tail model (diagnosis/tails.hpp): how much of the tails it explains.
+struct TailCovariateResult {
+  std::string covariate;          ///< edge, grazing, range or dark
+  std::string effect;             ///< the physical effect it stands for (mixed_pixels, incidence_noise, range_noise_law, dark_surface)
+  double coefficient = 0.0;       ///< its beta in logit pi (fitted on all the data, per unit of the covariate)
+  double unique_gain_nats_per_point = 0.0;  ///< held-out gain of the full tail model over the model without it
+  double unique_gain_se = 0.0;    ///< its standard error (blocks: scans)
+  double p_value = 1.0;           ///< one-sided p of that gain
+  double p_holm = 1.0;            ///< Holm-adjusted across the covariates
+  double share = 0.0;             ///< unique gain over the explained gain (full tail model vs the pooled one)
+  bool significant = false;       ///< Holm p < alpha and a positive gain
+};
+
+/// One beam among those that carry the tails.
+struct TailBeamReport {
+  double bearing_rad = 0.0;       ///< beam angle in the sensor frame
+  double range_m = 0.0;           ///< its mean reading
+  double incidence_rad = 0.0;     ///< NaN when unknown
+  double intensity = 0.0;         ///< mean intensity of its readings (NaN: none recorded)
+  bool edge = false;              ///< at a depth discontinuity
+  std::size_t readings = 0;       ///< its readings
+  double tail_fraction = 0.0;     ///< mean posterior probability of its readings being in the broad component
+  double tail_probability = 0.0;  ///< the fitted pi of the beam (from its covariates)
+  std::string cls;                ///< class: edge, grazing, range, dark or unknown
+};
+
+/// Static mode: the tails explained by physical covariates (diagnosis/tails.hpp).
+struct TailAttribution {
+  bool fitted = false;            ///< false: not run (note says why)
+  std::string note;
+  double pooled_fraction = 0.0;   ///< pi of the pooled contamination model (all data)
+  double pooled_wide_scale = 0.0; ///< k of the pooled model (broad over core standard deviation)
+  double pooled_gain_nats_per_point = 0.0;  ///< held out: pooled contamination over the Gaussian baseline
+  double pooled_gain_se = 0.0;
+  double explained_gain_nats_per_point = 0.0;  ///< held out: the model with every covariate over the pooled one
+  double explained_gain_se = 0.0;
+  /// One-sided p of the held-out gain of the full tail model over the Gaussian baseline; the tails
+  /// are significant when heavy_tails is, or when this p times (candidates tested + 1) < alpha.
+  double p_value = 1.0;
+  bool significant = false;       ///< the tails are significant (rule above)
+  std::vector<TailCovariateResult> covariates;  ///< those the data have (edge, grazing, range, dark)
+  double tail_readings = 0.0;     ///< expected readings in the broad component (sum of posteriors, all data)
+  std::map<std::string, double> tail_readings_by_class;  ///< the same by class of beam (edge, grazing, range, dark, unknown)
+  std::map<std::string, double> readings_by_class;       ///< all readings by class of beam
+  std::vector<TailBeamReport> top_beams;  ///< beams with the largest tail fraction (at most 10)
+  std::map<std::string, double> model;    ///< the full tail model's parameters (name with unit -> value)
+  /// Physical effects fitted under the pooled contamination likelihood (the tails do not drag
+  /// them): incidence_noise_exponent, noise_exponent, mixed_pixel_fraction, and their held-out
+  /// gains over the pooled model (..._gain, ..._gain_se, nats per reading).
+  std::map<std::string, double> robust;
+  std::string cause = "unknown";  ///< the effect of the covariate with the largest significant unique gain, or unknown
+};
+
 struct DiagnosisResult {
   std::string status = "ok";          ///< ok, or why the data cannot be diagnosed
   std::string message;                ///< what to do about it
@@ -155,6 +212,7 @@ struct DiagnosisResult {
   std::vector<CandidateResult> candidates;  ///< one per candidate effect
   std::string primary_cause = effect::kNone;  ///< an effect name, none or not_identifiable
   std::string decision;               ///< why that cause (rule applied, competing effects)
+  TailAttribution tails;              ///< static mode: what the tails are made of
   // Extended model
   std::map<std::string, double> extended_parameters;  ///< the named effect's parameters
   std::map<std::string, double> scene_keys;           ///< scene JSON keys (docs/FORMAT.md) that simulate it

@@ -988,6 +988,7 @@ class SequenceDiagnosis {
   void afterCandidates(DiagnosisResult& out) const;
   /// An angle offset is one heading shared by all stops (nested), handled by parsimony.
   std::vector<std::pair<std::string, std::string>> nestedEffects() const { return {{effect::kAngleOffset, effect::kHeadingError}}; }
+  void refineCause(DiagnosisResult&) const {}  // no tail model in sequences (yet)
   Closeness closenessBaseline(const DiagnosisResult&) const { return closeness(measured_z_, sim_base_); }
   void extend(std::size_t c, DiagnosisResult& out) const;
 

@@ -55,6 +55,8 @@ void setScore(CandidateResult& r, const std::vector<Discrepancy>& battery);
 ///   void beforeCandidates(DiagnosisResult&); CandidateResult candidate(std::size_t, const HeldOut&, const DiagnosisResult&);
 ///   void afterCandidates(DiagnosisResult&)
 ///   std::vector<std::pair<std::string, std::string>> nestedEffects()    4. (see nameCause)
+///   void refineCause(DiagnosisResult&)   4. after nameCause: a symptom (heavy_tails) replaced by
+///                                           the physical cause that explains it, where one does
 ///   Closeness closenessBaseline(const DiagnosisResult&); void extend(std::size_t, DiagnosisResult&)   5.
 /// Steps run in this order; what a mode draws at random is seeded per replica.
 template <class Mode>
@@ -81,6 +83,7 @@ void runDiagnosis(Mode& mode, const DiagnoseConfig& config, const std::vector<st
   mode.afterCandidates(out);
   // 4. The cause.
   out.primary_cause = nameCause(out.candidates, config.alpha, out.decision, mode.nestedEffects());
+  mode.refineCause(out);
   // 5. The extended model and how close its simulation comes to the data.
   out.closeness_baseline = mode.closenessBaseline(out);
   for (std::size_t c = 0; c < candidates.size(); ++c) {

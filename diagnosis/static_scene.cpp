@@ -6,6 +6,7 @@
 #include <map>
 #include <numeric>
 #include <random>
+#include <cstdio>
 #include <set>
 #include <stdexcept>
 
@@ -13,6 +14,7 @@
 
 #include "diagnosis/skeleton.hpp"
 #include "diagnosis/stats.hpp"
+#include "diagnosis/tails.hpp"
 #include "common/pose2.hpp"
 #include "common/rng.hpp"
 #include "common/stats_util.hpp"
@@ -51,6 +53,7 @@ struct Bin {
   double near = 0.0, far = 0.0;     ///< at an edge: the depths on both sides
   double cos_inc = 1.0;             ///< cosine of the incidence (1 when unknown)
   bool inc_known = false;
+  double intensity = kNaN;          ///< geometric mean intensity of its readings (NaN: none recorded)
 };
 
 /// Per-bin location fitted on a subset of the scans.
@@ -70,6 +73,7 @@ struct Data {
   bool trend = false;           // windows: each bin has a time trend
   double t_mean = 0.0;
   double window_min = 0.0, window_max = 1.0;
+  bool intensity = false;       // the bins carry an intensity
 };
 
 /// Maximum of a unimodal function on [lo, hi]: ternary search, `iterations` thirds dropped.
@@ -91,6 +95,18 @@ void forEachFitted(const Data& d, const std::vector<BinFit>& f, Fn fn) {
     if (bi < 0 || f[static_cast<std::size_t>(bi)].n == 0) continue;
     fn(i, d.bins[static_cast<std::size_t>(bi)], f[static_cast<std::size_t>(bi)]);
   }
+}
+
+/// Geometric mean of the readings' intensities (those above zero; NaN when none).
+double meanIntensity(const StaticScans& s, const std::vector<std::size_t>& idx) {
+  double sum = 0.0, n = 0.0;
+  for (std::size_t i : idx) {
+    const double v = s.readings[i].intensity;
+    if (!(v > 0.0) || !std::isfinite(v)) continue;
+    sum += std::log(v);
+    n += 1.0;
+  }
+  return n > 0.0 ? std::exp(sum / n) : kNaN;
 }
 
 Data makeBins(const StaticScans& s, std::size_t window) {
@@ -140,6 +156,7 @@ Data makeBins(const StaticScans& s, std::size_t window) {
     b.angle = sum / static_cast<double>(idx.size());
     b.slope = hi - lo > 1e-6;
     b.idx = std::move(idx);
+    if (s.has_intensity) b.intensity = meanIntensity(s, b.idx);
     for (std::size_t i : b.idx) d.bin_of[i] = static_cast<int>(d.bins.size());
     d.bins.push_back(std::move(b));
   }
@@ -151,6 +168,7 @@ Data makeBins(const StaticScans& s, std::size_t window) {
       ++used;
     }
   d.t_mean = used ? tw / static_cast<double>(used) : 0.0;
+  d.intensity = s.has_intensity;
   return d;
 }
 
@@ -959,6 +977,147 @@ struct SimSample {
   }
 };
 
+// ---------------------------------------------------------------------------------------------
+// Tails explained (issue 20, diagnosis/tails.hpp): the contamination model's covariates per bin,
+// the residuals it is fitted to, and its variants compared on the same scan folds.
+
+/// The tail model's view of the bins: covariates from the full-data locations `f`.
+std::vector<TailBeam> tailBeams(const Data& d, const std::vector<BinFit>& f) {
+  std::vector<double> log_i;
+  double mean_lr = 0.0, n = 0.0;
+  for (std::size_t k = 0; k < d.bins.size(); ++k) {
+    if (std::isfinite(d.bins[k].intensity)) log_i.push_back(std::log(d.bins[k].intensity));
+    if (f[k].n == 0) continue;
+    mean_lr += std::log(std::max(std::abs(f[k].m), 1e-3));
+    n += 1.0;
+  }
+  const double med_i = log_i.empty() ? 0.0 : upperMedian(log_i);
+  mean_lr /= std::max(n, 1.0);
+  std::vector<TailBeam> beams(d.bins.size());
+  for (std::size_t k = 0; k < d.bins.size(); ++k) {
+    const Bin& b = d.bins[k];
+    TailBeam& t = beams[k];
+    t.log_range = std::log(std::max(std::abs(f[k].m), 1e-3));
+    // At a depth edge the tails are the edge's (the bin's mean mixes both surfaces, and the slope
+    // it makes with its neighbour may be the jump's): no grazing covariate there. The noise law
+    // keeps the incidence (a pillar's silhouette is seen at grazing incidence).
+    t.log_sec_inc = b.inc_known ? -std::log(clampCosIncidence(b.cos_inc)) : 0.0;
+    t.x[kTailEdge] = b.edge ? 1.0 : 0.0;
+    t.x[kTailGrazing] = b.edge ? 0.0 : t.log_sec_inc;
+    t.x[kTailRange] = t.log_range - mean_lr;
+    // Darkness: how much weaker than the median beam's the return is, ln(I_median / I), >= 0.
+    t.x[kTailDark] = std::isfinite(b.intensity) ? std::max(0.0, med_i - std::log(b.intensity)) : 0.0;
+    if (b.edge && b.far > b.near) {
+      t.mix_lo = b.near - f[k].med;
+      t.mix_hi = b.far - f[k].med;
+    }
+  }
+  return beams;
+}
+
+/// Covariates the data can show: edges at 3 beams or more; the others varying over 3 beams or more.
+std::array<bool, kTailCovariates> tailAvailable(const Data& d, const std::vector<TailBeam>& beams, std::size_t edges) {
+  std::array<bool, kTailCovariates> a{};
+  a[kTailEdge] = edges >= 3;
+  for (int j : {kTailGrazing, kTailRange, kTailDark}) {
+    std::vector<double> x;
+    for (const auto& b : beams) x.push_back(b.x[static_cast<std::size_t>(j)]);
+    const double med = x.empty() ? 0.0 : upperMedian(x);
+    std::size_t away = 0;
+    for (double v : x) away += std::abs(v - med) > 0.1;
+    a[static_cast<std::size_t>(j)] = away >= 3;
+  }
+  a[kTailDark] = a[kTailDark] && d.intensity;
+  return a;
+}
+
+/// Residuals of the readings about their bin's location (edge bins: about the median, as a
+/// mixed-pixel model needs), of the training scans or of the held-out ones; `scans` gets each
+/// one's scan. Held out: the location's uncertainty widens the core (factor sqrt(1 + 1/n)).
+std::vector<TailReading> tailResiduals(const Data& d, const std::vector<BinFit>& f, const std::vector<bool>& train,
+                                       bool held_out, std::vector<std::size_t>* scans) {
+  std::vector<TailReading> out;
+  forEachFitted(d, f, [&](std::size_t i, const Bin& b, const BinFit& bf) {
+    const bool in_train = train.empty() || train[static_cast<std::size_t>(d.t[i])];
+    if (in_train == held_out) return;
+    TailReading r;
+    r.beam = static_cast<std::size_t>(d.bin_of[i]);
+    r.residual_m = d.y[i] - bf.at(d.a[i], d.t[i]) - (b.edge ? bf.med - bf.m : 0.0);
+    r.inflation = held_out ? std::sqrt(1.0 + 1.0 / std::max(bf.n, 1.0)) : 1.0;
+    out.push_back(r);
+    if (scans) scans->push_back(static_cast<std::size_t>(d.t[i]));
+  });
+  return out;
+}
+
+/// The tail models compared, their held-out log-likelihoods (aligned with the Gaussian
+/// baseline's held-out readings) and the scan of each point.
+struct TailStudy {
+  std::vector<TailBeam> beams;
+  std::array<bool, kTailCovariates> available{};
+  std::vector<TailSpec> specs;   ///< 0: pooled, 1: every covariate, then one without each, then robust effects
+  std::vector<int> dropped;      ///< covariate left out of spec s (-1: none)
+  std::size_t gamma = 0, kappa = 0, mixed = 0;  ///< specs of the robust effects (0: not fitted)
+  std::vector<std::vector<double>> ll;
+  std::vector<std::size_t> block;
+  std::vector<double> gauss;     ///< the Gaussian baseline's held-out log-likelihoods, aligned
+  double floor_w = 0.0, floor_density = 0.0;
+};
+
+/// The specs: pooled, full, full without each covariate, pooled with each robust effect.
+void setupTailSpecs(TailStudy& ts, bool incidence_known, bool edges) {
+  TailSpec pooled, full;
+  full.covariate = ts.available;
+  ts.specs = {pooled, full};
+  ts.dropped = {-1, -1};
+  for (int j = 0; j < kTailCovariates; ++j) {
+    if (!ts.available[static_cast<std::size_t>(j)]) continue;
+    TailSpec s = full;
+    s.covariate[static_cast<std::size_t>(j)] = false;
+    ts.specs.push_back(s);
+    ts.dropped.push_back(j);
+  }
+  auto robust = [&](std::size_t& at, auto set) {
+    TailSpec s = pooled;
+    set(s);
+    at = ts.specs.size();
+    ts.specs.push_back(s);
+    ts.dropped.push_back(-1);
+  };
+  if (incidence_known) robust(ts.gamma, [](TailSpec& s) { s.gamma = true; });
+  robust(ts.kappa, [](TailSpec& s) { s.kappa = true; });
+  if (edges) robust(ts.mixed, [](TailSpec& s) { s.mixed = true; });
+  ts.ll.assign(ts.specs.size(), {});
+}
+
+/// Held-out gain of log-likelihoods `a` over `b` (blocks: scans).
+HeldOutGain gainOf(const std::vector<double>& a, const std::vector<double>& b, const std::vector<std::size_t>& block) {
+  HeldOut h(1);
+  h.base = b;  // deliberate copies: a few vectors, once per diagnosis
+  h.cand[0] = a;
+  h.block = block;
+  h.points = static_cast<double>(a.size());
+  return heldOutGain(h, 0);
+}
+
+/// Class of a beam: the significant covariate whose term raises its tail odds most (at least
+/// twofold), else unknown.
+std::string tailClass(const TailModel& m, const TailBeam& b, const std::vector<TailCovariateResult>& covs) {
+  std::string cls = "unknown";
+  double best = std::log(2.0);
+  for (const auto& c : covs) {
+    if (!c.significant) continue;
+    int j = 0;
+    while (c.covariate != tailCovariateName(j)) ++j;
+    const double term = m.beta[static_cast<std::size_t>(1 + j)] * b.x[static_cast<std::size_t>(j)];
+    if (term > best) {
+      best = term;
+      cls = c.covariate;
+    }
+  }
+  return cls;
+}
+
 /// Repeated scans from one pose, diagnosed with the bin and wall models (the problem object of
 /// runDiagnosis; its steps in the order they run).
 class StaticDiagnosis {
@@ -975,8 +1134,10 @@ class StaticDiagnosis {
   const char* noHeldOut() const { return "no held-out reading"; }
   void beforeCandidates(DiagnosisResult& out);
   CandidateResult candidate(std::size_t c, const HeldOut& held, const DiagnosisResult& out);
-  void afterCandidates(DiagnosisResult&) const {}
+  void afterCandidates(DiagnosisResult& out);
   std::vector<std::pair<std::string, std::string>> nestedEffects() const { return {}; }
+  void refineCause(DiagnosisResult& out);
+  void reRankUnderTails(DiagnosisResult& out);
   Closeness closenessBaseline(const DiagnosisResult& out) const { return closenessOf(out.measured, sim_base_); }
   void extend(std::size_t c, DiagnosisResult& out) const;
 
@@ -987,6 +1148,12 @@ class StaticDiagnosis {
   void reportWalls() const;
   void foldLikelihoods(int k, const std::vector<int>& fold, HeldOut& held) const;
   void wallLikelihoods(HeldOut& held) const;
+  void startTails();
+  void tailFold(int k, const std::vector<int>& fold);
+  void tailCovariateGains(TailAttribution& ta) const;
+  TailModel tailFullData(TailAttribution& ta, const std::vector<TailReading>& all) const;
+  void tailClasses(TailAttribution& ta, const TailModel& full, const std::vector<TailReading>& all) const;
+  void tailRobust(DiagnosisResult& out, const std::vector<TailReading>& all, const TailModel& pooled);
   double inSample(const Flags& fl, Model* fitted) const;
   bool notApplicable(CandidateResult& r) const;
   void setIdentifiability(CandidateResult& r) const;
@@ -1012,6 +1179,11 @@ class StaticDiagnosis {
   std::vector<Flags> flags_;      // per candidate
   double ll_in_base_ = 0.0;       // in-sample log-likelihood of the baseline
   std::vector<Model> full_;       // per candidate: fitted on all the data
+  bool tails_on_ = false;         // the tail study runs (heavy_tails is a candidate)
+  TailStudy tails_;               // the tail models and their held-out log-likelihoods
+  std::map<std::string, double> robust_;  // effect -> its parameter fitted under the pooled contamination
+  std::map<std::string, double> robust_sigma_;  // effect -> the core's sigma_e fitted with it
+  bool named_by_tails_ = false;   // the cause was named from the tails' covariates
 };
 
 bool StaticDiagnosis::fitBaseline(DiagnosisResult& out) {
@@ -1138,8 +1310,13 @@ void StaticDiagnosis::heldOut(HeldOut& held) {
   std::vector<int> fold(data_.scans);
   for (std::size_t t = 0; t < data_.scans; ++t) fold[t] = static_cast<int>(t % static_cast<std::size_t>(config_.folds));
   for (const auto& e : candidates_) flags_.push_back(flagsOf(e));
-  for (int k = 0; k < config_.folds; ++k) foldLikelihoods(k, fold, held);
+  startTails();
+  for (int k = 0; k < config_.folds; ++k) {
+    foldLikelihoods(k, fold, held);
+    if (tails_on_) tailFold(k, fold);
+  }
   held.points = static_cast<double>(held.base.size());
+  if (tails_on_) tails_.gauss = held.base;  // the readings' part (the wall bins come next); deliberate copy
   wallLikelihoods(held);
 }
 
@@ -1164,6 +1341,271 @@ void StaticDiagnosis::foldLikelihoods(int k, const std::vector<int>& fold, HeldO
                                  ? readingLL(mc[c], d_, bin, fc[c][static_cast<std::size_t>(bi)], i, floor_w)
                                  : kNaN);
   }
+}
+
+/// The tail study's beams, covariates and specs (only when heavy_tails is a candidate).
+void StaticDiagnosis::startTails() {
+  tails_on_ = std::find(candidates_.begin(), candidates_.end(), effect::kHeavyTails) != candidates_.end();
+  if (!tails_on_) return;
+  tails_.beams = tailBeams(d_, f0_);
+  tails_.available = tailAvailable(d_, tails_.beams, edges_);
+  std::size_t inc_known = 0;
+  for (const auto& b : d_.bins) inc_known += b.inc_known;
+  setupTailSpecs(tails_, inc_known >= 3, edges_ >= 3);
+  tails_.floor_w = config_.outlier_floor;
+  tails_.floor_density = d_.window_max > d_.window_min ? 1.0 / (d_.window_max - d_.window_min) : 0.0;
+}
+
+/// Fold k's readings under every tail model fitted on the other scans (the same folds, the same
+/// held-out readings in the same order as the Gaussian baseline's).
+void StaticDiagnosis::tailFold(int k, const std::vector<int>& fold) {
+  std::vector<bool> train(data_.scans);
+  for (std::size_t t = 0; t < data_.scans; ++t) train[t] = fold[t] != k;
+  const std::vector<BinFit> fits = fitBins(d_, train, 0.0);
+  const auto fit_on = tailResiduals(d_, fits, train, false, nullptr);
+  const auto test = tailResiduals(d_, fits, train, true, &tails_.block);
+  // Warm starts: the full model from the pooled one, each model without a covariate from the
+  // full one, the robust effects from the pooled one.
+  std::vector<TailModel> models;
+  for (std::size_t s = 0; s < tails_.specs.size(); ++s) {
+    const TailModel* warm = s == 0 ? nullptr : tails_.dropped[s] >= 0 ? &models[1] : &models[0];
+    models.push_back(
+        fitTailModel(tails_.beams, fit_on, tails_.specs[s], base0_.sigma_e, tails_.floor_w, tails_.floor_density, 60, warm));
+    for (const auto& r : test)
+      tails_.ll[s].push_back(
+          models[s].logDensity(tails_.beams[r.beam], r.residual_m, r.inflation, tails_.floor_w, tails_.floor_density));
+  }
+}
+
+/// Step 3 for the tails: held-out gains (pooled over the Gaussian baseline, covariates over the
+/// pooled model, each covariate's unique part), the full model on all the data, the robust effects.
+void StaticDiagnosis::afterCandidates(DiagnosisResult& out) {
+  TailAttribution& ta = out.tails;
+  if (!tails_on_) {
+    ta.note = "heavy_tails is not among the candidates";
+    return;
+  }
+  if (tails_.gauss.empty() || tails_.ll[0].size() != tails_.gauss.size()) {
+    ta.note = "no held-out reading for the tail models";
+    return;
+  }
+  ta.fitted = true;
+  const HeldOutGain pooled = gainOf(tails_.ll[0], tails_.gauss, tails_.block);
+  const HeldOutGain explained = gainOf(tails_.ll[1], tails_.ll[0], tails_.block);
+  ta.pooled_gain_nats_per_point = pooled.gain;
+  ta.pooled_gain_se = pooled.se;
+  ta.explained_gain_nats_per_point = explained.gain;
+  ta.explained_gain_se = explained.se;
+  const HeldOutGain total = gainOf(tails_.ll[1], tails_.gauss, tails_.block);
+  ta.p_value = total.finite ? heldoutPValue(total.gain, total.se) : 1.0;
+  tailCovariateGains(ta);
+  const auto all = tailResiduals(d_, f0_, {}, false, nullptr);
+  const TailModel pooled_all = tailFullData(ta, all);
+  tailRobust(out, all, pooled_all);
+}
+
+/// Each covariate's unique held-out gain (the full model over the model without it), Holm across
+/// them; the cause is the effect of the one with the largest significant gain.
+void StaticDiagnosis::tailCovariateGains(TailAttribution& ta) const {
+  std::vector<double> p;
+  for (std::size_t s = 0; s < tails_.specs.size(); ++s) {
+    const int j = tails_.dropped[s];
+    if (j < 0) continue;
+    TailCovariateResult c;
+    c.covariate = tailCovariateName(j);
+    c.effect = tailCovariateEffect(j);
+    const HeldOutGain g = gainOf(tails_.ll[1], tails_.ll[s], tails_.block);
+    c.unique_gain_nats_per_point = g.gain;
+    c.unique_gain_se = g.se;
+    c.p_value = g.finite ? heldoutPValue(g.gain, g.se) : kNaN;
+    c.share = ta.explained_gain_nats_per_point > 0.0 ? g.gain / ta.explained_gain_nats_per_point : 0.0;
+    p.push_back(c.p_value);
+    ta.covariates.push_back(c);
+  }
+  const auto adj = holmAdjust(p);
+  const TailCovariateResult* top = nullptr;
+  for (std::size_t k = 0; k < ta.covariates.size(); ++k) {
+    TailCovariateResult& c = ta.covariates[k];
+    c.p_holm = adj[k];
+    c.significant = std::isfinite(adj[k]) && adj[k] < config_.alpha && c.unique_gain_nats_per_point > 0.0;
+    if (c.significant && (!top || c.unique_gain_nats_per_point > top->unique_gain_nats_per_point)) top = &c;
+  }
+  ta.cause = top ? top->effect : "unknown";
+}
+
+/// The pooled and the full tail models on all the data: parameters, and which beams carry the
+/// tails. Returns the pooled model (the robust effects start from it).
+TailModel StaticDiagnosis::tailFullData(TailAttribution& ta, const std::vector<TailReading>& all) const {
+  const double fw = tails_.floor_w, fd = tails_.floor_density;
+  const TailModel pooled = fitTailModel(tails_.beams, all, tails_.specs[0], base0_.sigma_e, fw, fd);
+  ta.pooled_fraction = pooled.tailProbability(TailBeam{});
+  ta.pooled_wide_scale = pooled.wide;
+  const TailModel full = fitTailModel(tails_.beams, all, tails_.specs[1], base0_.sigma_e, fw, fd, 60, &pooled);
+  ta.model["sigma_e"] = full.sigma_e;
+  ta.model["wide_scale"] = full.wide;
+  ta.model["wide_range_exponent"] = full.wide_exponent;
+  ta.model["reference_range_m"] = std::exp(full.ref_log_range);
+  ta.model["logit_intercept"] = full.beta[0];
+  ta.model["em_iterations"] = full.iterations;
+  ta.model["em_converged"] = full.converged ? 1.0 : 0.0;
+  for (auto& c : ta.covariates) {
+    int j = 0;
+    while (c.covariate != tailCovariateName(j)) ++j;
+    c.coefficient = full.beta[static_cast<std::size_t>(1 + j)];
+    ta.model["logit_" + c.covariate] = c.coefficient;
+  }
+  tailClasses(ta, full, all);
+  return pooled;
+}
+
+/// Tail readings (posterior sums) by class of beam, and the beams with the largest tail fraction.
+void StaticDiagnosis::tailClasses(TailAttribution& ta, const TailModel& full, const std::vector<TailReading>& all) const {
+  std::vector<double> tail(d_.bins.size(), 0.0), n(d_.bins.size(), 0.0);
+  for (const auto& r : all) {
+    tail[r.beam] += full.responsibility(tails_.beams[r.beam], r.residual_m, r.inflation, tails_.floor_w, tails_.floor_density);
+    n[r.beam] += 1.0;
+  }
+  for (const char* cls : {"edge", "grazing", "range", "dark", "unknown"}) {
+    ta.tail_readings_by_class[cls] = 0.0;
+    ta.readings_by_class[cls] = 0.0;
+  }
+  std::vector<TailBeamReport> beams;
+  for (std::size_t b = 0; b < d_.bins.size(); ++b) {
+    if (n[b] == 0.0) continue;
+    const std::string cls = tailClass(full, tails_.beams[b], ta.covariates);
+    ta.tail_readings += tail[b];
+    ta.tail_readings_by_class[cls] += tail[b];
+    ta.readings_by_class[cls] += n[b];
+    TailBeamReport r;
+    const Bin& bin = d_.bins[b];
+    r.bearing_rad = bin.angle;
+    r.range_m = f0_[b].m;
+    r.incidence_rad = bin.inc_known ? std::acos(std::clamp(bin.cos_inc, 0.0, 1.0)) : kNaN;
+    r.intensity = bin.intensity;
+    r.edge = bin.edge;
+    r.readings = static_cast<std::size_t>(n[b]);
+    r.tail_fraction = tail[b] / n[b];
+    r.tail_probability = full.tailProbability(tails_.beams[b]);
+    r.cls = cls;
+    beams.push_back(r);
+  }
+  std::stable_sort(beams.begin(), beams.end(), [](const TailBeamReport& a, const TailBeamReport& b) { return a.tail_fraction > b.tail_fraction; });
+  if (beams.size() > 10) beams.resize(10);
+  ta.top_beams = std::move(beams);
+}
+
+/// Incidence exponent, range exponent and mixed-pixel fraction fitted under the pooled
+/// contamination (the tails do not drag them), with their held-out gains over the pooled model.
+void StaticDiagnosis::tailRobust(DiagnosisResult& out, const std::vector<TailReading>& all, const TailModel& pooled) {
+  struct Item {
+    std::size_t spec;
+    const char* effect;
+    const char* key;
+  };
+  const Item items[] = {{tails_.gamma, effect::kIncidenceNoise, "incidence_noise_exponent"},
+                        {tails_.kappa, effect::kRangeNoiseLaw, "noise_exponent"},
+                        {tails_.mixed, effect::kMixedPixels, "mixed_pixel_fraction"}};
+  for (const Item& it : items) {
+    if (it.spec == 0) continue;
+    const TailModel m =
+        fitTailModel(tails_.beams, all, tails_.specs[it.spec], base0_.sigma_e, tails_.floor_w, tails_.floor_density, 60, &pooled);
+    const double value = it.spec == tails_.gamma ? m.gamma : it.spec == tails_.kappa ? m.kappa : m.mixed;
+    const HeldOutGain g = gainOf(tails_.ll[it.spec], tails_.ll[0], tails_.block);
+    const std::string key = it.key;
+    out.tails.robust[key] = value;
+    out.tails.robust[key + "_gain"] = g.gain;
+    out.tails.robust[key + "_gain_se"] = g.se;
+    out.tails.robust[key + "_p"] = g.finite ? heldoutPValue(g.gain, g.se) : 1.0;
+    robust_[it.effect] = value;
+    robust_sigma_[it.effect] = m.sigma_e;
+    for (auto& c : out.candidates)
+      if (c.effect == it.effect) c.estimates[key + "_robust"] = value;
+  }
+}
+
+/// The effects fitted under the pooled contamination (StaticDiagnosis::tailRobust): their key in
+/// TailAttribution::robust, or nullptr.
+const char* robustEffectOf(const std::string& e) {
+  if (e == effect::kIncidenceNoise) return "incidence_noise_exponent";
+  if (e == effect::kRangeNoiseLaw) return "noise_exponent";
+  if (e == effect::kMixedPixels) return "mixed_pixel_fraction";
+  return nullptr;
+}
+
+/// A noise law or mixed pixels named while the tails are significant: the Gaussian likelihood the
+/// ranking came from is dominated by the tails, so the three are ranked again by their held-out
+/// gains over the pooled contamination (Holm across them); the largest significant one is named.
+void StaticDiagnosis::reRankUnderTails(DiagnosisResult& out) {
+  named_by_tails_ = true;  // its simulation takes the exponent fitted beside the contamination
+  const auto& rob = out.tails.robust;
+  std::vector<std::string> effects;
+  std::vector<double> p;
+  for (const char* e : {effect::kIncidenceNoise, effect::kRangeNoiseLaw, effect::kMixedPixels}) {
+    const std::string key = robustEffectOf(e);
+    if (!rob.count(key + "_p")) continue;
+    effects.push_back(e);
+    p.push_back(rob.at(key + "_p"));
+  }
+  const auto adj = holmAdjust(p);
+  std::string best;
+  double best_gain = 0.0;
+  for (std::size_t k = 0; k < effects.size(); ++k) {
+    const double gain = rob.at(std::string(robustEffectOf(effects[k])) + "_gain");
+    if (adj[k] < config_.alpha && gain > best_gain) {
+      best_gain = gain;
+      best = effects[k];
+    }
+  }
+  if (best.empty() || best == out.primary_cause) return;
+  out.decision = "the tails are significant and dominate the Gaussian likelihood that ranked " + out.primary_cause +
+                 " first; fitted beside a pooled contamination, " + best + " has the largest significant held-out gain (+" +
+                 std::to_string(best_gain) + " nats per reading)";
+  out.primary_cause = best;
+}
+
+/// Step 4 for the tails: when the named cause is the pooled symptom (heavy_tails) or nothing while
+/// the tails are significant, the physical effect whose covariate carries the largest significant
+/// share of the tails' explained log-likelihood; heavy_tails, cause unknown, when none does.
+void StaticDiagnosis::refineCause(DiagnosisResult& out) {
+  TailAttribution& ta = out.tails;
+  if (!ta.fitted) return;
+  double tested = 1.0;
+  bool heavy = false;
+  for (const auto& c : out.candidates) {
+    tested += std::isfinite(c.p_value) && c.applicable;
+    heavy = heavy || (c.effect == effect::kHeavyTails && c.significant);
+  }
+  ta.significant = heavy || std::min(1.0, tested * ta.p_value) < config_.alpha;
+  if (!ta.significant) return;
+  if (robustEffectOf(out.primary_cause)) {
+    reRankUnderTails(out);
+    return;
+  }
+  if (out.primary_cause != effect::kHeavyTails && out.primary_cause != effect::kNone) return;
+  if (ta.cause == "unknown") {
+    if (out.primary_cause == effect::kNone)
+      out.decision = "the tails are significant (a contamination mixture predicts held-out readings better, p " +
+                     std::to_string(ta.p_value) + ") but no candidate is";
+    out.primary_cause = effect::kHeavyTails;
+    out.decision += "; no covariate of the tails (edge, grazing, range, dark) explains them held out: cause unknown";
+    return;
+  }
+  const TailCovariateResult* top = nullptr;
+  for (const auto& c : ta.covariates)
+    if (c.significant && c.effect == ta.cause && (!top || c.unique_gain_nats_per_point > top->unique_gain_nats_per_point)) top = &c;
+  char buf[400];
+  std::snprintf(buf, sizeof buf,
+                "the tails are significant; of what their covariates explain "
+                "held out (+%.4g nats per reading over a pooled contamination), `%s` carries the largest significant share "
+                "(%.0f %%, +%.4g +- %.2g nats, Holm p %.2g): %s",
+                ta.explained_gain_nats_per_point, top->covariate.c_str(), 100.0 * top->share, top->unique_gain_nats_per_point,
+                top->unique_gain_se, top->p_holm, ta.cause.c_str());
+  out.decision = buf;
+  out.primary_cause = ta.cause;
+  named_by_tails_ = true;
+  // Not a candidate (dark_surface): the tail model is the extension (a candidate's replaces it).
+  out.extended_parameters = ta.model;
+  out.gain_heldout_nats_per_point = ta.pooled_gain_nats_per_point + ta.explained_gain_nats_per_point;
 }
 
 /// Wall bins: the bin means given the wall model (baseline: alpha_0 and lines).
@@ -1315,12 +1757,16 @@ void StaticDiagnosis::extend(std::size_t c, DiagnosisResult& out) const {
   Model sim_model = base0_;
   const std::string& e = out.primary_cause;
   if (e == effect::kIncidenceNoise) fx.incidence_noise_exponent = fm.gamma;
+  if (named_by_tails_ && e == effect::kIncidenceNoise && robust_.count(e)) fx.incidence_noise_exponent = robust_.at(e);
   if (e == effect::kRangeDrift) fx.range_drift_m_per_scan = fm.drift;
   if (e == effect::kMixedPixels) fx.mixed_pixel_fraction = fm.mixed;
   if (e == effect::kHeavyTails) fx.noise_student_dof = std::max(fm.dof, 2.1);
   if (e == effect::kQuantisation) fx.range_resolution_m = fm.q;
-  if (e == effect::kRangeNoiseLaw) sim_model.kappa = fm.kappa;
+  if (e == effect::kRangeNoiseLaw) sim_model.kappa = named_by_tails_ && robust_.count(e) ? robust_.at(e) : fm.kappa;
   sim_model.sigma_e = fm.sigma_e;
+  // Named from the tails: the core noise fitted beside the contamination (its wild readings are
+  // not simulated: the simulator has no covariate-dependent contamination).
+  if (named_by_tails_ && robust_sigma_.count(e)) sim_model.sigma_e = robust_sigma_.at(e);
   WallFit w_sim = w0_;
   if (e == effect::kIncidenceBias && wb_.ok) {
     w_sim = wb_;

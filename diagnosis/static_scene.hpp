@@ -20,6 +20,7 @@
 // (seed 004 eq. 1), Gaussian, no drift, no incidence dependence.
 
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "diagnosis/diagnosis.hpp"
@@ -32,12 +33,14 @@ struct StaticScans {
     double angle_rad = 0.0;   ///< beam angle in the sensor frame, radians
     double range_m = 0.0;     ///< reading, metres (finite, > 0)
     std::uint32_t scan = 0;   ///< scan index (time order)
+    double intensity = std::numeric_limits<double>::quiet_NaN();  ///< return intensity (sensor units), NaN when not recorded
   };
   std::vector<Reading> readings;  ///< all returns of all scans
   std::size_t scans = 0;          ///< scans (including scans without returns)
   std::size_t beams_per_scan = 0; ///< median beams per scan (angular resolution), 0 when unknown
   double range_min_m = 0.0;       ///< sensor window
   double range_max_m = 1e9;
+  bool has_intensity = false;     ///< the readings carry an intensity (a covariate of the tails: dark surfaces)
 };
 
 /// A straight surface found in the beam means.

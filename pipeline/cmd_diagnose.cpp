@@ -58,11 +58,13 @@ diagnosis::StaticScans staticScans(const io::Sequence& seq, std::size_t stop, co
   for (std::size_t k = 0; k < scans.size(); ++k) {
     const io::Scan scan = io::readScan(seq.scans[scans[k]].path);
     counts.push_back(scan.cloud->size());
+    s.has_intensity = s.has_intensity || scan.has_intensity;  // a covariate of the tails (dark surfaces)
     for (const auto& p : *scan.cloud) {
       if (!std::isfinite(p.x) || !std::isfinite(p.y)) continue;
       const double r = fix.correct(std::hypot(static_cast<double>(p.x), static_cast<double>(p.y)));
       if (!(r > 0.0)) continue;
-      s.readings.push_back({std::atan2(static_cast<double>(p.y), static_cast<double>(p.x)), r, static_cast<std::uint32_t>(k)});
+      s.readings.push_back({std::atan2(static_cast<double>(p.y), static_cast<double>(p.x)), r, static_cast<std::uint32_t>(k),
+                            scan.has_intensity ? static_cast<double>(p.intensity) : std::nan("")});
     }
     on_scan(k + 1);
   }

@@ -190,6 +190,50 @@ ojson candidateJson(const diagnosis::CandidateResult& c) {
   return j;
 }
 
+/// Static mode: what the tails are made of (diagnosis/tails.hpp); null when not fitted.
+ojson tailsJson(const diagnosis::TailAttribution& t) {
+  if (!t.fitted) return t.note.empty() ? ojson(nullptr) : ojson{{"fitted", false}, {"note", t.note}};
+  ojson covs = ojson::array();
+  for (const auto& c : t.covariates)
+    covs.push_back(ojson{{"covariate", c.covariate},
+                         {"effect", c.effect},
+                         {"coefficient", num(c.coefficient)},
+                         {"unique_gain_nats_per_point", num(c.unique_gain_nats_per_point)},
+                         {"unique_gain_se", num(c.unique_gain_se)},
+                         {"p_value", num(c.p_value)},
+                         {"p_holm", num(c.p_holm)},
+                         {"share", num(c.share)},
+                         {"significant", c.significant}});
+  ojson beams = ojson::array();
+  for (const auto& b : t.top_beams)
+    beams.push_back(ojson{{"bearing_rad", num(b.bearing_rad)},
+                          {"range_m", num(b.range_m)},
+                          {"incidence_rad", num(b.incidence_rad)},
+                          {"intensity", num(b.intensity)},
+                          {"edge", b.edge},
+                          {"readings", b.readings},
+                          {"tail_fraction", num(b.tail_fraction)},
+                          {"tail_probability", num(b.tail_probability)},
+                          {"class", b.cls}});
+  return ojson{{"fitted", true},
+               {"cause", t.cause},
+               {"significant", t.significant},
+               {"p_value", num(t.p_value)},
+               {"pooled", ojson{{"fraction", num(t.pooled_fraction)},
+                                {"wide_scale", num(t.pooled_wide_scale)},
+                                {"heldout_gain_nats_per_point", num(t.pooled_gain_nats_per_point)},
+                                {"heldout_gain_se", num(t.pooled_gain_se)}}},
+               {"explained", ojson{{"heldout_gain_nats_per_point", num(t.explained_gain_nats_per_point)},
+                                   {"heldout_gain_se", num(t.explained_gain_se)}}},
+               {"covariates", covs},
+               {"model", numbers(t.model)},
+               {"tail_readings", num(t.tail_readings)},
+               {"tail_readings_by_class", numbers(t.tail_readings_by_class)},
+               {"readings_by_class", numbers(t.readings_by_class)},
+               {"top_beams", beams},
+               {"robust", numbers(t.robust)}};
+}
+
 /// The named effect's gain: held out, delta AIC, closeness of simulations, calibration.
 ojson gainJson(const DiagnosisResult& r, bool named) {
   ojson gain{{"heldout_nats_per_point", named ? num(r.gain_heldout_nats_per_point) : ojson(nullptr)},
@@ -293,6 +337,36 @@ void writeCandidates(std::ostream& md, const DiagnosisResult& r) {
        << (c.applicable ? fmt(c.delta_aic, 1) : "-") << " | " << c.parameters << " | " << (c.significant ? "**yes**" : "no")
        << " | " << (c.identifiable ? "yes" : "no") << " | " << est << " | " << c.note << " |\n";
   }
+}
+
+void writeTails(std::ostream& md, const DiagnosisResult& r) {
+  const auto& t = r.tails;
+  if (!t.fitted) return;
+  md << "\n## What the tails are made of\n\n";
+  md << "A contamination mixture (diagnosis/tails.hpp): pooled, a fraction " << fmt(t.pooled_fraction, 4)
+     << " of readings " << fmt(t.pooled_wide_scale, 3) << " times as wide as the core, held-out gain "
+     << fmt(t.pooled_gain_nats_per_point, 4) << " +- " << fmt(t.pooled_gain_se, 4)
+     << " nats per reading over the Gaussian baseline; with its probability depending on the covariates, a further "
+     << fmt(t.explained_gain_nats_per_point, 4) << " +- " << fmt(t.explained_gain_se, 4) << ". Cause: `" << t.cause << "`.\n\n";
+  md << "| covariate | effect | coefficient | unique held-out gain [nats/pt] | se | Holm p | share | significant |\n"
+        "|---|---|---|---|---|---|---|---|\n";
+  for (const auto& c : t.covariates)
+    md << "| " << c.covariate << " | `" << c.effect << "` | " << fmt(c.coefficient, 3) << " | "
+       << fmt(c.unique_gain_nats_per_point, 5) << " | " << fmt(c.unique_gain_se, 5) << " | " << pfmt(c.p_holm) << " | "
+       << fmt(100.0 * c.share, 1) << " % | " << (c.significant ? "**yes**" : "no") << " |\n";
+  md << "\nTail readings (posterior sums) by class of beam, of " << fmt(t.tail_readings, 1) << ":";
+  for (const auto& [k, v] : t.tail_readings_by_class)
+    md << " " << k << " " << fmt(v, 1) << " of " << fmt(t.readings_by_class.at(k), 0) << ";";
+  md << "\n\n| beam [deg] | range [m] | incidence [deg] | intensity | edge | readings | tail fraction | fitted pi | class |\n"
+        "|---|---|---|---|---|---|---|---|---|\n";
+  for (const auto& b : t.top_beams)
+    md << "| " << fmt(rad2deg(b.bearing_rad), 1) << " | " << fmt(b.range_m, 3) << " | "
+       << (std::isfinite(b.incidence_rad) ? fmt(rad2deg(b.incidence_rad), 1) : "-") << " | "
+       << (std::isfinite(b.intensity) ? fmt(b.intensity, 1) : "-") << " | " << (b.edge ? "yes" : "no") << " | " << b.readings
+       << " | " << fmt(b.tail_fraction, 3) << " | " << fmt(b.tail_probability, 3) << " | " << b.cls << " |\n";
+  md << "\nUnder the pooled contamination:";
+  for (const auto& [k, v] : t.robust) md << " " << k << " = " << fmt(v, 4) << ";";
+  md << "\n";
 }
 
 void writeExtended(std::ostream& md, const DiagnosisResult& r) {
@@ -438,6 +512,7 @@ nlohmann::ordered_json diagnosisJson(const DiagnosisResult& r, const DiagnosisSo
                {"candidates", candidates},
                {"primary_cause", r.primary_cause},
                {"decision", r.decision},
+               {"tails", tailsJson(r.tails)},
                {"extended_model", extended},
                {"gain", gainJson(r, named)}};
 }
@@ -455,6 +530,7 @@ void writeDiagnosis(const std::filesystem::path& dir, const DiagnosisResult& r, 
   writeBaseline(md, r, src);
   writeBattery(md, r);
   writeCandidates(md, r);
+  writeTails(md, r);
   writeExtended(md, r);
   writePlots(dir, r, md);
   if (!src.command.empty()) md << "\nProduced by `" << src.command << "`.\n";

@@ -118,11 +118,16 @@ inline HiddenEffectCase hiddenEffectCase(const std::string& effect, std::uint64_
   return h;
 }
 
-/// A simulated room seen from one pose: walls at several distances and incidences, a pillar and
-/// a box (depth discontinuities), bias 0.01 + d, `scans` scans. `turn_rad_per_scan`: the sensor
-/// turns in place by this much per scan (the scans are cast from the turned heading).
-inline diagnosis::StaticScans staticRoom(const RangeEffects& fx, const NoiseModel& noise, std::uint64_t seed, int scans = 150,
-                                           double step_error_fraction = 0.0, double turn_rad_per_scan = 0.0) {
+inline NoiseModel squaredNoise(double sigma_e) {
+  NoiseModel n;
+  n.kind = NoiseKind::squared;
+  n.sigma_e = sigma_e;
+  return n;
+}
+
+/// The scene of staticRoom(): an irregular room seen from one pose, walls at several distances
+/// and incidences, a pillar and a box (depth discontinuities), bias 0.01 + d.
+inline Scene staticRoomScene(const RangeEffects& fx, const NoiseModel& noise, int scans, double step_error_fraction) {
   Scene s;
   s.sensor.beams = 360;
   s.sensor.range.range_min_m = 0.15;
@@ -134,10 +139,17 @@ inline diagnosis::StaticScans staticRoom(const RangeEffects& fx, const NoiseMode
   s.path.scans_per_stop = scans;
   s.path.start = Pose2{0.3, -0.2, 0.4};
   s.path.step_error_fraction = step_error_fraction;
-  // An irregular room: walls at several distances and incidences, a pillar, a box.
   s.walls = {{-2.0, -3.0, 4.0, -3.0}, {4.0, -3.0, 4.0, 1.0}, {4.0, 1.0, 2.5, 3.5}, {2.5, 3.5, -2.0, 3.5}, {-2.0, 3.5, -2.0, -3.0}};
   s.clutter = {{1.5, 1.0, 0.2}};
   s.walls.push_back({-1.0, 0.8, -0.4, 1.6});
+  return s;
+}
+
+/// A simulated room seen from one pose (staticRoomScene), `scans` scans. `turn_rad_per_scan`:
+/// the sensor turns in place by this much per scan (the scans are cast from the turned heading).
+inline diagnosis::StaticScans staticRoom(const RangeEffects& fx, const NoiseModel& noise, std::uint64_t seed, int scans = 150,
+                                           double step_error_fraction = 0.0, double turn_rad_per_scan = 0.0) {
+  const Scene s = staticRoomScene(fx, noise, scans, step_error_fraction);
   const auto stops = simulation::planStops(s, seed);
   diagnosis::StaticScans out;
   out.scans = static_cast<std::size_t>(scans);
@@ -156,11 +168,56 @@ inline diagnosis::StaticScans staticRoom(const RangeEffects& fx, const NoiseMode
   return out;
 }
 
-inline NoiseModel squaredNoise(double sigma_e) {
-  NoiseModel n;
-  n.kind = NoiseKind::squared;
-  n.sigma_e = sigma_e;
-  return n;
+/// Where the extra-wide errors of staticRoomWithTails() occur.
+enum class TailWhere { grazing, edge, dark, everywhere };
+
+/// Which beams are of class `where`, from the truth of a scan: grazing, a true incidence above
+/// 45 degrees; edge, a neighbouring beam's true distance more than 10 cm away (or no return);
+/// dark, the beams on the room's fourth wall (the one 3.7 m ahead, seen at 0-32 degrees).
+inline std::vector<bool> tailBeams(const simulation::SimulatedScan& sim, TailWhere where) {
+  const std::size_t n = sim.truth.size();
+  std::vector<bool> in(n, false);
+  for (std::size_t b = 0; b < n; ++b) {
+    const io::TrueRange& t = sim.truth[b];
+    if (!std::isfinite(t.range_m)) continue;
+    const double prev = sim.truth[(b + n - 1) % n].range_m, next = sim.truth[(b + 1) % n].range_m;
+    const bool edge = !(std::abs(prev - t.range_m) <= 0.1) || !(std::abs(next - t.range_m) <= 0.1);
+    const bool dark = t.target == io::TargetKind::wall && t.target_id == 4;
+    in[b] = where == TailWhere::everywhere || (where == TailWhere::grazing && t.incidence_rad > deg2rad(45.0)) ||
+            (where == TailWhere::edge && edge) || (where == TailWhere::dark && dark);
+  }
+  return in;
+}
+
+/// staticRoom() with extra-wide errors the test controls: with probability `rate` a reading of a
+/// beam of class `where` gets a further N(0, wide_m^2) (its own stream, drawn for every beam).
+/// Every reading carries an intensity: 20 on the dark wall, 200 elsewhere (whatever `where` is).
+inline diagnosis::StaticScans staticRoomWithTails(TailWhere where, double rate, double wide_m, std::uint64_t seed,
+                                                  const RangeEffects& fx = {}, int scans = 150) {
+  const Scene s = staticRoomScene(fx, squaredNoise(0.0015), scans, 0.0);
+  const auto stops = simulation::planStops(s, seed);
+  diagnosis::StaticScans out;
+  out.scans = static_cast<std::size_t>(scans);
+  out.beams_per_scan = 360;
+  out.range_min_m = 0.15;
+  out.range_max_m = 12.0;
+  out.has_intensity = true;
+  std::normal_distribution<double> normal(0.0, 1.0);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (std::size_t k = 0; k < out.scans; ++k) {
+    const auto sim = simulation::simulateScan(s, stops[0], k, seed);
+    const std::vector<bool> in = tailBeams(sim, where), dark = tailBeams(sim, TailWhere::dark);
+    auto gen = makeRng(seed, 0x7A115ULL + k);
+    for (std::size_t b = 0; b < sim.truth.size(); ++b) {
+      const double u = unit(gen), e = normal(gen);
+      const auto& p = (*sim.scan.cloud)[b];
+      if (!std::isfinite(p.x)) continue;
+      const double r = std::hypot(static_cast<double>(p.x), static_cast<double>(p.y));
+      out.readings.push_back({std::atan2(static_cast<double>(p.y), static_cast<double>(p.x)),
+                              in[b] && u < rate ? r + wide_m * e : r, static_cast<std::uint32_t>(k), dark[b] ? 20.0 : 200.0});
+    }
+  }
+  return out;
 }
 
 /// One static case: an effect hidden in the room and the causes the truth allows.

@@ -22,6 +22,7 @@
 #include "diagnosis/sequence.hpp"
 #include "diagnosis/static_scene.hpp"
 #include "diagnosis/stats.hpp"
+#include "diagnosis/tails.hpp"
 #include "calibration/joint_refinement.hpp"
 #include "diagnosis/diagnose_cases.hpp"
 #include "common/rng.hpp"
@@ -588,6 +589,186 @@ TEST(DiagnoseStatic, TooFewScansGiveAStatus) {
   const auto r = diagnoseStatic(staticRoom({}, squared(0.0015), 1, 3), DiagnoseConfig{});
   EXPECT_EQ(r.status, "too_few_scans");
   EXPECT_FALSE(r.message.empty());
+}
+
+// ---------------------------------------------------------------------------------------------
+// Tails explained by covariates (diagnosis/tails.hpp, issue 20).
+
+/// Residuals drawn from the tail model itself: the EM recovers its parameters (oracle: the truth).
+TEST(DiagnoseTails, EmRecoversTheContaminationModelFromItsOwnDraws) {
+  for (std::uint64_t seed : {1u, 2u, 3u}) {
+    SCOPED_TRACE(seed);
+    auto rng = makeRng(seed, 17);
+    std::normal_distribution<double> normal(0.0, 1.0);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    TailModel truth;
+    truth.sigma_e = 0.002;
+    truth.gamma = 1.0;
+    truth.wide = 8.0;
+    truth.beta = {-4.0, 3.0, 0.0, 0.0, 0.0};
+    truth.spec.covariate[kTailEdge] = true;
+    std::vector<TailBeam> beams(200);
+    std::vector<TailReading> readings;
+    for (std::size_t b = 0; b < beams.size(); ++b) {
+      beams[b].log_range = std::log(1.0 + 3.0 * unit(rng));
+      beams[b].log_sec_inc = -std::log(std::cos(deg2rad(70.0) * unit(rng)));
+      beams[b].x = {b % 2 == 0 ? 1.0 : 0.0, beams[b].log_sec_inc, beams[b].log_range - 0.8, 0.0};
+      for (int k = 0; k < 200; ++k) {
+        const double s = truth.sigma(beams[b]) * (unit(rng) < truth.tailProbability(beams[b]) ? truth.wide : 1.0);
+        readings.push_back({b, s * normal(rng), 1.0});
+      }
+    }
+    TailSpec spec;
+    spec.covariate = {true, true, true, false};
+    spec.gamma = true;
+    const TailModel m = fitTailModel(beams, readings, spec, 0.01, 1e-3, 1.0 / 12.0);
+    EXPECT_TRUE(m.converged);
+    EXPECT_NEAR(m.sigma_e, 0.002, 0.0001);
+    EXPECT_NEAR(m.gamma, 1.0, 0.05);
+    EXPECT_NEAR(m.wide, 8.0, 0.5);
+    EXPECT_NEAR(m.beta[0], -4.0, 0.3);
+    EXPECT_NEAR(m.beta[1 + kTailEdge], 3.0, 0.3);
+    EXPECT_NEAR(m.beta[1 + kTailGrazing], 0.0, 0.3);  // covariates without effect stay near 0
+    EXPECT_NEAR(m.beta[1 + kTailRange], 0.0, 0.3);
+  }
+}
+
+/// Degenerate inputs: no readings, or every residual zero (a sensor that repeats itself): finite
+/// parameters, no crash; no readings is reported as not converged.
+TEST(DiagnoseTails, DegenerateInputsGiveFiniteParameters) {
+  std::vector<TailBeam> beams(3);
+  TailSpec spec;
+  spec.covariate = {true, true, true, true};
+  spec.kappa = spec.gamma = spec.mixed = true;
+  const TailModel none = fitTailModel(beams, {}, spec, 0.01, 1e-3, 0.1);
+  EXPECT_FALSE(none.converged);
+  std::vector<TailReading> zeros;
+  for (std::size_t b = 0; b < beams.size(); ++b)
+    for (int k = 0; k < 20; ++k) zeros.push_back({b, 0.0, 1.0});
+  const TailModel flat = fitTailModel(beams, zeros, spec, 0.01, 1e-3, 0.1);
+  for (double v : {flat.sigma_e, flat.kappa, flat.gamma, flat.wide, flat.mixed, flat.beta[0]}) EXPECT_TRUE(std::isfinite(v));
+  EXPECT_TRUE(std::isfinite(flat.logDensity(beams[0], 0.001, 1.0, 1e-3, 0.1)));
+}
+
+/// Where the test puts the extra-wide errors, and what the diagnosis must say about them.
+struct TailTruth {
+  const char* name;
+  test::TailWhere where;
+  const char* effect;  ///< the physical cause to name
+  const char* cls;     ///< the class of beams holding most of the tail readings
+};
+
+class StaticTails : public ::testing::TestWithParam<TailTruth> {};
+
+/// Extra-wide errors (10 % of the readings of one class of beams, 5 cm) only at grazing incidence,
+/// only at depth edges or only on a dark wall: named by the physical effect (not heavy_tails), the
+/// tails put in that class. Four seeds the method was not tuned on; at least 3 right (a method
+/// right 95 % of the time passes with probability 0.99).
+TEST_P(StaticTails, DiagnoseNamesThePhysicalCauseAndTheBeamsThatCarryTheTails) {
+  const TailTruth& c = GetParam();
+  int right = 0;
+  std::string log;
+  for (std::uint64_t seed = 301; seed < 305; ++seed) {
+    DiagnoseConfig dc;
+    dc.replicas = 5;
+    dc.seed = seed;
+    const auto r = diagnoseStatic(test::staticRoomWithTails(c.where, 0.10, 0.05, seed), dc);
+    ASSERT_EQ(r.status, "ok") << r.message;
+    ASSERT_TRUE(r.tails.fitted) << r.tails.note;
+    std::string top;
+    double most = -1.0;
+    for (const auto& [k, v] : r.tails.tail_readings_by_class)
+      if (v > most) {
+        most = v;
+        top = k;
+      }
+    right += r.primary_cause == c.effect && r.tails.cause == c.effect && top == c.cls;
+    log += " seed " + std::to_string(seed) + ": " + r.primary_cause + ", tails " + r.tails.cause + ", class " + top + ";";
+  }
+  std::printf("%s:%s\n", c.name, log.c_str());
+  EXPECT_GE(right, 3) << log;
+}
+
+INSTANTIATE_TEST_SUITE_P(Room, StaticTails,
+                         ::testing::Values(TailTruth{"grazing", test::TailWhere::grazing, "incidence_noise", "grazing"},
+                                           TailTruth{"edge", test::TailWhere::edge, "mixed_pixels", "edge"},
+                                           TailTruth{"dark", test::TailWhere::dark, "dark_surface", "dark"}),
+                         [](const auto& p) { return std::string(p.param.name); });
+
+/// The tail study gives the same numbers, to the last bit, when run again with the same seed.
+TEST(DiagnoseStatic, TailStudyIsDeterministic) {
+  DiagnoseConfig dc;
+  dc.replicas = 5;
+  const StaticScans s = test::staticRoomWithTails(test::TailWhere::edge, 0.10, 0.05, 331);
+  const auto a = diagnoseStatic(s, dc), b = diagnoseStatic(s, dc);
+  ASSERT_TRUE(a.tails.fitted);
+  EXPECT_EQ(a.primary_cause, b.primary_cause);
+  EXPECT_EQ(a.tails.model, b.tails.model);
+  EXPECT_EQ(a.tails.robust, b.tails.robust);
+  EXPECT_EQ(a.tails.tail_readings_by_class, b.tails.tail_readings_by_class);
+  ASSERT_EQ(a.tails.covariates.size(), b.tails.covariates.size());
+  for (std::size_t k = 0; k < a.tails.covariates.size(); ++k)
+    EXPECT_EQ(a.tails.covariates[k].unique_gain_nats_per_point, b.tails.covariates[k].unique_gain_nats_per_point);
+  ASSERT_EQ(a.tails.top_beams.size(), b.tails.top_beams.size());
+  for (std::size_t k = 0; k < a.tails.top_beams.size(); ++k)
+    EXPECT_EQ(a.tails.top_beams[k].bearing_rad, b.tails.top_beams[k].bearing_rad);
+}
+
+/// Mixed pixels at 2-10 % of the edge readings (issue 20, item 3; a fraction drawn per seed): the
+/// readings between the two surfaces are tails on the edge beams, so mixed_pixels is named (by its
+/// own candidate, or from the tails' edge covariate). Four seeds, at least 3.
+TEST(DiagnoseStatic, MixedPixelsAtTwoToTenPercentOfEdgeReadingsAreNamed) {
+  int right = 0;
+  std::string log;
+  for (std::uint64_t seed = 321; seed < 325; ++seed) {
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    auto rng = makeRng(seed, 5);
+    RangeEffects fx;
+    fx.mixed_pixel_fraction = 0.02 + 0.08 * u(rng);
+    DiagnoseConfig dc;
+    dc.replicas = 5;
+    dc.seed = seed;
+    const auto r = diagnoseStatic(staticRoom(fx, squared(0.0015), seed), dc);
+    ASSERT_EQ(r.status, "ok") << r.message;
+    right += r.primary_cause == effect::kMixedPixels;
+    char buf[200];
+    std::snprintf(buf, sizeof buf, " seed %d (fraction %.3f): %s, tails %s;", static_cast<int>(seed), fx.mixed_pixel_fraction,
+                  r.primary_cause.c_str(), r.tails.cause.c_str());
+    log += buf;
+  }
+  std::printf("mixed pixels:%s\n", log.c_str());
+  EXPECT_GE(right, 3) << log;
+}
+
+/// Tails everywhere (5 % of all readings 5 cm off) over a noise growing as (1 / cos phi)^1: the
+/// incidence exponent fitted under the contamination comes out near 1 (under the Gaussian
+/// likelihood 0.73-0.88 on these seeds), and incidence_noise is named.
+TEST(DiagnoseStatic, IncidenceExponentIsRecoveredUnderContamination) {
+  RangeEffects fx;
+  fx.incidence_noise_exponent = 1.0;
+  for (std::uint64_t seed = 311; seed < 314; ++seed) {
+    SCOPED_TRACE(seed);
+    DiagnoseConfig dc;
+    dc.replicas = 5;
+    dc.seed = seed;
+    const auto r = diagnoseStatic(test::staticRoomWithTails(test::TailWhere::everywhere, 0.05, 0.05, seed, fx), dc);
+    ASSERT_EQ(r.status, "ok") << r.message;
+    ASSERT_TRUE(r.tails.fitted) << r.tails.note;
+    const double robust = r.tails.robust.at("incidence_noise_exponent");
+    double gaussian = std::numeric_limits<double>::quiet_NaN();
+    for (const auto& k : r.candidates)
+      if (k.effect == "incidence_noise") gaussian = k.estimates.at("incidence_noise_exponent");
+    std::printf("seed %d: incidence exponent %.3f under the contamination, %.3f under the Gaussian; named %s; robust gains: "
+                "gamma %.4f +- %.4f, kappa %.4f +- %.4f\n",
+                static_cast<int>(seed), robust, gaussian, r.primary_cause.c_str(), r.tails.robust.at("incidence_noise_exponent_gain"),
+                r.tails.robust.at("incidence_noise_exponent_gain_se"), r.tails.robust.at("noise_exponent_gain"),
+                r.tails.robust.at("noise_exponent_gain_se"));
+    EXPECT_NEAR(robust, 1.0, 0.15);
+    // The Gaussian ranking, dominated by the tails, puts a range law first; ranked beside the
+    // contamination the incidence noise comes first.
+    EXPECT_EQ(r.primary_cause, "incidence_noise") << r.decision << " tails significant " << r.tails.significant << " p " << r.tails.p_value;
+    EXPECT_GT(r.tails.robust.at("incidence_noise_exponent_gain"), 0.0);
+  }
 }
 
 }  // namespace

@@ -208,6 +208,11 @@ TEST(CliDiagnoseMeasured, RplidarRecordingIsAStaticRoom) {
   // The named cause must be one of the two noise departures, and both must be significant.
   const std::string cause = j["primary_cause"];
   EXPECT_TRUE(cause == "heavy_tails" || cause == "incidence_noise") << cause;
+  // Issue 20: the tails are explained by the beams' covariates, and the cause named is physical.
+  ASSERT_TRUE(j["tails"].is_object());
+  EXPECT_TRUE(j["tails"]["fitted"].get<bool>());
+  EXPECT_NE(j["tails"]["cause"], "unknown");
+  EXPECT_NE(cause, "heavy_tails");
   for (const auto& c : j["candidates"])
     if (c["effect"] == "heavy_tails" || c["effect"] == "incidence_noise") {
       EXPECT_TRUE(c["significant"].get<bool>()) << c["effect"];
