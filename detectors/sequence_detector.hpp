@@ -93,6 +93,7 @@ struct SequenceDetections {
   } replay;
   /// Without kept scans: the final pass's detections and tracks in a temporary file, which
   /// forEachScan reads instead of detecting again; null when no temporary file could be made.
+  /// Copies of the result share the file: visit one of them at a time.
   std::shared_ptr<DetectionLog> log;
 };
 
