@@ -41,10 +41,14 @@ void runCalibrate(const CalibrateCommand& c) {
   CalibrationModel model;
   std::vector<calibration::ReferenceMatch> matches;
   std::string survey;
-  if (!c.reference.empty() && io::readReference(c.reference).distances.empty()) {
+  std::optional<Reference> measured;
+  if (!c.reference.empty()) {
+    measured = io::readReference(c.reference);
+    io::checkReference(*measured, seq.stops.size(), c.reference);
+  }
+  if (measured && measured->distances.empty()) {
     // Surveyed landmarks or measured poses only: self-calibration with them held fixed.
-    const Reference ref = io::readReference(c.reference);
-    io::checkReference(ref, seq.stops.size(), c.reference);
+    const Reference& ref = *measured;
     StageBars progress;
     std::vector<SurveyMatch> found;
     const SequenceCalibration result = calibrateSequenceWithSurvey(seq, ref, c.reference, detectionConfig(*c.options),
@@ -52,10 +56,9 @@ void runCalibrate(const CalibrateCommand& c) {
     progress.finish();
     model = result.model;
     survey = surveyTable(found, ref);
-  } else if (!c.reference.empty()) {
+  } else if (measured) {
     // Against the distances the user measured (seed 004 section 5).
-    const Reference ref = io::readReference(c.reference);
-    io::checkReference(ref, seq.stops.size(), c.reference);
+    const Reference& ref = *measured;
     if (!ref.landmarks.empty() || !ref.stops.empty())
       std::fprintf(stderr, "lidarcal: warning: %s: with distances given, the surveyed landmarks and measured stops are "
                            "checked but not used (combining both is not implemented); remove the distances to use them\n",
