@@ -132,24 +132,40 @@ class PcdFile {
   std::string bytes_;
 };
 
-/// A read-only stream over bytes in memory (no copy), seekable for PCL's ASCII body reader.
-class MemoryBuffer : public std::streambuf {
+/// A stream over a PcdFile that reads on from the file as it is consumed (parsing a header reads
+/// the header, not the data behind it), seekable within the file for PCL's ASCII body reader.
+class PcdStreamBuffer : public std::streambuf {
  public:
-  explicit MemoryBuffer(const std::string& bytes) {
-    char* p = const_cast<char*>(bytes.data());  // only read: no put area
-    setg(p, p, p + bytes.size());
-  }
+  explicit PcdStreamBuffer(PcdFile& file) : file_(file) { point(0); }
 
  protected:
+  int_type underflow() override {
+    const std::size_t at = static_cast<std::size_t>(gptr() - eback());
+    if (at >= file_.bytes().size()) file_.readUpTo(at + kChunk);
+    point(at);
+    return at < file_.bytes().size() ? traits_type::to_int_type(file_.bytes()[at]) : traits_type::eof();
+  }
   pos_type seekoff(off_type off, std::ios_base::seekdir dir, std::ios_base::openmode) override {
-    const off_type base = dir == std::ios_base::beg ? 0 : dir == std::ios_base::cur ? gptr() - eback() : egptr() - eback();
+    const off_type base = dir == std::ios_base::beg   ? 0
+                          : dir == std::ios_base::cur ? gptr() - eback()
+                                                      : static_cast<off_type>(file_.size());
     return seekpos(pos_type(base + off), std::ios_base::in);
   }
   pos_type seekpos(pos_type pos, std::ios_base::openmode) override {
-    if (pos < 0 || pos > egptr() - eback()) return pos_type(off_type(-1));
-    setg(eback(), eback() + static_cast<off_type>(pos), egptr());
+    if (pos < 0 || static_cast<std::size_t>(pos) > file_.size()) return pos_type(off_type(-1));
+    file_.readUpTo(static_cast<std::size_t>(pos));
+    point(static_cast<std::size_t>(pos));
     return pos;
   }
+
+ private:
+  static constexpr std::size_t kChunk = 4096;
+  /// The get area over the bytes read so far (the string may have moved), positioned at `at`.
+  void point(std::size_t at) {
+    char* p = const_cast<char*>(file_.bytes().data());  // only read: no put area
+    setg(p, p + at, p + file_.bytes().size());
+  }
+  PcdFile& file_;
 };
 
 /// A directory where a scan file is expected: name one of its scans.
@@ -432,12 +448,11 @@ void yawToQuaternion(double yaw_rad, double& qw, double& qz) {
 }
 
 ScanHeader readScanHeader(const fs::path& file) {
-  // The header fits in kMaxHeaderBytes (parseHeader refuses more), then the compressed block's sizes.
   PcdFile f(file);
-  f.readUpTo(kMaxHeaderBytes + 8);
-  MemoryBuffer buffer(f.bytes());
+  PcdStreamBuffer buffer(f);
   std::istream in(&buffer);
   const ParsedHeader h = parseHeader(in, file.string());
+  f.readUpTo(h.data_offset + 8);  // a compressed block's sizes
   return toScanHeader(file, h, f.size(), f.bytes());
 }
 
@@ -488,32 +503,26 @@ std::size_t compressedBlockSize(const std::string& bytes, std::size_t at) {
 /// The point data of a checked file, read by PCL's body reader from the file's bytes in memory
 /// (the file is opened once: header, checks and data; the header parsed once, by parseHeader).
 pcl::PCLPointCloud2 readBlob(PcdFile& f, const ParsedHeader& h, const std::string& where) {
-  // The checked header says how far the data goes (toScanHeader: binary data within the file,
-  // the compressed block's sizes); ASCII data runs to the end.
   pcl::PCLPointCloud2 blob = blobLayout(h);
-  std::size_t end = f.size();
-  if (h.data == "binary") end = h.data_offset + blob.data.size();
-  if (h.data == "binary_compressed") end = h.data_offset + 8 + compressedBlockSize(f.bytes(), h.data_offset);
-  f.readUpTo(end);
-  const std::string& bytes = f.bytes();
-  pcl::PCDReader reader;
   const auto data_idx = static_cast<unsigned int>(h.data_offset);
+  pcl::PCDReader reader;
   int rc = 0;
   if (h.data == "ascii") {
-    MemoryBuffer buffer(bytes);
+    PcdStreamBuffer buffer(f);
     std::istream stream(&buffer);
     stream.seekg(static_cast<std::streamoff>(data_idx));
     rc = reader.readBodyASCII(stream, blob, pcl::PCDReader::PCD_V7);
   } else {
-    // PCL's body reader takes no length: the data must lie within the bytes (toScanHeader
-    // checked binary data against the file size and the compressed block's sizes).
     const bool compressed = h.data == "binary_compressed";
-    std::size_t need = data_idx + blob.data.size();
     if (compressed && blob.data.empty()) return blob;  // no points: no block to unpack
-    if (compressed) need = data_idx + 8 + compressedBlockSize(bytes, data_idx);
-    if (need > bytes.size()) rc = -1;
+    // How far the data goes: the packed points, or the compressed block's sizes and bytes (the
+    // caller read the sizes). PCL's body reader takes no length, so the bytes must reach there.
+    const std::size_t end = compressed ? data_idx + 8 + compressedBlockSize(f.bytes(), data_idx)
+                                       : data_idx + blob.data.size();
+    f.readUpTo(end);
+    if (end > f.bytes().size()) rc = -1;
     if (rc == 0)
-      rc = reader.readBodyBinary(reinterpret_cast<const unsigned char*>(bytes.data()), blob, pcl::PCDReader::PCD_V7,
+      rc = reader.readBodyBinary(reinterpret_cast<const unsigned char*>(f.bytes().data()), blob, pcl::PCDReader::PCD_V7,
                                  compressed, data_idx);
   }
   if (rc < 0)
@@ -527,13 +536,13 @@ pcl::PCLPointCloud2 readBlob(PcdFile& f, const ParsedHeader& h, const std::strin
 Scan readScan(const fs::path& file) {
   const std::string where = file.string();
   PcdFile f(file);
-  f.readUpTo(kMaxHeaderBytes + 8);
   ParsedHeader parsed;
   {
-    MemoryBuffer buffer(f.bytes());
+    PcdStreamBuffer buffer(f);
     std::istream in(&buffer);
     parsed = parseHeader(in, where);
   }
+  f.readUpTo(parsed.data_offset + 8);  // a compressed block's sizes
   const ScanHeader header = toScanHeader(file, parsed, f.size(), f.bytes());
   const pcl::PCLPointCloud2 blob = readBlob(f, parsed, where);
   const std::size_t n = static_cast<std::size_t>(blob.width) * blob.height;
