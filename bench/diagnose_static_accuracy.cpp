@@ -35,13 +35,7 @@ void tailCases(int seeds, int first, int replicas) {
       dc.replicas = replicas;
       dc.seed = static_cast<std::uint64_t>(seed);
       const auto r = diagnosis::diagnoseStatic(test::staticRoomWithTails(c.where, 0.10, 0.05, static_cast<std::uint64_t>(seed)), dc);
-      std::string top;
-      double most = -1.0;
-      for (const auto& [k, v] : r.tails.tail_readings_by_class)
-        if (v > most) {
-          most = v;
-          top = k;
-        }
+      const std::string top = test::dominantTailClass(r.tails);
       right += r.primary_cause == c.effect;
       cls_right += top == c.cls;
       if (r.primary_cause != c.effect) ++named[r.primary_cause];

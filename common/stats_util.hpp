@@ -1,6 +1,7 @@
 #pragma once
-// Small numeric helpers shared across the libraries: the non-finite constants, ln(2 pi) and the
-// medians. One definition each (issue 18 found them copied a dozen times).
+// Small numeric helpers shared across the libraries: the non-finite constants, ln(2 pi), the
+// medians and a one-dimensional maximiser. One definition each (issue 18 found them copied a
+// dozen times).
 
 #include <algorithm>
 #include <cstddef>
@@ -28,6 +29,18 @@ inline double upperMedian(std::vector<double> v) {
   const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
   std::nth_element(v.begin(), mid, v.end());
   return *mid;
+}
+
+/// Maximum of a unimodal function on [lo, hi] by ternary search: `iterations` times the third
+/// on the lower side of the two inner points is dropped; returns the middle of what is left.
+template <class Fn>
+double ternaryMax(Fn fn, double lo, double hi, int iterations) {
+  for (int i = 0; i < iterations; ++i) {
+    const double m1 = lo + (hi - lo) / 3.0, m2 = hi - (hi - lo) / 3.0;
+    if (fn(m1) < fn(m2)) lo = m1;
+    else hi = m2;
+  }
+  return 0.5 * (lo + hi);
 }
 
 }  // namespace lidarcal

@@ -76,17 +76,6 @@ struct Data {
   bool intensity = false;       // the bins carry an intensity
 };
 
-/// Maximum of a unimodal function on [lo, hi]: ternary search, `iterations` thirds dropped.
-template <class Fn>
-double goldenMax(Fn fn, double lo, double hi, int iterations) {
-  for (int i = 0; i < iterations; ++i) {
-    const double m1 = lo + (hi - lo) / 3.0, m2 = hi - (hi - lo) / 3.0;
-    if (fn(m1) < fn(m2)) lo = m1;
-    else hi = m2;
-  }
-  return 0.5 * (lo + hi);
-}
-
 /// Calls fn(i, bin, fit) for every reading i in a bin that has a location fit, in reading order.
 template <class Fn>
 void forEachFitted(const Data& d, const std::vector<BinFit>& f, Fn fn) {
@@ -461,7 +450,7 @@ bool wallGaussNewton(const Data& d, const std::vector<BinFit>& f, WallFit& w, bo
   return true;
 }
 
-/// Roughness: ML of tau^2 given the residuals (golden section on log tau).
+/// Roughness: ML of tau^2 given the residuals (ternary search on log tau).
 double wallRoughness(const std::vector<BinFit>& f, const WallFit& w, const Eigen::VectorXd& r) {
   auto ll = [&](double log_tau) {
     const double t2 = std::exp(2.0 * log_tau);
@@ -473,7 +462,7 @@ double wallRoughness(const std::vector<BinFit>& f, const WallFit& w, const Eigen
     }
     return s;
   };
-  const double lt = goldenMax(ll, std::log(1e-5), std::log(0.5), 60);
+  const double lt = ternaryMax(ll, std::log(1e-5), std::log(0.5), 60);
   return std::exp(2.0 * lt);
 }
 
@@ -718,7 +707,7 @@ void ModelFitter::fitDof() {
     }
     return s;
   };
-  m_.dof = 2.0 + std::exp(goldenMax(ll, std::log(0.1), std::log(300.0), 50));
+  m_.dof = 2.0 + std::exp(ternaryMax(ll, std::log(0.1), std::log(300.0), 50));
 }
 
 Model ModelFitter::fit(double q_detected) {
@@ -736,8 +725,8 @@ Model ModelFitter::fit(double q_detected) {
     profile(m_.kappa, m_.gamma, &m_.sigma_e);
     dropOutliers();
     refresh();
-    if (fl_.kappa) m_.kappa = goldenMax([&](double k) { return profile(k, m_.gamma, nullptr); }, -1.0, 5.0, 50);
-    if (fl_.gamma) m_.gamma = goldenMax([&](double g) { return profile(m_.kappa, g, nullptr); }, -1.0, 4.0, 50);
+    if (fl_.kappa) m_.kappa = ternaryMax([&](double k) { return profile(k, m_.gamma, nullptr); }, -1.0, 5.0, 50);
+    if (fl_.gamma) m_.gamma = ternaryMax([&](double g) { return profile(m_.kappa, g, nullptr); }, -1.0, 4.0, 50);
     profile(m_.kappa, m_.gamma, &m_.sigma_e);
     if (fl_.drift) fitDrift();
     if (fl_.mixed) fitMixed();

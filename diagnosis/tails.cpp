@@ -6,6 +6,8 @@
 
 #include <Eigen/Dense>
 
+#include "common/stats_util.hpp"
+
 namespace lidarcal::diagnosis {
 namespace {
 
@@ -89,22 +91,12 @@ double profileScales(const TailModel& m, const std::vector<TailBeam>& beams, con
   return -logh - 0.5 * w * std::log(s2);
 }
 
-template <class Fn>
-double goldenArgMax(Fn fn, double lo, double hi, int iterations) {
-  for (int i = 0; i < iterations; ++i) {
-    const double m1 = lo + (hi - lo) / 3.0, m2 = hi - (hi - lo) / 3.0;
-    if (fn(m1) < fn(m2)) lo = m1;
-    else hi = m2;
-  }
-  return 0.5 * (lo + hi);
-}
-
-/// One coordinate of the scales by golden section on the profile (`field` set in a copy).
+/// One coordinate of the scales by ternary search on the profile (`field` set in a copy).
 template <class Set>
 void maximiseCoordinate(TailModel& m, const std::vector<TailBeam>& beams, const std::vector<BeamSums>& sums, double lo,
                         double hi, Set set) {
   TailModel t = m;
-  const double best = goldenArgMax([&](double v) { set(t, v); return profileScales(t, beams, sums, nullptr); }, lo, hi, 40);
+  const double best = ternaryMax([&](double v) { set(t, v); return profileScales(t, beams, sums, nullptr); }, lo, hi, 40);
   set(m, best);
 }
 

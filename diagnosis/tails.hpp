@@ -11,7 +11,7 @@
 // metres is rho = 0, a scale mixture of the core rho = kappa), eta_b the mixed-pixel fraction at depth edges (a reading
 // anywhere between the two surfaces; 0 elsewhere). With every beta_j = 0 the broad component is a
 // pooled tail (a symptom, like a Student t); a covariate with a significant beta_j names a cause.
-// Fitted by EM: closed-form sigma_e and eta, golden-section on the exponents and k (profile in
+// Fitted by EM: closed-form sigma_e and eta, ternary search on the exponents and k (profile in
 // sigma_e, per-beam sums), Newton steps (IRLS) on beta with the responsibilities as soft labels.
 // Internal to the diagnosis library (static mode).
 

@@ -145,17 +145,23 @@ inline Scene staticRoomScene(const RangeEffects& fx, const NoiseModel& noise, in
   return s;
 }
 
+/// The empty data of `scans` scans of 360 beams from the room's lidar (0.15-12 m).
+inline diagnosis::StaticScans roomScans(int scans) {
+  diagnosis::StaticScans out;
+  out.scans = static_cast<std::size_t>(scans);
+  out.beams_per_scan = 360;
+  out.range_min_m = 0.15;
+  out.range_max_m = 12.0;
+  return out;
+}
+
 /// A simulated room seen from one pose (staticRoomScene), `scans` scans. `turn_rad_per_scan`:
 /// the sensor turns in place by this much per scan (the scans are cast from the turned heading).
 inline diagnosis::StaticScans staticRoom(const RangeEffects& fx, const NoiseModel& noise, std::uint64_t seed, int scans = 150,
                                            double step_error_fraction = 0.0, double turn_rad_per_scan = 0.0) {
   const Scene s = staticRoomScene(fx, noise, scans, step_error_fraction);
   const auto stops = simulation::planStops(s, seed);
-  diagnosis::StaticScans out;
-  out.scans = static_cast<std::size_t>(scans);
-  out.beams_per_scan = 360;
-  out.range_min_m = 0.15;
-  out.range_max_m = 12.0;
+  diagnosis::StaticScans out = roomScans(scans);
   for (std::size_t k = 0; k < out.scans; ++k) {
     TruthStop stop = stops[0];
     stop.actual.yaw_rad += turn_rad_per_scan * static_cast<double>(k);
@@ -196,11 +202,7 @@ inline diagnosis::StaticScans staticRoomWithTails(TailWhere where, double rate, 
                                                   const RangeEffects& fx = {}, int scans = 150) {
   const Scene s = staticRoomScene(fx, squaredNoise(0.0015), scans, 0.0);
   const auto stops = simulation::planStops(s, seed);
-  diagnosis::StaticScans out;
-  out.scans = static_cast<std::size_t>(scans);
-  out.beams_per_scan = 360;
-  out.range_min_m = 0.15;
-  out.range_max_m = 12.0;
+  diagnosis::StaticScans out = roomScans(scans);
   out.has_intensity = true;
   std::normal_distribution<double> normal(0.0, 1.0);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
@@ -218,6 +220,18 @@ inline diagnosis::StaticScans staticRoomWithTails(TailWhere where, double rate, 
     }
   }
   return out;
+}
+
+/// The class of beams holding the most posterior tail readings ("" when none was counted).
+inline std::string dominantTailClass(const diagnosis::TailAttribution& tails) {
+  std::string top;
+  double most = -1.0;
+  for (const auto& [cls, n] : tails.tail_readings_by_class)
+    if (n > most) {
+      most = n;
+      top = cls;
+    }
+  return top;
 }
 
 /// One static case: an effect hidden in the room and the causes the truth allows.

@@ -675,13 +675,7 @@ TEST_P(StaticTails, DiagnoseNamesThePhysicalCauseAndTheBeamsThatCarryTheTails) {
     const auto r = diagnoseStatic(test::staticRoomWithTails(c.where, 0.10, 0.05, seed), dc);
     ASSERT_EQ(r.status, "ok") << r.message;
     ASSERT_TRUE(r.tails.fitted) << r.tails.note;
-    std::string top;
-    double most = -1.0;
-    for (const auto& [k, v] : r.tails.tail_readings_by_class)
-      if (v > most) {
-        most = v;
-        top = k;
-      }
+    const std::string top = test::dominantTailClass(r.tails);
     right += r.primary_cause == c.effect && r.tails.cause == c.effect && top == c.cls;
     log += " seed " + std::to_string(seed) + ": " + r.primary_cause + ", tails " + r.tails.cause + ", class " + top + ";";
   }
