@@ -136,9 +136,12 @@ TEST(Inversion, LsTakesTheRootNearestTheReadingAmongAllRootsInTheWindow) {
 
 TEST(Inversion, MlTakesTheMostLikelyDistanceInTheWindow) {
   // The answer must be the likelihood's maximum on a 0.1 mm grid (or better), also where the
-  // noise is large enough for distant stationary points to matter.
+  // noise is large enough for distant stationary points to matter, and where f - 4 =
+  // (d - 2)(d - 4)(d - 6) / 2 gives readings near 4 m three distances: the likelihood then
+  // prefers the nearest (about 2 m), while LS takes the one nearest the reading (about 4 m).
   for (const double sigma_e : {0.002, 0.02, 0.1}) {
-    for (const auto& alpha : std::vector<std::vector<double>>{{0.03, 0.98, 0.004, -0.0001}, {0.0525, 0.8838, 0.0584}}) {
+    for (const auto& alpha : std::vector<std::vector<double>>{
+             {0.03, 0.98, 0.004, -0.0001}, {0.0525, 0.8838, 0.0584}, {-20.0, 22.0, -6.0, 0.5}}) {
       RangeModel m;
       m.bias.alpha = alpha;
       m.noise.kind = NoiseKind::squared;
