@@ -605,14 +605,31 @@ bool refuseJoint(CalibrationModel& m, const JointResult& j, const LandmarkObserv
                 "closed-form";
     return true;
   }
+  const auto [near, far] = std::minmax_element(j.distances_m.begin(), j.distances_m.end());
+  if (far == j.distances_m.end()) return false;
+  const std::string advice =
+      " (too little geometry to pin it down: record more stops along a longer line past more poles, or use --method "
+      "closed-form)";
+  if (!(*near > 0.0)) {
+    // Collapsed: the landmarks moved onto the stops, and a bias of any slope explains readings at
+    // zero distance (seen on a YDLIDAR recording of four poles: slope -776).
+    m.status = "joint_failed";
+    m.message = "the joint refinement collapsed: it places a landmark at a stop (a beam distance of " +
+                std::to_string(*near) + " m)" + advice;
+    return true;
+  }
+  if (!isMonotone(j.model.bias, *near, *far)) {
+    m.status = "joint_failed";
+    m.message = "the joint refinement's bias falls with distance somewhere in " + std::to_string(*near) + "-" +
+                std::to_string(*far) + " m, where it saw the landmarks, so no reading there has one distance" + advice;
+    return true;
+  }
   if (!(obs.range_max_m < 1e8)) return false;
   const double limit = 1.5 * obs.range_max_m + 0.5;
-  const auto far = std::max_element(j.distances_m.begin(), j.distances_m.end());
-  if (far == j.distances_m.end() || *far <= limit) return false;
+  if (*far <= limit) return false;
   m.status = "joint_failed";
   m.message = "the joint refinement ran away: it places a landmark " + std::to_string(*far) +
-              " m from a stop, beyond the sensor's range limit of " + std::to_string(obs.range_max_m) +
-              " m (too little geometry to pin it down: add landmarks or stops, or use --method closed-form)";
+              " m from a stop, beyond the sensor's range limit of " + std::to_string(obs.range_max_m) + " m" + advice;
   return true;
 }
 
