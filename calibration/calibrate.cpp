@@ -358,6 +358,27 @@ void addPlausibilityWarnings(CalibrationModel& m, const JointResult* j) {
       m.warnings.push_back(text);
     }
   }
+  // Landmarks the data do not locate: with a centre uncertain by decimetres the range offset
+  // can trade against where the landmark stands, and a small standard error of the offset does
+  // not mean it is right. Every CARMEN office log gives this (median centre standard error
+  // 0.4-90 m: its "landmarks" are furniture seen from few directions), the simulated pole fields
+  // about 1 cm.
+  if (j && !j->centre_covariance.empty()) {
+    std::vector<double> se;
+    for (const auto& [id, c] : j->centre_covariance)
+      se.push_back(std::sqrt(std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(c).eigenvalues()(1))));
+    const double typical = median(se);
+    if (typical > kUnlocatedLandmarkM) {
+      std::snprintf(text, sizeof text,
+                    "the landmarks' positions are not pinned down by the data (median standard error of a centre "
+                    "%.2f m over %zu landmarks, against about 0.01 m for round poles seen from several stops): the "
+                    "offset can trade against where they stand, so its standard error understates its error; check "
+                    "that lidarcal detect finds round poles of one radius, record stops all around them, or "
+                    "calibrate against measured distances (--reference)",
+                    typical, se.size());
+      m.warnings.push_back(text);
+    }
+  }
   // Corrections far beyond what lidars are built to: more often landmarks that are not round
   // poles of one radius (corners, door frames) than a sensor that far off. The bound leaves
   // room for the strongly biased triangulation sensor of Alhashimi et al. 2021's simulations
