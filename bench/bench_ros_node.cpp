@@ -8,9 +8,10 @@
 // reading a root search).
 //
 //   build/bench/bench_ros_node        (Time = per scan)
-// Measured (Release, 2 shared cores, time per scan): steady 8-9 us / 360 beams and 25 us / 1081
-// beams whatever the model; cold, LS order 2: 45 / 113 us; LS order 3: 0.45 / 1.3 ms; ML order
-// 3: 1.4 / 4.0 ms.
+// Measured (Release, 2 shared cores, time per scan, medians of 3): steady 10 us / 360 beams and
+// 31 us / 1081 beams whatever the model; cold, LS order 2: 45 / 130 us; LS order 3: 48 / 136 us;
+// ML order 3: 121 / 346 us. The same bench built at 12f7489 (eigenvalue roots per reading), run
+// beside it: LS order 3 581 / 1678 us, ML order 3 1776 / 5130 us.
 
 #include <benchmark/benchmark.h>
 

@@ -358,6 +358,27 @@ void addPlausibilityWarnings(CalibrationModel& m, const JointResult* j) {
       m.warnings.push_back(text);
     }
   }
+  // Landmarks the data do not locate: with a centre uncertain by decimetres the range offset
+  // can trade against where the landmark stands, and a small standard error of the offset does
+  // not mean it is right. Every CARMEN office log gives this (median centre standard error
+  // 0.4-90 m: its "landmarks" are furniture seen from few directions), the simulated pole fields
+  // about 1 cm.
+  if (j && !j->centre_covariance.empty()) {
+    std::vector<double> se;
+    for (const auto& [id, c] : j->centre_covariance)
+      se.push_back(std::sqrt(std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(c).eigenvalues()(1))));
+    const double typical = median(se);
+    if (typical > kUnlocatedLandmarkM) {
+      std::snprintf(text, sizeof text,
+                    "the landmarks' positions are not pinned down by the data (median standard error of a centre "
+                    "%.2f m over %zu landmarks, against about 0.01 m for round poles seen from several stops): the "
+                    "offset can trade against where they stand, so its standard error understates its error; check "
+                    "that lidarcal detect finds round poles of one radius, record stops all around them, or "
+                    "calibrate against measured distances (--reference)",
+                    typical, se.size());
+      m.warnings.push_back(text);
+    }
+  }
   // Corrections far beyond what lidars are built to: more often landmarks that are not round
   // poles of one radius (corners, door frames) than a sensor that far off. The bound leaves
   // room for the strongly biased triangulation sensor of Alhashimi et al. 2021's simulations
@@ -605,14 +626,31 @@ bool refuseJoint(CalibrationModel& m, const JointResult& j, const LandmarkObserv
                 "closed-form";
     return true;
   }
+  const auto [near, far] = std::minmax_element(j.distances_m.begin(), j.distances_m.end());
+  if (far == j.distances_m.end()) return false;
+  const std::string advice =
+      " (too little geometry to pin it down: record more stops along a longer line past more poles, or use --method "
+      "closed-form)";
+  if (!(*near > 0.0)) {
+    // Collapsed: the landmarks moved onto the stops, and a bias of any slope explains readings at
+    // zero distance (seen on a YDLIDAR recording of four poles: slope -776).
+    m.status = "joint_failed";
+    m.message = "the joint refinement collapsed: it places a landmark at a stop (a beam distance of " +
+                std::to_string(*near) + " m)" + advice;
+    return true;
+  }
+  if (!isMonotone(j.model.bias, *near, *far)) {
+    m.status = "joint_failed";
+    m.message = "the joint refinement's bias falls with distance somewhere in " + std::to_string(*near) + "-" +
+                std::to_string(*far) + " m, where it saw the landmarks, so no reading there has one distance" + advice;
+    return true;
+  }
   if (!(obs.range_max_m < 1e8)) return false;
   const double limit = 1.5 * obs.range_max_m + 0.5;
-  const auto far = std::max_element(j.distances_m.begin(), j.distances_m.end());
-  if (far == j.distances_m.end() || *far <= limit) return false;
+  if (*far <= limit) return false;
   m.status = "joint_failed";
   m.message = "the joint refinement ran away: it places a landmark " + std::to_string(*far) +
-              " m from a stop, beyond the sensor's range limit of " + std::to_string(obs.range_max_m) +
-              " m (too little geometry to pin it down: add landmarks or stops, or use --method closed-form)";
+              " m from a stop, beyond the sensor's range limit of " + std::to_string(obs.range_max_m) + " m" + advice;
   return true;
 }
 

@@ -70,10 +70,14 @@ CalibrationModel calibrate(const LandmarkObservations& obs, const CalibrationCon
 /// draw a warning.
 inline constexpr double kImplausibleCorrection = 0.25;
 
+/// A median standard error of the landmark centres above this, metres, draws a warning.
+inline constexpr double kUnlocatedLandmarkM = 0.1;
+
 /// What a user should know before trusting a self-calibrated model, appended to m.warnings:
 /// an offset whose correlation with the estimated pole radius exceeds 0.9 in magnitude (from
-/// `j`, which may be null; sets m.offset_radius_correlation), and corrections |f(d) - d| above
-/// kImplausibleCorrection of max(d, 0.5 m) inside m.fitted_range_m.
+/// `j`, which may be null; sets m.offset_radius_correlation), landmark centres whose median
+/// standard error (largest axis, from `j`) exceeds kUnlocatedLandmarkM, and corrections
+/// |f(d) - d| above kImplausibleCorrection of max(d, 0.5 m) inside m.fitted_range_m.
 void addPlausibilityWarnings(CalibrationModel& m, const JointResult* j);
 
 /// The oracle of seed 004: the same fits against known distances (pairs' d_m are true).

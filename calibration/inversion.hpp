@@ -1,13 +1,18 @@
 #pragma once
 // Filtering stage (seed 000 section 3.2 phase 3, seed 004 section 5.2): the distance d that
 // explains a raw reading y under the calibrated model.
-//   LS (seed 004 eq. 30, seed 000 eq. 30): a root of f(d) = y; closed form for n <= 2,
-//       polynomial roots above; the root inside the window nearest the reading.
+//   LS (seed 004 eq. 30, seed 000 eq. 30): a root of f(d) = y; the root inside the window
+//       nearest the reading.
 //   ML (seed 004 eqs. 28-29): a root of (y - f(d)) (y - f(d) + d f'(d) / 2) = sigma_e^2 d^4,
 //       the stationary points of the likelihood of model (21); the most likely one.
+// Roots are found inside the window only: the roots of the derivative split it into pieces on
+// which the polynomial is monotone, and each piece with a sign change is solved by Newton's
+// method kept inside its bracket. For LS the pieces depend on the model alone and are computed
+// once, so a reading costs a few polynomial evaluations (the ROS node's budget, issue 21).
 
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "common/range_model.hpp"
 
@@ -40,6 +45,7 @@ class RangeInverter {
   std::optional<double> invertMl(double y_m) const;
   RangeModel model_;
   InversionConfig config_;
+  std::vector<double> ls_pieces_;  ///< the window split where f' = 0: f - y is monotone on each piece
 };
 
 /// Whether f is strictly increasing on [d_min, d_max] (else the inversion is ambiguous);

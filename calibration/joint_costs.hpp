@@ -3,7 +3,6 @@
 // residuals of one beam reading and of the pose priors, and the geometry of a beam at an
 // estimate. The model they implement is documented in joint_refinement.hpp.
 
-#include <array>
 #include <cmath>
 
 #include <ceres/ceres.h>
@@ -22,6 +21,28 @@ struct BeamRangeCost {
     const T a = pose[2] + T(angle_rad);
     const T d = rayCircleDistance(pose[0], pose[1], a, centre[0], centre[1], radius[0]);
     residual[0] = (T(y_m) - evaluatePolynomial<N>(alpha, d)) * T(inv_sigma);
+    return true;
+  }
+};
+
+/// A measured target (KnownRange): its mean reading against the mean of f over its beams' true
+/// distances (on a pole from its centre and the radius block; on a wall as given).
+template <int N>
+struct KnownRangeCost {
+  const KnownRange* target;
+  double inv_sigma;
+  template <typename T>
+  bool operator()(const T* alpha, const T* radius, T* residual) const {
+    T sum = T(0);
+    double n = 0.0;
+    for (const KnownRange::Beam& b : target->beams) {
+      const T d = target->pole ? rayCircleDistance(T(0), T(0), T(b.angle_rad), T(target->centre_x_m), T(target->centre_y_m),
+                                                   radius[0])
+                               : T(b.distance_m);
+      sum += T(b.count) * (T(b.mean_reading_m) - evaluatePolynomial<N>(alpha, d));
+      n += b.count;
+    }
+    residual[0] = sum / T(n) * T(inv_sigma);
     return true;
   }
 };
@@ -109,6 +130,7 @@ struct MotionPriorCost {
 /// std::invalid_argument for an order outside 1..6.
 ceres::CostFunction* beamCost(int order, double angle, double y, double inv_sigma);
 ceres::CostFunction* effectCost(int order, double angle, double y, double inv_sigma, double t_rel);
+ceres::CostFunction* knownRangeCost(int order, const KnownRange& k, double inv_sigma);
 
 /// The commanded step from stop a to stop b, in a's frame.
 Pose2 commandedStep(const Pose2& a, const Pose2& b);

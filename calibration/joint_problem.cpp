@@ -67,6 +67,11 @@ ceres::CostFunction* makeBeamCost(double angle, double y, double inv_sigma) {
 }
 
 template <int N>
+ceres::CostFunction* makeKnownRangeCost(const KnownRange& k, double inv_sigma) {
+  return new ceres::AutoDiffCostFunction<KnownRangeCost<N>, 1, N, 1>(new KnownRangeCost<N>{&k, inv_sigma});
+}
+
+template <int N>
 ceres::CostFunction* makeEffectCost(double angle, double y, double inv_sigma, double t_rel) {
   return new ceres::AutoDiffCostFunction<EffectBeamCost<N>, 1, 3, 2, 1, N, 1, 3>(
       new EffectBeamCost<N>{angle, y, inv_sigma, t_rel});
@@ -94,6 +99,18 @@ ceres::CostFunction* effectCost(int order, double angle, double y, double inv_si
     case 5: return makeEffectCost<5>(angle, y, inv_sigma, t_rel);
     case 6: return makeEffectCost<6>(angle, y, inv_sigma, t_rel);
     case 7: return makeEffectCost<7>(angle, y, inv_sigma, t_rel);
+    default: throw std::invalid_argument("refineJoint: order must be 1..6");
+  }
+}
+
+ceres::CostFunction* knownRangeCost(int order, const KnownRange& k, double inv_sigma) {
+  switch (order + 1) {
+    case 2: return makeKnownRangeCost<2>(k, inv_sigma);
+    case 3: return makeKnownRangeCost<3>(k, inv_sigma);
+    case 4: return makeKnownRangeCost<4>(k, inv_sigma);
+    case 5: return makeKnownRangeCost<5>(k, inv_sigma);
+    case 6: return makeKnownRangeCost<6>(k, inv_sigma);
+    case 7: return makeKnownRangeCost<7>(k, inv_sigma);
     default: throw std::invalid_argument("refineJoint: order must be 1..6");
   }
 }
@@ -329,6 +346,7 @@ void JointProblem::addResiduals(ceres::Problem& problem, bool robust) {
                  std::sqrt(std::max(weight_[i], 1e-6)) / sigma_[i], 1.0);
     out_.reading_residuals = readings_.size();
   }
+  addKnownRanges(problem, robust);
   addPosePriors(problem);
   if (fx_.anyMean()) fixInactiveTerms(problem);
   fixKnownGeometry(problem);
@@ -381,6 +399,23 @@ bool JointProblem::addPooledReadings(ceres::Problem& problem, bool robust) {
   }
   out_.reading_residuals = groups.size();
   return true;
+}
+
+/// The measured targets (JointConfig::known_ranges, seed 004 section 5 beside the self-calibration):
+/// the standard error of a target's mean reading is the readings' sigma(d) / sqrt(n) and its tape
+/// error carried through the slope, f'(d) tape_sigma, both at the current estimate.
+void JointProblem::addKnownRanges(ceres::Problem& problem, bool robust) {
+  RangeModel current = out_.model;
+  current.bias.alpha = alphaVector();
+  for (const KnownRange& k : config_.known_ranges) {
+    const double n = k.count();
+    if (!(n > 0.0)) continue;
+    const double d = k.meanDistance(*radius_), reading = std::max(current.noise.stddev(d, current.bias), 1e-4);
+    const double tape = current.bias.derivative(d) * k.tape_sigma_m;
+    const double sigma = std::sqrt(reading * reading / n + tape * tape);
+    ceres::LossFunction* loss = robust ? new ceres::HuberLoss(config_.huber_sigmas) : nullptr;
+    problem.AddResidualBlock(knownRangeCost(config_.order, k, 1.0 / std::max(sigma, 1e-6)), loss, alpha_, radius_);
+  }
 }
 
 /// Each stop tied to its commanded pose (seed 000 eq. 8; with the odometry scale, to the scaled

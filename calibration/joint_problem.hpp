@@ -59,6 +59,7 @@ class JointProblem {
   void addReading(ceres::Problem& problem, bool robust, const Reading& r, double angle, double y, double inv,
                   double count);
   bool addPooledReadings(ceres::Problem& problem, bool robust);
+  void addKnownRanges(ceres::Problem& problem, bool robust);
   void addPosePriors(ceres::Problem& problem);
   void fixInactiveTerms(ceres::Problem& problem);
   void fixKnownGeometry(ceres::Problem& problem);

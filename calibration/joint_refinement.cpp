@@ -25,6 +25,22 @@ const char* toString(MotionPrior m) {
   return "unknown";
 }
 
+double KnownRange::count() const {
+  double n = 0.0;
+  for (const Beam& b : beams) n += b.count;
+  return n;
+}
+
+double KnownRange::meanDistance(double radius_m) const {
+  double sum = 0.0, n = 0.0;
+  for (const Beam& b : beams) {
+    const double d = pole ? rayCircleDistance(0.0, 0.0, b.angle_rad, centre_x_m, centre_y_m, radius_m) : b.distance_m;
+    sum += b.count * d;
+    n += b.count;
+  }
+  return n > 0.0 ? sum / n : 0.0;
+}
+
 bool continuousMotion(const LandmarkObservations& obs, const JointConfig& config) {
   if (obs.commanded.size() < static_cast<std::size_t>(std::max(config.motion_min_stops, 1))) return false;
   // Distinct scans with sightings per stop (sightings come scan by scan, but do not rely on it).

@@ -68,6 +68,27 @@ enum class MotionPrior {
 };
 const char* toString(MotionPrior m);
 
+/// What a tape measure says about the range model at one measured target (REF.json `distances`,
+/// issue 17): the readings of the beams on it and their true distances. On a pole the tape gives
+/// the distance to its centre, so each beam's distance follows from the centre (on the detected
+/// bearing) and the pole radius, which the refinement estimates with the rest; on a wall it is
+/// given. One residual per target, the mean reading against the mean of f over its beams,
+/// because the beams of one target share its one tape error.
+struct KnownRange {
+  struct Beam {
+    double angle_rad = 0.0;       ///< beam angle in the sensor frame, radians
+    double distance_m = 0.0;      ///< true distance (walls; on a pole it follows from the radius)
+    double count = 0.0;           ///< readings of this beam
+    double mean_reading_m = 0.0;  ///< their mean, metres
+  };
+  bool pole = false;              ///< beam distances from the centre and the common radius
+  double centre_x_m = 0.0, centre_y_m = 0.0;  ///< pole centre in the sensor frame, metres
+  std::vector<Beam> beams;
+  double tape_sigma_m = 0.002;    ///< standard deviation of the measured distance, metres
+  double count() const;           ///< readings behind the mean
+  double meanDistance(double radius_m) const;  ///< mean true distance of the readings, metres
+};
+
 struct JointConfig {
   int order = 2;                  ///< bias polynomial order n (>= 1)
   NoiseKind noise = NoiseKind::squared;  ///< noise law re-estimated between solves: squared, polynomial or constant
@@ -121,6 +142,10 @@ struct JointConfig {
   std::map<int, Eigen::Vector2d> known_centres;
   /// Measured sensor poses (stop index -> pose), held fixed (REF.json `stops`).
   std::map<std::size_t, Pose2> known_poses;
+  /// Measured distances (REF.json `distances` at some stops): each adds the seed 004 section 5
+  /// term (mean reading - mean f(d)) / sqrt(sigma(d)^2 / n + (f'(d) tape_sigma)^2) to the fit, so
+  /// the tape's scale enters beside the self-calibration's geometry (and, on poles, the radius).
+  std::vector<KnownRange> known_ranges;
   void validate() const;          ///< throws std::invalid_argument
 };
 

@@ -119,7 +119,7 @@ void landmarkReadings(const LandmarkObservations& obs, const ReferenceDistance& 
       if (std::abs(perp) > c.lateral_fraction * r) continue;
       const double d = rayCircleDistance(0.0, 0.0, b.angle_rad, cx, cy, r);
       if (!(d > 0.0)) continue;
-      out.push_back({m.entry, s.stop, s.scan, b.beam, d, b.range_m});
+      out.push_back({m.entry, s.stop, s.scan, b.beam, d, b.range_m, b.angle_rad});
       ++m.readings;
     }
   }
@@ -161,7 +161,7 @@ void wallReadings(const LandmarkObservations& obs, const ReferenceDistance& e, c
     for (const auto& b : ws.beams) {
       const double incidence = wrapAngle(b.angle_rad - m.bearing_rad);
       if (!std::isfinite(b.range_m) || std::abs(incidence) > c.max_wall_incidence_rad) continue;
-      out.push_back({m.entry, ws.stop, ws.scan, b.beam, e.distance_m / std::cos(incidence), b.range_m});
+      out.push_back({m.entry, ws.stop, ws.scan, b.beam, e.distance_m / std::cos(incidence), b.range_m, b.angle_rad});
       ++m.readings;
     }
   }
@@ -302,6 +302,36 @@ ClusteredFit fitClustered(const std::vector<double>& d, const std::vector<double
     fit.covariance = jack * ((groups - 1.0) / groups);
   }
   return fit;
+}
+
+std::vector<KnownRange> knownRanges(const ReferenceReadings& known, const Reference& ref) {
+  // Per entry, the readings of each beam pooled (beam angles to 1e-5 rad, as the joint
+  // refinement pools repeated scans).
+  std::map<std::size_t, std::map<long long, KnownRange::Beam>> beams;
+  for (const KnownReading& r : known.readings) {
+    KnownRange::Beam& b = beams[r.entry][std::llround(r.angle_rad * 1e5)];
+    b.angle_rad = r.angle_rad;
+    b.distance_m += r.d_m;
+    b.mean_reading_m += r.y_m;
+    b.count += 1.0;
+  }
+  std::vector<KnownRange> out;
+  for (const auto& m : known.matches) {
+    const auto it = beams.find(m.entry);
+    if (!m.ok() || it == beams.end() || m.entry >= ref.distances.size()) continue;
+    KnownRange k;
+    k.pole = m.target == ReferenceTarget::landmark;
+    k.centre_x_m = m.reference_m * std::cos(m.bearing_rad);  // as landmarkReadings places it
+    k.centre_y_m = m.reference_m * std::sin(m.bearing_rad);
+    k.tape_sigma_m = ref.distances[m.entry].sigma_m;
+    for (auto& [key, b] : it->second) {
+      b.distance_m /= b.count;
+      b.mean_reading_m /= b.count;
+      k.beams.push_back(b);
+    }
+    out.push_back(std::move(k));
+  }
+  return out;
 }
 
 CalibrationModel calibrateWithReference(const std::vector<KnownReading>& readings, const CalibrationConfig& config,

@@ -21,6 +21,7 @@
 #include <Eigen/Core>
 
 #include "calibration/calibrate.hpp"
+#include "calibration/joint_refinement.hpp"
 #include "common/calibration_model.hpp"
 #include "common/landmark_observations.hpp"
 #include "common/reference.hpp"
@@ -70,6 +71,7 @@ struct KnownReading {
   std::uint32_t beam = 0;  ///< beam index (kUnknownBeam when not comparable across scans)
   double d_m = 0.0;       ///< true distance along the beam, metres
   double y_m = 0.0;       ///< raw reading, metres
+  double angle_rad = 0.0;  ///< beam angle in the sensor frame, radians
 };
 
 struct ReferenceReadings {
@@ -101,6 +103,10 @@ ClusteredFit fitClustered(const std::vector<double>& d, const std::vector<double
 /// seed 004's test, the order by leave-one-stop-out cross-validation, standard errors clustered
 /// by stop. The result's status says why not when the readings cannot support a model (fewer
 /// than 3 stops, or fewer stops than coefficients + 1).
+/// The readings of each matched reference distance summarised for the joint refinement (one
+/// KnownRange per entry with readings; its tape sigma from REF.json).
+std::vector<KnownRange> knownRanges(const ReferenceReadings& known, const Reference& ref);
+
 CalibrationModel calibrateWithReference(const std::vector<KnownReading>& readings, const CalibrationConfig& config,
                                         double range_min_m = 0.0, double range_max_m = 1e9);
 

@@ -23,10 +23,18 @@ namespace lidarcal::pipeline {
 namespace {
 
 struct CalibrateCommand {
-  std::string seq, out, truth, frame = "true", report, reference;
+  std::string seq, out, truth, frame = "true", report, reference, reference_fit = "auto";
   bool overwrite = false;
   std::shared_ptr<CalibrationOptions> options = std::make_shared<CalibrationOptions>();
 };
+
+/// --reference-fit: distances alone (seed 004 section 5) or inside the self-calibration. auto:
+/// alone when every stop has a measured distance and nothing else is given, combined otherwise.
+bool combineWithSelfCalibration(const Reference& ref, std::size_t stops, const std::string& mode) {
+  if (mode == "distances") return false;
+  if (mode == "combined") return true;
+  return !referenceCoversEveryStop(ref, stops) || !ref.landmarks.empty() || !ref.stops.empty();
+}
 
 void runCalibrate(const CalibrateCommand& c) {
   io::checkOutsideInput(c.seq, c.out);
@@ -56,12 +64,22 @@ void runCalibrate(const CalibrateCommand& c) {
     progress.finish();
     model = result.model;
     survey = surveyTable(found, ref);
+  } else if (measured && combineWithSelfCalibration(*measured, seq.stops.size(), c.reference_fit)) {
+    // Distances at some stops: in the self-calibration's likelihood, beside the poles.
+    const Reference& ref = *measured;
+    StageBars progress;
+    std::vector<SurveyMatch> found;
+    const SequenceCalibration result = calibrateSequenceWithDistancesAndSelf(
+        seq, ref, c.reference, detectionConfig(*c.options), config, &matches, &found, std::ref(progress));
+    progress.finish();
+    model = result.model;
+    survey = surveyTable(found, ref);
   } else if (measured) {
     // Against the distances the user measured (seed 004 section 5).
     const Reference& ref = *measured;
     if (!ref.landmarks.empty() || !ref.stops.empty())
-      std::fprintf(stderr, "lidarcal: warning: %s: with distances given, the surveyed landmarks and measured stops are "
-                           "checked but not used (combining both is not implemented); remove the distances to use them\n",
+      std::fprintf(stderr, "lidarcal: warning: %s: --reference-fit distances fits the distances alone: the surveyed "
+                           "landmarks and measured stops are checked but not used\n",
                    c.reference.c_str());
     Progress progress("detect", seq.scans.size());
     const SequenceCalibration result = calibrateSequenceWithReference(
@@ -120,11 +138,19 @@ void addCalibrateCommand(CLI::App& app) {
                   "the best a self-calibration can reach")
       ->check(CLI::IsMember({"true", "commanded"}))
       ->capture_default_str();
-  sub->add_option("--reference", c->reference,
+  CLI::Option* reference = sub->add_option("--reference", c->reference,
                   "REF.json with what you measured (docs/FORMAT.md, \"Reference measurements\"): distances (tape, "
                   "laser meter) fit the range model to them (Alhashimi et al. 2016, section 5); without distances, "
                   "surveyed landmark centres and measured stop poses are held fixed in the self-calibration")
       ->excludes(truth);
+  sub->add_option("--reference-fit", c->reference_fit,
+                  "With --reference distances: distances (fit the range model to them alone; every measured stop "
+                  "counts), combined (add them to the self-calibration of the whole sequence, with the surveyed "
+                  "landmarks and stops held fixed), or auto: distances when every stop has one and no landmarks or "
+                  "stops are given, combined otherwise")
+      ->check(CLI::IsMember({"auto", "distances", "combined"}))
+      ->capture_default_str()
+      ->needs(reference);
   sub->add_option("--report", c->report,
                   "Also write a report (Markdown + PNG plots) into this new directory (not with --truth)")
       ->excludes(truth);

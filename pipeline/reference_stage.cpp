@@ -4,7 +4,6 @@
 #include <cmath>
 #include <cstdio>
 #include <optional>
-
 #include <set>
 
 #include "calibration/filtering.hpp"
@@ -83,6 +82,25 @@ ReferenceObservations observeReference(const io::Sequence& seq, const Reference&
   return out;
 }
 
+void requireEveryDistanceFound(const calibration::ReferenceReadings& known, const std::filesystem::path& ref_file) {
+  std::string unmatched;
+  std::size_t failures = 0;
+  for (const auto& m : known.matches)
+    if (!m.ok()) {
+      if (failures++ < 5) unmatched += (unmatched.empty() ? "" : "; ") + std::string("distances[") + std::to_string(m.entry) + "]: " + m.status;
+    }
+  if (failures > 5) unmatched += "; and " + std::to_string(failures - 5) + " more";
+  if (failures > 0)
+    throw DataError(ref_file.string(), "distances", unmatched,
+                    "check the stop numbers (lidarcal info), give bearing_rad to pick the target, or remove the entry");
+}
+
+bool referenceCoversEveryStop(const Reference& ref, std::size_t stops) {
+  std::set<std::size_t> measured;
+  for (const auto& d : ref.distances) measured.insert(d.stop);
+  return measured.size() == stops;
+}
+
 SequenceCalibration calibrateSequenceWithReference(const io::Sequence& seq, const Reference& ref,
                                            const std::filesystem::path& ref_file,
                                            const detectors::SequenceDetectionConfig& detection,
@@ -95,16 +113,7 @@ SequenceCalibration calibrateSequenceWithReference(const io::Sequence& seq, cons
                      "add the distances you measured (docs/FORMAT.md, \"Reference measurements\")");
   ReferenceObservations ro = observeReference(seq, ref, referenceDetection(detection), scanLoader(seq), on_scan);
   if (matches) *matches = ro.known.matches;
-  std::string unmatched;
-  std::size_t failures = 0;
-  for (const auto& m : ro.known.matches)
-    if (!m.ok()) {
-      if (failures++ < 5) unmatched += (unmatched.empty() ? "" : "; ") + std::string("distances[") + std::to_string(m.entry) + "]: " + m.status;
-    }
-  if (failures > 5) unmatched += "; and " + std::to_string(failures - 5) + " more";
-  if (failures > 0)
-    throw DataError(ref_file.string(), "distances", unmatched,
-                    "check the stop numbers (lidarcal info), give bearing_rad to pick the target, or remove the entry");
+  requireEveryDistanceFound(ro.known, ref_file);
   SequenceCalibration out;
   out.observations = std::move(ro.observations);
   out.model = calibration::calibrateWithReference(ro.known.readings, config, out.observations.range_min_m,
@@ -194,6 +203,27 @@ SequenceCalibration calibrateSequenceWithSurvey(const io::Sequence& seq, const R
   };
   SequenceCalibration out = calibrateSequence(seq, det, cfg, progress, adjust);
   if (matches) *matches = found;
+  return out;
+}
+
+SequenceCalibration calibrateSequenceWithDistancesAndSelf(const io::Sequence& seq, const Reference& ref,
+                                                         const std::filesystem::path& ref_file,
+                                                         const detectors::SequenceDetectionConfig& detection,
+                                                         const calibration::CalibrationConfig& config,
+                                                         std::vector<calibration::ReferenceMatch>* matches,
+                                                         std::vector<SurveyMatch>* survey, const NamedProgress& progress) {
+  if (config.method != calibration::Method::joint)
+    throw InputError(ref_file.string(), "distances",
+                     "measured at only some stops (or given with surveyed landmarks or stops) are combined with the "
+                     "self-calibration in the joint refinement, which --method closed-form skips",
+                     "use --method joint, or --reference-fit distances to fit the measured distances alone");
+  const ReferenceObservations ro = observeReference(seq, ref, referenceDetection(detection), scanLoader(seq));
+  if (matches) *matches = ro.known.matches;
+  requireEveryDistanceFound(ro.known, ref_file);
+  calibration::CalibrationConfig cfg = config;
+  cfg.joint.known_ranges = calibration::knownRanges(ro.known, ref);
+  SequenceCalibration out = calibrateSequenceWithSurvey(seq, ref, ref_file, detection, cfg, survey, progress);
+  if (out.model.status == "ok") out.model.method = "joint+reference";
   return out;
 }
 

@@ -74,6 +74,26 @@ SequenceCalibration calibrateSequenceWithSurvey(const io::Sequence& seq, const R
                                                 std::vector<SurveyMatch>* matches = nullptr,
                                                 const NamedProgress& progress = {});
 
+/// Throws DataError naming every reference distance whose target was not found (with what to do).
+void requireEveryDistanceFound(const calibration::ReferenceReadings& known, const std::filesystem::path& ref_file);
+
+/// Whether every stop of the sequence has a measured distance (then seed 004's fit on the
+/// distances alone is the calibration; otherwise they join the self-calibration).
+bool referenceCoversEveryStop(const Reference& ref, std::size_t stops);
+
+/// Self-calibration of the whole sequence with the measured distances in the same likelihood
+/// (calibration::JointConfig::known_ranges: the tape's scale beside the poles' geometry) and the
+/// surveyed landmarks and measured stops of `ref` held fixed as in calibrateSequenceWithSurvey.
+/// For distances measured at only some stops (issue 17). Method "joint+reference". Throws
+/// InputError for --method closed-form, DataError for a distance whose target is not found.
+SequenceCalibration calibrateSequenceWithDistancesAndSelf(const io::Sequence& seq, const Reference& ref,
+                                                         const std::filesystem::path& ref_file,
+                                                         const detectors::SequenceDetectionConfig& detection,
+                                                         const calibration::CalibrationConfig& config,
+                                                         std::vector<calibration::ReferenceMatch>* matches = nullptr,
+                                                         std::vector<SurveyMatch>* survey = nullptr,
+                                                         const NamedProgress& progress = {});
+
 /// The matches as a Markdown table for stdout.
 std::string surveyTable(const std::vector<SurveyMatch>& matches, const Reference& ref);
 

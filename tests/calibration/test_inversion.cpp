@@ -1,7 +1,9 @@
 // Inversion of the bias (seed 004 section 5.2): LS round trip f(f^-1(y)) = y over the range
 // limits for every order, and ML satisfying eq. 28.
 
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -85,9 +87,90 @@ TEST(Inversion, ReadingWindowIsCheckedOnlyWhereReadingsCanFall) {
   EXPECT_NEAR(where, (1.0 - std::sqrt(0.28)) / 0.36, 1e-9);
 }
 
+// Brute force, independent of the inverter's root search: every sign change of f(d) - y on a
+// 0.1 mm grid, bisected to 1e-12 m; and the likelihood of model (21) maximised on the grid.
+std::vector<double> gridRoots(const BiasPolynomial& f, double y, double lo, double hi) {
+  std::vector<double> roots;
+  const double step = 1e-4;
+  for (double a = lo; a < hi; a += step) {
+    double b = std::min(a + step, hi), fa = f(a) - y;
+    if (fa == 0.0) roots.push_back(a);
+    if ((fa < 0.0) == (f(b) - y < 0.0)) continue;
+    for (int i = 0; i < 60; ++i) {
+      const double mid = 0.5 * (a + b);
+      ((f(mid) - y < 0.0) == (fa < 0.0) ? a : b) = mid;
+    }
+    roots.push_back(a);
+  }
+  return roots;
+}
+
+TEST(Inversion, LsTakesTheRootNearestTheReadingAmongAllRootsInTheWindow) {
+  // Non-monotone polynomials with one to three distances per reading inside [0, 8] m.
+  const std::vector<std::vector<double>> models = {{0.0, 1.0, -0.5, 0.06}, {0.05, 2.5, -0.25}, {0.02, 0.95, 0.03, 0.004},
+                                                   {-0.1, 1.6, -0.5, 0.04, 0.0006}};
+  for (const auto& alpha : models) {
+    RangeModel m;
+    m.bias.alpha = alpha;
+    InversionConfig c;
+    c.d_max_m = 8.0;
+    const RangeInverter inv(m, c);
+    int multiple = 0;  // readings with more than one distance in the window
+    for (double y = 0.05; y < 7.0; y += 0.0137) {
+      const std::vector<double> roots = gridRoots(m.bias, y, 0.0, 8.0);
+      multiple += roots.size() > 1;
+      const auto d = inv.invert(y);
+      ASSERT_EQ(d.has_value(), !roots.empty()) << "y = " << y;
+      if (!d) continue;
+      const double nearest = *std::min_element(roots.begin(), roots.end(), [&](double a, double b) {
+        return std::abs(a - y) < std::abs(b - y);
+      });
+      EXPECT_NEAR(*d, nearest, 1e-9) << "y = " << y;
+      EXPECT_NEAR(m.bias(*d), y, 1e-12 * std::max(1.0, std::abs(y))) << "to machine precision, y = " << y;
+    }
+    if (alpha[2] < 0.0) {
+      EXPECT_GT(multiple, 10) << "a falling part must give readings several distances (model " << &alpha - models.data() << ")";
+    }
+  }
+}
+
+TEST(Inversion, MlTakesTheMostLikelyDistanceInTheWindow) {
+  // The answer must be the likelihood's maximum on a 0.1 mm grid (or better), also where the
+  // noise is large enough for distant stationary points to matter, and where f - 4 =
+  // (d - 2)(d - 4)(d - 6) / 2 gives readings near 4 m three distances: the likelihood then
+  // prefers the nearest (about 2 m), while LS takes the one nearest the reading (about 4 m).
+  for (const double sigma_e : {0.002, 0.02, 0.1}) {
+    for (const auto& alpha : std::vector<std::vector<double>>{
+             {0.03, 0.98, 0.004, -0.0001}, {0.0525, 0.8838, 0.0584}, {-20.0, 22.0, -6.0, 0.5}}) {
+      RangeModel m;
+      m.bias.alpha = alpha;
+      m.noise.kind = NoiseKind::squared;
+      m.noise.sigma_e = sigma_e;
+      InversionConfig c;
+      c.method = InversionMethod::ml;
+      c.d_max_m = 12.0;
+      const RangeInverter inv(m, c);
+      const double s2 = sigma_e * sigma_e;
+      for (double y = 0.2; y < 9.0; y += 0.173) {
+        auto loglik = [&](double d) {
+          const double r = y - m.bias(d);
+          return -std::log(d * d) - r * r / (2.0 * s2 * std::pow(d, 4));
+        };
+        double grid_best = -1e300;
+        for (double d = 1e-4; d <= 12.0; d += 1e-4) grid_best = std::max(grid_best, loglik(d));
+        const auto d = inv.invert(y);
+        ASSERT_TRUE(d) << "y = " << y;
+        EXPECT_GE(loglik(*d), grid_best - 1e-9) << "sigma_e " << sigma_e << ", y = " << y;
+      }
+    }
+  }
+}
+
 TEST(Inversion, OrderZeroCannotBeInverted) {
   RangeModel m;
   m.bias.alpha = {1.0};
+  EXPECT_THROW(RangeInverter(m, InversionConfig{}), std::invalid_argument);
+  m.bias.alpha.assign(11, 0.1);  // order 10: above model.json's limit
   EXPECT_THROW(RangeInverter(m, InversionConfig{}), std::invalid_argument);
 }
 

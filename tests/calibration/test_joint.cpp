@@ -2,6 +2,8 @@
 // and end to end it comes close to the ground-truth fit.
 
 #include <cmath>
+#include <map>
+#include <utility>
 
 #include <gtest/gtest.h>
 
@@ -189,6 +191,63 @@ TEST(Calibrate, SurveyedCentresOrMeasuredPosesGiveTheScaleAnOdometryScaleErrorHi
     for (const auto& l : with_centres.landmarks) {
       EXPECT_DOUBLE_EQ(l.x_m, cfg.landmarks[static_cast<std::size_t>(l.id) - 1].x_m);
       EXPECT_DOUBLE_EQ(l.y_m, cfg.landmarks[static_cast<std::size_t>(l.id) - 1].y_m);
+    }
+  }
+}
+
+// Tape-measured distances at two stops only (too few for seed 004's fit on its own, which needs
+// three) combined with the self-calibration of the whole recording (JointConfig::known_ranges;
+// issue 17): the tape gives the scale an odometry scale error hides, the poles and the other
+// stops the shape. The truth the test controls: the beams' true distances from the simulation.
+TEST(Calibrate, DistancesMeasuredAtTwoStopsGiveTheSelfCalibrationItsScale) {
+  auto cfg = paperField(0.005, 0.2, 0.0005);
+  cfg.path.step_error_fraction = 0.06;
+  cfg.publish_radius = false;
+  const auto bias = [](const CalibrationModel& m, double d) { return m.model.bias(d) - d; };
+  const auto truthBias = [&](double d) { return cfg.model.bias(d) - d; };
+  for (std::uint64_t seed = 1; seed <= 3; ++seed) {
+    SCOPED_TRACE(seed);
+    const auto sample = simulation::simulateLandmarkLevel(cfg, seed);
+    CalibrationConfig cc = configFor(0.005, 0.2);
+    cc.joint.sigma_s_m = 0.2;
+    const CalibrationModel self = calibrate(sample.obs, cc);
+    // Every pole seen at the first and the last stop, its centre distance measured exactly (the
+    // tape's 2 mm only weighs it); the beams' distances then follow from the pole radius, which
+    // the refinement estimates.
+    const std::size_t last = sample.stops.size() - 1;
+    std::map<std::pair<std::size_t, int>, std::map<long long, KnownRange::Beam>> beams;
+    for (const Sighting& sg : sample.obs.sightings) {
+      if (sg.stop != 0 && sg.stop != last) continue;
+      for (const BeamReading& br : sg.beams) {
+        KnownRange::Beam& b = beams[{sg.stop, sg.landmark}][std::llround(br.angle_rad * 1e5)];
+        b.angle_rad = br.angle_rad;
+        b.mean_reading_m += br.range_m;
+        b.count += 1.0;
+      }
+    }
+    CalibrationConfig taped = cc;
+    for (auto& [key, by_angle] : beams) {
+      KnownRange k;
+      k.pole = true;
+      const auto& l = cfg.landmarks[static_cast<std::size_t>(key.second) - 1];
+      sample.stops[key.first].actual.toSensor(l.x_m, l.y_m, k.centre_x_m, k.centre_y_m);
+      for (auto& [angle, b] : by_angle) {
+        b.mean_reading_m /= b.count;
+        k.beams.push_back(b);
+      }
+      taped.joint.known_ranges.push_back(k);
+    }
+    ASSERT_GE(taped.joint.known_ranges.size(), 4u);
+    const CalibrationModel with_tape = calibrate(sample.obs, taped);
+    ASSERT_EQ(self.status, "ok") << self.message;
+    ASSERT_EQ(with_tape.status, "ok") << with_tape.message;
+    for (double d : {1.0, 2.0, 3.0}) {
+      SCOPED_TRACE(d);
+      const double e_self = std::abs(bias(self, d) - truthBias(d)), e_tape = std::abs(bias(with_tape, d) - truthBias(d));
+      EXPECT_LT(e_tape, 0.005);
+      if (d >= 2.0) {
+        EXPECT_LT(5.0 * e_tape, e_self) << "the tape must fix what the odometry scale error hides";
+      }
     }
   }
 }

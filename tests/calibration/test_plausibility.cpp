@@ -4,6 +4,7 @@
 #include <cmath>
 #include <string>
 
+#include <Eigen/Geometry>
 #include <gtest/gtest.h>
 
 #include "calibration/calibrate.hpp"
@@ -58,6 +59,22 @@ TEST(PlausibilityWarnings, AnOffsetThatTradesOffAgainstTheRadiusIsFlaggedOnlyWhe
     addPlausibilityWarnings(m, &j);
     EXPECT_NEAR(m.offset_radius_correlation, corr, 1e-12);
     EXPECT_EQ(mentions(m, "trades off against the estimated pole radius"), std::abs(corr) > 0.9);
+  }
+}
+
+TEST(PlausibilityWarnings, LandmarksTheDataDoNotLocateAreFlaggedByTheirMedianCentreError) {
+  // Standard errors along the worse axis of 5 mm to 3 m; the median decides (one badly seen
+  // landmark among well located ones is not a reason to distrust the offset).
+  for (const double worst_axis : {0.005, 0.05, 0.2, 3.0}) {
+    SCOPED_TRACE(worst_axis);
+    CalibrationModel m = withBias({0.01, 1.0}, 1.0, 3.0);
+    JointResult j;
+    const Eigen::Rotation2Dd turn(0.7);
+    const Eigen::Matrix2d axes = Eigen::Vector2d(0.004 * 0.004, worst_axis * worst_axis).asDiagonal();
+    for (int id = 1; id <= 4; ++id) j.centre_covariance[id] = turn.toRotationMatrix() * axes * turn.toRotationMatrix().transpose();
+    j.centre_covariance[5] = Eigen::Matrix2d::Identity() * 100.0;  // one landmark 10 m uncertain
+    addPlausibilityWarnings(m, &j);
+    EXPECT_EQ(mentions(m, "not pinned down by the data"), worst_axis > kUnlocatedLandmarkM);
   }
 }
 

@@ -366,6 +366,13 @@ INSTANTIATE_TEST_SUITE_P(
                  [](auto& e) { e.landmark_offsets = true; },
                  [](const JointResult& f) { return f.effects.landmark_offset_m.at(3) - f.effects.landmark_offset_m.at(1); }, 0.04,
                  0.005},
+        // The true steps 4 % longer (shorter) than commanded; the radius is given, so the scale
+        // is separable from the bias.
+        Recovery{"odometry_scale", [](auto& c) { c.path.step_error_fraction = 0.04; }, [](auto& e) { e.odometry_scale = true; },
+                 [](const JointResult& f) { return f.effects.odometry_scale; }, 0.04, 0.01},
+        Recovery{"odometry_scale_negative", [](auto& c) { c.path.step_error_fraction = -0.04; },
+                 [](auto& e) { e.odometry_scale = true; }, [](const JointResult& f) { return f.effects.odometry_scale; }, -0.04,
+                 0.01},
         Recovery{"incidence_noise", [](auto& c) { c.effects.incidence_noise_exponent = 1.0; },
                  [](auto& e) { e.incidence_noise = true; },
                  [](const JointResult& f) { return f.effects.incidence_noise_exponent; }, 1.0, 0.2},

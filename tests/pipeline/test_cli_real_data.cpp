@@ -59,6 +59,10 @@ TEST_P(RealRecording, CalibratesOrRefusesWithAReason) {
     EXPECT_EQ(m["bias"]["standard_error"].size(), m["bias"]["alpha"].size()) << "every coefficient with its error";
     EXPECT_TRUE(m.contains("fitted_range"));
     EXPECT_NE(r.out.find("+-"), std::string::npos) << "standard errors on stdout:\n" << r.out;
+    // A model given exit 0 is one `correct` takes (positive distances, a rising bias).
+    const auto c = runCli("correct -q " + (dir / "seq").string() + " --model " + model.string() + " --out " +
+                          (dir / (command + "-corrected")).string());
+    EXPECT_EQ(c.exit_code, 0) << c.err;
   }
 }
 

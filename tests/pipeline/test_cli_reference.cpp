@@ -2,6 +2,7 @@
 // `calibrate --reference`, `evaluate --reference [--model]`, on simulated sequences whose truth
 // plays the tape measure, and on the Hokuyo range sweep of ../shared/data (tape-measured).
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 
@@ -170,6 +171,52 @@ TEST(CliReference, SurveyedLandmarksAndStopsAreHeldFixed) {
   EXPECT_NE(r.err.find("landmarks[5]"), std::string::npos) << r.err;
   EXPECT_EQ(r.err.find("landmarks[4]"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir / "far_model.json"));
+}
+
+// Distances measured at two of ten stops (too few for seed 004's fit alone) join the
+// self-calibration of the whole sequence (--reference-fit auto picks it): on the paper's field
+// with every step 6 % longer than the odometry says and the pole radius unknown, the tape fixes
+// the scale the self-calibration cannot see. The truth plays the tape (exact distances).
+TEST(CliReference, DistancesAtSomeStopsJoinTheSelfCalibration) {
+  TempDir dir;
+  nlohmann::json scene = json(test::sourceDir() / "data/scenes/paper_field.json");
+  scene["path"]["step_error_fraction"] = 0.06;
+  test::writeFile(dir / "scene.json", scene.dump());
+  const auto sim = runCli("simulate -q --scene " + (dir / "scene.json").string() + " --out " + (dir / "s").string() +
+                          " --seed 36 --scans-per-stop 3");
+  ASSERT_EQ(sim.exit_code, 0) << sim.err;
+  nlohmann::json meta = json(dir / "s/scans/sequence.json");
+  meta.erase("landmark_radius_m");
+  test::writeFile(dir / "s/scans/sequence.json", meta.dump());
+  const Truth truth = io::readTruth(dir / "s/truth.json");
+  Reference tape = tapeReference(truth);
+  const std::size_t last = truth.stops.size() - 1;
+  tape.distances.erase(std::remove_if(tape.distances.begin(), tape.distances.end(),
+                                      [&](const ReferenceDistance& d) { return d.stop != 0 && d.stop != last; }),
+                       tape.distances.end());
+  ASSERT_GE(tape.distances.size(), 4u);
+  io::writeReference(dir / "ref.json", tape);
+  const auto self = runCli("calibrate -q " + (dir / "s/scans").string() + " --out " + (dir / "self.json").string());
+  const auto both = runCli("calibrate -q " + (dir / "s/scans").string() + " --reference " + (dir / "ref.json").string() +
+                           " --out " + (dir / "both.json").string());
+  ASSERT_EQ(self.exit_code, 0) << self.err;
+  ASSERT_EQ(both.exit_code, 0) << both.err;
+  EXPECT_NE(both.out.find("| entry | stop | target |"), std::string::npos) << "the matched distances on stdout:\n" << both.out;
+  EXPECT_EQ(json(dir / "both.json")["method"], "joint+reference");
+  const auto with_tape = io::readModel(dir / "both.json"), without = io::readModel(dir / "self.json");
+  auto error = [&](const CalibrationModel& m, double d) { return std::abs(m.model.bias(d) - truth.scene.sensor.range.bias(d)); };
+  for (double d : {2.0, 3.0}) {
+    EXPECT_LT(error(with_tape, d), 0.005) << d;
+    EXPECT_LT(5.0 * error(with_tape, d), error(without, d)) << d;
+  }
+  // The distances alone are too few (two stops), and the closed form has no place for them.
+  const auto alone = runCli("calibrate -q " + (dir / "s/scans").string() + " --reference " + (dir / "ref.json").string() +
+                            " --reference-fit distances --out " + (dir / "alone.json").string());
+  EXPECT_EQ(alone.exit_code, 3) << alone.err;
+  const auto cf = runCli("calibrate -q " + (dir / "s/scans").string() + " --reference " + (dir / "ref.json").string() +
+                         " --method closed-form --out " + (dir / "cf.json").string());
+  EXPECT_EQ(cf.exit_code, 2) << cf.err;
+  EXPECT_NE(cf.err.find("--method joint"), std::string::npos) << cf.err;
 }
 
 // ---- Real data: the Hokuyo UST-30LX looking at a 45 mm (radius) reflector at tape-measured

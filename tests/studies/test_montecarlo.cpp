@@ -484,6 +484,47 @@ TEST(Study, TheCeilingIsTheSensorModelsAndTheOracleComesCloseToIt) {
   }
 }
 
+/// Every data row of a study CSV, by column name.
+std::vector<std::map<std::string, double>> csvRows(const std::string& csv) {
+  std::istringstream in(csv);
+  std::string header, line;
+  std::getline(in, header);
+  std::vector<std::map<std::string, double>> rows;
+  while (std::getline(in, line))
+    if (!line.empty()) rows.push_back(csvRow(header + "\n" + line));
+  return rows;
+}
+
+TEST(Study, Fig9ClaimsHoldWhereWeReproduceThemAndFailWhereWeDoNot) {
+  // Seed 000 on Fig. 9: raising sigma_theta and sigma_s "does not lead to abrupt decays". In
+  // sigma_s this holds for the closed form (docs/RESULTS.md, L = 5, sigma_theta 1 deg: 16.3 at
+  // 0.1 cm, 11.9 at 3 cm); in sigma_theta it does not (about 1 at 5 deg: the calibration no
+  // longer helps). Both are asserted, so that a change either way is seen; and at low noise the
+  // closed form reaches most of what the true model can (14.7 of 21.9 at 1 cm, 1 deg).
+  const TrialConfig config;
+  StudyGrids g;
+  g.fig9_landmarks = {5};
+  g.sigma_s_m = {0.001, 0.03};
+  g.sigma_theta_deg = {1.0, 5.0};
+  RunOptions o;
+  o.trials = 40;
+  o.joint_trials = 0;
+  o.seed = 11;
+  o.threads = 2;
+  const auto out = runStudy({Figure::fig9}, g, config, o);
+  ASSERT_FALSE(out.interrupted);
+  std::map<std::pair<double, double>, std::map<std::string, double>> cell;
+  for (const auto& row : csvRows(out.files.at(0).second)) cell[{row.at("sigma_s_m"), row.at("sigma_theta_deg")}] = row;
+  ASSERT_EQ(cell.size(), 4u);
+  auto closedForm = [&](double ss, double st) { return cell.at({ss, st}).at("closed_form_ratio_median"); };
+  auto ceiling = [&](double ss, double st) { return cell.at({ss, st}).at("ceiling_ratio_median"); };
+  // A median over 40 trials scatters by about 3 %; the bounds sit well outside that.
+  EXPECT_GT(closedForm(0.001, 1.0), 0.5 * ceiling(0.001, 1.0));
+  EXPECT_GT(closedForm(0.03, 1.0), 0.5 * closedForm(0.001, 1.0)) << "gradual in sigma_s";
+  EXPECT_LT(closedForm(0.001, 5.0), 3.0) << "the closed form's fall in sigma_theta";
+  EXPECT_GT(ceiling(0.001, 5.0), 15.0) << "which the true model does not share";
+}
+
 TEST(ScanLevel, OneTrialFindsTheLandmarksAndCalibrates) {
   TrialConfig c = smallConfig();
   c.level = Level::scan;
