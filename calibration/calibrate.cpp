@@ -276,7 +276,7 @@ JointStage jointStage(const LandmarkObservations& obs, const CalibrationConfig& 
   init.model.bias.alpha = alphaAt(jc.order, init.model.bias.alpha);
   const JointResult settled = refineJoint(obs, init, jc);
   report(1);
-  if (settled.poses.empty()) return JointStage{settled, {}, 0};
+  if (!settled.ok()) return JointStage{settled, {}, 0};
   // Pass 2: every order from the settled geometry on one fixed set of readings, so that their
   // information criteria compare likelihoods of the same data.
   JointInit from = init;
@@ -321,7 +321,7 @@ JointStage jointStage(const LandmarkObservations& obs, const CalibrationConfig& 
         chosen = i;
         break;
       }
-  if (config.joint.covariance && !runs[chosen].poses.empty()) {
+  if (config.joint.covariance && runs[chosen].ok()) {
     // Covariance at the chosen order: one more (already converged) solve with it switched on.
     JointInit at = from;
     at.poses = runs[chosen].poses;
@@ -618,7 +618,7 @@ std::vector<double> closedFormCovariance(const LandmarkObservations& obs, const 
 /// poses trade off). True when refused.
 bool refuseJoint(CalibrationModel& m, const JointResult& j, const LandmarkObservations& obs, int usable,
                  double baseline) {
-  if (j.poses.empty()) {
+  if (!j.ok()) {
     m.status = "joint_failed";
     m.message = j.message + " (" + count(static_cast<std::size_t>(usable), "landmark") + " triangulated over a path of " +
                 metres(baseline) + ": the beams that saw them do not meet the triangulated circles). Record stops along "

@@ -483,6 +483,7 @@ void JointProblem::fixKnownGeometry(ceres::Problem& problem) {
 JointResult JointProblem::run() {
   selectReadings();
   if (readings_.size() < static_cast<std::size_t>(config_.order + 2) * 4) {
+    out_.status = JointStatus::too_few_readings;
     out_.message = "too few landmark readings for the joint refinement (" + std::to_string(readings_.size()) + ")";
     return out_;
   }
@@ -494,6 +495,7 @@ JointResult JointProblem::run() {
     if (!solve(outer)) return out_;
     if (outer > 0 && reestimateNoise(outer)) break;
   }
+  out_.status = JointStatus::ok;
   reportEstimates();
   reportPriorLikelihood();
   reportEffects();
@@ -519,6 +521,7 @@ bool JointProblem::solve(int outer) {
   ceres::Problem problem(problem_options);
   addResiduals(problem, true);
   if (!problem.HasParameterBlock(alpha_)) {
+    out_.status = JointStatus::no_readings;
     out_.message = "no landmark reading left to fit";
     return false;
   }
@@ -530,6 +533,7 @@ bool JointProblem::solve(int outer) {
   out_.solver_iterations += static_cast<int>(summary.iterations.size());
   out_.converged = summary.termination_type == ceres::CONVERGENCE;
   if (!summary.IsSolutionUsable()) {
+    out_.status = JointStatus::solver_failed;
     out_.message = "Ceres did not find a usable solution: " + summary.message;
     out_.converged = false;
     return false;

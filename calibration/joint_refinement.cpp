@@ -99,6 +99,17 @@ double readingLogLikelihood(double y, double mean, double sigma, double mixed_fr
   return hi + std::log(std::exp(std::log(keep) + log_normal - hi) + std::exp(log_other - hi));
 }
 
+const char* toString(JointStatus s) {
+  switch (s) {
+    case JointStatus::not_run: return "not_run";
+    case JointStatus::ok: return "ok";
+    case JointStatus::too_few_readings: return "too_few_readings";
+    case JointStatus::no_readings: return "no_readings";
+    case JointStatus::solver_failed: return "solver_failed";
+  }
+  return "?";
+}
+
 JointResult refineJoint(const LandmarkObservations& obs, const JointInit& init, const JointConfig& config) {
   return joint::JointProblem(obs, init, config).run();
 }

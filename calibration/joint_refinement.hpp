@@ -165,8 +165,20 @@ struct JointInit {
   JointEffectEstimates effects;            ///< effect terms to start from (used for the terms switched on)
 };
 
+/// How a joint refinement ended (JointResult::status).
+enum class JointStatus {
+  not_run,           ///< a result nobody computed (the default)
+  ok,                ///< a solution; JointResult::converged and message say how settled it is
+  too_few_readings,  ///< fewer landmark readings than four per bias parameter
+  no_readings,       ///< no landmark reading left to fit at a solve
+  solver_failed,     ///< Ceres found no usable solution
+};
+const char* toString(JointStatus s);
+
 struct JointResult {
-  std::vector<Pose2> poses;                ///< refined stop poses
+  JointStatus status = JointStatus::not_run;  ///< ok, or why there is no solution (message says more)
+  bool ok() const { return status == JointStatus::ok; }
+  std::vector<Pose2> poses;                ///< refined stop poses (one per stop when ok)
   std::map<int, Eigen::Vector2d> centres;  ///< refined landmark centres
   std::map<int, Eigen::Matrix2d> centre_covariance;  ///< per landmark, m^2 (when covariance is on)
   double radius_m = 0.0;                   ///< refined common radius
@@ -197,7 +209,7 @@ struct JointResult {
   int solver_iterations = 0;               ///< Ceres iterations, all solves
   int outer_iterations = 0;                ///< noise re-estimations done
   bool converged = false;                  ///< last solve converged and the noise settled
-  std::string message;                     ///< why not, when not
+  std::string message;                     ///< why not, when not ok; how settled, when ok
   JointEffectEstimates effects;            ///< effect terms (neutral when off)
   int effect_parameters = 0;               ///< parameters of the effect terms switched on (heading: one per stop)
   double window_min_m = 0.0;               ///< reading window of the outlier floor and the mixed pixels, metres

@@ -911,7 +911,7 @@ JointConfig warm(JointConfig c) {
 
 /// Negative log-likelihood of the readings and the odometry (infinite for a failed fit).
 double total(const JointResult& r) {
-  return r.poses.empty() ? std::numeric_limits<double>::infinity() : r.neg_log_likelihood + r.prior_neg_log_likelihood;
+  return !r.ok() ? std::numeric_limits<double>::infinity() : r.neg_log_likelihood + r.prior_neg_log_likelihood;
 }
 
 JointInit withOrder(JointInit i, int order) {
@@ -1029,7 +1029,7 @@ bool SequenceDiagnosis::fitBaseline(DiagnosisResult& out) {
   base_ = baselineConfig(cal_, cc_, obs_, config_);
   findStarts();
   chooseOrder();
-  if (fit0_.poses.empty()) {
+  if (!fit0_.ok()) {
     out.status = "baseline_failed";
     out.message = fit0_.message;
     return false;
@@ -1102,7 +1102,7 @@ void SequenceDiagnosis::chooseOrder() {
   JointConfig other = base_;
   other.order = closed_form_order_;
   JointResult alt = bestOf(init_, other);
-  if (!alt.poses.empty() && 2.0 * (total(alt) - total(fit0_)) + 2.0 * (other.order - base_.order) < 0.0) {
+  if (alt.ok() && 2.0 * (total(alt) - total(fit0_)) + 2.0 * (other.order - base_.order) < 0.0) {
     fit0_ = std::move(alt);
     base_ = other;
   }
@@ -1135,7 +1135,7 @@ void SequenceDiagnosis::replica(int b, std::map<std::string, std::vector<double>
   const LandmarkObservations rep =
       simulateReplica(plan0_, obs_, poseNoise(fit0_, base_), deriveSeed(config_.seed, 1000 + static_cast<std::uint64_t>(b)));
   const JointResult f = refineJoint(rep, initFrom(fit0_), warm(base_));
-  if (f.poses.empty()) return;
+  if (!f.ok()) return;
   const auto rr = rows(rep, f, base_);
   for (const auto& [k, v] : statistics(rep, f, rr, base_)) stats[k].push_back(v);
   if (b < config_.closeness_replicas) append(sim_base_, rr);
@@ -1182,13 +1182,13 @@ void SequenceDiagnosis::foldLikelihoods(HeldOut& held) const {
     if (!any) continue;
     const LandmarkObservations tr = subset(obs_, train), te = subset(obs_, test);
     const JointResult fb = refineJoint(tr, initFrom(fit0_), warm(base_));
-    if (fb.poses.empty()) continue;
+    if (!fb.ok()) continue;
     const auto eb = evaluateJoint(te, fb, base_);
     std::vector<std::vector<JointReading>> ec(candidates_.size());
     bool ok = true;
     for (std::size_t c = 0; c < candidates_.size(); ++c) {
-      const JointResult fc = refineJoint(tr, fits_[c].poses.empty() ? initFrom(fit0_) : initFrom(fits_[c]), warm(cfgs_[c]));
-      if (fc.poses.empty()) {
+      const JointResult fc = refineJoint(tr, !fits_[c].ok() ? initFrom(fit0_) : initFrom(fits_[c]), warm(cfgs_[c]));
+      if (!fc.ok()) {
         ok = false;
         break;
       }
@@ -1209,7 +1209,7 @@ void SequenceDiagnosis::odometryLikelihoods(HeldOut& held) const {
   const auto ob = odometryHeldOut(obs_, fit0_, base_);
   std::vector<std::vector<double>> oc(candidates_.size());
   for (std::size_t c = 0; c < candidates_.size(); ++c)
-    oc[c] = fits_[c].poses.empty() ? std::vector<double>(ob.size(), kNaN) : odometryHeldOut(obs_, fits_[c], cfgs_[c]);
+    oc[c] = !fits_[c].ok() ? std::vector<double>(ob.size(), kNaN) : odometryHeldOut(obs_, fits_[c], cfgs_[c]);
   for (std::size_t k = 0; k < ob.size() && !held.base.empty(); ++k) {
     // One block per stop, after the scans' blocks; two observations (x, y) per stop.
     const std::size_t key = std::numeric_limits<std::size_t>::max() - k;
@@ -1227,7 +1227,7 @@ CandidateResult SequenceDiagnosis::candidate(std::size_t c, const HeldOut& held,
   r.statistic = statisticOf(r.effect);
   setScore(r, out.battery);
   const JointResult& fc = fits_[c];
-  if (fc.poses.empty()) {
+  if (!fc.ok()) {
     r.applicable = false;
     r.note = "the extended fit failed: " + fc.message;
     r.p_value = kNaN;
@@ -1283,7 +1283,7 @@ void SequenceDiagnosis::extend(std::size_t c, DiagnosisResult& out) const {
     const LandmarkObservations rep =
         simulateReplica(plan, obs_, poseNoise(fc, cfgs_[c]), deriveSeed(config_.seed, 5000 + static_cast<std::uint64_t>(b)));
     const JointResult f = refineJoint(rep, initFrom(fit0_), warm(base_));
-    if (f.poses.empty()) continue;
+    if (!f.ok()) continue;
     const auto rr = rows(rep, f, base_);
     append(sim_ext, rr);
     if (out.simulated_extended.empty()) out.simulated_extended = records(rr);

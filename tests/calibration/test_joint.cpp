@@ -51,6 +51,22 @@ CalibrationConfig configFor(double sigma_s, double sigma_psi_deg) {
   return cc;
 }
 
+TEST(JointRefinement, SaysWhyThereIsNoSolution) {
+  // Two sightings cannot fit a bias, poses and centres: the result says so by its status, with
+  // no poses, and a result nobody computed is not a solution either.
+  const auto cfg = paperField(0.01, 1.0, 0.0005);
+  auto sample = simulation::simulateLandmarkLevel(cfg, 1);
+  const JointInit init = triangulatedStart(sample, cfg.model);
+  sample.obs.sightings.resize(2);
+  const JointResult r = refineJoint(sample.obs, init, JointConfig{});
+  EXPECT_EQ(r.status, JointStatus::too_few_readings);
+  EXPECT_FALSE(r.ok());
+  EXPECT_TRUE(r.poses.empty());
+  EXPECT_NE(r.message.find("too few"), std::string::npos) << r.message;
+  EXPECT_FALSE(JointResult{}.ok());
+  EXPECT_STREQ(toString(JointStatus::solver_failed), "solver_failed");
+}
+
 TEST(JointRefinement, RecoversAKnownHeadingErrorPerStop) {
   const auto cfg = paperField(0.01, 1.0, 0.0005);
   for (std::uint64_t seed = 1; seed <= 3; ++seed) {
@@ -64,6 +80,7 @@ TEST(JointRefinement, RecoversAKnownHeadingErrorPerStop) {
     jc.sigma_psi_rad = deg2rad(1.0);
     jc.estimate_radius = false;
     const auto r = refineJoint(sample.obs, init, jc);
+    ASSERT_TRUE(r.ok()) << toString(r.status) << ": " << r.message;
     ASSERT_EQ(r.poses.size(), sample.stops.size()) << r.message;
     // A common rotation of all headings (and of the world) is not observable: the mean heading
     // error of the stops is absorbed into the world frame. Compare headings up to it.
@@ -328,8 +345,8 @@ TEST(JointRefinement, PoolingRepeatedScansLeavesTheEstimatesUnchanged) {
     const auto pooled = refineJoint(sample.obs, init, jc);
     jc.pool_repeated_scans = false;
     const auto each = refineJoint(sample.obs, init, jc);
-    ASSERT_FALSE(pooled.poses.empty()) << pooled.message;
-    ASSERT_FALSE(each.poses.empty()) << each.message;
+    ASSERT_TRUE(pooled.ok()) << pooled.message;
+    ASSERT_TRUE(each.ok()) << each.message;
     EXPECT_EQ(pooled.readings, each.readings);
     // The scans of a stop repeat the same beams: about 20 readings per residual.
     EXPECT_LE(pooled.reading_residuals * 10, each.reading_residuals);
