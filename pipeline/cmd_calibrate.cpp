@@ -36,6 +36,40 @@ bool combineWithSelfCalibration(const Reference& ref, std::size_t stops, const s
   return !referenceCoversEveryStop(ref, stops) || !ref.landmarks.empty() || !ref.stops.empty();
 }
 
+/// calibrate --reference: what was measured, used as --reference-fit says; `matches` and
+/// `survey` receive what stdout shows about the matching.
+CalibrationModel calibrateWithMeasurements(const CalibrateCommand& c, const io::Sequence& seq,
+                                           const calibration::CalibrationConfig& config,
+                                           std::vector<calibration::ReferenceMatch>& matches, std::string& survey) {
+  const Reference ref = io::readReference(c.reference);
+  io::checkReference(ref, seq.stops.size(), c.reference);
+  const auto detection = detectionConfig(*c.options);
+  if (ref.distances.empty() || combineWithSelfCalibration(ref, seq.stops.size(), c.reference_fit)) {
+    // The self-calibration with the surveyed geometry held fixed and the distances (measured at
+    // some stops) in its likelihood.
+    StageBars progress;
+    std::vector<SurveyMatch> found;
+    const SequenceCalibration result =
+        ref.distances.empty()
+            ? calibrateSequenceWithSurvey(seq, ref, c.reference, detection, config, &found, std::ref(progress))
+            : calibrateSequenceWithDistancesAndSelf(seq, ref, c.reference, detection, config, &matches, &found,
+                                                    std::ref(progress));
+    progress.finish();
+    survey = surveyTable(found, ref);
+    return result.model;
+  }
+  // Against the distances alone (seed 004 section 5).
+  if (!ref.landmarks.empty() || !ref.stops.empty())
+    std::fprintf(stderr, "lidarcal: warning: %s: --reference-fit distances fits the distances alone: the surveyed "
+                         "landmarks and measured stops are checked but not used\n",
+                 c.reference.c_str());
+  Progress progress("detect", seq.scans.size());
+  const SequenceCalibration result = calibrateSequenceWithReference(
+      seq, ref, c.reference, detection, config, &matches, [&](std::size_t done, std::size_t) { progress.update(done); });
+  progress.finish();
+  return result.model;
+}
+
 void runCalibrate(const CalibrateCommand& c) {
   io::checkOutsideInput(c.seq, c.out);
   io::checkOutputFile(c.out, c.overwrite);
@@ -49,44 +83,8 @@ void runCalibrate(const CalibrateCommand& c) {
   CalibrationModel model;
   std::vector<calibration::ReferenceMatch> matches;
   std::string survey;
-  std::optional<Reference> measured;
   if (!c.reference.empty()) {
-    measured = io::readReference(c.reference);
-    io::checkReference(*measured, seq.stops.size(), c.reference);
-  }
-  if (measured && measured->distances.empty()) {
-    // Surveyed landmarks or measured poses only: self-calibration with them held fixed.
-    const Reference& ref = *measured;
-    StageBars progress;
-    std::vector<SurveyMatch> found;
-    const SequenceCalibration result = calibrateSequenceWithSurvey(seq, ref, c.reference, detectionConfig(*c.options),
-                                                                   config, &found, std::ref(progress));
-    progress.finish();
-    model = result.model;
-    survey = surveyTable(found, ref);
-  } else if (measured && combineWithSelfCalibration(*measured, seq.stops.size(), c.reference_fit)) {
-    // Distances at some stops: in the self-calibration's likelihood, beside the poles.
-    const Reference& ref = *measured;
-    StageBars progress;
-    std::vector<SurveyMatch> found;
-    const SequenceCalibration result = calibrateSequenceWithDistancesAndSelf(
-        seq, ref, c.reference, detectionConfig(*c.options), config, &matches, &found, std::ref(progress));
-    progress.finish();
-    model = result.model;
-    survey = surveyTable(found, ref);
-  } else if (measured) {
-    // Against the distances the user measured (seed 004 section 5).
-    const Reference& ref = *measured;
-    if (!ref.landmarks.empty() || !ref.stops.empty())
-      std::fprintf(stderr, "lidarcal: warning: %s: --reference-fit distances fits the distances alone: the surveyed "
-                           "landmarks and measured stops are checked but not used\n",
-                   c.reference.c_str());
-    Progress progress("detect", seq.scans.size());
-    const SequenceCalibration result = calibrateSequenceWithReference(
-        seq, ref, c.reference, detectionConfig(*c.options), config, &matches,
-        [&](std::size_t done, std::size_t) { progress.update(done); });
-    progress.finish();
-    model = result.model;
+    model = calibrateWithMeasurements(c, seq, config, matches, survey);
   } else if (!c.truth.empty()) {
     // Oracle (seed 004): fitted against the true distances; for comparison only.
     const SimulationTruth truth = loadTruth(c.truth);
