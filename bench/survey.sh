@@ -7,7 +7,8 @@
 # (true centre distance + 2 mm noise) to the poles within 4 m at the first and the last stop only,
 # which join the self-calibration (--reference-fit auto: two stops are too few to fit alone). Prints the error of
 # f(d) - d against the truth at 1, 2 and 3 m (median and largest over the seeds, mm) and the
-# median standard error the model reports.
+# median standard error the model reports, and in how many seeds the truth lies inside the
+# model's 95 % interval (f(d) +- 1.96 SE).
 #
 #   bench/survey.sh [SEEDS]     (default 10; needs build/pipeline/lidarcal)
 set -euo pipefail
@@ -63,8 +64,8 @@ def se(m, d):
     return math.sqrt(max(0.0, sum(d ** i * d ** j * c[i * n + j] for i in range(n) for j in range(n))))
 rows = {"self-calibration": "self.json", "surveyed pole centres": "lm.json.model", "measured stop poses": "st.json.model",
         "tape at 2 of 10 stops": "tape.json.model"}
-print("| model | d | median abs error [mm] | largest [mm] | median reported SE [mm] |")
-print("|---|---|---|---|---|")
+print("| model | d | median abs error [mm] | largest [mm] | median reported SE [mm] | truth inside the 95 % interval |")
+print("|---|---|---|---|---|---|")
 for name, file in rows.items():
     for d in (1.0, 2.0, 3.0):
         errs, ses = [], []
@@ -73,5 +74,6 @@ for name, file in rows.items():
             m = json.load(open(f"{w}/{s}/{file}"))
             errs.append(abs(f(m["bias"]["alpha"], d) - f(t, d)) * 1000)
             ses.append(se(m, d) * 1000)
-        print(f"| {name} | {d:.0f} m | {st.median(errs):.1f} | {max(errs):.1f} | {st.median(ses):.1f} |")
+        inside = sum(1 for e, v in zip(errs, ses) if e <= 1.96 * v)
+        print(f"| {name} | {d:.0f} m | {st.median(errs):.1f} | {max(errs):.1f} | {st.median(ses):.1f} | {inside} / {seeds} |")
 PY
