@@ -3,6 +3,8 @@
 #include <cstdio>
 #include <memory>
 #include <optional>
+#include <set>
+#include <string>
 #include <vector>
 
 #include <CLI/CLI.hpp>
@@ -29,21 +31,32 @@ struct CalibrateCommand {
 };
 
 /// --reference-fit: distances alone (seed 004 section 5) or inside the self-calibration. auto:
-/// alone when every stop has a measured distance and nothing else is given, combined otherwise.
+/// alone when every stop has a measured distance and nothing else is given, combined otherwise
+/// (see calibrateWithMeasurements for its fallback).
 bool combineWithSelfCalibration(const Reference& ref, std::size_t stops, const std::string& mode) {
   if (mode == "distances") return false;
   if (mode == "combined") return true;
   return !referenceCoversEveryStop(ref, stops) || !ref.landmarks.empty() || !ref.stops.empty();
 }
 
+/// Stops with at least one measured distance.
+std::size_t measuredStops(const Reference& ref) {
+  std::set<std::size_t> stops;
+  for (const auto& d : ref.distances) stops.insert(d.stop);
+  return stops.size();
+}
+
 /// calibrate --reference: what was measured, used as --reference-fit says; `matches` and
-/// `survey` receive what stdout shows about the matching.
+/// `survey` receive what stdout shows about the matching. Under auto, distances at three or more
+/// stops (and nothing else) that the self-calibration cannot use — a sensor that never moved,
+/// some of its recordings untaped — are fitted alone.
 CalibrationModel calibrateWithMeasurements(const CalibrateCommand& c, const io::Sequence& seq,
                                            const calibration::CalibrationConfig& config,
                                            std::vector<calibration::ReferenceMatch>& matches, std::string& survey) {
   const Reference ref = io::readReference(c.reference);
   io::checkReference(ref, seq.stops.size(), c.reference);
   const auto detection = detectionConfig(*c.options);
+  const bool alone_possible = measuredStops(ref) >= 3 && ref.landmarks.empty() && ref.stops.empty();
   if (ref.distances.empty() || combineWithSelfCalibration(ref, seq.stops.size(), c.reference_fit)) {
     // The self-calibration with the surveyed geometry held fixed and the distances (measured at
     // some stops) in its likelihood.
@@ -55,8 +68,16 @@ CalibrationModel calibrateWithMeasurements(const CalibrateCommand& c, const io::
             : calibrateSequenceWithDistancesAndSelf(seq, ref, c.reference, detection, config, &matches, &found,
                                                     std::ref(progress));
     progress.finish();
-    survey = surveyTable(found, ref);
-    return result.model;
+    const bool fall_back = result.model.status != "ok" && c.reference_fit == "auto" && alone_possible;
+    if (!fall_back) {
+      survey = surveyTable(found, ref);
+      return result.model;
+    }
+    std::fprintf(stderr,
+                 "lidarcal: the self-calibration cannot use this sequence (%s); fitting the distances of the %zu "
+                 "measured stops alone instead (--reference-fit distances)\n",
+                 result.model.status.c_str(), measuredStops(ref));
+    matches.clear();
   }
   // Against the distances alone (seed 004 section 5).
   if (!ref.landmarks.empty() || !ref.stops.empty())
@@ -145,7 +166,8 @@ void addCalibrateCommand(CLI::App& app) {
                   "With --reference distances: distances (fit the range model to them alone; every measured stop "
                   "counts), combined (add them to the self-calibration of the whole sequence, with the surveyed "
                   "landmarks and stops held fixed), or auto: distances when every stop has one and no landmarks or "
-                  "stops are given, combined otherwise")
+                  "stops are given, combined otherwise, and distances after all when the self-calibration cannot use "
+                  "the sequence (a sensor that never moved) and 3 or more stops have one")
       ->check(CLI::IsMember({"auto", "distances", "combined"}))
       ->capture_default_str()
       ->needs(reference);

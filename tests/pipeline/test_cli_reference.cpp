@@ -219,6 +219,33 @@ TEST(CliReference, DistancesAtSomeStopsJoinTheSelfCalibration) {
   EXPECT_NE(cf.err.find("--method joint"), std::string::npos) << cf.err;
 }
 
+// A sensor that hardly moved (ten stops within 27 mm), taped at five of them: auto tries the
+// self-calibration, which refuses the sequence (no baseline), and fits the five stops' distances
+// alone; asked for `combined` explicitly, the refusal stands.
+TEST(CliReference, AutoFitsTheDistancesAloneWhenTheSelfCalibrationCannotUseTheSequence) {
+  TempDir dir;
+  nlohmann::json scene = json(test::sourceDir() / "data/scenes/paper_field.json");
+  scene["path"]["step_m"] = 0.003;
+  test::writeFile(dir / "scene.json", scene.dump());
+  const auto sim = runCli("simulate -q --scene " + (dir / "scene.json").string() + " --out " + (dir / "s").string() +
+                          " --seed 37 --scans-per-stop 3");
+  ASSERT_EQ(sim.exit_code, 0) << sim.err;
+  Reference tape = tapeReference(io::readTruth(dir / "s/truth.json"));
+  tape.distances.erase(std::remove_if(tape.distances.begin(), tape.distances.end(),
+                                      [](const ReferenceDistance& d) { return d.stop >= 5; }),
+                       tape.distances.end());
+  io::writeReference(dir / "ref.json", tape);
+  const std::string base = "calibrate -q " + (dir / "s/scans").string() + " --reference " + (dir / "ref.json").string();
+  const auto r = runCli(base + " --out " + (dir / "auto.json").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("fitting the distances of the 5 measured stops alone"), std::string::npos) << r.err;
+  EXPECT_EQ(json(dir / "auto.json")["method"], "reference");
+  const auto forced = runCli(base + " --reference-fit combined --out " + (dir / "combined.json").string());
+  EXPECT_EQ(forced.exit_code, 3) << forced.err;
+  EXPECT_NE(forced.err.find("no_baseline"), std::string::npos) << forced.err;
+  EXPECT_FALSE(fs::exists(dir / "combined.json"));
+}
+
 // ---- Real data: the Hokuyo UST-30LX looking at a 45 mm (radius) reflector at tape-measured
 // centre distances 0.129-2.95 m (../shared/data/hokuyo_ust30lx_reflector/range_sweep). ----
 
