@@ -13,6 +13,7 @@
 #include <Eigen/Dense>
 
 #include "calibration/inversion.hpp"
+#include "calibration/jackknife.hpp"
 #include "calibration/noise_exponent.hpp"
 #include "common/stats_util.hpp"
 
@@ -601,11 +602,7 @@ std::vector<double> closedFormCovariance(const LandmarkObservations& obs, const 
     if (a.size() != n) return {};
     alphas.push_back(Eigen::Map<const Eigen::VectorXd>(a.data(), static_cast<Eigen::Index>(n)));
   }
-  Eigen::VectorXd mean = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(n));
-  for (const auto& a : alphas) mean += a / static_cast<double>(G);
-  Eigen::MatrixXd cov = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
-  for (const auto& a : alphas) cov += (a - mean) * (a - mean).transpose();
-  cov *= static_cast<double>(G - 1) / static_cast<double>(G);
+  const Eigen::MatrixXd cov = jackknifeCovariance(alphas);
   std::vector<double> out(n * n);
   for (std::size_t i = 0; i < n; ++i)
     for (std::size_t j = 0; j < n; ++j) out[i * n + j] = cov(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j));

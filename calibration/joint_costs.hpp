@@ -36,10 +36,7 @@ struct KnownRangeCost {
     T sum = T(0);
     double n = 0.0;
     for (const KnownRange::Beam& b : target->beams) {
-      const T d = target->pole ? rayCircleDistance(T(0), T(0), T(b.angle_rad), T(target->centre_x_m), T(target->centre_y_m),
-                                                   radius[0])
-                               : T(b.distance_m);
-      sum += T(b.count) * (T(b.mean_reading_m) - evaluatePolynomial<N>(alpha, d));
+      sum += T(b.count) * (T(b.mean_reading_m) - evaluatePolynomial<N>(alpha, target->distance(b, radius[0])));
       n += b.count;
     }
     residual[0] = sum / T(n) * T(inv_sigma);

@@ -34,8 +34,7 @@ double KnownRange::count() const {
 double KnownRange::meanDistance(double radius_m) const {
   double sum = 0.0, n = 0.0;
   for (const Beam& b : beams) {
-    const double d = pole ? rayCircleDistance(0.0, 0.0, b.angle_rad, centre_x_m, centre_y_m, radius_m) : b.distance_m;
-    sum += b.count * d;
+    sum += b.count * distance(b, radius_m);
     n += b.count;
   }
   return n > 0.0 ? sum / n : 0.0;

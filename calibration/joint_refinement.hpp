@@ -87,6 +87,9 @@ struct KnownRange {
   double tape_sigma_m = 0.002;    ///< standard deviation of the measured distance, metres
   double count() const;           ///< readings behind the mean
   double meanDistance(double radius_m) const;  ///< mean true distance of the readings, metres
+  /// True distance of beam b with pole radius `radius` (any scalar type, for the Ceres cost).
+  template <typename T>
+  T distance(const Beam& b, const T& radius) const;
 };
 
 struct JointConfig {

@@ -19,4 +19,10 @@ T rayCircleDistance(const T& px, const T& py, const T& a, const T& cx, const T& 
   return along;
 }
 
+template <typename T>
+T KnownRange::distance(const Beam& b, const T& radius) const {
+  if (!pole) return T(b.distance_m);
+  return rayCircleDistance(T(0), T(0), T(b.angle_rad), T(centre_x_m), T(centre_y_m), radius);
+}
+
 }  // namespace lidarcal::calibration

@@ -12,6 +12,7 @@
 #include <Eigen/Dense>
 
 #include "calibration/inversion.hpp"
+#include "calibration/jackknife.hpp"
 #include "calibration/joint_refinement.hpp"
 #include "calibration/noise_exponent.hpp"
 #include "calibration/range_model_fit.hpp"
@@ -294,13 +295,7 @@ ClusteredFit fitClustered(const std::vector<double>& d, const std::vector<double
       }
   }
   fit.cv_mse_m2 = cv_w > 0.0 ? cv / cv_w : kNaN;
-  if (leave_out.size() >= 2) {
-    Eigen::VectorXd mean = Eigen::VectorXd::Zero(p);
-    for (const auto& a : leave_out) mean += a / groups;
-    Eigen::MatrixXd jack = Eigen::MatrixXd::Zero(p, p);
-    for (const auto& a : leave_out) jack += (a - mean) * (a - mean).transpose();
-    fit.covariance = jack * ((groups - 1.0) / groups);
-  }
+  if (leave_out.size() >= 2) fit.covariance = jackknifeCovariance(leave_out);
   return fit;
 }
 

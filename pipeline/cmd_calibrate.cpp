@@ -3,7 +3,6 @@
 #include <cstdio>
 #include <memory>
 #include <optional>
-#include <set>
 #include <string>
 #include <vector>
 
@@ -36,14 +35,7 @@ struct CalibrateCommand {
 bool combineWithSelfCalibration(const Reference& ref, std::size_t stops, const std::string& mode) {
   if (mode == "distances") return false;
   if (mode == "combined") return true;
-  return !referenceCoversEveryStop(ref, stops) || !ref.landmarks.empty() || !ref.stops.empty();
-}
-
-/// Stops with at least one measured distance.
-std::size_t measuredStops(const Reference& ref) {
-  std::set<std::size_t> stops;
-  for (const auto& d : ref.distances) stops.insert(d.stop);
-  return stops.size();
+  return measuredStops(ref) != stops || !ref.landmarks.empty() || !ref.stops.empty();
 }
 
 /// calibrate --reference: what was measured, used as --reference-fit says; `matches` and

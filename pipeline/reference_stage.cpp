@@ -95,10 +95,10 @@ void requireEveryDistanceFound(const calibration::ReferenceReadings& known, cons
                     "check the stop numbers (lidarcal info), give bearing_rad to pick the target, or remove the entry");
 }
 
-bool referenceCoversEveryStop(const Reference& ref, std::size_t stops) {
+std::size_t measuredStops(const Reference& ref) {
   std::set<std::size_t> measured;
   for (const auto& d : ref.distances) measured.insert(d.stop);
-  return measured.size() == stops;
+  return measured.size();
 }
 
 SequenceCalibration calibrateSequenceWithReference(const io::Sequence& seq, const Reference& ref,

@@ -77,9 +77,9 @@ SequenceCalibration calibrateSequenceWithSurvey(const io::Sequence& seq, const R
 /// Throws DataError naming every reference distance whose target was not found (with what to do).
 void requireEveryDistanceFound(const calibration::ReferenceReadings& known, const std::filesystem::path& ref_file);
 
-/// Whether every stop of the sequence has a measured distance (then seed 004's fit on the
-/// distances alone is the calibration; otherwise they join the self-calibration).
-bool referenceCoversEveryStop(const Reference& ref, std::size_t stops);
+/// Stops with at least one measured distance (all of the sequence's: seed 004's fit on the
+/// distances alone is the calibration; fewer: they join the self-calibration).
+std::size_t measuredStops(const Reference& ref);
 
 /// Self-calibration of the whole sequence with the measured distances in the same likelihood
 /// (calibration::JointConfig::known_ranges: the tape's scale beside the poles' geometry) and the

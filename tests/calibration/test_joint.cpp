@@ -51,6 +51,22 @@ CalibrationConfig configFor(double sigma_s, double sigma_psi_deg) {
   return cc;
 }
 
+/// The case self-calibration cannot see: the paper's field with every step 6 % longer than the
+/// odometry says and the pole radius not published (the bias absorbs the scale error).
+simulation::LandmarkLevelConfig scaleErrorField() {
+  auto cfg = paperField(0.005, 0.2, 0.0005);
+  cfg.path.step_error_fraction = 0.06;
+  cfg.publish_radius = false;
+  return cfg;
+}
+
+/// Its calibration, told the odometry is poor (the stops may move by decimetres).
+CalibrationConfig poorOdometryConfig() {
+  CalibrationConfig cc = configFor(0.005, 0.2);
+  cc.joint.sigma_s_m = 0.2;
+  return cc;
+}
+
 TEST(JointRefinement, SaysWhyThereIsNoSolution) {
   // Two sightings cannot fit a bias, poses and centres: the result says so by its status, with
   // no poses, and a result nobody computed is not a solution either.
@@ -158,9 +174,7 @@ TEST(Calibrate, JointComesCloseToTheGroundTruthFitAndBeatsTheClosedFormUnderLarg
 // poses can (REF.json `landmarks`, `stops`; issue 17). The survey is taken from the truth the
 // test controls; a survey scaled by 3 % must move the fitted bias with it (it is really used).
 TEST(Calibrate, SurveyedCentresOrMeasuredPosesGiveTheScaleAnOdometryScaleErrorHides) {
-  auto cfg = paperField(0.005, 0.2, 0.0005);
-  cfg.path.step_error_fraction = 0.06;
-  cfg.publish_radius = false;
+  const auto cfg = scaleErrorField();
   const auto bias = [](const CalibrationModel& m, double d) { return m.model.bias(d) - d; };
   const auto truthBias = [&](double d) { return cfg.model.bias(d) - d; };
   const auto standardError = [](const CalibrationModel& m, double d) {  // of f(d), from the alpha covariance
@@ -174,8 +188,7 @@ TEST(Calibrate, SurveyedCentresOrMeasuredPosesGiveTheScaleAnOdometryScaleErrorHi
   for (std::uint64_t seed = 1; seed <= 3; ++seed) {
     SCOPED_TRACE(seed);
     const auto sample = simulation::simulateLandmarkLevel(cfg, seed);
-    CalibrationConfig cc = configFor(0.005, 0.2);
-    cc.joint.sigma_s_m = 0.2;  // the odometry is known to be poor: let the poses move
+    const CalibrationConfig cc = poorOdometryConfig();
     const CalibrationModel self = calibrate(sample.obs, cc);
     CalibrationConfig surveyed = cc, scaled = cc, posed = cc;
     for (std::size_t l = 0; l < cfg.landmarks.size(); ++l) {
@@ -217,16 +230,13 @@ TEST(Calibrate, SurveyedCentresOrMeasuredPosesGiveTheScaleAnOdometryScaleErrorHi
 // issue 17): the tape gives the scale an odometry scale error hides, the poles and the other
 // stops the shape. The truth the test controls: the beams' true distances from the simulation.
 TEST(Calibrate, DistancesMeasuredAtTwoStopsGiveTheSelfCalibrationItsScale) {
-  auto cfg = paperField(0.005, 0.2, 0.0005);
-  cfg.path.step_error_fraction = 0.06;
-  cfg.publish_radius = false;
+  const auto cfg = scaleErrorField();
   const auto bias = [](const CalibrationModel& m, double d) { return m.model.bias(d) - d; };
   const auto truthBias = [&](double d) { return cfg.model.bias(d) - d; };
   for (std::uint64_t seed = 1; seed <= 3; ++seed) {
     SCOPED_TRACE(seed);
     const auto sample = simulation::simulateLandmarkLevel(cfg, seed);
-    CalibrationConfig cc = configFor(0.005, 0.2);
-    cc.joint.sigma_s_m = 0.2;
+    const CalibrationConfig cc = poorOdometryConfig();
     const CalibrationModel self = calibrate(sample.obs, cc);
     // Every pole seen at the first and the last stop, its centre distance measured exactly (the
     // tape's 2 mm only weighs it); the beams' distances then follow from the pole radius, which

@@ -25,10 +25,20 @@ namespace fs = std::filesystem;
 
 nlohmann::json json(const fs::path& p) { return nlohmann::json::parse(test::readFile(p)); }
 
-void simulate(const fs::path& dir, int seed) {
-  const auto r = runCli("simulate -q --scene " + (test::sourceDir() / "data/scenes/paper_field.json").string() +
-                        " --out " + dir.string() + " --seed " + std::to_string(seed) + " --scans-per-stop 3");
+fs::path paperFieldScene() { return test::sourceDir() / "data/scenes/paper_field.json"; }
+
+void simulate(const fs::path& dir, int seed, const fs::path& scene = paperFieldScene()) {
+  const auto r = runCli("simulate -q --scene " + scene.string() + " --out " + dir.string() + " --seed " +
+                        std::to_string(seed) + " --scans-per-stop 3");
   ASSERT_EQ(r.exit_code, 0) << r.err;
+}
+
+/// The paper's field with one setting of its path changed, written to `file`.
+fs::path paperFieldWith(const fs::path& file, const std::string& path_key, double value) {
+  nlohmann::json scene = json(paperFieldScene());
+  scene["path"][path_key] = value;
+  test::writeFile(file, scene.dump());
+  return file;
 }
 
 /// REF.json a user with a tape would write for a simulated sequence (exact distances from the
@@ -179,12 +189,7 @@ TEST(CliReference, SurveyedLandmarksAndStopsAreHeldFixed) {
 // the scale the self-calibration cannot see. The truth plays the tape (exact distances).
 TEST(CliReference, DistancesAtSomeStopsJoinTheSelfCalibration) {
   TempDir dir;
-  nlohmann::json scene = json(test::sourceDir() / "data/scenes/paper_field.json");
-  scene["path"]["step_error_fraction"] = 0.06;
-  test::writeFile(dir / "scene.json", scene.dump());
-  const auto sim = runCli("simulate -q --scene " + (dir / "scene.json").string() + " --out " + (dir / "s").string() +
-                          " --seed 36 --scans-per-stop 3");
-  ASSERT_EQ(sim.exit_code, 0) << sim.err;
+  simulate(dir / "s", 36, paperFieldWith(dir / "scene.json", "step_error_fraction", 0.06));
   nlohmann::json meta = json(dir / "s/scans/sequence.json");
   meta.erase("landmark_radius_m");
   test::writeFile(dir / "s/scans/sequence.json", meta.dump());
@@ -224,12 +229,7 @@ TEST(CliReference, DistancesAtSomeStopsJoinTheSelfCalibration) {
 // alone; asked for `combined` explicitly, the refusal stands.
 TEST(CliReference, AutoFitsTheDistancesAloneWhenTheSelfCalibrationCannotUseTheSequence) {
   TempDir dir;
-  nlohmann::json scene = json(test::sourceDir() / "data/scenes/paper_field.json");
-  scene["path"]["step_m"] = 0.003;
-  test::writeFile(dir / "scene.json", scene.dump());
-  const auto sim = runCli("simulate -q --scene " + (dir / "scene.json").string() + " --out " + (dir / "s").string() +
-                          " --seed 37 --scans-per-stop 3");
-  ASSERT_EQ(sim.exit_code, 0) << sim.err;
+  simulate(dir / "s", 37, paperFieldWith(dir / "scene.json", "step_m", 0.003));
   Reference tape = tapeReference(io::readTruth(dir / "s/truth.json"));
   tape.distances.erase(std::remove_if(tape.distances.begin(), tape.distances.end(),
                                       [](const ReferenceDistance& d) { return d.stop >= 5; }),

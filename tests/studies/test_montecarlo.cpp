@@ -447,21 +447,33 @@ double expectedCeiling(const std::vector<Cylinder>& layout, const PathSpec& path
   return raw / corrected;
 }
 
+/// 40 trials of the closed form and the oracle (no joint refinement) from `seed`.
+RunOptions fig9Options(std::uint64_t seed) {
+  RunOptions o;
+  o.trials = 40;
+  o.joint_trials = 0;
+  o.seed = seed;
+  o.threads = 2;
+  return o;
+}
+
+/// Fig. 9 of the paper's setting with five landmarks, over the given noise grid.
+auto fig9AtFiveLandmarks(const TrialConfig& config, std::vector<double> sigma_s_m, std::vector<double> sigma_theta_deg,
+                         const RunOptions& o) {
+  StudyGrids g;
+  g.fig9_landmarks = {5};
+  g.sigma_s_m = std::move(sigma_s_m);
+  g.sigma_theta_deg = std::move(sigma_theta_deg);
+  return runStudy({Figure::fig9}, g, config, o);
+}
+
 TEST(Study, TheCeilingIsTheSensorModelsAndTheOracleComesCloseToIt) {
   // One cell of Fig. 9 in the paper's setting (L = 5, 20 stops, 10 scans per stop), closed form and
   // oracle. The ceiling (eq. 31 with the simulated sensor's own bias) agrees with the value the
   // sensor model gives for each layout, and the estimators stay at or below it.
   const TrialConfig config;
-  StudyGrids g;
-  g.fig9_landmarks = {5};
-  g.sigma_s_m = {0.01};
-  g.sigma_theta_deg = {1.0};
-  RunOptions o;
-  o.trials = 40;
-  o.joint_trials = 0;
-  o.seed = 3;
-  o.threads = 2;
-  const auto out = runStudy({Figure::fig9}, g, config, o);
+  const RunOptions o = fig9Options(3);
+  const auto out = fig9AtFiveLandmarks(config, {0.01}, {1.0}, o);
   ASSERT_FALSE(out.interrupted);
   const auto row = csvRow(out.files.at(0).second);
   double expected = 0.0;
@@ -501,17 +513,7 @@ TEST(Study, Fig9ClaimsHoldWhereWeReproduceThemAndFailWhereWeDoNot) {
   // 0.1 cm, 11.9 at 3 cm); in sigma_theta it does not (about 1 at 5 deg: the calibration no
   // longer helps). Both are asserted, so that a change either way is seen; and at low noise the
   // closed form reaches most of what the true model can (14.7 of 21.9 at 1 cm, 1 deg).
-  const TrialConfig config;
-  StudyGrids g;
-  g.fig9_landmarks = {5};
-  g.sigma_s_m = {0.001, 0.03};
-  g.sigma_theta_deg = {1.0, 5.0};
-  RunOptions o;
-  o.trials = 40;
-  o.joint_trials = 0;
-  o.seed = 11;
-  o.threads = 2;
-  const auto out = runStudy({Figure::fig9}, g, config, o);
+  const auto out = fig9AtFiveLandmarks(TrialConfig{}, {0.001, 0.03}, {1.0, 5.0}, fig9Options(11));
   ASSERT_FALSE(out.interrupted);
   std::map<std::pair<double, double>, std::map<std::string, double>> cell;
   for (const auto& row : csvRows(out.files.at(0).second)) cell[{row.at("sigma_s_m"), row.at("sigma_theta_deg")}] = row;
