@@ -47,7 +47,7 @@ int main(int argc, char** argv) {
     if (verbose || r.primary_cause != effect)
       for (const auto& k : r.candidates)
         std::printf("    %-16s p=%.2e holm=%.2e score p=%.1e es=%7.1f gain=%+.5f (se %.5f) dAIC=%9.1f k=%d id=%d (%.3f, se %.2g) mse=%.1f\n",
-                    k.effect.c_str(), k.p_value, k.p_holm, k.score_p_value, k.effect_size, k.heldout_gain_nats_per_point, k.heldout_gain_se,
+                    toString(k.effect), k.p_value, k.p_holm, k.score_p_value, k.effect_size, k.heldout_gain_nats_per_point, k.heldout_gain_se,
                     k.delta_aic, k.parameters, k.identifiable, k.information_ratio, k.standard_error, k.calibration_mse_ratio);
     if (verbose)
       for (const auto& k : r.candidates)

@@ -80,7 +80,7 @@ Outcome trial(const RangeModel& sensor, const Setup& s, std::uint64_t seed) {
   cc.closed_form_rule = calibration::OrderRule::aic;
   const CalibrationModel m = calibration::calibrateAgainstTruth(pairs, cc, {}, s.window_min, s.window_max);
   Outcome o;
-  if (m.status != "ok") return o;
+  if (!m.status.ok()) return o;
   RangeModel model = m.model;
   model.range_min_m = s.window_min;
   model.range_max_m = s.window_max;

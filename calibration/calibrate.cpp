@@ -518,12 +518,12 @@ int addTriangulated(CalibrationModel& m, const std::vector<LandmarkEstimate>& tr
 
 /// The refusal when no landmark could be triangulated: the first three reasons, what to record.
 void refuseNoUsableLandmark(CalibrationModel& m, const std::vector<LandmarkEstimate>& tri) {
-  m.status = "no_usable_landmark";
-  m.message = tri.empty() ? "no landmark was observed (check what lidarcal detect finds)"
+  m.status.code = StatusCode::no_usable_landmark;
+  m.status.message = tri.empty() ? "no landmark was observed (check what lidarcal detect finds)"
                           : "no landmark could be triangulated";
-  for (std::size_t i = 0; i < tri.size() && i < 3; ++i) m.message += "; landmark " + std::to_string(tri[i].id) + ": " + m.landmarks[i].status;
-  if (tri.size() > 3) m.message += "; and " + std::to_string(tri.size() - 3) + " more";
-  m.message += ". Record 3 or more stops along a straight line past 3 or more poles (cylinders 5-30 cm across, "
+  for (std::size_t i = 0; i < tri.size() && i < 3; ++i) m.status.message += "; landmark " + std::to_string(tri[i].id) + ": " + m.landmarks[i].status;
+  if (tri.size() > 3) m.status.message += "; and " + std::to_string(tri.size() - 3) + " more";
+  m.status.message += ". Record 3 or more stops along a straight line past 3 or more poles (cylinders 5-30 cm across, "
                "free-standing, 0.5-4 m away), give their radius with --radius if they are thinner, or give measured "
                "distances with --reference";
 }
@@ -536,14 +536,14 @@ void refuseTooFewObservations(CalibrationModel& m, const LandmarkObservations& o
   for (const auto& s : obs.sightings)
     for (const auto& l : tri)
       if (l.ok() && l.id == s.landmark && !s.beams.empty() && std::isfinite(s.beams[centralBeam(s)].range_m)) ++read;
-  m.status = "too_few_observations";
-  m.message = "only " + count(pairs, "landmark-stop distance") + " from " + count(static_cast<std::size_t>(usable), "triangulated landmark") +
+  m.status.code = StatusCode::too_few_observations;
+  m.status.message = "only " + count(pairs, "landmark-stop distance") + " from " + count(static_cast<std::size_t>(usable), "triangulated landmark") +
               " (at least " + std::to_string(config.max_order + 3) + " needed)";
   if (read > 0 && pairs == 0)
-    m.message += ": none of the " + count(read, "reading") +
+    m.status.message += ": none of the " + count(read, "reading") +
                  " meets its triangulated landmark in front of the sensor, so the bearing-only positions are wrong "
                  "(a path of " + metres(baseline) + " is short for landmarks this far)";
-  m.message += ": record more stops along a longer straight line past 3 or more poles, or give measured distances with "
+  m.status.message += ": record more stops along a longer straight line past 3 or more poles, or give measured distances with "
                "--reference";
 }
 
@@ -616,8 +616,8 @@ std::vector<double> closedFormCovariance(const LandmarkObservations& obs, const 
 bool refuseJoint(CalibrationModel& m, const JointResult& j, const LandmarkObservations& obs, int usable,
                  double baseline) {
   if (!j.ok()) {
-    m.status = "joint_failed";
-    m.message = j.message + " (" + count(static_cast<std::size_t>(usable), "landmark") + " triangulated over a path of " +
+    m.status.code = StatusCode::joint_failed;
+    m.status.message = j.status.message + " (" + count(static_cast<std::size_t>(usable), "landmark") + " triangulated over a path of " +
                 metres(baseline) + ": the beams that saw them do not meet the triangulated circles). Record stops along "
                 "a longer straight line past 3 or more poles, give the pole radius (--radius), or use --method "
                 "closed-form";
@@ -631,22 +631,22 @@ bool refuseJoint(CalibrationModel& m, const JointResult& j, const LandmarkObserv
   if (!(*near > 0.0)) {
     // Collapsed: the landmarks moved onto the stops, and a bias of any slope explains readings at
     // zero distance (seen on a YDLIDAR recording of four poles: slope -776).
-    m.status = "joint_failed";
-    m.message = "the joint refinement collapsed: it places a landmark at a stop (a beam distance of " +
+    m.status.code = StatusCode::joint_failed;
+    m.status.message = "the joint refinement collapsed: it places a landmark at a stop (a beam distance of " +
                 std::to_string(*near) + " m)" + advice;
     return true;
   }
   if (!isMonotone(j.model.bias, *near, *far)) {
-    m.status = "joint_failed";
-    m.message = "the joint refinement's bias falls with distance somewhere in " + std::to_string(*near) + "-" +
+    m.status.code = StatusCode::joint_failed;
+    m.status.message = "the joint refinement's bias falls with distance somewhere in " + std::to_string(*near) + "-" +
                 std::to_string(*far) + " m, where it saw the landmarks, so no reading there has one distance" + advice;
     return true;
   }
   if (!(obs.range_max_m < 1e8)) return false;
   const double limit = 1.5 * obs.range_max_m + 0.5;
   if (*far <= limit) return false;
-  m.status = "joint_failed";
-  m.message = "the joint refinement ran away: it places a landmark " + std::to_string(*far) +
+  m.status.code = StatusCode::joint_failed;
+  m.status.message = "the joint refinement ran away: it places a landmark " + std::to_string(*far) +
               " m from a stop, beyond the sensor's range limit of " + std::to_string(obs.range_max_m) + " m" + advice;
   return true;
 }
@@ -686,7 +686,7 @@ void fillJoint(CalibrationModel& m, const JointStage& js, const CalibrationConfi
   if (!j.distances_m.empty())
     m.fitted_range_m = std::make_pair(*std::min_element(j.distances_m.begin(), j.distances_m.end()),
                                       *std::max_element(j.distances_m.begin(), j.distances_m.end()));
-  if (!j.converged) m.message = "joint refinement: " + j.message;  // usable, but say so
+  if (!j.converged) m.status.message = "joint refinement: " + j.status.message;  // usable, but say so
 }
 
 }  // namespace
@@ -702,8 +702,8 @@ CalibrationModel calibrate(const LandmarkObservations& obs, const CalibrationCon
   // turning on the spot, or standing still) give every landmark the same bearing line.
   const double baseline = pathExtent(obs.commanded);
   if (const auto problem = baselineProblem(obs.commanded, config); problem && !obs.sightings.empty()) {
-    m.status = "no_baseline";
-    m.message = *problem;
+    m.status.code = StatusCode::no_baseline;
+    m.status.message = *problem;
     return m;
   }
 
@@ -716,8 +716,8 @@ CalibrationModel calibrate(const LandmarkObservations& obs, const CalibrationCon
     return m;
   }
   if (!(radius > 0.0)) {
-    m.status = "no_radius";
-    m.message = "the landmark radius is unknown and could not be estimated";
+    m.status.code = StatusCode::no_radius;
+    m.status.message = "the landmark radius is unknown and could not be estimated";
     return m;
   }
 
@@ -757,8 +757,8 @@ CalibrationModel calibrateAgainstTruth(const std::vector<RangePair>& pairs, cons
   m.model.range_min_m = range_min_m;
   m.model.range_max_m = range_max_m;
   if (pairs.size() < static_cast<std::size_t>(config.max_order) + 3) {
-    m.status = "too_few_observations";
-    m.message = "too few readings with a known distance";
+    m.status.code = StatusCode::too_few_observations;
+    m.status.message = "too few readings with a known distance";
     return m;
   }
   const Admissible window = range_max_m < 1e8 ? invertibleOver(range_min_m, range_max_m) : Admissible{};

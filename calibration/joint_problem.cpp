@@ -483,8 +483,8 @@ void JointProblem::fixKnownGeometry(ceres::Problem& problem) {
 JointResult JointProblem::run() {
   selectReadings();
   if (readings_.size() < static_cast<std::size_t>(config_.order + 2) * 4) {
-    out_.status = JointStatus::too_few_readings;
-    out_.message = "too few landmark readings for the joint refinement (" + std::to_string(readings_.size()) + ")";
+    out_.status.code = StatusCode::too_few_readings;
+    out_.status.message = "too few landmark readings for the joint refinement (" + std::to_string(readings_.size()) + ")";
     return out_;
   }
   previous_noise_size_ = noiseSize(out_.model.noise);
@@ -495,7 +495,7 @@ JointResult JointProblem::run() {
     if (!solve(outer)) return out_;
     if (outer > 0 && reestimateNoise(outer)) break;
   }
-  out_.status = JointStatus::ok;
+  out_.status.code = StatusCode::ok;
   reportEstimates();
   reportPriorLikelihood();
   reportEffects();
@@ -521,8 +521,8 @@ bool JointProblem::solve(int outer) {
   ceres::Problem problem(problem_options);
   addResiduals(problem, true);
   if (!problem.HasParameterBlock(alpha_)) {
-    out_.status = JointStatus::no_readings;
-    out_.message = "no landmark reading left to fit";
+    out_.status.code = StatusCode::no_readings;
+    out_.status.message = "no landmark reading left to fit";
     return false;
   }
   if (config_.estimate_radius) problem.SetParameterLowerBound(radius_, 0, 1e-3);
@@ -533,8 +533,8 @@ bool JointProblem::solve(int outer) {
   out_.solver_iterations += static_cast<int>(summary.iterations.size());
   out_.converged = summary.termination_type == ceres::CONVERGENCE;
   if (!summary.IsSolutionUsable()) {
-    out_.status = JointStatus::solver_failed;
-    out_.message = "Ceres did not find a usable solution: " + summary.message;
+    out_.status.code = StatusCode::solver_failed;
+    out_.status.message = "Ceres did not find a usable solution: " + summary.message;
     out_.converged = false;
     return false;
   }
@@ -555,7 +555,7 @@ bool JointProblem::reestimateNoise(int outer) {
   previous_noise_size_ = s_now;
   if (outer == config_.outer_iterations) {
     out_.converged = false;
-    out_.message = "noise model still changing after " + std::to_string(config_.outer_iterations) + " re-estimations";
+    out_.status.message = "noise model still changing after " + std::to_string(config_.outer_iterations) + " re-estimations";
   }
   return false;
 }

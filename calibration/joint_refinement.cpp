@@ -98,15 +98,22 @@ double readingLogLikelihood(double y, double mean, double sigma, double mixed_fr
   return hi + std::log(std::exp(std::log(keep) + log_normal - hi) + std::exp(log_other - hi));
 }
 
-const char* toString(JointStatus s) {
-  switch (s) {
-    case JointStatus::not_run: return "not_run";
-    case JointStatus::ok: return "ok";
-    case JointStatus::too_few_readings: return "too_few_readings";
-    case JointStatus::no_readings: return "no_readings";
-    case JointStatus::solver_failed: return "solver_failed";
+bool JointEffects::enable(Effect e) {
+  switch (e) {
+    case Effect::incidence_noise: incidence_noise = true; return true;
+    case Effect::incidence_bias: incidence_bias = true; return true;
+    case Effect::landmark_bias: landmark_offsets = true; return true;
+    case Effect::heading_error: estimate_heading = true; return true;
+    case Effect::range_drift: drift = true; return true;
+    case Effect::mixed_pixels: mixed_pixels = true; return true;
+    case Effect::angle_offset: angle_offset = true; return true;
+    case Effect::range_noise_law: noise_exponent = true; return true;
+    case Effect::odometry_scale: odometry_scale = true; return true;
+    case Effect::heavy_tails:
+    case Effect::quantisation:
+    case Effect::dark_surface: return false;
   }
-  return "?";
+  return false;
 }
 
 JointResult refineJoint(const LandmarkObservations& obs, const JointInit& init, const JointConfig& config) {

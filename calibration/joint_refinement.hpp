@@ -26,8 +26,10 @@
 
 #include <Eigen/Core>
 
+#include "common/effect.hpp"
 #include "common/landmark_observations.hpp"
 #include "common/range_model.hpp"
+#include "common/status.hpp"
 
 namespace lidarcal::calibration {
 
@@ -44,6 +46,9 @@ struct JointEffects {
   bool odometry_scale = false;    ///< commanded steps scaled by (1 + s), s estimated (the true step length differs)
   /// Whether a term in the mean of the readings is on (they need the extended residual).
   bool anyMean() const { return landmark_offsets || drift || angle_offset || incidence_bias; }
+  /// Switches on the term that models `e` (heading_error: the per-stop heading, on by default);
+  /// false when the refinement has no term for it (info(e).joint_term).
+  bool enable(Effect e);
 };
 
 /// Estimates of the effect terms; neutral values for the terms that were off.
@@ -168,19 +173,12 @@ struct JointInit {
   JointEffectEstimates effects;            ///< effect terms to start from (used for the terms switched on)
 };
 
-/// How a joint refinement ended (JointResult::status).
-enum class JointStatus {
-  not_run,           ///< a result nobody computed (the default)
-  ok,                ///< a solution; JointResult::converged and message say how settled it is
-  too_few_readings,  ///< fewer landmark readings than four per bias parameter
-  no_readings,       ///< no landmark reading left to fit at a solve
-  solver_failed,     ///< Ceres found no usable solution
-};
-const char* toString(JointStatus s);
-
 struct JointResult {
-  JointStatus status = JointStatus::not_run;  ///< ok, or why there is no solution (message says more)
-  bool ok() const { return status == JointStatus::ok; }
+  /// ok (converged and status.message say how settled the solution is), or why there is none:
+  /// not_run (a result nobody computed, the default), too_few_readings (fewer landmark readings
+  /// than four per bias parameter), no_readings (none left to fit at a solve), solver_failed.
+  Status status{StatusCode::not_run, ""};
+  bool ok() const { return status.ok(); }
   std::vector<Pose2> poses;                ///< refined stop poses (one per stop when ok)
   std::map<int, Eigen::Vector2d> centres;  ///< refined landmark centres
   std::map<int, Eigen::Matrix2d> centre_covariance;  ///< per landmark, m^2 (when covariance is on)
@@ -212,7 +210,6 @@ struct JointResult {
   int solver_iterations = 0;               ///< Ceres iterations, all solves
   int outer_iterations = 0;                ///< noise re-estimations done
   bool converged = false;                  ///< last solve converged and the noise settled
-  std::string message;                     ///< why not, when not ok; how settled, when ok
   JointEffectEstimates effects;            ///< effect terms (neutral when off)
   int effect_parameters = 0;               ///< parameters of the effect terms switched on (heading: one per stop)
   double window_min_m = 0.0;               ///< reading window of the outlier floor and the mixed pixels, metres

@@ -347,8 +347,8 @@ CalibrationModel calibrateWithReference(const std::vector<KnownReading>& reading
   }
   const std::size_t groups = stops.size();
   if (groups < 3) {
-    m.status = "too_few_reference_stops";
-    m.message = "known distances at " + std::to_string(groups) +
+    m.status.code = StatusCode::too_few_reference_stops;
+    m.status.message = "known distances at " + std::to_string(groups) +
                 " stop(s): a range model needs measured distances at 3 or more stops (better 10 or more, spread over "
                 "the range you will use the sensor at)";
     return m;
@@ -392,8 +392,8 @@ CalibrationModel calibrateWithReference(const std::vector<KnownReading>& reading
     if (row.invertible && (best < 0 || f.cv_mse_m2 < fits[static_cast<std::size_t>(best)].cv_mse_m2)) best = n - 1;
   }
   if (best < 0) {
-    m.status = "no_invertible_order";
-    m.message = "no polynomial order fitted to the known distances increases over " + fixed(d_lo, 3) + "-" +
+    m.status.code = StatusCode::no_invertible_order;
+    m.status.message = "no polynomial order fitted to the known distances increases over " + fixed(d_lo, 3) + "-" +
                 fixed(d_hi, 3) + " m: measure more distances across that range";
     return m;
   }

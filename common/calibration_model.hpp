@@ -12,6 +12,7 @@
 
 #include "common/pose2.hpp"
 #include "common/range_model.hpp"
+#include "common/status.hpp"
 
 namespace lidarcal {
 
@@ -76,8 +77,9 @@ struct CalibrationModel {
   /// calibration data; `correct` applies the bias only.
   std::map<std::string, double> effects;
   // Diagnostics
-  std::string status = "ok";         ///< ok or a reason
-  std::string message;               ///< details a user can act on
+  /// ok, or why there is no usable model (model.json diagnostics.status), with a message a user
+  /// can act on (also when ok: a note such as an unsettled noise model).
+  Status status;
   int iterations = 0;                ///< solver iterations
   double residual_rms_m = 0.0;       ///< RMS of range residuals
   std::size_t readings = 0;          ///< readings used

@@ -5,7 +5,7 @@
 //
 // A beam that hits a surface at true distance d with incidence phi (angle between the beam and
 // the surface normal) in scan t reads
-//   y = f(d) + b_inc (1 - cos phi) + o_surface + c_drift t + sigma(d) (1 / cos phi)^gamma e,
+//   y = f(d) + b_inc (1 - cos phi) + o_surface + c_drift (t - t_ref) + sigma(d) (1 / cos phi)^gamma e,
 // with e a unit normal (or a unit-variance Student t with `noise_student_dof` degrees of freedom),
 // rounded to a multiple of `range_resolution_m`; an edge beam (depth discontinuity next to it)
 // is a mixed pixel with probability `mixed_pixel_fraction`: it reads a distance drawn uniformly
@@ -23,6 +23,10 @@ struct RangeEffects {
   double incidence_bias_m = 0.0;
   /// c_drift: the reading grows by this much per scan (warm-up, temperature), metres per scan. 0 = off.
   double range_drift_m_per_scan = 0.0;
+  /// t_ref: the scan index at which the drift term is zero. One convention for the simulator and
+  /// every fit: a fit centres it on its mean scan (and reports it: model.json
+  /// effects.range_drift_reference_scan), a scene's default 0 is the first scan.
+  double range_drift_reference_scan = 0.0;
   /// Probability that a beam at a depth discontinuity returns a mixed reading, [0, 1]. 0 = off.
   double mixed_pixel_fraction = 0.0;
   /// Degrees of freedom of a Student-t range noise (heavy tails), > 2; 0 = Gaussian.
@@ -46,9 +50,9 @@ inline double incidenceNoiseFactor(double gamma, double cos_phi) {
 }
 
 /// The mean reading of a beam (the equation at the top of this file without the noise):
-/// f(d) + o + c t + b (1 - cos phi), f_d = f(d), o the surface offset, c the drift per scan at
-/// scan t (from whatever origin the caller uses: the simulator the first scan, the joint
-/// refinement the mean scan), b the incidence bias, cos_phi the clamped cosine of the incidence.
+/// f(d) + o + c t + b (1 - cos phi), f_d = f(d), o the surface offset, c the drift per scan,
+/// t the scan index minus the drift's reference scan t_ref (RangeEffects::range_drift_reference_scan),
+/// b the incidence bias, cos_phi the clamped cosine of the incidence.
 /// The one expression of it, for the simulator, the Ceres residuals (T a jet) and the
 /// evaluation; the terms are summed in this order everywhere.
 template <typename T>

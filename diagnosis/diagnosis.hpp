@@ -25,28 +25,21 @@
 #include <string>
 #include <vector>
 
+#include "common/effect.hpp"
 #include "common/range_model.hpp"
+#include "common/status.hpp"
 
 namespace lidarcal::diagnosis {
 
-/// Candidate effect names, as they appear in diagnosis.json.
-namespace effect {
-inline constexpr const char* kIncidenceNoise = "incidence_noise";
-inline constexpr const char* kIncidenceBias = "incidence_bias";
-inline constexpr const char* kLandmarkBias = "landmark_bias";
-inline constexpr const char* kHeadingError = "heading_error";
-inline constexpr const char* kRangeDrift = "range_drift";
-inline constexpr const char* kMixedPixels = "mixed_pixels";
-inline constexpr const char* kAngleOffset = "angle_offset";
-inline constexpr const char* kRangeNoiseLaw = "range_noise_law";
-inline constexpr const char* kOdometryScale = "odometry_scale";  ///< beyond the issue's list: step length error
-inline constexpr const char* kHeavyTails = "heavy_tails";        ///< beyond the list: Student-t noise
-inline constexpr const char* kQuantisation = "quantisation";     ///< beyond the list: readings on a grid
-inline constexpr const char* kRangeOffset = "range_offset";      ///< static data: constant offset alpha_0
-inline constexpr const char* kDarkSurface = "dark_surface";      ///< static data with intensity: dark surfaces return wide errors
-inline constexpr const char* kNone = "none";
-inline constexpr const char* kNotIdentifiable = "not_identifiable";
-}  // namespace effect
+/// The verdicts that are not an effect (DiagnosisResult::primary_cause, TailAttribution::cause);
+/// the effects themselves are lidarcal::Effect (common/effect.hpp).
+namespace cause {
+inline constexpr const char* kNone = "none";                          ///< nothing significant
+inline constexpr const char* kNotIdentifiable = "not_identifiable";  ///< significant, but the data cannot tell which
+inline constexpr const char* kUnknown = "unknown";                    ///< tails: no covariate explains them
+}  // namespace cause
+/// Whether a verdict (primary_cause, TailAttribution::cause) names the effect.
+inline bool names(const std::string& verdict, Effect e) { return verdict == toString(e); }
 
 enum class DiagnoseMode { sequence, static_scene };
 const char* toString(DiagnoseMode mode);  ///< "sequence" or "static"
@@ -67,7 +60,7 @@ struct DiagnoseConfig {
   /// NaN: estimated from the straightness of the walls (then an incidence-dependent bias, which
   /// bends walls much alike, is hard to tell from it).
   double static_range_offset_m = std::numeric_limits<double>::quiet_NaN();
-  std::vector<std::string> candidates;  ///< effects to test; empty: every candidate of the mode
+  std::vector<Effect> candidates;  ///< effects to test; empty: every candidate of the mode
   void validate() const;          ///< throws std::invalid_argument
 };
 
@@ -86,7 +79,7 @@ struct Discrepancy {
 
 /// One candidate effect.
 struct CandidateResult {
-  std::string effect;                     ///< name (effect::k...)
+  Effect effect = Effect::incidence_noise;  ///< the effect tested
   /// p-value of the effect: m min(p of the held-out gain, p of the score statistic aimed at it,
   /// p of the likelihood ratio where it applies) over the m tests that apply (Bonferroni). NaN
   /// when none applies.
@@ -142,7 +135,7 @@ struct ResidualRecord {
 /// One covariate of the tail model (diagnosis/tails.hpp): how much of the tails it explains.
 struct TailCovariateResult {
   std::string covariate;          ///< edge, grazing, range or dark
-  std::string effect;             ///< the physical effect it stands for (mixed_pixels, incidence_noise, range_noise_law, dark_surface)
+  Effect effect = Effect::mixed_pixels;  ///< the physical effect it stands for (mixed_pixels, incidence_noise, range_noise_law, dark_surface)
   double coefficient = 0.0;       ///< its beta in logit pi (fitted on all the data, per unit of the covariate)
   double unique_gain_nats_per_point = 0.0;  ///< held-out gain of the full tail model over the model without it
   double unique_gain_se = 0.0;    ///< its standard error (blocks: scans)
@@ -189,12 +182,11 @@ struct TailAttribution {
   /// them): incidence_noise_exponent, noise_exponent, mixed_pixel_fraction, and their held-out
   /// gains over the pooled model (..._gain, ..._gain_se, nats per reading).
   std::map<std::string, double> robust;
-  std::string cause = "unknown";  ///< the effect of the covariate with the largest significant unique gain, or unknown
+  std::string cause = cause::kUnknown;  ///< the effect of the covariate with the largest significant unique gain, or unknown
 };
 
 struct DiagnosisResult {
-  std::string status = "ok";          ///< ok, or why the data cannot be diagnosed
-  std::string message;                ///< what to do about it
+  Status status;                      ///< ok, or why the data cannot be diagnosed and what to do about it
   DiagnoseMode mode = DiagnoseMode::sequence;
   // Data
   std::size_t scans = 0, stops = 0, readings = 0;  ///< size of the data diagnosed
@@ -210,7 +202,7 @@ struct DiagnosisResult {
   // Tests
   std::vector<Discrepancy> battery;       ///< discrepancy statistics
   std::vector<CandidateResult> candidates;  ///< one per candidate effect
-  std::string primary_cause = effect::kNone;  ///< an effect name, none or not_identifiable
+  std::string primary_cause = cause::kNone;  ///< an effect's name (toString(Effect)), none or not_identifiable
   std::string decision;               ///< why that cause (rule applied, competing effects)
   TailAttribution tails;              ///< static mode: what the tails are made of
   // Extended model

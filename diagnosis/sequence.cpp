@@ -27,38 +27,8 @@ namespace {
 
 constexpr double kClip = 3.0;  // Huber clipping of standardised residuals in the score statistics
 
-std::vector<std::string> allCandidates() {
-  return {effect::kIncidenceNoise, effect::kIncidenceBias, effect::kLandmarkBias, effect::kHeadingError,
-          effect::kRangeDrift,     effect::kMixedPixels,   effect::kAngleOffset,  effect::kRangeNoiseLaw,
-          effect::kOdometryScale};
-}
-
-/// The score statistic that tests each candidate (a member of the battery).
-const char* statisticOf(const std::string& e) {
-  if (e == effect::kIncidenceNoise) return "spread_vs_incidence";
-  if (e == effect::kIncidenceBias) return "residual_vs_incidence";
-  if (e == effect::kLandmarkBias) return "landmark_identity";
-  if (e == effect::kHeadingError) return "heading_within_stop";
-  if (e == effect::kRangeDrift) return "residual_vs_time";
-  if (e == effect::kMixedPixels) return "edge_excess";
-  if (e == effect::kAngleOffset) return "path_rotation";
-  if (e == effect::kRangeNoiseLaw) return "spread_vs_range";
-  if (e == effect::kOdometryScale) return "path_scale";
-  return "";
-}
-
-JointConfig effectConfig(JointConfig c, const std::string& e) {
-  JointEffects& fx = c.effects;
-  if (e == effect::kIncidenceNoise) fx.incidence_noise = true;
-  else if (e == effect::kIncidenceBias) fx.incidence_bias = true;
-  else if (e == effect::kLandmarkBias) fx.landmark_offsets = true;
-  else if (e == effect::kHeadingError) fx.estimate_heading = true;
-  else if (e == effect::kRangeDrift) fx.drift = true;
-  else if (e == effect::kMixedPixels) fx.mixed_pixels = true;
-  else if (e == effect::kAngleOffset) fx.angle_offset = true;
-  else if (e == effect::kRangeNoiseLaw) fx.noise_exponent = true;
-  else if (e == effect::kOdometryScale) fx.odometry_scale = true;
-  else throw std::invalid_argument("diagnose: unknown effect '" + e + "' for a sequence");
+JointConfig effectConfig(JointConfig c, Effect e) {
+  if (!c.effects.enable(e)) throw std::invalid_argument(std::string("diagnose: no joint term for the effect '") + toString(e) + "'");
   return c;
 }
 
@@ -469,7 +439,7 @@ ReplicaPlan replicaPlan(const LandmarkObservations& obs, const JointResult& fit,
   c.effects.incidence_noise_exponent = fit.effects.incidence_noise_exponent;
   c.effects.incidence_bias_m = fit.effects.incidence_bias_m;
   c.effects.range_drift_m_per_scan = fit.effects.drift_m_per_scan;
-  c.model.bias.alpha[0] -= fit.effects.drift_m_per_scan * fit.effects.drift_reference_scan;
+  c.effects.range_drift_reference_scan = fit.effects.drift_reference_scan;
   c.effects.mixed_pixel_fraction = fit.effects.mixed_pixel_fraction;
   c.mount_yaw_rad = fit.effects.angle_offset_rad;
   if (c.effects.mixed_pixel_fraction > 0.0) {
@@ -726,25 +696,25 @@ Identifiability variety(const std::vector<Row>& rs, Covariate covariate, double 
 /// Mean-type effects: the model's Jacobian in the nuisance parameters and in the effect; I_eff
 /// is the information on the effect left after profiling the nuisance out. Variance-type
 /// effects: the variety of their covariate beyond a constant (the noise scale).
-std::map<std::string, Identifiability> identifiability(const LandmarkObservations& obs, const JointResult& fit,
+std::map<Effect, Identifiability> identifiability(const LandmarkObservations& obs, const JointResult& fit,
                                                        const std::vector<Row>& rs, const JointConfig& cfg) {
   const Design x = design(obs, fit, rs, cfg);
   const Nuisance nu = nuisance(x);
-  std::map<std::string, Identifiability> out;
-  if (x.landmarks >= 2) out[effect::kLandmarkBias] = assess(x, nu, x.x_lm, 0.01);
-  else out[effect::kLandmarkBias] = Identifiability{0.0, std::numeric_limits<double>::infinity(), 0.01};
-  out[effect::kHeadingError] = assess(x, nu, x.x_head, deg2rad(1.0));
-  out[effect::kAngleOffset] = assess(x, nu, x.x_angle, deg2rad(1.0));
-  out[effect::kRangeDrift] = assess(x, nu, x.x_drift, x.tmax > x.tmin ? 0.01 / (x.tmax - x.tmin) : 0.0);
-  out[effect::kIncidenceBias] = assess(x, nu, x.x_inc, 0.01);
-  out[effect::kOdometryScale] = assess(x, nu, x.x_scale, 0.01);
-  out[effect::kIncidenceNoise] = variety(rs, [](const JointReading& r) { return -std::log(r.cos_incidence); }, 0.5);
-  out[effect::kRangeNoiseLaw] =
+  std::map<Effect, Identifiability> out;
+  if (x.landmarks >= 2) out[Effect::landmark_bias] = assess(x, nu, x.x_lm, 0.01);
+  else out[Effect::landmark_bias] = Identifiability{0.0, std::numeric_limits<double>::infinity(), 0.01};
+  out[Effect::heading_error] = assess(x, nu, x.x_head, deg2rad(1.0));
+  out[Effect::angle_offset] = assess(x, nu, x.x_angle, deg2rad(1.0));
+  out[Effect::range_drift] = assess(x, nu, x.x_drift, x.tmax > x.tmin ? 0.01 / (x.tmax - x.tmin) : 0.0);
+  out[Effect::incidence_bias] = assess(x, nu, x.x_inc, 0.01);
+  out[Effect::odometry_scale] = assess(x, nu, x.x_scale, 0.01);
+  out[Effect::incidence_noise] = variety(rs, [](const JointReading& r) { return -std::log(r.cos_incidence); }, 0.5);
+  out[Effect::range_noise_law] =
       variety(rs, [&](const JointReading& r) { return std::log(std::max(fit.model.bias(r.d_m), 1e-3)); }, 0.5);
   std::size_t edges = 0;
   for (const auto& r : rs) edges += r.r.edge;
   const bool both = edges >= 10 && rs.size() - edges >= 10;
-  out[effect::kMixedPixels] = Identifiability{both ? 1.0 : 0.0, both ? 0.0 : std::numeric_limits<double>::infinity(), 0.02};
+  out[Effect::mixed_pixels] = Identifiability{both ? 1.0 : 0.0, both ? 0.0 : std::numeric_limits<double>::infinity(), 0.02};
   return out;
 }
 
@@ -836,29 +806,29 @@ double calibrationMseRatio(const LandmarkObservations& obs, const JointResult& f
 }
 
 /// Size of a fitted effect in the unit of its identifiability standard error (RMS over components).
-double effectSize(const std::string& e, const JointResult& f) {
+double effectSize(Effect e, const JointResult& f) {
   const auto& x = f.effects;
-  if (e == effect::kLandmarkBias) {
+  if (e == Effect::landmark_bias) {
     double s = 0.0;
     for (const auto& [id, o] : x.landmark_offset_m) s += o * o;
     return x.landmark_offset_m.empty() ? 0.0 : std::sqrt(s / static_cast<double>(x.landmark_offset_m.size()));
   }
-  if (e == effect::kHeadingError) return x.heading_rms_rad;
-  if (e == effect::kRangeDrift) return std::abs(x.drift_m_per_scan);
-  if (e == effect::kAngleOffset) return std::abs(x.angle_offset_rad);
-  if (e == effect::kIncidenceBias) return std::abs(x.incidence_bias_m);
-  if (e == effect::kOdometryScale) return std::abs(x.odometry_scale);
-  if (e == effect::kIncidenceNoise) return std::abs(x.incidence_noise_exponent);
-  if (e == effect::kRangeNoiseLaw) return std::abs(x.noise_exponent - 2.0);
+  if (e == Effect::heading_error) return x.heading_rms_rad;
+  if (e == Effect::range_drift) return std::abs(x.drift_m_per_scan);
+  if (e == Effect::angle_offset) return std::abs(x.angle_offset_rad);
+  if (e == Effect::incidence_bias) return std::abs(x.incidence_bias_m);
+  if (e == Effect::odometry_scale) return std::abs(x.odometry_scale);
+  if (e == Effect::incidence_noise) return std::abs(x.incidence_noise_exponent);
+  if (e == Effect::range_noise_law) return std::abs(x.noise_exponent - 2.0);
   return 0.0;
 }
 
-std::map<std::string, double> effectEstimates(const std::string& e, const JointResult& f) {
+std::map<std::string, double> effectEstimates(Effect e, const JointResult& f) {
   const auto& x = f.effects;
   std::map<std::string, double> m;
-  if (e == effect::kIncidenceNoise) m["incidence_noise_exponent"] = x.incidence_noise_exponent;
-  if (e == effect::kIncidenceBias) m["incidence_bias_m"] = x.incidence_bias_m;
-  if (e == effect::kLandmarkBias) {
+  if (e == Effect::incidence_noise) m["incidence_noise_exponent"] = x.incidence_noise_exponent;
+  if (e == Effect::incidence_bias) m["incidence_bias_m"] = x.incidence_bias_m;
+  if (e == Effect::landmark_bias) {
     double s = 0.0;
     for (const auto& [id, o] : x.landmark_offset_m) {
       m["landmark_offset_m[" + std::to_string(id) + "]"] = o;
@@ -866,16 +836,16 @@ std::map<std::string, double> effectEstimates(const std::string& e, const JointR
     }
     m["landmark_offset_rms_m"] = x.landmark_offset_m.empty() ? 0.0 : std::sqrt(s / static_cast<double>(x.landmark_offset_m.size()));
   }
-  if (e == effect::kHeadingError) m["heading_rms_deg"] = rad2deg(x.heading_rms_rad);
-  if (e == effect::kRangeDrift) m["range_drift_m_per_scan"] = x.drift_m_per_scan;
-  if (e == effect::kMixedPixels) m["mixed_pixel_fraction"] = x.mixed_pixel_fraction;
-  if (e == effect::kAngleOffset) m["angle_offset_deg"] = rad2deg(x.angle_offset_rad);
-  if (e == effect::kRangeNoiseLaw) m["noise_exponent"] = x.noise_exponent;
-  if (e == effect::kOdometryScale) m["odometry_scale"] = x.odometry_scale;
+  if (e == Effect::heading_error) m["heading_rms_deg"] = rad2deg(x.heading_rms_rad);
+  if (e == Effect::range_drift) m["range_drift_m_per_scan"] = x.drift_m_per_scan;
+  if (e == Effect::mixed_pixels) m["mixed_pixel_fraction"] = x.mixed_pixel_fraction;
+  if (e == Effect::angle_offset) m["angle_offset_deg"] = rad2deg(x.angle_offset_rad);
+  if (e == Effect::range_noise_law) m["noise_exponent"] = x.noise_exponent;
+  if (e == Effect::odometry_scale) m["odometry_scale"] = x.odometry_scale;
   return m;
 }
 
-std::map<std::string, double> sceneKeys(const std::string& e, const JointResult& f, const ReplicaPlan& plan) {
+std::map<std::string, double> sceneKeys(Effect e, const JointResult& f, const ReplicaPlan& plan) {
   std::map<std::string, double> k;
   const auto& x = f.effects;
   const auto& c = plan.config;
@@ -883,17 +853,18 @@ std::map<std::string, double> sceneKeys(const std::string& e, const JointResult&
     k["sensor.bias_alpha[" + std::to_string(i) + "]"] = c.model.bias.alpha[i];
   if (c.model.noise.kind == NoiseKind::power) k["sensor.noise.exponent (kind power)"] = c.model.noise.exponent;
   k["sensor.noise.sigma_e"] = c.model.noise.sigma_e;
-  if (e == effect::kIncidenceNoise) k["sensor.effects.incidence_noise_exponent"] = x.incidence_noise_exponent;
-  if (e == effect::kIncidenceBias) k["sensor.effects.incidence_bias_m"] = x.incidence_bias_m;
-  if (e == effect::kLandmarkBias)
+  if (e == Effect::landmark_bias)
     for (std::size_t i = 0; i < plan.ids.size(); ++i)
       k["landmarks[" + std::to_string(i) + "].range_offset_m (id " + std::to_string(plan.ids[i]) + ")"] =
           c.landmarks[i].range_offset_m;
-  if (e == effect::kHeadingError) k["path.sigma_psi_deg"] = rad2deg(x.heading_rms_rad);
-  if (e == effect::kRangeDrift) k["sensor.effects.range_drift_m_per_scan"] = x.drift_m_per_scan;
-  if (e == effect::kMixedPixels) k["sensor.effects.mixed_pixel_fraction"] = x.mixed_pixel_fraction;
-  if (e == effect::kAngleOffset) k["sensor.mount_yaw_deg"] = rad2deg(x.angle_offset_rad);
-  if (e == effect::kOdometryScale) k["path.step_error_fraction"] = x.odometry_scale;
+  const std::map<Effect, double> value = {{Effect::incidence_noise, x.incidence_noise_exponent},
+                                          {Effect::incidence_bias, x.incidence_bias_m},
+                                          {Effect::heading_error, rad2deg(x.heading_rms_rad)},
+                                          {Effect::range_drift, x.drift_m_per_scan},
+                                          {Effect::mixed_pixels, x.mixed_pixel_fraction},
+                                          {Effect::angle_offset, rad2deg(x.angle_offset_rad)},
+                                          {Effect::odometry_scale, x.odometry_scale}};
+  if (const auto it = value.find(e); it != value.end()) k[info(e).scene_key] = it->second;
   return k;
 }
 
@@ -973,7 +944,7 @@ JointConfig baselineConfig(const CalibrationModel& cal, const CalibrationConfig&
 /// runDiagnosis; its steps in the order they run).
 class SequenceDiagnosis {
  public:
-  SequenceDiagnosis(const LandmarkObservations& obs, const DiagnoseConfig& config, const std::vector<std::string>& candidates,
+  SequenceDiagnosis(const LandmarkObservations& obs, const DiagnoseConfig& config, const std::vector<Effect>& candidates,
                     const std::vector<std::vector<double>>* truth)
       : obs_(obs), config_(config), candidates_(candidates), truth_(truth) {}
 
@@ -987,7 +958,7 @@ class SequenceDiagnosis {
   CandidateResult candidate(std::size_t c, const HeldOut& held, const DiagnosisResult& out) const;
   void afterCandidates(DiagnosisResult& out) const;
   /// An angle offset is one heading shared by all stops (nested), handled by parsimony.
-  std::vector<std::pair<std::string, std::string>> nestedEffects() const { return {{effect::kAngleOffset, effect::kHeadingError}}; }
+  std::vector<std::pair<Effect, Effect>> nestedEffects() const { return {{Effect::angle_offset, Effect::heading_error}}; }
   void refineCause(DiagnosisResult&) const {}  // no tail model in sequences (yet)
   Closeness closenessBaseline(const DiagnosisResult&) const { return closeness(measured_z_, sim_base_); }
   void extend(std::size_t c, DiagnosisResult& out) const;
@@ -998,14 +969,14 @@ class SequenceDiagnosis {
   JointResult bestOf(const JointInit& start, const JointConfig& cfg, bool both = true) const;
   void chooseOrder();
   void describeBaseline(DiagnosisResult& out) const;
-  JointInit candidateStart(const std::string& e) const;
+  JointInit candidateStart(Effect e) const;
   void foldLikelihoods(HeldOut& held) const;
   void odometryLikelihoods(HeldOut& held) const;
   void setIdentifiability(CandidateResult& r, const JointResult& fc, bool radius_known) const;
 
   const LandmarkObservations& obs_;
   const DiagnoseConfig& config_;
-  const std::vector<std::string>& candidates_;
+  const std::vector<Effect>& candidates_;
   const std::vector<std::vector<double>>* truth_;  // true ranges, aligned with the beams (optional)
   CalibrationConfig cc_;               // the calibration that starts the baseline
   CalibrationModel cal_;
@@ -1021,7 +992,7 @@ class SequenceDiagnosis {
   ZSample sim_base_;                   // residuals of the first replicas (closeness)
   std::vector<JointConfig> cfgs_;      // per candidate: its refinement
   std::vector<JointResult> fits_;      // per candidate: fit on all the data
-  std::map<std::string, Identifiability> ident_;
+  std::map<Effect, Identifiability> ident_;
 };
 
 bool SequenceDiagnosis::fitBaseline(DiagnosisResult& out) {
@@ -1030,8 +1001,8 @@ bool SequenceDiagnosis::fitBaseline(DiagnosisResult& out) {
   findStarts();
   chooseOrder();
   if (!fit0_.ok()) {
-    out.status = "baseline_failed";
-    out.message = fit0_.message;
+    out.status.code = StatusCode::baseline_failed;
+    out.status.message = fit0_.status.message;
     return false;
   }
   describeBaseline(out);
@@ -1047,12 +1018,12 @@ bool SequenceDiagnosis::calibrateBaseline(DiagnosisResult& out) {
   try {
     cal_ = calibrate(obs_, cc_);
   } catch (const std::invalid_argument& e) {
-    cal_.status = "calibration_failed";
-    cal_.message = e.what();
+    cal_.status.code = StatusCode::calibration_failed;
+    cal_.status.message = e.what();
   }
-  if (cal_.status != "ok") {
+  if (!cal_.status.ok()) {
     out.status = cal_.status;
-    out.message = "the baseline calibration failed: " + cal_.message;
+    out.status.message = "the baseline calibration failed: " + cal_.status.message;
     return false;
   }
   return true;
@@ -1074,7 +1045,7 @@ void SequenceDiagnosis::findStarts() {
   CalibrationConfig cf = cc_;
   cf.method = Method::closed_form;
   const CalibrationModel m = calibrate(obs_, cf);
-  if (m.status != "ok") return;
+  if (!m.status.ok()) return;
   JointInit n;
   n.poses = obs_.commanded;
   n.radius_m = init_.radius_m;
@@ -1145,14 +1116,14 @@ void SequenceDiagnosis::replica(int b, std::map<std::string, std::vector<double>
 /// The path terms start from what the baseline's refined path shows (the baseline's optimum is
 /// a stationary point of the extended models along them): its rotation and stretch against
 /// the commanded path.
-JointInit SequenceDiagnosis::candidateStart(const std::string& e) const {
+JointInit SequenceDiagnosis::candidateStart(Effect e) const {
   const double sqrt_info = std::sqrt(std::max(pathSpread(obs_.commanded), 1e-12));
   JointInit start = initFrom(fit0_);
   // Turn the baseline's world (which turned to absorb the offset) back onto the commanded
   // path, and let the beams turn instead.
-  if (e == effect::kAngleOffset)
+  if (e == Effect::angle_offset)
     turnStart(start, -measured_stats_.at("path_rotation") * base_.sigma_s_m / sqrt_info, obs_.commanded);
-  if (e == effect::kOdometryScale) start.effects.odometry_scale = measured_stats_.at("path_scale") * base_.sigma_s_m / sqrt_info;
+  if (e == Effect::odometry_scale) start.effects.odometry_scale = measured_stats_.at("path_scale") * base_.sigma_s_m / sqrt_info;
   return start;
 }
 
@@ -1161,7 +1132,7 @@ void SequenceDiagnosis::heldOut(HeldOut& held) {
   for (const auto& e : candidates_) {
     cfgs_.push_back(effectConfig(base_, e));
     // The neutral start matters for the terms that bend the geometry the baseline settled in.
-    fits_.push_back(bestOf(candidateStart(e), cfgs_.back(), e == effect::kIncidenceBias || e == effect::kLandmarkBias));
+    fits_.push_back(bestOf(candidateStart(e), cfgs_.back(), e == Effect::incidence_bias || e == Effect::landmark_bias));
   }
   foldLikelihoods(held);
   odometryLikelihoods(held);
@@ -1224,12 +1195,12 @@ void SequenceDiagnosis::odometryLikelihoods(HeldOut& held) const {
 CandidateResult SequenceDiagnosis::candidate(std::size_t c, const HeldOut& held, const DiagnosisResult& out) const {
   CandidateResult r;
   r.effect = candidates_[c];
-  r.statistic = statisticOf(r.effect);
+  r.statistic = statisticOf(r.effect, DiagnoseMode::sequence);
   setScore(r, out.battery);
   const JointResult& fc = fits_[c];
   if (!fc.ok()) {
     r.applicable = false;
-    r.note = "the extended fit failed: " + fc.message;
+    r.note = "the extended fit failed: " + fc.status.message;
     r.p_value = kNaN;
     return r;
   }
@@ -1259,11 +1230,11 @@ void SequenceDiagnosis::setIdentifiability(CandidateResult& r, const JointResult
     r.identifiable = it->second.se < std::max(it->second.ref, effectSize(r.effect, fc) / 4.0);
   }
   if (r.identifiable) return;
-  if (r.effect == effect::kIncidenceBias && !radius_known)
+  if (r.effect == Effect::incidence_bias && !radius_known)
     r.note = "confounded with the landmark radius and alpha_0 (radius estimated; give landmark_radius_m)";
-  else if (r.effect == effect::kOdometryScale && !radius_known)
+  else if (r.effect == Effect::odometry_scale && !radius_known)
     r.note = "a step-length error is a change of the world's scale, which the bias polynomial absorbs when the radius is unknown";
-  else if (r.effect == effect::kMixedPixels) r.note = "too few outermost or inner beams";
+  else if (r.effect == Effect::mixed_pixels) r.note = "too few outermost or inner beams";
   else r.note = "the baseline's parameters absorb it (standard error " + std::to_string(r.standard_error) + " after them)";
 }
 
@@ -1277,7 +1248,7 @@ void SequenceDiagnosis::extend(std::size_t c, DiagnosisResult& out) const {
   out.extended_bias_alpha = fc.model.bias.alpha;
   out.calibration_mse_ratio_extended = out.candidates[c].calibration_mse_ratio;
   const ReplicaPlan plan = replicaPlan(obs_, fc, out.radius_known);
-  out.scene_keys = sceneKeys(out.primary_cause, fc, plan);
+  out.scene_keys = sceneKeys(candidates_[c], fc, plan);
   ZSample sim_ext;
   for (int b = 0; b < config_.closeness_replicas; ++b) {
     const LandmarkObservations rep =
@@ -1308,9 +1279,7 @@ void countData(const LandmarkObservations& obs, DiagnosisResult& out) {
 
 }  // namespace
 
-std::vector<std::string> sequenceCandidates() {
-  return allCandidates();
-}
+std::vector<Effect> sequenceCandidates() { return candidateList(DiagnoseConfig{}, DiagnoseMode::sequence); }
 
 DiagnosisResult diagnoseSequence(const LandmarkObservations& obs, const DiagnoseConfig& config,
                                  const std::vector<std::vector<double>>* true_range_m) {
@@ -1320,7 +1289,7 @@ DiagnosisResult diagnoseSequence(const LandmarkObservations& obs, const Diagnose
   out.seed = config.seed;
   out.replicas = config.replicas;
   out.folds = config.folds;
-  const std::vector<std::string> candidates = candidateList(config, allCandidates(), "a sequence");
+  const std::vector<Effect> candidates = candidateList(config, DiagnoseMode::sequence);
   countData(obs, out);
   SequenceDiagnosis problem(obs, config, candidates, true_range_m);
   runDiagnosis(problem, config, candidates, out);

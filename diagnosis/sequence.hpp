@@ -21,7 +21,7 @@
 namespace lidarcal::diagnosis {
 
 /// Effects a sequence can show, in output order.
-std::vector<std::string> sequenceCandidates();
+std::vector<Effect> sequenceCandidates();
 
 /// Diagnoses. `true_range_m` (optional, aligned with obs.sightings[i].beams[j]) gives the
 /// calibration gain against the truth. Returns a status instead of throwing for data that

@@ -6,13 +6,21 @@
 
 namespace lidarcal::diagnosis {
 
-std::vector<std::string> candidateList(const DiagnoseConfig& config, const std::vector<std::string>& all,
-                                       const std::string& what) {
-  std::vector<std::string> candidates = config.candidates.empty() ? all : config.candidates;
-  for (const auto& c : candidates)
-    if (std::find(all.begin(), all.end(), c) == all.end())
-      throw std::invalid_argument("diagnose: '" + c + "' is not a candidate effect for " + what);
-  return candidates;
+std::vector<Effect> candidateList(const DiagnoseConfig& config, DiagnoseMode mode) {
+  std::vector<Effect> all;
+  for (const auto& i : effectTable())
+    if ((mode == DiagnoseMode::sequence ? i.sequence_statistic : i.static_statistic) != nullptr) all.push_back(i.effect);
+  if (config.candidates.empty()) return all;
+  for (Effect e : config.candidates)
+    if (std::find(all.begin(), all.end(), e) == all.end())
+      throw std::invalid_argument(std::string("diagnose: '") + toString(e) + "' is not a candidate effect for " +
+                                  (mode == DiagnoseMode::sequence ? "a sequence" : "a static recording"));
+  return config.candidates;
+}
+
+const char* statisticOf(Effect e, DiagnoseMode mode) {
+  const char* s = mode == DiagnoseMode::sequence ? info(e).sequence_statistic : info(e).static_statistic;
+  return s ? s : "";
 }
 
 double HeldOut::baselineMean() const {

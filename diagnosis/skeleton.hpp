@@ -15,10 +15,12 @@
 
 namespace lidarcal::diagnosis {
 
-/// The candidates to test: `config.candidates`, or all of the mode when empty. Throws
-/// std::invalid_argument for a name that is not in `all` ("... for <what>").
-std::vector<std::string> candidateList(const DiagnoseConfig& config, const std::vector<std::string>& all,
-                                       const std::string& what);
+/// The candidates to test: `config.candidates`, or every effect the mode tests (those with a
+/// statistic for it in effectTable()) when empty. Throws std::invalid_argument for an effect the
+/// mode does not test.
+std::vector<Effect> candidateList(const DiagnoseConfig& config, DiagnoseMode mode);
+/// The battery's score statistic aimed at an effect in that mode ("" when there is none).
+const char* statisticOf(Effect e, DiagnoseMode mode);
 
 /// Held-out log-likelihoods, point by point: of the baseline, of each candidate, and the block
 /// (scan, stop or wall bin) each point belongs to; the standard error of a gain is over blocks.
@@ -54,13 +56,13 @@ void setScore(CandidateResult& r, const std::vector<Discrepancy>& battery);
 ///   std::size_t candidateCount(); void heldOut(HeldOut&); const char* noHeldOut()   3.
 ///   void beforeCandidates(DiagnosisResult&); CandidateResult candidate(std::size_t, const HeldOut&, const DiagnosisResult&);
 ///   void afterCandidates(DiagnosisResult&)
-///   std::vector<std::pair<std::string, std::string>> nestedEffects()    4. (see nameCause)
+///   std::vector<std::pair<Effect, Effect>> nestedEffects()    4. (see nameCause)
 ///   void refineCause(DiagnosisResult&)   4. after nameCause: a symptom (heavy_tails) replaced by
 ///                                           the physical cause that explains it, where one does
 ///   Closeness closenessBaseline(const DiagnosisResult&); void extend(std::size_t, DiagnosisResult&)   5.
 /// Steps run in this order; what a mode draws at random is seeded per replica.
 template <class Mode>
-void runDiagnosis(Mode& mode, const DiagnoseConfig& config, const std::vector<std::string>& candidates,
+void runDiagnosis(Mode& mode, const DiagnoseConfig& config, const std::vector<Effect>& candidates,
                   DiagnosisResult& out) {
   // 1. Baseline: the seeds' model.
   if (!mode.fitBaseline(out)) return;
@@ -73,8 +75,8 @@ void runDiagnosis(Mode& mode, const DiagnoseConfig& config, const std::vector<st
   HeldOut held(candidates.size());
   mode.heldOut(held);
   if (held.base.empty()) {
-    out.status = "cross_validation_failed";
-    out.message = mode.noHeldOut();
+    out.status.code = StatusCode::cross_validation_failed;
+    out.status.message = mode.noHeldOut();
     return;
   }
   out.baseline_heldout_nats_per_point = held.baselineMean();
@@ -87,7 +89,7 @@ void runDiagnosis(Mode& mode, const DiagnoseConfig& config, const std::vector<st
   // 5. The extended model and how close its simulation comes to the data.
   out.closeness_baseline = mode.closenessBaseline(out);
   for (std::size_t c = 0; c < candidates.size(); ++c) {
-    if (candidates[c] != out.primary_cause) continue;
+    if (toString(candidates[c]) != out.primary_cause) continue;
     const CandidateResult& r = out.candidates[c];
     out.extended_parameters = r.estimates;
     out.gain_heldout_nats_per_point = r.heldout_gain_nats_per_point;

@@ -23,23 +23,6 @@
 namespace lidarcal::diagnosis {
 namespace {
 
-std::vector<std::string> allCandidates() {
-  return {effect::kIncidenceNoise, effect::kIncidenceBias, effect::kLandmarkBias,  effect::kHeadingError,
-          effect::kRangeDrift,     effect::kMixedPixels,   effect::kAngleOffset,   effect::kRangeNoiseLaw,
-          effect::kOdometryScale,  effect::kHeavyTails,    effect::kQuantisation};
-}
-
-const char* statisticOf(const std::string& e) {
-  if (e == effect::kIncidenceNoise) return "spread_vs_incidence";
-  if (e == effect::kIncidenceBias) return "wall_curvature";
-  if (e == effect::kRangeDrift) return "residual_vs_time";
-  if (e == effect::kMixedPixels) return "edge_excess";
-  if (e == effect::kRangeNoiseLaw) return "spread_vs_range";
-  if (e == effect::kHeavyTails) return "tail_weight";
-  if (e == effect::kQuantisation) return "quantisation";
-  return "";
-}
-
 // ---------------------------------------------------------------------------------------------
 // Direction bins: a beam over the scans.
 
@@ -538,15 +521,15 @@ struct Flags {
   int parameters() const { return kappa + gamma + drift + mixed + dof + quant + wall_b; }
 };
 
-Flags flagsOf(const std::string& e) {
+Flags flagsOf(Effect e) {
   Flags f;
-  if (e == effect::kRangeNoiseLaw) f.kappa = true;
-  else if (e == effect::kIncidenceNoise) f.gamma = true;
-  else if (e == effect::kRangeDrift) f.drift = true;
-  else if (e == effect::kMixedPixels) f.mixed = true;
-  else if (e == effect::kHeavyTails) f.dof = true;
-  else if (e == effect::kQuantisation) f.quant = true;
-  else if (e == effect::kIncidenceBias) f.wall_b = true;
+  if (e == Effect::range_noise_law) f.kappa = true;
+  else if (e == Effect::incidence_noise) f.gamma = true;
+  else if (e == Effect::range_drift) f.drift = true;
+  else if (e == Effect::mixed_pixels) f.mixed = true;
+  else if (e == Effect::heavy_tails) f.dof = true;
+  else if (e == Effect::quantisation) f.quant = true;
+  else if (e == Effect::incidence_bias) f.wall_b = true;
   return f;
 }
 
@@ -1111,7 +1094,7 @@ std::string tailClass(const TailModel& m, const TailBeam& b, const std::vector<T
 /// runDiagnosis; its steps in the order they run).
 class StaticDiagnosis {
  public:
-  StaticDiagnosis(const StaticScans& data, const DiagnoseConfig& config, const std::vector<std::string>& candidates,
+  StaticDiagnosis(const StaticScans& data, const DiagnoseConfig& config, const std::vector<Effect>& candidates,
                   std::vector<WallLine>* walls_out)
       : data_(data), config_(config), candidates_(candidates), walls_out_(walls_out) {}
 
@@ -1124,7 +1107,7 @@ class StaticDiagnosis {
   void beforeCandidates(DiagnosisResult& out);
   CandidateResult candidate(std::size_t c, const HeldOut& held, const DiagnosisResult& out);
   void afterCandidates(DiagnosisResult& out);
-  std::vector<std::pair<std::string, std::string>> nestedEffects() const { return {}; }
+  std::vector<std::pair<Effect, Effect>> nestedEffects() const { return {}; }
   void refineCause(DiagnosisResult& out);
   void reRankUnderTails(DiagnosisResult& out);
   Closeness closenessBaseline(const DiagnosisResult& out) const { return closenessOf(out.measured, sim_base_); }
@@ -1152,7 +1135,7 @@ class StaticDiagnosis {
 
   const StaticScans& data_;
   const DiagnoseConfig& config_;
-  const std::vector<std::string>& candidates_;
+  const std::vector<Effect>& candidates_;
   std::vector<WallLine>* walls_out_;
   std::size_t window_ = 0;        // scans per window (0: one pose)
   Data d_;                        // readings in direction bins
@@ -1170,8 +1153,8 @@ class StaticDiagnosis {
   std::vector<Model> full_;       // per candidate: fitted on all the data
   bool tails_on_ = false;         // the tail study runs (heavy_tails is a candidate)
   TailStudy tails_;               // the tail models and their held-out log-likelihoods
-  std::map<std::string, double> robust_;  // effect -> its parameter fitted under the pooled contamination
-  std::map<std::string, double> robust_sigma_;  // effect -> the core's sigma_e fitted with it
+  std::map<Effect, double> robust_;  // effect -> its parameter fitted under the pooled contamination
+  std::map<Effect, double> robust_sigma_;  // effect -> the core's sigma_e fitted with it
   bool named_by_tails_ = false;   // the cause was named from the tails' covariates
 };
 
@@ -1194,8 +1177,8 @@ bool StaticDiagnosis::fitBaseline(DiagnosisResult& out) {
 /// windows of scans, each a pose of its own, with a time trend per beam (the sensor creeping).
 bool StaticDiagnosis::makeData(DiagnosisResult& out) {
   if (data_.scans < static_cast<std::size_t>(2 * config_.folds)) {
-    out.status = "too_few_scans";
-    out.message = "a static recording needs at least " + std::to_string(2 * config_.folds) + " scans from the same pose";
+    out.status.code = StatusCode::too_few_scans;
+    out.status.message = "a static recording needs at least " + std::to_string(2 * config_.folds) + " scans from the same pose";
     return false;
   }
   window_ = config_.static_window > 0 ? static_cast<std::size_t>(config_.static_window) : 0;
@@ -1210,8 +1193,8 @@ bool StaticDiagnosis::makeData(DiagnosisResult& out) {
   }
   out.baseline_extra["window_scans"] = static_cast<double>(window_);
   if (d_.bins.size() < 10) {
-    out.status = "too_few_beams";
-    out.message = "fewer than 10 beam directions return in enough scans";
+    out.status.code = StatusCode::too_few_beams;
+    out.status.message = "fewer than 10 beam directions return in enough scans";
     return false;
   }
   return true;
@@ -1334,7 +1317,7 @@ void StaticDiagnosis::foldLikelihoods(int k, const std::vector<int>& fold, HeldO
 
 /// The tail study's beams, covariates and specs (only when heavy_tails is a candidate).
 void StaticDiagnosis::startTails() {
-  tails_on_ = std::find(candidates_.begin(), candidates_.end(), effect::kHeavyTails) != candidates_.end();
+  tails_on_ = std::find(candidates_.begin(), candidates_.end(), Effect::heavy_tails) != candidates_.end();
   if (!tails_on_) return;
   tails_.beams = tailBeams(d_, f0_);
   tails_.available = tailAvailable(d_, tails_.beams, edges_);
@@ -1419,7 +1402,7 @@ void StaticDiagnosis::tailCovariateGains(TailAttribution& ta) const {
     c.significant = std::isfinite(adj[k]) && adj[k] < config_.alpha && c.unique_gain_nats_per_point > 0.0;
     if (c.significant && (!top || c.unique_gain_nats_per_point > top->unique_gain_nats_per_point)) top = &c;
   }
-  ta.cause = top ? top->effect : "unknown";
+  ta.cause = top ? toString(top->effect) : cause::kUnknown;
 }
 
 /// The pooled and the full tail models on all the data: parameters, and which beams carry the
@@ -1488,12 +1471,12 @@ void StaticDiagnosis::tailClasses(TailAttribution& ta, const TailModel& full, co
 void StaticDiagnosis::tailRobust(DiagnosisResult& out, const std::vector<TailReading>& all, const TailModel& pooled) {
   struct Item {
     std::size_t spec;
-    const char* effect;
+    Effect effect;
     const char* key;
   };
-  const Item items[] = {{tails_.gamma, effect::kIncidenceNoise, "incidence_noise_exponent"},
-                        {tails_.kappa, effect::kRangeNoiseLaw, "noise_exponent"},
-                        {tails_.mixed, effect::kMixedPixels, "mixed_pixel_fraction"}};
+  const Item items[] = {{tails_.gamma, Effect::incidence_noise, "incidence_noise_exponent"},
+                        {tails_.kappa, Effect::range_noise_law, "noise_exponent"},
+                        {tails_.mixed, Effect::mixed_pixels, "mixed_pixel_fraction"}};
   for (const Item& it : items) {
     if (it.spec == 0) continue;
     const TailModel m =
@@ -1514,10 +1497,10 @@ void StaticDiagnosis::tailRobust(DiagnosisResult& out, const std::vector<TailRea
 
 /// The effects fitted under the pooled contamination (StaticDiagnosis::tailRobust): their key in
 /// TailAttribution::robust, or nullptr.
-const char* robustEffectOf(const std::string& e) {
-  if (e == effect::kIncidenceNoise) return "incidence_noise_exponent";
-  if (e == effect::kRangeNoiseLaw) return "noise_exponent";
-  if (e == effect::kMixedPixels) return "mixed_pixel_fraction";
+const char* robustEffectOf(Effect e) {
+  if (e == Effect::incidence_noise) return "incidence_noise_exponent";
+  if (e == Effect::range_noise_law) return "noise_exponent";
+  if (e == Effect::mixed_pixels) return "mixed_pixel_fraction";
   return nullptr;
 }
 
@@ -1527,9 +1510,9 @@ const char* robustEffectOf(const std::string& e) {
 void StaticDiagnosis::reRankUnderTails(DiagnosisResult& out) {
   named_by_tails_ = true;  // its simulation takes the exponent fitted beside the contamination
   const auto& rob = out.tails.robust;
-  std::vector<std::string> effects;
+  std::vector<Effect> effects;
   std::vector<double> p;
-  for (const char* e : {effect::kIncidenceNoise, effect::kRangeNoiseLaw, effect::kMixedPixels}) {
+  for (Effect e : {Effect::incidence_noise, Effect::range_noise_law, Effect::mixed_pixels}) {
     const std::string key = robustEffectOf(e);
     if (!rob.count(key + "_p")) continue;
     effects.push_back(e);
@@ -1542,7 +1525,7 @@ void StaticDiagnosis::reRankUnderTails(DiagnosisResult& out) {
     const double gain = rob.at(std::string(robustEffectOf(effects[k])) + "_gain");
     if (adj[k] < config_.alpha && gain > best_gain) {
       best_gain = gain;
-      best = effects[k];
+      best = toString(effects[k]);
     }
   }
   if (best.empty() || best == out.primary_cause) return;
@@ -1562,26 +1545,27 @@ void StaticDiagnosis::refineCause(DiagnosisResult& out) {
   bool heavy = false;
   for (const auto& c : out.candidates) {
     tested += std::isfinite(c.p_value) && c.applicable;
-    heavy = heavy || (c.effect == effect::kHeavyTails && c.significant);
+    heavy = heavy || (c.effect == Effect::heavy_tails && c.significant);
   }
   ta.significant = heavy || std::min(1.0, tested * ta.p_value) < config_.alpha;
   if (!ta.significant) return;
-  if (robustEffectOf(out.primary_cause)) {
+  const std::optional<Effect> named = parseEffect(out.primary_cause);
+  if (named && robustEffectOf(*named)) {
     reRankUnderTails(out);
     return;
   }
-  if (out.primary_cause != effect::kHeavyTails && out.primary_cause != effect::kNone) return;
-  if (ta.cause == "unknown") {
-    if (out.primary_cause == effect::kNone)
+  if (!names(out.primary_cause, Effect::heavy_tails) && out.primary_cause != cause::kNone) return;
+  if (ta.cause == cause::kUnknown) {
+    if (out.primary_cause == cause::kNone)
       out.decision = "the tails are significant (a contamination mixture predicts held-out readings better, p " +
                      std::to_string(ta.p_value) + ") but no candidate is";
-    out.primary_cause = effect::kHeavyTails;
+    out.primary_cause = toString(Effect::heavy_tails);
     out.decision += "; no covariate of the tails (edge, grazing, range, dark) explains them held out: cause unknown";
     return;
   }
   const TailCovariateResult* top = nullptr;
   for (const auto& c : ta.covariates)
-    if (c.significant && c.effect == ta.cause && (!top || c.unique_gain_nats_per_point > top->unique_gain_nats_per_point)) top = &c;
+    if (c.significant && names(ta.cause, c.effect) && (!top || c.unique_gain_nats_per_point > top->unique_gain_nats_per_point)) top = &c;
   char buf[400];
   std::snprintf(buf, sizeof buf,
                 "the tails are significant; of what their covariates explain "
@@ -1627,7 +1611,7 @@ void StaticDiagnosis::beforeCandidates(DiagnosisResult& out) {
 CandidateResult StaticDiagnosis::candidate(std::size_t c, const HeldOut& held, const DiagnosisResult& out) {
   CandidateResult r;
   r.effect = candidates_[c];
-  r.statistic = statisticOf(r.effect);
+  r.statistic = statisticOf(r.effect, DiagnoseMode::static_scene);
   if (notApplicable(r)) return r;
   setScore(r, out.battery);
   const HeldOutGain gain = heldOutGain(held, c);
@@ -1650,15 +1634,15 @@ CandidateResult StaticDiagnosis::candidate(std::size_t c, const HeldOut& held, c
 
 /// Effects one pose cannot show, or that each wall line absorbs: no test.
 bool StaticDiagnosis::notApplicable(CandidateResult& r) const {
-  const std::string& e = r.effect;
-  if (e == effect::kHeadingError || e == effect::kAngleOffset || e == effect::kOdometryScale) {
+  const Effect e = r.effect;
+  if (e == Effect::heading_error || e == Effect::angle_offset || e == Effect::odometry_scale) {
     r.applicable = false;
     r.identifiable = false;
     r.p_value = r.p_holm = r.score_p_value = kNaN;
     r.note = "one pose: nothing about stops or headings can be seen";
     return true;
   }
-  if (e == effect::kLandmarkBias) {
+  if (e == Effect::landmark_bias) {
     r.identifiable = false;
     r.applicable = true;
     r.p_value = r.p_holm = r.score_p_value = kNaN;
@@ -1671,18 +1655,18 @@ bool StaticDiagnosis::notApplicable(CandidateResult& r) const {
 }
 
 void StaticDiagnosis::setIdentifiability(CandidateResult& r) const {
-  const std::string& e = r.effect;
-  if (e == effect::kIncidenceBias) {
+  const Effect e = r.effect;
+  if (e == Effect::incidence_bias) {
     r.standard_error = wb_.ok ? wb_.b_se : kInf;
     r.identifiable = a0_identified_ && wb_.ok && r.standard_error < std::max(0.01, std::abs(wb_.b) / 4.0);
     if (!r.identifiable)
       r.note = a0_identified_ ? "bends the walls almost as a range offset does: give the offset (--range-offset) from a reference distance"
                               : "too few straight walls, or walls seen over too narrow a range of incidence";
-  } else if (e == effect::kIncidenceNoise || e == effect::kRangeNoiseLaw) {
+  } else if (e == Effect::incidence_noise || e == Effect::range_noise_law) {
     double mm = 0.0, m2 = 0.0, n = 0.0;
     for (const auto& b : d_.bins) {
-      if (e == effect::kIncidenceNoise && !b.inc_known) continue;
-      const double g = e == effect::kIncidenceNoise ? -std::log(b.cos_inc)
+      if (e == Effect::incidence_noise && !b.inc_known) continue;
+      const double g = e == Effect::incidence_noise ? -std::log(b.cos_inc)
                                                     : std::log(std::max(f0_[static_cast<std::size_t>(&b - d_.bins.data())].m, 1e-3));
       mm += g;
       m2 += g * g;
@@ -1693,28 +1677,28 @@ void StaticDiagnosis::setIdentifiability(CandidateResult& r) const {
     r.information_ratio = var / (m2 / std::max(nbins, 1.0) + 1e-4);
     r.standard_error = var > 0.0 ? 1.0 / std::sqrt(2.0 * n * var) : kInf;
     r.identifiable = r.standard_error < 0.5;
-    if (!r.identifiable) r.note = e == effect::kIncidenceNoise ? "no spread of incidence angles" : "no spread of ranges";
-  } else if (e == effect::kRangeDrift && window_ > 0) {
+    if (!r.identifiable) r.note = e == Effect::incidence_noise ? "no spread of incidence angles" : "no spread of ranges";
+  } else if (e == Effect::range_drift && window_ > 0) {
     r.identifiable = false;
     r.note = "each window of scans has its own time trend per beam (the sensor moved), which absorbs a drift";
-  } else if (e == effect::kMixedPixels) {
+  } else if (e == Effect::mixed_pixels) {
     r.identifiable = edges_ >= 3;
     if (!r.identifiable) r.note = "fewer than 3 beams at depth discontinuities";
   }
 }
 
 void StaticDiagnosis::setEstimates(CandidateResult& r, const Model& fm) const {
-  const std::string& e = r.effect;
-  if (e == effect::kIncidenceNoise) r.estimates["incidence_noise_exponent"] = fm.gamma;
-  if (e == effect::kRangeNoiseLaw) r.estimates["noise_exponent"] = fm.kappa;
-  if (e == effect::kRangeDrift) {
+  const Effect e = r.effect;
+  if (e == Effect::incidence_noise) r.estimates["incidence_noise_exponent"] = fm.gamma;
+  if (e == Effect::range_noise_law) r.estimates["noise_exponent"] = fm.kappa;
+  if (e == Effect::range_drift) {
     r.estimates["range_drift_m_per_scan"] = fm.drift;
     r.estimates["range_drift_over_recording_m"] = fm.drift * static_cast<double>(data_.scans - 1);
   }
-  if (e == effect::kMixedPixels) r.estimates["mixed_pixel_fraction"] = fm.mixed;
-  if (e == effect::kHeavyTails) r.estimates["student_dof"] = fm.dof;
-  if (e == effect::kQuantisation) r.estimates["grid_m"] = fm.q;
-  if (e == effect::kIncidenceBias) {
+  if (e == Effect::mixed_pixels) r.estimates["mixed_pixel_fraction"] = fm.mixed;
+  if (e == Effect::heavy_tails) r.estimates["student_dof"] = fm.dof;
+  if (e == Effect::quantisation) r.estimates["grid_m"] = fm.q;
+  if (e == Effect::incidence_bias) {
     r.estimates["incidence_bias_m"] = wb_.b;
     r.estimates["alpha0_with_it_m"] = wb_.alpha0;
   }
@@ -1744,35 +1728,33 @@ void StaticDiagnosis::extend(std::size_t c, DiagnosisResult& out) const {
   const Model& fm = full_[c];
   RangeEffects fx;
   Model sim_model = base0_;
-  const std::string& e = out.primary_cause;
-  if (e == effect::kIncidenceNoise) fx.incidence_noise_exponent = fm.gamma;
-  if (named_by_tails_ && e == effect::kIncidenceNoise && robust_.count(e)) fx.incidence_noise_exponent = robust_.at(e);
-  if (e == effect::kRangeDrift) fx.range_drift_m_per_scan = fm.drift;
-  if (e == effect::kMixedPixels) fx.mixed_pixel_fraction = fm.mixed;
-  if (e == effect::kHeavyTails) fx.noise_student_dof = std::max(fm.dof, 2.1);
-  if (e == effect::kQuantisation) fx.range_resolution_m = fm.q;
-  if (e == effect::kRangeNoiseLaw) sim_model.kappa = named_by_tails_ && robust_.count(e) ? robust_.at(e) : fm.kappa;
+  const Effect e = candidates_[c];
+  if (e == Effect::incidence_noise) fx.incidence_noise_exponent = fm.gamma;
+  if (named_by_tails_ && e == Effect::incidence_noise && robust_.count(e)) fx.incidence_noise_exponent = robust_.at(e);
+  if (e == Effect::range_drift) {
+    fx.range_drift_m_per_scan = fm.drift;
+    fx.range_drift_reference_scan = d_.t_mean;  // the fit's drift is c (t - t_mean)
+  }
+  if (e == Effect::mixed_pixels) fx.mixed_pixel_fraction = fm.mixed;
+  if (e == Effect::heavy_tails) fx.noise_student_dof = std::max(fm.dof, 2.1);
+  if (e == Effect::quantisation) fx.range_resolution_m = fm.q;
+  if (e == Effect::range_noise_law) sim_model.kappa = named_by_tails_ && robust_.count(e) ? robust_.at(e) : fm.kappa;
   sim_model.sigma_e = fm.sigma_e;
   // Named from the tails: the core noise fitted beside the contamination (its wild readings are
   // not simulated: the simulator has no covariate-dependent contamination).
   if (named_by_tails_ && robust_sigma_.count(e)) sim_model.sigma_e = robust_sigma_.at(e);
   WallFit w_sim = w0_;
-  if (e == effect::kIncidenceBias && wb_.ok) {
+  if (e == Effect::incidence_bias && wb_.ok) {
     w_sim = wb_;
     fx.incidence_bias_m = wb_.b;
   }
   const double a0 = w_sim.ok ? w_sim.alpha0 : 0.0;
   out.extended_bias_alpha = {a0, 1.0};
   setSceneKeys(out, a0, sim_model, fx);
-  // The simulator's drift term is c t; the fitted one is c (t - t_mean): same readings when
-  // alpha_0 takes the difference (done by the scene key; the bins carry it here).
-  std::vector<BinFit> f_sim = f0_;
-  if (fx.range_drift_m_per_scan != 0.0)
-    for (auto& bf : f_sim) bf.m -= fx.range_drift_m_per_scan * d_.t_mean;
   SimSample ext;
   ext.var.resize(d_.bins.size());
   for (int b = 0; b < config_.closeness_replicas; ++b) {
-    const Data rep = simulateStatic(d_, f_sim, w_sim, sim_model, deriveSeed(config_.seed, 6000 + static_cast<std::uint64_t>(b)), fx);
+    const Data rep = simulateStatic(d_, f0_, w_sim, sim_model, deriveSeed(config_.seed, 6000 + static_cast<std::uint64_t>(b)), fx);
     std::vector<BinFit> fr;
     const Model mr = fitModel(rep, {}, Flags{}, 0.0, fr);
     const auto rec = recordsOf(rep, fr, mr);
@@ -1788,22 +1770,20 @@ void StaticDiagnosis::setSceneKeys(DiagnosisResult& out, double a0, const Model&
   keys["sensor.bias_alpha[1]"] = 1.0;
   if (sim_model.kappa != 2.0) keys["sensor.noise.exponent (kind power)"] = sim_model.kappa;
   keys["sensor.noise.sigma_e"] = sim_model.sigma_e;
-  if (fx.incidence_noise_exponent != 0.0) keys["sensor.effects.incidence_noise_exponent"] = fx.incidence_noise_exponent;
-  if (fx.incidence_bias_m != 0.0) keys["sensor.effects.incidence_bias_m"] = fx.incidence_bias_m;
+  if (fx.incidence_noise_exponent != 0.0) keys[info(Effect::incidence_noise).scene_key] = fx.incidence_noise_exponent;
+  if (fx.incidence_bias_m != 0.0) keys[info(Effect::incidence_bias).scene_key] = fx.incidence_bias_m;
   if (fx.range_drift_m_per_scan != 0.0) {
-    keys["sensor.effects.range_drift_m_per_scan"] = fx.range_drift_m_per_scan;
-    keys["sensor.bias_alpha[0]"] = a0 - fx.range_drift_m_per_scan * d_.t_mean;
+    keys[info(Effect::range_drift).scene_key] = fx.range_drift_m_per_scan;
+    keys["sensor.effects.range_drift_reference_scan"] = fx.range_drift_reference_scan;
   }
-  if (fx.mixed_pixel_fraction != 0.0) keys["sensor.effects.mixed_pixel_fraction"] = fx.mixed_pixel_fraction;
-  if (fx.noise_student_dof != 0.0) keys["sensor.effects.noise_student_dof"] = fx.noise_student_dof;
-  if (fx.range_resolution_m != 0.0) keys["sensor.effects.range_resolution_m"] = fx.range_resolution_m;
+  if (fx.mixed_pixel_fraction != 0.0) keys[info(Effect::mixed_pixels).scene_key] = fx.mixed_pixel_fraction;
+  if (fx.noise_student_dof != 0.0) keys[info(Effect::heavy_tails).scene_key] = fx.noise_student_dof;
+  if (fx.range_resolution_m != 0.0) keys[info(Effect::quantisation).scene_key] = fx.range_resolution_m;
 }
 
 }  // namespace
 
-std::vector<std::string> staticCandidates() {
-  return allCandidates();
-}
+std::vector<Effect> staticCandidates() { return candidateList(DiagnoseConfig{}, DiagnoseMode::static_scene); }
 
 DiagnosisResult diagnoseStatic(const StaticScans& data, const DiagnoseConfig& config, std::vector<WallLine>* walls_out) {
   config.validate();
@@ -1815,7 +1795,7 @@ DiagnosisResult diagnoseStatic(const StaticScans& data, const DiagnoseConfig& co
   out.scans = data.scans;
   out.stops = 1;
   out.readings = data.readings.size();
-  const std::vector<std::string> candidates = candidateList(config, allCandidates(), "a static recording");
+  const std::vector<Effect> candidates = candidateList(config, DiagnoseMode::static_scene);
   StaticDiagnosis problem(data, config, candidates, walls_out);
   runDiagnosis(problem, config, candidates, out);
   return out;

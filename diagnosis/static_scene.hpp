@@ -53,7 +53,7 @@ struct WallLine {
 };
 
 /// Effects a static recording can show, in output order (those that cannot apply included).
-std::vector<std::string> staticCandidates();
+std::vector<Effect> staticCandidates();
 
 /// Diagnoses. `walls` (optional) receives the fitted wall lines (the geometric reference).
 DiagnosisResult diagnoseStatic(const StaticScans& data, const DiagnoseConfig& config, std::vector<WallLine>* walls = nullptr);

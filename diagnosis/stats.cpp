@@ -202,8 +202,8 @@ double gridResultant(const std::vector<double>& y, double q) {
 }
 
 std::string nameCause(std::vector<CandidateResult>& cands, double alpha, std::string& decision,
-                      const std::vector<std::pair<std::string, std::string>>& nested,
-                      const std::vector<std::pair<std::string, std::string>>& indistinguishable) {
+                      const std::vector<std::pair<Effect, Effect>>& nested,
+                      const std::vector<std::pair<Effect, Effect>>& indistinguishable) {
   std::vector<double> p;
   for (const auto& c : cands) p.push_back(c.applicable ? c.p_value : std::numeric_limits<double>::quiet_NaN());
   const auto adj = holmAdjust(p);
@@ -218,12 +218,12 @@ std::string nameCause(std::vector<CandidateResult>& cands, double alpha, std::st
   if (sig.empty()) {
     decision = "no candidate is significant (Holm-adjusted p < " + std::to_string(alpha) +
                " with a positive held-out gain): the baseline describes the data";
-    return effect::kNone;
+    return cause::kNone;
   }
   std::size_t top = sig.front();
   for (std::size_t i : sig)
     if (cands[i].heldout_gain_nats_per_point > cands[top].heldout_gain_nats_per_point) top = i;
-  decision = "largest held-out gain among the significant effects: " + cands[top].effect;
+  decision = std::string("largest held-out gain among the significant effects: ") + toString(cands[top].effect);
   auto close = [&](std::size_t a, std::size_t b) {
     const double se = std::hypot(cands[a].heldout_gain_se, cands[b].heldout_gain_se);
     return cands[b].heldout_gain_nats_per_point >= cands[a].heldout_gain_nats_per_point - 2.0 * se;
@@ -234,23 +234,23 @@ std::string nameCause(std::vector<CandidateResult>& cands, double alpha, std::st
     for (const auto& [simpler, richer] : nested)
       if (i != top && cands[i].effect == simpler && cands[top].effect == richer && close(top, i)) chosen = i;
   if (chosen != top)
-    decision = cands[chosen].effect + " explains as much as " + cands[top].effect +
+    decision = std::string(toString(cands[chosen].effect)) + " explains as much as " + toString(cands[top].effect) +
                " (held-out gains within two standard errors), which contains it, with fewer parameters";
   if (!cands[chosen].identifiable) {
-    decision = cands[chosen].effect + " is significant but cannot be estimated apart from the baseline's parameters (" +
+    decision = std::string(toString(cands[chosen].effect)) + " is significant but cannot be estimated apart from the baseline's parameters (" +
                cands[chosen].note + ")";
-    return effect::kNotIdentifiable;
+    return cause::kNotIdentifiable;
   }
   for (std::size_t i : sig) {
     if (i == chosen || !close(chosen, i)) continue;
     for (const auto& [a, b] : indistinguishable)
       if ((a == cands[i].effect && b == cands[chosen].effect) || (b == cands[i].effect && a == cands[chosen].effect)) {
-        decision = cands[chosen].effect + " and " + cands[i].effect +
+        decision = std::string(toString(cands[chosen].effect)) + " and " + toString(cands[i].effect) +
                    " are both significant, explain the data equally well and cannot be told apart here";
-        return effect::kNotIdentifiable;
+        return cause::kNotIdentifiable;
       }
   }
-  return cands[chosen].effect;
+  return toString(cands[chosen].effect);
 }
 
 }  // namespace lidarcal::diagnosis

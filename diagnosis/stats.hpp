@@ -92,7 +92,7 @@ double gridResultant(const std::vector<double>& y_m, double q_m);
 ///   within two standard errors of it and the pair is declared `indistinguishable`.
 /// Returns the cause; `decision` receives the reason in words.
 std::string nameCause(std::vector<CandidateResult>& candidates, double alpha, std::string& decision,
-                      const std::vector<std::pair<std::string, std::string>>& nested = {},
-                      const std::vector<std::pair<std::string, std::string>>& indistinguishable = {});
+                      const std::vector<std::pair<Effect, Effect>>& nested = {},
+                      const std::vector<std::pair<Effect, Effect>>& indistinguishable = {});
 
 }  // namespace lidarcal::diagnosis

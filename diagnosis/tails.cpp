@@ -151,9 +151,9 @@ const char* tailCovariateName(int k) {
   return names[k];
 }
 
-const char* tailCovariateEffect(int k) {
-  static const char* names[] = {"mixed_pixels", "incidence_noise", "range_noise_law", "dark_surface"};
-  return names[k];
+Effect tailCovariateEffect(int k) {
+  static const Effect effects[] = {Effect::mixed_pixels, Effect::incidence_noise, Effect::range_noise_law, Effect::dark_surface};
+  return effects[k];
 }
 
 int TailSpec::parameters() const {

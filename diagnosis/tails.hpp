@@ -19,6 +19,8 @@
 #include <cstddef>
 #include <vector>
 
+#include "common/effect.hpp"
+
 namespace lidarcal::diagnosis {
 
 /// Covariates of the contamination probability, in output order.
@@ -27,7 +29,7 @@ enum TailCovariate : int { kTailEdge = 0, kTailGrazing = 1, kTailRange = 2, kTai
 /// "edge", "grazing", "range", "dark".
 const char* tailCovariateName(int k);
 /// The physical effect each covariate stands for: mixed_pixels, incidence_noise, range_noise_law, dark_surface.
-const char* tailCovariateEffect(int k);
+Effect tailCovariateEffect(int k);
 
 /// One beam (direction bin) as the tail model sees it.
 struct TailBeam {

@@ -83,8 +83,8 @@ void writeModel(const std::filesystem::path& file, const CalibrationModel& m) {
                                          {"batches", nf.exponent_batches}}}}},
           {"landmarks", landmarks},
           {"stops", stops},
-          {"diagnostics", ojson{{"status", m.status},
-                                {"message", m.message},
+          {"diagnostics", ojson{{"status", m.status.name()},
+                                {"message", m.status.message},
                                 {"iterations", m.iterations},
                                 {"residual_rms_m", m.residual_rms_m},
                                 {"readings", m.readings},
@@ -175,8 +175,10 @@ CalibrationModel readModel(const std::filesystem::path& file) {
   }
   if (root.has("diagnostics")) {
     const JsonView d = root.child("diagnostics");
-    m.status = d.getString("status", "ok");
-    m.message = d.getString("message", "");
+    const std::string status = d.getString("status", "ok");
+    const std::optional<StatusCode> code = parseStatusCode(status);
+    if (!code) d.fail("status", "'" + status + "' is not a status lidarcal writes (ok, joint_failed, ...: docs/ERRORS.md)");
+    m.status = Status{*code, d.getString("message", "")};
   }
   return m;
 }

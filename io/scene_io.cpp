@@ -29,6 +29,7 @@ RangeEffects parseEffects(const JsonView& v) {
   e.incidence_noise_exponent = v.getNonNegative("incidence_noise_exponent", 0.0);
   e.incidence_bias_m = v.getNumber("incidence_bias_m", 0.0);
   e.range_drift_m_per_scan = v.getNumber("range_drift_m_per_scan", 0.0);
+  e.range_drift_reference_scan = v.getNonNegative("range_drift_reference_scan", 0.0);
   e.mixed_pixel_fraction = v.getNonNegative("mixed_pixel_fraction", 0.0);
   if (e.mixed_pixel_fraction > 1.0) v.fail("mixed_pixel_fraction", "must lie in [0, 1]");
   e.noise_student_dof = v.getNonNegative("noise_student_dof", 0.0);
@@ -44,6 +45,7 @@ ojson effectsToJson(const RangeEffects& e) {
   if (e.incidence_noise_exponent != 0.0) j["incidence_noise_exponent"] = e.incidence_noise_exponent;
   if (e.incidence_bias_m != 0.0) j["incidence_bias_m"] = e.incidence_bias_m;
   if (e.range_drift_m_per_scan != 0.0) j["range_drift_m_per_scan"] = e.range_drift_m_per_scan;
+  if (e.range_drift_reference_scan != 0.0) j["range_drift_reference_scan"] = e.range_drift_reference_scan;
   if (e.mixed_pixel_fraction != 0.0) j["mixed_pixel_fraction"] = e.mixed_pixel_fraction;
   if (e.noise_student_dof != 0.0) j["noise_student_dof"] = e.noise_student_dof;
   if (e.range_resolution_m != 0.0) j["range_resolution_m"] = e.range_resolution_m;

@@ -80,20 +80,11 @@ calibration::CalibrationConfig calibrationConfig(const CalibrationOptions& o) {
     const auto comma = rest.find(',');
     const std::string e = rest.substr(0, comma);
     rest = comma == std::string::npos ? "" : rest.substr(comma + 1);
-    auto& fx = c.joint.effects;
-    if (e.empty() || e == "heading_error") continue;
-    if (e == "incidence_noise") fx.incidence_noise = true;
-    else if (e == "incidence_bias") fx.incidence_bias = true;
-    else if (e == "landmark_bias") fx.landmark_offsets = true;
-    else if (e == "range_drift") fx.drift = true;
-    else if (e == "angle_offset") fx.angle_offset = true;
-    else if (e == "range_noise_law") fx.noise_exponent = true;
-    else if (e == "mixed_pixels") fx.mixed_pixels = true;
-    else if (e == "odometry_scale") fx.odometry_scale = true;
-    else
+    if (e.empty()) continue;
+    const std::optional<Effect> effect = parseEffect(e);
+    if (!effect || !c.joint.effects.enable(*effect))
       throw InputError("", "--effects", "unknown effect '" + e + "'",
-                       "use incidence_noise, incidence_bias, landmark_bias, range_drift, angle_offset, range_noise_law, "
-                       "mixed_pixels or odometry_scale");
+                       "use " + effectNames([](const EffectInfo& i) { return i.joint_term; }));
   }
   if ((c.joint.effects.incidence_noise || c.joint.effects.noise_exponent) && c.noise == NoiseKind::polynomial)
     throw InputError("", "--effects", "incidence_noise and range_noise_law need --noise squared or constant");

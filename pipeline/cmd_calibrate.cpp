@@ -60,7 +60,7 @@ CalibrationModel calibrateWithMeasurements(const CalibrateCommand& c, const io::
             : calibrateSequenceWithDistancesAndSelf(seq, ref, c.reference, detection, config, &matches, &found,
                                                     std::ref(progress));
     progress.finish();
-    const bool fall_back = result.model.status != "ok" && c.reference_fit == "auto" && alone_possible;
+    const bool fall_back = !result.model.status.ok() && c.reference_fit == "auto" && alone_possible;
     if (!fall_back) {
       survey = surveyTable(found, ref);
       return result.model;
@@ -68,7 +68,7 @@ CalibrationModel calibrateWithMeasurements(const CalibrateCommand& c, const io::
     std::fprintf(stderr,
                  "lidarcal: the self-calibration cannot use this sequence (%s); fitting the distances of the %zu "
                  "measured stops alone instead (--reference-fit distances)\n",
-                 result.model.status.c_str(), measuredStops(ref));
+                 result.model.status.name(), measuredStops(ref));
     matches.clear();
   }
   // Against the distances alone (seed 004 section 5).
@@ -108,7 +108,7 @@ void runCalibrate(const CalibrateCommand& c) {
     const SequenceCalibration result = calibrateSequence(seq, detectionConfig(*c.options), config, std::ref(progress));
     progress.finish();
     model = result.model;
-    if (report && model.status == "ok") {
+    if (report && model.status.ok()) {
       ReportInputs in;
       in.sequence = c.seq;
       in.scans = seq.scans.size();
@@ -120,8 +120,8 @@ void runCalibrate(const CalibrateCommand& c) {
       writeReport(report->path(), in);
     }
   }
-  if (model.status != "ok")
-    throw DataError(c.seq, "calibration", model.status + ": " + model.message, "see docs/ERRORS.md");
+  if (!model.status.ok())
+    throw DataError(c.seq, "calibration", std::string(model.status.name()) + ": " + model.status.message, "see docs/ERRORS.md");
   io::writeModel(c.out, model);
   if (report) report->commit();
   if (!matches.empty()) std::fputs(referenceTable(matches).c_str(), stdout);

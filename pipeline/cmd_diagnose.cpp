@@ -86,8 +86,14 @@ diagnosis::DiagnoseConfig diagnoseConfig(const DiagnoseCommand& c) {
   if (!c.candidates.empty()) {
     std::stringstream ss(c.candidates);
     std::string item;
-    while (std::getline(ss, item, ','))
-      if (!item.empty()) config.candidates.push_back(item);
+    while (std::getline(ss, item, ',')) {
+      if (item.empty()) continue;
+      const std::optional<Effect> e = parseEffect(item);
+      if (!e)
+        throw InputError("", "--candidates", "unknown effect '" + item + "'",
+                         "use " + effectNames([](const EffectInfo& i) { return i.sequence_statistic || i.static_statistic; }));
+      config.candidates.push_back(*e);
+    }
   }
   return config;
 }
@@ -135,12 +141,13 @@ std::optional<LandmarkObservations> findLandmarks(const DiagnoseCommand& c, cons
   return obs;
 }
 
-void checkCandidates(const diagnosis::DiagnoseConfig& config, const std::vector<std::string>& known, const char* kind) {
-  for (const auto& e : config.candidates)
+void checkCandidates(const diagnosis::DiagnoseConfig& config, const std::vector<Effect>& known, const char* kind) {
+  for (Effect e : config.candidates)
     if (std::find(known.begin(), known.end(), e) == known.end()) {
       std::string list;
-      for (const auto& k : known) list += (list.empty() ? "" : ", ") + k;
-      throw InputError("", "--candidates", "'" + e + "' is not a candidate effect for " + kind, "use " + list);
+      for (Effect k : known) list += (list.empty() ? "" : ", ") + std::string(toString(k));
+      throw InputError("", "--candidates", std::string("'") + toString(e) + "' is not a candidate effect for " + kind,
+                       "use " + list);
     }
 }
 
@@ -224,20 +231,20 @@ void runDiagnose(const DiagnoseCommand& c) {
   diagnosis::DiagnosisResult result;
   if (obs && c.mode != "static") {
     result = diagnoseLandmarks(c, config, fix, *obs);
-    if (result.status != "ok" && c.mode == "auto") {
+    if (!result.status.ok() && c.mode == "auto") {
       // Poles were found but cannot carry a sequence diagnosis: look at one pose instead.
       if (!quiet())
         std::fprintf(stderr, "the sequence cannot be diagnosed (%s: %s); diagnosing repeated scans of one pose instead\n",
-                     result.status.c_str(), result.message.c_str());
-      src.selection = "sequence diagnosis failed (" + result.status + "), ";
+                     result.status.name(), result.status.message.c_str());
+      src.selection = "sequence diagnosis failed (" + std::string(result.status.name()) + "), ";
       obs.reset();
     }
   }
   if (!obs || c.mode == "static") result = diagnoseOnePose(c, seq, config, fix, src);
   writeDiagnosis(out.path(), result, src);
   out.commit();
-  if (result.status != "ok")
-    throw DataError(c.data, "diagnosis", result.status + ": " + result.message, "see " + (fs::path(c.out) / "report.md").string());
+  if (!result.status.ok())
+    throw DataError(c.data, "diagnosis", std::string(result.status.name()) + ": " + result.status.message, "see " + (fs::path(c.out) / "report.md").string());
   if (!quiet())
     std::fprintf(stderr, "%s: primary cause %s; report in %s\n", toString(result.mode), result.primary_cause.c_str(),
                  (fs::path(c.out) / "report.md").c_str());

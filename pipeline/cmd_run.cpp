@@ -51,8 +51,8 @@ void runRun(const RunCommand& c) {
   StageBars progress;
   const SequenceCalibration cal = calibrateSequence(seq, detectionConfig(*c.options), config, std::ref(progress));
   progress.finish();
-  if (cal.model.status != "ok")
-    throw DataError(seq_dir.string(), "calibration", cal.model.status + ": " + cal.model.message, "see docs/ERRORS.md");
+  if (!cal.model.status.ok())
+    throw DataError(seq_dir.string(), "calibration", cal.model.status.name() + std::string(": ") + cal.model.status.message, "see docs/ERRORS.md");
   io::writeModel(out.path() / "model.json", cal.model);
 
   const auto method = c.inversion == "ml" ? calibration::InversionMethod::ml : calibration::InversionMethod::ls;
@@ -77,7 +77,7 @@ void runRun(const RunCommand& c) {
     CalibrationModel bound = calibrateOracle(seq, truth, commandedScale(truth.truth), config);
     CalibrationModel oracle = calibrateOracle(seq, truth, 1.0, config);
     in.compared.push_back(ours);
-    if (cal.model.method != "closed-form" && cf.status == "ok")
+    if (cal.model.method != "closed-form" && cf.status.ok())
       in.compared.push_back({std::string("closed form of ") + papers::kLandmarks + " (no ground truth)", cf,
                              evaluate(cf, method, seq, truth)});
     in.compared.push_back({"ground truth in the commanded frame (best without ground truth)", bound,

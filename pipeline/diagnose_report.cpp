@@ -167,7 +167,7 @@ ojson batteryJson(const std::vector<diagnosis::Discrepancy>& battery) {
 }
 
 ojson candidateJson(const diagnosis::CandidateResult& c) {
-  ojson j{{"effect", c.effect},
+  ojson j{{"effect", toString(c.effect)},
           {"p_value", num(c.p_value)},
           {"p_holm", num(c.p_holm)},
           {"p_heldout", num(c.p_heldout)},
@@ -196,7 +196,7 @@ ojson tailsJson(const diagnosis::TailAttribution& t) {
   ojson covs = ojson::array();
   for (const auto& c : t.covariates)
     covs.push_back(ojson{{"covariate", c.covariate},
-                         {"effect", c.effect},
+                         {"effect", toString(c.effect)},
                          {"coefficient", num(c.coefficient)},
                          {"unique_gain_nats_per_point", num(c.unique_gain_nats_per_point)},
                          {"unique_gain_se", num(c.unique_gain_se)},
@@ -332,7 +332,7 @@ void writeCandidates(std::ostream& md, const DiagnosisResult& r) {
   for (const auto& c : r.candidates) {
     std::string est;
     for (const auto& [k, v] : c.estimates) est += (est.empty() ? "" : ", ") + k + " = " + fmt(v, 5);
-    md << "| `" << c.effect << "` | " << (c.applicable ? fmt(c.heldout_gain_nats_per_point, 5) : "-") << " | "
+    md << "| `" << toString(c.effect) << "` | " << (c.applicable ? fmt(c.heldout_gain_nats_per_point, 5) : "-") << " | "
        << (c.applicable ? fmt(c.heldout_gain_se, 5) : "-") << " | " << pfmt(c.p_value) << " | " << pfmt(c.p_holm) << " | "
        << (c.applicable ? fmt(c.delta_aic, 1) : "-") << " | " << c.parameters << " | " << (c.significant ? "**yes**" : "no")
        << " | " << (c.identifiable ? "yes" : "no") << " | " << est << " | " << c.note << " |\n";
@@ -351,7 +351,7 @@ void writeTails(std::ostream& md, const DiagnosisResult& r) {
   md << "| covariate | effect | coefficient | unique held-out gain [nats/pt] | se | Holm p | share | significant |\n"
         "|---|---|---|---|---|---|---|---|\n";
   for (const auto& c : t.covariates)
-    md << "| " << c.covariate << " | `" << c.effect << "` | " << fmt(c.coefficient, 3) << " | "
+    md << "| " << c.covariate << " | `" << toString(c.effect) << "` | " << fmt(c.coefficient, 3) << " | "
        << fmt(c.unique_gain_nats_per_point, 5) << " | " << fmt(c.unique_gain_se, 5) << " | " << pfmt(c.p_holm) << " | "
        << fmt(100.0 * c.share, 1) << " % | " << (c.significant ? "**yes**" : "no") << " |\n";
   md << "\nTail readings (posterior sums) by class of beam, of " << fmt(t.tail_readings, 1) << ":";
@@ -500,8 +500,8 @@ nlohmann::ordered_json diagnosisJson(const DiagnosisResult& r, const DiagnosisSo
                          : ojson(nullptr);
   return ojson{{"format", "lidarcal-diagnosis/1"},
                {"mode", toString(r.mode)},
-               {"status", r.status},
-               {"message", r.message},
+               {"status", r.status.name()},
+               {"message", r.status.message},
                {"data", dataJson(r, src)},
                {"settings", ojson{{"seed", r.seed},
                                   {"replicas", r.replicas},
@@ -521,8 +521,8 @@ void writeDiagnosis(const std::filesystem::path& dir, const DiagnosisResult& r, 
   io::writeTextAtomically(dir / "diagnosis.json", diagnosisJson(r, src).dump(2) + "\n");
   std::ostringstream md;
   writeDataLine(md, r, src);
-  if (r.status != "ok") {
-    md << "**Not diagnosed: " << r.status << ".** " << r.message << "\n";
+  if (!r.status.ok()) {
+    md << "**Not diagnosed: " << r.status.name() << ".** " << r.status.message << "\n";
     io::writeTextAtomically(dir / "report.md", md.str());
     return;
   }

@@ -223,7 +223,7 @@ SequenceCalibration calibrateSequenceWithDistancesAndSelf(const io::Sequence& se
   calibration::CalibrationConfig cfg = config;
   cfg.joint.known_ranges = calibration::knownRanges(ro.known, ref);
   SequenceCalibration out = calibrateSequenceWithSurvey(seq, ref, ref_file, detection, cfg, survey, progress);
-  if (out.model.status == "ok") out.model.method = "joint+reference";
+  if (out.model.status.ok()) out.model.method = "joint+reference";
   return out;
 }
 

@@ -267,7 +267,7 @@ void writeModelSection(std::ostringstream& md, const CalibrationModel& m, const 
   else if (fitted.max_m > 0.0)
     md << "- fitted on landmark readings at estimated distances from " << fixed(fitted.min_m, 2) << " to "
        << fixed(fitted.max_m, 2) << " m (the sensor reads up to " << fixed(m.model.range_max_m, 1) << " m)\n";
-  if (!m.message.empty()) md << "- note: " << userWords(m.message) << "\n";
+  if (!m.status.message.empty()) md << "- note: " << userWords(m.status.message) << "\n";
   for (const auto& w : m.warnings) md << "- **warning**: " << w << "\n";
 }
 
@@ -401,8 +401,8 @@ void writeReport(const std::filesystem::path& dir, const ReportInputs& in) {
   md << "# lidarcal calibration report\n\n";
   md << "Sequence `" << in.sequence.string() << "`: " << plural(in.scans, "scan") << " at " << plural(in.stops, "stop")
      << ", " << plural(m.landmarks.size(), "landmark") << " in " << plural(in.detections, "detection") << ".\n\n";
-  if (m.status != "ok") {
-    md << "**Calibration failed: " << m.status << ".** " << userWords(m.message) << "\n";
+  if (!m.status.ok()) {
+    md << "**Calibration failed: " << m.status.name() << ".** " << userWords(m.status.message) << "\n";
     io::writeTextAtomically(dir / "report.md", md.str());
     return;
   }

@@ -19,8 +19,8 @@ SequenceCalibration calibrateSequence(const io::Sequence& seq, const detectors::
   // sequence there is nothing to detect for.
   const int min_stops = config.triangulation.min_stops;
   if (seq.stops.size() < static_cast<std::size_t>(min_stops)) {
-    out.model.status = "too_few_stops";
-    out.model.message = "the sequence has " + std::to_string(seq.stops.size()) +
+    out.model.status.code = StatusCode::too_few_stops;
+    out.model.status.message = "the sequence has " + std::to_string(seq.stops.size()) +
                         " stop(s) (consecutive scans with one VIEWPOINT form a stop) and each landmark must be "
                         "triangulated from at least " + std::to_string(min_stops) +
                         " stops: record scans at " + std::to_string(min_stops) +
@@ -33,8 +33,8 @@ SequenceCalibration calibrateSequence(const io::Sequence& seq, const detectors::
     poses.reserve(seq.stops.size());
     for (const auto& stop : seq.stops) poses.push_back(stop.commanded);
     if (const auto problem = calibration::baselineProblem(poses, config)) {
-      out.model.status = "no_baseline";
-      out.model.message = *problem;
+      out.model.status.code = StatusCode::no_baseline;
+      out.model.status.message = *problem;
       return out;
     }
   }
@@ -63,7 +63,7 @@ SequenceCalibration calibrateSequence(const io::Sequence& seq, const detectors::
   if (seq.meta.beams) out.model.beams = seq.meta.beams;
   else if (fewest == most && most > 0) out.model.beams = static_cast<int>(most);
   if (out.detections.association.landmarks.empty())
-    out.model.message = out.detections.note + (out.model.message.empty() ? "" : "; ") + out.model.message;
+    out.model.status.message = out.detections.note + (out.model.status.message.empty() ? "" : "; ") + out.model.status.message;
   return out;
 }
 
@@ -102,9 +102,9 @@ std::string beamCountWarning(const io::Sequence& seq) {
 namespace {
 
 void checkModelStatus(const CalibrationModel& model, const std::string& where) {
-  if (model.status != "ok")
+  if (!model.status.ok())
     throw DataError(where, "diagnostics.status",
-                    "the model is not usable (" + model.status + ")" + (model.message.empty() ? "" : ": " + model.message),
+                    "the model is not usable (" + std::string(model.status.name()) + ")" + (model.status.message.empty() ? "" : ": " + model.status.message),
                     "calibrate again with more landmarks or stops");
 }
 

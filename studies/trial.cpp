@@ -133,7 +133,7 @@ std::array<double, kTestSets> ratios(const std::vector<double>& alpha, const Tes
 
 /// Scores a model with both order rules: the bias of the order each picks from the model's table.
 void score(EstimatorOutcome& o, const CalibrationModel& m, const TestSets& tests, const LandmarkObservations& obs) {
-  o.ok = m.status == "ok";
+  o.ok = m.status.ok();
   if (!o.ok) return;
   for (std::size_t r = 0; r < kRules; ++r) {
     RuleOutcome& out = o.rules[r];
@@ -174,8 +174,8 @@ CalibrationModel guarded(F&& f) {
     return f();
   } catch (const std::exception& e) {
     CalibrationModel m;
-    m.status = "exception";
-    m.message = e.what();
+    m.status.code = StatusCode::exception;
+    m.status.message = e.what();
     return m;
   }
 }
@@ -367,7 +367,7 @@ TrialResult runTrial(const TrialConfig& config, const Cell& cell, const std::vec
     });
     jt.ran = true;
     score(jt, jm, tests, calib.obs);
-    if (jm.status == "ok") jt.landmarks = positionErrors(jm, calib, layout);
+    if (jm.status.ok()) jt.landmarks = positionErrors(jm, calib, layout);
     else jt.landmarks.assign(layout.size(), PositionError{kNaN, kNaN});
   }
 

@@ -75,12 +75,13 @@ TEST(JointRefinement, SaysWhyThereIsNoSolution) {
   const JointInit init = triangulatedStart(sample, cfg.model);
   sample.obs.sightings.resize(2);
   const JointResult r = refineJoint(sample.obs, init, JointConfig{});
-  EXPECT_EQ(r.status, JointStatus::too_few_readings);
+  EXPECT_EQ(r.status.code, StatusCode::too_few_readings);
   EXPECT_FALSE(r.ok());
   EXPECT_TRUE(r.poses.empty());
-  EXPECT_NE(r.message.find("too few"), std::string::npos) << r.message;
-  EXPECT_FALSE(JointResult{}.ok());
-  EXPECT_STREQ(toString(JointStatus::solver_failed), "solver_failed");
+  EXPECT_NE(r.status.message.find("too few"), std::string::npos) << r.status.message;
+  const JointResult not_computed;
+  EXPECT_FALSE(not_computed.ok());
+  EXPECT_STREQ(toString(StatusCode::solver_failed), "solver_failed");
 }
 
 TEST(JointRefinement, RecoversAKnownHeadingErrorPerStop) {
@@ -96,8 +97,8 @@ TEST(JointRefinement, RecoversAKnownHeadingErrorPerStop) {
     jc.sigma_psi_rad = deg2rad(1.0);
     jc.estimate_radius = false;
     const auto r = refineJoint(sample.obs, init, jc);
-    ASSERT_TRUE(r.ok()) << toString(r.status) << ": " << r.message;
-    ASSERT_EQ(r.poses.size(), sample.stops.size()) << r.message;
+    ASSERT_TRUE(r.ok()) << r.status.name() << ": " << r.status.message;
+    ASSERT_EQ(r.poses.size(), sample.stops.size()) << r.status.message;
     // A common rotation of all headings (and of the world) is not observable: the mean heading
     // error of the stops is absorbed into the world frame. Compare headings up to it.
     const std::size_t n = r.poses.size();
@@ -152,7 +153,7 @@ TEST(Calibrate, JointComesCloseToTheGroundTruthFitAndBeatsTheClosedFormUnderLarg
       const auto cf = calibrate(train.obs, cc);
       cc.method = Method::joint;
       const auto joint = calibrate(train.obs, cc);
-      ASSERT_EQ(joint.status, "ok") << joint.message;
+      ASSERT_STREQ(joint.status.name(), "ok") << joint.status.message;
       std::vector<RangePair> truth_pairs;
       for (std::size_t i = 0; i < train.obs.sightings.size(); ++i)
         for (std::size_t j = 0; j < train.obs.sightings[i].beams.size(); ++j)
@@ -200,7 +201,7 @@ TEST(Calibrate, SurveyedCentresOrMeasuredPosesGiveTheScaleAnOdometryScaleErrorHi
     const CalibrationModel with_centres = calibrate(sample.obs, surveyed);
     const CalibrationModel with_poses = calibrate(sample.obs, posed);
     const CalibrationModel with_scaled = calibrate(sample.obs, scaled);
-    for (const auto* m : {&self, &with_centres, &with_poses, &with_scaled}) ASSERT_EQ(m->status, "ok") << m->message;
+    for (const auto* m : {&self, &with_centres, &with_poses, &with_scaled}) ASSERT_STREQ(m->status.name(), "ok") << m->status.message;
     for (double d : {1.0, 2.0, 3.0}) {
       SCOPED_TRACE(d);
       const double e_self = std::abs(bias(self, d) - truthBias(d));
@@ -266,8 +267,8 @@ TEST(Calibrate, DistancesMeasuredAtTwoStopsGiveTheSelfCalibrationItsScale) {
     }
     ASSERT_GE(taped.joint.known_ranges.size(), 4u);
     const CalibrationModel with_tape = calibrate(sample.obs, taped);
-    ASSERT_EQ(self.status, "ok") << self.message;
-    ASSERT_EQ(with_tape.status, "ok") << with_tape.message;
+    ASSERT_STREQ(self.status.name(), "ok") << self.status.message;
+    ASSERT_STREQ(with_tape.status.name(), "ok") << with_tape.status.message;
     for (double d : {1.0, 2.0, 3.0}) {
       SCOPED_TRACE(d);
       const double e_self = std::abs(bias(self, d) - truthBias(d)), e_tape = std::abs(bias(with_tape, d) - truthBias(d));
@@ -294,7 +295,7 @@ TEST(Calibrate, ClosedFormStandardErrorsDescribeItsError) {
       auto cc = configFor(0.02, 0.5);
       cc.method = Method::closed_form;
       const CalibrationModel m = calibrate(sample.obs, cc);
-      ASSERT_EQ(m.status, "ok") << m.message;
+      ASSERT_STREQ(m.status.name(), "ok") << m.status.message;
       const std::size_t k = m.model.bias.alpha.size();
       ASSERT_EQ(m.alpha_covariance.size(), k * k);
       double v = 0.0;
@@ -355,8 +356,8 @@ TEST(JointRefinement, PoolingRepeatedScansLeavesTheEstimatesUnchanged) {
     const auto pooled = refineJoint(sample.obs, init, jc);
     jc.pool_repeated_scans = false;
     const auto each = refineJoint(sample.obs, init, jc);
-    ASSERT_TRUE(pooled.ok()) << pooled.message;
-    ASSERT_TRUE(each.ok()) << each.message;
+    ASSERT_TRUE(pooled.ok()) << pooled.status.message;
+    ASSERT_TRUE(each.ok()) << each.status.message;
     EXPECT_EQ(pooled.readings, each.readings);
     // The scans of a stop repeat the same beams: about 20 readings per residual.
     EXPECT_LE(pooled.reading_residuals * 10, each.reading_residuals);
@@ -376,8 +377,8 @@ TEST(Calibrate, NoLandmarkGivesAStatusNotACrash) {
   LandmarkObservations obs;
   obs.commanded = {Pose2{}, Pose2{0.3, 0, 0}, Pose2{0.6, 0, 0}};
   const auto m = calibrate(obs, CalibrationConfig{});
-  EXPECT_EQ(m.status, "no_usable_landmark");
-  EXPECT_FALSE(m.message.empty());
+  EXPECT_STREQ(m.status.name(), "no_usable_landmark");
+  EXPECT_FALSE(m.status.message.empty());
 }
 
 }  // namespace

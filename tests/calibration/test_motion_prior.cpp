@@ -65,11 +65,11 @@ TEST(MotionPrior, RefinedPosesBeatTheOdometryAndThePerPosePrior) {
     cc.joint.covariance = false;
     cc.joint.motion = MotionPrior::on;
     const auto with = calibrate(sample.obs, cc);
-    ASSERT_EQ(with.status, "ok") << with.message;
+    ASSERT_STREQ(with.status.name(), "ok") << with.status.message;
     EXPECT_TRUE(with.motion_prior);
     cc.joint.motion = MotionPrior::off;
     const auto without = calibrate(sample.obs, cc);
-    ASSERT_EQ(without.status, "ok") << without.message;
+    ASSERT_STREQ(without.status.name(), "ok") << without.status.message;
     EXPECT_FALSE(without.motion_prior);
     const double odometry = positionRms(sample.obs.commanded, sample.stops);
     const double prior = positionRms(with.stop_poses, sample.stops);

@@ -85,7 +85,7 @@ TEST(ReferenceCalibration, RecoversTheBiasAndIts95PercentIntervalsCoverTheTruth)
     const ReferenceReadings known = knownReadings(sample.obs, tapeMeasured(cfg, sample), 0.12);
     for (const auto& m : known.matches) ASSERT_TRUE(m.ok()) << "entry " << m.entry << ": " << m.status;
     const CalibrationModel m = calibrateWithReference(known.readings, CalibrationConfig{});
-    ASSERT_EQ(m.status, "ok") << m.message;
+    ASSERT_STREQ(m.status.name(), "ok") << m.status.message;
     ASSERT_TRUE(m.fitted_range_m.has_value());
     exponent_two += m.noise_fits.exponent_best == 2;
     for (std::size_t i = 0; i < at.size(); ++i) {
@@ -106,7 +106,7 @@ TEST(ReferenceCalibration, NoiseExponentTestNamesConstantNoiseOfATimeOfFlightSen
     const auto sample = simulation::simulateLandmarkLevel(cfg, seed);
     const auto known = knownReadings(sample.obs, tapeMeasured(cfg, sample), 0.12);
     const CalibrationModel m = calibrateWithReference(known.readings, CalibrationConfig{});
-    ASSERT_EQ(m.status, "ok") << m.message;
+    ASSERT_STREQ(m.status.name(), "ok") << m.status.message;
     EXPECT_EQ(m.noise_fits.exponent_best, 0);
     EXPECT_EQ(m.model.noise.kind, NoiseKind::constant);
     EXPECT_NEAR(m.model.noise.sigma_e, 0.004, 0.0008);
@@ -145,8 +145,8 @@ TEST(ReferenceCalibration, TooFewStopsIsAStatusNotAModel) {
   for (std::size_t k = 0; k < 2; ++k)
     for (int i = 0; i < 50; ++i) r.push_back({k, k, 0, static_cast<std::uint32_t>(i), 1.0 + k, 1.01 + k});
   const CalibrationModel m = calibrateWithReference(r, CalibrationConfig{});
-  EXPECT_EQ(m.status, "too_few_reference_stops");
-  EXPECT_NE(m.message.find("3 or more stops"), std::string::npos);
+  EXPECT_STREQ(m.status.name(), "too_few_reference_stops");
+  EXPECT_NE(m.status.message.find("3 or more stops"), std::string::npos);
 }
 
 TEST(ReferenceCalibration, WallReadingsHaveTheDistanceAlongTheBeamToTheMeasuredPlane) {

@@ -2,6 +2,11 @@
 
 #include <gtest/gtest.h>
 
+#include <fstream>
+
+#include <nlohmann/json.hpp>
+
+#include "common/effect.hpp"
 #include "common/errors.hpp"
 #include "io/scene_io.hpp"
 #include "test_util.hpp"
@@ -58,6 +63,28 @@ INSTANTIATE_TEST_SUITE_P(
                                    "landmarks": [{"x_m": 1, "y_m": 1, "radius_m": 0.1}, {"x_m": 1, "y_m": 1, "radius_m": -0.1}]})",
                                "landmarks[1].radius_m"},
                       BadScene{"{\n\"sensor\": {,}\n}", "line 2 column 12"}));
+
+// The effect table's scene keys (common/effect.hpp) are the keys the scene reader reads: every
+// "sensor.effects.*" key of the table, set in a scene, comes back from reading and writing it.
+TEST(SceneIo, EveryEffectSceneKeyOfTheTableIsRead) {
+  TempDir dir;
+  nlohmann::json base;
+  std::ifstream(test::sourceDir() / "data/scenes/paper_field.json") >> base;
+  int keys = 0;
+  for (const auto& i : effectTable()) {
+    const std::string key = i.scene_key;
+    const std::string prefix = "sensor.effects.";
+    if (key.rfind(prefix, 0) != 0) continue;
+    ++keys;
+    const std::string field = key.substr(prefix.size());
+    nlohmann::json j = base;
+    j["sensor"]["effects"] = {{field, i.effect == Effect::mixed_pixels ? 0.5 : 3.0}};
+    test::writeFile(dir / "s.json", j.dump());
+    const auto back = sceneToJson(readScene(dir / "s.json"));
+    EXPECT_TRUE(back["sensor"]["effects"].contains(field)) << i.name << ": " << key;
+  }
+  EXPECT_EQ(keys, 6);
+}
 
 TEST(SceneIo, MissingSceneFileIsReported) {
   try {

@@ -186,6 +186,12 @@ TEST(CliCalibrateEffects, TheCalibrationUsesAnEffectTermAndWritesIt) {
   r = runCli("calibrate -q " + (dir / "s/scans").string() + " --out " + (dir / "n.json").string() + " --effects wobble");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("wobble"), std::string::npos);
+  // An effect the joint refinement has no term for is refused too, and the remedy lists those it has.
+  r = runCli("calibrate -q " + (dir / "s/scans").string() + " --out " + (dir / "n.json").string() + " --effects heavy_tails");
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("odometry_scale"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("quantisation"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "n.json"));
 }
 
 TEST(CliDiagnoseMeasured, RplidarRecordingIsAStaticRoom) {

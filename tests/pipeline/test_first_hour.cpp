@@ -124,7 +124,7 @@ TEST_F(FirstHour, EveryStageReportsItsOwnProgressUpToItsTotal) {
         s.last = done;
         s.total = total;
       });
-  ASSERT_EQ(cal.model.status, "ok") << cal.model.message;
+  ASSERT_STREQ(cal.model.status.name(), "ok") << cal.model.status.message;
   EXPECT_EQ(order, (std::vector<std::string>{"detect", "joint refinement"}));
   for (const auto& [stage, s] : seen) {
     SCOPED_TRACE(stage);

@@ -258,7 +258,7 @@ TEST(Study, TinyStudyStatisticsAgreeWithADirectComputation) {
     }
 
     CalibrationModel cf = calibration::calibrate(calib.obs, cc);
-    ASSERT_EQ(cf.status, "ok") << cf.message;
+    ASSERT_STREQ(cf.status.name(), "ok") << cf.status.message;
     cf.model.range_min_m = calib.obs.range_min_m;
     cf.model.range_max_m = calib.obs.range_max_m;
     cf_ratio.push_back(mseRatio(cf.model, truth, raw));
@@ -282,7 +282,7 @@ TEST(Study, TinyStudyStatisticsAgreeWithADirectComputation) {
     std::vector<calibration::RangePair> pairs;
     for (const auto& [k, a] : og) pairs.push_back({a[0] / a[2], a[1] / a[2], std::get<2>(k)});
     CalibrationModel orc = calibration::calibrateAgainstTruth(pairs, cc, {}, calib.obs.range_min_m, calib.obs.range_max_m);
-    ASSERT_EQ(orc.status, "ok") << orc.message;
+    ASSERT_STREQ(orc.status.name(), "ok") << orc.status.message;
     orc.model.range_min_m = calib.obs.range_min_m;
     orc.model.range_max_m = calib.obs.range_max_m;
     oracle_ratio.push_back(mseRatio(orc.model, truth, raw));

@@ -1,0 +1,60 @@
+#pragma once
+// How a result ended: one code a program can test and one message a user can act on. The
+// calibration (model.json "diagnostics.status"), the joint refinement and the diagnosis report
+// their outcome with it; exceptions are left for bad input at the edges (io/, the command line)
+// and for programming errors. The codes' meanings for a user: docs/ERRORS.md.
+
+#include <optional>
+#include <string>
+#include <string_view>
+
+namespace lidarcal {
+
+enum class StatusCode {
+  ok,
+  // calibration (model.json)
+  too_few_stops,            ///< the sequence has fewer stops than a triangulation needs
+  no_baseline,              ///< the stops do not span a baseline (the sensor never moved)
+  no_usable_landmark,       ///< no landmark could be triangulated
+  too_few_observations,     ///< too few landmark-stop distances for the range model
+  joint_failed,             ///< the joint refinement found no usable solution
+  no_radius,                ///< the landmark radius is neither given nor estimable
+  too_few_reference_stops,  ///< calibrate --reference: too few stops with a known distance
+  no_invertible_order,      ///< calibrate --reference: no order gives an invertible model
+  exception,                ///< studies: a trial threw (the message is what)
+  // joint refinement
+  not_run,                  ///< no refinement was computed (a default result)
+  too_few_readings,         ///< fewer readings than parameters
+  no_readings,              ///< no reading left to fit
+  solver_failed,            ///< Ceres returned no usable solution
+  // diagnosis
+  baseline_failed,          ///< the seeds' model could not be fitted
+  calibration_failed,       ///< the baseline calibration behind a sequence diagnosis failed
+  cross_validation_failed,  ///< no fold could be fitted
+  too_few_scans,            ///< static data: too few scans from one pose
+  too_few_beams,            ///< static data: too few beam directions return often enough
+};
+
+/// The code's name as written in model.json and diagnosis.json ("ok", "joint_failed", ...).
+const char* toString(StatusCode code);
+/// The code of that name; nullopt for any other string.
+std::optional<StatusCode> parseStatusCode(std::string_view name);
+
+struct Status {
+  StatusCode code = StatusCode::ok;
+  /// Why not, and what to record instead, when not ok; a note a user should read when ok
+  /// (e.g. how settled a solution is); may be empty.
+  std::string message;
+  bool ok() const { return code == StatusCode::ok; }
+  const char* name() const { return toString(code); }
+  /// "code: message" (or the code alone), for error messages.
+  std::string text() const { return message.empty() ? std::string(name()) : std::string(name()) + ": " + message; }
+  /// Sets both (returns *this for one-line failures).
+  Status& set(StatusCode c, std::string m) {
+    code = c;
+    message = std::move(m);
+    return *this;
+  }
+};
+
+}  // namespace lidarcal
