@@ -47,14 +47,6 @@ struct Status {
   std::string message;
   bool ok() const { return code == StatusCode::ok; }
   const char* name() const { return toString(code); }
-  /// "code: message" (or the code alone), for error messages.
-  std::string text() const { return message.empty() ? std::string(name()) : std::string(name()) + ": " + message; }
-  /// Sets both (returns *this for one-line failures).
-  Status& set(StatusCode c, std::string m) {
-    code = c;
-    message = std::move(m);
-    return *this;
-  }
 };
 
 }  // namespace lidarcal
