@@ -274,6 +274,8 @@ std::vector<BadInputCase> cases() {
           {"model.json", "format", "lidarcal calibrate"});
   forEach(correcting, "model_bad_field", withModel([](nlohmann::json& j) { j["noise"]["kind"] = "pink"; }), 2,
           {"model.json", "noise.kind", "unknown noise kind"});
+  forEach(correcting, "model_unknown_status", withModel([](nlohmann::json& j) { j["diagnostics"]["status"] = "wobbly"; }), 2,
+          {"model.json", "diagnostics.status", "'wobbly' is not a status lidarcal writes"});
   forEach(correcting, "model_failed_calibration",
           withModel([](nlohmann::json& j) { j["diagnostics"]["status"] = "joint_failed"; }), 3,
           {"model.json", "diagnostics.status", "not usable", "calibrate again"});
