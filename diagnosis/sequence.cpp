@@ -865,6 +865,8 @@ std::map<std::string, double> sceneKeys(Effect e, const JointResult& f, const Re
                                           {Effect::angle_offset, rad2deg(x.angle_offset_rad)},
                                           {Effect::odometry_scale, x.odometry_scale}};
   if (const auto it = value.find(e); it != value.end()) k[info(e).scene_key] = it->second;
+  // The fit's drift is zero at its mean scan; the simulator's at the reference scan given here.
+  if (e == Effect::range_drift) k["sensor.effects.range_drift_reference_scan"] = c.effects.range_drift_reference_scan;
   return k;
 }
 

@@ -491,6 +491,28 @@ TEST(DiagnoseSequence, ResultCarriesEveryCandidateAndTheExtendedModel) {
   EXPECT_GT(r.calibration_mse_ratio_extended, r.calibration_mse_ratio_baseline);
 }
 
+TEST(DiagnoseSequence, ADriftsSceneKeysGiveItsReferenceScanBesideTheFittedOffset) {
+  // The joint refinement's drift is zero at the mean scan; the scene keys that simulate the named
+  // drift carry that reference scan, with the fitted alpha_0 unshifted.
+  const auto h = test::hiddenEffectCase("range_drift", 21);
+  const auto s = simulation::simulateLandmarkLevel(h.config, h.seed);
+  DiagnoseConfig dc;
+  dc.replicas = 5;
+  dc.closeness_replicas = 1;
+  const auto r = diagnoseSequence(s.obs, dc);
+  ASSERT_STREQ(r.status.name(), "ok") << r.status.message;
+  ASSERT_EQ(r.primary_cause, toString(Effect::range_drift)) << r.decision;
+  ASSERT_TRUE(r.scene_keys.count("sensor.effects.range_drift_reference_scan"));
+  double last = 0.0;
+  for (const auto& sg : s.obs.sightings) last = std::max(last, static_cast<double>(sg.scan));
+  const double t_ref = r.scene_keys.at("sensor.effects.range_drift_reference_scan");
+  EXPECT_GT(t_ref, 0.25 * last);
+  EXPECT_LT(t_ref, 0.75 * last);
+  ASSERT_FALSE(r.extended_bias_alpha.empty());
+  EXPECT_EQ(r.scene_keys.at("sensor.bias_alpha[0]"), r.extended_bias_alpha[0]);
+  EXPECT_EQ(r.scene_keys.at("sensor.effects.range_drift_m_per_scan"), r.extended_parameters.at("range_drift_m_per_scan"));
+}
+
 TEST(DiagnoseSequence, AStepLengthErrorIsNotIdentifiableWithoutTheRadius) {
   auto h = test::hiddenEffectCase("odometry_scale", 2);
   h.config.publish_radius = false;
