@@ -20,6 +20,7 @@
 // (diagnosis/skeleton.hpp). The statistics are in diagnosis/stats.hpp.
 
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <map>
 #include <string>
@@ -61,6 +62,9 @@ struct DiagnoseConfig {
   /// bends walls much alike, is hard to tell from it).
   double static_range_offset_m = std::numeric_limits<double>::quiet_NaN();
   std::vector<Effect> candidates;  ///< effects to test; empty: every candidate of the mode
+  /// Optional: hears of each step (stage name, units done, total; total 0: not counted). Only
+  /// reports; the result does not depend on it.
+  std::function<void(const std::string& stage, std::size_t done, std::size_t total)> progress;
   void validate() const;          ///< throws std::invalid_argument
 };
 

@@ -1131,7 +1131,10 @@ JointInit SequenceDiagnosis::candidateStart(Effect e) const {
 
 /// Full fits of the candidates, then held-out likelihoods: folds by scan, odometry by stop.
 void SequenceDiagnosis::heldOut(HeldOut& held) {
+  // Progress: the candidates' fits on all the data, then the folds.
+  const std::size_t steps = candidates_.size() + static_cast<std::size_t>(config_.folds);
   for (const auto& e : candidates_) {
+    reportProgress(config_, kHeldOutStage, cfgs_.size(), steps);
     cfgs_.push_back(effectConfig(base_, e));
     // The neutral start matters for the terms that bend the geometry the baseline settled in.
     fits_.push_back(bestOf(candidateStart(e), cfgs_.back(), e == Effect::incidence_bias || e == Effect::landmark_bias));
@@ -1145,6 +1148,8 @@ void SequenceDiagnosis::heldOut(HeldOut& held) {
 void SequenceDiagnosis::foldLikelihoods(HeldOut& held) const {
   const std::vector<int> fold = folds(obs_, config_.folds);
   for (int f = 0; f < config_.folds; ++f) {
+    reportProgress(config_, kHeldOutStage, candidates_.size() + static_cast<std::size_t>(f),
+                   candidates_.size() + static_cast<std::size_t>(config_.folds));
     std::vector<bool> train(obs_.sightings.size()), test(obs_.sightings.size());
     bool any = false;
     for (std::size_t i = 0; i < obs_.sightings.size(); ++i) {

@@ -61,18 +61,33 @@ void setScore(CandidateResult& r, const std::vector<Discrepancy>& battery);
 ///                                           the physical cause that explains it, where one does
 ///   Closeness closenessBaseline(const DiagnosisResult&); void extend(std::size_t, DiagnosisResult&)   5.
 /// Steps run in this order; what a mode draws at random is seeded per replica.
+/// The stage in which a mode fits its candidates on the folds (modes report their own counts).
+inline constexpr const char* kHeldOutStage = "held-out fits";
+
+/// Tells config.progress (when set) that `stage` is at `done` of `total`.
+inline void reportProgress(const DiagnoseConfig& config, const char* stage, std::size_t done, std::size_t total) {
+  if (config.progress) config.progress(stage, done, total);
+}
+
 template <class Mode>
 void runDiagnosis(Mode& mode, const DiagnoseConfig& config, const std::vector<Effect>& candidates,
                   DiagnosisResult& out) {
   // 1. Baseline: the seeds' model.
+  reportProgress(config, "baseline fit", 0, 0);
   if (!mode.fitBaseline(out)) return;
   const std::map<std::string, double> measured = mode.measuredStatistics(out);
   // 2. Parametric bootstrap from the fitted baseline: the battery's p-values.
   std::map<std::string, std::vector<double>> replica_stats;
-  for (int b = 0; b < config.replicas; ++b) mode.replica(b, replica_stats, out);
+  const auto replicas = static_cast<std::size_t>(config.replicas);
+  for (int b = 0; b < config.replicas; ++b) {
+    reportProgress(config, "bootstrap replicas", static_cast<std::size_t>(b), replicas);
+    mode.replica(b, replica_stats, out);
+  }
+  reportProgress(config, "bootstrap replicas", replicas, replicas);
   out.battery = makeBattery(mode.statisticInfo(), measured, replica_stats);
   // 3. Candidates: held-out gain, delta AIC, identifiability.
   HeldOut held(candidates.size());
+  reportProgress(config, kHeldOutStage, 0, 0);
   mode.heldOut(held);
   if (held.base.empty()) {
     out.status.code = StatusCode::cross_validation_failed;
@@ -81,12 +96,17 @@ void runDiagnosis(Mode& mode, const DiagnoseConfig& config, const std::vector<Ef
   }
   out.baseline_heldout_nats_per_point = held.baselineMean();
   mode.beforeCandidates(out);
-  for (std::size_t c = 0; c < candidates.size(); ++c) out.candidates.push_back(mode.candidate(c, held, out));
+  for (std::size_t c = 0; c < candidates.size(); ++c) {
+    reportProgress(config, "candidate tests", c, candidates.size());
+    out.candidates.push_back(mode.candidate(c, held, out));
+  }
+  reportProgress(config, "candidate tests", candidates.size(), candidates.size());
   mode.afterCandidates(out);
   // 4. The cause.
   out.primary_cause = nameCause(out.candidates, config.alpha, out.decision, mode.nestedEffects());
   mode.refineCause(out);
   // 5. The extended model and how close its simulation comes to the data.
+  reportProgress(config, "extended model", 0, 0);
   out.closeness_baseline = mode.closenessBaseline(out);
   for (std::size_t c = 0; c < candidates.size(); ++c) {
     if (toString(candidates[c]) != out.primary_cause) continue;

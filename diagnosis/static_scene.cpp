@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include <Eigen/Dense>
+#include <Eigen/SparseCholesky>
 
 #include "diagnosis/skeleton.hpp"
 #include "diagnosis/stats.hpp"
@@ -81,6 +82,18 @@ double meanIntensity(const StaticScans& s, const std::vector<std::size_t>& idx) 
   return n > 0.0 ? std::exp(sum / n) : kNaN;
 }
 
+/// Mean scan index of the binned readings (the drift's centre).
+void setMeanTime(Data& d) {
+  double tw = 0.0;
+  std::size_t used = 0;
+  for (std::size_t i = 0; i < d.t.size(); ++i)
+    if (d.bin_of[i] >= 0) {
+      tw += d.t[i];
+      ++used;
+    }
+  d.t_mean = used ? tw / static_cast<double>(used) : 0.0;
+}
+
 Data makeBins(const StaticScans& s, std::size_t window) {
   Data d;
   const std::size_t n = s.readings.size();
@@ -132,16 +145,61 @@ Data makeBins(const StaticScans& s, std::size_t window) {
     for (std::size_t i : b.idx) d.bin_of[i] = static_cast<int>(d.bins.size());
     d.bins.push_back(std::move(b));
   }
-  double tw = 0.0;
-  std::size_t used = 0;
-  for (std::size_t i = 0; i < n; ++i)
-    if (d.bin_of[i] >= 0) {
-      tw += d.t[i];
-      ++used;
-    }
-  d.t_mean = used ? tw / static_cast<double>(used) : 0.0;
+  setMeanTime(d);
   d.intensity = s.has_intensity;
   return d;
+}
+
+/// A reading this far from its beam's median, and six robust deviations, lies on another surface.
+constexpr double kSceneStepM = 0.05;
+
+/// Whether bin b saw the scene change: its readings off its median (by kSceneStepM and six
+/// robust deviations) come in runs in time, as when an object is moved into or out of the beam
+/// or a person walks through it, not scattered over the recording as a sensor's own outliers
+/// and mixed pixels are. Wald-Wolfowitz runs test on the off/on labels in scan order (z < -4),
+/// with at least 5 off readings and 5 % of the bin's.
+bool sceneChanged(const Data& d, const Bin& b) {
+  std::vector<double> ys;
+  for (std::size_t i : b.idx) ys.push_back(d.y[i]);
+  const double med = upperMedian(ys);
+  std::vector<double> dev;
+  for (double y : ys) dev.push_back(std::abs(y - med));
+  const double step = std::max(kSceneStepM, 6.0 * 1.4826 * upperMedian(dev));
+  std::vector<std::pair<double, bool>> seq;  // (scan, off)
+  for (std::size_t i : b.idx) seq.emplace_back(d.t[i], std::abs(d.y[i] - med) > step);
+  std::stable_sort(seq.begin(), seq.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+  const auto n = static_cast<double>(seq.size());
+  double off = 0.0, runs = seq.empty() ? 0.0 : 1.0;
+  for (std::size_t k = 0; k < seq.size(); ++k) {
+    off += seq[k].second ? 1.0 : 0.0;
+    if (k > 0 && seq[k].second != seq[k - 1].second) runs += 1.0;
+  }
+  const double on = n - off;
+  if (off < 5.0 || off < 0.05 * n || on < 5.0) return false;
+  const double mean = 1.0 + 2.0 * off * on / n;
+  const double var = 2.0 * off * on * (2.0 * off * on - n) / (n * n * (n - 1.0));
+  return var > 0.0 && (runs - mean) / std::sqrt(var) < -4.0;
+}
+
+/// Drops the bins that saw the scene change (sceneChanged) when they are at most half the bins
+/// (beyond that the sensor, not the scene, moved; movedFraction has already looked at the
+/// medians); returns how many were dropped. In the forklift recordings a third of the beams see
+/// objects carried in or out.
+std::size_t dropChangedBins(Data& d) {
+  std::vector<bool> drop(d.bins.size());
+  std::size_t changed = 0;
+  for (std::size_t b = 0; b < d.bins.size(); ++b) changed += (drop[b] = sceneChanged(d, d.bins[b])) ? 1 : 0;
+  if (changed == 0 || static_cast<double>(changed) > 0.5 * static_cast<double>(d.bins.size())) return 0;
+  std::vector<Bin> kept;
+  d.bin_of.assign(d.y.size(), -1);
+  for (std::size_t b = 0; b < d.bins.size(); ++b) {
+    if (drop[b]) continue;
+    for (std::size_t i : d.bins[b].idx) d.bin_of[i] = static_cast<int>(kept.size());
+    kept.push_back(std::move(d.bins[b]));
+  }
+  d.bins = std::move(kept);
+  setMeanTime(d);
+  return changed;
 }
 
 /// Location of every bin from the readings with train[scan] (all when empty), after removing
@@ -381,9 +439,17 @@ double wallMean(const Data& d, const WallFit& w, std::size_t b, double& u, doubl
 /// The wall model's least-squares system at its current parameters: Jacobian (alpha_0, b when
 /// fitted, then p and theta of each line), residuals and weights of the wall bins.
 struct WallSystem {
-  Eigen::MatrixXd j;
+  Eigen::SparseMatrix<double, Eigen::RowMajor> j;  ///< four entries a row at most: the normal matrix is an arrow
   Eigen::VectorXd r, wt;
 };
+
+/// The weighted normal matrix J^T W J (alpha_0 held: its diagonal set to `held_diagonal`).
+Eigen::SparseMatrix<double> wallNormal(const WallSystem& s, bool alpha0_free, double held_diagonal) {
+  const Eigen::SparseMatrix<double, Eigen::RowMajor> jw = s.wt.asDiagonal() * s.j;
+  Eigen::SparseMatrix<double> h = Eigen::SparseMatrix<double>(s.j.transpose()) * Eigen::SparseMatrix<double>(jw);
+  if (!alpha0_free) h.coeffRef(0, 0) = held_diagonal;
+  return h;
+}
 
 /// Residuals and weights of the wall bins (roughness tau2 plus the bin mean's variance).
 void wallResiduals(const Data& d, const std::vector<BinFit>& f, const WallFit& w, double tau2, WallSystem& s) {
@@ -400,7 +466,9 @@ void wallResiduals(const Data& d, const std::vector<BinFit>& f, const WallFit& w
 bool wallGaussNewton(const Data& d, const std::vector<BinFit>& f, WallFit& w, bool with_b, bool alpha0_free, double tau2,
                      WallSystem& s) {
   const int nb = static_cast<int>(w.bins.size()), nl = static_cast<int>(w.lines.size());
+  std::vector<Eigen::Triplet<double>> entries;
   for (int it = 0; it < 15; ++it) {
+    entries.clear();
     for (int k = 0; k < nb; ++k) {
       const std::size_t b = w.bins[static_cast<std::size_t>(k)];
       double u, cu;
@@ -408,18 +476,20 @@ bool wallGaussNewton(const Data& d, const std::vector<BinFit>& f, WallFit& w, bo
       const Line& l = w.lines[static_cast<std::size_t>(d.bins[b].wall)];
       s.r(k) = f[b].m - mu;
       s.wt(k) = 1.0 / (tau2 + f[b].s2 / f[b].n);
-      s.j.row(k).setZero();
-      s.j(k, 0) = 1.0;
+      if (alpha0_free) entries.emplace_back(k, 0, 1.0);
       int c = 1;
-      if (with_b) s.j(k, c++) = 1.0 - cu;
+      if (with_b) entries.emplace_back(k, c++, 1.0 - cu);
       const int wl = c + 2 * d.bins[b].wall;
-      s.j(k, wl) = 1.0 / cu;
-      s.j(k, wl + 1) = -l.p * std::sin(u) / (cu * cu) - w.b * std::sin(u);
+      entries.emplace_back(k, wl, 1.0 / cu);
+      entries.emplace_back(k, wl + 1, -l.p * std::sin(u) / (cu * cu) - w.b * std::sin(u));
     }
-    if (!alpha0_free) s.j.col(0).setZero();
-    Eigen::MatrixXd h = s.j.transpose() * s.wt.asDiagonal() * s.j;
-    if (!alpha0_free) h(0, 0) = 1.0;
-    const Eigen::VectorXd step = h.ldlt().solve(s.j.transpose() * s.wt.asDiagonal() * s.r);
+    s.j.setZero();
+    s.j.setFromTriplets(entries.begin(), entries.end());
+    // Sparse: a cluttered room has hundreds of short lines, and a dense normal matrix then
+    // costs seconds a step (the forklift's 1081-beam scans).
+    const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(wallNormal(s, alpha0_free, 1.0));
+    if (ldlt.info() != Eigen::Success) return false;
+    const Eigen::VectorXd step = ldlt.solve(Eigen::VectorXd(s.j.transpose() * s.wt.cwiseProduct(s.r)));
     if (!step.allFinite()) return false;
     w.alpha0 += step(0);
     int c = 1;
@@ -456,17 +526,21 @@ void finishWalls(const Data& d, const std::vector<BinFit>& f, WallFit& w, bool w
   const int nb = static_cast<int>(w.bins.size());
   const auto np = static_cast<int>(s.j.cols());
   wallResiduals(d, f, w, tau2, s);
-  if (!alpha0_free) s.j.col(0).setZero();
-  Eigen::MatrixXd h = s.j.transpose() * s.wt.asDiagonal() * s.j;
-  if (!alpha0_free) h(0, 0) = 1e12;  // held: no uncertainty, no leverage
-  const Eigen::MatrixXd cov = h.ldlt().solve(Eigen::MatrixXd::Identity(np, np));
+  // alpha_0 held: no uncertainty, no leverage
+  const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(wallNormal(s, alpha0_free, 1e12));
+  if (ldlt.info() != Eigen::Success) return;
+  const Eigen::MatrixXd cov = ldlt.solve(Eigen::MatrixXd::Identity(np, np));
   w.alpha0_se = alpha0_free ? std::sqrt(std::max(cov(0, 0), 0.0)) : 0.0;
   if (with_b) w.b_se = std::sqrt(std::max(cov(1, 1), 0.0));
   w.loo_ll.resize(static_cast<std::size_t>(nb));
   w.resid.resize(static_cast<std::size_t>(nb));
   double ss = 0.0;
   for (int k = 0; k < nb; ++k) {
-    const double hii = std::min(s.wt(k) * s.j.row(k).dot(cov * s.j.row(k).transpose()), 0.99);
+    double quad = 0.0;  // j_k^T cov j_k over the row's few entries
+    for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator a(s.j, k); a; ++a)
+      for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator c(s.j, k); c; ++c)
+        quad += a.value() * cov(a.col(), c.col()) * c.value();
+    const double hii = std::min(s.wt(k) * quad, 0.99);
     const double v = (1.0 / s.wt(k)) / (1.0 - hii);
     const double e = s.r(k) / (1.0 - hii);
     w.loo_ll[static_cast<std::size_t>(k)] = -0.5 * (kLog2Pi + std::log(v) + e * e / v);
@@ -490,7 +564,7 @@ WallFit fitWalls(const Data& d, const std::vector<BinFit>& f, const std::vector<
   const int np = 1 + (with_b ? 1 : 0) + 2 * nl;
   const int nb = static_cast<int>(w.bins.size());
   if (nl == 0 || nb < np + 3) return w;
-  WallSystem s{Eigen::MatrixXd(nb, np), Eigen::VectorXd(nb), Eigen::VectorXd(nb)};
+  WallSystem s{Eigen::SparseMatrix<double, Eigen::RowMajor>(nb, np), Eigen::VectorXd(nb), Eigen::VectorXd(nb)};
   double tau2 = 1e-6;
   for (int outer = 0; outer < 4; ++outer) {
     if (!wallGaussNewton(d, f, w, with_b, alpha0_free, tau2, s)) return w;
@@ -885,8 +959,11 @@ Data simulateStatic(const Data& d, const std::vector<BinFit>& f, const WallFit& 
   return r;
 }
 
-/// Whether the sensor moved during the recording: the beams' means in the first and second half
-/// of the scans differ beyond their noise, by different amounts (a drift moves them all alike).
+/// Standard error of a normal sample's median over that of its mean: sqrt(pi / 2).
+constexpr double kMedianEfficiency = 1.2533141373155003;
+
+/// Whether the sensor moved during the recording: the beams' medians in the first and second
+/// half of the scans differ beyond their noise, by different amounts (a drift moves them all alike).
 double movedFraction(const Data& d) {
   double tmax = 0.0;
   for (double t : d.t) tmax = std::max(tmax, t);
@@ -899,8 +976,10 @@ double movedFraction(const Data& d) {
   std::vector<double> diff, se;
   for (std::size_t k = 0; k < d.bins.size(); ++k) {
     if (a[k].n == 0 || b[k].n == 0) continue;
-    diff.push_back(b[k].m - a[k].m);
-    se.push_back(std::sqrt(a[k].s2 / a[k].n + b[k].s2 / b[k].n));
+    // Medians: a person walking past, or a beam flickering onto the vehicle's own body, moves a
+    // bin's mean by decimetres while the sensor stands still (the forklift recordings).
+    diff.push_back(b[k].med - a[k].med);
+    se.push_back(kMedianEfficiency * std::sqrt(a[k].s2 / a[k].n + b[k].s2 / b[k].n));
   }
   if (diff.empty()) return 1.0;
   const double common = upperMedian(diff);
@@ -1192,6 +1271,9 @@ bool StaticDiagnosis::makeData(DiagnosisResult& out) {
     }
   }
   out.baseline_extra["window_scans"] = static_cast<double>(window_);
+  // One pose: beams that saw objects move (a person, a reflector carried away) are left out;
+  // the sensor's model is about the scene standing still.
+  if (window_ == 0) out.baseline_extra["scene_changed_bins"] = static_cast<double>(dropChangedBins(d_));
   if (d_.bins.size() < 10) {
     out.status.code = StatusCode::too_few_beams;
     out.status.message = "fewer than 10 beam directions return in enough scans";
@@ -1283,10 +1365,13 @@ void StaticDiagnosis::heldOut(HeldOut& held) {
   for (std::size_t t = 0; t < data_.scans; ++t) fold[t] = static_cast<int>(t % static_cast<std::size_t>(config_.folds));
   for (const auto& e : candidates_) flags_.push_back(flagsOf(e));
   startTails();
+  const auto folds = static_cast<std::size_t>(config_.folds);
   for (int k = 0; k < config_.folds; ++k) {
+    reportProgress(config_, kHeldOutStage, static_cast<std::size_t>(k), folds);
     foldLikelihoods(k, fold, held);
     if (tails_on_) tailFold(k, fold);
   }
+  reportProgress(config_, kHeldOutStage, folds, folds);
   held.points = static_cast<double>(held.base.size());
   if (tails_on_) tails_.gauss = held.base;  // the readings' part (the wall bins come next); deliberate copy
   wallLikelihoods(held);

@@ -173,9 +173,7 @@ diagnosis::DiagnosisResult diagnoseLandmarks(const DiagnoseCommand& c, const dia
   std::vector<std::vector<double>> truth_ranges;
   if (!c.truth.empty()) truth_ranges = truthRanges(c.truth, obs);
   if (!quiet()) std::fprintf(stderr, "diagnosing a sequence: %zu sightings (%d replicas)\n", obs.sightings.size(), c.replicas);
-  Activity activity("diagnose (sequence)");
   diagnosis::DiagnosisResult result = diagnosis::diagnoseSequence(obs, config, c.truth.empty() ? nullptr : &truth_ranges);
-  activity.finish();
   return result;
 }
 
@@ -206,9 +204,7 @@ diagnosis::DiagnosisResult diagnoseOnePose(const DiagnoseCommand& c, const io::S
   if (!quiet())
     std::fprintf(stderr, "diagnosing repeated scans of one pose: %zu scans, %zu readings (%d replicas)\n", s.scans,
                  s.readings.size(), c.replicas);
-  Activity activity("diagnose (repeated scans of one pose)");
   diagnosis::DiagnosisResult result = diagnosis::diagnoseStatic(s, config, &src.walls);
-  activity.finish();
   return result;
 }
 
@@ -219,7 +215,9 @@ void runDiagnose(const DiagnoseCommand& c) {
   FLAGS_minloglevel = google::GLOG_ERROR;
   io::checkOutsideInput(c.data, c.out);
   const io::Sequence seq = io::openSequence(c.data);
-  const diagnosis::DiagnoseConfig config = diagnoseConfig(c);
+  diagnosis::DiagnoseConfig config = diagnoseConfig(c);
+  StageBars bars;  // a bar per step on a terminal (a forklift's 1081-beam static recording takes a while)
+  config.progress = std::ref(bars);
   const Corrector fix = makeCorrector(c.model);
   io::StagedDirectory out(c.out, c.overwrite);
   DiagnosisSource src;
@@ -233,6 +231,7 @@ void runDiagnose(const DiagnoseCommand& c) {
     result = diagnoseLandmarks(c, config, fix, *obs);
     if (!result.status.ok() && c.mode == "auto") {
       // Poles were found but cannot carry a sequence diagnosis: look at one pose instead.
+      bars.finish();
       if (!quiet())
         std::fprintf(stderr, "the sequence cannot be diagnosed (%s: %s); diagnosing repeated scans of one pose instead\n",
                      result.status.name(), result.status.message.c_str());
@@ -241,6 +240,7 @@ void runDiagnose(const DiagnoseCommand& c) {
     }
   }
   if (!obs || c.mode == "static") result = diagnoseOnePose(c, seq, config, fix, src);
+  bars.finish();
   writeDiagnosis(out.path(), result, src);
   out.commit();
   if (!result.status.ok())
