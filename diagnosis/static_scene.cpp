@@ -621,14 +621,16 @@ double expected(const Model& m, const Bin& b, const BinFit& f, double a, double 
 /// Log-likelihood of one reading (predictive: the bin's location is known to 1 / n_train).
 double readingLL(const Model& m, const Data& d, const Bin& b, const BinFit& f, std::size_t i, double floor_weight) {
   const double centre = expected(m, b, f, d.a[i], d.t[i]) + m.drift * (d.t[i] - d.t_mean);
-  const double sigma = std::max(m.sigma_e * shapeOf(m, b, centre) * std::sqrt(1.0 + 1.0 / std::max(f.n, 1.0)), 1e-6);
+  double sigma = m.sigma_e * shapeOf(m, b, centre);
+  // Readings rounded to a grid q: the rounding adds its own variance q^2 / 12 at every range, a
+  // floor under the noise law (a density like every other model's, so that held-out
+  // likelihoods compare like with like; a probability per grid cell would not).
+  if (m.q > 0.0) sigma = std::sqrt(sigma * sigma + m.q * m.q / 12.0);
+  sigma = std::max(sigma * std::sqrt(1.0 + 1.0 / std::max(f.n, 1.0)), 1e-6);
   const double y = d.y[i];
   const double z = (y - centre) / sigma;
   double dens;
-  if (m.q > 0.0) {
-    const double hi = (y + 0.5 * m.q - centre) / sigma, lo = (y - 0.5 * m.q - centre) / sigma;
-    dens = std::max(0.5 * (std::erfc(-hi / std::sqrt(2.0)) - std::erfc(-lo / std::sqrt(2.0))), 1e-300) / m.q;
-  } else if (m.dof > 0.0) {
+  if (m.dof > 0.0) {
     const double nu = m.dof, s = sigma * std::sqrt((nu - 2.0) / nu), x = (y - centre) / s;
     dens = std::exp(std::lgamma(0.5 * (nu + 1.0)) - std::lgamma(0.5 * nu) - 0.5 * std::log(nu * kPi) -
                     0.5 * (nu + 1.0) * std::log1p(x * x / nu)) / s;
@@ -660,6 +662,7 @@ class ModelFitter {
   void fitDrift();
   void fitMixed();
   void fitDof();
+  void fitFloorScale();
 
   const Data& d_;
   const std::vector<bool>& train_;
@@ -767,6 +770,26 @@ void ModelFitter::fitDof() {
   m_.dof = 2.0 + std::exp(ternaryMax(ll, std::log(0.1), std::log(300.0), 50));
 }
 
+/// sigma_e under the rounding's variance floor (readingLL): the Gaussian profile's sigma_e
+/// holds the rounding's variance too, which the floor now carries. ML on the per-bin sums.
+void ModelFitter::fitFloorScale() {
+  refresh();
+  const double floor2 = m_.q * m_.q / 12.0;
+  auto ll = [&](double log_sigma) {
+    const double s2 = std::exp(2.0 * log_sigma);
+    double s = 0.0;
+    for (std::size_t b = 0; b < d_.bins.size(); ++b) {
+      if (bin_n_[b] == 0.0) continue;
+      const double h = std::max(shapeOf(m_, d_.bins[b], centreOf(m_, d_.bins[b], fits_[b])), 1e-9);
+      const double v = s2 * h * h + floor2;
+      s -= 0.5 * (bin_n_[b] * std::log(v) + bin_ss_[b] / v);
+    }
+    return s;
+  };
+  const double top = std::log(std::max(m_.sigma_e, 1e-9));
+  m_.sigma_e = std::exp(ternaryMax(ll, top - std::log(50.0), top + std::log(1.2), 60));
+}
+
 Model ModelFitter::fit(double q_detected) {
   m_.robust_edges = fl_.mixed;
   if (fl_.quant) m_.q = q_detected;
@@ -789,6 +812,7 @@ Model ModelFitter::fit(double q_detected) {
     if (fl_.mixed) fitMixed();
   }
   if (fl_.dof) fitDof();
+  if (fl_.quant && m_.q > 0.0) fitFloorScale();
   return m_;
 }
 
@@ -1187,6 +1211,8 @@ class StaticDiagnosis {
   CandidateResult candidate(std::size_t c, const HeldOut& held, const DiagnosisResult& out);
   void afterCandidates(DiagnosisResult& out);
   std::vector<std::pair<Effect, Effect>> nestedEffects() const { return {}; }
+  /// The reading grid is seen in the readings (the `quantisation` statistic).
+  std::vector<Effect> directEffects() const { return {Effect::quantisation}; }
   void refineCause(DiagnosisResult& out);
   void reRankUnderTails(DiagnosisResult& out);
   Closeness closenessBaseline(const DiagnosisResult& out) const { return closenessOf(out.measured, sim_base_); }

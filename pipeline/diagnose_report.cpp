@@ -326,7 +326,7 @@ void writeCandidates(std::ostream& md, const DiagnosisResult& r) {
   md << "\n## Candidate effects\n\n";
   md << "Each effect added to the baseline and fitted; held-out log-likelihood gain per point (" << r.folds
      << " folds by scan" << (seq ? ", odometry leave-one-stop-out" : ", wall beams leave-one-out")
-     << "), its one-sided p-value, Holm-adjusted across the candidates; significant = adjusted p < alpha with a positive gain.\n\n";
+     << "), its one-sided p-value, Holm-adjusted across the candidates; significant = adjusted p < alpha with a positive gain (for a reading grid seen in the readings, `quantisation`: a gain not below zero by two standard errors).\n\n";
   md << "| effect | held-out gain [nats/pt] | se | p | Holm p | delta AIC | params | significant | identifiable | estimates | note |\n"
         "|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const auto& c : r.candidates) {
