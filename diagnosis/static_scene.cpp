@@ -153,6 +153,9 @@ Data makeBins(const StaticScans& s, std::size_t window) {
 /// A reading this far from its beam's median, and six robust deviations, lies on another surface.
 constexpr double kSceneStepM = 0.05;
 
+/// A normal sample's standard deviation over its median absolute deviation.
+constexpr double kMadToSigma = 1.4826;
+
 /// Whether bin b saw the scene change: its readings off its median (by kSceneStepM and six
 /// robust deviations) come in runs in time, as when an object is moved into or out of the beam
 /// or a person walks through it, not scattered over the recording as a sensor's own outliers
@@ -164,7 +167,7 @@ bool sceneChanged(const Data& d, const Bin& b) {
   const double med = upperMedian(ys);
   std::vector<double> dev;
   for (double y : ys) dev.push_back(std::abs(y - med));
-  const double step = std::max(kSceneStepM, 6.0 * 1.4826 * upperMedian(dev));
+  const double step = std::max(kSceneStepM, 6.0 * kMadToSigma * upperMedian(dev));
   std::vector<std::pair<double, bool>> seq;  // (scan, off)
   for (std::size_t i : b.idx) seq.emplace_back(d.t[i], std::abs(d.y[i] - med) > step);
   std::stable_sort(seq.begin(), seq.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
@@ -483,7 +486,6 @@ bool wallGaussNewton(const Data& d, const std::vector<BinFit>& f, WallFit& w, bo
       entries.emplace_back(k, wl, 1.0 / cu);
       entries.emplace_back(k, wl + 1, -l.p * std::sin(u) / (cu * cu) - w.b * std::sin(u));
     }
-    s.j.setZero();
     s.j.setFromTriplets(entries.begin(), entries.end());
     // Sparse: a cluttered room has hundreds of short lines, and a dense normal matrix then
     // costs seconds a step (the forklift's 1081-beam scans).

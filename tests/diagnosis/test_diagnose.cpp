@@ -658,7 +658,7 @@ TEST(DiagnoseStatic, BeamsThatSawAnObjectCarriedAwayAreLeftOutAndTheRoomStaysCle
   ASSERT_STREQ(r.status.name(), "ok") << r.status.message;
   EXPECT_EQ(r.baseline_extra.at("window_scans"), 0.0);
   // Every beam of the sector; a few beams' readings fall in two bins (their angles, computed
-  // from float coordinates, round apart), hence the margin above.
+  // from float coordinates, round apart), hence the margin of six.
   EXPECT_GE(r.baseline_extra.at("scene_changed_bins"), kSectorBeams);
   EXPECT_LE(r.baseline_extra.at("scene_changed_bins"), kSectorBeams + 6.0);
   EXPECT_EQ(r.primary_cause, cause::kNone) << r.decision;
@@ -857,6 +857,14 @@ TEST(DiagnoseStatic, TailStudyIsDeterministic) {
 /// Mixed pixels at 2-10 % of the edge readings (issue 20, item 3; a fraction drawn per seed): the
 /// readings between the two surfaces are tails on the edge beams, so mixed_pixels is named (by its
 /// own candidate, or from the tails' edge covariate). Four seeds, at least 3.
+/// diagnoseStatic on staticRoom() with `fx`, simulated and diagnosed with `seed`, 5 replicas.
+DiagnosisResult diagnoseRoomAtSeed(const RangeEffects& fx, std::uint64_t seed) {
+  DiagnoseConfig dc;
+  dc.replicas = 5;
+  dc.seed = seed;
+  return diagnoseStatic(staticRoom(fx, squared(0.0015), seed), dc);
+}
+
 class CoarseGrid : public ::testing::TestWithParam<double> {};
 
 TEST_P(CoarseGrid, ReadingsRoundedToItAreNamedQuantisation) {
@@ -864,23 +872,18 @@ TEST_P(CoarseGrid, ReadingsRoundedToItAreNamedQuantisation) {
   // variance floor and the grid seen in the readings name the cause (before the floor model 2 and
   // 0 of 10 were named; docs/RESULTS.md "Static mode").
   const double grid = GetParam();
-  {
-    int right = 0;
-    std::string log;
-    for (std::uint64_t seed = 331; seed < 335; ++seed) {
-      RangeEffects fx;
-      fx.range_resolution_m = grid;
-      DiagnoseConfig dc;
-      dc.replicas = 5;
-      dc.seed = seed;
-      const auto r = diagnoseStatic(staticRoom(fx, squared(0.0015), seed), dc);
-      ASSERT_STREQ(r.status.name(), "ok") << r.status.message;
-      right += names(r.primary_cause, Effect::quantisation);
-      log += " seed " + std::to_string(seed) + ": " + r.primary_cause + ";";
-    }
-    std::printf("grid %.3f m:%s\n", grid, log.c_str());
-    EXPECT_GE(right, 3) << "grid " << grid << ":" << log;
+  int right = 0;
+  std::string log;
+  for (std::uint64_t seed = 331; seed < 335; ++seed) {
+    RangeEffects fx;
+    fx.range_resolution_m = grid;
+    const auto r = diagnoseRoomAtSeed(fx, seed);
+    ASSERT_STREQ(r.status.name(), "ok") << r.status.message;
+    right += names(r.primary_cause, Effect::quantisation);
+    log += " seed " + std::to_string(seed) + ": " + r.primary_cause + ";";
   }
+  std::printf("grid %.3f m:%s\n", grid, log.c_str());
+  EXPECT_GE(right, 3) << "grid " << grid << ":" << log;
 }
 
 INSTANTIATE_TEST_SUITE_P(Room, CoarseGrid, ::testing::Values(0.005, 0.010),
@@ -894,10 +897,7 @@ TEST(DiagnoseStatic, MixedPixelsAtTwoToTenPercentOfEdgeReadingsAreNamed) {
     auto rng = makeRng(seed, 5);
     RangeEffects fx;
     fx.mixed_pixel_fraction = 0.02 + 0.08 * u(rng);
-    DiagnoseConfig dc;
-    dc.replicas = 5;
-    dc.seed = seed;
-    const auto r = diagnoseStatic(staticRoom(fx, squared(0.0015), seed), dc);
+    const auto r = diagnoseRoomAtSeed(fx, seed);
     ASSERT_STREQ(r.status.name(), "ok") << r.status.message;
     right += names(r.primary_cause, Effect::mixed_pixels);
     char buf[200];
