@@ -117,6 +117,28 @@ TEST_F(CliDiagnose, CleanDataHasNoCauseAndTheSameSeedGivesTheSameBytes) {
   EXPECT_EQ(test::readFile(out / "a/diagnosis.json"), test::readFile(out / "b/diagnosis.json"));
 }
 
+TEST_F(CliDiagnose, ALongSequenceIsDiagnosedOverItsLeadingStopsAndSaysSo) {
+  // The whole clean sequence first (no cap), then capped at about half its readings.
+  TempDir out;
+  const std::string args = " " + at("clean/scans").string() + " --replicas 5 --out ";
+  const auto whole = runCli("diagnose -q --max-readings 0" + args + (out / "all").string());
+  ASSERT_EQ(whole.exit_code, 0) << whole.err;
+  const auto all = json(out / "all/diagnosis.json")["data"];
+  EXPECT_FALSE(all.contains("selection"));
+  const int total = all["readings"].get<int>(), cap = total / 2;
+  const auto r = runCli("diagnose -q --max-readings " + std::to_string(cap) + args + (out / "half").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto half = json(out / "half/diagnosis.json")["data"];
+  EXPECT_LE(half["readings"].get<int>(), cap);
+  EXPECT_GT(half["readings"].get<int>(), cap / 2);  // whole stops up to the cap, not fewer
+  EXPECT_LT(half["stops"].get<int>(), all["stops"].get<int>());
+  EXPECT_LT(half["scans"].get<int>(), all["scans"].get<int>());
+  const std::string said = "the first " + std::to_string(half["stops"].get<int>()) + " of " +
+                           std::to_string(all["stops"].get<int>()) + " stops";
+  EXPECT_NE(half["selection"].get<std::string>().find(said), std::string::npos) << half["selection"];
+  EXPECT_NE(test::readFile(out / "half/report.md").find(said), std::string::npos);
+}
+
 TEST(CliDiagnoseStatic, ARoomFromOnePoseIsDiagnosedInStaticModeAndTheEffectNamed) {
   TempDir dir;
   const fs::path scene = writeScene(dir.path(), "room", [](nlohmann::json& s) {
