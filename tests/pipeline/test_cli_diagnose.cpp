@@ -139,7 +139,7 @@ TEST_F(CliDiagnose, ALongSequenceIsDiagnosedOverItsLeadingStopsAndSaysSo) {
   EXPECT_NE(test::readFile(out / "half/report.md").find(said), std::string::npos);
 }
 
-TEST(CliDiagnoseDriving, PosesThatSeeNoPoleKeepTheHeldOutGainsFinite) {
+TEST(CliDiagnoseDriving, PosesThatSeeNoPoleKeepTheHeldOutGainsFiniteAndTheReplicasDriftLikeTheData) {
   // A robot driving without stopping (a pose per scan, chained by the odometry: the motion
   // prior) whose sensor reaches 1 m only, so that some poses see no pole. The odometry's
   // held-out likelihood assumed a pose prior per stop; such a pose sits where its neighbours put
@@ -163,6 +163,12 @@ TEST(CliDiagnoseDriving, PosesThatSeeNoPoleKeepTheHeldOutGainsFinite) {
   }
   EXPECT_GE(finite, 5);
   EXPECT_EQ(test::readFile(dir / "d/report.md").find("odometry leave-one-stop-out"), std::string::npos);
+  // The replicas drive their paths as the motion prior says odometry drifts. Drawn around the
+  // commanded poses as for stop and go, they disagreed with the data on 4 of the 17 battery
+  // statistics at p < 0.01 here (6-8 on the full-range drives of data/scenes), now on 1.
+  int small_p = 0;
+  for (const auto& b : j["battery"]) small_p += b["p_value"].get<double>() < 0.01;
+  EXPECT_LE(small_p, 2) << j["battery"].dump();
 }
 
 TEST(CliDiagnoseStatic, ARoomFromOnePoseIsDiagnosedInStaticModeAndTheEffectNamed) {
