@@ -181,8 +181,9 @@ std::string leadingWindow(LandmarkObservations& obs, std::size_t max_readings) {
       total += s.beams.size();
     }
   if (max_readings == 0 || total <= max_readings) return "";
+  // Two stops at least, whatever they hold: a sequence diagnosis needs them.
   std::size_t stops = 0, kept = 0;
-  while (stops < per_stop.size() && kept + per_stop[stops] <= max_readings) kept += per_stop[stops++];
+  while (stops < per_stop.size() && (stops < 2 || kept + per_stop[stops] <= max_readings)) kept += per_stop[stops++];
   const std::size_t all_stops = obs.commanded.size();
   obs.commanded.resize(stops);
   obs.sightings.erase(std::remove_if(obs.sightings.begin(), obs.sightings.end(),

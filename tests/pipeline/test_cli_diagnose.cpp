@@ -137,6 +137,10 @@ TEST_F(CliDiagnose, ALongSequenceIsDiagnosedOverItsLeadingStopsAndSaysSo) {
                            std::to_string(all["stops"].get<int>()) + " stops";
   EXPECT_NE(half["selection"].get<std::string>().find(said), std::string::npos) << half["selection"];
   EXPECT_NE(test::readFile(out / "half/report.md").find(said), std::string::npos);
+  // A cap below one stop's readings keeps the two stops a sequence diagnosis needs.
+  const auto tiny = runCli("diagnose -q --mode sequence --max-readings 1" + args + (out / "tiny").string());
+  EXPECT_TRUE(tiny.exit_code == 0 || tiny.exit_code == 3) << tiny.exit_code << " " << tiny.err;
+  EXPECT_EQ(json(out / "tiny/diagnosis.json")["data"]["stops"].get<int>(), 2);
 }
 
 TEST(CliDiagnoseDriving, PosesThatSeeNoPoleKeepTheHeldOutGainsFiniteAndTheReplicasDriftLikeTheData) {
