@@ -63,7 +63,7 @@ ceres::Solver::Options solverOptions(bool motion, int max_iterations) {
 
 template <int N>
 ceres::CostFunction* makeBeamCost(double angle, double y, double inv_sigma) {
-  return new ceres::AutoDiffCostFunction<BeamRangeCost<N>, 1, 3, 2, 1, N>(new BeamRangeCost<N>{angle, y, inv_sigma});
+  return new BeamRangeAnalyticCost<N>(angle, y, inv_sigma);
 }
 
 template <int N>

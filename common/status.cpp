@@ -6,7 +6,7 @@
 namespace lidarcal {
 namespace {
 
-constexpr std::array<std::pair<StatusCode, const char*>, 19> kNames = {{
+constexpr std::array<std::pair<StatusCode, const char*>, 20> kNames = {{
     {StatusCode::ok, "ok"},
     {StatusCode::too_few_stops, "too_few_stops"},
     {StatusCode::no_baseline, "no_baseline"},
@@ -26,6 +26,7 @@ constexpr std::array<std::pair<StatusCode, const char*>, 19> kNames = {{
     {StatusCode::cross_validation_failed, "cross_validation_failed"},
     {StatusCode::too_few_scans, "too_few_scans"},
     {StatusCode::too_few_beams, "too_few_beams"},
+    {StatusCode::too_few_walls, "too_few_walls"},
 }};
 
 }  // namespace

@@ -33,6 +33,7 @@ enum class StatusCode {
   cross_validation_failed,  ///< no fold could be fitted
   too_few_scans,            ///< static data: too few scans from one pose
   too_few_beams,            ///< static data: too few beam directions return often enough
+  too_few_walls,            ///< static data: the returns lie on straight surfaces over too narrow a sector
 };
 
 /// The code's name as written in model.json and diagnosis.json ("ok", "joint_failed", ...).

@@ -155,6 +155,10 @@ constexpr double kSceneStepM = 0.05;
 
 /// A normal sample's standard deviation over its median absolute deviation.
 constexpr double kMadToSigma = 1.4826;
+/// Least beam sector the wall lines must cover (summed over lines) for a static diagnosis: the
+/// Hokuyo range sweep's reflector fills 2-5 degrees; the sparsest real room here (the YDLIDAR X4,
+/// three walls of 8-12 returning beams) 14.8-19.8.
+constexpr double kMinWallSectorRad = 10.0 * kPi / 180.0;
 
 /// Whether bin b saw the scene change: its readings off its median (by kSceneStepM and six
 /// robust deviations) come in runs in time, as when an object is moved into or out of the beam
@@ -1224,6 +1228,7 @@ class StaticDiagnosis {
   bool makeData(DiagnosisResult& out);
   void fitWallModel();
   void describeBaseline(DiagnosisResult& out) const;
+  double wallSector() const;
   void reportWalls() const;
   void foldLikelihoods(int k, const std::vector<int>& fold, HeldOut& held) const;
   void wallLikelihoods(HeldOut& held) const;
@@ -1277,7 +1282,35 @@ bool StaticDiagnosis::fitBaseline(DiagnosisResult& out) {
   for (const auto& b : d_.bins) edges_ += b.edge;
   describeBaseline(out);
   if (walls_out_) reportWalls();
+  // The noise is read against range and incidence off the walls: straight surfaces seen over a
+  // narrow sector (one target, such as the retro-reflector a range sweep was masked to) hold
+  // neither spread, and any effect named from them would be chance.
+  if (const double span = wallSector(); span < kMinWallSectorRad) {
+    out.status.code = StatusCode::too_few_walls;
+    char buf[320];
+    std::snprintf(buf, sizeof buf,
+                  "the returns lie on %zu straight surface(s) seen over %.1f degrees (at least %.0f needed): record the "
+                  "repeated scans in a room with walls in view at several distances, not one target alone",
+                  lines0_.size(), rad2deg(span), rad2deg(kMinWallSectorRad));
+    out.status.message = buf;
+    return false;
+  }
   return true;
+}
+
+/// The beam sector the wall lines cover: the sum over lines of the angles between their first and
+/// last bin.
+double StaticDiagnosis::wallSector() const {
+  std::vector<double> lo(lines0_.size(), kInf), hi(lines0_.size(), -kInf);
+  for (const Bin& b : d_.bins)
+    if (b.wall >= 0 && static_cast<std::size_t>(b.wall) < lines0_.size()) {
+      lo[static_cast<std::size_t>(b.wall)] = std::min(lo[static_cast<std::size_t>(b.wall)], b.angle);
+      hi[static_cast<std::size_t>(b.wall)] = std::max(hi[static_cast<std::size_t>(b.wall)], b.angle);
+    }
+  double sum = 0.0;
+  for (std::size_t l = 0; l < lines0_.size(); ++l)
+    if (hi[l] >= lo[l]) sum += hi[l] - lo[l];
+  return sum;
 }
 
 /// One pose for the whole recording, unless the beams show that the sensor moved: then short

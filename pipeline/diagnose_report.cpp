@@ -262,7 +262,7 @@ void writeDataLine(std::ostream& md, const DiagnosisResult& r, const DiagnosisSo
   md << "# lidarcal diagnosis\n\n";
   md << "Data: `" << src.data.string() << "`" << (src.sensor.empty() ? "" : " (" + src.sensor + ")") << ", **"
      << toString(r.mode) << "** mode: " << r.scans << " scans";
-  if (seq) md << " at " << r.stops << " stops, " << r.landmarks << " landmarks";
+  if (seq) md << " at " << r.stops << " stops" << (src.selection.empty() ? "" : " (" + src.selection + ")") << ", " << r.landmarks << " landmarks";
   else md << (src.selection.empty() ? "" : " (" + src.selection + ")") << ", " << r.landmarks << " wall lines";
   md << ", " << r.readings << " readings.";
   if (!src.model.empty()) md << " Readings first corrected with `" << src.model << "`.";
@@ -321,12 +321,21 @@ void writeBattery(std::ostream& md, const DiagnosisResult& r) {
   md << "\n</details>\n";
 }
 
+/// The sequence was refined with the motion prior (continuous recording): no stop has a pose
+/// prior of its own to hold out.
+bool motionPrior(const DiagnosisResult& r) {
+  const auto it = r.baseline_extra.find("motion_prior");
+  return it != r.baseline_extra.end() && it->second > 0.5;
+}
+
 void writeCandidates(std::ostream& md, const DiagnosisResult& r) {
   const bool seq = r.mode == diagnosis::DiagnoseMode::sequence;
   md << "\n## Candidate effects\n\n";
   md << "Each effect added to the baseline and fitted; held-out log-likelihood gain per point (" << r.folds
-     << " folds by scan" << (seq ? ", odometry leave-one-stop-out" : ", wall beams leave-one-out")
-     << "), its one-sided p-value, Holm-adjusted across the candidates; significant = adjusted p < alpha with a positive gain (for a reading grid seen in the readings, `quantisation`: a gain not below zero by two standard errors).\n\n";
+     << " folds by scan" << (!seq ? ", wall beams leave-one-out" : motionPrior(r) ? "" : ", odometry leave-one-stop-out")
+     << "), its one-sided p-value, Holm-adjusted across the candidates; significant = adjusted p < alpha with a positive gain"
+     << (seq ? "" : " (for a reading grid seen in the readings, `quantisation`: a gain not below zero by two standard errors)")
+     << ".\n\n";
   md << "| effect | held-out gain [nats/pt] | se | p | Holm p | delta AIC | params | significant | identifiable | estimates | note |\n"
         "|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const auto& c : r.candidates) {

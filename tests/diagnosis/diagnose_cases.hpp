@@ -155,13 +155,15 @@ inline diagnosis::StaticScans roomScans(int scans) {
   return out;
 }
 
-/// A simulated room seen from one pose (staticRoomScene), `scans` scans. `turn_rad_per_scan`:
-/// the sensor turns in place by this much per scan (the scans are cast from the turned heading).
-inline diagnosis::StaticScans staticRoom(const RangeEffects& fx, const NoiseModel& noise, std::uint64_t seed, int scans = 150,
-                                           double step_error_fraction = 0.0, double turn_rad_per_scan = 0.0) {
-  const Scene s = staticRoomScene(fx, noise, scans, step_error_fraction);
+/// The scans of a one-stop scene `s` (its scans_per_stop), as `diagnose` reads them.
+/// `turn_rad_per_scan`: the sensor turns in place by this much per scan (the scans are cast from
+/// the turned heading).
+inline diagnosis::StaticScans sceneScans(const Scene& s, std::uint64_t seed, double turn_rad_per_scan = 0.0) {
   const auto stops = simulation::planStops(s, seed);
-  diagnosis::StaticScans out = roomScans(scans);
+  diagnosis::StaticScans out = roomScans(s.path.scans_per_stop);
+  out.beams_per_scan = static_cast<std::size_t>(s.sensor.beams);
+  out.range_min_m = s.sensor.range.range_min_m;
+  out.range_max_m = s.sensor.range.range_max_m;
   for (std::size_t k = 0; k < out.scans; ++k) {
     TruthStop stop = stops[0];
     stop.actual.yaw_rad += turn_rad_per_scan * static_cast<double>(k);
@@ -172,6 +174,12 @@ inline diagnosis::StaticScans staticRoom(const RangeEffects& fx, const NoiseMode
                                 std::hypot(static_cast<double>(p.x), static_cast<double>(p.y)), static_cast<std::uint32_t>(k)});
   }
   return out;
+}
+
+/// A simulated room seen from one pose (staticRoomScene), `scans` scans.
+inline diagnosis::StaticScans staticRoom(const RangeEffects& fx, const NoiseModel& noise, std::uint64_t seed, int scans = 150,
+                                           double step_error_fraction = 0.0, double turn_rad_per_scan = 0.0) {
+  return sceneScans(staticRoomScene(fx, noise, scans, step_error_fraction), seed, turn_rad_per_scan);
 }
 
 /// Where the extra-wide errors of staticRoomWithTails() occur.

@@ -731,6 +731,36 @@ TEST(DiagnoseStatic, CleanRoomFalsePositiveRateOverSeeds) {
   EXPECT_LE(named, std::max(1, n / 20)) << which;
 }
 
+/// One pose in front of `walls` (and `poles`) only: the room's sensor with 0.25-degree beams.
+StaticScans sceneOf(std::vector<Segment> walls, std::vector<Cylinder> poles, std::uint64_t seed) {
+  Scene s = test::staticRoomScene({}, squared(0.0015), 60, 0.0);
+  s.sensor.beams = 1440;
+  s.sensor.angle_increment_rad = deg2rad(0.25);
+  s.walls = std::move(walls);
+  s.clutter = std::move(poles);
+  return test::sceneScans(s, seed);
+}
+
+TEST(DiagnoseStatic, OneTargetAloneIsRefusedAndOneLongWallIsNot) {
+  // Scans masked to one target, as the Hokuyo range sweep is (a reflector, nothing else), or a
+  // short board: enough beams return, but over a few degrees, with no spread in range or
+  // incidence to read an effect off.
+  DiagnoseConfig dc;
+  dc.replicas = 5;
+  for (const auto& [what, scans] :
+       {std::pair{"a pole 0.9 m away", sceneOf({}, {{1.0, 0.3, 0.045}}, 3)},
+        std::pair{"a 0.2 m board 1.7 m away", sceneOf({{2.0, -0.1, 2.0, 0.1}}, {}, 4)}}) {
+    SCOPED_TRACE(what);
+    const auto r = diagnoseStatic(scans, dc);
+    EXPECT_STREQ(r.status.name(), "too_few_walls") << r.status.message << " cause " << r.primary_cause;
+    EXPECT_NE(r.status.message.find("room"), std::string::npos) << r.status.message;  // says what to record
+  }
+  // One wall 1.7 m away across 120 degrees of the view is enough.
+  const auto wall = diagnoseStatic(sceneOf({{2.0, -3.0, 2.0, 3.0}}, {}, 5), dc);
+  EXPECT_TRUE(wall.status.ok()) << wall.status.name() << ": " << wall.status.message;
+  EXPECT_EQ(wall.landmarks, 1u);
+}
+
 TEST(DiagnoseStatic, TooFewScansGiveAStatus) {
   const auto r = diagnoseStatic(staticRoom({}, squared(0.0015), 1, 3), DiagnoseConfig{});
   EXPECT_STREQ(r.status.name(), "too_few_scans");
