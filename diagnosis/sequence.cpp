@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include <Eigen/Dense>
+#include <Eigen/SparseCore>
 
 #include "calibration/calibrate.hpp"
 #include "diagnosis/skeleton.hpp"
@@ -580,12 +581,26 @@ struct Identifiability {
 /// The linearised model for identifiability: the Jacobian in the nuisance parameters (bias,
 /// radius when estimated, centres, stop positions with their priors, rows n.. for the priors),
 /// the weights, and each mean-type effect's columns.
+/// Sparse where it grows with the data: a reading touches the bias, the radius, one centre and
+/// one pose, and a long log has a pose per scan (dense, this took most of the 0.7 GB and 2.2 GB
+/// that Freiburg 079's first 10,000 and 20,000 readings needed; the campus log's 2,008 stops, of
+/// which 197 see a landmark, 0.8 GB).
 struct Design {
-  Eigen::MatrixXd j;
+  using Sparse = Eigen::SparseMatrix<double>;
+  Sparse j;
   Eigen::VectorXd w;
-  Eigen::MatrixXd x_lm, x_head, x_drift, x_angle, x_inc, x_scale;
+  Sparse x_lm, x_head;
+  Eigen::MatrixXd x_drift, x_angle, x_inc, x_scale;
   std::size_t landmarks = 0;
   double tmin = 0.0, tmax = 0.0;  ///< scan range of the readings
+};
+
+/// The entries of a design's sparse blocks while its rows are written, and each stop's pose
+/// slot (-1 for a stop without readings: its pose, free under its prior, takes up its prior's
+/// rows whatever the effect, so it and they are left out; a continuous log has many such).
+struct DesignEntries {
+  std::vector<Eigen::Triplet<double>> j, lm, head;
+  std::vector<int> slot;
 };
 
 /// Landmark id -> column of its centre's x (y at +1), from column `col` on.
@@ -601,7 +616,7 @@ std::map<int, int> centreColumns(const JointResult& fit, int col) {
 
 /// The readings' rows of the design.
 void readingRows(const JointResult& fit, const std::vector<Row>& rs, const JointConfig& cfg, const std::map<int, int>& lm,
-                 int pose0, Design& x) {
+                 int pose0, Design& x, DesignEntries& e) {
   const int na = fit.model.bias.order() + 1;
   const int n = static_cast<int>(rs.size());
   double tmean = 0.0;
@@ -622,19 +637,20 @@ void readingRows(const JointResult& fit, const std::vector<Row>& rs, const Joint
     const double fp = fit.model.bias.derivative(g.d);
     double v = 1.0;
     for (int a = 0; a < na; ++a) {
-      x.j(i, a) = v;
+      e.j.emplace_back(i, a, v);
       v *= g.d;
     }
-    if (cfg.estimate_radius) x.j(i, na) = fp * g.dr;
+    if (cfg.estimate_radius) e.j.emplace_back(i, na, fp * g.dr);
     const int cc = lm.at(r.landmark);
-    x.j(i, cc) = fp * g.dcx;
-    x.j(i, cc + 1) = fp * g.dcy;
-    const int pc = pose0 + 2 * static_cast<int>(r.stop);
-    x.j(i, pc) = -fp * g.dcx;
-    x.j(i, pc + 1) = -fp * g.dcy;
+    e.j.emplace_back(i, cc, fp * g.dcx);
+    e.j.emplace_back(i, cc + 1, fp * g.dcy);
+    const int slot = e.slot[r.stop];
+    const int pc = pose0 + 2 * slot;
+    e.j.emplace_back(i, pc, -fp * g.dcx);
+    e.j.emplace_back(i, pc + 1, -fp * g.dcy);
     const int li = static_cast<int>(std::distance(lm.begin(), lm.find(r.landmark)));
-    if (li > 0) x.x_lm(i, li - 1) = 1.0;
-    x.x_head(i, static_cast<int>(r.stop)) = fp * g.da;
+    if (li > 0) e.lm.emplace_back(i, li - 1, 1.0);
+    e.head.emplace_back(i, slot, fp * g.da);
     x.x_angle(i, 0) = fp * g.da;
     x.x_drift(i, 0) = static_cast<double>(r.scan) - tmean;
     x.x_inc(i, 0) = 1.0 - r.cos_incidence;
@@ -644,40 +660,54 @@ void readingRows(const JointResult& fit, const std::vector<Row>& rs, const Joint
 Design design(const LandmarkObservations& obs, const JointResult& fit, const std::vector<Row>& rs, const JointConfig& cfg) {
   const int na = fit.model.bias.order() + 1;
   const std::map<int, int> lm = centreColumns(fit, na + (cfg.estimate_radius ? 1 : 0));
-  const int k_stops = static_cast<int>(fit.poses.size());
+  DesignEntries e;
+  e.slot.assign(fit.poses.size(), -1);
+  for (const auto& r : rs) e.slot[r.r.stop] = 0;
+  std::vector<std::size_t> stop_of_slot;
+  for (std::size_t k = 0; k < e.slot.size(); ++k)
+    if (e.slot[k] == 0) {
+      e.slot[k] = static_cast<int>(stop_of_slot.size());
+      stop_of_slot.push_back(k);
+    }
+  const int k_stops = static_cast<int>(stop_of_slot.size());
   const int pose0 = na + (cfg.estimate_radius ? 1 : 0) + 2 * static_cast<int>(lm.size());
   const int p = pose0 + 2 * k_stops;
   const int n = static_cast<int>(rs.size());
   const int rows_total = n + 2 * k_stops;
   Design x;
   x.landmarks = lm.size();
-  x.j = Eigen::MatrixXd::Zero(rows_total, p);
   x.w = Eigen::VectorXd::Ones(rows_total);
-  x.x_lm = Eigen::MatrixXd::Zero(rows_total, std::max<int>(static_cast<int>(lm.size()) - 1, 1));
-  x.x_head = Eigen::MatrixXd::Zero(rows_total, k_stops);
   x.x_drift = Eigen::MatrixXd::Zero(rows_total, 1), x.x_angle = x.x_drift, x.x_inc = x.x_drift, x.x_scale = x.x_drift;
-  readingRows(fit, rs, cfg, lm, pose0, x);
+  e.j.reserve(static_cast<std::size_t>(n) * static_cast<std::size_t>(na + 5) + 2 * static_cast<std::size_t>(k_stops));
+  readingRows(fit, rs, cfg, lm, pose0, x, e);
   const Pose2& c0 = obs.commanded.front();
   for (int k = 0; k < k_stops; ++k) {
     const double inv = 1.0 / cfg.sigma_s_m;
-    x.j(n + 2 * k, pose0 + 2 * k) = inv;
-    x.j(n + 2 * k + 1, pose0 + 2 * k + 1) = inv;
-    x.x_scale(n + 2 * k, 0) = -(obs.commanded[static_cast<std::size_t>(k)].x_m - c0.x_m) * inv;
-    x.x_scale(n + 2 * k + 1, 0) = -(obs.commanded[static_cast<std::size_t>(k)].y_m - c0.y_m) * inv;
+    const Pose2& c = obs.commanded[stop_of_slot[static_cast<std::size_t>(k)]];
+    e.j.emplace_back(n + 2 * k, pose0 + 2 * k, inv);
+    e.j.emplace_back(n + 2 * k + 1, pose0 + 2 * k + 1, inv);
+    x.x_scale(n + 2 * k, 0) = -(c.x_m - c0.x_m) * inv;
+    x.x_scale(n + 2 * k + 1, 0) = -(c.y_m - c0.y_m) * inv;
   }
+  x.j.resize(rows_total, p);
+  x.j.setFromTriplets(e.j.begin(), e.j.end());
+  x.x_lm.resize(rows_total, std::max<int>(static_cast<int>(lm.size()) - 1, 1));
+  x.x_lm.setFromTriplets(e.lm.begin(), e.lm.end());
+  x.x_head.resize(rows_total, k_stops);
+  x.x_head.setFromTriplets(e.head.begin(), e.head.end());
   return x;
 }
 
 /// The nuisance parameters' information, factorised once for every mean-type effect.
 struct Nuisance {
-  Eigen::MatrixXd jw;               ///< J^T W
-  Eigen::LDLT<Eigen::MatrixXd> ldlt;  ///< of J^T W J with a relative ridge
+  Design::Sparse jw;                  ///< J^T W
+  Eigen::LDLT<Eigen::MatrixXd> ldlt;  ///< of J^T W J with a relative ridge (dense: pivoted, for the nearly singular)
 };
 
 Nuisance nuisance(const Design& x) {
   Nuisance nu;
   nu.jw = x.j.transpose() * x.w.asDiagonal();
-  Eigen::MatrixXd h = nu.jw * x.j;
+  Eigen::MatrixXd h = Eigen::MatrixXd(nu.jw * x.j);
   // A ridge relative to each parameter's own information: an absolute one (scaled by the
   // largest diagonal) would pin the weakly informed nuisance directions and make an effect
   // that they absorb exactly (a step-length error with the radius free) look estimable.
@@ -687,12 +717,14 @@ Nuisance nuisance(const Design& x) {
   return nu;
 }
 
-/// A mean-type effect with columns `xe`: information left after profiling the nuisance out.
-Identifiability assess(const Design& x, const Nuisance& nu, const Eigen::MatrixXd& xe, double ref) {
+/// A mean-type effect with columns `xe` (sparse or dense): information left after profiling the
+/// nuisance out.
+template <class Columns>
+Identifiability assess(const Design& x, const Nuisance& nu, const Columns& xe, double ref) {
   Identifiability id;
   id.ref = ref;
-  const Eigen::MatrixXd raw = xe.transpose() * x.w.asDiagonal() * xe;
-  const Eigen::MatrixXd c = nu.jw * xe;
+  const Eigen::MatrixXd raw = Eigen::MatrixXd(xe.transpose() * x.w.asDiagonal() * xe);
+  const Eigen::MatrixXd c = Eigen::MatrixXd(nu.jw * xe);
   Eigen::MatrixXd eff = raw - c.transpose() * nu.ldlt.solve(c);
   const double tr = raw.trace();
   id.ratio = tr > 0.0 ? std::clamp(eff.trace() / tr, 0.0, 1.0) : 0.0;

