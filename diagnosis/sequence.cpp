@@ -658,12 +658,13 @@ void readingRows(const JointResult& fit, const std::vector<Row>& rs, const Joint
 Design design(const LandmarkObservations& obs, const JointResult& fit, const std::vector<Row>& rs, const JointConfig& cfg) {
   const int na = fit.model.bias.order() + 1;
   const std::map<int, int> lm = centreColumns(fit, na + (cfg.estimate_radius ? 1 : 0));
+  std::vector<bool> seen(fit.poses.size(), false);
+  for (const auto& r : rs) seen[r.r.stop] = true;
   DesignEntries e;
   e.slot.assign(fit.poses.size(), -1);
-  for (const auto& r : rs) e.slot[r.r.stop] = 0;
   std::vector<std::size_t> stop_of_slot;
-  for (std::size_t k = 0; k < e.slot.size(); ++k)
-    if (e.slot[k] == 0) {
+  for (std::size_t k = 0; k < seen.size(); ++k)
+    if (seen[k]) {
       e.slot[k] = static_cast<int>(stop_of_slot.size());
       stop_of_slot.push_back(k);
     }
