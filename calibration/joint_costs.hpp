@@ -187,9 +187,6 @@ ceres::CostFunction* beamCost(int order, double angle, double y, double inv_sigm
 ceres::CostFunction* effectCost(int order, double angle, double y, double inv_sigma, double t_rel);
 ceres::CostFunction* knownRangeCost(int order, const KnownRange& k, double inv_sigma);
 
-/// The commanded step from stop a to stop b, in a's frame.
-Pose2 commandedStep(const Pose2& a, const Pose2& b);
-
 /// Geometry of a beam at the current estimate (pose x, y, heading; centre x, y): distance, cosine
 /// of the incidence, lateral offset.
 struct BeamGeometry {

@@ -115,13 +115,6 @@ ceres::CostFunction* knownRangeCost(int order, const KnownRange& k, double inv_s
   }
 }
 
-Pose2 commandedStep(const Pose2& a, const Pose2& b) {
-  Pose2 d;
-  a.toSensor(b.x_m, b.y_m, d.x_m, d.y_m);
-  d.yaw_rad = wrapAngle(b.yaw_rad - a.yaw_rad);
-  return d;
-}
-
 BeamGeometry beamGeometry(const double* pose, double angle, const double* centre, double radius) {
   BeamGeometry g;
   const double a = pose[2] + angle;
@@ -427,7 +420,7 @@ void JointProblem::addPosePriors(ceres::Problem& problem) {
     const Pose2& c = obs_.commanded[k];
     const double yaw = poses_[k][2] + wrapAngle(c.yaw_rad - poses_[k][2]);  // unwrapped next to the estimate
     if (motion_ && k > 0) {
-      const Pose2 step = commandedStep(obs_.commanded[k - 1], c);
+      const Pose2 step = stepBetween(obs_.commanded[k - 1], c);
       const double now = poses_[k][2] - poses_[k - 1][2];
       const double len = std::hypot(step.x_m, step.y_m);
       problem.AddResidualBlock(
@@ -653,8 +646,8 @@ void JointProblem::reportPriorLikelihood() {
   };
   for (std::size_t k = 0; k < poses_.size(); ++k) {
     if (motion_ && k > 0) {
-      const Pose2 step = commandedStep(obs_.commanded[k - 1], obs_.commanded[k]);
-      const Pose2 est = commandedStep(out_.poses[k - 1], out_.poses[k]);
+      const Pose2 step = stepBetween(obs_.commanded[k - 1], obs_.commanded[k]);
+      const Pose2 est = stepBetween(out_.poses[k - 1], out_.poses[k]);
       add(est.x_m - (1.0 + s) * step.x_m, est.y_m - (1.0 + s) * step.y_m,
           config_.motion_sigma_fraction * std::hypot(step.x_m, step.y_m) + config_.motion_sigma_floor_m);
       continue;

@@ -34,6 +34,22 @@ inline double wrapAngle(double a_rad) {
   return a_rad - kPi;
 }
 
+/// Pose b seen from pose a: the step from a to b in a's frame.
+inline Pose2 stepBetween(const Pose2& a, const Pose2& b) {
+  Pose2 d;
+  a.toSensor(b.x_m, b.y_m, d.x_m, d.y_m);
+  d.yaw_rad = wrapAngle(b.yaw_rad - a.yaw_rad);
+  return d;
+}
+
+/// Pose a followed by the step d (given in a's frame).
+inline Pose2 compose(const Pose2& a, const Pose2& d) {
+  Pose2 out;
+  a.toWorld(d.x_m, d.y_m, out.x_m, out.y_m);
+  out.yaw_rad = wrapAngle(a.yaw_rad + d.yaw_rad);
+  return out;
+}
+
 constexpr double kPi = 3.14159265358979323846;
 constexpr double deg2rad(double deg) { return deg * kPi / 180.0; }
 constexpr double rad2deg(double rad) { return rad * 180.0 / kPi; }

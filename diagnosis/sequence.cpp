@@ -489,17 +489,15 @@ void drawPoses(const LandmarkObservations& obs, const PoseNoise& noise, std::mt1
     const Pose2& c = obs.commanded[k];
     Pose2& a = stops[k].actual;
     if (noise.motion && k > 0) {
-      const Pose2& prev = obs.commanded[k - 1];
-      double sx = 0.0, sy = 0.0;
-      prev.toSensor(c.x_m, c.y_m, sx, sy);  // the commanded step in the frame of the stop before
-      const double len = std::hypot(sx, sy);
+      const Pose2 step = stepBetween(obs.commanded[k - 1], c);  // in the frame of the stop before
+      const double len = std::hypot(step.x_m, step.y_m);
       const double st = noise.step_fraction * len + noise.step_floor_m;
       const double sh = noise.heading_per_m * len + noise.heading_floor_rad;
-      const double dx = (1.0 + noise.scale) * sx + st * normal(rng), dy = (1.0 + noise.scale) * sy + st * normal(rng);
-      const double dpsi = wrapAngle(c.yaw_rad - prev.yaw_rad) + sh * normal(rng);
-      const Pose2& b = stops[k - 1].actual;
-      b.toWorld(dx, dy, a.x_m, a.y_m);
-      a.yaw_rad = wrapAngle(b.yaw_rad + dpsi);
+      Pose2 drawn;
+      drawn.x_m = (1.0 + noise.scale) * step.x_m + st * normal(rng);
+      drawn.y_m = (1.0 + noise.scale) * step.y_m + st * normal(rng);
+      drawn.yaw_rad = step.yaw_rad + sh * normal(rng);
+      a = compose(stops[k - 1].actual, drawn);
       continue;
     }
     a.x_m = c0.x_m + (1.0 + noise.scale) * (c.x_m - c0.x_m) + noise.sigma_s_m * normal(rng);
@@ -660,12 +658,13 @@ void readingRows(const JointResult& fit, const std::vector<Row>& rs, const Joint
 Design design(const LandmarkObservations& obs, const JointResult& fit, const std::vector<Row>& rs, const JointConfig& cfg) {
   const int na = fit.model.bias.order() + 1;
   const std::map<int, int> lm = centreColumns(fit, na + (cfg.estimate_radius ? 1 : 0));
+  std::vector<bool> seen(fit.poses.size(), false);
+  for (const auto& r : rs) seen[r.r.stop] = true;
   DesignEntries e;
   e.slot.assign(fit.poses.size(), -1);
-  for (const auto& r : rs) e.slot[r.r.stop] = 0;
   std::vector<std::size_t> stop_of_slot;
-  for (std::size_t k = 0; k < e.slot.size(); ++k)
-    if (e.slot[k] == 0) {
+  for (std::size_t k = 0; k < seen.size(); ++k)
+    if (seen[k]) {
       e.slot[k] = static_cast<int>(stop_of_slot.size());
       stop_of_slot.push_back(k);
     }

@@ -158,7 +158,7 @@ constexpr double kMadToSigma = 1.4826;
 /// Least beam sector the wall lines must cover (summed over lines) for a static diagnosis: the
 /// Hokuyo range sweep's reflector fills 2-5 degrees; the sparsest real room here (the YDLIDAR X4,
 /// three walls of 8-12 returning beams) 14.8-19.8.
-constexpr double kMinWallSectorRad = 10.0 * kPi / 180.0;
+constexpr double kMinWallSectorRad = deg2rad(10.0);
 
 /// Whether bin b saw the scene change: its readings off its median (by kSceneStepM and six
 /// robust deviations) come in runs in time, as when an object is moved into or out of the beam
@@ -1228,6 +1228,7 @@ class StaticDiagnosis {
   bool makeData(DiagnosisResult& out);
   void fitWallModel();
   void describeBaseline(DiagnosisResult& out) const;
+  std::vector<std::pair<double, double>> lineExtents() const;
   double wallSector() const;
   void reportWalls() const;
   void foldLikelihoods(int k, const std::vector<int>& fold, HeldOut& held) const;
@@ -1298,18 +1299,25 @@ bool StaticDiagnosis::fitBaseline(DiagnosisResult& out) {
   return true;
 }
 
+/// The first and last beam angle of each wall line, over the bins the wall model fits
+/// (+inf, -inf for a line without any).
+std::vector<std::pair<double, double>> StaticDiagnosis::lineExtents() const {
+  std::vector<std::pair<double, double>> ext(lines0_.size(), {kInf, -kInf});
+  for (std::size_t bi : w0_.bins) {
+    const Bin& b = d_.bins[bi];
+    auto& [lo, hi] = ext.at(static_cast<std::size_t>(b.wall));
+    lo = std::min(lo, b.angle);
+    hi = std::max(hi, b.angle);
+  }
+  return ext;
+}
+
 /// The beam sector the wall lines cover: the sum over lines of the angles between their first and
 /// last bin.
 double StaticDiagnosis::wallSector() const {
-  std::vector<double> lo(lines0_.size(), kInf), hi(lines0_.size(), -kInf);
-  for (const Bin& b : d_.bins)
-    if (b.wall >= 0 && static_cast<std::size_t>(b.wall) < lines0_.size()) {
-      lo[static_cast<std::size_t>(b.wall)] = std::min(lo[static_cast<std::size_t>(b.wall)], b.angle);
-      hi[static_cast<std::size_t>(b.wall)] = std::max(hi[static_cast<std::size_t>(b.wall)], b.angle);
-    }
   double sum = 0.0;
-  for (std::size_t l = 0; l < lines0_.size(); ++l)
-    if (hi[l] >= lo[l]) sum += hi[l] - lo[l];
+  for (const auto& [lo, hi] : lineExtents())
+    if (hi >= lo) sum += hi - lo;
   return sum;
 }
 
@@ -1378,23 +1386,24 @@ void StaticDiagnosis::describeBaseline(DiagnosisResult& out) const {
 /// The fitted wall lines, for the caller (the geometric reference).
 void StaticDiagnosis::reportWalls() const {
   walls_out_->clear();
+  const auto extents = lineExtents();
   for (std::size_t l = 0; l < lines0_.size(); ++l) {
     WallLine wl;
     const Line& line = w0_.ok ? w0_.lines[l] : lines0_[l];
     wl.normal_rad = wrapAngle(line.theta);
     wl.distance_m = line.p;
-    double lo = kInf, hi = -kInf, ss = 0.0;
+    // Residuals exist only when the wall model's fit ran to its end (fitWalls returns early on
+    // too few bins or a failed step).
+    const bool fitted = w0_.resid.size() == w0_.bins.size();
+    double ss = 0.0;
     for (std::size_t k = 0; k < w0_.bins.size(); ++k) {
-      const Bin& b = d_.bins[w0_.bins[k]];
-      if (b.wall != static_cast<int>(l)) continue;
-      lo = std::min(lo, b.angle);
-      hi = std::max(hi, b.angle);
+      if (d_.bins[w0_.bins[k]].wall != static_cast<int>(l)) continue;
       ++wl.bins;
-      ss += w0_.resid[k] * w0_.resid[k];
+      if (fitted) ss += w0_.resid[k] * w0_.resid[k];
     }
-    wl.first_angle_rad = lo;
-    wl.last_angle_rad = hi;
-    wl.rms_m = wl.bins ? std::sqrt(ss / static_cast<double>(wl.bins)) : 0.0;
+    wl.first_angle_rad = extents[l].first;
+    wl.last_angle_rad = extents[l].second;
+    wl.rms_m = !wl.bins ? 0.0 : fitted ? std::sqrt(ss / static_cast<double>(wl.bins)) : kNaN;
     walls_out_->push_back(wl);
   }
 }

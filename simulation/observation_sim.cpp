@@ -17,10 +17,7 @@ std::vector<OdometryStep> commandedMotions(const ObservationScene& scene) {
 }
 
 Pose2 compose(const Pose2& pose, double dx_m, double dy_m, double dtheta_rad) {
-  Pose2 out;
-  pose.toWorld(dx_m, dy_m, out.x_m, out.y_m);
-  out.yaw_rad = wrapAngle(pose.yaw_rad + dtheta_rad);
-  return out;
+  return lidarcal::compose(pose, Pose2{dx_m, dy_m, dtheta_rad});
 }
 
 ObservationSimulation simulateObservations(const ObservationScene& scene, std::uint64_t seed) {

@@ -48,21 +48,6 @@ double mixedPixelDistance(const RangeEffects& fx, double d_m, double background_
 
 namespace {
 
-/// Pose b seen from pose a: the step from a to b in a's frame.
-Pose2 stepBetween(const Pose2& a, const Pose2& b) {
-  Pose2 d;
-  a.toSensor(b.x_m, b.y_m, d.x_m, d.y_m);
-  d.yaw_rad = wrapAngle(b.yaw_rad - a.yaw_rad);
-  return d;
-}
-
-/// Pose a followed by the step d (given in a's frame).
-Pose2 compose(const Pose2& a, const Pose2& d) {
-  Pose2 out;
-  a.toWorld(d.x_m, d.y_m, out.x_m, out.y_m);
-  out.yaw_rad = wrapAngle(a.yaw_rad + d.yaw_rad);
-  return out;
-}
 
 /// Walks a route piece by piece (each an arc of constant curvature, or straight), looping.
 class RouteWalker {
