@@ -4,7 +4,8 @@
 # CARMEN Intel log (910 scans, a pose per scan; skipped when ../shared/data is absent), the
 # median wall time and peak memory of `run`, `detect` and `calibrate` (farm-bench, RUNS runs
 # each) and the ratio of each to the floor (pcd_floor: read and write the same PCD files with
-# PCL), each pair timed in turn (farm-bench --vs) so that the ratio holds on a busy machine.
+# PCL), each pair timed in turn (farm-bench --vs) so that the ratio holds on a busy machine;
+# then calibrate against detect on each sequence, as a pair too.
 #
 #   bench/speed.sh [RUNS] [DIR] (default 3 runs, work files under DIR (default: mktemp's, on disk);
 #                               needs build/pipeline/lidarcal and build/bench/pcd_floor)
@@ -46,4 +47,15 @@ for s in "${sets[@]}"; do
     echo "| $name | $cmd | $(median 'A wall s' "$W/fb.txt") | $(median 'A peak MiB' "$W/fb.txt") |" \
          "$(median 'B wall s' "$W/fb.txt") | $(median 'B peak MiB' "$W/fb.txt") | $(median 'A/B wall' "$W/fb.txt") |"
   done
+done
+# The target on a long log compares calibrate with detect on the same sequence: timed as a pair.
+echo
+echo "| sequence | calibrate wall [s] | detect wall [s] | calibrate / detect |"
+echo "|---|---|---|---|"
+for s in "${sets[@]}"; do
+  name=${s%%:*} seq=${s#*:}
+  # shellcheck disable=SC2086
+  farm-bench -n "$RUNS" --timeout 3000 --vs "$L detect -q $seq -o $W/out --overwrite" -- \
+    $L calibrate -q $seq -o $W/model.json --overwrite > "$W/fb.txt" 2>&1 || true
+  echo "| $name | $(median 'A wall s' "$W/fb.txt") | $(median 'B wall s' "$W/fb.txt") | $(median 'A/B wall' "$W/fb.txt") |"
 done

@@ -15,6 +15,7 @@
 #include "calibration/inversion.hpp"
 #include "calibration/jackknife.hpp"
 #include "calibration/noise_exponent.hpp"
+#include "common/parallel.hpp"
 #include "common/stats_util.hpp"
 
 namespace lidarcal::calibration {
@@ -93,46 +94,55 @@ NoiseModel fitNoiseLaw(NoiseKind kind, int order, const BiasPolynomial& f, const
   return n;
 }
 
-/// Runs one informational side estimator; a failure (degenerate data) is recorded, not thrown:
-/// the calibration does not depend on it.
+/// Runs one informational side estimator; a failure (degenerate data) is noted in `failed`, not
+/// thrown: the calibration does not depend on it.
 template <class Fn>
-void sideEstimator(NoiseFits& nf, const char* name, Fn&& fn) {
+void sideEstimator(std::map<std::string, std::string>& failed, const char* name, Fn&& fn) {
   try {
     fn();
   } catch (const std::exception& e) {
-    nf.unavailable[name] = e.what();
+    failed[name] = e.what();
   }
 }
 
+/// The noise estimators side by side. Two independent groups run on up to `threads` threads:
+/// seed 000's noise polynomial, and seed 004's closed form, its ML and the exponent test; each
+/// writes only its own fields and failure notes, merged afterwards.
 void fillNoiseFits(CalibrationModel& m, int order, const std::vector<double>& d, const std::vector<double>& y,
-                   const std::vector<std::vector<double>>& batches) {
+                   const std::vector<std::vector<double>>& batches, int threads) {
   NoiseFits& nf = m.noise_fits;
   nf = NoiseFits{};
   std::vector<double> r(d.size());
   for (std::size_t i = 0; i < d.size(); ++i) r[i] = y[i] - m.model.bias(d[i]);
-  const int noise_order = std::max(order, 1);
-  sideEstimator(nf, "seed000_beta", [&] { nf.seed000_beta = fitNoisePolynomial(d, r, noise_order); });
-  const int bias_order = std::max(order, 1);
-  sideEstimator(nf, "seed004_closed_form", [&] {
-    const Seed004Fit cf = fitSeed004ClosedForm(d, y, bias_order);
-    nf.seed004_cf_alpha = cf.alpha;
-    nf.seed004_cf_sigma_e = cf.sigma_e;
-  });
-  if (!nf.seed004_cf_alpha.empty()) {
-    sideEstimator(nf, "seed004_ml", [&] {
-      const Seed004Fit ml = fitSeed004ML(d, y, nf.seed004_cf_alpha);
-      nf.seed004_ml_alpha = ml.alpha;
-      nf.seed004_ml_sigma_e = ml.sigma_e;
+  const int noise_order = std::max(order, 1), bias_order = std::max(order, 1);
+  std::map<std::string, std::string> failed[2];
+  parallelFor(2, threadsFor(threads), [&](std::size_t group) {
+    if (group == 0) {
+      sideEstimator(failed[0], "seed000_beta", [&] { nf.seed000_beta = fitNoisePolynomial(d, r, noise_order); });
+      return;
+    }
+    sideEstimator(failed[1], "seed004_closed_form", [&] {
+      const Seed004Fit cf = fitSeed004ClosedForm(d, y, bias_order);
+      nf.seed004_cf_alpha = cf.alpha;
+      nf.seed004_cf_sigma_e = cf.sigma_e;
     });
-  } else {
-    nf.unavailable["seed004_ml"] = "starts from the closed form, which could not run";
-  }
-  sideEstimator(nf, "exponent_test", [&] {
-    const NoiseExponentTest t = testNoiseExponent(batches);
-    nf.exponent_loglik = t.log_likelihood;
-    nf.exponent_best = t.best;
-    nf.exponent_batches = t.batches;
+    if (!nf.seed004_cf_alpha.empty()) {
+      sideEstimator(failed[1], "seed004_ml", [&] {
+        const Seed004Fit ml = fitSeed004ML(d, y, nf.seed004_cf_alpha);
+        nf.seed004_ml_alpha = ml.alpha;
+        nf.seed004_ml_sigma_e = ml.sigma_e;
+      });
+    } else {
+      failed[1]["seed004_ml"] = "starts from the closed form, which could not run";
+    }
+    sideEstimator(failed[1], "exponent_test", [&] {
+      const NoiseExponentTest t = testNoiseExponent(batches);
+      nf.exponent_loglik = t.log_likelihood;
+      nf.exponent_best = t.best;
+      nf.exponent_batches = t.batches;
+    });
   });
+  for (const auto& f : failed) nf.unavailable.insert(f.begin(), f.end());
 }
 
 void fillOrders(CalibrationModel& m, const OrderSelection& sel, std::size_t n) {
@@ -291,12 +301,18 @@ JointStage jointStage(const LandmarkObservations& obs, const CalibrationConfig& 
   jc.outer_iterations = std::min(jc.outer_iterations, 2);  // the noise law settled in pass 1
   std::vector<JointResult> runs;
   std::vector<OrderRow> rows;
+  // The orders are independent solves: side by side, each with its own copy of the settings.
+  runs.resize(static_cast<std::size_t>(config.max_order));
+  parallelFor(runs.size(), threadsFor(config.threads), [&](std::size_t k) {
+    JointConfig jn = jc;
+    JointInit fn = from;
+    jn.order = static_cast<int>(k) + 1;
+    fn.model.bias.alpha = alphaAt(jn.order, settled.model.bias.alpha);
+    runs[k] = refineJoint(obs, fn, jn);
+  });
   for (int n = 1; n <= config.max_order; ++n) {
-    jc.order = n;
-    from.model.bias.alpha = alphaAt(n, settled.model.bias.alpha);
-    runs.push_back(refineJoint(obs, from, jc));
     report(1 + static_cast<std::size_t>(n));
-    const auto& r = runs.back();
+    const auto& r = runs[static_cast<std::size_t>(n) - 1];
     OrderRow row;
     row.order = n;
     row.alpha = r.model.bias.alpha;
@@ -416,6 +432,7 @@ const char* toString(JointOrderRule r) {
 
 void CalibrationConfig::validate() const {
   if (max_order < 1 || max_order > 6) throw std::invalid_argument("CalibrationConfig: max_order must be 1..6");
+  if (threads < 0) throw std::invalid_argument("CalibrationConfig: threads must be >= 0 (0: automatic)");
   triangulation.validate();
   JointConfig j = joint;
   j.order = 1;
@@ -561,7 +578,9 @@ void fillClosedForm(CalibrationModel& m, const LandmarkObservations& obs, const 
   const int order = std::max(sel.chosen, 1);  // order 0 cannot be inverted
   m.model.bias.alpha = sel.table[static_cast<std::size_t>(std::min<int>(order, static_cast<int>(sel.table.size()) - 1))].alpha;
   m.model.noise = fitNoiseLaw(config.noise, order, m.model.bias, d, y);
-  fillNoiseFits(m, order, d, y, batches);
+  // The noise estimators side by side: the joint refinement fits them again on its own readings
+  // (fillJoint), so they are fitted here only for a model that stays a closed form.
+  if (config.method == Method::closed_form) fillNoiseFits(m, order, d, y, batches, config.threads);
   m.residual_rms_m = rmsResidual(m.model.bias, d, y);
   m.readings = d.size();
   m.sigma_theta_rad = bearingScatter(obs, tri);
@@ -670,7 +689,7 @@ void fillJoint(CalibrationModel& m, const JointStage& js, const CalibrationConfi
   m.heading_scatter_rad = j.heading_scatter_rad;
   m.residual_rms_m = j.residual_rms_m;
   // The noise estimators side by side, on the joint refinement's readings and distances.
-  fillNoiseFits(m, m.model.bias.order(), j.distances_m, j.readings_m, batches);
+  fillNoiseFits(m, m.model.bias.order(), j.distances_m, j.readings_m, batches, config.threads);
   m.alpha_covariance.assign(j.alpha_covariance.data(), j.alpha_covariance.data() + j.alpha_covariance.size());
   m.effects = effectValues(config.joint.effects, j.effects);
   for (auto& c : m.landmarks) {
@@ -742,7 +761,10 @@ CalibrationModel calibrate(const LandmarkObservations& obs, const CalibrationCon
 
   // Stage 3: joint refinement (ours), from the closed form.
   const JointStage js = jointStage(obs, config, tri, sel, radius, d, y, m.model);
-  if (refuseJoint(m, js.result, obs, usable, baseline)) return m;
+  if (refuseJoint(m, js.result, obs, usable, baseline)) {
+    fillNoiseFits(m, std::max(sel.chosen, 1), d, y, batches, config.threads);  // the closed form's, as fillClosedForm skipped them
+    return m;
+  }
   fillJoint(m, js, config, batches);
   addPlausibilityWarnings(m, &js.result);
   return m;
@@ -794,7 +816,7 @@ CalibrationModel calibrateAgainstTruth(const std::vector<RangePair>& pairs, cons
   } else {
     m.model.bias.alpha = sel.table[static_cast<std::size_t>(std::min<int>(order, static_cast<int>(sel.table.size()) - 1))].alpha;
   }
-  fillNoiseFits(m, order, d, y, batches);
+  fillNoiseFits(m, order, d, y, batches, config.threads);
   m.model.noise = fitNoiseLaw(config.noise, order, m.model.bias, d, y);
   m.residual_rms_m = rmsResidual(m.model.bias, d, y);
   m.readings = d.size();

@@ -47,6 +47,9 @@ struct CalibrationConfig {
   /// stage name ("joint refinement"), the solves done and the solves in all (the settling pass,
   /// one per order, the covariance). Default empty: not called.
   std::function<void(const char* stage, std::size_t done, std::size_t total)> progress;
+  /// Threads for the joint refinement's orders (independent solves from one settled geometry;
+  /// the result does not depend on the number). 0: the machine's cores, at most 8. Default 0.
+  int threads = 0;
   void validate() const;                              ///< throws std::invalid_argument
 };
 

@@ -424,7 +424,7 @@ void JointProblem::addPosePriors(ceres::Problem& problem) {
       const double now = poses_[k][2] - poses_[k - 1][2];
       const double len = std::hypot(step.x_m, step.y_m);
       problem.AddResidualBlock(
-          new ceres::AutoDiffCostFunction<MotionPriorCost, 3, 3, 3, 1>(new MotionPriorCost{
+          new MotionPriorAnalyticCost(MotionPriorCost{
               step.x_m, step.y_m, now + wrapAngle(step.yaw_rad - now),
               1.0 / (config_.motion_sigma_fraction * len + config_.motion_sigma_floor_m),
               1.0 / (config_.motion_heading_sigma_rad_per_m * len + config_.motion_heading_floor_rad)}),

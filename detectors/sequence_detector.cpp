@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "common/errors.hpp"
+#include "common/parallel.hpp"
 
 #include "detectors/detection_log.hpp"
 #include "detectors/landmark_radius.hpp"
@@ -31,6 +32,7 @@ void SequenceDetectionConfig::validate() const {
   if (!(continuous_drift_per_m >= 0.0) || !std::isfinite(continuous_drift_per_m))
     throw std::invalid_argument("SequenceDetectionConfig.continuous_drift_per_m: must be >= 0");
   if (arcs_per_landmark < 2) throw std::invalid_argument("SequenceDetectionConfig.arcs_per_landmark: must be >= 2");
+  if (threads < 0) throw std::invalid_argument("SequenceDetectionConfig.threads: must be >= 0 (0: automatic)");
 }
 
 namespace {
@@ -86,20 +88,40 @@ using StopOf = std::function<std::size_t(std::size_t)>;
 
 void detectByStop(std::size_t scan_count, const ScanLoader& load, const StopOf& stop_of,
                   const DetectionConfig& base, const std::vector<RadiusHint>& hints_world, bool collect_arcs,
-                  const std::function<void(StopBlock&)>& on_stop, const std::function<void(std::size_t)>& on_scan) {
+                  int threads, const std::function<void(StopBlock&)>& on_stop,
+                  const std::function<void(std::size_t)>& on_scan) {
+  // Scans are loaded and detected a window at a time on `threads` threads (a scan's detection
+  // depends on the scan and the pass's hints alone), then taken stop by stop in order. Memory:
+  // the current stop and one window.
+  const std::size_t window = 16 * static_cast<std::size_t>(std::max(threads, 1));
+  std::vector<io::Scan> ahead;          // loaded and detected, not yet in a stop
+  std::vector<ScanDetections> ahead_found;
+  std::size_t ahead_first = 0;          // scan index of ahead[0]
+  auto fill = [&](std::size_t first) {
+    const std::size_t end = std::min(scan_count, first + window);
+    for (std::size_t i = std::max<std::size_t>(first, 1); i < end; ++i)
+      if (stop_of(i) < stop_of(i - 1))
+        throw std::invalid_argument("detectSequence: stop_of_scan must be non-decreasing (the scans of a stop consecutive)");
+    ahead_first = first;
+    ahead.assign(end - first, io::Scan{});
+    ahead_found.assign(end - first, ScanDetections{});
+    parallelFor(ahead.size(), threads, [&](std::size_t k) {
+      ahead[k] = load(first + k);
+      ahead_found[k] = detectScan(ahead[k], configFor(base, hints_world, ahead[k].viewpoint));
+    });
+  };
   std::vector<io::Scan> loaded;  // the scans of the current stop (one stop in memory)
+  std::vector<ScanDetections> found;
   std::vector<std::size_t> index;
   for (std::size_t i = 0; i < scan_count; ++i) {
+    if (i == 0 || i >= ahead_first + ahead.size()) fill(i);
     const std::size_t stop = stop_of(i);
-    if (i > 0 && stop < stop_of(i - 1))
-      throw std::invalid_argument("detectSequence: stop_of_scan must be non-decreasing (the scans of a stop consecutive)");
-    loaded.push_back(load(i));
+    loaded.push_back(std::move(ahead[i - ahead_first]));
+    found.push_back(std::move(ahead_found[i - ahead_first]));
     index.push_back(i);
     if (i + 1 < scan_count && stop_of(i + 1) == stop) continue;
     StopBlock block;
     block.stop = stop;
-    std::vector<ScanDetections> found;
-    for (const auto& scan : loaded) found.push_back(detectScan(scan, configFor(base, hints_world, scan.viewpoint)));
     if (collect_arcs && !base.landmark_radius_m && loaded.size() >= 2) {
       // The radius unknown (first pass): thin far poles that no single arc determines are
       // fitted with the radius of the stop's scans pooled (stop_radius.hpp). Only objects no
@@ -115,11 +137,11 @@ void detectByStop(std::size_t scan_count, const ScanLoader& load, const StopOf& 
         if (!known) pooled.push_back(h);
       }
       if (!pooled.empty())
-        for (std::size_t k = 0; k < loaded.size(); ++k) {
+        parallelFor(loaded.size(), threads, [&](std::size_t k) {
           DetectionConfig cfg = configFor(base, hints_world, loaded[k].viewpoint);
           cfg.radius_hints.insert(cfg.radius_hints.end(), pooled.begin(), pooled.end());
           found[k] = detectScan(loaded[k], cfg);
-        }
+        });
     }
     for (std::size_t k = 0; k < loaded.size(); ++k) {
       const io::Scan& scan = loaded[k];
@@ -138,6 +160,7 @@ void detectByStop(std::size_t scan_count, const ScanLoader& load, const StopOf& 
     block.loaded = &loaded;
     on_stop(block);
     loaded.clear();
+    found.clear();
     index.clear();
   }
 }
@@ -236,7 +259,7 @@ Pass runPass(std::size_t scan_count, const ScanLoader& load, const StopOf& stop_
   std::vector<std::vector<int>> cluster_of_scan;         // kept scans: cluster of each detection
   std::vector<std::vector<TrackSerial>> track_of_scan;   // kept scans: track of each of its stop's clusters
   if (!keep_scans) p.log = DetectionLog::create();
-  detectByStop(scan_count, load, stop_of, base, hints_world, collect_arcs, [&](StopBlock& block) {
+  detectByStop(scan_count, load, stop_of, base, hints_world, collect_arcs, threadsFor(config.threads), [&](StopBlock& block) {
     StopClusters clusters;
     std::vector<std::vector<int>> cluster_of;
     const std::vector<TrackSerial> tracks = linkBlock(block, config.association, linker, p.fingerprint, clusters, cluster_of);
@@ -342,6 +365,7 @@ SequenceDetections detectSequenceImpl(std::size_t scan_count, const ScanLoader& 
   r.known_radius_m = config.detection.landmark_radius_m;
   r.replay.detection = config.detection;
   r.replay.association = config.association;
+  r.replay.threads = config.threads;
   const std::size_t total = known ? scan_count : 2 * scan_count;
   auto progress = [&](std::size_t offset) {
     return [&on_scan, offset, total](std::size_t i) {
@@ -440,7 +464,7 @@ void visitReplayed(const SequenceDetections& r, std::size_t scan_count, const Sc
   const auto& rp = r.replay;
   StopLinker linker(rp.association, countStops(scan_count, stop_of));
   std::uint64_t print = 0xcbf29ce484222325ull;
-  detectByStop(scan_count, load, stop_of, rp.detection, rp.hints_world, false, [&](StopBlock& block) {
+  detectByStop(scan_count, load, stop_of, rp.detection, rp.hints_world, false, threadsFor(rp.threads), [&](StopBlock& block) {
     StopClusters clusters;
     std::vector<std::vector<int>> cluster_of;
     const std::vector<TrackSerial> tracks = linkBlock(block, rp.association, linker, print, clusters, cluster_of);

@@ -56,6 +56,9 @@ struct SequenceDetectionConfig {
   /// (association.hpp). Stop and go keeps association.drift_per_m. Default 0.2.
   double continuous_drift_per_m = 0.2;
   int continuous_min_stops = 20;  ///< see continuous_drift_per_m. Default 20
+  /// Threads detecting scans (a window of scans at a time; each scan's detection is its own, so
+  /// the result does not depend on the number). 0: the machine's cores, at most 8. Default 0.
+  int threads = 0;
 
   /// Throws std::invalid_argument naming the first bad field.
   void validate() const;
@@ -90,6 +93,7 @@ struct SequenceDetections {
     AssociationConfig association;
     TrackIds track_ids;                     ///< landmark id of each track of the final pass
     std::uint64_t fingerprint = 0;          ///< of the final pass's tracks at every stop (changed scans)
+    int threads = 0;                        ///< SequenceDetectionConfig::threads
   } replay;
   /// Without kept scans: the final pass's detections and tracks in a temporary file, which
   /// forEachScan reads instead of detecting again; null when no temporary file could be made.
@@ -97,7 +101,8 @@ struct SequenceDetections {
   std::shared_ptr<DetectionLog> log;
 };
 
-/// Loads scan i of a sequence (0 <= i < scan count).
+/// Loads scan i of a sequence (0 <= i < scan count). Called from several threads at once when
+/// SequenceDetectionConfig::threads is not 1 (each call for another scan).
 using ScanLoader = std::function<io::Scan(std::size_t)>;
 
 /// Progress callback: `done` scans processed out of `total` (2 x scans when the radius is

@@ -7,7 +7,16 @@
 
 namespace lidarcal::pipeline {
 
+void addThreadsOption(CLI::App* app, int& threads) {
+  app->add_option("--threads", threads,
+                  "Threads (0: the machine's cores, at most 8) detecting and correcting scans side by side and "
+                  "fitting the bias orders side by side; the output does not depend on it")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+}
+
 void addCalibrationOptions(CLI::App* app, const std::shared_ptr<CalibrationOptions>& o) {
+  addThreadsOption(app, o->threads);
   app->add_option("--method", o->method,
                   std::string("closed-form: triangulation + least squares as in ") + papers::kLandmarks +
                       "; joint: refine poses, landmarks "
@@ -61,6 +70,7 @@ void addCalibrationOptions(CLI::App* app, const std::shared_ptr<CalibrationOptio
 calibration::CalibrationConfig calibrationConfig(const CalibrationOptions& o) {
   calibration::CalibrationConfig c;
   c.method = o.method == "closed-form" ? calibration::Method::closed_form : calibration::Method::joint;
+  c.threads = o.threads;
   c.max_order = o.max_order;
   c.closed_form_rule = o.order_rule == "validation" ? calibration::OrderRule::validation : calibration::OrderRule::aic;
   c.joint_rule = o.joint_order_rule == "aic"   ? calibration::JointOrderRule::aic
@@ -95,6 +105,7 @@ detectors::SequenceDetectionConfig detectionConfig(const CalibrationOptions& o) 
   detectors::SequenceDetectionConfig c;
   if (o.radius_m > 0.0) c.detection.landmark_radius_m = o.radius_m;
   c.association.min_stops = o.min_stops;
+  c.threads = o.threads;
   if (!(o.inlier_threshold.at(0) > 0.0))
     throw InputError("", "--inlier-threshold", "A (the threshold at range 0) must be > 0");
   c.detection.threshold_m = o.inlier_threshold.at(0);

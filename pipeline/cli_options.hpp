@@ -29,7 +29,12 @@ struct CalibrationOptions {
   std::vector<double> inlier_threshold{0.01, 0.005};  // A, B of the detector's t(r) = A + B r^2, metres
   std::string motion_prior = "auto";  // auto, on, off (JointConfig::motion)
   std::string effects;  // comma-separated effect terms of the joint refinement (lidarcal diagnose's names)
+  int threads = 0;      // threads (detection, the joint refinement's orders, correction); 0: automatic
 };
+
+/// --threads: the threads for the work that runs side by side (0, the default: the machine's
+/// cores, at most 8).
+void addThreadsOption(CLI::App* app, int& threads);
 
 /// Adds the options to a subcommand.
 void addCalibrationOptions(CLI::App* app, const std::shared_ptr<CalibrationOptions>& o);

@@ -63,6 +63,7 @@ void addCorrectCommand(CLI::App& app) {
   struct Options {
     std::string seq, model, out, topic;
     bool ascii = false, overwrite = false, force = false;
+    int threads = 0;
   };
   auto o = std::make_shared<Options>();
   auto c = std::make_shared<CorrectionOptions>();
@@ -73,6 +74,7 @@ void addCorrectCommand(CLI::App& app) {
   addCorrectionOptions(sub, c);
   sub->add_option("--topic", o->topic, "IN.bag: the sensor_msgs/LaserScan topic to correct (default: the bag's only one)");
   sub->add_flag("--ascii", o->ascii, "Write ASCII PCD instead of binary");
+  addThreadsOption(sub, o->threads);
   sub->add_flag("--overwrite", o->overwrite, "Replace OUT if it exists");
   sub->add_flag("--force", o->force,
                 "Apply a model whose range limits differ from the sequence's (same sensor, other limits set), with a "
@@ -101,7 +103,7 @@ void addCorrectCommand(CLI::App& app) {
     const auto stats = correctSequence(
         seq, model, c->method(), out.path(),
         o->ascii ? io::PcdEncoding::ascii : io::PcdEncoding::binary,
-        [&](std::size_t done, std::size_t) { progress.update(done); }, outside);
+        [&](std::size_t done, std::size_t) { progress.update(done); }, outside, o->threads);
     progress.finish();
     out.commit();
     printStats(stats, o->out, o->model, outside);

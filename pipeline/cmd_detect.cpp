@@ -19,6 +19,7 @@
 #include "io/scene_io.hpp"
 #include "io/sequence.hpp"
 #include "io/true_ranges.hpp"
+#include "pipeline/cli_options.hpp"
 #include "pipeline/commands.hpp"
 #include "pipeline/progress.hpp"
 #include "pipeline/words.hpp"
@@ -40,6 +41,7 @@ struct DetectOptions {
   int max_missing_beams = 1;
   std::vector<double> inlier_threshold{0.01, 0.005};  // A, B of t(r) = A + B r^2
   std::string truth;
+  int threads = 0;  // 0: automatic
 };
 
 void printEvaluation(const detectors::DetectionEvaluation& ev) {
@@ -77,6 +79,7 @@ void runDetect(const DetectOptions& o) {
   // per scan is kept in memory and the labelling pass reads the detections back from a
   // temporary file (detectors/detection_log.hpp).
   cfg.keep_scans = !o.truth.empty();
+  cfg.threads = o.threads;
 
   std::optional<Truth> truth;
   std::map<std::size_t, std::vector<io::TrueRange>> true_ranges;
@@ -171,6 +174,7 @@ void addDetectCommand(CLI::App& app) {
           ->check(CLI::PositiveNumber);
   sub->add_flag("--estimate-radius", o->estimate_radius, "Ignore sequence.json's radius and estimate it per landmark")
       ->excludes(radius);
+  addThreadsOption(sub, o->threads);
   sub->add_option("--min-stops", o->min_stops, "A landmark must be seen at this many stops (capped at the number of stops)")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();

@@ -1,6 +1,7 @@
 #include "pipeline/report.hpp"
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <limits>
 #include <cstdio>
@@ -36,9 +37,9 @@ struct PlotData {
   FittedRange fitted;
 };
 
-/// Readings drawn on the scatter plots at most: more only overplot, and gnuplot's cairo terminal
-/// takes about 10 us per point (0.7 s for the 3 x 24,000 points of 1000 scans, issue 19).
-constexpr std::size_t kMaxScatterPoints = 5000;
+/// Readings drawn on the scatter plots at most: more only overplot and make the SVG files large
+/// (about 100 bytes per point).
+constexpr std::size_t kMaxScatterPoints = 2500;
 
 /// Counts of raw and corrected errors in common bins over the central 99 % of both.
 std::string histogram(std::vector<double> raw, std::vector<double> cor) {
@@ -77,10 +78,19 @@ std::string circleLines(double x, double y, double r) {
   return o.str() + "\n";
 }
 
+/// `v` as an ostream of precision 6 writes it (printf's %.6g), then `end`: the readings' table
+/// has a row per reading, which std::to_chars writes several times faster than a stream.
+void appendG6(std::string& out, double v, char end) {
+  char buf[32];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v, std::chars_format::general, 6);
+  out.append(buf, r.ptr);
+  out.push_back(end);
+}
+
 PlotData plotData(const LandmarkObservations& obs, const CalibrationModel& m, const std::vector<Cylinder>& truth) {
   PlotData p;
-  std::ostringstream dist, raw, cor, noise, curve, circles, stops, true_circles;
-  for (auto* o : {&dist, &raw, &cor, &noise, &curve, &stops}) o->precision(6);
+  std::ostringstream raw, cor, noise, curve, circles, stops, true_circles;
+  for (auto* o : {&raw, &cor, &noise, &curve, &stops}) o->precision(6);
   std::map<int, const CalibratedLandmark*> lm;
   for (const auto& l : m.landmarks)
     if (l.status == "ok") lm[l.id] = &l;
@@ -114,7 +124,9 @@ PlotData plotData(const LandmarkObservations& obs, const CalibrationModel& m, co
       double c = std::nan("");
       if (inv)
         if (const auto found = inv->invert(b.range_m)) c = *found;
-      dist << d << ' ' << b.range_m << ' ' << c << '\n';
+      appendG6(p.distance, d, ' ');
+      appendG6(p.distance, b.range_m, ' ');
+      appendG6(p.distance, c, '\n');
       ++p.readings;
       raw_errors.push_back(b.range_m - d);
       if (std::isfinite(c)) corrected_errors.push_back(c - d);
@@ -149,7 +161,6 @@ PlotData plotData(const LandmarkObservations& obs, const CalibrationModel& m, co
   for (std::size_t k = 0; k < m.stop_poses.size(); ++k)
     stops << m.stop_poses[k].x_m << ' ' << m.stop_poses[k].y_m << ' ' << k << '\n';
   for (const auto& c : truth) true_circles << circleLines(c.x_m, c.y_m, c.radius_m);
-  p.distance = dist.str();
   p.curve = curve.str();
   p.noise = noise.str();
   p.raw = raw.str();
@@ -171,7 +182,7 @@ std::string reportScript(const FittedRange& fitted, bool histogram, bool truth, 
   const std::string shown = every == 1 ? std::string() : " (1 in " + std::to_string(every) + " shown)";
   std::ostringstream g;
   g.precision(6);
-  g << "set terminal pngcairo size 1000,650 font \"DejaVu Sans,11\"\n"
+  g << "set terminal svg size 1000,650 font \"DejaVu Sans,11\" background rgb \"white\"\n"
        "set grid\n"
        "set key outside below horizontal\n"
        "set xrange ["
@@ -181,20 +192,20 @@ std::string reportScript(const FittedRange& fitted, bool histogram, bool truth, 
     << "label_every = " << std::max<std::size_t>(1, (stops + 19) / 20) << "\n"
     << R"GP(set arrow 1 from fit_min, graph 0 to fit_min, graph 1 nohead dt 3 lc rgb "#666666"
 set arrow 2 from fit_max, graph 0 to fit_max, graph 1 nohead dt 3 lc rgb "#666666"
-set output "distance.png"
+set output "distance.svg"
 set title "Raw range error against the distance estimated from the landmarks (dotted: fitted range)"
 set xlabel "estimated true distance d [m]"
 set ylabel "raw reading - d [m]"
 plot "distance.dat")GP" << sample << R"GP( using 1:($2-$1) with points pt 7 ps 0.3 lc rgb "#8899bb" title "readings on landmarks)GP" << shown << R"GP(", \
      "curve.dat" using 1:($2-$1) with lines lw 2 lc rgb "#cc3311" title "fitted bias f(d) - d", \
      0 with lines dt 2 lc rgb "black" title "ideal (no error)"
-set output "residuals.png"
+set output "residuals.svg"
 set title "Error before and after correction against the estimated distance"
 set ylabel "reading - d [mm]"
 plot "distance.dat")GP" << sample << R"GP( using 1:(1000*($2-$1)) with points pt 7 ps 0.3 lc rgb "#cc3311" title "raw)GP" << shown << R"GP(", \
      "distance.dat")GP" << sample << R"GP( using 1:(1000*($3-$1)) with points pt 7 ps 0.3 lc rgb "#009944" title "corrected)GP" << shown << R"GP(", \
      0 with lines dt 2 lc rgb "black" title "no error"
-set output "noise.png"
+set output "noise.svg"
 set title "Noise against distance"
 set ylabel "standard deviation of the reading [mm]"
 plot "noise.dat" using 1:($2*1000) with points pt 7 ps 1 lc rgb "#0077bb" title "measured (RMS residual, 0.25 m bins)", \
@@ -203,7 +214,7 @@ unset arrow 1
 unset arrow 2
 )GP";
   if (histogram)
-    g << R"GP(set output "histogram.png"
+    g << R"GP(set output "histogram.svg"
 set title "Error of the readings on landmarks, before and after correction"
 set autoscale x
 set xlabel "reading - estimated distance [mm]"
@@ -211,8 +222,8 @@ set ylabel "readings"
 plot "histogram.dat" using (1000*$1):2 with histeps lw 2 lc rgb "#cc3311" title "raw", \
      "histogram.dat" using (1000*$1):3 with histeps lw 2 lc rgb "#009944" title "corrected"
 )GP";
-  g << R"GP(set terminal pngcairo size 900,900 font "DejaVu Sans,11"
-set output "map.png"
+  g << R"GP(set terminal svg size 900,900 font "DejaVu Sans,11" background rgb "white"
+set output "map.svg"
 set title "Landmarks with raw and corrected points, one scan per stop"
 set autoscale x
 set xlabel "x [m]"
@@ -333,12 +344,12 @@ void writePlotsSection(std::ostringstream& md, const std::filesystem::path& dir,
   }
   md << "\n## Plots\n\n";
   if (plotted) {
-    md << "![raw readings against estimated distance](distance.png)\n\n";
-    md << "![error before and after correction against distance](residuals.png)\n\n";
-    if (!p->histogram.empty()) md << "![error before and after correction](histogram.png)\n\n";
-    md << "![noise against distance](noise.png)\n\n";
+    md << "![raw readings against estimated distance](distance.svg)\n\n";
+    md << "![error before and after correction against distance](residuals.svg)\n\n";
+    if (!p->histogram.empty()) md << "![error before and after correction](histogram.svg)\n\n";
+    md << "![noise against distance](noise.svg)\n\n";
     md << "![landmark map with numbered stops, raw and corrected points" << (p->truth.empty() ? "" : ", true landmarks")
-       << " (" << kLandmarks << ", Fig. 13)](map.png)\n";
+       << " (" << kLandmarks << ", Fig. 13)](map.svg)\n";
   } else {
     md << "(" << (p ? why : std::string("no plot data")) << ")\n";
   }

@@ -93,10 +93,11 @@ struct CorrectionStats {
 };
 
 /// Streams every scan through the filtering stage into `out_dir` (an existing, empty staging
-/// directory); copies sequence.json.
+/// directory); copies sequence.json. `threads` (0: the machine's cores, at most 8) correct
+/// scans side by side; the files and counts do not depend on it.
 CorrectionStats correctSequence(const io::Sequence& seq, const CalibrationModel& model,
                                 calibration::InversionMethod method, const std::filesystem::path& out_dir,
                                 io::PcdEncoding encoding, const StageProgress& on_scan = {},
-                                calibration::Outside outside = calibration::Outside::keep);
+                                calibration::Outside outside = calibration::Outside::keep, int threads = 0);
 
 }  // namespace lidarcal::pipeline

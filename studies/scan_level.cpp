@@ -125,6 +125,7 @@ Draw drawScanLevel(const std::vector<Cylinder>& layout, const PathSpec& path, co
 
   detectors::SequenceDetectionConfig dc;
   dc.detection.landmark_radius_m = d.obs.landmark_radius_m;  // known radius, as the paper assumes
+  dc.threads = 1;  // the trials already run on every core
   const auto det = detectors::detectSequence(
       scans.size(), [&](std::size_t i) { return scans.at(i).scan; }, stop_of_scan, dc);
   d.true_id = matchLandmarks(det.association, layout, config.match_distance_m);

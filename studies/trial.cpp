@@ -309,6 +309,7 @@ std::uint64_t trialSeed(std::uint64_t seed, const Cell& cell, std::size_t trial)
 calibration::CalibrationConfig estimatorConfig(const TrialConfig& config, const Cell& cell) {
   calibration::CalibrationConfig cc;
   cc.max_order = config.max_order;
+  cc.threads = 1;  // the trials already run on every core
   cc.noise = NoiseKind::polynomial;  // the paper's noise law (eq. 3)
   cc.closed_form_rule = calibration::OrderRule::aic;
   cc.joint_rule = calibration::JointOrderRule::aic;  // the model's own order; both rules are read from its table

@@ -425,6 +425,33 @@ TEST(JointRefinement, WrittenOutBeamDerivativesAreThoseOfAutomaticDifferentiatio
   EXPECT_LT(hits, 6 * 200 - 100);
 }
 
+TEST(JointRefinement, WrittenOutMotionPriorDerivativesAreThoseOfAutomaticDifferentiation) {
+  // 500 pose pairs, steps, scales and weights drawn at random: no answer depends on the draw.
+  std::mt19937_64 rng(0x0d0);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int trial = 0; trial < 500; ++trial) {
+    const joint::MotionPriorCost cost{0.3 * u(rng), 0.1 * u(rng), 0.5 * u(rng), 20.0 * (1.5 + u(rng)), 100.0 * (1.5 + u(rng))};
+    double a[3] = {2.0 * u(rng), 2.0 * u(rng), 3.0 * u(rng)}, b[3] = {a[0] + 0.3 * u(rng), a[1] + 0.3 * u(rng), a[2] + 0.5 * u(rng)};
+    double scale[1] = {0.05 * u(rng)};
+    const joint::MotionPriorAnalyticCost written(cost);
+    const ceres::AutoDiffCostFunction<joint::MotionPriorCost, 3, 3, 3, 1> reference(new joint::MotionPriorCost(cost));
+    const double* params[3] = {a, b, scale};
+    double r_w[3], r_a[3], jw[3][9] = {}, ja[3][9] = {};
+    double* jac_w[3] = {jw[0], jw[1], jw[2]};
+    double* jac_a[3] = {ja[0], ja[1], ja[2]};
+    EXPECT_TRUE(written.Evaluate(params, r_w, jac_w));
+    EXPECT_TRUE(reference.Evaluate(params, r_a, jac_a));
+    const int sizes[3] = {9, 9, 3};
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(r_w[k], r_a[k], 1e-12 * (1.0 + std::abs(r_a[k])));
+    for (int blk = 0; blk < 3; ++blk)
+      for (int k = 0; k < sizes[blk]; ++k)
+        EXPECT_NEAR(jw[blk][k], ja[blk][k], 1e-9 * (1.0 + std::abs(ja[blk][k]))) << "block " << blk << " entry " << k;
+    double r_only[3];
+    EXPECT_TRUE(written.Evaluate(params, r_only, nullptr));
+    for (int k = 0; k < 3; ++k) EXPECT_EQ(r_only[k], r_w[k]);
+  }
+}
+
 TEST(Calibrate, NoLandmarkGivesAStatusNotACrash) {
   LandmarkObservations obs;
   obs.commanded = {Pose2{}, Pose2{0.3, 0, 0}, Pose2{0.6, 0, 0}};

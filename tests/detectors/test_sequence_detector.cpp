@@ -2,6 +2,7 @@
 // checked beam by beam against the simulator's truth; the radius estimated when not given;
 // odometry drift; a sequence without landmarks.
 
+#include <atomic>
 #include <cmath>
 #include <map>
 #include <random>
@@ -299,6 +300,44 @@ TEST(DetectSequence, SameInputSameOutput) {
       EXPECT_EQ(a.scans[i].detections[j].centre_x_m, b.scans[i].detections[j].centre_x_m);
       EXPECT_EQ(a.scans[i].detections[j].inliers, b.scans[i].detections[j].inliers);
     }
+}
+
+// Scans are loaded and detected a window at a time on several threads: the detections, ids,
+// landmarks and radii are those of one thread, with the radius known and estimated (two
+// passes, the stop-pooled radius), among clutter, and each scan is loaded once per pass.
+TEST(DetectSequence, TheNumberOfThreadsChangesNothing) {
+  const Scene clutter = io::readScene(test::sourceDir() / "data/scenes/field_clutter.json");
+  const Simulated s = simulateScene(clutter, 3);
+  for (const bool known : {true, false}) {
+    SequenceDetectionConfig cfg;
+    if (known) cfg.detection.landmark_radius_m = 0.12;
+    cfg.threads = 1;
+    const SequenceDetections one = run(s, cfg);
+    for (int threads : {2, 3, 5}) {
+      SCOPED_TRACE(std::string(known ? "radius known, " : "radius estimated, ") + std::to_string(threads) + " threads");
+      cfg.threads = threads;
+      std::vector<std::atomic<int>> loads(s.scans.size());
+      const SequenceDetections many = detectSequence(
+          s.scans.size(), [&](std::size_t i) { ++loads[i]; return s.scans[i].scan; }, s.stop_of_scan, cfg);
+      for (const auto& l : loads) EXPECT_EQ(l.load(), known ? 1 : 2);
+      ASSERT_EQ(many.association.ids, one.association.ids);
+      ASSERT_EQ(many.association.landmarks.size(), one.association.landmarks.size());
+      for (std::size_t k = 0; k < one.association.landmarks.size(); ++k) {
+        EXPECT_EQ(many.association.landmarks[k].x_m, one.association.landmarks[k].x_m);
+        EXPECT_EQ(many.association.landmarks[k].radius_m, one.association.landmarks[k].radius_m);
+      }
+      EXPECT_EQ(many.replay.fingerprint, one.replay.fingerprint);
+      ASSERT_EQ(many.scans.size(), one.scans.size());
+      for (std::size_t i = 0; i < one.scans.size(); ++i) {
+        ASSERT_EQ(many.scans[i].detections.size(), one.scans[i].detections.size()) << i;
+        for (std::size_t j = 0; j < one.scans[i].detections.size(); ++j) {
+          EXPECT_EQ(many.scans[i].detections[j].centre_x_m, one.scans[i].detections[j].centre_x_m);
+          EXPECT_EQ(many.scans[i].detections[j].radius_m, one.scans[i].detections[j].radius_m);
+          EXPECT_EQ(many.scans[i].detections[j].inliers, one.scans[i].detections[j].inliers);
+        }
+      }
+    }
+  }
 }
 
 TEST(JointRadius, RecoversTheRadiusFromArcsSeenAtSeveralRanges) {

@@ -205,9 +205,9 @@ TEST_F(FirstHour, ReportPlotsTheFittedRangeWithResidualsAfterCorrectionAndMarksE
   EXPECT_NEAR(curve.front()[0], x0, 1e-4);
   EXPECT_NEAR(curve.back()[0], x1, 1e-4);
   // Residuals after correction and the before/after histogram are plotted; legends outside.
-  EXPECT_TRUE(contains(gp, "set output \"residuals.png\"")) << gp;
+  EXPECT_TRUE(contains(gp, "set output \"residuals.svg\"")) << gp;
   EXPECT_TRUE(contains(gp, "using 1:(1000*($3-$1))")) << gp;
-  EXPECT_TRUE(contains(gp, "set output \"histogram.png\"")) << gp;
+  EXPECT_TRUE(contains(gp, "set output \"histogram.svg\"")) << gp;
   EXPECT_TRUE(contains(gp, "set key outside")) << gp;
   EXPECT_FALSE(contains(gp, "set key top left")) << gp;
   const auto hist = rows(rep / "histogram.dat");
@@ -235,8 +235,16 @@ TEST_F(FirstHour, ReportPlotsTheFittedRangeWithResidualsAfterCorrectionAndMarksE
   EXPECT_FALSE(contains(md, "seed 00")) << md;
   EXPECT_TRUE(contains(md, "Alhashimi et al. 2016")) << md;
   if (std::system("command -v gnuplot >/dev/null 2>&1") == 0) {
-    EXPECT_TRUE(fs::exists(rep / "residuals.png"));
-    EXPECT_TRUE(fs::exists(rep / "histogram.png"));
+    // Every picture the report shows was drawn, as an SVG document.
+    std::size_t images = 0;
+    for (std::size_t pos = md.find("]("); pos != std::string::npos; pos = md.find("](", pos + 2)) {
+      const std::string name = md.substr(pos + 2, md.find(')', pos) - pos - 2);
+      if (name.size() < 4 || name.substr(name.size() - 4) != ".svg") continue;
+      ++images;
+      ASSERT_TRUE(fs::exists(rep / name)) << name;
+      EXPECT_TRUE(contains(readFile(rep / name), "<svg")) << name;
+    }
+    EXPECT_GE(images, 5u) << md;
   }
 }
 
