@@ -1000,7 +1000,11 @@ JointConfig baselineConfig(const CalibrationModel& cal, const CalibrationConfig&
   base.covariance = false;
   base.outer_iterations = 4;
   base.outlier_floor = config.outlier_floor;
-  base.effects.estimate_heading = false;
+  // The seeds' model holds each stop's heading at the commanded one (stop and go). A continuous
+  // recording's odometry drifts in heading as in position, and its motion prior models both
+  // step by step: there the baseline refines the headings under that prior. Held at the drifting
+  // odometry instead, clean simulated drives were named heading_error (6 of 6).
+  base.effects.estimate_heading = continuousMotion(obs, base);
   base.cauchy_loss = true;
   return base;
 }
@@ -1282,9 +1286,16 @@ CandidateResult SequenceDiagnosis::candidate(std::size_t c, const HeldOut& held,
     r.p_value = kNaN;
     return r;
   }
+  if (r.effect == Effect::heading_error && base_.effects.estimate_heading) {
+    r.applicable = false;
+    r.note = "the baseline already refines every heading (a continuous recording: under the motion prior)";
+    r.p_value = kNaN;
+    return r;
+  }
   // Held-out gain per point, standard error from per-scan blocks.
   setHeldOutGain(r, heldOutGain(held, c));
-  r.parameters = fc.effect_parameters;
+  // Parameters beyond the baseline's (a continuous recording's baseline refines the headings too).
+  r.parameters = fc.effect_parameters - fit0_.effect_parameters;
   const double lr = 2.0 * (fit0_.neg_log_likelihood + fit0_.prior_neg_log_likelihood - fc.neg_log_likelihood -
                            fc.prior_neg_log_likelihood);
   r.delta_aic = 2.0 * r.parameters - lr;
