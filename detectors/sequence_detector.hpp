@@ -13,7 +13,9 @@
 // seen in the last AssociationConfig::forget_after_stops stops; the radius estimate keeps at
 // most arcs_per_landmark arcs per track); the final pass's detections go to a temporary file
 // (detection_log.hpp), from which forEachScan gives each scan's detections without detecting
-// again (and, when no temporary file can be made, by detecting each stop again).
+// again (and, when no temporary file can be made, by detecting each stop again). Scans are
+// loaded and detected a window ahead (16 per thread: SequenceDetectionConfig::threads), so one
+// window is in memory besides the current stop.
 
 #include <cstddef>
 #include <cstdint>
