@@ -1042,6 +1042,9 @@ class SequenceDiagnosis {
   JointInit candidateStart(Effect e) const;
   void foldLikelihoods(HeldOut& held) const;
   void odometryLikelihoods(HeldOut& held) const;
+  /// An effect the baseline already holds (heading_error under the motion prior, where the
+  /// baseline refines the headings): its "extended" fits are the baseline's, not fitted again.
+  bool inBaseline(Effect e) const { return e == Effect::heading_error && base_.effects.estimate_heading; }
   void setIdentifiability(CandidateResult& r, const JointResult& fc, bool radius_known) const;
 
   const LandmarkObservations& obs_;
@@ -1206,7 +1209,8 @@ void SequenceDiagnosis::heldOut(HeldOut& held) {
     reportProgress(config_, kHeldOutStage, cfgs_.size(), steps);
     cfgs_.push_back(effectConfig(base_, e));
     // The neutral start matters for the terms that bend the geometry the baseline settled in.
-    fits_.push_back(bestOf(candidateStart(e), cfgs_.back(), e == Effect::incidence_bias || e == Effect::landmark_bias));
+    fits_.push_back(inBaseline(e) ? fit0_
+                                  : bestOf(candidateStart(e), cfgs_.back(), e == Effect::incidence_bias || e == Effect::landmark_bias));
   }
   foldLikelihoods(held);
   odometryLikelihoods(held);
@@ -1234,6 +1238,10 @@ void SequenceDiagnosis::foldLikelihoods(HeldOut& held) const {
     std::vector<std::vector<JointReading>> ec(candidates_.size());
     bool ok = true;
     for (std::size_t c = 0; c < candidates_.size(); ++c) {
+      if (inBaseline(candidates_[c])) {
+        ec[c] = eb;
+        continue;
+      }
       const JointResult fc = refineJoint(tr, !fits_[c].ok() ? initFrom(fit0_) : initFrom(fits_[c]), warm(cfgs_[c]));
       if (!fc.ok()) {
         ok = false;
@@ -1286,7 +1294,7 @@ CandidateResult SequenceDiagnosis::candidate(std::size_t c, const HeldOut& held,
     r.p_value = kNaN;
     return r;
   }
-  if (r.effect == Effect::heading_error && base_.effects.estimate_heading) {
+  if (inBaseline(r.effect)) {
     r.applicable = false;
     r.note = "the baseline already refines every heading (a continuous recording: under the motion prior)";
     r.p_value = kNaN;
