@@ -7,16 +7,16 @@
 
 namespace lidarcal::pipeline {
 
-void addThreadsOption(CLI::App* app, int& threads) {
+void addThreadsOption(CLI::App* app, int& threads, const std::string& work) {
   app->add_option("--threads", threads,
-                  "Threads (0: the machine's cores, at most 8) detecting and correcting scans side by side and "
-                  "fitting the bias orders side by side; the output does not depend on it")
+                  "Threads (0: the machine's cores, at most 8) " + work + "; the output does not depend on it")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
 }
 
 void addCalibrationOptions(CLI::App* app, const std::shared_ptr<CalibrationOptions>& o) {
-  addThreadsOption(app, o->threads);
+  addThreadsOption(app, o->threads,
+                   "detecting scans, fitting the bias orders and (run) correcting scans side by side");
   app->add_option("--method", o->method,
                   std::string("closed-form: triangulation + least squares as in ") + papers::kLandmarks +
                       "; joint: refine poses, landmarks "

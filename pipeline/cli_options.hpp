@@ -32,9 +32,9 @@ struct CalibrationOptions {
   int threads = 0;      // threads (detection, the joint refinement's orders, correction); 0: automatic
 };
 
-/// --threads: the threads for the work that runs side by side (0, the default: the machine's
-/// cores, at most 8).
-void addThreadsOption(CLI::App* app, int& threads);
+/// --threads: the threads for the work that runs side by side, which `work` names for the help
+/// (0, the default: the machine's cores, at most 8).
+void addThreadsOption(CLI::App* app, int& threads, const std::string& work);
 
 /// Adds the options to a subcommand.
 void addCalibrationOptions(CLI::App* app, const std::shared_ptr<CalibrationOptions>& o);

@@ -74,7 +74,7 @@ void addCorrectCommand(CLI::App& app) {
   addCorrectionOptions(sub, c);
   sub->add_option("--topic", o->topic, "IN.bag: the sensor_msgs/LaserScan topic to correct (default: the bag's only one)");
   sub->add_flag("--ascii", o->ascii, "Write ASCII PCD instead of binary");
-  addThreadsOption(sub, o->threads);
+  addThreadsOption(sub, o->threads, "correcting a sequence's scans side by side (a bag is corrected in order)");
   sub->add_flag("--overwrite", o->overwrite, "Replace OUT if it exists");
   sub->add_flag("--force", o->force,
                 "Apply a model whose range limits differ from the sequence's (same sensor, other limits set), with a "

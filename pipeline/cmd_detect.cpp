@@ -174,7 +174,7 @@ void addDetectCommand(CLI::App& app) {
           ->check(CLI::PositiveNumber);
   sub->add_flag("--estimate-radius", o->estimate_radius, "Ignore sequence.json's radius and estimate it per landmark")
       ->excludes(radius);
-  addThreadsOption(sub, o->threads);
+  addThreadsOption(sub, o->threads, "detecting scans side by side");
   sub->add_option("--min-stops", o->min_stops, "A landmark must be seen at this many stops (capped at the number of stops)")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
