@@ -561,7 +561,7 @@ void JointProblem::reestimateMixedFraction(const std::vector<double>& res) {
       sum += 1.0 - weight_[i];
       n += 1.0;
     }
-  mixed_fraction_ = n > 0 ? std::clamp(sum / n, 1e-4, 0.9) : 0.0;
+  mixed_fraction_ = n > 0 ? std::clamp(sum / n, kMinMixedPixelFraction, 0.9) : 0.0;
 }
 
 /// The polynomial law by least squares on |residual|; the others as sigma_i = sigma_e h_i(kappa,

@@ -65,6 +65,10 @@ struct JointEffectEstimates {
   double heading_rms_rad = 0.0;             ///< RMS of the refined minus the commanded headings, radians
 };
 
+/// Least mixed-pixel fraction the refinement's EM step keeps (a fraction at it: no reading was
+/// attributed to mixed pixels).
+inline constexpr double kMinMixedPixelFraction = 1e-4;
+
 /// Whether the odometry between consecutive stops enters as a motion prior.
 enum class MotionPrior {
   automatic,  ///< on when continuousMotion() says the sequence never stopped (default)

@@ -6,6 +6,7 @@
 #include <numeric>
 #include <stdexcept>
 
+#include <Eigen/Dense>
 #include <boost/math/distributions/normal.hpp>
 #include <boost/math/distributions/students_t.hpp>
 
@@ -260,6 +261,25 @@ std::string nameCause(std::vector<CandidateResult>& cands, double alpha, std::st
       }
   }
   return toString(cands[chosen].effect);
+}
+
+std::vector<Eigen::Matrix3d> blockTridiagonalInverseDiagonal(const std::vector<Eigen::Matrix3d>& diagonal,
+                                                             const std::vector<Eigen::Matrix3d>& upper) {
+  using Mat3 = Eigen::Matrix3d;
+  const std::size_t n = diagonal.size();
+  if (n == 0) return {};
+  if (upper.size() + 1 < n) throw std::invalid_argument("blockTridiagonalInverseDiagonal: one upper block per pair of neighbours");
+  // D_0 = A_0, D_k+1 = A_k+1 - B_k^T D_k^-1 B_k;  C_n-1 = D_n-1^-1,
+  // C_k = D_k^-1 + D_k^-1 B_k C_k+1 B_k^T D_k^-1.
+  std::vector<Mat3> dinv(n), cov(n);
+  Mat3 d = diagonal[0];
+  for (std::size_t k = 0; k < n; ++k) {
+    dinv[k] = d.inverse();
+    if (k + 1 < n) d = diagonal[k + 1] - upper[k].transpose() * dinv[k] * upper[k];
+  }
+  cov[n - 1] = dinv[n - 1];
+  for (std::size_t k = n - 1; k-- > 0;) cov[k] = dinv[k] + dinv[k] * upper[k] * cov[k + 1] * upper[k].transpose() * dinv[k];
+  return cov;
 }
 
 }  // namespace lidarcal::diagnosis

@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Core>
+
 #include "diagnosis/diagnosis.hpp"
 
 namespace lidarcal::diagnosis {
@@ -21,6 +23,14 @@ double replicaPValue(double value, const std::vector<double>& replicas, bool two
 /// Fills a Discrepancy from its measured value and its replica values.
 Discrepancy makeDiscrepancy(std::string name, std::string variable, std::string description, double value,
                             const std::vector<double>& replicas, bool two_sided);
+
+/// Diagonal blocks of the inverse of a symmetric positive-definite block-tridiagonal matrix:
+/// 3x3 blocks diagonal[k] on the diagonal and upper[k] at (k, k + 1) (upper may be longer; its
+/// last block is not used). A forward pass of Schur complements and a backward pass, as in a
+/// Kalman smoother: O(n) for n blocks instead of the dense inverse's O(n^3). The marginal
+/// covariances of a chain of poses from its information matrix.
+std::vector<Eigen::Matrix3d> blockTridiagonalInverseDiagonal(const std::vector<Eigen::Matrix3d>& diagonal,
+                                                             const std::vector<Eigen::Matrix3d>& upper);
 
 /// One-sided p-value of a held-out gain with standard error se: P(N(0, 1) >= gain / se); 1 for
 /// a gain that is not positive, NaN without a standard error.

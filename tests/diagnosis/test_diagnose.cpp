@@ -18,6 +18,7 @@
 #include <numeric>
 #include <random>
 
+#include <Eigen/Dense>
 #include <gtest/gtest.h>
 
 #include "diagnosis/sequence.hpp"
@@ -91,6 +92,46 @@ TEST(DiagnoseStats, LikelihoodRatioAndCombinedPValues) {
   EXPECT_NEAR(combinedPValue(0.2, 0.01, std::nan("")), 0.02, 1e-15);
   EXPECT_NEAR(combinedPValue(0.9, 0.8, 0.7), 1.0, 1e-15);
   EXPECT_TRUE(std::isnan(combinedPValue(std::nan(""), std::nan(""), std::nan(""))));
+}
+
+TEST(DiagnoseStats, BlockTridiagonalInverseMatchesTheDenseInverse) {
+  // A chain of 9 poses: random information per pose (readings) plus random couplings between
+  // neighbours (odometry steps), assembled as J^T J so that the matrix is positive definite.
+  auto rng = makeRng(11, 3);
+  std::normal_distribution<double> n01(0.0, 1.0);
+  const int n = 9;
+  std::vector<Eigen::Matrix3d> diag(n, Eigen::Matrix3d::Zero()), upper(n, Eigen::Matrix3d::Zero());
+  Eigen::MatrixXd dense = Eigen::MatrixXd::Zero(3 * n, 3 * n);
+  auto random3 = [&] {
+    Eigen::Matrix3d m;
+    for (int i = 0; i < 9; ++i) m(i / 3, i % 3) = n01(rng);
+    return m;
+  };
+  for (int k = 0; k < n; ++k) {
+    const Eigen::Matrix3d j = random3();
+    const Eigen::Matrix3d info = j.transpose() * j * (k % 3 == 1 ? 1e-3 : 1.0);  // some poses nearly unseen
+    diag[k] += info;
+    dense.block<3, 3>(3 * k, 3 * k) += info;
+  }
+  for (int k = 0; k + 1 < n; ++k) {
+    const Eigen::Matrix3d ja = random3(), jb = random3();
+    diag[k] += ja.transpose() * ja;
+    diag[k + 1] += jb.transpose() * jb;
+    upper[k] += ja.transpose() * jb;
+    dense.block<3, 3>(3 * k, 3 * k) += ja.transpose() * ja;
+    dense.block<3, 3>(3 * k + 3, 3 * k + 3) += jb.transpose() * jb;
+    dense.block<3, 3>(3 * k, 3 * k + 3) += ja.transpose() * jb;
+    dense.block<3, 3>(3 * k + 3, 3 * k) += jb.transpose() * ja;
+  }
+  const Eigen::MatrixXd inverse = dense.inverse();
+  const auto blocks = diagnosis::blockTridiagonalInverseDiagonal(diag, upper);
+  ASSERT_EQ(blocks.size(), static_cast<std::size_t>(n));
+  for (int k = 0; k < n; ++k) {
+    const Eigen::Matrix3d want = inverse.block<3, 3>(3 * k, 3 * k);
+    EXPECT_LT((blocks[k] - want).norm(), 1e-8 * want.norm()) << "block " << k;
+  }
+  EXPECT_TRUE(diagnosis::blockTridiagonalInverseDiagonal({}, {}).empty());
+  EXPECT_THROW(diagnosis::blockTridiagonalInverseDiagonal(diag, {}), std::invalid_argument);
 }
 
 TEST(DiagnoseStats, KolmogorovSmirnovDistance) {

@@ -5,11 +5,13 @@
 #include <cmath>
 #include <filesystem>
 #include <functional>
+#include <random>
 #include <set>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "common/rng.hpp"
 #include "io/model_io.hpp"
 #include "test_util.hpp"
 
@@ -187,6 +189,46 @@ TEST(CliDiagnoseDriving, PosesThatSeeNoPoleKeepTheHeldOutGainsFiniteAndTheReplic
     if (c["effect"] == "incidence_bias" || c["effect"] == "range_drift") {
       EXPECT_EQ(c["parameters"], 1) << c["effect"];
     }
+}
+
+TEST(CliDiagnoseDriving, CleanDrivesNameNoEffectAtItsNull) {
+  // A pose per scan, chained by the odometry. Before session 10 every clean drive tried was
+  // named (large poles: mixed_pixels, odometry_scale; thin poles: incidence_bias), each with its
+  // estimate at the null: edge beams scored at the fitted pose alone, baselines in poorer optima
+  // than a candidate's fit, a likelihood ratio between optima. The drive's seed is drawn from a
+  // seed this test does not read (the method was developed on seeds 1-60 of the two scenes).
+  TempDir dir;
+  auto rng = makeRng(20261125, 5);
+  std::uniform_int_distribution<int> seed_of(100, 100000);
+  for (const std::string scene : {"driving_large_poles", "driving_small_poles"}) {
+    test::writeFile(dir / "scene.json", test::readFile(test::sourceDir() / ("data/scenes/" + scene + ".json")));
+    const int seed = seed_of(rng);
+    simulate(dir / "scene.json", dir / scene, seed);
+    const auto r = runCli("diagnose -q " + (dir / scene / "scans").string() + " --replicas 5 --out " + (dir / (scene + "-d")).string());
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    // Large poles: `none` in 19 of 20 drives (docs/RESULTS.md). Thin poles (one to three beams
+    // per pole) still get a cause in about one drive of four, so only the rules are checked there.
+    if (scene == "driving_large_poles") {
+      EXPECT_EQ(r.out, "none\n") << scene << " seed " << seed;
+    }
+    const auto j = json(dir / (scene + "-d") / "diagnosis.json");
+    for (const auto& c : j["candidates"]) {
+      // Under the motion prior the likelihood ratio is not used (a pose per scan: optima).
+      EXPECT_TRUE(c["p_likelihood_ratio"].is_null()) << c["effect"];
+      if (!c["significant"].get<bool>()) continue;
+      // A significant effect stands two standard errors clear of its null, and a mixed-pixel
+      // fraction above the EM's floor.
+      const double se = c["standard_error"].get<double>();
+      if (c["effect"] == "mixed_pixels") {
+        EXPECT_GT(c["estimates"]["mixed_pixel_fraction"].get<double>(), 1.0001e-4);
+      } else if (se > 0.0 && c["effect"] != "landmark_bias") {
+        const double est = c["estimates"].begin().value().get<double>();
+        const double null = c["effect"] == "range_noise_law" ? 2.0 : 0.0;
+        const double unit = c["effect"] == "angle_offset" ? std::acos(-1.0) / 180.0 : 1.0;  // degrees reported, radians fitted
+        EXPECT_GT(std::abs(est - null) * unit, 2.0 * se) << scene << " " << c["effect"];
+      }
+    }
+  }
 }
 
 TEST(CliDiagnoseStatic, ARoomFromOnePoseIsDiagnosedInStaticModeAndTheEffectNamed) {
