@@ -120,12 +120,12 @@ Eigen::Vector3d poseGradient(const JointResult& fit, const JointReading& r) {
 std::vector<Eigen::Matrix3d> poseCovariances(const LandmarkObservations& obs, const JointResult& fit, const JointConfig& cfg) {
   using Mat3 = Eigen::Matrix3d;
   const std::size_t n = fit.poses.size();
+  if (n == 0) return {};
   std::vector<Mat3> a(n, Mat3::Zero()), b(n, Mat3::Zero());  // b[k]: the block (k, k + 1)
   for (const auto& r : evaluateJoint(obs, fit, cfg)) {
     const Eigen::Vector3d g = poseGradient(fit, r);
     a[r.stop] += g * g.transpose() / (r.sigma_m * r.sigma_m);
   }
-  if (n == 0) return {};
   a[0].diagonal() += Eigen::Vector3d(1.0 / (cfg.sigma_s_m * cfg.sigma_s_m), 1.0 / (cfg.sigma_s_m * cfg.sigma_s_m),
                                      1.0 / (cfg.sigma_psi_rad * cfg.sigma_psi_rad));
   for (std::size_t k = 1; k < n && k < obs.commanded.size(); ++k) {
@@ -1117,10 +1117,12 @@ class SequenceDiagnosis {
   void chooseOrder();
   void describeBaseline(DiagnosisResult& out) const;
   JointInit candidateStart(Effect e) const;
-  void fitCandidates();
+  void fitCandidates(bool measured_start, const char* stage, std::size_t steps);
+  std::optional<JointResult> sameOptimum(const LandmarkObservations& obs, std::size_t c, JointResult& fc,
+                                         const JointResult& base) const;
   void requireClearOfNull(CandidateResult& r, const JointResult& fc) const;
   bool settleBaseline();
-  void foldLikelihoods(HeldOut& held) const;
+  void foldLikelihoods(HeldOut& held, std::size_t steps_before, std::size_t steps) const;
   void odometryLikelihoods(HeldOut& held) const;
   /// An effect the baseline already holds (heading_error under the motion prior, where the
   /// baseline refines the headings): its "extended" fits are the baseline's, not fitted again.
@@ -1160,8 +1162,10 @@ bool SequenceDiagnosis::fitBaseline(DiagnosisResult& out) {
     out.status.message = fit0_.status.message;
     return false;
   }
-  fitCandidates();
-  settled_ = settleBaseline();
+  if (fit0_.motion_prior) {  // settleBaseline needs the candidates' fits
+    fitCandidates(false, "baseline fit", candidates_.size());
+    settled_ = settleBaseline();
+  }
   describeBaseline(out);
   return true;
 }
@@ -1311,18 +1315,36 @@ JointInit SequenceDiagnosis::candidateStart(Effect e) const {
   return start;
 }
 
-/// The candidates' fits on all the data (cfgs_, fits_), from the baseline's solution (heldOut
-/// refits those that candidateStart turns by the measured statistics).
-void SequenceDiagnosis::fitCandidates() {
+/// The candidates' fits on all the data (cfgs_, fits_): from candidateStart (measured_start:
+/// it turns the start by the measured statistics) or from the baseline's solution. Progress:
+/// candidate c is step c of `steps` of `stage`.
+void SequenceDiagnosis::fitCandidates(bool measured_start, const char* stage, std::size_t steps) {
   cfgs_.clear();
   fits_.clear();
   for (const auto& e : candidates_) {
-    reportProgress(config_, "baseline fit", cfgs_.size(), candidates_.size());
+    reportProgress(config_, stage, cfgs_.size(), steps);
     cfgs_.push_back(effectConfig(base_, e));
     // The neutral start matters for the terms that bend the geometry the baseline settled in.
     fits_.push_back(inBaseline(e) ? fit0_
-                                  : bestOf(initFrom(fit0_), cfgs_.back(), e == Effect::incidence_bias || e == Effect::landmark_bias));
+                                  : bestOf(measured_start ? candidateStart(e) : initFrom(fit0_), cfgs_.back(),
+                                           e == Effect::incidence_bias || e == Effect::landmark_bias));
   }
+}
+
+/// Under the motion prior two fits of one model can settle in different optima (settleBaseline).
+/// The baseline is refitted from candidate c's solution fc; when fc fits worse than the better of
+/// that refit and `base`, fc is refitted from it (the better of the two kept). Returns the refit
+/// when it beats `base` (nothing: `base` is the baseline in fc's optimum).
+std::optional<JointResult> SequenceDiagnosis::sameOptimum(const LandmarkObservations& obs, std::size_t c, JointResult& fc,
+                                                          const JointResult& base) const {
+  std::optional<JointResult> back = refineJoint(obs, initFrom(fc), warm(base_));
+  if (!(total(*back) < total(base))) back.reset();
+  const JointResult& better = back ? *back : base;
+  if (total(fc) > total(better)) {
+    JointResult again = refineJoint(obs, initFrom(better), warm(cfgs_[c]));
+    if (total(again) < total(fc)) fc = std::move(again);
+  }
+  return back;
 }
 
 /// A candidate's fit can find a better optimum of the baseline's own likelihood: thin poles
@@ -1346,38 +1368,37 @@ bool SequenceDiagnosis::settleBaseline() {
   return true;
 }
 
-/// Held-out likelihoods: folds by scan, odometry by stop. The candidates fitted from
-/// candidateStart are refitted (it needs the measured statistics); with a settled baseline
-/// (settleBaseline) all of them are.
+/// Held-out likelihoods: folds by scan, odometry by stop. The candidates are fitted here (stop
+/// and go) or refitted: all of them against a settled baseline (settleBaseline), otherwise those
+/// whose start needs the measured statistics (candidateStart).
 void SequenceDiagnosis::heldOut(HeldOut& held) {
-  for (std::size_t c = 0; c < candidates_.size(); ++c) {
-    const Effect e = candidates_[c];
-    if (!settled_ && e != Effect::angle_offset && e != Effect::odometry_scale) continue;
-    fits_[c] = inBaseline(e) ? fit0_
-                             : bestOf(candidateStart(e), cfgs_[c], e == Effect::incidence_bias || e == Effect::landmark_bias);
+  const std::size_t fold_steps = static_cast<std::size_t>(config_.folds);
+  std::size_t steps_before = 0;
+  if (fits_.empty() || settled_) {
+    steps_before = candidates_.size();
+    fitCandidates(true, kHeldOutStage, steps_before + fold_steps);
+  } else {
+    for (std::size_t c = 0; c < candidates_.size(); ++c) {
+      const Effect e = candidates_[c];
+      if (e == Effect::angle_offset || e == Effect::odometry_scale) fits_[c] = bestOf(candidateStart(e), cfgs_[c], false);
+    }
   }
-  // The likelihood ratio compares the candidate with the baseline in the same optimum: under the
-  // motion prior the baseline is refitted from the candidate's solution (and the candidate from
-  // that refit when the baseline came out better), the better of each kept.
+  // The likelihood ratio compares the candidate with the baseline in the same optimum.
   base_total_.assign(candidates_.size(), total(fit0_));
   for (std::size_t c = 0; c < candidates_.size() && fit0_.motion_prior; ++c) {
     if (inBaseline(candidates_[c]) || !fits_[c].ok()) continue;
-    const JointResult back = refineJoint(obs_, initFrom(fits_[c]), warm(base_));
-    base_total_[c] = std::min(base_total_[c], total(back));
-    if (total(fits_[c]) <= base_total_[c]) continue;
-    JointResult again = refineJoint(obs_, initFrom(total(back) < total(fit0_) ? back : fit0_), warm(cfgs_[c]));
-    if (total(again) < total(fits_[c])) fits_[c] = std::move(again);
+    if (const auto back = sameOptimum(obs_, c, fits_[c], fit0_)) base_total_[c] = total(*back);
   }
-  foldLikelihoods(held);
+  foldLikelihoods(held, steps_before, steps_before + fold_steps);
   odometryLikelihoods(held);
   held.points = static_cast<double>(held.base.size());
 }
 
 /// Readings of each fold's sightings under the models fitted on the other folds (block: scan).
-void SequenceDiagnosis::foldLikelihoods(HeldOut& held) const {
+void SequenceDiagnosis::foldLikelihoods(HeldOut& held, std::size_t steps_before, std::size_t steps) const {
   const std::vector<int> fold = folds(obs_, config_.folds);
   for (int f = 0; f < config_.folds; ++f) {
-    reportProgress(config_, kHeldOutStage, static_cast<std::size_t>(f), static_cast<std::size_t>(config_.folds));
+    reportProgress(config_, kHeldOutStage, steps_before + static_cast<std::size_t>(f), steps);
     std::vector<bool> train(obs_.sightings.size()), test(obs_.sightings.size());
     bool any = false;
     for (std::size_t i = 0; i < obs_.sightings.size(); ++i) {
@@ -1403,25 +1424,18 @@ void SequenceDiagnosis::foldLikelihoods(HeldOut& held) const {
         ok = false;
         break;
       }
-      if (!fit0_.motion_prior) {
-        ec[c] = heldOutLikelihoods(tr, te, fc, cfgs_[c]);
-        if (ec[c].size() != eb.size()) ok = false;
+      // Under the motion prior the candidate is scored against the baseline in its own optimum
+      // (sameOptimum): that baseline's difference to fb's is taken off its readings (held.base
+      // stays fb's).
+      const std::optional<JointResult> bb = fit0_.motion_prior ? sameOptimum(tr, c, fc, fb) : std::nullopt;
+      ec[c] = heldOutLikelihoods(tr, te, fc, cfgs_[c]);
+      if (ec[c].size() != eb.size()) {
+        ok = false;
         continue;
       }
-      // Under the motion prior two fits of one model can settle in different optima
-      // (settleBaseline): the baseline is also refitted from the candidate's solution and the
-      // candidate from the better baseline, each the better of its two kept. The candidate's
-      // readings are scored against that baseline: its difference to fb's is taken off
-      // (held.base stays fb's).
-      JointResult bc = refineJoint(tr, initFrom(fc), warm(base_));
-      const JointResult& bb = total(bc) < total(fb) ? bc : fb;
-      if (total(fc) > total(bb)) {
-        JointResult again = refineJoint(tr, initFrom(bb), warm(cfgs_[c]));
-        if (total(again) < total(fc)) fc = std::move(again);
-      }
-      ec[c] = heldOutLikelihoods(tr, te, fc, cfgs_[c]);
-      const std::vector<double> ebb = &bb == &fb ? eb : heldOutLikelihoods(tr, te, bb, base_);
-      if (ec[c].size() != eb.size() || ebb.size() != eb.size()) {
+      if (!bb) continue;
+      const std::vector<double> ebb = heldOutLikelihoods(tr, te, *bb, base_);
+      if (ebb.size() != eb.size()) {
         ok = false;
         continue;
       }
