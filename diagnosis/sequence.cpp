@@ -1105,7 +1105,6 @@ class SequenceDiagnosis {
   void afterCandidates(DiagnosisResult& out) const;
   /// An angle offset is one heading shared by all stops (nested), handled by parsimony.
   std::vector<std::pair<Effect, Effect>> nestedEffects() const { return {{Effect::angle_offset, Effect::heading_error}}; }
-  std::vector<Effect> directEffects() const { return {}; }
   void refineCause(DiagnosisResult&) const {}  // no tail model in sequences (yet)
   Closeness closenessBaseline(const DiagnosisResult&) const { return closeness(measured_z_, sim_base_); }
   void extend(std::size_t c, DiagnosisResult& out) const;

@@ -204,23 +204,6 @@ TEST(DiagnoseStats, CauseNamingRules) {
   // A significant effect that cannot be estimated apart from the baseline.
   std::vector<CandidateResult> confounded = {cand(a, 1e-12, 0.05, 0.001, 1, false), cand(b, 1e-9, 0.01, 0.001, 1)};
   EXPECT_EQ(nameCause(confounded, 0.01, why), cause::kNotIdentifiable);
-  // An effect seen in the readings themselves (`direct`: a reading grid) is significant on its
-  // statistic with a held-out gain nil within two standard errors, and preferred to a top effect
-  // it explains as much as; not to one well above it. Another effect with the same numbers is not.
-  const Effect grid = Effect::quantisation, tails = Effect::heavy_tails;
-  std::vector<CandidateResult> seen = {cand(a, 0.5, -0.001, 0.001, 1), cand(grid, 1e-12, -0.0005, 0.001, 1)};
-  EXPECT_EQ(nameCause(seen, 0.01, why, {}, {}, {grid}), toString(grid)) << why;
-  EXPECT_EQ(nameCause(seen, 0.01, why), cause::kNone);
-  std::vector<CandidateResult> below = {cand(grid, 1e-12, -0.003, 0.001, 1)};
-  EXPECT_EQ(nameCause(below, 0.01, why, {}, {}, {grid}), cause::kNone);
-  std::vector<CandidateResult> near_top = {cand(tails, 1e-9, 0.0016, 0.0003, 1), cand(grid, 1e-12, 0.0010, 0.0004, 1)};
-  EXPECT_EQ(nameCause(near_top, 0.01, why, {}, {}, {grid}), toString(grid)) << why;
-  EXPECT_EQ(nameCause(near_top, 0.01, why), toString(tails));
-  std::vector<CandidateResult> far_top = {cand(tails, 1e-9, 0.0100, 0.0003, 1), cand(grid, 1e-12, 0.0010, 0.0004, 1)};
-  EXPECT_EQ(nameCause(far_top, 0.01, why, {}, {}, {grid}), toString(tails));
-  // Within two (large) standard errors of the top but explaining nothing: the top stays.
-  std::vector<CandidateResult> nil = {cand(tails, 1e-9, 0.034, 0.039, 1), cand(grid, 1e-12, -0.0003, 0.0004, 1)};
-  EXPECT_EQ(nameCause(nil, 0.01, why, {}, {}, {grid}), toString(tails));
   // Two effects that explain the data alike and are declared indistinguishable.
   std::vector<CandidateResult> twins = {cand(a, 1e-12, 0.0500, 0.002, 1), cand(b, 1e-12, 0.0495, 0.002, 1)};
   EXPECT_EQ(nameCause(twins, 0.01, why, {}, {{a, b}}), cause::kNotIdentifiable);
@@ -936,16 +919,22 @@ DiagnosisResult diagnoseRoomAtSeed(const RangeEffects& fx, std::uint64_t seed) {
   return diagnoseStatic(staticRoom(fx, squared(0.0015), seed), dc);
 }
 
-class CoarseGrid : public ::testing::TestWithParam<double> {};
+class ReadingGrid : public ::testing::TestWithParam<double> {};
 
-TEST_P(CoarseGrid, ReadingsRoundedToItAreNamedQuantisation) {
-  // Readings rounded to 5 or 10 mm under noise of 4-30 mm (the room at 1.7-4.5 m): the rounding's
-  // variance floor and the grid seen in the readings name the cause (before the floor model 2 and
-  // 0 of 10 were named; docs/RESULTS.md "Static mode").
+TEST_P(ReadingGrid, ReadingsRoundedToItAreNamedQuantisation) {
+  // Readings rounded to 2, 5 or 10 mm under noise of 3-50 mm (the room at 1.5-6 m). Every model
+  // is scored on the readings spread uniformly over their grid cells, where the rounded model
+  // (a normal cell probability over q) is the true one; before that the 5 and 10 mm grids were
+  // named in 2 and 0 of 10 rooms, then 15 and 16 of 20 under a variance floor (docs/RESULTS.md
+  // "Static mode"). Four rooms whose seeds come from a seed this test does not read (the method
+  // was developed on seeds 101-130), at least 3 named.
   const double grid = GetParam();
+  auto rng = makeRng(20261125, static_cast<std::uint64_t>(grid * 1e4));
+  std::uniform_int_distribution<std::uint64_t> seed_of(1000, 1000000);
   int right = 0;
   std::string log;
-  for (std::uint64_t seed = 331; seed < 335; ++seed) {
+  for (int k = 0; k < 4; ++k) {
+    const std::uint64_t seed = seed_of(rng);
     RangeEffects fx;
     fx.range_resolution_m = grid;
     const auto r = diagnoseRoomAtSeed(fx, seed);
@@ -957,8 +946,9 @@ TEST_P(CoarseGrid, ReadingsRoundedToItAreNamedQuantisation) {
   EXPECT_GE(right, 3) << "grid " << grid << ":" << log;
 }
 
-INSTANTIATE_TEST_SUITE_P(Room, CoarseGrid, ::testing::Values(0.005, 0.010),
-                         [](const auto& grid_info) { return grid_info.param < 0.0075 ? std::string("mm5") : std::string("mm10"); });
+INSTANTIATE_TEST_SUITE_P(Room, ReadingGrid, ::testing::Values(0.002, 0.005, 0.010), [](const auto& grid_info) {
+  return "mm" + std::to_string(static_cast<int>(std::lround(grid_info.param * 1e3)));
+});
 
 TEST(DiagnoseStatic, MixedPixelsAtTwoToTenPercentOfEdgeReadingsAreNamed) {
   int right = 0;
