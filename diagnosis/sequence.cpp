@@ -173,7 +173,7 @@ std::vector<double> heldOutLikelihoods(const LandmarkObservations& train, const 
     const Eigen::Vector3d g = poseGradient(fit, r);
     const double sigma = std::sqrt(r.sigma_m * r.sigma_m + g.dot(cov[r.stop] * g));
     ll[i] = readingLogLikelihood(r.y_m, r.mean_m, sigma, r.edge ? fit.effects.mixed_pixel_fraction : 0.0, cfg.outlier_floor,
-                                 fit.window_min_m, fit.window_max_m);
+                                 fit.window_min_m, fit.window_max_m, fit.effects.student_dof);
   }
   return ll;
 }
@@ -519,6 +519,7 @@ ReplicaPlan replicaPlan(const LandmarkObservations& obs, const JointResult& fit,
   c.effects.range_drift_m_per_scan = fit.effects.drift_m_per_scan;
   c.effects.range_drift_reference_scan = fit.effects.drift_reference_scan;
   c.effects.mixed_pixel_fraction = fit.effects.mixed_pixel_fraction;
+  c.effects.noise_student_dof = fit.effects.student_dof;
   c.mount_yaw_rad = fit.effects.angle_offset_rad;
   if (c.effects.mixed_pixel_fraction > 0.0) {
     // The fitted mixed pixels read uniformly up to the window's end: a background that far.
@@ -982,6 +983,7 @@ std::map<std::string, double> effectEstimates(Effect e, const JointResult& f) {
   if (e == Effect::angle_offset) m["angle_offset_deg"] = rad2deg(x.angle_offset_rad);
   if (e == Effect::range_noise_law) m["noise_exponent"] = x.noise_exponent;
   if (e == Effect::odometry_scale) m["odometry_scale"] = x.odometry_scale;
+  if (e == Effect::heavy_tails) m["student_dof"] = x.student_dof;
   return m;
 }
 
@@ -1003,7 +1005,8 @@ std::map<std::string, double> sceneKeys(Effect e, const JointResult& f, const Re
                                           {Effect::range_drift, x.drift_m_per_scan},
                                           {Effect::mixed_pixels, x.mixed_pixel_fraction},
                                           {Effect::angle_offset, rad2deg(x.angle_offset_rad)},
-                                          {Effect::odometry_scale, x.odometry_scale}};
+                                          {Effect::odometry_scale, x.odometry_scale},
+                                          {Effect::heavy_tails, x.student_dof}};
   if (const auto it = value.find(e); it != value.end()) k[info(e).scene_key] = it->second;
   // The fit's drift is zero at its mean scan; the simulator's at the reference scan given here.
   if (e == Effect::range_drift) k["sensor.effects.range_drift_reference_scan"] = c.effects.range_drift_reference_scan;

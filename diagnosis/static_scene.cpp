@@ -799,7 +799,7 @@ void ModelFitter::fitCellScale() {
   for (std::size_t k = 0; k < use_.size(); ++k) {
     const std::size_t i = use_[k];
     centre[k] = expected(m_, binOf(i), fitOf(i), d_.a[i], d_.t[i]) + m_.drift * (d_.t[i] - d_.t_mean);
-    shape[k] = shapeOf(m_, binOf(i), centre[k]);
+    shape[k] = shapeOf(m_, binOf(i), centreOf(m_, binOf(i), fitOf(i)));  // at the bin's location, as profile() takes it
   }
   auto ll = [&](double log_sigma) {
     const double se = std::exp(log_sigma);
@@ -1505,7 +1505,7 @@ void StaticDiagnosis::foldLikelihoods(int k, const std::vector<int>& fold, HeldO
     const Bin& bin = d_.bins[static_cast<std::size_t>(bi)];
     held.base.push_back(readingLL(mb, *scored_, bin, fb[static_cast<std::size_t>(bi)], i, floor_w));
     held.block.push_back(static_cast<std::size_t>(d_.t[i]));
-    for (std::size_t c = 0; c < candidates_.size(); ++c)
+      for (std::size_t c = 0; c < candidates_.size(); ++c)
       held.cand[c].push_back(fc[c][static_cast<std::size_t>(bi)].n > 0
                                  ? readingLL(mc[c], *scored_, bin, fc[c][static_cast<std::size_t>(bi)], i, floor_w)
                                  : kNaN);

@@ -59,10 +59,34 @@ int replicasPerCase() {
   return env && *env ? std::max(5, std::atoi(env)) : 5;
 }
 
-/// First case seed of the hidden-effect runs (LIDARCAL_DIAGNOSE_FIRST, default 21).
-int firstCase() {
+/// A stream tag from a case's name (FNV-1a: the same on every platform).
+std::uint64_t nameTag(const std::string& name) {
+  std::uint64_t h = 14695981039346656037ULL;
+  for (unsigned char ch : name) h = (h ^ ch) * 1099511628211ULL;
+  return h;
+}
+
+/// Seeds for the hidden effects, drawn from a seed the tests do not read (issue 20: data
+/// generated with seeds the tests do not choose), one stream per `tag`, disjoint in practice from
+/// the development seeds (all below 1000).
+std::vector<std::uint64_t> unreadSeeds(std::uint64_t tag, int n) {
+  auto rng = makeRng(20261125, tag);
+  std::uniform_int_distribution<std::uint64_t> seed_of(1000, 1000000);
+  std::vector<std::uint64_t> out(static_cast<std::size_t>(n));
+  for (auto& s : out) s = seed_of(rng);
+  return out;
+}
+
+/// Case seeds of the hidden-effect runs of `effect`: n consecutive from LIDARCAL_DIAGNOSE_FIRST
+/// when it is set (the long run and docs/RESULTS.md: 21-40), else drawn by unreadSeeds.
+std::vector<std::uint64_t> caseSeeds(const std::string& effect, int n) {
   const char* env = std::getenv("LIDARCAL_DIAGNOSE_FIRST");
-  return env && *env ? std::max(1, std::atoi(env)) : 21;
+  if (env && *env) {
+    std::vector<std::uint64_t> out;
+    for (int k = 0; k < n; ++k) out.push_back(static_cast<std::uint64_t>(std::max(1, std::atoi(env)) + k));
+    return out;
+  }
+  return unreadSeeds(nameTag(effect), n);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -436,7 +460,11 @@ INSTANTIATE_TEST_SUITE_P(
                  },
                  [](auto& e) { e.noise_exponent = true; }, [](const JointResult& f) { return f.effects.noise_exponent; }, 1.0, 0.2},
         Recovery{"mixed_pixels", [](auto& c) { c.effects.mixed_pixel_fraction = 0.2; }, [](auto& e) { e.mixed_pixels = true; },
-                 [](const JointResult& f) { return f.effects.mixed_pixel_fraction; }, 0.2, 0.06}),
+                 [](const JointResult& f) { return f.effects.mixed_pixel_fraction; }, 0.2, 0.06},
+        // Student-t noise of 4 degrees of freedom (same variance): about 5,000 readings hold nu
+        // to a few tenths.
+        Recovery{"student_noise", [](auto& c) { c.effects.noise_student_dof = 4.0; }, [](auto& e) { e.student_noise = true; },
+                 [](const JointResult& f) { return f.effects.student_dof; }, 4.0, 1.2}),
     [](const auto& p) { return std::string(p.param.name); });
 
 // ---------------------------------------------------------------------------------------------
@@ -453,15 +481,15 @@ std::pair<double, const char*> signedTruth(const std::string& e, const test::Hid
 }
 
 TEST_P(HiddenEffect, DiagnoseNamesItAndItsSignAndItsLikelihoodRatio) {
-  // Case seeds from 21 on: disjoint from the seeds 1-20 the method was developed on.
+  // Case seeds drawn from a seed the test does not read (caseSeeds), away from the seeds 1-40
+  // the method was developed and measured on.
   const std::string e = GetParam();
   const int n = casesPerEffect(e);
-  const int first = firstCase();
   int named = 0, signs = 0, signed_cases = 0, lr_significant = 0, lr_cases = 0;
   std::string misses;
-  for (int k = first; k < first + n; ++k) {
+  for (const std::uint64_t k : caseSeeds(e, n)) {
     SCOPED_TRACE(k);
-    const auto h = test::hiddenEffectCase(e, static_cast<std::uint64_t>(k));
+    const auto h = test::hiddenEffectCase(e, k);
     const auto s = simulation::simulateLandmarkLevel(h.config, h.seed);
     DiagnoseConfig dc;
     dc.seed = static_cast<std::uint64_t>(k);
@@ -498,7 +526,7 @@ TEST_P(HiddenEffect, DiagnoseNamesItAndItsSignAndItsLikelihoodRatio) {
 
 INSTANTIATE_TEST_SUITE_P(Sequence, HiddenEffect,
                          ::testing::Values("none", "incidence_noise", "incidence_bias", "landmark_bias", "heading_error",
-                                           "range_drift", "mixed_pixels", "angle_offset", "range_noise_law"),
+                                           "range_drift", "mixed_pixels", "angle_offset", "range_noise_law", "heavy_tails"),
                          [](const auto& p) { return std::string(p.param); });
 
 TEST(DiagnoseSequence, ResultCarriesEveryCandidateAndTheExtendedModel) {
@@ -511,7 +539,7 @@ TEST(DiagnoseSequence, ResultCarriesEveryCandidateAndTheExtendedModel) {
   std::vector<std::string> names;
   for (const auto& c : r.candidates) names.push_back(toString(c.effect));
   for (const char* e : {"incidence_noise", "incidence_bias", "landmark_bias", "heading_error", "range_drift", "mixed_pixels",
-                        "angle_offset", "range_noise_law"})
+                        "angle_offset", "range_noise_law", "heavy_tails"})
     EXPECT_NE(std::find(names.begin(), names.end(), e), names.end()) << e;
   ASSERT_EQ(r.primary_cause, "landmark_bias");
   // The offsets are recovered (relative to their mean, as simulated): the estimates explain most
@@ -610,7 +638,12 @@ TEST_P(StaticHiddenEffect, DiagnoseNamesWhatTheTruthAllows) {
   DiagnoseConfig dc;
   dc.replicas = 9;
   dc.static_range_offset_m = c.known_offset_m;
-  const auto r = diagnoseStatic(staticRoom(c.fx, c.noise, 7, 150, c.step_error_fraction), dc);
+  // One room whose seed comes from a seed this test does not read (the rates over seeds 101-110
+  // are in docs/RESULTS.md).
+  const std::uint64_t seed = unreadSeeds(nameTag(c.name), 1).front();
+  dc.seed = seed;
+  const auto r = diagnoseStatic(staticRoom(c.fx, c.noise, seed, 150, c.step_error_fraction), dc);
+  SCOPED_TRACE(seed);
   ASSERT_STREQ(r.status.name(), "ok") << r.status.message;
   if (!c.also.empty()) {
     EXPECT_TRUE(c.allows(r.primary_cause)) << r.primary_cause << ": " << r.decision;
@@ -868,7 +901,7 @@ TEST_P(StaticTails, DiagnoseNamesThePhysicalCauseAndTheBeamsThatCarryTheTails) {
   const TailTruth& c = GetParam();
   int right = 0;
   std::string log;
-  for (std::uint64_t seed = 301; seed < 305; ++seed) {
+  for (const std::uint64_t seed : unreadSeeds(nameTag(c.effect) + 301, 4)) {
     DiagnoseConfig dc;
     dc.replicas = 5;
     dc.seed = seed;
@@ -953,7 +986,7 @@ INSTANTIATE_TEST_SUITE_P(Room, ReadingGrid, ::testing::Values(0.002, 0.005, 0.01
 TEST(DiagnoseStatic, MixedPixelsAtTwoToTenPercentOfEdgeReadingsAreNamed) {
   int right = 0;
   std::string log;
-  for (std::uint64_t seed = 321; seed < 325; ++seed) {
+  for (const std::uint64_t seed : unreadSeeds(321, 4)) {
     std::uniform_real_distribution<double> u(0.0, 1.0);
     auto rng = makeRng(seed, 5);
     RangeEffects fx;
