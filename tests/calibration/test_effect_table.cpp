@@ -48,8 +48,9 @@ TEST(EffectTable, TheJointRefinementHasATermExactlyForTheEffectsTheTableSays) {
 }
 
 TEST(EffectTable, EffectNamesListsTheSelectedNamesInTableOrder) {
-  EXPECT_EQ(effectNames([](const EffectInfo& i) { return i.static_statistic && !i.sequence_statistic; }),
-            "heavy_tails, quantisation");
+  EXPECT_EQ(effectNames([](const EffectInfo& i) { return i.static_statistic && !i.sequence_statistic; }), "quantisation");
+  EXPECT_EQ(effectNames([](const EffectInfo& i) { return i.static_statistic && i.sequence_statistic && !i.joint_term; }), "");
+  EXPECT_EQ(effectNames([](const EffectInfo& i) { return !i.static_statistic && !i.sequence_statistic; }), "dark_surface");
   EXPECT_EQ(effectNames([](const EffectInfo&) { return false; }), "");
 }
 

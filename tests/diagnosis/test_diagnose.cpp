@@ -529,6 +529,33 @@ INSTANTIATE_TEST_SUITE_P(Sequence, HiddenEffect,
                                            "range_drift", "mixed_pixels", "angle_offset", "range_noise_law", "heavy_tails"),
                          [](const auto& p) { return std::string(p.param); });
 
+TEST(DiagnoseSequence, APhysicalEffectUnderHeavyTailsIsNamedAndTheTailsStayBesideIt) {
+  // A drift of 3-4 cm over the sequence in Student-t noise (nu 3.5): the t explains much of the
+  // residuals, but the named cause must be physical (issue 20). Either the drift gains most (as
+  // in the two cases here), or the t comes first and the drift holds beside it (refitted with the
+  // t, held out: SequenceDiagnosis::refineCause). Two cases whose seeds come from a seed this test
+  // does not read.
+  for (const std::uint64_t k : unreadSeeds(nameTag("drift under tails"), 2)) {
+    SCOPED_TRACE(k);
+    auto h = test::hiddenEffectCase("range_drift", k);
+    h.config.effects.noise_student_dof = 3.5;
+    const auto s = simulation::simulateLandmarkLevel(h.config, h.seed);
+    DiagnoseConfig dc;
+    dc.seed = k;
+    dc.replicas = 5;
+    dc.closeness_replicas = 1;
+    const auto r = diagnoseSequence(s.obs, dc);
+    ASSERT_STREQ(r.status.name(), "ok") << r.status.message;
+    EXPECT_EQ(r.primary_cause, "range_drift") << r.decision;
+    for (const auto& c : r.candidates)
+      if (c.effect == Effect::heavy_tails) {
+        EXPECT_TRUE(c.significant);
+        EXPECT_LT(c.estimates.at("student_dof"), 10.0);  // fitted without the drift, the t is wider than 3.5
+      }
+    std::printf("case %llu: %s (%s)\n", static_cast<unsigned long long>(k), r.primary_cause.c_str(), r.decision.c_str());
+  }
+}
+
 TEST(DiagnoseSequence, ResultCarriesEveryCandidateAndTheExtendedModel) {
   const auto h = test::hiddenEffectCase("landmark_bias", 3);
   const auto s = simulation::simulateLandmarkLevel(h.config, h.seed);
