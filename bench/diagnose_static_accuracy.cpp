@@ -3,7 +3,7 @@
 // coarser quantisation grids, the clean room (its false-positive rate), and the tail cases of
 // issue 20 (extra-wide errors only at grazing beams, at depth edges, on a dark wall; tests use
 // seeds 301-304), over many seeds.
-//   build/bench/diagnose_static_accuracy [--seeds 10] [--clean-seeds 20] [--first 101] [--replicas 19] [--only NAME]
+//   build/bench/diagnose_static_accuracy [--seeds 10] [--clean-seeds 20] [--first 101] [--replicas 19] [--only NAME] [--verbose]
 
 #include <cstdio>
 #include <map>
@@ -14,6 +14,17 @@
 
 #include "diagnosis/diagnose_cases.hpp"
 #include "diagnosis/static_scene.hpp"
+
+/// One case's candidates, one line each (stderr): what decided the verdict.
+void printCandidates(const char* name, int seed, const lidarcal::diagnosis::DiagnosisResult& r) {
+  std::fprintf(stderr, "%s seed %d: %s\n", name, seed, r.primary_cause.c_str());
+  for (const auto& c : r.candidates)
+    std::fprintf(stderr, "  %-16s gain %+.4f +- %.4f  p_heldout %.2g  score_p %.2g  p_holm %.2g  %s\n", toString(c.effect),
+                 c.heldout_gain_nats_per_point, c.heldout_gain_se, c.p_heldout, c.score_p_value, c.p_holm,
+                 c.significant ? "significant" : "");
+  for (const auto& c : r.candidates)
+    for (const auto& [k, v] : c.estimates) std::fprintf(stderr, "    %s %s = %.6g\n", toString(c.effect), k.c_str(), v);
+}
 
 /// Extra-wide errors (10 % of the readings of one class of beams, 5 cm): how often the physical
 /// cause is named and the tails put in the right class of beams.
@@ -58,6 +69,8 @@ int main(int argc, char** argv) {
   app.add_option("--replicas", replicas, "bootstrap replicas");
   std::string only;
   app.add_option("--only", only, "run only the cases whose name contains this (and no tail cases)");
+  bool verbose = false;
+  app.add_flag("--verbose", verbose, "print every case's candidates (held-out gain, p-values) to stderr");
   CLI11_PARSE(app, argc, argv);
   std::vector<test::StaticCase> cases = test::staticCases();
   for (double grid : {0.005, 0.01}) {
@@ -81,6 +94,7 @@ int main(int argc, char** argv) {
       const auto r = diagnosis::diagnoseStatic(test::staticRoom(c.fx, c.noise, static_cast<std::uint64_t>(seed), 150, c.step_error_fraction), dc);
       const bool ok = c.allows(r.primary_cause);
       right += ok;
+      if (verbose) printCandidates(c.name, seed, r);
       if (!ok) ++named[r.primary_cause];
     }
     std::string other;

@@ -160,7 +160,7 @@ JointProblem::JointProblem(const LandmarkObservations& obs, const JointInit& ini
   // one residual sqrt(n) (ybar - f) / sigma carries all they say about the parameters: the cost
   // of a solve no longer grows with the scans per stop. Not when a term depends on the scan
   // (drift) or on each reading (mixed-pixel weights). The robust loss acts on the group.
-  pool_ = config.pool_repeated_scans && !fx_.drift && !fx_.mixed_pixels;
+  pool_ = config.pool_repeated_scans && !fx_.drift && !fx_.mixed_pixels && !fx_.student_noise;
 }
 
 void JointProblem::initialiseModel() {
@@ -211,6 +211,7 @@ void JointProblem::initialiseParameters() {
   globals_ = take(3);
   scale_ = take(1);
   mixed_fraction_ = fx_.mixed_pixels ? 0.05 : 0.0;
+  dof_ = fx_.student_noise ? 10.0 : 0.0;
 }
 
 /// The terms that are on start from the given estimates.
@@ -232,6 +233,7 @@ void JointProblem::startEffectTerms() {
   if (fx_.odometry_scale) *scale_ = e0.odometry_scale;
   if (fx_.incidence_noise) gamma_ = e0.incidence_noise_exponent;
   if (fx_.mixed_pixels && e0.mixed_pixel_fraction > 0.0) mixed_fraction_ = e0.mixed_pixel_fraction;
+  if (fx_.student_noise && e0.student_dof > 2.0) dof_ = e0.student_dof;
 }
 
 /// The window of the outlier floor and the mixed pixels: the sensor's, or 1.25 x the largest reading.
@@ -313,9 +315,18 @@ std::vector<double> JointProblem::residualsNow(const BiasPolynomial& f) const {
 }
 
 /// Mixed pixels (EM): the responsibility of the uniform for each outermost beam; the fit weighs
-/// a reading by 1 - responsibility.
+/// a reading by 1 - responsibility. Student-t noise (EM for the t as a scale mixture of
+/// Gaussians): a reading of residual r weighs (nu + 1) / (nu + (r / s)^2), s = sigma sqrt((nu - 2)
+/// / nu) the t's scale; the residual is r / s, so the weight carries nu / (nu - 2) too.
 void JointProblem::updateResponsibilities(const std::vector<double>& res) {
   weight_.assign(readings_.size(), 1.0);
+  if (fx_.student_noise && dof_ > 2.0) {
+    const double to_scale = dof_ / (dof_ - 2.0);
+    for (std::size_t i = 0; i < readings_.size(); ++i) {
+      const double u2 = res[i] * res[i] / (sigma_[i] * sigma_[i]) * to_scale;
+      weight_[i] = (dof_ + 1.0) / (dof_ + u2) * to_scale;
+    }
+  }
   if (!fx_.mixed_pixels) return;
   for (std::size_t i = 0; i < readings_.size(); ++i) {
     if (!readings_[i].edge) continue;
@@ -543,6 +554,7 @@ bool JointProblem::reestimateNoise(int outer) {
   const std::vector<double> res = residualsNow(f);
   if (fx_.mixed_pixels) reestimateMixedFraction(res);
   fitNoiseLaw(res, f);
+  if (fx_.student_noise) fitStudent(res, f);
   const double s_now = noiseSize(out_.model.noise);
   if (previous_noise_size_ > 0.0 && std::abs(s_now - previous_noise_size_) <= 1e-2 * previous_noise_size_) return true;
   previous_noise_size_ = s_now;
@@ -593,6 +605,45 @@ void JointProblem::fitNoiseLaw(const std::vector<double>& res, const BiasPolynom
       gamma_ = goldenMax([&](double g) { return profileNoise(out_.model.noise, g, in, res, f, nullptr); }, -1.0, 4.0);
   }
   profileNoise(out_.model.noise, gamma_, in, res, f, &out_.model.noise.sigma_e);
+}
+
+/// Student-t noise: the scale sigma_e of the law's shape and nu, by EM on the readings within 30
+/// sigma (beyond, the outlier floor's): t scale from the weighted squares, then nu by golden
+/// section of the t log-likelihood (ECM), ten rounds.
+void JointProblem::fitStudent(const std::vector<double>& res, const BiasPolynomial& f) {
+  std::vector<double> x;  // residual over the law's shape
+  for (std::size_t i = 0; i < readings_.size(); ++i) {
+    const double h = std::max(noiseShape(out_.model.noise, f, geo_[i].d, geo_[i].cos_inc, gamma_), 1e-9);
+    if (std::abs(res[i]) <= 30.0 * sigma_[i]) x.push_back(res[i] / h);
+  }
+  if (x.size() < 10) return;
+  // A polynomial law is not a scale times a shape: there nu alone is fitted, its scale held.
+  const bool scaled = config_.noise != NoiseKind::polynomial;
+  if (!scaled) {
+    x.clear();
+    for (std::size_t i = 0; i < readings_.size(); ++i)
+      if (std::abs(res[i]) <= 30.0 * sigma_[i]) x.push_back(res[i] / sigma_[i]);
+  }
+  double nu = dof_ > 2.0 ? dof_ : 10.0;
+  double t2 = out_.model.noise.sigma_e * out_.model.noise.sigma_e * (nu - 2.0) / nu;  // t scale squared
+  for (int round = 0; round < 10; ++round) {
+    double s = 0.0;
+    for (double v : x) s += (nu + 1.0) / (nu + v * v / t2) * v * v;
+    t2 = scaled ? std::max(s / static_cast<double>(x.size()), 1e-300) : (nu - 2.0) / nu;
+    const double t = std::sqrt(t2);
+    const double log_nu2 = goldenMax(
+        [&](double l) {
+          const double n = 2.0 + std::exp(l);
+          double ll = 0.0;
+          const double sd = scaled ? t * std::sqrt(n / (n - 2.0)) : 1.0;  // the t's standard deviation
+          for (double v : x) ll += studentLogDensity(v, sd, n);
+          return ll;
+        },
+        std::log(0.05), std::log(300.0));
+    nu = 2.0 + std::exp(log_nu2);
+  }
+  dof_ = nu;
+  if (scaled) out_.model.noise.sigma_e = std::sqrt(t2 * nu / (nu - 2.0));
 }
 
 /// Profile log-likelihood (up to constants) of the law n with incidence exponent g over the
@@ -670,10 +721,11 @@ void JointProblem::reportEffects() {
                                                                      : 2.0;
   e.mixed_pixel_fraction = fx_.mixed_pixels ? mixed_fraction_ : 0.0;
   e.odometry_scale = fx_.odometry_scale ? *scale_ : 0.0;
+  e.student_dof = fx_.student_noise ? dof_ : 0.0;
   e.heading_rms_rad = out_.heading_scatter_rad;
   out_.effect_parameters = (fx_.landmark_offsets ? static_cast<int>(offsets_.size()) - 1 : 0) + (fx_.drift ? 1 : 0) +
                            (fx_.angle_offset ? 1 : 0) + (fx_.incidence_bias ? 1 : 0) + (fx_.incidence_noise ? 1 : 0) +
-                           (fx_.noise_exponent ? 1 : 0) + (fx_.mixed_pixels ? 1 : 0) + (fx_.odometry_scale ? 1 : 0) +
+                           (fx_.noise_exponent ? 1 : 0) + (fx_.mixed_pixels ? 1 : 0) + (fx_.odometry_scale ? 1 : 0) + (fx_.student_noise ? 1 : 0) +
                            (fx_.estimate_heading ? static_cast<int>(poses_.size()) : 0);
 }
 
@@ -693,7 +745,7 @@ void JointProblem::reportLikelihood() {
     const double r = (readings_[i].y_m - mean) / s;
     out_.neg_log_likelihood -= readingLogLikelihood(readings_[i].y_m, mean, s,
                                                     readings_[i].edge ? e.mixed_pixel_fraction : 0.0,
-                                                    config_.outlier_floor, out_.window_min_m, window_max_);
+                                                    config_.outlier_floor, out_.window_min_m, window_max_, e.student_dof);
     out_.residual_rms_m += r * r * s * s;
     if (std::abs(r) > config_.huber_sigmas * 2.0) ++out_.outliers;
   }

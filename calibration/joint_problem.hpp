@@ -69,6 +69,7 @@ class JointProblem {
   bool reestimateNoise(int outer);
   void reestimateMixedFraction(const std::vector<double>& res);
   void fitNoiseLaw(const std::vector<double>& res, const BiasPolynomial& f);
+  void fitStudent(const std::vector<double>& res, const BiasPolynomial& f);
   double profileNoise(NoiseModel n, double g, const std::vector<std::size_t>& in, const std::vector<double>& res,
                       const BiasPolynomial& f, double* sigma_e) const;
 
@@ -102,6 +103,7 @@ class JointProblem {
   double* scale_ = nullptr;                ///< odometry scale
   double gamma_ = 0.0;                     ///< incidence noise exponent
   double mixed_fraction_ = 0.0;
+  double dof_ = 0.0;                       ///< Student-t degrees of freedom (0: Gaussian noise)
 
   double window_max_ = 0.0;  ///< upper end of the reading window
   double previous_noise_size_ = 0.0;  ///< size of the noise law before the last re-estimation
@@ -112,7 +114,7 @@ class JointProblem {
   std::vector<Reading> readings_;
   std::vector<BeamGeometry> geo_;
   std::vector<double> sigma_;
-  std::vector<double> weight_;  ///< 1 - mixed-pixel responsibility
+  std::vector<double> weight_;  ///< 1 - mixed-pixel responsibility, or the Student t's EM weight
 };
 
 }  // namespace lidarcal::calibration::joint

@@ -80,10 +80,18 @@ void JointConfig::validate() const {
       throw std::invalid_argument("JointConfig: known pose of stop " + std::to_string(k) + " not finite");
 }
 
+double studentLogDensity(double x, double sigma, double nu) {
+  const double s = sigma * std::sqrt((nu - 2.0) / nu), u = x / s;
+  return std::lgamma(0.5 * (nu + 1.0)) - std::lgamma(0.5 * nu) - 0.5 * std::log(nu * kPi) - std::log(s) -
+         0.5 * (nu + 1.0) * std::log1p(u * u / nu);
+}
+
 double readingLogLikelihood(double y, double mean, double sigma, double mixed_fraction, double outlier_floor,
-                            double window_min, double window_max) {
+                            double window_min, double window_max, double student_dof) {
   const double z = (y - mean) / sigma;
-  const double log_normal = -0.5 * (kLog2Pi + z * z) - std::log(sigma);
+  // The core density: Gaussian, or the Student t (named log_normal all the same below).
+  const double log_normal = student_dof > 2.0 ? studentLogDensity(y - mean, sigma, student_dof)
+                                              : -0.5 * (kLog2Pi + z * z) - std::log(sigma);
   if (mixed_fraction <= 0.0 && outlier_floor <= 0.0) return log_normal;
   // Mixture densities, computed relative to the normal density to stay finite far in the tails.
   double mixed = 0.0;
@@ -109,7 +117,7 @@ bool JointEffects::enable(Effect e) {
     case Effect::angle_offset: angle_offset = true; return true;
     case Effect::range_noise_law: noise_exponent = true; return true;
     case Effect::odometry_scale: odometry_scale = true; return true;
-    case Effect::heavy_tails:
+    case Effect::heavy_tails: student_noise = true; return true;
     case Effect::quantisation:
     case Effect::dark_surface: return false;
   }
@@ -153,7 +161,7 @@ std::vector<JointReading> evaluateJoint(const LandmarkObservations& obs, const J
                                  e.incidence_bias_m, g.cos_inc);
       r.sigma_m = std::max(joint::readingSigma(fit.model.noise, fit.model.bias, g.d, g.cos_inc, gamma), 1e-6);
       r.log_likelihood = readingLogLikelihood(r.y_m, r.mean_m, r.sigma_m, r.edge ? e.mixed_pixel_fraction : 0.0,
-                                              config.outlier_floor, fit.window_min_m, fit.window_max_m);
+                                              config.outlier_floor, fit.window_min_m, fit.window_max_m, e.student_dof);
       out.push_back(r);
     }
   }

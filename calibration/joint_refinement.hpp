@@ -44,6 +44,9 @@ struct JointEffects {
   bool noise_exponent = false;    ///< noise sigma_e f(d)^kappa, kappa estimated between solves (squared law: 2)
   bool mixed_pixels = false;      ///< outermost beams: mixture with a uniform, fraction estimated between solves (EM)
   bool odometry_scale = false;    ///< commanded steps scaled by (1 + s), s estimated (the true step length differs)
+  /// Noise a Student t of nu degrees of freedom (unit variance times sigma), nu estimated between
+  /// solves; the readings weighted by the t's EM weights (heavy tails, seed 004's pooled t).
+  bool student_noise = false;
   /// Whether a term in the mean of the readings is on (they need the extended residual).
   bool anyMean() const { return landmark_offsets || drift || angle_offset || incidence_bias; }
   /// Switches on the term that models `e` (heading_error: the per-stop heading, on by default);
@@ -63,6 +66,7 @@ struct JointEffectEstimates {
   double mixed_pixel_fraction = 0.0;        ///< of the outermost beams of the sightings
   double odometry_scale = 0.0;              ///< s: true steps are (1 + s) times the commanded ones
   double heading_rms_rad = 0.0;             ///< RMS of the refined minus the commanded headings, radians
+  double student_dof = 0.0;                 ///< nu of the Student-t noise (0: Gaussian)
 };
 
 /// Least mixed-pixel fraction the refinement's EM step keeps (a fraction at it: no reading was
@@ -248,8 +252,14 @@ std::vector<JointReading> evaluateJoint(const LandmarkObservations& obs, const J
 /// Log-likelihood of a reading y with predicted mean and standard deviation, as refineJoint
 /// reports it: Gaussian, mixed with a uniform over [mean, window_max] with weight
 /// `mixed_fraction` (mixed pixels) and with a uniform over the window with weight `outlier_floor`.
+/// `student_dof` > 2: a Student t of that many degrees of freedom and standard deviation sigma
+/// instead of the Gaussian.
 double readingLogLikelihood(double y_m, double mean_m, double sigma_m, double mixed_fraction, double outlier_floor,
-                            double window_min_m, double window_max_m);
+                            double window_min_m, double window_max_m, double student_dof = 0.0);
+
+/// Log-density of a Student t with nu > 2 degrees of freedom, mean 0 and standard deviation
+/// sigma, at x (the simulator's unit-variance t scaled by sigma).
+double studentLogDensity(double x, double sigma, double nu);
 
 /// Distance along a ray from (px, py) at angle a to the circle (cx, cy, r); for a ray that
 /// misses, the distance to the point of closest approach (continuous at the tangent).

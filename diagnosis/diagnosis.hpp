@@ -100,7 +100,7 @@ struct CandidateResult {
   double heldout_gain_se = 0.0;           ///< its standard error (blocks: scans)
   double delta_aic = 0.0;                 ///< AIC(extended) - AIC(baseline); negative favours the effect
   int parameters = 0;                     ///< parameters the effect adds
-  bool significant = false;               ///< Holm p < alpha and a positive held-out gain (see nameCause: direct effects)
+  bool significant = false;               ///< Holm p < alpha and a positive held-out gain (see nameCause)
   bool identifiable = true;               ///< the data can estimate it apart from the baseline's parameters
   bool applicable = true;                 ///< the data can show it at all (e.g. no heading in a static scan)
   double information_ratio = 1.0;         ///< information kept after the nuisance parameters (0..1)

@@ -56,7 +56,7 @@ void setScore(CandidateResult& r, const std::vector<Discrepancy>& battery);
 ///   std::size_t candidateCount(); void heldOut(HeldOut&); const char* noHeldOut()   3.
 ///   void beforeCandidates(DiagnosisResult&); CandidateResult candidate(std::size_t, const HeldOut&, const DiagnosisResult&);
 ///   void afterCandidates(DiagnosisResult&)
-///   std::vector<std::pair<Effect, Effect>> nestedEffects(); std::vector<Effect> directEffects()   4. (see nameCause)
+///   std::vector<std::pair<Effect, Effect>> nestedEffects()   4. (see nameCause)
 ///   void refineCause(DiagnosisResult&)   4. after nameCause: a symptom (heavy_tails) replaced by
 ///                                           the physical cause that explains it, where one does
 ///   Closeness closenessBaseline(const DiagnosisResult&); void extend(std::size_t, DiagnosisResult&)   5.
@@ -103,7 +103,7 @@ void runDiagnosis(Mode& mode, const DiagnoseConfig& config, const std::vector<Ef
   reportProgress(config, "candidate tests", candidates.size(), candidates.size());
   mode.afterCandidates(out);
   // 4. The cause.
-  out.primary_cause = nameCause(out.candidates, config.alpha, out.decision, mode.nestedEffects(), {}, mode.directEffects());
+  out.primary_cause = nameCause(out.candidates, config.alpha, out.decision, mode.nestedEffects());
   mode.refineCause(out);
   // 5. The extended model and how close its simulation comes to the data.
   reportProgress(config, "extended model", 0, 0);

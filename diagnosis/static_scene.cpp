@@ -58,6 +58,7 @@ struct Data {
   double t_mean = 0.0;
   double window_min = 0.0, window_max = 1.0;
   bool intensity = false;       // the bins carry an intensity
+  std::vector<double> y_cell;   // dequantised data: the reading each y was spread from (its grid cell's centre)
 };
 
 /// Calls fn(i, bin, fit) for every reading i in a bin that has a location fit, in reading order.
@@ -624,19 +625,31 @@ double expected(const Model& m, const Bin& b, const BinFit& f, double a, double 
   return f.at(a, t) + (centreOf(m, b, f) - f.m);
 }
 
+/// Probability that a normal variable (mean mu, std. dev. s) falls in [lo, hi], computed on
+/// the side of the tail it lies in (no cancellation far from the mean).
+double normalMass(double lo, double hi, double mu, double s) {
+  const double a = (lo - mu) / (s * std::sqrt(2.0)), b = (hi - mu) / (s * std::sqrt(2.0));
+  if (a > 0.0) return 0.5 * (std::erfc(a) - std::erfc(b));
+  if (b < 0.0) return 0.5 * (std::erfc(-b) - std::erfc(-a));
+  return 1.0 - 0.5 * (std::erfc(b) + std::erfc(-a));
+}
+
 /// Log-likelihood of one reading (predictive: the bin's location is known to 1 / n_train).
 double readingLL(const Model& m, const Data& d, const Bin& b, const BinFit& f, std::size_t i, double floor_weight) {
   const double centre = expected(m, b, f, d.a[i], d.t[i]) + m.drift * (d.t[i] - d.t_mean);
-  double sigma = m.sigma_e * shapeOf(m, b, centre);
-  // Readings rounded to a grid q: the rounding adds its own variance q^2 / 12 at every range, a
-  // floor under the noise law (a density like every other model's, so that held-out
-  // likelihoods compare like with like; a probability per grid cell would not).
-  if (m.q > 0.0) sigma = std::sqrt(sigma * sigma + m.q * m.q / 12.0);
-  sigma = std::max(sigma * std::sqrt(1.0 + 1.0 / std::max(f.n, 1.0)), 1e-6);
+  const double sigma = std::max(m.sigma_e * shapeOf(m, b, centre) * std::sqrt(1.0 + 1.0 / std::max(f.n, 1.0)), 1e-6);
   const double y = d.y[i];
   const double z = (y - centre) / sigma;
   double dens;
-  if (m.dof > 0.0) {
+  if (m.q > 0.0) {
+    // Readings rounded to a grid q: the probability of the reading's cell [y - q/2, y + q/2]
+    // under the unrounded noise, over q. That is the density of the reading plus a uniform
+    // rounding error, so it compares like with like with the other models' densities; the
+    // noise scale is the unrounded one (ModelFitter::fitCellScale), so the rounding's
+    // variance is not counted twice.
+    const double cell = d.y_cell.empty() ? y : d.y_cell[i];
+    dens = normalMass(cell - 0.5 * m.q, cell + 0.5 * m.q, centre, sigma) / m.q;
+  } else if (m.dof > 0.0) {
     const double nu = m.dof, s = sigma * std::sqrt((nu - 2.0) / nu), x = (y - centre) / s;
     dens = std::exp(std::lgamma(0.5 * (nu + 1.0)) - std::lgamma(0.5 * nu) - 0.5 * std::log(nu * kPi) -
                     0.5 * (nu + 1.0) * std::log1p(x * x / nu)) / s;
@@ -668,7 +681,7 @@ class ModelFitter {
   void fitDrift();
   void fitMixed();
   void fitDof();
-  void fitFloorScale();
+  void fitCellScale();
 
   const Data& d_;
   const std::vector<bool>& train_;
@@ -776,24 +789,31 @@ void ModelFitter::fitDof() {
   m_.dof = 2.0 + std::exp(ternaryMax(ll, std::log(0.1), std::log(300.0), 50));
 }
 
-/// sigma_e under the rounding's variance floor (readingLL): the Gaussian profile's sigma_e
-/// holds the rounding's variance too, which the floor now carries. ML on the per-bin sums.
-void ModelFitter::fitFloorScale() {
-  refresh();
-  const double floor2 = m_.q * m_.q / 12.0;
+/// sigma_e under the rounded model (readingLL: a normal cell probability per reading): the
+/// Gaussian profile's sigma_e holds the rounding's variance too, the cells carry it now. ML over
+/// the training readings the noise scale is fitted on (outliers beyond 6 sigma left out), about
+/// their bin's location like the profile's (readingLL's widening for a held-out reading is not
+/// applied: a training reading is part of its bin's mean).
+void ModelFitter::fitCellScale() {
+  std::vector<double> shape(use_.size()), centre(use_.size());
+  for (std::size_t k = 0; k < use_.size(); ++k) {
+    const std::size_t i = use_[k];
+    centre[k] = expected(m_, binOf(i), fitOf(i), d_.a[i], d_.t[i]) + m_.drift * (d_.t[i] - d_.t_mean);
+    shape[k] = shapeOf(m_, binOf(i), centreOf(m_, binOf(i), fitOf(i)));  // at the bin's location, as profile() takes it
+  }
   auto ll = [&](double log_sigma) {
-    const double s2 = std::exp(2.0 * log_sigma);
+    const double se = std::exp(log_sigma);
     double s = 0.0;
-    for (std::size_t b = 0; b < d_.bins.size(); ++b) {
-      if (bin_n_[b] == 0.0) continue;
-      const double h = std::max(shapeOf(m_, d_.bins[b], centreOf(m_, d_.bins[b], fits_[b])), 1e-9);
-      const double v = s2 * h * h + floor2;
-      s -= 0.5 * (bin_n_[b] * std::log(v) + bin_ss_[b] / v);
+    for (std::size_t k = 0; k < use_.size(); ++k) {
+      const std::size_t i = use_[k];
+      if (weight_[i] < 0.5) continue;
+      const double sigma = std::max(se * shape[k], 1e-6);
+      s += std::log(std::max(normalMass(d_.y[i] - 0.5 * m_.q, d_.y[i] + 0.5 * m_.q, centre[k], sigma), 1e-300));
     }
     return s;
   };
   const double top = std::log(std::max(m_.sigma_e, 1e-9));
-  m_.sigma_e = std::exp(ternaryMax(ll, top - std::log(50.0), top + std::log(1.2), 60));
+  m_.sigma_e = std::exp(ternaryMax(ll, top - std::log(1000.0), top + std::log(1.2), 60));
 }
 
 Model ModelFitter::fit(double q_detected) {
@@ -818,7 +838,7 @@ Model ModelFitter::fit(double q_detected) {
     if (fl_.mixed) fitMixed();
   }
   if (fl_.dof) fitDof();
-  if (fl_.quant && m_.q > 0.0) fitFloorScale();
+  if (fl_.quant && m_.q > 0.0) fitCellScale();
   return m_;
 }
 
@@ -930,6 +950,22 @@ double detectGrid(const std::vector<double>& y) {
   for (double q : {1e-4, 2.5e-4, 5e-4, 1e-3, 2e-3, 5e-3, 1e-2})
     if (gridResultant(y, q) > 0.9) best = q;
   return best;
+}
+
+/// Readings on a grid q scored as densities: every model's likelihood is evaluated at the reading
+/// plus a uniform draw over its grid cell (uniform dequantisation; Theis, van den Oord & Bethge,
+/// "A note on the evaluation of generative models", ICLR 2016). A continuous density evaluated
+/// at the grid points themselves is not comparable with the rounded model's cell probability
+/// (readingLL): where the noise is finer than the grid it is higher than any probability over
+/// q allows. On the dequantised readings both are densities of the same variable, and the
+/// rounded model is the true one when the readings were rounded. Fits stay on the readings.
+Data dequantise(const Data& d, double q, std::uint64_t seed) {
+  Data r = d;
+  r.y_cell = d.y;
+  auto gen = makeRng(seed, 0x0ULL);
+  std::uniform_real_distribution<double> cell(-0.5 * q, 0.5 * q);
+  for (double& y : r.y) y += cell(gen);
+  return r;
 }
 
 /// The baseline's readings, simulated with the project's simulator (reading level): the same
@@ -1206,6 +1242,8 @@ class StaticDiagnosis {
   StaticDiagnosis(const StaticScans& data, const DiagnoseConfig& config, const std::vector<Effect>& candidates,
                   std::vector<WallLine>* walls_out)
       : data_(data), config_(config), candidates_(candidates), walls_out_(walls_out) {}
+  StaticDiagnosis(const StaticDiagnosis&) = delete;  // scored_ points into the object
+  StaticDiagnosis& operator=(const StaticDiagnosis&) = delete;
 
   bool fitBaseline(DiagnosisResult& out);
   std::map<std::string, double> measuredStatistics(DiagnosisResult& out);
@@ -1217,8 +1255,6 @@ class StaticDiagnosis {
   CandidateResult candidate(std::size_t c, const HeldOut& held, const DiagnosisResult& out);
   void afterCandidates(DiagnosisResult& out);
   std::vector<std::pair<Effect, Effect>> nestedEffects() const { return {}; }
-  /// The reading grid is seen in the readings (the `quantisation` statistic).
-  std::vector<Effect> directEffects() const { return {Effect::quantisation}; }
   void refineCause(DiagnosisResult& out);
   void reRankUnderTails(DiagnosisResult& out);
   Closeness closenessBaseline(const DiagnosisResult& out) const { return closenessOf(out.measured, sim_base_); }
@@ -1259,6 +1295,8 @@ class StaticDiagnosis {
   bool a0_identified_ = false;
   WallFit w0_, wb_;               // the wall model without and with the incidence bias
   double q_ = 0.0;                // reading grid (0: none)
+  Data dequantised_;              // d_ with every reading spread over its grid cell (q_ > 0)
+  const Data* scored_ = &d_;      // the readings every likelihood is scored on (d_ or dequantised_)
   std::size_t edges_ = 0;         // bins at depth discontinuities
   SimSample sim_base_;            // baseline replicas (closeness)
   std::vector<Flags> flags_;      // per candidate
@@ -1280,6 +1318,10 @@ bool StaticDiagnosis::fitBaseline(DiagnosisResult& out) {
   for (std::size_t i = 0; i < d_.y.size(); ++i)
     if (d_.bin_of[i] >= 0) used_y.push_back(d_.y[i]);
   q_ = detectGrid(used_y);
+  if (q_ > 0.0) {
+    dequantised_ = dequantise(d_, q_, deriveSeed(config_.seed, 0xDE0A7ULL));
+    scored_ = &dequantised_;
+  }
   for (const auto& b : d_.bins) edges_ += b.edge;
   describeBaseline(out);
   if (walls_out_) reportWalls();
@@ -1461,11 +1503,11 @@ void StaticDiagnosis::foldLikelihoods(int k, const std::vector<int>& fold, HeldO
     const int bi = d_.bin_of[i];
     if (bi < 0 || train[static_cast<std::size_t>(d_.t[i])] || fb[static_cast<std::size_t>(bi)].n == 0) continue;
     const Bin& bin = d_.bins[static_cast<std::size_t>(bi)];
-    held.base.push_back(readingLL(mb, d_, bin, fb[static_cast<std::size_t>(bi)], i, floor_w));
+    held.base.push_back(readingLL(mb, *scored_, bin, fb[static_cast<std::size_t>(bi)], i, floor_w));
     held.block.push_back(static_cast<std::size_t>(d_.t[i]));
-    for (std::size_t c = 0; c < candidates_.size(); ++c)
+      for (std::size_t c = 0; c < candidates_.size(); ++c)
       held.cand[c].push_back(fc[c][static_cast<std::size_t>(bi)].n > 0
-                                 ? readingLL(mc[c], d_, bin, fc[c][static_cast<std::size_t>(bi)], i, floor_w)
+                                 ? readingLL(mc[c], *scored_, bin, fc[c][static_cast<std::size_t>(bi)], i, floor_w)
                                  : kNaN);
   }
 }
@@ -1490,7 +1532,7 @@ void StaticDiagnosis::tailFold(int k, const std::vector<int>& fold) {
   for (std::size_t t = 0; t < data_.scans; ++t) train[t] = fold[t] != k;
   const std::vector<BinFit> fits = fitBins(d_, train, 0.0);
   const auto fit_on = tailResiduals(d_, fits, train, false, nullptr);
-  const auto test = tailResiduals(d_, fits, train, true, &tails_.block);
+  const auto test = tailResiduals(*scored_, fits, train, true, &tails_.block);
   // Warm starts: the full model from the pooled one, each model without a covariate from the
   // full one, the robust effects from the pooled one.
   std::vector<TailModel> models;
@@ -1753,7 +1795,7 @@ double StaticDiagnosis::inSample(const Flags& fl, Model* fitted) const {
   const Model mm = fitModel(d_, {}, fl, q_, ff);
   if (fitted) *fitted = mm;
   double s = 0.0;
-  forEachFitted(d_, ff, [&](std::size_t i, const Bin& b, const BinFit& bf) { s += readingLL(mm, d_, b, bf, i, config_.outlier_floor); });
+  forEachFitted(d_, ff, [&](std::size_t i, const Bin& b, const BinFit& bf) { s += readingLL(mm, *scored_, b, bf, i, config_.outlier_floor); });
   return s;
 }
 
@@ -1777,7 +1819,10 @@ CandidateResult StaticDiagnosis::candidate(std::size_t c, const HeldOut& held, c
     return r;
   }
   setHeldOutGain(r, gain);
-  r.p_value = combinedPValue(r.p_heldout, r.score_p_value);
+  // A reading grid is plain in the readings (the `quantisation` statistic), on real sensors as
+  // much as in simulations; whether the rounding explains anything is the held-out gain's to say
+  // (on the dequantised readings, where the rounded model is the true one when it is).
+  r.p_value = r.effect == Effect::quantisation ? r.p_heldout : combinedPValue(r.p_heldout, r.score_p_value);
   r.parameters = flags_[c].parameters();
   double ll_in = inSample(flags_[c], &full_[c]);
   if (flags_[c].wall_b && wb_.ok && w0_.ok) ll_in = ll_in_base_ + (wb_.in_ll - w0_.in_ll);  // only the walls' part differs
@@ -1852,7 +1897,10 @@ void StaticDiagnosis::setEstimates(CandidateResult& r, const Model& fm) const {
   }
   if (e == Effect::mixed_pixels) r.estimates["mixed_pixel_fraction"] = fm.mixed;
   if (e == Effect::heavy_tails) r.estimates["student_dof"] = fm.dof;
-  if (e == Effect::quantisation) r.estimates["grid_m"] = fm.q;
+  if (e == Effect::quantisation) {
+    r.estimates["grid_m"] = fm.q;
+    r.estimates["noise_scale_unrounded"] = fm.sigma_e;  // sigma_e of sigma_e |m|^kappa before the rounding
+  }
   if (e == Effect::incidence_bias) {
     r.estimates["incidence_bias_m"] = wb_.b;
     r.estimates["alpha0_with_it_m"] = wb_.alpha0;

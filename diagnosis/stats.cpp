@@ -204,17 +204,14 @@ double gridResultant(const std::vector<double>& y, double q) {
 
 std::string nameCause(std::vector<CandidateResult>& cands, double alpha, std::string& decision,
                       const std::vector<std::pair<Effect, Effect>>& nested,
-                      const std::vector<std::pair<Effect, Effect>>& indistinguishable,
-                      const std::vector<Effect>& direct) {
-  auto isDirect = [&](Effect e) { return std::find(direct.begin(), direct.end(), e) != direct.end(); };
+                      const std::vector<std::pair<Effect, Effect>>& indistinguishable) {
   std::vector<double> p;
   for (const auto& c : cands) p.push_back(c.applicable ? c.p_value : std::numeric_limits<double>::quiet_NaN());
   const auto adj = holmAdjust(p);
   for (std::size_t i = 0; i < cands.size(); ++i) {
     cands[i].p_holm = adj[i];
     const double gain = cands[i].heldout_gain_nats_per_point;
-    cands[i].significant = cands[i].applicable && std::isfinite(adj[i]) && adj[i] < alpha &&
-                           (gain > 0.0 || (isDirect(cands[i].effect) && gain > -2.0 * cands[i].heldout_gain_se));
+    cands[i].significant = cands[i].applicable && std::isfinite(adj[i]) && adj[i] < alpha && gain > 0.0;
   }
   std::vector<std::size_t> sig;
   for (std::size_t i = 0; i < cands.size(); ++i)
@@ -240,12 +237,6 @@ std::string nameCause(std::vector<CandidateResult>& cands, double alpha, std::st
   if (chosen != top)
     decision = std::string(toString(cands[chosen].effect)) + " explains as much as " + toString(cands[top].effect) +
                " (held-out gains within two standard errors), which contains it, with fewer parameters";
-  for (std::size_t i : sig)
-    if (i != chosen && isDirect(cands[i].effect) && cands[i].heldout_gain_nats_per_point > 0.0 && close(chosen, i)) {
-      decision = std::string(toString(cands[i].effect)) + " is seen in the readings themselves (" + cands[i].statistic +
-                 ") and explains as much as " + toString(cands[chosen].effect) + " (held-out gains within two standard errors)";
-      chosen = i;
-    }
   if (!cands[chosen].identifiable) {
     decision = std::string(toString(cands[chosen].effect)) + " is significant but cannot be estimated apart from the baseline's parameters (" +
                cands[chosen].note + ")";

@@ -100,16 +100,9 @@ double gridResultant(const std::vector<double>& y_m, double q_m);
 ///   per-stop headings) whose gain is within two standard errors (parsimony);
 ///   not_identifiable when that effect is not identifiable, or when another significant effect is
 ///   within two standard errors of it and the pair is declared `indistinguishable`.
-/// `direct`: effects seen in the readings themselves by their battery statistic (a reading grid),
-/// whose held-out gain can be nil where they are plainly there (rounding finer than the noise
-/// barely changes the likelihood): significant with a gain not below zero by two standard errors,
-/// and preferred to the top effect when its own gain is positive and within two standard errors
-/// of the top's (with a nil gain it explains nothing the top effect does: the YDLIDAR's 1 mm grid
-/// beside its tails).
 /// Returns the cause; `decision` receives the reason in words.
 std::string nameCause(std::vector<CandidateResult>& candidates, double alpha, std::string& decision,
                       const std::vector<std::pair<Effect, Effect>>& nested = {},
-                      const std::vector<std::pair<Effect, Effect>>& indistinguishable = {},
-                      const std::vector<Effect>& direct = {});
+                      const std::vector<std::pair<Effect, Effect>>& indistinguishable = {});
 
 }  // namespace lidarcal::diagnosis

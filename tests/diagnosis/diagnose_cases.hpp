@@ -111,6 +111,9 @@ inline HiddenEffectCase hiddenEffectCase(const std::string& effect, std::uint64_
   } else if (effect == "odometry_scale") {
     c.path.step_error_fraction = sign * (0.03 + 0.02 * u(rng));  // true steps 3-5 % off
     std::snprintf(buf, sizeof buf, "step error %.3f", c.path.step_error_fraction);
+  } else if (effect == "heavy_tails") {
+    c.effects.noise_student_dof = 3.0 + 2.0 * u(rng);  // Student t noise, 3-5 degrees of freedom (same variance)
+    std::snprintf(buf, sizeof buf, "nu %.2f", c.effects.noise_student_dof);
   } else {
     throw std::invalid_argument("hiddenEffectCase: unknown effect " + effect);
   }

@@ -59,10 +59,34 @@ int replicasPerCase() {
   return env && *env ? std::max(5, std::atoi(env)) : 5;
 }
 
-/// First case seed of the hidden-effect runs (LIDARCAL_DIAGNOSE_FIRST, default 21).
-int firstCase() {
+/// A stream tag from a case's name (FNV-1a: the same on every platform).
+std::uint64_t nameTag(const std::string& name) {
+  std::uint64_t h = 14695981039346656037ULL;
+  for (unsigned char ch : name) h = (h ^ ch) * 1099511628211ULL;
+  return h;
+}
+
+/// Seeds for the hidden effects, drawn from a seed the tests do not read (issue 20: data
+/// generated with seeds the tests do not choose), one stream per `tag`, disjoint in practice from
+/// the development seeds (all below 1000).
+std::vector<std::uint64_t> unreadSeeds(std::uint64_t tag, int n) {
+  auto rng = makeRng(20261125, tag);
+  std::uniform_int_distribution<std::uint64_t> seed_of(1000, 1000000);
+  std::vector<std::uint64_t> out(static_cast<std::size_t>(n));
+  for (auto& s : out) s = seed_of(rng);
+  return out;
+}
+
+/// Case seeds of the hidden-effect runs of `effect`: n consecutive from LIDARCAL_DIAGNOSE_FIRST
+/// when it is set (the long run and docs/RESULTS.md: 21-40), else drawn by unreadSeeds.
+std::vector<std::uint64_t> caseSeeds(const std::string& effect, int n) {
   const char* env = std::getenv("LIDARCAL_DIAGNOSE_FIRST");
-  return env && *env ? std::max(1, std::atoi(env)) : 21;
+  if (env && *env) {
+    std::vector<std::uint64_t> out;
+    for (int k = 0; k < n; ++k) out.push_back(static_cast<std::uint64_t>(std::max(1, std::atoi(env)) + k));
+    return out;
+  }
+  return unreadSeeds(nameTag(effect), n);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -204,23 +228,6 @@ TEST(DiagnoseStats, CauseNamingRules) {
   // A significant effect that cannot be estimated apart from the baseline.
   std::vector<CandidateResult> confounded = {cand(a, 1e-12, 0.05, 0.001, 1, false), cand(b, 1e-9, 0.01, 0.001, 1)};
   EXPECT_EQ(nameCause(confounded, 0.01, why), cause::kNotIdentifiable);
-  // An effect seen in the readings themselves (`direct`: a reading grid) is significant on its
-  // statistic with a held-out gain nil within two standard errors, and preferred to a top effect
-  // it explains as much as; not to one well above it. Another effect with the same numbers is not.
-  const Effect grid = Effect::quantisation, tails = Effect::heavy_tails;
-  std::vector<CandidateResult> seen = {cand(a, 0.5, -0.001, 0.001, 1), cand(grid, 1e-12, -0.0005, 0.001, 1)};
-  EXPECT_EQ(nameCause(seen, 0.01, why, {}, {}, {grid}), toString(grid)) << why;
-  EXPECT_EQ(nameCause(seen, 0.01, why), cause::kNone);
-  std::vector<CandidateResult> below = {cand(grid, 1e-12, -0.003, 0.001, 1)};
-  EXPECT_EQ(nameCause(below, 0.01, why, {}, {}, {grid}), cause::kNone);
-  std::vector<CandidateResult> near_top = {cand(tails, 1e-9, 0.0016, 0.0003, 1), cand(grid, 1e-12, 0.0010, 0.0004, 1)};
-  EXPECT_EQ(nameCause(near_top, 0.01, why, {}, {}, {grid}), toString(grid)) << why;
-  EXPECT_EQ(nameCause(near_top, 0.01, why), toString(tails));
-  std::vector<CandidateResult> far_top = {cand(tails, 1e-9, 0.0100, 0.0003, 1), cand(grid, 1e-12, 0.0010, 0.0004, 1)};
-  EXPECT_EQ(nameCause(far_top, 0.01, why, {}, {}, {grid}), toString(tails));
-  // Within two (large) standard errors of the top but explaining nothing: the top stays.
-  std::vector<CandidateResult> nil = {cand(tails, 1e-9, 0.034, 0.039, 1), cand(grid, 1e-12, -0.0003, 0.0004, 1)};
-  EXPECT_EQ(nameCause(nil, 0.01, why, {}, {}, {grid}), toString(tails));
   // Two effects that explain the data alike and are declared indistinguishable.
   std::vector<CandidateResult> twins = {cand(a, 1e-12, 0.0500, 0.002, 1), cand(b, 1e-12, 0.0495, 0.002, 1)};
   EXPECT_EQ(nameCause(twins, 0.01, why, {}, {{a, b}}), cause::kNotIdentifiable);
@@ -453,7 +460,11 @@ INSTANTIATE_TEST_SUITE_P(
                  },
                  [](auto& e) { e.noise_exponent = true; }, [](const JointResult& f) { return f.effects.noise_exponent; }, 1.0, 0.2},
         Recovery{"mixed_pixels", [](auto& c) { c.effects.mixed_pixel_fraction = 0.2; }, [](auto& e) { e.mixed_pixels = true; },
-                 [](const JointResult& f) { return f.effects.mixed_pixel_fraction; }, 0.2, 0.06}),
+                 [](const JointResult& f) { return f.effects.mixed_pixel_fraction; }, 0.2, 0.06},
+        // Student-t noise of 4 degrees of freedom (same variance): about 5,000 readings hold nu
+        // to a few tenths.
+        Recovery{"student_noise", [](auto& c) { c.effects.noise_student_dof = 4.0; }, [](auto& e) { e.student_noise = true; },
+                 [](const JointResult& f) { return f.effects.student_dof; }, 4.0, 1.2}),
     [](const auto& p) { return std::string(p.param.name); });
 
 // ---------------------------------------------------------------------------------------------
@@ -470,15 +481,15 @@ std::pair<double, const char*> signedTruth(const std::string& e, const test::Hid
 }
 
 TEST_P(HiddenEffect, DiagnoseNamesItAndItsSignAndItsLikelihoodRatio) {
-  // Case seeds from 21 on: disjoint from the seeds 1-20 the method was developed on.
+  // Case seeds drawn from a seed the test does not read (caseSeeds), away from the seeds 1-40
+  // the method was developed and measured on.
   const std::string e = GetParam();
   const int n = casesPerEffect(e);
-  const int first = firstCase();
   int named = 0, signs = 0, signed_cases = 0, lr_significant = 0, lr_cases = 0;
   std::string misses;
-  for (int k = first; k < first + n; ++k) {
+  for (const std::uint64_t k : caseSeeds(e, n)) {
     SCOPED_TRACE(k);
-    const auto h = test::hiddenEffectCase(e, static_cast<std::uint64_t>(k));
+    const auto h = test::hiddenEffectCase(e, k);
     const auto s = simulation::simulateLandmarkLevel(h.config, h.seed);
     DiagnoseConfig dc;
     dc.seed = static_cast<std::uint64_t>(k);
@@ -515,8 +526,35 @@ TEST_P(HiddenEffect, DiagnoseNamesItAndItsSignAndItsLikelihoodRatio) {
 
 INSTANTIATE_TEST_SUITE_P(Sequence, HiddenEffect,
                          ::testing::Values("none", "incidence_noise", "incidence_bias", "landmark_bias", "heading_error",
-                                           "range_drift", "mixed_pixels", "angle_offset", "range_noise_law"),
+                                           "range_drift", "mixed_pixels", "angle_offset", "range_noise_law", "heavy_tails"),
                          [](const auto& p) { return std::string(p.param); });
+
+TEST(DiagnoseSequence, APhysicalEffectUnderHeavyTailsIsNamedAndTheTailsStayBesideIt) {
+  // A drift of 3-4 cm over the sequence in Student-t noise (nu 3.5): the t explains much of the
+  // residuals, but the named cause must be physical (issue 20). Either the drift gains most (as
+  // in the two cases here), or the t comes first and the drift holds beside it (refitted with the
+  // t, held out: SequenceDiagnosis::refineCause). Two cases whose seeds come from a seed this test
+  // does not read.
+  for (const std::uint64_t k : unreadSeeds(nameTag("drift under tails"), 2)) {
+    SCOPED_TRACE(k);
+    auto h = test::hiddenEffectCase("range_drift", k);
+    h.config.effects.noise_student_dof = 3.5;
+    const auto s = simulation::simulateLandmarkLevel(h.config, h.seed);
+    DiagnoseConfig dc;
+    dc.seed = k;
+    dc.replicas = 5;
+    dc.closeness_replicas = 1;
+    const auto r = diagnoseSequence(s.obs, dc);
+    ASSERT_STREQ(r.status.name(), "ok") << r.status.message;
+    EXPECT_EQ(r.primary_cause, "range_drift") << r.decision;
+    for (const auto& c : r.candidates)
+      if (c.effect == Effect::heavy_tails) {
+        EXPECT_TRUE(c.significant);
+        EXPECT_LT(c.estimates.at("student_dof"), 10.0);  // fitted without the drift, the t is wider than 3.5
+      }
+    std::printf("case %llu: %s (%s)\n", static_cast<unsigned long long>(k), r.primary_cause.c_str(), r.decision.c_str());
+  }
+}
 
 TEST(DiagnoseSequence, ResultCarriesEveryCandidateAndTheExtendedModel) {
   const auto h = test::hiddenEffectCase("landmark_bias", 3);
@@ -528,7 +566,7 @@ TEST(DiagnoseSequence, ResultCarriesEveryCandidateAndTheExtendedModel) {
   std::vector<std::string> names;
   for (const auto& c : r.candidates) names.push_back(toString(c.effect));
   for (const char* e : {"incidence_noise", "incidence_bias", "landmark_bias", "heading_error", "range_drift", "mixed_pixels",
-                        "angle_offset", "range_noise_law"})
+                        "angle_offset", "range_noise_law", "heavy_tails"})
     EXPECT_NE(std::find(names.begin(), names.end(), e), names.end()) << e;
   ASSERT_EQ(r.primary_cause, "landmark_bias");
   // The offsets are recovered (relative to their mean, as simulated): the estimates explain most
@@ -627,7 +665,12 @@ TEST_P(StaticHiddenEffect, DiagnoseNamesWhatTheTruthAllows) {
   DiagnoseConfig dc;
   dc.replicas = 9;
   dc.static_range_offset_m = c.known_offset_m;
-  const auto r = diagnoseStatic(staticRoom(c.fx, c.noise, 7, 150, c.step_error_fraction), dc);
+  // One room whose seed comes from a seed this test does not read (the rates over seeds 101-110
+  // are in docs/RESULTS.md).
+  const std::uint64_t seed = unreadSeeds(nameTag(c.name), 1).front();
+  dc.seed = seed;
+  const auto r = diagnoseStatic(staticRoom(c.fx, c.noise, seed, 150, c.step_error_fraction), dc);
+  SCOPED_TRACE(seed);
   ASSERT_STREQ(r.status.name(), "ok") << r.status.message;
   if (!c.also.empty()) {
     EXPECT_TRUE(c.allows(r.primary_cause)) << r.primary_cause << ": " << r.decision;
@@ -885,7 +928,7 @@ TEST_P(StaticTails, DiagnoseNamesThePhysicalCauseAndTheBeamsThatCarryTheTails) {
   const TailTruth& c = GetParam();
   int right = 0;
   std::string log;
-  for (std::uint64_t seed = 301; seed < 305; ++seed) {
+  for (const std::uint64_t seed : unreadSeeds(nameTag(c.effect) + 301, 4)) {
     DiagnoseConfig dc;
     dc.replicas = 5;
     dc.seed = seed;
@@ -936,16 +979,22 @@ DiagnosisResult diagnoseRoomAtSeed(const RangeEffects& fx, std::uint64_t seed) {
   return diagnoseStatic(staticRoom(fx, squared(0.0015), seed), dc);
 }
 
-class CoarseGrid : public ::testing::TestWithParam<double> {};
+class ReadingGrid : public ::testing::TestWithParam<double> {};
 
-TEST_P(CoarseGrid, ReadingsRoundedToItAreNamedQuantisation) {
-  // Readings rounded to 5 or 10 mm under noise of 4-30 mm (the room at 1.7-4.5 m): the rounding's
-  // variance floor and the grid seen in the readings name the cause (before the floor model 2 and
-  // 0 of 10 were named; docs/RESULTS.md "Static mode").
+TEST_P(ReadingGrid, ReadingsRoundedToItAreNamedQuantisation) {
+  // Readings rounded to 2, 5 or 10 mm under noise of 3-50 mm (the room at 1.5-6 m). Every model
+  // is scored on the readings spread uniformly over their grid cells, where the rounded model
+  // (a normal cell probability over q) is the true one; before that the 5 and 10 mm grids were
+  // named in 2 and 0 of 10 rooms, then 15 and 16 of 20 under a variance floor (docs/RESULTS.md
+  // "Static mode"). Four rooms whose seeds come from a seed this test does not read (the method
+  // was developed on seeds 101-130), at least 3 named.
   const double grid = GetParam();
+  auto rng = makeRng(20261125, static_cast<std::uint64_t>(grid * 1e4));
+  std::uniform_int_distribution<std::uint64_t> seed_of(1000, 1000000);
   int right = 0;
   std::string log;
-  for (std::uint64_t seed = 331; seed < 335; ++seed) {
+  for (int k = 0; k < 4; ++k) {
+    const std::uint64_t seed = seed_of(rng);
     RangeEffects fx;
     fx.range_resolution_m = grid;
     const auto r = diagnoseRoomAtSeed(fx, seed);
@@ -957,13 +1006,14 @@ TEST_P(CoarseGrid, ReadingsRoundedToItAreNamedQuantisation) {
   EXPECT_GE(right, 3) << "grid " << grid << ":" << log;
 }
 
-INSTANTIATE_TEST_SUITE_P(Room, CoarseGrid, ::testing::Values(0.005, 0.010),
-                         [](const auto& grid_info) { return grid_info.param < 0.0075 ? std::string("mm5") : std::string("mm10"); });
+INSTANTIATE_TEST_SUITE_P(Room, ReadingGrid, ::testing::Values(0.002, 0.005, 0.010), [](const auto& grid_info) {
+  return "mm" + std::to_string(static_cast<int>(std::lround(grid_info.param * 1e3)));
+});
 
 TEST(DiagnoseStatic, MixedPixelsAtTwoToTenPercentOfEdgeReadingsAreNamed) {
   int right = 0;
   std::string log;
-  for (std::uint64_t seed = 321; seed < 325; ++seed) {
+  for (const std::uint64_t seed : unreadSeeds(321, 4)) {
     std::uniform_real_distribution<double> u(0.0, 1.0);
     auto rng = makeRng(seed, 5);
     RangeEffects fx;
