@@ -725,7 +725,8 @@ void JointProblem::reportEffects() {
   e.heading_rms_rad = out_.heading_scatter_rad;
   out_.effect_parameters = (fx_.landmark_offsets ? static_cast<int>(offsets_.size()) - 1 : 0) + (fx_.drift ? 1 : 0) +
                            (fx_.angle_offset ? 1 : 0) + (fx_.incidence_bias ? 1 : 0) + (fx_.incidence_noise ? 1 : 0) +
-                           (fx_.noise_exponent ? 1 : 0) + (fx_.mixed_pixels ? 1 : 0) + (fx_.odometry_scale ? 1 : 0) + (fx_.student_noise ? 1 : 0) +
+                           (fx_.noise_exponent ? 1 : 0) + (fx_.mixed_pixels ? 1 : 0) + (fx_.odometry_scale ? 1 : 0) +
+                           (fx_.student_noise ? 1 : 0) +
                            (fx_.estimate_heading ? static_cast<int>(poses_.size()) : 0);
 }
 

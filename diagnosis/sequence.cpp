@@ -860,8 +860,9 @@ std::map<Effect, Identifiability> identifiability(const LandmarkObservations& ob
   // standardised residual (the t's log-density to first order in 1 / nu), orthogonal to the
   // location and scale terms, of variance 24 / 16: information 1.5 per reading. Smallest worth
   // naming: nu = 20.
-  out[Effect::heavy_tails] =
-      Identifiability{1.0, rs.empty() ? std::numeric_limits<double>::infinity() : 1.0 / std::sqrt(1.5 * static_cast<double>(rs.size())), 0.05};
+  const double tails_se =
+      rs.empty() ? std::numeric_limits<double>::infinity() : 1.0 / std::sqrt(1.5 * static_cast<double>(rs.size()));
+  out[Effect::heavy_tails] = Identifiability{1.0, tails_se, 0.05};
   return out;
 }
 
