@@ -27,12 +27,15 @@ int main(int argc, char** argv) {
   app.add_option("--first", first, "first case seed");
   app.add_option("--replicas", replicas);
   app.add_flag("--verbose", verbose);
+  double tails_dof = 0.0;
+  app.add_option("--tails-dof", tails_dof, "also make the noise a Student t of this many degrees of freedom (> 2): the effect under heavy tails");
   CLI11_PARSE(app, argc, argv);
   int correct = 0;
   std::map<std::string, int> named;
   double total_s = 0.0;
   for (int c = first; c < first + cases; ++c) {
-    const auto hidden = test::hiddenEffectCase(effect, static_cast<std::uint64_t>(c));
+    auto hidden = test::hiddenEffectCase(effect, static_cast<std::uint64_t>(c));
+    if (tails_dof > 2.0) hidden.config.effects.noise_student_dof = tails_dof;
     const auto sample = simulation::simulateLandmarkLevel(hidden.config, hidden.seed);
     diagnosis::DiagnoseConfig dc;
     dc.replicas = replicas;
