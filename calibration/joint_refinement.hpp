@@ -45,7 +45,7 @@ struct JointEffects {
   bool mixed_pixels = false;      ///< outermost beams: mixture with a uniform, fraction estimated between solves (EM)
   bool odometry_scale = false;    ///< commanded steps scaled by (1 + s), s estimated (the true step length differs)
   /// Noise a Student t of nu degrees of freedom (unit variance times sigma), nu estimated between
-  /// solves; the readings weighted by the t's EM weights (heavy tails, seed 004's pooled t).
+  /// solves; the readings weighted by the t's EM weights (heavy tails; `diagnose`'s heavy_tails candidate).
   bool student_noise = false;
   /// Whether a term in the mean of the readings is on (they need the extended residual).
   bool anyMean() const { return landmark_offsets || drift || angle_offset || incidence_bias; }

@@ -1505,7 +1505,7 @@ void StaticDiagnosis::foldLikelihoods(int k, const std::vector<int>& fold, HeldO
     const Bin& bin = d_.bins[static_cast<std::size_t>(bi)];
     held.base.push_back(readingLL(mb, *scored_, bin, fb[static_cast<std::size_t>(bi)], i, floor_w));
     held.block.push_back(static_cast<std::size_t>(d_.t[i]));
-      for (std::size_t c = 0; c < candidates_.size(); ++c)
+    for (std::size_t c = 0; c < candidates_.size(); ++c)
       held.cand[c].push_back(fc[c][static_cast<std::size_t>(bi)].n > 0
                                  ? readingLL(mc[c], *scored_, bin, fc[c][static_cast<std::size_t>(bi)], i, floor_w)
                                  : kNaN);
