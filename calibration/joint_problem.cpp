@@ -611,19 +611,15 @@ void JointProblem::fitNoiseLaw(const std::vector<double>& res, const BiasPolynom
 /// sigma (beyond, the outlier floor's): t scale from the weighted squares, then nu by golden
 /// section of the t log-likelihood (ECM), ten rounds.
 void JointProblem::fitStudent(const std::vector<double>& res, const BiasPolynomial& f) {
-  std::vector<double> x;  // residual over the law's shape
-  for (std::size_t i = 0; i < readings_.size(); ++i) {
-    const double h = std::max(noiseShape(out_.model.noise, f, geo_[i].d, geo_[i].cos_inc, gamma_), 1e-9);
-    if (std::abs(res[i]) <= 30.0 * sigma_[i]) x.push_back(res[i] / h);
-  }
-  if (x.size() < 10) return;
   // A polynomial law is not a scale times a shape: there nu alone is fitted, its scale held.
   const bool scaled = config_.noise != NoiseKind::polynomial;
-  if (!scaled) {
-    x.clear();
-    for (std::size_t i = 0; i < readings_.size(); ++i)
-      if (std::abs(res[i]) <= 30.0 * sigma_[i]) x.push_back(res[i] / sigma_[i]);
+  std::vector<double> x;  // residual over the law's shape (polynomial law: over sigma)
+  for (std::size_t i = 0; i < readings_.size(); ++i) {
+    if (!(std::abs(res[i]) <= 30.0 * sigma_[i])) continue;
+    x.push_back(res[i] / (scaled ? std::max(noiseShape(out_.model.noise, f, geo_[i].d, geo_[i].cos_inc, gamma_), 1e-9)
+                                 : sigma_[i]));
   }
+  if (x.size() < 10) return;
   double nu = dof_ > 2.0 ? dof_ : 10.0;
   double t2 = out_.model.noise.sigma_e * out_.model.noise.sigma_e * (nu - 2.0) / nu;  // t scale squared
   for (int round = 0; round < 10; ++round) {

@@ -6,6 +6,7 @@
 #include <limits>
 #include <map>
 #include <optional>
+#include <utility>
 #include <set>
 #include <stdexcept>
 
@@ -53,6 +54,21 @@ LandmarkObservations subset(const LandmarkObservations& obs, const std::vector<b
   for (std::size_t i = 0; i < obs.sightings.size(); ++i)
     if (keep[i]) out.sightings.push_back(obs.sightings[i]);
   return out;
+}
+
+/// Fold f of `fold` (the fold of each sighting): the other folds' sightings to fit on and fold
+/// f's to score; nothing when fold f holds no sighting.
+std::optional<std::pair<LandmarkObservations, LandmarkObservations>> foldSplit(const LandmarkObservations& obs,
+                                                                                const std::vector<int>& fold, int f) {
+  std::vector<bool> train(obs.sightings.size()), test(obs.sightings.size());
+  bool any = false;
+  for (std::size_t i = 0; i < obs.sightings.size(); ++i) {
+    train[i] = fold[i] != f;
+    test[i] = fold[i] == f;
+    any = any || test[i];
+  }
+  if (!any) return std::nullopt;
+  return std::make_pair(subset(obs, train), subset(obs, test));
 }
 
 /// Fold of each sighting: scan position within its stop modulo K, or (stop + landmark) mod K
@@ -1117,7 +1133,7 @@ class SequenceDiagnosis {
   /// An angle offset is one heading shared by all stops (nested), handled by parsimony.
   std::vector<std::pair<Effect, Effect>> nestedEffects() const { return {{Effect::angle_offset, Effect::heading_error}}; }
   void refineCause(DiagnosisResult& out) const;
-  HeldOutGain gainBesideTails(std::size_t c, std::size_t tails) const;
+  std::vector<HeldOutGain> gainsBesideTails(const std::vector<std::size_t>& effects, std::size_t tails) const;
   Closeness closenessBaseline(const DiagnosisResult&) const { return closeness(measured_z_, sim_base_); }
   void extend(std::size_t c, DiagnosisResult& out) const;
 
@@ -1416,15 +1432,9 @@ void SequenceDiagnosis::foldLikelihoods(HeldOut& held, std::size_t steps_before,
   const std::vector<int> fold = folds(obs_, config_.folds);
   for (int f = 0; f < config_.folds; ++f) {
     reportProgress(config_, kHeldOutStage, steps_before + static_cast<std::size_t>(f), steps);
-    std::vector<bool> train(obs_.sightings.size()), test(obs_.sightings.size());
-    bool any = false;
-    for (std::size_t i = 0; i < obs_.sightings.size(); ++i) {
-      train[i] = fold[i] != f;
-      test[i] = fold[i] == f;
-      any = any || test[i];
-    }
-    if (!any) continue;
-    const LandmarkObservations tr = subset(obs_, train), te = subset(obs_, test);
+    const auto split = foldSplit(obs_, fold, f);
+    if (!split) continue;
+    const auto& [tr, te] = *split;
     const JointResult fb = refineJoint(tr, initFrom(fit0_), warm(base_));
     if (!fb.ok()) continue;
     std::vector<std::size_t> scan;
@@ -1580,46 +1590,51 @@ void SequenceDiagnosis::setIdentifiability(CandidateResult& r, const JointResult
   else r.note = "the baseline's parameters absorb it (standard error " + std::to_string(r.standard_error) + " after them)";
 }
 
-/// Held-out gain of candidate c's effect beside the Student-t noise of candidate `tails`: the
-/// joint refinement with both terms against the one with the t alone, on the same scan folds
-/// (per-scan blocks). Whether a physical effect holds once the tails have their own term.
-HeldOutGain SequenceDiagnosis::gainBesideTails(std::size_t c, std::size_t tails) const {
-  JointConfig both = cfgs_[c];
-  both.effects.enable(Effect::heavy_tails);
-  JointInit start = initFrom(fits_[c]);
-  start.effects.student_dof = fits_[tails].effects.student_dof;
+/// Held-out gains of the effects of candidates `effects` beside the Student-t noise of candidate
+/// `tails`: the joint refinement with both terms against the one with the t alone (fitted once
+/// per fold for all of them), on the same scan folds (per-scan blocks). Whether a physical
+/// effect holds once the tails have their own term.
+std::vector<HeldOutGain> SequenceDiagnosis::gainsBesideTails(const std::vector<std::size_t>& effects, std::size_t tails) const {
+  std::vector<JointConfig> both(effects.size());
+  std::vector<JointInit> start(effects.size());
+  for (std::size_t k = 0; k < effects.size(); ++k) {
+    both[k] = cfgs_[effects[k]];
+    both[k].effects.enable(Effect::heavy_tails);
+    start[k] = initFrom(fits_[effects[k]]);
+    start[k].effects.student_dof = fits_[tails].effects.student_dof;
+  }
   const std::vector<int> fold = folds(obs_, config_.folds);
-  HeldOut held(1);
+  std::vector<HeldOut> held(effects.size(), HeldOut(1));
   for (int f = 0; f < config_.folds; ++f) {
-    std::vector<bool> train(obs_.sightings.size()), test(obs_.sightings.size());
-    bool any = false;
-    for (std::size_t i = 0; i < obs_.sightings.size(); ++i) {
-      train[i] = fold[i] != f;
-      test[i] = fold[i] == f;
-      any = any || test[i];
-    }
-    if (!any) continue;
-    const LandmarkObservations tr = subset(obs_, train), te = subset(obs_, test);
+    const auto split = foldSplit(obs_, fold, f);
+    if (!split) continue;
+    const auto& [tr, te] = *split;
     const JointResult ft = refineJoint(tr, initFrom(fits_[tails]), warm(cfgs_[tails]));
-    const JointResult fb = refineJoint(tr, start, warm(both));
-    if (!ft.ok() || !fb.ok()) continue;
+    if (!ft.ok()) continue;
     std::vector<std::size_t> scan;
     const auto lt = heldOutLikelihoods(tr, te, ft, cfgs_[tails], &scan);
-    const auto lb = heldOutLikelihoods(tr, te, fb, both);
-    if (lt.size() != lb.size()) continue;
-    for (std::size_t i = 0; i < lt.size(); ++i) {
-      held.base.push_back(lt[i]);
-      held.cand[0].push_back(lb[i]);
-      held.block.push_back(scan[i]);
+    for (std::size_t k = 0; k < effects.size(); ++k) {
+      const JointResult fb = refineJoint(tr, start[k], warm(both[k]));
+      if (!fb.ok()) continue;
+      const auto lb = heldOutLikelihoods(tr, te, fb, both[k]);
+      if (lt.size() != lb.size()) continue;
+      for (std::size_t i = 0; i < lt.size(); ++i) {
+        held[k].base.push_back(lt[i]);
+        held[k].cand[0].push_back(lb[i]);
+        held[k].block.push_back(scan[i]);
+      }
     }
   }
-  held.points = static_cast<double>(held.base.size());
-  if (held.base.empty()) return HeldOutGain{0.0, 0.0, false};
-  return heldOutGain(held, 0);
+  std::vector<HeldOutGain> out;
+  for (auto& h : held) {
+    h.points = static_cast<double>(h.base.size());
+    out.push_back(h.base.empty() ? HeldOutGain{0.0, 0.0, false} : heldOutGain(h, 0));
+  }
+  return out;
 }
 
 /// Heavy tails are a symptom (issue 20: the named cause must be physical). When the Student t
-/// comes first, each significant physical effect is fitted beside it (gainBesideTails): one
+/// comes first, each significant physical effect is fitted beside it (gainsBesideTails): one
 /// whose held-out gain over the t alone stays significant (one-sided, Bonferroni over those
 /// tried) is the cause, the largest such gain named, and the tails remain beside it. With none,
 /// the t stays named and the cause of the tails is unknown: a sequence has no covariate model of
@@ -1640,8 +1655,10 @@ void SequenceDiagnosis::refineCause(DiagnosisResult& out) const {
   char buf[480];
   std::size_t best = candidates_.size();
   double best_gain = 0.0;
-  for (std::size_t c : physical) {
-    const HeldOutGain g = gainBesideTails(c, tails);
+  const std::vector<HeldOutGain> gains = gainsBesideTails(physical, tails);
+  for (std::size_t k = 0; k < physical.size(); ++k) {
+    const std::size_t c = physical[k];
+    const HeldOutGain& g = gains[k];
     CandidateResult& r = out.candidates[c];
     r.estimates["heldout_gain_beside_tails"] = g.gain;
     r.estimates["heldout_gain_beside_tails_se"] = g.se;
