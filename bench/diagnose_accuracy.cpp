@@ -2,6 +2,7 @@
 // Each case draws the size (and sign) of the effect from its own seed, simulates the paper
 // field at the landmark level with it, diagnoses, and compares the named cause.
 //   build/bench/diagnose_accuracy --effect heading_error --cases 20
+//   build/bench/diagnose_accuracy --effect none --cases 20 --grid 0.001   (clean data on a 1 mm grid)
 
 #include <chrono>
 #include <cstdio>
@@ -29,6 +30,8 @@ int main(int argc, char** argv) {
   app.add_flag("--verbose", verbose);
   double tails_dof = 0.0;
   app.add_option("--tails-dof", tails_dof, "also make the noise a Student t of this many degrees of freedom (> 2): the effect under heavy tails");
+  double grid_m = 0.0;
+  app.add_option("--grid", grid_m, "also round the readings to this grid, metres (the effect on a sensor that reports whole millimetres: 0.001)");
   CLI11_PARSE(app, argc, argv);
   int correct = 0;
   std::map<std::string, int> named;
@@ -36,6 +39,7 @@ int main(int argc, char** argv) {
   for (int c = first; c < first + cases; ++c) {
     auto hidden = test::hiddenEffectCase(effect, static_cast<std::uint64_t>(c));
     if (tails_dof > 2.0) hidden.config.effects.noise_student_dof = tails_dof;
+    if (grid_m > 0.0) hidden.config.effects.range_resolution_m = grid_m;
     const auto sample = simulation::simulateLandmarkLevel(hidden.config, hidden.seed);
     diagnosis::DiagnoseConfig dc;
     dc.replicas = replicas;

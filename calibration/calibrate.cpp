@@ -221,6 +221,7 @@ std::map<std::string, double> effectValues(const JointEffects& on, const JointEf
   if (on.mixed_pixels) m["mixed_pixel_fraction"] = e.mixed_pixel_fraction;
   if (on.odometry_scale) m["odometry_scale"] = e.odometry_scale;
   if (on.student_noise) m["noise_student_dof"] = e.student_dof;
+  if (on.quantised) m["range_resolution_m"] = e.range_grid_m;
   return m;
 }
 

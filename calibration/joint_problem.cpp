@@ -491,6 +491,11 @@ JointResult JointProblem::run() {
     out_.status.message = "too few landmark readings for the joint refinement (" + std::to_string(readings_.size()) + ")";
     return out_;
   }
+  if (fx_.quantised) {
+    std::vector<double> y;
+    for (const auto& r : readings_) y.push_back(r.y_m);
+    grid_ = detectReadingGrid(y);
+  }
   previous_noise_size_ = noiseSize(out_.model.noise);
   weight_.assign(readings_.size(), 1.0);
   // Iteration 0 settles the geometry (poses, centres, radius) with the starting bias held;
@@ -509,6 +514,15 @@ JointResult JointProblem::run() {
   return out_;
 }
 
+/// The standard deviation a reading is weighted and screened with: the noise law's, and on a
+/// reading grid q the rounding's variance q^2 / 12 beside it (Sheppard's correction). Without it
+/// the rounded model's unrounded scale (fitCellScale), 0.5 mm near the poles under a 20 mm grid,
+/// made every rounding residual an outlier of the Huber loss and of the noise fits.
+double JointProblem::workingSigma(std::size_t i, const RangeModel& m) const {
+  const double s = sigmaOf(i, m);
+  return std::max(grid_ > 0.0 ? std::sqrt(s * s + grid_ * grid_ / 12.0) : s, 1e-4);
+}
+
 /// One Ceres solve from the current estimate (outer 0: bias held). False when it failed.
 bool JointProblem::solve(int outer) {
   out_.outer_iterations = outer;
@@ -517,7 +531,7 @@ bool JointProblem::solve(int outer) {
   sigma_.resize(readings_.size());
   RangeModel current = out_.model;
   current.bias.alpha = alphaVector();
-  for (std::size_t i = 0; i < readings_.size(); ++i) sigma_[i] = std::max(sigmaOf(i, current), 1e-4);
+  for (std::size_t i = 0; i < readings_.size(); ++i) sigma_[i] = workingSigma(i, current);
   if (outer > 0) updateResponsibilities(residualsNow(current.bias));  // E-step (weights 1 without mixed pixels)
   else weight_.assign(readings_.size(), 1.0);
 
@@ -555,6 +569,7 @@ bool JointProblem::reestimateNoise(int outer) {
   if (fx_.mixed_pixels) reestimateMixedFraction(res);
   fitNoiseLaw(res, f);
   if (fx_.student_noise) fitStudent(res, f);
+  if (grid_ > 0.0) fitCellScale(res);
   const double s_now = noiseSize(out_.model.noise);
   if (previous_noise_size_ > 0.0 && std::abs(s_now - previous_noise_size_) <= 1e-2 * previous_noise_size_) return true;
   previous_noise_size_ = s_now;
@@ -642,6 +657,38 @@ void JointProblem::fitStudent(const std::vector<double>& res, const BiasPolynomi
   if (scaled) out_.model.noise.sigma_e = std::sqrt(t2 * nu / (nu - 2.0));
 }
 
+/// Readings on a grid q (quantised): the noise law scaled by the factor c that maximises the
+/// readings' cell probabilities (coreLogDensity with the grid; under Student-t noise the t's)
+/// over the readings within 6 sigma that are not mixed pixels (30 under the t). The Gaussian fit's scale holds
+/// the rounding's variance q^2/12 too; the cells carry it now.
+void JointProblem::fitCellScale(const std::vector<double>& res) {
+  // Under Student-t noise the weights are the t's, and its tails are fitted: within 30 sigma as fitStudent.
+  const bool t = fx_.student_noise && dof_ > 2.0;
+  std::vector<std::size_t> in;
+  for (std::size_t i = 0; i < readings_.size(); ++i)
+    if (std::abs(res[i]) <= (t ? 30.0 : 6.0) * sigma_[i] && (t || weight_[i] > 0.5)) in.push_back(i);
+  if (in.size() < 10) return;
+  RangeModel now = out_.model;
+  now.bias.alpha = alphaVector();
+  std::vector<double> s(in.size());
+  for (std::size_t k = 0; k < in.size(); ++k) s[k] = std::max(sigmaOf(in[k], now), 1e-9);
+  auto ll = [&](double log_c) {
+    const double c = std::exp(log_c);
+    double sum = 0.0;
+    for (std::size_t k = 0; k < in.size(); ++k) {
+      const double y = readings_[in[k]].y_m;
+      sum += coreLogDensity(y, y - res[in[k]], c * s[k], fx_.student_noise ? dof_ : 0.0, grid_);
+    }
+    return sum;
+  };
+  const double c = std::exp(goldenMax(ll, std::log(1e-3), std::log(1.2)));
+  if (config_.noise == NoiseKind::polynomial) {
+    for (double& b : out_.model.noise.beta) b *= c;
+  } else {
+    out_.model.noise.sigma_e *= c;
+  }
+}
+
 /// Profile log-likelihood (up to constants) of the law n with incidence exponent g over the
 /// readings `in`; sigma_e (when asked) its maximising scale.
 double JointProblem::profileNoise(NoiseModel n, double g, const std::vector<std::size_t>& in,
@@ -718,11 +765,12 @@ void JointProblem::reportEffects() {
   e.mixed_pixel_fraction = fx_.mixed_pixels ? mixed_fraction_ : 0.0;
   e.odometry_scale = fx_.odometry_scale ? *scale_ : 0.0;
   e.student_dof = fx_.student_noise ? dof_ : 0.0;
+  e.range_grid_m = grid_;
   e.heading_rms_rad = out_.heading_scatter_rad;
   out_.effect_parameters = (fx_.landmark_offsets ? static_cast<int>(offsets_.size()) - 1 : 0) + (fx_.drift ? 1 : 0) +
                            (fx_.angle_offset ? 1 : 0) + (fx_.incidence_bias ? 1 : 0) + (fx_.incidence_noise ? 1 : 0) +
                            (fx_.noise_exponent ? 1 : 0) + (fx_.mixed_pixels ? 1 : 0) + (fx_.odometry_scale ? 1 : 0) +
-                           (fx_.student_noise ? 1 : 0) +
+                           (fx_.student_noise ? 1 : 0) + (fx_.quantised ? 1 : 0) +
                            (fx_.estimate_heading ? static_cast<int>(poses_.size()) : 0);
 }
 
@@ -742,7 +790,8 @@ void JointProblem::reportLikelihood() {
     const double r = (readings_[i].y_m - mean) / s;
     out_.neg_log_likelihood -= readingLogLikelihood(readings_[i].y_m, mean, s,
                                                     readings_[i].edge ? e.mixed_pixel_fraction : 0.0,
-                                                    config_.outlier_floor, out_.window_min_m, window_max_, e.student_dof);
+                                                    config_.outlier_floor, out_.window_min_m, window_max_, e.student_dof,
+                                                    e.range_grid_m);
     out_.residual_rms_m += r * r * s * s;
     if (std::abs(r) > config_.huber_sigmas * 2.0) ++out_.outliers;
   }
@@ -778,7 +827,7 @@ void JointProblem::reportBearingResiduals() {
 /// Covariance of alpha, the radius and the centres with the final weights; the pose priors fix
 /// the gauge.
 void JointProblem::computeCovariance() {
-  for (std::size_t i = 0; i < readings_.size(); ++i) sigma_[i] = std::max(sigmaOf(i, out_.model), 1e-4);
+  for (std::size_t i = 0; i < readings_.size(); ++i) sigma_[i] = workingSigma(i, out_.model);
   ceres::Problem problem;
   addResiduals(problem, false);
   ceres::Covariance::Options copt;

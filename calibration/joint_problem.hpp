@@ -70,6 +70,8 @@ class JointProblem {
   void reestimateMixedFraction(const std::vector<double>& res);
   void fitNoiseLaw(const std::vector<double>& res, const BiasPolynomial& f);
   void fitStudent(const std::vector<double>& res, const BiasPolynomial& f);
+  void fitCellScale(const std::vector<double>& res);
+  double workingSigma(std::size_t i, const RangeModel& m) const;
   double profileNoise(NoiseModel n, double g, const std::vector<std::size_t>& in, const std::vector<double>& res,
                       const BiasPolynomial& f, double* sigma_e) const;
 
@@ -104,6 +106,7 @@ class JointProblem {
   double gamma_ = 0.0;                     ///< incidence noise exponent
   double mixed_fraction_ = 0.0;
   double dof_ = 0.0;                       ///< Student-t degrees of freedom (0: Gaussian noise)
+  double grid_ = 0.0;                      ///< grid of the readings under the quantised model (0: none)
 
   double window_max_ = 0.0;  ///< upper end of the reading window
   double previous_noise_size_ = 0.0;  ///< size of the noise law before the last re-estimation

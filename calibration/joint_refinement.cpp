@@ -1,5 +1,7 @@
 #include "calibration/joint_refinement.hpp"
 
+#include <boost/math/distributions/students_t.hpp>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -86,12 +88,33 @@ double studentLogDensity(double x, double sigma, double nu) {
          0.5 * (nu + 1.0) * std::log1p(u * u / nu);
 }
 
-double readingLogLikelihood(double y, double mean, double sigma, double mixed_fraction, double outlier_floor,
-                            double window_min, double window_max, double student_dof) {
+namespace {
+/// Probability that a Student t (nu > 2 degrees of freedom, mean mu, standard deviation s)
+/// falls in [lo, hi], computed on the side of the tail it lies in (as normalMass).
+double studentMass(double lo, double hi, double mu, double s, double nu) {
+  const boost::math::students_t t(nu);
+  const double scale = s * std::sqrt((nu - 2.0) / nu), a = (lo - mu) / scale, b = (hi - mu) / scale;
+  if (a > 0.0) return boost::math::cdf(boost::math::complement(t, a)) - boost::math::cdf(boost::math::complement(t, b));
+  if (b < 0.0) return boost::math::cdf(t, b) - boost::math::cdf(t, a);
+  return 1.0 - boost::math::cdf(boost::math::complement(t, b)) - boost::math::cdf(t, a);
+}
+}  // namespace
+
+double coreLogDensity(double y, double mean, double sigma, double student_dof, double grid_m) {
+  if (grid_m > 0.0) {
+    const double lo = y - 0.5 * grid_m, hi = y + 0.5 * grid_m;
+    const double mass = student_dof > 2.0 ? studentMass(lo, hi, mean, sigma, student_dof) : normalMass(lo, hi, mean, sigma);
+    return std::log(std::max(mass, 1e-300) / grid_m);
+  }
+  if (student_dof > 2.0) return studentLogDensity(y - mean, sigma, student_dof);
   const double z = (y - mean) / sigma;
-  // The core density: Gaussian, or the Student t (named log_normal all the same below).
-  const double log_normal = student_dof > 2.0 ? studentLogDensity(y - mean, sigma, student_dof)
-                                              : -0.5 * (kLog2Pi + z * z) - std::log(sigma);
+  return -0.5 * (kLog2Pi + z * z) - std::log(sigma);
+}
+
+double readingLogLikelihood(double y, double mean, double sigma, double mixed_fraction, double outlier_floor,
+                            double window_min, double window_max, double student_dof, double grid_m) {
+  // The core density (named log_normal all the same below).
+  const double log_normal = coreLogDensity(y, mean, sigma, student_dof, grid_m);
   if (mixed_fraction <= 0.0 && outlier_floor <= 0.0) return log_normal;
   // Mixture densities, computed relative to the normal density to stay finite far in the tails.
   double mixed = 0.0;
@@ -118,7 +141,7 @@ bool JointEffects::enable(Effect e) {
     case Effect::range_noise_law: noise_exponent = true; return true;
     case Effect::odometry_scale: odometry_scale = true; return true;
     case Effect::heavy_tails: student_noise = true; return true;
-    case Effect::quantisation:
+    case Effect::quantisation: quantised = true; return true;
     case Effect::dark_surface: return false;
   }
   return false;
@@ -161,7 +184,8 @@ std::vector<JointReading> evaluateJoint(const LandmarkObservations& obs, const J
                                  e.incidence_bias_m, g.cos_inc);
       r.sigma_m = std::max(joint::readingSigma(fit.model.noise, fit.model.bias, g.d, g.cos_inc, gamma), 1e-6);
       r.log_likelihood = readingLogLikelihood(r.y_m, r.mean_m, r.sigma_m, r.edge ? e.mixed_pixel_fraction : 0.0,
-                                              config.outlier_floor, fit.window_min_m, fit.window_max_m, e.student_dof);
+                                              config.outlier_floor, fit.window_min_m, fit.window_max_m, e.student_dof,
+                                              e.range_grid_m);
       out.push_back(r);
     }
   }

@@ -47,6 +47,10 @@ struct JointEffects {
   /// Noise a Student t of nu degrees of freedom (unit variance times sigma), nu estimated between
   /// solves; the readings weighted by the t's EM weights (heavy tails; `diagnose`'s heavy_tails candidate).
   bool student_noise = false;
+  /// Readings rounded to a grid (the sensor's range resolution, detected from the readings,
+  /// detectReadingGrid): each reading's likelihood is the probability of its grid cell under the
+  /// unrounded noise, whose scale is fitted by ML on the cells (`diagnose`'s quantisation candidate).
+  bool quantised = false;
   /// Whether a term in the mean of the readings is on (they need the extended residual).
   bool anyMean() const { return landmark_offsets || drift || angle_offset || incidence_bias; }
   /// Switches on the term that models `e` (heading_error: the per-stop heading, on by default);
@@ -67,6 +71,7 @@ struct JointEffectEstimates {
   double odometry_scale = 0.0;              ///< s: true steps are (1 + s) times the commanded ones
   double heading_rms_rad = 0.0;             ///< RMS of the refined minus the commanded headings, radians
   double student_dof = 0.0;                 ///< nu of the Student-t noise (0: Gaussian)
+  double range_grid_m = 0.0;                ///< grid the readings were rounded to (0: not rounded)
 };
 
 /// Least mixed-pixel fraction the refinement's EM step keeps (a fraction at it: no reading was
@@ -253,9 +258,17 @@ std::vector<JointReading> evaluateJoint(const LandmarkObservations& obs, const J
 /// reports it: Gaussian, mixed with a uniform over [mean, window_max] with weight
 /// `mixed_fraction` (mixed pixels) and with a uniform over the window with weight `outlier_floor`.
 /// `student_dof` > 2: a Student t of that many degrees of freedom and standard deviation sigma
-/// instead of the Gaussian.
+/// instead of the Gaussian. `grid_m` > 0: y is a reading rounded to that grid, and the core
+/// density is the noise's probability of y's cell [y - q/2, y + q/2] over q (the density of the
+/// reading plus a uniform rounding error: comparable with a continuous model's density at a
+/// reading spread over its cell).
 double readingLogLikelihood(double y_m, double mean_m, double sigma_m, double mixed_fraction, double outlier_floor,
-                            double window_min_m, double window_max_m, double student_dof = 0.0);
+                            double window_min_m, double window_max_m, double student_dof = 0.0, double grid_m = 0.0);
+
+/// Log-density of a reading y under the noise alone: Gaussian of mean and standard deviation
+/// sigma, or a Student t of that standard deviation (`student_dof` > 2); with `grid_m` > 0 the
+/// probability of y's grid cell under it, over the grid (the rounded model).
+double coreLogDensity(double y_m, double mean_m, double sigma_m, double student_dof, double grid_m);
 
 /// Log-density of a Student t with nu > 2 degrees of freedom, mean 0 and standard deviation
 /// sigma, at x (the simulator's unit-variance t scaled by sigma).

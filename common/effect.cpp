@@ -18,7 +18,8 @@ const std::vector<EffectInfo>& effectTable() {
       {Effect::range_noise_law, "range_noise_law", "spread_vs_range", "spread_vs_range", true, "sensor.noise.exponent"},
       {Effect::odometry_scale, "odometry_scale", "path_scale", "", true, "path.step_error_fraction"},
       {Effect::heavy_tails, "heavy_tails", "tail_weight", "tail_weight", true, "sensor.effects.noise_student_dof"},
-      {Effect::quantisation, "quantisation", nullptr, "quantisation", false, "sensor.effects.range_resolution_m"},
+      {Effect::quantisation, "quantisation", "quantisation_1mm", "quantisation", true,
+       "sensor.effects.range_resolution_m"},
       {Effect::dark_surface, "dark_surface", nullptr, nullptr, false, ""},
   };
   return table;

@@ -25,7 +25,7 @@ enum class Effect {
   range_noise_law,   ///< noise grows as f(d)^kappa, kappa not 2
   odometry_scale,    ///< steps differ from the commanded length by a fraction
   heavy_tails,       ///< Student-t noise (a symptom: static data)
-  quantisation,      ///< readings on a grid (static data)
+  quantisation,      ///< readings on a grid (the sensor's range resolution)
   dark_surface,      ///< dark surfaces return wide errors (static data with intensity: a cause of tails)
 };
 

@@ -4,6 +4,7 @@
 // dozen times).
 
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <limits>
 #include <vector>
@@ -41,6 +42,38 @@ double ternaryMax(Fn fn, double lo, double hi, int iterations) {
     else hi = m2;
   }
   return 0.5 * (lo + hi);
+}
+
+/// Probability that a normal variable (mean mu, standard deviation s) falls in [lo, hi],
+/// computed on the side of the tail it lies in (no cancellation far from the mean).
+inline double normalMass(double lo, double hi, double mu, double s) {
+  const double a = (lo - mu) / (s * std::sqrt(2.0)), b = (hi - mu) / (s * std::sqrt(2.0));
+  if (a > 0.0) return 0.5 * (std::erfc(a) - std::erfc(b));
+  if (b < 0.0) return 0.5 * (std::erfc(-b) - std::erfc(-a));
+  return 1.0 - 0.5 * (std::erfc(b) + std::erfc(-a));
+}
+
+/// Resultant length |mean exp(2 pi i y / q)| of readings y on a grid of step q: near 1 when the
+/// readings are multiples of q, about 1/sqrt(n) when they are not.
+inline double gridResultant(const std::vector<double>& y_m, double q_m) {
+  if (y_m.empty() || !(q_m > 0.0)) return 0.0;
+  constexpr double kTwoPi = 6.283185307179586;
+  double c = 0.0, s = 0.0;
+  for (double v : y_m) {
+    const double a = kTwoPi * (v / q_m - std::floor(v / q_m));
+    c += std::cos(a);
+    s += std::sin(a);
+  }
+  return std::hypot(c, s) / static_cast<double>(y_m.size());
+}
+
+/// Coarsest grid the readings lie on, metres (0 when none of 0.1, 0.25, 0.5, 1, 2, 5, 10 and
+/// 20 mm fits): the sensor's range resolution when it reports rounded ranges (quantisation).
+inline double detectReadingGrid(const std::vector<double>& y_m) {
+  double best = 0.0;
+  for (double q : {1e-4, 2.5e-4, 5e-4, 1e-3, 2e-3, 5e-3, 1e-2, 2e-2})
+    if (gridResultant(y_m, q) > 0.9) best = q;
+  return best;
 }
 
 }  // namespace lidarcal

@@ -6,6 +6,7 @@
 #include <limits>
 #include <map>
 #include <optional>
+#include <tuple>
 #include <utility>
 #include <set>
 #include <stdexcept>
@@ -69,6 +70,31 @@ std::optional<std::pair<LandmarkObservations, LandmarkObservations>> foldSplit(c
   }
   if (!any) return std::nullopt;
   return std::make_pair(subset(obs, train), subset(obs, test));
+}
+
+/// The readings' grid (detectReadingGrid over every finite beam; 0: none).
+double readingGrid(const LandmarkObservations& obs) {
+  std::vector<double> y;
+  for (const auto& s : obs.sightings)
+    for (const auto& b : s.beams)
+      if (std::isfinite(b.range_m)) y.push_back(b.range_m);
+  return detectReadingGrid(y);
+}
+
+/// The readings spread uniformly over their grid cells of width q (uniform dequantisation;
+/// Theis, van den Oord & Bethge, "A note on the evaluation of generative models", ICLR 2016):
+/// where the readings lie on a grid, the held-out likelihoods of the continuous models are taken
+/// at these, the rounded model's (readingLogLikelihood with a grid) at the readings themselves.
+/// Both are then densities of the same variable (as in the static diagnosis); fits stay on the
+/// readings as recorded.
+LandmarkObservations dequantise(const LandmarkObservations& obs, double q, std::uint64_t seed) {
+  LandmarkObservations out = obs;
+  auto gen = makeRng(seed, 0x0ULL);
+  std::uniform_real_distribution<double> cell(-0.5 * q, 0.5 * q);
+  for (auto& s : out.sightings)
+    for (auto& b : s.beams)
+      if (std::isfinite(b.range_m)) b.range_m += cell(gen);
+  return out;
 }
 
 /// Fold of each sighting: scan position within its stop modulo K, or (stop + landmark) mod K
@@ -189,7 +215,7 @@ std::vector<double> heldOutLikelihoods(const LandmarkObservations& train, const 
     const Eigen::Vector3d g = poseGradient(fit, r);
     const double sigma = std::sqrt(r.sigma_m * r.sigma_m + g.dot(cov[r.stop] * g));
     ll[i] = readingLogLikelihood(r.y_m, r.mean_m, sigma, r.edge ? fit.effects.mixed_pixel_fraction : 0.0, cfg.outlier_floor,
-                                 fit.window_min_m, fit.window_max_m, fit.effects.student_dof);
+                                 fit.window_min_m, fit.window_max_m, fit.effects.student_dof, fit.effects.range_grid_m);
   }
   return ll;
 }
@@ -536,6 +562,7 @@ ReplicaPlan replicaPlan(const LandmarkObservations& obs, const JointResult& fit,
   c.effects.range_drift_reference_scan = fit.effects.drift_reference_scan;
   c.effects.mixed_pixel_fraction = fit.effects.mixed_pixel_fraction;
   c.effects.noise_student_dof = fit.effects.student_dof;
+  c.effects.range_resolution_m = fit.effects.range_grid_m;
   c.mount_yaw_rad = fit.effects.angle_offset_rad;
   if (c.effects.mixed_pixel_fraction > 0.0) {
     // The fitted mixed pixels read uniformly up to the window's end: a background that far.
@@ -1008,6 +1035,10 @@ std::map<std::string, double> effectEstimates(Effect e, const JointResult& f) {
   if (e == Effect::range_noise_law) m["noise_exponent"] = x.noise_exponent;
   if (e == Effect::odometry_scale) m["odometry_scale"] = x.odometry_scale;
   if (e == Effect::heavy_tails) m["student_dof"] = x.student_dof;
+  if (e == Effect::quantisation) {
+    m["grid_m"] = x.range_grid_m;
+    m["noise_scale_unrounded"] = f.model.noise.sigma_e;  // sigma_e of the law before the rounding
+  }
   return m;
 }
 
@@ -1030,7 +1061,8 @@ std::map<std::string, double> sceneKeys(Effect e, const JointResult& f, const Re
                                           {Effect::mixed_pixels, x.mixed_pixel_fraction},
                                           {Effect::angle_offset, rad2deg(x.angle_offset_rad)},
                                           {Effect::odometry_scale, x.odometry_scale},
-                                          {Effect::heavy_tails, x.student_dof}};
+                                          {Effect::heavy_tails, x.student_dof},
+                                          {Effect::quantisation, x.range_grid_m}};
   if (const auto it = value.find(e); it != value.end()) k[info(e).scene_key] = it->second;
   // The fit's drift is zero at its mean scan; the simulator's at the reference scan given here.
   if (e == Effect::range_drift) k["sensor.effects.range_drift_reference_scan"] = c.effects.range_drift_reference_scan;
@@ -1133,7 +1165,10 @@ class SequenceDiagnosis {
   /// An angle offset is one heading shared by all stops (nested), handled by parsimony.
   std::vector<std::pair<Effect, Effect>> nestedEffects() const { return {{Effect::angle_offset, Effect::heading_error}}; }
   void refineCause(DiagnosisResult& out) const;
-  std::vector<HeldOutGain> gainsBesideTails(const std::vector<std::size_t>& effects, std::size_t tails) const;
+  void nameBeside(DiagnosisResult& out, Effect symptom) const;
+  std::vector<HeldOutGain> gainsBeside(const std::vector<std::size_t>& effects, std::size_t under) const;
+  std::pair<JointConfig, JointInit> beside(std::size_t c, std::size_t under) const;
+  double pBesideGridInSample(std::size_t c, std::size_t under) const;
   Closeness closenessBaseline(const DiagnosisResult&) const { return closeness(measured_z_, sim_base_); }
   void extend(std::size_t c, DiagnosisResult& out) const;
 
@@ -1150,6 +1185,8 @@ class SequenceDiagnosis {
   void requireClearOfNull(CandidateResult& r, const JointResult& fc) const;
   bool settleBaseline();
   void foldLikelihoods(HeldOut& held, std::size_t steps_before, std::size_t steps) const;
+  LandmarkObservations scoredTest(const LandmarkObservations& recorded, const std::vector<int>& fold, int f,
+                                  const JointConfig& cfg) const;
   void odometryLikelihoods(HeldOut& held) const;
   /// An effect the baseline already holds (heading_error under the motion prior, where the
   /// baseline refines the headings): its "extended" fits are the baseline's, not fitted again.
@@ -1159,7 +1196,9 @@ class SequenceDiagnosis {
   /// Gaussian σ² + gᵀCg scores it with, and clean simulated drives with large poles were named
   /// heavy_tails (ν 17 and 40, +0.008 to +0.014 nats per reading held out, ΔAIC in sample +7).
   bool untested(Effect e) const { return e == Effect::heavy_tails && base_.effects.estimate_heading; }
-  bool notFitted(Effect e) const { return inBaseline(e) || untested(e); }
+  /// The rounded model where the readings lie on no grid: the baseline's.
+  bool offGrid(Effect e) const { return e == Effect::quantisation && grid_ <= 0.0; }
+  bool notFitted(Effect e) const { return inBaseline(e) || untested(e) || offGrid(e); }
   void setIdentifiability(CandidateResult& r, const JointResult& fc, bool radius_known) const;
 
   const LandmarkObservations& obs_;
@@ -1183,10 +1222,22 @@ class SequenceDiagnosis {
   bool settled_ = false;               // a candidate's solution gave the baseline a better optimum
   std::vector<double> base_total_;     // per candidate: the baseline's -log L in its optimum (heldOut)
   std::map<Effect, Identifiability> ident_;
+  double grid_ = 0.0;                  // grid the readings lie on (0: none)
+  LandmarkObservations dequantised_;   // obs_ spread over its grid cells (grid_ > 0)
 };
+
+/// The held-out readings a model of `cfg` is scored on: fold f's readings as recorded (`recorded`)
+/// for the rounded model or when the readings lie on no grid, otherwise spread over their cells.
+LandmarkObservations SequenceDiagnosis::scoredTest(const LandmarkObservations& recorded, const std::vector<int>& fold, int f,
+                                                   const JointConfig& cfg) const {
+  if (grid_ <= 0.0 || cfg.effects.quantised) return recorded;
+  return foldSplit(dequantised_, fold, f)->second;
+}
 
 bool SequenceDiagnosis::fitBaseline(DiagnosisResult& out) {
   if (!calibrateBaseline(out)) return false;
+  grid_ = readingGrid(obs_);
+  if (grid_ > 0.0) dequantised_ = dequantise(obs_, grid_, deriveSeed(config_.seed, 0xDE0A7ULL));
   base_ = baselineConfig(cal_, cc_, obs_, config_);
   findStarts();
   chooseOrder();
@@ -1434,7 +1485,8 @@ void SequenceDiagnosis::foldLikelihoods(HeldOut& held, std::size_t steps_before,
     reportProgress(config_, kHeldOutStage, steps_before + static_cast<std::size_t>(f), steps);
     const auto split = foldSplit(obs_, fold, f);
     if (!split) continue;
-    const auto& [tr, te] = *split;
+    const auto& [tr, recorded] = *split;
+    const LandmarkObservations te = scoredTest(recorded, fold, f, base_);
     const JointResult fb = refineJoint(tr, initFrom(fit0_), warm(base_));
     if (!fb.ok()) continue;
     std::vector<std::size_t> scan;
@@ -1455,7 +1507,7 @@ void SequenceDiagnosis::foldLikelihoods(HeldOut& held, std::size_t steps_before,
       // (sameOptimum): that baseline's difference to fb's is taken off its readings (held.base
       // stays fb's).
       const std::optional<JointResult> bb = fit0_.motion_prior ? sameOptimum(tr, c, fc, fb) : std::nullopt;
-      ec[c] = heldOutLikelihoods(tr, te, fc, cfgs_[c]);
+      ec[c] = heldOutLikelihoods(tr, cfgs_[c].effects.quantised ? recorded : te, fc, cfgs_[c]);
       if (ec[c].size() != eb.size()) {
         ok = false;
         continue;
@@ -1551,6 +1603,12 @@ CandidateResult SequenceDiagnosis::candidate(std::size_t c, const HeldOut& held,
     r.p_value = kNaN;
     return r;
   }
+  if (offGrid(r.effect)) {
+    r.applicable = false;
+    r.note = "the readings lie on no grid of 0.1 to 20 mm";
+    r.p_value = kNaN;
+    return r;
+  }
   // Held-out gain per point, standard error from per-scan blocks.
   setHeldOutGain(r, heldOutGain(held, c));
   // Parameters beyond the baseline's (a continuous recording's baseline refines the headings too).
@@ -1566,6 +1624,18 @@ CandidateResult SequenceDiagnosis::candidate(std::size_t c, const HeldOut& held,
   // significant (p 1e-17 to 1e-20) whose held-out gains were not (docs/FINDINGS.md).
   r.p_likelihood_ratio = fit0_.motion_prior ? kNaN : likelihoodRatioPValue(lr, r.parameters);
   r.p_value = combinedPValue(r.p_heldout, r.score_p_value, r.p_likelihood_ratio);
+  if (r.effect == Effect::quantisation) {
+    // The grid is plain in the readings (its statistic's p is ~0 on every recording on one, real
+    // ones too): it shows that the grid exists, not that the rounding explains anything, which
+    // is the held-out gain's to say. In sample, the baseline is scored on the spread readings
+    // (a density at the grid points themselves is not comparable with a cell probability).
+    double spread = 0.0;
+    for (const auto& x : evaluateJoint(dequantised_, fit0_, base_)) spread -= x.log_likelihood;
+    r.delta_aic = 2.0 * r.parameters - 2.0 * (spread + fit0_.prior_neg_log_likelihood - fc.neg_log_likelihood -
+                                              fc.prior_neg_log_likelihood);
+    r.p_likelihood_ratio = kNaN;
+    r.p_value = r.p_heldout;
+  }
   setIdentifiability(r, fc, out.radius_known);
   requireClearOfNull(r, fc);
   r.estimates = effectEstimates(r.effect, fc);
@@ -1590,39 +1660,52 @@ void SequenceDiagnosis::setIdentifiability(CandidateResult& r, const JointResult
   else r.note = "the baseline's parameters absorb it (standard error " + std::to_string(r.standard_error) + " after them)";
 }
 
-/// Held-out gains of the effects of candidates `effects` beside the Student-t noise of candidate
-/// `tails`: the joint refinement with both terms against the one with the t alone (fitted once
-/// per fold for all of them), on the same scan folds (per-scan blocks). Whether a physical
-/// effect holds once the tails have their own term.
-std::vector<HeldOutGain> SequenceDiagnosis::gainsBesideTails(const std::vector<std::size_t>& effects, std::size_t tails) const {
+/// Held-out gains of the effects of candidates `effects` beside the term of candidate `under`
+/// (the Student-t noise, or the reading grid): the joint refinement with both terms against the
+/// one with `under`'s alone (fitted once per fold for all of them), on the same scan folds
+/// (per-scan blocks; beside the grid, the odometry too). Whether a physical effect holds once the
+/// tails, or the rounding, have a term of their own.
+std::vector<HeldOutGain> SequenceDiagnosis::gainsBeside(const std::vector<std::size_t>& effects, std::size_t under) const {
   std::vector<JointConfig> both(effects.size());
   std::vector<JointInit> start(effects.size());
-  for (std::size_t k = 0; k < effects.size(); ++k) {
-    both[k] = cfgs_[effects[k]];
-    both[k].effects.enable(Effect::heavy_tails);
-    start[k] = initFrom(fits_[effects[k]]);
-    start[k].effects.student_dof = fits_[tails].effects.student_dof;
-  }
+  for (std::size_t k = 0; k < effects.size(); ++k) std::tie(both[k], start[k]) = beside(effects[k], under);
   const std::vector<int> fold = folds(obs_, config_.folds);
   std::vector<HeldOut> held(effects.size(), HeldOut(1));
   for (int f = 0; f < config_.folds; ++f) {
     const auto split = foldSplit(obs_, fold, f);
     if (!split) continue;
-    const auto& [tr, te] = *split;
-    const JointResult ft = refineJoint(tr, initFrom(fits_[tails]), warm(cfgs_[tails]));
+    const auto& [tr, recorded] = *split;
+    const JointResult ft = refineJoint(tr, initFrom(fits_[under]), warm(cfgs_[under]));
     if (!ft.ok()) continue;
     std::vector<std::size_t> scan;
-    const auto lt = heldOutLikelihoods(tr, te, ft, cfgs_[tails], &scan);
+    const auto lt = heldOutLikelihoods(tr, scoredTest(recorded, fold, f, cfgs_[under]), ft, cfgs_[under], &scan);
     for (std::size_t k = 0; k < effects.size(); ++k) {
       const JointResult fb = refineJoint(tr, start[k], warm(both[k]));
       if (!fb.ok()) continue;
-      const auto lb = heldOutLikelihoods(tr, te, fb, both[k]);
+      const auto lb = heldOutLikelihoods(tr, scoredTest(recorded, fold, f, both[k]), fb, both[k]);
       if (lt.size() != lb.size()) continue;
       for (std::size_t i = 0; i < lt.size(); ++i) {
         held[k].base.push_back(lt[i]);
         held[k].cand[0].push_back(lb[i]);
         held[k].block.push_back(scan[i]);
       }
+    }
+  }
+  // Stop and go: the odometry held out too, leave one stop out, as in the candidates' gains
+  // (odometryLikelihoods).
+  if (!fit0_.motion_prior && candidates_[under] == Effect::quantisation) {
+    const auto ou = odometryHeldOut(obs_, fits_[under], cfgs_[under]);
+    for (std::size_t k = 0; k < effects.size(); ++k) {
+      if (held[k].base.empty()) continue;
+      const JointResult fk = refineJoint(obs_, start[k], both[k]);
+      if (!fk.ok()) continue;
+      const auto ok = odometryHeldOut(obs_, fk, both[k]);
+      for (std::size_t j = 0; j < ou.size() && j < ok.size(); ++j)
+        for (int twice = 0; twice < 2; ++twice) {  // one block per stop, two observations (x, y)
+          held[k].base.push_back(0.5 * ou[j]);
+          held[k].cand[0].push_back(0.5 * ok[j]);
+          held[k].block.push_back(std::numeric_limits<std::size_t>::max() - j);
+        }
     }
   }
   std::vector<HeldOutGain> out;
@@ -1633,36 +1716,99 @@ std::vector<HeldOutGain> SequenceDiagnosis::gainsBesideTails(const std::vector<s
   return out;
 }
 
-/// Heavy tails are a symptom (issue 20: the named cause must be physical). When the Student t
-/// comes first, each significant physical effect is fitted beside it (gainsBesideTails): one
-/// whose held-out gain over the t alone stays significant (one-sided, Bonferroni over those
-/// tried) is the cause, the largest such gain named, and the tails remain beside it. With none,
-/// the t stays named and the cause of the tails is unknown: a sequence has no covariate model of
-/// its tails (static recordings do: diagnosis/tails.hpp). Naming the largest significant
-/// physical effect without this check renamed 10 of 40 simulated t-noise cases (mixed_pixels 7:
-/// a t's far readings on outermost beams look like mixed pixels).
+/// Candidate c's refinement with candidate `under`'s term switched on too, and its start (c's
+/// solution, with the t's degrees of freedom when `under` is the Student-t noise).
+std::pair<JointConfig, JointInit> SequenceDiagnosis::beside(std::size_t c, std::size_t under) const {
+  std::pair<JointConfig, JointInit> out{cfgs_[c], initFrom(fits_[c])};
+  out.first.effects.enable(candidates_[under]);
+  if (candidates_[under] == Effect::heavy_tails) out.second.effects.student_dof = fits_[under].effects.student_dof;
+  return out;
+}
+
+/// Effects of the noise's shape: their parameters (kappa, gamma, nu, the mixed-pixel fraction)
+/// are estimated on the Gaussian residuals and only the law's scale by ML on the grid cells, so
+/// the rounded model with one of them is not an ML fit, and its likelihood ratio against the
+/// rounded model alone not chi-squared.
+bool noiseShapeEffect(Effect e) {
+  return e == Effect::incidence_noise || e == Effect::range_noise_law || e == Effect::heavy_tails || e == Effect::mixed_pixels;
+}
+
+/// In-sample evidence beside a fine reading grid (nameBeside), as the candidates have it (stop
+/// and go, one-parameter effects in the mean or the poses; otherwise NaN): the likelihood ratio of
+/// candidate c's fit with the grid against the rounded model alone on all the data, chi-squared
+/// with one degree of freedom. Both are rounded models of the recorded readings, so their
+/// likelihoods compare (a continuous model's and the rounded one's do not). An angle offset is
+/// seen in sample: the poles turn with the bearings and take most of it out of sample (on a 1 mm
+/// grid, 15 of 20 offsets were named `quantisation` without it, its held-out gain beside the
+/// grid as alone, +0.005 +- 0.004).
+double SequenceDiagnosis::pBesideGridInSample(std::size_t c, std::size_t under) const {
+  if (fit0_.motion_prior || noiseShapeEffect(candidates_[c])) return kNaN;
+  const auto [cfg, start] = beside(c, under);
+  const JointResult f = refineJoint(obs_, start, cfg);
+  if (!f.ok()) return kNaN;
+  return likelihoodRatioPValue(2.0 * (total(fits_[under]) - total(f)), f.effect_parameters - fits_[under].effect_parameters);
+}
+
+/// Heavy tails are a symptom (issue 20: the named cause must be physical), and a reading grid
+/// is the format of the sensor's output, which biases nothing. When either comes first, each
+/// other significant effect is fitted beside it (gainsBeside): one whose held-out gain over the
+/// tails' (the grid's) term alone stays significant (one-sided, Bonferroni over those tried) is
+/// the cause, the largest such gain named, and the tails (the rounding) remain beside it. With
+/// none, the symptom stays named. The grid is checked first and is not tried beside the tails
+/// (it is no cause of them). Naming the largest significant physical effect without this check
+/// renamed 10 of 40 simulated t-noise cases (mixed_pixels 7: a t's far readings on outermost
+/// beams look like mixed pixels); readings of clean simulated data rounded to 1 mm were named
+/// `quantisation` in 17 of 20 (+0.01 nats per reading: the squared law's noise is 0.5 mm at
+/// 0.5 m), a hidden effect beside them would otherwise compete with the rounding's gain.
 void SequenceDiagnosis::refineCause(DiagnosisResult& out) const {
-  if (!names(out.primary_cause, Effect::heavy_tails)) return;
-  std::size_t tails = candidates_.size();
+  if (names(out.primary_cause, Effect::quantisation)) nameBeside(out, Effect::quantisation);
+  if (names(out.primary_cause, Effect::heavy_tails)) nameBeside(out, Effect::heavy_tails);
+}
+
+void SequenceDiagnosis::nameBeside(DiagnosisResult& out, Effect symptom) const {
+  const bool grid = symptom == Effect::quantisation;
+  const char* key = grid ? "heldout_gain_beside_grid" : "heldout_gain_beside_tails";
+  const std::string key_se = std::string(key) + "_se";
+  std::size_t under = candidates_.size();
   std::vector<std::size_t> physical;
   for (std::size_t c = 0; c < out.candidates.size(); ++c) {
     const CandidateResult& r = out.candidates[c];
-    if (r.effect == Effect::heavy_tails) tails = c;
-    else if (r.significant && r.identifiable) physical.push_back(c);
+    if (r.effect == symptom) under = c;
+    else if (r.significant && r.identifiable && r.effect != Effect::quantisation) physical.push_back(c);
   }
-  if (tails == candidates_.size()) return;
-  const double nu = fits_[tails].effects.student_dof;
-  char buf[480];
+  if (under == candidates_.size()) return;
+  const double value = grid ? 1000.0 * fits_[under].effects.range_grid_m : fits_[under].effects.student_dof;
+  // The refinement fits the geometry by least squares with the rounding's variance q^2/12 beside
+  // the noise's (Sheppard's correction): the ML fit of the rounded readings only while the grid
+  // is finer than about twice the noise. Beyond, the likelihood ratio is not chi-squared: on
+  // 5-20 mm grids over noise of 0.9 mm on the nearest tenth of the readings it named incidence
+  // biases of about 1 mm beside the grid in 4 of 40 simulated cases with none hidden. Fine: q at
+  // most twice the noise of the readings' 10th percentile.
+  bool fine_grid = false;
+  if (grid) {
+    std::vector<double> s;
+    for (const auto& x : evaluateJoint(obs_, fits_[under], cfgs_[under])) s.push_back(x.sigma_m);
+    std::sort(s.begin(), s.end());
+    fine_grid = !s.empty() && fits_[under].effects.range_grid_m <= 2.0 * s[s.size() / 10];
+  }
+  char buf[520];
   std::size_t best = candidates_.size();
   double best_gain = 0.0;
-  const std::vector<HeldOutGain> gains = gainsBesideTails(physical, tails);
+  const std::vector<HeldOutGain> gains = gainsBeside(physical, under);
   for (std::size_t k = 0; k < physical.size(); ++k) {
     const std::size_t c = physical[k];
     const HeldOutGain& g = gains[k];
     CandidateResult& r = out.candidates[c];
-    r.estimates["heldout_gain_beside_tails"] = g.gain;
-    r.estimates["heldout_gain_beside_tails_se"] = g.se;
-    const double p = g.finite ? heldoutPValue(g.gain, g.se) : 1.0;
+    r.estimates[key] = g.gain;
+    r.estimates[key_se] = g.se;
+    double p = g.finite ? heldoutPValue(g.gain, g.se) : 1.0;
+    // Beside a fine grid the likelihood ratio counts too (Bonferroni with the held-out gain, as
+    // in the candidate's own p), when the held-out gain is positive.
+    if (fine_grid && g.finite && g.gain > 0.0) {
+      const double p_lr = pBesideGridInSample(c, under);
+      if (std::isfinite(p_lr)) r.estimates["p_likelihood_ratio_beside_grid"] = p_lr;
+      p = combinedPValue(p, kNaN, p_lr);
+    }
     if (!(p * static_cast<double>(physical.size()) < config_.alpha)) continue;
     if (best == candidates_.size() || g.gain > best_gain) {
       best = c;
@@ -1671,17 +1817,22 @@ void SequenceDiagnosis::refineCause(DiagnosisResult& out) const {
   }
   if (best == candidates_.size()) {
     std::snprintf(buf, sizeof buf,
-                  "; the tails (Student t, nu %.3g) are significant and no physical effect holds beside them (%zu tried, "
-                  "held-out gain over the t alone): cause unknown",
-                  nu, physical.size());
+                  grid ? "; the readings' grid (%.3g mm) is significant and no other effect holds beside it (%zu tried, held-out "
+                         "gain over the rounded model alone)"
+                       : "; the tails (Student t, nu %.3g) are significant and no physical effect holds beside them (%zu tried, "
+                         "held-out gain over the t alone): cause unknown",
+                  value, physical.size());
     out.decision += buf;
     return;
   }
   const CandidateResult& r = out.candidates[best];
   std::snprintf(buf, sizeof buf,
-                "heavy tails (Student t, nu %.3g) come first, a symptom; %s holds beside them (held-out gain over the t alone "
-                "+%.4g +- %.2g nats per reading; alone +%.4g): named, the tails remain beside it",
-                nu, toString(r.effect), best_gain, r.estimates.at("heldout_gain_beside_tails_se"), r.heldout_gain_nats_per_point);
+                grid ? "the readings' grid (%.3g mm) comes first, a format of the output that biases nothing; %s holds beside it "
+                       "(held-out gain over the rounded model alone +%.4g +- %.2g nats per reading; alone +%.4g): named, the "
+                       "rounding remains beside it"
+                     : "heavy tails (Student t, nu %.3g) come first, a symptom; %s holds beside them (held-out gain over the t "
+                       "alone +%.4g +- %.2g nats per reading; alone +%.4g): named, the tails remain beside it",
+                value, toString(r.effect), best_gain, r.estimates.at(key_se), r.heldout_gain_nats_per_point);
   out.decision = buf;
   out.primary_cause = toString(r.effect);
 }

@@ -625,15 +625,6 @@ double expected(const Model& m, const Bin& b, const BinFit& f, double a, double 
   return f.at(a, t) + (centreOf(m, b, f) - f.m);
 }
 
-/// Probability that a normal variable (mean mu, std. dev. s) falls in [lo, hi], computed on
-/// the side of the tail it lies in (no cancellation far from the mean).
-double normalMass(double lo, double hi, double mu, double s) {
-  const double a = (lo - mu) / (s * std::sqrt(2.0)), b = (hi - mu) / (s * std::sqrt(2.0));
-  if (a > 0.0) return 0.5 * (std::erfc(a) - std::erfc(b));
-  if (b < 0.0) return 0.5 * (std::erfc(-b) - std::erfc(-a));
-  return 1.0 - 0.5 * (std::erfc(b) + std::erfc(-a));
-}
-
 /// Log-likelihood of one reading (predictive: the bin's location is known to 1 / n_train).
 double readingLL(const Model& m, const Data& d, const Bin& b, const BinFit& f, std::size_t i, double floor_weight) {
   const double centre = expected(m, b, f, d.a[i], d.t[i]) + m.drift * (d.t[i] - d.t_mean);
@@ -942,14 +933,6 @@ const std::vector<StatisticInfo>& statInfo() {
       {"range_offset_mm", "wall", "range offset alpha_0 the walls' straightness implies, mm", true},
   };
   return info;
-}
-
-/// Coarsest grid the readings lie on (0 when none of 0.1, 0.25, 0.5, 1, 2, 5, 10 mm fits).
-double detectGrid(const std::vector<double>& y) {
-  double best = 0.0;
-  for (double q : {1e-4, 2.5e-4, 5e-4, 1e-3, 2e-3, 5e-3, 1e-2})
-    if (gridResultant(y, q) > 0.9) best = q;
-  return best;
 }
 
 /// Readings on a grid q scored as densities: every model's likelihood is evaluated at the reading
@@ -1317,7 +1300,7 @@ bool StaticDiagnosis::fitBaseline(DiagnosisResult& out) {
   std::vector<double> used_y;
   for (std::size_t i = 0; i < d_.y.size(); ++i)
     if (d_.bin_of[i] >= 0) used_y.push_back(d_.y[i]);
-  q_ = detectGrid(used_y);
+  q_ = detectReadingGrid(used_y);
   if (q_ > 0.0) {
     dequantised_ = dequantise(d_, q_, deriveSeed(config_.seed, 0xDE0A7ULL));
     scored_ = &dequantised_;

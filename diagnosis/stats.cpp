@@ -191,17 +191,6 @@ double clippedSquareVariance(double c) {
   return m4 - m2 * m2;
 }
 
-double gridResultant(const std::vector<double>& y, double q) {
-  if (y.empty() || !(q > 0.0)) return 0.0;
-  double c = 0.0, s = 0.0;
-  for (double v : y) {
-    const double a = 2.0 * kPi * (v / q - std::floor(v / q));
-    c += std::cos(a);
-    s += std::sin(a);
-  }
-  return std::hypot(c, s) / static_cast<double>(y.size());
-}
-
 std::string nameCause(std::vector<CandidateResult>& cands, double alpha, std::string& decision,
                       const std::vector<std::pair<Effect, Effect>>& nested,
                       const std::vector<std::pair<Effect, Effect>>& indistinguishable) {

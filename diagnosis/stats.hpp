@@ -8,6 +8,7 @@
 
 #include <Eigen/Core>
 
+#include "common/stats_util.hpp"
 #include "diagnosis/diagnosis.hpp"
 
 namespace lidarcal::diagnosis {
@@ -88,10 +89,6 @@ double huberPsi(double z, double c = 3.0);
 /// E[min(Z^2, c^2)] and Var[min(Z^2, c^2)] for a standard normal Z.
 double clippedSquareMean(double c = 3.0);
 double clippedSquareVariance(double c = 3.0);
-
-/// Resultant length |mean exp(2 pi i y / q)| of readings y on a grid of step q: near 1 when the
-/// readings are multiples of q, about 1/sqrt(n) when they are not.
-double gridResultant(const std::vector<double>& y_m, double q_m);
 
 /// Names the cause from the candidates (fills `significant` and the Holm p-values first):
 ///   significant = Holm-adjusted p < alpha and held-out gain > 0;

@@ -334,7 +334,8 @@ void writeCandidates(std::ostream& md, const DiagnosisResult& r) {
   md << "Each effect added to the baseline and fitted; held-out log-likelihood gain per point (" << r.folds
      << " folds by scan" << (!seq ? ", wall beams leave-one-out" : motionPrior(r) ? "" : ", odometry leave-one-stop-out")
      << "), its one-sided p-value, Holm-adjusted across the candidates; significant = adjusted p < alpha with a positive gain"
-     << (seq ? "" : " (for a reading grid seen in the readings, `quantisation`: a gain not below zero by two standard errors)")
+     << "; `quantisation` (readings on a grid): the p of its held-out gain alone, every other model scored on the readings "
+        "spread over their grid cells"
      << ".\n\n";
   md << "| effect | held-out gain [nats/pt] | se | p | Holm p | delta AIC | params | significant | identifiable | estimates | note |\n"
         "|---|---|---|---|---|---|---|---|---|---|---|\n";

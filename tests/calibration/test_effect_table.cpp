@@ -40,7 +40,8 @@ TEST(EffectTable, TheJointRefinementHasATermExactlyForTheEffectsTheTableSays) {
                          fx.drift != before.drift || fx.angle_offset != before.angle_offset ||
                          fx.incidence_bias != before.incidence_bias || fx.incidence_noise != before.incidence_noise ||
                          fx.noise_exponent != before.noise_exponent || fx.mixed_pixels != before.mixed_pixels ||
-                         fx.odometry_scale != before.odometry_scale || fx.student_noise != before.student_noise;
+                         fx.odometry_scale != before.odometry_scale || fx.student_noise != before.student_noise ||
+                         fx.quantised != before.quantised;
     EXPECT_EQ(changed, has) << i.name;
     // A sequence can test exactly the effects the joint refinement can fit.
     EXPECT_EQ(i.sequence_statistic != nullptr, i.joint_term) << i.name;
@@ -48,7 +49,7 @@ TEST(EffectTable, TheJointRefinementHasATermExactlyForTheEffectsTheTableSays) {
 }
 
 TEST(EffectTable, EffectNamesListsTheSelectedNamesInTableOrder) {
-  EXPECT_EQ(effectNames([](const EffectInfo& i) { return i.static_statistic && !i.sequence_statistic; }), "quantisation");
+  EXPECT_EQ(effectNames([](const EffectInfo& i) { return i.static_statistic && !i.sequence_statistic; }), "");
   EXPECT_EQ(effectNames([](const EffectInfo& i) { return i.static_statistic && i.sequence_statistic && !i.joint_term; }), "");
   EXPECT_EQ(effectNames([](const EffectInfo& i) { return !i.static_statistic && !i.sequence_statistic; }), "dark_surface");
   EXPECT_EQ(effectNames([](const EffectInfo&) { return false; }), "");

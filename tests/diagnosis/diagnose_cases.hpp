@@ -114,6 +114,12 @@ inline HiddenEffectCase hiddenEffectCase(const std::string& effect, std::uint64_
   } else if (effect == "heavy_tails") {
     c.effects.noise_student_dof = 3.0 + 2.0 * u(rng);  // Student t noise, 3-5 degrees of freedom (same variance)
     std::snprintf(buf, sizeof buf, "nu %.2f", c.effects.noise_student_dof);
+  } else if (effect == "quantisation") {
+    // Readings rounded to 5, 10 or 20 mm (a sensor reporting whole centimetres: the SICK LMS
+    // logs of CARMEN). The noise is 2 mm at 1 m and 2 cm at 3 m: the grid shows near the poles.
+    const double grids[] = {0.005, 0.01, 0.02};
+    c.effects.range_resolution_m = grids[std::min(2, static_cast<int>(3.0 * u(rng)))];
+    std::snprintf(buf, sizeof buf, "grid %.0f mm", 1000.0 * c.effects.range_resolution_m);
   } else {
     throw std::invalid_argument("hiddenEffectCase: unknown effect " + effect);
   }
