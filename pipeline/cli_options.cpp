@@ -62,9 +62,10 @@ void addCalibrationOptions(CLI::App* app, const std::shared_ptr<CalibrationOptio
       ->check(CLI::IsMember({"auto", "on", "off"}))
       ->capture_default_str();
   app->add_option("--effects", o->effects,
-                  "Comma-separated effect terms for the joint refinement, as `lidarcal diagnose` names them: "
-                  "incidence_noise, incidence_bias, landmark_bias, range_drift, angle_offset, range_noise_law, mixed_pixels, "
-                  "odometry_scale (per-stop headings, heading_error, are always refined)");
+                  "Comma-separated effect terms for the joint refinement, as `lidarcal diagnose` names them: " +
+                      effectNames([](const EffectInfo& i) { return i.joint_term && i.effect != Effect::heading_error; }) +
+                      " (heavy_tails: Student-t noise; quantisation: the readings rounded to the grid they lie on; per-stop "
+                      "headings, heading_error, are always refined)");
 }
 
 calibration::CalibrationConfig calibrationConfig(const CalibrationOptions& o) {
