@@ -1166,9 +1166,10 @@ class SequenceDiagnosis {
   std::vector<std::pair<Effect, Effect>> nestedEffects() const { return {{Effect::angle_offset, Effect::heading_error}}; }
   void refineCause(DiagnosisResult& out) const;
   void nameBeside(DiagnosisResult& out, Effect symptom) const;
-  std::vector<HeldOutGain> gainsBeside(const std::vector<std::size_t>& effects, std::size_t under) const;
+  std::vector<HeldOutGain> gainsBeside(const std::vector<std::size_t>& effects, std::size_t under,
+                                       std::vector<JointResult>& full) const;
   std::pair<JointConfig, JointInit> beside(std::size_t c, std::size_t under) const;
-  double pBesideGridInSample(std::size_t c, std::size_t under) const;
+  double pBesideGridInSample(const JointResult& both, std::size_t under) const;
   Closeness closenessBaseline(const DiagnosisResult&) const { return closeness(measured_z_, sim_base_); }
   void extend(std::size_t c, DiagnosisResult& out) const;
 
@@ -1185,8 +1186,9 @@ class SequenceDiagnosis {
   void requireClearOfNull(CandidateResult& r, const JointResult& fc) const;
   bool settleBaseline();
   void foldLikelihoods(HeldOut& held, std::size_t steps_before, std::size_t steps) const;
-  LandmarkObservations scoredTest(const LandmarkObservations& recorded, const std::vector<int>& fold, int f,
-                                  const JointConfig& cfg) const;
+  LandmarkObservations spreadTest(const std::vector<int>& fold, int f) const;
+  const LandmarkObservations& scored(const JointConfig& cfg, const LandmarkObservations& recorded,
+                                     const LandmarkObservations& spread) const;
   void odometryLikelihoods(HeldOut& held) const;
   /// An effect the baseline already holds (heading_error under the motion prior, where the
   /// baseline refines the headings): its "extended" fits are the baseline's, not fitted again.
@@ -1226,12 +1228,17 @@ class SequenceDiagnosis {
   LandmarkObservations dequantised_;   // obs_ spread over its grid cells (grid_ > 0)
 };
 
-/// The held-out readings a model of `cfg` is scored on: fold f's readings as recorded (`recorded`)
-/// for the rounded model or when the readings lie on no grid, otherwise spread over their cells.
-LandmarkObservations SequenceDiagnosis::scoredTest(const LandmarkObservations& recorded, const std::vector<int>& fold, int f,
-                                                   const JointConfig& cfg) const {
-  if (grid_ <= 0.0 || cfg.effects.quantised) return recorded;
-  return foldSplit(dequantised_, fold, f)->second;
+/// Fold f's held-out readings spread over their grid cells (nothing when the readings lie on no
+/// grid): split once per fold, for every model scored on them (scored).
+LandmarkObservations SequenceDiagnosis::spreadTest(const std::vector<int>& fold, int f) const {
+  return grid_ > 0.0 ? foldSplit(dequantised_, fold, f)->second : LandmarkObservations{};
+}
+
+/// The held-out readings a model of `cfg` is scored on: as recorded for the rounded model or when
+/// the readings lie on no grid, otherwise spread over their cells (`spread`, spreadTest).
+const LandmarkObservations& SequenceDiagnosis::scored(const JointConfig& cfg, const LandmarkObservations& recorded,
+                                                      const LandmarkObservations& spread) const {
+  return grid_ > 0.0 && !cfg.effects.quantised ? spread : recorded;
 }
 
 bool SequenceDiagnosis::fitBaseline(DiagnosisResult& out) {
@@ -1486,7 +1493,8 @@ void SequenceDiagnosis::foldLikelihoods(HeldOut& held, std::size_t steps_before,
     const auto split = foldSplit(obs_, fold, f);
     if (!split) continue;
     const auto& [tr, recorded] = *split;
-    const LandmarkObservations te = scoredTest(recorded, fold, f, base_);
+    const LandmarkObservations spread = spreadTest(fold, f);
+    const LandmarkObservations& te = scored(base_, recorded, spread);
     const JointResult fb = refineJoint(tr, initFrom(fit0_), warm(base_));
     if (!fb.ok()) continue;
     std::vector<std::size_t> scan;
@@ -1507,7 +1515,7 @@ void SequenceDiagnosis::foldLikelihoods(HeldOut& held, std::size_t steps_before,
       // (sameOptimum): that baseline's difference to fb's is taken off its readings (held.base
       // stays fb's).
       const std::optional<JointResult> bb = fit0_.motion_prior ? sameOptimum(tr, c, fc, fb) : std::nullopt;
-      ec[c] = heldOutLikelihoods(tr, cfgs_[c].effects.quantised ? recorded : te, fc, cfgs_[c]);
+      ec[c] = heldOutLikelihoods(tr, scored(cfgs_[c], recorded, spread), fc, cfgs_[c]);
       if (ec[c].size() != eb.size()) {
         ok = false;
         continue;
@@ -1613,7 +1621,19 @@ CandidateResult SequenceDiagnosis::candidate(std::size_t c, const HeldOut& held,
   setHeldOutGain(r, heldOutGain(held, c));
   // Parameters beyond the baseline's (a continuous recording's baseline refines the headings too).
   r.parameters = fc.effect_parameters - fit0_.effect_parameters;
-  const double lr = 2.0 * (base_total_[c] - fc.neg_log_likelihood - fc.prior_neg_log_likelihood);
+  // The rounded model: the grid is plain in the readings (its statistic's p is ~0 on every
+  // recording on one, real ones too): it shows that the grid exists, not that the rounding
+  // explains anything, which is the held-out gain's to say. In sample, the baseline is scored on
+  // the spread readings (a density at the grid points themselves is not comparable with a cell
+  // probability).
+  const bool rounded = r.effect == Effect::quantisation;
+  double base_total = base_total_[c];
+  if (rounded) {
+    double spread = 0.0;
+    for (const auto& x : evaluateJoint(dequantised_, fit0_, base_)) spread -= x.log_likelihood;
+    base_total = spread + fit0_.prior_neg_log_likelihood;
+  }
+  const double lr = 2.0 * (base_total - fc.neg_log_likelihood - fc.prior_neg_log_likelihood);
   r.delta_aic = 2.0 * r.parameters - lr;
   // In-sample evidence too, for one-parameter effects: where the baseline's parameters absorb
   // most of an effect (a constant bearing rotation moves the poles) the held-out gain is small
@@ -1622,20 +1642,8 @@ CandidateResult SequenceDiagnosis::candidate(std::size_t c, const HeldOut& held,
   // optimum, which a pose per scan does not ensure (settleBaseline found 1,780 nats between two
   // optima of one model); on clean simulated drives it called incidence biases of 0.6 mm
   // significant (p 1e-17 to 1e-20) whose held-out gains were not (docs/FINDINGS.md).
-  r.p_likelihood_ratio = fit0_.motion_prior ? kNaN : likelihoodRatioPValue(lr, r.parameters);
-  r.p_value = combinedPValue(r.p_heldout, r.score_p_value, r.p_likelihood_ratio);
-  if (r.effect == Effect::quantisation) {
-    // The grid is plain in the readings (its statistic's p is ~0 on every recording on one, real
-    // ones too): it shows that the grid exists, not that the rounding explains anything, which
-    // is the held-out gain's to say. In sample, the baseline is scored on the spread readings
-    // (a density at the grid points themselves is not comparable with a cell probability).
-    double spread = 0.0;
-    for (const auto& x : evaluateJoint(dequantised_, fit0_, base_)) spread -= x.log_likelihood;
-    r.delta_aic = 2.0 * r.parameters - 2.0 * (spread + fit0_.prior_neg_log_likelihood - fc.neg_log_likelihood -
-                                              fc.prior_neg_log_likelihood);
-    r.p_likelihood_ratio = kNaN;
-    r.p_value = r.p_heldout;
-  }
+  r.p_likelihood_ratio = fit0_.motion_prior || rounded ? kNaN : likelihoodRatioPValue(lr, r.parameters);
+  r.p_value = rounded ? r.p_heldout : combinedPValue(r.p_heldout, r.score_p_value, r.p_likelihood_ratio);
   setIdentifiability(r, fc, out.radius_known);
   requireClearOfNull(r, fc);
   r.estimates = effectEstimates(r.effect, fc);
@@ -1665,7 +1673,10 @@ void SequenceDiagnosis::setIdentifiability(CandidateResult& r, const JointResult
 /// one with `under`'s alone (fitted once per fold for all of them), on the same scan folds
 /// (per-scan blocks; beside the grid, the odometry too). Whether a physical effect holds once the
 /// tails, or the rounding, have a term of their own.
-std::vector<HeldOutGain> SequenceDiagnosis::gainsBeside(const std::vector<std::size_t>& effects, std::size_t under) const {
+std::vector<HeldOutGain> SequenceDiagnosis::gainsBeside(const std::vector<std::size_t>& effects, std::size_t under,
+                                                        std::vector<JointResult>& full) const {
+  full.clear();
+  full.resize(effects.size());
   std::vector<JointConfig> both(effects.size());
   std::vector<JointInit> start(effects.size());
   for (std::size_t k = 0; k < effects.size(); ++k) std::tie(both[k], start[k]) = beside(effects[k], under);
@@ -1677,12 +1688,13 @@ std::vector<HeldOutGain> SequenceDiagnosis::gainsBeside(const std::vector<std::s
     const auto& [tr, recorded] = *split;
     const JointResult ft = refineJoint(tr, initFrom(fits_[under]), warm(cfgs_[under]));
     if (!ft.ok()) continue;
+    const LandmarkObservations spread = spreadTest(fold, f);
     std::vector<std::size_t> scan;
-    const auto lt = heldOutLikelihoods(tr, scoredTest(recorded, fold, f, cfgs_[under]), ft, cfgs_[under], &scan);
+    const auto lt = heldOutLikelihoods(tr, scored(cfgs_[under], recorded, spread), ft, cfgs_[under], &scan);
     for (std::size_t k = 0; k < effects.size(); ++k) {
       const JointResult fb = refineJoint(tr, start[k], warm(both[k]));
       if (!fb.ok()) continue;
-      const auto lb = heldOutLikelihoods(tr, scoredTest(recorded, fold, f, both[k]), fb, both[k]);
+      const auto lb = heldOutLikelihoods(tr, scored(both[k], recorded, spread), fb, both[k]);
       if (lt.size() != lb.size()) continue;
       for (std::size_t i = 0; i < lt.size(); ++i) {
         held[k].base.push_back(lt[i]);
@@ -1697,9 +1709,9 @@ std::vector<HeldOutGain> SequenceDiagnosis::gainsBeside(const std::vector<std::s
     const auto ou = odometryHeldOut(obs_, fits_[under], cfgs_[under]);
     for (std::size_t k = 0; k < effects.size(); ++k) {
       if (held[k].base.empty()) continue;
-      const JointResult fk = refineJoint(obs_, start[k], both[k]);
-      if (!fk.ok()) continue;
-      const auto ok = odometryHeldOut(obs_, fk, both[k]);
+      full[k] = refineJoint(obs_, start[k], both[k]);
+      if (!full[k].ok()) continue;
+      const auto ok = odometryHeldOut(obs_, full[k], both[k]);
       for (std::size_t j = 0; j < ou.size() && j < ok.size(); ++j)
         for (int twice = 0; twice < 2; ++twice) {  // one block per stop, two observations (x, y)
           held[k].base.push_back(0.5 * ou[j]);
@@ -1735,18 +1747,16 @@ bool noiseShapeEffect(Effect e) {
 
 /// In-sample evidence beside a fine reading grid (nameBeside), as the candidates have it (stop
 /// and go, one-parameter effects in the mean or the poses; otherwise NaN): the likelihood ratio of
-/// candidate c's fit with the grid against the rounded model alone on all the data, chi-squared
-/// with one degree of freedom. Both are rounded models of the recorded readings, so their
+/// `both`, a candidate's fit with the grid on all the data (gainsBeside's, for the odometry),
+/// against the rounded model alone, chi-squared with one degree of freedom. Both are rounded models of the recorded readings, so their
 /// likelihoods compare (a continuous model's and the rounded one's do not). An angle offset is
 /// seen in sample: the poles turn with the bearings and take most of it out of sample (on a 1 mm
 /// grid, 15 of 20 offsets were named `quantisation` without it, its held-out gain beside the
 /// grid as alone, +0.005 +- 0.004).
-double SequenceDiagnosis::pBesideGridInSample(std::size_t c, std::size_t under) const {
-  if (fit0_.motion_prior || noiseShapeEffect(candidates_[c])) return kNaN;
-  const auto [cfg, start] = beside(c, under);
-  const JointResult f = refineJoint(obs_, start, cfg);
-  if (!f.ok()) return kNaN;
-  return likelihoodRatioPValue(2.0 * (total(fits_[under]) - total(f)), f.effect_parameters - fits_[under].effect_parameters);
+double SequenceDiagnosis::pBesideGridInSample(const JointResult& both, std::size_t under) const {
+  if (fit0_.motion_prior || !both.ok()) return kNaN;
+  return likelihoodRatioPValue(2.0 * (total(fits_[under]) - total(both)),
+                               both.effect_parameters - fits_[under].effect_parameters);
 }
 
 /// Heavy tails are a symptom (issue 20: the named cause must be physical), and a reading grid
@@ -1794,7 +1804,8 @@ void SequenceDiagnosis::nameBeside(DiagnosisResult& out, Effect symptom) const {
   char buf[520];
   std::size_t best = candidates_.size();
   double best_gain = 0.0;
-  const std::vector<HeldOutGain> gains = gainsBeside(physical, under);
+  std::vector<JointResult> full;  // the fits beside the grid on all the data (stop and go)
+  const std::vector<HeldOutGain> gains = gainsBeside(physical, under, full);
   for (std::size_t k = 0; k < physical.size(); ++k) {
     const std::size_t c = physical[k];
     const HeldOutGain& g = gains[k];
@@ -1804,8 +1815,8 @@ void SequenceDiagnosis::nameBeside(DiagnosisResult& out, Effect symptom) const {
     double p = g.finite ? heldoutPValue(g.gain, g.se) : 1.0;
     // Beside a fine grid the likelihood ratio counts too (Bonferroni with the held-out gain, as
     // in the candidate's own p), when the held-out gain is positive.
-    if (fine_grid && g.finite && g.gain > 0.0) {
-      const double p_lr = pBesideGridInSample(c, under);
+    if (fine_grid && g.finite && g.gain > 0.0 && !noiseShapeEffect(r.effect)) {
+      const double p_lr = pBesideGridInSample(full[k], under);
       if (std::isfinite(p_lr)) r.estimates["p_likelihood_ratio_beside_grid"] = p_lr;
       p = combinedPValue(p, kNaN, p_lr);
     }

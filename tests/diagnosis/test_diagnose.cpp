@@ -478,6 +478,17 @@ INSTANTIATE_TEST_SUITE_P(
 
 class HiddenEffect : public ::testing::TestWithParam<const char*> {};
 
+/// Hidden case h simulated and diagnosed with diagnose seed `seed` and `replicas` bootstrap
+/// replicas; one replica for the extended simulation, whose closeness these tests do not look at.
+DiagnosisResult diagnoseCase(const test::HiddenEffectCase& h, std::uint64_t seed, int replicas) {
+  const auto s = simulation::simulateLandmarkLevel(h.config, h.seed);
+  DiagnoseConfig dc;
+  dc.seed = seed;
+  dc.replicas = replicas;
+  dc.closeness_replicas = 1;
+  return diagnoseSequence(s.obs, dc);
+}
+
 /// The hidden size of a signed effect (0: not signed) and the key of its estimate.
 std::pair<double, const char*> signedTruth(const std::string& e, const test::HiddenEffectCase& h) {
   if (e == "incidence_bias") return {h.config.effects.incidence_bias_m, "incidence_bias_m"};
@@ -496,12 +507,7 @@ TEST_P(HiddenEffect, DiagnoseNamesItAndItsSignAndItsLikelihoodRatio) {
   for (const std::uint64_t k : caseSeeds(e, n)) {
     SCOPED_TRACE(k);
     const auto h = test::hiddenEffectCase(e, k);
-    const auto s = simulation::simulateLandmarkLevel(h.config, h.seed);
-    DiagnoseConfig dc;
-    dc.seed = static_cast<std::uint64_t>(k);
-    dc.replicas = replicasPerCase();
-    dc.closeness_replicas = 1;  // how close the extended simulation comes is not looked at here
-    const auto r = diagnoseSequence(s.obs, dc);
+    const auto r = diagnoseCase(h, k, replicasPerCase());
     ASSERT_STREQ(r.status.name(), "ok") << r.status.message;
     if (r.primary_cause == e) ++named;
     else misses += " case " + std::to_string(k) + " (" + h.size + "): " + r.primary_cause + ";";
@@ -552,12 +558,7 @@ TEST_P(OnAMillimetreGrid, TheEffectIsNamedBesideTheRounding) {
     SCOPED_TRACE(k);
     auto h = test::hiddenEffectCase(e, k);
     h.config.effects.range_resolution_m = 0.001;
-    const auto s = simulation::simulateLandmarkLevel(h.config, h.seed);
-    DiagnoseConfig dc;
-    dc.seed = k;
-    dc.replicas = 5;
-    dc.closeness_replicas = 1;
-    const auto r = diagnoseSequence(s.obs, dc);
+    const auto r = diagnoseCase(h, k, 5);
     ASSERT_STREQ(r.status.name(), "ok") << r.status.message;
     const bool right = e == "none" ? r.primary_cause == "none" || r.primary_cause == "quantisation" : r.primary_cause == e;
     named += right;
@@ -586,12 +587,7 @@ TEST(DiagnoseSequence, APhysicalEffectUnderHeavyTailsIsNamedAndTheTailsStayBesid
     SCOPED_TRACE(k);
     auto h = test::hiddenEffectCase("landmark_bias", k);
     h.config.effects.noise_student_dof = 3.0;
-    const auto s = simulation::simulateLandmarkLevel(h.config, h.seed);
-    DiagnoseConfig dc;
-    dc.seed = k;
-    dc.replicas = 5;
-    dc.closeness_replicas = 1;
-    const auto r = diagnoseSequence(s.obs, dc);
+    const auto r = diagnoseCase(h, k, 5);
     ASSERT_STREQ(r.status.name(), "ok") << r.status.message;
     EXPECT_EQ(r.primary_cause, "landmark_bias") << r.decision;
     for (const auto& c : r.candidates) {
