@@ -3,6 +3,7 @@
 // field at the landmark level with it, diagnoses, and compares the named cause.
 //   build/bench/diagnose_accuracy --effect heading_error --cases 20
 //   build/bench/diagnose_accuracy --effect none --cases 20 --grid 0.001   (clean data on a 1 mm grid)
+//   build/bench/diagnose_accuracy --effect none --cases 20 --intensity    (clean data, poles of several intensities)
 
 #include <chrono>
 #include <cstdio>
@@ -32,6 +33,8 @@ int main(int argc, char** argv) {
   app.add_option("--tails-dof", tails_dof, "also make the noise a Student t of this many degrees of freedom (> 2): the effect under heavy tails");
   double grid_m = 0.0;
   app.add_option("--grid", grid_m, "also round the readings to this grid, metres (the effect on a sensor that reports whole millimetres: 0.001)");
+  bool intensity = false;
+  app.add_flag("--intensity", intensity, "also give the landmarks return intensities of 15-250 (dark_surface always has them)");
   CLI11_PARSE(app, argc, argv);
   int correct = 0;
   std::map<std::string, int> named;
@@ -40,6 +43,7 @@ int main(int argc, char** argv) {
     auto hidden = test::hiddenEffectCase(effect, static_cast<std::uint64_t>(c));
     if (tails_dof > 2.0) hidden.config.effects.noise_student_dof = tails_dof;
     if (grid_m > 0.0) hidden.config.effects.range_resolution_m = grid_m;
+    if (intensity && effect != "dark_surface") test::giveIntensities(hidden.config, static_cast<std::uint64_t>(c));
     const auto sample = simulation::simulateLandmarkLevel(hidden.config, hidden.seed);
     diagnosis::DiagnoseConfig dc;
     dc.replicas = replicas;

@@ -222,6 +222,10 @@ std::map<std::string, double> effectValues(const JointEffects& on, const JointEf
   if (on.odometry_scale) m["odometry_scale"] = e.odometry_scale;
   if (on.student_noise) m["noise_student_dof"] = e.student_dof;
   if (on.quantised) m["range_resolution_m"] = e.range_grid_m;
+  if (on.dark_noise) {
+    m["dark_noise_exponent"] = e.dark_noise_exponent;
+    m["dark_reference_intensity"] = e.dark_reference_intensity;
+  }
   return m;
 }
 
@@ -725,6 +729,15 @@ CalibrationModel calibrate(const LandmarkObservations& obs, const CalibrationCon
   if (const auto problem = baselineProblem(obs.commanded, config); problem && !obs.sightings.empty()) {
     m.status.code = StatusCode::no_baseline;
     m.status.message = *problem;
+    return m;
+  }
+
+  // The dark-surface noise term fits the noise against the return intensity: nothing to fit without one.
+  if (config.method == Method::joint && config.joint.effects.dark_noise && !intensitiesVary(obs)) {
+    m.status.code = StatusCode::no_intensity;
+    m.status.message = "--effects dark_surface fits the noise against the return intensity, and no reading of these "
+                       "scans records one (or all record the same value): record with the driver's intensities on "
+                       "(ROS LaserScan intensities, a PCD intensity field), or leave dark_surface out of --effects";
     return m;
   }
 

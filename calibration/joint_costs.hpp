@@ -238,13 +238,16 @@ struct BeamGeometry {
 };
 BeamGeometry beamGeometry(const double* pose, double angle, const double* centre, double radius);
 
-/// Noise shape h (sigma = scale * h) of a reading: the law's dependence on d and the incidence.
-double noiseShape(const NoiseModel& n, const BiasPolynomial& f, double d, double cos_inc, double gamma);
+/// Noise shape h (sigma = scale * h) of a reading: the law's dependence on d, the incidence
+/// ((1 / cos phi)^gamma) and the darkness ln(I_ref / I) of its return ((I_ref / I)^delta).
+double noiseShape(const NoiseModel& n, const BiasPolynomial& f, double d, double cos_inc, double gamma, double dark,
+                  double delta);
 /// The scale that multiplies the shape: sigma_e, or 1 for the polynomial law (its beta carry the scale).
 inline double noiseScale(const NoiseModel& n) { return n.kind == NoiseKind::polynomial ? 1.0 : n.sigma_e; }
 /// sigma_i = scale * h_i.
-inline double readingSigma(const NoiseModel& n, const BiasPolynomial& f, double d, double cos_inc, double gamma) {
-  return noiseScale(n) * noiseShape(n, f, d, cos_inc, gamma);
+inline double readingSigma(const NoiseModel& n, const BiasPolynomial& f, double d, double cos_inc, double gamma,
+                           double dark, double delta) {
+  return noiseScale(n) * noiseShape(n, f, d, cos_inc, gamma, dark, delta);
 }
 
 }  // namespace lidarcal::calibration::joint

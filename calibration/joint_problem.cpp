@@ -125,7 +125,8 @@ BeamGeometry beamGeometry(const double* pose, double angle, const double* centre
   return g;
 }
 
-double noiseShape(const NoiseModel& n, const BiasPolynomial& f, double d, double cos_inc, double gamma) {
+double noiseShape(const NoiseModel& n, const BiasPolynomial& f, double d, double cos_inc, double gamma, double dark,
+                  double delta) {
   double h = 1.0;
   switch (n.kind) {
     case NoiseKind::squared: h = f(d) * f(d); break;
@@ -137,7 +138,7 @@ double noiseShape(const NoiseModel& n, const BiasPolynomial& f, double d, double
     }
     default: break;
   }
-  return h * incidenceNoiseFactor(gamma, cos_inc);
+  return h * incidenceNoiseFactor(gamma, cos_inc) * darkNoiseFactor(delta, dark);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -155,11 +156,13 @@ JointProblem::JointProblem(const LandmarkObservations& obs, const JointInit& ini
   startEffectTerms();
   initialiseReadingWindow();
   initialiseDriftReference();
+  initialiseReferenceIntensity();
   // Repeated scans from one pose: the readings of one beam on one landmark at one stop share
   // their geometry, so (Gaussian) sum_i (y_i - f)^2 = n (ybar - f)^2 + sum_i (y_i - ybar)^2, and
   // one residual sqrt(n) (ybar - f) / sigma carries all they say about the parameters: the cost
   // of a solve no longer grows with the scans per stop. Not when a term depends on the scan
-  // (drift) or on each reading (mixed-pixel weights). The robust loss acts on the group.
+  // (drift) or on each reading (mixed-pixel weights, a Student t's weights). The robust loss acts
+  // on the group. With the dark-surface term a group also shares its intensity.
   pool_ = config.pool_repeated_scans && !fx_.drift && !fx_.mixed_pixels && !fx_.student_noise;
 }
 
@@ -232,6 +235,7 @@ void JointProblem::startEffectTerms() {
   if (fx_.incidence_bias) globals_[2] = e0.incidence_bias_m;
   if (fx_.odometry_scale) *scale_ = e0.odometry_scale;
   if (fx_.incidence_noise) gamma_ = e0.incidence_noise_exponent;
+  if (fx_.dark_noise) delta_ = e0.dark_noise_exponent;
   if (fx_.mixed_pixels && e0.mixed_pixel_fraction > 0.0) mixed_fraction_ = e0.mixed_pixel_fraction;
   if (fx_.student_noise && e0.student_dof > 2.0) dof_ = e0.student_dof;
 }
@@ -261,6 +265,18 @@ void JointProblem::initialiseDriftReference() {
   t_ref_ = out_.effects.drift_reference_scan;
 }
 
+/// I_ref of the dark-surface noise: the start's, else the median intensity of the readings (0:
+/// none recorded; every reading's darkness is then 0).
+void JointProblem::initialiseReferenceIntensity() {
+  reference_intensity_ = init_.effects.dark_reference_intensity;
+  if (reference_intensity_ > 0.0) return;
+  std::vector<double> v;
+  for (const auto& s : obs_.sightings)
+    for (const auto& b : s.beams)
+      if (std::isfinite(b.range_m) && b.intensity > 0.0 && std::isfinite(b.intensity)) v.push_back(b.intensity);
+  reference_intensity_ = v.empty() ? 0.0 : median(v);
+}
+
 /// Readings on the central part of each landmark (lateral offset < fraction * radius): beams
 /// near the edges have range derivatives that blow up at the tangent. Re-selected from the
 /// current estimate before every solve (unless the caller selected them: keep_all_beams).
@@ -275,13 +291,15 @@ void JointProblem::selectReadings() {
       if (!std::isfinite(b.range_m)) continue;
       const bool edge = j == 0 || j + 1 == s.beams.size();
       if (config_.keep_all_beams) {
-        readings_.push_back({s.stop, s.scan, s.landmark, b.angle_rad, b.range_m, edge});
+        readings_.push_back({s.stop, s.scan, s.landmark, b.angle_rad, b.range_m, edge,
+                             darkness(b.intensity, reference_intensity_)});
         continue;
       }
       const double a = p[2] + b.angle_rad + globals_[1];
       const double perp = (it->second[1] - p[1]) * std::cos(a) - (it->second[0] - p[0]) * std::sin(a);
       if (std::abs(perp) < config_.lateral_fraction * *radius_)
-        readings_.push_back({s.stop, s.scan, s.landmark, b.angle_rad, b.range_m, edge});
+        readings_.push_back({s.stop, s.scan, s.landmark, b.angle_rad, b.range_m, edge,
+                             darkness(b.intensity, reference_intensity_)});
     }
   }
 }
@@ -305,7 +323,7 @@ double JointProblem::meanOf(std::size_t i, const BiasPolynomial& f) const {
 }
 
 double JointProblem::sigmaOf(std::size_t i, const RangeModel& m) const {
-  return readingSigma(m.noise, m.bias, geo_[i].d, geo_[i].cos_inc, gamma_);
+  return readingSigma(m.noise, m.bias, geo_[i].d, geo_[i].cos_inc, gamma_, readings_[i].darkness, delta_);
 }
 
 std::vector<double> JointProblem::residualsNow(const BiasPolynomial& f) const {
@@ -385,12 +403,15 @@ bool JointProblem::addPooledReadings(ceres::Problem& problem, bool robust) {
     double sum_y = 0.0, sum_angle = 0.0;
   };
   // Key: stop, landmark, beam angle to 1e-5 rad (angles recovered from float coordinates differ
-  // by ~1e-7 from scan to scan; beams are 1e-3 rad apart or more). Ordered: the residuals go in
-  // in one order whatever the order of the readings.
-  std::map<std::tuple<std::size_t, int, long long>, Pooled> groups;
+  // by ~1e-7 from scan to scan; beams are 1e-3 rad apart or more), and with the dark-surface
+  // term the darkness (readings of one sigma only; with it off the key's last part is 0, so the
+  // groups are those of the fit without the term). Ordered: the residuals go in in one order
+  // whatever the order of the readings.
+  std::map<std::tuple<std::size_t, int, long long, long long>, Pooled> groups;
   for (std::size_t i = 0; i < readings_.size(); ++i) {
     const auto& r = readings_[i];
-    Pooled& g = groups[{r.stop, r.landmark, std::llround(r.angle_rad * 1e5)}];
+    const long long dark = fx_.dark_noise ? std::llround(r.darkness * 1e6) : 0;
+    Pooled& g = groups[{r.stop, r.landmark, std::llround(r.angle_rad * 1e5), dark}];
     if (g.n == 0) g.first = i;
     ++g.n;
     g.sum_y += r.y_m;
@@ -612,14 +633,16 @@ void JointProblem::fitNoiseLaw(const std::vector<double>& res, const BiasPolynom
           [&](double k) {
             NoiseModel n = out_.model.noise;
             n.exponent = k;
-            return profileNoise(n, gamma_, in, res, f, nullptr);
+            return profileNoise(n, gamma_, delta_, in, res, f, nullptr);
           },
           -1.0, 5.0);
     }
     if (fx_.incidence_noise)
-      gamma_ = goldenMax([&](double g) { return profileNoise(out_.model.noise, g, in, res, f, nullptr); }, -1.0, 4.0);
+      gamma_ = goldenMax([&](double g) { return profileNoise(out_.model.noise, g, delta_, in, res, f, nullptr); }, -1.0, 4.0);
+    if (fx_.dark_noise && reference_intensity_ > 0.0)  // without intensities the factor is 1 whatever delta is
+      delta_ = goldenMax([&](double x) { return profileNoise(out_.model.noise, gamma_, x, in, res, f, nullptr); }, -1.0, 3.0);
   }
-  profileNoise(out_.model.noise, gamma_, in, res, f, &out_.model.noise.sigma_e);
+  profileNoise(out_.model.noise, gamma_, delta_, in, res, f, &out_.model.noise.sigma_e);
 }
 
 /// Student-t noise: the scale sigma_e of the law's shape and nu, by EM on the readings within 30
@@ -631,7 +654,7 @@ void JointProblem::fitStudent(const std::vector<double>& res, const BiasPolynomi
   std::vector<double> x;  // residual over the law's shape (polynomial law: over sigma)
   for (std::size_t i = 0; i < readings_.size(); ++i) {
     if (!(std::abs(res[i]) <= 30.0 * sigma_[i])) continue;
-    x.push_back(res[i] / (scaled ? std::max(noiseShape(out_.model.noise, f, geo_[i].d, geo_[i].cos_inc, gamma_), 1e-9)
+    x.push_back(res[i] / (scaled ? std::max(noiseShape(out_.model.noise, f, geo_[i].d, geo_[i].cos_inc, gamma_, readings_[i].darkness, delta_), 1e-9)
                                  : sigma_[i]));
   }
   if (x.size() < 10) return;
@@ -691,11 +714,11 @@ void JointProblem::fitCellScale(const std::vector<double>& res) {
 
 /// Profile log-likelihood (up to constants) of the law n with incidence exponent g over the
 /// readings `in`; sigma_e (when asked) its maximising scale.
-double JointProblem::profileNoise(NoiseModel n, double g, const std::vector<std::size_t>& in,
+double JointProblem::profileNoise(NoiseModel n, double g, double delta, const std::vector<std::size_t>& in,
                                   const std::vector<double>& res, const BiasPolynomial& f, double* sigma_e) const {
   double s2 = 0.0, logh = 0.0;
   for (std::size_t i : in) {
-    const double h = std::max(noiseShape(n, f, geo_[i].d, geo_[i].cos_inc, g), 1e-9);
+    const double h = std::max(noiseShape(n, f, geo_[i].d, geo_[i].cos_inc, g, readings_[i].darkness, delta), 1e-9);
     s2 += res[i] * res[i] / (h * h);
     logh += std::log(h);
   }
@@ -766,11 +789,13 @@ void JointProblem::reportEffects() {
   e.odometry_scale = fx_.odometry_scale ? *scale_ : 0.0;
   e.student_dof = fx_.student_noise ? dof_ : 0.0;
   e.range_grid_m = grid_;
+  e.dark_noise_exponent = delta_;
+  e.dark_reference_intensity = reference_intensity_;
   e.heading_rms_rad = out_.heading_scatter_rad;
   out_.effect_parameters = (fx_.landmark_offsets ? static_cast<int>(offsets_.size()) - 1 : 0) + (fx_.drift ? 1 : 0) +
                            (fx_.angle_offset ? 1 : 0) + (fx_.incidence_bias ? 1 : 0) + (fx_.incidence_noise ? 1 : 0) +
                            (fx_.noise_exponent ? 1 : 0) + (fx_.mixed_pixels ? 1 : 0) + (fx_.odometry_scale ? 1 : 0) +
-                           (fx_.student_noise ? 1 : 0) + (fx_.quantised ? 1 : 0) +
+                           (fx_.student_noise ? 1 : 0) + (fx_.quantised ? 1 : 0) + (fx_.dark_noise ? 1 : 0) +
                            (fx_.estimate_heading ? static_cast<int>(poses_.size()) : 0);
 }
 

@@ -36,6 +36,7 @@ class JointProblem {
     double angle_rad;
     double y_m;
     bool edge;
+    double darkness;  ///< ln(I_ref / I) of its return (0: no intensity recorded)
   };
 
   // initialise
@@ -45,6 +46,7 @@ class JointProblem {
   void startEffectTerms();
   void initialiseReadingWindow();
   void initialiseDriftReference();
+  void initialiseReferenceIntensity();
   void selectReadings();
 
   // per reading at the current estimate
@@ -72,7 +74,7 @@ class JointProblem {
   void fitStudent(const std::vector<double>& res, const BiasPolynomial& f);
   void fitCellScale(const std::vector<double>& res);
   double workingSigma(std::size_t i, const RangeModel& m) const;
-  double profileNoise(NoiseModel n, double g, const std::vector<std::size_t>& in, const std::vector<double>& res,
+  double profileNoise(NoiseModel n, double g, double delta, const std::vector<std::size_t>& in, const std::vector<double>& res,
                       const BiasPolynomial& f, double* sigma_e) const;
 
   // summarise
@@ -104,6 +106,8 @@ class JointProblem {
   double* globals_ = nullptr;              ///< drift, zero-angle offset, incidence bias
   double* scale_ = nullptr;                ///< odometry scale
   double gamma_ = 0.0;                     ///< incidence noise exponent
+  double delta_ = 0.0;                     ///< dark-surface noise exponent
+  double reference_intensity_ = 0.0;       ///< I_ref of the darkness (0: no intensity recorded)
   double mixed_fraction_ = 0.0;
   double dof_ = 0.0;                       ///< Student-t degrees of freedom (0: Gaussian noise)
   double grid_ = 0.0;                      ///< grid of the readings under the quantised model (0: none)

@@ -63,8 +63,8 @@ void JointConfig::validate() const {
   if (noise != NoiseKind::squared && noise != NoiseKind::polynomial && noise != NoiseKind::constant &&
       noise != NoiseKind::power)
     throw std::invalid_argument("JointConfig: noise must be squared, power, polynomial or constant");
-  if ((effects.incidence_noise || effects.noise_exponent) && noise == NoiseKind::polynomial)
-    throw std::invalid_argument("JointConfig: incidence_noise and noise_exponent need the squared, power or constant law");
+  if ((effects.incidence_noise || effects.noise_exponent || effects.dark_noise) && noise == NoiseKind::polynomial)
+    throw std::invalid_argument("JointConfig: incidence_noise, noise_exponent and dark_noise need the squared, power or constant law");
   if (!(sigma_s_m > 0.0) || !(sigma_psi_rad > 0.0)) throw std::invalid_argument("JointConfig: priors must be positive");
   if (!(huber_sigmas > 0.0)) throw std::invalid_argument("JointConfig: huber_sigmas must be positive");
   if (!(lateral_fraction > 0.0 && lateral_fraction <= 1.0))
@@ -142,7 +142,7 @@ bool JointEffects::enable(Effect e) {
     case Effect::odometry_scale: odometry_scale = true; return true;
     case Effect::heavy_tails: student_noise = true; return true;
     case Effect::quantisation: quantised = true; return true;
-    case Effect::dark_surface: return false;
+    case Effect::dark_surface: dark_noise = true; return true;
   }
   return false;
 }
@@ -178,11 +178,13 @@ std::vector<JointReading> evaluateJoint(const LandmarkObservations& obs, const J
       r.d_m = g.d;
       r.lateral = g.lateral;
       r.cos_incidence = g.cos_inc;
+      r.darkness = darkness(b.intensity, e.dark_reference_intensity);
       r.edge = j == 0 || j + 1 == s.beams.size();
       r.mean_m = expectedReading(fit.model.bias(g.d), offset != e.landmark_offset_m.end() ? offset->second : 0.0,
                                  e.drift_m_per_scan, static_cast<double>(s.scan) - e.drift_reference_scan,
                                  e.incidence_bias_m, g.cos_inc);
-      r.sigma_m = std::max(joint::readingSigma(fit.model.noise, fit.model.bias, g.d, g.cos_inc, gamma), 1e-6);
+      r.sigma_m = std::max(joint::readingSigma(fit.model.noise, fit.model.bias, g.d, g.cos_inc, gamma, r.darkness,
+                                                     e.dark_noise_exponent), 1e-6);
       r.log_likelihood = readingLogLikelihood(r.y_m, r.mean_m, r.sigma_m, r.edge ? e.mixed_pixel_fraction : 0.0,
                                               config.outlier_floor, fit.window_min_m, fit.window_max_m, e.student_dof,
                                               e.range_grid_m);

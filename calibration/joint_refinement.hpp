@@ -51,6 +51,10 @@ struct JointEffects {
   /// detectReadingGrid): each reading's likelihood is the probability of its grid cell under the
   /// unrounded noise, whose scale is fitted by ML on the cells (`diagnose`'s quantisation candidate).
   bool quantised = false;
+  /// Noise grows as (I_ref / I)^delta with the return intensity I of the reading (dark surfaces),
+  /// delta estimated between solves; readings without an intensity keep the factor 1
+  /// (`diagnose`'s dark_surface candidate).
+  bool dark_noise = false;
   /// Whether a term in the mean of the readings is on (they need the extended residual).
   bool anyMean() const { return landmark_offsets || drift || angle_offset || incidence_bias; }
   /// Switches on the term that models `e` (heading_error: the per-stop heading, on by default);
@@ -72,6 +76,10 @@ struct JointEffectEstimates {
   double heading_rms_rad = 0.0;             ///< RMS of the refined minus the commanded headings, radians
   double student_dof = 0.0;                 ///< nu of the Student-t noise (0: Gaussian)
   double range_grid_m = 0.0;                ///< grid the readings were rounded to (0: not rounded)
+  double dark_noise_exponent = 0.0;         ///< delta of (I_ref / I)^delta
+  /// I_ref: the median intensity of the readings the fit saw (0: none recorded). A fit started
+  /// from estimates with a reference keeps it, so that folds and refits share one delta's meaning.
+  double dark_reference_intensity = 0.0;
 };
 
 /// Least mixed-pixel fraction the refinement's EM step keeps (a fraction at it: no reading was
@@ -243,6 +251,7 @@ struct JointReading {
   double d_m = 0.0;             ///< predicted true distance along the beam, metres
   double lateral = 0.0;         ///< signed miss distance of the beam from the centre over the radius (0 centre, +-1 tangent)
   double cos_incidence = 1.0;   ///< cosine of the incidence on the pole (clamped at 0.05)
+  double darkness = 0.0;        ///< ln(I_ref / I) of its intensity (0: none recorded)
   bool edge = false;            ///< first or last beam of its sighting (depth discontinuity next to it)
   double mean_m = 0.0;          ///< predicted reading: f(d) plus the effect terms, metres
   double sigma_m = 0.0;         ///< predicted standard deviation, metres

@@ -26,7 +26,7 @@ enum class Effect {
   odometry_scale,    ///< steps differ from the commanded length by a fraction
   heavy_tails,       ///< Student-t noise (a symptom: static data)
   quantisation,      ///< readings on a grid (the sensor's range resolution)
-  dark_surface,      ///< dark surfaces return wide errors (static data with intensity: a cause of tails)
+  dark_surface,      ///< dark surfaces return wide errors: noise grows as (I_ref / I)^delta (data with intensity)
 };
 
 /// What names an effect, and where each kind of data tests it.

@@ -3,6 +3,7 @@
 // detector (from scans) or by the landmark-level simulator (seed 000 eqs. 3, 5, 8).
 
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <vector>
 
@@ -19,6 +20,9 @@ struct BeamReading {
   double angle_rad = 0.0;   ///< nominal beam angle in the sensor frame, radians
   double range_m = 0.0;     ///< raw reading, metres
   std::uint32_t beam = 0;   ///< index of the point in its scan; kUnknownBeam when not comparable across scans
+  /// Return intensity as the sensor reports it (any unit); NaN when none was recorded (a
+  /// recorded intensity of 0 or less counts as none: most drivers write 0 when they have none).
+  double intensity = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// One landmark seen in one scan.
@@ -51,5 +55,18 @@ struct LandmarkObservations {
   /// Walls seen at the stops that a reference measures a wall at (empty otherwise).
   std::vector<WallSighting> walls;
 };
+
+/// Whether the beams of the sightings record a return intensity of at least two values (the
+/// dark-surface noise term has a covariate to fit).
+inline bool intensitiesVary(const LandmarkObservations& obs) {
+  double first = 0.0;
+  for (const auto& s : obs.sightings)
+    for (const auto& b : s.beams) {
+      if (!(b.intensity > 0.0) || !(b.intensity < std::numeric_limits<double>::infinity())) continue;
+      if (first == 0.0) first = b.intensity;
+      else if (b.intensity != first) return true;
+    }
+  return false;
+}
 
 }  // namespace lidarcal

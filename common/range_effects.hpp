@@ -5,11 +5,13 @@
 //
 // A beam that hits a surface at true distance d with incidence phi (angle between the beam and
 // the surface normal) in scan t reads
-//   y = f(d) + b_inc (1 - cos phi) + o_surface + c_drift (t - t_ref) + sigma(d) (1 / cos phi)^gamma e,
+//   y = f(d) + b_inc (1 - cos phi) + o_surface + c_drift (t - t_ref) + sigma(d) (1 / cos phi)^gamma (I_ref / I)^delta e,
 // with e a unit normal (or a unit-variance Student t with `noise_student_dof` degrees of freedom),
 // rounded to a multiple of `range_resolution_m`; an edge beam (depth discontinuity next to it)
 // is a mixed pixel with probability `mixed_pixel_fraction`: it reads a distance drawn uniformly
-// between the foreground and the background.
+// between the foreground and the background. I is the return intensity of the surface (dark
+// surfaces return little light: the spot's centroid, or the echo's timing, is found less
+// precisely); the factor is 1 when the surface records no intensity.
 
 #include <algorithm>
 #include <cmath>
@@ -33,13 +35,29 @@ struct RangeEffects {
   double noise_student_dof = 0.0;
   /// Readings are rounded to a multiple of this, metres (quantisation). 0 = off.
   double range_resolution_m = 0.0;
+  /// delta: the noise grows as (I_ref / I)^delta with the return intensity I (dark surfaces). 0 = off.
+  double dark_noise_exponent = 0.0;
+  /// I_ref: the intensity at which that factor is 1 (> 0; a fit takes the median intensity of its readings).
+  double dark_reference_intensity = 1.0;
 
   /// Whether any effect is on.
   bool any() const {
     return incidence_noise_exponent != 0.0 || incidence_bias_m != 0.0 || range_drift_m_per_scan != 0.0 ||
-           mixed_pixel_fraction != 0.0 || noise_student_dof != 0.0 || range_resolution_m != 0.0;
+           mixed_pixel_fraction != 0.0 || noise_student_dof != 0.0 || range_resolution_m != 0.0 ||
+           dark_noise_exponent != 0.0;
   }
 };
+
+/// ln(I_ref / I): how much darker than the reference a return of intensity I is; 0 when either
+/// is not a positive number (no intensity recorded).
+inline double darkness(double intensity, double reference) {
+  return intensity > 0.0 && reference > 0.0 && std::isfinite(intensity) && std::isfinite(reference)
+             ? std::log(reference / intensity)
+             : 0.0;
+}
+
+/// (I_ref / I)^delta = exp(delta ln(I_ref / I)): the factor on the noise standard deviation.
+inline double darkNoiseFactor(double delta, double darkness_ln) { return delta == 0.0 ? 1.0 : std::exp(delta * darkness_ln); }
 
 /// cos phi kept away from 0: grazing beams are treated as at 87 degrees.
 inline double clampCosIncidence(double cos_phi) { return std::clamp(std::abs(cos_phi), 0.05, 1.0); }

@@ -19,6 +19,7 @@ struct Cylinder {
   double y_m = 0.0;       ///< centre y in the world frame, metres
   double radius_m = 0.1;  ///< radius, metres (> 0)
   double range_offset_m = 0.0;  ///< added to every reading on this surface (reflectivity, colour), metres
+  double intensity = 0.0;       ///< return intensity the sensor reports on this surface (0: none recorded)
 };
 
 /// A straight wall segment in the world frame.
@@ -26,6 +27,7 @@ struct Segment {
   double x0_m = 0.0, y0_m = 0.0;  ///< first end point, metres
   double x1_m = 1.0, y1_m = 0.0;  ///< second end point, metres
   double range_offset_m = 0.0;    ///< added to every reading on this surface (reflectivity, colour), metres
+  double intensity = 0.0;         ///< return intensity the sensor reports on this surface (0: none recorded)
 };
 
 /// The scanning lidar: beam layout, range model and angular noise.

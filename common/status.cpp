@@ -6,7 +6,7 @@
 namespace lidarcal {
 namespace {
 
-constexpr std::array<std::pair<StatusCode, const char*>, 20> kNames = {{
+constexpr std::array<std::pair<StatusCode, const char*>, 21> kNames = {{
     {StatusCode::ok, "ok"},
     {StatusCode::too_few_stops, "too_few_stops"},
     {StatusCode::no_baseline, "no_baseline"},
@@ -16,6 +16,7 @@ constexpr std::array<std::pair<StatusCode, const char*>, 20> kNames = {{
     {StatusCode::no_radius, "no_radius"},
     {StatusCode::too_few_reference_stops, "too_few_reference_stops"},
     {StatusCode::no_invertible_order, "no_invertible_order"},
+    {StatusCode::no_intensity, "no_intensity"},
     {StatusCode::exception, "exception"},
     {StatusCode::not_run, "not_run"},
     {StatusCode::too_few_readings, "too_few_readings"},

@@ -21,6 +21,7 @@ enum class StatusCode {
   no_radius,                ///< the landmark radius is neither given nor estimable
   too_few_reference_stops,  ///< calibrate --reference: too few stops with a known distance
   no_invertible_order,      ///< calibrate --reference: no order gives an invertible model
+  no_intensity,             ///< calibrate --effects dark_surface: the readings record no intensity (or one value)
   exception,                ///< studies: a trial threw (the message is what)
   // joint refinement
   not_run,                  ///< no refinement was computed (a default result)

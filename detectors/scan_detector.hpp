@@ -109,10 +109,10 @@ struct Detection {
   double free_radius_stddev_m = 0.0;  ///< free-radius fit: standard deviation of the radius, metres
   std::size_t cluster_points = 0;  ///< returns in the cluster
   pcl::Indices inliers;      ///< points of the scan on the circle (ascending); their count is n_points
-  /// The inliers' x, y (sensor frame, as read), in the order of `inliers`; filled only where a
-  /// sequence keeps its scans' detections (sequence_detector.hpp), so that the sightings need
-  /// no second read of the scans.
-  std::vector<std::array<float, 2>> inlier_xy;
+  /// The inliers' x, y (sensor frame, as read) and intensity, in the order of `inliers`; filled
+  /// only where a sequence keeps its scans' detections (sequence_detector.hpp), so that the
+  /// sightings need no second read of the scans.
+  std::vector<std::array<float, 3>> inlier_xyi;
 };
 
 /// Everything found in one scan.

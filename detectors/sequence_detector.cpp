@@ -215,14 +215,17 @@ bool continuousStops(std::size_t scan_count, const StopOf& stop_of, int min_stop
   return stops >= static_cast<std::size_t>(std::max(min_stops, 1)) && 2 * single > stops;
 }
 
-/// The inliers' coordinates into each detection of a stop (kept scans).
+/// The inliers' coordinates and intensities into each detection of a stop (kept scans).
 void keepInlierPoints(StopBlock& block) {
   for (std::size_t i = 0; i < block.scans.size(); ++i) {
     const auto& cloud = *block.loaded->at(i).cloud;
     for (auto& d : block.scans[i].detections) {
-      d.inlier_xy.clear();
-      d.inlier_xy.reserve(d.inliers.size());
-      for (auto k : d.inliers) d.inlier_xy.push_back({cloud[static_cast<std::size_t>(k)].x, cloud[static_cast<std::size_t>(k)].y});
+      d.inlier_xyi.clear();
+      d.inlier_xyi.reserve(d.inliers.size());
+      for (auto k : d.inliers) {
+        const auto& p = cloud[static_cast<std::size_t>(k)];
+        d.inlier_xyi.push_back({p.x, p.y, p.intensity});
+      }
     }
   }
 }

@@ -329,6 +329,8 @@ void rangeStatistics(const JointResult& fit, const std::vector<Row>& rs, const s
   st["residual_vs_incidence"] = meanScore(rs, orthogonalise(x, d, w, 0));
   for (std::size_t i = 0; i < n; ++i) g[i] = -std::log(rs[i].r.cos_incidence);
   st["spread_vs_incidence"] = spreadScore(rs, g);
+  for (std::size_t i = 0; i < n; ++i) g[i] = rs[i].r.darkness;
+  st["spread_vs_intensity"] = spreadScore(rs, g);
 }
 
 /// Position within the object: outermost beams against the others.
@@ -474,6 +476,7 @@ const std::vector<StatisticInfo>& statInfo() {
       {"spread_vs_range", "range", "score of the noise growing with log f(d) beyond the squared law (clipped squared residuals), ~N(0,1)", true},
       {"residual_vs_incidence", "incidence angle", "score of the residuals against 1 - cos(incidence), ~N(0,1)", true},
       {"spread_vs_incidence", "incidence angle", "score of the noise growing with -ln cos(incidence), ~N(0,1)", true},
+      {"spread_vs_intensity", "intensity", "score of the noise growing with ln(I_ref / I), the darkness of the return (0 without intensities), ~N(0,1)", true},
       {"edge_excess", "position within the object", "positive minus negative |z| > 3 residuals on the outermost beams, beyond the inner beams' rate, per sqrt(edge beams)", false},
       {"edge_vs_centre_spread", "position within the object", "mean clipped z^2 on the outermost beams minus on the inner beams", true},
       {"landmark_identity", "landmark", "cube root of chi^2 / dof of the per-landmark mean residuals (overall mean removed)", false},
@@ -525,10 +528,17 @@ struct ReplicaPlan {
 ReplicaPlan replicaPlan(const LandmarkObservations& obs, const JointResult& fit, bool radius_known) {
   ReplicaPlan plan;
   auto& c = plan.config;
+  // Each landmark returns the median intensity of its readings (0: none recorded).
+  std::map<int, std::vector<double>> intensities;
+  for (const auto& s : obs.sightings)
+    for (const auto& b : s.beams)
+      if (b.intensity > 0.0 && std::isfinite(b.intensity)) intensities[s.landmark].push_back(b.intensity);
   for (const auto& [id, centre] : fit.centres) {
     Cylinder cyl{centre.x(), centre.y(), fit.radius_m};
     auto o = fit.effects.landmark_offset_m.find(id);
     if (o != fit.effects.landmark_offset_m.end()) cyl.range_offset_m = o->second;
+    auto in = intensities.find(id);
+    if (in != intensities.end()) cyl.intensity = median(in->second);
     c.landmarks.push_back(cyl);
     plan.ids.push_back(id);
   }
@@ -563,6 +573,8 @@ ReplicaPlan replicaPlan(const LandmarkObservations& obs, const JointResult& fit,
   c.effects.mixed_pixel_fraction = fit.effects.mixed_pixel_fraction;
   c.effects.noise_student_dof = fit.effects.student_dof;
   c.effects.range_resolution_m = fit.effects.range_grid_m;
+  c.effects.dark_noise_exponent = fit.effects.dark_noise_exponent;
+  if (fit.effects.dark_reference_intensity > 0.0) c.effects.dark_reference_intensity = fit.effects.dark_reference_intensity;
   c.mount_yaw_rad = fit.effects.angle_offset_rad;
   if (c.effects.mixed_pixel_fraction > 0.0) {
     // The fitted mixed pixels read uniformly up to the window's end: a background that far.
@@ -893,6 +905,7 @@ std::map<Effect, Identifiability> identifiability(const LandmarkObservations& ob
   out[Effect::incidence_bias] = assess(x, nu, x.x_inc, 0.01);
   out[Effect::odometry_scale] = assess(x, nu, x.x_scale, 0.01);
   out[Effect::incidence_noise] = variety(rs, [](const JointReading& r) { return -std::log(r.cos_incidence); }, 0.5);
+  out[Effect::dark_surface] = variety(rs, [](const JointReading& r) { return r.darkness; }, 0.5);
   out[Effect::range_noise_law] =
       variety(rs, [&](const JointReading& r) { return std::log(std::max(fit.model.bias(r.d_m), 1e-3)); }, 0.5);
   std::size_t edges = 0;
@@ -1010,6 +1023,7 @@ double effectSize(Effect e, const JointResult& f) {
   if (e == Effect::incidence_bias) return std::abs(x.incidence_bias_m);
   if (e == Effect::odometry_scale) return std::abs(x.odometry_scale);
   if (e == Effect::incidence_noise) return std::abs(x.incidence_noise_exponent);
+  if (e == Effect::dark_surface) return std::abs(x.dark_noise_exponent);
   if (e == Effect::range_noise_law) return std::abs(x.noise_exponent - 2.0);
   if (e == Effect::heavy_tails) return x.student_dof > 2.0 ? 1.0 / x.student_dof : 0.0;
   return 0.0;
@@ -1019,6 +1033,10 @@ std::map<std::string, double> effectEstimates(Effect e, const JointResult& f) {
   const auto& x = f.effects;
   std::map<std::string, double> m;
   if (e == Effect::incidence_noise) m["incidence_noise_exponent"] = x.incidence_noise_exponent;
+  if (e == Effect::dark_surface) {
+    m["dark_noise_exponent"] = x.dark_noise_exponent;
+    m["dark_reference_intensity"] = x.dark_reference_intensity;
+  }
   if (e == Effect::incidence_bias) m["incidence_bias_m"] = x.incidence_bias_m;
   if (e == Effect::landmark_bias) {
     double s = 0.0;
@@ -1062,10 +1080,16 @@ std::map<std::string, double> sceneKeys(Effect e, const JointResult& f, const Re
                                           {Effect::angle_offset, rad2deg(x.angle_offset_rad)},
                                           {Effect::odometry_scale, x.odometry_scale},
                                           {Effect::heavy_tails, x.student_dof},
-                                          {Effect::quantisation, x.range_grid_m}};
+                                          {Effect::quantisation, x.range_grid_m},
+                                          {Effect::dark_surface, x.dark_noise_exponent}};
   if (const auto it = value.find(e); it != value.end()) k[info(e).scene_key] = it->second;
   // The fit's drift is zero at its mean scan; the simulator's at the reference scan given here.
   if (e == Effect::range_drift) k["sensor.effects.range_drift_reference_scan"] = c.effects.range_drift_reference_scan;
+  if (e == Effect::dark_surface) {
+    k["sensor.effects.dark_reference_intensity"] = c.effects.dark_reference_intensity;
+    for (std::size_t i = 0; i < plan.ids.size(); ++i)
+      k["landmarks[" + std::to_string(i) + "].intensity (id " + std::to_string(plan.ids[i]) + ")"] = c.landmarks[i].intensity;
+  }
   return k;
 }
 
@@ -1200,7 +1224,21 @@ class SequenceDiagnosis {
   bool untested(Effect e) const { return e == Effect::heavy_tails && base_.effects.estimate_heading; }
   /// The rounded model where the readings lie on no grid: the baseline's.
   bool offGrid(Effect e) const { return e == Effect::quantisation && grid_ <= 0.0; }
-  bool notFitted(Effect e) const { return inBaseline(e) || untested(e) || offGrid(e); }
+  /// The dark-surface model where no reading records an intensity (or all record one value): the baseline's.
+  bool noIntensity(Effect e) const { return e == Effect::dark_surface && !intensity_varies_; }
+  bool notFitted(Effect e) const { return whyNotFitted(e) != nullptr; }
+  /// Why the candidate is not fitted (its note), or nullptr when it is.
+  const char* whyNotFitted(Effect e) const {
+    if (untested(e))
+      return "not tested on a continuous recording: the held-out readings' pose uncertainty gives their predictive "
+             "distribution tails of its own (clean simulated drives were named heavy_tails)";
+    if (inBaseline(e)) return "the baseline already refines every heading (a continuous recording: under the motion prior)";
+    if (offGrid(e)) return "the readings lie on no grid of 0.1 to 20 mm";
+    if (noIntensity(e))
+      return "no reading records a return intensity (or all record one value): record with the driver's intensities on "
+             "(ROS LaserScan intensities, a PCD intensity field)";
+    return nullptr;
+  }
   void setIdentifiability(CandidateResult& r, const JointResult& fc, bool radius_known) const;
 
   const LandmarkObservations& obs_;
@@ -1225,6 +1263,7 @@ class SequenceDiagnosis {
   std::vector<double> base_total_;     // per candidate: the baseline's -log L in its optimum (heldOut)
   std::map<Effect, Identifiability> ident_;
   double grid_ = 0.0;                  // grid the readings lie on (0: none)
+  bool intensity_varies_ = false;      // the readings record at least two different intensities
   LandmarkObservations dequantised_;   // obs_ spread over its grid cells (grid_ > 0)
 };
 
@@ -1244,6 +1283,7 @@ const LandmarkObservations& SequenceDiagnosis::scored(const JointConfig& cfg, co
 bool SequenceDiagnosis::fitBaseline(DiagnosisResult& out) {
   if (!calibrateBaseline(out)) return false;
   grid_ = readingGrid(obs_);
+  intensity_varies_ = intensitiesVary(obs_);
   if (grid_ > 0.0) dequantised_ = dequantise(obs_, grid_, deriveSeed(config_.seed, 0xDE0A7ULL));
   base_ = baselineConfig(cal_, cc_, obs_, config_);
   findStarts();
@@ -1598,22 +1638,9 @@ CandidateResult SequenceDiagnosis::candidate(std::size_t c, const HeldOut& held,
     r.p_value = kNaN;
     return r;
   }
-  if (untested(r.effect)) {
+  if (const char* why = whyNotFitted(r.effect)) {
     r.applicable = false;
-    r.note = "not tested on a continuous recording: the held-out readings' pose uncertainty gives their predictive "
-             "distribution tails of its own (clean simulated drives were named heavy_tails)";
-    r.p_value = kNaN;
-    return r;
-  }
-  if (inBaseline(r.effect)) {
-    r.applicable = false;
-    r.note = "the baseline already refines every heading (a continuous recording: under the motion prior)";
-    r.p_value = kNaN;
-    return r;
-  }
-  if (offGrid(r.effect)) {
-    r.applicable = false;
-    r.note = "the readings lie on no grid of 0.1 to 20 mm";
+    r.note = why;
     r.p_value = kNaN;
     return r;
   }
@@ -1737,12 +1764,13 @@ std::pair<JointConfig, JointInit> SequenceDiagnosis::beside(std::size_t c, std::
   return out;
 }
 
-/// Effects of the noise's shape: their parameters (kappa, gamma, nu, the mixed-pixel fraction)
-/// are estimated on the Gaussian residuals and only the law's scale by ML on the grid cells, so
-/// the rounded model with one of them is not an ML fit, and its likelihood ratio against the
-/// rounded model alone not chi-squared.
+/// Effects of the noise's shape: their parameters (kappa, gamma, delta, nu, the mixed-pixel fraction)
+/// are estimated on the Gaussian residuals and only the law's scale by ML on the grid cells (by
+/// the t's EM under Student-t noise), so the rounded model (the t) with one of them is not an ML
+/// fit, and its likelihood ratio against the rounded model (the t) alone not chi-squared.
 bool noiseShapeEffect(Effect e) {
-  return e == Effect::incidence_noise || e == Effect::range_noise_law || e == Effect::heavy_tails || e == Effect::mixed_pixels;
+  return e == Effect::incidence_noise || e == Effect::range_noise_law || e == Effect::heavy_tails ||
+         e == Effect::mixed_pixels || e == Effect::dark_surface;
 }
 
 /// In-sample evidence beside a fine reading grid (nameBeside), as the candidates have it (stop

@@ -20,6 +20,7 @@ Cylinder parseCylinder(const JsonView& v) {
   c.y_m = v.getNumber("y_m");
   c.radius_m = v.getPositive("radius_m");
   c.range_offset_m = v.getNumber("range_offset_m", 0.0);
+  c.intensity = v.getNonNegative("intensity", 0.0);
   return c;
 }
 
@@ -36,6 +37,8 @@ RangeEffects parseEffects(const JsonView& v) {
   if (e.noise_student_dof != 0.0 && e.noise_student_dof <= 2.0)
     v.fail("noise_student_dof", "must be 0 (Gaussian noise) or above 2 (a Student t with finite variance)");
   e.range_resolution_m = v.getNonNegative("range_resolution_m", 0.0);
+  e.dark_noise_exponent = v.getNumber("dark_noise_exponent", 0.0);
+  e.dark_reference_intensity = v.getPositive("dark_reference_intensity", 1.0);
   return e;
 }
 
@@ -49,6 +52,10 @@ ojson effectsToJson(const RangeEffects& e) {
   if (e.mixed_pixel_fraction != 0.0) j["mixed_pixel_fraction"] = e.mixed_pixel_fraction;
   if (e.noise_student_dof != 0.0) j["noise_student_dof"] = e.noise_student_dof;
   if (e.range_resolution_m != 0.0) j["range_resolution_m"] = e.range_resolution_m;
+  if (e.dark_noise_exponent != 0.0) {
+    j["dark_noise_exponent"] = e.dark_noise_exponent;
+    j["dark_reference_intensity"] = e.dark_reference_intensity;
+  }
   return j;
 }
 
@@ -220,7 +227,7 @@ Scene parseScene(const JsonView& root) {
     for (const auto& e : root.array("walls")) {
       e.requireObject();
       Segment w{e.getNumber("x0_m"), e.getNumber("y0_m"), e.getNumber("x1_m"), e.getNumber("y1_m"),
-                e.getNumber("range_offset_m", 0.0)};
+                e.getNumber("range_offset_m", 0.0), e.getNonNegative("intensity", 0.0)};
       if (std::hypot(w.x1_m - w.x0_m, w.y1_m - w.y0_m) <= 0.0) e.fail("", "wall has zero length");
       s.walls.push_back(w);
     }
@@ -254,6 +261,7 @@ nlohmann::ordered_json sceneToJson(const Scene& s) {
     for (const auto& c : cs) {
       a.push_back(ojson{{"x_m", c.x_m}, {"y_m", c.y_m}, {"radius_m", c.radius_m}});
       if (c.range_offset_m != 0.0) a.back()["range_offset_m"] = c.range_offset_m;
+      if (c.intensity != 0.0) a.back()["intensity"] = c.intensity;
     }
     return a;
   };
@@ -261,6 +269,7 @@ nlohmann::ordered_json sceneToJson(const Scene& s) {
   for (const auto& w : s.walls) {
     walls.push_back(ojson{{"x0_m", w.x0_m}, {"y0_m", w.y0_m}, {"x1_m", w.x1_m}, {"y1_m", w.y1_m}});
     if (w.range_offset_m != 0.0) walls.back()["range_offset_m"] = w.range_offset_m;
+    if (w.intensity != 0.0) walls.back()["intensity"] = w.intensity;
   }
   return ojson{{"name", s.name},       {"sensor", sensor},   {"path", path},
                {"landmarks", cylinders(s.landmarks)}, {"clutter", cylinders(s.clutter)}, {"walls", walls},

@@ -23,7 +23,7 @@ LandmarkObservations toLandmarkObservations(const io::Sequence& seq, const detec
   detectors::forEachScan(det, seq, load, [&](std::size_t i, const detectors::ScanDetections& sd, const std::vector<int>& ids) {
     bool any = false, kept_points = true;
     for (std::size_t j = 0; j < ids.size(); ++j)
-      if (ids[j] > 0) any = true, kept_points = kept_points && sd.detections[j].inlier_xy.size() == sd.detections[j].inliers.size();
+      if (ids[j] > 0) any = true, kept_points = kept_points && sd.detections[j].inlier_xyi.size() == sd.detections[j].inliers.size();
     if (!any) return;
     // The inliers' coordinates kept by the detection, else the scan read again.
     const io::Scan scan = kept_points ? io::Scan{} : load(i);
@@ -39,13 +39,16 @@ LandmarkObservations toLandmarkObservations(const io::Sequence& seq, const detec
       s.radius_m = d.radius_m;
       for (std::size_t k = 0; k < d.inliers.size(); ++k) {
         const auto idx = d.inliers[k];
-        const float x = kept_points ? d.inlier_xy[k][0] : (*scan.cloud)[static_cast<std::size_t>(idx)].x;
-        const float y = kept_points ? d.inlier_xy[k][1] : (*scan.cloud)[static_cast<std::size_t>(idx)].y;
+        const float x = kept_points ? d.inlier_xyi[k][0] : (*scan.cloud)[static_cast<std::size_t>(idx)].x;
+        const float y = kept_points ? d.inlier_xyi[k][1] : (*scan.cloud)[static_cast<std::size_t>(idx)].y;
+        const float in = kept_points ? d.inlier_xyi[k][2] : (*scan.cloud)[static_cast<std::size_t>(idx)].intensity;
         if (!std::isfinite(x)) continue;
         // The point's direction is its beam's direction: the sensor measures range along it.
+        // An intensity of 0 (what a scan without one reads as) is none recorded.
         s.beams.push_back(BeamReading{std::atan2(static_cast<double>(y), static_cast<double>(x)),
                                       std::hypot(static_cast<double>(x), static_cast<double>(y)),
-                                      same_beams[s.stop] ? static_cast<std::uint32_t>(idx) : kUnknownBeam});
+                                      same_beams[s.stop] ? static_cast<std::uint32_t>(idx) : kUnknownBeam,
+                                      in > 0.0f ? static_cast<double>(in) : std::nan("")});
       }
       if (!s.beams.empty()) obs.sightings.push_back(std::move(s));
     }

@@ -9,6 +9,13 @@
 
 namespace lidarcal::simulation {
 
+namespace {
+
+/// What the beams of a surface record as intensity: its own, or NaN (none recorded).
+double recordedIntensity(const Cylinder& c) { return c.intensity > 0.0 ? c.intensity : std::nan(""); }
+
+}  // namespace
+
 LandmarkLevelSample simulateLandmarkLevel(const LandmarkLevelConfig& config, std::uint64_t seed) {
   LandmarkLevelSample out;
   Scene scene;
@@ -49,10 +56,10 @@ LandmarkLevelSample simulateLandmarkLevel(const LandmarkLevelConfig& config, std
         std::vector<double> truth;
         if (!config.beams) {
           const double d = centre - c.radius_m;  // eq. 2 minus the radius
-          const double y = effectReading(config.model, config.effects, d, BeamContext{1.0, c.range_offset_m, scan}, e,
+          const double y = effectReading(config.model, config.effects, d, BeamContext{1.0, c.range_offset_m, scan, c.intensity}, e,
                                          effect_rng);  // eq. 3
           if (y < config.model.range_min_m || y > config.model.range_max_m) continue;
-          s.beams.push_back(BeamReading{s.bearing_rad, y, 0});
+          s.beams.push_back(BeamReading{s.bearing_rad, y, 0, recordedIntensity(c)});
           truth.push_back(d);
         } else {
           const double half = std::asin(c.radius_m / centre);
@@ -93,11 +100,11 @@ LandmarkLevelSample simulateLandmarkLevel(const LandmarkLevelConfig& config, std
             const Ray ray = rayAt(j);
             const double perp = (c.y_m - a.y_m) * ray.dx - (c.x_m - a.x_m) * ray.dy;
             const double cos_inc = std::sqrt(std::max(0.0, 1.0 - (perp / c.radius_m) * (perp / c.radius_m)));
-            const double y = effectReading(config.model, config.effects, dm, BeamContext{cos_inc, c.range_offset_m, scan},
+            const double y = effectReading(config.model, config.effects, dm, BeamContext{cos_inc, c.range_offset_m, scan, c.intensity},
                                            beam_noise[h], effect_rng);
             if (y < config.model.range_min_m || y > config.model.range_max_m) continue;
             const auto beam = static_cast<std::uint32_t>(((j % n) + n) % n);
-            s.beams.push_back(BeamReading{wrapAngle(grid + static_cast<double>(j) * inc), y, beam});
+            s.beams.push_back(BeamReading{wrapAngle(grid + static_cast<double>(j) * inc), y, beam, recordedIntensity(c)});
             truth.push_back(t);
           }
           if (s.beams.empty()) continue;

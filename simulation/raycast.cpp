@@ -63,14 +63,28 @@ RayHit castRay(const Scene& scene, const Ray& ray) {
   return best;
 }
 
-double surfaceOffset(const Scene& scene, const RayHit& hit) {
+namespace {
+
+/// `field` of the surface hit (a cylinder or a segment); 0 when nothing was hit.
+template <class Field>
+double ofSurfaceHit(const Scene& scene, const RayHit& hit, Field field) {
   const auto index = static_cast<std::size_t>(hit.id - 1);
   switch (hit.kind) {
-    case io::TargetKind::landmark: return scene.landmarks.at(index).range_offset_m;
-    case io::TargetKind::clutter: return scene.clutter.at(index).range_offset_m;
-    case io::TargetKind::wall: return scene.walls.at(index).range_offset_m;
+    case io::TargetKind::landmark: return field(scene.landmarks.at(index));
+    case io::TargetKind::clutter: return field(scene.clutter.at(index));
+    case io::TargetKind::wall: return field(scene.walls.at(index));
     default: return 0.0;
   }
+}
+
+}  // namespace
+
+double surfaceOffset(const Scene& scene, const RayHit& hit) {
+  return ofSurfaceHit(scene, hit, [](const auto& s) { return s.range_offset_m; });
+}
+
+double surfaceIntensity(const Scene& scene, const RayHit& hit) {
+  return ofSurfaceHit(scene, hit, [](const auto& s) { return s.intensity; });
 }
 
 }  // namespace lidarcal::simulation

@@ -33,5 +33,7 @@ RayHit castRay(const Scene& scene, const Ray& ray);
 
 /// Range offset of the surface a ray hit (Cylinder/Segment::range_offset_m; 0 for no hit).
 double surfaceOffset(const Scene& scene, const RayHit& hit);
+/// Return intensity of the surface hit (0: none recorded, or nothing hit).
+double surfaceIntensity(const Scene& scene, const RayHit& hit);
 
 }  // namespace lidarcal::simulation

@@ -1,7 +1,7 @@
 #include "simulation/simulator.hpp"
 
-#include <cmath>
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <stdexcept>
 
@@ -30,7 +30,8 @@ double effectReading(const RangeModel& model, const RangeEffects& fx, double d_m
     e = unit_normal / std::sqrt(chi2(effect_rng) / nu) * std::sqrt((nu - 2.0) / nu);
   }
   const double c = clampCosIncidence(beam.cos_incidence);
-  const double sigma = model.noise.stddev(d_m, model.bias) * incidenceNoiseFactor(fx.incidence_noise_exponent, c);
+  const double sigma = model.noise.stddev(d_m, model.bias) * incidenceNoiseFactor(fx.incidence_noise_exponent, c) *
+                       darkNoiseFactor(fx.dark_noise_exponent, darkness(beam.intensity, fx.dark_reference_intensity));
   // The mean reading as the joint refinement models it (common/range_effects.hpp).
   const double y = expectedReading(model.bias(d_m), beam.surface_offset_m, fx.range_drift_m_per_scan,
                                    static_cast<double>(beam.scan) - fx.range_drift_reference_scan, fx.incidence_bias_m, c) +
@@ -160,6 +161,9 @@ SimulatedScan simulateScan(const Scene& scene, const TruthStop& stop, std::size_
   SimulatedScan out;
   out.scan.name = io::scanFileName(scan_index);
   out.scan.viewpoint = stop.commanded;
+  // An intensity field when a surface of the scene records one (the scans of scenes without stay as they were).
+  const auto bright = [](const auto& v) { return std::any_of(v.begin(), v.end(), [](const auto& s) { return s.intensity > 0.0; }); };
+  out.scan.has_intensity = bright(scene.landmarks) || bright(scene.clutter) || bright(scene.walls);
   out.scan.cloud.reset(new pcl::PointCloud<pcl::PointXYZI>);
   out.scan.cloud->resize(n);
   out.scan.cloud->width = static_cast<std::uint32_t>(n);
@@ -208,7 +212,8 @@ SimulatedScan simulateScan(const Scene& scene, const TruthStop& stop, std::size_
         if (std::isnan(background) || nb.range_m < background) background = nb.range_m;
       }
       const double d = mixedPixelDistance(sensor.effects, hit.range_m, background, effect_rng);
-      const BeamContext ctx{std::cos(hit.incidence_rad), surfaceOffset(scene, hit), scan_index};
+      const BeamContext ctx{std::cos(hit.incidence_rad), surfaceOffset(scene, hit), scan_index, surfaceIntensity(scene, hit)};
+      pt.intensity = static_cast<float>(ctx.intensity);
       reading = effectReading(model, sensor.effects, d, ctx, unit_normal[b], effect_rng);
     }
     // The sensor reports only readings inside its window; anything else is a beam without return.

@@ -28,13 +28,14 @@ struct BeamContext {
   double cos_incidence = 1.0;     ///< cosine of the angle between the beam and the surface normal
   double surface_offset_m = 0.0;  ///< range offset of the surface hit (Cylinder/Segment::range_offset_m), metres
   std::size_t scan = 0;           ///< scan index in the sequence (drift)
+  double intensity = 0.0;         ///< return intensity of the surface hit (0: none recorded; dark-surface noise)
 };
 
 /// Generator of the effects' own random numbers for scan `scan`: a stream apart from the
 /// scan's, so that switching effects on leaves every other draw of the sequence unchanged.
 std::mt19937_64 effectRng(std::uint64_t seed, std::size_t scan);
 
-/// A reading with effects: f(d) + b_inc (1 - cos phi) + offset + c_drift t + sigma(d) (1/cos phi)^gamma e,
+/// A reading with effects: f(d) + b_inc (1 - cos phi) + offset + c_drift t + sigma(d) (1/cos phi)^gamma (I_ref/I)^delta e,
 /// quantised. e is `unit_normal`, or with a Student-t noise a unit-variance t variate built from
 /// it and a chi-square draw from `effect_rng` (drawn only when that effect is on). With every
 /// effect off this is rangeReading().

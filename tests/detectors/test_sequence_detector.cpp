@@ -6,6 +6,7 @@
 #include <cmath>
 #include <map>
 #include <random>
+#include <set>
 
 #include <gtest/gtest.h>
 
@@ -168,25 +169,33 @@ TEST(DetectSequence, WithoutKeptScansTheLogAndTheReplayGiveTheSameDetectionsAndI
   }
 }
 
-// The kept detections carry their inliers' coordinates as the scan holds them (the sightings
-// are built from them without reading the scans again).
+// The kept detections carry their inliers' coordinates and intensities as the scan holds them
+// (the sightings are built from them without reading the scans again). The poles return
+// intensities of their own, as the simulator writes them into the scans.
 TEST(DetectSequence, KeptDetectionsCarryTheirInliersCoordinates) {
-  const Simulated s = simulateScene(paperField(), 1);
+  Scene scene = paperField();
+  for (std::size_t l = 0; l < scene.landmarks.size(); ++l) scene.landmarks[l].intensity = 40.0 + 30.0 * static_cast<double>(l);
+  const Simulated s = simulateScene(scene, 1);
+  std::set<float> seen;
   SequenceDetectionConfig cfg;
   cfg.detection.landmark_radius_m = 0.12;
   const SequenceDetections r = run(s, cfg);
   std::size_t checked = 0;
   for (std::size_t i = 0; i < r.scans.size(); ++i)
     for (const auto& d : r.scans[i].detections) {
-      ASSERT_EQ(d.inlier_xy.size(), d.inliers.size());
+      ASSERT_EQ(d.inlier_xyi.size(), d.inliers.size());
       for (std::size_t k = 0; k < d.inliers.size(); ++k) {
         const auto& p = (*s.scans[i].scan.cloud)[static_cast<std::size_t>(d.inliers[k])];
-        EXPECT_EQ(d.inlier_xy[k][0], p.x);
-        EXPECT_EQ(d.inlier_xy[k][1], p.y);
+        EXPECT_EQ(d.inlier_xyi[k][0], p.x);
+        EXPECT_EQ(d.inlier_xyi[k][1], p.y);
+        EXPECT_EQ(d.inlier_xyi[k][2], p.intensity);
+        seen.insert(p.intensity);
         ++checked;
       }
     }
   EXPECT_GT(checked, 1000u);
+  // Every pole's intensity reaches the detections.
+  for (const auto& l : scene.landmarks) EXPECT_EQ(seen.count(static_cast<float>(l.intensity)), 1u) << l.intensity;
 }
 
 // Scans that change between detectSequence and forEachScan (here: the poles removed) cannot be

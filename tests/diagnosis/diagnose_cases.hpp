@@ -50,6 +50,15 @@ inline simulation::LandmarkLevelConfig paperFieldLandmarkLevel() {
   return c;
 }
 
+/// Gives every landmark of `c` a return intensity, drawn for case `case_seed` from a stream of
+/// its own (the effect's size and the simulation draw nothing else differently): log-uniform in
+/// 15-250, the spread between a black and a white surface (about 5 % and 80 % reflectance).
+inline void giveIntensities(simulation::LandmarkLevelConfig& c, std::uint64_t case_seed) {
+  auto rng = makeRng(case_seed, 92);
+  std::uniform_real_distribution<double> u(std::log(15.0), std::log(250.0));
+  for (auto& l : c.landmarks) l.intensity = std::exp(u(rng));
+}
+
 /// The case `case_seed` of effect `effect` ("none" for clean data). Sizes: around the issue's
 /// "realistic" examples, drawn uniformly in the ranges below.
 inline HiddenEffectCase hiddenEffectCase(const std::string& effect, std::uint64_t case_seed) {
@@ -120,6 +129,16 @@ inline HiddenEffectCase hiddenEffectCase(const std::string& effect, std::uint64_
     const double grids[] = {0.005, 0.01, 0.02};
     c.effects.range_resolution_m = grids[std::min(2, static_cast<int>(3.0 * u(rng)))];
     std::snprintf(buf, sizeof buf, "grid %.0f mm", 1000.0 * c.effects.range_resolution_m);
+  } else if (effect == "dark_surface") {
+    // Noise growing as (I_ref / I)^delta on the landmarks' intensities (giveIntensities):
+    // delta 0.5 is a photon-limited spot (sigma ~ 1 / sqrt(signal)). The reference is the
+    // geometric middle of the intensities' range, so the squared law's 2 cm at 3 m holds there.
+    giveIntensities(c, case_seed);
+    c.effects.dark_noise_exponent = 0.5 + 0.5 * u(rng);  // delta in [0.5, 1]
+    c.effects.dark_reference_intensity = std::sqrt(15.0 * 250.0);
+    std::snprintf(buf, sizeof buf, "delta %.2f, intensities %.0f %.0f %.0f %.0f %.0f", c.effects.dark_noise_exponent,
+                  c.landmarks[0].intensity, c.landmarks[1].intensity, c.landmarks[2].intensity, c.landmarks[3].intensity,
+                  c.landmarks[4].intensity);
   } else {
     throw std::invalid_argument("hiddenEffectCase: unknown effect " + effect);
   }

@@ -470,7 +470,16 @@ INSTANTIATE_TEST_SUITE_P(
         // the noise itself near the poles); -1 when the grid is not the hidden one.
         Recovery{"quantised", [](auto& c) { c.effects.range_resolution_m = 0.01; }, [](auto& e) { e.quantised = true; },
                  [](const JointResult& f) { return f.effects.range_grid_m == 0.01 ? f.model.noise.sigma_e / 0.0019176 : -1.0; },
-                 1.0, 0.1}),
+                 1.0, 0.1},
+        // Poles of intensity 20, 40, 80, 160 and 320, noise growing as (I_ref / I)^0.75: a
+        // black pole reads 2.8 times as noisy as a mid-grey one.
+        Recovery{"dark", [](auto& c) {
+                   for (std::size_t l = 0; l < c.landmarks.size(); ++l) c.landmarks[l].intensity = 20.0 * std::pow(2.0, l);
+                   c.effects.dark_noise_exponent = 0.75;
+                   c.effects.dark_reference_intensity = 80.0;
+                 },
+                 [](auto& e) { e.dark_noise = true; }, [](const JointResult& f) { return f.effects.dark_noise_exponent; },
+                 0.75, 0.1}),
     [](const auto& p) { return std::string(p.param.name); });
 
 // ---------------------------------------------------------------------------------------------
@@ -539,7 +548,7 @@ TEST_P(HiddenEffect, DiagnoseNamesItAndItsSignAndItsLikelihoodRatio) {
 INSTANTIATE_TEST_SUITE_P(Sequence, HiddenEffect,
                          ::testing::Values("none", "incidence_noise", "incidence_bias", "landmark_bias", "heading_error",
                                            "range_drift", "mixed_pixels", "angle_offset", "range_noise_law", "heavy_tails",
-                                           "quantisation"),
+                                           "quantisation", "dark_surface"),
                          [](const auto& p) { return std::string(p.param); });
 
 /// Effects in readings rounded to whole millimetres, as every real sensor reports them. The
@@ -576,6 +585,48 @@ TEST_P(OnAMillimetreGrid, TheEffectIsNamedBesideTheRounding) {
 
 INSTANTIATE_TEST_SUITE_P(Sequence, OnAMillimetreGrid, ::testing::Values("none", "angle_offset", "incidence_noise", "landmark_bias"),
                          [](const auto& p) { return std::string(p.param); });
+
+/// Effects where the poles return intensities of 15 to 250 (black to white) and the noise does
+/// not depend on them: the dark-surface candidate is fitted (applicable) and must not take the
+/// place of the hidden effect, nor be named in clean data. Three cases per effect whose seeds
+/// come from a seed this test does not read, 5 bootstrap replicas each.
+class WithIntensities : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(WithIntensities, TheDarkSurfaceModelTakesNoOtherEffectsPlace) {
+  const std::string e = GetParam();
+  int named = 0;
+  std::string misses;
+  for (const std::uint64_t k : unreadSeeds(nameTag(e + " with intensities"), 3)) {
+    SCOPED_TRACE(k);
+    auto h = test::hiddenEffectCase(e, k);
+    test::giveIntensities(h.config, k);
+    const auto r = diagnoseCase(h, k, 5);
+    ASSERT_STREQ(r.status.name(), "ok") << r.status.message;
+    named += r.primary_cause == e;
+    if (r.primary_cause != e) misses += " case " + std::to_string(k) + " (" + h.size + "): " + r.primary_cause + " [" + r.decision + "];";
+    const auto d = std::find_if(r.candidates.begin(), r.candidates.end(), [](const CandidateResult& c) { return c.effect == Effect::dark_surface; });
+    ASSERT_NE(d, r.candidates.end());
+    ASSERT_TRUE(d->applicable) << d->note;
+    EXPECT_FALSE(d->significant) << "dark_surface significant with noise independent of intensity: " << r.decision;
+  }
+  EXPECT_GE(named, 2) << e << ":" << misses;
+}
+
+INSTANTIATE_TEST_SUITE_P(Sequence, WithIntensities, ::testing::Values("none", "incidence_noise", "landmark_bias"),
+                         [](const auto& p) { return std::string(p.param); });
+
+TEST(DiagnoseSequence, WithoutIntensitiesTheDarkSurfaceModelIsNotApplicable) {
+  // The paper field as the seeds simulate it: no intensity recorded. The candidate is listed, not
+  // fitted, and says what to record.
+  const auto h = test::hiddenEffectCase("none", 5);
+  const auto r = diagnoseCase(h, 5, 5);
+  ASSERT_STREQ(r.status.name(), "ok") << r.status.message;
+  const auto d = std::find_if(r.candidates.begin(), r.candidates.end(), [](const CandidateResult& c) { return c.effect == Effect::dark_surface; });
+  ASSERT_NE(d, r.candidates.end());
+  EXPECT_FALSE(d->applicable);
+  EXPECT_NE(d->note.find("intensit"), std::string::npos) << d->note;
+  EXPECT_FALSE(d->significant);
+}
 
 TEST(DiagnoseSequence, APhysicalEffectUnderHeavyTailsIsNamedAndTheTailsStayBesideIt) {
   // Per-pole range offsets (RMS 2-2.5 cm) in Student-t noise of 3 degrees of freedom: the named

@@ -83,7 +83,34 @@ TEST(SceneIo, EveryEffectSceneKeyOfTheTableIsRead) {
     const auto back = sceneToJson(readScene(dir / "s.json"));
     EXPECT_TRUE(back["sensor"]["effects"].contains(field)) << i.name << ": " << key;
   }
-  EXPECT_EQ(keys, 6);
+  EXPECT_EQ(keys, 7);
+}
+
+TEST(SceneIo, SurfaceIntensitiesAndTheDarkNoiseRoundTrip) {
+  TempDir dir;
+  nlohmann::json j;
+  std::ifstream(test::sourceDir() / "data/scenes/paper_field.json") >> j;
+  j["landmarks"][1]["intensity"] = 35.5;
+  j["sensor"]["effects"] = {{"dark_noise_exponent", 0.5}, {"dark_reference_intensity", 90.0}};
+  test::writeFile(dir / "s.json", j.dump());
+  const Scene s = readScene(dir / "s.json");
+  EXPECT_EQ(s.landmarks[0].intensity, 0.0);  // none recorded
+  EXPECT_EQ(s.landmarks[1].intensity, 35.5);
+  EXPECT_EQ(s.sensor.effects.dark_noise_exponent, 0.5);
+  EXPECT_EQ(s.sensor.effects.dark_reference_intensity, 90.0);
+  const auto back = sceneToJson(s);
+  EXPECT_FALSE(back["landmarks"][0].contains("intensity"));  // scenes without intensities keep their bytes
+  EXPECT_EQ(back["landmarks"][1]["intensity"], 35.5);
+  EXPECT_EQ(back["sensor"]["effects"]["dark_reference_intensity"], 90.0);
+  // A reference of 0 makes no sense (the factor is (I_ref / I)^delta): refused, naming the key.
+  j["sensor"]["effects"]["dark_reference_intensity"] = 0.0;
+  test::writeFile(dir / "s.json", j.dump());
+  try {
+    readScene(dir / "s.json");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("dark_reference_intensity"), std::string::npos) << e.what();
+  }
 }
 
 TEST(SceneIo, MissingSceneFileIsReported) {

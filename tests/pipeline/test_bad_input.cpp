@@ -252,6 +252,12 @@ std::vector<BadInputCase> cases() {
           simulated(scene(R"({"x_m": 3.5, "y_m": 2.0, "radius_m": 0.02}, {"x_m": 3.0, "y_m": -2.5, "radius_m": 0.02},
                              {"x_m": 4.5, "y_m": 0.8, "radius_m": 0.02})", path(6, 2))),
           3, {"sim/scans", "calibration", "no_usable_landmark", "ERRORS.md"});
+  // The dark-surface noise term on scans whose intensity field holds 0 everywhere (none recorded).
+  const std::vector<std::pair<const char*, std::string>> dark = {
+      {"calibrate", "calibrate {IN}/sim/scans --out {OUT} --effects dark_surface"}};
+  forEach(dark, "dark_surface_without_intensity",
+          simulated(scene(kPaperPoles, path(6, 2))), 3,
+          {"sim/scans", "calibration", "no_intensity", "dark_surface", "intensities on"});
 
   // ---- model files (correct)
   const std::vector<std::pair<const char*, std::string>> correcting = {

@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "detectors/sequence_detector.hpp"
 #include "io/sequence.hpp"
 #include "pipeline/collect_sightings.hpp"
@@ -24,7 +26,7 @@ TEST(CollectSightings, KeptInlierCoordinatesGiveTheSightingsOfASecondRead) {
 
   detectors::SequenceDetections stripped = kept;
   for (auto& scan : stripped.scans)
-    for (auto& d : scan.detections) d.inlier_xy.clear();
+    for (auto& d : scan.detections) d.inlier_xyi.clear();
   const LandmarkObservations from_files = pipeline::toLandmarkObservations(seq, stripped, counting);
   EXPECT_GT(reads, 0u);
 
@@ -40,6 +42,9 @@ TEST(CollectSightings, KeptInlierCoordinatesGiveTheSightingsOfASecondRead) {
       EXPECT_EQ(a.beams[j].angle_rad, b.beams[j].angle_rad);
       EXPECT_EQ(a.beams[j].range_m, b.beams[j].range_m);
       EXPECT_EQ(a.beams[j].beam, b.beams[j].beam);
+      // Intensity as recorded, or NaN (none) on both sides.
+      EXPECT_TRUE(a.beams[j].intensity == b.beams[j].intensity ||
+                  (std::isnan(a.beams[j].intensity) && std::isnan(b.beams[j].intensity)));
     }
   }
 }
