@@ -34,7 +34,8 @@ int main(int argc, char** argv) {
   double grid_m = 0.0;
   app.add_option("--grid", grid_m, "also round the readings to this grid, metres (the effect on a sensor that reports whole millimetres: 0.001)");
   bool intensity = false;
-  app.add_flag("--intensity", intensity, "also give the landmarks return intensities of 15-250 (dark_surface always has them)");
+  app.add_flag("--intensity", intensity,
+               "also give the landmarks return intensities of 15-250 (dark_surface always has them)");
   CLI11_PARSE(app, argc, argv);
   int correct = 0;
   std::map<std::string, int> named;

@@ -638,9 +638,11 @@ void JointProblem::fitNoiseLaw(const std::vector<double>& res, const BiasPolynom
           -1.0, 5.0);
     }
     if (fx_.incidence_noise)
-      gamma_ = goldenMax([&](double g) { return profileNoise(out_.model.noise, g, delta_, in, res, f, nullptr); }, -1.0, 4.0);
+      gamma_ = goldenMax([&](double g) { return profileNoise(out_.model.noise, g, delta_, in, res, f, nullptr); }, -1.0,
+                         4.0);
     if (fx_.dark_noise && reference_intensity_ > 0.0)  // without intensities the factor is 1 whatever delta is
-      delta_ = goldenMax([&](double x) { return profileNoise(out_.model.noise, gamma_, x, in, res, f, nullptr); }, -1.0, 3.0);
+      delta_ = goldenMax([&](double x) { return profileNoise(out_.model.noise, gamma_, x, in, res, f, nullptr); }, -1.0,
+                         3.0);
   }
   profileNoise(out_.model.noise, gamma_, delta_, in, res, f, &out_.model.noise.sigma_e);
 }
@@ -654,8 +656,8 @@ void JointProblem::fitStudent(const std::vector<double>& res, const BiasPolynomi
   std::vector<double> x;  // residual over the law's shape (polynomial law: over sigma)
   for (std::size_t i = 0; i < readings_.size(); ++i) {
     if (!(std::abs(res[i]) <= 30.0 * sigma_[i])) continue;
-    x.push_back(res[i] / (scaled ? std::max(noiseShape(out_.model.noise, f, geo_[i].d, geo_[i].cos_inc, gamma_, readings_[i].darkness, delta_), 1e-9)
-                                 : sigma_[i]));
+    const double h = noiseShape(out_.model.noise, f, geo_[i].d, geo_[i].cos_inc, gamma_, readings_[i].darkness, delta_);
+    x.push_back(res[i] / (scaled ? std::max(h, 1e-9) : sigma_[i]));
   }
   if (x.size() < 10) return;
   double nu = dof_ > 2.0 ? dof_ : 10.0;

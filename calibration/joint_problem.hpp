@@ -74,8 +74,8 @@ class JointProblem {
   void fitStudent(const std::vector<double>& res, const BiasPolynomial& f);
   void fitCellScale(const std::vector<double>& res);
   double workingSigma(std::size_t i, const RangeModel& m) const;
-  double profileNoise(NoiseModel n, double g, double delta, const std::vector<std::size_t>& in, const std::vector<double>& res,
-                      const BiasPolynomial& f, double* sigma_e) const;
+  double profileNoise(NoiseModel n, double g, double delta, const std::vector<std::size_t>& in,
+                      const std::vector<double>& res, const BiasPolynomial& f, double* sigma_e) const;
 
   // summarise
   void reportEstimates();

@@ -64,7 +64,8 @@ void JointConfig::validate() const {
       noise != NoiseKind::power)
     throw std::invalid_argument("JointConfig: noise must be squared, power, polynomial or constant");
   if ((effects.incidence_noise || effects.noise_exponent || effects.dark_noise) && noise == NoiseKind::polynomial)
-    throw std::invalid_argument("JointConfig: incidence_noise, noise_exponent and dark_noise need the squared, power or constant law");
+    throw std::invalid_argument(
+        "JointConfig: incidence_noise, noise_exponent and dark_noise need the squared, power or constant law");
   if (!(sigma_s_m > 0.0) || !(sigma_psi_rad > 0.0)) throw std::invalid_argument("JointConfig: priors must be positive");
   if (!(huber_sigmas > 0.0)) throw std::invalid_argument("JointConfig: huber_sigmas must be positive");
   if (!(lateral_fraction > 0.0 && lateral_fraction <= 1.0))

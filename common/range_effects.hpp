@@ -57,7 +57,9 @@ inline double darkness(double intensity, double reference) {
 }
 
 /// (I_ref / I)^delta = exp(delta ln(I_ref / I)): the factor on the noise standard deviation.
-inline double darkNoiseFactor(double delta, double darkness_ln) { return delta == 0.0 ? 1.0 : std::exp(delta * darkness_ln); }
+inline double darkNoiseFactor(double delta, double darkness_ln) {
+  return delta == 0.0 ? 1.0 : std::exp(delta * darkness_ln);
+}
 
 /// cos phi kept away from 0: grazing beams are treated as at 87 degrees.
 inline double clampCosIncidence(double cos_phi) { return std::clamp(std::abs(cos_phi), 0.05, 1.0); }

@@ -97,8 +97,9 @@ calibration::CalibrationConfig calibrationConfig(const CalibrationOptions& o) {
       throw InputError("", "--effects", "unknown effect '" + e + "'",
                        "use " + effectNames([](const EffectInfo& i) { return i.joint_term; }));
   }
-  if ((c.joint.effects.incidence_noise || c.joint.effects.noise_exponent) && c.noise == NoiseKind::polynomial)
-    throw InputError("", "--effects", "incidence_noise and range_noise_law need --noise squared or constant");
+  if ((c.joint.effects.incidence_noise || c.joint.effects.noise_exponent || c.joint.effects.dark_noise) &&
+      c.noise == NoiseKind::polynomial)
+    throw InputError("", "--effects", "incidence_noise, range_noise_law and dark_surface need --noise squared or constant");
   return c;
 }
 
