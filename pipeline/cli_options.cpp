@@ -64,7 +64,8 @@ void addCalibrationOptions(CLI::App* app, const std::shared_ptr<CalibrationOptio
   app->add_option("--effects", o->effects,
                   "Comma-separated effect terms for the joint refinement, as `lidarcal diagnose` names them: " +
                       effectNames([](const EffectInfo& i) { return i.joint_term && i.effect != Effect::heading_error; }) +
-                      " (heavy_tails: Student-t noise; quantisation: the readings rounded to the grid they lie on; per-stop "
+                      " (heavy_tails: Student-t noise; quantisation: the readings rounded to the grid they lie on; "
+                      "dark_surface: noise growing as the return intensity falls, needs scans with intensities; per-stop "
                       "headings, heading_error, are always refined)");
 }
 
