@@ -273,7 +273,7 @@ void JointProblem::initialiseReferenceIntensity() {
   std::vector<double> v;
   for (const auto& s : obs_.sightings)
     for (const auto& b : s.beams)
-      if (std::isfinite(b.range_m) && b.intensity > 0.0 && std::isfinite(b.intensity)) v.push_back(b.intensity);
+      if (std::isfinite(b.range_m) && b.hasIntensity()) v.push_back(b.intensity);
   reference_intensity_ = v.empty() ? 0.0 : median(v);
 }
 

@@ -23,6 +23,8 @@ struct BeamReading {
   /// Return intensity as the sensor reports it (any unit); NaN when none was recorded (a
   /// recorded intensity of 0 or less counts as none: most drivers write 0 when they have none).
   double intensity = std::numeric_limits<double>::quiet_NaN();
+  /// Whether it records an intensity (a finite value above 0).
+  bool hasIntensity() const { return intensity > 0.0 && intensity < std::numeric_limits<double>::infinity(); }
 };
 
 /// One landmark seen in one scan.
@@ -62,7 +64,7 @@ inline bool intensitiesVary(const LandmarkObservations& obs) {
   double first = 0.0;
   for (const auto& s : obs.sightings)
     for (const auto& b : s.beams) {
-      if (!(b.intensity > 0.0) || !(b.intensity < std::numeric_limits<double>::infinity())) continue;
+      if (!b.hasIntensity()) continue;
       if (first == 0.0) first = b.intensity;
       else if (b.intensity != first) return true;
     }

@@ -532,7 +532,7 @@ ReplicaPlan replicaPlan(const LandmarkObservations& obs, const JointResult& fit,
   std::map<int, std::vector<double>> intensities;
   for (const auto& s : obs.sightings)
     for (const auto& b : s.beams)
-      if (b.intensity > 0.0 && std::isfinite(b.intensity)) intensities[s.landmark].push_back(b.intensity);
+      if (b.hasIntensity()) intensities[s.landmark].push_back(b.intensity);
   for (const auto& [id, centre] : fit.centres) {
     Cylinder cyl{centre.x(), centre.y(), fit.radius_m};
     auto o = fit.effects.landmark_offset_m.find(id);
@@ -1824,13 +1824,14 @@ void SequenceDiagnosis::nameBeside(DiagnosisResult& out, Effect symptom) const {
   // is finer than about twice the noise. Beyond, the likelihood ratio is not chi-squared: on
   // 5-20 mm grids over noise of 0.9 mm on the nearest tenth of the readings it named incidence
   // biases of about 1 mm beside the grid in 4 of 40 simulated cases with none hidden. Fine: q at
-  // most twice the noise of the readings' 10th percentile.
-  bool fine_grid = false;
+  // most twice the noise of the readings' 10th percentile. Beside the t the geometry is the t's
+  // ML fit (its EM weights): the ratio counts there.
+  bool ratio_counts = !grid;
   if (grid) {
     std::vector<double> s;
     for (const auto& x : evaluateJoint(obs_, fits_[under], cfgs_[under])) s.push_back(x.sigma_m);
     std::sort(s.begin(), s.end());
-    fine_grid = !s.empty() && fits_[under].effects.range_grid_m <= 2.0 * s[s.size() / 10];
+    ratio_counts = !s.empty() && fits_[under].effects.range_grid_m <= 2.0 * s[s.size() / 10];
   }
   char buf[520];
   std::size_t best = candidates_.size();
@@ -1846,7 +1847,7 @@ void SequenceDiagnosis::nameBeside(DiagnosisResult& out, Effect symptom) const {
     double p = g.finite ? heldoutPValue(g.gain, g.se) : 1.0;
     // Beside a fine grid or the t the likelihood ratio counts too (Bonferroni with the held-out
     // gain, as in the candidate's own p), when the held-out gain is positive.
-    if ((fine_grid || !grid) && g.finite && g.gain > 0.0 && !noiseShapeEffect(r.effect)) {
+    if (ratio_counts && g.finite && g.gain > 0.0 && !noiseShapeEffect(r.effect)) {
       const double p_lr = pBesideInSample(full[k], under);
       if (std::isfinite(p_lr)) r.estimates[grid ? "p_likelihood_ratio_beside_grid" : "p_likelihood_ratio_beside_tails"] = p_lr;
       p = combinedPValue(p, kNaN, p_lr);

@@ -16,6 +16,7 @@
 #include <functional>
 #include <limits>
 #include <numeric>
+#include <optional>
 #include <random>
 
 #include <Eigen/Dense>
@@ -498,6 +499,12 @@ DiagnosisResult diagnoseCase(const test::HiddenEffectCase& h, std::uint64_t seed
   return diagnoseSequence(s.obs, dc);
 }
 
+/// The candidate row of effect `e` in `r` (nullptr when `e` was not a candidate).
+const CandidateResult* candidateFor(const DiagnosisResult& r, Effect e) {
+  const auto c = std::find_if(r.candidates.begin(), r.candidates.end(), [e](const CandidateResult& x) { return x.effect == e; });
+  return c == r.candidates.end() ? nullptr : &*c;
+}
+
 /// The hidden size of a signed effect (0: not signed) and the key of its estimate.
 std::pair<double, const char*> signedTruth(const std::string& e, const test::HiddenEffectCase& h) {
   if (e == "incidence_bias") return {h.config.effects.incidence_bias_m, "incidence_bias_m"};
@@ -520,8 +527,9 @@ TEST_P(HiddenEffect, DiagnoseNamesItAndItsSignAndItsLikelihoodRatio) {
     ASSERT_STREQ(r.status.name(), "ok") << r.status.message;
     if (r.primary_cause == e) ++named;
     else misses += " case " + std::to_string(k) + " (" + h.size + "): " + r.primary_cause + ";";
-    const auto c = std::find_if(r.candidates.begin(), r.candidates.end(), [&](const CandidateResult& x) { return toString(x.effect) == e; });
-    if (c == r.candidates.end()) continue;  // none
+    const std::optional<Effect> hidden = parseEffect(e);
+    const CandidateResult* c = hidden ? candidateFor(r, *hidden) : nullptr;
+    if (!c) continue;  // none
     // One-parameter effects: the likelihood ratio of the nested fits (extended against the
     // seeds' model) on all the data finds the hidden effect.
     if (std::isfinite(c->p_likelihood_ratio)) {
@@ -573,8 +581,8 @@ TEST_P(OnAMillimetreGrid, TheEffectIsNamedBesideTheRounding) {
     named += right;
     if (!right) misses += " case " + std::to_string(k) + " (" + h.size + "): " + r.primary_cause + " [" + r.decision + "];";
     // The grid is found whatever is named.
-    const auto q = std::find_if(r.candidates.begin(), r.candidates.end(), [](const CandidateResult& c) { return c.effect == Effect::quantisation; });
-    ASSERT_NE(q, r.candidates.end());
+    const CandidateResult* q = candidateFor(r, Effect::quantisation);
+    ASSERT_NE(q, nullptr);
     ASSERT_TRUE(q->applicable) << q->note;
     EXPECT_EQ(q->estimates.at("grid_m"), 0.001);
   }
@@ -604,8 +612,8 @@ TEST_P(WithIntensities, TheDarkSurfaceModelTakesNoOtherEffectsPlace) {
     ASSERT_STREQ(r.status.name(), "ok") << r.status.message;
     named += r.primary_cause == e;
     if (r.primary_cause != e) misses += " case " + std::to_string(k) + " (" + h.size + "): " + r.primary_cause + " [" + r.decision + "];";
-    const auto d = std::find_if(r.candidates.begin(), r.candidates.end(), [](const CandidateResult& c) { return c.effect == Effect::dark_surface; });
-    ASSERT_NE(d, r.candidates.end());
+    const CandidateResult* d = candidateFor(r, Effect::dark_surface);
+    ASSERT_NE(d, nullptr);
     ASSERT_TRUE(d->applicable) << d->note;
     EXPECT_FALSE(d->significant) << "dark_surface significant with noise independent of intensity: " << r.decision;
   }
@@ -621,8 +629,8 @@ TEST(DiagnoseSequence, WithoutIntensitiesTheDarkSurfaceModelIsNotApplicable) {
   const auto h = test::hiddenEffectCase("none", 5);
   const auto r = diagnoseCase(h, 5, 5);
   ASSERT_STREQ(r.status.name(), "ok") << r.status.message;
-  const auto d = std::find_if(r.candidates.begin(), r.candidates.end(), [](const CandidateResult& c) { return c.effect == Effect::dark_surface; });
-  ASSERT_NE(d, r.candidates.end());
+  const CandidateResult* d = candidateFor(r, Effect::dark_surface);
+  ASSERT_NE(d, nullptr);
   EXPECT_FALSE(d->applicable);
   EXPECT_NE(d->note.find("intensit"), std::string::npos) << d->note;
   EXPECT_FALSE(d->significant);
@@ -644,10 +652,10 @@ TEST(DiagnoseSequence, AnAngleOffsetUnderHeavyTailsIsNamedByItsLikelihoodRatioBe
     ASSERT_STREQ(r.status.name(), "ok") << r.status.message;
     named += r.primary_cause == "angle_offset";
     if (r.primary_cause != "angle_offset") misses += " case " + std::to_string(k) + ": " + r.primary_cause + " [" + r.decision + "];";
-    for (const auto& c : r.candidates) {
-      if (c.effect == Effect::angle_offset && r.primary_cause == "angle_offset" && c.estimates.count("heldout_gain_beside_tails")) {
-        EXPECT_TRUE(c.estimates.count("p_likelihood_ratio_beside_tails")) << r.decision;
-      }
+    const CandidateResult* a = candidateFor(r, Effect::angle_offset);
+    ASSERT_NE(a, nullptr);
+    if (r.primary_cause == "angle_offset" && a->estimates.count("heldout_gain_beside_tails")) {
+      EXPECT_TRUE(a->estimates.count("p_likelihood_ratio_beside_tails")) << r.decision;
     }
   }
   EXPECT_GE(named, 2) << misses;
