@@ -3,7 +3,8 @@
 // coarser quantisation grids, the clean room (its false-positive rate), and the tail cases of
 // issue 20 (extra-wide errors only at grazing beams, at depth edges, on a dark wall; tests use
 // seeds 301-304), over many seeds.
-//   build/bench/diagnose_static_accuracy [--seeds 10] [--clean-seeds 20] [--first 101] [--replicas 19] [--only NAME] [--verbose]
+//   build/bench/diagnose_static_accuracy [--seeds 10] [--clean-seeds 20] [--first 101] [--replicas 19] [--only NAME]
+//                                        [--dark-exponent DELTA] [--verbose]
 
 #include <cstdio>
 #include <map>
@@ -69,10 +70,14 @@ int main(int argc, char** argv) {
   app.add_option("--replicas", replicas, "bootstrap replicas");
   std::string only;
   app.add_option("--only", only, "run only the cases whose name contains this (and no tail cases)");
+  double dark_exponent = 0.0;
+  app.add_option("--dark-exponent", dark_exponent, "the dark_surface case's exponent delta instead of 0.75 (its detection limit)");
   bool verbose = false;
   app.add_flag("--verbose", verbose, "print every case's candidates (held-out gain, p-values) to stderr");
   CLI11_PARSE(app, argc, argv);
   std::vector<test::StaticCase> cases = test::staticCases();
+  for (auto& c : cases)
+    if (dark_exponent != 0.0 && c.fx.dark_noise_exponent != 0.0) c.fx.dark_noise_exponent = dark_exponent;
   for (double grid : {0.005, 0.01}) {
     RangeEffects fx;
     fx.range_resolution_m = grid;
@@ -91,7 +96,7 @@ int main(int argc, char** argv) {
       dc.replicas = replicas;
       dc.seed = static_cast<std::uint64_t>(seed);
       dc.static_range_offset_m = c.known_offset_m;
-      const auto r = diagnosis::diagnoseStatic(test::staticRoom(c.fx, c.noise, static_cast<std::uint64_t>(seed), 150, c.step_error_fraction), dc);
+      const auto r = diagnosis::diagnoseStatic(test::staticRoom(c, static_cast<std::uint64_t>(seed)), dc);
       const bool ok = c.allows(r.primary_cause);
       right += ok;
       if (verbose) printCandidates(c.name, seed, r);

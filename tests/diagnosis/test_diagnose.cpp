@@ -803,7 +803,7 @@ TEST_P(StaticHiddenEffect, DiagnoseNamesWhatTheTruthAllows) {
   // are in docs/RESULTS.md).
   const std::uint64_t seed = unreadSeeds(nameTag(c.name), 1).front();
   dc.seed = seed;
-  const auto r = diagnoseStatic(staticRoom(c.fx, c.noise, seed, 150, c.step_error_fraction), dc);
+  const auto r = diagnoseStatic(staticRoom(c, seed), dc);
   SCOPED_TRACE(seed);
   ASSERT_STREQ(r.status.name(), "ok") << r.status.message;
   if (!c.also.empty()) {
@@ -1189,6 +1189,64 @@ TEST(DiagnoseStatic, IncidenceExponentIsRecoveredUnderContamination) {
     // contamination the incidence noise comes first.
     EXPECT_EQ(r.primary_cause, "incidence_noise") << r.decision << " tails significant " << r.tails.significant << " p " << r.tails.p_value;
     EXPECT_GT(r.tails.robust.at("incidence_noise_exponent_gain"), 0.0);
+  }
+}
+
+/// A noise law that grows on dark surfaces, sigma times (I_ref / I)^delta, in a room whose six walls
+/// and pillar return intensities 20-250 (shuffled over the surfaces per room) and delta from
+/// 0.2 to 1, both drawn from seeds the test does not read: dark_surface is named, its exponent
+/// recovered and its reference the intensity of the median beam's surface.
+TEST(DiagnoseStatic, ADarkSurfaceNoiseLawIsNamedAndItsExponentRecovered) {
+  for (const std::uint64_t seed : unreadSeeds(nameTag("static dark surface"), 2)) {
+    SCOPED_TRACE(seed);
+    auto rng = makeRng(seed, 9);
+    test::StaticCase c{"dark", "dark_surface", {}, RangeEffects{}};
+    c.intensities = test::roomIntensities();
+    std::shuffle(c.intensities.begin(), c.intensities.end(), rng);
+    c.fx.dark_noise_exponent = std::uniform_real_distribution<double>(0.2, 1.0)(rng);
+    c.fx.dark_reference_intensity = 90.0;
+    DiagnoseConfig dc;
+    dc.replicas = 5;
+    dc.seed = seed;
+    const auto r = diagnoseStatic(test::staticRoom(c, seed), dc);
+    ASSERT_STREQ(r.status.name(), "ok") << r.status.message;
+    EXPECT_EQ(r.primary_cause, "dark_surface") << r.decision;
+    const CandidateResult* k = nullptr;
+    for (const auto& x : r.candidates)
+      if (x.effect == Effect::dark_surface) k = &x;
+    ASSERT_NE(k, nullptr);
+    ASSERT_TRUE(k->applicable) << k->note;
+    EXPECT_NEAR(k->estimates.at("dark_noise_exponent"), c.fx.dark_noise_exponent, 0.05);
+    // The reference is the median beam's intensity: that of one of the surfaces (the scale
+    // sigma_e takes up the difference from the simulator's reference).
+    const double ref = k->estimates.at("dark_reference_intensity");
+    EXPECT_TRUE(std::any_of(c.intensities.begin(), c.intensities.end(), [ref](double v) { return std::abs(ref / v - 1.0) < 1e-6; }))
+        << ref;
+    EXPECT_TRUE(r.scene_keys.count("sensor.effects.dark_noise_exponent"));
+  }
+}
+
+/// Without intensities, or with one value on every reading (the RPLIDAR's 47), a dark surface
+/// cannot show: the candidate is not applicable and says what to record.
+TEST(DiagnoseStatic, DarkSurfaceIsNotApplicableWithoutVaryingIntensities) {
+  for (const bool constant : {false, true}) {
+    SCOPED_TRACE(constant);
+    test::StaticCase c{"clean", "none", {}, RangeEffects{}};
+    if (constant) c.intensities.assign(7, 47.0);
+    DiagnoseConfig dc;
+    dc.replicas = 5;
+    dc.seed = 5;
+    const auto r = diagnoseStatic(test::staticRoom(c, 5), dc);
+    ASSERT_STREQ(r.status.name(), "ok") << r.status.message;
+    bool seen = false;
+    for (const auto& k : r.candidates)
+      if (k.effect == Effect::dark_surface) {
+        seen = true;
+        EXPECT_FALSE(k.applicable);
+        EXPECT_NE(k.note.find("intensit"), std::string::npos) << k.note;
+      }
+    EXPECT_TRUE(seen);
+    EXPECT_NE(r.primary_cause, "dark_surface");
   }
 }
 
