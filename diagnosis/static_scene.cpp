@@ -1148,6 +1148,7 @@ std::vector<TailBeam> tailBeams(const Data& d, const std::vector<BinFit>& f) {
     t.x[kTailRange] = t.log_range - mean_lr;
     // Darkness: how much weaker than the median beam's the return is, ln(I_median / I), >= 0.
     t.x[kTailDark] = std::max(0.0, b.dark);
+    t.dark = b.dark;
     if (b.edge && b.far > b.near) {
       t.mix_lo = b.near - f[k].med;
       t.mix_hi = b.far - f[k].med;
@@ -1198,7 +1199,7 @@ struct TailStudy {
   std::array<bool, kTailCovariates> available{};
   std::vector<TailSpec> specs;   ///< 0: pooled, 1: every covariate, then one without each, then robust effects
   std::vector<int> dropped;      ///< covariate left out of spec s (-1: none)
-  std::size_t gamma = 0, kappa = 0, mixed = 0;  ///< specs of the robust effects (0: not fitted)
+  std::size_t gamma = 0, kappa = 0, mixed = 0, delta = 0;  ///< specs of the robust effects (0: not fitted)
   std::vector<std::vector<double>> ll;
   std::vector<std::size_t> block;
   std::vector<double> gauss;     ///< the Gaussian baseline's held-out log-likelihoods, aligned
@@ -1206,7 +1207,7 @@ struct TailStudy {
 };
 
 /// The specs: pooled, full, full without each covariate, pooled with each robust effect.
-void setupTailSpecs(TailStudy& ts, bool incidence_known, bool edges) {
+void setupTailSpecs(TailStudy& ts, bool incidence_known, bool edges, bool dark) {
   TailSpec pooled, full;
   full.covariate = ts.available;
   ts.specs = {pooled, full};
@@ -1228,6 +1229,7 @@ void setupTailSpecs(TailStudy& ts, bool incidence_known, bool edges) {
   if (incidence_known) robust(ts.gamma, [](TailSpec& s) { s.gamma = true; });
   robust(ts.kappa, [](TailSpec& s) { s.kappa = true; });
   if (edges) robust(ts.mixed, [](TailSpec& s) { s.mixed = true; });
+  if (dark) robust(ts.delta, [](TailSpec& s) { s.delta = true; });
   ts.ll.assign(ts.specs.size(), {});
 }
 
@@ -1280,7 +1282,13 @@ class StaticDiagnosis {
   void afterCandidates(DiagnosisResult& out);
   std::vector<std::pair<Effect, Effect>> nestedEffects() const { return {}; }
   void refineCause(DiagnosisResult& out);
-  void reRankUnderTails(DiagnosisResult& out);
+  void refineCauseByTails(DiagnosisResult& out);
+  /// A pooled contamination above this share is the main component, not a tail.
+  static constexpr double kMostReadings = 0.5;
+  double darkRangeCorrelation() const;
+  /// Covariates this correlated cannot be told apart.
+  static constexpr double kConfounded = 0.95;
+  bool reRankUnderTails(DiagnosisResult& out);
   Closeness closenessBaseline(const DiagnosisResult& out) const { return closenessOf(out.measured, sim_base_); }
   void extend(std::size_t c, DiagnosisResult& out) const;
 
@@ -1544,7 +1552,7 @@ void StaticDiagnosis::startTails() {
   tails_.available = tailAvailable(d_, tails_.beams, edges_);
   std::size_t inc_known = 0;
   for (const auto& b : d_.bins) inc_known += b.inc_known;
-  setupTailSpecs(tails_, inc_known >= 3, edges_ >= 3);
+  setupTailSpecs(tails_, inc_known >= 3, edges_ >= 3, darknessVaries(d_));
   tails_.floor_w = config_.outlier_floor;
   tails_.floor_density = d_.window_max > d_.window_min ? 1.0 / (d_.window_max - d_.window_min) : 0.0;
 }
@@ -1687,8 +1695,8 @@ void StaticDiagnosis::tailClasses(TailAttribution& ta, const TailModel& full, co
   ta.top_beams = std::move(beams);
 }
 
-/// Incidence exponent, range exponent and mixed-pixel fraction fitted under the pooled
-/// contamination (the tails do not drag them), with their held-out gains over the pooled model.
+/// Incidence exponent, range exponent, mixed-pixel fraction and dark-surface exponent fitted under
+/// the pooled contamination (the tails do not drag them), with their held-out gains over the pooled model.
 void StaticDiagnosis::tailRobust(DiagnosisResult& out, const std::vector<TailReading>& all, const TailModel& pooled) {
   struct Item {
     std::size_t spec;
@@ -1697,12 +1705,16 @@ void StaticDiagnosis::tailRobust(DiagnosisResult& out, const std::vector<TailRea
   };
   const Item items[] = {{tails_.gamma, Effect::incidence_noise, "incidence_noise_exponent"},
                         {tails_.kappa, Effect::range_noise_law, "noise_exponent"},
-                        {tails_.mixed, Effect::mixed_pixels, "mixed_pixel_fraction"}};
+                        {tails_.mixed, Effect::mixed_pixels, "mixed_pixel_fraction"},
+                        {tails_.delta, Effect::dark_surface, "dark_noise_exponent"}};
   for (const Item& it : items) {
     if (it.spec == 0) continue;
     const TailModel m =
         fitTailModel(tails_.beams, all, tails_.specs[it.spec], base0_.sigma_e, tails_.floor_w, tails_.floor_density, 60, &pooled);
-    const double value = it.spec == tails_.gamma ? m.gamma : it.spec == tails_.kappa ? m.kappa : m.mixed;
+    const double value = it.spec == tails_.gamma   ? m.gamma
+                         : it.spec == tails_.kappa ? m.kappa
+                         : it.spec == tails_.delta ? m.delta
+                                                   : m.mixed;
     const HeldOutGain g = gainOf(tails_.ll[it.spec], tails_.ll[0], tails_.block);
     const std::string key = it.key;
     out.tails.robust[key] = value;
@@ -1722,18 +1734,20 @@ const char* robustEffectOf(Effect e) {
   if (e == Effect::incidence_noise) return "incidence_noise_exponent";
   if (e == Effect::range_noise_law) return "noise_exponent";
   if (e == Effect::mixed_pixels) return "mixed_pixel_fraction";
+  if (e == Effect::dark_surface) return "dark_noise_exponent";
   return nullptr;
 }
 
-/// A noise law or mixed pixels named while the tails are significant: the Gaussian likelihood the
-/// ranking came from is dominated by the tails, so the three are ranked again by their held-out
-/// gains over the pooled contamination (Holm across them); the largest significant one is named.
-void StaticDiagnosis::reRankUnderTails(DiagnosisResult& out) {
+/// A noise law, mixed pixels or a dark surface named while the tails are significant: the Gaussian
+/// likelihood the ranking came from is dominated by the tails, so the four are ranked again by
+/// their held-out gains over the pooled contamination (Holm across them); the largest significant
+/// one is named. False when none is significant there (the verdict is left to the caller).
+bool StaticDiagnosis::reRankUnderTails(DiagnosisResult& out) {
   named_by_tails_ = true;  // its simulation takes the exponent fitted beside the contamination
   const auto& rob = out.tails.robust;
   std::vector<Effect> effects;
   std::vector<double> p;
-  for (Effect e : {Effect::incidence_noise, Effect::range_noise_law, Effect::mixed_pixels}) {
+  for (Effect e : {Effect::incidence_noise, Effect::range_noise_law, Effect::mixed_pixels, Effect::dark_surface}) {
     const std::string key = robustEffectOf(e);
     if (!rob.count(key + "_p")) continue;
     effects.push_back(e);
@@ -1749,17 +1763,34 @@ void StaticDiagnosis::reRankUnderTails(DiagnosisResult& out) {
       best = toString(effects[k]);
     }
   }
-  if (best.empty() || best == out.primary_cause) return;
+  if (best.empty()) return false;
+  if (best == out.primary_cause) return true;
   out.decision = "the tails are significant and dominate the Gaussian likelihood that ranked " + out.primary_cause +
                  " first; fitted beside a pooled contamination, " + best + " has the largest significant held-out gain (+" +
                  std::to_string(best_gain) + " nats per reading)";
   out.primary_cause = best;
+  return true;
 }
 
-/// Step 4 for the tails: when the named cause is the pooled symptom (heavy_tails) or nothing while
-/// the tails are significant, the physical effect whose covariate carries the largest significant
-/// share of the tails' explained log-likelihood; heavy_tails, cause unknown, when none does.
+/// Step 4 for the tails (refineCauseByTails), with a caution when the contamination the cause was
+/// named beside holds most of the readings: it is then the main component, not a tail, and what is
+/// fitted beside it describes the wild readings more than the sensor (the forklift's back lidars,
+/// which see the vehicle's own body, docs/FINDINGS.md).
 void StaticDiagnosis::refineCause(DiagnosisResult& out) {
+  refineCauseByTails(out);
+  if (named_by_tails_ && out.tails.pooled_fraction > kMostReadings)
+    out.decision += "; caution: the pooled contamination holds " +
+                    std::to_string(static_cast<int>(std::lround(100.0 * out.tails.pooled_fraction))) +
+                    " % of the readings, so the values fitted beside it describe those readings more than the sensor's "
+                    "core noise: look for what the beams see besides the scene (the vehicle's body, moving objects) and "
+                    "leave it out (import --range-min, a shorter stretch of scans)";
+}
+
+/// When the named cause is the pooled symptom (heavy_tails) or nothing while the tails are
+/// significant, the physical effect whose covariate carries the largest significant share of the
+/// tails' explained log-likelihood; heavy_tails, cause unknown, when none does. A noise law, mixed
+/// pixels or a dark surface named from the Gaussian ranking: ranked again beside the contamination.
+void StaticDiagnosis::refineCauseByTails(DiagnosisResult& out) {
   TailAttribution& ta = out.tails;
   if (!ta.fitted) return;
   double tested = 1.0;
@@ -1771,13 +1802,21 @@ void StaticDiagnosis::refineCause(DiagnosisResult& out) {
   ta.significant = heavy || std::min(1.0, tested * ta.p_value) < config_.alpha;
   if (!ta.significant) return;
   const std::optional<Effect> named = parseEffect(out.primary_cause);
+  std::string why;  // why the tails' cause replaces the Gaussian ranking's
   if (named && robustEffectOf(*named)) {
-    reRankUnderTails(out);
-    return;
+    if (reRankUnderTails(out)) return;
+    // None of the four is significant beside the contamination: the tails made the Gaussian
+    // verdict, and the tails' own cause is named (session 14; seeds 402 and 406 of the edge tails).
+    named_by_tails_ = false;
+    why = out.primary_cause +
+          ", first under the Gaussian likelihood, is not significant beside a pooled contamination (nor is another noise "
+          "law, mixed pixels or a dark surface)";
+    out.primary_cause = cause::kNone;
   }
   if (!names(out.primary_cause, Effect::heavy_tails) && out.primary_cause != cause::kNone) return;
   if (ta.cause == cause::kUnknown) {
-    if (out.primary_cause == cause::kNone)
+    if (!why.empty()) out.decision = why;
+    else if (out.primary_cause == cause::kNone)
       out.decision = "the tails are significant (a contamination mixture predicts held-out readings better, p " +
                      std::to_string(ta.p_value) + ") but no candidate is";
     out.primary_cause = toString(Effect::heavy_tails);
@@ -1794,7 +1833,7 @@ void StaticDiagnosis::refineCause(DiagnosisResult& out) {
                 "(%.0f %%, +%.4g +- %.2g nats, Holm p %.2g): %s",
                 ta.explained_gain_nats_per_point, top->covariate.c_str(), 100.0 * top->share, top->unique_gain_nats_per_point,
                 top->unique_gain_se, top->p_holm, ta.cause.c_str());
-  out.decision = buf;
+  out.decision = why.empty() ? std::string(buf) : why + "; " + buf;
   out.primary_cause = ta.cause;
   named_by_tails_ = true;
   // The tail model until the named effect's candidate replaces it (every cause the tails name is a
@@ -1887,6 +1926,25 @@ bool StaticDiagnosis::notApplicable(CandidateResult& r) const {
   return false;
 }
 
+/// Correlation over the beams (weighted by their readings) of darkness and ln range: a time-of-flight
+/// sensor without intensity compensation returns weaker from farther, and the two covariates then
+/// say the same.
+double StaticDiagnosis::darkRangeCorrelation() const {
+  double n = 0.0, sx = 0.0, sy = 0.0, sxx = 0.0, syy = 0.0, sxy = 0.0;
+  for (std::size_t k = 0; k < d_.bins.size(); ++k) {
+    if (f0_[k].n == 0 || !std::isfinite(d_.bins[k].intensity)) continue;
+    const double w = static_cast<double>(d_.bins[k].idx.size()), x = d_.bins[k].dark, y = std::log(std::max(f0_[k].m, 1e-3));
+    n += w;
+    sx += w * x;
+    sy += w * y;
+    sxx += w * x * x;
+    syy += w * y * y;
+    sxy += w * x * y;
+  }
+  const double vx = sxx - sx * sx / std::max(n, 1.0), vy = syy - sy * sy / std::max(n, 1.0);
+  return vx > 0.0 && vy > 0.0 ? (sxy - sx * sy / n) / std::sqrt(vx * vy) : 0.0;
+}
+
 void StaticDiagnosis::setIdentifiability(CandidateResult& r) const {
   const Effect e = r.effect;
   if (e == Effect::incidence_bias) {
@@ -1917,6 +1975,12 @@ void StaticDiagnosis::setIdentifiability(CandidateResult& r) const {
       r.note = e == Effect::incidence_noise ? "no spread of incidence angles"
                : e == Effect::dark_surface  ? "no spread of intensities"
                                             : "no spread of ranges";
+    if (r.identifiable && e == Effect::dark_surface && std::abs(darkRangeCorrelation()) > kConfounded) {
+      r.identifiable = false;
+      r.note = "the intensity follows the range on this recording (correlation " + std::to_string(darkRangeCorrelation()) +
+               "): a dark surface cannot be told from the range law; record surfaces of different reflectivity at the same "
+               "distance";
+    }
   } else if (e == Effect::range_drift && window_ > 0) {
     r.identifiable = false;
     r.note = "each window of scans has its own time trend per beam (the sensor moved), which absorbs a drift";
@@ -1933,6 +1997,7 @@ void StaticDiagnosis::setEstimates(CandidateResult& r, const Model& fm) const {
   if (e == Effect::dark_surface) {
     r.estimates["dark_noise_exponent"] = fm.delta;
     r.estimates["dark_reference_intensity"] = d_.i_ref;
+    r.estimates["darkness_range_correlation"] = darkRangeCorrelation();
   }
   if (e == Effect::range_drift) {
     r.estimates["range_drift_m_per_scan"] = fm.drift;
@@ -1983,7 +2048,7 @@ void StaticDiagnosis::extend(std::size_t c, DiagnosisResult& out) const {
   }
   if (e == Effect::mixed_pixels) fx.mixed_pixel_fraction = fm.mixed;
   if (e == Effect::dark_surface) {
-    fx.dark_noise_exponent = fm.delta;
+    fx.dark_noise_exponent = named_by_tails_ && robust_.count(e) ? robust_.at(e) : fm.delta;
     fx.dark_reference_intensity = d_.i_ref;
   }
   if (e == Effect::heavy_tails) fx.noise_student_dof = std::max(fm.dof, 2.1);
