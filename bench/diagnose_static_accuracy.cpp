@@ -3,7 +3,8 @@
 // coarser quantisation grids, the clean room (its false-positive rate), and the tail cases of
 // issue 20 (extra-wide errors only at grazing beams, at depth edges, on a dark wall; tests use
 // seeds 301-304), over many seeds.
-//   build/bench/diagnose_static_accuracy [--seeds 10] [--clean-seeds 20] [--first 101] [--replicas 19] [--only NAME] [--verbose]
+//   build/bench/diagnose_static_accuracy [--seeds 10] [--clean-seeds 20] [--first 101] [--replicas 19] [--only NAME]
+//                                        [--dark-exponent DELTA] [--verbose]
 
 #include <cstdio>
 #include <map>
@@ -28,7 +29,7 @@ void printCandidates(const char* name, int seed, const lidarcal::diagnosis::Diag
 
 /// Extra-wide errors (10 % of the readings of one class of beams, 5 cm): how often the physical
 /// cause is named and the tails put in the right class of beams.
-void tailCases(int seeds, int first, int replicas) {
+void tailCases(int seeds, int first, int replicas, const std::string& only, bool verbose) {
   using namespace lidarcal;
   struct Case {
     const char* name;
@@ -39,6 +40,7 @@ void tailCases(int seeds, int first, int replicas) {
   for (const Case& c : {Case{"tails_grazing", test::TailWhere::grazing, "incidence_noise", "grazing"},
                         Case{"tails_edge", test::TailWhere::edge, "mixed_pixels", "edge"},
                         Case{"tails_dark", test::TailWhere::dark, "dark_surface", "dark"}}) {
+    if (!only.empty() && std::string(c.name).find(only) == std::string::npos) continue;
     std::map<std::string, int> named;
     int right = 0, cls_right = 0;
     for (int seed = first; seed < first + seeds; ++seed) {
@@ -47,6 +49,13 @@ void tailCases(int seeds, int first, int replicas) {
       dc.seed = static_cast<std::uint64_t>(seed);
       const auto r = diagnosis::diagnoseStatic(test::staticRoomWithTails(c.where, 0.10, 0.05, static_cast<std::uint64_t>(seed)), dc);
       const std::string top = test::dominantTailClass(r.tails);
+      if (verbose) {
+        printCandidates(c.name, seed, r);
+        std::fprintf(stderr, "  decision: %s\n  tails: pooled %.3f, cause %s;", r.decision.c_str(), r.tails.pooled_fraction,
+                     r.tails.cause.c_str());
+        for (const auto& [k, v] : r.tails.robust) std::fprintf(stderr, " %s %.4g", k.c_str(), v);
+        std::fprintf(stderr, "\n");
+      }
       right += r.primary_cause == c.effect;
       cls_right += top == c.cls;
       if (r.primary_cause != c.effect) ++named[r.primary_cause];
@@ -68,11 +77,15 @@ int main(int argc, char** argv) {
   app.add_option("--first", first, "first seed (the tests use 7)");
   app.add_option("--replicas", replicas, "bootstrap replicas");
   std::string only;
-  app.add_option("--only", only, "run only the cases whose name contains this (and no tail cases)");
+  app.add_option("--only", only, "run only the cases whose name contains this (tails_: the tail cases)");
+  double dark_exponent = 0.0;
+  app.add_option("--dark-exponent", dark_exponent, "the dark_surface case's exponent delta instead of 0.75 (its detection limit)");
   bool verbose = false;
   app.add_flag("--verbose", verbose, "print every case's candidates (held-out gain, p-values) to stderr");
   CLI11_PARSE(app, argc, argv);
   std::vector<test::StaticCase> cases = test::staticCases();
+  for (auto& c : cases)
+    if (dark_exponent != 0.0 && c.fx.dark_noise_exponent != 0.0) c.fx.dark_noise_exponent = dark_exponent;
   for (double grid : {0.005, 0.01}) {
     RangeEffects fx;
     fx.range_resolution_m = grid;
@@ -91,7 +104,7 @@ int main(int argc, char** argv) {
       dc.replicas = replicas;
       dc.seed = static_cast<std::uint64_t>(seed);
       dc.static_range_offset_m = c.known_offset_m;
-      const auto r = diagnosis::diagnoseStatic(test::staticRoom(c.fx, c.noise, static_cast<std::uint64_t>(seed), 150, c.step_error_fraction), dc);
+      const auto r = diagnosis::diagnoseStatic(test::staticRoom(c, static_cast<std::uint64_t>(seed)), dc);
       const bool ok = c.allows(r.primary_cause);
       right += ok;
       if (verbose) printCandidates(c.name, seed, r);
@@ -105,6 +118,6 @@ int main(int argc, char** argv) {
                 other.empty() ? "-" : other.c_str());
     std::fflush(stdout);
   }
-  if (only.empty()) tailCases(seeds, first, replicas);
+  tailCases(seeds, first, replicas, only, verbose);
   return 0;
 }

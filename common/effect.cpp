@@ -20,7 +20,7 @@ const std::vector<EffectInfo>& effectTable() {
       {Effect::heavy_tails, "heavy_tails", "tail_weight", "tail_weight", true, "sensor.effects.noise_student_dof"},
       {Effect::quantisation, "quantisation", "quantisation_1mm", "quantisation", true,
        "sensor.effects.range_resolution_m"},
-      {Effect::dark_surface, "dark_surface", "spread_vs_intensity", nullptr, true, "sensor.effects.dark_noise_exponent"},
+      {Effect::dark_surface, "dark_surface", "spread_vs_intensity", "spread_vs_intensity", true, "sensor.effects.dark_noise_exponent"},
   };
   return table;
 }

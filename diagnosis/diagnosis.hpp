@@ -183,7 +183,7 @@ struct TailAttribution {
   std::vector<TailBeamReport> top_beams;  ///< beams with the largest tail fraction (at most 10)
   std::map<std::string, double> model;    ///< the full tail model's parameters (name with unit -> value)
   /// Physical effects fitted under the pooled contamination likelihood (the tails do not drag
-  /// them): incidence_noise_exponent, noise_exponent, mixed_pixel_fraction, and their held-out
+  /// them): incidence_noise_exponent, noise_exponent, mixed_pixel_fraction, dark_noise_exponent, and their held-out
   /// gains over the pooled model (..._gain, ..._gain_se, nats per reading).
   std::map<std::string, double> robust;
   std::string cause = cause::kUnknown;  ///< the effect of the covariate with the largest significant unique gain, or unknown

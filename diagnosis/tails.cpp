@@ -73,14 +73,14 @@ double expectation(const TailModel& m, const std::vector<TailBeam>& beams, const
 }
 
 /// Expected complete log-likelihood of the scales (up to constants), sigma_e at its ML value:
-/// core ln s_b = ln sigma_e + kappa l_b + gamma c_b, broad ln s_b + ln k + (rho - kappa)(l_b - l_ref)
-/// (l: ln range, c: ln 1/cos phi).
+/// core ln s_b = ln sigma_e + kappa l_b + gamma c_b + delta k_b, broad ln s_b + ln k + (rho - kappa)(l_b - l_ref)
+/// (l: ln range, c: ln 1/cos phi, k: darkness ln(I_med / I)).
 double profileScales(const TailModel& m, const std::vector<TailBeam>& beams, const std::vector<BeamSums>& sums,
                      double* sigma_e) {
   double ss = 0.0, w = 0.0, logh = 0.0;
   for (std::size_t b = 0; b < beams.size(); ++b) {
     if (sums[b].a <= 0.0) continue;
-    const double lc = m.kappa * beams[b].log_range + m.gamma * beams[b].log_sec_inc;
+    const double lc = m.kappa * beams[b].log_range + m.gamma * beams[b].log_sec_inc + m.delta * beams[b].dark;
     const double lw = lc + std::log(m.wide) + (m.wide_exponent - m.kappa) * (beams[b].log_range - m.ref_log_range);
     ss += sums[b].s_core * std::exp(-2.0 * lc) + sums[b].s_wide * std::exp(-2.0 * lw);
     w += sums[b].a;
@@ -105,6 +105,7 @@ void maximiseCoordinate(TailModel& m, const std::vector<TailBeam>& beams, const 
 void maximiseScales(TailModel& m, const std::vector<TailBeam>& beams, const std::vector<BeamSums>& sums) {
   if (m.spec.kappa) maximiseCoordinate(m, beams, sums, -1.0, 5.0, [](TailModel& t, double v) { t.kappa = v; });
   if (m.spec.gamma) maximiseCoordinate(m, beams, sums, -1.0, 4.0, [](TailModel& t, double v) { t.gamma = v; });
+  if (m.spec.delta) maximiseCoordinate(m, beams, sums, -1.0, 3.0, [](TailModel& t, double v) { t.delta = v; });
   double tail = 0.0;
   for (const auto& s : sums) tail += s.t;
   if (tail > 1e-6) {
@@ -157,7 +158,7 @@ Effect tailCovariateEffect(int k) {
 }
 
 int TailSpec::parameters() const {
-  int n = kappa + gamma + mixed;
+  int n = kappa + gamma + mixed + delta;
   for (bool c : covariate) n += c;
   return n;
 }
@@ -170,7 +171,7 @@ double TailModel::tailProbability(const TailBeam& b) const {
 }
 
 double TailModel::sigma(const TailBeam& b) const {
-  return sigma_e * std::exp(kappa * b.log_range + gamma * b.log_sec_inc);
+  return sigma_e * std::exp(kappa * b.log_range + gamma * b.log_sec_inc + delta * b.dark);
 }
 
 double TailModel::broadSigma(const TailBeam& b) const {
@@ -197,6 +198,7 @@ TailModel startOf(const TailSpec& spec, double sigma_e_start, const TailModel* w
     m.converged = false;
     if (!spec.kappa) m.kappa = 2.0;
     if (!spec.gamma) m.gamma = 0.0;
+    if (!spec.delta) m.delta = 0.0;
     if (spec.mixed && !warm->spec.mixed) m.mixed = 0.05;
     if (!spec.mixed) m.mixed = 0.0;
     for (int j = 0; j < kTailCovariates; ++j)

@@ -3,7 +3,7 @@
 // probability depends on what the beam sees. A residual r of beam b (reading minus the beam's
 // location) has the density
 //   p(r) = (1 - eta_b) [(1 - pi_b) N(r; 0, s_b^2) + pi_b N(r; 0, w_b^2)] + eta_b U(r; lo_b, hi_b)
-//   s_b = sigma_e m_b^kappa (1 / cos phi_b)^gamma        seed 004 eq. 1 with free exponents
+//   s_b = sigma_e m_b^kappa (1 / cos phi_b)^gamma (I_med / I_b)^delta   seed 004 eq. 1 with free exponents
 //   w_b = k s_b (m_b / m_ref)^(rho - kappa)              the broad width, its own range law
 //   logit pi_b = beta_0 + sum_j beta_j x_bj              x: depth edge, ln(1/cos phi), ln m, darkness
 // k the broad component's width over the core's at the reference range m_ref (>= 4), rho its
@@ -37,6 +37,7 @@ struct TailBeam {
   double log_sec_inc = 0.0;  ///< ln(1 / cos phi), 0 when the incidence is unknown
   std::array<double, kTailCovariates> x{};  ///< covariates: edge 0/1, ln(1/cos phi), ln m - mean, darkness ln(I_med / I) >= 0
   double mix_lo = 0.0, mix_hi = 0.0;  ///< residuals a mixed reading can take (edge beams; lo == hi: none), metres
+  double dark = 0.0;         ///< ln(I_med / I), signed (the core's dark-surface factor; 0 without intensities)
 };
 
 /// One reading's residual.
@@ -52,6 +53,7 @@ struct TailSpec {
   bool kappa = false;   ///< range exponent free (else 2, seed 004)
   bool gamma = false;   ///< incidence exponent free (else 0)
   bool mixed = false;   ///< mixed-pixel fraction at edges free (else 0)
+  bool delta = false;   ///< dark-surface exponent free (else 0)
   int parameters() const;  ///< free parameters besides sigma_e, k and beta_0
 };
 
@@ -60,6 +62,7 @@ struct TailModel {
   double sigma_e = 0.01;  ///< noise scale, metres at 1 m
   double kappa = 2.0;     ///< range exponent
   double gamma = 0.0;     ///< incidence exponent
+  double delta = 0.0;     ///< dark-surface exponent
   double wide = 5.0;      ///< k: the broad component's width over the core's at the reference range
   double wide_exponent = 2.0;  ///< rho: range exponent of the broad width
   double ref_log_range = 0.0;  ///< ln m_ref: mean ln range of the readings fitted

@@ -52,9 +52,11 @@ TEST(EffectTable, EffectNamesListsTheSelectedNamesInTableOrder) {
   EXPECT_EQ(effectNames([](const EffectInfo& i) { return i.static_statistic && !i.sequence_statistic; }), "");
   EXPECT_EQ(effectNames([](const EffectInfo& i) { return i.static_statistic && i.sequence_statistic && !i.joint_term; }), "");
   EXPECT_EQ(effectNames([](const EffectInfo& i) { return !i.static_statistic && !i.sequence_statistic; }), "");
-  // dark_surface is named in static data through the tail model's darkness covariate, not as a candidate.
-  EXPECT_EQ(effectNames([](const EffectInfo& i) { return !i.static_statistic && i.sequence_statistic; }),
-            "dark_surface");
+  // Every effect is a candidate in both modes (dark_surface in static data since session 14).
+  EXPECT_EQ(effectNames([](const EffectInfo& i) { return !i.static_statistic || !i.sequence_statistic; }), "");
+  // One pose shows nothing of stops, headings or one surface's offset: no static statistic.
+  EXPECT_EQ(effectNames([](const EffectInfo& i) { return i.static_statistic && *i.static_statistic == '\0'; }),
+            "landmark_bias, heading_error, angle_offset, odometry_scale");
   EXPECT_EQ(effectNames([](const EffectInfo&) { return false; }), "");
 }
 

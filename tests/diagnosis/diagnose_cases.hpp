@@ -196,10 +196,12 @@ inline diagnosis::StaticScans sceneScans(const Scene& s, std::uint64_t seed, dou
     TruthStop stop = stops[0];
     stop.actual.yaw_rad += turn_rad_per_scan * static_cast<double>(k);
     const auto sim = simulation::simulateScan(s, stop, k, seed);
+    out.has_intensity = sim.scan.has_intensity;
     for (const auto& p : *sim.scan.cloud)
       if (std::isfinite(p.x))
         out.readings.push_back({std::atan2(static_cast<double>(p.y), static_cast<double>(p.x)),
-                                std::hypot(static_cast<double>(p.x), static_cast<double>(p.y)), static_cast<std::uint32_t>(k)});
+                                std::hypot(static_cast<double>(p.x), static_cast<double>(p.y)), static_cast<std::uint32_t>(k),
+                                sim.scan.has_intensity ? static_cast<double>(p.intensity) : std::nan("")});
   }
   return out;
 }
@@ -280,11 +282,24 @@ struct StaticCase {
   /// alpha_0 given to the diagnosis as a reference distance would give it (NaN: not given).
   double known_offset_m = std::numeric_limits<double>::quiet_NaN();
   double step_error_fraction = 0.0;  ///< odometry scale error of the (one-stop) path
+  /// Intensity each surface returns: the six walls, then the pillar (empty: none recorded).
+  std::vector<double> intensities = {};
   /// Whether the truth allows `cause` to be named.
   bool allows(const std::string& cause) const {
     return cause == effect || std::find(also.begin(), also.end(), cause) != also.end();
   }
 };
+
+/// The room of case `c` seen from one pose (150 scans), the noise drawn from `seed`.
+inline diagnosis::StaticScans staticRoom(const StaticCase& c, std::uint64_t seed) {
+  Scene s = staticRoomScene(c.fx, c.noise, 150, c.step_error_fraction);
+  for (std::size_t k = 0; k < c.intensities.size(); ++k)
+    (k < s.walls.size() ? s.walls[k].intensity : s.clutter[k - s.walls.size()].intensity) = c.intensities[k];
+  return sceneScans(s, seed);
+}
+
+/// Surfaces of several intensities (dark 20-40, bright 150-250; the median wall 90).
+inline std::vector<double> roomIntensities() { return {200.0, 35.0, 120.0, 20.0, 90.0, 250.0, 60.0}; }
 
 /// The static cases. The room's alpha_0 is 0.01 m. An incidence-dependent bias bends straight walls
 /// almost as an offset does: with the offset given (a reference distance) it is named; without it
@@ -314,6 +329,12 @@ inline std::vector<StaticCase> staticCases() {
       {"mixed_pixels", "mixed_pixels", {}, fx([](RangeEffects& e) { e.mixed_pixel_fraction = 0.08; })},
       {"quantisation", "quantisation", {}, fx([](RangeEffects& e) { e.range_resolution_m = 0.002; })},
       {"odometry_scale_cannot_exist", "none", {}, RangeEffects{}, squaredNoise(0.0015), none, 0.04},
+      {"clean_with_intensities", "none", {}, RangeEffects{}, squaredNoise(0.0015), none, 0.0, roomIntensities()},
+      {"dark_surface", "dark_surface", {}, fx([](RangeEffects& e) {
+         e.dark_noise_exponent = 0.75;
+         e.dark_reference_intensity = 90.0;
+       }),
+       squaredNoise(0.0015), none, 0.0, roomIntensities()},
   };
 }
 
