@@ -1202,6 +1202,7 @@ class SequenceDiagnosis {
   void findStarts();
   JointResult bestOf(const JointInit& start, const JointConfig& cfg, bool both = true) const;
   JointResult graduated(const LandmarkObservations& obs, const JointInit& start, const JointConfig& cfg) const;
+  JointResult replicaFit(const LandmarkObservations& rep) const;
   void chooseOrder();
   void describeBaseline(DiagnosisResult& out) const;
   JointInit candidateStart(Effect e) const;
@@ -1446,17 +1447,22 @@ std::map<std::string, double> SequenceDiagnosis::measuredStatistics(DiagnosisRes
 }
 
 /// One bootstrap replica: simulated from the fitted baseline, refitted from it.
-void SequenceDiagnosis::replica(int b, std::map<std::string, std::vector<double>>& stats, DiagnosisResult& out) {
-  const LandmarkObservations rep =
-      simulateReplica(plan0_, obs_, poseNoise(fit0_, base_), deriveSeed(config_.seed, 1000 + static_cast<std::uint64_t>(b)));
+/// A replica's baseline fit, from the data's: under the motion prior also in two steps, as the
+/// data were fitted (bestOf). Fitted directly, a drive's replicas stopped in poorer optima than
+/// the data's fit and disagreed with it on the edge and incidence statistics.
+JointResult SequenceDiagnosis::replicaFit(const LandmarkObservations& rep) const {
   JointResult f = refineJoint(rep, initFrom(fit0_), warm(base_));
-  // A replica is fitted as the data were (bestOf): under the motion prior in two steps too.
-  // Fitted directly, a drive's replicas stopped in poorer optima than the data's fit and
-  // disagreed with it on the edge and incidence statistics.
   if (base_.effects.estimate_heading) {
     JointResult other = graduated(rep, initFrom(fit0_), base_);
     if (total(other) < total(f)) f = std::move(other);
   }
+  return f;
+}
+
+void SequenceDiagnosis::replica(int b, std::map<std::string, std::vector<double>>& stats, DiagnosisResult& out) {
+  const LandmarkObservations rep =
+      simulateReplica(plan0_, obs_, poseNoise(fit0_, base_), deriveSeed(config_.seed, 1000 + static_cast<std::uint64_t>(b)));
+  const JointResult f = replicaFit(rep);
   if (!f.ok()) return;
   const auto rr = rows(rep, f, base_);
   for (const auto& [k, v] : statistics(rep, f, rr, base_)) stats[k].push_back(v);
@@ -1932,7 +1938,7 @@ void SequenceDiagnosis::extend(std::size_t c, DiagnosisResult& out) const {
   for (int b = 0; b < config_.closeness_replicas; ++b) {
     const LandmarkObservations rep =
         simulateReplica(plan, obs_, poseNoise(fc, cfgs_[c]), deriveSeed(config_.seed, 5000 + static_cast<std::uint64_t>(b)));
-    const JointResult f = refineJoint(rep, initFrom(fit0_), warm(base_));
+    const JointResult f = replicaFit(rep);
     if (!f.ok()) continue;
     const auto rr = rows(rep, f, base_);
     append(sim_ext, rr);
