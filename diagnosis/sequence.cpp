@@ -1367,8 +1367,8 @@ JointResult SequenceDiagnosis::bestOf(const JointInit& start, const JointConfig&
 /// each landmark by the current estimate, re-selected before every solve, under the Huber loss
 /// (calibrate's problem, whose objective is smooth), then on every beam under `cfg`. On every
 /// beam under the Cauchy loss a pose per scan leaves optima the direct fit cannot leave: a beam
-/// that the estimate puts past a thin pole's tangent reads the closest approach, flat in the
-/// pose. A drive among thin poles with a range drift of 3.4 cm (bench/diagnose_drives.sh
+/// that the estimate puts past a thin pole's tangent is predicted at its closest approach, flat
+/// in the pose. A drive among thin poles with a range drift of 3.4 cm (bench/diagnose_drives.sh
 /// driving_small_poles range_drift, case 1) fitted the drift at half its size, 4,000 nats short;
 /// in two steps the drift came out at its true value from the baseline's solution, the
 /// calibration's and the neutral start alike.
@@ -1446,7 +1446,6 @@ std::map<std::string, double> SequenceDiagnosis::measuredStatistics(DiagnosisRes
   return measured_stats_;
 }
 
-/// One bootstrap replica: simulated from the fitted baseline, refitted from it.
 /// A replica's baseline fit, from the data's: under the motion prior also in two steps, as the
 /// data were fitted (bestOf). Fitted directly, a drive's replicas stopped in poorer optima than
 /// the data's fit and disagreed with it on the edge and incidence statistics.
@@ -1459,6 +1458,7 @@ JointResult SequenceDiagnosis::replicaFit(const LandmarkObservations& rep) const
   return f;
 }
 
+/// One bootstrap replica: simulated from the fitted baseline, refitted from it.
 void SequenceDiagnosis::replica(int b, std::map<std::string, std::vector<double>>& stats, DiagnosisResult& out) {
   const LandmarkObservations rep =
       simulateReplica(plan0_, obs_, poseNoise(fit0_, base_), deriveSeed(config_.seed, 1000 + static_cast<std::uint64_t>(b)));
