@@ -1,6 +1,7 @@
 #include "diagnosis/stats.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <numeric>
@@ -241,6 +242,43 @@ std::string nameCause(std::vector<CandidateResult>& cands, double alpha, std::st
       }
   }
   return toString(cands[chosen].effect);
+}
+
+DistanceMoments poleDistanceMoments(double along, double perp, const Eigen::Matrix2d& v, double r) {
+  const double sp = std::sqrt(std::max(v(1, 1), 0.0));
+  if (std::abs(perp) < r && r - std::abs(perp) > 6.0 * sp) {
+    const double q = std::sqrt(r * r - perp * perp);
+    const Eigen::Vector2d g(1.0, perp / q);  // d(distance) / d(along, perp)
+    return {along - q + 0.5 * v(1, 1) * r * r / (q * q * q), g.dot(v * g)};  // the root's curvature in the mean
+  }
+  if (!(sp > 0.0)) return {along - std::sqrt(std::max(r * r - perp * perp, 0.0)), 0.0};
+  double lo = std::max(-r, perp - 8.0 * sp), hi = std::min(r, perp + 8.0 * sp);
+  if (!(lo < hi)) {  // far past the tangent: the normal's tail inside, falling at (|perp| - r) / sp^2
+    const double width = std::min(2.0 * r, 10.0 * sp * sp / (std::abs(perp) - r));
+    lo = perp > 0.0 ? r - width : -r;
+    hi = perp > 0.0 ? r : -r + width;
+  }
+  const double beta = v(0, 1) / v(1, 1), along_var = std::max(v(0, 0) - beta * v(0, 1), 0.0);
+  // perp = r sin(t): the root r cos(t) is smooth in t where it is steep in perp (the tangent).
+  constexpr std::size_t kPoints = 64;
+  const double t0 = std::asin(std::clamp(lo / r, -1.0, 1.0)), t1 = std::asin(std::clamp(hi / r, -1.0, 1.0));
+  std::array<double, kPoints> logw{}, d{};
+  for (std::size_t k = 0; k < kPoints; ++k) {
+    const double t = t0 + (t1 - t0) * (static_cast<double>(k) + 0.5) / static_cast<double>(kPoints);
+    const double x = r * std::sin(t), u = (x - perp) / sp;
+    logw[k] = -0.5 * u * u + std::log(std::cos(t));
+    d[k] = along + beta * (x - perp) - r * std::cos(t);
+  }
+  const double top = *std::max_element(logw.begin(), logw.end());
+  double sw = 0.0, m = 0.0, m2 = 0.0;
+  for (std::size_t k = 0; k < kPoints; ++k) {
+    const double w = std::exp(logw[k] - top);
+    sw += w;
+    m += w * d[k];
+    m2 += w * d[k] * d[k];
+  }
+  m /= sw;
+  return {m, std::max(m2 / sw - m * m, 0.0) + along_var};
 }
 
 std::vector<Eigen::Matrix3d> blockTridiagonalInverseDiagonal(const std::vector<Eigen::Matrix3d>& diagonal,

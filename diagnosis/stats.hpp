@@ -33,6 +33,19 @@ Discrepancy makeDiscrepancy(std::string name, std::string variable, std::string 
 std::vector<Eigen::Matrix3d> blockTridiagonalInverseDiagonal(const std::vector<Eigen::Matrix3d>& diagonal,
                                                              const std::vector<Eigen::Matrix3d>& upper);
 
+/// Mean and variance of the distance along a beam to a circular pole of radius r, which is
+/// along - sqrt(r^2 - perp^2) (`along`: to the ray's closest approach to the centre, `perp`: the
+/// ray's miss distance), when (along, perp) are jointly normal about the given values with
+/// covariance v and the beam is known to have hit the pole (|perp| < r). Away from the tangent
+/// (6 standard deviations of perp inside it) the first-order variance and the root's curvature
+/// serve; otherwise the root is averaged over perp's truncated normal (64 midpoints in t, with
+/// perp = r sin t), along following perp by regression.
+/// A miss distance past the tangent with no spread: mean `along`, variance 0.
+struct DistanceMoments {
+  double mean = 0.0, var = 0.0;
+};
+DistanceMoments poleDistanceMoments(double along, double perp, const Eigen::Matrix2d& v, double r);
+
 /// One-sided p-value of a held-out gain with standard error se: P(N(0, 1) >= gain / se); 1 for
 /// a gain that is not positive, NaN without a standard error.
 double heldoutPValue(double gain, double se);

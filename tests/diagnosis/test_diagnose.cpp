@@ -159,6 +159,42 @@ TEST(DiagnoseStats, BlockTridiagonalInverseMatchesTheDenseInverse) {
   EXPECT_THROW(diagnosis::blockTridiagonalInverseDiagonal(diag, {}), std::invalid_argument);
 }
 
+TEST(DiagnoseStats, PoleDistanceMomentsMatchSampledHits) {
+  // The distance along a beam to a pole of radius 2.75 cm when the ray's closest approach and
+  // miss distance are uncertain (correlated normals), over the draws whose beam hits the pole,
+  // against the moments: far inside the tangent, near it, at it and past it (the fit's miss
+  // distance outside the pole while the reading came from it).
+  constexpr double r = 0.0275;
+  std::mt19937_64 rng(11);
+  std::normal_distribution<double> n01(0.0, 1.0);
+  for (const double perp : {0.0, 0.015, 0.024, 0.0275, 0.029, -0.031}) {
+    for (const double sp : {0.0005, 0.002, 0.006}) {
+      Eigen::Matrix2d v;
+      v << 4e-6, 0.6 * 2e-3 * sp, 0.6 * 2e-3 * sp, sp * sp;
+      const Eigen::Matrix2d l = v.llt().matrixL();
+      double n = 0.0, m = 0.0, m2 = 0.0;
+      for (int k = 0; k < 400000; ++k) {
+        const Eigen::Vector2d x = Eigen::Vector2d(1.2, perp) + l * Eigen::Vector2d(n01(rng), n01(rng));
+        if (std::abs(x(1)) >= r) continue;
+        const double d = x(0) - std::sqrt(r * r - x(1) * x(1));
+        n += 1.0;
+        m += d;
+        m2 += d * d;
+      }
+      if (n < 2000.0) continue;  // too few hits to check against
+      m /= n;
+      const double var = m2 / n - m * m;
+      const auto got = diagnosis::poleDistanceMoments(1.2, perp, v, r);
+      const double se_mean = std::sqrt(var / n);
+      EXPECT_NEAR(got.mean, m, 5.0 * se_mean + 2e-5) << "perp " << perp << " sd " << sp;
+      EXPECT_NEAR(got.var, var, 0.05 * var) << "perp " << perp << " sd " << sp;
+    }
+  }
+  // No spread at all: the ray's own distance (its closest approach when it misses).
+  EXPECT_DOUBLE_EQ(diagnosis::poleDistanceMoments(1.0, 0.03, Eigen::Matrix2d::Zero(), r).mean, 1.0);
+  EXPECT_DOUBLE_EQ(diagnosis::poleDistanceMoments(1.0, 0.0, Eigen::Matrix2d::Zero(), r).mean, 1.0 - r);
+}
+
 TEST(DiagnoseStats, KolmogorovSmirnovDistance) {
   EXPECT_DOUBLE_EQ(ksDistance({1, 2, 3}, {1, 2, 3}), 0.0);
   EXPECT_DOUBLE_EQ(ksDistance({1, 2, 3}, {4, 5, 6}), 1.0);

@@ -206,11 +206,10 @@ TEST(CliDiagnoseDriving, CleanDrivesNameNoEffectAtItsNull) {
     simulate(dir / "scene.json", dir / scene, seed);
     const auto r = runCli("diagnose -q " + (dir / scene / "scans").string() + " --replicas 5 --out " + (dir / (scene + "-d")).string());
     ASSERT_EQ(r.exit_code, 0) << r.err;
-    // Large poles: `none` in 19 of 20 drives (docs/RESULTS.md). Thin poles (one to three beams
-    // per pole) still get a cause in about one drive of four, so only the rules are checked there.
-    if (scene == "driving_large_poles") {
-      EXPECT_EQ(r.out, "none\n") << scene << " seed " << seed;
-    }
+    // Large poles: `none` in 19 of 20 drives, thin poles (one to three beams per pole) in 20 of
+    // 20 since session 16's held-out predictive distribution (docs/RESULTS.md); before it two
+    // thin-pole drives in 20 were named range_noise_law, the in-sample noise being too small.
+    EXPECT_EQ(r.out, "none\n") << scene << " seed " << seed;
     const auto j = json(dir / (scene + "-d") / "diagnosis.json");
     for (const auto& c : j["candidates"]) {
       // Under the motion prior the likelihood ratio is not used (a pose per scan: optima).
