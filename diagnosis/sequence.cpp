@@ -172,22 +172,34 @@ DistanceMoments heldOutDistance(const JointResult& fit, const JointReading& r, c
   return poleDistanceMoments(along, perp, j * cov * j.transpose(), fit.radius_m);
 }
 
+/// A reading's information on its stop's pose: its pose gradient g and its standard deviation.
+struct PoseInformation {
+  std::size_t stop = 0;
+  Eigen::Vector3d g = Eigen::Vector3d::Zero();
+  double sigma = 0.0;
+};
+
+/// The readings of `obs` under `fit`, as information on their stops' poses (computed once for
+/// poseCovariances and noiseDofFactor).
+std::vector<PoseInformation> poseInformation(const LandmarkObservations& obs, const JointResult& fit, const JointConfig& cfg) {
+  std::vector<PoseInformation> out;
+  for (const auto& r : evaluateJoint(obs, fit, cfg)) out.push_back({r.stop, poseGradient(fit, r), r.sigma_m});
+  return out;
+}
+
 /// Marginal covariance of every stop's pose in a fit under the motion prior, the landmarks and
 /// the range model held at the fit (a Laplace approximation). The readings of each stop (Gaussian
 /// information g g^T / sigma^2 per reading) and the odometry steps between consecutive stops (the
 /// refinement's motion prior, its derivatives as in MotionPriorAnalyticCost) make a block-
-/// tridiagonal information matrix (blockTridiagonalInverseDiagonal inverts it). `noise_scale`:
-/// a factor on every reading's variance.
-std::vector<Eigen::Matrix3d> poseCovariances(const LandmarkObservations& obs, const JointResult& fit, const JointConfig& cfg,
-                                             double noise_scale = 1.0) {
+/// tridiagonal information matrix (blockTridiagonalInverseDiagonal inverts it). `readings`:
+/// poseInformation(obs, fit, cfg); `noise_scale`: a factor on every reading's variance.
+std::vector<Eigen::Matrix3d> poseCovariances(const std::vector<PoseInformation>& readings, const LandmarkObservations& obs,
+                                             const JointResult& fit, const JointConfig& cfg, double noise_scale) {
   using Mat3 = Eigen::Matrix3d;
   const std::size_t n = fit.poses.size();
   if (n == 0) return {};
   std::vector<Mat3> a(n, Mat3::Zero()), b(n, Mat3::Zero());  // b[k]: the block (k, k + 1)
-  for (const auto& r : evaluateJoint(obs, fit, cfg)) {
-    const Eigen::Vector3d g = poseGradient(fit, r);
-    a[r.stop] += g * g.transpose() / (noise_scale * r.sigma_m * r.sigma_m);
-  }
+  for (const auto& r : readings) a[r.stop] += r.g * r.g.transpose() / (noise_scale * r.sigma * r.sigma);
   a[0].diagonal() += Eigen::Vector3d(1.0 / (cfg.sigma_s_m * cfg.sigma_s_m), 1.0 / (cfg.sigma_s_m * cfg.sigma_s_m),
                                      1.0 / (cfg.sigma_psi_rad * cfg.sigma_psi_rad));
   for (std::size_t k = 1; k < n && k < obs.commanded.size(); ++k) {
@@ -214,14 +226,10 @@ std::vector<Eigen::Matrix3d> poseCovariances(const LandmarkObservations& obs, co
 /// the factor is n / (n - h), as a residual variance is divided by its degrees of freedom. On
 /// clean thin-pole drives the folds' poses took 39 % of the readings' degrees of freedom and the
 /// fitted sigma_e was 17 % below the simulator's (docs/RESULTS.md, "Continuous recordings").
-double noiseDofFactor(const LandmarkObservations& obs, const JointResult& fit, const JointConfig& cfg,
-                      const std::vector<Eigen::Matrix3d>& cov) {
-  double n = 0.0, h = 0.0;
-  for (const auto& r : evaluateJoint(obs, fit, cfg)) {
-    const Eigen::Vector3d g = poseGradient(fit, r);
-    h += g.dot(cov[r.stop] * g) / (r.sigma_m * r.sigma_m);
-    n += 1.0;
-  }
+double noiseDofFactor(const std::vector<PoseInformation>& readings, const std::vector<Eigen::Matrix3d>& cov) {
+  double h = 0.0;
+  for (const auto& r : readings) h += r.g.dot(cov[r.stop] * r.g) / (r.sigma * r.sigma);
+  const double n = static_cast<double>(readings.size());
   return n > h + 1.0 ? n / (n - h) : 1.0;
 }
 
@@ -249,8 +257,9 @@ std::vector<double> heldOutLikelihoods(const LandmarkObservations& train, const 
   double dof = 1.0;
   std::vector<Eigen::Matrix3d> cov;
   if (pose_uncertain) {
-    dof = noiseDofFactor(train, fit, cfg, poseCovariances(train, fit, cfg));
-    cov = poseCovariances(train, fit, cfg, dof);
+    const std::vector<PoseInformation> info = poseInformation(train, fit, cfg);
+    dof = noiseDofFactor(info, poseCovariances(info, train, fit, cfg, 1.0));
+    cov = poseCovariances(info, train, fit, cfg, dof);
   }
   for (std::size_t i = 0; i < rs.size(); ++i) {
     const JointReading& r = rs[i];
