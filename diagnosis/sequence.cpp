@@ -187,10 +187,11 @@ std::vector<PoseInformation> poseInformation(const LandmarkObservations& obs, co
   return out;
 }
 
-/// One odometry step k - 1 -> k of a fit under the motion prior, as the refinement weighs it
-/// (MotionPriorCost): its residual (the fitted step in the frame of stop k - 1 against the
+/// The odometry from stop a to stop b > a of a fit under the motion prior, as the refinement
+/// weighs it (MotionPriorCost): its residual (the fitted step in the frame of stop a against the
 /// commanded one, translation scaled by 1 + s; heading change) in units of its standard
 /// deviations, the residual's derivatives by the two poses, and ln(1 / (sd_x sd_y sd_psi)).
+/// Over a run of steps (b > a + 1) their variances add up (the turns between them neglected).
 struct OdometryStep {
   Eigen::Vector3d r = Eigen::Vector3d::Zero();
   Eigen::Matrix3d ja = Eigen::Matrix3d::Zero(), jb = Eigen::Matrix3d::Zero();
@@ -198,12 +199,20 @@ struct OdometryStep {
   double log_scale = 0.0;
 };
 
-OdometryStep odometryStep(const LandmarkObservations& obs, const JointResult& fit, const JointConfig& cfg, std::size_t k) {
-  const Pose2 step = stepBetween(obs.commanded[k - 1], obs.commanded[k]);
-  const double len = std::hypot(step.x_m, step.y_m);
-  const double t = 1.0 / (cfg.motion_sigma_fraction * len + cfg.motion_sigma_floor_m);
-  const double h = 1.0 / (cfg.motion_heading_sigma_rad_per_m * len + cfg.motion_heading_floor_rad);
-  const Pose2 &pa = fit.poses[k - 1], &pb = fit.poses[k];
+OdometryStep odometryStep(const LandmarkObservations& obs, const JointResult& fit, const JointConfig& cfg, std::size_t a,
+                          std::size_t b) {
+  const Pose2 step = stepBetween(obs.commanded[a], obs.commanded[b]);
+  double sd_t = 0.0, sd_h = 0.0;
+  for (std::size_t k = a + 1; k <= b; ++k) {  // the steps' variances add up over a run of them
+    const Pose2 one = k == b && a + 1 == b ? step : stepBetween(obs.commanded[k - 1], obs.commanded[k]);
+    const double len = std::hypot(one.x_m, one.y_m);
+    const double st = cfg.motion_sigma_fraction * len + cfg.motion_sigma_floor_m;
+    const double sh = cfg.motion_heading_sigma_rad_per_m * len + cfg.motion_heading_floor_rad;
+    sd_t = a + 1 == b ? st : std::hypot(sd_t, st);
+    sd_h = a + 1 == b ? sh : std::hypot(sd_h, sh);
+  }
+  const double t = 1.0 / sd_t, h = 1.0 / sd_h;
+  const Pose2 &pa = fit.poses[a], &pb = fit.poses[b];
   const double c = std::cos(pa.yaw_rad), s = std::sin(pa.yaw_rad), ex = pb.x_m - pa.x_m, ey = pb.y_m - pa.y_m;
   const double along = c * ex + s * ey, across = c * ey - s * ex, f = 1.0 + fit.effects.odometry_scale;
   OdometryStep o;
@@ -232,7 +241,7 @@ void poseChainInformation(const std::vector<PoseInformation>& readings, const La
   a[0].diagonal() += Eigen::Vector3d(1.0 / (cfg.sigma_s_m * cfg.sigma_s_m), 1.0 / (cfg.sigma_s_m * cfg.sigma_s_m),
                                      1.0 / (cfg.sigma_psi_rad * cfg.sigma_psi_rad));
   for (std::size_t k = 1; k < n && k < obs.commanded.size(); ++k) {
-    const OdometryStep o = odometryStep(obs, fit, cfg, k);
+    const OdometryStep o = odometryStep(obs, fit, cfg, k - 1, k);
     a[k - 1] += o.ja.transpose() * o.ja;
     a[k] += o.jb.transpose() * o.jb;
     b[k - 1] += o.ja.transpose() * o.jb;
@@ -292,7 +301,7 @@ std::vector<double> stepHeldOut(const LandmarkObservations& obs, const JointResu
   std::vector<double> out(n - 1, kNaN);
   for (std::size_t k = 1; k < n; ++k) {
     if (readings[k - 1] < kLocatingReadings || readings[k] < kLocatingReadings) continue;
-    const OdometryStep o = odometryStep(obs, fit, cfg, k);
+    const OdometryStep o = odometryStep(obs, fit, cfg, k - 1, k);
     Eigen::Matrix<double, 6, 6> joint;
     joint << cov[k - 1], upper[k - 1], upper[k - 1].transpose(), cov[k];
     Eigen::Matrix<double, 3, 6> j;
@@ -935,18 +944,19 @@ void readingRows(const JointResult& fit, const std::vector<Row>& rs, const Joint
   }
 }
 
-/// The rows of the motion prior (a continuous recording): the first pose's prior, then each
-/// odometry step's three (odometryStep) on the two poses' columns x, y, heading; the odometry
-/// scale's column is the steps' derivative by it.
-void motionRows(const LandmarkObservations& obs, const JointResult& fit, const JointConfig& cfg, int pose0, int row0,
-                Design& x, DesignEntries& e) {
+/// The rows of the motion prior (a continuous recording) on the poses with readings
+/// (`stop_of_slot`, in order): the first one's prior, then the odometry from each to the next
+/// (odometryStep: the steps in between composed, their variances added up), three rows each on
+/// the two poses' columns x, y, heading; the odometry scale's column is their derivative by it.
+void motionRows(const LandmarkObservations& obs, const JointResult& fit, const JointConfig& cfg,
+                const std::vector<std::size_t>& stop_of_slot, int pose0, int row0, Design& x, DesignEntries& e) {
+  if (stop_of_slot.empty()) return;
   const double inv_s = 1.0 / cfg.sigma_s_m, inv_psi = 1.0 / cfg.sigma_psi_rad;
   e.j.emplace_back(row0, pose0, inv_s);
   e.j.emplace_back(row0 + 1, pose0 + 1, inv_s);
   e.j.emplace_back(row0 + 2, pose0 + 2, inv_psi);
-  const std::size_t n = std::min(fit.poses.size(), obs.commanded.size());
-  for (std::size_t k = 1; k < n; ++k) {
-    const OdometryStep o = odometryStep(obs, fit, cfg, k);
+  for (std::size_t k = 1; k < stop_of_slot.size(); ++k) {
+    const OdometryStep o = odometryStep(obs, fit, cfg, stop_of_slot[k - 1], stop_of_slot[k]);
     const int row = row0 + 3 * static_cast<int>(k), ca = pose0 + 3 * static_cast<int>(k - 1), cb = ca + 3;
     for (int a = 0; a < 3; ++a)
       for (int b = 0; b < 3; ++b) {
@@ -954,7 +964,7 @@ void motionRows(const LandmarkObservations& obs, const JointResult& fit, const J
         if (o.jb(a, b) != 0.0) e.j.emplace_back(row + a, cb + b, o.jb(a, b));
       }
     // The odometry scale: d(residual)/d(s) = -(dx, dy) / sd.
-    const Pose2 step = stepBetween(obs.commanded[k - 1], obs.commanded[k]);
+    const Pose2 step = stepBetween(obs.commanded[stop_of_slot[k - 1]], obs.commanded[stop_of_slot[k]]);
     x.x_scale(row, 0) = -step.x_m * o.inv_t;
     x.x_scale(row + 1, 0) = -step.y_m * o.inv_t;
   }
@@ -963,11 +973,12 @@ void motionRows(const LandmarkObservations& obs, const JointResult& fit, const J
 Design design(const LandmarkObservations& obs, const JointResult& fit, const std::vector<Row>& rs, const JointConfig& cfg) {
   const int na = fit.model.bias.order() + 1;
   const std::map<int, int> lm = centreColumns(fit, na + (cfg.estimate_radius ? 1 : 0));
-  // Under the motion prior every pose is a slot (one without readings still chains its
-  // neighbours) and its heading is a nuisance parameter: the baseline refines it, so an effect
-  // the headings absorb (an angle offset) is known only as well as the odometry steps say.
+  // Under the motion prior a pose's heading is a nuisance parameter too: the baseline refines
+  // it, so an effect the headings absorb (an angle offset) is known only as well as the
+  // odometry steps say. The poses without readings are composed into the steps between those
+  // with (a dense design over every pose of Freiburg's campus log took 630 MB).
   const bool motion = fit.motion_prior && cfg.effects.estimate_heading && obs.commanded.size() >= fit.poses.size();
-  std::vector<bool> seen(fit.poses.size(), motion);
+  std::vector<bool> seen(fit.poses.size(), false);
   for (const auto& r : rs) seen[r.r.stop] = true;
   DesignEntries e;
   e.stride = motion ? 3 : 2;
@@ -990,7 +1001,7 @@ Design design(const LandmarkObservations& obs, const JointResult& fit, const std
   e.j.reserve(static_cast<std::size_t>(n) * static_cast<std::size_t>(na + 5) + 2 * static_cast<std::size_t>(k_stops));
   readingRows(fit, rs, cfg, lm, pose0, x, e);
   const Pose2& c0 = obs.commanded.front();
-  if (motion) motionRows(obs, fit, cfg, pose0, n, x, e);
+  if (motion) motionRows(obs, fit, cfg, stop_of_slot, pose0, n, x, e);
   for (int k = 0; k < k_stops && !motion; ++k) {
     const double inv = 1.0 / cfg.sigma_s_m;
     const Pose2& c = obs.commanded[stop_of_slot[static_cast<std::size_t>(k)]];
