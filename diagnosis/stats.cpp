@@ -281,14 +281,22 @@ DistanceMoments poleDistanceMoments(double along, double perp, const Eigen::Matr
   return {m, std::max(m2 / sw - m * m, 0.0) + along_var};
 }
 
+double leaveOneOutLogDensity(const Eigen::Vector3d& r, const Eigen::Matrix3d& s) {
+  const Eigen::LDLT<Eigen::Matrix3d> ldlt(Eigen::Matrix3d::Identity() - s);
+  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 1e-9)) return std::numeric_limits<double>::quiet_NaN();
+  constexpr double kTwoPi = 6.283185307179586;
+  return -0.5 * r.dot(ldlt.solve(r)) + 0.5 * ldlt.vectorD().array().log().sum() - 1.5 * std::log(kTwoPi);
+}
+
 std::vector<Eigen::Matrix3d> blockTridiagonalInverseDiagonal(const std::vector<Eigen::Matrix3d>& diagonal,
-                                                             const std::vector<Eigen::Matrix3d>& upper) {
+                                                             const std::vector<Eigen::Matrix3d>& upper,
+                                                             std::vector<Eigen::Matrix3d>* upper_out) {
   using Mat3 = Eigen::Matrix3d;
   const std::size_t n = diagonal.size();
   if (n == 0) return {};
   if (upper.size() + 1 < n) throw std::invalid_argument("blockTridiagonalInverseDiagonal: one upper block per pair of neighbours");
   // D_0 = A_0, D_k+1 = A_k+1 - B_k^T D_k^-1 B_k;  C_n-1 = D_n-1^-1,
-  // C_k = D_k^-1 + D_k^-1 B_k C_k+1 B_k^T D_k^-1.
+  // C_k = D_k^-1 + D_k^-1 B_k C_k+1 B_k^T D_k^-1, and C_k,k+1 = -D_k^-1 B_k C_k+1.
   std::vector<Mat3> dinv(n), cov(n);
   Mat3 d = diagonal[0];
   for (std::size_t k = 0; k < n; ++k) {
@@ -297,6 +305,10 @@ std::vector<Eigen::Matrix3d> blockTridiagonalInverseDiagonal(const std::vector<E
   }
   cov[n - 1] = dinv[n - 1];
   for (std::size_t k = n - 1; k-- > 0;) cov[k] = dinv[k] + dinv[k] * upper[k] * cov[k + 1] * upper[k].transpose() * dinv[k];
+  if (upper_out) {
+    upper_out->assign(n > 0 ? n - 1 : 0, Mat3::Zero());
+    for (std::size_t k = 0; k + 1 < n; ++k) (*upper_out)[k] = -dinv[k] * upper[k] * cov[k + 1];
+  }
   return cov;
 }
 

@@ -29,9 +29,11 @@ Discrepancy makeDiscrepancy(std::string name, std::string variable, std::string 
 /// 3x3 blocks diagonal[k] on the diagonal and upper[k] at (k, k + 1) (upper may be longer; its
 /// last block is not used). A forward pass of Schur complements and a backward pass, as in a
 /// Kalman smoother: O(n) for n blocks instead of the dense inverse's O(n^3). The marginal
-/// covariances of a chain of poses from its information matrix.
+/// covariances of a chain of poses from its information matrix. `upper_out`, when given, gets
+/// the inverse's blocks at (k, k + 1) too: the covariance of neighbouring poses.
 std::vector<Eigen::Matrix3d> blockTridiagonalInverseDiagonal(const std::vector<Eigen::Matrix3d>& diagonal,
-                                                             const std::vector<Eigen::Matrix3d>& upper);
+                                                             const std::vector<Eigen::Matrix3d>& upper,
+                                                             std::vector<Eigen::Matrix3d>* upper_out = nullptr);
 
 /// Mean and variance of the distance along a beam to a circular pole of radius r, which is
 /// along - sqrt(r^2 - perp^2) (`along`: to the ray's closest approach to the centre, `perp`: the
@@ -45,6 +47,15 @@ struct DistanceMoments {
   double mean = 0.0, var = 0.0;
 };
 DistanceMoments poleDistanceMoments(double along, double perp, const Eigen::Matrix2d& v, double r);
+
+/// Leave-one-out log-density of one block of a (locally) linear Gaussian model, from the fit on
+/// every block: r the block's residual at that fit and S = J C J^T its leverage (J its rows,
+/// C the parameters' covariance), both in units of the block's own standard deviations. Left
+/// out, the residual is (I - S)^-1 r with covariance (I - S)^-1, so
+///   ln p = -r^T (I - S)^-1 r / 2 + ln det(I - S) / 2 - (dim / 2) ln(2 pi)
+/// (in those units). NaN when I - S is not positive definite (nothing else determines the
+/// block's parameters).
+double leaveOneOutLogDensity(const Eigen::Vector3d& r, const Eigen::Matrix3d& s);
 
 /// One-sided p-value of a held-out gain with standard error se: P(N(0, 1) >= gain / se); 1 for
 /// a gain that is not positive, NaN without a standard error.

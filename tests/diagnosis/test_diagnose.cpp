@@ -149,14 +149,61 @@ TEST(DiagnoseStats, BlockTridiagonalInverseMatchesTheDenseInverse) {
     dense.block<3, 3>(3 * k + 3, 3 * k) += jb.transpose() * ja;
   }
   const Eigen::MatrixXd inverse = dense.inverse();
-  const auto blocks = diagnosis::blockTridiagonalInverseDiagonal(diag, upper);
+  std::vector<Eigen::Matrix3d> off;
+  const auto blocks = diagnosis::blockTridiagonalInverseDiagonal(diag, upper, &off);
   ASSERT_EQ(blocks.size(), static_cast<std::size_t>(n));
+  ASSERT_EQ(off.size(), static_cast<std::size_t>(n - 1));
   for (int k = 0; k < n; ++k) {
     const Eigen::Matrix3d want = inverse.block<3, 3>(3 * k, 3 * k);
     EXPECT_LT((blocks[k] - want).norm(), 1e-8 * want.norm()) << "block " << k;
+    if (k + 1 == n) continue;
+    const Eigen::Matrix3d want_off = inverse.block<3, 3>(3 * k, 3 * k + 3);
+    EXPECT_LT((off[k] - want_off).norm(), 1e-8 * want.norm()) << "block " << k << ", " << k + 1;
   }
   EXPECT_TRUE(diagnosis::blockTridiagonalInverseDiagonal({}, {}).empty());
   EXPECT_THROW(diagnosis::blockTridiagonalInverseDiagonal(diag, {}), std::invalid_argument);
+}
+
+TEST(DiagnoseStats, LeaveOneOutLogDensityMatchesTheRefitWithoutTheBlock) {
+  // A linear Gaussian model in 6 parameters (two poses), observed in blocks of 3 rows with unit
+  // noise: the formula from the fit on every block against the predictive density of the block
+  // under the fit without it.
+  auto rng = makeRng(17, 4);
+  std::normal_distribution<double> n01(0.0, 1.0);
+  const int blocks = 5;
+  std::vector<Eigen::Matrix<double, 3, 6>> j(blocks);
+  std::vector<Eigen::Vector3d> y(blocks);
+  for (int b = 0; b < blocks; ++b) {
+    for (int i = 0; i < 18; ++i) j[b](i / 6, i % 6) = n01(rng) * (b == 0 ? 0.2 : 1.0);  // block 0: little leverage
+    for (int i = 0; i < 3; ++i) y[b](i) = n01(rng) * 2.0;  // residuals of any size
+  }
+  auto fit = [&](int without, Eigen::Matrix<double, 6, 1>& theta, Eigen::Matrix<double, 6, 6>& cov) {
+    Eigen::Matrix<double, 6, 6> h = Eigen::Matrix<double, 6, 6>::Zero();
+    Eigen::Matrix<double, 6, 1> g = Eigen::Matrix<double, 6, 1>::Zero();
+    for (int b = 0; b < blocks; ++b)
+      if (b != without) {
+        h += j[b].transpose() * j[b];
+        g += j[b].transpose() * y[b];
+      }
+    cov = h.inverse();
+    theta = cov * g;
+  };
+  Eigen::Matrix<double, 6, 1> theta;
+  Eigen::Matrix<double, 6, 6> cov;
+  fit(-1, theta, cov);
+  for (int k = 0; k < blocks; ++k) {
+    Eigen::Matrix<double, 6, 1> theta_k;
+    Eigen::Matrix<double, 6, 6> cov_k;
+    fit(k, theta_k, cov_k);
+    const Eigen::Vector3d e = y[k] - j[k] * theta_k;
+    const Eigen::Matrix3d p = Eigen::Matrix3d::Identity() + j[k] * cov_k * j[k].transpose();
+    const double want = -0.5 * e.dot(p.inverse() * e) - 0.5 * std::log(p.determinant()) - 1.5 * std::log(2.0 * std::acos(-1.0));
+    const Eigen::Vector3d r = y[k] - j[k] * theta;
+    const double got = diagnosis::leaveOneOutLogDensity(r, j[k] * cov * j[k].transpose());
+    EXPECT_NEAR(got, want, 1e-9 * std::max(1.0, std::abs(want))) << "block " << k;
+  }
+  // A block that alone determines a direction of the parameters: S has an eigenvalue 1.
+  EXPECT_TRUE(std::isnan(diagnosis::leaveOneOutLogDensity(Eigen::Vector3d(1.0, 0.0, 0.0), Eigen::Matrix3d::Identity())));
 }
 
 TEST(DiagnoseStats, PoleDistanceMomentsMatchSampledHits) {

@@ -212,8 +212,11 @@ TEST(CliDiagnoseDriving, CleanDrivesNameNoEffectAtItsNull) {
     EXPECT_EQ(r.out, "none\n") << scene << " seed " << seed;
     const auto j = json(dir / (scene + "-d") / "diagnosis.json");
     for (const auto& c : j["candidates"]) {
-      // Under the motion prior the likelihood ratio is not used (a pose per scan: optima).
-      EXPECT_TRUE(c["p_likelihood_ratio"].is_null()) << c["effect"];
+      // Under the motion prior the likelihood ratio is used for the path terms alone (a pose per
+      // scan: optima; the path terms' evidence is in the odometry steps).
+      if (c["effect"] != "angle_offset" && c["effect"] != "odometry_scale") {
+        EXPECT_TRUE(c["p_likelihood_ratio"].is_null()) << c["effect"];
+      }
       if (!c["significant"].get<bool>()) continue;
       // A significant effect stands two standard errors clear of its null, and a mixed-pixel
       // fraction above the EM's floor.
@@ -255,6 +258,40 @@ TEST(CliDiagnoseDriving, ARangeDriftInAThinPoleDriveIsNamedAtItsSize) {
   for (const auto& c : j["candidates"])
     if (c["effect"] == "range_drift") {
       EXPECT_NEAR(c["estimates"]["range_drift_m_per_scan"].get<double>(), drift, 0.1 * std::abs(drift)) << "seed " << seed;
+    }
+}
+
+TEST(CliDiagnoseDriving, ALidarYawedOnARobotThatNeverStopsIsNamedFromItsOdometrySteps) {
+  // A lidar mounted 2-3 degrees off the robot's axis, on a robot that never stops among thin
+  // poles. Each scan's heading is refined, so the readings alone cannot tell the offset from the
+  // headings; the odometry steps can: the robot drives along its own axis, which the yawed lidar
+  // sees turned. Until session 17 such drives were named none in 5 of 5 (the fit started from
+  // the baseline's headings, its baseline refitted with the offset dropped from the beams and
+  // the steps held out nowhere). The offset's size and sign and the simulator's seed come from a
+  // seed this test does not read.
+  TempDir dir;
+  auto rng = makeRng(20261127, 23);
+  const double sign = std::bernoulli_distribution(0.5)(rng) ? 1.0 : -1.0;
+  const double yaw_deg = sign * std::uniform_real_distribution<double>(2.0, 3.0)(rng);
+  const int seed = std::uniform_int_distribution<int>(100, 100000)(rng);
+  nlohmann::json s = json(test::sourceDir() / "data/scenes/driving_small_poles.json");
+  s["sensor"]["mount_yaw_deg"] = yaw_deg;
+  test::writeFile(dir / "yawed.json", s.dump(1));
+  simulate(dir / "yawed.json", dir / "drive", seed);
+  const auto r = runCli("diagnose -q " + (dir / "drive/scans").string() + " --replicas 5 --out " + (dir / "d").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.out, "angle_offset\n") << "seed " << seed << ", yaw " << yaw_deg << " deg";
+  const auto j = json(dir / "d/diagnosis.json");
+  for (const auto& c : j["candidates"])
+    if (c["effect"] == "angle_offset") {
+      // Its standard error is what the odometry steps know of it (the headings a nuisance):
+      // about half a degree on this drive, not the readings' 0.06 degrees.
+      const double se_deg = c["standard_error"].get<double>() * 180.0 / std::acos(-1.0);
+      EXPECT_GT(se_deg, 0.1);
+      EXPECT_LT(se_deg, 1.0);
+      EXPECT_NEAR(c["estimates"]["angle_offset_deg"].get<double>(), yaw_deg, 3.0 * se_deg) << "seed " << seed;
+      EXPECT_FALSE(c["p_likelihood_ratio"].is_null());
+      EXPECT_GT(c["heldout_gain_nats_per_point"].get<double>(), 0.0);
     }
 }
 
