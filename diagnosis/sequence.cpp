@@ -204,12 +204,10 @@ OdometryStep odometryStep(const LandmarkObservations& obs, const JointResult& fi
   const Pose2 step = stepBetween(obs.commanded[a], obs.commanded[b]);
   double sd_t = 0.0, sd_h = 0.0;
   for (std::size_t k = a + 1; k <= b; ++k) {  // the steps' variances add up over a run of them
-    const Pose2 one = k == b && a + 1 == b ? step : stepBetween(obs.commanded[k - 1], obs.commanded[k]);
+    const Pose2 one = stepBetween(obs.commanded[k - 1], obs.commanded[k]);
     const double len = std::hypot(one.x_m, one.y_m);
-    const double st = cfg.motion_sigma_fraction * len + cfg.motion_sigma_floor_m;
-    const double sh = cfg.motion_heading_sigma_rad_per_m * len + cfg.motion_heading_floor_rad;
-    sd_t = a + 1 == b ? st : std::hypot(sd_t, st);
-    sd_h = a + 1 == b ? sh : std::hypot(sd_h, sh);
+    sd_t = std::hypot(sd_t, cfg.motion_sigma_fraction * len + cfg.motion_sigma_floor_m);
+    sd_h = std::hypot(sd_h, cfg.motion_heading_sigma_rad_per_m * len + cfg.motion_heading_floor_rad);
   }
   const double t = 1.0 / sd_t, h = 1.0 / sd_h;
   const Pose2 &pa = fit.poses[a], &pb = fit.poses[b];
@@ -275,6 +273,25 @@ double noiseDofFactor(const std::vector<PoseInformation>& readings, const std::v
   return n > h + 1.0 ? n / (n - h) : 1.0;
 }
 
+/// What the readings of `obs` and the odometry know of each pose of a fit under the motion prior:
+/// the readings' pose information, the factor that takes the fit's noise variance to the
+/// readings' own (noiseDofFactor), and the poses' covariances at that variance (`upper`, when
+/// given: the neighbours' covariances too).
+struct PoseUncertainty {
+  std::vector<PoseInformation> info;
+  double dof = 1.0;
+  std::vector<Eigen::Matrix3d> cov;
+};
+
+PoseUncertainty poseUncertainty(const LandmarkObservations& obs, const JointResult& fit, const JointConfig& cfg,
+                                std::vector<Eigen::Matrix3d>* upper = nullptr) {
+  PoseUncertainty u;
+  u.info = poseInformation(obs, fit, cfg);
+  u.dof = noiseDofFactor(u.info, poseCovariances(u.info, obs, fit, cfg, 1.0));
+  u.cov = poseCovariances(u.info, obs, fit, cfg, u.dof, upper);
+  return u;
+}
+
 /// Held-out log-likelihood of each odometry step k - 1 -> k of a fit under the motion prior
 /// (element k - 1), predicted from everything but itself: the readings locate both poses and the
 /// other steps tie them to their neighbours. Linearised leave-one-out with the landmarks held at
@@ -291,12 +308,11 @@ constexpr int kLocatingReadings = 3;
 std::vector<double> stepHeldOut(const LandmarkObservations& obs, const JointResult& fit, const JointConfig& cfg) {
   const std::size_t n = std::min(fit.poses.size(), obs.commanded.size());
   if (n < 2) return {};
-  const std::vector<PoseInformation> info = poseInformation(obs, fit, cfg);
-  const double dof = noiseDofFactor(info, poseCovariances(info, obs, fit, cfg, 1.0));
   std::vector<Eigen::Matrix3d> upper;
-  const std::vector<Eigen::Matrix3d> cov = poseCovariances(info, obs, fit, cfg, dof, &upper);
+  const PoseUncertainty u = poseUncertainty(obs, fit, cfg, &upper);
+  const std::vector<Eigen::Matrix3d>& cov = u.cov;
   std::vector<int> readings(n, 0);
-  for (const auto& r : info)
+  for (const auto& r : u.info)
     if (r.stop < n) ++readings[r.stop];
   std::vector<double> out(n - 1, kNaN);
   for (std::size_t k = 1; k < n; ++k) {
@@ -351,13 +367,10 @@ std::vector<double> heldOutLikelihoods(const LandmarkObservations& train, const 
   }
   const bool pose_uncertain = fit.motion_prior && cfg.effects.estimate_heading;
   // The noise at the readings' own variance (noiseDofFactor), and the poses' covariance with it.
-  double dof = 1.0;
-  std::vector<Eigen::Matrix3d> cov;
-  if (pose_uncertain) {
-    const std::vector<PoseInformation> info = poseInformation(train, fit, cfg);
-    dof = noiseDofFactor(info, poseCovariances(info, train, fit, cfg, 1.0));
-    cov = poseCovariances(info, train, fit, cfg, dof);
-  }
+  PoseUncertainty u;
+  if (pose_uncertain) u = poseUncertainty(train, fit, cfg);
+  const double dof = u.dof;
+  const std::vector<Eigen::Matrix3d>& cov = u.cov;
   for (std::size_t i = 0; i < rs.size(); ++i) {
     const JointReading& r = rs[i];
     if (!pose_uncertain) {
