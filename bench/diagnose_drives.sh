@@ -7,6 +7,7 @@
 # For `none`, FIRST..LAST are simulator seeds; otherwise case numbers: the effect's size and
 # sign are drawn from the case number (sizes as in bench/diagnose_accuracy's cases) and the
 # simulator seed is 500 + case. Needs python3. docs/RESULTS.md, "Continuous recordings".
+# With KEEP=DIR set, each case's diagnosis.json is kept as DIR/SCENE-EFFECT-K.json.
 set -euo pipefail
 scene=$1 effect=$2 first=$3 last=$4
 bin=${5:-build/pipeline/lidarcal}
@@ -44,4 +45,5 @@ PY
   [ "$effect" = none ] || seed=$((500 + k))
   "$bin" simulate -q --scene "$work/scene.json" --seed "$seed" -o "$work/sim" --overwrite
   echo "$scene $effect $k $("$bin" diagnose "$work/sim/scans" -o "$work/d" --overwrite --replicas 5 -q)"
+  if [ -n "${KEEP:-}" ]; then cp "$work/d/diagnosis.json" "$KEEP/$scene-$effect-$k.json"; fi
 done

@@ -25,6 +25,9 @@ struct BeamReading {
   double intensity = std::numeric_limits<double>::quiet_NaN();
   /// Whether it records an intensity (a finite value above 0).
   bool hasIntensity() const { return intensity > 0.0 && intensity < std::numeric_limits<double>::infinity(); }
+  /// Not on the landmark's circle: the beam beside it, read between the landmark and the
+  /// background, kept as a mixed-pixel candidate (pipeline/collect_sightings.hpp). Default false.
+  bool beside = false;
 };
 
 /// One landmark seen in one scan.

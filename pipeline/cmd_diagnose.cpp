@@ -128,7 +128,8 @@ std::optional<LandmarkObservations> findLandmarks(const DiagnoseCommand& c, cons
   const auto det = detectors::detectSequence(seq, dc, [&](std::size_t d, std::size_t t) { progress.update(d, t); });
   progress.finish();
   if (!det.association.landmarks.empty()) {
-    obs = toLandmarkObservations(seq, det);
+    // The beams beside each pole that read between it and the background: mixed pixels' readings.
+    obs = toLandmarkObservations(seq, det, SightingOptions{true});
     if (!seq.meta.range_max_m) {
       double max_reading = 0.0;
       for (const auto& s : obs->sightings)
@@ -203,6 +204,9 @@ diagnosis::DiagnosisResult diagnoseLandmarks(const DiagnoseCommand& c, const dia
   if (fix.inverter)
     for (auto& s : obs.sightings)
       for (auto& b : s.beams) b.range_m = fix.correct(b.range_m);
+  for (const auto& s : obs.sightings)
+    src.beside_pole_readings += static_cast<std::size_t>(
+        std::count_if(s.beams.begin(), s.beams.end(), [](const BeamReading& b) { return b.beside; }));
   std::vector<std::vector<double>> truth_ranges;
   if (!c.truth.empty()) truth_ranges = truthRanges(c.truth, obs);
   if (!quiet()) std::fprintf(stderr, "diagnosing a sequence: %zu sightings (%d replicas)\n", obs.sightings.size(), c.replicas);

@@ -251,6 +251,7 @@ ojson dataJson(const DiagnosisResult& r, const DiagnosisSource& src) {
   data[r.mode == diagnosis::DiagnoseMode::sequence ? "landmarks" : "walls"] = r.landmarks;
   if (!src.sensor.empty()) data["sensor"] = src.sensor;
   if (!src.selection.empty()) data["selection"] = src.selection;
+  if (r.mode == diagnosis::DiagnoseMode::sequence) data["readings_beside_poles"] = src.beside_pole_readings;
   if (!src.model.empty()) data["corrected_with_model"] = src.model;
   return data;
 }
@@ -264,7 +265,11 @@ void writeDataLine(std::ostream& md, const DiagnosisResult& r, const DiagnosisSo
      << toString(r.mode) << "** mode: " << r.scans << " scans";
   if (seq) md << " at " << r.stops << " stops" << (src.selection.empty() ? "" : " (" + src.selection + ")") << ", " << r.landmarks << " landmarks";
   else md << (src.selection.empty() ? "" : " (" + src.selection + ")") << ", " << r.landmarks << " wall lines";
-  md << ", " << r.readings << " readings.";
+  md << ", " << r.readings << " readings";
+  if (seq && src.beside_pole_readings > 0)
+    md << " (" << src.beside_pole_readings
+       << " of them beside a pole, between it and the background: mixed-pixel candidates the detector leaves out)";
+  md << ".";
   if (!src.model.empty()) md << " Readings first corrected with `" << src.model << "`.";
   md << "\n\n";
 }

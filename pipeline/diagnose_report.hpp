@@ -20,6 +20,7 @@ struct DiagnosisSource {
   std::string selection;                ///< e.g. "stop 3 (402 scans)" for static data of a longer sequence
   std::string model;                    ///< --model file, when the readings were corrected first
   std::string command;                  ///< command line
+  std::size_t beside_pole_readings = 0; ///< sequence: readings kept beside the poles (mixed-pixel candidates)
   std::vector<diagnosis::WallLine> walls;  ///< static: the fitted wall lines
 };
 

@@ -191,6 +191,24 @@ TEST(CliDiagnoseDriving, PosesThatSeeNoPoleKeepTheHeldOutGainsFiniteAndTheReplic
     }
 }
 
+TEST(CliDiagnoseStopAndGo, MixedPixelsAtPoleEdgesInTheScansAreNamed) {
+  // The paper field through the scan simulator and the detector, 5-10 % of the beams at a pole's
+  // edge reading between the pole and the background: the readings off the circle are kept
+  // beside their sightings when no other scan of the stop sees a surface there. Fraction and
+  // simulator seed from a seed this test does not read (measured: 8 of 8 such fields named,
+  // their clean twins none; docs/RESULTS.md).
+  TempDir dir;
+  auto rng = makeRng(20261128, 31);
+  const double fraction = std::uniform_real_distribution<double>(0.05, 0.10)(rng);
+  const int seed = std::uniform_int_distribution<int>(100, 100000)(rng);
+  simulate(writeScene(dir.path(), "mixed", [&](nlohmann::json& s) { s["sensor"]["effects"] = {{"mixed_pixel_fraction", fraction}}; }),
+           dir / "mixed", seed);
+  const auto r = runCli("diagnose -q " + (dir / "mixed/scans").string() + " --replicas 9 --out " + (dir / "d").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.out, "mixed_pixels\n") << "seed " << seed << ", fraction " << fraction;
+  EXPECT_GT(json(dir / "d/diagnosis.json")["data"]["readings_beside_poles"].get<int>(), 0);
+}
+
 TEST(CliDiagnoseDriving, CleanDrivesNameNoEffectAtItsNull) {
   // A pose per scan, chained by the odometry. Before session 10 every clean drive tried was
   // named (large poles: mixed_pixels, odometry_scale; thin poles: incidence_bias), each with its
@@ -258,6 +276,38 @@ TEST(CliDiagnoseDriving, ARangeDriftInAThinPoleDriveIsNamedAtItsSize) {
   for (const auto& c : j["candidates"])
     if (c["effect"] == "range_drift") {
       EXPECT_NEAR(c["estimates"]["range_drift_m_per_scan"].get<double>(), drift, 0.1 * std::abs(drift)) << "seed " << seed;
+    }
+}
+
+TEST(CliDiagnoseDriving, MixedPixelsBesideThinPolesAreNamed) {
+  // 5-10 % of the beams at a thin pole's edge read somewhere between the pole and the background.
+  // The detector leaves those readings off the pole's circle; until session 18 the diagnosis
+  // never saw them and named such drives none in 5 of 5. The readings beside a pole that lie
+  // between it and the background and that no nearby scan sees again are now kept as the
+  // sighting's outermost readings. The fraction and the simulator's seed come from a seed this
+  // test does not read.
+  TempDir dir;
+  auto rng = makeRng(20261128, 29);
+  const double fraction = std::uniform_real_distribution<double>(0.05, 0.10)(rng);
+  const int seed = std::uniform_int_distribution<int>(100, 100000)(rng);
+  nlohmann::json s = json(test::sourceDir() / "data/scenes/driving_small_poles.json");
+  s["sensor"]["effects"] = {{"mixed_pixel_fraction", fraction}};
+  test::writeFile(dir / "mixed.json", s.dump(1));
+  simulate(dir / "mixed.json", dir / "drive", seed);
+  const auto r = runCli("diagnose -q " + (dir / "drive/scans").string() + " --replicas 5 --out " + (dir / "d").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.out, "mixed_pixels\n") << "seed " << seed << ", fraction " << fraction;
+  const auto j = json(dir / "d/diagnosis.json");
+  EXPECT_GT(j["data"]["readings_beside_poles"].get<int>(), 0);
+  EXPECT_NE(test::readFile(dir / "d/report.md").find("beside a pole"), std::string::npos);
+  for (const auto& c : j["candidates"])
+    if (c["effect"] == "mixed_pixels") {
+      // Fitted over the sightings' outermost readings, of which only the mixed pixels beside a
+      // detected pole are seen (a mixed pixel on a pole seen by two beams leaves it undetected):
+      // below the hidden fraction, above the EM's floor.
+      const double f = c["estimates"]["mixed_pixel_fraction"].get<double>();
+      EXPECT_GT(f, 0.01) << "seed " << seed;
+      EXPECT_LT(f, fraction) << "seed " << seed;
     }
 }
 
