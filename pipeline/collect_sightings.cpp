@@ -13,13 +13,20 @@ namespace lidarcal::pipeline {
 
 namespace {
 
-/// Point i of a scan as a reading (its beam's direction and range); nullopt without a return.
+/// A point (sensor frame) as its beam's reading: the point's direction is its beam's direction
+/// (the sensor measures range along it). An intensity of 0 (what a scan without one reads as)
+/// is none recorded.
+BeamReading beamReading(float x, float y, float intensity, std::uint32_t beam) {
+  return BeamReading{std::atan2(static_cast<double>(y), static_cast<double>(x)),
+                     std::hypot(static_cast<double>(x), static_cast<double>(y)), beam,
+                     intensity > 0.0f ? static_cast<double>(intensity) : std::nan("")};
+}
+
+/// Point i of a scan as a reading; nullopt without a return.
 std::optional<BeamReading> pointReading(const io::Scan& scan, long i) {
   const auto& p = (*scan.cloud)[static_cast<std::size_t>(i)];
   if (!std::isfinite(p.x) || !std::isfinite(p.y)) return std::nullopt;
-  const double x = p.x, y = p.y;
-  return BeamReading{std::atan2(y, x), std::hypot(x, y), static_cast<std::uint32_t>(i),
-                     p.intensity > 0.0f ? static_cast<double>(p.intensity) : std::nan("")};
+  return beamReading(p.x, p.y, p.intensity, static_cast<std::uint32_t>(i));
 }
 
 /// Angle from a to b, in [-pi, pi).
@@ -170,12 +177,7 @@ LandmarkObservations toLandmarkObservations(const io::Sequence& seq, const detec
         const float y = kept_points ? d.inlier_xyi[k][1] : (*scan.cloud)[static_cast<std::size_t>(idx)].y;
         const float in = kept_points ? d.inlier_xyi[k][2] : (*scan.cloud)[static_cast<std::size_t>(idx)].intensity;
         if (!std::isfinite(x)) continue;
-        // The point's direction is its beam's direction: the sensor measures range along it.
-        // An intensity of 0 (what a scan without one reads as) is none recorded.
-        s.beams.push_back(BeamReading{std::atan2(static_cast<double>(y), static_cast<double>(x)),
-                                      std::hypot(static_cast<double>(x), static_cast<double>(y)),
-                                      same_beams[s.stop] ? static_cast<std::uint32_t>(idx) : kUnknownBeam,
-                                      in > 0.0f ? static_cast<double>(in) : std::nan("")});
+        s.beams.push_back(beamReading(x, y, in, same_beams[s.stop] ? static_cast<std::uint32_t>(idx) : kUnknownBeam));
       }
       if (s.beams.empty()) continue;
       if (options.mixed_pixel_candidates)
