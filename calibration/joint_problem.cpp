@@ -175,7 +175,9 @@ void JointProblem::initialiseModel() {
   if (config_.noise == NoiseKind::power && init_.model.noise.kind != NoiseKind::power) out_.model.noise.exponent = 2.0;
   if (fx_.noise_exponent && out_.model.noise.kind == NoiseKind::squared) {
     out_.model.noise.kind = NoiseKind::power;
-    out_.model.noise.exponent = 2.0;
+    // Held, the start's exponent is the law; fitted, the first solve weighs by the squared law.
+    const bool held = config_.hold_noise_shape && init_.model.noise.kind == NoiseKind::power;
+    out_.model.noise.exponent = held ? init_.model.noise.exponent : 2.0;
   }
 }
 
@@ -627,7 +629,7 @@ void JointProblem::fitNoiseLaw(const std::vector<double>& res, const BiasPolynom
     out_.model.noise.beta = fitNoisePolynomial(din, rin, config_.noise_order);
     return;
   }
-  for (int pass = 0; pass < 2; ++pass) {
+  for (int pass = 0; pass < 2 && !config_.hold_noise_shape; ++pass) {
     if (fx_.noise_exponent) {
       out_.model.noise.exponent = goldenMax(
           [&](double k) {

@@ -312,4 +312,18 @@ std::vector<Eigen::Matrix3d> blockTridiagonalInverseDiagonal(const std::vector<E
   return cov;
 }
 
+double blockTridiagonalLogDet(const std::vector<Eigen::Matrix3d>& diagonal, const std::vector<Eigen::Matrix3d>& upper) {
+  const std::size_t n = diagonal.size();
+  if (upper.size() + 1 < n && n > 0) throw std::invalid_argument("blockTridiagonalLogDet: one upper block per pair of neighbours");
+  double sum = 0.0;
+  Eigen::Matrix3d d = n > 0 ? diagonal[0] : Eigen::Matrix3d::Identity();
+  for (std::size_t k = 0; k < n; ++k) {
+    const Eigen::LLT<Eigen::Matrix3d> llt(d);
+    if (llt.info() != Eigen::Success) return std::numeric_limits<double>::quiet_NaN();
+    sum += 2.0 * llt.matrixL().toDenseMatrix().diagonal().array().log().sum();
+    if (k + 1 < n) d = diagonal[k + 1] - upper[k].transpose() * llt.solve(upper[k]);
+  }
+  return sum;
+}
+
 }  // namespace lidarcal::diagnosis

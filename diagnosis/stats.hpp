@@ -35,6 +35,10 @@ std::vector<Eigen::Matrix3d> blockTridiagonalInverseDiagonal(const std::vector<E
                                                              const std::vector<Eigen::Matrix3d>& upper,
                                                              std::vector<Eigen::Matrix3d>* upper_out = nullptr);
 
+/// ln det of the same symmetric positive-definite block-tridiagonal matrix: the sum of ln det of
+/// the forward pass's Schur complements. NaN when one is not positive definite.
+double blockTridiagonalLogDet(const std::vector<Eigen::Matrix3d>& diagonal, const std::vector<Eigen::Matrix3d>& upper);
+
 /// Mean and variance of the distance along a beam to a circular pole of radius r, which is
 /// along - sqrt(r^2 - perp^2) (`along`: to the ray's closest approach to the centre, `perp`: the
 /// ray's miss distance), when (along, perp) are jointly normal about the given values with

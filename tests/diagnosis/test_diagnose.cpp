@@ -119,7 +119,7 @@ TEST(DiagnoseStats, LikelihoodRatioAndCombinedPValues) {
   EXPECT_TRUE(std::isnan(combinedPValue(std::nan(""), std::nan(""), std::nan(""))));
 }
 
-TEST(DiagnoseStats, BlockTridiagonalInverseMatchesTheDenseInverse) {
+TEST(DiagnoseStats, BlockTridiagonalInverseAndLogDetMatchTheDenseOnes) {
   // A chain of 9 poses: random information per pose (readings) plus random couplings between
   // neighbours (odometry steps), assembled as J^T J so that the matrix is positive definite.
   auto rng = makeRng(11, 3);
@@ -162,6 +162,12 @@ TEST(DiagnoseStats, BlockTridiagonalInverseMatchesTheDenseInverse) {
   }
   EXPECT_TRUE(diagnosis::blockTridiagonalInverseDiagonal({}, {}).empty());
   EXPECT_THROW(diagnosis::blockTridiagonalInverseDiagonal(diag, {}), std::invalid_argument);
+  // Its log-determinant (the restricted likelihood's term for the poses) from the same pass.
+  const double log_det = std::log(dense.determinant());
+  EXPECT_NEAR(diagnosis::blockTridiagonalLogDet(diag, upper), log_det, 1e-9 * std::abs(log_det));
+  std::vector<Eigen::Matrix3d> indefinite = diag;
+  indefinite[2] = -indefinite[2];
+  EXPECT_TRUE(std::isnan(diagnosis::blockTridiagonalLogDet(indefinite, upper)));
 }
 
 TEST(DiagnoseStats, LeaveOneOutLogDensityMatchesTheRefitWithoutTheBlock) {

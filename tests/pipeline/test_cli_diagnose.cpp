@@ -40,6 +40,16 @@ void simulate(const fs::path& scene, const fs::path& out, int seed, const std::s
   ASSERT_EQ(r.exit_code, 0) << r.err;
 }
 
+/// A thin-pole drive (data/scenes/driving_small_poles.json) with `edit` applied to its scene,
+/// simulated with `seed` into dir/drive and diagnosed with 5 replicas into dir/d.
+test::CliResult diagnoseThinPoleDrive(const fs::path& dir, const std::function<void(nlohmann::json&)>& edit, int seed) {
+  nlohmann::json s = json(test::sourceDir() / "data/scenes/driving_small_poles.json");
+  edit(s);
+  test::writeFile(dir / "scene.json", s.dump(1));
+  simulate(dir / "scene.json", dir / "drive", seed);
+  return runCli("diagnose -q " + (dir / "drive/scans").string() + " --replicas 5 --out " + (dir / "d").string());
+}
+
 class CliDiagnose : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
@@ -264,12 +274,10 @@ TEST(CliDiagnoseDriving, ARangeDriftInAThinPoleDriveIsNamedAtItsSize) {
   const double sign = std::bernoulli_distribution(0.5)(rng) ? 1.0 : -1.0;
   const double over_drive_m = std::uniform_real_distribution<double>(0.03, 0.04)(rng);
   const int seed = std::uniform_int_distribution<int>(100, 100000)(rng);
-  nlohmann::json s = json(test::sourceDir() / "data/scenes/driving_small_poles.json");
-  const double drift = sign * over_drive_m / s["path"]["scans"].get<double>();
-  s["sensor"]["effects"] = {{"range_drift_m_per_scan", drift}};
-  test::writeFile(dir / "drift.json", s.dump(1));
-  simulate(dir / "drift.json", dir / "drive", seed);
-  const auto r = runCli("diagnose -q " + (dir / "drive/scans").string() + " --replicas 5 --out " + (dir / "d").string());
+  const double scans = json(test::sourceDir() / "data/scenes/driving_small_poles.json")["path"]["scans"].get<double>();
+  const double drift = sign * over_drive_m / scans;
+  const auto r = diagnoseThinPoleDrive(
+      dir.path(), [&](nlohmann::json& s) { s["sensor"]["effects"] = {{"range_drift_m_per_scan", drift}}; }, seed);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(r.out, "range_drift\n") << "seed " << seed << ", drift " << drift;
   const auto j = json(dir / "d/diagnosis.json");
@@ -290,11 +298,8 @@ TEST(CliDiagnoseDriving, MixedPixelsBesideThinPolesAreNamed) {
   auto rng = makeRng(20261128, 29);
   const double fraction = std::uniform_real_distribution<double>(0.05, 0.10)(rng);
   const int seed = std::uniform_int_distribution<int>(100, 100000)(rng);
-  nlohmann::json s = json(test::sourceDir() / "data/scenes/driving_small_poles.json");
-  s["sensor"]["effects"] = {{"mixed_pixel_fraction", fraction}};
-  test::writeFile(dir / "mixed.json", s.dump(1));
-  simulate(dir / "mixed.json", dir / "drive", seed);
-  const auto r = runCli("diagnose -q " + (dir / "drive/scans").string() + " --replicas 5 --out " + (dir / "d").string());
+  const auto r = diagnoseThinPoleDrive(
+      dir.path(), [&](nlohmann::json& s) { s["sensor"]["effects"] = {{"mixed_pixel_fraction", fraction}}; }, seed);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(r.out, "mixed_pixels\n") << "seed " << seed << ", fraction " << fraction;
   const auto j = json(dir / "d/diagnosis.json");
@@ -308,6 +313,34 @@ TEST(CliDiagnoseDriving, MixedPixelsBesideThinPolesAreNamed) {
       const double f = c["estimates"]["mixed_pixel_fraction"].get<double>();
       EXPECT_GT(f, 0.01) << "seed " << seed;
       EXPECT_LT(f, fraction) << "seed " << seed;
+    }
+}
+
+TEST(CliDiagnoseDriving, NoiseGrowingTowardsGrazingOnThinPolesIsNamedNotASteeperRangeLaw) {
+  // The noise of a reading grows as (1 / cos phi)^gamma with its incidence phi on the pole, gamma
+  // 1-1.5, on a robot that never stops among thin poles. Fitted by maximum likelihood with a pose
+  // per scan, the exponent reads the residuals as the noise, and the outermost beams that the
+  // scan's pose rests on have the smallest: until session 19 clean drives had it at -1 (its lower
+  // bound) and 7 of 20 such drives were named a range law 0.2-0.5 steeper than the squared one
+  // (4) or none (2 of them; docs/RESULTS.md). The exponent is now estimated by restricted
+  // likelihood over the poses. Its size and the simulator's seed come from a seed this test does
+  // not read.
+  TempDir dir;
+  auto rng = makeRng(20261128, 31);
+  const double gamma = std::uniform_real_distribution<double>(1.0, 1.5)(rng);
+  const int seed = std::uniform_int_distribution<int>(100, 100000)(rng);
+  const auto r = diagnoseThinPoleDrive(
+      dir.path(), [&](nlohmann::json& s) { s["sensor"]["effects"] = {{"incidence_noise_exponent", gamma}}; }, seed);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.out, "incidence_noise\n") << "seed " << seed << ", gamma " << gamma;
+  const auto j = json(dir / "d/diagnosis.json");
+  for (const auto& c : j["candidates"])
+    if (c["effect"] == "incidence_noise") {
+      // Still short of the truth (0.52-0.87 for 1.05-1.48 in 20 drives: the beams nearest a
+      // pole's tangent move more with the pose than linearly), and clear of zero.
+      const double g = c["estimates"]["incidence_noise_exponent"].get<double>();
+      EXPECT_GT(g, 0.3) << "seed " << seed << ", gamma " << gamma;
+      EXPECT_LT(g, gamma + 0.2) << "seed " << seed << ", gamma " << gamma;
     }
 }
 
@@ -326,11 +359,7 @@ TEST(CliDiagnoseDriving, ALidarYawedOnARobotThatNeverStopsIsNamedFromItsOdometry
   const double sign = std::bernoulli_distribution(0.5)(rng) ? 1.0 : -1.0;
   const double yaw_deg = sign * std::uniform_real_distribution<double>(2.5, 3.5)(rng);
   const int seed = std::uniform_int_distribution<int>(100, 100000)(rng);
-  nlohmann::json s = json(test::sourceDir() / "data/scenes/driving_small_poles.json");
-  s["sensor"]["mount_yaw_deg"] = yaw_deg;
-  test::writeFile(dir / "yawed.json", s.dump(1));
-  simulate(dir / "yawed.json", dir / "drive", seed);
-  const auto r = runCli("diagnose -q " + (dir / "drive/scans").string() + " --replicas 5 --out " + (dir / "d").string());
+  const auto r = diagnoseThinPoleDrive(dir.path(), [&](nlohmann::json& s) { s["sensor"]["mount_yaw_deg"] = yaw_deg; }, seed);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(r.out, "angle_offset\n") << "seed " << seed << ", yaw " << yaw_deg << " deg";
   const auto j = json(dir / "d/diagnosis.json");
