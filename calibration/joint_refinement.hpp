@@ -142,8 +142,9 @@ struct JointConfig {
   bool keep_all_beams = false;    ///< use every beam of every sighting (the caller selected them); ignores lateral_fraction
   bool settle_geometry = true;    ///< first solve with the bias held (off when starting from a converged solution)
   /// Keep the noise law's shape parameters (kappa, gamma, delta) at the start's values and fit
-  /// only its scale: `diagnose` estimates them itself on a continuous recording, where a pose per
-  /// scan shrinks the residuals of the readings it rests on (leverage-corrected, diagnosis/sequence.cpp).
+  /// only its scale: `diagnose` estimates the incidence and darkness exponents itself on a
+  /// continuous recording, where a pose per scan shrinks the residuals of the readings it rests
+  /// on (restricted likelihood over the poses, diagnosis/sequence.cpp).
   bool hold_noise_shape = false;
   /// One residual per beam, landmark and stop instead of one per reading: repeated scans from
   /// one pose summarised by their count and mean (the Gaussian likelihood unchanged, the cost
