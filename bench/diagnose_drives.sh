@@ -8,6 +8,8 @@
 # sign are drawn from the case number (sizes as in bench/diagnose_accuracy's cases) and the
 # simulator seed is 500 + case. Needs python3. docs/RESULTS.md, "Continuous recordings".
 # With KEEP=DIR set, each case's diagnosis.json is kept as DIR/SCENE-EFFECT-K.json.
+# REPLICAS (default 19, diagnose's own default) sets --replicas: sessions 15-19 ran 5, whose
+# Student-t predictive p of the statistics (4 degrees of freedom) cannot fall far.
 set -euo pipefail
 scene=$1 effect=$2 first=$3 last=$4
 bin=${5:-build/pipeline/lidarcal}
@@ -44,6 +46,6 @@ PY
   seed=$k
   [ "$effect" = none ] || seed=$((500 + k))
   "$bin" simulate -q --scene "$work/scene.json" --seed "$seed" -o "$work/sim" --overwrite
-  echo "$scene $effect $k $("$bin" diagnose "$work/sim/scans" -o "$work/d" --overwrite --replicas 5 -q)"
+  echo "$scene $effect $k $("$bin" diagnose "$work/sim/scans" -o "$work/d" --overwrite --replicas "${REPLICAS:-19}" -q)"
   if [ -n "${KEEP:-}" ]; then cp "$work/d/diagnosis.json" "$KEEP/$scene-$effect-$k.json"; fi
 done

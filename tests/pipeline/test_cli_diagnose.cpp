@@ -41,13 +41,27 @@ void simulate(const fs::path& scene, const fs::path& out, int seed, const std::s
 }
 
 /// A thin-pole drive (data/scenes/driving_small_poles.json) with `edit` applied to its scene,
-/// simulated with `seed` into dir/drive and diagnosed with 5 replicas into dir/d.
-test::CliResult diagnoseThinPoleDrive(const fs::path& dir, const std::function<void(nlohmann::json&)>& edit, int seed) {
+/// simulated with `seed` into dir/drive and diagnosed with `replicas` replicas into dir/d.
+test::CliResult diagnoseThinPoleDrive(const fs::path& dir, const std::function<void(nlohmann::json&)>& edit, int seed,
+                                      int replicas = 5) {
   nlohmann::json s = json(test::sourceDir() / "data/scenes/driving_small_poles.json");
   edit(s);
   test::writeFile(dir / "scene.json", s.dump(1));
   simulate(dir / "scene.json", dir / "drive", seed);
-  return runCli("diagnose -q " + (dir / "drive/scans").string() + " --replicas 5 --out " + (dir / "d").string());
+  return runCli("diagnose -q " + (dir / "drive/scans").string() + " --replicas " + std::to_string(replicas) + " --out " +
+                (dir / "d").string());
+}
+
+/// Twice the log-likelihood ratio of candidate c's fit on all the data against the baseline's.
+double likelihoodRatio(const nlohmann::json& c) {
+  return 2.0 * c["parameters"].get<double>() - c["delta_aic"].get<double>();
+}
+
+/// The terms in the mean of the readings or the path: their fits nest the baseline's.
+bool meanTerm(const nlohmann::json& c) {
+  for (const char* e : {"incidence_bias", "landmark_bias", "range_drift", "angle_offset", "odometry_scale"})
+    if (c["effect"] == e) return true;
+  return false;
 }
 
 class CliDiagnose : public ::testing::Test {
@@ -246,6 +260,11 @@ TEST(CliDiagnoseDriving, CleanDrivesNameNoEffectAtItsNull) {
         EXPECT_TRUE(c["p_likelihood_ratio"].is_null()) << c["effect"];
       }
       if (!c["significant"].get<bool>()) continue;
+      // A significant term in the mean fits all the data at least as well as the baseline it
+      // nests (up to the solver's slack).
+      if (meanTerm(c)) {
+        EXPECT_GT(likelihoodRatio(c), -1.0) << scene << " " << c["effect"];
+      }
       // A significant effect stands two standard errors clear of its null, and a mixed-pixel
       // fraction above the EM's floor.
       const double se = c["standard_error"].get<double>();
@@ -373,6 +392,44 @@ TEST(CliDiagnoseDriving, ALidarYawedOnARobotThatNeverStopsIsNamedFromItsOdometry
       EXPECT_NEAR(c["estimates"]["angle_offset_deg"].get<double>(), yaw_deg, 3.0 * se_deg) << "seed " << seed;
       EXPECT_FALSE(c["p_likelihood_ratio"].is_null());
       EXPECT_GT(c["heldout_gain_nats_per_point"].get<double>(), 0.0);
+    }
+  // Every significant term in the mean fits all the data at least as well as the baseline: one
+  // that did not (a drift of 0.26 mm over such a drive, 1.2 nats less likely than the baseline)
+  // had outgained the offset through its folds' other optima.
+  for (const auto& c : j["candidates"])
+    if (c["significant"].get<bool>() && meanTerm(c)) {
+      EXPECT_GT(likelihoodRatio(c), -1.0) << c["effect"];
+    }
+}
+
+TEST(CliDiagnoseDriving, ANoiseLawFlatterThanTheSquaredOneIsNamedOnThinPolesAtTheDefaultReplicas) {
+  // The noise grows as f(d)^k, k 0.5-1, instead of seed 004's f(d)^2, its scale matched to the
+  // squared law's at f(d) = 1.8 m, near where this drive sees its poles: over its readings the
+  // two laws differ by a factor of two at most. With 5 bootstrap replicas 4 of 20 such drives
+  // were named none (the statistic's p from a Student t of 4 degrees of freedom); with
+  // diagnose's default of 19, 1 of 20 (docs/RESULTS.md). The exponent and the simulator's seed
+  // come from a seed this test does not read.
+  TempDir dir;
+  auto rng = makeRng(20261128, 37);
+  const double k = std::uniform_real_distribution<double>(0.5, 1.0)(rng);
+  const int seed = std::uniform_int_distribution<int>(100, 100000)(rng);
+  const auto r = diagnoseThinPoleDrive(
+      dir.path(),
+      [&](nlohmann::json& s) {
+        const double sigma = s["sensor"]["noise"]["sigma_e"].get<double>() * std::pow(1.8, 2.0 - k);
+        s["sensor"]["noise"] = {{"kind", "power"}, {"sigma_e", sigma}, {"exponent", k}};
+      },
+      seed, 19);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.out, "range_noise_law\n") << "seed " << seed << ", k " << k;
+  const auto j = json(dir / "d/diagnosis.json");
+  for (const auto& c : j["candidates"])
+    if (c["effect"] == "range_noise_law") {
+      // Fitted near its size (0.97-1.19 for k 0.95-0.97 in the drives of docs/RESULTS.md), and
+      // clear of the squared law.
+      const double kappa = c["estimates"]["noise_exponent"].get<double>();
+      EXPECT_NEAR(kappa, k, 0.5) << "seed " << seed;
+      EXPECT_LT(kappa, 1.7) << "seed " << seed << ", k " << k;
     }
 }
 
