@@ -2169,13 +2169,8 @@ std::vector<HeldOutGain> SequenceDiagnosis::gainsBeside(const std::vector<std::s
   full.resize(effects.size());
   std::vector<JointConfig> both(effects.size());
   std::vector<JointInit> start(effects.size());
-  for (std::size_t k = 0; k < effects.size(); ++k) {
-    std::tie(both[k], start[k]) = beside(effects[k], under);
-    if (!from_under) continue;
-    both[k] = cfgs_[under];
-    both[k].effects.enable(candidates_[effects[k]]);
-    start[k] = initFrom(fits_[under]);
-  }
+  for (std::size_t k = 0; k < effects.size(); ++k)
+    std::tie(both[k], start[k]) = from_under ? beside(under, effects[k]) : beside(effects[k], under);
   const std::vector<int> fold = folds(obs_, config_.folds);
   std::vector<HeldOut> held(effects.size(), HeldOut(1));
   for (int f = 0; f < config_.folds; ++f) {
