@@ -24,6 +24,7 @@ struct SightingOptions {
 };
 
 /// Re-reads the scans (one at a time) to collect the readings of every associated detection.
+/// The sightings come by scan, and within a scan by landmark id, whatever the detector's order.
 LandmarkObservations toLandmarkObservations(const io::Sequence& seq, const detectors::SequenceDetections& det,
                                             const SightingOptions& options = {});
 

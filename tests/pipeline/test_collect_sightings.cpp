@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -53,6 +54,33 @@ TEST(CollectSightings, KeptInlierCoordinatesGiveTheSightingsOfASecondRead) {
       EXPECT_TRUE(a.beams[j].intensity == b.beams[j].intensity ||
                   (std::isnan(a.beams[j].intensity) && std::isnan(b.beams[j].intensity)));
     }
+  }
+}
+
+TEST(CollectSightings, TheSightingsOfAScanComeByLandmarkWhateverTheDetectorsOrder) {
+  const io::Sequence seq = io::openSequence(test::sourceDir() / "data/example/scans");
+  const detectors::SequenceDetections det = detectors::detectSequence(seq, detectors::SequenceDetectionConfig{});
+  detectors::SequenceDetections reversed = det;
+  std::size_t turned = 0;  // scans with two poles or more, whose detections now come the other way round
+  for (std::size_t i = 0; i < reversed.scans.size(); ++i) {
+    auto& d = reversed.scans[i].detections;
+    auto& ids = reversed.association.ids.at(i);
+    ASSERT_EQ(d.size(), ids.size());
+    std::reverse(d.begin(), d.end());
+    std::reverse(ids.begin(), ids.end());
+    turned += d.size() > 1 ? 1 : 0;
+  }
+  ASSERT_GT(turned, 0u);
+  const LandmarkObservations a = pipeline::toLandmarkObservations(seq, det);
+  const LandmarkObservations b = pipeline::toLandmarkObservations(seq, reversed);
+  ASSERT_EQ(a.sightings.size(), b.sightings.size());
+  for (std::size_t k = 0; k < a.sightings.size(); ++k) {
+    EXPECT_EQ(a.sightings[k].scan, b.sightings[k].scan);
+    EXPECT_EQ(a.sightings[k].landmark, b.sightings[k].landmark);
+    EXPECT_EQ(a.sightings[k].bearing_rad, b.sightings[k].bearing_rad);
+    ASSERT_EQ(a.sightings[k].beams.size(), b.sightings[k].beams.size());
+    for (std::size_t j = 0; j < a.sightings[k].beams.size(); ++j) EXPECT_EQ(a.sightings[k].beams[j].range_m, b.sightings[k].beams[j].range_m);
+    if (k > 0 && a.sightings[k].scan == a.sightings[k - 1].scan) EXPECT_LT(a.sightings[k - 1].landmark, a.sightings[k].landmark);
   }
 }
 
