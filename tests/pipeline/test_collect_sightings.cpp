@@ -80,7 +80,9 @@ TEST(CollectSightings, TheSightingsOfAScanComeByLandmarkWhateverTheDetectorsOrde
     EXPECT_EQ(a.sightings[k].bearing_rad, b.sightings[k].bearing_rad);
     ASSERT_EQ(a.sightings[k].beams.size(), b.sightings[k].beams.size());
     for (std::size_t j = 0; j < a.sightings[k].beams.size(); ++j) EXPECT_EQ(a.sightings[k].beams[j].range_m, b.sightings[k].beams[j].range_m);
-    if (k > 0 && a.sightings[k].scan == a.sightings[k - 1].scan) EXPECT_LT(a.sightings[k - 1].landmark, a.sightings[k].landmark);
+    if (k > 0 && a.sightings[k].scan == a.sightings[k - 1].scan) {
+      EXPECT_LT(a.sightings[k - 1].landmark, a.sightings[k].landmark);
+    }
   }
 }
 
