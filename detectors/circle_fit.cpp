@@ -371,9 +371,12 @@ CircleFit fitPoints(const std::vector<Eigen::Vector2d>& pts, const pcl::Indices&
     sel = std::move(again);
     fitSelection(pts, sel, centroid, ransac_model, cfg, out);
   }
-  out.inliers.reserve(sel.size());
-  for (auto k : sel) out.inliers.push_back(idx[k]);
-  std::sort(out.inliers.begin(), out.inliers.end());
+  // The inliers in the order of `idx`: a scan's cluster runs in beam order, continuing across the
+  // scan's end (beams n-1 | 0), so the first and last inliers are the arc's edges there too.
+  std::vector<std::size_t> along = sel;
+  std::sort(along.begin(), along.end());
+  out.inliers.reserve(along.size());
+  for (auto k : along) out.inliers.push_back(idx[k]);
 
   if (cfg.seen_from && concave(pts, sel, out.circle, *cfg.seen_from)) {
     out.status = FitStatus::wrong_side;

@@ -82,7 +82,7 @@ struct CircleFit {
   /// Standard deviation of the free radius per metre of point noise: sqrt((J^T J)^-1) of the
   /// radius at the solution (multiply by the noise level). Infinite when not determined.
   double free_radius_sensitivity = 0.0;
-  pcl::Indices inliers;  ///< indices (into the input cloud) of the points within the threshold
+  pcl::Indices inliers;  ///< indices (into the input cloud) of the points within the threshold, in the order of `indices`
   bool used_ransac = false;        ///< RANSAC chose the inliers (false: all points were used)
   bool refinement_rejected = false;  ///< the refined free fit left the limits; RANSAC's model kept
   int iterations = 0;    ///< iterations of the last geometric refinement

@@ -108,7 +108,9 @@ struct Detection {
   double free_rms_m = 0.0;       ///< free-radius fit: RMS, metres
   double free_radius_stddev_m = 0.0;  ///< free-radius fit: standard deviation of the radius, metres
   std::size_t cluster_points = 0;  ///< returns in the cluster
-  pcl::Indices inliers;      ///< points of the scan on the circle (ascending); their count is n_points
+  /// Points of the scan on the circle, in beam order along the arc: a pole across the scan's end
+  /// runs from the last beams on to the first ones, so front() and back() are its edges.
+  pcl::Indices inliers;
   /// The inliers' x, y (sensor frame, as read) and intensity, in the order of `inliers`; filled
   /// only where a sequence keeps its scans' detections (sequence_detector.hpp), so that the
   /// sightings need no second read of the scans.

@@ -114,6 +114,33 @@ TEST(DetectScan, PoleInFrontOfAWallIsFoundWhereItIs) {
   }
 }
 
+// A pole across the end of the scan (beams 359 | 0) is one arc in beam order like any other:
+// consecutive beams from one edge to the other, so that the first and last inliers are its
+// edges (the readings beside it, the mixed-pixel term and the edge readings depend on that).
+TEST(DetectScan, APoleAcrossTheEndOfTheScanRunsFromOneEdgeToTheOther) {
+  for (double bearing_deg : {-0.5, 0.0, 0.5, 37.0}) {  // beam 0 points at 0 degrees
+    SCOPED_TRACE(std::to_string(bearing_deg) + " deg");
+    Scene s = oneStop({0.0, 1.0}, 0.0);
+    addRoom(s);
+    s.landmarks.push_back({1.2 * std::cos(deg2rad(bearing_deg)), 1.2 * std::sin(deg2rad(bearing_deg)), 0.12});
+    DetectionConfig cfg;
+    cfg.landmark_radius_m = 0.12;
+    const ScanDetections d = detectScan(simulate(s, 1).scan, cfg);
+    ASSERT_EQ(d.detections.size(), 1u);
+    const pcl::Indices& in = d.detections[0].inliers;
+    ASSERT_GE(in.size(), 5u);
+    for (std::size_t k = 1; k < in.size(); ++k) EXPECT_EQ(in[k], (in[k - 1] + 1) % 360) << "inlier " << k;
+    // The edges are the beams farthest from the pole's bearing.
+    auto off = [&](int beam) { return std::abs(wrapAngle(deg2rad(beam) - d.detections[0].bearing_rad)); };
+    for (auto i : in) {
+      EXPECT_LE(off(i), std::max(off(in.front()), off(in.back())) + 1e-9);
+      if (i != in.front() && i != in.back()) {
+        EXPECT_LT(off(i), std::min(off(in.front()), off(in.back())));
+      }
+    }
+  }
+}
+
 // The lidar's range bias stretches the arc radially (f(d) = 0.0525 + 0.8838 d + 0.0584 d^2), but
 // symmetrically about the line of sight: the bearing to the fitted centre stays exact.
 TEST(DetectScan, BearingStaysAccurateUnderTheRangeBias) {
