@@ -39,8 +39,8 @@ LandmarkObservations toLandmarkObservations(const io::Sequence& seq, const detec
 /// points out extended to this beam (the nearer of that line and the next point's reading). The
 /// four points must be evenly spaced in angle (within a quarter of a step), so a cloud without
 /// its missing returns is judged right too. A clean scan puts almost no reading there: a beam
-/// past the pole reads the background, one on it reads the pole. (A pole across a full scan's
-/// first beam gets no candidate: its inliers' first and last indices are not its edges.)
+/// past the pole reads the background, one on it reads the pole. A pole across a full scan's seam
+/// is looked beside too: its inliers run along the arc (n-2, n-1, 0, 1), so their ends are its edges.
 std::optional<BeamReading> readingBetweenPoleAndBackground(const io::Scan& scan, int edge, int step, double radius_m,
                                                            const detectors::DetectionConfig& config);
 
