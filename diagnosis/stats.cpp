@@ -113,6 +113,10 @@ double likelihoodRatioPValue(double statistic, int parameters) {
   return std::erfc(std::sqrt(statistic / 2.0));  // P(chi2_1 > s) = P(|N(0,1)| > sqrt(s))
 }
 
+double boundedLikelihoodRatioPValue(double statistic) {
+  return statistic > 0.0 ? 0.5 * likelihoodRatioPValue(statistic, 1) : 1.0;
+}
+
 std::vector<double> holmAdjust(const std::vector<double>& p) {
   std::vector<std::size_t> idx;
   for (std::size_t i = 0; i < p.size(); ++i)

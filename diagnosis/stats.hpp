@@ -80,6 +80,12 @@ double combinedPValue(double p_heldout, double p_score, double p_lr);
 /// at or below 0 gives 1.
 double likelihoodRatioPValue(double statistic, int parameters);
 
+/// p-value of a likelihood-ratio statistic for one parameter whose null lies on the bound of its
+/// range (a noise exponent that cannot fall below 0): under the null the estimate sits on the
+/// bound half the time, so the statistic is 0 or chi-square with one degree of freedom, half and
+/// half (Self and Liang 1987): half likelihoodRatioPValue's; 1 at or below 0.
+double boundedLikelihoodRatioPValue(double statistic);
+
 /// What a discrepancy statistic is, for the battery table.
 struct StatisticInfo {
   const char* name;         ///< e.g. "spread_vs_incidence"

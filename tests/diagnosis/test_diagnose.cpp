@@ -112,6 +112,11 @@ TEST(DiagnoseStats, LikelihoodRatioAndCombinedPValues) {
   EXPECT_NEAR(likelihoodRatioPValue(6.634897, 1), 0.01, 1e-6);
   EXPECT_EQ(likelihoodRatioPValue(-0.5, 1), 1.0);
   EXPECT_TRUE(std::isnan(likelihoodRatioPValue(10.0, 3)));  // one parameter only
+  // On the bound of its range the null is half 0, half chi-square: its 5 % and 1 % points are
+  // chi-square's 10 % and 2 % points.
+  EXPECT_NEAR(boundedLikelihoodRatioPValue(2.705543), 0.05, 1e-6);
+  EXPECT_NEAR(boundedLikelihoodRatioPValue(5.411894), 0.01, 1e-6);
+  EXPECT_EQ(boundedLikelihoodRatioPValue(0.0), 1.0);
   // Bonferroni over the tests that apply.
   EXPECT_NEAR(combinedPValue(0.2, 0.01, 0.003), 0.009, 1e-15);
   EXPECT_NEAR(combinedPValue(0.2, 0.01, std::nan("")), 0.02, 1e-15);
