@@ -85,12 +85,14 @@ struct Discrepancy {
 struct CandidateResult {
   Effect effect = Effect::incidence_noise;  ///< the effect tested
   /// p-value of the effect: m min(p of the held-out gain, p of the score statistic aimed at it,
-  /// p of the likelihood ratio where it applies) over the m tests that apply (Bonferroni). NaN
-  /// when none applies.
+  /// p of the likelihood ratio where it applies) over the m tests that apply (Bonferroni); a
+  /// continuous recording's path term: its likelihood ratio's alone. NaN when none applies.
   double p_value = 1.0;
   double p_heldout = 1.0;                 ///< one-sided p of the held-out gain over its standard error (normal)
   /// Sequence mode, one-parameter effects: p of the likelihood ratio on all the data (chi-square,
-  /// 1 degree of freedom); NaN otherwise.
+  /// 1 degree of freedom); on a continuous recording the path terms' only, and the noise
+  /// exponents' restricted ratio over the poses (half chi-square: the null on the bound); NaN
+  /// otherwise.
   double p_likelihood_ratio = std::numeric_limits<double>::quiet_NaN();
   double p_holm = 1.0;                    ///< Holm-adjusted across the candidates with a p-value
   std::string statistic;                  ///< the battery's score statistic aimed at this effect

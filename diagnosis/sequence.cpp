@@ -2131,7 +2131,7 @@ CandidateResult SequenceDiagnosis::candidate(std::size_t c, const HeldOut& held,
   // In-sample evidence too, for one-parameter effects: where the baseline's parameters absorb
   // most of an effect (a constant bearing rotation moves the poles) the held-out gain is small
   // while the likelihood ratio on all the data is not. Naming still needs a positive held-out gain.
-  // Under the motion prior for the path terms alone: the ratio is chi-squared only when both
+  // Under the motion prior the ratio of two fits for the path terms alone: it is chi-squared only when both
   // fits reach their best optimum, which a pose per scan does not ensure (settleBaseline found
   // 1,780 nats between two optima of one model); on clean simulated drives it called incidence
   // biases of 0.6 mm significant (p 1e-17 to 1e-20) whose held-out gains were not
@@ -2144,10 +2144,11 @@ CandidateResult SequenceDiagnosis::candidate(std::size_t c, const HeldOut& held,
   // with a hidden incidence exponent of 1.06 and 1.26, fitted at 0.54 and 0.81 with standard
   // errors of 0.03, the held-out gains (+0.014 +- 0.006, +0.019 +- 0.010) alone left them `none`.
   // A path term is judged by its ratio alone: the held-out steps see half of what it sees, and
-  // three tests of one piece of evidence, Bonferroni-combined, needed 4.2 standard errors of an
-  // offset (0.55 degrees each) where the ratio and the estimate's z (requireClearOfNull) agree
-  // at 3.5: offsets of 2.2-2.3 degrees were estimated at 1.9-2.0 and left `none` at Holm p 0.011
-  // and 0.022. The held-out gain must still be positive to name either.
+  // three tests of one piece of evidence, Bonferroni-combined and then Holm-adjusted over 8
+  // candidates, asked the ratio for p < 0.01 / 24 (z 3.5) where alone it needs 0.01 / 8 (z 3.2):
+  // offsets of 2.2-2.3 degrees, estimated at 1.9-2.0 (z 3.3-3.5 with standard errors of 0.55),
+  // were left `none` at Holm p 0.011 and 0.022. The held-out gain must still be positive to name
+  // either, and the estimate's own z still bounds p (requireClearOfNull).
   const bool ratio = !fit0_.motion_prior || pathTerm(r.effect);
   const bool shape_ratio = fit0_.motion_prior && restrictedShape(r.effect) && c < shape_ratio_.size() &&
                            std::isfinite(shape_ratio_[c]);
