@@ -2150,8 +2150,7 @@ CandidateResult SequenceDiagnosis::candidate(std::size_t c, const HeldOut& held,
   // were left `none` at Holm p 0.011 and 0.022. The held-out gain must still be positive to name
   // either, and the estimate's own z still bounds p (requireClearOfNull).
   const bool ratio = !fit0_.motion_prior || pathTerm(r.effect);
-  const bool shape_ratio = fit0_.motion_prior && restrictedShape(r.effect) && c < shape_ratio_.size() &&
-                           std::isfinite(shape_ratio_[c]);
+  const bool shape_ratio = fit0_.motion_prior && restrictedShape(r.effect) && std::isfinite(shape_ratio_[c]);
   r.p_likelihood_ratio = rounded       ? kNaN
                          : ratio       ? likelihoodRatioPValue(lr, r.parameters)
                          : shape_ratio ? boundedLikelihoodRatioPValue(shape_ratio_[c])

@@ -21,6 +21,26 @@
 namespace lidarcal {
 namespace {
 
+/// The same sightings in the same order: scan, landmark and every reading (intensity as
+/// recorded, or NaN, none, on both sides).
+void expectSameSightings(const LandmarkObservations& x, const LandmarkObservations& y) {
+  ASSERT_EQ(x.sightings.size(), y.sightings.size());
+  for (std::size_t k = 0; k < x.sightings.size(); ++k) {
+    const auto& a = x.sightings[k];
+    const auto& b = y.sightings[k];
+    EXPECT_EQ(a.scan, b.scan);
+    EXPECT_EQ(a.landmark, b.landmark);
+    ASSERT_EQ(a.beams.size(), b.beams.size());
+    for (std::size_t j = 0; j < a.beams.size(); ++j) {
+      EXPECT_EQ(a.beams[j].angle_rad, b.beams[j].angle_rad);
+      EXPECT_EQ(a.beams[j].range_m, b.beams[j].range_m);
+      EXPECT_EQ(a.beams[j].beam, b.beams[j].beam);
+      EXPECT_TRUE(a.beams[j].intensity == b.beams[j].intensity ||
+                  (std::isnan(a.beams[j].intensity) && std::isnan(b.beams[j].intensity)));
+    }
+  }
+}
+
 TEST(CollectSightings, KeptInlierCoordinatesGiveTheSightingsOfASecondRead) {
   const io::Sequence seq = io::openSequence(test::sourceDir() / "data/example/scans");
   const detectors::SequenceDetections kept = detectors::detectSequence(seq, detectors::SequenceDetectionConfig{});
@@ -39,22 +59,7 @@ TEST(CollectSightings, KeptInlierCoordinatesGiveTheSightingsOfASecondRead) {
   EXPECT_GT(reads, 0u);
 
   ASSERT_FALSE(from_kept.sightings.empty());
-  ASSERT_EQ(from_kept.sightings.size(), from_files.sightings.size());
-  for (std::size_t k = 0; k < from_kept.sightings.size(); ++k) {
-    const auto& a = from_kept.sightings[k];
-    const auto& b = from_files.sightings[k];
-    EXPECT_EQ(a.scan, b.scan);
-    EXPECT_EQ(a.landmark, b.landmark);
-    ASSERT_EQ(a.beams.size(), b.beams.size());
-    for (std::size_t j = 0; j < a.beams.size(); ++j) {
-      EXPECT_EQ(a.beams[j].angle_rad, b.beams[j].angle_rad);
-      EXPECT_EQ(a.beams[j].range_m, b.beams[j].range_m);
-      EXPECT_EQ(a.beams[j].beam, b.beams[j].beam);
-      // Intensity as recorded, or NaN (none) on both sides.
-      EXPECT_TRUE(a.beams[j].intensity == b.beams[j].intensity ||
-                  (std::isnan(a.beams[j].intensity) && std::isnan(b.beams[j].intensity)));
-    }
-  }
+  expectSameSightings(from_kept, from_files);
 }
 
 TEST(CollectSightings, TheSightingsOfAScanComeByLandmarkWhateverTheDetectorsOrder) {
@@ -73,13 +78,10 @@ TEST(CollectSightings, TheSightingsOfAScanComeByLandmarkWhateverTheDetectorsOrde
   ASSERT_GT(turned, 0u);
   const LandmarkObservations a = pipeline::toLandmarkObservations(seq, det);
   const LandmarkObservations b = pipeline::toLandmarkObservations(seq, reversed);
+  expectSameSightings(a, b);
   ASSERT_EQ(a.sightings.size(), b.sightings.size());
   for (std::size_t k = 0; k < a.sightings.size(); ++k) {
-    EXPECT_EQ(a.sightings[k].scan, b.sightings[k].scan);
-    EXPECT_EQ(a.sightings[k].landmark, b.sightings[k].landmark);
     EXPECT_EQ(a.sightings[k].bearing_rad, b.sightings[k].bearing_rad);
-    ASSERT_EQ(a.sightings[k].beams.size(), b.sightings[k].beams.size());
-    for (std::size_t j = 0; j < a.sightings[k].beams.size(); ++j) EXPECT_EQ(a.sightings[k].beams[j].range_m, b.sightings[k].beams[j].range_m);
     if (k > 0 && a.sightings[k].scan == a.sightings[k - 1].scan) {
       EXPECT_LT(a.sightings[k - 1].landmark, a.sightings[k].landmark);
     }
