@@ -161,8 +161,14 @@ struct ScaledPosePriorCost {
   }
 };
 
-/// Motion prior between consecutive stops a -> b: the step from a to b in a's frame against
-/// the commanded step (dx, dy, dpsi), its translation scaled by (1 + s) (odometry scale).
+/// Motion prior between consecutive stops a -> b: the commanded step (dx, dy, dpsi) against the
+/// step from a to b in a's frame, its translation divided by 1 + s (odometry scale): the odometry
+/// reports the true step shrunk by 1 + s plus its noise, so the residual is taken where the noise
+/// is, on the commanded side. Scaling the commanded step instead (fitted - (1 + s) commanded)
+/// regresses the true steps on noisy ones and dilutes the scale: a clean thin-pole drive's
+/// odometry (3 mm per coordinate on 3 cm steps) gave s = -2 sigma^2 / L^2 = -2 %, named as a step
+/// error on 3 of 16 clean drives once the odometry's noise was fitted (RESULTS, session 23).
+/// With s = 0 both are the same.
 struct MotionPriorCost {
   double dx, dy, dpsi, inv_t, inv_psi;
   template <typename T>
@@ -172,8 +178,8 @@ struct MotionPriorCost {
     const T c = cos(a[2]), s = sin(a[2]);
     const T ex = b[0] - a[0], ey = b[1] - a[1];
     const T f = T(1) + scale[0];
-    residual[0] = (c * ex + s * ey - f * T(dx)) * T(inv_t);
-    residual[1] = (c * ey - s * ex - f * T(dy)) * T(inv_t);
+    residual[0] = ((c * ex + s * ey) / f - T(dx)) * T(inv_t);
+    residual[1] = ((c * ey - s * ex) / f - T(dy)) * T(inv_t);
     // Like the pose prior: dpsi is unwrapped next to the estimate when the residual is built.
     residual[2] = (b[2] - a[2] - T(dpsi)) * T(inv_psi);
     return true;
@@ -183,8 +189,10 @@ struct MotionPriorCost {
 /// MotionPriorCost with its derivatives written out (on long pose chains the automatic ones
 /// were a sixth of `calibrate`'s time). With c, s the cosine and sine of a's heading and
 /// (ex, ey) = b - a in the world frame, the step seen from a is (c ex + s ey, c ey - s ex):
-///   d/d(a0, a1, a2) of r0 = (-c, -s, c ey - s ex) inv_t,  of r1 = (s, -c, -(c ex + s ey)) inv_t,
-///   d/d(b0, b1) of r0 = (c, s) inv_t,  of r1 = (-s, c) inv_t,  d/d(scale) = (-dx, -dy) inv_t,
+/// r0 = (along / f - dx) inv_t, r1 = (across / f - dy) inv_t with f = 1 + scale:
+///   d/d(a0, a1, a2) of r0 = (-c, -s, c ey - s ex) inv_t / f,  of r1 = (s, -c, -(c ex + s ey)) inv_t / f,
+///   d/d(b0, b1) of r0 = (c, s) inv_t / f,  of r1 = (-s, c) inv_t / f,
+///   d/d(scale) = (-along, -across) inv_t / f^2,
 /// and r2 = (b2 - a2 - dpsi) inv_psi moves with the headings alone.
 class MotionPriorAnalyticCost final : public ceres::SizedCostFunction<3, 3, 3, 1> {
  public:
@@ -197,11 +205,11 @@ class MotionPriorAnalyticCost final : public ceres::SizedCostFunction<3, 3, 3, 1
     const double c = std::cos(a[2]), s = std::sin(a[2]);
     const double ex = b[0] - a[0], ey = b[1] - a[1];
     const double along = c * ex + s * ey, across = c * ey - s * ex;
-    residuals[0] = (along - f * c_.dx) * c_.inv_t;
-    residuals[1] = (across - f * c_.dy) * c_.inv_t;
+    residuals[0] = (along / f - c_.dx) * c_.inv_t;
+    residuals[1] = (across / f - c_.dy) * c_.inv_t;
     residuals[2] = (b[2] - a[2] - c_.dpsi) * c_.inv_psi;
     if (jacobians == nullptr) return true;
-    const double t = c_.inv_t, p = c_.inv_psi;
+    const double t = c_.inv_t / f, p = c_.inv_psi;
     if (double* j = jacobians[0]) {  // rows r0, r1, r2; columns a0, a1, a2
       j[0] = -c * t, j[1] = -s * t, j[2] = across * t;
       j[3] = s * t, j[4] = -c * t, j[5] = -along * t;
@@ -213,8 +221,8 @@ class MotionPriorAnalyticCost final : public ceres::SizedCostFunction<3, 3, 3, 1
       j[6] = 0.0, j[7] = 0.0, j[8] = p;
     }
     if (double* j = jacobians[2]) {
-      j[0] = -c_.dx * t;
-      j[1] = -c_.dy * t;
+      j[0] = -along * t / f;
+      j[1] = -across * t / f;
       j[2] = 0.0;
     }
     return true;

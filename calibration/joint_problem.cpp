@@ -769,7 +769,7 @@ void JointProblem::reportPriorLikelihood() {
     if (motion_ && k > 0) {
       const Pose2 step = stepBetween(obs_.commanded[k - 1], obs_.commanded[k]);
       const Pose2 est = stepBetween(out_.poses[k - 1], out_.poses[k]);
-      add(est.x_m - (1.0 + s) * step.x_m, est.y_m - (1.0 + s) * step.y_m,
+      add(est.x_m / (1.0 + s) - step.x_m, est.y_m / (1.0 + s) - step.y_m,  // where the noise is (MotionPriorCost)
           config_.motion_sigma_fraction * std::hypot(step.x_m, step.y_m) + config_.motion_sigma_floor_m);
       continue;
     }

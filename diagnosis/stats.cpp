@@ -12,6 +12,7 @@
 #include <boost/math/distributions/students_t.hpp>
 
 #include "common/pose2.hpp"
+#include "common/range_effects.hpp"
 
 namespace lidarcal::diagnosis {
 
@@ -248,14 +249,20 @@ std::string nameCause(std::vector<CandidateResult>& cands, double alpha, std::st
   return toString(cands[chosen].effect);
 }
 
-DistanceMoments poleDistanceMoments(double along, double perp, const Eigen::Matrix2d& v, double r) {
+DistanceMoments poleDistanceMoments(double along, double perp, const Eigen::Matrix2d& v, double r, double root_extra) {
+  // The root's extra share: root_extra r cos(phi), cos(phi) = q / r clamped as the model clamps it.
+  const auto extra = [&](double q) { return root_extra == 0.0 ? 0.0 : root_extra * r * clampCosIncidence(q / r); };
   const double sp = std::sqrt(std::max(v(1, 1), 0.0));
   if (std::abs(perp) < r && r - std::abs(perp) > 6.0 * sp) {
     const double q = std::sqrt(r * r - perp * perp);
-    const Eigen::Vector2d g(1.0, perp / q);  // d(distance) / d(along, perp)
-    return {along - q + 0.5 * v(1, 1) * r * r / (q * q * q), g.dot(v * g)};  // the root's curvature in the mean
+    const double k = q > 0.05 * r ? 1.0 + root_extra : 1.0;  // the clamped cosine is flat in perp
+    const Eigen::Vector2d g(1.0, k * perp / q);  // d(along - q - extra) / d(along, perp)
+    return {along - q - extra(q) + 0.5 * k * v(1, 1) * r * r / (q * q * q), g.dot(v * g)};  // the root's curvature in the mean
   }
-  if (!(sp > 0.0)) return {along - std::sqrt(std::max(r * r - perp * perp, 0.0)), 0.0};
+  if (!(sp > 0.0)) {
+    const double q = std::sqrt(std::max(r * r - perp * perp, 0.0));
+    return {along - q - extra(q), 0.0};
+  }
   double lo = std::max(-r, perp - 8.0 * sp), hi = std::min(r, perp + 8.0 * sp);
   if (!(lo < hi)) {  // far past the tangent: the normal's tail inside, falling at (|perp| - r) / sp^2
     const double width = std::min(2.0 * r, 10.0 * sp * sp / (std::abs(perp) - r));
@@ -269,9 +276,9 @@ DistanceMoments poleDistanceMoments(double along, double perp, const Eigen::Matr
   std::array<double, kPoints> logw{}, d{};
   for (std::size_t k = 0; k < kPoints; ++k) {
     const double t = t0 + (t1 - t0) * (static_cast<double>(k) + 0.5) / static_cast<double>(kPoints);
-    const double x = r * std::sin(t), u = (x - perp) / sp;
+    const double x = r * std::sin(t), u = (x - perp) / sp, q = r * std::cos(t);
     logw[k] = -0.5 * u * u + std::log(std::cos(t));
-    d[k] = along + beta * (x - perp) - r * std::cos(t);
+    d[k] = along + beta * (x - perp) - q - extra(q);
   }
   const double top = *std::max_element(logw.begin(), logw.end());
   double sw = 0.0, m = 0.0, m2 = 0.0;

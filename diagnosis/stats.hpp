@@ -47,10 +47,15 @@ double blockTridiagonalLogDet(const std::vector<Eigen::Matrix3d>& diagonal, cons
 /// serve; otherwise the root is averaged over perp's truncated normal (64 midpoints in t, with
 /// perp = r sin t), along following perp by regression.
 /// A miss distance past the tangent with no spread: mean `along`, variance 0.
+/// root_extra = c > 0: the moments of along - sqrt(r^2 - perp^2) - c r cos(phi) instead, cos(phi) =
+/// sqrt(r^2 - perp^2) / r clamped (clampCosIncidence): a reading with an incidence bias b reads
+/// f(d) + b (1 - cos phi), which moves with perp as the distance does scaled by 1 + b / (r f'(d)),
+/// so c = b / (r f'(d)). On a thin pole (r 2.75 cm, b 3.3 cm) that more than doubles the spread
+/// a held-out reading has from its scan's pose (RESULTS, session 23).
 struct DistanceMoments {
   double mean = 0.0, var = 0.0;
 };
-DistanceMoments poleDistanceMoments(double along, double perp, const Eigen::Matrix2d& v, double r);
+DistanceMoments poleDistanceMoments(double along, double perp, const Eigen::Matrix2d& v, double r, double root_extra = 0.0);
 
 /// Leave-one-out log-density of one block of a (locally) linear Gaussian model, from the fit on
 /// every block: r the block's residual at that fit and S = J C J^T its leverage (J its rows,

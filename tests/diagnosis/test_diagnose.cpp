@@ -217,12 +217,12 @@ TEST(DiagnoseStats, LeaveOneOutLogDensityMatchesTheRefitWithoutTheBlock) {
   EXPECT_TRUE(std::isnan(diagnosis::leaveOneOutLogDensity(Eigen::Vector3d(1.0, 0.0, 0.0), Eigen::Matrix3d::Identity())));
 }
 
-TEST(DiagnoseStats, PoleDistanceMomentsMatchSampledHits) {
-  // The distance along a beam to a pole of radius 2.75 cm when the ray's closest approach and
-  // miss distance are uncertain (correlated normals), over the draws whose beam hits the pole,
-  // against the moments: far inside the tangent, near it, at it and past it (the fit's miss
-  // distance outside the pole while the reading came from it).
-  constexpr double r = 0.0275;
+namespace {
+/// poleDistanceMoments(1.2, perp, v, r, extra) against the sampled moments of
+/// along - q - extra r cos(phi) over the draws whose beam hits the pole (q = sqrt(r^2 - perp^2),
+/// cos(phi) = q / r clamped as the model clamps it), for miss distances far inside the tangent,
+/// near it, at it and past it (the fit's miss distance outside the pole while the reading came from it).
+void expectPoleMomentsMatchSamples(double r, double extra) {
   std::mt19937_64 rng(11);
   std::normal_distribution<double> n01(0.0, 1.0);
   for (const double perp : {0.0, 0.015, 0.024, 0.0275, 0.029, -0.031}) {
@@ -234,7 +234,8 @@ TEST(DiagnoseStats, PoleDistanceMomentsMatchSampledHits) {
       for (int k = 0; k < 400000; ++k) {
         const Eigen::Vector2d x = Eigen::Vector2d(1.2, perp) + l * Eigen::Vector2d(n01(rng), n01(rng));
         if (std::abs(x(1)) >= r) continue;
-        const double d = x(0) - std::sqrt(r * r - x(1) * x(1));
+        const double q = std::sqrt(r * r - x(1) * x(1));
+        const double d = x(0) - q - extra * r * std::max(q / r, 0.05);
         n += 1.0;
         m += d;
         m2 += d * d;
@@ -242,15 +243,39 @@ TEST(DiagnoseStats, PoleDistanceMomentsMatchSampledHits) {
       if (n < 2000.0) continue;  // too few hits to check against
       m /= n;
       const double var = m2 / n - m * m;
-      const auto got = diagnosis::poleDistanceMoments(1.2, perp, v, r);
+      const auto got = diagnosis::poleDistanceMoments(1.2, perp, v, r, extra);
       const double se_mean = std::sqrt(var / n);
-      EXPECT_NEAR(got.mean, m, 5.0 * se_mean + 2e-5) << "perp " << perp << " sd " << sp;
-      EXPECT_NEAR(got.var, var, 0.05 * var) << "perp " << perp << " sd " << sp;
+      EXPECT_NEAR(got.mean, m, 5.0 * se_mean + 2e-5) << "perp " << perp << " sd " << sp << " extra " << extra;
+      EXPECT_NEAR(got.var, var, 0.05 * var) << "perp " << perp << " sd " << sp << " extra " << extra;
     }
   }
+}
+}  // namespace
+
+TEST(DiagnoseStats, PoleDistanceMomentsMatchSampledHits) {
+  // The distance along a beam to a pole of radius 2.75 cm when the ray's closest approach and
+  // miss distance are uncertain (correlated normals).
+  constexpr double r = 0.0275;
+  expectPoleMomentsMatchSamples(r, 0.0);
   // No spread at all: the ray's own distance (its closest approach when it misses).
   EXPECT_DOUBLE_EQ(diagnosis::poleDistanceMoments(1.0, 0.03, Eigen::Matrix2d::Zero(), r).mean, 1.0);
   EXPECT_DOUBLE_EQ(diagnosis::poleDistanceMoments(1.0, 0.0, Eigen::Matrix2d::Zero(), r).mean, 1.0 - r);
+}
+
+TEST(DiagnoseStats, PoleReadingMomentsWithAnIncidenceBiasMatchSampledHits) {
+  // A reading with an incidence bias b moves with the miss distance as along - (1 + b / r) q:
+  // b 3.3 cm on r 2.75 cm, and a small b; the sampled moments the test computes itself.
+  constexpr double r = 0.0275;
+  expectPoleMomentsMatchSamples(r, 0.033 / r);
+  expectPoleMomentsMatchSamples(r, 0.004 / r);
+  // The extra root's variance: far inside the tangent, to first order (1 + c)^2 times the distance's.
+  Eigen::Matrix2d v;
+  v << 0.0, 0.0, 0.0, 1e-8;
+  const double plain = diagnosis::poleDistanceMoments(1.0, 0.01, v, r).var;
+  EXPECT_NEAR(diagnosis::poleDistanceMoments(1.0, 0.01, v, r, 1.2).var, 2.2 * 2.2 * plain, 1e-6 * plain);
+  // With no spread: the root and its extra share at the given miss distance.
+  const double q = std::sqrt(r * r - 0.01 * 0.01);
+  EXPECT_NEAR(diagnosis::poleDistanceMoments(1.0, 0.01, Eigen::Matrix2d::Zero(), r, 1.2).mean, 1.0 - q - 1.2 * q, 1e-12);
 }
 
 TEST(DiagnoseStats, KolmogorovSmirnovDistance) {
