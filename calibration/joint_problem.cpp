@@ -476,6 +476,7 @@ void JointProblem::addPosePriors(ceres::Problem& problem) {
     if (!fx_.estimate_heading && problem.HasParameterBlock(poses_[k]))
       problem.SetManifold(poses_[k], new ceres::SubsetManifold(3, {2}));
   }
+  boundStepScale(problem);
 }
 
 /// Offsets: the first landmark is the reference (its offset is alpha_0's); others free when on.
@@ -756,6 +757,16 @@ void JointProblem::reportEstimates() {
   out_.pose_scatter_m = std::sqrt(ps / (2.0 * static_cast<double>(poses_.size())));
   out_.heading_scatter_rad = std::sqrt(hs / static_cast<double>(poses_.size()));
   for (const auto& [id, c] : centres_) out_.centres[id] = Eigen::Vector2d(c[0], c[1]);
+}
+
+/// A fitted step scale stays within +-kMaxStepScale: odometry that misjudges its steps by half
+/// is broken, not miscalibrated. Unbounded, an incidence bias hidden in a thin-pole drive drew
+/// the scale to -0.99 (the path shrunk to a point, its misfit in the steps), which out-gained the
+/// bias itself held out (RESULTS, session 23).
+void JointProblem::boundStepScale(ceres::Problem& problem) const {
+  if (!fx_.odometry_scale || !problem.HasParameterBlock(scale_) || problem.IsParameterBlockConstant(scale_)) return;
+  problem.SetParameterLowerBound(scale_, 0, -kMaxStepScale);
+  problem.SetParameterUpperBound(scale_, 0, kMaxStepScale);
 }
 
 /// NLL of the commanded positions (or steps, with the motion prior) given the refined poses.

@@ -80,6 +80,8 @@ class JointProblem {
   // summarise
   void reportEstimates();
   void reportPriorLikelihood();
+  void boundStepScale(ceres::Problem& problem) const;
+  static constexpr double kMaxStepScale = 0.5;
   void reportEffects();
   void reportLikelihood();
   void reportBearingResiduals();
