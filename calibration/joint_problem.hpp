@@ -81,7 +81,6 @@ class JointProblem {
   void reportEstimates();
   void reportPriorLikelihood();
   void boundStepScale(ceres::Problem& problem) const;
-  static constexpr double kMaxStepScale = 0.5;
   void reportEffects();
   void reportLikelihood();
   void reportBearingResiduals();

@@ -33,6 +33,11 @@
 
 namespace lidarcal::calibration {
 
+/// The largest step scale |s| a fit takes (JointEffects::odometry_scale): odometry that misjudges
+/// its steps by half is broken, not miscalibrated (JointProblem bounds it; diagnose does not name
+/// a scale at the bound).
+constexpr double kMaxStepScale = 0.5;
+
 /// Effect terms beyond the seeds' model. Defaults: the refinement as it always was.
 struct JointEffects {
   bool estimate_heading = true;   ///< per-stop heading free with prior sigma_psi_rad; false: held at the commanded one

@@ -2203,8 +2203,16 @@ JointResult SequenceDiagnosis::withCorrectedShape(const LandmarkObservations& ob
 /// ratio, below -2 kNestedSlackNats) is not at its optimum.
 constexpr double kNestedSlackNats = 0.5;
 void SequenceDiagnosis::requireClearOfNull(CandidateResult& r, const JointResult& fc, double lr) const {
-  if (!fit0_.motion_prior || !std::isfinite(r.p_value)) return;
   auto say = [&r](const std::string& why) { r.note += (r.note.empty() ? "" : "; ") + why; };
+  // A step scale at its bound is no odometry's: on thin-pole drives with a hidden incidence bias
+  // the scale ran to -0.5 (unbounded -0.92 to -0.99, the path shrunk towards a point) and its
+  // held-out gain outgrew the bias's (RESULTS, session 23).
+  if (r.effect == Effect::odometry_scale && std::isfinite(r.p_value) &&
+      std::abs(fc.effects.odometry_scale) >= kMaxStepScale * (1.0 - 1e-6)) {
+    r.p_value = 1.0;
+    say("its estimate ran to the bound (+-0.5): a path bent by another effect, not a step scale");
+  }
+  if (!fit0_.motion_prior || !std::isfinite(r.p_value)) return;
   if (r.standard_error > 0.0) {
     const double z = effectSize(r.effect, fc) / r.standard_error;
     const double p_estimate = std::erfc(z / std::sqrt(2.0));
