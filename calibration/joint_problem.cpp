@@ -460,8 +460,7 @@ void JointProblem::addPosePriors(ceres::Problem& problem) {
       problem.AddResidualBlock(
           new MotionPriorAnalyticCost(MotionPriorCost{
               step.x_m, step.y_m, now + wrapAngle(step.yaw_rad - now),
-              1.0 / (config_.motion_sigma_fraction * len + config_.motion_sigma_floor_m),
-              1.0 / (config_.motion_heading_sigma_rad_per_m * len + config_.motion_heading_floor_rad)}),
+              1.0 / config_.motionStepSigma(len), 1.0 / config_.motionHeadingSigma(len)}),
           nullptr, poses_[k - 1], poses_[k], scale_);
       if (!fx_.odometry_scale) problem.SetParameterBlockConstant(scale_);
     } else if (fx_.odometry_scale) {
@@ -781,7 +780,7 @@ void JointProblem::reportPriorLikelihood() {
       const Pose2 step = stepBetween(obs_.commanded[k - 1], obs_.commanded[k]);
       const Pose2 est = stepBetween(out_.poses[k - 1], out_.poses[k]);
       add(est.x_m / (1.0 + s) - step.x_m, est.y_m / (1.0 + s) - step.y_m,  // where the noise is (MotionPriorCost)
-          config_.motion_sigma_fraction * std::hypot(step.x_m, step.y_m) + config_.motion_sigma_floor_m);
+          config_.motionStepSigma(std::hypot(step.x_m, step.y_m)));
       continue;
     }
     add(poses_[k][0] - (c0.x_m + (1.0 + s) * (obs_.commanded[k].x_m - c0.x_m)),

@@ -168,6 +168,10 @@ struct JointConfig {
   double motion_sigma_floor_m = 0.002;           ///< plus this, metres. Default 0.002
   double motion_heading_sigma_rad_per_m = 0.1;   ///< std. dev. of the heading change per metre of step, rad/m. Default 0.1 (5.7 deg/m)
   double motion_heading_floor_rad = 0.002;       ///< plus this, radians. Default 0.002 (0.11 deg)
+  /// The motion prior's std. dev. of each coordinate of a step of length `len`, metres.
+  double motionStepSigma(double len) const { return motion_sigma_fraction * len + motion_sigma_floor_m; }
+  /// The motion prior's std. dev. of the heading change over a step of length `len`, radians.
+  double motionHeadingSigma(double len) const { return motion_heading_sigma_rad_per_m * len + motion_heading_floor_rad; }
   /// automatic: the fewest stops a continuous sequence has (below, stop and go is assumed).
   /// Default 20.
   int motion_min_stops = 20;

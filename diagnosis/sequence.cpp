@@ -210,8 +210,8 @@ OdometryStep odometryStep(const LandmarkObservations& obs, const JointResult& fi
   for (std::size_t k = a + 1; k <= b; ++k) {  // the steps' variances add up over a run of them
     const Pose2 one = stepBetween(obs.commanded[k - 1], obs.commanded[k]);
     const double len = std::hypot(one.x_m, one.y_m);
-    sd_t = std::hypot(sd_t, cfg.motion_sigma_fraction * len + cfg.motion_sigma_floor_m);
-    sd_h = std::hypot(sd_h, cfg.motion_heading_sigma_rad_per_m * len + cfg.motion_heading_floor_rad);
+    sd_t = std::hypot(sd_t, cfg.motionStepSigma(len));
+    sd_h = std::hypot(sd_h, cfg.motionHeadingSigma(len));
   }
   const double t = 1.0 / sd_t, h = 1.0 / sd_h;
   const Pose2 &pa = fit.poses[a], &pb = fit.poses[b];
@@ -398,25 +398,38 @@ double restrictedShapeEstimate(const LandmarkObservations& obs, const JointResul
 /// kLocatingReadings each: a pose is three numbers): between such poses the step is odometry
 /// predicting odometry, and its linearised leave-one-out hangs on second-order terms.
 constexpr int kLocatingReadings = 3;
-std::vector<double> stepHeldOut(const LandmarkObservations& obs, const JointResult& fit, const JointConfig& cfg) {
+
+/// Calls fn(k, step, S) for each odometry step k - 1 -> k of a fit under the motion prior whose
+/// two poses the readings both locate (kLocatingReadings each): the step (odometryStep) and its
+/// leverage S = J C J^T, J its derivatives by the two poses, C their joint covariance
+/// (poseUncertainty).
+template <typename Fn>
+void forEachLocatedStep(const LandmarkObservations& obs, const JointResult& fit, const JointConfig& cfg, Fn fn) {
   const std::size_t n = std::min(fit.poses.size(), obs.commanded.size());
-  if (n < 2) return {};
+  if (n < 2) return;
   std::vector<Eigen::Matrix3d> upper;
   const PoseUncertainty u = poseUncertainty(obs, fit, cfg, &upper);
-  const std::vector<Eigen::Matrix3d>& cov = u.cov;
   std::vector<int> readings(n, 0);
   for (const auto& r : u.info)
     if (r.stop < n) ++readings[r.stop];
-  std::vector<double> out(n - 1, kNaN);
   for (std::size_t k = 1; k < n; ++k) {
     if (readings[k - 1] < kLocatingReadings || readings[k] < kLocatingReadings) continue;
     const OdometryStep o = odometryStep(obs, fit, cfg, k - 1, k);
     Eigen::Matrix<double, 6, 6> joint;
-    joint << cov[k - 1], upper[k - 1], upper[k - 1].transpose(), cov[k];
+    joint << u.cov[k - 1], upper[k - 1], upper[k - 1].transpose(), u.cov[k];
     Eigen::Matrix<double, 3, 6> j;
     j << o.ja, o.jb;
-    out[k - 1] = leaveOneOutLogDensity(o.r, j * joint * j.transpose()) + o.log_scale;
+    fn(k, o, Eigen::Matrix3d(j * joint * j.transpose()));
   }
+}
+
+std::vector<double> stepHeldOut(const LandmarkObservations& obs, const JointResult& fit, const JointConfig& cfg) {
+  const std::size_t n = std::min(fit.poses.size(), obs.commanded.size());
+  if (n < 2) return {};
+  std::vector<double> out(n - 1, kNaN);
+  forEachLocatedStep(obs, fit, cfg, [&out](std::size_t k, const OdometryStep& o, const Eigen::Matrix3d& s) {
+    out[k - 1] = leaveOneOutLogDensity(o.r, s) + o.log_scale;
+  });
   return out;
 }
 
@@ -442,26 +455,13 @@ struct OdometryNoiseFactors {
 };
 
 OdometryNoiseFactors odometryNoiseFactors(const LandmarkObservations& obs, const JointResult& fit, const JointConfig& cfg) {
-  const std::size_t n = std::min(fit.poses.size(), obs.commanded.size());
-  if (n < 11) return {};
-  std::vector<Eigen::Matrix3d> upper;
-  const PoseUncertainty u = poseUncertainty(obs, fit, cfg, &upper);
-  std::vector<int> readings(n, 0);
-  for (const auto& r : u.info)
-    if (r.stop < n) ++readings[r.stop];
+  if (std::min(fit.poses.size(), obs.commanded.size()) < 11) return {};
   std::vector<double> t, h;
   double leverage = 0.0;
-  for (std::size_t k = 1; k < n; ++k) {
-    if (readings[k - 1] < kLocatingReadings || readings[k] < kLocatingReadings) continue;
-    const OdometryStep o = odometryStep(obs, fit, cfg, k - 1, k);
-    Eigen::Matrix<double, 6, 6> joint;
-    joint << u.cov[k - 1], upper[k - 1], upper[k - 1].transpose(), u.cov[k];
-    Eigen::Matrix<double, 3, 6> j;
-    j << o.ja, o.jb;
-    const Eigen::Matrix3d s = j * joint * j.transpose();
+  forEachLocatedStep(obs, fit, cfg, [&](std::size_t, const OdometryStep& o, const Eigen::Matrix3d& s) {
     for (int i = 0; i < 3; ++i) (i < 2 ? t : h).push_back(o.r(i) * o.r(i) / std::max(1.0 - s(i, i), 0.05));
     leverage += s.trace() / 3.0;
-  }
+  });
   if (h.size() < 10) return {};
   constexpr double kChi2OneMedian = 0.454936;
   return {std::sqrt(median(t) / kChi2OneMedian), std::sqrt(median(h) / kChi2OneMedian), static_cast<double>(t.size()),
@@ -1820,22 +1820,16 @@ void SequenceDiagnosis::fitOdometryNoise() {
     const double nt = std::min(ft * f.translation, 1.0), nh = std::min(fh * f.heading, 1.0);
     settled = std::abs(std::log(nt / ft)) < 0.02 && std::abs(std::log(nh / fh)) < 0.02;
     if (settled) break;
-    JointConfig c = base_;  // scaled by this pass's factors, or set at the defaults when capped
-    const double gt = nt < 1.0 ? f.translation : 1.0, gh = nh < 1.0 ? f.heading : 1.0;
-    if (nt < 1.0) {
-      c.motion_sigma_fraction *= gt;
-      c.motion_sigma_floor_m *= gt;
-    } else {
-      c.motion_sigma_fraction = prior.motion_sigma_fraction;
-      c.motion_sigma_floor_m = prior.motion_sigma_floor_m;
-    }
-    if (nh < 1.0) {
-      c.motion_heading_sigma_rad_per_m *= gh;
-      c.motion_heading_floor_rad *= gh;
-    } else {
-      c.motion_heading_sigma_rad_per_m = prior.motion_heading_sigma_rad_per_m;
-      c.motion_heading_floor_rad = prior.motion_heading_floor_rad;
-    }
+    // A (per metre, floor) pair scaled by this pass's factor, or back at the defaults when capped.
+    const auto rescale = [](double& per_m, double& floor, double factor, bool capped, double prior_per_m, double prior_floor) {
+      per_m = capped ? prior_per_m : per_m * factor;
+      floor = capped ? prior_floor : floor * factor;
+    };
+    JointConfig c = base_;
+    rescale(c.motion_sigma_fraction, c.motion_sigma_floor_m, f.translation, nt >= 1.0, prior.motion_sigma_fraction,
+            prior.motion_sigma_floor_m);
+    rescale(c.motion_heading_sigma_rad_per_m, c.motion_heading_floor_rad, f.heading, nh >= 1.0,
+            prior.motion_heading_sigma_rad_per_m, prior.motion_heading_floor_rad);
     JointResult again = refineJoint(obs_, initFrom(fit0_), warm(c));
     if (!again.ok()) break;
     base_ = c;
@@ -1880,8 +1874,8 @@ void SequenceDiagnosis::describeBaseline(DiagnosisResult& out) const {
     out.baseline_extra["odometry_heading_factor_se"] = f.fitted ? f.headingSe() : 0.0;
     const double step = medianStepLength(obs_.commanded);
     out.baseline_extra["odometry_step_m"] = step;
-    out.baseline_extra["odometry_step_sd_m"] = base_.motion_sigma_fraction * step + base_.motion_sigma_floor_m;
-    out.baseline_extra["odometry_step_heading_sd_rad"] = base_.motion_heading_sigma_rad_per_m * step + base_.motion_heading_floor_rad;
+    out.baseline_extra["odometry_step_sd_m"] = base_.motionStepSigma(step);
+    out.baseline_extra["odometry_step_heading_sd_rad"] = base_.motionHeadingSigma(step);
   }
 }
 
