@@ -769,22 +769,32 @@ void JointProblem::boundStepScale(ceres::Problem& problem) const {
 }
 
 /// NLL of the commanded positions (or steps, with the motion prior) given the refined poses.
+/// With the motion prior the heading changes (and the first stop's heading) count too, as the
+/// refinement weighs them (MotionPriorCost, PosePriorCost): a likelihood ratio of two drives'
+/// fits then compares the objectives they minimised. Without it (stops) the headings' prior is
+/// left out, as it has been since the stop-and-go diagnosis was calibrated on it.
 void JointProblem::reportPriorLikelihood() {
   const Pose2& c0 = obs_.commanded.front();
   const double s = fx_.odometry_scale ? *scale_ : 0.0;
   auto add = [&](double ex, double ey, double sd) {
     out_.prior_neg_log_likelihood += 0.5 * (ex * ex + ey * ey) / (sd * sd) + kLog2Pi + 2.0 * std::log(sd);
   };
+  auto addHeading = [&](double e, double sd) {
+    out_.prior_neg_log_likelihood += 0.5 * e * e / (sd * sd) + 0.5 * kLog2Pi + std::log(sd);
+  };
   for (std::size_t k = 0; k < poses_.size(); ++k) {
     if (motion_ && k > 0) {
       const Pose2 step = stepBetween(obs_.commanded[k - 1], obs_.commanded[k]);
       const Pose2 est = stepBetween(out_.poses[k - 1], out_.poses[k]);
+      const double len = std::hypot(step.x_m, step.y_m);
       add(est.x_m / (1.0 + s) - step.x_m, est.y_m / (1.0 + s) - step.y_m,  // where the noise is (MotionPriorCost)
-          config_.motionStepSigma(std::hypot(step.x_m, step.y_m)));
+          config_.motionStepSigma(len));
+      addHeading(wrapAngle(out_.poses[k].yaw_rad - out_.poses[k - 1].yaw_rad - step.yaw_rad), config_.motionHeadingSigma(len));
       continue;
     }
     add(poses_[k][0] - (c0.x_m + (1.0 + s) * (obs_.commanded[k].x_m - c0.x_m)),
         poses_[k][1] - (c0.y_m + (1.0 + s) * (obs_.commanded[k].y_m - c0.y_m)), config_.sigma_s_m);
+    if (motion_) addHeading(wrapAngle(out_.poses[k].yaw_rad - obs_.commanded[k].yaw_rad), config_.sigma_psi_rad);
   }
 }
 
