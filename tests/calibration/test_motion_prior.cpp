@@ -85,5 +85,48 @@ TEST(MotionPrior, RefinedPosesBeatTheOdometryAndThePerPosePrior) {
   }
 }
 
+// The prior's reported negative log-likelihood is the odometry's Gaussian density at the
+// refined poses, translation and heading of every step (and the first pose's tie to its
+// commanded pose): a likelihood ratio of two fits compares what the refinement minimised. Until
+// session 24 the heading changes were left out (hundreds of nats on this drive).
+TEST(MotionPrior, ReportedPriorLikelihoodIsTheOdometrysDensityAtThePoses) {
+  const auto cfg = driving();
+  const auto sample = simulation::simulateLandmarkLevel(cfg, 4);
+  JointConfig jc;
+  jc.covariance = false;
+  jc.motion = MotionPrior::on;
+  JointInit init;
+  init.poses = sample.obs.commanded;
+  for (std::size_t l = 0; l < cfg.landmarks.size(); ++l)
+    init.centres[static_cast<int>(l) + 1] = Eigen::Vector2d(cfg.landmarks[l].x_m, cfg.landmarks[l].y_m);
+  init.radius_m = cfg.landmarks.front().radius_m;
+  init.model = cfg.model;
+  const JointResult f = refineJoint(sample.obs, init, jc);
+  ASSERT_TRUE(f.ok()) << f.status.message;
+  ASSERT_TRUE(f.motion_prior);
+  ASSERT_EQ(f.poses.size(), sample.obs.commanded.size());
+  const double log2pi = std::log(2.0 * M_PI);
+  auto gauss = [&](double e, double sd) { return 0.5 * e * e / (sd * sd) + 0.5 * log2pi + std::log(sd); };
+  const auto& c = sample.obs.commanded;
+  double expected = gauss(f.poses[0].x_m - c[0].x_m, jc.sigma_s_m) + gauss(f.poses[0].y_m - c[0].y_m, jc.sigma_s_m) +
+                    gauss(std::remainder(f.poses[0].yaw_rad - c[0].yaw_rad, 2.0 * M_PI), jc.sigma_psi_rad);
+  double heading = 0.0;
+  for (std::size_t k = 1; k < f.poses.size(); ++k) {
+    // Each step seen from the pose before it, commanded and refined.
+    auto step = [](const Pose2& a, const Pose2& b) {
+      const double ca = std::cos(a.yaw_rad), sa = std::sin(a.yaw_rad), dx = b.x_m - a.x_m, dy = b.y_m - a.y_m;
+      return Pose2{ca * dx + sa * dy, ca * dy - sa * dx, std::remainder(b.yaw_rad - a.yaw_rad, 2.0 * M_PI)};
+    };
+    const Pose2 want = step(c[k - 1], c[k]), got = step(f.poses[k - 1], f.poses[k]);
+    const double len = std::hypot(want.x_m, want.y_m);
+    expected += gauss(got.x_m - want.x_m, jc.motionStepSigma(len)) + gauss(got.y_m - want.y_m, jc.motionStepSigma(len));
+    const double h = gauss(std::remainder(got.yaw_rad - want.yaw_rad, 2.0 * M_PI), jc.motionHeadingSigma(len));
+    expected += h;
+    heading += h;
+  }
+  EXPECT_LT(heading, -100.0);  // the heading terms matter: ln sd is about -5 per step
+  EXPECT_NEAR(f.prior_neg_log_likelihood, expected, 1e-6 * std::abs(expected));
+}
+
 }  // namespace
 }  // namespace lidarcal::calibration
