@@ -42,6 +42,20 @@ double KnownRange::meanDistance(double radius_m) const {
   return n > 0.0 ? sum / n : 0.0;
 }
 
+double motionStepLength(const std::vector<Pose2>& commanded, std::size_t k) {
+  constexpr std::size_t kHalfWindow = 10;
+  const std::size_t first = k > kHalfWindow ? k - kHalfWindow : 1, last = std::min(k + kHalfWindow, commanded.size() - 1);
+  std::array<double, 2 * kHalfWindow + 1> len{};
+  std::size_t n = 0;
+  for (std::size_t j = std::max<std::size_t>(first, 1); j <= last; ++j) {
+    const Pose2 step = stepBetween(commanded[j - 1], commanded[j]);
+    len[n++] = std::hypot(step.x_m, step.y_m);
+  }
+  if (n == 0) return 0.0;
+  std::sort(len.begin(), len.begin() + static_cast<std::ptrdiff_t>(n));
+  return n % 2 == 1 ? len[n / 2] : 0.5 * (len[n / 2 - 1] + len[n / 2]);
+}
+
 bool continuousMotion(const LandmarkObservations& obs, const JointConfig& config) {
   if (obs.commanded.size() < static_cast<std::size_t>(std::max(config.motion_min_stops, 1))) return false;
   // Distinct scans with sightings per stop (sightings come scan by scan, but do not rely on it).
