@@ -47,13 +47,17 @@ double motionStepLength(const std::vector<Pose2>& commanded, std::size_t k) {
   const std::size_t first = k > kHalfWindow ? k - kHalfWindow : 1, last = std::min(k + kHalfWindow, commanded.size() - 1);
   std::array<double, 2 * kHalfWindow + 1> len{};
   std::size_t n = 0;
-  for (std::size_t j = std::max<std::size_t>(first, 1); j <= last; ++j) {
+  const auto lengthOf = [&commanded](std::size_t j) {
     const Pose2 step = stepBetween(commanded[j - 1], commanded[j]);
-    len[n++] = std::hypot(step.x_m, step.y_m);
-  }
-  if (n == 0) return 0.0;
+    return std::hypot(step.x_m, step.y_m);
+  };
+  for (std::size_t j = first; j <= last; ++j)
+    if (j != k) len[n++] = lengthOf(j);
+  const double own = lengthOf(k);
+  if (n == 0) return own;
   std::sort(len.begin(), len.begin() + static_cast<std::ptrdiff_t>(n));
-  return n % 2 == 1 ? len[n / 2] : 0.5 * (len[n / 2 - 1] + len[n / 2]);
+  const double neighbours = n % 2 == 1 ? len[n / 2] : 0.5 * (len[n / 2 - 1] + len[n / 2]);
+  return own >= 0.5 * neighbours && own <= 1.5 * neighbours ? neighbours : own;
 }
 
 bool continuousMotion(const LandmarkObservations& obs, const JointConfig& config) {

@@ -200,13 +200,17 @@ struct JointConfig {
 bool continuousMotion(const LandmarkObservations& obs, const JointConfig& config);
 
 /// The length the motion prior's deviations are taken at for the step into pose k >= 1 of
-/// `commanded`: the median length of the commanded steps k - 10 ... k + 10 (those that exist).
-/// Odometry errs in proportion to the step it measures, not to what it reports; weighed at its
-/// own reported length, a step reported short weighed more than one reported long, and a drive's
-/// fitted step scale came out 1.2 % long on average (odometry noise 10 % of 3 cm steps,
-/// tests/calibration/test_motion_prior.cpp; RESULTS, session 24). The refined step's length
-/// instead follows the reported one through the poses' share of the step (it gave -0.6 %); the
-/// neighbours' median is all but independent of the step's own noise and follows the speed.
+/// `commanded`: the median length of its neighbours, the commanded steps k - 10 ... k + 10 but
+/// itself (those that exist), when its own reported length lies within half of that median either
+/// way, otherwise its own. Odometry errs in proportion to the step it measures, not to what it
+/// reports; weighed at its own reported length, a step reported short weighed more than one
+/// reported long, and a drive's fitted step scale came out 1.2 % long on average (odometry noise
+/// 10 % of 3 cm steps, tests/calibration/test_motion_prior.cpp; RESULTS, session 24). The refined
+/// step's length instead follows the reported one through the poses' share of the step (it gave
+/// -0.6 %); the neighbours' median is independent of the step's own noise. A step more than half
+/// again or less than half its neighbours' is the robot changing speed (or a pose left out), not
+/// the odometry's noise (a tenth of the step): on CARMEN's logs a step is 0.1 to 8.5 times its
+/// neighbours' median, and weighed at the median such steps changed two of four verdicts.
 double motionStepLength(const std::vector<Pose2>& commanded, std::size_t k);
 
 /// Starting point (normally the closed-form calibration).

@@ -139,22 +139,25 @@ TEST(MotionPrior, ReportedPriorLikelihoodIsTheOdometrysDensityAtThePoses) {
 }
 
 // A step's deviations are taken at the length its neighbours report, not its own: one step
-// reported 50 % long among 3 cm steps keeps 3 cm, and where the speed changes the length follows
-// it within the window (ten steps either side).
+// reported 40 % long among 3 cm steps keeps 3 cm (the odometry's noise), one ten times as long
+// keeps its own (the robot sped up, or a pose is missing), and where the speed changes the
+// length follows it within the window (ten steps either side).
 TEST(MotionPrior, AStepIsWeighedAtTheLengthItsNeighboursReport) {
   std::vector<Pose2> c{Pose2{0.0, 0.0, 0.0}};
   for (int k = 1; k <= 60; ++k) {
-    const double step = k == 20 ? 0.045 : k <= 40 ? 0.03 : 0.06;
+    const double step = k == 20 ? 0.042 : k == 10 ? 0.3 : k <= 40 ? 0.03 : 0.06;
     c.push_back(Pose2{c.back().x_m + step, 0.0, 0.0});
   }
   EXPECT_NEAR(motionStepLength(c, 20), 0.03, 1e-12);
+  EXPECT_NEAR(motionStepLength(c, 10), 0.3, 1e-12);
   EXPECT_NEAR(motionStepLength(c, 1), 0.03, 1e-12);    // the window clipped at the start
   EXPECT_NEAR(motionStepLength(c, 60), 0.06, 1e-12);   // and at the end
-  EXPECT_NEAR(motionStepLength(c, 25), 0.03, 1e-12);   // 21 steps of 3 cm (the 4.5 cm one among them)
+  EXPECT_NEAR(motionStepLength(c, 25), 0.03, 1e-12);   // 20 neighbours, 19 of 3 cm
   EXPECT_NEAR(motionStepLength(c, 55), 0.06, 1e-12);
-  // Across the change, the majority of the window.
-  EXPECT_NEAR(motionStepLength(c, 36), 0.03, 1e-12);   // steps 26-46: 15 of 3 cm, 6 of 6 cm
-  EXPECT_NEAR(motionStepLength(c, 46), 0.06, 1e-12);   // steps 36-56: 5 of 3 cm, 16 of 6 cm
+  // Across the change, the majority of the window (its own within half of that).
+  EXPECT_NEAR(motionStepLength(c, 36), 0.03, 1e-12);   // steps 26-46 but 36: 14 of 3 cm, 6 of 6 cm
+  EXPECT_NEAR(motionStepLength(c, 46), 0.06, 1e-12);   // steps 36-56 but 46: 5 of 3 cm, 15 of 6 cm
+  EXPECT_NEAR(motionStepLength(c, 40), 0.045, 1e-12);  // steps 30-50 but 40: 10 of 3 cm, 10 of 6 cm; its own 3 cm within half of 4.5
 }
 
 // The step scale of a drive is unbiased: odometry that reports every step 1 / (1 + s) times its
