@@ -14,7 +14,9 @@
 
 #include "calibration/calibrate.hpp"
 #include "calibration/joint_refinement.hpp"
+#include "common/pose2.hpp"
 #include "common/rng.hpp"
+#include "common/stats_util.hpp"
 #include "io/scene_io.hpp"
 #include "simulation/landmark_level.hpp"
 #include "test_util.hpp"
@@ -115,22 +117,17 @@ TEST(MotionPrior, ReportedPriorLikelihoodIsTheOdometrysDensityAtThePoses) {
   ASSERT_TRUE(f.ok()) << f.status.message;
   ASSERT_TRUE(f.motion_prior);
   ASSERT_EQ(f.poses.size(), sample.obs.commanded.size());
-  const double log2pi = std::log(2.0 * M_PI);
-  auto gauss = [&](double e, double sd) { return 0.5 * e * e / (sd * sd) + 0.5 * log2pi + std::log(sd); };
+  auto gauss = [](double e, double sd) { return 0.5 * e * e / (sd * sd) + 0.5 * kLog2Pi + std::log(sd); };
   const auto& c = sample.obs.commanded;
   double expected = gauss(f.poses[0].x_m - c[0].x_m, jc.sigma_s_m) + gauss(f.poses[0].y_m - c[0].y_m, jc.sigma_s_m) +
-                    gauss(std::remainder(f.poses[0].yaw_rad - c[0].yaw_rad, 2.0 * M_PI), jc.sigma_psi_rad);
+                    gauss(wrapAngle(f.poses[0].yaw_rad - c[0].yaw_rad), jc.sigma_psi_rad);
   double heading = 0.0;
   for (std::size_t k = 1; k < f.poses.size(); ++k) {
     // Each step seen from the pose before it, commanded and refined.
-    auto step = [](const Pose2& a, const Pose2& b) {
-      const double ca = std::cos(a.yaw_rad), sa = std::sin(a.yaw_rad), dx = b.x_m - a.x_m, dy = b.y_m - a.y_m;
-      return Pose2{ca * dx + sa * dy, ca * dy - sa * dx, std::remainder(b.yaw_rad - a.yaw_rad, 2.0 * M_PI)};
-    };
-    const Pose2 want = step(c[k - 1], c[k]), got = step(f.poses[k - 1], f.poses[k]);
+    const Pose2 want = stepBetween(c[k - 1], c[k]), got = stepBetween(f.poses[k - 1], f.poses[k]);
     const double len = motionStepLength(c, k);
     expected += gauss(got.x_m - want.x_m, jc.motionStepSigma(len)) + gauss(got.y_m - want.y_m, jc.motionStepSigma(len));
-    const double h = gauss(std::remainder(got.yaw_rad - want.yaw_rad, 2.0 * M_PI), jc.motionHeadingSigma(len));
+    const double h = gauss(wrapAngle(got.yaw_rad - want.yaw_rad), jc.motionHeadingSigma(len));
     expected += h;
     heading += h;
   }
