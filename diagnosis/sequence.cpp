@@ -2199,8 +2199,8 @@ JointResult SequenceDiagnosis::withCorrectedShape(const LandmarkObservations& ob
 /// clean drives gained +0.0005 to +0.009 nats per reading (block standard errors 5 times
 /// smaller) with angle offsets of 1e-13 rad and step-scale errors of 1e-9. A mixed-pixel
 /// fraction at the EM's floor attributes no reading to mixed pixels: the baseline's model. A term
-/// in the mean whose fit on all the data is less likely than the baseline's (lr, twice the log
-/// ratio, below -2 kNestedSlackNats) is not at its optimum.
+/// in the mean whose fit on all the data is no more likely than the baseline's (lr, twice the log
+/// ratio, at most 0) has no evidence in sample; below -2 kNestedSlackNats it is not at its optimum.
 constexpr double kNestedSlackNats = 0.5;
 void SequenceDiagnosis::requireClearOfNull(CandidateResult& r, const JointResult& fc, double lr) const {
   auto say = [&r](const std::string& why) { r.note += (r.note.empty() ? "" : "; ") + why; };
@@ -2234,10 +2234,20 @@ void SequenceDiagnosis::requireClearOfNull(CandidateResult& r, const JointResult
   // a yawed lidar's drive named a drift of 0.26 mm over the drive (held-out gain +0.005 per
   // reading) whose fit on all the data was 1.2 nats less likely than the baseline's, each fold's
   // fit 1-7 nats more, and the baseline refitted from that fold fit's solution 5-23 nats less.
-  if (geometryTerm(r.effect) && lr < -2.0 * kNestedSlackNats) {
+  // Within that slack (no more likely than the baseline, by at most kNestedSlackNats) the term
+  // explains nothing of the data it was fitted on, and a held-out gain is again the folds'
+  // optima's: a yawed lidar's drive (weights at the neighbours' step length) named a drift of
+  // 0.26 mm over the drive, 3.5 standard errors, held-out +0.006 +- 0.0015 per reading against the
+  // found offset's +0.005, whose fit on all the data was 0.31 nats less likely than the
+  // baseline's. Of 962 drive diagnoses kept in sessions 22-24 it was the only significant term in
+  // the mean with lr in [-1, 0].
+  if (geometryTerm(r.effect) && lr <= 0.0) {
     r.p_value = 1.0;
-    char buf[160];
-    std::snprintf(buf, sizeof buf, "its fit on all the data is %.1f nats less likely than the baseline's: not at its optimum", -0.5 * lr);
+    char buf[200];
+    if (lr < -2.0 * kNestedSlackNats)
+      std::snprintf(buf, sizeof buf, "its fit on all the data is %.1f nats less likely than the baseline's: not at its optimum", -0.5 * lr);
+    else
+      std::snprintf(buf, sizeof buf, "its fit on all the data is no more likely than the baseline's (%+.2g nats): it explains nothing in sample", 0.5 * lr);
     say(buf);
   }
 }
