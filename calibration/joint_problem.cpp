@@ -456,7 +456,7 @@ void JointProblem::addPosePriors(ceres::Problem& problem) {
     if (motion_ && k > 0) {
       const Pose2 step = stepBetween(obs_.commanded[k - 1], c);
       const double now = poses_[k][2] - poses_[k - 1][2];
-      const double len = std::hypot(step.x_m, step.y_m);
+      const double len = motionStepLength(obs_.commanded, k);
       problem.AddResidualBlock(
           new MotionPriorAnalyticCost(MotionPriorCost{
               step.x_m, step.y_m, now + wrapAngle(step.yaw_rad - now),
@@ -786,7 +786,7 @@ void JointProblem::reportPriorLikelihood() {
     if (motion_ && k > 0) {
       const Pose2 step = stepBetween(obs_.commanded[k - 1], obs_.commanded[k]);
       const Pose2 est = stepBetween(out_.poses[k - 1], out_.poses[k]);
-      const double len = std::hypot(step.x_m, step.y_m);
+      const double len = motionStepLength(obs_.commanded, k);
       add(est.x_m / (1.0 + s) - step.x_m, est.y_m / (1.0 + s) - step.y_m,  // where the noise is (MotionPriorCost)
           config_.motionStepSigma(len));
       addHeading(wrapAngle(out_.poses[k].yaw_rad - out_.poses[k - 1].yaw_rad - step.yaw_rad), config_.motionHeadingSigma(len));

@@ -42,6 +42,24 @@ double KnownRange::meanDistance(double radius_m) const {
   return n > 0.0 ? sum / n : 0.0;
 }
 
+double motionStepLength(const std::vector<Pose2>& commanded, std::size_t k) {
+  constexpr std::size_t kHalfWindow = 10;
+  const std::size_t first = k > kHalfWindow ? k - kHalfWindow : 1, last = std::min(k + kHalfWindow, commanded.size() - 1);
+  std::array<double, 2 * kHalfWindow + 1> len{};
+  std::size_t n = 0;
+  const auto lengthOf = [&commanded](std::size_t j) {
+    const Pose2 step = stepBetween(commanded[j - 1], commanded[j]);
+    return std::hypot(step.x_m, step.y_m);
+  };
+  for (std::size_t j = first; j <= last; ++j)
+    if (j != k) len[n++] = lengthOf(j);
+  const double own = lengthOf(k);
+  if (n == 0) return own;
+  std::sort(len.begin(), len.begin() + static_cast<std::ptrdiff_t>(n));
+  const double neighbours = n % 2 == 1 ? len[n / 2] : 0.5 * (len[n / 2 - 1] + len[n / 2]);
+  return own >= 0.5 * neighbours && own <= 1.5 * neighbours ? neighbours : own;
+}
+
 bool continuousMotion(const LandmarkObservations& obs, const JointConfig& config) {
   if (obs.commanded.size() < static_cast<std::size_t>(std::max(config.motion_min_stops, 1))) return false;
   // Distinct scans with sightings per stop (sightings come scan by scan, but do not rely on it).

@@ -208,8 +208,7 @@ OdometryStep odometryStep(const LandmarkObservations& obs, const JointResult& fi
   const Pose2 step = stepBetween(obs.commanded[a], obs.commanded[b]);
   double sd_t = 0.0, sd_h = 0.0;
   for (std::size_t k = a + 1; k <= b; ++k) {  // the steps' variances add up over a run of them
-    const Pose2 one = stepBetween(obs.commanded[k - 1], obs.commanded[k]);
-    const double len = std::hypot(one.x_m, one.y_m);
+    const double len = motionStepLength(obs.commanded, k);
     sd_t = std::hypot(sd_t, cfg.motionStepSigma(len));
     sd_h = std::hypot(sd_h, cfg.motionHeadingSigma(len));
   }
@@ -489,7 +488,7 @@ std::pair<double, double> stepTurnAndStretch(const LandmarkObservations& obs, co
     const Pose2 cmd = stepBetween(obs.commanded[k - 1], obs.commanded[k]), got = stepBetween(fit.poses[k - 1], fit.poses[k]);
     const double len = f * std::hypot(cmd.x_m, cmd.y_m);
     if (!(len > 1e-6)) continue;
-    const double sd = cfg.motion_sigma_fraction * len / f + cfg.motion_sigma_floor_m, w = len * len / (sd * sd);
+    const double sd = cfg.motionStepSigma(motionStepLength(obs.commanded, k)), w = len * len / (sd * sd);
     turn += w * wrapAngle(std::atan2(got.y_m, got.x_m) - std::atan2(cmd.y_m, cmd.x_m));
     stretch += w * ((got.x_m * cmd.x_m + got.y_m * cmd.y_m) * f / (len * len) - 1.0);
     info += w;
@@ -935,31 +934,38 @@ PoseNoise poseNoise(const JointResult& fit, const JointConfig& cfg) {
 }
 
 /// The poses of a replica: each independently around its commanded pose (stop and go), or, under
-/// the motion prior, a path driven by the commanded steps with the prior's noise, so that the
-/// replicas drift as the model says odometry does.
-void drawPoses(const LandmarkObservations& obs, const PoseNoise& noise, std::mt19937_64& rng,
-               std::vector<TruthStop>& stops) {
+/// the motion prior, as a drive's odometry is made: the replica's path drives the recorded steps
+/// scaled by 1 + s, and its odometry (returned; the recorded one otherwise) reports each of them
+/// over 1 + s with the prior's noise, chained from the first pose, so that the replicas drift as
+/// the model says odometry does. (Drawn the other way, a path scattered about the recorded
+/// odometry, the noise was on the path's side, where the fit's commanded-side residual
+/// (MotionPriorCost) reads it as a step scale of about +1 %.)
+std::vector<Pose2> drawPoses(const LandmarkObservations& obs, const PoseNoise& noise, std::mt19937_64& rng,
+                             std::vector<TruthStop>& stops) {
   std::normal_distribution<double> normal(0.0, 1.0);
   const Pose2& c0 = obs.commanded.front();
+  std::vector<Pose2> reported = obs.commanded;
   for (std::size_t k = 0; k < stops.size(); ++k) {
     const Pose2& c = obs.commanded[k];
     Pose2& a = stops[k].actual;
     if (noise.motion && k > 0) {
       const Pose2 step = stepBetween(obs.commanded[k - 1], c);  // in the frame of the stop before
-      const double len = std::hypot(step.x_m, step.y_m);
+      const double len = motionStepLength(obs.commanded, k);
       const double st = noise.step_fraction * len + noise.step_floor_m;
       const double sh = noise.heading_per_m * len + noise.heading_floor_rad;
-      Pose2 drawn;
-      drawn.x_m = (1.0 + noise.scale) * step.x_m + st * normal(rng);
-      drawn.y_m = (1.0 + noise.scale) * step.y_m + st * normal(rng);
-      drawn.yaw_rad = step.yaw_rad + sh * normal(rng);
-      a = compose(stops[k - 1].actual, drawn);
+      a = compose(stops[k - 1].actual, Pose2{(1.0 + noise.scale) * step.x_m, (1.0 + noise.scale) * step.y_m, step.yaw_rad});
+      Pose2 odometry;
+      odometry.x_m = step.x_m + st * normal(rng);
+      odometry.y_m = step.y_m + st * normal(rng);
+      odometry.yaw_rad = step.yaw_rad + sh * normal(rng);
+      reported[k] = compose(reported[k - 1], odometry);
       continue;
     }
     a.x_m = c0.x_m + (1.0 + noise.scale) * (c.x_m - c0.x_m) + noise.sigma_s_m * normal(rng);
     a.y_m = c0.y_m + (1.0 + noise.scale) * (c.y_m - c0.y_m) + noise.sigma_s_m * normal(rng);
     a.yaw_rad = wrapAngle(c.yaw_rad + noise.sigma_psi_rad * normal(rng));
   }
+  return reported;
 }
 
 LandmarkObservations simulateReplica(ReplicaPlan plan, const LandmarkObservations& obs, const PoseNoise& noise,
@@ -967,10 +973,10 @@ LandmarkObservations simulateReplica(ReplicaPlan plan, const LandmarkObservation
   // The stop poses are redrawn: the baseline says how they scatter about the commanded ones,
   // and whatever the fitted poses show beyond that is evidence against it.
   auto rng = makeRng(seed, 0x9053ULL);
-  drawPoses(obs, noise, rng, plan.config.stops);
+  std::vector<Pose2> odometry = drawPoses(obs, noise, rng, plan.config.stops);
   auto sample = simulation::simulateLandmarkLevel(plan.config, seed);
   LandmarkObservations out;
-  out.commanded = obs.commanded;
+  out.commanded = std::move(odometry);
   out.landmark_radius_m = obs.landmark_radius_m;
   out.range_min_m = obs.range_min_m;
   out.range_max_m = obs.range_max_m;
@@ -2193,8 +2199,8 @@ JointResult SequenceDiagnosis::withCorrectedShape(const LandmarkObservations& ob
 /// clean drives gained +0.0005 to +0.009 nats per reading (block standard errors 5 times
 /// smaller) with angle offsets of 1e-13 rad and step-scale errors of 1e-9. A mixed-pixel
 /// fraction at the EM's floor attributes no reading to mixed pixels: the baseline's model. A term
-/// in the mean whose fit on all the data is less likely than the baseline's (lr, twice the log
-/// ratio, below -2 kNestedSlackNats) is not at its optimum.
+/// in the mean whose fit on all the data is no more likely than the baseline's (lr, twice the log
+/// ratio, at most 0) has no evidence in sample; below -2 kNestedSlackNats it is not at its optimum.
 constexpr double kNestedSlackNats = 0.5;
 void SequenceDiagnosis::requireClearOfNull(CandidateResult& r, const JointResult& fc, double lr) const {
   auto say = [&r](const std::string& why) { r.note += (r.note.empty() ? "" : "; ") + why; };
@@ -2228,10 +2234,20 @@ void SequenceDiagnosis::requireClearOfNull(CandidateResult& r, const JointResult
   // a yawed lidar's drive named a drift of 0.26 mm over the drive (held-out gain +0.005 per
   // reading) whose fit on all the data was 1.2 nats less likely than the baseline's, each fold's
   // fit 1-7 nats more, and the baseline refitted from that fold fit's solution 5-23 nats less.
-  if (geometryTerm(r.effect) && lr < -2.0 * kNestedSlackNats) {
+  // Within that slack (no more likely than the baseline, by at most kNestedSlackNats) the term
+  // explains nothing of the data it was fitted on, and a held-out gain is again the folds'
+  // optima's: a yawed lidar's drive (weights at the neighbours' step length) named a drift of
+  // 0.26 mm over the drive, 3.5 standard errors, held-out +0.006 +- 0.0015 per reading against the
+  // found offset's +0.005, whose fit on all the data was 0.31 nats less likely than the
+  // baseline's. Of 962 drive diagnoses kept in sessions 22-24 it was the only significant term in
+  // the mean with lr in [-1, 0].
+  if (geometryTerm(r.effect) && lr <= 0.0) {
     r.p_value = 1.0;
-    char buf[160];
-    std::snprintf(buf, sizeof buf, "its fit on all the data is %.1f nats less likely than the baseline's: not at its optimum", -0.5 * lr);
+    char buf[200];
+    if (lr < -2.0 * kNestedSlackNats)
+      std::snprintf(buf, sizeof buf, "its fit on all the data is %.1f nats less likely than the baseline's: not at its optimum", -0.5 * lr);
+    else
+      std::snprintf(buf, sizeof buf, "its fit on all the data is no more likely than the baseline's (%+.2g nats): it explains nothing in sample", 0.5 * lr);
     say(buf);
   }
 }
