@@ -160,8 +160,9 @@ struct JointConfig {
   /// fixes the gauge) and every later stop k is tied to stop k - 1 by the commanded step between
   /// them (robot frame of k - 1): each coordinate with std. dev. motion_sigma_fraction s +
   /// motion_sigma_floor_m, the heading change with motion_heading_sigma_rad_per_m s +
-  /// motion_heading_floor_rad, s the step's length as its neighbours report it (motionStepLength). Odometry drift then accumulates along the path as it does on a real robot
-  /// instead of being pulled back to the commanded poses. Default automatic.
+  /// motion_heading_floor_rad, s the step's length as its neighbours report it
+  /// (motionStepLength). Odometry drift then accumulates along the path as it does on a real
+  /// robot instead of being pulled back to the commanded poses. Default automatic.
   MotionPrior motion = MotionPrior::automatic;
   double motion_sigma_fraction = 0.1;            ///< std. dev. of each step coordinate per metre of step. Default 0.1
   double motion_sigma_floor_m = 0.002;           ///< plus this, metres. Default 0.002
@@ -171,7 +172,6 @@ struct JointConfig {
   double motionStepSigma(double len) const { return motion_sigma_fraction * len + motion_sigma_floor_m; }
   /// The motion prior's std. dev. of the heading change over a step of length `len`, radians.
   double motionHeadingSigma(double len) const { return motion_heading_sigma_rad_per_m * len + motion_heading_floor_rad; }
-
   /// automatic: the fewest stops a continuous sequence has (below, stop and go is assumed).
   /// Default 20.
   int motion_min_stops = 20;
