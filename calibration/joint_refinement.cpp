@@ -45,18 +45,17 @@ double KnownRange::meanDistance(double radius_m) const {
 double motionStepLength(const std::vector<Pose2>& commanded, std::size_t k) {
   constexpr std::size_t kHalfWindow = 10;
   const std::size_t first = k > kHalfWindow ? k - kHalfWindow : 1, last = std::min(k + kHalfWindow, commanded.size() - 1);
-  std::array<double, 2 * kHalfWindow + 1> len{};
-  std::size_t n = 0;
   const auto lengthOf = [&commanded](std::size_t j) {
     const Pose2 step = stepBetween(commanded[j - 1], commanded[j]);
     return std::hypot(step.x_m, step.y_m);
   };
+  std::vector<double> len;
+  len.reserve(2 * kHalfWindow);
   for (std::size_t j = first; j <= last; ++j)
-    if (j != k) len[n++] = lengthOf(j);
+    if (j != k) len.push_back(lengthOf(j));
   const double own = lengthOf(k);
-  if (n == 0) return own;
-  std::sort(len.begin(), len.begin() + static_cast<std::ptrdiff_t>(n));
-  const double neighbours = n % 2 == 1 ? len[n / 2] : 0.5 * (len[n / 2 - 1] + len[n / 2]);
+  if (len.empty()) return own;
+  const double neighbours = median(std::move(len));
   return own >= 0.5 * neighbours && own <= 1.5 * neighbours ? neighbours : own;
 }
 
