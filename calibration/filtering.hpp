@@ -23,6 +23,8 @@ enum class Outside {
   extrapolate,  ///< corrected with the polynomial all the same
   drop,         ///< made a beam without return (NaN)
 };
+/// The policy of `correct`, `export`, `evaluate` and the live nodes when none is given.
+inline constexpr Outside kDefaultOutside = Outside::keep;
 const char* toString(Outside o);
 /// Parses keep, extrapolate or drop; returns false for anything else.
 bool parseOutside(const std::string& name, Outside& out);
@@ -32,7 +34,7 @@ bool parseOutside(const std::string& name, Outside& out);
 struct CorrectionWindow {
   double reading_min_m = 0.0;                  ///< smallest reading corrected, metres
   double reading_max_m = 1e300;                ///< largest reading corrected, metres
-  Outside outside = Outside::keep;             ///< what happens to the others
+  Outside outside = kDefaultOutside;           ///< what happens to the others
 };
 CorrectionWindow correctionWindow(const CalibrationModel& model, Outside outside);
 

@@ -121,7 +121,7 @@ calibration::InversionMethod CorrectionOptions::method() const {
 }
 
 calibration::Outside CorrectionOptions::outsidePolicy() const {
-  calibration::Outside o = calibration::Outside::keep;
+  calibration::Outside o = calibration::kDefaultOutside;
   if (!calibration::parseOutside(outside, o))
     throw InputError("", "--outside", "unknown policy '" + outside + "'", "use keep, extrapolate or drop");
   return o;

@@ -45,7 +45,7 @@ detectors::SequenceDetectionConfig detectionConfig(const CalibrationOptions& o);
 /// How readings are corrected: `correct`, `export` and the ROS node share these options.
 struct CorrectionOptions {
   std::string inversion = "ls";  ///< --inversion ls|ml
-  std::string outside = "keep";  ///< --outside keep|extrapolate|drop
+  std::string outside = calibration::toString(calibration::kDefaultOutside);  ///< --outside keep|extrapolate|drop
   calibration::InversionMethod method() const;
   calibration::Outside outsidePolicy() const;
 };

@@ -107,7 +107,7 @@ void evaluateReference(const std::string& seq_dir, const std::string& ref_file, 
               {"rms_error_all_m", number(rmsError(raw.known.matches))}, {"entries", raw_json}};
   std::optional<ReferenceObservations> corrected;
   if (model) {
-    calibration::Outside outside = calibration::Outside::keep;
+    calibration::Outside outside = calibration::kDefaultOutside;
     calibration::parseOutside(outside_name, outside);
     if (const std::string w = checkModelFits(*model, seq, model_file, false, outside); !w.empty())
       std::fprintf(stderr, "lidarcal: warning: %s\n", w.c_str());
@@ -132,7 +132,7 @@ void evaluateReference(const std::string& seq_dir, const std::string& ref_file, 
 
 void addEvaluateCommand(CLI::App& app) {
   struct Options {
-    std::string corrected, truth, raw, out, reference, model, inversion = "ls", outside = "keep";
+    std::string corrected, truth, raw, out, reference, model, inversion = "ls", outside = calibration::toString(calibration::kDefaultOutside);
     double radius_m = 0.0;
   };
   auto o = std::make_shared<Options>();

@@ -95,7 +95,7 @@ void runRun(const RunCommand& c) {
   fs::create_directory(out.path() / "corrected");
   Progress cprog("correct", seq.scans.size());
   const auto stats = correctSequence(seq, cal.model, method, out.path() / "corrected", io::PcdEncoding::binary,
-                                     [&](std::size_t d, std::size_t) { cprog.update(d); }, calibration::Outside::keep,
+                                     [&](std::size_t d, std::size_t) { cprog.update(d); }, calibration::kDefaultOutside,
                                      c.options->threads);
   cprog.finish();
   {

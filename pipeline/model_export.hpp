@@ -14,7 +14,7 @@ namespace lidarcal::pipeline {
 
 struct ExportConfig {
   calibration::InversionMethod inversion = calibration::InversionMethod::ls;  ///< ls (default) or ml, as `correct --inversion`
-  calibration::Outside outside = calibration::Outside::keep;  ///< as `correct --outside`; default keep
+  calibration::Outside outside = calibration::kDefaultOutside;  ///< as `correct --outside`
   double step_m = 0.001;            ///< lut: reading step, metres (> 0); default 1 mm
   std::string source;               ///< model file named in the YAML comment
 };

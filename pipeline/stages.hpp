@@ -55,7 +55,7 @@ std::string beamCountWarning(const io::Sequence& seq);
 /// returned text is a warning to print (empty when everything fits). With `outside` other than
 /// extrapolate, f must be invertible over the fitted range only.
 std::string checkModelFits(const CalibrationModel& model, const io::Sequence& seq, const std::filesystem::path& model_file,
-                           bool force = false, calibration::Outside outside = calibration::Outside::keep);
+                           bool force = false, calibration::Outside outside = calibration::kDefaultOutside);
 
 /// What a recording says about its sensor (sequence.json, a bag's LaserScan messages).
 struct SensorFacts {
@@ -70,7 +70,7 @@ struct SensorFacts {
 /// `force`; the warning is returned) and invertibility. Same errors.
 std::string checkModelFitsSensor(const CalibrationModel& model, const SensorFacts& facts,
                                  const std::filesystem::path& model_file, bool force = false,
-                                 calibration::Outside outside = calibration::Outside::keep);
+                                 calibration::Outside outside = calibration::kDefaultOutside);
 
 /// Throws InputError naming `where` when a scan of `beams` beams does not match the model's beam count.
 void checkModelBeams(const CalibrationModel& model, std::size_t beams, const std::string& where,
@@ -85,7 +85,7 @@ calibration::ReadingCorrector modelCorrector(const CalibrationModel& model, cali
                                              calibration::Outside outside, const std::filesystem::path& model_file);
 
 void checkModelInvertible(const CalibrationModel& model, const std::filesystem::path& model_file,
-                          calibration::Outside outside = calibration::Outside::keep);
+                          calibration::Outside outside = calibration::kDefaultOutside);
 
 struct CorrectionStats {
   std::size_t scans = 0, points = 0, corrected = 0, unresolved = 0;
@@ -98,6 +98,6 @@ struct CorrectionStats {
 CorrectionStats correctSequence(const io::Sequence& seq, const CalibrationModel& model,
                                 calibration::InversionMethod method, const std::filesystem::path& out_dir,
                                 io::PcdEncoding encoding, const StageProgress& on_scan = {},
-                                calibration::Outside outside = calibration::Outside::keep, int threads = 0);
+                                calibration::Outside outside = calibration::kDefaultOutside, int threads = 0);
 
 }  // namespace lidarcal::pipeline

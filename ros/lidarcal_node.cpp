@@ -29,7 +29,7 @@ namespace {
 using namespace lidarcal;
 
 struct NodeSettings {
-  std::string model_file, input = "scan", output = "scan_corrected", inversion = "ls", outside = "keep";
+  std::string model_file, input = "scan", output = "scan_corrected", inversion = "ls", outside = calibration::toString(calibration::kDefaultOutside);
   std::optional<std::string> sensor_name;
   bool force = false;
 };
@@ -98,7 +98,7 @@ int main(int argc, char** argv) {
   pnh.param("outside", s.outside, s.outside);
   pnh.param("force", s.force, s.force);
   if (std::string name; pnh.getParam("sensor_name", name)) s.sensor_name = name;
-  calibration::Outside outside = calibration::Outside::keep;
+  calibration::Outside outside = calibration::kDefaultOutside;
   if (s.inversion != "ls" && s.inversion != "ml") {
     ROS_FATAL("lidarcal_node: ~inversion is '%s': use ls or ml", s.inversion.c_str());
     return 2;
