@@ -40,7 +40,8 @@ nlohmann::ordered_json evaluationJson(const Evaluation& e) {
                                 {"lost_returns", e.lost},
                                 {"landmarks", toJson(e.landmarks)},
                                 {"walls", toJson(e.walls)},
-                                {"all", toJson(e.all)}};
+                                {"all", toJson(e.all)},
+                                {"beyond_fitted_range", toJson(e.beyond)}};
 }
 
 namespace {
@@ -112,8 +113,7 @@ void evaluateReference(const std::string& seq_dir, const std::string& ref_file, 
     if (const std::string w = checkModelFits(*model, seq, model_file, false, outside); !w.empty())
       std::fprintf(stderr, "lidarcal: warning: %s\n", w.c_str());
     const auto method = inversion == "ml" ? calibration::InversionMethod::ml : calibration::InversionMethod::ls;
-    const ScanCorrection correction{calibration::modelInverter(*model, method, outside),
-                                    calibration::correctionWindow(*model, outside)};
+    const calibration::ReadingCorrector correction = calibration::readingCorrector(*model, method, outside);
     Progress cor_progress("measure (corrected)", seq.scans.size());
     corrected = observeReference(seq, ref, detection, scanLoader(seq, &correction),
                                  [&](std::size_t d, std::size_t) { cor_progress.update(d); });
@@ -153,8 +153,9 @@ void addEvaluateCommand(CLI::App& app) {
   sub->add_option("--inversion", o->inversion, "With --model: ls or ml (see lidarcal correct --help)")
       ->check(CLI::IsMember({"ls", "ml"}))
       ->capture_default_str();
-  sub->add_option("--outside", o->outside, "With --model: keep, extrapolate or drop readings outside the fitted range")
-      ->check(CLI::IsMember({"keep", "extrapolate", "drop"}))
+  sub->add_option("--outside", o->outside,
+                  "With --model: " + calibration::outsideNames() + " readings beyond the fitted range (see lidarcal correct --help)")
+      ->check(CLI::IsMember(calibration::outsidePolicies()))
       ->capture_default_str();
   sub->add_option("--radius", o->radius_m, "With --reference: pole radius in metres (default: sequence.json, else estimated)")
       ->check(CLI::PositiveNumber);

@@ -6,6 +6,8 @@
 #include <limits>
 #include <tuple>
 
+#include "pipeline/words.hpp"
+
 namespace lidarcal::pipeline {
 std::string fixed(double v, int digits, bool sign) {
   char buf[64];
@@ -75,7 +77,10 @@ std::string modelSummary(const CalibrationModel& m) {
   if (m.fitted_range_m)
     s += "  fitted over true distances " + fixed(m.fitted_range_m->first, 3) + "-" + fixed(m.fitted_range_m->second, 3) +
          " m (readings " + fixed(m.model.bias(m.fitted_range_m->first), 3) + "-" +
-         fixed(m.model.bias(m.fitted_range_m->second), 3) + " m); `correct` leaves readings outside as they are\n";
+         fixed(m.model.bias(m.fitted_range_m->second), 3) +
+         " m; the beams' distances to the surfaces they hit, for a pole's nearest point its centre distance minus "
+         "its radius); `correct` continues the correction "
+         "beyond them at its slope at the edge (--outside)\n";
   const bool errors = m.alpha_covariance.size() == m.model.bias.alpha.size() * m.model.bias.alpha.size();
   s += "  error of the raw reading (f(d) - d)" + std::string(errors ? " +- its standard error" : "") + ":";
   for (double d : tableDistances(m)) {
@@ -87,6 +92,37 @@ std::string modelSummary(const CalibrationModel& m) {
   s += "\n";
   for (const auto& w : m.warnings) s += "  warning: " + w + "\n";
   return s;
+}
+
+std::string beyondFitText(const calibration::FilteringStats& s, const CalibrationModel& m, calibration::Outside outside) {
+  const std::size_t returns = s.corrected + s.beyond() + s.unresolved;
+  if (s.beyond() == 0 || returns == 0 || !m.fitted_range_m) return "";
+  const double share = static_cast<double>(s.beyond()) / static_cast<double>(returns);
+  const auto [lo, hi] = *m.fitted_range_m;
+  std::string fate;
+  switch (outside) {
+    case calibration::Outside::linear:
+      fate = "corrected by continuing the fitted correction past the edge at its slope there (--outside linear; "
+             "marked 2 in the `correction` field, with a standard error that grows with the distance past the edge)";
+      break;
+    case calibration::Outside::extrapolate: fate = "corrected with the polynomial itself (--outside extrapolate)"; break;
+    case calibration::Outside::keep: fate = "left as read (--outside keep)"; break;
+    case calibration::Outside::drop: fate = "dropped (--outside drop)"; break;
+  }
+  std::string where;
+  if (s.below > 0) where = std::to_string(s.below) + " below it, readings down to " + fixed(s.beyond_min_m, 2) + " m";
+  if (s.beyond() > s.below)
+    where += (where.empty() ? "" : "; ") + std::to_string(s.beyond() - s.below) + " above it, readings up to " +
+             fixed(s.beyond_max_m, 2) + " m";
+  std::string t = plural(s.beyond(), "return") + " (" + fixed(100.0 * share, 1) +
+                  " % of the returns) lie beyond the true distances the model was fitted on (" + fixed(lo, 2) + "-" +
+                  fixed(hi, 2) + " m; " + where + "): " + fate + ".";
+  if (share > 0.5)
+    t += "\nwarning: most of the returns lie beyond the fitted range, so most of the output rests on an "
+         "extrapolation. Record the poles over the whole span of distances the sensor will be used at (here readings " +
+         fixed(std::min(s.beyond_min_m, m.model.bias(lo)), 1) + "-" + fixed(std::max(s.beyond_max_m, m.model.bias(hi)), 1) +
+         " m), and calibrate again.";
+  return t;
 }
 
 std::string referenceTable(const std::vector<calibration::ReferenceMatch>& raw,

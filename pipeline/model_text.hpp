@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "calibration/filtering.hpp"
 #include "calibration/reference.hpp"
 #include "common/calibration_model.hpp"
 
@@ -34,6 +35,11 @@ std::vector<double> tableDistances(const CalibrationModel& m);
 /// Several lines of plain text: method, f with errors, fitted range, noise, corrections at
 /// tableDistances() with errors, warnings.
 std::string modelSummary(const CalibrationModel& m);
+
+/// What happened to the returns beyond the fitted range, in a sentence (empty when there were
+/// none): how many, the share of all returns, their readings' span, and the policy. When most
+/// returns lie beyond, a second sentence starting "warning:" says so and what to record.
+std::string beyondFitText(const calibration::FilteringStats& stats, const CalibrationModel& m, calibration::Outside outside);
 
 /// The reference distances as matched: stop, target, measured (tape) distance, what the scans
 /// read there (mean over the scans, its standard error), the difference, and the readings used
