@@ -1,4 +1,4 @@
-// Calibration cost (docs/RESULTS.md, "Calibration"): the paper's closed form and our joint
+// Calibration cost (docs/results/calibration-accuracy.md): the paper's closed form and our joint
 // refinement on the same data, 20 stops x 5 landmarks, one scan per stop and ten; and
 // `lidarcal run` on the bundled example next to the time to only read and write its PCD files.
 //   build/bench/bench_calibration --benchmark_min_time=1

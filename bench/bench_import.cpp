@@ -9,7 +9,7 @@
 // Times are medians over N runs (default 5), peak RSS the largest.
 //
 // Add a step by appending to steps(); a step with `keep` writes to that directory and leaves it
-// for later steps (the detect step reads the kept Freiburg import). Numbers go to docs/RESULTS.md.
+// for later steps (the detect step reads the kept Freiburg import). Numbers: docs/results/speed.md.
 
 #include <algorithm>
 #include <chrono>

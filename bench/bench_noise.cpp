@@ -3,7 +3,7 @@
 // all 80 particles run even when they stay identical) against the ML estimator (estimating the
 // process noise too, or told it as the hill climbing is: `ProcessGiven`), in the
 // settings of seed 003's experiments 2 and 3 (data/scenes/noise_exp12.json, noise_exp3.json,
-// simulator seed 1). Numbers: docs/RESULTS.md, "Noise consistency".
+// simulator seed 1). Numbers: docs/results/noise-consistency.md.
 //
 //   build/bench/bench_noise --benchmark_counters_tabular=true
 

@@ -1,4 +1,4 @@
-// Per-scan work of lidarcal_node (issue 21 budget: <= 0.2 ms per 360-beam scan, <= 1 ms per
+// Per-scan work of lidarcal_node (budget: <= 0.2 ms per 360-beam scan, <= 1 ms per
 // 1081-beam scan): copy the received ranges and correct them with pipeline::correctLaserRanges,
 // as the node's callback does (the ROS transport itself is not included). Bias polynomials of
 // order 2 (closed-form LS) and 3 (polynomial roots), LS and ML inversion; readings spread over

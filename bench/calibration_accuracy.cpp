@@ -1,7 +1,8 @@
-// Calibration accuracy through the command line, as a user would run it (docs/RESULTS.md,
-// "Calibration"): for each seed, simulate a calibration sequence and an evaluation sequence of
-// the same scene, calibrate on the first (joint, closed form, oracle, oracle in the commanded
-// frame), correct the second with each model and evaluate it against its truth.
+// Calibration accuracy through the command line, as a user would run it
+// (docs/results/calibration-accuracy.md): for each seed, simulate a calibration sequence and an
+// evaluation sequence of the same scene, calibrate on the first (joint, closed form, oracle,
+// oracle in the commanded frame), correct the second with each model and evaluate it against
+// its truth.
 //
 //   build/bench/calibration_accuracy --scene data/scenes/paper_field.json --seeds 20
 //       [--sigma-s 0.02 --sigma-psi 0.5] [--work /tmp/acc]

@@ -7,7 +7,7 @@ covariance-derived numbers (keys naming a covariance, variance, correlation or s
 addresses of the parameter blocks, so before the joint refinement kept its blocks in one array
 the last digits of standard errors and covariances depended on where the allocator put each
 block (off-diagonal centre covariances, small differences of larger terms, to about 10 digits);
-see docs/RESULTS.md ("Architecture step"). Every other number must be identical.
+see docs/results/test-suite.md. Every other number must be identical.
 Prints every file that differs and, for the tolerated ones, the JSON paths of the numbers.
 Exit 0 when every file is identical or tolerated, 1 otherwise.
 """

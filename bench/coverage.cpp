@@ -3,7 +3,7 @@
 // tape distances taken from the simulator's truth: `calibrate --reference`), and check whether
 // the 95 % interval f(d) +- 1.96 SE(f(d)) holds the simulated sensor's true f(d) at a few
 // distances inside the fitted range, and each coefficient's interval its true value
-// (docs/RESULTS.md, "Standard errors").
+// (docs/results/standard-errors.md).
 //
 //   build/bench/coverage --scene data/scenes/paper_field.json --seeds 100 [--first-seed 1001]
 //       [--scans-per-stop 10] [--work /tmp/coverage]

@@ -1,4 +1,4 @@
-// How often `diagnose` names an effect hidden in simulated data (docs/RESULTS.md, "Diagnosis").
+// How often `diagnose` names an effect hidden in simulated data (docs/results/hidden-effects.md).
 // Each case draws the size (and sign) of the effect from its own seed, simulates the paper
 // field at the landmark level with it, diagnoses, and compares the named cause.
 //   build/bench/diagnose_accuracy --effect heading_error --cases 20

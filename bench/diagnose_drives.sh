@@ -6,9 +6,9 @@
 # incidence_noise | range_drift | mixed_pixels | range_noise_law | landmark_bias | angle_offset.
 # For `none`, FIRST..LAST are simulator seeds; otherwise case numbers: the effect's size and
 # sign are drawn from the case number (sizes as in bench/diagnose_accuracy's cases) and the
-# simulator seed is 500 + case. Needs python3. docs/RESULTS.md, "Continuous recordings".
+# simulator seed is 500 + case. Needs python3. docs/results/hidden-effects.md.
 # With KEEP=DIR set, each case's diagnosis.json is kept as DIR/SCENE-EFFECT-K.json.
-# REPLICAS (default 19, diagnose's own default) sets --replicas: sessions 15-19 ran 5, whose
+# REPLICAS (default 19, diagnose's own default) sets --replicas; with 5 the
 # Student-t predictive p of the statistics (4 degrees of freedom) cannot fall far.
 set -euo pipefail
 scene=$1 effect=$2 first=$3 last=$4

@@ -1,7 +1,7 @@
 // How often `diagnose` (static mode) names what the truth allows in a room seen from one pose
-// (docs/RESULTS.md, "Diagnosis", static mode): every case of tests/diagnosis/diagnose_cases.hpp,
-// coarser quantisation grids, the clean room (its false-positive rate), and the tail cases of
-// issue 20 (extra-wide errors only at grazing beams, at depth edges, on a dark wall; the tests
+// (docs/results/static-diagnosis.md): every case of tests/diagnosis/diagnose_cases.hpp,
+// coarser quantisation grids, the clean room (its false-positive rate), and the tail cases
+// (extra-wide errors only at grazing beams, at depth edges, on a dark wall; the tests
 // draw their rooms from seeds they do not read), over many seeds.
 //   build/bench/diagnose_static_accuracy [--seeds 10] [--clean-seeds 20] [--first 101] [--replicas 19] [--only NAME]
 //                                        [--dark-exponent DELTA] [--verbose]

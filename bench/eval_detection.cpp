@@ -1,6 +1,6 @@
 // eval_detection: landmark detection and association measured against the simulator's truth,
 // over several seeds of one or more scenes, in memory (no files written). Prints the Markdown
-// tables of docs/RESULTS.md (section Detection).
+// tables of docs/results/detection.md.
 //
 //   build/bench/eval_detection --seeds 10 data/scenes/paper_field.json data/scenes/field_clutter.json
 //   build/bench/eval_detection --estimate-radius --seeds 10 data/scenes/paper_field.json

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# What is the Hokuyo range sweep's structured error against the tape (issue 20 item 4;
-# docs/FINDINGS.md "Hokuyo UST-30LX range sweep")? Imports the 42 bags of
+# What is the Hokuyo range sweep's structured error against the tape
+# (docs/FINDINGS.md "Hokuyo UST-30LX range sweep")? Imports the 42 bags of
 # ../shared/data/hokuyo_ust30lx_reflector/range_sweep as one stop each, detects the 45 mm
 # reflector, measures its centre distance against the tape (`evaluate --reference`, raw), and
 # tests sensor-side explanations of what a polynomial in the distance leaves: the reflector's

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Byte-identical outputs before and after a change that must not change behaviour (issue 18,
-# the architecture step): runs one fixed set of commands with a given lidarcal binary and
+# Byte-identical outputs before and after a change that must not change behaviour
+# (docs/results/test-suite.md): runs one fixed set of commands with a given lidarcal binary and
 # prints a SHA-256 per output file; run it with the binary before and after and compare.
 #
 #   bench/identical_outputs.sh [--quick] [--keep DIR] [LIDARCAL] > sums.txt

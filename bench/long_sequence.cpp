@@ -1,5 +1,5 @@
 // Long inputs: peak memory and time of `lidarcal detect` and `lidarcal correct` on sequences of
-// 1,000 to 100,000 scans (docs/RESULTS.md, "Hardening"). Each command runs in a child process
+// 1,000 to 100,000 scans (docs/results/hardening.md). Each command runs in a child process
 // whose own peak resident memory is read with wait4 (child_process.hpp).
 //
 // The sequences are the bundled example (10 stops x 10 scans of the paper's field, 4.4 KB per

@@ -1,5 +1,5 @@
-// What sets the MSE ratio's ceiling in the Monte Carlo study (docs/RESULTS.md, "Monte Carlo
-// study", "The ratio's ceiling"): one cell of Fig. 9 (L = 5, sigma_s = 1 cm, sigma_theta = 2
+// What sets the MSE ratio's ceiling in the Monte Carlo study (docs/results/montecarlo.md,
+// "The ratio's ceiling"): one cell of Fig. 9 (L = 5, sigma_s = 1 cm, sigma_theta = 2
 // degrees on the heading), the closed form, the oracle and the ceiling (eq. 31 with the simulated
 // sensor's own bias) on the three test sets, while one setting at a time moves from the study's
 // default towards the paper's field (seed 000 section 4.3: landmarks up to 5 m) and beyond:

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Where seed 003's hill climbing ends, beside the thesis' end points (docs/RESULTS.md, "Noise
-# consistency", "The hill climbing's end points beside the thesis'").
+# Where seed 003's hill climbing ends, beside the thesis' end points
+# (docs/results/noise-consistency.md, "The hill climbing's end points beside the thesis'").
 #   bench/noise_endpoints.sh [SEEDS]     (default SEEDS: 1 2 3 4 5; needs a build in build/)
 # Experiments 1-3 (simulator seed 1, as in docs/noise/exp*.md), variances only (the thesis prints
 # only those), both variants of the objective, the hill climbing's own seed (particle filter and

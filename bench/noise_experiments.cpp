@@ -1,4 +1,4 @@
-// Experiments behind docs/RESULTS.md, section "Noise consistency" (run by bench/noise_experiments.sh).
+// Experiments behind docs/results/noise-consistency.md (run by bench/noise_experiments.sh).
 //
 //   noise_experiments side-by-side --scene S.json --init I.json --seed N --out DIR [--kl-max-evaluations M]
 //     simulates the scene, runs seed 003's KL hill climbing (the seed's variant and ours, climbing

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Reproduces the tables and plots of docs/RESULTS.md, section "Noise consistency".
+# Reproduces the tables and plots of docs/results/noise-consistency.md.
 #   bench/noise_experiments.sh [OUT]        (default OUT: docs/noise; needs a build in build/)
 # Writes OUT/<experiment>.md (side-by-side table), OUT/<experiment>/<method>/{result.json,
 # objective.png, params.png, trace.dat, params.dat, plot.gp} and OUT/ml_study_<experiment>.md.

@@ -1,9 +1,9 @@
-// The I/O floor of a sequence (issue 19): read every .pcd file of a directory with PCL and write
-// it again, binary, into another directory. What any command that rewrites the scans must at
-// least do; bench/speed.sh times lidarcal's commands against it. OUT_DIR is made anew, a
+// The I/O floor of a sequence (docs/results/speed.md): read every .pcd file of a directory with PCL
+// and write it again, binary, into another directory. What any command that rewrites the scans must
+// at least do; bench/speed.sh times lidarcal's commands against it. OUT_DIR is made anew, a
 // directory left by a previous run removed first, as lidarcal's commands do with --overwrite:
-// creating files in a fresh directory costs the file system more than overwriting old ones
-// (on ext4, about 0.7 ms against 0.15 ms per file here), and the floor must pay what they pay.
+// creating files in a fresh directory costs the file system more than overwriting old ones (on
+// ext4, about 0.7 ms against 0.15 ms per file here), and the floor must pay what they pay.
 //
 //   pcd_floor IN_DIR OUT_DIR
 

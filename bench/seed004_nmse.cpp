@@ -1,5 +1,5 @@
 // Seed 004's normalised MSE (eqs. 31-32: 0.0789 raw -> 0.0046 calibrated, a factor 17.15) on
-// simulated sensors (docs/RESULTS.md, "Seed 004: normalised MSE").
+// simulated sensors (docs/results/normalised-mse.md).
 //
 // Seed 004 section 6: a training set and a test set of readings at known distances (a robot
 // moving towards a target with piecewise constant speeds: batches of readings at constant

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Speed of lidarcal's main commands against the I/O floor (issue 19; docs/RESULTS.md "Speed"),
+# Speed of lidarcal's main commands against the I/O floor (docs/results/speed.md),
 # in one run: on a simulated sequence of 20 stops x 50 scans (1000 scans, 5 poles) and on the
 # CARMEN Intel log (910 scans, a pose per scan; skipped when ../shared/data is absent), the
 # median wall time and peak memory of `run`, `detect` and `calibrate` (farm-bench, RUNS runs

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The step scale a drive's motion prior estimates when each step's standard deviation is taken at
 the length the odometry reported for it, at its true length, or at one length for all
-(docs/RESULTS.md, "Session 24"). One dimension of the estimator: the fitted steps are exact, the
+(docs/results/hidden-effects.md). One dimension of the estimator: the fitted steps are exact, the
 odometry reports each true step t with noise of 10 % of t per coordinate, the prior's deviation is
 a L + b (the defaults 0.1 L + 2 mm times the factor 0.62 a clean drive fits), and the scale solves
 sum w (c - f / (1 + s)) f = 0, 1 + s = sum w f^2 / sum w c.f.

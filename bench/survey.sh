@@ -1,14 +1,13 @@
 #!/usr/bin/env bash
-# Surveyed geometry against an odometry scale error (issue 17; docs/RESULTS.md "Surveyed pole
-# centres and measured poses"): the paper's field with every step 6 % longer than the odometry
-# says, the pole radius unknown (removed from sequence.json), SEEDS seeds. Each seed is
-# calibrated four ways: self-calibration, with the true pole centres as a survey (REF.json
-# `landmarks`, no radius), with the true stop poses (REF.json `stops`), and with tape distances
-# (true centre distance + 2 mm noise) to the poles within 4 m at the first and the last stop only,
-# which join the self-calibration (--reference-fit auto: two stops are too few to fit alone). Prints the error of
-# f(d) - d against the truth at 1, 2 and 3 m (median and largest over the seeds, mm) and the
-# median standard error the model reports, and in how many seeds the truth lies inside the
-# model's 95 % interval (f(d) +- 1.96 SE).
+# Surveyed geometry against an odometry scale error (docs/results/survey.md): the paper's field
+# with every step 6 % longer than the odometry says, the pole radius unknown (removed from
+# sequence.json), SEEDS seeds. Each seed is calibrated four ways: self-calibration, with the true
+# pole centres as a survey (REF.json `landmarks`, no radius), with the true stop poses (REF.json
+# `stops`), and with tape distances (true centre distance + 2 mm noise) to the poles within 4 m at
+# the first and the last stop only, which join the self-calibration (--reference-fit auto: two
+# stops are too few to fit alone). Prints the error of f(d) - d against the truth at 1, 2 and 3 m
+# (median and largest over the seeds, mm) and the median standard error the model reports, and in
+# how many seeds the truth lies inside the model's 95 % interval (f(d) +- 1.96 SE).
 #
 #   bench/survey.sh [SEEDS]     (default 10; needs build/pipeline/lidarcal)
 set -euo pipefail

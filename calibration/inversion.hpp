@@ -8,7 +8,7 @@
 // Roots are found inside the window only: the roots of the derivative split it into pieces on
 // which the polynomial is monotone, and each piece with a sign change is solved by Newton's
 // method kept inside its bracket. For LS the pieces depend on the model alone and are computed
-// once, so a reading costs a few polynomial evaluations (the ROS node's budget, issue 21).
+// once, so a reading costs a few polynomial evaluations (the ROS node's budget: docs/results/speed.md).
 
 #include <optional>
 #include <string>

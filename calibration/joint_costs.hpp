@@ -167,7 +167,7 @@ struct ScaledPosePriorCost {
 /// is, on the commanded side. Scaling the commanded step instead (fitted - (1 + s) commanded)
 /// regresses the true steps on noisy ones and dilutes the scale: a clean thin-pole drive's
 /// odometry (3 mm per coordinate on 3 cm steps) gave s = -2 sigma^2 / L^2 = -2 %, named as a step
-/// error on 4 of 40 clean drives once the odometry's noise was fitted (RESULTS, session 23).
+/// error on 4 of 40 clean drives once the odometry's noise was fitted (docs/results/hidden-effects.md).
 /// With s = 0 both are the same.
 struct MotionPriorCost {
   double dx, dy, dpsi, inv_t, inv_psi;

@@ -761,7 +761,7 @@ void JointProblem::reportEstimates() {
 /// A fitted step scale stays within +-kMaxStepScale: odometry that misjudges its steps by half
 /// is broken, not miscalibrated. Unbounded, an incidence bias hidden in a thin-pole drive drew
 /// the scale to -0.99 (the path shrunk to a point, its misfit in the steps), which out-gained the
-/// bias itself held out (RESULTS, session 23).
+/// bias itself held out (docs/results/hidden-effects.md).
 void JointProblem::boundStepScale(ceres::Problem& problem) const {
   if (!fx_.odometry_scale || !problem.HasParameterBlock(scale_) || problem.IsParameterBlockConstant(scale_)) return;
   problem.SetParameterLowerBound(scale_, 0, -kMaxStepScale);

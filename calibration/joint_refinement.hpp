@@ -99,8 +99,8 @@ enum class MotionPrior {
 };
 const char* toString(MotionPrior m);
 
-/// What a tape measure says about the range model at one measured target (REF.json `distances`,
-/// issue 17): the readings of the beams on it and their true distances. On a pole the tape gives
+/// What a tape measure says about the range model at one measured target (REF.json `distances`
+/// at some stops): the readings of the beams on it and their true distances. On a pole the tape gives
 /// the distance to its centre, so each beam's distance follows from the centre (on the detected
 /// bearing) and the pole radius, which the refinement estimates with the rest; on a wall it is
 /// given. One residual per target, the mean reading against the mean of f over its beams,
@@ -153,7 +153,7 @@ struct JointConfig {
   bool hold_noise_shape = false;
   /// One residual per beam, landmark and stop instead of one per reading: repeated scans from
   /// one pose summarised by their count and mean (the Gaussian likelihood unchanged, the cost
-  /// independent of the scans per stop; issue 19). Not with drift or mixed pixels. Default true.
+  /// independent of the scans per stop). Not with drift or mixed pixels. Default true.
   bool pool_repeated_scans = true;
   /// Motion prior (continuous motion: each scan its own stop, the robot driving between them).
   /// On, the first stop keeps the prior around its commanded pose (sigma_s_m, sigma_psi_rad: it
@@ -205,7 +205,7 @@ bool continuousMotion(const LandmarkObservations& obs, const JointConfig& config
 /// way, otherwise its own. Odometry errs in proportion to the step it measures, not to what it
 /// reports; weighed at its own reported length, a step reported short weighed more than one
 /// reported long, and a drive's fitted step scale came out 1.2 % long on average (odometry noise
-/// 10 % of 3 cm steps, tests/calibration/test_motion_prior.cpp; RESULTS, session 24). The refined
+/// 10 % of 3 cm steps, tests/calibration/test_motion_prior.cpp; docs/results/hidden-effects.md). The refined
 /// step's length instead follows the reported one through the poses' share of the step (it gave
 /// -0.6 %); the neighbours' median is independent of the step's own noise. A step more than half
 /// again or less than half its neighbours' is the robot changing speed (or a pose left out), not

@@ -280,7 +280,7 @@ ClusteredFit fitClustered(const std::vector<double>& d, const std::vector<double
   // Leave one cluster out: fit on the others, the weighted squared error on it; the spread of
   // those fits is the jackknife covariance (which, unlike the sandwich above, does not shrink
   // with few clusters: with 10 stops the sandwich's 95 % intervals held the truth in 83-92 % of
-  // simulated cases, docs/RESULTS.md "Standard errors").
+  // simulated cases; docs/results/standard-errors.md).
   double cv = 0.0, cv_w = 0.0;
   std::vector<Eigen::VectorXd> leave_out;
   for (const auto& [g, sc] : score) {

@@ -1,7 +1,6 @@
 #pragma once
 // Small numeric helpers shared across the libraries: the non-finite constants, ln(2 pi), the
-// medians and a one-dimensional maximiser. One definition each (issue 18 found them copied a
-// dozen times).
+// medians and a one-dimensional maximiser. One definition each.
 
 #include <algorithm>
 #include <cmath>

@@ -1,5 +1,5 @@
 #pragma once
-// The detections of a sequence's final pass, written to an anonymous temporary file (issue 19).
+// The detections of a sequence's final pass, written to an anonymous temporary file.
 // A sequence detected without keeping its scans (memory flat in the sequence's length) is
 // visited again scan by scan for the labelled files and the sightings; reading these records
 // back replaces detecting every scan a second time. Each record carries a fingerprint of the

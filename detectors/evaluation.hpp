@@ -2,7 +2,7 @@
 // Detection and association measured against a simulator's truth (truth.json, true_ranges.csv).
 // Used by `lidarcal detect --truth` and bench/eval_detection; never by detection itself.
 //
-// Definitions (docs/RESULTS.md, section Detection):
+// Definitions (docs/results/detection.md):
 //  - a detection's truth is the target (kind, id) of the majority of its inlier beams;
 //    it is a true positive when that target is a landmark;
 //  - an observation (scan, landmark) is observable when at least min_beams of the landmark's

@@ -2,7 +2,7 @@
 // PCL's RANSAC (pcl::RandomSampleConsensus, fixed seed) for the two models the scan detector
 // fits, run as pcl::SACSegmentation runs it (same model, seeds, settings and calls) but without
 // linking pcl_segmentation: loading that library (and pcl_features, pcl_filters behind it) cost
-// every lidarcal command about 70 ms of start-up, a sixth of `detect` on 1000 scans (issue 19).
+// every lidarcal command about 70 ms of start-up, a sixth of `detect` on 1000 scans.
 
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>

@@ -1,5 +1,5 @@
 #pragma once
-// Radius of thin, far poles from all the scans of one stop (issue 17 item 5). A cheap lidar sees
+// Radius of thin, far poles from all the scans of one stop (docs/results/detection.md). A cheap lidar sees
 // a 55 mm pole at 3-4.5 m with 3-9 beams: one arc cannot determine a radius (scan_detector.hpp
 // refuses it: "radius not determined by the arc", or too few points for a free fit), but the
 // scans of one stop see the same arc from the same pose, so their points pooled fit one circle

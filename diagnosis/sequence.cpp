@@ -161,8 +161,7 @@ Eigen::Vector3d poseGradient(const JointResult& fit, const JointReading& r) {
 /// miss distance `perp` are linear in the pose, and poleDistanceMoments conditions on the hit.
 /// Linearised alone, a thin pole's outermost beams were predicted with up to 20 times the
 /// variance they had, and beams the fit put past the tangent (flat in the pose there, yet their
-/// readings came from the pole) with a small fraction of it (docs/RESULTS.md, "Continuous
-/// recordings").
+/// readings came from the pole) with a small fraction of it (docs/results/hidden-effects.md).
 /// root_extra: poleDistanceMoments's, for a fit with an incidence bias.
 DistanceMoments heldOutDistance(const JointResult& fit, const JointReading& r, const Eigen::Matrix3d& cov,
                                 double root_extra = 0.0) {
@@ -269,7 +268,7 @@ std::vector<Eigen::Matrix3d> poseCovariances(const std::vector<PoseInformation>&
 /// g^T C g / sigma^2 over the readings (their leverages, C the pose's marginal covariance), and
 /// the factor is n / (n - h), as a residual variance is divided by its degrees of freedom. On
 /// clean thin-pole drives the folds' poses took 39 % of the readings' degrees of freedom and the
-/// fitted sigma_e was 17 % below the simulator's (docs/RESULTS.md, "Continuous recordings").
+/// fitted sigma_e was 17 % below the simulator's (docs/results/hidden-effects.md).
 double noiseDofFactor(const std::vector<PoseInformation>& readings, const std::vector<Eigen::Matrix3d>& cov) {
   double h = 0.0;
   for (const auto& r : readings) h += r.g.dot(cov[r.stop] * r.g) / (r.sigma * r.sigma);
@@ -320,7 +319,7 @@ void setNoiseShape(Effect e, double v, JointInit& init) {
 /// residual is expected at sigma_i^2 (1 - h_i), not sigma_i^2. The refinement's own estimate
 /// (maximum likelihood with the poses) reads the residuals as the noise, and with a pose per scan
 /// the readings a pose rests on most, a thin pole's outermost beams near grazing, have the
-/// smallest residuals: on the 20 clean thin-pole drives of docs/RESULTS.md it put the incidence
+/// smallest residuals: on 20 clean simulated thin-pole drives it put the incidence
 /// exponent at its lower bound, -1, every time (held-out gain -0.02 to -0.07 nats per reading),
 /// and a hidden exponent of 1.06-1.48 at 0.02-1.33, while the range law beside it went to
 /// 2.2-2.5. The scale found here is not kept (the held-out readings take the residuals' degrees
@@ -440,7 +439,7 @@ std::vector<double> stepHeldOut(const LandmarkObservations& obs, const JointResu
 /// instead, a few steps 4-5 standard deviations off (a pose the readings barely locate, fitted in
 /// another optimum) put a drive's heading noise 27 % above the simulator's; with the median, on
 /// four drives of known odometry, the translation came within 1.6 of its standard errors and the
-/// heading within 2.2 (+17 %), session 23.
+/// heading within 2.2 (+17 %).
 /// The counts: the residuals behind each factor (its relative standard error is about
 /// sqrt(1.36 / count), the median absolute deviation's as an estimate of a normal's scale).
 /// Steps whose poses the readings do not both locate are left out. Factors 1 and counts 0 with
@@ -529,7 +528,7 @@ std::vector<double> heldOutLikelihoods(const LandmarkObservations& train, const 
     }
     // An incidence bias b moves the reading with the pose as the distance does, b / (r f'(d)) more
     // (poleDistanceMoments): on a thin pole predicted from the distance alone, a fold that refitted
-    // a hidden b of 3.7 cm lost 96-210 nats on its held-out scans (RESULTS, session 23).
+    // a hidden b of 3.7 cm lost 96-210 nats on its held-out scans (docs/results/hidden-effects.md).
     const double slope = fit.model.bias.derivative(r.d_m), b = fit.effects.incidence_bias_m;
     const double extra = b != 0.0 && slope > 0.1 && fit.radius_m > 0.0 ? b / (fit.radius_m * slope) : 0.0;
     const DistanceMoments dm = heldOutDistance(fit, r, cov[r.stop], extra);
@@ -1810,7 +1809,7 @@ void SequenceDiagnosis::chooseOrder() {
 /// (within 2 %, four passes at most). Held at the defaults, the thin-pole drives' odometry (3 mm
 /// per 3 cm step against the defaults' 5 mm) was weighed at a third of its information: the
 /// yawed lidar's offset had a standard error of 0.55 degrees where its estimates scattered by
-/// 0.34 over 40 drives, and three offsets of 2.1-2.2 degrees went unnamed (RESULTS, session 23).
+/// 0.34 over 40 drives, and three offsets of 2.1-2.2 degrees went unnamed (docs/results/hidden-effects.md).
 void SequenceDiagnosis::fitOdometryNoise() {
   const JointConfig prior = base_;
   const JointResult at_prior = fit0_;
@@ -2206,7 +2205,7 @@ void SequenceDiagnosis::requireClearOfNull(CandidateResult& r, const JointResult
   auto say = [&r](const std::string& why) { r.note += (r.note.empty() ? "" : "; ") + why; };
   // A step scale at its bound is no odometry's: on thin-pole drives with a hidden incidence bias
   // the scale ran to -0.5 (unbounded -0.92 to -0.99, the path shrunk towards a point) and its
-  // held-out gain outgrew the bias's (RESULTS, session 23).
+  // held-out gain outgrew the bias's (docs/results/hidden-effects.md).
   if (r.effect == Effect::odometry_scale && std::isfinite(r.p_value) &&
       std::abs(fc.effects.odometry_scale) >= kMaxStepScale * (1.0 - 1e-6)) {
     r.p_value = 1.0;
@@ -2239,8 +2238,8 @@ void SequenceDiagnosis::requireClearOfNull(CandidateResult& r, const JointResult
   // optima's: a yawed lidar's drive (weights at the neighbours' step length) named a drift of
   // 0.26 mm over the drive, 3.5 standard errors, held-out +0.006 +- 0.0015 per reading against the
   // found offset's +0.005, whose fit on all the data was 0.31 nats less likely than the
-  // baseline's. Of 962 drive diagnoses kept in sessions 22-24 it was the only significant term in
-  // the mean with lr in [-1, 0].
+  // baseline's. Of 962 kept drive diagnoses it was the only significant term in the mean with lr
+  // in [-1, 0].
   if (geometryTerm(r.effect) && lr <= 0.0) {
     r.p_value = 1.0;
     char buf[200];
@@ -2422,7 +2421,7 @@ std::pair<JointConfig, JointInit> SequenceDiagnosis::beside(std::size_t c, std::
 /// are estimated on the Gaussian residuals and only the law's scale by ML on the grid cells (by
 /// the t's EM under Student-t noise), so the rounded model (the t) with one of them is not an ML
 /// fit, and its likelihood ratio against the rounded model (the t) alone not chi-squared (beside
-/// the t it named incidence noise in 1 of 20 pure t-noise cases, session 11).
+/// the t it named incidence noise in 1 of 20 pure t-noise cases).
 bool noiseShapeEffect(Effect e) {
   return e == Effect::incidence_noise || e == Effect::range_noise_law || e == Effect::heavy_tails ||
          e == Effect::mixed_pixels || e == Effect::dark_surface;
@@ -2444,7 +2443,7 @@ double SequenceDiagnosis::pBesideInSample(const JointResult& both, std::size_t u
                                both.effect_parameters - fits_[under].effect_parameters);
 }
 
-/// Heavy tails are a symptom (issue 20: the named cause must be physical), and a reading grid
+/// Heavy tails are a symptom (the named cause must be physical), and a reading grid
 /// is the format of the sensor's output, which biases nothing. When either comes first, each
 /// other significant effect is fitted beside it (gainsBeside): one whose held-out gain over the
 /// tails' (the grid's) term alone stays significant (one-sided, Bonferroni over those tried) is

@@ -1122,7 +1122,7 @@ struct SimSample {
 };
 
 // ---------------------------------------------------------------------------------------------
-// Tails explained (issue 20, diagnosis/tails.hpp): the contamination model's covariates per bin,
+// Tails explained (diagnosis/tails.hpp): the contamination model's covariates per bin,
 // the residuals it is fitted to, and its variants compared on the same scan folds.
 
 /// The tail model's view of the bins: covariates from the full-data locations `f`.
@@ -1806,7 +1806,7 @@ void StaticDiagnosis::refineCauseByTails(DiagnosisResult& out) {
   if (named && robustEffectOf(*named)) {
     if (reRankUnderTails(out)) return;
     // None of the four is significant beside the contamination: the tails made the Gaussian
-    // verdict, and the tails' own cause is named (session 14; seeds 402 and 406 of the edge tails).
+    // verdict, and the tails' own cause is named (seeds 402 and 406 of the edge tails).
     named_by_tails_ = false;
     why = out.primary_cause +
           ", first under the Gaussian likelihood, is not significant beside a pooled contamination (nor is another noise "
@@ -1837,7 +1837,7 @@ void StaticDiagnosis::refineCauseByTails(DiagnosisResult& out) {
   out.primary_cause = ta.cause;
   named_by_tails_ = true;
   // The tail model until the named effect's candidate replaces it (every cause the tails name is a
-  // candidate; dark_surface since session 14: its model is the Gaussian noise law with the
+  // candidate; dark_surface's model is the Gaussian noise law with the
   // darkness factor, simulated with the exponent fitted on all readings).
   out.extended_parameters = ta.model;
   out.gain_heldout_nats_per_point = ta.pooled_gain_nats_per_point + ta.explained_gain_nats_per_point;

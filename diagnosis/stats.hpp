@@ -51,7 +51,7 @@ double blockTridiagonalLogDet(const std::vector<Eigen::Matrix3d>& diagonal, cons
 /// sqrt(r^2 - perp^2) / r clamped (clampCosIncidence): a reading with an incidence bias b reads
 /// f(d) + b (1 - cos phi), which moves with perp as the distance does scaled by 1 + b / (r f'(d)),
 /// so c = b / (r f'(d)). On a thin pole (r 2.75 cm, b 3.3 cm) that more than doubles the spread
-/// a held-out reading has from its scan's pose (RESULTS, session 23).
+/// a held-out reading has from its scan's pose (docs/results/hidden-effects.md).
 struct DistanceMoments {
   double mean = 0.0, var = 0.0;
 };

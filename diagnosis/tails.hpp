@@ -1,5 +1,5 @@
 #pragma once
-// Tails explained by physical covariates (issue 20): a per-reading contamination mixture whose
+// Tails explained by physical covariates: a per-reading contamination mixture whose
 // probability depends on what the beam sees. A residual r of beam b (reading minus the beam's
 // location) has the density
 //   p(r) = (1 - eta_b) [(1 - pi_b) N(r; 0, s_b^2) + pi_b N(r; 0, w_b^2)] + eta_b U(r; lo_b, hi_b)

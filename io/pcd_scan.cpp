@@ -670,7 +670,7 @@ void writeScan(const fs::path& file, const Scan& scan, PcdEncoding encoding) {
     bool ok = true;
     if (encoding == PcdEncoding::binary) {
       // PCL's header followed by the packed data: the bytes of PCL's writeBinary without the
-      // page of padding it stretches the file by, in one open and one write (issue 19).
+      // page of padding it stretches the file by, in one open and one write.
       const std::string header = writer.generateHeaderBinary(blob, origin, orientation) + "DATA binary\n";
       std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
       out.write(header.data(), static_cast<std::streamsize>(header.size()));

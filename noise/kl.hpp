@@ -3,7 +3,7 @@
 // assumed noise setting, fit a Gaussian to each sensor's predicted errors per component (range,
 // bearing), and sum the KL divergences KL(assumed || predicted) over sensors and components.
 //
-// Three switches select the seed's variant or ours (docs/RESULTS.md, "Noise consistency"):
+// Three switches select the seed's variant or ours (docs/results/noise-consistency.md):
 //  - common random numbers: the same particle-filter random stream for every candidate setting
 //    (ours), or a fresh stream per evaluation (seed: the objective is then a noisy function);
 //  - KL scale: the Gaussians parametrised by their variance (ours) or with the variance value used

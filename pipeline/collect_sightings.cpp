@@ -194,8 +194,7 @@ LandmarkObservations toLandmarkObservations(const io::Sequence& seq, const detec
   // Within a scan by landmark id, not in the detector's order: a fit under a pose per scan sums
   // its terms in this order, and on a drive with a hidden effect the same sightings listed in
   // another order (a pole across the scan's seam moved from first to last) reached baselines
-  // 440 nats apart (a yawed thin-pole drive, session 21). Their order is now a function of what
-  // was seen.
+  // 440 nats apart (a yawed thin-pole drive). Their order is a function of what was seen.
   std::stable_sort(obs.sightings.begin(), obs.sightings.end(), [](const Sighting& a, const Sighting& b) {
     return a.scan != b.scan ? a.scan < b.scan : a.landmark < b.landmark;
   });

@@ -13,7 +13,7 @@ namespace lidarcal::pipeline {
 /// What a sighting holds besides its circle's inliers.
 struct SightingOptions {
   /// Also the beam just outside each end of the inliers when it reads clearly between the pole and
-  /// the surface behind it, as its sighting's outermost reading: a mixed pixel (issue 20). The
+  /// the surface behind it, as its sighting's outermost reading: a mixed pixel. The
   /// detector leaves such readings out (they are off the circle), so without them a diagnosis
   /// cannot see mixed pixels on thin poles. Reads every scan with a sighting again. Default false.
   bool mixed_pixel_candidates = false;

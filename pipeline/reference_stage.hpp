@@ -78,7 +78,7 @@ std::size_t measuredStops(const Reference& ref);
 /// Self-calibration of the whole sequence with the measured distances in the same likelihood
 /// (calibration::JointConfig::known_ranges: the tape's scale beside the poles' geometry) and the
 /// surveyed landmarks and measured stops of `ref` held fixed as in calibrateSequenceWithSurvey.
-/// For distances measured at only some stops (issue 17). Method "joint+reference". Throws
+/// For distances measured at only some stops. Method "joint+reference". Throws
 /// InputError for --method closed-form, DataError for a distance whose target is not found.
 SequenceCalibration calibrateSequenceWithDistancesAndSelf(const io::Sequence& seq, const Reference& ref,
                                                          const std::filesystem::path& ref_file,

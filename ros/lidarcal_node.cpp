@@ -1,4 +1,4 @@
-// lidarcal_node: corrects a sensor_msgs/LaserScan topic live with a model.json (issue 21).
+// lidarcal_node: corrects a sensor_msgs/LaserScan topic live with a model.json.
 //   ~model      model.json from `lidarcal calibrate` (required)
 //   ~input      LaserScan topic to read (default "scan")
 //   ~output     topic for the corrected scans (default "scan_corrected")

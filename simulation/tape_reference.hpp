@@ -1,8 +1,8 @@
 #pragma once
 // What a user with a tape measure would write into REF.json for a simulated sequence: the
 // distance from the sensor's true position at each stop to the centre of every pole it sees
-// whole. Used by the tests and benchmarks of `calibrate --reference` (docs/RESULTS.md,
-// "Are the standard errors honest?"); the truth stands in for the tape.
+// whole. Used by the tests and benchmarks of `calibrate --reference`
+// (docs/results/standard-errors.md); the truth stands in for the tape.
 
 #include <cstdint>
 

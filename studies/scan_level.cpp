@@ -130,8 +130,8 @@ Draw drawScanLevel(const std::vector<Cylinder>& layout, const PathSpec& path, co
       scans.size(), [&](std::size_t i) { return scans.at(i).scan; }, stop_of_scan, dc);
   d.true_id = matchLandmarks(det.association, layout, config.match_distance_m);
   // As pipeline::toLandmarkObservations, from the scans in memory, but within a scan in the
-  // detector's order, not by landmark (session 22 changed that function; the study's stop-and-go
-  // numbers in docs/RESULTS.md were measured in this order).
+  // detector's order, not by landmark (the study's stop-and-go numbers in
+  // docs/results/montecarlo.md were measured in this order).
   for (std::size_t i = 0; i < det.scans.size(); ++i) {
     const auto& sd = det.scans[i];
     const auto& ids = det.association.ids.at(i);

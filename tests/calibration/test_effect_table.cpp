@@ -52,7 +52,7 @@ TEST(EffectTable, EffectNamesListsTheSelectedNamesInTableOrder) {
   EXPECT_EQ(effectNames([](const EffectInfo& i) { return i.static_statistic && !i.sequence_statistic; }), "");
   EXPECT_EQ(effectNames([](const EffectInfo& i) { return i.static_statistic && i.sequence_statistic && !i.joint_term; }), "");
   EXPECT_EQ(effectNames([](const EffectInfo& i) { return !i.static_statistic && !i.sequence_statistic; }), "");
-  // Every effect is a candidate in both modes (dark_surface in static data since session 14).
+  // Every effect is a candidate in both modes (dark_surface in static data too).
   EXPECT_EQ(effectNames([](const EffectInfo& i) { return !i.static_statistic || !i.sequence_statistic; }), "");
   // One pose shows nothing of stops, headings or one surface's offset: no static statistic.
   EXPECT_EQ(effectNames([](const EffectInfo& i) { return i.static_statistic && *i.static_statistic == '\0'; }),

@@ -174,7 +174,7 @@ TEST(Calibrate, JointComesCloseToTheGroundTruthFitAndBeatsTheClosedFormUnderLarg
 
 // An odometry scale error with the pole radius unknown: self-calibration cannot tell a longer
 // path from a stretched range (the bias absorbs it), surveyed landmark centres or measured stop
-// poses can (REF.json `landmarks`, `stops`; issue 17). The survey is taken from the truth the
+// poses can (REF.json `landmarks`, `stops`). The survey is taken from the truth the
 // test controls; a survey scaled by 3 % must move the fitted bias with it (it is really used).
 TEST(Calibrate, SurveyedCentresOrMeasuredPosesGiveTheScaleAnOdometryScaleErrorHides) {
   const auto cfg = scaleErrorField();
@@ -229,8 +229,8 @@ TEST(Calibrate, SurveyedCentresOrMeasuredPosesGiveTheScaleAnOdometryScaleErrorHi
 }
 
 // Tape-measured distances at two stops only (too few for seed 004's fit on its own, which needs
-// three) combined with the self-calibration of the whole recording (JointConfig::known_ranges;
-// issue 17): the tape gives the scale an odometry scale error hides, the poles and the other
+// three) combined with the self-calibration of the whole recording (JointConfig::known_ranges):
+// the tape gives the scale an odometry scale error hides, the poles and the other
 // stops the shape. The truth the test controls: the beams' true distances from the simulation.
 TEST(Calibrate, DistancesMeasuredAtTwoStopsGiveTheSelfCalibrationItsScale) {
   const auto cfg = scaleErrorField();

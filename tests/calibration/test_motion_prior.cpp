@@ -1,4 +1,4 @@
-// Continuous motion (issue 17 item 2): a robot driving a loop among thin poles, every scan its
+// Continuous motion: a robot driving a loop among thin poles, every scan its
 // own pose from drifting odometry (data/scenes/driving_small_poles.json, landmark level: no
 // detector). The joint refinement with the odometry as a motion prior between consecutive
 // poses must bring the poses closer to the truth than the odometry, and closer than tying every
@@ -105,8 +105,8 @@ TEST(MotionPrior, RefinedPosesBeatTheOdometryAndThePerPosePrior) {
 // The prior's reported negative log-likelihood is the odometry's Gaussian density at the
 // refined poses, translation and heading of every step (and the first pose's tie to its
 // commanded pose), each step's deviations at its neighbours' length: a likelihood ratio of two fits
-// compares what the refinement minimised. Until session 24 the heading changes were left out
-// (hundreds of nats on this drive).
+// compares what the refinement minimised. Leaving the heading changes out would miss hundreds
+// of nats on this drive.
 TEST(MotionPrior, ReportedPriorLikelihoodIsTheOdometrysDensityAtThePoses) {
   const auto cfg = driving();
   const auto sample = simulation::simulateLandmarkLevel(cfg, 4);

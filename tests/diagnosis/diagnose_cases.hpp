@@ -303,10 +303,10 @@ inline std::vector<double> roomIntensities() { return {200.0, 35.0, 120.0, 20.0,
 
 /// The static cases. The room's alpha_0 is 0.01 m. An incidence-dependent bias bends straight walls
 /// almost as an offset does: with the offset given (a reference distance) it is named; without it
-/// the truth allows it, "not identifiable" or nothing named (over seeds 101-110 it is named in 5
-/// of 10, docs/RESULTS.md), but no other cause. A step-length error
+/// the truth allows it, "not identifiable" or nothing named (over seeds 101-110 it was named in 5
+/// of 10), but no other cause. A step-length error
 /// cannot exist with one pose (nothing moves): the data are clean. Quantisation: a 2 mm grid, as
-/// coarse as the noise at 1-2 m (docs/RESULTS.md gives the rates for coarser grids).
+/// coarse as the noise at 1-2 m (docs/results/static-diagnosis.md gives the rates for coarser grids).
 inline std::vector<StaticCase> staticCases() {
   auto fx = [](auto set) {
     RangeEffects e;

@@ -41,11 +41,11 @@ using namespace lidarcal::calibration;  // the joint refinement the diagnosis re
 namespace {
 
 /// Hidden-effect cases of `effect` (LIDARCAL_DIAGNOSE_CASES for every effect). By default 10 for
-/// the clean data and angle_offset, the two whose fresh rate is below 20 of 20 (docs/RESULTS.md),
-/// and 5 for the others: a case costs about 4 s of CPU (candidate fits and cross-validation, not
-/// the replicas), and 10 for every effect made the default suite about 60 % longer than before
-/// issue 22, against a budget of 30 %. A deliberate bug that breaks an effect's likelihood ratio
-/// or its sign fails its check in every case, so 5 cases catch it as surely as 10.
+/// the clean data and angle_offset, the two whose fresh rate is below 20 of 20
+/// (docs/results/hidden-effects.md), and 5 for the others: a case costs about 4 s of CPU (candidate
+/// fits and cross-validation, not the replicas), and 10 for every effect would make the default
+/// suite about 60 % longer, against a budget of 30 %. A deliberate bug that breaks an effect's
+/// likelihood ratio or its sign fails its check in every case, so 5 cases catch it as surely as 10.
 int casesPerEffect(const std::string& effect) {
   const char* env = std::getenv("LIDARCAL_DIAGNOSE_CASES");
   if (env && *env) return std::max(1, std::atoi(env));
@@ -54,7 +54,7 @@ int casesPerEffect(const std::string& effect) {
 
 /// Bootstrap replicas of the hidden-effect runs (LIDARCAL_DIAGNOSE_REPLICAS). The default run
 /// takes the fewest the method allows (5) to keep the suite's time; the long run and
-/// docs/RESULTS.md take the command's default (19).
+/// docs/results/hidden-effects.md take the command's default (19).
 int replicasPerCase() {
   const char* env = std::getenv("LIDARCAL_DIAGNOSE_REPLICAS");
   return env && *env ? std::max(5, std::atoi(env)) : 5;
@@ -67,9 +67,9 @@ std::uint64_t nameTag(const std::string& name) {
   return h;
 }
 
-/// Seeds for the hidden effects, drawn from a seed the tests do not read (issue 20: data
-/// generated with seeds the tests do not choose), one stream per `tag`, disjoint in practice from
-/// the development seeds (all below 1000).
+/// Seeds for the hidden effects, drawn from a seed the tests do not read (data generated with seeds
+/// the tests do not choose), one stream per `tag`, disjoint in practice from the development seeds
+/// (all below 1000).
 std::vector<std::uint64_t> unreadSeeds(std::uint64_t tag, int n) {
   auto rng = makeRng(20261125, tag);
   std::uniform_int_distribution<std::uint64_t> seed_of(1000, 1000000);
@@ -79,7 +79,8 @@ std::vector<std::uint64_t> unreadSeeds(std::uint64_t tag, int n) {
 }
 
 /// Case seeds of the hidden-effect runs of `effect`: n consecutive from LIDARCAL_DIAGNOSE_FIRST
-/// when it is set (the long run and docs/RESULTS.md: 21-40), else drawn by unreadSeeds.
+/// when it is set (the long run and docs/results/hidden-effects.md: 21-40), else drawn by
+/// unreadSeeds.
 std::vector<std::uint64_t> caseSeeds(const std::string& effect, int n) {
   const char* env = std::getenv("LIDARCAL_DIAGNOSE_FIRST");
   if (env && *env) {
@@ -757,10 +758,10 @@ TEST(DiagnoseSequence, WithoutIntensitiesTheDarkSurfaceModelIsNotApplicable) {
 
 TEST(DiagnoseSequence, AnAngleOffsetUnderHeavyTailsIsNamedByItsLikelihoodRatioBesideTheT) {
   // A lidar yawed 2-3 degrees in Student-t noise of 3 degrees of freedom: the t comes first, and
-  // the offset's evidence is in sample (its held-out gain beside the t is about 2 standard
-  // errors), so it is named by the likelihood ratio of the two t fits (SequenceDiagnosis::
-  // nameBeside; named in 18 of 20 fresh cases, docs/RESULTS.md). Three cases whose seeds come
-  // from a seed this test does not read, at least 2 named.
+  // the offset's evidence is in sample (its held-out gain beside the t is about 2 standard errors),
+  // so it is named by the likelihood ratio of the two t fits (SequenceDiagnosis:: nameBeside; named
+  // in 18 of 20 fresh cases, docs/results/hidden-effects.md). Three cases whose seeds come from a
+  // seed this test does not read, at least 2 named.
   int named = 0;
   std::string misses;
   for (const std::uint64_t k : unreadSeeds(nameTag("angle offset under tails"), 3)) {
@@ -782,9 +783,9 @@ TEST(DiagnoseSequence, AnAngleOffsetUnderHeavyTailsIsNamedByItsLikelihoodRatioBe
 
 TEST(DiagnoseSequence, APhysicalEffectUnderHeavyTailsIsNamedAndTheTailsStayBesideIt) {
   // Per-pole range offsets (RMS 2-2.5 cm) in Student-t noise of 3 degrees of freedom: the named
-  // cause must be physical (issue 20). Either the offsets gain most, or the t comes first and
-  // the offsets hold beside it (refitted with the t, held out: SequenceDiagnosis::refineCause;
-  // in 3 of 5 development cases). Three cases whose seeds come from a seed this test does not read.
+  // cause must be physical. Either the offsets gain most, or the t comes first and the offsets hold
+  // beside it (refitted with the t, held out: SequenceDiagnosis::refineCause; in 3 of 5 development
+  // cases). Three cases whose seeds come from a seed this test does not read.
   int beside = 0;
   for (const std::uint64_t k : unreadSeeds(nameTag("offsets under tails"), 3)) {
     SCOPED_TRACE(k);
@@ -918,8 +919,8 @@ TEST_P(StaticHiddenEffect, DiagnoseNamesWhatTheTruthAllows) {
   DiagnoseConfig dc;
   dc.replicas = 9;
   dc.static_range_offset_m = c.known_offset_m;
-  // One room whose seed comes from a seed this test does not read (the rates over seeds 101-110
-  // are in docs/RESULTS.md).
+  // One room whose seed comes from a seed this test does not read (the rates over seeds:
+  // docs/results/static-diagnosis.md).
   const std::uint64_t seed = unreadSeeds(nameTag(c.name), 1).front();
   dc.seed = seed;
   const auto r = diagnoseStatic(staticRoom(c, seed), dc);
@@ -1105,7 +1106,7 @@ TEST(DiagnoseStatic, TooFewScansGiveAStatus) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Tails explained by covariates (diagnosis/tails.hpp, issue 20).
+// Tails explained by covariates (diagnosis/tails.hpp).
 
 /// Residuals drawn from the tail model itself: the EM recovers its parameters (oracle: the truth).
 TEST(DiagnoseTails, EmRecoversTheContaminationModelFromItsOwnDraws) {
@@ -1221,10 +1222,10 @@ TEST(DiagnoseStatic, TailStudyIsDeterministic) {
     EXPECT_EQ(a.tails.top_beams[k].bearing_rad, b.tails.top_beams[k].bearing_rad);
 }
 
-/// Mixed pixels at 2-10 % of the edge readings (issue 20, item 3; a fraction drawn per seed): the
-/// readings between the two surfaces are tails on the edge beams, so mixed_pixels is named (by its
-/// own candidate, or from the tails' edge covariate). Four seeds, at least 3.
-/// diagnoseStatic on staticRoom() with `fx`, simulated and diagnosed with `seed`, 5 replicas.
+/// Mixed pixels at 2-10 % of the edge readings (a fraction drawn per seed): the readings between
+/// the two surfaces are tails on the edge beams, so mixed_pixels is named (by its own candidate, or
+/// from the tails' edge covariate). Four seeds, at least 3. diagnoseStatic on staticRoom() with
+/// `fx`, simulated and diagnosed with `seed`, 5 replicas.
 DiagnosisResult diagnoseRoomAtSeed(const RangeEffects& fx, std::uint64_t seed) {
   DiagnoseConfig dc;
   dc.replicas = 5;
@@ -1235,12 +1236,12 @@ DiagnosisResult diagnoseRoomAtSeed(const RangeEffects& fx, std::uint64_t seed) {
 class ReadingGrid : public ::testing::TestWithParam<double> {};
 
 TEST_P(ReadingGrid, ReadingsRoundedToItAreNamedQuantisation) {
-  // Readings rounded to 2, 5 or 10 mm under noise of 3-50 mm (the room at 1.5-6 m). Every model
-  // is scored on the readings spread uniformly over their grid cells, where the rounded model
-  // (a normal cell probability over q) is the true one; before that the 5 and 10 mm grids were
-  // named in 2 and 0 of 10 rooms, then 15 and 16 of 20 under a variance floor (docs/RESULTS.md
-  // "Static mode"). Four rooms whose seeds come from a seed this test does not read (the method
-  // was developed on seeds 101-130), at least 3 named.
+  // Readings rounded to 2, 5 or 10 mm under noise of 3-50 mm (the room at 1.5-6 m). Every model is
+  // scored on the readings spread uniformly over their grid cells, where the rounded model (a
+  // normal cell probability over q) is the true one; a continuous model scored at the grid points,
+  // or a variance floor, misses most 5 and 10 mm grids (docs/results/static-diagnosis.md). Four
+  // rooms whose seeds come from a seed this test does not read (the method was developed on seeds
+  // 101-130), at least 3 named.
   const double grid = GetParam();
   int right = 0;
   std::string log;

@@ -236,7 +236,7 @@ TEST(CliDiagnoseStopAndGo, MixedPixelsAtPoleEdgesInTheScansAreNamed) {
   // edge reading between the pole and the background: the readings off the circle are kept
   // beside their sightings when no other scan of the stop sees a surface there. Fraction and
   // simulator seed from a seed this test does not read (measured: 8 of 8 such fields named,
-  // their clean twins none; docs/RESULTS.md).
+  // their clean twins none; docs/results/hidden-effects.md).
   TempDir dir;
   auto rng = makeRng(20261128, 31);
   const double fraction = std::uniform_real_distribution<double>(0.05, 0.10)(rng);
@@ -250,11 +250,11 @@ TEST(CliDiagnoseStopAndGo, MixedPixelsAtPoleEdgesInTheScansAreNamed) {
 }
 
 TEST(CliDiagnoseDriving, CleanDrivesNameNoEffectAtItsNull) {
-  // A pose per scan, chained by the odometry. Before session 10 every clean drive tried was
-  // named (large poles: mixed_pixels, odometry_scale; thin poles: incidence_bias), each with its
-  // estimate at the null: edge beams scored at the fitted pose alone, baselines in poorer optima
-  // than a candidate's fit, a likelihood ratio between optima. The drive's seed is drawn from a
-  // seed this test does not read (the method was developed on seeds 1-60 of the two scenes).
+  // A pose per scan, chained by the odometry. What names a clean drive an effect at its null (large
+  // poles: mixed_pixels, odometry_scale; thin poles: incidence_bias): edge beams scored at the
+  // fitted pose alone, baselines in poorer optima than a candidate's fit, a likelihood ratio
+  // between optima. The drive's seed is drawn from a seed this test does not read (the method was
+  // developed on seeds 1-60 of the two scenes).
   TempDir dir;
   auto rng = makeRng(20261125, 5);
   std::uniform_int_distribution<int> seed_of(100, 100000);
@@ -264,9 +264,9 @@ TEST(CliDiagnoseDriving, CleanDrivesNameNoEffectAtItsNull) {
     simulate(dir / "scene.json", dir / scene, seed);
     const auto r = runCli("diagnose -q " + (dir / scene / "scans").string() + " --replicas 5 --out " + (dir / (scene + "-d")).string());
     ASSERT_EQ(r.exit_code, 0) << r.err;
-    // Large poles: `none` in 19 of 20 drives, thin poles (one to three beams per pole) in 20 of
-    // 20 since session 16's held-out predictive distribution (docs/RESULTS.md); before it two
-    // thin-pole drives in 20 were named range_noise_law, the in-sample noise being too small.
+    // Clean drives are `none` with large poles and with thin ones (one to three beams per pole;
+    // docs/results/hidden-effects.md). Without the held-out predictive distribution over the
+    // pose, thin-pole drives get range_noise_law, the in-sample noise being too small.
     EXPECT_EQ(r.out, "none\n") << scene << " seed " << seed;
     const auto j = json(dir / (scene + "-d") / "diagnosis.json");
     expectInSampleEvidence(j, scene + " seed " + std::to_string(seed));
@@ -295,13 +295,13 @@ TEST(CliDiagnoseDriving, CleanDrivesNameNoEffectAtItsNull) {
 }
 
 TEST(CliDiagnoseDriving, ARangeDriftInAThinPoleDriveIsNamedAtItsSize) {
-  // A robot that never stops among thin poles (one to three beams per pole and scan) whose
-  // readings drift by 3-4 cm over the drive. Fitted directly on every beam, from the baseline's
-  // solution, the drift settled at a third to two thirds of its size, thousands of nats short of
-  // its optimum, and incidence_noise was named in 4 of 5 such drives (docs/RESULTS.md,
-  // "Continuous recordings"); every fit under the motion prior now also starts with calibrate's
-  // smoother problem (SequenceDiagnosis::graduated). The drift's size and sign and the
-  // simulator's seed come from a seed this test does not read.
+  // A robot that never stops among thin poles (one to three beams per pole and scan) whose readings
+  // drift by 3-4 cm over the drive. Fitted directly on every beam, from the baseline's solution,
+  // the drift settled at a third to two thirds of its size, thousands of nats short of its optimum,
+  // and incidence_noise was named in 4 of 5 such drives; so every fit under the motion prior also
+  // starts with calibrate's smoother problem (SequenceDiagnosis::graduated;
+  // docs/results/hidden-effects.md). The drift's size and sign and the simulator's seed come from a
+  // seed this test does not read.
   TempDir dir;
   auto rng = makeRng(20261127, 17);
   const double sign = std::bernoulli_distribution(0.5)(rng) ? 1.0 : -1.0;
@@ -322,11 +322,10 @@ TEST(CliDiagnoseDriving, ARangeDriftInAThinPoleDriveIsNamedAtItsSize) {
 
 TEST(CliDiagnoseDriving, MixedPixelsBesideThinPolesAreNamed) {
   // 5-10 % of the beams at a thin pole's edge read somewhere between the pole and the background.
-  // The detector leaves those readings off the pole's circle; until session 18 the diagnosis
-  // never saw them and named such drives none in 5 of 5. The readings beside a pole that lie
-  // between it and the background and that no nearby scan sees again are now kept as the
-  // sighting's outermost readings. The fraction and the simulator's seed come from a seed this
-  // test does not read.
+  // The detector leaves those readings off the pole's circle, so a diagnosis of its sightings alone
+  // never sees them (such drives: none in 5 of 5). The readings beside a pole that lie between it
+  // and the background and that no nearby scan sees again are kept as the sighting's outermost
+  // readings. The fraction and the simulator's seed come from a seed this test does not read.
   TempDir dir;
   auto rng = makeRng(20261128, 29);
   const double fraction = std::uniform_real_distribution<double>(0.05, 0.10)(rng);
@@ -353,11 +352,11 @@ TEST(CliDiagnoseDriving, NoiseGrowingTowardsGrazingOnThinPolesIsNamedNotASteeper
   // The noise of a reading grows as (1 / cos phi)^gamma with its incidence phi on the pole, gamma
   // 1-1.5, on a robot that never stops among thin poles. Fitted by maximum likelihood with a pose
   // per scan, the exponent reads the residuals as the noise, and the outermost beams that the
-  // scan's pose rests on have the smallest: until session 19 clean drives had it at -1 (its lower
-  // bound) and 7 of 20 such drives were named a range law 0.2-0.5 steeper than the squared one
-  // (4) or none (2 of them; docs/RESULTS.md). The exponent is now estimated by restricted
-  // likelihood over the poses. Its size and the simulator's seed come from a seed this test does
-  // not read.
+  // scan's pose rests on have the smallest: so fitted, clean drives had it at -1 (its lower bound)
+  // and 7 of 20 such drives were named a range law 0.2-0.5 steeper than the squared one (4) or none
+  // (2 of them). The exponent is therefore estimated by restricted likelihood over the poses
+  // (docs/results/hidden-effects.md). Its size and the simulator's seed come from a seed this test
+  // does not read.
   TempDir dir;
   auto rng = makeRng(20261128, 31);
   const double gamma = std::uniform_real_distribution<double>(1.0, 1.5)(rng);
@@ -381,12 +380,12 @@ TEST(CliDiagnoseDriving, ALidarYawedOnARobotThatNeverStopsIsNamedFromItsOdometry
   // A lidar mounted 2.5-3.5 degrees off the robot's axis, on a robot that never stops among thin
   // poles. Each scan's heading is refined, so the readings alone cannot tell the offset from the
   // headings; the odometry steps can: the robot drives along its own axis, which the yawed lidar
-  // sees turned. Until session 17 such drives were named none in 5 of 5 (the fit started from
-  // the baseline's headings, its baseline refitted with the offset dropped from the beams and
-  // the steps held out nowhere). The offset's size and sign and the simulator's seed come from a
-  // seed this test does not read. Sizes from 2.5 degrees, 4.5 standard errors of this drive's
-  // 0.55: at 2.07 degrees (3.8 standard errors) one drive was reported none, the offset
-  // estimated at 1.95 but Holm's p 0.011 against 0.01, the detection limit (docs/RESULTS.md).
+  // sees turned. Started from the baseline's headings, with its baseline refitted with the offset
+  // dropped from the beams and no step held out, such drives were named none in 5 of 5. The
+  // offset's size and sign and the simulator's seed come from a seed this test does not read. Sizes
+  // from 2.5 degrees, 4.5 standard errors of this drive's 0.55: at 2.07 degrees (3.8 standard
+  // errors) one drive was reported none, the offset estimated at 1.95 but Holm's p 0.011 against
+  // 0.01, the detection limit (docs/results/hidden-effects.md).
   TempDir dir;
   auto rng = makeRng(20261127, 23);
   const double sign = std::bernoulli_distribution(0.5)(rng) ? 1.0 : -1.0;
@@ -449,11 +448,11 @@ TEST(CliDiagnoseDriving, TheOdometrysNoiseIsFittedFromTheDrivesOwnSteps) {
 
 TEST(CliDiagnoseDriving, ANoiseLawFlatterThanTheSquaredOneIsNamedOnThinPolesAtTheDefaultReplicas) {
   // The noise grows as f(d)^k, k 0.5-1, instead of seed 004's f(d)^2, its scale matched to the
-  // squared law's at f(d) = 1.8 m, near where this drive sees its poles: the two laws part only
-  // at its nearest and farthest readings. With 5 bootstrap replicas 4 of 20 such drives
-  // were named none (the statistic's p from a Student t of 4 degrees of freedom); with
-  // diagnose's default of 19, 1 of 20 (docs/RESULTS.md). The exponent and the simulator's seed
-  // come from a seed this test does not read.
+  // squared law's at f(d) = 1.8 m, near where this drive sees its poles: the two laws part only at
+  // its nearest and farthest readings. With 5 bootstrap replicas 4 of 20 such drives were named
+  // none (the statistic's p from a Student t of 4 degrees of freedom); with diagnose's default of
+  // 19, 1 of 20 (docs/results/hidden-effects.md). The exponent and the simulator's seed come from a
+  // seed this test does not read.
   TempDir dir;
   auto rng = makeRng(20261128, 37);
   const double k = std::uniform_real_distribution<double>(0.5, 1.0)(rng);
@@ -470,8 +469,8 @@ TEST(CliDiagnoseDriving, ANoiseLawFlatterThanTheSquaredOneIsNamedOnThinPolesAtTh
   const auto j = json(dir / "d/diagnosis.json");
   for (const auto& c : j["candidates"])
     if (c["effect"] == "range_noise_law") {
-      // Fitted near its size (0.97-1.19 for k 0.95-0.97 in the drives of docs/RESULTS.md), and
-      // clear of the squared law.
+      // Fitted near its size (0.97-1.19 for k 0.95-0.97 in the drives of
+      // docs/results/hidden-effects.md), and clear of the squared law.
       const double kappa = c["estimates"]["noise_exponent"].get<double>();
       EXPECT_NEAR(kappa, k, 0.5) << "seed " << seed;
       EXPECT_LT(kappa, 1.7) << "seed " << seed << ", k " << k;

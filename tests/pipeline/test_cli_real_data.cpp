@@ -78,7 +78,8 @@ INSTANTIATE_TEST_SUITE_P(
         Recording{"ydlidar_19_44_15", "ydlidar_x4/2019-05-03-19-44-15.dat", "--from ydlidar"},
         Recording{"carmen_intel", "carmen/intel-corrected.log.gz", "--from carmen"},
         Recording{"carmen_csail", "carmen/csail-corrected.log.gz", "--from carmen"},
-        // 4791 poses: every third scan keeps the test short; the whole log calibrates too (docs/RESULTS.md).
+        // 4791 poses: every third scan keeps the test short; the whole log calibrates too
+        // (docs/results/real-sensors.md).
         Recording{"carmen_freiburg_079", "carmen/freiburg-079-corrected.log.gz", "--from carmen --every 3"},
         Recording{"carmen_freiburg_campus", "carmen/freiburg-campus-corrected.log.gz", "--from carmen"},
         Recording{"hokuyo_range_sweep_one_bag", kHokuyo + "range_sweep/bs_exp_1041.bag", "--from rosbag1", true},

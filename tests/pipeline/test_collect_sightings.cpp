@@ -1,6 +1,6 @@
 // Sightings from the coordinates the detection kept equal those from reading the scans again
-// (issue 19: calibrate and run read every scan once). The readings beside a pole that only a
-// mixed pixel puts between it and its background (issue 20).
+// (calibrate and run read every scan once). The readings beside a pole that only a mixed pixel
+// puts between it and its background.
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>

@@ -1,4 +1,4 @@
-// What a new user meets in the first hour (issue 16): progress counts, the report's plots over
+// What a new user meets in the first hour: progress counts, the report's plots over
 // the fitted range, `plot`'s titles, legends and refusal to overwrite, import's format
 // detection, `-o`, `info --json`, observations.csv ids as labels, `correct --force`, the words
 // of --help and `run`, and the messages for a directory or a 3D cloud where a scan is expected.

@@ -509,8 +509,8 @@ std::vector<std::map<std::string, double>> csvRows(const std::string& csv) {
 
 TEST(Study, Fig9ClaimsHoldWhereWeReproduceThemAndFailWhereWeDoNot) {
   // Seed 000 on Fig. 9: raising sigma_theta and sigma_s "does not lead to abrupt decays". In
-  // sigma_s this holds for the closed form (docs/RESULTS.md, L = 5, sigma_theta 1 deg: 16.3 at
-  // 0.1 cm, 11.9 at 3 cm); in sigma_theta it does not (about 1 at 5 deg: the calibration no
+  // sigma_s this holds for the closed form (docs/results/montecarlo.md, L = 5, sigma_theta 1 deg:
+  // 16.3 at 0.1 cm, 11.9 at 3 cm); in sigma_theta it does not (about 1 at 5 deg: the calibration no
   // longer helps). Both are asserted, so that a change either way is seen; and at low noise the
   // closed form reaches most of what the true model can (14.7 of 21.9 at 1 cm, 1 deg).
   const auto out = fig9AtFiveLandmarks(TrialConfig{}, {0.001, 0.03}, {1.0, 5.0}, fig9Options(11));
