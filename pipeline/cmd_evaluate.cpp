@@ -89,6 +89,8 @@ void evaluateReference(const std::string& seq_dir, const std::string& ref_file, 
   const io::Sequence seq = io::openSequence(seq_dir);
   const Reference ref = io::readReference(ref_file);
   io::checkReference(ref, seq.stops.size(), ref_file);
+  calibration::Outside outside = calibration::kDefaultOutside;
+  calibration::parseOutside(outside_name, outside);  // checked by the option
   CalibrationOptions options;
   options.radius_m = radius_m;
   const auto detection = referenceDetection(detectionConfig(options));
@@ -108,8 +110,6 @@ void evaluateReference(const std::string& seq_dir, const std::string& ref_file, 
               {"rms_error_all_m", number(rmsError(raw.known.matches))}, {"entries", raw_json}};
   std::optional<ReferenceObservations> corrected;
   if (model) {
-    calibration::Outside outside = calibration::kDefaultOutside;
-    calibration::parseOutside(outside_name, outside);
     if (const std::string w = checkModelFits(*model, seq, model_file, false, outside); !w.empty())
       std::fprintf(stderr, "lidarcal: warning: %s\n", w.c_str());
     const auto method = inversion == "ml" ? calibration::InversionMethod::ml : calibration::InversionMethod::ls;
@@ -124,7 +124,8 @@ void evaluateReference(const std::string& seq_dir, const std::string& ref_file, 
     j["corrected"] = {{"rms_error_m", number(rmsError(corrected->known.matches, fitted))},
                       {"rms_error_all_m", number(rmsError(corrected->known.matches))}, {"entries", cor_json}};
   }
-  std::fputs(referenceTable(raw.known.matches, corrected ? &corrected->known.matches : nullptr, fitted).c_str(), stdout);
+  std::fputs(referenceTable(raw.known.matches, corrected ? &corrected->known.matches : nullptr, fitted, outside).c_str(),
+             stdout);
   if (!out.empty()) io::writeTextAtomically(out, j.dump(2) + "\n");
 }
 

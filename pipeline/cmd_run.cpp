@@ -147,7 +147,15 @@ void runRun(const RunCommand& c) {
                                  {"extrapolated_returns", stats.extrapolated},
                                  {"beyond_fitted_range_returns", stats.beyond()},
                                  {"unresolved_returns", stats.unresolved}};
-  if (!in.compared.empty()) summary["evaluation"] = evaluationJson(in.compared.front().evaluation);
+  if (!in.compared.empty()) {
+    summary["evaluation"] = evaluationJson(in.compared.front().evaluation);
+    auto baselines = nlohmann::ordered_json::array();
+    for (std::size_t k = 1; k < in.compared.size(); ++k)
+      baselines.push_back({{"model", in.compared[k].name},
+                           {"order", in.compared[k].model.model.bias.order()},
+                           {"evaluation", evaluationJson(in.compared[k].evaluation)}});
+    summary["baselines"] = baselines;
+  }
   io::writeTextAtomically(out.path() / "summary.json", summary.dump(2) + "\n");
   out.commit();
   printRun(c, seq, cal, in, stats, outside);

@@ -126,18 +126,20 @@ std::string beyondFitText(const calibration::FilteringStats& s, const Calibratio
 }
 
 std::string referenceTable(const std::vector<calibration::ReferenceMatch>& raw,
-                           const std::vector<calibration::ReferenceMatch>* corrected, const CalibrationModel* model) {
+                           const std::vector<calibration::ReferenceMatch>* corrected, const CalibrationModel* model,
+                           calibration::Outside outside) {
   auto inside = [&](const calibration::ReferenceMatch& m) {
     return !model || !model->fitted_range_m ||
            (m.surface_m >= model->fitted_range_m->first - 1e-3 && m.surface_m <= model->fitted_range_m->second + 1e-3);
   };
+  const bool beyond_corrected = outside == calibration::Outside::linear || outside == calibration::Outside::extrapolate;
   std::string s = "| entry | stop | target | reference [m] | raw [m] | raw - reference [mm] |";
   if (corrected) s += " corrected [m] | corrected - reference [mm] |";
   s += " scans | readings |\n|---|---|---|---|---|---|";
   if (corrected) s += "---|---|";
   s += "---|---|\n";
   double sum_raw = 0.0, sum_cor = 0.0;
-  std::size_t n_raw = 0, n_cor = 0, outside = 0;
+  std::size_t n_raw = 0, n_cor = 0, left_out = 0;
   auto cell = [](const calibration::ReferenceMatch& m, bool counted, double& sum, std::size_t& n) {
     if (!m.ok()) return std::string(" not found | - |");
     const double e = m.measured_m - m.reference_m;
@@ -148,18 +150,21 @@ std::string referenceTable(const std::vector<calibration::ReferenceMatch>& raw,
   for (std::size_t k = 0; k < raw.size(); ++k) {
     const auto& m = raw[k];
     const bool in = inside(m);
-    outside += !in;
-    s += "| " + std::to_string(m.entry) + (in ? "" : " (outside the fitted range)") + " | " + std::to_string(m.stop) +
+    const bool counted = in || beyond_corrected;
+    left_out += !counted;
+    s += "| " + std::to_string(m.entry) + (in ? "" : " (beyond the fitted range)") + " | " + std::to_string(m.stop) +
          " | " + (m.target == ReferenceTarget::wall ? "wall" : "landmark " + std::to_string(m.landmark)) + " | " +
-         fixed(m.reference_m, 3) + " |" + cell(m, in, sum_raw, n_raw);
-    if (corrected) s += k < corrected->size() ? cell((*corrected)[k], in, sum_cor, n_cor) : std::string(" - | - |");
+         fixed(m.reference_m, 3) + " |" + cell(m, counted, sum_raw, n_raw);
+    if (corrected) s += k < corrected->size() ? cell((*corrected)[k], counted, sum_cor, n_cor) : std::string(" - | - |");
     s += " " + std::to_string(m.sightings) + " | " + std::to_string(m.readings) + " |\n";
   }
   auto rms = [](double sum, std::size_t n) { return n ? fixed(1000.0 * std::sqrt(sum / static_cast<double>(n)), 1) : std::string("-"); };
   s += "\nRMS of measured - reference: raw " + rms(sum_raw, n_raw) + " mm";
   if (corrected) s += ", corrected " + rms(sum_cor, n_cor) + " mm";
   s += " (over " + std::to_string(n_raw) + " entries";
-  if (outside) s += "; " + std::to_string(outside) + " outside the fitted range left out: their readings are not corrected";
+  if (left_out)
+    s += "; " + std::to_string(left_out) + " beyond the fitted range left out: --outside " + calibration::toString(outside) +
+         " does not correct their readings";
   s += ")\n";
   return s;
 }

@@ -44,10 +44,11 @@ std::string beyondFitText(const calibration::FilteringStats& stats, const Calibr
 /// The reference distances as matched: stop, target, measured (tape) distance, what the scans
 /// read there (mean over the scans, its standard error), the difference, and the readings used
 /// (Markdown table). With `corrected`, a second column set for the corrected scans; with
-/// `model`, entries outside its fitted range are marked and left out of the RMS (their readings
-/// are not corrected by default).
+/// `model`, entries outside its fitted range are marked, and left out of the RMS when `outside`
+/// leaves their readings uncorrected (keep, drop).
 std::string referenceTable(const std::vector<calibration::ReferenceMatch>& raw,
                            const std::vector<calibration::ReferenceMatch>* corrected = nullptr,
-                           const CalibrationModel* model = nullptr);
+                           const CalibrationModel* model = nullptr,
+                           calibration::Outside outside = calibration::kDefaultOutside);
 
 }  // namespace lidarcal::pipeline

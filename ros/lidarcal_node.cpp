@@ -126,8 +126,9 @@ int main(int argc, char** argv) {
     ros::spin();
     const auto& st = node.stats();
     // After ros::spin() the ROS logger may be shut down already: plain stdout.
-    std::printf("lidarcal_node: %zu scans, %zu returns corrected, %zu outside the fitted readings, %zu without a distance\n",
-                st.scans, st.corrected, st.outside, st.unresolved);
+    std::printf("lidarcal_node: %zu scans, %zu returns corrected, %zu of them beyond the fitted range, %zu beyond it left "
+                "uncorrected, %zu without a distance\n",
+                st.scans, st.corrected + st.extrapolated, st.extrapolated, st.outside, st.unresolved);
     std::fflush(stdout);
     return node.exitCode();
   } catch (const DataError& e) {

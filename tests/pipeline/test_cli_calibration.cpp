@@ -194,9 +194,11 @@ TEST_F(CliCalibration, RunsFiguresAreThoseOfTheScansItWrote) {
 }
 
 TEST_F(CliCalibration, AWallCrossingTheEdgeOfTheFittedRangeHasNoStep) {
-  // Neighbouring beams on one wall, the first corrected by the fit and the second continued past
-  // its edge: their errors against the truth differ only by the readings' noise. Kept as read,
-  // the second would jump by the sensor's bias there (about half a metre).
+  // Neighbouring beams on one wall whose true distances straddle the far edge of the fitted range:
+  // their errors against the truth differ only by the readings' noise. Kept as read, the one
+  // beyond would jump by the sensor's bias there (about half a metre). The beams are chosen by
+  // their true distance: chosen by their noisy reading, the one read beyond the edge would be the
+  // one whose noise is the larger.
   TempDir out;
   const std::string model = (out / "m.json").string();
   ASSERT_EQ(runCli("calibrate -q " + (a() / "scans").string() + " --out " + model).exit_code, 0);
@@ -214,15 +216,14 @@ TEST_F(CliCalibration, AWallCrossingTheEdgeOfTheFittedRangeHasNoStep) {
       const io::Scan cs = io::readScan(std::filesystem::path(dir) / raw.scans[i].name());
       for (std::size_t b = 0; b + 1 < cs.cloud->size(); ++b) {
         const auto &t0 = truth[i * beams + b], &t1 = truth[i * beams + b + 1];
-        const auto c0 = cs.correction[b], c1 = cs.correction[b + 1];
-        const bool crossing = (c0 == io::PointCorrection::corrected) != (c1 == io::PointCorrection::corrected) &&
-                              c0 != io::PointCorrection::no_return && c1 != io::PointCorrection::no_return;
-        if (!crossing || t0.target != io::TargetKind::wall || t1.target != t0.target || t1.target_id != t0.target_id)
-          continue;
+        const double edge = m.fitted_range_m->second;
+        const bool crossing = (t0.range_m <= edge) != (t1.range_m <= edge);
         const auto &p0 = (*cs.cloud)[b], &p1 = (*cs.cloud)[b + 1];
+        if (!crossing || t0.target != io::TargetKind::wall || t1.target != t0.target || t1.target_id != t0.target_id ||
+            !std::isfinite(p0.x) || !std::isfinite(p1.x))
+          continue;
         const double e0 = std::hypot(p0.x, p0.y) - t0.range_m, e1 = std::hypot(p1.x, p1.y) - t1.range_m;
-        const bool first_inside = c0 == io::PointCorrection::corrected;
-        sum += first_inside ? e1 - e0 : e0 - e1;  // beyond minus inside
+        sum += t0.range_m <= edge ? e1 - e0 : e0 - e1;  // beyond minus inside
         const double s0 = m.model.noise.stddev(t0.range_m, m.model.bias) / m.model.bias.derivative(t0.range_m);
         const double s1 = m.model.noise.stddev(t1.range_m, m.model.bias) / m.model.bias.derivative(t1.range_m);
         variance += s0 * s0 + s1 * s1;
