@@ -363,9 +363,33 @@ JointStage jointStage(const LandmarkObservations& obs, const CalibrationConfig& 
 
 }  // namespace
 
+void addUnsupportedCorrectionWarning(CalibrationModel& m) {
+  const std::size_t n = m.model.bias.alpha.size();
+  if (!m.fitted_range_m || m.alpha_covariance.size() != n * n) return;
+  const auto [lo, hi] = *m.fitted_range_m;
+  double largest = 0.0, largest_se = 0.0;
+  for (int i = 0; i <= 50; ++i) {
+    const double d = lo + (hi - lo) * i / 50.0;
+    // Standard error of f(d): that of the distance it corrects to, times f'(d).
+    const double se = correctionStandardError(m.model.bias, m.alpha_covariance, d, d, d) * m.model.bias.derivative(d);
+    const double c = std::abs(m.model.bias(d) - d);
+    if (!std::isfinite(se)) return;
+    if (c > 2.0 * se) return;  // a correction the data support somewhere
+    if (c > largest) largest = c, largest_se = se;
+  }
+  char text[400];
+  std::snprintf(text, sizeof text,
+                "the correction is within two standard errors of none over the whole fitted range (at most %.1f mm, "
+                "+-%.1f mm there): the data do not show that the sensor errs, and applying it may add as much error as "
+                "it removes; measure more distances, or repeat each, before relying on it",
+                1000.0 * largest, 1000.0 * largest_se);
+  m.warnings.push_back(text);
+}
+
 void addPlausibilityWarnings(CalibrationModel& m, const JointResult* j) {
   const std::size_t n = m.model.bias.alpha.size();
   char text[512];
+  addUnsupportedCorrectionWarning(m);
   // An offset that trades off against the pole radius is not determined by the data: the
   // central beam reads alpha_0 + alpha_1 (|c - p| - r), and only the arcs' curvature tells r.
   if (j && j->alpha_radius_covariance.size() == static_cast<Eigen::Index>(n) && j->radius_variance > 0.0 &&
@@ -591,7 +615,7 @@ void fillClosedForm(CalibrationModel& m, const LandmarkObservations& obs, const 
   m.readings = d.size();
   m.sigma_theta_rad = bearingScatter(obs, tri);
   m.stop_poses = obs.commanded;
-  m.fitted_range_m = std::make_pair(*std::min_element(d.begin(), d.end()), *std::max_element(d.begin(), d.end()));
+  m.fitted_range_m = fittedRange(d, y, m.model.bias);
 }
 
 /// Groups of the delete-a-group jackknife of the closed form: at most this many, each a run of
@@ -708,9 +732,7 @@ void fillJoint(CalibrationModel& m, const JointStage& js, const CalibrationConfi
     if (cv != j.centre_covariance.end())
       c.covariance_m2 = {cv->second(0, 0), cv->second(0, 1), cv->second(1, 0), cv->second(1, 1)};
   }
-  if (!j.distances_m.empty())
-    m.fitted_range_m = std::make_pair(*std::min_element(j.distances_m.begin(), j.distances_m.end()),
-                                      *std::max_element(j.distances_m.begin(), j.distances_m.end()));
+  if (!j.distances_m.empty()) m.fitted_range_m = fittedRange(j.distances_m, j.readings_m, m.model.bias);
   if (!j.converged) m.status.message = "joint refinement: " + j.status.message;  // usable, but say so
 }
 
@@ -835,6 +857,7 @@ CalibrationModel calibrateAgainstTruth(const std::vector<RangePair>& pairs, cons
   m.model.noise = fitNoiseLaw(config.noise, order, m.model.bias, d, y);
   m.residual_rms_m = rmsResidual(m.model.bias, d, y);
   m.readings = d.size();
+  m.fitted_range_m = fittedRange(d, y, m.model.bias);
   return m;
 }
 

@@ -83,6 +83,12 @@ inline constexpr double kUnlocatedLandmarkM = 0.1;
 /// |f(d) - d| above kImplausibleCorrection of max(d, 0.5 m) inside m.fitted_range_m.
 void addPlausibilityWarnings(CalibrationModel& m, const JointResult* j);
 
+/// Appends a warning to m.warnings when the correction is nowhere distinguishable from none:
+/// |f(d) - d| within two standard errors of f(d) everywhere in m.fitted_range_m (applying it
+/// may add as much error as it removes). Needs the covariance and the fitted range; appended
+/// also by addPlausibilityWarnings.
+void addUnsupportedCorrectionWarning(CalibrationModel& m);
+
 /// The oracle of seed 004: the same fits against known distances (pairs' d_m are true).
 /// `batches` (optional) feed the noise-exponent test; orders that cannot be inverted over the
 /// reading window [range_min_m, range_max_m] are not chosen (no check with the defaults).

@@ -3,12 +3,15 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <limits>
+#include <optional>
 
 namespace lidarcal::calibration {
 
 const char* toString(Outside o) {
   switch (o) {
+    case Outside::linear: return "linear";
     case Outside::keep: return "keep";
     case Outside::extrapolate: return "extrapolate";
     case Outside::drop: return "drop";
@@ -16,8 +19,12 @@ const char* toString(Outside o) {
   return "?";
 }
 
+namespace {
+constexpr Outside kAllOutside[] = {Outside::linear, Outside::keep, Outside::extrapolate, Outside::drop};
+}  // namespace
+
 bool parseOutside(const std::string& name, Outside& out) {
-  for (Outside o : {Outside::keep, Outside::extrapolate, Outside::drop})
+  for (Outside o : kAllOutside)
     if (name == toString(o)) {
       out = o;
       return true;
@@ -25,12 +32,31 @@ bool parseOutside(const std::string& name, Outside& out) {
   return false;
 }
 
+std::vector<std::string> outsidePolicies() {
+  std::vector<std::string> names;
+  for (Outside o : kAllOutside) names.emplace_back(toString(o));
+  return names;
+}
+
+std::string outsideNames() {
+  std::string s;
+  for (std::size_t i = 0; i < std::size(kAllOutside); ++i)
+    s += std::string(i == 0 ? "" : i + 1 == std::size(kAllOutside) ? " or " : ", ") + toString(kAllOutside[i]);
+  return s;
+}
+
 CorrectionWindow correctionWindow(const CalibrationModel& model, Outside outside) {
   CorrectionWindow w;
   w.outside = outside;
-  if (model.fitted_range_m && outside != Outside::extrapolate) {
-    w.reading_min_m = model.model.bias(model.fitted_range_m->first);
-    w.reading_max_m = model.model.bias(model.fitted_range_m->second);
+  if (model.fitted_range_m) {
+    const auto [lo, hi] = *model.fitted_range_m;
+    const BiasPolynomial& f = model.model.bias;
+    w.distance_min_m = lo;
+    w.distance_max_m = hi;
+    w.reading_min_m = f(lo);
+    w.reading_max_m = f(hi);
+    w.slope_min = f.derivative(lo);
+    w.slope_max = f.derivative(hi);
   }
   return w;
 }
@@ -46,22 +72,63 @@ RangeInverter modelInverter(const CalibrationModel& model, InversionMethod metho
   return RangeInverter(model.model, c);
 }
 
-CorrectedReading correctReading(double r, const RangeInverter& inverter, const CorrectionWindow& window) {
-  if ((r < window.reading_min_m || r > window.reading_max_m) && window.outside != Outside::extrapolate) {
-    if (window.outside == Outside::drop) return {kNaN, ReadingFate::outside_dropped};
-    return {r, ReadingFate::outside_kept};
+CorrectedReading ReadingCorrector::operator()(double r) const {
+  const CorrectionWindow& w = window;
+  const bool below = r < w.reading_min_m, above = r > w.reading_max_m;
+  if ((below || above) && w.outside == Outside::keep) return {r, ReadingFate::outside_kept, kNaN};
+  if ((below || above) && w.outside == Outside::drop) return {kNaN, ReadingFate::outside_dropped, kNaN};
+  if (!(r > 0.0)) return {kNaN, ReadingFate::unresolved, kNaN};
+  std::optional<double> d;
+  if ((below || above) && w.outside == Outside::linear) {
+    const double slope = above ? w.slope_max : w.slope_min;
+    const double edge_d = above ? w.distance_max_m : w.distance_min_m;
+    const double edge_y = above ? w.reading_max_m : w.reading_min_m;
+    if (slope > 0.0) d = edge_d + (r - edge_y) / slope;
+    if (d && !(*d > 0.0)) d.reset();
+  } else {
+    d = inverter.invert(r);
   }
-  const auto d = inverter.invert(r);
-  if (!d || !(r > 0.0)) return {kNaN, ReadingFate::unresolved};
-  return {*d, ReadingFate::corrected};
+  if (!d) return {kNaN, ReadingFate::unresolved, kNaN};
+  // The polynomial's own extrapolation has the polynomial's own uncertainty: no clamp to the edge.
+  const bool own = w.outside == Outside::extrapolate;
+  const double se = correctionStandardError(bias, covariance, *d, own ? *d : w.distance_min_m, own ? *d : w.distance_max_m);
+  return {*d, below || above ? ReadingFate::extrapolated : ReadingFate::corrected, se};
 }
 
 ReadingCorrector readingCorrector(const CalibrationModel& model, InversionMethod method, Outside outside) {
-  return {modelInverter(model, method, outside), correctionWindow(model, outside)};
+  return {modelInverter(model, method, outside), correctionWindow(model, outside), model.model.bias,
+          model.alpha_covariance};
 }
 
-io::Scan correctScan(const io::Scan& scan, const RangeInverter& inverter, FilteringStats* stats,
-                     const CorrectionWindow& window) {
+void FilteringStats::add(const CorrectedReading& c, double reading_m, bool below_window) {
+  switch (c.fate) {
+    case ReadingFate::corrected: ++corrected; return;
+    case ReadingFate::unresolved: ++unresolved; return;
+    case ReadingFate::extrapolated: ++extrapolated; break;
+    case ReadingFate::outside_kept:
+    case ReadingFate::outside_dropped: ++outside; break;
+  }
+  if (below_window) {
+    ++below;
+    beyond_min_m = std::min(beyond_min_m, reading_m);
+  } else {
+    beyond_max_m = std::max(beyond_max_m, reading_m);
+  }
+}
+
+FilteringStats& FilteringStats::operator+=(const FilteringStats& o) {
+  points += o.points;
+  corrected += o.corrected;
+  extrapolated += o.extrapolated;
+  unresolved += o.unresolved;
+  outside += o.outside;
+  below += o.below;
+  beyond_min_m = std::min(beyond_min_m, o.beyond_min_m);
+  beyond_max_m = std::max(beyond_max_m, o.beyond_max_m);
+  return *this;
+}
+
+io::Scan correctScan(const io::Scan& scan, const ReadingCorrector& correct, FilteringStats* stats) {
   io::Scan out;
   out.name = scan.name;
   out.viewpoint = scan.viewpoint;
@@ -69,26 +136,33 @@ io::Scan correctScan(const io::Scan& scan, const RangeInverter& inverter, Filter
   out.labels = scan.labels;
   // A deliberate copy: the corrected scan is a new output; the input stays as read.
   out.cloud.reset(new pcl::PointCloud<pcl::PointXYZI>(*scan.cloud));
+  out.correction.assign(out.cloud->size(), io::PointCorrection::no_return);
+  out.correction_se.assign(out.cloud->size(), std::numeric_limits<float>::quiet_NaN());
   FilteringStats s;
   s.points = out.cloud->size();
-  constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
-  for (auto& p : *out.cloud) {
+  constexpr float kNaNf = std::numeric_limits<float>::quiet_NaN();
+  for (std::size_t i = 0; i < out.cloud->size(); ++i) {
+    auto& p = (*out.cloud)[i];
     if (!std::isfinite(p.x) || !std::isfinite(p.y)) continue;
     const double r = std::hypot(static_cast<double>(p.x), static_cast<double>(p.y));
-    const CorrectedReading c = correctReading(r, inverter, window);
+    const CorrectedReading c = correct(r);
+    s.add(c, r, r < correct.window.reading_min_m);
     switch (c.fate) {
-      case ReadingFate::outside_kept: ++s.outside; continue;
-      case ReadingFate::outside_dropped: ++s.outside; break;
-      case ReadingFate::unresolved: ++s.unresolved; break;
-      case ReadingFate::corrected: {
+      case ReadingFate::outside_kept: out.correction[i] = io::PointCorrection::raw; continue;
+      case ReadingFate::outside_dropped:
+      case ReadingFate::unresolved: break;
+      case ReadingFate::corrected:
+      case ReadingFate::extrapolated: {
         const double k = c.range_m / r;  // move the point along its beam
         p.x = static_cast<float>(p.x * k);
         p.y = static_cast<float>(p.y * k);
-        ++s.corrected;
+        const bool inside = c.fate == ReadingFate::corrected;
+        out.correction[i] = inside ? io::PointCorrection::corrected : io::PointCorrection::extrapolated;
+        out.correction_se[i] = static_cast<float>(c.standard_error_m);
         continue;
       }
     }
-    p.x = p.y = p.z = kNaN;  // dropped or unresolved: a beam without return
+    p.x = p.y = p.z = kNaNf;  // dropped or unresolved: a beam without return
     out.cloud->is_dense = false;
   }
   if (stats) *stats = s;

@@ -8,6 +8,8 @@
 #include <stdexcept>
 #include <vector>
 
+#include "common/stats_util.hpp"
+
 namespace lidarcal::calibration {
 namespace {
 
@@ -283,6 +285,56 @@ std::optional<double> RangeInverter::invertMl(double y_m) const {
   }
   if (!best || s2 == 0.0) return ls;
   return best;
+}
+
+double correctionStandardError(const BiasPolynomial& f, const std::vector<double>& covariance, double d, double d_min,
+                               double d_max) {
+  const std::size_t n = f.alpha.size();
+  if (covariance.size() != n * n || n == 0) return kNaN;
+  const double e = std::clamp(d, d_min, d_max);
+  // g_i = d/d alpha_i of f(e) + f'(e) (d - e) = e^i + i e^(i-1) (d - e).
+  std::vector<double> g(n);
+  double power = 1.0, lower = 0.0;  // e^i and e^(i-1)
+  for (std::size_t i = 0; i < n; ++i) {
+    g[i] = power + static_cast<double>(i) * lower * (d - e);
+    lower = power;
+    power *= e;
+  }
+  double v = 0.0;
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = 0; j < n; ++j) v += g[i] * covariance[i * n + j] * g[j];
+  const double slope = f.derivative(e);
+  return v >= 0.0 && slope > 0.0 ? std::sqrt(v) / slope : kNaN;
+}
+
+namespace {
+
+/// The distance beyond `edge` at which f reaches y: Newton's method from the tangent at the
+/// edge; the tangent's answer when f turns over on the way (f' <= 0) or does not converge.
+double distanceBeyondEdge(const BiasPolynomial& f, double edge, double y) {
+  const double slope = f.derivative(edge);
+  if (!(slope > 0.0)) return edge;
+  const double tangent = edge + (y - f(edge)) / slope;
+  double d = tangent;
+  for (int i = 0; i < 30; ++i) {
+    const double s = f.derivative(d);
+    if (!(s > 0.0)) return tangent;
+    const double step = (f(d) - y) / s;
+    d -= step;
+    if (std::abs(step) <= 1e-12 * std::max(1.0, std::abs(d))) return d;
+  }
+  return tangent;
+}
+
+}  // namespace
+
+std::pair<double, double> fittedRange(const std::vector<double>& d, const std::vector<double>& y, const BiasPolynomial& f) {
+  double lo = *std::min_element(d.begin(), d.end()), hi = *std::max_element(d.begin(), d.end());
+  const auto [y_lo, y_hi] = std::minmax_element(y.begin(), y.end());
+  // The nearest and farthest targets' readings scatter a few noise widths beyond f(lo) and f(hi).
+  if (*y_lo < f(lo)) lo = std::clamp(distanceBeyondEdge(f, lo, *y_lo), 0.0, lo);
+  if (*y_hi > f(hi)) hi = std::max(hi, distanceBeyondEdge(f, hi, *y_hi));
+  return {lo, hi};
 }
 
 }  // namespace lidarcal::calibration

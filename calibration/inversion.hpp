@@ -12,6 +12,7 @@
 
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "common/range_model.hpp"
@@ -56,5 +57,17 @@ bool isMonotone(const BiasPolynomial& f, double d_min_m, double d_max_m, double*
 /// it passes y_max. `where` receives the first distance at which f' <= 0 while f < y_max (or
 /// the largest distance searched, 4 y_max, when f never reaches y_max).
 bool invertsReadingWindow(const BiasPolynomial& f, double y_min_m, double y_max_m, double* where = nullptr);
+
+/// Standard error (metres) of the distance that f, continued linearly beyond [d_min, d_max],
+/// gives for a reading, at corrected distance d: sqrt(g' C g) / f'(e), with g the gradient of
+/// f(e) + f'(e) (d - e) in the coefficients, e = d clamped to the window. NaN without covariance.
+double correctionStandardError(const BiasPolynomial& f, const std::vector<double>& covariance, double d_m,
+                               double d_min_m, double d_max_m);
+
+/// The true distances a fit covers, [min, max] metres: every distance d_m of the fit's readings,
+/// widened to the distances f gives for its smallest and largest reading y_m (the readings of
+/// the nearest and farthest target scatter beyond f(min d) and f(max d)). d_m and y_m are the
+/// same length and not empty.
+std::pair<double, double> fittedRange(const std::vector<double>& d_m, const std::vector<double>& y_m, const BiasPolynomial& f);
 
 }  // namespace lidarcal::calibration

@@ -12,6 +12,7 @@
 #include <Eigen/Dense>
 
 #include "calibration/inversion.hpp"
+#include "calibration/calibrate.hpp"
 #include "calibration/jackknife.hpp"
 #include "calibration/joint_refinement.hpp"
 #include "calibration/noise_exponent.hpp"
@@ -409,7 +410,8 @@ CalibrationModel calibrateWithReference(const std::vector<KnownReading>& reading
   m.model.noise.sigma_e = f.sigma_e;
   m.model.noise.exponent = exponent;
   m.alpha_covariance.assign(f.covariance.data(), f.covariance.data() + f.covariance.size());
-  m.fitted_range_m = std::make_pair(d_lo, d_hi);
+  m.fitted_range_m = fittedRange(d, y, m.model.bias);
+  addUnsupportedCorrectionWarning(m);
   m.readings = d.size();
   double s = 0.0;
   for (std::size_t i = 0; i < d.size(); ++i) s += std::pow(y[i] - polyAt(f.alpha, d[i]), 2);

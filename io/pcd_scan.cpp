@@ -554,6 +554,8 @@ Scan readScan(const fs::path& file) {
   const pcl::PCLPointField* fz = cloudField(blob, "z");
   const pcl::PCLPointField* fi = cloudField(blob, "intensity");
   const pcl::PCLPointField* fl = cloudField(blob, "label");
+  const pcl::PCLPointField* fc = cloudField(blob, "correction");
+  const pcl::PCLPointField* fs = cloudField(blob, "correction_se");
   if (!fx || !fy)  // the header we checked has them; PCL must have read the same header
     throw InputError(where, "FIELDS", "PCL read other fields than the header lists (a damaged file)", "re-export the scan");
 
@@ -567,6 +569,8 @@ Scan readScan(const fs::path& file) {
   scan.cloud->height = 1;
   scan.cloud->is_dense = true;
   if (fl) scan.labels.resize(n);
+  if (fc) scan.correction.resize(n);
+  if (fc && fs) scan.correction_se.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
     const std::uint8_t* p = blob.data.data() + i * blob.point_step;
     const double x = readValue(p + fx->offset, fx->datatype);
@@ -598,6 +602,13 @@ Scan readScan(const fs::path& file) {
         throw InputError(where, item(), "label is not a non-negative integer", kFormatRemedy);
       scan.labels[i] = static_cast<std::uint32_t>(label);
     }
+    if (fc) {
+      const double code = readValue(p + fc->offset, fc->datatype);
+      if (!(code >= 0.0 && code <= 3.0) || code != std::floor(code))
+        throw InputError(where, item(), "correction is not 0, 1, 2 or 3", kFormatRemedy);
+      scan.correction[i] = static_cast<PointCorrection>(static_cast<std::uint8_t>(code));
+      if (fs) scan.correction_se[i] = static_cast<float>(readValue(p + fs->offset, fs->datatype));
+    }
   }
   return scan;
 }
@@ -607,14 +618,21 @@ void writeScan(const fs::path& file, const Scan& scan, PcdEncoding encoding) {
   const std::size_t n = scan.cloud->size();
   if (!scan.labels.empty() && scan.labels.size() != n)
     throw std::invalid_argument("writeScan: labels and points differ in number");
+  const bool corrections = !scan.correction.empty();
+  if (corrections && (scan.correction.size() != n || scan.correction_se.size() != n))
+    throw std::invalid_argument("writeScan: corrections and points differ in number");
 
-  // Packed fields, no padding: x y z [intensity] [label].
+  // Packed fields, no padding: x y z [intensity] [label] [correction correction_se].
   pcl::PCLPointCloud2 blob;
   appendField(blob, "x", pcl::PCLPointField::FLOAT32, 4);
   appendField(blob, "y", pcl::PCLPointField::FLOAT32, 4);
   appendField(blob, "z", pcl::PCLPointField::FLOAT32, 4);
   if (scan.has_intensity) appendField(blob, "intensity", pcl::PCLPointField::FLOAT32, 4);
   if (!scan.labels.empty()) appendField(blob, "label", pcl::PCLPointField::UINT32, 4);
+  if (corrections) {
+    appendField(blob, "correction", pcl::PCLPointField::UINT8, 1);
+    appendField(blob, "correction_se", pcl::PCLPointField::FLOAT32, 4);
+  }
   blob.width = static_cast<std::uint32_t>(n);
   blob.height = 1;
   blob.row_step = blob.point_step * blob.width;
@@ -631,7 +649,14 @@ void writeScan(const fs::path& file, const Scan& scan, PcdEncoding encoding) {
       std::memcpy(p + off, &pt.intensity, 4);
       off += 4;
     }
-    if (!scan.labels.empty()) std::memcpy(p + off, &scan.labels[i], 4);
+    if (!scan.labels.empty()) {
+      std::memcpy(p + off, &scan.labels[i], 4);
+      off += 4;
+    }
+    if (corrections) {
+      p[off] = static_cast<std::uint8_t>(scan.correction[i]);
+      std::memcpy(p + off + 1, &scan.correction_se[i], 4);
+    }
     if (!std::isfinite(pt.x)) blob.is_dense = false;
   }
 

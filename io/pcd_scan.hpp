@@ -29,6 +29,15 @@ struct ScanHeader {
   bool binary = false;          ///< DATA binary or binary_compressed
 };
 
+/// What `lidarcal correct` did to a point: the `correction` field of a corrected scan
+/// (docs/FORMAT.md).
+enum class PointCorrection : std::uint8_t {
+  no_return = 0,     ///< no return (NaN): none in the raw scan, dropped or without a distance
+  corrected = 1,     ///< inside the range the model was fitted over: the fit's correction
+  extrapolated = 2,  ///< beyond the fitted range: the model continued past its edge
+  raw = 3,           ///< beyond the fitted range and left as read (`--outside keep`)
+};
+
 /// One scan: points in beam order (NaN = no return), optional intensity and label per point.
 struct Scan {
   std::string name;                                   ///< file name without directory
@@ -36,6 +45,11 @@ struct Scan {
   pcl::PointCloud<pcl::PointXYZI>::Ptr cloud;         ///< points; intensity 0 when absent
   bool has_intensity = false;                         ///< write/read an `intensity` field
   std::vector<std::uint32_t> labels;                  ///< per-point label; empty = no `label` field
+  /// Per-point correction (corrected scans); empty = no `correction` field.
+  std::vector<PointCorrection> correction;
+  /// Per-point standard error of the correction, metres (NaN where none); empty = no
+  /// `correction_se` field. Written only together with `correction`.
+  std::vector<float> correction_se;
 };
 
 /// PCD encoding used when writing.
@@ -47,7 +61,8 @@ ScanHeader readScanHeader(const std::filesystem::path& file);
 /// Reads a scan file (ASCII, binary or binary_compressed). Throws InputError on bad input.
 Scan readScan(const std::filesystem::path& file);
 
-/// Writes a scan atomically (temporary file + rename). Fields: x y z [intensity] [label].
+/// Writes a scan atomically (temporary file + rename). Fields: x y z [intensity] [label]
+/// [correction correction_se].
 void writeScan(const std::filesystem::path& file, const Scan& scan, PcdEncoding encoding = PcdEncoding::binary);
 
 /// Viewpoint quaternion (w, z) of a yaw angle, as stored in VIEWPOINT `tx ty 0 qw 0 0 qz`.

@@ -25,13 +25,8 @@ void correctLaserRanges(std::vector<float>& ranges_m, double range_min_m, double
     // The importer's rule for a return (io/sequence_writer.cpp): anything else is not a reading.
     if (!std::isfinite(r) || !(r > 0.0f) || r < range_min_m || r > range_max_m) continue;
     const calibration::CorrectedReading c = correct(r);
-    switch (c.fate) {
-      case calibration::ReadingFate::corrected: ++stats.corrected; break;
-      case calibration::ReadingFate::outside_kept: ++stats.outside; continue;
-      case calibration::ReadingFate::outside_dropped: ++stats.outside; break;
-      case calibration::ReadingFate::unresolved: ++stats.unresolved; break;
-    }
-    r = static_cast<float>(c.range_m);  // NaN when dropped or unresolved
+    stats.add(c, r, r < correct.window().reading_min_m);
+    r = static_cast<float>(c.range_m);  // the reading itself when kept; NaN when dropped or unresolved
   }
 }
 

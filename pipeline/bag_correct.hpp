@@ -28,6 +28,8 @@ class MemoCorrector {
       : correct_(std::move(correct)), capacity_(capacity) {}
   calibration::CorrectedReading operator()(float reading_m);
   std::size_t remembered() const { return memo_.size(); }
+  /// The readings the fit itself corrects.
+  const calibration::CorrectionWindow& window() const { return correct_.window; }
 
  private:
   calibration::ReadingCorrector correct_;

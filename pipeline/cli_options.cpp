@@ -123,7 +123,7 @@ calibration::InversionMethod CorrectionOptions::method() const {
 calibration::Outside CorrectionOptions::outsidePolicy() const {
   calibration::Outside o = calibration::kDefaultOutside;
   if (!calibration::parseOutside(outside, o))
-    throw InputError("", "--outside", "unknown policy '" + outside + "'", "use keep, extrapolate or drop");
+    throw InputError("", "--outside", "unknown policy '" + outside + "'", "use " + calibration::outsideNames());
   return o;
 }
 
@@ -134,9 +134,11 @@ void addCorrectionOptions(CLI::App* app, const std::shared_ptr<CorrectionOptions
       ->check(CLI::IsMember({"ls", "ml"}))
       ->capture_default_str();
   app->add_option("--outside", o->outside,
-                  "Readings outside the range the model was fitted over (model.json fitted_range): keep them as they "
-                  "are, extrapolate the polynomial, or drop them (no return)")
-      ->check(CLI::IsMember({"keep", "extrapolate", "drop"}))
+                  "Readings beyond the distances the model was fitted over (model.json fitted_range): linear continues "
+                  "the fitted correction past the edge at its slope there (no step, no kink; the default), keep leaves "
+                  "them as read, extrapolate applies the polynomial itself, drop removes them (no return). Corrected "
+                  "scans mark each point in their `correction` field (docs/FORMAT.md)")
+      ->check(CLI::IsMember(calibration::outsidePolicies()))
       ->capture_default_str();
 }
 

@@ -14,6 +14,7 @@
 #include "pipeline/bag_correct.hpp"
 #include "pipeline/cli_options.hpp"
 #include "pipeline/commands.hpp"
+#include "pipeline/model_text.hpp"
 #include "pipeline/papers.hpp"
 #include "pipeline/progress.hpp"
 #include "pipeline/stages.hpp"
@@ -29,14 +30,14 @@ bool isRosbag(const std::string& input) {
          io::detectRecordingFormat(input).kind == io::RecordingKind::rosbag1;
 }
 
-void printStats(const CorrectionStats& stats, const std::string& out, const std::string& model_file,
+void printStats(const CorrectionStats& stats, const std::string& out, const CalibrationModel& model,
                 calibration::Outside outside) {
   if (quiet()) return;
-  std::fprintf(stderr, "corrected %s in %s into %s (%zu without a distance in the window)\n",
-               plural(stats.corrected, "return").c_str(), plural(stats.scans, "scan").c_str(), out.c_str(), stats.unresolved);
-  if (stats.outside > 0)
-    std::fprintf(stderr, "%zu returns lie outside the readings the model was fitted on (%s): %s (--outside)\n",
-                 stats.outside, model_file.c_str(), outside == calibration::Outside::drop ? "dropped" : "kept as they are");
+  std::fprintf(stderr, "corrected %s in %s into %s: %zu inside the fitted range, %zu beyond it, %zu without a distance\n",
+               plural(stats.corrected + stats.extrapolated, "return").c_str(), plural(stats.scans, "scan").c_str(),
+               out.c_str(), stats.corrected, stats.extrapolated, stats.unresolved);
+  if (const std::string beyond = beyondFitText(stats, model, outside); !beyond.empty())
+    std::fprintf(stderr, "%s\n", beyond.c_str());
 }
 
 /// correct IN.bag --out OUT.bag: every message copied, the topic's ranges corrected.
@@ -54,7 +55,7 @@ void correctBag(const std::string& in, const std::string& model_file, const std:
   io::writeAtomically(out, [&](const std::filesystem::path& tmp) {
     stats = correctRosbag(in, tmp, topic, model, correct, model_file);
   });
-  printStats(stats, out, model_file, outside);
+  printStats(stats, out, model, outside);
 }
 
 }  // namespace
@@ -106,7 +107,7 @@ void addCorrectCommand(CLI::App& app) {
         [&](std::size_t done, std::size_t) { progress.update(done); }, outside, o->threads);
     progress.finish();
     out.commit();
-    printStats(stats, o->out, o->model, outside);
+    printStats(stats, o->out, model, outside);
   });
 }
 

@@ -40,7 +40,8 @@ nlohmann::ordered_json evaluationJson(const Evaluation& e) {
                                 {"lost_returns", e.lost},
                                 {"landmarks", toJson(e.landmarks)},
                                 {"walls", toJson(e.walls)},
-                                {"all", toJson(e.all)}};
+                                {"all", toJson(e.all)},
+                                {"beyond_fitted_range", toJson(e.beyond)}};
 }
 
 namespace {
@@ -88,6 +89,8 @@ void evaluateReference(const std::string& seq_dir, const std::string& ref_file, 
   const io::Sequence seq = io::openSequence(seq_dir);
   const Reference ref = io::readReference(ref_file);
   io::checkReference(ref, seq.stops.size(), ref_file);
+  calibration::Outside outside = calibration::kDefaultOutside;
+  calibration::parseOutside(outside_name, outside);  // checked by the option
   CalibrationOptions options;
   options.radius_m = radius_m;
   const auto detection = referenceDetection(detectionConfig(options));
@@ -107,13 +110,10 @@ void evaluateReference(const std::string& seq_dir, const std::string& ref_file, 
               {"rms_error_all_m", number(rmsError(raw.known.matches))}, {"entries", raw_json}};
   std::optional<ReferenceObservations> corrected;
   if (model) {
-    calibration::Outside outside = calibration::kDefaultOutside;
-    calibration::parseOutside(outside_name, outside);
     if (const std::string w = checkModelFits(*model, seq, model_file, false, outside); !w.empty())
       std::fprintf(stderr, "lidarcal: warning: %s\n", w.c_str());
     const auto method = inversion == "ml" ? calibration::InversionMethod::ml : calibration::InversionMethod::ls;
-    const ScanCorrection correction{calibration::modelInverter(*model, method, outside),
-                                    calibration::correctionWindow(*model, outside)};
+    const calibration::ReadingCorrector correction = calibration::readingCorrector(*model, method, outside);
     Progress cor_progress("measure (corrected)", seq.scans.size());
     corrected = observeReference(seq, ref, detection, scanLoader(seq, &correction),
                                  [&](std::size_t d, std::size_t) { cor_progress.update(d); });
@@ -124,7 +124,8 @@ void evaluateReference(const std::string& seq_dir, const std::string& ref_file, 
     j["corrected"] = {{"rms_error_m", number(rmsError(corrected->known.matches, fitted))},
                       {"rms_error_all_m", number(rmsError(corrected->known.matches))}, {"entries", cor_json}};
   }
-  std::fputs(referenceTable(raw.known.matches, corrected ? &corrected->known.matches : nullptr, fitted).c_str(), stdout);
+  std::fputs(referenceTable(raw.known.matches, corrected ? &corrected->known.matches : nullptr, fitted, outside).c_str(),
+             stdout);
   if (!out.empty()) io::writeTextAtomically(out, j.dump(2) + "\n");
 }
 
@@ -153,8 +154,9 @@ void addEvaluateCommand(CLI::App& app) {
   sub->add_option("--inversion", o->inversion, "With --model: ls or ml (see lidarcal correct --help)")
       ->check(CLI::IsMember({"ls", "ml"}))
       ->capture_default_str();
-  sub->add_option("--outside", o->outside, "With --model: keep, extrapolate or drop readings outside the fitted range")
-      ->check(CLI::IsMember({"keep", "extrapolate", "drop"}))
+  sub->add_option("--outside", o->outside,
+                  "With --model: " + calibration::outsideNames() + " readings beyond the fitted range (see lidarcal correct --help)")
+      ->check(CLI::IsMember(calibration::outsidePolicies()))
       ->capture_default_str();
   sub->add_option("--radius", o->radius_m, "With --reference: pole radius in metres (default: sequence.json, else estimated)")
       ->check(CLI::PositiveNumber);

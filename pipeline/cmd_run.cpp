@@ -3,7 +3,6 @@
 
 #include <cmath>
 #include <cstdio>
-#include <future>
 #include <memory>
 
 #include <CLI/CLI.hpp>
@@ -32,6 +31,57 @@ struct RunCommand {
   std::shared_ptr<CalibrationOptions> options = std::make_shared<CalibrationOptions>();
 };
 
+/// The comparison with the simulator's truth: our model scored on the corrected scans as
+/// written (read back from `corrected_dir`), the baselines under the same rule in memory.
+void compareWithTruth(ReportInputs& in, const io::Sequence& seq, const std::filesystem::path& corrected_dir,
+                      const SimulationTruth& truth, const SequenceCalibration& cal,
+                      const calibration::CalibrationConfig& config, calibration::InversionMethod method,
+                      calibration::Outside outside) {
+  in.true_landmarks = truth.truth.scene.landmarks;
+  in.compared.push_back({"lidarcal " + cal.model.method + " (no ground truth), the written scans", cal.model,
+                         evaluate(io::openSequence(corrected_dir), seq, truth)});
+  if (cal.model.method != "closed-form") {
+    auto cf_config = config;
+    cf_config.method = calibration::Method::closed_form;
+    const CalibrationModel cf = calibration::calibrate(cal.observations, cf_config);
+    if (cf.status.ok())
+      in.compared.push_back({std::string("closed form of ") + papers::kLandmarks + " (no ground truth)", cf,
+                             evaluate(cf, method, outside, seq, truth)});
+  }
+  const CalibrationModel scaled = calibrateOracle(seq, truth, commandedScale(truth.truth), config);
+  in.compared.push_back({"ground truth x odometry scale error " + fixed(commandedScale(truth.truth), 4) +
+                             " (unseen by self-calibration)",
+                         scaled, evaluate(scaled, method, outside, seq, truth)});
+  const CalibrationModel oracle = calibrateOracle(seq, truth, 1.0, config);
+  in.compared.push_back({std::string("ground truth (oracle, ") + papers::kTriangulation + " ML)", oracle,
+                         evaluate(oracle, method, outside, seq, truth)});
+}
+
+/// The run in a few lines on stdout.
+void printRun(const RunCommand& c, const io::Sequence& seq, const SequenceCalibration& cal, const ReportInputs& in,
+              const CorrectionStats& stats, calibration::Outside outside) {
+  namespace fs = std::filesystem;
+  std::printf("lidarcal run: %s, %s, %s found\n", plural(seq.scans.size(), "scan").c_str(),
+              plural(seq.stops.size(), "stop").c_str(), plural(cal.detections.association.landmarks.size(), "landmark").c_str());
+  std::fputs(modelSummary(cal.model).c_str(), stdout);
+  std::printf("  corrected scans: %zu returns inside the fitted range, %zu beyond it, %zu without a distance\n",
+              stats.corrected, stats.extrapolated, stats.unresolved);
+  if (const std::string beyond = beyondFitText(stats, cal.model, outside); !beyond.empty())
+    std::printf("  %s\n", beyond.c_str());
+  if (!in.compared.empty()) {
+    const Evaluation& ours = in.compared.front().evaluation;
+    std::printf("  against the truth (MSE ratio = raw MSE / corrected MSE: higher is better, 1 = no gain):\n");
+    std::printf("    %-62s %12s %12s\n", "", "landmarks", "all returns");
+    std::printf("    %-62s %9.1f mm %9.1f mm\n", "raw readings, RMS:", 1000.0 * std::sqrt(ours.landmarks.mse_raw_m2),
+                1000.0 * std::sqrt(ours.all.mse_raw_m2));
+    for (const auto& m : in.compared)
+      std::printf("    %-62s %12.2f %12.2f\n", (m.name + ", MSE ratio:").c_str(), m.evaluation.landmarks.mse_ratio,
+                  m.evaluation.all.mse_ratio);
+  }
+  std::printf("  model:     %s\n  corrected: %s\n  report:    %s\n", (fs::path(c.out) / "model.json").c_str(),
+              (fs::path(c.out) / "corrected").c_str(), (fs::path(c.out) / "report/report.md").c_str());
+}
+
 void runRun(const RunCommand& c) {
   namespace fs = std::filesystem;
   const fs::path seq_dir = c.seq.empty() ? bundledExample() : fs::path(c.seq);
@@ -56,6 +106,13 @@ void runRun(const RunCommand& c) {
   io::writeModel(out.path() / "model.json", cal.model);
 
   const auto method = c.inversion == "ml" ? calibration::InversionMethod::ml : calibration::InversionMethod::ls;
+  const calibration::Outside outside = calibration::kDefaultOutside;
+  fs::create_directory(out.path() / "corrected");
+  Progress cprog("correct", seq.scans.size());
+  const auto stats = correctSequence(seq, cal.model, method, out.path() / "corrected", io::PcdEncoding::binary,
+                                     [&](std::size_t d, std::size_t) { cprog.update(d); }, outside, c.options->threads);
+  cprog.finish();
+
   ReportInputs in;
   in.sequence = seq_dir;
   in.scans = seq.scans.size();
@@ -63,44 +120,20 @@ void runRun(const RunCommand& c) {
   in.detections = cal.detections.association.assigned;
   in.observations = &cal.observations;
   in.model = &cal.model;
+  in.correction = &stats;
+  in.outside = outside;
   in.command = "lidarcal run " + (c.seq.empty() ? std::string() : c.seq + " ") + "--out " + c.out;
   if (!truth_file.empty()) {
     Activity activity("evaluate against the truth");
-    const SimulationTruth truth = loadTruth(truth_file);
-    in.true_landmarks = truth.truth.scene.landmarks;
-    auto cf_config = config;
-    cf_config.method = calibration::Method::closed_form;
-    ComparedModel ours{"lidarcal " + cal.model.method + " (no ground truth)", cal.model, evaluate(cal.model, method, seq, truth)};
-    CalibrationModel cf = cal.model.method == "closed-form"
-                              ? cal.model
-                              : calibration::calibrate(cal.observations, cf_config);
-    CalibrationModel bound = calibrateOracle(seq, truth, commandedScale(truth.truth), config);
-    CalibrationModel oracle = calibrateOracle(seq, truth, 1.0, config);
-    in.compared.push_back(ours);
-    if (cal.model.method != "closed-form" && cf.status.ok())
-      in.compared.push_back({std::string("closed form of ") + papers::kLandmarks + " (no ground truth)", cf,
-                             evaluate(cf, method, seq, truth)});
-    in.compared.push_back({"ground truth in the commanded frame (best without ground truth)", bound,
-                           evaluate(bound, method, seq, truth)});
-    in.compared.push_back({std::string("ground truth (oracle, ") + papers::kTriangulation + " ML)", oracle,
-                           evaluate(oracle, method, seq, truth)});
+    compareWithTruth(in, seq, out.path() / "corrected", loadTruth(truth_file), cal, config, method, outside);
     in.truth_note = "Evaluated on the calibration sequence itself against " + truth_file.string() +
-                    " (simulator truth; calibration did not use it). The commanded-frame row fits the true distances "
-                    "scaled by the odometry scale error (" + std::to_string(commandedScale(truth.truth)) +
-                    "), which no self-calibration can see.";
+                    " (simulator truth; calibration did not use it). Our row scores the corrected scans as written "
+                    "in corrected/, read back; the other rows apply their models under the same rule (--outside " +
+                    calibration::toString(outside) + ").";
   }
-  // The report (its plots are gnuplot's: a third of the run on 1000 scans) is written while the
-  // scans are corrected: the two share only read-only inputs and write into separate folders.
-  auto report = std::async(std::launch::async, [&] { writeReport(out.path() / "report", in); });
-  fs::create_directory(out.path() / "corrected");
-  Progress cprog("correct", seq.scans.size());
-  const auto stats = correctSequence(seq, cal.model, method, out.path() / "corrected", io::PcdEncoding::binary,
-                                     [&](std::size_t d, std::size_t) { cprog.update(d); }, calibration::kDefaultOutside,
-                                     c.options->threads);
-  cprog.finish();
   {
     Activity activity("report");
-    report.get();
+    writeReport(out.path() / "report", in);
   }
   nlohmann::ordered_json summary{{"sequence", seq_dir.string()},
                                  {"scans", seq.scans.size()},
@@ -109,25 +142,23 @@ void runRun(const RunCommand& c) {
                                  {"method", cal.model.method},
                                  {"order", cal.model.model.bias.order()},
                                  {"alpha", cal.model.model.bias.alpha},
-                                 {"corrected_returns", stats.corrected}};
-  if (!in.compared.empty()) summary["evaluation"] = evaluationJson(in.compared.front().evaluation);
+                                 {"outside", calibration::toString(outside)},
+                                 {"corrected_returns", stats.corrected},
+                                 {"extrapolated_returns", stats.extrapolated},
+                                 {"beyond_fitted_range_returns", stats.beyond()},
+                                 {"unresolved_returns", stats.unresolved}};
+  if (!in.compared.empty()) {
+    summary["evaluation"] = evaluationJson(in.compared.front().evaluation);
+    auto baselines = nlohmann::ordered_json::array();
+    for (std::size_t k = 1; k < in.compared.size(); ++k)
+      baselines.push_back({{"model", in.compared[k].name},
+                           {"order", in.compared[k].model.model.bias.order()},
+                           {"evaluation", evaluationJson(in.compared[k].evaluation)}});
+    summary["baselines"] = baselines;
+  }
   io::writeTextAtomically(out.path() / "summary.json", summary.dump(2) + "\n");
   out.commit();
-
-  std::printf("lidarcal run: %s, %s, %s found\n", plural(seq.scans.size(), "scan").c_str(),
-              plural(seq.stops.size(), "stop").c_str(), plural(cal.detections.association.landmarks.size(), "landmark").c_str());
-  std::fputs(modelSummary(cal.model).c_str(), stdout);
-  if (!in.compared.empty()) {
-    const auto& raw = in.compared.front().evaluation.landmarks;
-    std::printf("  against the truth, on landmark returns (MSE ratio = raw MSE / corrected MSE: higher is better, 1 = no "
-                "gain):\n");
-    std::printf("    %-66s RMS %7.1f mm\n", "raw readings:", 1000.0 * std::sqrt(raw.mse_raw_m2));
-    for (const auto& m : in.compared)
-      std::printf("    %-66s RMS %7.1f mm, MSE ratio %8.2f\n", (m.name + ":").c_str(),
-                  1000.0 * std::sqrt(m.evaluation.landmarks.mse_corrected_m2), m.evaluation.landmarks.mse_ratio);
-  }
-  std::printf("  model:     %s\n  corrected: %s\n  report:    %s\n", (fs::path(c.out) / "model.json").c_str(),
-              (fs::path(c.out) / "corrected").c_str(), (fs::path(c.out) / "report/report.md").c_str());
+  printRun(c, seq, cal, in, stats, outside);
 }
 
 }  // namespace

@@ -8,7 +8,8 @@
 
 namespace lidarcal::pipeline {
 
-/// Scans, lost returns and the MSE comparisons (landmarks, walls, all returns) of `e`.
+/// Scans, lost returns and the MSE comparisons (landmarks, walls, all returns, and the returns
+/// beyond the fitted range) of `e`.
 nlohmann::ordered_json evaluationJson(const Evaluation& e);
 
 }  // namespace lidarcal::pipeline

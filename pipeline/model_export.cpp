@@ -35,9 +35,14 @@ std::string quoted(const std::string& s) { return nlohmann::json(s).dump(); }  /
 std::pair<double, double> correctedReadings(const CalibrationModel& model, calibration::Outside outside,
                                             const std::string& model_file) {
   const calibration::CorrectionWindow w = calibration::correctionWindow(model, outside);
-  if (model.fitted_range_m && outside != calibration::Outside::extrapolate) return {w.reading_min_m, w.reading_max_m};
+  const bool beyond = outside == calibration::Outside::extrapolate || outside == calibration::Outside::linear;
+  if (model.fitted_range_m && !beyond) return {w.reading_min_m, w.reading_max_m};
   const RangeModel& m = model.model;
-  if (!(m.range_max_m < 1e9) || !std::isfinite(m.range_min_m))
+  const bool limits_known = m.range_max_m < 1e9 && std::isfinite(m.range_min_m);
+  // The continuation corrects every reading; without the sensor's limits the table covers the fit's.
+  if (!limits_known && model.fitted_range_m && outside == calibration::Outside::linear)
+    return {w.reading_min_m, w.reading_max_m};
+  if (!limits_known)
     throw DataError(model_file, "fitted_range / sensor.range_max_m",
                     "the model records neither the range it was fitted over nor the sensor's range limits, so the "
                     "readings it corrects are unknown",
@@ -46,13 +51,16 @@ std::pair<double, double> correctedReadings(const CalibrationModel& model, calib
 }
 
 std::string exportYaml(const CalibrationModel& model, const ExportConfig& config) {
-  const auto [y_lo, y_hi] = correctedReadings(model, config.outside, config.source);
+  // The readings the fit itself covers; with `linear` the others are continued from its edges.
+  const auto [y_lo, y_hi] = correctedReadings(
+      model, config.outside == calibration::Outside::linear ? calibration::Outside::keep : config.outside, config.source);
   const auto [d_lo, d_hi] = model.fitted_range_m.value_or(std::pair<double, double>(model.model.range_min_m, model.model.range_max_m));
   std::string y;
   y += "# lidarcal range model for a ROS driver (lidarcal export --format yaml; docs/FORMAT.md)\n";
   y += "# from " + config.source + "\n";
   y += "# A reading y (metres) in valid_reading_m is corrected to the distance d with f(d) = y,\n";
-  y += "# f(d) = sum_i bias_alpha[i] * d^i; readings outside valid_reading_m: see `outside`.\n";
+  y += "# f(d) = sum_i bias_alpha[i] * d^i; readings outside valid_reading_m: see `outside`\n";
+  y += "# (linear: d = d_edge + (y - f(d_edge)) / f'(d_edge) at the nearer edge of valid_range_m).\n";
   y += "format: \"lidarcal-ros-params/1\"\n";
   y += "sensor_name: " + quoted(model.sensor_name) + "\n";
   y += "beams: " + (model.beams ? std::to_string(*model.beams) : std::string("0")) + "  # 0: not recorded\n";
@@ -64,7 +72,7 @@ std::string exportYaml(const CalibrationModel& model, const ExportConfig& config
   y += "inversion: " + std::string(calibration::toString(config.inversion)) +
        "  # ls: the d with f(d) = y; ml: the most likely d (squared noise law)\n";
   y += "outside: " + std::string(calibration::toString(config.outside)) +
-       "  # readings outside valid_reading_m: keep, extrapolate or drop\n";
+       "  # readings outside valid_reading_m: " + calibration::outsideNames() + "\n";
   y += "noise_law: " + std::string(toString(model.model.noise.kind)) + "\n";
   y += "noise_sigma_e: " + number(model.model.noise.sigma_e) + "\n";
   return y;

@@ -3,7 +3,7 @@
 // (docs/FORMAT.md#model-for-drivers-lidarcal-export).
 //   yaml: ROS parameters: the bias polynomial, the readings it corrects, the inversion.
 //   lut:  CSV lookup table reading_m -> range_m over those readings, each row what `correct`
-//         gives for that reading (calibration::correctReading).
+//         gives for that reading (calibration::ReadingCorrector).
 
 #include <string>
 
@@ -19,8 +19,9 @@ struct ExportConfig {
   std::string source;               ///< model file named in the YAML comment
 };
 
-/// Readings the model corrects, [first, second] metres: f over the fitted range, or the sensor's
-/// range window with --outside extrapolate or a model without fitted range. Throws DataError
+/// Readings the model corrects, [first, second] metres: f over the fitted range with keep and
+/// drop; the sensor's range window with linear and extrapolate (linear without the sensor's
+/// limits: f over the fitted range), or for a model without fitted range. Throws DataError
 /// when the model gives neither (no fitted range and no finite range limits).
 std::pair<double, double> correctedReadings(const CalibrationModel& model, calibration::Outside outside,
                                             const std::string& model_file);

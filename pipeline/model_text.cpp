@@ -6,6 +6,8 @@
 #include <limits>
 #include <tuple>
 
+#include "pipeline/words.hpp"
+
 namespace lidarcal::pipeline {
 std::string fixed(double v, int digits, bool sign) {
   char buf[64];
@@ -75,7 +77,10 @@ std::string modelSummary(const CalibrationModel& m) {
   if (m.fitted_range_m)
     s += "  fitted over true distances " + fixed(m.fitted_range_m->first, 3) + "-" + fixed(m.fitted_range_m->second, 3) +
          " m (readings " + fixed(m.model.bias(m.fitted_range_m->first), 3) + "-" +
-         fixed(m.model.bias(m.fitted_range_m->second), 3) + " m); `correct` leaves readings outside as they are\n";
+         fixed(m.model.bias(m.fitted_range_m->second), 3) +
+         " m; the beams' distances to the surfaces they hit, for a pole's nearest point its centre distance minus "
+         "its radius); `correct` continues the correction "
+         "beyond them at its slope at the edge (--outside)\n";
   const bool errors = m.alpha_covariance.size() == m.model.bias.alpha.size() * m.model.bias.alpha.size();
   s += "  error of the raw reading (f(d) - d)" + std::string(errors ? " +- its standard error" : "") + ":";
   for (double d : tableDistances(m)) {
@@ -89,19 +94,52 @@ std::string modelSummary(const CalibrationModel& m) {
   return s;
 }
 
+std::string beyondFitText(const calibration::FilteringStats& s, const CalibrationModel& m, calibration::Outside outside) {
+  const std::size_t returns = s.corrected + s.beyond() + s.unresolved;
+  if (s.beyond() == 0 || returns == 0 || !m.fitted_range_m) return "";
+  const double share = static_cast<double>(s.beyond()) / static_cast<double>(returns);
+  const auto [lo, hi] = *m.fitted_range_m;
+  std::string fate;
+  switch (outside) {
+    case calibration::Outside::linear:
+      fate = "corrected by continuing the fitted correction past the edge at its slope there (--outside linear; "
+             "marked 2 in the `correction` field, with a standard error that grows with the distance past the edge)";
+      break;
+    case calibration::Outside::extrapolate: fate = "corrected with the polynomial itself (--outside extrapolate)"; break;
+    case calibration::Outside::keep: fate = "left as read (--outside keep)"; break;
+    case calibration::Outside::drop: fate = "dropped (--outside drop)"; break;
+  }
+  std::string where;
+  if (s.below > 0) where = std::to_string(s.below) + " below it, readings down to " + fixed(s.beyond_min_m, 2) + " m";
+  if (s.beyond() > s.below)
+    where += (where.empty() ? "" : "; ") + std::to_string(s.beyond() - s.below) + " above it, readings up to " +
+             fixed(s.beyond_max_m, 2) + " m";
+  std::string t = plural(s.beyond(), "return") + " (" + fixed(100.0 * share, 1) +
+                  " % of the returns) lie beyond the true distances the model was fitted on (" + fixed(lo, 2) + "-" +
+                  fixed(hi, 2) + " m; " + where + "): " + fate + ".";
+  if (share > 0.5)
+    t += "\nwarning: most of the returns lie beyond the fitted range, so most of the output rests on an "
+         "extrapolation. Record the poles over the whole span of distances the sensor will be used at (here readings " +
+         fixed(std::min(s.beyond_min_m, m.model.bias(lo)), 1) + "-" + fixed(std::max(s.beyond_max_m, m.model.bias(hi)), 1) +
+         " m), and calibrate again.";
+  return t;
+}
+
 std::string referenceTable(const std::vector<calibration::ReferenceMatch>& raw,
-                           const std::vector<calibration::ReferenceMatch>* corrected, const CalibrationModel* model) {
+                           const std::vector<calibration::ReferenceMatch>* corrected, const CalibrationModel* model,
+                           calibration::Outside outside) {
   auto inside = [&](const calibration::ReferenceMatch& m) {
     return !model || !model->fitted_range_m ||
            (m.surface_m >= model->fitted_range_m->first - 1e-3 && m.surface_m <= model->fitted_range_m->second + 1e-3);
   };
+  const bool beyond_corrected = outside == calibration::Outside::linear || outside == calibration::Outside::extrapolate;
   std::string s = "| entry | stop | target | reference [m] | raw [m] | raw - reference [mm] |";
   if (corrected) s += " corrected [m] | corrected - reference [mm] |";
   s += " scans | readings |\n|---|---|---|---|---|---|";
   if (corrected) s += "---|---|";
   s += "---|---|\n";
   double sum_raw = 0.0, sum_cor = 0.0;
-  std::size_t n_raw = 0, n_cor = 0, outside = 0;
+  std::size_t n_raw = 0, n_cor = 0, left_out = 0;
   auto cell = [](const calibration::ReferenceMatch& m, bool counted, double& sum, std::size_t& n) {
     if (!m.ok()) return std::string(" not found | - |");
     const double e = m.measured_m - m.reference_m;
@@ -112,18 +150,21 @@ std::string referenceTable(const std::vector<calibration::ReferenceMatch>& raw,
   for (std::size_t k = 0; k < raw.size(); ++k) {
     const auto& m = raw[k];
     const bool in = inside(m);
-    outside += !in;
-    s += "| " + std::to_string(m.entry) + (in ? "" : " (outside the fitted range)") + " | " + std::to_string(m.stop) +
+    const bool counted = in || beyond_corrected;
+    left_out += !counted;
+    s += "| " + std::to_string(m.entry) + (in ? "" : " (beyond the fitted range)") + " | " + std::to_string(m.stop) +
          " | " + (m.target == ReferenceTarget::wall ? "wall" : "landmark " + std::to_string(m.landmark)) + " | " +
-         fixed(m.reference_m, 3) + " |" + cell(m, in, sum_raw, n_raw);
-    if (corrected) s += k < corrected->size() ? cell((*corrected)[k], in, sum_cor, n_cor) : std::string(" - | - |");
+         fixed(m.reference_m, 3) + " |" + cell(m, counted, sum_raw, n_raw);
+    if (corrected) s += k < corrected->size() ? cell((*corrected)[k], counted, sum_cor, n_cor) : std::string(" - | - |");
     s += " " + std::to_string(m.sightings) + " | " + std::to_string(m.readings) + " |\n";
   }
   auto rms = [](double sum, std::size_t n) { return n ? fixed(1000.0 * std::sqrt(sum / static_cast<double>(n)), 1) : std::string("-"); };
   s += "\nRMS of measured - reference: raw " + rms(sum_raw, n_raw) + " mm";
   if (corrected) s += ", corrected " + rms(sum_cor, n_cor) + " mm";
   s += " (over " + std::to_string(n_raw) + " entries";
-  if (outside) s += "; " + std::to_string(outside) + " outside the fitted range left out: their readings are not corrected";
+  if (left_out)
+    s += "; " + std::to_string(left_out) + " beyond the fitted range left out: --outside " + calibration::toString(outside) +
+         " does not correct their readings";
   s += ")\n";
   return s;
 }

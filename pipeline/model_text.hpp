@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "calibration/filtering.hpp"
 #include "calibration/reference.hpp"
 #include "common/calibration_model.hpp"
 
@@ -35,13 +36,19 @@ std::vector<double> tableDistances(const CalibrationModel& m);
 /// tableDistances() with errors, warnings.
 std::string modelSummary(const CalibrationModel& m);
 
+/// What happened to the returns beyond the fitted range, in a sentence (empty when there were
+/// none): how many, the share of all returns, their readings' span, and the policy. When most
+/// returns lie beyond, a second sentence starting "warning:" says so and what to record.
+std::string beyondFitText(const calibration::FilteringStats& stats, const CalibrationModel& m, calibration::Outside outside);
+
 /// The reference distances as matched: stop, target, measured (tape) distance, what the scans
 /// read there (mean over the scans, its standard error), the difference, and the readings used
 /// (Markdown table). With `corrected`, a second column set for the corrected scans; with
-/// `model`, entries outside its fitted range are marked and left out of the RMS (their readings
-/// are not corrected by default).
+/// `model`, entries outside its fitted range are marked, and left out of the RMS when `outside`
+/// leaves their readings uncorrected (keep, drop).
 std::string referenceTable(const std::vector<calibration::ReferenceMatch>& raw,
                            const std::vector<calibration::ReferenceMatch>* corrected = nullptr,
-                           const CalibrationModel* model = nullptr);
+                           const CalibrationModel* model = nullptr,
+                           calibration::Outside outside = calibration::kDefaultOutside);
 
 }  // namespace lidarcal::pipeline

@@ -13,10 +13,10 @@
 
 namespace lidarcal::pipeline {
 
-detectors::ScanLoader scanLoader(const io::Sequence& seq, const ScanCorrection* correct) {
+detectors::ScanLoader scanLoader(const io::Sequence& seq, const calibration::ReadingCorrector* correct) {
   return [&seq, correct](std::size_t i) {
     io::Scan scan = io::readScan(seq.scans.path(i));
-    return correct ? calibration::correctScan(scan, correct->inverter, nullptr, correct->window) : scan;
+    return correct ? calibration::correctScan(scan, *correct) : scan;
   };
 }
 

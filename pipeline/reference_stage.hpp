@@ -18,14 +18,8 @@
 
 namespace lidarcal::pipeline {
 
-/// A model ready to correct scans: its inverter and the readings it corrects.
-struct ScanCorrection {
-  calibration::RangeInverter inverter;
-  calibration::CorrectionWindow window;
-};
-
 /// Loads scan i of `seq`; with `correct`, every point moved to its corrected distance first.
-detectors::ScanLoader scanLoader(const io::Sequence& seq, const ScanCorrection* correct = nullptr);
+detectors::ScanLoader scanLoader(const io::Sequence& seq, const calibration::ReadingCorrector* correct = nullptr);
 
 struct ReferenceObservations {
   LandmarkObservations observations;       ///< poles (and walls at the stops a wall is measured at)

@@ -9,6 +9,7 @@
 #include <optional>
 #include <sstream>
 
+#include "calibration/filtering.hpp"
 #include "calibration/inversion.hpp"
 #include "calibration/joint_refinement.hpp"
 #include "io/atomic_file.hpp"
@@ -94,9 +95,10 @@ PlotData plotData(const LandmarkObservations& obs, const CalibrationModel& m, co
   std::map<int, const CalibratedLandmark*> lm;
   for (const auto& l : m.landmarks)
     if (l.status == "ok") lm[l.id] = &l;
-  std::optional<calibration::RangeInverter> inv;
+  // The readings corrected as `correct` does (these lie inside the fitted range).
+  std::optional<calibration::ReadingCorrector> correct;
   try {
-    inv.emplace(m.model, calibration::inversionWindow(m.model, calibration::InversionMethod::ls));
+    correct.emplace(calibration::readingCorrector(m, calibration::InversionMethod::ls, calibration::kDefaultOutside));
   } catch (const std::invalid_argument&) {
   }
   std::map<int, std::pair<double, int>> bins;  // 0.25 m bins of the estimated distance
@@ -122,8 +124,7 @@ PlotData plotData(const LandmarkObservations& obs, const CalibrationModel& m, co
       d_max = std::max(d_max, d);
       // Corrected reading: NaN where the model has no distance for it.
       double c = std::nan("");
-      if (inv)
-        if (const auto found = inv->invert(b.range_m)) c = *found;
+      if (correct) c = (*correct)(b.range_m).range_m;
       appendG6(p.distance, d, ' ');
       appendG6(p.distance, b.range_m, ' ');
       appendG6(p.distance, c, '\n');
@@ -272,9 +273,11 @@ void writeModelSection(std::ostringstream& md, const CalibrationModel& m, const 
   md << "\n";
   if (m.fitted_range_m)
     md << "- fitted on readings at true distances from " << fixed(m.fitted_range_m->first, 2) << " to "
-       << fixed(m.fitted_range_m->second, 2) << " m (the sensor reads up to " << fixed(m.model.range_max_m, 1)
-       << " m): `lidarcal correct` leaves readings outside the fitted range as they are (`--outside extrapolate` "
-          "applies the polynomial there too)\n";
+       << fixed(m.fitted_range_m->second, 2) << " m (the beams' distances to the surfaces they hit; the sensor reads up "
+       << "to " << fixed(m.model.range_max_m, 1) << " m). Beyond them `lidarcal correct` continues the correction at "
+       << "its slope at the edge, without a step or a kink, and marks those points (field `correction` = 2, with "
+          "their standard error in `correction_se`; docs/FORMAT.md). `--outside keep`, `drop` or `extrapolate` "
+          "(the polynomial itself) choose otherwise.\n";
   else if (fitted.max_m > 0.0)
     md << "- fitted on landmark readings at estimated distances from " << fixed(fitted.min_m, 2) << " to "
        << fixed(fitted.max_m, 2) << " m (the sensor reads up to " << fixed(m.model.range_max_m, 1) << " m)\n";
@@ -305,22 +308,34 @@ void writeErrorTable(std::ostringstream& md, const CalibrationModel& m, const Fi
 
 }
 
+/// One row of the written scans' table: returns, RMS error raw and corrected, MSE ratio.
+std::string writtenRow(const std::string& name, const calibration::RangeComparison& c) {
+  if (c.n == 0) return "| " + name + " | 0 | - | - | - |\n";
+  return "| " + name + " | " + std::to_string(c.n) + " | " + fixed(1000 * std::sqrt(c.mse_raw_m2), 2) + " | " +
+         fixed(1000 * std::sqrt(c.mse_corrected_m2), 2) + " | " + fixed(c.mse_ratio, 2) + " |\n";
+}
+
 /// The MSE ratios against the truth, when there is one.
 void writeTruthSection(std::ostringstream& md, const ReportInputs& in) {
   using papers::kLandmarks;
   using papers::kTriangulation;
-  if (!in.compared.empty()) {
-    md << "\n## Against the truth\n\n" << in.truth_note << "\n\n";
-    md << "The MSE ratio is the raw readings' mean squared error divided by the corrected ones' (" << kLandmarks
-       << ", eq. 31): higher is better, 1 means no gain.\n\n";
-    md << "| model | order | MSE ratio, landmarks | MSE ratio, all returns | RMS error after, landmarks [mm] | "
-          "normalised MSE after (" << kTriangulation << ", eq. 31) |\n|---|---|---|---|---|---|\n";
-    const auto& first = in.compared.front().evaluation;
-    md << "| raw readings | - | 1.00 | 1.00 | " << fixed(1000 * std::sqrt(first.landmarks.mse_raw_m2), 2) << " | "
-       << fixed(first.all.nmse_raw, 5) << " |\n";
-    for (const auto& c : in.compared) md << comparisonRow(c);
-  }
-
+  if (in.compared.empty()) return;
+  md << "\n## Against the truth\n\n" << in.truth_note << "\n\n";
+  md << "The MSE ratio is the raw readings' mean squared error divided by the corrected ones' (" << kLandmarks
+     << ", eq. 31): higher is better, 1 means no gain.\n\n";
+  const Evaluation& ours = in.compared.front().evaluation;
+  md << "The corrected scans as written:\n\n| returns on | returns | raw RMS error [mm] | corrected RMS error [mm] | "
+        "MSE ratio |\n|---|---|---|---|---|\n";
+  md << writtenRow("landmarks", ours.landmarks) << writtenRow("walls", ours.walls) << writtenRow("all", ours.all)
+     << writtenRow(std::string("beyond the fitted range (--outside ") + calibration::toString(in.outside) + ")",
+                   ours.beyond);
+  if (ours.lost > 0) md << "\n" << plural(ours.lost, "raw return") << " had no corrected distance and are not scored.\n";
+  md << "\nEvery model under the same rule:\n\n";
+  md << "| model | order | MSE ratio, landmarks | MSE ratio, all returns | RMS error after, landmarks [mm] | "
+        "normalised MSE after (" << kTriangulation << ", eq. 31) |\n|---|---|---|---|---|---|\n";
+  md << "| raw readings | - | 1.00 | 1.00 | " << fixed(1000 * std::sqrt(ours.landmarks.mse_raw_m2), 2) << " | "
+     << fixed(ours.all.nmse_raw, 5) << " |\n";
+  for (const auto& c : in.compared) md << comparisonRow(c);
 }
 
 /// The plot data, the gnuplot script and the plots (or why there are none).
@@ -421,6 +436,13 @@ void writeReport(const std::filesystem::path& dir, const ReportInputs& in) {
       in.observations ? std::optional<PlotData>(plotData(*in.observations, m, in.true_landmarks)) : std::nullopt;
   const FittedRange fitted = p ? p->fitted : FittedRange{};
   writeModelSection(md, m, fitted);
+  if (in.correction)
+    if (const std::string beyond = beyondFitText(*in.correction, m, in.outside); !beyond.empty()) {
+      std::string text = beyond;
+      for (std::size_t at = text.find("\nwarning: "); at != std::string::npos; at = text.find("\nwarning: ", at))
+        text.replace(at, 10, "\n\n**Warning**: ");
+      md << "\n" << text << "\n";
+    }
   writeErrorTable(md, m, fitted);
   writeTruthSection(md, in);
   writePlotsSection(md, dir, m, p, fitted);

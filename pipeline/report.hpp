@@ -28,7 +28,11 @@ struct ReportInputs {
   std::size_t detections = 0;               ///< associated circle detections
   const LandmarkObservations* observations = nullptr;  ///< what calibration saw
   const CalibrationModel* model = nullptr;  ///< the result
-  std::vector<ComparedModel> compared;      ///< with truth: this model and its baselines
+  /// What `correct` did to the returns of the written scans (null: the scans were not corrected).
+  const calibration::FilteringStats* correction = nullptr;
+  calibration::Outside outside = calibration::kDefaultOutside;  ///< the policy they were corrected under
+  /// With truth: this model scored on the written scans first, then its baselines.
+  std::vector<ComparedModel> compared;
   std::string truth_note;                   ///< where the evaluation data came from
   std::vector<Cylinder> true_landmarks;     ///< simulator truth: drawn on the map when given
   std::string command;                      ///< command line that produced the report

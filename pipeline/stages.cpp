@@ -217,8 +217,7 @@ CorrectionStats correctSequence(const io::Sequence& seq, const CalibrationModel&
                                 calibration::InversionMethod method, const std::filesystem::path& out_dir,
                                 io::PcdEncoding encoding, const StageProgress& on_scan, calibration::Outside outside,
                                 int threads) {
-  const calibration::RangeInverter inverter = calibration::modelInverter(model, method, outside);
-  const calibration::CorrectionWindow window_of = calibration::correctionWindow(model, outside);
+  const calibration::ReadingCorrector correct = calibration::readingCorrector(model, method, outside);
   CorrectionStats stats;
   // A window of scans at a time on `threads` threads (each scan read, corrected and written on
   // its own); the counts added up and the progress told in scan order.
@@ -231,14 +230,11 @@ CorrectionStats correctSequence(const io::Sequence& seq, const CalibrationModel&
       const std::size_t i = first + k;
       const io::Scan scan = io::readScan(seq.scans[i].path);
       f[k] = calibration::FilteringStats{};
-      io::writeScan(out_dir / seq.scans[i].name(), calibration::correctScan(scan, inverter, &f[k], window_of), encoding);
+      io::writeScan(out_dir / seq.scans[i].name(), calibration::correctScan(scan, correct, &f[k]), encoding);
     });
     for (std::size_t k = 0; k < count; ++k) {
       ++stats.scans;
-      stats.points += f[k].points;
-      stats.corrected += f[k].corrected;
-      stats.unresolved += f[k].unresolved;
-      stats.outside += f[k].outside;
+      stats += f[k];
     }
     if (on_scan) on_scan(first + count, n);
   }

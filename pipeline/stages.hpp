@@ -87,9 +87,9 @@ calibration::ReadingCorrector modelCorrector(const CalibrationModel& model, cali
 void checkModelInvertible(const CalibrationModel& model, const std::filesystem::path& model_file,
                           calibration::Outside outside = calibration::kDefaultOutside);
 
-struct CorrectionStats {
-  std::size_t scans = 0, points = 0, corrected = 0, unresolved = 0;
-  std::size_t outside = 0;  ///< returns outside the fitted reading range (kept or dropped)
+/// What correcting a sequence or a bag did to its returns, and in how many scans.
+struct CorrectionStats : calibration::FilteringStats {
+  std::size_t scans = 0;  ///< scans (or LaserScan messages) corrected
 };
 
 /// Streams every scan through the filtering stage into `out_dir` (an existing, empty staging

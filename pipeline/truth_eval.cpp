@@ -86,40 +86,49 @@ std::vector<std::vector<double>> truthBatches(const io::Sequence& raw, const Sim
   return batches;
 }
 
+namespace {
+
+/// Truth, raw and corrected ranges of one class of beams.
+struct Compared {
+  std::vector<double> truth, raw, corrected;
+  void add(double t, double r, double c) {
+    truth.push_back(t);
+    raw.push_back(r);
+    corrected.push_back(c);
+  }
+  calibration::RangeComparison compare() const { return calibration::compareRanges(truth, raw, corrected); }
+};
+
+}  // namespace
+
 Evaluation evaluate(const io::Sequence& raw, const SimulationTruth& truth, const CorrectedRanges& corrected) {
   checkMatches(raw, truth);
-  std::vector<double> t_l, r_l, c_l, t_w, r_w, c_w, t_a, r_a, c_a;
+  Compared landmarks, walls, all, beyond;
   Evaluation e;
   for (std::size_t i = 0; i < raw.scans.size(); ++i) {
     const io::Scan rs = io::readScan(raw.scans[i].path);
-    const std::vector<double> cor = corrected(i, rs);
+    const CorrectedScanRanges cor = corrected(i, rs);
     ++e.scans;
-    for (std::size_t b = 0; b < rs.cloud->size() && b < truth.beams && b < cor.size(); ++b) {
+    for (std::size_t b = 0; b < rs.cloud->size() && b < truth.beams && b < cor.range_m.size(); ++b) {
       const auto& t = truth.at(i, b);
       const auto& p = (*rs.cloud)[b];
       if (!std::isfinite(p.x) || !std::isfinite(t.range_m)) continue;
-      if (!std::isfinite(cor[b])) {
+      const double c = cor.range_m[b];
+      if (!std::isfinite(c)) {
         ++e.lost;
         continue;
       }
-      const double raw_r = std::hypot(static_cast<double>(p.x), static_cast<double>(p.y));
-      t_a.push_back(t.range_m);
-      r_a.push_back(raw_r);
-      c_a.push_back(cor[b]);
-      if (t.target == io::TargetKind::landmark) {
-        t_l.push_back(t.range_m);
-        r_l.push_back(raw_r);
-        c_l.push_back(cor[b]);
-      } else if (t.target == io::TargetKind::wall) {
-        t_w.push_back(t.range_m);
-        r_w.push_back(raw_r);
-        c_w.push_back(cor[b]);
-      }
+      const double r = std::hypot(static_cast<double>(p.x), static_cast<double>(p.y));
+      all.add(t.range_m, r, c);
+      if (t.target == io::TargetKind::landmark) landmarks.add(t.range_m, r, c);
+      else if (t.target == io::TargetKind::wall) walls.add(t.range_m, r, c);
+      if (b < cor.beyond.size() && cor.beyond[b]) beyond.add(t.range_m, r, c);
     }
   }
-  e.landmarks = calibration::compareRanges(t_l, r_l, c_l);
-  e.walls = calibration::compareRanges(t_w, r_w, c_w);
-  e.all = calibration::compareRanges(t_a, r_a, c_a);
+  e.landmarks = landmarks.compare();
+  e.walls = walls.compare();
+  e.all = all.compare();
+  e.beyond = beyond.compare();
   return e;
 }
 
@@ -135,24 +144,31 @@ Evaluation evaluate(const io::Sequence& corrected, const io::Sequence& raw, cons
     const io::Scan cs = io::readScan(corrected.scans[i].path);
     if (cs.cloud->size() != rs.cloud->size())
       throw InputError(corrected.scans[i].path, "POINTS", "differs from the raw scan", "re-run lidarcal correct");
-    std::vector<double> r(cs.cloud->size());
-    for (std::size_t b = 0; b < r.size(); ++b) {
+    CorrectedScanRanges r;
+    r.range_m.resize(cs.cloud->size());
+    for (std::size_t b = 0; b < r.range_m.size(); ++b) {
       const auto& q = (*cs.cloud)[b];
-      r[b] = std::isfinite(q.x) ? std::hypot(static_cast<double>(q.x), static_cast<double>(q.y)) : std::nan("");
+      r.range_m[b] = std::isfinite(q.x) ? std::hypot(static_cast<double>(q.x), static_cast<double>(q.y)) : std::nan("");
     }
+    for (const io::PointCorrection c : cs.correction)
+      r.beyond.push_back(c == io::PointCorrection::extrapolated || c == io::PointCorrection::raw);
     return r;
   });
 }
 
-Evaluation evaluate(const CalibrationModel& model, calibration::InversionMethod method, const io::Sequence& raw,
-                    const SimulationTruth& truth) {
-  const calibration::RangeInverter inverter(model.model, calibration::inversionWindow(model.model, method));
+Evaluation evaluate(const CalibrationModel& model, calibration::InversionMethod method, calibration::Outside outside,
+                    const io::Sequence& raw, const SimulationTruth& truth) {
+  const calibration::ReadingCorrector correct = calibration::readingCorrector(model, method, outside);
   return evaluate(raw, truth, [&](std::size_t, const io::Scan& rs) {
-    std::vector<double> r(rs.cloud->size(), std::nan(""));
-    for (std::size_t b = 0; b < r.size(); ++b) {
+    CorrectedScanRanges r;
+    r.range_m.assign(rs.cloud->size(), std::nan(""));
+    r.beyond.assign(rs.cloud->size(), false);
+    for (std::size_t b = 0; b < r.range_m.size(); ++b) {
       const auto& p = (*rs.cloud)[b];
       if (!std::isfinite(p.x)) continue;
-      if (const auto d = inverter.invert(std::hypot(static_cast<double>(p.x), static_cast<double>(p.y)))) r[b] = *d;
+      const calibration::CorrectedReading c = correct(std::hypot(static_cast<double>(p.x), static_cast<double>(p.y)));
+      r.range_m[b] = c.range_m;
+      r.beyond[b] = c.fate != calibration::ReadingFate::corrected && c.fate != calibration::ReadingFate::unresolved;
     }
     return r;
   });

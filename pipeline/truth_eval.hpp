@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "calibration/evaluation.hpp"
+#include "calibration/filtering.hpp"
 #include "calibration/inversion.hpp"
 #include "common/calibration_model.hpp"
 #include "calibration/range_model_fit.hpp"
@@ -41,19 +42,30 @@ struct Evaluation {
   calibration::RangeComparison landmarks;  ///< beams on landmarks
   calibration::RangeComparison walls;      ///< beams on walls
   calibration::RangeComparison all;        ///< every beam with a return and a truth
+  /// Beams whose reading lies beyond the model's fitted range (continued, or kept raw): also
+  /// counted in the rows above.
+  calibration::RangeComparison beyond;
   std::size_t scans = 0;                   ///< scans compared
   std::size_t lost = 0;                    ///< raw returns that the correction turned into NaN
 };
 
-/// Corrected range of every point of raw scan `index` (NaN where there is none).
-using CorrectedRanges = std::function<std::vector<double>(std::size_t index, const io::Scan& raw)>;
+/// The corrected scan of one raw scan: a range per point (NaN where there is none) and whether
+/// its reading lay beyond the model's fitted range.
+struct CorrectedScanRanges {
+  std::vector<double> range_m;  ///< corrected range per point, metres
+  std::vector<bool> beyond;     ///< per point: beyond the fitted range (empty: none is)
+};
+/// Corrected ranges of raw scan `index`.
+using CorrectedRanges = std::function<CorrectedScanRanges(std::size_t index, const io::Scan& raw)>;
 
 /// Compares raw ranges and their corrections with the true ranges.
 Evaluation evaluate(const io::Sequence& raw, const SimulationTruth& truth, const CorrectedRanges& corrected);
-/// Compares raw and corrected scans (matched by file name) with the true ranges.
+/// Compares raw and corrected scans (matched by file name) with the true ranges; a point is
+/// beyond the fitted range where the corrected scan's `correction` field says so.
 Evaluation evaluate(const io::Sequence& corrected, const io::Sequence& raw, const SimulationTruth& truth);
-/// Compares raw ranges and the model's corrections of them with the true ranges (no files written).
-Evaluation evaluate(const CalibrationModel& model, calibration::InversionMethod method, const io::Sequence& raw,
-                    const SimulationTruth& truth);
+/// Compares raw ranges and the model's corrections of them, under `outside` as `correct`
+/// applies it, with the true ranges (no files written).
+Evaluation evaluate(const CalibrationModel& model, calibration::InversionMethod method, calibration::Outside outside,
+                    const io::Sequence& raw, const SimulationTruth& truth);
 
 }  // namespace lidarcal::pipeline

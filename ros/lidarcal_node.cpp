@@ -3,7 +3,7 @@
 //   ~input      LaserScan topic to read (default "scan")
 //   ~output     topic for the corrected scans (default "scan_corrected")
 //   ~inversion  ls | ml, as `lidarcal correct --inversion` (default ls)
-//   ~outside    keep | extrapolate | drop, as `lidarcal correct --outside` (default keep)
+//   ~outside    linear | keep | extrapolate | drop, as `lidarcal correct --outside` (default linear)
 //   ~sensor_name  optional: the sensor's name as in model.json; another name is refused at start
 //   ~force      apply a model whose range limits differ from the scans' (default false)
 // Each scan is republished with the same header and beams; its ranges go through the rule of
@@ -104,7 +104,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   if (!calibration::parseOutside(s.outside, outside)) {
-    ROS_FATAL("lidarcal_node: ~outside is '%s': use keep, extrapolate or drop", s.outside.c_str());
+    ROS_FATAL("lidarcal_node: ~outside is '%s': use %s", s.outside.c_str(), calibration::outsideNames().c_str());
     return 2;
   }
   const auto method = s.inversion == "ml" ? calibration::InversionMethod::ml : calibration::InversionMethod::ls;
@@ -126,8 +126,9 @@ int main(int argc, char** argv) {
     ros::spin();
     const auto& st = node.stats();
     // After ros::spin() the ROS logger may be shut down already: plain stdout.
-    std::printf("lidarcal_node: %zu scans, %zu returns corrected, %zu outside the fitted readings, %zu without a distance\n",
-                st.scans, st.corrected, st.outside, st.unresolved);
+    std::printf("lidarcal_node: %zu scans, %zu returns corrected, %zu of them beyond the fitted range, %zu beyond it left "
+                "uncorrected, %zu without a distance\n",
+                st.scans, st.corrected + st.extrapolated, st.extrapolated, st.outside, st.unresolved);
     std::fflush(stdout);
     return node.exitCode();
   } catch (const DataError& e) {

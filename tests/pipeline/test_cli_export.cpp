@@ -49,7 +49,7 @@ TEST(Export, YamlCarriesTheModelExactly) {
   EXPECT_EQ(readings[0], m.model.bias(0.5));
   EXPECT_EQ(readings[1], m.model.bias(8.0));
   EXPECT_EQ(yamlValue(y, "inversion"), "ml");
-  EXPECT_EQ(yamlValue(y, "outside"), "keep");
+  EXPECT_EQ(yamlValue(y, "outside"), "linear");  // the default: continued at the edges' slope
   EXPECT_EQ(yamlValue(y, "beams"), "360");
   EXPECT_NE(y.find("\nsensor_name: \"test sensor\"\n"), std::string::npos) << y;
   // Standard output when no -o is given: the same text.
@@ -62,8 +62,8 @@ TEST(Export, LutInvertsThePolynomialOverTheFittedRange) {
   TempDir dir;
   const CalibrationModel m = polynomialModel("test sensor", 0);
   io::writeModel(dir / "model.json", m);
-  const CliResult r =
-      runCli("export " + (dir / "model.json").string() + " --format lut --step 0.01 -o " + (dir / "lut.csv").string());
+  const CliResult r = runCli("export " + (dir / "model.json").string() + " --format lut --step 0.01 --outside keep -o " +
+                             (dir / "lut.csv").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto rows = readLut(readFile(dir / "lut.csv"));
   const double lo = m.model.bias(0.5), hi = m.model.bias(8.0);
@@ -124,7 +124,7 @@ TEST_P(LutEqualsCorrect, ForEveryRow) {
   const io::Scan raw = io::readScan(dir / "seq" / io::scanFileName(0));
   const io::Scan out = io::readScan(dir / "out" / io::scanFileName(0));
   ASSERT_EQ(out.cloud->size(), rows.size());
-  const bool extrapolate = std::string(c.outside) == "extrapolate";
+  const bool extrapolate = std::string(c.outside) == "extrapolate" || std::string(c.outside) == "linear";
   std::size_t nan_rows = 0, outside_rows = 0;
   for (std::size_t i = 0; i < rows.size(); ++i) {
     SCOPED_TRACE(i);
@@ -154,8 +154,30 @@ TEST_P(LutEqualsCorrect, ForEveryRow) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Policies, LutEqualsCorrect,
-                         ::testing::Values(LutCase{"ls", "keep"}, LutCase{"ml", "keep"}, LutCase{"ls", "extrapolate"}),
+                         ::testing::Values(LutCase{"ls", "keep"}, LutCase{"ml", "keep"}, LutCase{"ls", "extrapolate"},
+                                           LutCase{"ls", "linear"}, LutCase{"ml", "linear"}),
                          [](const auto& p) { return std::string(p.param.inversion) + "_" + p.param.outside; });
+
+TEST(Export, TheDefaultContinuesTheTangentOverTheSensorsRangeWindow) {
+  TempDir dir;
+  const CalibrationModel m = polynomialModel("s", 0);
+  io::writeModel(dir / "model.json", m);
+  const CliResult r = runCli("export " + (dir / "model.json").string() + " --format lut");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto rows = readLut(r.out);
+  ASSERT_FALSE(rows.empty());
+  EXPECT_EQ(rows.front().first, 0.15);
+  EXPECT_EQ(rows.back().first, 12.0);
+  const auto& f = m.model.bias;
+  std::size_t beyond = 0;
+  for (const auto& [y, d] : rows) {
+    if (y >= f(0.5) && y <= f(8.0)) continue;
+    const double edge = y < f(0.5) ? 0.5 : 8.0;
+    EXPECT_NEAR(d, edge + (y - f(edge)) / f.derivative(edge), 1e-8 * d + 1e-9) << y;  // 9 significant digits
+    ++beyond;
+  }
+  EXPECT_GT(beyond, 100u);
+}
 
 TEST(Export, ExtrapolateSpansTheSensorsRangeWindow) {
   TempDir dir;

@@ -13,6 +13,7 @@
 #include "io/reference_io.hpp"
 #include "io/scene_io.hpp"
 #include "io/sequence.hpp"
+#include "io/true_ranges.hpp"
 #include "simulation/tape_reference.hpp"
 #include "test_util.hpp"
 
@@ -76,6 +77,51 @@ TEST(CliReference, CalibratesAgainstTapeDistancesAndHalvesTheErrorOnAnotherRecor
   EXPECT_GT(raw, 0.05);  // the simulated sensor reads 5-20 cm long at the poles
   EXPECT_LT(corrected, 0.5 * raw);
   EXPECT_LT(corrected, 0.01);
+}
+
+TEST(CliReference, TheFarthestTargetsOwnReadingsLieInsideTheFittedRange) {
+  // Tape distances to one pole at 4.5, 3.0 and 1.5 m (its centre): every reading the fit used,
+  // those of the 4.5 m stop included, is corrected by the fit itself, none continued past its edge.
+  TempDir dir;
+  nlohmann::json scene = json(paperFieldScene());
+  scene["sensor"]["range_max_m"] = 10.0;
+  scene["sensor"]["beams"] = 720;
+  scene["sensor"]["angle_increment_deg"] = 0.5;
+  scene["landmarks"] = {{{"x_m", 6.0}, {"y_m", 0.0}, {"radius_m", 0.12}}};
+  scene["walls"] = nlohmann::json::array();
+  scene["path"]["start"] = {{"x_m", 1.5}, {"y_m", 0.0}, {"yaw_deg", 0.0}};
+  scene["path"]["step_m"] = 1.5;
+  scene["path"]["stops"] = 3;
+  scene["path"]["sigma_s_m"] = 0.0;
+  scene["path"]["sigma_psi_deg"] = 0.0;
+  test::writeFile(dir / "scene.json", scene.dump());
+  ASSERT_EQ(runCli("simulate -q --scene " + (dir / "scene.json").string() + " --out " + (dir / "s").string() +
+                   " --seed 7 --scans-per-stop 10").exit_code, 0);
+  test::writeFile(dir / "ref.json", R"({"format": "lidarcal-reference/1", "distances": [
+      {"stop": 0, "distance_m": 4.5}, {"stop": 1, "distance_m": 3.0}, {"stop": 2, "distance_m": 1.5}]})");
+  const auto cal = runCli("calibrate -q " + (dir / "s/scans").string() + " --reference " + (dir / "ref.json").string() +
+                          " --radius 0.12 --out " + (dir / "m.json").string());
+  ASSERT_EQ(cal.exit_code, 0) << cal.err;
+  ASSERT_EQ(runCli("correct -q " + (dir / "s/scans").string() + " --model " + (dir / "m.json").string() + " --out " +
+                   (dir / "c").string()).exit_code, 0);
+  const auto model = io::readModel(dir / "m.json");
+  ASSERT_TRUE(model.fitted_range_m.has_value());
+  EXPECT_GT(model.fitted_range_m->second, 4.38);  // the 4.5 m pole's surface
+  const auto truth = io::readTrueRanges(dir / "s/true_ranges.csv");
+  const auto seq = io::openSequence(dir / "c");
+  const std::size_t beams = truth.size() / seq.scans.size();
+  std::size_t used = 0;
+  for (std::size_t i = 0; i < seq.scans.size(); ++i) {
+    const io::Scan scan = io::readScan(seq.scans[i].path);
+    for (std::size_t b = 0; b < beams; ++b) {
+      const auto& t = truth[i * beams + b];
+      // The beams a pole's distance is fitted on: incidence below about 45 degrees.
+      if (t.target != io::TargetKind::landmark || t.incidence_rad > 0.7 || !std::isfinite((*scan.cloud)[b].x)) continue;
+      EXPECT_EQ(scan.correction[b], io::PointCorrection::corrected) << "scan " << i << " beam " << b;
+      ++used;
+    }
+  }
+  EXPECT_GT(used, 30u);
 }
 
 TEST(CliReference, StopPerInputMakesOneStopPerRecordingAtOnePose) {

@@ -17,6 +17,7 @@
 
 #include "common/errors.hpp"
 #include "io/detect_format.hpp"
+#include "io/model_io.hpp"
 #include "io/sequence.hpp"
 #include "pipeline/cli_options.hpp"
 #include "pipeline/gnuplot.hpp"
@@ -189,6 +190,17 @@ TEST_F(FirstHour, ReportPlotsTheFittedRangeWithResidualsAfterCorrectionAndMarksE
   EXPECT_LT(cor_sq, raw_sq / 10.0);  // the residuals after correction are the small ones
   // The paper field's sensor reads to 6 m; the poles are within about 4 m of the stops.
   ASSERT_LT(hi, 5.0);
+  // The model's fitted range covers every reading the fit used.
+  const auto model = io::readModel(out / "m.json");
+  ASSERT_TRUE(model.fitted_range_m.has_value());
+  EXPECT_LE(model.fitted_range_m->first, lo);
+  EXPECT_GE(model.fitted_range_m->second, hi);
+  for (const auto& row : dist) {  // distance.dat holds six significant digits
+    EXPECT_GE(row[1], model.model.bias(model.fitted_range_m->first) - 1e-5);
+    EXPECT_LE(row[1], model.model.bias(model.fitted_range_m->second) + 1e-5);
+  }
+  lo = model.fitted_range_m->first;
+  hi = model.fitted_range_m->second;
   // The script's x range is the fitted one with a margin, not 0..range_max.
   const std::string gp = readFile(rep / "plots.gp");
   const auto at = gp.find("set xrange [");
@@ -258,8 +270,8 @@ TEST_F(FirstHour, RunDrawsTheTrueLandmarksAndExplainsTheMseRatio) {
   EXPECT_TRUE(contains(readFile(out / "o/report/plots.gp"), "\"truth.dat\"")) << readFile(out / "o/report/plots.gp");
   // The printed summary says what the MSE ratio means and gives the RMS in mm before and after.
   EXPECT_TRUE(contains(r.out, "raw MSE / corrected MSE: higher is better")) << r.out;
-  EXPECT_TRUE(contains(r.out, "raw readings:")) << r.out;
-  EXPECT_TRUE(contains(r.out, " mm, MSE ratio")) << r.out;
+  EXPECT_TRUE(contains(r.out, "raw readings, RMS:")) << r.out;
+  EXPECT_TRUE(contains(r.out, "the written scans, MSE ratio:")) << r.out;
   EXPECT_TRUE(contains(r.out, "10 stops, 5 landmarks")) << r.out;
   EXPECT_FALSE(contains(r.out, "seed 00")) << r.out;
   // Running again into the same OUT is refused with the way out named.
