@@ -85,8 +85,11 @@ class Entries {
     return out;
   }
   std::string text(const std::string& key) const {
+    const std::string& v = raw(key);
+    if (v.empty() || v[0] != '"') return v;  // plain scalars (ls, keep) stay as written
     const nlohmann::json j = json(key);
-    return j.is_string() ? j.get<std::string>() : raw(key);  // plain scalars (ls, keep) stay as written
+    if (!j.is_string()) fail(key, "is not a string");
+    return j.get<std::string>();
   }
   [[noreturn]] void fail(const std::string& key, const std::string& problem) const {
     throw InputError(file_, key, problem, kRemedy);
