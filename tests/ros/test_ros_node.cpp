@@ -119,8 +119,15 @@ TEST_F(RosNode, PublishesWhatCorrectWritesToABag) {
     ASSERT_EQ(expected.size(), in.size());
 
     const std::string input = "/raw_" + inversion, output = "/corrected_" + inversion;
-    Child node = startNode("lidarcal_" + inversion, {"_model:=" + (dir / "model.json").string(), "_input:=" + input,
-                                                     "_output:=" + output, "_inversion:=" + inversion});
+    // LS from model.json; ML from the model exported as YAML, whose inversion the node takes.
+    std::vector<std::string> params = {"_model:=" + (dir / "model.json").string(), "_input:=" + input, "_output:=" + output,
+                                       "_inversion:=" + inversion};
+    if (inversion == "ml") {
+      const fs::path yaml = dir / "model.yaml";
+      ASSERT_EQ(runCli("export " + (dir / "model.json").string() + " --format yaml --inversion ml -o " + yaml.string()).exit_code, 0);
+      params = {"_model:=" + yaml.string(), "_input:=" + input, "_output:=" + output};
+    }
+    Child node = startNode("lidarcal_" + inversion, params);
     ros::NodeHandle nh;
     std::mutex mutex;
     std::vector<sensor_msgs::LaserScan> received;
@@ -170,6 +177,17 @@ TEST_F(RosNode, RefusesAnotherSensorsModelAtTheFirstScan) {
   const std::string log = node.log();
   EXPECT_NE(log.find("refusing to correct /raw_other"), std::string::npos) << log;
   EXPECT_NE(log.find("360"), std::string::npos) << log;
+}
+
+TEST_F(RosNode, HelpPrintsTheParametersWithoutAMaster) {
+  TempDir dir;
+  // No master at this address: --help must not wait for one.
+  for (const char* flag : {"--help", "-h"}) {
+    Child help({"env", "ROS_MASTER_URI=http://127.0.0.1:9", LIDARCAL_NODE_EXE, flag}, dir / "help.log");
+    ASSERT_EQ(help.waitExit(10.0).value_or(-1), 0) << help.log();
+    for (const char* p : {"~model", "~input", "~output", "~inversion", "~outside", "~sensor_name", "~force", "export --format yaml"})
+      EXPECT_NE(help.log().find(p), std::string::npos) << p << "\n" << help.log();
+  }
 }
 
 TEST_F(RosNode, RefusesAtStart) {
