@@ -26,25 +26,7 @@ constexpr std::size_t kBeams = 100;
 /// Equal floats, NaN equal to NaN.
 bool sameFloat(float a, float b) { return (std::isnan(a) && std::isnan(b)) || a == b; }
 
-/// Scan k: readings 0.2 + 0.11 i + 0.01 k m, intensities i mod 7; beams 1-5 are not readings
-/// (inf, NaN, 0, below range_min, above range_max), as the ROS1 node test's scans.
-TestScan scan(int k) {
-  TestScan s;
-  s.sec = 100 + k;
-  s.nanosec = 1000u * static_cast<std::uint32_t>(k);
-  s.angle_min = -3.1f;
-  s.angle_increment = 0.06f;
-  for (std::size_t i = 0; i < kBeams; ++i) {
-    s.ranges.push_back(0.2f + 0.11f * static_cast<float>(i) + 0.01f * static_cast<float>(k));
-    s.intensities.push_back(static_cast<float>(i % 7));
-  }
-  s.ranges[1] = std::numeric_limits<float>::infinity();
-  s.ranges[2] = std::numeric_limits<float>::quiet_NaN();
-  s.ranges[3] = 0.0f;
-  s.ranges[4] = 0.1f;
-  s.ranges[5] = 12.5f;
-  return s;
-}
+TestScan scan(int k) { return recordedScan(k, kBeams); }
 
 /// A std_msgs/msg/String message in CDR ("other topic" traffic that must pass untouched).
 std::string stringCdr(const std::string& text) {

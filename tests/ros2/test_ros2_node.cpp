@@ -29,25 +29,6 @@ constexpr double kDiscoveryS = 30.0, kDeliveryS = 10.0;
 
 bool sameFloat(float a, float b) { return (std::isnan(a) && std::isnan(b)) || a == b; }
 
-/// Scan k of the recording: readings 0.2 + 0.11 i + 0.01 k m; beams 1-5 are not readings.
-TestScan recordedScan(int k, std::size_t beams = kBeams) {
-  TestScan s;
-  s.sec = 100 + k;
-  s.nanosec = 1000u * static_cast<std::uint32_t>(k);
-  s.angle_min = -3.1f;
-  s.angle_increment = 0.06f;
-  for (std::size_t i = 0; i < beams; ++i) {
-    s.ranges.push_back(0.2f + 0.11f * static_cast<float>(i % 100) + 0.01f * static_cast<float>(k));
-    s.intensities.push_back(static_cast<float>(i % 7));
-  }
-  s.ranges[1] = std::numeric_limits<float>::infinity();
-  s.ranges[2] = std::numeric_limits<float>::quiet_NaN();
-  s.ranges[3] = 0.0f;
-  s.ranges[4] = 0.1f;
-  s.ranges[5] = 12.5f;
-  return s;
-}
-
 /// A decoded LaserScan as the Fast DDS type.
 Ros2Scan toDds(const io::Ros2LaserScan& m) {
   Ros2Scan s;
@@ -113,7 +94,7 @@ class Ros2Node : public ::testing::Test {
   /// 30 scans on /scan in one zstd chunk.
   static std::string recording() {
     std::string records;
-    for (int k = 0; k < 30; ++k) records += messageRecord(1, 1000000000ull * static_cast<std::uint64_t>(100 + k), laserScanCdr(recordedScan(k)));
+    for (int k = 0; k < 30; ++k) records += messageRecord(1, 1000000000ull * static_cast<std::uint64_t>(100 + k), laserScanCdr(recordedScan(k, kBeams)));
     return mcapHead() + schemaRecord(1, "sensor_msgs/msg/LaserScan") + channelRecord(1, 1, "/scan") +
            chunkRecord(records, "zstd", 100000000000ull, 129000000000ull) + mcapTail();
   }
