@@ -24,7 +24,9 @@ namespace fs = std::filesystem;
 constexpr std::uint8_t kMagic[8] = {0x89, 'M', 'C', 'A', 'P', '0', '\r', '\n'};
 // MCAP spec, "Records": opcode (uint8), content length (uint64), content.
 constexpr std::size_t kRecordHeadBytes = 9;
-enum Opcode : std::uint8_t { kHeader = 0x01, kFooter = 0x02, kSchema = 0x03, kChannel = 0x04, kMessage = 0x05, kChunk = 0x06 };
+enum Opcode : std::uint8_t {
+  kHeader = 0x01, kFooter = 0x02, kSchema = 0x03, kChannel = 0x04, kMessage = 0x05, kChunk = 0x06, kMetadata = 0x0C
+};
 // Message record: channel_id uint16, sequence uint32, log_time uint64, publish_time uint64, then the data.
 constexpr std::size_t kMessageFixedBytes = 2 + 4 + 8 + 8;
 
@@ -194,7 +196,11 @@ struct McapReader::Impl {
   std::ifstream in;
   std::uint64_t size = 0;
   std::vector<Source> sources;                       // in file order
-  std::map<std::uint16_t, std::string> schemas;       // id -> name
+  struct SchemaRecord {
+    std::string name, encoding, data;
+  };
+  std::map<std::uint16_t, SchemaRecord> schemas;      // id -> schema
+  std::vector<std::string> metadata;                  // contents of the Metadata records
   std::map<std::uint16_t, std::size_t> channel_at;    // id -> index in channels
 
   /// `n` bytes at `offset` (checked against the file size by the caller).
@@ -217,10 +223,11 @@ void define(Impl& im, std::vector<McapChannel>& channels, const Record& r, const
   Fields f(r.content, r.length, place);
   if (r.op == kSchema) {
     const std::uint16_t id = f.u16();
-    std::string name = f.str();
-    f.str();           // encoding
-    f.skipPrefixed();  // data
-    im.schemas.emplace(id, std::move(name));
+    Impl::SchemaRecord schema;
+    schema.name = f.str();
+    schema.encoding = f.str();
+    schema.data = f.str();
+    im.schemas.emplace(id, std::move(schema));
     return;
   }
   McapChannel c;
@@ -228,11 +235,19 @@ void define(Impl& im, std::vector<McapChannel>& channels, const Record& r, const
   const std::uint16_t schema_id = f.u16();
   c.topic = f.str();
   c.message_encoding = f.str();
-  f.skipPrefixed();  // metadata
+  const std::uint32_t metadata_bytes = f.u32();
+  const std::uint8_t* metadata = f.take(metadata_bytes);
+  c.metadata.assign(reinterpret_cast<const char*>(metadata) - 4, metadata_bytes + 4);
   if (schema_id != 0 && !im.schemas.count(schema_id))
     corrupt(place, "channel " + std::to_string(c.id) + " refers to schema " + std::to_string(schema_id) +
                        ", which no Schema record before it defines");
-  if (schema_id != 0) c.schema_name = im.schemas.at(schema_id);
+  if (schema_id != 0) {
+    const Impl::SchemaRecord& schema = im.schemas.at(schema_id);
+    c.schema_id = schema_id;
+    c.schema_name = schema.name;
+    c.schema_encoding = schema.encoding;
+    c.schema_data = schema.data;
+  }
   if (im.channel_at.emplace(c.id, channels.size()).second) channels.push_back(std::move(c));
 }
 
@@ -314,7 +329,10 @@ void indexFile(Impl& im, std::vector<McapChannel>& channels) {
     }
     if (r.op == kSchema || r.op == kChannel) define(im, channels, r, place);
     else if (r.op == kMessage) noteMessage(im, channels, r, s, place);
-    else if (r.op == kChunk) {
+    else if (r.op == kMetadata) {
+      im.read(pos + kRecordHeadBytes, r.length, content, place);
+      im.metadata.emplace_back(content.begin(), content.end());
+    } else if (r.op == kChunk) {
       s.chunk = true;
       indexChunk(im, channels, s, place);
     }
@@ -331,6 +349,8 @@ struct Loaded {
     const McapChannel* channel;
     const std::uint8_t* data;
     std::size_t size;
+    std::uint32_t sequence;
+    std::uint64_t publish_time;
   };
   std::vector<Entry> entries;
   std::size_t left = 0;
@@ -340,12 +360,13 @@ void addEntry(const Record& r, const std::vector<McapChannel>& channels, const I
               Loaded& out, const Place& place) {
   Fields f(r.content, r.length, place);
   const std::uint16_t channel = f.u16();
-  f.u32();
+  const std::uint32_t sequence = f.u32();
   const std::uint64_t time = f.u64();
-  f.u64();
+  const std::uint64_t publish_time = f.u64();
   if (!wanted[channel]) return;
   const std::uint64_t size = f.left();
-  out.entries.push_back({time, &channels[im.channel_at.at(channel)], f.take(size), static_cast<std::size_t>(size)});
+  out.entries.push_back(
+      {time, &channels[im.channel_at.at(channel)], f.take(size), static_cast<std::size_t>(size), sequence, publish_time});
 }
 
 void load(Impl& im, const Source& s, const std::vector<McapChannel>& channels, const std::vector<bool>& wanted, Loaded& out) {
@@ -381,6 +402,8 @@ McapReader::McapReader(const fs::path& file) : impl_(std::make_unique<Impl>()) {
 
 McapReader::~McapReader() = default;
 
+const std::vector<std::string>& McapReader::metadataRecords() const { return impl_->metadata; }
+
 bool McapReader::forEachMessage(const std::set<std::string>& topics, const McapMessageCallback& on_message) const {
   std::vector<bool> wanted(65536, false);
   for (const auto& c : channels_) wanted[c.id] = topics.count(c.topic) > 0;
@@ -410,7 +433,7 @@ bool McapReader::forEachMessage(const std::set<std::string>& topics, const McapM
     due.pop();
     Loaded& l = open.at(k);
     const auto& e = l.entries[i];
-    if (!on_message({e.channel, time, e.data, e.size})) return false;
+    if (!on_message({e.channel, time, e.publish_time, e.sequence, e.data, e.size})) return false;
     if (--l.left == 0) open.erase(k);  // memory back as soon as a source is done
   }
 }

@@ -1,5 +1,8 @@
 #include "io/ros2_msgs.hpp"
 
+#include <cstring>
+#include <stdexcept>
+
 #include "io/cdr.hpp"
 
 namespace lidarcal::io {
@@ -55,7 +58,20 @@ void decodeLaserScan(const std::uint8_t* data, std::size_t size, Ros2LaserScan& 
   msg.range_min = in.f32();
   msg.range_max = in.f32();
   in.f32Seq(msg.ranges);
+  msg.ranges_offset = in.offset() - 4 * msg.ranges.size();
+  msg.big_endian = in.bigEndian();
   in.f32Seq(msg.intensities);
+}
+
+void patchLaserScanRanges(const Ros2LaserScan& msg, std::uint8_t* data, std::size_t size) {
+  if (msg.ranges_offset + 4 * msg.ranges.size() > size)
+    throw std::logic_error("patchLaserScanRanges: the message is not the one the scan was decoded from");
+  std::uint8_t* p = data + msg.ranges_offset;
+  for (float r : msg.ranges) {
+    std::uint32_t bits = 0;
+    std::memcpy(&bits, &r, sizeof bits);
+    for (int b = 0; b < 4; ++b) *p++ = static_cast<std::uint8_t>(bits >> (8 * (msg.big_endian ? 3 - b : b)));
+  }
 }
 
 Ros2StampedTransform decodeOdometry(const std::uint8_t* data, std::size_t size) {

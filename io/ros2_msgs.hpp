@@ -25,11 +25,16 @@ struct Ros2LaserScan {
   float range_min = 0, range_max = 0;                       ///< m
   std::vector<float> ranges;        ///< m
   std::vector<float> intensities;   ///< sensor units
+  std::size_t ranges_offset = 0;    ///< byte offset of ranges[0] in the serialised message
+  bool big_endian = false;          ///< the message's CDR byte order
 
   /// The fields as the shared conversion (fillRawScan) takes them; views into this message.
   LaserScanView view() const;
 };
 void decodeLaserScan(const std::uint8_t* data, std::size_t size, Ros2LaserScan& msg);
+/// Writes msg.ranges back into the serialised message `msg` was decoded from (same size, same
+/// byte order, at msg.ranges_offset): every other byte stays as it was.
+void patchLaserScanRanges(const Ros2LaserScan& msg, std::uint8_t* data, std::size_t size);
 
 /// A stamped transform of a tf message or the pose of an odometry message.
 struct Ros2StampedTransform {

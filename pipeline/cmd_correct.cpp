@@ -1,5 +1,6 @@
 // lidarcal correct SEQ --model model.json --out OUT
 // lidarcal correct IN.bag --model model.json --out OUT.bag [--topic T]
+// lidarcal correct IN.mcap|IN.db3|IN_DIR --model model.json --out OUT.mcap|OUT.db3|OUT_DIR [--topic T]
 
 #include <cstdio>
 #include <memory>
@@ -11,6 +12,7 @@
 #include "io/detect_format.hpp"
 #include "io/import_rosbag.hpp"
 #include "io/model_io.hpp"
+#include "pipeline/bag2_correct.hpp"
 #include "pipeline/bag_correct.hpp"
 #include "pipeline/cli_options.hpp"
 #include "pipeline/commands.hpp"
@@ -30,6 +32,15 @@ bool isRosbag(const std::string& input) {
          io::detectRecordingFormat(input).kind == io::RecordingKind::rosbag1;
 }
 
+/// A ROS 2 bag: an MCAP or rosbag2 SQLite file, or a directory with metadata.yaml.
+bool isRosbag2(const std::string& input) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(input, ec)) return std::filesystem::is_regular_file(std::filesystem::path(input) / "metadata.yaml", ec);
+  if (!std::filesystem::is_regular_file(input, ec)) return false;
+  const io::RecordingKind kind = io::detectRecordingFormat(input).kind;
+  return kind == io::RecordingKind::mcap || kind == io::RecordingKind::rosbag2;
+}
+
 void printStats(const CorrectionStats& stats, const std::string& out, const CalibrationModel& model,
                 calibration::Outside outside) {
   if (quiet()) return;
@@ -43,6 +54,7 @@ void printStats(const CorrectionStats& stats, const std::string& out, const Cali
 /// correct IN.bag --out OUT.bag: every message copied, the topic's ranges corrected.
 void correctBag(const std::string& in, const std::string& model_file, const std::string& out, const std::string& topic,
                 const CorrectionOptions& c, bool overwrite, bool force) {
+  checkBagOutputKind(in, out, true);
   io::requireRosbagSupport(in);
   io::checkOutsideInput(in, out);
   io::checkOutputFile(out, overwrite);
@@ -58,6 +70,32 @@ void correctBag(const std::string& in, const std::string& model_file, const std:
   printStats(stats, out, model, outside);
 }
 
+/// correct IN.mcap|IN.db3|IN_DIR --out the same kind: every message copied, the topic's ranges corrected.
+void correctBag2(const std::string& in, const std::string& model_file, const std::string& out, const std::string& topic,
+                 const CorrectionOptions& c, bool overwrite, bool force) {
+  checkBagOutputKind(in, out, false);
+  io::checkOutsideInput(in, out);
+  std::error_code ec;
+  const bool dir = std::filesystem::is_directory(in, ec);
+  if (!dir) io::checkOutputFile(out, overwrite);
+  const CalibrationModel model = io::readModel(model_file);
+  const calibration::Outside outside = c.outsidePolicy();
+  if (const std::string w = checkModelFitsSensor(model, rosbag2SensorFacts(in, topic), model_file, force, outside); !w.empty())
+    std::fprintf(stderr, "lidarcal: warning: %s\n", w.c_str());
+  const calibration::ReadingCorrector correct = modelCorrector(model, c.method(), outside, model_file);
+  CorrectionStats stats;
+  if (dir) {
+    io::StagedDirectory staged(out, overwrite);
+    stats = correctRosbag2(in, staged.path(), topic, model, correct, model_file);
+    staged.commit();
+  } else {
+    io::writeAtomically(out, [&](const std::filesystem::path& tmp) {
+      stats = correctRosbag2(in, tmp, topic, model, correct, model_file);
+    });
+  }
+  printStats(stats, out, model, outside);
+}
+
 }  // namespace
 
 void addCorrectCommand(CLI::App& app) {
@@ -68,12 +106,12 @@ void addCorrectCommand(CLI::App& app) {
   };
   auto o = std::make_shared<Options>();
   auto c = std::make_shared<CorrectionOptions>();
-  CLI::App* sub = app.add_subcommand("correct", "Rewrite every scan of a sequence (or every LaserScan of a ROS1 bag) with calibrated ranges");
-  sub->add_option("SEQ", o->seq, "Sequence directory (any sequence of the calibrated sensor), or a ROS1 bag")->required();
+  CLI::App* sub = app.add_subcommand("correct", "Rewrite every scan of a sequence (or every LaserScan of a ROS1 or ROS 2 bag) with calibrated ranges");
+  sub->add_option("SEQ", o->seq, "Sequence directory (any sequence of the calibrated sensor), a ROS1 bag, or a ROS 2 bag (.mcap, .db3 or its directory)")->required();
   sub->add_option("--model", o->model, "model.json from lidarcal calibrate")->required();
-  sub->add_option("-o,--out", o->out, "Output sequence directory (a .bag file for a bag: every message copied, only the topic's ranges changed)")->required();
+  sub->add_option("-o,--out", o->out, "Output sequence directory; for a bag, a bag of the same kind (.bag, .mcap, .db3 or a directory): every message copied, only the topic's ranges changed")->required();
   addCorrectionOptions(sub, c);
-  sub->add_option("--topic", o->topic, "IN.bag: the sensor_msgs/LaserScan topic to correct (default: the bag's only one)");
+  sub->add_option("--topic", o->topic, "A bag's LaserScan topic to correct (default: the bag's only one)");
   sub->add_flag("--ascii", o->ascii, "Write ASCII PCD instead of binary");
   addThreadsOption(sub, o->threads, "correcting a sequence's scans side by side (a bag is corrected in order)");
   sub->add_flag("--overwrite", o->overwrite, "Replace OUT if it exists");
@@ -86,8 +124,13 @@ void addCorrectCommand(CLI::App& app) {
       correctBag(o->seq, o->model, o->out, o->topic, *c, o->overwrite, o->force);
       return;
     }
+    if (isRosbag2(o->seq)) {
+      if (o->ascii) throw InputError("", "--ascii", "applies to sequences, not to bags", "drop --ascii");
+      correctBag2(o->seq, o->model, o->out, o->topic, *c, o->overwrite, o->force);
+      return;
+    }
     if (sub->count("--topic") > 0)
-      throw InputError(o->seq, "--topic", "applies to ROS1 bags only (this is not one)", "drop --topic");
+      throw InputError(o->seq, "--topic", "applies to bags only (this is not one)", "drop --topic");
     io::checkOutsideInput(o->seq, o->out);
     const io::Sequence seq = io::openSequence(o->seq);
     const CalibrationModel model = io::readModel(o->model);

@@ -1,11 +1,12 @@
-// lidarcal_node: corrects a sensor_msgs/LaserScan topic live with a model.json.
-//   ~model      model.json from `lidarcal calibrate` (required)
+// lidarcal_node: corrects a sensor_msgs/LaserScan topic live with a lidarcal model (ROS 1).
+//   ~model      model.json from `lidarcal calibrate`, or the YAML of `lidarcal export --format yaml` (required)
 //   ~input      LaserScan topic to read (default "scan")
 //   ~output     topic for the corrected scans (default "scan_corrected")
-//   ~inversion  ls | ml, as `lidarcal correct --inversion` (default ls)
-//   ~outside    linear | keep | extrapolate | drop, as `lidarcal correct --outside` (default linear)
+//   ~inversion  ls | ml, as `lidarcal correct --inversion` (default: the YAML's, else ls)
+//   ~outside    as `lidarcal correct --outside` (default: the YAML's, else correct's default)
 //   ~sensor_name  optional: the sensor's name as in model.json; another name is refused at start
 //   ~force      apply a model whose range limits differ from the scans' (default false)
+// `--help` / `-h` prints these and exits 0 before contacting a master.
 // Each scan is republished with the same header and beams; its ranges go through the rule of
 // `lidarcal correct IN.bag` (pipeline::correctLaserRanges), so the node and a corrected bag agree
 // bit for bit. A model of another sensor (beam count, range limits, name) is refused with a
@@ -21,6 +22,7 @@
 #include "common/errors.hpp"
 #include "io/import.hpp"
 #include "io/model_io.hpp"
+#include "io/model_yaml.hpp"
 #include "pipeline/bag_correct.hpp"
 #include "pipeline/stages.hpp"
 
@@ -33,6 +35,33 @@ struct NodeSettings {
   std::optional<std::string> sensor_name;
   bool force = false;
 };
+
+void printHelp() {
+  std::printf(
+      "lidarcal_node: corrects a sensor_msgs/LaserScan topic with a lidarcal model and republishes it (ROS 1)\n\n"
+      "usage: lidarcal_node _model:=MODEL [_input:=scan] [_output:=scan_corrected] [_inversion:=ls|ml] [_outside:=POLICY]\n"
+      "                     [_sensor_name:=NAME] [_force:=true] [__name:=NODE]\n\n"
+      "private parameters:\n"
+      "  ~model        model.json of `lidarcal calibrate`, or the YAML of `lidarcal export --format yaml` (required)\n"
+      "  ~input        LaserScan topic to read (default scan)\n"
+      "  ~output       topic of the corrected scans (default scan_corrected)\n"
+      "  ~inversion    ls | ml, as `lidarcal correct --inversion` (default: the YAML's, else ls)\n"
+      "  ~outside      readings outside the fitted range, as `lidarcal correct --outside` (default: the YAML's, else %s)\n"
+      "  ~sensor_name  the sensor's name as in the model; another name is refused at start\n"
+      "  ~force        true: apply a model whose range limits differ from the scans' (default false)\n\n"
+      "exit status: 0 after Ctrl-C, 2 a bad parameter or a model of another sensor, 3 a model that cannot correct.\n",
+      calibration::toString(calibration::kDefaultOutside));
+}
+
+/// The model of ~model: a model.json, or export's YAML (whose inversion and outside policy
+/// apply unless ~inversion / ~outside are set).
+CalibrationModel loadModel(NodeSettings& s, bool inversion_set, bool outside_set) {
+  if (!io::isExportedModelYaml(s.model_file)) return io::readModel(s.model_file);
+  io::ExportedModel e = io::readExportedModelYaml(s.model_file);
+  if (!inversion_set) s.inversion = e.inversion;
+  if (!outside_set) s.outside = e.outside;
+  return std::move(e.model);
+}
 
 class CorrectionNode {
  public:
@@ -85,6 +114,11 @@ class CorrectionNode {
 }  // namespace
 
 int main(int argc, char** argv) {
+  for (int i = 1; i < argc; ++i)
+    if (std::string(argv[i]) == "--help" || std::string(argv[i]) == "-h") {
+      printHelp();  // before ros::init: no master is needed to read this
+      return 0;
+    }
   ros::init(argc, argv, "lidarcal_node");
   ros::NodeHandle nh, pnh("~");
   NodeSettings s;
@@ -94,22 +128,22 @@ int main(int argc, char** argv) {
   }
   pnh.param("input", s.input, s.input);
   pnh.param("output", s.output, s.output);
-  pnh.param("inversion", s.inversion, s.inversion);
-  pnh.param("outside", s.outside, s.outside);
+  const bool inversion_set = pnh.getParam("inversion", s.inversion);
+  const bool outside_set = pnh.getParam("outside", s.outside);
   pnh.param("force", s.force, s.force);
   if (std::string name; pnh.getParam("sensor_name", name)) s.sensor_name = name;
   calibration::Outside outside = calibration::kDefaultOutside;
-  if (s.inversion != "ls" && s.inversion != "ml") {
-    ROS_FATAL("lidarcal_node: ~inversion is '%s': use ls or ml", s.inversion.c_str());
-    return 2;
-  }
-  if (!calibration::parseOutside(s.outside, outside)) {
-    ROS_FATAL("lidarcal_node: ~outside is '%s': use %s", s.outside.c_str(), calibration::outsideNames().c_str());
-    return 2;
-  }
-  const auto method = s.inversion == "ml" ? calibration::InversionMethod::ml : calibration::InversionMethod::ls;
   try {
-    const CalibrationModel model = io::readModel(s.model_file);
+    const CalibrationModel model = loadModel(s, inversion_set, outside_set);
+    if (s.inversion != "ls" && s.inversion != "ml") {
+      ROS_FATAL("lidarcal_node: ~inversion is '%s': use ls or ml", s.inversion.c_str());
+      return 2;
+    }
+    if (!calibration::parseOutside(s.outside, outside)) {
+      ROS_FATAL("lidarcal_node: ~outside is '%s': use %s", s.outside.c_str(), calibration::outsideNames().c_str());
+      return 2;
+    }
+    const auto method = s.inversion == "ml" ? calibration::InversionMethod::ml : calibration::InversionMethod::ls;
     pipeline::checkModelInvertible(model, s.model_file, outside);
     if (s.sensor_name)  // refused at start when the name is given; beams and limits at the first scan
       pipeline::checkModelFitsSensor(model, {s.sensor_name, std::nullopt, std::nullopt, "~sensor_name", "node"}, s.model_file,

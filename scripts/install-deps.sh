@@ -16,6 +16,8 @@ PACKAGES=(
   librcpputils-dev librcutils-dev libament-index-cpp-dev
   libnav-msgs-dev libtf2-msgs-dev  # odometry and tf in bags (import --pose odom:|tf:)
   libroscpp-dev python3-rosmaster  # lidarcal_node (roscpp) and the rosmaster its test starts
+  cyclonedds-dev cyclonedds-tools  # lidarcal_ros2_node: Eclipse Cyclone DDS and its IDL compiler idlc
+  libfastrtps-dev fastddsgen       # eProsima Fast DDS and fastddsgen: the other vendor, for the cross-vendor test
   clang-14 libclang-rt-14-dev      # libFuzzer targets (scripts/fuzz.sh): clang's -fsanitize=fuzzer and its runtime
 )
 

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
+#include <limits>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -67,6 +68,24 @@ struct TestScan {
   float range_min = 0.15f, range_max = 12.0f;
   std::vector<float> ranges, intensities;
 };
+
+/// Scan k of `beams` beams as the node and bag tests record it: readings 0.2 + 0.11 (i mod 100)
+/// + 0.01 k metres, intensities i mod 7, angles from -3.1 rad by 0.06 rad; beams 1-5 hold what is
+/// not a reading (inf, NaN, 0, below range_min, above range_max).
+inline TestScan recordedScan(int k, std::size_t beams) {
+  TestScan s;
+  s.sec = 100 + k;
+  s.nanosec = 1000u * static_cast<std::uint32_t>(k);
+  s.angle_min = -3.1f;
+  s.angle_increment = 0.06f;
+  for (std::size_t i = 0; i < beams; ++i) {
+    s.ranges.push_back(0.2f + 0.11f * static_cast<float>(i % 100) + 0.01f * static_cast<float>(k));
+    s.intensities.push_back(static_cast<float>(i % 7));
+  }
+  const float not_readings[] = {std::numeric_limits<float>::infinity(), std::numeric_limits<float>::quiet_NaN(), 0.0f, 0.1f, 12.5f};
+  for (std::size_t i = 0; i < 5 && i + 1 < beams; ++i) s.ranges[i + 1] = not_readings[i];
+  return s;
+}
 
 inline std::string laserScanCdr(const TestScan& s, bool big_endian = false) {
   CdrWriter w(big_endian);

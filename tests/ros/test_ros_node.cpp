@@ -26,73 +26,12 @@
 #include <rosbag/view.h>
 #include <sensor_msgs/LaserScan.h>
 
+#include "node_process.hpp"
 #include "pipeline/ros_test_util.hpp"
 #include "ros/laser_scan_util.hpp"
 
 namespace lidarcal::test {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-/// Polls `done` every 10 ms for at most `seconds`.
-bool waitFor(const std::function<bool()>& done, double seconds) {
-  const auto end = Clock::now() + std::chrono::duration<double>(seconds);
-  while (Clock::now() < end) {
-    if (done()) return true;
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
-  }
-  return done();
-}
-
-/// A child process with stdout and stderr in `log`.
-class Child {
- public:
-  Child(const std::vector<std::string>& argv, const fs::path& log) : log_(log) {
-    std::vector<char*> args;
-    for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
-    args.push_back(nullptr);
-    pid_ = fork();
-    if (pid_ == 0) {
-      if (FILE* f = std::fopen(log.c_str(), "w")) {
-        dup2(fileno(f), STDOUT_FILENO);
-        dup2(fileno(f), STDERR_FILENO);
-      }
-      execvp(args[0], args.data());
-      std::perror("execvp");
-      _exit(127);
-    }
-  }
-  ~Child() { stop(); }
-  Child(const Child&) = delete;
-  Child& operator=(const Child&) = delete;
-  /// Exit status once it has ended by itself within `seconds`, else nothing.
-  std::optional<int> waitExit(double seconds) {
-    if (pid_ <= 0) return status_;
-    int status = 0;
-    const bool ended = waitFor([&] { return waitpid(pid_, &status, WNOHANG) == pid_; }, seconds);
-    if (!ended) return std::nullopt;
-    pid_ = -1;
-    status_ = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-    return status_;
-  }
-  /// SIGINT (a ROS node's Ctrl-C), then SIGKILL after 10 s; returns the exit status.
-  int stop() {
-    if (pid_ > 0) {
-      kill(pid_, SIGINT);
-      if (!waitExit(10.0) && pid_ > 0) {
-        kill(pid_, SIGKILL);
-        waitExit(5.0);
-      }
-    }
-    return status_.value_or(-1);
-  }
-  std::string log() const { return readFile(log_); }
-
- private:
-  pid_t pid_ = -1;
-  std::optional<int> status_;
-  fs::path log_;
-};
 
 int freeLoopbackPort() {
   const int fd = socket(AF_INET, SOCK_STREAM, 0);
@@ -180,8 +119,15 @@ TEST_F(RosNode, PublishesWhatCorrectWritesToABag) {
     ASSERT_EQ(expected.size(), in.size());
 
     const std::string input = "/raw_" + inversion, output = "/corrected_" + inversion;
-    Child node = startNode("lidarcal_" + inversion, {"_model:=" + (dir / "model.json").string(), "_input:=" + input,
-                                                     "_output:=" + output, "_inversion:=" + inversion});
+    // LS from model.json; ML from the model exported as YAML, whose inversion the node takes.
+    std::vector<std::string> params = {"_model:=" + (dir / "model.json").string(), "_input:=" + input, "_output:=" + output,
+                                       "_inversion:=" + inversion};
+    if (inversion == "ml") {
+      const fs::path yaml = dir / "model.yaml";
+      ASSERT_EQ(runCli("export " + (dir / "model.json").string() + " --format yaml --inversion ml -o " + yaml.string()).exit_code, 0);
+      params = {"_model:=" + yaml.string(), "_input:=" + input, "_output:=" + output};
+    }
+    Child node = startNode("lidarcal_" + inversion, params);
     ros::NodeHandle nh;
     std::mutex mutex;
     std::vector<sensor_msgs::LaserScan> received;
@@ -231,6 +177,17 @@ TEST_F(RosNode, RefusesAnotherSensorsModelAtTheFirstScan) {
   const std::string log = node.log();
   EXPECT_NE(log.find("refusing to correct /raw_other"), std::string::npos) << log;
   EXPECT_NE(log.find("360"), std::string::npos) << log;
+}
+
+TEST_F(RosNode, HelpPrintsTheParametersWithoutAMaster) {
+  TempDir dir;
+  // No master at this address: --help must not wait for one.
+  for (const char* flag : {"--help", "-h"}) {
+    Child help({"env", "ROS_MASTER_URI=http://127.0.0.1:9", LIDARCAL_NODE_EXE, flag}, dir / "help.log");
+    ASSERT_EQ(help.waitExit(10.0).value_or(-1), 0) << help.log();
+    for (const char* p : {"~model", "~input", "~output", "~inversion", "~outside", "~sensor_name", "~force", "export --format yaml"})
+      EXPECT_NE(help.log().find(p), std::string::npos) << p << "\n" << help.log();
+  }
 }
 
 TEST_F(RosNode, RefusesAtStart) {

@@ -1,0 +1,90 @@
+#pragma once
+// What the ROS 2 node does with each received LaserScan, apart from the transport: check it,
+// correct its ranges in place with the rule of `lidarcal correct` (pipeline::correctLaserRanges
+// through a pipeline::MemoCorrector, so node and corrected bags agree bit for bit) and say
+// whether to publish it, drop it or stop.
+//
+// - The first well-formed scan decides whether the model belongs to the sensor (beam count,
+//   range limits, as pipeline::checkModelFitsSensor): a model of another sensor is refused.
+// - A malformed scan is dropped and counted, never published: no beams, a header field that is
+//   not finite (angles, range limits), range_min above range_max, intensities neither empty nor
+//   one per beam, or a beam count other than the sensor's (decided by the first scan). Ranges
+//   that are NaN or inf are not malformed (REP 117: no return) and pass unchanged, as in `correct`.
+
+#include <array>
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "calibration/filtering.hpp"
+#include "common/calibration_model.hpp"
+#include "pipeline/bag_correct.hpp"
+#include "pipeline/stages.hpp"
+
+namespace lidarcal::ros2 {
+
+/// The fields of one received LaserScan the checks read; `ranges` is corrected in place.
+struct ScanFields {
+  float angle_min = 0, angle_max = 0, angle_increment = 0;  ///< rad
+  float range_min = 0, range_max = 0;                       ///< m
+  float* ranges = nullptr;                                  ///< m, `beams` values, corrected in place
+  std::size_t beams = 0;                                    ///< number of ranges
+  std::size_t intensities = 0;                              ///< number of intensities
+};
+
+/// Why a scan was dropped.
+enum class DropReason { empty, non_finite_field, range_limits, intensities, beam_count, count_ };
+const char* toString(DropReason r);
+
+enum class ScanVerdict {
+  publish,  ///< corrected: publish it
+  drop,     ///< malformed: dropped (reason in dropReason(), text in message())
+  refuse,   ///< the model is not this sensor's: stop (message() says why; exit status 2)
+};
+
+/// How the node corrects, from its parameters and the model file.
+struct LiveSettings {
+  std::string model_file;                          ///< for messages
+  std::string topic;                               ///< the input topic, for messages
+  calibration::InversionMethod method = calibration::InversionMethod::ls;  ///< inversion
+  calibration::Outside outside = calibration::kDefaultOutside;             ///< readings outside the fitted range
+  std::optional<std::string> sensor_name;          ///< checked against the model at the first scan when set
+  bool force = false;                              ///< apply a model whose range limits differ (with a warning)
+};
+
+/// Counts over the node's life.
+struct LiveStats {
+  pipeline::CorrectionStats correction;            ///< scans published and what happened to their returns
+  std::array<std::size_t, static_cast<std::size_t>(DropReason::count_)> dropped{};  ///< scans dropped, by reason
+  std::size_t droppedTotal() const;
+};
+
+class LiveCorrector {
+ public:
+  /// `correct`: pipeline::modelCorrector(model, settings.method, settings.outside, model_file).
+  LiveCorrector(const CalibrationModel& model, const LiveSettings& settings, const calibration::ReadingCorrector& correct);
+
+  /// Checks and corrects one scan (see the header comment).
+  ScanVerdict process(ScanFields& scan);
+  /// Why the last scan was dropped or refused (empty after a published scan).
+  const std::string& message() const { return message_; }
+  DropReason dropReason() const { return reason_; }
+  /// A warning from the sensor check at the first scan (range limits applied under force); empty otherwise.
+  const std::string& sensorWarning() const { return sensor_warning_; }
+  const LiveStats& stats() const { return stats_; }
+
+ private:
+  ScanVerdict drop(DropReason reason, std::string why);
+
+  CalibrationModel model_;
+  LiveSettings settings_;
+  pipeline::MemoCorrector correct_;  // remembers the readings seen: a lookup per beam after the first scans
+  std::vector<float> ranges_;        // the scan's ranges, as correctLaserRanges takes them (reused)
+  std::size_t sensor_beams_ = 0;     // the beam count of the first accepted scan (0: none yet)
+  LiveStats stats_;
+  std::string message_, sensor_warning_;
+  DropReason reason_ = DropReason::empty;
+};
+
+}  // namespace lidarcal::ros2
