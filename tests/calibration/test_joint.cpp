@@ -172,6 +172,23 @@ TEST(Calibrate, JointComesCloseToTheGroundTruthFitAndBeatsTheClosedFormUnderLarg
   }
 }
 
+TEST(Calibrate, TheNoiseScaleOfTheSquaredLawIsRecoveredOnALongSequence) {
+  // 10 stops of 30 scans: thousands of readings pin sigma_e to about half a per cent. A noise
+  // shape of the wrong power (f^1.9 instead of Alhashimi et al. 2016's f^2, eq. 1) moves it by
+  // the mean of f^0.1 over the readings, about 8 %.
+  auto cfg = paperField(0.02, 0.5, 0.0019176);
+  cfg.path.scans_per_stop = 30;
+  for (std::uint64_t seed = 11; seed <= 13; ++seed) {
+    SCOPED_TRACE(seed);
+    const auto sample = simulation::simulateLandmarkLevel(cfg, seed);
+    const auto m = calibrate(sample.obs, configFor(0.02, 0.5));
+    ASSERT_STREQ(m.status.name(), "ok") << m.status.message;
+    ASSERT_EQ(m.model.noise.kind, NoiseKind::squared);
+    EXPECT_NEAR(m.model.noise.sigma_e / 0.0019176, 1.0, 0.03);
+    EXPECT_EQ(m.noise_fits.exponent_best, 2);  // Alhashimi et al. 2016's test (eqs. 10-15) picks k = 2
+  }
+}
+
 // An odometry scale error with the pole radius unknown: self-calibration cannot tell a longer
 // path from a stretched range (the bias absorbs it), surveyed landmark centres or measured stop
 // poses can (REF.json `landmarks`, `stops`). The survey is taken from the truth the

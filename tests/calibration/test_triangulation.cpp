@@ -101,6 +101,38 @@ TEST(Triangulation, CovarianceMatchesTheScatterOverSeeds) {
   EXPECT_NEAR(z2 / count, 2.0 * 18.0 / 16.0, 0.5);
 }
 
+TEST(Triangulation, ThreeNoisyBearingsLocateTheLandmarkWithinTheirReportedUncertainty) {
+  // Three stops, one scan each: every bearing line counts. Three noisy lines do not meet in one
+  // point, so the residual and the covariance are not zero, and the error stays within the
+  // reported uncertainty as often as Hotelling's distribution says: err' C^-1 err is 2 F(2, 1)
+  // (scale from K - 2 = 1 residual degree of freedom), below 2 x 199.5 in 95 % of the draws
+  // (F(2, nu) quantile nu/2 ((1 - p)^(-2/nu) - 1)).
+  auto cfg = noiseFree(Pose2{});
+  cfg.sigma_theta_rad = deg2rad(1.0);
+  cfg.path.scans_per_stop = 1;
+  cfg.path.stops = 3;
+  cfg.path.step_m = 0.5;
+  TriangulationConfig tc;
+  tc.weights = LineWeights::residual;
+  tc.sigma_s_m = 1e-6;
+  tc.sigma_theta_rad = deg2rad(1.0);
+  const int n = 400;
+  int covered = 0;
+  for (int seed = 1; seed <= n; ++seed) {
+    auto c = cfg;
+    c.landmarks = {{1.0, 1.5, 0.12}};
+    const auto e = triangulateAll(simulation::simulateLandmarkLevel(c, static_cast<std::uint64_t>(seed)).obs, tc)[0];
+    ASSERT_EQ(e.status, TriangulationStatus::ok) << seed;
+    ASSERT_EQ(e.stops, 3);
+    ASSERT_GT(e.residual_rms_m, 0.0) << seed;
+    ASSERT_GT(e.covariance.determinant(), 0.0) << seed;
+    const Eigen::Vector2d err(e.x_m - 1.0, e.y_m - 1.5);
+    covered += err.dot(e.covariance.inverse() * err) <= 2.0 * 199.5;
+  }
+  // 95 % of 400: 380, binomial sd 4.4; allow three of them.
+  EXPECT_NEAR(covered, 380, 13);
+}
+
 /// Eq. 23 with the eq. 25 weights built here from the raw sightings, by a route of its own: per
 /// stop, the circular mean of the centre bearings (world frame through the commanded heading),
 /// the reading of the beam nearest each scan's centre bearing, its sample variance over the
