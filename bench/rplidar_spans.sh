@@ -19,7 +19,7 @@ L=$(readlink -f build/pipeline/lidarcal)
 BAG=../shared/data/rplidar_a2_room/rplidar_1.bag
 W=$(mktemp -d)
 trap 'rm -rf "$W"' EXIT
-"$L" import -q "$BAG" -o "$W/room"
+"$L" import -q "$BAG" -o "$W/room" > /dev/null
 
 # The spans: line of the plan, wall normals (deg), laser meter (m); pair = the two walls.
 python3 - "$W" <<'PY'

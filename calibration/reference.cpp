@@ -377,7 +377,7 @@ CalibrationModel calibrateWithReference(const std::vector<KnownReading>& reading
     m.status.code = StatusCode::too_few_reference_stops;
     m.status.message = "known distances at " + plural(groups, "stop") +
                 ": a range model needs measured distances at 3 or more stops (better 10 or more, spread over "
-                "the range you will use the sensor at)";
+                "the range you will use the sensor at), or wall-to-wall spans beside them (docs/FORMAT.md#wall-to-wall-spans)";
     return m;
   }
   const double exponent = testReadingNoise(readings, config, m.noise_fits);

@@ -18,7 +18,7 @@
 // (p to p / cos 57 degrees) would identify f by itself if f depended on the distance alone, but
 // an incidence-dependent reading mimics it (`diagnose` names incidence_bias): on the RPLIDAR room
 // of docs/RESULTS.md the walls' straightness says alpha_0 = -73 +- 14 mm where the spans say
-// about +20 mm. So a wall enters only through p_w(f), and what is identifiable is what the
+// +25 +- 5 mm. So a wall enters only through p_w(f), and what is identifiable is what the
 // spans' residuals determine: one span, or several between the same two walls, determine one
 // number, an offset f(d) = d + alpha_0 ("order 0"); spans between pairs of walls of different
 // lengths determine a scale as well (order 1), and so on (the rank of their Jacobian).

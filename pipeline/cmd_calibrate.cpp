@@ -148,7 +148,7 @@ void runCalibrate(const CalibrateCommand& c) {
     std::fprintf(stderr, "continuous motion: the odometry between consecutive stops entered the joint refinement as a "
                          "motion prior (--motion-prior off to tie every stop to its own commanded pose)\n");
   if (!quiet())
-    std::fprintf(stderr, "%s model (%s) written to %s\n", model.method.c_str(), orderText(model).c_str(), c.out.c_str());
+    std::fprintf(stderr, "%s model, %s, written to %s\n", model.method.c_str(), orderText(model).c_str(), c.out.c_str());
 }
 
 }  // namespace

@@ -99,7 +99,7 @@ void requireEverySpanFound(const calibration::SpanReadings& spans, const std::fi
     throw DataError(ref_file.string(), "spans", unmatched,
                     "give each wall's normal direction in the sensor frame (degrees counter-clockwise from the sensor's "
                     "forward axis, within 20 degrees; the walls seen are listed), check the stop and distance_m, or "
-                    "remove the entry (docs/FORMAT.md, \"Wall-to-wall spans\")");
+                    "remove the entry (docs/FORMAT.md#wall-to-wall-spans)");
 }
 
 std::size_t measuredStops(const Reference& ref) {

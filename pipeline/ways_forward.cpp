@@ -14,7 +14,7 @@ namespace {
 /// Scans of a stop whose walls are enough to name them (the first ones; their noise averages out).
 constexpr std::size_t kScansForWalls = 20;
 
-constexpr const char* kReferenceFormat = "docs/FORMAT.md, \"Reference measurements\" and \"Wall-to-wall spans\"";
+constexpr const char* kReferenceFormat = "docs/FORMAT.md#wall-to-wall-spans, in \"Reference measurements\"";
 
 }  // namespace
 
