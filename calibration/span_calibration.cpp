@@ -126,6 +126,24 @@ double noiseScale(const std::vector<KnownReading>& readings, const BiasPolynomia
   return readings.empty() ? 0.0 : std::sqrt(s / static_cast<double>(readings.size()));
 }
 
+/// Each entry uncorrected, under the chosen fit, and left out with its group.
+std::vector<SpanCheck> entryChecks(const SpanProblem& problem, const OrderResult& chosen) {
+  std::vector<SpanCheck> checks;
+  const Eigen::VectorXd raw = entryErrors(problem, BiasPolynomial{});
+  const std::size_t spans = problem.spans.size();
+  for (std::size_t k = 0; k < problem.entries(); ++k) {
+    SpanCheck c;
+    c.entry = problem.name(k);
+    c.stop = k < spans ? problem.spans[k].stop : problem.tapes[k - spans].stop;
+    c.reference_m = k < spans ? problem.spans[k].distance_m : problem.tapes[k - spans].reference_m;
+    c.raw_error_m = raw.size() ? raw(static_cast<Eigen::Index>(k)) : kNaN;
+    c.fitted_error_m = chosen.fit.error_m(static_cast<Eigen::Index>(k));
+    c.left_out_error_m = chosen.left_out_error_m.empty() ? kNaN : chosen.left_out_error_m[k];
+    checks.push_back(c);
+  }
+  return checks;
+}
+
 std::string fixed(double v, int digits) {
   char text[64];
   std::snprintf(text, sizeof text, "%.*f", digits, v);
@@ -201,20 +219,7 @@ CalibrationModel calibrateWithSpans(const LandmarkObservations& obs, const SpanP
     m.warnings.push_back("the measured entries disagree with the model by " +
                          fixed(std::sqrt(chosen.fit.chi2 / static_cast<double>(chosen.fit.dof)), 1) +
                          " times what their sigma_m says; the standard errors are widened by that factor");
-  if (checks) {
-    checks->clear();
-    const Eigen::VectorXd raw = entryErrors(problem, BiasPolynomial{});
-    for (std::size_t k = 0; k < n; ++k) {
-      SpanCheck c;
-      c.entry = problem.name(k);
-      c.stop = k < problem.spans.size() ? problem.spans[k].stop : problem.tapes[k - problem.spans.size()].stop;
-      c.reference_m = k < problem.spans.size() ? problem.spans[k].distance_m : problem.tapes[k - problem.spans.size()].reference_m;
-      c.raw_error_m = raw.size() ? raw(static_cast<Eigen::Index>(k)) : kNaN;
-      c.fitted_error_m = chosen.fit.error_m(static_cast<Eigen::Index>(k));
-      c.left_out_error_m = chosen.left_out_error_m.empty() ? kNaN : chosen.left_out_error_m[k];
-      checks->push_back(c);
-    }
-  }
+  if (checks) *checks = entryChecks(problem, chosen);
   return m;
 }
 

@@ -191,8 +191,8 @@ std::string leadingWindow(LandmarkObservations& obs, std::size_t max_readings) {
                       obs.sightings.end());
   obs.walls.erase(std::remove_if(obs.walls.begin(), obs.walls.end(), [stops](const WallSighting& w) { return w.stop >= stops; }),
                   obs.walls.end());
-  return "the first " + std::to_string(stops) + " of " + std::to_string(all_stops) + " stops: " + std::to_string(kept) +
-         " of " + std::to_string(total) + " landmark readings (--max-readings " + std::to_string(max_readings) + ")";
+  return "the first " + std::to_string(stops) + " of " + plural(all_stops, "stop") + ": " + std::to_string(kept) + " of " +
+         plural(total, "landmark reading") + " (--max-readings " + std::to_string(max_readings) + ")";
 }
 
 diagnosis::DiagnosisResult diagnoseLandmarks(const DiagnoseCommand& c, const diagnosis::DiagnoseConfig& config,

@@ -131,7 +131,7 @@ std::string referenceTable(const std::vector<calibration::ReferenceMatch>& raw,
   auto rms = [](double sum, std::size_t n) { return n ? fixed(1000.0 * std::sqrt(sum / static_cast<double>(n)), 1) : std::string("-"); };
   s += "\nRMS of measured - reference: raw " + rms(sum_raw, n_raw) + " mm";
   if (corrected) s += ", corrected " + rms(sum_cor, n_cor) + " mm";
-  s += " (over " + std::to_string(n_raw) + " entries";
+  s += " (over " + plural(n_raw, "entry", "entries");
   if (outside) s += "; " + std::to_string(outside) + " outside the fitted range left out: their readings are not corrected";
   s += ")\n";
   return s;

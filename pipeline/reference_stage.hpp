@@ -51,8 +51,8 @@ ReferenceObservations observeReference(const io::Sequence& seq, const Reference&
 /// What calibrate --reference shows about the spans: which walls each one was found between,
 /// and how the model reproduces it (also when left out of the fit).
 struct SpanReport {
-  calibration::SpanReadings found;
-  std::vector<calibration::SpanCheck> checks;
+  calibration::SpanReadings found;             ///< each span's two walls as found, with their beams
+  std::vector<calibration::SpanCheck> checks;  ///< each entry of the fit: raw, fitted, left out
 };
 
 /// The range model from the reference distances and spans (method "reference"): with spans,
