@@ -16,6 +16,7 @@
 #include "calibration/jackknife.hpp"
 #include "calibration/noise_exponent.hpp"
 #include "common/parallel.hpp"
+#include "common/plural.hpp"
 #include "common/stats_util.hpp"
 
 namespace lidarcal::calibration {
@@ -418,11 +419,11 @@ void addPlausibilityWarnings(CalibrationModel& m, const JointResult* j) {
     if (typical > kUnlocatedLandmarkM) {
       std::snprintf(text, sizeof text,
                     "the landmarks' positions are not pinned down by the data (median standard error of a centre "
-                    "%.2f m over %zu landmarks, against about 0.01 m for round poles seen from several stops): the "
+                    "%.2f m over %s, against about 0.01 m for round poles seen from several stops): the "
                     "offset can trade against where they stand, so its standard error understates its error; check "
                     "that lidarcal detect finds round poles of one radius, record stops all around them, or "
                     "calibrate against measured distances (--reference)",
-                    typical, se.size());
+                    typical, plural(se.size(), "landmark").c_str());
       m.warnings.push_back(text);
     }
   }

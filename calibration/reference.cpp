@@ -17,6 +17,7 @@
 #include "calibration/joint_refinement.hpp"
 #include "calibration/noise_exponent.hpp"
 #include "calibration/range_model_fit.hpp"
+#include "common/plural.hpp"
 #include "common/stats_util.hpp"
 
 namespace lidarcal::calibration {
@@ -330,6 +331,32 @@ std::vector<KnownRange> knownRanges(const ReferenceReadings& known, const Refere
   return out;
 }
 
+double testReadingNoise(const std::vector<KnownReading>& readings, const CalibrationConfig& config, NoiseFits& fits) {
+  // One batch: one beam on one target at one stop (a constant true distance), in scan order.
+  std::map<std::tuple<std::size_t, std::size_t, std::uint32_t>, std::vector<std::pair<std::size_t, double>>> by_beam;
+  for (const auto& r : readings)
+    if (r.beam != kUnknownBeam) by_beam[{r.stop, r.entry, r.beam}].push_back({r.scan, r.y_m});
+  std::vector<std::vector<double>> batches;
+  for (auto& [key, v] : by_beam) {
+    std::sort(v.begin(), v.end());
+    std::vector<double> b;
+    for (const auto& [scan, value] : v) b.push_back(value);
+    batches.push_back(std::move(b));
+  }
+  const NoiseExponentTest test = testNoiseExponent(batches);
+  fits.exponent_loglik = test.log_likelihood;
+  fits.exponent_best = test.best;
+  fits.exponent_batches = test.batches;
+  if (test.best < 0) fits.unavailable["exponent_test"] = "no beam was read repeatedly at one stop";
+  return test.best >= 0 ? test.best : (config.noise == NoiseKind::constant ? 0.0 : 2.0);
+}
+
+void setNoiseLaw(NoiseModel& noise, double exponent, double sigma_e) {
+  noise.kind = exponent == 0.0 ? NoiseKind::constant : exponent == 2.0 ? NoiseKind::squared : NoiseKind::power;
+  noise.sigma_e = sigma_e;
+  noise.exponent = exponent;
+}
+
 CalibrationModel calibrateWithReference(const std::vector<KnownReading>& readings, const CalibrationConfig& config,
                                         double range_min_m, double range_max_m) {
   config.validate();
@@ -349,29 +376,12 @@ CalibrationModel calibrateWithReference(const std::vector<KnownReading>& reading
   const std::size_t groups = stops.size();
   if (groups < 3) {
     m.status.code = StatusCode::too_few_reference_stops;
-    m.status.message = "known distances at " + std::to_string(groups) +
-                " stop(s): a range model needs measured distances at 3 or more stops (better 10 or more, spread over "
-                "the range you will use the sensor at)";
+    m.status.message = "known distances at " + plural(groups, "stop") +
+                ": a range model needs measured distances at 3 or more stops (better 10 or more, spread over "
+                "the range you will use the sensor at), or wall-to-wall spans beside them (docs/FORMAT.md#wall-to-wall-spans)";
     return m;
   }
-  // Seed 004's noise-exponent test on the repeated readings of one beam at one stop.
-  // One batch: one beam on one target at one stop (a constant true distance).
-  std::map<std::tuple<std::size_t, std::size_t, std::uint32_t>, std::vector<std::pair<std::size_t, double>>> by_beam;
-  for (const auto& r : readings)
-    if (r.beam != kUnknownBeam) by_beam[{r.stop, r.entry, r.beam}].push_back({r.scan, r.y_m});
-  std::vector<std::vector<double>> batches;
-  for (auto& [key, v] : by_beam) {
-    std::sort(v.begin(), v.end());
-    std::vector<double> b;
-    for (const auto& [scan, value] : v) b.push_back(value);
-    batches.push_back(std::move(b));
-  }
-  const NoiseExponentTest test = testNoiseExponent(batches);
-  m.noise_fits.exponent_loglik = test.log_likelihood;
-  m.noise_fits.exponent_best = test.best;
-  m.noise_fits.exponent_batches = test.batches;
-  const double exponent = test.best >= 0 ? test.best : (config.noise == NoiseKind::constant ? 0.0 : 2.0);
-  if (test.best < 0) m.noise_fits.unavailable["exponent_test"] = "no beam was read repeatedly at one stop";
+  const double exponent = testReadingNoise(readings, config, m.noise_fits);
 
   // Every order the stops can support (leave-one-out needs more stops than coefficients).
   const double d_lo = *std::min_element(d.begin(), d.end()), d_hi = *std::max_element(d.begin(), d.end());
@@ -406,9 +416,7 @@ CalibrationModel calibrateWithReference(const std::vector<KnownReading>& reading
   m.order_aic = order_aic;
   m.order_validation = best + 1;
   m.model.bias.alpha = f.alpha;
-  m.model.noise.kind = exponent == 0.0 ? NoiseKind::constant : exponent == 2.0 ? NoiseKind::squared : NoiseKind::power;
-  m.model.noise.sigma_e = f.sigma_e;
-  m.model.noise.exponent = exponent;
+  setNoiseLaw(m.model.noise, exponent, f.sigma_e);
   m.alpha_covariance.assign(f.covariance.data(), f.covariance.data() + f.covariance.size());
   m.fitted_range_m = fittedRange(d, y, m.model.bias);
   addUnsupportedCorrectionWarning(m);

@@ -99,14 +99,23 @@ struct ClusteredFit {
 ClusteredFit fitClustered(const std::vector<double>& d, const std::vector<double>& y,
                           const std::vector<std::size_t>& cluster, int order, double exponent);
 
-/// The range model from known-distance readings (method "reference"): the noise exponent by
-/// seed 004's test, the order by leave-one-stop-out cross-validation, standard errors clustered
-/// by stop. The result's status says why not when the readings cannot support a model (fewer
-/// than 3 stops, or fewer stops than coefficients + 1).
 /// The readings of each matched reference distance summarised for the joint refinement (one
 /// KnownRange per entry with readings; its tape sigma from REF.json).
 std::vector<KnownRange> knownRanges(const ReferenceReadings& known, const Reference& ref);
 
+/// Seed 004's noise-exponent test (eqs. 10-15) on the repeated readings of each beam on one
+/// target at one stop; fills the exponent_* fields of `fits` and returns the exponent k of
+/// sigma = sigma_e f(d)^k to fit with: the test's, else 0 for config.noise constant and 2
+/// otherwise (with the reason in fits.unavailable).
+double testReadingNoise(const std::vector<KnownReading>& readings, const CalibrationConfig& config, NoiseFits& fits);
+
+/// The noise law sigma = sigma_e f(d)^exponent: constant for 0, squared for 2, power otherwise.
+void setNoiseLaw(NoiseModel& noise, double exponent, double sigma_e);
+
+/// The range model from known-distance readings (method "reference"): the noise exponent by
+/// seed 004's test, the order by leave-one-stop-out cross-validation, standard errors clustered
+/// by stop. The result's status says why not when the readings cannot support a model (fewer
+/// than 3 stops, or fewer stops than coefficients + 1).
 CalibrationModel calibrateWithReference(const std::vector<KnownReading>& readings, const CalibrationConfig& config,
                                         double range_min_m = 0.0, double range_max_m = 1e9);
 

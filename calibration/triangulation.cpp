@@ -8,6 +8,8 @@
 
 #include <Eigen/Eigenvalues>
 
+#include "common/plural.hpp"
+
 namespace lidarcal::calibration {
 
 void TriangulationConfig::validate() const {
@@ -85,7 +87,7 @@ LandmarkEstimate triangulate(int id, const std::vector<StopBearing>& bearings, c
   est.stops = static_cast<int>(bearings.size());
   if (est.stops < config.min_stops) {
     est.status = TriangulationStatus::too_few_stops;
-    est.message = "seen from " + std::to_string(est.stops) + " stop(s), at least " + std::to_string(config.min_stops) +
+    est.message = "seen from " + plural(bearings.size(), "stop") + ", at least " + std::to_string(config.min_stops) +
                   " are needed: place the landmark where more stops can see it";
     return est;
   }

@@ -48,6 +48,9 @@ struct WallSighting {
   double normal_rad = 0.0;         ///< direction from the sensor to the nearest point of the line, radians
   double distance_m = 0.0;         ///< perpendicular distance from the sensor to the line, metres
   std::vector<BeamReading> beams;  ///< raw readings of the beams on the wall, in beam order
+  /// Which surface of its stop this is: sightings of one surface in the scans of a stop share
+  /// an id (> 0; detectors/wall_tracks.hpp); 0 when not grouped. Default 0.
+  int wall = 0;
 };
 
 /// Everything calibration needs from a sequence.
@@ -57,7 +60,7 @@ struct LandmarkObservations {
   std::optional<double> landmark_radius_m;  ///< common landmark radius when known
   double range_min_m = 0.0;               ///< sensor reporting window, metres
   double range_max_m = 1e9;               ///< sensor reporting window, metres
-  /// Walls seen at the stops that a reference measures a wall at (empty otherwise).
+  /// Walls seen at the stops that a reference measures a wall or a span at (empty otherwise).
   std::vector<WallSighting> walls;
 };
 

@@ -2,7 +2,8 @@
 // What a user measured by hand (a tape measure, a laser distance meter, a survey) about a
 // recorded sequence: the content of REF.json (docs/FORMAT.md, "Reference measurements").
 // Plain data: io/ reads it, calibration/ fits the range model against it (seed 004 section 5:
-// calibration against known distances), pipeline/ evaluates a model with it.
+// calibration against known distances; wall-to-wall spans, calibration/span_fit.hpp),
+// pipeline/ evaluates a model with it.
 
 #include <cstddef>
 #include <optional>
@@ -31,6 +32,19 @@ struct ReferenceDistance {
   double sigma_m = 0.002;
 };
 
+/// The measured distance between two parallel walls that a stop sees on opposite sides (a laser
+/// distance meter held across the room): the sum of the sensor's perpendicular distances to the
+/// two walls. Each wall is named by the direction of its normal from the sensor: the direction,
+/// in the sensor frame, in which that wall is nearest.
+struct ReferenceSpan {
+  std::size_t stop = 0;          ///< stop index in the sequence (0-based)
+  double bearing_a_rad = 0.0;    ///< approximate normal direction of one wall, sensor frame, radians
+  double bearing_b_rad = 0.0;    ///< approximate normal direction of the other wall, radians
+  double distance_m = 0.0;       ///< measured wall-to-wall distance, metres (> 0)
+  /// Standard deviation of the measurement, metres (a laser distance meter: about 2 mm). Default 0.002.
+  double sigma_m = 0.002;
+};
+
 /// A surveyed landmark: its centre in the frame of the sequence's VIEWPOINTs.
 struct ReferenceLandmark {
   double x_m = 0.0, y_m = 0.0;         ///< centre, metres
@@ -48,7 +62,8 @@ struct Reference {
   std::vector<ReferenceDistance> distances;
   std::vector<ReferenceLandmark> landmarks;
   std::vector<ReferenceStop> stops;
-  bool empty() const { return distances.empty() && landmarks.empty() && stops.empty(); }
+  std::vector<ReferenceSpan> spans;
+  bool empty() const { return distances.empty() && landmarks.empty() && stops.empty() && spans.empty(); }
 };
 
 }  // namespace lidarcal

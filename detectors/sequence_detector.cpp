@@ -7,6 +7,7 @@
 
 #include "common/errors.hpp"
 #include "common/parallel.hpp"
+#include "common/plural.hpp"
 
 #include "detectors/detection_log.hpp"
 #include "detectors/landmark_radius.hpp"
@@ -413,13 +414,13 @@ SequenceDetections detectSequenceImpl(std::size_t scan_count, const ScanLoader& 
   if (r.association.landmarks.empty()) {
     r.radius_source = RadiusSource::none;
     r.note = circles == 0 ? "no circular object found in any scan: zero landmarks"
-                          : std::to_string(circles) + " circle(s) found, but none seen in half the scans of " +
+                          : plural(circles, "circle") + " found, but none seen in half the scans of " +
                                 std::to_string(config.association.min_stops) +
                                 " or more stops (capped at the number of stops): zero landmarks";
   } else {
     r.radius_source = known ? RadiusSource::known : RadiusSource::estimated;
-    r.note = std::to_string(r.association.landmarks.size()) + " landmark(s) from " +
-             std::to_string(r.association.assigned) + " of " + std::to_string(circles) + " circle detection(s)";
+    r.note = plural(r.association.landmarks.size(), "landmark") + " from " + std::to_string(r.association.assigned) +
+             " of " + plural(circles, "circle detection");
   }
   return r;
 }

@@ -1,7 +1,11 @@
 #pragma once
 // Flat surfaces (walls) in one 2D scan, for measurements against a wall: each cluster of the
-// segmentation (segmentation.hpp) that a straight line explains (line_fit.hpp) is a wall, with
-// its perpendicular distance and normal direction from the sensor.
+// segmentation (segmentation.hpp) is split into straight pieces (split and merge: a piece that
+// a line does not explain is cut at the point farthest from the chord between its ends, as in
+// Douglas-Peucker), each piece a line explains (line_fit.hpp) is a wall, pieces on one line (a
+// wall interrupted by a table leg, or split at a noisy point) are merged into one wall, and a
+// return that two walls claim (near a corner) is given to neither; each wall with its
+// perpendicular distance and normal direction from the sensor.
 
 #include <vector>
 
@@ -16,10 +20,19 @@ namespace lidarcal::detectors {
 
 struct WallConfig {
   SegmentationConfig segmentation;  ///< clustering in scan order
-  LineFitConfig line;               ///< the line fit of each cluster (inlier threshold 0.01 m by default)
+  /// The line fit of each piece. Its inlier threshold is the threshold at range 0: a piece at
+  /// mean range r uses line.inlier_threshold_m + threshold_per_m2 * r^2 (the detection's
+  /// t(r) = A + B r^2). Default 0.01 m.
+  LineFitConfig line;
+  /// Growth of the inlier threshold with the range squared, 1/m (a triangulation lidar's noise
+  /// grows with range squared). Default 0: the threshold is line.inlier_threshold_m everywhere.
+  double threshold_per_m2 = 0.0;
   int min_points = 8;               ///< a wall needs this many returns. Default 8
-  double min_inlier_fraction = 0.8;  ///< line inliers / cluster returns. Default 0.8
+  double min_inlier_fraction = 0.8;  ///< line inliers / piece returns. Default 0.8
   double min_length_m = 0.2;        ///< extent of the inliers along the line, metres. Default 0.2
+  /// Two walls whose normals differ by less than this, radians, and whose distances differ by
+  /// less than their inlier threshold are one wall (merged). Default 0.035 (2 degrees).
+  double merge_angle_rad = 0.035;
   void validate() const;            ///< throws std::invalid_argument naming the first bad field
 };
 
@@ -31,7 +44,7 @@ struct Wall {
   pcl::Indices inliers;      ///< points on the line, ascending
 };
 
-/// Every wall of a scan (sensor at the origin).
+/// Every wall of a scan (sensor at the origin), by ascending normal direction.
 std::vector<Wall> findWalls(const pcl::PointCloud<pcl::PointXYZI>& cloud, const WallConfig& config);
 
 }  // namespace lidarcal::detectors

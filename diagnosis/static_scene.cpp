@@ -13,6 +13,7 @@
 #include <Eigen/Dense>
 #include <Eigen/SparseCholesky>
 
+#include "common/plural.hpp"
 #include "diagnosis/skeleton.hpp"
 #include "diagnosis/stats.hpp"
 #include "diagnosis/tails.hpp"
@@ -1364,9 +1365,9 @@ bool StaticDiagnosis::fitBaseline(DiagnosisResult& out) {
     out.status.code = StatusCode::too_few_walls;
     char buf[320];
     std::snprintf(buf, sizeof buf,
-                  "the returns lie on %zu straight surface(s) seen over %.1f degrees (at least %.0f needed): record the "
+                  "the returns lie on %s seen over %.1f degrees (at least %.0f needed): record the "
                   "repeated scans in a room with walls in view at several distances, not one target alone",
-                  lines0_.size(), rad2deg(span), rad2deg(kMinWallSectorRad));
+                  plural(lines0_.size(), "straight surface").c_str(), rad2deg(span), rad2deg(kMinWallSectorRad));
     out.status.message = buf;
     return false;
   }

@@ -4,6 +4,7 @@
 #include <cstdio>
 
 #include "common/errors.hpp"
+#include "common/plural.hpp"
 
 namespace lidarcal::io {
 namespace {
@@ -187,7 +188,7 @@ void BagScanSink::finish(const fs::path& file, const std::string& topic) {
                               "that (localisation typically by centimetres): try --still-m 0.05 --still-deg 1");
   }
   if (without_pose_ > 0)
-    report_.notes.push_back(std::to_string(without_pose_) + " scans skipped without a pose (first: " + first_why_ + ")");
+    report_.notes.push_back(plural(without_pose_, "scan") + " skipped without a pose (first: " + first_why_ + ")");
   if (upside_down_)
     report_.notes.push_back("the scan frame is upside down in the pose's frame: VIEWPOINT holds the heading of its x axis, "
                             "its beams run clockwise in the world");

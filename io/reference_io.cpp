@@ -1,12 +1,14 @@
 #include "io/reference_io.hpp"
 
 #include <cmath>
+#include <cstdio>
 #include <set>
 #include <string>
 
 #include <nlohmann/json.hpp>
 
 #include "common/errors.hpp"
+#include "common/plural.hpp"
 #include "io/atomic_file.hpp"
 #include "io/json_util.hpp"
 
@@ -49,13 +51,42 @@ ReferenceDistance readDistance(const JsonView& e) {
   return d;
 }
 
+/// A wall's normal direction in degrees (any turn, kept in radians).
+double readBearingDeg(const JsonView& e, const std::string& key) {
+  const double deg = e.getNumber(key);
+  if (!(std::abs(deg) <= 360.0)) e.fail(key, "must be an angle in degrees (-360..360)");
+  return deg2rad(deg);
+}
+
+ReferenceSpan readSpan(const JsonView& e) {
+  e.requireObject();
+  rejectUnknownKeys(e, {"stop", "bearing_a_deg", "bearing_b_deg", "distance_m", "sigma_m"});
+  ReferenceSpan s;
+  s.stop = stopIndex(e);
+  s.bearing_a_rad = readBearingDeg(e, "bearing_a_deg");
+  s.bearing_b_rad = readBearingDeg(e, "bearing_b_deg");
+  // The sensor stands between the two walls: their normals point away from each other.
+  const double apart = rad2deg(std::abs(wrapAngle(s.bearing_a_rad - s.bearing_b_rad)));
+  if (apart < 90.0) {
+    char text[200];
+    std::snprintf(text, sizeof text,
+                  "is %.0f degrees from bearing_a_deg: the two walls of a span lie on opposite sides of the sensor, "
+                  "their normal directions about 180 degrees apart",
+                  apart);
+    e.fail("bearing_b_deg", text);
+  }
+  s.distance_m = e.getPositive("distance_m");
+  s.sigma_m = e.getPositive("sigma_m", s.sigma_m);
+  return s;
+}
+
 }  // namespace
 
 Reference readReference(const std::filesystem::path& file) {
   const nlohmann::json j = readJsonFile(file);
   const JsonView root(file.string(), j);
   root.requireObject();
-  rejectUnknownKeys(root, {"format", "distances", "landmarks", "stops"});
+  rejectUnknownKeys(root, {"format", "distances", "landmarks", "stops", "spans"});
   if (root.getString("format", "") != kFormat)
     root.fail("format", std::string("not a lidarcal reference file (expected \"") + kFormat + "\")");
   Reference ref;
@@ -80,8 +111,10 @@ Reference readReference(const std::filesystem::path& file) {
       s.pose = Pose2{e.getNumber("x_m"), e.getNumber("y_m"), e.getNumber("yaw_rad")};
       ref.stops.push_back(s);
     }
+  if (root.has("spans"))
+    for (const auto& e : root.array("spans")) ref.spans.push_back(readSpan(e));
   if (ref.empty())
-    root.fail("", "holds no measurement: give at least one of distances, landmarks or stops");
+    root.fail("", "holds no measurement: give at least one of distances, spans, landmarks or stops");
   // Two surveyed landmarks closer than their radii are one pole written twice.
   for (std::size_t a = 0; a < ref.landmarks.size(); ++a)
     for (std::size_t b = a + 1; b < ref.landmarks.size(); ++b)
@@ -96,11 +129,12 @@ void checkReference(const Reference& ref, std::size_t stops, const std::filesyst
   auto inRange = [&](std::size_t stop, const std::string& entry) {
     if (stop >= stops)
       throw InputError(file.string(), entry + ".stop",
-                       "is stop " + std::to_string(stop) + " but the sequence has " + std::to_string(stops) +
-                           " stop(s), numbered from 0",
+                       "is stop " + std::to_string(stop) + " but the sequence has " + plural(stops, "stop") +
+                           ", numbered from 0",
                        "number the stops as `lidarcal info` lists them (import --stop-per-input makes one per recording)");
   };
   for (std::size_t k = 0; k < ref.distances.size(); ++k) inRange(ref.distances[k].stop, "distances[" + std::to_string(k) + "]");
+  for (std::size_t k = 0; k < ref.spans.size(); ++k) inRange(ref.spans[k].stop, "spans[" + std::to_string(k) + "]");
   std::set<std::size_t> seen;
   for (std::size_t k = 0; k < ref.stops.size(); ++k) {
     const std::string entry = "stops[" + std::to_string(k) + "]";
@@ -133,6 +167,13 @@ void writeReference(const std::filesystem::path& file, const Reference& ref) {
       a.push_back(e);
     }
     j["landmarks"] = a;
+  }
+  if (!ref.spans.empty()) {
+    auto a = nlohmann::ordered_json::array();
+    for (const auto& s : ref.spans)
+      a.push_back({{"stop", s.stop}, {"bearing_a_deg", rad2deg(s.bearing_a_rad)},
+                   {"bearing_b_deg", rad2deg(s.bearing_b_rad)}, {"distance_m", s.distance_m}, {"sigma_m", s.sigma_m}});
+    j["spans"] = a;
   }
   if (!ref.stops.empty()) {
     auto a = nlohmann::ordered_json::array();

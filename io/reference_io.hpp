@@ -1,7 +1,7 @@
 #pragma once
 // REF.json: measurements a user made by hand about a sequence (docs/FORMAT.md, "Reference
-// measurements"): distances from the sensor to landmarks or walls at given stops, surveyed
-// landmark centres, measured stop poses.
+// measurements"): distances from the sensor to landmarks or walls at given stops, wall-to-wall
+// spans, surveyed landmark centres, measured stop poses.
 
 #include <cstddef>
 #include <filesystem>

@@ -1,4 +1,4 @@
-// lidarcal calibrate SEQ --out model.json [--method closed-form|joint] [--truth truth.json]
+// lidarcal calibrate SEQ --out model.json [--method closed-form|joint] [--truth truth.json | --reference REF.json] [--report DIR]
 
 #include <cstdio>
 #include <memory>
@@ -18,6 +18,8 @@
 #include "pipeline/model_text.hpp"
 #include "pipeline/reference_stage.hpp"
 #include "pipeline/stages.hpp"
+#include "pipeline/ways_forward.hpp"
+#include "pipeline/words.hpp"
 #include "io/reference_io.hpp"
 
 namespace lidarcal::pipeline {
@@ -38,49 +40,61 @@ bool combineWithSelfCalibration(const Reference& ref, std::size_t stops, const s
   return measuredStops(ref) != stops || !ref.landmarks.empty() || !ref.stops.empty();
 }
 
-/// calibrate --reference: what was measured, used as --reference-fit says; `matches` and
-/// `survey` receive what stdout shows about the matching. Under auto, distances at three or more
-/// stops (and nothing else) that the self-calibration cannot use — a sensor that never moved,
-/// some of its recordings untaped — are fitted alone.
-CalibrationModel calibrateWithMeasurements(const CalibrateCommand& c, const io::Sequence& seq,
-                                           const calibration::CalibrationConfig& config,
-                                           std::vector<calibration::ReferenceMatch>& matches, std::string& survey) {
+/// What stdout shows about the matching of REF.json's entries.
+struct MeasurementsShown {
+  std::vector<calibration::ReferenceMatch> matches;
+  std::string survey;
+  SpanReport spans;
+};
+
+/// calibrate --reference: what was measured, used as --reference-fit says. Under auto, distances
+/// at three or more stops (and nothing else) that the self-calibration cannot use — a sensor
+/// that never moved, some of its recordings untaped — are fitted alone. Spans are always fitted
+/// with the distances alone (the self-calibration takes none).
+SequenceCalibration calibrateWithMeasurements(const CalibrateCommand& c, const io::Sequence& seq,
+                                              const calibration::CalibrationConfig& config, MeasurementsShown& shown) {
   const Reference ref = io::readReference(c.reference);
   io::checkReference(ref, seq.stops.size(), c.reference);
   const auto detection = detectionConfig(*c.options);
+  if (!ref.spans.empty() && c.reference_fit == "combined")
+    throw InputError(c.reference, "spans",
+                     "are fitted with the measured distances alone; the self-calibration (--reference-fit combined) "
+                     "takes no spans",
+                     "use --reference-fit auto or distances, or leave the spans out");
   const bool alone_possible = measuredStops(ref) >= 3 && ref.landmarks.empty() && ref.stops.empty();
-  if (ref.distances.empty() || combineWithSelfCalibration(ref, seq.stops.size(), c.reference_fit)) {
+  if (ref.spans.empty() && (ref.distances.empty() || combineWithSelfCalibration(ref, seq.stops.size(), c.reference_fit))) {
     // The self-calibration with the surveyed geometry held fixed and the distances (measured at
     // some stops) in its likelihood.
     StageBars progress;
     std::vector<SurveyMatch> found;
-    const SequenceCalibration result =
+    SequenceCalibration result =
         ref.distances.empty()
             ? calibrateSequenceWithSurvey(seq, ref, c.reference, detection, config, &found, std::ref(progress))
-            : calibrateSequenceWithDistancesAndSelf(seq, ref, c.reference, detection, config, &matches, &found,
+            : calibrateSequenceWithDistancesAndSelf(seq, ref, c.reference, detection, config, &shown.matches, &found,
                                                     std::ref(progress));
     progress.finish();
     const bool fall_back = !result.model.status.ok() && c.reference_fit == "auto" && alone_possible;
     if (!fall_back) {
-      survey = surveyTable(found, ref);
-      return result.model;
+      shown.survey = surveyTable(found, ref);
+      return result;
     }
     std::fprintf(stderr,
-                 "lidarcal: the self-calibration cannot use this sequence (%s); fitting the distances of the %zu "
-                 "measured stops alone instead (--reference-fit distances)\n",
-                 result.model.status.name(), measuredStops(ref));
-    matches.clear();
+                 "lidarcal: the self-calibration cannot use this sequence (%s); fitting the distances of the %s "
+                 "alone instead (--reference-fit distances)\n",
+                 result.model.status.name(), plural(measuredStops(ref), "measured stop").c_str());
+    shown.matches.clear();
   }
-  // Against the distances alone (seed 004 section 5).
+  // Against the distances (and spans) alone (seed 004 section 5).
   if (!ref.landmarks.empty() || !ref.stops.empty())
-    std::fprintf(stderr, "lidarcal: warning: %s: --reference-fit distances fits the distances alone: the surveyed "
+    std::fprintf(stderr, "lidarcal: warning: %s: %s fits the measured distances and spans alone: the surveyed "
                          "landmarks and measured stops are checked but not used\n",
-                 c.reference.c_str());
+                 c.reference.c_str(), ref.spans.empty() ? "--reference-fit distances" : "a REF.json with spans");
   Progress progress("detect", seq.scans.size());
-  const SequenceCalibration result = calibrateSequenceWithReference(
-      seq, ref, c.reference, detection, config, &matches, [&](std::size_t done, std::size_t) { progress.update(done); });
+  SequenceCalibration result =
+      calibrateSequenceWithReference(seq, ref, c.reference, detection, config, &shown.matches,
+                                     [&](std::size_t done, std::size_t) { progress.update(done); }, &shown.spans);
   progress.finish();
-  return result.model;
+  return result;
 }
 
 void runCalibrate(const CalibrateCommand& c) {
@@ -93,46 +107,48 @@ void runCalibrate(const CalibrateCommand& c) {
   // The report directory appears only with the model (staged, committed after model.json).
   std::optional<io::StagedDirectory> report;
   if (!c.report.empty()) report.emplace(c.report, c.overwrite);
-  CalibrationModel model;
-  std::vector<calibration::ReferenceMatch> matches;
-  std::string survey;
+  SequenceCalibration result;
+  MeasurementsShown shown;
   if (!c.reference.empty()) {
-    model = calibrateWithMeasurements(c, seq, config, matches, survey);
+    result = calibrateWithMeasurements(c, seq, config, shown);
   } else if (!c.truth.empty()) {
     // Oracle (seed 004): fitted against the true distances; for comparison only.
     const SimulationTruth truth = loadTruth(c.truth);
     const double scale = c.frame == "commanded" ? commandedScale(truth.truth) : 1.0;
-    model = calibrateOracle(seq, truth, scale, config);
+    result.model = calibrateOracle(seq, truth, scale, config);
   } else {
     StageBars progress;
-    const SequenceCalibration result = calibrateSequence(seq, detectionConfig(*c.options), config, std::ref(progress));
+    result = calibrateSequence(seq, detectionConfig(*c.options), config, std::ref(progress));
     progress.finish();
-    model = result.model;
-    if (report && model.status.ok()) {
-      ReportInputs in;
-      in.sequence = c.seq;
-      in.scans = seq.scans.size();
-      in.stops = seq.stops.size();
-      in.detections = result.detections.association.assigned;
-      in.observations = &result.observations;
-      in.model = &model;
-      in.command = "lidarcal calibrate " + c.seq + " --out " + c.out + " --method " + c.options->method;
-      writeReport(report->path(), in);
-    }
   }
+  const CalibrationModel& model = result.model;
   if (!model.status.ok())
-    throw DataError(c.seq, "calibration", std::string(model.status.name()) + ": " + model.status.message, "see docs/ERRORS.md");
+    throw DataError(c.seq, "calibration", std::string(model.status.name()) + ": " + model.status.message,
+                    waysForward(seq, model.status.code));
+  if (report) {
+    ReportInputs in;
+    in.sequence = c.seq;
+    in.scans = seq.scans.size();
+    in.stops = seq.stops.size();
+    in.detections = result.detections.association.assigned;
+    in.observations = &result.observations;
+    in.model = &model;
+    if (!c.reference.empty() && !result.known.empty()) in.known = &result.known;
+    in.command = "lidarcal calibrate " + c.seq + " --out " + c.out +
+                 (c.reference.empty() ? " --method " + c.options->method : " --reference " + c.reference);
+    writeReport(report->path(), in);
+  }
   io::writeModel(c.out, model);
   if (report) report->commit();
-  if (!matches.empty()) std::fputs(referenceTable(matches).c_str(), stdout);
-  if (!survey.empty()) std::fputs(survey.c_str(), stdout);
+  if (!shown.matches.empty()) std::fputs(referenceTable(shown.matches).c_str(), stdout);
+  if (!shown.spans.checks.empty()) std::fputs(spanTable(shown.spans.found, shown.spans.checks).c_str(), stdout);
+  if (!shown.survey.empty()) std::fputs(shown.survey.c_str(), stdout);
   std::fputs(modelSummary(model).c_str(), stdout);
   if (!quiet() && model.motion_prior)
     std::fprintf(stderr, "continuous motion: the odometry between consecutive stops entered the joint refinement as a "
                          "motion prior (--motion-prior off to tie every stop to its own commanded pose)\n");
   if (!quiet())
-    std::fprintf(stderr, "%s model of order %d written to %s\n", model.method.c_str(), model.model.bias.order(),
-                 c.out.c_str());
+    std::fprintf(stderr, "%s model, %s, written to %s\n", model.method.c_str(), orderText(model).c_str(), c.out.c_str());
 }
 
 }  // namespace
@@ -151,7 +167,8 @@ void addCalibrateCommand(CLI::App& app) {
       ->capture_default_str();
   CLI::Option* reference = sub->add_option("--reference", c->reference,
                   "REF.json with what you measured (docs/FORMAT.md, \"Reference measurements\"): distances (tape, "
-                  "laser meter) fit the range model to them (Alhashimi et al. 2016, section 5); without distances, "
+                  "laser meter) and wall-to-wall spans (a laser meter across the room between two walls the sensor "
+                  "sees) fit the range model to them (Alhashimi et al. 2016, section 5); without distances or spans, "
                   "surveyed landmark centres and measured stop poses are held fixed in the self-calibration")
       ->excludes(truth);
   sub->add_option("--reference-fit", c->reference_fit,
@@ -159,12 +176,14 @@ void addCalibrateCommand(CLI::App& app) {
                   "counts), combined (add them to the self-calibration of the whole sequence, with the surveyed "
                   "landmarks and stops held fixed), or auto: distances when every stop has one and no landmarks or "
                   "stops are given, combined otherwise, and distances after all when the self-calibration cannot use "
-                  "the sequence (a sensor that never moved) and 3 or more stops have one")
+                  "the sequence (a sensor that never moved) and 3 or more stops have one. Spans are always fitted "
+                  "with the distances alone")
       ->check(CLI::IsMember({"auto", "distances", "combined"}))
       ->capture_default_str()
       ->needs(reference);
   sub->add_option("--report", c->report,
-                  "Also write a report (Markdown + PNG plots) into this new directory (not with --truth)")
+                  "Also write a report (report.md with SVG plots, and the .dat/.gp files that draw them) into this new "
+                  "directory (not with --truth)")
       ->excludes(truth);
   sub->add_flag("--overwrite", c->overwrite, "Replace --out if it exists");
   addCalibrationOptions(sub, c->options);

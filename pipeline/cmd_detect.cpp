@@ -3,6 +3,7 @@
 // Two passes over the files: detect + associate (the scans of one stop in memory at a time), then labels
 // (each stop detected again: memory does not grow with the number of scans).
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <map>
@@ -148,8 +149,21 @@ void runDetect(const DetectOptions& o) {
       break;
     case detectors::RadiusSource::none: std::printf("- radius: unknown (no landmark to estimate it from)"); break;
   }
-  std::printf("\n- circle detections: %zu, given a landmark id: %zu (discarded: %zu at too few stops, %zu conflicts)\n",
-              circles, a.assigned, a.discarded_few_stops, a.discarded_conflicts);
+  // The association wants a landmark at min_stops stops, capped at the stops there are: on a
+  // recording with fewer, say what the discards mean there and what it cannot do.
+  const std::size_t stops = seq.stops.size(), wanted = static_cast<std::size_t>(o.min_stops);
+  const std::size_t capped = std::min(stops, wanted);
+  const std::string why = capped <= 1 ? "found in fewer than half the scans of the stop"
+                                      : "found in half the scans of fewer than " + plural(capped, "stop");
+  std::printf("\n- circle detections: %zu, given a landmark id: %zu (discarded: %zu %s, %zu in conflict)\n", circles,
+              a.assigned, a.discarded_few_stops, why.c_str(), a.discarded_conflicts);
+  if (stops < wanted)
+    std::printf("- the association follows a landmark over %s (--min-stops) and this recording has %s, so a circle %s "
+                "counts; triangulating the landmarks (calibrate, run) needs %s: record more, or calibrate against "
+                "measured distances or wall-to-wall spans (calibrate --reference, docs/FORMAT.md)\n",
+                plural(wanted, "stop").c_str(), plural(stops, "stop").c_str(),
+                stops == 1 ? "found in half of its scans" : "found in half the scans of all of them",
+                plural(wanted, "stop").c_str());
   std::printf("- %s\n", result.note.c_str());
   if (!a.landmarks.empty()) {
     std::printf("\n| id | x_m (world) | y_m (world) | radius_m | detections | stops | first scan |\n|---|---|---|---|---|---|---|\n");

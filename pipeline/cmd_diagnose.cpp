@@ -191,8 +191,8 @@ std::string leadingWindow(LandmarkObservations& obs, std::size_t max_readings) {
                       obs.sightings.end());
   obs.walls.erase(std::remove_if(obs.walls.begin(), obs.walls.end(), [stops](const WallSighting& w) { return w.stop >= stops; }),
                   obs.walls.end());
-  return "the first " + std::to_string(stops) + " of " + std::to_string(all_stops) + " stops: " + std::to_string(kept) +
-         " of " + std::to_string(total) + " landmark readings (--max-readings " + std::to_string(max_readings) + ")";
+  return "the first " + std::to_string(stops) + " of " + plural(all_stops, "stop") + ": " + std::to_string(kept) + " of " +
+         plural(total, "landmark reading") + " (--max-readings " + std::to_string(max_readings) + ")";
 }
 
 diagnosis::DiagnosisResult diagnoseLandmarks(const DiagnoseCommand& c, const diagnosis::DiagnoseConfig& config,
@@ -209,7 +209,9 @@ diagnosis::DiagnosisResult diagnoseLandmarks(const DiagnoseCommand& c, const dia
         std::count_if(s.beams.begin(), s.beams.end(), [](const BeamReading& b) { return b.beside; }));
   std::vector<std::vector<double>> truth_ranges;
   if (!c.truth.empty()) truth_ranges = truthRanges(c.truth, obs);
-  if (!quiet()) std::fprintf(stderr, "diagnosing a sequence: %zu sightings (%d replicas)\n", obs.sightings.size(), c.replicas);
+  if (!quiet())
+    std::fprintf(stderr, "diagnosing a sequence: %s (%s)\n", plural(obs.sightings.size(), "sighting").c_str(),
+                 plural(static_cast<std::size_t>(c.replicas), "replica").c_str());
   diagnosis::DiagnosisResult result = diagnosis::diagnoseSequence(obs, config, c.truth.empty() ? nullptr : &truth_ranges);
   return result;
 }
@@ -239,8 +241,8 @@ diagnosis::DiagnosisResult diagnoseOnePose(const DiagnoseCommand& c, const io::S
   const diagnosis::StaticScans s = staticScans(seq, stop, fix, [&](std::size_t done) { reading.update(done); });
   reading.finish();
   if (!quiet())
-    std::fprintf(stderr, "diagnosing repeated scans of one pose: %zu scans, %zu readings (%d replicas)\n", s.scans,
-                 s.readings.size(), c.replicas);
+    std::fprintf(stderr, "diagnosing repeated scans of one pose: %s, %s (%s)\n", plural(s.scans, "scan").c_str(),
+                 plural(s.readings.size(), "reading").c_str(), plural(static_cast<std::size_t>(c.replicas), "replica").c_str());
   diagnosis::DiagnosisResult result = diagnosis::diagnoseStatic(s, config, &src.walls);
   return result;
 }
@@ -296,7 +298,8 @@ void addDiagnoseCommand(CLI::App& app) {
       "diagnose", "Show what the published range model gets wrong on measured data, name the cause, fit the extended model, measure the gain");
   sub->add_option("DATA", c->data, "Sequence directory (docs/FORMAT.md): scans of poles from several stops, or repeated scans from one pose")
       ->required();
-  sub->add_option("-o,--out", c->out, "Output directory: diagnosis.json, report.md, plots")->required();
+  sub->add_option("-o,--out", c->out, "Output directory: diagnosis.json, report.md with PNG plots (and the .dat/plots.gp files that draw them)")
+      ->required();
   sub->add_option("--model", c->model, "Diagnose the readings corrected with this model.json (what the calibrated model still gets wrong)");
   sub->add_option("--seed", c->seed, "Seed of the bootstrap replicas; the same data and seed give the same output")
       ->capture_default_str();

@@ -81,8 +81,35 @@ double rmsError(const std::vector<calibration::ReferenceMatch>& matches, const C
 }
 
 
+nlohmann::ordered_json spanJson(const calibration::SpanMatch& m) {
+  nlohmann::ordered_json j{{"entry", m.entry}, {"stop", m.stop}, {"reference_m", m.reference_m}, {"status", m.status}};
+  if (m.ok()) {
+    j["measured_m"] = m.measured_m;
+    j["measured_se_m"] = number(m.measured_se_m);
+    j["error_m"] = m.measured_m - m.reference_m;
+    j["scans"] = m.scans;
+  }
+  return j;
+}
+
+/// RMS of measured - reference over the spans found (NaN when none).
+double spanRmsError(const std::vector<calibration::SpanMatch>& matches) {
+  double s = 0.0;
+  std::size_t n = 0;
+  for (const auto& m : matches)
+    if (m.ok()) s += std::pow(m.measured_m - m.reference_m, 2), ++n;
+  return n ? std::sqrt(s / static_cast<double>(n)) : std::nan("");
+}
+
+/// The spans part of E.json: each span as the scans measure it, and the RMS.
+nlohmann::ordered_json spansJson(const std::vector<calibration::SpanMatch>& matches) {
+  auto entries = nlohmann::ordered_json::array();
+  for (const auto& m : matches) entries.push_back(spanJson(m));
+  return {{"rms_error_m", number(spanRmsError(matches))}, {"entries", entries}};
+}
+
 /// evaluate SEQ --reference REF.json [--model model.json]: what the scans measure at the
-/// reference distances, raw and corrected.
+/// reference distances and spans, raw and corrected.
 void evaluateReference(const std::string& seq_dir, const std::string& ref_file, const std::string& model_file,
                        const std::string& inversion, const std::string& outside_name, double radius_m,
                        const std::string& out) {
@@ -108,6 +135,7 @@ void evaluateReference(const std::string& seq_dir, const std::string& ref_file, 
   // raw by default) and over all of them.
   j["raw"] = {{"rms_error_m", number(rmsError(raw.known.matches, fitted))},
               {"rms_error_all_m", number(rmsError(raw.known.matches))}, {"entries", raw_json}};
+  if (!ref.spans.empty()) j["raw"]["spans"] = spansJson(raw.spans.matches);
   std::optional<ReferenceObservations> corrected;
   if (model) {
     if (const std::string w = checkModelFits(*model, seq, model_file, false, outside); !w.empty())
@@ -123,9 +151,13 @@ void evaluateReference(const std::string& seq_dir, const std::string& ref_file, 
     j["model"] = model_file;
     j["corrected"] = {{"rms_error_m", number(rmsError(corrected->known.matches, fitted))},
                       {"rms_error_all_m", number(rmsError(corrected->known.matches))}, {"entries", cor_json}};
+    if (!ref.spans.empty()) j["corrected"]["spans"] = spansJson(corrected->spans.matches);
   }
-  std::fputs(referenceTable(raw.known.matches, corrected ? &corrected->known.matches : nullptr, fitted, outside).c_str(),
-             stdout);
+  if (!ref.distances.empty())
+    std::fputs(referenceTable(raw.known.matches, corrected ? &corrected->known.matches : nullptr, fitted, outside).c_str(),
+               stdout);
+  if (!ref.spans.empty())
+    std::fputs(spanEvaluationTable(raw.spans.matches, corrected ? &corrected->spans.matches : nullptr).c_str(), stdout);
   if (!out.empty()) io::writeTextAtomically(out, j.dump(2) + "\n");
 }
 
@@ -147,7 +179,7 @@ void addEvaluateCommand(CLI::App& app) {
                                        "the raw sequence")->required();
   auto* truth_option = sub->add_option("--truth", o->truth, "truth.json written by lidarcal simulate");
   auto* reference = sub->add_option("--reference", o->reference,
-                                    "REF.json of measured distances (docs/FORMAT.md, \"Reference measurements\")")
+                                    "REF.json of measured distances or wall-to-wall spans (docs/FORMAT.md, \"Reference measurements\")")
                         ->excludes(truth_option);
   sub->add_option("--model", o->model, "With --reference: also measure with the scans corrected by this model.json")
       ->needs(reference);

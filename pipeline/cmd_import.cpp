@@ -12,6 +12,7 @@
 #include "common/errors.hpp"
 #include "io/detect_format.hpp"
 #include "io/import_rosbag.hpp"
+#include "pipeline/words.hpp"
 #include "pipeline/commands.hpp"
 #include "pipeline/import.hpp"
 #include "pipeline/progress.hpp"
@@ -149,7 +150,7 @@ void runImport(const ImportOptions& o, const CLI::App& sub) {
 
   const auto& w = r.written;
   const std::string from = o.inputs.size() == 1 ? o.inputs.front() : std::to_string(o.inputs.size()) + " recordings";
-  std::printf("imported %zu of %zu scans from %s (%s) into %s\n", w.written, r.read.scans, from.c_str(),
+  std::printf("imported %zu of %s from %s (%s) into %s\n", w.written, plural(r.read.scans, "scan").c_str(), from.c_str(),
               toString(s.format), w.out.c_str());
   if (o.stop_per_input)
     std::printf("  one stop per recording (%zu; sequence.json stop_starts)\n", o.inputs.size());

@@ -22,6 +22,7 @@
 
 #include "common/errors.hpp"
 #include "io/atomic_file.hpp"
+#include "pipeline/words.hpp"
 #include "pipeline/commands.hpp"
 #include "pipeline/gnuplot.hpp"
 #include "pipeline/progress.hpp"
@@ -143,8 +144,9 @@ bool runMonteCarlo(const MonteCarloOptions& o) {
   io::StagedDirectory out(o.out, o.overwrite);
   const auto cells = studies::studyCells(figures, grids);
   if (!quiet())
-    std::fprintf(stderr, "montecarlo: %zu cells x %zu trials (joint refinement on %zu), %s level, %d thread(s)\n",
-                 cells.size(), run.trials, run.joint_trials, studies::toString(config.level), run.threads);
+    std::fprintf(stderr, "montecarlo: %zu cells x %zu trials (joint refinement on %zu), %s level, %s\n",
+                 cells.size(), run.trials, run.joint_trials, studies::toString(config.level),
+                 plural(static_cast<std::size_t>(run.threads), "thread").c_str());
   const auto start = std::chrono::steady_clock::now();
   studies::StudyOutput result;
   {
@@ -161,8 +163,8 @@ bool runMonteCarlo(const MonteCarloOptions& o) {
   if (g_interrupted) return false;
   out.commit();
   const double trials = static_cast<double>(cells.size() * run.trials);
-  std::printf("Monte Carlo study: %zu cells x %zu trials in %.1f s (%.1f trials/s, %d thread(s))\n", cells.size(),
-              run.trials, seconds, trials / seconds, run.threads);
+  std::printf("Monte Carlo study: %zu cells x %zu trials in %.1f s (%.1f trials/s, %s)\n", cells.size(), run.trials,
+              seconds, trials / seconds, plural(static_cast<std::size_t>(run.threads), "thread").c_str());
   std::printf("Output: %s (summary.md; per figure .csv, .png, .gp, .md)\n", o.out.c_str());
   if (!plots.empty()) std::printf("Plots: %s\n", plots.c_str());
   return true;

@@ -15,6 +15,7 @@
 #include "io/noise_json.hpp"
 #include "io/observations_csv.hpp"
 #include "io/sequence.hpp"
+#include "pipeline/words.hpp"
 #include "pipeline/commands.hpp"
 #include "pipeline/progress.hpp"
 #include "simulation/observation_sim.hpp"
@@ -31,8 +32,8 @@ void simulateObservationScene(const std::string& scene_file, const std::string& 
   io::writeNoiseTruth(out.path() / "noise_truth.json", io::NoiseTruth{seed, scene, sim.true_poses});
   out.commit();
   if (!quiet())
-    std::fprintf(stderr, "simulated %zu observations by %zu sensors at %zu stops into %s\n", sim.observations.size(),
-                 scene.sensors.size(), sim.odometry.size(), out_dir.c_str());
+    std::fprintf(stderr, "simulated %s by %s at %s into %s\n", plural(sim.observations.size(), "observation").c_str(),
+                 plural(scene.sensors.size(), "sensor").c_str(), plural(sim.odometry.size(), "stop").c_str(), out_dir.c_str());
 }
 
 namespace {
@@ -56,8 +57,8 @@ void runConvert(const ConvertOptions& o) {
   io::writeOdometry(out.path() / "odometry.csv", io::odometryFromStops(seq.stops));
   out.commit();
   if (!quiet())
-    std::fprintf(stderr, "converted %zu detections at %zu stops into %s\n", observations.size(), seq.stops.size(),
-                 o.out.c_str());
+    std::fprintf(stderr, "converted %s at %s into %s\n", plural(observations.size(), "detection").c_str(),
+                 plural(seq.stops.size(), "stop").c_str(), o.out.c_str());
 }
 
 }  // namespace

@@ -17,6 +17,7 @@
 #include "io/pcd_scan.hpp"
 #include "pipeline/commands.hpp"
 #include "pipeline/gnuplot.hpp"
+#include "pipeline/words.hpp"
 
 namespace lidarcal::pipeline {
 namespace {
@@ -80,7 +81,7 @@ void runPlot(const PlotOptions& o) {
   std::ostringstream gp;
   gp << "set terminal pngcairo size 900,900 font \"DejaVu Sans,11\"\n"
      << "set output \"plot.png\"\nset size ratio -1\nset grid\nset key outside below horizontal\n"
-     << "set title " << gnuplotString(title + " (sensor frame; " + std::to_string(n_labelled) + " points on landmarks)", true)
+     << "set title " << gnuplotString(title + " (sensor frame; " + plural(n_labelled, "point") + " on landmarks)", true)
      << "\n"
      << "set xlabel \"x [m] (forward)\"\nset ylabel \"y [m] (left)\"\nset palette defined (0 '#1b9e77', 1 '#d95f02', 2 '#7570b3', 3 '#e7298a', 4 '#66a61e')\n"
      << "unset colorbox\nplot ";

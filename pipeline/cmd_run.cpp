@@ -19,6 +19,7 @@
 #include "pipeline/progress.hpp"
 #include "pipeline/report.hpp"
 #include "pipeline/stages.hpp"
+#include "pipeline/ways_forward.hpp"
 #include "pipeline/words.hpp"
 
 namespace lidarcal::pipeline {
@@ -102,7 +103,8 @@ void runRun(const RunCommand& c) {
   const SequenceCalibration cal = calibrateSequence(seq, detectionConfig(*c.options), config, std::ref(progress));
   progress.finish();
   if (!cal.model.status.ok())
-    throw DataError(seq_dir.string(), "calibration", cal.model.status.name() + std::string(": ") + cal.model.status.message, "see docs/ERRORS.md");
+    throw DataError(seq_dir.string(), "calibration", cal.model.status.name() + std::string(": ") + cal.model.status.message,
+                    waysForward(seq, cal.model.status.code));
   io::writeModel(out.path() / "model.json", cal.model);
 
   const auto method = c.inversion == "ml" ? calibration::InversionMethod::ml : calibration::InversionMethod::ls;
@@ -167,7 +169,9 @@ void addRunCommand(CLI::App& app) {
   auto c = std::make_shared<RunCommand>();
   CLI::App* sub = app.add_subcommand("run", "The main job: detect, calibrate, correct and report (default: the bundled example)");
   sub->add_option("SEQ", c->seq, "Sequence directory (default: the bundled example)");
-  sub->add_option("-o,--out", c->out, "Output directory: model.json, corrected/, report/, summary.json")->capture_default_str();
+  sub->add_option("-o,--out", c->out,
+                  "Output directory: model.json, corrected/, report/ (report.md with SVG plots), summary.json")
+      ->capture_default_str();
   sub->add_option("--truth", c->truth, "truth.json of a simulated sequence, to evaluate against (found automatically next "
                                        "to DIR/scans)");
   sub->add_flag("--no-truth", c->no_truth, "Do not look for a truth.json next to the sequence");

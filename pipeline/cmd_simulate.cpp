@@ -13,6 +13,7 @@
 #include "io/true_ranges.hpp"
 #include "pipeline/commands.hpp"
 #include "pipeline/progress.hpp"
+#include "pipeline/words.hpp"
 #include "simulation/simulator.hpp"
 
 namespace lidarcal::pipeline {
@@ -77,8 +78,9 @@ void runSimulate(const SimulateOptions& o) {
   io::writeTruth(out.path() / "truth.json", truth);
   out.commit();
   if (!quiet())
-    std::fprintf(stderr, "simulated %zu scans at %d stops into %s (sequence: %s)\n", total, scene.path.stops,
-                 o.out.c_str(), (fs::path(o.out) / "scans").c_str());
+    std::fprintf(stderr, "simulated %s at %s into %s (sequence: %s)\n", plural(total, "scan").c_str(),
+                 plural(static_cast<std::size_t>(scene.path.stops), "stop").c_str(), o.out.c_str(),
+                 (fs::path(o.out) / "scans").c_str());
 }
 
 }  // namespace

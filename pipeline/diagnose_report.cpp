@@ -12,6 +12,7 @@
 #include "common/pose2.hpp"
 #include "io/atomic_file.hpp"
 #include "pipeline/gnuplot.hpp"
+#include "pipeline/words.hpp"
 
 namespace lidarcal::pipeline {
 namespace {
@@ -262,10 +263,10 @@ void writeDataLine(std::ostream& md, const DiagnosisResult& r, const DiagnosisSo
   const bool seq = r.mode == diagnosis::DiagnoseMode::sequence;
   md << "# lidarcal diagnosis\n\n";
   md << "Data: `" << src.data.string() << "`" << (src.sensor.empty() ? "" : " (" + src.sensor + ")") << ", **"
-     << toString(r.mode) << "** mode: " << r.scans << " scans";
-  if (seq) md << " at " << r.stops << " stops" << (src.selection.empty() ? "" : " (" + src.selection + ")") << ", " << r.landmarks << " landmarks";
-  else md << (src.selection.empty() ? "" : " (" + src.selection + ")") << ", " << r.landmarks << " wall lines";
-  md << ", " << r.readings << " readings";
+     << toString(r.mode) << "** mode: " << plural(r.scans, "scan");
+  if (seq) md << " at " << plural(r.stops, "stop") << (src.selection.empty() ? "" : " (" + src.selection + ")") << ", " << plural(r.landmarks, "landmark");
+  else md << (src.selection.empty() ? "" : " (" + src.selection + ")") << ", " << plural(r.landmarks, "wall line");
+  md << ", " << plural(r.readings, "reading");
   if (seq && src.beside_pole_readings > 0)
     md << " (" << src.beside_pole_readings
        << " of them beside a pole, between it and the background: mixed-pixel candidates the detector leaves out)";

@@ -6,6 +6,7 @@
 #include <limits>
 #include <tuple>
 
+#include "common/pose2.hpp"
 #include "pipeline/words.hpp"
 
 namespace lidarcal::pipeline {
@@ -22,7 +23,7 @@ std::string polynomialText(const std::vector<double>& a, const std::vector<doubl
     if (i) s += a[i] < 0 ? " - " : " + ";
     else if (a[i] < 0) s += "-";
     s += fixed(std::abs(a[i]), 5);
-    if (i < se.size() && std::isfinite(se[i])) s += " (+-" + fixed(se[i], 5) + ")";
+    if (i < se.size() && std::isfinite(se[i])) s += se[i] == 0.0 ? std::string(" (fixed)") : " (+-" + fixed(se[i], 5) + ")";
     if (i == 1) s += " d";
     if (i > 1) s += " d^" + std::to_string(i);
   }
@@ -70,10 +71,16 @@ std::vector<double> tableDistances(const CalibrationModel& m) {
   return d;
 }
 
+std::string orderText(const CalibrationModel& m) {
+  const std::vector<double> se = coefficientErrors(m);
+  const bool offset_only = se.size() == 2 && se[1] == 0.0 && m.model.bias.alpha[1] == 1.0;
+  return offset_only ? "an offset only (order 0)" : "order " + std::to_string(m.model.bias.order());
+}
+
 std::string modelSummary(const CalibrationModel& m) {
   std::string s;
-  s += "  range model (" + m.method + ", order " + std::to_string(m.model.bias.order()) + "): reading = " +
-       polynomialWithErrors(m) + "   (d in m; +- one standard error)\n";
+  s += "  range model (" + m.method + ", " + orderText(m) + "): reading = " + polynomialWithErrors(m) +
+       "   (d in m; +- one standard error)\n";
   if (m.fitted_range_m)
     s += "  fitted over true distances " + fixed(m.fitted_range_m->first, 3) + "-" + fixed(m.fitted_range_m->second, 3) +
          " m (readings " + fixed(m.model.bias(m.fitted_range_m->first), 3) + "-" +
@@ -161,11 +168,78 @@ std::string referenceTable(const std::vector<calibration::ReferenceMatch>& raw,
   auto rms = [](double sum, std::size_t n) { return n ? fixed(1000.0 * std::sqrt(sum / static_cast<double>(n)), 1) : std::string("-"); };
   s += "\nRMS of measured - reference: raw " + rms(sum_raw, n_raw) + " mm";
   if (corrected) s += ", corrected " + rms(sum_cor, n_cor) + " mm";
-  s += " (over " + std::to_string(n_raw) + " entries";
+  s += " (over " + plural(n_raw, "entry", "entries");
   if (left_out)
     s += "; " + std::to_string(left_out) + " beyond the fitted range left out: --outside " + calibration::toString(outside) +
          " does not correct their readings";
   s += ")\n";
+  return s;
+}
+
+namespace {
+
+/// RMS of the finite values, in mm ("-" when none).
+std::string rmsMm(const std::vector<double>& v) {
+  double s = 0.0;
+  std::size_t n = 0;
+  for (double e : v)
+    if (std::isfinite(e)) s += e * e, ++n;
+  return n ? fixed(1000.0 * std::sqrt(s / static_cast<double>(n)), 1) : std::string("-");
+}
+
+std::string mm(double v) { return std::isfinite(v) ? fixed(1000.0 * v, 1, true) : std::string("-"); }
+
+std::string wallText(const calibration::SpanWall& w) {
+  return fixed(rad2deg(w.normal_rad), 0) + " deg at " + fixed(w.distance_m, 3) + " m";
+}
+
+}  // namespace
+
+std::string spanTable(const calibration::SpanReadings& found, const std::vector<calibration::SpanCheck>& checks) {
+  std::string s = "| entry | stop | walls (normal, distance as read) | measured [m] | raw - measured [mm] | "
+                  "fitted - measured [mm] | left out - measured [mm] |\n|---|---|---|---|---|---|---|\n";
+  std::vector<double> raw, fitted, left_out;
+  for (const auto& c : checks) {
+    std::string walls = "(tape distance)";
+    for (const auto& m : found.matches)
+      if (c.entry == "spans[" + std::to_string(m.entry) + "]" && m.ok())
+        walls = wallText(found.walls[m.wall_a]) + ", " + wallText(found.walls[m.wall_b]);
+    s += "| " + c.entry + " | " + std::to_string(c.stop) + " | " + walls + " | " + fixed(c.reference_m, 3) + " | " +
+         mm(c.raw_error_m) + " | " + mm(c.fitted_error_m) + " | " + mm(c.left_out_error_m) + " |\n";
+    raw.push_back(c.raw_error_m);
+    fitted.push_back(c.fitted_error_m);
+    left_out.push_back(c.left_out_error_m);
+  }
+  s += "\nRMS of what the sensor says - measured: raw " + rmsMm(raw) + " mm, fitted " + rmsMm(fitted) + " mm, left out " +
+       rmsMm(left_out) + " mm (over " + plural(checks.size(), "entry", "entries") +
+       "; left out: fitted without the entry and every other span between the same two walls; - where the other "
+       "entries cannot determine the model's order)\n";
+  return s;
+}
+
+std::string spanEvaluationTable(const std::vector<calibration::SpanMatch>& raw,
+                                const std::vector<calibration::SpanMatch>* corrected) {
+  std::string s = "| entry | stop | measured [m] | raw [m] | raw - measured [mm] |";
+  if (corrected) s += " corrected [m] | corrected - measured [mm] |";
+  s += " scans |\n|---|---|---|---|---|";
+  if (corrected) s += "---|---|";
+  s += "---|\n";
+  std::vector<double> raw_errors, cor_errors;
+  auto cell = [](const calibration::SpanMatch& m, std::vector<double>& errors) {
+    if (!m.ok()) return std::string(" not found | - |");
+    errors.push_back(m.measured_m - m.reference_m);
+    const std::string se = std::isfinite(m.measured_se_m) ? " +- " + fixed(m.measured_se_m, 4) : std::string();
+    return " " + fixed(m.measured_m, 4) + se + " | " + mm(m.measured_m - m.reference_m) + " |";
+  };
+  for (std::size_t k = 0; k < raw.size(); ++k) {
+    s += "| spans[" + std::to_string(raw[k].entry) + "] | " + std::to_string(raw[k].stop) + " | " +
+         fixed(raw[k].reference_m, 3) + " |" + cell(raw[k], raw_errors);
+    if (corrected) s += k < corrected->size() ? cell((*corrected)[k], cor_errors) : std::string(" - | - |");
+    s += " " + std::to_string(raw[k].scans) + " |\n";
+  }
+  s += "\nRMS of the spans as the scans measure them - measured: raw " + rmsMm(raw_errors) + " mm";
+  if (corrected) s += ", corrected " + rmsMm(cor_errors) + " mm";
+  s += "\n";
   return s;
 }
 

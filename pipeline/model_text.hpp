@@ -8,6 +8,7 @@
 
 #include "calibration/filtering.hpp"
 #include "calibration/reference.hpp"
+#include "calibration/span_calibration.hpp"
 #include "common/calibration_model.hpp"
 
 namespace lidarcal::pipeline {
@@ -32,6 +33,9 @@ std::string polynomialWithErrors(const CalibrationModel& m);
 /// when the fitted range is unknown), about five of them, rounded.
 std::vector<double> tableDistances(const CalibrationModel& m);
 
+/// "order 2", or "an offset only (order 0)" for f(d) = d + alpha_0 with alpha_1 held at 1.
+std::string orderText(const CalibrationModel& m);
+
 /// Several lines of plain text: method, f with errors, fitted range, noise, corrections at
 /// tableDistances() with errors, warnings.
 std::string modelSummary(const CalibrationModel& m);
@@ -50,5 +54,17 @@ std::string referenceTable(const std::vector<calibration::ReferenceMatch>& raw,
                            const std::vector<calibration::ReferenceMatch>* corrected = nullptr,
                            const CalibrationModel* model = nullptr,
                            calibration::Outside outside = calibration::kDefaultOutside);
+
+/// The spans of a fit (Markdown table): the two walls each was found between (normal direction
+/// and distance as read), the measured span, and what the sensor says minus that: uncorrected,
+/// with the model, and with the model's order fitted without the entry and the other spans
+/// between its walls; then the RMS of each column. Tape distances fitted beside the spans are
+/// rows too.
+std::string spanTable(const calibration::SpanReadings& found, const std::vector<calibration::SpanCheck>& checks);
+
+/// The spans as measured on the scans (sum of the two walls' line distances, mean over the
+/// scans), raw and, with `corrected`, on the corrected scans (Markdown table with the RMS).
+std::string spanEvaluationTable(const std::vector<calibration::SpanMatch>& raw,
+                                const std::vector<calibration::SpanMatch>* corrected = nullptr);
 
 }  // namespace lidarcal::pipeline

@@ -8,7 +8,7 @@
 
 #include "calibration/filtering.hpp"
 #include "common/errors.hpp"
-#include "detectors/walls.hpp"
+#include "detectors/wall_tracks.hpp"
 #include "pipeline/collect_sightings.hpp"
 
 namespace lidarcal::pipeline {
@@ -30,32 +30,24 @@ detectors::SequenceDetectionConfig referenceDetection(detectors::SequenceDetecti
 
 namespace {
 
-/// Walls of every scan at the stops that a reference measures a wall at.
-std::vector<WallSighting> observeWalls(const io::Sequence& seq, const Reference& ref, const detectors::ScanLoader& load) {
+/// Walls of every scan at the stops that a reference measures a wall or a span at, grouped into
+/// the surfaces of each stop; the line fits take the detection's inlier threshold.
+std::vector<WallSighting> observeWalls(const io::Sequence& seq, const Reference& ref, const detectors::ScanLoader& load,
+                                       const detectors::SequenceDetectionConfig& detection) {
   std::set<std::size_t> stops;
   for (const auto& d : ref.distances)
     if (d.target == ReferenceTarget::wall) stops.insert(d.stop);
+  for (const auto& s : ref.spans) stops.insert(s.stop);
   std::vector<WallSighting> walls;
-  const detectors::WallConfig config;
-  for (std::size_t k : stops) {
+  detectors::WallConfig config;
+  config.line.inlier_threshold_m = detection.detection.threshold_m;
+  config.threshold_per_m2 = detection.detection.threshold_per_m2;
+  for (std::size_t k : stops)
     for (std::size_t i : seq.stops[k].scans) {
       const io::Scan scan = load(i);
-      for (const detectors::Wall& w : detectors::findWalls(*scan.cloud, config)) {
-        WallSighting ws;
-        ws.stop = k;
-        ws.scan = i;
-        ws.normal_rad = w.normal_rad;
-        ws.distance_m = w.distance_m;
-        for (const auto idx : w.inliers) {
-          const auto& p = (*scan.cloud)[static_cast<std::size_t>(idx)];
-          ws.beams.push_back(BeamReading{std::atan2(static_cast<double>(p.y), static_cast<double>(p.x)),
-                                         std::hypot(static_cast<double>(p.x), static_cast<double>(p.y)),
-                                         static_cast<std::uint32_t>(idx)});
-        }
-        walls.push_back(std::move(ws));
-      }
+      for (WallSighting& ws : detectors::wallSightings(*scan.cloud, k, i, config)) walls.push_back(std::move(ws));
     }
-  }
+  detectors::labelWallSurfaces(walls);
   return walls;
 }
 
@@ -76,9 +68,10 @@ ReferenceObservations observeReference(const io::Sequence& seq, const Reference&
     out.observations.range_min_m = seq.meta.range_min_m.value_or(0.0);
     out.observations.range_max_m = seq.meta.range_max_m.value_or(1e9);
   }
-  out.observations.walls = observeWalls(seq, ref, load);
+  out.observations.walls = observeWalls(seq, ref, load, detection);
   const double radius = detection.detection.landmark_radius_m.value_or(seq.meta.landmark_radius_m.value_or(0.0));
   out.known = calibration::knownReadings(out.observations, ref, radius);
+  out.spans = calibration::spanReadings(out.observations, ref);
   return out;
 }
 
@@ -95,6 +88,20 @@ void requireEveryDistanceFound(const calibration::ReferenceReadings& known, cons
                     "check the stop numbers (lidarcal info), give bearing_rad to pick the target, or remove the entry");
 }
 
+void requireEverySpanFound(const calibration::SpanReadings& spans, const std::filesystem::path& ref_file) {
+  std::string unmatched;
+  std::size_t failures = 0;
+  for (const auto& m : spans.matches)
+    if (!m.ok() && failures++ < 5)
+      unmatched += (unmatched.empty() ? "" : "; ") + std::string("spans[") + std::to_string(m.entry) + "]." + m.field + ": " + m.status;
+  if (failures > 5) unmatched += "; and " + std::to_string(failures - 5) + " more";
+  if (failures > 0)
+    throw DataError(ref_file.string(), "spans", unmatched,
+                    "give each wall's normal direction in the sensor frame (degrees counter-clockwise from the sensor's "
+                    "forward axis, within 20 degrees; the walls seen are listed), check the stop and distance_m, or "
+                    "remove the entry (docs/FORMAT.md#wall-to-wall-spans)");
+}
+
 std::size_t measuredStops(const Reference& ref) {
   std::set<std::size_t> measured;
   for (const auto& d : ref.distances) measured.insert(d.stop);
@@ -106,23 +113,33 @@ SequenceCalibration calibrateSequenceWithReference(const io::Sequence& seq, cons
                                            const detectors::SequenceDetectionConfig& detection,
                                            const calibration::CalibrationConfig& config,
                                            std::vector<calibration::ReferenceMatch>* matches,
-                                           const StageProgress& on_scan) {
-  if (ref.distances.empty())
+                                           const StageProgress& on_scan, SpanReport* spans) {
+  if (ref.distances.empty() && ref.spans.empty())
     throw InputError(ref_file.string(), "distances",
-                     "is empty: calibrating against a reference needs measured distances at 3 or more stops",
-                     "add the distances you measured (docs/FORMAT.md, \"Reference measurements\")");
+                     "is empty: calibrating against a reference needs measured distances at 3 or more stops, or "
+                     "wall-to-wall spans",
+                     "add the distances or spans you measured (docs/FORMAT.md, \"Reference measurements\")");
   ReferenceObservations ro = observeReference(seq, ref, referenceDetection(detection), scanLoader(seq), on_scan);
   if (matches) *matches = ro.known.matches;
   requireEveryDistanceFound(ro.known, ref_file);
+  requireEverySpanFound(ro.spans, ref_file);
   SequenceCalibration out;
   out.observations = std::move(ro.observations);
-  out.model = calibration::calibrateWithReference(ro.known.readings, config, out.observations.range_min_m,
-                                                  out.observations.range_max_m);
+  if (ref.spans.empty()) {
+    out.model = calibration::calibrateWithReference(ro.known.readings, config, out.observations.range_min_m,
+                                                    out.observations.range_max_m);
+    out.known = std::move(ro.known.readings);
+  } else {
+    const calibration::SpanProblem problem = calibration::spanProblem(ro.spans, ref, ro.known.readings);
+    std::vector<calibration::SpanCheck> checks;
+    out.model = calibration::calibrateWithSpans(out.observations, problem, ro.known.readings, config, &checks, &out.known);
+    if (spans) *spans = SpanReport{std::move(ro.spans), std::move(checks)};
+  }
   if (seq.meta.sensor_name) out.model.sensor_name = *seq.meta.sensor_name;
   const auto [fewest, most] = io::pointCountRange(seq);
   if (seq.meta.beams) out.model.beams = seq.meta.beams;
   else if (fewest == most && most > 0) out.model.beams = static_cast<int>(most);
-  out.detections.association.assigned = ro.known.readings.size();
+  out.detections.association.assigned = out.known.size();
   return out;
 }
 

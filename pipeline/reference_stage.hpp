@@ -1,7 +1,9 @@
 #pragma once
 // Calibration and evaluation against what a user measured (REF.json, common/reference.hpp):
 // the targets of the reference distances found in the scans, their beams turned into readings
-// of known true distance, and the range model fitted to them (calibration/reference.hpp).
+// of known true distance, and the range model fitted to them (calibration/reference.hpp); the
+// walls of wall-to-wall spans found the same way and the model fitted to the spans
+// (calibration/span_calibration.hpp).
 
 #include <cstddef>
 #include <filesystem>
@@ -11,6 +13,7 @@
 #include "calibration/filtering.hpp"
 #include "calibration/inversion.hpp"
 #include "calibration/reference.hpp"
+#include "calibration/span_calibration.hpp"
 #include "common/reference.hpp"
 #include "detectors/sequence_detector.hpp"
 #include "io/sequence.hpp"
@@ -22,8 +25,9 @@ namespace lidarcal::pipeline {
 detectors::ScanLoader scanLoader(const io::Sequence& seq, const calibration::ReadingCorrector* correct = nullptr);
 
 struct ReferenceObservations {
-  LandmarkObservations observations;       ///< poles (and walls at the stops a wall is measured at)
+  LandmarkObservations observations;       ///< poles (and walls at the stops a wall or a span is measured at)
   calibration::ReferenceReadings known;    ///< each reference distance matched, with its known-distance readings
+  calibration::SpanReadings spans;         ///< each span's two walls, with their beams
   std::size_t landmarks = 0;               ///< poles found by the detection
 };
 
@@ -32,19 +36,28 @@ struct ReferenceObservations {
 detectors::SequenceDetectionConfig referenceDetection(detectors::SequenceDetectionConfig detection);
 
 /// Finds the targets of `ref` in the scans `load` gives (poles: detection and association as in
-/// calibrateSequence; walls: findWalls at the stops a wall is measured at).
+/// calibrateSequence; walls: findWalls, with the detection's inlier threshold, at the stops a
+/// wall or a span is measured at, grouped into the surfaces of each stop).
 ReferenceObservations observeReference(const io::Sequence& seq, const Reference& ref,
                                        const detectors::SequenceDetectionConfig& detection,
                                        const detectors::ScanLoader& load, const StageProgress& on_scan = {});
 
-/// The range model from the reference distances (method "reference"); throws DataError naming
-/// every entry whose target was not found (with what to do).
+/// What calibrate --reference shows about the spans: which walls each one was found between,
+/// and how the model reproduces it (also when left out of the fit).
+struct SpanReport {
+  calibration::SpanReadings found;             ///< each span's two walls as found, with their beams
+  std::vector<calibration::SpanCheck> checks;  ///< each entry of the fit: raw, fitted, left out
+};
+
+/// The range model from the reference distances and spans (method "reference"): with spans,
+/// calibrateWithSpans over both; else calibrateWithReference. Throws DataError naming every
+/// entry whose target was not found (with what to do).
 SequenceCalibration calibrateSequenceWithReference(const io::Sequence& seq, const Reference& ref,
                                            const std::filesystem::path& ref_file,
                                            const detectors::SequenceDetectionConfig& detection,
                                            const calibration::CalibrationConfig& config,
                                            std::vector<calibration::ReferenceMatch>* matches = nullptr,
-                                           const StageProgress& on_scan = {});
+                                           const StageProgress& on_scan = {}, SpanReport* spans = nullptr);
 
 /// A surveyed landmark (REF.json `landmarks[entry]`) and the detected landmark it stands for.
 struct SurveyMatch {
@@ -70,6 +83,10 @@ SequenceCalibration calibrateSequenceWithSurvey(const io::Sequence& seq, const R
 
 /// Throws DataError naming every reference distance whose target was not found (with what to do).
 void requireEveryDistanceFound(const calibration::ReferenceReadings& known, const std::filesystem::path& ref_file);
+
+/// Throws DataError naming every span whose walls were not found, by the REF.json field at
+/// fault (e.g. `spans[0].bearing_b_deg`), with the walls the stop does show.
+void requireEverySpanFound(const calibration::SpanReadings& spans, const std::filesystem::path& ref_file);
 
 /// Stops with at least one measured distance (all of the sequence's: seed 004's fit on the
 /// distances alone is the calibration; fewer: they join the self-calibration).

@@ -88,28 +88,75 @@ void appendG6(std::string& out, double v, char end) {
   out.push_back(end);
 }
 
+/// The readings behind the distance, residual, histogram and noise plots, one at a time.
+struct ReadingTally {
+  std::optional<calibration::ReadingCorrector> correct;  ///< as `correct` does (the fit's readings lie inside its range)
+  std::map<int, std::pair<double, int>> bins;  // 0.25 m bins of the true distance: sum of d, readings
+  std::map<int, double> bin_sum2;
+  std::vector<double> raw_errors, corrected_errors;
+  double d_min = std::numeric_limits<double>::infinity(), d_max = 0.0;
+
+  explicit ReadingTally(const CalibrationModel& m) {
+    try {
+      correct.emplace(calibration::readingCorrector(m, calibration::InversionMethod::ls, calibration::kDefaultOutside));
+    } catch (const std::invalid_argument&) {
+    }
+  }
+  /// Adds reading y at true distance d; returns the corrected reading (NaN where the model has no distance for it).
+  double add(PlotData& p, const CalibrationModel& m, double d, double y) {
+    d_min = std::min(d_min, d);
+    d_max = std::max(d_max, d);
+    const double c = correct ? (*correct)(y).range_m : std::nan("");
+    appendG6(p.distance, d, ' ');
+    appendG6(p.distance, y, ' ');
+    appendG6(p.distance, c, '\n');
+    ++p.readings;
+    raw_errors.push_back(y - d);
+    if (std::isfinite(c)) corrected_errors.push_back(c - d);
+    const double r = y - m.model.bias(d);
+    const int bin = static_cast<int>(std::floor(d / 0.25));
+    bins[bin].first += d;
+    bins[bin].second += 1;
+    bin_sum2[bin] += r * r;
+    return c;
+  }
+  /// The fitted range, the noise per bin, the fitted curve and the histogram.
+  void finish(PlotData& p, const CalibrationModel& m) {
+    std::ostringstream noise, curve;
+    noise.precision(6);
+    curve.precision(6);
+    if (d_max > 0.0) p.fitted = {d_min, d_max};
+    if (m.fitted_range_m) p.fitted = {m.fitted_range_m->first, m.fitted_range_m->second};  // what the fit saw
+    for (const auto& [bin, v] : bins)
+      if (v.second >= 5)
+        noise << v.first / v.second << ' ' << std::sqrt(bin_sum2[bin] / v.second) << ' '
+              << m.model.noise.stddev(v.first / v.second, m.model.bias) << '\n';
+    // The fitted curve over the plotted range only (beyond it the polynomial is extrapolated).
+    const auto [lo, hi] = plotRange(p.fitted);
+    const int steps = 200;
+    for (int i = 0; i <= steps; ++i) {
+      const double d = lo + (hi - lo) * i / steps;
+      curve << d << ' ' << m.model.bias(d) << ' ' << d << '\n';
+    }
+    p.noise = noise.str();
+    p.curve = curve.str();
+    p.histogram = histogram(std::move(raw_errors), std::move(corrected_errors));
+  }
+};
+
 PlotData plotData(const LandmarkObservations& obs, const CalibrationModel& m, const std::vector<Cylinder>& truth) {
   PlotData p;
-  std::ostringstream raw, cor, noise, curve, circles, stops, true_circles;
-  for (auto* o : {&raw, &cor, &noise, &curve, &stops}) o->precision(6);
+  ReadingTally tally(m);
+  std::ostringstream raw, cor, circles, stops, true_circles;
+  for (auto* o : {&raw, &cor, &stops}) o->precision(6);
   std::map<int, const CalibratedLandmark*> lm;
   for (const auto& l : m.landmarks)
     if (l.status == "ok") lm[l.id] = &l;
-  // The readings corrected as `correct` does (these lie inside the fitted range).
-  std::optional<calibration::ReadingCorrector> correct;
-  try {
-    correct.emplace(calibration::readingCorrector(m, calibration::InversionMethod::ls, calibration::kDefaultOutside));
-  } catch (const std::invalid_argument&) {
-  }
-  std::map<int, std::pair<double, int>> bins;  // 0.25 m bins of the estimated distance
-  std::map<int, double> bin_sum2;
   std::map<std::size_t, std::size_t> first_scan_of_stop;
   for (const auto& s : obs.sightings) {
     auto f = first_scan_of_stop.find(s.stop);
     if (f == first_scan_of_stop.end() || s.scan < f->second) first_scan_of_stop[s.stop] = s.scan;
   }
-  std::vector<double> raw_errors, corrected_errors;
-  double d_min = std::numeric_limits<double>::infinity(), d_max = 0.0;
   for (const auto& s : obs.sightings) {
     auto it = lm.find(s.landmark);
     if (it == lm.end() || s.stop >= m.stop_poses.size() || s.stop >= obs.commanded.size()) continue;
@@ -120,22 +167,7 @@ PlotData plotData(const LandmarkObservations& obs, const CalibrationModel& m, co
       const double d = calibration::rayCircleDistance(est.x_m, est.y_m, est.yaw_rad + b.angle_rad, it->second->x_m,
                                                       it->second->y_m, it->second->radius_m);
       if (!std::isfinite(d)) continue;
-      d_min = std::min(d_min, d);
-      d_max = std::max(d_max, d);
-      // Corrected reading: NaN where the model has no distance for it.
-      double c = std::nan("");
-      if (correct) c = (*correct)(b.range_m).range_m;
-      appendG6(p.distance, d, ' ');
-      appendG6(p.distance, b.range_m, ' ');
-      appendG6(p.distance, c, '\n');
-      ++p.readings;
-      raw_errors.push_back(b.range_m - d);
-      if (std::isfinite(c)) corrected_errors.push_back(c - d);
-      const double r = b.range_m - m.model.bias(d);
-      const int bin = static_cast<int>(std::floor(d / 0.25));
-      bins[bin].first += d;
-      bins[bin].second += 1;
-      bin_sum2[bin] += r * r;
+      const double c = tally.add(p, m, d, b.range_m);
       if (!map_scan) continue;
       const double ar = cmd.yaw_rad + b.angle_rad;
       raw << cmd.x_m + b.range_m * std::cos(ar) << ' ' << cmd.y_m + b.range_m * std::sin(ar) << '\n';
@@ -145,37 +177,54 @@ PlotData plotData(const LandmarkObservations& obs, const CalibrationModel& m, co
       }
     }
   }
-  if (d_max > 0.0) p.fitted = {d_min, d_max};
-  if (m.fitted_range_m) p.fitted = {m.fitted_range_m->first, m.fitted_range_m->second};  // what the fit saw
-  for (const auto& [bin, v] : bins)
-    if (v.second >= 5)
-      noise << v.first / v.second << ' ' << std::sqrt(bin_sum2[bin] / v.second) << ' '
-            << m.model.noise.stddev(v.first / v.second, m.model.bias) << '\n';
-  // The fitted curve over the plotted range only (beyond it the polynomial is extrapolated).
-  const auto [lo, hi] = plotRange(p.fitted);
-  const int steps = 200;
-  for (int i = 0; i <= steps; ++i) {
-    const double d = lo + (hi - lo) * i / steps;
-    curve << d << ' ' << m.model.bias(d) << ' ' << d << '\n';
-  }
+  tally.finish(p, m);
   for (const auto& [id, l] : lm) circles << circleLines(l->x_m, l->y_m, l->radius_m);
   for (std::size_t k = 0; k < m.stop_poses.size(); ++k)
     stops << m.stop_poses[k].x_m << ' ' << m.stop_poses[k].y_m << ' ' << k << '\n';
   for (const auto& c : truth) true_circles << circleLines(c.x_m, c.y_m, c.radius_m);
-  p.curve = curve.str();
-  p.noise = noise.str();
   p.raw = raw.str();
   p.corrected = cor.str();
   p.circles = circles.str();
   p.stops = stops.str();
-  p.histogram = histogram(std::move(raw_errors), std::move(corrected_errors));
   p.truth = true_circles.str();
+  return p;
+}
+
+/// The plots of a calibration against reference measurements: the readings whose true distance
+/// the reference gives (or, for a span's walls, the fit places), and on the map one scan per stop
+/// of them, raw and corrected, at the commanded poses.
+PlotData knownPlotData(const std::vector<calibration::KnownReading>& known, const LandmarkObservations& obs,
+                       const CalibrationModel& m) {
+  PlotData p;
+  ReadingTally tally(m);
+  std::ostringstream raw, cor, stops;
+  for (auto* o : {&raw, &cor, &stops}) o->precision(6);
+  std::map<std::size_t, std::size_t> first_scan_of_stop;
+  for (const auto& r : known) {
+    auto f = first_scan_of_stop.find(r.stop);
+    if (f == first_scan_of_stop.end() || r.scan < f->second) first_scan_of_stop[r.stop] = r.scan;
+  }
+  for (const auto& r : known) {
+    const double c = tally.add(p, m, r.d_m, r.y_m);
+    if (first_scan_of_stop[r.stop] != r.scan || r.stop >= obs.commanded.size()) continue;
+    const Pose2& cmd = obs.commanded[r.stop];
+    const double a = cmd.yaw_rad + r.angle_rad;
+    raw << cmd.x_m + r.y_m * std::cos(a) << ' ' << cmd.y_m + r.y_m * std::sin(a) << '\n';
+    if (std::isfinite(c)) cor << cmd.x_m + c * std::cos(a) << ' ' << cmd.y_m + c * std::sin(a) << '\n';
+  }
+  tally.finish(p, m);
+  for (std::size_t k = 0; k < obs.commanded.size(); ++k)
+    stops << obs.commanded[k].x_m << ' ' << obs.commanded[k].y_m << ' ' << k << '\n';
+  p.raw = raw.str();
+  p.corrected = cor.str();
+  p.stops = stops.str();
   return p;
 }
 
 /// The gnuplot script of the report. Distance plots share the x range of the fitted data;
 /// legends sit outside the plotting area; every label_every-th of `stops` stops is numbered.
-std::string reportScript(const FittedRange& fitted, bool histogram, bool truth, std::size_t stops, std::size_t readings) {
+std::string reportScript(const FittedRange& fitted, bool histogram, bool truth, std::size_t stops, std::size_t readings,
+                         bool reference) {
   const auto [lo, hi] = plotRange(fitted);
   // An even sample of the readings on the scatter plots (all of them stay in distance.dat).
   const std::size_t every = std::max<std::size_t>(1, (readings + kMaxScatterPoints - 1) / kMaxScatterPoints);
@@ -194,10 +243,10 @@ std::string reportScript(const FittedRange& fitted, bool histogram, bool truth, 
     << R"GP(set arrow 1 from fit_min, graph 0 to fit_min, graph 1 nohead dt 3 lc rgb "#666666"
 set arrow 2 from fit_max, graph 0 to fit_max, graph 1 nohead dt 3 lc rgb "#666666"
 set output "distance.svg"
-set title "Raw range error against the distance estimated from the landmarks (dotted: fitted range)"
+set title "Raw range error against the )GP" << (reference ? "true distance the reference measurements give" : "distance estimated from the landmarks") << R"GP( (dotted: fitted range)"
 set xlabel "estimated true distance d [m]"
 set ylabel "raw reading - d [m]"
-plot "distance.dat")GP" << sample << R"GP( using 1:($2-$1) with points pt 7 ps 0.3 lc rgb "#8899bb" title "readings on landmarks)GP" << shown << R"GP(", \
+plot "distance.dat")GP" << sample << R"GP( using 1:($2-$1) with points pt 7 ps 0.3 lc rgb "#8899bb" title "readings on )GP" << (reference ? "the measured targets" : "landmarks") << shown << R"GP(", \
      "curve.dat" using 1:($2-$1) with lines lw 2 lc rgb "#cc3311" title "fitted bias f(d) - d", \
      0 with lines dt 2 lc rgb "black" title "ideal (no error)"
 set output "residuals.svg"
@@ -225,13 +274,14 @@ plot "histogram.dat" using (1000*$1):2 with histeps lw 2 lc rgb "#cc3311" title 
 )GP";
   g << R"GP(set terminal svg size 900,900 font "DejaVu Sans,11" background rgb "white"
 set output "map.svg"
-set title "Landmarks with raw and corrected points, one scan per stop"
+set title ")GP" << (reference ? "Points on the measured targets, raw and corrected" : "Landmarks with raw and corrected points")
+    << R"GP(, one scan per stop"
 set autoscale x
 set xlabel "x [m]"
 set ylabel "y [m]"
 set size ratio -1
-plot "circles.dat" using 1:2 with lines lw 2 lc rgb "#999999" title "landmarks (estimated)", \
-)GP";
+plot )GP";
+  if (!reference) g << "\"circles.dat\" using 1:2 with lines lw 2 lc rgb \"#999999\" title \"landmarks (estimated)\", \\\n";
   if (truth) g << "     \"truth.dat\" using 1:2 with lines lw 1 dt 2 lc rgb \"black\" title \"landmarks (truth)\", \\\n";
   g << R"GP(     "raw.dat" using 1:2 with points pt 2 ps 0.6 lc rgb "#cc3311" title "raw", \
      "corrected.dat" using 1:2 with points pt 6 ps 0.6 lc rgb "#009944" title "corrected", \
@@ -261,16 +311,17 @@ namespace {
 /// The model in words: bias with its standard errors, noise, bearing noise, range, notes.
 void writeModelSection(std::ostringstream& md, const CalibrationModel& m, const FittedRange& fitted) {
   md << "## The calibrated model\n\n";
-  md << "- method: **" << m.method << "**, bias order n = " << m.model.bias.order() << " (chosen by "
-     << userWords(m.order_rule) << ")\n";
+  md << "- method: **" << m.method << "**, bias " << orderText(m) << " (chosen by " << userWords(m.order_rule) << ")\n";
   md << "- bias: reading = f(d) = " << polynomialWithErrors(m) << "  (d = true distance in metres"
      << (coefficientErrors(m).empty() || !std::isfinite(coefficientErrors(m)[0]) ? "" : "; +- one standard error") << ")\n";
   md << "- noise: " << noiseText(m.model.noise, m.model.bias) << "\n";
-  md << "- bearing noise sigma_theta = " << fixed(rad2deg(m.sigma_theta_rad), 3) << " deg";
-  if (m.method == "joint")
-    md << "; stop poses moved by " << fixed(1000 * m.pose_scatter_m, 1) << " mm and "
-       << fixed(rad2deg(m.heading_scatter_rad), 2) << " deg (RMS) from the commanded ones";
-  md << "\n";
+  if (m.method != "reference") {  // a fit to measured distances estimates no bearing noise
+    md << "- bearing noise sigma_theta = " << fixed(rad2deg(m.sigma_theta_rad), 3) << " deg";
+    if (m.method == "joint")
+      md << "; stop poses moved by " << fixed(1000 * m.pose_scatter_m, 1) << " mm and "
+         << fixed(rad2deg(m.heading_scatter_rad), 2) << " deg (RMS) from the commanded ones";
+    md << "\n";
+  }
   if (m.fitted_range_m)
     md << "- fitted on readings at true distances from " << fixed(m.fitted_range_m->first, 2) << " to "
        << fixed(m.fitted_range_m->second, 2) << " m (the beams' distances to the surfaces they hit; the sensor reads up "
@@ -354,7 +405,10 @@ void writePlotsSection(std::ostringstream& md, const std::filesystem::path& dir,
     io::writeTextAtomically(dir / "stops.dat", p->stops);
     if (!p->histogram.empty()) io::writeTextAtomically(dir / "histogram.dat", p->histogram);
     if (!p->truth.empty()) io::writeTextAtomically(dir / "truth.dat", p->truth);
-    io::writeTextAtomically(dir / "plots.gp", reportScript(fitted, !p->histogram.empty(), !p->truth.empty(), m.stop_poses.size(), p->readings));
+    const std::size_t stops = m.stop_poses.empty() ? static_cast<std::size_t>(std::count(p->stops.begin(), p->stops.end(), '\n'))
+                                                   : m.stop_poses.size();
+    io::writeTextAtomically(dir / "plots.gp", reportScript(fitted, !p->histogram.empty(), !p->truth.empty(), stops,
+                                                           p->readings, p->circles.empty()));
     plotted = runGnuplot(dir, "plots.gp", &why);
   }
   md << "\n## Plots\n\n";
@@ -425,15 +479,17 @@ void writeReport(const std::filesystem::path& dir, const ReportInputs& in) {
   const CalibrationModel& m = *in.model;
   std::ostringstream md;
   md << "# lidarcal calibration report\n\n";
-  md << "Sequence `" << in.sequence.string() << "`: " << plural(in.scans, "scan") << " at " << plural(in.stops, "stop")
-     << ", " << plural(m.landmarks.size(), "landmark") << " in " << plural(in.detections, "detection") << ".\n\n";
+  md << "Sequence `" << in.sequence.string() << "`: " << plural(in.scans, "scan") << " at " << plural(in.stops, "stop");
+  if (in.known) md << ", " << plural(in.known->size(), "reading") << " of known true distance (reference measurements).\n\n";
+  else md << ", " << plural(m.landmarks.size(), "landmark") << " in " << plural(in.detections, "detection") << ".\n\n";
   if (!m.status.ok()) {
     md << "**Calibration failed: " << m.status.name() << ".** " << userWords(m.status.message) << "\n";
     io::writeTextAtomically(dir / "report.md", md.str());
     return;
   }
-  const std::optional<PlotData> p =
-      in.observations ? std::optional<PlotData>(plotData(*in.observations, m, in.true_landmarks)) : std::nullopt;
+  std::optional<PlotData> p;
+  if (in.observations && in.known) p = knownPlotData(*in.known, *in.observations, m);
+  else if (in.observations) p = plotData(*in.observations, m, in.true_landmarks);
   const FittedRange fitted = p ? p->fitted : FittedRange{};
   writeModelSection(md, m, fitted);
   if (in.correction)
@@ -448,7 +504,7 @@ void writeReport(const std::filesystem::path& dir, const ReportInputs& in) {
   writePlotsSection(md, dir, m, p, fitted);
   writeOrderSection(md, m);
   writeNoiseSection(md, m);
-  writeLandmarksSection(md, m);
+  if (!m.landmarks.empty()) writeLandmarksSection(md, m);
   md << "\n## References\n\n" << papers::kReferences;
   if (!in.command.empty()) md << "\nProduced by `" << in.command << "`.\n";
   io::writeTextAtomically(dir / "report.md", md.str());

@@ -1,5 +1,5 @@
 #pragma once
-// The calibration report a newcomer reads: report.md with PNG plots (measured vs estimated
+// The calibration report a newcomer reads: report.md with SVG plots (measured vs estimated
 // distance with the fitted curve, noise vs range, the landmark map with raw and corrected
 // points as in seed 000 Fig. 13, the order-selection table, the noise estimators side by side).
 
@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "calibration/reference.hpp"
 #include "common/calibration_model.hpp"
 #include "common/landmark_observations.hpp"
 #include "common/scene.hpp"
@@ -28,6 +29,9 @@ struct ReportInputs {
   std::size_t detections = 0;               ///< associated circle detections
   const LandmarkObservations* observations = nullptr;  ///< what calibration saw
   const CalibrationModel* model = nullptr;  ///< the result
+  /// Calibration against reference measurements: the readings of known true distance it was
+  /// fitted to (plotted instead of the landmarks' readings); null otherwise.
+  const std::vector<calibration::KnownReading>* known = nullptr;
   /// What `correct` did to the returns of the written scans (null: the scans were not corrected).
   const calibration::FilteringStats* correction = nullptr;
   calibration::Outside outside = calibration::kDefaultOutside;  ///< the policy they were corrected under
@@ -49,7 +53,7 @@ struct FittedRange {
 /// least 0.1 m), never below 0.
 std::pair<double, double> plotRange(const FittedRange& fitted);
 
-/// Writes DIR/report.md and DIR/*.png (plots skipped with a note when gnuplot is missing):
+/// Writes DIR/report.md and DIR/*.svg (plots skipped with a note when gnuplot is missing):
 /// readings and residuals before/after correction against the distance over the fitted range,
 /// their histograms, noise against distance, and the map (estimated landmarks, numbered stops,
 /// raw and corrected points, the true landmarks when given). The plot data (*.dat) and the

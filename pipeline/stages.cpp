@@ -8,6 +8,7 @@
 #include "calibration/filtering.hpp"
 #include "common/errors.hpp"
 #include "common/parallel.hpp"
+#include "common/plural.hpp"
 #include "pipeline/collect_sightings.hpp"
 
 namespace lidarcal::pipeline {
@@ -21,8 +22,8 @@ SequenceCalibration calibrateSequence(const io::Sequence& seq, const detectors::
   const int min_stops = config.triangulation.min_stops;
   if (seq.stops.size() < static_cast<std::size_t>(min_stops)) {
     out.model.status.code = StatusCode::too_few_stops;
-    out.model.status.message = "the sequence has " + std::to_string(seq.stops.size()) +
-                        " stop(s) (consecutive scans with one VIEWPOINT form a stop) and each landmark must be "
+    out.model.status.message = "the sequence has " + plural(seq.stops.size(), "stop") +
+                        " (consecutive scans with one VIEWPOINT form a stop) and each landmark must be "
                         "triangulated from at least " + std::to_string(min_stops) +
                         " stops: record scans at " + std::to_string(min_stops) +
                         " or more stops along a line, each with its own VIEWPOINT";

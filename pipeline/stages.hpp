@@ -11,6 +11,7 @@
 #include "calibration/calibrate.hpp"
 #include "calibration/filtering.hpp"
 #include "calibration/inversion.hpp"
+#include "calibration/reference.hpp"
 #include "common/calibration_model.hpp"
 #include "detectors/sequence_detector.hpp"
 #include "io/pcd_scan.hpp"
@@ -27,6 +28,9 @@ struct SequenceCalibration {
   detectors::SequenceDetections detections;  ///< circles per scan and landmark ids
   LandmarkObservations observations;         ///< what calibration consumed
   CalibrationModel model;                    ///< the result (status says whether it is usable)
+  /// Calibration against reference measurements: the readings of known true distance the model
+  /// was fitted to (a span's walls at the distances the model places them); empty otherwise.
+  std::vector<calibration::KnownReading> known;
 };
 
 /// Detection, association and calibration of a sequence. `progress` hears of "detect" (scans,

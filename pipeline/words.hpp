@@ -5,14 +5,12 @@
 #include <string>
 #include <utility>
 
+#include "common/plural.hpp"
 #include "pipeline/papers.hpp"
 
 namespace lidarcal::pipeline {
 
-/// "1 stop", "2 stops", "0 stops" (`plural_word` for irregular plurals).
-inline std::string plural(std::size_t n, const std::string& word, const std::string& plural_word = "") {
-  return std::to_string(n) + " " + (n == 1 ? word : (plural_word.empty() ? word + "s" : plural_word));
-}
+using lidarcal::plural;  // common/plural.hpp: "1 stop", "2 stops"
 
 /// Library text (model fields, messages) cites the papers by their seed numbers; users know
 /// them by author and year.

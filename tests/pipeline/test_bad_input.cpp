@@ -233,9 +233,11 @@ std::vector<BadInputCase> cases() {
   const std::vector<std::pair<const char*, std::string>> calibrating = {
       {"calibrate", "calibrate {IN}/sim/scans --out {OUT}"}, {"run", "run {IN}/sim/scans --no-truth --out {OUT}"}};
   forEach(calibrating, "one_single_stop", simulated(scene(kPaperPoles, path(1, 3))), 3,
-          {"sim/scans", "calibration", "too_few_stops", "has 1 stop(s)", "at least 3 stops", "its own VIEWPOINT"});
+          {"sim/scans", "calibration", "too_few_stops", "has 1 stop ", "at least 3 stops", "its own VIEWPOINT",
+           "made from one place", "--reference REF.json", "wall-to-wall spans", "lidarcal diagnose"});
   forEach(calibrating, "two_stops", simulated(scene(kPaperPoles, path(2, 3))), 3,
-          {"sim/scans", "calibration", "too_few_stops", "has 2 stop(s)", "at least 3 stops"});
+          {"sim/scans", "calibration", "too_few_stops", "has 2 stops", "at least 3 stops", "--reference REF.json",
+           "lidarcal diagnose"});
   // Five stops, but a 2 m sensor sees each pole from two of them only.
   forEach(calibrating, "landmarks_at_fewer_than_3_stops",
           simulated(R"({"sensor": {"beams": 360, "range_min_m": 0.2, "range_max_m": 2.0, "bias_alpha": [0.0525, 0.8838, 0.0584],
@@ -243,7 +245,7 @@ std::vector<BadInputCase> cases() {
             "path": {"start": {"x_m": -1.0}, "step_m": 1.2, "stops": 5, "scans_per_stop": 2},
             "landmarks": [{"x_m": -0.4, "y_m": 1.3, "radius_m": 0.12}, {"x_m": 2.0, "y_m": -1.3, "radius_m": 0.12},
                           {"x_m": 3.2, "y_m": 1.3, "radius_m": 0.12}]})"),
-          3, {"sim/scans", "calibration", "no_usable_landmark", "3 or more stops", "zero landmarks"});
+          3, {"sim/scans", "calibration", "no_usable_landmark", "3 or more stops", "zero landmarks", "lidarcal detect"});
   forEach(calibrating, "landmarks_on_the_path_line",
           simulated(scene(R"({"x_m": 4.2, "y_m": 0.0, "radius_m": 0.12}, {"x_m": 5.5, "y_m": 0.0, "radius_m": 0.12})",
                           path(6, 2))),

@@ -27,6 +27,23 @@ std::string scene(const char* name) { return (test::sourceDir() / "data/scenes" 
 
 bool sameFloat(float a, float b) { return std::memcmp(&a, &b, sizeof a) == 0; }
 
+// One stop: the association cannot follow a pole over stops; the summary says what a discard
+// means there (not "at too few stops") and what the recording cannot do, each count with its noun.
+TEST(CliDetect, AOneStopRecordingIsDescribedAsOne) {
+  TempDir dir;
+  const std::string sim = (dir / "sim").string();
+  ASSERT_EQ(runCli("simulate -q --scene " + scene("paper_field.json") + " --out " + sim + " --seed 3 --stops 1 --scans-per-stop 4")
+                .exit_code, 0);
+  const auto r = runCli("detect -q " + sim + "/scans --out " + (dir / "det").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("4 scans at 1 stop\n"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("found in fewer than half the scans of the stop"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("too few stops"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("this recording has 1 stop,"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("calibrate --reference"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("(s)"), std::string::npos) << r.out;
+}
+
 TEST(CliDetect, LabelsEveryScanAndWritesTheLandmarkTable) {
   TempDir dir;
   const std::string sim = (dir / "sim").string(), out = (dir / "det").string();
@@ -35,7 +52,7 @@ TEST(CliDetect, LabelsEveryScanAndWritesTheLandmarkTable) {
   const auto before = test::snapshot(sim);
   const auto r = runCli("detect -q " + sim + "/scans --out " + out + " --truth " + sim + "/truth.json");
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_NE(r.out.find("5 landmark(s)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("5 landmarks"), std::string::npos) << r.out;
   // The evaluation row: every detection a true positive, no false positive, precision 1.
   EXPECT_TRUE(std::regex_search(r.out, std::regex(R"(\| (\d+) \| \1 \| 0 \| 1\.0000 \|)"))) << r.out;
   EXPECT_TRUE(test::snapshot(sim) == before);  // the input is untouched

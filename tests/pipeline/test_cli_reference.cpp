@@ -55,9 +55,19 @@ TEST(CliReference, CalibratesAgainstTapeDistancesAndHalvesTheErrorOnAnotherRecor
   writeTapeReference(dir / "fit/truth.json", dir / "fit.json");
   writeTapeReference(dir / "test/truth.json", dir / "test.json");
   const auto cal = runCli("calibrate -q " + (dir / "fit/scans").string() + " --reference " + (dir / "fit.json").string() +
-                          " --out " + (dir / "model.json").string());
+                          " --out " + (dir / "model.json").string() + " --report " + (dir / "report").string());
   ASSERT_EQ(cal.exit_code, 0) << cal.err;
   EXPECT_NE(cal.out.find("+-"), std::string::npos) << "standard errors on stdout:\n" << cal.out;
+  // The report: the readings of known distance; its plots what `calibrate --help` promises.
+  ASSERT_TRUE(fs::exists(dir / "report/report.md"));
+  EXPECT_NE(test::readFile(dir / "report/report.md").find("of known true distance"), std::string::npos);
+  const auto help = runCli("calibrate --help");
+  EXPECT_NE(help.out.find("SVG plots"), std::string::npos) << help.out;
+  EXPECT_EQ(help.out.find("PNG"), std::string::npos) << help.out;
+  for (const auto& f : fs::directory_iterator(dir / "report")) EXPECT_NE(f.path().extension(), ".png") << f.path();
+  if (fs::exists(dir / "report/distance.svg")) {  // gnuplot installed: the plot the report links to is there
+    EXPECT_NE(test::readFile(dir / "report/report.md").find("](distance.svg)"), std::string::npos);
+  }
   const auto m = json(dir / "model.json");
   EXPECT_EQ(m["method"], "reference");
   EXPECT_EQ(m["bias"]["standard_error"].size(), m["bias"]["alpha"].size());
