@@ -1,11 +1,12 @@
 #include "detectors/line_fit.hpp"
-#include "detectors/ransac.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
 #include <Eigen/Dense>
+
+#include "detectors/ransac.hpp"
 
 namespace lidarcal::detectors {
 

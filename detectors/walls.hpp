@@ -8,7 +8,6 @@
 #include <vector>
 
 #include <Eigen/Core>
-
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
 #include <pcl/types.h>

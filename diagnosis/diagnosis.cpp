@@ -13,7 +13,8 @@ void DiagnoseConfig::validate() const {
   if (folds < 2) throw std::invalid_argument("DiagnoseConfig: folds must be >= 2");
   if (!(alpha > 0.0 && alpha < 1.0)) throw std::invalid_argument("DiagnoseConfig: alpha must be in (0, 1)");
   if (max_order < 1 || max_order > 6) throw std::invalid_argument("DiagnoseConfig: max_order must be 1..6");
-  if (!(outlier_floor >= 0.0 && outlier_floor < 0.5)) throw std::invalid_argument("DiagnoseConfig: outlier_floor must be in [0, 0.5)");
+  if (!(outlier_floor >= 0.0 && outlier_floor < 0.5))
+    throw std::invalid_argument("DiagnoseConfig: outlier_floor must be in [0, 0.5)");
   if (!(sigma_s_m > 0.0)) throw std::invalid_argument("DiagnoseConfig: sigma_s_m must be positive");
   if (closeness_replicas < 1) throw std::invalid_argument("DiagnoseConfig: closeness_replicas must be >= 1");
 }

@@ -2,8 +2,8 @@
 // Model criticism (`lidarcal diagnose`): what the published range model gets wrong on measured
 // data, the physical cause, the model extended with it and the gain, measured out of sample.
 //   1. fit the baseline, the published model: polynomial range bias, noise by range only
-//      (Alhashimi et al. 2016 eq. 1), independent bearing and stop-position errors (Alhashimi et
-//      al. 2021 A3-A4, eq. 8);
+//      (Alhashimi et al. 2016 eq. 1), independent bearing and stop-position errors
+//      (Alhashimi et al. 2021 A3-A4, eq. 8);
 //   2. parametric bootstrap: simulate the same geometry from the fitted baseline, refit, and
 //      calibrate a battery of discrepancy statistics (and one score statistic per candidate
 //      effect) on the replicas: p-value and effect size of each;
@@ -51,7 +51,9 @@ struct DiagnoseConfig {
   double alpha = 0.01;            ///< family-wise error rate over the candidates (Holm)
   std::uint64_t seed = 1;         ///< bootstrap and simulation seed
   int max_order = 4;              ///< sequences: bias orders 1..max_order (order by the calibration's rule)
-  double sigma_s_m = 0.02;        ///< sequences: odometry, std. dev. of a stop's position around the commanded one (Alhashimi et al. 2021 eq. 8)
+  /// Sequences: odometry, std. dev. of a stop's position around the commanded one, metres
+  /// (Alhashimi et al. 2021 eq. 8).
+  double sigma_s_m = 0.02;
   double outlier_floor = 1e-3;    ///< weight of a uniform over the reading window in every likelihood
   int closeness_replicas = 4;     ///< replicas simulated from the extended model (closeness to the data)
   /// Static data: scans per window. 0: the whole recording is one pose unless the beams show that
@@ -118,7 +120,8 @@ struct CandidateResult {
   double standard_error = 0.0;
   std::string note;                       ///< why not identifiable / not applicable / competing effect
   std::map<std::string, double> estimates;  ///< the effect's fitted parameters (name with unit -> value)
-  double calibration_mse_ratio = 0.0;     ///< with truth: MSE ratio (Alhashimi et al. 2021 eq. 31) of the extended calibration, 0 when not computed
+  /// With truth: MSE ratio (Alhashimi et al. 2021 eq. 31) of the extended calibration, 0 when not computed.
+  double calibration_mse_ratio = 0.0;
 };
 
 /// How close a simulation of a model comes to the measured data.
@@ -190,8 +193,8 @@ struct TailAttribution {
   std::vector<TailBeamReport> top_beams;  ///< beams with the largest tail fraction (at most 10)
   std::map<std::string, double> model;    ///< the full tail model's parameters (name with unit -> value)
   /// Physical effects fitted under the pooled contamination likelihood (the tails do not drag
-  /// them): incidence_noise_exponent, noise_exponent, mixed_pixel_fraction, dark_noise_exponent, and their held-out
-  /// gains over the pooled model (..._gain, ..._gain_se, nats per reading).
+  /// them): incidence_noise_exponent, noise_exponent, mixed_pixel_fraction, dark_noise_exponent,
+  /// and their held-out gains over the pooled model (..._gain, ..._gain_se, nats per reading).
   std::map<std::string, double> robust;
   std::string cause = cause::kUnknown;  ///< the effect of the covariate with the largest significant unique gain, or unknown
 };

@@ -68,7 +68,8 @@ std::vector<Eigen::Matrix3d> blockTridiagonalInverseDiagonal(const std::vector<E
   using Mat3 = Eigen::Matrix3d;
   const std::size_t n = diagonal.size();
   if (n == 0) return {};
-  if (upper.size() + 1 < n) throw std::invalid_argument("blockTridiagonalInverseDiagonal: one upper block per pair of neighbours");
+  if (upper.size() + 1 < n)
+    throw std::invalid_argument("blockTridiagonalInverseDiagonal: one upper block per pair of neighbours");
   // D_0 = A_0, D_k+1 = A_k+1 - B_k^T D_k^-1 B_k;  C_n-1 = D_n-1^-1,
   // C_k = D_k^-1 + D_k^-1 B_k C_k+1 B_k^T D_k^-1, and C_k,k+1 = -D_k^-1 B_k C_k+1.
   std::vector<Mat3> dinv(n), cov(n);
@@ -88,7 +89,8 @@ std::vector<Eigen::Matrix3d> blockTridiagonalInverseDiagonal(const std::vector<E
 
 double blockTridiagonalLogDet(const std::vector<Eigen::Matrix3d>& diagonal, const std::vector<Eigen::Matrix3d>& upper) {
   const std::size_t n = diagonal.size();
-  if (upper.size() + 1 < n && n > 0) throw std::invalid_argument("blockTridiagonalLogDet: one upper block per pair of neighbours");
+  if (upper.size() + 1 < n && n > 0)
+    throw std::invalid_argument("blockTridiagonalLogDet: one upper block per pair of neighbours");
   double sum = 0.0;
   Eigen::Matrix3d d = n > 0 ? diagonal[0] : Eigen::Matrix3d::Identity();
   for (std::size_t k = 0; k < n; ++k) {

@@ -12,13 +12,13 @@ const std::vector<VerdictRule>& verdictRules() {
       // Each candidate's p-value (step 3).
       {"evidence", "both", "candidate",
        "p = k min(p_heldout, p_score, p_lr) over the k tests that apply; a reading grid: p_heldout alone; a drive's "
-       "path term: p_lr alone", "-",
+       "path term: p_lr alone",
+       "-",
        "held out where the baseline bent to absorb the effect, the score where few readings carry it, the ratio where "
        "the baseline's parameters absorb most of it"},
       {"step_scale_at_bound", "sequence", "candidate", "an odometry scale at its bound: p = 1", "|s| = 0.5 (kMaxStepScale)",
        "a path bent by another effect runs the scale to its bound; no odometry is that far off"},
-      {"estimate_clear_of_null", "drive", "candidate",
-       "p raised to the two-sided p of the estimate over its standard error", "-",
+      {"estimate_clear_of_null", "drive", "candidate", "p raised to the two-sided p of the estimate over its standard error", "-",
        "held-out readings of a drive differ between fits of one model by more than an effect at its null changes them"},
       {"mixed_pixels_at_floor", "drive", "candidate", "a mixed-pixel fraction at the EM's floor: p = 1",
        "1e-4 (kMinMixedPixelFraction)", "no reading was attributed to mixed pixels: the baseline's model"},
@@ -32,18 +32,22 @@ const std::vector<VerdictRule>& verdictRules() {
       // The shared naming (step 4, nameCause).
       {"significant", "both", "name", "Holm-adjusted p < alpha across the candidates, and a positive held-out gain", "alpha",
        "the family-wise error stays at alpha, and the extended model must predict new data better"},
-      {"largest_gain", "both", "name", "none when no candidate is significant; else the significant one with the largest "
-       "held-out gain", "-", "the held-out gain is what the extended model buys out of sample"},
+      {"largest_gain", "both", "name",
+       "none when no candidate is significant; else the significant one with the largest "
+       "held-out gain",
+       "-", "the held-out gain is what the extended model buys out of sample"},
       {"parsimony", "both", "name",
        "a significant effect nested in the first one (an angle offset in per-stop headings), its gain within 2 standard "
-       "errors, is named instead", "2 SE (kCloseGainSe)", "fewer parameters explain as much"},
+       "errors, is named instead",
+       "2 SE (kCloseGainSe)", "fewer parameters explain as much"},
       {"identifiable", "both", "name",
        "the named effect's standard error, once the baseline's parameters are free, must be below the smallest size worth "
-       "naming or a quarter of its estimate; else not_identifiable", "4 SE (kIdentifiableEstimateSe)",
-       "the data must tell the effect from the baseline's own parameters"},
+       "naming or a quarter of its estimate; else not_identifiable",
+       "4 SE (kIdentifiableEstimateSe)", "the data must tell the effect from the baseline's own parameters"},
       {"indistinguishable", "both", "name",
        "another significant effect within 2 standard errors, the pair declared indistinguishable: not_identifiable (no "
-       "pair is declared at present)", "2 SE (kCloseGainSe)", "two effects that explain the data equally well cannot be told apart"},
+       "pair is declared at present)",
+       "2 SE (kCloseGainSe)", "two effects that explain the data equally well cannot be told apart"},
       // After the naming (step 4, each mode's refineCause).
       {"grid_first", "sequence", "refine",
        "quantisation named: each significant identifiable physical effect is refitted beside the rounding; the largest "
@@ -55,11 +59,12 @@ const std::vector<VerdictRule>& verdictRules() {
        "heavy tails are a symptom; the named cause must be physical"},
       {"noise_term_beside_path", "drive", "refine",
        "a noise term named while a path term (angle offset, step scale) is significant must gain beside it (one-sided), "
-       "else the path term is named", "alpha",
-       "a path the fit cannot follow leaves its misfit in the readings that move most with the pose"},
+       "else the path term is named",
+       "alpha", "a path the fit cannot follow leaves its misfit in the readings that move most with the pose"},
       {"tails_significant", "static", "refine",
        "the tails are significant when heavy_tails is, or when the tail model's held-out p times (candidates tested + 1) "
-       "< alpha", "alpha", "the tails must be a departure from the baseline, not a chance one"},
+       "< alpha",
+       "alpha", "the tails must be a departure from the baseline, not a chance one"},
       {"rerank_beside_contamination", "static", "refine",
        "a noise law, mixed pixels or a dark surface named while the tails are significant is ranked again by its held-out "
        "gain beside a pooled contamination (Holm); none significant there: none, and the next rule",
@@ -111,8 +116,8 @@ std::string nameCause(std::vector<CandidateResult>& cands, double alpha, std::st
     decision = std::string(toString(cands[chosen].effect)) + " explains as much as " + toString(cands[top].effect) +
                " (held-out gains within two standard errors), which contains it, with fewer parameters";
   if (!cands[chosen].identifiable) {
-    decision = std::string(toString(cands[chosen].effect)) + " is significant but cannot be estimated apart from the baseline's parameters (" +
-               cands[chosen].note + ")";
+    decision = std::string(toString(cands[chosen].effect)) +
+               " is significant but cannot be estimated apart from the baseline's parameters (" + cands[chosen].note + ")";
     return cause::kNotIdentifiable;
   }
   for (std::size_t i : sig) {

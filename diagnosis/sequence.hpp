@@ -15,8 +15,8 @@
 
 #include <vector>
 
-#include "diagnosis/diagnosis.hpp"
 #include "common/landmark_observations.hpp"
+#include "diagnosis/diagnosis.hpp"
 
 namespace lidarcal::diagnosis {
 

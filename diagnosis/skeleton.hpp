@@ -16,18 +16,6 @@
 
 namespace lidarcal::diagnosis {
 
-/// Runs the five steps of diagnosis.hpp on a mode's problem object, which provides:
-///   bool fitBaseline(DiagnosisResult&)                 1. false: out.status says why not
-///   std::map<std::string, double> measuredStatistics(DiagnosisResult&)   (and out.measured)
-///   void replica(int b, std::map<std::string, std::vector<double>>&, DiagnosisResult&)   2.
-///   const std::vector<StatisticInfo>& statisticInfo()
-///   std::size_t candidateCount(); void heldOut(HeldOut&); const char* noHeldOut()   3.
-///   void beforeCandidates(DiagnosisResult&); CandidateResult candidate(std::size_t, const HeldOut&, const DiagnosisResult&);
-///   void afterCandidates(DiagnosisResult&)
-///   std::vector<std::pair<Effect, Effect>> nestedEffects()   4. (see nameCause)
-///   void refineCause(DiagnosisResult&)   4. after nameCause: the mode's rules of diagnosis/rules.hpp
-///   Closeness closenessBaseline(const DiagnosisResult&); void extend(std::size_t, DiagnosisResult&)   5.
-/// Steps run in this order; what a mode draws at random is seeded per replica.
 /// The stage in which a mode fits its candidates on the folds (modes report their own counts).
 inline constexpr const char* kHeldOutStage = "held-out fits";
 
@@ -36,6 +24,18 @@ inline void reportProgress(const DiagnoseConfig& config, const char* stage, std:
   if (config.progress) config.progress(stage, done, total);
 }
 
+/// Runs the five steps of diagnosis.hpp on a mode's problem object, which provides:
+///   bool fitBaseline(DiagnosisResult&)                 1. false: out.status says why not
+///   std::map<std::string, double> measuredStatistics(DiagnosisResult&)   (and out.measured)
+///   void replica(int b, std::map<std::string, std::vector<double>>&, DiagnosisResult&)   2.
+///   const std::vector<StatisticInfo>& statisticInfo()
+///   void heldOut(HeldOut&); const char* noHeldOut()   3.
+///   void beforeCandidates(DiagnosisResult&); CandidateResult candidate(std::size_t, const HeldOut&, const DiagnosisResult&);
+///   void afterCandidates(DiagnosisResult&)
+///   std::vector<std::pair<Effect, Effect>> nestedEffects()   4. (see nameCause)
+///   void refineCause(DiagnosisResult&)   4. after nameCause: the mode's rules of diagnosis/rules.hpp
+///   Closeness closenessBaseline(const DiagnosisResult&); void extend(std::size_t, DiagnosisResult&)   5.
+/// Steps run in this order; what a mode draws at random is seeded per replica.
 template <class Mode>
 void runDiagnosis(Mode& mode, const DiagnoseConfig& config, const std::vector<Effect>& candidates,
                   DiagnosisResult& out) {

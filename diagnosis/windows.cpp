@@ -31,6 +31,12 @@ std::string leadingWindow(LandmarkObservations& obs, std::size_t max_readings) {
          " of " + std::to_string(total) + " landmark readings (--max-readings " + std::to_string(max_readings) + ")";
 }
 
+void correctReadings(LandmarkObservations& obs, const ReadingCorrection& fix) {
+  if (fix.inverter)
+    for (auto& s : obs.sightings)
+      for (auto& b : s.beams) b.range_m = fix.correct(b.range_m);
+}
+
 std::size_t busiestStop(const io::Sequence& seq) {
   std::size_t stop = 0;
   for (std::size_t k = 0; k < seq.stops.size(); ++k)

@@ -3,6 +3,7 @@
 // the stop whose repeated scans static mode reads by default, and those scans' readings (through
 // a calibrated model's inverse when one is given, to diagnose what that model still gets wrong).
 
+#include <cmath>
 #include <cstddef>
 #include <functional>
 #include <optional>
@@ -33,12 +34,14 @@ struct ReadingCorrection {
 /// the selection's words (empty when nothing was cut).
 std::string leadingWindow(LandmarkObservations& obs, std::size_t max_readings);
 
+/// Every reading of every sighting through `fix` (nothing to do without an inverse).
+void correctReadings(LandmarkObservations& obs, const ReadingCorrection& fix);
+
 /// The stop with the most scans (the first of equals): the one static mode reads by default.
 std::size_t busiestStop(const io::Sequence& seq);
 
 /// The readings of the scans of stop `stop`, each through `fix`, with the scans' median beam
 /// count, their intensities when recorded, and the sensor window; on_scan(done) after each scan.
-
 StaticScans staticScans(const io::Sequence& seq, std::size_t stop, const ReadingCorrection& fix,
                         const std::function<void(std::size_t)>& on_scan);
 

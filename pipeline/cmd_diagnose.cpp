@@ -132,14 +132,14 @@ std::vector<std::vector<double>> truthRanges(const std::string& path, const Land
 }
 
 diagnosis::DiagnosisResult diagnoseLandmarks(const DiagnoseCommand& c, const diagnosis::DiagnoseConfig& config,
-                                             const diagnosis::ReadingCorrection& fix, LandmarkObservations& obs, DiagnosisSource& src) {
-  checkCandidates(config, diagnosis::candidateList(diagnosis::DiagnoseConfig{}, diagnosis::DiagnoseMode::sequence), "a sequence");
+                                             const diagnosis::ReadingCorrection& fix, LandmarkObservations& obs,
+                                             DiagnosisSource& src) {
+  checkCandidates(config, diagnosis::candidateList(diagnosis::DiagnoseConfig{}, diagnosis::DiagnoseMode::sequence),
+                  "a sequence");
   src.selection = diagnosis::leadingWindow(obs, c.max_readings);
   if (!src.selection.empty() && !quiet())
     std::fprintf(stderr, "a long sequence: diagnosing %s; --max-readings 0 takes them all\n", src.selection.c_str());
-  if (fix.inverter)
-    for (auto& s : obs.sightings)
-      for (auto& b : s.beams) b.range_m = fix.correct(b.range_m);
+  diagnosis::correctReadings(obs, fix);
   for (const auto& s : obs.sightings)
     src.beside_pole_readings += static_cast<std::size_t>(
         std::count_if(s.beams.begin(), s.beams.end(), [](const BeamReading& b) { return b.beside; }));
@@ -167,7 +167,8 @@ diagnosis::DiagnosisResult diagnoseOnePose(const DiagnoseCommand& c, const io::S
   if (seq.stops.size() > 1)
     src.selection += "stop " + std::to_string(stop) + " of " + std::to_string(seq.stops.size()) + ", " +
                      plural(seq.stops[stop].scans.size(), "scan") + " from one pose";
-  checkCandidates(config, diagnosis::candidateList(diagnosis::DiagnoseConfig{}, diagnosis::DiagnoseMode::static_scene), "repeated scans of one pose");
+  checkCandidates(config, diagnosis::candidateList(diagnosis::DiagnoseConfig{}, diagnosis::DiagnoseMode::static_scene),
+                  "repeated scans of one pose");
   Progress reading("read the scans of stop " + std::to_string(stop), seq.stops[stop].scans.size());
   const diagnosis::StaticScans s = diagnosis::staticScans(seq, stop, fix, [&](std::size_t done) { reading.update(done); });
   reading.finish();
@@ -214,7 +215,8 @@ void runDiagnose(const DiagnoseCommand& c) {
   writeDiagnosis(out.path(), result, src);
   out.commit();
   if (!result.status.ok())
-    throw DataError(c.data, "diagnosis", std::string(result.status.name()) + ": " + result.status.message, "see " + (fs::path(c.out) / "report.md").string());
+    throw DataError(c.data, "diagnosis", std::string(result.status.name()) + ": " + result.status.message,
+                    "see " + (fs::path(c.out) / "report.md").string());
   if (!quiet())
     std::fprintf(stderr, "%s: primary cause %s; report in %s\n", toString(result.mode), result.primary_cause.c_str(),
                  (fs::path(c.out) / "report.md").c_str());
@@ -226,11 +228,14 @@ void runDiagnose(const DiagnoseCommand& c) {
 void addDiagnoseCommand(CLI::App& app) {
   auto c = std::make_shared<DiagnoseCommand>();
   CLI::App* sub = app.add_subcommand(
-      "diagnose", "Show what the published range model gets wrong on measured data, name the cause, fit the extended model, measure the gain");
-  sub->add_option("DATA", c->data, "Sequence directory (docs/FORMAT.md): scans of poles from several stops, or repeated scans from one pose")
+      "diagnose",
+      "Show what the published range model gets wrong on measured data, name the cause, fit the extended model, measure the gain");
+  sub->add_option("DATA", c->data,
+                  "Sequence directory (docs/FORMAT.md): scans of poles from several stops, or repeated scans from one pose")
       ->required();
   sub->add_option("-o,--out", c->out, "Output directory: diagnosis.json, report.md, plots")->required();
-  sub->add_option("--model", c->model, "Diagnose the readings corrected with this model.json (what the calibrated model still gets wrong)");
+  sub->add_option("--model", c->model,
+                  "Diagnose the readings corrected with this model.json (what the calibrated model still gets wrong)");
   sub->add_option("--seed", c->seed, "Seed of the bootstrap replicas; the same data and seed give the same output")
       ->capture_default_str();
   sub->add_option("--mode", c->mode, "auto: a sequence when poles are found at two stops or more, else static")
@@ -247,8 +252,10 @@ void addDiagnoseCommand(CLI::App& app) {
                   "Sequence mode: diagnose the leading stops that hold at most this many landmark readings (0: all; a "
                   "diagnosis refits the whole problem for every replica, candidate and fold)")
       ->capture_default_str();
-  sub->add_option("--stop", c->stop, "Static mode: the stop to use (default: the one with the most scans)")->check(CLI::NonNegativeNumber);
-  sub->add_option("--radius", c->radius_m, "Landmark radius in metres (default: sequence.json, else estimated)")->check(CLI::PositiveNumber);
+  sub->add_option("--stop", c->stop, "Static mode: the stop to use (default: the one with the most scans)")
+      ->check(CLI::NonNegativeNumber);
+  sub->add_option("--radius", c->radius_m, "Landmark radius in metres (default: sequence.json, else estimated)")
+      ->check(CLI::PositiveNumber);
   sub->add_option("--sigma-s", c->sigma_s_m, "Odometry: std. dev. of a stop's position around the commanded one (m)")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();

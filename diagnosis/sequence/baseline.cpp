@@ -9,6 +9,14 @@
 #include "diagnosis/sequence/problem.hpp"
 
 namespace lidarcal::diagnosis::sequence {
+namespace {
+
+/// AIC of fit `a` (bias order a_order) minus AIC of fit `b` (order b_order).
+double aicChange(const JointResult& a, int a_order, const JointResult& b, int b_order) {
+  return 2.0 * (totalNegLogLikelihood(a) - totalNegLogLikelihood(b)) + 2.0 * (a_order - b_order);
+}
+
+}  // namespace
 
 bool SequenceDiagnosis::fitBaseline(DiagnosisResult& out) {
   if (!calibrateBaseline(out)) return false;
@@ -96,10 +104,10 @@ JointResult SequenceDiagnosis::bestOf(const JointInit& start, const JointConfig&
 /// each landmark by the current estimate, re-selected before every solve, under the Huber loss
 /// (calibrate's problem, whose objective is smooth), then on every beam under `cfg`. On every beam
 /// under the Cauchy loss a pose per scan leaves optima the direct fit cannot leave (a beam put past
-/// a thin pole's tangent is predicted at its closest approach, flat in the pose): docs/results/hidden-effects.md, Robots that
-/// never stop.
+/// a thin pole's tangent is predicted at its closest approach, flat in the pose):
+/// docs/results/hidden-effects.md, Robots that never stop.
 JointResult SequenceDiagnosis::fitInTwoSteps(const LandmarkObservations& obs, const JointInit& start,
-                                          const JointConfig& cfg) const {
+                                             const JointConfig& cfg) const {
   JointConfig smooth = cfg;
   smooth.keep_all_beams = false;
   smooth.reselect = true;
@@ -124,7 +132,7 @@ void SequenceDiagnosis::chooseOrder() {
       JointConfig other = baseline_cfg_;
       other.order = order;
       JointResult alt = bestOf(calibrated_start_, other);
-      if (alt.ok() && 2.0 * (totalNegLogLikelihood(alt) - totalNegLogLikelihood(baseline_fit_)) + 2.0 * (other.order - baseline_cfg_.order) < 0.0) {
+      if (alt.ok() && aicChange(alt, other.order, baseline_fit_, baseline_cfg_.order) < 0.0) {
         std::swap(alt, baseline_fit_);
         baseline_cfg_ = other;
       }
@@ -141,7 +149,7 @@ void SequenceDiagnosis::chooseOrder() {
   JointConfig other = baseline_cfg_;
   other.order = closed_form_order_;
   JointResult alt = bestOf(calibrated_start_, other);
-  if (alt.ok() && 2.0 * (totalNegLogLikelihood(alt) - totalNegLogLikelihood(baseline_fit_)) + 2.0 * (other.order - baseline_cfg_.order) < 0.0) {
+  if (alt.ok() && aicChange(alt, other.order, baseline_fit_, baseline_cfg_.order) < 0.0) {
     baseline_fit_ = std::move(alt);
     baseline_cfg_ = other;
   }
@@ -198,8 +206,8 @@ JointResult SequenceDiagnosis::replicaFit(const LandmarkObservations& rep) const
 
 /// One bootstrap replica: simulated from the fitted baseline, refitted from it.
 void SequenceDiagnosis::replica(int b, std::map<std::string, std::vector<double>>& stats, DiagnosisResult& out) {
-  const LandmarkObservations rep =
-      simulateReplica(baseline_plan_, obs_, poseNoise(baseline_fit_, baseline_cfg_), deriveSeed(config_.seed, 1000 + static_cast<std::uint64_t>(b)));
+  const LandmarkObservations rep = simulateReplica(baseline_plan_, obs_, poseNoise(baseline_fit_, baseline_cfg_),
+                                                   deriveSeed(config_.seed, 1000 + static_cast<std::uint64_t>(b)));
   const JointResult f = replicaFit(rep);
   if (!f.ok()) return;
   const auto rr = readingRows(rep, f, baseline_cfg_);

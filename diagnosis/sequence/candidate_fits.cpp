@@ -24,13 +24,13 @@ LandmarkObservations SequenceDiagnosis::dequantisedTestFold(const std::vector<in
 /// The held-out readings a model of `cfg` is scored on: as recorded for the rounded model or when
 /// the readings lie on no grid, otherwise spread over their cells (`spread`, dequantisedTestFold).
 const LandmarkObservations& SequenceDiagnosis::scoredReadings(const JointConfig& cfg, const LandmarkObservations& recorded,
-                                                      const LandmarkObservations& spread) const {
+                                                              const LandmarkObservations& spread) const {
   return reading_grid_m_ > 0.0 && !cfg.effects.quantised ? spread : recorded;
 }
 
-/// The candidates' fits on all the data (candidate_cfgs_, candidate_fits_): from candidateStart (measured_start:
-/// it turns the start by the measured statistics) or from the baseline's solution. Progress:
-/// candidate c is step c of `steps` of `stage`.
+/// The candidates' fits on all the data (candidate_cfgs_, candidate_fits_): from candidateStart
+/// (measured_start: it turns the start by the measured statistics) or from the baseline's solution.
+/// Progress: candidate c is step c of `steps` of `stage`.
 void SequenceDiagnosis::fitCandidates(bool measured_start, const char* stage, std::size_t steps) {
   candidate_cfgs_.clear();
   candidate_fits_.clear();
@@ -38,7 +38,8 @@ void SequenceDiagnosis::fitCandidates(bool measured_start, const char* stage, st
     reportProgress(config_, stage, candidate_cfgs_.size(), steps);
     candidate_cfgs_.push_back(effectConfig(baseline_cfg_, e));
     // The neutral start matters for the terms that bend the geometry the baseline settled in.
-    candidate_fits_.push_back(notFitted(e) ? baseline_fit_
+    candidate_fits_.push_back(notFitted(e)
+                                  ? baseline_fit_
                                   : bestOf(measured_start ? candidateStart(e) : initFrom(baseline_fit_), candidate_cfgs_.back(),
                                            e == Effect::incidence_bias || e == Effect::landmark_bias));
   }
@@ -64,15 +65,18 @@ std::optional<JointResult> SequenceDiagnosis::sameOptimum(const LandmarkObservat
 /// leaves many): the baseline is refitted from every candidate's solution that beats it by more
 /// than 2 nats; the best refit that beats the baseline by more than 1 nat replaces it. True when
 /// one did. Under the motion prior only: stop and go holds each heading where the start puts it, so
-/// a refit from a heading_error fit's solution would keep that fit's headings (docs/results/hidden-effects.md, Robots that
-/// never stop).
+/// a refit from a heading_error fit's solution would keep that fit's headings
+/// (docs/results/hidden-effects.md, Robots that never stop).
 bool SequenceDiagnosis::settleBaseline() {
   if (!baseline_fit_.motion_prior) return false;
   JointResult best;
   for (std::size_t c = 0; c < candidates_.size(); ++c) {
-    if (!candidate_fits_[c].ok() || notFitted(candidates_[c]) || !(totalNegLogLikelihood(candidate_fits_[c]) < totalNegLogLikelihood(baseline_fit_) - 2.0)) continue;
+    if (!candidate_fits_[c].ok() || notFitted(candidates_[c]) ||
+        !(totalNegLogLikelihood(candidate_fits_[c]) < totalNegLogLikelihood(baseline_fit_) - 2.0))
+      continue;
     JointResult back = refineJoint(obs_, baselineStart(candidate_fits_[c]), warmStartConfig(baseline_cfg_));
-    if (totalNegLogLikelihood(back) < std::min(totalNegLogLikelihood(best), totalNegLogLikelihood(baseline_fit_) - 1.0)) best = std::move(back);
+    if (totalNegLogLikelihood(back) < std::min(totalNegLogLikelihood(best), totalNegLogLikelihood(baseline_fit_) - 1.0))
+      best = std::move(back);
   }
   if (!best.ok()) return false;
   baseline_fit_ = std::move(best);
@@ -91,7 +95,8 @@ void SequenceDiagnosis::heldOut(HeldOut& held) {
   } else {
     for (std::size_t c = 0; c < candidates_.size(); ++c) {
       const Effect e = candidates_[c];
-      if (e == Effect::angle_offset || e == Effect::odometry_scale) candidate_fits_[c] = bestOf(candidateStart(e), candidate_cfgs_[c], false);
+      if (e == Effect::angle_offset || e == Effect::odometry_scale)
+        candidate_fits_[c] = bestOf(candidateStart(e), candidate_cfgs_[c], false);
     }
   }
   // The likelihood ratio compares the candidate with the baseline in the same optimum.
@@ -101,8 +106,8 @@ void SequenceDiagnosis::heldOut(HeldOut& held) {
     if (notFitted(candidates_[c]) || !candidate_fits_[c].ok()) continue;
     const auto back = sameOptimum(obs_, c, candidate_fits_[c], baseline_fit_);
     if (back) baseline_nll_in_optimum_[c] = totalNegLogLikelihood(*back);
-    candidate_fits_[c] = withCorrectedShape(obs_, candidates_[c], back ? *back : baseline_fit_, baseline_cfg_, std::move(candidate_fits_[c]), candidate_cfgs_[c],
-                                  &shape_lr_statistic_[c]);
+    candidate_fits_[c] = withCorrectedShape(obs_, candidates_[c], back ? *back : baseline_fit_, baseline_cfg_,
+                                            std::move(candidate_fits_[c]), candidate_cfgs_[c], &shape_lr_statistic_[c]);
   }
   // Under the motion prior each term of the geometry is paired with the baseline refitted from
   // its own solution, for the held-out steps (odometryLikelihoods).
@@ -137,7 +142,8 @@ void SequenceDiagnosis::foldLikelihoods(HeldOut& held, std::size_t steps_before,
         ec[c] = eb;
         continue;
       }
-      JointResult fc = refineJoint(tr, !candidate_fits_[c].ok() ? initFrom(baseline_fit_) : initFrom(candidate_fits_[c]), warmStartConfig(candidate_cfgs_[c]));
+      JointResult fc = refineJoint(tr, !candidate_fits_[c].ok() ? initFrom(baseline_fit_) : initFrom(candidate_fits_[c]),
+                                   warmStartConfig(candidate_cfgs_[c]));
       if (!fc.ok()) {
         ok = false;
         break;
@@ -175,11 +181,11 @@ void SequenceDiagnosis::odometryLikelihoods(HeldOut& held) const {
   // Stop and go: a stop's commanded position against its own pose prior. Under the motion prior no
   // pose has a prior of its own: each odometry step between two located poses is held out
   // (stepHeldOut), three observations (x, y, heading) per step. The terms of the geometry predict
-  // the steps their own way (an incidence bias straightens the path it distorts), each scored against
-  // the baseline refitted from its own solution (paired_baselines_), since two optima of one model
-  // differ on the steps by more than an effect does. The noise terms' steps differ from the
-  // baseline's only through a second-order term of the linearised leave-one-out, unstable where few
-  // readings locate a pose: they are given the baseline's.
+  // the steps their own way (an incidence bias straightens the path it distorts), each scored
+  // against the baseline refitted from its own solution (paired_baselines_), since two optima of
+  // one model differ on the steps by more than an effect does. The noise terms' steps differ from
+  // the baseline's only through a second-order term of the linearised leave-one-out, unstable where
+  // few readings locate a pose: they are given the baseline's.
   if (baseline_fit_.motion_prior) {
     const auto sb = stepHeldOut(obs_, baseline_fit_, baseline_cfg_);
     std::vector<std::vector<double>> sc(candidates_.size());
@@ -191,7 +197,8 @@ void SequenceDiagnosis::odometryLikelihoods(HeldOut& held) const {
         continue;
       }
       // The candidate's steps against its paired baseline's, added to the baseline's.
-      const std::vector<double> own = stepHeldOut(obs_, candidate_fits_[c], candidate_cfgs_[c]), pair = stepHeldOut(obs_, paired_baselines_[c], baseline_cfg_);
+      const std::vector<double> own = stepHeldOut(obs_, candidate_fits_[c], candidate_cfgs_[c]),
+                                pair = stepHeldOut(obs_, paired_baselines_[c], baseline_cfg_);
       for (std::size_t k = 0; k < sb.size() && own.size() == sb.size() && pair.size() == sb.size(); ++k)
         sc[c][k] += own[k] - pair[k];
     }
@@ -209,7 +216,8 @@ void SequenceDiagnosis::odometryLikelihoods(HeldOut& held) const {
   const auto ob = odometryHeldOut(obs_, baseline_fit_, baseline_cfg_);
   std::vector<std::vector<double>> oc(candidates_.size());
   for (std::size_t c = 0; c < candidates_.size(); ++c)
-    oc[c] = !candidate_fits_[c].ok() ? std::vector<double>(ob.size(), kNaN) : odometryHeldOut(obs_, candidate_fits_[c], candidate_cfgs_[c]);
+    oc[c] = !candidate_fits_[c].ok() ? std::vector<double>(ob.size(), kNaN)
+                                     : odometryHeldOut(obs_, candidate_fits_[c], candidate_cfgs_[c]);
   for (std::size_t k = 0; k < ob.size() && !held.base.empty(); ++k) {
     // One block per stop, after the scans' blocks; two observations (x, y) per stop.
     const std::size_t key = std::numeric_limits<std::size_t>::max() - k;

@@ -50,9 +50,12 @@ void SequenceDiagnosis::applyCandidateGates(CandidateResult& r, const JointResul
     r.p_value = 1.0;
     char buf[200];
     if (lr < -2.0 * rules::kNestedSlackNats)
-      std::snprintf(buf, sizeof buf, "its fit on all the data is %.1f nats less likely than the baseline's: not at its optimum", -0.5 * lr);
+      std::snprintf(buf, sizeof buf, "its fit on all the data is %.1f nats less likely than the baseline's: not at its optimum",
+                    -0.5 * lr);
     else
-      std::snprintf(buf, sizeof buf, "its fit on all the data is no more likely than the baseline's (%+.2g nats): it explains nothing in sample", 0.5 * lr);
+      std::snprintf(buf, sizeof buf,
+                    "its fit on all the data is no more likely than the baseline's (%+.2g nats): it explains nothing in sample",
+                    0.5 * lr);
     say(buf);
   }
 }

@@ -138,7 +138,8 @@ std::map<std::string, double> effectEstimates(Effect e, const JointResult& f) {
       m["landmark_offset_m[" + std::to_string(id) + "]"] = o;
       s += o * o;
     }
-    m["landmark_offset_rms_m"] = x.landmark_offset_m.empty() ? 0.0 : std::sqrt(s / static_cast<double>(x.landmark_offset_m.size()));
+    m["landmark_offset_rms_m"] =
+        x.landmark_offset_m.empty() ? 0.0 : std::sqrt(s / static_cast<double>(x.landmark_offset_m.size()));
   }
   if (e == Effect::heading_error) m["heading_rms_deg"] = rad2deg(x.heading_rms_rad);
   if (e == Effect::range_drift) m["range_drift_m_per_scan"] = x.drift_m_per_scan;
@@ -200,8 +201,8 @@ void SequenceDiagnosis::extend(std::size_t c, DiagnosisResult& out) const {
   out.scene_keys = sceneKeys(candidates_[c], fc, plan);
   ZSample sim_ext;
   for (int b = 0; b < config_.closeness_replicas; ++b) {
-    const LandmarkObservations rep =
-        simulateReplica(plan, obs_, poseNoise(fc, candidate_cfgs_[c]), deriveSeed(config_.seed, 5000 + static_cast<std::uint64_t>(b)));
+    const LandmarkObservations rep = simulateReplica(plan, obs_, poseNoise(fc, candidate_cfgs_[c]),
+                                                     deriveSeed(config_.seed, 5000 + static_cast<std::uint64_t>(b)));
     const JointResult f = replicaFit(rep);
     if (!f.ok()) continue;
     const auto rr = readingRows(rep, f, baseline_cfg_);

@@ -14,11 +14,12 @@ namespace lidarcal::diagnosis::sequence {
 
 /// Standardised residuals (under a baseline refit) of simulated data, with their groups.
 struct ZSample {
-  std::vector<double> z;
-  std::vector<long> group;
+  std::vector<double> z;      ///< standardised residuals (reading minus mean, over sigma)
+  std::vector<long> group;    ///< each one's group: landmark x stop x edge
 };
 
-/// The standardised residuals of `rs`, appended to `sample` with their groups (landmark x stop x edge).
+/// The standardised residuals of `rs`, appended to `sample` with their groups (landmark x stop x
+/// edge).
 void appendStandardised(ZSample& sample, const std::vector<ReadingRow>& rs);
 
 /// How close a simulation comes to the measured data: the KS distance of the standardised
@@ -28,8 +29,8 @@ Closeness closeness(const ZSample& measured, const ZSample& simulated);
 /// The residual records of the report's plots.
 std::vector<ResidualRecord> residualRecords(const std::vector<ReadingRow>& rs);
 
-/// MSE ratio (Alhashimi et al. 2021 eq. 31) of a fitted model's correction of the readings against the truth:
-/// the effect terms are taken off each reading, then f is inverted (LS).
+/// MSE ratio (Alhashimi et al. 2021 eq. 31) of a fitted model's correction of the readings against
+/// the truth: the effect terms are taken off each reading, then f is inverted (LS).
 double calibrationMseRatio(const LandmarkObservations& obs, const JointResult& fit, const JointConfig& cfg,
                            const std::vector<std::vector<double>>& truth);
 

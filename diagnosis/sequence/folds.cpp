@@ -71,7 +71,8 @@ std::vector<int> foldOfEachSighting(const LandmarkObservations& obs, int k) {
   std::vector<int> f(obs.sightings.size());
   for (std::size_t i = 0; i < obs.sightings.size(); ++i) {
     const auto& s = obs.sightings[i];
-    f[i] = by_scan ? position[s.scan] % k : static_cast<int>((s.stop + static_cast<std::size_t>(s.landmark)) % static_cast<std::size_t>(k));
+    f[i] = by_scan ? position[s.scan] % k
+                   : static_cast<int>((s.stop + static_cast<std::size_t>(s.landmark)) % static_cast<std::size_t>(k));
   }
   return f;
 }

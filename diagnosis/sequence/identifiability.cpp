@@ -48,8 +48,8 @@ std::map<int, int> centreColumns(const JointResult& fit, int col) {
 }
 
 /// The readings' rows of the design.
-void designReadingRows(const JointResult& fit, const std::vector<ReadingRow>& rs, const JointConfig& cfg, const std::map<int, int>& lm,
-                 int pose0, Design& x, DesignEntries& e) {
+void designReadingRows(const JointResult& fit, const std::vector<ReadingRow>& rs, const JointConfig& cfg,
+                       const std::map<int, int>& lm, int pose0, Design& x, DesignEntries& e) {
   const int na = fit.model.bias.order() + 1;
   const int n = static_cast<int>(rs.size());
   double tmean = 0.0;
@@ -96,7 +96,7 @@ void designReadingRows(const JointResult& fit, const std::vector<ReadingRow>& rs
 /// (odometryStep: the steps in between composed, their variances added up), three rows each on
 /// the two poses' columns x, y, heading; the odometry scale's column is their derivative by it.
 void designMotionRows(const LandmarkObservations& obs, const JointResult& fit, const JointConfig& cfg,
-                const std::vector<std::size_t>& stop_of_slot, int pose0, int row0, Design& x, DesignEntries& e) {
+                      const std::vector<std::size_t>& stop_of_slot, int pose0, int row0, Design& x, DesignEntries& e) {
   if (stop_of_slot.empty()) return;
   const double inv_s = 1.0 / cfg.sigma_s_m, inv_psi = 1.0 / cfg.sigma_psi_rad;
   e.j.emplace_back(row0, pose0, inv_s);
@@ -117,7 +117,8 @@ void designMotionRows(const LandmarkObservations& obs, const JointResult& fit, c
   }
 }
 
-Design linearisedDesign(const LandmarkObservations& obs, const JointResult& fit, const std::vector<ReadingRow>& rs, const JointConfig& cfg) {
+Design linearisedDesign(const LandmarkObservations& obs, const JointResult& fit, const std::vector<ReadingRow>& rs,
+                        const JointConfig& cfg) {
   const int na = fit.model.bias.order() + 1;
   const std::map<int, int> lm = centreColumns(fit, na + (cfg.estimate_radius ? 1 : 0));
   // Under the motion prior a pose's heading is a nuisance parameter too: the baseline refines
@@ -206,7 +207,7 @@ Identifiability meanEffectIdentifiability(const Design& x, const Nuisance& nu, c
   return id;
 }
 
-/// A variance-type effect: covariateSpreadIdentifiability of its covariate beyond a constant (sigma_e).
+/// A variance-type effect: the spread of its covariate beyond a constant (sigma_e).
 template <class Covariate>
 Identifiability covariateSpreadIdentifiability(const std::vector<ReadingRow>& rs, Covariate covariate, double ref) {
   const int n = static_cast<int>(rs.size());
@@ -228,21 +229,24 @@ Identifiability covariateSpreadIdentifiability(const std::vector<ReadingRow>& rs
 }  // namespace
 
 std::map<Effect, Identifiability> identifiability(const LandmarkObservations& obs, const JointResult& fit,
-                                                       const std::vector<ReadingRow>& rs, const JointConfig& cfg) {
+                                                  const std::vector<ReadingRow>& rs, const JointConfig& cfg) {
   const Design x = linearisedDesign(obs, fit, rs, cfg);
   const Nuisance nu = nuisanceInformation(x);
   std::map<Effect, Identifiability> out;
-  if (x.landmarks >= 2) out[Effect::landmark_bias] = meanEffectIdentifiability(x, nu, x.x_lm, 0.01);
+  if (x.landmarks >= 2)
+    out[Effect::landmark_bias] = meanEffectIdentifiability(x, nu, x.x_lm, 0.01);
   else out[Effect::landmark_bias] = Identifiability{0.0, std::numeric_limits<double>::infinity(), 0.01};
   out[Effect::heading_error] = meanEffectIdentifiability(x, nu, x.x_head, deg2rad(1.0));
   out[Effect::angle_offset] = meanEffectIdentifiability(x, nu, x.x_angle, deg2rad(1.0));
   out[Effect::range_drift] = meanEffectIdentifiability(x, nu, x.x_drift, x.tmax > x.tmin ? 0.01 / (x.tmax - x.tmin) : 0.0);
   out[Effect::incidence_bias] = meanEffectIdentifiability(x, nu, x.x_inc, 0.01);
   out[Effect::odometry_scale] = meanEffectIdentifiability(x, nu, x.x_scale, 0.01);
-  out[Effect::incidence_noise] = covariateSpreadIdentifiability(rs, [](const JointReading& r) { return -std::log(r.cos_incidence); }, 0.5);
-  out[Effect::dark_surface] = covariateSpreadIdentifiability(rs, [](const JointReading& r) { return r.darkness; }, 0.5);
-  out[Effect::range_noise_law] =
-      covariateSpreadIdentifiability(rs, [&](const JointReading& r) { return std::log(std::max(fit.model.bias(r.d_m), 1e-3)); }, 0.5);
+  out[Effect::incidence_noise] = covariateSpreadIdentifiability(
+      rs, [](const JointReading& r) { return -std::log(r.cos_incidence); }, 0.5);
+  out[Effect::dark_surface] = covariateSpreadIdentifiability(
+      rs, [](const JointReading& r) { return r.darkness; }, 0.5);
+  out[Effect::range_noise_law] = covariateSpreadIdentifiability(
+      rs, [&](const JointReading& r) { return std::log(std::max(fit.model.bias(r.d_m), 1e-3)); }, 0.5);
   std::size_t edges = 0;
   for (const auto& r : rs) edges += r.r.edge;
   const bool both = edges >= 10 && rs.size() - edges >= 10;

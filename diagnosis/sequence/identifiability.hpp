@@ -17,10 +17,10 @@ struct Identifiability {
   double ref = 0.0;    ///< the smallest size worth naming (same unit); identifiable when se < ref
 };
 
-/// Mean-type effects: the model's Jacobian in the nuisance parameters and in the effect; I_eff
-/// is the information on the effect left after profiling the nuisance out. Variance-type
-/// effects: the covariateSpreadIdentifiability of their covariate beyond a constant (the noise scale).
+/// Mean-type effects: the model's Jacobian in the nuisance parameters and in the effect; I_eff is
+/// the information on the effect left after profiling the nuisance out. Variance-type effects: the
+/// spread of their covariate beyond a constant (the noise scale).
 std::map<Effect, Identifiability> identifiability(const LandmarkObservations& obs, const JointResult& fit,
-                                                       const std::vector<ReadingRow>& rs, const JointConfig& cfg);
+                                                  const std::vector<ReadingRow>& rs, const JointConfig& cfg);
 
 }  // namespace lidarcal::diagnosis::sequence

@@ -89,7 +89,8 @@ bool noiseShapeEffect(Effect e) {
 JointResult SequenceDiagnosis::withCorrectedShape(const LandmarkObservations& obs, Effect e, const JointResult& base,
                                                   const JointConfig& base_cfg, JointResult fc, const JointConfig& fc_cfg,
                                                   double* statistic) const {
-  if (!restrictedShape(e) || !baseline_fit_.motion_prior || !baseline_cfg_.effects.estimate_heading || !fc.ok() || !base.ok()) return fc;
+  if (!restrictedShape(e) || !baseline_fit_.motion_prior || !baseline_cfg_.effects.estimate_heading || !fc.ok() || !base.ok())
+    return fc;
   JointConfig held = warmStartConfig(fc_cfg);
   held.hold_noise_shape = true;
   JointResult from = base;

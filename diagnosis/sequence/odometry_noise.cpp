@@ -34,7 +34,8 @@ double medianStepLength(const std::vector<Pose2>& commanded) {
 /// deviations (JointConfig's defaults: a robot's odometry is unknown) scaled by what the baseline's
 /// steps show (odometryNoiseFactors), the baseline refitted, until the factors settle (within 2 %,
 /// four passes at most). Held at the defaults, a drive's odometry better than them is weighed below
-/// its information and path terms go unnamed (docs/results/hidden-effects.md, Robots that never stop).
+/// its information and path terms go unnamed (docs/results/hidden-effects.md, Robots that never
+/// stop).
 void SequenceDiagnosis::fitOdometryNoise() {
   const JointConfig prior = baseline_cfg_;
   const JointResult at_prior = baseline_fit_;
@@ -66,8 +67,8 @@ void SequenceDiagnosis::fitOdometryNoise() {
     fh = nh;
   }
   // Where the poses follow the steps (mean leverage above a half) their residuals cannot tell the
-  // odometry's noise, and shrinking it draws the poses closer still (poses from SLAM: docs/FINDINGS.md).
-  // Then, or when the factors do not settle, the prior's defaults stand.
+  // odometry's noise, and shrinking it draws the poses closer still (poses from SLAM:
+  // docs/FINDINGS.md). Then, or when the factors do not settle, the prior's defaults stand.
   odometry_noise_.fitted = settled && odometry_noise_.heading_count > 0.0 && odometry_noise_.leverage < 0.5;
   if (!odometry_noise_.fitted) {
     baseline_cfg_ = prior;

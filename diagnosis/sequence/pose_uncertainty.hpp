@@ -17,7 +17,11 @@ namespace lidarcal::diagnosis::sequence {
 /// Distance along a ray to a circle and its derivatives (see rayCircleDistance); the square
 /// root is kept away from 0 near the tangent like the incidence (clampCosIncidence).
 struct RayGradient {
-  double d = 0.0, dcx = 0.0, dcy = 0.0, dr = 0.0, da = 0.0;
+  double d = 0.0;    ///< distance along the ray, metres
+  double dcx = 0.0;  ///< its derivative by the centre's x (unitless)
+  double dcy = 0.0;  ///< by the centre's y
+  double dr = 0.0;   ///< by the radius
+  double da = 0.0;   ///< by the ray's angle, metres per radian
 };
 
 RayGradient rayGradient(double px, double py, double a, double cx, double cy, double r);
@@ -29,16 +33,17 @@ Eigen::Vector3d poseGradient(const JointResult& fit, const JointReading& r);
 /// Mean and variance of the distance along a held-out beam to its pole when the scan's pose is
 /// uncertain (Gaussian about the fit, covariance `cov`): the ray's closest approach `along` and
 /// miss distance `perp` are linear in the pose, and poleDistanceMoments conditions on the hit
-/// (linearised alone, a thin pole's outermost beams get many times their variance: docs/results/hidden-effects.md).
-/// root_extra: poleDistanceMoments's, for a fit with an incidence bias.
+/// (linearised alone, a thin pole's outermost beams get many times their variance:
+/// docs/results/hidden-effects.md). root_extra: poleDistanceMoments's, for a fit with an incidence
+/// bias.
 DistanceMoments heldOutDistance(const JointResult& fit, const JointReading& r, const Eigen::Matrix3d& cov,
                                 double root_extra = 0.0);
 
 /// A reading's information on its stop's pose: its pose gradient g and its standard deviation.
 struct PoseInformation {
-  std::size_t stop = 0;
-  Eigen::Vector3d g = Eigen::Vector3d::Zero();
-  double sigma = 0.0;
+  std::size_t stop = 0;                         ///< the reading's stop
+  Eigen::Vector3d g = Eigen::Vector3d::Zero();  ///< its expected value's gradient by the pose (x, y, heading)
+  double sigma = 0.0;                           ///< its standard deviation, metres
 };
 
 /// The readings of `obs` under `fit`, as information on their stops' poses (computed once for
@@ -51,10 +56,11 @@ std::vector<PoseInformation> poseInformation(const LandmarkObservations& obs, co
 /// deviations, the residual's derivatives by the two poses, and ln(1 / (sd_x sd_y sd_psi)).
 /// Over a run of steps (b > a + 1) their variances add up (the turns between them neglected).
 struct OdometryStep {
-  Eigen::Vector3d r = Eigen::Vector3d::Zero();
-  Eigen::Matrix3d ja = Eigen::Matrix3d::Zero(), jb = Eigen::Matrix3d::Zero();
-  double inv_t = 0.0;  ///< 1 / the translation's standard deviation
-  double log_scale = 0.0;
+  Eigen::Vector3d r = Eigen::Vector3d::Zero();   ///< residual (x, y, heading) in standard deviations
+  Eigen::Matrix3d ja = Eigen::Matrix3d::Zero();  ///< its derivatives by pose a
+  Eigen::Matrix3d jb = Eigen::Matrix3d::Zero();  ///< its derivatives by pose b
+  double inv_t = 0.0;                            ///< 1 / the translation's standard deviation, 1/m
+  double log_scale = 0.0;                        ///< ln(1 / (sd_x sd_y sd_psi))
 };
 
 OdometryStep odometryStep(const LandmarkObservations& obs, const JointResult& fit, const JointConfig& cfg, std::size_t a,
@@ -81,7 +87,8 @@ std::vector<Eigen::Matrix3d> poseCovariances(const std::vector<PoseInformation>&
 /// pose per scan fitted to a dozen readings the residuals are smaller than the noise (the
 /// Neyman-Scott problem). The poses take up h = sum of g^T C g / sigma^2 over the readings (their
 /// leverages, C the pose's marginal covariance), and the factor is n / (n - h), as a residual
-/// variance is divided by its degrees of freedom (docs/results/hidden-effects.md, Robots that never stop).
+/// variance is divided by its degrees of freedom (docs/results/hidden-effects.md, Robots that never
+/// stop).
 double noiseDofFactor(const std::vector<PoseInformation>& readings, const std::vector<Eigen::Matrix3d>& cov);
 
 /// What the readings of `obs` and the odometry know of each pose of a fit under the motion prior:
@@ -89,9 +96,9 @@ double noiseDofFactor(const std::vector<PoseInformation>& readings, const std::v
 /// readings' own (noiseDofFactor), and the poses' covariances at that variance (`upper`, when
 /// given: the neighbours' covariances too).
 struct PoseUncertainty {
-  std::vector<PoseInformation> info;
-  double dof = 1.0;
-  std::vector<Eigen::Matrix3d> cov;
+  std::vector<PoseInformation> info;  ///< the readings' information (poseInformation)
+  double dof = 1.0;                   ///< noiseDofFactor: the fit's noise variance to the readings' own
+  std::vector<Eigen::Matrix3d> cov;   ///< each pose's marginal covariance at that variance
 };
 
 PoseUncertainty poseUncertainty(const LandmarkObservations& obs, const JointResult& fit, const JointConfig& cfg,

@@ -8,8 +8,8 @@
 #include <utility>
 #include <vector>
 
-#include "diagnosis/held_out.hpp"
 #include "diagnosis/battery.hpp"
+#include "diagnosis/held_out.hpp"
 #include "diagnosis/sequence/extended_model.hpp"
 #include "diagnosis/sequence/identifiability.hpp"
 #include "diagnosis/sequence/odometry_noise.hpp"
@@ -36,7 +36,9 @@ class SequenceDiagnosis {
   const std::vector<StatisticInfo>& statisticInfo() const { return diagnosis::statisticInfo(DiagnoseMode::sequence); }
   void heldOut(HeldOut& held);
   const char* noHeldOut() const { return "no fold could be fitted: too few scans or landmarks"; }
-  void beforeCandidates(DiagnosisResult&) { identifiability_ = identifiability(obs_, baseline_fit_, measured_rows_, baseline_cfg_); }
+  void beforeCandidates(DiagnosisResult&) {
+    identifiability_ = identifiability(obs_, baseline_fit_, measured_rows_, baseline_cfg_);
+  }
   CandidateResult candidate(std::size_t c, const HeldOut& held, const DiagnosisResult& out) const;
   void afterCandidates(DiagnosisResult& out) const;
   /// An angle offset is one heading shared by all stops (nested), handled by parsimony.
@@ -48,7 +50,7 @@ class SequenceDiagnosis {
                                   double best_gain) const;
   void requireNoiseTermToHoldBesidePath(DiagnosisResult& out) const;
   std::vector<HeldOutGain> heldOutGainsBesideTerm(const std::vector<std::size_t>& effects, std::size_t under,
-                                       std::vector<JointResult>& full, bool from_under = false) const;
+                                                  std::vector<JointResult>& full, bool from_under = false) const;
   std::pair<JointConfig, JointInit> configWithBothTerms(std::size_t c, std::size_t under) const;
   double likelihoodRatioPBesideTerm(const JointResult& both, std::size_t under) const;
   Closeness closenessBaseline(const DiagnosisResult&) const { return closeness(measured_z_, baseline_replica_z_); }
@@ -84,18 +86,20 @@ class SequenceDiagnosis {
   void foldLikelihoods(HeldOut& held, std::size_t steps_before, std::size_t steps) const;
   LandmarkObservations dequantisedTestFold(const std::vector<int>& fold, int f) const;
   const LandmarkObservations& scoredReadings(const JointConfig& cfg, const LandmarkObservations& recorded,
-                                     const LandmarkObservations& spread) const;
+                                             const LandmarkObservations& spread) const;
   void odometryLikelihoods(HeldOut& held) const;
   /// An effect the baseline already holds (heading_error under the motion prior, where the
   /// baseline refines the headings): its "extended" fits are the baseline's, not fitted again.
   bool inBaseline(Effect e) const { return e == Effect::heading_error && baseline_cfg_.effects.estimate_heading; }
-  // / Student-t noise is not tested on a continuous recording: a held-out reading's predictive
-  // / distribution under its pose's uncertainty is a scale mixture, wider-tailed than the Gaussian
-  // / it is scored with, so clean drives would gain from a t (docs/results/hidden-effects.md, Robots that never stop).
+  /// Student-t noise is not tested on a continuous recording: a held-out reading's predictive
+  /// distribution under its pose's uncertainty is a scale mixture, wider-tailed than the Gaussian
+  /// it is scored with, so clean drives would gain from a t (docs/results/hidden-effects.md,
+  /// Robots that never stop).
   bool untested(Effect e) const { return e == Effect::heavy_tails && baseline_cfg_.effects.estimate_heading; }
   /// The rounded model where the readings lie on no grid: the baseline's.
   bool offGrid(Effect e) const { return e == Effect::quantisation && reading_grid_m_ <= 0.0; }
-  /// The dark-surface model where no reading records an intensity (or all record one value): the baseline's.
+  /// The dark-surface model where no reading records an intensity (or all record one value): the
+  /// baseline's.
   bool noIntensity(Effect e) const { return e == Effect::dark_surface && !intensity_varies_; }
   bool notFitted(Effect e) const { return whyNotFitted(e) != nullptr; }
   /// Why the candidate is not fitted (its note), or nullptr when it is.
@@ -116,29 +120,29 @@ class SequenceDiagnosis {
   const DiagnoseConfig& config_;
   const std::vector<Effect>& candidates_;
   const std::vector<std::vector<double>>* truth_;  // true ranges, aligned with the beams (optional)
-  CalibrationConfig calibration_cfg_;               // the calibration that starts the baseline
+  CalibrationConfig calibration_cfg_;              // the calibration that starts the baseline
   CalibrationModel calibration_;
-  JointConfig baseline_cfg_;                   // the baseline's refinement
+  JointConfig baseline_cfg_;                       // the baseline's refinement
   JointInit calibrated_start_;                     // start: the calibration's refined solution
-  std::optional<JointInit> neutral_start_;   // start that no range effect has bent (when available)
+  std::optional<JointInit> neutral_start_;         // start that no range effect has bent (when available)
   int closed_form_order_ = 1;
-  JointResult baseline_fit_;                   // the baseline fit
+  JointResult baseline_fit_;                       // the baseline fit
   std::vector<ReadingRow> measured_rows_;
   std::map<std::string, double> measured_stats_;
   ZSample measured_z_;
-  ReplicaPlan baseline_plan_;                  // replicas of the baseline
-  ZSample baseline_replica_z_;                   // residuals of the first replicas (closeness)
-  std::vector<JointConfig> candidate_cfgs_;      // per candidate: its refinement
-  std::vector<JointResult> candidate_fits_;      // per candidate: fit on all the data
-  bool baseline_settled_ = false;               // a candidate's solution gave the baseline a better optimum
-  std::vector<double> baseline_nll_in_optimum_;     // per candidate: the baseline's -log L in its optimum (heldOut)
-  std::vector<double> shape_lr_statistic_;    // per candidate: its noise exponent's restricted likelihood ratio (NaN: none)
-  std::vector<JointResult> paired_baselines_;     // per term of the geometry, under the motion prior: the baseline from its solution
+  ReplicaPlan baseline_plan_;                      // replicas of the baseline
+  ZSample baseline_replica_z_;                     // residuals of the first replicas (closeness)
+  std::vector<JointConfig> candidate_cfgs_;        // per candidate: its refinement
+  std::vector<JointResult> candidate_fits_;        // per candidate: fit on all the data
+  bool baseline_settled_ = false;                  // a candidate's solution gave the baseline a better optimum
+  std::vector<double> baseline_nll_in_optimum_;    // per candidate: the baseline's -log L in its optimum (heldOut)
+  std::vector<double> shape_lr_statistic_;         // per candidate: its noise exponent's restricted likelihood ratio (NaN: none)
+  std::vector<JointResult> paired_baselines_;      // per geometry term (motion prior): the baseline refitted from its solution
   std::map<Effect, Identifiability> identifiability_;
-  double reading_grid_m_ = 0.0;                  // grid the readings lie on (0: none)
-  OdometryNoiseFactors odometry_noise_;  // the motion prior's factors on the defaults (fitOdometryNoise)
-  bool intensity_varies_ = false;      // the readings record at least two different intensities
-  LandmarkObservations dequantised_;   // obs_ spread over its grid cells (reading_grid_m_ > 0)
+  double reading_grid_m_ = 0.0;                    // grid the readings lie on (0: none)
+  OdometryNoiseFactors odometry_noise_;            // the motion prior's factors on the defaults (fitOdometryNoise)
+  bool intensity_varies_ = false;                  // the readings record at least two different intensities
+  LandmarkObservations dequantised_;               // obs_ spread over its grid cells (reading_grid_m_ > 0)
 };
 
 }  // namespace lidarcal::diagnosis::sequence

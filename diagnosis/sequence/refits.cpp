@@ -1,16 +1,17 @@
 #include "diagnosis/sequence/refits.hpp"
 
-#include "common/pose2.hpp"
-
 #include <algorithm>
 #include <limits>
 #include <stdexcept>
 #include <string>
 
+#include "common/pose2.hpp"
+
 namespace lidarcal::diagnosis::sequence {
 
 JointConfig effectConfig(JointConfig c, Effect e) {
-  if (!c.effects.enable(e)) throw std::invalid_argument(std::string("diagnose: no joint term for the effect '") + toString(e) + "'");
+  if (!c.effects.enable(e))
+    throw std::invalid_argument(std::string("diagnose: no joint term for the effect '") + toString(e) + "'");
   return c;
 }
 
@@ -53,10 +54,10 @@ JointConfig baselineConfig(const CalibrationModel& cal, const CalibrationConfig&
   base.covariance = false;
   base.outer_iterations = 4;
   base.outlier_floor = config.outlier_floor;
-  // The published model holds each stop's heading at the commanded one (stop and go). A
-  // continuous recording's odometry drifts in heading as in position, and its motion prior models
-  // both step by step: there the baseline refines the headings (held at the drifting odometry, clean
-  // drives would be named heading_error).
+  // The published model holds each stop's heading at the commanded one (stop and go). A continuous
+  // recording's odometry drifts in heading as in position, and its motion prior models both step by
+  // step: there the baseline refines the headings (held at the drifting odometry, clean drives
+  // would be named heading_error).
   base.effects.estimate_heading = continuousMotion(obs, base);
   base.cauchy_loss = true;
   return base;

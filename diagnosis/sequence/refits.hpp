@@ -9,10 +9,12 @@
 #include "diagnosis/diagnosis.hpp"
 
 namespace lidarcal::diagnosis::sequence {
-// The sequence diagnosis refits with the calibration stages (joint refinement, range model, inversion).
+// The sequence diagnosis refits with the calibration stages (joint refinement, range model,
+// inversion).
 using namespace lidarcal::calibration;
 
-/// The refinement `c` with effect e's term switched on; throws std::invalid_argument when e has none.
+/// The refinement `c` with effect e's term switched on; throws std::invalid_argument when e has
+/// none.
 JointConfig effectConfig(JointConfig c, Effect e);
 
 /// A start at a fitted solution: its poses, centres, radius, range model and effect terms.

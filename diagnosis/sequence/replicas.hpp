@@ -15,7 +15,7 @@ namespace lidarcal::diagnosis::sequence {
 
 /// Landmark-level simulation of the measured geometry from a fit (ids mapped to the fit's).
 struct ReplicaPlan {
-  simulation::LandmarkLevelConfig config;
+  simulation::LandmarkLevelConfig config;         ///< the simulator's scene, path, model and effects
   std::vector<int> ids;                           ///< simulated landmark l + 1 -> data id
   std::set<std::pair<std::size_t, int>> present;  ///< (scan, data landmark id) pairs of the data
 };
@@ -27,12 +27,17 @@ ReplicaPlan replicaPlan(const LandmarkObservations& obs, const JointResult& fit,
 /// How a replica's stop poses are drawn: around the commanded path (scaled by 1 + scale), with
 /// the model's position and heading scatter (Alhashimi et al. 2021 eq. 8).
 struct PoseNoise {
-  double sigma_s_m = 0.0, sigma_psi_rad = 0.0, scale = 0.0;
+  double sigma_s_m = 0.0;      ///< stop and go: a stop's position scatter, metres
+  double sigma_psi_rad = 0.0;  ///< stop and go: its heading scatter, radians (0: headings as commanded)
+  double scale = 0.0;          ///< odometry scale s: the true steps are 1 + s times the commanded ones
   /// The motion prior (continuous recording): each pose is the one before moved by the
   /// commanded step, with noise of std. dev. step_fraction s + step_floor_m per coordinate and
   /// heading_per_m s + heading_floor_rad in heading (s the commanded step length).
   bool motion = false;
-  double step_fraction = 0.0, step_floor_m = 0.0, heading_per_m = 0.0, heading_floor_rad = 0.0;
+  double step_fraction = 0.0;      ///< translation noise per metre of step
+  double step_floor_m = 0.0;       ///< translation noise floor, metres
+  double heading_per_m = 0.0;      ///< heading noise per metre of step, radians per metre
+  double heading_floor_rad = 0.0;  ///< heading noise floor, radians
 };
 
 /// How the replicas of `fit`, a fit of model `cfg`, draw their poses.

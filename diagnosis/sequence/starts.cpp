@@ -63,7 +63,8 @@ JointInit SequenceDiagnosis::candidateStart(Effect e) const {
   // path, and let the beams turn instead.
   if (e == Effect::angle_offset)
     turnStart(start, -measured_stats_.at("path_rotation") * baseline_cfg_.sigma_s_m / sqrt_info, obs_.commanded);
-  if (e == Effect::odometry_scale) start.effects.odometry_scale = measured_stats_.at("path_scale") * baseline_cfg_.sigma_s_m / sqrt_info;
+  if (e == Effect::odometry_scale)
+    start.effects.odometry_scale = measured_stats_.at("path_scale") * baseline_cfg_.sigma_s_m / sqrt_info;
   return start;
 }
 

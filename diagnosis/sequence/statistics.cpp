@@ -238,7 +238,8 @@ std::vector<ReadingRow> readingRows(const LandmarkObservations& obs, const Joint
   return out;
 }
 
-Statistics sequenceStatistics(const LandmarkObservations& obs, const JointResult& fit, const std::vector<ReadingRow>& rs, const JointConfig& cfg) {
+Statistics sequenceStatistics(const LandmarkObservations& obs, const JointResult& fit, const std::vector<ReadingRow>& rs,
+                              const JointConfig& cfg) {
   Statistics st;
   const std::size_t n = rs.size();
   if (n == 0) return st;

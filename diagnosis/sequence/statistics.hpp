@@ -16,8 +16,10 @@ constexpr double kClip = 3.0;  // Huber clipping of standardised residuals in th
 
 /// Per-reading quantities the statistics need, under a fit.
 struct ReadingRow {
-  JointReading r;
-  double z = 0.0, psi = 0.0, dmu_da = 0.0;
+  JointReading r;       ///< the reading under the fit
+  double z = 0.0;       ///< standardised residual
+  double psi = 0.0;     ///< z clipped at kClip (Huber)
+  double dmu_da = 0.0;  ///< derivative of its mean by the beam angle, metres per radian
 };
 
 /// Every reading of `obs` under `fit` with its standardised residual, clipped residual and the
@@ -28,6 +30,7 @@ std::vector<ReadingRow> readingRows(const LandmarkObservations& obs, const Joint
 using Statistics = std::map<std::string, double>;
 
 /// Every statistic of the battery (and the candidates' scores) under a baseline fit.
-Statistics sequenceStatistics(const LandmarkObservations& obs, const JointResult& fit, const std::vector<ReadingRow>& rs, const JointConfig& cfg);
+Statistics sequenceStatistics(const LandmarkObservations& obs, const JointResult& fit, const std::vector<ReadingRow>& rs,
+                              const JointConfig& cfg);
 
 }  // namespace lidarcal::diagnosis::sequence

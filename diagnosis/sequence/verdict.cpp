@@ -41,7 +41,8 @@ void SequenceDiagnosis::requireNoiseTermToHoldBesidePath(DiagnosisResult& out) c
   for (std::size_t c = 0; c < out.candidates.size(); ++c) {
     const CandidateResult& r = out.candidates[c];
     if (names(out.primary_cause, r.effect)) named = c;
-    if (pathTerm(r.effect) && r.significant && r.identifiable && (path == none || r.p_holm < out.candidates[path].p_holm)) path = c;
+    if (pathTerm(r.effect) && r.significant && r.identifiable && (path == none || r.p_holm < out.candidates[path].p_holm))
+      path = c;
   }
   if (named == none || path == none || !noiseShapeEffect(candidates_[named]) || candidates_[named] == Effect::heavy_tails) return;
   std::vector<JointResult> full;
@@ -53,7 +54,8 @@ void SequenceDiagnosis::requireNoiseTermToHoldBesidePath(DiagnosisResult& out) c
   r.estimates[key + "_se"] = g.se;
   char buf[600];
   if (p < config_.alpha) {
-    std::snprintf(buf, sizeof buf, "; it holds beside %s, also significant (held-out gain over %s alone %+.4g +- %.2g nats per reading, p %.2g)",
+    std::snprintf(buf, sizeof buf,
+                  "; it holds beside %s, also significant (held-out gain over %s alone %+.4g +- %.2g nats per reading, p %.2g)",
                   toString(candidates_[path]), toString(candidates_[path]), g.gain, g.se, p);
     out.decision += buf;
     return;
@@ -169,10 +171,11 @@ void SequenceDiagnosis::describeCauseBesideSymptom(DiagnosisResult& out, bool gr
 /// Student t, the reading grid, a path term): the joint refinement with both terms against the one
 /// with `under`'s alone (fitted once per fold for all of them), on the same scan folds (per-scan
 /// blocks; stop and go, the odometry too). `full` receives the fits with both terms on all the data
-/// (stop and go). from_under: both terms fitted from `under`'s solution (a path term's: its headings
-/// hold the offset), a restricted shape at its estimate under `under`'s fold fit (withCorrectedShape).
+/// (stop and go). from_under: both terms fitted from `under`'s solution (a path term's: its
+/// headings hold the offset), a restricted shape at its estimate under `under`'s fold fit
+/// (withCorrectedShape).
 std::vector<HeldOutGain> SequenceDiagnosis::heldOutGainsBesideTerm(const std::vector<std::size_t>& effects, std::size_t under,
-                                                        std::vector<JointResult>& full, bool from_under) const {
+                                                                   std::vector<JointResult>& full, bool from_under) const {
   full.clear();
   full.resize(effects.size());
   std::vector<JointConfig> both(effects.size());
@@ -189,7 +192,8 @@ std::vector<HeldOutGain> SequenceDiagnosis::heldOutGainsBesideTerm(const std::ve
     if (!ft.ok()) continue;
     const LandmarkObservations spread = dequantisedTestFold(fold, f);
     std::vector<std::size_t> scan;
-    const auto lt = heldOutLikelihoods(tr, scoredReadings(candidate_cfgs_[under], recorded, spread), ft, candidate_cfgs_[under], &scan);
+    const auto lt =
+        heldOutLikelihoods(tr, scoredReadings(candidate_cfgs_[under], recorded, spread), ft, candidate_cfgs_[under], &scan);
     for (std::size_t k = 0; k < effects.size(); ++k) {
       JointResult fb = refineJoint(tr, start[k], warmStartConfig(both[k]));
       if (from_under) fb = withCorrectedShape(tr, candidates_[effects[k]], ft, candidate_cfgs_[under], std::move(fb), both[k]);
@@ -204,8 +208,9 @@ std::vector<HeldOutGain> SequenceDiagnosis::heldOutGainsBesideTerm(const std::ve
     }
   }
   // Stop and go: the odometry held out too, leave one stop out, as in the candidates' gains
-  // (odometryLikelihoods). Not under the motion prior, where a candidate's held-out steps are scored
-  // against its paired baseline (paired_baselines_), which the fits beside a term do not have.
+  // (odometryLikelihoods). Not under the motion prior, where a candidate's held-out steps are
+  // scored against its paired baseline (paired_baselines_), which the fits beside a term do not
+  // have.
   if (!baseline_fit_.motion_prior) {
     const auto ou = odometryHeldOut(obs_, candidate_fits_[under], candidate_cfgs_[under]);
     for (std::size_t k = 0; k < effects.size(); ++k) {

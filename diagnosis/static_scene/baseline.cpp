@@ -130,7 +130,8 @@ void StaticDiagnosis::describeBaseline(DiagnosisResult& out) const {
   extra["wall_lines"] = static_cast<double>(wall_lines_.size());
   extra["wall_bins"] = static_cast<double>(walls_.bins.size());
   extra["alpha0_m"] = walls_.ok && alpha0_identified_ ? walls_.alpha0 : kNaN;
-  extra["alpha0_se_m"] = walls_.ok && alpha0_identified_ && !std::isfinite(config_.static_range_offset_m) ? walls_.alpha0_se : kNaN;
+  extra["alpha0_se_m"] =
+      walls_.ok && alpha0_identified_ && !std::isfinite(config_.static_range_offset_m) ? walls_.alpha0_se : kNaN;
   extra["wall_roughness_m"] = walls_.ok ? walls_.tau : kNaN;
   extra["reading_grid_m"] = reading_grid_m_;
   extra["edge_bins"] = static_cast<double>(edge_bins_);
@@ -170,7 +171,8 @@ std::map<std::string, double> StaticDiagnosis::measuredStatistics(DiagnosisResul
 
 /// One bootstrap replica: simulated from the fitted baseline, refitted from it.
 void StaticDiagnosis::replica(int b, std::map<std::string, std::vector<double>>& stats, DiagnosisResult& out) {
-  const BinnedReadings rep = simulateStatic(binned_, bin_fits_, walls_, baseline_model_, deriveSeed(config_.seed, 2000 + static_cast<std::uint64_t>(b)), RangeEffects{});
+  const BinnedReadings rep = simulateStatic(binned_, bin_fits_, walls_, baseline_model_,
+                                            deriveSeed(config_.seed, 2000 + static_cast<std::uint64_t>(b)), RangeEffects{});
   std::vector<BinFit> fr;
   const ReadingModel mr = fitModel(rep, {}, FreeTerms{}, 0.0, fr);
   const WallFit wr0 = fitWalls(rep, fr, walls_.ok ? walls_.lines : wall_lines_, false, fixed_alpha0_);

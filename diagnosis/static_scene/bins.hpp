@@ -31,25 +31,30 @@ struct Bin {
 
 /// Per-bin location fitted on a subset of the scans.
 struct BinFit {
-  double m = 0.0, g = 0.0, abar = 0.0, med = 0.0, s2 = 0.0;
+  double m = 0.0;     ///< mean reading at the bin's mean angle (and mean scan), metres
+  double g = 0.0;     ///< trend in angle (irregular grids), metres per radian
+  double abar = 0.0;  ///< mean angle of the readings fitted, radians
+  double med = 0.0;   ///< median reading (after the drift), metres
+  double s2 = 0.0;    ///< residual variance about the location, m^2
   double h = 0.0, tbar = 0.0;  ///< time trend (windows: the sensor creeping), metres per scan
-  double n = 0.0;
+  double n = 0.0;  ///< readings fitted (0: too few, no fit)
   /// Location of a reading at angle a in scan t.
   double at(double a, double t) const { return m + g * (a - abar) + h * (t - tbar); }
 };
 
 /// Readings in direction bins, with what the models need of them.
 struct BinnedReadings {
-  std::vector<double> a, y, t;  // angle, reading, scan
-  std::vector<Bin> bins;
-  std::vector<int> bin_of;      // reading -> bin (-1: not used)
-  double width = 0.0;           // bin width (0: fixed grid)
-  bool trend = false;           // windows: each bin has a time trend
-  double t_mean = 0.0;
-  double window_min = 0.0, window_max = 1.0;
-  bool intensity = false;       // the bins carry an intensity
-  double i_ref = kNaN;          // the median bin's intensity (the darkness reference; NaN: none recorded)
-  std::vector<double> y_cell;   // dequantised data: the reading each y was spread from (its grid cell's centre)
+  std::vector<double> a, y, t;  ///< each reading's angle (rad), value (m) and scan index
+  std::vector<Bin> bins;        ///< the direction bins kept
+  std::vector<int> bin_of;      ///< reading -> bin (-1: not used)
+  double width = 0.0;           ///< bin width, radians (0: fixed grid, bins by exact angle)
+  bool trend = false;           ///< windows: each bin has a time trend
+  double t_mean = 0.0;          ///< mean scan index of the binned readings (the drift's centre)
+  double window_min = 0.0;      ///< the sensor's reading window, metres (the outlier floor's support)
+  double window_max = 1.0;
+  bool intensity = false;       ///< the bins carry an intensity
+  double i_ref = kNaN;          ///< the median bin's intensity (the darkness reference; NaN: none recorded)
+  std::vector<double> y_cell;   ///< dequantised data: the reading each y was spread from (its grid cell's centre)
 };
 
 /// Calls fn(i, bin, fit) for every reading i in a bin that has a location fit, in reading order.

@@ -5,6 +5,7 @@
 #include <limits>
 #include <string>
 
+#include "diagnosis/rules.hpp"
 #include "diagnosis/static_scene/problem.hpp"
 #include "diagnosis/stats.hpp"
 
@@ -68,7 +69,9 @@ double StaticDiagnosis::inSampleLogLikelihood(const FreeTerms& fl, ReadingModel*
   const ReadingModel mm = fitModel(binned_, {}, fl, reading_grid_m_, ff);
   if (fitted) *fitted = mm;
   double s = 0.0;
-  forEachFitted(binned_, ff, [&](std::size_t i, const Bin& b, const BinFit& bf) { s += readingLL(mm, *scored_readings_, b, bf, i, config_.outlier_floor); });
+  forEachFitted(binned_, ff, [&](std::size_t i, const Bin& b, const BinFit& bf) {
+    s += readingLL(mm, *scored_readings_, b, bf, i, config_.outlier_floor);
+  });
   return s;
 }
 
@@ -98,7 +101,8 @@ CandidateResult StaticDiagnosis::candidate(std::size_t c, const HeldOut& held, c
   r.p_value = r.effect == Effect::quantisation ? r.p_heldout : combinedPValue(r.p_heldout, r.score_p_value);
   r.parameters = free_terms_[c].parameters();
   double ll_in = inSampleLogLikelihood(free_terms_[c], &fit_on_all_[c]);
-  if (free_terms_[c].wall_b && walls_with_bias_.ok && walls_.ok) ll_in = baseline_in_sample_ll_ + (walls_with_bias_.in_ll - walls_.in_ll);  // only the walls' part differs
+  if (free_terms_[c].wall_b && walls_with_bias_.ok && walls_.ok)
+    ll_in = baseline_in_sample_ll_ + (walls_with_bias_.in_ll - walls_.in_ll);  // only the walls' part differs
   r.delta_aic = 2.0 * r.parameters - 2.0 * (ll_in - baseline_in_sample_ll_);
   setIdentifiability(r);
   setEstimates(r, fit_on_all_[c]);
@@ -134,14 +138,15 @@ bool StaticDiagnosis::notApplicable(CandidateResult& r) const {
   return false;
 }
 
-/// Correlation over the beams (weighted by their readings) of darkness and ln range: a time-of-flight
-/// sensor without intensity compensation returns weaker from farther, and the two covariates then
-/// say the same.
+/// Correlation over the beams (weighted by their readings) of darkness and ln range: a
+/// time-of-flight sensor without intensity compensation returns weaker from farther, and the two
+/// covariates then say the same.
 double StaticDiagnosis::darkRangeCorrelation() const {
   double n = 0.0, sx = 0.0, sy = 0.0, sxx = 0.0, syy = 0.0, sxy = 0.0;
   for (std::size_t k = 0; k < binned_.bins.size(); ++k) {
     if (bin_fits_[k].n == 0 || !std::isfinite(binned_.bins[k].intensity)) continue;
-    const double w = static_cast<double>(binned_.bins[k].idx.size()), x = binned_.bins[k].dark, y = std::log(std::max(bin_fits_[k].m, 1e-3));
+    const double w = static_cast<double>(binned_.bins[k].idx.size()), x = binned_.bins[k].dark,
+                 y = std::log(std::max(bin_fits_[k].m, 1e-3));
     n += w;
     sx += w * x;
     sy += w * y;
@@ -157,10 +162,12 @@ void StaticDiagnosis::setIdentifiability(CandidateResult& r) const {
   const Effect e = r.effect;
   if (e == Effect::incidence_bias) {
     r.standard_error = walls_with_bias_.ok ? walls_with_bias_.b_se : kInf;
-    r.identifiable = alpha0_identified_ && walls_with_bias_.ok && r.standard_error < std::max(0.01, std::abs(walls_with_bias_.b) / 4.0);
+    r.identifiable =
+        alpha0_identified_ && walls_with_bias_.ok && r.standard_error < std::max(0.01, std::abs(walls_with_bias_.b) / rules::kIdentifiableEstimateSe);
     if (!r.identifiable)
-      r.note = alpha0_identified_ ? "bends the walls almost as a range offset does: give the offset (--range-offset) from a reference distance"
-                              : "too few straight walls, or walls seen over too narrow a range of incidence";
+      r.note = alpha0_identified_
+                   ? "bends the walls almost as a range offset does: give the offset (--range-offset) from a reference distance"
+                   : "too few straight walls, or walls seen over too narrow a range of incidence";
   } else if (e == Effect::incidence_noise || e == Effect::range_noise_law || e == Effect::dark_surface) {
     // The exponent's standard error from the spread of its covariate over the bins (the score's
     // information for a log-linear variance: n var(g) / 2).
@@ -168,8 +175,9 @@ void StaticDiagnosis::setIdentifiability(CandidateResult& r) const {
     for (const auto& b : binned_.bins) {
       if (e == Effect::incidence_noise && !b.inc_known) continue;
       const double g = e == Effect::incidence_noise ? -std::log(b.cos_inc)
-                       : e == Effect::dark_surface  ? b.dark
-                                                    : std::log(std::max(bin_fits_[static_cast<std::size_t>(&b - binned_.bins.data())].m, 1e-3));
+                       : e == Effect::dark_surface
+                           ? b.dark
+                           : std::log(std::max(bin_fits_[static_cast<std::size_t>(&b - binned_.bins.data())].m, 1e-3));
       mm += g;
       m2 += g * g;
       n += static_cast<double>(b.idx.size());

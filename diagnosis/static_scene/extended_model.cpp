@@ -36,7 +36,8 @@ void StaticDiagnosis::extend(std::size_t c, DiagnosisResult& out) const {
   ReadingModel sim_model = baseline_model_;
   const Effect e = candidates_[c];
   if (e == Effect::incidence_noise) fx.incidence_noise_exponent = fm.gamma;
-  if (named_by_tails_ && e == Effect::incidence_noise && robust_estimate_.count(e)) fx.incidence_noise_exponent = robust_estimate_.at(e);
+  if (named_by_tails_ && e == Effect::incidence_noise && robust_estimate_.count(e))
+    fx.incidence_noise_exponent = robust_estimate_.at(e);
   if (e == Effect::range_drift) {
     fx.range_drift_m_per_scan = fm.drift;
     fx.range_drift_reference_scan = binned_.t_mean;  // the fit's drift is c (t - t_mean)
@@ -48,7 +49,8 @@ void StaticDiagnosis::extend(std::size_t c, DiagnosisResult& out) const {
   }
   if (e == Effect::heavy_tails) fx.noise_student_dof = std::max(fm.dof, 2.1);
   if (e == Effect::quantisation) fx.range_resolution_m = fm.q;
-  if (e == Effect::range_noise_law) sim_model.kappa = named_by_tails_ && robust_estimate_.count(e) ? robust_estimate_.at(e) : fm.kappa;
+  if (e == Effect::range_noise_law)
+    sim_model.kappa = named_by_tails_ && robust_estimate_.count(e) ? robust_estimate_.at(e) : fm.kappa;
   sim_model.sigma_e = fm.sigma_e;
   // Named from the tails: the core noise fitted beside the contamination (its wild readings are
   // not simulated: the simulator has no covariate-dependent contamination).
@@ -64,7 +66,8 @@ void StaticDiagnosis::extend(std::size_t c, DiagnosisResult& out) const {
   SimSample ext;
   ext.var.resize(binned_.bins.size());
   for (int b = 0; b < config_.closeness_replicas; ++b) {
-    const BinnedReadings rep = simulateStatic(binned_, bin_fits_, w_sim, sim_model, deriveSeed(config_.seed, 6000 + static_cast<std::uint64_t>(b)), fx);
+    const BinnedReadings rep =
+        simulateStatic(binned_, bin_fits_, w_sim, sim_model, deriveSeed(config_.seed, 6000 + static_cast<std::uint64_t>(b)), fx);
     std::vector<BinFit> fr;
     const ReadingModel mr = fitModel(rep, {}, FreeTerms{}, 0.0, fr);
     const auto rec = residualRecordsOf(rep, fr, mr);

@@ -10,10 +10,10 @@
 
 #include "diagnosis/battery.hpp"
 #include "diagnosis/held_out.hpp"
+#include "diagnosis/skeleton.hpp"
 #include "diagnosis/static_scene/replicas.hpp"
 #include "diagnosis/static_scene/tail_study.hpp"
 #include "diagnosis/static_scene/wall_model.hpp"
-#include "diagnosis/skeleton.hpp"
 
 namespace lidarcal::diagnosis::static_scene {
 
@@ -72,27 +72,27 @@ class StaticDiagnosis {
   const DiagnoseConfig& config_;
   const std::vector<Effect>& candidates_;
   std::vector<WallLine>* walls_out_;
-  std::size_t window_scans_ = 0;        // scans per window (0: one pose)
-  BinnedReadings binned_;                        // readings in direction bins
-  std::vector<BinFit> bin_fits_;        // the baseline's bin locations
-  ReadingModel baseline_model_;                   // the baseline's reading model
-  std::vector<Line> wall_lines_;      // wall lines found in the bin means
-  double fixed_alpha0_ = kNaN;        // alpha_0 held (NaN: from the walls' straightness)
+  std::size_t window_scans_ = 0;                      // scans per window (0: one pose)
+  BinnedReadings binned_;                             // readings in direction bins
+  std::vector<BinFit> bin_fits_;                      // the baseline's bin locations
+  ReadingModel baseline_model_;                       // the baseline's reading model
+  std::vector<Line> wall_lines_;                      // wall lines found in the bin means
+  double fixed_alpha0_ = kNaN;                        // alpha_0 held (NaN: from the walls' straightness)
   bool alpha0_identified_ = false;
-  WallFit walls_, walls_with_bias_;               // the wall model without and with the incidence bias
-  double reading_grid_m_ = 0.0;                // reading grid (0: none)
-  BinnedReadings dequantised_;              // binned_ with every reading spread over its grid cell (reading_grid_m_ > 0)
-  const BinnedReadings* scored_readings_ = &binned_;      // the readings every likelihood is scored on (binned_ or dequantised_)
-  std::size_t edge_bins_ = 0;         // bins at depth discontinuities
-  SimSample baseline_replicas_;            // baseline replicas (closeness)
-  std::vector<FreeTerms> free_terms_;      // per candidate
-  double baseline_in_sample_ll_ = 0.0;       // in-sample log-likelihood of the baseline
-  std::vector<ReadingModel> fit_on_all_;       // per candidate: fitted on all the data
-  bool tail_study_on_ = false;         // the tail study runs (heavy_tails is a candidate)
-  TailStudy tail_study_;               // the tail models and their held-out log-likelihoods
-  std::map<Effect, double> robust_estimate_;  // effect -> its parameter fitted under the pooled contamination
-  std::map<Effect, double> robust_sigma_e_;  // effect -> the core's sigma_e fitted with it
-  bool named_by_tails_ = false;   // the cause was named from the tails' covariates
+  WallFit walls_, walls_with_bias_;                   // the wall model without and with the incidence bias
+  double reading_grid_m_ = 0.0;                       // reading grid (0: none)
+  BinnedReadings dequantised_;                        // binned_ spread over its grid cells (reading_grid_m_ > 0)
+  const BinnedReadings* scored_readings_ = &binned_;  // the readings every likelihood is scored on (binned_ or dequantised_)
+  std::size_t edge_bins_ = 0;                         // bins at depth discontinuities
+  SimSample baseline_replicas_;                       // baseline replicas (closeness)
+  std::vector<FreeTerms> free_terms_;                 // per candidate
+  double baseline_in_sample_ll_ = 0.0;                // in-sample log-likelihood of the baseline
+  std::vector<ReadingModel> fit_on_all_;              // per candidate: fitted on all the data
+  bool tail_study_on_ = false;                        // the tail study runs (heavy_tails is a candidate)
+  TailStudy tail_study_;                              // the tail models and their held-out log-likelihoods
+  std::map<Effect, double> robust_estimate_;          // effect -> its parameter fitted under the pooled contamination
+  std::map<Effect, double> robust_sigma_e_;           // effect -> the core's sigma_e fitted with it
+  bool named_by_tails_ = false;                       // the cause was named from the tails' covariates
 };
 
 }  // namespace lidarcal::diagnosis::static_scene

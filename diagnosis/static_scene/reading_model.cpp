@@ -32,7 +32,8 @@ double expected(const ReadingModel& m, const Bin& b, const BinFit& f, double a, 
   return f.at(a, t) + (centreOf(m, b, f) - f.m);
 }
 
-double readingLL(const ReadingModel& m, const BinnedReadings& d, const Bin& b, const BinFit& f, std::size_t i, double floor_weight) {
+double readingLL(const ReadingModel& m, const BinnedReadings& d, const Bin& b, const BinFit& f, std::size_t i,
+                 double floor_weight) {
   const double centre = expected(m, b, f, d.a[i], d.t[i]) + m.drift * (d.t[i] - d.t_mean);
   const double sigma = std::max(m.sigma_e * shapeOf(m, b, centre) * std::sqrt(1.0 + 1.0 / std::max(f.n, 1.0)), 1e-6);
   const double y = d.y[i];
@@ -234,10 +235,13 @@ ReadingModel ModelFitter::fit(double q_detected) {
     profile(m_, &m_.sigma_e);
     dropOutliers();
     refresh();
-    if (fl_.kappa) m_.kappa = ternaryMax([&](double k) { return profileWith([k](ReadingModel& t) { t.kappa = k; }); }, -1.0, 5.0, 50);
-    if (fl_.gamma) m_.gamma = ternaryMax([&](double g) { return profileWith([g](ReadingModel& t) { t.gamma = g; }); }, -1.0, 4.0, 50);
+    if (fl_.kappa)
+      m_.kappa = ternaryMax([&](double k) { return profileWith([k](ReadingModel& t) { t.kappa = k; }); }, -1.0, 5.0, 50);
+    if (fl_.gamma)
+      m_.gamma = ternaryMax([&](double g) { return profileWith([g](ReadingModel& t) { t.gamma = g; }); }, -1.0, 4.0, 50);
     // The dark-surface exponent as the sequence's joint refinement takes it (JointEffects::dark_noise).
-    if (fl_.delta) m_.delta = ternaryMax([&](double x) { return profileWith([x](ReadingModel& t) { t.delta = x; }); }, -1.0, 3.0, 50);
+    if (fl_.delta)
+      m_.delta = ternaryMax([&](double x) { return profileWith([x](ReadingModel& t) { t.delta = x; }); }, -1.0, 3.0, 50);
     profile(m_, &m_.sigma_e);
     if (fl_.drift) fitDrift();
     if (fl_.mixed) fitMixed();
@@ -249,7 +253,8 @@ ReadingModel ModelFitter::fit(double q_detected) {
 
 }  // namespace
 
-ReadingModel fitModel(const BinnedReadings& d, const std::vector<bool>& train, const FreeTerms& fl, double q_detected, std::vector<BinFit>& fits) {
+ReadingModel fitModel(const BinnedReadings& d, const std::vector<bool>& train, const FreeTerms& fl, double q_detected,
+                      std::vector<BinFit>& fits) {
   return ModelFitter(d, train, fl, fits).fit(q_detected);
 }
 

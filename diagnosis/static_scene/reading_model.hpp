@@ -27,7 +27,14 @@ struct ReadingModel {
 
 /// Which terms of the reading model are free (one per candidate effect).
 struct FreeTerms {
-  bool kappa = false, gamma = false, drift = false, mixed = false, dof = false, quant = false, wall_b = false, delta = false;
+  bool kappa = false;   ///< range exponent (range_noise_law)
+  bool gamma = false;   ///< incidence exponent (incidence_noise)
+  bool drift = false;   ///< drift over the scans (range_drift)
+  bool mixed = false;   ///< mixed-pixel fraction at edges (mixed_pixels)
+  bool dof = false;     ///< Student-t degrees of freedom (heavy_tails)
+  bool quant = false;   ///< rounding to the detected grid (quantisation)
+  bool wall_b = false;  ///< the wall model's incidence bias (incidence_bias)
+  bool delta = false;   ///< dark-surface exponent (dark_surface)
   int parameters() const { return kappa + gamma + drift + mixed + dof + quant + wall_b + delta; }
 };
 
@@ -44,10 +51,12 @@ double centreOf(const ReadingModel& m, const Bin& b, const BinFit& f);
 double expected(const ReadingModel& m, const Bin& b, const BinFit& f, double a, double t);
 
 /// Log-likelihood of one reading (predictive: the bin's location is known to 1 / n_train).
-double readingLL(const ReadingModel& m, const BinnedReadings& d, const Bin& b, const BinFit& f, std::size_t i, double floor_weight);
+double readingLL(const ReadingModel& m, const BinnedReadings& d, const Bin& b, const BinFit& f, std::size_t i,
+                 double floor_weight);
 
 /// Fits the free parameters of a model on the readings of the training scans (`fits`: the bin
 /// locations it ends with).
-ReadingModel fitModel(const BinnedReadings& d, const std::vector<bool>& train, const FreeTerms& fl, double q_detected, std::vector<BinFit>& fits);
+ReadingModel fitModel(const BinnedReadings& d, const std::vector<bool>& train, const FreeTerms& fl, double q_detected,
+                      std::vector<BinFit>& fits);
 
 }  // namespace lidarcal::diagnosis::static_scene

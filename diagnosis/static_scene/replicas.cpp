@@ -10,8 +10,8 @@
 
 namespace lidarcal::diagnosis::static_scene {
 
-BinnedReadings simulateStatic(const BinnedReadings& d, const std::vector<BinFit>& f, const WallFit& w, const ReadingModel& m, std::uint64_t seed,
-                    const RangeEffects& fx) {
+BinnedReadings simulateStatic(const BinnedReadings& d, const std::vector<BinFit>& f, const WallFit& w, const ReadingModel& m,
+                              std::uint64_t seed, const RangeEffects& fx) {
   BinnedReadings r = d;
   RangeModel rm;
   rm.bias.alpha = {w.ok ? w.alpha0 : 0.0, 1.0};

@@ -15,8 +15,8 @@ namespace lidarcal::diagnosis::static_scene {
 /// objects carried in or out (docs/FINDINGS.md).
 std::size_t dropChangedBins(BinnedReadings& d);
 
-/// Whether the sensor moved during the recording: the beams' medians in the first and second
-/// half of the scans differ beyond their noise, by different amounts (a drift moves them all alike).
+/// Whether the sensor moved during the recording: the beams' medians in the first and second half
+/// of the scans differ beyond their noise, by different amounts (a drift moves them all alike).
 double movedFraction(const BinnedReadings& d);
 
 }  // namespace lidarcal::diagnosis::static_scene

@@ -10,8 +10,8 @@
 namespace lidarcal::diagnosis::static_scene {
 namespace {
 
-/// Lag-1 correlation over the scans of each bin (the independence check of Alhashimi et al. 2016), pooled, times
-/// sqrt(pairs).
+/// Lag-1 correlation over the scans of each bin (the independence check of Alhashimi et al. 2016),
+/// pooled, times sqrt(pairs).
 double lag1Correlation(const BinnedReadings& d, const std::vector<BinFit>& f) {
   double num = 0.0, den = 0.0, n = 0.0;
   for (std::size_t bi = 0; bi < d.bins.size(); ++bi) {
@@ -31,8 +31,8 @@ double lag1Correlation(const BinnedReadings& d, const std::vector<BinFit>& f) {
 
 }  // namespace
 
-std::map<std::string, double> staticStatistics(const BinnedReadings& d, const std::vector<BinFit>& f, const ReadingModel& m, const WallFit& w0,
-                                         const WallFit& wb, double q) {
+std::map<std::string, double> staticStatistics(const BinnedReadings& d, const std::vector<BinFit>& f, const ReadingModel& m,
+                                               const WallFit& w0, const WallFit& wb, double q) {
   std::map<std::string, double> st;
   std::vector<double> z, psi, xs, logm, zi, loginc, zc, cb, sb, zd, dark;
   // One recorded value (a driver's constant) leaves darkness at rounding level, which the score,

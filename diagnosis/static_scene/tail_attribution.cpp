@@ -37,11 +37,11 @@ void StaticDiagnosis::tailFold(int k, const std::vector<int>& fold) {
   std::vector<TailModel> models;
   for (std::size_t s = 0; s < tail_study_.specs.size(); ++s) {
     const TailModel* start_from = s == 0 ? nullptr : tail_study_.dropped[s] >= 0 ? &models[1] : &models[0];
-    models.push_back(
-        fitTailModel(tail_study_.beams, fit_on, tail_study_.specs[s], baseline_model_.sigma_e, tail_study_.floor_w, tail_study_.floor_density, 60, start_from));
+    models.push_back(fitTailModel(tail_study_.beams, fit_on, tail_study_.specs[s], baseline_model_.sigma_e, tail_study_.floor_w,
+                                  tail_study_.floor_density, 60, start_from));
     for (const auto& r : test)
-      tail_study_.ll[s].push_back(
-          models[s].logDensity(tail_study_.beams[r.beam], r.residual_m, r.inflation, tail_study_.floor_w, tail_study_.floor_density));
+      tail_study_.ll[s].push_back(models[s].logDensity(tail_study_.beams[r.beam], r.residual_m, r.inflation, tail_study_.floor_w,
+                                                       tail_study_.floor_density));
   }
 }
 
@@ -130,7 +130,8 @@ TailModel StaticDiagnosis::tailFullData(TailAttribution& ta, const std::vector<T
 void StaticDiagnosis::tailClasses(TailAttribution& ta, const TailModel& full, const std::vector<TailReading>& all) const {
   std::vector<double> tail(binned_.bins.size(), 0.0), n(binned_.bins.size(), 0.0);
   for (const auto& r : all) {
-    tail[r.beam] += full.responsibility(tail_study_.beams[r.beam], r.residual_m, r.inflation, tail_study_.floor_w, tail_study_.floor_density);
+    tail[r.beam] +=
+        full.responsibility(tail_study_.beams[r.beam], r.residual_m, r.inflation, tail_study_.floor_w, tail_study_.floor_density);
     n[r.beam] += 1.0;
   }
   for (const char* cls : {"edge", "grazing", "range", "dark", "unknown"}) {
@@ -157,13 +158,15 @@ void StaticDiagnosis::tailClasses(TailAttribution& ta, const TailModel& full, co
     r.cls = cls;
     beams.push_back(r);
   }
-  std::stable_sort(beams.begin(), beams.end(), [](const TailBeamReport& a, const TailBeamReport& b) { return a.tail_fraction > b.tail_fraction; });
+  std::stable_sort(beams.begin(), beams.end(),
+                   [](const TailBeamReport& a, const TailBeamReport& b) { return a.tail_fraction > b.tail_fraction; });
   if (beams.size() > 10) beams.resize(10);
   ta.top_beams = std::move(beams);
 }
 
 /// Incidence exponent, range exponent, mixed-pixel fraction and dark-surface exponent fitted under
-/// the pooled contamination (the tails do not drag them), with their held-out gains over the pooled model.
+/// the pooled contamination (the tails do not drag them), with their held-out gains over the pooled
+/// model.
 void StaticDiagnosis::tailRobust(DiagnosisResult& out, const std::vector<TailReading>& all, const TailModel& pooled) {
   struct Item {
     std::size_t spec;
@@ -176,12 +179,12 @@ void StaticDiagnosis::tailRobust(DiagnosisResult& out, const std::vector<TailRea
                         {tail_study_.delta, Effect::dark_surface, "dark_noise_exponent"}};
   for (const Item& it : items) {
     if (it.spec == 0) continue;
-    const TailModel m =
-        fitTailModel(tail_study_.beams, all, tail_study_.specs[it.spec], baseline_model_.sigma_e, tail_study_.floor_w, tail_study_.floor_density, 60, &pooled);
+    const TailModel m = fitTailModel(tail_study_.beams, all, tail_study_.specs[it.spec], baseline_model_.sigma_e,
+                                     tail_study_.floor_w, tail_study_.floor_density, 60, &pooled);
     const double value = it.spec == tail_study_.gamma   ? m.gamma
                          : it.spec == tail_study_.kappa ? m.kappa
                          : it.spec == tail_study_.delta ? m.delta
-                                                   : m.mixed;
+                                                        : m.mixed;
     const HeldOutGain g = gainOf(tail_study_.ll[it.spec], tail_study_.ll[0], tail_study_.block);
     const std::string key = it.key;
     out.tails.robust[key] = value;

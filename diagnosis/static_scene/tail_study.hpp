@@ -30,15 +30,16 @@ std::vector<TailReading> tailResiduals(const BinnedReadings& d, const std::vecto
 /// The tail models compared, their held-out log-likelihoods (aligned with the Gaussian
 /// baseline's held-out readings) and the scan of each point.
 struct TailStudy {
-  std::vector<TailBeam> beams;
-  std::array<bool, kTailCovariates> available{};
+  std::vector<TailBeam> beams;                    ///< every bin as the tail model sees it
+  std::array<bool, kTailCovariates> available{};  ///< covariates the data can show
   std::vector<TailSpec> specs;   ///< 0: pooled, 1: every covariate, then one without each, then robust effects
   std::vector<int> dropped;      ///< covariate left out of spec s (-1: none)
   std::size_t gamma = 0, kappa = 0, mixed = 0, delta = 0;  ///< specs of the robust effects (0: not fitted)
-  std::vector<std::vector<double>> ll;
-  std::vector<std::size_t> block;
+  std::vector<std::vector<double>> ll;  ///< per spec, held-out log-likelihood of each point
+  std::vector<std::size_t> block;       ///< each point's scan
   std::vector<double> gauss;     ///< the Gaussian baseline's held-out log-likelihoods, aligned
-  double floor_w = 0.0, floor_density = 0.0;
+  double floor_w = 0.0;        ///< weight of the uniform outlier floor
+  double floor_density = 0.0;  ///< its density over the reading window, 1/m
 };
 
 /// The specs: pooled, full, full without each covariate, pooled with each robust effect.

@@ -116,7 +116,8 @@ void StaticDiagnosis::refineCauseByTails(DiagnosisResult& out) {
   }
   const TailCovariateResult* top = nullptr;
   for (const auto& c : ta.covariates)
-    if (c.significant && names(ta.cause, c.effect) && (!top || c.unique_gain_nats_per_point > top->unique_gain_nats_per_point)) top = &c;
+    if (c.significant && names(ta.cause, c.effect) && (!top || c.unique_gain_nats_per_point > top->unique_gain_nats_per_point))
+      top = &c;
   char buf[400];
   std::snprintf(buf, sizeof buf,
                 "the tails are significant; of what their covariates explain "

@@ -45,8 +45,8 @@ void wallResiduals(const BinnedReadings& d, const std::vector<BinFit>& f, const 
 
 /// Gauss-Newton on the wall model at fixed roughness (at most 15 steps); false when a step is
 /// not finite.
-bool wallGaussNewton(const BinnedReadings& d, const std::vector<BinFit>& f, WallFit& w, bool with_b, bool alpha0_free, double tau2,
-                     WallSystem& s) {
+bool wallGaussNewton(const BinnedReadings& d, const std::vector<BinFit>& f, WallFit& w, bool with_b, bool alpha0_free,
+                     double tau2, WallSystem& s) {
   const int nb = static_cast<int>(w.bins.size()), nl = static_cast<int>(w.lines.size());
   std::vector<Eigen::Triplet<double>> entries;
   for (int it = 0; it < 15; ++it) {

@@ -37,8 +37,8 @@ double binStep(const BinnedReadings& d, const std::vector<std::size_t>& order) {
 
 /// Runs: neighbours in angle whose points are close (no depth jump, no missing beam between).
 /// Marks the bins on both sides of a depth discontinuity as edges.
-std::vector<std::vector<std::size_t>> findRuns(BinnedReadings& d, const std::vector<BinFit>& f, const std::vector<std::size_t>& order,
-                                               double step) {
+std::vector<std::vector<std::size_t>> findRuns(BinnedReadings& d, const std::vector<BinFit>& f,
+                                               const std::vector<std::size_t>& order, double step) {
   std::vector<std::vector<std::size_t>> runs;
   for (std::size_t k = 0; k < order.size(); ++k) {
     const std::size_t b = order[k];

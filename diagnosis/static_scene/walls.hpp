@@ -12,7 +12,8 @@ namespace lidarcal::diagnosis::static_scene {
 
 /// A wall line in normal form, the wall model's parameters for it.
 struct Line {
-  double theta = 0.0, p = 0.0;  // normal direction and distance: x cos(theta) + y sin(theta) = p
+  double theta = 0.0;  ///< direction of the normal from the sensor, radians
+  double p = 0.0;      ///< distance from the sensor, metres: x cos(theta) + y sin(theta) = p
 };
 
 /// Finds the walls among the bins from their full-data locations `f`: sets each bin's wall, edge

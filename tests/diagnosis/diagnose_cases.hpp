@@ -11,15 +11,14 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <random>
 #include <stdexcept>
 #include <string>
-
-#include <limits>
 #include <vector>
 
-#include "diagnosis/static_scene.hpp"
 #include "common/rng.hpp"
+#include "diagnosis/static_scene.hpp"
 #include "simulation/landmark_level.hpp"
 #include "simulation/simulator.hpp"
 

@@ -5,11 +5,14 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <fstream>
 #include <functional>
 #include <limits>
 #include <numeric>
 #include <optional>
 #include <random>
+#include <sstream>
+#include <string>
 
 #include <Eigen/Dense>
 #include <gtest/gtest.h>
@@ -17,10 +20,6 @@
 #include "calibration/joint_refinement.hpp"
 #include "common/rng.hpp"
 #include "diagnosis/diagnose_cases.hpp"
-#include <fstream>
-#include <sstream>
-#include <string>
-
 #include "diagnosis/rules.hpp"
 #include "test_util.hpp"
 

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
+#include <fstream>
 #include <functional>
 #include <limits>
 #include <numeric>
@@ -13,16 +15,13 @@
 
 #include <Eigen/Dense>
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include "calibration/joint_refinement.hpp"
 #include "common/rng.hpp"
 #include "diagnosis/diagnose_cases.hpp"
 #include "io/scene_io.hpp"
 #include "simulation/simulator.hpp"
-
-#include <filesystem>
-#include <fstream>
-#include <nlohmann/json.hpp>
 
 namespace lidarcal::diagnosis {
 using namespace lidarcal::calibration;  // the joint refinement the diagnosis refits with

@@ -18,8 +18,8 @@
 
 #include "calibration/joint_refinement.hpp"
 #include "common/rng.hpp"
-#include "diagnosis/diagnose_cases.hpp"
 #include "diagnose_test_util.hpp"
+#include "diagnosis/diagnose_cases.hpp"
 #include "diagnosis/static_scene.hpp"
 #include "io/scene_io.hpp"
 #include "simulation/simulator.hpp"
