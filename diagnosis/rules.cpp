@@ -83,6 +83,7 @@ const std::vector<VerdictRule>& verdictRules() {
 std::string nameCause(std::vector<CandidateResult>& cands, double alpha, std::string& decision,
                       const std::vector<std::pair<Effect, Effect>>& nested,
                       const std::vector<std::pair<Effect, Effect>>& indistinguishable) {
+  // Rule significant.
   std::vector<double> p;
   for (const auto& c : cands) p.push_back(c.applicable ? c.p_value : std::numeric_limits<double>::quiet_NaN());
   const auto adj = holmAdjust(p);
@@ -91,6 +92,7 @@ std::string nameCause(std::vector<CandidateResult>& cands, double alpha, std::st
     const double gain = cands[i].heldout_gain_nats_per_point;
     cands[i].significant = cands[i].applicable && std::isfinite(adj[i]) && adj[i] < alpha && gain > 0.0;
   }
+  // Rule largest_gain.
   std::vector<std::size_t> sig;
   for (std::size_t i = 0; i < cands.size(); ++i)
     if (cands[i].significant) sig.push_back(i);
@@ -105,9 +107,9 @@ std::string nameCause(std::vector<CandidateResult>& cands, double alpha, std::st
   decision = std::string("largest held-out gain among the significant effects: ") + toString(cands[top].effect);
   auto close = [&](std::size_t a, std::size_t b) {
     const double se = std::hypot(cands[a].heldout_gain_se, cands[b].heldout_gain_se);
-    return cands[b].heldout_gain_nats_per_point >= cands[a].heldout_gain_nats_per_point - 2.0 * se;
+    return cands[b].heldout_gain_nats_per_point >= cands[a].heldout_gain_nats_per_point - rules::kCloseGainSe * se;
   };
-  // Parsimony: a significant effect nested in the top one that explains as much.
+  // Rule parsimony: a significant effect nested in the top one that explains as much.
   std::size_t chosen = top;
   for (std::size_t i : sig)
     for (const auto& [simpler, richer] : nested)
@@ -115,11 +117,13 @@ std::string nameCause(std::vector<CandidateResult>& cands, double alpha, std::st
   if (chosen != top)
     decision = std::string(toString(cands[chosen].effect)) + " explains as much as " + toString(cands[top].effect) +
                " (held-out gains within two standard errors), which contains it, with fewer parameters";
+  // Rule identifiable.
   if (!cands[chosen].identifiable) {
     decision = std::string(toString(cands[chosen].effect)) +
                " is significant but cannot be estimated apart from the baseline's parameters (" + cands[chosen].note + ")";
     return cause::kNotIdentifiable;
   }
+  // Rule indistinguishable.
   for (std::size_t i : sig) {
     if (i == chosen || !close(chosen, i)) continue;
     for (const auto& [a, b] : indistinguishable)

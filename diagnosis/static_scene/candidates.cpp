@@ -161,9 +161,10 @@ double StaticDiagnosis::darkRangeCorrelation() const {
 void StaticDiagnosis::setIdentifiability(CandidateResult& r) const {
   const Effect e = r.effect;
   if (e == Effect::incidence_bias) {
+    // Rule identifiable: below 1 cm, or the estimate clear of zero.
     r.standard_error = walls_with_bias_.ok ? walls_with_bias_.b_se : kInf;
-    r.identifiable =
-        alpha0_identified_ && walls_with_bias_.ok && r.standard_error < std::max(0.01, std::abs(walls_with_bias_.b) / rules::kIdentifiableEstimateSe);
+    r.identifiable = alpha0_identified_ && walls_with_bias_.ok &&
+                     r.standard_error < std::max(0.01, std::abs(walls_with_bias_.b) / rules::kIdentifiableEstimateSe);
     if (!r.identifiable)
       r.note = alpha0_identified_
                    ? "bends the walls almost as a range offset does: give the offset (--range-offset) from a reference distance"
@@ -191,6 +192,7 @@ void StaticDiagnosis::setIdentifiability(CandidateResult& r) const {
       r.note = e == Effect::incidence_noise ? "no spread of incidence angles"
                : e == Effect::dark_surface  ? "no spread of intensities"
                                             : "no spread of ranges";
+    // Rule dark_follows_range.
     if (r.identifiable && e == Effect::dark_surface && std::abs(darkRangeCorrelation()) > rules::kConfounded) {
       r.identifiable = false;
       r.note = "the intensity follows the range on this recording (correlation " + std::to_string(darkRangeCorrelation()) +

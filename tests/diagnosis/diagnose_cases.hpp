@@ -11,14 +11,15 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <limits>
 #include <random>
 #include <stdexcept>
 #include <string>
+
+#include <limits>
 #include <vector>
 
-#include "common/rng.hpp"
 #include "diagnosis/static_scene.hpp"
+#include "common/rng.hpp"
 #include "simulation/landmark_level.hpp"
 #include "simulation/simulator.hpp"
 
