@@ -20,6 +20,7 @@ void registerCommands(CLI::App& app) {
   addNoiseConsistencyCommand(app);
   addLandmarksToObservationsCommand(app);
   addMonteCarloCommand(app);
+  addMonteCarloMergeCommand(app);
   addDiagnoseCommand(app);
 }
 

@@ -11,21 +11,26 @@ namespace lidarcal::studies {
 void RunOptions::validate() const {
   if (threads < 1) throw std::invalid_argument("RunOptions: threads must be >= 1");
   if (trials < 1) throw std::invalid_argument("RunOptions: trials must be >= 1");
+  if (shard_count < 1 || shard_index >= shard_count)
+    throw std::invalid_argument("RunOptions: shard_index must be below shard_count (>= 1)");
 }
 
 namespace {
 
-struct Item {
-  std::size_t cell, trial;
-};
-
-/// Work order: trials with the (slow) joint refinement spread evenly among the others, so the
-/// rate seen by the progress bar, and its estimate of the time left, stays steady.
-std::vector<Item> workOrder(std::size_t cells, std::size_t trials, std::size_t joint_trials) {
-  std::vector<Item> slow, fast;
-  for (std::size_t t = 0; t < trials; ++t)
-    for (std::size_t c = 0; c < cells; ++c) (t < joint_trials ? slow : fast).push_back({c, t});
-  std::vector<Item> out;
+/// Work order of one slice: trials with the (slow) joint refinement spread evenly among the
+/// others, so the rate seen by the progress bar, and its estimate of the time left, stays steady.
+/// A slice takes every shard_count-th slow trial and every shard_count-th fast one, so slices
+/// get equal shares of both whatever their proportion.
+std::vector<TrialIndex> workOrder(std::size_t cells, const RunOptions& options) {
+  std::vector<TrialIndex> slow, fast;
+  std::size_t slow_seen = 0, fast_seen = 0;
+  for (std::size_t t = 0; t < options.trials; ++t)
+    for (std::size_t c = 0; c < cells; ++c) {
+      const bool joint = t < options.joint_trials;
+      std::size_t& seen = joint ? slow_seen : fast_seen;
+      if (seen++ % options.shard_count == options.shard_index) (joint ? slow : fast).push_back({c, t});
+    }
+  std::vector<TrialIndex> out;
   out.reserve(slow.size() + fast.size());
   std::size_t i = 0, j = 0;
   while (i < slow.size() || j < fast.size()) {
@@ -38,12 +43,17 @@ std::vector<Item> workOrder(std::size_t cells, std::size_t trials, std::size_t j
 
 }  // namespace
 
+std::vector<TrialIndex> shardTrials(std::size_t cells, const RunOptions& options) {
+  options.validate();
+  return workOrder(cells, options);
+}
+
 StudyRun runCells(const TrialConfig& config, const std::vector<Cell>& cells, const RunOptions& options) {
   config.validate();
   options.validate();
   StudyRun run;
   run.results.assign(cells.size(), std::vector<TrialResult>(options.trials));
-  const std::vector<Item> order = workOrder(cells.size(), options.trials, options.joint_trials);
+  const std::vector<TrialIndex> order = shardTrials(cells.size(), options);
   std::atomic<std::size_t> next{0}, done{0};
   std::atomic<bool> failed{false};
   std::exception_ptr error;
@@ -54,7 +64,7 @@ StudyRun runCells(const TrialConfig& config, const std::vector<Cell>& cells, con
       if (stopRequested()) return;
       const std::size_t i = next.fetch_add(1);
       if (i >= order.size()) return;
-      const Item& it = order[i];
+      const TrialIndex& it = order[i];
       try {
         const Cell& cell = cells[it.cell];
         const auto layout = trialLayout(config, options.seed, it.trial, cell.landmarks);
