@@ -22,6 +22,7 @@ void registerCommands(CLI::App& app) {
   addMonteCarloCommand(app);
   addMonteCarloMergeCommand(app);
   addDiagnoseCommand(app);
+  addFleetCommand(app);
 }
 
 std::filesystem::path dataDir() {
