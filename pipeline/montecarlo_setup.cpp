@@ -6,6 +6,7 @@
 #include <iterator>
 #include <stdexcept>
 #include <thread>
+#include <type_traits>
 
 #include "common/errors.hpp"
 #include "io/atomic_file.hpp"
@@ -77,6 +78,27 @@ T field(const nlohmann::json& j, const char* key, const std::string& file) {
   }
 }
 
+/// Every option the study's output depends on, by its name in the identity: one list for writing
+/// and for reading it back.
+template <class Options, class Visit>
+void forEachIdentityField(Options& o, Visit&& visit) {
+  visit("study", o.study);
+  visit("quick", o.quick);
+  visit("level", o.level);
+  visit("angle_noise", o.angle_noise);
+  visit("noise_law", o.noise_law);
+  visit("noise_scale", o.noise_scale);
+  visit("max_distance_m", o.max_distance_m);
+  visit("range_max_m", o.range_max_m);
+  visit("stops", o.stops);
+  visit("step_m", o.step_m);
+  visit("scans_per_stop", o.scans_per_stop);
+  visit("max_order", o.max_order);
+  visit("seed", o.seed);
+  visit("trials", o.trials);
+  visit("joint_trials", o.joint_trials);
+}
+
 }  // namespace
 
 StudySetup studySetup(const MonteCarloOptions& o) {
@@ -97,46 +119,22 @@ StudySetup studySetup(const MonteCarloOptions& o) {
 }
 
 nlohmann::json studyIdentity(const MonteCarloOptions& o, const StudySetup& s) {
+  MonteCarloOptions resolved = o;  // the defaults of the level filled in
+  resolved.noise_scale = s.config.noise_scale;
+  resolved.trials = s.run.trials;
+  resolved.joint_trials = s.run.joint_trials;
   nlohmann::json j;
   j["lidarcal_version"] = LIDARCAL_VERSION;
-  j["study"] = o.study;
-  j["quick"] = o.quick;
-  j["level"] = o.level;
-  j["angle_noise"] = o.angle_noise;
-  j["noise_law"] = o.noise_law;
-  j["noise_scale"] = s.config.noise_scale;
-  j["max_distance_m"] = o.max_distance_m;
-  j["range_max_m"] = o.range_max_m;
-  j["stops"] = o.stops;
-  j["step_m"] = o.step_m;
-  j["scans_per_stop"] = o.scans_per_stop;
-  j["max_order"] = o.max_order;
-  j["seed"] = o.seed;
-  j["trials"] = s.run.trials;
-  j["joint_trials"] = s.run.joint_trials;
+  forEachIdentityField(resolved, [&](const char* key, const auto& value) { j[key] = value; });
   j["cells"] = studies::studyCells(s.figures, s.grids).size();
   return j;
 }
 
 MonteCarloOptions optionsFromIdentity(const nlohmann::json& j, const std::string& file) {
   MonteCarloOptions o;
-  o.study = field<std::string>(j, "study", file);
-  o.quick = field<bool>(j, "quick", file);
-  o.level = field<std::string>(j, "level", file);
-  o.angle_noise = field<std::string>(j, "angle_noise", file);
-  o.noise_law = field<std::string>(j, "noise_law", file);
-  o.noise_scale = field<double>(j, "noise_scale", file);
-  o.max_distance_m = field<double>(j, "max_distance_m", file);
-  o.range_max_m = field<double>(j, "range_max_m", file);
-  o.stops = field<int>(j, "stops", file);
-  o.step_m = field<double>(j, "step_m", file);
-  o.scans_per_stop = field<int>(j, "scans_per_stop", file);
-  o.max_order = field<int>(j, "max_order", file);
-  o.seed = field<std::uint64_t>(j, "seed", file);
-  o.trials = field<std::size_t>(j, "trials", file);
-  o.joint_trials = field<std::size_t>(j, "joint_trials", file);
+  forEachIdentityField(o, [&](const char* key, auto& value) { value = field<std::decay_t<decltype(value)>>(j, key, file); });
   o.no_joint = o.joint_trials == 0;
-  if (o.trials == 0) throw InputError(file, "trials", "must be at least 1", "write the shard again");
+  if (o.trials == 0) throw InputError(file, "study.trials", "must be at least 1", "write the shard again");
   return o;
 }
 

@@ -17,6 +17,7 @@ PACKAGES=(
   libnav-msgs-dev libtf2-msgs-dev  # odometry and tf in bags (import --pose odom:|tf:)
   libroscpp-dev python3-rosmaster  # lidarcal_node (roscpp) and the rosmaster its test starts
   clang-14 libclang-rt-14-dev      # libFuzzer targets (scripts/fuzz.sh): clang's -fsanitize=fuzzer and its runtime
+  slurmctld slurmd slurm-client munge  # the Slurm recipes' test (scripts/slurm/): a single-node cluster it starts and stops
 )
 
 missing=()

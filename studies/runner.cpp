@@ -1,5 +1,6 @@
 #include "studies/runner.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <exception>
 #include <mutex>
@@ -19,16 +20,17 @@ namespace {
 
 /// Work order of one slice: trials with the (slow) joint refinement spread evenly among the
 /// others, so the rate seen by the progress bar, and its estimate of the time left, stays steady.
-/// A slice takes every shard_count-th slow trial and every shard_count-th fast one, so slices
-/// get equal shares of both whatever their proportion.
+/// Which trials: the slow ones are counted cell by cell (cell c's trial t < J is number c J + t)
+/// and so are the fast ones (c (T - J) + t - J); slice k takes those whose number is k modulo
+/// shard_count. The slices get equal numbers of slow and of fast trials (within one) and an even
+/// share of every cell's trials (cells differ in cost).
 std::vector<TrialIndex> workOrder(std::size_t cells, const RunOptions& options) {
+  const std::size_t T = options.trials, J = std::min(options.joint_trials, options.trials);
   std::vector<TrialIndex> slow, fast;
-  std::size_t slow_seen = 0, fast_seen = 0;
-  for (std::size_t t = 0; t < options.trials; ++t)
+  for (std::size_t t = 0; t < T; ++t)
     for (std::size_t c = 0; c < cells; ++c) {
-      const bool joint = t < options.joint_trials;
-      std::size_t& seen = joint ? slow_seen : fast_seen;
-      if (seen++ % options.shard_count == options.shard_index) (joint ? slow : fast).push_back({c, t});
+      const std::size_t number = t < J ? c * J + t : c * (T - J) + (t - J);
+      if (number % options.shard_count == options.shard_index) (t < J ? slow : fast).push_back({c, t});
     }
   std::vector<TrialIndex> out;
   out.reserve(slow.size() + fast.size());

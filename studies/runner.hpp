@@ -35,10 +35,11 @@ struct TrialIndex {
   std::size_t trial = 0;  ///< trial number in the cell, 0-based
 };
 
-/// The trials of slice options.shard_index of options.shard_count, in the order they run: every
-/// shard_count-th trial with the (slow) joint refinement and every shard_count-th one without
-/// (counted trial by trial, cell by cell), so the slices take about the same time. The slices
-/// 0 ... N - 1 hold every trial exactly once. Depends on (cells, trials, joint_trials, shard) only.
+/// The trials of slice options.shard_index of options.shard_count, in the order they run. The
+/// trials with the (slow) joint refinement are numbered cell by cell, and so are the others; a
+/// slice takes every shard_count-th of each, so the slices get equal numbers of both (within one)
+/// and an even share of every cell, and take about the same time. The slices 0 ... N - 1 hold
+/// every trial exactly once. Depends on (cells, trials, joint_trials, shard) only.
 std::vector<TrialIndex> shardTrials(std::size_t cells, const RunOptions& options);
 
 struct StudyRun {

@@ -3,13 +3,6 @@
 // with `lidarcal correct IN.bag --out OUT.bag` (the same correction rule); models of another
 // sensor refused. Every wait is bounded; processes are ended by their pid.
 
-#include <arpa/inet.h>
-#include <netinet/in.h>
-#include <signal.h>
-#include <sys/socket.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
@@ -26,88 +19,12 @@
 #include <rosbag/view.h>
 #include <sensor_msgs/LaserScan.h>
 
+#include "child_process.hpp"
 #include "pipeline/ros_test_util.hpp"
 #include "ros/laser_scan_util.hpp"
 
 namespace lidarcal::test {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-/// Polls `done` every 10 ms for at most `seconds`.
-bool waitFor(const std::function<bool()>& done, double seconds) {
-  const auto end = Clock::now() + std::chrono::duration<double>(seconds);
-  while (Clock::now() < end) {
-    if (done()) return true;
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
-  }
-  return done();
-}
-
-/// A child process with stdout and stderr in `log`.
-class Child {
- public:
-  Child(const std::vector<std::string>& argv, const fs::path& log) : log_(log) {
-    std::vector<char*> args;
-    for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
-    args.push_back(nullptr);
-    pid_ = fork();
-    if (pid_ == 0) {
-      if (FILE* f = std::fopen(log.c_str(), "w")) {
-        dup2(fileno(f), STDOUT_FILENO);
-        dup2(fileno(f), STDERR_FILENO);
-      }
-      execvp(args[0], args.data());
-      std::perror("execvp");
-      _exit(127);
-    }
-  }
-  ~Child() { stop(); }
-  Child(const Child&) = delete;
-  Child& operator=(const Child&) = delete;
-  /// Exit status once it has ended by itself within `seconds`, else nothing.
-  std::optional<int> waitExit(double seconds) {
-    if (pid_ <= 0) return status_;
-    int status = 0;
-    const bool ended = waitFor([&] { return waitpid(pid_, &status, WNOHANG) == pid_; }, seconds);
-    if (!ended) return std::nullopt;
-    pid_ = -1;
-    status_ = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-    return status_;
-  }
-  /// SIGINT (a ROS node's Ctrl-C), then SIGKILL after 10 s; returns the exit status.
-  int stop() {
-    if (pid_ > 0) {
-      kill(pid_, SIGINT);
-      if (!waitExit(10.0) && pid_ > 0) {
-        kill(pid_, SIGKILL);
-        waitExit(5.0);
-      }
-    }
-    return status_.value_or(-1);
-  }
-  std::string log() const { return readFile(log_); }
-
- private:
-  pid_t pid_ = -1;
-  std::optional<int> status_;
-  fs::path log_;
-};
-
-int freeLoopbackPort() {
-  const int fd = socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  a.sin_port = 0;
-  socklen_t len = sizeof a;
-  if (bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0 || getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len) != 0) {
-    close(fd);
-    return -1;
-  }
-  close(fd);
-  return ntohs(a.sin_port);
-}
 
 class RosNode : public ::testing::Test {
  protected:

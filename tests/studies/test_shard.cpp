@@ -8,6 +8,7 @@
 #include <limits>
 #include <map>
 #include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -27,7 +28,7 @@ RunOptions options(std::size_t trials, std::size_t joint_trials, std::size_t sha
   return o;
 }
 
-TEST(MontecarloShards, SlicesHoldEveryTrialOnceAndShareTheJointTrialsEvenly) {
+TEST(MontecarloShards, SlicesHoldEveryTrialOnceAndShareTheJointTrialsAndEveryCellEvenly) {
   for (const auto& [cells, trials, joint] : {std::tuple<std::size_t, std::size_t, std::size_t>{1, 1, 1}, {3, 6, 2},
                                              {18, 6, 2}, {5, 40, 0}, {24, 10, 10}, {7, 13, 4}})
     for (std::size_t shards : {1, 2, 3, 4, 7, 64}) {
@@ -35,24 +36,32 @@ TEST(MontecarloShards, SlicesHoldEveryTrialOnceAndShareTheJointTrialsEvenly) {
                    std::to_string(joint) + ", shards " + std::to_string(shards));
       std::map<std::pair<std::size_t, std::size_t>, int> seen;
       std::size_t fewest_joint = SIZE_MAX, most_joint = 0, fewest = SIZE_MAX, most = 0;
+      std::vector<std::size_t> fewest_of_cell(cells, SIZE_MAX), most_of_cell(cells, 0);
       for (std::size_t k = 0; k < shards; ++k) {
         const auto slice = shardTrials(cells, options(trials, joint, k, shards));
         std::size_t with_joint = 0;
+        std::vector<std::size_t> of_cell(cells, 0);
         for (const TrialIndex& t : slice) {
           ASSERT_LT(t.cell, cells);
           ASSERT_LT(t.trial, trials);
           ++seen[{t.cell, t.trial}];
           if (t.trial < joint) ++with_joint;
+          ++of_cell[t.cell];
         }
         fewest_joint = std::min(fewest_joint, with_joint);
         most_joint = std::max(most_joint, with_joint);
         fewest = std::min(fewest, slice.size());
         most = std::max(most, slice.size());
+        for (std::size_t c = 0; c < cells; ++c) {
+          fewest_of_cell[c] = std::min(fewest_of_cell[c], of_cell[c]);
+          most_of_cell[c] = std::max(most_of_cell[c], of_cell[c]);
+        }
       }
       EXPECT_EQ(seen.size(), cells * trials);
       for (const auto& [trial, count] : seen) EXPECT_EQ(count, 1);
       EXPECT_LE(most_joint - fewest_joint, 1u);  // the slow trials as evenly as they divide
       EXPECT_LE(most - fewest, 2u);              // and so the slices' sizes
+      for (std::size_t c = 0; c < cells; ++c) EXPECT_LE(most_of_cell[c] - fewest_of_cell[c], 2u) << "cell " << c;  // every cell shared
     }
 }
 
