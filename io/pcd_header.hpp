@@ -19,17 +19,17 @@ constexpr const char* kFormatRemedy = "see docs/FORMAT.md for the scan file form
 
 /// One field of FIELDS with its SIZE (bytes), TYPE (F, I or U) and COUNT.
 struct HeaderField {
-  std::string name;
-  int size = 0;
-  char type = '?';
-  int count = 1;
+  std::string name;  ///< field name (x, y, z, intensity, ...)
+  int size = 0;      ///< bytes per value: 1, 2, 4 or 8
+  char type = '?';   ///< F (float), I (signed) or U (unsigned)
+  int count = 1;     ///< values per point
 };
 
 /// A checked header: its fields, the cloud's dimensions, the VIEWPOINT and where DATA begins.
 struct ParsedHeader {
-  std::vector<HeaderField> fields;
-  long long width = -1, height = -1, points = -1;
-  bool has_viewpoint = false;
+  std::vector<HeaderField> fields;  ///< in the order of FIELDS
+  long long width = -1, height = -1, points = -1;  ///< as given; HEIGHT defaults to 1, POINTS to WIDTH x HEIGHT
+  bool has_viewpoint = false;       ///< a VIEWPOINT line was given
   double viewpoint[7] = {0, 0, 0, 1, 0, 0, 0};  ///< tx ty tz qw qx qy qz
   std::string data;             ///< ascii, binary or binary_compressed
   std::size_t data_offset = 0;  ///< byte offset of the first data byte
