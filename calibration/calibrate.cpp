@@ -37,13 +37,13 @@ CalibrationModel calibrate(const LandmarkObservations& obs, const CalibrationCon
   if (refuseUnusableInput(m, obs, config)) return m;
   const double baseline = pathExtent(obs.commanded);
 
-  // 1. Triangulate every landmark from its bearings at the commanded stops.
+  // 1. Triangulate every landmark from its bearings at the commanded stops (Alhashimi et al. 2021, 3.1).
   const auto tri = triangulateAll(obs, config.triangulation);
   const double radius = landmarkRadius(obs);
   const int usable = addTriangulated(m, tri, radius);
   if (refuseTriangulation(m, tri, usable, radius)) return m;
 
-  // 2. Closed-form seed: landmark-stop distances, the order, the bias and the noise law.
+  // 2. Closed-form seed: landmark-stop distances, the order, the bias and the noise law (3.2).
   const auto pairs = closedFormPairs(obs, tri, radius, false);
   if (refuseTooFewPairs(m, obs, config, tri, pairs.size(), usable, baseline)) return m;
   const ClosedFormSeed seed = closedFormSeed(obs, tri, radius, pairs, config);

@@ -16,7 +16,6 @@ namespace lidarcal::noise {
 
 using ml::AdjustmentAnalysis;
 using ml::analyseAdjustment;
-using ml::compose;
 using ml::groupNames;
 using ml::linearizeObservation;
 using ml::linearizeOdometry;
@@ -39,8 +38,10 @@ void MlNoiseConfig::validate() const {
 MlState initialState(const NoiseProblem& problem) {
   MlState st;
   st.poses.push_back(Pose2{});
-  for (int k = 1; k < problem.stops; ++k)
-    st.poses.push_back(compose(st.poses.back(), problem.odometry[static_cast<std::size_t>(k)]));
+  for (int k = 1; k < problem.stops; ++k) {
+    const OdometryStep& u = problem.odometry[static_cast<std::size_t>(k)];
+    st.poses.push_back(compose(st.poses.back(), Pose2{u.dx_m, u.dy_m, u.dtheta_rad}));  // dead reckoning
+  }
   st.landmarks.assign(static_cast<std::size_t>(problem.landmarks), {0.0, 0.0});
   std::vector<int> count(static_cast<std::size_t>(problem.landmarks), 0);
   for (const auto& o : problem.observations) {

@@ -67,13 +67,6 @@ inline std::vector<std::string> groupNames(int sensors) {
   return names;
 }
 
-inline Pose2 compose(const Pose2& pose, const OdometryStep& u) {
-  Pose2 out;
-  pose.toWorld(u.dx_m, u.dy_m, out.x_m, out.y_m);
-  out.yaw_rad = wrapAngle(pose.yaw_rad + u.dtheta_rad);
-  return out;
-}
-
 using Mat3 = Eigen::Matrix3d;
 using Vec3 = Eigen::Vector3d;
 
