@@ -23,9 +23,9 @@
 #include "io/model_io.hpp"
 #include "pipeline/commands.hpp"
 #include "pipeline/diagnose_report.hpp"
-#include "pipeline/collect_sightings.hpp"
+#include "detectors/sightings.hpp"
 #include "pipeline/progress.hpp"
-#include "pipeline/truth_eval.hpp"
+#include "io/simulation_truth.hpp"
 #include "pipeline/words.hpp"
 
 namespace lidarcal::pipeline {
@@ -94,7 +94,7 @@ std::optional<LandmarkObservations> findLandmarks(const DiagnoseCommand& c, cons
   progress.finish();
   if (!det.association.landmarks.empty()) {
     // The beams beside each pole that read between it and the background: mixed pixels' readings.
-    obs = toLandmarkObservations(seq, det, SightingOptions{true});
+    obs = detectors::toLandmarkObservations(seq, det, detectors::SightingOptions{true});
     if (!seq.meta.range_max_m) {
       double max_reading = 0.0;
       for (const auto& s : obs->sightings)
@@ -120,7 +120,7 @@ void checkCandidates(const diagnosis::DiagnoseConfig& config, const std::vector<
 
 /// True range of every beam of every sighting from truth.json (NaN where the truth has none).
 std::vector<std::vector<double>> truthRanges(const std::string& path, const LandmarkObservations& obs) {
-  const SimulationTruth truth = loadTruth(path);
+  const io::SimulationTruth truth = io::loadTruth(path);
   std::vector<std::vector<double>> ranges;
   for (const auto& s : obs.sightings) {
     std::vector<double> t;

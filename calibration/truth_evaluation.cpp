@@ -1,31 +1,14 @@
-#include "pipeline/truth_eval.hpp"
+#include "calibration/truth_evaluation.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <map>
+#include <string>
 
+#include "calibration/oracle.hpp"
 #include "common/errors.hpp"
-#include "io/scene_io.hpp"
 
-namespace lidarcal::pipeline {
-
-SimulationTruth loadTruth(const std::filesystem::path& truth_json) {
-  SimulationTruth t;
-  t.truth = io::readTruth(truth_json);
-  const auto csv = truth_json.parent_path() / t.truth.true_ranges_file;
-  t.ranges = io::readTrueRanges(csv);
-  t.beams = static_cast<std::size_t>(t.truth.scene.sensor.beams);
-  std::size_t scans = 0;
-  for (const auto& s : t.truth.stops) scans += s.scans;
-  if (t.ranges.size() != scans * t.beams)
-    throw InputError(csv.string(), "", "holds " + std::to_string(t.ranges.size()) + " rows, truth.json promises " +
-                                           std::to_string(scans * t.beams),
-                     "regenerate the simulation");
-  for (std::size_t i = 0; i < t.ranges.size(); ++i)
-    if (t.ranges[i].scan != i / t.beams || t.ranges[i].beam != i % t.beams)
-      throw InputError(csv.string(), "line " + std::to_string(i + 2), "rows are not in scan, beam order",
-                       "regenerate the simulation");
-  return t;
-}
+namespace lidarcal::calibration {
 
 double commandedScale(const Truth& truth) {
   std::vector<Pose2> actual, commanded;
@@ -33,12 +16,12 @@ double commandedScale(const Truth& truth) {
     actual.push_back(s.actual);
     commanded.push_back(s.commanded);
   }
-  return actual.size() >= 2 ? calibration::similarityScale(actual, commanded) : 1.0;
+  return actual.size() >= 2 ? similarityScale(actual, commanded) : 1.0;
 }
 
 namespace {
 
-void checkMatches(const io::Sequence& raw, const SimulationTruth& truth) {
+void checkMatches(const io::Sequence& raw, const io::SimulationTruth& truth) {
   if (raw.scans.size() * truth.beams != truth.ranges.size())
     throw InputError(raw.dir.string(), "", "has " + std::to_string(raw.scans.size()) +
                                                " scans, the truth describes " +
@@ -48,9 +31,9 @@ void checkMatches(const io::Sequence& raw, const SimulationTruth& truth) {
 
 }  // namespace
 
-std::vector<calibration::RangePair> truthPairs(const io::Sequence& raw, const SimulationTruth& truth, double scale) {
+std::vector<RangePair> truthPairs(const io::Sequence& raw, const io::SimulationTruth& truth, double scale) {
   checkMatches(raw, truth);
-  std::vector<calibration::RangePair> pairs;
+  std::vector<RangePair> pairs;
   for (std::size_t k = 0; k < raw.stops.size(); ++k) {
     const auto& scans = raw.stops[k].scans;
     for (std::size_t pos = 0; pos < scans.size(); ++pos) {
@@ -68,7 +51,7 @@ std::vector<calibration::RangePair> truthPairs(const io::Sequence& raw, const Si
   return pairs;
 }
 
-std::vector<std::vector<double>> truthBatches(const io::Sequence& raw, const SimulationTruth& truth) {
+std::vector<std::vector<double>> truthBatches(const io::Sequence& raw, const io::SimulationTruth& truth) {
   checkMatches(raw, truth);
   std::vector<std::vector<double>> batches;
   for (const auto& stop : raw.stops) {
@@ -96,12 +79,12 @@ struct Compared {
     raw.push_back(r);
     corrected.push_back(c);
   }
-  calibration::RangeComparison compare() const { return calibration::compareRanges(truth, raw, corrected); }
+  RangeComparison compare() const { return compareRanges(truth, raw, corrected); }
 };
 
 }  // namespace
 
-Evaluation evaluate(const io::Sequence& raw, const SimulationTruth& truth, const CorrectedRanges& corrected) {
+Evaluation evaluate(const io::Sequence& raw, const io::SimulationTruth& truth, const CorrectedRanges& corrected) {
   checkMatches(raw, truth);
   Compared landmarks, walls, all, beyond;
   Evaluation e;
@@ -132,7 +115,7 @@ Evaluation evaluate(const io::Sequence& raw, const SimulationTruth& truth, const
   return e;
 }
 
-Evaluation evaluate(const io::Sequence& corrected, const io::Sequence& raw, const SimulationTruth& truth) {
+Evaluation evaluate(const io::Sequence& corrected, const io::Sequence& raw, const io::SimulationTruth& truth) {
   if (corrected.scans.size() != raw.scans.size())
     throw InputError(corrected.dir.string(), "", "has " + std::to_string(corrected.scans.size()) + " scans, the raw sequence " +
                                                      std::to_string(raw.scans.size()),
@@ -156,9 +139,9 @@ Evaluation evaluate(const io::Sequence& corrected, const io::Sequence& raw, cons
   });
 }
 
-Evaluation evaluate(const CalibrationModel& model, calibration::InversionMethod method, calibration::Outside outside,
-                    const io::Sequence& raw, const SimulationTruth& truth) {
-  const calibration::ReadingCorrector correct = calibration::readingCorrector(model, method, outside);
+Evaluation evaluate(const CalibrationModel& model, InversionMethod method, Outside outside,
+                    const io::Sequence& raw, const io::SimulationTruth& truth) {
+  const ReadingCorrector correct = readingCorrector(model, method, outside);
   return evaluate(raw, truth, [&](std::size_t, const io::Scan& rs) {
     CorrectedScanRanges r;
     r.range_m.assign(rs.cloud->size(), std::nan(""));
@@ -166,12 +149,34 @@ Evaluation evaluate(const CalibrationModel& model, calibration::InversionMethod 
     for (std::size_t b = 0; b < r.range_m.size(); ++b) {
       const auto& p = (*rs.cloud)[b];
       if (!std::isfinite(p.x)) continue;
-      const calibration::CorrectedReading c = correct(std::hypot(static_cast<double>(p.x), static_cast<double>(p.y)));
+      const CorrectedReading c = correct(std::hypot(static_cast<double>(p.x), static_cast<double>(p.y)));
       r.range_m[b] = c.range_m;
-      r.beyond[b] = c.fate != calibration::ReadingFate::corrected && c.fate != calibration::ReadingFate::unresolved;
+      r.beyond[b] = c.fate != ReadingFate::corrected && c.fate != ReadingFate::unresolved;
     }
     return r;
   });
 }
 
-}  // namespace lidarcal::pipeline
+CalibrationModel calibrateOracle(const io::Sequence& raw, const io::SimulationTruth& truth, double scale,
+                                 const CalibrationConfig& config) {
+  const auto pairs = truthPairs(raw, truth, scale);
+  const auto& sensor = truth.truth.scene.sensor.range;
+  CalibrationModel m =
+      calibrateAgainstTruth(pairs, config, truthBatches(raw, truth), sensor.range_min_m, sensor.range_max_m);
+  m.method = scale == 1.0 ? "oracle" : "oracle-commanded";
+  m.beams = truth.truth.scene.sensor.beams;
+  m.sensor_name = truth.truth.scene.sensor.name;
+  for (const auto& s : truth.truth.stops) m.stop_poses.push_back(scale == 1.0 ? s.actual : s.commanded);
+  for (std::size_t i = 0; i < truth.truth.scene.landmarks.size(); ++i) {
+    const auto& c = truth.truth.scene.landmarks[i];
+    CalibratedLandmark l;
+    l.id = static_cast<int>(i) + 1;
+    l.x_m = c.x_m;
+    l.y_m = c.y_m;
+    l.radius_m = c.radius_m;
+    m.landmarks.push_back(l);
+  }
+  return m;
+}
+
+}  // namespace lidarcal::calibration

@@ -1,13 +1,18 @@
 #pragma once
-// A node under test as a child process (fork + exec, stdout and stderr into a log file), ended
-// by its pid only; and a bounded poll. Shared by the ROS 1 and ROS 2 node tests.
+// Child processes for the tests that start servers (rosmaster, the Slurm daemons): started by
+// fork + exec with their output in a log file, waited for with bounded polls, stopped by their
+// pid (a signal, then SIGKILL), and a free loopback port for them to listen on.
 
+#include <arpa/inet.h>
+#include <netinet/in.h>
 #include <signal.h>
+#include <sys/socket.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
 #include <functional>
 #include <optional>
 #include <string>
@@ -61,10 +66,11 @@ class Child {
     status_ = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
     return status_;
   }
-  /// SIGINT (a ROS node's Ctrl-C), then SIGKILL after 10 s; returns the exit status.
-  int stop() {
+  /// `signal` (default SIGINT, a ROS node's Ctrl-C; SIGTERM for a daemon), then SIGKILL after 10 s;
+  /// returns the exit status.
+  int stop(int signal = SIGINT) {
     if (pid_ > 0) {
-      kill(pid_, SIGINT);
+      kill(pid_, signal);
       if (!waitExit(10.0) && pid_ > 0) {
         kill(pid_, SIGKILL);
         waitExit(5.0);
@@ -73,11 +79,29 @@ class Child {
     return status_.value_or(-1);
   }
   std::string log() const { return readFile(log_); }
+  /// The process id (-1 once it has ended and been waited for).
+  pid_t pid() const { return pid_; }
 
  private:
   pid_t pid_ = -1;
   std::optional<int> status_;
   fs::path log_;
 };
+
+/// A TCP port on 127.0.0.1 that nothing listens on now (-1 when none could be had).
+inline int freeLoopbackPort() {
+  const int fd = socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  a.sin_port = 0;
+  socklen_t len = sizeof a;
+  if (bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0 || getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len) != 0) {
+    close(fd);
+    return -1;
+  }
+  close(fd);
+  return ntohs(a.sin_port);
+}
 
 }  // namespace lidarcal::test

@@ -1,6 +1,5 @@
-// Sightings from the coordinates the detection kept equal those from reading the scans again
-// (calibrate and run read every scan once). The readings beside a pole that only a mixed pixel
-// puts between it and its background.
+// The readings beside a pole that only a mixed pixel puts between it and its background, and
+// the check that no nearby scan sees a surface there.
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -11,82 +10,15 @@
 #include <random>
 
 #include "common/rng.hpp"
-#include "pipeline/truth_eval.hpp"
-
+#include "detectors/mixed_pixels.hpp"
 #include "detectors/sequence_detector.hpp"
+#include "detectors/sightings.hpp"
 #include "io/sequence.hpp"
-#include "pipeline/collect_sightings.hpp"
+#include "io/simulation_truth.hpp"
 #include "test_util.hpp"
 
 namespace lidarcal {
 namespace {
-
-/// The same sightings in the same order: scan, landmark and every reading (intensity as
-/// recorded, or NaN, none, on both sides).
-void expectSameSightings(const LandmarkObservations& x, const LandmarkObservations& y) {
-  ASSERT_EQ(x.sightings.size(), y.sightings.size());
-  for (std::size_t k = 0; k < x.sightings.size(); ++k) {
-    const auto& a = x.sightings[k];
-    const auto& b = y.sightings[k];
-    EXPECT_EQ(a.scan, b.scan);
-    EXPECT_EQ(a.landmark, b.landmark);
-    ASSERT_EQ(a.beams.size(), b.beams.size());
-    for (std::size_t j = 0; j < a.beams.size(); ++j) {
-      EXPECT_EQ(a.beams[j].angle_rad, b.beams[j].angle_rad);
-      EXPECT_EQ(a.beams[j].range_m, b.beams[j].range_m);
-      EXPECT_EQ(a.beams[j].beam, b.beams[j].beam);
-      EXPECT_TRUE(a.beams[j].intensity == b.beams[j].intensity ||
-                  (std::isnan(a.beams[j].intensity) && std::isnan(b.beams[j].intensity)));
-    }
-  }
-}
-
-TEST(CollectSightings, KeptInlierCoordinatesGiveTheSightingsOfASecondRead) {
-  const io::Sequence seq = io::openSequence(test::sourceDir() / "data/example/scans");
-  const detectors::SequenceDetections kept = detectors::detectSequence(seq, detectors::SequenceDetectionConfig{});
-  std::size_t reads = 0;
-  const detectors::ScanLoader counting = [&](std::size_t i) {
-    ++reads;
-    return io::readScan(seq.scans.path(i));
-  };
-  const LandmarkObservations from_kept = pipeline::toLandmarkObservations(seq, kept, counting);
-  EXPECT_EQ(reads, 0u);  // nothing read again
-
-  detectors::SequenceDetections stripped = kept;
-  for (auto& scan : stripped.scans)
-    for (auto& d : scan.detections) d.inlier_xyi.clear();
-  const LandmarkObservations from_files = pipeline::toLandmarkObservations(seq, stripped, counting);
-  EXPECT_GT(reads, 0u);
-
-  ASSERT_FALSE(from_kept.sightings.empty());
-  expectSameSightings(from_kept, from_files);
-}
-
-TEST(CollectSightings, TheSightingsOfAScanComeByLandmarkWhateverTheDetectorsOrder) {
-  const io::Sequence seq = io::openSequence(test::sourceDir() / "data/example/scans");
-  const detectors::SequenceDetections det = detectors::detectSequence(seq, detectors::SequenceDetectionConfig{});
-  detectors::SequenceDetections reversed = det;
-  std::size_t turned = 0;  // scans with two poles or more, whose detections now come the other way round
-  for (std::size_t i = 0; i < reversed.scans.size(); ++i) {
-    auto& d = reversed.scans[i].detections;
-    auto& ids = reversed.association.ids.at(i);
-    ASSERT_EQ(d.size(), ids.size());
-    std::reverse(d.begin(), d.end());
-    std::reverse(ids.begin(), ids.end());
-    turned += d.size() > 1 ? 1 : 0;
-  }
-  ASSERT_GT(turned, 0u);
-  const LandmarkObservations a = pipeline::toLandmarkObservations(seq, det);
-  const LandmarkObservations b = pipeline::toLandmarkObservations(seq, reversed);
-  expectSameSightings(a, b);
-  ASSERT_EQ(a.sightings.size(), b.sightings.size());
-  for (std::size_t k = 0; k < a.sightings.size(); ++k) {
-    EXPECT_EQ(a.sightings[k].bearing_rad, b.sightings[k].bearing_rad);
-    if (k > 0 && a.sightings[k].scan == a.sightings[k - 1].scan) {
-      EXPECT_LT(a.sightings[k - 1].landmark, a.sightings[k].landmark);
-    }
-  }
-}
 
 /// A scan of 360 one-degree beams: a wall 3 m away across the view, ranges `r` on beams 10-13.
 io::Scan wallScan(const std::vector<double>& r) {
@@ -106,12 +38,12 @@ io::Scan wallScan(const std::vector<double>& r) {
   return scan;
 }
 
-TEST(CollectSightings, OnlyAReadingBetweenThePoleAndTheWallBehindItIsAMixedPixelCandidate) {
+TEST(MixedPixels, OnlyAReadingBetweenThePoleAndTheWallBehindItIsAMixedPixelCandidate) {
   const detectors::DetectionConfig dc;  // t(r) = 0.01 + 0.005 r^2
   const double radius = 0.0275;
   // A pole at 1 m on beams 10-12, beam 13 beside it; the wall behind reads about 3.05 m there.
   const auto beside = [&](double reading) {
-    return pipeline::readingBetweenPoleAndBackground(wallScan({1.00, 0.99, 1.00, reading}), 12, +1, radius, dc);
+    return detectors::readingBetweenPoleAndBackground(wallScan({1.00, 0.99, 1.00, reading}), 12, +1, radius, dc);
   };
   const auto mid = beside(2.0);
   ASSERT_TRUE(mid.has_value());
@@ -123,18 +55,37 @@ TEST(CollectSightings, OnlyAReadingBetweenThePoleAndTheWallBehindItIsAMixedPixel
   EXPECT_FALSE(beside(2.95).has_value());  // within 3 t of the wall
   EXPECT_TRUE(beside(2.70).has_value());
   // On the other side (beam 9 and below), the wall extended to beam 9 is the background.
-  EXPECT_FALSE(pipeline::readingBetweenPoleAndBackground(wallScan({1.00, 0.99, 1.00}), 10, -1, radius, dc).has_value());
+  EXPECT_FALSE(detectors::readingBetweenPoleAndBackground(wallScan({1.00, 0.99, 1.00}), 10, -1, radius, dc).has_value());
   // Beams not evenly spaced in angle (a return missing from a dense cloud) are not judged.
   io::Scan gap = wallScan({1.00, 0.99, 1.00, 2.0});
   gap.cloud->erase(gap.cloud->begin() + 14);
-  EXPECT_FALSE(pipeline::readingBetweenPoleAndBackground(gap, 12, +1, radius, dc).has_value());
+  EXPECT_FALSE(detectors::readingBetweenPoleAndBackground(gap, 12, +1, radius, dc).has_value());
+}
+
+TEST(MixedPixels, AScanSeesAPointOnlyWhereOneOfItsReturnsReadsItsDistance) {
+  // The wall scan from a pose at (1, 2) turned by 0.3 rad: every return's own world point is
+  // seen, a point 0.2 m nearer along the same beam is not, and the tolerance decides in between.
+  const io::Scan scan = wallScan({});
+  const detectors::PolarScan polar = detectors::polarScan(scan);
+  ASSERT_EQ(polar.angle_rad.size(), 360u);
+  EXPECT_TRUE(std::is_sorted(polar.angle_rad.begin(), polar.angle_rad.end()));
+  const Pose2 from{1.0, 2.0, 0.3};
+  for (int b : {0, 90, 175, 355}) {  // beams where the wall is square to the beam (or far): neighbours read alike
+    SCOPED_TRACE(b);
+    const auto& p = (*scan.cloud)[static_cast<std::size_t>(b)];
+    const double a = from.yaw_rad + std::atan2(p.y, p.x), r = std::hypot(p.x, p.y);
+    EXPECT_TRUE(detectors::seesPoint(polar, from, from.x_m + r * std::cos(a), from.y_m + r * std::sin(a), 0.01));
+    EXPECT_FALSE(detectors::seesPoint(polar, from, from.x_m + (r - 0.2) * std::cos(a), from.y_m + (r - 0.2) * std::sin(a), 0.1));
+    EXPECT_TRUE(detectors::seesPoint(polar, from, from.x_m + (r - 0.2) * std::cos(a), from.y_m + (r - 0.2) * std::sin(a), 0.3));
+  }
+  EXPECT_FALSE(detectors::seesPoint(detectors::PolarScan{}, from, 0.0, 0.0, 1.0));  // no returns
 }
 
 /// Sightings of a simulated drive among thin poles, with the mixed-pixel candidates and without,
 /// and its truth.
 struct Drive {
   LandmarkObservations obs, inliers_only;
-  pipeline::SimulationTruth truth;
+  io::SimulationTruth truth;
 };
 
 Drive simulateDrive(const test::TempDir& dir, const std::string& name, double mixed_fraction, int seed) {
@@ -146,10 +97,10 @@ Drive simulateDrive(const test::TempDir& dir, const std::string& name, double mi
   EXPECT_EQ(r.exit_code, 0) << r.err;
   const io::Sequence seq = io::openSequence(dir / name / "scans");
   const auto det = detectors::detectSequence(seq, detectors::SequenceDetectionConfig{});
-  pipeline::SightingOptions with;
+  detectors::SightingOptions with;
   with.mixed_pixel_candidates = true;
-  return {pipeline::toLandmarkObservations(seq, det, with), pipeline::toLandmarkObservations(seq, det),
-          pipeline::loadTruth(dir / name / "truth.json")};
+  return {detectors::toLandmarkObservations(seq, det, with), detectors::toLandmarkObservations(seq, det),
+          io::loadTruth(dir / name / "truth.json")};
 }
 
 /// The sightings' readings that are no inlier of their circle (those beside it), split by truth
@@ -171,7 +122,7 @@ std::pair<int, int> besideReadings(const Drive& d) {
   return {mixed, other};
 }
 
-TEST(CollectSightings, TheReadingsKeptBesideThinPolesAreTheMixedPixels) {
+TEST(MixedPixels, TheReadingsKeptBesideThinPolesAreTheMixedPixels) {
   // A drive among thin poles (one to three beams per pole), 5-10 % of the beams at a pole's edge
   // reading somewhere between it and the background; the detector leaves those readings out.
   // The fraction and the simulator's seed come from a seed this test does not read. Every
