@@ -192,6 +192,112 @@ RigObservations withoutLonePoles(const RigObservations& obs, std::size_t* droppe
   return out;
 }
 
+/// Refuses observations with no pole seen from two places.
+Status refuseWithoutPoles(const RigObservations& obs, const RigObservations& all) {
+  if (obs.sightings.empty() && !all.sightings.empty())
+    return Status{StatusCode::no_shared_landmark,
+                  "every pole is seen from one place only (one sensor at one stop): nothing ties the sensors' "
+                  "frames or shows their range errors (place poles where two sensors see them, or move the "
+                  "vehicle between stops)"};
+  if (obs.sightings.empty()) return Status{StatusCode::no_usable_landmark, "no sensor saw a pole"};
+  return Status{StatusCode::ok, ""};
+}
+
+std::vector<bool> stopsWithSightings(const RigObservations& obs) {
+  std::vector<bool> seen(obs.vehicle.size(), false);
+  for (const RigSighting& s : obs.sightings)
+    if (s.stop < seen.size()) seen[s.stop] = true;
+  return seen;
+}
+
+/// The frame of the mountings: the vehicle's when its recorded poses turn enough, else relative
+/// to the reference; refused when the frame asked for is not determined by the data.
+Status chooseFrame(const RigObservations& obs, const RigConfig& config, const Spread& spread, FitSetup* setup) {
+  const std::string& ref = obs.sensors[config.reference].name;
+  const bool turned = obs.vehicle_known && spread.turn_rad >= config.min_turn_rad;
+  setup->frame = config.frame == RigFrame::automatic ? (turned ? RigFrame::vehicle : RigFrame::relative) : config.frame;
+  if (setup->frame == RigFrame::vehicle && !turned)
+    return Status{StatusCode::not_identifiable,
+                  std::string(obs.vehicle_known ? "the vehicle's recorded headings span only " +
+                                                      fixed(rad2deg(spread.turn_rad), 1) + " deg"
+                                                : "the vehicle's poses are not recorded") +
+                      ": a mounting's position in the vehicle frame cannot be told from the poles' positions "
+                      "(record the vehicle's poses (--pose tf:FRAME or odom:TOPIC) while it turns by " +
+                      fixed(rad2deg(config.min_turn_rad), 0) + " deg or more, or find the mountings relative to " +
+                      ref + " with --frame relative)"};
+  if (setup->frame == RigFrame::relative && !(obs.vehicle_known && spread.travel_m >= config.min_travel_m)) {
+    const std::vector<std::size_t> alone = unlinkedSensors(obs, config.reference);
+    if (!alone.empty())
+      return Status{StatusCode::no_shared_landmark,
+                    obs.sensors[alone.front()].name + " sees no pole that " + ref +
+                        " (or a sensor that shares poles with it) also sees: without a vehicle that moves "
+                        "on recorded poses, only poles two sensors see tie their frames (place poles where "
+                        "both see them, or record the vehicle's poses while it drives and turns)"};
+  }
+  return Status{StatusCode::ok, ""};
+}
+
+/// The gauge (range scale, held stops), the motion prior and the starting flips.
+void completeSetup(const RigObservations& obs, const RigConfig& config, const Spread& spread, FitSetup* setup) {
+  setup->scale_held = !(obs.vehicle_known && spread.travel_m >= config.min_travel_m);
+  setup->motion = config.motion == MotionPrior::on || (config.motion == MotionPrior::automatic && continuousRig(obs, config));
+  setup->motion = setup->motion && obs.vehicle_known;
+  setup->stop_held = heldStops(obs);
+  setup->flips.resize(obs.sensors.size());
+  for (std::size_t s = 0; s < obs.sensors.size(); ++s) setup->flips[s] = obs.sensors[s].prior.flip();
+}
+
+/// Refuses a fit in which a sensor reads no shared pole or whose mounting's standard errors
+/// exceed the limits; marks range models not determined (checkModel).
+Status checkEstimates(const RigObservations& obs, const RigConfig& config, RigResult* r) {
+  for (std::size_t s = 0; s < r->sensors.size(); ++s) {
+    RigSensorEstimate& e = r->sensors[s];
+    if (e.residuals == 0)
+      return Status{StatusCode::no_shared_landmark,
+                    obs.sensors[s].name + " reads no pole that is seen from another place (another sensor or "
+                                          "another stop): nothing ties its mounting (place poles where it and "
+                                          "another sensor both see them)"};
+    checkModel(e, obs.sensors[s].name, config);
+    if (e.mounting_held) continue;
+    const double se_xy = std::sqrt(std::max(e.mounting_covariance(0, 0), e.mounting_covariance(1, 1)));
+    const double se_yaw = std::sqrt(e.mounting_covariance(2, 2));
+    if (se_xy > config.max_mounting_se_m || se_yaw > config.max_mounting_se_rad)
+      return Status{StatusCode::not_identifiable,
+                    "the mounting of " + obs.sensors[s].name + " is determined to " + fixed(se_xy * 1000.0, 0) +
+                        " mm and " + fixed(rad2deg(se_yaw), 1) + " deg only (standard errors): " +
+                        std::to_string(e.shared_poles) + " of its " + std::to_string(e.poles) +
+                        " poles are seen by another sensor (record more poles that two sensors see, spread "
+                        "around the vehicle, or drive the vehicle through a turn on recorded poses)"};
+  }
+  return Status{StatusCode::ok, ""};
+}
+
+/// What the user should know about the fit: poles left out, the frame, the scale, the flips.
+void addNotes(const RigObservations& obs, const RigConfig& config, const Spread& spread, std::size_t lone, RigResult* r) {
+  const std::string& ref = obs.sensors[config.reference].name;
+  if (lone > 0)
+    r->notes.push_back(std::to_string(lone) + (lone == 1 ? " pole was" : " poles were") +
+                       " seen from one place only (one sensor at one stop) and left out: such a pole tells nothing "
+                       "about the mountings or the range models");
+  if (r->frame == RigFrame::vehicle)
+    r->notes.push_back("mountings in the vehicle frame: the recorded poses turn by " + fixed(rad2deg(spread.turn_rad), 1) +
+                       " deg over " + fixed(spread.travel_m, 2) + " m");
+  else
+    r->notes.push_back("mountings relative to " + ref + " (held at its prior): " +
+                       (obs.vehicle_known ? "the recorded poses turn by " + fixed(rad2deg(spread.turn_rad), 1) + " deg only"
+                                          : std::string("the vehicle's poses are not recorded")) +
+                       ", so a mounting's place on the vehicle cannot be told from the poles' positions; only the "
+                       "sensors' mountings relative to each other are determined");
+  if (r->scale_free)
+    r->notes.push_back("a range scale common to every sensor and to the geometry is not determined without a known "
+                       "distance (recorded poses over at least " + fixed(config.min_travel_m, 1) + " m, or a tape): " + ref +
+                       "'s alpha_1 is held at 1 and the other sensors' scales are relative to it");
+  for (std::size_t s = 0; s < r->sensors.size(); ++s)
+    if (r->sensors[s].flip_log_likelihood_ratio > 0.0)
+      r->notes.push_back(obs.sensors[s].name + (r->sensors[s].mounting.upside_down ? " upside down" : " upright") +
+                         " (log-likelihood " + fixed(r->sensors[s].flip_log_likelihood_ratio, 1) + " nats above the other flip)");
+}
+
 }  // namespace
 
 const char* toString(RigFrame f) {
@@ -237,100 +343,19 @@ RigResult calibrateRig(const RigObservations& all, const RigConfig& config) {
   const RigObservations obs = withoutLonePoles(all, &lone);
   RigResult fail;
   fail.reference = config.reference;
-  if (obs.sightings.empty() && !all.sightings.empty()) {
-    fail.status = Status{StatusCode::no_shared_landmark,
-                         "every pole is seen from one place only (one sensor at one stop): nothing ties the sensors' "
-                         "frames or shows their range errors (place poles where two sensors see them, or move the "
-                         "vehicle between stops)"};
-    return fail;
-  }
-  if (obs.sightings.empty()) {
-    fail.status = Status{StatusCode::no_usable_landmark, "no sensor saw a pole"};
-    return fail;
-  }
-  std::vector<bool> seen(obs.vehicle.size(), false);
-  for (const RigSighting& s : obs.sightings)
-    if (s.stop < seen.size()) seen[s.stop] = true;
-  const Spread spread = recordedSpread(obs, seen);
-  const std::string& ref = obs.sensors[config.reference].name;
-  const bool turned = obs.vehicle_known && spread.turn_rad >= config.min_turn_rad;
+  fail.status = refuseWithoutPoles(obs, all);
+  if (!fail.ok()) return fail;
+  const Spread spread = recordedSpread(obs, stopsWithSightings(obs));
   FitSetup setup;
-  setup.frame = config.frame == RigFrame::automatic ? (turned ? RigFrame::vehicle : RigFrame::relative) : config.frame;
-  if (setup.frame == RigFrame::vehicle && !turned) {
-    fail.status = Status{StatusCode::not_identifiable,
-                         std::string(obs.vehicle_known ? "the vehicle's recorded headings span only " +
-                                                             fixed(rad2deg(spread.turn_rad), 1) + " deg"
-                                                       : "the vehicle's poses are not recorded") +
-                             ": a mounting's position in the vehicle frame cannot be told from the poles' positions "
-                             "(record the vehicle's poses (--pose tf:FRAME or odom:TOPIC) while it turns by " +
-                             fixed(rad2deg(config.min_turn_rad), 0) + " deg or more, or find the mountings relative to " +
-                             ref + " with --frame relative)"};
-    return fail;
-  }
-  if (setup.frame == RigFrame::relative && !(obs.vehicle_known && spread.travel_m >= config.min_travel_m)) {
-    const std::vector<std::size_t> alone = unlinkedSensors(obs, config.reference);
-    if (!alone.empty()) {
-      fail.status = Status{StatusCode::no_shared_landmark,
-                           obs.sensors[alone.front()].name + " sees no pole that " + ref +
-                               " (or a sensor that shares poles with it) also sees: without a vehicle that moves "
-                               "on recorded poses, only poles two sensors see tie their frames (place poles where "
-                               "both see them, or record the vehicle's poses while it drives and turns)"};
-      return fail;
-    }
-  }
-  setup.scale_held = !(obs.vehicle_known && spread.travel_m >= config.min_travel_m);
-  setup.motion = config.motion == MotionPrior::on || (config.motion == MotionPrior::automatic && continuousRig(obs, config));
-  setup.motion = setup.motion && obs.vehicle_known;
-  setup.stop_held = heldStops(obs);
-  setup.flips.resize(obs.sensors.size());
-  for (std::size_t s = 0; s < obs.sensors.size(); ++s) setup.flips[s] = obs.sensors[s].prior.flip();
+  fail.status = chooseFrame(obs, config, spread, &setup);
+  if (!fail.ok()) return fail;
+  completeSetup(obs, config, spread, &setup);
 
   RigResult r = fitWithOrders(obs, config, setup);
   if (!r.ok()) return r;
-  for (std::size_t s = 0; s < r.sensors.size(); ++s) {
-    RigSensorEstimate& e = r.sensors[s];
-    if (e.residuals == 0) {
-      r.status = Status{StatusCode::no_shared_landmark,
-                        obs.sensors[s].name + " reads no pole that is seen from another place (another sensor or "
-                                              "another stop): nothing ties its mounting (place poles where it and "
-                                              "another sensor both see them)"};
-      return r;
-    }
-    checkModel(e, obs.sensors[s].name, config);
-    if (e.mounting_held) continue;
-    const double se_xy = std::sqrt(std::max(e.mounting_covariance(0, 0), e.mounting_covariance(1, 1)));
-    const double se_yaw = std::sqrt(e.mounting_covariance(2, 2));
-    if (se_xy > config.max_mounting_se_m || se_yaw > config.max_mounting_se_rad) {
-      r.status = Status{StatusCode::not_identifiable,
-                        "the mounting of " + obs.sensors[s].name + " is determined to " + fixed(se_xy * 1000.0, 0) +
-                            " mm and " + fixed(rad2deg(se_yaw), 1) + " deg only (standard errors): " +
-                            std::to_string(e.shared_poles) + " of its " + std::to_string(e.poles) +
-                            " poles are seen by another sensor (record more poles that two sensors see, spread "
-                            "around the vehicle, or drive the vehicle through a turn on recorded poses)"};
-      return r;
-    }
-  }
-  if (lone > 0)
-    r.notes.push_back(std::to_string(lone) + (lone == 1 ? " pole was" : " poles were") +
-                      " seen from one place only (one sensor at one stop) and left out: such a pole tells nothing "
-                      "about the mountings or the range models");
-  if (r.frame == RigFrame::vehicle)
-    r.notes.push_back("mountings in the vehicle frame: the recorded poses turn by " + fixed(rad2deg(spread.turn_rad), 1) +
-                      " deg over " + fixed(spread.travel_m, 2) + " m");
-  else
-    r.notes.push_back("mountings relative to " + ref + " (held at its prior): " +
-                      (obs.vehicle_known ? "the recorded poses turn by " + fixed(rad2deg(spread.turn_rad), 1) + " deg only"
-                                         : std::string("the vehicle's poses are not recorded")) +
-                      ", so a mounting's place on the vehicle cannot be told from the poles' positions; only the "
-                      "sensors' mountings relative to each other are determined");
-  if (r.scale_free)
-    r.notes.push_back("a range scale common to every sensor and to the geometry is not determined without a known "
-                      "distance (recorded poses over at least " + fixed(config.min_travel_m, 1) + " m, or a tape): " + ref +
-                      "'s alpha_1 is held at 1 and the other sensors' scales are relative to it");
-  for (std::size_t s = 0; s < r.sensors.size(); ++s)
-    if (r.sensors[s].flip_log_likelihood_ratio > 0.0)
-      r.notes.push_back(obs.sensors[s].name + (r.sensors[s].mounting.upside_down ? " upside down" : " upright") +
-                        " (log-likelihood " + fixed(r.sensors[s].flip_log_likelihood_ratio, 1) + " nats above the other flip)");
+  r.status = checkEstimates(obs, config, &r);
+  if (!r.ok()) return r;
+  addNotes(obs, config, spread, lone, &r);
   return r;
 }
 

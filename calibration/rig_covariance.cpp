@@ -98,34 +98,37 @@ bool RigProblem::computeCovariance() {
   return true;
 }
 
-void RigProblem::summarise() {
-  const auto block = [&](std::size_t offset, std::size_t size) {
-    Eigen::MatrixXd c = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(size), static_cast<Eigen::Index>(size));
-    for (std::size_t a = 0; a < size; ++a)
-      for (std::size_t b = 0; b < size; ++b) {
-        const int ca = column_of_[offset + a], cb = column_of_[offset + b];
-        if (ca >= 0 && cb >= 0) c(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b)) = covariance_(ca, cb);
-      }
-    return c;
-  };
+Eigen::MatrixXd RigProblem::covarianceBlock(std::size_t offset, std::size_t size) const {
+  Eigen::MatrixXd c = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(size), static_cast<Eigen::Index>(size));
+  for (std::size_t a = 0; a < size; ++a)
+    for (std::size_t b = 0; b < size; ++b) {
+      const int ca = column_of_[offset + a], cb = column_of_[offset + b];
+      if (ca >= 0 && cb >= 0) c(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b)) = covariance_(ca, cb);
+    }
+  return c;
+}
+
+/// Each sensor's mounting, range model and residuals; returns the log-likelihood of its beams
+/// summed over the sensors and the number of beams in `samples_used`.
+double RigProblem::summariseSensors(std::size_t* samples_used) {
   const auto samples = noiseSamples();
   const std::size_t S = obs_.sensors.size();
   out_.sensors.assign(S, RigSensorEstimate{});
   double ll = 0.0;
-  std::size_t n_samples = 0;
+  *samples_used = 0;
   for (std::size_t s = 0; s < S; ++s) {
     RigSensorEstimate& e = out_.sensors[s];
     const double* m = mount(s);
     e.mounting = obs_.sensors[s].prior;
     e.mounting.x_m = m[0], e.mounting.y_m = m[1], e.mounting.yaw_rad = wrapAngle(m[2]);
     e.mounting.upside_down = setup_.flips[s] < 0.0;
-    e.mounting_covariance = block(mount_offset_ + 3 * s, 3);
+    e.mounting_covariance = covarianceBlock(mount_offset_ + 3 * s, 3);
     e.mounting_held = setup_.frame == RigFrame::relative && s == config_.reference;
     e.model.bias.alpha.assign(alpha(s), alpha(s) + setup_.orders[s] + 1);
     e.model.noise = noise_[s].law;
     e.model.range_min_m = obs_.sensors[s].range_min_m;
     e.model.range_max_m = obs_.sensors[s].range_max_m;
-    e.alpha_covariance = block(alpha_offset_[s], static_cast<std::size_t>(setup_.orders[s]) + 1);
+    e.alpha_covariance = covarianceBlock(alpha_offset_[s], static_cast<std::size_t>(setup_.orders[s]) + 1);
     e.scale_held = setup_.scale_held && s == config_.reference;
     e.beam_scatter_m = noise_[s].tau_m;
     e.readings = readings_per_sensor_[s];
@@ -134,7 +137,7 @@ void RigProblem::summarise() {
     for (const auto& x : samples[s]) ss += x.residual * x.residual;
     e.residual_rms_m = samples[s].empty() ? 0.0 : std::sqrt(ss / static_cast<double>(samples[s].size()));
     ll += pooledLogLikelihood(samples[s], noise_[s]);
-    n_samples += samples[s].size();
+    *samples_used += samples[s].size();
   }
   for (std::size_t s = 0; s < S; ++s) out_.sensors[s].d_min_m = 1e9, out_.sensors[s].d_max_m = 0.0;
   for (const std::size_t i : used_) {
@@ -143,11 +146,17 @@ void RigProblem::summarise() {
     out_.sensors[b.sensor].d_min_m = std::min(out_.sensors[b.sensor].d_min_m, d);
     out_.sensors[b.sensor].d_max_m = std::max(out_.sensors[b.sensor].d_max_m, d);
   }
+  return ll;
+}
+
+/// Each pole's position with its covariance and the sensors that see it; per sensor, how many
+/// poles it sees and how many of them another sensor sees too.
+void RigProblem::summarisePoles() {
   for (std::size_t i = 0; i < pole_ids_.size(); ++i) {
     RigPoleEstimate p;
     p.id = pole_ids_[i];
     p.x_m = pole(i)[0], p.y_m = pole(i)[1];
-    p.covariance = block(pole_offset_ + 2 * i, 2);
+    p.covariance = covarianceBlock(pole_offset_ + 2 * i, 2);
     for (const RigSighting& s : obs_.sightings)
       if (s.pole == p.id && std::find(p.sensors.begin(), p.sensors.end(), s.sensor) == p.sensors.end())
         p.sensors.push_back(s.sensor);
@@ -158,11 +167,13 @@ void RigProblem::summarise() {
     }
     out_.poles.push_back(p);
   }
-  for (std::size_t k = 0; k < obs_.vehicle.size(); ++k) out_.vehicle.push_back(Pose2{vehicle(k)[0], vehicle(k)[1], vehicle(k)[2]});
-  out_.radius_m = *radius();
-  out_.radius_se_m = std::sqrt(std::max(0.0, block(radius_offset_, 1)(0, 0)));
+}
+
+/// Every other sensor's mounting in the reference's frame, its covariance from both mountings'
+/// joint covariance (their correlation is most of the relative mounting's precision).
+void RigProblem::summariseRelativeMountings() {
   const std::size_t ref = config_.reference;
-  for (std::size_t s = 0; s < S; ++s) {
+  for (std::size_t s = 0; s < obs_.sensors.size(); ++s) {
     if (s == ref) continue;
     Eigen::Matrix<double, 6, 6> c = Eigen::Matrix<double, 6, 6>::Zero();
     const std::size_t offsets[2] = {mount_offset_ + 3 * ref, mount_offset_ + 3 * s};
@@ -177,6 +188,16 @@ void RigProblem::summarise() {
     r.sensor = s;
     out_.relative.push_back(r);
   }
+}
+
+void RigProblem::summarise() {
+  std::size_t n_samples = 0;
+  const double ll = summariseSensors(&n_samples);
+  summarisePoles();
+  for (std::size_t k = 0; k < obs_.vehicle.size(); ++k) out_.vehicle.push_back(Pose2{vehicle(k)[0], vehicle(k)[1], vehicle(k)[2]});
+  out_.radius_m = *radius();
+  out_.radius_se_m = std::sqrt(std::max(0.0, covarianceBlock(radius_offset_, 1)(0, 0)));
+  summariseRelativeMountings();
   out_.parameters = static_cast<std::size_t>(covariance_.rows());
   out_.neg_log_likelihood = -ll;
   out_.bic = static_cast<double>(out_.parameters) * std::log(std::max<double>(1.0, static_cast<double>(n_samples))) - 2.0 * ll;

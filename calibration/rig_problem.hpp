@@ -70,6 +70,10 @@ class RigProblem {
   bool reestimateNoise();
   // summarise
   bool computeCovariance();
+  Eigen::MatrixXd covarianceBlock(std::size_t offset, std::size_t size) const;
+  double summariseSensors(std::size_t* samples_used);
+  void summarisePoles();
+  void summariseRelativeMountings();
   void summarise();
 
   double* vehicle(std::size_t k) { return &params_[3 * k]; }
