@@ -175,4 +175,23 @@ CalibrationModel readModelFor(const std::filesystem::path& file, const std::stri
   return rig.sensors[*at].model;
 }
 
+CalibrationModel readModelForNode(const std::filesystem::path& file, const std::optional<std::string>& sensor_name,
+                                  const std::string& topic, std::string* chosen) {
+  if (!isRigModel(file)) {
+    if (chosen) chosen->clear();
+    return readModel(file);
+  }
+  const RigModel rig = readRigModel(file);
+  const std::optional<std::size_t> at = rig.find(sensor_name ? *sensor_name : topic);
+  if (!at && sensor_name)
+    throw InputError(file.string(), "sensors", "has no block for sensor_name '" + *sensor_name + "' (it holds " + blockNames(rig) + ")",
+                     "set sensor_name to one of these names, or leave it unset to pick the block by the input topic");
+  if (!at)
+    throw InputError(file.string(), "sensors", "has no block whose topic is the input topic '" + topic + "' (it holds " +
+                                                   blockNames(rig) + ")",
+                     "set sensor_name to the block's name, or the input to its topic");
+  if (chosen) *chosen = rig.sensors[*at].name;
+  return rig.sensors[*at].model;
+}
+
 }  // namespace lidarcal::io

@@ -75,4 +75,11 @@ RigModel readRigModel(const std::filesystem::path& file);
 /// is empty or names none. `chosen` (optional) receives the block's name ("" for a single model).
 CalibrationModel readModelFor(const std::filesystem::path& file, const std::string& key, std::string* chosen = nullptr);
 
+/// The model a live node applies: a single-sensor model.json as it is; of a rig model, the block
+/// `sensor_name` names when it is set, else the block whose topic is `topic` (the node's input,
+/// resolved). Throws InputError naming the file and its "sensors", listing the blocks, when no
+/// block matches: the node's refusal of a model of another sensor. `chosen` as readModelFor's.
+CalibrationModel readModelForNode(const std::filesystem::path& file, const std::optional<std::string>& sensor_name,
+                                  const std::string& topic, std::string* chosen = nullptr);
+
 }  // namespace lidarcal::io

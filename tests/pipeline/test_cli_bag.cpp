@@ -197,27 +197,10 @@ TEST(CorrectBag, TopicChoice) {
   for (const auto& [x, y] : scans) expectRangesCorrected(*x, *y, polynomialModel("", 100));
 }
 
-/// A rig model whose two blocks correct /scan and /scan_b with different biases.
-io::RigModel twoLidarModel() {
-  io::RigModel rig;
-  rig.frame = "relative";
-  rig.reference = "front";
-  for (const std::string name : {"front", "back"}) {
-    io::RigModelSensor s;
-    s.name = name;
-    s.topic = name == "front" ? "/scan" : "/scan_b";
-    s.frame_id = "laser";
-    s.model = polynomialModel("", 100);
-    if (name == "back") s.model.model.bias.alpha = {-0.02, 1.01, 0.0};
-    rig.sensors.push_back(s);
-  }
-  return rig;
-}
-
 TEST(CorrectBag, RigModelCorrectsEachTopicWithItsOwnBlock) {
   TempDir dir;
   const auto in = writeBag(dir / "in.bag", 6, true);
-  const io::RigModel rig = twoLidarModel();
+  const io::RigModel rig = twoLidarModel("/scan", "/scan_b");
   io::writeRigModel(dir / "rig.json", rig);
   const std::string model = " --model " + (dir / "rig.json").string();
   const CliResult r = runCli("correct " + in.string() + model + " -o " + (dir / "out.bag").string());
