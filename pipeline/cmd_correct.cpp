@@ -140,7 +140,8 @@ void addCorrectCommand(CLI::App& app) {
   sub->add_option("--topic", o->topic, "A bag's LaserScan topic to correct (default: the bag's only one)");
   sub->add_option("--sensor", o->sensor,
                   "With a rig model (several sensors): the block to apply, by sensor name, topic or frame (a ROS1 bag: "
-                  "default every block whose topic the bag holds; several comma-separated)");
+                  "default every block whose topic the bag holds; several comma-separated; a ROS 2 bag: one block per run, "
+                  "with --topic when it holds several LaserScan topics)");
   sub->add_flag("--ascii", o->ascii, "Write ASCII PCD instead of binary");
   addThreadsOption(sub, o->threads, "correcting a sequence's scans side by side (a bag is corrected in order)");
   sub->add_flag("--overwrite", o->overwrite, "Replace OUT if it exists");
