@@ -239,7 +239,7 @@ TEST(CliReference, SurveyedLandmarksAndStopsAreHeldFixed) {
   EXPECT_FALSE(fs::exists(dir / "far_model.json"));
 }
 
-// Distances measured at two of ten stops (too few for seed 004's fit alone) join the
+// Distances measured at two of ten stops (too few for Alhashimi et al. 2016's fit alone) join the
 // self-calibration of the whole sequence (--reference-fit auto picks it): on the paper's field
 // with every step 6 % longer than the odometry says and the pole radius unknown, the tape fixes
 // the scale the self-calibration cannot see. The truth plays the tape (exact distances).
@@ -351,7 +351,7 @@ TEST(CliReferenceHokuyo, FitOnHalfTheTapeDistancesPredictsTheOtherHalf) {
                           " --radius 0.045 --out " + (dir / "model.json").string());
   ASSERT_EQ(cal.exit_code, 0) << cal.err;
   const auto m = json(dir / "model.json");
-  // A time-of-flight lidar: seed 004's test finds noise that does not grow with the range.
+  // A time-of-flight lidar: Alhashimi et al. 2016's test finds noise that does not grow with the range.
   EXPECT_EQ(m["noise_estimators"]["exponent_test"]["best"], 0);
   EXPECT_EQ(m["noise"]["kind"], "constant");
   const auto ev = runCli("evaluate -q " + (dir / "test").string() + " --reference " + (dir / "test.json").string() +
