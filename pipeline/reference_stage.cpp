@@ -241,6 +241,10 @@ SequenceCalibration calibrateSequenceWithDistancesAndSelf(const io::Sequence& se
   cfg.joint.known_ranges = calibration::knownRanges(ro.known, ref);
   SequenceCalibration out = calibrateSequenceWithSurvey(seq, ref, ref_file, detection, cfg, survey, progress);
   if (out.model.status.ok()) out.model.method = "joint+reference";
+  out.model.discrepancy.note =
+      "not estimated: the measured distances are terms of the self-calibration, none held out, so the intervals are "
+      "the fitted curve's alone; they do not include how far the sensor may lie from any polynomial between the "
+      "distances it was fitted at (fit the distances alone, --reference-fit distances, with ten or more of them)";
   return out;
 }
 
