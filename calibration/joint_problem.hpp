@@ -5,10 +5,13 @@
 // them from the readings selected at the current estimate:
 //
 //   initialise  -> model, parameter blocks, reading window, drift reference, readings
-//   solve loop  -> [select readings] geometry, sigmas, weights -> residuals -> Ceres
-//                  -> re-estimate the noise law (and the mixed-pixel fraction) until it settles
+//                  (joint_problem.cpp, with the per-reading geometry)
+//   solve loop  -> [select readings] geometry, sigmas, weights -> residuals (joint_residuals.cpp)
+//                  -> Ceres -> re-estimate the noise law (and the mixed-pixel fraction) until it
+//                  settles (joint_solve.cpp)
 //   summarise   -> estimates, priors' NLL, effects, likelihood and criteria, bearing residuals,
-//                  covariance of the bias, radius and centres
+//                  covariance of the bias, radius and centres (joint_summary.cpp)
+// The cost functions' factories are in joint_costs.cpp.
 
 #include <map>
 #include <vector>

@@ -26,7 +26,7 @@ struct BeamReading {
   /// Whether it records an intensity (a finite value above 0).
   bool hasIntensity() const { return intensity > 0.0 && intensity < std::numeric_limits<double>::infinity(); }
   /// Not on the landmark's circle: the beam beside it, read between the landmark and the
-  /// background, kept as a mixed-pixel candidate (pipeline/collect_sightings.hpp). Default false.
+  /// background, kept as a mixed-pixel candidate (detectors/mixed_pixels.hpp). Default false.
   bool beside = false;
 };
 

@@ -28,6 +28,84 @@ double totalCost(const std::vector<ArcObservation>& arcs, const std::vector<doub
   return s;
 }
 
+/// The Gauss-Newton normal equations per arc k: A_k (centre block), e_k (centre-radius
+/// coupling), b_k, and the radius' own hrr and gradient gr.
+struct RadiusNormalEquations {
+  std::vector<Eigen::Matrix2d> a;
+  std::vector<Eigen::Vector2d> e, b;
+  double hrr = 0.0, gr = 0.0;
+};
+
+RadiusNormalEquations normalEquations(const std::vector<ArcObservation>& arcs, const std::vector<double>& w,
+                                      const std::vector<Eigen::Vector2d>& c, double radius) {
+  RadiusNormalEquations ne;
+  auto& a = ne.a;
+  auto& e = ne.e;
+  auto& b = ne.b;
+  a.resize(arcs.size());
+  e.resize(arcs.size());
+  b.resize(arcs.size());
+  for (std::size_t k = 0; k < arcs.size(); ++k) {
+    a[k].setZero(), e[k].setZero(), b[k].setZero();
+    for (const auto& p : arcs[k].points) {
+      const Eigen::Vector2d d = p - c[k];
+      const double n = std::max(d.norm(), 1e-300);
+      const Eigen::Vector2d jc = -d / n;  // d r / d c_k; d r / d R = -1
+      const double r = n - radius;
+      a[k] += w[k] * jc * jc.transpose();
+      e[k] += -w[k] * jc;
+      b[k] += w[k] * jc * r;
+      ne.hrr += w[k];
+      ne.gr += -w[k] * r;
+    }
+  }
+  return ne;
+}
+
+/// The joint fit's state: centres, radius, cost, the Levenberg-Marquardt damping.
+struct RadiusFit {
+  std::vector<Eigen::Vector2d> c;
+  double radius = 0.0, cost = 0.0, lambda = 1e-3;
+  bool converged = false;
+};
+
+/// One damped step: raises the damping until the cost does not grow (Schur complement: the
+/// centres eliminated, the radius step solved, back-substituted). False when none does.
+bool levenbergMarquardtStep(const std::vector<ArcObservation>& arcs, const std::vector<double>& w,
+                            const RadiusNormalEquations& ne, double radius_min_m, double radius_max_m, RadiusFit& fit) {
+  const auto& a = ne.a;
+  const auto& e = ne.e;
+  const auto& b = ne.b;
+  double& lambda = fit.lambda;
+  while (lambda < 1e12) {
+    double s = ne.hrr * (1.0 + lambda), g = ne.gr;
+    std::vector<Eigen::Matrix2d> a_inv(arcs.size());
+    for (std::size_t k = 0; k < arcs.size(); ++k) {
+      Eigen::Matrix2d ad = a[k];
+      ad.diagonal() += lambda * ad.diagonal().cwiseMax(1e-12);
+      a_inv[k] = ad.inverse();
+      s -= e[k].dot(a_inv[k] * e[k]);
+      g -= e[k].dot(a_inv[k] * b[k]);
+    }
+    const double dr = -g / s;
+    std::vector<Eigen::Vector2d> c_new(arcs.size());
+    for (std::size_t k = 0; k < arcs.size(); ++k) c_new[k] = fit.c[k] - a_inv[k] * (b[k] + e[k] * dr);
+    const double r_new = std::clamp(fit.radius + dr, radius_min_m, radius_max_m);
+    const double cost_new = totalCost(arcs, w, c_new, r_new);
+    if (std::isfinite(cost_new) && cost_new <= fit.cost) {
+      const bool negligible = std::abs(r_new - fit.radius) < 1e-10;
+      fit.c = std::move(c_new);
+      fit.radius = r_new;
+      fit.cost = cost_new;
+      lambda = std::max(lambda * 0.1, 1e-12);
+      fit.converged = negligible;
+      return true;
+    }
+    lambda *= 10.0;
+  }
+  return false;
+}
+
 }  // namespace
 
 RadiusEstimate estimateJointRadius(const std::vector<ArcObservation>& arcs, double radius_min_m, double radius_max_m,
@@ -40,7 +118,7 @@ RadiusEstimate estimateJointRadius(const std::vector<ArcObservation>& arcs, doub
     return out;
   }
   std::vector<double> w;
-  std::vector<Eigen::Vector2d> c;
+  RadiusFit fit;
   double sw = 0.0, wr = 0.0;
   for (const auto& a : arcs) {
     if (a.points.empty()) {
@@ -48,70 +126,23 @@ RadiusEstimate estimateJointRadius(const std::vector<ArcObservation>& arcs, doub
       return out;
     }
     w.push_back(weightOf(a));
-    c.emplace_back(a.start.x_m, a.start.y_m);
+    fit.c.emplace_back(a.start.x_m, a.start.y_m);
     sw += w.back();
     wr += w.back() * a.start.radius_m;
   }
-  double radius = std::clamp(wr / sw, radius_min_m, radius_max_m);
-  double cost = totalCost(arcs, w, c, radius);
-  double lambda = 1e-3;
-  bool converged = false;
-  for (int it = 0; it < max_iterations && !converged; ++it) {
+  fit.radius = std::clamp(wr / sw, radius_min_m, radius_max_m);
+  fit.cost = totalCost(arcs, w, fit.c, fit.radius);
+  for (int it = 0; it < max_iterations && !fit.converged; ++it) {
     out.iterations = it + 1;
-    // Normal equations per observation: A_k (centre block), e_k (centre-radius coupling), b_k.
-    std::vector<Eigen::Matrix2d> a(arcs.size());
-    std::vector<Eigen::Vector2d> e(arcs.size()), b(arcs.size());
-    double hrr = 0.0, gr = 0.0;
-    for (std::size_t k = 0; k < arcs.size(); ++k) {
-      a[k].setZero(), e[k].setZero(), b[k].setZero();
-      for (const auto& p : arcs[k].points) {
-        const Eigen::Vector2d d = p - c[k];
-        const double n = std::max(d.norm(), 1e-300);
-        const Eigen::Vector2d jc = -d / n;  // d r / d c_k; d r / d R = -1
-        const double r = n - radius;
-        a[k] += w[k] * jc * jc.transpose();
-        e[k] += -w[k] * jc;
-        b[k] += w[k] * jc * r;
-        hrr += w[k];
-        gr += -w[k] * r;
-      }
-    }
-    bool improved = false;
-    while (lambda < 1e12) {
-      // Schur complement: eliminate the centres, solve for the radius step, back-substitute.
-      double s = hrr * (1.0 + lambda), g = gr;
-      std::vector<Eigen::Matrix2d> a_inv(arcs.size());
-      for (std::size_t k = 0; k < arcs.size(); ++k) {
-        Eigen::Matrix2d ad = a[k];
-        ad.diagonal() += lambda * ad.diagonal().cwiseMax(1e-12);
-        a_inv[k] = ad.inverse();
-        s -= e[k].dot(a_inv[k] * e[k]);
-        g -= e[k].dot(a_inv[k] * b[k]);
-      }
-      const double dr = -g / s;
-      std::vector<Eigen::Vector2d> c_new(arcs.size());
-      for (std::size_t k = 0; k < arcs.size(); ++k) c_new[k] = c[k] - a_inv[k] * (b[k] + e[k] * dr);
-      const double r_new = std::clamp(radius + dr, radius_min_m, radius_max_m);
-      const double cost_new = totalCost(arcs, w, c_new, r_new);
-      if (std::isfinite(cost_new) && cost_new <= cost) {
-        const bool negligible = std::abs(r_new - radius) < 1e-10;
-        c = std::move(c_new);
-        radius = r_new;
-        cost = cost_new;
-        lambda = std::max(lambda * 0.1, 1e-12);
-        improved = true;
-        converged = negligible;
-        break;
-      }
-      lambda *= 10.0;
-    }
-    if (!improved) break;
+    const RadiusNormalEquations ne = normalEquations(arcs, w, fit.c, fit.radius);
+    if (!levenbergMarquardtStep(arcs, w, ne, radius_min_m, radius_max_m, fit)) break;
   }
+  const double radius = fit.radius;
   out.radius_m = radius;
-  for (const auto& ck : c) out.centres.push_back(Circle2{ck.x(), ck.y(), radius});
+  for (const auto& ck : fit.c) out.centres.push_back(Circle2{ck.x(), ck.y(), radius});
   double wn = 0.0;
   for (std::size_t k = 0; k < arcs.size(); ++k) wn += w[k] * static_cast<double>(arcs[k].points.size());
-  out.rms_m = std::sqrt(cost / wn);
+  out.rms_m = std::sqrt(fit.cost / wn);
   out.status = (radius <= radius_min_m || radius >= radius_max_m) ? FitStatus::radius_out_of_limits : FitStatus::ok;
   return out;
 }

@@ -1,11 +1,12 @@
 #include "detectors/line_fit.hpp"
-#include "detectors/ransac.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
 #include <Eigen/Dense>
+
+#include "detectors/ransac.hpp"
 
 namespace lidarcal::detectors {
 
@@ -30,8 +31,19 @@ Line2 totalLeastSquaresLine(const std::vector<Eigen::Vector2d>& points) {
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(s);
   line.point = mean;
   line.direction = eig.eigenvectors().col(1).normalized();  // largest scatter
+  line.normal = eig.eigenvectors().col(0);                  // smallest scatter
   line.rms_m = std::sqrt(std::max(eig.eigenvalues()[0], 0.0) / static_cast<double>(points.size()));
   return line;
+}
+
+NormalForm normalForm(const Line2& line) {
+  Eigen::Vector2d n = line.normal;
+  double p = n.dot(line.point);
+  if (p < 0) {
+    n = -n;
+    p = -p;
+  }
+  return {std::atan2(n.y(), n.x()), p};
 }
 
 LineFit fitLine(const pcl::PointCloud<pcl::PointXYZI>& cloud, const pcl::Indices& indices, const LineFitConfig& cfg) {

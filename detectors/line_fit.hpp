@@ -29,6 +29,7 @@ struct LineFitConfig {
 struct Line2 {
   Eigen::Vector2d point = Eigen::Vector2d::Zero();      ///< a point on the line (the centroid), metres
   Eigen::Vector2d direction = Eigen::Vector2d::UnitX();  ///< unit direction
+  Eigen::Vector2d normal = Eigen::Vector2d::UnitY();     ///< unit normal (the scatter's smallest axis)
   double rms_m = 0.0;                                    ///< RMS perpendicular distance of the points, metres
 };
 
@@ -45,5 +46,14 @@ LineFit fitLine(const pcl::PointCloud<pcl::PointXYZI>& cloud, const pcl::Indices
 
 /// Total-least-squares line of at least 2 points (principal axis of the scatter).
 Line2 totalLeastSquaresLine(const std::vector<Eigen::Vector2d>& points);
+
+/// The line in normal form, x cos(normal_rad) + y sin(normal_rad) = distance_m with distance_m >= 0:
+/// the normal's direction from the origin (the sensor) towards the line, radians, and the line's
+/// perpendicular distance from it, metres.
+struct NormalForm {
+  double normal_rad = 0.0;  ///< direction of the normal from the origin, radians
+  double distance_m = 0.0;  ///< perpendicular distance from the origin, metres (>= 0)
+};
+NormalForm normalForm(const Line2& line);
 
 }  // namespace lidarcal::detectors

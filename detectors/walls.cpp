@@ -4,6 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include "common/pose2.hpp"
 
@@ -171,6 +172,52 @@ std::vector<Wall> findWalls(const pcl::PointCloud<pcl::PointXYZI>& cloud, const 
   std::sort(walls.begin(), walls.end(), [](const Wall& a, const Wall& b) {
     return a.normal_rad != b.normal_rad ? a.normal_rad < b.normal_rad : a.distance_m < b.distance_m;
   });
+  return walls;
+}
+
+void RunWallConfig::validate() const {
+  if (!(max_deviation_m > 0.0)) throw std::invalid_argument("RunWallConfig.max_deviation_m: must be > 0");
+  if (min_points < 2) throw std::invalid_argument("RunWallConfig.min_points: must be >= 2");
+}
+
+std::vector<Wall> findWallsInRun(const std::vector<Eigen::Vector2d>& run, const RunWallConfig& config) {
+  config.validate();
+  std::vector<Wall> walls;
+  const auto min_points = static_cast<std::size_t>(config.min_points);
+  const bool trim = config.drop_run_ends && run.size() >= 3;
+  const std::size_t first = trim ? 1 : 0, last = trim ? run.size() - 1 : run.size();
+  if (last - first < min_points) return walls;
+  std::vector<std::pair<std::size_t, std::size_t>> stack{{first, last}};  // pieces [lo, hi) still to check
+  while (!stack.empty()) {
+    const auto [lo, hi] = stack.back();
+    stack.pop_back();
+    if (hi - lo < min_points) continue;
+    const std::vector<Eigen::Vector2d> pts(run.begin() + static_cast<long>(lo), run.begin() + static_cast<long>(hi));
+    const Line2 line = totalLeastSquaresLine(pts);
+    const NormalForm nf = normalForm(line);
+    double worst = 0.0;
+    std::size_t at = lo;
+    for (std::size_t k = lo; k < hi; ++k) {
+      const Eigen::Vector2d& q = pts[k - lo];
+      const double dev = std::abs(q.x() * std::cos(nf.normal_rad) + q.y() * std::sin(nf.normal_rad) - nf.distance_m);
+      if (dev > worst) {
+        worst = dev;
+        at = k;
+      }
+    }
+    if (worst <= config.max_deviation_m) {
+      Wall w;
+      w.normal_rad = nf.normal_rad;
+      w.distance_m = nf.distance_m;
+      w.rms_m = line.rms_m;
+      for (std::size_t k = lo; k < hi; ++k) w.inliers.push_back(static_cast<pcl::index_t>(k));
+      walls.push_back(std::move(w));
+    } else {
+      const std::size_t cut = std::clamp(at, lo + 1, hi - 1);  // split at the farthest point
+      stack.push_back({cut, hi});
+      stack.push_back({lo, cut});
+    }
+  }
   return walls;
 }
 

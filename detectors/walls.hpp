@@ -6,9 +6,12 @@
 // wall interrupted by a table leg, or split at a noisy point) are merged into one wall, and a
 // return that two walls claim (near a corner) is given to neither; each wall with its
 // perpendicular distance and normal direction from the sensor.
+// For points already ordered into runs (beam means of a static recording:
+// diagnosis/static_scene/walls.cpp), findWallsInRun splits the runs into straight pieces instead.
 
 #include <vector>
 
+#include <Eigen/Core>
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
 #include <pcl/types.h>
@@ -46,5 +49,20 @@ struct Wall {
 
 /// Every wall of a scan (sensor at the origin), by ascending normal direction.
 std::vector<Wall> findWalls(const pcl::PointCloud<pcl::PointXYZI>& cloud, const WallConfig& config);
+
+/// The same finder for points that are already in order and free of jumps (a run: e.g. the mean
+/// readings of neighbouring beams over many scans, which need no segmentation and no consensus):
+/// each run is split recursively at its point farthest from the total-least-squares line until
+/// every piece is straight.
+struct RunWallConfig {
+  double max_deviation_m = 0.025;  ///< a piece is straight when no point lies farther from its line, metres. Default 0.025
+  int min_points = 8;              ///< pieces with fewer points are dropped. Default 8
+  bool drop_run_ends = true;       ///< a run's first and last point (of 3 or more) border a gap or a jump: left out. Default true
+  void validate() const;           ///< throws std::invalid_argument naming the first bad field
+};
+
+/// The straight pieces of one run of ordered points (sensor at the origin), in the order the
+/// splitting finds them: each a Wall whose inliers index `run`, ascending and contiguous.
+std::vector<Wall> findWallsInRun(const std::vector<Eigen::Vector2d>& run, const RunWallConfig& config);
 
 }  // namespace lidarcal::detectors

@@ -1,23 +1,23 @@
 #pragma once
-// Model criticism (`lidarcal diagnose`): what the seeds' model gets wrong on measured data, the
-// physical cause, the model extended with it and the gain, measured out of sample.
-//   1. fit the baseline, the seeds' model: polynomial range bias, noise by range only
-//      (seed 004 eq. 1), independent bearing and stop-position errors (seed 000 A3-A4, eq. 8);
+// Model criticism (`lidarcal diagnose`): what the published range model gets wrong on measured
+// data, the physical cause, the model extended with it and the gain, measured out of sample.
+//   1. fit the baseline, the published model: polynomial range bias, noise by range only
+//      (Alhashimi et al. 2016 eq. 1), independent bearing and stop-position errors
+//      (Alhashimi et al. 2021 A3-A4, eq. 8);
 //   2. parametric bootstrap: simulate the same geometry from the fitted baseline, refit, and
 //      calibrate a battery of discrepancy statistics (and one score statistic per candidate
 //      effect) on the replicas: p-value and effect size of each;
 //   3. fit the baseline extended by each candidate effect; gain out of sample (cross-validated
 //      by scan), delta AIC, identifiability (information left after the nuisance parameters);
-//   4. name the cause: the largest significant held-out gain, Holm-controlled across candidates;
-//      `none` when nothing is significant, `not_identifiable` when the data cannot tell; static
-//      data: when the tails are significant, a symptom (heavy_tails, or none) gives way to the
-//      physical effect whose covariate explains most of them, and a noise law is ranked beside
-//      the contamination (diagnosis/tails.hpp, TailAttribution);
+//   4. name the cause by the ordered rules of diagnosis/rules.hpp (docs/DIAGNOSIS.md): the
+//      largest significant held-out gain, Holm-controlled across candidates; `none` when nothing
+//      is significant, `not_identifiable` when the data cannot tell; a symptom (heavy tails, a
+//      reading grid) gives way to the physical effect that holds beside it;
 //   5. the extended model: its parameters, the scene keys that simulate it, how much closer its
 //      simulation comes to the data, and (with truth) the gain in calibration.
 // Two kinds of data: a sequence of scans of poles (diagnosis/sequence.hpp) and repeated scans
 // from one pose of any scene (diagnosis/static_scene.hpp), both run by the same five steps
-// (diagnosis/skeleton.hpp). The statistics are in diagnosis/stats.hpp.
+// (diagnosis/skeleton.hpp). The statistics are in diagnosis/stats.hpp and diagnosis/battery.hpp.
 
 #include <cstdint>
 #include <functional>
@@ -51,7 +51,9 @@ struct DiagnoseConfig {
   double alpha = 0.01;            ///< family-wise error rate over the candidates (Holm)
   std::uint64_t seed = 1;         ///< bootstrap and simulation seed
   int max_order = 4;              ///< sequences: bias orders 1..max_order (order by the calibration's rule)
-  double sigma_s_m = 0.02;        ///< sequences: odometry, std. dev. of a stop's position around the commanded one (seed 000 eq. 8)
+  /// Sequences: odometry, std. dev. of a stop's position around the commanded one, metres
+  /// (Alhashimi et al. 2021 eq. 8).
+  double sigma_s_m = 0.02;
   double outlier_floor = 1e-3;    ///< weight of a uniform over the reading window in every likelihood
   int closeness_replicas = 4;     ///< replicas simulated from the extended model (closeness to the data)
   /// Static data: scans per window. 0: the whole recording is one pose unless the beams show that
@@ -67,6 +69,11 @@ struct DiagnoseConfig {
   std::function<void(const std::string& stage, std::size_t done, std::size_t total)> progress;
   void validate() const;          ///< throws std::invalid_argument
 };
+
+/// The candidates a diagnosis of that mode tests: `config.candidates`, or every effect the mode
+/// tests (those with a statistic for it in effectTable()) when empty. Throws std::invalid_argument
+/// for an effect the mode does not test.
+std::vector<Effect> candidateList(const DiagnoseConfig& config, DiagnoseMode mode);
 
 /// One discrepancy statistic: measured value against its distribution over the replicas.
 struct Discrepancy {
@@ -113,7 +120,8 @@ struct CandidateResult {
   double standard_error = 0.0;
   std::string note;                       ///< why not identifiable / not applicable / competing effect
   std::map<std::string, double> estimates;  ///< the effect's fitted parameters (name with unit -> value)
-  double calibration_mse_ratio = 0.0;     ///< with truth: MSE ratio (seed 000 eq. 31) of the extended calibration, 0 when not computed
+  /// With truth: MSE ratio (Alhashimi et al. 2021 eq. 31) of the extended calibration, 0 when not computed.
+  double calibration_mse_ratio = 0.0;
 };
 
 /// How close a simulation of a model comes to the measured data.
@@ -185,8 +193,8 @@ struct TailAttribution {
   std::vector<TailBeamReport> top_beams;  ///< beams with the largest tail fraction (at most 10)
   std::map<std::string, double> model;    ///< the full tail model's parameters (name with unit -> value)
   /// Physical effects fitted under the pooled contamination likelihood (the tails do not drag
-  /// them): incidence_noise_exponent, noise_exponent, mixed_pixel_fraction, dark_noise_exponent, and their held-out
-  /// gains over the pooled model (..._gain, ..._gain_se, nats per reading).
+  /// them): incidence_noise_exponent, noise_exponent, mixed_pixel_fraction, dark_noise_exponent,
+  /// and their held-out gains over the pooled model (..._gain, ..._gain_se, nats per reading).
   std::map<std::string, double> robust;
   std::string cause = cause::kUnknown;  ///< the effect of the covariate with the largest significant unique gain, or unknown
 };
@@ -198,7 +206,7 @@ struct DiagnosisResult {
   std::size_t scans = 0, stops = 0, readings = 0;  ///< size of the data diagnosed
   std::size_t landmarks = 0;          ///< sequence: landmarks; static: fitted walls
   // Baseline
-  RangeModel baseline;                ///< bias f, noise law (seed 004 squared), window
+  RangeModel baseline;                ///< bias f, noise law (Alhashimi et al. 2016, squared), window
   double baseline_sigma_theta_rad = 0.0;  ///< sequence: bearing noise of the sightings
   double baseline_radius_m = 0.0;     ///< sequence: landmark radius
   bool radius_known = false;          ///< sequence: radius given (not estimated)

@@ -2,7 +2,7 @@
 // Diagnosis of a scan sequence with landmarks (diagnosis/diagnosis.hpp), on what calibration
 // consumes: the beams of every landmark sighting.
 //   baseline   calibrate() (joint refinement, order by its rule) with every heading held at the
-//              commanded one and the seed 004 squared noise law; then one refinement on every
+//              commanded one and the squared noise law of Alhashimi et al. 2016; then one refinement on every
 //              beam of every sighting (the fixed reading set all models are compared on);
 //   replicas   simulateLandmarkLevel() from the fitted poses, centres, radius, bias and noise,
 //              keeping the (scan, landmark) pairs of the data, refitted from the baseline;
@@ -15,13 +15,10 @@
 
 #include <vector>
 
-#include "diagnosis/diagnosis.hpp"
 #include "common/landmark_observations.hpp"
+#include "diagnosis/diagnosis.hpp"
 
 namespace lidarcal::diagnosis {
-
-/// Effects a sequence can show, in output order.
-std::vector<Effect> sequenceCandidates();
 
 /// Diagnoses. `true_range_m` (optional, aligned with obs.sightings[i].beams[j]) gives the
 /// calibration gain against the truth. Returns a status instead of throwing for data that

@@ -1,8 +1,7 @@
 #pragma once
-// The steps of a diagnosis (diagnosis/diagnosis.hpp) shared by both kinds of data: the candidate
-// list, the held-out likelihoods and their gain, the battery's score of a candidate, and the
-// driver that runs the five steps on a mode's problem object (sequence.cpp, static_scene.cpp).
-// Internal to the diagnosis library.
+// The five steps of a diagnosis (diagnosis/diagnosis.hpp), shared by both kinds of data: the
+// driver that runs them on a mode's problem object (diagnosis/sequence/problem.hpp,
+// diagnosis/static_scene/problem.hpp). Internal to the diagnosis library.
 
 #include <cstddef>
 #include <map>
@@ -10,57 +9,13 @@
 #include <utility>
 #include <vector>
 
+#include "diagnosis/battery.hpp"
 #include "diagnosis/diagnosis.hpp"
-#include "diagnosis/stats.hpp"
+#include "diagnosis/held_out.hpp"
+#include "diagnosis/rules.hpp"
 
 namespace lidarcal::diagnosis {
 
-/// The candidates to test: `config.candidates`, or every effect the mode tests (those with a
-/// statistic for it in effectTable()) when empty. Throws std::invalid_argument for an effect the
-/// mode does not test.
-std::vector<Effect> candidateList(const DiagnoseConfig& config, DiagnoseMode mode);
-/// The battery's score statistic aimed at an effect in that mode ("" when there is none).
-const char* statisticOf(Effect e, DiagnoseMode mode);
-
-/// Held-out log-likelihoods, point by point: of the baseline, of each candidate, and the block
-/// (scan, stop or wall bin) each point belongs to; the standard error of a gain is over blocks.
-struct HeldOut {
-  std::vector<double> base;                 ///< baseline, per held-out point, nats
-  std::vector<std::vector<double>> cand;    ///< per candidate, aligned with `base`
-  std::vector<std::size_t> block;           ///< block of each point
-  double points = 0.0;                      ///< the count the gains are divided by ("per point")
-  explicit HeldOut(std::size_t candidates) : cand(candidates) {}
-  /// Mean baseline log-likelihood per point.
-  double baselineMean() const;
-};
-
-/// Held-out gain of one candidate over the baseline.
-struct HeldOutGain {
-  double gain = 0.0;    ///< sum of the differences over `points`, nats per point
-  double se = 0.0;      ///< its standard error from the per-block sums
-  bool finite = true;   ///< every difference was finite
-};
-HeldOutGain heldOutGain(const HeldOut& held, std::size_t candidate);
-
-/// Sets the candidate's held-out gain, its standard error and one-sided p-value.
-void setHeldOutGain(CandidateResult& r, const HeldOutGain& g);
-
-/// The battery's score statistic aimed at the candidate (r.statistic): its p-value and effect size.
-void setScore(CandidateResult& r, const std::vector<Discrepancy>& battery);
-
-/// Runs the five steps of diagnosis.hpp on a mode's problem object, which provides:
-///   bool fitBaseline(DiagnosisResult&)                 1. false: out.status says why not
-///   std::map<std::string, double> measuredStatistics(DiagnosisResult&)   (and out.measured)
-///   void replica(int b, std::map<std::string, std::vector<double>>&, DiagnosisResult&)   2.
-///   const std::vector<StatisticInfo>& statisticInfo()
-///   std::size_t candidateCount(); void heldOut(HeldOut&); const char* noHeldOut()   3.
-///   void beforeCandidates(DiagnosisResult&); CandidateResult candidate(std::size_t, const HeldOut&, const DiagnosisResult&);
-///   void afterCandidates(DiagnosisResult&)
-///   std::vector<std::pair<Effect, Effect>> nestedEffects()   4. (see nameCause)
-///   void refineCause(DiagnosisResult&)   4. after nameCause: a symptom (heavy_tails) replaced by
-///                                           the physical cause that explains it, where one does
-///   Closeness closenessBaseline(const DiagnosisResult&); void extend(std::size_t, DiagnosisResult&)   5.
-/// Steps run in this order; what a mode draws at random is seeded per replica.
 /// The stage in which a mode fits its candidates on the folds (modes report their own counts).
 inline constexpr const char* kHeldOutStage = "held-out fits";
 
@@ -69,10 +24,22 @@ inline void reportProgress(const DiagnoseConfig& config, const char* stage, std:
   if (config.progress) config.progress(stage, done, total);
 }
 
+/// Runs the five steps of diagnosis.hpp on a mode's problem object, which provides:
+///   bool fitBaseline(DiagnosisResult&)                 1. false: out.status says why not
+///   std::map<std::string, double> measuredStatistics(DiagnosisResult&)   (and out.measured)
+///   void replica(int b, std::map<std::string, std::vector<double>>&, DiagnosisResult&)   2.
+///   const std::vector<StatisticInfo>& statisticInfo()
+///   void heldOut(HeldOut&); const char* noHeldOut()   3.
+///   void beforeCandidates(DiagnosisResult&); CandidateResult candidate(std::size_t, const HeldOut&, const DiagnosisResult&);
+///   void afterCandidates(DiagnosisResult&)
+///   std::vector<std::pair<Effect, Effect>> nestedEffects()   4. (see nameCause)
+///   void refineCause(DiagnosisResult&)   4. after nameCause: the mode's rules of diagnosis/rules.hpp
+///   Closeness closenessBaseline(const DiagnosisResult&); void extend(std::size_t, DiagnosisResult&)   5.
+/// Steps run in this order; what a mode draws at random is seeded per replica.
 template <class Mode>
 void runDiagnosis(Mode& mode, const DiagnoseConfig& config, const std::vector<Effect>& candidates,
                   DiagnosisResult& out) {
-  // 1. Baseline: the seeds' model.
+  // 1. Baseline: the published model.
   reportProgress(config, "baseline fit", 0, 0);
   if (!mode.fitBaseline(out)) return;
   const std::map<std::string, double> measured = mode.measuredStatistics(out);
@@ -102,7 +69,7 @@ void runDiagnosis(Mode& mode, const DiagnoseConfig& config, const std::vector<Ef
   }
   reportProgress(config, "candidate tests", candidates.size(), candidates.size());
   mode.afterCandidates(out);
-  // 4. The cause.
+  // 4. The cause: the rules of diagnosis/rules.hpp, in the table's order.
   out.primary_cause = nameCause(out.candidates, config.alpha, out.decision, mode.nestedEffects());
   mode.refineCause(out);
   // 5. The extended model and how close its simulation comes to the data.

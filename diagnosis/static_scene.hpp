@@ -1,10 +1,10 @@
 #pragma once
-// Diagnosis of repeated scans from one pose of any scene (diagnosis/diagnosis.hpp): seed 004's
-// characterisation setting, where each beam over the scans is a batch at a constant distance.
+// Diagnosis of repeated scans from one pose of any scene (diagnosis/diagnosis.hpp): the
+// characterisation setting of Alhashimi et al. 2016, where each beam over the scans is a batch at a constant distance.
 //
 // Without a true distance, what is identifiable:
 //   - per beam (direction bin): the mean reading m_b and the spread around it, so the noise law
-//     (spread against m_b, seed 004 eqs. 10-15 generalised to a free exponent), the shape of
+//     (spread against m_b, Alhashimi et al. 2016 eqs. 10-15 generalised to a free exponent), the shape of
 //     the noise (tails, quantisation), anything shared over time (drift over the scans) and the
 //     readings at depth discontinuities (mixed pixels);
 //   - on straight surfaces (wall lines fitted to the beam means): the incidence of each beam,
@@ -17,7 +17,7 @@
 // Likelihood of the readings: a beam's readings given its mean (held out by scan) times its
 // mean given the wall model, N(line + bias terms, tau^2 + s_b^2 / n_b) with a wall roughness tau
 // (held out by bin, leave one out). Baseline: f(d) = alpha_0 + d, sigma = sigma_e f(d)^2
-// (seed 004 eq. 1), Gaussian, no drift, no incidence dependence.
+// (Alhashimi et al. 2016 eq. 1), Gaussian, no drift, no incidence dependence.
 
 #include <cstdint>
 #include <limits>
@@ -51,9 +51,6 @@ struct WallLine {
   std::size_t bins = 0;      ///< direction bins on it
   double rms_m = 0.0;        ///< RMS of the bin means about the model (range units)
 };
-
-/// Effects a static recording can show, in output order (those that cannot apply included).
-std::vector<Effect> staticCandidates();
 
 /// Diagnoses. `walls` (optional) receives the fitted wall lines (the geometric reference).
 DiagnosisResult diagnoseStatic(const StaticScans& data, const DiagnoseConfig& config, std::vector<WallLine>* walls = nullptr);

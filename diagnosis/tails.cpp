@@ -15,7 +15,7 @@ constexpr double kSqrt2Pi = 2.5066282746310002;
 constexpr int kBeta = 1 + kTailCovariates;
 /// Smallest k: a broad component narrower than 4 core standard deviations would mimic a smooth
 /// noise law (readings at grazing incidence twice as spread) instead of wild readings, and pull
-/// the exponents fitted beside it (simulated gamma = 1 came out 0.85 with k >= 2).
+/// the exponents fitted beside it (docs/results/static-diagnosis.md).
 constexpr double kMinWide = 4.0;
 
 double logistic(double v) { return 1.0 / (1.0 + std::exp(-v)); }
@@ -190,16 +190,16 @@ double TailModel::responsibility(const TailBeam& b, double residual_m, double in
 namespace {
 
 /// The starting point: a fitted model's parameters (what `spec` holds fixed reset), or the defaults.
-TailModel startOf(const TailSpec& spec, double sigma_e_start, const TailModel* warm) {
+TailModel startOf(const TailSpec& spec, double sigma_e_start, const TailModel* start_from) {
   TailModel m;
-  if (warm) {
-    m = *warm;
+  if (start_from) {
+    m = *start_from;
     m.iterations = 0;
     m.converged = false;
     if (!spec.kappa) m.kappa = 2.0;
     if (!spec.gamma) m.gamma = 0.0;
     if (!spec.delta) m.delta = 0.0;
-    if (spec.mixed && !warm->spec.mixed) m.mixed = 0.05;
+    if (spec.mixed && !start_from->spec.mixed) m.mixed = 0.05;
     if (!spec.mixed) m.mixed = 0.0;
     for (int j = 0; j < kTailCovariates; ++j)
       if (!spec.covariate[static_cast<std::size_t>(j)]) m.beta[static_cast<std::size_t>(1 + j)] = 0.0;
@@ -217,8 +217,8 @@ TailModel startOf(const TailSpec& spec, double sigma_e_start, const TailModel* w
 }  // namespace
 
 TailModel fitTailModel(const std::vector<TailBeam>& beams, const std::vector<TailReading>& readings, const TailSpec& spec,
-                       double sigma_e_start, double floor_w, double floor_density, int max_iterations, const TailModel* warm) {
-  TailModel m = startOf(spec, sigma_e_start, warm);
+                       double sigma_e_start, double floor_w, double floor_density, int max_iterations, const TailModel* start_from) {
+  TailModel m = startOf(spec, sigma_e_start, start_from);
   double lr = 0.0, nr = 0.0;
   for (const auto& rd : readings) {
     lr += beams[rd.beam].log_range;

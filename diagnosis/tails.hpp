@@ -3,7 +3,7 @@
 // probability depends on what the beam sees. A residual r of beam b (reading minus the beam's
 // location) has the density
 //   p(r) = (1 - eta_b) [(1 - pi_b) N(r; 0, s_b^2) + pi_b N(r; 0, w_b^2)] + eta_b U(r; lo_b, hi_b)
-//   s_b = sigma_e m_b^kappa (1 / cos phi_b)^gamma (I_med / I_b)^delta   seed 004 eq. 1 with free exponents
+//   s_b = sigma_e m_b^kappa (1 / cos phi_b)^gamma (I_med / I_b)^delta   Alhashimi et al. 2016 eq. 1, free exponents
 //   w_b = k s_b (m_b / m_ref)^(rho - kappa)              the broad width, its own range law
 //   logit pi_b = beta_0 + sum_j beta_j x_bj              x: depth edge, ln(1/cos phi), ln m, darkness
 // k the broad component's width over the core's at the reference range m_ref (>= 4), rho its
@@ -50,7 +50,7 @@ struct TailReading {
 /// Which parameters are free.
 struct TailSpec {
   std::array<bool, kTailCovariates> covariate{};  ///< beta_j free (else 0)
-  bool kappa = false;   ///< range exponent free (else 2, seed 004)
+  bool kappa = false;   ///< range exponent free (else 2, Alhashimi et al. 2016)
   bool gamma = false;   ///< incidence exponent free (else 0)
   bool mixed = false;   ///< mixed-pixel fraction at edges free (else 0)
   bool delta = false;   ///< dark-surface exponent free (else 0)
@@ -82,10 +82,10 @@ struct TailModel {
 };
 
 /// Fits the model by EM (sigma_e_start is the initial scale; the other free parameters start at a
-/// 2 % pooled tail of width 5, eta 5 %; or, with `warm`, at that fitted model's parameters, those
+/// 2 % pooled tail of width 5, eta 5 %; or, with `start_from`, at that fitted model's parameters, those
 /// `spec` holds fixed reset). Deterministic. No readings: the start, converged = false.
 TailModel fitTailModel(const std::vector<TailBeam>& beams, const std::vector<TailReading>& readings, const TailSpec& spec,
                        double sigma_e_start, double floor_w, double floor_density, int max_iterations = 60,
-                       const TailModel* warm = nullptr);
+                       const TailModel* start_from = nullptr);
 
 }  // namespace lidarcal::diagnosis

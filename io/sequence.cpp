@@ -376,24 +376,38 @@ void checkScanNumbers(const fs::path& dir, const std::vector<std::string>& sorte
 
 }  // namespace
 
-Sequence openSequence(const fs::path& dir, const StopTolerance& tol) {
+namespace {
+
+/// The scan file names of a directory: while every name reads PREFIX + digits of one width +
+/// .pcd (what lidarcal writes), only the numbers (8 bytes a scan); else the names, sorted.
+struct ScanNames {
+  std::vector<std::string> files;   ///< the names, sorted (one_pattern false)
+  std::vector<std::uint64_t> numbers;  ///< the numbers, sorted (one_pattern true)
+  std::string prefix;               ///< of the numbered names
+  std::size_t width = 0;            ///< digits of the numbered names
+  bool one_pattern = true;          ///< every name numbered alike
+  std::size_t size() const { return one_pattern ? numbers.size() : files.size(); }
+};
+
+/// Throws InputError when `dir` is missing or not a directory.
+void checkSequenceDirectory(const fs::path& dir) {
   std::error_code ec;
   if (!fs::exists(dir, ec))
     throw InputError(dir.string(), "", "sequence directory does not exist", "check the path");
   if (!fs::is_directory(dir, ec))
     throw InputError(dir.string(), "", "is not a directory: a sequence is a directory of .pcd files",
                      "pass the directory that holds the scans");
-  Sequence seq;
-  seq.dir = dir;
-  // File names only (a std::filesystem::path per file costs several hundred bytes: its
-  // components are paths too), then one path per scan header. While every name reads
-  // PREFIX + digits of one width + .pcd (what lidarcal writes), only the numbers are kept (8 bytes
-  // a scan); the first name that does not fit turns them back into names.
-  std::vector<std::string> files;
-  std::vector<std::uint64_t> numbers;
-  std::string prefix;
-  std::size_t width = 0;
-  bool one_pattern = true;
+}
+
+/// File names only (a std::filesystem::path per file costs several hundred bytes: its components
+/// are paths too), in order; the first name that does not fit the numbered pattern turns the
+/// numbers back into names. Throws InputError for a .PCD in another case, an unreadable or empty
+/// directory, and numbers that are not zero-padded.
+ScanNames listScanNames(const fs::path& dir) {
+  std::error_code ec;
+  ScanNames names;
+  std::vector<std::string>& files = names.files;
+  std::vector<std::uint64_t>& numbers = names.numbers;
   for (const auto& entry : fs::directory_iterator(dir, ec)) {
     if (!entry.is_regular_file()) continue;
     std::string name = entry.path().filename().string();
@@ -403,16 +417,16 @@ Sequence openSequence(const fs::path& dir, const StopTolerance& tol) {
                                                       "': lidarcal reads only files ending in lower-case .pcd and would skip this scan",
                        "rename it to end in .pcd (mind a file of that name already present)");
     if (!isPcdName(name)) continue;
-    if (one_pattern) {
+    if (names.one_pattern) {
       const std::optional<NumberedName> num = numberedName(name);
-      if (num && (numbers.empty() || (num->prefix == prefix && num->width == width))) {
-        if (numbers.empty()) prefix = std::string(num->prefix), width = num->width;
+      if (num && (numbers.empty() || (num->prefix == names.prefix && num->width == names.width))) {
+        if (numbers.empty()) names.prefix = std::string(num->prefix), names.width = num->width;
         numbers.push_back(num->number);
         continue;
       }
-      one_pattern = false;
+      names.one_pattern = false;
       files.reserve(numbers.size() + 1);
-      for (std::uint64_t v : numbers) files.push_back(numberedFileName(prefix, width, v));
+      for (std::uint64_t v : numbers) files.push_back(numberedFileName(names.prefix, names.width, v));
       std::vector<std::uint64_t>().swap(numbers);
     }
     files.push_back(std::move(name));
@@ -421,12 +435,7 @@ Sequence openSequence(const fs::path& dir, const StopTolerance& tol) {
   if (files.empty() && numbers.empty())
     throw InputError(dir.string(), "", "holds no .pcd file: an empty sequence",
                      "point to a directory of scans (see docs/FORMAT.md), or create one with `lidarcal simulate` or `lidarcal import`");
-  // The directory as ScanList wants it: the first path without its file name.
-  auto dirOf = [&](const std::string& first_name) {
-    const std::string first = (dir / first_name).string();
-    return first.substr(0, first.size() - first_name.size());
-  };
-  if (one_pattern) {
+  if (names.one_pattern) {
     // One prefix, one width: numeric order is lexicographic order and no number can appear twice
     // (same width and value = same name), so checkScanNumbers has nothing to report here.
     std::sort(numbers.begin(), numbers.end());
@@ -434,18 +443,31 @@ Sequence openSequence(const fs::path& dir, const StopTolerance& tol) {
     std::sort(files.begin(), files.end());
     checkScanNumbers(dir, files);
   }
-  const fs::path meta = dir / "sequence.json";
-  if (fs::exists(meta, ec)) seq.meta = readSequenceMeta(meta);
-  // The names move into the compact list (and the numbers or the vector of strings are freed)
-  // before the headers are read.
-  const std::size_t n = one_pattern ? numbers.size() : files.size();
-  if (one_pattern) {
-    seq.scans = ScanList::numbered(dirOf(numberedFileName(prefix, width, numbers.front())), prefix, width, numbers);
-    std::vector<std::uint64_t>().swap(numbers);
-  } else {
-    seq.scans = ScanList(dirOf(files.front()), files);
-    std::vector<std::string>().swap(files);
+  return names;
+}
+
+/// The names moved into the compact list (the numbers or the vector of strings freed).
+ScanList compactScanList(const fs::path& dir, ScanNames& names) {
+  // The directory as ScanList wants it: the first path without its file name.
+  auto dirOf = [&](const std::string& first_name) {
+    const std::string first = (dir / first_name).string();
+    return first.substr(0, first.size() - first_name.size());
+  };
+  if (names.one_pattern) {
+    ScanList list = ScanList::numbered(dirOf(numberedFileName(names.prefix, names.width, names.numbers.front())),
+                                       names.prefix, names.width, names.numbers);
+    std::vector<std::uint64_t>().swap(names.numbers);
+    return list;
   }
+  ScanList list(dirOf(names.files.front()), names.files);
+  std::vector<std::string>().swap(names.files);
+  return list;
+}
+
+/// Reads every scan's header into seq.scans and groups the scans into stops (by pose within
+/// `tol`, or where sequence.json's stop_starts says).
+void readHeadersIntoStops(Sequence& seq, std::size_t n, const StopTolerance& tol) {
+  const fs::path& dir = seq.dir;
   std::size_t next_start = 0;  // the next of seq.meta.stop_starts (sorted) to meet
   for (std::size_t i = 0; i < n; ++i) {
     const fs::path f = seq.scans.path(i);
@@ -476,6 +498,22 @@ Sequence openSequence(const fs::path& dir, const StopTolerance& tol) {
     throw InputError((dir / "sequence.json").string(), "stop_starts",
                      "names '" + seq.meta.stop_starts[next_start] + "', which is not a scan of this directory",
                      "remove it from stop_starts or restore the scan");
+}
+
+}  // namespace
+
+Sequence openSequence(const fs::path& dir, const StopTolerance& tol) {
+  checkSequenceDirectory(dir);
+  Sequence seq;
+  seq.dir = dir;
+  ScanNames names = listScanNames(dir);
+  std::error_code ec;
+  const fs::path meta = dir / "sequence.json";
+  if (fs::exists(meta, ec)) seq.meta = readSequenceMeta(meta);
+  // The names move into the compact list before the headers are read.
+  const std::size_t n = names.size();
+  seq.scans = compactScanList(dir, names);
+  readHeadersIntoStops(seq, n, tol);
   seq.stops.shrink_to_fit();
   seq.scans.shrink_to_fit();
   return seq;

@@ -16,6 +16,7 @@
 #include "pipeline/progress.hpp"
 #include "pipeline/report.hpp"
 #include "pipeline/model_text.hpp"
+#include "calibration/truth_evaluation.hpp"
 #include "pipeline/reference_stage.hpp"
 #include "pipeline/stages.hpp"
 #include "pipeline/ways_forward.hpp"
@@ -66,7 +67,7 @@ SequenceCalibration calibrateWithMeasurements(const CalibrateCommand& c, const i
     // The self-calibration with the surveyed geometry held fixed and the distances (measured at
     // some stops) in its likelihood.
     StageBars progress;
-    std::vector<SurveyMatch> found;
+    std::vector<detectors::SurveyMatch> found;
     SequenceCalibration result =
         ref.distances.empty()
             ? calibrateSequenceWithSurvey(seq, ref, c.reference, detection, config, &found, std::ref(progress))
@@ -113,9 +114,9 @@ void runCalibrate(const CalibrateCommand& c) {
     result = calibrateWithMeasurements(c, seq, config, shown);
   } else if (!c.truth.empty()) {
     // Oracle (seed 004): fitted against the true distances; for comparison only.
-    const SimulationTruth truth = loadTruth(c.truth);
-    const double scale = c.frame == "commanded" ? commandedScale(truth.truth) : 1.0;
-    result.model = calibrateOracle(seq, truth, scale, config);
+    const io::SimulationTruth truth = io::loadTruth(c.truth);
+    const double scale = c.frame == "commanded" ? calibration::commandedScale(truth.truth) : 1.0;
+    result.model = calibration::calibrateOracle(seq, truth, scale, config);
   } else {
     StageBars progress;
     result = calibrateSequence(seq, detectionConfig(*c.options), config, std::ref(progress));

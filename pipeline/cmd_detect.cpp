@@ -61,10 +61,8 @@ void printEvaluation(const detectors::DetectionEvaluation& ev) {
                   b.free_radius_rms_m);
 }
 
-void runDetect(const DetectOptions& o) {
-  const io::Sequence seq = io::openSequence(o.seq);
-  io::checkOutsideInput(o.seq, o.out);
-
+/// The detection settings of the command's options; throws InputError for a threshold A <= 0.
+detectors::SequenceDetectionConfig detectionSettings(const DetectOptions& o) {
   detectors::SequenceDetectionConfig cfg;
   if (o.radius_m > 0.0) cfg.detection.landmark_radius_m = o.radius_m;
   cfg.use_sequence_radius = !o.estimate_radius;
@@ -81,37 +79,41 @@ void runDetect(const DetectOptions& o) {
   // temporary file (detectors/detection_log.hpp).
   cfg.keep_scans = !o.truth.empty();
   cfg.threads = o.threads;
+  return cfg;
+}
 
+/// The simulator's truth and its true ranges by scan (none without --truth).
+struct DetectTruth {
   std::optional<Truth> truth;
-  std::map<std::size_t, std::vector<io::TrueRange>> true_ranges;
-  if (!o.truth.empty()) {
-    truth = io::readTruth(o.truth);
-    for (auto& r : io::readTrueRanges(fs::path(o.truth).parent_path() / truth->true_ranges_file))
-      true_ranges[r.scan].push_back(r);
-  }
+  std::map<std::size_t, std::vector<io::TrueRange>> ranges;
+};
 
-  io::StagedDirectory out(o.out, o.overwrite);
-  detectors::SequenceDetections result;
-  {
-    std::unique_ptr<Progress> progress;
-    result = detectors::detectSequence(seq, cfg, [&](std::size_t done, std::size_t total) {
-      if (!progress) progress = std::make_unique<Progress>("detect", total);
-      progress->update(done, total);
-    });
-    if (progress) progress->finish();
-  }
+DetectTruth readDetectTruth(const DetectOptions& o) {
+  DetectTruth t;
+  if (o.truth.empty()) return t;
+  t.truth = io::readTruth(o.truth);
+  for (auto& r : io::readTrueRanges(fs::path(o.truth).parent_path() / t.truth->true_ranges_file))
+    t.ranges[r.scan].push_back(r);
+  return t;
+}
 
-  // Second pass: the same points in the same order, with a label per point.
+/// Second pass: the same points in the same order, with a label per point, into `out_dir`, with
+/// landmarks.csv and sequence.json; the scans' truth when there is one.
+std::vector<detectors::ScanTruth> writeLabelledScans(const DetectOptions& o, const io::Sequence& seq,
+                                                     const detectors::SequenceDetections& result, DetectTruth& t,
+                                                     const fs::path& out_dir) {
+  std::optional<Truth>& truth = t.truth;
+  std::map<std::size_t, std::vector<io::TrueRange>>& true_ranges = t.ranges;
   const fs::path meta = seq.dir / "sequence.json";
-  if (fs::exists(meta)) fs::copy_file(meta, out.path() / "sequence.json");
-  io::LandmarksCsvWriter csv(out.path() / "landmarks.csv");
+  if (fs::exists(meta)) fs::copy_file(meta, out_dir / "sequence.json");
+  io::LandmarksCsvWriter csv(out_dir / "landmarks.csv");
   std::vector<detectors::ScanTruth> scan_truth;
   Progress progress("label", seq.scans.size());
   auto write = [&](std::size_t i, const io::Scan& loaded, const detectors::ScanDetections& sd, const std::vector<int>& ids) {
     io::Scan scan = loaded;
     scan.labels = detectors::scanLabels(sd, ids, scan.cloud->size());
     const std::string name = seq.scans[i].name();
-    io::writeScan(out.path() / name, scan, o.ascii ? io::PcdEncoding::ascii : io::PcdEncoding::binary);
+    io::writeScan(out_dir / name, scan, o.ascii ? io::PcdEncoding::ascii : io::PcdEncoding::binary);
     const auto& dets = sd.detections;
     for (std::size_t j = 0; j < dets.size(); ++j) {
       const int id = ids[j];
@@ -131,8 +133,12 @@ void runDetect(const DetectOptions& o) {
   detectors::forEachLoadedScan(result, seq, write, [&](std::size_t done, std::size_t) { progress.update(done); });
   progress.finish();
   csv.close();
-  out.commit();
+  return scan_truth;
+}
 
+/// The landmarks found, as Markdown on stdout.
+void printDetectSummary(const DetectOptions& o, const io::Sequence& seq, const detectors::SequenceDetections& result,
+                        const detectors::SequenceDetectionConfig& cfg) {
   const auto& a = result.association;
   const std::size_t circles = a.detections;
   std::printf("# Landmarks of %s\n\n", o.seq.c_str());
@@ -172,7 +178,28 @@ void runDetect(const DetectOptions& o) {
                   l.radius_estimated ? " (estimated)" : "", l.detections, l.stops, l.first_scan);
   }
   std::printf("\nOutput: %s (labelled scans, sequence.json, landmarks.csv)\n", o.out.c_str());
-  if (truth) printEvaluation(detectors::evaluateDetections(result.scans, &a, scan_truth, *truth));
+}
+
+void runDetect(const DetectOptions& o) {
+  const io::Sequence seq = io::openSequence(o.seq);
+  io::checkOutsideInput(o.seq, o.out);
+  const detectors::SequenceDetectionConfig cfg = detectionSettings(o);
+  DetectTruth truth = readDetectTruth(o);
+
+  io::StagedDirectory out(o.out, o.overwrite);
+  detectors::SequenceDetections result;
+  {
+    std::unique_ptr<Progress> progress;
+    result = detectors::detectSequence(seq, cfg, [&](std::size_t done, std::size_t total) {
+      if (!progress) progress = std::make_unique<Progress>("detect", total);
+      progress->update(done, total);
+    });
+    if (progress) progress->finish();
+  }
+  const std::vector<detectors::ScanTruth> scan_truth = writeLabelledScans(o, seq, result, truth, out.path());
+  out.commit();
+  printDetectSummary(o, seq, result, cfg);
+  if (truth.truth) printEvaluation(detectors::evaluateDetections(result.scans, &result.association, scan_truth, *truth.truth));
 }
 
 }  // namespace

@@ -16,15 +16,16 @@
 
 #include "diagnosis/sequence.hpp"
 #include "diagnosis/static_scene.hpp"
+#include "diagnosis/windows.hpp"
 #include "calibration/inversion.hpp"
 #include "common/errors.hpp"
 #include "io/atomic_file.hpp"
 #include "io/model_io.hpp"
 #include "pipeline/commands.hpp"
 #include "pipeline/diagnose_report.hpp"
-#include "pipeline/collect_sightings.hpp"
+#include "detectors/sightings.hpp"
 #include "pipeline/progress.hpp"
-#include "pipeline/truth_eval.hpp"
+#include "io/simulation_truth.hpp"
 #include "pipeline/words.hpp"
 
 namespace lidarcal::pipeline {
@@ -39,42 +40,6 @@ struct DiagnoseCommand {
   bool overwrite = false;
   std::string command;
 };
-
-/// Readings corrected through a calibrated model (diagnose what the model still gets wrong).
-struct Corrector {
-  std::optional<calibration::RangeInverter> inverter;
-  double correct(double y) const {
-    if (!inverter) return y;
-    const auto d = inverter->invert(y);
-    return d ? *d : std::nan("");
-  }
-};
-
-diagnosis::StaticScans staticScans(const io::Sequence& seq, std::size_t stop, const Corrector& fix,
-                                     const std::function<void(std::size_t)>& on_scan) {
-  diagnosis::StaticScans s;
-  const auto& scans = seq.stops.at(stop).scans;
-  s.scans = scans.size();
-  std::vector<std::size_t> counts;
-  for (std::size_t k = 0; k < scans.size(); ++k) {
-    const io::Scan scan = io::readScan(seq.scans[scans[k]].path);
-    counts.push_back(scan.cloud->size());
-    s.has_intensity = s.has_intensity || scan.has_intensity;  // a covariate of the tails (dark surfaces)
-    for (const auto& p : *scan.cloud) {
-      if (!std::isfinite(p.x) || !std::isfinite(p.y)) continue;
-      const double r = fix.correct(std::hypot(static_cast<double>(p.x), static_cast<double>(p.y)));
-      if (!(r > 0.0)) continue;
-      s.readings.push_back({std::atan2(static_cast<double>(p.y), static_cast<double>(p.x)), r, static_cast<std::uint32_t>(k),
-                            scan.has_intensity ? static_cast<double>(p.intensity) : std::nan("")});
-    }
-    on_scan(k + 1);
-  }
-  std::sort(counts.begin(), counts.end());
-  s.beams_per_scan = counts.empty() ? 0 : counts[counts.size() / 2];
-  s.range_min_m = seq.meta.range_min_m.value_or(0.0);
-  s.range_max_m = seq.meta.range_max_m.value_or(1e9);
-  return s;
-}
 
 diagnosis::DiagnoseConfig diagnoseConfig(const DiagnoseCommand& c) {
   diagnosis::DiagnoseConfig config;
@@ -100,8 +65,8 @@ diagnosis::DiagnoseConfig diagnoseConfig(const DiagnoseCommand& c) {
 }
 
 /// The model's inverse when --model is given (else readings pass unchanged).
-Corrector makeCorrector(const std::string& model) {
-  Corrector fix;
+diagnosis::ReadingCorrection makeCorrector(const std::string& model) {
+  diagnosis::ReadingCorrection fix;
   if (model.empty()) return fix;
   const CalibrationModel m = io::readModel(model);
   try {
@@ -129,7 +94,7 @@ std::optional<LandmarkObservations> findLandmarks(const DiagnoseCommand& c, cons
   progress.finish();
   if (!det.association.landmarks.empty()) {
     // The beams beside each pole that read between it and the background: mixed pixels' readings.
-    obs = toLandmarkObservations(seq, det, SightingOptions{true});
+    obs = detectors::toLandmarkObservations(seq, det, detectors::SightingOptions{true});
     if (!seq.meta.range_max_m) {
       double max_reading = 0.0;
       for (const auto& s : obs->sightings)
@@ -155,7 +120,7 @@ void checkCandidates(const diagnosis::DiagnoseConfig& config, const std::vector<
 
 /// True range of every beam of every sighting from truth.json (NaN where the truth has none).
 std::vector<std::vector<double>> truthRanges(const std::string& path, const LandmarkObservations& obs) {
-  const SimulationTruth truth = loadTruth(path);
+  const io::SimulationTruth truth = io::loadTruth(path);
   std::vector<std::vector<double>> ranges;
   for (const auto& s : obs.sightings) {
     std::vector<double> t;
@@ -166,44 +131,15 @@ std::vector<std::vector<double>> truthRanges(const std::string& path, const Land
   return ranges;
 }
 
-/// A long log cut to its leading stops that hold at most `max_readings` landmark readings (none
-/// cut when 0). A sequence diagnosis refits the joint problem for every replica, candidate and
-/// fold, each fit costing about a microsecond per reading and Levenberg-Marquardt iteration:
-/// CARMEN's Freiburg 079 log whole (57,600 readings at 4,791 poses) had not finished after 16
-/// minutes; its first 10,000 readings take under 2 minutes. The window is said in the report.
-/// Returns the selection's words (empty when nothing was cut).
-std::string leadingWindow(LandmarkObservations& obs, std::size_t max_readings) {
-  std::vector<std::size_t> per_stop(obs.commanded.size(), 0);
-  std::size_t total = 0;
-  for (const auto& s : obs.sightings)
-    if (s.stop < per_stop.size()) {
-      per_stop[s.stop] += s.beams.size();
-      total += s.beams.size();
-    }
-  if (max_readings == 0 || total <= max_readings) return "";
-  // Two stops at least, whatever they hold: a sequence diagnosis needs them.
-  std::size_t stops = 0, kept = 0;
-  while (stops < per_stop.size() && (stops < 2 || kept + per_stop[stops] <= max_readings)) kept += per_stop[stops++];
-  const std::size_t all_stops = obs.commanded.size();
-  obs.commanded.resize(stops);
-  obs.sightings.erase(std::remove_if(obs.sightings.begin(), obs.sightings.end(),
-                                     [stops](const Sighting& s) { return s.stop >= stops; }),
-                      obs.sightings.end());
-  obs.walls.erase(std::remove_if(obs.walls.begin(), obs.walls.end(), [stops](const WallSighting& w) { return w.stop >= stops; }),
-                  obs.walls.end());
-  return "the first " + std::to_string(stops) + " of " + plural(all_stops, "stop") + ": " + std::to_string(kept) + " of " +
-         plural(total, "landmark reading") + " (--max-readings " + std::to_string(max_readings) + ")";
-}
-
 diagnosis::DiagnosisResult diagnoseLandmarks(const DiagnoseCommand& c, const diagnosis::DiagnoseConfig& config,
-                                             const Corrector& fix, LandmarkObservations& obs, DiagnosisSource& src) {
-  checkCandidates(config, diagnosis::sequenceCandidates(), "a sequence");
-  src.selection = leadingWindow(obs, c.max_readings);
+                                             const diagnosis::ReadingCorrection& fix, LandmarkObservations& obs,
+                                             DiagnosisSource& src) {
+  checkCandidates(config, diagnosis::candidateList(diagnosis::DiagnoseConfig{}, diagnosis::DiagnoseMode::sequence),
+                  "a sequence");
+  src.selection = diagnosis::leadingWindow(obs, c.max_readings);
   if (!src.selection.empty() && !quiet())
     std::fprintf(stderr, "a long sequence: diagnosing %s; --max-readings 0 takes them all\n", src.selection.c_str());
-  if (fix.inverter)
-    for (auto& s : obs.sightings)
-      for (auto& b : s.beams) b.range_m = fix.correct(b.range_m);
+  diagnosis::correctReadings(obs, fix);
   for (const auto& s : obs.sightings)
     src.beside_pole_readings += static_cast<std::size_t>(
         std::count_if(s.beams.begin(), s.beams.end(), [](const BeamReading& b) { return b.beside; }));
@@ -218,27 +154,25 @@ diagnosis::DiagnosisResult diagnoseLandmarks(const DiagnoseCommand& c, const dia
 
 /// Static mode: --stop, else the stop with the most scans.
 std::size_t pickStop(const DiagnoseCommand& c, const io::Sequence& seq) {
-  std::size_t stop = 0;
   if (c.stop >= 0) {
     if (static_cast<std::size_t>(c.stop) >= seq.stops.size())
       throw InputError(c.data, "--stop", "the sequence has " + plural(seq.stops.size(), "stop"), "give a stop index from 0");
     return static_cast<std::size_t>(c.stop);
   }
-  for (std::size_t k = 0; k < seq.stops.size(); ++k)
-    if (seq.stops[k].scans.size() > seq.stops[stop].scans.size()) stop = k;
-  return stop;
+  return diagnosis::busiestStop(seq);
 }
 
 diagnosis::DiagnosisResult diagnoseOnePose(const DiagnoseCommand& c, const io::Sequence& seq,
-                                           const diagnosis::DiagnoseConfig& config, const Corrector& fix,
+                                           const diagnosis::DiagnoseConfig& config, const diagnosis::ReadingCorrection& fix,
                                            DiagnosisSource& src) {
   const std::size_t stop = pickStop(c, seq);
   if (seq.stops.size() > 1)
     src.selection += "stop " + std::to_string(stop) + " of " + std::to_string(seq.stops.size()) + ", " +
                      plural(seq.stops[stop].scans.size(), "scan") + " from one pose";
-  checkCandidates(config, diagnosis::staticCandidates(), "repeated scans of one pose");
+  checkCandidates(config, diagnosis::candidateList(diagnosis::DiagnoseConfig{}, diagnosis::DiagnoseMode::static_scene),
+                  "repeated scans of one pose");
   Progress reading("read the scans of stop " + std::to_string(stop), seq.stops[stop].scans.size());
-  const diagnosis::StaticScans s = staticScans(seq, stop, fix, [&](std::size_t done) { reading.update(done); });
+  const diagnosis::StaticScans s = diagnosis::staticScans(seq, stop, fix, [&](std::size_t done) { reading.update(done); });
   reading.finish();
   if (!quiet())
     std::fprintf(stderr, "diagnosing repeated scans of one pose: %s, %s (%s)\n", plural(s.scans, "scan").c_str(),
@@ -257,7 +191,7 @@ void runDiagnose(const DiagnoseCommand& c) {
   diagnosis::DiagnoseConfig config = diagnoseConfig(c);
   StageBars bars;  // a bar per step on a terminal (a forklift's 1081-beam static recording takes a while)
   config.progress = std::ref(bars);
-  const Corrector fix = makeCorrector(c.model);
+  const diagnosis::ReadingCorrection fix = makeCorrector(c.model);
   io::StagedDirectory out(c.out, c.overwrite);
   DiagnosisSource src;
   src.data = c.data;
@@ -283,7 +217,8 @@ void runDiagnose(const DiagnoseCommand& c) {
   writeDiagnosis(out.path(), result, src);
   out.commit();
   if (!result.status.ok())
-    throw DataError(c.data, "diagnosis", std::string(result.status.name()) + ": " + result.status.message, "see " + (fs::path(c.out) / "report.md").string());
+    throw DataError(c.data, "diagnosis", std::string(result.status.name()) + ": " + result.status.message,
+                    "see " + (fs::path(c.out) / "report.md").string());
   if (!quiet())
     std::fprintf(stderr, "%s: primary cause %s; report in %s\n", toString(result.mode), result.primary_cause.c_str(),
                  (fs::path(c.out) / "report.md").c_str());
@@ -295,12 +230,16 @@ void runDiagnose(const DiagnoseCommand& c) {
 void addDiagnoseCommand(CLI::App& app) {
   auto c = std::make_shared<DiagnoseCommand>();
   CLI::App* sub = app.add_subcommand(
-      "diagnose", "Show what the published range model gets wrong on measured data, name the cause, fit the extended model, measure the gain");
-  sub->add_option("DATA", c->data, "Sequence directory (docs/FORMAT.md): scans of poles from several stops, or repeated scans from one pose")
+      "diagnose",
+      "Show what the published range model gets wrong on measured data, name the cause, fit the extended model, measure the gain");
+  sub->add_option("DATA", c->data,
+                  "Sequence directory (docs/FORMAT.md): scans of poles from several stops, or repeated scans from one pose")
       ->required();
-  sub->add_option("-o,--out", c->out, "Output directory: diagnosis.json, report.md with PNG plots (and the .dat/plots.gp files that draw them)")
+  sub->add_option("-o,--out", c->out,
+                  "Output directory: diagnosis.json, report.md with PNG plots (and the .dat/plots.gp files that draw them)")
       ->required();
-  sub->add_option("--model", c->model, "Diagnose the readings corrected with this model.json (what the calibrated model still gets wrong)");
+  sub->add_option("--model", c->model,
+                  "Diagnose the readings corrected with this model.json (what the calibrated model still gets wrong)");
   sub->add_option("--seed", c->seed, "Seed of the bootstrap replicas; the same data and seed give the same output")
       ->capture_default_str();
   sub->add_option("--mode", c->mode, "auto: a sequence when poles are found at two stops or more, else static")
@@ -317,8 +256,10 @@ void addDiagnoseCommand(CLI::App& app) {
                   "Sequence mode: diagnose the leading stops that hold at most this many landmark readings (0: all; a "
                   "diagnosis refits the whole problem for every replica, candidate and fold)")
       ->capture_default_str();
-  sub->add_option("--stop", c->stop, "Static mode: the stop to use (default: the one with the most scans)")->check(CLI::NonNegativeNumber);
-  sub->add_option("--radius", c->radius_m, "Landmark radius in metres (default: sequence.json, else estimated)")->check(CLI::PositiveNumber);
+  sub->add_option("--stop", c->stop, "Static mode: the stop to use (default: the one with the most scans)")
+      ->check(CLI::NonNegativeNumber);
+  sub->add_option("--radius", c->radius_m, "Landmark radius in metres (default: sequence.json, else estimated)")
+      ->check(CLI::PositiveNumber);
   sub->add_option("--sigma-s", c->sigma_s_m, "Odometry: std. dev. of a stop's position around the commanded one (m)")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();

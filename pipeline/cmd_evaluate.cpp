@@ -20,7 +20,6 @@
 #include "pipeline/commands.hpp"
 #include "pipeline/papers.hpp"
 #include "pipeline/predictive_check.hpp"
-#include "pipeline/truth_eval.hpp"
 
 namespace lidarcal::pipeline {
 namespace {
@@ -36,7 +35,7 @@ nlohmann::ordered_json toJson(const calibration::RangeComparison& c) {
 
 }  // namespace
 
-nlohmann::ordered_json evaluationJson(const Evaluation& e) {
+nlohmann::ordered_json evaluationJson(const calibration::Evaluation& e) {
   return nlohmann::ordered_json{{"scans", e.scans},
                                 {"lost_returns", e.lost},
                                 {"landmarks", toJson(e.landmarks)},
@@ -213,9 +212,9 @@ void addEvaluateCommand(CLI::App& app) {
       return evaluateReference(o->corrected, o->reference, o->model, o->inversion, o->outside, o->radius_m, o->out,
                                o->force);
     if (o->truth.empty()) throw InputError("", "--truth", "evaluate needs --truth or --reference", "give one of them");
-    const SimulationTruth truth = loadTruth(o->truth);
+    const io::SimulationTruth truth = io::loadTruth(o->truth);
     const fs::path raw = o->raw.empty() ? fs::path(o->truth).parent_path() / "scans" : fs::path(o->raw);
-    const Evaluation e = evaluate(io::openSequence(o->corrected), io::openSequence(raw), truth);
+    const calibration::Evaluation e = calibration::evaluate(io::openSequence(o->corrected), io::openSequence(raw), truth);
     const std::string text = evaluationJson(e).dump(2) + "\n";
     std::fputs(text.c_str(), stdout);
     if (!o->out.empty()) io::writeTextAtomically(o->out, text);

@@ -3,55 +3,30 @@
 // refinement and the oracle side by side. Writes DIR/<fig>.csv, <fig>.gp, <fig>.png, <fig>.md and
 // DIR/summary.md. Interrupting (Ctrl-C) stops after the trials in progress and writes nothing; a
 // plot gnuplot cannot draw fails the command (nothing written); without gnuplot the plots are skipped
-// and the command says so.
+// and the command says so. With --shard K/N it runs one of N disjoint slices of the trials and
+// writes them for `lidarcal montecarlo-merge` (pipeline/montecarlo_shard.hpp).
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
-#include <filesystem>
-#include <fstream>
-#include <iterator>
-#include <stdexcept>
 #include <memory>
-#include <thread>
 
 #include <CLI/CLI.hpp>
 #include <glog/logging.h>
 
-#include "common/errors.hpp"
 #include "io/atomic_file.hpp"
 #include "pipeline/words.hpp"
 #include "pipeline/commands.hpp"
-#include "pipeline/gnuplot.hpp"
+#include "pipeline/montecarlo_setup.hpp"
+#include "pipeline/montecarlo_shard.hpp"
 #include "pipeline/progress.hpp"
 #include "studies/study.hpp"
 
 namespace lidarcal::pipeline {
 namespace {
-
-struct MonteCarloOptions {
-  std::string study = "all";
-  std::string out;
-  std::size_t trials = 0;        // 0: default of the level
-  std::size_t joint_trials = 0;  // 0: default of the level
-  bool no_joint = false;
-  int threads = 0;               // 0: all cores
-  std::uint64_t seed = 1;
-  std::string level = "landmark";
-  std::string angle_noise = "heading";
-  std::string noise_law = "paper";
-  double max_distance_m = 4.0;   // landmarks' farthest surface from any stop
-  double range_max_m = 6.0;      // the sensor's reading window, upper end
-  int scans_per_stop = 10;
-  int stops = 20;
-  double step_m = 0.15;
-  int max_order = 3;
-  double noise_scale = -1.0;     // < 0: default of the level
-  bool quick = false;
-  bool overwrite = false;
-};
 
 /// Set by SIGINT while the trials run; the workers stop after their current trial.
 std::atomic<bool> g_interrupted{false};
@@ -69,97 +44,58 @@ class InterruptGuard {
   void (*previous_)(int) = SIG_DFL;
 };
 
-std::vector<studies::Figure> figuresOf(const std::string& name) {
-  if (name == "all") return studies::allFigures();
-  studies::Figure f;
-  if (!studies::parseFigure(name, f))
-    throw InputError("", "--study", "unknown study '" + name + "'", "use fig7, fig8, fig9, fig10, fig11 or all");
-  return {f};
-}
+/// Quiets Ceres for the study: it logs through glog when a solve struggles (WARNING: a step
+/// failed and is retried with more damping; ERROR: the solve gave up, and the estimator either
+/// reports a failure, counted in the CSV's *_failed columns, or goes on from its last usable
+/// solution). Over thousands of trials these lines would bury the progress bar.
+void quietSolver() { FLAGS_minloglevel = std::max(FLAGS_minloglevel, static_cast<int>(google::GLOG_FATAL)); }
 
-/// Runs every figure's gnuplot script in `dir`. A missing gnuplot is reported (the returned text,
-/// empty when every plot was drawn); a script that fails is an error: the command fails and writes
-/// nothing, rather than leave a partial picture behind (gnuplot stops at the first failing panel).
-std::string drawPlots(const std::filesystem::path& dir, const std::vector<std::string>& scripts) {
-  if (std::system("command -v gnuplot >/dev/null 2>&1") != 0)
-    return "skipped, gnuplot is not installed (apt-get install gnuplot-nox); run gnuplot on the .gp files later";
-  for (const auto& script : scripts) {
-    std::string why;
-    if (!runGnuplot(dir, script, &why)) {
-      std::ifstream in(dir / "gnuplot.log");  // gnuplot's own messages, kept by runGnuplot on failure
-      std::string log((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-      if (log.size() > 2000) log = log.substr(0, 2000) + "...";
-      throw std::runtime_error("montecarlo: gnuplot failed on " + script + ", nothing was written:\n" + log);
-    }
-  }
-  return "";
-}
-
-/// Returns false when interrupted (nothing written).
-bool runMonteCarlo(const MonteCarloOptions& o) {
-  const auto figures = figuresOf(o.study);
-  studies::TrialConfig config;
-  if (!studies::parseLevel(o.level, config.level))
-    throw InputError("", "--level", "unknown level '" + o.level + "'", "use landmark or scan");
-  const bool scan = config.level == studies::Level::scan;
-  if (!studies::parseAngleNoise(o.angle_noise, config.angle_noise))
-    throw InputError("", "--angle-noise", "unknown model '" + o.angle_noise + "'", "use heading, beams or bearing");
-  if (!studies::parseNoiseLaw(o.noise_law, config.noise_law))
-    throw InputError("", "--noise-law", "unknown law '" + o.noise_law + "'", "use paper or squared");
-  if (scan && config.angle_noise != studies::AngleNoise::heading)
-    throw InputError("", "--angle-noise", "the scan level models the angle noise as heading noise only",
-                     "drop --angle-noise or use heading");
-  config.path.scans_per_stop = o.scans_per_stop;
-  config.path.stops = o.stops;
-  config.path.step_m = o.step_m;
-  config.max_order = o.max_order;
-  config.placement.max_surface_m = o.max_distance_m;
-  config.sensor.range_max_m = o.range_max_m;
-  config.noise_scale = o.noise_scale >= 0.0 ? o.noise_scale : (scan ? 0.2 : 1.0);
-  try {
-    config.validate();
-  } catch (const std::invalid_argument& e) {
-    throw InputError("", "options", e.what());
-  }
-  const studies::StudyGrids grids = o.quick ? studies::StudyGrids::quick() : studies::StudyGrids{};
-
-  studies::RunOptions run;
-  // Defaults: the landmark level runs the paper's 1000 trials (100 with --quick), the joint
-  // refinement on the first 200 (10); the scan level 100 trials (10), the joint on the first 50 (5).
-  run.trials = o.trials ? o.trials : (scan ? (o.quick ? 10 : 100) : (o.quick ? 100 : 1000));
-  run.joint_trials = o.no_joint ? 0 : (o.joint_trials ? o.joint_trials : (scan ? (o.quick ? 5 : 50) : (o.quick ? 10 : 200)));
-  run.joint_trials = std::min(run.joint_trials, run.trials);
-  run.threads = o.threads > 0 ? o.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  run.seed = o.seed;
-  run.stop = &g_interrupted;
-
-  // From here to the commit a SIGINT only sets the flag: the trials stop, nothing is committed.
-  g_interrupted = false;
-  InterruptGuard guard;
-  // Ceres logs through glog when a solve struggles (WARNING: a step failed and is retried with more
-  // damping; ERROR: the solve gave up, and the estimator either reports a failure, counted in the
-  // CSV's *_failed columns, or goes on from its last usable solution). Over thousands of trials
-  // these lines would bury the progress bar.
-  FLAGS_minloglevel = std::max(FLAGS_minloglevel, static_cast<int>(google::GLOG_FATAL));
+/// Runs slice run.shard_index of the study and writes it for the merge. False when interrupted.
+bool runShard(const MonteCarloOptions& o, const StudySetup& setup, studies::RunOptions run) {
+  const auto cells = studies::studyCells(setup.figures, setup.grids);
+  const auto slice = studies::shardTrials(cells.size(), run);
   io::StagedDirectory out(o.out, o.overwrite);
-  const auto cells = studies::studyCells(figures, grids);
+  if (!quiet())
+    std::fprintf(stderr, "montecarlo: shard %zu/%zu, %zu of the %zu cells x %zu trials, %s\n", run.shard_index + 1,
+                 run.shard_count, slice.size(), cells.size(), run.trials,
+                 plural(static_cast<std::size_t>(run.threads), "thread").c_str());
+  const auto start = std::chrono::steady_clock::now();
+  studies::StudyRun result;
+  {
+    Progress progress("montecarlo", slice.size());
+    run.on_progress = [&](std::size_t done, std::size_t) { progress.update(done); };
+    result = studies::runCells(setup.config, cells, run);
+    if (!result.interrupted) progress.finish();
+  }
+  if (result.interrupted || g_interrupted) return false;
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  writeShard(out.path(), studyIdentity(o, setup), run, slice, result);
+  out.commit();
+  std::printf("Monte Carlo shard %zu/%zu: %zu trials in %.1f s (%s)\n", run.shard_index + 1, run.shard_count, slice.size(),
+              seconds, plural(static_cast<std::size_t>(run.threads), "thread").c_str());
+  std::printf("Output: %s (shard.json, trials.csv; merge every shard with lidarcal montecarlo-merge)\n", o.out.c_str());
+  return true;
+}
+
+/// Runs the whole study. False when interrupted (nothing written).
+bool runWholeStudy(const MonteCarloOptions& o, const StudySetup& setup, studies::RunOptions run) {
+  io::StagedDirectory out(o.out, o.overwrite);
+  const auto cells = studies::studyCells(setup.figures, setup.grids);
   if (!quiet())
     std::fprintf(stderr, "montecarlo: %zu cells x %zu trials (joint refinement on %zu), %s level, %s\n",
-                 cells.size(), run.trials, run.joint_trials, studies::toString(config.level),
+                 cells.size(), run.trials, run.joint_trials, studies::toString(setup.config.level),
                  plural(static_cast<std::size_t>(run.threads), "thread").c_str());
   const auto start = std::chrono::steady_clock::now();
   studies::StudyOutput result;
   {
     Progress progress("montecarlo", cells.size() * run.trials);
     run.on_progress = [&](std::size_t done, std::size_t) { progress.update(done); };
-    result = studies::runStudy(figures, grids, config, run);
+    result = studies::runStudy(setup.figures, setup.grids, setup.config, run);
     if (!result.interrupted) progress.finish();
   }
   if (result.interrupted) return false;  // `out` is discarded: nothing is written
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-
-  for (const auto& [name, text] : result.files) io::writeTextAtomically(out.path() / name, text);
-  const std::string plots = drawPlots(out.path(), result.gnuplot_scripts);
+  const std::string plots = writeStudyOutput(out.path(), result);
   if (g_interrupted) return false;
   out.commit();
   const double trials = static_cast<double>(cells.size() * run.trials);
@@ -168,6 +104,19 @@ bool runMonteCarlo(const MonteCarloOptions& o) {
   std::printf("Output: %s (summary.md; per figure .csv, .png, .gp, .md)\n", o.out.c_str());
   if (!plots.empty()) std::printf("Plots: %s\n", plots.c_str());
   return true;
+}
+
+/// Returns false when interrupted (nothing written).
+bool runMonteCarlo(const MonteCarloOptions& o) {
+  const StudySetup setup = studySetup(o);
+  studies::RunOptions run = setup.run;
+  if (!o.shard.empty()) parseShard(o.shard, run);
+  run.stop = &g_interrupted;
+  // From here to the commit a SIGINT only sets the flag: the trials stop, nothing is committed.
+  g_interrupted = false;
+  InterruptGuard guard;
+  quietSolver();
+  return o.shard.empty() ? runWholeStudy(o, setup, run) : runShard(o, setup, run);
 }
 
 }  // namespace
@@ -226,6 +175,10 @@ void addMonteCarloCommand(CLI::App& app) {
                   "the scan level (the detector cannot find the poles through the paper's noise)")
       ->check(CLI::NonNegativeNumber);
   sub->add_flag("--quick", o->quick, "Coarse grids and fewer trials, for a first look");
+  sub->add_option("--shard", o->shard,
+                  "K/N: run only the K-th of N disjoint slices of the trials (each trial seeded as in the whole study) "
+                  "and write them to OUT for `lidarcal montecarlo-merge`, which makes the whole study's files byte for "
+                  "byte; one slice per batch task (Slurm: $((SLURM_ARRAY_TASK_ID + 1))/N)");
   sub->add_flag("--overwrite", o->overwrite, "Replace OUT if it exists");
   sub->callback([o] {
     if (!runMonteCarlo(*o)) {

@@ -19,6 +19,7 @@
 #include "pipeline/progress.hpp"
 #include "pipeline/report.hpp"
 #include "pipeline/stages.hpp"
+#include "pipeline/truth_stage.hpp"
 #include "pipeline/ways_forward.hpp"
 #include "pipeline/words.hpp"
 
@@ -32,32 +33,6 @@ struct RunCommand {
   std::shared_ptr<CalibrationOptions> options = std::make_shared<CalibrationOptions>();
 };
 
-/// The comparison with the simulator's truth: our model scored on the corrected scans as
-/// written (read back from `corrected_dir`), the baselines under the same rule in memory.
-void compareWithTruth(ReportInputs& in, const io::Sequence& seq, const std::filesystem::path& corrected_dir,
-                      const SimulationTruth& truth, const SequenceCalibration& cal,
-                      const calibration::CalibrationConfig& config, calibration::InversionMethod method,
-                      calibration::Outside outside) {
-  in.true_landmarks = truth.truth.scene.landmarks;
-  in.compared.push_back({"lidarcal " + cal.model.method + " (no ground truth), the written scans", cal.model,
-                         evaluate(io::openSequence(corrected_dir), seq, truth)});
-  if (cal.model.method != "closed-form") {
-    auto cf_config = config;
-    cf_config.method = calibration::Method::closed_form;
-    const CalibrationModel cf = calibration::calibrate(cal.observations, cf_config);
-    if (cf.status.ok())
-      in.compared.push_back({std::string("closed form of ") + papers::kLandmarks + " (no ground truth)", cf,
-                             evaluate(cf, method, outside, seq, truth)});
-  }
-  const CalibrationModel scaled = calibrateOracle(seq, truth, commandedScale(truth.truth), config);
-  in.compared.push_back({"ground truth x odometry scale error " + fixed(commandedScale(truth.truth), 4) +
-                             " (unseen by self-calibration)",
-                         scaled, evaluate(scaled, method, outside, seq, truth)});
-  const CalibrationModel oracle = calibrateOracle(seq, truth, 1.0, config);
-  in.compared.push_back({std::string("ground truth (oracle, ") + papers::kTriangulation + " ML)", oracle,
-                         evaluate(oracle, method, outside, seq, truth)});
-}
-
 /// The run in a few lines on stdout.
 void printRun(const RunCommand& c, const io::Sequence& seq, const SequenceCalibration& cal, const ReportInputs& in,
               const CorrectionStats& stats, calibration::Outside outside) {
@@ -70,7 +45,7 @@ void printRun(const RunCommand& c, const io::Sequence& seq, const SequenceCalibr
   if (const std::string beyond = beyondFitText(stats, cal.model, outside); !beyond.empty())
     std::printf("  %s\n", beyond.c_str());
   if (!in.compared.empty()) {
-    const Evaluation& ours = in.compared.front().evaluation;
+    const calibration::Evaluation& ours = in.compared.front().evaluation;
     std::printf("  against the truth (MSE ratio = raw MSE / corrected MSE: higher is better, 1 = no gain):\n");
     std::printf("    %-62s %12s %12s\n", "", "landmarks", "all returns");
     std::printf("    %-62s %9.1f mm %9.1f mm\n", "raw readings, RMS:", 1000.0 * std::sqrt(ours.landmarks.mse_raw_m2),
@@ -83,6 +58,46 @@ void printRun(const RunCommand& c, const io::Sequence& seq, const SequenceCalibr
               (fs::path(c.out) / "corrected").c_str(), (fs::path(c.out) / "report/report.md").c_str());
 }
 
+/// The truth to evaluate against: --truth, or found next to a simulated sequence (DIR/scans +
+/// DIR/truth.json) unless --no-truth; empty when there is none.
+std::filesystem::path truthFile(const RunCommand& c, const std::filesystem::path& seq_dir) {
+  namespace fs = std::filesystem;
+  fs::path truth_file = c.truth;
+  std::error_code ec;
+  if (truth_file.empty() && !c.no_truth && fs::exists(seq_dir.parent_path() / "truth.json", ec) &&
+      seq_dir.filename() == "scans")
+    truth_file = seq_dir.parent_path() / "truth.json";
+  return truth_file;
+}
+
+/// summary.json: the sequence, the model, the corrected returns and, with truth, the evaluations.
+nlohmann::ordered_json runSummary(const std::filesystem::path& seq_dir, const io::Sequence& seq,
+                                  const SequenceCalibration& cal, const ReportInputs& in, const CorrectionStats& stats,
+                                  calibration::Outside outside) {
+  nlohmann::ordered_json summary{{"sequence", seq_dir.string()},
+                                 {"scans", seq.scans.size()},
+                                 {"stops", seq.stops.size()},
+                                 {"landmarks", cal.detections.association.landmarks.size()},
+                                 {"method", cal.model.method},
+                                 {"order", cal.model.model.bias.order()},
+                                 {"alpha", cal.model.model.bias.alpha},
+                                 {"outside", calibration::toString(outside)},
+                                 {"corrected_returns", stats.corrected},
+                                 {"extrapolated_returns", stats.extrapolated},
+                                 {"beyond_fitted_range_returns", stats.beyond()},
+                                 {"unresolved_returns", stats.unresolved}};
+  if (!in.compared.empty()) {
+    summary["evaluation"] = evaluationJson(in.compared.front().evaluation);
+    auto baselines = nlohmann::ordered_json::array();
+    for (std::size_t k = 1; k < in.compared.size(); ++k)
+      baselines.push_back({{"model", in.compared[k].name},
+                           {"order", in.compared[k].model.model.bias.order()},
+                           {"evaluation", evaluationJson(in.compared[k].evaluation)}});
+    summary["baselines"] = baselines;
+  }
+  return summary;
+}
+
 void runRun(const RunCommand& c) {
   namespace fs = std::filesystem;
   const fs::path seq_dir = c.seq.empty() ? bundledExample() : fs::path(c.seq);
@@ -90,12 +105,7 @@ void runRun(const RunCommand& c) {
   io::checkOutsideInput(seq_dir, c.out);
   const io::Sequence seq = io::openSequence(seq_dir);
   if (const std::string w = beamCountWarning(seq); !w.empty()) std::fprintf(stderr, "lidarcal: warning: %s\n", w.c_str());
-  // Truth: given, or found next to a simulated sequence (DIR/scans + DIR/truth.json).
-  fs::path truth_file = c.truth;
-  std::error_code ec;
-  if (truth_file.empty() && !c.no_truth && fs::exists(seq_dir.parent_path() / "truth.json", ec) &&
-      seq_dir.filename() == "scans")
-    truth_file = seq_dir.parent_path() / "truth.json";
+  const fs::path truth_file = truthFile(c, seq_dir);
 
   io::StagedDirectory out(c.out, c.overwrite);
   const auto config = calibrationConfig(*c.options);
@@ -127,7 +137,9 @@ void runRun(const RunCommand& c) {
   in.command = "lidarcal run " + (c.seq.empty() ? std::string() : c.seq + " ") + "--out " + c.out;
   if (!truth_file.empty()) {
     Activity activity("evaluate against the truth");
-    compareWithTruth(in, seq, out.path() / "corrected", loadTruth(truth_file), cal, config, method, outside);
+    const io::SimulationTruth truth = io::loadTruth(truth_file);
+    in.true_landmarks = truth.truth.scene.landmarks;
+    in.compared = compareWithTruth(seq, out.path() / "corrected", truth, cal, config, method, outside);
     in.truth_note = "Evaluated on the calibration sequence itself against " + truth_file.string() +
                     " (simulator truth; calibration did not use it). Our row scores the corrected scans as written "
                     "in corrected/, read back; the other rows apply their models under the same rule (--outside " +
@@ -137,28 +149,7 @@ void runRun(const RunCommand& c) {
     Activity activity("report");
     writeReport(out.path() / "report", in);
   }
-  nlohmann::ordered_json summary{{"sequence", seq_dir.string()},
-                                 {"scans", seq.scans.size()},
-                                 {"stops", seq.stops.size()},
-                                 {"landmarks", cal.detections.association.landmarks.size()},
-                                 {"method", cal.model.method},
-                                 {"order", cal.model.model.bias.order()},
-                                 {"alpha", cal.model.model.bias.alpha},
-                                 {"outside", calibration::toString(outside)},
-                                 {"corrected_returns", stats.corrected},
-                                 {"extrapolated_returns", stats.extrapolated},
-                                 {"beyond_fitted_range_returns", stats.beyond()},
-                                 {"unresolved_returns", stats.unresolved}};
-  if (!in.compared.empty()) {
-    summary["evaluation"] = evaluationJson(in.compared.front().evaluation);
-    auto baselines = nlohmann::ordered_json::array();
-    for (std::size_t k = 1; k < in.compared.size(); ++k)
-      baselines.push_back({{"model", in.compared[k].name},
-                           {"order", in.compared[k].model.model.bias.order()},
-                           {"evaluation", evaluationJson(in.compared[k].evaluation)}});
-    summary["baselines"] = baselines;
-  }
-  io::writeTextAtomically(out.path() / "summary.json", summary.dump(2) + "\n");
+  io::writeTextAtomically(out.path() / "summary.json", runSummary(seq_dir, seq, cal, in, stats, outside).dump(2) + "\n");
   out.commit();
   printRun(c, seq, cal, in, stats, outside);
 }

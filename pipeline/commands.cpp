@@ -20,7 +20,9 @@ void registerCommands(CLI::App& app) {
   addNoiseConsistencyCommand(app);
   addLandmarksToObservationsCommand(app);
   addMonteCarloCommand(app);
+  addMonteCarloMergeCommand(app);
   addDiagnoseCommand(app);
+  addFleetCommand(app);
 }
 
 std::filesystem::path dataDir() {

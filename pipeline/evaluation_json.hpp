@@ -4,12 +4,12 @@
 
 #include <nlohmann/json.hpp>
 
-#include "pipeline/truth_eval.hpp"
+#include "calibration/truth_evaluation.hpp"
 
 namespace lidarcal::pipeline {
 
 /// Scans, lost returns and the MSE comparisons (landmarks, walls, all returns, and the returns
 /// beyond the fitted range) of `e`.
-nlohmann::ordered_json evaluationJson(const Evaluation& e);
+nlohmann::ordered_json evaluationJson(const calibration::Evaluation& e);
 
 }  // namespace lidarcal::pipeline

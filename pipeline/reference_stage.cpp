@@ -8,8 +8,8 @@
 
 #include "calibration/filtering.hpp"
 #include "common/errors.hpp"
-#include "detectors/wall_tracks.hpp"
-#include "pipeline/collect_sightings.hpp"
+#include "detectors/sightings.hpp"
+#include "detectors/stop_walls.hpp"
 
 namespace lidarcal::pipeline {
 
@@ -30,25 +30,13 @@ detectors::SequenceDetectionConfig referenceDetection(detectors::SequenceDetecti
 
 namespace {
 
-/// Walls of every scan at the stops that a reference measures a wall or a span at, grouped into
-/// the surfaces of each stop; the line fits take the detection's inlier threshold.
-std::vector<WallSighting> observeWalls(const io::Sequence& seq, const Reference& ref, const detectors::ScanLoader& load,
-                                       const detectors::SequenceDetectionConfig& detection) {
+/// The stops a reference measures a wall or a span at.
+std::set<std::size_t> wallStops(const Reference& ref) {
   std::set<std::size_t> stops;
   for (const auto& d : ref.distances)
     if (d.target == ReferenceTarget::wall) stops.insert(d.stop);
   for (const auto& s : ref.spans) stops.insert(s.stop);
-  std::vector<WallSighting> walls;
-  detectors::WallConfig config;
-  config.line.inlier_threshold_m = detection.detection.threshold_m;
-  config.threshold_per_m2 = detection.detection.threshold_per_m2;
-  for (std::size_t k : stops)
-    for (std::size_t i : seq.stops[k].scans) {
-      const io::Scan scan = load(i);
-      for (WallSighting& ws : detectors::wallSightings(*scan.cloud, k, i, config)) walls.push_back(std::move(ws));
-    }
-  detectors::labelWallSurfaces(walls);
-  return walls;
+  return stops;
 }
 
 }  // namespace
@@ -61,14 +49,14 @@ ReferenceObservations observeReference(const io::Sequence& seq, const Reference&
   for (const auto& d : ref.distances) poles = poles || d.target == ReferenceTarget::landmark;
   if (poles) {
     const detectors::SequenceDetections det = detectors::detectSequence(seq, load, detection, on_scan);
-    out.observations = toLandmarkObservations(seq, det, load);
+    out.observations = detectors::toLandmarkObservations(seq, det, load);
     out.landmarks = det.association.landmarks.size();
   } else {
     for (const auto& stop : seq.stops) out.observations.commanded.push_back(stop.commanded);
     out.observations.range_min_m = seq.meta.range_min_m.value_or(0.0);
     out.observations.range_max_m = seq.meta.range_max_m.value_or(1e9);
   }
-  out.observations.walls = observeWalls(seq, ref, load, detection);
+  out.observations.walls = detectors::wallsAtStops(seq, wallStops(ref), load, detection.detection);
   const double radius = detection.detection.landmark_radius_m.value_or(seq.meta.landmark_radius_m.value_or(0.0));
   out.known = calibration::knownReadings(out.observations, ref, radius);
   out.spans = calibration::spanReadings(out.observations, ref);
@@ -143,62 +131,19 @@ SequenceCalibration calibrateSequenceWithReference(const io::Sequence& seq, cons
   return out;
 }
 
-namespace {
-
-/// Surveyed centres matched to detected landmarks: the closest pairs first, one to one, within
-/// kSurveyGateM. Unmatched entries get id 0.
-std::vector<SurveyMatch> matchSurvey(const std::vector<ReferenceLandmark>& surveyed,
-                                     const std::vector<detectors::Landmark>& detected) {
-  struct Pair {
-    double d;
-    std::size_t s, l;
-  };
-  std::vector<Pair> pairs;
-  for (std::size_t s = 0; s < surveyed.size(); ++s)
-    for (std::size_t l = 0; l < detected.size(); ++l) {
-      const double d = std::hypot(surveyed[s].x_m - detected[l].x_m, surveyed[s].y_m - detected[l].y_m);
-      if (d <= kSurveyGateM) pairs.push_back({d, s, l});
-    }
-  std::stable_sort(pairs.begin(), pairs.end(), [](const Pair& a, const Pair& b) { return a.d < b.d; });
-  std::vector<SurveyMatch> out(surveyed.size());
-  std::vector<bool> taken(detected.size(), false);
-  for (std::size_t s = 0; s < surveyed.size(); ++s) out[s].entry = s;
-  for (const Pair& p : pairs) {
-    if (out[p.s].id != 0 || taken[p.l]) continue;
-    out[p.s].id = detected[p.l].id;
-    out[p.s].distance_m = p.d;
-    taken[p.l] = true;
-  }
-  return out;
-}
-
-/// The radius the surveyed landmarks agree on (within 1 mm), if every one gives it.
-std::optional<double> surveyedRadius(const std::vector<ReferenceLandmark>& surveyed) {
-  std::optional<double> lo, hi;
-  for (const auto& l : surveyed) {
-    if (!l.radius_m) return std::nullopt;
-    lo = std::min(lo.value_or(*l.radius_m), *l.radius_m);
-    hi = std::max(hi.value_or(*l.radius_m), *l.radius_m);
-  }
-  if (!lo || *hi - *lo > 1e-3) return std::nullopt;
-  return 0.5 * (*lo + *hi);
-}
-
-}  // namespace
-
 SequenceCalibration calibrateSequenceWithSurvey(const io::Sequence& seq, const Reference& ref,
                                                 const std::filesystem::path& ref_file,
                                                 const detectors::SequenceDetectionConfig& detection,
                                                 const calibration::CalibrationConfig& config,
-                                                std::vector<SurveyMatch>* matches, const NamedProgress& progress) {
+                                                std::vector<detectors::SurveyMatch>* matches, const NamedProgress& progress) {
   detectors::SequenceDetectionConfig det = detection;
   if (!det.detection.landmark_radius_m && !seq.meta.landmark_radius_m)
-    if (const auto r = surveyedRadius(ref.landmarks)) det.detection.landmark_radius_m = *r;
+    if (const auto r = detectors::surveyedRadius(ref.landmarks)) det.detection.landmark_radius_m = *r;
   calibration::CalibrationConfig cfg = config;
   for (const auto& s : ref.stops) cfg.joint.known_poses[s.stop] = s.pose;
-  std::vector<SurveyMatch> found;
+  std::vector<detectors::SurveyMatch> found;
   const auto adjust = [&](const detectors::SequenceDetections& d, calibration::CalibrationConfig& c) {
-    found = matchSurvey(ref.landmarks, d.association.landmarks);
+    found = detectors::matchSurvey(ref.landmarks, d.association.landmarks);
     std::string unmatched;
     for (const auto& m : found) {
       if (m.id != 0) {
@@ -211,7 +156,7 @@ SequenceCalibration calibrateSequenceWithSurvey(const io::Sequence& seq, const R
       unmatched += text;
     }
     char why[96];
-    std::snprintf(why, sizeof why, ": no detected landmark within %.1f m (%zu detected)", kSurveyGateM,
+    std::snprintf(why, sizeof why, ": no detected landmark within %.1f m (%zu detected)", detectors::kSurveyGateM,
                   d.association.landmarks.size());
     if (!unmatched.empty())
       throw DataError(ref_file.string(), "landmarks", unmatched + why,
@@ -228,7 +173,7 @@ SequenceCalibration calibrateSequenceWithDistancesAndSelf(const io::Sequence& se
                                                          const detectors::SequenceDetectionConfig& detection,
                                                          const calibration::CalibrationConfig& config,
                                                          std::vector<calibration::ReferenceMatch>* matches,
-                                                         std::vector<SurveyMatch>* survey, const NamedProgress& progress) {
+                                                         std::vector<detectors::SurveyMatch>* survey, const NamedProgress& progress) {
   if (config.method != calibration::Method::joint)
     throw InputError(ref_file.string(), "distances",
                      "measured at only some stops (or given with surveyed landmarks or stops) are combined with the "
@@ -248,7 +193,7 @@ SequenceCalibration calibrateSequenceWithDistancesAndSelf(const io::Sequence& se
   return out;
 }
 
-std::string surveyTable(const std::vector<SurveyMatch>& matches, const Reference& ref) {
+std::string surveyTable(const std::vector<detectors::SurveyMatch>& matches, const Reference& ref) {
   std::string t;
   if (!matches.empty())
     t += "surveyed landmarks held fixed (REF.json; off by: from the position detect found with the commanded poses "

@@ -1,9 +1,10 @@
 #pragma once
-// Calibration and evaluation against what a user measured (REF.json, common/reference.hpp):
-// the targets of the reference distances found in the scans, their beams turned into readings
-// of known true distance, and the range model fitted to them (calibration/reference.hpp); the
-// walls of wall-to-wall spans found the same way and the model fitted to the spans
-// (calibration/span_calibration.hpp).
+// Calibration and evaluation against what a user measured (REF.json, common/reference.hpp), as a
+// composition: the targets of the reference distances found in the scans (poles: detectors/;
+// walls: detectors/stop_walls.hpp), their beams turned into readings of known true distance, and
+// the range model fitted to them (calibration/reference.hpp); the walls of wall-to-wall spans and
+// the model fitted to the spans (calibration/span_calibration.hpp); surveyed landmarks matched to
+// detected ones (detectors/survey_match.hpp) and held fixed in the self-calibration.
 
 #include <cstddef>
 #include <filesystem>
@@ -16,6 +17,7 @@
 #include "calibration/span_calibration.hpp"
 #include "common/reference.hpp"
 #include "detectors/sequence_detector.hpp"
+#include "detectors/survey_match.hpp"
 #include "io/sequence.hpp"
 #include "pipeline/stages.hpp"
 
@@ -59,26 +61,15 @@ SequenceCalibration calibrateSequenceWithReference(const io::Sequence& seq, cons
                                            std::vector<calibration::ReferenceMatch>* matches = nullptr,
                                            const StageProgress& on_scan = {}, SpanReport* spans = nullptr);
 
-/// A surveyed landmark (REF.json `landmarks[entry]`) and the detected landmark it stands for.
-struct SurveyMatch {
-  std::size_t entry = 0;       ///< index in REF.json's landmarks
-  int id = 0;                  ///< detected landmark id
-  double distance_m = 0.0;     ///< from the surveyed centre to the detected landmark's position
-};
-
-/// Farthest a surveyed centre may lie from the detected landmark it is matched to (the detected
-/// positions come from the commanded poses and a raw, biased range: decimetres off are common).
-inline constexpr double kSurveyGateM = 0.5;
-
 /// Self-calibration (detection, triangulation, joint refinement) with the surveyed landmark
 /// centres and the measured stop poses of `ref` held fixed (REF.json without distances). Each
-/// surveyed landmark is matched to the nearest detected one (one to one, within kSurveyGateM);
+/// surveyed landmark is matched to the nearest detected one (detectors::matchSurvey);
 /// throws DataError naming the entries that match none.
 SequenceCalibration calibrateSequenceWithSurvey(const io::Sequence& seq, const Reference& ref,
                                                 const std::filesystem::path& ref_file,
                                                 const detectors::SequenceDetectionConfig& detection,
                                                 const calibration::CalibrationConfig& config,
-                                                std::vector<SurveyMatch>* matches = nullptr,
+                                                std::vector<detectors::SurveyMatch>* matches = nullptr,
                                                 const NamedProgress& progress = {});
 
 /// Throws DataError naming every reference distance whose target was not found (with what to do).
@@ -88,7 +79,7 @@ void requireEveryDistanceFound(const calibration::ReferenceReadings& known, cons
 /// fault (e.g. `spans[0].bearing_b_deg`), with the walls the stop does show.
 void requireEverySpanFound(const calibration::SpanReadings& spans, const std::filesystem::path& ref_file);
 
-/// Stops with at least one measured distance (all of the sequence's: seed 004's fit on the
+/// Stops with at least one measured distance (all of the sequence's: Alhashimi et al. 2016's fit on the
 /// distances alone is the calibration; fewer: they join the self-calibration).
 std::size_t measuredStops(const Reference& ref);
 
@@ -102,10 +93,10 @@ SequenceCalibration calibrateSequenceWithDistancesAndSelf(const io::Sequence& se
                                                          const detectors::SequenceDetectionConfig& detection,
                                                          const calibration::CalibrationConfig& config,
                                                          std::vector<calibration::ReferenceMatch>* matches = nullptr,
-                                                         std::vector<SurveyMatch>* survey = nullptr,
+                                                         std::vector<detectors::SurveyMatch>* survey = nullptr,
                                                          const NamedProgress& progress = {});
 
 /// The matches as a Markdown table for stdout.
-std::string surveyTable(const std::vector<SurveyMatch>& matches, const Reference& ref);
+std::string surveyTable(const std::vector<detectors::SurveyMatch>& matches, const Reference& ref);
 
 }  // namespace lidarcal::pipeline

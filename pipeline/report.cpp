@@ -380,7 +380,7 @@ void writeTruthSection(std::ostringstream& md, const ReportInputs& in) {
   md << "\n## Against the truth\n\n" << in.truth_note << "\n\n";
   md << "The MSE ratio is the raw readings' mean squared error divided by the corrected ones' (" << kLandmarks
      << ", eq. 31): higher is better, 1 means no gain.\n\n";
-  const Evaluation& ours = in.compared.front().evaluation;
+  const calibration::Evaluation& ours = in.compared.front().evaluation;
   md << "The corrected scans as written:\n\n| returns on | returns | raw RMS error [mm] | corrected RMS error [mm] | "
         "MSE ratio |\n|---|---|---|---|---|\n";
   md << writtenRow("landmarks", ours.landmarks) << writtenRow("walls", ours.walls) << writtenRow("all", ours.all)

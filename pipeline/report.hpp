@@ -12,7 +12,7 @@
 #include "common/calibration_model.hpp"
 #include "common/landmark_observations.hpp"
 #include "common/scene.hpp"
-#include "pipeline/truth_eval.hpp"
+#include "calibration/truth_evaluation.hpp"
 
 namespace lidarcal::pipeline {
 
@@ -20,7 +20,7 @@ namespace lidarcal::pipeline {
 struct ComparedModel {
   std::string name;         ///< e.g. "closed form (seed 000)", "oracle"
   CalibrationModel model;   ///< the model
-  Evaluation evaluation;    ///< its correction of the evaluation sequence
+  calibration::Evaluation evaluation;  ///< its correction of the evaluation sequence
 };
 
 struct ReportInputs {

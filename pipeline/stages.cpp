@@ -9,7 +9,7 @@
 #include "common/errors.hpp"
 #include "common/parallel.hpp"
 #include "common/plural.hpp"
-#include "pipeline/collect_sightings.hpp"
+#include "detectors/sightings.hpp"
 
 namespace lidarcal::pipeline {
 
@@ -43,7 +43,7 @@ SequenceCalibration calibrateSequence(const io::Sequence& seq, const detectors::
   out.detections = detectors::detectSequence(seq, detection, [&](std::size_t done, std::size_t total) {
     if (progress) progress("detect", done, total);
   });
-  out.observations = toLandmarkObservations(seq, out.detections);
+  out.observations = detectors::toLandmarkObservations(seq, out.detections);
   if (!seq.meta.range_max_m) {
     // No sensor window in sequence.json: take the largest landmark reading, with margin.
     double max_reading = 0.0;
@@ -67,28 +67,6 @@ SequenceCalibration calibrateSequence(const io::Sequence& seq, const detectors::
   if (out.detections.association.landmarks.empty())
     out.model.status.message = out.detections.note + (out.model.status.message.empty() ? "" : "; ") + out.model.status.message;
   return out;
-}
-
-CalibrationModel calibrateOracle(const io::Sequence& raw, const SimulationTruth& truth, double scale,
-                                 const calibration::CalibrationConfig& config) {
-  const auto pairs = truthPairs(raw, truth, scale);
-  const auto& sensor = truth.truth.scene.sensor.range;
-  CalibrationModel m =
-      calibration::calibrateAgainstTruth(pairs, config, truthBatches(raw, truth), sensor.range_min_m, sensor.range_max_m);
-  m.method = scale == 1.0 ? "oracle" : "oracle-commanded";
-  m.beams = truth.truth.scene.sensor.beams;
-  m.sensor_name = truth.truth.scene.sensor.name;
-  for (const auto& s : truth.truth.stops) m.stop_poses.push_back(scale == 1.0 ? s.actual : s.commanded);
-  for (std::size_t i = 0; i < truth.truth.scene.landmarks.size(); ++i) {
-    const auto& c = truth.truth.scene.landmarks[i];
-    CalibratedLandmark l;
-    l.id = static_cast<int>(i) + 1;
-    l.x_m = c.x_m;
-    l.y_m = c.y_m;
-    l.radius_m = c.radius_m;
-    m.landmarks.push_back(l);
-  }
-  return m;
 }
 
 std::string beamCountWarning(const io::Sequence& seq) {

@@ -16,7 +16,6 @@
 #include "detectors/sequence_detector.hpp"
 #include "io/pcd_scan.hpp"
 #include "io/sequence.hpp"
-#include "pipeline/truth_eval.hpp"
 
 namespace lidarcal::pipeline {
 
@@ -42,12 +41,6 @@ using CalibrationAdjust = std::function<void(const detectors::SequenceDetections
 SequenceCalibration calibrateSequence(const io::Sequence& seq, const detectors::SequenceDetectionConfig& detection,
                                       const calibration::CalibrationConfig& config, const NamedProgress& progress = {},
                                       const CalibrationAdjust& adjust = {});
-
-/// The oracle of seed 004 on a simulated sequence: the range model fitted against the true
-/// distances of the landmark beams, scaled by `scale` (1: plain oracle; commandedScale(): the
-/// best any self-calibration can do, in the commanded frame).
-CalibrationModel calibrateOracle(const io::Sequence& raw, const SimulationTruth& truth, double scale,
-                                 const calibration::CalibrationConfig& config);
 
 /// A warning for calibrate/run when the scans of `seq` differ in their number of points (empty
 /// when they agree). Not an error: some sensors (YDLIDAR X4) vary their beam count per sweep.

@@ -19,6 +19,7 @@ PACKAGES=(
   cyclonedds-dev cyclonedds-tools  # lidarcal_ros2_node: Eclipse Cyclone DDS and its IDL compiler idlc
   libfastrtps-dev fastddsgen       # eProsima Fast DDS and fastddsgen: the other vendor, for the cross-vendor test
   clang-14 libclang-rt-14-dev      # libFuzzer targets (scripts/fuzz.sh): clang's -fsanitize=fuzzer and its runtime
+  slurmctld slurmd slurm-client munge  # the Slurm recipes' test (scripts/slurm/): a single-node cluster it starts and stops
 )
 
 missing=()

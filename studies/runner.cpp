@@ -1,5 +1,6 @@
 #include "studies/runner.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <exception>
 #include <mutex>
@@ -11,21 +12,27 @@ namespace lidarcal::studies {
 void RunOptions::validate() const {
   if (threads < 1) throw std::invalid_argument("RunOptions: threads must be >= 1");
   if (trials < 1) throw std::invalid_argument("RunOptions: trials must be >= 1");
+  if (shard_count < 1 || shard_index >= shard_count)
+    throw std::invalid_argument("RunOptions: shard_index must be below shard_count (>= 1)");
 }
 
 namespace {
 
-struct Item {
-  std::size_t cell, trial;
-};
-
-/// Work order: trials with the (slow) joint refinement spread evenly among the others, so the
-/// rate seen by the progress bar, and its estimate of the time left, stays steady.
-std::vector<Item> workOrder(std::size_t cells, std::size_t trials, std::size_t joint_trials) {
-  std::vector<Item> slow, fast;
-  for (std::size_t t = 0; t < trials; ++t)
-    for (std::size_t c = 0; c < cells; ++c) (t < joint_trials ? slow : fast).push_back({c, t});
-  std::vector<Item> out;
+/// Work order of one slice: trials with the (slow) joint refinement spread evenly among the
+/// others, so the rate seen by the progress bar, and its estimate of the time left, stays steady.
+/// Which trials: the slow ones are counted cell by cell (cell c's trial t < J is number c J + t)
+/// and so are the fast ones (c (T - J) + t - J); slice k takes those whose number is k modulo
+/// shard_count. The slices get equal numbers of slow and of fast trials (within one) and an even
+/// share of every cell's trials (cells differ in cost).
+std::vector<TrialIndex> workOrder(std::size_t cells, const RunOptions& options) {
+  const std::size_t T = options.trials, J = std::min(options.joint_trials, options.trials);
+  std::vector<TrialIndex> slow, fast;
+  for (std::size_t t = 0; t < T; ++t)
+    for (std::size_t c = 0; c < cells; ++c) {
+      const std::size_t number = t < J ? c * J + t : c * (T - J) + (t - J);
+      if (number % options.shard_count == options.shard_index) (t < J ? slow : fast).push_back({c, t});
+    }
+  std::vector<TrialIndex> out;
   out.reserve(slow.size() + fast.size());
   std::size_t i = 0, j = 0;
   while (i < slow.size() || j < fast.size()) {
@@ -38,12 +45,17 @@ std::vector<Item> workOrder(std::size_t cells, std::size_t trials, std::size_t j
 
 }  // namespace
 
+std::vector<TrialIndex> shardTrials(std::size_t cells, const RunOptions& options) {
+  options.validate();
+  return workOrder(cells, options);
+}
+
 StudyRun runCells(const TrialConfig& config, const std::vector<Cell>& cells, const RunOptions& options) {
   config.validate();
   options.validate();
   StudyRun run;
   run.results.assign(cells.size(), std::vector<TrialResult>(options.trials));
-  const std::vector<Item> order = workOrder(cells.size(), options.trials, options.joint_trials);
+  const std::vector<TrialIndex> order = shardTrials(cells.size(), options);
   std::atomic<std::size_t> next{0}, done{0};
   std::atomic<bool> failed{false};
   std::exception_ptr error;
@@ -54,7 +66,7 @@ StudyRun runCells(const TrialConfig& config, const std::vector<Cell>& cells, con
       if (stopRequested()) return;
       const std::size_t i = next.fetch_add(1);
       if (i >= order.size()) return;
-      const Item& it = order[i];
+      const TrialIndex& it = order[i];
       try {
         const Cell& cell = cells[it.cell];
         const auto layout = trialLayout(config, options.seed, it.trial, cell.landmarks);

@@ -67,71 +67,68 @@ ScanLevelConfig scanLevelConfig(const TrialConfig& config) {
   return c;
 }
 
-Draw drawScanLevel(const std::vector<Cylinder>& layout, const PathSpec& path, const RangeModel& sensor,
-                   const ScanLevelConfig& config, std::uint64_t seed, bool detect) {
-  config.validate();
-  const Scene scene = sceneOf(layout, path, sensor, config);
-  const auto stops = simulation::planStops(scene, seed);
+namespace {
+
+/// The simulated scans of every stop, in order, and the stop of each.
+struct SimulatedScans {
   std::vector<simulation::SimulatedScan> scans;
   std::vector<std::size_t> stop_of_scan;
+};
+
+SimulatedScans simulateStops(const Scene& scene, const std::vector<TruthStop>& stops, std::uint64_t seed) {
+  SimulatedScans out;
+  auto& scans = out.scans;
+  auto& stop_of_scan = out.stop_of_scan;
   for (std::size_t k = 0; k < stops.size(); ++k)
     for (std::size_t i = 0; i < stops[k].scans; ++i) {
       scans.push_back(simulation::simulateScan(scene, stops[k], stops[k].first_scan + i, seed));
       stop_of_scan.push_back(k);
     }
+  return out;
+}
 
-  Draw d;
-  for (const auto& s : stops) {
-    d.obs.commanded.push_back(s.commanded);
-    d.actual.push_back(s.actual);
-  }
-  d.obs.range_min_m = sensor.range_min_m;
-  d.obs.range_max_m = sensor.range_max_m;
-  if (!layout.empty()) d.obs.landmark_radius_m = layout.front().radius_m;
-
-  if (!detect) {
-    // The truth's own grouping: every beam on landmark t in scan i is one sighting of t.
-    d.true_id.resize(layout.size() + 1);
-    for (std::size_t l = 1; l <= layout.size(); ++l) d.true_id[l] = static_cast<int>(l);
-    for (std::size_t i = 0; i < scans.size(); ++i) {
-      std::map<int, std::size_t> at;  // landmark -> sighting index in this scan
-      const auto& cloud = *scans[i].scan.cloud;
-      for (std::size_t b = 0; b < scans[i].truth.size(); ++b) {
-        const io::TrueRange& t = scans[i].truth[b];
-        if (t.target != io::TargetKind::landmark || !std::isfinite(cloud[b].x)) continue;
-        auto [it, fresh] = at.try_emplace(t.target_id, d.obs.sightings.size());
-        if (fresh) {
-          Sighting s;
-          s.stop = stop_of_scan[i];
-          s.scan = i;
-          s.landmark = t.target_id;
-          const Cylinder& c = layout[static_cast<std::size_t>(t.target_id - 1)];
-          Pose2 a = stops[s.stop].actual;
-          double sx = 0.0, sy = 0.0;
-          a.toSensor(c.x_m, c.y_m, sx, sy);
-          s.bearing_rad = std::atan2(sy, sx);
-          s.centre_range_m = std::hypot(sx, sy);
-          s.radius_m = c.radius_m;
-          d.obs.sightings.push_back(s);
-          d.truth_m.emplace_back();
-        }
-        const double x = cloud[b].x, y = cloud[b].y;
-        d.obs.sightings[it->second].beams.push_back(BeamReading{std::atan2(y, x), std::hypot(x, y), static_cast<std::uint32_t>(b)});
-        d.truth_m[it->second].push_back(t.range_m);
+/// Sightings by the truth's own grouping: every beam on landmark t in scan i is one sighting of t.
+void addTruthSightings(Draw& d, const std::vector<Cylinder>& layout, const std::vector<TruthStop>& stops,
+                       const SimulatedScans& sim) {
+  const auto& scans = sim.scans;
+  const auto& stop_of_scan = sim.stop_of_scan;
+  d.true_id.resize(layout.size() + 1);
+  for (std::size_t l = 1; l <= layout.size(); ++l) d.true_id[l] = static_cast<int>(l);
+  for (std::size_t i = 0; i < scans.size(); ++i) {
+    std::map<int, std::size_t> at;  // landmark -> sighting index in this scan
+    const auto& cloud = *scans[i].scan.cloud;
+    for (std::size_t b = 0; b < scans[i].truth.size(); ++b) {
+      const io::TrueRange& t = scans[i].truth[b];
+      if (t.target != io::TargetKind::landmark || !std::isfinite(cloud[b].x)) continue;
+      auto [it, fresh] = at.try_emplace(t.target_id, d.obs.sightings.size());
+      if (fresh) {
+        Sighting s;
+        s.stop = stop_of_scan[i];
+        s.scan = i;
+        s.landmark = t.target_id;
+        const Cylinder& c = layout[static_cast<std::size_t>(t.target_id - 1)];
+        Pose2 a = stops[s.stop].actual;
+        double sx = 0.0, sy = 0.0;
+        a.toSensor(c.x_m, c.y_m, sx, sy);
+        s.bearing_rad = std::atan2(sy, sx);
+        s.centre_range_m = std::hypot(sx, sy);
+        s.radius_m = c.radius_m;
+        d.obs.sightings.push_back(s);
+        d.truth_m.emplace_back();
       }
+      const double x = cloud[b].x, y = cloud[b].y;
+      d.obs.sightings[it->second].beams.push_back(BeamReading{std::atan2(y, x), std::hypot(x, y), static_cast<std::uint32_t>(b)});
+      d.truth_m[it->second].push_back(t.range_m);
     }
-    return d;
   }
+}
 
-  detectors::SequenceDetectionConfig dc;
-  dc.detection.landmark_radius_m = d.obs.landmark_radius_m;  // known radius, as the paper assumes
-  dc.threads = 1;  // the trials already run on every core
-  const auto det = detectors::detectSequence(
-      scans.size(), [&](std::size_t i) { return scans.at(i).scan; }, stop_of_scan, dc);
-  d.true_id = matchLandmarks(det.association, layout, config.match_distance_m);
-  // As pipeline::toLandmarkObservations, from the scans in memory, but within a scan in the
-  // detector's order, not by landmark (the study's stop-and-go numbers in
-  // docs/results/montecarlo.md were measured in this order).
+/// Sightings of the detected landmarks: as detectors::toLandmarkObservations, from the scans in
+/// memory, but within a scan in the detector's order, not by landmark (the study's stop-and-go
+/// numbers in docs/results/montecarlo.md were measured in this order).
+void addDetectedSightings(Draw& d, const detectors::SequenceDetections& det, const SimulatedScans& sim) {
+  const auto& scans = sim.scans;
+  const auto& stop_of_scan = sim.stop_of_scan;
   for (std::size_t i = 0; i < det.scans.size(); ++i) {
     const auto& sd = det.scans[i];
     const auto& ids = det.association.ids.at(i);
@@ -164,6 +161,36 @@ Draw drawScanLevel(const std::vector<Cylinder>& layout, const PathSpec& path, co
       d.truth_m.push_back(std::move(truth));
     }
   }
+}
+
+}  // namespace
+
+Draw drawScanLevel(const std::vector<Cylinder>& layout, const PathSpec& path, const RangeModel& sensor,
+                   const ScanLevelConfig& config, std::uint64_t seed, bool detect) {
+  config.validate();
+  const Scene scene = sceneOf(layout, path, sensor, config);
+  const auto stops = simulation::planStops(scene, seed);
+  const SimulatedScans sim = simulateStops(scene, stops, seed);
+
+  Draw d;
+  for (const auto& s : stops) {
+    d.obs.commanded.push_back(s.commanded);
+    d.actual.push_back(s.actual);
+  }
+  d.obs.range_min_m = sensor.range_min_m;
+  d.obs.range_max_m = sensor.range_max_m;
+  if (!layout.empty()) d.obs.landmark_radius_m = layout.front().radius_m;
+  if (!detect) {
+    addTruthSightings(d, layout, stops, sim);
+    return d;
+  }
+  detectors::SequenceDetectionConfig dc;
+  dc.detection.landmark_radius_m = d.obs.landmark_radius_m;  // known radius, as the paper assumes
+  dc.threads = 1;  // the trials already run on every core
+  const auto det = detectors::detectSequence(
+      sim.scans.size(), [&](std::size_t i) { return sim.scans.at(i).scan; }, sim.stop_of_scan, dc);
+  d.true_id = matchLandmarks(det.association, layout, config.match_distance_m);
+  addDetectedSightings(d, det, sim);
   return d;
 }
 

@@ -1,6 +1,7 @@
 #include "studies/study.hpp"
 
 #include <algorithm>
+#include <stdexcept>
 
 #include "studies/statistics.hpp"
 
@@ -23,15 +24,26 @@ std::vector<Cell> studyCells(const std::vector<Figure>& figures, const StudyGrid
 
 StudyOutput runStudy(const std::vector<Figure>& figures, const StudyGrids& grids, const TrialConfig& config,
                      const RunOptions& options) {
+  if (options.shard_count != 1) throw std::invalid_argument("runStudy: a shard is not a whole study (runCells)");
+  const std::vector<Cell> cells = studyCells(figures, grids);
+  const StudyRun run = runCells(config, cells, options);
+  if (run.interrupted) {
+    StudyOutput out;
+    out.cells = cells.size();
+    out.interrupted = true;
+    return out;
+  }
+  return studyOutput(figures, grids, config, options, run.results);
+}
+
+StudyOutput studyOutput(const std::vector<Figure>& figures, const StudyGrids& grids, const TrialConfig& config,
+                        const RunOptions& options, const std::vector<std::vector<TrialResult>>& results) {
   StudyOutput out;
   const std::vector<Cell> cells = studyCells(figures, grids);
+  if (results.size() != cells.size()) throw std::invalid_argument("studyOutput: one result list per cell expected");
   out.cells = cells.size();
-  const StudyRun run = runCells(config, cells, options);
-  out.interrupted = run.interrupted;
-  if (run.interrupted) return out;
-
   std::vector<CellSummary> summaries;
-  for (std::size_t i = 0; i < cells.size(); ++i) summaries.push_back(summarize(cells[i], run.results[i], config.max_order));
+  for (std::size_t i = 0; i < cells.size(); ++i) summaries.push_back(summarize(cells[i], results[i], config.max_order));
   StudyMeta meta;
   meta.config = config;
   meta.seed = options.seed;

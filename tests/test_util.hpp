@@ -87,6 +87,17 @@ inline std::map<std::string, std::string> snapshot(const fs::path& dir) {
   return files;
 }
 
+/// Expects `got` to hold the files of `expected`, byte for byte (a mismatch names the file but does
+/// not print the bytes: a PNG would flood the log).
+inline void expectSameFiles(const std::map<std::string, std::string>& expected, const std::map<std::string, std::string>& got) {
+  EXPECT_EQ(got.size(), expected.size());
+  for (const auto& [name, bytes] : expected) {
+    SCOPED_TRACE(name);
+    ASSERT_TRUE(got.count(name)) << "missing";
+    EXPECT_TRUE(got.at(name) == bytes) << "differs";
+  }
+}
+
 inline fs::path sourceDir() { return LIDARCAL_TEST_SOURCE_DIR; }
 inline fs::path sharedData() { return LIDARCAL_SHARED_DATA; }
 

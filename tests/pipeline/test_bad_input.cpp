@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "bad_input_builders.hpp"
 #include "bad_input_util.hpp"
 #include "io/import_test_util.hpp"
 
@@ -16,81 +17,6 @@ namespace lidarcal {
 namespace {
 
 using namespace test;
-
-std::string scenePath(const char* name) { return (sourceDir() / "data/scenes" / name).string(); }
-
-/// Shared fixtures, built once: FIX/bin (binary, 4 stops x 2 scans: enough to calibrate, so that
-/// output failures are reached), FIX/ascii (the same in ASCII), FIX/model.json (calibrated on
-/// 10 stops x 2 scans of the paper's field).
-const fs::path& fixtures() {
-  static const fs::path dir = cachedFixture("bad-input", [](const fs::path& d) {
-    const std::string scene = scenePath("paper_field.json");
-    for (const auto& [name, flags] : {std::pair<const char*, const char*>{"bin", ""}, {"ascii", " --ascii"}}) {
-      const auto r = runCli("simulate -q --scene " + scene + " --out " + (d / name).string() +
-                            " --stops 4 --scans-per-stop 2 --seed 3" + flags);
-      EXPECT_EQ(r.exit_code, 0) << r.err;
-    }
-    auto r = runCli("simulate -q --scene " + scene + " --out " + (d / "cal").string() + " --scans-per-stop 2 --seed 4");
-    EXPECT_EQ(r.exit_code, 0) << r.err;
-    r = runCli("calibrate -q " + (d / "cal/scans").string() + " --out " + (d / "model.json").string());
-    EXPECT_EQ(r.exit_code, 0) << r.err;
-  });
-  return dir;
-}
-
-// ---- input builders
-
-void copySequence(const Ws& w) { copyTree(w.fix / "bin/scans", w.seq()); }
-void copyAsciiSequence(const Ws& w) { copyTree(w.fix / "ascii/scans", w.seq()); }
-
-/// Copies the binary sequence and edits one scan.
-std::function<void(const Ws&)> withScan(const char* file, std::function<void(std::string&)> edit) {
-  return [file, edit](const Ws& w) {
-    copySequence(w);
-    editFile(w.seq() / file, edit);
-  };
-}
-
-/// Copies the good model and edits its JSON.
-std::function<void(const Ws&)> withModel(std::function<void(nlohmann::json&)> edit) {
-  return [edit](const Ws& w) {
-    copySequence(w);
-    auto j = nlohmann::json::parse(readFile(w.fix / "model.json"));
-    edit(j);
-    writeFile(w.in / "model.json", j.dump(2));
-  };
-}
-
-/// Writes a scene (JSON text) and simulates it into IN/sim.
-std::function<void(const Ws&)> simulated(std::string scene_json, std::string flags = "") {
-  return [scene_json, flags](const Ws& w) {
-    fs::create_directories(w.in);
-    writeFile(w.in / "scene.json", scene_json);
-    const auto r = runCli("simulate -q --scene " + (w.in / "scene.json").string() + " --out " + (w.in / "sim").string() + " " + flags);
-    ASSERT_EQ(r.exit_code, 0) << r.err;
-  };
-}
-
-/// The paper's sensor and walls with the given landmarks and path.
-std::string scene(const std::string& landmarks, const std::string& path, const std::string& sensor_extra = "") {
-  return R"({"sensor": {"beams": 360, "range_min_m": 0.2, "range_max_m": 6.0, "bias_alpha": [0.0525, 0.8838, 0.0584],
-      "noise": {"kind": "squared", "sigma_e": 0.0019176})" + sensor_extra + R"(},
-    "path": )" + path + R"(, "landmarks": [)" + landmarks + R"(],
-    "walls": [{"x0_m": -1.5, "y0_m": -3.8, "x1_m": 5.0, "y1_m": -3.8}, {"x0_m": 5.0, "y0_m": -3.8, "x1_m": 5.0, "y1_m": 4.5},
-              {"x0_m": 5.0, "y0_m": 4.5, "x1_m": -1.5, "y1_m": 4.5}, {"x0_m": -1.5, "y0_m": 4.5, "x1_m": -1.5, "y1_m": -3.8}]})";
-}
-const char* kPaperPoles = R"({"x_m": 1.5, "y_m": 0.75, "radius_m": 0.12}, {"x_m": 0.3, "y_m": 2.2, "radius_m": 0.12},
-    {"x_m": 2.4, "y_m": 3.4, "radius_m": 0.12}, {"x_m": 3.9, "y_m": -1.3, "radius_m": 0.12}, {"x_m": 0.9, "y_m": -2.8, "radius_m": 0.12})";
-std::string path(int stops, int scans = 2) {
-  return R"({"step_m": 0.3, "sigma_s_m": 0.02, "sigma_psi_deg": 0.5, "stops": )" + std::to_string(stops) +
-         R"(, "scans_per_stop": )" + std::to_string(scans) + "}";
-}
-
-std::string flaserLine(int n, double r) {
-  std::string s = "FLASER " + std::to_string(n);
-  for (int i = 0; i < n; ++i) s += " " + std::to_string(r);
-  return s + " 0 0 0 0 0 0 1.5 host 1.5\n";
-}
 
 // Commands that read a scan sequence, for the PCD and sequence cases.
 const std::vector<std::pair<const char*, std::string>> kSequenceCommands = {
@@ -539,78 +465,6 @@ TEST_P(BadInput, FailsCleanlyNamingFileItemAndRemedy) {
 
 INSTANTIATE_TEST_SUITE_P(Catalogue, BadInput, ::testing::ValuesIn(cases()),
                          [](const ::testing::TestParamInfo<BadInputCase>& p) { return p.param.name; });
-
-// ---- not errors, documented in docs/ERRORS.md as well
-
-TEST(BadInputWarnings, ScansWithDifferentBeamCountsCalibrateWithAWarningAndAModelWithoutABeamCount) {
-  TempDir dir;
-  const fs::path in = dir / "in";
-  // The paper's field seen by a sensor whose beam count varies (YDLIDAR X4 does): odd stops
-  // with 360 beams, even stops with 359, and no `beams` in sequence.json.
-  const std::string paper = readFile(scenePath("paper_field.json"));
-  fs::create_directories(in / "scans");
-  writeFile(dir / "a.json", replaceAll(paper, "\"scans_per_stop\": 10", "\"scans_per_stop\": 2"));
-  writeFile(dir / "b.json", replaceAll(replaceAll(paper, "\"scans_per_stop\": 10", "\"scans_per_stop\": 2"),
-                                       "\"angle_increment_deg\": 1.0", "\"angle_increment_deg\": 1.0027855"));
-  writeFile(dir / "b.json", replaceAll(readFile(dir / "b.json"), "\"beams\": 360", "\"beams\": 359"));
-  for (const char* s : {"a", "b"})
-    ASSERT_EQ(runCli("simulate -q --scene " + (dir / (std::string(s) + ".json")).string() + " --out " + (dir / s).string() +
-                     " --seed 5").exit_code, 0);
-  for (int i = 0; i < 20; ++i) {
-    const std::string name = "scan_0000" + std::string(i < 10 ? "0" : "") + std::to_string(i) + ".pcd";
-    fs::copy_file(dir / ((i / 2) % 2 ? "b" : "a") / "scans" / name, in / "scans" / name);
-  }
-  auto meta = nlohmann::json::parse(readFile(dir / "a/scans/sequence.json"));
-  meta.erase("beams");
-  writeFile(in / "scans/sequence.json", meta.dump());
-  const auto before = snapshot(in);
-  const auto r = runCli("calibrate -q " + (in / "scans").string() + " --out " + (dir / "m.json").string());
-  ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_NE(r.err.find("warning: "), std::string::npos) << r.err;
-  EXPECT_NE(r.err.find("varies from 359 to 360"), std::string::npos) << r.err;
-  EXPECT_TRUE(snapshot(in) == before);
-  const auto model = nlohmann::json::parse(readFile(dir / "m.json"));
-  EXPECT_TRUE(model["sensor"]["beams"].is_null());
-  // The bias is still found: the simulated one is f(3) = 3.24 m.
-  const auto& a = model["bias"]["alpha"];
-  double f3 = 0.0;
-  for (std::size_t i = a.size(); i-- > 0;) f3 = f3 * 3.0 + a[i].get<double>();
-  EXPECT_NEAR(f3, 0.0525 + 0.8838 * 3 + 0.0584 * 9, 0.03);
-  // And the model corrects every scan of that sequence.
-  const auto c = runCli("correct -q " + (in / "scans").string() + " --model " + (dir / "m.json").string() + " --out " +
-                        (dir / "c").string());
-  EXPECT_EQ(c.exit_code, 0) << c.err;
-  EXPECT_NE(c.err.find("warning: "), std::string::npos) << c.err;
-  EXPECT_NE(c.err.find("varies from 359 to 360"), std::string::npos) << c.err;
-  // A model of one beam count refuses the scans with the other, naming the first.
-  auto fixed = nlohmann::json::parse(readFile(dir / "m.json"));
-  fixed["sensor"]["beams"] = 360;
-  writeFile(dir / "m360.json", fixed.dump());
-  const auto f = runCli("correct " + (in / "scans").string() + " --model " + (dir / "m360.json").string() + " --out " +
-                        (dir / "c360").string());
-  EXPECT_EQ(f.exit_code, 2);
-  EXPECT_NE(f.err.find("scan_000002.pcd: POINTS: has 359 beams"), std::string::npos) << f.err;
-  EXPECT_FALSE(fs::exists(dir / "c360"));
-  EXPECT_TRUE(snapshot(in) == before);
-}
-
-TEST(BadInputGeometry, LandmarksAllOnOneSideOfThePathStillCalibrate) {
-  // Seed 000 places poles on both sides of the path; on one side only, the bearing lines from
-  // the stops still cross at a wide angle, so this is not degenerate: the bias is recovered.
-  TempDir dir;
-  const Ws w{dir / "in", dir / "out", fixtures()};
-  ASSERT_NO_FATAL_FAILURE(simulated(scene(R"({"x_m": 1.5, "y_m": 0.75, "radius_m": 0.12}, {"x_m": 0.3, "y_m": 2.2, "radius_m": 0.12},
-      {"x_m": 2.4, "y_m": 3.4, "radius_m": 0.12}, {"x_m": 3.6, "y_m": 1.4, "radius_m": 0.12}, {"x_m": 1.2, "y_m": 3.9, "radius_m": 0.12})",
-                                          path(10, 3)))(w));
-  const auto r = runCli("calibrate -q " + (w.in / "sim/scans").string() + " --out " + (dir / "m.json").string());
-  ASSERT_EQ(r.exit_code, 0) << r.err;
-  const auto a = nlohmann::json::parse(readFile(dir / "m.json"))["bias"]["alpha"];
-  for (double d : {1.0, 2.0, 3.0}) {
-    double f = 0.0;
-    for (std::size_t i = a.size(); i-- > 0;) f = f * d + a[i].get<double>();
-    EXPECT_NEAR(f, 0.0525 + 0.8838 * d + 0.0584 * d * d, 0.03) << "d = " << d;
-  }
-}
 
 }  // namespace
 }  // namespace lidarcal

@@ -3,13 +3,6 @@
 // with `lidarcal correct IN.bag --out OUT.bag` (the same correction rule); models of another
 // sensor refused. Every wait is bounded; processes are ended by their pid.
 
-#include <arpa/inet.h>
-#include <netinet/in.h>
-#include <signal.h>
-#include <sys/socket.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
@@ -26,27 +19,12 @@
 #include <rosbag/view.h>
 #include <sensor_msgs/LaserScan.h>
 
-#include "node_process.hpp"
+#include "child_process.hpp"
 #include "pipeline/ros_test_util.hpp"
 #include "ros/laser_scan_util.hpp"
 
 namespace lidarcal::test {
 namespace {
-
-int freeLoopbackPort() {
-  const int fd = socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  a.sin_port = 0;
-  socklen_t len = sizeof a;
-  if (bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0 || getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len) != 0) {
-    close(fd);
-    return -1;
-  }
-  close(fd);
-  return ntohs(a.sin_port);
-}
 
 class RosNode : public ::testing::Test {
  protected:

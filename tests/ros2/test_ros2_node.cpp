@@ -17,7 +17,7 @@
 #include "io/model_yaml.hpp"
 #include "io/ros2_msgs.hpp"
 #include "io/rosbag2_test_writer.hpp"
-#include "node_process.hpp"
+#include "child_process.hpp"
 #include "pipeline/ros_test_util.hpp"
 #include "ros2/fastdds_peer.hpp"
 
