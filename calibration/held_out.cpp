@@ -32,7 +32,10 @@ bool HeldOutEntry::inside(double factor) const {
   return std::abs(residual_m) <= factor * std::sqrt(predictive_se_m * predictive_se_m + entry_se_m * entry_se_m);
 }
 
-std::vector<HeldOutEntry> heldOutEntries(const CalibrationModel& model, const std::vector<KnownReading>& readings) {
+namespace {
+
+/// The readings' residuals about the model's f, one per measured entry, weighted by its noise law.
+std::vector<EntryResidual> residualsAboutModel(const CalibrationModel& model, const std::vector<KnownReading>& readings) {
   const BiasPolynomial& f = model.model.bias;
   const double k = noiseLawExponent(model.model.noise);
   std::vector<double> d, y, w, tape;
@@ -44,8 +47,14 @@ std::vector<HeldOutEntry> heldOutEntries(const CalibrationModel& model, const st
     tape.push_back(r.tape_sigma_m);
     entry.push_back(r.entry);
   }
+  return entryResiduals(d, y, w, entry, tape, f);
+}
+
+}  // namespace
+
+std::vector<HeldOutEntry> heldOutEntries(const CalibrationModel& model, const std::vector<KnownReading>& readings) {
   std::vector<HeldOutEntry> out;
-  for (const EntryResidual& e : entryResiduals(d, y, w, entry, tape, f)) {
+  for (const EntryResidual& e : residualsAboutModel(model, readings)) {
     HeldOutEntry h;
     h.entry = e.entry;
     h.distance_m = e.distance_m;
@@ -56,6 +65,10 @@ std::vector<HeldOutEntry> heldOutEntries(const CalibrationModel& model, const st
     out.push_back(h);
   }
   return out;
+}
+
+Discrepancy discrepancyOfMeasuredEntries(const CalibrationModel& model, const std::vector<KnownReading>& readings) {
+  return estimateDiscrepancy(residualsAboutModel(model, readings), model.model.bias.order());
 }
 
 HalfCheck checkInterleavedHalf(const std::vector<KnownReading>& readings, int fit_parity, const CalibrationConfig& config) {

@@ -40,6 +40,13 @@ struct HeldOutEntry {
 /// their d_m from the measured distances) about `model`, in ascending entry order.
 std::vector<HeldOutEntry> heldOutEntries(const CalibrationModel& model, const std::vector<KnownReading>& readings);
 
+/// The model discrepancy of `model` over measured entries that were terms of its fit beside
+/// other data (the self-calibration's likelihood, `--reference-fit combined`): REML over the
+/// entries' residuals about f, as calibrateWithReference does over its own (the polynomial's
+/// coefficients counted as fitted to them, which leaves entries - coefficients degrees of
+/// freedom). Method "none", with a note saying why, when the entries cannot leave one.
+Discrepancy discrepancyOfMeasuredEntries(const CalibrationModel& model, const std::vector<KnownReading>& readings);
+
 /// A fit on some stops and the others about it.
 struct HalfCheck {
   CalibrationModel model;             ///< calibrateWithReference on the fitted stops (its status says whether it is usable)

@@ -114,7 +114,7 @@ double testReadingNoise(const std::vector<KnownReading>& readings, const Calibra
 void setNoiseLaw(NoiseModel& noise, double exponent, double sigma_e);
 
 /// The range model from known-distance readings (method "reference"): the noise exponent by
-/// seed 004's test, the order by leave-one-stop-out cross-validation, standard errors clustered
+/// the test of Alhashimi et al. 2016 (eqs. 10-15), the order by leave-one-stop-out cross-validation, standard errors clustered
 /// by stop, and the model discrepancy over the entries (calibration/discrepancy.hpp: the
 /// sensor's scatter about the polynomial between measured distances, net of the entries' stated
 /// tape errors). The result's status says why not when the readings cannot support a model

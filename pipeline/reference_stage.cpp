@@ -6,6 +6,7 @@
 #include <optional>
 #include <set>
 
+#include "calibration/held_out.hpp"
 #include "calibration/filtering.hpp"
 #include "common/errors.hpp"
 #include "detectors/sightings.hpp"
@@ -186,10 +187,9 @@ SequenceCalibration calibrateSequenceWithDistancesAndSelf(const io::Sequence& se
   cfg.joint.known_ranges = calibration::knownRanges(ro.known, ref);
   SequenceCalibration out = calibrateSequenceWithSurvey(seq, ref, ref_file, detection, cfg, survey, progress);
   if (out.model.status.ok()) out.model.method = "joint+reference";
-  out.model.discrepancy.note =
-      "not estimated: the measured distances are terms of the self-calibration, none held out, so the intervals are "
-      "the fitted curve's alone; they do not include how far the sensor may lie from any polynomial between the "
-      "distances it was fitted at (fit the distances alone, --reference-fit distances, with ten or more of them)";
+  // The measured entries were terms of the fit, none held out: REML counts the polynomial's
+  // coefficients as fitted to them, so the discrepancy is estimated only where they outnumber them.
+  if (out.model.status.ok()) out.model.discrepancy = calibration::discrepancyOfMeasuredEntries(out.model, ro.known.readings);
   return out;
 }
 

@@ -131,6 +131,28 @@ TEST(Discrepancy, IsNearZeroForANoisySensorThatFollowsThePolynomialAndNearTheRip
   EXPECT_NEAR(sum_ripple / seeds, 0.004 / std::sqrt(2.0), 0.15 * 0.004 / std::sqrt(2.0));
 }
 
+TEST(Discrepancy, OfEntriesAFitUsedBesideOtherDataIsTheirScatterAboutItOrNoneWithAReason) {
+  // A model fitted elsewhere (here: the sensor's own polynomial, as a self-calibration that
+  // pinned the curve exactly would give) and measured entries about it: the rippled sensor's
+  // entries scatter by the ripple, A / sqrt(2); three entries leave no degree of freedom
+  // beside the three coefficients.
+  const auto config = sweep(21, 0.0042, 0.004, 0.0);
+  const auto s = simulation::simulateRangeSweep(config, 21);
+  const auto known = knownReadings(s.obs, s.reference, config.radius_m);
+  CalibrationModel m;
+  m.model = config.model;
+  const Discrepancy all = discrepancyOfMeasuredEntries(m, known.readings);
+  EXPECT_EQ(all.method, "reml");
+  EXPECT_EQ(all.dof, 30 - 3);
+  EXPECT_NEAR(all.sigma_m, 0.004 / std::sqrt(2.0), 0.35 * 0.004 / std::sqrt(2.0));
+  std::vector<KnownReading> three;
+  for (const KnownReading& r : known.readings)
+    if (r.entry < 3) three.push_back(r);
+  const Discrepancy few = discrepancyOfMeasuredEntries(m, three);
+  EXPECT_FALSE(few.estimated());
+  EXPECT_NE(few.note.find("no degree of freedom"), std::string::npos) << few.note;
+}
+
 /// Counts over interleaved halves of many sweeps, both ways round: held-out tape distances and
 /// true biases inside the predictive intervals, and true biases inside the curve's alone.
 struct Coverage {

@@ -313,7 +313,7 @@ TEST(CliReference, SurveyedLandmarksAndStopsAreHeldFixed) {
   EXPECT_FALSE(fs::exists(dir / "far_model.json"));
 }
 
-// Distances measured at two of ten stops (too few for seed 004's fit alone) join the
+// Distances measured at two of ten stops (too few for the fit of Alhashimi et al. 2016 alone) join the
 // self-calibration of the whole sequence (--reference-fit auto picks it): on the paper's field
 // with every step 6 % longer than the odometry says and the pole radius unknown, the tape fixes
 // the scale the self-calibration cannot see. The truth plays the tape (exact distances).
@@ -344,6 +344,15 @@ TEST(CliReference, DistancesAtSomeStopsJoinTheSelfCalibration) {
     EXPECT_LT(error(with_tape, d), 0.005) << d;
     EXPECT_LT(5.0 * error(with_tape, d), error(without, d)) << d;
   }
+  // The taped entries outnumber the polynomial's coefficients: their scatter about the joint fit
+  // is the discrepancy, near 0 for this sensor, which follows its polynomial. The self-calibration
+  // has none, and says what its intervals leave out.
+  const Discrepancy& q = with_tape.discrepancy;
+  ASSERT_EQ(q.method, "reml") << q.note;
+  EXPECT_EQ(q.dof, static_cast<int>(q.entries) - static_cast<int>(with_tape.model.bias.alpha.size()));
+  EXPECT_LT(q.sigma_m, 0.002);
+  EXPECT_EQ(without.discrepancy.method, "none");
+  EXPECT_NE(without.discrepancy.note.find("scale error"), std::string::npos) << without.discrepancy.note;
   // The distances alone are too few (two stops), and the closed form has no place for them.
   const auto alone = runCli("calibrate -q " + (dir / "s/scans").string() + " --reference " + (dir / "ref.json").string() +
                             " --reference-fit distances --out " + (dir / "alone.json").string());
@@ -434,7 +443,7 @@ TEST(CliReferenceHokuyo, FitOnHalfTheTapeDistancesPredictsTheOtherHalfBothWaysRo
     const auto cal = runCli("calibrate -q " + fitted + " --reference " + fitted + ".json --radius 0.045 --out " + model);
     ASSERT_EQ(cal.exit_code, 0) << cal.err;
     const auto m = json(model);
-    // A time-of-flight lidar: seed 004's test finds noise that does not grow with the range.
+    // A time-of-flight lidar: the noise-exponent test of Alhashimi et al. 2016 finds noise that does not grow with the range.
     EXPECT_EQ(m["noise_estimators"]["exponent_test"]["best"], 0);
     EXPECT_EQ(m["noise"]["kind"], "constant");
     // The sensor departs from any polynomial by millimetres (docs/results/real-sensors.md).
