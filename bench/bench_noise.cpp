@@ -1,8 +1,8 @@
-// Wall time of noise estimation on the same data: seed 003's KL hill climbing (our variant;
+// Wall time of noise estimation on the same data: Sharma 2020's KL hill climbing (our variant;
 // the seed's settings: 80 particles, step 0.01, 5 jumps, means and variances climbed; `Literal`:
 // all 80 particles run even when they stay identical) against the ML estimator (estimating the
 // process noise too, or told it as the hill climbing is: `ProcessGiven`), in the
-// settings of seed 003's experiments 2 and 3 (data/scenes/noise_exp12.json, noise_exp3.json,
+// settings of Sharma 2020's experiments 2 and 3 (data/scenes/noise_exp12.json, noise_exp3.json,
 // simulator seed 1). Numbers: docs/results/noise-consistency.md.
 //
 //   build/bench/bench_noise --benchmark_counters_tabular=true

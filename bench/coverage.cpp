@@ -160,7 +160,7 @@ int main(int argc, char** argv) {
   for (std::size_t k = 0; k < at.size(); ++k) std::printf("---|");
   std::printf("---|---|\n");
   print("joint refinement (no ground truth)", joint, at);
-  print("closed form of seed 000, jackknife SE (no ground truth)", closed, at);
+  print("closed form of Alhashimi et al. 2021, jackknife SE (no ground truth)", closed, at);
   print("against exact distances (--reference)", reference, at);
   char name[96];
   std::snprintf(name, sizeof name, "against tape distances, tape error %.1f mm (--reference)", 1000.0 * tape_sigma);

@@ -2,7 +2,7 @@
 // "The ratio's ceiling"): one cell of Fig. 9 (L = 5, sigma_s = 1 cm, sigma_theta = 2
 // degrees on the heading), the closed form, the oracle and the ceiling (eq. 31 with the simulated
 // sensor's own bias) on the three test sets, while one setting at a time moves from the study's
-// default towards the paper's field (seed 000 section 4.3: landmarks up to 5 m) and beyond:
+// default towards the paper's field (Alhashimi et al. 2021 section 4.3: landmarks up to 5 m) and beyond:
 // scans averaged per stop, farthest landmark, reading window, noise law. Medians and means with
 // their Monte Carlo standard errors.
 //   build/bench/montecarlo_ceiling [--trials 500] [--threads 2] [--seed 1]
@@ -50,10 +50,10 @@ int main(int argc, char** argv) {
   const std::vector<Variant> variants = {
       {"study default: 10 scans/stop, landmarks to 4 m, window 6 m, noise 5 % of f(d)", 10, 4.0, 6.0, NoiseLaw::paper},
       {"25 scans/stop", 25, 4.0, 6.0, NoiseLaw::paper},
-      {"25 scans/stop, landmarks to 5 m (seed 000 section 4.3)", 25, 5.0, 6.0, NoiseLaw::paper},
+      {"25 scans/stop, landmarks to 5 m (Alhashimi et al. 2021 section 4.3)", 25, 5.0, 6.0, NoiseLaw::paper},
       {"25 scans/stop, landmarks to 5 m, no window", 25, 5.0, 1000.0, NoiseLaw::paper},
-      {"25 scans/stop, landmarks to 4 m, seed 004's noise law (same at 3 m)", 25, 4.0, 6.0, NoiseLaw::squared},
-      {"25 scans/stop, landmarks to 5 m, seed 004's noise law", 25, 5.0, 6.0, NoiseLaw::squared},
+      {"25 scans/stop, landmarks to 4 m, Alhashimi et al. 2016's noise law (same at 3 m)", 25, 4.0, 6.0, NoiseLaw::squared},
+      {"25 scans/stop, landmarks to 5 m, Alhashimi et al. 2016's noise law", 25, 5.0, 6.0, NoiseLaw::squared},
       {"50 scans/stop, landmarks to 5 m", 50, 5.0, 6.0, NoiseLaw::paper},
       {"100 scans/stop, landmarks to 5 m", 100, 5.0, 6.0, NoiseLaw::paper},
   };

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Where seed 003's hill climbing ends, beside the thesis' end points
+# Where Sharma 2020's hill climbing ends, beside the thesis' end points
 # (docs/results/noise-consistency.md, "The hill climbing's end points beside the thesis'").
 #   bench/noise_endpoints.sh [SEEDS]     (default SEEDS: 1 2 3 4 5; needs a build in build/)
 # Experiments 1-3 (simulator seed 1, as in docs/noise/exp*.md), variances only (the thesis prints

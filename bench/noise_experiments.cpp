@@ -1,14 +1,14 @@
 // Experiments behind docs/results/noise-consistency.md (run by bench/noise_experiments.sh).
 //
 //   noise_experiments side-by-side --scene S.json --init I.json --seed N --out DIR [--kl-max-evaluations M]
-//     simulates the scene, runs seed 003's KL hill climbing (the seed's variant and ours, climbing
+//     simulates the scene, runs Sharma 2020's KL hill climbing (the seed's variant and ours, climbing
 //     means and variances, and variances only) and the ML estimator on the same data, writes each
 //     result.json and its plots under DIR, and prints a Markdown table.
 //   noise_experiments ml-study --scene S.json --seeds 20 [--process-given]
 //     runs the ML estimator on seeds 1..20 and prints, per variance, the median estimate and the
 //     median relative error against the truth; with --seeds 40 or more also the mean, the spread
 //     against the estimator's own standard error, and how many disjoint 20-seed blocks have their
-//     median within 10 %. --process-given fixes the process variances at the truth (seed 003's
+//     median within 10 %. --process-given fixes the process variances at the truth (Sharma 2020's
 //     experiments assume the true process noise) and estimates the sensors' noise only.
 //   noise_experiments objective-noise --scene S.json --init I.json [--seed N] [--evaluations 20]
 //     spread of the KL objective at one setting over particle streams, per variant.
@@ -188,7 +188,7 @@ void mlStudy(const std::string& scene_file, int seeds, bool process_given) {
   std::printf("%d seeds; each %d stops, %zu observations. Median wall time %.2f s, median %g iterations, %d not converged.\n\n",
               seeds, stops, observations, median(times), median(iterations), not_converged);
   if (process_given)
-    std::printf("Process variances given (fixed at the truth %s, as seed 003 assumes them); the sensors' variances and "
+    std::printf("Process variances given (fixed at the truth %s, as Sharma 2020 assumes them); the sensors' variances and "
                 "biases estimated.\n\n", processCell(truth).c_str());
   std::printf("| variance | truth | median estimate | median estimate / truth − 1 | median \\|rel. error\\| | within 10%% (seeds) |\n|---|---|---|---|---|---|\n");
   for (std::size_t i = 0; i < shown; ++i) {

@@ -24,7 +24,7 @@ for s in noise_exp12:exp2 noise_exp3:exp3 noise_exp3_long:exp3_long noise_hard:h
   echo "ml-study ${s#*:}" >&2
   "$BIN" ml-study --scene "data/scenes/${s%%:*}.json" --seeds 20 >"$OUT/ml_study_${s#*:}.md"
 done
-# Seed 003's experiments tell the estimator the true process noise: the sensors' noise alone.
+# Sharma 2020's experiments tell the estimator the true process noise: the sensors' noise alone.
 for s in noise_exp12:exp2 noise_exp3:exp3; do
   echo "ml-study ${s#*:}, process given" >&2
   "$BIN" ml-study --scene "data/scenes/${s%%:*}.json" --seeds 20 --process-given >"$OUT/ml_study_${s#*:}_process_given.md"

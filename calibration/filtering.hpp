@@ -1,5 +1,5 @@
 #pragma once
-// Filtering stage (seed 000 section 3.2 phase 3): every point of a scan moved along its beam
+// Filtering stage (Alhashimi et al. 2021 section 3.2 phase 3): every point of a scan moved along its beam
 // to the corrected distance. Same points, same order; NaN stays NaN; labels and intensity kept.
 
 #include <limits>

@@ -219,7 +219,7 @@ RangeInverter::RangeInverter(const RangeModel& model, const InversionConfig& con
   if (model_.bias.order() < 1 || (model_.bias.order() == 1 && model_.bias.alpha[1] == 0.0))
     throw std::invalid_argument("RangeInverter: a bias polynomial of order 0 cannot be inverted");
   if (config_.method == InversionMethod::ml && model_.noise.kind != NoiseKind::squared)
-    throw std::invalid_argument("RangeInverter: ML inversion (seed 004 eq. 28) needs the squared noise law");
+    throw std::invalid_argument("RangeInverter: ML inversion (Alhashimi et al. 2016 eq. 28) needs the squared noise law");
   if (!(config_.d_max_m > config_.d_min_m)) throw std::invalid_argument("RangeInverter: empty distance window");
   if (model_.bias.alpha.size() > 10) throw std::invalid_argument("RangeInverter: bias polynomials above order 9 are not supported");
   ls_pieces_ = vectorOf(monotonePieces(polynomial(model_.bias.alpha), config_.d_min_m, config_.d_max_m));

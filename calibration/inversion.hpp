@@ -1,9 +1,9 @@
 #pragma once
-// Filtering stage (seed 000 section 3.2 phase 3, seed 004 section 5.2): the distance d that
+// Filtering stage (Alhashimi et al. 2021 section 3.2 phase 3, Alhashimi et al. 2016 section 5.2): the distance d that
 // explains a raw reading y under the calibrated model.
-//   LS (seed 004 eq. 30, seed 000 eq. 30): a root of f(d) = y; the root inside the window
+//   LS (Alhashimi et al. 2016 eq. 30, Alhashimi et al. 2021 eq. 30): a root of f(d) = y; the root inside the window
 //       nearest the reading.
-//   ML (seed 004 eqs. 28-29): a root of (y - f(d)) (y - f(d) + d f'(d) / 2) = sigma_e^2 d^4,
+//   ML (Alhashimi et al. 2016 eqs. 28-29): a root of (y - f(d)) (y - f(d) + d f'(d) / 2) = sigma_e^2 d^4,
 //       the stationary points of the likelihood of model (21); the most likely one.
 // Roots are found inside the window only: the roots of the derivative split it into pieces on
 // which the polynomial is monotone, and each piece with a sign change is solved by Newton's

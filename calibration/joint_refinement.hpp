@@ -1,5 +1,5 @@
 #pragma once
-// Joint refinement (beyond seed 000): one maximum-likelihood problem over every stop's pose,
+// Joint refinement (beyond Alhashimi et al. 2021): one maximum-likelihood problem over every stop's pose,
 // the landmark centres, the landmark radius and the bias polynomial, from the individual beam
 // readings rather than per-landmark summaries. Each reading y_i of beam angle a_i at stop k on
 // landmark l is modelled as
@@ -75,7 +75,7 @@ struct JointEffectEstimates {
   double angle_offset_rad = 0.0;            ///< a_0, radians
   double incidence_bias_m = 0.0;            ///< b, metres
   double incidence_noise_exponent = 0.0;    ///< gamma
-  double noise_exponent = 2.0;              ///< kappa of sigma_e f(d)^kappa (2: seed 004's law)
+  double noise_exponent = 2.0;              ///< kappa of sigma_e f(d)^kappa (2: Alhashimi et al. 2016's law)
   double mixed_pixel_fraction = 0.0;        ///< of the outermost beams of the sightings
   double odometry_scale = 0.0;              ///< s: true steps are (1 + s) times the commanded ones
   double heading_rms_rad = 0.0;             ///< RMS of the refined minus the commanded headings, radians
@@ -94,7 +94,7 @@ inline constexpr double kMinMixedPixelFraction = 1e-4;
 /// Whether the odometry between consecutive stops enters as a motion prior.
 enum class MotionPrior {
   automatic,  ///< on when continuousMotion() says the sequence never stopped (default)
-  off,        ///< every stop tied to its commanded pose (stop and go, seed 000 eq. 8)
+  off,        ///< every stop tied to its commanded pose (stop and go, Alhashimi et al. 2021 eq. 8)
   on,         ///< the first stop tied to its commanded pose, every later one to the commanded step from the one before
 };
 const char* toString(MotionPrior m);
@@ -126,7 +126,7 @@ struct KnownRange {
 struct JointConfig {
   int order = 2;                  ///< bias polynomial order n (>= 1)
   NoiseKind noise = NoiseKind::squared;  ///< noise law re-estimated between solves: squared, polynomial or constant
-  int noise_order = 1;            ///< order of the polynomial noise law (seed 000 beta)
+  int noise_order = 1;            ///< order of the polynomial noise law (Alhashimi et al. 2021 beta)
   double sigma_s_m = 0.02;        ///< prior std. dev. of each stop coordinate around the commanded one, metres
   double sigma_psi_rad = 0.0087;  ///< prior std. dev. of each stop heading, radians (0.5 degree)
   bool estimate_radius = true;    ///< estimate one common landmark radius (else keep the initial one)
@@ -185,7 +185,7 @@ struct JointConfig {
   std::map<int, Eigen::Vector2d> known_centres;
   /// Measured sensor poses (stop index -> pose), held fixed (REF.json `stops`).
   std::map<std::size_t, Pose2> known_poses;
-  /// Measured distances (REF.json `distances` at some stops): each adds the seed 004 section 5
+  /// Measured distances (REF.json `distances` at some stops): each adds the Alhashimi et al. 2016 section 5
   /// term (mean reading - mean f(d)) / sqrt(sigma(d)^2 / n + (f'(d) tape_sigma)^2) to the fit, so
   /// the tape's scale enters beside the self-calibration's geometry (and, on poles, the radius).
   std::vector<KnownRange> known_ranges;
@@ -196,7 +196,7 @@ struct JointConfig {
 /// scan its own stop, as imports from CARMEN, YDLIDAR or CSV odometry give) when it has at least
 /// config.motion_min_stops stops and more than half of the stops with sightings have them from
 /// one scan only. Stop-and-go recordings hold several scans per stop; a few stops of one scan
-/// each (short tests, seed 000's study with one scan per stop) stay stop and go.
+/// each (short tests, Alhashimi et al. 2021's study with one scan per stop) stay stop and go.
 bool continuousMotion(const LandmarkObservations& obs, const JointConfig& config);
 
 /// The length the motion prior's deviations are taken at for the step into pose k >= 1 of
@@ -249,7 +249,7 @@ struct JointResult {
   std::vector<double> readings_m;          ///< the readings themselves (same order)
   std::size_t outliers = 0;                ///< readings beyond the Huber threshold at the end
   double neg_log_likelihood = 0.0;         ///< Gaussian NLL of the readings at the solution
-  /// NLL of the commanded stop positions as measurements of the refined ones (seed 000 eq. 8,
+  /// NLL of the commanded stop positions as measurements of the refined ones (Alhashimi et al. 2021 eq. 8,
   /// sigma_s_m; with the odometry scale, of the scaled commanded path); with the motion prior,
   /// of the first stop's position and of the commanded steps' translations. Headings not included.
   double prior_neg_log_likelihood = 0.0;

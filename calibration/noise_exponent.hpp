@@ -1,5 +1,5 @@
 #pragma once
-// Seed 004 section 4: which power of f(d) scales the noise? Hypotheses (eq. 10)
+// Alhashimi et al. 2016 section 4: which power of f(d) scales the noise? Hypotheses (eq. 10)
 //   H_k: y = f(d) + f(d)^k e,  k = 0..3,
 // compared by their likelihood on batches of readings taken at a constant distance
 // (repeated scans at one stop: the same beam sees the same spot), eqs. 13-15.

@@ -66,22 +66,22 @@ void fillNoiseFits(CalibrationModel& m, int order, const std::vector<double>& d,
   std::map<std::string, std::string> failed[2];
   parallelFor(2, threadsFor(threads), [&](std::size_t group) {
     if (group == 0) {
-      sideEstimator(failed[0], "seed000_beta", [&] { nf.seed000_beta = fitNoisePolynomial(d, r, noise_order); });
+      sideEstimator(failed[0], "alhashimi2021_beta", [&] { nf.alhashimi2021_beta = fitNoisePolynomial(d, r, noise_order); });
       return;
     }
-    sideEstimator(failed[1], "seed004_closed_form", [&] {
-      const Seed004Fit cf = fitSeed004ClosedForm(d, y, bias_order);
-      nf.seed004_cf_alpha = cf.alpha;
-      nf.seed004_cf_sigma_e = cf.sigma_e;
+    sideEstimator(failed[1], "alhashimi2016_closed_form", [&] {
+      const Alhashimi2016Fit cf = fitAlhashimi2016ClosedForm(d, y, bias_order);
+      nf.alhashimi2016_cf_alpha = cf.alpha;
+      nf.alhashimi2016_cf_sigma_e = cf.sigma_e;
     });
-    if (!nf.seed004_cf_alpha.empty()) {
-      sideEstimator(failed[1], "seed004_ml", [&] {
-        const Seed004Fit ml = fitSeed004ML(d, y, nf.seed004_cf_alpha);
-        nf.seed004_ml_alpha = ml.alpha;
-        nf.seed004_ml_sigma_e = ml.sigma_e;
+    if (!nf.alhashimi2016_cf_alpha.empty()) {
+      sideEstimator(failed[1], "alhashimi2016_ml", [&] {
+        const Alhashimi2016Fit ml = fitAlhashimi2016ML(d, y, nf.alhashimi2016_cf_alpha);
+        nf.alhashimi2016_ml_alpha = ml.alpha;
+        nf.alhashimi2016_ml_sigma_e = ml.sigma_e;
       });
     } else {
-      failed[1]["seed004_ml"] = "starts from the closed form, which could not run";
+      failed[1]["alhashimi2016_ml"] = "starts from the closed form, which could not run";
     }
     sideEstimator(failed[1], "exponent_test", [&] {
       const NoiseExponentTest t = testNoiseExponent(batches);

@@ -38,8 +38,8 @@ CalibrationModel calibrateAgainstTruth(const std::vector<RangePair>& pairs, cons
     double best = std::numeric_limits<double>::infinity();
     for (auto& row : m.orders) {
       if (row.order < 1) continue;
-      const Seed004Fit cf = fitSeed004ClosedForm(d, y, row.order);
-      const Seed004Fit ml = fitSeed004ML(d, y, cf.alpha);
+      const Alhashimi2016Fit cf = fitAlhashimi2016ClosedForm(d, y, row.order);
+      const Alhashimi2016Fit ml = fitAlhashimi2016ML(d, y, cf.alpha);
       const double k = row.order + 2.0;
       row.alpha = ml.alpha;
       row.aic = 2.0 * k + 2.0 * ml.neg_log_likelihood;
@@ -51,7 +51,7 @@ CalibrationModel calibrateAgainstTruth(const std::vector<RangePair>& pairs, cons
       }
     }
     m.order_aic = order;
-    m.order_rule = "aic (seed 004 ML)";
+    m.order_rule = "aic (Alhashimi et al. 2016 ML)";
     m.model.bias.alpha = m.orders[static_cast<std::size_t>(order)].alpha;
   } else {
     m.model.bias.alpha = sel.table[static_cast<std::size_t>(std::min<int>(order, static_cast<int>(sel.table.size()) - 1))].alpha;

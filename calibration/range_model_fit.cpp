@@ -49,12 +49,12 @@ double mse(const std::vector<double>& alpha, const std::vector<RangePair>& pairs
   return n ? sum / static_cast<double>(n) : std::numeric_limits<double>::quiet_NaN();
 }
 
-// Profiled negative log-likelihood of seed 004 model (1), eqs. 18-20, as a function of alpha:
+// Profiled negative log-likelihood of Alhashimi et al. 2016 model (1), eqs. 18-20, as a function of alpha:
 //   sigma_e^2(alpha) = (1/N) sum (y - f)^2 / f^4,
 //   L(alpha) = N/2 ln(2 pi sigma_e^2) + 2 sum ln|f| + N/2.
-class Seed004Profile final : public ceres::FirstOrderFunction {
+class Alhashimi2016Profile final : public ceres::FirstOrderFunction {
  public:
-  Seed004Profile(const std::vector<double>& d, const std::vector<double>& y, int params)
+  Alhashimi2016Profile(const std::vector<double>& d, const std::vector<double>& y, int params)
       : d_(d), y_(y), params_(params) {}
   int NumParameters() const override { return params_; }
   bool Evaluate(const double* alpha, double* cost, double* gradient) const override {
@@ -91,7 +91,7 @@ class Seed004Profile final : public ceres::FirstOrderFunction {
   int params_;
 };
 
-// Negative log-likelihood of residuals under sigma(d) = |sum beta_i d^i| (seed 000 eq. 3).
+// Negative log-likelihood of residuals under sigma(d) = |sum beta_i d^i| (Alhashimi et al. 2021 eq. 3).
 class NoisePolynomialNll final : public ceres::FirstOrderFunction {
  public:
   NoisePolynomialNll(const std::vector<double>& d, const std::vector<double>& r, int params)
@@ -230,15 +230,15 @@ std::vector<double> fitNoisePolynomial(const std::vector<double>& d, const std::
   return beta;
 }
 
-Seed004Fit fitSeed004ClosedForm(const std::vector<double>& d, const std::vector<double>& y, int order) {
+Alhashimi2016Fit fitAlhashimi2016ClosedForm(const std::vector<double>& d, const std::vector<double>& y, int order) {
   // Eq. 22-24: y/d^2 = sum_i alpha_i d^(i-2) + e. Regress y/d^2 on d^(i-2): the same as
   // weighted least squares of y on d^i with weights 1/d^4 (eq. 25-26).
   std::vector<double> w(d.size());
   for (std::size_t i = 0; i < d.size(); ++i) {
-    if (!(d[i] > 0.0)) throw std::invalid_argument("fitSeed004ClosedForm: distances must be positive");
+    if (!(d[i] > 0.0)) throw std::invalid_argument("fitAlhashimi2016ClosedForm: distances must be positive");
     w[i] = 1.0 / (d[i] * d[i] * d[i] * d[i]);
   }
-  Seed004Fit fit;
+  Alhashimi2016Fit fit;
   fit.alpha = fitPolynomial(d, y, order, w);
   double s = 0.0;
   for (std::size_t i = 0; i < d.size(); ++i) {
@@ -254,10 +254,10 @@ Seed004Fit fitSeed004ClosedForm(const std::vector<double>& d, const std::vector<
   return fit;
 }
 
-Seed004Fit fitSeed004ML(const std::vector<double>& d, const std::vector<double>& y, const std::vector<double>& start) {
-  Seed004Fit fit;
+Alhashimi2016Fit fitAlhashimi2016ML(const std::vector<double>& d, const std::vector<double>& y, const std::vector<double>& start) {
+  Alhashimi2016Fit fit;
   fit.alpha = start;
-  ceres::GradientProblem problem(new Seed004Profile(d, y, static_cast<int>(start.size())));
+  ceres::GradientProblem problem(new Alhashimi2016Profile(d, y, static_cast<int>(start.size())));
   ceres::GradientProblemSolver::Summary summary;
   ceres::Solve(lbfgsOptions(), problem, fit.alpha.data(), &summary);
   fit.iterations = static_cast<int>(summary.iterations.size());

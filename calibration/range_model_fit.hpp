@@ -1,6 +1,6 @@
 #pragma once
-// The range model from (distance, reading) pairs: seed 000 section 3.2 (polynomial bias by
-// linear least squares, eqs. 26-28; order by AIC or held-out validation) and seed 004
+// The range model from (distance, reading) pairs: Alhashimi et al. 2021 section 3.2 (polynomial bias by
+// linear least squares, eqs. 26-28; order by AIC or held-out validation) and Alhashimi et al. 2016
 // section 5 (noise sigma_e f(d)^2: closed-form approximation eqs. 21-26, full ML eqs. 18-20).
 
 #include <functional>
@@ -15,7 +15,7 @@ namespace lidarcal::calibration {
 struct RangePair {
   double d_m = 0.0;  ///< distance the reading should have been (estimated from landmarks, or true)
   double y_m = 0.0;  ///< raw reading
-  int part = 0;      ///< split for order selection: 0 fit, 1 choose, 2 test (seed 000 section 4.3)
+  int part = 0;      ///< split for order selection: 0 fit, 1 choose, 2 test (Alhashimi et al. 2021 section 4.3)
 };
 
 /// Least-squares polynomial y = sum_i alpha_i d^i of a given order (eq. 28), solved by QR in
@@ -52,24 +52,24 @@ using Admissible = std::function<bool(const std::vector<double>& alpha)>;
 OrderSelection selectOrder(const std::vector<RangePair>& pairs, int n_max, OrderRule rule,
                            const Admissible& admissible = {});
 
-/// Seed 000's noise form: sigma(d) = |sum_i beta_i d^i| fitted by maximum likelihood to
+/// Alhashimi et al. 2021's noise form: sigma(d) = |sum_i beta_i d^i| fitted by maximum likelihood to
 /// residuals r_i = y_i - f(d_i) (Ceres, started from a least-squares fit of |r| sqrt(pi/2)).
 std::vector<double> fitNoisePolynomial(const std::vector<double>& d, const std::vector<double>& residuals, int order);
 
-/// Seed 004 eqs. 21-26: alpha and sigma_e^2 of y = f(d) + d^2 e in closed form
+/// Alhashimi et al. 2016 eqs. 21-26: alpha and sigma_e^2 of y = f(d) + d^2 e in closed form
 /// (regression of y/d^2 on d^(i-2)).
-struct Seed004Fit {
+struct Alhashimi2016Fit {
   std::vector<double> alpha;     ///< alpha_0..alpha_n
   double sigma_e = 0.0;          ///< noise scale, m^-1
   double neg_log_likelihood = 0.0;  ///< of model (1) y = f(d) + f(d)^2 e at these parameters (eq. 18 / 2 + const)
   int iterations = 0;            ///< optimiser iterations (0 for the closed form)
   bool converged = true;
 };
-Seed004Fit fitSeed004ClosedForm(const std::vector<double>& d, const std::vector<double>& y, int order);
+Alhashimi2016Fit fitAlhashimi2016ClosedForm(const std::vector<double>& d, const std::vector<double>& y, int order);
 
-/// Seed 004 eqs. 18-20: full maximum likelihood of y = f(d) + f(d)^2 e over (alpha, sigma_e),
+/// Alhashimi et al. 2016 eqs. 18-20: full maximum likelihood of y = f(d) + f(d)^2 e over (alpha, sigma_e),
 /// sigma_e profiled out, alpha by L-BFGS (Ceres) from `start` (e.g. the closed form).
-Seed004Fit fitSeed004ML(const std::vector<double>& d, const std::vector<double>& y, const std::vector<double>& start);
+Alhashimi2016Fit fitAlhashimi2016ML(const std::vector<double>& d, const std::vector<double>& y, const std::vector<double>& start);
 
 /// Negative log-likelihood (with constants) of readings y at distances d under a range model.
 double negLogLikelihood(const RangeModel& model, const std::vector<double>& d, const std::vector<double>& y);

@@ -1,13 +1,13 @@
 #pragma once
-// Calibration against what a user measured (seed 004 section 5: the range model fitted to
+// Calibration against what a user measured (Alhashimi et al. 2016 section 5: the range model fitted to
 // readings whose true distance is known). A reference distance to a pole's centre (or to a
 // wall) at one stop gives every beam on that target a known true distance; the range model is
 // then fitted to those readings:
-//   - the noise exponent k of sigma = sigma_e f(d)^k by seed 004's test (eqs. 10-15) on the
+//   - the noise exponent k of sigma = sigma_e f(d)^k by Alhashimi et al. 2016's test (eqs. 10-15) on the
 //     repeated readings of one beam at one stop (a time-of-flight lidar gives k = 0, a
 //     triangulation lidar k = 2);
 //   - f for every order by weighted least squares with weights 1 / f(d)^(2k), iterated (the
-//     generalised form of seed 004's closed form, eqs. 21-26);
+//     generalised form of Alhashimi et al. 2016's closed form, eqs. 21-26);
 //   - the order by leave-one-stop-out cross-validation: the readings of one stop share the
 //     error of its one tape measurement (and whatever the model misses at that distance), so
 //     the stop, not the reading, is the unit of independent information;
@@ -104,7 +104,7 @@ ClusteredFit fitClustered(const std::vector<double>& d, const std::vector<double
 /// KnownRange per entry with readings; its tape sigma from REF.json).
 std::vector<KnownRange> knownRanges(const ReferenceReadings& known, const Reference& ref);
 
-/// Seed 004's noise-exponent test (eqs. 10-15) on the repeated readings of each beam on one
+/// Alhashimi et al. 2016's noise-exponent test (eqs. 10-15) on the repeated readings of each beam on one
 /// target at one stop; fills the exponent_* fields of `fits` and returns the exponent k of
 /// sigma = sigma_e f(d)^k to fit with: the test's, else 0 for config.noise constant and 2
 /// otherwise (with the reason in fits.unavailable).
@@ -114,7 +114,7 @@ double testReadingNoise(const std::vector<KnownReading>& readings, const Calibra
 void setNoiseLaw(NoiseModel& noise, double exponent, double sigma_e);
 
 /// The range model from known-distance readings (method "reference"): the noise exponent by
-/// the test of Alhashimi et al. 2016 (eqs. 10-15), the order by leave-one-stop-out cross-validation, standard errors clustered
+/// Alhashimi et al. 2016's test, the order by leave-one-stop-out cross-validation, standard errors clustered
 /// by stop, and the model discrepancy over the entries (calibration/discrepancy.hpp: the
 /// sensor's scatter about the polynomial between measured distances, net of the entries' stated
 /// tape errors). The result's status says why not when the readings cannot support a model

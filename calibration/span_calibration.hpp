@@ -3,7 +3,7 @@
 // span_fit.hpp for every order the entries determine, the order by leave-one-group-out
 // cross-validation (a group: the spans between one pair of walls, or one tape distance; the
 // rule calibrateWithReference applies over the stops, reference.hpp), and the noise law from
-// the readings at the distances the chosen fit gives the walls (seed 004's exponent test,
+// the readings at the distances the chosen fit gives the walls (Alhashimi et al. 2016's exponent test,
 // eqs. 10-15).
 
 #include <cstddef>

@@ -1,6 +1,6 @@
 #pragma once
 // The range model from wall-to-wall spans (REF.json `spans`; span_walls.hpp finds the walls),
-// alone or with tape distances (REF.json `distances`): the counterpart for spans of seed 004's
+// alone or with tape distances (REF.json `distances`): the counterpart for spans of Alhashimi et al. 2016's
 // calibration against known distances (section 5, reference.hpp).
 //
 //   - A beam on wall w at angle phi reads f(p_w / cos(phi - n_w)) + noise: p_w is the sensor's

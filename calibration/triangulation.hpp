@@ -1,5 +1,5 @@
 #pragma once
-// Landmark centres from bearings (seed 000 section 3.1, eqs. 18-25): each stop k that sees
+// Landmark centres from bearings (Alhashimi et al. 2021 section 3.1, eqs. 18-25): each stop k that sees
 // landmark l gives a line through the stop along the bearing; the centre is the weighted
 // least-squares point closest to all lines, with the commanded stop positions in place of
 // the unknown true ones (eq. 21-23).

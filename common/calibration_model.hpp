@@ -39,16 +39,16 @@ struct CalibratedLandmark {
 
 /// Results of the noise-law estimators, reported side by side.
 struct NoiseFits {
-  std::vector<double> seed000_beta;            ///< sigma(d) = |sum beta_i d^i|, ML (seed 000 eq. 3)
-  std::vector<double> seed004_cf_alpha;        ///< seed 004 closed form eqs. 21-26: alpha
-  double seed004_cf_sigma_e = 0.0;             ///< and sigma_e
-  std::vector<double> seed004_ml_alpha;        ///< seed 004 full ML eqs. 18-20: alpha
-  double seed004_ml_sigma_e = 0.0;             ///< and sigma_e
-  std::array<double, 4> exponent_loglik{};     ///< seed 004 eq. 15 for H0..H3
+  std::vector<double> alhashimi2021_beta;            ///< sigma(d) = |sum beta_i d^i|, ML (Alhashimi et al. 2021 eq. 3)
+  std::vector<double> alhashimi2016_cf_alpha;        ///< Alhashimi et al. 2016 closed form eqs. 21-26: alpha
+  double alhashimi2016_cf_sigma_e = 0.0;             ///< and sigma_e
+  std::vector<double> alhashimi2016_ml_alpha;        ///< Alhashimi et al. 2016 full ML eqs. 18-20: alpha
+  double alhashimi2016_ml_sigma_e = 0.0;             ///< and sigma_e
+  std::array<double, 4> exponent_loglik{};     ///< Alhashimi et al. 2016 eq. 15 for H0..H3
   int exponent_best = -1;                      ///< argmax of the above; -1 when not testable
   std::size_t exponent_batches = 0;            ///< constant-distance batches used
-  /// Estimators that could not run on these data, by name ("seed000_beta", "seed004_closed_form",
-  /// "seed004_ml", "exponent_test") -> why. They are informational: the calibration stands without them.
+  /// Estimators that could not run on these data, by name ("alhashimi2021_beta", "alhashimi2016_closed_form",
+  /// "alhashimi2016_ml", "exponent_test") -> why. They are informational: the calibration stands without them.
   std::map<std::string, std::string> unavailable;
 };
 

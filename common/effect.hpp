@@ -1,5 +1,5 @@
 #pragma once
-// The effects beyond the seeds' range model (seed 000 A3-A4, seed 004 eq. 1) that the
+// The effects beyond the seeds' range model (Alhashimi et al. 2021 A3-A4, Alhashimi et al. 2016 eq. 1) that the
 // calibration can estimate, the simulator can produce and `lidarcal diagnose` looks for: one
 // enum and one table with everything that names them (the name in diagnosis.json and on the
 // command line, the discrepancy statistic aimed at each in both kinds of data, which data can

@@ -1,6 +1,6 @@
 #pragma once
 // What calibration consumes: landmarks seen from the stops of a sequence. Produced by the
-// detector (from scans) or by the landmark-level simulator (seed 000 eqs. 3, 5, 8).
+// detector (from scans) or by the landmark-level simulator (Alhashimi et al. 2021 eqs. 3, 5, 8).
 
 #include <cstdint>
 #include <limits>

@@ -1,7 +1,7 @@
 #pragma once
 // An observation-level scene (`"kind": "observations"`): landmarks as points, a robot driven by
 // commanded motions with process noise, and range-bearing sensors each with its own Gaussian
-// noise. simulation/observation_sim turns it into observations.csv + odometry.csv (seed 003's
+// noise. simulation/observation_sim turns it into observations.csv + odometry.csv (Sharma 2020's
 // experimental setting, ch. 5). Plain data; io/noise_json reads it.
 
 #include <limits>

@@ -1,5 +1,5 @@
 #pragma once
-// Effects beyond the seeds' range model (seed 000 A3-A4, seed 004 eq. 1), shared by the
+// Effects beyond the seeds' range model (Alhashimi et al. 2021 A3-A4, Alhashimi et al. 2016 eq. 1), shared by the
 // simulator and the calibration: what `lidarcal diagnose` looks for in measured data. Every
 // effect is off by default (the seeds' model). Physical causes: docs/FORMAT.md ("Effects").
 //

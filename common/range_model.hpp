@@ -1,8 +1,8 @@
 #pragma once
 // The range model shared by the simulator and the calibration.
 //
-//   seed 000 eq. 3:  r = sum_i alpha_i d^i + (sum_i beta_i d^i) e,   e ~ N(0, 1)
-//   seed 004 eq. 1:  y = f(d) + f(d)^2 e,                            e ~ N(0, sigma_e^2)
+//   Alhashimi et al. 2021 eq. 3:  r = sum_i alpha_i d^i + (sum_i beta_i d^i) e,   e ~ N(0, 1)
+//   Alhashimi et al. 2016 eq. 1:  y = f(d) + f(d)^2 e,                            e ~ N(0, sigma_e^2)
 //
 // d is the true distance (metres) from the sensor to the surface hit by the beam,
 // r (or y) the reading. f is the bias polynomial, the noise multiplies a unit normal.
@@ -12,7 +12,7 @@
 
 namespace lidarcal {
 
-/// alpha_0 + alpha_1 d + ... + alpha_{N-1} d^(N-1) by Horner's rule (seed 004 eq. 1's f), for any
+/// alpha_0 + alpha_1 d + ... + alpha_{N-1} d^(N-1) by Horner's rule (Alhashimi et al. 2016 eq. 1's f), for any
 /// scalar type (the Ceres residuals evaluate it on jets).
 template <int N, typename T>
 T evaluatePolynomial(const T* alpha, const T& d) {
@@ -21,7 +21,7 @@ T evaluatePolynomial(const T* alpha, const T& d) {
   return f;
 }
 
-/// Polynomial f(d) = sum_i alpha[i] d^i (seed 000 eq. 3, seed 004 eq. 3). d and f in metres.
+/// Polynomial f(d) = sum_i alpha[i] d^i (Alhashimi et al. 2021 eq. 3, Alhashimi et al. 2016 eq. 3). d and f in metres.
 struct BiasPolynomial {
   /// Coefficients alpha_0..alpha_n (alpha_i in m^(1-i)). Default: identity f(d) = d.
   std::vector<double> alpha{0.0, 1.0};
@@ -38,14 +38,14 @@ struct BiasPolynomial {
 enum class NoiseKind {
   none,        ///< noise-free readings
   constant,    ///< sigma(d) = sigma_e
-  polynomial,  ///< sigma(d) = |sum_i beta_i d^i|            (seed 000 eq. 3)
-  squared,     ///< sigma(d) = sigma_e f(d)^2                (seed 004 eq. 1)
-  power,       ///< sigma(d) = sigma_e f(d)^exponent          (seed 004 H0..H3, eq. 10)
+  polynomial,  ///< sigma(d) = |sum_i beta_i d^i|            (Alhashimi et al. 2021 eq. 3)
+  squared,     ///< sigma(d) = sigma_e f(d)^2                (Alhashimi et al. 2016 eq. 1)
+  power,       ///< sigma(d) = sigma_e f(d)^exponent          (Alhashimi et al. 2016 H0..H3, eq. 10)
 };
 
 /// Range-noise model: the standard deviation of the reading around f(d).
 struct NoiseModel {
-  /// Which law the standard deviation follows. Default: seed 004's squared law.
+  /// Which law the standard deviation follows. Default: Alhashimi et al. 2016's squared law.
   NoiseKind kind = NoiseKind::squared;
   /// Coefficients beta_0..beta_n of the polynomial law, metres. Used by `polynomial` only.
   std::vector<double> beta;

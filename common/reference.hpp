@@ -1,7 +1,7 @@
 #pragma once
 // What a user measured by hand (a tape measure, a laser distance meter, a survey) about a
 // recorded sequence: the content of REF.json (docs/FORMAT.md, "Reference measurements").
-// Plain data: io/ reads it, calibration/ fits the range model against it (seed 004 section 5:
+// Plain data: io/ reads it, calibration/ fits the range model against it (Alhashimi et al. 2016 section 5:
 // calibration against known distances; wall-to-wall spans, calibration/span_fit.hpp),
 // pipeline/ evaluates a model with it.
 

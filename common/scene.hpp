@@ -44,7 +44,7 @@ struct SensorSpec {
 
 /// How the robot moves through the scene.
 enum class PathKind {
-  stops,    ///< stop and go along a straight line (seed 000 eqs. 7-8); the default
+  stops,    ///< stop and go along a straight line (Alhashimi et al. 2021 eqs. 7-8); the default
   driving,  ///< never stops: a pose per scan along a smooth route, VIEWPOINT from noisy odometry
 };
 
@@ -77,7 +77,7 @@ struct DrivingSpec {
   OdometryNoise odometry;          ///< how the commanded poses drift from the true ones
 };
 
-/// The robot's path: stops at fixed steps along a straight line (seed 000 eqs. 7-8), or (kind
+/// The robot's path: stops at fixed steps along a straight line (Alhashimi et al. 2021 eqs. 7-8), or (kind
 /// driving) a pose every speed_m_per_scan along a route, stops = poses.
 struct PathSpec {
   PathKind kind = PathKind::stops;  ///< stop and go (default) or driving
@@ -105,7 +105,7 @@ struct Scene {
 };
 
 /// Commanded pose of stop k of a stop-and-go path: start + k * step along the start heading
-/// (seed 000 eq. 7). (Driving paths: simulation::planStops.)
+/// (Alhashimi et al. 2021 eq. 7). (Driving paths: simulation::planStops.)
 inline Pose2 commandedPose(const PathSpec& path, int stop) {
   Pose2 pose = path.start;
   pose.x_m += stop * path.step_m * std::cos(path.start.yaw_rad);

@@ -1,9 +1,9 @@
 #pragma once
-// Radius of a landmark estimated jointly over all its observations (seed 000 section 3.1: the
+// Radius of a landmark estimated jointly over all its observations (Alhashimi et al. 2021 section 3.1: the
 // radius is known or "not difficult to obtain" from the arcs): one radius R and one centre c_k per
 // observation minimise sum_k w_k sum_i (|p_ki - c_k| - R)^2, solved by Gauss-Newton with the
 // centres eliminated (Schur complement on R). Observations are weighted by w_k = 1 / range_k^4
-// (triangulation noise grows about with the square of the range, seed 004 eq. 1), so the near,
+// (triangulation noise grows about with the square of the range, Alhashimi et al. 2016 eq. 1), so the near,
 // least distorted arcs dominate.
 
 #include <cstddef>

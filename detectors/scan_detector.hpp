@@ -2,7 +2,7 @@
 // Landmark candidates in one 2D scan: segment (segmentation.hpp), then classify each cluster as a
 // circle (a pole: landmark candidate), a line (wall, box face) or clutter.
 //
-// A cluster is a circle when (seed 000 section 2, A1: cylinders of known or inferable radius)
+// A cluster is a circle when (Alhashimi et al. 2021 section 2, A1: cylinders of known or inferable radius)
 //  - it is near enough for its shape to show (t(range) <= max_threshold_to_radius R);
 //  - it stands in front of its surroundings: the beams next to its ends have no return or a
 //    farther one (require_free_edges; a wall seen between chair legs is cut by nearer returns);
@@ -15,7 +15,7 @@
 //  - a straight line does not explain the points clearly better (line_evidence, line_rms_ratio).
 // t(r) = threshold_m + threshold_per_m2 r^2 is the inlier threshold at range r: about three
 // standard deviations of a triangulation lidar whose noise grows with the square of the range
-// (seed 004 eq. 1).
+// (Alhashimi et al. 2016 eq. 1).
 
 #include <array>
 #include <cstddef>

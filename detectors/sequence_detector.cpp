@@ -385,7 +385,7 @@ SequenceDetections detectSequenceImpl(std::size_t scan_count, const ScanLoader& 
     const std::vector<RadiusHint> world = estimateRadii(r, first, config.detection);
     if (!world.empty()) {
       DetectionConfig cfg = config.detection;
-      // Landmarks of one make (seed 000: cylinders of one radius): when every estimate agrees
+      // Landmarks of one make (Alhashimi et al. 2021: cylinders of one radius): when every estimate agrees
       // with their median, clusters near no known landmark are fitted with that radius too.
       std::vector<double> radii;
       for (const auto& h : world) radii.push_back(h.radius_m);

@@ -3,7 +3,7 @@
 // a 55 mm pole at 3-4.5 m with 3-9 beams: one arc cannot determine a radius (scan_detector.hpp
 // refuses it: "radius not determined by the arc", or too few points for a free fit), but the
 // scans of one stop see the same arc from the same pose, so their points pooled fit one circle
-// (seed 000 section 3.1: the radius "not difficult to obtain" from the arcs; the free fit of
+// (Alhashimi et al. 2021 section 3.1: the radius "not difficult to obtain" from the arcs; the free fit of
 // circle_fit.hpp on the pooled points). The result is a radius hint in the stop's sensor frame;
 // detectSequence's first pass fits those clusters with it fixed, and the joint radius over
 // every stop (landmark_radius.hpp) follows as for larger poles.

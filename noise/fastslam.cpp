@@ -33,7 +33,7 @@ Pose2 compose(const Pose2& pose, double dx, double dy, double dtheta) {
 }
 
 // Predicted errors of one observation against one particle: reading minus h(pose, landmark)
-// (seed 003 ch. 3.2), without the assumed bias.
+// (Sharma 2020 ch. 3.2), without the assumed bias.
 void predictedError(const Pose2& pose, const Eigen::Vector2d& lm, const Observation& o, double& er, double& eb) {
   const double dx = lm.x() - pose.x_m, dy = lm.y() - pose.y_m;
   er = o.range_m - std::hypot(dx, dy);
@@ -75,7 +75,7 @@ void validateAssumed(const NoiseProblem& problem, const NoiseSetting& assumed) {
 }
 
 /// The particle filter over one problem: per stop predict, update with each observation,
-/// record the predicted errors and the mean pose, resample (seed 003 ch. 3.1-3.2).
+/// record the predicted errors and the mean pose, resample (Sharma 2020 ch. 3.1-3.2).
 class FastSlamFilter {
  public:
   FastSlamFilter(const NoiseProblem& problem, const NoiseSetting& assumed, const FastSlamConfig& config, std::uint64_t seed,
@@ -148,7 +148,7 @@ FastSlamResult FastSlamFilter::run() {
   return std::move(result_);
 }
 
-/// Prediction (seed 003 ch. 3.1): commanded motion plus sampled process noise.
+/// Prediction (Sharma 2020 ch. 3.1): commanded motion plus sampled process noise.
 void FastSlamFilter::predict(int k) {
   const OdometryStep& u = problem_.odometry[static_cast<std::size_t>(k)];
   for (auto& p : particles_) {
@@ -232,7 +232,7 @@ void FastSlamFilter::recordErrors(const Observation& o) {
   e.bearing_sq_rad2.push_back(mb2);
 }
 
-/// State estimate of the stop: weighted mean pose (seed 003 ch. 3.1).
+/// State estimate of the stop: weighted mean pose (Sharma 2020 ch. 3.1).
 void FastSlamFilter::recordMeanPose() {
   Pose2 mean;
   double sc = 0.0, ss = 0.0;

@@ -1,7 +1,7 @@
 #pragma once
-// FastSLAM 1.0 with known data association (seed 003 ch. 3.1, after Montemerlo et al., its
+// FastSLAM 1.0 with known data association (Sharma 2020 ch. 3.1, after Montemerlo et al., its
 // ref. [8]): every particle carries a pose and one 2x2 EKF per landmark. For each stop the
-// particles are moved by the commanded motion plus sampled process noise (seed 003 ch. 3.1,
+// particles are moved by the commanded motion plus sampled process noise (Sharma 2020 ch. 3.1,
 // x(t) = A x(t-1) + B u + w), then each range-bearing observation, from any sensor, updates the
 // particle's landmark EKF under the assumed noise of that sensor and multiplies the particle's
 // weight by the innovation likelihood (ch. 3.1, fig. 13). After a stop's observations, the
@@ -26,7 +26,7 @@
 namespace lidarcal::noise {
 
 struct FastSlamConfig {
-  /// Number of particles. Default 80 (seed 003 ch. 5, all experiments).
+  /// Number of particles. Default 80 (Sharma 2020 ch. 5, all experiments).
   int particles = 80;
   /// Resample (systematic) when the effective sample size falls below this fraction of the
   /// particles; 1 resamples after every stop. Default 0.5.
@@ -44,7 +44,7 @@ struct FastSlamConfig {
   void validate() const;
 };
 
-/// Predicted errors of one sensor, one entry per observation used (seed 003 ch. 3.2).
+/// Predicted errors of one sensor, one entry per observation used (Sharma 2020 ch. 3.2).
 struct SensorErrorSamples {
   std::vector<double> range_m;           ///< particle-weighted mean range error, metres
   std::vector<double> range_sq_m2;       ///< particle-weighted mean squared range error, m^2

@@ -79,7 +79,7 @@ double LatticeClimber::evaluate(const Index& idx, bool jump) {
   return v;
 }
 
-/// Seed 003 ch. 3.4: neighbours value +- step of every parameter, accepted when better; true
+/// Sharma 2020 ch. 3.4: neighbours value +- step of every parameter, accepted when better; true
 /// when the current point moved.
 bool LatticeClimber::sweep() {
   bool moved = false;

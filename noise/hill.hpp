@@ -1,5 +1,5 @@
 #pragma once
-// Hill climbing of seed 003 ch. 3.4 and ch. 5, and its use on the noise-consistency objective.
+// Hill climbing of Sharma 2020 ch. 3.4 and ch. 5, and its use on the noise-consistency objective.
 //
 // Each parameter has two neighbours (value +- step), so each (mean, variance) pair has the
 // seed's four. A sweep visits the neighbours of the current point in parameter order and moves
@@ -23,7 +23,7 @@
 namespace lidarcal::noise {
 
 struct HillClimbConfig {
-  double step = 0.01;         ///< step of every parameter, in its unit (seed 003 ch. 5: 0.01)
+  double step = 0.01;         ///< step of every parameter, in its unit (Sharma 2020 ch. 5: 0.01)
   int max_jumps = 5;          ///< random jumps in a row without improvement before stopping (seed: 5)
   int jump_steps = 10;        ///< a jump moves each parameter by up to this many steps (our choice; the seed does not say)
   int max_evaluations = 5000; ///< hard cap on objective evaluations
@@ -79,7 +79,7 @@ struct KlHillResult {
 std::vector<double> packNoise(const NoiseSetting& n, const KlHillConfig& config);
 NoiseSetting unpackNoise(const std::vector<double>& x, const NoiseSetting& base, const KlHillConfig& config);
 
-/// Seed 003's estimator: hill climbing of the KL noise-consistency objective from `initial`.
+/// Sharma 2020's estimator: hill climbing of the KL noise-consistency objective from `initial`.
 /// The jumps draw from stream 0 of `seed`; the filter from streams 1, 2, ... (noise_kl.hpp).
 KlHillResult estimateNoiseKlHill(const NoiseProblem& problem, const NoiseSetting& initial, const KlHillConfig& config,
                                  std::uint64_t seed, const std::function<void(int, double)>& on_evaluation = {});

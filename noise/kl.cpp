@@ -58,7 +58,7 @@ KlEvaluation evaluateKlObjective(const NoiseProblem& problem, const NoiseSetting
     const SensorNoise& a = assumed.sensors[static_cast<std::size_t>(s)];
     const ErrorGaussian pr = fitErrors(e.range_m, e.range_sq_m2, config.statistic);
     const ErrorGaussian pb = fitErrors(e.bearing_rad, e.bearing_sq_rad2, config.statistic);
-    // Seed 003 ch. 3.3: KL(assumed || predicted), summed over sensors (and here components).
+    // Sharma 2020 ch. 3.3: KL(assumed || predicted), summed over sensors (and here components).
     const double kr = gaussianKl(a.range_mean_m, asVariance(a.range_var_m2), pr.mean, asVariance(pr.var));
     const double kb = gaussianKl(a.bearing_mean_rad, asVariance(a.bearing_var_rad2), pb.mean, asVariance(pb.var));
     out.predicted_range.push_back(pr);

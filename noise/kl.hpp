@@ -1,5 +1,5 @@
 #pragma once
-// The noise-consistency objective of seed 003 (ch. 3.2-3.3): run the particle filter under an
+// The noise-consistency objective of Sharma 2020 (ch. 3.2-3.3): run the particle filter under an
 // assumed noise setting, fit a Gaussian to each sensor's predicted errors per component (range,
 // bearing), and sum the KL divergences KL(assumed || predicted) over sensors and components.
 //

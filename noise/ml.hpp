@@ -1,5 +1,5 @@
 #pragma once
-// Maximum-likelihood noise estimation beside seed 003: variance-component estimation (VCE) in
+// Maximum-likelihood noise estimation beside Sharma 2020: variance-component estimation (VCE) in
 // the batch least-squares adjustment of poses, landmarks and sensor biases.
 //
 // Model (linearised at the solution): observations z = h(pose_k, landmark_j) + bias_s + e with

@@ -1,7 +1,7 @@
 #pragma once
 // The data of noise estimation, checked and indexed once: stops, sensors, landmarks (dense
 // indices), observations grouped by stop, commanded motions. Built from observations.csv and
-// odometry.csv (docs/FORMAT.md); shared by the KL hill climbing (seed 003) and the ML estimator.
+// odometry.csv (docs/FORMAT.md); shared by the KL hill climbing (Sharma 2020) and the ML estimator.
 
 #include <cstddef>
 #include <vector>

@@ -32,7 +32,7 @@ struct CalibrateCommand {
   std::shared_ptr<CalibrationOptions> options = std::make_shared<CalibrationOptions>();
 };
 
-/// --reference-fit: distances alone (seed 004 section 5) or inside the self-calibration. auto:
+/// --reference-fit: distances alone (Alhashimi et al. 2016 section 5) or inside the self-calibration. auto:
 /// alone when every stop has a measured distance and nothing else is given, combined otherwise
 /// (see calibrateWithMeasurements for its fallback).
 bool combineWithSelfCalibration(const Reference& ref, std::size_t stops, const std::string& mode) {
@@ -85,7 +85,7 @@ SequenceCalibration calibrateWithMeasurements(const CalibrateCommand& c, const i
                  result.model.status.name(), plural(measuredStops(ref), "measured stop").c_str());
     shown.matches.clear();
   }
-  // Against the distances (and spans) alone (seed 004 section 5).
+  // Against the distances (and spans) alone (Alhashimi et al. 2016 section 5).
   if (!ref.landmarks.empty() || !ref.stops.empty())
     std::fprintf(stderr, "lidarcal: warning: %s: %s fits the measured distances and spans alone: the surveyed "
                          "landmarks and measured stops are checked but not used\n",
@@ -113,7 +113,7 @@ void runCalibrate(const CalibrateCommand& c) {
   if (!c.reference.empty()) {
     result = calibrateWithMeasurements(c, seq, config, shown);
   } else if (!c.truth.empty()) {
-    // Oracle (seed 004): fitted against the true distances; for comparison only.
+    // Oracle (Alhashimi et al. 2016): fitted against the true distances; for comparison only.
     const io::SimulationTruth truth = io::loadTruth(c.truth);
     const double scale = c.frame == "commanded" ? calibration::commandedScale(truth.truth) : 1.0;
     result.model = calibration::calibrateOracle(seq, truth, scale, config);

@@ -1,5 +1,5 @@
 // lidarcal montecarlo --study fig7|fig8|fig9|fig10|fig11|all --trials N --out DIR: the Monte Carlo
-// study of seed 000 (sections 4.1-4.2, Figs. 7-11) with the paper's closed form, our joint
+// study of Alhashimi et al. 2021 (sections 4.1-4.2, Figs. 7-11) with the paper's closed form, our joint
 // refinement and the oracle side by side. Writes DIR/<fig>.csv, <fig>.gp, <fig>.png, <fig>.md and
 // DIR/summary.md. Interrupting (Ctrl-C) stops after the trials in progress and writes nothing; a
 // plot gnuplot cannot draw fails the command (nothing written); without gnuplot the plots are skipped

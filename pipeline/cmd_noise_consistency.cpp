@@ -1,7 +1,7 @@
 // lidarcal noise-consistency --observations OBS.csv --odometry ODO.csv --method kl-hill|ml --out RESULT.json
 //   [--seed S] [--plot DIR] [--init SETTING.json] [--truth noise_truth.json] [--variant sound|faithful] ...
 // Estimates every sensor's range and bearing noise (mean, variance) and the process noise
-// without ground truth: seed 003's KL noise consistency with hill climbing, or maximum likelihood
+// without ground truth: Sharma 2020's KL noise consistency with hill climbing, or maximum likelihood
 // by variance-component estimation.
 
 #include <cstdio>

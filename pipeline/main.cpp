@@ -50,7 +50,6 @@ std::string userPaths(const std::string& message) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  using lidarcal::pipeline::userWords;
   // PCL's readers print their own diagnostics; ours are clearer and name the file and field.
   pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);
 
@@ -73,10 +72,10 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return app.exit(e) == 0 ? 0 : 2;
   } catch (const lidarcal::DataError& e) {
-    std::fprintf(stderr, "lidarcal: cannot proceed: %s\n", userWords(userPaths(e.what())).c_str());
+    std::fprintf(stderr, "lidarcal: cannot proceed: %s\n", userPaths(e.what()).c_str());
     return 3;
   } catch (const lidarcal::InputError& e) {
-    std::fprintf(stderr, "lidarcal: error: %s\n", userWords(userPaths(e.what())).c_str());
+    std::fprintf(stderr, "lidarcal: error: %s\n", userPaths(e.what()).c_str());
     return 2;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "lidarcal: internal error: %s\n(please report this with the command you ran)\n", e.what());

@@ -1,6 +1,6 @@
 #pragma once
 // Composition of noise estimation for `lidarcal noise-consistency` and the benchmarks: runs the
-// KL hill climbing (seed 003) or the ML estimator on a NoiseProblem, times it, turns the result
+// KL hill climbing (Sharma 2020) or the ML estimator on a NoiseProblem, times it, turns the result
 // into result.json (docs/FORMAT.md) and draws the traces with gnuplot.
 
 #include <cstdint>

@@ -1,15 +1,15 @@
 #pragma once
-// How user-facing text (--help, reports, printed summaries) names the method's sources. Code
-// comments cite them as seed 000 / 004 / 003 (/work/shared/seeds); users never saw those names.
+// The method's sources as user-facing text (--help, reports, printed summaries) names them: by
+// author and year, as the code comments do.
 
 namespace lidarcal::pipeline::papers {
 
-/// Seed 000: the calibration against fixed landmarks in unknown positions.
+/// The calibration against fixed landmarks in unknown positions.
 inline constexpr const char* kLandmarks = "Alhashimi et al. 2021";
-/// Seed 004: the statistical model of triangulation lidars (bias polynomial, noise law, inversion).
+/// The statistical model of triangulation lidars (bias polynomial, noise law, inversion).
 inline constexpr const char* kTriangulation = "Alhashimi et al. 2016";
-/// Seed 003: noise estimation by noise consistency.
-inline constexpr const char* kNoiseConsistency = "the noise-consistency method";
+/// Noise estimation by noise consistency.
+inline constexpr const char* kNoiseConsistency = "Sharma 2020";
 
 /// The model discrepancy beside a fitted model (calibration/discrepancy.hpp).
 inline constexpr const char* kDiscrepancy = "Kennedy & O'Hagan 2001";
@@ -24,7 +24,7 @@ inline constexpr const char* kReferences =
     "of Lidars Using Fixed Landmarks in Unknown Positions\", Sensors, 2021.\n"
     "- Alhashimi et al. 2016: A. Alhashimi, D. Varagnolo, T. Gustafsson, \"Statistical Modeling and Calibration of "
     "Triangulation Lidars\", ICINCO 2016.\n"
-    "- The noise-consistency method: S. V. Sharma, \"In-situ Sensor Calibration Using Noise Consistency\", MSc "
+    "- Sharma 2020: S. V. Sharma, \"In-situ Sensor Calibration Using Noise Consistency\", MSc "
     "thesis, University of Texas at Arlington, 2020.\n"
     "- Kennedy & O'Hagan 2001: M. C. Kennedy, A. O'Hagan, \"Bayesian calibration of computer models\", Journal of "
     "the Royal Statistical Society B 63(3), 2001.\n"

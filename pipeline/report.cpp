@@ -311,7 +311,7 @@ namespace {
 /// The model in words: bias with its standard errors, noise, bearing noise, range, notes.
 void writeModelSection(std::ostringstream& md, const CalibrationModel& m, const FittedRange& fitted) {
   md << "## The calibrated model\n\n";
-  md << "- method: **" << m.method << "**, bias " << orderText(m) << " (chosen by " << userWords(m.order_rule) << ")\n";
+  md << "- method: **" << m.method << "**, bias " << orderText(m) << " (chosen by " << m.order_rule << ")\n";
   md << "- bias: reading = f(d) = " << polynomialWithErrors(m) << "  (d = true distance in metres"
      << (coefficientErrors(m).empty() || !std::isfinite(coefficientErrors(m)[0]) ? "" : "; +- one standard error") << ")\n";
   md << "- noise: " << noiseText(m.model.noise, m.model.bias) << "\n";
@@ -332,7 +332,7 @@ void writeModelSection(std::ostringstream& md, const CalibrationModel& m, const 
   else if (fitted.max_m > 0.0)
     md << "- fitted on landmark readings at estimated distances from " << fixed(fitted.min_m, 2) << " to "
        << fixed(fitted.max_m, 2) << " m (the sensor reads up to " << fixed(m.model.range_max_m, 1) << " m)\n";
-  if (!m.status.message.empty()) md << "- note: " << userWords(m.status.message) << "\n";
+  if (!m.status.message.empty()) md << "- note: " << m.status.message << "\n";
   for (const auto& w : m.warnings) md << "- **warning**: " << w << "\n";
 }
 
@@ -450,15 +450,15 @@ void writeNoiseSection(std::ostringstream& md, const CalibrationModel& m) {
   const auto& nf = m.noise_fits;
   md << "\n## Noise estimators side by side\n\n";
   md << "| estimator | result |\n|---|---|\n";
-  md << "| " << kLandmarks << ", polynomial noise, ML | sigma(d) = |" << polynomialText(nf.seed000_beta) << "| |\n";
-  md << "| " << kTriangulation << ", closed form (eqs. 21-26) | f = " << polynomialText(nf.seed004_cf_alpha)
-     << ", sigma_e = " << fixed(nf.seed004_cf_sigma_e, 5) << " |\n";
-  md << "| " << kTriangulation << ", full ML (eqs. 18-20) | f = " << polynomialText(nf.seed004_ml_alpha)
-     << ", sigma_e = " << fixed(nf.seed004_ml_sigma_e, 5) << " |\n";
+  md << "| " << kLandmarks << ", polynomial noise, ML | sigma(d) = |" << polynomialText(nf.alhashimi2021_beta) << "| |\n";
+  md << "| " << kTriangulation << ", closed form (eqs. 21-26) | f = " << polynomialText(nf.alhashimi2016_cf_alpha)
+     << ", sigma_e = " << fixed(nf.alhashimi2016_cf_sigma_e, 5) << " |\n";
+  md << "| " << kTriangulation << ", full ML (eqs. 18-20) | f = " << polynomialText(nf.alhashimi2016_ml_alpha)
+     << ", sigma_e = " << fixed(nf.alhashimi2016_ml_sigma_e, 5) << " |\n";
   for (const auto& [name, reason] : nf.unavailable) {
-    const std::string label = name == "seed000_beta"          ? std::string(kLandmarks) + ", polynomial noise"
-                              : name == "seed004_closed_form" ? std::string(kTriangulation) + ", closed form"
-                              : name == "seed004_ml"          ? std::string(kTriangulation) + ", full ML"
+    const std::string label = name == "alhashimi2021_beta"          ? std::string(kLandmarks) + ", polynomial noise"
+                              : name == "alhashimi2016_closed_form" ? std::string(kTriangulation) + ", closed form"
+                              : name == "alhashimi2016_ml"          ? std::string(kTriangulation) + ", full ML"
                                                               : std::string("noise-exponent test");
     md << "| " << label << " | not available: " << reason << " |\n";
   }
@@ -489,7 +489,7 @@ void writeReport(const std::filesystem::path& dir, const ReportInputs& in) {
   if (in.known) md << ", " << plural(in.known->size(), "reading") << " of known true distance (reference measurements).\n\n";
   else md << ", " << plural(m.landmarks.size(), "landmark") << " in " << plural(in.detections, "detection") << ".\n\n";
   if (!m.status.ok()) {
-    md << "**Calibration failed: " << m.status.name() << ".** " << userWords(m.status.message) << "\n";
+    md << "**Calibration failed: " << m.status.name() << ".** " << m.status.message << "\n";
     io::writeTextAtomically(dir / "report.md", md.str());
     return;
   }

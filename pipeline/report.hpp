@@ -1,7 +1,7 @@
 #pragma once
 // The calibration report a newcomer reads: report.md with SVG plots (measured vs estimated
 // distance with the fitted curve, noise vs range, the landmark map with raw and corrected
-// points as in seed 000 Fig. 13, the order-selection table, the noise estimators side by side).
+// points as in Alhashimi et al. 2021 Fig. 13, the order-selection table, the noise estimators side by side).
 
 #include <filesystem>
 #include <optional>
@@ -18,7 +18,7 @@ namespace lidarcal::pipeline {
 
 /// A model evaluated against the truth, for the comparison table.
 struct ComparedModel {
-  std::string name;         ///< e.g. "closed form (seed 000)", "oracle"
+  std::string name;         ///< e.g. "closed form (Alhashimi et al. 2021)", "oracle"
   CalibrationModel model;   ///< the model
   calibration::Evaluation evaluation;  ///< its correction of the evaluation sequence
 };

@@ -1,5 +1,5 @@
 #pragma once
-// Landmark-level simulator of seed 000 section 4.1: the robot stops along a line (eqs. 7-8),
+// Landmark-level simulator of Alhashimi et al. 2021 section 4.1: the robot stops along a line (eqs. 7-8),
 // each landmark is seen at bearing theta + v (eq. 5) and range f(d) + sigma(d) e (eq. 3).
 // Optionally the beams of the lidar's angular grid that fall on each landmark are ray-cast
 // too, so the joint refinement can use individual readings (no scans, no detector: fast).

@@ -1,5 +1,5 @@
 #pragma once
-// Observation-level simulator (seed 003 ch. 3.5 and ch. 5): the true trajectory follows the
+// Observation-level simulator (Sharma 2020 ch. 3.5 and ch. 5): the true trajectory follows the
 // commanded motions plus process noise, x_k = x_{k-1} (+) (u_k + w_k), w_k ~ N(0, diag(q));
 // each sensor reads every landmark within its range window and field of view as
 //   range   = |l - p_k| + range_mean + sqrt(range_var) e1,

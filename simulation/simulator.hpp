@@ -1,8 +1,8 @@
 #pragma once
-// Scan-level simulator: the robot stops along a straight line (seed 000 eqs. 7-8) or drives
+// Scan-level simulator: the robot stops along a straight line (Alhashimi et al. 2021 eqs. 7-8) or drives
 // along a route (a pose per scan, odometry drifting as a random walk), the lidar
 // sweeps its beams, each beam is ray-cast against the scene and its reading drawn from the
-// range model (seed 000 eq. 3 or seed 004 eq. 1).
+// range model (Alhashimi et al. 2021 eq. 3 or Alhashimi et al. 2016 eq. 1).
 //
 // Randomness: the stop poses come from stream 0 of the seed, scan i from stream i + 1, so any
 // scan can be produced on its own (streaming, threads) with the same bytes.
@@ -20,7 +20,7 @@
 
 namespace lidarcal::simulation {
 
-/// A reading for true distance d: f(d) + sigma(d) * unit_normal (seed 000 eq. 3 / seed 004 eq. 1).
+/// A reading for true distance d: f(d) + sigma(d) * unit_normal (Alhashimi et al. 2021 eq. 3 / Alhashimi et al. 2016 eq. 1).
 double rangeReading(const RangeModel& model, double d_m, double unit_normal);
 
 /// Where and when a beam met its surface: what the effects of common/range_effects.hpp depend on.

@@ -1,7 +1,7 @@
 #pragma once
 // One simulated calibration run as the Monte Carlo study sees it: what the estimators get (the
 // landmark observations) and the truth kept aside to score them. Both simulation levels
-// (landmark level: seed 000 eqs. 3, 5, 8; scan level: ray casting and detection) produce it.
+// (landmark level: Alhashimi et al. 2021 eqs. 3, 5, 8; scan level: ray casting and detection) produce it.
 
 #include <cstdint>
 #include <vector>
@@ -11,7 +11,7 @@
 
 namespace lidarcal::studies {
 
-/// A reading with its true distance (for the oracle and for the MSE ratio, seed 000 eq. 31).
+/// A reading with its true distance (for the oracle and for the MSE ratio, Alhashimi et al. 2021 eq. 31).
 struct TruthReading {
   std::size_t stop = 0;     ///< stop index
   int landmark = 0;         ///< true landmark id (1-based, as in the layout)

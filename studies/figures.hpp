@@ -1,5 +1,5 @@
 #pragma once
-// The five Monte Carlo figures of seed 000 (sections 4.1-4.2) as study grids, and what is
+// The five Monte Carlo figures of Alhashimi et al. 2021 (sections 4.1-4.2) as study grids, and what is
 // written for each: a CSV of every cell, a gnuplot script (data inline) for the PNG, and a
 // Markdown summary that sets our numbers against the paper's claims. Text only: the pipeline
 // writes the files and runs gnuplot.

@@ -1,5 +1,5 @@
 #pragma once
-// Random landmark layouts for the Monte Carlo study (seed 000 section 4.1 draws a scene per
+// Random landmark layouts for the Monte Carlo study (Alhashimi et al. 2021 section 4.1 draws a scene per
 // simulation; section 4.3 keeps every landmark between 0.2 m and 5 m of every stop, visible and
 // distinguishable). Landmarks are drawn one after the other, each accepted only when it is
 // compatible with the ones before, so the first L landmarks of a layout of L' > L are a layout of

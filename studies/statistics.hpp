@@ -1,7 +1,7 @@
 #pragma once
 // Per-cell statistics of a Monte Carlo study: quartiles and means of each per-trial metric with
 // their Monte Carlo standard errors, order-selection counts under each order rule, and the bias
-// and variance of the landmark position estimators (seed 000 Figs. 7-8) over every (trial,
+// and variance of the landmark position estimators (Alhashimi et al. 2021 Figs. 7-8) over every (trial,
 // landmark) sample of the cell.
 
 #include <array>

@@ -49,7 +49,7 @@ StudyOutput studyOutput(const std::vector<Figure>& figures, const StudyGrids& gr
   meta.seed = options.seed;
   meta.trials = options.trials;
   meta.joint_trials = options.joint_trials;
-  std::string summary = "# Monte Carlo study of seed 000 (Figs. 7-11)\n\n"
+  std::string summary = "# Monte Carlo study of Alhashimi et al. 2021 (Figs. 7-11)\n\n"
                         "Estimators: the paper's closed form (triangulation, section 3.1; least squares and AIC, "
                         "section 3.2), our joint refinement, and the oracle (the paper's fit against the true "
                         "distances). MSE ratio: eq. 31 on a fresh draw of the same layout. Columns: docs/FORMAT.md.\n\n";
@@ -62,7 +62,7 @@ StudyOutput studyOutput(const std::vector<Figure>& figures, const StudyGrids& gr
     const std::string md = figureSummary(f, mine, grids, meta);
     out.files.emplace_back(name + ".csv", figureCsv(f, mine, meta));
     out.files.emplace_back(name + ".gp", figureGnuplot(f, mine, grids, meta));
-    out.files.emplace_back(name + ".md", "# Monte Carlo study of seed 000\n\n" + md);
+    out.files.emplace_back(name + ".md", "# Monte Carlo study of Alhashimi et al. 2021\n\n" + md);
     out.gnuplot_scripts.push_back(name + ".gp");
     summary += md + "\n";
   }

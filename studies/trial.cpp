@@ -107,7 +107,7 @@ TestSets testSets(const Draw& draw) {
   return t;
 }
 
-/// Corrects readings with a model (LS inversion, seed 000 eq. 30); a reading the model cannot
+/// Corrects readings with a model (LS inversion, Alhashimi et al. 2021 eq. 30); a reading the model cannot
 /// invert is left as it is (a filter in use has nothing better to report).
 std::vector<double> correct(const calibration::RangeInverter& inv, const std::vector<double>& raw) {
   std::vector<double> out(raw.size());

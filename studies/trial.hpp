@@ -1,5 +1,5 @@
 #pragma once
-// One Monte Carlo trial of the seed 000 study (sections 4.1-4.2): simulate a calibration run
+// One Monte Carlo trial of the Alhashimi et al. 2021 study (sections 4.1-4.2): simulate a calibration run
 // over a landmark layout, calibrate it with the paper's closed form (triangulation + LS + AIC),
 // our joint refinement and the oracle (the same LS + AIC against the true distances), and score
 // each on a fresh draw of the same layout with the MSE ratio (eq. 31) on three test sets, with
@@ -21,7 +21,7 @@ namespace lidarcal::studies {
 
 /// How the scans are produced.
 enum class Level {
-  landmark,  ///< seed 000 eqs. 3, 5, 8 per landmark, beams ray-cast on each landmark (fast)
+  landmark,  ///< Alhashimi et al. 2021 eqs. 3, 5, 8 per landmark, beams ray-cast on each landmark (fast)
   scan,      ///< whole scans ray-cast, landmarks found by the detector (detection in the loop)
 };
 const char* toString(Level level);
@@ -49,8 +49,8 @@ bool parseAngleNoise(const std::string& name, AngleNoise& noise);
 
 /// The simulated sensor's noise law.
 enum class NoiseLaw {
-  paper,    ///< seed 000 section 4.1: sigma(d) = |sum beta_i d^i|, beta = 0.05 alpha (5 % of f(d))
-  squared,  ///< seed 004 eq. 1: sigma(d) = sigma_e f(d)^2, sigma_e so that sigma(3 m) is the paper law's
+  paper,    ///< Alhashimi et al. 2021 section 4.1: sigma(d) = |sum beta_i d^i|, beta = 0.05 alpha (5 % of f(d))
+  squared,  ///< Alhashimi et al. 2016 eq. 1: sigma(d) = sigma_e f(d)^2, sigma_e so that sigma(3 m) is the paper law's
 };
 const char* toString(NoiseLaw law);
 bool parseNoiseLaw(const std::string& name, NoiseLaw& law);
@@ -58,7 +58,7 @@ bool parseNoiseLaw(const std::string& name, NoiseLaw& law);
 /// Order rules the estimators are compared under: each estimator's table of fitted orders is
 /// read with both, so the three are always compared under the same rule.
 enum class Rule {
-  aic = 0,               ///< smallest AIC (seed 000 section 3.2)
+  aic = 0,               ///< smallest AIC (Alhashimi et al. 2021 section 3.2)
   aic_parsimonious = 1,  ///< smallest order whose AIC is within 2 of the smallest (Burnham & Anderson)
 };
 constexpr std::size_t kRules = 2;
@@ -90,7 +90,7 @@ struct TrialConfig {
   /// bearings carry their own noise).
   AngleNoise angle_noise = AngleNoise::heading;
   PathSpec path = defaultPath();               ///< stops (20), step (0.15 m), scans per stop (10); sigmas from the cell
-  RangeModel sensor = paperSensor();           ///< seed 000 section 4.1: n = 2, alpha, beta = 0.05 alpha; window 0.2-6 m
+  RangeModel sensor = paperSensor();           ///< Alhashimi et al. 2021 section 4.1: n = 2, alpha, beta = 0.05 alpha; window 0.2-6 m
   NoiseLaw noise_law = NoiseLaw::paper;        ///< the law of the simulated noise (sensor.noise is replaced for squared)
   /// Multiplies the noise coefficients beta of `sensor` (1: the paper's 5 % of the range). The
   /// detector cannot find 12 cm poles through that much noise beyond about a metre, so scan-level

@@ -1,4 +1,4 @@
-// Inversion of the bias (seed 004 section 5.2): LS round trip f(f^-1(y)) = y over the range
+// Inversion of the bias (Alhashimi et al. 2016 section 5.2): LS round trip f(f^-1(y)) = y over the range
 // limits for every order, and ML satisfying eq. 28.
 
 #include <algorithm>

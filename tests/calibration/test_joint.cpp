@@ -245,7 +245,7 @@ TEST(Calibrate, SurveyedCentresOrMeasuredPosesGiveTheScaleAnOdometryScaleErrorHi
   }
 }
 
-// Tape-measured distances at two stops only (too few for seed 004's fit on its own, which needs
+// Tape-measured distances at two stops only (too few for Alhashimi et al. 2016's fit on its own, which needs
 // three) combined with the self-calibration of the whole recording (JointConfig::known_ranges):
 // the tape gives the scale an odometry scale error hides, the poles and the other
 // stops the shape. The truth the test controls: the beams' true distances from the simulation.

@@ -57,11 +57,11 @@ TEST(NoiseFits, EstimatorsThatCannotRunAreNotedAndTheResultDoesNotDependOnTheThr
   CalibrationModel one = m, two = m;
   calibration::fillNoiseFits(one, 1, d, y, {}, 1);
   calibration::fillNoiseFits(two, 1, d, y, {}, 2);
-  EXPECT_EQ(one.noise_fits.seed000_beta, two.noise_fits.seed000_beta);
-  EXPECT_EQ(one.noise_fits.seed004_cf_alpha, two.noise_fits.seed004_cf_alpha);
-  EXPECT_EQ(one.noise_fits.seed004_ml_alpha, two.noise_fits.seed004_ml_alpha);
+  EXPECT_EQ(one.noise_fits.alhashimi2021_beta, two.noise_fits.alhashimi2021_beta);
+  EXPECT_EQ(one.noise_fits.alhashimi2016_cf_alpha, two.noise_fits.alhashimi2016_cf_alpha);
+  EXPECT_EQ(one.noise_fits.alhashimi2016_ml_alpha, two.noise_fits.alhashimi2016_ml_alpha);
   EXPECT_EQ(one.noise_fits.unavailable, two.noise_fits.unavailable);
-  EXPECT_EQ(one.noise_fits.unavailable.count("seed004_closed_form"), 0u);
+  EXPECT_EQ(one.noise_fits.unavailable.count("alhashimi2016_closed_form"), 0u);
 }
 
 }  // namespace

@@ -1,5 +1,5 @@
-// Range-model fits: least squares, AIC on a hand-computable case, seed 004's closed form
-// against its formula, ML, seed 000's noise polynomial, the noise-exponent test.
+// Range-model fits: least squares, AIC on a hand-computable case, Alhashimi et al. 2016's closed form
+// against its formula, ML, Alhashimi et al. 2021's noise polynomial, the noise-exponent test.
 
 #include <cmath>
 #include <numeric>
@@ -64,7 +64,7 @@ TEST(SelectOrder, AicOnAHandComputableCase) {
   EXPECT_EQ(sel.chosen, 2);
 }
 
-TEST(Seed004ClosedForm, MatchesItsFormulaOnATinyExample) {
+TEST(Alhashimi2016ClosedForm, MatchesItsFormulaOnATinyExample) {
   // Eqs. 24-26 with n = 1: H = [d^-2, d^-1], y~ = y / d^2, alpha = (H'H)^-1 H'y~,
   // sigma_e^2 = |y~ - H alpha|^2 / N, computed here by hand with a 2x2 inverse.
   const std::vector<double> d = {0.5, 1.0, 2.0, 4.0};
@@ -85,7 +85,7 @@ TEST(Seed004ClosedForm, MatchesItsFormulaOnATinyExample) {
     const double r = y[i] / (d[i] * d[i]) - alpha0 / (d[i] * d[i]) - alpha1 / d[i];
     s += r * r;
   }
-  const auto fit = fitSeed004ClosedForm(d, y, 1);
+  const auto fit = fitAlhashimi2016ClosedForm(d, y, 1);
   ASSERT_EQ(fit.alpha.size(), 2u);
   EXPECT_NEAR(fit.alpha[0], alpha0, 1e-10);
   EXPECT_NEAR(fit.alpha[1], alpha1, 1e-10);
@@ -96,7 +96,7 @@ struct Draws {
   std::vector<double> d, y;
 };
 
-Draws drawSeed004(const RangeModel& m, int n, std::uint64_t seed) {
+Draws drawAlhashimi2016(const RangeModel& m, int n, std::uint64_t seed) {
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(0.3, 4.5);
   std::normal_distribution<double> g(0.0, 1.0);
@@ -109,16 +109,16 @@ Draws drawSeed004(const RangeModel& m, int n, std::uint64_t seed) {
   return out;
 }
 
-TEST(Seed004ML, RecoversTheModelAndImprovesOnTheClosedFormLikelihood) {
+TEST(Alhashimi2016ML, RecoversTheModelAndImprovesOnTheClosedFormLikelihood) {
   RangeModel m;
   m.bias.alpha = {0.0525, 0.8838, 0.0584};
   m.noise.kind = NoiseKind::squared;
   m.noise.sigma_e = 0.004;
   for (std::uint64_t seed = 1; seed <= 5; ++seed) {
     SCOPED_TRACE(seed);
-    const auto draws = drawSeed004(m, 3000, seed);
-    const auto cf = fitSeed004ClosedForm(draws.d, draws.y, 2);
-    const auto ml = fitSeed004ML(draws.d, draws.y, cf.alpha);
+    const auto draws = drawAlhashimi2016(m, 3000, seed);
+    const auto cf = fitAlhashimi2016ClosedForm(draws.d, draws.y, 2);
+    const auto ml = fitAlhashimi2016ML(draws.d, draws.y, cf.alpha);
     // ML maximises the likelihood of model (1): never worse than its start.
     EXPECT_LE(ml.neg_log_likelihood, cf.neg_log_likelihood + 1e-9);
     EXPECT_NEAR(ml.sigma_e, m.noise.sigma_e, 0.1 * m.noise.sigma_e);
@@ -126,14 +126,14 @@ TEST(Seed004ML, RecoversTheModelAndImprovesOnTheClosedFormLikelihood) {
   }
 }
 
-TEST(NoisePolynomial, RecoversSeed000Beta) {
+TEST(NoisePolynomial, RecoversThePolynomialNoiseOfAlhashimi2021) {
   RangeModel m;
   m.bias.alpha = {0.0525, 0.8838, 0.0584};
   m.noise.kind = NoiseKind::polynomial;
   m.noise.beta = {0.01, 0.02};  // sigma(d) = 0.01 + 0.02 d
   for (std::uint64_t seed = 1; seed <= 5; ++seed) {
     SCOPED_TRACE(seed);
-    const auto draws = drawSeed004(m, 5000, seed);
+    const auto draws = drawAlhashimi2016(m, 5000, seed);
     std::vector<double> r(draws.d.size());
     for (std::size_t i = 0; i < r.size(); ++i) r[i] = draws.y[i] - m.bias(draws.d[i]);
     const auto beta = fitNoisePolynomial(draws.d, r, 1);

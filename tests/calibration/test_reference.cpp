@@ -1,4 +1,4 @@
-// Calibration against measured distances (seed 004 section 5): the known-distance readings of
+// Calibration against measured distances (Alhashimi et al. 2016 section 5): the known-distance readings of
 // poles and walls, the fit with its stop-clustered standard errors, the noise exponent test,
 // and the matching of reference entries to targets.
 
@@ -95,7 +95,7 @@ TEST(ReferenceCalibration, RecoversTheBiasAndIts95PercentIntervalsCoverTheTruth)
     }
   }
   for (std::size_t i = 0; i < at.size(); ++i) EXPECT_GE(covered[i], 34) << "coverage at " << at[i] << " m";
-  EXPECT_GE(exponent_two, 36) << "seed 004's test should name the squared law it was simulated with";
+  EXPECT_GE(exponent_two, 36) << "Alhashimi et al. 2016's test should name the squared law it was simulated with";
 }
 
 TEST(ReferenceCalibration, NoiseExponentTestNamesConstantNoiseOfATimeOfFlightSensor) {

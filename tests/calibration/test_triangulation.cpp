@@ -1,4 +1,4 @@
-// Triangulation (seed 000 section 3.1): exact on noise-free data, equivariant under rigid
+// Triangulation (Alhashimi et al. 2021 section 3.1): exact on noise-free data, equivariant under rigid
 // motions, the eq. 25 weights on noisy data against a hand-built weighted least squares,
 // degenerate geometry reported.
 
@@ -170,7 +170,7 @@ HandBuilt handBuiltWls(const LandmarkObservations& obs, int id, double sigma_s, 
     const double theta = p.yaw_rad + std::atan2(st.s, st.c);
     const double mean = st.sum / st.n;
     const double var = (st.sum2 - st.n * mean * mean) / (st.n - 1);
-    w(i) = 1.0 / (sigma_s * sigma_s) + 1.0 / (sigma_theta * sigma_theta * var);  // seed 000 eq. 25
+    w(i) = 1.0 / (sigma_s * sigma_s) + 1.0 / (sigma_theta * sigma_theta * var);  // Alhashimi et al. 2021 eq. 25
     A(i, 0) = std::sqrt(w(i)) * std::sin(theta);
     A(i, 1) = -std::sqrt(w(i)) * std::cos(theta);
     rhs(i) = std::sqrt(w(i)) * (std::sin(theta) * p.x_m - std::cos(theta) * p.y_m);

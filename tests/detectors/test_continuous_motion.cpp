@@ -1,4 +1,4 @@
-// Issue 17, items 2 and 5, checked against the simulator's truth beam by beam:
+// Driving and thin poles, checked against the simulator's truth beam by beam:
 //  - continuous motion: a robot driving loops among six thin poles without stopping (every scan
 //    its own pose, odometry drifting); the tracks keep their ids through hundreds of poses and
 //    when a pole comes back into view after a loop;

@@ -1,7 +1,7 @@
 #pragma once
 // Simulated sequences with one effect hidden in them (or none), for the diagnosis tests and
-// bench/diagnose_accuracy. The paper field of seed 000 section 4.3 at the landmark level: five
-// poles of 0.12 m (radius published), ten stops of 0.30 m, ten scans per stop, seed 004's bias
+// bench/diagnose_accuracy. The paper field of Alhashimi et al. 2021 section 4.3 at the landmark level: five
+// poles of 0.12 m (radius published), ten stops of 0.30 m, ten scans per stop, Alhashimi et al. 2016's bias
 // and squared noise (2 cm at 3 m), stop positions scattered by 2 cm, sighting bearings by 0.2
 // degree, and the room's walls behind the poles (the background of mixed pixels). Which size
 // (and sign) the effect takes is drawn from the case seed; the tests only look at the name.

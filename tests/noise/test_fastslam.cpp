@@ -1,4 +1,4 @@
-// FastSLAM (seed 003 ch. 3.1-3.2) on simulated observations with known truth.
+// FastSLAM (Sharma 2020 ch. 3.1-3.2) on simulated observations with known truth.
 
 #include <cmath>
 

@@ -1,4 +1,4 @@
-// Hill climbing (seed 003 ch. 3.4) and the KL noise-consistency objective it climbs.
+// Hill climbing (Sharma 2020 ch. 3.4) and the KL noise-consistency objective it climbs.
 
 #include <cmath>
 #include <random>

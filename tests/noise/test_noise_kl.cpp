@@ -1,4 +1,4 @@
-// The KL divergence of seed 003 ch. 3.3 (closed form) and the fit of the predicted Gaussian.
+// The KL divergence of Sharma 2020 ch. 3.3 (closed form) and the fit of the predicted Gaussian.
 
 #include <cmath>
 #include <vector>

@@ -154,8 +154,8 @@ TEST(NoiseMl, RecoversVariancesAndBiasesWithinFourStandardErrors) {
 }
 
 TEST(NoiseMl, WithTheProcessNoiseGivenEstimatesTheSensorsAndKeepsTheProcessAsGiven) {
-  // Seed 003's experiments tell the estimator the true process noise; only the sensors are unknown.
-  const SensorNoise s0{0.0, 0.3, 0.0, 0.4}, s1{0.0, 0.5, 0.0, 0.3};  // seed 003 experiment 3
+  // Sharma 2020's experiments tell the estimator the true process noise; only the sensors are unknown.
+  const SensorNoise s0{0.0, 0.3, 0.0, 0.4}, s1{0.0, 0.5, 0.0, 0.3};  // Sharma 2020 experiment 3
   const ProcessNoise q{0.01, 0.002, 0.001};
   const ObservationScene scene = test::squareScene(4, s0, s1, q);
   for (std::uint64_t seed = 1; seed <= 4; ++seed) {
@@ -194,7 +194,7 @@ TEST(NoiseMl, BeyondTheInformationCapTheStandardErrorsAreDiagonalAndTheEstimateI
 }
 
 TEST(NoiseMl, ZeroProcessNoiseIsEstimatedNearZeroAndSensorVariancesStayUnbiased) {
-  const SensorNoise s0{0.0, 0.3, 0.0, 0.4}, s1{0.0, 0.5, 0.0, 0.6};  // seed 003 experiment 2
+  const SensorNoise s0{0.0, 0.3, 0.0, 0.4}, s1{0.0, 0.5, 0.0, 0.6};  // Sharma 2020 experiment 2
   const ObservationScene scene = test::squareScene(4, s0, s1, ProcessNoise{});
   const auto sim = simulation::simulateObservations(scene, 11);
   const MlNoiseResult r = estimateNoiseMl(makeNoiseProblem(sim.observations, sim.odometry), MlNoiseConfig{});

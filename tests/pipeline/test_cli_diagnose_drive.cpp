@@ -267,7 +267,7 @@ TEST(CliDiagnoseDriving, TheOdometrysNoiseIsFittedFromTheDrivesOwnSteps) {
 }
 
 TEST(CliDiagnoseDriving, ANoiseLawFlatterThanTheSquaredOneIsNamedOnThinPolesAtTheDefaultReplicas) {
-  // The noise grows as f(d)^k, k 0.5-1, instead of seed 004's f(d)^2, its scale matched to the
+  // The noise grows as f(d)^k, k 0.5-1, instead of Alhashimi et al. 2016's f(d)^2, its scale matched to the
   // squared law's at f(d) = 1.8 m, near where this drive sees its poles: the two laws part only at
   // its nearest and farthest readings. With 5 bootstrap replicas 4 of 20 such drives were named
   // none (the statistic's p from a Student t of 4 degrees of freedom); with diagnose's default of

@@ -68,7 +68,7 @@ TEST(CliDiagnoseMeasured, RplidarRecordingIsAStaticRoom) {
   // The named cause must be one of the two noise departures, and both must be significant.
   const std::string cause = j["primary_cause"];
   EXPECT_TRUE(cause == "heavy_tails" || cause == "incidence_noise") << cause;
-  // Issue 20: the tails are explained by the beams' covariates, and the cause named is physical.
+  // The tails are explained by the beams' covariates, and the cause named is physical.
   ASSERT_TRUE(j["tails"].is_object());
   EXPECT_TRUE(j["tails"]["fitted"].get<bool>());
   EXPECT_NE(j["tails"]["cause"], "unknown");

@@ -313,7 +313,7 @@ TEST(CliReference, SurveyedLandmarksAndStopsAreHeldFixed) {
   EXPECT_FALSE(fs::exists(dir / "far_model.json"));
 }
 
-// Distances measured at two of ten stops (too few for the fit of Alhashimi et al. 2016 alone) join the
+// Distances measured at two of ten stops (too few for Alhashimi et al. 2016's fit alone) join the
 // self-calibration of the whole sequence (--reference-fit auto picks it): on the paper's field
 // with every step 6 % longer than the odometry says and the pole radius unknown, the tape fixes
 // the scale the self-calibration cannot see. The truth plays the tape (exact distances).
@@ -443,7 +443,7 @@ TEST(CliReferenceHokuyo, FitOnHalfTheTapeDistancesPredictsTheOtherHalfBothWaysRo
     const auto cal = runCli("calibrate -q " + fitted + " --reference " + fitted + ".json --radius 0.045 --out " + model);
     ASSERT_EQ(cal.exit_code, 0) << cal.err;
     const auto m = json(model);
-    // A time-of-flight lidar: the noise-exponent test of Alhashimi et al. 2016 finds noise that does not grow with the range.
+    // A time-of-flight lidar: Alhashimi et al. 2016's test finds noise that does not grow with the range.
     EXPECT_EQ(m["noise_estimators"]["exponent_test"]["best"], 0);
     EXPECT_EQ(m["noise"]["kind"], "constant");
     // The sensor departs from any polynomial by millimetres (docs/results/real-sensors.md).

@@ -482,12 +482,10 @@ TEST(ObservationIds, AnyIntegerSensorIdsAreLabelsKeptInTheResult) {
   EXPECT_EQ(labelled["data"]["landmarks"], plain["data"]["landmarks"]);
 }
 
-TEST(Words, PluralAndSeedNames) {
+TEST(Words, PluralsAndGnuplotStrings) {
   EXPECT_EQ(pipeline::plural(1, "stop"), "1 stop");
   EXPECT_EQ(pipeline::plural(0, "stop"), "0 stops");
   EXPECT_EQ(pipeline::plural(2, "stop"), "2 stops");
-  EXPECT_EQ(pipeline::userWords("aic (seed 004 ML); seed 000 eq. 31; seed 003"),
-            "aic (Alhashimi et al. 2016 ML); Alhashimi et al. 2021 eq. 31; the noise-consistency method");
   EXPECT_EQ(pipeline::gnuplotString("scan_1.pcd"), "\"scan_1.pcd\"");
   EXPECT_EQ(pipeline::gnuplotString("scan_1.pcd", true), "\"scan\\\\_1.pcd\"");
 }

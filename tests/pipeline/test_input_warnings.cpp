@@ -69,7 +69,7 @@ TEST(BadInputWarnings, ScansWithDifferentBeamCountsCalibrateWithAWarningAndAMode
 }
 
 TEST(BadInputGeometry, LandmarksAllOnOneSideOfThePathStillCalibrate) {
-  // Seed 000 places poles on both sides of the path; on one side only, the bearing lines from
+  // Alhashimi et al. 2021 places poles on both sides of the path; on one side only, the bearing lines from
   // the stops still cross at a wide angle, so this is not degenerate: the bias is recovered.
   TempDir dir;
   const Ws w{dir / "in", dir / "out", fixtures()};

@@ -1,4 +1,4 @@
-// The observation-level simulator (seed 003's setting): readings, noise statistics, streams.
+// The observation-level simulator (Sharma 2020's setting): readings, noise statistics, streams.
 
 #include <cmath>
 

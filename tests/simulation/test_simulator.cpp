@@ -69,13 +69,13 @@ NoiseModel squaredNoise() {
 NoiseModel polynomialNoise() {
   NoiseModel n;
   n.kind = NoiseKind::polynomial;
-  n.beta = {0.05 * 0.0525, 0.05 * 0.8838, 0.05 * 0.0584};  // seed 000 section 4.1: beta = 0.05 alpha
+  n.beta = {0.05 * 0.0525, 0.05 * 0.8838, 0.05 * 0.0584};  // Alhashimi et al. 2021 section 4.1: beta = 0.05 alpha
   return n;
 }
 
 INSTANTIATE_TEST_SUITE_P(BothForms, NoiseStatistics,
-                         ::testing::Values(NoiseCase{"seed004_squared", squaredNoise()},
-                                           NoiseCase{"seed000_polynomial", polynomialNoise()}),
+                         ::testing::Values(NoiseCase{"alhashimi2016_squared", squaredNoise()},
+                                           NoiseCase{"alhashimi2021_polynomial", polynomialNoise()}),
                          [](const auto& p) { return std::string(p.param.name); });
 
 TEST(Simulator, NoiseFreeReadingsAreTheBiasOfTheTrueRange) {

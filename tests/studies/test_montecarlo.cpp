@@ -1,4 +1,4 @@
-// Monte Carlo study (seed 000 Figs. 7-11): layouts keep their constraints, per-stop averaging is
+// Monte Carlo study (Alhashimi et al. 2021 Figs. 7-11): layouts keep their constraints, per-stop averaging is
 // exact, quartiles follow their definition, the study is deterministic whatever the thread count,
 // and a tiny study's statistics agree with a direct computation done here from the simulator and
 // the estimators.
@@ -508,7 +508,7 @@ std::vector<std::map<std::string, double>> csvRows(const std::string& csv) {
 }
 
 TEST(Study, Fig9ClaimsHoldWhereWeReproduceThemAndFailWhereWeDoNot) {
-  // Seed 000 on Fig. 9: raising sigma_theta and sigma_s "does not lead to abrupt decays". In
+  // Alhashimi et al. 2021 on Fig. 9: raising sigma_theta and sigma_s "does not lead to abrupt decays". In
   // sigma_s this holds for the closed form (docs/results/montecarlo.md, L = 5, sigma_theta 1 deg:
   // 16.3 at 0.1 cm, 11.9 at 3 cm); in sigma_theta it does not (about 1 at 5 deg: the calibration no
   // longer helps). Both are asserted, so that a change either way is seen; and at low noise the

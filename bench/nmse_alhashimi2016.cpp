@@ -1,22 +1,22 @@
-// Seed 004's normalised MSE (eqs. 31-32: 0.0789 raw -> 0.0046 calibrated, a factor 17.15) on
+// Alhashimi et al. 2016's normalised MSE (eqs. 31-32: 0.0789 raw -> 0.0046 calibrated, a factor 17.15) on
 // simulated sensors (docs/results/normalised-mse.md).
 //
-// Seed 004 section 6: a training set and a test set of readings at known distances (a robot
+// Alhashimi et al. 2016 section 6: a training set and a test set of readings at known distances (a robot
 // moving towards a target with piecewise constant speeds: batches of readings at constant
 // distance); the calibration fits y = f(d) + f(d)^2 e (eq. 1) by maximum likelihood with the order
 // by AIC (section 5), and the test readings are corrected by the LS inversion (eq. 30). Here: B
 // batches at distances uniform over [d_min, d_max], R readings each, for training and again for
 // testing; readings outside the sensor's window [0.2, 6] m are not reported (as the sensor
-// does). The calibration is calibrateAgainstTruth with the squared noise law (seed 004's
+// does). The calibration is calibrateAgainstTruth with the squared noise law (Alhashimi et al. 2016's
 // estimator); its test NMSE is averaged over many simulated datasets (mean and standard error).
 //
 // The text gives neither the bias polynomial nor sigma_e of the sensor it measured. Sensors:
-//   - lidarcal's own simulated sensor (data/scenes/paper_field.json: seed 000's alpha, 2 cm at 3 m);
-//   - seed 000's sensor (section 4.1: alpha, beta = 0.05 alpha, the "same lidar sensor" as seed 004);
-//   - seed 004-like sensors: raw NMSE set to the paper's 0.0789 (the one number the text gives about
-//     the raw sensor) by the slope alpha_1 (seed 000's alpha_0 and alpha_2 kept) or by a pure scale
-//     error, with seed 004's noise law sigma_e f(d)^2 at 2.5-10 % of the reading at 3 m.
-//   build/bench/seed004_nmse [--datasets 200] [--batches 40] [--readings 25] [--d-min 0.5] [--d-max 4]
+//   - lidarcal's own simulated sensor (data/scenes/paper_field.json: Alhashimi et al. 2021's alpha, 2 cm at 3 m);
+//   - Alhashimi et al. 2021's sensor (section 4.1: alpha, beta = 0.05 alpha, the "same lidar sensor" as Alhashimi et al. 2016);
+//   - Alhashimi et al. 2016-like sensors: raw NMSE set to the paper's 0.0789 (the one number the text gives about
+//     the raw sensor) by the slope alpha_1 (Alhashimi et al. 2021's alpha_0 and alpha_2 kept) or by a pure scale
+//     error, with Alhashimi et al. 2016's noise law sigma_e f(d)^2 at 2.5-10 % of the reading at 3 m.
+//   build/bench/nmse_alhashimi2016 [--datasets 200] [--batches 40] [--readings 25] [--d-min 0.5] [--d-max 4]
 
 #include <cmath>
 #include <cstdio>
@@ -68,7 +68,7 @@ struct Outcome {
   int order = -1;
 };
 
-/// Seed 004's calibration on a training draw, scored on a test draw.
+/// Alhashimi et al. 2016's calibration on a training draw, scored on a test draw.
 Outcome trial(const RangeModel& sensor, const Setup& s, std::uint64_t seed) {
   auto rng = makeRng(seed, 1);
   const Draw train = draw(sensor, s, rng), test = draw(sensor, s, rng);
@@ -76,7 +76,7 @@ Outcome trial(const RangeModel& sensor, const Setup& s, std::uint64_t seed) {
   for (std::size_t i = 0; i < train.d.size(); ++i) pairs.push_back({train.d[i], train.y[i], static_cast<int>(i % 3)});
   calibration::CalibrationConfig cc;
   cc.max_order = 3;
-  cc.noise = NoiseKind::squared;  // seed 004 eq. 1: the ML fit of section 5 and the order by AIC on it
+  cc.noise = NoiseKind::squared;  // Alhashimi et al. 2016 eq. 1: the ML fit of section 5 and the order by AIC on it
   cc.closed_form_rule = calibration::OrderRule::aic;
   const CalibrationModel m = calibration::calibrateAgainstTruth(pairs, cc, {}, s.window_min, s.window_max);
   Outcome o;
@@ -109,7 +109,7 @@ double expectedRawNmse(const RangeModel& sensor, const Setup& s) {
   return sum / kSteps;
 }
 
-/// seed 004's noise law with the given fraction of the reading at 3 m.
+/// Alhashimi et al. 2016's noise law with the given fraction of the reading at 3 m.
 void squaredNoise(RangeModel& sensor, double fraction_at_3m) {
   const double f3 = sensor.bias(3.0);
   sensor.noise = NoiseModel{};
@@ -117,8 +117,8 @@ void squaredNoise(RangeModel& sensor, double fraction_at_3m) {
   sensor.noise.sigma_e = fraction_at_3m / f3;
 }
 
-/// The sensor `shape` ("slope": seed 000's alpha_0 and alpha_2, alpha_1 free; "scale": f = (1 + c) d)
-/// whose expected raw NMSE is `target`, with seed 004's noise at `fraction_at_3m` (bisection).
+/// The sensor `shape` ("slope": Alhashimi et al. 2021's alpha_0 and alpha_2, alpha_1 free; "scale": f = (1 + c) d)
+/// whose expected raw NMSE is `target`, with Alhashimi et al. 2016's noise at `fraction_at_3m` (bisection).
 RangeModel matchedSensor(const std::string& shape, double target, double fraction_at_3m, const Setup& s) {
   auto make = [&](double c) {
     RangeModel m;
@@ -179,7 +179,7 @@ void row(const std::string& name, const RangeModel& sensor, const Setup& s, int 
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app("seed 004's normalised MSE on simulated sensors");
+  CLI::App app("Alhashimi et al. 2016's normalised MSE on simulated sensors");
   Setup s;
   int datasets = 200;
   app.add_option("--datasets", datasets, "simulated training + test sets per sensor");
@@ -199,14 +199,14 @@ int main(int argc, char** argv) {
   ours.noise.kind = NoiseKind::squared;
   ours.noise.sigma_e = 0.0019176;
   row("lidarcal's simulated sensor (paper_field.json)", ours, s, datasets);
-  RangeModel seed000;
-  seed000.bias.alpha = {0.0525, 0.8838, 0.0584};
-  seed000.noise.kind = NoiseKind::polynomial;
-  seed000.noise.beta = {0.05 * 0.0525, 0.05 * 0.8838, 0.05 * 0.0584};
-  row("seed 000's sensor (beta = 0.05 alpha)", seed000, s, datasets);
+  RangeModel paper_sensor;
+  paper_sensor.bias.alpha = {0.0525, 0.8838, 0.0584};
+  paper_sensor.noise.kind = NoiseKind::polynomial;
+  paper_sensor.noise.beta = {0.05 * 0.0525, 0.05 * 0.8838, 0.05 * 0.0584};
+  row("Alhashimi et al. 2021's sensor (beta = 0.05 alpha)", paper_sensor, s, datasets);
   for (double fraction : {0.025, 0.05, 0.075, 0.09, 0.10})
-    row("raw NMSE 0.0789 by the slope, seed 004's noise law", matchedSensor("slope", 0.0789, fraction, s), s, datasets);
-  row("raw NMSE 0.0789 by a scale error, seed 004's noise law", matchedSensor("scale", 0.0789, 0.05, s), s, datasets);
-  std::printf("\nSeed 004 (eqs. 31-32): raw 0.0789, calibrated 0.0046 (raw / calibrated 17.15), one test set.\n");
+    row("raw NMSE 0.0789 by the slope, Alhashimi et al. 2016's noise law", matchedSensor("slope", 0.0789, fraction, s), s, datasets);
+  row("raw NMSE 0.0789 by a scale error, Alhashimi et al. 2016's noise law", matchedSensor("scale", 0.0789, 0.05, s), s, datasets);
+  std::printf("\nAlhashimi et al. 2016 (eqs. 31-32): raw 0.0789, calibrated 0.0046 (raw / calibrated 17.15), one test set.\n");
   return 0;
 }
