@@ -6,7 +6,7 @@
 namespace lidarcal {
 namespace {
 
-constexpr std::array<std::pair<StatusCode, const char*>, 21> kNames = {{
+constexpr std::array<std::pair<StatusCode, const char*>, 23> kNames = {{
     {StatusCode::ok, "ok"},
     {StatusCode::too_few_stops, "too_few_stops"},
     {StatusCode::no_baseline, "no_baseline"},
@@ -28,6 +28,8 @@ constexpr std::array<std::pair<StatusCode, const char*>, 21> kNames = {{
     {StatusCode::too_few_scans, "too_few_scans"},
     {StatusCode::too_few_beams, "too_few_beams"},
     {StatusCode::too_few_walls, "too_few_walls"},
+    {StatusCode::not_identifiable, "not_identifiable"},
+    {StatusCode::no_shared_landmark, "no_shared_landmark"},
 }};
 
 }  // namespace

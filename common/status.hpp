@@ -35,6 +35,9 @@ enum class StatusCode {
   too_few_scans,            ///< static data: too few scans from one pose
   too_few_beams,            ///< static data: too few beam directions return often enough
   too_few_walls,            ///< static data: the returns lie on straight surfaces over too narrow a sector
+  // several sensors on one vehicle
+  not_identifiable,         ///< the data leave a mounting (or another parameter) undetermined
+  no_shared_landmark,       ///< a sensor sees no pole another sensor sees, and nothing else ties their frames
 };
 
 /// The code's name as written in model.json and diagnosis.json ("ok", "joint_failed", ...).

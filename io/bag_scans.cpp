@@ -73,7 +73,10 @@ std::string chooseScanTopic(const fs::path& file, const std::vector<BagTopic>& t
 std::vector<std::string> poseTopics(const fs::path& file, const std::vector<BagTopic>& topics, const BagPoseConfig& config,
                                     const BagFlavour& flavour) {
   std::vector<std::string> read;
-  if (config.kind == BagPoseConfig::Kind::none) return read;
+  if (config.kind == BagPoseConfig::Kind::none) {
+    if (!config.vehicle_frame.empty() && findTopic(topics, "/tf_static")) read.emplace_back("/tf_static");  // mountings
+    return read;
+  }
   for (const char* name : {"/tf_static", "/tf"})
     if (findTopic(topics, name) && (config.kind == BagPoseConfig::Kind::tf || std::string(name) == "/tf_static"))
       read.emplace_back(name);
@@ -149,6 +152,27 @@ std::vector<std::string> BagPoses::notes() const {
   return n;
 }
 
+void BagPoses::addRigPoses(const std::string& frame, double stamp_s, RawScan& scan) const {
+  scan.frame_id = frame;
+  scan.vehicle_frame = config_.vehicle_frame == "auto" ? tree_.vehicleFrameOf(frame) : stripSlash(config_.vehicle_frame);
+  scan.mounting.reset();
+  scan.vehicle_pose.reset();
+  if (const auto m = tree_.lookup(scan.vehicle_frame, frame, stamp_s, config_.hold_s)) {
+    const Pose2 p = planarPose(*m);
+    scan.mounting = Mounting{p.x_m, p.y_m, p.yaw_rad, isUpsideDown(*m), m->translation.z()};
+  }
+  std::optional<Transform3> vehicle;
+  if (config_.kind == BagPoseConfig::Kind::tf) vehicle = tree_.lookup(config_.name, scan.vehicle_frame, stamp_s, config_.hold_s);
+  if (config_.kind == BagPoseConfig::Kind::odom) {
+    vehicle = odom_.at(stamp_s, config_.hold_s);
+    if (vehicle && !odom_child_.empty() && odom_child_ != scan.vehicle_frame) {
+      const auto link = tree_.lookup(odom_child_, scan.vehicle_frame, stamp_s, config_.hold_s);
+      vehicle = link ? std::optional<Transform3>(*vehicle * *link) : std::nullopt;
+    }
+  }
+  if (vehicle) scan.vehicle_pose = planarPose(*vehicle);
+}
+
 BagScanSink::BagScanSink(const BagPoseConfig& config, BagPoses& poses, const ScanCallback& on_scan, ImportReport& report)
     : config_(config), poses_(poses), on_scan_(on_scan), report_(report), still_(config.still_m, config.still_rad) {}
 
@@ -164,6 +188,7 @@ bool BagScanSink::offer(RawScan& scan, const std::string& frame_id) {
     upside_down_ = upside_down_ || isUpsideDown(*pose);
     scan.pose = still_.apply(planarPose(*pose));
   }
+  if (!config_.vehicle_frame.empty()) poses_.addRigPoses(stripSlash(frame_id), scan.stamp_s, scan);
   ++report_.scans;
   if (on_scan_(scan)) return true;
   report_.stopped_early = true;

@@ -36,6 +36,11 @@ struct BagPoseConfig {
   double hold_s = 0.1;         ///< a scan this close (s) before the first or after the last pose sample takes that sample; default 0.1
   double still_m = 0.01;       ///< poses within this distance (m) ...
   double still_rad = 0.00872664626;  ///< ... and this heading (rad, default 0.5 deg) of the stop's first pose are that pose
+  /// Rig import: also the pose of this frame (the vehicle's) and the scan frame's mounting on it
+  /// (RawScan::vehicle_pose, RawScan::mounting; /tf_static is read even without a pose source).
+  /// "auto": the frame just below the first moving (/tf) link above the scan frame, or the top of
+  /// its static chain. Default empty: none.
+  std::string vehicle_frame;
 };
 
 struct RosbagConfig {
@@ -102,6 +107,8 @@ class BagPoses {
   std::optional<Transform3> at(const std::string& frame, double stamp_s, std::string& why);
   /// Notes for the report.
   std::vector<std::string> notes() const;
+  /// Rig import: the vehicle's pose and the scan frame's mounting at `stamp_s` into `scan`.
+  void addRigPoses(const std::string& frame, double stamp_s, RawScan& scan) const;
 
  private:
   BagPoseConfig config_;

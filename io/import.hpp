@@ -10,7 +10,10 @@
 #include <string>
 #include <vector>
 
+#include <optional>
+
 #include "common/pose2.hpp"
+#include "common/rig.hpp"
 
 namespace lidarcal::io {
 
@@ -25,6 +28,13 @@ struct RawScan {
   double stamp_s = std::numeric_limits<double>::quiet_NaN();     ///< time stamp, seconds (informational; NaN when absent)
   std::size_t source_index = 0;      ///< index of the scan in the recording (0-based, before --every)
   double progress = 0.0;             ///< fraction of the input read so far, 0..1 (for progress display only)
+  /// Rig import (BagPoseConfig::vehicle_frame set): the vehicle frame's pose in the fixed frame at
+  /// this scan's stamp (unset without --pose or when tf has none), the scan frame's mounting on
+  /// the vehicle (tf, tf_static; unset when they do not connect), and the frames themselves.
+  std::optional<Pose2> vehicle_pose;
+  std::optional<Mounting> mounting;
+  std::string frame_id;              ///< the scan's frame (bags; empty otherwise)
+  std::string vehicle_frame;         ///< the vehicle frame the mounting is in (rig import)
 };
 
 /// Receives the scans one at a time; returns false to stop reading (enough scans).

@@ -158,12 +158,21 @@ ImportReport readRosbag(const fs::path& file, const RosbagConfig& config, const 
 
 BagRewriteReport rewriteRosbag(const fs::path& in, const fs::path& out, const std::string& wanted,
                                const RangesCallback& on_scan) {
+  return rewriteRosbagTopics(in, out, {wanted}, [&](const std::string&, std::vector<float>& ranges, const RawScan& scan) {
+    on_scan(ranges, scan);
+  });
+}
+
+BagRewriteReport rewriteRosbagTopics(const fs::path& in, const fs::path& out, const std::vector<std::string>& wanted,
+                                     const TopicRangesCallback& on_scan) {
   rosbag::Bag bag;
   openBag(bag, in);
   BagRewriteReport report;
   std::string where;
   try {
-    report.topic = chooseScanTopic(in, topicsOf(bag), wanted, kRos1Flavour);
+    std::vector<std::string> chosen;
+    for (const std::string& w : wanted) chosen.push_back(chooseScanTopic(in, topicsOf(bag), w, kRos1Flavour));
+    report.topic = chosen.front();
     rosbag::Bag written;
     written.open(out.string(), rosbag::bagmode::Write);
     rosbag::View all(bag);
@@ -171,14 +180,14 @@ BagRewriteReport rewriteRosbag(const fs::path& in, const fs::path& out, const st
     RawScan scan;
     for (const rosbag::MessageInstance& m : all) {
       where = "topic " + m.getTopic() + ", message " + std::to_string(report.messages);
-      if (m.getTopic() == report.topic) {
+      if (std::find(chosen.begin(), chosen.end(), m.getTopic()) != chosen.end()) {
         const sensor_msgs::LaserScan::Ptr msg = m.instantiate<sensor_msgs::LaserScan>();
         if (!msg)
           throw InputError(in.string(), where, "is not a " + std::string(kLaserScanType) + " (type " + m.getDataType() + ")",
                            "choose another topic");
         fillRawScan(viewOf(*msg), RosbagConfig{}, scan);
         scan.source_index = report.scans++;
-        on_scan(msg->ranges, scan);
+        on_scan(m.getTopic(), msg->ranges, scan);
         written.write(m.getTopic(), m.getTime(), *msg, m.getConnectionHeader());
       } else {
         written.write(m.getTopic(), m.getTime(), m, m.getConnectionHeader());  // the serialised bytes as they are

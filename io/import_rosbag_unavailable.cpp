@@ -26,4 +26,9 @@ BagRewriteReport rewriteRosbag(const std::filesystem::path& in, const std::files
   unavailable(in);
 }
 
+BagRewriteReport rewriteRosbagTopics(const std::filesystem::path& in, const std::filesystem::path&,
+                                     const std::vector<std::string>&, const TopicRangesCallback&) {
+  unavailable(in);
+}
+
 }  // namespace lidarcal::io

@@ -65,6 +65,10 @@ Discrepancy readDiscrepancy(const JsonView& v) {
 }  // namespace
 
 void writeModel(const std::filesystem::path& file, const CalibrationModel& m) {
+  writeTextAtomically(file, modelJson(m).dump(2) + "\n");
+}
+
+ojson modelJson(const CalibrationModel& m) {
   ojson orders = ojson::array();
   for (const auto& o : m.orders)
     orders.push_back(ojson{{"order", o.order},
@@ -136,15 +140,19 @@ void writeModel(const std::filesystem::path& file, const CalibrationModel& m) {
     for (const auto& [k, v] : m.effects) fx[k] = number(v);
     j["effects"] = fx;
   }
-  writeTextAtomically(file, j.dump(2) + "\n");
+  return j;
 }
 
-CalibrationModel readModel(const std::filesystem::path& file) {
-  const nlohmann::json j = readJsonFile(file);
-  const JsonView root(file.string(), j);
+CalibrationModel readModel(const std::filesystem::path& file) { return modelFromJson(readJsonFile(file), file.string()); }
+
+CalibrationModel modelFromJson(const nlohmann::json& j, const std::string& file, const std::string& path) {
+  const JsonView root(file, j, path);
   root.requireObject();
   CalibrationModel m;
   m.format = root.getString("format", "");
+  if (m.format == "lidarcal-rig-model/1")
+    root.fail("format", "holds one model per sensor of a rig (\"lidarcal-rig-model/1\"): pick one with --sensor NAME "
+                        "(`correct`, `export`) or the node's sensor parameter");
   if (m.format != "lidarcal-model/1")
     root.fail("format", "not a lidarcal model file (expected \"lidarcal-model/1\"); create one with `lidarcal calibrate`");
   m.method = root.getString("method", "");

@@ -97,6 +97,16 @@ std::vector<std::string> TransformTree::frames() const {
   return {names.begin(), names.end()};
 }
 
+std::string TransformTree::vehicleFrameOf(const std::string& frame) const {
+  std::string current = frame;
+  for (std::size_t depth = 0; depth <= parent_of_.size(); ++depth) {
+    const auto it = parent_of_.find(current);
+    if (it == parent_of_.end() || !it->second.track.empty()) return current;
+    current = it->second.parent;
+  }
+  return current;
+}
+
 Pose2 StillPoseFilter::apply(const Pose2& p) {
   if (held_ && std::hypot(p.x_m - held_->x_m, p.y_m - held_->y_m) <= tol_m_ &&
       std::abs(wrapAngle(p.yaw_rad - held_->yaw_rad)) <= tol_rad_)

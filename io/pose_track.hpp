@@ -62,6 +62,9 @@ class TransformTree {
                                    std::string* why = nullptr) const;
   /// Frames known (parents and children), sorted, for messages.
   std::vector<std::string> frames() const;
+  /// The frame a sensor `frame` rides on: the one just below the first dynamic (/tf) link met
+  /// walking up from `frame`, or the top of its chain when every link is static.
+  std::string vehicleFrameOf(const std::string& frame) const;
 
  private:
   struct Edge {

@@ -19,8 +19,11 @@ namespace lidarcal::io {
 /// `scan` is the message as the importer reads it (angles, limits, stamp), for checks.
 using RangesCallback = std::function<void(std::vector<float>& ranges_m, const RawScan& scan)>;
 
+/// The same with the message's topic, for a rewrite of several topics.
+using TopicRangesCallback = std::function<void(const std::string& topic, std::vector<float>& ranges_m, const RawScan& scan)>;
+
 struct BagRewriteReport {
-  std::string topic;            ///< the LaserScan topic whose ranges went through the callback
+  std::string topic;            ///< the (first) LaserScan topic whose ranges went through the callback
   std::size_t messages = 0;     ///< messages written (all topics)
   std::size_t connections = 0;  ///< connections of the input (each written with its header)
   std::size_t scans = 0;        ///< LaserScan messages passed to the callback
@@ -30,5 +33,10 @@ struct BagRewriteReport {
 /// only LaserScan topic (as readRosbag). Throws InputError for an unreadable bag or topic.
 BagRewriteReport rewriteRosbag(const std::filesystem::path& in, const std::filesystem::path& out, const std::string& topic,
                                const RangesCallback& on_scan);
+
+/// The same for the ranges of every topic in `topics` (each checked as `topic` above; several
+/// sensors of one vehicle, each with its own model).
+BagRewriteReport rewriteRosbagTopics(const std::filesystem::path& in, const std::filesystem::path& out,
+                                     const std::vector<std::string>& topics, const TopicRangesCallback& on_scan);
 
 }  // namespace lidarcal::io

@@ -18,6 +18,7 @@
 #include "pipeline/model_text.hpp"
 #include "calibration/truth_evaluation.hpp"
 #include "pipeline/reference_stage.hpp"
+#include "pipeline/cmd_rig.hpp"
 #include "pipeline/stages.hpp"
 #include "pipeline/ways_forward.hpp"
 #include "pipeline/words.hpp"
@@ -30,6 +31,7 @@ struct CalibrateCommand {
   std::string seq, out, truth, frame = "true", report, reference, reference_fit = "auto";
   bool overwrite = false;
   std::shared_ptr<CalibrationOptions> options = std::make_shared<CalibrationOptions>();
+  RigCalibrateSettings rig;  // a rig sequence's own options
 };
 
 /// --reference-fit: distances alone (Alhashimi et al. 2016 section 5) or inside the self-calibration. auto:
@@ -99,6 +101,17 @@ SequenceCalibration calibrateWithMeasurements(const CalibrateCommand& c, const i
 }
 
 void runCalibrate(const CalibrateCommand& c) {
+  if (io::isRigDirectory(c.seq)) {
+    if (!c.truth.empty() || !c.reference.empty() || !c.report.empty())
+      throw InputError(c.seq, "--truth/--reference/--report", "are for one sensor's sequence, not a rig",
+                       "calibrate one sensor's directory of the rig with them");
+    RigCalibrateSettings rig = c.rig;
+    rig.dir = c.seq;
+    rig.out = c.out;
+    rig.overwrite = c.overwrite;
+    rig.options = *c.options;
+    return runRigCalibrate(rig);
+  }
   io::checkOutsideInput(c.seq, c.out);
   io::checkOutputFile(c.out, c.overwrite);
   if (!c.report.empty()) io::checkOutsideInput(c.seq, c.report);
@@ -188,6 +201,20 @@ void addCalibrateCommand(CLI::App& app) {
       ->excludes(truth);
   sub->add_flag("--overwrite", c->overwrite, "Replace --out if it exists");
   addCalibrationOptions(sub, c->options);
+  sub->add_option("--rig-frame", c->rig.frame,
+                  "Rig sequence: the frame of the mountings: vehicle (needs recorded poses and a turn), relative (the "
+                  "reference sensor held at its tf_static design) or auto")
+      ->check(CLI::IsMember({"auto", "vehicle", "relative"}))
+      ->capture_default_str();
+  sub->add_option("--reference-sensor", c->rig.reference, "Rig sequence: the reference sensor (default: the first)");
+  sub->add_option("--min-intensity", c->rig.min_intensity,
+                  "Rig sequence: points returning less intensity read as no return (retro-reflective poles stand out; "
+                  "0: off)")
+      ->capture_default_str();
+  sub->add_option("--associate", c->rig.associate_m,
+                  "Rig sequence: a detection within this many metres of a pole (designed mountings, vehicle poses) is "
+                  "that pole")
+      ->capture_default_str();
   sub->callback([c] { runCalibrate(*c); });
 }
 

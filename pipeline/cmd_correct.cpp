@@ -12,8 +12,11 @@
 #include "io/detect_format.hpp"
 #include "io/import_rosbag.hpp"
 #include "io/model_io.hpp"
+#include "io/rig_model_io.hpp"
 #include "pipeline/bag2_correct.hpp"
 #include "pipeline/bag_correct.hpp"
+#include "pipeline/cmd_rig.hpp"
+#include "pipeline/rig_correct.hpp"
 #include "pipeline/cli_options.hpp"
 #include "pipeline/commands.hpp"
 #include "pipeline/model_text.hpp"
@@ -53,12 +56,12 @@ void printStats(const CorrectionStats& stats, const std::string& out, const Cali
 
 /// correct IN.bag --out OUT.bag: every message copied, the topic's ranges corrected.
 void correctBag(const std::string& in, const std::string& model_file, const std::string& out, const std::string& topic,
-                const CorrectionOptions& c, bool overwrite, bool force) {
+                const CorrectionOptions& c, bool overwrite, bool force, const std::string& sensor) {
   checkBagOutputKind(in, out, true);
   io::requireRosbagSupport(in);
   io::checkOutsideInput(in, out);
   io::checkOutputFile(out, overwrite);
-  const CalibrationModel model = io::readModel(model_file);
+  const CalibrationModel model = io::readModelFor(model_file, sensor.empty() ? topic : sensor);
   const calibration::Outside outside = c.outsidePolicy();
   if (const std::string w = checkModelFitsSensor(model, bagSensorFacts(in, topic), model_file, force, outside); !w.empty())
     std::fprintf(stderr, "lidarcal: warning: %s\n", w.c_str());
@@ -72,13 +75,13 @@ void correctBag(const std::string& in, const std::string& model_file, const std:
 
 /// correct IN.mcap|IN.db3|IN_DIR --out the same kind: every message copied, the topic's ranges corrected.
 void correctBag2(const std::string& in, const std::string& model_file, const std::string& out, const std::string& topic,
-                 const CorrectionOptions& c, bool overwrite, bool force) {
+                 const CorrectionOptions& c, bool overwrite, bool force, const std::string& sensor) {
   checkBagOutputKind(in, out, false);
   io::checkOutsideInput(in, out);
   std::error_code ec;
   const bool dir = std::filesystem::is_directory(in, ec);
   if (!dir) io::checkOutputFile(out, overwrite);
-  const CalibrationModel model = io::readModel(model_file);
+  const CalibrationModel model = io::readModelFor(model_file, sensor.empty() ? topic : sensor);
   const calibration::Outside outside = c.outsidePolicy();
   if (const std::string w = checkModelFitsSensor(model, rosbag2SensorFacts(in, topic), model_file, force, outside); !w.empty())
     std::fprintf(stderr, "lidarcal: warning: %s\n", w.c_str());
@@ -96,11 +99,34 @@ void correctBag2(const std::string& in, const std::string& model_file, const std
   printStats(stats, out, model, outside);
 }
 
+/// correct IN.bag --model RIG_MODEL.json: each sensor's topic corrected by its block.
+void correctRigBag(const std::string& in, const std::string& model_file, const std::string& out,
+                   const std::vector<std::string>& keys, const CorrectionOptions& c, bool overwrite, bool force) {
+  checkBagOutputKind(in, out, true);
+  io::requireRosbagSupport(in);
+  io::checkOutsideInput(in, out);
+  io::checkOutputFile(out, overwrite);
+  const io::RigModel model = io::readRigModel(model_file);
+  std::vector<std::string> topics;
+  for (const io::BagTopic& t : io::listBagTopics(in)) topics.push_back(t.topic);
+  const std::vector<std::size_t> blocks = rigBlocksForBag(model, model_file, topics, keys);
+  std::vector<std::string> warnings;
+  std::vector<RigCorrection> done;
+  io::writeAtomically(out, [&](const std::filesystem::path& tmp) {
+    done = correctRigRosbag(in, tmp, model, model_file, blocks, c.method(), c.outsidePolicy(), force, warnings);
+  });
+  for (const std::string& w : warnings) std::fprintf(stderr, "lidarcal: warning: %s\n", w.c_str());
+  for (const RigCorrection& d : done) {
+    std::fprintf(stderr, "%s (%s): ", d.topic.c_str(), d.sensor.c_str());
+    printStats(d.stats, out, model.sensors[*model.find(d.sensor)].model, c.outsidePolicy());
+  }
+}
+
 }  // namespace
 
 void addCorrectCommand(CLI::App& app) {
   struct Options {
-    std::string seq, model, out, topic;
+    std::string seq, model, out, topic, sensor;
     bool ascii = false, overwrite = false, force = false;
     int threads = 0;
   };
@@ -112,6 +138,10 @@ void addCorrectCommand(CLI::App& app) {
   sub->add_option("-o,--out", o->out, "Output sequence directory; for a bag, a bag of the same kind (.bag, .mcap, .db3 or a directory): every message copied, only the topic's ranges changed")->required();
   addCorrectionOptions(sub, c);
   sub->add_option("--topic", o->topic, "A bag's LaserScan topic to correct (default: the bag's only one)");
+  sub->add_option("--sensor", o->sensor,
+                  "With a rig model (several sensors): the block to apply, by sensor name, topic or frame (a ROS1 bag: "
+                  "default every block whose topic the bag holds; several comma-separated; a ROS 2 bag: one block per run, "
+                  "with --topic when it holds several LaserScan topics)");
   sub->add_flag("--ascii", o->ascii, "Write ASCII PCD instead of binary");
   addThreadsOption(sub, o->threads, "correcting a sequence's scans side by side (a bag is corrected in order)");
   sub->add_flag("--overwrite", o->overwrite, "Replace OUT if it exists");
@@ -121,19 +151,24 @@ void addCorrectCommand(CLI::App& app) {
   sub->callback([o, c, sub] {
     if (isRosbag(o->seq)) {
       if (o->ascii) throw InputError("", "--ascii", "applies to sequences, not to bags", "drop --ascii");
-      correctBag(o->seq, o->model, o->out, o->topic, *c, o->overwrite, o->force);
+      if (io::isRigModel(o->model)) {
+        std::vector<std::string> keys = splitList(o->sensor);
+        for (const std::string& t : splitList(o->topic)) keys.push_back(t);
+        return correctRigBag(o->seq, o->model, o->out, keys, *c, o->overwrite, o->force);
+      }
+      correctBag(o->seq, o->model, o->out, o->topic, *c, o->overwrite, o->force, o->sensor);
       return;
     }
     if (isRosbag2(o->seq)) {
       if (o->ascii) throw InputError("", "--ascii", "applies to sequences, not to bags", "drop --ascii");
-      correctBag2(o->seq, o->model, o->out, o->topic, *c, o->overwrite, o->force);
+      correctBag2(o->seq, o->model, o->out, o->topic, *c, o->overwrite, o->force, o->sensor);
       return;
     }
     if (sub->count("--topic") > 0)
       throw InputError(o->seq, "--topic", "applies to bags only (this is not one)", "drop --topic");
     io::checkOutsideInput(o->seq, o->out);
     const io::Sequence seq = io::openSequence(o->seq);
-    const CalibrationModel model = io::readModel(o->model);
+    const CalibrationModel model = io::readModelFor(o->model, o->sensor);
     const calibration::Outside outside = c->outsidePolicy();
     if (const std::string w = checkModelFits(model, seq, o->model, o->force, outside); !w.empty())
       std::fprintf(stderr, "lidarcal: warning: %s\n", w.c_str());

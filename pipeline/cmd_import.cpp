@@ -14,6 +14,7 @@
 #include "io/import_rosbag.hpp"
 #include "pipeline/words.hpp"
 #include "pipeline/commands.hpp"
+#include "pipeline/cmd_rig.hpp"
 #include "pipeline/import.hpp"
 #include "pipeline/progress.hpp"
 
@@ -37,6 +38,8 @@ struct ImportOptions {
   std::string sensor_name;
   double still_m = io::BagPoseConfig{}.still_m;
   double still_deg = rad2deg(io::BagPoseConfig{}.still_rad);
+  std::string sensor_names;            // rig: one per topic
+  std::string vehicle_frame = "auto";  // rig: the frame the mountings are in
 };
 
 /// rosbag1/rosbag2 --pose odom:TOPIC | tf:FRAME.
@@ -137,6 +140,16 @@ void runImport(const ImportOptions& o, const CLI::App& sub) {
   if (sub.count("--range-min")) s.range_min_m = o.range_min_m;
   if (sub.count("--range-max")) s.range_max_m = o.range_max_m;
   s.sensor_name = o.sensor_name;
+  if (const std::vector<std::string> topics = splitList(o.topic); topics.size() > 1 || sub.count("--sensor-names")) {
+    RigImportSettings rig;  // several topics: a rig sequence
+    rig.base = s;
+    rig.topics = topics;
+    rig.names = splitList(o.sensor_names);
+    rig.vehicle_frame = o.vehicle_frame;
+    return runRigImport(rig);
+  }
+  if (sub.count("--vehicle-frame"))
+    throw InputError("", "--vehicle-frame", "applies to a rig (several topics) only", "drop it, or list the topics");
 
   // Progress in KiB of the inputs read (the number of scans is not known before the end).
   std::uintmax_t bytes = 0;
@@ -183,7 +196,16 @@ void addImportCommand(CLI::App& app) {
                 "several measured target distances; sequence.json stop_starts, docs/FORMAT.md)");
   sub->add_option("-o,--out", o->out, "Sequence directory to create (scan_NNNNNN.pcd + sequence.json)");
   sub->add_option("--topic", o->topic, "rosbag1/rosbag2: the LaserScan topic (sensor_msgs/LaserScan, sensor_msgs/msg/LaserScan; default: the "
-                  "bag's only one)");
+                  "bag's only one); several, comma-separated (/scan_front,/scan_back): one rig sequence of the vehicle's "
+                  "sensors, with each scan's vehicle pose and stop and each sensor's mounting from /tf_static "
+                  "(docs/FORMAT.md, \"Several sensors on one vehicle\")");
+  sub->add_option("--sensor-names", o->sensor_names,
+                  "rosbag1/rosbag2 with several --topic: a short name per topic, in order (default: the topics without "
+                  "their slash), e.g. front,back");
+  sub->add_option("--vehicle-frame", o->vehicle_frame,
+                  "rosbag1/rosbag2 with several --topic: the frame the sensors' mountings are read in from /tf_static "
+                  "(default auto: the frame below the first /tf link above each scan frame, e.g. base_footprint)")
+      ->capture_default_str();
   sub->add_flag("--list-topics", o->list_topics, "rosbag1/rosbag2: list the bag's topics and exit");
   sub->add_option("--every", o->every, "Keep every N-th scan")->check(CLI::PositiveNumber)->capture_default_str();
   sub->add_option("--max-scans", o->max_scans, "Stop after writing N scans (0 = all)")->capture_default_str();

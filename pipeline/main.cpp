@@ -58,7 +58,8 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", LIDARCAL_VERSION);
   app.footer("Method: Alhashimi et al. 2021, \"Calibrating Range Measurements of Lidars Using Fixed Landmarks in Unknown "
              "Positions\" (Sensors); Alhashimi et al. 2016, \"Statistical Modeling and Calibration of Triangulation "
-             "Lidars\" (ICINCO); and the noise-consistency method for noise without ground truth. Equation numbers in "
+             "Lidars\" (ICINCO); Sharma 2020, \"In-situ Sensor Calibration Using Noise Consistency\" (MSc thesis). "
+             "Equation numbers in "
              "the help and the reports are those of these papers.");
   bool quiet = false;
   app.add_flag("-q,--quiet", quiet, "No progress output on stderr");

@@ -1,10 +1,12 @@
 // lidarcal_node: corrects a sensor_msgs/LaserScan topic live with a lidarcal model (ROS 1).
-//   ~model      model.json from `lidarcal calibrate`, or the YAML of `lidarcal export --format yaml` (required)
+//   ~model      model.json from `lidarcal calibrate` (of one sensor, or of a rig: see ~sensor_name), or the YAML
+//               of `lidarcal export --format yaml` (required)
 //   ~input      LaserScan topic to read (default "scan")
 //   ~output     topic for the corrected scans (default "scan_corrected")
 //   ~inversion  ls | ml, as `lidarcal correct --inversion` (default: the YAML's, else ls)
 //   ~outside    as `lidarcal correct --outside` (default: the YAML's, else correct's default)
-//   ~sensor_name  optional: the sensor's name as in model.json; another name is refused at start
+//   ~sensor_name  optional: the sensor's name as in model.json; another name is refused at start. With a
+//               rig model it picks the sensor's block; unset, the block whose topic is ~input (resolved)
 //   ~force      apply a model whose range limits differ from the scans' (default false)
 // `--help` / `-h` prints these and exits 0 before contacting a master.
 // Each scan is republished with the same header and beams; its ranges go through the rule of
@@ -23,6 +25,7 @@
 #include "io/import.hpp"
 #include "io/model_io.hpp"
 #include "io/model_yaml.hpp"
+#include "io/rig_model_io.hpp"
 #include "pipeline/bag_correct.hpp"
 #include "pipeline/stages.hpp"
 
@@ -34,6 +37,7 @@ struct NodeSettings {
   std::string model_file, input = "scan", output = "scan_corrected", inversion = "ls", outside = calibration::toString(calibration::kDefaultOutside);
   std::optional<std::string> sensor_name;
   bool force = false;
+  std::string block;  // the rig model's block applied ("" for a single-sensor model)
 };
 
 void printHelp() {
@@ -42,21 +46,28 @@ void printHelp() {
       "usage: lidarcal_node _model:=MODEL [_input:=scan] [_output:=scan_corrected] [_inversion:=ls|ml] [_outside:=POLICY]\n"
       "                     [_sensor_name:=NAME] [_force:=true] [__name:=NODE]\n\n"
       "private parameters:\n"
-      "  ~model        model.json of `lidarcal calibrate`, or the YAML of `lidarcal export --format yaml` (required)\n"
+      "  ~model        model.json of `lidarcal calibrate` (one sensor's or a rig's), or the YAML of\n"
+      "                `lidarcal export --format yaml` (required)\n"
       "  ~input        LaserScan topic to read (default scan)\n"
       "  ~output       topic of the corrected scans (default scan_corrected)\n"
       "  ~inversion    ls | ml, as `lidarcal correct --inversion` (default: the YAML's, else ls)\n"
       "  ~outside      readings outside the fitted range, as `lidarcal correct --outside` (default: the YAML's, else %s)\n"
-      "  ~sensor_name  the sensor's name as in the model; another name is refused at start\n"
+      "  ~sensor_name  the sensor's name as in the model; another name is refused at start. With a rig model:\n"
+      "                the block to apply (name, topic or frame); unset: the block whose topic is ~input\n"
       "  ~force        true: apply a model whose range limits differ from the scans' (default false)\n\n"
       "exit status: 0 after Ctrl-C, 2 a bad parameter or a model of another sensor, 3 a model that cannot correct.\n",
       calibration::toString(calibration::kDefaultOutside));
 }
 
-/// The model of ~model: a model.json, or export's YAML (whose inversion and outside policy
-/// apply unless ~inversion / ~outside are set).
+/// The model of ~model: a model.json (a rig model's block by ~sensor_name or the input topic), or
+/// export's YAML (whose inversion and outside policy apply unless ~inversion / ~outside are set).
 CalibrationModel loadModel(NodeSettings& s, bool inversion_set, bool outside_set) {
-  if (!io::isExportedModelYaml(s.model_file)) return io::readModel(s.model_file);
+  if (!io::isExportedModelYaml(s.model_file)) {
+    CalibrationModel m = io::readModelForNode(s.model_file, s.sensor_name, ros::names::resolve(s.input), &s.block);
+    // The block was chosen by this name: the block's own sensor_name need not repeat it.
+    if (!s.block.empty()) s.sensor_name.reset();
+    return m;
+  }
   io::ExportedModel e = io::readExportedModelYaml(s.model_file);
   if (!inversion_set) s.inversion = e.inversion;
   if (!outside_set) s.outside = e.outside;
@@ -153,8 +164,10 @@ int main(int argc, char** argv) {
     const std::string fitted =
         model.fitted_range_m ? std::to_string(model.fitted_range_m->first) + "-" + std::to_string(model.fitted_range_m->second) + " m"
                              : std::string("not recorded");
-    ROS_INFO("lidarcal_node: correcting %s -> %s with %s (sensor '%s', %s beams, fitted %s; inversion %s, outside %s)",
+    const std::string block = s.block.empty() ? "" : " block " + s.block;
+    ROS_INFO("lidarcal_node: correcting %s -> %s with %s%s (sensor '%s', %s beams, fitted %s; inversion %s, outside %s)",
              ros::names::resolve(s.input).c_str(), ros::names::resolve(s.output).c_str(), s.model_file.c_str(),
+             block.c_str(),
              model.sensor_name.c_str(), model.beams ? std::to_string(*model.beams).c_str() : "any", fitted.c_str(),
              s.inversion.c_str(), s.outside.c_str());
     ros::spin();
@@ -170,6 +183,8 @@ int main(int argc, char** argv) {
     return 3;
   } catch (const InputError& e) {
     ROS_FATAL("lidarcal_node: refusing the model: %s", e.what());
-    return 2;
+    return 2;  } catch (const std::exception& e) {
+    ROS_FATAL("lidarcal_node: %s", e.what());
+    return 1;
   }
 }

@@ -16,6 +16,7 @@
 #include "common/errors.hpp"
 #include "io/model_io.hpp"
 #include "io/model_yaml.hpp"
+#include "io/rig_model_io.hpp"
 #include "ros2/cyclone_relay.hpp"
 #include "ros2/live_corrector.hpp"
 #include "ros2/node_args.hpp"
@@ -32,6 +33,7 @@ void onSignal(int) { g_stop = 1; }
 /// YAML says, then the defaults of `correct`.
 struct LoadedModel {
   CalibrationModel model;
+  std::string block;  ///< the rig model's block applied ("" for a single-sensor model)
   std::string inversion = "ls";
   calibration::Outside outside = calibration::kDefaultOutside;
 };
@@ -46,7 +48,7 @@ LoadedModel loadModel(const ros2::NodeParameters& p) {
       throw InputError(p.model_file, "outside", "'" + e.outside + "' is not a policy of `lidarcal correct --outside`",
                        "export the model again, or set -p outside:=...");
   } else {
-    m.model = io::readModel(p.model_file);
+    m.model = io::readModelForNode(p.model_file, p.sensor_name, ros2::resolveTopic(p.input, p), &m.block);
   }
   if (p.inversion) m.inversion = *p.inversion;
   if (p.outside) calibration::parseOutside(*p.outside, m.outside);  // checked by parseNodeArguments
@@ -90,11 +92,12 @@ int run(const ros2::NodeParameters& p) {
   s.topic = ros2::resolveTopic(p.input, p);
   s.method = m.inversion == "ml" ? calibration::InversionMethod::ml : calibration::InversionMethod::ls;
   s.outside = m.outside;
-  s.sensor_name = p.sensor_name;
+  // A rig model's block chosen by sensor_name: the block's own sensor_name need not repeat it.
+  if (m.block.empty()) s.sensor_name = p.sensor_name;
   s.force = p.force;
   pipeline::checkModelInvertible(m.model, p.model_file, s.outside);
-  if (p.sensor_name)  // refused at start when the name is given; beams and limits at the first scan
-    pipeline::checkModelFitsSensor(m.model, {p.sensor_name, std::nullopt, std::nullopt, "parameter sensor_name", "node"},
+  if (s.sensor_name)  // refused at start when the name is given; beams and limits at the first scan
+    pipeline::checkModelFitsSensor(m.model, {s.sensor_name, std::nullopt, std::nullopt, "parameter sensor_name", "node"},
                                    p.model_file, p.force, s.outside);
   ros2::LiveCorrector corrector(m.model, s, pipeline::modelCorrector(m.model, s.method, s.outside, p.model_file));
 
@@ -107,8 +110,9 @@ int run(const ros2::NodeParameters& p) {
   rc.input_qos = p.input_qos;
   rc.output_qos = p.output_qos;
   ros2::CycloneRelay relay(rc);
-  std::fprintf(stderr, "lidarcal_ros2_node: correcting %s -> %s on domain %d with %s (sensor '%s', %s beams; inversion %s, outside %s)\n",
-               s.topic.c_str(), output.c_str(), rc.domain_id, p.model_file.c_str(), m.model.sensor_name.c_str(),
+  const std::string block = m.block.empty() ? "" : " block " + m.block;
+  std::fprintf(stderr, "lidarcal_ros2_node: correcting %s -> %s on domain %d with %s%s (sensor '%s', %s beams; inversion %s, outside %s)\n",
+               s.topic.c_str(), output.c_str(), rc.domain_id, p.model_file.c_str(), block.c_str(), m.model.sensor_name.c_str(),
                m.model.beams ? std::to_string(*m.model.beams).c_str() : "any", m.inversion.c_str(), calibration::toString(s.outside));
 
   ros2::WarningLimiter warnings;

@@ -133,7 +133,8 @@ std::string nodeHelp() {
       "(same header and intensities; ranges corrected with the rule of `lidarcal correct`).\n\n"
       "usage: lidarcal_ros2_node --ros-args -p model:=MODEL [-p NAME:=VALUE ...] [-r __node:=NAME] [-r __ns:=/NS] [-r FROM:=TO]\n\n"
       "parameters:\n"
-      "  model        model.json of `lidarcal calibrate`, or the YAML of `lidarcal export --format yaml` (required)\n"
+      "  model        model.json of `lidarcal calibrate` (one sensor's or a rig's), or the YAML of\n"
+      "               `lidarcal export --format yaml` (required)\n"
       "  input        LaserScan topic to read (default scan)\n"
       "  output       topic of the corrected scans (default scan_corrected)\n"
       "  inversion    ls | ml, as `lidarcal correct --inversion` (default: the YAML's, else ls)\n"
@@ -141,7 +142,8 @@ std::string nodeHelp() {
   h += calibration::toString(calibration::kDefaultOutside);
   h +=
       ")\n"
-      "  sensor_name  the sensor's name as in the model; another name is refused at start (default: not checked)\n"
+      "  sensor_name  the sensor's name as in the model; another name is refused at start (default: not checked).\n"
+      "               With a rig model: the block to apply (name, topic or frame); unset: the block whose topic is input\n"
       "  force        true: apply a model whose range limits differ from the scans' (default false)\n"
       "  input_qos    sensor_data (best effort, keep last 5; default) or default (reliable, keep last 10)\n"
       "  output_qos   default (reliable, keep last 10; default) or sensor_data\n\n"

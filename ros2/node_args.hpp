@@ -26,12 +26,14 @@ enum class QosProfile {
 const char* toString(QosProfile q);
 
 struct NodeParameters {
-  std::string model_file;                  ///< model: model.json or the YAML of `lidarcal export --format yaml` (required)
+  std::string model_file;                  ///< model: model.json (a sensor's or a rig's) or export's YAML (required)
   std::string input = "scan";              ///< input: LaserScan topic to correct (ROS name)
   std::string output = "scan_corrected";   ///< output: topic of the corrected scans (ROS name)
   std::optional<std::string> inversion;    ///< inversion: ls | ml; unset: the YAML's, else ls
   std::optional<std::string> outside;      ///< outside: a policy name of `correct --outside`; unset: the YAML's, else the default
-  std::optional<std::string> sensor_name;  ///< sensor_name: refused at start when not the model's; unset: not checked
+  /// sensor_name: refused at start when not the model's; unset: not checked. With a rig model: the
+  /// block to apply (name, topic or frame); unset: the block whose topic is the resolved input.
+  std::optional<std::string> sensor_name;
   bool force = false;                      ///< force: apply a model whose range limits differ from the scans'
   QosProfile input_qos = QosProfile::sensor_data;  ///< input_qos: sensor_data (default) or default
   QosProfile output_qos = QosProfile::reliable;    ///< output_qos: default (default) or sensor_data

@@ -2,8 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 #include <string>
+
+#include "common/errors.hpp"
 
 namespace lidarcal::studies {
 
@@ -72,8 +75,11 @@ std::vector<Cylinder> placeLandmarks(const PathSpec& path, int count, const Plac
     }
     if (static_cast<int>(out.size()) == count) return out;
   }
-  throw std::runtime_error("placeLandmarks: could not place " + std::to_string(count) + " landmarks in " +
-                           std::to_string(config.max_restarts + 1) + " layouts; widen the region or lower the count");
+  // Reachable from the command line (a short path, many landmarks): the user can act on it.
+  char what[160];
+  std::snprintf(what, sizeof what, "no room for %d landmarks of radius %g m beside a path of %d stops %g m apart (%d layouts tried)",
+                count, config.radius_m, path.stops, path.step_m, config.max_restarts + 1);
+  throw DataError("", "landmark layout", what, "lengthen the path (more stops or a longer step) or place fewer landmarks");
 }
 
 }  // namespace lidarcal::studies

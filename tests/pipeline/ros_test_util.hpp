@@ -11,6 +11,7 @@
 
 #include "common/calibration_model.hpp"
 #include "io/model_io.hpp"
+#include "io/rig_model_io.hpp"
 #include "test_util.hpp"
 
 namespace lidarcal::test {
@@ -29,6 +30,24 @@ inline CalibrationModel polynomialModel(const std::string& name, int beams) {
   m.model.range_max_m = 12.0;
   m.fitted_range_m = std::make_pair(0.5, 8.0);
   return m;
+}
+
+/// A rig model of two 100-beam lidars, "front" on `front_topic` (polynomialModel) and "back" on
+/// `back_topic` (f(d) = -0.02 + 1.01 d): each topic corrected by its own block differs from the other's.
+inline io::RigModel twoLidarModel(const std::string& front_topic, const std::string& back_topic) {
+  io::RigModel rig;
+  rig.frame = "relative";
+  rig.reference = "front";
+  for (const std::string name : {"front", "back"}) {
+    io::RigModelSensor s;
+    s.name = name;
+    s.topic = name == "front" ? front_topic : back_topic;
+    s.frame_id = "laser_" + name;
+    s.model = polynomialModel("", 100);
+    if (name == "back") s.model.model.bias.alpha = {-0.02, 1.01, 0.0};
+    rig.sensors.push_back(s);
+  }
+  return rig;
 }
 
 /// Rows of `reading_m,range_m` (NaN for "nan"); fails the test on a malformed line.

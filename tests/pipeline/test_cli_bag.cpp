@@ -18,6 +18,8 @@
 #include <tf2_msgs/TFMessage.h>
 
 #include "io/pcd_scan.hpp"
+#include "io/rig.hpp"
+#include "io/rig_model_io.hpp"
 #include "io/sequence.hpp"
 #include "ros/laser_scan_util.hpp"
 #include "ros_test_util.hpp"
@@ -193,6 +195,65 @@ TEST(CorrectBag, TopicChoice) {
   const auto scans = expectSameBagButRanges(in, dir / "out.bag", "/scan_b");
   ASSERT_EQ(scans.size(), 4u);
   for (const auto& [x, y] : scans) expectRangesCorrected(*x, *y, polynomialModel("", 100));
+}
+
+TEST(CorrectBag, RigModelCorrectsEachTopicWithItsOwnBlock) {
+  TempDir dir;
+  const auto in = writeBag(dir / "in.bag", 6, true);
+  const io::RigModel rig = twoLidarModel("/scan", "/scan_b");
+  io::writeRigModel(dir / "rig.json", rig);
+  const std::string model = " --model " + (dir / "rig.json").string();
+  const CliResult r = runCli("correct " + in.string() + model + " -o " + (dir / "out.bag").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto a = readAll(in), b = readAll(dir / "out.bag");
+  ASSERT_EQ(a.size(), b.size());
+  std::size_t front = 0, back = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    SCOPED_TRACE(i);
+    ASSERT_EQ(a[i].topic, b[i].topic);
+    if (a[i].topic == "/scan") expectRangesCorrected(*a[i].scan, *b[i].scan, rig.sensors[0].model), ++front;
+    else if (a[i].topic == "/scan_b") expectRangesCorrected(*a[i].scan, *b[i].scan, rig.sensors[1].model), ++back;
+    else EXPECT_EQ(a[i].bytes, b[i].bytes);
+  }
+  EXPECT_EQ(front, 6u);
+  EXPECT_EQ(back, 6u);
+  // One block by name: the other topic is copied as it was.
+  const CliResult one = runCli("correct " + in.string() + model + " --sensor back -o " + (dir / "back.bag").string());
+  ASSERT_EQ(one.exit_code, 0) << one.err;
+  const auto scans = expectSameBagButRanges(in, dir / "back.bag", "/scan_b");
+  ASSERT_EQ(scans.size(), 6u);
+  for (const auto& [x, y] : scans) expectRangesCorrected(*x, *y, rig.sensors[1].model);
+  // A sequence needs the block named; the error lists the blocks.
+  ASSERT_EQ(runCli("import " + in.string() + " --topic /scan -o " + (dir / "seq").string()).exit_code, 0);
+  const CliResult seq = runCli("correct " + (dir / "seq").string() + model + " -o " + (dir / "seq-out").string());
+  EXPECT_EQ(seq.exit_code, 2);
+  EXPECT_NE(seq.err.find("front (/scan)"), std::string::npos) << seq.err;
+  const CliResult unknown = runCli("correct " + in.string() + model + " --sensor side -o " + (dir / "x.bag").string());
+  EXPECT_EQ(unknown.exit_code, 2);
+  EXPECT_NE(unknown.err.find("'side'"), std::string::npos) << unknown.err;
+}
+
+TEST(ImportRig, TwoTopicsKeepEachScansSensor) {
+  TempDir dir;
+  const auto in = writeBag(dir / "in.bag", 5, true);
+  const CliResult r = runCli("import " + in.string() + " --topic /scan,/scan_b --sensor-names front,back -o " +
+                             (dir / "rig").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const io::Rig rig = io::openRig(dir / "rig");
+  ASSERT_EQ(rig.meta.sensors.size(), 2u);
+  EXPECT_EQ(rig.meta.sensors[1].name, "back");
+  EXPECT_EQ(rig.meta.sensors[1].topic, "/scan_b");
+  ASSERT_EQ(rig.scans.size(), 10u);
+  std::size_t back = 0;
+  for (const io::RigScan& s : rig.scans) back += s.sensor == "back";
+  EXPECT_EQ(back, 5u);
+  for (const io::Sequence& seq : rig.sequences) EXPECT_EQ(seq.scans.size(), 5u);
+  // Single-topic imports are unchanged: no rig files.
+  ASSERT_EQ(runCli("import " + in.string() + " --topic /scan -o " + (dir / "one").string()).exit_code, 0);
+  EXPECT_FALSE(io::isRigDirectory(dir / "one"));
+  const CliResult names = runCli("import " + in.string() + " --topic /scan,/scan_b --sensor-names a -o " + (dir / "x").string());
+  EXPECT_EQ(names.exit_code, 2);
+  EXPECT_NE(names.err.find("--sensor-names"), std::string::npos) << names.err;
 }
 
 TEST(CorrectBag, RefusesAnotherSensorsModelAndLeavesNoOutput) {

@@ -114,6 +114,17 @@ TEST(CliMonteCarlo, RefusesBadOptions) {
   EXPECT_NE(help.out.find("writes nothing"), std::string::npos) << help.out;
 }
 
+// Fig. 8 places four poles and more beside the path; three stops 0.15 m apart leave too little room.
+TEST(CliMonteCarlo, APathTooShortForItsLandmarksIsRefusedWithWhatToChange) {
+  TempDir dir;
+  const std::string out = (dir / "o").string();
+  const auto r = runCli("montecarlo --study fig8 --trials 2 --stops 3 --out " + out);
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_NE(r.err.find("lengthen the path"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("internal error"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out));
+}
+
 TEST(CliMonteCarlo, InterruptStopsCleanlyAndWritesNothing) {
   TempDir dir;
   const fs::path out = dir / "o";

@@ -386,7 +386,7 @@ TEST(Conventions, EveryCommandWithOutAcceptsDashO) {
       ++with_out;
       EXPECT_TRUE(contains(r.out, "-o,--out")) << r.out;
     }
-    // Users never heard of the seeds: the papers are named instead.
+    // The papers are named by author and year.
     EXPECT_FALSE(contains(r.out, "seed 00")) << r.out;
     EXPECT_FALSE(contains(r.out, "seeds'")) << r.out;
   }
@@ -394,7 +394,7 @@ TEST(Conventions, EveryCommandWithOutAcceptsDashO) {
   EXPECT_FALSE(contains(help.out, "seed 00")) << help.out;
   EXPECT_TRUE(contains(help.out, "Alhashimi et al. 2021")) << help.out;
   EXPECT_TRUE(contains(help.out, "Alhashimi et al. 2016")) << help.out;
-  EXPECT_TRUE(contains(help.out, "noise-consistency method")) << help.out;
+  EXPECT_TRUE(contains(help.out, "Sharma 2020")) << help.out;
 }
 
 TEST_F(FirstHour, InfoJsonCarriesTheSummaryForScripts) {

@@ -62,6 +62,41 @@ class RosNode : public ::testing::Test {
     return Child(argv, *dir_ / (name + ".log"));
   }
 
+  /// Publishes `scans` on `input` to a running node, each after the previous one came back on
+  /// `output`; returns the scans received.
+  static std::vector<sensor_msgs::LaserScan> correctLive(const Child& node, const std::string& input, const std::string& output,
+                                                         const std::vector<sensor_msgs::LaserScan>& scans) {
+    ros::NodeHandle nh;
+    std::mutex mutex;
+    std::vector<sensor_msgs::LaserScan> received;
+    ros::Subscriber sub = nh.subscribe<sensor_msgs::LaserScan>(output, 100, [&](const sensor_msgs::LaserScan::ConstPtr& m) {
+      std::lock_guard<std::mutex> lock(mutex);
+      received.push_back(*m);
+    });
+    ros::Publisher pub = nh.advertise<sensor_msgs::LaserScan>(input, 100);
+    if (!waitFor([&] { return pub.getNumSubscribers() > 0 && sub.getNumPublishers() > 0; }, 30.0)) {
+      ADD_FAILURE() << "the node did not connect: " << node.log();
+      return {};
+    }
+    for (std::size_t k = 0; k < scans.size(); ++k) {
+      pub.publish(scans[k]);
+      if (!waitFor([&] { std::lock_guard<std::mutex> lock(mutex); return received.size() > k; }, 10.0)) {
+        ADD_FAILURE() << "no corrected scan " << k << ": " << node.log();
+        break;
+      }
+    }
+    std::lock_guard<std::mutex> lock(mutex);
+    return received;
+  }
+
+  /// The LaserScans of `topic` in a bag, in order.
+  static std::vector<sensor_msgs::LaserScan> scansOf(const fs::path& bag_file, const std::string& topic) {
+    std::vector<sensor_msgs::LaserScan> out;
+    rosbag::Bag bag(bag_file.string(), rosbag::bagmode::Read);
+    for (const auto& m : rosbag::View(bag, rosbag::TopicQuery(topic))) out.push_back(*m.instantiate<sensor_msgs::LaserScan>());
+    return out;
+  }
+
   static fs::path* dir_;
   static Child* master_;
   static ros::AsyncSpinner* spinner_;
@@ -87,13 +122,7 @@ TEST_F(RosNode, PublishesWhatCorrectWritesToABag) {
     const CliResult c = runCli("correct " + (dir / "in.bag").string() + " --model " + (dir / "model.json").string() +
                                " --inversion " + inversion + " -o " + out);
     ASSERT_EQ(c.exit_code, 0) << c.err;
-    std::vector<sensor_msgs::LaserScan> in, expected;
-    {
-      rosbag::Bag a((dir / "in.bag").string(), rosbag::bagmode::Read);
-      for (const auto& m : rosbag::View(a)) in.push_back(*m.instantiate<sensor_msgs::LaserScan>());
-      rosbag::Bag b(out, rosbag::bagmode::Read);
-      for (const auto& m : rosbag::View(b)) expected.push_back(*m.instantiate<sensor_msgs::LaserScan>());
-    }
+    const std::vector<sensor_msgs::LaserScan> in = scansOf(dir / "in.bag", "/scan"), expected = scansOf(out, "/scan");
     ASSERT_EQ(expected.size(), in.size());
 
     const std::string input = "/raw_" + inversion, output = "/corrected_" + inversion;
@@ -106,21 +135,7 @@ TEST_F(RosNode, PublishesWhatCorrectWritesToABag) {
       params = {"_model:=" + yaml.string(), "_input:=" + input, "_output:=" + output};
     }
     Child node = startNode("lidarcal_" + inversion, params);
-    ros::NodeHandle nh;
-    std::mutex mutex;
-    std::vector<sensor_msgs::LaserScan> received;
-    ros::Subscriber sub = nh.subscribe<sensor_msgs::LaserScan>(output, 100, [&](const sensor_msgs::LaserScan::ConstPtr& m) {
-      std::lock_guard<std::mutex> lock(mutex);
-      received.push_back(*m);
-    });
-    ros::Publisher pub = nh.advertise<sensor_msgs::LaserScan>(input, 100);
-    ASSERT_TRUE(waitFor([&] { return pub.getNumSubscribers() > 0 && sub.getNumPublishers() > 0; }, 30.0))
-        << "the node did not connect: " << node.log();
-    for (std::size_t k = 0; k < in.size(); ++k) {
-      pub.publish(in[k]);
-      ASSERT_TRUE(waitFor([&] { std::lock_guard<std::mutex> lock(mutex); return received.size() > k; }, 10.0))
-          << "no corrected scan " << k << ": " << node.log();
-    }
+    const std::vector<sensor_msgs::LaserScan> received = correctLive(node, input, output, in);
     EXPECT_EQ(node.stop(), 0) << node.log();
     EXPECT_NE(node.log().find("30 scans"), std::string::npos) << node.log();
     ASSERT_EQ(received.size(), expected.size());
@@ -155,6 +170,62 @@ TEST_F(RosNode, RefusesAnotherSensorsModelAtTheFirstScan) {
   const std::string log = node.log();
   EXPECT_NE(log.find("refusing to correct /raw_other"), std::string::npos) << log;
   EXPECT_NE(log.find("360"), std::string::npos) << log;
+}
+
+TEST_F(RosNode, PicksTheBlockOfARigModelByTopicOrSensorName) {
+  TempDir dir;
+  // A two-lidar bag and a rig model whose blocks differ; `correct` applies each block to its topic.
+  {
+    rosbag::Bag bag((dir / "in.bag").string(), rosbag::bagmode::Write);
+    for (int k = 0; k < 8; ++k)
+      for (const char* topic : {"/scan_front", "/scan_back"}) {
+        const sensor_msgs::LaserScan m = laserScan(k, 100);
+        bag.write(topic, m.header.stamp, m);
+      }
+  }
+  const fs::path rig = dir / "rig.json";
+  io::writeRigModel(rig, twoLidarModel("/scan_front", "/scan_back"));
+  const CliResult c = runCli("correct " + (dir / "in.bag").string() + " --model " + rig.string() + " -o " + (dir / "out.bag").string());
+  ASSERT_EQ(c.exit_code, 0) << c.err;
+  const std::vector<sensor_msgs::LaserScan> in = scansOf(dir / "in.bag", "/scan_back");
+  const std::vector<sensor_msgs::LaserScan> front = scansOf(dir / "out.bag", "/scan_front"), back = scansOf(dir / "out.bag", "/scan_back");
+  ASSERT_EQ(in.size(), 8u);
+  ASSERT_EQ(back.size(), 8u);
+  ASSERT_FALSE(sameFloat(front[0].ranges[50], back[0].ranges[50]));  // the blocks tell apart
+
+  // By the input topic (the block's), and by ~sensor_name on another topic.
+  struct Case {
+    std::string name, input, block;
+    std::vector<std::string> extra;
+  };
+  for (const Case& k : {Case{"lidarcal_rig_topic", "/scan_back", "back", {}},
+                        Case{"lidarcal_rig_name", "/raw_rig", "front", {"_sensor_name:=front"}}}) {
+    SCOPED_TRACE(k.name);
+    std::vector<std::string> params = {"_model:=" + rig.string(), "_input:=" + k.input, "_output:=/corrected_rig"};
+    params.insert(params.end(), k.extra.begin(), k.extra.end());
+    Child node = startNode(k.name, params);
+    const std::vector<sensor_msgs::LaserScan> received = correctLive(node, k.input, "/corrected_rig", in);
+    EXPECT_EQ(node.stop(), 0) << node.log();
+    EXPECT_NE(node.log().find("block " + k.block), std::string::npos) << node.log();
+    const std::vector<sensor_msgs::LaserScan>& expected = k.block == "back" ? back : front;
+    ASSERT_EQ(received.size(), expected.size());
+    for (std::size_t s = 0; s < received.size(); ++s)
+      for (std::size_t i = 0; i < received[s].ranges.size(); ++i)
+        EXPECT_TRUE(sameFloat(received[s].ranges[i], expected[s].ranges[i])) << s << "/" << i;
+  }
+
+  // No block for the topic or the name: refused at start, the blocks listed.
+  for (const std::vector<std::string>& p : {std::vector<std::string>{"_input:=/scan_side"},
+                                            std::vector<std::string>{"_input:=/scan_back", "_sensor_name:=side"}}) {
+    std::vector<std::string> params = {"_model:=" + rig.string()};
+    params.insert(params.end(), p.begin(), p.end());
+    Child node = startNode("lidarcal_rig_none", params);
+    ASSERT_EQ(node.waitExit(20.0).value_or(-1), 2) << node.log();
+    const std::string log = node.log();
+    EXPECT_NE(log.find(rig.string()), std::string::npos) << log;
+    EXPECT_NE(log.find("front (/scan_front), back (/scan_back)"), std::string::npos) << log;
+    EXPECT_NE(log.find(p.size() == 1 ? "'/scan_side'" : "'side'"), std::string::npos) << log;
+  }
 }
 
 TEST_F(RosNode, HelpPrintsTheParametersWithoutAMaster) {

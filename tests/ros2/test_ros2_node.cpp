@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <limits>
 #include <optional>
+#include <map>
 #include <set>
 
 #include <gtest/gtest.h>
@@ -128,6 +129,30 @@ class Ros2Node : public ::testing::Test {
     }
   }
 
+  /// Runs `node` (started with reliable input QoS) on `sent` from `input` to `output` and checks
+  /// that every scan came back once, known by its stamp, with the ranges of `expected`.
+  void expectCorrectedLive(Child& node, const std::string& input, const std::string& output,
+                           const std::vector<io::Ros2LaserScan>& sent, const std::vector<io::Ros2LaserScan>& expected) {
+    peer = std::make_unique<FastDdsPeer>(domain_);
+    peer->subscribe("rt/" + output, PeerQos::reliable);
+    peer->advertise("rt/" + input, PeerQos::reliable);
+    ASSERT_TRUE(peer->waitMatched(kDiscoveryS)) << "the node and the peer did not match: " << node.log();
+    prime(sent[0], node);
+    publishAll(sent, node);
+    EXPECT_EQ(node.stop(), 0) << node.log();
+    expectSummaryCounts(node);
+    // Each received scan is one sent (scan 0 possibly more than once: prime), known by its stamp.
+    std::set<std::int32_t> seen;
+    for (const Ros2Scan& got : peer->received()) {
+      const auto k = static_cast<std::size_t>(got.header().stamp().sec() - sent[0].stamp_sec);
+      ASSERT_LT(k, sent.size());
+      SCOPED_TRACE(k);
+      expectCorrected(got, sent[k], expected[k].ranges);
+      seen.insert(got.header().stamp().sec());
+    }
+    EXPECT_EQ(seen.size(), sent.size());
+  }
+
   /// The node's summary says it published what the peer received.
   void expectSummaryCounts(const Child& node) {
     const std::string n = std::to_string(peer->received().size()) + " scans";
@@ -158,27 +183,52 @@ TEST_F(Ros2Node, PublishesWhatCorrectWritesToAnMcapBitForBit) {
     const std::string model = inversion == "ls" ? (dir / "model.json").string() : (dir / "model.yaml").string();
     Child node = startNode("lidarcal_" + inversion, {"model:=" + model, "input:=raw_" + inversion, "output:=corrected_" + inversion,
                                                      "input_qos:=default"});
-    peer = std::make_unique<FastDdsPeer>(domain_);
-    peer->subscribe("rt/corrected_" + inversion, PeerQos::reliable);
-    peer->advertise("rt/raw_" + inversion, PeerQos::reliable);
-    ASSERT_TRUE(peer->waitMatched(kDiscoveryS)) << "the node and the peer did not match: " << node.log();
-    prime(sent[0], node);
-    publishAll(sent, node);
-    EXPECT_EQ(node.stop(), 0) << node.log();
-    expectSummaryCounts(node);
-    // Each received scan is one sent (scan 0 possibly more than once: prime), known by its stamp.
-    std::set<std::int32_t> seen;
+    expectCorrectedLive(node, "raw_" + inversion, "corrected_" + inversion, sent, expected);
     std::size_t changed = 0;
-    for (const Ros2Scan& got : peer->received()) {
-      const auto k = static_cast<std::size_t>(got.header().stamp().sec() - sent[0].stamp_sec);
-      ASSERT_LT(k, sent.size());
-      SCOPED_TRACE(k);
-      expectCorrected(got, sent[k], expected[k].ranges);
-      if (seen.insert(got.header().stamp().sec()).second)
-        for (std::size_t i = 0; i < kBeams; ++i) changed += !sameFloat(got.ranges()[i], sent[k].ranges[i]);
-    }
-    EXPECT_EQ(seen.size(), sent.size());
+    for (std::size_t k = 0; k < sent.size(); ++k)
+      for (std::size_t i = 0; i < kBeams; ++i) changed += !sameFloat(expected[k].ranges[i], sent[k].ranges[i]);
     EXPECT_GT(changed, sent.size() * 50);  // most readings lie in the fitted range and moved
+  }
+}
+
+TEST_F(Ros2Node, PicksTheBlockOfARigModelByTopicOrSensorName) {
+  // "back" on /scan (the node's default input), "front" on another topic; `correct` with each
+  // block named is the oracle.
+  const fs::path rig = dir / "rig.json";
+  io::writeRigModel(rig, twoLidarModel("/scan_front", "/scan"));
+  const std::vector<io::Ros2LaserScan> sent = scansOf(dir / "in.mcap");
+  std::map<std::string, std::vector<io::Ros2LaserScan>> expected;
+  for (const std::string block : {"front", "back"}) {
+    const fs::path out = dir / (block + ".mcap");
+    const CliResult c = runCli("correct " + (dir / "in.mcap").string() + " --model " + rig.string() + " --sensor " + block +
+                               " -o " + out.string());
+    ASSERT_EQ(c.exit_code, 0) << c.err;
+    expected[block] = scansOf(out);
+    ASSERT_EQ(expected[block].size(), sent.size());
+  }
+  ASSERT_FALSE(sameFloat(expected["front"][0].ranges[50], expected["back"][0].ranges[50]));  // the blocks tell apart
+  {
+    SCOPED_TRACE("by topic");
+    Child node = startNode("lidarcal_rig_topic", {"model:=" + rig.string(), "input_qos:=default"});
+    expectCorrectedLive(node, "scan", "scan_corrected", sent, expected["back"]);
+    EXPECT_NE(node.log().find("block back"), std::string::npos) << node.log();
+  }
+  {
+    SCOPED_TRACE("by sensor_name");
+    Child node = startNode("lidarcal_rig_name", {"model:=" + rig.string(), "sensor_name:=front", "input:=raw_rig",
+                                                 "output:=corrected_rig", "input_qos:=default"});
+    expectCorrectedLive(node, "raw_rig", "corrected_rig", sent, expected["front"]);
+    EXPECT_NE(node.log().find("block front"), std::string::npos) << node.log();
+  }
+  // No block for the topic or the name: refused at start, the blocks listed.
+  for (const std::string p : {"input:=scan_side", "sensor_name:=side"}) {
+    SCOPED_TRACE(p);
+    Child node = startNode("lidarcal_rig_none", {"model:=" + rig.string(), p});
+    ASSERT_EQ(node.waitExit(20.0).value_or(-1), 2) << node.log();
+    const std::string log = node.log();
+    EXPECT_NE(log.find(rig.string()), std::string::npos) << log;
+    EXPECT_NE(log.find("front (/scan_front), back (/scan)"), std::string::npos) << log;
+    EXPECT_NE(log.find(p == "input:=scan_side" ? "'/scan_side'" : "'side'"), std::string::npos) << log;
   }
 }
 

@@ -1,0 +1,34 @@
+#pragma once
+// `lidarcal correct IN.bag --model RIG_MODEL.json --out OUT.bag`: a bag of several lidars with
+// each LaserScan topic corrected by its own sensor's block of a rig model (io/rig_model_io.hpp),
+// each block checked against its topic as a single-sensor model is against the bag's one.
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "io/rig_model_io.hpp"
+#include "pipeline/stages.hpp"
+
+namespace lidarcal::pipeline {
+
+struct RigCorrection {
+  std::string sensor, topic;  ///< the block and the topic it corrected
+  CorrectionStats stats;      ///< its returns
+};
+
+/// The blocks to apply: every block whose topic the bag holds, or those `keys` name (sensor name,
+/// topic or frame). Throws InputError naming the model file when a key names no block, a block
+/// has no topic, or no block's topic is in the bag.
+std::vector<std::size_t> rigBlocksForBag(const io::RigModel& model, const std::filesystem::path& model_file,
+                                         const std::vector<std::string>& bag_topics, const std::vector<std::string>& keys);
+
+/// Writes `out` (a new file; the caller makes it atomic) from `in`, each chosen block's topic
+/// corrected by its model (checked first: status, sensor name, range limits unless `force`;
+/// warnings go to `warnings`). Throws InputError or DataError naming the block.
+std::vector<RigCorrection> correctRigRosbag(const std::filesystem::path& in, const std::filesystem::path& out,
+                                            const io::RigModel& model, const std::filesystem::path& model_file,
+                                            const std::vector<std::size_t>& blocks, calibration::InversionMethod method,
+                                            calibration::Outside outside, bool force, std::vector<std::string>& warnings);
+
+}  // namespace lidarcal::pipeline
