@@ -1,4 +1,5 @@
 #include "calibration/filtering.hpp"
+#include "calibration/discrepancy.hpp"
 #include "common/stats_util.hpp"
 
 #include <algorithm>
@@ -75,9 +76,9 @@ RangeInverter modelInverter(const CalibrationModel& model, InversionMethod metho
 CorrectedReading ReadingCorrector::operator()(double r) const {
   const CorrectionWindow& w = window;
   const bool below = r < w.reading_min_m, above = r > w.reading_max_m;
-  if ((below || above) && w.outside == Outside::keep) return {r, ReadingFate::outside_kept, kNaN};
-  if ((below || above) && w.outside == Outside::drop) return {kNaN, ReadingFate::outside_dropped, kNaN};
-  if (!(r > 0.0)) return {kNaN, ReadingFate::unresolved, kNaN};
+  if ((below || above) && w.outside == Outside::keep) return {r, ReadingFate::outside_kept, kNaN, kNaN};
+  if ((below || above) && w.outside == Outside::drop) return {kNaN, ReadingFate::outside_dropped, kNaN, kNaN};
+  if (!(r > 0.0)) return {kNaN, ReadingFate::unresolved, kNaN, kNaN};
   std::optional<double> d;
   if ((below || above) && w.outside == Outside::linear) {
     const double slope = above ? w.slope_max : w.slope_min;
@@ -88,16 +89,25 @@ CorrectedReading ReadingCorrector::operator()(double r) const {
   } else {
     d = inverter.invert(r);
   }
-  if (!d) return {kNaN, ReadingFate::unresolved, kNaN};
+  if (!d) return {kNaN, ReadingFate::unresolved, kNaN, kNaN};
+  const CorrectionErrors e = errorsAt(*d);
+  return {*d, below || above ? ReadingFate::extrapolated : ReadingFate::corrected, e.predictive_m, e.curve_m};
+}
+
+CorrectionErrors ReadingCorrector::errorsAt(double d) const {
   // The polynomial's own extrapolation has the polynomial's own uncertainty: no clamp to the edge.
-  const bool own = w.outside == Outside::extrapolate;
-  const double se = correctionStandardError(bias, covariance, *d, own ? *d : w.distance_min_m, own ? *d : w.distance_max_m);
-  return {*d, below || above ? ReadingFate::extrapolated : ReadingFate::corrected, se};
+  const bool own = window.outside == Outside::extrapolate;
+  const double lo = own ? d : window.distance_min_m, hi = own ? d : window.distance_max_m;
+  const double curve = correctionStandardError(bias, covariance, d, lo, hi);
+  // The discrepancy is in reading units: through the slope of the rule that corrected the reading.
+  const double slope = bias.derivative(std::clamp(d, lo, hi));
+  const double predictive = slope > 0.0 ? predictiveStandardError(curve * slope, discrepancy) / slope : kNaN;
+  return {predictive, curve};
 }
 
 ReadingCorrector readingCorrector(const CalibrationModel& model, InversionMethod method, Outside outside) {
   return {modelInverter(model, method, outside), correctionWindow(model, outside), model.model.bias,
-          model.alpha_covariance};
+          model.alpha_covariance, model.discrepancy};
 }
 
 void FilteringStats::add(const CorrectedReading& c, double reading_m, bool below_window) {

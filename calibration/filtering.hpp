@@ -64,11 +64,22 @@ enum class ReadingFate {
 struct CorrectedReading {
   double range_m = 0.0;                       ///< corrected distance, metres; NaN for dropped and unresolved readings
   ReadingFate fate = ReadingFate::corrected;  ///< what happened to it
-  /// Standard error of the correction from the fit's coefficient covariance (delta method),
-  /// metres: how far the fitted curve may be off at this distance, not the reading's own noise.
-  /// It grows with the distance past the edge for extrapolated readings. NaN when the model
-  /// records no covariance, or for readings left raw, dropped or unresolved.
+  /// Predictive standard error of the correction, metres: how far the corrected distance's
+  /// expectation may lie from the true distance at a distance the fit did not see, the curve's
+  /// standard error and the model discrepancy combined, sqrt(curve_standard_error_m^2 +
+  /// (sigma_delta / f'(d))^2) (calibration/discrepancy.hpp); the curve's alone when the model
+  /// has no discrepancy estimate. Not the reading's own noise. NaN when the model records no
+  /// covariance, or for readings left raw, dropped or unresolved.
   double standard_error_m = 0.0;
+  /// Standard error of the fitted curve's correction alone (delta method on the coefficients'
+  /// covariance), metres; it grows with the distance past the edge for extrapolated readings.
+  double curve_standard_error_m = 0.0;
+};
+
+/// The two standard errors of a correction at one corrected distance, metres.
+struct CorrectionErrors {
+  double predictive_m = 0.0;  ///< curve and discrepancy (CorrectedReading::standard_error_m)
+  double curve_m = 0.0;       ///< the fitted curve's alone (CorrectedReading::curve_standard_error_m)
 };
 
 /// A model ready to correct readings: the single rule behind `correct`, corrected bags, the
@@ -78,8 +89,11 @@ struct ReadingCorrector {
   CorrectionWindow window;            ///< correctionWindow(model, outside)
   BiasPolynomial bias;                ///< f, for the continuation beyond the window
   std::vector<double> covariance;     ///< row-major covariance of f's coefficients; empty when unknown
+  Discrepancy discrepancy;            ///< the model's discrepancy (none: the curve's standard error alone)
   /// Corrects one positive, finite reading (metres).
   CorrectedReading operator()(double reading_m) const;
+  /// The standard errors operator() gives a reading whose corrected distance is distance_m.
+  CorrectionErrors errorsAt(double distance_m) const;
 };
 /// Throws std::invalid_argument like RangeInverter.
 ReadingCorrector readingCorrector(const CalibrationModel& model, InversionMethod method, Outside outside);

@@ -13,6 +13,7 @@
 
 #include "calibration/inversion.hpp"
 #include "calibration/calibrate.hpp"
+#include "calibration/discrepancy.hpp"
 #include "calibration/jackknife.hpp"
 #include "calibration/joint_refinement.hpp"
 #include "calibration/noise_exponent.hpp"
@@ -122,7 +123,7 @@ void landmarkReadings(const LandmarkObservations& obs, const ReferenceDistance& 
       if (std::abs(perp) > c.lateral_fraction * r) continue;
       const double d = rayCircleDistance(0.0, 0.0, b.angle_rad, cx, cy, r);
       if (!(d > 0.0)) continue;
-      out.push_back({m.entry, s.stop, s.scan, b.beam, d, b.range_m, b.angle_rad});
+      out.push_back({m.entry, s.stop, s.scan, b.beam, d, b.range_m, b.angle_rad, e.sigma_m});
       ++m.readings;
     }
   }
@@ -164,7 +165,8 @@ void wallReadings(const LandmarkObservations& obs, const ReferenceDistance& e, c
     for (const auto& b : ws.beams) {
       const double incidence = wrapAngle(b.angle_rad - m.bearing_rad);
       if (!std::isfinite(b.range_m) || std::abs(incidence) > c.max_wall_incidence_rad) continue;
-      out.push_back({m.entry, ws.stop, ws.scan, b.beam, e.distance_m / std::cos(incidence), b.range_m, b.angle_rad});
+      out.push_back({m.entry, ws.stop, ws.scan, b.beam, e.distance_m / std::cos(incidence), b.range_m, b.angle_rad,
+                     e.sigma_m});
       ++m.readings;
     }
   }
@@ -357,6 +359,79 @@ void setNoiseLaw(NoiseModel& noise, double exponent, double sigma_e) {
   noise.exponent = exponent;
 }
 
+namespace {
+
+/// The known-distance readings as columns, with the number of stops they come from.
+struct ReadingColumns {
+  std::vector<double> d, y, tape_sigma;
+  std::vector<std::size_t> stop, entry;
+  std::size_t stops = 0;
+};
+
+ReadingColumns columnsOf(const std::vector<KnownReading>& readings) {
+  ReadingColumns c;
+  std::set<std::size_t> stops;
+  for (const auto& r : readings) {
+    c.d.push_back(r.d_m);
+    c.y.push_back(r.y_m);
+    c.tape_sigma.push_back(r.tape_sigma_m);
+    c.stop.push_back(r.stop);
+    c.entry.push_back(r.entry);
+    stops.insert(r.stop);
+  }
+  c.stops = stops.size();
+  return c;
+}
+
+/// Fits every order the stops can support (leave-one-out needs more stops than coefficients)
+/// into `fits` and m.orders; returns the index of the invertible order with the smallest
+/// leave-one-stop-out error, -1 when none is invertible over [d_lo, d_hi].
+int fitEveryOrder(const ReadingColumns& c, double exponent, const CalibrationConfig& config, double d_lo, double d_hi,
+                  CalibrationModel& m, std::vector<ClusteredFit>& fits) {
+  int best = -1;
+  for (int n = 1; n <= config.max_order && static_cast<std::size_t>(n) + 2 <= c.stops; ++n) {
+    fits.push_back(fitClustered(c.d, c.y, c.stop, n, exponent));
+    const ClusteredFit& f = fits.back();
+    OrderRow row;
+    row.order = n;
+    row.alpha = f.alpha;
+    const double k = n + 2.0;
+    row.aic = 2.0 * k + 2.0 * f.neg_log_likelihood;
+    row.bic = k * std::log(static_cast<double>(c.d.size())) + 2.0 * f.neg_log_likelihood;
+    row.validation_mse_m2 = f.cv_mse_m2;
+    row.test_mse_m2 = kNaN;
+    row.invertible = isMonotone(BiasPolynomial{f.alpha}, d_lo, d_hi);
+    m.orders.push_back(row);
+    if (row.invertible && (best < 0 || f.cv_mse_m2 < fits[static_cast<std::size_t>(best)].cv_mse_m2)) best = n - 1;
+  }
+  return best;
+}
+
+/// The invertible order of smallest AIC in m.orders, -1 when none.
+int orderByAic(const CalibrationModel& m) {
+  int order = -1;
+  for (const auto& row : m.orders)
+    if (row.invertible && (order < 0 || row.aic < m.orders[static_cast<std::size_t>(order - 1)].aic)) order = row.order;
+  return order;
+}
+
+/// m's bias, noise law, covariance, fitted range, residual RMS and discrepancy from the chosen fit.
+void adoptFit(CalibrationModel& m, const ClusteredFit& f, const ReadingColumns& c, double exponent) {
+  m.model.bias.alpha = f.alpha;
+  setNoiseLaw(m.model.noise, exponent, f.sigma_e);
+  m.alpha_covariance.assign(f.covariance.data(), f.covariance.data() + f.covariance.size());
+  m.fitted_range_m = fittedRange(c.d, c.y, m.model.bias);
+  m.readings = c.d.size();
+  double s = 0.0;
+  for (std::size_t i = 0; i < c.d.size(); ++i) s += std::pow(c.y[i] - polyAt(f.alpha, c.d[i]), 2);
+  m.residual_rms_m = std::sqrt(s / static_cast<double>(c.d.size()));
+  const std::vector<double> w = lawWeights(f.alpha, c.d, exponent, std::vector<bool>(c.d.size(), true));
+  m.discrepancy = estimateDiscrepancy(entryResiduals(c.d, c.y, w, c.entry, c.tape_sigma, m.model.bias),
+                                      static_cast<int>(f.alpha.size()) - 1);
+}
+
+}  // namespace
+
 CalibrationModel calibrateWithReference(const std::vector<KnownReading>& readings, const CalibrationConfig& config,
                                         double range_min_m, double range_max_m) {
   config.validate();
@@ -364,66 +439,29 @@ CalibrationModel calibrateWithReference(const std::vector<KnownReading>& reading
   m.method = "reference";
   m.model.range_min_m = range_min_m;
   m.model.range_max_m = range_max_m;
-  std::vector<double> d, y;
-  std::vector<std::size_t> stop;
-  std::set<std::size_t> stops;
-  for (const auto& r : readings) {
-    d.push_back(r.d_m);
-    y.push_back(r.y_m);
-    stop.push_back(r.stop);
-    stops.insert(r.stop);
-  }
-  const std::size_t groups = stops.size();
-  if (groups < 3) {
+  const ReadingColumns c = columnsOf(readings);
+  if (c.stops < 3) {
     m.status.code = StatusCode::too_few_reference_stops;
-    m.status.message = "known distances at " + plural(groups, "stop") +
+    m.status.message = "known distances at " + plural(c.stops, "stop") +
                 ": a range model needs measured distances at 3 or more stops (better 10 or more, spread over "
                 "the range you will use the sensor at), or wall-to-wall spans beside them (docs/FORMAT.md#wall-to-wall-spans)";
     return m;
   }
   const double exponent = testReadingNoise(readings, config, m.noise_fits);
-
-  // Every order the stops can support (leave-one-out needs more stops than coefficients).
-  const double d_lo = *std::min_element(d.begin(), d.end()), d_hi = *std::max_element(d.begin(), d.end());
+  const double d_lo = *std::min_element(c.d.begin(), c.d.end()), d_hi = *std::max_element(c.d.begin(), c.d.end());
   std::vector<ClusteredFit> fits;
-  int best = -1;
-  for (int n = 1; n <= config.max_order && static_cast<std::size_t>(n) + 2 <= groups; ++n) {
-    fits.push_back(fitClustered(d, y, stop, n, exponent));
-    const ClusteredFit& f = fits.back();
-    OrderRow row;
-    row.order = n;
-    row.alpha = f.alpha;
-    const double k = n + 2.0;
-    row.aic = 2.0 * k + 2.0 * f.neg_log_likelihood;
-    row.bic = k * std::log(static_cast<double>(d.size())) + 2.0 * f.neg_log_likelihood;
-    row.validation_mse_m2 = f.cv_mse_m2;
-    row.test_mse_m2 = kNaN;
-    row.invertible = isMonotone(BiasPolynomial{f.alpha}, d_lo, d_hi);
-    m.orders.push_back(row);
-    if (row.invertible && (best < 0 || f.cv_mse_m2 < fits[static_cast<std::size_t>(best)].cv_mse_m2)) best = n - 1;
-  }
+  const int best = fitEveryOrder(c, exponent, config, d_lo, d_hi, m, fits);
   if (best < 0) {
     m.status.code = StatusCode::no_invertible_order;
     m.status.message = "no polynomial order fitted to the known distances increases over " + fixed(d_lo, 3) + "-" +
                 fixed(d_hi, 3) + " m: measure more distances across that range";
     return m;
   }
-  int order_aic = -1;
-  for (const auto& row : m.orders)
-    if (row.invertible && (order_aic < 0 || row.aic < m.orders[static_cast<std::size_t>(order_aic - 1)].aic)) order_aic = row.order;
-  const ClusteredFit& f = fits[static_cast<std::size_t>(best)];
   m.order_rule = "leave-one-stop-out cross-validation";
-  m.order_aic = order_aic;
+  m.order_aic = orderByAic(m);
   m.order_validation = best + 1;
-  m.model.bias.alpha = f.alpha;
-  setNoiseLaw(m.model.noise, exponent, f.sigma_e);
-  m.alpha_covariance.assign(f.covariance.data(), f.covariance.data() + f.covariance.size());
-  m.fitted_range_m = fittedRange(d, y, m.model.bias);
+  adoptFit(m, fits[static_cast<std::size_t>(best)], c, exponent);
   addUnsupportedCorrectionWarning(m);
-  m.readings = d.size();
-  double s = 0.0;
-  for (std::size_t i = 0; i < d.size(); ++i) s += std::pow(y[i] - polyAt(f.alpha, d[i]), 2);
-  m.residual_rms_m = std::sqrt(s / static_cast<double>(d.size()));
   return m;
 }
 

@@ -72,6 +72,7 @@ struct KnownReading {
   double d_m = 0.0;       ///< true distance along the beam, metres
   double y_m = 0.0;       ///< raw reading, metres
   double angle_rad = 0.0;  ///< beam angle in the sensor frame, radians
+  double tape_sigma_m = 0.002;  ///< stated error of the entry's measured distance (REF.json sigma_m), metres
 };
 
 struct ReferenceReadings {
@@ -114,8 +115,10 @@ void setNoiseLaw(NoiseModel& noise, double exponent, double sigma_e);
 
 /// The range model from known-distance readings (method "reference"): the noise exponent by
 /// Alhashimi et al. 2016's test, the order by leave-one-stop-out cross-validation, standard errors clustered
-/// by stop. The result's status says why not when the readings cannot support a model (fewer
-/// than 3 stops, or fewer stops than coefficients + 1).
+/// by stop, and the model discrepancy over the entries (calibration/discrepancy.hpp: the
+/// sensor's scatter about the polynomial between measured distances, net of the entries' stated
+/// tape errors). The result's status says why not when the readings cannot support a model
+/// (fewer than 3 stops, or fewer stops than coefficients + 1).
 CalibrationModel calibrateWithReference(const std::vector<KnownReading>& readings, const CalibrationConfig& config,
                                         double range_min_m = 0.0, double range_max_m = 1e9);
 

@@ -194,6 +194,9 @@ CalibrationModel calibrateWithSpans(const LandmarkObservations& obs, const SpanP
   const Eigen::MatrixXd& cov = chosen.fit.covariance;
   m.alpha_covariance.assign(cov.data(), cov.data() + cov.size());
   m.fitted_range_m = chosen.range;
+  m.discrepancy.note =
+      "not estimated for wall-to-wall spans: the standard errors are widened by the spans' disagreement with the model "
+      "beyond their sigma_m (sqrt(chi^2 / dof)), which is as far as a few spans can see the sensor's departure from it";
 
   std::size_t first_wall_entry = 0;
   for (const TapeEntry& t : problem.tapes) first_wall_entry = std::max(first_wall_entry, t.entry + 1);

@@ -52,6 +52,36 @@ struct NoiseFits {
   std::map<std::string, std::string> unavailable;
 };
 
+/// Discrepancy::note of a model without a discrepancy estimate.
+inline constexpr const char* kDiscrepancyNotEstimated =
+    "not estimated (no measured distances beside the fit): the intervals are the fitted curve's alone. They do not "
+    "include how far the sensor may lie from any polynomial between the distances it was fitted at (model "
+    "discrepancy), nor, for a self-calibration, an odometry scale error, which self-calibration cannot see; "
+    "calibrate --reference with ten or more measured distances estimates the first, a few taped stops remove the second";
+
+/// Model discrepancy (Kennedy & O'Hagan 2001): how far the sensor's mean reading at a distance
+/// the fit did not see may lie from the fitted polynomial, beyond the polynomial's own
+/// uncertainty (alpha_covariance). Treated as a Gaussian term of standard deviation sigma_m,
+/// independent between distances; the predictive standard error of f at d is
+/// sqrt(curve SE(d)^2 + sigma_m^2), with Student-t quantiles of `dof` degrees of freedom.
+/// Estimated only where measured distances give independent units (calibrate --reference);
+/// elsewhere method is "none" and the predictive interval is the curve's (docs/FORMAT.md).
+struct Discrepancy {
+  /// How sigma_m was estimated: "reml" (restricted maximum likelihood over the measured
+  /// entries, calibration/discrepancy.hpp) or "none" (not estimated: sigma_m NaN).
+  std::string method = "none";
+  double sigma_m = std::numeric_limits<double>::quiet_NaN();  ///< standard deviation, metres of reading; NaN when none
+  int dof = 0;                  ///< degrees of freedom of its estimate: entries - coefficients; 0 when none
+  std::size_t entries = 0;      ///< measured distances (targets at stops) it was estimated from
+  /// RMS of the tape errors the entries state (REF.json sigma_m), metres: taken out of sigma_m,
+  /// which describes the sensor, not the tape. NaN when none.
+  double tape_sigma_m = std::numeric_limits<double>::quiet_NaN();
+  /// What the intervals include and do not, in words.
+  std::string note = kDiscrepancyNotEstimated;
+  /// Whether sigma_m was estimated (and may be used).
+  bool estimated() const { return method != "none" && sigma_m >= 0.0; }
+};
+
 struct CalibrationModel {
   std::string format = "lidarcal-model/1";
   std::string method;                ///< closed-form, joint, oracle or oracle-commanded
@@ -70,6 +100,8 @@ struct CalibrationModel {
   /// leaves readings beyond f(min)..f(max) as they are unless told otherwise. Unset (models
   /// written before it was recorded): the whole range window.
   std::optional<std::pair<double, double>> fitted_range_m;
+  /// Model discrepancy beside alpha_covariance: together they give the predictive interval.
+  Discrepancy discrepancy;
   /// What a user should read before trusting the model (plausibility checks); empty when none.
   std::vector<std::string> warnings;
   /// Effect terms the joint refinement estimated with them (`calibrate --effects`, name with

@@ -5,7 +5,8 @@
 //
 // A beam that hits a surface at true distance d with incidence phi (angle between the beam and
 // the surface normal) in scan t reads
-//   y = f(d) + b_inc (1 - cos phi) + o_surface + c_drift (t - t_ref) + sigma(d) (1 / cos phi)^gamma (I_ref / I)^delta e,
+//   y = f(d) + ripple(d) + b_inc (1 - cos phi) + o_surface + c_drift (t - t_ref)
+//       + sigma(d) (1 / cos phi)^gamma (I_ref / I)^delta e,
 // with e a unit normal (or a unit-variance Student t with `noise_student_dof` degrees of freedom),
 // rounded to a multiple of `range_resolution_m`; an edge beam (depth discontinuity next to it)
 // is a mixed pixel with probability `mixed_pixel_fraction`: it reads a distance drawn uniformly
@@ -39,12 +40,19 @@ struct RangeEffects {
   double dark_noise_exponent = 0.0;
   /// I_ref: the intensity at which that factor is 1 (> 0; a fit takes the median intensity of its readings).
   double dark_reference_intensity = 1.0;
+  /// A: the sensor's bias gains a ripple A sin(2 pi d / lambda + psi) over the true distance d,
+  /// metres: a bias no low-order polynomial follows (rangeRipple). 0 = off.
+  double ripple_amplitude_m = 0.0;
+  /// lambda: the ripple's wavelength in the true distance, metres (> 0). Default 0.25.
+  double ripple_wavelength_m = 0.25;
+  /// psi: the ripple's phase at d = 0, radians. Default 0.
+  double ripple_phase_rad = 0.0;
 
   /// Whether any effect is on.
   bool any() const {
     return incidence_noise_exponent != 0.0 || incidence_bias_m != 0.0 || range_drift_m_per_scan != 0.0 ||
            mixed_pixel_fraction != 0.0 || noise_student_dof != 0.0 || range_resolution_m != 0.0 ||
-           dark_noise_exponent != 0.0;
+           dark_noise_exponent != 0.0 || ripple_amplitude_m != 0.0;
   }
 };
 
@@ -59,6 +67,15 @@ inline double darkness(double intensity, double reference) {
 /// (I_ref / I)^delta = exp(delta ln(I_ref / I)): the factor on the noise standard deviation.
 inline double darkNoiseFactor(double delta, double darkness_ln) {
   return delta == 0.0 ? 1.0 : std::exp(delta * darkness_ln);
+}
+
+/// The ripple of the sensor's bias at true distance d, metres: A sin(2 pi d / lambda + psi)
+/// (0 when off). Part of the sensor's mean reading f(d) + ripple(d) in the simulator; no fit
+/// models it, so what it leaves is model discrepancy (calibration/discrepancy.hpp).
+inline double rangeRipple(const RangeEffects& fx, double d_m) {
+  if (fx.ripple_amplitude_m == 0.0) return 0.0;
+  constexpr double kTwoPi = 6.283185307179586;
+  return fx.ripple_amplitude_m * std::sin(kTwoPi * d_m / fx.ripple_wavelength_m + fx.ripple_phase_rad);
 }
 
 /// cos phi kept away from 0: grazing beams are treated as at 87 degrees.

@@ -28,7 +28,7 @@ struct ReferenceDistance {
   /// range is nearest distance_m.
   std::optional<double> bearing_rad;
   /// Standard deviation of the measurement, metres (a tape read to the millimetre and placed by
-  /// hand: a few millimetres). Default 0.002.
+  /// hand: a few millimetres; 0: taken as exact). Default 0.002.
   double sigma_m = 0.002;
 };
 

@@ -36,6 +36,32 @@ ojson biasJson(const CalibrationModel& m) {
   return j;
 }
 
+/// The model discrepancy beside the curve's covariance (docs/FORMAT.md, "discrepancy").
+ojson discrepancyJson(const Discrepancy& d) {
+  ojson j{{"method", d.method}, {"sigma_m", number(d.sigma_m)}};
+  if (d.estimated()) {
+    j["dof"] = d.dof;
+    j["entries"] = d.entries;
+    j["tape_sigma_m"] = number(d.tape_sigma_m);
+  }
+  j["note"] = d.note;
+  return j;
+}
+
+Discrepancy readDiscrepancy(const JsonView& v) {
+  v.requireObject();
+  Discrepancy d;
+  d.method = v.getString("method", "none");
+  if (d.method != "none" && d.method != "reml") v.fail("method", "must be \"none\" or \"reml\"");
+  d.note = v.getString("note", "");
+  if (d.method == "none") return d;
+  d.sigma_m = v.getNonNegative("sigma_m");
+  d.dof = v.getPositiveInt("dof");
+  d.entries = static_cast<std::size_t>(v.getPositiveInt("entries", d.dof + 1));
+  if (v.has("tape_sigma_m") && !v.json().at("tape_sigma_m").is_null()) d.tape_sigma_m = v.getNonNegative("tape_sigma_m");
+  return d;
+}
+
 }  // namespace
 
 void writeModel(const std::filesystem::path& file, const CalibrationModel& m) {
@@ -73,6 +99,7 @@ ojson modelJson(const CalibrationModel& m) {
           {"noise", noiseJson(m.model.noise)},
           {"sigma_theta_rad", m.sigma_theta_rad},
           {"alpha_covariance", m.alpha_covariance},
+          {"discrepancy", discrepancyJson(m.discrepancy)},
           {"order_selection", ojson{{"rule", m.order_rule}, {"order_aic", m.order_aic},
                                     {"order_validation", m.order_validation}, {"table", orders}}},
           {"noise_estimators",
@@ -175,6 +202,7 @@ CalibrationModel modelFromJson(const nlohmann::json& j, const std::string& file,
     const std::vector<double> c = root.getNumbers("alpha_covariance");
     if (c.size() == m.model.bias.alpha.size() * m.model.bias.alpha.size()) m.alpha_covariance = c;
   }
+  if (root.has("discrepancy")) m.discrepancy = readDiscrepancy(root.child("discrepancy"));
   if (root.has("effects")) {
     const JsonView fx = root.child("effects");
     fx.requireObject();

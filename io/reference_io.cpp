@@ -47,7 +47,7 @@ ReferenceDistance readDistance(const JsonView& e) {
     if (!(std::abs(b) <= 2.0 * 3.14159265358979323846)) e.fail("bearing_rad", "must be an angle in radians (-2 pi..2 pi)");
     d.bearing_rad = b;
   }
-  d.sigma_m = e.getPositive("sigma_m", d.sigma_m);
+  d.sigma_m = e.getNonNegative("sigma_m", d.sigma_m);  // 0: the distance is taken as exact
   return d;
 }
 

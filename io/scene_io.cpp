@@ -39,6 +39,9 @@ RangeEffects parseEffects(const JsonView& v) {
   e.range_resolution_m = v.getNonNegative("range_resolution_m", 0.0);
   e.dark_noise_exponent = v.getNumber("dark_noise_exponent", 0.0);
   e.dark_reference_intensity = v.getPositive("dark_reference_intensity", 1.0);
+  e.ripple_amplitude_m = v.getNonNegative("ripple_amplitude_m", 0.0);
+  e.ripple_wavelength_m = v.getPositive("ripple_wavelength_m", e.ripple_wavelength_m);
+  e.ripple_phase_rad = v.getNumber("ripple_phase_rad", 0.0);
   return e;
 }
 
@@ -55,6 +58,11 @@ ojson effectsToJson(const RangeEffects& e) {
   if (e.dark_noise_exponent != 0.0) {
     j["dark_noise_exponent"] = e.dark_noise_exponent;
     j["dark_reference_intensity"] = e.dark_reference_intensity;
+  }
+  if (e.ripple_amplitude_m != 0.0) {
+    j["ripple_amplitude_m"] = e.ripple_amplitude_m;
+    j["ripple_wavelength_m"] = e.ripple_wavelength_m;
+    j["ripple_phase_rad"] = e.ripple_phase_rad;
   }
   return j;
 }

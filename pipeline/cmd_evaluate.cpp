@@ -19,6 +19,7 @@
 #include "pipeline/reference_stage.hpp"
 #include "pipeline/commands.hpp"
 #include "pipeline/papers.hpp"
+#include "pipeline/predictive_check.hpp"
 
 namespace lidarcal::pipeline {
 namespace {
@@ -111,7 +112,7 @@ nlohmann::ordered_json spansJson(const std::vector<calibration::SpanMatch>& matc
 /// reference distances and spans, raw and corrected.
 void evaluateReference(const std::string& seq_dir, const std::string& ref_file, const std::string& model_file,
                        const std::string& inversion, const std::string& outside_name, double radius_m,
-                       const std::string& out) {
+                       const std::string& out, bool force) {
   const io::Sequence seq = io::openSequence(seq_dir);
   const Reference ref = io::readReference(ref_file);
   io::checkReference(ref, seq.stops.size(), ref_file);
@@ -136,8 +137,9 @@ void evaluateReference(const std::string& seq_dir, const std::string& ref_file, 
               {"rms_error_all_m", number(rmsError(raw.known.matches))}, {"entries", raw_json}};
   if (!ref.spans.empty()) j["raw"]["spans"] = spansJson(raw.spans.matches);
   std::optional<ReferenceObservations> corrected;
+  std::optional<PredictiveCheck> check;  // each distance against the model's intervals
   if (model) {
-    if (const std::string w = checkModelFits(*model, seq, model_file, false, outside); !w.empty())
+    if (const std::string w = checkModelFits(*model, seq, model_file, force, outside); !w.empty())
       std::fprintf(stderr, "lidarcal: warning: %s\n", w.c_str());
     const auto method = inversion == "ml" ? calibration::InversionMethod::ml : calibration::InversionMethod::ls;
     const calibration::ReadingCorrector correction = calibration::readingCorrector(*model, method, outside);
@@ -151,10 +153,13 @@ void evaluateReference(const std::string& seq_dir, const std::string& ref_file, 
     j["corrected"] = {{"rms_error_m", number(rmsError(corrected->known.matches, fitted))},
                       {"rms_error_all_m", number(rmsError(corrected->known.matches))}, {"entries", cor_json}};
     if (!ref.spans.empty()) j["corrected"]["spans"] = spansJson(corrected->spans.matches);
+    if (!ref.distances.empty()) check = predictiveCheck(corrected->known.matches, ref, *model, correction);
+    if (check) j["predictive"] = predictiveJson(*check);
   }
   if (!ref.distances.empty())
     std::fputs(referenceTable(raw.known.matches, corrected ? &corrected->known.matches : nullptr, fitted, outside).c_str(),
                stdout);
+  if (check) std::fputs(predictiveTable(*check).c_str(), stdout);
   if (!ref.spans.empty())
     std::fputs(spanEvaluationTable(raw.spans.matches, corrected ? &corrected->spans.matches : nullptr).c_str(), stdout);
   if (!out.empty()) io::writeTextAtomically(out, j.dump(2) + "\n");
@@ -166,6 +171,7 @@ void addEvaluateCommand(CLI::App& app) {
   struct Options {
     std::string corrected, truth, raw, out, reference, model, inversion = "ls", outside = calibration::toString(calibration::kDefaultOutside);
     double radius_m = 0.0;
+    bool force = false;
   };
   auto o = std::make_shared<Options>();
   CLI::App* sub = app.add_subcommand(
@@ -189,6 +195,9 @@ void addEvaluateCommand(CLI::App& app) {
                   "With --model: " + calibration::outsideNames() + " readings beyond the fitted range (see lidarcal correct --help)")
       ->check(CLI::IsMember(calibration::outsidePolicies()))
       ->capture_default_str();
+  sub->add_flag("--force", o->force,
+                "With --model: apply it to a sequence whose sensor name or range limits differ from the model's (the same "
+                "sensor recorded with other settings)");
   sub->add_option("--radius", o->radius_m, "With --reference: pole radius in metres (default: sequence.json, else estimated)")
       ->check(CLI::PositiveNumber);
   sub->add_option("--raw", o->raw, "With --truth: raw sequence (default: the scans/ directory next to truth.json)");
@@ -200,7 +209,8 @@ void addEvaluateCommand(CLI::App& app) {
       io::checkOutputFile(o->out, true);
     }
     if (!o->reference.empty())
-      return evaluateReference(o->corrected, o->reference, o->model, o->inversion, o->outside, o->radius_m, o->out);
+      return evaluateReference(o->corrected, o->reference, o->model, o->inversion, o->outside, o->radius_m, o->out,
+                               o->force);
     if (o->truth.empty()) throw InputError("", "--truth", "evaluate needs --truth or --reference", "give one of them");
     const io::SimulationTruth truth = io::loadTruth(o->truth);
     const fs::path raw = o->raw.empty() ? fs::path(o->truth).parent_path() / "scans" : fs::path(o->raw);

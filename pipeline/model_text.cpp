@@ -6,6 +6,8 @@
 #include <limits>
 #include <tuple>
 
+#include "calibration/discrepancy.hpp"
+#include "calibration/held_out.hpp"
 #include "common/pose2.hpp"
 #include "pipeline/words.hpp"
 
@@ -38,16 +40,22 @@ std::vector<double> coefficientErrors(const CalibrationModel& m) {
   return se;
 }
 
-double biasError(const CalibrationModel& m, double d) {
-  const std::size_t n = m.model.bias.alpha.size();
-  if (m.alpha_covariance.size() != n * n) return std::numeric_limits<double>::quiet_NaN();
-  std::vector<double> x(n);
-  double p = 1.0;
-  for (std::size_t i = 0; i < n; ++i, p *= d) x[i] = p;
-  double v = 0.0;
-  for (std::size_t i = 0; i < n; ++i)
-    for (std::size_t j = 0; j < n; ++j) v += x[i] * m.alpha_covariance[i * n + j] * x[j];
-  return std::sqrt(std::max(0.0, v));
+double biasError(const CalibrationModel& m, double d) { return calibration::curveStandardError(m, d); }
+
+double predictiveHalfWidth(const CalibrationModel& m, double d, double level) {
+  return calibration::predictiveFactor(m.discrepancy, level) *
+         calibration::predictiveStandardError(biasError(m, d), m.discrepancy);
+}
+
+std::string discrepancyText(const CalibrationModel& m) {
+  const Discrepancy& q = m.discrepancy;
+  if (!q.estimated()) return "model discrepancy " + q.note;
+  std::string s = "model discrepancy " + fixed(1000.0 * q.sigma_m, 1) + " mm, REML over " +
+                  plural(q.entries, "measured distance") + " (" + plural(static_cast<std::size_t>(q.dof), "degree") +
+                  " of freedom";
+  if (std::isfinite(q.tape_sigma_m) && q.tape_sigma_m > 0.0)
+    s += ", stated tape error " + fixed(1000.0 * q.tape_sigma_m, 1) + " mm";
+  return s + "): " + q.note;
 }
 
 std::string polynomialWithErrors(const CalibrationModel& m) {
@@ -77,6 +85,22 @@ std::string orderText(const CalibrationModel& m) {
   return offset_only ? "an offset only (order 0)" : "order " + std::to_string(m.model.bias.order());
 }
 
+namespace {
+
+/// "  0.50 m: -6.2 +- 2.4 mm;  1.00 m: ..." at tableDistances(m), each error followed by
+/// what `interval` gives for its distance, ending in a newline.
+template <class Interval>
+std::string errorList(const CalibrationModel& m, Interval interval) {
+  std::string s;
+  for (double d : tableDistances(m)) {
+    if (!s.empty()) s += ";";
+    s += "  " + fixed(d, 2) + " m: " + fixed(1000.0 * (m.model.bias(d) - d), 1, true) + interval(d) + " mm";
+  }
+  return s + "\n";
+}
+
+}  // namespace
+
 std::string modelSummary(const CalibrationModel& m) {
   std::string s;
   s += "  range model (" + m.method + ", " + orderText(m) + "): reading = " + polynomialWithErrors(m) +
@@ -89,14 +113,13 @@ std::string modelSummary(const CalibrationModel& m) {
          "its radius); `correct` continues the correction "
          "beyond them at its slope at the edge (--outside)\n";
   const bool errors = m.alpha_covariance.size() == m.model.bias.alpha.size() * m.model.bias.alpha.size();
-  s += "  error of the raw reading (f(d) - d)" + std::string(errors ? " +- its standard error" : "") + ":";
-  for (double d : tableDistances(m)) {
-    s += "  " + fixed(d, 2) + " m: " + fixed(1000.0 * (m.model.bias(d) - d), 1, true);
-    if (errors) s += " +- " + fixed(1000.0 * biasError(m, d), 1);
-    s += " mm;";
+  s += "  error of the raw reading (f(d) - d)" + std::string(errors ? " +- curve SE (how well the polynomial is pinned down)" : "") +
+       ":" + errorList(m, [&](double d) { return errors ? " +- " + fixed(1000.0 * biasError(m, d), 1) : std::string(); });
+  if (errors) {
+    s += "  predictive 95 % interval of that error at a distance the fit did not see (curve and model discrepancy):" +
+         errorList(m, [&](double d) { return " +- " + fixed(1000.0 * predictiveHalfWidth(m, d, 0.95), 1); });
+    s += "    (" + discrepancyText(m) + ")\n";
   }
-  if (!s.empty() && s.back() == ';') s.pop_back();
-  s += "\n";
   for (const auto& w : m.warnings) s += "  warning: " + w + "\n";
   return s;
 }

@@ -1,6 +1,7 @@
 #pragma once
 // A calibrated model in words, for stdout and the report: every coefficient with its standard
-// error, the correction at a few distances inside the fitted range (with its standard error),
+// error, the correction at a few distances inside the fitted range (with the curve's standard
+// error and the predictive interval beside it),
 // the range the model was fitted over, and the plausibility warnings.
 
 #include <string>
@@ -23,8 +24,19 @@ std::string polynomialText(const std::vector<double>& a, const std::vector<doubl
 /// Standard error of each bias coefficient (NaN when the covariance was not computed).
 std::vector<double> coefficientErrors(const CalibrationModel& m);
 
-/// Standard error of f(d) at distance d from the covariance of alpha (NaN without it).
+/// Standard error of f(d) at distance d from the covariance of alpha (NaN without it): the
+/// curve's standard error.
 double biasError(const CalibrationModel& m, double d_m);
+
+/// Half-width of the central predictive interval of probability `level` of f(d) at a distance
+/// the fit did not see: the curve's standard error and the model discrepancy combined, times
+/// the Student-t quantile of the discrepancy's degrees of freedom (calibration/discrepancy.hpp;
+/// the curve's normal interval when the model has no discrepancy). NaN without covariance.
+double predictiveHalfWidth(const CalibrationModel& m, double d_m, double level);
+
+/// The model discrepancy in words: its size, how it was estimated and what the intervals
+/// include (or why there is none).
+std::string discrepancyText(const CalibrationModel& m);
 
 /// "0.05250 (+-0.00110) + 0.88380 (+-0.00090) d + ..." (no errors when not computed).
 std::string polynomialWithErrors(const CalibrationModel& m);

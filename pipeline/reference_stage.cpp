@@ -6,6 +6,7 @@
 #include <optional>
 #include <set>
 
+#include "calibration/held_out.hpp"
 #include "calibration/filtering.hpp"
 #include "common/errors.hpp"
 #include "detectors/sightings.hpp"
@@ -186,6 +187,9 @@ SequenceCalibration calibrateSequenceWithDistancesAndSelf(const io::Sequence& se
   cfg.joint.known_ranges = calibration::knownRanges(ro.known, ref);
   SequenceCalibration out = calibrateSequenceWithSurvey(seq, ref, ref_file, detection, cfg, survey, progress);
   if (out.model.status.ok()) out.model.method = "joint+reference";
+  // The measured entries were terms of the fit, none held out: REML counts the polynomial's
+  // coefficients as fitted to them, so the discrepancy is estimated only where they outnumber them.
+  if (out.model.status.ok()) out.model.discrepancy = calibration::discrepancyOfMeasuredEntries(out.model, ro.known.readings);
   return out;
 }
 

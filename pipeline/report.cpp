@@ -342,7 +342,8 @@ void writeErrorTable(std::ostringstream& md, const CalibrationModel& m, const Fi
   md << "\nWhat the raw sensor reads at a few true distances, and the error it makes";
   if (fitted.max_m > 0.0) md << " (rows outside the fitted range are extrapolated, marked *)";
   md << ":\n\n";
-  md << "| true distance | raw reading | error (+- standard error) | noise (1 sigma) | data |\n|---|---|---|---|---|\n";
+  md << "| true distance | raw reading | error (+- curve SE) | predictive 95 % interval | noise (1 sigma) | data |\n"
+        "|---|---|---|---|---|---|\n";
   const double last = std::min(m.model.range_max_m, std::max(5.0, fitted.max_m));
   for (double d : {0.25, 0.5, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 8.0, 10.0, 12.0, 15.0, 20.0, 25.0, 30.0, 40.0, 50.0, 60.0, 80.0}) {
     if (d > last) break;
@@ -351,9 +352,14 @@ void writeErrorTable(std::ostringstream& md, const CalibrationModel& m, const Fi
     md << "| " << fixed(d, 2) << " m" << (inside ? "" : " *") << " | " << fixed(m.model.bias(d), 3) << " m | "
        << fixed(1000 * (m.model.bias(d) - d), 1, true)
        << (std::isfinite(biasError(m, d)) ? " +- " + fixed(1000 * biasError(m, d), 1) : std::string()) << " mm | "
+       << (std::isfinite(biasError(m, d)) ? "+- " + fixed(1000 * predictiveHalfWidth(m, d, 0.95), 1) + " mm" : "-") << " | "
        << fixed(1000 * m.model.noise.stddev(d, m.model.bias), 1)
        << " mm | " << (inside ? "fitted" : "extrapolated") << " |\n";
   }
+  md << "\nThe curve SE says how well the data pin the polynomial down; the predictive interval is where the "
+        "sensor's error at a distance the fit did not see lies with 95 % probability: "
+     << discrepancyText(m) << " (" << papers::kDiscrepancy << "; " << papers::kReml << "; "
+     << papers::kPredictionInterval << "). A single reading adds its noise.\n";
   md << "\n`lidarcal correct` inverts f for every point (" << kTriangulation
      << ", eq. 30) and moves it along its beam.\n";
 

@@ -32,8 +32,9 @@ double effectReading(const RangeModel& model, const RangeEffects& fx, double d_m
   const double c = clampCosIncidence(beam.cos_incidence);
   const double sigma = model.noise.stddev(d_m, model.bias) * incidenceNoiseFactor(fx.incidence_noise_exponent, c) *
                        darkNoiseFactor(fx.dark_noise_exponent, darkness(beam.intensity, fx.dark_reference_intensity));
-  // The mean reading as the joint refinement models it (common/range_effects.hpp).
-  const double y = expectedReading(model.bias(d_m), beam.surface_offset_m, fx.range_drift_m_per_scan,
+  // The mean reading as the joint refinement models it (common/range_effects.hpp), with the
+  // ripple no fit models.
+  const double y = expectedReading(model.bias(d_m) + rangeRipple(fx, d_m), beam.surface_offset_m, fx.range_drift_m_per_scan,
                                    static_cast<double>(beam.scan) - fx.range_drift_reference_scan, fx.incidence_bias_m, c) +
                    sigma * e;
   return quantise(y, fx.range_resolution_m);

@@ -1,6 +1,7 @@
 // The correction rule (calibration/filtering.hpp): what happens to a reading inside and beyond
 // the range a model was fitted over, under every --outside policy, and its standard error.
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -99,6 +100,31 @@ TEST(Filtering, TheStandardErrorIsTheDeltaMethodsAndGrowsPastTheEdge) {
   CalibrationModel bare = m;
   bare.alpha_covariance.clear();
   EXPECT_TRUE(std::isnan(readingCorrector(bare, InversionMethod::ls, Outside::linear)(3.0).standard_error_m));
+}
+
+TEST(Filtering, ThePredictiveStandardErrorAddsTheDiscrepancyThroughTheSlope) {
+  CalibrationModel m = quadraticModel();
+  const ReadingCorrector curve_only = readingCorrector(m, InversionMethod::ls, Outside::linear);
+  m.discrepancy.method = "reml";
+  m.discrepancy.sigma_m = 0.004;
+  m.discrepancy.dof = 12;
+  const ReadingCorrector correct = readingCorrector(m, InversionMethod::ls, Outside::linear);
+  // Inside (2.5 m) and beyond the edge (a reading continued past 4 m): the curve's standard error
+  // is what it was, and the predictive one adds the discrepancy, in distance units through the
+  // slope of the rule that corrected the reading (f' at d inside, at the edge beyond).
+  for (const double reading : {m.model.bias(2.5), 6.0}) {
+    SCOPED_TRACE(reading);
+    const CorrectedReading before = curve_only(reading), c = correct(reading);
+    EXPECT_DOUBLE_EQ(c.range_m, before.range_m);
+    EXPECT_DOUBLE_EQ(c.curve_standard_error_m, before.standard_error_m);
+    EXPECT_DOUBLE_EQ(before.standard_error_m, before.curve_standard_error_m);  // no discrepancy: the curve's
+    const double slope = m.model.bias.derivative(std::min(c.range_m, 4.0));
+    const double expected = std::hypot(c.curve_standard_error_m, 0.004 / slope);
+    EXPECT_NEAR(c.standard_error_m, expected, 1e-12);
+    const CorrectionErrors at = correct.errorsAt(c.range_m);
+    EXPECT_DOUBLE_EQ(at.predictive_m, c.standard_error_m);
+    EXPECT_DOUBLE_EQ(at.curve_m, c.curve_standard_error_m);
+  }
 }
 
 TEST(Filtering, AReadingContinuedBelowZeroDistanceHasNone) {

@@ -2,12 +2,14 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <fstream>
 
 #include <nlohmann/json.hpp>
 
 #include "common/effect.hpp"
 #include "common/errors.hpp"
+#include "common/range_effects.hpp"
 #include "io/scene_io.hpp"
 #include "test_util.hpp"
 
@@ -86,6 +88,17 @@ TEST(SceneIo, EveryEffectSceneKeyOfTheTableIsRead) {
   EXPECT_EQ(keys, 7);
 }
 
+/// Writes `scene` to `file` and expects readScene to refuse it with an InputError naming `key`.
+void expectRefusedNaming(const std::filesystem::path& file, const nlohmann::json& scene, const std::string& key) {
+  test::writeFile(file, scene.dump());
+  try {
+    readScene(file);
+    ADD_FAILURE() << "accepted a scene with a bad " << key;
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
+  }
+}
+
 TEST(SceneIo, SurfaceIntensitiesAndTheDarkNoiseRoundTrip) {
   TempDir dir;
   nlohmann::json j;
@@ -104,13 +117,26 @@ TEST(SceneIo, SurfaceIntensitiesAndTheDarkNoiseRoundTrip) {
   EXPECT_EQ(back["sensor"]["effects"]["dark_reference_intensity"], 90.0);
   // A reference of 0 makes no sense (the factor is (I_ref / I)^delta): refused, naming the key.
   j["sensor"]["effects"]["dark_reference_intensity"] = 0.0;
+  expectRefusedNaming(dir / "s.json", j, "dark_reference_intensity");
+}
+
+TEST(SceneIo, TheRippleOfTheBiasRoundTripsAndItsWavelengthMustBePositive) {
+  TempDir dir;
+  nlohmann::json j;
+  std::ifstream(test::sourceDir() / "data/scenes/paper_field.json") >> j;
+  j["sensor"]["effects"] = {{"ripple_amplitude_m", 0.004}, {"ripple_wavelength_m", 0.3}, {"ripple_phase_rad", 1.0}};
   test::writeFile(dir / "s.json", j.dump());
-  try {
-    readScene(dir / "s.json");
-    FAIL();
-  } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("dark_reference_intensity"), std::string::npos) << e.what();
-  }
+  const Scene s = readScene(dir / "s.json");
+  EXPECT_EQ(s.sensor.effects.ripple_amplitude_m, 0.004);
+  EXPECT_EQ(s.sensor.effects.ripple_wavelength_m, 0.3);
+  EXPECT_EQ(s.sensor.effects.ripple_phase_rad, 1.0);
+  EXPECT_TRUE(s.sensor.effects.any());
+  // The sensor's mean reading gains A sin(2 pi d / lambda + phi).
+  EXPECT_NEAR(rangeRipple(s.sensor.effects, 0.075), 0.004 * std::sin(0.5 * 3.14159265358979323846 + 1.0), 1e-15);
+  const auto back = sceneToJson(s);
+  EXPECT_EQ(back["sensor"]["effects"]["ripple_wavelength_m"], 0.3);
+  j["sensor"]["effects"]["ripple_wavelength_m"] = 0.0;
+  expectRefusedNaming(dir / "s.json", j, "ripple_wavelength_m");
 }
 
 TEST(SceneIo, MissingSceneFileIsReported) {

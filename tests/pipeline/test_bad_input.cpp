@@ -208,6 +208,12 @@ std::vector<BadInputCase> cases() {
           {"model.json", "format", "lidarcal calibrate"});
   forEach(correcting, "model_bad_field", withModel([](nlohmann::json& j) { j["noise"]["kind"] = "pink"; }), 2,
           {"model.json", "noise.kind", "unknown noise kind"});
+  forEach(correcting, "model_discrepancy_method",
+          withModel([](nlohmann::json& j) { j["discrepancy"] = {{"method", "guess"}, {"sigma_m", 0.003}}; }), 2,
+          {"model.json", "discrepancy.method", "\"none\" or \"reml\""});
+  forEach(correcting, "model_discrepancy_negative",
+          withModel([](nlohmann::json& j) { j["discrepancy"] = {{"method", "reml"}, {"sigma_m", -0.003}, {"dof", 5}}; }), 2,
+          {"model.json", "discrepancy.sigma_m"});
   forEach(correcting, "model_unknown_status", withModel([](nlohmann::json& j) { j["diagnostics"]["status"] = "wobbly"; }), 2,
           {"model.json", "diagnostics.status", "'wobbly' is not a status lidarcal writes"});
   forEach(correcting, "model_failed_calibration",

@@ -1,0 +1,88 @@
+#!/usr/bin/env bash
+# The predictive intervals of `calibrate --reference` on real recordings the fit never saw
+# (docs/results/real-sensors.md, "Predictive intervals on recordings the fit never saw"):
+#   - the Hokuyo UST-30LX range sweep of ../shared/data (42 bags, sorted by distance) split into
+#     interleaved halves, fitted on one and checked on the other, both ways round;
+#   - the README's tape-measure walkthrough: rows 2 12 22 of labels.csv against rows 7 17 27,
+#     both ways round;
+#   - the four reference scenes (a full room, the reflector at 0.505-1.111 m), checked with the
+#     model fitted on the whole sweep;
+# each with the tape distances stated exact (REF.json sigma_m 0) and with a 2 mm tape error
+# (sigma_m 0.002). `evaluate --reference --model` counts the entries inside each interval.
+#
+#   bench/predictive_coverage.sh [WORK_DIR]      (default /tmp/lidarcal-predictive; about a minute)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+LIDARCAL=${LIDARCAL:-build/pipeline/lidarcal}
+DATA=${LIDARCAL_SHARED_DATA:-../shared/data}/hokuyo_ust30lx_reflector
+SWEEP=$DATA/range_sweep
+WORK=${1:-/tmp/lidarcal-predictive}
+RADIUS=0.045   # the reflector's radius (../shared/data/README.md)
+[ -f "$SWEEP/labels.csv" ] || { echo "predictive_coverage: $SWEEP is absent" >&2; exit 1; }
+rm -rf "$WORK" && mkdir -p "$WORK"
+
+# set NAME ROWS...: the bags of those data rows of labels.csv (1 = the first bag) as one stop each,
+# and their REF.json with sigma_m 0 and 0.002.
+set_of() {
+  local name=$1; shift
+  for r in "$@"; do sed -n "$((r + 1))p" "$SWEEP/labels.csv"; done > "$WORK/$name.csv"
+  # shellcheck disable=SC2046
+  "$LIDARCAL" import -q --from rosbag1 $(awk -F, -v d="$SWEEP" '{printf "%s/%s ", d, $1}' "$WORK/$name.csv") \
+    --stop-per-input -o "$WORK/$name" > /dev/null
+  for s in 0 0.002; do
+    awk -F, -v s=$s 'BEGIN {printf "{\"format\": \"lidarcal-reference/1\", \"distances\": ["}
+      {printf "%s{\"stop\": %d, \"target\": \"landmark\", \"distance_m\": %s, \"sigma_m\": %s}", (NR > 1 ? ", " : ""), NR - 1, $2, s}
+      END {print "]}"}' "$WORK/$name.csv" > "$WORK/$name-ref-$s.json"
+  done
+}
+n=$(($(wc -l < "$SWEEP/labels.csv") - 1))
+set_of odd $(seq 1 2 "$n")      # 0.129, 0.228, ... (the 1st, 3rd, ... by distance)
+set_of even $(seq 2 2 "$n")     # 0.178, 0.280, ...
+set_of all $(seq 1 "$n")
+set_of walk_fit 1 11 21         # the README's walkthrough: rows 2 12 22 of labels.csv
+set_of walk_check 6 16 26       # rows 7 17 27
+# The reference scenes: the same sensor on another topic (/scan, named as the sweep's topic so
+# that the model applies) with other range limits (evaluate --force).
+SCENES=$DATA/reference_scenes
+"$LIDARCAL" import -q --from rosbag1 "$SCENES"/ref_505.bag "$SCENES"/ref_707.bag "$SCENES"/ref_909.bag "$SCENES"/ref_1111.bag \
+  --stop-per-input --sensor-name "$(python3 -c 'import json, sys; print(json.load(open(sys.argv[1]))["sensor_name"])' \
+  "$WORK/all/sequence.json")" -o "$WORK/scenes" > /dev/null
+for s in 0 0.002; do
+  echo "{\"format\": \"lidarcal-reference/1\", \"distances\": [$(for k in 0 1 2 3; do
+    d=(0.505 0.707 0.909 1.111); printf '%s{"stop": %d, "distance_m": %s, "bearing_rad": 1.5708, "sigma_m": %s}' \
+      "$([ $k -gt 0 ] && echo ', ')" $k "${d[$k]}" $s; done)]}" > "$WORK/scenes-ref-$s.json"
+done
+
+# check FIT CHECK SIGMA [--force]: calibrate on FIT, evaluate on CHECK; one JSON line of counts.
+check() {
+  local fit=$1 check=$2 s=$3; shift 3
+  [ -f "$WORK/model-$fit-$s.json" ] || "$LIDARCAL" calibrate -q "$WORK/$fit" --reference "$WORK/$fit-ref-$s.json" \
+    --radius $RADIUS -o "$WORK/model-$fit-$s.json" > /dev/null
+  "$LIDARCAL" evaluate -q "$WORK/$check" --reference "$WORK/$check-ref-$s.json" --radius $RADIUS \
+    --model "$WORK/model-$fit-$s.json" -o "$WORK/eval-$fit-$check-$s.json" "$@" > "$WORK/eval-$fit-$check-$s.txt" 2>&1
+  python3 - "$WORK/eval-$fit-$check-$s.json" "$fit" "$check" "$s" <<'PY'
+import json, math, sys
+e = json.load(open(sys.argv[1]))["predictive"]
+rows = [x for x in e["entries"] if x["checked"]]
+n = len(rows)
+rms = 1000 * math.sqrt(sum(x["error_m"] ** 2 for x in rows) / n) if n else float("nan")
+tau = e["discrepancy"]["sigma_m"]
+pct = lambda k: f"{k}/{n} = {100 * k / n:.0f} %" if n else "-"
+print(f"| {sys.argv[2]} | {sys.argv[3]} | {1000 * float(sys.argv[4]):.0f} mm | {n} | "
+      f"{'-' if tau is None else f'{1000 * tau:.1f}'} ({e['discrepancy']['dof']}) | {rms:.1f} mm | "
+      f"{pct(e['inside_68'])} | {pct(e['inside_95'])} | {pct(e['inside_curve_95'])} |")
+PY
+}
+
+echo "| fitted on | checked on | stated tape error | entries checked | discrepancy [mm] (dof) | RMS corrected - tape |" \
+     "inside the 68 % predictive interval | inside the 95 % predictive interval | inside the curve's 95 % interval |"
+echo "|---|---|---|---|---|---|---|---|---|"
+for s in 0.002 0; do
+  check odd even $s
+  check even odd $s
+  check walk_fit walk_check $s
+  check walk_check walk_fit $s
+  check all scenes $s --force
+done
+echo
+echo "per-entry tables: $WORK/eval-*.txt"

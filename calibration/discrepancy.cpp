@@ -1,0 +1,171 @@
+#include "calibration/discrepancy.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <stdexcept>
+
+#include <Eigen/Dense>
+
+#include "common/stats_util.hpp"
+#include "common/student_t.hpp"
+
+namespace lidarcal::calibration {
+namespace {
+
+/// Running weighted sums of one entry's readings.
+struct EntrySums {
+  double w = 0.0, wd = 0.0, wr = 0.0, wrr = 0.0, tape = 0.0;
+  std::size_t n = 0;
+};
+
+/// Smallest variance an entry is given, square metres: keeps the likelihood finite on
+/// noise-free data whose residuals are exactly 0.
+constexpr double kVarianceFloorM2 = 1e-20;
+
+/// The design of the meta-regression: powers of d / scale (scaling changes the restricted
+/// likelihood by a constant only, and keeps the powers of order 9 well conditioned).
+Eigen::MatrixXd design(const std::vector<EntryResidual>& entries, int order) {
+  double scale = 0.0;
+  for (const auto& e : entries) scale = std::max(scale, std::abs(e.distance_m));
+  if (!(scale > 0.0)) scale = 1.0;
+  Eigen::MatrixXd x(static_cast<Eigen::Index>(entries.size()), order + 1);
+  for (std::size_t g = 0; g < entries.size(); ++g) {
+    double p = 1.0;
+    for (int i = 0; i <= order; ++i, p *= entries[g].distance_m / scale) x(static_cast<Eigen::Index>(g), i) = p;
+  }
+  return x;
+}
+
+/// -2 x the restricted log-likelihood without its constant, at tau^2 = tau2:
+/// sum log V_g + log det(X' V^-1 X) + sum (r_g - x_g' beta_GLS)^2 / V_g.
+double restrictedDeviance(const Eigen::MatrixXd& x, const std::vector<EntryResidual>& entries, double tau2) {
+  const Eigen::Index n = x.rows(), p = x.cols();
+  Eigen::VectorXd sqrt_w(n), r(n);
+  double log_v = 0.0;
+  for (Eigen::Index g = 0; g < n; ++g) {
+    const double v = std::max(tau2 + entries[static_cast<std::size_t>(g)].known_variance_m2, kVarianceFloorM2);
+    log_v += std::log(v);
+    sqrt_w(g) = 1.0 / std::sqrt(v);
+    r(g) = entries[static_cast<std::size_t>(g)].residual_m;
+  }
+  // Weighted least squares by QR of W^1/2 X: log det(X' W X) = 2 sum log |R_ii|.
+  const Eigen::MatrixXd xw = sqrt_w.asDiagonal() * x;
+  const Eigen::VectorXd rw = sqrt_w.asDiagonal() * r;
+  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(xw);
+  const Eigen::VectorXd beta = qr.solve(rw);
+  const double rss = (rw - xw * beta).squaredNorm();
+  double log_det = 0.0;
+  const Eigen::MatrixXd rr = qr.matrixQR().topLeftCorner(p, p).triangularView<Eigen::Upper>();
+  for (Eigen::Index i = 0; i < p; ++i) log_det += 2.0 * std::log(std::max(std::abs(rr(i, i)), 1e-300));
+  return log_v + log_det + rss;
+}
+
+/// The largest tau worth searching: a few times the residuals' spread about the least-squares
+/// polynomial (the REML estimate of tau^2 stays below that spread's variance).
+double searchLimit(const Eigen::MatrixXd& x, const std::vector<EntryResidual>& entries) {
+  Eigen::VectorXd r(x.rows());
+  for (Eigen::Index g = 0; g < x.rows(); ++g) r(g) = entries[static_cast<std::size_t>(g)].residual_m;
+  const Eigen::VectorXd beta = x.householderQr().solve(r);
+  const double dof = static_cast<double>(x.rows() - x.cols());
+  return 4.0 * std::sqrt(std::max((r - x * beta).squaredNorm() / dof, kVarianceFloorM2));
+}
+
+}  // namespace
+
+std::vector<EntryResidual> entryResiduals(const std::vector<double>& d, const std::vector<double>& y,
+                                          const std::vector<double>& weight, const std::vector<std::size_t>& entry,
+                                          const std::vector<double>& tape_sigma, const BiasPolynomial& f) {
+  const std::size_t n = d.size();
+  if (y.size() != n || weight.size() != n || entry.size() != n || tape_sigma.size() != n)
+    throw std::invalid_argument("entryResiduals: the per-reading vectors differ in length");
+  std::map<std::size_t, EntrySums> sums;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!(weight[i] > 0.0)) continue;
+    EntrySums& s = sums[entry[i]];
+    const double r = y[i] - f(d[i]);
+    s.w += weight[i];
+    s.wd += weight[i] * d[i];
+    s.wr += weight[i] * r;
+    s.wrr += weight[i] * r * r;
+    s.tape = tape_sigma[i];
+    ++s.n;
+  }
+  // The readings' noise pooled over the entries: weighted scatter about each entry's mean, over
+  // readings - entries degrees of freedom. The mean of entry g then has variance sigma_w^2 / W_g.
+  double within = 0.0;
+  std::size_t readings = 0;
+  for (const auto& [g, s] : sums) {
+    within += std::max(0.0, s.wrr - s.wr * s.wr / s.w);
+    readings += s.n;
+  }
+  const double sigma_w2 = readings > sums.size() ? within / static_cast<double>(readings - sums.size()) : 0.0;
+  std::vector<EntryResidual> out;
+  out.reserve(sums.size());
+  for (const auto& [g, s] : sums) {
+    EntryResidual e;
+    e.entry = g;
+    e.distance_m = s.wd / s.w;
+    e.residual_m = s.wr / s.w;
+    const double tape = f.derivative(e.distance_m) * s.tape;
+    e.known_variance_m2 = sigma_w2 / s.w + tape * tape;
+    e.tape_sigma_m = s.tape;
+    e.readings = s.n;
+    out.push_back(e);
+  }
+  return out;
+}
+
+double restrictedLogLikelihood(const std::vector<EntryResidual>& entries, int order, double tau_m) {
+  return -0.5 * restrictedDeviance(design(entries, order), entries, tau_m * tau_m);
+}
+
+Discrepancy estimateDiscrepancy(const std::vector<EntryResidual>& entries, int order) {
+  Discrepancy out;
+  out.entries = entries.size();
+  const int coefficients = order + 1;
+  if (order < 0 || static_cast<int>(entries.size()) <= coefficients) {
+    out.note = "not estimated: " + std::to_string(entries.size()) + " measured entries leave no degree of freedom beside " +
+               std::to_string(coefficients) + " coefficients, so the intervals are the fitted curve's alone and do not "
+               "include how far the sensor may lie from the polynomial between the measured distances";
+    return out;
+  }
+  const Eigen::MatrixXd x = design(entries, order);
+  auto loglik = [&](double tau) { return -0.5 * restrictedDeviance(x, entries, tau * tau); };
+  // A grid dense near 0 (where the estimate sits for a sensor that follows the polynomial),
+  // then the best cell refined: the likelihood need not be unimodal over the whole range.
+  const double limit = searchLimit(x, entries);
+  constexpr int kGrid = 400;
+  auto at = [&](int j) { return limit * std::pow(static_cast<double>(j) / kGrid, 2.0); };
+  int best = 0;
+  double best_value = loglik(0.0);
+  for (int j = 1; j <= kGrid; ++j)
+    if (const double v = loglik(at(j)); v > best_value) best_value = v, best = j;
+  double tau = at(best);
+  if (best > 0) {
+    const double refined = ternaryMax(loglik, at(best - 1), at(std::min(best + 1, kGrid)), 100);
+    if (loglik(refined) >= best_value) tau = refined;
+  }
+  double tape2 = 0.0;
+  for (const auto& e : entries) tape2 += e.tape_sigma_m * e.tape_sigma_m;
+  out.method = "reml";
+  out.sigma_m = tau;
+  out.dof = static_cast<int>(entries.size()) - coefficients;
+  out.tape_sigma_m = std::sqrt(tape2 / static_cast<double>(entries.size()));
+  out.note = "the predictive interval includes the sensor's scatter about the polynomial between the measured "
+             "distances, beyond their stated tape errors; it does not include an error all of them share (a tape that "
+             "reads long, a wrong pole radius)";
+  return out;
+}
+
+double predictiveStandardError(double curve_se, const Discrepancy& d) {
+  if (!d.estimated()) return curve_se;
+  return std::sqrt(curve_se * curve_se + d.sigma_m * d.sigma_m);
+}
+
+double predictiveFactor(const Discrepancy& d, double level) {
+  return centralTFactor(level, d.estimated() && d.dof > 0 ? static_cast<double>(d.dof) : kInf);
+}
+
+}  // namespace lidarcal::calibration

@@ -1,0 +1,68 @@
+#pragma once
+// Model discrepancy of a range model fitted to measured distances (calibrate --reference): how
+// far the sensor's mean reading at a distance the fit did not see may lie from the fitted
+// polynomial, beyond the polynomial's own uncertainty. A real sensor is not a polynomial (the
+// Hokuyo UST-30LX of docs/results/real-sensors.md leaves a structured +-10 mm against the tape);
+// the coefficients' covariance says how well the polynomial is pinned down, not how far the
+// sensor is from it.
+//
+// Following Kennedy & O'Hagan (2001), the sensor's mean reading is the polynomial plus a
+// discrepancy delta(d), here a Gaussian term of variance tau^2 that is independent between
+// the measured distances (the Hokuyo's residual changes sign between tape distances 20-40 mm
+// apart, so no smoothness is assumed). Each measured entry g (one target at one stop, one tape
+// measurement) gives the weighted mean residual r_g of its readings about the fit, at the mean
+// distance d_g of its readings:
+//   r_g = x(d_g)' beta + u_g + e_g,   u_g ~ N(0, tau^2),   e_g ~ N(0, k_g),
+// with k_g known: the readings' noise averaged over the entry (pooled within-entry scatter over
+// the entry's weight) plus the stated tape error carried through the slope, (f'(d_g) sigma_tape)^2.
+// This is a random-effects meta-regression (each entry a "study" with known within-study
+// variance): tau^2 is its restricted maximum likelihood (REML) estimate (Patterson & Thompson
+// 1971; Viechtbauer 2005 for meta-analysis), which accounts for the polynomial's own degrees of
+// freedom, and has entries - coefficients degrees of freedom. The predictive standard error of f
+// at a new distance is sqrt(SE_curve(d)^2 + tau^2), its intervals Student-t quantiles with those
+// degrees of freedom (as the prediction interval of a random-effects meta-analysis, Higgins,
+// Thompson & Spiegelhalter 2009).
+
+#include <cstddef>
+#include <vector>
+
+#include "common/calibration_model.hpp"
+#include "common/range_model.hpp"
+
+namespace lidarcal::calibration {
+
+/// One measured entry summarised about a fitted f.
+struct EntryResidual {
+  std::size_t entry = 0;          ///< the entry's label (REF.json distances index)
+  double distance_m = 0.0;        ///< weighted mean true distance of its readings, metres
+  double residual_m = 0.0;        ///< weighted mean of reading - f(distance) over its readings, metres
+  double known_variance_m2 = 0.0; ///< k_g: noise of that mean plus (f'(d) sigma_tape)^2, square metres
+  double tape_sigma_m = 0.0;      ///< its stated tape error, metres
+  std::size_t readings = 0;       ///< readings it holds
+};
+
+/// The entries' residuals about f. d_m, y_m, weight (of the noise law, 1 / sigma_i^2 up to a
+/// common factor), entry and tape_sigma_m are per reading and of one length; a reading with
+/// weight 0 is left out. Entries in ascending label order.
+std::vector<EntryResidual> entryResiduals(const std::vector<double>& d_m, const std::vector<double>& y_m,
+                                          const std::vector<double>& weight, const std::vector<std::size_t>& entry,
+                                          const std::vector<double>& tape_sigma_m, const BiasPolynomial& f);
+
+/// The restricted log-likelihood of tau (metres) in the meta-regression above with a polynomial
+/// mean of `order` (up to a constant).
+double restrictedLogLikelihood(const std::vector<EntryResidual>& entries, int order, double tau_m);
+
+/// tau by REML (method "reml"), dof = entries - (order + 1), tape_sigma_m the RMS of the
+/// entries' stated tape errors. Method "none" (with a note saying why) when the entries cannot
+/// leave a degree of freedom.
+Discrepancy estimateDiscrepancy(const std::vector<EntryResidual>& entries, int order);
+
+/// sqrt(curve_se^2 + sigma^2) with the discrepancy's sigma (curve_se when none is estimated);
+/// both in the same units. NaN when curve_se is.
+double predictiveStandardError(double curve_se, const Discrepancy& discrepancy);
+
+/// Half-width factor of the central predictive interval of probability `level`: the Student-t
+/// quantile with the discrepancy's degrees of freedom (the normal's when none is estimated).
+double predictiveFactor(const Discrepancy& discrepancy, double level);
+
+}  // namespace lidarcal::calibration
