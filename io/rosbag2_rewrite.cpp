@@ -19,35 +19,37 @@ namespace {
 
 namespace fs = std::filesystem;
 
-/// Decodes one LaserScan of the topic, hands its ranges to the callback and patches them into `bytes`.
+/// Decodes one LaserScan of a chosen topic, hands its ranges to the callback and patches them into `bytes`.
 class ScanPatcher {
  public:
-  ScanPatcher(const fs::path& file, std::string topic, const RangesCallback& on_scan, BagRewriteReport& report)
-      : file_(file.string()), topic_(std::move(topic)), on_scan_(on_scan), report_(report) {}
+  ScanPatcher(const fs::path& file, const TopicRangesCallback& on_scan, BagRewriteReport& report)
+      : file_(file.string()), on_scan_(on_scan), report_(report) {}
 
-  void patch(std::vector<std::uint8_t>& bytes) {
+  void patch(const std::string& topic, std::vector<std::uint8_t>& bytes) {
     try {
       decodeLaserScan(bytes.data(), bytes.size(), msg_);
     } catch (const InputError& e) {
-      throw InputError(file_, "topic " + topic_ + ", message " + std::to_string(report_.scans) + ", " + e.item(),
+      throw InputError(file_, "topic " + topic + ", message " + std::to_string(report_.scans) + ", " + e.item(),
                        std::string("is not a valid CDR ") + kRos2Flavour.scan_type + ": " + e.problem(),
                        "the bag is damaged, or the topic holds another type than it declares");
     }
     fillRawScan(msg_.view(), RosbagConfig{}, scan_);
     scan_.source_index = report_.scans++;
-    on_scan_(msg_.ranges, scan_);
+    on_scan_(topic, msg_.ranges, scan_);
     patchLaserScanRanges(msg_, bytes.data(), bytes.size());
   }
 
  private:
-  std::string file_, topic_;
-  const RangesCallback& on_scan_;
+  std::string file_;
+  const TopicRangesCallback& on_scan_;
   BagRewriteReport& report_;
   Ros2LaserScan msg_;  // reused: its vectors keep their capacity
   RawScan scan_;
 };
 
-void rewriteMcap(const fs::path& in, const fs::path& out, const std::string& topic, ScanPatcher& patcher,
+using Topics = std::set<std::string>;
+
+void rewriteMcap(const fs::path& in, const fs::path& out, const Topics& chosen, ScanPatcher& patcher,
                  BagRewriteReport& report) {
   const McapReader reader(in);
   McapWriter writer(out);
@@ -64,9 +66,9 @@ void rewriteMcap(const fs::path& in, const fs::path& out, const std::string& top
   std::vector<std::uint8_t> bytes;
   reader.forEachMessage(topics, [&](const McapMessage& m) {
     const std::uint8_t* data = m.data;
-    if (m.channel->topic == topic) {
+    if (chosen.count(m.channel->topic) > 0) {
       bytes.assign(m.data, m.data + m.size);
-      patcher.patch(bytes);
+      patcher.patch(m.channel->topic, bytes);
       data = bytes.data();
     }
     writer.addMessage(m.channel->id, m.sequence, m.log_time_ns, m.publish_time_ns, data, m.size);
@@ -96,14 +98,18 @@ struct Statement {
   ~Statement() { sqlite3_finalize(s); }
 };
 
-void rewriteDb3(const fs::path& in, const fs::path& out, const std::string& topic, ScanPatcher& patcher, BagRewriteReport& report) {
+void rewriteDb3(const fs::path& in, const fs::path& out, const Topics& chosen, ScanPatcher& patcher, BagRewriteReport& report) {
   std::error_code ec;
   fs::copy_file(in, out, fs::copy_options::overwrite_existing, ec);
   if (ec) throw InputError(out.string(), "", "cannot be written: " + ec.message(), "check the output directory");
   const Db3 src(in, SQLITE_OPEN_READONLY), dst(out, SQLITE_OPEN_READWRITE);
-  Statement rows(src, "SELECT m.id, m.data FROM messages m JOIN topics t ON m.topic_id = t.id WHERE t.name = ? "
-                      "ORDER BY m.timestamp, m.id");
-  sqlite3_bind_text(rows.s, 1, topic.c_str(), -1, SQLITE_TRANSIENT);
+  // One query over every chosen topic: the messages reach the callback in time order, as from an MCAP.
+  std::string marks;
+  for (std::size_t i = 0; i < chosen.size(); ++i) marks += i == 0 ? "?" : ", ?";
+  Statement rows(src, "SELECT m.id, m.data, t.name FROM messages m JOIN topics t ON m.topic_id = t.id WHERE t.name IN (" +
+                          marks + ") ORDER BY m.timestamp, m.id");
+  int at = 0;
+  for (const std::string& t : chosen) sqlite3_bind_text(rows.s, ++at, t.c_str(), -1, SQLITE_TRANSIENT);
   if (sqlite3_exec(dst.db, "BEGIN", nullptr, nullptr, nullptr) != SQLITE_OK) dst.fail("BEGIN", "cannot be run");
   Statement update(dst, "UPDATE messages SET data = ? WHERE id = ?");
   std::vector<std::uint8_t> bytes;
@@ -111,7 +117,7 @@ void rewriteDb3(const fs::path& in, const fs::path& out, const std::string& topi
   while ((rc = sqlite3_step(rows.s)) == SQLITE_ROW) {
     const auto* data = static_cast<const std::uint8_t*>(sqlite3_column_blob(rows.s, 1));
     bytes.assign(data, data + sqlite3_column_bytes(rows.s, 1));
-    patcher.patch(bytes);
+    patcher.patch(reinterpret_cast<const char*>(sqlite3_column_text(rows.s, 2)), bytes);
     sqlite3_bind_blob(update.s, 1, bytes.data(), static_cast<int>(bytes.size()), SQLITE_STATIC);
     sqlite3_bind_int64(update.s, 2, sqlite3_column_int64(rows.s, 0));
     if (sqlite3_step(update.s) != SQLITE_DONE) dst.fail("table messages", "cannot be updated");
@@ -132,21 +138,34 @@ bool isMcap(const fs::path& file) {
   return in.gcount() == 8 && std::string(head, 8) == std::string("\x89MCAP0\r\n", 8);
 }
 
-void rewriteFile(const fs::path& in, const fs::path& out, const std::string& topic, ScanPatcher& patcher,
+void rewriteFile(const fs::path& in, const fs::path& out, const Topics& chosen, ScanPatcher& patcher,
                  BagRewriteReport& report) {
-  if (isMcap(in)) rewriteMcap(in, out, topic, patcher, report);
-  else rewriteDb3(in, out, topic, patcher, report);
+  if (isMcap(in)) rewriteMcap(in, out, chosen, patcher, report);
+  else rewriteDb3(in, out, chosen, patcher, report);
 }
 
 }  // namespace
 
 BagRewriteReport rewriteRosbag2(const fs::path& in, const fs::path& out, const std::string& wanted, const RangesCallback& on_scan) {
+  return rewriteRosbag2Topics(in, out, {wanted}, [&](const std::string&, std::vector<float>& ranges, const RawScan& scan) {
+    on_scan(ranges, scan);
+  });
+}
+
+BagRewriteReport rewriteRosbag2Topics(const fs::path& in, const fs::path& out, const std::vector<std::string>& wanted,
+                                      const TopicRangesCallback& on_scan) {
   BagRewriteReport report;
-  report.topic = chooseScanTopic(in, Rosbag2(in).bagTopics(), wanted, kRos2Flavour);  // reads and checks the whole bag first
-  ScanPatcher patcher(in, report.topic, on_scan, report);
+  const std::vector<BagTopic> bag_topics = Rosbag2(in).bagTopics();  // reads and checks the whole bag first
+  Topics chosen;
+  for (const std::string& w : wanted) {
+    const std::string topic = chooseScanTopic(in, bag_topics, w, kRos2Flavour);
+    if (report.topic.empty()) report.topic = topic;
+    chosen.insert(topic);
+  }
+  ScanPatcher patcher(in, on_scan, report);
   std::error_code ec;
   if (!fs::is_directory(in, ec)) {
-    rewriteFile(in, out, report.topic, patcher, report);
+    rewriteFile(in, out, chosen, patcher, report);
     return report;
   }
   std::ifstream yaml(in / "metadata.yaml", std::ios::binary);
@@ -159,7 +178,7 @@ BagRewriteReport rewriteRosbag2(const fs::path& in, const fs::path& out, const s
     if (fs::path(rel).has_parent_path())
       throw InputError((in / "metadata.yaml").string(), "relative_file_paths", "lists " + rel + ", outside the bag directory",
                        "`ros2 bag reindex DIR` rewrites metadata.yaml with the files' names");
-    rewriteFile(in / rel, out / rel, report.topic, patcher, report);
+    rewriteFile(in / rel, out / rel, chosen, patcher, report);
   }
   return report;
 }

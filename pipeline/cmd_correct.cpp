@@ -1,6 +1,7 @@
 // lidarcal correct SEQ --model model.json --out OUT
 // lidarcal correct IN.bag --model model.json --out OUT.bag [--topic T]
 // lidarcal correct IN.mcap|IN.db3|IN_DIR --model model.json --out OUT.mcap|OUT.db3|OUT_DIR [--topic T]
+// lidarcal correct IN.bag|IN.mcap|IN.db3|IN_DIR --model RIG_MODEL.json --out OUT [--sensor A,B]
 
 #include <cstdio>
 #include <memory>
@@ -11,6 +12,7 @@
 #include "io/atomic_file.hpp"
 #include "io/detect_format.hpp"
 #include "io/import_rosbag.hpp"
+#include "io/import_rosbag2.hpp"
 #include "io/model_io.hpp"
 #include "io/rig_model_io.hpp"
 #include "pipeline/bag2_correct.hpp"
@@ -99,22 +101,36 @@ void correctBag2(const std::string& in, const std::string& model_file, const std
   printStats(stats, out, model, outside);
 }
 
-/// correct IN.bag --model RIG_MODEL.json: each sensor's topic corrected by its block.
-void correctRigBag(const std::string& in, const std::string& model_file, const std::string& out,
-                   const std::vector<std::string>& keys, const CorrectionOptions& c, bool overwrite, bool force) {
-  checkBagOutputKind(in, out, true);
-  io::requireRosbagSupport(in);
-  io::checkOutsideInput(in, out);
-  io::checkOutputFile(out, overwrite);
-  const io::RigModel model = io::readRigModel(model_file);
+/// The topics of a ROS1 or ROS 2 bag, of any type (the rewriter refuses a block's topic that is not a LaserScan).
+std::vector<std::string> bagTopicNames(const std::string& in, bool ros2) {
   std::vector<std::string> topics;
-  for (const io::BagTopic& t : io::listBagTopics(in)) topics.push_back(t.topic);
-  const std::vector<std::size_t> blocks = rigBlocksForBag(model, model_file, topics, keys);
+  for (const io::BagTopic& t : ros2 ? io::listRosbag2Topics(in) : io::listBagTopics(in)) topics.push_back(t.topic);
+  return topics;
+}
+
+/// correct IN.bag|IN.mcap|IN.db3|IN_DIR --model RIG_MODEL.json: each sensor's topic corrected by its block, in one pass.
+void correctRigBag(const std::string& in, const std::string& model_file, const std::string& out,
+                   const std::vector<std::string>& keys, const CorrectionOptions& c, bool overwrite, bool force, bool ros2) {
+  checkBagOutputKind(in, out, !ros2);
+  if (!ros2) io::requireRosbagSupport(in);
+  io::checkOutsideInput(in, out);
+  std::error_code ec;
+  const bool dir = ros2 && std::filesystem::is_directory(in, ec);
+  if (!dir) io::checkOutputFile(out, overwrite);
+  const io::RigModel model = io::readRigModel(model_file);
+  const std::vector<std::size_t> blocks = rigBlocksForBag(model, model_file, bagTopicNames(in, ros2), keys);
   std::vector<std::string> warnings;
   std::vector<RigCorrection> done;
-  io::writeAtomically(out, [&](const std::filesystem::path& tmp) {
-    done = correctRigRosbag(in, tmp, model, model_file, blocks, c.method(), c.outsidePolicy(), force, warnings);
-  });
+  const auto write = [&](const std::filesystem::path& tmp) {
+    done = correctRigRosbag(in, tmp, model, model_file, blocks, c.method(), c.outsidePolicy(), force, ros2, warnings);
+  };
+  if (dir) {
+    io::StagedDirectory staged(out, overwrite);
+    write(staged.path());
+    staged.commit();
+  } else {
+    io::writeAtomically(out, write);
+  }
   for (const std::string& w : warnings) std::fprintf(stderr, "lidarcal: warning: %s\n", w.c_str());
   for (const RigCorrection& d : done) {
     std::fprintf(stderr, "%s (%s): ", d.topic.c_str(), d.sensor.c_str());
@@ -135,13 +151,13 @@ void addCorrectCommand(CLI::App& app) {
   CLI::App* sub = app.add_subcommand("correct", "Rewrite every scan of a sequence (or every LaserScan of a ROS1 or ROS 2 bag) with calibrated ranges");
   sub->add_option("SEQ", o->seq, "Sequence directory (any sequence of the calibrated sensor), a ROS1 bag, or a ROS 2 bag (.mcap, .db3 or its directory)")->required();
   sub->add_option("--model", o->model, "model.json from lidarcal calibrate")->required();
-  sub->add_option("-o,--out", o->out, "Output sequence directory; for a bag, a bag of the same kind (.bag, .mcap, .db3 or a directory): every message copied, only the topic's ranges changed")->required();
+  sub->add_option("-o,--out", o->out, "Output sequence directory; for a bag, a bag of the same kind (.bag, .mcap, .db3 or a directory): every message copied, only the corrected topics' ranges changed")->required();
   addCorrectionOptions(sub, c);
   sub->add_option("--topic", o->topic, "A bag's LaserScan topic to correct (default: the bag's only one)");
   sub->add_option("--sensor", o->sensor,
-                  "With a rig model (several sensors): the block to apply, by sensor name, topic or frame (a ROS1 bag: "
-                  "default every block whose topic the bag holds; several comma-separated; a ROS 2 bag: one block per run, "
-                  "with --topic when it holds several LaserScan topics)");
+                  "With a rig model (several sensors): the blocks to apply, by sensor name, topic or frame, several "
+                  "comma-separated (a ROS1 or ROS 2 bag: default every block whose topic the bag holds, each topic "
+                  "corrected by its own block in one pass)");
   sub->add_flag("--ascii", o->ascii, "Write ASCII PCD instead of binary");
   addThreadsOption(sub, o->threads, "correcting a sequence's scans side by side (a bag is corrected in order)");
   sub->add_flag("--overwrite", o->overwrite, "Replace OUT if it exists");
@@ -149,20 +165,16 @@ void addCorrectCommand(CLI::App& app) {
                 "Apply a model whose range limits differ from the sequence's (same sensor, other limits set), with a "
                 "warning");
   sub->callback([o, c, sub] {
-    if (isRosbag(o->seq)) {
+    const bool ros1 = isRosbag(o->seq), ros2 = !ros1 && isRosbag2(o->seq);
+    if (ros1 || ros2) {
       if (o->ascii) throw InputError("", "--ascii", "applies to sequences, not to bags", "drop --ascii");
       if (io::isRigModel(o->model)) {
         std::vector<std::string> keys = splitList(o->sensor);
         for (const std::string& t : splitList(o->topic)) keys.push_back(t);
-        return correctRigBag(o->seq, o->model, o->out, keys, *c, o->overwrite, o->force);
+        return correctRigBag(o->seq, o->model, o->out, keys, *c, o->overwrite, o->force, ros2);
       }
-      correctBag(o->seq, o->model, o->out, o->topic, *c, o->overwrite, o->force, o->sensor);
-      return;
-    }
-    if (isRosbag2(o->seq)) {
-      if (o->ascii) throw InputError("", "--ascii", "applies to sequences, not to bags", "drop --ascii");
-      correctBag2(o->seq, o->model, o->out, o->topic, *c, o->overwrite, o->force, o->sensor);
-      return;
+      if (ros1) return correctBag(o->seq, o->model, o->out, o->topic, *c, o->overwrite, o->force, o->sensor);
+      return correctBag2(o->seq, o->model, o->out, o->topic, *c, o->overwrite, o->force, o->sensor);
     }
     if (sub->count("--topic") > 0)
       throw InputError(o->seq, "--topic", "applies to bags only (this is not one)", "drop --topic");

@@ -5,7 +5,9 @@
 #include <memory>
 
 #include "common/errors.hpp"
+#include "io/rosbag2_rewrite.hpp"
 #include "io/rosbag_rewrite.hpp"
+#include "pipeline/bag2_correct.hpp"
 #include "pipeline/bag_correct.hpp"
 
 namespace lidarcal::pipeline {
@@ -34,7 +36,8 @@ std::vector<std::size_t> rigBlocksForBag(const io::RigModel& model, const std::f
 std::vector<RigCorrection> correctRigRosbag(const std::filesystem::path& in, const std::filesystem::path& out,
                                             const io::RigModel& model, const std::filesystem::path& model_file,
                                             const std::vector<std::size_t>& blocks, calibration::InversionMethod method,
-                                            calibration::Outside outside, bool force, std::vector<std::string>& warnings) {
+                                            calibration::Outside outside, bool force, bool ros2,
+                                            std::vector<std::string>& warnings) {
   std::vector<RigCorrection> done;
   std::vector<std::unique_ptr<MemoCorrector>> memos;
   std::map<std::string, std::size_t> by_topic;
@@ -42,21 +45,24 @@ std::vector<RigCorrection> correctRigRosbag(const std::filesystem::path& in, con
   for (const std::size_t k : blocks) {
     const io::RigModelSensor& s = model.sensors[k];
     const std::string where = model_file.string() + " (sensor " + s.name + ")";
-    if (const std::string w = checkModelFitsSensor(s.model, bagSensorFacts(in, s.topic), where, force, outside); !w.empty())
+    const SensorFacts facts = ros2 ? rosbag2SensorFacts(in, s.topic) : bagSensorFacts(in, s.topic);
+    if (const std::string w = checkModelFitsSensor(s.model, facts, where, force, outside); !w.empty())
       warnings.push_back(w);
     memos.push_back(std::make_unique<MemoCorrector>(modelCorrector(s.model, method, outside, where)));
     by_topic[s.topic] = done.size();
     done.push_back(RigCorrection{s.name, s.topic, {}});
     topics.push_back(s.topic);
   }
-  io::rewriteRosbagTopics(in, out, topics, [&](const std::string& topic, std::vector<float>& ranges, const io::RawScan& scan) {
+  const io::TopicRangesCallback on_scan = [&](const std::string& topic, std::vector<float>& ranges, const io::RawScan& scan) {
     const std::size_t i = by_topic.at(topic);
     const io::RigModelSensor& s = model.sensors[blocks[i]];
     checkModelBeams(s.model, ranges.size(), in.string() + " (" + topic + " LaserScan " + std::to_string(scan.source_index) + ")",
                     model_file);
     correctLaserRanges(ranges, scan.range_min_m, scan.range_max_m, *memos[i], done[i].stats);
     ++done[i].stats.scans;
-  });
+  };
+  if (ros2) io::rewriteRosbag2Topics(in, out, topics, on_scan);
+  else io::rewriteRosbagTopics(in, out, topics, on_scan);
   return done;
 }
 

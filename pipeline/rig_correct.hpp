@@ -1,7 +1,8 @@
 #pragma once
-// `lidarcal correct IN.bag --model RIG_MODEL.json --out OUT.bag`: a bag of several lidars with
-// each LaserScan topic corrected by its own sensor's block of a rig model (io/rig_model_io.hpp),
-// each block checked against its topic as a single-sensor model is against the bag's one.
+// `lidarcal correct IN.bag|IN.mcap|IN.db3|IN_DIR --model RIG_MODEL.json --out OUT`: a ROS1 or
+// ROS 2 bag of several lidars with each LaserScan topic corrected by its own sensor's block of a
+// rig model (io/rig_model_io.hpp), each block checked against its topic as a single-sensor model
+// is against the bag's one.
 
 #include <filesystem>
 #include <string>
@@ -23,12 +24,14 @@ struct RigCorrection {
 std::vector<std::size_t> rigBlocksForBag(const io::RigModel& model, const std::filesystem::path& model_file,
                                          const std::vector<std::string>& bag_topics, const std::vector<std::string>& keys);
 
-/// Writes `out` (a new file; the caller makes it atomic) from `in`, each chosen block's topic
-/// corrected by its model (checked first: status, sensor name, range limits unless `force`;
-/// warnings go to `warnings`). Throws InputError or DataError naming the block.
+/// Writes `out` (a new file, or for a rosbag2 directory an existing empty one; the caller makes it
+/// atomic) from `in` (a ROS 2 bag when `ros2`), each chosen block's topic corrected by its model in
+/// one pass (checked first: status, sensor name, range limits unless `force`; warnings go to
+/// `warnings`). Throws InputError or DataError naming the block.
 std::vector<RigCorrection> correctRigRosbag(const std::filesystem::path& in, const std::filesystem::path& out,
                                             const io::RigModel& model, const std::filesystem::path& model_file,
                                             const std::vector<std::size_t>& blocks, calibration::InversionMethod method,
-                                            calibration::Outside outside, bool force, std::vector<std::string>& warnings);
+                                            calibration::Outside outside, bool force, bool ros2,
+                                            std::vector<std::string>& warnings);
 
 }  // namespace lidarcal::pipeline

@@ -1,7 +1,8 @@
 // `lidarcal correct` on ROS 2 bags (.mcap, .db3, rosbag2 directories) through the binary: the
 // corrected bag re-imports to the ranges `correct` gives on the imported sequence, every other
 // message and every stamp is kept byte for byte, the MCAP written is valid (read back by
-// lidarcal's reader, record by record), and ROS1 <-> ROS 2 names are refused with the remedy.
+// lidarcal's reader, record by record), ROS1 <-> ROS 2 names are refused with the remedy, and a
+// rig model corrects each LaserScan topic with its own block in one pass.
 
 #include <cmath>
 #include <limits>
@@ -72,10 +73,12 @@ std::vector<Recorded> messagesOf(const fs::path& file) {
   return out;
 }
 
-/// The ranges of the bag's /scan as the importer reads them.
-std::vector<std::vector<float>> importedRanges(const fs::path& bag) {
+/// The ranges of the bag's LaserScan `topic` (empty: its only one) as the importer reads them.
+std::vector<std::vector<float>> importedRanges(const fs::path& bag, const std::string& topic = "") {
   std::vector<std::vector<float>> out;
-  io::readRosbag2(bag, io::RosbagConfig{}, [&](const io::RawScan& s) {
+  io::RosbagConfig config;
+  config.topic = topic;
+  io::readRosbag2(bag, config, [&](const io::RawScan& s) {
     out.push_back(s.ranges_m);
     return true;
   });
@@ -189,6 +192,94 @@ TEST_F(CorrectRosbag2, RefusesToTurnOneKindOfBagIntoAnotherNamingTheRemedy) {
   EXPECT_EQ(correct("in.mcap", "out.db3").exit_code, 2);
   EXPECT_FALSE(fs::exists(dir / "out.bag"));
   EXPECT_FALSE(fs::exists(dir / "out.db3"));
+}
+
+/// Scans on /scan and /scan_b (the back lidar's readings 0.3 m longer) and /chatter after each, at
+/// time k; the rows of the same bag as .db3 into `rows`.
+void writeTwoLidarMcap(const fs::path& file, std::vector<Db3Message>& rows) {
+  std::string out = mcapHead() + schemaRecord(1, "sensor_msgs/msg/LaserScan") + schemaRecord(2, "std_msgs/msg/String") +
+                    channelRecord(1, 1, "/scan") + channelRecord(2, 2, "/chatter") + channelRecord(3, 1, "/scan_b");
+  std::string chunk;
+  for (int k = 0; k < 8; ++k) {
+    const std::uint64_t t = 1000000000ull * static_cast<std::uint64_t>(100 + k);
+    TestScan back = scan(k);
+    back.frame_id = "laser_back";
+    for (float& r : back.ranges) r += 0.3f;
+    const std::string messages[] = {laserScanCdr(scan(k), k % 3 == 0), laserScanCdr(back, k % 2 == 0), stringCdr("hi " + std::to_string(k))};
+    for (const int c : {0, 1, 2}) {
+      const int channel = c == 0 ? 1 : c == 1 ? 3 : 2;
+      chunk += messageRecord(static_cast<std::uint16_t>(channel), t + static_cast<std::uint64_t>(c), messages[c]);
+      rows.push_back({channel, static_cast<std::int64_t>(t) + c, messages[c]});
+    }
+  }
+  writeFile(file, out + chunkRecord(chunk, "zstd", 100000000000ull, 107000000002ull) + mcapTail());
+}
+
+/// The bytes of every message on `topic`, in order.
+std::vector<std::vector<std::uint8_t>> bytesOn(const std::vector<Recorded>& messages, const std::string& topic) {
+  std::vector<std::vector<std::uint8_t>> out;
+  for (const Recorded& m : messages)
+    if (m.topic == topic) out.push_back(m.bytes);
+  return out;
+}
+
+TEST_F(CorrectRosbag2, RigModelCorrectsEachTopicWithItsOwnBlockInOnePass) {
+  std::vector<Db3Message> rows;
+  writeTwoLidarMcap(dir / "two.mcap", rows);
+  const io::RigModel rig = twoLidarModel("/scan", "/scan_b");
+  io::writeRigModel(dir / "rig.json", rig);
+  const std::string model = " --model " + (dir / "rig.json").string();
+  const CliResult r = runCli("correct " + (dir / "two.mcap").string() + model + " -o " + (dir / "rig.mcap").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  // The truth: each topic alone corrected with its block as a single-sensor model.
+  for (const std::size_t b : {0, 1}) {
+    io::writeModel(dir / (rig.sensors[b].name + ".json"), rig.sensors[b].model);
+    const CliResult one = runCli("correct " + (dir / "two.mcap").string() + " --model " + (dir / (rig.sensors[b].name + ".json")).string() +
+                                 " --topic " + rig.sensors[b].topic + " -o " + (dir / (rig.sensors[b].name + ".mcap")).string());
+    ASSERT_EQ(one.exit_code, 0) << one.err;
+  }
+  const auto in = messagesOf(dir / "two.mcap"), out = messagesOf(dir / "rig.mcap");
+  ASSERT_EQ(in.size(), 24u);
+  ASSERT_EQ(out.size(), in.size());
+  for (std::size_t j = 0; j < in.size(); ++j) {
+    EXPECT_EQ(out[j].topic, in[j].topic) << j;
+    EXPECT_EQ(out[j].log_time, in[j].log_time) << j;
+    EXPECT_EQ(out[j].publish_time, in[j].publish_time) << j;
+    EXPECT_EQ(out[j].sequence, in[j].sequence) << j;
+    if (in[j].topic == "/chatter") EXPECT_EQ(out[j].bytes, in[j].bytes) << j;
+    else EXPECT_NE(out[j].bytes, in[j].bytes) << j;  // its ranges moved
+  }
+  // Bit for bit the single-topic runs' messages: the same ranges, every other byte the input's.
+  EXPECT_EQ(bytesOn(out, "/scan"), bytesOn(messagesOf(dir / "front.mcap"), "/scan"));
+  EXPECT_EQ(bytesOn(out, "/scan_b"), bytesOn(messagesOf(dir / "back.mcap"), "/scan_b"));
+  // The other block would have given other ranges: each topic did get its own.
+  ASSERT_EQ(runCli("correct " + (dir / "two.mcap").string() + " --model " + (dir / "front.json").string() +
+                   " --topic /scan_b -o " + (dir / "wrong.mcap").string()).exit_code, 0);
+  EXPECT_NE(bytesOn(out, "/scan_b"), bytesOn(messagesOf(dir / "wrong.mcap"), "/scan_b"));
+  // --sensor narrows to one block: the other topic is copied as it was.
+  const CliResult back = runCli("correct " + (dir / "two.mcap").string() + model + " --sensor back -o " + (dir / "only-back.mcap").string());
+  ASSERT_EQ(back.exit_code, 0) << back.err;
+  const auto narrowed = messagesOf(dir / "only-back.mcap");
+  EXPECT_EQ(bytesOn(narrowed, "/scan"), bytesOn(in, "/scan"));
+  EXPECT_EQ(bytesOn(narrowed, "/scan_b"), bytesOn(out, "/scan_b"));
+  // A .db3 of the same messages, alone and in a rosbag2 directory: the same ranges.
+  writeDb3(dir / "two.db3", {{1, "/scan", "sensor_msgs/msg/LaserScan"}, {2, "/chatter", "std_msgs/msg/String"},
+                             {3, "/scan_b", "sensor_msgs/msg/LaserScan"}}, rows);
+  fs::create_directories(dir / "bag");
+  fs::copy_file(dir / "two.db3", dir / "bag" / "bag_0.db3");
+  writeFile(dir / "bag" / "metadata.yaml", "rosbag2_bagfile_information:\n  version: 5\n  storage_identifier: sqlite3\n"
+                                           "  relative_file_paths:\n    - bag_0.db3\n");
+  ASSERT_EQ(runCli("correct " + (dir / "two.db3").string() + model + " -o " + (dir / "rig.db3").string()).exit_code, 0);
+  ASSERT_EQ(runCli("correct " + (dir / "bag").string() + model + " -o " + (dir / "rig-bag").string()).exit_code, 0);
+  for (const std::string bag : {"rig.db3", "rig-bag"})
+    for (const std::string topic : {"/scan", "/scan_b"}) {
+      SCOPED_TRACE(bag + " " + topic);
+      const auto got = importedRanges(dir / bag, topic), mcap = importedRanges(dir / "rig.mcap", topic);
+      ASSERT_EQ(got.size(), 8u);
+      ASSERT_EQ(got.size(), mcap.size());
+      for (std::size_t k = 0; k < got.size(); ++k)
+        for (std::size_t i = 0; i < got[k].size(); ++i) EXPECT_TRUE(sameFloat(got[k][i], mcap[k][i])) << k << " " << i;
+    }
 }
 
 TEST_F(CorrectRosbag2, AModelOfAnotherSensorWritesNothing) {

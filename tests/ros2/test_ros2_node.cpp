@@ -204,15 +204,17 @@ TEST_F(Ros2Node, PublishesWhatCorrectWritesToAnMcapBitForBit) {
 
 TEST_F(Ros2Node, PicksTheBlockOfARigModelByTopicOrSensorName) {
   // "back" on /scan (the node's default input), "front" on another topic; `correct` with each
-  // block named is the oracle.
+  // block as a single-sensor model is the oracle (a rig model corrects only a block's own topic).
   const fs::path rig = dir / "rig.json";
-  io::writeRigModel(rig, twoLidarModel("/scan_front", "/scan"));
+  const io::RigModel rig_model = twoLidarModel("/scan_front", "/scan");
+  io::writeRigModel(rig, rig_model);
   const std::vector<io::Ros2LaserScan> sent = scansOf(dir / "in.mcap");
   std::map<std::string, std::vector<io::Ros2LaserScan>> expected;
-  for (const std::string block : {"front", "back"}) {
-    const fs::path out = dir / (block + ".mcap");
-    const CliResult c = runCli("correct " + (dir / "in.mcap").string() + " --model " + rig.string() + " --sensor " + block +
-                               " -o " + out.string());
+  for (const io::RigModelSensor& s : rig_model.sensors) {
+    const std::string block = s.name;
+    const fs::path out = dir / (block + ".mcap"), model = dir / (block + ".json");
+    io::writeModel(model, s.model);
+    const CliResult c = runCli("correct " + (dir / "in.mcap").string() + " --model " + model.string() + " -o " + out.string());
     ASSERT_EQ(c.exit_code, 0) << c.err;
     expected[block] = scansOf(out);
     ASSERT_EQ(expected[block].size(), sent.size());
