@@ -7,7 +7,7 @@
 #include "common/plural.hpp"
 #include "io/atomic_file.hpp"
 #include "pipeline/cmd_rig.hpp"
-#include "pipeline/rig_observations.hpp"
+#include "detectors/rig_sightings.hpp"
 #include "pipeline/rig_report.hpp"
 
 namespace lidarcal::pipeline {
@@ -43,17 +43,17 @@ void runRigCalibrate(const RigCalibrateSettings& s) {
   io::checkOutsideInput(s.dir, s.out);
   io::checkOutputFile(s.out, s.overwrite);
   const io::Rig rig = io::openRig(s.dir);
-  RigDetectionSettings det;
+  detectors::RigDetectionSettings det;
   det.detection = detectionConfig(s.options).detection;
   if (!det.detection.landmark_radius_m)
     for (const auto& seq : rig.sequences)
       if (seq.meta.landmark_radius_m) det.detection.landmark_radius_m = seq.meta.landmark_radius_m;
   det.min_intensity = s.min_intensity;
   det.associate_m = s.associate_m;
-  const RigCollected found = collectRigObservations(rig, det);
+  const detectors::RigCollected found = detectors::collectRigObservations(rig, det);
   std::printf("| sensor | scans | circles | on poles | poles |\n|---|---|---|---|---|\n");
   for (std::size_t k = 0; k < found.sensors.size(); ++k) {
-    const RigSensorDetections& d = found.sensors[k];
+    const detectors::RigSensorDetections& d = found.sensors[k];
     std::printf("| %s | %zu | %zu | %zu | %zu |\n", rig.meta.sensors[k].name.c_str(), d.scans, d.detections, d.sightings, d.poles);
   }
   std::printf("%s, %zu seen by two sensors or more\n", plural(found.poles, "pole").c_str(), found.shared_poles);

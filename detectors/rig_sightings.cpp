@@ -1,4 +1,4 @@
-#include "pipeline/rig_observations.hpp"
+#include "detectors/rig_sightings.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -9,7 +9,7 @@
 #include "common/errors.hpp"
 #include "io/pcd_scan.hpp"
 
-namespace lidarcal::pipeline {
+namespace lidarcal::detectors {
 namespace {
 
 /// One detection placed in the frame of the vehicle's poses.
@@ -167,4 +167,4 @@ RigCollected collectRigObservations(const io::Rig& rig, const RigDetectionSettin
   return out;
 }
 
-}  // namespace lidarcal::pipeline
+}  // namespace lidarcal::detectors

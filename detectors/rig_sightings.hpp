@@ -13,10 +13,10 @@
 #include "detectors/scan_detector.hpp"
 #include "io/rig.hpp"
 
-namespace lidarcal::pipeline {
+namespace lidarcal::detectors {
 
 struct RigDetectionSettings {
-  detectors::DetectionConfig detection;  ///< per scan; its landmark_radius_m is the poles' radius (required)
+  DetectionConfig detection;  ///< per scan; its landmark_radius_m is the poles' radius (required)
   /// Retro-reflectors: points returning less than this intensity read as no return, so the
   /// reflectors stand alone in front of what is behind them. 0 (default): every point counts.
   double min_intensity = 0.0;
@@ -46,4 +46,4 @@ struct RigCollected {
 /// Detects and associates. Throws InputError for bad settings or a rig without a radius.
 RigCollected collectRigObservations(const io::Rig& rig, const RigDetectionSettings& settings);
 
-}  // namespace lidarcal::pipeline
+}  // namespace lidarcal::detectors
