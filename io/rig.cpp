@@ -21,17 +21,6 @@ constexpr const char* kFormat = "lidarcal-rig/1";
 constexpr const char* kScansHeader = "sensor,file,stamp_s,input,stop,vehicle_x_m,vehicle_y_m,vehicle_yaw_rad";
 constexpr const char* kRemedy = "rig sequences are written by `lidarcal import` with several topics (docs/FORMAT.md)";
 
-Mounting readMounting(const JsonView& v) {
-  v.requireObject();
-  Mounting m;
-  m.x_m = v.getNumber("x_m");
-  m.y_m = v.getNumber("y_m");
-  m.yaw_rad = v.getNumber("yaw_rad");
-  m.upside_down = v.getBool("upside_down", false);
-  m.z_m = v.getNumber("z_m", 0.0);
-  return m;
-}
-
 /// Text of a double that reads back as the same double.
 std::string exact(double v) {
   if (!std::isfinite(v)) return "nan";
@@ -44,6 +33,17 @@ std::string exact(double v) {
 
 std::optional<std::size_t> RigMeta::find(const std::string& key) const {
   return findSensorByKey(sensors, key);
+}
+
+Mounting readMounting(const JsonView& v) {
+  v.requireObject();
+  Mounting m;
+  m.x_m = v.getNumber("x_m");
+  m.y_m = v.getNumber("y_m");
+  m.yaw_rad = v.getNumber("yaw_rad");
+  m.upside_down = v.getBool("upside_down", false);
+  m.z_m = v.getNumber("z_m", 0.0);
+  return m;
 }
 
 ojson mountingJson(const Mounting& m) {

@@ -20,6 +20,8 @@
 
 namespace lidarcal::io {
 
+class JsonView;  // io/json_util.hpp
+
 /// One sensor of a rig sequence.
 struct RigSensorInfo {
   std::string name;                  ///< short name, unique; also its sub-directory
@@ -92,7 +94,9 @@ std::optional<std::size_t> findSensorByKey(const std::vector<T>& items, const st
   return std::nullopt;
 }
 
-/// The JSON object of a mounting ({x_m, y_m, yaw_rad, upside_down, z_m}) and back.
+/// The JSON object of a mounting ({x_m, y_m, yaw_rad, upside_down, z_m}) and back; reading
+/// throws InputError naming the field.
 nlohmann::ordered_json mountingJson(const Mounting& m);
+Mounting readMounting(const JsonView& v);
 
 }  // namespace lidarcal::io

@@ -29,16 +29,6 @@ ojson standardErrors(const std::array<double, 9>& c) {
 
 Pose2 readPose(const JsonView& v) { return Pose2{v.getNumber("x_m"), v.getNumber("y_m"), v.getNumber("yaw_rad")}; }
 
-Mounting readMounting(const JsonView& v) {
-  Mounting m;
-  m.x_m = v.getNumber("x_m");
-  m.y_m = v.getNumber("y_m");
-  m.yaw_rad = v.getNumber("yaw_rad");
-  m.upside_down = v.getBool("upside_down", false);
-  m.z_m = v.getNumber("z_m", 0.0);
-  return m;
-}
-
 std::array<double, 9> readCovariance(const JsonView& v, const std::string& key) {
   std::array<double, 9> c{};
   if (!v.has(key)) return c;
