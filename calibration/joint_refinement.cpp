@@ -169,6 +169,16 @@ JointResult refineJoint(const LandmarkObservations& obs, const JointInit& init, 
   return joint::JointProblem(obs, init, config).run();
 }
 
+JointInit initFrom(const JointResult& r) {
+  JointInit i;
+  i.poses = r.poses;
+  i.centres = r.centres;
+  i.radius_m = r.radius_m;
+  i.model = r.model;
+  i.effects = r.effects;
+  return i;
+}
+
 std::vector<JointReading> evaluateJoint(const LandmarkObservations& obs, const JointResult& fit, const JointConfig& config) {
   std::vector<JointReading> out;
   const JointEffectEstimates& e = fit.effects;

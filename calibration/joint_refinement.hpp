@@ -267,6 +267,9 @@ struct JointResult {
 
 JointResult refineJoint(const LandmarkObservations& obs, const JointInit& init, const JointConfig& config);
 
+/// A start at a fitted solution: its poses, centres, radius, range model and effect terms.
+JointInit initFrom(const JointResult& r);
+
 /// One beam reading evaluated under a fitted joint model.
 struct JointReading {
   std::size_t sighting = 0;     ///< index into LandmarkObservations::sightings

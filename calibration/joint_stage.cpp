@@ -51,17 +51,6 @@ JointInit closedFormStart(const LandmarkObservations& obs, const CalibrationConf
   return init;
 }
 
-/// `init` moved to where a fit ended: poses, centres, radius, model and effect terms.
-JointInit startFrom(const JointInit& init, const JointResult& r) {
-  JointInit from = init;
-  from.poses = r.poses;
-  from.centres = r.centres;
-  from.radius_m = r.radius_m;
-  from.model = r.model;
-  from.effects = r.effects;
-  return from;
-}
-
 /// Pass 2: every order 1..max_order from the settled geometry. The orders are independent
 /// solves: side by side, each with its own copy of the settings.
 std::vector<JointResult> fitEveryOrder(const LandmarkObservations& obs, const JointInit& from, const JointConfig& jc,
@@ -138,7 +127,7 @@ JointStage jointStage(const LandmarkObservations& obs, const CalibrationConfig& 
   if (!settled.ok()) return JointStage{settled, {}, 0};
   // Pass 2: every order from the settled geometry on one fixed set of readings, so that their
   // information criteria compare likelihoods of the same data.
-  const JointInit from = startFrom(init, settled);
+  const JointInit from = initFrom(settled);
   jc.reselect = false;
   jc.covariance = false;  // computed once, for the chosen order
   jc.outer_iterations = std::min(jc.outer_iterations, 2);  // the noise law settled in pass 1
@@ -151,7 +140,7 @@ JointStage jointStage(const LandmarkObservations& obs, const CalibrationConfig& 
     jc.order = static_cast<int>(chosen) + 1;
     jc.covariance = true;
     jc.outer_iterations = 1;
-    runs[chosen] = refineJoint(obs, startFrom(from, runs[chosen]), jc);
+    runs[chosen] = refineJoint(obs, initFrom(runs[chosen]), jc);
   }
   progress.finished();
   return JointStage{runs[chosen], rows, best_aic};

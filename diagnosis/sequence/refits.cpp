@@ -15,16 +15,6 @@ JointConfig effectConfig(JointConfig c, Effect e) {
   return c;
 }
 
-JointInit initFrom(const JointResult& r) {
-  JointInit i;
-  i.poses = r.poses;
-  i.centres = r.centres;
-  i.radius_m = r.radius_m;
-  i.model = r.model;
-  i.effects = r.effects;
-  return i;
-}
-
 JointConfig warmStartConfig(JointConfig c) {
   c.settle_geometry = false;
   c.outer_iterations = 2;

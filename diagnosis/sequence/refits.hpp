@@ -17,9 +17,6 @@ using namespace lidarcal::calibration;
 /// none.
 JointConfig effectConfig(JointConfig c, Effect e);
 
-/// A start at a fitted solution: its poses, centres, radius, range model and effect terms.
-JointInit initFrom(const JointResult& r);
-
 /// Fits that start from a converged solution (replicas, folds) skip the geometry pass and
 /// re-estimate the noise law at most twice.
 JointConfig warmStartConfig(JointConfig c);
