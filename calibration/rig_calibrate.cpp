@@ -51,16 +51,22 @@ struct Components {
   void join(std::size_t a, std::size_t b) { parent[find(a)] = find(b); }
 };
 
+/// The `count` stops or sensors (`of`: RigSighting::stop or ::sensor) grouped by the poles they share.
+Components joinedByPoles(const RigObservations& obs, std::size_t count, std::size_t RigSighting::*of) {
+  std::map<int, std::size_t> first;
+  Components c(count);
+  for (const RigSighting& s : obs.sightings) {
+    const auto [it, fresh] = first.emplace(s.pole, s.*of);
+    if (!fresh) c.join(s.*of, it->second);
+  }
+  return c;
+}
+
 /// Without recorded poses, one stop of each group of stops joined by poles is held: the gauge.
 std::vector<bool> heldStops(const RigObservations& obs) {
   std::vector<bool> held(obs.vehicle.size(), false);
   if (obs.vehicle_known) return held;
-  std::map<int, std::size_t> first_stop;
-  Components c(obs.vehicle.size());
-  for (const RigSighting& s : obs.sightings) {
-    const auto [it, fresh] = first_stop.emplace(s.pole, s.stop);
-    if (!fresh) c.join(s.stop, it->second);
-  }
+  Components c = joinedByPoles(obs, obs.vehicle.size(), &RigSighting::stop);
   std::set<std::size_t> done;
   for (const RigSighting& s : obs.sightings)
     if (done.insert(c.find(s.stop)).second) held[s.stop] = true;
@@ -69,12 +75,7 @@ std::vector<bool> heldStops(const RigObservations& obs) {
 
 /// Sensors not joined to the reference through poles both see (any stop).
 std::vector<std::size_t> unlinkedSensors(const RigObservations& obs, std::size_t reference) {
-  std::map<int, std::size_t> first_sensor;
-  Components c(obs.sensors.size());
-  for (const RigSighting& s : obs.sightings) {
-    const auto [it, fresh] = first_sensor.emplace(s.pole, s.sensor);
-    if (!fresh) c.join(s.sensor, it->second);
-  }
+  Components c = joinedByPoles(obs, obs.sensors.size(), &RigSighting::sensor);
   std::vector<std::size_t> out;
   for (std::size_t s = 0; s < obs.sensors.size(); ++s)
     if (c.find(s) != c.find(reference)) out.push_back(s);
