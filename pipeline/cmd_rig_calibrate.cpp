@@ -69,6 +69,10 @@ void runRigCalibrate(const RigCalibrateSettings& s) {
   std::fputs(rigMountingTable(model).c_str(), stdout);
   std::fputs(("\n" + rigSnippets(model)).c_str(), stdout);
   for (const std::string& note : model.notes) std::printf("  %s\n", note.c_str());
+  for (const io::RigModelSensor& sensor : model.sensors)
+    if (!sensor.model.status.ok())
+      std::fprintf(stderr, "warning: the range model of %s is not determined; correct refuses its block (the table's status says why)\n",
+                   sensor.name.c_str());
   std::fprintf(stderr, "rig model (%s) written to %s\n", plural(model.sensors.size(), "sensor").c_str(), s.out.c_str());
 }
 
