@@ -36,6 +36,16 @@ void addUnsupportedCorrectionWarning(CalibrationModel& m) {
   m.warnings.push_back(text);
 }
 
+RelativeCorrection largestRelativeCorrection(const BiasPolynomial& bias, double lo, double hi) {
+  RelativeCorrection worst{0.0, lo, 0.0};
+  for (int i = 0; i <= 50; ++i) {
+    const double d = lo + (hi - lo) * i / 50.0;
+    const double rel = std::abs(bias(d) - d) / std::max(d, 0.5);
+    if (rel > worst.fraction) worst = {rel, d, 1000.0 * std::abs(bias(d) - d)};
+  }
+  return worst;
+}
+
 void addPlausibilityWarnings(CalibrationModel& m, const JointResult* j) {
   const std::size_t n = m.model.bias.alpha.size();
   char text[512];
@@ -82,18 +92,13 @@ void addPlausibilityWarnings(CalibrationModel& m, const JointResult* j) {
   // (alpha = [0.0525, 0.8838, 0.0584]: +17 % at 4.9 m), which is not an error.
   if (m.fitted_range_m) {
     const auto [lo, hi] = *m.fitted_range_m;
-    double worst = 0.0, at = lo;
-    for (int i = 0; i <= 50; ++i) {
-      const double d = lo + (hi - lo) * i / 50.0;
-      const double rel = std::abs(m.model.bias(d) - d) / std::max(d, 0.5);
-      if (rel > worst) worst = rel, at = d;
-    }
-    if (worst > kImplausibleCorrection) {
+    const RelativeCorrection worst = largestRelativeCorrection(m.model.bias, lo, hi);
+    if (worst.fraction > kImplausibleCorrection) {
       std::snprintf(text, sizeof text,
                     "the model changes readings by up to %.0f %% (%.0f mm at %.2f m): more than the range error of "
                     "most lidars; check that the landmarks lidarcal detect finds are round poles of one radius (not "
                     "corners, door frames or legs of different sizes) before using it",
-                    100.0 * worst, 1000.0 * std::abs(m.model.bias(at) - at), at);
+                    100.0 * worst.fraction, worst.mm, worst.at_m);
       m.warnings.push_back(text);
     }
   }

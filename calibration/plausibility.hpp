@@ -11,6 +11,15 @@ namespace lidarcal::calibration {
 /// draw a warning.
 inline constexpr double kImplausibleCorrection = 0.25;
 
+/// The largest correction |f(d) - d| over max(d, 0.5 m) for d in [lo, hi] (51 points), and
+/// where it is: beyond kImplausibleCorrection it is more than lidars are built to.
+struct RelativeCorrection {
+  double fraction = 0.0;  ///< |f(d) - d| / max(d, 0.5 m)
+  double at_m = 0.0;      ///< the distance d where it is largest, metres
+  double mm = 0.0;        ///< |f(d) - d| there, millimetres
+};
+RelativeCorrection largestRelativeCorrection(const BiasPolynomial& bias, double lo, double hi);
+
 /// A median standard error of the landmark centres above this, metres, draws a warning.
 inline constexpr double kUnlocatedLandmarkM = 0.1;
 

@@ -9,6 +9,7 @@
 #include <set>
 #include <stdexcept>
 
+#include "calibration/plausibility.hpp"
 #include "calibration/rig_problem.hpp"
 
 namespace lidarcal::calibration {
@@ -163,22 +164,6 @@ RigResult fitWithOrders(const RigObservations& obs, const RigConfig& config, Fit
   return best;
 }
 
-/// Marks the range model not determined when its correction's standard error at the middle of
-/// the fitted distances exceeds max_model_se_m.
-void checkModel(RigSensorEstimate& e, const std::string& name, const RigConfig& config) {
-  const double d = 0.5 * (e.d_min_m + e.d_max_m);
-  const auto n = static_cast<Eigen::Index>(e.model.bias.alpha.size());
-  Eigen::VectorXd g(n);
-  for (Eigen::Index k = 0; k < n; ++k) g(k) = std::pow(d, static_cast<double>(k));
-  e.model_se_m = std::sqrt(std::max(0.0, g.dot(e.alpha_covariance * g)));
-  if (e.model_se_m > config.max_model_se_m)
-    e.model_status = Status{StatusCode::not_identifiable,
-                            "the range model of " + name + " is determined to " + fixed(e.model_se_m * 1000.0, 0) +
-                                " mm only at " + fixed(d, 2) + " m (standard error): its poles are seen from too few "
-                                "other places (record poles that it and another sensor see at several distances, or "
-                                "drive the vehicle past them on recorded poses)"};
-}
-
 /// The sightings of poles seen from two viewpoints (sensor and stop) or more: one seen from one
 /// place only is located by its own readings exactly and tells nothing about the rest.
 RigObservations withoutLonePoles(const RigObservations& obs, std::size_t* dropped) {
@@ -249,7 +234,7 @@ void completeSetup(const RigObservations& obs, const RigConfig& config, const Sp
 }
 
 /// Refuses a fit in which a sensor reads no shared pole or whose mounting's standard errors
-/// exceed the limits; marks range models not determined (checkModel).
+/// exceed the limits; marks range models not determined (checkRangeModel).
 Status checkEstimates(const RigObservations& obs, const RigConfig& config, RigResult* r) {
   for (std::size_t s = 0; s < r->sensors.size(); ++s) {
     RigSensorEstimate& e = r->sensors[s];
@@ -258,7 +243,7 @@ Status checkEstimates(const RigObservations& obs, const RigConfig& config, RigRe
                     obs.sensors[s].name + " reads no pole that is seen from another place (another sensor or "
                                           "another stop): nothing ties its mounting (place poles where it and "
                                           "another sensor both see them)"};
-    checkModel(e, obs.sensors[s].name, config);
+    checkRangeModel(e, obs.sensors[s].name, config);
     if (e.mounting_held) continue;
     const double se_xy = std::sqrt(std::max(e.mounting_covariance(0, 0), e.mounting_covariance(1, 1)));
     const double se_yaw = std::sqrt(e.mounting_covariance(2, 2));
@@ -323,6 +308,29 @@ void RigConfig::validate(std::size_t sensors) const {
       throw std::invalid_argument("RigConfig: noise laws are constant or squared");
   if (!(sigma_vehicle_m > 0.0) || !(sigma_vehicle_rad > 0.0)) throw std::invalid_argument("RigConfig: vehicle sigmas must be > 0");
   if (!(lateral_fraction > 0.0 && lateral_fraction <= 1.0)) throw std::invalid_argument("RigConfig: lateral_fraction must be in (0, 1]");
+}
+
+void checkRangeModel(RigSensorEstimate& e, const std::string& name, const RigConfig& config) {
+  const double d = 0.5 * (e.d_min_m + e.d_max_m);
+  const auto n = static_cast<Eigen::Index>(e.model.bias.alpha.size());
+  Eigen::VectorXd g(n);
+  for (Eigen::Index k = 0; k < n; ++k) g(k) = std::pow(d, static_cast<double>(k));
+  e.model_se_m = std::sqrt(std::max(0.0, g.dot(e.alpha_covariance * g)));
+  if (e.model_se_m > config.max_model_se_m)
+    e.model_status = Status{StatusCode::not_identifiable,
+                            "the range model of " + name + " is determined to " + fixed(e.model_se_m * 1000.0, 0) +
+                                " mm only at " + fixed(d, 2) + " m (standard error): its poles are seen from too few "
+                                "other places (record poles that it and another sensor see at several distances, or "
+                                "drive the vehicle past them on recorded poses)"};
+  const RelativeCorrection worst = largestRelativeCorrection(e.model.bias, e.d_min_m, e.d_max_m);
+  if (e.model_status.ok() && worst.fraction > kImplausibleCorrection)
+    e.model_status = Status{StatusCode::not_identifiable,
+                            "the range model of " + name + " changes readings by " + fixed(worst.mm, 0) + " mm at " +
+                                fixed(worst.at_m, 2) + " m (" + fixed(100.0 * worst.fraction, 0) +
+                                " %), more than lidars are built to: over the distances its poles were seen at (" +
+                                fixed(e.d_min_m, 2) + "-" + fixed(e.d_max_m, 2) + " m) the polynomial trades off "
+                                "against the mounting (record poles that it and another sensor see over a wider span "
+                                "of distances, 1-10 m)"};
 }
 
 RigRelativeMounting relativeMountingWithCovariance(const Mounting& a, const Mounting& b,

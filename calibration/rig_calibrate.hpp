@@ -146,6 +146,15 @@ struct RigResult {
 /// config; data that cannot give the mountings come back as a status.
 RigResult calibrateRig(const RigObservations& obs, const RigConfig& config);
 
+/// Sets e.model_se_m (the standard error of f at the middle of the fitted distances) and marks
+/// the range model not determined (e.model_status not_identifiable, with what to record) when
+/// that exceeds config.max_model_se_m, or when the model changes readings by more than lidars
+/// are built to (calibration/plausibility.hpp, kImplausibleCorrection) anywhere in
+/// [e.d_min_m, e.d_max_m]: over a short span of distances a polynomial trades off against the
+/// mounting, and a small standard error then does not make the model right. `name` names the
+/// sensor in the message.
+void checkRangeModel(RigSensorEstimate& e, const std::string& name, const RigConfig& config);
+
 /// The relative mounting of `sensor` in `reference`'s frame with its covariance, from both
 /// mountings and their joint covariance (6 x 6: reference x, y, yaw, then sensor's).
 RigRelativeMounting relativeMountingWithCovariance(const Mounting& reference, const Mounting& sensor,

@@ -7,6 +7,7 @@
 #include "common/plural.hpp"
 #include "io/atomic_file.hpp"
 #include "pipeline/cmd_rig.hpp"
+#include "pipeline/progress.hpp"
 #include "detectors/rig_sightings.hpp"
 #include "pipeline/rig_report.hpp"
 
@@ -50,20 +51,28 @@ void runRigCalibrate(const RigCalibrateSettings& s) {
       if (seq.meta.landmark_radius_m) det.detection.landmark_radius_m = seq.meta.landmark_radius_m;
   det.min_intensity = s.min_intensity;
   det.associate_m = s.associate_m;
+  Activity detecting("detecting poles in " + plural(rig.scans.size(), "scan"));
   const detectors::RigCollected found = detectors::collectRigObservations(rig, det);
+  detecting.finish();
   std::printf("| sensor | scans | circles | on poles | poles |\n|---|---|---|---|---|\n");
   for (std::size_t k = 0; k < found.sensors.size(); ++k) {
     const detectors::RigSensorDetections& d = found.sensors[k];
     std::printf("| %s | %zu | %zu | %zu | %zu |\n", rig.meta.sensors[k].name.c_str(), d.scans, d.detections, d.sightings, d.poles);
   }
   std::printf("%s, %zu seen by two sensors or more\n", plural(found.poles, "pole").c_str(), found.shared_poles);
+  Activity fitting("fitting mountings, range models and poles jointly");
   const calibration::RigResult r = calibration::calibrateRig(found.observations, rigConfig(s, rig));
+  fitting.finish();
   if (!r.ok()) throw DataError(s.dir, "calibration", std::string(r.status.name()) + ": " + r.status.message, whatToRecord(rig));
   const io::RigModel model = rigModel(rig, r);
   io::writeRigModel(s.out, model);
   std::fputs(rigMountingTable(model).c_str(), stdout);
   std::fputs(("\n" + rigSnippets(model)).c_str(), stdout);
   for (const std::string& note : model.notes) std::printf("  %s\n", note.c_str());
+  for (const io::RigModelSensor& sensor : model.sensors)
+    if (!sensor.model.status.ok())
+      std::fprintf(stderr, "warning: the range model of %s is not determined; correct refuses its block (the table's status says why)\n",
+                   sensor.name.c_str());
   std::fprintf(stderr, "rig model (%s) written to %s\n", plural(model.sensors.size(), "sensor").c_str(), s.out.c_str());
 }
 

@@ -86,6 +86,41 @@ TEST(RigCalibration, ADrivingVehicleRecoversItsMountingsWithTheOdometryAsMotionP
   expectMountingsWithin(r, sim, 4.0);
 }
 
+/// An estimate fitted over [lo, hi] metres with bias coefficients `alpha` known to 1 mm and 1e-4.
+calibration::RigSensorEstimate fittedOver(std::vector<double> alpha, double lo, double hi) {
+  calibration::RigSensorEstimate e;
+  e.model.bias.alpha = std::move(alpha);
+  e.alpha_covariance = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(e.model.bias.alpha.size()),
+                                             static_cast<Eigen::Index>(e.model.bias.alpha.size()));
+  e.alpha_covariance(0, 0) = 1e-6;
+  e.alpha_covariance(1, 1) = 1e-8;
+  e.d_min_m = lo;
+  e.d_max_m = hi;
+  return e;
+}
+
+TEST(RigCalibration, ARangeModelBeyondWhatLidarsAreBuiltToIsNotDeterminedHoweverSmallItsErrors) {
+  const RigConfig c;
+  // A 4 % scale error and a 12 mm offset over 1-8 m: a range error, kept.
+  calibration::RigSensorEstimate plain = fittedOver({0.012, 1.04}, 1.0, 8.0);
+  calibration::checkRangeModel(plain, "front", c);
+  EXPECT_TRUE(plain.model_status.ok()) << plain.model_status.message;
+  // A quadratic that moves readings by 180 mm at 0.55 m over 0.55-1.01 m (a short span where
+  // the polynomial trades off against the mounting): refused, naming the span.
+  calibration::RigSensorEstimate bent = fittedOver({1.14, -1.77, 1.85}, 0.55, 1.01);
+  calibration::checkRangeModel(bent, "back", c);
+  EXPECT_EQ(bent.model_status.code, StatusCode::not_identifiable);
+  EXPECT_NE(bent.model_status.message.find("0.55-1.01 m"), std::string::npos) << bent.model_status.message;
+  // The same polynomial's standard error alone would pass it.
+  EXPECT_LT(bent.model_se_m, c.max_model_se_m);
+  // Just inside and just outside the bound (25 % of the distance at 2 m: 500 mm).
+  calibration::RigSensorEstimate inside = fittedOver({0.49, 1.0}, 2.0, 4.0), outside = fittedOver({0.51, 1.0}, 2.0, 4.0);
+  calibration::checkRangeModel(inside, "a", c);
+  calibration::checkRangeModel(outside, "b", c);
+  EXPECT_TRUE(inside.model_status.ok());
+  EXPECT_FALSE(outside.model_status.ok());
+}
+
 TEST(RigCalibration, EachSensorGetsItsOwnNoiseLaw) {
   const simulation::RigSimConfig sim = stopAndGo(true);  // the side lidar's noise grows with f(d)^2
   const RigResult r = calibration::calibrateRig(simulation::simulateRig(sim, 1).obs, configFor(sim));

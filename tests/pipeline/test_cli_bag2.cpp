@@ -17,6 +17,8 @@
 #include "io/ros2_msgs.hpp"
 #include "io/sequence.hpp"
 #include "io/rosbag2_test_writer.hpp"
+#include "io/pcd_scan.hpp"
+#include "io/rig.hpp"
 #include "pipeline/ros_test_util.hpp"
 
 namespace lidarcal::test {
@@ -280,6 +282,44 @@ TEST_F(CorrectRosbag2, RigModelCorrectsEachTopicWithItsOwnBlockInOnePass) {
       for (std::size_t k = 0; k < got.size(); ++k)
         for (std::size_t i = 0; i < got[k].size(); ++i) EXPECT_TRUE(sameFloat(got[k][i], mcap[k][i])) << k << " " << i;
     }
+}
+
+TEST(ImportRigRosbag2, TwoLidarTopicsOfAnMcapImportAsARigWithEachScanUnderItsSensor) {
+  TempDir dir;
+  std::vector<Db3Message> rows;
+  writeTwoLidarMcap(dir / "two.mcap", rows);
+  // Without /tf_static nothing says which frame the two lidars share: import asks for it by name.
+  const std::string args = " --topic /scan,/scan_b --sensor-names front,back -o " + (dir / "rig").string();
+  const CliResult unnamed = runCli("import " + (dir / "two.mcap").string() + args);
+  EXPECT_EQ(unnamed.exit_code, 2);
+  EXPECT_NE(unnamed.err.find("--vehicle-frame"), std::string::npos) << unnamed.err;
+  EXPECT_FALSE(fs::exists(dir / "rig"));
+  const CliResult r = runCli("import " + (dir / "two.mcap").string() + args + " --vehicle-frame base_link");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const io::Rig rig = io::openRig(dir / "rig");
+  ASSERT_EQ(rig.meta.sensors.size(), 2u);
+  EXPECT_EQ(rig.meta.sensors[0].topic, "/scan");
+  EXPECT_EQ(rig.meta.sensors[1].topic, "/scan_b");
+  EXPECT_EQ(rig.meta.sensors[1].frame_id, "laser_back");
+  ASSERT_EQ(rig.scans.size(), 16u);
+  // Each sensor's sequence holds its own topic's ranges, scan by scan, as a single-topic import reads them.
+  for (const std::size_t s : {0, 1}) {
+    SCOPED_TRACE(rig.meta.sensors[s].name);
+    const auto want = importedRanges(dir / "two.mcap", rig.meta.sensors[s].topic);
+    ASSERT_EQ(rig.sequences[s].scans.size(), want.size());
+    for (std::size_t k = 0; k < want.size(); ++k) {
+      const io::Scan scan = io::readScan(rig.sequences[s].scans[k].path);
+      ASSERT_EQ(scan.cloud->size(), want[k].size());
+      std::size_t returns = 0;  // readings outside the scan's range window import as no return
+      for (std::size_t i = 0; i < want[k].size(); ++i) {
+        const auto& p = (*scan.cloud)[i];
+        if (!std::isfinite(p.x)) continue;
+        ++returns;
+        EXPECT_NEAR(std::hypot(p.x, p.y), want[k][i], 1e-5) << k << " " << i;
+      }
+      EXPECT_GT(returns, want[k].size() / 2) << k;
+    }
+  }
 }
 
 TEST_F(CorrectRosbag2, AModelOfAnotherSensorWritesNothing) {
