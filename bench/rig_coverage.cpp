@@ -7,7 +7,7 @@
 // over 50 seeds) and the largest |error| / SE, then the same fraction over every quantity of the
 // scenario (docs/results/several-lidars.md).
 //
-//   rig_coverage [--seeds 50] [--first 1] [--scenarios two-stops,two-driving,...]
+//   rig_coverage [--seeds 50] [--first 1] [--scenarios two-stops,two-driving,...] [--lateral-fraction 0.7]
 
 #include <cmath>
 #include <cstdio>
@@ -44,7 +44,7 @@ struct Scenario {
   calibration::RigConfig config;
 };
 
-Scenario scenario(const std::string& name) {
+Scenario scenario(const std::string& name, double lateral_fraction) {
   const bool three = name.rfind("three", 0) == 0;
   Scenario s{name, {}, {}};
   if (name.find("driving") != std::string::npos) {
@@ -61,6 +61,7 @@ Scenario scenario(const std::string& name) {
     s.config.sigma_vehicle_m = s.sim.sigma_s_m;
     s.config.sigma_vehicle_rad = s.sim.sigma_psi_rad;
   }
+  s.config.lateral_fraction = lateral_fraction;
   s.config.orders.assign(s.sim.sensors.size(), 1);  // the truth's order: the coverage of the SEs, not the order choice
   return s;
 }
@@ -125,9 +126,13 @@ int main(int argc, char** argv) {
   app.add_option("--seeds", seeds, "Seeds per scenario")->capture_default_str();
   app.add_option("--first", first, "First seed")->capture_default_str();
   app.add_option("--scenarios", names, "Scenarios")->delimiter(',');
+  double lateral = calibration::RigConfig{}.lateral_fraction;
+  app.add_option("--lateral-fraction", lateral, "Beams passing within this fraction of a pole's radius from its centre are fitted")
+      ->check(CLI::Range(0.05, 1.0))
+      ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   std::printf("| scenario | quantity | fits | RMS error (mm, deg, 1e-3) | mean SE | mean error/SE | within 1.96 SE | max error/SE (seed) |\n");
   std::printf("|---|---|---|---|---|---|---|---|\n");
-  for (const std::string& n : names) run(scenario(n), first, seeds);
+  for (const std::string& n : names) run(scenario(n, lateral), first, seeds);
   return 0;
 }
