@@ -90,8 +90,8 @@ void checkHalf(const simulation::RangeSweep& sweep, const calibration::Reference
   const double f95 = calibration::predictiveFactor(m.discrepancy, 0.95);
   for (const auto& h : half.held_out) {
     ++t.entries;
-    t.tape68 += h.inside(f68);
-    t.tape95 += h.inside(f95);
+    t.tape68 += h.inside(m.discrepancy, 0.6827);
+    t.tape95 += h.inside(m.discrepancy, 0.95);
     t.tape_z2 += h.residual_m * h.residual_m / (h.predictive_se_m * h.predictive_se_m + h.entry_se_m * h.entry_se_m);
     // The sensor's true mean reading at the pole's nearest point, against the fit's.
     const double d = sweep.true_distance_m[known.matches[h.entry].stop] - radius_m;

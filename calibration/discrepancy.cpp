@@ -164,8 +164,10 @@ double predictiveStandardError(double curve_se, const Discrepancy& d) {
   return std::sqrt(curve_se * curve_se + d.sigma_m * d.sigma_m);
 }
 
-double predictiveFactor(const Discrepancy& d, double level) {
-  return centralTFactor(level, d.estimated() && d.dof > 0 ? static_cast<double>(d.dof) : kInf);
+double predictiveFactor(const Discrepancy& d, double level, double known_share) {
+  if (!d.estimated() || d.dof <= 0 || known_share >= 1.0) return centralTFactor(level, kInf);
+  const double estimated = 1.0 - (known_share > 0.0 ? known_share : 0.0);
+  return centralTFactor(level, static_cast<double>(d.dof) / (estimated * estimated));
 }
 
 }  // namespace lidarcal::calibration

@@ -21,7 +21,8 @@
 // freedom, and has entries - coefficients degrees of freedom. The predictive standard error of f
 // at a new distance is sqrt(SE_curve(d)^2 + tau^2), its intervals Student-t quantiles with those
 // degrees of freedom (as the prediction interval of a random-effects meta-analysis, Higgins,
-// Thompson & Spiegelhalter 2009).
+// Thompson & Spiegelhalter 2009). An interval that also adds known variances (a tape error, the
+// noise of a mean) takes more degrees of freedom by Welch-Satterthwaite.
 
 #include <cstddef>
 #include <vector>
@@ -63,6 +64,10 @@ double predictiveStandardError(double curve_se, const Discrepancy& discrepancy);
 
 /// Half-width factor of the central predictive interval of probability `level`: the Student-t
 /// quantile with the discrepancy's degrees of freedom (the normal's when none is estimated).
-double predictiveFactor(const Discrepancy& discrepancy, double level);
+/// `known_share` in [0, 1) is the part of the interval's variance taken as exact rather than
+/// estimated from the entries: a stated tape error, the noise of a mean of many readings. The
+/// estimated part carries the discrepancy's dof, the known part infinitely many, and the whole
+/// dof / (1 - known_share)^2 (Welch-Satterthwaite; Satterthwaite 1946, JCGM 100:2008 G.4).
+double predictiveFactor(const Discrepancy& discrepancy, double level, double known_share = 0.0);
 
 }  // namespace lidarcal::calibration

@@ -28,8 +28,10 @@ double noiseLawExponent(const NoiseModel& noise) {
   }
 }
 
-bool HeldOutEntry::inside(double factor) const {
-  return std::abs(residual_m) <= factor * std::sqrt(predictive_se_m * predictive_se_m + entry_se_m * entry_se_m);
+bool HeldOutEntry::inside(const Discrepancy& discrepancy, double level) const {
+  const double own = entry_se_m * entry_se_m, total = predictive_se_m * predictive_se_m + own;
+  const double factor = predictiveFactor(discrepancy, level, total > 0.0 ? own / total : 0.0);
+  return std::abs(residual_m) <= factor * std::sqrt(total);
 }
 
 namespace {

@@ -32,8 +32,9 @@ struct HeldOutEntry {
   double curve_se_m = 0.0;         ///< SE_curve at distance_m, metres
   double predictive_se_m = 0.0;    ///< sqrt(SE_curve^2 + sigma_delta^2), metres (the curve's alone without a discrepancy)
   double entry_se_m = 0.0;         ///< the entry's own: sqrt(noise of the mean + (f' sigma_tape)^2), metres
-  /// Whether |residual| <= factor sqrt(predictive_se^2 + entry_se^2).
-  bool inside(double factor) const;
+  /// Whether |residual| <= t sqrt(predictive_se^2 + entry_se^2), t the half-width factor of the
+  /// central interval of probability `level` (predictiveFactor, the entry's own variance known).
+  bool inside(const Discrepancy& discrepancy, double level) const;
 };
 
 /// The held-out entries of `readings` (the readings of entries the model was not fitted on;

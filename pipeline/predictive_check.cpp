@@ -23,7 +23,7 @@ bool corrected(const calibration::ReferenceMatch& m, const CalibrationModel& mod
 }
 
 EntryInterval entryInterval(const calibration::ReferenceMatch& m, const Reference& ref, const CalibrationModel& model,
-                            const calibration::ReadingCorrector& correct, double factor_68, double factor_95) {
+                            const calibration::ReadingCorrector& correct) {
   EntryInterval e;
   e.entry = m.entry;
   e.reference_m = m.reference_m;
@@ -38,8 +38,11 @@ EntryInterval entryInterval(const calibration::ReferenceMatch& m, const Referenc
   e.interval_se_m = std::sqrt(e.predictive_se_m * e.predictive_se_m + other);
   if (!std::isfinite(e.interval_se_m)) return e;
   e.checked = true;
-  e.inside_68 = std::abs(e.error_m) <= factor_68 * e.interval_se_m;
-  e.inside_95 = std::abs(e.error_m) <= factor_95 * e.interval_se_m;
+  const double known = e.interval_se_m > 0.0 ? other / (e.interval_se_m * e.interval_se_m) : 0.0;
+  e.factor_68 = calibration::predictiveFactor(model.discrepancy, kLevel68, known);
+  e.factor_95 = calibration::predictiveFactor(model.discrepancy, kLevel95, known);
+  e.inside_68 = std::abs(e.error_m) <= e.factor_68 * e.interval_se_m;
+  e.inside_95 = std::abs(e.error_m) <= e.factor_95 * e.interval_se_m;
   e.inside_curve_95 = std::abs(e.error_m) <= 1.96 * std::sqrt(e.curve_se_m * e.curve_se_m + other);
   return e;
 }
@@ -60,7 +63,7 @@ PredictiveCheck predictiveCheck(const std::vector<calibration::ReferenceMatch>& 
   c.factor_68 = calibration::predictiveFactor(model.discrepancy, kLevel68);
   c.factor_95 = calibration::predictiveFactor(model.discrepancy, kLevel95);
   for (const auto& m : matches) {
-    const EntryInterval e = entryInterval(m, ref, model, correct, c.factor_68, c.factor_95);
+    const EntryInterval e = entryInterval(m, ref, model, correct);
     c.checked += e.checked;
     c.inside_68 += e.checked && e.inside_68;
     c.inside_95 += e.checked && e.inside_95;
@@ -81,6 +84,8 @@ ojson predictiveJson(const PredictiveCheck& c) {
       j["measured_se_m"] = number(e.measured_se_m);
       j["tape_sigma_m"] = e.tape_sigma_m;
       j["interval_se_m"] = number(e.interval_se_m);
+      j["factor_68"] = e.factor_68;
+      j["factor_95"] = e.factor_95;
       j["inside_68"] = e.inside_68;
       j["inside_95"] = e.inside_95;
       j["inside_curve_95"] = e.inside_curve_95;
@@ -111,7 +116,7 @@ std::string predictiveTable(const PredictiveCheck& c) {
       continue;
     }
     s += mm(e.error_m, true) + " | " + mm(e.curve_se_m) + " | " + mm(e.predictive_se_m) + " | " + mm(e.tape_sigma_m) +
-         " | +-" + mm(c.factor_95 * e.interval_se_m) + " | " + (e.inside_68 ? "yes" : "no") + " | " +
+         " | +-" + mm(e.factor_95 * e.interval_se_m) + " | " + (e.inside_68 ? "yes" : "no") + " | " +
          (e.inside_95 ? "yes" : "no") + " |\n";
   }
   const Discrepancy& d = c.discrepancy;
@@ -121,7 +126,8 @@ std::string predictiveTable(const PredictiveCheck& c) {
   if (d.estimated())
     s += "Model discrepancy " + fixed(1000.0 * d.sigma_m, 1) + " mm (" + d.method + ", " + plural(d.dof, "degree") +
          " of freedom; " + papers::kDiscrepancy + "), Student-t factors " + fixed(c.factor_68, 2) + " and " +
-         fixed(c.factor_95, 2) + ".\n";
+         fixed(c.factor_95, 2) + " for the correction alone, nearer the normal's where an entry's known tape and "
+         "scan errors make up part of its interval (Welch-Satterthwaite).\n";
   else
     s += "The model has no discrepancy estimate: its predictive interval is the curve's (" + d.note + ").\n";
   return s;

@@ -7,8 +7,10 @@
 // and the model discrepancy: calibration/discrepancy.hpp; the same rule `correct` writes into
 // correction_se), SE_measured the standard error of the scans' mean, sigma_tape the entry's
 // stated tape error (REF.json sigma_m). The predictive intervals use Student-t quantiles with
-// the discrepancy's degrees of freedom; the curve's interval is +-1.96 with the curve's standard
-// error in place of SE_pred (what the model's coefficients alone would claim).
+// the discrepancy's degrees of freedom, raised for the share of the variance that is known (the
+// scans' and the tape's: Welch-Satterthwaite, calibration::predictiveFactor); the curve's
+// interval is +-1.96 with the curve's standard error in place of SE_pred (what the model's
+// coefficients alone would claim).
 
 #include <cstddef>
 #include <string>
@@ -39,6 +41,8 @@ struct EntryInterval {
   double measured_se_m = 0.0;      ///< standard error of the scans' mean (0 when not known), metres
   double tape_sigma_m = 0.0;       ///< the entry's stated tape error, metres
   double interval_se_m = 0.0;      ///< sqrt(predictive^2 + measured^2 + tape^2), metres
+  double factor_68 = 0.0;          ///< t_68: half-width of the 68 % predictive interval in interval_se_m
+  double factor_95 = 0.0;          ///< t_95: and of the 95 % one
   bool inside_68 = false;          ///< |error| <= t_68 interval_se_m
   bool inside_95 = false;          ///< |error| <= t_95 interval_se_m
   bool inside_curve_95 = false;    ///< |error| <= 1.96 sqrt(curve^2 + measured^2 + tape^2)
@@ -47,8 +51,8 @@ struct EntryInterval {
 /// The entries and how many of them each interval holds.
 struct PredictiveCheck {
   Discrepancy discrepancy;          ///< the model's
-  double factor_68 = 0.0;           ///< half-width of the 68 % predictive interval in interval_se_m
-  double factor_95 = 0.0;           ///< and of the 95 % one
+  double factor_68 = 0.0;           ///< half-width of the 68 % interval of the correction alone, in its predictive SE
+  double factor_95 = 0.0;           ///< and of the 95 % one (each entry has its own, with its known variances)
   std::vector<EntryInterval> entries;
   std::size_t checked = 0, inside_68 = 0, inside_95 = 0, inside_curve_95 = 0;  ///< counts over the checked entries
 };
