@@ -2,8 +2,9 @@
 // calibrate it through the command line (the joint refinement without ground truth, and against
 // tape distances taken from the simulator's truth: `calibrate --reference`), and check whether
 // the 95 % interval f(d) +- 1.96 SE(f(d)) holds the simulated sensor's true f(d) at a few
-// distances inside the fitted range, and each coefficient's interval its true value
-// (docs/results/standard-errors.md).
+// distances inside the fitted range, and each coefficient's interval its true value; and the
+// predictive 95 % interval (curve and model discrepancy, Student t: calibration/discrepancy.hpp)
+// at the same distances (docs/results/standard-errors.md).
 //
 //   build/bench/coverage --scene data/scenes/paper_field.json --seeds 100 [--first-seed 1001]
 //       [--scans-per-stop 10] [--work /tmp/coverage]
@@ -21,6 +22,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "calibration/discrepancy.hpp"
 #include "io/reference_io.hpp"
 #include "io/scene_io.hpp"
 #include "simulation/tape_reference.hpp"
@@ -54,7 +56,7 @@ double poly(const std::vector<double>& a, double d) {
 
 struct Tally {
   std::vector<int> covered_f, n_f;
-  int covered_alpha = 0, n_alpha = 0, fits = 0, failed = 0;
+  int covered_alpha = 0, n_alpha = 0, fits = 0, failed = 0, covered_predictive = 0;
   double sum_z2 = 0.0;
   int n_z = 0;
 };
@@ -69,6 +71,13 @@ void check(const nlohmann::json& m, const std::vector<double>& truth, const std:
     return;
   }
   ++t.fits;
+  lidarcal::Discrepancy dis;
+  if (const auto& j = m["discrepancy"]; j.is_object() && j.value("method", "none") != "none" && j["sigma_m"].is_number()) {
+    dis.method = j["method"];
+    dis.sigma_m = j["sigma_m"];
+    dis.dof = j.value("dof", 0);
+  }
+  const double t95 = lidarcal::calibration::predictiveFactor(dis, 0.95);
   const double lo = m["fitted_range"]["d_min_m"], hi = m["fitted_range"]["d_max_m"];
   for (std::size_t k = 0; k < at.size(); ++k) {
     if (at[k] < lo || at[k] > hi) continue;
@@ -77,6 +86,8 @@ void check(const nlohmann::json& m, const std::vector<double>& truth, const std:
       for (std::size_t j = 0; j < n; ++j) v += std::pow(at[k], double(i)) * c[i * n + j] * std::pow(at[k], double(j));
     const double z = (poly(a, at[k]) - poly(truth, at[k])) / std::sqrt(v);
     t.covered_f[k] += std::abs(z) <= 1.96;
+    const double predictive = lidarcal::calibration::predictiveStandardError(std::sqrt(v), dis);
+    t.covered_predictive += std::abs(z * std::sqrt(v)) <= t95 * predictive;
     ++t.n_f[k];
     t.sum_z2 += z * z;
     ++t.n_z;
@@ -96,7 +107,9 @@ void print(const char* name, const Tally& t, const std::vector<double>& at) {
     else std::printf(" - |");
   if (t.n_alpha) std::printf(" %d/%d = %.0f %% |", t.covered_alpha, t.n_alpha, 100.0 * t.covered_alpha / t.n_alpha);
   else std::printf(" - |");
-  std::printf(" %.2f |\n", t.n_z ? std::sqrt(t.sum_z2 / t.n_z) : std::nan(""));
+  std::printf(" %.2f |", t.n_z ? std::sqrt(t.sum_z2 / t.n_z) : std::nan(""));
+  if (t.n_z) std::printf(" %d/%d = %.0f %% |\n", t.covered_predictive, t.n_z, 100.0 * t.covered_predictive / t.n_z);
+  else std::printf(" - |\n");
 }
 
 }  // namespace
@@ -156,9 +169,9 @@ int main(int argc, char** argv) {
               first + seeds - 1, scans);
   std::printf("| method | fits (without SE) |");
   for (double d : at) std::printf(" f(%.0f m) |", d);
-  std::printf(" alpha_i (true order chosen) | RMS of z = error / SE |\n|---|---|");
+  std::printf(" alpha_i (true order chosen) | RMS of z = error / SE | predictive 95 %%, f(d) at all three |\n|---|---|");
   for (std::size_t k = 0; k < at.size(); ++k) std::printf("---|");
-  std::printf("---|---|\n");
+  std::printf("---|---|---|\n");
   print("joint refinement (no ground truth)", joint, at);
   print("closed form of Alhashimi et al. 2021, jackknife SE (no ground truth)", closed, at);
   print("against exact distances (--reference)", reference, at);
