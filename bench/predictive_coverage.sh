@@ -7,7 +7,8 @@
 #     both ways round;
 #   - the four reference scenes (a full room, the reflector at 0.505-1.111 m), checked with the
 #     model fitted on the whole sweep;
-#   - the whole sweep fitted without one recording and checked on it, every recording in turn;
+#   - the whole sweep fitted without one recording and checked on it, every recording in turn, and
+#     fitted on every third recording (14) and checked on the other 28, each third in turn;
 # each with the tape distances stated exact (REF.json sigma_m 0) and with a 2 mm tape error
 # (sigma_m 0.002). `evaluate --reference --model` counts the entries inside each interval.
 #
@@ -86,45 +87,50 @@ for s in 0.002 0; do
   check all scenes $s --force
 done
 
-# Leave one out: the whole sweep fitted without one recording, that recording checked; every
-# recording in turn. Pooled counts and the held-out errors over their interval's standard error.
-loo() {
-  local s=$1 k
-  for ((k = 0; k < n; k++)); do
-    python3 - "$WORK/all-ref-$s.json" "$k" "$WORK/loo-fit.json" "$WORK/loo-check.json" <<'PY'
+# folds S K ON NAME: the whole sweep split by recording index modulo K; for each residue r the
+# model is fitted on the recordings with index % K == r (ON=1) or != r (ON=0) and checked on the
+# others. One row of counts pooled over the folds, with the held-out errors over their interval's
+# standard error (z).
+folds() {
+  local s=$1 k=$2 on=$3 name=$4 r
+  for ((r = 0; r < k; r++)); do
+    python3 - "$WORK/all-ref-$s.json" "$k" "$r" "$on" "$WORK/fold-fit.json" "$WORK/fold-check.json" <<'PY'
 import json, sys
-ref = json.load(open(sys.argv[1])); k = int(sys.argv[2])
-for path, keep in ((sys.argv[3], lambda d: d["stop"] != k), (sys.argv[4], lambda d: d["stop"] == k)):
+ref = json.load(open(sys.argv[1])); k, r, on = (int(v) for v in sys.argv[2:5])
+fit = lambda d: (d["stop"] % k == r) == bool(on)
+for path, keep in ((sys.argv[5], fit), (sys.argv[6], lambda d: not fit(d))):
     json.dump(dict(ref, distances=[d for d in ref["distances"] if keep(d)]), open(path, "w"))
 PY
-    "$LIDARCAL" calibrate -q "$WORK/all" --reference "$WORK/loo-fit.json" --radius $RADIUS --overwrite -o "$WORK/loo-model.json" \
-      > /dev/null 2>&1
-    "$LIDARCAL" evaluate -q "$WORK/all" --reference "$WORK/loo-check.json" --radius $RADIUS --model "$WORK/loo-model.json" \
-      -o "$WORK/loo-$s-$k.json" > /dev/null 2>&1
-    printf '\rleave one out (tape %s): %d of %d' "$s" $((k + 1)) "$n" >&2
+    "$LIDARCAL" calibrate -q "$WORK/all" --reference "$WORK/fold-fit.json" --radius $RADIUS --overwrite \
+      -o "$WORK/fold-model.json" > /dev/null 2>&1
+    "$LIDARCAL" evaluate -q "$WORK/all" --reference "$WORK/fold-check.json" --radius $RADIUS \
+      --model "$WORK/fold-model.json" -o "$WORK/fold-$name-$s-$r.json" > /dev/null 2>&1
+    printf '\r%s (tape %s): %d of %d' "$name" "$s" $((r + 1)) "$k" >&2
   done
   echo >&2
-  python3 - "$WORK" "$s" "$n" <<'PY'
+  python3 - "$WORK" "$s" "$k" "$name" <<'PY'
 import json, math, sys
-work, s, n = sys.argv[1], sys.argv[2], int(sys.argv[3])
+work, s, k, name = sys.argv[1], sys.argv[2], int(sys.argv[3]), sys.argv[4]
 rows = []
-for k in range(n):
-    rows += [x for x in json.load(open(f"{work}/loo-{s}-{k}.json"))["predictive"]["entries"] if x["checked"]]
+for r in range(k):
+    rows += [x for x in json.load(open(f"{work}/fold-{name}-{s}-{r}.json"))["predictive"]["entries"] if x["checked"]]
 m = len(rows)
 z = [x["error_m"] / x["interval_se_m"] for x in rows]
 pct = lambda key: f"{sum(x[key] for x in rows)}/{m} = {100 * sum(x[key] for x in rows) / m:.0f} %"
-print(f"| {1000 * float(s):.0f} mm | {m} | {math.sqrt(sum(v * v for v in z) / m):.2f} | {max(abs(v) for v in z):.2f} | "
-      f"{1000 * math.sqrt(sum(x['error_m'] ** 2 for x in rows) / m):.1f} mm | "
+print(f"| {name} | {1000 * float(s):.0f} mm | {m} | {math.sqrt(sum(v * v for v in z) / m):.2f} | "
+      f"{max(abs(v) for v in z):.2f} | {1000 * math.sqrt(sum(x['error_m'] ** 2 for x in rows) / m):.1f} mm | "
       f"{pct('inside_68')} | {pct('inside_95')} | {pct('inside_curve_95')} |")
 PY
 }
 echo
-echo "Leave one out: the whole sweep fitted without one recording, that recording checked, each in turn"
+echo "Folds of the whole sweep: fitted on all but one recording, or on every third, and checked on the rest"
 echo
-echo "| stated tape error | entries checked | RMS z | largest abs z | RMS corrected - tape |" \
+echo "| folds | stated tape error | entries checked | RMS z | largest abs z | RMS corrected - tape |" \
      "inside the 68 % predictive interval | inside the 95 % predictive interval | inside the curve's 95 % interval |"
-echo "|---|---|---|---|---|---|---|---|"
-loo 0.002
-loo 0
+echo "|---|---|---|---|---|---|---|---|---|"
+for s in 0.002 0; do
+  folds $s "$n" 0 "leave one out"
+  folds $s 3 1 "fitted on a third"
+done
 echo
 echo "per-entry tables: $WORK/eval-*.txt"
