@@ -10,7 +10,7 @@
 // drawn per seed, and the truth is the polynomial plus the ripple.
 //
 //   build/bench/coverage --scene data/scenes/paper_field.json --seeds 100 [--first-seed 1001]
-//       [--scans-per-stop 10] [--work /tmp/coverage]
+//       [--scans-per-stop 10] [--work /tmp/coverage] [--joint-args "--max-order 2"]
 
 #include <algorithm>
 #include <cmath>
@@ -132,6 +132,8 @@ int main(int argc, char** argv) {
   app.add_option("--scans-per-stop", scans)->capture_default_str();
   app.add_option("--work", work)->capture_default_str();
   app.add_option("--tape-sigma", tape_sigma, "Standard deviation of the simulated tape error, metres")->capture_default_str();
+  std::string joint_args;
+  app.add_option("--joint-args", joint_args, "More options for the joint refinement's calibrate (e.g. \"--max-order 2\")");
   CLI11_PARSE(app, argc, argv);
   const std::string exe = LIDARCAL_EXE;
   const std::vector<double> at = {1.0, 2.0, 3.0};
@@ -159,7 +161,8 @@ int main(int argc, char** argv) {
     }
     const auto truth_json = readJson(dir / "truth.json");
     const std::vector<double> truth = truth_json["model"]["bias_alpha"];
-    if (sh(exe + " calibrate -q " + (dir / "scans").string() + " -o " + (dir / "joint.json").string() + " --overwrite"))
+    if (sh(exe + " calibrate -q " + joint_args + " " + (dir / "scans").string() + " -o " + (dir / "joint.json").string() +
+           " --overwrite"))
       check(readJson(dir / "joint.json"), truth, fx, at, joint);
     else
       ++joint.failed;
