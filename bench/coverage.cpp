@@ -27,7 +27,9 @@
 #include <nlohmann/json.hpp>
 
 #include "calibration/discrepancy.hpp"
+#include "calibration/held_out.hpp"
 #include "common/range_effects.hpp"
+#include "io/model_io.hpp"
 #include "io/reference_io.hpp"
 #include "io/scene_io.hpp"
 #include "simulation/tape_reference.hpp"
@@ -66,35 +68,27 @@ struct Tally {
   int n_z = 0;
 };
 
-/// Checks one model.json against the true bias.
-void check(const nlohmann::json& m, const std::vector<double>& truth, const lidarcal::RangeEffects& fx,
+/// Checks one model against the true bias.
+void check(const lidarcal::CalibrationModel& m, const std::vector<double>& truth, const lidarcal::RangeEffects& fx,
            const std::vector<double>& at, Tally& t) {
-  const std::vector<double> a = m["bias"]["alpha"];
-  const std::vector<double> c = m["alpha_covariance"];
+  const std::vector<double>& a = m.model.bias.alpha;
+  const std::vector<double>& c = m.alpha_covariance;
   const std::size_t n = a.size();
-  if (c.size() != n * n) {
+  if (c.size() != n * n || !m.fitted_range_m) {
     ++t.failed;
     return;
   }
   ++t.fits;
-  lidarcal::Discrepancy dis;
-  if (const auto& j = m["discrepancy"]; j.is_object() && j.value("method", "none") != "none" && j["sigma_m"].is_number()) {
-    dis.method = j["method"];
-    dis.sigma_m = j["sigma_m"];
-    dis.dof = j.value("dof", 0);
-  }
-  const double t95 = lidarcal::calibration::predictiveFactor(dis, 0.95);
-  const double lo = m["fitted_range"]["d_min_m"], hi = m["fitted_range"]["d_max_m"];
+  const double t95 = lidarcal::calibration::predictiveFactor(m.discrepancy, 0.95);
+  const auto [lo, hi] = *m.fitted_range_m;
   for (std::size_t k = 0; k < at.size(); ++k) {
     if (at[k] < lo || at[k] > hi) continue;
-    double v = 0.0;
-    for (std::size_t i = 0; i < n; ++i)
-      for (std::size_t j = 0; j < n; ++j) v += std::pow(at[k], double(i)) * c[i * n + j] * std::pow(at[k], double(j));
+    const double se = lidarcal::calibration::curveStandardError(m, at[k]);
     // The sensor's true mean reading: the scene's polynomial and its ripple, if any.
-    const double z = (poly(a, at[k]) - poly(truth, at[k]) - lidarcal::rangeRipple(fx, at[k])) / std::sqrt(v);
+    const double error = m.model.bias(at[k]) - poly(truth, at[k]) - lidarcal::rangeRipple(fx, at[k]);
+    const double z = error / se;
     t.covered_f[k] += std::abs(z) <= 1.96;
-    const double predictive = lidarcal::calibration::predictiveStandardError(std::sqrt(v), dis);
-    t.covered_predictive += std::abs(z * std::sqrt(v)) <= t95 * predictive;
+    t.covered_predictive += std::abs(error) <= t95 * lidarcal::calibration::predictiveStandardError(se, m.discrepancy);
     ++t.n_f[k];
     t.sum_z2 += z * z;
     ++t.n_z;
@@ -163,24 +157,24 @@ int main(int argc, char** argv) {
     const std::vector<double> truth = truth_json["model"]["bias_alpha"];
     if (sh(exe + " calibrate -q " + joint_args + " " + (dir / "scans").string() + " -o " + (dir / "joint.json").string() +
            " --overwrite"))
-      check(readJson(dir / "joint.json"), truth, fx, at, joint);
+      check(lidarcal::io::readModel(dir / "joint.json"), truth, fx, at, joint);
     else
       ++joint.failed;
     if (sh(exe + " calibrate -q --method closed-form " + (dir / "scans").string() + " -o " + (dir / "cf.json").string() +
            " --overwrite"))
-      check(readJson(dir / "cf.json"), truth, fx, at, closed);
+      check(lidarcal::io::readModel(dir / "cf.json"), truth, fx, at, closed);
     else
       ++closed.failed;
     tapeReference(dir / "truth.json", dir / "ref.json", 0.0, 0);
     if (sh(exe + " calibrate -q " + (dir / "scans").string() + " --reference " + (dir / "ref.json").string() + " -o " +
            (dir / "ref-model.json").string() + " --overwrite"))
-      check(readJson(dir / "ref-model.json"), truth, fx, at, reference);
+      check(lidarcal::io::readModel(dir / "ref-model.json"), truth, fx, at, reference);
     else
       ++reference.failed;
     tapeReference(dir / "truth.json", dir / "tape.json", tape_sigma, static_cast<std::uint64_t>(seed));
     if (sh(exe + " calibrate -q " + (dir / "scans").string() + " --reference " + (dir / "tape.json").string() + " -o " +
            (dir / "tape-model.json").string() + " --overwrite"))
-      check(readJson(dir / "tape-model.json"), truth, fx, at, taped);
+      check(lidarcal::io::readModel(dir / "tape-model.json"), truth, fx, at, taped);
     else
       ++taped.failed;
     std::fprintf(stderr, "\rseed %d of %d", seed - first + 1, seeds);

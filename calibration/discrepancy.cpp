@@ -170,4 +170,9 @@ double predictiveFactor(const Discrepancy& d, double level, double known_share) 
   return centralTFactor(level, static_cast<double>(d.dof) / (estimated * estimated));
 }
 
+double knownShare(double estimated_variance, double known_variance) {
+  const double total = estimated_variance + known_variance;
+  return total > 0.0 ? known_variance / total : 0.0;
+}
+
 }  // namespace lidarcal::calibration

@@ -70,4 +70,8 @@ double predictiveStandardError(double curve_se, const Discrepancy& discrepancy);
 /// dof / (1 - known_share)^2 (Welch-Satterthwaite; Satterthwaite 1946, JCGM 100:2008 G.4).
 double predictiveFactor(const Discrepancy& discrepancy, double level, double known_share = 0.0);
 
+/// known / (estimated + known) of two variances (0 when both are 0): the known_share of an
+/// interval whose variance is the estimated one plus a known one.
+double knownShare(double estimated_variance, double known_variance);
+
 }  // namespace lidarcal::calibration

@@ -29,9 +29,9 @@ double noiseLawExponent(const NoiseModel& noise) {
 }
 
 bool HeldOutEntry::inside(const Discrepancy& discrepancy, double level) const {
-  const double own = entry_se_m * entry_se_m, total = predictive_se_m * predictive_se_m + own;
-  const double factor = predictiveFactor(discrepancy, level, total > 0.0 ? own / total : 0.0);
-  return std::abs(residual_m) <= factor * std::sqrt(total);
+  const double predictive = predictive_se_m * predictive_se_m, own = entry_se_m * entry_se_m;
+  const double factor = predictiveFactor(discrepancy, level, knownShare(predictive, own));
+  return std::abs(residual_m) <= factor * std::sqrt(predictive + own);
 }
 
 namespace {

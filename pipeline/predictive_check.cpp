@@ -38,7 +38,7 @@ EntryInterval entryInterval(const calibration::ReferenceMatch& m, const Referenc
   e.interval_se_m = std::sqrt(e.predictive_se_m * e.predictive_se_m + other);
   if (!std::isfinite(e.interval_se_m)) return e;
   e.checked = true;
-  const double known = e.interval_se_m > 0.0 ? other / (e.interval_se_m * e.interval_se_m) : 0.0;
+  const double known = calibration::knownShare(e.predictive_se_m * e.predictive_se_m, other);
   e.factor_68 = calibration::predictiveFactor(model.discrepancy, kLevel68, known);
   e.factor_95 = calibration::predictiveFactor(model.discrepancy, kLevel95, known);
   e.inside_68 = std::abs(e.error_m) <= e.factor_68 * e.interval_se_m;
