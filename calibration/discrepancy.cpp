@@ -111,6 +111,7 @@ std::vector<EntryResidual> entryResiduals(const std::vector<double>& d, const st
     const double tape = f.derivative(e.distance_m) * s.tape;
     e.known_variance_m2 = sigma_w2 / s.w + tape * tape;
     e.tape_sigma_m = s.tape;
+    e.weight = s.w;
     e.readings = s.n;
     out.push_back(e);
   }
@@ -156,6 +157,16 @@ Discrepancy estimateDiscrepancy(const std::vector<EntryResidual>& entries, int o
   out.note = "the predictive interval includes the sensor's scatter about the polynomial between the measured "
              "distances, beyond their stated tape errors; it does not include an error all of them share (a tape that "
              "reads long, a wrong pole radius)";
+  return out;
+}
+
+std::map<std::size_t, double> randomEffectsFactors(const std::vector<EntryResidual>& entries, const Discrepancy& d) {
+  std::map<std::size_t, double> out;
+  const bool taped = std::any_of(entries.begin(), entries.end(), [](const EntryResidual& e) { return e.tape_sigma_m > 0.0; });
+  if (!d.estimated() || (d.sigma_m == 0.0 && !taped)) return out;
+  const double tau2 = d.sigma_m * d.sigma_m;
+  for (const auto& e : entries)
+    out[e.entry] = 1.0 / (e.weight * std::max(tau2 + e.known_variance_m2, kVarianceFloorM2));
   return out;
 }
 

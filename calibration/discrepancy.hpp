@@ -25,6 +25,7 @@
 // noise of a mean) takes more degrees of freedom by Welch-Satterthwaite.
 
 #include <cstddef>
+#include <map>
 #include <vector>
 
 #include "common/calibration_model.hpp"
@@ -39,6 +40,7 @@ struct EntryResidual {
   double residual_m = 0.0;        ///< weighted mean of reading - f(distance) over its readings, metres
   double known_variance_m2 = 0.0; ///< k_g: noise of that mean plus (f'(d) sigma_tape)^2, square metres
   double tape_sigma_m = 0.0;      ///< its stated tape error, metres
+  double weight = 0.0;            ///< W_g: the sum of its readings' weights
   std::size_t readings = 0;       ///< readings it holds
 };
 
@@ -57,6 +59,17 @@ double restrictedLogLikelihood(const std::vector<EntryResidual>& entries, int or
 /// entries' stated tape errors. Method "none" (with a note saying why) when the entries cannot
 /// leave a degree of freedom.
 Discrepancy estimateDiscrepancy(const std::vector<EntryResidual>& entries, int order);
+
+/// The weight of each entry's readings in the random-effects fit of the polynomial, relative
+/// to the noise law's: 1 / (W_g (tau^2 + k_g)), so that entry g counts by 1 / (tau^2 + k_g) in
+/// all, its readings sharing that by the noise law. This is the generalised least squares, and
+/// with tau at its REML estimate the REML estimate, of the meta-regression's coefficients. Where
+/// the discrepancy or a stated tape error outweighs an entry's noise, every entry counts about
+/// alike: a hundred more readings at one distance do not say more about the sensor's departure
+/// there. Keyed by entry label; empty when no discrepancy is estimated, or when tau and every
+/// stated tape error are 0 (then the factors are all alike and the noise law's fit stands).
+std::map<std::size_t, double> randomEffectsFactors(const std::vector<EntryResidual>& entries,
+                                                   const Discrepancy& discrepancy);
 
 /// sqrt(curve_se^2 + sigma^2) with the discrepancy's sigma (curve_se when none is estimated);
 /// both in the same units. NaN when curve_se is.

@@ -195,9 +195,10 @@ std::vector<double> lawWeights(const std::vector<double>& alpha, const std::vect
   return w;
 }
 
-/// Iterated weighted least squares on the readings with use[i].
+/// Iterated weighted least squares on the readings with use[i], the noise law's weights times
+/// factor[i] (none when empty).
 std::vector<double> iteratedFit(const std::vector<double>& d, const std::vector<double>& y, const std::vector<bool>& use,
-                                int order, double exponent) {
+                                int order, double exponent, const std::vector<double>& factor) {
   std::vector<double> dd, yy, ww;
   std::vector<double> alpha(static_cast<std::size_t>(order) + 1, 0.0);
   alpha[1] = 1.0;  // f(d) = d to start the weights
@@ -205,7 +206,7 @@ std::vector<double> iteratedFit(const std::vector<double>& d, const std::vector<
     const std::vector<double> w = lawWeights(alpha, d, exponent, use);
     dd.clear(), yy.clear(), ww.clear();
     for (std::size_t i = 0; i < d.size(); ++i)
-      if (use[i]) dd.push_back(d[i]), yy.push_back(y[i]), ww.push_back(w[i]);
+      if (use[i]) dd.push_back(d[i]), yy.push_back(y[i]), ww.push_back(factor.empty() ? w[i] : w[i] * factor[i]);
     std::vector<double> next = fitPolynomial(dd, yy, order, ww);
     double change = 0.0;
     for (std::size_t i = 0; i < next.size(); ++i) change = std::max(change, std::abs(next[i] - alpha[i]));
@@ -247,12 +248,17 @@ ReferenceReadings knownReadings(const LandmarkObservations& obs, const Reference
 }
 
 ClusteredFit fitClustered(const std::vector<double>& d, const std::vector<double>& y,
-                          const std::vector<std::size_t>& cluster, int order, double exponent) {
-  if (d.size() != y.size() || d.size() != cluster.size()) throw std::invalid_argument("fitClustered: sizes differ");
+                          const std::vector<std::size_t>& cluster, int order, double exponent,
+                          const std::vector<double>& factor) {
+  if (d.size() != y.size() || d.size() != cluster.size() || (!factor.empty() && factor.size() != d.size()))
+    throw std::invalid_argument("fitClustered: sizes differ");
   const std::vector<bool> all(d.size(), true);
   ClusteredFit fit;
-  fit.alpha = iteratedFit(d, y, all, order, exponent);
-  const std::vector<double> w = lawWeights(fit.alpha, d, exponent, all);
+  fit.alpha = iteratedFit(d, y, all, order, exponent, factor);
+  const std::vector<double> law = lawWeights(fit.alpha, d, exponent, all);
+  std::vector<double> w = law;  // the fit's weights
+  if (!factor.empty())
+    for (std::size_t i = 0; i < d.size(); ++i) w[i] *= factor[i];
   const int p = order + 1;
   Eigen::MatrixXd bread = Eigen::MatrixXd::Zero(p, p);
   std::map<std::size_t, Eigen::VectorXd> score;  // per cluster: sum of w r x
@@ -264,7 +270,7 @@ ClusteredFit fitClustered(const std::vector<double>& d, const std::vector<double
     auto it = score.find(cluster[i]);
     if (it == score.end()) it = score.emplace(cluster[i], Eigen::VectorXd::Zero(p)).first;
     it->second += w[i] * r * x;
-    s2 += w[i] * r * r;
+    s2 += law[i] * r * r;
   }
   const double n = static_cast<double>(d.size());
   fit.sigma_e = std::sqrt(s2 / n);
@@ -276,7 +282,7 @@ ClusteredFit fitClustered(const std::vector<double>& d, const std::vector<double
   // Gaussian NLL of y ~ N(f(d), sigma_e^2 f(d)^(2k)).
   fit.neg_log_likelihood = 0.0;
   for (std::size_t i = 0; i < d.size(); ++i) {
-    const double sigma = fit.sigma_e / std::sqrt(w[i]);
+    const double sigma = fit.sigma_e / std::sqrt(law[i]);
     const double r = y[i] - polyAt(fit.alpha, d[i]);
     fit.neg_log_likelihood += 0.5 * (kLog2Pi + 2.0 * std::log(sigma) + r * r / (sigma * sigma));
   }
@@ -289,7 +295,7 @@ ClusteredFit fitClustered(const std::vector<double>& d, const std::vector<double
   for (const auto& [g, sc] : score) {
     std::vector<bool> use(d.size());
     for (std::size_t i = 0; i < d.size(); ++i) use[i] = cluster[i] != g;
-    const std::vector<double> a = iteratedFit(d, y, use, order, exponent);
+    const std::vector<double> a = iteratedFit(d, y, use, order, exponent, factor);
     leave_out.push_back(Eigen::Map<const Eigen::VectorXd>(a.data(), p));
     for (std::size_t i = 0; i < d.size(); ++i)
       if (!use[i]) {
@@ -430,6 +436,22 @@ void adoptFit(CalibrationModel& m, const ClusteredFit& f, const ReadingColumns& 
                                       static_cast<int>(f.alpha.size()) - 1);
 }
 
+/// Refits f's order with the random-effects weights of m's discrepancy (calibration/discrepancy.hpp)
+/// and adopts that fit; m unchanged when the weights are the noise law's.
+void adoptRandomEffectsFit(CalibrationModel& m, const ClusteredFit& f, const ReadingColumns& c, double exponent) {
+  const std::vector<double> w = lawWeights(f.alpha, c.d, exponent, std::vector<bool>(c.d.size(), true));
+  const auto factors =
+      randomEffectsFactors(entryResiduals(c.d, c.y, w, c.entry, c.tape_sigma, m.model.bias), m.discrepancy);
+  if (factors.empty()) return;
+  std::vector<double> factor(c.d.size(), 0.0);
+  for (std::size_t i = 0; i < c.d.size(); ++i)
+    if (const auto it = factors.find(c.entry[i]); it != factors.end()) factor[i] = it->second;
+  const ClusteredFit re = fitClustered(c.d, c.y, c.stop, static_cast<int>(f.alpha.size()) - 1, exponent, factor);
+  const Discrepancy discrepancy = m.discrepancy;  // REML's tau does not depend on the fit it starts from
+  adoptFit(m, re, c, exponent);
+  m.discrepancy = discrepancy;
+}
+
 }  // namespace
 
 CalibrationModel calibrateWithReference(const std::vector<KnownReading>& readings, const CalibrationConfig& config,
@@ -461,6 +483,7 @@ CalibrationModel calibrateWithReference(const std::vector<KnownReading>& reading
   m.order_aic = orderByAic(m);
   m.order_validation = best + 1;
   adoptFit(m, fits[static_cast<std::size_t>(best)], c, exponent);
+  adoptRandomEffectsFit(m, fits[static_cast<std::size_t>(best)], c, exponent);
   addUnsupportedCorrectionWarning(m);
   return m;
 }

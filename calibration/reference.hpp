@@ -97,8 +97,11 @@ struct ClusteredFit {
 
 /// Weighted least squares of y on 1, d, ..., d^order with weights 1 / f(d)^(2 exponent),
 /// iterated to a fixed point, and its covariance clustered by `cluster` (jackknife). `cluster[i]` labels reading i.
+/// `factor[i]`, when given, multiplies reading i's weight in the fit (the random-effects weights of
+/// calibration/discrepancy.hpp); sigma_e and the likelihood stay the noise law's.
 ClusteredFit fitClustered(const std::vector<double>& d, const std::vector<double>& y,
-                          const std::vector<std::size_t>& cluster, int order, double exponent);
+                          const std::vector<std::size_t>& cluster, int order, double exponent,
+                          const std::vector<double>& factor = {});
 
 /// The readings of each matched reference distance summarised for the joint refinement (one
 /// KnownRange per entry with readings; its tape sigma from REF.json).
@@ -117,8 +120,10 @@ void setNoiseLaw(NoiseModel& noise, double exponent, double sigma_e);
 /// Alhashimi et al. 2016's test, the order by leave-one-stop-out cross-validation, standard errors clustered
 /// by stop, and the model discrepancy over the entries (calibration/discrepancy.hpp: the
 /// sensor's scatter about the polynomial between measured distances, net of the entries' stated
-/// tape errors). The result's status says why not when the readings cannot support a model
-/// (fewer than 3 stops, or fewer stops than coefficients + 1).
+/// tape errors). Where the entries state a tape error or show a discrepancy, the chosen order is
+/// refitted with the random-effects weights (randomEffectsFactors), so that each entry counts by
+/// its whole variance rather than by its readings. The result's status says why not when the
+/// readings cannot support a model (fewer than 3 stops, or fewer stops than coefficients + 1).
 CalibrationModel calibrateWithReference(const std::vector<KnownReading>& readings, const CalibrationConfig& config,
                                         double range_min_m = 0.0, double range_max_m = 1e9);
 

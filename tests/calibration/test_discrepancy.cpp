@@ -76,6 +76,30 @@ TEST(Discrepancy, EntriesThatLeaveNoDegreeOfFreedomGiveNoneWithAReason) {
   EXPECT_NEAR(predictiveFactor(d, 0.95), 1.959964, 1e-5);
 }
 
+TEST(Discrepancy, RandomEffectsWeightsCountEachEntryByItsWholeVariance) {
+  auto entries = entriesOf({0.001, -0.002, 0.003, 0.0, 0.001}, 0.0);
+  for (std::size_t g = 0; g < entries.size(); ++g) {
+    entries[g].weight = g % 2 ? 100.0 : 1.0;                    // a hundred times the readings
+    entries[g].known_variance_m2 = 1e-6 / entries[g].weight;  // so a hundredth of the noise
+  }
+  Discrepancy d;
+  d.method = "reml";
+  d.sigma_m = 0.0;
+  d.dof = 2;
+  EXPECT_TRUE(randomEffectsFactors(entries, d).empty()) << "no discrepancy, no tape error: the noise law's weights stand";
+  d.sigma_m = 0.003;
+  const auto f = randomEffectsFactors(entries, d);
+  ASSERT_EQ(f.size(), entries.size());
+  for (const auto& e : entries)
+    EXPECT_NEAR(e.weight * f.at(e.entry), 1.0 / (9e-6 + e.known_variance_m2), 1e-6 / (9e-6 + e.known_variance_m2));
+  // tau dominates: the entry with 100 times the readings counts barely more than the other.
+  EXPECT_LT(entries[1].weight * f.at(1) / (entries[0].weight * f.at(0)), 1.12);
+  entries[0].tape_sigma_m = 0.002;
+  d.sigma_m = 0.0;
+  EXPECT_EQ(randomEffectsFactors(entries, d).size(), entries.size()) << "a stated tape error alone changes the weights";
+  EXPECT_TRUE(randomEffectsFactors(entries, Discrepancy{}).empty()) << "none estimated";
+}
+
 TEST(Discrepancy, IntervalsWithAKnownPartOfTheirVarianceHoldTheirLevel) {
   // An error e = a + b, a ~ N(0, v_est) whose variance is estimated with dof degrees of freedom
   // (s2 = v_est chi2_dof / dof), b ~ N(0, v_known) with v_known exact. The interval

@@ -3,6 +3,7 @@
 // and the matching of reference entries to targets.
 
 #include <cmath>
+#include <random>
 
 #include <gtest/gtest.h>
 
@@ -138,6 +139,41 @@ TEST(ReferenceCalibration, MatchesEntriesByBearingOrByMeasuredDistance) {
   EXPECT_NE(known.matches[1].status.find("bearing"), std::string::npos) << known.matches[1].status;
   EXPECT_FALSE(known.matches[2].ok());
   EXPECT_NE(known.matches[2].status.find("stop 2"), std::string::npos) << known.matches[2].status;
+}
+
+TEST(ReferenceCalibration, WhereTheTapeErrorOutweighsTheNoiseEveryEntryCountsAboutAlike) {
+  // Twelve taped distances, every other one with 100 times the readings. Each tape distance is
+  // off by its own 2 mm error, which no number of readings averages away: weighting the entries
+  // by their readings (the noise law alone) leans on half of them, the random-effects weights of
+  // calibration/discrepancy.hpp on all. Over 40 seeds the latter's f must be closer to the truth
+  // (for equal weights against 100:1 the expected squared error is about half).
+  const BiasPolynomial truth{{0.02, 0.97, 0.012}};
+  const int seeds = 40;
+  double re_se = 0.0, law_se = 0.0;
+  for (int seed = 301; seed < 301 + seeds; ++seed) {
+    std::mt19937_64 rng(static_cast<std::uint64_t>(seed));
+    std::normal_distribution<double> noise(0.0, 0.003), tape(0.0, 0.002);
+    std::vector<KnownReading> r;
+    for (std::size_t k = 0; k < 12; ++k) {
+      const double d = 0.5 + 0.25 * static_cast<double>(k), taped = d + tape(rng);
+      for (int i = 0; i < (k % 2 ? 500 : 5); ++i)
+        r.push_back({k, k, static_cast<std::size_t>(i), kUnknownBeam, taped, truth(d) + noise(rng), 0.0, 0.002});
+    }
+    CalibrationConfig config;
+    config.max_order = 2;  // the truth's: the weights, not the order, are under test
+    config.noise = NoiseKind::constant;
+    const CalibrationModel m = calibrateWithReference(r, config);
+    ASSERT_STREQ(m.status.name(), "ok") << m.status.message;
+    std::vector<double> d, y;
+    std::vector<std::size_t> stop;
+    for (const auto& k : r) d.push_back(k.d_m), y.push_back(k.y_m), stop.push_back(k.stop);
+    const BiasPolynomial law{fitClustered(d, y, stop, m.model.bias.order(), 0.0).alpha};
+    for (double at = 0.5; at <= 3.25; at += 0.25) {
+      re_se += std::pow(m.model.bias(at) - truth(at), 2);
+      law_se += std::pow(law(at) - truth(at), 2);
+    }
+  }
+  EXPECT_LT(re_se, 0.8 * law_se) << "RMS ratio " << std::sqrt(re_se / law_se);
 }
 
 TEST(ReferenceCalibration, TooFewStopsIsAStatusNotAModel) {
