@@ -1,6 +1,7 @@
 // Do the standard errors mean what they say? For each seed: simulate a calibration sequence,
 // calibrate it through the command line (the joint refinement without ground truth, and against
-// tape distances taken from the simulator's truth: `calibrate --reference`), and check whether
+// tape distances taken from the simulator's truth: `calibrate --reference`, alone and for a few
+// stops inside the self-calibration: `--reference-fit combined`), and check whether
 // the 95 % interval f(d) +- 1.96 SE(f(d)) holds the simulated sensor's true f(d) at a few
 // distances inside the fitted range, and each coefficient's interval its true value; and the
 // predictive 95 % interval (curve and model discrepancy, Student t: calibration/discrepancy.hpp)
@@ -10,7 +11,7 @@
 // drawn per seed, and the truth is the polynomial plus the ripple.
 //
 //   build/bench/coverage --scene data/scenes/paper_field.json --seeds 100 [--first-seed 1001]
-//       [--scans-per-stop 10] [--work /tmp/coverage] [--joint-args "--max-order 2"]
+//       [--scans-per-stop 10] [--work /tmp/coverage] [--joint-args "--max-order 2"] [--taped-stops 5]
 
 #include <algorithm>
 #include <cmath>
@@ -48,11 +49,17 @@ nlohmann::json readJson(const fs::path& p) {
 /// REF.json a user with a tape would write: each visible pole's distance from the true pose of
 /// every stop, with its bearing (poles within 4 m, none in front of another); each distance
 /// with a tape error drawn from N(0, tape_sigma_m^2) (0: exact).
-void tapeReference(const fs::path& truth, const fs::path& out, double tape_sigma_m, std::uint64_t seed) {
+/// Only the first `stops` stops' distances when stops >= 0.
+void tapeReference(const fs::path& truth, const fs::path& out, double tape_sigma_m, std::uint64_t seed, int stops = -1) {
   lidarcal::TapeConfig config;
   config.sigma_m = tape_sigma_m;
   config.seed = seed;
-  lidarcal::io::writeReference(out, lidarcal::tapeReference(lidarcal::io::readTruth(truth), config));
+  lidarcal::Reference ref = lidarcal::tapeReference(lidarcal::io::readTruth(truth), config);
+  auto& d = ref.distances;
+  if (stops >= 0)
+    d.erase(std::remove_if(d.begin(), d.end(), [&](const auto& e) { return e.stop >= static_cast<std::size_t>(stops); }),
+            d.end());
+  lidarcal::io::writeReference(out, ref);
 }
 
 double poly(const std::vector<double>& a, double d) {
@@ -128,12 +135,17 @@ int main(int argc, char** argv) {
   app.add_option("--tape-sigma", tape_sigma, "Standard deviation of the simulated tape error, metres")->capture_default_str();
   std::string joint_args;
   app.add_option("--joint-args", joint_args, "More options for the joint refinement's calibrate (e.g. \"--max-order 2\")");
+  int taped_stops = 5;
+  app.add_option("--taped-stops", taped_stops,
+                 "Stops whose tape distances join the self-calibration (--reference-fit combined) in the last row")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
   CLI11_PARSE(app, argc, argv);
   const std::string exe = LIDARCAL_EXE;
   const std::vector<double> at = {1.0, 2.0, 3.0};
   const lidarcal::Scene base = lidarcal::io::readScene(scene);
   Tally joint{std::vector<int>(at.size()), std::vector<int>(at.size())};
-  Tally reference = joint, taped = joint, closed = joint;
+  Tally reference = joint, taped = joint, closed = joint, combined = joint;
   fs::create_directories(work);
   for (int seed = first; seed < first + seeds; ++seed) {
     const fs::path dir = fs::path(work) / ("s" + std::to_string(seed));
@@ -177,6 +189,12 @@ int main(int argc, char** argv) {
       check(lidarcal::io::readModel(dir / "tape-model.json"), truth, fx, at, taped);
     else
       ++taped.failed;
+    tapeReference(dir / "truth.json", dir / "taped-stops.json", tape_sigma, static_cast<std::uint64_t>(seed), taped_stops);
+    if (sh(exe + " calibrate -q " + (dir / "scans").string() + " --reference " + (dir / "taped-stops.json").string() +
+           " --reference-fit combined -o " + (dir / "combined.json").string() + " --overwrite"))
+      check(lidarcal::io::readModel(dir / "combined.json"), truth, fx, at, combined);
+    else
+      ++combined.failed;
     std::fprintf(stderr, "\rseed %d of %d", seed - first + 1, seeds);
     fs::remove_all(dir / "scans");
   }
@@ -194,5 +212,8 @@ int main(int argc, char** argv) {
   char name[96];
   std::snprintf(name, sizeof name, "against tape distances, tape error %.1f mm (--reference)", 1000.0 * tape_sigma);
   print(name, taped, at);
+  std::snprintf(name, sizeof name, "joint refinement with the first %d stops' tape distances (--reference-fit combined)",
+                taped_stops);
+  print(name, combined, at);
   return 0;
 }
