@@ -8,6 +8,7 @@
 #include <set>
 #include <stdexcept>
 #include <tuple>
+#include <utility>
 
 #include <Eigen/Dense>
 
@@ -421,7 +422,7 @@ int orderByAic(const CalibrationModel& m) {
   return order;
 }
 
-/// m's bias, noise law, covariance, fitted range, residual RMS and discrepancy from the chosen fit.
+/// m's bias, noise law, covariance, fitted range and residual RMS from the fit it adopts.
 void adoptFit(CalibrationModel& m, const ClusteredFit& f, const ReadingColumns& c, double exponent) {
   m.model.bias.alpha = f.alpha;
   setNoiseLaw(m.model.noise, exponent, f.sigma_e);
@@ -431,25 +432,22 @@ void adoptFit(CalibrationModel& m, const ClusteredFit& f, const ReadingColumns& 
   double s = 0.0;
   for (std::size_t i = 0; i < c.d.size(); ++i) s += std::pow(c.y[i] - polyAt(f.alpha, c.d[i]), 2);
   m.residual_rms_m = std::sqrt(s / static_cast<double>(c.d.size()));
-  const std::vector<double> w = lawWeights(f.alpha, c.d, exponent, std::vector<bool>(c.d.size(), true));
-  m.discrepancy = estimateDiscrepancy(entryResiduals(c.d, c.y, w, c.entry, c.tape_sigma, m.model.bias),
-                                      static_cast<int>(f.alpha.size()) - 1);
 }
 
-/// Refits f's order with the random-effects weights of m's discrepancy (calibration/discrepancy.hpp)
-/// and adopts that fit; m unchanged when the weights are the noise law's.
-void adoptRandomEffectsFit(CalibrationModel& m, const ClusteredFit& f, const ReadingColumns& c, double exponent) {
+/// The model discrepancy over the entries about the chosen fit f (calibration/discrepancy.hpp),
+/// and the fit to adopt at f's order: f refitted with the random-effects weights, or f itself
+/// where those are the noise law's.
+std::pair<ClusteredFit, Discrepancy> randomEffectsFit(const ClusteredFit& f, const ReadingColumns& c, double exponent) {
+  const int order = static_cast<int>(f.alpha.size()) - 1;
   const std::vector<double> w = lawWeights(f.alpha, c.d, exponent, std::vector<bool>(c.d.size(), true));
-  const auto factors =
-      randomEffectsFactors(entryResiduals(c.d, c.y, w, c.entry, c.tape_sigma, m.model.bias), m.discrepancy);
-  if (factors.empty()) return;
+  const std::vector<EntryResidual> entries = entryResiduals(c.d, c.y, w, c.entry, c.tape_sigma, BiasPolynomial{f.alpha});
+  Discrepancy discrepancy = estimateDiscrepancy(entries, order);
+  const auto factors = randomEffectsFactors(entries, discrepancy);
+  if (factors.empty()) return {f, std::move(discrepancy)};
   std::vector<double> factor(c.d.size(), 0.0);
   for (std::size_t i = 0; i < c.d.size(); ++i)
     if (const auto it = factors.find(c.entry[i]); it != factors.end()) factor[i] = it->second;
-  const ClusteredFit re = fitClustered(c.d, c.y, c.stop, static_cast<int>(f.alpha.size()) - 1, exponent, factor);
-  const Discrepancy discrepancy = m.discrepancy;  // REML's tau does not depend on the fit it starts from
-  adoptFit(m, re, c, exponent);
-  m.discrepancy = discrepancy;
+  return {fitClustered(c.d, c.y, c.stop, order, exponent, factor), std::move(discrepancy)};
 }
 
 }  // namespace
@@ -482,8 +480,9 @@ CalibrationModel calibrateWithReference(const std::vector<KnownReading>& reading
   m.order_rule = "leave-one-stop-out cross-validation";
   m.order_aic = orderByAic(m);
   m.order_validation = best + 1;
-  adoptFit(m, fits[static_cast<std::size_t>(best)], c, exponent);
-  adoptRandomEffectsFit(m, fits[static_cast<std::size_t>(best)], c, exponent);
+  auto [fit, discrepancy] = randomEffectsFit(fits[static_cast<std::size_t>(best)], c, exponent);
+  adoptFit(m, fit, c, exponent);
+  m.discrepancy = std::move(discrepancy);
   addUnsupportedCorrectionWarning(m);
   return m;
 }
