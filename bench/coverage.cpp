@@ -5,7 +5,9 @@
 // the 95 % interval f(d) +- 1.96 SE(f(d)) holds the simulated sensor's true f(d) at a few
 // distances inside the fitted range, and each coefficient's interval its true value; and the
 // predictive 95 % interval (curve and model discrepancy, Student t: calibration/discrepancy.hpp)
-// at the same distances (docs/results/standard-errors.md).
+// at the same distances, and the RMS error of f(d) there; for `calibrate --reference` also that of
+// the noise law's fit of the same order from model.json's order table, the baseline of the
+// random-effects refit (docs/results/standard-errors.md).
 //
 // A scene whose sensor has a ripple (sensor.effects.ripple_amplitude_m) gets the ripple's phase
 // drawn per seed, and the truth is the polynomial plus the ripple.
@@ -71,13 +73,25 @@ double poly(const std::vector<double>& a, double d) {
 struct Tally {
   std::vector<int> covered_f, n_f;
   int covered_alpha = 0, n_alpha = 0, fits = 0, failed = 0, covered_predictive = 0;
-  double sum_z2 = 0.0;
-  int n_z = 0;
+  double sum_z2 = 0.0, sum_error2 = 0.0, sum_law_error2 = 0.0;
+  int n_z = 0, n_law = 0;
 };
 
-/// Checks one model against the true bias.
-void check(const lidarcal::CalibrationModel& m, const std::vector<double>& truth, const lidarcal::RangeEffects& fx,
-           const std::vector<double>& at, Tally& t) {
+/// The coefficients of the order table's fit of `order` in model.json, empty when it has none.
+/// For `calibrate --reference` that is the noise law's fit the order was chosen from, before the
+/// random-effects refit the model adopts.
+std::vector<double> tableFit(const nlohmann::json& model, int order) {
+  for (const auto& row : model["order_selection"]["table"])
+    if (row["order"].get<int>() == order) return row["alpha"].get<std::vector<double>>();
+  return {};
+}
+
+/// Checks the model.json `file` against the true bias; with `noise_law`, also the order table's
+/// fit of the chosen order (the baseline of the random-effects refit).
+void check(const fs::path& file, const std::vector<double>& truth, const lidarcal::RangeEffects& fx,
+           const std::vector<double>& at, Tally& t, bool noise_law = false) {
+  const lidarcal::CalibrationModel m = lidarcal::io::readModel(file);
+  const std::vector<double> law = noise_law ? tableFit(readJson(file), m.model.bias.order()) : std::vector<double>{};
   const std::vector<double>& a = m.model.bias.alpha;
   const std::vector<double>& c = m.alpha_covariance;
   const std::size_t n = a.size();
@@ -92,8 +106,11 @@ void check(const lidarcal::CalibrationModel& m, const std::vector<double>& truth
     if (at[k] < lo || at[k] > hi) continue;
     const double se = lidarcal::calibration::curveStandardError(m, at[k]);
     // The sensor's true mean reading: the scene's polynomial and its ripple, if any.
-    const double error = m.model.bias(at[k]) - poly(truth, at[k]) - lidarcal::rangeRipple(fx, at[k]);
+    const double truth_k = poly(truth, at[k]) + lidarcal::rangeRipple(fx, at[k]);
+    const double error = m.model.bias(at[k]) - truth_k;
     const double z = error / se;
+    t.sum_error2 += error * error;
+    if (!law.empty()) t.sum_law_error2 += std::pow(poly(law, at[k]) - truth_k, 2), ++t.n_law;
     t.covered_f[k] += std::abs(z) <= 1.96;
     t.covered_predictive += std::abs(error) <= t95 * lidarcal::calibration::predictiveStandardError(se, m.discrepancy);
     ++t.n_f[k];
@@ -116,7 +133,10 @@ void print(const char* name, const Tally& t, const std::vector<double>& at) {
   if (t.n_alpha) std::printf(" %d/%d = %.0f %% |", t.covered_alpha, t.n_alpha, 100.0 * t.covered_alpha / t.n_alpha);
   else std::printf(" - |");
   std::printf(" %.2f |", t.n_z ? std::sqrt(t.sum_z2 / t.n_z) : std::nan(""));
-  if (t.n_z) std::printf(" %d/%d = %.0f %% |\n", t.covered_predictive, t.n_z, 100.0 * t.covered_predictive / t.n_z);
+  if (t.n_z) std::printf(" %d/%d = %.0f %% |", t.covered_predictive, t.n_z, 100.0 * t.covered_predictive / t.n_z);
+  else std::printf(" - |");
+  std::printf(" %.2f |", t.n_z ? 1000.0 * std::sqrt(t.sum_error2 / t.n_z) : std::nan(""));
+  if (t.n_law) std::printf(" %.2f |\n", 1000.0 * std::sqrt(t.sum_law_error2 / t.n_law));
   else std::printf(" - |\n");
 }
 
@@ -169,30 +189,30 @@ int main(int argc, char** argv) {
     const std::vector<double> truth = truth_json["model"]["bias_alpha"];
     if (sh(exe + " calibrate -q " + joint_args + " " + (dir / "scans").string() + " -o " + (dir / "joint.json").string() +
            " --overwrite"))
-      check(lidarcal::io::readModel(dir / "joint.json"), truth, fx, at, joint);
+      check(dir / "joint.json", truth, fx, at, joint);
     else
       ++joint.failed;
     if (sh(exe + " calibrate -q --method closed-form " + (dir / "scans").string() + " -o " + (dir / "cf.json").string() +
            " --overwrite"))
-      check(lidarcal::io::readModel(dir / "cf.json"), truth, fx, at, closed);
+      check(dir / "cf.json", truth, fx, at, closed);
     else
       ++closed.failed;
     tapeReference(dir / "truth.json", dir / "ref.json", 0.0, 0);
     if (sh(exe + " calibrate -q " + (dir / "scans").string() + " --reference " + (dir / "ref.json").string() + " -o " +
            (dir / "ref-model.json").string() + " --overwrite"))
-      check(lidarcal::io::readModel(dir / "ref-model.json"), truth, fx, at, reference);
+      check(dir / "ref-model.json", truth, fx, at, reference, true);
     else
       ++reference.failed;
     tapeReference(dir / "truth.json", dir / "tape.json", tape_sigma, static_cast<std::uint64_t>(seed));
     if (sh(exe + " calibrate -q " + (dir / "scans").string() + " --reference " + (dir / "tape.json").string() + " -o " +
            (dir / "tape-model.json").string() + " --overwrite"))
-      check(lidarcal::io::readModel(dir / "tape-model.json"), truth, fx, at, taped);
+      check(dir / "tape-model.json", truth, fx, at, taped, true);
     else
       ++taped.failed;
     tapeReference(dir / "truth.json", dir / "taped-stops.json", tape_sigma, static_cast<std::uint64_t>(seed), taped_stops);
     if (sh(exe + " calibrate -q " + (dir / "scans").string() + " --reference " + (dir / "taped-stops.json").string() +
            " --reference-fit combined -o " + (dir / "combined.json").string() + " --overwrite"))
-      check(lidarcal::io::readModel(dir / "combined.json"), truth, fx, at, combined);
+      check(dir / "combined.json", truth, fx, at, combined);
     else
       ++combined.failed;
     std::fprintf(stderr, "\rseed %d of %d", seed - first + 1, seeds);
@@ -203,9 +223,10 @@ int main(int argc, char** argv) {
               first + seeds - 1, scans);
   std::printf("| method | fits (without SE) |");
   for (double d : at) std::printf(" f(%.0f m) |", d);
-  std::printf(" alpha_i (true order chosen) | RMS of z = error / SE | predictive 95 %%, f(d) at all three |\n|---|---|");
+  std::printf(" alpha_i (true order chosen) | RMS of z = error / SE | predictive 95 %%, f(d) at all three |"
+              " RMS error of f(d) at all three [mm] | the same, noise-law fit of that order [mm] |\n|---|---|");
   for (std::size_t k = 0; k < at.size(); ++k) std::printf("---|");
-  std::printf("---|---|---|\n");
+  std::printf("---|---|---|---|---|\n");
   print("joint refinement (no ground truth)", joint, at);
   print("closed form of Alhashimi et al. 2021, jackknife SE (no ground truth)", closed, at);
   print("against exact distances (--reference)", reference, at);
