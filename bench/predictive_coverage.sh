@@ -9,10 +9,12 @@
 #     model fitted on the whole sweep;
 #   - the whole sweep fitted without one recording and checked on it, every recording in turn, and
 #     fitted on every third recording (14) and checked on the other 28, each third in turn;
+#   - one tape distance of the whole sweep read 5-30 mm long, in turn at six entries: whether the
+#     fit's warnings name it;
 # each with the tape distances stated exact (REF.json sigma_m 0) and with a 2 mm tape error
 # (sigma_m 0.002). `evaluate --reference --model` counts the entries inside each interval.
 #
-#   bench/predictive_coverage.sh [WORK_DIR]      (default /tmp/lidarcal-predictive; about 5 minutes)
+#   bench/predictive_coverage.sh [WORK_DIR]      (default /tmp/lidarcal-predictive; about 6 minutes)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 LIDARCAL=${LIDARCAL:-build/pipeline/lidarcal}
@@ -131,6 +133,43 @@ echo "|---|---|---|---|---|---|---|---|---|"
 for s in 0.002 0; do
   folds $s "$n" 0 "leave one out"
   folds $s 3 1 "fitted on a third"
+done
+
+# A misread tape: one entry of the whole sweep (2 mm stated tape error) read long by E mm, at
+# six entries spread over the range in turn; which entries the fit's warnings name
+# (calibration/discrepancy.hpp, deletedResiduals) and the model discrepancy, read back from model.json.
+echo
+echo "One tape distance read long: the entries calibrate --reference names as disagreeing with the others"
+echo
+echo "| tape read long by | fits | the misread entry named, alone | another entry named | model discrepancy [mm], median |"
+echo "|---|---|---|---|---|"
+for e in 0 5 10 15 20 30; do
+  for k in 3 10 17 24 31 38; do
+    python3 - "$WORK/all-ref-0.002.json" "$k" "$e" "$WORK/misread.json" <<'PY'
+import json, sys
+ref = json.load(open(sys.argv[1])); k, e = int(sys.argv[2]), float(sys.argv[3])
+ref["distances"][k]["distance_m"] += e / 1000
+json.dump(ref, open(sys.argv[4], "w"))
+PY
+    "$LIDARCAL" calibrate -q "$WORK/all" --reference "$WORK/misread.json" --radius $RADIUS --overwrite \
+      -o "$WORK/misread-$e-$k.json" > /dev/null 2>&1
+    [ "$e" = 0 ] && break  # the sweep as taped: one fit
+  done
+  python3 - "$WORK" "$e" <<'PY'
+import glob, json, re, statistics, sys
+work, e = sys.argv[1], sys.argv[2]
+fits = alone = other = 0
+tau = []
+for path in sorted(glob.glob(f"{work}/misread-{e}-*.json")):
+    k = int(re.search(r"-(\d+)\.json$", path).group(1))
+    m = json.load(open(path))
+    named = {int(re.match(r"distances\[(\d+)\]", w).group(1)) for w in m.get("warnings", []) if "disagrees" in w}
+    fits += 1
+    alone += named == {k} and e != "0"
+    other += bool(named - {k}) if e != "0" else bool(named)
+    tau.append(1000 * m["discrepancy"]["sigma_m"])
+print(f"| {e} mm | {fits} | {alone if e != '0' else '-'} | {other} | {statistics.median(tau):.1f} |")
+PY
 done
 echo
 echo "per-entry tables: $WORK/eval-*.txt"

@@ -24,18 +24,32 @@ struct EntrySums {
 /// noise-free data whose residuals are exactly 0.
 constexpr double kVarianceFloorM2 = 1e-20;
 
-/// The design of the meta-regression: powers of d / scale (scaling changes the restricted
-/// likelihood by a constant only, and keeps the powers of order 9 well conditioned).
-Eigen::MatrixXd design(const std::vector<EntryResidual>& entries, int order) {
+/// The largest |distance| of the entries (1 when all are 0).
+double distanceScale(const std::vector<EntryResidual>& entries) {
   double scale = 0.0;
   for (const auto& e : entries) scale = std::max(scale, std::abs(e.distance_m));
-  if (!(scale > 0.0)) scale = 1.0;
-  Eigen::MatrixXd x(static_cast<Eigen::Index>(entries.size()), order + 1);
-  for (std::size_t g = 0; g < entries.size(); ++g) {
-    double p = 1.0;
-    for (int i = 0; i <= order; ++i, p *= entries[g].distance_m / scale) x(static_cast<Eigen::Index>(g), i) = p;
-  }
+  return scale > 0.0 ? scale : 1.0;
+}
+
+/// Powers 0..order of d / scale.
+Eigen::RowVectorXd powersAt(double d, double scale, int order) {
+  Eigen::RowVectorXd x(order + 1);
+  double p = 1.0;
+  for (int i = 0; i <= order; ++i, p *= d / scale) x(i) = p;
   return x;
+}
+
+/// The design of the meta-regression: powers of d / scale (scaling changes the restricted
+/// likelihood by a constant only, and keeps the powers of order 9 well conditioned).
+Eigen::MatrixXd design(const std::vector<EntryResidual>& entries, int order, double scale) {
+  Eigen::MatrixXd x(static_cast<Eigen::Index>(entries.size()), order + 1);
+  for (std::size_t g = 0; g < entries.size(); ++g)
+    x.row(static_cast<Eigen::Index>(g)) = powersAt(entries[g].distance_m, scale, order);
+  return x;
+}
+
+Eigen::MatrixXd design(const std::vector<EntryResidual>& entries, int order) {
+  return design(entries, order, distanceScale(entries));
 }
 
 /// -2 x the restricted log-likelihood without its constant, at tau^2 = tau2:
@@ -157,6 +171,42 @@ Discrepancy estimateDiscrepancy(const std::vector<EntryResidual>& entries, int o
   out.note = "the predictive interval includes the sensor's scatter about the polynomial between the measured "
              "distances, beyond their stated tape errors; it does not include an error all of them share (a tape that "
              "reads long, a wrong pole radius)";
+  return out;
+}
+
+std::vector<DeletedResidual> deletedResiduals(const std::vector<EntryResidual>& entries, int order) {
+  std::vector<DeletedResidual> out;
+  const int coefficients = order + 1;
+  if (order < 0 || static_cast<int>(entries.size()) < coefficients + 2) return out;
+  const double scale = distanceScale(entries);
+  for (std::size_t g = 0; g < entries.size(); ++g) {
+    std::vector<EntryResidual> others = entries;
+    others.erase(others.begin() + static_cast<std::ptrdiff_t>(g));
+    const Discrepancy d = estimateDiscrepancy(others, order);
+    const double tau2 = d.estimated() ? d.sigma_m * d.sigma_m : 0.0;
+    // Generalised least squares of the others' residuals by QR of V^-1/2 X; the prediction's
+    // variance x' (X' V^-1 X)^-1 x is |R^-T x|^2.
+    const Eigen::MatrixXd x = design(others, order, scale);
+    Eigen::VectorXd sqrt_w(x.rows()), r(x.rows());
+    for (Eigen::Index i = 0; i < x.rows(); ++i) {
+      const EntryResidual& e = others[static_cast<std::size_t>(i)];
+      sqrt_w(i) = 1.0 / std::sqrt(std::max(tau2 + e.known_variance_m2, kVarianceFloorM2));
+      r(i) = e.residual_m;
+    }
+    const Eigen::HouseholderQR<Eigen::MatrixXd> qr(sqrt_w.asDiagonal() * x);
+    const Eigen::VectorXd beta = qr.solve(Eigen::VectorXd(sqrt_w.asDiagonal() * r));
+    const Eigen::MatrixXd rr = qr.matrixQR().topLeftCorner(coefficients, coefficients).triangularView<Eigen::Upper>();
+    const Eigen::RowVectorXd at = powersAt(entries[g].distance_m, scale, order);
+    const Eigen::VectorXd u = rr.transpose().triangularView<Eigen::Lower>().solve(at.transpose());
+    DeletedResidual out_g;
+    out_g.entry = entries[g].entry;
+    out_g.distance_m = entries[g].distance_m;
+    out_g.error_m = entries[g].residual_m - at.dot(beta);
+    out_g.se_m = std::sqrt(std::max(tau2 + entries[g].known_variance_m2 + u.squaredNorm(), kVarianceFloorM2));
+    out_g.dof = static_cast<int>(others.size()) - coefficients;
+    out_g.p_value = 2.0 * studentTCdf(-std::abs(out_g.error_m / out_g.se_m), static_cast<double>(out_g.dof));
+    out.push_back(out_g);
+  }
   return out;
 }
 

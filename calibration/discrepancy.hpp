@@ -60,6 +60,25 @@ double restrictedLogLikelihood(const std::vector<EntryResidual>& entries, int or
 /// leave a degree of freedom.
 Discrepancy estimateDiscrepancy(const std::vector<EntryResidual>& entries, int order);
 
+/// One entry judged by the others: what the random-effects fit of the other entries (tau by
+/// REML over them, the polynomial by generalised least squares) predicts for it.
+struct DeletedResidual {
+  std::size_t entry = 0;    ///< the entry's label
+  double distance_m = 0.0;  ///< its mean distance, metres
+  double error_m = 0.0;     ///< its residual less the others' prediction, metres
+  /// sqrt(tau_(-g)^2 + k_g + SE of the others' prediction^2), metres.
+  double se_m = 0.0;
+  int dof = 0;              ///< the others' degrees of freedom: entries - 1 - coefficients
+  double p_value = 1.0;     ///< two-sided P(|T| >= |error / se|), T ~ Student t with dof
+};
+
+/// The studentized deleted residual of every entry (the case-deletion outlier diagnostic of a
+/// meta-regression; Viechtbauer & Cheung 2010): entry g against the fit of the others, with the
+/// discrepancy re-estimated without it, so that a blunder (a wrong stop number or tape reading)
+/// does not hide by widening its own yardstick. Empty when the others would leave no degree of
+/// freedom (fewer than order + 3 entries).
+std::vector<DeletedResidual> deletedResiduals(const std::vector<EntryResidual>& entries, int order);
+
 /// The weight of each entry's readings in the random-effects fit of the polynomial, relative
 /// to the noise law's: 1 / (W_g (tau^2 + k_g)), so that entry g counts by 1 / (tau^2 + k_g) in
 /// all, its readings sharing that by the noise law. This is the generalised least squares, and

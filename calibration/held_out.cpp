@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <map>
 
 #include "calibration/discrepancy.hpp"
 #include "common/stats_util.hpp"
@@ -71,6 +73,29 @@ std::vector<HeldOutEntry> heldOutEntries(const CalibrationModel& model, const st
 
 Discrepancy discrepancyOfMeasuredEntries(const CalibrationModel& model, const std::vector<KnownReading>& readings) {
   return estimateDiscrepancy(residualsAboutModel(model, readings), model.model.bias.order());
+}
+
+std::vector<std::string> disagreeingEntryWarnings(const CalibrationModel& model, const std::vector<KnownReading>& readings,
+                                                  double alpha) {
+  std::map<std::size_t, std::size_t> stop_of;
+  for (const KnownReading& r : readings) stop_of[r.entry] = r.stop;
+  const std::vector<DeletedResidual> deleted = deletedResiduals(residualsAboutModel(model, readings), model.model.bias.order());
+  std::vector<std::string> out;
+  const double n = static_cast<double>(deleted.size());
+  for (const DeletedResidual& e : deleted) {
+    const double p = std::min(1.0, n * e.p_value);
+    if (!(p < alpha)) continue;
+    char buf[512];
+    std::snprintf(buf, sizeof buf,
+                  "distances[%zu] (stop %zu, its beams at %.3f m) disagrees with the other measured distances: its readings lie "
+                  "%+.1f mm from what the others predict, %.1f standard errors (p = %.1g over %zu entries, Bonferroni); "
+                  "check its stop number, tape reading and target. Left in, it widens the model discrepancy and every "
+                  "predictive interval",
+                  e.entry, stop_of[e.entry], e.distance_m, 1000.0 * e.error_m, std::abs(e.error_m / e.se_m), p,
+                  deleted.size());
+    out.push_back(buf);
+  }
+  return out;
 }
 
 HalfCheck checkInterleavedHalf(const std::vector<KnownReading>& readings, int fit_parity, const CalibrationConfig& config) {

@@ -10,6 +10,7 @@
 //   through the slope, (f'(d) sigma_tape)^2.
 
 #include <cstddef>
+#include <string>
 #include <vector>
 
 #include "calibration/reference.hpp"
@@ -47,6 +48,14 @@ std::vector<HeldOutEntry> heldOutEntries(const CalibrationModel& model, const st
 /// coefficients counted as fitted to them, which leaves entries - coefficients degrees of
 /// freedom). Method "none", with a note saying why, when the entries cannot leave one.
 Discrepancy discrepancyOfMeasuredEntries(const CalibrationModel& model, const std::vector<KnownReading>& readings);
+
+/// One warning for each measured entry that disagrees with the others beyond chance: its
+/// studentized deleted residual (deletedResiduals, about the model's f at its order) has a
+/// Bonferroni-adjusted p-value, min(1, entries x p), below `alpha`. A wrong stop number or
+/// tape reading otherwise passes as model discrepancy and widens every predictive interval.
+/// Each names the entry as distances[k] with its stop; empty when none disagrees.
+std::vector<std::string> disagreeingEntryWarnings(const CalibrationModel& model, const std::vector<KnownReading>& readings,
+                                                  double alpha = 0.05);
 
 /// A fit on some stops and the others about it.
 struct HalfCheck {

@@ -15,6 +15,7 @@
 #include "calibration/inversion.hpp"
 #include "calibration/calibrate.hpp"
 #include "calibration/discrepancy.hpp"
+#include "calibration/held_out.hpp"
 #include "calibration/jackknife.hpp"
 #include "calibration/joint_refinement.hpp"
 #include "calibration/noise_exponent.hpp"
@@ -483,6 +484,7 @@ CalibrationModel calibrateWithReference(const std::vector<KnownReading>& reading
   auto [fit, discrepancy] = randomEffectsFit(fits[static_cast<std::size_t>(best)], c, exponent);
   adoptFit(m, fit, c, exponent);
   m.discrepancy = std::move(discrepancy);
+  for (std::string& w : disagreeingEntryWarnings(m, readings)) m.warnings.push_back(std::move(w));
   addUnsupportedCorrectionWarning(m);
   return m;
 }

@@ -125,6 +125,7 @@ void evaluateReference(const std::string& seq_dir, const std::string& ref_file, 
   const auto raw = observeReference(seq, ref, detection, scanLoader(seq),
                                     [&](std::size_t d, std::size_t) { raw_progress.update(d); });
   raw_progress.finish();
+  requireDistinctTargets(raw.known, ref_file);
   nlohmann::ordered_json j{{"sequence", seq_dir}, {"reference", ref_file}};
   std::optional<CalibrationModel> model;
   if (!model_file.empty()) model = io::readModel(model_file);

@@ -77,6 +77,24 @@ void requireEveryDistanceFound(const calibration::ReferenceReadings& known, cons
                     "check the stop numbers (lidarcal info), give bearing_rad to pick the target, or remove the entry");
 }
 
+void requireDistinctTargets(const calibration::ReferenceReadings& known, const std::filesystem::path& ref_file) {
+  const auto& ms = known.matches;
+  for (std::size_t j = 1; j < ms.size(); ++j)
+    for (std::size_t i = 0; i < j; ++i) {
+      const calibration::ReferenceMatch &a = ms[i], &b = ms[j];
+      if (!a.ok() || !b.ok() || a.stop != b.stop || a.target != b.target) continue;
+      // One pole is one landmark id; one wall gives the same mean over the same scans.
+      const bool pole = a.target == ReferenceTarget::landmark;
+      if (pole ? a.landmark != b.landmark : (a.measured_m != b.measured_m || a.bearing_rad != b.bearing_rad)) continue;
+      throw InputError(ref_file.string(), "distances[" + std::to_string(b.entry) + "]",
+                       "names the same " + (pole ? "pole (landmark " + std::to_string(b.landmark) + ")" : std::string("wall")) +
+                           " at stop " + std::to_string(b.stop) + " as distances[" + std::to_string(a.entry) +
+                           "], so its readings would count twice",
+                       "give each target at a stop once: average repeated tape measurements into one entry, or give "
+                       "bearing_rad to pick another target (docs/FORMAT.md)");
+    }
+}
+
 void requireEverySpanFound(const calibration::SpanReadings& spans, const std::filesystem::path& ref_file) {
   std::string unmatched;
   std::size_t failures = 0;
@@ -111,6 +129,7 @@ SequenceCalibration calibrateSequenceWithReference(const io::Sequence& seq, cons
   ReferenceObservations ro = observeReference(seq, ref, referenceDetection(detection), scanLoader(seq), on_scan);
   if (matches) *matches = ro.known.matches;
   requireEveryDistanceFound(ro.known, ref_file);
+  requireDistinctTargets(ro.known, ref_file);
   requireEverySpanFound(ro.spans, ref_file);
   SequenceCalibration out;
   out.observations = std::move(ro.observations);
@@ -183,13 +202,18 @@ SequenceCalibration calibrateSequenceWithDistancesAndSelf(const io::Sequence& se
   const ReferenceObservations ro = observeReference(seq, ref, referenceDetection(detection), scanLoader(seq));
   if (matches) *matches = ro.known.matches;
   requireEveryDistanceFound(ro.known, ref_file);
+  requireDistinctTargets(ro.known, ref_file);
   calibration::CalibrationConfig cfg = config;
   cfg.joint.known_ranges = calibration::knownRanges(ro.known, ref);
   SequenceCalibration out = calibrateSequenceWithSurvey(seq, ref, ref_file, detection, cfg, survey, progress);
   if (out.model.status.ok()) out.model.method = "joint+reference";
   // The measured entries were terms of the fit, none held out: REML counts the polynomial's
   // coefficients as fitted to them, so the discrepancy is estimated only where they outnumber them.
-  if (out.model.status.ok()) out.model.discrepancy = calibration::discrepancyOfMeasuredEntries(out.model, ro.known.readings);
+  if (out.model.status.ok()) {
+    out.model.discrepancy = calibration::discrepancyOfMeasuredEntries(out.model, ro.known.readings);
+    for (std::string& w : calibration::disagreeingEntryWarnings(out.model, ro.known.readings))
+      out.model.warnings.push_back(std::move(w));
+  }
   return out;
 }
 

@@ -75,6 +75,10 @@ SequenceCalibration calibrateSequenceWithSurvey(const io::Sequence& seq, const R
 /// Throws DataError naming every reference distance whose target was not found (with what to do).
 void requireEveryDistanceFound(const calibration::ReferenceReadings& known, const std::filesystem::path& ref_file);
 
+/// Throws InputError naming the first reference distance that matched the same target at the
+/// same stop as an earlier one (its readings would count twice).
+void requireDistinctTargets(const calibration::ReferenceReadings& known, const std::filesystem::path& ref_file);
+
 /// Throws DataError naming every span whose walls were not found, by the REF.json field at
 /// fault (e.g. `spans[0].bearing_b_deg`), with the walls the stop does show.
 void requireEverySpanFound(const calibration::SpanReadings& spans, const std::filesystem::path& ref_file);

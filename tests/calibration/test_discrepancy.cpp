@@ -100,6 +100,60 @@ TEST(Discrepancy, RandomEffectsWeightsCountEachEntryByItsWholeVariance) {
   EXPECT_TRUE(randomEffectsFactors(entries, Discrepancy{}).empty()) << "none estimated";
 }
 
+/// Twenty entries over 0.5-2.4 m about a quadratic the residuals are taken about (which a
+/// meta-regression of the same order absorbs), with a discrepancy of tau and a known variance k.
+std::vector<EntryResidual> quadraticEntries(std::mt19937_64& rng, double tau, double k) {
+  std::normal_distribution<double> normal(0.0, 1.0);
+  std::vector<double> r(20);
+  for (std::size_t g = 0; g < r.size(); ++g) {
+    const double d = 0.5 + 0.1 * static_cast<double>(g);
+    r[g] = 0.004 - 0.006 * d + 0.002 * d * d + tau * normal(rng) + std::sqrt(k) * normal(rng);
+  }
+  return entriesOf(r, k);
+}
+
+/// The entries whose Bonferroni-adjusted deleted-residual p-value is below 0.05.
+std::vector<std::size_t> flagged(const std::vector<EntryResidual>& e, int order) {
+  const auto deleted = deletedResiduals(e, order);
+  std::vector<std::size_t> out;
+  for (const auto& d : deleted)
+    if (static_cast<double>(deleted.size()) * d.p_value < 0.05) out.push_back(d.entry);
+  return out;
+}
+
+TEST(Discrepancy, DeletedResidualsNameABlunderAndFlagCleanEntriesAtMostAtTheFamilyRate) {
+  const double tau = 0.003, k = 1e-6, whole = std::sqrt(tau * tau + k);
+  std::mt19937_64 rng(11);
+  const int trials = 300;
+  int false_alarms = 0, found = 0;
+  for (int t = 0; t < trials; ++t) {
+    auto e = quadraticEntries(rng, tau, k);
+    false_alarms += flagged(e, 2).empty() ? 0 : 1;
+    e[7].residual_m += 8.0 * whole;  // a tape read 8 standard deviations off
+    found += flagged(e, 2) == std::vector<std::size_t>{7} ? 1 : 0;
+  }
+  // Bonferroni holds the chance of any flag on clean entries to 5 %; 8 % is 2.4 binomial SDs above.
+  EXPECT_LE(false_alarms, trials * 8 / 100);
+  EXPECT_GE(found, trials * 95 / 100);
+}
+
+TEST(Discrepancy, DeletedResidualsNeedTheOthersToLeaveADegreeOfFreedom) {
+  std::mt19937_64 rng(12);
+  auto e = quadraticEntries(rng, 0.003, 1e-6);
+  e.resize(4);
+  EXPECT_TRUE(deletedResiduals(e, 2).empty());
+  e = quadraticEntries(rng, 0.003, 1e-6);
+  e.resize(5);
+  const auto d = deletedResiduals(e, 2);
+  ASSERT_EQ(d.size(), 5u);
+  for (const auto& x : d) {
+    EXPECT_EQ(x.dof, 1);
+    EXPECT_GT(x.se_m, 0.0);
+    EXPECT_GE(x.p_value, 0.0);
+    EXPECT_LE(x.p_value, 1.0);
+  }
+}
+
 TEST(Discrepancy, IntervalsWithAKnownPartOfTheirVarianceHoldTheirLevel) {
   // An error e = a + b, a ~ N(0, v_est) whose variance is estimated with dof degrees of freedom
   // (s2 = v_est chi2_dof / dof), b ~ N(0, v_known) with v_known exact. The interval

@@ -141,6 +141,20 @@ TEST(ReferenceCalibration, MatchesEntriesByBearingOrByMeasuredDistance) {
   EXPECT_NE(known.matches[2].status.find("stop 2"), std::string::npos) << known.matches[2].status;
 }
 
+/// Readings at twelve taped stops, 0.5-3.25 m, of a sensor whose mean reading is truth(d) with
+/// 3 mm noise: readings(k) of them at stop k, each stop's tape off by its own 2 mm error (stated).
+std::vector<KnownReading> tapedReadings(std::uint64_t seed, const BiasPolynomial& truth, int (*readings)(std::size_t)) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> noise(0.0, 0.003), tape(0.0, 0.002);
+  std::vector<KnownReading> r;
+  for (std::size_t k = 0; k < 12; ++k) {
+    const double d = 0.5 + 0.25 * static_cast<double>(k), taped = d + tape(rng);
+    for (int i = 0; i < readings(k); ++i)
+      r.push_back({k, k, static_cast<std::size_t>(i), kUnknownBeam, taped, truth(d) + noise(rng), 0.0, 0.002});
+  }
+  return r;
+}
+
 TEST(ReferenceCalibration, WhereTheTapeErrorOutweighsTheNoiseEveryEntryCountsAboutAlike) {
   // Twelve taped distances, every other one with 100 times the readings. Each tape distance is
   // off by its own 2 mm error, which no number of readings averages away: weighting the entries
@@ -151,14 +165,8 @@ TEST(ReferenceCalibration, WhereTheTapeErrorOutweighsTheNoiseEveryEntryCountsAbo
   const int seeds = 40;
   double re_se = 0.0, law_se = 0.0;
   for (int seed = 301; seed < 301 + seeds; ++seed) {
-    std::mt19937_64 rng(static_cast<std::uint64_t>(seed));
-    std::normal_distribution<double> noise(0.0, 0.003), tape(0.0, 0.002);
-    std::vector<KnownReading> r;
-    for (std::size_t k = 0; k < 12; ++k) {
-      const double d = 0.5 + 0.25 * static_cast<double>(k), taped = d + tape(rng);
-      for (int i = 0; i < (k % 2 ? 500 : 5); ++i)
-        r.push_back({k, k, static_cast<std::size_t>(i), kUnknownBeam, taped, truth(d) + noise(rng), 0.0, 0.002});
-    }
+    const std::vector<KnownReading> r =
+        tapedReadings(static_cast<std::uint64_t>(seed), truth, [](std::size_t k) { return k % 2 ? 500 : 5; });
     CalibrationConfig config;
     config.max_order = 2;  // the truth's: the weights, not the order, are under test
     config.noise = NoiseKind::constant;
@@ -174,6 +182,34 @@ TEST(ReferenceCalibration, WhereTheTapeErrorOutweighsTheNoiseEveryEntryCountsAbo
     }
   }
   EXPECT_LT(re_se, 0.8 * law_se) << "RMS ratio " << std::sqrt(re_se / law_se);
+}
+
+TEST(ReferenceCalibration, AWrongTapeReadingIsNamedInAWarningAndCorrectOnesAreNot) {
+  // Twelve taped stops on a sensor that follows a quadratic; in the second model the tape of
+  // entry 5 was read 30 mm long (its readings then lie 30 mm short of what the others predict).
+  const BiasPolynomial truth{{0.02, 0.97, 0.012}};
+  int clean_warnings = 0, named = 0;
+  const int seeds = 20;
+  for (int seed = 401; seed < 401 + seeds; ++seed) {
+    std::vector<KnownReading> r = tapedReadings(static_cast<std::uint64_t>(seed), truth, [](std::size_t) { return 50; });
+    auto disagreeing = [](const CalibrationModel& m) {
+      std::vector<std::string> w;
+      for (const auto& s : m.warnings)
+        if (s.find("disagrees with the other measured distances") != std::string::npos) w.push_back(s);
+      return w;
+    };
+    CalibrationConfig config;
+    config.noise = NoiseKind::constant;
+    const CalibrationModel clean = calibrateWithReference(r, config);
+    ASSERT_STREQ(clean.status.name(), "ok") << clean.status.message;
+    clean_warnings += static_cast<int>(disagreeing(clean).size());
+    for (auto& k : r)
+      if (k.entry == 5) k.d_m += 0.030;
+    const auto w = disagreeing(calibrateWithReference(r, config));
+    named += w.size() == 1 && w[0].rfind("distances[5] (stop 5", 0) == 0 ? 1 : 0;
+  }
+  EXPECT_LE(clean_warnings, 2);  // Bonferroni at 5 %: about one in 20 fits
+  EXPECT_EQ(named, seeds);
 }
 
 TEST(ReferenceCalibration, TooFewStopsIsAStatusNotAModel) {

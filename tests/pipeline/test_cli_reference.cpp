@@ -261,6 +261,51 @@ TEST(CliReference, BadReferenceEntriesExitTwoNamingTheEntry) {
   }
 }
 
+TEST(CliReference, AnEntryNamingATargetTwiceIsRefusedAndAWrongTapeReadingIsNamed) {
+  TempDir dir;
+  simulate(dir / "s", 35);
+  writeTapeReference(dir / "s/truth.json", dir / "ref.json");
+  nlohmann::json ref = json(dir / "ref.json");
+  ASSERT_GE(ref["distances"].size(), 12u);
+  const auto calibrate = [&](const std::string& name) {
+    return runCli("calibrate -q " + (dir / "s/scans").string() + " --reference " + (dir / (name + ".json")).string() +
+                  " --reference-fit distances --out " + (dir / (name + "-model.json")).string());
+  };
+  nlohmann::json twice = ref;
+  twice["distances"].push_back(ref["distances"][3]);
+  test::writeFile(dir / "twice.json", twice.dump());
+  const std::string last = "distances[" + std::to_string(ref["distances"].size()) + "]";
+  for (const std::string cmd : {"calibrate", "evaluate"}) {
+    SCOPED_TRACE(cmd);
+    const auto r = cmd == "calibrate" ? calibrate("twice")
+                                      : runCli("evaluate -q " + (dir / "s/scans").string() + " --reference " +
+                                               (dir / "twice.json").string() + " -o " + (dir / "e.json").string());
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    EXPECT_NE(r.err.find("twice.json: " + last), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("as distances[3]"), std::string::npos) << r.err;
+  }
+  EXPECT_FALSE(fs::exists(dir / "twice-model.json"));
+  EXPECT_FALSE(fs::exists(dir / "e.json"));
+
+  ASSERT_EQ(calibrate("ref").exit_code, 0);
+  nlohmann::json wrong = ref;
+  wrong["distances"][6]["distance_m"] = ref["distances"][6]["distance_m"].get<double>() + 0.05;
+  test::writeFile(dir / "wrong.json", wrong.dump());
+  const auto r = calibrate("wrong");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto named = [](const nlohmann::json& model) {
+    std::vector<std::string> out;
+    for (const auto& w : model.value("warnings", nlohmann::json::array()))
+      if (w.get<std::string>().find("disagrees with the other measured distances") != std::string::npos) out.push_back(w);
+    return out;
+  };
+  EXPECT_TRUE(named(json(dir / "ref-model.json")).empty());
+  const auto w = named(json(dir / "wrong-model.json"));
+  ASSERT_EQ(w.size(), 1u);
+  EXPECT_EQ(w[0].rfind("distances[6] ", 0), 0u) << w[0];
+  EXPECT_NE(r.out.find("warning: distances[6]"), std::string::npos) << r.out;
+}
+
 TEST(CliReference, AnEntryWithoutItsTargetIsRefusedWithExitThreeNamingIt) {
   TempDir dir;
   simulate(dir / "s", 34);
