@@ -66,7 +66,8 @@ check() {
     --model "$WORK/model-$fit-$s.json" -o "$WORK/eval-$fit-$check-$s.json" "$@" > "$WORK/eval-$fit-$check-$s.txt" 2>&1
   python3 - "$WORK/eval-$fit-$check-$s.json" "$fit" "$check" "$s" <<'PY'
 import json, math, sys
-e = json.load(open(sys.argv[1]))["predictive"]
+whole = json.load(open(sys.argv[1]))
+e, q = whole["predictive"], whole["corrected"]["mse_ratio"]
 rows = [x for x in e["entries"] if x["checked"]]
 n = len(rows)
 rms = 1000 * math.sqrt(sum(x["error_m"] ** 2 for x in rows) / n) if n else float("nan")
@@ -74,13 +75,15 @@ tau = e["discrepancy"]["sigma_m"]
 pct = lambda k: f"{k}/{n} = {100 * k / n:.0f} %" if n else "-"
 print(f"| {sys.argv[2]} | {sys.argv[3]} | {1000 * float(sys.argv[4]):.0f} mm | {n} | "
       f"{'-' if tau is None else f'{1000 * tau:.1f}'} ({e['discrepancy']['dof']}) | {rms:.1f} mm | "
-      f"{pct(e['inside_68'])} | {pct(e['inside_95'])} | {pct(e['inside_curve_95'])} |")
+      f"{pct(e['inside_68'])} | {pct(e['inside_95'])} | {pct(e['inside_curve_95'])} | "
+      + (f"{q['ratio']:.2f} ({q['low_95']:.2f}-{q['high_95']:.2f}) |" if q["low_95"] is not None else "- |"))
 PY
 }
 
 echo "| fitted on | checked on | stated tape error | entries checked | discrepancy [mm] (dof) | RMS corrected - tape |" \
-     "inside the 68 % predictive interval | inside the 95 % predictive interval | inside the curve's 95 % interval |"
-echo "|---|---|---|---|---|---|---|---|---|"
+     "inside the 68 % predictive interval | inside the 95 % predictive interval | inside the curve's 95 % interval |" \
+     "MSE ratio raw / corrected (95 % interval) |"
+echo "|---|---|---|---|---|---|---|---|---|---|"
 for s in 0.002 0; do
   check odd even $s
   check even odd $s
@@ -110,26 +113,33 @@ PY
     printf '\r%s (tape %s): %d of %d' "$name" "$s" $((r + 1)) "$k" >&2
   done
   echo >&2
-  python3 - "$WORK" "$s" "$k" "$name" <<'PY'
+  python3 - "$WORK" "$s" "$k" "$name" "$(pwd)/bench" <<'PY'
 import json, math, sys
+sys.path.insert(0, sys.argv[5])
+from mse_ratio import text
 work, s, k, name = sys.argv[1], sys.argv[2], int(sys.argv[3]), sys.argv[4]
-rows = []
+rows, raw, cor = [], [], []
 for r in range(k):
-    rows += [x for x in json.load(open(f"{work}/fold-{name}-{s}-{r}.json"))["predictive"]["entries"] if x["checked"]]
+    e = json.load(open(f"{work}/fold-{name}-{s}-{r}.json"))
+    rows += [x for x in e["predictive"]["entries"] if x["checked"]]
+    for a, b in zip(e["raw"]["entries"], e["corrected"]["entries"]):
+        if a["status"] == "ok" and b["status"] == "ok" and a["in_fitted_range"]:
+            raw.append(a["error_m"]), cor.append(b["error_m"])
 m = len(rows)
 z = [x["error_m"] / x["interval_se_m"] for x in rows]
 pct = lambda key: f"{sum(x[key] for x in rows)}/{m} = {100 * sum(x[key] for x in rows) / m:.0f} %"
 print(f"| {name} | {1000 * float(s):.0f} mm | {m} | {math.sqrt(sum(v * v for v in z) / m):.2f} | "
       f"{max(abs(v) for v in z):.2f} | {1000 * math.sqrt(sum(x['error_m'] ** 2 for x in rows) / m):.1f} mm | "
-      f"{pct('inside_68')} | {pct('inside_95')} | {pct('inside_curve_95')} |")
+      f"{pct('inside_68')} | {pct('inside_95')} | {pct('inside_curve_95')} | {text(raw, cor)} |")
 PY
 }
 echo
 echo "Folds of the whole sweep: fitted on all but one recording, or on every third, and checked on the rest"
 echo
 echo "| folds | stated tape error | entries checked | RMS z | largest abs z | RMS corrected - tape |" \
-     "inside the 68 % predictive interval | inside the 95 % predictive interval | inside the curve's 95 % interval |"
-echo "|---|---|---|---|---|---|---|---|---|"
+     "inside the 68 % predictive interval | inside the 95 % predictive interval | inside the curve's 95 % interval |" \
+     "MSE ratio raw / corrected, pooled (95 % interval) |"
+echo "|---|---|---|---|---|---|---|---|---|---|"
 for s in 0.002 0; do
   folds $s "$n" 0 "leave one out"
   folds $s 3 1 "fitted on a third"

@@ -8,6 +8,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "calibration/error_summary.hpp"
 #include "common/errors.hpp"
 #include "io/atomic_file.hpp"
 #include "io/model_io.hpp"
@@ -70,14 +71,31 @@ nlohmann::ordered_json matchJson(const calibration::ReferenceMatch& m, const Cal
   return j;
 }
 
-/// RMS of measured - reference over the matched entries (with `model`: those inside its fitted
-/// range only; NaN when none).
-double rmsError(const std::vector<calibration::ReferenceMatch>& matches, const CalibrationModel* model = nullptr) {
-  double s = 0.0;
-  std::size_t n = 0;
+/// measured - reference of the matched entries (with `model`: those inside its fitted range only).
+std::vector<double> entryErrors(const std::vector<calibration::ReferenceMatch>& matches,
+                                const CalibrationModel* model = nullptr) {
+  std::vector<double> e;
   for (const auto& m : matches)
-    if (m.ok() && inFittedRange(m, model)) s += std::pow(m.measured_m - m.reference_m, 2), ++n;
-  return n ? std::sqrt(s / static_cast<double>(n)) : std::nan("");
+    if (m.ok() && inFittedRange(m, model)) e.push_back(m.measured_m - m.reference_m);
+  return e;
+}
+
+/// The RMS of measured - reference over those entries and its standard error, as E.json keys.
+void addRms(nlohmann::ordered_json& j, const std::vector<calibration::ReferenceMatch>& matches, const CalibrationModel* model) {
+  const calibration::RmsError e = calibration::rmsError(entryErrors(matches, model));
+  j["rms_error_m"] = number(e.rms_m);
+  j["rms_error_se_m"] = number(e.se_m);
+  j["rms_error_all_m"] = number(calibration::rmsError(entryErrors(matches)).rms_m);
+}
+
+/// Raw against corrected over the entries matched in both and inside the model's fitted range.
+calibration::MseRatio pairedMseRatio(const std::vector<calibration::ReferenceMatch>& raw,
+                                     const std::vector<calibration::ReferenceMatch>& corrected, const CalibrationModel& model) {
+  std::vector<double> r, c;
+  for (std::size_t k = 0; k < raw.size() && k < corrected.size(); ++k)
+    if (raw[k].ok() && corrected[k].ok() && inFittedRange(raw[k], &model))
+      r.push_back(raw[k].measured_m - raw[k].reference_m), c.push_back(corrected[k].measured_m - corrected[k].reference_m);
+  return calibration::mseRatio(r, c);
 }
 
 
@@ -92,20 +110,17 @@ nlohmann::ordered_json spanJson(const calibration::SpanMatch& m) {
   return j;
 }
 
-/// RMS of measured - reference over the spans found (NaN when none).
-double spanRmsError(const std::vector<calibration::SpanMatch>& matches) {
-  double s = 0.0;
-  std::size_t n = 0;
-  for (const auto& m : matches)
-    if (m.ok()) s += std::pow(m.measured_m - m.reference_m, 2), ++n;
-  return n ? std::sqrt(s / static_cast<double>(n)) : std::nan("");
-}
-
-/// The spans part of E.json: each span as the scans measure it, and the RMS.
+/// The spans part of E.json: each span as the scans measure it, and the RMS over those found
+/// with its standard error.
 nlohmann::ordered_json spansJson(const std::vector<calibration::SpanMatch>& matches) {
   auto entries = nlohmann::ordered_json::array();
-  for (const auto& m : matches) entries.push_back(spanJson(m));
-  return {{"rms_error_m", number(spanRmsError(matches))}, {"entries", entries}};
+  std::vector<double> errors;
+  for (const auto& m : matches) {
+    entries.push_back(spanJson(m));
+    if (m.ok()) errors.push_back(m.measured_m - m.reference_m);
+  }
+  const calibration::RmsError e = calibration::rmsError(errors);
+  return {{"rms_error_m", number(e.rms_m)}, {"rms_error_se_m", number(e.se_m)}, {"entries", entries}};
 }
 
 /// evaluate SEQ --reference REF.json [--model model.json]: what the scans measure at the
@@ -134,8 +149,9 @@ void evaluateReference(const std::string& seq_dir, const std::string& ref_file, 
   for (const auto& m : raw.known.matches) raw_json.push_back(matchJson(m, fitted));
   // With a model, the RMS over the entries inside its fitted range (readings outside are kept
   // raw by default) and over all of them.
-  j["raw"] = {{"rms_error_m", number(rmsError(raw.known.matches, fitted))},
-              {"rms_error_all_m", number(rmsError(raw.known.matches))}, {"entries", raw_json}};
+  j["raw"] = nlohmann::ordered_json::object();
+  addRms(j["raw"], raw.known.matches, fitted);
+  j["raw"]["entries"] = raw_json;
   if (!ref.spans.empty()) j["raw"]["spans"] = spansJson(raw.spans.matches);
   std::optional<ReferenceObservations> corrected;
   std::optional<PredictiveCheck> check;  // each distance against the model's intervals
@@ -151,8 +167,12 @@ void evaluateReference(const std::string& seq_dir, const std::string& ref_file, 
     auto cor_json = nlohmann::ordered_json::array();
     for (const auto& m : corrected->known.matches) cor_json.push_back(matchJson(m, fitted));
     j["model"] = model_file;
-    j["corrected"] = {{"rms_error_m", number(rmsError(corrected->known.matches, fitted))},
-                      {"rms_error_all_m", number(rmsError(corrected->known.matches))}, {"entries", cor_json}};
+    j["corrected"] = nlohmann::ordered_json::object();
+    addRms(j["corrected"], corrected->known.matches, fitted);
+    const calibration::MseRatio ratio = pairedMseRatio(raw.known.matches, corrected->known.matches, *model);
+    j["corrected"]["mse_ratio"] = {{"ratio", number(ratio.ratio)}, {"low_95", number(ratio.low)},
+                                   {"high_95", number(ratio.high)}, {"entries", ratio.entries}};
+    j["corrected"]["entries"] = cor_json;
     if (!ref.spans.empty()) j["corrected"]["spans"] = spansJson(corrected->spans.matches);
     if (!ref.distances.empty()) check = predictiveCheck(corrected->known.matches, ref, *model, correction);
     if (check) j["predictive"] = predictiveJson(*check);

@@ -7,8 +7,10 @@
 #include <tuple>
 
 #include "calibration/discrepancy.hpp"
+#include "calibration/error_summary.hpp"
 #include "calibration/held_out.hpp"
 #include "common/pose2.hpp"
+#include "pipeline/papers.hpp"
 #include "pipeline/words.hpp"
 
 namespace lidarcal::pipeline {
@@ -155,6 +157,21 @@ std::string beyondFitText(const calibration::FilteringStats& s, const Calibratio
   return t;
 }
 
+namespace {
+
+/// RMS of the finite values +- its standard error over them, "X +- Y mm" ("X mm" with one value,
+/// "-" with none).
+std::string rmsMm(const std::vector<double>& v) {
+  std::vector<double> finite;
+  for (double e : v)
+    if (std::isfinite(e)) finite.push_back(e);
+  const calibration::RmsError r = calibration::rmsError(finite);
+  if (!r.entries) return "-";
+  return fixed(1000.0 * r.rms_m, 1) + (std::isfinite(r.se_m) ? " +- " + fixed(1000.0 * r.se_m, 1) : std::string()) + " mm";
+}
+
+}  // namespace
+
 std::string referenceTable(const std::vector<calibration::ReferenceMatch>& raw,
                            const std::vector<calibration::ReferenceMatch>* corrected, const CalibrationModel* model,
                            calibration::Outside outside) {
@@ -168,12 +185,12 @@ std::string referenceTable(const std::vector<calibration::ReferenceMatch>& raw,
   s += " scans | readings |\n|---|---|---|---|---|---|";
   if (corrected) s += "---|---|";
   s += "---|---|\n";
-  double sum_raw = 0.0, sum_cor = 0.0;
-  std::size_t n_raw = 0, n_cor = 0, left_out = 0;
-  auto cell = [](const calibration::ReferenceMatch& m, bool counted, double& sum, std::size_t& n) {
+  std::vector<double> e_raw, e_cor, pair_raw, pair_cor;  // measured - reference of the entries counted
+  std::size_t left_out = 0;
+  auto cell = [](const calibration::ReferenceMatch& m, bool counted, std::vector<double>& errors) {
     if (!m.ok()) return std::string(" not found | - |");
     const double e = m.measured_m - m.reference_m;
-    if (counted) sum += e * e, ++n;
+    if (counted) errors.push_back(e);
     const std::string se = std::isfinite(m.measured_se_m) ? " +- " + fixed(m.measured_se_m, 4) : std::string();
     return " " + fixed(m.measured_m, 4) + se + " | " + fixed(1000.0 * e, 1, true) + " |";
   };
@@ -184,31 +201,38 @@ std::string referenceTable(const std::vector<calibration::ReferenceMatch>& raw,
     left_out += !counted;
     s += "| " + std::to_string(m.entry) + (in ? "" : " (beyond the fitted range)") + " | " + std::to_string(m.stop) +
          " | " + (m.target == ReferenceTarget::wall ? "wall" : "landmark " + std::to_string(m.landmark)) + " | " +
-         fixed(m.reference_m, 3) + " |" + cell(m, counted, sum_raw, n_raw);
-    if (corrected) s += k < corrected->size() ? cell((*corrected)[k], counted, sum_cor, n_cor) : std::string(" - | - |");
+         fixed(m.reference_m, 3) + " |" + cell(m, counted, e_raw);
+    const calibration::ReferenceMatch* c = corrected && k < corrected->size() ? &(*corrected)[k] : nullptr;
+    if (corrected) s += c ? cell(*c, counted, e_cor) : std::string(" - | - |");
+    if (counted && c && m.ok() && c->ok())
+      pair_raw.push_back(m.measured_m - m.reference_m), pair_cor.push_back(c->measured_m - c->reference_m);
     s += " " + std::to_string(m.sightings) + " | " + std::to_string(m.readings) + " |\n";
   }
-  auto rms = [](double sum, std::size_t n) { return n ? fixed(1000.0 * std::sqrt(sum / static_cast<double>(n)), 1) : std::string("-"); };
-  s += "\nRMS of measured - reference: raw " + rms(sum_raw, n_raw) + " mm";
-  if (corrected) s += ", corrected " + rms(sum_cor, n_cor) + " mm";
-  s += " (over " + plural(n_raw, "entry", "entries");
+  s += "\nRMS of measured - reference: raw " + rmsMm(e_raw);
+  if (corrected) s += ", corrected " + rmsMm(e_cor);
+  s += " (over " + plural(e_raw.size(), "entry", "entries") + "; +- one standard error over the entries";
   if (left_out)
     s += "; " + std::to_string(left_out) + " beyond the fitted range left out: --outside " + calibration::toString(outside) +
          " does not correct their readings";
   s += ")\n";
+  if (corrected && !pair_raw.empty()) {
+    const calibration::MseRatio q = calibration::mseRatio(pair_raw, pair_cor);
+    if (std::isfinite(q.ratio)) {
+      s += "MSE ratio raw / corrected (" + std::string(papers::kLandmarks) + ", eq. 31; above 1 the correction helps): " +
+           fixed(q.ratio, 2);
+      if (std::isfinite(q.low))
+        s += ", 95 % interval " + fixed(q.low, 2) + "-" + fixed(q.high, 2) + " (paired over " +
+             plural(q.entries, "entry", "entries") + ")" +
+             (q.low > 1.0   ? ": the correction helps on these distances"
+              : q.high < 1.0 ? ": the correction makes these distances worse"
+                             : ": these entries cannot tell whether the correction helps");
+      s += "\n";
+    }
+  }
   return s;
 }
 
 namespace {
-
-/// RMS of the finite values, in mm ("-" when none).
-std::string rmsMm(const std::vector<double>& v) {
-  double s = 0.0;
-  std::size_t n = 0;
-  for (double e : v)
-    if (std::isfinite(e)) s += e * e, ++n;
-  return n ? fixed(1000.0 * std::sqrt(s / static_cast<double>(n)), 1) : std::string("-");
-}
 
 std::string mm(double v) { return std::isfinite(v) ? fixed(1000.0 * v, 1, true) : std::string("-"); }
 
@@ -233,9 +257,9 @@ std::string spanTable(const calibration::SpanReadings& found, const std::vector<
     fitted.push_back(c.fitted_error_m);
     left_out.push_back(c.left_out_error_m);
   }
-  s += "\nRMS of what the sensor says - measured: raw " + rmsMm(raw) + " mm, fitted " + rmsMm(fitted) + " mm, left out " +
-       rmsMm(left_out) + " mm (over " + plural(checks.size(), "entry", "entries") +
-       "; left out: fitted without the entry and every other span between the same two walls; - where the other "
+  s += "\nRMS of what the sensor says - measured: raw " + rmsMm(raw) + ", fitted " + rmsMm(fitted) + ", left out " +
+       rmsMm(left_out) + " (over " + plural(checks.size(), "entry", "entries") +
+       "; +- one standard error over the entries; left out: fitted without the entry and every other span between the same two walls; - where the other "
        "entries cannot determine the model's order)\n";
   return s;
 }
@@ -260,9 +284,9 @@ std::string spanEvaluationTable(const std::vector<calibration::SpanMatch>& raw,
     if (corrected) s += k < corrected->size() ? cell((*corrected)[k], cor_errors) : std::string(" - | - |");
     s += " " + std::to_string(raw[k].scans) + " |\n";
   }
-  s += "\nRMS of the spans as the scans measure them - measured: raw " + rmsMm(raw_errors) + " mm";
-  if (corrected) s += ", corrected " + rmsMm(cor_errors) + " mm";
-  s += "\n";
+  s += "\nRMS of the spans as the scans measure them - measured: raw " + rmsMm(raw_errors);
+  if (corrected) s += ", corrected " + rmsMm(cor_errors);
+  s += " (+- one standard error over the spans)\n";
   return s;
 }
 

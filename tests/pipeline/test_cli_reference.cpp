@@ -102,6 +102,18 @@ TEST(CliReference, CalibratesAgainstTapeDistancesAndHalvesTheErrorOnAnotherRecor
   EXPECT_GT(raw, 0.05);  // the simulated sensor reads 5-20 cm long at the poles
   EXPECT_LT(corrected, 0.5 * raw);
   EXPECT_LT(corrected, 0.01);
+  // The gain with its uncertainty: each RMS has a standard error, and the MSE ratio's interval
+  // lies above 1 (stdout says the correction helps). Every entry matched both ways inside the
+  // fitted range, so the ratio is that of the two RMS squared.
+  EXPECT_GT(e["raw"]["rms_error_se_m"].get<double>(), 0.0);
+  EXPECT_GT(e["corrected"]["rms_error_se_m"].get<double>(), 0.0);
+  const auto& ratio = e["corrected"]["mse_ratio"];
+  if (ratio["entries"] == e["corrected"]["entries"].size()) {
+    EXPECT_NEAR(ratio["ratio"].get<double>(), std::pow(raw / corrected, 2), 1e-9);
+  }
+  EXPECT_GT(ratio["low_95"].get<double>(), 1.0);
+  EXPECT_GT(ratio["high_95"].get<double>(), ratio["ratio"].get<double>());
+  EXPECT_NE(ev.out.find("the correction helps on these distances"), std::string::npos) << ev.out;
   // Every entry of another recording against the intervals: the counts are those of the entries.
   const auto& p = e["predictive"];
   ASSERT_EQ(p["entries"].size(), e["corrected"]["entries"].size());
