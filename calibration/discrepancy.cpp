@@ -52,28 +52,45 @@ Eigen::MatrixXd design(const std::vector<EntryResidual>& entries, int order) {
   return design(entries, order, distanceScale(entries));
 }
 
-/// -2 x the restricted log-likelihood without its constant, at tau^2 = tau2:
-/// sum log V_g + log det(X' V^-1 X) + sum (r_g - x_g' beta_GLS)^2 / V_g.
-double restrictedDeviance(const Eigen::MatrixXd& x, const std::vector<EntryResidual>& entries, double tau2) {
+/// V_g = tau^2 + k_g, the entry's whole variance (floored).
+double entryVariance(const EntryResidual& e, double tau2) { return std::max(tau2 + e.known_variance_m2, kVarianceFloorM2); }
+
+/// The generalised least squares fit of the entries' residuals on x at tau^2 = tau2, by QR of
+/// V^-1/2 X.
+struct GlsFit {
+  Eigen::VectorXd beta;
+  Eigen::MatrixXd r;   ///< the QR's upper triangle R: X' V^-1 X = R' R
+  double rss = 0.0;    ///< sum (r_g - x_g' beta)^2 / V_g
+  double log_v = 0.0;  ///< sum log V_g
+};
+
+GlsFit glsFit(const Eigen::MatrixXd& x, const std::vector<EntryResidual>& entries, double tau2) {
   const Eigen::Index n = x.rows(), p = x.cols();
   Eigen::VectorXd sqrt_w(n), r(n);
-  double log_v = 0.0;
+  GlsFit out;
   for (Eigen::Index g = 0; g < n; ++g) {
-    const double v = std::max(tau2 + entries[static_cast<std::size_t>(g)].known_variance_m2, kVarianceFloorM2);
-    log_v += std::log(v);
+    const double v = entryVariance(entries[static_cast<std::size_t>(g)], tau2);
+    out.log_v += std::log(v);
     sqrt_w(g) = 1.0 / std::sqrt(v);
     r(g) = entries[static_cast<std::size_t>(g)].residual_m;
   }
-  // Weighted least squares by QR of W^1/2 X: log det(X' W X) = 2 sum log |R_ii|.
   const Eigen::MatrixXd xw = sqrt_w.asDiagonal() * x;
   const Eigen::VectorXd rw = sqrt_w.asDiagonal() * r;
   const Eigen::HouseholderQR<Eigen::MatrixXd> qr(xw);
-  const Eigen::VectorXd beta = qr.solve(rw);
-  const double rss = (rw - xw * beta).squaredNorm();
+  out.beta = qr.solve(rw);
+  out.rss = (rw - xw * out.beta).squaredNorm();
+  out.r = qr.matrixQR().topLeftCorner(p, p).triangularView<Eigen::Upper>();
+  return out;
+}
+
+/// -2 x the restricted log-likelihood without its constant, at tau^2 = tau2:
+/// sum log V_g + log det(X' V^-1 X) + sum (r_g - x_g' beta_GLS)^2 / V_g.
+double restrictedDeviance(const Eigen::MatrixXd& x, const std::vector<EntryResidual>& entries, double tau2) {
+  const GlsFit fit = glsFit(x, entries, tau2);
+  // log det(X' V^-1 X) = 2 sum log |R_ii|.
   double log_det = 0.0;
-  const Eigen::MatrixXd rr = qr.matrixQR().topLeftCorner(p, p).triangularView<Eigen::Upper>();
-  for (Eigen::Index i = 0; i < p; ++i) log_det += 2.0 * std::log(std::max(std::abs(rr(i, i)), 1e-300));
-  return log_v + log_det + rss;
+  for (Eigen::Index i = 0; i < x.cols(); ++i) log_det += 2.0 * std::log(std::max(std::abs(fit.r(i, i)), 1e-300));
+  return fit.log_v + log_det + fit.rss;
 }
 
 /// The largest tau worth searching: a few times the residuals' spread about the least-squares
@@ -184,24 +201,14 @@ std::vector<DeletedResidual> deletedResiduals(const std::vector<EntryResidual>& 
     others.erase(others.begin() + static_cast<std::ptrdiff_t>(g));
     const Discrepancy d = estimateDiscrepancy(others, order);
     const double tau2 = d.estimated() ? d.sigma_m * d.sigma_m : 0.0;
-    // Generalised least squares of the others' residuals by QR of V^-1/2 X; the prediction's
-    // variance x' (X' V^-1 X)^-1 x is |R^-T x|^2.
-    const Eigen::MatrixXd x = design(others, order, scale);
-    Eigen::VectorXd sqrt_w(x.rows()), r(x.rows());
-    for (Eigen::Index i = 0; i < x.rows(); ++i) {
-      const EntryResidual& e = others[static_cast<std::size_t>(i)];
-      sqrt_w(i) = 1.0 / std::sqrt(std::max(tau2 + e.known_variance_m2, kVarianceFloorM2));
-      r(i) = e.residual_m;
-    }
-    const Eigen::HouseholderQR<Eigen::MatrixXd> qr(sqrt_w.asDiagonal() * x);
-    const Eigen::VectorXd beta = qr.solve(Eigen::VectorXd(sqrt_w.asDiagonal() * r));
-    const Eigen::MatrixXd rr = qr.matrixQR().topLeftCorner(coefficients, coefficients).triangularView<Eigen::Upper>();
+    // The others' fit; the prediction's variance x' (X' V^-1 X)^-1 x is |R^-T x|^2.
+    const GlsFit fit = glsFit(design(others, order, scale), others, tau2);
     const Eigen::RowVectorXd at = powersAt(entries[g].distance_m, scale, order);
-    const Eigen::VectorXd u = rr.transpose().triangularView<Eigen::Lower>().solve(at.transpose());
+    const Eigen::VectorXd u = fit.r.transpose().triangularView<Eigen::Lower>().solve(at.transpose());
     DeletedResidual out_g;
     out_g.entry = entries[g].entry;
     out_g.distance_m = entries[g].distance_m;
-    out_g.error_m = entries[g].residual_m - at.dot(beta);
+    out_g.error_m = entries[g].residual_m - at.dot(fit.beta);
     out_g.se_m = std::sqrt(std::max(tau2 + entries[g].known_variance_m2 + u.squaredNorm(), kVarianceFloorM2));
     out_g.dof = static_cast<int>(others.size()) - coefficients;
     out_g.p_value = 2.0 * studentTCdf(-std::abs(out_g.error_m / out_g.se_m), static_cast<double>(out_g.dof));
@@ -216,7 +223,7 @@ std::map<std::size_t, double> randomEffectsFactors(const std::vector<EntryResidu
   if (!d.estimated() || (d.sigma_m == 0.0 && !taped)) return out;
   const double tau2 = d.sigma_m * d.sigma_m;
   for (const auto& e : entries)
-    out[e.entry] = 1.0 / (e.weight * std::max(tau2 + e.known_variance_m2, kVarianceFloorM2));
+    out[e.entry] = 1.0 / (e.weight * entryVariance(e, tau2));
   return out;
 }
 
