@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Calibration cost (docs/results/calibration-accuracy.md): the paper's closed form and our joint
 // refinement on the same data, 20 stops x 5 landmarks, one scan per stop and ten; and
 // `lidarcal run` on the bundled example next to the time to only read and write its PCD files.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Detection throughput (scans per second) and per-scan accuracy of lidarcal's detector side by
 // side with a plain PCL baseline on the same simulated scans, in one run:
 //

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Cost of `diagnose` (docs/results/hidden-effects.md): on a 10-stop sequence of the paper field
 // (5 poles, 10 scans per stop, landmark level), side by side with the calibration it starts
 // from (the joint refinement alone), and on a static room of 150 scans. One core.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Import throughput and peak memory, measured on whole `lidarcal` processes: every step runs
 // the installed-style command line in a child process (fork + exec) and reads the child's own
 // resource usage (wait4: ru_maxrss = peak resident memory, and wall time around it). Steps with

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Monte Carlo study throughput (docs/results/montecarlo.md): trials per second of the
 // landmark level and the scan level, with and without the joint refinement, on 1 and 2 threads
 // (the speed-up of the thread pool), and the joint refinement on every reading against the

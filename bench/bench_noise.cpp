@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Wall time of noise estimation on the same data: Sharma 2020's KL hill climbing (our variant;
 // the seed's settings: 80 particles, step 0.01, 5 jumps, means and variances climbed; `Literal`:
 // all 80 particles run even when they stay identical) against the ML estimator (estimating the

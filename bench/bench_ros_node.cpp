@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Per-scan work of the live nodes side by side (budget: <= 0.2 ms per 360-beam scan, <= 1 ms per
 // 1081-beam scan). ROS 1 (`lidarcal_node`): copy the received ranges and correct them with
 // pipeline::correctLaserRanges, as its callback does. ROS 2 (`lidarcal_ros2_node`, names

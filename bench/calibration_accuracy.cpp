@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Calibration accuracy through the command line, as a user would run it
 // (docs/results/calibration-accuracy.md): for each seed, simulate a calibration sequence and an
 // evaluation sequence of the same scene, calibrate on the first (joint, closed form, oracle,

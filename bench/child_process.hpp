@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Runs a command in a child process (fork + exec) and reads the child's own resource usage
 // (wait4: ru_maxrss = its peak resident memory, CPU times) with the wall time around it.

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # Scaling of a sharded Monte Carlo study (docs/results/cluster.md): the study cut into N = 1, 2
 # and 4 shards run side by side on this machine, one thread each, then merged; per N, RUNS times,
 # the median wall time (first shard started to merge done), total CPU (every shard and the

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: BSD-3-Clause
 """Compares two output trees of bench/identical_outputs.sh (--keep BEFORE, --keep AFTER).
 
 Files must be byte-identical, with one allowance: JSON files whose only differences are

@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: BSD-3-Clause
 """Continuous motion measured on simulated driving sequences (docs/RESULTS.md, "Continuous motion").
 
 For each seed: `lidarcal simulate` a driving scene, `lidarcal detect --truth` (association), then

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Do the standard errors mean what they say? For each seed: simulate a calibration sequence,
 // calibrate it through the command line (the joint refinement without ground truth, and against
 // tape distances taken from the simulator's truth: `calibrate --reference`, alone and for a few

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // How often `diagnose` names an effect hidden in simulated data (docs/results/hidden-effects.md).
 // Each case draws the size (and sign) of the effect from its own seed, simulates the paper
 // field at the landmark level with it, diagnoses, and compares the named cause.

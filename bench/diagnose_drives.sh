@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # Diagnoses simulated drives (a robot that never stops: data/scenes/driving_*_poles.json), clean
 # or with one effect hidden in the scene's sensor, and prints the cause named for each.
 #   bench/diagnose_drives.sh SCENE EFFECT FIRST LAST [LIDARCAL]

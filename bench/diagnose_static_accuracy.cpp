@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // How often `diagnose` (static mode) names what the truth allows in a room seen from one pose
 // (docs/results/static-diagnosis.md): every case of tests/diagnosis/diagnose_cases.hpp,
 // coarser quantisation grids, the clean room (its false-positive rate), and the tail cases

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // eval_detection: landmark detection and association measured against the simulator's truth,
 // over several seeds of one or more scenes, in memory (no files written). Prints the Markdown
 // tables of docs/results/detection.md.

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # Real data with tape-measured truth (docs/results/real-sensors.md):
 # the 42 bags of ../shared/data/hokuyo_ust30lx_reflector/range_sweep, sorted by distance, split
 # alternately into a fit half (1st, 3rd, ...) and a test half (2nd, 4th, ...). Calibrate on the

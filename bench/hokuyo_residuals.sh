@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # What is the Hokuyo range sweep's structured error against the tape
 # (docs/FINDINGS.md "Hokuyo UST-30LX range sweep")? Imports the 42 bags of
 # ../shared/data/hokuyo_ust30lx_reflector/range_sweep as one stop each, detects the 45 mm

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # Byte-identical outputs before and after a change that must not change behaviour
 # (docs/results/test-suite.md): runs one fixed set of commands with a given lidarcal binary and
 # prints a SHA-256 per output file; run it with the binary before and after and compare.

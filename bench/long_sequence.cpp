@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Long inputs: peak memory and time of `lidarcal detect` and `lidarcal correct` on sequences of
 // 1,000 to 100,000 scans (docs/results/hardening.md). Each command runs in a child process
 // whose own peak resident memory is read with wait4 (child_process.hpp).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // What sets the MSE ratio's ceiling in the Monte Carlo study (docs/results/montecarlo.md,
 // "The ratio's ceiling"): one cell of Fig. 9 (L = 5, sigma_s = 1 cm, sigma_theta = 2
 // degrees on the heading), the closed form, the oracle and the ceiling (eq. 31 with the simulated

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 """raw MSE / corrected MSE over paired entries with its 95 % interval, as `evaluate` computes it
 (calibration/error_summary.hpp): exp(ln ratio +- t SE), SE by the delta method with the two mean
 squares' covariance, t with entries - 1 degrees of freedom. For the benches, which pool the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Alhashimi et al. 2016's normalised MSE (eqs. 31-32: 0.0789 raw -> 0.0046 calibrated, a factor 17.15) on
 // simulated sensors (docs/results/normalised-mse.md).
 //

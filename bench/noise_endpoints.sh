@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # Where Sharma 2020's hill climbing ends, beside the thesis' end points
 # (docs/results/noise-consistency.md, "The hill climbing's end points beside the thesis'").
 #   bench/noise_endpoints.sh [SEEDS]     (default SEEDS: 1 2 3 4 5; needs a build in build/)

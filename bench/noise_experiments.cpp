@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Experiments behind docs/results/noise-consistency.md (run by bench/noise_experiments.sh).
 //
 //   noise_experiments side-by-side --scene S.json --init I.json --seed N --out DIR [--kl-max-evaluations M]

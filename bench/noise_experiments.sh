@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # Reproduces the tables and plots of docs/results/noise-consistency.md.
 #   bench/noise_experiments.sh [OUT]        (default OUT: docs/noise; needs a build in build/)
 # Writes OUT/<experiment>.md (side-by-side table), OUT/<experiment>/<method>/{result.json,

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # What a user gets beyond the fitted range: simulated rooms (seeds the tests do not use) through
 # `lidarcal run`, then the same model applied with each --outside policy by `correct`, and every
 # written sequence scored against the simulator's truth by `evaluate` (the files read back).

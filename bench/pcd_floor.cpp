@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The I/O floor of a sequence (docs/results/speed.md): read every .pcd file of a directory with PCL
 // and write it again, binary, into another directory. What any command that rewrites the scans must
 // at least do; bench/speed.sh times lidarcal's commands against it. OUT_DIR is made anew, a

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Do the predictive intervals of `calibrate --reference` hold what they claim, on sensors that
 // follow a polynomial and on sensors that do not? For each seed: a simulated range sweep (one
 // pole at 30 distances, simulation/range_sweep.hpp) split into interleaved halves; the range

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # The predictive intervals of `calibrate --reference` on real recordings the fit never saw
 # (docs/results/real-sensors.md, "Predictive intervals on recordings the fit never saw"):
 #   - the Hokuyo UST-30LX range sweep of ../shared/data (42 bags, sorted by distance) split into

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # Every shared real recording through `lidarcal calibrate` (docs/results/real-sensors.md):
 # the outcome (exit 0 with the model, or exit 3 with the reason), wall time and peak memory of
 # calibrate, the selected order and the bias at 1 m and 3 m with their standard errors.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // rig_coverage: do the standard errors of calibrateRig hold the simulated truth as often as
 // they claim? For each scenario (two or three lidars; stop and go, driving, static), each seed
 // draws a vehicle (tests/calibration/rig_scenes.hpp), calibrates it and records, per estimated

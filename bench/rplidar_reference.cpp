@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The RPLIDAR A2 recording against the laser-meter references (docs/FINDINGS.md):
 // ../shared/data/rplidar_a2_room/distance_comparison.md gives six wall-to-wall distances
 // measured with two laser distance meters and a folding rule, layout_measurements_FK35.png

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # Wall-to-wall spans on the RPLIDAR A2 room (docs/RESULTS.md, "Wall-to-wall spans (RPLIDAR A2
 # room)"): the bag of ../shared/data/rplidar_a2_room (one static pose, 1319 scans) and the six
 # laser-meter spans of its distance_comparison.md (lines 1-3 wall to wall, 4-5 wall to cabinet,

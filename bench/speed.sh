@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # Speed of lidarcal's main commands against the I/O floor (docs/results/speed.md),
 # in one run: on a simulated sequence of 20 stops x 50 scans (1000 scans, 5 poles) and on the
 # CARMEN Intel log (910 scans, a pose per scan; skipped when ../shared/data is absent), the

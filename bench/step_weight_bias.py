@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: BSD-3-Clause
 """The step scale a drive's motion prior estimates when each step's standard deviation is taken at
 the length the odometry reported for it, at its true length, or at one length for all
 (docs/results/hidden-effects.md). One dimension of the estimator: the fitted steps are exact, the

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # Surveyed geometry against an odometry scale error (docs/results/survey.md): the paper's field
 # with every step 6 % longer than the odometry says, the pole radius unknown (removed from
 # sequence.json), SEEDS seeds. Each seed is calibrated four ways: self-calibration, with the true

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Calibration without ground truth, end to end on landmark observations (calibrate.cpp reads
 // as these stages, each in its own file):

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The settings of calibrate() (calibrate.hpp): which method, the order rules, the noise law and
 // the settings of each stage.

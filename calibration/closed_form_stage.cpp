@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "calibration/closed_form_stage.hpp"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Stage 2 of calibrate(): the closed form of Alhashimi et al. 2021 (section 3.2). Distances from
 // the triangulated landmarks to the stops along the central beams, the bias polynomial for orders

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Model discrepancy of a range model fitted to measured distances (calibrate --reference): how
 // far the sensor's mean reading at a distance the fit did not see may lie from the fitted

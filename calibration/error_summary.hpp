@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // How far measured distances lie from reference ones, summed up over the entries with the
 // uncertainty that the number of entries leaves: the RMS error with its standard error, and

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // How much closer corrected ranges are to the truth than raw ones.
 //   MSE ratio (Alhashimi et al. 2021 eq. 31): MSE(d, raw) / MSE(d, corrected)

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "calibration/filtering.hpp"
 #include "calibration/discrepancy.hpp"
 #include "common/stats_util.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Filtering stage (Alhashimi et al. 2021 section 3.2 phase 3): every point of a scan moved along its beam
 // to the corrected distance. Same points, same order; NaN stays NaN; labels and intensity kept.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "calibration/held_out.hpp"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A model checked on measured entries it was not fitted on, at the level of the readings (the
 // simulated counterpart of `evaluate --reference --model` on recordings the fit never saw; used

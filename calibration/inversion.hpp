@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Filtering stage (Alhashimi et al. 2021 section 3.2 phase 3, Alhashimi et al. 2016 section 5.2): the distance d that
 // explains a raw reading y under the calibrated model.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The delete-a-group jackknife covariance (Efron and Stein 1981): from G estimates, each made
 // without one group (a stop, or a run of stops), (G - 1)/G sum_g (a_-g - mean)(a_-g - mean)^T.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Internal to the joint refinement (joint_problem.cpp, joint_refinement.cpp): the Ceres
 // residuals of one beam reading and of the pose priors, and the geometry of a beam at an

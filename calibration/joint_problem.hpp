@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Internal to refineJoint() (joint_refinement.hpp): the joint refinement as a problem with
 // named steps. Parameter blocks (poses, centres, radius, bias, landmark offsets, the global

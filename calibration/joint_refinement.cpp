@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "calibration/joint_refinement.hpp"
 
 #include <boost/math/distributions/students_t.hpp>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Joint refinement (beyond Alhashimi et al. 2021): one maximum-likelihood problem over every stop's pose,
 // the landmark centres, the landmark radius and the bias polynomial, from the individual beam

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The residuals of one solve: the readings (pooled over repeated scans when allowed), the
 // measured targets, the pose priors, and which parameter blocks are held fixed.
 #include "calibration/joint_problem.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The solve loop of the joint refinement: Ceres solves from the current estimate, each followed
 // by the noise law (and the mixed-pixel fraction, a Student t's weights, a grid's cell scale)
 // re-estimated from the residuals until it settles.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "calibration/joint_stage.hpp"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Stage 3 of calibrate(): the joint refinement (joint_refinement.hpp) from the closed form.
 // Pass 1 settles the geometry at order 2; pass 2 fits every order from there on one fixed set

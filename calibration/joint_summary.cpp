@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The joint refinement's result from a solved problem: estimates, the priors' likelihood, the
 // effect terms, the likelihood and information criteria, bearing residuals, covariances.
 #include "calibration/joint_problem.hpp"

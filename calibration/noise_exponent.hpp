@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Alhashimi et al. 2016 section 4: which power of f(d) scales the noise? Hypotheses (eq. 10)
 //   H_k: y = f(d) + f(d)^k e,  k = 0..3,

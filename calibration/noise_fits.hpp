@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The noise law of a fitted bias, and the noise estimators reported beside it (model.json
 // "noise_fits"): Alhashimi et al. 2021's noise polynomial, Alhashimi et al. 2016's closed form

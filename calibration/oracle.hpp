@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The oracle of Alhashimi et al. 2016: the range model fitted against known distances, the best
 // any self-calibration of these readings could do. Used against a simulator's truth only.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // What a user should know before trusting a calibrated model: warnings appended to its
 // `warnings`, never a refusal (calibrate() and the reference fits call them last).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "calibration/range_model_fit.hpp"
 
 #include "common/pose2.hpp"

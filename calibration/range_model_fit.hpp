@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The range model from (distance, reading) pairs: Alhashimi et al. 2021 section 3.2 (polynomial bias by
 // linear least squares, eqs. 26-28; order by AIC or held-out validation) and Alhashimi et al. 2016

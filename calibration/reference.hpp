@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Calibration against what a user measured (Alhashimi et al. 2016 section 5: the range model fitted to
 // readings whose true distance is known). A reference distance to a pole's centre (or to a

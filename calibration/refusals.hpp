@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Why calibrate() cannot give a model from these observations: each refusal sets the model's
 // status (code and a message naming what to record or which option to give).

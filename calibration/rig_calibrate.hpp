@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Joint calibration of several 2D lidars on one vehicle against fixed poles in unknown places:
 // the single-sensor joint refinement of Alhashimi et al. 2021 (section 3.3, every pose, pole and

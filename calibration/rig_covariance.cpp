@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // RigProblem's summary: the covariance of every free parameter (the inverse of J^T J over the
 // whitened residuals and priors, the gauge held), the leverage of each pooled beam (its row of
 // the hat matrix J (J^T J)^-1 J^T) and the estimates with their standard errors.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Internal to the rig calibration (rig_calibrate.hpp): each sensor's noise from its pooled beam
 // readings. A beam seen n times on one pole at one stop gives its mean ybar and the sum of

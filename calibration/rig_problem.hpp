@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Internal to calibrateRig() (rig_calibrate.hpp): one fit of the rig at fixed bias orders, flips
 // and gauge, as a problem with named steps:

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Internal to the rig calibration: where the fit starts. A designed mounting a few degrees off
 // puts a pole metres away a radius or more off for the other sensors, and rays that miss a

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The range model (method "reference") from wall-to-wall spans and tape distances: the fits of
 // span_fit.hpp for every order the entries determine, the order by leave-one-group-out

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The range model from wall-to-wall spans (REF.json `spans`; span_walls.hpp finds the walls),
 // alone or with tape distances (REF.json `distances`): the counterpart for spans of Alhashimi et al. 2016's

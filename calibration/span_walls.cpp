@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "calibration/span_walls.hpp"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The two walls a wall-to-wall span names (REF.json `spans`, docs/FORMAT.md), found among the
 // surfaces a stop sees (WallSighting::wall, detectors/wall_tracks.hpp), and what the scans read

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Landmark centres from bearings (Alhashimi et al. 2021 section 3.1, eqs. 18-25): each stop k that sees
 // landmark l gives a line through the stop along the bearing; the centre is the weighted

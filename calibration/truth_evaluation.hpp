@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Scoring against a simulator's truth (never used by the calibration itself): the oracle's
 // (distance, reading) pairs and its model, and how much closer corrected ranges are to the

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 # Finds Debian's Eclipse Cyclone DDS (cyclonedds-dev: dds/dds.h, libddsc) and its IDL compiler
 # (cyclonedds-tools: idlc) for the ROS 2 node `lidarcal_ros2_node`. Looked up piece by piece
 # like the ROS1 libraries, so that the message names the missing pieces.

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 # Finds Debian's eProsima Fast DDS (libfastrtps-dev: fastdds/dds/... headers, libfastrtps and
 # libfastcdr) and its IDL compiler (fastddsgen) for the other vendor of the ROS 2 node's
 # cross-vendor test. Looked up piece by piece, like the ROS1 libraries.

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 # Finds Debian's ROS1 bag-reading libraries (librosbag-storage-dev, libsensor-msgs-dev,
 # libnav-msgs-dev and libtf2-msgs-dev for `import --pose odom:|tf:`, and the
 # packages Debian forgets to pull in: libclass-loader-dev, librcpputils-dev, librcutils-dev,

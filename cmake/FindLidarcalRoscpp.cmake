@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 # Finds Debian's roscpp (libroscpp-dev) for the live correction node `lidarcal_node`, on top of
 # the bag libraries (FindLidarcalRosbag.cmake). Like those, looked up piece by piece: Debian's
 # ROS1 packages ship no usable CMake config outside catkin.

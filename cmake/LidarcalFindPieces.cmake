@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 # Helpers of the Find modules that look up Debian's ROS1 libraries piece by piece
 # (FindLidarcalRosbag.cmake, FindLidarcalRoscpp.cmake).
 

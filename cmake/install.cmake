@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 # Installation: `cmake --install build [--prefix P]` puts
 #   bin/lidarcal
 #   lib/liblidarcal_<name>.a                  every library made by lidarcal_library()

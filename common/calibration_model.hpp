@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A calibrated range model and how it was obtained: the content of model.json
 // (docs/FORMAT.md). Plain data: calibration/ fills it, io/ reads and writes it.

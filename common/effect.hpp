@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The effects beyond the seeds' range model (Alhashimi et al. 2021 A3-A4, Alhashimi et al. 2016 eq. 1) that the
 // calibration can estimate, the simulator can produce and `lidarcal diagnose` looks for: one

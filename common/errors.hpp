@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Errors a user can act on: which file, which item, what is wrong, what to do.
 

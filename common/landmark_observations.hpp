@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // What calibration consumes: landmarks seen from the stops of a sequence. Produced by the
 // detector (from scans) or by the landmark-level simulator (Alhashimi et al. 2021 eqs. 3, 5, 8).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Landmark observations and odometry of a robot that stops, looks at landmarks with one or
 // more range-bearing sensors, and moves on (docs/FORMAT.md: observations.csv, odometry.csv).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // An observation-level scene (`"kind": "observations"`): landmarks as points, a robot driven by
 // commanded motions with process noise, and range-bearing sensors each with its own Gaussian

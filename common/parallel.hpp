@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Independent work items on a few threads, with results that do not depend on the number of
 // threads: item i is computed by one call fn(i) that writes only what belongs to i (which thread

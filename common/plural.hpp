@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A count with its noun ("1 stop", "2 stops") for every message a user reads: the libraries'
 // statuses and the commands' output alike.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // What a user measured by hand (a tape measure, a laser distance meter, a survey) about a
 // recorded sequence: the content of REF.json (docs/FORMAT.md, "Reference measurements").

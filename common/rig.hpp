@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Several 2D lidars on one vehicle: each sensor's planar mounting in the vehicle frame, and what
 // a joint calibration of them consumes (the poles each sensor saw, at each of the vehicle's

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Deterministic random streams: every randomised stage derives its generator from a base seed
 // and a stream index, so results do not depend on the order in which streams are consumed

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A simulated world: a 2D scanning lidar on a robot that stops along a straight line (or drives
 // along a route without stopping) among vertical cylinders (landmarks, clutter) and wall

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Small numeric helpers shared across the libraries: the non-finite constants, ln(2 pi), the
 // medians and a one-dimensional maximiser. One definition each.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // How a result ended: one code a program can test and one message a user can act on. The
 // calibration (model.json "diagnostics.status"), the joint refinement and the diagnosis report

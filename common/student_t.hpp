@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Student's t distribution: its distribution function and quantiles, for intervals whose scale
 // is estimated from few units (the predictive intervals of calibration/discrepancy.hpp use the

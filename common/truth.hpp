@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Ground truth of a simulated sequence. Written beside the sequence (DIR/truth.json), never
 // inside it; only evaluation and oracle calibration read it.

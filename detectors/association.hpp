@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Association across stops, in world coordinates from each scan's commanded pose (VIEWPOINT):
 //  1. at each stop (one pose: detections differ by noise only) the detections closer than

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "detectors/circle_fit.hpp"
 #include "detectors/ransac.hpp"
 

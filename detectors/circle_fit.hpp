@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Circle fitting in the scan plane: PCL's RANSAC (SACSegmentation + SACMODEL_CIRCLE2D) to find
 // the consensus set, then a geometric least-squares refinement in double precision started from

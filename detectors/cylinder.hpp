@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Cylinders in 3D clouds (multi-beam lidars, depth cameras): the pipeline of PCL's cylinder
 // segmentation tutorial. Pass-through on z, normals from the k nearest neighbours, the dominant

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The detections of a sequence's final pass, written to an anonymous temporary file.
 // A sequence detected without keeping its scans (memory flat in the sequence's length) is

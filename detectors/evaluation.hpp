@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Detection and association measured against a simulator's truth (truth.json, true_ranges.csv).
 // Used by `lidarcal detect --truth` and bench/eval_detection; never by detection itself.

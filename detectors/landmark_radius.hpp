@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Radius of a landmark estimated jointly over all its observations (Alhashimi et al. 2021 section 3.1: the
 // radius is known or "not difficult to obtain" from the arcs): one radius R and one centre c_k per

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Straight lines (walls, box faces) in the scan plane: PCL's RANSAC (SACMODEL_LINE) for the
 // consensus set, then a total-least-squares line through it in double precision.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Mixed pixels beside a pole: the beam just outside a circle's inliers that reads between the
 // pole and the surface behind it, kept when no nearby scan sees a surface at its point (what is

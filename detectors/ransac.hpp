@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // PCL's RANSAC (pcl::RandomSampleConsensus, fixed seed) for the two models the scan detector
 // fits, run as pcl::SACSegmentation runs it (same model, seeds, settings and calls) but without

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // From a rig sequence (io/rig.hpp) to what the joint calibration of several lidars consumes
 // (common/rig.hpp): poles found in every scan of every sensor, then associated over the sensors

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Landmark candidates in one 2D scan: segment (segmentation.hpp), then classify each cluster as a
 // circle (a pole: landmark candidate), a line (wall, box face) or clutter.

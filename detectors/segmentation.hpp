@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Splits a 2D scan into clusters of neighbouring returns, walking the beams in scan order: a new
 // cluster starts where two consecutive returns are farther apart than a range-dependent gap (the

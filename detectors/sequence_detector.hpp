@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A whole sequence: detect in every scan (streaming, the scans of one stop in memory at a
 // time), associate across stops, and, when the landmark radius is not known, estimate it

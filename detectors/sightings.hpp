@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // From detections in scans to what calibration consumes: each associated circle becomes a
 // Sighting carrying the raw readings of its points (and, when asked, the mixed-pixel candidates

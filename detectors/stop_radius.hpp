@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Radius of thin, far poles from all the scans of one stop (docs/results/detection.md). A cheap lidar sees
 // a 55 mm pole at 3-4.5 m with 3-9 beams: one arc cannot determine a radius (scan_detector.hpp

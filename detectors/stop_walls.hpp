@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The walls a sequence shows at chosen stops: every scan's lines (wall_tracks.hpp), grouped into
 // the surfaces of each stop.

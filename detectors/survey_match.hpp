@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Surveyed landmarks (REF.json `landmarks`, common/reference.hpp) matched to the landmarks the
 // detection found: the closest pairs first, one to one, within a gate.

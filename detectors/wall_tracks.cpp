@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "detectors/wall_tracks.hpp"
 
 #include <algorithm>

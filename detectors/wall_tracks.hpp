@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The surfaces behind the walls of a stop: findWalls (walls.hpp) finds the walls of each scan
 // anew, and the scans of one stop see the same surfaces, each a little differently (noise, a

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Flat surfaces (walls) in one 2D scan, for measurements against a wall: each cluster of the
 // segmentation (segmentation.hpp) is split into straight pieces (split and merge: a piece that

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The battery of discrepancy statistics (step 2 of diagnosis/diagnosis.hpp): what each statistic
 // of each mode is, its measured value against its values on the bootstrap replicas, and the

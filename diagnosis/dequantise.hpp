@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Uniform dequantisation (Theis, van den Oord & Bethge, "A note on the evaluation of generative
 // models", ICLR 2016). Readings on a grid q are scored as densities at the reading plus a uniform

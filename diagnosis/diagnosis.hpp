@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Model criticism (`lidarcal diagnose`): what the published range model gets wrong on measured
 // data, the physical cause, the model extended with it and the gain, measured out of sample.

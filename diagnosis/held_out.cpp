@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "diagnosis/held_out.hpp"
 
 #include <cmath>

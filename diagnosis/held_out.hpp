@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Held-out log-likelihoods of the baseline and of each candidate, point by point, and the gain of
 // a candidate over the baseline with its standard error over blocks (scans, stops, wall bins):

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "diagnosis/pose_gaussians.hpp"
 
 #include <algorithm>

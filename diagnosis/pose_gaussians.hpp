@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Gaussian algebra of a sequence's held-out predictions: the marginal covariances of a chain of
 // poses from its block-tridiagonal information, its log-determinant, the leave-one-out density of

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The verdict: how the candidates' fits become a named cause (step 4 of diagnosis/diagnosis.hpp),
 // as one ordered table of rules. Each rule has an id, the data it applies to, the stage where it

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Diagnosis of a scan sequence with landmarks (diagnosis/diagnosis.hpp), on what calibration
 // consumes: the beams of every landmark sighting.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The five steps of a diagnosis (diagnosis/diagnosis.hpp), shared by both kinds of data: the
 // driver that runs them on a mode's problem object (diagnosis/sequence/problem.hpp,

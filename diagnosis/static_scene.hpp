@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Diagnosis of repeated scans from one pose of any scene (diagnosis/diagnosis.hpp): the
 // characterisation setting of Alhashimi et al. 2016, where each beam over the scans is a batch at a constant distance.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Statistics of the diagnosis (diagnosis/diagnosis.hpp): p-values calibrated on bootstrap
 // replicas, held-out gains and likelihood ratios, their combination, multiple testing, score

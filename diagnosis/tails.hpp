@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Tails explained by physical covariates: a per-reading contamination mixture whose
 // probability depends on what the beam sees. A residual r of beam b (reading minus the beam's

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // What part of a recording a diagnosis reads, and how: a long sequence cut to its leading stops,
 // the stop whose repeated scans static mode reads by default, and those scans' readings (through

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Outputs are written atomically: a file appears complete or not at all; an output directory
 // is filled under a staging name and renamed into place when it is complete.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // What the ROS1 bag reader (import_rosbag.cpp, built with Debian's ROS1 libraries) and the
 // ROS 2 bag reader (import_rosbag2.cpp, built always) share: the options, the choice of the

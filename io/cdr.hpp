@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A reader of OMG CDR (Common Data Representation), the serialisation of ROS 2 messages: a
 // 4-byte encapsulation header, then the fields in declaration order, each primitive aligned on

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Checked reading of simple CSV files (no quoting): a header line, then rows of fields.
 // Every error names the file, the line, the column and what to do. io-internal.

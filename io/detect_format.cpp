@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "io/detect_format.hpp"
 
 #include <algorithm>

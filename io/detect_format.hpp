@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // What kind of recording a file holds, from its content (not its name): `lidarcal import`
 // without --from. Reads at most the first 64 KiB (after gzip decompression for gzip files); a

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // What every importer (ROS1 bag, CARMEN, YDLIDAR X4 dataset, CSV) hands on: one scan at a time
 // in polar form, as the recording stores it. Importers stream: they refill one RawScan and call

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // CARMEN log importer (plain or gzip). Reads the front-laser lines, FLASER or ROBOTLASER1
 // (whichever comes first; the other kind is ignored), one scan per line, and skips every

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // CSV importer for recordings in any other format: one row per beam, a header naming the
 // columns (any order; unknown columns are ignored), rows of one scan consecutive:

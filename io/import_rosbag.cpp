@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The only translation unit that includes ROS headers (they are slow to compile and not
 // warning-clean; CMake adds them as SYSTEM includes to this library only).
 

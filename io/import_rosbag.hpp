@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // ROS1 bag importer (sensor_msgs/LaserScan), reading through Debian's ROS1 libraries
 // (rosbag_storage: rosbag::Bag + rosbag::View), not a parser of our own. Built only when

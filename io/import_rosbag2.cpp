@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "io/import_rosbag2.hpp"
 
 #include <algorithm>

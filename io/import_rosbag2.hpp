@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // ROS 2 bag importer (sensor_msgs/msg/LaserScan in CDR): a .mcap file, a .db3 file or a rosbag2
 // directory (io/rosbag2_storage.hpp), decoded by io/ros2_msgs.hpp. Built always (no ROS

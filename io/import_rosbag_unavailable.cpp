@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Stand-in for import_rosbag.cpp when lidarcal is built without the ROS1 libraries.
 
 #include "io/import_rosbag.hpp"

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Importer for the YDLIDAR X4 dataset (BradleyWood/Lidar-Dataset, `*.dat`, plain or gzip):
 // one scan per line, comma-separated,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Checked access to JSON input files: every error names the file and the field path
 // (e.g. `scene.json: sensor.range.bias.alpha[2]: must be a number`). io-internal.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // landmarks.csv, written by `lidarcal detect`: one row per landmark detection (docs/FORMAT.md).
 // Streamed row by row (the caller makes the enclosing output directory atomic).

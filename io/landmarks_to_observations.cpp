@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "io/landmarks_to_observations.hpp"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Converts detection's landmarks.csv (one row per detected landmark in a scan) into
 // observations.csv rows, and a sequence's commanded stop poses into odometry.csv rows, so real

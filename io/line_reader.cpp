@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "io/line_reader.hpp"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Line-by-line reading of a text file that may be gzip-compressed (zlib detects gzip by its
 // magic bytes and reads plain files as they are). Holds one line in memory. Decompression

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A small reader of MCAP files (https://mcap.dev/spec), the default storage of ROS 2 bags since
 // Iron: no C++ MCAP library is packaged for Debian 12. It reads the data section record by

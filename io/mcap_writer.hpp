@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A small writer of MCAP files (https://mcap.dev/spec), beside the reader (io/mcap_reader.hpp):
 // magic, Header, the Schema and Channel records, Messages in Chunks (zstd through Debian's

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // model.json: a calibrated range model (docs/FORMAT.md).
 

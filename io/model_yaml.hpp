@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The range model as `lidarcal export --format yaml` writes it (format "lidarcal-ros-params/1",
 // docs/FORMAT.md), read back for the live nodes: a ROS user keeps one YAML file per sensor and

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // JSON files of noise estimation (docs/FORMAT.md): observation scenes (`"kind": "observations"`),
 // noise_truth.json (simulator output), and noise settings (`--init` of noise-consistency and the

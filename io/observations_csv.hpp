@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // observations.csv and odometry.csv: the input of noise estimation (docs/FORMAT.md).
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Private to the PCD reader (pcd_scan.cpp): a PCD header parsed and checked before PCL sees the
 // file, with the messages a damaged or foreign file gets.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // One scan of a sequence: a PCD file in the sensor frame with the commanded pose in VIEWPOINT.
 // The contract is docs/FORMAT.md. Loading and saving go through PCL's PCDReader/PCDWriter;

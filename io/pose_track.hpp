@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Poses recorded beside the scans (ROS odometry, tf), looked up at each scan's time stamp for
 // VIEWPOINT (`lidarcal import --pose odom:TOPIC|tf:FRAME`). Pure geometry, no ROS types: the

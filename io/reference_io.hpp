@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // REF.json: measurements a user made by hand about a sequence (docs/FORMAT.md, "Reference
 // measurements"): distances from the sensor to landmarks or walls at given stops, wall-to-wall

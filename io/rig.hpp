@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A rig sequence: the scans of several lidars on one vehicle (docs/FORMAT.md, "Several sensors
 // on one vehicle"). A directory holding

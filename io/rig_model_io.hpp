@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // model.json of a rig (docs/FORMAT.md, "Rig model"): one block per sensor, each block a complete
 // single-sensor model (format lidarcal-model/1) beside the sensor's name, topic, frame and

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The ROS 2 messages lidarcal reads from a bag, decoded from CDR (io/cdr.hpp) by their field
 // layout in the .msg definitions (sensor_msgs/msg/LaserScan, nav_msgs/msg/Odometry,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A ROS 2 bag copied message by message with the ranges of one or more sensor_msgs/msg/LaserScan
 // topics changed by the caller (`lidarcal correct IN.mcap|IN.db3|IN_DIR --out OUT`): the ROS 2

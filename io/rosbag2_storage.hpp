@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The storage of a ROS 2 bag: a single .mcap file, a single .db3 file (SQLite), or a rosbag2
 // directory (metadata.yaml naming the storage and its files, read in the order listed). Gives

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A ROS1 bag copied message by message, with the ranges of one sensor_msgs/LaserScan topic
 // changed by the caller (`lidarcal correct IN.bag --out OUT.bag`). Same connections (topic,

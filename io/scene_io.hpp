@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Scene files (input of `lidarcal simulate`) and truth files (its output), JSON.
 // Formats: docs/FORMAT.md.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A scan sequence: a directory of .pcd files in lexicographic order, grouped into stops by
 // their VIEWPOINT, with optional metadata in sequence.json (docs/FORMAT.md).

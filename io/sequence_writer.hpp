@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The streaming sink of every importer: writes scan_NNNNNN.pcd files one at a time into a
 // staged output directory and, at commit(), sequence.json (sensor name, range limits, beams).

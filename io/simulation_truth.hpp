@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A simulated sequence's truth as files hold it: truth.json (scene, stops) and the true range of
 // every beam (true_ranges.csv beside it).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Splitting text records into fields and parsing numbers without copies (io-internal, used by
 // the line-based importers).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The simulator's companion file DIR/true_ranges.csv: the true range of every beam of every
 // scan (docs/FORMAT.md). Written row by row so long simulations stream.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // FastSLAM 1.0 with known data association (Sharma 2020 ch. 3.1, after Montemerlo et al., its
 // ref. [8]): every particle carries a pose and one 2x2 EKF per landmark. For each stop the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Hill climbing of Sharma 2020 ch. 3.4 and ch. 5, and its use on the noise-consistency objective.
 //

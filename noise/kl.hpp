@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The noise-consistency objective of Sharma 2020 (ch. 3.2-3.3): run the particle filter under an
 // assumed noise setting, fit a Gaussian to each sensor's predicted errors per component (range,

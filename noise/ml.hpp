@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Maximum-likelihood noise estimation beside Sharma 2020: variance-component estimation (VCE) in
 // the batch least-squares adjustment of poses, landmarks and sensor biases.

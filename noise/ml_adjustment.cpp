@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The normal matrix of the ML noise adjustment and what it gives: redundancy numbers per group,
 // log det N, the biases' standard errors, the REML information of the variances.
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Private to the ML noise estimator (ml.cpp, ml_adjustment.cpp): the model's residuals and
 // Jacobians, shared by the Ceres costs and the redundancy computation, and the Ceres costs.

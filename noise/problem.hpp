@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The data of noise estimation, checked and indexed once: stops, sensors, landmarks (dense
 // indices), observations grouped by stop, commanded motions. Built from observations.csv and

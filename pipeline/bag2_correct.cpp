@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "pipeline/bag2_correct.hpp"
 
 #include "common/errors.hpp"

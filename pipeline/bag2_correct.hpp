@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // `lidarcal correct IN --model model.json --out OUT` for ROS 2 bags (IN a .mcap or .db3 file, or
 // a rosbag2 directory): the bag copied with the ranges of one LaserScan topic corrected by the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // `lidarcal correct IN.bag --model model.json --out OUT.bag`: the bag copied with the ranges of
 // one LaserScan topic corrected reading by reading (calibration::correctReading, as `correct`

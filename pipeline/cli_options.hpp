@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Command-line options shared by `calibrate` and `run`, mapped into the stage configs.
 

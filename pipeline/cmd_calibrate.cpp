@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // lidarcal calibrate SEQ --out model.json [--method closed-form|joint] [--truth truth.json | --reference REF.json] [--report DIR]
 
 #include <cstdio>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // lidarcal correct SEQ --model model.json --out OUT
 // lidarcal correct IN.bag --model model.json --out OUT.bag [--topic T]
 // lidarcal correct IN.mcap|IN.db3|IN_DIR --model model.json --out OUT.mcap|OUT.db3|OUT_DIR [--topic T]

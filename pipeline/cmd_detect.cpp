@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // lidarcal detect SEQ --out OUT: landmarks in every scan, one id per landmark over the sequence.
 // Writes OUT/ (labelled copies of the scans, sequence.json, landmarks.csv); prints a summary.
 // Two passes over the files: detect + associate (the scans of one stop in memory at a time), then labels

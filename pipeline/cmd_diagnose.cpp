@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // lidarcal diagnose DATA --out DIR [--model model.json] [--seed S] [--mode auto|sequence|static]
 // Model criticism: what the seeds' model gets wrong on the data, the named cause, the extended
 // model and its held-out gain (diagnosis/diagnosis.hpp). Writes DIR/diagnosis.json, report.md

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // lidarcal evaluate OUT --truth truth.json [--raw RAW]: MSE ratio of raw vs corrected ranges.
 
 #include <cmath>

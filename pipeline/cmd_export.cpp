@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // lidarcal export model.json --format yaml|lut [-o FILE] [--step S]
 
 #include <cstdio>

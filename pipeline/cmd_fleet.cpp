@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // lidarcal fleet INPUT... --out DIR: one view of a fleet's calibrations. Each INPUT is a
 // model.json, a `run` output directory (holding model.json) or, with --manifest, a CSV of
 // `sensor,date,model` rows that gives each calibration its sensor and date (a sensor's history).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // lidarcal import [--from rosbag1|rosbag2|carmen|ydlidar|csv] INPUT --out SEQ [options]
 // Streams a recording into a PCD scan sequence (docs/FORMAT.md, "Importing recordings").
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // lidarcal info SEQ: what is in a scan sequence.
 
 #include <cstdio>

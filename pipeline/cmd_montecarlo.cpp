@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // lidarcal montecarlo --study fig7|fig8|fig9|fig10|fig11|all --trials N --out DIR: the Monte Carlo
 // study of Alhashimi et al. 2021 (sections 4.1-4.2, Figs. 7-11) with the paper's closed form, our joint
 // refinement and the oracle side by side. Writes DIR/<fig>.csv, <fig>.gp, <fig>.png, <fig>.md and

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // lidarcal montecarlo-merge SHARD_DIR... --out DIR: puts a Monte Carlo study run in shards
 // (`lidarcal montecarlo --shard K/N`) back together. The shards must be the N slices of one
 // study, each once (pipeline/montecarlo_shard.hpp checks it and names the file and field that

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // lidarcal noise-consistency --observations OBS.csv --odometry ODO.csv --method kl-hill|ml --out RESULT.json
 //   [--seed S] [--plot DIR] [--init SETTING.json] [--truth noise_truth.json] [--variant sound|faithful] ...
 // Estimates every sensor's range and bearing noise (mean, variance) and the process noise

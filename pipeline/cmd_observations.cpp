@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Observation-level data for noise estimation:
 //   lidarcal simulate --scene SCENE.json (with "kind": "observations") --out DIR [--seed N]
 //     writes DIR/observations.csv, DIR/odometry.csv and DIR/noise_truth.json;

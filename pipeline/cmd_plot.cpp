@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // lidarcal plot SCAN.pcd --out scan.png [--landmarks landmarks.csv]: a scan as a picture, in the
 // sensor frame, points coloured by their `label` (landmark id; grey for background), with the
 // circles detect fitted to it.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The rig (several sensors on one vehicle) side of `import`, `calibrate` and `correct`: each
 // command hands over here when it meets several topics, a rig sequence or a rig model

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // lidarcal calibrate RIG --out model.json: the joint calibration of a rig sequence's sensors.
 
 #include <cstdio>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // lidarcal import BAG... --topic /front,/back [--sensor-names front,back] [--vehicle-frame F] -o RIG
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // lidarcal run [SEQ] --out OUT: the main job. Detect the poles, calibrate, correct every scan,
 // and write a report. With no SEQ it runs on the bundled example.
 

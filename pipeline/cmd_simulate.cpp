@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // lidarcal simulate --scene SCENE.json --out DIR [--seed N]
 // Writes DIR/scans/ (the sequence), DIR/truth.json and DIR/true_ranges.csv.
 

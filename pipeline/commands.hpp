@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Every `lidarcal` subcommand is registered here, in one place. Each lives in its own
 // pipeline/cmd_*.cpp: it maps command-line options into the stage config structs, calls

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Output of `lidarcal diagnose`: DIR/diagnosis.json (docs/FORMAT.md) and DIR/report.md with
 // PNG plots (residuals against each variable, measured next to simulated).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The JSON of an evaluation against the truth, shared by `lidarcal evaluate` (cmd_evaluate.cpp,
 // where it is defined) and `lidarcal run`'s summary.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A fleet of sensors, each calibrated now and then (`lidarcal fleet`): which lidar's bias moved
 // since its previous calibration, and which stands out from the rest of the fleet.

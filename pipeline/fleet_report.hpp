@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // What `lidarcal fleet` writes (docs/FORMAT.md, "Fleet report"): fleet.json for machines,
 // fleet.md and the bias curves of every sensor in one plot for people. Text only; the command

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Plots through gnuplot (Debian's gnuplot-nox): the report writes data files and a script,
 // this runs it. A missing gnuplot is not an error: the report says the plots were skipped.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // `lidarcal import`: a recording (ROS1 bag, ROS 2 bag, CARMEN log, YDLIDAR X4 .dat, CSV) streamed scan by
 // scan into a PCD scan sequence. Composition of an io importer and io::SequenceWriter.

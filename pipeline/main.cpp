@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The `lidarcal` command: the only main, the only place that prints.
 
 #include <cstdio>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // `lidarcal export`: a model.json in the forms a ROS driver can use without lidarcal's code
 // (docs/FORMAT.md#model-for-drivers-lidarcal-export).

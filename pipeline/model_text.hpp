@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A calibrated model in words, for stdout and the report: every coefficient with its standard
 // error, the correction at a few distances inside the fitted range (with the curve's standard

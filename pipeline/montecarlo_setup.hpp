@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // What `lidarcal montecarlo` and `lidarcal montecarlo-merge` share: the study's options and how
 // they map into the studies/ structs, the identity of a study (everything its output depends

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Shards of a Monte Carlo study on disk (docs/FORMAT.md, "Monte Carlo shards"): what
 // `lidarcal montecarlo --shard K/N` writes, and how `lidarcal montecarlo-merge` reads the N

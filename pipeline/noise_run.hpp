@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Composition of noise estimation for `lidarcal noise-consistency` and the benchmarks: runs the
 // KL hill climbing (Sharma 2020) or the ML estimator on a NoiseProblem, times it, turns the result

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The method's sources as user-facing text (--help, reports, printed summaries) names them: by
 // author and year, as the code comments do.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // `evaluate --reference --model`: each measured distance checked against the model's two kinds
 // of interval. The error checked is what the corrected scans measure minus the measured

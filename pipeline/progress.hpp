@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Progress on stderr for long work: a bar with rate and time left, redrawn at most 5 times a
 // second, only when stderr is a terminal (logs stay clean) and not silenced with --quiet.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Calibration and evaluation against what a user measured (REF.json, common/reference.hpp), as a
 // composition: the targets of the reference distances found in the scans (poles: detectors/;

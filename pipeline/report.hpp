@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The calibration report a newcomer reads: report.md with SVG plots (measured vs estimated
 // distance with the fitted curve, noise vs range, the landmark map with raw and corrected

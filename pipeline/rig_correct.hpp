@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // `lidarcal correct IN.bag|IN.mcap|IN.db3|IN_DIR --model RIG_MODEL.json --out OUT`: a ROS1 or
 // ROS 2 bag of several lidars with each LaserScan topic corrected by its own sensor's block of a

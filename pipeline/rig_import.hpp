@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // `lidarcal import BAG... --topic T1,T2[,...] -o RIG`: several LaserScan topics of one vehicle
 // into one rig sequence (io/rig.hpp): one ordinary sequence per sensor, the vehicle's pose and

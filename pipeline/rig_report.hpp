@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // What `calibrate` makes of a rig's joint calibration: the rig model.json (io/rig_model_io.hpp)
 // and the text that compares each mounting with its design (tf_static), with snippets to paste

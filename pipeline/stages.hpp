@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The pipeline read like the paper: detect the poles in every scan and label them across
 // stops, triangulate, fit the range model (closed form, then the joint refinement), and

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A summary of a scan sequence: what a user checks before calibrating.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The stage `lidarcal run` adds when the sequence has a simulator's truth: the calibrated model
 // scored on the corrected scans as written, beside the baselines it is compared with.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // What a user can do with a recording that calibrate or run refused: the ways forward that exist
 // for that recording, named in the refusal (docs/ERRORS.md). A recording made from one place

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // lidarcal_node: corrects a sensor_msgs/LaserScan topic live with a lidarcal model (ROS 1).
 //   ~model      model.json from `lidarcal calibrate` (of one sensor, or of a rig: see ~sensor_name), or the YAML
 //               of `lidarcal export --format yaml` (required)

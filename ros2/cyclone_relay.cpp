@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "ros2/cyclone_relay.hpp"
 
 #include <stdexcept>

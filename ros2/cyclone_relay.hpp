@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The DDS side of lidarcal_ros2_node, on Eclipse Cyclone DDS: one participant on the ROS 2
 // domain, a reader of the input topic and a writer of the output topic, both of type

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // lidarcal_ros2_node: corrects a sensor_msgs/msg/LaserScan topic live with a lidarcal model, as
 // a ROS 2 node seen by `ros2 topic list` and `ros2 topic echo`: a DDS participant (Cyclone DDS)
 // that follows ROS 2's conventions (topic "rt/<name>", type sensor_msgs::msg::dds_::LaserScan_,

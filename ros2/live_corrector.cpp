@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "ros2/live_corrector.hpp"
 
 #include <algorithm>

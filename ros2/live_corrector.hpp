@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // What the ROS 2 node does with each received LaserScan, apart from the transport: check it,
 // correct its ranges in place with the rule of `lidarcal correct` (pipeline::correctLaserRanges

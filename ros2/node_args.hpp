@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The command line of lidarcal_ros2_node, as a ROS 2 executable takes it:
 //

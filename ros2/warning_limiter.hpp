@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Rate-limited warnings for a live node: a warning of one kind is let through at most once per
 // `period_s`; the ones held back in between are counted and reported with the next one let

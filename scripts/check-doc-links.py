@@ -1,4 +1,5 @@
 #!/usr/bin/env python3
+# SPDX-License-Identifier: BSD-3-Clause
 """Checks every relative link in the project's Markdown files: the file it names exists and, when
 the link has a #fragment, the target has a heading with that anchor (GitHub's slug rules:
 lower case, punctuation other than '-' and '_' removed, spaces to '-', duplicates numbered -1,

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # CI step (separate from scripts/test.sh, see docs/BUILDING.md): builds the libFuzzer targets
 # with clang (ASan + UBSan) in build-fuzz/ and runs each for a bounded time with a fixed seed on
 # its seed corpus (tests/fuzz/corpus/<target>/). Exits nonzero on any finding; the input that

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # First README command: install what is missing, build, and run the main job on the bundled example.
 set -euo pipefail
 cd "$(dirname "$0")/.."

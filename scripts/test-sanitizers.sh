@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # CI step (separate from scripts/test.sh, see docs/BUILDING.md): the whole test suite under
 # AddressSanitizer + UndefinedBehaviorSanitizer with LeakSanitizer on, in its own build
 # directory build-asan/ (a second full build: about 25 minutes on two cores, the tests about

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # Second README command (and CI's first step): install what is missing, build with warnings as
 # errors, run the default test suite: every test but the long statistical cases (label slow) and
 # the Slurm recipes (label slurm), which CI runs as its next steps (.ci/run); docs/BUILDING.md

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "simulation/landmark_level.hpp"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Landmark-level simulator of Alhashimi et al. 2021 section 4.1: the robot stops along a line (eqs. 7-8),
 // each landmark is seen at bearing theta + v (eq. 5) and range f(d) + sigma(d) e (eq. 3).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Observation-level simulator (Sharma 2020 ch. 3.5 and ch. 5): the true trajectory follows the
 // commanded motions plus process noise, x_k = x_{k-1} (+) (u_k + w_k), w_k ~ N(0, diag(q));

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A simulated range sweep: a static sensor looking at one pole placed at a series of measured
 // distances, one stop per distance, the way the Hokuyo UST-30LX sweep of ../shared/data was

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Closed-form ray casting in the scan plane against circles (vertical cylinders) and segments.
 

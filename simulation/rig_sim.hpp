@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Landmark-level simulation of several 2D lidars on one vehicle: the vehicle stops at given
 // poses (each true pose around its recorded one, Alhashimi et al. 2021 eq. 8) or drives along a

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Scan-level simulator: the robot stops along a straight line (Alhashimi et al. 2021 eqs. 7-8) or drives
 // along a route (a pose per scan, odometry drifting as a random walk), the lidar

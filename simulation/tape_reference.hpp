@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // What a user with a tape measure would write into REF.json for a simulated sequence: the
 // distance from the sensor's true position at each stop to the centre of every pole it sees

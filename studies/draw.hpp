@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // One simulated calibration run as the Monte Carlo study sees it: what the estimators get (the
 // landmark observations) and the truth kept aside to score them. Both simulation levels

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The gnuplot scripts of the Monte Carlo figures (Alhashimi et al. 2021, Figs. 7-11).
 #include <algorithm>
 #include <cmath>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The Markdown summaries of the Monte Carlo figures (Alhashimi et al. 2021, Figs. 7-11): the
 // paper's claims against the study's numbers.
 #include <algorithm>

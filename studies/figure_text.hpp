@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Private to the figures (figures.cpp, figure_gnuplot.cpp, figure_summary.cpp): numbers as text,
 // the cells' statistics by estimator, gnuplot blocks and panels, Markdown tables.

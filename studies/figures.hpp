@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The five Monte Carlo figures of Alhashimi et al. 2021 (sections 4.1-4.2) as study grids, and what is
 // written for each: a CSV of every cell, a gnuplot script (data inline) for the PNG, and a

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Random landmark layouts for the Monte Carlo study (Alhashimi et al. 2021 section 4.1 draws a scene per
 // simulation; section 4.3 keeps every landmark between 0.2 m and 5 m of every stop, visible and

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Runs the trials of many cells on a pool of threads. Every trial's seed and layout depend only
 // on (study seed, cell, trial) and results are stored by index, so the output is the same

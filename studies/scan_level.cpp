@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "studies/scan_level.hpp"
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Scan-level draws for the Monte Carlo study: the layout becomes a scene, every scan is
 // ray-cast (simulation/simulator.hpp), and the landmarks are found by the detector and

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "studies/statistics.hpp"
 #include "common/stats_util.hpp"
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Per-cell statistics of a Monte Carlo study: quartiles and means of each per-trial metric with
 // their Monte Carlo standard errors, order-selection counts under each order rule, and the bias

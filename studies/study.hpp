@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A whole Monte Carlo study: the cells of the requested figures (each cell run once even when
 // several figures use it), their trials, and the text of every output file.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // One Monte Carlo trial of the Alhashimi et al. 2021 study (sections 4.1-4.2): simulate a calibration run
 // over a landmark layout, calibrate it with the paper's closed form (triangulation + LS + AIC),

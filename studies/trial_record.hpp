@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // One trial's result as a line of text that reads back bit for bit: what a shard of a study
 // (runner.hpp, shardTrials) hands to the merge. Every number of a TrialResult is kept, doubles in

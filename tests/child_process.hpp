@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Child processes for the tests that start servers (rosmaster, the Slurm daemons): started by
 // fork + exec with their output in a log file, waited for with bounded polls, stopped by their

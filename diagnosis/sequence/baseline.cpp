@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Steps 1 and 2 of a sequence diagnosis: the baseline fitted (two starts, the order, a drive's
 // odometry noise), the measured statistics, and the bootstrap replicas refitted from it.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Step 3 of a sequence diagnosis, the fits: each candidate on all the data, the baseline settled
 // in the best optimum they find, and every model refitted on the folds for the held-out
 // likelihoods of the readings and the odometry.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Step 3 of a sequence diagnosis, the scores: one candidate's held-out gain, likelihood ratio,
 // p-value, identifiability and estimates, and the gates of the rule table (diagnosis/rules.hpp)
 // that hold its p-value at 1 when its fit is no effect.

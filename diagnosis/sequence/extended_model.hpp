@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A sequence's extended model (step 5): the named effect's estimates and size, the scene keys
 // that simulate it, how close its simulation comes to the data, and (with truth) the gain in

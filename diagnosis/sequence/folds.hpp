@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Cross-validation of a sequence: each sighting's fold (by scan position within its stop), the
 // split into the sightings fitted on and those scored, and the readings spread over their grid

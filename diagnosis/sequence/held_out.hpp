@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Held-out log-likelihoods of a sequence: each scored reading under a fit on the other folds,
 // and the odometry left out one stop (stop and go) or one step (a continuous recording) at a

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Identifiability of a sequence's candidate effects: the information on each effect that is left
 // once the baseline's parameters (bias, radius, centres, stop poses with their priors) are free,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The noise's shape terms of a sequence's candidates: which are estimated by restricted
 // likelihood over the poses, that estimate, and which are shapes of the noise at all.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "diagnosis/sequence/odometry_noise.hpp"
 
 #include "common/pose2.hpp"

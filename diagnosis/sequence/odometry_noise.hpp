@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A continuous recording's odometry noise, from its own steps: the factors on the motion prior's
 // default standard deviations that the baseline's steps show. Internal to the diagnosis library.

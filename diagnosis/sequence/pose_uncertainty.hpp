@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // What a sequence's readings and odometry know of each stop's pose: a reading's gradient by its
 // pose, the poses' information and marginal covariances under the motion prior (a Laplace

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The sequence diagnosis' problem object (diagnosis/skeleton.hpp's five steps on joint
 // refinements). Internal to the diagnosis library.

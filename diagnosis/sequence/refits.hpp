@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The joint refinement (calibration/joint_refinement.hpp) as the sequence diagnosis drives it:
 // the baseline's setup, one effect term switched on, starts from earlier solutions, warm refits.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Parametric bootstrap replicas of a sequence: the measured geometry simulated at landmark level
 // (simulation/landmark_level.hpp) from a fit, with the stop poses redrawn as the model says they

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Where the candidates' fits start: the path terms (zero-angle offset, step length) from what the
 // baseline's refined path shows, the baseline again from a candidate's solution. Internal to the

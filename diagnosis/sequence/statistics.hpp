@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The discrepancy statistics of a sequence (diagnosis/battery.hpp lists them): score statistics
 // of the residuals against range, incidence, position on the pole, landmark, stop, heading, time

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Step 4 of a sequence diagnosis after nameCause: the rules of diagnosis/rules.hpp that replace a
 // symptom (the reading grid, heavy tails) by the physical effect that holds beside it, and that
 // make a noise term hold beside a significant path term on a continuous recording.

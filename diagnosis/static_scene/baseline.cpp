@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Steps 1 and 2 of a static diagnosis: the readings binned (one pose, or windows when the sensor
 // moved), the baseline's bin locations, noise law and wall model, the measured statistics, and
 // the bootstrap replicas refitted from it.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #include "diagnosis/static_scene/bins.hpp"
 
 #include <algorithm>

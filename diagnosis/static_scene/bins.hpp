@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Repeated scans from one pose as direction bins: a beam over the scans (or over a window of
 // scans when the sensor moved), its location fitted on any subset of the scans, and the bins'

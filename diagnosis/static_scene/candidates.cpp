@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Step 3 of a static diagnosis: every candidate's reading model fitted on the scan folds and on
 // all the data, its held-out gain, delta AIC, applicability, identifiability and estimates.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Step 5 of a static diagnosis: the named effect's model, the scene keys that simulate it, and
 // how close its simulation, refitted with the baseline, comes to the data.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The static diagnosis' problem object (diagnosis/skeleton.hpp's five steps on the bin, wall and
 // tail models). Internal to the diagnosis library.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The reading model: each reading of a bin about its location, with the noise law
 // sigma_e |m|^kappa (1 / cos phi)^gamma (I_ref / I)^delta (Alhashimi et al. 2016 eq. 1 with free

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Parametric bootstrap replicas of a static recording: the same beams and scans simulated with
 // the project's simulator from a fitted model, and the standardised residuals and per-bin

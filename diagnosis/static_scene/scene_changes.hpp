@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Whether a recording from one pose stayed one pose: beams that saw the scene change (an object
 // carried in or out, a person walking past) and a sensor that moved. Internal to the diagnosis

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The discrepancy statistics of a static recording (diagnosis/battery.hpp lists them): the
 // noise against range, incidence, intensity and bearing, a shared trend over the scans, the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Step 3 for the tails of a static recording (diagnosis/tails.hpp): the tail models fitted on
 // the scan folds, their held-out gains, each covariate's unique share, the full model on all the
 // data (which beams carry the tails) and the effects fitted beside a pooled contamination.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The tails of a static recording explained (diagnosis/tails.hpp): the contamination model's
 // covariates per bin, the residuals it is fitted to, and its variants (pooled, every covariate,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Step 4 of a static diagnosis after nameCause: the rules of diagnosis/rules.hpp that read the
 // tails (their significance, a noise law re-ranked beside a pooled contamination, the covariate
 // that names their cause, the caution when the contamination holds most readings).

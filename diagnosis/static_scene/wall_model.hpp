@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The wall model: bin means on walls = alpha_0 + b (1 - cos phi) + p / cos(a - theta), with a
 // roughness tau; Gauss-Newton, then leave-one-bin-out predictive log-likelihoods. With the walls

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The walls of a room seen from one pose: runs of neighbouring bins without a depth jump, the
 // incidence of each bin from the slope of its run, and straight pieces of the runs found by

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # A fleet's calibration drives on a Slurm cluster: one array task per recording (`lidarcal run`),
 # then the fleet report over every calibration in OUT/runs, once all tasks have ended (a failed
 # recording does not hold the others back: the report says which gave no model).

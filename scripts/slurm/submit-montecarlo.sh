@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # A Monte Carlo study on a Slurm cluster: N array tasks, one shard each, then the merge, which
 # runs when every shard has succeeded. The study lands in OUT/study, the job logs in OUT/logs.
 #   submit-montecarlo.sh N OUT [lidarcal montecarlo options]

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Simulated vehicles with two or three lidars, shared by the rig calibration's tests and the
 // coverage bench (bench/rig_coverage.cpp): a forklift-like rig (front corner upright, back corner

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The closed-form stage's pieces against answers the test controls: noise-free readings of a
 // known circle give the exact landmark-stop distance, readings at one distance group into one
 // batch per (stop, landmark, beam), the radius is the known one or the median of the fits.

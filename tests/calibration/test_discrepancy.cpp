@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The model discrepancy of calibrate --reference (calibration/discrepancy.hpp): its REML estimate
 // against the closed form it has when every entry is equally precise, zero for a sensor that
 // follows the polynomial, the ripple's size for one that does not, and the predictive intervals

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The one table of effects (common/effect.hpp) against the code that acts on them.
 
 #include <gtest/gtest.h>

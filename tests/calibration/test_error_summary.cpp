@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The RMS error against a reference with its standard error, and the MSE ratio with its
 // interval (calibration/error_summary.hpp): the intervals hold the truth the test draws from.
 

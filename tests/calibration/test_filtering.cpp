@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The correction rule (calibration/filtering.hpp): what happens to a reading inside and beyond
 // the range a model was fitted over, under every --outside policy, and its standard error.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Inversion of the bias (Alhashimi et al. 2016 section 5.2): LS round trip f(f^-1(y)) = y over the range
 // limits for every order, and ML satisfying eq. 28.
 

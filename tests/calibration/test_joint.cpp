@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Joint refinement: recovers per-stop heading errors, its covariance describes its error,
 // and end to end it comes close to the ground-truth fit.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Continuous motion: a robot driving a loop among thin poles, every scan its
 // own pose from drifting odometry (data/scenes/driving_small_poles.json, landmark level: no
 // detector). The joint refinement with the odometry as a motion prior between consecutive

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The noise law of a fitted bias recovered from readings the test draws, and the side estimators
 // that fail on degenerate data noted, never thrown.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The oracle against known distances: noise-free readings of a known bias give it back, and too
 // few readings are a status, not a throw.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Plausibility warnings of a self-calibrated model (calibration/calibrate.hpp,
 // addPlausibilityWarnings): each fires on the condition it names and stays silent otherwise.
 

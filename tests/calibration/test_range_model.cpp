@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Range-model fits: least squares, AIC on a hand-computable case, Alhashimi et al. 2016's closed form
 // against its formula, ML, Alhashimi et al. 2021's noise polynomial, the noise-exponent test.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Calibration against measured distances (Alhashimi et al. 2016 section 5): the known-distance readings of
 // poles and walls, the fit with its stop-clustered standard errors, the noise exponent test,
 // and the matching of reference entries to targets.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The refusals of calibrate(): each sets its status code and a message naming what to do, and
 // lets usable data through.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Joint calibration of several lidars on one vehicle (calibration/rig_calibrate.hpp) against
 // simulated rigs whose truth the test sets: mountings, range models, vehicle poses. The coverage
 // of the standard errors over many seeds is bench/rig_coverage.cpp's job; here a few seeds each.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Calibration from wall-to-wall spans (calibration/span_walls.hpp, span_fit.hpp,
 // span_calibration.hpp) on rooms the simulator ray-casts: the true room gives the spans (the
 // laser meter), the sensor's bias is the truth the fit must recover within its standard errors;

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Triangulation (Alhashimi et al. 2021 section 3.1): exact on noise-free data, equivariant under rigid
 // motions, the eq. 25 weights on noisy data against a hand-built weighted least squares,
 // degenerate geometry reported.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Scoring against a simulator's truth: the odometry scale error of a path the test scales and
 // moves, and a truth that does not describe the sequence refused.
 

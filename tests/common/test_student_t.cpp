@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Student's t distribution (common/student_t.hpp) against its closed forms (1 and 2 degrees of
 // freedom), printed tables and the normal limit.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Uses the installed lidarcal::io: opens the bundled example sequence from share/lidarcal and
 // writes a small sequence with the importers' SequenceWriter; and lidarcal::calibration: corrects
 // one range with a model.json, as a driver would (docs/FORMAT.md, "Model for drivers"). Exit 0

@@ -1,3 +1,4 @@
+# SPDX-License-Identifier: BSD-3-Clause
 # cmake -DBUILD_DIR=... -DCONSUMER_SOURCE=... -DWORK_DIR=... -P run_consumer_test.cmake
 # Installs the build into WORK_DIR/prefix, checks the layout, then configures, builds and runs
 # the consumer project against it, and runs the installed `lidarcal` on the installed example.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Association across stops on synthetic detections whose truth the test knows: drift, occlusion,
 // spurious circles, close landmarks, and the order of the input.
 

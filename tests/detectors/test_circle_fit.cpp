@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Circle fitting against closed forms and PCL's own model: PCL-style known-circle cases,
 // degenerate inputs, short arcs, fixed radius, rigid motions, float precision far from the origin.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Driving and thin poles, checked against the simulator's truth beam by beam:
 //  - continuous motion: a robot driving loops among six thin poles without stopping (every scan
 //    its own pose, odometry drifting); the tracks keep their ids through hundreds of poses and

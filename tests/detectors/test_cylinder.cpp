@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // 3D cylinders: a synthetic cylinder on a plane (closed form), and PCL's mug scene against the
 // numbers PCL's cylinder-segmentation tutorial reports.
 

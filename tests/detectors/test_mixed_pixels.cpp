@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The readings beside a pole that only a mixed pixel puts between it and its background, and
 // the check that no nearby scan sees a surface there.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // common/parallel.hpp: every index runs once whatever the number of threads, and a failure is
 // reported as a serial loop would report it (the smallest failing index).
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Per-scan segmentation and classification on scans the simulator draws from scenes whose truth
 // the test controls: poles are found where they are, walls and chair legs never are.
 

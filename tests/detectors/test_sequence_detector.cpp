@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Whole sequences simulated from the paper's field scene: every landmark found with one id,
 // checked beam by beam against the simulator's truth; the radius estimated when not given;
 // odometry drift; a sequence without landmarks.

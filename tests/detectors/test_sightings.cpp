@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Sightings from the coordinates the detection kept equal those from reading the scans again
 // (calibrate and run read every scan once), and come by landmark within a scan whatever the
 // detector's order.

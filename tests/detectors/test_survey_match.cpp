@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Surveyed landmarks matched to detected ones: the closest pairs first, one to one, within the
 // gate; an entry without a detected landmark near it gets id 0.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Walls in a scan (detectors/walls.hpp) and the surfaces of a stop (detectors/wall_tracks.hpp),
 // against rooms the test builds: every wall found where it stands, corners split, a wall
 // interrupted by a gap merged, a noisy far wall found only with the threshold growing with range.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Simulated sequences with one effect hidden in them (or none), for the diagnosis tests and
 // bench/diagnose_accuracy. The paper field of Alhashimi et al. 2021 section 4.3 at the landmark level: five

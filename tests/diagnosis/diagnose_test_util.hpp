@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Helpers of the diagnosis' hidden-effect tests: case seeds drawn from a seed the tests do not read,
 // the case and replica counts the environment can raise (LIDARCAL_DIAGNOSE_CASES,

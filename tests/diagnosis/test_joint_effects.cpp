@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The joint refinement's effect terms (calibration/joint_refinement.hpp), which the sequence
 // diagnosis fits its candidates with (diagnosis/sequence/refits.hpp), recover known values.
 

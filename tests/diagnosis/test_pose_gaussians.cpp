@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Gaussian algebra of the held-out predictions (diagnosis/pose_gaussians.hpp) against dense and
 // sampled oracles: the block-tridiagonal inverse and log-determinant, the leave-one-out density,
 // and a beam's distance to a pole under pose uncertainty.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The verdict's rules (diagnosis/rules.hpp): nameCause on hand-made candidates, and the rule
 // table as docs/DIAGNOSIS.md documents it, in the same order.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The sequence diagnosis (diagnosis/sequence.hpp): diagnose names an effect hidden in simulated
 // data (which one and its size drawn from a case seed the assertion does not look at), its result
 // carries every candidate and the extended model, and data it cannot diagnose give a status.

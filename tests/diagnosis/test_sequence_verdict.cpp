@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The rules that act after the naming in a sequence (diagnosis/sequence/verdict.cpp): an effect
 // hidden in readings on a grid or under heavy tails is named beside the symptom, and the
 // dark-surface model takes no other effect's place.

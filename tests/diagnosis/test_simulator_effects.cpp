@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The simulator's effects (simulation/simulator.hpp), which the diagnosis' replicas and extended
 // models simulate, against their definitions; their scene keys round-trip.
 

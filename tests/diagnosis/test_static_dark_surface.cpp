@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Dark surfaces in a static recording: the noise law's dark-surface exponent named and recovered,
 // also under heavy tails; not named when the intensity follows the range or does not vary; a
 // cause named beside a contamination of most readings comes with a caution.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Effects in a static recording named as the truth allows: readings rounded to a grid, mixed
 // pixels at depth edges, an incidence exponent under contamination.
 

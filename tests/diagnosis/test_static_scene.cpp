@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The static diagnosis (diagnosis/static_scene.hpp) on a simulated room seen from one pose: a clean
 // room has no cause and its walls are found, a hidden effect is named as the truth allows, a
 // turning sensor is diagnosed in windows, progress changes nothing, and data it cannot diagnose

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Whether a recording from one pose stayed one pose (diagnosis/static_scene/scene_changes.hpp):
 // beams that saw an object carried away are left out, scattered outliers are not a scene change.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The tails of a static recording explained (diagnosis/static_scene/tail_attribution.cpp and
 // verdict.cpp): extra-wide errors in one class of beams are named by their physical cause, and
 // the tail study is deterministic.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The diagnosis' statistics (diagnosis/stats.hpp) against closed forms and their definitions:
 // Holm's step-down, likelihood-ratio and combined p-values, the KS distance, replica p-values,
 // the reading-grid resultant, the held-out p-value.

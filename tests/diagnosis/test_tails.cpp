@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The tail model (diagnosis/tails.hpp): EM recovers a contamination model from its own draws and
 // stays finite on degenerate inputs.
 

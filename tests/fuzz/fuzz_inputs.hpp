@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // One function per fuzzed reader: hand it any bytes; it writes them to a scratch file, runs the
 // reader and accepts a result or an InputError. Anything else (a crash, a sanitizer report, an

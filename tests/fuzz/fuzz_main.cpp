@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // libFuzzer entry point of one target, chosen at compile time (LIDARCAL_FUZZ_TARGET, see
 // tests/fuzz/CMakeLists.txt): fuzz_pcd, fuzz_json, ...
 

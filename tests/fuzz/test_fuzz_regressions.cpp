@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Replays every fuzz target's seed corpus (tests/fuzz/corpus/<target>/) and every input a fuzz
 // run ever found a problem with (tests/fuzz/regressions/<target>/, committed with the fix) in
 // the normal build, and under the sanitizers in scripts/test-sanitizers.sh: each must give a

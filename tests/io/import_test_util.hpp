@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Helpers for the importer tests: gzip files, collecting the scans an importer hands on.
 

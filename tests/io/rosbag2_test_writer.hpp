@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Test-side writers of ROS 2 bags, built straight from the specifications and independent of the
 // reader under test: CDR serialisation of LaserScan, Odometry and TFMessage (CORBA 3.3 Part 2

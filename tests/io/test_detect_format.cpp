@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // A recording's format told from its content (io/detect_format.hpp): small inputs of every
 // kind, gzip or not, the shared recordings, and `import` without --from giving what --from gives.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // CARMEN log importer: FLASER and ROBOTLASER1 lines, angle conventions, pose choice, gzip,
 // and malformed lines reported with their line number.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // CSV importer: documented columns, one row per beam, errors naming the line.
 
 #include <cmath>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // ROS1 bag importer, against bags written here with the same ROS libraries (the oracle for
 // what a LaserScan says) and, when present, the RPLIDAR recording in ../shared/data.
 

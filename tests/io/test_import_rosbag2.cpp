@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // ROS 2 bag importer (MCAP, SQLite .db3, rosbag2 directories; CDR LaserScan), against bags
 // written here from the specifications (rosbag2_test_writer.hpp): the points of the imported
 // sequence must be what the test computes from the ranges it chose. Needs no ROS.

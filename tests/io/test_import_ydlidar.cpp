@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // YDLIDAR X4 dataset importer: odometry integration (closed forms), beam angles, first-line
 // deltas, malformed lines.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // io-level checks behind docs/ERRORS.md: scan numbering in sequence directories, outputs that
 // never replace special files or directories, headers that promise more than the file holds,
 // strict true_ranges.csv rows.

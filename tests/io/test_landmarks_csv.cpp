@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // landmarks.csv: round trip, quoting, and errors that name the line and column.
 
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Line reading of plain and gzip files; damaged gzip is reported.
 
 #include <gtest/gtest.h>

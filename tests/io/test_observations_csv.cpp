@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // observations.csv, odometry.csv, observation scenes, noise settings and the landmarks.csv converter.
 
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // PCD scan files: round trips, interoperability with PCL's own reader, and bad input.
 
 #include <cmath>

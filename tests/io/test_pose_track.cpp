@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Poses looked up at scan stamps (import --pose): interpolation against closed forms, tf chains
 // against composing by hand, the still-pose filter's stops.
 

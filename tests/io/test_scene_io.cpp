@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Scene and truth files.
 
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Sequences: file order, grouping into stops, metadata, bad directories.
 
 #include <algorithm>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The importers' sink: polar readings to points, --every / --max-scans, sequence.json, and no
 // partial output. PCL's own reader is the oracle for the files written.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Small observation scenes for the noise-estimation tests (known truth, fixed layouts).
 

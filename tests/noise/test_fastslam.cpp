@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // FastSLAM (Sharma 2020 ch. 3.1-3.2) on simulated observations with known truth.
 
 #include <cmath>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Hill climbing (Sharma 2020 ch. 3.4) and the KL noise-consistency objective it climbs.
 
 #include <cmath>

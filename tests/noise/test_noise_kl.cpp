@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The KL divergence of Sharma 2020 ch. 3.3 (closed form) and the fit of the predicted Gaussian.
 
 #include <cmath>

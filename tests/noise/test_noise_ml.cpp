@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Maximum-likelihood noise estimation (variance components in the batch adjustment).
 
 #include <cmath>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The bad-input catalogue's input builders (test_bad_input.cpp, test_input_warnings.cpp): the
 // shared fixtures, copies of good inputs with one edit, simulated scenes.

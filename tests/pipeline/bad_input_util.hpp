@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The bad-input catalogue's harness (docs/ERRORS.md): one table row per case. A case prepares
 // its inputs under IN, names the command line (placeholders below) and what must happen: the

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Helpers of the `lidarcal diagnose` command-line tests: simulated scenes and drives, and what a
 // diagnosis.json's candidates say in sample.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Shared by the export, bag and node tests: a hand-made model.json (the oracle knows its
 // polynomial) and a small CSV reader for the exported lookup table.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The bad-input catalogue (docs/ERRORS.md), one row per case: every command that reads the
 // input refuses it with the documented exit code and a message naming the file, the item and
 // the remedy; the input is byte for byte unchanged and nothing is left at or beside the output

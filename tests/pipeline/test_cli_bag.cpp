@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // `lidarcal correct IN.bag --out OUT.bag`: every connection and message copied in order with the
 // same stamps; only the LaserScan ranges of the topic change, to what `correct` gives for the
 // imported sequence. Bags written here with the ROS libraries (the oracle), and the shared

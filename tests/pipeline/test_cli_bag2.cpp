@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // `lidarcal correct` on ROS 2 bags (.mcap, .db3, rosbag2 directories) through the binary: the
 // corrected bag re-imports to the ranges `correct` gives on the imported sequence, every other
 // message and every stamp is kept byte for byte, the MCAP written is valid (read back by

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // `lidarcal run`, `calibrate`, `correct` and `evaluate` end to end on simulated sequences.
 
 #include <cmath>

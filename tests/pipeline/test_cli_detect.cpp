@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // End-to-end checks of `lidarcal detect`: labelled copies of the scans, landmarks.csv,
 // untouched input, atomic and deterministic output, refusals, a sequence without landmarks.
 

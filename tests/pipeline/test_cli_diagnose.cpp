@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // `lidarcal diagnose` end to end on stop-and-go sequences: simulated scans through the detector,
 // the output files, determinism, a long sequence's window, mixed pixels and dark poles named from
 // the scans, errors; `calibrate --effects`.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // `lidarcal diagnose` on drives (a robot that never stops, a pose per scan under the motion prior):
 // clean drives name no effect, hidden effects among thin poles are named at their size, a yawed
 // lidar from its odometry steps, the odometry's noise fitted from the drive's own steps.

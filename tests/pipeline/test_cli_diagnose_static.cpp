@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // `lidarcal diagnose` in static mode: a simulated room from one pose and the RPLIDAR recording.
 
 #include <cmath>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // `lidarcal export`: the ROS parameter YAML carries the model exactly; the lookup table inverts
 // the polynomial and equals what `lidarcal correct` gives for the same readings.
 

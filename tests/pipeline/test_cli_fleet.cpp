@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // `lidarcal fleet` end to end on a simulated fleet: 21 sensors, each simulated and calibrated
 // twice (`lidarcal simulate`, `lidarcal calibrate`) with the paper field's bias; the second time
 // one sensor's offset alpha_0 is 2 cm larger. The report flags exactly that sensor (moved since

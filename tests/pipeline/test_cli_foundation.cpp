@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // End-to-end checks of the `lidarcal` binary: simulate, info, determinism, bad input.
 
 #include <cmath>

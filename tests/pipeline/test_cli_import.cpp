@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // `lidarcal import` end to end: every recording in ../shared/data imports with the expected
 // counts, angles and ranges (checked against the source files parsed here independently, and
 // opened with PCL's own reader); bad inputs exit with 2, name the file and the line or topic,

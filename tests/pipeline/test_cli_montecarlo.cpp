@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // `lidarcal montecarlo` end to end: the files it promises, the same bytes with 1 and 2 threads,
 // every plot drawn without the joint refinement, a failing plot that fails the command, refusals
 // of bad options, and an interruption that leaves nothing behind.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // `lidarcal montecarlo --shard K/N` and `lidarcal montecarlo-merge` end to end: the merged
 // directory holds the bytes of the study run at once (CSV, summaries, gnuplot scripts, PNGs),
 // whatever the number of shards, their order and their thread counts; shards of another study,

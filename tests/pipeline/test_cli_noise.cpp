@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // End-to-end: simulate an observation scene, estimate its noise with both methods, convert
 // detection output; errors and determinism.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // `lidarcal plot`: a labelled scan becomes a PNG; bad input is reported.
 
 #include <gtest/gtest.h>

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Every recording in ../shared/data goes through `calibrate` and `run` to a result (exit 0, with
 // standard errors) or a reasoned refusal (exit 3 saying what is missing and what to record):
 // never an internal error. Skipped when ../shared/data is absent.

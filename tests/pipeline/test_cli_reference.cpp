@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Calibration against measured distances end to end: `import --stop-per-input`,
 // `calibrate --reference`, `evaluate --reference [--model]`, on simulated sequences whose truth
 // plays the tape measure, and on the Hokuyo range sweep of ../shared/data (tape-measured).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // A simulated two-lidar vehicle through the command line: its scans written as a two-topic ROS1
 // bag with the designed mountings in /tf_static, `import --topic a,b`, `calibrate RIG`, and the
 // rig model read back against the simulated truth (the same vehicle as the coverage bench's

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Wall-to-wall spans in REF.json end to end: `calibrate --reference` on a simulated room from one
 // stop (the room's true dimensions play the laser meter), the report it writes, `evaluate` of the
 // spans on the corrected scans, every way a span can be wrong named by its REF.json field, and

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Same input and seed give byte-identical output, for every command that writes files. A
 // command with a --threads option (its --help says so) is run with --threads 1 and --threads 2;
 // the others are run twice. Both runs write to the same path (the first result is moved aside)

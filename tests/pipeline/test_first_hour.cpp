@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // What a new user meets in the first hour: progress counts, the report's plots over the fitted
 // range, `plot`'s titles, legends and refusal to overwrite, `-o`, `info --json`, observations.csv
 // ids as labels, `correct --force`, the words of --help and `run`, and the messages for a

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Fleet statistics (pipeline/fleet.hpp) on models written here with a known covariance: the bias
 // and its standard error against a hand computation, Wald's test against its closed form for one
 // distance, the false-alarm rate over many simulated fleets of unchanged sensors held to alpha,

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Inputs that are not errors, documented in docs/ERRORS.md beside the bad-input catalogue: scans
 // whose beam count varies, landmarks all on one side of the path.
 

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A synthetic sensor_msgs/LaserScan for the bag and node tests (ROS headers: only test targets
 // built with the ROS libraries include this).

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // lidarcal_node against a real rosmaster (Debian's python3-rosmaster) on loopback, started and
 // stopped here: recorded scans published, corrected scans received and compared bit for bit
 // with `lidarcal correct IN.bag --out OUT.bag` (the same correction rule); models of another

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The cross-vendor test's ROS 2 peer on eProsima Fast DDS (the node runs on Cyclone DDS): a
 // participant on loopback only (UDPv4 restricted to 127.0.0.1, the other participants found

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The ROS 2 node without DDS: its command line (ROS 2's -p/-r syntax, name resolution), the
 // per-scan rule (ros2::LiveCorrector against pipeline::correctLaserRanges, the rule of
 // `correct`), the rate limit of its warnings, and the model read from export's YAML.

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // lidarcal_ros2_node (Cyclone DDS) against a ROS 2 peer on the other vendor's DDS (Fast DDS, in
 // this process), both on loopback only and on a domain of this run's own: recorded scans published
 // under ROS 2's names and QoS, the corrected scans received and compared bit for bit with

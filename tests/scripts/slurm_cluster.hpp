@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // A real single-node Slurm cluster on localhost for one test program, from Debian's packages
 // (munge, slurmctld, slurmd): a MUNGE key and socket, slurm.conf, state and spool directories

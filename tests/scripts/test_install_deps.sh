@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # scripts/install-deps.sh with stubs first on PATH: nothing is installed for real. The stubs
 # (dpkg-query, apt-get, sudo, id) log their arguments; each case checks the exact commands the
 # script would run, as root, as a sudo user, as a user without sudo, and with nothing missing.

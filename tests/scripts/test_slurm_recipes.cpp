@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The Slurm recipes of scripts/slurm/ submitted to a real single-node Slurm (slurm_cluster.hpp):
 // a Monte Carlo study as an array of shards and a dependent merge, checked byte for byte against
 // the study run in one process; a fleet as an array of `lidarcal run` tasks and a dependent fleet

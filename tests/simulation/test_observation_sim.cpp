@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // The observation-level simulator (Sharma 2020's setting): readings, noise statistics, streams.
 
 #include <cmath>

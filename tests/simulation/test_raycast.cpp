@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Ray casting against closed-form cases.
 
 #include <cmath>

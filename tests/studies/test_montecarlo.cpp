@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Monte Carlo study (Alhashimi et al. 2021 Figs. 7-11): layouts keep their constraints, per-stop averaging is
 // exact, quartiles follow their definition, the study is deterministic whatever the thread count,
 // and a tiny study's statistics agree with a direct computation done here from the simulator and

@@ -1,3 +1,4 @@
+// SPDX-License-Identifier: BSD-3-Clause
 // Shards of a Monte Carlo study: the slices hold every trial exactly once and share the slow
 // (joint refinement) trials evenly; a trial's record reads back bit for bit, and a damaged one is
 // refused naming its column; the study run slice by slice and put back together from the records
