@@ -21,7 +21,8 @@ using namespace lidarcal;
 
 simulation::LandmarkLevelSample sample(int scans_per_stop) {
   simulation::LandmarkLevelConfig c;
-  c.landmarks = {{1.5, 0.75, 0.12}, {0.3, 2.2, 0.12}, {2.4, 3.4, 0.12}, {3.9, -1.3, 0.12}, {0.9, -2.8, 0.12}};
+  c.landmarks = {
+      {1.5, 0.75, 0.12}, {0.3, 2.2, 0.12}, {2.4, 3.4, 0.12}, {3.9, -1.3, 0.12}, {0.9, -2.8, 0.12}};
   c.path.stops = 20;
   c.path.step_m = 0.15;
   c.path.scans_per_stop = scans_per_stop;
@@ -57,13 +58,14 @@ void BM_Joint(benchmark::State& state) { run(state, calibration::Method::joint);
 BENCHMARK(BM_ClosedForm)->Arg(1)->Arg(10)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Joint)->Arg(1)->Arg(10)->Unit(benchmark::kMillisecond);
 
-const std::filesystem::path kExample = std::filesystem::path(LIDARCAL_SOURCE_DIR) / "data/example/scans";
+const std::filesystem::path kExample =
+    std::filesystem::path(LIDARCAL_SOURCE_DIR) / "data/example/scans";
 
 /// The main job on the bundled example (detect, calibrate, correct, report), as a process.
 void BM_RunExample(benchmark::State& state) {
   const auto out = std::filesystem::temp_directory_path() / "lidarcal-bench-run";
-  const std::string cmd = std::string(LIDARCAL_EXE) + " run -q --no-truth " + kExample.string() + " --out " +
-                          out.string() + " --overwrite >/dev/null";
+  const std::string cmd = std::string(LIDARCAL_EXE) + " run -q --no-truth " + kExample.string() +
+                          " --out " + out.string() + " --overwrite >/dev/null";
   for (auto _ : state)
     if (std::system(cmd.c_str()) != 0) state.SkipWithError("lidarcal run failed");
   std::filesystem::remove_all(out);

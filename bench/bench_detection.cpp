@@ -59,7 +59,8 @@ const Data& data(const std::string& scene_file) {
   d->truth.stops = simulation::planStops(d->truth.scene, 1);
   for (std::size_t k = 0; k < d->truth.stops.size(); ++k)
     for (std::size_t i = 0; i < d->truth.stops[k].scans; ++i) {
-      d->scans.push_back(simulation::simulateScan(d->truth.scene, d->truth.stops[k], d->truth.stops[k].first_scan + i, 1));
+      d->scans.push_back(simulation::simulateScan(d->truth.scene, d->truth.stops[k],
+                                                  d->truth.stops[k].first_scan + i, 1));
       d->stop_of_scan.push_back(k);
     }
   for (std::size_t i = 0; i < d->scans.size(); ++i)
@@ -103,7 +104,9 @@ ScanDetections pclBaseline(const pcl::PointCloud<pcl::PointXYZI>& scan) {
     setCentre(d, Circle2{coef.values[0], coef.values[1], coef.values[2]});
     d.free_status = FitStatus::ok;
     d.free_radius_m = coef.values[2];
-    for (auto i : inliers.indices) d.inliers.push_back(original[static_cast<std::size_t>(c.indices[static_cast<std::size_t>(i)])]);
+    for (auto i : inliers.indices)
+      d.inliers.push_back(
+          original[static_cast<std::size_t>(c.indices[static_cast<std::size_t>(i)])]);
     out.detections.push_back(std::move(d));
   }
   return out;
@@ -116,7 +119,8 @@ ScanDetections ours(const pcl::PointCloud<pcl::PointXYZI>& scan) {
 }
 
 /// Accuracy counters of one detector over all scans (per scan, before association).
-void score(benchmark::State& state, const Data& d, ScanDetections (*detector)(const pcl::PointCloud<pcl::PointXYZI>&)) {
+void score(benchmark::State& state, const Data& d,
+           ScanDetections (*detector)(const pcl::PointCloud<pcl::PointXYZI>&)) {
   std::vector<ScanDetections> all;
   for (const auto& s : d.scans) all.push_back(detector(*s.scan.cloud));
   const DetectionEvaluation ev = evaluateDetections(all, nullptr, d.scan_truth, d.truth);
@@ -136,7 +140,8 @@ void score(benchmark::State& state, const Data& d, ScanDetections (*detector)(co
   state.counters["range_rms_m"] = n > 0 ? std::sqrt(r2 / n) : 0.0;
 }
 
-void run(benchmark::State& state, const std::string& scene, ScanDetections (*detector)(const pcl::PointCloud<pcl::PointXYZI>&)) {
+void run(benchmark::State& state, const std::string& scene,
+         ScanDetections (*detector)(const pcl::PointCloud<pcl::PointXYZI>&)) {
   pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);
   const Data& d = data(scene);
   std::size_t k = 0;
@@ -160,8 +165,8 @@ void BM_Lidarcal_Sequence_Clutter(benchmark::State& state) {
   SequenceDetectionConfig cfg;
   cfg.detection.landmark_radius_m = kRadius;
   for (auto _ : state)
-    benchmark::DoNotOptimize(
-        detectSequence(d.scans.size(), [&](std::size_t i) { return d.scans[i].scan; }, d.stop_of_scan, cfg));
+    benchmark::DoNotOptimize(detectSequence(
+        d.scans.size(), [&](std::size_t i) { return d.scans[i].scan; }, d.stop_of_scan, cfg));
   state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations() * d.scans.size()));
 }
 

@@ -57,7 +57,11 @@ void BM_DiagnoseStaticRoom(benchmark::State& state) {
   scene.sensor.range.noise.sigma_e = 0.0015;
   scene.path.stops = 1;
   scene.path.scans_per_stop = 150;
-  scene.walls = {{-2.0, -3.0, 4.0, -3.0}, {4.0, -3.0, 4.0, 1.0}, {4.0, 1.0, 2.5, 3.5}, {2.5, 3.5, -2.0, 3.5}, {-2.0, 3.5, -2.0, -3.0}};
+  scene.walls = {{-2.0, -3.0, 4.0, -3.0},
+                 {4.0, -3.0, 4.0, 1.0},
+                 {4.0, 1.0, 2.5, 3.5},
+                 {2.5, 3.5, -2.0, 3.5},
+                 {-2.0, 3.5, -2.0, -3.0}};
   const auto stops = simulation::planStops(scene, 1);
   diagnosis::StaticScans data;
   data.scans = 150;
@@ -68,7 +72,8 @@ void BM_DiagnoseStaticRoom(benchmark::State& state) {
     for (const auto& p : *simulation::simulateScan(scene, stops[0], k, 1).scan.cloud)
       if (std::isfinite(p.x))
         data.readings.push_back({std::atan2(static_cast<double>(p.y), static_cast<double>(p.x)),
-                                 std::hypot(static_cast<double>(p.x), static_cast<double>(p.y)), static_cast<std::uint32_t>(k)});
+                                 std::hypot(static_cast<double>(p.x), static_cast<double>(p.y)),
+                                 static_cast<std::uint32_t>(k)});
   diagnosis::DiagnoseConfig c;
   for (auto _ : state) benchmark::DoNotOptimize(diagnosis::diagnoseStatic(data, c));
   state.counters["readings"] = static_cast<double>(data.readings.size());

@@ -54,10 +54,20 @@ void BM_LandmarkLevel(benchmark::State& state) { runBatch(state, Level::landmark
 void BM_ScanLevel(benchmark::State& state) { runBatch(state, Level::scan); }
 
 // {threads, joint, trials per cell}
-BENCHMARK(BM_LandmarkLevel)->Args({1, 0, 50})->Args({2, 0, 50})->Args({1, 1, 5})->Args({2, 1, 5})
-    ->Unit(benchmark::kSecond)->UseRealTime();
-BENCHMARK(BM_ScanLevel)->Args({1, 0, 3})->Args({2, 0, 3})->Args({1, 1, 3})->Args({2, 1, 3})
-    ->Unit(benchmark::kSecond)->UseRealTime();
+BENCHMARK(BM_LandmarkLevel)
+    ->Args({1, 0, 50})
+    ->Args({2, 0, 50})
+    ->Args({1, 1, 5})
+    ->Args({2, 1, 5})
+    ->Unit(benchmark::kSecond)
+    ->UseRealTime();
+BENCHMARK(BM_ScanLevel)
+    ->Args({1, 0, 3})
+    ->Args({2, 0, 3})
+    ->Args({1, 1, 3})
+    ->Args({2, 1, 3})
+    ->Unit(benchmark::kSecond)
+    ->UseRealTime();
 
 /// The joint refinement of one landmark-level draw (L = 5, 20 stops, 10 scans per stop) on every
 /// reading, range(0) = 0, or on the per-stop beam averages the study feeds it, range(0) = 1.
@@ -67,7 +77,8 @@ void BM_JointInput(benchmark::State& state) {
   const auto layout = trialLayout(config, 1, 0, 5);
   PathSpec path = config.path;
   path.sigma_s_m = cell.sigma_s_m;
-  path.sigma_psi_rad = cell.sigma_theta_rad;  // the study's default angle noise: the heading per stop
+  // the study's default angle noise: the heading per stop
+  path.sigma_psi_rad = cell.sigma_theta_rad;
   const Draw d = drawLandmarkLevel(layout, path, config.sensor, 0.0, 1, false);
   const LandmarkObservations input = state.range(0) ? averageScans(d.obs) : d.obs;
   calibration::CalibrationConfig cc = estimatorConfig(config, cell);

@@ -10,8 +10,8 @@
 
 #include <benchmark/benchmark.h>
 
-#include "noise/problem.hpp"
 #include "io/noise_json.hpp"
+#include "noise/problem.hpp"
 #include "pipeline/noise_run.hpp"
 #include "simulation/observation_sim.hpp"
 
@@ -26,8 +26,10 @@ struct Data {
 
 Data load(const char* scene, const char* init) {
   const std::string root = LIDARCAL_SOURCE_DIR;
-  const auto sim = simulation::simulateObservations(io::readObservationScene(root + "/data/scenes/" + scene), 1);
-  return Data{noise::makeNoiseProblem(sim.observations, sim.odometry), io::readNoiseSetting(root + "/data/noise/" + init)};
+  const auto sim =
+      simulation::simulateObservations(io::readObservationScene(root + "/data/scenes/" + scene), 1);
+  return Data{noise::makeNoiseProblem(sim.observations, sim.odometry),
+              io::readNoiseSetting(root + "/data/noise/" + init)};
 }
 
 void run(benchmark::State& state, const Data& d, pipeline::NoiseMethod method, bool literal = false,
@@ -58,13 +60,19 @@ const Data& exp3() {
   return d;
 }
 
-void BM_Exp2_KlHill_Literal(benchmark::State& s) { run(s, exp2(), pipeline::NoiseMethod::kl_hill, true); }
+void BM_Exp2_KlHill_Literal(benchmark::State& s) {
+  run(s, exp2(), pipeline::NoiseMethod::kl_hill, true);
+}
 void BM_Exp2_KlHill(benchmark::State& s) { run(s, exp2(), pipeline::NoiseMethod::kl_hill); }
 void BM_Exp2_Ml(benchmark::State& s) { run(s, exp2(), pipeline::NoiseMethod::ml); }
-void BM_Exp2_Ml_ProcessGiven(benchmark::State& s) { run(s, exp2(), pipeline::NoiseMethod::ml, false, true); }
+void BM_Exp2_Ml_ProcessGiven(benchmark::State& s) {
+  run(s, exp2(), pipeline::NoiseMethod::ml, false, true);
+}
 void BM_Exp3_KlHill(benchmark::State& s) { run(s, exp3(), pipeline::NoiseMethod::kl_hill); }
 void BM_Exp3_Ml(benchmark::State& s) { run(s, exp3(), pipeline::NoiseMethod::ml); }
-void BM_Exp3_Ml_ProcessGiven(benchmark::State& s) { run(s, exp3(), pipeline::NoiseMethod::ml, false, true); }
+void BM_Exp3_Ml_ProcessGiven(benchmark::State& s) {
+  run(s, exp3(), pipeline::NoiseMethod::ml, false, true);
+}
 
 BENCHMARK(BM_Exp2_KlHill_Literal)->Unit(benchmark::kSecond)->Iterations(1);
 BENCHMARK(BM_Exp2_KlHill)->Unit(benchmark::kSecond)->Iterations(1);

@@ -6,10 +6,10 @@
 // callback does (the checks of a malformed scan, the copy in and out, the same correction). The
 // transports (roscpp, DDS) are not included in either. Bias polynomials of
 // order 2 (closed-form LS) and 3 (polynomial roots), LS and ML inversion; readings spread over
-// 0.3-10 m with a fitted range of 0.5-8 m (some readings beyond it, continued as by default), quantised to 1 mm as
-// the sensors report them. `Steady`: the node after its first scans (the MemoCorrector has seen
-// the readings); `Cold`: a fresh corrector per scan (the first scans after start, every
-// reading a root search).
+// 0.3-10 m with a fitted range of 0.5-8 m (some readings beyond it, continued as by default),
+// quantised to 1 mm as the sensors report them. `Steady`: the node after its first scans (the
+// MemoCorrector has seen the readings); `Cold`: a fresh corrector per scan (the first scans after
+// start, every reading a root search).
 //
 //   build/bench/bench_ros_node        (Time = per scan)
 // Measured (Release, 2 shared cores, time per scan, medians of 3): steady 10 us / 360 beams and
@@ -34,7 +34,8 @@ using namespace lidarcal;
 
 CalibrationModel model(int order) {
   CalibrationModel m;
-  m.model.bias.alpha = order == 2 ? std::vector<double>{0.03, 0.98, 0.004} : std::vector<double>{0.03, 0.98, 0.004, -0.0001};
+  m.model.bias.alpha = order == 2 ? std::vector<double>{0.03, 0.98, 0.004}
+                                  : std::vector<double>{0.03, 0.98, 0.004, -0.0001};
   m.model.noise.kind = NoiseKind::squared;
   m.model.noise.sigma_e = 0.002;
   m.model.range_min_m = 0.15;
@@ -43,10 +44,12 @@ CalibrationModel model(int order) {
   return m;
 }
 
-void correctScan(benchmark::State& state, int order, calibration::InversionMethod method, bool cold) {
+void correctScan(benchmark::State& state, int order, calibration::InversionMethod method,
+                 bool cold) {
   const auto beams = static_cast<std::size_t>(state.range(0));
   const CalibrationModel m = model(order);
-  const calibration::ReadingCorrector correct = calibration::readingCorrector(m, method, calibration::kDefaultOutside);
+  const calibration::ReadingCorrector correct =
+      calibration::readingCorrector(m, method, calibration::kDefaultOutside);
   std::mt19937 rng(1);
   std::uniform_int_distribution<int> reading_mm(300, 10000);
   // 200 scans of a sensor whose readings are whole millimetres.
@@ -61,7 +64,8 @@ void correctScan(benchmark::State& state, int order, calibration::InversionMetho
   }
   std::size_t k = 0;
   for (auto _ : state) {
-    std::vector<float> ranges = received[k++ % received.size()];  // the node copies the received message
+    // the node copies the received message
+    std::vector<float> ranges = received[k++ % received.size()];
     if (cold) {
       pipeline::MemoCorrector fresh(correct);
       pipeline::correctLaserRanges(ranges, 0.15, 12.0, fresh, stats);
@@ -77,7 +81,8 @@ void correctScan(benchmark::State& state, int order, calibration::InversionMetho
 void ros2Scan(benchmark::State& state, int order, calibration::InversionMethod method, bool cold) {
   const auto beams = static_cast<std::size_t>(state.range(0));
   const CalibrationModel m = model(order);
-  const calibration::ReadingCorrector correct = calibration::readingCorrector(m, method, calibration::kDefaultOutside);
+  const calibration::ReadingCorrector correct =
+      calibration::readingCorrector(m, method, calibration::kDefaultOutside);
   ros2::LiveSettings settings;
   settings.model_file = "model.json";
   settings.topic = "/scan";
@@ -119,18 +124,42 @@ void ros2Scan(benchmark::State& state, int order, calibration::InversionMethod m
   }
 }
 
-void SteadyLsOrder2(benchmark::State& s) { correctScan(s, 2, calibration::InversionMethod::ls, false); }
-void SteadyLsOrder3(benchmark::State& s) { correctScan(s, 3, calibration::InversionMethod::ls, false); }
-void SteadyMlOrder3(benchmark::State& s) { correctScan(s, 3, calibration::InversionMethod::ml, false); }
-void ColdLsOrder2(benchmark::State& s) { correctScan(s, 2, calibration::InversionMethod::ls, true); }
-void ColdLsOrder3(benchmark::State& s) { correctScan(s, 3, calibration::InversionMethod::ls, true); }
-void ColdMlOrder3(benchmark::State& s) { correctScan(s, 3, calibration::InversionMethod::ml, true); }
-void Ros2SteadyLsOrder2(benchmark::State& s) { ros2Scan(s, 2, calibration::InversionMethod::ls, false); }
-void Ros2SteadyLsOrder3(benchmark::State& s) { ros2Scan(s, 3, calibration::InversionMethod::ls, false); }
-void Ros2SteadyMlOrder3(benchmark::State& s) { ros2Scan(s, 3, calibration::InversionMethod::ml, false); }
-void Ros2ColdLsOrder2(benchmark::State& s) { ros2Scan(s, 2, calibration::InversionMethod::ls, true); }
-void Ros2ColdLsOrder3(benchmark::State& s) { ros2Scan(s, 3, calibration::InversionMethod::ls, true); }
-void Ros2ColdMlOrder3(benchmark::State& s) { ros2Scan(s, 3, calibration::InversionMethod::ml, true); }
+void SteadyLsOrder2(benchmark::State& s) {
+  correctScan(s, 2, calibration::InversionMethod::ls, false);
+}
+void SteadyLsOrder3(benchmark::State& s) {
+  correctScan(s, 3, calibration::InversionMethod::ls, false);
+}
+void SteadyMlOrder3(benchmark::State& s) {
+  correctScan(s, 3, calibration::InversionMethod::ml, false);
+}
+void ColdLsOrder2(benchmark::State& s) {
+  correctScan(s, 2, calibration::InversionMethod::ls, true);
+}
+void ColdLsOrder3(benchmark::State& s) {
+  correctScan(s, 3, calibration::InversionMethod::ls, true);
+}
+void ColdMlOrder3(benchmark::State& s) {
+  correctScan(s, 3, calibration::InversionMethod::ml, true);
+}
+void Ros2SteadyLsOrder2(benchmark::State& s) {
+  ros2Scan(s, 2, calibration::InversionMethod::ls, false);
+}
+void Ros2SteadyLsOrder3(benchmark::State& s) {
+  ros2Scan(s, 3, calibration::InversionMethod::ls, false);
+}
+void Ros2SteadyMlOrder3(benchmark::State& s) {
+  ros2Scan(s, 3, calibration::InversionMethod::ml, false);
+}
+void Ros2ColdLsOrder2(benchmark::State& s) {
+  ros2Scan(s, 2, calibration::InversionMethod::ls, true);
+}
+void Ros2ColdLsOrder3(benchmark::State& s) {
+  ros2Scan(s, 3, calibration::InversionMethod::ls, true);
+}
+void Ros2ColdMlOrder3(benchmark::State& s) {
+  ros2Scan(s, 3, calibration::InversionMethod::ml, true);
+}
 
 }  // namespace
 

@@ -43,8 +43,10 @@ inline Measure runChild(const std::string& exe, const std::vector<std::string>& 
   Measure m;
   m.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   m.max_rss_kib = usage.ru_maxrss;  // kilobytes on Linux
-  m.user_s = static_cast<double>(usage.ru_utime.tv_sec) + 1e-6 * static_cast<double>(usage.ru_utime.tv_usec);
-  m.system_s = static_cast<double>(usage.ru_stime.tv_sec) + 1e-6 * static_cast<double>(usage.ru_stime.tv_usec);
+  m.user_s = static_cast<double>(usage.ru_utime.tv_sec) +
+             1e-6 * static_cast<double>(usage.ru_utime.tv_usec);
+  m.system_s = static_cast<double>(usage.ru_stime.tv_sec) +
+               1e-6 * static_cast<double>(usage.ru_stime.tv_usec);
   m.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return m;
 }

@@ -14,7 +14,8 @@
 // drawn per seed, and the truth is the polynomial plus the ripple.
 //
 //   build/bench/coverage --scene data/scenes/paper_field.json --seeds 100 [--first-seed 1001]
-//       [--scans-per-stop 10] [--work /tmp/coverage] [--joint-args "--max-order 2"] [--taped-stops 5]
+//       [--scans-per-stop 10] [--work /tmp/coverage] [--joint-args "--max-order 2"] [--taped-stops
+//       5]
 
 #include <algorithm>
 #include <cmath>
@@ -53,15 +54,18 @@ nlohmann::json readJson(const fs::path& p) {
 /// every stop, with its bearing (poles within 4 m, none in front of another); each distance
 /// with a tape error drawn from N(0, tape_sigma_m^2) (0: exact).
 /// Only the first `stops` stops' distances when stops >= 0.
-void tapeReference(const fs::path& truth, const fs::path& out, double tape_sigma_m, std::uint64_t seed, int stops = -1) {
+void tapeReference(const fs::path& truth, const fs::path& out, double tape_sigma_m,
+                   std::uint64_t seed, int stops = -1) {
   lidarcal::TapeConfig config;
   config.sigma_m = tape_sigma_m;
   config.seed = seed;
   lidarcal::Reference ref = lidarcal::tapeReference(lidarcal::io::readTruth(truth), config);
   auto& d = ref.distances;
   if (stops >= 0)
-    d.erase(std::remove_if(d.begin(), d.end(), [&](const auto& e) { return e.stop >= static_cast<std::size_t>(stops); }),
-            d.end());
+    d.erase(
+        std::remove_if(d.begin(), d.end(),
+                       [&](const auto& e) { return e.stop >= static_cast<std::size_t>(stops); }),
+        d.end());
   lidarcal::io::writeReference(out, ref);
 }
 
@@ -92,7 +96,8 @@ std::vector<double> tableFit(const nlohmann::json& model, int order) {
 void check(const fs::path& file, const std::vector<double>& truth, const lidarcal::RangeEffects& fx,
            const std::vector<double>& at, Tally& t, bool noise_law = false) {
   const lidarcal::CalibrationModel m = lidarcal::io::readModel(file);
-  const std::vector<double> law = noise_law ? tableFit(readJson(file), m.model.bias.order()) : std::vector<double>{};
+  const std::vector<double> law =
+      noise_law ? tableFit(readJson(file), m.model.bias.order()) : std::vector<double>{};
   const std::vector<double>& a = m.model.bias.alpha;
   const std::vector<double>& c = m.alpha_covariance;
   const std::size_t n = a.size();
@@ -113,7 +118,8 @@ void check(const fs::path& file, const std::vector<double>& truth, const lidarca
     t.sum_error2 += error * error;
     if (!law.empty()) t.sum_law_error2 += std::pow(poly(law, at[k]) - truth_k, 2), ++t.n_law;
     t.covered_f[k] += std::abs(z) <= 1.96;
-    t.covered_predictive += std::abs(error) <= t95 * lidarcal::calibration::predictiveStandardError(se, m.discrepancy);
+    t.covered_predictive +=
+        std::abs(error) <= t95 * lidarcal::calibration::predictiveStandardError(se, m.discrepancy);
     ++t.n_f[k];
     t.sum_z2 += z * z;
     ++t.n_z;
@@ -129,16 +135,27 @@ void check(const fs::path& file, const std::vector<double>& truth, const lidarca
 void print(const char* name, const Tally& t, const std::vector<double>& at) {
   std::printf("| %s | %d (%d without) |", name, t.fits, t.failed);
   for (std::size_t k = 0; k < at.size(); ++k)
-    if (t.n_f[k]) std::printf(" %d/%d = %.0f %% |", t.covered_f[k], t.n_f[k], 100.0 * t.covered_f[k] / t.n_f[k]);
-    else std::printf(" - |");
-  if (t.n_alpha) std::printf(" %d/%d = %.0f %% |", t.covered_alpha, t.n_alpha, 100.0 * t.covered_alpha / t.n_alpha);
-  else std::printf(" - |");
+    if (t.n_f[k])
+      std::printf(" %d/%d = %.0f %% |", t.covered_f[k], t.n_f[k],
+                  100.0 * t.covered_f[k] / t.n_f[k]);
+    else
+      std::printf(" - |");
+  if (t.n_alpha)
+    std::printf(" %d/%d = %.0f %% |", t.covered_alpha, t.n_alpha,
+                100.0 * t.covered_alpha / t.n_alpha);
+  else
+    std::printf(" - |");
   std::printf(" %.2f |", t.n_z ? std::sqrt(t.sum_z2 / t.n_z) : std::nan(""));
-  if (t.n_z) std::printf(" %d/%d = %.0f %% |", t.covered_predictive, t.n_z, 100.0 * t.covered_predictive / t.n_z);
-  else std::printf(" - |");
+  if (t.n_z)
+    std::printf(" %d/%d = %.0f %% |", t.covered_predictive, t.n_z,
+                100.0 * t.covered_predictive / t.n_z);
+  else
+    std::printf(" - |");
   std::printf(" %.2f |", t.n_z ? 1000.0 * std::sqrt(t.sum_error2 / t.n_z) : std::nan(""));
-  if (t.n_law) std::printf(" %.2f |\n", 1000.0 * std::sqrt(t.sum_law_error2 / t.n_law));
-  else std::printf(" - |\n");
+  if (t.n_law)
+    std::printf(" %.2f |\n", 1000.0 * std::sqrt(t.sum_law_error2 / t.n_law));
+  else
+    std::printf(" - |\n");
 }
 
 }  // namespace
@@ -150,15 +167,21 @@ int main(int argc, char** argv) {
   double tape_sigma = 0.002;
   app.add_option("--scene", scene)->capture_default_str();
   app.add_option("--seeds", seeds)->capture_default_str();
-  app.add_option("--first-seed", first, "Seeds first .. first + seeds - 1 (disjoint from those the tests use)")->capture_default_str();
+  app.add_option("--first-seed", first,
+                 "Seeds first .. first + seeds - 1 (disjoint from those the tests use)")
+      ->capture_default_str();
   app.add_option("--scans-per-stop", scans)->capture_default_str();
   app.add_option("--work", work)->capture_default_str();
-  app.add_option("--tape-sigma", tape_sigma, "Standard deviation of the simulated tape error, metres")->capture_default_str();
+  app.add_option("--tape-sigma", tape_sigma,
+                 "Standard deviation of the simulated tape error, metres")
+      ->capture_default_str();
   std::string joint_args;
-  app.add_option("--joint-args", joint_args, "More options for the joint refinement's calibrate (e.g. \"--max-order 2\")");
+  app.add_option("--joint-args", joint_args,
+                 "More options for the joint refinement's calibrate (e.g. \"--max-order 2\")");
   int taped_stops = 5;
   app.add_option("--taped-stops", taped_stops,
-                 "Stops whose tape distances join the self-calibration (--reference-fit combined) in the last row")
+                 "Stops whose tape distances join the self-calibration (--reference-fit combined) "
+                 "in the last row")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
   CLI11_PARSE(app, argc, argv);
@@ -176,43 +199,49 @@ int main(int argc, char** argv) {
     std::string scene_file = scene;
     if (drawn.sensor.effects.ripple_amplitude_m != 0.0) {
       std::mt19937_64 rng(static_cast<std::uint64_t>(seed) ^ 0x9e3779b97f4a7c15ULL);
-      drawn.sensor.effects.ripple_phase_rad = std::uniform_real_distribution<double>(0.0, 6.283185307179586)(rng);
+      drawn.sensor.effects.ripple_phase_rad =
+          std::uniform_real_distribution<double>(0.0, 6.283185307179586)(rng);
       scene_file = (fs::path(work) / ("scene-" + std::to_string(seed) + ".json")).string();
       std::ofstream(scene_file) << lidarcal::io::sceneToJson(drawn).dump(1);
     }
     const lidarcal::RangeEffects& fx = drawn.sensor.effects;
-    if (!sh(exe + " simulate -q --scene " + scene_file + " --out " + dir.string() + " --seed " + std::to_string(seed) +
-            " --scans-per-stop " + std::to_string(scans) + " --overwrite")) {
+    if (!sh(exe + " simulate -q --scene " + scene_file + " --out " + dir.string() + " --seed " +
+            std::to_string(seed) + " --scans-per-stop " + std::to_string(scans) + " --overwrite")) {
       std::fprintf(stderr, "simulate failed for seed %d\n", seed);
       return 1;
     }
     const auto truth_json = readJson(dir / "truth.json");
     const std::vector<double> truth = truth_json["model"]["bias_alpha"];
-    if (sh(exe + " calibrate -q " + joint_args + " " + (dir / "scans").string() + " -o " + (dir / "joint.json").string() +
-           " --overwrite"))
+    if (sh(exe + " calibrate -q " + joint_args + " " + (dir / "scans").string() + " -o " +
+           (dir / "joint.json").string() + " --overwrite"))
       check(dir / "joint.json", truth, fx, at, joint);
     else
       ++joint.failed;
-    if (sh(exe + " calibrate -q --method closed-form " + (dir / "scans").string() + " -o " + (dir / "cf.json").string() +
-           " --overwrite"))
+    if (sh(exe + " calibrate -q --method closed-form " + (dir / "scans").string() + " -o " +
+           (dir / "cf.json").string() + " --overwrite"))
       check(dir / "cf.json", truth, fx, at, closed);
     else
       ++closed.failed;
     tapeReference(dir / "truth.json", dir / "ref.json", 0.0, 0);
-    if (sh(exe + " calibrate -q " + (dir / "scans").string() + " --reference " + (dir / "ref.json").string() + " -o " +
-           (dir / "ref-model.json").string() + " --overwrite"))
+    if (sh(exe + " calibrate -q " + (dir / "scans").string() + " --reference " +
+           (dir / "ref.json").string() + " -o " + (dir / "ref-model.json").string() +
+           " --overwrite"))
       check(dir / "ref-model.json", truth, fx, at, reference, true);
     else
       ++reference.failed;
-    tapeReference(dir / "truth.json", dir / "tape.json", tape_sigma, static_cast<std::uint64_t>(seed));
-    if (sh(exe + " calibrate -q " + (dir / "scans").string() + " --reference " + (dir / "tape.json").string() + " -o " +
-           (dir / "tape-model.json").string() + " --overwrite"))
+    tapeReference(dir / "truth.json", dir / "tape.json", tape_sigma,
+                  static_cast<std::uint64_t>(seed));
+    if (sh(exe + " calibrate -q " + (dir / "scans").string() + " --reference " +
+           (dir / "tape.json").string() + " -o " + (dir / "tape-model.json").string() +
+           " --overwrite"))
       check(dir / "tape-model.json", truth, fx, at, taped, true);
     else
       ++taped.failed;
-    tapeReference(dir / "truth.json", dir / "taped-stops.json", tape_sigma, static_cast<std::uint64_t>(seed), taped_stops);
-    if (sh(exe + " calibrate -q " + (dir / "scans").string() + " --reference " + (dir / "taped-stops.json").string() +
-           " --reference-fit combined -o " + (dir / "combined.json").string() + " --overwrite"))
+    tapeReference(dir / "truth.json", dir / "taped-stops.json", tape_sigma,
+                  static_cast<std::uint64_t>(seed), taped_stops);
+    if (sh(exe + " calibrate -q " + (dir / "scans").string() + " --reference " +
+           (dir / "taped-stops.json").string() + " --reference-fit combined -o " +
+           (dir / "combined.json").string() + " --overwrite"))
       check(dir / "combined.json", truth, fx, at, combined);
     else
       ++combined.failed;
@@ -220,22 +249,27 @@ int main(int argc, char** argv) {
     fs::remove_all(dir / "scans");
   }
   std::fprintf(stderr, "\n");
-  std::printf("Coverage of the 95 %% intervals, %s, seeds %d-%d, %d scans per stop\n\n", scene.c_str(), first,
-              first + seeds - 1, scans);
+  std::printf("Coverage of the 95 %% intervals, %s, seeds %d-%d, %d scans per stop\n\n",
+              scene.c_str(), first, first + seeds - 1, scans);
   std::printf("| method | fits (without SE) |");
   for (double d : at) std::printf(" f(%.0f m) |", d);
-  std::printf(" alpha_i (true order chosen) | RMS of z = error / SE | predictive 95 %%, f(d) at all three |"
-              " RMS error of f(d) at all three [mm] | the same, noise-law fit of that order [mm] |\n|---|---|");
+  std::printf(
+      " alpha_i (true order chosen) | RMS of z = error / SE | predictive 95 %%, f(d) at all three |"
+      " RMS error of f(d) at all three [mm] | the same, noise-law fit of that order [mm] "
+      "|\n|---|---|");
   for (std::size_t k = 0; k < at.size(); ++k) std::printf("---|");
   std::printf("---|---|---|---|---|\n");
   print("joint refinement (no ground truth)", joint, at);
   print("closed form of Alhashimi et al. 2021, jackknife SE (no ground truth)", closed, at);
   print("against exact distances (--reference)", reference, at);
   char name[96];
-  std::snprintf(name, sizeof name, "against tape distances, tape error %.1f mm (--reference)", 1000.0 * tape_sigma);
+  std::snprintf(name, sizeof name, "against tape distances, tape error %.1f mm (--reference)",
+                1000.0 * tape_sigma);
   print(name, taped, at);
-  std::snprintf(name, sizeof name, "joint refinement with the first %d stops' tape distances (--reference-fit combined)",
-                taped_stops);
+  std::snprintf(
+      name, sizeof name,
+      "joint refinement with the first %d stops' tape distances (--reference-fit combined)",
+      taped_stops);
   print(name, combined, at);
   return 0;
 }

@@ -3,17 +3,19 @@
 // over several seeds of one or more scenes, in memory (no files written). Prints the Markdown
 // tables of docs/results/detection.md.
 //
-//   build/bench/eval_detection --seeds 10 data/scenes/paper_field.json data/scenes/field_clutter.json
-//   build/bench/eval_detection --estimate-radius --seeds 10 data/scenes/paper_field.json
-//   build/bench/eval_detection --misses data/scenes/field_noisy.json   (lists what was missed and why)
+//   build/bench/eval_detection --seeds 10 data/scenes/paper_field.json
+//   data/scenes/field_clutter.json build/bench/eval_detection --estimate-radius --seeds 10
+//   data/scenes/paper_field.json
+//   build/bench/eval_detection --misses data/scenes/field_noisy.json   (lists what was missed and
+//   why)
 
 #include <cmath>
 #include <cstdio>
 #include <string>
 #include <vector>
 
-#include <CLI/CLI.hpp>
 #include <pcl/console/print.h>
+#include <CLI/CLI.hpp>
 
 #include "common/errors.hpp"
 #include "detectors/evaluation.hpp"
@@ -36,10 +38,12 @@ struct Options {
 
 /// Sums over seeds of one scene.
 struct Totals {
-  std::size_t runs = 0, scans = 0, detections = 0, tp = 0, fp = 0, fp_clutter = 0, fp_walls = 0, observable = 0,
-              detected = 0, with_id = 0, wrong_id = 0, split_ids = 0, runs_all_found = 0;
+  std::size_t runs = 0, scans = 0, detections = 0, tp = 0, fp = 0, fp_clutter = 0, fp_walls = 0,
+              observable = 0, detected = 0, with_id = 0, wrong_id = 0, split_ids = 0,
+              runs_all_found = 0;
   std::size_t hidden = 0, hidden_detected = 0;
-  std::size_t raw_detections = 0, raw_tp = 0, raw_detected = 0, raw_fp_clutter = 0, raw_fp_walls = 0;
+  std::size_t raw_detections = 0, raw_tp = 0, raw_detected = 0, raw_fp_clutter = 0,
+              raw_fp_walls = 0;
   std::size_t clutter_beams = 0, object_beams = 0;
   struct Bin {
     double lo = 0, hi = 0;
@@ -59,7 +63,8 @@ void accumulate(Totals& t, const DetectionEvaluation& ev, const DetectionEvaluat
   t.observable += ev.observable, t.detected += ev.detected;
   t.hidden += ev.partly_hidden, t.hidden_detected += ev.partly_hidden_detected;
   t.with_id += ev.with_id, t.wrong_id += ev.wrong_id, t.split_ids += ev.split_ids;
-  t.raw_detections += raw.detections, t.raw_tp += raw.true_positives, t.raw_detected += raw.detected;
+  t.raw_detections += raw.detections, t.raw_tp += raw.true_positives,
+      t.raw_detected += raw.detected;
   t.raw_fp_clutter += raw.false_on_clutter, t.raw_fp_walls += raw.false_on_walls;
   if (t.bins.empty())
     for (const auto& b : ev.bins) t.bins.push_back(Totals::Bin{b.lo_m, b.hi_m});
@@ -67,7 +72,8 @@ void accumulate(Totals& t, const DetectionEvaluation& ev, const DetectionEvaluat
     const auto& b = ev.bins[k];
     auto& s = t.bins[k];
     const double n = double(b.detections), nf = double(b.free_radii);
-    s.observable += b.observable, s.detected += b.detected, s.n += b.detections, s.n_free += b.free_radii;
+    s.observable += b.observable, s.detected += b.detected, s.n += b.detections,
+        s.n_free += b.free_radii;
     s.centre2 += n * b.centre_rms_m * b.centre_rms_m;
     s.bearing2 += n * b.bearing_rms_rad * b.bearing_rms_rad;
     s.range += n * b.range_bias_m, s.range2 += n * b.range_rms_m * b.range_rms_m;
@@ -76,7 +82,8 @@ void accumulate(Totals& t, const DetectionEvaluation& ev, const DetectionEvaluat
   }
 }
 
-void printMisses(const SequenceDetections& r, const std::vector<ScanTruth>& truth, std::size_t landmarks, int min_beams) {
+void printMisses(const SequenceDetections& r, const std::vector<ScanTruth>& truth,
+                 std::size_t landmarks, int min_beams) {
   for (std::size_t s = 0; s < r.scans.size(); ++s) {
     for (std::size_t l = 1; l <= landmarks; ++l) {
       std::vector<int> beams;
@@ -93,24 +100,30 @@ void printMisses(const SequenceDetections& r, const std::vector<ScanTruth>& trut
       std::string why = "no cluster";
       for (const auto& c : r.scans[s].clusters) {
         const int b = beams[beams.size() / 2];
-        const bool inside = c.first_index <= c.last_index ? (b >= c.first_index && b <= c.last_index)
-                                                          : (b >= c.first_index || b <= c.last_index);
+        const bool inside = c.first_index <= c.last_index
+                                ? (b >= c.first_index && b <= c.last_index)
+                                : (b >= c.first_index || b <= c.last_index);
         if (inside)
-          why = std::string(toString(c.kind)) + " (" + std::to_string(c.points) + " points): " +
-                (c.reason.empty() ? "circle not given an id" : c.reason);
+          why = std::string(toString(c.kind)) + " (" + std::to_string(c.points) +
+                " points): " + (c.reason.empty() ? "circle not given an id" : c.reason);
       }
-      std::printf("  miss: scan %zu landmark %zu (%zu beams): %s\n", s, l, beams.size(), why.c_str());
+      std::printf("  miss: scan %zu landmark %zu (%zu beams): %s\n", s, l, beams.size(),
+                  why.c_str());
     }
     for (std::size_t j = 0; j < r.scans[s].detections.size(); ++j) {
       const Detection& d = r.scans[s].detections[j];
       std::size_t on_landmark = 0;
       for (auto i : d.inliers)
-        if (truth[s].beams[static_cast<std::size_t>(i)].target == io::TargetKind::landmark) ++on_landmark;
+        if (truth[s].beams[static_cast<std::size_t>(i)].target == io::TargetKind::landmark)
+          ++on_landmark;
       if (2 * on_landmark > d.inliers.size()) continue;
       const auto& b = truth[s].beams[static_cast<std::size_t>(d.inliers[d.inliers.size() / 2])];
-      std::printf("  false: scan %zu id %d on %s %d: %zu/%zu points, range %.2f bearing %.1f deg, rms %.4f, free %s r=%.3f\n", s,
-                  r.association.ids[s][j], io::toString(b.target), b.target_id, d.inliers.size(), d.cluster_points,
-                  d.range_m, d.bearing_rad * 180 / 3.14159265, d.rms_m, toString(d.free_status), d.free_radius_m);
+      std::printf(
+          "  false: scan %zu id %d on %s %d: %zu/%zu points, range %.2f bearing %.1f deg, rms "
+          "%.4f, free %s r=%.3f\n",
+          s, r.association.ids[s][j], io::toString(b.target), b.target_id, d.inliers.size(),
+          d.cluster_points, d.range_m, d.bearing_rad * 180 / 3.14159265, d.rms_m,
+          toString(d.free_status), d.free_radius_m);
     }
   }
 }
@@ -128,12 +141,14 @@ void runScene(const std::string& file, const Options& o) {
     std::vector<std::size_t> stop_of_scan;
     for (std::size_t s = 0; s < truth.stops.size(); ++s)
       for (std::size_t i = 0; i < truth.stops[s].scans; ++i) {
-        sims.push_back(simulation::simulateScan(scene, truth.stops[s], truth.stops[s].first_scan + i, seed));
+        sims.push_back(
+            simulation::simulateScan(scene, truth.stops[s], truth.stops[s].first_scan + i, seed));
         stop_of_scan.push_back(s);
       }
     SequenceDetectionConfig cfg;
     bool common = !scene.landmarks.empty();
-    for (const auto& l : scene.landmarks) common = common && l.radius_m == scene.landmarks.front().radius_m;
+    for (const auto& l : scene.landmarks)
+      common = common && l.radius_m == scene.landmarks.front().radius_m;
     if (scene.publish_landmark_radius && common && !o.estimate_radius)
       cfg.detection.landmark_radius_m = scene.landmarks.front().radius_m;
     const SequenceDetections r = detectSequence(
@@ -160,57 +175,76 @@ void runScene(const std::string& file, const Options& o) {
     for (std::size_t id = 1; id <= ev.truth_of_id.size(); ++id) {
       const int l = ev.truth_of_id[id - 1];
       if (l > 0 && r.association.landmarks[id - 1].radius_estimated) {
-        t.radius_abs_error_sum += std::abs(r.association.landmarks[id - 1].radius_m - scene.landmarks[std::size_t(l - 1)].radius_m);
+        t.radius_abs_error_sum += std::abs(r.association.landmarks[id - 1].radius_m -
+                                           scene.landmarks[std::size_t(l - 1)].radius_m);
         ++t.radius_estimates;
       }
     }
     if (o.misses) {
-      std::printf("seed %llu: %zu ids, precision %.4f recall %.4f purity %.4f\n", static_cast<unsigned long long>(seed),
-                  ev.ids, ev.precision, ev.recall, ev.purity);
+      std::printf("seed %llu: %zu ids, precision %.4f recall %.4f purity %.4f\n",
+                  static_cast<unsigned long long>(seed), ev.ids, ev.precision, ev.recall,
+                  ev.purity);
       printMisses(r, st, scene.landmarks.size(), ecfg.min_beams);
     }
   }
   auto ratio = [](std::size_t a, std::size_t b) { return b ? double(a) / double(b) : 1.0; };
   std::printf("\n### %s\n\n", file.c_str());
-  std::printf("%s; %zu landmarks, %zu clutter cylinders, %zu wall segments; %d seeds x %zu scans; radius %s; "
-              "clutter returns: %.1f%% of the returns on round objects\n\n",
-              scene.name.c_str(), scene.landmarks.size(), scene.clutter.size(), scene.walls.size(), o.seeds,
-              t.scans / std::max<std::size_t>(t.runs, 1),
-              (scene.publish_landmark_radius && !o.estimate_radius) ? "known (sequence.json)" : "estimated",
-              100.0 * ratio(t.clutter_beams, t.object_beams));
-  std::printf("| stage | detections | precision | recall (observable: %zu) | false on clutter | false on walls | purity | wrong ids | split ids | runs with every landmark one id |\n",
-              t.observable);
+  std::printf(
+      "%s; %zu landmarks, %zu clutter cylinders, %zu wall segments; %d seeds x %zu scans; radius "
+      "%s; "
+      "clutter returns: %.1f%% of the returns on round objects\n\n",
+      scene.name.c_str(), scene.landmarks.size(), scene.clutter.size(), scene.walls.size(), o.seeds,
+      t.scans / std::max<std::size_t>(t.runs, 1),
+      (scene.publish_landmark_radius && !o.estimate_radius) ? "known (sequence.json)" : "estimated",
+      100.0 * ratio(t.clutter_beams, t.object_beams));
+  std::printf(
+      "| stage | detections | precision | recall (observable: %zu) | false on clutter | false on "
+      "walls | purity | wrong ids | split ids | runs with every landmark one id |\n",
+      t.observable);
   std::printf("|---|---|---|---|---|---|---|---|---|---|\n");
-  std::printf("| per scan (before association) | %zu | %.4f | %.4f | %zu | %zu | | | | |\n", t.raw_detections,
-              ratio(t.raw_tp, t.raw_detections), ratio(t.raw_detected, t.observable), t.raw_fp_clutter, t.raw_fp_walls);
-  std::printf("| labelled (after association) | %zu | %.4f | %.4f | %zu | %zu | %.4f | %zu | %zu | %zu / %zu |\n",
-              t.detections, ratio(t.tp, t.detections), ratio(t.detected, t.observable), t.fp_clutter, t.fp_walls,
-              1.0 - ratio(t.wrong_id, t.with_id), t.wrong_id, t.split_ids, t.runs_all_found, t.runs);
-  std::printf("\nPartly hidden observations (excluded from recall): %zu, of which detected %zu.\n", t.hidden,
-              t.hidden_detected);
+  std::printf("| per scan (before association) | %zu | %.4f | %.4f | %zu | %zu | | | | |\n",
+              t.raw_detections, ratio(t.raw_tp, t.raw_detections),
+              ratio(t.raw_detected, t.observable), t.raw_fp_clutter, t.raw_fp_walls);
+  std::printf(
+      "| labelled (after association) | %zu | %.4f | %.4f | %zu | %zu | %.4f | %zu | %zu | %zu / "
+      "%zu |\n",
+      t.detections, ratio(t.tp, t.detections), ratio(t.detected, t.observable), t.fp_clutter,
+      t.fp_walls, 1.0 - ratio(t.wrong_id, t.with_id), t.wrong_id, t.split_ids, t.runs_all_found,
+      t.runs);
+  std::printf("\nPartly hidden observations (excluded from recall): %zu, of which detected %zu.\n",
+              t.hidden, t.hidden_detected);
   if (t.radius_estimates)
     std::printf("\nJoint radius estimates: mean |error| %.4f m over %zu landmark estimates.\n",
                 t.radius_abs_error_sum / double(t.radius_estimates), t.radius_estimates);
-  std::printf("\n| true range D (m) | observable | recall | centre RMS vs truth (m) | bearing RMS (mrad) | range - (f(D-R)+R): mean (m) | RMS (m) | free radius error: mean (m) | RMS (m) |\n");
+  std::printf(
+      "\n| true range D (m) | observable | recall | centre RMS vs truth (m) | bearing RMS (mrad) | "
+      "range - (f(D-R)+R): mean (m) | RMS (m) | free radius error: mean (m) | RMS (m) |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|\n");
   for (const auto& b : t.bins) {
     if (!b.observable && !b.n) continue;
-    const double n = std::max<double>(double(b.n), 1.0), nf = std::max<double>(double(b.n_free), 1.0);
-    std::printf("| %.0f-%.0f | %zu | %.4f | %.4f | %.2f | %+.4f | %.4f | %+.4f | %.4f |\n", b.lo, b.hi, b.observable,
-                ratio(b.detected, b.observable), std::sqrt(b.centre2 / n), 1e3 * std::sqrt(b.bearing2 / n), b.range / n,
-                std::sqrt(b.range2 / n), b.free / nf, std::sqrt(b.free2 / nf));
+    const double n = std::max<double>(double(b.n), 1.0),
+                 nf = std::max<double>(double(b.n_free), 1.0);
+    std::printf("| %.0f-%.0f | %zu | %.4f | %.4f | %.2f | %+.4f | %.4f | %+.4f | %.4f |\n", b.lo,
+                b.hi, b.observable, ratio(b.detected, b.observable), std::sqrt(b.centre2 / n),
+                1e3 * std::sqrt(b.bearing2 / n), b.range / n, std::sqrt(b.range2 / n), b.free / nf,
+                std::sqrt(b.free2 / nf));
   }
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"Detection and association against the simulator's truth (docs/RESULTS.md, section Detection)"};
+  CLI::App app{
+      "Detection and association against the simulator's truth (docs/RESULTS.md, section "
+      "Detection)"};
   Options o;
   app.add_option("SCENES", o.scenes, "Scene files (data/scenes/*.json)")->required();
-  app.add_option("--seeds", o.seeds, "Seeds per scene")->check(CLI::PositiveNumber)->capture_default_str();
+  app.add_option("--seeds", o.seeds, "Seeds per scene")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   app.add_option("--first-seed", o.first_seed, "First seed")->capture_default_str();
-  app.add_flag("--estimate-radius", o.estimate_radius, "Do not give the detector the landmark radius");
+  app.add_flag("--estimate-radius", o.estimate_radius,
+               "Do not give the detector the landmark radius");
   app.add_flag("--misses", o.misses, "List every missed observation with the reason");
   CLI11_PARSE(app, argc, argv);
   pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);  // our statuses say what PCL would print

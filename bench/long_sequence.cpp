@@ -36,7 +36,8 @@ void linkSequence(const fs::path& example, const fs::path& dir, std::size_t n) {
   fs::remove_all(dir);
   fs::create_directories(dir);
   fs::copy_file(example / "sequence.json", dir / "sequence.json");
-  for (std::size_t i = 0; i < n; ++i) fs::create_hard_link(example / scanName(i % 100), dir / scanName(i));
+  for (std::size_t i = 0; i < n; ++i)
+    fs::create_hard_link(example / scanName(i % 100), dir / scanName(i));
 }
 
 double mib(long kib) { return static_cast<double>(kib) / 1024.0; }
@@ -44,7 +45,8 @@ double mib(long kib) { return static_cast<double>(kib) / 1024.0; }
 Measure mustRun(const std::string& exe, const std::vector<std::string>& args) {
   const Measure m = runChild(exe, args);
   if (m.exit_code != 0) {
-    std::fprintf(stderr, "long_sequence: `lidarcal %s ...` failed with exit code %d\n", args.front().c_str(), m.exit_code);
+    std::fprintf(stderr, "long_sequence: `lidarcal %s ...` failed with exit code %d\n",
+                 args.front().c_str(), m.exit_code);
     std::exit(1);
   }
   return m;
@@ -67,7 +69,9 @@ int main(int argc, char** argv) {
     } else if (key == "--lidarcal") {
       exe = value;
     } else {
-      std::fprintf(stderr, "usage: long_sequence [--sizes 1000,10000,100000] [--work DIR] [--lidarcal PATH]\n");
+      std::fprintf(
+          stderr,
+          "usage: long_sequence [--sizes 1000,10000,100000] [--work DIR] [--lidarcal PATH]\n");
       return 2;
     }
   }
@@ -77,7 +81,9 @@ int main(int argc, char** argv) {
   mustRun(exe, {"calibrate", "-q", example.string(), "--out", model.string(), "--overwrite"});
   const Measure base = mustRun(exe, {"--version"});
 
-  std::printf("| scans | stops | `detect` peak RSS (MiB) | `detect` wall (s) | `correct` peak RSS (MiB) | `correct` wall (s) |\n");
+  std::printf(
+      "| scans | stops | `detect` peak RSS (MiB) | `detect` wall (s) | `correct` peak RSS (MiB) | "
+      "`correct` wall (s) |\n");
   std::printf("|---:|---:|---:|---:|---:|---:|\n");
   for (std::size_t n : sizes) {
     const fs::path seq = work / "seq";
@@ -86,14 +92,16 @@ int main(int argc, char** argv) {
     fs::remove_all(out);
     const Measure d = mustRun(exe, {"detect", "-q", seq.string(), "--out", out.string()});
     fs::remove_all(out);
-    const Measure c = mustRun(exe, {"correct", "-q", seq.string(), "--model", model.string(), "--out", out.string()});
+    const Measure c = mustRun(
+        exe, {"correct", "-q", seq.string(), "--model", model.string(), "--out", out.string()});
     fs::remove_all(out);
     fs::remove_all(seq);
-    std::printf("| %zu | %zu | %.1f | %.1f | %.1f | %.1f |\n", n, n / 10, mib(d.max_rss_kib), d.wall_s, mib(c.max_rss_kib),
-                c.wall_s);
+    std::printf("| %zu | %zu | %.1f | %.1f | %.1f | %.1f |\n", n, n / 10, mib(d.max_rss_kib),
+                d.wall_s, mib(c.max_rss_kib), c.wall_s);
     std::fflush(stdout);
   }
-  std::printf("\nBaseline: `lidarcal --version` peaks at %.1f MiB (the libraries loaded).\n", mib(base.max_rss_kib));
+  std::printf("\nBaseline: `lidarcal --version` peaks at %.1f MiB (the libraries loaded).\n",
+              mib(base.max_rss_kib));
   fs::remove_all(work);
   return 0;
 }

@@ -36,15 +36,17 @@ using namespace lidarcal;
 struct Case {
   std::string name;
   RangeModel model;
-  double ripple_m = 0.0;     ///< ripple amplitude (wavelength 0.3 m, phase drawn per seed)
-  double tape_m = 0.0;       ///< tape error drawn
+  double ripple_m = 0.0;  ///< ripple amplitude (wavelength 0.3 m, phase drawn per seed)
+  double tape_m = 0.0;    ///< tape error drawn
   std::size_t scans = 10;
-  double stated_m = -1.0;    ///< tape error stated in REF.json (negative: tape_m, as drawn)
+  double stated_m = -1.0;  ///< tape error stated in REF.json (negative: tape_m, as drawn)
 };
 
 struct Tally {
-  int entries = 0, tape68 = 0, tape95 = 0, truth68 = 0, truth95 = 0, curve95 = 0, fits = 0, failed = 0;
-  double tape_z2 = 0.0, truth_z2 = 0.0;  ///< sums of squared errors over their predictive standard errors
+  int entries = 0, tape68 = 0, tape95 = 0, truth68 = 0, truth95 = 0, curve95 = 0, fits = 0,
+      failed = 0;
+  /// sums of squared errors over their predictive standard errors
+  double tape_z2 = 0.0, truth_z2 = 0.0;
   std::vector<double> tau_m;
 };
 
@@ -77,8 +79,9 @@ std::vector<double> sweepDistances(std::mt19937_64& rng) {
 }
 
 /// Fits on the readings of the stops with parity `fit`, checks the others.
-void checkHalf(const simulation::RangeSweep& sweep, const calibration::ReferenceReadings& known, int fit,
-               const RangeModel& truth, const RangeEffects& fx, double radius_m, Tally& t) {
+void checkHalf(const simulation::RangeSweep& sweep, const calibration::ReferenceReadings& known,
+               int fit, const RangeModel& truth, const RangeEffects& fx, double radius_m,
+               Tally& t) {
   const calibration::HalfCheck half = calibration::checkInterleavedHalf(known.readings, fit);
   const CalibrationModel& m = half.model;
   if (!m.status.ok()) {
@@ -93,7 +96,8 @@ void checkHalf(const simulation::RangeSweep& sweep, const calibration::Reference
     ++t.entries;
     t.tape68 += h.inside(m.discrepancy, 0.6827);
     t.tape95 += h.inside(m.discrepancy, 0.95);
-    t.tape_z2 += h.residual_m * h.residual_m / (h.predictive_se_m * h.predictive_se_m + h.entry_se_m * h.entry_se_m);
+    t.tape_z2 += h.residual_m * h.residual_m /
+                 (h.predictive_se_m * h.predictive_se_m + h.entry_se_m * h.entry_se_m);
     // The sensor's true mean reading at the pole's nearest point, against the fit's.
     const double d = sweep.true_distance_m[known.matches[h.entry].stop] - radius_m;
     const double error = m.model.bias(d) - (truth.bias(d) + rangeRipple(fx, d));
@@ -118,10 +122,12 @@ void runCase(const Case& c, int first, int seeds) {
     config.stated_sigma_m = c.stated_m < 0.0 ? c.tape_m : c.stated_m;
     config.effects.ripple_amplitude_m = c.ripple_m;
     config.effects.ripple_wavelength_m = 0.3;
-    config.effects.ripple_phase_rad = std::uniform_real_distribution<double>(0.0, 6.283185307179586)(rng);
+    config.effects.ripple_phase_rad =
+        std::uniform_real_distribution<double>(0.0, 6.283185307179586)(rng);
     const auto sweep = simulation::simulateRangeSweep(config, static_cast<std::uint64_t>(seed));
     const auto known = calibration::knownReadings(sweep.obs, sweep.reference, config.radius_m);
-    for (int fit = 0; fit < 2; ++fit) checkHalf(sweep, known, fit, c.model, config.effects, config.radius_m, t);
+    for (int fit = 0; fit < 2; ++fit)
+      checkHalf(sweep, known, fit, c.model, config.effects, config.radius_m, t);
     std::fprintf(stderr, "\r%s: seed %d of %d", c.name.c_str(), seed - first + 1, seeds);
   }
   std::fprintf(stderr, "\n");
@@ -130,38 +136,52 @@ void runCase(const Case& c, int first, int seeds) {
   std::sort(tau.begin(), tau.end());
   const double median_tau = tau.empty() ? std::nan("") : tau[tau.size() / 2];
   const double n = std::max(t.entries, 1);
-  std::printf("| %s | %d (%d refused) | %d | %.1f | %.1f %% | %.1f %% | %.2f | %.1f %% | %.1f %% | %.2f | %.1f %% |\n",
-              c.name.c_str(), t.fits, t.failed, t.entries, 1000.0 * median_tau, pct(t.tape68), pct(t.tape95),
-              std::sqrt(t.tape_z2 / n), pct(t.truth68), pct(t.truth95), std::sqrt(t.truth_z2 / n), pct(t.curve95));
+  std::printf(
+      "| %s | %d (%d refused) | %d | %.1f | %.1f %% | %.1f %% | %.2f | %.1f %% | %.1f %% | %.2f | "
+      "%.1f %% |\n",
+      c.name.c_str(), t.fits, t.failed, t.entries, 1000.0 * median_tau, pct(t.tape68),
+      pct(t.tape95), std::sqrt(t.tape_z2 / n), pct(t.truth68), pct(t.truth95),
+      std::sqrt(t.truth_z2 / n), pct(t.curve95));
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
-  CLI::App app{"Coverage of the predictive intervals of calibrate --reference on simulated range sweeps"};
+  CLI::App app{
+      "Coverage of the predictive intervals of calibrate --reference on simulated range sweeps"};
   int seeds = 100, first = 2001;
   app.add_option("--seeds", seeds)->capture_default_str();
-  app.add_option("--first-seed", first, "Seeds first .. first + seeds - 1 (disjoint from those the tests use)")
+  app.add_option("--first-seed", first,
+                 "Seeds first .. first + seeds - 1 (disjoint from those the tests use)")
       ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   const std::vector<Case> cases = {
       {"triangulation sensor (polynomial bias), exact distances", paperSensor(), 0.0, 0.0, 10},
       {"triangulation sensor (polynomial bias), tape error 2 mm", paperSensor(), 0.0, 0.002, 10},
       {"triangulation sensor + ripple 4 mm, tape error 2 mm", paperSensor(), 0.004, 0.002, 10},
-      {"time-of-flight sensor (polynomial bias), exact distances", timeOfFlightSensor(), 0.0, 0.0, 20},
-      {"time-of-flight sensor (polynomial bias), tape error 2 mm", timeOfFlightSensor(), 0.0, 0.002, 20},
-      {"time-of-flight sensor + ripple 4 mm, exact distances", timeOfFlightSensor(), 0.004, 0.0, 20},
-      {"time-of-flight sensor + ripple 4 mm, tape error 2 mm", timeOfFlightSensor(), 0.004, 0.002, 20},
+      {"time-of-flight sensor (polynomial bias), exact distances", timeOfFlightSensor(), 0.0, 0.0,
+       20},
+      {"time-of-flight sensor (polynomial bias), tape error 2 mm", timeOfFlightSensor(), 0.0, 0.002,
+       20},
+      {"time-of-flight sensor + ripple 4 mm, exact distances", timeOfFlightSensor(), 0.004, 0.0,
+       20},
+      {"time-of-flight sensor + ripple 4 mm, tape error 2 mm", timeOfFlightSensor(), 0.004, 0.002,
+       20},
       // The Hokuyo sweep as docs/FINDINGS.md reads it: about 4 mm per recording in the reference
       // beyond the 2 mm its REF.json states, independent from one recording to the next.
-      {"time-of-flight sensor (polynomial bias), tape error 4.5 mm, 2 mm stated", timeOfFlightSensor(), 0.0, 0.0045, 20, 0.002},
+      {"time-of-flight sensor (polynomial bias), tape error 4.5 mm, 2 mm stated",
+       timeOfFlightSensor(), 0.0, 0.0045, 20, 0.002},
   };
-  std::printf("Predictive intervals on simulated range sweeps: 30 distances over 0.3-3.0 m, interleaved halves, fitted on "
-              "each half and checked on the other; seeds %d-%d; ripple wavelength 0.3 m, random phase\n\n",
-              first, first + seeds - 1);
-  std::printf("| sensor and tape | fits | held-out entries | median discrepancy [mm] | tape inside 68 %% | tape inside 95 %% "
-              "| RMS z, tape | true bias inside 68 %% | true bias inside 95 %% | RMS z, true bias "
-              "| true bias inside the curve's 95 %% |\n|---|---|---|---|---|---|---|---|---|---|---|\n");
+  std::printf(
+      "Predictive intervals on simulated range sweeps: 30 distances over 0.3-3.0 m, interleaved "
+      "halves, fitted on "
+      "each half and checked on the other; seeds %d-%d; ripple wavelength 0.3 m, random phase\n\n",
+      first, first + seeds - 1);
+  std::printf(
+      "| sensor and tape | fits | held-out entries | median discrepancy [mm] | tape inside 68 %% | "
+      "tape inside 95 %% "
+      "| RMS z, tape | true bias inside 68 %% | true bias inside 95 %% | RMS z, true bias "
+      "| true bias inside the curve's 95 %% |\n|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (const Case& c : cases) runCase(c, first, seeds);
   return 0;
 }

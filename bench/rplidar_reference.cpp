@@ -5,7 +5,8 @@
 // where they were taken. This program fits straight lines to the mean scan (each beam averaged
 // over all scans) where the walls of the plan are, reproduces the six measurements in the scan
 // and estimates the lidar's range offset from them.
-//   build/pipeline/lidarcal import --from rosbag1 ../shared/data/rplidar_a2_room/rplidar_1.bag --out /tmp/rplidar
+//   build/pipeline/lidarcal import --from rosbag1 ../shared/data/rplidar_a2_room/rplidar_1.bag
+//   --out /tmp/rplidar
 //   build/bench/rplidar_reference /tmp/rplidar [--plot DIR]   (DIR/rplidar_walls.png with gnuplot)
 //
 // The walls (beam index = degrees from angle_min = -180 degrees; see the plot made by
@@ -106,13 +107,17 @@ int main(int argc, char** argv) {
   for (const auto& [b, a] : acc)
     if (a[2] > 0.4 * static_cast<double>(seq.scans.size()))
       p[b] = {a[1] / a[2] * std::cos(a[0] / a[2]), a[1] / a[2] * std::sin(a[0] / a[2])};
-  const Line top = fit(p, 28, 68), left = fit(p, 108, 135), cabinet = fit(p, 290, 325), bottom = fit(p, 205, 260);
+  const Line top = fit(p, 28, 68), left = fit(p, 108, 135), cabinet = fit(p, 290, 325),
+             bottom = fit(p, 205, 260);
   const Line right_free = fit(p, 339, 350), right = fit(p, 339, 350, &left);
   auto show = [](const char* name, const Line& l) {
-    std::printf("| %s | %.2f | %.4f | %d | %.1f |\n", name, std::atan2(l.ny, l.nx) * 180.0 / M_PI, l.d, l.n, 1000 * l.rms);
+    std::printf("| %s | %.2f | %.4f | %d | %.1f |\n", name, std::atan2(l.ny, l.nx) * 180.0 / M_PI,
+                l.d, l.n, 1000 * l.rms);
   };
   std::printf("Wall lines fitted to the mean scan (readings as the lidar gives them):\n\n");
-  std::printf("| wall | normal [deg] | distance from the lidar [m] | beams | RMS [mm] |\n|---|---|---|---|---|\n");
+  std::printf(
+      "| wall | normal [deg] | distance from the lidar [m] | beams | RMS [mm] "
+      "|\n|---|---|---|---|---|\n");
   show("top (south-west)", top);
   show("left (south-east)", left);
   show("right, free", right_free);
@@ -130,11 +135,15 @@ int main(int argc, char** argv) {
     double from_top, reference, authors;
     const Line* far;
   };
-  const std::vector<Ref> refs = {{1, 0.15, 6.155, 6.19522848, &right}, {2, 0.55, 6.150, 6.18926752, &right},
-                                 {3, 1.30, 6.147, 6.17809073, &right}, {4, 1.50, 5.709, 5.77009549, &cabinet},
+  const std::vector<Ref> refs = {{1, 0.15, 6.155, 6.19522848, &right},
+                                 {2, 0.55, 6.150, 6.18926752, &right},
+                                 {3, 1.30, 6.147, 6.17809073, &right},
+                                 {4, 1.50, 5.709, 5.77009549, &cabinet},
                                  {5, 2.30, 5.709, 5.77055445, &cabinet}};
-  std::printf("\n| line | from the top wall [m] | laser meter [m] | lidar, this scan [m] | error [m] | authors' lidar [m] | authors' error [m] |\n"
-              "|---|---|---|---|---|---|---|\n");
+  std::printf(
+      "\n| line | from the top wall [m] | laser meter [m] | lidar, this scan [m] | error [m] | "
+      "authors' lidar [m] | authors' error [m] |\n"
+      "|---|---|---|---|---|---|---|\n");
   double sum = 0, sum_authors = 0;
   std::vector<double> err;
   for (const auto& r : refs) {
@@ -142,19 +151,22 @@ int main(int argc, char** argv) {
     err.push_back(w - r.reference);
     sum += w - r.reference;
     sum_authors += r.authors - r.reference;
-    std::printf("| %d | %.2f | %.3f | %.4f | %+.4f | %.4f | %+.4f |\n", r.line, r.from_top, r.reference, w, w - r.reference,
-                r.authors, r.authors - r.reference);
+    std::printf("| %d | %.2f | %.3f | %.4f | %+.4f | %.4f | %+.4f |\n", r.line, r.from_top,
+                r.reference, w, w - r.reference, r.authors, r.authors - r.reference);
   }
   // Line 6 crosses the room from the top wall to the bottom side, near the right wall.
   const auto c = intersect(top, right), l = intersect(top, left);
   const double ux = (l.first - c.first) / std::hypot(l.first - c.first, l.second - c.second),
                uy = (l.second - c.second) / std::hypot(l.first - c.first, l.second - c.second);
   const double px = c.first + 0.60 * ux, py = c.second + 0.60 * uy;
-  const double t = (bottom.d - (bottom.nx * px + bottom.ny * py)) / (bottom.nx * -top.nx + bottom.ny * -top.ny);
-  std::printf("| 6 | (0.60 from the right wall) | 4.777 | %.4f | %+.4f | 4.8096 | +0.0396 |\n", t, t - 4.777);
+  const double t =
+      (bottom.d - (bottom.nx * px + bottom.ny * py)) / (bottom.nx * -top.nx + bottom.ny * -top.ny);
+  std::printf("| 6 | (0.60 from the right wall) | 4.777 | %.4f | %+.4f | 4.8096 | +0.0396 |\n", t,
+              t - 4.777);
   if (argc >= 4 && std::string(argv[2]) == "--plot") {
     const std::string dir = argv[3];
-    std::ofstream pts(dir + "/rplidar_mean_scan.dat"), lines(dir + "/rplidar_lines.dat"), meas(dir + "/rplidar_measurements.dat");
+    std::ofstream pts(dir + "/rplidar_mean_scan.dat"), lines(dir + "/rplidar_lines.dat"),
+        meas(dir + "/rplidar_measurements.dat");
     for (const auto& [b, q] : p) pts << q.first << ' ' << q.second << ' ' << b << '\n';
     auto segment = [&](const Line& wall, int lo, int hi) {
       // The line between the beams lo and hi (where they meet it).
@@ -179,11 +191,16 @@ int main(int argc, char** argv) {
     lines.close();
     meas.close();
     std::ofstream gp(dir + "/rplidar_walls.gp");
-    gp << "set terminal pngcairo size 900,900 font \"DejaVu Sans,10\"\nset output \"rplidar_walls.png\"\nset size ratio -1\nset grid\n"
-          "set title \"RPLIDAR A2 room: mean scan, wall lines, laser-meter lines 1-5\"\nset xlabel \"x [m]\"\nset ylabel \"y [m]\"\n"
-          "plot \"rplidar_mean_scan.dat\" using 1:2 with points pt 7 ps 0.4 lc rgb \"#777777\" title \"mean reading per beam\", "
-          "\"rplidar_lines.dat\" using 1:2 with lines lw 3 lc rgb \"#0077bb\" title \"wall lines (top, left, right, cabinet, bottom)\", "
-          "\"rplidar_measurements.dat\" using 1:2 with lines lw 1 dt 2 lc rgb \"#cc3311\" title \"measurement lines 1-5\", "
+    gp << "set terminal pngcairo size 900,900 font \"DejaVu Sans,10\"\nset output "
+          "\"rplidar_walls.png\"\nset size ratio -1\nset grid\n"
+          "set title \"RPLIDAR A2 room: mean scan, wall lines, laser-meter lines 1-5\"\nset xlabel "
+          "\"x [m]\"\nset ylabel \"y [m]\"\n"
+          "plot \"rplidar_mean_scan.dat\" using 1:2 with points pt 7 ps 0.4 lc rgb \"#777777\" "
+          "title \"mean reading per beam\", "
+          "\"rplidar_lines.dat\" using 1:2 with lines lw 3 lc rgb \"#0077bb\" title \"wall lines "
+          "(top, left, right, cabinet, bottom)\", "
+          "\"rplidar_measurements.dat\" using 1:2 with lines lw 1 dt 2 lc rgb \"#cc3311\" title "
+          "\"measurement lines 1-5\", "
           "\"<echo 0 0\" using 1:2 with points pt 9 ps 2 lc rgb \"black\" title \"lidar\"\n";
     gp.close();
     const std::string cmd = "cd '" + dir + "' && gnuplot rplidar_walls.gp";
@@ -192,9 +209,12 @@ int main(int argc, char** argv) {
   const double mean = sum / static_cast<double>(refs.size());
   double var = 0;
   for (double e : err) var += (e - mean) * (e - mean) / static_cast<double>(err.size() - 1);
-  std::printf("\nLines 1-5: mean wall-to-wall error %+.4f m (sd %.4f m), authors %+.4f m. A wall-to-wall distance holds two\n"
-              "readings, so a constant range offset alpha_0 = %+.4f m +- %.4f m (standard error of the mean / 2).\n",
-              mean, std::sqrt(var), sum_authors / static_cast<double>(refs.size()), mean / 2.0,
-              std::sqrt(var / static_cast<double>(err.size())) / 2.0);
+  std::printf(
+      "\nLines 1-5: mean wall-to-wall error %+.4f m (sd %.4f m), authors %+.4f m. A wall-to-wall "
+      "distance holds two\n"
+      "readings, so a constant range offset alpha_0 = %+.4f m +- %.4f m (standard error of the "
+      "mean / 2).\n",
+      mean, std::sqrt(var), sum_authors / static_cast<double>(refs.size()), mean / 2.0,
+      std::sqrt(var / static_cast<double>(err.size())) / 2.0);
   return 0;
 }

@@ -18,7 +18,8 @@ int addTriangulated(CalibrationModel& m, const std::vector<LandmarkEstimate>& tr
     c.x_m = l.x_m;
     c.y_m = l.y_m;
     c.radius_m = radius;
-    c.covariance_m2 = {l.covariance(0, 0), l.covariance(0, 1), l.covariance(1, 0), l.covariance(1, 1)};
+    c.covariance_m2 = {l.covariance(0, 0), l.covariance(0, 1), l.covariance(1, 0),
+                       l.covariance(1, 1)};
     c.stops = l.stops;
     c.status = l.ok() ? "ok" : std::string(toString(l.status)) + ": " + l.message;
     m.landmarks.push_back(c);
@@ -38,7 +39,8 @@ CalibrationModel calibrate(const LandmarkObservations& obs, const CalibrationCon
   if (refuseUnusableInput(m, obs, config)) return m;
   const double baseline = pathExtent(obs.commanded);
 
-  // 1. Triangulate every landmark from its bearings at the commanded stops (Alhashimi et al. 2021, 3.1).
+  // 1. Triangulate every landmark from its bearings at the commanded stops (Alhashimi et al. 2021,
+  // 3.1).
   const auto tri = triangulateAll(obs, config.triangulation);
   const double radius = landmarkRadius(obs);
   const int usable = addTriangulated(m, tri, radius);
@@ -53,13 +55,15 @@ CalibrationModel calibrate(const LandmarkObservations& obs, const CalibrationCon
   if (config.method == Method::closed_form) {
     // 4. Side estimators on the closed form's pairs; its covariance by the jackknife over stops.
     fillNoiseFits(m, seed.order, seed.d_m, seed.y_m, batches, config.threads);
-    m.alpha_covariance = closedFormCovariance(obs, config, radius, static_cast<int>(m.model.bias.alpha.size()) - 1);
+    m.alpha_covariance =
+        closedFormCovariance(obs, config, radius, static_cast<int>(m.model.bias.alpha.size()) - 1);
     // 5. Plausibility.
     addPlausibilityWarnings(m, nullptr);
     return m;
   }
 
-  // 3. Joint refinement (ours) from the closed form; a refusal keeps the closed form's side estimators.
+  // 3. Joint refinement (ours) from the closed form; a refusal keeps the closed form's side
+  // estimators.
   const JointStage js = jointStage(obs, config, tri, seed, radius, m.model);
   if (refuseJoint(m, js.result, obs, usable, baseline)) {
     fillNoiseFits(m, seed.order, seed.d_m, seed.y_m, batches, config.threads);
@@ -67,7 +71,8 @@ CalibrationModel calibrate(const LandmarkObservations& obs, const CalibrationCon
   }
   fillJoint(m, js, config);
   // 4. Side estimators on the joint refinement's readings and distances.
-  fillNoiseFits(m, m.model.bias.order(), js.result.distances_m, js.result.readings_m, batches, config.threads);
+  fillNoiseFits(m, m.model.bias.order(), js.result.distances_m, js.result.readings_m, batches,
+                config.threads);
   // 5. Plausibility.
   addPlausibilityWarnings(m, &js.result);
   return m;

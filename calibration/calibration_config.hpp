@@ -18,20 +18,21 @@ const char* toString(Method m);
 
 /// How the joint refinement picks its order among 1..max_order.
 enum class JointOrderRule {
-  aic,              ///< smallest AIC
-  aic_parsimonious, ///< smallest order whose AIC is within 2 of the smallest (Burnham & Anderson)
-  bic,              ///< smallest BIC
+  aic,               ///< smallest AIC
+  aic_parsimonious,  ///< smallest order whose AIC is within 2 of the smallest (Burnham & Anderson)
+  bic,               ///< smallest BIC
 };
 const char* toString(JointOrderRule r);
 
 struct CalibrationConfig {
-  Method method = Method::joint;                      ///< closed form of the paper, or joint refinement
-  int max_order = 4;                                  ///< n_max of Alhashimi et al. 2021 phase 1
-  OrderRule closed_form_rule = OrderRule::aic;        ///< order rule of the closed form
-  JointOrderRule joint_rule = JointOrderRule::aic_parsimonious;  ///< order rule of the joint refinement
-  NoiseKind noise = NoiseKind::squared;               ///< noise law of the calibrated model
-  TriangulationConfig triangulation;                  ///< stage 1 settings
-  JointConfig joint;                                  ///< stage 3 settings (order is chosen here)
+  Method method = Method::joint;                ///< closed form of the paper, or joint refinement
+  int max_order = 4;                            ///< n_max of Alhashimi et al. 2021 phase 1
+  OrderRule closed_form_rule = OrderRule::aic;  ///< order rule of the closed form
+  /// order rule of the joint refinement
+  JointOrderRule joint_rule = JointOrderRule::aic_parsimonious;
+  NoiseKind noise = NoiseKind::squared;  ///< noise law of the calibrated model
+  TriangulationConfig triangulation;     ///< stage 1 settings
+  JointConfig joint;                     ///< stage 3 settings (order is chosen here)
   /// The stops must span at least this distance (metres) for the landmarks to be triangulated
   /// from bearings; below it calibrate() returns status no_baseline. Default 0.1 m.
   double min_baseline_m = 0.1;
@@ -42,7 +43,7 @@ struct CalibrationConfig {
   /// Threads for the joint refinement's orders (independent solves from one settled geometry;
   /// the result does not depend on the number). 0: the machine's cores, at most 8. Default 0.
   int threads = 0;
-  void validate() const;                              ///< throws std::invalid_argument
+  void validate() const;  ///< throws std::invalid_argument
 };
 
 }  // namespace lidarcal::calibration

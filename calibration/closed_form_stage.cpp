@@ -55,7 +55,8 @@ double bearingScatter(const LandmarkObservations& obs, const std::vector<Landmar
 
 }  // namespace
 
-std::vector<RangePair> closedFormPairs(const LandmarkObservations& obs, const std::vector<LandmarkEstimate>& landmarks,
+std::vector<RangePair> closedFormPairs(const LandmarkObservations& obs,
+                                       const std::vector<LandmarkEstimate>& landmarks,
                                        double radius_m, bool per_scan) {
   std::map<int, const LandmarkEstimate*> ok;
   for (const auto& l : landmarks)
@@ -74,14 +75,16 @@ std::vector<RangePair> closedFormPairs(const LandmarkObservations& obs, const st
     const BeamReading& b = s.beams[centralBeam(s)];
     if (!std::isfinite(b.range_m)) continue;
     const Pose2& p = obs.commanded.at(s.stop);
-    const double d = rayCircleDistance(p.x_m, p.y_m, p.yaw_rad + b.angle_rad, it->second->x_m, it->second->y_m, radius_m);
+    const double d = rayCircleDistance(p.x_m, p.y_m, p.yaw_rad + b.angle_rad, it->second->x_m,
+                                       it->second->y_m, radius_m);
     // A beam that meets the triangulated circle behind the stop (or at it) cannot have read this
     // landmark: the triangulation placed it badly. Such a pair says nothing about f.
     if (!(d > 0.0) || !std::isfinite(d)) continue;
-    // The paper's split (Alhashimi et al. 2021 section 4.3) into fit / choose / test thirds: by scan within
-    // the stop when a stop has at least three scans, else by (landmark, stop).
-    const int part = per_stop.at(s.stop) >= 3 ? static_cast<int>(position.at(s.scan) % 3)
-                                               : static_cast<int>((s.stop + static_cast<std::size_t>(s.landmark)) % 3);
+    // The paper's split (Alhashimi et al. 2021 section 4.3) into fit / choose / test thirds: by
+    // scan within the stop when a stop has at least three scans, else by (landmark, stop).
+    const int part = per_stop.at(s.stop) >= 3
+                         ? static_cast<int>(position.at(s.scan) % 3)
+                         : static_cast<int>((s.stop + static_cast<std::size_t>(s.landmark)) % 3);
     if (per_scan) {
       pairs.push_back({d, b.range_m, part});
     } else {
@@ -104,7 +107,8 @@ double landmarkRadius(const LandmarkObservations& obs) {
 }
 
 std::vector<std::vector<double>> constantDistanceBatches(const LandmarkObservations& obs) {
-  std::map<std::tuple<std::size_t, int, std::uint32_t>, std::vector<std::pair<std::size_t, double>>> by_beam;
+  std::map<std::tuple<std::size_t, int, std::uint32_t>, std::vector<std::pair<std::size_t, double>>>
+      by_beam;
   for (const auto& s : obs.sightings)
     for (const auto& b : s.beams)
       if (std::isfinite(b.range_m) && b.beam != kUnknownBeam)
@@ -121,7 +125,8 @@ std::vector<std::vector<double>> constantDistanceBatches(const LandmarkObservati
 
 Admissible invertibleOver(double range_min_m, double range_max_m) {
   return [=](const std::vector<double>& alpha) {
-    return alpha.size() >= 2 && invertsReadingWindow(BiasPolynomial{alpha}, range_min_m, range_max_m);
+    return alpha.size() >= 2 &&
+           invertsReadingWindow(BiasPolynomial{alpha}, range_min_m, range_max_m);
   };
 }
 
@@ -133,7 +138,8 @@ void fillOrders(CalibrationModel& m, const OrderSelection& sel, std::size_t n) {
     o.order = row.order;
     o.alpha = row.alpha;
     o.aic = row.aic;
-    o.bic = row.aic - 2.0 * (row.order + 2.0) + (row.order + 2.0) * std::log(static_cast<double>(n));
+    o.bic =
+        row.aic - 2.0 * (row.order + 2.0) + (row.order + 2.0) * std::log(static_cast<double>(n));
     o.validation_mse_m2 = row.validation_mse_m2;
     o.test_mse_m2 = row.test_mse_m2;
     m.orders.push_back(o);
@@ -143,19 +149,23 @@ void fillOrders(CalibrationModel& m, const OrderSelection& sel, std::size_t n) {
   m.order_rule = toString(sel.rule);
 }
 
-double rmsResidual(const BiasPolynomial& f, const std::vector<double>& d, const std::vector<double>& y) {
+double rmsResidual(const BiasPolynomial& f, const std::vector<double>& d,
+                   const std::vector<double>& y) {
   double s = 0.0;
   for (std::size_t i = 0; i < d.size(); ++i) s += std::pow(y[i] - f(d[i]), 2);
   return d.empty() ? 0.0 : std::sqrt(s / static_cast<double>(d.size()));
 }
 
-ClosedFormSeed closedFormSeed(const LandmarkObservations& obs, const std::vector<LandmarkEstimate>& tri,
-                              double radius_m, const std::vector<RangePair>& pairs, const CalibrationConfig& config) {
+ClosedFormSeed closedFormSeed(const LandmarkObservations& obs,
+                              const std::vector<LandmarkEstimate>& tri, double radius_m,
+                              const std::vector<RangePair>& pairs,
+                              const CalibrationConfig& config) {
   ClosedFormSeed seed;
   seed.pairs = pairs.size();
   const bool window_known = obs.range_max_m < 1e8;
-  seed.selection = selectOrder(pairs, config.max_order, config.closed_form_rule,
-                               window_known ? invertibleOver(obs.range_min_m, obs.range_max_m) : Admissible{});
+  seed.selection =
+      selectOrder(pairs, config.max_order, config.closed_form_rule,
+                  window_known ? invertibleOver(obs.range_min_m, obs.range_max_m) : Admissible{});
   seed.order = std::max(seed.selection.chosen, 1);
   for (const auto& p : closedFormPairs(obs, tri, radius_m, true)) {
     seed.d_m.push_back(p.d_m);
@@ -164,13 +174,16 @@ ClosedFormSeed closedFormSeed(const LandmarkObservations& obs, const std::vector
   return seed;
 }
 
-void fillClosedForm(CalibrationModel& m, const LandmarkObservations& obs, const std::vector<LandmarkEstimate>& tri,
-                    const ClosedFormSeed& seed, const CalibrationConfig& config) {
+void fillClosedForm(CalibrationModel& m, const LandmarkObservations& obs,
+                    const std::vector<LandmarkEstimate>& tri, const ClosedFormSeed& seed,
+                    const CalibrationConfig& config) {
   const OrderSelection& sel = seed.selection;
   const std::vector<double>& d = seed.d_m;
   const std::vector<double>& y = seed.y_m;
   fillOrders(m, sel, seed.pairs);
-  m.model.bias.alpha = sel.table[static_cast<std::size_t>(std::min<int>(seed.order, static_cast<int>(sel.table.size()) - 1))].alpha;
+  m.model.bias.alpha = sel.table[static_cast<std::size_t>(std::min<int>(
+                                     seed.order, static_cast<int>(sel.table.size()) - 1))]
+                           .alpha;
   m.model.noise = fitNoiseLaw(config.noise, seed.order, m.model.bias, d, y);
   m.residual_rms_m = rmsResidual(m.model.bias, d, y);
   m.readings = d.size();
@@ -179,7 +192,8 @@ void fillClosedForm(CalibrationModel& m, const LandmarkObservations& obs, const 
   m.fitted_range_m = fittedRange(d, y, m.model.bias);
 }
 
-std::vector<double> closedFormCovariance(const LandmarkObservations& obs, const CalibrationConfig& config, double radius,
+std::vector<double> closedFormCovariance(const LandmarkObservations& obs,
+                                         const CalibrationConfig& config, double radius,
                                          int order) {
   std::vector<std::size_t> stops;
   for (const auto& s : obs.sightings) stops.push_back(s.stop);
@@ -196,7 +210,8 @@ std::vector<double> closedFormCovariance(const LandmarkObservations& obs, const 
     without.sightings.clear();
     for (const auto& s : obs.sightings)
       if (group[s.stop] != g) without.sightings.push_back(s);
-    const auto pairs = closedFormPairs(without, triangulateAll(without, config.triangulation), radius, false);
+    const auto pairs =
+        closedFormPairs(without, triangulateAll(without, config.triangulation), radius, false);
     if (pairs.size() < n + 2) return {};
     const OrderSelection sel = selectOrder(pairs, order, config.closed_form_rule);
     const auto& a = sel.table[static_cast<std::size_t>(order)].alpha;
@@ -206,7 +221,8 @@ std::vector<double> closedFormCovariance(const LandmarkObservations& obs, const 
   const Eigen::MatrixXd cov = jackknifeCovariance(alphas);
   std::vector<double> out(n * n);
   for (std::size_t i = 0; i < n; ++i)
-    for (std::size_t j = 0; j < n; ++j) out[i * n + j] = cov(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j));
+    for (std::size_t j = 0; j < n; ++j)
+      out[i * n + j] = cov(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j));
   return out;
 }
 

@@ -54,7 +54,9 @@ Eigen::MatrixXd design(const std::vector<EntryResidual>& entries, int order) {
 }
 
 /// V_g = tau^2 + k_g, the entry's whole variance (floored).
-double entryVariance(const EntryResidual& e, double tau2) { return std::max(tau2 + e.known_variance_m2, kVarianceFloorM2); }
+double entryVariance(const EntryResidual& e, double tau2) {
+  return std::max(tau2 + e.known_variance_m2, kVarianceFloorM2);
+}
 
 /// The generalised least squares fit of the entries' residuals on x at tau^2 = tau2, by QR of
 /// V^-1/2 X.
@@ -86,11 +88,13 @@ GlsFit glsFit(const Eigen::MatrixXd& x, const std::vector<EntryResidual>& entrie
 
 /// -2 x the restricted log-likelihood without its constant, at tau^2 = tau2:
 /// sum log V_g + log det(X' V^-1 X) + sum (r_g - x_g' beta_GLS)^2 / V_g.
-double restrictedDeviance(const Eigen::MatrixXd& x, const std::vector<EntryResidual>& entries, double tau2) {
+double restrictedDeviance(const Eigen::MatrixXd& x, const std::vector<EntryResidual>& entries,
+                          double tau2) {
   const GlsFit fit = glsFit(x, entries, tau2);
   // log det(X' V^-1 X) = 2 sum log |R_ii|.
   double log_det = 0.0;
-  for (Eigen::Index i = 0; i < x.cols(); ++i) log_det += 2.0 * std::log(std::max(std::abs(fit.r(i, i)), 1e-300));
+  for (Eigen::Index i = 0; i < x.cols(); ++i)
+    log_det += 2.0 * std::log(std::max(std::abs(fit.r(i, i)), 1e-300));
   return fit.log_v + log_det + fit.rss;
 }
 
@@ -98,7 +102,8 @@ double restrictedDeviance(const Eigen::MatrixXd& x, const std::vector<EntryResid
 /// polynomial (the REML estimate of tau^2 stays below that spread's variance).
 double searchLimit(const Eigen::MatrixXd& x, const std::vector<EntryResidual>& entries) {
   Eigen::VectorXd r(x.rows());
-  for (Eigen::Index g = 0; g < x.rows(); ++g) r(g) = entries[static_cast<std::size_t>(g)].residual_m;
+  for (Eigen::Index g = 0; g < x.rows(); ++g)
+    r(g) = entries[static_cast<std::size_t>(g)].residual_m;
   const Eigen::VectorXd beta = x.householderQr().solve(r);
   const double dof = static_cast<double>(x.rows() - x.cols());
   return 4.0 * std::sqrt(std::max((r - x * beta).squaredNorm() / dof, kVarianceFloorM2));
@@ -106,9 +111,12 @@ double searchLimit(const Eigen::MatrixXd& x, const std::vector<EntryResidual>& e
 
 }  // namespace
 
-std::vector<EntryResidual> entryResiduals(const std::vector<double>& d, const std::vector<double>& y,
-                                          const std::vector<double>& weight, const std::vector<std::size_t>& entry,
-                                          const std::vector<double>& tape_sigma, const BiasPolynomial& f) {
+std::vector<EntryResidual> entryResiduals(const std::vector<double>& d,
+                                          const std::vector<double>& y,
+                                          const std::vector<double>& weight,
+                                          const std::vector<std::size_t>& entry,
+                                          const std::vector<double>& tape_sigma,
+                                          const BiasPolynomial& f) {
   const std::size_t n = d.size();
   if (y.size() != n || weight.size() != n || entry.size() != n || tape_sigma.size() != n)
     throw std::invalid_argument("entryResiduals: the per-reading vectors differ in length");
@@ -132,7 +140,8 @@ std::vector<EntryResidual> entryResiduals(const std::vector<double>& d, const st
     within += std::max(0.0, s.wrr - s.wr * s.wr / s.w);
     readings += s.n;
   }
-  const double sigma_w2 = readings > sums.size() ? within / static_cast<double>(readings - sums.size()) : 0.0;
+  const double sigma_w2 =
+      readings > sums.size() ? within / static_cast<double>(readings - sums.size()) : 0.0;
   std::vector<EntryResidual> out;
   out.reserve(sums.size());
   for (const auto& [g, s] : sums) {
@@ -159,9 +168,11 @@ Discrepancy estimateDiscrepancy(const std::vector<EntryResidual>& entries, int o
   out.entries = entries.size();
   const int coefficients = order + 1;
   if (order < 0 || static_cast<int>(entries.size()) <= coefficients) {
-    out.note = "not estimated: " + std::to_string(entries.size()) + " measured entries leave no degree of freedom beside " +
-               std::to_string(coefficients) + " coefficients, so the intervals are the fitted curve's alone and do not "
-               "include how far the sensor may lie from the polynomial between the measured distances";
+    out.note =
+        "not estimated: " + std::to_string(entries.size()) +
+        " measured entries leave no degree of freedom beside " + std::to_string(coefficients) +
+        " coefficients, so the intervals are the fitted curve's alone and do not "
+        "include how far the sensor may lie from the polynomial between the measured distances";
     return out;
   }
   const Eigen::MatrixXd x = design(entries, order);
@@ -186,13 +197,17 @@ Discrepancy estimateDiscrepancy(const std::vector<EntryResidual>& entries, int o
   out.sigma_m = tau;
   out.dof = static_cast<int>(entries.size()) - coefficients;
   out.tape_sigma_m = std::sqrt(tape2 / static_cast<double>(entries.size()));
-  out.note = "the predictive interval includes the sensor's scatter about the polynomial between the measured "
-             "distances, beyond their stated tape errors; it does not include an error all of them share (a tape that "
-             "reads long, a wrong pole radius)";
+  out.note =
+      "the predictive interval includes the sensor's scatter about the polynomial between the "
+      "measured "
+      "distances, beyond their stated tape errors; it does not include an error all of them share "
+      "(a tape that "
+      "reads long, a wrong pole radius)";
   return out;
 }
 
-std::vector<DeletedResidual> deletedResiduals(const std::vector<EntryResidual>& entries, int order) {
+std::vector<DeletedResidual> deletedResiduals(const std::vector<EntryResidual>& entries,
+                                              int order) {
   std::vector<DeletedResidual> out;
   const int coefficients = order + 1;
   if (order < 0 || static_cast<int>(entries.size()) < coefficients + 2) return out;
@@ -205,26 +220,30 @@ std::vector<DeletedResidual> deletedResiduals(const std::vector<EntryResidual>& 
     // The others' fit; the prediction's variance x' (X' V^-1 X)^-1 x is |R^-T x|^2.
     const GlsFit fit = glsFit(design(others, order, scale), others, tau2);
     const Eigen::RowVectorXd at = powersAt(entries[g].distance_m, scale, order);
-    const Eigen::VectorXd u = fit.r.transpose().triangularView<Eigen::Lower>().solve(at.transpose());
+    const Eigen::VectorXd u =
+        fit.r.transpose().triangularView<Eigen::Lower>().solve(at.transpose());
     DeletedResidual out_g;
     out_g.entry = entries[g].entry;
     out_g.distance_m = entries[g].distance_m;
     out_g.error_m = entries[g].residual_m - at.dot(fit.beta);
-    out_g.se_m = std::sqrt(std::max(tau2 + entries[g].known_variance_m2 + u.squaredNorm(), kVarianceFloorM2));
+    out_g.se_m = std::sqrt(
+        std::max(tau2 + entries[g].known_variance_m2 + u.squaredNorm(), kVarianceFloorM2));
     out_g.dof = static_cast<int>(others.size()) - coefficients;
-    out_g.p_value = 2.0 * studentTCdf(-std::abs(out_g.error_m / out_g.se_m), static_cast<double>(out_g.dof));
+    out_g.p_value =
+        2.0 * studentTCdf(-std::abs(out_g.error_m / out_g.se_m), static_cast<double>(out_g.dof));
     out.push_back(out_g);
   }
   return out;
 }
 
-std::map<std::size_t, double> randomEffectsFactors(const std::vector<EntryResidual>& entries, const Discrepancy& d) {
+std::map<std::size_t, double> randomEffectsFactors(const std::vector<EntryResidual>& entries,
+                                                   const Discrepancy& d) {
   std::map<std::size_t, double> out;
-  const bool taped = std::any_of(entries.begin(), entries.end(), [](const EntryResidual& e) { return e.tape_sigma_m > 0.0; });
+  const bool taped = std::any_of(entries.begin(), entries.end(),
+                                 [](const EntryResidual& e) { return e.tape_sigma_m > 0.0; });
   if (!d.estimated() || (d.sigma_m == 0.0 && !taped)) return out;
   const double tau2 = d.sigma_m * d.sigma_m;
-  for (const auto& e : entries)
-    out[e.entry] = 1.0 / (e.weight * entryVariance(e, tau2));
+  for (const auto& e : entries) out[e.entry] = 1.0 / (e.weight * entryVariance(e, tau2));
   return out;
 }
 

@@ -36,21 +36,25 @@ namespace lidarcal::calibration {
 
 /// One measured entry summarised about a fitted f.
 struct EntryResidual {
-  std::size_t entry = 0;          ///< the entry's label (REF.json distances index)
-  double distance_m = 0.0;        ///< weighted mean true distance of its readings, metres
-  double residual_m = 0.0;        ///< weighted mean of reading - f(distance) over its readings, metres
-  double known_variance_m2 = 0.0; ///< k_g: noise of that mean plus (f'(d) sigma_tape)^2, square metres
-  double tape_sigma_m = 0.0;      ///< its stated tape error, metres
-  double weight = 0.0;            ///< W_g: the sum of its readings' weights
-  std::size_t readings = 0;       ///< readings it holds
+  std::size_t entry = 0;    ///< the entry's label (REF.json distances index)
+  double distance_m = 0.0;  ///< weighted mean true distance of its readings, metres
+  double residual_m = 0.0;  ///< weighted mean of reading - f(distance) over its readings, metres
+  /// k_g: noise of that mean plus (f'(d) sigma_tape)^2, square metres
+  double known_variance_m2 = 0.0;
+  double tape_sigma_m = 0.0;  ///< its stated tape error, metres
+  double weight = 0.0;        ///< W_g: the sum of its readings' weights
+  std::size_t readings = 0;   ///< readings it holds
 };
 
 /// The entries' residuals about f. d_m, y_m, weight (of the noise law, 1 / sigma_i^2 up to a
 /// common factor), entry and tape_sigma_m are per reading and of one length; a reading with
 /// weight 0 is left out. Entries in ascending label order.
-std::vector<EntryResidual> entryResiduals(const std::vector<double>& d_m, const std::vector<double>& y_m,
-                                          const std::vector<double>& weight, const std::vector<std::size_t>& entry,
-                                          const std::vector<double>& tape_sigma_m, const BiasPolynomial& f);
+std::vector<EntryResidual> entryResiduals(const std::vector<double>& d_m,
+                                          const std::vector<double>& y_m,
+                                          const std::vector<double>& weight,
+                                          const std::vector<std::size_t>& entry,
+                                          const std::vector<double>& tape_sigma_m,
+                                          const BiasPolynomial& f);
 
 /// The restricted log-likelihood of tau (metres) in the meta-regression above with a polynomial
 /// mean of `order` (up to a constant).
@@ -69,8 +73,8 @@ struct DeletedResidual {
   double error_m = 0.0;     ///< its residual less the others' prediction, metres
   /// sqrt(tau_(-g)^2 + k_g + SE of the others' prediction^2), metres.
   double se_m = 0.0;
-  int dof = 0;              ///< the others' degrees of freedom: entries - 1 - coefficients
-  double p_value = 1.0;     ///< two-sided P(|T| >= |error / se|), T ~ Student t with dof
+  int dof = 0;           ///< the others' degrees of freedom: entries - 1 - coefficients
+  double p_value = 1.0;  ///< two-sided P(|T| >= |error / se|), T ~ Student t with dof
 };
 
 /// The studentized deleted residual of every entry (the case-deletion outlier diagnostic of a

@@ -41,12 +41,13 @@ RmsError rmsError(const std::vector<double>& errors_m) {
   const std::vector<double> sq = squares(errors_m);
   out.rms_m = std::sqrt(mean(sq));
   out.se_m = errors_m.size() < 2 ? kNaN
-             : out.rms_m > 0.0  ? std::sqrt(covarianceOfMeans(sq, sq)) / (2.0 * out.rms_m)
-                                : 0.0;
+             : out.rms_m > 0.0   ? std::sqrt(covarianceOfMeans(sq, sq)) / (2.0 * out.rms_m)
+                                 : 0.0;
   return out;
 }
 
-MseRatio mseRatio(const std::vector<double>& raw_errors_m, const std::vector<double>& corrected_errors_m, double level) {
+MseRatio mseRatio(const std::vector<double>& raw_errors_m,
+                  const std::vector<double>& corrected_errors_m, double level) {
   if (raw_errors_m.size() != corrected_errors_m.size())
     throw std::invalid_argument("mseRatio: raw and corrected errors differ in number");
   MseRatio out;
@@ -61,7 +62,8 @@ MseRatio mseRatio(const std::vector<double>& raw_errors_m, const std::vector<dou
   if (r.size() < 2 || !(mr > 0.0)) return out;
   const double var_log = covarianceOfMeans(r, r) / (mr * mr) + covarianceOfMeans(c, c) / (mc * mc) -
                          2.0 * covarianceOfMeans(r, c) / (mr * mc);
-  const double half = centralTFactor(level, static_cast<double>(r.size() - 1)) * std::sqrt(std::max(var_log, 0.0));
+  const double half =
+      centralTFactor(level, static_cast<double>(r.size() - 1)) * std::sqrt(std::max(var_log, 0.0));
   out.low = out.ratio * std::exp(-half);
   out.high = out.ratio * std::exp(half);
   return out;

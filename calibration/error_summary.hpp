@@ -32,7 +32,7 @@ struct MseRatio {
   double level = 0.95;
   std::size_t entries = 0;
 };
-MseRatio mseRatio(const std::vector<double>& raw_errors_m, const std::vector<double>& corrected_errors_m,
-                  double level = 0.95);
+MseRatio mseRatio(const std::vector<double>& raw_errors_m,
+                  const std::vector<double>& corrected_errors_m, double level = 0.95);
 
 }  // namespace lidarcal::calibration

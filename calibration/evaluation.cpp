@@ -14,7 +14,9 @@ RangeComparison compareRanges(const std::vector<double>& truth, const std::vecto
     throw std::invalid_argument("compareRanges: sizes differ");
   RangeComparison c;
   for (std::size_t i = 0; i < truth.size(); ++i) {
-    if (!std::isfinite(truth[i]) || !std::isfinite(raw[i]) || !std::isfinite(corrected[i]) || truth[i] <= 0.0) continue;
+    if (!std::isfinite(truth[i]) || !std::isfinite(raw[i]) || !std::isfinite(corrected[i]) ||
+        truth[i] <= 0.0)
+      continue;
     const double er = raw[i] - truth[i], ec = corrected[i] - truth[i];
     c.mse_raw_m2 += er * er;
     c.mse_corrected_m2 += ec * ec;
@@ -33,7 +35,8 @@ RangeComparison compareRanges(const std::vector<double>& truth, const std::vecto
 }
 
 double similarityScale(const std::vector<Pose2>& from, const std::vector<Pose2>& to) {
-  if (from.size() != to.size() || from.size() < 2) throw std::invalid_argument("similarityScale: need 2+ matching points");
+  if (from.size() != to.size() || from.size() < 2)
+    throw std::invalid_argument("similarityScale: need 2+ matching points");
   // In the plane a similarity is b = z a + t with complex z = s e^(i phi); least squares on the
   // centred points gives z = sum conj(a') b' / sum |a'|^2 (the 2D case of Umeyama 1991).
   std::complex<double> ma, mb;

@@ -2,7 +2,8 @@
 #pragma once
 // How much closer corrected ranges are to the truth than raw ones.
 //   MSE ratio (Alhashimi et al. 2021 eq. 31): MSE(d, raw) / MSE(d, corrected)
-//   normalised MSE (Alhashimi et al. 2016 eqs. 31-32): (1/N) sum (x - d)^2 / d^2 for x raw or corrected
+//   normalised MSE (Alhashimi et al. 2016 eqs. 31-32): (1/N) sum (x - d)^2 / d^2 for x raw or
+//   corrected
 
 #include <vector>
 
@@ -11,12 +12,12 @@
 namespace lidarcal::calibration {
 
 struct RangeComparison {
-  std::size_t n = 0;                 ///< readings compared (finite truth, raw and corrected)
-  double mse_raw_m2 = 0.0;           ///< MSE of raw readings against the truth
-  double mse_corrected_m2 = 0.0;     ///< MSE of corrected readings against the truth
-  double mse_ratio = 0.0;            ///< Alhashimi et al. 2021 eq. 31
-  double nmse_raw = 0.0;             ///< Alhashimi et al. 2016 eq. 32
-  double nmse_corrected = 0.0;       ///< Alhashimi et al. 2016 eq. 31
+  std::size_t n = 0;              ///< readings compared (finite truth, raw and corrected)
+  double mse_raw_m2 = 0.0;        ///< MSE of raw readings against the truth
+  double mse_corrected_m2 = 0.0;  ///< MSE of corrected readings against the truth
+  double mse_ratio = 0.0;         ///< Alhashimi et al. 2021 eq. 31
+  double nmse_raw = 0.0;          ///< Alhashimi et al. 2016 eq. 32
+  double nmse_corrected = 0.0;    ///< Alhashimi et al. 2016 eq. 31
 };
 
 /// Compares; entries with a non-finite value are skipped.

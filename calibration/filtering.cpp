@@ -13,16 +13,21 @@ namespace lidarcal::calibration {
 
 const char* toString(Outside o) {
   switch (o) {
-    case Outside::linear: return "linear";
-    case Outside::keep: return "keep";
-    case Outside::extrapolate: return "extrapolate";
-    case Outside::drop: return "drop";
+    case Outside::linear:
+      return "linear";
+    case Outside::keep:
+      return "keep";
+    case Outside::extrapolate:
+      return "extrapolate";
+    case Outside::drop:
+      return "drop";
   }
   return "?";
 }
 
 namespace {
-constexpr Outside kAllOutside[] = {Outside::linear, Outside::keep, Outside::extrapolate, Outside::drop};
+constexpr Outside kAllOutside[] = {Outside::linear, Outside::keep, Outside::extrapolate,
+                                   Outside::drop};
 }  // namespace
 
 bool parseOutside(const std::string& name, Outside& out) {
@@ -43,7 +48,10 @@ std::vector<std::string> outsidePolicies() {
 std::string outsideNames() {
   std::string s;
   for (std::size_t i = 0; i < std::size(kAllOutside); ++i)
-    s += std::string(i == 0 ? "" : i + 1 == std::size(kAllOutside) ? " or " : ", ") + toString(kAllOutside[i]);
+    s += std::string(i == 0                            ? ""
+                     : i + 1 == std::size(kAllOutside) ? " or "
+                                                       : ", ") +
+         toString(kAllOutside[i]);
   return s;
 }
 
@@ -63,7 +71,8 @@ CorrectionWindow correctionWindow(const CalibrationModel& model, Outside outside
   return w;
 }
 
-RangeInverter modelInverter(const CalibrationModel& model, InversionMethod method, Outside outside) {
+RangeInverter modelInverter(const CalibrationModel& model, InversionMethod method,
+                            Outside outside) {
   InversionConfig c = inversionWindow(model.model, method);
   if (model.fitted_range_m && outside != Outside::extrapolate) {
     const auto [lo, hi] = *model.fitted_range_m;
@@ -76,9 +85,11 @@ RangeInverter modelInverter(const CalibrationModel& model, InversionMethod metho
 
 CorrectedReading ReadingCorrector::operator()(double r) const {
   const CorrectionWindow& w = window;
-  const bool below = r < w.reading_min_m, above = r > w.reading_max_m;
-  if ((below || above) && w.outside == Outside::keep) return {r, ReadingFate::outside_kept, kNaN, kNaN};
-  if ((below || above) && w.outside == Outside::drop) return {kNaN, ReadingFate::outside_dropped, kNaN, kNaN};
+  const bool below = r<w.reading_min_m, above = r> w.reading_max_m;
+  if ((below || above) && w.outside == Outside::keep)
+    return {r, ReadingFate::outside_kept, kNaN, kNaN};
+  if ((below || above) && w.outside == Outside::drop)
+    return {kNaN, ReadingFate::outside_dropped, kNaN, kNaN};
   if (!(r > 0.0)) return {kNaN, ReadingFate::unresolved, kNaN, kNaN};
   std::optional<double> d;
   if ((below || above) && w.outside == Outside::linear) {
@@ -92,7 +103,8 @@ CorrectedReading ReadingCorrector::operator()(double r) const {
   }
   if (!d) return {kNaN, ReadingFate::unresolved, kNaN, kNaN};
   const CorrectionErrors e = errorsAt(*d);
-  return {*d, below || above ? ReadingFate::extrapolated : ReadingFate::corrected, e.predictive_m, e.curve_m};
+  return {*d, below || above ? ReadingFate::extrapolated : ReadingFate::corrected, e.predictive_m,
+          e.curve_m};
 }
 
 CorrectionErrors ReadingCorrector::errorsAt(double d) const {
@@ -102,22 +114,32 @@ CorrectionErrors ReadingCorrector::errorsAt(double d) const {
   const double curve = correctionStandardError(bias, covariance, d, lo, hi);
   // The discrepancy is in reading units: through the slope of the rule that corrected the reading.
   const double slope = bias.derivative(std::clamp(d, lo, hi));
-  const double predictive = slope > 0.0 ? predictiveStandardError(curve * slope, discrepancy) / slope : kNaN;
+  const double predictive =
+      slope > 0.0 ? predictiveStandardError(curve * slope, discrepancy) / slope : kNaN;
   return {predictive, curve};
 }
 
-ReadingCorrector readingCorrector(const CalibrationModel& model, InversionMethod method, Outside outside) {
+ReadingCorrector readingCorrector(const CalibrationModel& model, InversionMethod method,
+                                  Outside outside) {
   return {modelInverter(model, method, outside), correctionWindow(model, outside), model.model.bias,
           model.alpha_covariance, model.discrepancy};
 }
 
 void FilteringStats::add(const CorrectedReading& c, double reading_m, bool below_window) {
   switch (c.fate) {
-    case ReadingFate::corrected: ++corrected; return;
-    case ReadingFate::unresolved: ++unresolved; return;
-    case ReadingFate::extrapolated: ++extrapolated; break;
+    case ReadingFate::corrected:
+      ++corrected;
+      return;
+    case ReadingFate::unresolved:
+      ++unresolved;
+      return;
+    case ReadingFate::extrapolated:
+      ++extrapolated;
+      break;
     case ReadingFate::outside_kept:
-    case ReadingFate::outside_dropped: ++outside; break;
+    case ReadingFate::outside_dropped:
+      ++outside;
+      break;
   }
   if (below_window) {
     ++below;
@@ -159,16 +181,20 @@ io::Scan correctScan(const io::Scan& scan, const ReadingCorrector& correct, Filt
     const CorrectedReading c = correct(r);
     s.add(c, r, r < correct.window.reading_min_m);
     switch (c.fate) {
-      case ReadingFate::outside_kept: out.correction[i] = io::PointCorrection::raw; continue;
+      case ReadingFate::outside_kept:
+        out.correction[i] = io::PointCorrection::raw;
+        continue;
       case ReadingFate::outside_dropped:
-      case ReadingFate::unresolved: break;
+      case ReadingFate::unresolved:
+        break;
       case ReadingFate::corrected:
       case ReadingFate::extrapolated: {
         const double k = c.range_m / r;  // move the point along its beam
         p.x = static_cast<float>(p.x * k);
         p.y = static_cast<float>(p.y * k);
         const bool inside = c.fate == ReadingFate::corrected;
-        out.correction[i] = inside ? io::PointCorrection::corrected : io::PointCorrection::extrapolated;
+        out.correction[i] =
+            inside ? io::PointCorrection::corrected : io::PointCorrection::extrapolated;
         out.correction_se[i] = static_cast<float>(c.standard_error_m);
         continue;
       }

@@ -25,9 +25,12 @@ double curveStandardError(const CalibrationModel& m, double d) {
 
 double noiseLawExponent(const NoiseModel& noise) {
   switch (noise.kind) {
-    case NoiseKind::squared: return 2.0;
-    case NoiseKind::power: return noise.exponent;
-    default: return 0.0;
+    case NoiseKind::squared:
+      return 2.0;
+    case NoiseKind::power:
+      return noise.exponent;
+    default:
+      return 0.0;
   }
 }
 
@@ -40,7 +43,8 @@ bool HeldOutEntry::inside(const Discrepancy& discrepancy, double level) const {
 namespace {
 
 /// The readings' residuals about the model's f, one per measured entry, weighted by its noise law.
-std::vector<EntryResidual> residualsAboutModel(const CalibrationModel& model, const std::vector<KnownReading>& readings) {
+std::vector<EntryResidual> residualsAboutModel(const CalibrationModel& model,
+                                               const std::vector<KnownReading>& readings) {
   const BiasPolynomial& f = model.model.bias;
   const double k = noiseLawExponent(model.model.noise);
   std::vector<double> d, y, w, tape;
@@ -57,7 +61,8 @@ std::vector<EntryResidual> residualsAboutModel(const CalibrationModel& model, co
 
 }  // namespace
 
-std::vector<HeldOutEntry> heldOutEntries(const CalibrationModel& model, const std::vector<KnownReading>& readings) {
+std::vector<HeldOutEntry> heldOutEntries(const CalibrationModel& model,
+                                         const std::vector<KnownReading>& readings) {
   std::vector<HeldOutEntry> out;
   for (const EntryResidual& e : residualsAboutModel(model, readings)) {
     HeldOutEntry h;
@@ -72,15 +77,18 @@ std::vector<HeldOutEntry> heldOutEntries(const CalibrationModel& model, const st
   return out;
 }
 
-Discrepancy discrepancyOfMeasuredEntries(const CalibrationModel& model, const std::vector<KnownReading>& readings) {
+Discrepancy discrepancyOfMeasuredEntries(const CalibrationModel& model,
+                                         const std::vector<KnownReading>& readings) {
   return estimateDiscrepancy(residualsAboutModel(model, readings), model.model.bias.order());
 }
 
-std::vector<std::string> disagreeingEntryWarnings(const CalibrationModel& model, const std::vector<KnownReading>& readings,
+std::vector<std::string> disagreeingEntryWarnings(const CalibrationModel& model,
+                                                  const std::vector<KnownReading>& readings,
                                                   double alpha) {
   std::map<std::size_t, std::size_t> stop_of;
   for (const KnownReading& r : readings) stop_of[r.entry] = r.stop;
-  const std::vector<DeletedResidual> deleted = deletedResiduals(residualsAboutModel(model, readings), model.model.bias.order());
+  const std::vector<DeletedResidual> deleted =
+      deletedResiduals(residualsAboutModel(model, readings), model.model.bias.order());
   std::vector<std::string> out;
   const double n = static_cast<double>(deleted.size());
   for (const DeletedResidual& e : deleted) {
@@ -88,20 +96,25 @@ std::vector<std::string> disagreeingEntryWarnings(const CalibrationModel& model,
     if (!(p < alpha)) continue;
     char buf[512];
     std::snprintf(buf, sizeof buf,
-                  "distances[%zu] (stop %zu, its beams at %.3f m) disagrees with the other measured distances: its readings lie "
-                  "%+.1f mm from what the others predict, %.1f standard errors (p = %.1g over %zu entries, Bonferroni); "
-                  "check its stop number, tape reading and target. Left in, it widens the model discrepancy and every "
+                  "distances[%zu] (stop %zu, its beams at %.3f m) disagrees with the other "
+                  "measured distances: its readings lie "
+                  "%+.1f mm from what the others predict, %.1f standard errors (p = %.1g over %zu "
+                  "entries, Bonferroni); "
+                  "check its stop number, tape reading and target. Left in, it widens the model "
+                  "discrepancy and every "
                   "predictive interval",
-                  e.entry, stop_of[e.entry], e.distance_m, 1000.0 * e.error_m, std::abs(e.error_m / e.se_m), p,
-                  deleted.size());
+                  e.entry, stop_of[e.entry], e.distance_m, 1000.0 * e.error_m,
+                  std::abs(e.error_m / e.se_m), p, deleted.size());
     out.push_back(buf);
   }
   return out;
 }
 
-HalfCheck checkInterleavedHalf(const std::vector<KnownReading>& readings, int fit_parity, const CalibrationConfig& config) {
+HalfCheck checkInterleavedHalf(const std::vector<KnownReading>& readings, int fit_parity,
+                               const CalibrationConfig& config) {
   std::vector<KnownReading> fitted, held;
-  for (const KnownReading& r : readings) (static_cast<int>(r.stop % 2) == fit_parity ? fitted : held).push_back(r);
+  for (const KnownReading& r : readings)
+    (static_cast<int>(r.stop % 2) == fit_parity ? fitted : held).push_back(r);
   HalfCheck out;
   out.model = calibrateWithReference(fitted, config);
   if (out.model.status.ok()) out.held_out = heldOutEntries(out.model, held);

@@ -28,12 +28,14 @@ double noiseLawExponent(const NoiseModel& noise);
 
 /// One held-out entry about a model.
 struct HeldOutEntry {
-  std::size_t entry = 0;           ///< the entry's label (KnownReading::entry)
-  double distance_m = 0.0;         ///< weighted mean measured distance of its readings, metres
-  double residual_m = 0.0;         ///< weighted mean of reading - f(distance), metres
-  double curve_se_m = 0.0;         ///< SE_curve at distance_m, metres
-  double predictive_se_m = 0.0;    ///< sqrt(SE_curve^2 + sigma_delta^2), metres (the curve's alone without a discrepancy)
-  double entry_se_m = 0.0;         ///< the entry's own: sqrt(noise of the mean + (f' sigma_tape)^2), metres
+  std::size_t entry = 0;    ///< the entry's label (KnownReading::entry)
+  double distance_m = 0.0;  ///< weighted mean measured distance of its readings, metres
+  double residual_m = 0.0;  ///< weighted mean of reading - f(distance), metres
+  double curve_se_m = 0.0;  ///< SE_curve at distance_m, metres
+  /// sqrt(SE_curve^2 + sigma_delta^2), metres (the curve's alone without a discrepancy)
+  double predictive_se_m = 0.0;
+  /// the entry's own: sqrt(noise of the mean + (f' sigma_tape)^2), metres
+  double entry_se_m = 0.0;
   /// Whether |residual| <= t sqrt(predictive_se^2 + entry_se^2), t the half-width factor of the
   /// central interval of probability `level` (predictiveFactor, the entry's own variance known).
   bool inside(const Discrepancy& discrepancy, double level) const;
@@ -41,27 +43,32 @@ struct HeldOutEntry {
 
 /// The held-out entries of `readings` (the readings of entries the model was not fitted on;
 /// their d_m from the measured distances) about `model`, in ascending entry order.
-std::vector<HeldOutEntry> heldOutEntries(const CalibrationModel& model, const std::vector<KnownReading>& readings);
+std::vector<HeldOutEntry> heldOutEntries(const CalibrationModel& model,
+                                         const std::vector<KnownReading>& readings);
 
 /// The model discrepancy of `model` over measured entries that were terms of its fit beside
 /// other data (the self-calibration's likelihood, `--reference-fit combined`): REML over the
 /// entries' residuals about f, as calibrateWithReference does over its own (the polynomial's
 /// coefficients counted as fitted to them, which leaves entries - coefficients degrees of
 /// freedom). Method "none", with a note saying why, when the entries cannot leave one.
-Discrepancy discrepancyOfMeasuredEntries(const CalibrationModel& model, const std::vector<KnownReading>& readings);
+Discrepancy discrepancyOfMeasuredEntries(const CalibrationModel& model,
+                                         const std::vector<KnownReading>& readings);
 
 /// One warning for each measured entry that disagrees with the others beyond chance: its
 /// studentized deleted residual (deletedResiduals, about the model's f at its order) has a
 /// Bonferroni-adjusted p-value, min(1, entries x p), below `alpha`. A wrong stop number or
 /// tape reading otherwise passes as model discrepancy and widens every predictive interval.
 /// Each names the entry as distances[k] with its stop; empty when none disagrees.
-std::vector<std::string> disagreeingEntryWarnings(const CalibrationModel& model, const std::vector<KnownReading>& readings,
+std::vector<std::string> disagreeingEntryWarnings(const CalibrationModel& model,
+                                                  const std::vector<KnownReading>& readings,
                                                   double alpha = 0.05);
 
 /// A fit on some stops and the others about it.
 struct HalfCheck {
-  CalibrationModel model;             ///< calibrateWithReference on the fitted stops (its status says whether it is usable)
-  std::vector<HeldOutEntry> held_out;  ///< the other stops' entries about it (empty when the fit failed)
+  /// calibrateWithReference on the fitted stops (its status says whether it is usable)
+  CalibrationModel model;
+  /// the other stops' entries about it (empty when the fit failed)
+  std::vector<HeldOutEntry> held_out;
 };
 
 /// Interleaved halves: the model fitted to the readings of the stops with stop % 2 ==

@@ -3,8 +3,8 @@
 
 #include <algorithm>
 #include <array>
-#include <cstddef>
 #include <cmath>
+#include <cstddef>
 #include <limits>
 #include <stdexcept>
 #include <vector>
@@ -16,7 +16,8 @@ namespace {
 
 /// At most kMaxTerms numbers held on the stack: the coefficients of a polynomial (c[i] of x^i)
 /// or its roots. The root search per reading allocates nothing.
-constexpr std::size_t kMaxTerms = 19;  // degree 18: ML inversion (degree 2n) of order 9, model.json's limit
+// degree 18: ML inversion (degree 2n) of order 9, model.json's limit
+constexpr std::size_t kMaxTerms = 19;
 struct Terms {
   std::array<double, kMaxTerms> v;  // only the first n are set
   std::size_t n = 0;
@@ -25,7 +26,8 @@ struct Terms {
 };
 
 Terms termsOf(const std::vector<double>& values) {
-  if (values.size() > kMaxTerms) throw std::invalid_argument("inversion: polynomials above degree 18 are not supported");
+  if (values.size() > kMaxTerms)
+    throw std::invalid_argument("inversion: polynomials above degree 18 are not supported");
   Terms t;
   for (double x : values) t.push(x);
   return t;
@@ -45,7 +47,8 @@ Terms polynomial(const std::vector<double>& c) {
 Terms product(const Terms& a, const Terms& b) {
   Terms out;
   out.n = a.n + b.n - 1;
-  if (out.n > kMaxTerms) throw std::invalid_argument("inversion: polynomials above degree 18 are not supported");
+  if (out.n > kMaxTerms)
+    throw std::invalid_argument("inversion: polynomials above degree 18 are not supported");
   std::fill(out.v.begin(), out.v.begin() + static_cast<std::ptrdiff_t>(out.n), 0.0);
   for (std::size_t i = 0; i < a.n; ++i)
     for (std::size_t j = 0; j < b.n; ++j) out.v[i + j] += a[i] * b[j];
@@ -92,7 +95,8 @@ double bracketedRoot(const Terms& c, double a, double b, double fa, double fb, d
     }
     const double newton = dfx != 0.0 ? x - fx / dfx : a - 1.0;
     const double next = newton > a && newton < b ? newton : 0.5 * (a + b);
-    const double tolerance = 2.0 * std::numeric_limits<double>::epsilon() * std::max(std::abs(x), 1e-9);
+    const double tolerance =
+        2.0 * std::numeric_limits<double>::epsilon() * std::max(std::abs(x), 1e-9);
     if (std::abs(next - x) <= tolerance || b - a <= 2.0 * tolerance) return next;
     x = next;
   }
@@ -104,7 +108,8 @@ double bracketedRoot(const Terms& c, double a, double b, double fa, double fb, d
 /// at most one root: the pieces whose ends differ in sign are solved by bracketedRoot (from
 /// `near` in the piece that holds it). A root where c only touches zero without changing sign
 /// is found only where c is exactly 0.
-Terms rootsBetween(const Terms& c, const Terms& breaks, double near = std::numeric_limits<double>::quiet_NaN()) {
+Terms rootsBetween(const Terms& c, const Terms& breaks,
+                   double near = std::numeric_limits<double>::quiet_NaN()) {
   Terms roots;
   double a = breaks[0], fa = valueAt(c, a);
   if (fa == 0.0) roots.push(a);
@@ -192,12 +197,13 @@ bool invertsReadingWindow(const BiasPolynomial& f, double y_min_m, double y_max_
   const double d_end = 4.0 * std::max(y_max_m, 0.1);
   double d_start = 0.0;
   if (f(0.0) < y_min_m) {
-    for (double r : realRoots([&] {
-           auto c = f.alpha;
-           c[0] -= y_min_m;
-           return c;
-         }(),
-         0.0, d_end))
+    for (double r : realRoots(
+             [&] {
+               auto c = f.alpha;
+               c[0] -= y_min_m;
+               return c;
+             }(),
+             0.0, d_end))
       if (r > 0.0 && r < d_end) {
         d_start = d_start == 0.0 ? r : std::min(d_start, r);
       }
@@ -216,14 +222,19 @@ bool invertsReadingWindow(const BiasPolynomial& f, double y_min_m, double y_max_
   return isMonotone(f, d_start, d_stop, where);
 }
 
-RangeInverter::RangeInverter(const RangeModel& model, const InversionConfig& config) : model_(model), config_(config) {
+RangeInverter::RangeInverter(const RangeModel& model, const InversionConfig& config)
+    : model_(model), config_(config) {
   if (model_.bias.order() < 1 || (model_.bias.order() == 1 && model_.bias.alpha[1] == 0.0))
     throw std::invalid_argument("RangeInverter: a bias polynomial of order 0 cannot be inverted");
   if (config_.method == InversionMethod::ml && model_.noise.kind != NoiseKind::squared)
-    throw std::invalid_argument("RangeInverter: ML inversion (Alhashimi et al. 2016 eq. 28) needs the squared noise law");
-  if (!(config_.d_max_m > config_.d_min_m)) throw std::invalid_argument("RangeInverter: empty distance window");
-  if (model_.bias.alpha.size() > 10) throw std::invalid_argument("RangeInverter: bias polynomials above order 9 are not supported");
-  ls_pieces_ = vectorOf(monotonePieces(polynomial(model_.bias.alpha), config_.d_min_m, config_.d_max_m));
+    throw std::invalid_argument(
+        "RangeInverter: ML inversion (Alhashimi et al. 2016 eq. 28) needs the squared noise law");
+  if (!(config_.d_max_m > config_.d_min_m))
+    throw std::invalid_argument("RangeInverter: empty distance window");
+  if (model_.bias.alpha.size() > 10)
+    throw std::invalid_argument("RangeInverter: bias polynomials above order 9 are not supported");
+  ls_pieces_ =
+      vectorOf(monotonePieces(polynomial(model_.bias.alpha), config_.d_min_m, config_.d_max_m));
 }
 
 std::optional<double> RangeInverter::invert(double y_m) const {
@@ -281,15 +292,16 @@ std::optional<double> RangeInverter::invertMl(double y_m) const {
     if (breaks[k] <= *ls && *ls <= breaks[k + 1]) first = k;
   if (first < breaks.n) searchPiece(first, *ls);
   for (std::size_t k = 0; k + 1 < breaks.n; ++k) {
-    if (k == first || (best && breaks[k] > 0.0 && -std::log(breaks[k] * breaks[k]) < loglik(*best))) continue;
+    if (k == first || (best && breaks[k] > 0.0 && -std::log(breaks[k] * breaks[k]) < loglik(*best)))
+      continue;
     searchPiece(k, std::numeric_limits<double>::quiet_NaN());
   }
   if (!best || s2 == 0.0) return ls;
   return best;
 }
 
-double correctionStandardError(const BiasPolynomial& f, const std::vector<double>& covariance, double d, double d_min,
-                               double d_max) {
+double correctionStandardError(const BiasPolynomial& f, const std::vector<double>& covariance,
+                               double d, double d_min, double d_max) {
   const std::size_t n = f.alpha.size();
   if (covariance.size() != n * n || n == 0) return kNaN;
   const double e = std::clamp(d, d_min, d_max);
@@ -329,7 +341,8 @@ double distanceBeyondEdge(const BiasPolynomial& f, double edge, double y) {
 
 }  // namespace
 
-std::pair<double, double> fittedRange(const std::vector<double>& d, const std::vector<double>& y, const BiasPolynomial& f) {
+std::pair<double, double> fittedRange(const std::vector<double>& d, const std::vector<double>& y,
+                                      const BiasPolynomial& f) {
   double lo = *std::min_element(d.begin(), d.end()), hi = *std::max_element(d.begin(), d.end());
   const auto [y_lo, y_hi] = std::minmax_element(y.begin(), y.end());
   // The nearest and farthest targets' readings scatter a few noise widths beyond f(lo) and f(hi).

@@ -15,7 +15,8 @@ ceres::CostFunction* makeBeamCost(double angle, double y, double inv_sigma) {
 
 template <int N>
 ceres::CostFunction* makeKnownRangeCost(const KnownRange& k, double inv_sigma) {
-  return new ceres::AutoDiffCostFunction<KnownRangeCost<N>, 1, N, 1>(new KnownRangeCost<N>{&k, inv_sigma});
+  return new ceres::AutoDiffCostFunction<KnownRangeCost<N>, 1, N, 1>(
+      new KnownRangeCost<N>{&k, inv_sigma});
 }
 
 template <int N>
@@ -28,37 +29,58 @@ ceres::CostFunction* makeEffectCost(double angle, double y, double inv_sigma, do
 
 ceres::CostFunction* beamCost(int order, double angle, double y, double inv_sigma) {
   switch (order + 1) {
-    case 2: return makeBeamCost<2>(angle, y, inv_sigma);
-    case 3: return makeBeamCost<3>(angle, y, inv_sigma);
-    case 4: return makeBeamCost<4>(angle, y, inv_sigma);
-    case 5: return makeBeamCost<5>(angle, y, inv_sigma);
-    case 6: return makeBeamCost<6>(angle, y, inv_sigma);
-    case 7: return makeBeamCost<7>(angle, y, inv_sigma);
-    default: throw std::invalid_argument("refineJoint: order must be 1..6");
+    case 2:
+      return makeBeamCost<2>(angle, y, inv_sigma);
+    case 3:
+      return makeBeamCost<3>(angle, y, inv_sigma);
+    case 4:
+      return makeBeamCost<4>(angle, y, inv_sigma);
+    case 5:
+      return makeBeamCost<5>(angle, y, inv_sigma);
+    case 6:
+      return makeBeamCost<6>(angle, y, inv_sigma);
+    case 7:
+      return makeBeamCost<7>(angle, y, inv_sigma);
+    default:
+      throw std::invalid_argument("refineJoint: order must be 1..6");
   }
 }
 
 ceres::CostFunction* effectCost(int order, double angle, double y, double inv_sigma, double t_rel) {
   switch (order + 1) {
-    case 2: return makeEffectCost<2>(angle, y, inv_sigma, t_rel);
-    case 3: return makeEffectCost<3>(angle, y, inv_sigma, t_rel);
-    case 4: return makeEffectCost<4>(angle, y, inv_sigma, t_rel);
-    case 5: return makeEffectCost<5>(angle, y, inv_sigma, t_rel);
-    case 6: return makeEffectCost<6>(angle, y, inv_sigma, t_rel);
-    case 7: return makeEffectCost<7>(angle, y, inv_sigma, t_rel);
-    default: throw std::invalid_argument("refineJoint: order must be 1..6");
+    case 2:
+      return makeEffectCost<2>(angle, y, inv_sigma, t_rel);
+    case 3:
+      return makeEffectCost<3>(angle, y, inv_sigma, t_rel);
+    case 4:
+      return makeEffectCost<4>(angle, y, inv_sigma, t_rel);
+    case 5:
+      return makeEffectCost<5>(angle, y, inv_sigma, t_rel);
+    case 6:
+      return makeEffectCost<6>(angle, y, inv_sigma, t_rel);
+    case 7:
+      return makeEffectCost<7>(angle, y, inv_sigma, t_rel);
+    default:
+      throw std::invalid_argument("refineJoint: order must be 1..6");
   }
 }
 
 ceres::CostFunction* knownRangeCost(int order, const KnownRange& k, double inv_sigma) {
   switch (order + 1) {
-    case 2: return makeKnownRangeCost<2>(k, inv_sigma);
-    case 3: return makeKnownRangeCost<3>(k, inv_sigma);
-    case 4: return makeKnownRangeCost<4>(k, inv_sigma);
-    case 5: return makeKnownRangeCost<5>(k, inv_sigma);
-    case 6: return makeKnownRangeCost<6>(k, inv_sigma);
-    case 7: return makeKnownRangeCost<7>(k, inv_sigma);
-    default: throw std::invalid_argument("refineJoint: order must be 1..6");
+    case 2:
+      return makeKnownRangeCost<2>(k, inv_sigma);
+    case 3:
+      return makeKnownRangeCost<3>(k, inv_sigma);
+    case 4:
+      return makeKnownRangeCost<4>(k, inv_sigma);
+    case 5:
+      return makeKnownRangeCost<5>(k, inv_sigma);
+    case 6:
+      return makeKnownRangeCost<6>(k, inv_sigma);
+    case 7:
+      return makeKnownRangeCost<7>(k, inv_sigma);
+    default:
+      throw std::invalid_argument("refineJoint: order must be 1..6");
   }
 }
 
@@ -72,18 +94,23 @@ BeamGeometry beamGeometry(const double* pose, double angle, const double* centre
   return g;
 }
 
-double noiseShape(const NoiseModel& n, const BiasPolynomial& f, double d, double cos_inc, double gamma, double dark,
-                  double delta) {
+double noiseShape(const NoiseModel& n, const BiasPolynomial& f, double d, double cos_inc,
+                  double gamma, double dark, double delta) {
   double h = 1.0;
   switch (n.kind) {
-    case NoiseKind::squared: h = f(d) * f(d); break;
-    case NoiseKind::power: h = std::pow(std::abs(f(d)), n.exponent); break;
+    case NoiseKind::squared:
+      h = f(d) * f(d);
+      break;
+    case NoiseKind::power:
+      h = std::pow(std::abs(f(d)), n.exponent);
+      break;
     case NoiseKind::polynomial: {
       NoiseModel unit = n;
       h = unit.stddev(d, f);
       break;
     }
-    default: break;
+    default:
+      break;
   }
   return h * incidenceNoiseFactor(gamma, cos_inc) * darkNoiseFactor(delta, dark);
 }

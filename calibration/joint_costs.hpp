@@ -18,7 +18,8 @@ template <int N>
 struct BeamRangeCost {
   double angle_rad, y_m, inv_sigma;
   template <typename T>
-  bool operator()(const T* pose, const T* centre, const T* radius, const T* alpha, T* residual) const {
+  bool operator()(const T* pose, const T* centre, const T* radius, const T* alpha,
+                  T* residual) const {
     const T a = pose[2] + T(angle_rad);
     const T d = rayCircleDistance(pose[0], pose[1], a, centre[0], centre[1], radius[0]);
     residual[0] = (T(y_m) - evaluatePolynomial<N>(alpha, d)) * T(inv_sigma);
@@ -41,7 +42,8 @@ class BeamRangeAnalyticCost final : public ceres::SizedCostFunction<1, 3, 2, 1, 
   BeamRangeAnalyticCost(double angle_rad, double y_m, double inv_sigma)
       : angle_rad_(angle_rad), y_m_(y_m), inv_sigma_(inv_sigma) {}
 
-  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override {
     const double* pose = parameters[0];
     const double* centre = parameters[1];
     const double r = parameters[2][0];
@@ -95,7 +97,8 @@ struct KnownRangeCost {
     T sum = T(0);
     double n = 0.0;
     for (const KnownRange::Beam& b : target->beams) {
-      sum += T(b.count) * (T(b.mean_reading_m) - evaluatePolynomial<N>(alpha, target->distance(b, radius[0])));
+      sum += T(b.count) *
+             (T(b.mean_reading_m) - evaluatePolynomial<N>(alpha, target->distance(b, radius[0])));
       n += b.count;
     }
     residual[0] = sum / T(n) * T(inv_sigma);
@@ -109,8 +112,8 @@ template <int N>
 struct EffectBeamCost {
   double angle_rad, y_m, inv_sigma, t_rel;
   template <typename T>
-  bool operator()(const T* pose, const T* centre, const T* radius, const T* alpha, const T* offset, const T* g,
-                  T* residual) const {
+  bool operator()(const T* pose, const T* centre, const T* radius, const T* alpha, const T* offset,
+                  const T* g, T* residual) const {
     using std::cos;
     using std::sin;
     using std::sqrt;
@@ -119,7 +122,8 @@ struct EffectBeamCost {
     const T perp = (centre[1] - pose[1]) * cos(a) - (centre[0] - pose[0]) * sin(a);
     const T u = perp / radius[0];
     const T cos_phi = sqrt(clampCosIncidenceSquared(T(1) - u * u));
-    const T mean = expectedReading(evaluatePolynomial<N>(alpha, d), offset[0], g[0], T(t_rel), g[2], cos_phi);
+    const T mean =
+        expectedReading(evaluatePolynomial<N>(alpha, d), offset[0], g[0], T(t_rel), g[2], cos_phi);
     residual[0] = (T(y_m) - mean) * T(inv_sigma);
     return true;
   }
@@ -168,8 +172,8 @@ struct ScaledPosePriorCost {
 /// is, on the commanded side. Scaling the commanded step instead (fitted - (1 + s) commanded)
 /// regresses the true steps on noisy ones and dilutes the scale: a clean thin-pole drive's
 /// odometry (3 mm per coordinate on 3 cm steps) gave s = -2 sigma^2 / L^2 = -2 %, named as a step
-/// error on 4 of 40 clean drives once the odometry's noise was fitted (docs/results/hidden-effects.md).
-/// With s = 0 both are the same.
+/// error on 4 of 40 clean drives once the odometry's noise was fitted
+/// (docs/results/hidden-effects.md). With s = 0 both are the same.
 struct MotionPriorCost {
   double dx, dy, dpsi, inv_t, inv_psi;
   template <typename T>
@@ -191,15 +195,16 @@ struct MotionPriorCost {
 /// were a sixth of `calibrate`'s time). With c, s the cosine and sine of a's heading and
 /// (ex, ey) = b - a in the world frame, the step seen from a is (c ex + s ey, c ey - s ex):
 /// r0 = (along / f - dx) inv_t, r1 = (across / f - dy) inv_t with f = 1 + scale:
-///   d/d(a0, a1, a2) of r0 = (-c, -s, c ey - s ex) inv_t / f,  of r1 = (s, -c, -(c ex + s ey)) inv_t / f,
-///   d/d(b0, b1) of r0 = (c, s) inv_t / f,  of r1 = (-s, c) inv_t / f,
-///   d/d(scale) = (-along, -across) inv_t / f^2,
+///   d/d(a0, a1, a2) of r0 = (-c, -s, c ey - s ex) inv_t / f,  of r1 = (s, -c, -(c ex + s ey))
+///   inv_t / f, d/d(b0, b1) of r0 = (c, s) inv_t / f,  of r1 = (-s, c) inv_t / f, d/d(scale) =
+///   (-along, -across) inv_t / f^2,
 /// and r2 = (b2 - a2 - dpsi) inv_psi moves with the headings alone.
 class MotionPriorAnalyticCost final : public ceres::SizedCostFunction<3, 3, 3, 1> {
  public:
   explicit MotionPriorAnalyticCost(const MotionPriorCost& c) : c_(c) {}
 
-  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override {
     const double* a = parameters[0];
     const double* b = parameters[1];
     const double f = 1.0 + parameters[2][0];
@@ -249,13 +254,16 @@ BeamGeometry beamGeometry(const double* pose, double angle, const double* centre
 
 /// Noise shape h (sigma = scale * h) of a reading: the law's dependence on d, the incidence
 /// ((1 / cos phi)^gamma) and the darkness ln(I_ref / I) of its return ((I_ref / I)^delta).
-double noiseShape(const NoiseModel& n, const BiasPolynomial& f, double d, double cos_inc, double gamma, double dark,
-                  double delta);
-/// The scale that multiplies the shape: sigma_e, or 1 for the polynomial law (its beta carry the scale).
-inline double noiseScale(const NoiseModel& n) { return n.kind == NoiseKind::polynomial ? 1.0 : n.sigma_e; }
+double noiseShape(const NoiseModel& n, const BiasPolynomial& f, double d, double cos_inc,
+                  double gamma, double dark, double delta);
+/// The scale that multiplies the shape: sigma_e, or 1 for the polynomial law (its beta carry the
+/// scale).
+inline double noiseScale(const NoiseModel& n) {
+  return n.kind == NoiseKind::polynomial ? 1.0 : n.sigma_e;
+}
 /// sigma_i = scale * h_i.
-inline double readingSigma(const NoiseModel& n, const BiasPolynomial& f, double d, double cos_inc, double gamma,
-                           double dark, double delta) {
+inline double readingSigma(const NoiseModel& n, const BiasPolynomial& f, double d, double cos_inc,
+                           double gamma, double dark, double delta) {
   return noiseScale(n) * noiseShape(n, f, d, cos_inc, gamma, dark, delta);
 }
 

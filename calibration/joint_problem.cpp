@@ -10,10 +10,12 @@
 
 namespace lidarcal::calibration::joint {
 
-JointProblem::JointProblem(const LandmarkObservations& obs, const JointInit& init, const JointConfig& config)
+JointProblem::JointProblem(const LandmarkObservations& obs, const JointInit& init,
+                           const JointConfig& config)
     : obs_(obs), init_(init), config_(config), fx_(config.effects) {
   config.validate();
-  if (init.poses.size() != obs.commanded.size()) throw std::invalid_argument("refineJoint: one initial pose per stop");
+  if (init.poses.size() != obs.commanded.size())
+    throw std::invalid_argument("refineJoint: one initial pose per stop");
   out_.motion_prior = config.motion == MotionPrior::on ||
                       (config.motion == MotionPrior::automatic && continuousMotion(obs, config));
   motion_ = out_.motion_prior && init.poses.size() >= 2;
@@ -38,7 +40,8 @@ void JointProblem::initialiseModel() {
   out_.model.noise.kind = config_.noise;
   if (config_.noise == NoiseKind::polynomial && out_.model.noise.beta.empty())
     out_.model.noise.beta.assign(static_cast<std::size_t>(config_.noise_order) + 1, 0.0);
-  if (config_.noise == NoiseKind::power && init_.model.noise.kind != NoiseKind::power) out_.model.noise.exponent = 2.0;
+  if (config_.noise == NoiseKind::power && init_.model.noise.kind != NoiseKind::power)
+    out_.model.noise.exponent = 2.0;
   if (fx_.noise_exponent && out_.model.noise.kind == NoiseKind::squared) {
     out_.model.noise.kind = NoiseKind::power;
     // Held, the start's exponent is the law; fitted, the first solve weighs by the squared law.
@@ -108,7 +111,8 @@ void JointProblem::startEffectTerms() {
   if (fx_.student_noise && e0.student_dof > 2.0) dof_ = e0.student_dof;
 }
 
-/// The window of the outlier floor and the mixed pixels: the sensor's, or 1.25 x the largest reading.
+/// The window of the outlier floor and the mixed pixels: the sensor's, or 1.25 x the largest
+/// reading.
 void JointProblem::initialiseReadingWindow() {
   out_.window_min_m = obs_.range_min_m;
   out_.window_max_m = obs_.range_max_m;
@@ -164,7 +168,8 @@ void JointProblem::selectReadings() {
         continue;
       }
       const double a = p[2] + b.angle_rad + globals_[1];
-      const double perp = (it->second[1] - p[1]) * std::cos(a) - (it->second[0] - p[0]) * std::sin(a);
+      const double perp =
+          (it->second[1] - p[1]) * std::cos(a) - (it->second[0] - p[0]) * std::sin(a);
       if (std::abs(perp) < config_.lateral_fraction * *radius_)
         readings_.push_back({s.stop, s.scan, s.landmark, b.angle_rad, b.range_m, edge,
                              darkness(b.intensity, reference_intensity_)});
@@ -179,19 +184,22 @@ void JointProblem::updateGeometry() {
   geo_.resize(readings_.size());
   for (std::size_t i = 0; i < readings_.size(); ++i) {
     const auto& r = readings_[i];
-    geo_[i] = beamGeometry(poses_[r.stop], r.angle_rad + globals_[1], centres_.at(r.landmark), *radius_);
+    geo_[i] =
+        beamGeometry(poses_[r.stop], r.angle_rad + globals_[1], centres_.at(r.landmark), *radius_);
   }
 }
 
-/// The terms that are off hold their neutral values (zero), so the full expression serves every case.
+/// The terms that are off hold their neutral values (zero), so the full expression serves every
+/// case.
 double JointProblem::meanOf(std::size_t i, const BiasPolynomial& f) const {
   const auto& r = readings_[i];
-  return expectedReading(f(geo_[i].d), *offsets_.at(r.landmark), globals_[0], static_cast<double>(r.scan) - t_ref_,
-                         globals_[2], geo_[i].cos_inc);
+  return expectedReading(f(geo_[i].d), *offsets_.at(r.landmark), globals_[0],
+                         static_cast<double>(r.scan) - t_ref_, globals_[2], geo_[i].cos_inc);
 }
 
 double JointProblem::sigmaOf(std::size_t i, const RangeModel& m) const {
-  return readingSigma(m.noise, m.bias, geo_[i].d, geo_[i].cos_inc, gamma_, readings_[i].darkness, delta_);
+  return readingSigma(m.noise, m.bias, geo_[i].d, geo_[i].cos_inc, gamma_, readings_[i].darkness,
+                      delta_);
 }
 
 std::vector<double> JointProblem::residualsNow(const BiasPolynomial& f) const {
@@ -217,11 +225,13 @@ void JointProblem::updateResponsibilities(const std::vector<double>& res) {
   for (std::size_t i = 0; i < readings_.size(); ++i) {
     if (!readings_[i].edge) continue;
     const double mean = readings_[i].y_m - res[i];
-    const double u =
-        (res[i] >= 0.0 && readings_[i].y_m <= window_max_ && window_max_ > mean) ? 1.0 / (window_max_ - mean) : 0.0;
+    const double u = (res[i] >= 0.0 && readings_[i].y_m <= window_max_ && window_max_ > mean)
+                         ? 1.0 / (window_max_ - mean)
+                         : 0.0;
     const double z = res[i] / sigma_[i];
     const double nd = std::exp(-0.5 * z * z) / (sigma_[i] * std::sqrt(2.0 * kPi));
-    weight_[i] = 1.0 - mixed_fraction_ * u / (mixed_fraction_ * u + (1.0 - mixed_fraction_) * nd + 1e-300);
+    weight_[i] =
+        1.0 - mixed_fraction_ * u / (mixed_fraction_ * u + (1.0 - mixed_fraction_) * nd + 1e-300);
   }
 }
 }  // namespace lidarcal::calibration::joint

@@ -62,8 +62,8 @@ class JointProblem {
 
   // residuals
   void addResiduals(ceres::Problem& problem, bool robust);
-  void addReading(ceres::Problem& problem, bool robust, const Reading& r, double angle, double y, double inv,
-                  double count);
+  void addReading(ceres::Problem& problem, bool robust, const Reading& r, double angle, double y,
+                  double inv, double count);
   bool addPooledReadings(ceres::Problem& problem, bool robust);
   void addKnownRanges(ceres::Problem& problem, bool robust);
   void addPosePriors(ceres::Problem& problem);
@@ -79,7 +79,8 @@ class JointProblem {
   void fitCellScale(const std::vector<double>& res);
   double workingSigma(std::size_t i, const RangeModel& m) const;
   double profileNoise(NoiseModel n, double g, double delta, const std::vector<std::size_t>& in,
-                      const std::vector<double>& res, const BiasPolynomial& f, double* sigma_e) const;
+                      const std::vector<double>& res, const BiasPolynomial& f,
+                      double* sigma_e) const;
 
   // summarise
   void reportEstimates();
@@ -102,25 +103,25 @@ class JointProblem {
   // covariance's columns by the blocks' addresses; one array makes that order (and so the last
   // digits of every standard error) independent of where the allocator put each block.
   std::vector<double> params_;
-  std::vector<double*> poses_;             ///< x, y, heading per stop
-  std::map<int, double*> centres_;         ///< x, y per landmark
-  double* alpha_ = nullptr;                ///< alpha_0..alpha_n
+  std::vector<double*> poses_;      ///< x, y, heading per stop
+  std::map<int, double*> centres_;  ///< x, y per landmark
+  double* alpha_ = nullptr;         ///< alpha_0..alpha_n
   std::size_t n_alpha_ = 0;
-  std::map<int, double*> offsets_;         ///< landmark offsets; the first landmark is the reference (0)
+  std::map<int, double*> offsets_;  ///< landmark offsets; the first landmark is the reference (0)
   double* radius_ = nullptr;
-  double* globals_ = nullptr;              ///< drift, zero-angle offset, incidence bias
-  double* scale_ = nullptr;                ///< odometry scale
-  double gamma_ = 0.0;                     ///< incidence noise exponent
-  double delta_ = 0.0;                     ///< dark-surface noise exponent
-  double reference_intensity_ = 0.0;       ///< I_ref of the darkness (0: no intensity recorded)
+  double* globals_ = nullptr;         ///< drift, zero-angle offset, incidence bias
+  double* scale_ = nullptr;           ///< odometry scale
+  double gamma_ = 0.0;                ///< incidence noise exponent
+  double delta_ = 0.0;                ///< dark-surface noise exponent
+  double reference_intensity_ = 0.0;  ///< I_ref of the darkness (0: no intensity recorded)
   double mixed_fraction_ = 0.0;
-  double dof_ = 0.0;                       ///< Student-t degrees of freedom (0: Gaussian noise)
-  double grid_ = 0.0;                      ///< grid of the readings under the quantised model (0: none)
+  double dof_ = 0.0;   ///< Student-t degrees of freedom (0: Gaussian noise)
+  double grid_ = 0.0;  ///< grid of the readings under the quantised model (0: none)
 
-  double window_max_ = 0.0;  ///< upper end of the reading window
+  double window_max_ = 0.0;           ///< upper end of the reading window
   double previous_noise_size_ = 0.0;  ///< size of the noise law before the last re-estimation
-  double t_ref_ = 0.0;       ///< drift reference scan
-  bool pool_ = false;        ///< pool repeated scans (JointConfig::pool_repeated_scans, when allowed)
+  double t_ref_ = 0.0;                ///< drift reference scan
+  bool pool_ = false;  ///< pool repeated scans (JointConfig::pool_repeated_scans, when allowed)
 
   // Per reading.
   std::vector<Reading> readings_;

@@ -21,23 +21,27 @@ void JointProblem::addResiduals(ceres::Problem& problem, bool robust) {
   addPosePriors(problem);
   if (fx_.anyMean()) fixInactiveTerms(problem);
   fixKnownGeometry(problem);
-  if (!config_.estimate_radius && problem.HasParameterBlock(radius_)) problem.SetParameterBlockConstant(radius_);
+  if (!config_.estimate_radius && problem.HasParameterBlock(radius_))
+    problem.SetParameterBlockConstant(radius_);
 }
 
 /// `count` readings behind one residual: the loss's threshold scales with sqrt(count), so a
 /// pooled residual is down-weighted when its mean is off by huber_sigmas standard deviations of
 /// one reading, as a single reading would be (not when it is off by that many standard errors of
 /// the mean: a millimetre of geometry error would then put every group there).
-void JointProblem::addReading(ceres::Problem& problem, bool robust, const Reading& r, double angle, double y,
-                              double inv, double count) {
+void JointProblem::addReading(ceres::Problem& problem, bool robust, const Reading& r, double angle,
+                              double y, double inv, double count) {
   ceres::LossFunction* loss = nullptr;
   const double threshold = config_.huber_sigmas * std::sqrt(count);
-  if (robust && config_.cauchy_loss) loss = new ceres::CauchyLoss(threshold);
-  else if (robust) loss = new ceres::HuberLoss(threshold);
+  if (robust && config_.cauchy_loss)
+    loss = new ceres::CauchyLoss(threshold);
+  else if (robust)
+    loss = new ceres::HuberLoss(threshold);
   if (fx_.anyMean()) {
-    problem.AddResidualBlock(effectCost(config_.order, angle, y, inv, static_cast<double>(r.scan) - t_ref_), loss,
-                             poses_[r.stop], centres_.at(r.landmark), radius_, alpha_,
-                             offsets_.at(r.landmark), globals_);
+    problem.AddResidualBlock(
+        effectCost(config_.order, angle, y, inv, static_cast<double>(r.scan) - t_ref_), loss,
+        poses_[r.stop], centres_.at(r.landmark), radius_, alpha_, offsets_.at(r.landmark),
+        globals_);
   } else {
     problem.AddResidualBlock(beamCost(config_.order, angle, y, inv), loss, poses_[r.stop],
                              centres_.at(r.landmark), radius_, alpha_);
@@ -69,37 +73,42 @@ bool JointProblem::addPooledReadings(ceres::Problem& problem, bool robust) {
   if (groups.size() >= readings_.size()) return false;
   for (const auto& [key, g] : groups) {
     const double n = static_cast<double>(g.n);
-    addReading(problem, robust, readings_[g.first], g.sum_angle / n, g.sum_y / n, std::sqrt(n) / sigma_[g.first], n);
+    addReading(problem, robust, readings_[g.first], g.sum_angle / n, g.sum_y / n,
+               std::sqrt(n) / sigma_[g.first], n);
   }
   out_.reading_residuals = groups.size();
   return true;
 }
 
-/// The measured targets (JointConfig::known_ranges, Alhashimi et al. 2016 section 5 beside the self-calibration):
-/// the standard error of a target's mean reading is the readings' sigma(d) / sqrt(n) and its tape
-/// error carried through the slope, f'(d) tape_sigma, both at the current estimate.
+/// The measured targets (JointConfig::known_ranges, Alhashimi et al. 2016 section 5 beside the
+/// self-calibration): the standard error of a target's mean reading is the readings' sigma(d) /
+/// sqrt(n) and its tape error carried through the slope, f'(d) tape_sigma, both at the current
+/// estimate.
 void JointProblem::addKnownRanges(ceres::Problem& problem, bool robust) {
   RangeModel current = out_.model;
   current.bias.alpha = alphaVector();
   for (const KnownRange& k : config_.known_ranges) {
     const double n = k.count();
     if (!(n > 0.0)) continue;
-    const double d = k.meanDistance(*radius_), reading = std::max(current.noise.stddev(d, current.bias), 1e-4);
+    const double d = k.meanDistance(*radius_),
+                 reading = std::max(current.noise.stddev(d, current.bias), 1e-4);
     const double tape = current.bias.derivative(d) * k.tape_sigma_m;
     const double sigma = std::sqrt(reading * reading / n + tape * tape);
     ceres::LossFunction* loss = robust ? new ceres::HuberLoss(config_.huber_sigmas) : nullptr;
-    problem.AddResidualBlock(knownRangeCost(config_.order, k, 1.0 / std::max(sigma, 1e-6)), loss, alpha_, radius_);
+    problem.AddResidualBlock(knownRangeCost(config_.order, k, 1.0 / std::max(sigma, 1e-6)), loss,
+                             alpha_, radius_);
   }
 }
 
-/// Each stop tied to its commanded pose (Alhashimi et al. 2021 eq. 8; with the odometry scale, to the scaled
-/// commanded path), or with the motion prior to the commanded step from the stop before (the
-/// first stop's prior fixes the gauge).
+/// Each stop tied to its commanded pose (Alhashimi et al. 2021 eq. 8; with the odometry scale, to
+/// the scaled commanded path), or with the motion prior to the commanded step from the stop before
+/// (the first stop's prior fixes the gauge).
 void JointProblem::addPosePriors(ceres::Problem& problem) {
   const Pose2& c0 = obs_.commanded.front();
   for (std::size_t k = 0; k < poses_.size(); ++k) {
     const Pose2& c = obs_.commanded[k];
-    const double yaw = poses_[k][2] + wrapAngle(c.yaw_rad - poses_[k][2]);  // unwrapped next to the estimate
+    // unwrapped next to the estimate
+    const double yaw = poses_[k][2] + wrapAngle(c.yaw_rad - poses_[k][2]);
     if (motion_ && k > 0) {
       const Pose2 step = stepBetween(obs_.commanded[k - 1], c);
       const double now = poses_[k][2] - poses_[k - 1][2];
@@ -111,13 +120,16 @@ void JointProblem::addPosePriors(ceres::Problem& problem) {
           nullptr, poses_[k - 1], poses_[k], scale_);
       if (!fx_.odometry_scale) problem.SetParameterBlockConstant(scale_);
     } else if (fx_.odometry_scale) {
-      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<ScaledPosePriorCost, 3, 3, 1>(new ScaledPosePriorCost{
-                                   c.x_m, c.y_m, yaw, c0.x_m, c0.y_m, 1.0 / config_.sigma_s_m, 1.0 / config_.sigma_psi_rad}),
-                               nullptr, poses_[k], scale_);
+      problem.AddResidualBlock(
+          new ceres::AutoDiffCostFunction<ScaledPosePriorCost, 3, 3, 1>(
+              new ScaledPosePriorCost{c.x_m, c.y_m, yaw, c0.x_m, c0.y_m, 1.0 / config_.sigma_s_m,
+                                      1.0 / config_.sigma_psi_rad}),
+          nullptr, poses_[k], scale_);
     } else {
-      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<PosePriorCost, 3, 3>(new PosePriorCost{
-                                   c.x_m, c.y_m, yaw, 1.0 / config_.sigma_s_m, 1.0 / config_.sigma_psi_rad}),
-                               nullptr, poses_[k]);
+      problem.AddResidualBlock(
+          new ceres::AutoDiffCostFunction<PosePriorCost, 3, 3>(new PosePriorCost{
+              c.x_m, c.y_m, yaw, 1.0 / config_.sigma_s_m, 1.0 / config_.sigma_psi_rad}),
+          nullptr, poses_[k]);
     }
     if (!fx_.estimate_heading && problem.HasParameterBlock(poses_[k]))
       problem.SetManifold(poses_[k], new ceres::SubsetManifold(3, {2}));
@@ -138,8 +150,10 @@ void JointProblem::fixInactiveTerms(ceres::Problem& problem) {
   if (!fx_.drift) fixed.push_back(0);
   if (!fx_.angle_offset) fixed.push_back(1);
   if (!fx_.incidence_bias) fixed.push_back(2);
-  if (fixed.size() == 3) problem.SetParameterBlockConstant(globals_);
-  else if (!fixed.empty()) problem.SetManifold(globals_, new ceres::SubsetManifold(3, fixed));
+  if (fixed.size() == 3)
+    problem.SetParameterBlockConstant(globals_);
+  else if (!fixed.empty())
+    problem.SetManifold(globals_, new ceres::SubsetManifold(3, fixed));
 }
 
 /// Surveyed centres and measured poses are known, not estimated.
@@ -148,6 +162,7 @@ void JointProblem::fixKnownGeometry(ceres::Problem& problem) {
     if (auto it = centres_.find(id); it != centres_.end() && problem.HasParameterBlock(it->second))
       problem.SetParameterBlockConstant(it->second);
   for (const auto& [k, p] : config_.known_poses)
-    if (k < poses_.size() && problem.HasParameterBlock(poses_[k])) problem.SetParameterBlockConstant(poses_[k]);
+    if (k < poses_.size() && problem.HasParameterBlock(poses_[k]))
+      problem.SetParameterBlockConstant(poses_[k]);
 }
 }  // namespace lidarcal::calibration::joint

@@ -15,7 +15,8 @@ namespace {
 
 /// Size of a noise law, to tell when its re-estimation has settled.
 double noiseSize(const NoiseModel& n) {
-  if (n.kind == NoiseKind::polynomial) return n.beta.empty() ? 0.0 : std::abs(n.beta.front()) + std::abs(n.beta.back());
+  if (n.kind == NoiseKind::polynomial)
+    return n.beta.empty() ? 0.0 : std::abs(n.beta.front()) + std::abs(n.beta.back());
   return n.sigma_e;
 }
 
@@ -65,7 +66,8 @@ JointResult JointProblem::run() {
   selectReadings();
   if (readings_.size() < static_cast<std::size_t>(config_.order + 2) * 4) {
     out_.status.code = StatusCode::too_few_readings;
-    out_.status.message = "too few landmark readings for the joint refinement (" + std::to_string(readings_.size()) + ")";
+    out_.status.message = "too few landmark readings for the joint refinement (" +
+                          std::to_string(readings_.size()) + ")";
     return out_;
   }
   if (fx_.quantised) {
@@ -109,8 +111,11 @@ bool JointProblem::solve(int outer) {
   RangeModel current = out_.model;
   current.bias.alpha = alphaVector();
   for (std::size_t i = 0; i < readings_.size(); ++i) sigma_[i] = workingSigma(i, current);
-  if (outer > 0) updateResponsibilities(residualsNow(current.bias));  // E-step (weights 1 without mixed pixels)
-  else weight_.assign(readings_.size(), 1.0);
+  // E-step (weights 1 without mixed pixels)
+  if (outer > 0)
+    updateResponsibilities(residualsNow(current.bias));
+  else
+    weight_.assign(readings_.size(), 1.0);
 
   ceres::Problem::Options problem_options;
   ceres::Problem problem(problem_options);
@@ -148,11 +153,14 @@ bool JointProblem::reestimateNoise(int outer) {
   if (fx_.student_noise) fitStudent(res, f);
   if (grid_ > 0.0) fitCellScale(res);
   const double s_now = noiseSize(out_.model.noise);
-  if (previous_noise_size_ > 0.0 && std::abs(s_now - previous_noise_size_) <= 1e-2 * previous_noise_size_) return true;
+  if (previous_noise_size_ > 0.0 &&
+      std::abs(s_now - previous_noise_size_) <= 1e-2 * previous_noise_size_)
+    return true;
   previous_noise_size_ = s_now;
   if (outer == config_.outer_iterations) {
     out_.converged = false;
-    out_.status.message = "noise model still changing after " + std::to_string(config_.outer_iterations) + " re-estimations";
+    out_.status.message = "noise model still changing after " +
+                          std::to_string(config_.outer_iterations) + " re-estimations";
   }
   return false;
 }
@@ -194,11 +202,14 @@ void JointProblem::fitNoiseLaw(const std::vector<double>& res, const BiasPolynom
           -1.0, 5.0);
     }
     if (fx_.incidence_noise)
-      gamma_ = goldenMax([&](double g) { return profileNoise(out_.model.noise, g, delta_, in, res, f, nullptr); }, -1.0,
-                         4.0);
-    if (fx_.dark_noise && reference_intensity_ > 0.0)  // without intensities the factor is 1 whatever delta is
-      delta_ = goldenMax([&](double x) { return profileNoise(out_.model.noise, gamma_, x, in, res, f, nullptr); }, -1.0,
-                         3.0);
+      gamma_ = goldenMax(
+          [&](double g) { return profileNoise(out_.model.noise, g, delta_, in, res, f, nullptr); },
+          -1.0, 4.0);
+    // without intensities the factor is 1 whatever delta is
+    if (fx_.dark_noise && reference_intensity_ > 0.0)
+      delta_ = goldenMax(
+          [&](double x) { return profileNoise(out_.model.noise, gamma_, x, in, res, f, nullptr); },
+          -1.0, 3.0);
   }
   profileNoise(out_.model.noise, gamma_, delta_, in, res, f, &out_.model.noise.sigma_e);
 }
@@ -212,12 +223,14 @@ void JointProblem::fitStudent(const std::vector<double>& res, const BiasPolynomi
   std::vector<double> x;  // residual over the law's shape (polynomial law: over sigma)
   for (std::size_t i = 0; i < readings_.size(); ++i) {
     if (!(std::abs(res[i]) <= 30.0 * sigma_[i])) continue;
-    const double h = noiseShape(out_.model.noise, f, geo_[i].d, geo_[i].cos_inc, gamma_, readings_[i].darkness, delta_);
+    const double h = noiseShape(out_.model.noise, f, geo_[i].d, geo_[i].cos_inc, gamma_,
+                                readings_[i].darkness, delta_);
     x.push_back(res[i] / (scaled ? std::max(h, 1e-9) : sigma_[i]));
   }
   if (x.size() < 10) return;
   double nu = dof_ > 2.0 ? dof_ : 10.0;
-  double t2 = out_.model.noise.sigma_e * out_.model.noise.sigma_e * (nu - 2.0) / nu;  // t scale squared
+  // t scale squared
+  double t2 = out_.model.noise.sigma_e * out_.model.noise.sigma_e * (nu - 2.0) / nu;
   for (int round = 0; round < 10; ++round) {
     double s = 0.0;
     for (double v : x) s += (nu + 1.0) / (nu + v * v / t2) * v * v;
@@ -227,7 +240,8 @@ void JointProblem::fitStudent(const std::vector<double>& res, const BiasPolynomi
         [&](double l) {
           const double n = 2.0 + std::exp(l);
           double ll = 0.0;
-          const double sd = scaled ? t * std::sqrt(n / (n - 2.0)) : 1.0;  // the t's standard deviation
+          // the t's standard deviation
+          const double sd = scaled ? t * std::sqrt(n / (n - 2.0)) : 1.0;
           for (double v : x) ll += studentLogDensity(v, sd, n);
           return ll;
         },
@@ -240,14 +254,16 @@ void JointProblem::fitStudent(const std::vector<double>& res, const BiasPolynomi
 
 /// Readings on a grid q (quantised): the noise law scaled by the factor c that maximises the
 /// readings' cell probabilities (coreLogDensity with the grid; under Student-t noise the t's)
-/// over the readings within 6 sigma that are not mixed pixels (30 under the t). The Gaussian fit's scale holds
-/// the rounding's variance q^2/12 too; the cells carry it now.
+/// over the readings within 6 sigma that are not mixed pixels (30 under the t). The Gaussian fit's
+/// scale holds the rounding's variance q^2/12 too; the cells carry it now.
 void JointProblem::fitCellScale(const std::vector<double>& res) {
-  // Under Student-t noise the weights are the t's, and its tails are fitted: within 30 sigma as fitStudent.
+  // Under Student-t noise the weights are the t's, and its tails are fitted: within 30 sigma as
+  // fitStudent.
   const bool t = fx_.student_noise && dof_ > 2.0;
   std::vector<std::size_t> in;
   for (std::size_t i = 0; i < readings_.size(); ++i)
-    if (std::abs(res[i]) <= (t ? 30.0 : 6.0) * sigma_[i] && (t || weight_[i] > 0.5)) in.push_back(i);
+    if (std::abs(res[i]) <= (t ? 30.0 : 6.0) * sigma_[i] && (t || weight_[i] > 0.5))
+      in.push_back(i);
   if (in.size() < 10) return;
   RangeModel now = out_.model;
   now.bias.alpha = alphaVector();
@@ -272,11 +288,14 @@ void JointProblem::fitCellScale(const std::vector<double>& res) {
 
 /// Profile log-likelihood (up to constants) of the law n with incidence exponent g over the
 /// readings `in`; sigma_e (when asked) its maximising scale.
-double JointProblem::profileNoise(NoiseModel n, double g, double delta, const std::vector<std::size_t>& in,
-                                  const std::vector<double>& res, const BiasPolynomial& f, double* sigma_e) const {
+double JointProblem::profileNoise(NoiseModel n, double g, double delta,
+                                  const std::vector<std::size_t>& in,
+                                  const std::vector<double>& res, const BiasPolynomial& f,
+                                  double* sigma_e) const {
   double s2 = 0.0, logh = 0.0;
   for (std::size_t i : in) {
-    const double h = std::max(noiseShape(n, f, geo_[i].d, geo_[i].cos_inc, g, readings_[i].darkness, delta), 1e-9);
+    const double h = std::max(
+        noiseShape(n, f, geo_[i].d, geo_[i].cos_inc, g, readings_[i].darkness, delta), 1e-9);
     s2 += res[i] * res[i] / (h * h);
     logh += std::log(h);
   }

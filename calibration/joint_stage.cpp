@@ -19,7 +19,8 @@ class JointProgress {
  public:
   explicit JointProgress(const CalibrationConfig& config)
       : config_(config),
-        solves_(1 + static_cast<std::size_t>(config.max_order) + (config.joint.covariance ? 1 : 0)) {}
+        solves_(1 + static_cast<std::size_t>(config.max_order) +
+                (config.joint.covariance ? 1 : 0)) {}
   void report(std::size_t done) const {
     if (config_.progress) config_.progress("joint refinement", done, solves_);
   }
@@ -39,8 +40,8 @@ std::vector<double> alphaAt(int n, std::vector<double> alpha) {
 /// Start from the closed form's straight-line fit: a higher order chosen by AIC on noisy pairs
 /// can extrapolate wildly, a line is a safe start for the bias and the centres.
 JointInit closedFormStart(const LandmarkObservations& obs, const CalibrationConfig& config,
-                          const std::vector<LandmarkEstimate>& tri, const ClosedFormSeed& seed, double radius,
-                          const RangeModel& closed_form_model) {
+                          const std::vector<LandmarkEstimate>& tri, const ClosedFormSeed& seed,
+                          double radius, const RangeModel& closed_form_model) {
   const OrderSelection& sel = seed.selection;
   JointInit init;
   init.poses = obs.commanded;
@@ -54,8 +55,9 @@ JointInit closedFormStart(const LandmarkObservations& obs, const CalibrationConf
 
 /// Pass 2: every order 1..max_order from the settled geometry. The orders are independent
 /// solves: side by side, each with its own copy of the settings.
-std::vector<JointResult> fitEveryOrder(const LandmarkObservations& obs, const JointInit& from, const JointConfig& jc,
-                                       const JointResult& settled, const CalibrationConfig& config) {
+std::vector<JointResult> fitEveryOrder(const LandmarkObservations& obs, const JointInit& from,
+                                       const JointConfig& jc, const JointResult& settled,
+                                       const CalibrationConfig& config) {
   std::vector<JointResult> runs(static_cast<std::size_t>(config.max_order));
   parallelFor(runs.size(), threadsFor(config.threads), [&](std::size_t k) {
     JointConfig jn = jc;
@@ -68,8 +70,8 @@ std::vector<JointResult> fitEveryOrder(const LandmarkObservations& obs, const Jo
 }
 
 /// The order table of pass 2, each row marked invertible over the sensor's reading window.
-std::vector<OrderRow> orderRows(const std::vector<JointResult>& runs, const LandmarkObservations& obs,
-                                const JointProgress& progress) {
+std::vector<OrderRow> orderRows(const std::vector<JointResult>& runs,
+                                const LandmarkObservations& obs, const JointProgress& progress) {
   std::vector<OrderRow> rows;
   for (int n = 1; n <= static_cast<int>(runs.size()); ++n) {
     progress.report(1 + static_cast<std::size_t>(n));
@@ -83,14 +85,15 @@ std::vector<OrderRow> orderRows(const std::vector<JointResult>& runs, const Land
     rows.push_back(row);
   }
   const bool window_known = obs.range_max_m < 1e8;
-  const Admissible ok_order = window_known ? invertibleOver(obs.range_min_m, obs.range_max_m) : Admissible{};
+  const Admissible ok_order =
+      window_known ? invertibleOver(obs.range_min_m, obs.range_max_m) : Admissible{};
   for (auto& row : rows) row.invertible = !ok_order || ok_order(row.alpha);
   return rows;
 }
 
 /// The index of the order the rule picks, and (best_aic) that of the smallest admissible AIC.
-std::size_t chooseOrder(const std::vector<JointResult>& runs, const std::vector<OrderRow>& rows, JointOrderRule rule,
-                        std::size_t& best_aic) {
+std::size_t chooseOrder(const std::vector<JointResult>& runs, const std::vector<OrderRow>& rows,
+                        JointOrderRule rule, std::size_t& best_aic) {
   best_aic = 0;
   std::size_t best_bic = 0;
   for (std::size_t i = 0; i < runs.size(); ++i) {
@@ -112,8 +115,8 @@ std::size_t chooseOrder(const std::vector<JointResult>& runs, const std::vector<
 }  // namespace
 
 JointStage jointStage(const LandmarkObservations& obs, const CalibrationConfig& config,
-                      const std::vector<LandmarkEstimate>& tri, const ClosedFormSeed& seed, double radius_m,
-                      const RangeModel& closed_form_model) {
+                      const std::vector<LandmarkEstimate>& tri, const ClosedFormSeed& seed,
+                      double radius_m, const RangeModel& closed_form_model) {
   JointInit init = closedFormStart(obs, config, tri, seed, radius_m, closed_form_model);
   JointConfig jc = config.joint;
   jc.noise = config.noise;
@@ -130,7 +133,7 @@ JointStage jointStage(const LandmarkObservations& obs, const CalibrationConfig& 
   // information criteria compare likelihoods of the same data.
   const JointInit from = initFrom(settled);
   jc.reselect = false;
-  jc.covariance = false;  // computed once, for the chosen order
+  jc.covariance = false;                                   // computed once, for the chosen order
   jc.outer_iterations = std::min(jc.outer_iterations, 2);  // the noise law settled in pass 1
   std::vector<JointResult> runs = fitEveryOrder(obs, from, jc, settled, config);
   const std::vector<OrderRow> rows = orderRows(runs, obs, progress);
@@ -148,8 +151,8 @@ JointStage jointStage(const LandmarkObservations& obs, const CalibrationConfig& 
 }
 
 std::map<int, Eigen::Vector2d> rangeBearingCentres(const LandmarkObservations& obs,
-                                                   const std::vector<LandmarkEstimate>& tri, const RangeModel& model,
-                                                   double radius) {
+                                                   const std::vector<LandmarkEstimate>& tri,
+                                                   const RangeModel& model, double radius) {
   std::map<int, Eigen::Vector2d> sum;
   std::map<int, int> count;
   std::optional<RangeInverter> inverter;
@@ -169,13 +172,15 @@ std::map<int, Eigen::Vector2d> rangeBearingCentres(const LandmarkObservations& o
     if (!d) continue;
     const Pose2& p = obs.commanded.at(s.stop);
     const double a = p.yaw_rad + s.bearing_rad;
-    it->second += Eigen::Vector2d(p.x_m + (*d + radius) * std::cos(a), p.y_m + (*d + radius) * std::sin(a));
+    it->second +=
+        Eigen::Vector2d(p.x_m + (*d + radius) * std::cos(a), p.y_m + (*d + radius) * std::sin(a));
     ++count[s.landmark];
   }
   std::map<int, Eigen::Vector2d> out;
   for (const auto& l : tri) {
     if (!l.ok()) continue;
-    out[l.id] = count[l.id] > 0 ? Eigen::Vector2d(sum[l.id] / count[l.id]) : Eigen::Vector2d(l.x_m, l.y_m);
+    out[l.id] =
+        count[l.id] > 0 ? Eigen::Vector2d(sum[l.id] / count[l.id]) : Eigen::Vector2d(l.x_m, l.y_m);
   }
   return out;
 }
@@ -183,7 +188,8 @@ std::map<int, Eigen::Vector2d> rangeBearingCentres(const LandmarkObservations& o
 std::map<std::string, double> effectValues(const JointEffects& on, const JointEffectEstimates& e) {
   std::map<std::string, double> m;
   if (on.landmark_offsets)
-    for (const auto& [id, o] : e.landmark_offset_m) m["landmark_offset_m[" + std::to_string(id) + "]"] = o;
+    for (const auto& [id, o] : e.landmark_offset_m)
+      m["landmark_offset_m[" + std::to_string(id) + "]"] = o;
   if (on.drift) {
     m["range_drift_m_per_scan"] = e.drift_m_per_scan;
     m["range_drift_reference_scan"] = e.drift_reference_scan;
@@ -219,7 +225,8 @@ void fillJoint(CalibrationModel& m, const JointStage& js, const CalibrationConfi
   m.stop_poses = j.poses;
   m.heading_scatter_rad = j.heading_scatter_rad;
   m.residual_rms_m = j.residual_rms_m;
-  m.alpha_covariance.assign(j.alpha_covariance.data(), j.alpha_covariance.data() + j.alpha_covariance.size());
+  m.alpha_covariance.assign(j.alpha_covariance.data(),
+                            j.alpha_covariance.data() + j.alpha_covariance.size());
   m.effects = effectValues(config.joint.effects, j.effects);
   for (auto& c : m.landmarks) {
     auto it = j.centres.find(c.id);
@@ -231,8 +238,10 @@ void fillJoint(CalibrationModel& m, const JointStage& js, const CalibrationConfi
     if (cv != j.centre_covariance.end())
       c.covariance_m2 = {cv->second(0, 0), cv->second(0, 1), cv->second(1, 0), cv->second(1, 1)};
   }
-  if (!j.distances_m.empty()) m.fitted_range_m = fittedRange(j.distances_m, j.readings_m, m.model.bias);
-  if (!j.converged) m.status.message = "joint refinement: " + j.status.message;  // usable, but say so
+  if (!j.distances_m.empty())
+    m.fitted_range_m = fittedRange(j.distances_m, j.readings_m, m.model.bias);
+  // usable, but say so
+  if (!j.converged) m.status.message = "joint refinement: " + j.status.message;
 }
 
 }  // namespace lidarcal::calibration

@@ -21,24 +21,24 @@ namespace lidarcal::calibration {
 
 /// The joint refinement's result at the chosen order, the order table and the AIC's choice.
 struct JointStage {
-  JointResult result;         ///< the fit at the chosen order (its status says whether it ran)
-  std::vector<OrderRow> rows; ///< one row per order 1..max_order (empty when pass 1 failed)
-  std::size_t best_aic = 0;   ///< index (order - 1) of the smallest admissible AIC
+  JointResult result;          ///< the fit at the chosen order (its status says whether it ran)
+  std::vector<OrderRow> rows;  ///< one row per order 1..max_order (empty when pass 1 failed)
+  std::size_t best_aic = 0;    ///< index (order - 1) of the smallest admissible AIC
 };
 
 /// Runs both passes from the closed form (`seed`, and `closed_form_model` its model) with the
 /// landmarks `tri` of radius `radius_m`; reports progress through config.progress.
 JointStage jointStage(const LandmarkObservations& obs, const CalibrationConfig& config,
-                      const std::vector<LandmarkEstimate>& tri, const ClosedFormSeed& seed, double radius_m,
-                      const RangeModel& closed_form_model);
+                      const std::vector<LandmarkEstimate>& tri, const ClosedFormSeed& seed,
+                      double radius_m, const RangeModel& closed_form_model);
 
 /// Starting centres for the joint refinement: bearing-only triangulation places far landmarks
 /// poorly along the line of sight, so start each triangulated landmark at the mean of
 /// commanded stop + (f^-1(central reading) + radius) along the bearing, with the closed-form f
 /// (the triangulated centre when no reading inverts).
 std::map<int, Eigen::Vector2d> rangeBearingCentres(const LandmarkObservations& obs,
-                                                   const std::vector<LandmarkEstimate>& tri, const RangeModel& model,
-                                                   double radius);
+                                                   const std::vector<LandmarkEstimate>& tri,
+                                                   const RangeModel& model, double radius);
 
 /// The estimated effect terms that were switched on, by name (model.json "effects").
 std::map<std::string, double> effectValues(const JointEffects& on, const JointEffectEstimates& e);

@@ -31,7 +31,8 @@ void JointProblem::reportEstimates() {
   double ps = 0.0, hs = 0.0;
   for (std::size_t k = 0; k < poses_.size(); ++k) {
     out_.poses[k] = Pose2{poses_[k][0], poses_[k][1], wrapAngle(poses_[k][2])};
-    ps += std::pow(poses_[k][0] - obs_.commanded[k].x_m, 2) + std::pow(poses_[k][1] - obs_.commanded[k].y_m, 2);
+    ps += std::pow(poses_[k][0] - obs_.commanded[k].x_m, 2) +
+          std::pow(poses_[k][1] - obs_.commanded[k].y_m, 2);
     hs += std::pow(wrapAngle(poses_[k][2] - obs_.commanded[k].yaw_rad), 2);
   }
   out_.pose_scatter_m = std::sqrt(ps / (2.0 * static_cast<double>(poses_.size())));
@@ -44,7 +45,9 @@ void JointProblem::reportEstimates() {
 /// the scale to -0.99 (the path shrunk to a point, its misfit in the steps), which out-gained the
 /// bias itself held out (docs/results/hidden-effects.md).
 void JointProblem::boundStepScale(ceres::Problem& problem) const {
-  if (!fx_.odometry_scale || !problem.HasParameterBlock(scale_) || problem.IsParameterBlockConstant(scale_)) return;
+  if (!fx_.odometry_scale || !problem.HasParameterBlock(scale_) ||
+      problem.IsParameterBlockConstant(scale_))
+    return;
   problem.SetParameterLowerBound(scale_, 0, -kMaxStepScale);
   problem.SetParameterUpperBound(scale_, 0, kMaxStepScale);
 }
@@ -58,7 +61,8 @@ void JointProblem::reportPriorLikelihood() {
   const Pose2& c0 = obs_.commanded.front();
   const double s = fx_.odometry_scale ? *scale_ : 0.0;
   auto add = [&](double ex, double ey, double sd) {
-    out_.prior_neg_log_likelihood += 0.5 * (ex * ex + ey * ey) / (sd * sd) + kLog2Pi + 2.0 * std::log(sd);
+    out_.prior_neg_log_likelihood +=
+        0.5 * (ex * ex + ey * ey) / (sd * sd) + kLog2Pi + 2.0 * std::log(sd);
   };
   auto addHeading = [&](double e, double sd) {
     out_.prior_neg_log_likelihood += 0.5 * e * e / (sd * sd) + 0.5 * kLog2Pi + std::log(sd);
@@ -68,14 +72,18 @@ void JointProblem::reportPriorLikelihood() {
       const Pose2 step = stepBetween(obs_.commanded[k - 1], obs_.commanded[k]);
       const Pose2 est = stepBetween(out_.poses[k - 1], out_.poses[k]);
       const double len = motionStepLength(obs_.commanded, k);
-      add(est.x_m / (1.0 + s) - step.x_m, est.y_m / (1.0 + s) - step.y_m,  // where the noise is (MotionPriorCost)
+      // where the noise is (MotionPriorCost)
+      add(est.x_m / (1.0 + s) - step.x_m, est.y_m / (1.0 + s) - step.y_m,
           config_.motionStepSigma(len));
-      addHeading(wrapAngle(out_.poses[k].yaw_rad - out_.poses[k - 1].yaw_rad - step.yaw_rad), config_.motionHeadingSigma(len));
+      addHeading(wrapAngle(out_.poses[k].yaw_rad - out_.poses[k - 1].yaw_rad - step.yaw_rad),
+                 config_.motionHeadingSigma(len));
       continue;
     }
     add(poses_[k][0] - (c0.x_m + (1.0 + s) * (obs_.commanded[k].x_m - c0.x_m)),
         poses_[k][1] - (c0.y_m + (1.0 + s) * (obs_.commanded[k].y_m - c0.y_m)), config_.sigma_s_m);
-    if (motion_) addHeading(wrapAngle(out_.poses[k].yaw_rad - obs_.commanded[k].yaw_rad), config_.sigma_psi_rad);
+    if (motion_)
+      addHeading(wrapAngle(out_.poses[k].yaw_rad - obs_.commanded[k].yaw_rad),
+                 config_.sigma_psi_rad);
   }
 }
 
@@ -87,9 +95,9 @@ void JointProblem::reportEffects() {
   e.angle_offset_rad = fx_.angle_offset ? globals_[1] : 0.0;
   e.incidence_bias_m = fx_.incidence_bias ? globals_[2] : 0.0;
   e.incidence_noise_exponent = gamma_;
-  e.noise_exponent = out_.model.noise.kind == NoiseKind::power ? out_.model.noise.exponent
+  e.noise_exponent = out_.model.noise.kind == NoiseKind::power      ? out_.model.noise.exponent
                      : out_.model.noise.kind == NoiseKind::constant ? 0.0
-                                                                     : 2.0;
+                                                                    : 2.0;
   e.mixed_pixel_fraction = fx_.mixed_pixels ? mixed_fraction_ : 0.0;
   e.odometry_scale = fx_.odometry_scale ? *scale_ : 0.0;
   e.student_dof = fx_.student_noise ? dof_ : 0.0;
@@ -97,11 +105,12 @@ void JointProblem::reportEffects() {
   e.dark_noise_exponent = delta_;
   e.dark_reference_intensity = reference_intensity_;
   e.heading_rms_rad = out_.heading_scatter_rad;
-  out_.effect_parameters = (fx_.landmark_offsets ? static_cast<int>(offsets_.size()) - 1 : 0) + (fx_.drift ? 1 : 0) +
-                           (fx_.angle_offset ? 1 : 0) + (fx_.incidence_bias ? 1 : 0) + (fx_.incidence_noise ? 1 : 0) +
-                           (fx_.noise_exponent ? 1 : 0) + (fx_.mixed_pixels ? 1 : 0) + (fx_.odometry_scale ? 1 : 0) +
-                           (fx_.student_noise ? 1 : 0) + (fx_.quantised ? 1 : 0) + (fx_.dark_noise ? 1 : 0) +
-                           (fx_.estimate_heading ? static_cast<int>(poses_.size()) : 0);
+  out_.effect_parameters =
+      (fx_.landmark_offsets ? static_cast<int>(offsets_.size()) - 1 : 0) + (fx_.drift ? 1 : 0) +
+      (fx_.angle_offset ? 1 : 0) + (fx_.incidence_bias ? 1 : 0) + (fx_.incidence_noise ? 1 : 0) +
+      (fx_.noise_exponent ? 1 : 0) + (fx_.mixed_pixels ? 1 : 0) + (fx_.odometry_scale ? 1 : 0) +
+      (fx_.student_noise ? 1 : 0) + (fx_.quantised ? 1 : 0) + (fx_.dark_noise ? 1 : 0) +
+      (fx_.estimate_heading ? static_cast<int>(poses_.size()) : 0);
 }
 
 /// Likelihood at the solution (all readings, with the mixed-pixel and outlier terms) and the
@@ -118,10 +127,9 @@ void JointProblem::reportLikelihood() {
     const double s = std::max(sigmaOf(i, out_.model), 1e-6);
     const double mean = meanOf(i, out_.model.bias);
     const double r = (readings_[i].y_m - mean) / s;
-    out_.neg_log_likelihood -= readingLogLikelihood(readings_[i].y_m, mean, s,
-                                                    readings_[i].edge ? e.mixed_pixel_fraction : 0.0,
-                                                    config_.outlier_floor, out_.window_min_m, window_max_, e.student_dof,
-                                                    e.range_grid_m);
+    out_.neg_log_likelihood -= readingLogLikelihood(
+        readings_[i].y_m, mean, s, readings_[i].edge ? e.mixed_pixel_fraction : 0.0,
+        config_.outlier_floor, out_.window_min_m, window_max_, e.student_dof, e.range_grid_m);
     out_.residual_rms_m += r * r * s * s;
     if (std::abs(r) > config_.huber_sigmas * 2.0) ++out_.outliers;
   }
@@ -133,7 +141,8 @@ void JointProblem::reportLikelihood() {
   const int heading_params = fx_.estimate_heading ? static_cast<int>(poses_.size()) : 0;
   const double k = static_cast<double>(config_.order + 1) +
                    (config_.noise == NoiseKind::polynomial ? config_.noise_order + 1.0 : 1.0) +
-                   (config_.estimate_radius ? 1.0 : 0.0) + static_cast<double>(out_.effect_parameters - heading_params);
+                   (config_.estimate_radius ? 1.0 : 0.0) +
+                   static_cast<double>(out_.effect_parameters - heading_params);
   out_.aic = 2.0 * k + 2.0 * out_.neg_log_likelihood;
   out_.bic = k * std::log(static_cast<double>(readings_.size())) + 2.0 * out_.neg_log_likelihood;
 }
@@ -146,8 +155,8 @@ void JointProblem::reportBearingResiduals() {
     auto it = out_.centres.find(s.landmark);
     if (it == out_.centres.end() || s.stop >= out_.poses.size()) continue;
     const Pose2& p = out_.poses[s.stop];
-    const double predicted =
-        std::atan2(it->second.y() - p.y_m, it->second.x() - p.x_m) - p.yaw_rad - out_.effects.angle_offset_rad;
+    const double predicted = std::atan2(it->second.y() - p.y_m, it->second.x() - p.x_m) -
+                             p.yaw_rad - out_.effects.angle_offset_rad;
     bs += std::pow(wrapAngle(s.bearing_rad - predicted), 2);
     ++bn;
   }

@@ -7,7 +7,8 @@
 
 namespace lidarcal::calibration {
 
-NoiseExponentTest testNoiseExponent(const std::vector<std::vector<double>>& batches, std::size_t min_batch) {
+NoiseExponentTest testNoiseExponent(const std::vector<std::vector<double>>& batches,
+                                    std::size_t min_batch) {
   NoiseExponentTest t;
   std::vector<const std::vector<double>*> used;
   std::vector<double> fb;  // eq. 13: the batch mean estimates f(d_b)

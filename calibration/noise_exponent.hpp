@@ -19,6 +19,7 @@ struct NoiseExponentTest {
 };
 
 /// Runs the test. Each batch holds the readings of one constant distance in acquisition order.
-NoiseExponentTest testNoiseExponent(const std::vector<std::vector<double>>& batches, std::size_t min_batch = 3);
+NoiseExponentTest testNoiseExponent(const std::vector<std::vector<double>>& batches,
+                                    std::size_t min_batch = 3);
 
 }  // namespace lidarcal::calibration

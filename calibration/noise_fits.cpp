@@ -27,8 +27,8 @@ void sideEstimator(std::map<std::string, std::string>& failed, const char* name,
 
 }  // namespace
 
-NoiseModel fitNoiseLaw(NoiseKind kind, int order, const BiasPolynomial& f, const std::vector<double>& d,
-                       const std::vector<double>& y) {
+NoiseModel fitNoiseLaw(NoiseKind kind, int order, const BiasPolynomial& f,
+                       const std::vector<double>& d, const std::vector<double>& y) {
   NoiseModel n;
   n.kind = kind;
   std::vector<double> r(d.size());
@@ -43,22 +43,27 @@ NoiseModel fitNoiseLaw(NoiseKind kind, int order, const BiasPolynomial& f, const
       n.sigma_e = std::sqrt(s / static_cast<double>(d.size()));
       break;
     }
-    case NoiseKind::polynomial: n.beta = fitNoisePolynomial(d, r, std::max(order, 0)); break;
+    case NoiseKind::polynomial:
+      n.beta = fitNoisePolynomial(d, r, std::max(order, 0));
+      break;
     case NoiseKind::constant: {
       double s = 0.0;
       for (double v : r) s += v * v;
       n.sigma_e = std::sqrt(s / static_cast<double>(r.size()));
       break;
     }
-    default: throw std::invalid_argument("calibrate: noise law must be squared, polynomial or constant");
+    default:
+      throw std::invalid_argument("calibrate: noise law must be squared, polynomial or constant");
   }
   return n;
 }
 
 // Two groups: Alhashimi et al. 2021's noise polynomial, and Alhashimi et al. 2016's closed form,
-// its ML and the exponent test; each writes only its own fields and failure notes, merged afterwards.
-void fillNoiseFits(CalibrationModel& m, int order, const std::vector<double>& d, const std::vector<double>& y,
-                   const std::vector<std::vector<double>>& batches, int threads) {
+// its ML and the exponent test; each writes only its own fields and failure notes, merged
+// afterwards.
+void fillNoiseFits(CalibrationModel& m, int order, const std::vector<double>& d,
+                   const std::vector<double>& y, const std::vector<std::vector<double>>& batches,
+                   int threads) {
   NoiseFits& nf = m.noise_fits;
   nf = NoiseFits{};
   std::vector<double> r(d.size());
@@ -67,7 +72,8 @@ void fillNoiseFits(CalibrationModel& m, int order, const std::vector<double>& d,
   std::map<std::string, std::string> failed[2];
   parallelFor(2, threadsFor(threads), [&](std::size_t group) {
     if (group == 0) {
-      sideEstimator(failed[0], "alhashimi2021_beta", [&] { nf.alhashimi2021_beta = fitNoisePolynomial(d, r, noise_order); });
+      sideEstimator(failed[0], "alhashimi2021_beta",
+                    [&] { nf.alhashimi2021_beta = fitNoisePolynomial(d, r, noise_order); });
       return;
     }
     sideEstimator(failed[1], "alhashimi2016_closed_form", [&] {

@@ -6,14 +6,15 @@
 #include <limits>
 
 #include "calibration/closed_form_stage.hpp"
-#include "calibration/noise_fits.hpp"
 #include "calibration/inversion.hpp"
+#include "calibration/noise_fits.hpp"
 
 namespace lidarcal::calibration {
 
-CalibrationModel calibrateAgainstTruth(const std::vector<RangePair>& pairs, const CalibrationConfig& config,
-                                       const std::vector<std::vector<double>>& batches, double range_min_m,
-                                       double range_max_m) {
+CalibrationModel calibrateAgainstTruth(const std::vector<RangePair>& pairs,
+                                       const CalibrationConfig& config,
+                                       const std::vector<std::vector<double>>& batches,
+                                       double range_min_m, double range_max_m) {
   config.validate();
   CalibrationModel m;
   m.method = "oracle";
@@ -24,7 +25,8 @@ CalibrationModel calibrateAgainstTruth(const std::vector<RangePair>& pairs, cons
     m.status.message = "too few readings with a known distance";
     return m;
   }
-  const Admissible window = range_max_m < 1e8 ? invertibleOver(range_min_m, range_max_m) : Admissible{};
+  const Admissible window =
+      range_max_m < 1e8 ? invertibleOver(range_min_m, range_max_m) : Admissible{};
   const OrderSelection sel = selectOrder(pairs, config.max_order, config.closed_form_rule, window);
   fillOrders(m, sel, pairs.size());
   std::vector<double> d, y;
@@ -35,7 +37,8 @@ CalibrationModel calibrateAgainstTruth(const std::vector<RangePair>& pairs, cons
   int order = std::max(sel.chosen, 1);
   if (config.noise == NoiseKind::squared) {
     // With known distances the oracle is Alhashimi et al. 2016's estimator: full ML of model (1)
-    // for every order (eqs. 18-20, from the closed form eqs. 21-26) and the order by AIC on that likelihood.
+    // for every order (eqs. 18-20, from the closed form eqs. 21-26) and the order by AIC on that
+    // likelihood.
     double best = std::numeric_limits<double>::infinity();
     for (auto& row : m.orders) {
       if (row.order < 1) continue;
@@ -55,7 +58,9 @@ CalibrationModel calibrateAgainstTruth(const std::vector<RangePair>& pairs, cons
     m.order_rule = "aic (Alhashimi et al. 2016 ML)";
     m.model.bias.alpha = m.orders[static_cast<std::size_t>(order)].alpha;
   } else {
-    m.model.bias.alpha = sel.table[static_cast<std::size_t>(std::min<int>(order, static_cast<int>(sel.table.size()) - 1))].alpha;
+    m.model.bias.alpha = sel.table[static_cast<std::size_t>(std::min<int>(
+                                       order, static_cast<int>(sel.table.size()) - 1))]
+                             .alpha;
   }
   fillNoiseFits(m, order, d, y, batches, config.threads);
   m.model.noise = fitNoiseLaw(config.noise, order, m.model.bias, d, y);

@@ -16,8 +16,9 @@ namespace lidarcal::calibration {
 /// and the order by AIC on that likelihood; else the closed form's least squares.
 /// `batches` (optional) feed the noise-exponent test; orders that cannot be inverted over the
 /// reading window [range_min_m, range_max_m] are not chosen (no check with the defaults).
-CalibrationModel calibrateAgainstTruth(const std::vector<RangePair>& pairs, const CalibrationConfig& config,
-                                       const std::vector<std::vector<double>>& batches = {}, double range_min_m = 0.0,
-                                       double range_max_m = 1e9);
+CalibrationModel calibrateAgainstTruth(const std::vector<RangePair>& pairs,
+                                       const CalibrationConfig& config,
+                                       const std::vector<std::vector<double>>& batches = {},
+                                       double range_min_m = 0.0, double range_max_m = 1e9);
 
 }  // namespace lidarcal::calibration

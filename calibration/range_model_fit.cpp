@@ -10,12 +10,11 @@
 #include <numeric>
 #include <stdexcept>
 
-#include <Eigen/Dense>
 #include <ceres/ceres.h>
+#include <Eigen/Dense>
 
 namespace lidarcal::calibration {
 namespace {
-
 
 double evalPoly(const std::vector<double>& c, double x) {
   double v = 0.0;
@@ -32,7 +31,8 @@ std::vector<double> unscale(const Eigen::VectorXd& c, double shift, double scale
     double binom = 1.0;
     for (int m = 0; m <= j; ++m) {
       if (m > 0) binom = binom * (j - m + 1) / m;
-      out[static_cast<std::size_t>(m)] += c(j) * binom * std::pow(-shift, j - m) / std::pow(scale, j);
+      out[static_cast<std::size_t>(m)] +=
+          c(j) * binom * std::pow(-shift, j - m) / std::pow(scale, j);
     }
   }
   return out;
@@ -50,9 +50,9 @@ double mse(const std::vector<double>& alpha, const std::vector<RangePair>& pairs
   return n ? sum / static_cast<double>(n) : std::numeric_limits<double>::quiet_NaN();
 }
 
-// Profiled negative log-likelihood of Alhashimi et al. 2016 model (1), eqs. 18-20, as a function of alpha:
-//   sigma_e^2(alpha) = (1/N) sum (y - f)^2 / f^4,
-//   L(alpha) = N/2 ln(2 pi sigma_e^2) + 2 sum ln|f| + N/2.
+// Profiled negative log-likelihood of Alhashimi et al. 2016 model (1), eqs. 18-20, as a function of
+//   alpha: sigma_e^2(alpha) = (1/N) sum (y - f)^2 / f^4, L(alpha) = N/2 ln(2 pi sigma_e^2) + 2 sum
+//   ln|f| + N/2.
 class Alhashimi2016Profile final : public ceres::FirstOrderFunction {
  public:
   Alhashimi2016Profile(const std::vector<double>& d, const std::vector<double>& y, int params)
@@ -92,7 +92,8 @@ class Alhashimi2016Profile final : public ceres::FirstOrderFunction {
   int params_;
 };
 
-// Negative log-likelihood of residuals under sigma(d) = |sum beta_i d^i| (Alhashimi et al. 2021 eq. 3).
+// Negative log-likelihood of residuals under sigma(d) = |sum beta_i d^i| (Alhashimi et al. 2021 eq.
+// 3).
 class NoisePolynomialNll final : public ceres::FirstOrderFunction {
  public:
   NoisePolynomialNll(const std::vector<double>& d, const std::vector<double>& r, int params)
@@ -137,8 +138,8 @@ ceres::GradientProblemSolver::Options lbfgsOptions() {
 
 const char* toString(OrderRule r) { return r == OrderRule::aic ? "aic" : "validation"; }
 
-std::vector<double> fitPolynomial(const std::vector<double>& d, const std::vector<double>& y, int order,
-                                  const std::vector<double>& weights) {
+std::vector<double> fitPolynomial(const std::vector<double>& d, const std::vector<double>& y,
+                                  int order, const std::vector<double>& weights) {
   if (order < 0) throw std::invalid_argument("fitPolynomial: negative order");
   if (d.size() != y.size() || (!weights.empty() && weights.size() != d.size()))
     throw std::invalid_argument("fitPolynomial: sizes differ");
@@ -164,7 +165,8 @@ std::vector<double> fitPolynomial(const std::vector<double>& d, const std::vecto
   return unscale(c, mean, spread);
 }
 
-OrderSelection selectOrder(const std::vector<RangePair>& pairs, int n_max, OrderRule rule, const Admissible& admissible) {
+OrderSelection selectOrder(const std::vector<RangePair>& pairs, int n_max, OrderRule rule,
+                           const Admissible& admissible) {
   if (n_max < 0) throw std::invalid_argument("selectOrder: negative n_max");
   std::vector<double> d_all, y_all, d_fit, y_fit;
   for (const auto& p : pairs) {
@@ -213,15 +215,18 @@ OrderSelection selectOrder(const std::vector<RangePair>& pairs, int n_max, Order
   return sel;
 }
 
-std::vector<double> fitNoisePolynomial(const std::vector<double>& d, const std::vector<double>& residuals, int order) {
+std::vector<double> fitNoisePolynomial(const std::vector<double>& d,
+                                       const std::vector<double>& residuals, int order) {
   std::vector<double> absr(residuals.size());
-  for (std::size_t i = 0; i < residuals.size(); ++i) absr[i] = std::abs(residuals[i]) * std::sqrt(kPi / 2.0);
+  for (std::size_t i = 0; i < residuals.size(); ++i)
+    absr[i] = std::abs(residuals[i]) * std::sqrt(kPi / 2.0);
   std::vector<double> beta = fitPolynomial(d, absr, order);  // E|r| = sigma sqrt(2/pi)
   // Keep the start positive over the data so |.| is smooth there.
   bool positive = true;
   for (double v : d) positive = positive && evalPoly(beta, v) > 1e-9;
   if (!positive) {
-    const double mean = std::accumulate(absr.begin(), absr.end(), 0.0) / static_cast<double>(absr.size());
+    const double mean =
+        std::accumulate(absr.begin(), absr.end(), 0.0) / static_cast<double>(absr.size());
     std::fill(beta.begin(), beta.end(), 0.0);
     beta[0] = std::max(mean, 1e-6);
   }
@@ -231,12 +236,14 @@ std::vector<double> fitNoisePolynomial(const std::vector<double>& d, const std::
   return beta;
 }
 
-Alhashimi2016Fit fitAlhashimi2016ClosedForm(const std::vector<double>& d, const std::vector<double>& y, int order) {
+Alhashimi2016Fit fitAlhashimi2016ClosedForm(const std::vector<double>& d,
+                                            const std::vector<double>& y, int order) {
   // Eq. 22-24: y/d^2 = sum_i alpha_i d^(i-2) + e. Regress y/d^2 on d^(i-2): the same as
   // weighted least squares of y on d^i with weights 1/d^4 (eq. 25-26).
   std::vector<double> w(d.size());
   for (std::size_t i = 0; i < d.size(); ++i) {
-    if (!(d[i] > 0.0)) throw std::invalid_argument("fitAlhashimi2016ClosedForm: distances must be positive");
+    if (!(d[i] > 0.0))
+      throw std::invalid_argument("fitAlhashimi2016ClosedForm: distances must be positive");
     w[i] = 1.0 / (d[i] * d[i] * d[i] * d[i]);
   }
   Alhashimi2016Fit fit;
@@ -255,7 +262,8 @@ Alhashimi2016Fit fitAlhashimi2016ClosedForm(const std::vector<double>& d, const 
   return fit;
 }
 
-Alhashimi2016Fit fitAlhashimi2016ML(const std::vector<double>& d, const std::vector<double>& y, const std::vector<double>& start) {
+Alhashimi2016Fit fitAlhashimi2016ML(const std::vector<double>& d, const std::vector<double>& y,
+                                    const std::vector<double>& start) {
   Alhashimi2016Fit fit;
   fit.alpha = start;
   ceres::GradientProblem problem(new Alhashimi2016Profile(d, y, static_cast<int>(start.size())));
@@ -278,7 +286,8 @@ Alhashimi2016Fit fitAlhashimi2016ML(const std::vector<double>& d, const std::vec
   return fit;
 }
 
-double negLogLikelihood(const RangeModel& model, const std::vector<double>& d, const std::vector<double>& y) {
+double negLogLikelihood(const RangeModel& model, const std::vector<double>& d,
+                        const std::vector<double>& y) {
   double nll = 0.0;
   for (std::size_t i = 0; i < d.size(); ++i) {
     const double sigma = model.noise.stddev(d[i], model.bias);

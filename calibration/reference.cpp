@@ -13,10 +13,10 @@
 
 #include <Eigen/Dense>
 
-#include "calibration/inversion.hpp"
 #include "calibration/calibrate.hpp"
 #include "calibration/discrepancy.hpp"
 #include "calibration/held_out.hpp"
+#include "calibration/inversion.hpp"
 #include "calibration/jackknife.hpp"
 #include "calibration/joint_refinement.hpp"
 #include "calibration/noise_exponent.hpp"
@@ -34,7 +34,8 @@ std::string fixed(double v, int digits) {
   return buf;
 }
 
-/// Running mean and spread of a quantity over the scans of a stop, with a circular mean of an angle.
+/// Running mean and spread of a quantity over the scans of a stop, with a circular mean of an
+/// angle.
 struct Tally {
   std::size_t n = 0;
   double sum = 0.0, sum2 = 0.0, sin = 0.0, cos = 0.0;
@@ -49,7 +50,8 @@ struct Tally {
   double mean() const { return sum / static_cast<double>(n); }
   double standardError() const {
     if (n < 2) return kNaN;
-    const double var = std::max(0.0, (sum2 - sum * sum / static_cast<double>(n)) / static_cast<double>(n - 1));
+    const double var =
+        std::max(0.0, (sum2 - sum * sum / static_cast<double>(n)) / static_cast<double>(n - 1));
     return std::sqrt(var / static_cast<double>(n));
   }
   double angle() const { return std::atan2(sin, cos); }
@@ -60,8 +62,8 @@ struct Tally {
 /// that is within the distance tolerance; `why` says what was found instead. (Two poles on one
 /// bearing: the distance tells them apart.)
 template <class Key>
-std::optional<Key> choose(const std::map<Key, Tally>& tallies, const ReferenceDistance& e, const ReferenceConfig& c,
-                          std::string& why) {
+std::optional<Key> choose(const std::map<Key, Tally>& tallies, const ReferenceDistance& e,
+                          const ReferenceConfig& c, std::string& why) {
   std::optional<Key> best;
   double best_error = std::numeric_limits<double>::infinity(), nearest_bearing = best_error;
   for (const auto& [key, t] : tallies) {
@@ -82,8 +84,8 @@ std::optional<Key> choose(const std::map<Key, Tally>& tallies, const ReferenceDi
     return best;
   }
   if (best_error <= 0.1 + c.max_distance_error_fraction * e.distance_m) return best;
-  why = std::string(e.bearing_rad ? "the nearest in distance at that bearing" : "the nearest") + " measures " +
-        fixed(tallies.at(*best).mean(), 3) + " m, too far from distance_m";
+  why = std::string(e.bearing_rad ? "the nearest in distance at that bearing" : "the nearest") +
+        " measures " + fixed(tallies.at(*best).mean(), 3) + " m, too far from distance_m";
   return std::nullopt;
 }
 
@@ -117,7 +119,8 @@ void landmarkReadings(const LandmarkObservations& obs, const ReferenceDistance& 
   m.surface_m = e.distance_m - r;
   // The measured centre, on the detected bearing (a pole's arc is symmetric about it, whatever
   // the range bias): every beam's true distance follows from it.
-  const double cx = e.distance_m * std::cos(m.bearing_rad), cy = e.distance_m * std::sin(m.bearing_rad);
+  const double cx = e.distance_m * std::cos(m.bearing_rad),
+               cy = e.distance_m * std::sin(m.bearing_rad);
   for (const auto& s : obs.sightings) {
     if (s.stop != e.stop || s.landmark != *id) continue;
     for (const auto& b : s.beams) {
@@ -130,13 +133,16 @@ void landmarkReadings(const LandmarkObservations& obs, const ReferenceDistance& 
       ++m.readings;
     }
   }
-  if (m.readings == 0) m.status = "the pole matched at stop " + std::to_string(e.stop) + " has no beam near its centre";
+  if (m.readings == 0)
+    m.status =
+        "the pole matched at stop " + std::to_string(e.stop) + " has no beam near its centre";
 }
 
-void wallReadings(const LandmarkObservations& obs, const ReferenceDistance& e, const ReferenceConfig& c,
-                  ReferenceMatch& m, std::vector<KnownReading>& out) {
+void wallReadings(const LandmarkObservations& obs, const ReferenceDistance& e,
+                  const ReferenceConfig& c, ReferenceMatch& m, std::vector<KnownReading>& out) {
   // Per scan, the wall that matches the entry best; then over the stop.
-  std::map<std::size_t, std::map<std::size_t, Tally>> by_scan;  // scan -> wall index -> tally of one
+  // scan -> wall index -> tally of one
+  std::map<std::size_t, std::map<std::size_t, Tally>> by_scan;
   for (std::size_t w = 0; w < obs.walls.size(); ++w) {
     const WallSighting& ws = obs.walls[w];
     if (ws.stop != e.stop) continue;
@@ -168,12 +174,14 @@ void wallReadings(const LandmarkObservations& obs, const ReferenceDistance& e, c
     for (const auto& b : ws.beams) {
       const double incidence = wrapAngle(b.angle_rad - m.bearing_rad);
       if (!std::isfinite(b.range_m) || std::abs(incidence) > c.max_wall_incidence_rad) continue;
-      out.push_back({m.entry, ws.stop, ws.scan, b.beam, e.distance_m / std::cos(incidence), b.range_m, b.angle_rad,
-                     e.sigma_m});
+      out.push_back({m.entry, ws.stop, ws.scan, b.beam, e.distance_m / std::cos(incidence),
+                     b.range_m, b.angle_rad, e.sigma_m});
       ++m.readings;
     }
   }
-  if (m.readings == 0) m.status = "the wall matched at stop " + std::to_string(e.stop) + " has no beam within the incidence limit";
+  if (m.readings == 0)
+    m.status = "the wall matched at stop " + std::to_string(e.stop) +
+               " has no beam within the incidence limit";
 }
 
 Eigen::VectorXd powers(double d, int order) {
@@ -190,18 +198,22 @@ double polyAt(const std::vector<double>& a, double d) {
 }
 
 /// Weights of the noise law at the current f: 1 / f(d)^(2k) (f floored at 1 mm).
-std::vector<double> lawWeights(const std::vector<double>& alpha, const std::vector<double>& d, double exponent,
-                               const std::vector<bool>& use) {
+std::vector<double> lawWeights(const std::vector<double>& alpha, const std::vector<double>& d,
+                               double exponent, const std::vector<bool>& use) {
   std::vector<double> w(d.size(), 0.0);
   for (std::size_t i = 0; i < d.size(); ++i)
-    if (use[i]) w[i] = exponent == 0.0 ? 1.0 : std::pow(std::max(std::abs(polyAt(alpha, d[i])), 1e-3), -2.0 * exponent);
+    if (use[i])
+      w[i] = exponent == 0.0
+                 ? 1.0
+                 : std::pow(std::max(std::abs(polyAt(alpha, d[i])), 1e-3), -2.0 * exponent);
   return w;
 }
 
 /// Iterated weighted least squares on the readings with use[i], the noise law's weights times
 /// factor[i] (none when empty).
-std::vector<double> iteratedFit(const std::vector<double>& d, const std::vector<double>& y, const std::vector<bool>& use,
-                                int order, double exponent, const std::vector<double>& factor) {
+std::vector<double> iteratedFit(const std::vector<double>& d, const std::vector<double>& y,
+                                const std::vector<bool>& use, int order, double exponent,
+                                const std::vector<double>& factor) {
   std::vector<double> dd, yy, ww;
   std::vector<double> alpha(static_cast<std::size_t>(order) + 1, 0.0);
   alpha[1] = 1.0;  // f(d) = d to start the weights
@@ -209,10 +221,13 @@ std::vector<double> iteratedFit(const std::vector<double>& d, const std::vector<
     const std::vector<double> w = lawWeights(alpha, d, exponent, use);
     dd.clear(), yy.clear(), ww.clear();
     for (std::size_t i = 0; i < d.size(); ++i)
-      if (use[i]) dd.push_back(d[i]), yy.push_back(y[i]), ww.push_back(factor.empty() ? w[i] : w[i] * factor[i]);
+      if (use[i])
+        dd.push_back(d[i]), yy.push_back(y[i]),
+            ww.push_back(factor.empty() ? w[i] : w[i] * factor[i]);
     std::vector<double> next = fitPolynomial(dd, yy, order, ww);
     double change = 0.0;
-    for (std::size_t i = 0; i < next.size(); ++i) change = std::max(change, std::abs(next[i] - alpha[i]));
+    for (std::size_t i = 0; i < next.size(); ++i)
+      change = std::max(change, std::abs(next[i] - alpha[i]));
     alpha = std::move(next);
     if (change < 1e-12) break;
   }
@@ -226,13 +241,14 @@ void ReferenceConfig::validate() const {
     throw std::invalid_argument("ReferenceConfig: lateral_fraction must be in (0, 1]");
   if (!(max_wall_incidence_rad > 0.0 && max_wall_incidence_rad < 1.5))
     throw std::invalid_argument("ReferenceConfig: max_wall_incidence_rad must be in (0, 1.5)");
-  if (!(max_bearing_error_rad > 0.0)) throw std::invalid_argument("ReferenceConfig: max_bearing_error_rad must be positive");
+  if (!(max_bearing_error_rad > 0.0))
+    throw std::invalid_argument("ReferenceConfig: max_bearing_error_rad must be positive");
   if (!(max_distance_error_fraction > 0.0))
     throw std::invalid_argument("ReferenceConfig: max_distance_error_fraction must be positive");
 }
 
-ReferenceReadings knownReadings(const LandmarkObservations& obs, const Reference& ref, double radius_m,
-                                const ReferenceConfig& config) {
+ReferenceReadings knownReadings(const LandmarkObservations& obs, const Reference& ref,
+                                double radius_m, const ReferenceConfig& config) {
   config.validate();
   ReferenceReadings out;
   for (std::size_t k = 0; k < ref.distances.size(); ++k) {
@@ -243,8 +259,10 @@ ReferenceReadings knownReadings(const LandmarkObservations& obs, const Reference
     m.target = e.target;
     m.reference_m = e.distance_m;
     m.surface_m = e.distance_m;
-    if (e.target == ReferenceTarget::landmark) landmarkReadings(obs, e, radius_m, config, m, out.readings);
-    else wallReadings(obs, e, config, m, out.readings);
+    if (e.target == ReferenceTarget::landmark)
+      landmarkReadings(obs, e, radius_m, config, m, out.readings);
+    else
+      wallReadings(obs, e, config, m, out.readings);
     out.matches.push_back(m);
   }
   return out;
@@ -253,7 +271,8 @@ ReferenceReadings knownReadings(const LandmarkObservations& obs, const Reference
 ClusteredFit fitClustered(const std::vector<double>& d, const std::vector<double>& y,
                           const std::vector<std::size_t>& cluster, int order, double exponent,
                           const std::vector<double>& factor) {
-  if (d.size() != y.size() || d.size() != cluster.size() || (!factor.empty() && factor.size() != d.size()))
+  if (d.size() != y.size() || d.size() != cluster.size() ||
+      (!factor.empty() && factor.size() != d.size()))
     throw std::invalid_argument("fitClustered: sizes differ");
   const std::vector<bool> all(d.size(), true);
   ClusteredFit fit;
@@ -342,9 +361,12 @@ std::vector<KnownRange> knownRanges(const ReferenceReadings& known, const Refere
   return out;
 }
 
-double testReadingNoise(const std::vector<KnownReading>& readings, const CalibrationConfig& config, NoiseFits& fits) {
+double testReadingNoise(const std::vector<KnownReading>& readings, const CalibrationConfig& config,
+                        NoiseFits& fits) {
   // One batch: one beam on one target at one stop (a constant true distance), in scan order.
-  std::map<std::tuple<std::size_t, std::size_t, std::uint32_t>, std::vector<std::pair<std::size_t, double>>> by_beam;
+  std::map<std::tuple<std::size_t, std::size_t, std::uint32_t>,
+           std::vector<std::pair<std::size_t, double>>>
+      by_beam;
   for (const auto& r : readings)
     if (r.beam != kUnknownBeam) by_beam[{r.stop, r.entry, r.beam}].push_back({r.scan, r.y_m});
   std::vector<std::vector<double>> batches;
@@ -363,7 +385,9 @@ double testReadingNoise(const std::vector<KnownReading>& readings, const Calibra
 }
 
 void setNoiseLaw(NoiseModel& noise, double exponent, double sigma_e) {
-  noise.kind = exponent == 0.0 ? NoiseKind::constant : exponent == 2.0 ? NoiseKind::squared : NoiseKind::power;
+  noise.kind = exponent == 0.0   ? NoiseKind::constant
+               : exponent == 2.0 ? NoiseKind::squared
+                                 : NoiseKind::power;
   noise.sigma_e = sigma_e;
   noise.exponent = exponent;
 }
@@ -395,8 +419,8 @@ ReadingColumns columnsOf(const std::vector<KnownReading>& readings) {
 /// Fits every order the stops can support (leave-one-out needs more stops than coefficients)
 /// into `fits` and m.orders; returns the index of the invertible order with the smallest
 /// leave-one-stop-out error, -1 when none is invertible over [d_lo, d_hi].
-int fitEveryOrder(const ReadingColumns& c, double exponent, const CalibrationConfig& config, double d_lo, double d_hi,
-                  CalibrationModel& m, std::vector<ClusteredFit>& fits) {
+int fitEveryOrder(const ReadingColumns& c, double exponent, const CalibrationConfig& config,
+                  double d_lo, double d_hi, CalibrationModel& m, std::vector<ClusteredFit>& fits) {
   int best = -1;
   for (int n = 1; n <= config.max_order && static_cast<std::size_t>(n) + 2 <= c.stops; ++n) {
     fits.push_back(fitClustered(c.d, c.y, c.stop, n, exponent));
@@ -411,7 +435,9 @@ int fitEveryOrder(const ReadingColumns& c, double exponent, const CalibrationCon
     row.test_mse_m2 = kNaN;
     row.invertible = isMonotone(BiasPolynomial{f.alpha}, d_lo, d_hi);
     m.orders.push_back(row);
-    if (row.invertible && (best < 0 || f.cv_mse_m2 < fits[static_cast<std::size_t>(best)].cv_mse_m2)) best = n - 1;
+    if (row.invertible &&
+        (best < 0 || f.cv_mse_m2 < fits[static_cast<std::size_t>(best)].cv_mse_m2))
+      best = n - 1;
   }
   return best;
 }
@@ -420,12 +446,15 @@ int fitEveryOrder(const ReadingColumns& c, double exponent, const CalibrationCon
 int orderByAic(const CalibrationModel& m) {
   int order = -1;
   for (const auto& row : m.orders)
-    if (row.invertible && (order < 0 || row.aic < m.orders[static_cast<std::size_t>(order - 1)].aic)) order = row.order;
+    if (row.invertible &&
+        (order < 0 || row.aic < m.orders[static_cast<std::size_t>(order - 1)].aic))
+      order = row.order;
   return order;
 }
 
 /// m's bias, noise law, covariance, fitted range and residual RMS from the fit it adopts.
-void adoptFit(CalibrationModel& m, const ClusteredFit& f, const ReadingColumns& c, double exponent) {
+void adoptFit(CalibrationModel& m, const ClusteredFit& f, const ReadingColumns& c,
+              double exponent) {
   m.model.bias.alpha = f.alpha;
   setNoiseLaw(m.model.noise, exponent, f.sigma_e);
   m.alpha_covariance.assign(f.covariance.data(), f.covariance.data() + f.covariance.size());
@@ -439,10 +468,13 @@ void adoptFit(CalibrationModel& m, const ClusteredFit& f, const ReadingColumns& 
 /// The model discrepancy over the entries about the chosen fit f (calibration/discrepancy.hpp),
 /// and the fit to adopt at f's order: f refitted with the random-effects weights, or f itself
 /// where those are the noise law's.
-std::pair<ClusteredFit, Discrepancy> randomEffectsFit(const ClusteredFit& f, const ReadingColumns& c, double exponent) {
+std::pair<ClusteredFit, Discrepancy> randomEffectsFit(const ClusteredFit& f,
+                                                      const ReadingColumns& c, double exponent) {
   const int order = static_cast<int>(f.alpha.size()) - 1;
-  const std::vector<double> w = lawWeights(f.alpha, c.d, exponent, std::vector<bool>(c.d.size(), true));
-  const std::vector<EntryResidual> entries = entryResiduals(c.d, c.y, w, c.entry, c.tape_sigma, BiasPolynomial{f.alpha});
+  const std::vector<double> w =
+      lawWeights(f.alpha, c.d, exponent, std::vector<bool>(c.d.size(), true));
+  const std::vector<EntryResidual> entries =
+      entryResiduals(c.d, c.y, w, c.entry, c.tape_sigma, BiasPolynomial{f.alpha});
   Discrepancy discrepancy = estimateDiscrepancy(entries, order);
   const auto factors = randomEffectsFactors(entries, discrepancy);
   if (factors.empty()) return {f, std::move(discrepancy)};
@@ -454,8 +486,9 @@ std::pair<ClusteredFit, Discrepancy> randomEffectsFit(const ClusteredFit& f, con
 
 }  // namespace
 
-CalibrationModel calibrateWithReference(const std::vector<KnownReading>& readings, const CalibrationConfig& config,
-                                        double range_min_m, double range_max_m) {
+CalibrationModel calibrateWithReference(const std::vector<KnownReading>& readings,
+                                        const CalibrationConfig& config, double range_min_m,
+                                        double range_max_m) {
   config.validate();
   CalibrationModel m;
   m.method = "reference";
@@ -465,18 +498,22 @@ CalibrationModel calibrateWithReference(const std::vector<KnownReading>& reading
   if (c.stops < 3) {
     m.status.code = StatusCode::too_few_reference_stops;
     m.status.message = "known distances at " + plural(c.stops, "stop") +
-                ": a range model needs measured distances at 3 or more stops (better 10 or more, spread over "
-                "the range you will use the sensor at), or wall-to-wall spans beside them (docs/FORMAT.md#wall-to-wall-spans)";
+                       ": a range model needs measured distances at 3 or more stops (better 10 or "
+                       "more, spread over "
+                       "the range you will use the sensor at), or wall-to-wall spans beside them "
+                       "(docs/FORMAT.md#wall-to-wall-spans)";
     return m;
   }
   const double exponent = testReadingNoise(readings, config, m.noise_fits);
-  const double d_lo = *std::min_element(c.d.begin(), c.d.end()), d_hi = *std::max_element(c.d.begin(), c.d.end());
+  const double d_lo = *std::min_element(c.d.begin(), c.d.end()),
+               d_hi = *std::max_element(c.d.begin(), c.d.end());
   std::vector<ClusteredFit> fits;
   const int best = fitEveryOrder(c, exponent, config, d_lo, d_hi, m, fits);
   if (best < 0) {
     m.status.code = StatusCode::no_invertible_order;
-    m.status.message = "no polynomial order fitted to the known distances increases over " + fixed(d_lo, 3) + "-" +
-                fixed(d_hi, 3) + " m: measure more distances across that range";
+    m.status.message = "no polynomial order fitted to the known distances increases over " +
+                       fixed(d_lo, 3) + "-" + fixed(d_hi, 3) +
+                       " m: measure more distances across that range";
     return m;
   }
   m.order_rule = "leave-one-stop-out cross-validation";

@@ -4,7 +4,8 @@
 // the single-sensor joint refinement of Alhashimi et al. 2021 (section 3.3, every pose, pole and
 // the bias in one maximum-likelihood fit) written with one block of parameters per sensor. A
 // beam at angle a of sensor s, in a scan taken at the vehicle's stop k, on pole p, reads
-//     y = f_s(d) + e,   d = distance along the ray from T_k M_s at direction psi_k + yaw_s + flip_s a
+//     y = f_s(d) + e,   d = distance along the ray from T_k M_s at direction psi_k + yaw_s + flip_s
+//     a
 // to the circle (c_p, r), f_s the sensor's bias polynomial (Alhashimi et al. 2021 eq. 3), T_k the
 // vehicle's pose, M_s = (x_s, y_s, yaw_s) the sensor's mounting on the vehicle. The readings of
 // one beam on one pole at one stop are pooled into their mean, whose variance is
@@ -49,28 +50,40 @@ const char* toString(RigFrame f);
 
 struct RigConfig {
   RigFrame frame = RigFrame::automatic;  ///< see RigFrame. Default automatic
-  std::size_t reference = 0;             ///< reference sensor (relative frame; the range scale's gauge). Default 0
-  double sigma_vehicle_m = 0.02;         ///< stop and go: prior std. dev. of each coordinate of a stop around its recorded pose, metres. Default 0.02
-  double sigma_vehicle_rad = 0.0087;     ///< stop and go: the same for its heading, radians. Default 0.0087 (0.5 deg)
-  MotionPrior motion = MotionPrior::automatic;  ///< odometry steps between consecutive stops (continuous motion). Default automatic
-  int motion_min_stops = 20;             ///< automatic: a vehicle that never stops has at least this many stops, most of one scan. Default 20
-  double motion_sigma_fraction = 0.1;    ///< motion prior: std. dev. of each step coordinate per metre of step. Default 0.1
-  double motion_sigma_floor_m = 0.002;   ///< plus this, metres. Default 0.002
-  double motion_heading_sigma_rad_per_m = 0.1;  ///< of the heading change per metre of step, rad/m. Default 0.1
-  double motion_heading_floor_rad = 0.002;      ///< plus this, radians. Default 0.002
+  /// reference sensor (relative frame; the range scale's gauge). Default 0
+  std::size_t reference = 0;
+  /// stop and go: prior std. dev. of each coordinate of a stop around its recorded pose, metres.
+  /// Default 0.02
+  double sigma_vehicle_m = 0.02;
+  /// stop and go: the same for its heading, radians. Default 0.0087 (0.5 deg)
+  double sigma_vehicle_rad = 0.0087;
+  /// odometry steps between consecutive stops (continuous motion). Default automatic
+  MotionPrior motion = MotionPrior::automatic;
+  /// automatic: a vehicle that never stops has at least this many stops, most of one scan. Default
+  /// 20
+  int motion_min_stops = 20;
+  /// motion prior: std. dev. of each step coordinate per metre of step. Default 0.1
+  double motion_sigma_fraction = 0.1;
+  double motion_sigma_floor_m = 0.002;  ///< plus this, metres. Default 0.002
+  /// of the heading change per metre of step, rad/m. Default 0.1
+  double motion_heading_sigma_rad_per_m = 0.1;
+  double motion_heading_floor_rad = 0.002;  ///< plus this, radians. Default 0.002
   /// Bias order per sensor; empty: chosen per sensor by BIC among 1..max_order. Default empty.
   std::vector<int> orders;
-  int max_order = 2;                     ///< highest order tried when choosing. Default 2
+  int max_order = 2;  ///< highest order tried when choosing. Default 2
   /// Noise laws tried per sensor (the most likely is kept): constant and squared by default.
   std::vector<NoiseKind> noise_kinds{NoiseKind::constant, NoiseKind::squared};
-  double lateral_fraction = 0.7;         ///< beams passing within this fraction of the radius from a pole's centre are used. Default 0.7
-  int outer_iterations = 8;              ///< noise re-estimations at most. Default 8
-  int max_solver_iterations = 100;       ///< Ceres iterations per solve. Default 100
-  double min_turn_rad = 0.35;            ///< vehicle frame: the recorded headings must span this much, radians. Default 0.35 (20 deg)
-  double min_travel_m = 0.5;             ///< the recorded poses give the range scale when they span this much, metres. Default 0.5
+  /// beams passing within this fraction of the radius from a pole's centre are used. Default 0.7
+  double lateral_fraction = 0.7;
+  int outer_iterations = 8;         ///< noise re-estimations at most. Default 8
+  int max_solver_iterations = 100;  ///< Ceres iterations per solve. Default 100
+  /// vehicle frame: the recorded headings must span this much, radians. Default 0.35 (20 deg)
+  double min_turn_rad = 0.35;
+  /// the recorded poses give the range scale when they span this much, metres. Default 0.5
+  double min_travel_m = 0.5;
   /// A mounting whose standard error exceeds these is not identifiable (exit 3 with the reason).
-  double max_mounting_se_m = 0.25;       ///< metres. Default 0.25
-  double max_mounting_se_rad = 0.17;     ///< radians. Default 0.17 (10 deg)
+  double max_mounting_se_m = 0.25;    ///< metres. Default 0.25
+  double max_mounting_se_rad = 0.17;  ///< radians. Default 0.17 (10 deg)
   /// A range model whose correction at the middle of its fitted distances has a larger standard
   /// error is reported as not determined (its block is written with that status; `correct`
   /// refuses it). Metres. Default 0.01.
@@ -83,21 +96,25 @@ struct RigConfig {
 
 /// One sensor as calibrated.
 struct RigSensorEstimate {
-  Mounting mounting;                       ///< in the vehicle frame (relative frame: the reference at its prior)
-  Eigen::Matrix3d mounting_covariance = Eigen::Matrix3d::Zero();  ///< of (x, y, yaw); zero when held
-  bool mounting_held = false;              ///< the reference of the relative frame
-  RangeModel model;                        ///< bias f_s and noise law sigma_s
-  Eigen::MatrixXd alpha_covariance;        ///< of alpha_0..alpha_n
-  bool scale_held = false;                 ///< alpha_1 held at its start (the range scale's gauge)
-  double beam_scatter_m = 0.0;             ///< tau_s: std. dev. of a beam's error that repeats from scan to scan, metres
-  std::vector<std::pair<int, double>> order_bic;  ///< orders tried and the whole fit's BIC with each
-  double flip_log_likelihood_ratio = 0.0;  ///< flip estimated: log-likelihood of the kept flip over the other (0: not estimated)
-  std::size_t readings = 0;                ///< readings used
-  std::size_t residuals = 0;               ///< pooled residuals (beam means)
-  double residual_rms_m = 0.0;             ///< RMS of the beam means minus f(d)
-  double d_min_m = 0.0, d_max_m = 0.0;     ///< true distances the fit covers, metres
-  std::size_t poles = 0;                   ///< poles it saw
-  std::size_t shared_poles = 0;            ///< of them, poles another sensor saw too
+  Mounting mounting;  ///< in the vehicle frame (relative frame: the reference at its prior)
+  /// of (x, y, yaw); zero when held
+  Eigen::Matrix3d mounting_covariance = Eigen::Matrix3d::Zero();
+  bool mounting_held = false;        ///< the reference of the relative frame
+  RangeModel model;                  ///< bias f_s and noise law sigma_s
+  Eigen::MatrixXd alpha_covariance;  ///< of alpha_0..alpha_n
+  bool scale_held = false;           ///< alpha_1 held at its start (the range scale's gauge)
+  /// tau_s: std. dev. of a beam's error that repeats from scan to scan, metres
+  double beam_scatter_m = 0.0;
+  /// orders tried and the whole fit's BIC with each
+  std::vector<std::pair<int, double>> order_bic;
+  /// flip estimated: log-likelihood of the kept flip over the other (0: not estimated)
+  double flip_log_likelihood_ratio = 0.0;
+  std::size_t readings = 0;             ///< readings used
+  std::size_t residuals = 0;            ///< pooled residuals (beam means)
+  double residual_rms_m = 0.0;          ///< RMS of the beam means minus f(d)
+  double d_min_m = 0.0, d_max_m = 0.0;  ///< true distances the fit covers, metres
+  std::size_t poles = 0;                ///< poles it saw
+  std::size_t shared_poles = 0;         ///< of them, poles another sensor saw too
   /// Standard error of f_s at the middle of the fitted distances (delta method), metres.
   double model_se_m = 0.0;
   /// ok, or why this sensor's range model is not determined (not_identifiable): its block is
@@ -107,16 +124,16 @@ struct RigSensorEstimate {
 
 /// A pole as calibrated.
 struct RigPoleEstimate {
-  int id = 0;                              ///< pole id
-  double x_m = 0.0, y_m = 0.0;             ///< centre in the frame of the vehicle's poses, metres
+  int id = 0;                   ///< pole id
+  double x_m = 0.0, y_m = 0.0;  ///< centre in the frame of the vehicle's poses, metres
   Eigen::Matrix2d covariance = Eigen::Matrix2d::Zero();  ///< m^2
-  std::vector<std::size_t> sensors;        ///< sensors that saw it
+  std::vector<std::size_t> sensors;                      ///< sensors that saw it
 };
 
 /// Sensor `sensor` seen from sensor `reference`: where it sits in the reference's frame.
 struct RigRelativeMounting {
-  std::size_t reference = 0, sensor = 0;   ///< indices into the sensors
-  Pose2 pose;                              ///< x, y, yaw of `sensor` in `reference`'s frame
+  std::size_t reference = 0, sensor = 0;  ///< indices into the sensors
+  Pose2 pose;                             ///< x, y, yaw of `sensor` in `reference`'s frame
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();  ///< of (x, y, yaw)
 };
 
@@ -125,22 +142,22 @@ struct RigResult {
   /// too_few_readings, solver_failed), with what to record instead.
   Status status{StatusCode::not_run, ""};
   bool ok() const { return status.ok(); }
-  RigFrame frame = RigFrame::relative;     ///< vehicle or relative (never automatic)
-  std::size_t reference = 0;               ///< reference sensor
-  std::vector<RigSensorEstimate> sensors;  ///< one per sensor, in the input's order
-  std::vector<RigPoleEstimate> poles;      ///< by id
-  std::vector<Pose2> vehicle;              ///< refined pose of each stop
-  double radius_m = 0.0;                   ///< pole radius (given or estimated)
-  double radius_se_m = 0.0;                ///< its standard error (0 when given)
+  RigFrame frame = RigFrame::relative;        ///< vehicle or relative (never automatic)
+  std::size_t reference = 0;                  ///< reference sensor
+  std::vector<RigSensorEstimate> sensors;     ///< one per sensor, in the input's order
+  std::vector<RigPoleEstimate> poles;         ///< by id
+  std::vector<Pose2> vehicle;                 ///< refined pose of each stop
+  double radius_m = 0.0;                      ///< pole radius (given or estimated)
+  double radius_se_m = 0.0;                   ///< its standard error (0 when given)
   std::vector<RigRelativeMounting> relative;  ///< every other sensor relative to the reference
-  bool motion_prior = false;               ///< odometry steps were the vehicle's prior
-  bool scale_free = false;                 ///< the common range scale was a gauge (reference alpha_1 held)
+  bool motion_prior = false;                  ///< odometry steps were the vehicle's prior
+  bool scale_free = false;  ///< the common range scale was a gauge (reference alpha_1 held)
   /// What the data determine and what they cannot, in words (gauge, scale, flips).
   std::vector<std::string> notes;
-  int solver_iterations = 0;               ///< Ceres iterations, every solve of the kept fit
-  double neg_log_likelihood = 0.0;         ///< of the pooled readings at the solution, nats
-  double bic = 0.0;                        ///< k ln N + 2 NLL over the pooled readings
-  std::size_t parameters = 0;              ///< free parameters of the kept fit
+  int solver_iterations = 0;        ///< Ceres iterations, every solve of the kept fit
+  double neg_log_likelihood = 0.0;  ///< of the pooled readings at the solution, nats
+  double bic = 0.0;                 ///< k ln N + 2 NLL over the pooled readings
+  std::size_t parameters = 0;       ///< free parameters of the kept fit
 };
 
 /// Calibrates every sensor of the rig together. Throws std::invalid_argument for an invalid
@@ -158,7 +175,8 @@ void checkRangeModel(RigSensorEstimate& e, const std::string& name, const RigCon
 
 /// The relative mounting of `sensor` in `reference`'s frame with its covariance, from both
 /// mountings and their joint covariance (6 x 6: reference x, y, yaw, then sensor's).
-RigRelativeMounting relativeMountingWithCovariance(const Mounting& reference, const Mounting& sensor,
+RigRelativeMounting relativeMountingWithCovariance(const Mounting& reference,
+                                                   const Mounting& sensor,
                                                    const Eigen::Matrix<double, 6, 6>& covariance);
 
 }  // namespace lidarcal::calibration

@@ -21,7 +21,8 @@ Eigen::SparseMatrix<double, Eigen::RowMajor> toSparse(const ceres::CRSMatrix& j)
   std::vector<Eigen::Triplet<double>> t;
   t.reserve(j.values.size());
   for (int r = 0; r < j.num_rows; ++r)
-    for (int k = j.rows[static_cast<std::size_t>(r)]; k < j.rows[static_cast<std::size_t>(r) + 1]; ++k)
+    for (int k = j.rows[static_cast<std::size_t>(r)]; k < j.rows[static_cast<std::size_t>(r) + 1];
+         ++k)
       t.emplace_back(r, j.cols[static_cast<std::size_t>(k)], j.values[static_cast<std::size_t>(k)]);
   m.setFromTriplets(t.begin(), t.end());
   return m;
@@ -78,21 +79,32 @@ bool RigProblem::computeCovariance() {
     std::string what = "a parameter";
     for (std::size_t p = 0; p < column_of_.size(); ++p) {
       if (column_of_[p] != at) continue;
-      if (p < mount_offset_) what = "the vehicle's pose at stop " + std::to_string(p / 3);
-      else if (p < pole_offset_) what = "the mounting of " + obs_.sensors[(p - mount_offset_) / 3].name;
-      else if (p < radius_offset_) what = "the position of pole " + std::to_string(pole_ids_[(p - pole_offset_) / 2]);
-      else if (p == radius_offset_) what = "the pole radius";
-      else what = "the range model of a sensor";
+      if (p < mount_offset_)
+        what = "the vehicle's pose at stop " + std::to_string(p / 3);
+      else if (p < pole_offset_)
+        what = "the mounting of " + obs_.sensors[(p - mount_offset_) / 3].name;
+      else if (p < radius_offset_)
+        what = "the position of pole " + std::to_string(pole_ids_[(p - pole_offset_) / 2]);
+      else if (p == radius_offset_)
+        what = "the pole radius";
+      else
+        what = "the range model of a sensor";
     }
     out_.status = Status{StatusCode::not_identifiable, "the data leave " + what + " undetermined"};
     return false;
   }
-  covariance_ = scale.asDiagonal() * ldlt.solve(Eigen::MatrixXd::Identity(info.rows(), info.cols())) * scale.asDiagonal();
+  covariance_ = scale.asDiagonal() *
+                ldlt.solve(Eigen::MatrixXd::Identity(info.rows(), info.cols())) *
+                scale.asDiagonal();
   // Leverage of each pooled beam: j_i C j_i^T over its row's few nonzeros.
   for (std::size_t r = 0; r < used_.size() && r < static_cast<std::size_t>(j.rows()); ++r) {
     double h = 0.0;
-    for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator a(j, static_cast<Eigen::Index>(r)); a; ++a)
-      for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator b(j, static_cast<Eigen::Index>(r)); b; ++b)
+    for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator a(
+             j, static_cast<Eigen::Index>(r));
+         a; ++a)
+      for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator b(
+               j, static_cast<Eigen::Index>(r));
+           b; ++b)
         h += a.value() * covariance_(a.col(), b.col()) * b.value();
     leverage_[r] = h;
   }
@@ -100,11 +112,13 @@ bool RigProblem::computeCovariance() {
 }
 
 Eigen::MatrixXd RigProblem::covarianceBlock(std::size_t offset, std::size_t size) const {
-  Eigen::MatrixXd c = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(size), static_cast<Eigen::Index>(size));
+  Eigen::MatrixXd c =
+      Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(size), static_cast<Eigen::Index>(size));
   for (std::size_t a = 0; a < size; ++a)
     for (std::size_t b = 0; b < size; ++b) {
       const int ca = column_of_[offset + a], cb = column_of_[offset + b];
-      if (ca >= 0 && cb >= 0) c(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b)) = covariance_(ca, cb);
+      if (ca >= 0 && cb >= 0)
+        c(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b)) = covariance_(ca, cb);
     }
   return c;
 }
@@ -129,14 +143,16 @@ double RigProblem::summariseSensors(std::size_t* samples_used) {
     e.model.noise = noise_[s].law;
     e.model.range_min_m = obs_.sensors[s].range_min_m;
     e.model.range_max_m = obs_.sensors[s].range_max_m;
-    e.alpha_covariance = covarianceBlock(alpha_offset_[s], static_cast<std::size_t>(setup_.orders[s]) + 1);
+    e.alpha_covariance =
+        covarianceBlock(alpha_offset_[s], static_cast<std::size_t>(setup_.orders[s]) + 1);
     e.scale_held = setup_.scale_held && s == config_.reference;
     e.beam_scatter_m = noise_[s].tau_m;
     e.readings = readings_per_sensor_[s];
     e.residuals = samples[s].size();
     double ss = 0.0;
     for (const auto& x : samples[s]) ss += x.residual * x.residual;
-    e.residual_rms_m = samples[s].empty() ? 0.0 : std::sqrt(ss / static_cast<double>(samples[s].size()));
+    e.residual_rms_m =
+        samples[s].empty() ? 0.0 : std::sqrt(ss / static_cast<double>(samples[s].size()));
     ll += pooledLogLikelihood(samples[s], noise_[s]);
     *samples_used += samples[s].size();
   }
@@ -159,7 +175,8 @@ void RigProblem::summarisePoles() {
     p.x_m = pole(i)[0], p.y_m = pole(i)[1];
     p.covariance = covarianceBlock(pole_offset_ + 2 * i, 2);
     for (const RigSighting& s : obs_.sightings)
-      if (s.pole == p.id && std::find(p.sensors.begin(), p.sensors.end(), s.sensor) == p.sensors.end())
+      if (s.pole == p.id &&
+          std::find(p.sensors.begin(), p.sensors.end(), s.sensor) == p.sensors.end())
         p.sensors.push_back(s.sensor);
     std::sort(p.sensors.begin(), p.sensors.end());
     for (const std::size_t s : p.sensors) {
@@ -184,7 +201,8 @@ void RigProblem::summariseRelativeMountings() {
         const int cb = column_of_[offsets[b / 3] + static_cast<std::size_t>(b % 3)];
         if (ca >= 0 && cb >= 0) c(a, b) = covariance_(ca, cb);
       }
-    RigRelativeMounting r = relativeMountingWithCovariance(out_.sensors[ref].mounting, out_.sensors[s].mounting, c);
+    RigRelativeMounting r =
+        relativeMountingWithCovariance(out_.sensors[ref].mounting, out_.sensors[s].mounting, c);
     r.reference = ref;
     r.sensor = s;
     out_.relative.push_back(r);
@@ -195,13 +213,16 @@ void RigProblem::summarise() {
   std::size_t n_samples = 0;
   const double ll = summariseSensors(&n_samples);
   summarisePoles();
-  for (std::size_t k = 0; k < obs_.vehicle.size(); ++k) out_.vehicle.push_back(Pose2{vehicle(k)[0], vehicle(k)[1], vehicle(k)[2]});
+  for (std::size_t k = 0; k < obs_.vehicle.size(); ++k)
+    out_.vehicle.push_back(Pose2{vehicle(k)[0], vehicle(k)[1], vehicle(k)[2]});
   out_.radius_m = *radius();
   out_.radius_se_m = std::sqrt(std::max(0.0, covarianceBlock(radius_offset_, 1)(0, 0)));
   summariseRelativeMountings();
   out_.parameters = static_cast<std::size_t>(covariance_.rows());
   out_.neg_log_likelihood = -ll;
-  out_.bic = static_cast<double>(out_.parameters) * std::log(std::max<double>(1.0, static_cast<double>(n_samples))) - 2.0 * ll;
+  out_.bic = static_cast<double>(out_.parameters) *
+                 std::log(std::max<double>(1.0, static_cast<double>(n_samples))) -
+             2.0 * ll;
   out_.status = Status{StatusCode::ok, ""};
 }
 

@@ -27,7 +27,8 @@ double meanDof(const std::vector<NoiseSample>& samples) {
 
 /// tau^2 >= 0 with sum r^2 / (v_i + tau^2) = dof (0 when the residuals are no larger than the
 /// scatter within explains): the left side falls with tau^2, so bisection on a bracket.
-double fitTauSquared(const std::vector<NoiseSample>& samples, const SensorNoise& noise, double dof) {
+double fitTauSquared(const std::vector<NoiseSample>& samples, const SensorNoise& noise,
+                     double dof) {
   SensorNoise n0 = noise;
   n0.tau_m = 0.0;
   const auto chi2 = [&](double t2) {
@@ -61,7 +62,8 @@ double withinFit(const std::vector<NoiseSample>& samples, NoiseKind kind, double
 }
 
 /// sigma_e of `kind` from the means' residuals (tau 0), and their log-likelihood.
-double residualFit(const std::vector<NoiseSample>& samples, NoiseKind kind, double dof, double* loglik) {
+double residualFit(const std::vector<NoiseSample>& samples, NoiseKind kind, double dof,
+                   double* loglik) {
   double sum = 0.0, logv = 0.0;
   for (const auto& s : samples) {
     const double h = noiseShape(kind, s.h);
@@ -76,14 +78,17 @@ double residualFit(const std::vector<NoiseSample>& samples, NoiseKind kind, doub
 
 }  // namespace
 
-double noiseShape(NoiseKind kind, double f) { return kind == NoiseKind::squared ? std::max(f * f, 1e-6) : 1.0; }
+double noiseShape(NoiseKind kind, double f) {
+  return kind == NoiseKind::squared ? std::max(f * f, 1e-6) : 1.0;
+}
 
 double meanVariance(const SensorNoise& noise, const NoiseSample& s) {
   const double sd = noise.law.sigma_e * noiseShape(noise.law.kind, s.h);
   return sd * sd / s.n + noise.tau_m * noise.tau_m;
 }
 
-SensorNoise fitSensorNoise(const std::vector<NoiseSample>& samples, const std::vector<NoiseKind>& kinds) {
+SensorNoise fitSensorNoise(const std::vector<NoiseSample>& samples,
+                           const std::vector<NoiseKind>& kinds) {
   SensorNoise best;
   if (samples.empty() || kinds.empty()) return best;
   const double w = withinDof(samples);

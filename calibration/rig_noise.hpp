@@ -21,17 +21,18 @@ namespace lidarcal::calibration::rig {
 
 /// One pooled beam of one sensor at the current estimate.
 struct NoiseSample {
-  double h = 1.0;          ///< f(d) for the squared law's shape (the law picks h = f^2 or 1), metres
-  double n = 1.0;          ///< readings pooled
+  double h = 1.0;  ///< f(d) for the squared law's shape (the law picks h = f^2 or 1), metres
+  double n = 1.0;  ///< readings pooled
   double within_ss = 0.0;  ///< sum of squared deviations of the readings around their mean, m^2
   double residual = 0.0;   ///< mean reading minus f(d), metres
-  double leverage = 0.0;   ///< share of the fitted parameters in this residual (hat-matrix diagonal), 0..1
+  /// share of the fitted parameters in this residual (hat-matrix diagonal), 0..1
+  double leverage = 0.0;
 };
 
 /// A sensor's noise: sigma(d) = sigma_e h(d), and tau.
 struct SensorNoise {
-  NoiseModel law;          ///< constant or squared, with sigma_e
-  double tau_m = 0.0;      ///< std. dev. of the error a beam repeats from scan to scan, metres
+  NoiseModel law;             ///< constant or squared, with sigma_e
+  double tau_m = 0.0;         ///< std. dev. of the error a beam repeats from scan to scan, metres
   bool from_repeats = false;  ///< sigma_e came from the scatter within the beams
 };
 
@@ -42,7 +43,8 @@ double noiseShape(NoiseKind kind, double f);
 double meanVariance(const SensorNoise& noise, const NoiseSample& s);
 
 /// Fits sigma_e, the law (the most likely of `kinds`: constant, squared) and tau to the samples.
-SensorNoise fitSensorNoise(const std::vector<NoiseSample>& samples, const std::vector<NoiseKind>& kinds);
+SensorNoise fitSensorNoise(const std::vector<NoiseSample>& samples,
+                           const std::vector<NoiseKind>& kinds);
 
 /// Log-likelihood of the samples' readings (the means and the scatter within), nats.
 double pooledLogLikelihood(const std::vector<NoiseSample>& samples, const SensorNoise& noise);

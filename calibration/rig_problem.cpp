@@ -21,7 +21,8 @@ template <int N>
 struct RigBeamCost {
   double angle_rad, flip, mean_m, inv_sd;
   template <typename T>
-  bool operator()(const T* v, const T* m, const T* c, const T* r, const T* alpha, T* residual) const {
+  bool operator()(const T* v, const T* m, const T* c, const T* r, const T* alpha,
+                  T* residual) const {
     using std::cos;
     using std::sin;
     const T cv = cos(v[2]), sv = sin(v[2]);
@@ -41,11 +42,16 @@ ceres::CostFunction* makeCost(const RigBeamCost<N>& c) {
 
 ceres::CostFunction* beamCost(int order, double angle, double flip, double mean, double inv_sd) {
   switch (order) {
-    case 1: return makeCost<2>({angle, flip, mean, inv_sd});
-    case 2: return makeCost<3>({angle, flip, mean, inv_sd});
-    case 3: return makeCost<4>({angle, flip, mean, inv_sd});
-    case 4: return makeCost<5>({angle, flip, mean, inv_sd});
-    default: throw std::invalid_argument("rig calibration: bias order must be 1..4");
+    case 1:
+      return makeCost<2>({angle, flip, mean, inv_sd});
+    case 2:
+      return makeCost<3>({angle, flip, mean, inv_sd});
+    case 3:
+      return makeCost<4>({angle, flip, mean, inv_sd});
+    case 4:
+      return makeCost<5>({angle, flip, mean, inv_sd});
+    default:
+      throw std::invalid_argument("rig calibration: bias order must be 1..4");
   }
 }
 
@@ -62,15 +68,19 @@ ceres::Solver::Options solverOptions(int max_iterations) {
 }
 
 /// The sensor's pose in the world: the vehicle's pose followed by the mounting.
-Pose2 sensorPose(const double* v, const double* m) { return compose(Pose2{v[0], v[1], v[2]}, Pose2{m[0], m[1], m[2]}); }
+Pose2 sensorPose(const double* v, const double* m) {
+  return compose(Pose2{v[0], v[1], v[2]}, Pose2{m[0], m[1], m[2]});
+}
 
 }  // namespace
 
 RigProblem::RigProblem(const RigObservations& obs, const RigConfig& config, const FitSetup& setup)
     : obs_(obs), config_(config), setup_(setup) {
   const std::size_t S = obs.sensors.size();
-  if (setup.orders.size() != S || setup.flips.size() != S || setup.stop_held.size() != obs.vehicle.size())
-    throw std::invalid_argument("RigProblem: one order and flip per sensor and one hold flag per stop needed");
+  if (setup.orders.size() != S || setup.flips.size() != S ||
+      setup.stop_held.size() != obs.vehicle.size())
+    throw std::invalid_argument(
+        "RigProblem: one order and flip per sensor and one hold flag per stop needed");
   out_.frame = setup.frame;
   out_.reference = config.reference;
   out_.motion_prior = setup.motion;
@@ -81,7 +91,8 @@ RigProblem::RigProblem(const RigObservations& obs, const RigConfig& config, cons
 }
 
 std::size_t RigProblem::poleIndex(int id) const {
-  return static_cast<std::size_t>(std::lower_bound(pole_ids_.begin(), pole_ids_.end(), id) - pole_ids_.begin());
+  return static_cast<std::size_t>(std::lower_bound(pole_ids_.begin(), pole_ids_.end(), id) -
+                                  pole_ids_.begin());
 }
 
 /// One pooled beam per (sensor, stop, pole, beam index); a beam without an index is its own.
@@ -94,13 +105,15 @@ void RigProblem::poolBeams() {
   readings_per_sensor_.assign(obs_.sensors.size(), 0);
   for (const RigSighting& s : obs_.sightings) {
     if (s.sensor >= obs_.sensors.size() || s.stop >= obs_.vehicle.size())
-      throw std::invalid_argument("RigProblem: a sighting names a sensor or stop that does not exist");
+      throw std::invalid_argument(
+          "RigProblem: a sighting names a sensor or stop that does not exist");
     for (const BeamReading& b : s.beams) {
       if (!std::isfinite(b.range_m) || b.beside) continue;
       std::size_t at = beams_.size();
       bool fresh = true;
       if (b.beam != kUnknownBeam) {
-        const auto inserted = index.emplace(std::make_tuple(s.sensor, s.stop, s.pole, b.beam), beams_.size());
+        const auto inserted =
+            index.emplace(std::make_tuple(s.sensor, s.stop, s.pole, b.beam), beams_.size());
         at = inserted.first->second;
         fresh = inserted.second;
       }
@@ -118,7 +131,8 @@ void RigProblem::poolBeams() {
   for (std::size_t i = 0; i < beams_.size(); ++i) {
     beams_[i].n = sums[i].n;
     beams_[i].mean_m = sums[i].sum / sums[i].n;
-    beams_[i].within_ss = std::max(0.0, sums[i].sumsq - sums[i].n * beams_[i].mean_m * beams_[i].mean_m);
+    beams_[i].within_ss =
+        std::max(0.0, sums[i].sumsq - sums[i].n * beams_[i].mean_m * beams_[i].mean_m);
   }
   for (const RigSighting& s : obs_.sightings) pole_ids_.push_back(s.pole);
   std::sort(pole_ids_.begin(), pole_ids_.end());
@@ -146,9 +160,11 @@ void RigProblem::initialiseParameters() {
     alpha(s)[1] = 1.0;  // f(d) = d
   }
   *radius() = obs_.pole_radius_m.value_or(0.05);
-  // Each sensor's noise to start from: its scatter within the beams (free of the geometry), or 1 cm.
+  // Each sensor's noise to start from: its scatter within the beams (free of the geometry), or 1
+  // cm.
   std::vector<std::vector<NoiseSample>> samples(S);
-  for (const PooledBeam& b : beams_) samples[b.sensor].push_back(NoiseSample{b.mean_m, b.n, b.within_ss, 0.0, 0.0});
+  for (const PooledBeam& b : beams_)
+    samples[b.sensor].push_back(NoiseSample{b.mean_m, b.n, b.within_ss, 0.0, 0.0});
   noise_.resize(S);
   for (std::size_t s = 0; s < S; ++s) {
     noise_[s] = fitSensorNoise(samples[s], config_.noise_kinds);
@@ -157,15 +173,20 @@ void RigProblem::initialiseParameters() {
   }
 }
 
-/// The starting mountings and poles (rig_start.hpp): the reference's poles, the others aligned to them.
+/// The starting mountings and poles (rig_start.hpp): the reference's poles, the others aligned to
+/// them.
 void RigProblem::initialisePoles() {
   std::vector<Pose2> mountings;
-  for (std::size_t s = 0; s < obs_.sensors.size(); ++s) mountings.push_back(Pose2{mount(s)[0], mount(s)[1], mount(s)[2]});
+  for (std::size_t s = 0; s < obs_.sensors.size(); ++s)
+    mountings.push_back(Pose2{mount(s)[0], mount(s)[1], mount(s)[2]});
   std::map<int, Eigen::Vector2d> centres;
   startingGeometry(obs_, setup_.flips, *radius(), config_.reference, mountings, centres);
   for (std::size_t s = 0; s < obs_.sensors.size(); ++s) {
-    if (setup_.frame == RigFrame::relative && s == config_.reference) continue;  // held at its prior
-    std::copy_n(std::array<double, 3>{mountings[s].x_m, mountings[s].y_m, mountings[s].yaw_rad}.data(), 3, mount(s));
+    // held at its prior
+    if (setup_.frame == RigFrame::relative && s == config_.reference) continue;
+    std::copy_n(
+        std::array<double, 3>{mountings[s].x_m, mountings[s].y_m, mountings[s].yaw_rad}.data(), 3,
+        mount(s));
   }
   for (std::size_t i = 0; i < pole_ids_.size(); ++i) {
     const auto it = centres.find(pole_ids_[i]);
@@ -220,15 +241,17 @@ std::vector<std::vector<NoiseSample>> RigProblem::noiseSamples() const {
   return samples;
 }
 
-void RigProblem::addResiduals(ceres::Problem& problem, bool robust, std::vector<ceres::ResidualBlockId>* data_blocks) {
+void RigProblem::addResiduals(ceres::Problem& problem, bool robust,
+                              std::vector<ceres::ResidualBlockId>* data_blocks) {
   for (std::size_t j = 0; j < used_.size(); ++j) {
     const PooledBeam& b = beams_[used_[j]];
     const double f = biasOf(b.sensor, distanceOf(b, nullptr));
     const double var = meanVariance(noise_[b.sensor], NoiseSample{f, b.n, 0.0, 0.0, 0.0});
     ceres::LossFunction* loss = robust ? new ceres::HuberLoss(2.0) : nullptr;
     const ceres::ResidualBlockId id = problem.AddResidualBlock(
-        beamCost(setup_.orders[b.sensor], b.angle_rad, setup_.flips[b.sensor], b.mean_m, 1.0 / std::sqrt(var)), loss,
-        vehicle(b.stop), mount(b.sensor), pole(poleIndex(b.pole)), radius(), alpha(b.sensor));
+        beamCost(setup_.orders[b.sensor], b.angle_rad, setup_.flips[b.sensor], b.mean_m,
+                 1.0 / std::sqrt(var)),
+        loss, vehicle(b.stop), mount(b.sensor), pole(poleIndex(b.pole)), radius(), alpha(b.sensor));
     if (data_blocks) data_blocks->push_back(id);
   }
 }
@@ -242,19 +265,22 @@ void RigProblem::addVehiclePriors(ceres::Problem& problem) {
     if (!problem.HasParameterBlock(vehicle(k))) continue;
     const Pose2& p = obs_.vehicle[k];
     if (!setup_.motion || k == 0) {
-      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<joint::PosePriorCost, 3, 3>(
-                                   new joint::PosePriorCost{p.x_m, p.y_m, p.yaw_rad, inv_s, inv_psi}),
-                               nullptr, vehicle(k));
+      problem.AddResidualBlock(
+          new ceres::AutoDiffCostFunction<joint::PosePriorCost, 3, 3>(
+              new joint::PosePriorCost{p.x_m, p.y_m, p.yaw_rad, inv_s, inv_psi}),
+          nullptr, vehicle(k));
       continue;
     }
     if (!problem.HasParameterBlock(vehicle(k - 1))) continue;
     const Pose2 step = stepBetween(obs_.vehicle[k - 1], p);
     const double len = motionStepLength(obs_.vehicle, k);
     const double st = config_.motion_sigma_fraction * len + config_.motion_sigma_floor_m;
-    const double sp = config_.motion_heading_sigma_rad_per_m * len + config_.motion_heading_floor_rad;
-    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<joint::MotionPriorCost, 3, 3, 3, 1>(
-                                 new joint::MotionPriorCost{step.x_m, step.y_m, step.yaw_rad, 1.0 / st, 1.0 / sp}),
-                             nullptr, vehicle(k - 1), vehicle(k), &zero_scale_);
+    const double sp =
+        config_.motion_heading_sigma_rad_per_m * len + config_.motion_heading_floor_rad;
+    problem.AddResidualBlock(
+        new ceres::AutoDiffCostFunction<joint::MotionPriorCost, 3, 3, 3, 1>(
+            new joint::MotionPriorCost{step.x_m, step.y_m, step.yaw_rad, 1.0 / st, 1.0 / sp}),
+        nullptr, vehicle(k - 1), vehicle(k), &zero_scale_);
     problem.SetParameterBlockConstant(&zero_scale_);
   }
 }
@@ -263,14 +289,18 @@ void RigProblem::addVehiclePriors(ceres::Problem& problem) {
 /// range scale, and a radius that is given.
 void RigProblem::holdGauge(ceres::Problem& problem) {
   const std::size_t ref = config_.reference;
-  if (setup_.frame == RigFrame::relative && problem.HasParameterBlock(mount(ref))) problem.SetParameterBlockConstant(mount(ref));
+  if (setup_.frame == RigFrame::relative && problem.HasParameterBlock(mount(ref)))
+    problem.SetParameterBlockConstant(mount(ref));
   for (std::size_t k = 0; k < obs_.vehicle.size(); ++k)
-    if (setup_.stop_held[k] && problem.HasParameterBlock(vehicle(k))) problem.SetParameterBlockConstant(vehicle(k));
+    if (setup_.stop_held[k] && problem.HasParameterBlock(vehicle(k)))
+      problem.SetParameterBlockConstant(vehicle(k));
   if (setup_.scale_held && problem.HasParameterBlock(alpha(ref)))
     problem.SetManifold(alpha(ref), new ceres::SubsetManifold(setup_.orders[ref] + 1, {1}));
   if (!problem.HasParameterBlock(radius())) return;
-  if (obs_.pole_radius_m) problem.SetParameterBlockConstant(radius());
-  else problem.SetParameterLowerBound(radius(), 0, 1e-3);
+  if (obs_.pole_radius_m)
+    problem.SetParameterBlockConstant(radius());
+  else
+    problem.SetParameterLowerBound(radius(), 0, 1e-3);
 }
 
 bool RigProblem::solve(bool hold_bias, bool robust) {
@@ -285,7 +315,8 @@ bool RigProblem::solve(bool hold_bias, bool robust) {
   ceres::Solve(solverOptions(config_.max_solver_iterations), &problem, &summary);
   out_.solver_iterations += static_cast<int>(summary.iterations.size());
   if (!summary.IsSolutionUsable()) {
-    out_.status = Status{StatusCode::solver_failed, "Ceres found no usable solution: " + summary.message};
+    out_.status =
+        Status{StatusCode::solver_failed, "Ceres found no usable solution: " + summary.message};
     return false;
   }
   return true;
@@ -300,8 +331,11 @@ bool RigProblem::reestimateNoise() {
     if (samples[s].empty()) continue;
     const SensorNoise before = noise_[s];
     noise_[s] = fitSensorNoise(samples[s], config_.noise_kinds);
-    const auto moved = [](double a, double b) { return std::abs(a - b) > 0.01 * std::max(std::abs(b), 1e-6); };
-    settled = settled && before.law.kind == noise_[s].law.kind && !moved(noise_[s].law.sigma_e, before.law.sigma_e) &&
+    const auto moved = [](double a, double b) {
+      return std::abs(a - b) > 0.01 * std::max(std::abs(b), 1e-6);
+    };
+    settled = settled && before.law.kind == noise_[s].law.kind &&
+              !moved(noise_[s].law.sigma_e, before.law.sigma_e) &&
               !moved(noise_[s].tau_m, before.tau_m);
   }
   return settled;

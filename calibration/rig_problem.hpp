@@ -22,12 +22,12 @@ namespace lidarcal::calibration::rig {
 
 /// What one fit holds fixed: the outcome of calibrateRig's decisions.
 struct FitSetup {
-  std::vector<int> orders;          ///< bias order per sensor
-  std::vector<double> flips;        ///< +1 / -1 per sensor
+  std::vector<int> orders;              ///< bias order per sensor
+  std::vector<double> flips;            ///< +1 / -1 per sensor
   RigFrame frame = RigFrame::relative;  ///< vehicle or relative
-  bool scale_held = false;          ///< reference alpha_1 held (the range scale's gauge)
-  bool motion = false;              ///< odometry steps between consecutive stops (else a prior per stop)
-  std::vector<bool> stop_held;      ///< per stop: held at its start (gauge without recorded poses)
+  bool scale_held = false;              ///< reference alpha_1 held (the range scale's gauge)
+  bool motion = false;  ///< odometry steps between consecutive stops (else a prior per stop)
+  std::vector<bool> stop_held;  ///< per stop: held at its start (gauge without recorded poses)
   /// Pooled beams to fit (indices of RigProblem::selected() of an earlier fit of the same
   /// observations), so that fits of other orders are compared on the same readings; null: by
   /// the lateral rule at the current estimate.
@@ -38,10 +38,10 @@ struct FitSetup {
 struct PooledBeam {
   std::size_t sensor = 0, stop = 0;
   int pole = 0;
-  double angle_rad = 0.0;   ///< beam angle in the sensor's frame
-  double n = 0.0;           ///< readings
-  double mean_m = 0.0;      ///< their mean
-  double within_ss = 0.0;   ///< sum of squared deviations around the mean, m^2
+  double angle_rad = 0.0;  ///< beam angle in the sensor's frame
+  double n = 0.0;          ///< readings
+  double mean_m = 0.0;     ///< their mean
+  double within_ss = 0.0;  ///< sum of squared deviations around the mean, m^2
 };
 
 class RigProblem {
@@ -64,7 +64,8 @@ class RigProblem {
   void selectBeams(bool all);
   std::vector<std::vector<NoiseSample>> noiseSamples() const;
   // residuals and solves
-  void addResiduals(ceres::Problem& problem, bool robust, std::vector<ceres::ResidualBlockId>* data_blocks);
+  void addResiduals(ceres::Problem& problem, bool robust,
+                    std::vector<ceres::ResidualBlockId>* data_blocks);
   void addVehiclePriors(ceres::Problem& problem);
   void holdGauge(ceres::Problem& problem);
   bool solve(bool hold_bias, bool robust);
@@ -95,16 +96,16 @@ class RigProblem {
   std::vector<double> params_;
   std::size_t mount_offset_ = 0, pole_offset_ = 0, radius_offset_ = 0;
   std::vector<std::size_t> alpha_offset_;
-  std::vector<int> pole_ids_;       ///< sorted
-  double zero_scale_ = 0.0;         ///< the motion prior's step-scale block, held at 0
+  std::vector<int> pole_ids_;  ///< sorted
+  double zero_scale_ = 0.0;    ///< the motion prior's step-scale block, held at 0
 
   std::vector<PooledBeam> beams_;
   std::vector<std::size_t> used_;   ///< beams selected (indices into beams_)
   std::vector<double> leverage_;    ///< per used beam
   std::vector<SensorNoise> noise_;  ///< per sensor
   std::vector<std::size_t> readings_per_sensor_;
-  Eigen::MatrixXd covariance_;      ///< over the free parameters (columns_)
-  std::vector<int> column_of_;      ///< parameter index -> covariance column (-1: held)
+  Eigen::MatrixXd covariance_;  ///< over the free parameters (columns_)
+  std::vector<int> column_of_;  ///< parameter index -> covariance column (-1: held)
 };
 
 }  // namespace lidarcal::calibration::rig

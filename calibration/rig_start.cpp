@@ -34,13 +34,16 @@ Eigen::Vector2d toWorld(const Pose2& vehicle, const Pose2& mounting, const Eigen
 }
 
 /// The centres of the poles the placed sensors see: the mean of their sightings' centres.
-std::map<int, Eigen::Vector2d> placedPoles(const RigObservations& obs, const std::vector<double>& flips, double radius,
-                                           const std::vector<Pose2>& mountings, const std::vector<bool>& placed) {
+std::map<int, Eigen::Vector2d> placedPoles(const RigObservations& obs,
+                                           const std::vector<double>& flips, double radius,
+                                           const std::vector<Pose2>& mountings,
+                                           const std::vector<bool>& placed) {
   std::map<int, std::pair<Eigen::Vector2d, double>> sum;
   for (const RigSighting& s : obs.sightings) {
     if (!placed[s.sensor] || s.beams.empty()) continue;
     auto& [p, n] = sum.try_emplace(s.pole, Eigen::Vector2d::Zero(), 0.0).first->second;
-    p += toWorld(obs.vehicle[s.stop], mountings[s.sensor], sightingCentre(s, flips[s.sensor], radius));
+    p += toWorld(obs.vehicle[s.stop], mountings[s.sensor],
+                 sightingCentre(s, flips[s.sensor], radius));
     n += 1.0;
   }
   std::map<int, Eigen::Vector2d> out;
@@ -49,8 +52,8 @@ std::map<int, Eigen::Vector2d> placedPoles(const RigObservations& obs, const std
 }
 
 /// Aligns sensor `s`'s mounting to the placed poles; false when it shares none with them.
-bool align(const RigObservations& obs, std::size_t s, double flip, double radius, const std::map<int, Eigen::Vector2d>& poles,
-           Pose2& mounting) {
+bool align(const RigObservations& obs, std::size_t s, double flip, double radius,
+           const std::map<int, Eigen::Vector2d>& poles, Pose2& mounting) {
   double m[3] = {mounting.x_m, mounting.y_m, mounting.yaw_rad};
   ceres::Problem problem;
   std::set<int> shared;
@@ -60,9 +63,10 @@ bool align(const RigObservations& obs, std::size_t s, double flip, double radius
     shared.insert(g.pole);
     const Eigen::Vector2d q = sightingCentre(g, flip, radius);
     const Pose2& v = obs.vehicle[g.stop];
-    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<CentreCost, 2, 3>(
-                                 new CentreCost{v.x_m, v.y_m, v.yaw_rad, q.x(), q.y(), it->second.x(), it->second.y()}),
-                             new ceres::HuberLoss(0.1), m);
+    problem.AddResidualBlock(
+        new ceres::AutoDiffCostFunction<CentreCost, 2, 3>(
+            new CentreCost{v.x_m, v.y_m, v.yaw_rad, q.x(), q.y(), it->second.x(), it->second.y()}),
+        new ceres::HuberLoss(0.1), m);
   }
   if (shared.empty()) return false;
   // One shared pole fixes a translation only: the designed heading stays.
@@ -86,14 +90,17 @@ Eigen::Vector2d sightingCentre(const RigSighting& s, double flip, double radius_
 }
 
 void startingGeometry(const RigObservations& obs, const std::vector<double>& flips, double radius_m,
-                      std::size_t reference, std::vector<Pose2>& mountings, std::map<int, Eigen::Vector2d>& poles) {
+                      std::size_t reference, std::vector<Pose2>& mountings,
+                      std::map<int, Eigen::Vector2d>& poles) {
   std::vector<bool> placed(obs.sensors.size(), false);
   placed[reference] = true;
   for (bool progress = true; progress;) {
     progress = false;
-    const std::map<int, Eigen::Vector2d> known = placedPoles(obs, flips, radius_m, mountings, placed);
+    const std::map<int, Eigen::Vector2d> known =
+        placedPoles(obs, flips, radius_m, mountings, placed);
     for (std::size_t s = 0; s < obs.sensors.size(); ++s)
-      if (!placed[s] && align(obs, s, flips[s], radius_m, known, mountings[s])) placed[s] = progress = true;
+      if (!placed[s] && align(obs, s, flips[s], radius_m, known, mountings[s]))
+        placed[s] = progress = true;
   }
   for (std::size_t s = 0; s < placed.size(); ++s) placed[s] = true;
   poles = placedPoles(obs, flips, radius_m, mountings, placed);

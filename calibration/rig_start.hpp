@@ -23,6 +23,7 @@ Eigen::Vector2d sightingCentre(const RigSighting& s, double flip, double radius_
 /// Starting mountings (in: the priors; out: aligned) and pole centres (frame of the vehicle's
 /// poses). Sensors that share no pole with the placed ones keep their prior.
 void startingGeometry(const RigObservations& obs, const std::vector<double>& flips, double radius_m,
-                      std::size_t reference, std::vector<Pose2>& mountings, std::map<int, Eigen::Vector2d>& poles);
+                      std::size_t reference, std::vector<Pose2>& mountings,
+                      std::map<int, Eigen::Vector2d>& poles);
 
 }  // namespace lidarcal::calibration::rig

@@ -17,10 +17,11 @@ namespace {
 /// One order fitted to all entries and to all but each group of them.
 struct OrderResult {
   SpanModelFit fit;
-  bool cross_validated = false;         ///< every leave-one-group-out fit was determined
-  double cv_mse_m2 = kNaN;              ///< mean squared error of the entries left out with their group
-  std::vector<double> left_out_error_m;  ///< per entry, fitted without its group (NaN where not determined)
-  bool invertible = false;              ///< f increases over the fitted distances
+  bool cross_validated = false;  ///< every leave-one-group-out fit was determined
+  double cv_mse_m2 = kNaN;       ///< mean squared error of the entries left out with their group
+  /// per entry, fitted without its group (NaN where not determined)
+  std::vector<double> left_out_error_m;
+  bool invertible = false;                      ///< f increases over the fitted distances
   std::pair<double, double> range{kNaN, kNaN};  ///< true distances the fit gives the readings
 };
 
@@ -77,15 +78,16 @@ OrderResult evaluateOrder(const SpanProblem& p, int order) {
 
 /// Known-distance readings of the walls under f: every reading, in every scan, of the beams
 /// the wall's fit used, at the distance the fit gives it. Walls are numbered from first_entry.
-std::vector<KnownReading> wallReadings(const LandmarkObservations& obs, const SpanProblem& p, const BiasPolynomial& f,
-                                       std::size_t first_entry) {
+std::vector<KnownReading> wallReadings(const LandmarkObservations& obs, const SpanProblem& p,
+                                       const BiasPolynomial& f, std::size_t first_entry) {
   std::vector<KnownReading> out;
   for (std::size_t w = 0; w < p.walls.size(); ++w) {
     const SpanWall& wall = p.walls[w];
     const WallDistance wd = wallDistance(wall, f);
     if (!wd.ok) continue;
     std::set<long long> used;
-    for (const auto& b : wall.beams) used.insert(beamKey(BeamReading{b.angle_rad, b.reading_m, b.beam}));
+    for (const auto& b : wall.beams)
+      used.insert(beamKey(BeamReading{b.angle_rad, b.reading_m, b.beam}));
     for (const WallSighting& ws : obs.walls) {
       if (ws.stop != wall.stop || ws.wall != wall.wall) continue;
       for (const BeamReading& b : ws.beams) {
@@ -118,10 +120,12 @@ std::vector<OrderRow> orderTable(const std::vector<OrderResult>& results, std::s
 }
 
 /// sigma_e of sigma = sigma_e f(d)^k from the readings' residuals.
-double noiseScale(const std::vector<KnownReading>& readings, const BiasPolynomial& f, double exponent) {
+double noiseScale(const std::vector<KnownReading>& readings, const BiasPolynomial& f,
+                  double exponent) {
   double s = 0.0;
   for (const KnownReading& r : readings) {
-    const double w = exponent == 0.0 ? 1.0 : std::pow(std::max(std::abs(f(r.d_m)), 1e-3), -2.0 * exponent);
+    const double w =
+        exponent == 0.0 ? 1.0 : std::pow(std::max(std::abs(f(r.d_m)), 1e-3), -2.0 * exponent);
     s += w * std::pow(r.y_m - f(r.d_m), 2);
   }
   return readings.empty() ? 0.0 : std::sqrt(s / static_cast<double>(readings.size()));
@@ -154,8 +158,9 @@ std::string fixed(double v, int digits) {
 }  // namespace
 
 CalibrationModel calibrateWithSpans(const LandmarkObservations& obs, const SpanProblem& problem,
-                                    const std::vector<KnownReading>& tape, const CalibrationConfig& config,
-                                    std::vector<SpanCheck>* checks, std::vector<KnownReading>* fitted_readings) {
+                                    const std::vector<KnownReading>& tape,
+                                    const CalibrationConfig& config, std::vector<SpanCheck>* checks,
+                                    std::vector<KnownReading>* fitted_readings) {
   config.validate();
   CalibrationModel m;
   m.method = "reference";
@@ -168,19 +173,24 @@ CalibrationModel calibrateWithSpans(const LandmarkObservations& obs, const SpanP
     return m;
   }
   std::vector<OrderResult> results;
-  for (int order = 0; order <= config.max_order; ++order) results.push_back(evaluateOrder(problem, order));
+  for (int order = 0; order <= config.max_order; ++order)
+    results.push_back(evaluateOrder(problem, order));
   const std::vector<std::size_t> group = problem.groups();
   const bool one_group = *std::max_element(group.begin(), group.end()) == 0;
   int best = -1;
   for (const OrderResult& r : results) {
-    const bool candidate = r.fit.identifiable && r.invertible && (one_group ? r.fit.order == 0 : r.cross_validated);
-    if (candidate && (best < 0 || r.cv_mse_m2 < results[static_cast<std::size_t>(best)].cv_mse_m2)) best = r.fit.order;
+    const bool candidate =
+        r.fit.identifiable && r.invertible && (one_group ? r.fit.order == 0 : r.cross_validated);
+    if (candidate && (best < 0 || r.cv_mse_m2 < results[static_cast<std::size_t>(best)].cv_mse_m2))
+      best = r.fit.order;
   }
   m.orders = orderTable(results, n);
   if (best < 0) {
     m.status.code = StatusCode::no_invertible_order;
-    m.status.message = "no bias model the spans determine increases over the distances the walls stand at: measure "
-                       "spans between other walls, or tape distances";
+    m.status.message =
+        "no bias model the spans determine increases over the distances the walls stand at: "
+        "measure "
+        "spans between other walls, or tape distances";
     return m;
   }
   double best_aic = 1e300;
@@ -188,19 +198,24 @@ CalibrationModel calibrateWithSpans(const LandmarkObservations& obs, const SpanP
     if (row.invertible && row.aic < best_aic) best_aic = row.aic, m.order_aic = row.order;
   const OrderResult& chosen = results[static_cast<std::size_t>(best)];
   const BiasPolynomial f{chosen.fit.alpha};
-  m.order_rule = one_group ? "offset: one pair of walls measured (nothing to cross-validate with)"
-                            : "leave-one-out cross-validation over the pairs of walls spanned and the distances";
+  m.order_rule =
+      one_group
+          ? "offset: one pair of walls measured (nothing to cross-validate with)"
+          : "leave-one-out cross-validation over the pairs of walls spanned and the distances";
   m.order_validation = best;
   m.model.bias = f;
   const Eigen::MatrixXd& cov = chosen.fit.covariance;
   m.alpha_covariance.assign(cov.data(), cov.data() + cov.size());
   m.fitted_range_m = chosen.range;
   m.discrepancy.note =
-      "not estimated for wall-to-wall spans: the standard errors are widened by the spans' disagreement with the model "
-      "beyond their sigma_m (sqrt(chi^2 / dof)), which is as far as a few spans can see the sensor's departure from it";
+      "not estimated for wall-to-wall spans: the standard errors are widened by the spans' "
+      "disagreement with the model "
+      "beyond their sigma_m (sqrt(chi^2 / dof)), which is as far as a few spans can see the "
+      "sensor's departure from it";
 
   std::size_t first_wall_entry = 0;
-  for (const TapeEntry& t : problem.tapes) first_wall_entry = std::max(first_wall_entry, t.entry + 1);
+  for (const TapeEntry& t : problem.tapes)
+    first_wall_entry = std::max(first_wall_entry, t.entry + 1);
   std::vector<KnownReading> readings = wallReadings(obs, problem, f, first_wall_entry);
   readings.insert(readings.end(), tape.begin(), tape.end());
   const double exponent = testReadingNoise(readings, config, m.noise_fits);
@@ -212,17 +227,24 @@ CalibrationModel calibrateWithSpans(const LandmarkObservations& obs, const SpanP
   m.residual_rms_m = readings.empty() ? 0.0 : std::sqrt(s / static_cast<double>(readings.size()));
 
   if (results.size() > 1 && !results[1].fit.identifiable)
-    m.warnings.push_back("the measured entries determine an offset only (f(d) = d + alpha_0): spans between one pair of "
-                         "walls, or pairs of one length, fix the sum of two distances and nothing else; measure spans "
-                         "between walls at other distances (the room's other axis, a cabinet in front of a wall) or tape "
-                         "distances to determine a scale");
+    m.warnings.push_back(
+        "the measured entries determine an offset only (f(d) = d + alpha_0): spans between one "
+        "pair of "
+        "walls, or pairs of one length, fix the sum of two distances and nothing else; measure "
+        "spans "
+        "between walls at other distances (the room's other axis, a cabinet in front of a wall) or "
+        "tape "
+        "distances to determine a scale");
   if (chosen.fit.dof == 0)
-    m.warnings.push_back("no spare measured entry: the standard errors rest on sigma_m alone and hold nothing the model "
-                         "misses (measure one more span to check them)");
+    m.warnings.push_back(
+        "no spare measured entry: the standard errors rest on sigma_m alone and hold nothing the "
+        "model "
+        "misses (measure one more span to check them)");
   else if (chosen.fit.chi2 > static_cast<double>(chosen.fit.dof))
-    m.warnings.push_back("the measured entries disagree with the model by " +
-                         fixed(std::sqrt(chosen.fit.chi2 / static_cast<double>(chosen.fit.dof)), 1) +
-                         " times what their sigma_m says; the standard errors are widened by that factor");
+    m.warnings.push_back(
+        "the measured entries disagree with the model by " +
+        fixed(std::sqrt(chosen.fit.chi2 / static_cast<double>(chosen.fit.dof)), 1) +
+        " times what their sigma_m says; the standard errors are widened by that factor");
   if (checks) *checks = entryChecks(problem, chosen);
   return m;
 }

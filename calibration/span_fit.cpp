@@ -43,7 +43,8 @@ Residuals residuals(const SpanProblem& p, const BiasPolynomial& f) {
   Residuals out;
   const std::size_t m = p.entries();
   out.error_m = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(m));
-  out.covariance = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(m), static_cast<Eigen::Index>(m));
+  out.covariance =
+      Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(m), static_cast<Eigen::Index>(m));
   std::vector<WallDistance> walls;
   walls.reserve(p.walls.size());
   for (const SpanWall& w : p.walls) {
@@ -59,19 +60,24 @@ Residuals residuals(const SpanProblem& p, const BiasPolynomial& f) {
     // Spans that share a wall share the error of its distance.
     for (std::size_t l = 0; l < p.spans.size(); ++l)
       for (std::size_t w : {s.wall_a, s.wall_b})
-        if (w == p.spans[l].wall_a || w == p.spans[l].wall_b) out.covariance(i, static_cast<Eigen::Index>(l)) += walls[w].variance_m2;
+        if (w == p.spans[l].wall_a || w == p.spans[l].wall_b)
+          out.covariance(i, static_cast<Eigen::Index>(l)) += walls[w].variance_m2;
   }
   for (std::size_t e = 0; e < p.tapes.size(); ++e) {
     const TapeEntry& t = p.tapes[e];
     const auto i = static_cast<Eigen::Index>(p.spans.size() + e);
     const double n = static_cast<double>(t.d_m.size());
     double fbar = 0.0, ybar = 0.0, dbar = 0.0;
-    for (std::size_t j = 0; j < t.d_m.size(); ++j) fbar += f(t.d_m[j]) / n, ybar += t.y_m[j] / n, dbar += t.d_m[j] / n;
+    for (std::size_t j = 0; j < t.d_m.size(); ++j)
+      fbar += f(t.d_m[j]) / n, ybar += t.y_m[j] / n, dbar += t.d_m[j] / n;
     double s2 = 0.0;
-    for (std::size_t j = 0; j < t.d_m.size(); ++j) s2 += std::pow(t.y_m[j] - f(t.d_m[j]) - (ybar - fbar), 2) / std::max(n - 1.0, 1.0);
+    for (std::size_t j = 0; j < t.d_m.size(); ++j)
+      s2 += std::pow(t.y_m[j] - f(t.d_m[j]) - (ybar - fbar), 2) / std::max(n - 1.0, 1.0);
     const double slope = std::max(f.derivative(dbar), 1e-3);
     out.error_m(i) = (ybar - fbar) / slope;
-    out.covariance(i, i) = t.sigma_m * t.sigma_m + s2 / (static_cast<double>(std::max<std::size_t>(t.beams, 1)) * slope * slope);
+    out.covariance(i, i) =
+        t.sigma_m * t.sigma_m +
+        s2 / (static_cast<double>(std::max<std::size_t>(t.beams, 1)) * slope * slope);
   }
   return out;
 }
@@ -104,7 +110,8 @@ struct Linearised {
   Eigen::MatrixXd jacobian;  // used entries, whitened
 };
 
-Linearised linearise(const SpanProblem& p, int order, const Eigen::VectorXd& theta, const std::vector<bool>& use) {
+Linearised linearise(const SpanProblem& p, int order, const Eigen::VectorXd& theta,
+                     const std::vector<bool>& use) {
   Linearised out;
   const Residuals r = residuals(p, BiasPolynomial{alphaOf(order, theta)});
   if (!r.ok) return out;
@@ -121,7 +128,8 @@ Linearised linearise(const SpanProblem& p, int order, const Eigen::VectorXd& the
     const Residuals a = residuals(p, BiasPolynomial{alphaOf(order, up)});
     const Residuals b = residuals(p, BiasPolynomial{alphaOf(order, down)});
     if (!a.ok || !b.ok) return out;
-    out.jacobian.col(j) = llt.matrixL().solve(select(Eigen::VectorXd((a.error_m - b.error_m) / (2.0 * h)), use));
+    out.jacobian.col(j) =
+        llt.matrixL().solve(select(Eigen::VectorXd((a.error_m - b.error_m) / (2.0 * h)), use));
   }
   out.ok = true;
   return out;
@@ -170,11 +178,13 @@ WallDistance wallDistance(const SpanWall& wall, const BiasPolynomial& f) {
   Eigen::VectorXd r(static_cast<Eigen::Index>(n));
   auto linearise_at = [&](double p_m, double n_rad) {
     for (std::size_t b = 0; b < n; ++b) {
-      const double u = wall.beams[b].angle_rad - n_rad, c = std::max(std::cos(u), 0.05), d = p_m / c;
+      const double u = wall.beams[b].angle_rad - n_rad, c = std::max(std::cos(u), 0.05),
+                   d = p_m / c;
       const auto i = static_cast<Eigen::Index>(b);
       r(i) = wall.beams[b].reading_m - f(d);
       jac(i, 0) = -f.derivative(d) / c;
-      jac(i, 1) = f.derivative(d) * d * std::tan(u);  // d = p / cos(phi - n): dd/dn = -d tan(phi - n)
+      // d = p / cos(phi - n): dd/dn = -d tan(phi - n)
+      jac(i, 1) = f.derivative(d) * d * std::tan(u);
     }
   };
   for (int it = 0; it < 50; ++it) {
@@ -198,12 +208,16 @@ WallDistance wallDistance(const SpanWall& wall, const BiasPolynomial& f) {
   return out;
 }
 
-SpanProblem spanProblem(const SpanReadings& spans, const Reference& ref, const std::vector<KnownReading>& tape) {
+SpanProblem spanProblem(const SpanReadings& spans, const Reference& ref,
+                        const std::vector<KnownReading>& tape) {
   SpanProblem p;
   p.walls = spans.walls;
   for (const SpanMatch& m : spans.matches) {
-    if (!m.ok()) throw std::invalid_argument("spanProblem: spans[" + std::to_string(m.entry) + "] was not matched");
-    p.spans.push_back({m.entry, m.stop, m.wall_a, m.wall_b, ref.spans.at(m.entry).distance_m, ref.spans.at(m.entry).sigma_m});
+    if (!m.ok())
+      throw std::invalid_argument("spanProblem: spans[" + std::to_string(m.entry) +
+                                  "] was not matched");
+    p.spans.push_back({m.entry, m.stop, m.wall_a, m.wall_b, ref.spans.at(m.entry).distance_m,
+                       ref.spans.at(m.entry).sigma_m});
   }
   std::map<std::size_t, TapeEntry> by_entry;
   std::map<std::size_t, std::set<std::uint32_t>> beams;
@@ -230,7 +244,8 @@ Eigen::VectorXd entryErrors(const SpanProblem& problem, const BiasPolynomial& f)
 }
 
 SpanModelFit fitSpanModel(const SpanProblem& problem, int order, const std::vector<bool>& use) {
-  if (use.size() != problem.entries()) throw std::invalid_argument("fitSpanModel: use has the wrong size");
+  if (use.size() != problem.entries())
+    throw std::invalid_argument("fitSpanModel: use has the wrong size");
   SpanModelFit fit;
   fit.order = order;
   Eigen::VectorXd theta = identityTheta(order);
@@ -238,7 +253,9 @@ SpanModelFit fitSpanModel(const SpanProblem& problem, int order, const std::vect
   Linearised lin = linearise(problem, order, theta, use);
   if (!lin.ok || !fullRank(lin.jacobian)) return fit;
   for (int it = 0; it < 30; ++it) {
-    const Eigen::VectorXd step = (lin.jacobian.transpose() * lin.jacobian).ldlt().solve(-lin.jacobian.transpose() * lin.white);
+    const Eigen::VectorXd step = (lin.jacobian.transpose() * lin.jacobian)
+                                     .ldlt()
+                                     .solve(-lin.jacobian.transpose() * lin.white);
     if (!step.allFinite()) return fit;
     theta += step;
     lin = linearise(problem, order, theta, use);
@@ -252,7 +269,8 @@ SpanModelFit fitSpanModel(const SpanProblem& problem, int order, const std::vect
   fit.dof = used - static_cast<std::size_t>(theta.size());
   const double birge = fit.dof > 0 ? std::max(1.0, fit.chi2 / static_cast<double>(fit.dof)) : 1.0;
   const Eigen::MatrixXd cov = info.inverse() * birge;
-  fit.covariance = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(fit.alpha.size()), static_cast<Eigen::Index>(fit.alpha.size()));
+  fit.covariance = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(fit.alpha.size()),
+                                         static_cast<Eigen::Index>(fit.alpha.size()));
   fit.covariance.topLeftCorner(cov.rows(), cov.cols()) = cov;
   fit.error_m = lin.error_m;
   return fit;

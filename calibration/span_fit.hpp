@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The range model from wall-to-wall spans (REF.json `spans`; span_walls.hpp finds the walls),
-// alone or with tape distances (REF.json `distances`): the counterpart for spans of Alhashimi et al. 2016's
-// calibration against known distances (section 5, reference.hpp).
+// alone or with tape distances (REF.json `distances`): the counterpart for spans of Alhashimi et
+// al. 2016's calibration against known distances (section 5, reference.hpp).
 //
 //   - A beam on wall w at angle phi reads f(p_w / cos(phi - n_w)) + noise: p_w is the sensor's
 //     true perpendicular distance to the wall, n_w its normal direction.
@@ -44,10 +44,10 @@ namespace lidarcal::calibration {
 
 /// What a wall's readings say about it under the bias f.
 struct WallDistance {
-  bool ok = false;            ///< false: too few beams, or the fit left the sensor's side of the wall
-  double distance_m = 0.0;    ///< true perpendicular distance p_w, metres
-  double normal_rad = 0.0;    ///< normal direction n_w, sensor frame, radians
-  double variance_m2 = 0.0;   ///< variance of p_w from the beam means' scatter about the fit, m^2
+  bool ok = false;          ///< false: too few beams, or the fit left the sensor's side of the wall
+  double distance_m = 0.0;  ///< true perpendicular distance p_w, metres
+  double normal_rad = 0.0;  ///< normal direction n_w, sensor frame, radians
+  double variance_m2 = 0.0;  ///< variance of p_w from the beam means' scatter about the fit, m^2
 };
 
 /// (p_w, n_w) minimising the squared differences between the wall's beam means and
@@ -56,23 +56,24 @@ WallDistance wallDistance(const SpanWall& wall, const BiasPolynomial& f);
 
 /// The known-distance readings of one tape distance (a distances[] entry).
 struct TapeEntry {
-  std::size_t entry = 0;          ///< index into Reference::distances
-  std::size_t stop = 0;           ///< its stop
-  double reference_m = 0.0;       ///< the measured distance, metres
-  std::vector<double> d_m, y_m;   ///< true distances and raw readings of its beams, metres
-  std::size_t beams = 0;          ///< distinct beams among them
-  double sigma_m = 0.002;         ///< the measurement's standard deviation, metres
+  std::size_t entry = 0;         ///< index into Reference::distances
+  std::size_t stop = 0;          ///< its stop
+  double reference_m = 0.0;      ///< the measured distance, metres
+  std::vector<double> d_m, y_m;  ///< true distances and raw readings of its beams, metres
+  std::size_t beams = 0;         ///< distinct beams among them
+  double sigma_m = 0.002;        ///< the measurement's standard deviation, metres
 };
 
 /// The entries of a span fit: the spans found in the data and the tape distances.
 struct SpanProblem {
   std::vector<SpanWall> walls;
   struct Span {
-    std::size_t entry = 0, stop = 0, wall_a = 0, wall_b = 0;  ///< REF.json index, stop, indices into walls
-    double distance_m = 0.0, sigma_m = 0.002;                 ///< the measured span and its standard deviation
+    /// REF.json index, stop, indices into walls
+    std::size_t entry = 0, stop = 0, wall_a = 0, wall_b = 0;
+    double distance_m = 0.0, sigma_m = 0.002;  ///< the measured span and its standard deviation
   };
-  std::vector<Span> spans;        ///< the matched spans, in REF.json order
-  std::vector<TapeEntry> tapes;   ///< the tape distances, in REF.json order
+  std::vector<Span> spans;       ///< the matched spans, in REF.json order
+  std::vector<TapeEntry> tapes;  ///< the tape distances, in REF.json order
   std::size_t entries() const { return spans.size() + tapes.size(); }
   /// "spans[2]" or "distances[0]" for entry k (spans first).
   std::string name(std::size_t k) const;
@@ -83,17 +84,19 @@ struct SpanProblem {
 };
 
 /// The problem from the matched spans (every match ok) and the tape readings (reference.hpp).
-SpanProblem spanProblem(const SpanReadings& spans, const Reference& ref, const std::vector<KnownReading>& tape);
+SpanProblem spanProblem(const SpanReadings& spans, const Reference& ref,
+                        const std::vector<KnownReading>& tape);
 
 /// One bias model fitted to some of the entries.
 struct SpanModelFit {
-  int order = 0;                 ///< 0: the offset f(d) = d + alpha_0; n >= 1: a polynomial of order n
-  bool identifiable = false;     ///< the entries used determine every coefficient
-  std::vector<double> alpha;     ///< alpha_0..alpha_n (order 0: {alpha_0, 1})
-  Eigen::MatrixXd covariance;    ///< of alpha (order 0: 2x2, zero for the fixed alpha_1)
-  double chi2 = 0.0;             ///< sum of the whitened squared residuals
-  std::size_t dof = 0;           ///< entries used - coefficients
-  Eigen::VectorXd error_m;       ///< per entry (all of them): what the sensor says with this model - what was measured, metres
+  int order = 0;              ///< 0: the offset f(d) = d + alpha_0; n >= 1: a polynomial of order n
+  bool identifiable = false;  ///< the entries used determine every coefficient
+  std::vector<double> alpha;  ///< alpha_0..alpha_n (order 0: {alpha_0, 1})
+  Eigen::MatrixXd covariance;  ///< of alpha (order 0: 2x2, zero for the fixed alpha_1)
+  double chi2 = 0.0;           ///< sum of the whitened squared residuals
+  std::size_t dof = 0;         ///< entries used - coefficients
+  /// per entry (all of them): what the sensor says with this model - what was measured, metres
+  Eigen::VectorXd error_m;
 };
 
 /// Fits the model of `order` to the entries with use[k] (generalised least squares, Gauss-Newton

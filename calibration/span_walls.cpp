@@ -30,36 +30,43 @@ std::string metres(double m) {
 }
 
 /// The surfaces of `stop` seen in enough scans to be a span's wall.
-std::vector<const WallSurface*> candidates(const std::vector<WallSurface>& surfaces, std::size_t stop,
-                                           std::size_t stop_scans, const SpanConfig& c) {
+std::vector<const WallSurface*> candidates(const std::vector<WallSurface>& surfaces,
+                                           std::size_t stop, std::size_t stop_scans,
+                                           const SpanConfig& c) {
   std::vector<const WallSurface*> out;
   for (const auto& s : surfaces)
-    if (s.stop == stop && static_cast<double>(s.scans) >= c.min_scan_fraction * static_cast<double>(stop_scans))
+    if (s.stop == stop &&
+        static_cast<double>(s.scans) >= c.min_scan_fraction * static_cast<double>(stop_scans))
       out.push_back(&s);
   return out;
 }
 
-std::vector<const WallSurface*> near(const std::vector<const WallSurface*>& from, double bearing_rad, const SpanConfig& c) {
+std::vector<const WallSurface*> near(const std::vector<const WallSurface*>& from,
+                                     double bearing_rad, const SpanConfig& c) {
   std::vector<const WallSurface*> out;
   for (const WallSurface* s : from)
-    if (std::abs(wrapAngle(s->normal_rad - bearing_rad)) <= c.max_bearing_error_rad) out.push_back(s);
+    if (std::abs(wrapAngle(s->normal_rad - bearing_rad)) <= c.max_bearing_error_rad)
+      out.push_back(s);
   return out;
 }
 
 /// The pair of parallel surfaces (one near each bearing) whose distances add up nearest the span,
 /// or the reason there is none (status and field of `m`).
-std::pair<const WallSurface*, const WallSurface*> choosePair(const std::vector<WallSurface>& surfaces,
-                                                             const ReferenceSpan& span, std::size_t stop_scans,
-                                                             const SpanConfig& c, SpanMatch& m) {
+std::pair<const WallSurface*, const WallSurface*> choosePair(
+    const std::vector<WallSurface>& surfaces, const ReferenceSpan& span, std::size_t stop_scans,
+    const SpanConfig& c, SpanMatch& m) {
   const auto all = candidates(surfaces, span.stop, stop_scans, c);
-  const std::string seen = "; the walls seen at stop " + std::to_string(span.stop) +
-                           " (normal direction, distance as read): " + surfaceList(surfaces, span.stop);
+  const std::string seen =
+      "; the walls seen at stop " + std::to_string(span.stop) +
+      " (normal direction, distance as read): " + surfaceList(surfaces, span.stop);
   const auto a = near(all, span.bearing_a_rad, c), b = near(all, span.bearing_b_rad, c);
-  for (const auto& [side, found, bearing] : {std::make_tuple("bearing_a_deg", &a, span.bearing_a_rad),
-                                             std::make_tuple("bearing_b_deg", &b, span.bearing_b_rad)})
+  for (const auto& [side, found, bearing] :
+       {std::make_tuple("bearing_a_deg", &a, span.bearing_a_rad),
+        std::make_tuple("bearing_b_deg", &b, span.bearing_b_rad)})
     if (found->empty()) {
       m.field = side;
-      m.status = "no wall within " + degrees(c.max_bearing_error_rad) + " of " + degrees(bearing) + seen;
+      m.status =
+          "no wall within " + degrees(c.max_bearing_error_rad) + " of " + degrees(bearing) + seen;
       return {nullptr, nullptr};
     }
   std::pair<const WallSurface*, const WallSurface*> best{nullptr, nullptr};
@@ -74,13 +81,15 @@ std::pair<const WallSurface*, const WallSurface*> choosePair(const std::vector<W
     }
   if (!best.first) {
     m.field = "bearing_b_deg";
-    m.status = "the walls near the two bearings are not parallel: the nearest pair is " + degrees(least_skew) +
-               " from facing each other (at most " + degrees(c.max_parallel_error_rad) + ")" + seen;
+    m.status = "the walls near the two bearings are not parallel: the nearest pair is " +
+               degrees(least_skew) + " from facing each other (at most " +
+               degrees(c.max_parallel_error_rad) + ")" + seen;
     return best;
   }
   if (best_error > 0.1 + c.max_distance_error_fraction * span.distance_m) {
     m.field = "distance_m";
-    m.status = "the parallel walls near the two bearings read " + metres(best.first->distance_m + best.second->distance_m) +
+    m.status = "the parallel walls near the two bearings read " +
+               metres(best.first->distance_m + best.second->distance_m) +
                " apart at the nearest, too far from distance_m" + seen;
     return {nullptr, nullptr};
   }
@@ -94,11 +103,13 @@ void dropOffLine(std::vector<SpanWall::Beam>& beams) {
   for (int round = 0; round < 2 && beams.size() >= 3; ++round) {
     std::vector<Eigen::Vector2d> pts;
     Eigen::Vector2d centre = Eigen::Vector2d::Zero();
-    for (const auto& b : beams) pts.emplace_back(b.reading_m * std::cos(b.angle_rad), b.reading_m * std::sin(b.angle_rad));
+    for (const auto& b : beams)
+      pts.emplace_back(b.reading_m * std::cos(b.angle_rad), b.reading_m * std::sin(b.angle_rad));
     for (const auto& p : pts) centre += p / static_cast<double>(pts.size());
     Eigen::Matrix2d scatter = Eigen::Matrix2d::Zero();
     for (const auto& p : pts) scatter += (p - centre) * (p - centre).transpose();
-    const Eigen::Vector2d normal = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(scatter).eigenvectors().col(0);
+    const Eigen::Vector2d normal =
+        Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(scatter).eigenvectors().col(0);
     std::vector<double> off, spread;
     for (const auto& p : pts) off.push_back((p - centre).dot(normal));
     const double middle = median(off);
@@ -124,7 +135,9 @@ SpanWall gatherBeams(const LandmarkObservations& obs, const WallSurface& s, cons
   for (const WallSighting& ws : obs.walls) {
     if (ws.stop != s.stop || ws.wall != s.wall) continue;
     for (const BeamReading& b : ws.beams) {
-      if (!std::isfinite(b.range_m) || std::abs(wrapAngle(b.angle_rad - s.normal_rad)) > c.max_incidence_rad) continue;
+      if (!std::isfinite(b.range_m) ||
+          std::abs(wrapAngle(b.angle_rad - s.normal_rad)) > c.max_incidence_rad)
+        continue;
       SpanWall::Beam& e = beams[beamKey(b)];
       e.angle_rad += b.angle_rad;
       e.reading_m += b.range_m;
@@ -143,7 +156,8 @@ SpanWall gatherBeams(const LandmarkObservations& obs, const WallSurface& s, cons
 }
 
 /// The mean over the scans of the two walls' summed distances, and its standard error.
-void measureSpan(const LandmarkObservations& obs, const WallSurface& a, const WallSurface& b, SpanMatch& m) {
+void measureSpan(const LandmarkObservations& obs, const WallSurface& a, const WallSurface& b,
+                 SpanMatch& m) {
   std::map<std::size_t, std::pair<double, int>> by_scan;  // scan -> summed distance, walls seen
   for (const WallSighting& ws : obs.walls)
     if (ws.stop == a.stop && (ws.wall == a.wall || ws.wall == b.wall)) {
@@ -156,13 +170,15 @@ void measureSpan(const LandmarkObservations& obs, const WallSurface& a, const Wa
     if (e.second == 2) sum += e.first, sum2 += e.first * e.first, ++m.scans;
   const double n = static_cast<double>(m.scans);
   m.measured_m = m.scans ? sum / n : kNaN;
-  m.measured_se_m = m.scans > 1 ? std::sqrt(std::max(0.0, (sum2 - sum * sum / n) / (n - 1.0)) / n) : kNaN;
+  m.measured_se_m =
+      m.scans > 1 ? std::sqrt(std::max(0.0, (sum2 - sum * sum / n) / (n - 1.0)) / n) : kNaN;
 }
 
 }  // namespace
 
 long long beamKey(const BeamReading& b) {
-  return b.beam != kUnknownBeam ? static_cast<long long>(b.beam) : -1 - std::llround(b.angle_rad * 1e5);
+  return b.beam != kUnknownBeam ? static_cast<long long>(b.beam)
+                                : -1 - std::llround(b.angle_rad * 1e5);
 }
 
 void SpanConfig::validate() const {
@@ -170,7 +186,8 @@ void SpanConfig::validate() const {
     throw std::invalid_argument("SpanConfig: max_bearing_error_rad must be in (0, 1.6)");
   if (!(max_parallel_error_rad > 0.0 && max_parallel_error_rad < 0.8))
     throw std::invalid_argument("SpanConfig: max_parallel_error_rad must be in (0, 0.8)");
-  if (!(max_distance_error_fraction > 0.0)) throw std::invalid_argument("SpanConfig: max_distance_error_fraction must be positive");
+  if (!(max_distance_error_fraction > 0.0))
+    throw std::invalid_argument("SpanConfig: max_distance_error_fraction must be positive");
   if (!(min_scan_fraction >= 0.0 && min_scan_fraction <= 1.0))
     throw std::invalid_argument("SpanConfig: min_scan_fraction must be in [0, 1]");
   if (!(max_incidence_rad > 0.0 && max_incidence_rad < 1.5))
@@ -195,34 +212,42 @@ std::vector<WallSurface> wallSurfaces(const std::vector<WallSighting>& walls) {
   }
   std::vector<WallSurface> out;
   for (const auto& [key, s] : by_surface)
-    out.push_back({key.first, key.second, std::atan2(s.sin, s.cos), s.distance / static_cast<double>(s.n), s.scans.size()});
+    out.push_back({key.first, key.second, std::atan2(s.sin, s.cos),
+                   s.distance / static_cast<double>(s.n), s.scans.size()});
   return out;
 }
 
-std::string surfaceList(const std::vector<WallSurface>& surfaces, std::size_t stop, std::size_t limit) {
+std::string surfaceList(const std::vector<WallSurface>& surfaces, std::size_t stop,
+                        std::size_t limit) {
   std::vector<const WallSurface*> at;
   for (const auto& s : surfaces)
     if (s.stop == stop) at.push_back(&s);
   if (at.empty()) return "none";
-  std::stable_sort(at.begin(), at.end(), [](const WallSurface* a, const WallSurface* b) { return a->scans > b->scans; });
+  std::stable_sort(at.begin(), at.end(),
+                   [](const WallSurface* a, const WallSurface* b) { return a->scans > b->scans; });
   if (at.size() > limit) at.resize(limit);
-  std::stable_sort(at.begin(), at.end(), [](const WallSurface* a, const WallSurface* b) { return a->normal_rad < b->normal_rad; });
+  std::stable_sort(at.begin(), at.end(), [](const WallSurface* a, const WallSurface* b) {
+    return a->normal_rad < b->normal_rad;
+  });
   std::string text;
   for (const WallSurface* s : at) {
     char item[64];
-    std::snprintf(item, sizeof item, "%s%.0f deg at %.2f m", text.empty() ? "" : ", ", rad2deg(s->normal_rad), s->distance_m);
+    std::snprintf(item, sizeof item, "%s%.0f deg at %.2f m", text.empty() ? "" : ", ",
+                  rad2deg(s->normal_rad), s->distance_m);
     text += item;
   }
   return text;
 }
 
-SpanReadings spanReadings(const LandmarkObservations& obs, const Reference& ref, const SpanConfig& config) {
+SpanReadings spanReadings(const LandmarkObservations& obs, const Reference& ref,
+                          const SpanConfig& config) {
   config.validate();
   const std::vector<WallSurface> surfaces = wallSurfaces(obs.walls);
   std::map<std::size_t, std::set<std::size_t>> stop_scans;
   for (const WallSighting& w : obs.walls) stop_scans[w.stop].insert(w.scan);
   SpanReadings out;
-  std::map<std::pair<std::size_t, int>, std::size_t> wall_index;  // (stop, id) -> index into out.walls
+  // (stop, id) -> index into out.walls
+  std::map<std::pair<std::size_t, int>, std::size_t> wall_index;
   for (std::size_t k = 0; k < ref.spans.size(); ++k) {
     const ReferenceSpan& span = ref.spans[k];
     SpanMatch m;
@@ -232,7 +257,8 @@ SpanReadings spanReadings(const LandmarkObservations& obs, const Reference& ref,
     const auto [a, b] = choosePair(surfaces, span, stop_scans[span.stop].size(), config, m);
     if (a && b) {
       measureSpan(obs, *a, *b, m);
-      for (const auto& [s, side, index] : {std::make_tuple(a, "bearing_a_deg", &m.wall_a), std::make_tuple(b, "bearing_b_deg", &m.wall_b)}) {
+      for (const auto& [s, side, index] : {std::make_tuple(a, "bearing_a_deg", &m.wall_a),
+                                           std::make_tuple(b, "bearing_b_deg", &m.wall_b)}) {
         auto it = wall_index.find({s->stop, s->wall});
         if (it == wall_index.end()) {
           it = wall_index.emplace(std::make_pair(s->stop, s->wall), out.walls.size()).first;
@@ -241,7 +267,8 @@ SpanReadings spanReadings(const LandmarkObservations& obs, const Reference& ref,
         *index = it->second;
         if (out.walls[it->second].beams.size() < 3 && m.ok()) {
           m.field = side;
-          m.status = "the wall at " + degrees(s->normal_rad) + " has too few beams read in half of its scans within " +
+          m.status = "the wall at " + degrees(s->normal_rad) +
+                     " has too few beams read in half of its scans within " +
                      degrees(config.max_incidence_rad) + " of its normal (" +
                      std::to_string(out.walls[it->second].beams.size()) + "; at least 3 needed)";
         }

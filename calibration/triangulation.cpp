@@ -15,17 +15,24 @@ namespace lidarcal::calibration {
 
 void TriangulationConfig::validate() const {
   if (!(sigma_s_m > 0.0) || !(sigma_theta_rad > 0.0))
-    throw std::invalid_argument("TriangulationConfig: sigma_s_m and sigma_theta_rad must be positive");
-  if (min_stops < 2) throw std::invalid_argument("TriangulationConfig: min_stops must be at least 2");
-  if (!(max_condition > 1.0)) throw std::invalid_argument("TriangulationConfig: max_condition must exceed 1");
+    throw std::invalid_argument(
+        "TriangulationConfig: sigma_s_m and sigma_theta_rad must be positive");
+  if (min_stops < 2)
+    throw std::invalid_argument("TriangulationConfig: min_stops must be at least 2");
+  if (!(max_condition > 1.0))
+    throw std::invalid_argument("TriangulationConfig: max_condition must exceed 1");
 }
 
 const char* toString(TriangulationStatus s) {
   switch (s) {
-    case TriangulationStatus::ok: return "ok";
-    case TriangulationStatus::too_few_stops: return "too_few_stops";
-    case TriangulationStatus::degenerate_geometry: return "degenerate_geometry";
-    case TriangulationStatus::ill_conditioned: return "ill_conditioned";
+    case TriangulationStatus::ok:
+      return "ok";
+    case TriangulationStatus::too_few_stops:
+      return "too_few_stops";
+    case TriangulationStatus::degenerate_geometry:
+      return "degenerate_geometry";
+    case TriangulationStatus::ill_conditioned:
+      return "ill_conditioned";
   }
   return "unknown";
 }
@@ -68,7 +75,8 @@ std::vector<StopBearing> stopBearings(const LandmarkObservations& obs, int landm
   std::vector<StopBearing> out;
   out.reserve(acc.size());
   for (const auto& [stop, a] : acc) {
-    if (stop >= obs.commanded.size()) throw std::out_of_range("stopBearings: sighting refers to a stop without a pose");
+    if (stop >= obs.commanded.size())
+      throw std::out_of_range("stopBearings: sighting refers to a stop without a pose");
     StopBearing b;
     b.stop = stop;
     b.bearing_world_rad = wrapAngle(obs.commanded[stop].yaw_rad + std::atan2(a.sin, a.cos));
@@ -80,7 +88,8 @@ std::vector<StopBearing> stopBearings(const LandmarkObservations& obs, int landm
   return out;
 }
 
-LandmarkEstimate triangulate(int id, const std::vector<StopBearing>& bearings, const std::vector<Pose2>& commanded,
+LandmarkEstimate triangulate(int id, const std::vector<StopBearing>& bearings,
+                             const std::vector<Pose2>& commanded,
                              const TriangulationConfig& config) {
   config.validate();
   LandmarkEstimate est;
@@ -88,7 +97,8 @@ LandmarkEstimate triangulate(int id, const std::vector<StopBearing>& bearings, c
   est.stops = static_cast<int>(bearings.size());
   if (est.stops < config.min_stops) {
     est.status = TriangulationStatus::too_few_stops;
-    est.message = "seen from " + plural(bearings.size(), "stop") + ", at least " + std::to_string(config.min_stops) +
+    est.message = "seen from " + plural(bearings.size(), "stop") + ", at least " +
+                  std::to_string(config.min_stops) +
                   " are needed: place the landmark where more stops can see it";
     return est;
   }
@@ -116,15 +126,20 @@ LandmarkEstimate triangulate(int id, const std::vector<StopBearing>& bearings, c
     H(static_cast<Eigen::Index>(i), 0) = s;
     H(static_cast<Eigen::Index>(i), 1) = -c;
     b(static_cast<Eigen::Index>(i)) = s * p.x_m - c * p.y_m;
-    const double ss = config.sigma_s_m * config.sigma_s_m, st = config.sigma_theta_rad * config.sigma_theta_rad;
+    const double ss = config.sigma_s_m * config.sigma_s_m,
+                 st = config.sigma_theta_rad * config.sigma_theta_rad;
     double weight = 1.0;
     switch (config.weights) {
       case LineWeights::paper:
         weight = have_var ? 1.0 / ss + 1.0 / (st * sb.range_var_m2)  // eq. 25
                           : 1.0 / (ss + sb.range_m * sb.range_m * st);
         break;
-      case LineWeights::residual: weight = 1.0 / (ss + sb.range_m * sb.range_m * st); break;
-      case LineWeights::uniform: weight = 1.0; break;
+      case LineWeights::residual:
+        weight = 1.0 / (ss + sb.range_m * sb.range_m * st);
+        break;
+      case LineWeights::uniform:
+        weight = 1.0;
+        break;
     }
     w(static_cast<Eigen::Index>(i)) = weight;
   }
@@ -137,7 +152,8 @@ LandmarkEstimate triangulate(int id, const std::vector<StopBearing>& bearings, c
     est.status = TriangulationStatus::degenerate_geometry;
     est.message = "bearing lines are nearly parallel (spread " +
                   std::to_string(est.bearing_spread_rad * 180.0 / kPi) +
-                  " degrees): the landmark is almost on the path line or too far; move it sideways of the path";
+                  " degrees): the landmark is almost on the path line or too far; move it sideways "
+                  "of the path";
     return est;
   }
   if (!(est.condition < config.max_condition)) {
@@ -157,9 +173,11 @@ LandmarkEstimate triangulate(int id, const std::vector<StopBearing>& bearings, c
   return est;
 }
 
-std::vector<LandmarkEstimate> triangulateAll(const LandmarkObservations& obs, const TriangulationConfig& config) {
+std::vector<LandmarkEstimate> triangulateAll(const LandmarkObservations& obs,
+                                             const TriangulationConfig& config) {
   std::vector<LandmarkEstimate> out;
-  for (int id : landmarkIds(obs)) out.push_back(triangulate(id, stopBearings(obs, id), obs.commanded, config));
+  for (int id : landmarkIds(obs))
+    out.push_back(triangulate(id, stopBearings(obs, id), obs.commanded, config));
   return out;
 }
 

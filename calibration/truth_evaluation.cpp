@@ -24,15 +24,17 @@ namespace {
 
 void checkMatches(const io::Sequence& raw, const io::SimulationTruth& truth) {
   if (raw.scans.size() * truth.beams != truth.ranges.size())
-    throw InputError(raw.dir.string(), "", "has " + std::to_string(raw.scans.size()) +
-                                               " scans, the truth describes " +
-                                               std::to_string(truth.ranges.size() / std::max<std::size_t>(truth.beams, 1)),
-                     "pass the truth.json of this very sequence");
+    throw InputError(
+        raw.dir.string(), "",
+        "has " + std::to_string(raw.scans.size()) + " scans, the truth describes " +
+            std::to_string(truth.ranges.size() / std::max<std::size_t>(truth.beams, 1)),
+        "pass the truth.json of this very sequence");
 }
 
 }  // namespace
 
-std::vector<RangePair> truthPairs(const io::Sequence& raw, const io::SimulationTruth& truth, double scale) {
+std::vector<RangePair> truthPairs(const io::Sequence& raw, const io::SimulationTruth& truth,
+                                  double scale) {
   checkMatches(raw, truth);
   std::vector<RangePair> pairs;
   for (std::size_t k = 0; k < raw.stops.size(); ++k) {
@@ -44,15 +46,18 @@ std::vector<RangePair> truthPairs(const io::Sequence& raw, const io::SimulationT
         const auto& t = truth.at(i, b);
         const auto& p = (*scan.cloud)[b];
         if (t.target != io::TargetKind::landmark || !std::isfinite(p.x)) continue;
-        const int part = scans.size() >= 3 ? static_cast<int>(pos % 3) : static_cast<int>((k + b) % 3);
-        pairs.push_back({scale * t.range_m, std::hypot(static_cast<double>(p.x), static_cast<double>(p.y)), part});
+        const int part =
+            scans.size() >= 3 ? static_cast<int>(pos % 3) : static_cast<int>((k + b) % 3);
+        pairs.push_back({scale * t.range_m,
+                         std::hypot(static_cast<double>(p.x), static_cast<double>(p.y)), part});
       }
     }
   }
   return pairs;
 }
 
-std::vector<std::vector<double>> truthBatches(const io::Sequence& raw, const io::SimulationTruth& truth) {
+std::vector<std::vector<double>> truthBatches(const io::Sequence& raw,
+                                              const io::SimulationTruth& truth) {
   checkMatches(raw, truth);
   std::vector<std::vector<double>> batches;
   for (const auto& stop : raw.stops) {
@@ -85,7 +90,8 @@ struct Compared {
 
 }  // namespace
 
-Evaluation evaluate(const io::Sequence& raw, const io::SimulationTruth& truth, const CorrectedRanges& corrected) {
+Evaluation evaluate(const io::Sequence& raw, const io::SimulationTruth& truth,
+                    const CorrectedRanges& corrected) {
   checkMatches(raw, truth);
   Compared landmarks, walls, all, beyond;
   Evaluation e;
@@ -93,7 +99,8 @@ Evaluation evaluate(const io::Sequence& raw, const io::SimulationTruth& truth, c
     const io::Scan rs = io::readScan(raw.scans[i].path);
     const CorrectedScanRanges cor = corrected(i, rs);
     ++e.scans;
-    for (std::size_t b = 0; b < rs.cloud->size() && b < truth.beams && b < cor.range_m.size(); ++b) {
+    for (std::size_t b = 0; b < rs.cloud->size() && b < truth.beams && b < cor.range_m.size();
+         ++b) {
       const auto& t = truth.at(i, b);
       const auto& p = (*rs.cloud)[b];
       if (!std::isfinite(p.x) || !std::isfinite(t.range_m)) continue;
@@ -104,8 +111,10 @@ Evaluation evaluate(const io::Sequence& raw, const io::SimulationTruth& truth, c
       }
       const double r = std::hypot(static_cast<double>(p.x), static_cast<double>(p.y));
       all.add(t.range_m, r, c);
-      if (t.target == io::TargetKind::landmark) landmarks.add(t.range_m, r, c);
-      else if (t.target == io::TargetKind::wall) walls.add(t.range_m, r, c);
+      if (t.target == io::TargetKind::landmark)
+        landmarks.add(t.range_m, r, c);
+      else if (t.target == io::TargetKind::wall)
+        walls.add(t.range_m, r, c);
       if (b < cor.beyond.size() && cor.beyond[b]) beyond.add(t.range_m, r, c);
     }
   }
@@ -116,23 +125,29 @@ Evaluation evaluate(const io::Sequence& raw, const io::SimulationTruth& truth, c
   return e;
 }
 
-Evaluation evaluate(const io::Sequence& corrected, const io::Sequence& raw, const io::SimulationTruth& truth) {
+Evaluation evaluate(const io::Sequence& corrected, const io::Sequence& raw,
+                    const io::SimulationTruth& truth) {
   if (corrected.scans.size() != raw.scans.size())
-    throw InputError(corrected.dir.string(), "", "has " + std::to_string(corrected.scans.size()) + " scans, the raw sequence " +
-                                                     std::to_string(raw.scans.size()),
+    throw InputError(corrected.dir.string(), "",
+                     "has " + std::to_string(corrected.scans.size()) + " scans, the raw sequence " +
+                         std::to_string(raw.scans.size()),
                      "evaluate the output of `lidarcal correct` on this raw sequence");
   return evaluate(raw, truth, [&](std::size_t i, const io::Scan& rs) {
     if (raw.scans[i].name() != corrected.scans[i].name())
-      throw InputError(corrected.scans[i].path, "", "does not match the raw scan " + raw.scans[i].path,
+      throw InputError(corrected.scans[i].path, "",
+                       "does not match the raw scan " + raw.scans[i].path,
                        "the corrected and raw sequences must hold the same file names");
     const io::Scan cs = io::readScan(corrected.scans[i].path);
     if (cs.cloud->size() != rs.cloud->size())
-      throw InputError(corrected.scans[i].path, "POINTS", "differs from the raw scan", "re-run lidarcal correct");
+      throw InputError(corrected.scans[i].path, "POINTS", "differs from the raw scan",
+                       "re-run lidarcal correct");
     CorrectedScanRanges r;
     r.range_m.resize(cs.cloud->size());
     for (std::size_t b = 0; b < r.range_m.size(); ++b) {
       const auto& q = (*cs.cloud)[b];
-      r.range_m[b] = std::isfinite(q.x) ? std::hypot(static_cast<double>(q.x), static_cast<double>(q.y)) : std::nan("");
+      r.range_m[b] = std::isfinite(q.x)
+                         ? std::hypot(static_cast<double>(q.x), static_cast<double>(q.y))
+                         : std::nan("");
     }
     for (const io::PointCorrection c : cs.correction)
       r.beyond.push_back(c == io::PointCorrection::extrapolated || c == io::PointCorrection::raw);
@@ -150,7 +165,8 @@ Evaluation evaluate(const CalibrationModel& model, InversionMethod method, Outsi
     for (std::size_t b = 0; b < r.range_m.size(); ++b) {
       const auto& p = (*rs.cloud)[b];
       if (!std::isfinite(p.x)) continue;
-      const CorrectedReading c = correct(std::hypot(static_cast<double>(p.x), static_cast<double>(p.y)));
+      const CorrectedReading c =
+          correct(std::hypot(static_cast<double>(p.x), static_cast<double>(p.y)));
       r.range_m[b] = c.range_m;
       r.beyond[b] = c.fate != ReadingFate::corrected && c.fate != ReadingFate::unresolved;
     }
@@ -158,16 +174,17 @@ Evaluation evaluate(const CalibrationModel& model, InversionMethod method, Outsi
   });
 }
 
-CalibrationModel calibrateOracle(const io::Sequence& raw, const io::SimulationTruth& truth, double scale,
-                                 const CalibrationConfig& config) {
+CalibrationModel calibrateOracle(const io::Sequence& raw, const io::SimulationTruth& truth,
+                                 double scale, const CalibrationConfig& config) {
   const auto pairs = truthPairs(raw, truth, scale);
   const auto& sensor = truth.truth.scene.sensor.range;
-  CalibrationModel m =
-      calibrateAgainstTruth(pairs, config, truthBatches(raw, truth), sensor.range_min_m, sensor.range_max_m);
+  CalibrationModel m = calibrateAgainstTruth(pairs, config, truthBatches(raw, truth),
+                                             sensor.range_min_m, sensor.range_max_m);
   m.method = scale == 1.0 ? "oracle" : "oracle-commanded";
   m.beams = truth.truth.scene.sensor.beams;
   m.sensor_name = truth.truth.scene.sensor.name;
-  for (const auto& s : truth.truth.stops) m.stop_poses.push_back(scale == 1.0 ? s.actual : s.commanded);
+  for (const auto& s : truth.truth.stops)
+    m.stop_poses.push_back(scale == 1.0 ? s.actual : s.commanded);
   for (std::size_t i = 0; i < truth.truth.scene.landmarks.size(); ++i) {
     const auto& c = truth.truth.scene.landmarks[i];
     CalibratedLandmark l;

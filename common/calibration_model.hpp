@@ -30,35 +30,42 @@ struct OrderRow {
 
 /// A landmark as calibrated.
 struct CalibratedLandmark {
-  int id = 0;                              ///< landmark id
-  double x_m = 0.0, y_m = 0.0;             ///< centre, world (commanded) frame
-  double radius_m = 0.0;                   ///< radius
-  std::array<double, 4> covariance_m2{};   ///< row-major 2x2 covariance of (x, y)
-  int stops = 0;                           ///< stops that saw it
-  std::string status = "ok";               ///< ok or why it was not used
+  int id = 0;                             ///< landmark id
+  double x_m = 0.0, y_m = 0.0;            ///< centre, world (commanded) frame
+  double radius_m = 0.0;                  ///< radius
+  std::array<double, 4> covariance_m2{};  ///< row-major 2x2 covariance of (x, y)
+  int stops = 0;                          ///< stops that saw it
+  std::string status = "ok";              ///< ok or why it was not used
 };
 
 /// Results of the noise-law estimators, reported side by side.
 struct NoiseFits {
-  std::vector<double> alhashimi2021_beta;            ///< sigma(d) = |sum beta_i d^i|, ML (Alhashimi et al. 2021 eq. 3)
-  std::vector<double> alhashimi2016_cf_alpha;        ///< Alhashimi et al. 2016 closed form eqs. 21-26: alpha
-  double alhashimi2016_cf_sigma_e = 0.0;             ///< and sigma_e
-  std::vector<double> alhashimi2016_ml_alpha;        ///< Alhashimi et al. 2016 full ML eqs. 18-20: alpha
-  double alhashimi2016_ml_sigma_e = 0.0;             ///< and sigma_e
+  /// sigma(d) = |sum beta_i d^i|, ML (Alhashimi et al. 2021 eq. 3)
+  std::vector<double> alhashimi2021_beta;
+  /// Alhashimi et al. 2016 closed form eqs. 21-26: alpha
+  std::vector<double> alhashimi2016_cf_alpha;
+  double alhashimi2016_cf_sigma_e = 0.0;       ///< and sigma_e
+  std::vector<double> alhashimi2016_ml_alpha;  ///< Alhashimi et al. 2016 full ML eqs. 18-20: alpha
+  double alhashimi2016_ml_sigma_e = 0.0;       ///< and sigma_e
   std::array<double, 4> exponent_loglik{};     ///< Alhashimi et al. 2016 eq. 15 for H0..H3
   int exponent_best = -1;                      ///< argmax of the above; -1 when not testable
   std::size_t exponent_batches = 0;            ///< constant-distance batches used
-  /// Estimators that could not run on these data, by name ("alhashimi2021_beta", "alhashimi2016_closed_form",
-  /// "alhashimi2016_ml", "exponent_test") -> why. They are informational: the calibration stands without them.
+  /// Estimators that could not run on these data, by name ("alhashimi2021_beta",
+  /// "alhashimi2016_closed_form", "alhashimi2016_ml", "exponent_test") -> why. They are
+  /// informational: the calibration stands without them.
   std::map<std::string, std::string> unavailable;
 };
 
 /// Discrepancy::note of a model without a discrepancy estimate.
 inline constexpr const char* kDiscrepancyNotEstimated =
-    "not estimated (no measured distances beside the fit): the intervals are the fitted curve's alone. They do not "
-    "include how far the sensor may lie from any polynomial between the distances it was fitted at (model "
-    "discrepancy), nor, for a self-calibration, an odometry scale error, which self-calibration cannot see; "
-    "calibrate --reference with ten or more measured distances estimates the first, a few taped stops remove the second";
+    "not estimated (no measured distances beside the fit): the intervals are the fitted curve's "
+    "alone. They do not "
+    "include how far the sensor may lie from any polynomial between the distances it was fitted at "
+    "(model "
+    "discrepancy), nor, for a self-calibration, an odometry scale error, which self-calibration "
+    "cannot see; "
+    "calibrate --reference with ten or more measured distances estimates the first, a few taped "
+    "stops remove the second";
 
 /// Model discrepancy (Kennedy & O'Hagan 2001): how far the sensor's mean reading at a distance
 /// the fit did not see may lie from the fitted polynomial, beyond the polynomial's own
@@ -71,9 +78,10 @@ struct Discrepancy {
   /// How sigma_m was estimated: "reml" (restricted maximum likelihood over the measured
   /// entries, calibration/discrepancy.hpp) or "none" (not estimated: sigma_m NaN).
   std::string method = "none";
-  double sigma_m = std::numeric_limits<double>::quiet_NaN();  ///< standard deviation, metres of reading; NaN when none
-  int dof = 0;                  ///< degrees of freedom of its estimate: entries - coefficients; 0 when none
-  std::size_t entries = 0;      ///< measured distances (targets at stops) it was estimated from
+  /// standard deviation, metres of reading; NaN when none
+  double sigma_m = std::numeric_limits<double>::quiet_NaN();
+  int dof = 0;  ///< degrees of freedom of its estimate: entries - coefficients; 0 when none
+  std::size_t entries = 0;  ///< measured distances (targets at stops) it was estimated from
   /// RMS of the tape errors the entries state (REF.json sigma_m), metres: taken out of sigma_m,
   /// which describes the sensor, not the tape. NaN when none.
   double tape_sigma_m = std::numeric_limits<double>::quiet_NaN();
@@ -85,18 +93,18 @@ struct Discrepancy {
 
 struct CalibrationModel {
   std::string format = "lidarcal-model/1";
-  std::string method;                ///< closed-form, joint, oracle or oracle-commanded
-  std::string sensor_name;           ///< from sequence.json, when known
-  std::optional<int> beams;          ///< beams per scan of the calibrated sensor, when known
-  RangeModel model;                  ///< bias f, noise law, range window [range_min_m, range_max_m]
-  double sigma_theta_rad = 0.0;      ///< bearing noise estimate
-  std::string order_rule;            ///< how the order was chosen
+  std::string method;            ///< closed-form, joint, oracle or oracle-commanded
+  std::string sensor_name;       ///< from sequence.json, when known
+  std::optional<int> beams;      ///< beams per scan of the calibrated sensor, when known
+  RangeModel model;              ///< bias f, noise law, range window [range_min_m, range_max_m]
+  double sigma_theta_rad = 0.0;  ///< bearing noise estimate
+  std::string order_rule;        ///< how the order was chosen
   int order_aic = -1, order_validation = -1;  ///< orders each rule picks
-  std::vector<OrderRow> orders;      ///< the order-selection table
-  NoiseFits noise_fits;              ///< all noise estimators
+  std::vector<OrderRow> orders;               ///< the order-selection table
+  NoiseFits noise_fits;                       ///< all noise estimators
   std::vector<CalibratedLandmark> landmarks;  ///< landmark map
-  std::vector<Pose2> stop_poses;     ///< pose of each stop: refined (joint) or commanded (closed form)
-  std::vector<double> alpha_covariance;       ///< row-major (n+1)x(n+1), empty when not computed
+  std::vector<Pose2> stop_poses;  ///< pose of each stop: refined (joint) or commanded (closed form)
+  std::vector<double> alpha_covariance;  ///< row-major (n+1)x(n+1), empty when not computed
   /// True distances the fit saw, [min, max] metres. The model says nothing outside: `correct`
   /// leaves readings beyond f(min)..f(max) as they are unless told otherwise. Unset (models
   /// written before it was recorded): the whole range window.
@@ -113,11 +121,12 @@ struct CalibrationModel {
   /// ok, or why there is no usable model (model.json diagnostics.status), with a message a user
   /// can act on (also when ok: a note such as an unsettled noise model).
   Status status;
-  int iterations = 0;                ///< solver iterations
-  double residual_rms_m = 0.0;       ///< RMS of range residuals
-  std::size_t readings = 0;          ///< readings used
-  double pose_scatter_m = 0.0;       ///< joint: refined vs commanded stop positions (RMS per coordinate)
-  bool motion_prior = false;         ///< joint: odometry between consecutive stops was a prior (continuous motion)
+  int iterations = 0;           ///< solver iterations
+  double residual_rms_m = 0.0;  ///< RMS of range residuals
+  std::size_t readings = 0;     ///< readings used
+  double pose_scatter_m = 0.0;  ///< joint: refined vs commanded stop positions (RMS per coordinate)
+  /// joint: odometry between consecutive stops was a prior (continuous motion)
+  bool motion_prior = false;
   double heading_scatter_rad = 0.0;  ///< joint: refined vs commanded headings (RMS)
   /// joint with the radius estimated: correlation of alpha_0 with the pole radius (NaN otherwise);
   /// near +-1 the offset is not determined by the data.

@@ -14,7 +14,10 @@ class InputError : public std::runtime_error {
   /// remedy: what the user can do about it.
   InputError(std::string file, std::string item, std::string problem, std::string remedy = {})
       : std::runtime_error(compose(file, item, problem, remedy)),
-        file_(std::move(file)), item_(std::move(item)), problem_(std::move(problem)), remedy_(std::move(remedy)) {}
+        file_(std::move(file)),
+        item_(std::move(item)),
+        problem_(std::move(problem)),
+        remedy_(std::move(remedy)) {}
 
   const std::string& file() const { return file_; }
   const std::string& item() const { return item_; }
@@ -22,8 +25,8 @@ class InputError : public std::runtime_error {
   const std::string& remedy() const { return remedy_; }
 
  private:
-  static std::string compose(const std::string& file, const std::string& item, const std::string& problem,
-                             const std::string& remedy) {
+  static std::string compose(const std::string& file, const std::string& item,
+                             const std::string& problem, const std::string& remedy) {
     std::string text;
     if (!file.empty()) text += file + ": ";
     if (!item.empty()) text += item + ": ";

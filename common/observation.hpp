@@ -10,11 +10,12 @@ namespace lidarcal {
 
 /// One range-bearing reading of a landmark by one sensor at one stop.
 struct Observation {
-  int stop = 0;              ///< stop index (0-based; matches odometry.csv)
-  int sensor = 0;            ///< sensor index (0-based)
-  int landmark = -1;         ///< landmark id (>= 0), or -1 when the association is unknown
-  double range_m = 0.0;      ///< measured range, metres
-  double bearing_rad = 0.0;  ///< measured bearing in the robot frame, radians, counter-clockwise from robot x
+  int stop = 0;          ///< stop index (0-based; matches odometry.csv)
+  int sensor = 0;        ///< sensor index (0-based)
+  int landmark = -1;     ///< landmark id (>= 0), or -1 when the association is unknown
+  double range_m = 0.0;  ///< measured range, metres
+  /// measured bearing in the robot frame, radians, counter-clockwise from robot x
+  double bearing_rad = 0.0;
 };
 
 /// Commanded motion into a stop, expressed in the robot frame of the previous stop.
@@ -35,9 +36,9 @@ struct SensorNoise {
 
 /// Zero-mean Gaussian process (motion) noise added to each commanded motion, robot frame.
 struct ProcessNoise {
-  double dx_var_m2 = 0.0;         ///< variance of the forward displacement error, m^2
-  double dy_var_m2 = 0.0;         ///< variance of the leftward displacement error, m^2
-  double dtheta_var_rad2 = 0.0;   ///< variance of the heading change error, rad^2
+  double dx_var_m2 = 0.0;        ///< variance of the forward displacement error, m^2
+  double dy_var_m2 = 0.0;        ///< variance of the leftward displacement error, m^2
+  double dtheta_var_rad2 = 0.0;  ///< variance of the heading change error, rad^2
 };
 
 /// A full noise setting: one SensorNoise per sensor (index = sensor id) and the process noise.

@@ -19,8 +19,9 @@ struct RangeBearingSensor {
   std::string name = "sensor";  ///< free text
   SensorNoise noise;            ///< true noise: reading = truth + N(mean, var), per component
   double min_range_m = 0.0;     ///< landmarks closer than this are not seen, metres
-  double max_range_m = std::numeric_limits<double>::infinity();  ///< landmarks farther are not seen, metres
-  double fov_rad = 2.0 * kPi;   ///< field of view centred on robot x, radians (2 pi: all around)
+  /// landmarks farther are not seen, metres
+  double max_range_m = std::numeric_limits<double>::infinity();
+  double fov_rad = 2.0 * kPi;  ///< field of view centred on robot x, radians (2 pi: all around)
 };
 
 /// A point landmark in the world frame. Its id is its index in ObservationScene::landmarks.

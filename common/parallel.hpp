@@ -27,7 +27,8 @@ inline int threadsFor(int requested, int cap = 8) {
 /// failing one ran, and a thread stops only at a failure of its own).
 template <class Fn>
 void parallelFor(std::size_t n, int threads, Fn&& fn) {
-  const std::size_t t_count = std::min<std::size_t>(n, static_cast<std::size_t>(std::max(threads, 1)));
+  const std::size_t t_count =
+      std::min<std::size_t>(n, static_cast<std::size_t>(std::max(threads, 1)));
   if (t_count <= 1) {
     for (std::size_t i = 0; i < n; ++i) fn(i);
     return;
@@ -51,7 +52,8 @@ void parallelFor(std::size_t n, int threads, Fn&& fn) {
   for (std::size_t t = 1; t < t_count; ++t) pool.emplace_back(work, t);
   work(0);
   for (auto& th : pool) th.join();
-  const auto first = static_cast<std::size_t>(std::min_element(failed_at.begin(), failed_at.end()) - failed_at.begin());
+  const auto first = static_cast<std::size_t>(std::min_element(failed_at.begin(), failed_at.end()) -
+                                              failed_at.begin());
   if (error[first]) std::rethrow_exception(error[first]);
 }
 

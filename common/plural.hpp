@@ -9,8 +9,10 @@
 namespace lidarcal {
 
 /// "1 stop", "2 stops", "0 stops" (`plural_word` for irregular plurals: "1 entry", "2 entries").
-inline std::string plural(std::size_t n, const std::string& word, const std::string& plural_word = "") {
-  return std::to_string(n) + " " + (n == 1 ? word : (plural_word.empty() ? word + "s" : plural_word));
+inline std::string plural(std::size_t n, const std::string& word,
+                          const std::string& plural_word = "") {
+  return std::to_string(n) + " " +
+         (n == 1 ? word : (plural_word.empty() ? word + "s" : plural_word));
 }
 
 }  // namespace lidarcal

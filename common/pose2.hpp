@@ -8,8 +8,8 @@ namespace lidarcal {
 
 /// Planar pose: position (metres) and heading (radians, counter-clockwise from world x).
 struct Pose2 {
-  double x_m = 0.0;    ///< x position, metres
-  double y_m = 0.0;    ///< y position, metres
+  double x_m = 0.0;      ///< x position, metres
+  double y_m = 0.0;      ///< y position, metres
   double yaw_rad = 0.0;  ///< heading, radians
 
   /// Maps a point from the sensor frame to the world frame.

@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
-// Effects beyond the seeds' range model (Alhashimi et al. 2021 A3-A4, Alhashimi et al. 2016 eq. 1), shared by the
-// simulator and the calibration: what `lidarcal diagnose` looks for in measured data. Every
-// effect is off by default (the seeds' model). Physical causes: docs/FORMAT.md ("Effects").
+// Effects beyond the seeds' range model (Alhashimi et al. 2021 A3-A4, Alhashimi et al. 2016 eq. 1),
+// shared by the simulator and the calibration: what `lidarcal diagnose` looks for in measured data.
+// Every effect is off by default (the seeds' model). Physical causes: docs/FORMAT.md ("Effects").
 //
 // A beam that hits a surface at true distance d with incidence phi (angle between the beam and
 // the surface normal) in scan t reads
@@ -25,7 +25,8 @@ struct RangeEffects {
   double incidence_noise_exponent = 0.0;
   /// b_inc: the reading grows by b_inc (1 - cos phi), metres (b_inc at grazing incidence). 0 = off.
   double incidence_bias_m = 0.0;
-  /// c_drift: the reading grows by this much per scan (warm-up, temperature), metres per scan. 0 = off.
+  /// c_drift: the reading grows by this much per scan (warm-up, temperature), metres per scan. 0 =
+  /// off.
   double range_drift_m_per_scan = 0.0;
   /// t_ref: the scan index at which the drift term is zero. One convention for the simulator and
   /// every fit: a fit centres it on its mean scan (and reports it: model.json
@@ -37,9 +38,11 @@ struct RangeEffects {
   double noise_student_dof = 0.0;
   /// Readings are rounded to a multiple of this, metres (quantisation). 0 = off.
   double range_resolution_m = 0.0;
-  /// delta: the noise grows as (I_ref / I)^delta with the return intensity I (dark surfaces). 0 = off.
+  /// delta: the noise grows as (I_ref / I)^delta with the return intensity I (dark surfaces). 0 =
+  /// off.
   double dark_noise_exponent = 0.0;
-  /// I_ref: the intensity at which that factor is 1 (> 0; a fit takes the median intensity of its readings).
+  /// I_ref: the intensity at which that factor is 1 (> 0; a fit takes the median intensity of its
+  /// readings).
   double dark_reference_intensity = 1.0;
   /// A: the sensor's bias gains a ripple A sin(2 pi d / lambda + psi) over the true distance d,
   /// metres: a bias no low-order polynomial follows (rangeRipple). 0 = off.
@@ -51,9 +54,10 @@ struct RangeEffects {
 
   /// Whether any effect is on.
   bool any() const {
-    return incidence_noise_exponent != 0.0 || incidence_bias_m != 0.0 || range_drift_m_per_scan != 0.0 ||
-           mixed_pixel_fraction != 0.0 || noise_student_dof != 0.0 || range_resolution_m != 0.0 ||
-           dark_noise_exponent != 0.0 || ripple_amplitude_m != 0.0;
+    return incidence_noise_exponent != 0.0 || incidence_bias_m != 0.0 ||
+           range_drift_m_per_scan != 0.0 || mixed_pixel_fraction != 0.0 ||
+           noise_student_dof != 0.0 || range_resolution_m != 0.0 || dark_noise_exponent != 0.0 ||
+           ripple_amplitude_m != 0.0;
   }
 };
 
@@ -76,7 +80,8 @@ inline double darkNoiseFactor(double delta, double darkness_ln) {
 inline double rangeRipple(const RangeEffects& fx, double d_m) {
   if (fx.ripple_amplitude_m == 0.0) return 0.0;
   constexpr double kTwoPi = 6.283185307179586;
-  return fx.ripple_amplitude_m * std::sin(kTwoPi * d_m / fx.ripple_wavelength_m + fx.ripple_phase_rad);
+  return fx.ripple_amplitude_m *
+         std::sin(kTwoPi * d_m / fx.ripple_wavelength_m + fx.ripple_phase_rad);
 }
 
 /// cos phi kept away from 0: grazing beams are treated as at 87 degrees.
@@ -89,13 +94,13 @@ inline double incidenceNoiseFactor(double gamma, double cos_phi) {
 
 /// The mean reading of a beam (the equation at the top of this file without the noise):
 /// f(d) + o + c t + b (1 - cos phi), f_d = f(d), o the surface offset, c the drift per scan,
-/// t the scan index minus the drift's reference scan t_ref (RangeEffects::range_drift_reference_scan),
-/// b the incidence bias, cos_phi the clamped cosine of the incidence.
-/// The one expression of it, for the simulator, the Ceres residuals (T a jet) and the
-/// evaluation; the terms are summed in this order everywhere.
+/// t the scan index minus the drift's reference scan t_ref
+/// (RangeEffects::range_drift_reference_scan), b the incidence bias, cos_phi the clamped cosine of
+/// the incidence. The one expression of it, for the simulator, the Ceres residuals (T a jet) and
+/// the evaluation; the terms are summed in this order everywhere.
 template <typename T>
-T expectedReading(const T& f_d, const T& offset, const T& drift_per_scan, const T& t, const T& incidence_bias,
-                  const T& cos_phi) {
+T expectedReading(const T& f_d, const T& offset, const T& drift_per_scan, const T& t,
+                  const T& incidence_bias, const T& cos_phi) {
   return f_d + offset + drift_per_scan * t + incidence_bias * (T(1) - cos_phi);
 }
 

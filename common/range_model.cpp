@@ -13,7 +13,8 @@ double BiasPolynomial::operator()(double d_m) const {
 
 double BiasPolynomial::derivative(double d_m) const {
   double value = 0.0;
-  for (std::size_t i = alpha.size(); i-- > 1;) value = value * d_m + static_cast<double>(i) * alpha[i];
+  for (std::size_t i = alpha.size(); i-- > 1;)
+    value = value * d_m + static_cast<double>(i) * alpha[i];
   return value;
 }
 
@@ -40,18 +41,23 @@ double NoiseModel::stddev(double d_m, const BiasPolynomial& f) const {
 
 const char* toString(NoiseKind kind) {
   switch (kind) {
-    case NoiseKind::none: return "none";
-    case NoiseKind::constant: return "constant";
-    case NoiseKind::polynomial: return "polynomial";
-    case NoiseKind::squared: return "squared";
-    case NoiseKind::power: return "power";
+    case NoiseKind::none:
+      return "none";
+    case NoiseKind::constant:
+      return "constant";
+    case NoiseKind::polynomial:
+      return "polynomial";
+    case NoiseKind::squared:
+      return "squared";
+    case NoiseKind::power:
+      return "power";
   }
   return "unknown";
 }
 
 bool parseNoiseKind(const std::string& name, NoiseKind& kind) {
-  for (NoiseKind k : {NoiseKind::none, NoiseKind::constant, NoiseKind::polynomial, NoiseKind::squared,
-                      NoiseKind::power}) {
+  for (NoiseKind k : {NoiseKind::none, NoiseKind::constant, NoiseKind::polynomial,
+                      NoiseKind::squared, NoiseKind::power}) {
     if (name == toString(k)) {
       kind = k;
       return true;

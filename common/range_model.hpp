@@ -3,7 +3,8 @@
 // The range model shared by the simulator and the calibration.
 //
 //   Alhashimi et al. 2021 eq. 3:  r = sum_i alpha_i d^i + (sum_i beta_i d^i) e,   e ~ N(0, 1)
-//   Alhashimi et al. 2016 eq. 1:  y = f(d) + f(d)^2 e,                            e ~ N(0, sigma_e^2)
+//   Alhashimi et al. 2016 eq. 1:  y = f(d) + f(d)^2 e,                            e ~ N(0,
+//   sigma_e^2)
 //
 // d is the true distance (metres) from the sensor to the surface hit by the beam,
 // r (or y) the reading. f is the bias polynomial, the noise multiplies a unit normal.
@@ -13,8 +14,8 @@
 
 namespace lidarcal {
 
-/// alpha_0 + alpha_1 d + ... + alpha_{N-1} d^(N-1) by Horner's rule (Alhashimi et al. 2016 eq. 1's f), for any
-/// scalar type (the Ceres residuals evaluate it on jets).
+/// alpha_0 + alpha_1 d + ... + alpha_{N-1} d^(N-1) by Horner's rule (Alhashimi et al. 2016 eq. 1's
+/// f), for any scalar type (the Ceres residuals evaluate it on jets).
 template <int N, typename T>
 T evaluatePolynomial(const T* alpha, const T& d) {
   T f = alpha[N - 1];
@@ -22,7 +23,8 @@ T evaluatePolynomial(const T* alpha, const T& d) {
   return f;
 }
 
-/// Polynomial f(d) = sum_i alpha[i] d^i (Alhashimi et al. 2021 eq. 3, Alhashimi et al. 2016 eq. 3). d and f in metres.
+/// Polynomial f(d) = sum_i alpha[i] d^i (Alhashimi et al. 2021 eq. 3, Alhashimi et al. 2016 eq. 3).
+/// d and f in metres.
 struct BiasPolynomial {
   /// Coefficients alpha_0..alpha_n (alpha_i in m^(1-i)). Default: identity f(d) = d.
   std::vector<double> alpha{0.0, 1.0};
@@ -61,10 +63,10 @@ struct NoiseModel {
 
 /// Full range model of a sensor: bias, noise and the sensor's range window.
 struct RangeModel {
-  BiasPolynomial bias;                ///< f(d); identity by default
-  NoiseModel noise;                   ///< noise law around f(d)
-  double range_min_m = 0.0;           ///< smallest reading the sensor reports, metres
-  double range_max_m = 1e9;           ///< largest reading the sensor reports, metres
+  BiasPolynomial bias;       ///< f(d); identity by default
+  NoiseModel noise;          ///< noise law around f(d)
+  double range_min_m = 0.0;  ///< smallest reading the sensor reports, metres
+  double range_max_m = 1e9;  ///< largest reading the sensor reports, metres
 };
 
 const char* toString(NoiseKind kind);

@@ -13,9 +13,11 @@ namespace lidarcal {
 
 inline constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();  ///< "no value"
 inline constexpr double kInf = std::numeric_limits<double>::infinity();
-inline constexpr double kLog2Pi = 1.8378770664093453;  ///< ln(2 pi), the Gaussian log-density's constant
+/// ln(2 pi), the Gaussian log-density's constant
+inline constexpr double kLog2Pi = 1.8378770664093453;
 
-/// Median: the middle value, or the mean of the two middle values for an even count; NaN when empty.
+/// Median: the middle value, or the mean of the two middle values for an even count; NaN when
+/// empty.
 inline double median(std::vector<double> v) {
   if (v.empty()) return kNaN;
   std::sort(v.begin(), v.end());
@@ -38,8 +40,10 @@ template <class Fn>
 double ternaryMax(Fn fn, double lo, double hi, int iterations) {
   for (int i = 0; i < iterations; ++i) {
     const double m1 = lo + (hi - lo) / 3.0, m2 = hi - (hi - lo) / 3.0;
-    if (fn(m1) < fn(m2)) lo = m1;
-    else hi = m2;
+    if (fn(m1) < fn(m2))
+      lo = m1;
+    else
+      hi = m2;
   }
   return 0.5 * (lo + hi);
 }

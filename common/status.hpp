@@ -22,23 +22,25 @@ enum class StatusCode {
   no_radius,                ///< the landmark radius is neither given nor estimable
   too_few_reference_stops,  ///< calibrate --reference: too few stops with a known distance
   no_invertible_order,      ///< calibrate --reference: no order gives an invertible model
-  no_intensity,             ///< calibrate --effects dark_surface: the readings record no intensity (or one value)
-  exception,                ///< studies: a trial threw (the message is what)
+  /// calibrate --effects dark_surface: the readings record no intensity (or one value)
+  no_intensity,
+  exception,  ///< studies: a trial threw (the message is what)
   // joint refinement
-  not_run,                  ///< no refinement was computed (a default result)
-  too_few_readings,         ///< fewer readings than parameters
-  no_readings,              ///< no reading left to fit
-  solver_failed,            ///< Ceres returned no usable solution
+  not_run,           ///< no refinement was computed (a default result)
+  too_few_readings,  ///< fewer readings than parameters
+  no_readings,       ///< no reading left to fit
+  solver_failed,     ///< Ceres returned no usable solution
   // diagnosis
   baseline_failed,          ///< the seeds' model could not be fitted
   calibration_failed,       ///< the baseline calibration behind a sequence diagnosis failed
   cross_validation_failed,  ///< no fold could be fitted
   too_few_scans,            ///< static data: too few scans from one pose
   too_few_beams,            ///< static data: too few beam directions return often enough
-  too_few_walls,            ///< static data: the returns lie on straight surfaces over too narrow a sector
+  too_few_walls,  ///< static data: the returns lie on straight surfaces over too narrow a sector
   // several sensors on one vehicle
-  not_identifiable,         ///< the data leave a mounting (or another parameter) undetermined
-  no_shared_landmark,       ///< a sensor sees no pole another sensor sees, and nothing else ties their frames
+  not_identifiable,  ///< the data leave a mounting (or another parameter) undetermined
+  /// a sensor sees no pole another sensor sees, and nothing else ties their frames
+  no_shared_landmark,
 };
 
 /// The code's name as written in model.json and diagnosis.json ("ok", "joint_failed", ...).

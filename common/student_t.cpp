@@ -46,8 +46,10 @@ double normalQuantile(double p) {
   double lo = -40.0, hi = 40.0;
   for (int i = 0; i < 200; ++i) {
     const double mid = 0.5 * (lo + hi);
-    if (0.5 * std::erfc(-mid / std::sqrt(2.0)) < p) lo = mid;
-    else hi = mid;
+    if (0.5 * std::erfc(-mid / std::sqrt(2.0)) < p)
+      lo = mid;
+    else
+      hi = mid;
   }
   return 0.5 * (lo + hi);
 }
@@ -57,9 +59,11 @@ double normalQuantile(double p) {
 double regularisedIncompleteBeta(double a, double b, double x) {
   if (!(a > 0.0) || !(b > 0.0) || !(x >= 0.0 && x <= 1.0)) return kNaNValue;
   if (x == 0.0 || x == 1.0) return x;
-  const double log_front = std::lgamma(a + b) - std::lgamma(a) - std::lgamma(b) + a * std::log(x) + b * std::log1p(-x);
+  const double log_front =
+      std::lgamma(a + b) - std::lgamma(a) - std::lgamma(b) + a * std::log(x) + b * std::log1p(-x);
   const double front = std::exp(log_front);
-  // The fraction converges on the side of the mode; use the symmetry I_x(a, b) = 1 - I_{1-x}(b, a) otherwise.
+  // The fraction converges on the side of the mode; use the symmetry I_x(a, b) = 1 - I_{1-x}(b, a)
+  // otherwise.
   if (x < (a + 1.0) / (a + b + 2.0)) return front * betaContinuedFraction(a, b, x) / a;
   return 1.0 - front * betaContinuedFraction(b, a, 1.0 - x) / b;
 }
@@ -83,8 +87,10 @@ double studentTQuantile(double p, double dof) {
   while (studentTCdf(hi, dof) < q && hi < 1e12) hi *= 2.0;
   for (int i = 0; i < 200 && hi - lo > 1e-14 * hi; ++i) {
     const double mid = 0.5 * (lo + hi);
-    if (studentTCdf(mid, dof) < q) lo = mid;
-    else hi = mid;
+    if (studentTCdf(mid, dof) < q)
+      lo = mid;
+    else
+      hi = mid;
   }
   const double t = 0.5 * (lo + hi);
   return p > 0.5 ? t : -t;

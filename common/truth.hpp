@@ -14,16 +14,16 @@ namespace lidarcal {
 
 /// One stop of a simulated sequence.
 struct TruthStop {
-  Pose2 commanded;             ///< pose written to VIEWPOINT
-  Pose2 actual;                ///< pose the sensor really had (commanded + sigma_s, sigma_psi noise)
+  Pose2 commanded;  ///< pose written to VIEWPOINT
+  Pose2 actual;     ///< pose the sensor really had (commanded + sigma_s, sigma_psi noise)
   std::size_t first_scan = 0;  ///< index of the stop's first scan in the sequence
   std::size_t scans = 0;       ///< number of scans at this stop
 };
 
 struct Truth {
-  std::uint64_t seed = 0;             ///< simulator seed
-  Scene scene;                        ///< the scene simulated (landmark ids are 1..L in scene order)
-  std::vector<TruthStop> stops;       ///< per stop
+  std::uint64_t seed = 0;        ///< simulator seed
+  Scene scene;                   ///< the scene simulated (landmark ids are 1..L in scene order)
+  std::vector<TruthStop> stops;  ///< per stop
   std::string true_ranges_file = "true_ranges.csv";  ///< companion file, relative to truth.json
 };
 

@@ -20,14 +20,18 @@ void AssociationConfig::validate() const {
   auto fail = [](const char* field, const char* what) {
     throw std::invalid_argument(std::string("AssociationConfig.") + field + ": " + what);
   };
-  if (!(link_distance_m > 0.0) || !std::isfinite(link_distance_m)) fail("link_distance_m", "must be > 0");
-  if (!(stop_link_distance_m > 0.0) || !std::isfinite(stop_link_distance_m)) fail("stop_link_distance_m", "must be > 0");
+  if (!(link_distance_m > 0.0) || !std::isfinite(link_distance_m))
+    fail("link_distance_m", "must be > 0");
+  if (!(stop_link_distance_m > 0.0) || !std::isfinite(stop_link_distance_m))
+    fail("stop_link_distance_m", "must be > 0");
   if (!(min_link_distance_m > 0.0 && min_link_distance_m <= link_distance_m))
     fail("min_link_distance_m", "must be in (0, link_distance_m]");
   if (min_stops < 1) fail("min_stops", "must be >= 1");
-  if (!(min_scan_fraction >= 0.0 && min_scan_fraction <= 1.0)) fail("min_scan_fraction", "must be in [0, 1]");
+  if (!(min_scan_fraction >= 0.0 && min_scan_fraction <= 1.0))
+    fail("min_scan_fraction", "must be in [0, 1]");
   if (!(drift_per_m >= 0.0) || !std::isfinite(drift_per_m)) fail("drift_per_m", "must be >= 0");
-  if (!(max_link_distance_m > 0.0) || !std::isfinite(max_link_distance_m)) fail("max_link_distance_m", "must be > 0");
+  if (!(max_link_distance_m > 0.0) || !std::isfinite(max_link_distance_m))
+    fail("max_link_distance_m", "must be > 0");
 }
 
 namespace {
@@ -36,8 +40,8 @@ using Key = DetectionKey;
 
 /// A point to link: a detection (stage 1) or a stop cluster (stage 2).
 struct Node {
-  double x = 0.0, y = 0.0;    // world position, metres
-  std::size_t conflict = 0;   // two nodes with the same value may not share a group (scan, or stop)
+  double x = 0.0, y = 0.0;   // world position, metres
+  std::size_t conflict = 0;  // two nodes with the same value may not share a group (scan, or stop)
   Key key;
 };
 
@@ -60,11 +64,14 @@ void sortByKey(const std::vector<Node>& nodes, std::vector<std::size_t>& g) {
 
 /// Connected components of the graph "closer than eps" over `members` (a FLANN kd-tree radius
 /// search per node). Members sorted by key, components by their first member's key.
-std::vector<std::vector<std::size_t>> components(const std::vector<Node>& nodes, const std::vector<std::size_t>& members,
+std::vector<std::vector<std::size_t>> components(const std::vector<Node>& nodes,
+                                                 const std::vector<std::size_t>& members,
                                                  double eps) {
   pcl::PointCloud<pcl::PointXYZ>::Ptr cloud(new pcl::PointCloud<pcl::PointXYZ>);
   cloud->reserve(members.size());
-  for (auto m : members) cloud->push_back(pcl::PointXYZ(static_cast<float>(nodes[m].x), static_cast<float>(nodes[m].y), 0.0f));
+  for (auto m : members)
+    cloud->push_back(
+        pcl::PointXYZ(static_cast<float>(nodes[m].x), static_cast<float>(nodes[m].y), 0.0f));
   UnionFind uf(members.size());
   if (!members.empty()) {
     pcl::KdTreeFLANN<pcl::PointXYZ> tree;
@@ -84,7 +91,8 @@ std::vector<std::vector<std::size_t>> components(const std::vector<Node>& nodes,
     sortByKey(nodes, g);
     out.push_back(std::move(g));
   }
-  std::sort(out.begin(), out.end(), [&](const auto& a, const auto& b) { return nodes[a[0]].key < nodes[b[0]].key; });
+  std::sort(out.begin(), out.end(),
+            [&](const auto& a, const auto& b) { return nodes[a[0]].key < nodes[b[0]].key; });
   return out;
 }
 
@@ -97,15 +105,16 @@ bool hasConflict(const std::vector<Node>& nodes, const std::vector<std::size_t>&
 
 /// Splits a group until no two of its nodes conflict, relinking with a shorter distance; past
 /// min_eps keeps, per conflict value, the node nearest the group's median.
-void split(const std::vector<Node>& nodes, std::vector<std::size_t> group, double eps, double min_eps,
-           std::vector<std::vector<std::size_t>>& out, std::size_t& dropped) {
+void split(const std::vector<Node>& nodes, std::vector<std::size_t> group, double eps,
+           double min_eps, std::vector<std::vector<std::size_t>>& out, std::size_t& dropped) {
   if (!hasConflict(nodes, group)) {
     out.push_back(std::move(group));
     return;
   }
   const double shorter = eps * 0.7;
   if (shorter >= min_eps) {
-    for (auto& g : components(nodes, group, shorter)) split(nodes, std::move(g), shorter, min_eps, out, dropped);
+    for (auto& g : components(nodes, group, shorter))
+      split(nodes, std::move(g), shorter, min_eps, out, dropped);
     return;
   }
   std::vector<double> xs, ys;
@@ -127,10 +136,12 @@ void split(const std::vector<Node>& nodes, std::vector<std::size_t> group, doubl
 }
 
 /// Groups `members` into conflict-free components.
-std::vector<std::vector<std::size_t>> link(const std::vector<Node>& nodes, const std::vector<std::size_t>& members,
-                                           double eps, double min_eps, std::size_t& dropped) {
+std::vector<std::vector<std::size_t>> link(const std::vector<Node>& nodes,
+                                           const std::vector<std::size_t>& members, double eps,
+                                           double min_eps, std::size_t& dropped) {
   std::vector<std::vector<std::size_t>> out;
-  for (auto& g : components(nodes, members, eps)) split(nodes, std::move(g), eps, min_eps, out, dropped);
+  for (auto& g : components(nodes, members, eps))
+    split(nodes, std::move(g), eps, min_eps, out, dropped);
   return out;
 }
 
@@ -150,15 +161,17 @@ double weightedMedian(std::vector<std::pair<double, std::size_t>> v) {
 
 }  // namespace
 
-std::size_t clusterStop(const std::vector<const ScanDetections*>& scans, const std::vector<Pose2>& viewpoints,
-                        const AssociationConfig& cfg, StopClusters& out,
-                        std::vector<std::vector<int>>* cluster_of) {
-  if (viewpoints.size() != scans.size()) throw std::invalid_argument("clusterStop: one viewpoint per scan expected");
+std::size_t clusterStop(const std::vector<const ScanDetections*>& scans,
+                        const std::vector<Pose2>& viewpoints, const AssociationConfig& cfg,
+                        StopClusters& out, std::vector<std::vector<int>>* cluster_of) {
+  if (viewpoints.size() != scans.size())
+    throw std::invalid_argument("clusterStop: one viewpoint per scan expected");
   std::vector<Node> items;
   std::vector<std::pair<std::size_t, std::size_t>> where;  // (scan, detection) of each item
   if (cluster_of) cluster_of->assign(scans.size(), {});
   for (std::size_t s = 0; s < scans.size(); ++s) {
-    if (scans[s]->stop != scans.front()->stop) throw std::invalid_argument("clusterStop: scans of one stop expected");
+    if (scans[s]->stop != scans.front()->stop)
+      throw std::invalid_argument("clusterStop: scans of one stop expected");
     if (cluster_of) (*cluster_of)[s].assign(scans[s]->detections.size(), -1);
     for (std::size_t j = 0; j < scans[s]->detections.size(); ++j) {
       const Detection& d = scans[s]->detections[j];
@@ -175,11 +188,12 @@ std::size_t clusterStop(const std::vector<const ScanDetections*>& scans, const s
   std::iota(members.begin(), members.end(), 0);
   std::size_t dropped = 0;
   // At one stop (one pose, only noise), the detections of one object, one per scan.
-  for (auto& g : link(items, members, cfg.stop_link_distance_m, std::min(cfg.min_link_distance_m, cfg.stop_link_distance_m),
-                      dropped)) {
+  for (auto& g : link(items, members, cfg.stop_link_distance_m,
+                      std::min(cfg.min_link_distance_m, cfg.stop_link_distance_m), dropped)) {
     StopCluster c;
     c.stop = scans.front()->stop;
-    c.strong = static_cast<double>(g.size()) >= cfg.min_scan_fraction * static_cast<double>(scans.size());
+    c.strong =
+        static_cast<double>(g.size()) >= cfg.min_scan_fraction * static_cast<double>(scans.size());
     std::vector<std::pair<double, std::size_t>> radii;
     for (auto m : g) {
       c.x_m += items[m].x, c.y_m += items[m].y;
@@ -221,8 +235,8 @@ int TrackIds::of(TrackSerial serial) const {
   return it != ids.end() && it->first == serial ? it->second : 0;
 }
 
-std::vector<int> landmarkIds(const std::vector<int>& cluster_of, const std::vector<TrackSerial>& track_of,
-                             const TrackIds& ids) {
+std::vector<int> landmarkIds(const std::vector<int>& cluster_of,
+                             const std::vector<TrackSerial>& track_of, const TrackIds& ids) {
   std::vector<int> out(cluster_of.size(), 0);
   for (std::size_t j = 0; j < out.size(); ++j)
     if (cluster_of[j] >= 0) out[j] = ids.of(track_of.at(static_cast<std::size_t>(cluster_of[j])));
@@ -231,11 +245,13 @@ std::vector<int> landmarkIds(const std::vector<int>& cluster_of, const std::vect
 
 StopLinker::StopLinker(const AssociationConfig& config, std::size_t stops) : config_(config) {
   config_.validate();
-  min_stops_ = std::max<std::size_t>(1, std::min<std::size_t>(static_cast<std::size_t>(config_.min_stops), stops));
+  min_stops_ = std::max<std::size_t>(
+      1, std::min<std::size_t>(static_cast<std::size_t>(config_.min_stops), stops));
 }
 
 void StopLinker::merge(Track& into, Track& from) {
-  for (std::size_t q = 0; q < std::min(from.sightings, from.recent.size()); ++q)  // the older sightings first
+  // the older sightings first
+  for (std::size_t q = 0; q < std::min(from.sightings, from.recent.size()); ++q)
     into.recent[into.sightings++ % into.recent.size()] = from.recent[q];
   into.strong_stops += from.strong_stops;
   into.detections += from.detections;
@@ -247,19 +263,23 @@ void StopLinker::merge(Track& into, Track& from) {
   into.aliases.push_back(from.serial);
   into.aliases.insert(into.aliases.end(), from.aliases.begin(), from.aliases.end());
   std::vector<TrackSerial> co;
-  std::set_union(into.co_seen.begin(), into.co_seen.end(), from.co_seen.begin(), from.co_seen.end(), std::back_inserter(co));
+  std::set_union(into.co_seen.begin(), into.co_seen.end(), from.co_seen.begin(), from.co_seen.end(),
+                 std::back_inserter(co));
   into.co_seen = std::move(co);
   for (auto& t : tracks_) {  // who saw `from` close by saw `into`
     auto it = std::lower_bound(t.co_seen.begin(), t.co_seen.end(), from.serial);
     if (it == t.co_seen.end() || *it != from.serial) continue;
     t.co_seen.erase(it);
-    if (&t != &into) t.co_seen.insert(std::lower_bound(t.co_seen.begin(), t.co_seen.end(), into.serial), into.serial);
+    if (&t != &into)
+      t.co_seen.insert(std::lower_bound(t.co_seen.begin(), t.co_seen.end(), into.serial),
+                       into.serial);
   }
   merged_.emplace_back(from.serial, into.serial);
   from.dead = true;
 }
 
-std::vector<TrackSerial> StopLinker::add(const StopClusters& clusters, std::size_t stage1_conflicts) {
+std::vector<TrackSerial> StopLinker::add(const StopClusters& clusters,
+                                         std::size_t stage1_conflicts) {
   forgotten_.clear();
   merged_.clear();
   totals_.discarded_conflicts += stage1_conflicts;
@@ -287,10 +307,12 @@ std::vector<TrackSerial> StopLinker::add(const StopClusters& clusters, std::size
 std::size_t StopLinker::beginStop(const StopClusters& clusters) {
   const std::size_t stop = clusters.front().stop;
   for (const auto& c : clusters) {
-    if (c.stop != stop) throw std::invalid_argument("StopLinker::add: clusters of one stop expected");
+    if (c.stop != stop)
+      throw std::invalid_argument("StopLinker::add: clusters of one stop expected");
     totals_.detections += c.detections;
   }
-  if (started_ && stop <= last_stop_) throw std::invalid_argument("StopLinker::add: stops must come in increasing order");
+  if (started_ && stop <= last_stop_)
+    throw std::invalid_argument("StopLinker::add: stops must come in increasing order");
   started_ = true;
   last_stop_ = stop;
   return stop;
@@ -376,7 +398,8 @@ void StopLinker::mergeSplitTracks(StopWork& w) {
     for (std::size_t t = 0; t < tracks_.size(); ++t) {
       Track& other = tracks_[t];
       if (w.taken[t] || other.dead) continue;
-      if (other.distanceTo(w.clusters[k].x_m, w.clusters[k].y_m) > config_.link_distance_m) continue;
+      if (other.distanceTo(w.clusters[k].x_m, w.clusters[k].y_m) > config_.link_distance_m)
+        continue;
       Track& mine = tracks_[index(w.serial_of[k])];
       if (std::binary_search(mine.co_seen.begin(), mine.co_seen.end(), other.serial)) continue;
       Track& into = mine.serial < other.serial ? mine : other;
@@ -422,7 +445,9 @@ void StopLinker::forgetStale(std::size_t stop) {
   std::sort(gone.begin(), gone.end());
   for (auto& t : tracks_)
     t.co_seen.erase(std::remove_if(t.co_seen.begin(), t.co_seen.end(),
-                                   [&](TrackSerial s) { return std::binary_search(gone.begin(), gone.end(), s); }),
+                                   [&](TrackSerial s) {
+                                     return std::binary_search(gone.begin(), gone.end(), s);
+                                   }),
                     t.co_seen.end());
 }
 
@@ -438,7 +463,8 @@ Association StopLinker::finish(TrackIds& ids) const {
     }
   }
   // Ids by first sighting, then bearing in that scan, then position (all order-free).
-  std::sort(kept.begin(), kept.end(), [](const Track* a, const Track* b) { return a->first < b->first; });
+  std::sort(kept.begin(), kept.end(),
+            [](const Track* a, const Track* b) { return a->first < b->first; });
   ids.ids.clear();
   for (std::size_t rank = 0; rank < kept.size(); ++rank) {
     const Track& t = *kept[rank];
@@ -459,15 +485,17 @@ Association StopLinker::finish(TrackIds& ids) const {
   return out;
 }
 
-Association associate(const std::vector<ScanDetections>& scans, const std::vector<Pose2>& viewpoints,
-                      const AssociationConfig& cfg) {
+Association associate(const std::vector<ScanDetections>& scans,
+                      const std::vector<Pose2>& viewpoints, const AssociationConfig& cfg) {
   cfg.validate();
-  if (viewpoints.size() != scans.size()) throw std::invalid_argument("associate: one viewpoint per scan expected");
+  if (viewpoints.size() != scans.size())
+    throw std::invalid_argument("associate: one viewpoint per scan expected");
   std::map<std::size_t, std::vector<std::size_t>> scans_at_stop;
   for (std::size_t s = 0; s < scans.size(); ++s) scans_at_stop[scans[s].stop].push_back(s);
   StopLinker linker(cfg, scans_at_stop.size());
   std::vector<std::vector<int>> cluster_of(scans.size());  // per scan, per detection
-  std::vector<std::vector<TrackSerial>> track_of(scans.size());  // per scan: its stop's clusters' tracks
+  // per scan: its stop's clusters' tracks
+  std::vector<std::vector<TrackSerial>> track_of(scans.size());
   for (const auto& [stop, members] : scans_at_stop) {
     std::vector<const ScanDetections*> ptrs;
     std::vector<Pose2> poses;
@@ -477,12 +505,14 @@ Association associate(const std::vector<ScanDetections>& scans, const std::vecto
     const std::size_t conflicts = clusterStop(ptrs, poses, cfg, clusters, &of);
     linker.moveTo(poses.front());
     const std::vector<TrackSerial> tracks = linker.add(clusters, conflicts);
-    for (std::size_t i = 0; i < members.size(); ++i) cluster_of[members[i]] = std::move(of[i]), track_of[members[i]] = tracks;
+    for (std::size_t i = 0; i < members.size(); ++i)
+      cluster_of[members[i]] = std::move(of[i]), track_of[members[i]] = tracks;
   }
   TrackIds ids;
   Association out = linker.finish(ids);
   out.ids.resize(scans.size());
-  for (std::size_t s = 0; s < scans.size(); ++s) out.ids[s] = landmarkIds(cluster_of[s], track_of[s], ids);
+  for (std::size_t s = 0; s < scans.size(); ++s)
+    out.ids[s] = landmarkIds(cluster_of[s], track_of[s], ids);
   return out;
 }
 

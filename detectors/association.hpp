@@ -82,27 +82,32 @@ struct Landmark {
   double x_m = 0.0;            ///< mean world x of its detections (commanded poses), metres
   double y_m = 0.0;            ///< mean world y of its detections, metres
   std::size_t detections = 0;  ///< detections with this id
-  std::size_t stops = 0;       ///< stops that saw it strongly (in at least min_scan_fraction of their scans)
+  /// stops that saw it strongly (in at least min_scan_fraction of their scans)
+  std::size_t stops = 0;
   std::size_t first_scan = 0;  ///< smallest scan_index that saw it
-  double radius_m = 0.0;       ///< median radius of its detections, metres (detectSequence: known or jointly estimated)
-  bool radius_estimated = false;  ///< radius_m was estimated jointly over its observations (landmark_radius.hpp)
+  /// median radius of its detections, metres (detectSequence: known or jointly estimated)
+  double radius_m = 0.0;
+  /// radius_m was estimated jointly over its observations (landmark_radius.hpp)
+  bool radius_estimated = false;
 };
 
 struct Association {
-  std::vector<Landmark> landmarks;             ///< ids 1..L in this order
+  std::vector<Landmark> landmarks;  ///< ids 1..L in this order
   /// Landmark id of each detection: ids[i][j] for detection j of input scan i; 0 = not a landmark.
   std::vector<std::vector<int>> ids;
-  std::size_t detections = 0;                  ///< detections in the input
-  std::size_t assigned = 0;                    ///< detections given an id
-  std::size_t discarded_few_stops = 0;         ///< detections in groups seen at too few stops (or weak and alone)
-  std::size_t discarded_conflicts = 0;         ///< detections (or stop clusters) dropped as a second one of their scan (stop)
-  std::size_t discarded_components = 0;        ///< groups discarded for too few stops
+  std::size_t detections = 0;  ///< detections in the input
+  std::size_t assigned = 0;    ///< detections given an id
+  /// detections in groups seen at too few stops (or weak and alone)
+  std::size_t discarded_few_stops = 0;
+  /// detections (or stop clusters) dropped as a second one of their scan (stop)
+  std::size_t discarded_conflicts = 0;
+  std::size_t discarded_components = 0;  ///< groups discarded for too few stops
 };
 
-/// Groups the detections of all scans into landmarks. viewpoints[i] is the commanded pose of scan i.
-/// (Stage 1 per stop with clusterStop, then a StopLinker over the stops in index order.)
-Association associate(const std::vector<ScanDetections>& scans, const std::vector<Pose2>& viewpoints,
-                      const AssociationConfig& config);
+/// Groups the detections of all scans into landmarks. viewpoints[i] is the commanded pose of scan
+/// i. (Stage 1 per stop with clusterStop, then a StopLinker over the stops in index order.)
+Association associate(const std::vector<ScanDetections>& scans,
+                      const std::vector<Pose2>& viewpoints, const AssociationConfig& config);
 
 // ---- The same in steps, for streaming: stage 1 needs the detections of one stop only;
 // stages 2-4 (StopLinker) the stop clusters of one stop and the tracks alive. ----
@@ -113,11 +118,11 @@ using DetectionKey = std::tuple<std::size_t, std::size_t, double, double, double
 /// Stage 1 summary: the detections of one object at one stop.
 struct StopCluster {
   std::size_t stop = 0;
-  bool strong = false;         ///< found in at least min_scan_fraction of the stop's scans
+  bool strong = false;          ///< found in at least min_scan_fraction of the stop's scans
   double x_m = 0.0, y_m = 0.0;  ///< centroid of its detections, world frame, metres
-  std::size_t detections = 0;  ///< one per scan at most
-  double radius_m = 0.0;       ///< median radius of its detections, metres
-  DetectionKey first;          ///< key of its first detection
+  std::size_t detections = 0;   ///< one per scan at most
+  double radius_m = 0.0;        ///< median radius of its detections, metres
+  DetectionKey first;           ///< key of its first detection
 };
 
 /// The stop clusters of one stop.
@@ -128,9 +133,9 @@ using StopClusters = std::vector<StopCluster>;
 /// by their first key (an order that depends only on the detections) and, when `cluster_of`
 /// is given, sets (*cluster_of)[i][j] to the index in `out` of detection j of scans[i] (-1:
 /// dropped as a second detection of its scan). Returns the number of detections dropped that way.
-std::size_t clusterStop(const std::vector<const ScanDetections*>& scans, const std::vector<Pose2>& viewpoints,
-                        const AssociationConfig& config, StopClusters& out,
-                        std::vector<std::vector<int>>* cluster_of = nullptr);
+std::size_t clusterStop(const std::vector<const ScanDetections*>& scans,
+                        const std::vector<Pose2>& viewpoints, const AssociationConfig& config,
+                        StopClusters& out, std::vector<std::vector<int>>* cluster_of = nullptr);
 
 /// A track's serial number: 1, 2, ... in order of creation; 0 for "no track".
 using TrackSerial = std::uint64_t;
@@ -144,8 +149,8 @@ struct TrackIds {
 
 /// Landmark ids of one scan's detections: cluster_of[j] is detection j's index in its stop's
 /// clusters (clusterStop) or -1, track_of[k] the track of cluster k (StopLinker::add).
-std::vector<int> landmarkIds(const std::vector<int>& cluster_of, const std::vector<TrackSerial>& track_of,
-                             const TrackIds& ids);
+std::vector<int> landmarkIds(const std::vector<int>& cluster_of,
+                             const std::vector<TrackSerial>& track_of, const TrackIds& ids);
 
 /// A sample of at most `capacity` items spread evenly over all items offered (every item while
 /// fewer than `capacity` were offered; then every 2nd, 4th, ... one), in memory bounded by the
@@ -210,17 +215,18 @@ class StopLinker {
   struct Track {
     TrackSerial serial = 0;
     std::array<std::pair<double, double>, 8> recent{};  // last strong sightings (world, m), a ring
-    std::size_t sightings = 0;       // strong sightings so far (recent holds the last 8)
-    std::size_t last_stop = 0;       // stop of its last cluster, strong or weak
-    double seen_at_m = 0.0;          // travel (moveTo) at its last strong sighting
+    std::size_t sightings = 0;  // strong sightings so far (recent holds the last 8)
+    std::size_t last_stop = 0;  // stop of its last cluster, strong or weak
+    double seen_at_m = 0.0;     // travel (moveTo) at its last strong sighting
     std::size_t strong_stops = 0;
     std::size_t detections = 0;
     double sum_x = 0.0, sum_y = 0.0;  // detections x cluster centroid, summed
     DetectionKey first;
     EvenSample<std::pair<double, std::size_t>> radii;  // (cluster median radius, detections)
-    std::vector<TrackSerial> aliases;    // tracks merged into this one
-    std::vector<TrackSerial> co_seen;    // tracks seen close to it at one of its stops (sorted): never merged
-    bool dead = false;                   // merged into another during this add()
+    std::vector<TrackSerial> aliases;                  // tracks merged into this one
+    // tracks seen close to it at one of its stops (sorted): never merged
+    std::vector<TrackSerial> co_seen;
+    bool dead = false;  // merged into another during this add()
     /// Distance from (x, y) to the nearest of its recent strong sightings, metres.
     double distanceTo(double x, double y) const;
   };
@@ -252,9 +258,9 @@ class StopLinker {
   std::vector<std::pair<TrackSerial, TrackSerial>> merged_;
   bool started_ = false;
   std::size_t last_stop_ = 0;
-  double travel_m_ = 0.0;              // odometer of moveTo
-  std::optional<Pose2> pose_;          // the last pose given to moveTo
-  Association totals_;  // counts only (detections, conflicts, discarded)
+  double travel_m_ = 0.0;      // odometer of moveTo
+  std::optional<Pose2> pose_;  // the last pose given to moveTo
+  Association totals_;         // counts only (detections, conflicts, discarded)
 };
 
 }  // namespace lidarcal::detectors

@@ -13,12 +13,18 @@ namespace lidarcal::detectors {
 
 const char* toString(FitStatus status) {
   switch (status) {
-    case FitStatus::ok: return "ok";
-    case FitStatus::too_few_points: return "too_few_points";
-    case FitStatus::degenerate: return "degenerate";
-    case FitStatus::no_consensus: return "no_consensus";
-    case FitStatus::radius_out_of_limits: return "radius_out_of_limits";
-    case FitStatus::wrong_side: return "wrong_side";
+    case FitStatus::ok:
+      return "ok";
+    case FitStatus::too_few_points:
+      return "too_few_points";
+    case FitStatus::degenerate:
+      return "degenerate";
+    case FitStatus::no_consensus:
+      return "no_consensus";
+    case FitStatus::radius_out_of_limits:
+      return "radius_out_of_limits";
+    case FitStatus::wrong_side:
+      return "wrong_side";
   }
   return "unknown";
 }
@@ -27,12 +33,15 @@ void CircleFitConfig::validate() const {
   auto fail = [](const char* field, const char* what) {
     throw std::invalid_argument(std::string("CircleFitConfig.") + field + ": " + what);
   };
-  if (!(inlier_threshold_m > 0.0) || !std::isfinite(inlier_threshold_m)) fail("inlier_threshold_m", "must be > 0");
+  if (!(inlier_threshold_m > 0.0) || !std::isfinite(inlier_threshold_m))
+    fail("inlier_threshold_m", "must be > 0");
   // Both limits finite: PCL ignores the limits unless both differ from its +-max defaults.
-  if (!(radius_min_m >= 0.0) || !std::isfinite(radius_min_m)) fail("radius_min_m", "must be finite and >= 0");
+  if (!(radius_min_m >= 0.0) || !std::isfinite(radius_min_m))
+    fail("radius_min_m", "must be finite and >= 0");
   if (!(radius_max_m > radius_min_m) || !std::isfinite(radius_max_m))
     fail("radius_max_m", "must be finite and > radius_min_m");
-  if (fixed_radius_m && !(*fixed_radius_m > 0.0 && std::isfinite(*fixed_radius_m))) fail("fixed_radius_m", "must be > 0");
+  if (fixed_radius_m && !(*fixed_radius_m > 0.0 && std::isfinite(*fixed_radius_m)))
+    fail("fixed_radius_m", "must be > 0");
   if (ransac_min_points < 3) fail("ransac_min_points", "must be >= 3");
   if (max_iterations < 1) fail("max_iterations", "must be >= 1");
   if (!(probability > 0.0 && probability < 1.0)) fail("probability", "must be in (0, 1)");
@@ -88,7 +97,8 @@ std::optional<Circle2> taubinCircle(const std::vector<Eigen::Vector2d>& points) 
   const double cx = (mxz * (myy - x) - myz * mxy) / det / 2.0;
   const double cy = (myz * (mxx - x) - mxz * mxy) / det / 2.0;
   const Circle2 c{cx + mean.x(), cy + mean.y(), std::sqrt(cx * cx + cy * cy + mz)};
-  if (!std::isfinite(c.x_m) || !std::isfinite(c.y_m) || !std::isfinite(c.radius_m)) return std::nullopt;
+  if (!std::isfinite(c.x_m) || !std::isfinite(c.y_m) || !std::isfinite(c.radius_m))
+    return std::nullopt;
   return c;
 }
 
@@ -168,8 +178,8 @@ GeometricFit refineCircle(const std::vector<Eigen::Vector2d>& points, const Circ
 namespace {
 
 template <typename PointT>
-void gather(const pcl::PointCloud<PointT>& cloud, const pcl::Indices& indices, std::vector<Eigen::Vector2d>& pts,
-            pcl::Indices& idx) {
+void gather(const pcl::PointCloud<PointT>& cloud, const pcl::Indices& indices,
+            std::vector<Eigen::Vector2d>& pts, pcl::Indices& idx) {
   pts.reserve(indices.size());
   idx.reserve(indices.size());
   for (const auto i : indices) {
@@ -200,7 +210,8 @@ bool collinear(const std::vector<Eigen::Vector2d>& pts) {
   return !(ev[0] > 1e-12 * ev[1]);
 }
 
-std::vector<Eigen::Vector2d> subset(const std::vector<Eigen::Vector2d>& pts, const std::vector<std::size_t>& sel) {
+std::vector<Eigen::Vector2d> subset(const std::vector<Eigen::Vector2d>& pts,
+                                    const std::vector<std::size_t>& sel) {
   std::vector<Eigen::Vector2d> out;
   out.reserve(sel.size());
   for (auto k : sel) out.push_back(pts[k]);
@@ -212,18 +223,20 @@ bool withinLimits(const Circle2& c, const CircleFitConfig& cfg) {
 }
 
 /// PCL RANSAC on the centred points; returns the consensus set (positions in pts) and model.
-bool ransacCircle(const std::vector<Eigen::Vector2d>& pts, const Eigen::Vector2d& origin, const CircleFitConfig& cfg,
-                  std::vector<std::size_t>& consensus, Circle2& model) {
+bool ransacCircle(const std::vector<Eigen::Vector2d>& pts, const Eigen::Vector2d& origin,
+                  const CircleFitConfig& cfg, std::vector<std::size_t>& consensus, Circle2& model) {
   // A deliberate small copy: PCL's minimal-sample solver works on float points, which we centre
   // so that metres of offset from the sensor do not eat the float mantissa.
   pcl::PointCloud<pcl::PointXYZ>::Ptr centred(new pcl::PointCloud<pcl::PointXYZ>);
   centred->reserve(pts.size());
   for (const auto& p : pts)
-    centred->push_back(pcl::PointXYZ(static_cast<float>(p.x() - origin.x()), static_cast<float>(p.y() - origin.y()), 0.0f));
+    centred->push_back(pcl::PointXYZ(static_cast<float>(p.x() - origin.x()),
+                                     static_cast<float>(p.y() - origin.y()), 0.0f));
   pcl::Indices inliers;
   Eigen::VectorXf coefficients;
   const RansacSettings settings{cfg.inlier_threshold_m, cfg.max_iterations, cfg.probability};
-  if (!ransacCircle2D(centred, settings, cfg.radius_min_m, cfg.radius_max_m, inliers, coefficients) ||
+  if (!ransacCircle2D(centred, settings, cfg.radius_min_m, cfg.radius_max_m, inliers,
+                      coefficients) ||
       inliers.size() < 3 || coefficients.size() != 3)
     return false;
   consensus.assign(inliers.begin(), inliers.end());
@@ -253,8 +266,9 @@ bool refuseDegenerate(const std::vector<Eigen::Vector2d>& pts, CircleFit& out) {
 
 /// Free-radius fit of `sub`: Taubin start, geometric refinement; falls back to RANSAC's own model
 /// when the refinement leaves the radius limits.
-void fitFreeRadius(const std::vector<Eigen::Vector2d>& sub, const std::optional<Circle2>& ransac_model,
-                   const CircleFitConfig& cfg, CircleFit& out) {
+void fitFreeRadius(const std::vector<Eigen::Vector2d>& sub,
+                   const std::optional<Circle2>& ransac_model, const CircleFitConfig& cfg,
+                   CircleFit& out) {
   out.free_status = FitStatus::degenerate;
   if (const auto start = taubinCircle(sub)) {
     const GeometricFit g = refineCircle(sub, *start, std::nullopt, cfg.refine_iterations);
@@ -301,13 +315,16 @@ void fitSelection(const std::vector<Eigen::Vector2d>& pts, const std::vector<std
                   const CircleFitConfig& cfg, CircleFit& out) {
   const auto sub = subset(pts, sel);
   fitFreeRadius(sub, ransac_model, cfg, out);
-  if (cfg.fixed_radius_m) fitFixedRadius(sub, centroid, cfg, out);
-  else out.circle = out.free_circle;
+  if (cfg.fixed_radius_m)
+    fitFixedRadius(sub, centroid, cfg, out);
+  else
+    out.circle = out.free_circle;
   out.rms_m = circleRms(sub, out.circle);
 }
 
 /// Indices of the points within the inlier threshold of `c`.
-std::vector<std::size_t> pointsOn(const std::vector<Eigen::Vector2d>& pts, const Circle2& c, double threshold_m) {
+std::vector<std::size_t> pointsOn(const std::vector<Eigen::Vector2d>& pts, const Circle2& c,
+                                  double threshold_m) {
   std::vector<std::size_t> on;
   for (std::size_t k = 0; k < pts.size(); ++k) {
     const double r = std::hypot(pts[k].x() - c.x_m, pts[k].y() - c.y_m) - c.radius_m;
@@ -317,8 +334,8 @@ std::vector<std::size_t> pointsOn(const std::vector<Eigen::Vector2d>& pts, const
 }
 
 /// Whether the centre lies in front of the arc `sel` seen from `from` (a concave surface).
-bool concave(const std::vector<Eigen::Vector2d>& pts, const std::vector<std::size_t>& sel, const Circle2& circle,
-             const Eigen::Vector2d& from) {
+bool concave(const std::vector<Eigen::Vector2d>& pts, const std::vector<std::size_t>& sel,
+             const Circle2& circle, const Eigen::Vector2d& from) {
   Eigen::Vector2d m = Eigen::Vector2d::Zero();
   for (auto k : sel) m += pts[k];
   m /= static_cast<double>(sel.size());
@@ -326,7 +343,8 @@ bool concave(const std::vector<Eigen::Vector2d>& pts, const std::vector<std::siz
   return (c - from).norm() <= (m - from).norm();
 }
 
-CircleFit fitPoints(const std::vector<Eigen::Vector2d>& pts, const pcl::Indices& idx, const CircleFitConfig& cfg) {
+CircleFit fitPoints(const std::vector<Eigen::Vector2d>& pts, const pcl::Indices& idx,
+                    const CircleFitConfig& cfg) {
   cfg.validate();
   CircleFit out;
   if (refuseDegenerate(pts, out)) return out;
@@ -348,8 +366,8 @@ CircleFit fitPoints(const std::vector<Eigen::Vector2d>& pts, const pcl::Indices&
       out.used_ransac = true;
     } else if (!cfg.fixed_radius_m) {
       out.status = out.free_status = FitStatus::no_consensus;
-      out.message = "RANSAC found no circle with radius in [" + std::to_string(cfg.radius_min_m) + ", " +
-                    std::to_string(cfg.radius_max_m) + "] m";
+      out.message = "RANSAC found no circle with radius in [" + std::to_string(cfg.radius_min_m) +
+                    ", " + std::to_string(cfg.radius_max_m) + "] m";
       return out;
     }
   }
@@ -359,8 +377,9 @@ CircleFit fitPoints(const std::vector<Eigen::Vector2d>& pts, const pcl::Indices&
   if (!cfg.fixed_radius_m && out.free_status != FitStatus::ok) {
     out.status = out.free_status;
     out.message = out.free_status == FitStatus::radius_out_of_limits
-                      ? "best circle radius " + std::to_string(out.free_circle.radius_m) + " m is outside [" +
-                            std::to_string(cfg.radius_min_m) + ", " + std::to_string(cfg.radius_max_m) + "] m"
+                      ? "best circle radius " + std::to_string(out.free_circle.radius_m) +
+                            " m is outside [" + std::to_string(cfg.radius_min_m) + ", " +
+                            std::to_string(cfg.radius_max_m) + "] m"
                       : "no circle through the consensus points (collinear)";
     return out;
   }
@@ -389,7 +408,8 @@ CircleFit fitPoints(const std::vector<Eigen::Vector2d>& pts, const pcl::Indices&
 }
 
 template <typename PointT>
-CircleFit fitCloud(const pcl::PointCloud<PointT>& cloud, const pcl::Indices& indices, const CircleFitConfig& cfg) {
+CircleFit fitCloud(const pcl::PointCloud<PointT>& cloud, const pcl::Indices& indices,
+                   const CircleFitConfig& cfg) {
   std::vector<Eigen::Vector2d> pts;
   pcl::Indices idx;
   gather(cloud, indices, pts, idx);
@@ -398,7 +418,8 @@ CircleFit fitCloud(const pcl::PointCloud<PointT>& cloud, const pcl::Indices& ind
 
 }  // namespace
 
-CircleFit fitCircle(const pcl::PointCloud<pcl::PointXYZ>& cloud, const pcl::Indices& indices, const CircleFitConfig& config) {
+CircleFit fitCircle(const pcl::PointCloud<pcl::PointXYZ>& cloud, const pcl::Indices& indices,
+                    const CircleFitConfig& config) {
   return fitCloud(cloud, indices, config);
 }
 

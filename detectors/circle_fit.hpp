@@ -22,10 +22,10 @@
 #include <string>
 #include <vector>
 
-#include <Eigen/Core>
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
 #include <pcl/types.h>
+#include <Eigen/Core>
 
 namespace lidarcal::detectors {
 
@@ -54,7 +54,8 @@ struct CircleFitConfig {
   double radius_min_m = 0.0;
   /// Largest acceptable radius of the free fit, metres (finite). Default 1000.
   double radius_max_m = 1000.0;
-  /// Fit the centre with this radius fixed (metres); the free fit is still reported. Default: unset.
+  /// Fit the centre with this radius fixed (metres); the free fit is still reported. Default:
+  /// unset.
   std::optional<double> fixed_radius_m;
   /// Where the points were seen from (the sensor). When set, a fixed-radius fit starts behind the
   /// arc and a centre in front of the arc is refused (status wrong_side). Default: unset.
@@ -75,18 +76,19 @@ struct CircleFitConfig {
 struct CircleFit {
   FitStatus status = FitStatus::too_few_points;  ///< ok, or why there is no circle
   std::string message;                           ///< what went wrong, for a user
-  Circle2 circle;        ///< the reported circle: fixed-radius fit when a radius is given, else free
-  double rms_m = 0.0;    ///< RMS distance of the inliers to `circle`, metres
+  Circle2 circle;      ///< the reported circle: fixed-radius fit when a radius is given, else free
+  double rms_m = 0.0;  ///< RMS distance of the inliers to `circle`, metres
   FitStatus free_status = FitStatus::too_few_points;  ///< status of the free-radius fit
-  Circle2 free_circle;   ///< free-radius fit (valid when free_status is ok)
+  Circle2 free_circle;      ///< free-radius fit (valid when free_status is ok)
   double free_rms_m = 0.0;  ///< RMS distance of the inliers to `free_circle`, metres
   /// Standard deviation of the free radius per metre of point noise: sqrt((J^T J)^-1) of the
   /// radius at the solution (multiply by the noise level). Infinite when not determined.
   double free_radius_sensitivity = 0.0;
-  pcl::Indices inliers;  ///< indices (into the input cloud) of the points within the threshold, in the order of `indices`
-  bool used_ransac = false;        ///< RANSAC chose the inliers (false: all points were used)
+  /// indices (into the input cloud) of the points within the threshold, in the order of `indices`
+  pcl::Indices inliers;
+  bool used_ransac = false;          ///< RANSAC chose the inliers (false: all points were used)
   bool refinement_rejected = false;  ///< the refined free fit left the limits; RANSAC's model kept
-  int iterations = 0;    ///< iterations of the last geometric refinement
+  int iterations = 0;                ///< iterations of the last geometric refinement
 };
 
 /// Fits a circle to the points `indices` of `cloud` (x, y only; NaN points skipped).
@@ -104,9 +106,9 @@ std::optional<Circle2> taubinCircle(const std::vector<Eigen::Vector2d>& points);
 
 /// Result of a geometric least-squares refinement: minimises sum (|p_i - c| - r)^2.
 struct GeometricFit {
-  Circle2 circle;        ///< refined circle
-  double rms_m = 0.0;    ///< RMS of |p_i - c| - r
-  int iterations = 0;    ///< iterations used
+  Circle2 circle;          ///< refined circle
+  double rms_m = 0.0;      ///< RMS of |p_i - c| - r
+  int iterations = 0;      ///< iterations used
   bool converged = false;  ///< the step became negligible before the iteration limit
   /// sqrt of the diagonal of (J^T J)^-1 at the solution (x, y, radius; radius 0 when fixed):
   /// standard deviations per metre of point noise. Infinite when the fit is not determined.

@@ -21,15 +21,18 @@ void CylinderConfig::validate() const {
   };
   if (!(z_max_m > z_min_m)) fail("z_max_m", "must be > z_min_m");
   if (normal_neighbours < 3) fail("normal_neighbours", "must be >= 3");
-  if (!(plane_normal_weight >= 0.0 && plane_normal_weight <= 1.0)) fail("plane_normal_weight", "must be in [0, 1]");
+  if (!(plane_normal_weight >= 0.0 && plane_normal_weight <= 1.0))
+    fail("plane_normal_weight", "must be in [0, 1]");
   if (!(plane_threshold_m > 0.0)) fail("plane_threshold_m", "must be > 0");
   if (plane_iterations < 1) fail("plane_iterations", "must be >= 1");
   if (!(normal_weight >= 0.0 && normal_weight <= 1.0)) fail("normal_weight", "must be in [0, 1]");
   if (!(threshold_m > 0.0)) fail("threshold_m", "must be > 0");
   if (iterations < 1) fail("iterations", "must be >= 1");
   // Both limits finite (PCL ignores them otherwise).
-  if (!(radius_min_m >= 0.0) || !std::isfinite(radius_min_m)) fail("radius_min_m", "must be finite and >= 0");
-  if (!(radius_max_m > radius_min_m) || !std::isfinite(radius_max_m)) fail("radius_max_m", "must be finite and > radius_min_m");
+  if (!(radius_min_m >= 0.0) || !std::isfinite(radius_min_m))
+    fail("radius_min_m", "must be finite and >= 0");
+  if (!(radius_max_m > radius_min_m) || !std::isfinite(radius_max_m))
+    fail("radius_max_m", "must be finite and > radius_min_m");
 }
 
 namespace {
@@ -62,8 +65,8 @@ Normals::Ptr estimateNormals(const Cloud::Ptr& pts, int k) {
 
 /// The candidate points (indices into pts): with cfg.remove_plane, those off the dominant plane
 /// (its coefficients and inlier count into `out`); else all.
-pcl::IndicesPtr pointsOffPlane(const Cloud::Ptr& pts, const Normals::Ptr& normals, const CylinderConfig& cfg,
-                               CylinderResult& out) {
+pcl::IndicesPtr pointsOffPlane(const Cloud::Ptr& pts, const Normals::Ptr& normals,
+                               const CylinderConfig& cfg, CylinderResult& out) {
   pcl::IndicesPtr rest(new pcl::Indices);
   if (!cfg.remove_plane) {
     for (std::size_t i = 0; i < pts->size(); ++i) rest->push_back(static_cast<pcl::index_t>(i));
@@ -82,8 +85,8 @@ pcl::IndicesPtr pointsOffPlane(const Cloud::Ptr& pts, const Normals::Ptr& normal
   pcl::ModelCoefficients plane_coefficients;
   plane.segment(plane_inliers, plane_coefficients);
   if (plane_coefficients.values.size() == 4)
-    out.plane = Eigen::Vector4d(plane_coefficients.values[0], plane_coefficients.values[1], plane_coefficients.values[2],
-                                plane_coefficients.values[3]);
+    out.plane = Eigen::Vector4d(plane_coefficients.values[0], plane_coefficients.values[1],
+                                plane_coefficients.values[2], plane_coefficients.values[3]);
   out.plane_inliers = plane_inliers.indices.size();
   std::vector<bool> on_plane(pts->size(), false);
   for (auto i : plane_inliers.indices) on_plane[static_cast<std::size_t>(i)] = true;
@@ -125,7 +128,8 @@ void fitCylinder(const Cloud::Ptr& pts, const Normals::Ptr& normals, const pcl::
 
 }  // namespace
 
-CylinderResult detectCylinder(const pcl::PointCloud<pcl::PointXYZ>::ConstPtr& cloud, const CylinderConfig& cfg) {
+CylinderResult detectCylinder(const pcl::PointCloud<pcl::PointXYZ>::ConstPtr& cloud,
+                              const CylinderConfig& cfg) {
   cfg.validate();
   if (!cloud) throw std::invalid_argument("detectCylinder: no cloud");
   CylinderResult out;

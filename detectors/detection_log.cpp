@@ -25,7 +25,8 @@ struct ScanRecord {
 };
 
 [[noreturn]] void fail(const char* what) {
-  throw InputError("temporary file of the detections", "", std::string(what) + ": " + std::strerror(errno),
+  throw InputError("temporary file of the detections", "",
+                   std::string(what) + ": " + std::strerror(errno),
                    "free space where TMPDIR points (default /tmp) and run again");
 }
 
@@ -53,19 +54,22 @@ DetectionLog::~DetectionLog() { std::fclose(file_); }
 
 bool DetectionLog::append(const ScanDetections& scan, const std::vector<TrackSerial>& tracks,
                           std::uint64_t points_print) {
-  const ScanRecord s{scan.scan_index, scan.stop, scan.returns, scan.detections.size(), points_print};
+  const ScanRecord s{scan.scan_index, scan.stop, scan.returns, scan.detections.size(),
+                     points_print};
   bool ok = put(file_, &s, sizeof s);
   for (std::size_t j = 0; ok && j < scan.detections.size(); ++j) {
     const Detection& d = scan.detections[j];
     DetectionRecord r{};
     r.centre_x_m = d.centre_x_m, r.centre_y_m = d.centre_y_m, r.radius_m = d.radius_m;
     r.bearing_rad = d.bearing_rad, r.range_m = d.range_m, r.rms_m = d.rms_m;
-    r.free_centre_x_m = d.free_centre_x_m, r.free_centre_y_m = d.free_centre_y_m, r.free_radius_m = d.free_radius_m;
+    r.free_centre_x_m = d.free_centre_x_m, r.free_centre_y_m = d.free_centre_y_m,
+    r.free_radius_m = d.free_radius_m;
     r.free_rms_m = d.free_rms_m, r.free_radius_stddev_m = d.free_radius_stddev_m;
     r.cluster_points = d.cluster_points, r.track = tracks.at(j), r.inliers = d.inliers.size();
     r.free_status = static_cast<std::int32_t>(d.free_status);
     r.radius_fixed = d.radius_fixed ? 1 : 0;
-    ok = put(file_, &r, sizeof r) && put(file_, d.inliers.data(), d.inliers.size() * sizeof(d.inliers[0]));
+    ok = put(file_, &r, sizeof r) &&
+         put(file_, d.inliers.data(), d.inliers.size() * sizeof(d.inliers[0]));
   }
   return ok;
 }
@@ -74,7 +78,8 @@ bool DetectionLog::finish() { return std::fflush(file_) == 0; }
 
 void DetectionLog::rewind() { std::rewind(file_); }
 
-bool DetectionLog::next(ScanDetections& scan, std::vector<TrackSerial>& tracks, std::uint64_t& points_print) {
+bool DetectionLog::next(ScanDetections& scan, std::vector<TrackSerial>& tracks,
+                        std::uint64_t& points_print) {
   ScanRecord s{};
   if (!get(file_, &s, sizeof s, true)) return false;
   scan = ScanDetections{};
@@ -88,7 +93,8 @@ bool DetectionLog::next(ScanDetections& scan, std::vector<TrackSerial>& tracks, 
     Detection& d = scan.detections[j];
     d.centre_x_m = r.centre_x_m, d.centre_y_m = r.centre_y_m, d.radius_m = r.radius_m;
     d.bearing_rad = r.bearing_rad, d.range_m = r.range_m, d.rms_m = r.rms_m;
-    d.free_centre_x_m = r.free_centre_x_m, d.free_centre_y_m = r.free_centre_y_m, d.free_radius_m = r.free_radius_m;
+    d.free_centre_x_m = r.free_centre_x_m, d.free_centre_y_m = r.free_centre_y_m,
+    d.free_radius_m = r.free_radius_m;
     d.free_rms_m = r.free_rms_m, d.free_radius_stddev_m = r.free_radius_stddev_m;
     d.cluster_points = r.cluster_points;
     d.free_status = static_cast<FitStatus>(r.free_status);

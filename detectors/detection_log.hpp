@@ -28,7 +28,8 @@ class DetectionLog {
   /// Appends one scan: its detections, the track of each detection (0: none) and the
   /// fingerprint of its points. False when the file cannot be written (disk full, a file-size
   /// limit): the log is then incomplete and must not be read.
-  [[nodiscard]] bool append(const ScanDetections& scan, const std::vector<TrackSerial>& tracks, std::uint64_t points_print);
+  [[nodiscard]] bool append(const ScanDetections& scan, const std::vector<TrackSerial>& tracks,
+                            std::uint64_t points_print);
   /// Writes out what is buffered; false when it cannot be (the log must not be read then).
   [[nodiscard]] bool finish();
   /// Starts reading at the first record (after finish()).

@@ -8,23 +8,27 @@
 
 namespace lidarcal::detectors {
 
-ScanTruth makeScanTruth(const Truth& truth, std::size_t scan_index, std::vector<io::TrueRange> beams,
+ScanTruth makeScanTruth(const Truth& truth, std::size_t scan_index,
+                        std::vector<io::TrueRange> beams,
                         const pcl::PointCloud<pcl::PointXYZI>& cloud) {
   if (beams.size() != cloud.size())
     throw std::invalid_argument("makeScanTruth: scan " + std::to_string(scan_index) + " has " +
-                                std::to_string(cloud.size()) + " points but " + std::to_string(beams.size()) +
-                                " true ranges");
+                                std::to_string(cloud.size()) + " points but " +
+                                std::to_string(beams.size()) + " true ranges");
   ScanTruth st;
   st.beams = std::move(beams);
   st.returned.resize(cloud.size());
-  for (std::size_t i = 0; i < cloud.size(); ++i) st.returned[i] = std::isfinite(cloud[i].x) && std::isfinite(cloud[i].y);
+  for (std::size_t i = 0; i < cloud.size(); ++i)
+    st.returned[i] = std::isfinite(cloud[i].x) && std::isfinite(cloud[i].y);
   bool found = false;
   for (const auto& s : truth.stops)
     if (scan_index >= s.first_scan && scan_index < s.first_scan + s.scans) {
       st.sensor = s.actual;
       found = true;
     }
-  if (!found) throw std::invalid_argument("makeScanTruth: scan " + std::to_string(scan_index) + " is in no truth stop");
+  if (!found)
+    throw std::invalid_argument("makeScanTruth: scan " + std::to_string(scan_index) +
+                                " is in no truth stop");
   st.sensor.yaw_rad += truth.scene.sensor.mount_yaw_rad;
   return st;
 }
@@ -48,7 +52,8 @@ std::vector<bool> partlyHidden(const ScanTruth& t, std::size_t landmarks) {
   const std::size_t n = t.beams.size();
   std::vector<bool> hidden(landmarks + 1, false);
   auto on = [&](std::size_t i, std::size_t l) {
-    return t.beams[i].target == io::TargetKind::landmark && t.beams[i].target_id == static_cast<int>(l);
+    return t.beams[i].target == io::TargetKind::landmark &&
+           t.beams[i].target_id == static_cast<int>(l);
   };
   for (std::size_t l = 1; l <= landmarks && n > 0; ++l) {
     std::size_t starts = 0, first = n;
@@ -63,7 +68,8 @@ std::vector<bool> partlyHidden(const ScanTruth& t, std::size_t landmarks) {
     while (on((last + 1) % n, l) && (last + 1) % n != first) last = (last + 1) % n;
     const std::size_t before = (first + n - 1) % n, after = (last + 1) % n;
     auto nearer = [&](std::size_t nb, std::size_t end) {
-      return t.beams[nb].target != io::TargetKind::none && t.beams[nb].range_m < t.beams[end].range_m;
+      return t.beams[nb].target != io::TargetKind::none &&
+             t.beams[nb].range_m < t.beams[end].range_m;
     };
     hidden[l] = nearer(before, first) || nearer(after, last);
   }
@@ -91,7 +97,8 @@ struct LandmarksSeen {
 
 LandmarksSeen landmarksInSensorFrame(const ScanTruth& t, const std::vector<Cylinder>& landmarks) {
   const std::size_t L = landmarks.size();
-  LandmarksSeen seen{std::vector<double>(L + 1), std::vector<double>(L + 1), std::vector<double>(L + 1)};
+  LandmarksSeen seen{std::vector<double>(L + 1), std::vector<double>(L + 1),
+                     std::vector<double>(L + 1)};
   for (std::size_t l = 1; l <= L; ++l) {
     t.sensor.toSensor(landmarks[l - 1].x_m, landmarks[l - 1].y_m, seen.x[l], seen.y[l]);
     seen.dist[l] = std::hypot(seen.x[l], seen.y[l]);
@@ -100,8 +107,8 @@ LandmarksSeen landmarksInSensorFrame(const ScanTruth& t, const std::vector<Cylin
 }
 
 /// Adds the errors of a true detection of landmark l (radius R, reading bias f) to its bin.
-void addDetectionErrors(BinSums& bs, const Detection& d, const LandmarksSeen& seen, std::size_t l, double R,
-                        const BiasPolynomial& f) {
+void addDetectionErrors(BinSums& bs, const Detection& d, const LandmarksSeen& seen, std::size_t l,
+                        double R, const BiasPolynomial& f) {
   const double expected = f(seen.dist[l] - R) + R;
   ++bs.n;
   bs.centre2 += std::pow(d.centre_x_m - seen.x[l], 2) + std::pow(d.centre_y_m - seen.y[l], 2);
@@ -120,13 +127,15 @@ void addDetectionErrors(BinSums& bs, const Detection& d, const LandmarksSeen& se
 struct Tally {
   DetectionEvaluation ev;
   std::vector<BinSums> bins;
-  std::vector<std::pair<int, int>> id_truth;  ///< (id, truth landmark or 0) per detection with an id
+  /// (id, truth landmark or 0) per detection with an id
+  std::vector<std::pair<int, int>> id_truth;
 };
 
 /// Scores the detections of scan s against its truth; returns which landmarks were detected.
-std::vector<bool> scoreDetections(Tally& tally, const std::vector<ScanDetections>& scans, std::size_t s,
-                                  const Association* association, const ScanTruth& t, const LandmarksSeen& seen,
-                                  const Scene& scene, const EvaluationConfig& cfg) {
+std::vector<bool> scoreDetections(Tally& tally, const std::vector<ScanDetections>& scans,
+                                  std::size_t s, const Association* association, const ScanTruth& t,
+                                  const LandmarksSeen& seen, const Scene& scene,
+                                  const EvaluationConfig& cfg) {
   const std::size_t L = scene.landmarks.size();
   std::vector<bool> detected(L + 1, false);
   for (std::size_t j = 0; j < scans[s].detections.size(); ++j) {
@@ -143,7 +152,8 @@ std::vector<bool> scoreDetections(Tally& tally, const std::vector<ScanDetections
       detected[l] = true;
       const std::size_t b = binOf(cfg.range_edges_m, seen.dist[l]);
       if (b < tally.bins.size())
-        addDetectionErrors(tally.bins[b], d, seen, l, scene.landmarks[l - 1].radius_m, scene.sensor.range.bias);
+        addDetectionErrors(tally.bins[b], d, seen, l, scene.landmarks[l - 1].radius_m,
+                           scene.sensor.range.bias);
     } else {
       ++tally.ev.false_positives;
       if (kind == io::TargetKind::clutter) ++tally.ev.false_on_clutter;
@@ -156,12 +166,13 @@ std::vector<bool> scoreDetections(Tally& tally, const std::vector<ScanDetections
 
 /// Counts the landmarks of one scan that were observable (enough beams on them, not partly
 /// hidden) and which of them were detected.
-void countObservable(Tally& tally, const ScanTruth& t, const LandmarksSeen& seen, const std::vector<bool>& detected,
-                     std::size_t L, const EvaluationConfig& cfg) {
+void countObservable(Tally& tally, const ScanTruth& t, const LandmarksSeen& seen,
+                     const std::vector<bool>& detected, std::size_t L,
+                     const EvaluationConfig& cfg) {
   std::vector<std::size_t> beams_on(L + 1, 0);
   for (std::size_t i = 0; i < t.beams.size(); ++i)
-    if (t.returned[i] && t.beams[i].target == io::TargetKind::landmark && t.beams[i].target_id >= 1 &&
-        static_cast<std::size_t>(t.beams[i].target_id) <= L)
+    if (t.returned[i] && t.beams[i].target == io::TargetKind::landmark &&
+        t.beams[i].target_id >= 1 && static_cast<std::size_t>(t.beams[i].target_id) <= L)
       ++beams_on[static_cast<std::size_t>(t.beams[i].target_id)];
   const std::vector<bool> hidden = partlyHidden(t, L);
   DetectionEvaluation& ev = tally.ev;
@@ -184,8 +195,8 @@ void countObservable(Tally& tally, const ScanTruth& t, const LandmarksSeen& seen
 
 /// Ids: each id's truth landmark by majority; split ids (two ids on one landmark) and
 /// detections whose id's landmark is not theirs.
-void scoreIds(DetectionEvaluation& ev, const Association& association, const std::vector<std::pair<int, int>>& id_truth,
-              std::size_t L) {
+void scoreIds(DetectionEvaluation& ev, const Association& association,
+              const std::vector<std::pair<int, int>>& id_truth, std::size_t L) {
   ev.ids = association.landmarks.size();
   std::vector<std::map<int, std::size_t>> votes(ev.ids);
   for (const auto& [id, l] : id_truth)
@@ -233,10 +244,12 @@ RangeBin summariseBin(const BinSums& s, double lo_m, double hi_m) {
 
 }  // namespace
 
-DetectionEvaluation evaluateDetections(const std::vector<ScanDetections>& scans, const Association* association,
-                                       const std::vector<ScanTruth>& truth, const Truth& scene_truth,
-                                       const EvaluationConfig& cfg) {
-  if (truth.size() != scans.size()) throw std::invalid_argument("evaluateDetections: one ScanTruth per scan expected");
+DetectionEvaluation evaluateDetections(const std::vector<ScanDetections>& scans,
+                                       const Association* association,
+                                       const std::vector<ScanTruth>& truth,
+                                       const Truth& scene_truth, const EvaluationConfig& cfg) {
+  if (truth.size() != scans.size())
+    throw std::invalid_argument("evaluateDetections: one ScanTruth per scan expected");
   if (association && association->ids.size() != scans.size())
     throw std::invalid_argument("evaluateDetections: association of another scan list");
   const Scene& scene = scene_truth.scene;
@@ -246,7 +259,8 @@ DetectionEvaluation evaluateDetections(const std::vector<ScanDetections>& scans,
   tally.bins.resize(cfg.range_edges_m.size() > 1 ? cfg.range_edges_m.size() - 1 : 0);
   for (std::size_t s = 0; s < scans.size(); ++s) {
     const LandmarksSeen seen = landmarksInSensorFrame(truth[s], scene.landmarks);
-    const std::vector<bool> detected = scoreDetections(tally, scans, s, association, truth[s], seen, scene, cfg);
+    const std::vector<bool> detected =
+        scoreDetections(tally, scans, s, association, truth[s], seen, scene, cfg);
     countObservable(tally, truth[s], seen, detected, L, cfg);
   }
   DetectionEvaluation& ev = tally.ev;

@@ -37,7 +37,8 @@ struct RadiusNormalEquations {
   double hrr = 0.0, gr = 0.0;
 };
 
-RadiusNormalEquations normalEquations(const std::vector<ArcObservation>& arcs, const std::vector<double>& w,
+RadiusNormalEquations normalEquations(const std::vector<ArcObservation>& arcs,
+                                      const std::vector<double>& w,
                                       const std::vector<Eigen::Vector2d>& c, double radius) {
   RadiusNormalEquations ne;
   auto& a = ne.a;
@@ -73,7 +74,8 @@ struct RadiusFit {
 /// One damped step: raises the damping until the cost does not grow (Schur complement: the
 /// centres eliminated, the radius step solved, back-substituted). False when none does.
 bool levenbergMarquardtStep(const std::vector<ArcObservation>& arcs, const std::vector<double>& w,
-                            const RadiusNormalEquations& ne, double radius_min_m, double radius_max_m, RadiusFit& fit) {
+                            const RadiusNormalEquations& ne, double radius_min_m,
+                            double radius_max_m, RadiusFit& fit) {
   const auto& a = ne.a;
   const auto& e = ne.e;
   const auto& b = ne.b;
@@ -90,7 +92,8 @@ bool levenbergMarquardtStep(const std::vector<ArcObservation>& arcs, const std::
     }
     const double dr = -g / s;
     std::vector<Eigen::Vector2d> c_new(arcs.size());
-    for (std::size_t k = 0; k < arcs.size(); ++k) c_new[k] = fit.c[k] - a_inv[k] * (b[k] + e[k] * dr);
+    for (std::size_t k = 0; k < arcs.size(); ++k)
+      c_new[k] = fit.c[k] - a_inv[k] * (b[k] + e[k] * dr);
     const double r_new = std::clamp(fit.radius + dr, radius_min_m, radius_max_m);
     const double cost_new = totalCost(arcs, w, c_new, r_new);
     if (std::isfinite(cost_new) && cost_new <= fit.cost) {
@@ -109,8 +112,8 @@ bool levenbergMarquardtStep(const std::vector<ArcObservation>& arcs, const std::
 
 }  // namespace
 
-RadiusEstimate estimateJointRadius(const std::vector<ArcObservation>& arcs, double radius_min_m, double radius_max_m,
-                                   int max_iterations) {
+RadiusEstimate estimateJointRadius(const std::vector<ArcObservation>& arcs, double radius_min_m,
+                                   double radius_max_m, int max_iterations) {
   RadiusEstimate out;
   std::size_t points = 0;
   for (const auto& a : arcs) points += a.points.size();
@@ -142,9 +145,11 @@ RadiusEstimate estimateJointRadius(const std::vector<ArcObservation>& arcs, doub
   out.radius_m = radius;
   for (const auto& ck : fit.c) out.centres.push_back(Circle2{ck.x(), ck.y(), radius});
   double wn = 0.0;
-  for (std::size_t k = 0; k < arcs.size(); ++k) wn += w[k] * static_cast<double>(arcs[k].points.size());
+  for (std::size_t k = 0; k < arcs.size(); ++k)
+    wn += w[k] * static_cast<double>(arcs[k].points.size());
   out.rms_m = std::sqrt(fit.cost / wn);
-  out.status = (radius <= radius_min_m || radius >= radius_max_m) ? FitStatus::radius_out_of_limits : FitStatus::ok;
+  out.status = (radius <= radius_min_m || radius >= radius_max_m) ? FitStatus::radius_out_of_limits
+                                                                  : FitStatus::ok;
   return out;
 }
 

@@ -15,7 +15,8 @@ void LineFitConfig::validate() const {
   auto fail = [](const char* field, const char* what) {
     throw std::invalid_argument(std::string("LineFitConfig.") + field + ": " + what);
   };
-  if (!(inlier_threshold_m > 0.0) || !std::isfinite(inlier_threshold_m)) fail("inlier_threshold_m", "must be > 0");
+  if (!(inlier_threshold_m > 0.0) || !std::isfinite(inlier_threshold_m))
+    fail("inlier_threshold_m", "must be > 0");
   if (ransac_min_points < 2) fail("ransac_min_points", "must be >= 2");
   if (max_iterations < 1) fail("max_iterations", "must be >= 1");
   if (!(probability > 0.0 && probability < 1.0)) fail("probability", "must be in (0, 1)");
@@ -47,7 +48,8 @@ NormalForm normalForm(const Line2& line) {
   return {std::atan2(n.y(), n.x()), p};
 }
 
-LineFit fitLine(const pcl::PointCloud<pcl::PointXYZI>& cloud, const pcl::Indices& indices, const LineFitConfig& cfg) {
+LineFit fitLine(const pcl::PointCloud<pcl::PointXYZI>& cloud, const pcl::Indices& indices,
+                const LineFitConfig& cfg) {
   cfg.validate();
   LineFit out;
   std::vector<Eigen::Vector2d> pts;
@@ -55,7 +57,8 @@ LineFit fitLine(const pcl::PointCloud<pcl::PointXYZI>& cloud, const pcl::Indices
   pts.reserve(indices.size());
   idx.reserve(indices.size());
   for (const auto i : indices) {
-    if (i < 0 || static_cast<std::size_t>(i) >= cloud.size()) throw std::out_of_range("fitLine: index outside the cloud");
+    if (i < 0 || static_cast<std::size_t>(i) >= cloud.size())
+      throw std::out_of_range("fitLine: index outside the cloud");
     const auto& p = cloud[static_cast<std::size_t>(i)];
     if (!std::isfinite(p.x) || !std::isfinite(p.y)) continue;
     pts.emplace_back(p.x, p.y);
@@ -82,7 +85,8 @@ LineFit fitLine(const pcl::PointCloud<pcl::PointXYZI>& cloud, const pcl::Indices
     pcl::PointCloud<pcl::PointXYZ>::Ptr centred(new pcl::PointCloud<pcl::PointXYZ>);
     centred->reserve(pts.size());
     for (const auto& p : pts)
-      centred->push_back(pcl::PointXYZ(static_cast<float>(p.x() - centroid.x()), static_cast<float>(p.y() - centroid.y()), 0.0f));
+      centred->push_back(pcl::PointXYZ(static_cast<float>(p.x() - centroid.x()),
+                                       static_cast<float>(p.y() - centroid.y()), 0.0f));
     pcl::Indices inliers;
     Eigen::VectorXf coefficients;
     const RansacSettings settings{cfg.inlier_threshold_m, cfg.max_iterations, cfg.probability};

@@ -25,8 +25,10 @@ namespace lidarcal::detectors {
 /// four points must be evenly spaced in angle (within a quarter of a step), so a cloud without
 /// its missing returns is judged right too. A clean scan puts almost no reading there: a beam
 /// past the pole reads the background, one on it reads the pole. A pole across a full scan's seam
-/// is looked beside too: its inliers run along the arc (n-2, n-1, 0, 1), so their ends are its edges.
-std::optional<BeamReading> readingBetweenPoleAndBackground(const io::Scan& scan, int edge, int step, double radius_m,
+/// is looked beside too: its inliers run along the arc (n-2, n-1, 0, 1), so their ends are its
+/// edges.
+std::optional<BeamReading> readingBetweenPoleAndBackground(const io::Scan& scan, int edge, int step,
+                                                           double radius_m,
                                                            const DetectionConfig& config);
 
 /// A reading between a pole and its background, waiting for the check that nothing is there.
@@ -53,6 +55,7 @@ bool seesPoint(const PolarScan& scan, const Pose2& from, double x, double y, dou
 /// again within 2 t of their point (t the inlier threshold at its range), and puts them into
 /// their sightings of `obs` (at the front or the back of its beams).
 void addLoneCandidates(const io::Sequence& seq, const ScanLoader& load, const DetectionConfig& dc,
-                       std::vector<BesideCandidate> candidates, std::size_t window, LandmarkObservations& obs);
+                       std::vector<BesideCandidate> candidates, std::size_t window,
+                       LandmarkObservations& obs);
 
 }  // namespace lidarcal::detectors

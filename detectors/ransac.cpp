@@ -23,8 +23,8 @@ pcl::Indices allIndices(const pcl::PointCloud<pcl::PointXYZ>& cloud) {
 /// RANSAC over a model: the calls pcl::SACSegmentation::segment makes with RANSAC and without
 /// optimised coefficients (its initSAC sets the probability and the iterations when they differ
 /// from the defaults, which is the same as setting them).
-bool run(const pcl::SampleConsensusModel<pcl::PointXYZ>::Ptr& model, const RansacSettings& s, pcl::Indices& inliers,
-         Eigen::VectorXf& coefficients) {
+bool run(const pcl::SampleConsensusModel<pcl::PointXYZ>::Ptr& model, const RansacSettings& s,
+         pcl::Indices& inliers, Eigen::VectorXf& coefficients) {
   pcl::RandomSampleConsensus<pcl::PointXYZ> ransac(model, s.threshold_m);
   ransac.setProbability(s.probability);
   if (s.max_iterations != -1) ransac.setMaxIterations(s.max_iterations);
@@ -38,10 +38,12 @@ bool run(const pcl::SampleConsensusModel<pcl::PointXYZ>::Ptr& model, const Ransa
 
 }  // namespace
 
-bool ransacCircle2D(const pcl::PointCloud<pcl::PointXYZ>::ConstPtr& cloud, const RansacSettings& settings,
-                    double radius_min_m, double radius_max_m, pcl::Indices& inliers, Eigen::VectorXf& coefficients) {
+bool ransacCircle2D(const pcl::PointCloud<pcl::PointXYZ>::ConstPtr& cloud,
+                    const RansacSettings& settings, double radius_min_m, double radius_max_m,
+                    pcl::Indices& inliers, Eigen::VectorXf& coefficients) {
   if (!cloud || cloud->empty()) return false;
-  auto model = std::make_shared<pcl::SampleConsensusModelCircle2D<pcl::PointXYZ>>(cloud, allIndices(*cloud), false);
+  auto model = std::make_shared<pcl::SampleConsensusModelCircle2D<pcl::PointXYZ>>(
+      cloud, allIndices(*cloud), false);
   // SACSegmentation sets the limits only when both differ from the model's unlimited defaults.
   double lo = 0.0, hi = 0.0;
   model->getRadiusLimits(lo, hi);
@@ -49,10 +51,12 @@ bool ransacCircle2D(const pcl::PointCloud<pcl::PointXYZ>::ConstPtr& cloud, const
   return run(model, settings, inliers, coefficients);
 }
 
-bool ransacLine(const pcl::PointCloud<pcl::PointXYZ>::ConstPtr& cloud, const RansacSettings& settings,
-                pcl::Indices& inliers, Eigen::VectorXf& coefficients) {
+bool ransacLine(const pcl::PointCloud<pcl::PointXYZ>::ConstPtr& cloud,
+                const RansacSettings& settings, pcl::Indices& inliers,
+                Eigen::VectorXf& coefficients) {
   if (!cloud || cloud->empty()) return false;
-  auto model = std::make_shared<pcl::SampleConsensusModelLine<pcl::PointXYZ>>(cloud, allIndices(*cloud), false);
+  auto model = std::make_shared<pcl::SampleConsensusModelLine<pcl::PointXYZ>>(
+      cloud, allIndices(*cloud), false);
   return run(model, settings, inliers, coefficients);
 }
 

@@ -20,11 +20,13 @@ struct RansacSettings {
 
 /// A 2D circle (pcl::SACMODEL_CIRCLE2D: centre x, y and radius, radius within [radius_min,
 /// radius_max]). False when RANSAC found no model; otherwise its inliers and coefficients.
-bool ransacCircle2D(const pcl::PointCloud<pcl::PointXYZ>::ConstPtr& cloud, const RansacSettings& settings,
-                    double radius_min_m, double radius_max_m, pcl::Indices& inliers, Eigen::VectorXf& coefficients);
+bool ransacCircle2D(const pcl::PointCloud<pcl::PointXYZ>::ConstPtr& cloud,
+                    const RansacSettings& settings, double radius_min_m, double radius_max_m,
+                    pcl::Indices& inliers, Eigen::VectorXf& coefficients);
 
 /// A line (pcl::SACMODEL_LINE: a point and a direction).
-bool ransacLine(const pcl::PointCloud<pcl::PointXYZ>::ConstPtr& cloud, const RansacSettings& settings,
-                pcl::Indices& inliers, Eigen::VectorXf& coefficients);
+bool ransacLine(const pcl::PointCloud<pcl::PointXYZ>::ConstPtr& cloud,
+                const RansacSettings& settings, pcl::Indices& inliers,
+                Eigen::VectorXf& coefficients);
 
 }  // namespace lidarcal::detectors

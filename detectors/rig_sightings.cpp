@@ -61,8 +61,9 @@ std::vector<BeamReading> beamsOf(const detectors::Detection& d, const io::Scan& 
 }
 
 /// Every detection of every scan of every sensor, placed.
-std::vector<Placed> detectAll(const io::Rig& rig, const std::vector<RigSensor>& sensors, const std::vector<Pose2>& poses,
-                              const RigDetectionSettings& s, std::vector<RigSensorDetections>& counts) {
+std::vector<Placed> detectAll(const io::Rig& rig, const std::vector<RigSensor>& sensors,
+                              const std::vector<Pose2>& poses, const RigDetectionSettings& s,
+                              std::vector<RigSensorDetections>& counts) {
   std::vector<Placed> placed;
   for (std::size_t row = 0; row < rig.scans.size(); ++row) {
     const std::size_t k = *rig.meta.find(rig.scans[row].sensor);
@@ -83,7 +84,8 @@ std::vector<Placed> detectAll(const io::Rig& rig, const std::vector<RigSensor>& 
 }
 
 /// Greedy association in reading order: each detection joins the nearest pole within reach.
-std::vector<int> associate(const std::vector<Placed>& placed, double reach_m, std::vector<Gathered>& poles) {
+std::vector<int> associate(const std::vector<Placed>& placed, double reach_m,
+                           std::vector<Gathered>& poles) {
   std::vector<int> label(placed.size(), -1);
   for (std::size_t i = 0; i < placed.size(); ++i) {
     double best = reach_m;
@@ -109,7 +111,8 @@ std::vector<int> associate(const std::vector<Placed>& placed, double reach_m, st
 void RigDetectionSettings::validate() const {
   detection.validate();
   if (!detection.landmark_radius_m || *detection.landmark_radius_m <= 0.0)
-    throw InputError("", "--radius", "a rig needs the poles' radius", "give it, e.g. --radius 0.045");
+    throw InputError("", "--radius", "a rig needs the poles' radius",
+                     "give it, e.g. --radius 0.045");
   if (!(min_intensity >= 0.0)) throw InputError("", "--min-intensity", "must be >= 0");
   if (!(associate_m > 0.0)) throw InputError("", "--associate", "must be > 0 metres");
   if (min_scans < 1) throw InputError("", "--min-scans", "must be >= 1");
@@ -151,7 +154,8 @@ RigCollected collectRigObservations(const io::Rig& rig, const RigDetectionSettin
   // Pole ids 1.. in order of first sighting, for the poles seen in enough scans.
   std::vector<int> id(gathered.size(), 0);
   std::vector<std::set<std::size_t>> seen_by(gathered.size());
-  for (std::size_t i = 0; i < placed.size(); ++i) seen_by[static_cast<std::size_t>(label[i])].insert(placed[i].sensor);
+  for (std::size_t i = 0; i < placed.size(); ++i)
+    seen_by[static_cast<std::size_t>(label[i])].insert(placed[i].sensor);
   for (std::size_t p = 0; p < gathered.size(); ++p)
     if (gathered[p].rows.size() >= s.min_scans) {
       id[p] = static_cast<int>(++out.poles);

@@ -13,9 +13,12 @@ namespace lidarcal::detectors {
 
 const char* toString(ClusterKind kind) {
   switch (kind) {
-    case ClusterKind::circle: return "circle";
-    case ClusterKind::line: return "line";
-    case ClusterKind::clutter: return "clutter";
+    case ClusterKind::circle:
+      return "circle";
+    case ClusterKind::line:
+      return "line";
+    case ClusterKind::clutter:
+      return "clutter";
   }
   return "unknown";
 }
@@ -28,20 +31,29 @@ void DetectionConfig::validate() const {
   if (landmark_radius_m && !(*landmark_radius_m > 0.0 && std::isfinite(*landmark_radius_m)))
     fail("landmark_radius_m", "must be > 0");
   if (!(radius_min_m > 0.0) || !std::isfinite(radius_min_m)) fail("radius_min_m", "must be > 0");
-  if (!(radius_max_m > radius_min_m) || !std::isfinite(radius_max_m)) fail("radius_max_m", "must be > radius_min_m");
-  if (!(known_radius_min_factor > 0.0 && known_radius_min_factor < 1.0)) fail("known_radius_min_factor", "must be in (0, 1)");
+  if (!(radius_max_m > radius_min_m) || !std::isfinite(radius_max_m))
+    fail("radius_max_m", "must be > radius_min_m");
+  if (!(known_radius_min_factor > 0.0 && known_radius_min_factor < 1.0))
+    fail("known_radius_min_factor", "must be in (0, 1)");
   if (!(known_radius_max_factor > 1.0) || !std::isfinite(known_radius_max_factor))
     fail("known_radius_max_factor", "must be > 1");
   if (min_points < 3) fail("min_points", "must be >= 3");
   if (min_points_free < 4) fail("min_points_free", "must be >= 4");
   if (!(threshold_m > 0.0) || !std::isfinite(threshold_m)) fail("threshold_m", "must be > 0");
-  if (!(threshold_per_m2 >= 0.0) || !std::isfinite(threshold_per_m2)) fail("threshold_per_m2", "must be >= 0");
-  if (!(max_rms_fraction > 0.0) || !std::isfinite(max_rms_fraction)) fail("max_rms_fraction", "must be > 0");
-  if (!(min_inlier_fraction > 0.0 && min_inlier_fraction <= 1.0)) fail("min_inlier_fraction", "must be in (0, 1]");
-  if (!(extent_factor >= 1.0) || !std::isfinite(extent_factor)) fail("extent_factor", "must be >= 1");
-  if (!(min_width_fraction >= 0.0 && min_width_fraction <= 1.0)) fail("min_width_fraction", "must be in [0, 1]");
-  if (!(line_evidence >= 0.0) || !std::isfinite(line_evidence)) fail("line_evidence", "must be >= 0");
-  if (!(line_rms_ratio >= 0.0) || !std::isfinite(line_rms_ratio)) fail("line_rms_ratio", "must be >= 0");
+  if (!(threshold_per_m2 >= 0.0) || !std::isfinite(threshold_per_m2))
+    fail("threshold_per_m2", "must be >= 0");
+  if (!(max_rms_fraction > 0.0) || !std::isfinite(max_rms_fraction))
+    fail("max_rms_fraction", "must be > 0");
+  if (!(min_inlier_fraction > 0.0 && min_inlier_fraction <= 1.0))
+    fail("min_inlier_fraction", "must be in (0, 1]");
+  if (!(extent_factor >= 1.0) || !std::isfinite(extent_factor))
+    fail("extent_factor", "must be >= 1");
+  if (!(min_width_fraction >= 0.0 && min_width_fraction <= 1.0))
+    fail("min_width_fraction", "must be in [0, 1]");
+  if (!(line_evidence >= 0.0) || !std::isfinite(line_evidence))
+    fail("line_evidence", "must be >= 0");
+  if (!(line_rms_ratio >= 0.0) || !std::isfinite(line_rms_ratio))
+    fail("line_rms_ratio", "must be >= 0");
   if (!(max_threshold_to_radius > 0.0) || !std::isfinite(max_threshold_to_radius))
     fail("max_threshold_to_radius", "must be > 0");
   if (!(max_radius_uncertainty > 0.0)) fail("max_radius_uncertainty", "must be > 0");
@@ -49,8 +61,10 @@ void DetectionConfig::validate() const {
   if (max_iterations < 1) fail("max_iterations", "must be >= 1");
   if (ransac_min_points < 3) fail("ransac_min_points", "must be >= 3");
   for (const auto& h : radius_hints)
-    if (!(h.radius_m > 0.0) || !std::isfinite(h.x_m) || !std::isfinite(h.y_m)) fail("radius_hints", "need finite positions and radius > 0");
-  if (!(hint_distance_m > 0.0) || !std::isfinite(hint_distance_m)) fail("hint_distance_m", "must be > 0");
+    if (!(h.radius_m > 0.0) || !std::isfinite(h.x_m) || !std::isfinite(h.y_m))
+      fail("radius_hints", "need finite positions and radius > 0");
+  if (!(hint_distance_m > 0.0) || !std::isfinite(hint_distance_m))
+    fail("hint_distance_m", "must be > 0");
 }
 
 void setCentre(Detection& d, const Circle2& c) {
@@ -141,7 +155,8 @@ struct Classifier {
     lc.inlier_threshold_m = t;
     lc.max_iterations = cfg.max_iterations;
     const LineFit line = fitLine(cloud, idx, lc);
-    if (line.status == FitStatus::ok && static_cast<double>(line.inliers.size()) >= 0.8 * static_cast<double>(idx.size()) &&
+    if (line.status == FitStatus::ok &&
+        static_cast<double>(line.inliers.size()) >= 0.8 * static_cast<double>(idx.size()) &&
         line.line.rms_m <= cfg.max_rms_fraction * t)
       s.kind = ClusterKind::line;
   }
@@ -160,11 +175,13 @@ struct Classifier {
     std::nth_element(ranges.begin(), mid, ranges.end());
     const double range = *mid;
     const double t = cfg.threshold(range);
-    const std::optional<double> radius_known = cfg.landmark_radius_m ? cfg.landmark_radius_m : hintedRadius(pts);
+    const std::optional<double> radius_known =
+        cfg.landmark_radius_m ? cfg.landmark_radius_m : hintedRadius(pts);
     const bool known = radius_known.has_value();
     const double r_lo = known ? *radius_known * cfg.known_radius_min_factor : cfg.radius_min_m;
     const double r_hi = known ? *radius_known * cfg.known_radius_max_factor : cfg.radius_max_m;
-    const std::size_t min_points = static_cast<std::size_t>(known ? cfg.min_points : cfg.min_points_free);
+    const std::size_t min_points =
+        static_cast<std::size_t>(known ? cfg.min_points : cfg.min_points_free);
     const double r_wide = known ? *radius_known : cfg.radius_max_m;
 
     if (idx.size() < min_points) {
@@ -175,13 +192,15 @@ struct Classifier {
       s.reason = "too far: the noise hides the shape of a landmark";
       return std::nullopt;
     }
-    if (cfg.require_free_edges && (nearerNeighbour(idx.front(), -1) || nearerNeighbour(idx.back(), +1))) {
+    if (cfg.require_free_edges &&
+        (nearerNeighbour(idx.front(), -1) || nearerNeighbour(idx.back(), +1))) {
       s.reason = "partly hidden (a neighbouring return is nearer)";
       return std::nullopt;
     }
     // Width across the line of sight: bearings are exact while range noise moves points radially.
     const Eigen::Vector2d& mid_point = pts[pts.size() / 2];
-    if (range * angularSpan(pts, std::atan2(mid_point.y(), mid_point.x())) > 2.0 * r_wide * cfg.extent_factor) {
+    if (range * angularSpan(pts, std::atan2(mid_point.y(), mid_point.x())) >
+        2.0 * r_wide * cfg.extent_factor) {
       notCircle(idx, t, s, "wider than a landmark");
       return std::nullopt;
     }
@@ -199,7 +218,8 @@ struct Classifier {
       return std::nullopt;
     }
     const std::size_t n_in = fit.inliers.size();
-    if (n_in < min_points || static_cast<double>(n_in) < cfg.min_inlier_fraction * static_cast<double>(idx.size())) {
+    if (n_in < min_points ||
+        static_cast<double>(n_in) < cfg.min_inlier_fraction * static_cast<double>(idx.size())) {
       notCircle(idx, t, s, "too few points on the circle");
       return std::nullopt;
     }
@@ -207,19 +227,25 @@ struct Classifier {
       notCircle(idx, t, s, "circle fit too poor");
       return std::nullopt;
     }
-    const double p_free = static_cast<double>(n_in) > 3.0 ? std::sqrt(double(n_in) / (double(n_in) - 3.0)) : 0.0;
-    const double radius_stddev = fit.free_radius_sensitivity * std::max(fit.free_rms_m * p_free, t / 3.0);
+    const double p_free =
+        static_cast<double>(n_in) > 3.0 ? std::sqrt(double(n_in) / (double(n_in) - 3.0)) : 0.0;
+    const double radius_stddev =
+        fit.free_radius_sensitivity * std::max(fit.free_rms_m * p_free, t / 3.0);
     if (!known && !(radius_stddev <= cfg.max_radius_uncertainty * fit.free_circle.radius_m)) {
       notCircle(idx, t, s, "radius not determined by the arc");
       return std::nullopt;
     }
-    if (known && static_cast<int>(n_in) >= cfg.free_radius_check_points && fit.free_status != FitStatus::ok) {
-      notCircle(idx, t, s, std::string("free radius disagrees with the landmark radius (") + toString(fit.free_status) + ")");
+    if (known && static_cast<int>(n_in) >= cfg.free_radius_check_points &&
+        fit.free_status != FitStatus::ok) {
+      notCircle(idx, t, s,
+                std::string("free radius disagrees with the landmark radius (") +
+                    toString(fit.free_status) + ")");
       return std::nullopt;
     }
     std::vector<Eigen::Vector2d> in;
     in.reserve(n_in);
-    for (auto i : fit.inliers) in.emplace_back(cloud[static_cast<std::size_t>(i)].x, cloud[static_cast<std::size_t>(i)].y);
+    for (auto i : fit.inliers)
+      in.emplace_back(cloud[static_cast<std::size_t>(i)].x, cloud[static_cast<std::size_t>(i)].y);
     // The arc must be as wide as a pole of this radius looks from here (chair legs and edges of
     // partly hidden objects are narrower); the end points lie up to one beam inside the edges.
     const double radius = fit.circle.radius_m;
@@ -235,7 +261,8 @@ struct Classifier {
     // line_evidence noise variances (noise ~ t / 3) and a clearly lower RMS per degree of freedom.
     // Far poles seen by 3-4 beams are noise-dominated and stay circles.
     std::sort(in.begin(), in.end(), [&](const auto& a, const auto& b) {
-      return wrapAngle(std::atan2(a.y(), a.x()) - bearing) < wrapAngle(std::atan2(b.y(), b.x()) - bearing);
+      return wrapAngle(std::atan2(a.y(), a.x()) - bearing) <
+             wrapAngle(std::atan2(b.y(), b.x()) - bearing);
     });
     const double n = static_cast<double>(n_in), p_circle = known ? 2.0 : 3.0;
     const double ss_circle = n * fit.rms_m * fit.rms_m, sigma = t / 3.0;
@@ -243,7 +270,8 @@ struct Classifier {
       if (!(n > params) || !(n > p_circle)) return false;
       const double evidence = (ss_circle - ss) / (sigma * sigma);
       return evidence > cfg.line_evidence &&
-             std::sqrt(ss / (n - params)) < cfg.line_rms_ratio * std::sqrt(ss_circle / (n - p_circle));
+             std::sqrt(ss / (n - params)) <
+                 cfg.line_rms_ratio * std::sqrt(ss_circle / (n - p_circle));
     };
     const Line2 line = totalLeastSquaresLine(in);
     if (explainsBetter(n * line.rms_m * line.rms_m, 2.0)) {
@@ -275,7 +303,8 @@ struct Classifier {
 
 }  // namespace
 
-ScanDetections detectScan(const pcl::PointCloud<pcl::PointXYZI>& cloud, const DetectionConfig& cfg) {
+ScanDetections detectScan(const pcl::PointCloud<pcl::PointXYZI>& cloud,
+                          const DetectionConfig& cfg) {
   cfg.validate();
   ScanDetections out;
   for (const auto& p : cloud)
@@ -293,17 +322,21 @@ ScanDetections detectScan(const pcl::PointCloud<pcl::PointXYZI>& cloud, const De
     out.clusters.push_back(std::move(s));
   }
   // One pole, one detection: of two circles closer than their radius keep the better supported.
-  std::stable_sort(found.begin(), found.end(),
-                   [](const Detection& a, const Detection& b) { return a.inliers.size() > b.inliers.size(); });
+  std::stable_sort(found.begin(), found.end(), [](const Detection& a, const Detection& b) {
+    return a.inliers.size() > b.inliers.size();
+  });
   for (auto& d : found) {
-    const bool duplicate = std::any_of(out.detections.begin(), out.detections.end(), [&](const Detection& k) {
-      return std::hypot(k.centre_x_m - d.centre_x_m, k.centre_y_m - d.centre_y_m) < std::max(k.radius_m, d.radius_m);
-    });
+    const bool duplicate =
+        std::any_of(out.detections.begin(), out.detections.end(), [&](const Detection& k) {
+          return std::hypot(k.centre_x_m - d.centre_x_m, k.centre_y_m - d.centre_y_m) <
+                 std::max(k.radius_m, d.radius_m);
+        });
     if (!duplicate) out.detections.push_back(std::move(d));
   }
   // Report in scan order of the first inlier.
-  std::sort(out.detections.begin(), out.detections.end(),
-            [](const Detection& a, const Detection& b) { return a.inliers.front() < b.inliers.front(); });
+  std::sort(
+      out.detections.begin(), out.detections.end(),
+      [](const Detection& a, const Detection& b) { return a.inliers.front() < b.inliers.front(); });
   return out;
 }
 

@@ -17,7 +17,8 @@ void SegmentationConfig::validate() const {
   if (max_missing_beams < 0) fail("max_missing_beams", "must be >= 0");
   if (!(breakpoint_angle_rad >= 0.0 && breakpoint_angle_rad < 1.5707963267948966))
     fail("breakpoint_angle_rad", "must be in [0, pi/2)");
-  if (!(breakpoint_noise_m >= 0.0) || !std::isfinite(breakpoint_noise_m)) fail("breakpoint_noise_m", "must be >= 0");
+  if (!(breakpoint_noise_m >= 0.0) || !std::isfinite(breakpoint_noise_m))
+    fail("breakpoint_noise_m", "must be >= 0");
   if (!(breakpoint_noise_per_m2 >= 0.0) || !std::isfinite(breakpoint_noise_per_m2))
     fail("breakpoint_noise_per_m2", "must be >= 0");
 }
@@ -28,7 +29,8 @@ bool valid(const pcl::PointXYZI& p) { return std::isfinite(p.x) && std::isfinite
 
 /// Angle between the beams of two returns, radians, in [0, pi].
 double beamAngle(const pcl::PointXYZI& a, const pcl::PointXYZI& b) {
-  return std::abs(std::atan2(double(a.x) * b.y - double(a.y) * b.x, double(a.x) * b.x + double(a.y) * b.y));
+  return std::abs(
+      std::atan2(double(a.x) * b.y - double(a.y) * b.x, double(a.x) * b.x + double(a.y) * b.y));
 }
 
 bool neighbours(const pcl::PointXYZI& a, const pcl::PointXYZI& b, const SegmentationConfig& cfg) {
@@ -37,8 +39,8 @@ bool neighbours(const pcl::PointXYZI& a, const pcl::PointXYZI& b, const Segmenta
   const double dphi = beamAngle(a, b);
   if (cfg.breakpoint_angle_rad > 0.0 && dphi < cfg.breakpoint_angle_rad) {
     const double r = std::min(ra, rb);
-    const double abd = r * std::sin(dphi) / std::sin(cfg.breakpoint_angle_rad - dphi) + cfg.breakpoint_noise_m +
-                       cfg.breakpoint_noise_per_m2 * r * r;
+    const double abd = r * std::sin(dphi) / std::sin(cfg.breakpoint_angle_rad - dphi) +
+                       cfg.breakpoint_noise_m + cfg.breakpoint_noise_per_m2 * r * r;
     gap = std::min(gap, abd);
   }
   return std::hypot(double(a.x) - b.x, double(a.y) - b.y) <= gap;
@@ -46,14 +48,16 @@ bool neighbours(const pcl::PointXYZI& a, const pcl::PointXYZI& b, const Segmenta
 
 }  // namespace
 
-std::vector<pcl::Indices> segmentScan(const pcl::PointCloud<pcl::PointXYZI>& cloud, const SegmentationConfig& cfg) {
+std::vector<pcl::Indices> segmentScan(const pcl::PointCloud<pcl::PointXYZI>& cloud,
+                                      const SegmentationConfig& cfg) {
   cfg.validate();
   std::vector<pcl::Indices> clusters;
   const auto n = static_cast<int>(cloud.size());
   int last = -1;
   for (int i = 0; i < n; ++i) {
     if (!valid(cloud[i])) continue;
-    const bool join = last >= 0 && i - last - 1 <= cfg.max_missing_beams && neighbours(cloud[last], cloud[i], cfg);
+    const bool join = last >= 0 && i - last - 1 <= cfg.max_missing_beams &&
+                      neighbours(cloud[last], cloud[i], cfg);
     if (!join) clusters.emplace_back();
     clusters.back().push_back(i);
     last = i;
@@ -61,7 +65,8 @@ std::vector<pcl::Indices> segmentScan(const pcl::PointCloud<pcl::PointXYZI>& clo
   // Close the circle: the last cluster continues into the first one.
   if (clusters.size() >= 2) {
     const int first = clusters.front().front(), end = clusters.back().back();
-    if ((n - 1 - end) + first <= cfg.max_missing_beams && neighbours(cloud[end], cloud[first], cfg)) {
+    if ((n - 1 - end) + first <= cfg.max_missing_beams &&
+        neighbours(cloud[end], cloud[first], cfg)) {
       pcl::Indices merged = std::move(clusters.back());
       merged.insert(merged.end(), clusters.front().begin(), clusters.front().end());
       clusters.pop_back();

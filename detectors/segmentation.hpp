@@ -15,9 +15,11 @@
 namespace lidarcal::detectors {
 
 struct SegmentationConfig {
-  /// Consecutive returns farther apart than gap_m + gap_per_m * range split a cluster, metres. Default 0.10.
+  /// Consecutive returns farther apart than gap_m + gap_per_m * range split a cluster, metres.
+  /// Default 0.10.
   double gap_m = 0.10;
-  /// Growth of the gap with range (beam spacing and noise both grow with it), metres per metre. Default 0.06.
+  /// Growth of the gap with range (beam spacing and noise both grow with it), metres per metre.
+  /// Default 0.06.
   double gap_per_m = 0.06;
   /// Beams without return (NaN) tolerated inside a cluster. Default 1.
   int max_missing_beams = 1;
@@ -37,7 +39,8 @@ struct SegmentationConfig {
 
 /// Clusters of a scan: point indices in beam order (a cluster closed across the end of the scan
 /// continues from the last beams to the first ones). NaN points belong to no cluster.
-std::vector<pcl::Indices> segmentScan(const pcl::PointCloud<pcl::PointXYZI>& cloud, const SegmentationConfig& config);
+std::vector<pcl::Indices> segmentScan(const pcl::PointCloud<pcl::PointXYZI>& cloud,
+                                      const SegmentationConfig& config);
 
 /// Median angular step between consecutive beams that both have a return, radians (0 when the
 /// scan has fewer than two neighbouring returns).

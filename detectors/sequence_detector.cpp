@@ -18,9 +18,12 @@ namespace lidarcal::detectors {
 
 const char* toString(RadiusSource source) {
   switch (source) {
-    case RadiusSource::known: return "known";
-    case RadiusSource::estimated: return "estimated";
-    case RadiusSource::none: return "none";
+    case RadiusSource::known:
+      return "known";
+    case RadiusSource::estimated:
+      return "estimated";
+    case RadiusSource::none:
+      return "none";
   }
   return "unknown";
 }
@@ -29,12 +32,16 @@ void SequenceDetectionConfig::validate() const {
   detection.validate();
   association.validate();
   if (!(common_radius_tolerance >= 0.0 && common_radius_tolerance < 1.0))
-    throw std::invalid_argument("SequenceDetectionConfig.common_radius_tolerance: must be in [0, 1)");
-  if (arcs_per_stop_cluster < 1) throw std::invalid_argument("SequenceDetectionConfig.arcs_per_stop_cluster: must be >= 1");
+    throw std::invalid_argument(
+        "SequenceDetectionConfig.common_radius_tolerance: must be in [0, 1)");
+  if (arcs_per_stop_cluster < 1)
+    throw std::invalid_argument("SequenceDetectionConfig.arcs_per_stop_cluster: must be >= 1");
   if (!(continuous_drift_per_m >= 0.0) || !std::isfinite(continuous_drift_per_m))
     throw std::invalid_argument("SequenceDetectionConfig.continuous_drift_per_m: must be >= 0");
-  if (arcs_per_landmark < 2) throw std::invalid_argument("SequenceDetectionConfig.arcs_per_landmark: must be >= 2");
-  if (threads < 0) throw std::invalid_argument("SequenceDetectionConfig.threads: must be >= 0 (0: automatic)");
+  if (arcs_per_landmark < 2)
+    throw std::invalid_argument("SequenceDetectionConfig.arcs_per_landmark: must be >= 2");
+  if (threads < 0)
+    throw std::invalid_argument("SequenceDetectionConfig.threads: must be >= 0 (0: automatic)");
 }
 
 namespace {
@@ -55,10 +62,12 @@ struct KeptArc {
 };
 
 /// Inlier points of a detection (sensor frame), kept while the radius is unknown.
-std::vector<Eigen::Vector2d> arcOf(const pcl::PointCloud<pcl::PointXYZI>& cloud, const Detection& d) {
+std::vector<Eigen::Vector2d> arcOf(const pcl::PointCloud<pcl::PointXYZI>& cloud,
+                                   const Detection& d) {
   std::vector<Eigen::Vector2d> arc;
   arc.reserve(d.inliers.size());
-  for (auto i : d.inliers) arc.emplace_back(cloud[static_cast<std::size_t>(i)].x, cloud[static_cast<std::size_t>(i)].y);
+  for (auto i : d.inliers)
+    arc.emplace_back(cloud[static_cast<std::size_t>(i)].x, cloud[static_cast<std::size_t>(i)].y);
   return arc;
 }
 
@@ -68,12 +77,14 @@ struct StopBlock {
   const std::vector<io::Scan>* loaded = nullptr;  // the stop's scans as loaded, in order
   std::vector<ScanDetections> scans;
   std::vector<Pose2> viewpoints;
-  std::vector<std::vector<std::vector<Eigen::Vector2d>>> arcs;  // per scan, per detection (when collected)
+  // per scan, per detection (when collected)
+  std::vector<std::vector<std::vector<Eigen::Vector2d>>> arcs;
 };
 
 /// Detection configuration of a scan at `viewpoint`: the landmarks' world radius hints moved
 /// into its sensor frame.
-DetectionConfig configFor(const DetectionConfig& base, const std::vector<RadiusHint>& world, const Pose2& viewpoint) {
+DetectionConfig configFor(const DetectionConfig& base, const std::vector<RadiusHint>& world,
+                          const Pose2& viewpoint) {
   DetectionConfig cfg = base;
   for (const auto& h : world) {
     RadiusHint local = h;
@@ -89,21 +100,23 @@ DetectionConfig configFor(const DetectionConfig& base, const std::vector<RadiusH
 using StopOf = std::function<std::size_t(std::size_t)>;
 
 void detectByStop(std::size_t scan_count, const ScanLoader& load, const StopOf& stop_of,
-                  const DetectionConfig& base, const std::vector<RadiusHint>& hints_world, bool collect_arcs,
-                  int threads, const std::function<void(StopBlock&)>& on_stop,
+                  const DetectionConfig& base, const std::vector<RadiusHint>& hints_world,
+                  bool collect_arcs, int threads, const std::function<void(StopBlock&)>& on_stop,
                   const std::function<void(std::size_t)>& on_scan) {
   // Scans are loaded and detected a window at a time on `threads` threads (a scan's detection
   // depends on the scan and the pass's hints alone), then taken stop by stop in order. Memory:
   // the current stop and one window.
   const std::size_t window = 16 * static_cast<std::size_t>(std::max(threads, 1));
-  std::vector<io::Scan> ahead;          // loaded and detected, not yet in a stop
+  std::vector<io::Scan> ahead;  // loaded and detected, not yet in a stop
   std::vector<ScanDetections> ahead_found;
-  std::size_t ahead_first = 0;          // scan index of ahead[0]
+  std::size_t ahead_first = 0;  // scan index of ahead[0]
   auto fill = [&](std::size_t first) {
     const std::size_t end = std::min(scan_count, first + window);
     for (std::size_t i = std::max<std::size_t>(first, 1); i < end; ++i)
       if (stop_of(i) < stop_of(i - 1))
-        throw std::invalid_argument("detectSequence: stop_of_scan must be non-decreasing (the scans of a stop consecutive)");
+        throw std::invalid_argument(
+            "detectSequence: stop_of_scan must be non-decreasing (the scans of a stop "
+            "consecutive)");
     ahead_first = first;
     ahead.assign(end - first, io::Scan{});
     ahead_found.assign(end - first, ScanDetections{});
@@ -135,7 +148,8 @@ void detectByStop(std::size_t scan_count, const ScanLoader& load, const StopOf& 
         bool known = false;
         for (const auto& f : found)
           for (const auto& det : f.detections)
-            known = known || std::hypot(det.centre_x_m - h.x_m, det.centre_y_m - h.y_m) < det.radius_m + h.radius_m;
+            known = known || std::hypot(det.centre_x_m - h.x_m, det.centre_y_m - h.y_m) <
+                                 det.radius_m + h.radius_m;
         if (!known) pooled.push_back(h);
       }
       if (!pooled.empty())
@@ -180,8 +194,8 @@ void fingerprint(std::uint64_t& h, std::size_t stop, const std::vector<TrackSeri
 
 /// One stop's block through the association: stage 1 into `clusters` (cluster_of per
 /// detection), then the linker; folds the tracks into `print` and returns each cluster's track.
-std::vector<TrackSerial> linkBlock(const StopBlock& block, const AssociationConfig& cfg, StopLinker& linker,
-                                   std::uint64_t& print, StopClusters& clusters,
+std::vector<TrackSerial> linkBlock(const StopBlock& block, const AssociationConfig& cfg,
+                                   StopLinker& linker, std::uint64_t& print, StopClusters& clusters,
                                    std::vector<std::vector<int>>& cluster_of) {
   std::vector<const ScanDetections*> ptrs;
   for (const auto& d : block.scans) ptrs.push_back(&d);
@@ -234,7 +248,8 @@ void keepInlierPoints(StopBlock& block) {
 
 /// A stop's detections and the track of each into the log; the log dropped when it cannot be
 /// written (then forEachScan detects again: the log only saves time).
-void logBlock(std::shared_ptr<DetectionLog>& log, const StopBlock& block, const std::vector<std::vector<int>>& cluster_of,
+void logBlock(std::shared_ptr<DetectionLog>& log, const StopBlock& block,
+              const std::vector<std::vector<int>>& cluster_of,
               const std::vector<TrackSerial>& tracks) {
   for (std::size_t i = 0; log && i < block.scans.size(); ++i) {
     std::vector<TrackSerial> of(cluster_of[i].size(), 0);
@@ -249,60 +264,69 @@ void logBlock(std::shared_ptr<DetectionLog>& log, const StopBlock& block, const 
 struct Pass {
   std::uint64_t fingerprint = 0xcbf29ce484222325ull;
   std::map<TrackSerial, EvenSample<KeptArc>> arcs;  // per track alive (when collected)
-  std::vector<ScanDetections> scans;       // when kept
-  std::vector<Pose2> viewpoints;           // when kept
-  std::shared_ptr<DetectionLog> log;       // when not kept: every scan's detections and tracks
+  std::vector<ScanDetections> scans;                // when kept
+  std::vector<Pose2> viewpoints;                    // when kept
+  std::shared_ptr<DetectionLog> log;  // when not kept: every scan's detections and tracks
   TrackIds ids;
   Association association;
 };
 
 Pass runPass(std::size_t scan_count, const ScanLoader& load, const StopOf& stop_of,
-             const DetectionConfig& base, const std::vector<RadiusHint>& hints_world, const SequenceDetectionConfig& config,
-             bool collect_arcs, bool keep_scans, const std::function<void(std::size_t)>& on_scan) {
+             const DetectionConfig& base, const std::vector<RadiusHint>& hints_world,
+             const SequenceDetectionConfig& config, bool collect_arcs, bool keep_scans,
+             const std::function<void(std::size_t)>& on_scan) {
   Pass p;
   StopLinker linker(config.association, countStops(scan_count, stop_of));
-  std::vector<std::vector<int>> cluster_of_scan;         // kept scans: cluster of each detection
-  std::vector<std::vector<TrackSerial>> track_of_scan;   // kept scans: track of each of its stop's clusters
+  std::vector<std::vector<int>> cluster_of_scan;  // kept scans: cluster of each detection
+  // kept scans: track of each of its stop's clusters
+  std::vector<std::vector<TrackSerial>> track_of_scan;
   if (!keep_scans) p.log = DetectionLog::create();
-  detectByStop(scan_count, load, stop_of, base, hints_world, collect_arcs, threadsFor(config.threads), [&](StopBlock& block) {
-    StopClusters clusters;
-    std::vector<std::vector<int>> cluster_of;
-    const std::vector<TrackSerial> tracks = linkBlock(block, config.association, linker, p.fingerprint, clusters, cluster_of);
-    if (collect_arcs) {
-      for (const auto& [from, into] : linker.merged()) {
-        auto it = p.arcs.find(from);
-        if (it == p.arcs.end()) continue;
-        auto& sample = p.arcs.try_emplace(into, config.arcs_per_landmark).first->second;
-        for (const auto& a : it->second.items()) sample.offer(a);
-        p.arcs.erase(it);
-      }
-      // Up to arcs_per_stop_cluster arcs per cluster, spread evenly over its detections, into an
-      // even sample of the track's arcs.
-      std::vector<std::vector<std::pair<std::size_t, std::size_t>>> members(clusters.size());
-      for (std::size_t i = 0; i < cluster_of.size(); ++i)
-        for (std::size_t j = 0; j < cluster_of[i].size(); ++j)
-          if (cluster_of[i][j] >= 0) members[static_cast<std::size_t>(cluster_of[i][j])].emplace_back(i, j);
-      for (std::size_t c = 0; c < clusters.size(); ++c) {
-        if (tracks[c] == 0) continue;
-        auto& sample = p.arcs.try_emplace(tracks[c], config.arcs_per_landmark).first->second;
-        const std::size_t n = members[c].size(), k = std::min(n, config.arcs_per_stop_cluster);
-        for (std::size_t t = 0; t < k; ++t) {
-          const auto [i, j] = members[c][t * n / k];
-          const Detection& d = block.scans[i].detections[j];
-          sample.offer(KeptArc{ArcObservation{std::move(block.arcs[i][j]), Circle2{d.centre_x_m, d.centre_y_m, d.radius_m}},
-                               block.viewpoints[i]});
+  detectByStop(
+      scan_count, load, stop_of, base, hints_world, collect_arcs, threadsFor(config.threads),
+      [&](StopBlock& block) {
+        StopClusters clusters;
+        std::vector<std::vector<int>> cluster_of;
+        const std::vector<TrackSerial> tracks =
+            linkBlock(block, config.association, linker, p.fingerprint, clusters, cluster_of);
+        if (collect_arcs) {
+          for (const auto& [from, into] : linker.merged()) {
+            auto it = p.arcs.find(from);
+            if (it == p.arcs.end()) continue;
+            auto& sample = p.arcs.try_emplace(into, config.arcs_per_landmark).first->second;
+            for (const auto& a : it->second.items()) sample.offer(a);
+            p.arcs.erase(it);
+          }
+          // Up to arcs_per_stop_cluster arcs per cluster, spread evenly over its detections, into
+          // an even sample of the track's arcs.
+          std::vector<std::vector<std::pair<std::size_t, std::size_t>>> members(clusters.size());
+          for (std::size_t i = 0; i < cluster_of.size(); ++i)
+            for (std::size_t j = 0; j < cluster_of[i].size(); ++j)
+              if (cluster_of[i][j] >= 0)
+                members[static_cast<std::size_t>(cluster_of[i][j])].emplace_back(i, j);
+          for (std::size_t c = 0; c < clusters.size(); ++c) {
+            if (tracks[c] == 0) continue;
+            auto& sample = p.arcs.try_emplace(tracks[c], config.arcs_per_landmark).first->second;
+            const std::size_t n = members[c].size(), k = std::min(n, config.arcs_per_stop_cluster);
+            for (std::size_t t = 0; t < k; ++t) {
+              const auto [i, j] = members[c][t * n / k];
+              const Detection& d = block.scans[i].detections[j];
+              sample.offer(KeptArc{ArcObservation{std::move(block.arcs[i][j]),
+                                                  Circle2{d.centre_x_m, d.centre_y_m, d.radius_m}},
+                                   block.viewpoints[i]});
+            }
+          }
+          for (auto t : linker.forgotten()) p.arcs.erase(t);
         }
-      }
-      for (auto t : linker.forgotten()) p.arcs.erase(t);
-    }
-    if (p.log) logBlock(p.log, block, cluster_of, tracks);
-    if (keep_scans) {
-      keepInlierPoints(block);
-      for (auto& c : cluster_of) cluster_of_scan.push_back(std::move(c)), track_of_scan.push_back(tracks);
-      for (auto& d : block.scans) p.scans.push_back(std::move(d));
-      for (const auto& v : block.viewpoints) p.viewpoints.push_back(v);
-    }
-  }, on_scan);
+        if (p.log) logBlock(p.log, block, cluster_of, tracks);
+        if (keep_scans) {
+          keepInlierPoints(block);
+          for (auto& c : cluster_of)
+            cluster_of_scan.push_back(std::move(c)), track_of_scan.push_back(tracks);
+          for (auto& d : block.scans) p.scans.push_back(std::move(d));
+          for (const auto& v : block.viewpoints) p.viewpoints.push_back(v);
+        }
+      },
+      on_scan);
   if (p.log && !p.log->finish()) p.log.reset();
   p.association = linker.finish(p.ids);
   if (keep_scans)
@@ -313,7 +337,8 @@ Pass runPass(std::size_t scan_count, const ScanLoader& load, const StopOf& stop_
 
 /// Joint radius per landmark from the arcs kept for its track; the landmark's world position
 /// from the refitted centres. Returns the hints for the second pass.
-std::vector<RadiusHint> estimateRadii(SequenceDetections& r, const Pass& pass, const DetectionConfig& cfg) {
+std::vector<RadiusHint> estimateRadii(SequenceDetections& r, const Pass& pass,
+                                      const DetectionConfig& cfg) {
   const std::size_t L = r.association.landmarks.size();
   std::vector<std::vector<const KeptArc*>> arcs(L);
   for (const auto& [serial, sample] : pass.arcs)
@@ -338,7 +363,8 @@ std::vector<RadiusHint> estimateRadii(SequenceDetections& r, const Pass& pass, c
       arcs[l][k]->viewpoint.toWorld(est.centres[k].x_m, est.centres[k].y_m, wx, wy);
       x += wx, y += wy;
     }
-    world.push_back(RadiusHint{x / static_cast<double>(arcs[l].size()), y / static_cast<double>(arcs[l].size()), est.radius_m});
+    world.push_back(RadiusHint{x / static_cast<double>(arcs[l].size()),
+                               y / static_cast<double>(arcs[l].size()), est.radius_m});
   }
   return world;
 }
@@ -357,8 +383,9 @@ void adopt(SequenceDetections& r, Pass& pass) {
 
 namespace {
 
-SequenceDetections detectSequenceImpl(std::size_t scan_count, const ScanLoader& load, const StopOf& stop_of,
-                                      const SequenceDetectionConfig& given, const ProgressCallback& on_scan) {
+SequenceDetections detectSequenceImpl(std::size_t scan_count, const ScanLoader& load,
+                                      const StopOf& stop_of, const SequenceDetectionConfig& given,
+                                      const ProgressCallback& on_scan) {
   given.validate();
   SequenceDetections r;
   SequenceDetectionConfig config = given;  // a copy: the association's reach for continuous motion
@@ -377,7 +404,8 @@ SequenceDetections detectSequenceImpl(std::size_t scan_count, const ScanLoader& 
       if (on_scan) on_scan(offset + i + 1, total);
     };
   };
-  Pass first = runPass(scan_count, load, stop_of, config.detection, {}, config, !known, config.keep_scans, progress(0));
+  Pass first = runPass(scan_count, load, stop_of, config.detection, {}, config, !known,
+                       config.keep_scans, progress(0));
   adopt(r, first);
   if (!known && !r.association.landmarks.empty()) {
     // Second pass once radii are estimated: every scan again, with the landmarks expected in it
@@ -386,8 +414,8 @@ SequenceDetections detectSequenceImpl(std::size_t scan_count, const ScanLoader& 
     const std::vector<RadiusHint> world = estimateRadii(r, first, config.detection);
     if (!world.empty()) {
       DetectionConfig cfg = config.detection;
-      // Landmarks of one make (Alhashimi et al. 2021: cylinders of one radius): when every estimate agrees
-      // with their median, clusters near no known landmark are fitted with that radius too.
+      // Landmarks of one make (Alhashimi et al. 2021: cylinders of one radius): when every estimate
+      // agrees with their median, clusters near no known landmark are fitted with that radius too.
       std::vector<double> radii;
       for (const auto& h : world) radii.push_back(h.radius_m);
       std::sort(radii.begin(), radii.end());
@@ -397,7 +425,8 @@ SequenceDetections detectSequenceImpl(std::size_t scan_count, const ScanLoader& 
         cfg.landmark_radius_m = median;
         r.common_radius_m = median;
       }
-      Pass second = runPass(scan_count, load, stop_of, cfg, world, config, false, config.keep_scans, progress(scan_count));
+      Pass second = runPass(scan_count, load, stop_of, cfg, world, config, false, config.keep_scans,
+                            progress(scan_count));
       adopt(r, second);
       r.replay.detection = cfg;
       r.replay.hints_world = world;
@@ -414,24 +443,25 @@ SequenceDetections detectSequenceImpl(std::size_t scan_count, const ScanLoader& 
   const std::size_t circles = r.association.detections;
   if (r.association.landmarks.empty()) {
     r.radius_source = RadiusSource::none;
-    r.note = circles == 0 ? "no circular object found in any scan: zero landmarks"
-                          : plural(circles, "circle") + " found, but none seen in half the scans of " +
-                                std::to_string(config.association.min_stops) +
-                                " or more stops (capped at the number of stops): zero landmarks";
+    r.note = circles == 0
+                 ? "no circular object found in any scan: zero landmarks"
+                 : plural(circles, "circle") + " found, but none seen in half the scans of " +
+                       std::to_string(config.association.min_stops) +
+                       " or more stops (capped at the number of stops): zero landmarks";
   } else {
     r.radius_source = known ? RadiusSource::known : RadiusSource::estimated;
-    r.note = plural(r.association.landmarks.size(), "landmark") + " from " + std::to_string(r.association.assigned) +
-             " of " + plural(circles, "circle detection");
+    r.note = plural(r.association.landmarks.size(), "landmark") + " from " +
+             std::to_string(r.association.assigned) + " of " + plural(circles, "circle detection");
   }
   return r;
 }
 
 /// The kept scans, loading each only when the visitor wants it.
-void visitKept(const SequenceDetections& r, std::size_t scan_count, const ScanLoader& load, bool with_scan,
-               const LoadedScanVisitor& visit, const ProgressCallback& on_scan) {
+void visitKept(const SequenceDetections& r, std::size_t scan_count, const ScanLoader& load,
+               bool with_scan, const LoadedScanVisitor& visit, const ProgressCallback& on_scan) {
   if (r.scans.size() != scan_count)
-    throw std::invalid_argument("forEachScan: the result holds " + std::to_string(r.scans.size()) + " scans, not " +
-                                std::to_string(scan_count));
+    throw std::invalid_argument("forEachScan: the result holds " + std::to_string(r.scans.size()) +
+                                " scans, not " + std::to_string(scan_count));
   const io::Scan none;
   for (std::size_t i = 0; i < scan_count; ++i) {
     visit(i, with_scan ? load(i) : none, r.scans[i], r.association.ids.at(i));
@@ -450,10 +480,12 @@ void visitLogged(const SequenceDetections& r, std::size_t scan_count, const Scan
   std::uint64_t print = 0;
   for (std::size_t i = 0; i < scan_count; ++i) {
     if (!log.next(sd, tracks, print) || sd.scan_index != i)
-      throw std::invalid_argument("forEachScan: scan " + std::to_string(i) + " is not among those detected");
+      throw std::invalid_argument("forEachScan: scan " + std::to_string(i) +
+                                  " is not among those detected");
     const io::Scan scan = load(i);
     if (!scan.cloud || pointsPrint(*scan.cloud) != print)
-      throw DataError("scans", "scan " + std::to_string(i), "changed while they were being read (other points than before)",
+      throw DataError("scans", "scan " + std::to_string(i),
+                      "changed while they were being read (other points than before)",
                       "leave the sequence untouched while lidarcal reads it, then run again");
     std::vector<int> ids(tracks.size(), 0);
     for (std::size_t j = 0; j < tracks.size(); ++j) ids[j] = r.replay.track_ids.of(tracks[j]);
@@ -464,41 +496,52 @@ void visitLogged(const SequenceDetections& r, std::size_t scan_count, const Scan
 
 /// The final pass run again stop by stop: the same stops and objects give the same tracks, and
 /// the ids found at the end of the first run.
-void visitReplayed(const SequenceDetections& r, std::size_t scan_count, const ScanLoader& load, const StopOf& stop_of,
-                   const LoadedScanVisitor& visit, const ProgressCallback& on_scan) {
+void visitReplayed(const SequenceDetections& r, std::size_t scan_count, const ScanLoader& load,
+                   const StopOf& stop_of, const LoadedScanVisitor& visit,
+                   const ProgressCallback& on_scan) {
   const auto& rp = r.replay;
   StopLinker linker(rp.association, countStops(scan_count, stop_of));
   std::uint64_t print = 0xcbf29ce484222325ull;
-  detectByStop(scan_count, load, stop_of, rp.detection, rp.hints_world, false, threadsFor(rp.threads), [&](StopBlock& block) {
-    StopClusters clusters;
-    std::vector<std::vector<int>> cluster_of;
-    const std::vector<TrackSerial> tracks = linkBlock(block, rp.association, linker, print, clusters, cluster_of);
-    for (std::size_t i = 0; i < block.scans.size(); ++i)
-      visit(block.scans[i].scan_index, block.loaded->at(i), block.scans[i], landmarkIds(cluster_of[i], tracks, rp.track_ids));
-  }, [&](std::size_t i) {
-    if (on_scan) on_scan(i + 1, scan_count);
-  });
+  detectByStop(
+      scan_count, load, stop_of, rp.detection, rp.hints_world, false, threadsFor(rp.threads),
+      [&](StopBlock& block) {
+        StopClusters clusters;
+        std::vector<std::vector<int>> cluster_of;
+        const std::vector<TrackSerial> tracks =
+            linkBlock(block, rp.association, linker, print, clusters, cluster_of);
+        for (std::size_t i = 0; i < block.scans.size(); ++i)
+          visit(block.scans[i].scan_index, block.loaded->at(i), block.scans[i],
+                landmarkIds(cluster_of[i], tracks, rp.track_ids));
+      },
+      [&](std::size_t i) {
+        if (on_scan) on_scan(i + 1, scan_count);
+      });
   if (print != rp.fingerprint)
-    throw DataError("scans", "", "changed while they were being read (other objects at some stop than before)",
+    throw DataError("scans", "",
+                    "changed while they were being read (other objects at some stop than before)",
                     "leave the sequence untouched while lidarcal reads it, then run again");
 }
 
 /// Every scan with its detections: kept, logged or replayed, whichever the result allows.
-void forEachScanImpl(const SequenceDetections& r, std::size_t scan_count, const ScanLoader& load, const StopOf& stop_of,
-                     bool with_scan, const LoadedScanVisitor& visit, const ProgressCallback& on_scan) {
-  if (!r.scans.empty() || scan_count == 0) return visitKept(r, scan_count, load, with_scan, visit, on_scan);
+void forEachScanImpl(const SequenceDetections& r, std::size_t scan_count, const ScanLoader& load,
+                     const StopOf& stop_of, bool with_scan, const LoadedScanVisitor& visit,
+                     const ProgressCallback& on_scan) {
+  if (!r.scans.empty() || scan_count == 0)
+    return visitKept(r, scan_count, load, with_scan, visit, on_scan);
   if (r.log) return visitLogged(r, scan_count, load, visit, on_scan);
   visitReplayed(r, scan_count, load, stop_of, visit, on_scan);
 }
 
 /// A visitor of detections as a visitor of loaded scans.
 LoadedScanVisitor ignoringScan(const ScanVisitor& visit) {
-  return [&visit](std::size_t i, const io::Scan&, const ScanDetections& d, const std::vector<int>& ids) { visit(i, d, ids); };
+  return [&visit](std::size_t i, const io::Scan&, const ScanDetections& d,
+                  const std::vector<int>& ids) { visit(i, d, ids); };
 }
 
 /// A vector's entries as a StopOf, after checking its length.
 StopOf stopsOf(const std::vector<std::size_t>& stop_of_scan, std::size_t scan_count) {
-  if (stop_of_scan.size() != scan_count) throw std::invalid_argument("stop_of_scan: one stop index per scan expected");
+  if (stop_of_scan.size() != scan_count)
+    throw std::invalid_argument("stop_of_scan: one stop index per scan expected");
   return [&stop_of_scan](std::size_t i) { return stop_of_scan[i]; };
 }
 
@@ -513,62 +556,75 @@ StopOf stopsOf(const io::Sequence& sequence) {
 }  // namespace
 
 SequenceDetections detectSequence(std::size_t scan_count, const ScanLoader& load,
-                                  const std::vector<std::size_t>& stop_of_scan, const SequenceDetectionConfig& config,
+                                  const std::vector<std::size_t>& stop_of_scan,
+                                  const SequenceDetectionConfig& config,
                                   const ProgressCallback& on_scan) {
   return detectSequenceImpl(scan_count, load, stopsOf(stop_of_scan, scan_count), config, on_scan);
 }
 
-SequenceDetections detectSequence(const io::Sequence& sequence, const SequenceDetectionConfig& config,
+SequenceDetections detectSequence(const io::Sequence& sequence,
+                                  const SequenceDetectionConfig& config,
                                   const ProgressCallback& on_scan) {
   return detectSequence(sequence, loaderOf(sequence), config, on_scan);
 }
 
 SequenceDetections detectSequence(const io::Sequence& sequence, const ScanLoader& load,
-                                  const SequenceDetectionConfig& config, const ProgressCallback& on_scan) {
+                                  const SequenceDetectionConfig& config,
+                                  const ProgressCallback& on_scan) {
   SequenceDetectionConfig cfg = config;
-  if (!cfg.detection.landmark_radius_m && cfg.use_sequence_radius && sequence.meta.landmark_radius_m)
+  if (!cfg.detection.landmark_radius_m && cfg.use_sequence_radius &&
+      sequence.meta.landmark_radius_m)
     cfg.detection.landmark_radius_m = sequence.meta.landmark_radius_m;
   return detectSequenceImpl(sequence.scans.size(), load, stopsOf(sequence), cfg, on_scan);
 }
 
 void forEachScan(const SequenceDetections& r, std::size_t scan_count, const ScanLoader& load,
-                 const std::vector<std::size_t>& stop_of_scan, const ScanVisitor& visit, const ProgressCallback& on_scan) {
-  forEachScanImpl(r, scan_count, load, stopsOf(stop_of_scan, scan_count), false, ignoringScan(visit), on_scan);
+                 const std::vector<std::size_t>& stop_of_scan, const ScanVisitor& visit,
+                 const ProgressCallback& on_scan) {
+  forEachScanImpl(r, scan_count, load, stopsOf(stop_of_scan, scan_count), false,
+                  ignoringScan(visit), on_scan);
 }
 
-void forEachScan(const SequenceDetections& result, const io::Sequence& sequence, const ScanVisitor& visit,
-                 const ProgressCallback& on_scan) {
+void forEachScan(const SequenceDetections& result, const io::Sequence& sequence,
+                 const ScanVisitor& visit, const ProgressCallback& on_scan) {
   forEachScan(result, sequence, loaderOf(sequence), visit, on_scan);
 }
 
-void forEachScan(const SequenceDetections& result, const io::Sequence& sequence, const ScanLoader& load,
-                 const ScanVisitor& visit, const ProgressCallback& on_scan) {
-  forEachScanImpl(result, sequence.scans.size(), load, stopsOf(sequence), false, ignoringScan(visit), on_scan);
+void forEachScan(const SequenceDetections& result, const io::Sequence& sequence,
+                 const ScanLoader& load, const ScanVisitor& visit,
+                 const ProgressCallback& on_scan) {
+  forEachScanImpl(result, sequence.scans.size(), load, stopsOf(sequence), false,
+                  ignoringScan(visit), on_scan);
 }
 
-void forEachLoadedScan(const SequenceDetections& result, std::size_t scan_count, const ScanLoader& load,
-                       const std::vector<std::size_t>& stop_of_scan, const LoadedScanVisitor& visit,
-                       const ProgressCallback& on_scan) {
-  forEachScanImpl(result, scan_count, load, stopsOf(stop_of_scan, scan_count), true, visit, on_scan);
+void forEachLoadedScan(const SequenceDetections& result, std::size_t scan_count,
+                       const ScanLoader& load, const std::vector<std::size_t>& stop_of_scan,
+                       const LoadedScanVisitor& visit, const ProgressCallback& on_scan) {
+  forEachScanImpl(result, scan_count, load, stopsOf(stop_of_scan, scan_count), true, visit,
+                  on_scan);
 }
 
-void forEachLoadedScan(const SequenceDetections& result, const io::Sequence& sequence, const LoadedScanVisitor& visit,
-                       const ProgressCallback& on_scan) {
-  forEachScanImpl(result, sequence.scans.size(), loaderOf(sequence), stopsOf(sequence), true, visit, on_scan);
+void forEachLoadedScan(const SequenceDetections& result, const io::Sequence& sequence,
+                       const LoadedScanVisitor& visit, const ProgressCallback& on_scan) {
+  forEachScanImpl(result, sequence.scans.size(), loaderOf(sequence), stopsOf(sequence), true, visit,
+                  on_scan);
 }
 
-std::vector<std::uint32_t> scanLabels(const ScanDetections& detections, const std::vector<int>& ids, std::size_t points) {
+std::vector<std::uint32_t> scanLabels(const ScanDetections& detections, const std::vector<int>& ids,
+                                      std::size_t points) {
   std::vector<std::uint32_t> labels(points, 0u);
   const auto& dets = detections.detections;
   for (std::size_t j = 0; j < dets.size(); ++j) {
     const int id = ids.at(j);
     if (id <= 0) continue;
-    for (auto i : dets[j].inliers) labels.at(static_cast<std::size_t>(i)) = static_cast<std::uint32_t>(id);
+    for (auto i : dets[j].inliers)
+      labels.at(static_cast<std::size_t>(i)) = static_cast<std::uint32_t>(id);
   }
   return labels;
 }
 
-std::vector<std::uint32_t> scanLabels(const SequenceDetections& result, std::size_t scan, std::size_t points) {
+std::vector<std::uint32_t> scanLabels(const SequenceDetections& result, std::size_t scan,
+                                      std::size_t points) {
   return scanLabels(result.scans.at(scan), result.association.ids.at(scan), points);
 }
 

@@ -80,23 +80,28 @@ struct SequenceDetections {
   /// left empty: the per-cluster diagnostics of every scan would make memory grow with the
   /// sequence (detectScan has them).
   std::vector<ScanDetections> scans;
-  std::vector<Pose2> viewpoints;      ///< commanded pose of each scan (empty unless keep_scans)
-  Association association;            ///< landmarks, and the id of every detection (ids: only with keep_scans)
+  std::vector<Pose2> viewpoints;  ///< commanded pose of each scan (empty unless keep_scans)
+  /// landmarks, and the id of every detection (ids: only with keep_scans)
+  Association association;
   RadiusSource radius_source = RadiusSource::none;  ///< how radii were obtained
   std::optional<double> known_radius_m;  ///< the known radius, when radius_source is known
-  std::optional<double> common_radius_m;  ///< common radius used in the second pass, when the estimates agreed
-  std::size_t radius_failures = 0;    ///< landmarks whose joint radius could not be estimated (free fits kept)
-  bool continuous = false;            ///< the sequence was taken as continuous motion (continuous_drift_per_m used)
-  std::string note;                   ///< plain-language summary (e.g. why no landmark was found)
+  /// common radius used in the second pass, when the estimates agreed
+  std::optional<double> common_radius_m;
+  /// landmarks whose joint radius could not be estimated (free fits kept)
+  std::size_t radius_failures = 0;
+  /// the sequence was taken as continuous motion (continuous_drift_per_m used)
+  bool continuous = false;
+  std::string note;  ///< plain-language summary (e.g. why no landmark was found)
 
   /// How to run the final pass again (forEachScan without kept scans).
   struct Replay {
-    DetectionConfig detection;              ///< the final pass's configuration (radius hints excepted)
-    std::vector<RadiusHint> hints_world;    ///< estimated radii at their world positions (empty with a known radius)
+    DetectionConfig detection;  ///< the final pass's configuration (radius hints excepted)
+    /// estimated radii at their world positions (empty with a known radius)
+    std::vector<RadiusHint> hints_world;
     AssociationConfig association;
-    TrackIds track_ids;                     ///< landmark id of each track of the final pass
-    std::uint64_t fingerprint = 0;          ///< of the final pass's tracks at every stop (changed scans)
-    int threads = 0;                        ///< SequenceDetectionConfig::threads
+    TrackIds track_ids;             ///< landmark id of each track of the final pass
+    std::uint64_t fingerprint = 0;  ///< of the final pass's tracks at every stop (changed scans)
+    int threads = 0;                ///< SequenceDetectionConfig::threads
   } replay;
   /// Without kept scans: the final pass's detections and tracks in a temporary file, which
   /// forEachScan reads instead of detecting again; null when no temporary file could be made.
@@ -113,22 +118,27 @@ using ScanLoader = std::function<io::Scan(std::size_t)>;
 using ProgressCallback = std::function<void(std::size_t done, std::size_t total)>;
 
 /// Runs detection and association over `scan_count` scans obtained from `load`; stop_of_scan[i]
-/// is the stop of scan i, non-decreasing (the scans of a stop are consecutive). With the radius unknown: free-radius detection, association, joint
-/// radius per landmark, then a second detection pass with those radii and a fresh association.
+/// is the stop of scan i, non-decreasing (the scans of a stop are consecutive). With the radius
+/// unknown: free-radius detection, association, joint radius per landmark, then a second detection
+/// pass with those radii and a fresh association.
 SequenceDetections detectSequence(std::size_t scan_count, const ScanLoader& load,
-                                  const std::vector<std::size_t>& stop_of_scan, const SequenceDetectionConfig& config,
+                                  const std::vector<std::size_t>& stop_of_scan,
+                                  const SequenceDetectionConfig& config,
                                   const ProgressCallback& on_scan = {});
 
 /// The same over a sequence directory (io::readScan per scan, radius from sequence.json).
-SequenceDetections detectSequence(const io::Sequence& sequence, const SequenceDetectionConfig& config,
+SequenceDetections detectSequence(const io::Sequence& sequence,
+                                  const SequenceDetectionConfig& config,
                                   const ProgressCallback& on_scan = {});
 
 /// The same with the scans of `sequence` obtained from `load` (e.g. corrected on the fly).
 SequenceDetections detectSequence(const io::Sequence& sequence, const ScanLoader& load,
-                                  const SequenceDetectionConfig& config, const ProgressCallback& on_scan = {});
+                                  const SequenceDetectionConfig& config,
+                                  const ProgressCallback& on_scan = {});
 
 /// Receives scan `scan`'s detections of the final pass and their landmark ids (0: none).
-using ScanVisitor = std::function<void(std::size_t scan, const ScanDetections& detections, const std::vector<int>& ids)>;
+using ScanVisitor = std::function<void(std::size_t scan, const ScanDetections& detections,
+                                       const std::vector<int>& ids)>;
 
 /// Visits every scan in order with its detections and ids: from the result when the scans were
 /// kept, else from the result's log (each scan loaded to check that its points are those
@@ -140,32 +150,36 @@ void forEachScan(const SequenceDetections& result, std::size_t scan_count, const
                  const ProgressCallback& on_scan = {});
 
 /// The same over a sequence directory.
-void forEachScan(const SequenceDetections& result, const io::Sequence& sequence, const ScanVisitor& visit,
-                 const ProgressCallback& on_scan = {});
-
-/// The same with the scans obtained from `load` (the loader given to detectSequence).
-void forEachScan(const SequenceDetections& result, const io::Sequence& sequence, const detectors::ScanLoader& load,
+void forEachScan(const SequenceDetections& result, const io::Sequence& sequence,
                  const ScanVisitor& visit, const ProgressCallback& on_scan = {});
 
+/// The same with the scans obtained from `load` (the loader given to detectSequence).
+void forEachScan(const SequenceDetections& result, const io::Sequence& sequence,
+                 const detectors::ScanLoader& load, const ScanVisitor& visit,
+                 const ProgressCallback& on_scan = {});
+
 /// Receives scan `scan` as loaded, its detections of the final pass and their landmark ids.
-using LoadedScanVisitor = std::function<void(std::size_t scan, const io::Scan& loaded, const ScanDetections& detections,
-                                             const std::vector<int>& ids)>;
+using LoadedScanVisitor =
+    std::function<void(std::size_t scan, const io::Scan& loaded, const ScanDetections& detections,
+                       const std::vector<int>& ids)>;
 
 /// As forEachScan, with each scan loaded once and given to the visitor (a stop's scans when
 /// detecting again; otherwise one at a time). Throws DataError when a scan's points are not
 /// those detected.
-void forEachLoadedScan(const SequenceDetections& result, std::size_t scan_count, const ScanLoader& load,
-                       const std::vector<std::size_t>& stop_of_scan, const LoadedScanVisitor& visit,
-                       const ProgressCallback& on_scan = {});
+void forEachLoadedScan(const SequenceDetections& result, std::size_t scan_count,
+                       const ScanLoader& load, const std::vector<std::size_t>& stop_of_scan,
+                       const LoadedScanVisitor& visit, const ProgressCallback& on_scan = {});
 
 /// The same over a sequence directory.
-void forEachLoadedScan(const SequenceDetections& result, const io::Sequence& sequence, const LoadedScanVisitor& visit,
-                       const ProgressCallback& on_scan = {});
+void forEachLoadedScan(const SequenceDetections& result, const io::Sequence& sequence,
+                       const LoadedScanVisitor& visit, const ProgressCallback& on_scan = {});
 
 /// Labels of one scan: 0 background, the landmark id on the inliers of each associated detection.
-std::vector<std::uint32_t> scanLabels(const ScanDetections& detections, const std::vector<int>& ids, std::size_t points);
+std::vector<std::uint32_t> scanLabels(const ScanDetections& detections, const std::vector<int>& ids,
+                                      std::size_t points);
 
 /// The same for scan `scan` of a result whose scans were kept.
-std::vector<std::uint32_t> scanLabels(const SequenceDetections& result, std::size_t scan, std::size_t points);
+std::vector<std::uint32_t> scanLabels(const SequenceDetections& result, std::size_t scan,
+                                      std::size_t points);
 
 }  // namespace lidarcal::detectors

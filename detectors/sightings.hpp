@@ -33,7 +33,8 @@ LandmarkObservations toLandmarkObservations(const io::Sequence& seq, const Seque
 
 /// The same with the scans obtained from `load` (the loader given to detectSequence).
 LandmarkObservations toLandmarkObservations(const io::Sequence& seq, const SequenceDetections& det,
-                                            const ScanLoader& load, const SightingOptions& options = {});
+                                            const ScanLoader& load,
+                                            const SightingOptions& options = {});
 
 /// A point (sensor frame) as its beam's reading: the point's direction is its beam's direction
 /// (the sensor measures range along it). An intensity of 0 (what a scan without one reads as)

@@ -39,7 +39,8 @@ std::vector<Candidate> candidatesOf(const pcl::PointCloud<pcl::PointXYZI>& cloud
     // Width across the line of sight (bearings are exact): no wider than the largest pole.
     const double b0 = std::atan2(c.points.front().y(), c.points.front().x());
     const double b1 = std::atan2(c.points.back().y(), c.points.back().x());
-    if (c.range_m * std::abs(wrapAngle(b1 - b0)) > 2.0 * cfg.radius_max_m * cfg.extent_factor) continue;
+    if (c.range_m * std::abs(wrapAngle(b1 - b0)) > 2.0 * cfg.radius_max_m * cfg.extent_factor)
+      continue;
     if (cfg.threshold(c.range_m) > cfg.max_threshold_to_radius * cfg.radius_max_m) continue;
     out.push_back(std::move(c));
   }
@@ -48,8 +49,8 @@ std::vector<Candidate> candidatesOf(const pcl::PointCloud<pcl::PointXYZI>& cloud
 
 }  // namespace
 
-std::vector<RadiusHint> pooledStopRadii(const std::vector<const pcl::PointCloud<pcl::PointXYZI>*>& scans,
-                                        const DetectionConfig& cfg) {
+std::vector<RadiusHint> pooledStopRadii(
+    const std::vector<const pcl::PointCloud<pcl::PointXYZI>*>& scans, const DetectionConfig& cfg) {
   std::vector<RadiusHint> out;
   if (scans.size() < 2) return out;
   std::vector<Candidate> cands;
@@ -77,7 +78,8 @@ std::vector<RadiusHint> pooledStopRadii(const std::vector<const pcl::PointCloud<
     std::vector<std::size_t> seen;
     for (auto k : g) seen.push_back(cands[k].scan);
     std::sort(seen.begin(), seen.end());
-    if (std::adjacent_find(seen.begin(), seen.end()) != seen.end()) continue;  // two in one scan: not one pole
+    // two in one scan: not one pole
+    if (std::adjacent_find(seen.begin(), seen.end()) != seen.end()) continue;
     if (seen.size() < 2 || 2 * seen.size() < scans.size()) continue;
     pcl::PointCloud<pcl::PointXYZ> pooled;
     double range = 0.0;
@@ -99,13 +101,16 @@ std::vector<RadiusHint> pooledStopRadii(const std::vector<const pcl::PointCloud<
     const CircleFit fit = fitCircle(pooled, all, cc);
     if (fit.status != FitStatus::ok || fit.free_status != FitStatus::ok) continue;
     const double n = static_cast<double>(fit.inliers.size());
-    if (n < cfg.min_inlier_fraction * static_cast<double>(pooled.size()) || fit.rms_m > cfg.max_rms_fraction * t) continue;
+    if (n < cfg.min_inlier_fraction * static_cast<double>(pooled.size()) ||
+        fit.rms_m > cfg.max_rms_fraction * t)
+      continue;
     const double p_free = n > 3.0 ? std::sqrt(n / (n - 3.0)) : 0.0;
     const double stddev = fit.free_radius_sensitivity * std::max(fit.free_rms_m * p_free, t / 3.0);
     if (!(stddev <= cfg.max_radius_uncertainty * fit.free_circle.radius_m)) continue;
     // A flat face (wall, box) is no pole: a straight line must not fit the pooled points as well.
     std::vector<Eigen::Vector2d> in;
-    for (auto i : fit.inliers) in.emplace_back(pooled[static_cast<std::size_t>(i)].x, pooled[static_cast<std::size_t>(i)].y);
+    for (auto i : fit.inliers)
+      in.emplace_back(pooled[static_cast<std::size_t>(i)].x, pooled[static_cast<std::size_t>(i)].y);
     if (totalLeastSquaresLine(in).rms_m <= fit.free_rms_m) continue;
     out.push_back(RadiusHint{fit.free_circle.x_m, fit.free_circle.y_m, fit.free_circle.radius_m});
   }

@@ -1,13 +1,13 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
-// Radius of thin, far poles from all the scans of one stop (docs/results/detection.md). A cheap lidar sees
-// a 55 mm pole at 3-4.5 m with 3-9 beams: one arc cannot determine a radius (scan_detector.hpp
-// refuses it: "radius not determined by the arc", or too few points for a free fit), but the
-// scans of one stop see the same arc from the same pose, so their points pooled fit one circle
-// (Alhashimi et al. 2021 section 3.1: the radius "not difficult to obtain" from the arcs; the free fit of
-// circle_fit.hpp on the pooled points). The result is a radius hint in the stop's sensor frame;
-// detectSequence's first pass fits those clusters with it fixed, and the joint radius over
-// every stop (landmark_radius.hpp) follows as for larger poles.
+// Radius of thin, far poles from all the scans of one stop (docs/results/detection.md). A cheap
+// lidar sees a 55 mm pole at 3-4.5 m with 3-9 beams: one arc cannot determine a radius
+// (scan_detector.hpp refuses it: "radius not determined by the arc", or too few points for a free
+// fit), but the scans of one stop see the same arc from the same pose, so their points pooled fit
+// one circle (Alhashimi et al. 2021 section 3.1: the radius "not difficult to obtain" from the
+// arcs; the free fit of circle_fit.hpp on the pooled points). The result is a radius hint in the
+// stop's sensor frame; detectSequence's first pass fits those clusters with it fixed, and the joint
+// radius over every stop (landmark_radius.hpp) follows as for larger poles.
 
 #include <vector>
 
@@ -26,7 +26,8 @@ namespace lidarcal::detectors {
 /// scan) is pooled when it was seen in at least half the stop's scans and at least 2 of them,
 /// each cluster with at least 3 returns and no wider than a pole of radius_max_m. Stops of one
 /// scan give nothing (no pooling; continuous motion).
-std::vector<RadiusHint> pooledStopRadii(const std::vector<const pcl::PointCloud<pcl::PointXYZI>*>& scans,
-                                        const DetectionConfig& config);
+std::vector<RadiusHint> pooledStopRadii(
+    const std::vector<const pcl::PointCloud<pcl::PointXYZI>*>& scans,
+    const DetectionConfig& config);
 
 }  // namespace lidarcal::detectors

@@ -16,7 +16,8 @@ std::vector<WallSighting> wallsAtStops(const io::Sequence& seq, const std::set<s
   for (std::size_t k : stops)
     for (std::size_t i : seq.stops[k].scans) {
       const io::Scan scan = load(i);
-      for (WallSighting& ws : wallSightings(*scan.cloud, k, i, config)) walls.push_back(std::move(ws));
+      for (WallSighting& ws : wallSightings(*scan.cloud, k, i, config))
+        walls.push_back(std::move(ws));
     }
   labelWallSurfaces(walls);
   return walls;

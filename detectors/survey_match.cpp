@@ -6,7 +6,8 @@
 
 namespace lidarcal::detectors {
 
-std::vector<SurveyMatch> matchSurvey(const std::vector<ReferenceLandmark>& surveyed, const std::vector<Landmark>& detected) {
+std::vector<SurveyMatch> matchSurvey(const std::vector<ReferenceLandmark>& surveyed,
+                                     const std::vector<Landmark>& detected) {
   struct Pair {
     double d;
     std::size_t s, l;
@@ -14,10 +15,12 @@ std::vector<SurveyMatch> matchSurvey(const std::vector<ReferenceLandmark>& surve
   std::vector<Pair> pairs;
   for (std::size_t s = 0; s < surveyed.size(); ++s)
     for (std::size_t l = 0; l < detected.size(); ++l) {
-      const double d = std::hypot(surveyed[s].x_m - detected[l].x_m, surveyed[s].y_m - detected[l].y_m);
+      const double d =
+          std::hypot(surveyed[s].x_m - detected[l].x_m, surveyed[s].y_m - detected[l].y_m);
       if (d <= kSurveyGateM) pairs.push_back({d, s, l});
     }
-  std::stable_sort(pairs.begin(), pairs.end(), [](const Pair& a, const Pair& b) { return a.d < b.d; });
+  std::stable_sort(pairs.begin(), pairs.end(),
+                   [](const Pair& a, const Pair& b) { return a.d < b.d; });
   std::vector<SurveyMatch> out(surveyed.size());
   std::vector<bool> taken(detected.size(), false);
   for (std::size_t s = 0; s < surveyed.size(); ++s) out[s].entry = s;

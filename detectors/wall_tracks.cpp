@@ -23,8 +23,10 @@ struct Track {
 };
 
 /// Labels the sightings `members` (all of one stop), ids from 1.
-void labelStop(std::vector<WallSighting>& walls, std::vector<std::size_t> members, const WallTrackConfig& c) {
-  // Longer pieces first (their normals are the steadier); ties broken by content, not by input order.
+void labelStop(std::vector<WallSighting>& walls, std::vector<std::size_t> members,
+               const WallTrackConfig& c) {
+  // Longer pieces first (their normals are the steadier); ties broken by content, not by input
+  // order.
   std::sort(members.begin(), members.end(), [&](std::size_t a, std::size_t b) {
     const WallSighting &x = walls[a], &y = walls[b];
     if (x.beams.size() != y.beams.size()) return x.beams.size() > y.beams.size();
@@ -60,9 +62,11 @@ void labelStop(std::vector<WallSighting>& walls, std::vector<std::size_t> member
     for (std::size_t a = 0; a < tracks.size() && !merged; ++a)
       for (std::size_t b = a + 1; b < tracks.size() && !merged; ++b) {
         Track &x = tracks[a], &y = tracks[b];
-        if (y.n == 0 || x.n == 0 || std::abs(wrapAngle(x.normal() - y.normal())) > c.max_angle_rad ||
+        if (y.n == 0 || x.n == 0 ||
+            std::abs(wrapAngle(x.normal() - y.normal())) > c.max_angle_rad ||
             std::abs(x.meanDistance() - y.meanDistance()) > c.max_distance_m ||
-            std::any_of(y.scans.begin(), y.scans.end(), [&](std::size_t s) { return x.scans.count(s) > 0; }))
+            std::any_of(y.scans.begin(), y.scans.end(),
+                        [&](std::size_t s) { return x.scans.count(s) > 0; }))
           continue;
         x.sin += y.sin, x.cos += y.cos, x.distance += y.distance, x.n += y.n;
         x.scans.insert(y.scans.begin(), y.scans.end());
@@ -87,8 +91,9 @@ void labelStop(std::vector<WallSighting>& walls, std::vector<std::size_t> member
 
 }  // namespace
 
-std::vector<WallSighting> wallSightings(const pcl::PointCloud<pcl::PointXYZI>& cloud, std::size_t stop,
-                                        std::size_t scan, const WallConfig& config) {
+std::vector<WallSighting> wallSightings(const pcl::PointCloud<pcl::PointXYZI>& cloud,
+                                        std::size_t stop, std::size_t scan,
+                                        const WallConfig& config) {
   std::vector<WallSighting> out;
   for (const Wall& w : findWalls(cloud, config)) {
     WallSighting ws;

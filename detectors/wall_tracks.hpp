@@ -31,8 +31,9 @@ struct WallTrackConfig {
 
 /// The walls of one scan (findWalls) as sightings of scan `scan` at stop `stop`, each with the
 /// raw readings of its inliers (beam angle from the point, beam index = point index).
-std::vector<WallSighting> wallSightings(const pcl::PointCloud<pcl::PointXYZI>& cloud, std::size_t stop,
-                                        std::size_t scan, const WallConfig& config);
+std::vector<WallSighting> wallSightings(const pcl::PointCloud<pcl::PointXYZI>& cloud,
+                                        std::size_t stop, std::size_t scan,
+                                        const WallConfig& config);
 
 /// Sets WallSighting::wall: within each stop, every sighting joins the surface (of those it
 /// agrees with, and not yet seen in its scan) whose mean normal and distance are nearest, or

@@ -23,7 +23,8 @@ struct Piece {
   double threshold_m = 0.0;
 };
 
-/// The wall of a line fitted to `inliers` (NaN-free), or false when the line passes through the sensor.
+/// The wall of a line fitted to `inliers` (NaN-free), or false when the line passes through the
+/// sensor.
 bool wallFromLine(const Line2& line, pcl::Indices inliers, Wall& w) {
   const Eigen::Vector2d& p = line.point;
   const Eigen::Vector2d& u = line.direction;
@@ -49,15 +50,17 @@ pcl::Indices finitePoints(const pcl::PointCloud<pcl::PointXYZI>& cloud, const pc
 }
 
 /// Whether a line explains `piece` (enough inliers over enough length); fills `out` if so.
-bool lineExplains(const pcl::PointCloud<pcl::PointXYZI>& cloud, const pcl::Indices& piece, const WallConfig& c, Piece& out) {
+bool lineExplains(const pcl::PointCloud<pcl::PointXYZI>& cloud, const pcl::Indices& piece,
+                  const WallConfig& c, Piece& out) {
   double mean_range = 0.0;
   for (const auto i : piece) mean_range += xy(cloud, i).norm();
   mean_range /= static_cast<double>(piece.size());
   LineFitConfig line = c.line;
-  line.inlier_threshold_m = c.line.inlier_threshold_m + c.threshold_per_m2 * mean_range * mean_range;
+  line.inlier_threshold_m =
+      c.line.inlier_threshold_m + c.threshold_per_m2 * mean_range * mean_range;
   const LineFit fit = fitLine(cloud, piece, line);
-  if (fit.status != FitStatus::ok ||
-      static_cast<double>(fit.inliers.size()) < c.min_inlier_fraction * static_cast<double>(piece.size()))
+  if (fit.status != FitStatus::ok || static_cast<double>(fit.inliers.size()) <
+                                         c.min_inlier_fraction * static_cast<double>(piece.size()))
     return false;
   double lo = 0.0, hi = 0.0;  // extent of the inliers along the line
   for (const auto i : fit.inliers) {
@@ -72,8 +75,8 @@ bool lineExplains(const pcl::PointCloud<pcl::PointXYZI>& cloud, const pcl::Indic
 
 /// Split: a piece a line explains is a wall; any other is cut at the point farthest from the
 /// chord between its ends (a corner, the edge of an object) and both parts are tried again.
-void splitIntoWalls(const pcl::PointCloud<pcl::PointXYZI>& cloud, const pcl::Indices& piece, const WallConfig& c,
-                    std::vector<Piece>& out) {
+void splitIntoWalls(const pcl::PointCloud<pcl::PointXYZI>& cloud, const pcl::Indices& piece,
+                    const WallConfig& c, std::vector<Piece>& out) {
   if (static_cast<int>(piece.size()) < c.min_points) return;
   Piece found;
   if (lineExplains(cloud, piece, c, found)) {
@@ -81,7 +84,8 @@ void splitIntoWalls(const pcl::PointCloud<pcl::PointXYZI>& cloud, const pcl::Ind
     return;
   }
   const Eigen::Vector2d a = xy(cloud, piece.front()), b = xy(cloud, piece.back());
-  const Eigen::Vector2d along = (b - a).norm() > 0.0 ? Eigen::Vector2d((b - a).normalized()) : Eigen::Vector2d::UnitX();
+  const Eigen::Vector2d along =
+      (b - a).norm() > 0.0 ? Eigen::Vector2d((b - a).normalized()) : Eigen::Vector2d::UnitX();
   std::size_t cut = 0;
   double farthest = -1.0;
   for (std::size_t k = 1; k + 1 < piece.size(); ++k) {
@@ -104,22 +108,26 @@ void dropSharedPoints(const pcl::PointCloud<pcl::PointXYZI>& cloud, std::vector<
   std::sort(all.begin(), all.end());
   std::vector<pcl::index_t> shared;
   for (std::size_t k = 1; k < all.size(); ++k)
-    if (all[k] == all[k - 1] && (shared.empty() || shared.back() != all[k])) shared.push_back(all[k]);
+    if (all[k] == all[k - 1] && (shared.empty() || shared.back() != all[k]))
+      shared.push_back(all[k]);
   if (shared.empty()) return;
   for (Piece& p : pieces) {
     pcl::Indices kept;
     std::vector<Eigen::Vector2d> pts;
     for (const auto i : p.wall.inliers)
-      if (!std::binary_search(shared.begin(), shared.end(), i)) kept.push_back(i), pts.push_back(xy(cloud, i));
+      if (!std::binary_search(shared.begin(), shared.end(), i))
+        kept.push_back(i), pts.push_back(xy(cloud, i));
     if (kept.size() == p.wall.inliers.size() || kept.size() < 2) continue;
     Wall refitted;
-    if (wallFromLine(totalLeastSquaresLine(pts), std::move(kept), refitted)) p.wall = std::move(refitted);
+    if (wallFromLine(totalLeastSquaresLine(pts), std::move(kept), refitted))
+      p.wall = std::move(refitted);
   }
 }
 
 /// Merge: walls on one line (normals within merge_angle_rad, distances within the inlier
 /// threshold) become one, its line refitted through all their inliers.
-void mergeCollinear(const pcl::PointCloud<pcl::PointXYZI>& cloud, const WallConfig& c, std::vector<Piece>& pieces) {
+void mergeCollinear(const pcl::PointCloud<pcl::PointXYZI>& cloud, const WallConfig& c,
+                    std::vector<Piece>& pieces) {
   for (bool merged = true; merged;) {
     merged = false;
     for (std::size_t i = 0; i < pieces.size() && !merged; ++i)
@@ -159,7 +167,8 @@ void WallConfig::validate() const {
     throw std::invalid_argument("WallConfig.merge_angle_rad: must be in [0, 0.5)");
 }
 
-std::vector<Wall> findWalls(const pcl::PointCloud<pcl::PointXYZI>& cloud, const WallConfig& config) {
+std::vector<Wall> findWalls(const pcl::PointCloud<pcl::PointXYZI>& cloud,
+                            const WallConfig& config) {
   config.validate();
   std::vector<Piece> pieces;
   for (const pcl::Indices& cluster : segmentScan(cloud, config.segmentation))
@@ -169,7 +178,8 @@ std::vector<Wall> findWalls(const pcl::PointCloud<pcl::PointXYZI>& cloud, const 
   std::vector<Wall> walls;
   walls.reserve(pieces.size());
   for (auto& p : pieces)
-    if (static_cast<int>(p.wall.inliers.size()) >= config.min_points) walls.push_back(std::move(p.wall));
+    if (static_cast<int>(p.wall.inliers.size()) >= config.min_points)
+      walls.push_back(std::move(p.wall));
   std::sort(walls.begin(), walls.end(), [](const Wall& a, const Wall& b) {
     return a.normal_rad != b.normal_rad ? a.normal_rad < b.normal_rad : a.distance_m < b.distance_m;
   });
@@ -177,30 +187,35 @@ std::vector<Wall> findWalls(const pcl::PointCloud<pcl::PointXYZI>& cloud, const 
 }
 
 void RunWallConfig::validate() const {
-  if (!(max_deviation_m > 0.0)) throw std::invalid_argument("RunWallConfig.max_deviation_m: must be > 0");
+  if (!(max_deviation_m > 0.0))
+    throw std::invalid_argument("RunWallConfig.max_deviation_m: must be > 0");
   if (min_points < 2) throw std::invalid_argument("RunWallConfig.min_points: must be >= 2");
 }
 
-std::vector<Wall> findWallsInRun(const std::vector<Eigen::Vector2d>& run, const RunWallConfig& config) {
+std::vector<Wall> findWallsInRun(const std::vector<Eigen::Vector2d>& run,
+                                 const RunWallConfig& config) {
   config.validate();
   std::vector<Wall> walls;
   const auto min_points = static_cast<std::size_t>(config.min_points);
   const bool trim = config.drop_run_ends && run.size() >= 3;
   const std::size_t first = trim ? 1 : 0, last = trim ? run.size() - 1 : run.size();
   if (last - first < min_points) return walls;
-  std::vector<std::pair<std::size_t, std::size_t>> stack{{first, last}};  // pieces [lo, hi) still to check
+  // pieces [lo, hi) still to check
+  std::vector<std::pair<std::size_t, std::size_t>> stack{{first, last}};
   while (!stack.empty()) {
     const auto [lo, hi] = stack.back();
     stack.pop_back();
     if (hi - lo < min_points) continue;
-    const std::vector<Eigen::Vector2d> pts(run.begin() + static_cast<long>(lo), run.begin() + static_cast<long>(hi));
+    const std::vector<Eigen::Vector2d> pts(run.begin() + static_cast<long>(lo),
+                                           run.begin() + static_cast<long>(hi));
     const Line2 line = totalLeastSquaresLine(pts);
     const NormalForm nf = normalForm(line);
     double worst = 0.0;
     std::size_t at = lo;
     for (std::size_t k = lo; k < hi; ++k) {
       const Eigen::Vector2d& q = pts[k - lo];
-      const double dev = std::abs(q.x() * std::cos(nf.normal_rad) + q.y() * std::sin(nf.normal_rad) - nf.distance_m);
+      const double dev = std::abs(q.x() * std::cos(nf.normal_rad) +
+                                  q.y() * std::sin(nf.normal_rad) - nf.distance_m);
       if (dev > worst) {
         worst = dev;
         at = k;

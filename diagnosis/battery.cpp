@@ -19,37 +19,115 @@ struct StatisticRow {
 
 const std::vector<StatisticRow>& statisticTable() {
   static const std::vector<StatisticRow> table = {
-      {DiagnoseMode::sequence, {"residual_vs_range", "range", "score of a range trend of the residuals beyond the bias polynomial (order n + 1), ~N(0,1)", true}},
-      {DiagnoseMode::sequence, {"spread_vs_range", "range", "score of the noise growing with log f(d) beyond the squared law (clipped squared residuals), ~N(0,1)", true}},
-      {DiagnoseMode::sequence, {"residual_vs_incidence", "incidence angle", "score of the residuals against 1 - cos(incidence), ~N(0,1)", true}},
-      {DiagnoseMode::sequence, {"spread_vs_incidence", "incidence angle", "score of the noise growing with -ln cos(incidence), ~N(0,1)", true}},
-      {DiagnoseMode::sequence, {"spread_vs_intensity", "intensity", "score of the noise growing with ln(I_ref / I), the darkness of the return (0 without intensities), ~N(0,1)", true}},
-      {DiagnoseMode::sequence, {"edge_excess", "position within the object", "positive minus negative |z| > 3 residuals on the outermost beams, beyond the inner beams' rate, per sqrt(edge beams)", false}},
-      {DiagnoseMode::sequence, {"edge_vs_centre_spread", "position within the object", "mean clipped z^2 on the outermost beams minus on the inner beams", true}},
-      {DiagnoseMode::sequence, {"landmark_identity", "landmark", "cube root of chi^2 / dof of the per-landmark mean residuals (overall mean removed)", false}},
-      {DiagnoseMode::sequence, {"stop_identity", "stop index", "cube root of chi^2 / dof of the per-stop mean residuals (overall mean removed)", false}},
-      {DiagnoseMode::sequence, {"heading_within_stop", "stop index", "cube root of chi^2 / dof of per-stop rotation scores (a heading shared by all beams of a stop)", false}},
-      {DiagnoseMode::sequence, {"common_rotation", "bearing", "score of one rotation shared by every beam (zero-angle offset), ~N(0,1)", true}},
-      {DiagnoseMode::sequence, {"residual_vs_time", "scan index", "score of a linear trend of the residuals over the scans, ~N(0,1)", true}},
-      {DiagnoseMode::sequence, {"residual_vs_bearing", "bearing", "cube root of chi^2 / 2 of the residuals against cos and sin of the beam angle", false}},
-      {DiagnoseMode::sequence, {"path_rotation", "stop index", "rotation of the refined stop positions against the commanded path about its centroid, over the position prior, ~N(0,1)", true}},
-      {DiagnoseMode::sequence, {"path_scale", "stop index", "stretch of the refined stop positions against the commanded path about its centroid, over the position prior, ~N(0,1)", true}},
-      {DiagnoseMode::sequence, {"bearing_within_stop_correlation", "stop index", "ln F of the sighting bearing residuals between stops against within stops", false}},
-      {DiagnoseMode::sequence, {"tail_weight", "residual", "excess kurtosis of the standardised residuals", false}},
-      {DiagnoseMode::sequence, {"quantisation_1mm", "reading", "resultant length of the readings' phase on a 1 mm grid (1: on the grid)", false}},
-      {DiagnoseMode::static_scene, {"spread_vs_range", "range", "score of the noise growing with ln(mean reading) beyond the squared law, ~N(0,1)", true}},
-      {DiagnoseMode::static_scene, {"spread_vs_incidence", "incidence angle", "score of the noise growing with -ln cos(incidence), ~N(0,1)", true}},
-      {DiagnoseMode::static_scene, {"spread_vs_intensity", "intensity", "score of the noise growing with ln(I_median / I), the darkness of the return, away from discontinuities (0 without intensities that vary), ~N(0,1)", true}},
-      {DiagnoseMode::static_scene, {"spread_vs_bearing", "bearing", "cube root of chi^2 / 2 of the noise against cos and sin of the beam angle", false}},
-      {DiagnoseMode::static_scene, {"residual_vs_time", "scan index", "score of a trend shared by all beams over the scans, ~N(0,1)", true}},
-      {DiagnoseMode::static_scene, {"lag1_correlation", "scan index", "pooled lag-1 correlation of successive readings of a beam, times sqrt(pairs)", true}},
-      {DiagnoseMode::static_scene, {"edge_excess", "position within the object", "|z| > 3 readings at depth discontinuities beyond the rate elsewhere, per sqrt(edge readings)", false}},
-      {DiagnoseMode::static_scene, {"edge_vs_centre_spread", "position within the object", "mean clipped z^2 at depth discontinuities minus elsewhere", true}},
-      {DiagnoseMode::static_scene, {"tail_weight", "residual", "excess kurtosis of the standardised residuals (away from discontinuities)", false}},
-      {DiagnoseMode::static_scene, {"quantisation", "reading", "resultant length of the readings' phase on the detected grid (1: on the grid)", false}},
-      {DiagnoseMode::static_scene, {"wall_curvature", "incidence angle", "incidence bias b (1 - cos phi) fitted on the wall lines, over its standard error", true}},
-      {DiagnoseMode::static_scene, {"wall_roughness_mm", "wall", "scatter of the beam means about the wall model, mm", false}},
-      {DiagnoseMode::static_scene, {"range_offset_mm", "wall", "range offset alpha_0 the walls' straightness implies, mm", true}},
+      {DiagnoseMode::sequence,
+       {"residual_vs_range", "range",
+        "score of a range trend of the residuals beyond the bias polynomial (order n + 1), ~N(0,1)",
+        true}},
+      {DiagnoseMode::sequence,
+       {"spread_vs_range", "range",
+        "score of the noise growing with log f(d) beyond the squared law (clipped squared "
+        "residuals), ~N(0,1)",
+        true}},
+      {DiagnoseMode::sequence,
+       {"residual_vs_incidence", "incidence angle",
+        "score of the residuals against 1 - cos(incidence), ~N(0,1)", true}},
+      {DiagnoseMode::sequence,
+       {"spread_vs_incidence", "incidence angle",
+        "score of the noise growing with -ln cos(incidence), ~N(0,1)", true}},
+      {DiagnoseMode::sequence,
+       {"spread_vs_intensity", "intensity",
+        "score of the noise growing with ln(I_ref / I), the darkness of the return (0 without "
+        "intensities), ~N(0,1)",
+        true}},
+      {DiagnoseMode::sequence,
+       {"edge_excess", "position within the object",
+        "positive minus negative |z| > 3 residuals on the outermost beams, beyond the inner beams' "
+        "rate, per sqrt(edge beams)",
+        false}},
+      {DiagnoseMode::sequence,
+       {"edge_vs_centre_spread", "position within the object",
+        "mean clipped z^2 on the outermost beams minus on the inner beams", true}},
+      {DiagnoseMode::sequence,
+       {"landmark_identity", "landmark",
+        "cube root of chi^2 / dof of the per-landmark mean residuals (overall mean removed)",
+        false}},
+      {DiagnoseMode::sequence,
+       {"stop_identity", "stop index",
+        "cube root of chi^2 / dof of the per-stop mean residuals (overall mean removed)", false}},
+      {DiagnoseMode::sequence,
+       {"heading_within_stop", "stop index",
+        "cube root of chi^2 / dof of per-stop rotation scores (a heading shared by all beams of a "
+        "stop)",
+        false}},
+      {DiagnoseMode::sequence,
+       {"common_rotation", "bearing",
+        "score of one rotation shared by every beam (zero-angle offset), ~N(0,1)", true}},
+      {DiagnoseMode::sequence,
+       {"residual_vs_time", "scan index",
+        "score of a linear trend of the residuals over the scans, ~N(0,1)", true}},
+      {DiagnoseMode::sequence,
+       {"residual_vs_bearing", "bearing",
+        "cube root of chi^2 / 2 of the residuals against cos and sin of the beam angle", false}},
+      {DiagnoseMode::sequence,
+       {"path_rotation", "stop index",
+        "rotation of the refined stop positions against the commanded path about its centroid, "
+        "over the position prior, ~N(0,1)",
+        true}},
+      {DiagnoseMode::sequence,
+       {"path_scale", "stop index",
+        "stretch of the refined stop positions against the commanded path about its centroid, over "
+        "the position prior, ~N(0,1)",
+        true}},
+      {DiagnoseMode::sequence,
+       {"bearing_within_stop_correlation", "stop index",
+        "ln F of the sighting bearing residuals between stops against within stops", false}},
+      {DiagnoseMode::sequence,
+       {"tail_weight", "residual", "excess kurtosis of the standardised residuals", false}},
+      {DiagnoseMode::sequence,
+       {"quantisation_1mm", "reading",
+        "resultant length of the readings' phase on a 1 mm grid (1: on the grid)", false}},
+      {DiagnoseMode::static_scene,
+       {"spread_vs_range", "range",
+        "score of the noise growing with ln(mean reading) beyond the squared law, ~N(0,1)", true}},
+      {DiagnoseMode::static_scene,
+       {"spread_vs_incidence", "incidence angle",
+        "score of the noise growing with -ln cos(incidence), ~N(0,1)", true}},
+      {DiagnoseMode::static_scene,
+       {"spread_vs_intensity", "intensity",
+        "score of the noise growing with ln(I_median / I), the darkness of the return, away from "
+        "discontinuities (0 without intensities that vary), ~N(0,1)",
+        true}},
+      {DiagnoseMode::static_scene,
+       {"spread_vs_bearing", "bearing",
+        "cube root of chi^2 / 2 of the noise against cos and sin of the beam angle", false}},
+      {DiagnoseMode::static_scene,
+       {"residual_vs_time", "scan index",
+        "score of a trend shared by all beams over the scans, ~N(0,1)", true}},
+      {DiagnoseMode::static_scene,
+       {"lag1_correlation", "scan index",
+        "pooled lag-1 correlation of successive readings of a beam, times sqrt(pairs)", true}},
+      {DiagnoseMode::static_scene,
+       {"edge_excess", "position within the object",
+        "|z| > 3 readings at depth discontinuities beyond the rate elsewhere, per sqrt(edge "
+        "readings)",
+        false}},
+      {DiagnoseMode::static_scene,
+       {"edge_vs_centre_spread", "position within the object",
+        "mean clipped z^2 at depth discontinuities minus elsewhere", true}},
+      {DiagnoseMode::static_scene,
+       {"tail_weight", "residual",
+        "excess kurtosis of the standardised residuals (away from discontinuities)", false}},
+      {DiagnoseMode::static_scene,
+       {"quantisation", "reading",
+        "resultant length of the readings' phase on the detected grid (1: on the grid)", false}},
+      {DiagnoseMode::static_scene,
+       {"wall_curvature", "incidence angle",
+        "incidence bias b (1 - cos phi) fitted on the wall lines, over its standard error", true}},
+      {DiagnoseMode::static_scene,
+       {"wall_roughness_mm", "wall", "scatter of the beam means about the wall model, mm", false}},
+      {DiagnoseMode::static_scene,
+       {"range_offset_mm", "wall", "range offset alpha_0 the walls' straightness implies, mm",
+        true}},
   };
   return table;
 }
@@ -70,12 +148,13 @@ const std::vector<StatisticInfo>& statisticInfo(DiagnoseMode mode) {
 }
 
 const char* statisticOf(Effect e, DiagnoseMode mode) {
-  const char* s = mode == DiagnoseMode::sequence ? info(e).sequence_statistic : info(e).static_statistic;
+  const char* s =
+      mode == DiagnoseMode::sequence ? info(e).sequence_statistic : info(e).static_statistic;
   return s ? s : "";
 }
 
-Discrepancy makeDiscrepancy(std::string name, std::string variable, std::string description, double value,
-                            const std::vector<double>& replicas, bool two_sided) {
+Discrepancy makeDiscrepancy(std::string name, std::string variable, std::string description,
+                            double value, const std::vector<double>& replicas, bool two_sided) {
   Discrepancy d;
   d.name = std::move(name);
   d.variable = std::move(variable);
@@ -95,7 +174,8 @@ Discrepancy makeDiscrepancy(std::string name, std::string variable, std::string 
   return d;
 }
 
-std::vector<Discrepancy> makeBattery(const std::vector<StatisticInfo>& infos, const std::map<std::string, double>& measured,
+std::vector<Discrepancy> makeBattery(const std::vector<StatisticInfo>& infos,
+                                     const std::map<std::string, double>& measured,
                                      const std::map<std::string, std::vector<double>>& replicas) {
   std::vector<Discrepancy> out;
   for (const auto& s : infos) {
@@ -103,7 +183,8 @@ std::vector<Discrepancy> makeBattery(const std::vector<StatisticInfo>& infos, co
     if (it == measured.end()) continue;
     const auto rep = replicas.find(s.name);
     out.push_back(makeDiscrepancy(s.name, s.variable, s.description, it->second,
-                                  rep != replicas.end() ? rep->second : std::vector<double>{}, s.two_sided));
+                                  rep != replicas.end() ? rep->second : std::vector<double>{},
+                                  s.two_sided));
   }
   return out;
 }

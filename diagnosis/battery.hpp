@@ -27,12 +27,13 @@ const std::vector<StatisticInfo>& statisticInfo(DiagnoseMode mode);
 const char* statisticOf(Effect e, DiagnoseMode mode);
 
 /// Fills a Discrepancy from its measured value and its replica values.
-Discrepancy makeDiscrepancy(std::string name, std::string variable, std::string description, double value,
-                            const std::vector<double>& replicas, bool two_sided);
+Discrepancy makeDiscrepancy(std::string name, std::string variable, std::string description,
+                            double value, const std::vector<double>& replicas, bool two_sided);
 
 /// The battery: each listed statistic's measured value against its values on the replicas
 /// (statistics missing from `measured` are left out).
-std::vector<Discrepancy> makeBattery(const std::vector<StatisticInfo>& infos, const std::map<std::string, double>& measured,
+std::vector<Discrepancy> makeBattery(const std::vector<StatisticInfo>& infos,
+                                     const std::map<std::string, double>& measured,
                                      const std::map<std::string, std::vector<double>>& replicas);
 
 /// The battery's score statistic aimed at the candidate (r.statistic): its p-value and effect size.

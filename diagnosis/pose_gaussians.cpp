@@ -13,22 +13,27 @@
 
 namespace lidarcal::diagnosis {
 
-DistanceMoments poleDistanceMoments(double along, double perp, const Eigen::Matrix2d& v, double r, double root_extra) {
+DistanceMoments poleDistanceMoments(double along, double perp, const Eigen::Matrix2d& v, double r,
+                                    double root_extra) {
   // The root's extra share: root_extra r cos(phi), cos(phi) = q / r clamped as the model clamps it.
-  const auto extra = [&](double q) { return root_extra == 0.0 ? 0.0 : root_extra * r * clampCosIncidence(q / r); };
+  const auto extra = [&](double q) {
+    return root_extra == 0.0 ? 0.0 : root_extra * r * clampCosIncidence(q / r);
+  };
   const double sp = std::sqrt(std::max(v(1, 1), 0.0));
   if (std::abs(perp) < r && r - std::abs(perp) > 6.0 * sp) {
     const double q = std::sqrt(r * r - perp * perp);
     const double k = q > 0.05 * r ? 1.0 + root_extra : 1.0;  // the clamped cosine is flat in perp
     const Eigen::Vector2d g(1.0, k * perp / q);  // d(along - q - extra) / d(along, perp)
-    return {along - q - extra(q) + 0.5 * k * v(1, 1) * r * r / (q * q * q), g.dot(v * g)};  // the root's curvature in the mean
+    // the root's curvature in the mean
+    return {along - q - extra(q) + 0.5 * k * v(1, 1) * r * r / (q * q * q), g.dot(v * g)};
   }
   if (!(sp > 0.0)) {
     const double q = std::sqrt(std::max(r * r - perp * perp, 0.0));
     return {along - q - extra(q), 0.0};
   }
   double lo = std::max(-r, perp - 8.0 * sp), hi = std::min(r, perp + 8.0 * sp);
-  if (!(lo < hi)) {  // far past the tangent: the normal's tail inside, falling at (|perp| - r) / sp^2
+  // far past the tangent: the normal's tail inside, falling at (|perp| - r) / sp^2
+  if (!(lo < hi)) {
     const double width = std::min(2.0 * r, 10.0 * sp * sp / (std::abs(perp) - r));
     lo = perp > 0.0 ? r - width : -r;
     hi = perp > 0.0 ? r : -r + width;
@@ -36,7 +41,8 @@ DistanceMoments poleDistanceMoments(double along, double perp, const Eigen::Matr
   const double beta = v(0, 1) / v(1, 1), along_var = std::max(v(0, 0) - beta * v(0, 1), 0.0);
   // perp = r sin(t): the root r cos(t) is smooth in t where it is steep in perp (the tangent).
   constexpr std::size_t kPoints = 64;
-  const double t0 = std::asin(std::clamp(lo / r, -1.0, 1.0)), t1 = std::asin(std::clamp(hi / r, -1.0, 1.0));
+  const double t0 = std::asin(std::clamp(lo / r, -1.0, 1.0)),
+               t1 = std::asin(std::clamp(hi / r, -1.0, 1.0));
   std::array<double, kPoints> logw{}, d{};
   for (std::size_t k = 0; k < kPoints; ++k) {
     const double t = t0 + (t1 - t0) * (static_cast<double>(k) + 0.5) / static_cast<double>(kPoints);
@@ -58,19 +64,22 @@ DistanceMoments poleDistanceMoments(double along, double perp, const Eigen::Matr
 
 double leaveOneOutLogDensity(const Eigen::Vector3d& r, const Eigen::Matrix3d& s) {
   const Eigen::LDLT<Eigen::Matrix3d> ldlt(Eigen::Matrix3d::Identity() - s);
-  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 1e-9)) return std::numeric_limits<double>::quiet_NaN();
+  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 1e-9))
+    return std::numeric_limits<double>::quiet_NaN();
   constexpr double kTwoPi = 6.283185307179586;
-  return -0.5 * r.dot(ldlt.solve(r)) + 0.5 * ldlt.vectorD().array().log().sum() - 1.5 * std::log(kTwoPi);
+  return -0.5 * r.dot(ldlt.solve(r)) + 0.5 * ldlt.vectorD().array().log().sum() -
+         1.5 * std::log(kTwoPi);
 }
 
-std::vector<Eigen::Matrix3d> blockTridiagonalInverseDiagonal(const std::vector<Eigen::Matrix3d>& diagonal,
-                                                             const std::vector<Eigen::Matrix3d>& upper,
-                                                             std::vector<Eigen::Matrix3d>* upper_out) {
+std::vector<Eigen::Matrix3d> blockTridiagonalInverseDiagonal(
+    const std::vector<Eigen::Matrix3d>& diagonal, const std::vector<Eigen::Matrix3d>& upper,
+    std::vector<Eigen::Matrix3d>* upper_out) {
   using Mat3 = Eigen::Matrix3d;
   const std::size_t n = diagonal.size();
   if (n == 0) return {};
   if (upper.size() + 1 < n)
-    throw std::invalid_argument("blockTridiagonalInverseDiagonal: one upper block per pair of neighbours");
+    throw std::invalid_argument(
+        "blockTridiagonalInverseDiagonal: one upper block per pair of neighbours");
   // D_0 = A_0, D_k+1 = A_k+1 - B_k^T D_k^-1 B_k;  C_n-1 = D_n-1^-1,
   // C_k = D_k^-1 + D_k^-1 B_k C_k+1 B_k^T D_k^-1, and C_k,k+1 = -D_k^-1 B_k C_k+1.
   std::vector<Mat3> dinv(n), cov(n);
@@ -80,7 +89,8 @@ std::vector<Eigen::Matrix3d> blockTridiagonalInverseDiagonal(const std::vector<E
     if (k + 1 < n) d = diagonal[k + 1] - upper[k].transpose() * dinv[k] * upper[k];
   }
   cov[n - 1] = dinv[n - 1];
-  for (std::size_t k = n - 1; k-- > 0;) cov[k] = dinv[k] + dinv[k] * upper[k] * cov[k + 1] * upper[k].transpose() * dinv[k];
+  for (std::size_t k = n - 1; k-- > 0;)
+    cov[k] = dinv[k] + dinv[k] * upper[k] * cov[k + 1] * upper[k].transpose() * dinv[k];
   if (upper_out) {
     upper_out->assign(n > 0 ? n - 1 : 0, Mat3::Zero());
     for (std::size_t k = 0; k + 1 < n; ++k) (*upper_out)[k] = -dinv[k] * upper[k] * cov[k + 1];
@@ -88,7 +98,8 @@ std::vector<Eigen::Matrix3d> blockTridiagonalInverseDiagonal(const std::vector<E
   return cov;
 }
 
-double blockTridiagonalLogDet(const std::vector<Eigen::Matrix3d>& diagonal, const std::vector<Eigen::Matrix3d>& upper) {
+double blockTridiagonalLogDet(const std::vector<Eigen::Matrix3d>& diagonal,
+                              const std::vector<Eigen::Matrix3d>& upper) {
   const std::size_t n = diagonal.size();
   if (upper.size() + 1 < n && n > 0)
     throw std::invalid_argument("blockTridiagonalLogDet: one upper block per pair of neighbours");

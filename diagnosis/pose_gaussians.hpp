@@ -16,13 +16,14 @@ namespace lidarcal::diagnosis {
 /// Kalman smoother: O(n) for n blocks instead of the dense inverse's O(n^3). The marginal
 /// covariances of a chain of poses from its information matrix. `upper_out`, when given, gets
 /// the inverse's blocks at (k, k + 1) too: the covariance of neighbouring poses.
-std::vector<Eigen::Matrix3d> blockTridiagonalInverseDiagonal(const std::vector<Eigen::Matrix3d>& diagonal,
-                                                             const std::vector<Eigen::Matrix3d>& upper,
-                                                             std::vector<Eigen::Matrix3d>* upper_out = nullptr);
+std::vector<Eigen::Matrix3d> blockTridiagonalInverseDiagonal(
+    const std::vector<Eigen::Matrix3d>& diagonal, const std::vector<Eigen::Matrix3d>& upper,
+    std::vector<Eigen::Matrix3d>* upper_out = nullptr);
 
 /// ln det of the same symmetric positive-definite block-tridiagonal matrix: the sum of ln det of
 /// the forward pass's Schur complements. NaN when one is not positive definite.
-double blockTridiagonalLogDet(const std::vector<Eigen::Matrix3d>& diagonal, const std::vector<Eigen::Matrix3d>& upper);
+double blockTridiagonalLogDet(const std::vector<Eigen::Matrix3d>& diagonal,
+                              const std::vector<Eigen::Matrix3d>& upper);
 
 /// Mean and variance of the distance along a beam to a circular pole of radius r, which is
 /// along - sqrt(r^2 - perp^2) (`along`: to the ray's closest approach to the centre, `perp`: the
@@ -40,7 +41,8 @@ double blockTridiagonalLogDet(const std::vector<Eigen::Matrix3d>& diagonal, cons
 struct DistanceMoments {
   double mean = 0.0, var = 0.0;
 };
-DistanceMoments poleDistanceMoments(double along, double perp, const Eigen::Matrix2d& v, double r, double root_extra = 0.0);
+DistanceMoments poleDistanceMoments(double along, double perp, const Eigen::Matrix2d& v, double r,
+                                    double root_extra = 0.0);
 
 /// Leave-one-out log-density of one block of a (locally) linear Gaussian model, from the fit on
 /// every block: r the block's residual at that fit and S = J C J^T its leverage (J its rows,

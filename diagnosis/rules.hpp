@@ -35,12 +35,15 @@ inline constexpr double kMostReadings = 0.5;
 
 /// One rule of the verdict (docs/DIAGNOSIS.md, "The rules").
 struct VerdictRule {
-  const char* id;         ///< the name the code cites where it applies the rule
-  const char* data;       ///< "both", "sequence", "drive" (a sequence under the motion prior) or "static"
-  const char* stage;      ///< "candidate" (its p-value, step 3), "name" (nameCause) or "refine" (after it)
+  const char* id;  ///< the name the code cites where it applies the rule
+  /// "both", "sequence", "drive" (a sequence under the motion prior) or "static"
+  const char* data;
+  /// "candidate" (its p-value, step 3), "name" (nameCause) or "refine" (after it)
+  const char* stage;
   const char* condition;  ///< what it checks and what it does, in words
-  const char* threshold;  ///< its number (the constant of rules:: or calibration/ it uses), or "alpha" (--alpha, 0.01)
-  const char* reason;     ///< one line of why
+  /// its number (the constant of rules:: or calibration/ it uses), or "alpha" (--alpha, 0.01)
+  const char* threshold;
+  const char* reason;  ///< one line of why
 };
 
 /// Every rule, in the order the diagnosis applies them.

@@ -3,8 +3,9 @@
 // Diagnosis of a scan sequence with landmarks (diagnosis/diagnosis.hpp), on what calibration
 // consumes: the beams of every landmark sighting.
 //   baseline   calibrate() (joint refinement, order by its rule) with every heading held at the
-//              commanded one and the squared noise law of Alhashimi et al. 2016; then one refinement on every
-//              beam of every sighting (the fixed reading set all models are compared on);
+//              commanded one and the squared noise law of Alhashimi et al. 2016; then one
+//              refinement on every beam of every sighting (the fixed reading set all models are
+//              compared on);
 //   replicas   simulateLandmarkLevel() from the fitted poses, centres, radius, bias and noise,
 //              keeping the (scan, landmark) pairs of the data, refitted from the baseline;
 //   candidates refineJoint() with one effect term on (JointEffects), from the baseline;

@@ -21,7 +21,8 @@ namespace lidarcal::diagnosis {
 inline constexpr const char* kHeldOutStage = "held-out fits";
 
 /// Tells config.progress (when set) that `stage` is at `done` of `total`.
-inline void reportProgress(const DiagnoseConfig& config, const char* stage, std::size_t done, std::size_t total) {
+inline void reportProgress(const DiagnoseConfig& config, const char* stage, std::size_t done,
+                           std::size_t total) {
   if (config.progress) config.progress(stage, done, total);
 }
 
@@ -31,11 +32,13 @@ inline void reportProgress(const DiagnoseConfig& config, const char* stage, std:
 ///   void replica(int b, std::map<std::string, std::vector<double>>&, DiagnosisResult&)   2.
 ///   const std::vector<StatisticInfo>& statisticInfo()
 ///   void heldOut(HeldOut&); const char* noHeldOut()   3.
-///   void beforeCandidates(DiagnosisResult&); CandidateResult candidate(std::size_t, const HeldOut&, const DiagnosisResult&);
-///   void afterCandidates(DiagnosisResult&)
+///   void beforeCandidates(DiagnosisResult&); CandidateResult candidate(std::size_t, const
+///   HeldOut&, const DiagnosisResult&); void afterCandidates(DiagnosisResult&)
 ///   std::vector<std::pair<Effect, Effect>> nestedEffects()   4. (see nameCause)
-///   void refineCause(DiagnosisResult&)   4. after nameCause: the mode's rules of diagnosis/rules.hpp
-///   Closeness closenessBaseline(const DiagnosisResult&); void extend(std::size_t, DiagnosisResult&)   5.
+///   void refineCause(DiagnosisResult&)   4. after nameCause: the mode's rules of
+///   diagnosis/rules.hpp
+///   Closeness closenessBaseline(const DiagnosisResult&); void extend(std::size_t,
+///   DiagnosisResult&)   5.
 /// Steps run in this order; what a mode draws at random is seeded per replica.
 template <class Mode>
 void runDiagnosis(Mode& mode, const DiagnoseConfig& config, const std::vector<Effect>& candidates,

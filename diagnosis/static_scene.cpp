@@ -6,7 +6,8 @@
 
 namespace lidarcal::diagnosis {
 
-DiagnosisResult diagnoseStatic(const StaticScans& data, const DiagnoseConfig& config, std::vector<WallLine>* walls_out) {
+DiagnosisResult diagnoseStatic(const StaticScans& data, const DiagnoseConfig& config,
+                               std::vector<WallLine>* walls_out) {
   config.validate();
   DiagnosisResult out;
   out.mode = DiagnoseMode::static_scene;

@@ -11,7 +11,8 @@
 
 namespace lidarcal::diagnosis {
 
-double replicaPValue(double value, const std::vector<double>& replicas, bool two_sided, double* effect_size) {
+double replicaPValue(double value, const std::vector<double>& replicas, bool two_sided,
+                     double* effect_size) {
   std::vector<double> r;
   for (double v : replicas)
     if (std::isfinite(v)) r.push_back(v);
@@ -23,7 +24,10 @@ double replicaPValue(double value, const std::vector<double>& replicas, bool two
   for (double v : r) var += (v - mean) * (v - mean);
   const double sd = std::sqrt(var / (n - 1.0));
   if (!(sd > 0.0)) {
-    if (effect_size) *effect_size = value == mean ? 0.0 : std::copysign(std::numeric_limits<double>::infinity(), value - mean);
+    if (effect_size)
+      *effect_size = value == mean
+                         ? 0.0
+                         : std::copysign(std::numeric_limits<double>::infinity(), value - mean);
     return value == mean || (!two_sided && value < mean) ? 1.0 : 0.0;
   }
   if (effect_size) *effect_size = (value - mean) / sd;
@@ -141,7 +145,8 @@ double clippedSquareVariance(double c) {
   // E[min(Z^4, c^4)] = 3 P(|Z| < c) - 2 phi(c) (c^3 + 3 c) + c^4 P(|Z| > c).
   const boost::math::normal n;
   const double tail = 2.0 * boost::math::cdf(boost::math::complement(n, c));
-  const double m4 = 3.0 * (1.0 - tail) - 2.0 * boost::math::pdf(n, c) * (c * c * c + 3.0 * c) + c * c * c * c * tail;
+  const double m4 = 3.0 * (1.0 - tail) - 2.0 * boost::math::pdf(n, c) * (c * c * c + 3.0 * c) +
+                    c * c * c * c * tail;
   const double m2 = clippedSquareMean(c);
   return m4 - m2 * m2;
 }

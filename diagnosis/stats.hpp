@@ -16,7 +16,8 @@ namespace lidarcal::diagnosis {
 /// p-values far below 1/B (needed after a multiple-testing correction) are available from a few
 /// dozen replicas. Statistics are built to be close to normal under the baseline (signed scores,
 /// cube roots of chi-square sums). `effect_size` receives (value - m) / s.
-double replicaPValue(double value, const std::vector<double>& replicas, bool two_sided, double* effect_size = nullptr);
+double replicaPValue(double value, const std::vector<double>& replicas, bool two_sided,
+                     double* effect_size = nullptr);
 
 /// One-sided p-value of a held-out gain with standard error se: P(N(0, 1) >= gain / se); 1 for
 /// a gain that is not positive, NaN without a standard error.

@@ -52,8 +52,9 @@ struct BeamSums {
 };
 
 /// E-step: per-beam sums and the log-likelihood.
-double expectation(const TailModel& m, const std::vector<TailBeam>& beams, const std::vector<TailReading>& readings,
-                   double fw, double fd, std::vector<BeamSums>& sums) {
+double expectation(const TailModel& m, const std::vector<TailBeam>& beams,
+                   const std::vector<TailReading>& readings, double fw, double fd,
+                   std::vector<BeamSums>& sums) {
   sums.assign(beams.size(), BeamSums{});
   double ll = 0.0;
   for (const auto& rd : readings) {
@@ -74,15 +75,17 @@ double expectation(const TailModel& m, const std::vector<TailBeam>& beams, const
 }
 
 /// Expected complete log-likelihood of the scales (up to constants), sigma_e at its ML value:
-/// core ln s_b = ln sigma_e + kappa l_b + gamma c_b + delta k_b, broad ln s_b + ln k + (rho - kappa)(l_b - l_ref)
-/// (l: ln range, c: ln 1/cos phi, k: darkness ln(I_med / I)).
-double profileScales(const TailModel& m, const std::vector<TailBeam>& beams, const std::vector<BeamSums>& sums,
-                     double* sigma_e) {
+/// core ln s_b = ln sigma_e + kappa l_b + gamma c_b + delta k_b, broad ln s_b + ln k + (rho -
+/// kappa)(l_b - l_ref) (l: ln range, c: ln 1/cos phi, k: darkness ln(I_med / I)).
+double profileScales(const TailModel& m, const std::vector<TailBeam>& beams,
+                     const std::vector<BeamSums>& sums, double* sigma_e) {
   double ss = 0.0, w = 0.0, logh = 0.0;
   for (std::size_t b = 0; b < beams.size(); ++b) {
     if (sums[b].a <= 0.0) continue;
-    const double lc = m.kappa * beams[b].log_range + m.gamma * beams[b].log_sec_inc + m.delta * beams[b].dark;
-    const double lw = lc + std::log(m.wide) + (m.wide_exponent - m.kappa) * (beams[b].log_range - m.ref_log_range);
+    const double lc =
+        m.kappa * beams[b].log_range + m.gamma * beams[b].log_sec_inc + m.delta * beams[b].dark;
+    const double lw = lc + std::log(m.wide) +
+                      (m.wide_exponent - m.kappa) * (beams[b].log_range - m.ref_log_range);
     ss += sums[b].s_core * std::exp(-2.0 * lc) + sums[b].s_wide * std::exp(-2.0 * lw);
     w += sums[b].a;
     logh += (sums[b].a - sums[b].t) * lc + sums[b].t * lw;
@@ -94,31 +97,43 @@ double profileScales(const TailModel& m, const std::vector<TailBeam>& beams, con
 
 /// One coordinate of the scales by ternary search on the profile (`field` set in a copy).
 template <class Set>
-void maximiseCoordinate(TailModel& m, const std::vector<TailBeam>& beams, const std::vector<BeamSums>& sums, double lo,
-                        double hi, Set set) {
+void maximiseCoordinate(TailModel& m, const std::vector<TailBeam>& beams,
+                        const std::vector<BeamSums>& sums, double lo, double hi, Set set) {
   TailModel t = m;
-  const double best = ternaryMax([&](double v) { set(t, v); return profileScales(t, beams, sums, nullptr); }, lo, hi, 40);
+  const double best = ternaryMax(
+      [&](double v) {
+        set(t, v);
+        return profileScales(t, beams, sums, nullptr);
+      },
+      lo, hi, 40);
   set(m, best);
 }
 
 /// M-step of the noise law and the broad component: exponents (when free), the broad width's
 /// ratio k (>= kMinWide at the reference range) and its own range exponent rho, sigma_e.
-void maximiseScales(TailModel& m, const std::vector<TailBeam>& beams, const std::vector<BeamSums>& sums) {
-  if (m.spec.kappa) maximiseCoordinate(m, beams, sums, -1.0, 5.0, [](TailModel& t, double v) { t.kappa = v; });
-  if (m.spec.gamma) maximiseCoordinate(m, beams, sums, -1.0, 4.0, [](TailModel& t, double v) { t.gamma = v; });
-  if (m.spec.delta) maximiseCoordinate(m, beams, sums, -1.0, 3.0, [](TailModel& t, double v) { t.delta = v; });
+void maximiseScales(TailModel& m, const std::vector<TailBeam>& beams,
+                    const std::vector<BeamSums>& sums) {
+  if (m.spec.kappa)
+    maximiseCoordinate(m, beams, sums, -1.0, 5.0, [](TailModel& t, double v) { t.kappa = v; });
+  if (m.spec.gamma)
+    maximiseCoordinate(m, beams, sums, -1.0, 4.0, [](TailModel& t, double v) { t.gamma = v; });
+  if (m.spec.delta)
+    maximiseCoordinate(m, beams, sums, -1.0, 3.0, [](TailModel& t, double v) { t.delta = v; });
   double tail = 0.0;
   for (const auto& s : sums) tail += s.t;
   if (tail > 1e-6) {
-    maximiseCoordinate(m, beams, sums, -1.0, 5.0, [](TailModel& t, double v) { t.wide_exponent = v; });
-    maximiseCoordinate(m, beams, sums, std::log(kMinWide), std::log(1e3), [](TailModel& t, double v) { t.wide = std::exp(v); });
+    maximiseCoordinate(m, beams, sums, -1.0, 5.0,
+                       [](TailModel& t, double v) { t.wide_exponent = v; });
+    maximiseCoordinate(m, beams, sums, std::log(kMinWide), std::log(1e3),
+                       [](TailModel& t, double v) { t.wide = std::exp(v); });
   }
   profileScales(m, beams, sums, &m.sigma_e);
 }
 
 /// M-step of the logit coefficients: Newton steps on the expected complete log-likelihood of the
 /// labels (broad or core), soft labels t_b out of a_b, a small ridge.
-void maximiseLogit(TailModel& m, const std::vector<TailBeam>& beams, const std::vector<BeamSums>& sums) {
+void maximiseLogit(TailModel& m, const std::vector<TailBeam>& beams,
+                   const std::vector<BeamSums>& sums) {
   using Vec = Eigen::Matrix<double, kBeta, 1>;
   using Mat = Eigen::Matrix<double, kBeta, kBeta>;
   for (int step = 0; step < 3; ++step) {
@@ -128,7 +143,10 @@ void maximiseLogit(TailModel& m, const std::vector<TailBeam>& beams, const std::
       if (sums[b].a <= 0.0) continue;
       Vec x;
       x(0) = 1.0;
-      for (int j = 0; j < kTailCovariates; ++j) x(1 + j) = m.spec.covariate[static_cast<std::size_t>(j)] ? beams[b].x[static_cast<std::size_t>(j)] : 0.0;
+      for (int j = 0; j < kTailCovariates; ++j)
+        x(1 + j) = m.spec.covariate[static_cast<std::size_t>(j)]
+                       ? beams[b].x[static_cast<std::size_t>(j)]
+                       : 0.0;
       const double pi = m.tailProbability(beams[b]);
       g += (sums[b].t - sums[b].a * pi) * x;
       h += sums[b].a * pi * (1.0 - pi) * x * x.transpose();
@@ -154,7 +172,8 @@ const char* tailCovariateName(int k) {
 }
 
 Effect tailCovariateEffect(int k) {
-  static const Effect effects[] = {Effect::mixed_pixels, Effect::incidence_noise, Effect::range_noise_law, Effect::dark_surface};
+  static const Effect effects[] = {Effect::mixed_pixels, Effect::incidence_noise,
+                                   Effect::range_noise_law, Effect::dark_surface};
   return effects[k];
 }
 
@@ -167,7 +186,8 @@ int TailSpec::parameters() const {
 double TailModel::tailProbability(const TailBeam& b) const {
   double v = beta[0];
   for (int j = 0; j < kTailCovariates; ++j)
-    if (spec.covariate[static_cast<std::size_t>(j)]) v += beta[static_cast<std::size_t>(1 + j)] * b.x[static_cast<std::size_t>(j)];
+    if (spec.covariate[static_cast<std::size_t>(j)])
+      v += beta[static_cast<std::size_t>(1 + j)] * b.x[static_cast<std::size_t>(j)];
   return logistic(v);
 }
 
@@ -179,18 +199,22 @@ double TailModel::broadSigma(const TailBeam& b) const {
   return sigma(b) * wide * std::exp((wide_exponent - kappa) * (b.log_range - ref_log_range));
 }
 
-double TailModel::logDensity(const TailBeam& b, double residual_m, double inflation, double floor_w, double floor_density) const {
-  return std::log(std::max(partsOf(*this, b, residual_m, inflation, floor_w, floor_density).total(), 1e-300));
+double TailModel::logDensity(const TailBeam& b, double residual_m, double inflation, double floor_w,
+                             double floor_density) const {
+  return std::log(
+      std::max(partsOf(*this, b, residual_m, inflation, floor_w, floor_density).total(), 1e-300));
 }
 
-double TailModel::responsibility(const TailBeam& b, double residual_m, double inflation, double floor_w, double floor_density) const {
+double TailModel::responsibility(const TailBeam& b, double residual_m, double inflation,
+                                 double floor_w, double floor_density) const {
   const Parts p = partsOf(*this, b, residual_m, inflation, floor_w, floor_density);
   return p.wide / std::max(p.total(), 1e-300);
 }
 
 namespace {
 
-/// The starting point: a fitted model's parameters (what `spec` holds fixed reset), or the defaults.
+/// The starting point: a fitted model's parameters (what `spec` holds fixed reset), or the
+/// defaults.
 TailModel startOf(const TailSpec& spec, double sigma_e_start, const TailModel* start_from) {
   TailModel m;
   if (start_from) {
@@ -203,7 +227,8 @@ TailModel startOf(const TailSpec& spec, double sigma_e_start, const TailModel* s
     if (spec.mixed && !start_from->spec.mixed) m.mixed = 0.05;
     if (!spec.mixed) m.mixed = 0.0;
     for (int j = 0; j < kTailCovariates; ++j)
-      if (!spec.covariate[static_cast<std::size_t>(j)]) m.beta[static_cast<std::size_t>(1 + j)] = 0.0;
+      if (!spec.covariate[static_cast<std::size_t>(j)])
+        m.beta[static_cast<std::size_t>(1 + j)] = 0.0;
   } else {
     m.sigma_e = sigma_e_start > 0.0 ? sigma_e_start : 0.01;
     m.beta[0] = std::log(0.02 / 0.98);
@@ -217,8 +242,9 @@ TailModel startOf(const TailSpec& spec, double sigma_e_start, const TailModel* s
 
 }  // namespace
 
-TailModel fitTailModel(const std::vector<TailBeam>& beams, const std::vector<TailReading>& readings, const TailSpec& spec,
-                       double sigma_e_start, double floor_w, double floor_density, int max_iterations, const TailModel* start_from) {
+TailModel fitTailModel(const std::vector<TailBeam>& beams, const std::vector<TailReading>& readings,
+                       const TailSpec& spec, double sigma_e_start, double floor_w,
+                       double floor_density, int max_iterations, const TailModel* start_from) {
   TailModel m = startOf(spec, sigma_e_start, start_from);
   double lr = 0.0, nr = 0.0;
   for (const auto& rd : readings) {

@@ -21,16 +21,19 @@ std::string leadingWindow(LandmarkObservations& obs, std::size_t max_readings) {
   if (max_readings == 0 || total <= max_readings) return "";
   // Two stops at least, whatever they hold: a sequence diagnosis needs them.
   std::size_t stops = 0, kept = 0;
-  while (stops < per_stop.size() && (stops < 2 || kept + per_stop[stops] <= max_readings)) kept += per_stop[stops++];
+  while (stops < per_stop.size() && (stops < 2 || kept + per_stop[stops] <= max_readings))
+    kept += per_stop[stops++];
   const std::size_t all_stops = obs.commanded.size();
   obs.commanded.resize(stops);
   obs.sightings.erase(std::remove_if(obs.sightings.begin(), obs.sightings.end(),
                                      [stops](const Sighting& s) { return s.stop >= stops; }),
                       obs.sightings.end());
-  obs.walls.erase(std::remove_if(obs.walls.begin(), obs.walls.end(), [stops](const WallSighting& w) { return w.stop >= stops; }),
+  obs.walls.erase(std::remove_if(obs.walls.begin(), obs.walls.end(),
+                                 [stops](const WallSighting& w) { return w.stop >= stops; }),
                   obs.walls.end());
-  return "the first " + std::to_string(stops) + " of " + plural(all_stops, "stop") + ": " + std::to_string(kept) + " of " +
-         plural(total, "landmark reading") + " (--max-readings " + std::to_string(max_readings) + ")";
+  return "the first " + std::to_string(stops) + " of " + plural(all_stops, "stop") + ": " +
+         std::to_string(kept) + " of " + plural(total, "landmark reading") + " (--max-readings " +
+         std::to_string(max_readings) + ")";
 }
 
 void correctReadings(LandmarkObservations& obs, const ReadingCorrection& fix) {
@@ -55,12 +58,14 @@ StaticScans staticScans(const io::Sequence& seq, std::size_t stop, const Reading
   for (std::size_t k = 0; k < scans.size(); ++k) {
     const io::Scan scan = io::readScan(seq.scans[scans[k]].path);
     counts.push_back(scan.cloud->size());
-    s.has_intensity = s.has_intensity || scan.has_intensity;  // a covariate of the tails (dark surfaces)
+    // a covariate of the tails (dark surfaces)
+    s.has_intensity = s.has_intensity || scan.has_intensity;
     for (const auto& p : *scan.cloud) {
       if (!std::isfinite(p.x) || !std::isfinite(p.y)) continue;
       const double r = fix.correct(std::hypot(static_cast<double>(p.x), static_cast<double>(p.y)));
       if (!(r > 0.0)) continue;
-      s.readings.push_back({std::atan2(static_cast<double>(p.y), static_cast<double>(p.x)), r, static_cast<std::uint32_t>(k),
+      s.readings.push_back({std::atan2(static_cast<double>(p.y), static_cast<double>(p.x)), r,
+                            static_cast<std::uint32_t>(k),
                             scan.has_intensity ? static_cast<double>(p.intensity) : std::nan("")});
     }
     on_scan(k + 1);

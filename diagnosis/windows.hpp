@@ -19,7 +19,8 @@ namespace lidarcal::diagnosis {
 
 /// Readings corrected through a calibrated model's inverse; without one, readings pass unchanged.
 struct ReadingCorrection {
-  std::optional<calibration::RangeInverter> inverter;  ///< the model's inverse (empty: no correction)
+  /// the model's inverse (empty: no correction)
+  std::optional<calibration::RangeInverter> inverter;
   /// The corrected reading (NaN where the inverse has no root).
   double correct(double y) const {
     if (!inverter) return y;

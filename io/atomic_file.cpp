@@ -1,11 +1,11 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "io/atomic_file.hpp"
 
+#include <unistd.h>
 #include <atomic>
 #include <cerrno>
 #include <cstring>
 #include <fstream>
-#include <unistd.h>
 
 #include "common/errors.hpp"
 
@@ -30,15 +30,18 @@ void writeAtomically(const fs::path& file, const std::function<void(const fs::pa
   const fs::path dir = file.has_parent_path() ? file.parent_path() : fs::path(".");
   std::error_code ec;
   if (fs::exists(dir, ec) && !fs::is_directory(dir, ec))
-    throw InputError(file.string(), "", dir.string() + " is a file, not a directory", "choose a path in a directory");
+    throw InputError(file.string(), "", dir.string() + " is a file, not a directory",
+                     "choose a path in a directory");
   if (!fs::is_directory(dir, ec))
-    throw InputError(file.string(), "", "the directory to write into does not exist", "create it first");
+    throw InputError(file.string(), "", "the directory to write into does not exist",
+                     "create it first");
   // Never replace a directory, a device (/dev/null, /dev/full) or another special file by a
   // rename: only a regular file may be overwritten.
   const fs::file_status st = fs::symlink_status(file, ec);
   if (fs::exists(st) && !fs::is_regular_file(st))
-    throw InputError(file.string(), "", fs::is_directory(st) ? "is a directory, expected a file name"
-                                                             : "exists and is not a regular file",
+    throw InputError(file.string(), "",
+                     fs::is_directory(st) ? "is a directory, expected a file name"
+                                          : "exists and is not a regular file",
                      "choose the path of a (new or regular) file to write");
   const fs::path tmp = dir / ("." + file.filename().string() + ".tmp-" + uniqueSuffix());
   try {
@@ -50,17 +53,22 @@ void writeAtomically(const fs::path& file, const std::function<void(const fs::pa
   fs::rename(tmp, file, ec);
   if (ec) {
     fs::remove(tmp, ec);
-    throw InputError(file.string(), "", "could not move the finished file into place", "check permissions");
+    throw InputError(file.string(), "", "could not move the finished file into place",
+                     "check permissions");
   }
 }
 
 void writeTextAtomically(const fs::path& file, const std::string& bytes) {
   writeAtomically(file, [&](const fs::path& tmp) {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) throw InputError(file.string(), "", "cannot be created", "check that the directory is writable");
+    if (!out)
+      throw InputError(file.string(), "", "cannot be created",
+                       "check that the directory is writable");
     out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
     out.close();
-    if (!out) throw InputError(file.string(), "", "write failed (disk full?)", "free some space and run again");
+    if (!out)
+      throw InputError(file.string(), "", "write failed (disk full?)",
+                       "free some space and run again");
   });
 }
 
@@ -80,28 +88,35 @@ void checkOutputFile(const fs::path& file, bool overwrite) {
   std::error_code ec;
   const fs::path dir = file.has_parent_path() ? file.parent_path() : fs::path(".");
   if (fs::exists(dir, ec) && !fs::is_directory(dir, ec))
-    throw InputError(file.string(), "--out", dir.string() + " is a file, not a directory", "choose a path in a directory");
+    throw InputError(file.string(), "--out", dir.string() + " is a file, not a directory",
+                     "choose a path in a directory");
   if (!fs::is_directory(dir, ec))
-    throw InputError(file.string(), "--out", "its directory does not exist", "create " + dir.string() + " first");
+    throw InputError(file.string(), "--out", "its directory does not exist",
+                     "create " + dir.string() + " first");
   const fs::file_status st = fs::symlink_status(file, ec);
   if (fs::is_directory(st))
-    throw InputError(file.string(), "--out", "is a directory, expected a file name", "give the path of the file to write");
+    throw InputError(file.string(), "--out", "is a directory, expected a file name",
+                     "give the path of the file to write");
   if (fs::exists(st) && !fs::is_regular_file(st))
-    throw InputError(file.string(), "--out", "exists and is not a regular file", "give the path of a new file");
+    throw InputError(file.string(), "--out", "exists and is not a regular file",
+                     "give the path of a new file");
   if (fs::exists(st) && !overwrite)
-    throw InputError(file.string(), "--out", "already exists", "choose another file or pass --overwrite");
+    throw InputError(file.string(), "--out", "already exists",
+                     "choose another file or pass --overwrite");
   // Fail now rather than after the work: can a file be created there?
   const fs::path probe = dir / ("." + file.filename().string() + ".probe-" + uniqueSuffix());
   {
     std::ofstream out(probe, std::ios::binary);
     if (!out)
-      throw InputError(file.string(), "--out", "cannot be created (" + std::string(std::strerror(errno)) + ")",
+      throw InputError(file.string(), "--out",
+                       "cannot be created (" + std::string(std::strerror(errno)) + ")",
                        "check that " + dir.string() + " is writable");
   }
   fs::remove(probe, ec);
 }
 
-StagedDirectory::StagedDirectory(fs::path out, bool overwrite) : out_(std::move(out)), overwrite_(overwrite) {
+StagedDirectory::StagedDirectory(fs::path out, bool overwrite)
+    : out_(std::move(out)), overwrite_(overwrite) {
   if (out_.filename().empty()) out_ = out_.parent_path();  // "dir/" -> "dir"
   std::error_code ec;
   const fs::path parent = out_.has_parent_path() ? out_.parent_path() : fs::path(".");
@@ -109,10 +124,12 @@ StagedDirectory::StagedDirectory(fs::path out, bool overwrite) : out_(std::move(
     throw InputError(out_.string(), "--out", parent.string() + " is a file, not a directory",
                      "choose an output path in a directory");
   if (!fs::is_directory(parent, ec))
-    throw InputError(out_.string(), "--out", "its parent directory does not exist", "create " + parent.string() + " first");
+    throw InputError(out_.string(), "--out", "its parent directory does not exist",
+                     "create " + parent.string() + " first");
   if (fs::exists(out_, ec) && !fs::is_directory(out_, ec))
     throw InputError(out_.string(), "--out", "is a file; the output is a directory",
-                     "choose a new path (lidarcal does not replace a file by a directory, even with --overwrite)");
+                     "choose a new path (lidarcal does not replace a file by a directory, even "
+                     "with --overwrite)");
   if (fs::exists(out_, ec) && !overwrite_) {
     const bool empty_dir = fs::is_directory(out_, ec) && fs::is_empty(out_, ec);
     if (!empty_dir)
@@ -122,7 +139,8 @@ StagedDirectory::StagedDirectory(fs::path out, bool overwrite) : out_(std::move(
   staging_ = parent / ("." + out_.filename().string() + ".partial-" + uniqueSuffix());
   fs::create_directory(staging_, ec);
   if (ec)
-    throw InputError(out_.string(), "--out", "cannot create the output directory (" + ec.message() + ")",
+    throw InputError(out_.string(), "--out",
+                     "cannot create the output directory (" + ec.message() + ")",
                      "check that " + parent.string() + " is writable");
 }
 
@@ -139,12 +157,15 @@ void StagedDirectory::commit() {
   if (fs::exists(out_, ec)) {
     old = out_.parent_path() / ("." + out_.filename().string() + ".old-" + uniqueSuffix());
     fs::rename(out_, old, ec);
-    if (ec) throw InputError(out_.string(), "--out", "could not move the existing output aside", "check permissions");
+    if (ec)
+      throw InputError(out_.string(), "--out", "could not move the existing output aside",
+                       "check permissions");
   }
   fs::rename(staging_, out_, ec);
   if (ec) {
     if (!old.empty()) fs::rename(old, out_, ec);
-    throw InputError(out_.string(), "--out", "could not move the finished output into place", "check permissions");
+    throw InputError(out_.string(), "--out", "could not move the finished output into place",
+                     "check permissions");
   }
   committed_ = true;
   if (!old.empty()) fs::remove_all(old, ec);

@@ -11,7 +11,8 @@ namespace lidarcal::io {
 
 /// Calls write(tmp) with a temporary path next to `file`, then renames tmp onto `file`.
 /// The temporary file is removed if write throws.
-void writeAtomically(const std::filesystem::path& file, const std::function<void(const std::filesystem::path&)>& write);
+void writeAtomically(const std::filesystem::path& file,
+                     const std::function<void(const std::filesystem::path&)>& write);
 
 /// Writes `bytes` to `file` atomically.
 void writeTextAtomically(const std::filesystem::path& file, const std::string& bytes);

@@ -20,23 +20,29 @@ namespace lidarcal::io {
 
 /// One topic of a bag.
 struct BagTopic {
-  std::string topic;        ///< topic name, e.g. /scan
-  std::string datatype;     ///< message type, e.g. sensor_msgs/LaserScan (ROS1) or sensor_msgs/msg/LaserScan (ROS 2)
-  std::size_t messages = 0; ///< messages on the topic
+  std::string topic;  ///< topic name, e.g. /scan
+  /// message type, e.g. sensor_msgs/LaserScan (ROS1) or sensor_msgs/msg/LaserScan (ROS 2)
+  std::string datatype;
+  std::size_t messages = 0;  ///< messages on the topic
 };
 
 /// Where VIEWPOINT comes from (`import --pose odom:TOPIC|tf:FRAME`).
 struct BagPoseConfig {
   enum class Kind {
     none,  ///< identity for every scan (default)
-    odom,  ///< nav_msgs/Odometry on `name`, composed with the sensor's mount from /tf_static when there
-    tf,    ///< the chain from the fixed frame `name` to the scan's frame_id through /tf and /tf_static
+    /// nav_msgs/Odometry on `name`, composed with the sensor's mount from /tf_static when there
+    odom,
+    /// the chain from the fixed frame `name` to the scan's frame_id through /tf and /tf_static
+    tf,
   };
   Kind kind = Kind::none;
-  std::string name;            ///< odom: the topic; tf: the fixed frame
-  double hold_s = 0.1;         ///< a scan this close (s) before the first or after the last pose sample takes that sample; default 0.1
-  double still_m = 0.01;       ///< poses within this distance (m) ...
-  double still_rad = 0.00872664626;  ///< ... and this heading (rad, default 0.5 deg) of the stop's first pose are that pose
+  std::string name;  ///< odom: the topic; tf: the fixed frame
+  /// a scan this close (s) before the first or after the last pose sample takes that sample;
+  /// default 0.1
+  double hold_s = 0.1;
+  double still_m = 0.01;  ///< poses within this distance (m) ...
+  /// ... and this heading (rad, default 0.5 deg) of the stop's first pose are that pose
+  double still_rad = 0.00872664626;
   /// Rig import: also the pose of this frame (the vehicle's) and the scan frame's mounting on it
   /// (RawScan::vehicle_pose, RawScan::mounting; /tf_static is read even without a pose source).
   /// "auto": the frame just below the first moving (/tf) link above the scan frame, or the top of
@@ -48,9 +54,11 @@ struct RosbagConfig {
   /// sensor_msgs/LaserScan topic to read; default empty = the bag's only LaserScan topic
   /// (an error naming the candidates when there are several).
   std::string topic;
-  std::optional<double> range_min_m;  ///< overrides each message's range_min, metres; default: the message's
-  std::optional<double> range_max_m;  ///< overrides each message's range_max, metres; default: the message's
-  BagPoseConfig pose;                 ///< VIEWPOINT source; default identity
+  /// overrides each message's range_min, metres; default: the message's
+  std::optional<double> range_min_m;
+  /// overrides each message's range_max, metres; default: the message's
+  std::optional<double> range_max_m;
+  BagPoseConfig pose;  ///< VIEWPOINT source; default identity
 
   /// Throws InputError when the limits are inconsistent.
   void validate() const;
@@ -58,23 +66,26 @@ struct RosbagConfig {
 
 /// The names one bag flavour uses (ROS1 or ROS 2), for choosing topics and for messages.
 struct BagFlavour {
-  const char* from;         ///< the --from value: rosbag1 or rosbag2
-  const char* label;        ///< for sensor_name: ROS1 or ROS 2
-  const char* scan_type;    ///< sensor_msgs/LaserScan or sensor_msgs/msg/LaserScan
-  const char* odom_type;    ///< nav_msgs/Odometry or nav_msgs/msg/Odometry
+  const char* from;       ///< the --from value: rosbag1 or rosbag2
+  const char* label;      ///< for sensor_name: ROS1 or ROS 2
+  const char* scan_type;  ///< sensor_msgs/LaserScan or sensor_msgs/msg/LaserScan
+  const char* odom_type;  ///< nav_msgs/Odometry or nav_msgs/msg/Odometry
 };
-inline constexpr BagFlavour kRos1Flavour{"rosbag1", "ROS1", "sensor_msgs/LaserScan", "nav_msgs/Odometry"};
-inline constexpr BagFlavour kRos2Flavour{"rosbag2", "ROS 2", "sensor_msgs/msg/LaserScan", "nav_msgs/msg/Odometry"};
+inline constexpr BagFlavour kRos1Flavour{"rosbag1", "ROS1", "sensor_msgs/LaserScan",
+                                         "nav_msgs/Odometry"};
+inline constexpr BagFlavour kRos2Flavour{"rosbag2", "ROS 2", "sensor_msgs/msg/LaserScan",
+                                         "nav_msgs/msg/Odometry"};
 
 /// The LaserScan topic to read: `wanted`, checked, or the bag's only LaserScan topic. Throws
 /// InputError naming the LaserScan topics when there is none, several or `wanted` is not one.
-std::string chooseScanTopic(const std::filesystem::path& file, const std::vector<BagTopic>& topics, const std::string& wanted,
-                            const BagFlavour& flavour);
+std::string chooseScanTopic(const std::filesystem::path& file, const std::vector<BagTopic>& topics,
+                            const std::string& wanted, const BagFlavour& flavour);
 
 /// The topics --pose needs read (odometry topic, /tf_static, /tf), checked against the bag's
 /// topics: throws InputError when the odometry topic is missing or of another type, or when
 /// tf:FRAME is asked of a bag without /tf and /tf_static.
-std::vector<std::string> poseTopics(const std::filesystem::path& file, const std::vector<BagTopic>& topics,
+std::vector<std::string> poseTopics(const std::filesystem::path& file,
+                                    const std::vector<BagTopic>& topics,
                                     const BagPoseConfig& config, const BagFlavour& flavour);
 
 /// A LaserScan's fields (ROS1 and ROS 2 have the same), the arrays as views into the message.
@@ -101,7 +112,8 @@ class BagPoses {
  public:
   explicit BagPoses(const BagPoseConfig& config) : config_(config) {}
   void addOdometry(double stamp_s, const Transform3& pose, const std::string& child_frame);
-  void addTransform(const std::string& parent, const std::string& child, double stamp_s, const Transform3& t, bool is_static);
+  void addTransform(const std::string& parent, const std::string& child, double stamp_s,
+                    const Transform3& t, bool is_static);
   /// Throws DataError when --pose odom: found no odometry message on its topic.
   void checkFilled(const std::filesystem::path& file) const;
   /// The sensor's pose at the scan's stamp, or nothing (and why).
@@ -123,10 +135,13 @@ class BagPoses {
 /// count and the callback; then the checks and notes of the report.
 class BagScanSink {
  public:
-  BagScanSink(const BagPoseConfig& config, BagPoses& poses, const ScanCallback& on_scan, ImportReport& report);
-  /// Hands `scan` on with its pose (skipped without one). Returns false when the callback asks to stop.
+  BagScanSink(const BagPoseConfig& config, BagPoses& poses, const ScanCallback& on_scan,
+              ImportReport& report);
+  /// Hands `scan` on with its pose (skipped without one). Returns false when the callback asks to
+  /// stop.
   bool offer(RawScan& scan, const std::string& frame_id);
-  /// Throws DataError when no scan had a pose, InputError when the topic had no message; adds the notes.
+  /// Throws DataError when no scan had a pose, InputError when the topic had no message; adds the
+  /// notes.
   void finish(const std::filesystem::path& file, const std::string& topic);
 
  private:

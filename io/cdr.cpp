@@ -18,7 +18,9 @@ CdrReader::CdrReader(const std::uint8_t* data, std::size_t size) : data_(data), 
   const unsigned id = (static_cast<unsigned>(data[0]) << 8) | data[1];
   if (id != 0x0000 && id != 0x0001) {
     char text[120];
-    std::snprintf(text, sizeof text, "encapsulation 0x%04x is not plain CDR (0x0000 big-endian or 0x0001 little-endian)", id);
+    std::snprintf(
+        text, sizeof text,
+        "encapsulation 0x%04x is not plain CDR (0x0000 big-endian or 0x0001 little-endian)", id);
     fail(text);
   }
   big_endian_ = id == 0x0000;
@@ -37,7 +39,9 @@ void CdrReader::align(std::size_t n) {
 }
 
 const std::uint8_t* CdrReader::take(std::size_t n) {
-  if (n > size_ - pos_) fail("the message ends here (" + std::to_string(n) + " more bytes expected): it is cut short or not this type");
+  if (n > size_ - pos_)
+    fail("the message ends here (" + std::to_string(n) +
+         " more bytes expected): it is cut short or not this type");
   const std::uint8_t* p = data_ + pos_;
   pos_ += n;
   return p;
@@ -72,9 +76,11 @@ double CdrReader::f64() {
 
 std::string CdrReader::str() {
   const std::uint32_t n = u32();
-  if (n > size_ - pos_) fail("a string of " + std::to_string(n) + " bytes runs past the end of the message");
+  if (n > size_ - pos_)
+    fail("a string of " + std::to_string(n) + " bytes runs past the end of the message");
   const char* p = reinterpret_cast<const char*>(take(n));
-  // The length counts the terminating NUL; a writer that leaves it out (length 0 for "") is tolerated.
+  // The length counts the terminating NUL; a writer that leaves it out (length 0 for "") is
+  // tolerated.
   return std::string(p, n > 0 && p[n - 1] == '\0' ? n - 1 : n);
 }
 

@@ -35,7 +35,8 @@ class CdrReader {
   /// A sequence<float32>: uint32 count, then the values (§9.3.2.5). The count is checked against
   /// the bytes left before anything is allocated.
   void f32Seq(std::vector<float>& out);
-  /// A sequence's element count, checked against the bytes left for elements of at least `min_element_bytes`.
+  /// A sequence's element count, checked against the bytes left for elements of at least
+  /// `min_element_bytes`.
   std::uint32_t count(std::size_t min_element_bytes);
 
  private:

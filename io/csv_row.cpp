@@ -16,7 +16,8 @@ std::vector<std::string> splitCsvLine(const std::string& line) {
   std::size_t start = 0;
   while (true) {
     const std::size_t comma = s.find(',', start);
-    fields.push_back(s.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
+    fields.push_back(
+        s.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
     if (comma == std::string::npos) break;
     start = comma + 1;
   }
@@ -26,13 +27,15 @@ std::vector<std::string> splitCsvLine(const std::string& line) {
 CsvReader::CsvReader(const std::filesystem::path& file, std::string remedy)
     : file_(file), remedy_(std::move(remedy)), in_(file) {
   std::error_code ec;
-  if (!std::filesystem::exists(file, ec)) throw InputError(file.string(), "", "file does not exist", remedy_);
+  if (!std::filesystem::exists(file, ec))
+    throw InputError(file.string(), "", "file does not exist", remedy_);
   if (!in_) throw InputError(file.string(), "", "cannot be opened", "check its permissions");
 }
 
 std::vector<std::string> CsvReader::readHeader() {
   std::string line;
-  if (!std::getline(in_, line)) throw InputError(file_.string(), "line 1", "file is empty (no header)", remedy_);
+  if (!std::getline(in_, line))
+    throw InputError(file_.string(), "line 1", "file is empty (no header)", remedy_);
   line_no_ = 1;
   return splitCsvLine(line);
 }
@@ -60,7 +63,8 @@ bool CsvReader::next(std::size_t columns) {
 }
 
 void CsvReader::fail(const std::string& name, const std::string& problem) const {
-  throw InputError(file_.string(), "line " + std::to_string(line_no_) + ", column " + name, problem, remedy_);
+  throw InputError(file_.string(), "line " + std::to_string(line_no_) + ", column " + name, problem,
+                   remedy_);
 }
 
 double CsvReader::number(std::size_t index, const std::string& name) const {
@@ -78,7 +82,8 @@ long long CsvReader::integer(std::size_t index, const std::string& name) const {
   char* end = nullptr;
   errno = 0;
   const long long v = std::strtoll(f.c_str(), &end, 10);
-  if (f.empty() || end != f.c_str() + f.size() || errno == ERANGE) fail(name, "`" + f + "` is not an integer");
+  if (f.empty() || end != f.c_str() + f.size() || errno == ERANGE)
+    fail(name, "`" + f + "` is not an integer");
   return v;
 }
 

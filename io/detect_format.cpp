@@ -29,11 +29,12 @@ std::string peekContent(const std::filesystem::path& file) {
 }
 
 bool isCarmenKeyword(const std::string& word) {
-  static const char* const kKeywords[] = {"PARAM",       "SYNC",        "ODOM",        "FLASER",   "RLASER",
-                                          "LASER3",      "LASER4",      "RAWLASER1",   "RAWLASER2", "RAWLASER3",
-                                          "RAWLASER4",   "ROBOTLASER1", "ROBOTLASER2", "TRUEPOS",  "NMEAGGA",
-                                          "NMEARMC",     "GPSNMEA"};
-  return std::any_of(std::begin(kKeywords), std::end(kKeywords), [&](const char* k) { return word == k; });
+  static const char* const kKeywords[] = {
+      "PARAM",       "SYNC",      "ODOM",      "FLASER",    "RLASER",    "LASER3",
+      "LASER4",      "RAWLASER1", "RAWLASER2", "RAWLASER3", "RAWLASER4", "ROBOTLASER1",
+      "ROBOTLASER2", "TRUEPOS",   "NMEAGGA",   "NMEARMC",   "GPSNMEA"};
+  return std::any_of(std::begin(kKeywords), std::end(kKeywords),
+                     [&](const char* k) { return word == k; });
 }
 
 bool isNumber(std::string field) {
@@ -63,7 +64,8 @@ DetectedFormat fromText(const std::string& text, DetectedFormat d) {
     const auto first = line.find_first_not_of(" \t");
     if (first == std::string::npos || line[first] == '#') continue;
     for (char c : line)
-      if (c == '\0' || (static_cast<unsigned char>(c) < 0x20 && c != '\t')) return d;  // binary: unknown
+      // binary: unknown
+      if (c == '\0' || (static_cast<unsigned char>(c) < 0x20 && c != '\t')) return d;
     std::istringstream words(line);
     std::string word;
     words >> word;
@@ -90,7 +92,8 @@ DetectedFormat fromText(const std::string& text, DetectedFormat d) {
     if (fields.size() >= 4 && (complete || fields.size() > 4) &&
         std::all_of(fields.begin(), fields.end() - (complete ? 0 : 1), isNumber)) {
       d.kind = RecordingKind::ydlidar;
-      d.evidence = "its rows are " + std::string(complete ? std::to_string(fields.size()) : "many") +
+      d.evidence = "its rows are " +
+                   std::string(complete ? std::to_string(fields.size()) : "many") +
                    " comma-separated numbers without a header (distance, dtheta, dt, ranges)";
     }
     return d;
@@ -102,13 +105,20 @@ DetectedFormat fromText(const std::string& text, DetectedFormat d) {
 
 const char* toString(RecordingKind kind) {
   switch (kind) {
-    case RecordingKind::rosbag1: return "rosbag1";
-    case RecordingKind::mcap: return "mcap";
-    case RecordingKind::rosbag2: return "rosbag2";
-    case RecordingKind::carmen: return "carmen";
-    case RecordingKind::ydlidar: return "ydlidar";
-    case RecordingKind::csv: return "csv";
-    case RecordingKind::unknown: break;
+    case RecordingKind::rosbag1:
+      return "rosbag1";
+    case RecordingKind::mcap:
+      return "mcap";
+    case RecordingKind::rosbag2:
+      return "rosbag2";
+    case RecordingKind::carmen:
+      return "carmen";
+    case RecordingKind::ydlidar:
+      return "ydlidar";
+    case RecordingKind::csv:
+      return "csv";
+    case RecordingKind::unknown:
+      break;
   }
   return "unknown";
 }
@@ -118,15 +128,18 @@ DetectedFormat detectRecordingFormat(const std::filesystem::path& file) {
   DetectedFormat d;
   if (std::filesystem::is_directory(file, ec)) {
     if (!std::filesystem::is_regular_file(file / "metadata.yaml", ec))
-      throw InputError(file.string(), "", "is a directory without metadata.yaml (not a ROS 2 bag), expected a recording file",
-                       "give the path of the recording");
+      throw InputError(
+          file.string(), "",
+          "is a directory without metadata.yaml (not a ROS 2 bag), expected a recording file",
+          "give the path of the recording");
     d.kind = RecordingKind::rosbag2;
     d.evidence = "it is a directory with metadata.yaml (a ROS 2 bag)";
     return d;
   }
   std::ifstream in(file, std::ios::binary);
   if (!in) {
-    if (!std::filesystem::exists(file, ec)) throw InputError(file.string(), "", "file does not exist", "check the path");
+    if (!std::filesystem::exists(file, ec))
+      throw InputError(file.string(), "", "file does not exist", "check the path");
     throw InputError(file.string(), "", "cannot be opened for reading", "check its permissions");
   }
   char head[16] = {};
@@ -147,7 +160,8 @@ DetectedFormat detectRecordingFormat(const std::filesystem::path& file) {
     d.evidence = "it is an SQLite database (a ROS 2 .db3 bag file)";
     return d;
   }
-  d.gzip = magic.size() >= 2 && static_cast<unsigned char>(magic[0]) == 0x1f && static_cast<unsigned char>(magic[1]) == 0x8b;
+  d.gzip = magic.size() >= 2 && static_cast<unsigned char>(magic[0]) == 0x1f &&
+           static_cast<unsigned char>(magic[1]) == 0x8b;
   return fromText(peekContent(file), d);
 }
 

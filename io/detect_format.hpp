@@ -13,17 +13,23 @@ enum class RecordingKind {
   unknown,  ///< none of the below
   rosbag1,  ///< ROS1 bag: starts with `#ROSBAG V2.0`
   mcap,     ///< MCAP (ROS 2 and others): starts with the magic `\x89MCAP0\r\n`; read as a ROS 2 bag
-  rosbag2,  ///< ROS 2 bag: a directory with metadata.yaml, or an SQLite file (`SQLite format 3\0`, a .db3)
-  carmen,   ///< CARMEN log (plain or gzip): its first record line starts with a CARMEN keyword (FLASER, ODOM, PARAM, ...)
-  ydlidar,  ///< YDLIDAR X4 dataset `.dat` (plain or gzip): rows of at least 4 comma-separated numbers, no header
-  csv,      ///< lidarcal's CSV (plain or gzip): a header naming range_m and angle_rad
+  /// ROS 2 bag: a directory with metadata.yaml, or an SQLite file (`SQLite format 3\0`, a .db3)
+  rosbag2,
+  /// CARMEN log (plain or gzip): its first record line starts with a CARMEN keyword (FLASER, ODOM,
+  /// PARAM, ...)
+  carmen,
+  /// YDLIDAR X4 dataset `.dat` (plain or gzip): rows of at least 4 comma-separated numbers, no
+  /// header
+  ydlidar,
+  csv,  ///< lidarcal's CSV (plain or gzip): a header naming range_m and angle_rad
 };
 const char* toString(RecordingKind kind);
 
 struct DetectedFormat {
   RecordingKind kind = RecordingKind::unknown;
-  bool gzip = false;     ///< the file is gzip-compressed (the kinds above are those of the content)
-  std::string evidence;  ///< what decided it, for messages (e.g. "first record line starts with FLASER")
+  bool gzip = false;  ///< the file is gzip-compressed (the kinds above are those of the content)
+  /// what decided it, for messages (e.g. "first record line starts with FLASER")
+  std::string evidence;
 };
 
 /// Looks at the start of `file` (or, for a directory, for its metadata.yaml). Throws InputError

@@ -10,10 +10,13 @@ namespace lidarcal::io {
 
 void checkRangeLimits(double range_min_m, double range_max_m) {
   if (!(range_min_m >= 0.0) || range_min_m == std::numeric_limits<double>::infinity())
-    throw InputError("", "--range-min", "must be a finite number >= 0", "give the smallest valid reading in metres");
+    throw InputError("", "--range-min", "must be a finite number >= 0",
+                     "give the smallest valid reading in metres");
   if (!(range_max_m > range_min_m))
-    throw InputError("", "--range-max", "must be larger than the lower range limit (" + std::to_string(range_min_m) + " m)",
-                     "give the largest valid reading in metres");
+    throw InputError(
+        "", "--range-max",
+        "must be larger than the lower range limit (" + std::to_string(range_min_m) + " m)",
+        "give the largest valid reading in metres");
 }
 
 double float32Decimal(float value) {

@@ -20,22 +20,27 @@ namespace lidarcal::io {
 
 /// One scan of a recording, polar.
 struct RawScan {
-  Pose2 pose;                        ///< sensor pose in the world frame (becomes VIEWPOINT); identity when the recording has none
-  std::vector<double> angles_rad;    ///< bearing of each beam in the sensor frame, radians, counter-clockwise from x (forward)
-  std::vector<float> ranges_m;       ///< reading of each beam, metres; NaN, inf or <= 0 means no return
-  std::vector<float> intensities;    ///< intensity of each beam in the sensor's units; empty = none recorded
-  double range_min_m = 0.0;          ///< readings below this become beams without return, metres
-  double range_max_m = std::numeric_limits<double>::infinity();  ///< readings above this become beams without return, metres
-  double stamp_s = std::numeric_limits<double>::quiet_NaN();     ///< time stamp, seconds (informational; NaN when absent)
-  std::size_t source_index = 0;      ///< index of the scan in the recording (0-based, before --every)
-  double progress = 0.0;             ///< fraction of the input read so far, 0..1 (for progress display only)
+  /// sensor pose in the world frame (becomes VIEWPOINT); identity when the recording has none
+  Pose2 pose;
+  /// bearing of each beam in the sensor frame, radians, counter-clockwise from x (forward)
+  std::vector<double> angles_rad;
+  std::vector<float> ranges_m;  ///< reading of each beam, metres; NaN, inf or <= 0 means no return
+  /// intensity of each beam in the sensor's units; empty = none recorded
+  std::vector<float> intensities;
+  double range_min_m = 0.0;  ///< readings below this become beams without return, metres
+  /// readings above this become beams without return, metres
+  double range_max_m = std::numeric_limits<double>::infinity();
+  /// time stamp, seconds (informational; NaN when absent)
+  double stamp_s = std::numeric_limits<double>::quiet_NaN();
+  std::size_t source_index = 0;  ///< index of the scan in the recording (0-based, before --every)
+  double progress = 0.0;  ///< fraction of the input read so far, 0..1 (for progress display only)
   /// Rig import (BagPoseConfig::vehicle_frame set): the vehicle frame's pose in the fixed frame at
   /// this scan's stamp (unset without --pose or when tf has none), the scan frame's mounting on
   /// the vehicle (tf, tf_static; unset when they do not connect), and the frames themselves.
   std::optional<Pose2> vehicle_pose;
   std::optional<Mounting> mounting;
-  std::string frame_id;              ///< the scan's frame (bags; empty otherwise)
-  std::string vehicle_frame;         ///< the vehicle frame the mounting is in (rig import)
+  std::string frame_id;       ///< the scan's frame (bags; empty otherwise)
+  std::string vehicle_frame;  ///< the vehicle frame the mounting is in (rig import)
 };
 
 /// Receives the scans one at a time; returns false to stop reading (enough scans).
@@ -43,11 +48,13 @@ using ScanCallback = std::function<bool(const RawScan&)>;
 
 /// What an importer read.
 struct ImportReport {
-  std::size_t scans = 0;             ///< scans handed to the callback
-  std::size_t other_records = 0;     ///< records ignored because they are not scans of the selected source (lines, messages)
-  bool stopped_early = false;        ///< the callback asked to stop before the end of the input
-  std::string sensor_name;           ///< what the input says about the sensor (for sequence.json)
-  std::vector<std::string> notes;    ///< facts the user should know (e.g. which pose went into VIEWPOINT)
+  std::size_t scans = 0;  ///< scans handed to the callback
+  /// records ignored because they are not scans of the selected source (lines, messages)
+  std::size_t other_records = 0;
+  bool stopped_early = false;  ///< the callback asked to stop before the end of the input
+  std::string sensor_name;     ///< what the input says about the sensor (for sequence.json)
+  /// facts the user should know (e.g. which pose went into VIEWPOINT)
+  std::vector<std::string> notes;
 };
 
 /// Checks a range window for the importers' configs: 0 <= range_min_m < range_max_m (max may

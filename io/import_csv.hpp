@@ -19,7 +19,8 @@ namespace lidarcal::io {
 
 struct CsvConfig {
   double range_min_m = 0.0;  ///< readings below are beams without return, metres; default 0
-  double range_max_m = std::numeric_limits<double>::infinity();  ///< readings above are beams without return; default unbounded
+  /// readings above are beams without return; default unbounded
+  double range_max_m = std::numeric_limits<double>::infinity();
 
   /// Throws InputError when the limits are inconsistent.
   void validate() const;
@@ -28,6 +29,7 @@ struct CsvConfig {
 /// Streams the scans of a CSV file (plain or gzip) to `on_scan`. Throws InputError naming the
 /// line for a missing column, a malformed value, a pose that changes within a scan or rows of a
 /// scan that are not consecutive.
-ImportReport readCsvScans(const std::filesystem::path& csv, const CsvConfig& config, const ScanCallback& on_scan);
+ImportReport readCsvScans(const std::filesystem::path& csv, const CsvConfig& config,
+                          const ScanCallback& on_scan);
 
 }  // namespace lidarcal::io

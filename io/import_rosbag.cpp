@@ -10,9 +10,9 @@
 #include <cstdlib>
 #include <map>
 
+#include <nav_msgs/Odometry.h>
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
-#include <nav_msgs/Odometry.h>
 #include <sensor_msgs/LaserScan.h>
 #include <tf2_msgs/TFMessage.h>
 
@@ -27,14 +27,18 @@ constexpr const char* kLaserScanType = kRos1Flavour.scan_type;
 
 void openBag(rosbag::Bag& bag, const fs::path& file) {
   std::error_code ec;
-  if (!fs::exists(file, ec)) throw InputError(file.string(), "", "file does not exist", "check the path");
-  if (fs::is_directory(file, ec)) throw InputError(file.string(), "", "is a directory, expected a .bag file", "pass the bag file");
+  if (!fs::exists(file, ec))
+    throw InputError(file.string(), "", "file does not exist", "check the path");
+  if (fs::is_directory(file, ec))
+    throw InputError(file.string(), "", "is a directory, expected a .bag file",
+                     "pass the bag file");
   try {
     bag.open(file.string(), rosbag::bagmode::Read);
   } catch (const ros::Exception& e) {
-    throw InputError(file.string(), "", std::string("cannot be read as a ROS1 bag (rosbag: ") + e.what() + ")",
-                     "a truncated or unindexed bag (recording interrupted) can be repaired on a copy with "
-                     "`rosbag reindex`; a ROS 2 bag (directory, .mcap or .db3) is read with --from rosbag2");
+    throw InputError(
+        file.string(), "", std::string("cannot be read as a ROS1 bag (rosbag: ") + e.what() + ")",
+        "a truncated or unindexed bag (recording interrupted) can be repaired on a copy with "
+        "`rosbag reindex`; a ROS 2 bag (directory, .mcap or .db3) is read with --from rosbag2");
   }
 }
 
@@ -80,22 +84,24 @@ Transform3 toTransform(const geometry_msgs::Transform& tf) {
 }
 
 /// Fills `poses` from the bag's odometry and tf topics that config.pose needs.
-void readPoses(const rosbag::Bag& bag, const fs::path& file, const std::vector<BagTopic>& topics, const BagPoseConfig& config,
-               BagPoses& poses) {
+void readPoses(const rosbag::Bag& bag, const fs::path& file, const std::vector<BagTopic>& topics,
+               const BagPoseConfig& config, BagPoses& poses) {
   for (const std::string& topic : poseTopics(file, topics, config, kRos1Flavour)) {
     for (const rosbag::MessageInstance& m : rosbag::View(bag, rosbag::TopicQuery(topic))) {
       if (topic == config.name && config.kind == BagPoseConfig::Kind::odom) {
         const nav_msgs::Odometry::ConstPtr o = m.instantiate<nav_msgs::Odometry>();
         if (o)
-          poses.addOdometry(o->header.stamp.toSec(), toTransform(o->pose.pose.position, o->pose.pose.orientation),
+          poses.addOdometry(o->header.stamp.toSec(),
+                            toTransform(o->pose.pose.position, o->pose.pose.orientation),
                             o->child_frame_id);
         continue;
       }
-      const tf2_msgs::TFMessage::ConstPtr msg = m.instantiate<tf2_msgs::TFMessage>();  // tf/tfMessage has the same layout
+      // tf/tfMessage has the same layout
+      const tf2_msgs::TFMessage::ConstPtr msg = m.instantiate<tf2_msgs::TFMessage>();
       if (!msg) continue;
       for (const auto& t : msg->transforms)
-        poses.addTransform(t.header.frame_id, t.child_frame_id, t.header.stamp.toSec(), toTransform(t.transform),
-                           topic == "/tf_static");
+        poses.addTransform(t.header.frame_id, t.child_frame_id, t.header.stamp.toSec(),
+                           toTransform(t.transform), topic == "/tf_static");
     }
   }
   poses.checkFilled(file);
@@ -112,12 +118,14 @@ std::vector<BagTopic> listBagTopics(const fs::path& file) {
   try {
     return topicsOf(bag);
   } catch (const ros::Exception& e) {
-    throw InputError(file.string(), "", std::string("the bag index cannot be read (rosbag: ") + e.what() + ")",
+    throw InputError(file.string(), "",
+                     std::string("the bag index cannot be read (rosbag: ") + e.what() + ")",
                      "repair a copy with `rosbag reindex`");
   }
 }
 
-ImportReport readRosbag(const fs::path& file, const RosbagConfig& config, const ScanCallback& on_scan) {
+ImportReport readRosbag(const fs::path& file, const RosbagConfig& config,
+                        const ScanCallback& on_scan) {
   config.validate();
   rosbag::Bag bag;
   openBag(bag, file);
@@ -138,20 +146,25 @@ ImportReport readRosbag(const fs::path& file, const RosbagConfig& config, const 
     for (const rosbag::MessageInstance& m : view) {
       const sensor_msgs::LaserScan::ConstPtr msg = m.instantiate<sensor_msgs::LaserScan>();
       if (!msg)
-        throw InputError(file.string(), "topic " + topic + ", message " + std::to_string(index),
-                         "is not a " + std::string(kLaserScanType) + " (type " + m.getDataType() + ")", "choose another topic");
+        throw InputError(
+            file.string(), "topic " + topic + ", message " + std::to_string(index),
+            "is not a " + std::string(kLaserScanType) + " (type " + m.getDataType() + ")",
+            "choose another topic");
       fillRawScan(viewOf(*msg), config, scan);
       if (report.sensor_name.empty())
-        report.sensor_name = "ROS1 " + std::string(kLaserScanType) + " on " + topic +
-                             (msg->header.frame_id.empty() ? "" : " (frame " + msg->header.frame_id + ")");
+        report.sensor_name =
+            "ROS1 " + std::string(kLaserScanType) + " on " + topic +
+            (msg->header.frame_id.empty() ? "" : " (frame " + msg->header.frame_id + ")");
       scan.source_index = index++;
       scan.progress = total ? static_cast<double>(index) / static_cast<double>(total) : 1.0;
       if (!sink.offer(scan, msg->header.frame_id)) break;
     }
   } catch (const ros::Exception& e) {
-    throw InputError(file.string(), topic.empty() ? std::string() : "topic " + topic + ", message " + std::to_string(index),
-                     std::string("cannot be read (rosbag: ") + e.what() + ")",
-                     "the bag is damaged; repair a copy with `rosbag reindex` or record it again");
+    throw InputError(
+        file.string(),
+        topic.empty() ? std::string() : "topic " + topic + ", message " + std::to_string(index),
+        std::string("cannot be read (rosbag: ") + e.what() + ")",
+        "the bag is damaged; repair a copy with `rosbag reindex` or record it again");
   }
   sink.finish(file, topic);
   return report;
@@ -159,12 +172,14 @@ ImportReport readRosbag(const fs::path& file, const RosbagConfig& config, const 
 
 BagRewriteReport rewriteRosbag(const fs::path& in, const fs::path& out, const std::string& wanted,
                                const RangesCallback& on_scan) {
-  return rewriteRosbagTopics(in, out, {wanted}, [&](const std::string&, std::vector<float>& ranges, const RawScan& scan) {
-    on_scan(ranges, scan);
-  });
+  return rewriteRosbagTopics(
+      in, out, {wanted}, [&](const std::string&, std::vector<float>& ranges, const RawScan& scan) {
+        on_scan(ranges, scan);
+      });
 }
 
-BagRewriteReport rewriteRosbagTopics(const fs::path& in, const fs::path& out, const std::vector<std::string>& wanted,
+BagRewriteReport rewriteRosbagTopics(const fs::path& in, const fs::path& out,
+                                     const std::vector<std::string>& wanted,
                                      const TopicRangesCallback& on_scan) {
   rosbag::Bag bag;
   openBag(bag, in);
@@ -172,7 +187,8 @@ BagRewriteReport rewriteRosbagTopics(const fs::path& in, const fs::path& out, co
   std::string where;
   try {
     std::vector<std::string> chosen;
-    for (const std::string& w : wanted) chosen.push_back(chooseScanTopic(in, topicsOf(bag), w, kRos1Flavour));
+    for (const std::string& w : wanted)
+      chosen.push_back(chooseScanTopic(in, topicsOf(bag), w, kRos1Flavour));
     report.topic = chosen.front();
     rosbag::Bag written;
     written.open(out.string(), rosbag::bagmode::Write);
@@ -184,14 +200,17 @@ BagRewriteReport rewriteRosbagTopics(const fs::path& in, const fs::path& out, co
       if (std::find(chosen.begin(), chosen.end(), m.getTopic()) != chosen.end()) {
         const sensor_msgs::LaserScan::Ptr msg = m.instantiate<sensor_msgs::LaserScan>();
         if (!msg)
-          throw InputError(in.string(), where, "is not a " + std::string(kLaserScanType) + " (type " + m.getDataType() + ")",
-                           "choose another topic");
+          throw InputError(
+              in.string(), where,
+              "is not a " + std::string(kLaserScanType) + " (type " + m.getDataType() + ")",
+              "choose another topic");
         fillRawScan(viewOf(*msg), RosbagConfig{}, scan);
         scan.source_index = report.scans++;
         on_scan(m.getTopic(), msg->ranges, scan);
         written.write(m.getTopic(), m.getTime(), *msg, m.getConnectionHeader());
       } else {
-        written.write(m.getTopic(), m.getTime(), m, m.getConnectionHeader());  // the serialised bytes as they are
+        // the serialised bytes as they are
+        written.write(m.getTopic(), m.getTime(), m, m.getConnectionHeader());
       }
       ++report.messages;
     }

@@ -30,6 +30,7 @@ std::vector<BagTopic> listBagTopics(const std::filesystem::path& bag);
 /// scans without a pose (before the first or after the last sample) are skipped with a note.
 /// Throws InputError for an unreadable or truncated bag, a missing topic, or a topic of another
 /// message type; DataError when no scan has a pose.
-ImportReport readRosbag(const std::filesystem::path& bag, const RosbagConfig& config, const ScanCallback& on_scan);
+ImportReport readRosbag(const std::filesystem::path& bag, const RosbagConfig& config,
+                        const ScanCallback& on_scan);
 
 }  // namespace lidarcal::io

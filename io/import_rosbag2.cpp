@@ -14,31 +14,37 @@ namespace fs = std::filesystem;
 
 const Rosbag2Topic& topicOf(const Rosbag2& bag, const std::string& name) {
   const auto& topics = bag.topics();
-  return *std::find_if(topics.begin(), topics.end(), [&](const Rosbag2Topic& t) { return t.topic.topic == name; });
+  return *std::find_if(topics.begin(), topics.end(),
+                       [&](const Rosbag2Topic& t) { return t.topic.topic == name; });
 }
 
 /// Only CDR is decoded (what every ROS 2 rmw writes).
 void requireCdr(const fs::path& file, const Rosbag2& bag, const std::string& topic) {
   const std::string& encoding = topicOf(bag, topic).encoding;
   if (encoding != "cdr")
-    throw InputError(file.string(), "topic " + topic, "is serialised as '" + encoding + "', not cdr",
+    throw InputError(file.string(), "topic " + topic,
+                     "is serialised as '" + encoding + "', not cdr",
                      "lidarcal reads ROS 2 messages in CDR only");
 }
 
 /// Runs `decode`; a message that does not decode is an InputError naming the topic and message.
 template <typename F>
-void decodeOrExplain(const fs::path& file, const std::string& topic, std::size_t index, const char* type, F&& decode) {
+void decodeOrExplain(const fs::path& file, const std::string& topic, std::size_t index,
+                     const char* type, F&& decode) {
   try {
     decode();
   } catch (const InputError& e) {
-    throw InputError(file.string(), "topic " + topic + ", message " + std::to_string(index) + ", " + e.item(),
+    throw InputError(file.string(),
+                     "topic " + topic + ", message " + std::to_string(index) + ", " + e.item(),
                      std::string("is not a valid CDR ") + type + ": " + e.problem(),
                      "the bag is damaged, or the topic holds another type than it declares");
   }
 }
 
-/// Fills `poses` from the odometry and tf topics --pose needs (nav_msgs/msg/Odometry, tf2_msgs/msg/TFMessage).
-void readPoses(const Rosbag2& bag, const fs::path& file, const BagPoseConfig& config, BagPoses& poses) {
+/// Fills `poses` from the odometry and tf topics --pose needs (nav_msgs/msg/Odometry,
+/// tf2_msgs/msg/TFMessage).
+void readPoses(const Rosbag2& bag, const fs::path& file, const BagPoseConfig& config,
+               BagPoses& poses) {
   const std::vector<std::string> names = poseTopics(file, bag.bagTopics(), config, kRos2Flavour);
   for (const std::string& topic : names) requireCdr(file, bag, topic);
   std::size_t index = 0;
@@ -65,7 +71,8 @@ void readPoses(const Rosbag2& bag, const fs::path& file, const BagPoseConfig& co
 
 std::vector<BagTopic> listRosbag2Topics(const fs::path& bag) { return Rosbag2(bag).bagTopics(); }
 
-ImportReport readRosbag2(const fs::path& file, const RosbagConfig& config, const ScanCallback& on_scan) {
+ImportReport readRosbag2(const fs::path& file, const RosbagConfig& config,
+                         const ScanCallback& on_scan) {
   config.validate();
   const Rosbag2 bag(file);
   const std::string topic = chooseScanTopic(file, bag.bagTopics(), config.topic, kRos2Flavour);
@@ -81,13 +88,15 @@ ImportReport readRosbag2(const fs::path& file, const RosbagConfig& config, const
   RawScan scan;       // pose: the identity unless config.pose names a source
   std::size_t index = 0;
   bag.forEach({topic}, [&](const Rosbag2Message& m) {
-    decodeOrExplain(file, topic, index, kRos2Flavour.scan_type, [&] { decodeLaserScan(m.data, m.size, msg); });
+    decodeOrExplain(file, topic, index, kRos2Flavour.scan_type,
+                    [&] { decodeLaserScan(m.data, m.size, msg); });
     fillRawScan(msg.view(), config, scan);
     if (report.sensor_name.empty())
-      report.sensor_name = std::string(kRos2Flavour.label) + " " + kRos2Flavour.scan_type + " on " + topic +
-                           (msg.frame_id.empty() ? "" : " (frame " + msg.frame_id + ")");
+      report.sensor_name = std::string(kRos2Flavour.label) + " " + kRos2Flavour.scan_type + " on " +
+                           topic + (msg.frame_id.empty() ? "" : " (frame " + msg.frame_id + ")");
     scan.source_index = index++;
-    scan.progress = total ? std::min(1.0, static_cast<double>(index) / static_cast<double>(total)) : 1.0;
+    scan.progress =
+        total ? std::min(1.0, static_cast<double>(index) / static_cast<double>(total)) : 1.0;
     return sink.offer(scan, msg.frame_id);
   });
   sink.finish(file, topic);

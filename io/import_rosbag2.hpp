@@ -21,6 +21,7 @@ std::vector<BagTopic> listRosbag2Topics(const std::filesystem::path& bag);
 /// ROS1: same conversion, same --pose odom:/tf: handling with nav_msgs/msg/Odometry and
 /// tf2_msgs/msg/TFMessage). Throws InputError for an unreadable bag, a missing topic, a topic of
 /// another type or encoding, or a message that does not decode; DataError when no scan has a pose.
-ImportReport readRosbag2(const std::filesystem::path& bag, const RosbagConfig& config, const ScanCallback& on_scan);
+ImportReport readRosbag2(const std::filesystem::path& bag, const RosbagConfig& config,
+                         const ScanCallback& on_scan);
 
 }  // namespace lidarcal::io

@@ -9,8 +9,10 @@
 namespace lidarcal::io {
 namespace {
 [[noreturn]] void unavailable(const std::filesystem::path& file) {
-  throw InputError(file.string(), "--from rosbag1", "this lidarcal was built without ROS1 bag support",
-                   "install librosbag-storage-dev and libsensor-msgs-dev (scripts/install-deps.sh) and configure "
+  throw InputError(file.string(), "--from rosbag1",
+                   "this lidarcal was built without ROS1 bag support",
+                   "install librosbag-storage-dev and libsensor-msgs-dev (scripts/install-deps.sh) "
+                   "and configure "
                    "with -DLIDARCAL_WITH_ROSBAG=ON, or convert the bag to CSV (docs/FORMAT.md)");
 }
 }  // namespace
@@ -20,10 +22,13 @@ void requireRosbagSupport(const std::filesystem::path& bag) { unavailable(bag); 
 
 std::vector<BagTopic> listBagTopics(const std::filesystem::path& bag) { unavailable(bag); }
 
-ImportReport readRosbag(const std::filesystem::path& bag, const RosbagConfig&, const ScanCallback&) { unavailable(bag); }
+ImportReport readRosbag(const std::filesystem::path& bag, const RosbagConfig&,
+                        const ScanCallback&) {
+  unavailable(bag);
+}
 
-BagRewriteReport rewriteRosbag(const std::filesystem::path& in, const std::filesystem::path&, const std::string&,
-                               const RangesCallback&) {
+BagRewriteReport rewriteRosbag(const std::filesystem::path& in, const std::filesystem::path&,
+                               const std::string&, const RangesCallback&) {
   unavailable(in);
 }
 

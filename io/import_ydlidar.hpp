@@ -26,8 +26,10 @@ struct YdlidarConfig {
   /// Bearing of beam 0 in the robot frame, radians. Default 0: beam 0 points forward; beam i is at
   /// first_beam_rad + 2 pi i / n, counter-clockwise.
   double first_beam_rad = 0.0;
-  double range_min_m = 0.12;   ///< readings below are beams without return, metres; default 0.12 (dataset README)
-  double range_max_m = 10.0;   ///< readings above are beams without return, metres; default 10 (dataset README)
+  /// readings below are beams without return, metres; default 0.12 (dataset README)
+  double range_min_m = 0.12;
+  /// readings above are beams without return, metres; default 10 (dataset README)
+  double range_max_m = 10.0;
 
   /// Throws InputError when a value is out of range.
   void validate() const;
@@ -40,6 +42,7 @@ Pose2 integrateOdometry(const Pose2& previous, double distance_m, double dtheta_
 /// Streams the scans of a .dat file to `on_scan`. Scan 0 is at the origin: the deltas on the
 /// first line describe motion before the recording started and are not applied. Throws
 /// InputError naming the line for a malformed line.
-ImportReport readYdlidarDat(const std::filesystem::path& dat, const YdlidarConfig& config, const ScanCallback& on_scan);
+ImportReport readYdlidarDat(const std::filesystem::path& dat, const YdlidarConfig& config,
+                            const ScanCallback& on_scan);
 
 }  // namespace lidarcal::io

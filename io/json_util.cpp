@@ -17,7 +17,8 @@ nlohmann::json readJsonFile(const std::filesystem::path& file) {
   std::ifstream in(file, std::ios::binary);
   if (!in) {
     std::error_code ec;
-    if (!std::filesystem::exists(file, ec)) throw InputError(file.string(), "", "file does not exist", "check the path");
+    if (!std::filesystem::exists(file, ec))
+      throw InputError(file.string(), "", "file does not exist", "check the path");
     throw InputError(file.string(), "", "cannot be opened for reading", "check its permissions");
   }
   std::stringstream buffer;
@@ -29,9 +30,15 @@ nlohmann::json readJsonFile(const std::filesystem::path& file) {
     // Translate the byte offset into line and column.
     std::size_t line = 1, col = 1;
     for (std::size_t i = 0; i + 1 < e.byte && i < text.size(); ++i) {
-      if (text[i] == '\n') { ++line; col = 1; } else { ++col; }
+      if (text[i] == '\n') {
+        ++line;
+        col = 1;
+      } else {
+        ++col;
+      }
     }
-    throw InputError(file.string(), "line " + std::to_string(line) + " column " + std::to_string(col),
+    throw InputError(file.string(),
+                     "line " + std::to_string(line) + " column " + std::to_string(col),
                      "not valid JSON", "fix the syntax; the file must be one JSON object");
   }
 }
@@ -53,7 +60,9 @@ void JsonView::requireObject() const {
   if (!value_->is_object()) fail("", "must be a JSON object");
 }
 
-bool JsonView::has(const std::string& key) const { return value_->is_object() && value_->contains(key); }
+bool JsonView::has(const std::string& key) const {
+  return value_->is_object() && value_->contains(key);
+}
 
 const nlohmann::json& JsonView::member(const std::string& key) const {
   requireObject();
@@ -88,15 +97,21 @@ double JsonView::asNumber() const {
   return v;
 }
 
-double JsonView::getNumber(const std::string& key) const { return JsonView(file_, member(key), pathOf(key)).asNumber(); }
-double JsonView::getNumber(const std::string& key, double fallback) const { return has(key) ? getNumber(key) : fallback; }
+double JsonView::getNumber(const std::string& key) const {
+  return JsonView(file_, member(key), pathOf(key)).asNumber();
+}
+double JsonView::getNumber(const std::string& key, double fallback) const {
+  return has(key) ? getNumber(key) : fallback;
+}
 
 double JsonView::getPositive(const std::string& key) const {
   const double v = getNumber(key);
   if (!(v > 0.0)) fail(key, "must be positive");
   return v;
 }
-double JsonView::getPositive(const std::string& key, double fallback) const { return has(key) ? getPositive(key) : fallback; }
+double JsonView::getPositive(const std::string& key, double fallback) const {
+  return has(key) ? getPositive(key) : fallback;
+}
 
 double JsonView::getNonNegative(const std::string& key) const {
   const double v = getNumber(key);
@@ -114,7 +129,9 @@ int JsonView::getInt(const std::string& key) const {
   if (v < -2147483647LL || v > 2147483647LL) fail(key, "is out of range");
   return static_cast<int>(v);
 }
-int JsonView::getInt(const std::string& key, int fallback) const { return has(key) ? getInt(key) : fallback; }
+int JsonView::getInt(const std::string& key, int fallback) const {
+  return has(key) ? getInt(key) : fallback;
+}
 
 int JsonView::getPositiveInt(const std::string& key) const {
   const int v = getInt(key);

@@ -21,9 +21,9 @@ class JsonView {
 
   void requireObject() const;
   bool has(const std::string& key) const;
-  JsonView child(const std::string& key) const;            ///< required object member
+  JsonView child(const std::string& key) const;               ///< required object member
   std::vector<JsonView> array(const std::string& key) const;  ///< required array member
-  std::vector<JsonView> elements() const;                  ///< this value as an array
+  std::vector<JsonView> elements() const;                     ///< this value as an array
 
   double getNumber(const std::string& key) const;
   double getNumber(const std::string& key, double fallback) const;

@@ -13,16 +13,16 @@ namespace lidarcal::io {
 
 /// One detection of a landmark in one scan. Positions in the sensor frame of that scan.
 struct LandmarkRow {
-  std::string file;         ///< scan file name (no directory)
-  std::size_t stop = 0;     ///< stop index in the sequence (0-based)
-  int landmark = 0;         ///< landmark id (>= 1), the `label` of its points
-  double bearing_rad = 0.0; ///< bearing of the centre, radians, (-pi, pi]
-  double range_m = 0.0;     ///< distance from the sensor to the centre, metres
-  double centre_x_m = 0.0;  ///< centre x, metres
-  double centre_y_m = 0.0;  ///< centre y, metres
-  double radius_m = 0.0;    ///< radius used for the centre, metres
-  std::size_t n_points = 0; ///< points on the circle (labelled with the id)
-  double rms_m = 0.0;       ///< RMS distance of those points to the circle, metres
+  std::string file;          ///< scan file name (no directory)
+  std::size_t stop = 0;      ///< stop index in the sequence (0-based)
+  int landmark = 0;          ///< landmark id (>= 1), the `label` of its points
+  double bearing_rad = 0.0;  ///< bearing of the centre, radians, (-pi, pi]
+  double range_m = 0.0;      ///< distance from the sensor to the centre, metres
+  double centre_x_m = 0.0;   ///< centre x, metres
+  double centre_y_m = 0.0;   ///< centre y, metres
+  double radius_m = 0.0;     ///< radius used for the centre, metres
+  std::size_t n_points = 0;  ///< points on the circle (labelled with the id)
+  double rms_m = 0.0;        ///< RMS distance of those points to the circle, metres
 };
 
 /// The header line (without newline).

@@ -11,14 +11,16 @@
 
 namespace lidarcal::io {
 
-std::vector<Observation> observationsFromLandmarksCsv(const std::filesystem::path& file, RangeReference reference) {
+std::vector<Observation> observationsFromLandmarksCsv(const std::filesystem::path& file,
+                                                      RangeReference reference) {
   CsvReader csv(file, "landmarks.csv is written by `lidarcal detect` (docs/FORMAT.md)");
   const std::vector<std::string> header = csv.readHeader();
   std::map<std::string, std::size_t> column;
   for (std::size_t i = 0; i < header.size(); ++i) column[header[i]] = i;
   for (const char* needed : {"stop", "landmark", "bearing_rad", "range_m", "radius_m"})
     if (!column.count(needed))
-      throw InputError(file.string(), "line 1", std::string("no column `") + needed + "` in the header",
+      throw InputError(file.string(), "line 1",
+                       std::string("no column `") + needed + "` in the header",
                        "landmarks.csv is written by `lidarcal detect` (docs/FORMAT.md)");
   std::vector<Observation> out;
   while (csv.next(header.size())) {
@@ -38,7 +40,8 @@ std::vector<Observation> observationsFromLandmarksCsv(const std::filesystem::pat
     }
     out.push_back(o);
   }
-  std::stable_sort(out.begin(), out.end(), [](const Observation& a, const Observation& b) { return a.stop < b.stop; });
+  std::stable_sort(out.begin(), out.end(),
+                   [](const Observation& a, const Observation& b) { return a.stop < b.stop; });
   return out;
 }
 

@@ -18,14 +18,17 @@ namespace lidarcal::io {
 
 /// Which point of a round landmark the converted range refers to.
 enum class RangeReference {
-  centre,   ///< range_m as detected: sensor to the fitted centre (default; the point a landmark map holds)
-  surface,  ///< range_m - radius_m: sensor to the nearest point of the surface (what a single beam reads)
+  /// range_m as detected: sensor to the fitted centre (default; the point a landmark map holds)
+  centre,
+  /// range_m - radius_m: sensor to the nearest point of the surface (what a single beam reads)
+  surface,
 };
 
 /// Reads landmarks.csv and returns one observation per row: sensor 0, the row's stop and
 /// landmark id (ids <= 0 become -1, unassociated), its range (per `reference`) and bearing.
 /// Throws InputError (file, line, column) on a missing column or a malformed value.
-std::vector<Observation> observationsFromLandmarksCsv(const std::filesystem::path& file, RangeReference reference);
+std::vector<Observation> observationsFromLandmarksCsv(const std::filesystem::path& file,
+                                                      RangeReference reference);
 
 /// The commanded motion into every stop: the relative pose of stop k in the frame of stop k-1
 /// (stop 0: zero motion).

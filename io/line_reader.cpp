@@ -18,12 +18,15 @@ constexpr int kBufferBytes = 1 << 16;
 
 LineReader::LineReader(const fs::path& file) : file_(file) {
   std::error_code ec;
-  if (!fs::exists(file, ec)) throw InputError(file.string(), "", "file does not exist", "check the path");
-  if (fs::is_directory(file, ec)) throw InputError(file.string(), "", "is a directory, expected a file", "pass the file itself");
+  if (!fs::exists(file, ec))
+    throw InputError(file.string(), "", "file does not exist", "check the path");
+  if (fs::is_directory(file, ec))
+    throw InputError(file.string(), "", "is a directory, expected a file", "pass the file itself");
   const auto bytes = fs::file_size(file, ec);
   file_bytes_ = ec ? 0 : static_cast<std::size_t>(bytes);
   gz_ = gzopen(file.c_str(), "rb");
-  if (!gz_) throw InputError(file.string(), "", "cannot be opened for reading", "check its permissions");
+  if (!gz_)
+    throw InputError(file.string(), "", "cannot be opened for reading", "check its permissions");
   gzbuffer(handle(gz_), kBufferBytes);
   // gzdirect() is only meaningful after the first read has looked at the magic bytes.
   const int c = gzgetc(handle(gz_));
@@ -50,11 +53,14 @@ void LineReader::fail(const std::string& zlib_text) const {
   std::string zlib_message = zlib_text;
   const std::string prefix = file_.string() + ": ";
   if (zlib_message.compare(0, prefix.size(), prefix) == 0) zlib_message.erase(0, prefix.size());
-  const std::string item = line_number_ == 0 ? "start of file" : "after line " + std::to_string(line_number_);
+  const std::string item =
+      line_number_ == 0 ? "start of file" : "after line " + std::to_string(line_number_);
   if (compressed_)
-    throw InputError(file_.string(), item, "the gzip data is damaged or cut short (zlib: " + zlib_message + ")",
-                     "the file is corrupt: copy or download it again (`gzip -t FILE` checks a gzip file)");
-  throw InputError(file_.string(), item, "read error (" + zlib_message + ")", "check the file and the disk");
+    throw InputError(
+        file_.string(), item, "the gzip data is damaged or cut short (zlib: " + zlib_message + ")",
+        "the file is corrupt: copy or download it again (`gzip -t FILE` checks a gzip file)");
+  throw InputError(file_.string(), item, "read error (" + zlib_message + ")",
+                   "check the file and the disk");
 }
 
 bool LineReader::next(std::string& line) {
@@ -84,7 +90,8 @@ bool LineReader::next(std::string& line) {
 double LineReader::progress() const {
   if (file_bytes_ == 0) return 1.0;
   const z_off_t offset = gzoffset(handle(gz_));
-  return offset < 0 ? 0.0 : std::min(1.0, static_cast<double>(offset) / static_cast<double>(file_bytes_));
+  return offset < 0 ? 0.0
+                    : std::min(1.0, static_cast<double>(offset) / static_cast<double>(file_bytes_));
 }
 
 }  // namespace lidarcal::io

@@ -5,8 +5,8 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
-#include <map>
 #include <functional>
+#include <map>
 #include <queue>
 #include <tuple>
 
@@ -26,20 +26,28 @@ constexpr std::uint8_t kMagic[8] = {0x89, 'M', 'C', 'A', 'P', '0', '\r', '\n'};
 // MCAP spec, "Records": opcode (uint8), content length (uint64), content.
 constexpr std::size_t kRecordHeadBytes = 9;
 enum Opcode : std::uint8_t {
-  kHeader = 0x01, kFooter = 0x02, kSchema = 0x03, kChannel = 0x04, kMessage = 0x05, kChunk = 0x06, kMetadata = 0x0C
+  kHeader = 0x01,
+  kFooter = 0x02,
+  kSchema = 0x03,
+  kChannel = 0x04,
+  kMessage = 0x05,
+  kChunk = 0x06,
+  kMetadata = 0x0C
 };
-// Message record: channel_id uint16, sequence uint32, log_time uint64, publish_time uint64, then the data.
+// Message record: channel_id uint16, sequence uint32, log_time uint64, publish_time uint64, then
+// the data.
 constexpr std::size_t kMessageFixedBytes = 2 + 4 + 8 + 8;
 
 const char* const kRemedy =
-    "the file is damaged or cut short (recording interrupted): `mcap recover IN.mcap -o OUT.mcap` (the mcap CLI) "
+    "the file is damaged or cut short (recording interrupted): `mcap recover IN.mcap -o OUT.mcap` "
+    "(the mcap CLI) "
     "rescues what it can; or record it again";
 
 std::string opcodeName(std::uint8_t op) {
-  static const char* const kNames[] = {"?",          "Header",          "Footer",     "Schema",   "Channel",
-                                       "Message",    "Chunk",           "MessageIndex", "ChunkIndex", "Attachment",
-                                       "AttachmentIndex", "Statistics", "Metadata",   "MetadataIndex", "SummaryOffset",
-                                       "DataEnd"};
+  static const char* const kNames[] = {
+      "?",        "Header",        "Footer",        "Schema",     "Channel",         "Message",
+      "Chunk",    "MessageIndex",  "ChunkIndex",    "Attachment", "AttachmentIndex", "Statistics",
+      "Metadata", "MetadataIndex", "SummaryOffset", "DataEnd"};
   if (op >= 1 && op <= 0x0f) return kNames[op];
   char text[24];
   std::snprintf(text, sizeof text, "opcode 0x%02x", op);
@@ -59,12 +67,13 @@ struct Place {
 /// The little-endian fields of one record's content (MCAP spec, "Serialization"), bounds-checked.
 class Fields {
  public:
-  Fields(const std::uint8_t* data, std::uint64_t size, const Place& place) : p_(data), n_(size), place_(place) {}
+  Fields(const std::uint8_t* data, std::uint64_t size, const Place& place)
+      : p_(data), n_(size), place_(place) {}
   std::uint64_t left() const { return n_ - pos_; }
   const std::uint8_t* take(std::uint64_t n) {
     if (n > left())
-      corrupt(place_, "a field of " + std::to_string(n) + " bytes at byte " + std::to_string(pos_) + " of the record runs past its end (" +
-                          std::to_string(n_) + " bytes)");
+      corrupt(place_, "a field of " + std::to_string(n) + " bytes at byte " + std::to_string(pos_) +
+                          " of the record runs past its end (" + std::to_string(n_) + " bytes)");
     const std::uint8_t* at = p_ + pos_;
     pos_ += n;
     return at;
@@ -101,9 +110,11 @@ struct Record {
 };
 
 /// The record at `pos` of `buf` (advancing `pos`); false at the end.
-bool nextRecord(const std::vector<std::uint8_t>& buf, std::uint64_t& pos, Record& r, const Place& chunk) {
+bool nextRecord(const std::vector<std::uint8_t>& buf, std::uint64_t& pos, Record& r,
+                const Place& chunk) {
   if (pos == buf.size()) return false;
-  const Place here{chunk.file, chunk.where + ", record at byte " + std::to_string(pos) + " of its records"};
+  const Place here{chunk.file,
+                   chunk.where + ", record at byte " + std::to_string(pos) + " of its records"};
   Fields f(buf.data() + pos, buf.size() - pos, here);
   r.op = static_cast<std::uint8_t>(f.uint(1));
   r.length = f.u64();
@@ -140,53 +151,67 @@ void decompressZstd(const ChunkHead& h, std::vector<std::uint8_t>& out, const Pl
     corrupt(place, std::string("zstd cannot decompress the records (") + ZSTD_getErrorName(n) +
                        "; more data than uncompressed_size also gives this)");
   if (n != out.size())
-    corrupt(place, "the records decompress to " + std::to_string(n) + " bytes, uncompressed_size says " + std::to_string(out.size()));
+    corrupt(place, "the records decompress to " + std::to_string(n) +
+                       " bytes, uncompressed_size says " + std::to_string(out.size()));
 }
 
 // LZ4 frame format (not raw LZ4 blocks), as the MCAP spec's "lz4" compression names it.
 void decompressLz4(const ChunkHead& h, std::vector<std::uint8_t>& out, const Place& place) {
   LZ4F_dctx* ctx = nullptr;
-  if (LZ4F_isError(LZ4F_createDecompressionContext(&ctx, LZ4F_VERSION))) corrupt(place, "lz4: out of memory");
+  if (LZ4F_isError(LZ4F_createDecompressionContext(&ctx, LZ4F_VERSION)))
+    corrupt(place, "lz4: out of memory");
   std::size_t in_done = 0, out_done = 0, hint = 1;
   while (in_done < h.records_size && hint != 0) {
-    std::size_t out_n = out.size() - out_done, in_n = static_cast<std::size_t>(h.records_size) - in_done;
+    std::size_t out_n = out.size() - out_done,
+                in_n = static_cast<std::size_t>(h.records_size) - in_done;
     hint = LZ4F_decompress(ctx, out.data() + out_done, &out_n, h.records + in_done, &in_n, nullptr);
     if (LZ4F_isError(hint)) break;
-    if (in_n == 0 && out_n == 0) break;  // output full with input left: more data than uncompressed_size
+    // output full with input left: more data than uncompressed_size
+    if (in_n == 0 && out_n == 0) break;
     in_done += in_n;
     out_done += out_n;
   }
   LZ4F_freeDecompressionContext(ctx);
-  if (LZ4F_isError(hint)) corrupt(place, std::string("lz4 cannot decompress the records (") + LZ4F_getErrorName(hint) + ")");
+  if (LZ4F_isError(hint))
+    corrupt(place,
+            std::string("lz4 cannot decompress the records (") + LZ4F_getErrorName(hint) + ")");
   if (hint != 0 || in_done != h.records_size || out_done != out.size())
-    corrupt(place, "the lz4 records do not decompress to uncompressed_size (" + std::to_string(out.size()) +
+    corrupt(place, "the lz4 records do not decompress to uncompressed_size (" +
+                       std::to_string(out.size()) +
                        " bytes): the chunk is cut short or its size is wrong");
 }
 
-/// The chunk's records, uncompressed, in `out`. Checks uncompressed_size (capped) and the CRC when given.
+/// The chunk's records, uncompressed, in `out`. Checks uncompressed_size (capped) and the CRC when
+/// given.
 void unpackChunk(const ChunkHead& h, std::vector<std::uint8_t>& out, const Place& place) {
   if (h.compression != "" && h.compression != "zstd" && h.compression != "lz4")
-    corrupt(place, "unknown compression '" + h.compression + "' (this reader knows none, zstd and lz4)");
-  const std::uint64_t cap = std::min<std::uint64_t>(kMaxChunkBytes, h.records_size * 1024 + (1u << 20));
+    corrupt(place,
+            "unknown compression '" + h.compression + "' (this reader knows none, zstd and lz4)");
+  const std::uint64_t cap =
+      std::min<std::uint64_t>(kMaxChunkBytes, h.records_size * 1024 + (1u << 20));
   if (h.uncompressed_size > cap || (h.compression.empty() && h.uncompressed_size != h.records_size))
-    corrupt(place, "uncompressed_size " + std::to_string(h.uncompressed_size) + " does not fit its " +
-                       std::to_string(h.records_size) + " bytes of " + (h.compression.empty() ? "uncompressed" : h.compression) +
-                       " records");
+    corrupt(place, "uncompressed_size " + std::to_string(h.uncompressed_size) +
+                       " does not fit its " + std::to_string(h.records_size) + " bytes of " +
+                       (h.compression.empty() ? "uncompressed" : h.compression) + " records");
   out.resize(static_cast<std::size_t>(h.uncompressed_size));
-  if (h.compression.empty()) std::copy(h.records, h.records + h.records_size, out.begin());
-  else if (h.compression == "zstd") decompressZstd(h, out, place);
-  else decompressLz4(h, out, place);
+  if (h.compression.empty())
+    std::copy(h.records, h.records + h.records_size, out.begin());
+  else if (h.compression == "zstd")
+    decompressZstd(h, out, place);
+  else
+    decompressLz4(h, out, place);
   // MCAP spec: uncompressed_crc is the CRC-32 of the uncompressed records; 0 means not computed.
-  if (h.crc != 0 && crc32_z(0L, out.data(), out.size()) != h.crc) corrupt(place, "the records fail their CRC-32 check");
+  if (h.crc != 0 && crc32_z(0L, out.data(), out.size()) != h.crc)
+    corrupt(place, "the records fail their CRC-32 check");
 }
 
 /// A chunk, or a message outside chunks, and the messages in it.
 struct Source {
-  std::uint64_t offset = 0;              ///< byte offset of the record
-  std::uint64_t length = 0;              ///< content length
+  std::uint64_t offset = 0;  ///< byte offset of the record
+  std::uint64_t length = 0;  ///< content length
   bool chunk = false;
   std::uint64_t min_time = ~std::uint64_t{0};  ///< earliest log_time of its messages
-  std::vector<std::uint16_t> channels;   ///< channel ids of its messages, sorted, unique
+  std::vector<std::uint16_t> channels;         ///< channel ids of its messages, sorted, unique
 };
 
 }  // namespace
@@ -196,21 +221,23 @@ struct McapReader::Impl {
   std::string name;
   std::ifstream in;
   std::uint64_t size = 0;
-  std::vector<Source> sources;                       // in file order
+  std::vector<Source> sources;  // in file order
   struct SchemaRecord {
     std::string name, encoding, data;
   };
-  std::map<std::uint16_t, SchemaRecord> schemas;      // id -> schema
-  std::vector<std::string> metadata;                  // contents of the Metadata records
-  std::map<std::uint16_t, std::size_t> channel_at;    // id -> index in channels
+  std::map<std::uint16_t, SchemaRecord> schemas;    // id -> schema
+  std::vector<std::string> metadata;                // contents of the Metadata records
+  std::map<std::uint16_t, std::size_t> channel_at;  // id -> index in channels
 
   /// `n` bytes at `offset` (checked against the file size by the caller).
-  void read(std::uint64_t offset, std::uint64_t n, std::vector<std::uint8_t>& buf, const Place& place) {
+  void read(std::uint64_t offset, std::uint64_t n, std::vector<std::uint8_t>& buf,
+            const Place& place) {
     buf.resize(static_cast<std::size_t>(n));
     in.clear();
     in.seekg(static_cast<std::streamoff>(offset));
     in.read(reinterpret_cast<char*>(buf.data()), static_cast<std::streamsize>(n));
-    if (static_cast<std::uint64_t>(in.gcount()) != n) corrupt(place, "cannot be read (I/O error or the file shrank)");
+    if (static_cast<std::uint64_t>(in.gcount()) != n)
+      corrupt(place, "cannot be read (I/O error or the file shrank)");
   }
 };
 
@@ -218,8 +245,8 @@ namespace {
 
 using Impl = McapReader::Impl;
 
-/// Schema and Channel records (MCAP spec, "Schema", "Channel"): the first definition of an id counts
-/// (the summary section repeats them).
+/// Schema and Channel records (MCAP spec, "Schema", "Channel"): the first definition of an id
+/// counts (the summary section repeats them).
 void define(Impl& im, std::vector<McapChannel>& channels, const Record& r, const Place& place) {
   Fields f(r.content, r.length, place);
   if (r.op == kSchema) {
@@ -240,8 +267,8 @@ void define(Impl& im, std::vector<McapChannel>& channels, const Record& r, const
   const std::uint8_t* metadata = f.take(metadata_bytes);
   c.metadata.assign(reinterpret_cast<const char*>(metadata) - 4, metadata_bytes + 4);
   if (schema_id != 0 && !im.schemas.count(schema_id))
-    corrupt(place, "channel " + std::to_string(c.id) + " refers to schema " + std::to_string(schema_id) +
-                       ", which no Schema record before it defines");
+    corrupt(place, "channel " + std::to_string(c.id) + " refers to schema " +
+                       std::to_string(schema_id) + ", which no Schema record before it defines");
   if (schema_id != 0) {
     const Impl::SchemaRecord& schema = im.schemas.at(schema_id);
     c.schema_id = schema_id;
@@ -253,7 +280,8 @@ void define(Impl& im, std::vector<McapChannel>& channels, const Record& r, const
 }
 
 /// A Message record's channel and log_time; counts it on its channel and in `source`.
-void noteMessage(Impl& im, std::vector<McapChannel>& channels, const Record& r, Source& source, const Place& place) {
+void noteMessage(Impl& im, std::vector<McapChannel>& channels, const Record& r, Source& source,
+                 const Place& place) {
   Fields f(r.content, r.length, place);
   const std::uint16_t channel = f.u16();
   f.u32();  // sequence
@@ -261,11 +289,13 @@ void noteMessage(Impl& im, std::vector<McapChannel>& channels, const Record& r, 
   f.u64();  // publish_time
   const auto it = im.channel_at.find(channel);
   if (it == im.channel_at.end())
-    corrupt(place, "a message on channel " + std::to_string(channel) + ", which no Channel record before it defines");
+    corrupt(place, "a message on channel " + std::to_string(channel) +
+                       ", which no Channel record before it defines");
   ++channels[it->second].messages;
   source.min_time = std::min(source.min_time, log_time);
   if (!std::binary_search(source.channels.begin(), source.channels.end(), channel))
-    source.channels.insert(std::upper_bound(source.channels.begin(), source.channels.end(), channel), channel);
+    source.channels.insert(
+        std::upper_bound(source.channels.begin(), source.channels.end(), channel), channel);
 }
 
 void indexChunk(Impl& im, std::vector<McapChannel>& channels, Source& source, const Place& place) {
@@ -276,8 +306,10 @@ void indexChunk(Impl& im, std::vector<McapChannel>& channels, Source& source, co
   Record r;
   while (nextRecord(records, pos, r, place)) {
     const Place inner{place.file, place.where + ", its " + opcodeName(r.op) + " record"};
-    if (r.op == kSchema || r.op == kChannel) define(im, channels, r, inner);
-    else if (r.op == kMessage) noteMessage(im, channels, r, source, inner);
+    if (r.op == kSchema || r.op == kChannel)
+      define(im, channels, r, inner);
+    else if (r.op == kMessage)
+      noteMessage(im, channels, r, source, inner);
   }
 }
 
@@ -294,7 +326,8 @@ Record recordHead(Impl& im, std::uint64_t pos) {
   r.length = f.u64();
   if (r.length > im.size - pos - kRecordHeadBytes)
     corrupt({im.name, "record at byte " + std::to_string(pos) + " (" + opcodeName(r.op) + ")"},
-            "its length " + std::to_string(r.length) + " runs past the end of the file (" + std::to_string(im.size) +
+            "its length " + std::to_string(r.length) + " runs past the end of the file (" +
+                std::to_string(im.size) +
                 " bytes): the file is cut short, or the length is damaged");
   return r;
 }
@@ -305,7 +338,9 @@ void checkMagic(Impl& im, std::uint64_t pos, const char* which) {
   std::vector<std::uint8_t> magic;
   im.read(pos, sizeof kMagic, magic, place);
   if (!std::equal(magic.begin(), magic.end(), kMagic))
-    throw InputError(im.name, place.where, "not the MCAP magic \\x89MCAP0\\r\\n: not an MCAP file, or a damaged one", kRemedy);
+    throw InputError(im.name, place.where,
+                     "not the MCAP magic \\x89MCAP0\\r\\n: not an MCAP file, or a damaged one",
+                     kRemedy);
 }
 
 /// Reads the data section record by record up to the Footer (MCAP spec, "File Structure").
@@ -314,7 +349,8 @@ void indexFile(Impl& im, std::vector<McapChannel>& channels) {
   std::uint64_t pos = sizeof kMagic;
   for (bool first = true;; first = false) {
     Record r = recordHead(im, pos);
-    const Place place{im.name, "record at byte " + std::to_string(pos) + " (" + opcodeName(r.op) + ")"};
+    const Place place{im.name,
+                      "record at byte " + std::to_string(pos) + " (" + opcodeName(r.op) + ")"};
     if (first && r.op != kHeader) corrupt(place, "the first record must be a Header");
     Source s;
     s.offset = pos;
@@ -322,14 +358,18 @@ void indexFile(Impl& im, std::vector<McapChannel>& channels) {
     std::vector<std::uint8_t> content;
     if (r.op == kFooter) return checkMagic(im, pos + kRecordHeadBytes + r.length, "closing");
     if (r.op == kSchema || r.op == kChannel || r.op == kMessage) {
-      im.read(pos + kRecordHeadBytes, std::min<std::uint64_t>(r.length, r.op == kMessage ? kMessageFixedBytes : r.length),
+      im.read(pos + kRecordHeadBytes,
+              std::min<std::uint64_t>(r.length, r.op == kMessage ? kMessageFixedBytes : r.length),
               content, place);
       r.content = content.data();
-      if (r.op == kMessage && r.length < kMessageFixedBytes) corrupt(place, "shorter than a Message's fixed fields");
+      if (r.op == kMessage && r.length < kMessageFixedBytes)
+        corrupt(place, "shorter than a Message's fixed fields");
       if (r.op == kMessage) r.length = kMessageFixedBytes;
     }
-    if (r.op == kSchema || r.op == kChannel) define(im, channels, r, place);
-    else if (r.op == kMessage) noteMessage(im, channels, r, s, place);
+    if (r.op == kSchema || r.op == kChannel)
+      define(im, channels, r, place);
+    else if (r.op == kMessage)
+      noteMessage(im, channels, r, s, place);
     else if (r.op == kMetadata) {
       im.read(pos + kRecordHeadBytes, r.length, content, place);
       im.metadata.emplace_back(content.begin(), content.end());
@@ -337,7 +377,8 @@ void indexFile(Impl& im, std::vector<McapChannel>& channels) {
       s.chunk = true;
       indexChunk(im, channels, s, place);
     }
-    if ((r.op == kMessage || r.op == kChunk) && !s.channels.empty()) im.sources.push_back(std::move(s));
+    if ((r.op == kMessage || r.op == kChunk) && !s.channels.empty())
+      im.sources.push_back(std::move(s));
     pos += kRecordHeadBytes + s.length;  // other records (index, summary, unknown opcodes) skipped
   }
 }
@@ -357,8 +398,8 @@ struct Loaded {
   std::size_t left = 0;
 };
 
-void addEntry(const Record& r, const std::vector<McapChannel>& channels, const Impl& im, const std::vector<bool>& wanted,
-              Loaded& out, const Place& place) {
+void addEntry(const Record& r, const std::vector<McapChannel>& channels, const Impl& im,
+              const std::vector<bool>& wanted, Loaded& out, const Place& place) {
   Fields f(r.content, r.length, place);
   const std::uint16_t channel = f.u16();
   const std::uint32_t sequence = f.u32();
@@ -366,12 +407,14 @@ void addEntry(const Record& r, const std::vector<McapChannel>& channels, const I
   const std::uint64_t publish_time = f.u64();
   if (!wanted[channel]) return;
   const std::uint64_t size = f.left();
-  out.entries.push_back(
-      {time, &channels[im.channel_at.at(channel)], f.take(size), static_cast<std::size_t>(size), sequence, publish_time});
+  out.entries.push_back({time, &channels[im.channel_at.at(channel)], f.take(size),
+                         static_cast<std::size_t>(size), sequence, publish_time});
 }
 
-void load(Impl& im, const Source& s, const std::vector<McapChannel>& channels, const std::vector<bool>& wanted, Loaded& out) {
-  const Place place{im.name, "record at byte " + std::to_string(s.offset) + (s.chunk ? " (Chunk)" : " (Message)")};
+void load(Impl& im, const Source& s, const std::vector<McapChannel>& channels,
+          const std::vector<bool>& wanted, Loaded& out) {
+  const Place place{im.name, "record at byte " + std::to_string(s.offset) +
+                                 (s.chunk ? " (Chunk)" : " (Message)")};
   im.read(s.offset + kRecordHeadBytes, s.length, out.content, place);
   if (!s.chunk) {
     addEntry({kMessage, out.content.data(), s.length}, channels, im, wanted, out, place);
@@ -383,7 +426,8 @@ void load(Impl& im, const Source& s, const std::vector<McapChannel>& channels, c
     while (nextRecord(out.records, pos, r, place))
       if (r.op == kMessage) addEntry(r, channels, im, wanted, out, place);
   }
-  std::stable_sort(out.entries.begin(), out.entries.end(), [](const auto& a, const auto& b) { return a.time < b.time; });
+  std::stable_sort(out.entries.begin(), out.entries.end(),
+                   [](const auto& a, const auto& b) { return a.time < b.time; });
   out.left = out.entries.size();
 }
 
@@ -393,10 +437,12 @@ McapReader::McapReader(const fs::path& file) : impl_(std::make_unique<Impl>()) {
   impl_->path = file;
   impl_->name = file.string();
   std::error_code ec;
-  if (!fs::exists(file, ec)) throw InputError(impl_->name, "", "file does not exist", "check the path");
+  if (!fs::exists(file, ec))
+    throw InputError(impl_->name, "", "file does not exist", "check the path");
   impl_->in.open(file, std::ios::binary);
   const auto size = fs::file_size(file, ec);
-  if (!impl_->in || ec) throw InputError(impl_->name, "", "cannot be opened for reading", "check its permissions");
+  if (!impl_->in || ec)
+    throw InputError(impl_->name, "", "cannot be opened for reading", "check its permissions");
   impl_->size = size;
   indexFile(*impl_, channels_);
 }
@@ -405,24 +451,29 @@ McapReader::~McapReader() = default;
 
 const std::vector<std::string>& McapReader::metadataRecords() const { return impl_->metadata; }
 
-bool McapReader::forEachMessage(const std::set<std::string>& topics, const McapMessageCallback& on_message) const {
+bool McapReader::forEachMessage(const std::set<std::string>& topics,
+                                const McapMessageCallback& on_message) const {
   std::vector<bool> wanted(65536, false);
   for (const auto& c : channels_) wanted[c.id] = topics.count(c.topic) > 0;
   // Sources holding a wanted channel, by earliest log_time (ties in file order).
   std::vector<std::size_t> order;
   for (std::size_t k = 0; k < impl_->sources.size(); ++k) {
     const auto& ch = impl_->sources[k].channels;
-    if (std::any_of(ch.begin(), ch.end(), [&](std::uint16_t id) { return wanted[id]; })) order.push_back(k);
+    if (std::any_of(ch.begin(), ch.end(), [&](std::uint16_t id) { return wanted[id]; }))
+      order.push_back(k);
   }
-  std::stable_sort(order.begin(), order.end(),
-                   [&](std::size_t a, std::size_t b) { return impl_->sources[a].min_time < impl_->sources[b].min_time; });
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return impl_->sources[a].min_time < impl_->sources[b].min_time;
+  });
   // k-way merge: a source is loaded once the next message due is not earlier than its first.
-  using Key = std::tuple<std::uint64_t, std::size_t, std::size_t>;  // log_time, source (file order), entry
+  // log_time, source (file order), entry
+  using Key = std::tuple<std::uint64_t, std::size_t, std::size_t>;
   std::priority_queue<Key, std::vector<Key>, std::greater<Key>> due;
   std::map<std::size_t, Loaded> open;
   std::size_t next = 0;
   for (;;) {
-    while (next < order.size() && (due.empty() || impl_->sources[order[next]].min_time <= std::get<0>(due.top()))) {
+    while (next < order.size() &&
+           (due.empty() || impl_->sources[order[next]].min_time <= std::get<0>(due.top()))) {
       const std::size_t k = order[next++];
       Loaded& l = open[k];
       load(*impl_, impl_->sources[k], channels_, wanted, l);

@@ -24,23 +24,25 @@ namespace lidarcal::io {
 
 /// A channel (topic) of an MCAP file with its schema.
 struct McapChannel {
-  std::uint16_t id = 0;            ///< channel id
-  std::string topic;               ///< e.g. /scan
-  std::string message_encoding;    ///< e.g. cdr (ROS 2)
-  std::string schema_name;         ///< e.g. sensor_msgs/msg/LaserScan; empty when the channel has no schema
-  std::size_t messages = 0;        ///< messages on the channel in the data section
-  std::uint16_t schema_id = 0;     ///< the Schema record's id (0: none)
-  std::string schema_encoding;     ///< e.g. ros2msg; empty when the channel has no schema
-  std::string schema_data;         ///< the schema's definition, as recorded
-  std::string metadata;            ///< the channel's metadata map as recorded (MCAP Map bytes, length prefix included)
+  std::uint16_t id = 0;          ///< channel id
+  std::string topic;             ///< e.g. /scan
+  std::string message_encoding;  ///< e.g. cdr (ROS 2)
+  /// e.g. sensor_msgs/msg/LaserScan; empty when the channel has no schema
+  std::string schema_name;
+  std::size_t messages = 0;     ///< messages on the channel in the data section
+  std::uint16_t schema_id = 0;  ///< the Schema record's id (0: none)
+  std::string schema_encoding;  ///< e.g. ros2msg; empty when the channel has no schema
+  std::string schema_data;      ///< the schema's definition, as recorded
+  /// the channel's metadata map as recorded (MCAP Map bytes, length prefix included)
+  std::string metadata;
 };
 
 /// One message handed on; `data` is valid during the callback only.
 struct McapMessage {
   const McapChannel* channel = nullptr;
-  std::uint64_t log_time_ns = 0;   ///< log_time, nanoseconds
+  std::uint64_t log_time_ns = 0;      ///< log_time, nanoseconds
   std::uint64_t publish_time_ns = 0;  ///< publish_time, nanoseconds
-  std::uint32_t sequence = 0;      ///< the Message record's sequence number
+  std::uint32_t sequence = 0;         ///< the Message record's sequence number
   const std::uint8_t* data = nullptr;
   std::size_t size = 0;
 };
@@ -61,14 +63,16 @@ class McapReader {
 
   /// The channels in the order their Channel records come.
   const std::vector<McapChannel>& channels() const { return channels_; }
-  /// The contents of the Metadata records outside chunks (name and map, as recorded), in file order.
+  /// The contents of the Metadata records outside chunks (name and map, as recorded), in file
+  /// order.
   const std::vector<std::string>& metadataRecords() const;
 
   /// Hands on the messages of the channels on `topics` in log-time order (equal times in file
   /// order), until `on_message` returns false. Chunks whose times overlap are merged; only those
   /// that hold a message due next are decompressed, so memory stays that of the overlapping
   /// chunks. Returns false when stopped.
-  bool forEachMessage(const std::set<std::string>& topics, const McapMessageCallback& on_message) const;
+  bool forEachMessage(const std::set<std::string>& topics,
+                      const McapMessageCallback& on_message) const;
 
   struct Impl;  ///< the open file and where its messages are (mcap_reader.cpp)
 

@@ -23,15 +23,16 @@ namespace lidarcal::io {
 enum class McapCompression { none, zstd };
 
 struct McapWriterOptions {
-  std::string profile = "ros2";                 ///< Header profile ("ros2" for a ROS 2 bag)
-  std::string library = "lidarcal";             ///< Header library: who wrote the file
+  std::string profile = "ros2";                         ///< Header profile ("ros2" for a ROS 2 bag)
+  std::string library = "lidarcal";                     ///< Header library: who wrote the file
   McapCompression compression = McapCompression::zstd;  ///< chunk compression (default zstd)
-  std::size_t chunk_bytes = 768 * 1024;         ///< a chunk is closed once its records exceed this, bytes
+  std::size_t chunk_bytes = 768 * 1024;  ///< a chunk is closed once its records exceed this, bytes
 };
 
 class McapWriter {
  public:
-  /// Creates `file` and writes the magic and the Header. Throws InputError when it cannot be written.
+  /// Creates `file` and writes the magic and the Header. Throws InputError when it cannot be
+  /// written.
   McapWriter(const std::filesystem::path& file, const McapWriterOptions& options = {});
   /// Closes the file if close() was not called (without checking the result: call close()).
   ~McapWriter();
@@ -39,14 +40,15 @@ class McapWriter {
   McapWriter& operator=(const McapWriter&) = delete;
 
   /// A Schema record (`id` > 0, each once, before the channels that use it).
-  void addSchema(std::uint16_t id, const std::string& name, const std::string& encoding, const std::string& data);
+  void addSchema(std::uint16_t id, const std::string& name, const std::string& encoding,
+                 const std::string& data);
   /// A Channel record; `metadata` is the MCAP Map as recorded (its uint32 byte length included;
   /// empty: an empty map).
-  void addChannel(std::uint16_t id, std::uint16_t schema_id, const std::string& topic, const std::string& message_encoding,
-                  const std::string& metadata = {});
+  void addChannel(std::uint16_t id, std::uint16_t schema_id, const std::string& topic,
+                  const std::string& message_encoding, const std::string& metadata = {});
   /// A Message record in the current chunk.
-  void addMessage(std::uint16_t channel_id, std::uint32_t sequence, std::uint64_t log_time_ns, std::uint64_t publish_time_ns,
-                  const std::uint8_t* data, std::size_t size);
+  void addMessage(std::uint16_t channel_id, std::uint32_t sequence, std::uint64_t log_time_ns,
+                  std::uint64_t publish_time_ns, const std::uint8_t* data, std::size_t size);
   /// A Metadata record (its content as recorded: name, then the map), outside chunks.
   void addMetadata(const std::string& content);
   /// Writes the last chunk, DataEnd, the summary, the Footer and the magic. Throws InputError on

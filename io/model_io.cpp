@@ -20,7 +20,8 @@ ojson number(double v) { return std::isfinite(v) ? ojson(v) : ojson(nullptr); }
 ojson noiseJson(const NoiseModel& n) {
   ojson j{{"kind", toString(n.kind)}};
   if (n.kind == NoiseKind::polynomial) j["beta"] = n.beta;
-  if (n.kind == NoiseKind::constant || n.kind == NoiseKind::squared || n.kind == NoiseKind::power) j["sigma_e"] = n.sigma_e;
+  if (n.kind == NoiseKind::constant || n.kind == NoiseKind::squared || n.kind == NoiseKind::power)
+    j["sigma_e"] = n.sigma_e;
   if (n.kind == NoiseKind::power) j["exponent"] = n.exponent;
   return j;
 }
@@ -31,7 +32,8 @@ ojson biasJson(const CalibrationModel& m) {
   const std::size_t n = m.model.bias.alpha.size();
   if (m.alpha_covariance.size() == n * n) {
     ojson se = ojson::array();
-    for (std::size_t i = 0; i < n; ++i) se.push_back(number(std::sqrt(m.alpha_covariance[i * n + i])));
+    for (std::size_t i = 0; i < n; ++i)
+      se.push_back(number(std::sqrt(m.alpha_covariance[i * n + i])));
     j["standard_error"] = se;
   }
   return j;
@@ -59,7 +61,8 @@ Discrepancy readDiscrepancy(const JsonView& v) {
   d.sigma_m = v.getNonNegative("sigma_m");
   d.dof = v.getPositiveInt("dof");
   d.entries = static_cast<std::size_t>(v.getPositiveInt("entries", d.dof + 1));
-  if (v.has("tape_sigma_m") && !v.json().at("tape_sigma_m").is_null()) d.tape_sigma_m = v.getNonNegative("tape_sigma_m");
+  if (v.has("tape_sigma_m") && !v.json().at("tape_sigma_m").is_null())
+    d.tape_sigma_m = v.getNonNegative("tape_sigma_m");
   return d;
 }
 
@@ -81,51 +84,62 @@ ojson modelJson(const CalibrationModel& m) {
                            {"invertible", o.invertible}});
   ojson landmarks = ojson::array();
   for (const auto& l : m.landmarks)
-    landmarks.push_back(ojson{{"id", l.id},
-                              {"x_m", l.x_m},
-                              {"y_m", l.y_m},
-                              {"radius_m", l.radius_m},
-                              {"covariance_m2", ojson::array({number(l.covariance_m2[0]), number(l.covariance_m2[1]),
-                                                               number(l.covariance_m2[2]), number(l.covariance_m2[3])})},
-                              {"stops", l.stops},
-                              {"status", l.status}});
+    landmarks.push_back(ojson{
+        {"id", l.id},
+        {"x_m", l.x_m},
+        {"y_m", l.y_m},
+        {"radius_m", l.radius_m},
+        {"covariance_m2", ojson::array({number(l.covariance_m2[0]), number(l.covariance_m2[1]),
+                                        number(l.covariance_m2[2]), number(l.covariance_m2[3])})},
+        {"stops", l.stops},
+        {"status", l.status}});
   ojson stops = ojson::array();
-  for (const auto& p : m.stop_poses) stops.push_back(ojson{{"x_m", p.x_m}, {"y_m", p.y_m}, {"yaw_rad", p.yaw_rad}});
+  for (const auto& p : m.stop_poses)
+    stops.push_back(ojson{{"x_m", p.x_m}, {"y_m", p.y_m}, {"yaw_rad", p.yaw_rad}});
   const auto& nf = m.noise_fits;
-  ojson j{{"format", m.format},
-          {"method", m.method},
-          {"sensor", ojson{{"name", m.sensor_name}, {"beams", m.beams ? ojson(*m.beams) : ojson(nullptr)},
-                           {"range_min_m", m.model.range_min_m}, {"range_max_m", m.model.range_max_m}}},
-          {"bias", biasJson(m)},
-          {"noise", noiseJson(m.model.noise)},
-          {"sigma_theta_rad", m.sigma_theta_rad},
-          {"alpha_covariance", m.alpha_covariance},
-          {"discrepancy", discrepancyJson(m.discrepancy)},
-          {"order_selection", ojson{{"rule", m.order_rule}, {"order_aic", m.order_aic},
-                                    {"order_validation", m.order_validation}, {"table", orders}}},
-          {"noise_estimators",
-           ojson{{"alhashimi2021_beta", nf.alhashimi2021_beta},
-                 {"alhashimi2016_closed_form", ojson{{"alpha", nf.alhashimi2016_cf_alpha}, {"sigma_e", nf.alhashimi2016_cf_sigma_e}}},
-                 {"alhashimi2016_ml", ojson{{"alpha", nf.alhashimi2016_ml_alpha}, {"sigma_e", nf.alhashimi2016_ml_sigma_e}}},
-                 {"exponent_test", ojson{{"log_likelihood_h0_h3", ojson::array({number(nf.exponent_loglik[0]),
-                                                                               number(nf.exponent_loglik[1]),
-                                                                               number(nf.exponent_loglik[2]),
-                                                                               number(nf.exponent_loglik[3])})},
-                                         {"best", nf.exponent_best},
-                                         {"batches", nf.exponent_batches}}}}},
-          {"landmarks", landmarks},
-          {"stops", stops},
-          {"diagnostics", ojson{{"status", m.status.name()},
-                                {"message", m.status.message},
-                                {"iterations", m.iterations},
-                                {"residual_rms_m", m.residual_rms_m},
-                                {"readings", m.readings},
-                                {"pose_scatter_m", m.pose_scatter_m},
-                                {"heading_scatter_rad", m.heading_scatter_rad},
-                                {"offset_radius_correlation", number(m.offset_radius_correlation)}}}};
+  ojson j{
+      {"format", m.format},
+      {"method", m.method},
+      {"sensor", ojson{{"name", m.sensor_name},
+                       {"beams", m.beams ? ojson(*m.beams) : ojson(nullptr)},
+                       {"range_min_m", m.model.range_min_m},
+                       {"range_max_m", m.model.range_max_m}}},
+      {"bias", biasJson(m)},
+      {"noise", noiseJson(m.model.noise)},
+      {"sigma_theta_rad", m.sigma_theta_rad},
+      {"alpha_covariance", m.alpha_covariance},
+      {"discrepancy", discrepancyJson(m.discrepancy)},
+      {"order_selection", ojson{{"rule", m.order_rule},
+                                {"order_aic", m.order_aic},
+                                {"order_validation", m.order_validation},
+                                {"table", orders}}},
+      {"noise_estimators",
+       ojson{{"alhashimi2021_beta", nf.alhashimi2021_beta},
+             {"alhashimi2016_closed_form", ojson{{"alpha", nf.alhashimi2016_cf_alpha},
+                                                 {"sigma_e", nf.alhashimi2016_cf_sigma_e}}},
+             {"alhashimi2016_ml", ojson{{"alpha", nf.alhashimi2016_ml_alpha},
+                                        {"sigma_e", nf.alhashimi2016_ml_sigma_e}}},
+             {"exponent_test",
+              ojson{{"log_likelihood_h0_h3",
+                     ojson::array({number(nf.exponent_loglik[0]), number(nf.exponent_loglik[1]),
+                                   number(nf.exponent_loglik[2]), number(nf.exponent_loglik[3])})},
+                    {"best", nf.exponent_best},
+                    {"batches", nf.exponent_batches}}}}},
+      {"landmarks", landmarks},
+      {"stops", stops},
+      {"diagnostics", ojson{{"status", m.status.name()},
+                            {"message", m.status.message},
+                            {"iterations", m.iterations},
+                            {"residual_rms_m", m.residual_rms_m},
+                            {"readings", m.readings},
+                            {"pose_scatter_m", m.pose_scatter_m},
+                            {"heading_scatter_rad", m.heading_scatter_rad},
+                            {"offset_radius_correlation", number(m.offset_radius_correlation)}}}};
   if (m.fitted_range_m) {
     const auto [lo, hi] = *m.fitted_range_m;
-    j["fitted_range"] = ojson{{"d_min_m", lo}, {"d_max_m", hi}, {"reading_min_m", m.model.bias(lo)},
+    j["fitted_range"] = ojson{{"d_min_m", lo},
+                              {"d_max_m", hi},
+                              {"reading_min_m", m.model.bias(lo)},
                               {"reading_max_m", m.model.bias(hi)}};
   }
   // Only when used, so that stop-and-go models keep their bytes.
@@ -144,34 +158,46 @@ ojson modelJson(const CalibrationModel& m) {
   return j;
 }
 
-CalibrationModel readModel(const std::filesystem::path& file) { return modelFromJson(readJsonFile(file), file.string()); }
+CalibrationModel readModel(const std::filesystem::path& file) {
+  return modelFromJson(readJsonFile(file), file.string());
+}
 
-CalibrationModel modelFromJson(const nlohmann::json& j, const std::string& file, const std::string& path) {
+CalibrationModel modelFromJson(const nlohmann::json& j, const std::string& file,
+                               const std::string& path) {
   const JsonView root(file, j, path);
   root.requireObject();
   CalibrationModel m;
   m.format = root.getString("format", "");
   if (m.format == "lidarcal-rig-model/1")
-    root.fail("format", "holds one model per sensor of a rig (\"lidarcal-rig-model/1\"): pick one with --sensor NAME "
-                        "(`correct`, `export`) or the node's sensor parameter");
+    root.fail("format",
+              "holds one model per sensor of a rig (\"lidarcal-rig-model/1\"): pick one with "
+              "--sensor NAME "
+              "(`correct`, `export`) or the node's sensor parameter");
   if (m.format != "lidarcal-model/1")
-    root.fail("format", "not a lidarcal model file (expected \"lidarcal-model/1\"); create one with `lidarcal calibrate`");
+    root.fail("format",
+              "not a lidarcal model file (expected \"lidarcal-model/1\"); create one with "
+              "`lidarcal calibrate`");
   m.method = root.getString("method", "");
   const JsonView sensor = root.child("sensor");
   m.sensor_name = sensor.getString("name", "");
-  if (sensor.has("beams") && !sensor.json().at("beams").is_null()) m.beams = sensor.getPositiveInt("beams");
+  if (sensor.has("beams") && !sensor.json().at("beams").is_null())
+    m.beams = sensor.getPositiveInt("beams");
   m.model.range_min_m = sensor.getNonNegative("range_min_m");
   m.model.range_max_m = sensor.getPositive("range_max_m");
-  if (m.model.range_min_m >= m.model.range_max_m) sensor.fail("range_min_m", "must be smaller than range_max_m");
+  if (m.model.range_min_m >= m.model.range_max_m)
+    sensor.fail("range_min_m", "must be smaller than range_max_m");
   const JsonView bias = root.child("bias");
   m.model.bias.alpha = bias.getNumbers("alpha");
   if (m.model.bias.alpha.size() < 2 || m.model.bias.alpha.size() > 10)
     bias.fail("alpha", "must hold 2 to 10 coefficients (order 1 to 9)");
   const JsonView noise = root.child("noise");
   const std::string kind = noise.getString("kind");
-  if (!parseNoiseKind(kind, m.model.noise.kind)) noise.fail("kind", "unknown noise kind '" + kind + "'");
-  if (m.model.noise.kind == NoiseKind::polynomial) m.model.noise.beta = noise.getNumbers("beta");
-  else if (m.model.noise.kind != NoiseKind::none) m.model.noise.sigma_e = noise.getNonNegative("sigma_e");
+  if (!parseNoiseKind(kind, m.model.noise.kind))
+    noise.fail("kind", "unknown noise kind '" + kind + "'");
+  if (m.model.noise.kind == NoiseKind::polynomial)
+    m.model.noise.beta = noise.getNumbers("beta");
+  else if (m.model.noise.kind != NoiseKind::none)
+    m.model.noise.sigma_e = noise.getNonNegative("sigma_e");
   if (m.model.noise.kind == NoiseKind::power) m.model.noise.exponent = noise.getNumber("exponent");
   m.sigma_theta_rad = root.getNonNegative("sigma_theta_rad", 0.0);
   if (root.has("landmarks"))
@@ -198,7 +224,8 @@ CalibrationModel modelFromJson(const nlohmann::json& j, const std::string& file,
     m.fitted_range_m = std::make_pair(lo, hi);
   }
   if (root.has("warnings"))
-    for (const auto& w : root.array("warnings")) m.warnings.push_back(w.json().is_string() ? w.json().get<std::string>() : w.json().dump());
+    for (const auto& w : root.array("warnings"))
+      m.warnings.push_back(w.json().is_string() ? w.json().get<std::string>() : w.json().dump());
   if (root.has("alpha_covariance")) {
     const std::vector<double> c = root.getNumbers("alpha_covariance");
     if (c.size() == m.model.bias.alpha.size() * m.model.bias.alpha.size()) m.alpha_covariance = c;
@@ -214,7 +241,10 @@ CalibrationModel modelFromJson(const nlohmann::json& j, const std::string& file,
     const JsonView d = root.child("diagnostics");
     const std::string status = d.getString("status", "ok");
     const std::optional<StatusCode> code = parseStatusCode(status);
-    if (!code) d.fail("status", "'" + status + "' is not a status lidarcal writes (ok, joint_failed, ...: docs/ERRORS.md)");
+    if (!code)
+      d.fail("status",
+             "'" + status +
+                 "' is not a status lidarcal writes (ok, joint_failed, ...: docs/ERRORS.md)");
     m.status = Status{*code, d.getString("message", "")};
   }
   return m;

@@ -18,6 +18,7 @@ CalibrationModel readModel(const std::filesystem::path& file);
 /// model.json's content (what writeModel writes), e.g. for one sensor's block of a rig model.
 nlohmann::ordered_json modelJson(const CalibrationModel& model);
 /// A model from its JSON; errors name `file` and the field under `path` (e.g. "sensors[1].model").
-CalibrationModel modelFromJson(const nlohmann::json& j, const std::string& file, const std::string& path = {});
+CalibrationModel modelFromJson(const nlohmann::json& j, const std::string& file,
+                               const std::string& path = {});
 
 }  // namespace lidarcal::io

@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "io/model_yaml.hpp"
 
-#include <limits>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <sstream>
 
@@ -20,7 +20,9 @@ constexpr const char* kRemedy = "write it again with `lidarcal export MODEL.json
 
 std::string readText(const fs::path& file) {
   std::ifstream in(file, std::ios::binary);
-  if (!in) throw InputError(file.string(), "", "cannot be opened for reading", "check the path and its permissions");
+  if (!in)
+    throw InputError(file.string(), "", "cannot be opened for reading",
+                     "check the path and its permissions");
   std::stringstream text;
   text << in.rdbuf();
   return text.str();
@@ -50,7 +52,8 @@ class Entries {
     while (std::getline(in, line)) {
       if (line.empty() || line[0] == '#' || line[0] == ' ') continue;
       const auto colon = line.find(':');
-      if (colon != std::string::npos) values_[line.substr(0, colon)] = valueOf(line.substr(colon + 1));
+      if (colon != std::string::npos)
+        values_[line.substr(0, colon)] = valueOf(line.substr(colon + 1));
     }
   }
   const std::string& raw(const std::string& key) const {
@@ -62,7 +65,8 @@ class Entries {
   /// number that is not finite) becomes null.
   nlohmann::json json(const std::string& key) const {
     std::string v = raw(key);
-    for (auto at = v.find(".nan"); at != std::string::npos; at = v.find(".nan", at)) v.replace(at, 4, "null");
+    for (auto at = v.find(".nan"); at != std::string::npos; at = v.find(".nan", at))
+      v.replace(at, 4, "null");
     try {
       return nlohmann::json::parse(v);
     } catch (const nlohmann::json::exception&) {
@@ -77,7 +81,8 @@ class Entries {
   }
   std::vector<double> numbers(const std::string& key, std::size_t min_size) const {
     const nlohmann::json j = json(key);
-    if (!j.is_array() || j.size() < min_size) fail(key, "is not a list of at least " + std::to_string(min_size) + " numbers");
+    if (!j.is_array() || j.size() < min_size)
+      fail(key, "is not a list of at least " + std::to_string(min_size) + " numbers");
     std::vector<double> out;
     for (const auto& x : j) {
       if (!x.is_number()) fail(key, "holds something that is not a number");
@@ -124,13 +129,15 @@ bool isExportedModelYaml(const fs::path& file) {
 
 ExportedModel readExportedModelYaml(const fs::path& file) {
   const Entries e(readText(file), file.string());
-  if (e.text("format") != kFormat) e.fail("format", "is '" + e.raw("format") + "', not \"" + kFormat + "\"");
+  if (e.text("format") != kFormat)
+    e.fail("format", "is '" + e.raw("format") + "', not \"" + kFormat + "\"");
   ExportedModel out;
   CalibrationModel& m = out.model;
   m.method = "export";
   m.sensor_name = e.text("sensor_name");
   const double beams = e.number("beams");
-  if (!(beams >= 0) || beams != static_cast<int>(beams)) e.fail("beams", "is not a whole number of beams (0: not recorded)");
+  if (!(beams >= 0) || beams != static_cast<int>(beams))
+    e.fail("beams", "is not a whole number of beams (0: not recorded)");
   if (beams > 0) m.beams = static_cast<int>(beams);
   m.model.bias.alpha = e.numbers("bias_alpha", 2);
   const std::vector<double> valid = e.numbers("valid_range_m", 2);
@@ -138,7 +145,8 @@ ExportedModel readExportedModelYaml(const fs::path& file) {
   m.fitted_range_m = std::make_pair(valid[0], valid[1]);
   m.model.range_min_m = e.number("range_min_m");
   m.model.range_max_m = e.number("range_max_m");
-  if (!parseNoiseKind(e.text("noise_law"), m.model.noise.kind)) e.fail("noise_law", "is not a noise law lidarcal knows");
+  if (!parseNoiseKind(e.text("noise_law"), m.model.noise.kind))
+    e.fail("noise_law", "is not a noise law lidarcal knows");
   m.model.noise.sigma_e = e.number("noise_sigma_e");
   out.inversion = e.text("inversion");
   out.outside = e.text("outside");

@@ -20,13 +20,14 @@ namespace lidarcal::io {
 
 /// A model read from the YAML of `lidarcal export --format yaml`.
 struct ExportedModel {
-  CalibrationModel model;     ///< sensor, bias, fitted range (valid_range_m), range limits, noise law
-  std::string inversion;      ///< `inversion` as exported: ls or ml
-  std::string outside;        ///< `outside` as exported: a policy name of `correct --outside`
+  CalibrationModel model;  ///< sensor, bias, fitted range (valid_range_m), range limits, noise law
+  std::string inversion;   ///< `inversion` as exported: ls or ml
+  std::string outside;     ///< `outside` as exported: a policy name of `correct --outside`
 };
 
-/// True when `file` starts like the YAML of export (its text holds `format: "lidarcal-ros-params/1"`
-/// before any `{`), false for anything else (e.g. model.json). Throws InputError when it cannot be read.
+/// True when `file` starts like the YAML of export (its text holds `format:
+/// "lidarcal-ros-params/1"` before any `{`), false for anything else (e.g. model.json). Throws
+/// InputError when it cannot be read.
 bool isExportedModelYaml(const std::filesystem::path& file);
 
 /// Reads the YAML. Throws InputError naming the key for a missing or malformed entry.

@@ -55,7 +55,8 @@ ObservationScene parseObservationScene(const JsonView& root) {
     sensor.noise = parseSensorNoise(e);
     sensor.min_range_m = e.getNonNegative("min_range_m", 0.0);
     sensor.max_range_m = e.getPositive("max_range_m", sensor.max_range_m);
-    if (sensor.min_range_m >= sensor.max_range_m) e.fail("min_range_m", "must be smaller than max_range_m");
+    if (sensor.min_range_m >= sensor.max_range_m)
+      e.fail("min_range_m", "must be smaller than max_range_m");
     sensor.fov_rad = deg2rad(e.getPositive("fov_deg", 360.0));
     if (sensor.fov_rad > 2.0 * kPi + 1e-12) e.fail("fov_deg", "must not exceed 360");
     s.sensors.push_back(sensor);
@@ -99,9 +100,12 @@ NoiseSetting parseNoiseSetting(const JsonView& root, const std::vector<int>* lab
     sensors[i].requireObject();
     const int label = labels && i < labels->size() ? (*labels)[i] : static_cast<int>(i);
     if (sensors[i].getInt("sensor", label) != label)
-      sensors[i].fail("sensor", labels ? "sensors must be listed in the ascending order of their ids in the observations ("
-                                             + std::to_string(label) + " here)"
-                                       : "sensors must be listed in order 0, 1, 2, ...");
+      sensors[i].fail(
+          "sensor",
+          labels
+              ? "sensors must be listed in the ascending order of their ids in the observations (" +
+                    std::to_string(label) + " here)"
+              : "sensors must be listed in order 0, 1, 2, ...");
     n.sensors.push_back(parseSensorNoise(sensors[i]));
   }
   if (root.has("process_var")) n.process = parseProcessVar(root.child("process_var"));
@@ -139,13 +143,18 @@ ojson observationSceneToJson(const ObservationScene& s) {
   for (const auto& l : s.landmarks) landmarks.push_back(ojson{{"x_m", l.x_m}, {"y_m", l.y_m}});
   ojson motions = ojson::array();
   for (const auto& m : s.motions)
-    motions.push_back(ojson{{"dx_m", m.dx_m}, {"dy_m", m.dy_m}, {"dtheta_deg", rad2deg(m.dtheta_rad)}, {"count", m.count}});
+    motions.push_back(ojson{{"dx_m", m.dx_m},
+                            {"dy_m", m.dy_m},
+                            {"dtheta_deg", rad2deg(m.dtheta_rad)},
+                            {"count", m.count}});
   return ojson{{"kind", "observations"},
                {"name", s.name},
                {"sensors", sensors},
                {"process_noise", processVarToJson(s.process)},
                {"landmarks", landmarks},
-               {"trajectory", ojson{{"start", ojson{{"x_m", s.start.x_m}, {"y_m", s.start.y_m}, {"yaw_deg", rad2deg(s.start.yaw_rad)}}},
+               {"trajectory", ojson{{"start", ojson{{"x_m", s.start.x_m},
+                                                    {"y_m", s.start.y_m},
+                                                    {"yaw_deg", rad2deg(s.start.yaw_rad)}}},
                                     {"motions", motions},
                                     {"repeat", s.repeat}}}};
 }
@@ -160,7 +169,8 @@ ojson noiseSettingToJson(const NoiseSetting& setting) {
   return ojson{{"sensors", sensors}, {"process_var", processVarToJson(setting.process)}};
 }
 
-NoiseSetting readNoiseSetting(const std::filesystem::path& file, const std::vector<int>* sensor_labels) {
+NoiseSetting readNoiseSetting(const std::filesystem::path& file,
+                              const std::vector<int>* sensor_labels) {
   const nlohmann::json j = readJsonFile(file);
   return parseNoiseSetting(JsonView(file.string(), j), sensor_labels);
 }
@@ -168,10 +178,14 @@ NoiseSetting readNoiseSetting(const std::filesystem::path& file, const std::vect
 void writeNoiseTruth(const std::filesystem::path& file, const NoiseTruth& t) {
   ojson landmarks = ojson::array();
   for (std::size_t i = 0; i < t.scene.landmarks.size(); ++i)
-    landmarks.push_back(ojson{{"id", i}, {"x_m", t.scene.landmarks[i].x_m}, {"y_m", t.scene.landmarks[i].y_m}});
+    landmarks.push_back(
+        ojson{{"id", i}, {"x_m", t.scene.landmarks[i].x_m}, {"y_m", t.scene.landmarks[i].y_m}});
   ojson poses = ojson::array();
   for (std::size_t k = 0; k < t.poses.size(); ++k)
-    poses.push_back(ojson{{"stop", k}, {"x_m", t.poses[k].x_m}, {"y_m", t.poses[k].y_m}, {"yaw_rad", t.poses[k].yaw_rad}});
+    poses.push_back(ojson{{"stop", k},
+                          {"x_m", t.poses[k].x_m},
+                          {"y_m", t.poses[k].y_m},
+                          {"yaw_rad", t.poses[k].yaw_rad}});
   ojson j{{"format", "lidarcal-noise-truth/1"}, {"seed", t.seed}};
   j.update(noiseSettingToJson(trueNoise(t.scene)));
   j["landmarks"] = landmarks;

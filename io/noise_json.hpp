@@ -32,13 +32,14 @@ nlohmann::ordered_json noiseSettingToJson(const NoiseSetting& setting);
 /// result.json or noise_truth.json can be read as a setting). Entry i is sensor i, or with
 /// `sensor_labels` the sensor labelled (*sensor_labels)[i] (observations.csv's ids). Throws
 /// InputError.
-NoiseSetting readNoiseSetting(const std::filesystem::path& file, const std::vector<int>* sensor_labels = nullptr);
+NoiseSetting readNoiseSetting(const std::filesystem::path& file,
+                              const std::vector<int>* sensor_labels = nullptr);
 
 /// Truth of an observation simulation.
 struct NoiseTruth {
-  std::uint64_t seed = 0;        ///< simulator seed
-  ObservationScene scene;        ///< the scene simulated (true noise inside)
-  std::vector<Pose2> poses;      ///< true pose of every stop
+  std::uint64_t seed = 0;    ///< simulator seed
+  ObservationScene scene;    ///< the scene simulated (true noise inside)
+  std::vector<Pose2> poses;  ///< true pose of every stop
 };
 /// Writes noise_truth.json atomically.
 void writeNoiseTruth(const std::filesystem::path& file, const NoiseTruth& truth);

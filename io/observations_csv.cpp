@@ -27,7 +27,8 @@ int checkedIndex(const CsvReader& csv, std::size_t column, const char* name, lon
 
 /// Replaces each row's `field` by the index of its value among the values sorted ascending
 /// (0..N-1) and returns those values. With `keep_unknown`, -1 (unknown association) stays -1.
-std::vector<int> relabel(std::vector<Observation>& rows, int Observation::*field, bool keep_unknown) {
+std::vector<int> relabel(std::vector<Observation>& rows, int Observation::*field,
+                         bool keep_unknown) {
   std::map<int, int> index;
   for (const auto& o : rows)
     if (!(keep_unknown && o.*field == -1)) index.emplace(o.*field, 0);
@@ -43,7 +44,8 @@ std::vector<int> relabel(std::vector<Observation>& rows, int Observation::*field
 
 }  // namespace
 
-std::vector<Observation> readObservations(const std::filesystem::path& file, std::vector<int>* sensor_labels,
+std::vector<Observation> readObservations(const std::filesystem::path& file,
+                                          std::vector<int>* sensor_labels,
                                           std::vector<int>* landmark_labels) {
   CsvReader csv(file, kRemedy);
   csv.expectHeader(kObservationsHeader);
@@ -70,7 +72,8 @@ void writeObservations(const std::filesystem::path& file, const std::vector<Obse
   text.reserve(rows.size() * 48 + text.size());
   char line[128];
   for (const auto& o : rows) {
-    std::snprintf(line, sizeof line, "%d,%d,%d,%.12g,%.12g\n", o.stop, o.sensor, o.landmark, o.range_m, o.bearing_rad);
+    std::snprintf(line, sizeof line, "%d,%d,%d,%.12g,%.12g\n", o.stop, o.sensor, o.landmark,
+                  o.range_m, o.bearing_rad);
     text += line;
   }
   writeTextAtomically(file, text);
@@ -84,7 +87,8 @@ std::vector<OdometryStep> readOdometry(const std::filesystem::path& file) {
     OdometryStep s;
     s.stop = checkedIndex(csv, 0, "stop", 0);
     if (s.stop != static_cast<int>(rows.size()))
-      csv.fail("stop", "expected stop " + std::to_string(rows.size()) + " (rows must list stops 0, 1, 2, ... in order)");
+      csv.fail("stop", "expected stop " + std::to_string(rows.size()) +
+                           " (rows must list stops 0, 1, 2, ... in order)");
     s.dx_m = csv.number(1, "dx_m");
     s.dy_m = csv.number(2, "dy_m");
     s.dtheta_rad = csv.number(3, "dtheta_rad");
@@ -93,7 +97,8 @@ std::vector<OdometryStep> readOdometry(const std::filesystem::path& file) {
     rows.push_back(s);
   }
   if (rows.empty())
-    throw InputError(file.string(), "", "holds no stop (at least the start, stop 0, is needed)", kRemedy);
+    throw InputError(file.string(), "", "holds no stop (at least the start, stop 0, is needed)",
+                     kRemedy);
   return rows;
 }
 
@@ -101,7 +106,8 @@ void writeOdometry(const std::filesystem::path& file, const std::vector<Odometry
   std::string text = std::string(kOdometryHeader) + "\n";
   char line[128];
   for (const auto& s : rows) {
-    std::snprintf(line, sizeof line, "%d,%.12g,%.12g,%.12g\n", s.stop, s.dx_m, s.dy_m, s.dtheta_rad);
+    std::snprintf(line, sizeof line, "%d,%.12g,%.12g,%.12g\n", s.stop, s.dx_m, s.dy_m,
+                  s.dtheta_rad);
     text += line;
   }
   writeTextAtomically(file, text);

@@ -21,7 +21,8 @@ inline constexpr const char* kOdometryHeader = "stop,dx_m,dy_m,dtheta_rad";
 /// name them as the file did. Ids already numbered 0..N-1 keep their numbers. Throws InputError
 /// (file, line, column, remedy) on a bad header, a malformed or non-finite field, a negative
 /// stop or an id outside the int range.
-std::vector<Observation> readObservations(const std::filesystem::path& file, std::vector<int>* sensor_labels = nullptr,
+std::vector<Observation> readObservations(const std::filesystem::path& file,
+                                          std::vector<int>* sensor_labels = nullptr,
                                           std::vector<int>* landmark_labels = nullptr);
 /// Writes observations.csv atomically (rows in the order given).
 void writeObservations(const std::filesystem::path& file, const std::vector<Observation>& rows);

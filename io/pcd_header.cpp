@@ -18,8 +18,9 @@ namespace {
 /// read like that would make PCL load something else than the header we checked (found by
 /// fuzzing: a `COLUMNS` line at the start of binary data gave PCL one garbage field and no x).
 void checkNothingAfterData(std::istream& in, const std::string& where, std::size_t consumed) {
-  static const char* const kKeywords[] = {"VERSION", "FIELDS", "COLUMNS", "SIZE",   "TYPE", "COUNT",
-                                          "WIDTH",   "HEIGHT", "VIEWPOINT", "POINTS", "DATA"};
+  static const char* const kKeywords[] = {"VERSION",   "FIELDS", "COLUMNS", "SIZE",
+                                          "TYPE",      "COUNT",  "WIDTH",   "HEIGHT",
+                                          "VIEWPOINT", "POINTS", "DATA"};
   const auto space = [](char c) { return std::isspace(static_cast<unsigned char>(c)) != 0; };
   std::string line;
   while (consumed < kMaxHeaderBytes && std::getline(in, line)) {
@@ -34,8 +35,9 @@ void checkNothingAfterData(std::istream& in, const std::string& where, std::size
     if (word[0] == '#') continue;  // and skips comments
     for (const char* k : kKeywords)
       if (word.compare(0, std::strlen(k), k) == 0)
-        throw InputError(where, "DATA", "the data begins with a line PCL would read as more header ('" + printable(word) +
-                                            "'): a damaged file",
+        throw InputError(where, "DATA",
+                         "the data begins with a line PCL would read as more header ('" +
+                             printable(word) + "'): a damaged file",
                          "re-export the scan");
     return;
   }
@@ -49,8 +51,9 @@ struct HeaderLines {
 };
 
 /// One WIDTH, HEIGHT, POINTS or VIEWPOINT line into the header.
-void parseDimensionOrViewpoint(ParsedHeader& h, const std::string& key, const std::vector<std::string>& words,
-                               const std::string& item, const std::string& where) {
+void parseDimensionOrViewpoint(ParsedHeader& h, const std::string& key,
+                               const std::vector<std::string>& words, const std::string& item,
+                               const std::string& where) {
   if (key == "WIDTH" || key == "HEIGHT" || key == "POINTS") {
     long long v = 0;
     if (words.size() != 1 || !parseLong(words[0], v) || v < 0)
@@ -59,13 +62,17 @@ void parseDimensionOrViewpoint(ParsedHeader& h, const std::string& key, const st
     return;
   }
   if (words.size() != 7)
-    throw InputError(where, "VIEWPOINT", "expected 7 numbers `tx ty tz qw qx qy qz`, found " +
-                                             std::to_string(words.size()),
-                     kFormatRemedy);
+    throw InputError(
+        where, "VIEWPOINT",
+        "expected 7 numbers `tx ty tz qw qx qy qz`, found " + std::to_string(words.size()),
+        kFormatRemedy);
   for (int i = 0; i < 7; ++i)
-    if (!parseDouble(words[static_cast<std::size_t>(i)], h.viewpoint[i]) || !std::isfinite(h.viewpoint[i]))
-      throw InputError(where, "VIEWPOINT", "value '" + printable(words[static_cast<std::size_t>(i)]) + "' is not a finite number",
-                       kFormatRemedy);
+    if (!parseDouble(words[static_cast<std::size_t>(i)], h.viewpoint[i]) ||
+        !std::isfinite(h.viewpoint[i]))
+      throw InputError(
+          where, "VIEWPOINT",
+          "value '" + printable(words[static_cast<std::size_t>(i)]) + "' is not a finite number",
+          kFormatRemedy);
   h.has_viewpoint = true;
 }
 
@@ -79,7 +86,8 @@ HeaderLines readHeaderLines(std::istream& in, const std::string& where, ParsedHe
     ++line_no;
     consumed += line.size() + 1;
     if (consumed > kMaxHeaderBytes)
-      throw InputError(where, "header", "no DATA line in the first 64 KiB: not a PCD file or a damaged one",
+      throw InputError(where, "header",
+                       "no DATA line in the first 64 KiB: not a PCD file or a damaged one",
                        kFormatRemedy);
     if (!line.empty() && line.back() == '\r') line.pop_back();
     if (line.empty() || line[0] == '#') continue;
@@ -104,13 +112,16 @@ HeaderLines readHeaderLines(std::istream& in, const std::string& where, ParsedHe
     } else if (key == "WIDTH" || key == "HEIGHT" || key == "POINTS" || key == "VIEWPOINT") {
       parseDimensionOrViewpoint(h, key, words, item, where);
     } else if (key == "DATA") {
-      if (words.size() != 1 || (words[0] != "ascii" && words[0] != "binary" && words[0] != "binary_compressed"))
-        throw InputError(where, "DATA", "must be ascii, binary or binary_compressed", kFormatRemedy);
+      if (words.size() != 1 ||
+          (words[0] != "ascii" && words[0] != "binary" && words[0] != "binary_compressed"))
+        throw InputError(where, "DATA", "must be ascii, binary or binary_compressed",
+                         kFormatRemedy);
       h.data = words[0];
       h.data_offset = consumed;
       break;
     } else {
-      throw InputError(where, item, "unknown header keyword: not a PCD file or a damaged one", kFormatRemedy);
+      throw InputError(where, item, "unknown header keyword: not a PCD file or a damaged one",
+                       kFormatRemedy);
     }
   }
   return lines;
@@ -121,21 +132,31 @@ void checkFieldLayout(ParsedHeader& h, const HeaderLines& lines, const std::stri
   const auto& sizes = lines.sizes;
   const auto& types = lines.types;
   const auto& counts = lines.counts;
-  if (!lines.seen_fields || h.fields.empty()) throw InputError(where, "FIELDS", "missing", kFormatRemedy);
+  if (!lines.seen_fields || h.fields.empty())
+    throw InputError(where, "FIELDS", "missing", kFormatRemedy);
   if (!lines.seen_size || sizes.size() != h.fields.size())
-    throw InputError(where, "SIZE", "must give one size per field (" + std::to_string(h.fields.size()) + ")", kFormatRemedy);
+    throw InputError(where, "SIZE",
+                     "must give one size per field (" + std::to_string(h.fields.size()) + ")",
+                     kFormatRemedy);
   if (!lines.seen_type || types.size() != h.fields.size())
-    throw InputError(where, "TYPE", "must give one type per field (" + std::to_string(h.fields.size()) + ")", kFormatRemedy);
+    throw InputError(where, "TYPE",
+                     "must give one type per field (" + std::to_string(h.fields.size()) + ")",
+                     kFormatRemedy);
   if (!counts.empty() && counts.size() != h.fields.size())
-    throw InputError(where, "COUNT", "must give one count per field (" + std::to_string(h.fields.size()) + ")", kFormatRemedy);
+    throw InputError(where, "COUNT",
+                     "must give one count per field (" + std::to_string(h.fields.size()) + ")",
+                     kFormatRemedy);
   for (std::size_t i = 0; i < h.fields.size(); ++i) {
     long long size = 0, count = 1;
     if (!parseLong(sizes[i], size) || (size != 1 && size != 2 && size != 4 && size != 8))
-      throw InputError(where, "SIZE of field '" + h.fields[i].name + "'", "must be 1, 2, 4 or 8", kFormatRemedy);
+      throw InputError(where, "SIZE of field '" + h.fields[i].name + "'", "must be 1, 2, 4 or 8",
+                       kFormatRemedy);
     if (types[i].size() != 1 || std::string("FIU").find(types[i][0]) == std::string::npos)
-      throw InputError(where, "TYPE of field '" + h.fields[i].name + "'", "must be F, I or U", kFormatRemedy);
+      throw InputError(where, "TYPE of field '" + h.fields[i].name + "'", "must be F, I or U",
+                       kFormatRemedy);
     if (!counts.empty() && (!parseLong(counts[i], count) || count < 1 || count > 1'000'000))
-      throw InputError(where, "COUNT of field '" + h.fields[i].name + "'", "must be a positive integer", kFormatRemedy);
+      throw InputError(where, "COUNT of field '" + h.fields[i].name + "'",
+                       "must be a positive integer", kFormatRemedy);
     h.fields[i].size = static_cast<int>(size);
     h.fields[i].type = types[i][0];
     h.fields[i].count = static_cast<int>(count);
@@ -147,13 +168,15 @@ void checkDimensions(ParsedHeader& h, const std::string& where) {
   if (h.width < 0) throw InputError(where, "WIDTH", "missing", kFormatRemedy);
   if (h.height < 0) h.height = 1;
   if (h.points < 0) h.points = h.width * h.height;
-  if (h.width > static_cast<long long>(kMaxPoints) || h.height > static_cast<long long>(kMaxPoints) ||
-      h.points != h.width * h.height)
-    throw InputError(where, "POINTS", "POINTS (" + std::to_string(h.points) + ") differs from WIDTH x HEIGHT (" +
-                                          std::to_string(h.width) + " x " + std::to_string(h.height) + ")",
+  if (h.width > static_cast<long long>(kMaxPoints) ||
+      h.height > static_cast<long long>(kMaxPoints) || h.points != h.width * h.height)
+    throw InputError(where, "POINTS",
+                     "POINTS (" + std::to_string(h.points) + ") differs from WIDTH x HEIGHT (" +
+                         std::to_string(h.width) + " x " + std::to_string(h.height) + ")",
                      kFormatRemedy);
   if (h.points > static_cast<long long>(kMaxPoints))
-    throw InputError(where, "POINTS", "more than 100 million points: refusing to load", kFormatRemedy);
+    throw InputError(where, "POINTS", "more than 100 million points: refusing to load",
+                     kFormatRemedy);
 }
 
 }  // namespace
@@ -195,7 +218,9 @@ bool parseDouble(const std::string& text, double& value) {
 ParsedHeader parseHeader(std::istream& in, const std::string& where) {
   ParsedHeader h;
   const HeaderLines lines = readHeaderLines(in, where, h);
-  if (h.data.empty()) throw InputError(where, "DATA", "header has no DATA line: truncated or not a PCD file", kFormatRemedy);
+  if (h.data.empty())
+    throw InputError(where, "DATA", "header has no DATA line: truncated or not a PCD file",
+                     kFormatRemedy);
   checkNothingAfterData(in, where, lines.consumed);
   checkFieldLayout(h, lines, where);
   checkDimensions(h, where);
@@ -215,10 +240,13 @@ Pose2 viewpointPose(const ParsedHeader& h, const std::string& where) {
   const double* v = h.viewpoint;
   const double norm = std::sqrt(v[3] * v[3] + v[4] * v[4] + v[5] * v[5] + v[6] * v[6]);
   if (std::abs(norm - 1.0) > 1e-3)
-    throw InputError(where, "VIEWPOINT", "quaternion (qw qx qy qz) is not of unit length (norm " + std::to_string(norm) + ")",
-                     kFormatRemedy);
+    throw InputError(
+        where, "VIEWPOINT",
+        "quaternion (qw qx qy qz) is not of unit length (norm " + std::to_string(norm) + ")",
+        kFormatRemedy);
   if (std::abs(v[4]) > 1e-3 || std::abs(v[5]) > 1e-3)
-    throw InputError(where, "VIEWPOINT", "quaternion has roll/pitch (qx, qy not 0): only a yaw rotation is allowed",
+    throw InputError(where, "VIEWPOINT",
+                     "quaternion has roll/pitch (qx, qy not 0): only a yaw rotation is allowed",
                      kFormatRemedy);
   Pose2 pose;
   pose.x_m = v[0];
@@ -227,16 +255,19 @@ Pose2 viewpointPose(const ParsedHeader& h, const std::string& where) {
   return pose;
 }
 
-void checkCoordinateField(const ParsedHeader& h, const std::string& name, bool required, const std::string& where) {
+void checkCoordinateField(const ParsedHeader& h, const std::string& name, bool required,
+                          const std::string& where) {
   const HeaderField* f = findField(h, name);
   if (!f) {
     if (required)
-      throw InputError(where, "FIELDS", "no '" + name + "' field: scans need at least x and y (and normally z)",
+      throw InputError(where, "FIELDS",
+                       "no '" + name + "' field: scans need at least x and y (and normally z)",
                        kFormatRemedy);
     return;
   }
   if (f->type != 'F' || (f->size != 4 && f->size != 8) || f->count != 1)
-    throw InputError(where, "field '" + name + "'", "must be a single float (TYPE F, SIZE 4 or 8, COUNT 1)", kFormatRemedy);
+    throw InputError(where, "field '" + name + "'",
+                     "must be a single float (TYPE F, SIZE 4 or 8, COUNT 1)", kFormatRemedy);
 }
 
 }  // namespace lidarcal::io::pcd

@@ -12,9 +12,9 @@
 
 namespace lidarcal::io::pcd {
 
-constexpr std::size_t kMaxHeaderBytes = 1 << 16;     ///< a PCD header is a few hundred bytes
-constexpr std::size_t kMaxPoints = 100'000'000;      ///< refuse absurd POINTS before allocating
-constexpr double kMaxAbsCoordinate_m = 1.0e5;        ///< no lidar of ours sees 100 km
+constexpr std::size_t kMaxHeaderBytes = 1 << 16;  ///< a PCD header is a few hundred bytes
+constexpr std::size_t kMaxPoints = 100'000'000;   ///< refuse absurd POINTS before allocating
+constexpr double kMaxAbsCoordinate_m = 1.0e5;     ///< no lidar of ours sees 100 km
 
 constexpr const char* kFormatRemedy = "see docs/FORMAT.md for the scan file format";
 
@@ -29,11 +29,12 @@ struct HeaderField {
 /// A checked header: its fields, the cloud's dimensions, the VIEWPOINT and where DATA begins.
 struct ParsedHeader {
   std::vector<HeaderField> fields;  ///< in the order of FIELDS
-  long long width = -1, height = -1, points = -1;  ///< as given; HEIGHT defaults to 1, POINTS to WIDTH x HEIGHT
-  bool has_viewpoint = false;       ///< a VIEWPOINT line was given
+  /// as given; HEIGHT defaults to 1, POINTS to WIDTH x HEIGHT
+  long long width = -1, height = -1, points = -1;
+  bool has_viewpoint = false;                   ///< a VIEWPOINT line was given
   double viewpoint[7] = {0, 0, 0, 1, 0, 0, 0};  ///< tx ty tz qw qx qy qz
-  std::string data;             ///< ascii, binary or binary_compressed
-  std::size_t data_offset = 0;  ///< byte offset of the first data byte
+  std::string data;                             ///< ascii, binary or binary_compressed
+  std::size_t data_offset = 0;                  ///< byte offset of the first data byte
 };
 
 /// Words separated by white space, as `>>` splits them.
@@ -56,10 +57,12 @@ ParsedHeader parseHeader(std::istream& in, const std::string& where);
 /// The field called `name`, or nullptr.
 const HeaderField* findField(const ParsedHeader& h, const std::string& name);
 
-/// The sensor pose of the VIEWPOINT (a yaw rotation only); throws InputError when missing or not planar.
+/// The sensor pose of the VIEWPOINT (a yaw rotation only); throws InputError when missing or not
+/// planar.
 Pose2 viewpointPose(const ParsedHeader& h, const std::string& where);
 
 /// Throws InputError when field `name` is not a single float (or is missing and `required`).
-void checkCoordinateField(const ParsedHeader& h, const std::string& name, bool required, const std::string& where);
+void checkCoordinateField(const ParsedHeader& h, const std::string& name, bool required,
+                          const std::string& where);
 
 }  // namespace lidarcal::io::pcd

@@ -66,7 +66,8 @@ class PcdStreamBuffer : public std::streambuf {
     const std::size_t at = static_cast<std::size_t>(gptr() - eback());
     if (at >= file_.bytes().size()) file_.readUpTo(at + kChunk);
     point(at);
-    return at < file_.bytes().size() ? traits_type::to_int_type(file_.bytes()[at]) : traits_type::eof();
+    return at < file_.bytes().size() ? traits_type::to_int_type(file_.bytes()[at])
+                                     : traits_type::eof();
   }
   pos_type seekoff(off_type off, std::ios_base::seekdir dir, std::ios_base::openmode) override {
     const off_type base = dir == std::ios_base::beg   ? 0
@@ -99,8 +100,10 @@ class PcdStreamBuffer : public std::streambuf {
   for (const auto& e : fs::directory_iterator(file, ec))
     if (e.path().extension() == ".pcd") pcds.push_back(e.path());
   if (!pcds.empty()) example = *std::min_element(pcds.begin(), pcds.end());
-  throw InputError(file.string(), "", "is a directory; give a .pcd file (e.g. " + example.string() + ")",
-                   "commands that read a whole sequence (info, detect, calibrate, correct, run) take the directory");
+  throw InputError(file.string(), "",
+                   "is a directory; give a .pcd file (e.g. " + example.string() + ")",
+                   "commands that read a whole sequence (info, detect, calibrate, correct, run) "
+                   "take the directory");
 }
 
 PcdFile::PcdFile(const fs::path& file) : where_(file.string()) {
@@ -114,7 +117,8 @@ PcdFile::PcdFile(const fs::path& file) : where_(file.string()) {
   if (!stated || !S_ISREG(st.st_mode)) {
     ::close(fd_);
     if (stated && S_ISDIR(st.st_mode)) refuseDirectory(file);
-    throw InputError(where_, "", "cannot be read (not a regular file)", "give the path of a .pcd file");
+    throw InputError(where_, "", "cannot be read (not a regular file)",
+                     "give the path of a .pcd file");
   }
   size_ = static_cast<std::size_t>(st.st_size);
 }
@@ -131,44 +135,53 @@ void PcdFile::readUpTo(std::size_t n) {
     got += static_cast<std::size_t>(r);
   }
   if (got < want)
-    throw InputError(where_, "DATA", "could not be read to its end (the file changed or the disk failed)", "run again");
+    throw InputError(where_, "DATA",
+                     "could not be read to its end (the file changed or the disk failed)",
+                     "run again");
 }
-
 
 /// binary_compressed data starts with the compressed and the uncompressed size (uint32 each).
 /// PCL trusts the uncompressed size when unpacking: it must be what the header promises, and
 /// the compressed block must lie within the file.
-void checkCompressedBlock(const std::string& where, const ParsedHeader& h, std::size_t promised, std::size_t data_bytes,
-                          const std::string& bytes) {
+void checkCompressedBlock(const std::string& where, const ParsedHeader& h, std::size_t promised,
+                          std::size_t data_bytes, const std::string& bytes) {
   std::uint32_t sizes[2] = {0, 0};
   if (data_bytes < 8 || h.data_offset + sizeof sizes > bytes.size())
     throw InputError(where, "DATA", "file is truncated: no compressed block after the header",
                      "the recording was cut short; re-export or drop this file");
   std::memcpy(sizes, bytes.data() + h.data_offset, sizeof sizes);
   if (sizes[1] != promised)
-    throw InputError(where, "DATA", "the compressed block unpacks to " + std::to_string(sizes[1]) +
-                                        " bytes, the header promises " + std::to_string(promised) + " (damaged file)",
+    throw InputError(where, "DATA",
+                     "the compressed block unpacks to " + std::to_string(sizes[1]) +
+                         " bytes, the header promises " + std::to_string(promised) +
+                         " (damaged file)",
                      "re-export the scan");
   if (sizes[0] > data_bytes - 8)
-    throw InputError(where, "DATA", "file is truncated: the compressed block has " + std::to_string(sizes[0]) +
-                                        " bytes, the file holds " + std::to_string(data_bytes - 8),
+    throw InputError(where, "DATA",
+                     "file is truncated: the compressed block has " + std::to_string(sizes[0]) +
+                         " bytes, the file holds " + std::to_string(data_bytes - 8),
                      "the recording was cut short; re-export or drop this file");
 }
 
-/// The checked header of `file` (`file_size` bytes, `bytes` its first ones: the compressed block's sizes).
-ScanHeader toScanHeader(const fs::path& file, const ParsedHeader& h, std::size_t file_size, const std::string& bytes) {
+/// The checked header of `file` (`file_size` bytes, `bytes` its first ones: the compressed block's
+/// sizes).
+ScanHeader toScanHeader(const fs::path& file, const ParsedHeader& h, std::size_t file_size,
+                        const std::string& bytes) {
   const std::string where = file.string();
   checkCoordinateField(h, "x", true, where);
   checkCoordinateField(h, "y", true, where);
   checkCoordinateField(h, "z", false, where);
   if (h.height > 1)
-    throw InputError(where, "HEIGHT",
-                     "this is a 3D organised cloud (" + std::to_string(h.width) + "x" + std::to_string(h.height) +
-                         " points), not a 2D lidar scan; lidarcal's 2D commands need one planar scan per file "
-                         "(HEIGHT 1, the sensor's pose in VIEWPOINT, docs/FORMAT.md)",
-                     "import a 2D lidar recording with lidarcal import; for cylinders in a 3D cloud use the library "
-                     "function lidarcal::detectors::detectCylinder (detectors/cylinder.hpp, PCL's cylinder "
-                     "segmentation)");
+    throw InputError(
+        where, "HEIGHT",
+        "this is a 3D organised cloud (" + std::to_string(h.width) + "x" +
+            std::to_string(h.height) +
+            " points), not a 2D lidar scan; lidarcal's 2D commands need one planar scan per file "
+            "(HEIGHT 1, the sensor's pose in VIEWPOINT, docs/FORMAT.md)",
+        "import a 2D lidar recording with lidarcal import; for cylinders in a 3D cloud use the "
+        "library "
+        "function lidarcal::detectors::detectCylinder (detectors/cylinder.hpp, PCL's cylinder "
+        "segmentation)");
   ScanHeader out;
   out.path = file.string();
   out.viewpoint = viewpointPose(h, where);
@@ -189,15 +202,21 @@ ScanHeader toScanHeader(const fs::path& file, const ParsedHeader& h, std::size_t
     const std::size_t data_bytes = file_size > h.data_offset ? file_size - h.data_offset : 0;
     const double promised = static_cast<double>(point_bytes) * static_cast<double>(out.points);
     if (h.data == "binary" && file_size < h.data_offset + point_bytes * out.points)
-      throw InputError(where, "DATA", "file is truncated: " + std::to_string(file_size) + " bytes, the header promises " +
-                                          std::to_string(h.data_offset + point_bytes * out.points),
+      throw InputError(where, "DATA",
+                       "file is truncated: " + std::to_string(file_size) +
+                           " bytes, the header promises " +
+                           std::to_string(h.data_offset + point_bytes * out.points),
                        "the recording was cut short; re-export or drop this file");
-    if (h.data == "binary_compressed" && out.points > 0) checkCompressedBlock(where, h, point_bytes * out.points, data_bytes, bytes);
-    if ((h.data == "ascii" && 2.0 * static_cast<double>(values) * static_cast<double>(out.points) > data_bytes + 1.0) ||
-        (h.data == "binary_compressed" && promised > 300.0 * static_cast<double>(data_bytes) + 4096.0))
-      throw InputError(where, "DATA", "file is truncated: " + std::to_string(data_bytes) +
-                                          " bytes of data cannot hold the " + std::to_string(out.points) +
-                                          " points the header promises",
+    if (h.data == "binary_compressed" && out.points > 0)
+      checkCompressedBlock(where, h, point_bytes * out.points, data_bytes, bytes);
+    if ((h.data == "ascii" &&
+         2.0 * static_cast<double>(values) * static_cast<double>(out.points) > data_bytes + 1.0) ||
+        (h.data == "binary_compressed" &&
+         promised > 300.0 * static_cast<double>(data_bytes) + 4096.0))
+      throw InputError(where, "DATA",
+                       "file is truncated: " + std::to_string(data_bytes) +
+                           " bytes of data cannot hold the " + std::to_string(out.points) +
+                           " points the header promises",
                        "the recording was cut short; re-export or drop this file");
   }
   return out;
@@ -206,15 +225,48 @@ ScanHeader toScanHeader(const fs::path& file, const ParsedHeader& h, std::size_t
 /// Value of element 0 of a field as double.
 double readValue(const std::uint8_t* p, std::uint8_t datatype) {
   switch (datatype) {
-    case pcl::PCLPointField::INT8: { std::int8_t v; std::memcpy(&v, p, 1); return v; }
-    case pcl::PCLPointField::UINT8: { std::uint8_t v; std::memcpy(&v, p, 1); return v; }
-    case pcl::PCLPointField::INT16: { std::int16_t v; std::memcpy(&v, p, 2); return v; }
-    case pcl::PCLPointField::UINT16: { std::uint16_t v; std::memcpy(&v, p, 2); return v; }
-    case pcl::PCLPointField::INT32: { std::int32_t v; std::memcpy(&v, p, 4); return v; }
-    case pcl::PCLPointField::UINT32: { std::uint32_t v; std::memcpy(&v, p, 4); return v; }
-    case pcl::PCLPointField::FLOAT32: { float v; std::memcpy(&v, p, 4); return v; }
-    case pcl::PCLPointField::FLOAT64: { double v; std::memcpy(&v, p, 8); return v; }
-    default: return std::numeric_limits<double>::quiet_NaN();
+    case pcl::PCLPointField::INT8: {
+      std::int8_t v;
+      std::memcpy(&v, p, 1);
+      return v;
+    }
+    case pcl::PCLPointField::UINT8: {
+      std::uint8_t v;
+      std::memcpy(&v, p, 1);
+      return v;
+    }
+    case pcl::PCLPointField::INT16: {
+      std::int16_t v;
+      std::memcpy(&v, p, 2);
+      return v;
+    }
+    case pcl::PCLPointField::UINT16: {
+      std::uint16_t v;
+      std::memcpy(&v, p, 2);
+      return v;
+    }
+    case pcl::PCLPointField::INT32: {
+      std::int32_t v;
+      std::memcpy(&v, p, 4);
+      return v;
+    }
+    case pcl::PCLPointField::UINT32: {
+      std::uint32_t v;
+      std::memcpy(&v, p, 4);
+      return v;
+    }
+    case pcl::PCLPointField::FLOAT32: {
+      float v;
+      std::memcpy(&v, p, 4);
+      return v;
+    }
+    case pcl::PCLPointField::FLOAT64: {
+      double v;
+      std::memcpy(&v, p, 8);
+      return v;
+    }
+    default:
+      return std::numeric_limits<double>::quiet_NaN();
   }
 }
 
@@ -224,7 +276,8 @@ const pcl::PCLPointField* cloudField(const pcl::PCLPointCloud2& cloud, const std
   return nullptr;
 }
 
-void appendField(pcl::PCLPointCloud2& cloud, const std::string& name, std::uint8_t datatype, std::uint32_t size) {
+void appendField(pcl::PCLPointCloud2& cloud, const std::string& name, std::uint8_t datatype,
+                 std::uint32_t size) {
   pcl::PCLPointField f;
   f.name = name;
   f.offset = cloud.point_step;
@@ -257,9 +310,12 @@ namespace {
 std::uint8_t datatypeOf(const HeaderField& f) {
   using P = pcl::PCLPointField;
   switch (f.type) {
-    case 'F': return f.size == 8 ? P::FLOAT64 : P::FLOAT32;
-    case 'I': return f.size == 1 ? P::INT8 : f.size == 2 ? P::INT16 : f.size == 4 ? P::INT32 : P::INT64;
-    default: return f.size == 1 ? P::UINT8 : f.size == 2 ? P::UINT16 : f.size == 4 ? P::UINT32 : P::UINT64;
+    case 'F':
+      return f.size == 8 ? P::FLOAT64 : P::FLOAT32;
+    case 'I':
+      return f.size == 1 ? P::INT8 : f.size == 2 ? P::INT16 : f.size == 4 ? P::INT32 : P::INT64;
+    default:
+      return f.size == 1 ? P::UINT8 : f.size == 2 ? P::UINT16 : f.size == 4 ? P::UINT32 : P::UINT64;
   }
 }
 
@@ -316,8 +372,8 @@ pcl::PCLPointCloud2 readBlob(PcdFile& f, const ParsedHeader& h, const std::strin
     f.readUpTo(end);
     if (end > f.bytes().size()) rc = -1;
     if (rc == 0)
-      rc = reader.readBodyBinary(reinterpret_cast<const unsigned char*>(f.bytes().data()), blob, pcl::PCDReader::PCD_V7,
-                                 compressed, data_idx);
+      rc = reader.readBodyBinary(reinterpret_cast<const unsigned char*>(f.bytes().data()), blob,
+                                 pcl::PCDReader::PCD_V7, compressed, data_idx);
   }
   if (rc < 0)
     throw InputError(where, "DATA", "PCL could not read the point data (truncated or garbled file)",
@@ -341,7 +397,8 @@ Scan readScan(const fs::path& file) {
   const pcl::PCLPointCloud2 blob = readBlob(f, parsed, where);
   const std::size_t n = static_cast<std::size_t>(blob.width) * blob.height;
   if (n != header.points || blob.data.size() < n * blob.point_step)
-    throw InputError(where, "DATA", "holds fewer points than the header's POINTS", "re-export the scan");
+    throw InputError(where, "DATA", "holds fewer points than the header's POINTS",
+                     "re-export the scan");
 
   const pcl::PCLPointField* fx = cloudField(blob, "x");
   const pcl::PCLPointField* fy = cloudField(blob, "y");
@@ -351,7 +408,9 @@ Scan readScan(const fs::path& file) {
   const pcl::PCLPointField* fc = cloudField(blob, "correction");
   const pcl::PCLPointField* fs = cloudField(blob, "correction_se");
   if (!fx || !fy)  // the header we checked has them; PCL must have read the same header
-    throw InputError(where, "FIELDS", "PCL read other fields than the header lists (a damaged file)", "re-export the scan");
+    throw InputError(where, "FIELDS",
+                     "PCL read other fields than the header lists (a damaged file)",
+                     "re-export the scan");
 
   Scan scan;
   scan.name = file.filename().string();
@@ -373,11 +432,13 @@ Scan readScan(const fs::path& file) {
     const bool nan_x = std::isnan(x), nan_y = std::isnan(y);
     const auto item = [i] { return "point " + std::to_string(i); };
     if (nan_x != nan_y)
-      throw InputError(where, item(), "only one of x, y is NaN: a beam without return must have x and y NaN",
+      throw InputError(where, item(),
+                       "only one of x, y is NaN: a beam without return must have x and y NaN",
                        kFormatRemedy);
     if (!nan_x) {
       if (!std::isfinite(x) || !std::isfinite(y) || (!std::isnan(z) && !std::isfinite(z)))
-        throw InputError(where, item(), "coordinate is infinite", "write NaN for a beam with no return");
+        throw InputError(where, item(), "coordinate is infinite",
+                         "write NaN for a beam with no return");
       if (std::abs(x) > kMaxAbsCoordinate_m || std::abs(y) > kMaxAbsCoordinate_m ||
           (!std::isnan(z) && std::abs(z) > kMaxAbsCoordinate_m))
         throw InputError(where, item(), "coordinate beyond 100 km: not a lidar reading",
@@ -388,7 +449,8 @@ Scan readScan(const fs::path& file) {
     auto& pt = (*scan.cloud)[i];
     pt.x = static_cast<float>(x);
     pt.y = static_cast<float>(y);
-    pt.z = nan_x ? std::numeric_limits<float>::quiet_NaN() : static_cast<float>(std::isnan(z) ? 0.0 : z);
+    pt.z = nan_x ? std::numeric_limits<float>::quiet_NaN()
+                 : static_cast<float>(std::isnan(z) ? 0.0 : z);
     pt.intensity = fi ? static_cast<float>(readValue(p + fi->offset, fi->datatype)) : 0.0f;
     if (fl) {
       const double label = readValue(p + fl->offset, fl->datatype);
@@ -456,7 +518,8 @@ void writeScan(const fs::path& file, const Scan& scan, PcdEncoding encoding) {
 
   double qw = 1.0, qz = 0.0;
   yawToQuaternion(scan.viewpoint.yaw_rad, qw, qz);
-  const Eigen::Vector4f origin(static_cast<float>(scan.viewpoint.x_m), static_cast<float>(scan.viewpoint.y_m), 0.0f, 0.0f);
+  const Eigen::Vector4f origin(static_cast<float>(scan.viewpoint.x_m),
+                               static_cast<float>(scan.viewpoint.y_m), 0.0f, 0.0f);
   const Eigen::Quaternionf orientation(static_cast<float>(qw), 0.0f, 0.0f, static_cast<float>(qz));
 
   writeAtomically(file, [&](const fs::path& tmp) {
@@ -465,10 +528,12 @@ void writeScan(const fs::path& file, const Scan& scan, PcdEncoding encoding) {
     if (encoding == PcdEncoding::binary) {
       // PCL's header followed by the packed data: the bytes of PCL's writeBinary without the
       // page of padding it stretches the file by, in one open and one write.
-      const std::string header = writer.generateHeaderBinary(blob, origin, orientation) + "DATA binary\n";
+      const std::string header =
+          writer.generateHeaderBinary(blob, origin, orientation) + "DATA binary\n";
       std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
       out.write(header.data(), static_cast<std::streamsize>(header.size()));
-      out.write(reinterpret_cast<const char*>(blob.data.data()), static_cast<std::streamsize>(blob.data.size()));
+      out.write(reinterpret_cast<const char*>(blob.data.data()),
+                static_cast<std::streamsize>(blob.data.size()));
       out.close();
       ok = !out.fail();
     } else {

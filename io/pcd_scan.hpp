@@ -23,11 +23,11 @@ struct ScanHeader {
   std::string path;
   /// The file name without its directory.
   std::string name() const { return std::filesystem::path(path).filename().string(); }
-  Pose2 viewpoint;              ///< commanded pose from VIEWPOINT (yaw only)
-  std::size_t points = 0;       ///< POINTS (= WIDTH x HEIGHT)
-  bool has_intensity = false;   ///< an `intensity` field is present
-  bool has_label = false;       ///< a `label` field is present
-  bool binary = false;          ///< DATA binary or binary_compressed
+  Pose2 viewpoint;             ///< commanded pose from VIEWPOINT (yaw only)
+  std::size_t points = 0;      ///< POINTS (= WIDTH x HEIGHT)
+  bool has_intensity = false;  ///< an `intensity` field is present
+  bool has_label = false;      ///< a `label` field is present
+  bool binary = false;         ///< DATA binary or binary_compressed
 };
 
 /// What `lidarcal correct` did to a point: the `correction` field of a corrected scan
@@ -41,11 +41,11 @@ enum class PointCorrection : std::uint8_t {
 
 /// One scan: points in beam order (NaN = no return), optional intensity and label per point.
 struct Scan {
-  std::string name;                                   ///< file name without directory
-  Pose2 viewpoint;                                    ///< commanded pose of the sensor
-  pcl::PointCloud<pcl::PointXYZI>::Ptr cloud;         ///< points; intensity 0 when absent
-  bool has_intensity = false;                         ///< write/read an `intensity` field
-  std::vector<std::uint32_t> labels;                  ///< per-point label; empty = no `label` field
+  std::string name;                            ///< file name without directory
+  Pose2 viewpoint;                             ///< commanded pose of the sensor
+  pcl::PointCloud<pcl::PointXYZI>::Ptr cloud;  ///< points; intensity 0 when absent
+  bool has_intensity = false;                  ///< write/read an `intensity` field
+  std::vector<std::uint32_t> labels;           ///< per-point label; empty = no `label` field
   /// Per-point correction (corrected scans); empty = no `correction` field.
   std::vector<PointCorrection> correction;
   /// Per-point standard error of the correction, metres (NaN where none); empty = no
@@ -64,7 +64,8 @@ Scan readScan(const std::filesystem::path& file);
 
 /// Writes a scan atomically (temporary file + rename). Fields: x y z [intensity] [label]
 /// [correction correction_se].
-void writeScan(const std::filesystem::path& file, const Scan& scan, PcdEncoding encoding = PcdEncoding::binary);
+void writeScan(const std::filesystem::path& file, const Scan& scan,
+               PcdEncoding encoding = PcdEncoding::binary);
 
 /// Viewpoint quaternion (w, z) of a yaw angle, as stored in VIEWPOINT `tx ty 0 qw 0 0 qz`.
 void yawToQuaternion(double yaw_rad, double& qw, double& qz);

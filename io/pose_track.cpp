@@ -21,7 +21,8 @@ void TransformTrack::add(double stamp_s, const Transform3& t) {
 
 void TransformTrack::sort() const {
   if (sorted_) return;
-  std::stable_sort(samples_.begin(), samples_.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::stable_sort(samples_.begin(), samples_.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
   sorted_ = true;
 }
 
@@ -36,7 +37,8 @@ std::optional<Transform3> TransformTrack::at(double stamp_s, double hold_s) cons
   const auto after = std::lower_bound(samples_.begin(), samples_.end(), stamp_s,
                                       [](const auto& s, double t) { return s.first < t; });
   if (after == samples_.begin())
-    return stamp_s >= after->first - hold_s ? std::optional<Transform3>(after->second) : std::nullopt;
+    return stamp_s >= after->first - hold_s ? std::optional<Transform3>(after->second)
+                                            : std::nullopt;
   if (after == samples_.end()) {
     const auto& last = samples_.back();
     return stamp_s <= last.first + hold_s ? std::optional<Transform3>(last.second) : std::nullopt;
@@ -44,30 +46,37 @@ std::optional<Transform3> TransformTrack::at(double stamp_s, double hold_s) cons
   const auto& [t1, b] = *after;
   const auto& [t0, a] = *std::prev(after);
   const double u = t1 > t0 ? (stamp_s - t0) / (t1 - t0) : 1.0;
-  return Transform3{a.translation + u * (b.translation - a.translation), a.rotation.slerp(u, b.rotation)};
+  return Transform3{a.translation + u * (b.translation - a.translation),
+                    a.rotation.slerp(u, b.rotation)};
 }
 
-void TransformTree::addStatic(const std::string& parent, const std::string& child, const Transform3& t) {
+void TransformTree::addStatic(const std::string& parent, const std::string& child,
+                              const Transform3& t) {
   Edge& e = parent_of_[child];
   e.parent = parent;
   e.fixed = t;
 }
 
-void TransformTree::addDynamic(const std::string& parent, const std::string& child, double stamp_s, const Transform3& t) {
+void TransformTree::addDynamic(const std::string& parent, const std::string& child, double stamp_s,
+                               const Transform3& t) {
   Edge& e = parent_of_[child];
-  if (e.parent != parent) e.track = TransformTrack();  // re-parented: the last parent wins (tf does the same)
+  // re-parented: the last parent wins (tf does the same)
+  if (e.parent != parent) e.track = TransformTrack();
   e.parent = parent;
   e.track.add(stamp_s, t);
 }
 
-std::optional<Transform3> TransformTree::lookup(const std::string& fixed, const std::string& frame, double stamp_s,
-                                                double hold_s, std::string* why) const {
+std::optional<Transform3> TransformTree::lookup(const std::string& fixed, const std::string& frame,
+                                                double stamp_s, double hold_s,
+                                                std::string* why) const {
   Transform3 pose;  // frame -> current
   std::string current = frame;
   for (std::size_t depth = 0; current != fixed; ++depth) {
     const auto it = parent_of_.find(current);
     if (it == parent_of_.end() || depth > parent_of_.size()) {
-      if (why) *why = "frame '" + frame + "' is not connected to '" + fixed + "' (the chain ends at '" + current + "')";
+      if (why)
+        *why = "frame '" + frame + "' is not connected to '" + fixed + "' (the chain ends at '" +
+               current + "')";
       return std::nullopt;
     }
     const Edge& e = it->second;
@@ -77,8 +86,9 @@ std::optional<Transform3> TransformTree::lookup(const std::string& fixed, const 
       if (why) {
         const auto [first, last] = e.track.span();
         char text[160];
-        std::snprintf(text, sizeof text, "at %.3f s: the transform %s -> %s is recorded from %.3f to %.3f s only", stamp_s,
-                      e.parent.c_str(), current.c_str(), first, last);
+        std::snprintf(text, sizeof text,
+                      "at %.3f s: the transform %s -> %s is recorded from %.3f to %.3f s only",
+                      stamp_s, e.parent.c_str(), current.c_str(), first, last);
         *why = text;
       }
       return std::nullopt;

@@ -18,10 +18,12 @@ namespace lidarcal::io {
 
 /// A rigid transform child -> parent: p_parent = rotation * p_child + translation.
 struct Transform3 {
-  Eigen::Vector3d translation = Eigen::Vector3d::Zero();           ///< metres
-  Eigen::Quaterniond rotation = Eigen::Quaterniond::Identity();    ///< unit quaternion
+  Eigen::Vector3d translation = Eigen::Vector3d::Zero();         ///< metres
+  Eigen::Quaterniond rotation = Eigen::Quaterniond::Identity();  ///< unit quaternion
 
-  Transform3 operator*(const Transform3& b) const { return {translation + rotation * b.translation, rotation * b.rotation}; }
+  Transform3 operator*(const Transform3& b) const {
+    return {translation + rotation * b.translation, rotation * b.rotation};
+  }
 };
 
 /// The planar pose of a frame: position (x, y) and the heading of its x axis projected on the
@@ -55,12 +57,13 @@ class TransformTrack {
 class TransformTree {
  public:
   void addStatic(const std::string& parent, const std::string& child, const Transform3& t);
-  void addDynamic(const std::string& parent, const std::string& child, double stamp_s, const Transform3& t);
+  void addDynamic(const std::string& parent, const std::string& child, double stamp_s,
+                  const Transform3& t);
   /// The pose of `frame` in `fixed` at `stamp_s` (chain of child -> parent edges from `frame` up
   /// to `fixed`). Without a pose, `why` receives the reason (frame not connected to `fixed`, or
   /// `stamp_s` outside an edge's recorded span by more than `hold_s`).
-  std::optional<Transform3> lookup(const std::string& fixed, const std::string& frame, double stamp_s, double hold_s,
-                                   std::string* why = nullptr) const;
+  std::optional<Transform3> lookup(const std::string& fixed, const std::string& frame,
+                                   double stamp_s, double hold_s, std::string* why = nullptr) const;
   /// Frames known (parents and children), sorted, for messages.
   std::vector<std::string> frames() const;
   /// The frame a sensor `frame` rides on: the one just below the first dynamic (/tf) link met
@@ -81,7 +84,8 @@ class TransformTree {
 /// first pose) and `lidarcal` sees stops.
 class StillPoseFilter {
  public:
-  StillPoseFilter(double tolerance_m, double tolerance_rad) : tol_m_(tolerance_m), tol_rad_(tolerance_rad) {}
+  StillPoseFilter(double tolerance_m, double tolerance_rad)
+      : tol_m_(tolerance_m), tol_rad_(tolerance_rad) {}
   Pose2 apply(const Pose2& p);
   std::size_t stops() const { return stops_; }  ///< distinct poses handed out so far
 

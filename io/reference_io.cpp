@@ -39,13 +39,17 @@ ReferenceDistance readDistance(const JsonView& e) {
   ReferenceDistance d;
   d.stop = stopIndex(e);
   const std::string target = e.getString("target", "landmark");
-  if (target == "landmark") d.target = ReferenceTarget::landmark;
-  else if (target == "wall") d.target = ReferenceTarget::wall;
-  else e.fail("target", "must be \"landmark\" or \"wall\", not \"" + target + "\"");
+  if (target == "landmark")
+    d.target = ReferenceTarget::landmark;
+  else if (target == "wall")
+    d.target = ReferenceTarget::wall;
+  else
+    e.fail("target", "must be \"landmark\" or \"wall\", not \"" + target + "\"");
   d.distance_m = e.getPositive("distance_m");
   if (e.has("bearing_rad")) {
     const double b = e.getNumber("bearing_rad");
-    if (!(std::abs(b) <= 2.0 * 3.14159265358979323846)) e.fail("bearing_rad", "must be an angle in radians (-2 pi..2 pi)");
+    if (!(std::abs(b) <= 2.0 * 3.14159265358979323846))
+      e.fail("bearing_rad", "must be an angle in radians (-2 pi..2 pi)");
     d.bearing_rad = b;
   }
   d.sigma_m = e.getNonNegative("sigma_m", d.sigma_m);  // 0: the distance is taken as exact
@@ -71,7 +75,8 @@ ReferenceSpan readSpan(const JsonView& e) {
   if (apart < 90.0) {
     char text[200];
     std::snprintf(text, sizeof text,
-                  "is %.0f degrees from bearing_a_deg: the two walls of a span lie on opposite sides of the sensor, "
+                  "is %.0f degrees from bearing_a_deg: the two walls of a span lie on opposite "
+                  "sides of the sensor, "
                   "their normal directions about 180 degrees apart",
                   apart);
     e.fail("bearing_b_deg", text);
@@ -89,7 +94,8 @@ Reference readReference(const std::filesystem::path& file) {
   root.requireObject();
   rejectUnknownKeys(root, {"format", "distances", "landmarks", "stops", "spans"});
   if (root.getString("format", "") != kFormat)
-    root.fail("format", std::string("not a lidarcal reference file (expected \"") + kFormat + "\")");
+    root.fail("format",
+              std::string("not a lidarcal reference file (expected \"") + kFormat + "\")");
   Reference ref;
   if (root.has("distances"))
     for (const auto& e : root.array("distances")) ref.distances.push_back(readDistance(e));
@@ -115,14 +121,17 @@ Reference readReference(const std::filesystem::path& file) {
   if (root.has("spans"))
     for (const auto& e : root.array("spans")) ref.spans.push_back(readSpan(e));
   if (ref.empty())
-    root.fail("", "holds no measurement: give at least one of distances, spans, landmarks or stops");
+    root.fail("",
+              "holds no measurement: give at least one of distances, spans, landmarks or stops");
   // Two surveyed landmarks closer than their radii are one pole written twice.
   for (std::size_t a = 0; a < ref.landmarks.size(); ++a)
     for (std::size_t b = a + 1; b < ref.landmarks.size(); ++b)
-      if (std::hypot(ref.landmarks[a].x_m - ref.landmarks[b].x_m, ref.landmarks[a].y_m - ref.landmarks[b].y_m) < 0.01)
-        throw InputError(file.string(), "landmarks[" + std::to_string(b) + "]",
-                         "is within 1 cm of landmarks[" + std::to_string(a) + "]: one pole listed twice",
-                         "remove one of the two entries");
+      if (std::hypot(ref.landmarks[a].x_m - ref.landmarks[b].x_m,
+                     ref.landmarks[a].y_m - ref.landmarks[b].y_m) < 0.01)
+        throw InputError(
+            file.string(), "landmarks[" + std::to_string(b) + "]",
+            "is within 1 cm of landmarks[" + std::to_string(a) + "]: one pole listed twice",
+            "remove one of the two entries");
   return ref;
 }
 
@@ -130,18 +139,22 @@ void checkReference(const Reference& ref, std::size_t stops, const std::filesyst
   auto inRange = [&](std::size_t stop, const std::string& entry) {
     if (stop >= stops)
       throw InputError(file.string(), entry + ".stop",
-                       "is stop " + std::to_string(stop) + " but the sequence has " + plural(stops, "stop") +
-                           ", numbered from 0",
-                       "number the stops as `lidarcal info` lists them (import --stop-per-input makes one per recording)");
+                       "is stop " + std::to_string(stop) + " but the sequence has " +
+                           plural(stops, "stop") + ", numbered from 0",
+                       "number the stops as `lidarcal info` lists them (import --stop-per-input "
+                       "makes one per recording)");
   };
-  for (std::size_t k = 0; k < ref.distances.size(); ++k) inRange(ref.distances[k].stop, "distances[" + std::to_string(k) + "]");
-  for (std::size_t k = 0; k < ref.spans.size(); ++k) inRange(ref.spans[k].stop, "spans[" + std::to_string(k) + "]");
+  for (std::size_t k = 0; k < ref.distances.size(); ++k)
+    inRange(ref.distances[k].stop, "distances[" + std::to_string(k) + "]");
+  for (std::size_t k = 0; k < ref.spans.size(); ++k)
+    inRange(ref.spans[k].stop, "spans[" + std::to_string(k) + "]");
   std::set<std::size_t> seen;
   for (std::size_t k = 0; k < ref.stops.size(); ++k) {
     const std::string entry = "stops[" + std::to_string(k) + "]";
     inRange(ref.stops[k].stop, entry);
     if (!seen.insert(ref.stops[k].stop).second)
-      throw InputError(file.string(), entry + ".stop", "measures stop " + std::to_string(ref.stops[k].stop) + " a second time",
+      throw InputError(file.string(), entry + ".stop",
+                       "measures stop " + std::to_string(ref.stops[k].stop) + " a second time",
                        "keep one pose per stop");
   }
 }
@@ -172,13 +185,20 @@ void writeReference(const std::filesystem::path& file, const Reference& ref) {
   if (!ref.spans.empty()) {
     auto a = nlohmann::ordered_json::array();
     for (const auto& s : ref.spans)
-      a.push_back({{"stop", s.stop}, {"bearing_a_deg", rad2deg(s.bearing_a_rad)},
-                   {"bearing_b_deg", rad2deg(s.bearing_b_rad)}, {"distance_m", s.distance_m}, {"sigma_m", s.sigma_m}});
+      a.push_back({{"stop", s.stop},
+                   {"bearing_a_deg", rad2deg(s.bearing_a_rad)},
+                   {"bearing_b_deg", rad2deg(s.bearing_b_rad)},
+                   {"distance_m", s.distance_m},
+                   {"sigma_m", s.sigma_m}});
     j["spans"] = a;
   }
   if (!ref.stops.empty()) {
     auto a = nlohmann::ordered_json::array();
-    for (const auto& s : ref.stops) a.push_back({{"stop", s.stop}, {"x_m", s.pose.x_m}, {"y_m", s.pose.y_m}, {"yaw_rad", s.pose.yaw_rad}});
+    for (const auto& s : ref.stops)
+      a.push_back({{"stop", s.stop},
+                   {"x_m", s.pose.x_m},
+                   {"y_m", s.pose.y_m},
+                   {"yaw_rad", s.pose.yaw_rad}});
     j["stops"] = a;
   }
   writeTextAtomically(file, j.dump(2) + "\n");

@@ -19,8 +19,10 @@ namespace fs = std::filesystem;
 using ojson = nlohmann::ordered_json;
 
 constexpr const char* kFormat = "lidarcal-rig/1";
-constexpr const char* kScansHeader = "sensor,file,stamp_s,input,stop,vehicle_x_m,vehicle_y_m,vehicle_yaw_rad";
-constexpr const char* kRemedy = "rig sequences are written by `lidarcal import` with several topics (docs/FORMAT.md)";
+constexpr const char* kScansHeader =
+    "sensor,file,stamp_s,input,stop,vehicle_x_m,vehicle_y_m,vehicle_yaw_rad";
+constexpr const char* kRemedy =
+    "rig sequences are written by `lidarcal import` with several topics (docs/FORMAT.md)";
 
 /// Text of a double that reads back as the same double.
 std::string exact(double v) {
@@ -48,7 +50,11 @@ Mounting readMounting(const JsonView& v) {
 }
 
 ojson mountingJson(const Mounting& m) {
-  return ojson{{"x_m", m.x_m}, {"y_m", m.y_m}, {"yaw_rad", m.yaw_rad}, {"upside_down", m.upside_down}, {"z_m", m.z_m}};
+  return ojson{{"x_m", m.x_m},
+               {"y_m", m.y_m},
+               {"yaw_rad", m.yaw_rad},
+               {"upside_down", m.upside_down},
+               {"z_m", m.z_m}};
 }
 
 bool isRigDirectory(const fs::path& dir) {
@@ -69,8 +75,11 @@ void writeRigMeta(const fs::path& file, const RigMeta& meta) {
     for (const auto& [name, mounting] : in.mountings) m[name] = mountingJson(mounting);
     inputs.push_back(ojson{{"name", in.name}, {"mountings", m}});
   }
-  const ojson j{{"format", kFormat}, {"vehicle_frame", meta.vehicle_frame}, {"vehicle_poses", meta.pose_source},
-                {"sensors", sensors}, {"inputs", inputs}};
+  const ojson j{{"format", kFormat},
+                {"vehicle_frame", meta.vehicle_frame},
+                {"vehicle_poses", meta.pose_source},
+                {"sensors", sensors},
+                {"inputs", inputs}};
   writeTextAtomically(file, j.dump(2) + "\n");
 }
 
@@ -79,7 +88,8 @@ RigMeta readRigMeta(const fs::path& file) {
   const JsonView root(file.string(), j);
   root.requireObject();
   if (root.getString("format", "") != kFormat)
-    root.fail("format", std::string("not a rig sequence (expected \"") + kFormat + "\"); " + kRemedy);
+    root.fail("format",
+              std::string("not a rig sequence (expected \"") + kFormat + "\"); " + kRemedy);
   RigMeta meta;
   meta.vehicle_frame = root.getString("vehicle_frame", "");
   meta.pose_source = root.getString("vehicle_poses", "none");
@@ -87,11 +97,13 @@ RigMeta readRigMeta(const fs::path& file) {
     s.requireObject();
     RigSensorInfo info;
     info.name = s.getString("name");
-    if (info.name.empty() || info.name.find_first_of("/\\,") != std::string::npos || info.name[0] == '.')
+    if (info.name.empty() || info.name.find_first_of("/\\,") != std::string::npos ||
+        info.name[0] == '.')
       s.fail("name", "must be a plain directory name (no '/', '\\\\', ',' or leading '.')");
     info.topic = s.getString("topic", "");
     info.frame_id = s.getString("frame_id", "");
-    if (s.has("mounting") && !s.json().at("mounting").is_null()) info.mounting = readMounting(s.child("mounting"));
+    if (s.has("mounting") && !s.json().at("mounting").is_null())
+      info.mounting = readMounting(s.child("mounting"));
     if (meta.find(info.name)) s.fail("name", "names a sensor twice");
     meta.sensors.push_back(info);
   }
@@ -104,7 +116,8 @@ RigMeta readRigMeta(const fs::path& file) {
       if (in.has("mountings")) {
         const JsonView m = in.child("mountings");
         m.requireObject();
-        for (const auto& [name, value] : m.json().items()) input.mountings[name] = readMounting(m.child(name));
+        for (const auto& [name, value] : m.json().items())
+          input.mountings[name] = readMounting(m.child(name));
       }
       meta.inputs.push_back(input);
     }
@@ -114,8 +127,9 @@ RigMeta readRigMeta(const fs::path& file) {
 void writeRigScans(const fs::path& file, const std::vector<RigScan>& scans) {
   std::string text = std::string(kScansHeader) + "\n";
   for (const RigScan& s : scans)
-    text += s.sensor + "," + s.file + "," + exact(s.stamp_s) + "," + std::to_string(s.input) + "," + std::to_string(s.stop) +
-            "," + exact(s.vehicle.x_m) + "," + exact(s.vehicle.y_m) + "," + exact(s.vehicle.yaw_rad) + "\n";
+    text += s.sensor + "," + s.file + "," + exact(s.stamp_s) + "," + std::to_string(s.input) + "," +
+            std::to_string(s.stop) + "," + exact(s.vehicle.x_m) + "," + exact(s.vehicle.y_m) + "," +
+            exact(s.vehicle.yaw_rad) + "\n";
   writeTextAtomically(file, text);
 }
 
@@ -132,7 +146,8 @@ std::vector<RigScan> readRigScans(const fs::path& file) {
     if (input < 0 || stop < 0) csv.fail(input < 0 ? "input" : "stop", "must be >= 0");
     s.input = static_cast<std::size_t>(input);
     s.stop = static_cast<std::size_t>(stop);
-    s.vehicle = Pose2{csv.number(5, "vehicle_x_m"), csv.number(6, "vehicle_y_m"), csv.number(7, "vehicle_yaw_rad")};
+    s.vehicle = Pose2{csv.number(5, "vehicle_x_m"), csv.number(6, "vehicle_y_m"),
+                      csv.number(7, "vehicle_yaw_rad")};
     if (!out.empty() && s.stop < out.back().stop && s.sensor == out.back().sensor)
       csv.fail("stop", "goes back: a sensor's scans are listed in time order, stops counted up");
     out.push_back(s);
@@ -158,14 +173,18 @@ Rig openRig(const fs::path& dir) {
     const std::string where = "row " + std::to_string(r + 2);
     const std::optional<std::size_t> s = rig.meta.find(row.sensor);
     if (!s || rig.meta.sensors[*s].name != row.sensor)
-      throw InputError((dir / "scans.csv").string(), where, "names sensor '" + row.sensor + "', which rig.json does not list", kRemedy);
+      throw InputError((dir / "scans.csv").string(), where,
+                       "names sensor '" + row.sensor + "', which rig.json does not list", kRemedy);
     const auto it = index_of[*s].find(row.file);
     if (it == index_of[*s].end())
-      throw InputError((dir / "scans.csv").string(), where, "names scan " + row.sensor + "/" + row.file + ", which does not exist",
+      throw InputError((dir / "scans.csv").string(), where,
+                       "names scan " + row.sensor + "/" + row.file + ", which does not exist",
                        "restore the scan or import the recordings again");
     if (!rig.meta.inputs.empty() && row.input >= rig.meta.inputs.size())
-      throw InputError((dir / "scans.csv").string(), where, "names recording " + std::to_string(row.input) + " of " +
-                       std::to_string(rig.meta.inputs.size()), kRemedy);
+      throw InputError((dir / "scans.csv").string(), where,
+                       "names recording " + std::to_string(row.input) + " of " +
+                           std::to_string(rig.meta.inputs.size()),
+                       kRemedy);
     rig.scan_index.push_back(it->second);
     ++listed[*s];
   }

@@ -25,23 +25,27 @@ class JsonView;  // io/json_util.hpp
 
 /// One sensor of a rig sequence.
 struct RigSensorInfo {
-  std::string name;                  ///< short name, unique; also its sub-directory
-  std::string topic;                 ///< the LaserScan topic it was imported from (empty: not a bag)
-  std::string frame_id;              ///< its tf frame (empty when unknown)
-  std::optional<Mounting> mounting;  ///< designed mounting in the vehicle frame (tf_static), when known
+  std::string name;      ///< short name, unique; also its sub-directory
+  std::string topic;     ///< the LaserScan topic it was imported from (empty: not a bag)
+  std::string frame_id;  ///< its tf frame (empty when unknown)
+  /// designed mounting in the vehicle frame (tf_static), when known
+  std::optional<Mounting> mounting;
 };
 
 /// One recording imported into the rig, with the mountings its tf_static gave (they may differ
 /// from recording to recording when the design was edited between them).
 struct RigInput {
-  std::string name;                           ///< the recording's file name
-  std::map<std::string, Mounting> mountings;  ///< sensor name -> tf_static mounting in this recording
+  std::string name;  ///< the recording's file name
+  /// sensor name -> tf_static mounting in this recording
+  std::map<std::string, Mounting> mountings;
 };
 
 /// rig.json.
 struct RigMeta {
-  std::string vehicle_frame;       ///< the frame the mountings are in (e.g. base_footprint); empty when unknown
-  std::string pose_source;         ///< where the vehicle's poses come from: "tf:FRAME", "odom:TOPIC" or "none"
+  /// the frame the mountings are in (e.g. base_footprint); empty when unknown
+  std::string vehicle_frame;
+  /// where the vehicle's poses come from: "tf:FRAME", "odom:TOPIC" or "none"
+  std::string pose_source;
   std::vector<RigSensorInfo> sensors;
   std::vector<RigInput> inputs;
   /// Whether scans.csv holds measured vehicle poses (pose_source is not "none").
@@ -52,20 +56,20 @@ struct RigMeta {
 
 /// One row of scans.csv.
 struct RigScan {
-  std::string sensor;    ///< sensor name
-  std::string file;      ///< scan file in the sensor's directory
-  double stamp_s = 0.0;  ///< time stamp, seconds (NaN when the recording has none)
-  std::size_t input = 0; ///< recording index (rig.json inputs)
-  std::size_t stop = 0;  ///< the vehicle's stop, counted over the rig
-  Pose2 vehicle;         ///< the vehicle's pose (identity when not recorded)
+  std::string sensor;     ///< sensor name
+  std::string file;       ///< scan file in the sensor's directory
+  double stamp_s = 0.0;   ///< time stamp, seconds (NaN when the recording has none)
+  std::size_t input = 0;  ///< recording index (rig.json inputs)
+  std::size_t stop = 0;   ///< the vehicle's stop, counted over the rig
+  Pose2 vehicle;          ///< the vehicle's pose (identity when not recorded)
 };
 
 /// An opened rig sequence.
 struct Rig {
   std::filesystem::path dir;
   RigMeta meta;
-  std::vector<RigScan> scans;          ///< scans.csv, in file order
-  std::vector<Sequence> sequences;     ///< per sensor (meta.sensors order)
+  std::vector<RigScan> scans;       ///< scans.csv, in file order
+  std::vector<Sequence> sequences;  ///< per sensor (meta.sensors order)
   /// Index of scan row `row`'s scan within its sensor's sequence (matched by file name).
   std::vector<std::size_t> scan_index;
 };

@@ -20,15 +20,20 @@ constexpr const char* kFormat = "lidarcal-rig-model/1";
 
 ojson number(double v) { return std::isfinite(v) ? ojson(v) : ojson(nullptr); }
 
-ojson poseJson(const Pose2& p) { return ojson{{"x_m", p.x_m}, {"y_m", p.y_m}, {"yaw_rad", p.yaw_rad}}; }
+ojson poseJson(const Pose2& p) {
+  return ojson{{"x_m", p.x_m}, {"y_m", p.y_m}, {"yaw_rad", p.yaw_rad}};
+}
 
 /// Standard errors of (x, y, yaw) from a row-major 3x3 covariance, in mm and degrees.
 ojson standardErrors(const std::array<double, 9>& c) {
-  return ojson{{"x_mm", number(1000.0 * std::sqrt(c[0]))}, {"y_mm", number(1000.0 * std::sqrt(c[4]))},
+  return ojson{{"x_mm", number(1000.0 * std::sqrt(c[0]))},
+               {"y_mm", number(1000.0 * std::sqrt(c[4]))},
                {"yaw_deg", number(rad2deg(std::sqrt(c[8])))}};
 }
 
-Pose2 readPose(const JsonView& v) { return Pose2{v.getNumber("x_m"), v.getNumber("y_m"), v.getNumber("yaw_rad")}; }
+Pose2 readPose(const JsonView& v) {
+  return Pose2{v.getNumber("x_m"), v.getNumber("y_m"), v.getNumber("yaw_rad")};
+}
 
 std::array<double, 9> readCovariance(const JsonView& v, const std::string& key) {
   std::array<double, 9> c{};
@@ -76,8 +81,10 @@ void writeRigModel(const std::filesystem::path& file, const RigModel& m) {
   }
   ojson relative = ojson::array();
   for (const RigModelRelative& r : m.relative) {
-    ojson j{{"reference", r.reference}, {"sensor", r.sensor}, {"x_m", r.pose.x_m}, {"y_m", r.pose.y_m},
-            {"yaw_rad", r.pose.yaw_rad}, {"standard_error", standardErrors(r.covariance)}, {"covariance", r.covariance}};
+    ojson j{{"reference", r.reference},  {"sensor", r.sensor},
+            {"x_m", r.pose.x_m},         {"y_m", r.pose.y_m},
+            {"yaw_rad", r.pose.yaw_rad}, {"standard_error", standardErrors(r.covariance)},
+            {"covariance", r.covariance}};
     j["design"] = r.design ? poseJson(*r.design) : ojson(nullptr);
     if (r.design)
       j["difference"] = ojson{{"x_mm", 1000.0 * (r.pose.x_m - r.design->x_m)},
@@ -87,15 +94,26 @@ void writeRigModel(const std::filesystem::path& file, const RigModel& m) {
   }
   ojson poles = ojson::array();
   for (const auto& p : m.poles)
-    poles.push_back(ojson{{"id", p.id}, {"x_m", p.x_m}, {"y_m", p.y_m},
-                          {"covariance_m2", ojson::array({number(p.covariance_m2[0]), number(p.covariance_m2[1]),
-                                                          number(p.covariance_m2[2]), number(p.covariance_m2[3])})},
-                          {"sensors", p.sensors}});
+    poles.push_back(ojson{
+        {"id", p.id},
+        {"x_m", p.x_m},
+        {"y_m", p.y_m},
+        {"covariance_m2", ojson::array({number(p.covariance_m2[0]), number(p.covariance_m2[1]),
+                                        number(p.covariance_m2[2]), number(p.covariance_m2[3])})},
+        {"sensors", p.sensors}});
   ojson stops = ojson::array();
   for (const Pose2& p : m.stops) stops.push_back(poseJson(p));
-  const ojson j{{"format", kFormat}, {"frame", m.frame}, {"reference", m.reference}, {"vehicle_frame", m.vehicle_frame},
-                {"scale_free", m.scale_free}, {"motion_prior", m.motion_prior}, {"radius_m", m.radius_m},
-                {"sensors", sensors}, {"relative_mountings", relative}, {"poles", poles}, {"stops", stops},
+  const ojson j{{"format", kFormat},
+                {"frame", m.frame},
+                {"reference", m.reference},
+                {"vehicle_frame", m.vehicle_frame},
+                {"scale_free", m.scale_free},
+                {"motion_prior", m.motion_prior},
+                {"radius_m", m.radius_m},
+                {"sensors", sensors},
+                {"relative_mountings", relative},
+                {"poles", poles},
+                {"stops", stops},
                 {"notes", m.notes},
                 {"diagnostics", ojson{{"status", m.status.name()}, {"message", m.status.message}}}};
   writeTextAtomically(file, j.dump(2) + "\n");
@@ -106,7 +124,8 @@ RigModel readRigModel(const std::filesystem::path& file) {
   const JsonView root(file.string(), j);
   root.requireObject();
   if (root.getString("format", "") != kFormat)
-    root.fail("format", std::string("not a rig model (expected \"") + kFormat + "\"); `lidarcal calibrate RIG` writes one");
+    root.fail("format", std::string("not a rig model (expected \"") + kFormat +
+                            "\"); `lidarcal calibrate RIG` writes one");
   RigModel m;
   m.frame = root.getString("frame", "relative");
   m.reference = root.getString("reference", "");
@@ -126,7 +145,8 @@ RigModel readRigModel(const std::filesystem::path& file) {
     s.mounting = readMounting(mounting);
     s.mounting_held = mounting.getBool("held", false);
     s.mounting_covariance = readCovariance(mounting, "covariance");
-    if (b.has("design") && !b.json().at("design").is_null()) s.design = readMounting(b.child("design"));
+    if (b.has("design") && !b.json().at("design").is_null())
+      s.design = readMounting(b.child("design"));
     s.beam_scatter_m = b.getNonNegative("beam_scatter_m", 0.0);
     s.model = modelFromJson(b.json().at("model"), file.string(), b.pathOf("model"));
     if (m.find(s.name)) b.fail("name", "names a sensor twice");
@@ -140,7 +160,8 @@ RigModel readRigModel(const std::filesystem::path& file) {
       rel.sensor = r.getString("sensor");
       rel.pose = readPose(r);
       rel.covariance = readCovariance(r, "covariance");
-      if (r.has("design") && !r.json().at("design").is_null()) rel.design = readPose(r.child("design"));
+      if (r.has("design") && !r.json().at("design").is_null())
+        rel.design = readPose(r.child("design"));
       m.relative.push_back(rel);
     }
   if (root.has("notes"))
@@ -149,7 +170,8 @@ RigModel readRigModel(const std::filesystem::path& file) {
   return m;
 }
 
-CalibrationModel readModelFor(const std::filesystem::path& file, const std::string& key, std::string* chosen) {
+CalibrationModel readModelFor(const std::filesystem::path& file, const std::string& key,
+                              std::string* chosen) {
   if (!isRigModel(file)) {
     if (chosen) chosen->clear();
     return readModel(file);
@@ -160,13 +182,15 @@ CalibrationModel readModelFor(const std::filesystem::path& file, const std::stri
                      "pick one with --sensor NAME or TOPIC");
   const std::optional<std::size_t> at = rig.find(key);
   if (!at)
-    throw InputError(file.string(), "sensors", "has no sensor named '" + key + "' (it holds " + blockNames(rig) + ")",
+    throw InputError(file.string(), "sensors",
+                     "has no sensor named '" + key + "' (it holds " + blockNames(rig) + ")",
                      "pick one by its name, topic or frame");
   if (chosen) *chosen = rig.sensors[*at].name;
   return rig.sensors[*at].model;
 }
 
-CalibrationModel readModelForNode(const std::filesystem::path& file, const std::optional<std::string>& sensor_name,
+CalibrationModel readModelForNode(const std::filesystem::path& file,
+                                  const std::optional<std::string>& sensor_name,
                                   const std::string& topic, std::string* chosen) {
   if (!isRigModel(file)) {
     if (chosen) chosen->clear();
@@ -175,11 +199,15 @@ CalibrationModel readModelForNode(const std::filesystem::path& file, const std::
   const RigModel rig = readRigModel(file);
   const std::optional<std::size_t> at = rig.find(sensor_name ? *sensor_name : topic);
   if (!at && sensor_name)
-    throw InputError(file.string(), "sensors", "has no block for sensor_name '" + *sensor_name + "' (it holds " + blockNames(rig) + ")",
-                     "set sensor_name to one of these names, or leave it unset to pick the block by the input topic");
+    throw InputError(
+        file.string(), "sensors",
+        "has no block for sensor_name '" + *sensor_name + "' (it holds " + blockNames(rig) + ")",
+        "set sensor_name to one of these names, or leave it unset to pick the block by the input "
+        "topic");
   if (!at)
-    throw InputError(file.string(), "sensors", "has no block whose topic is the input topic '" + topic + "' (it holds " +
-                                                   blockNames(rig) + ")",
+    throw InputError(file.string(), "sensors",
+                     "has no block whose topic is the input topic '" + topic + "' (it holds " +
+                         blockNames(rig) + ")",
                      "set sensor_name to the block's name, or the input to its topic");
   if (chosen) *chosen = rig.sensors[*at].name;
   return rig.sensors[*at].model;

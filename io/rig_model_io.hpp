@@ -21,15 +21,17 @@ namespace lidarcal::io {
 
 /// One sensor's block.
 struct RigModelSensor {
-  std::string name;                    ///< short name (the rig sequence's sub-directory)
-  std::string topic;                   ///< its LaserScan topic (empty when not from a bag)
-  std::string frame_id;                ///< its tf frame (empty when unknown)
-  Mounting mounting;                   ///< estimated mounting (vehicle frame; relative frame: the reference at its design)
-  std::array<double, 9> mounting_covariance{};  ///< row-major 3x3 of (x m, y m, yaw rad); zero when held
-  bool mounting_held = false;          ///< the relative frame's reference
-  std::optional<Mounting> design;      ///< the mounting tf_static gives (first recording), when known
-  double beam_scatter_m = 0.0;         ///< tau: a beam's error that repeats from scan to scan, metres
-  CalibrationModel model;              ///< the range model, as a single-sensor model.json holds it
+  std::string name;      ///< short name (the rig sequence's sub-directory)
+  std::string topic;     ///< its LaserScan topic (empty when not from a bag)
+  std::string frame_id;  ///< its tf frame (empty when unknown)
+  /// estimated mounting (vehicle frame; relative frame: the reference at its design)
+  Mounting mounting;
+  /// row-major 3x3 of (x m, y m, yaw rad); zero when held
+  std::array<double, 9> mounting_covariance{};
+  bool mounting_held = false;      ///< the relative frame's reference
+  std::optional<Mounting> design;  ///< the mounting tf_static gives (first recording), when known
+  double beam_scatter_m = 0.0;     ///< tau: a beam's error that repeats from scan to scan, metres
+  CalibrationModel model;          ///< the range model, as a single-sensor model.json holds it
 };
 
 /// `sensor` seen from `reference`, estimated and designed.
@@ -42,25 +44,25 @@ struct RigModelRelative {
 
 /// A pole as calibrated.
 struct RigModelPole {
-  int id = 0;                                ///< pole id
-  double x_m = 0.0, y_m = 0.0;               ///< centre in the frame of the vehicle's poses, metres
-  std::array<double, 4> covariance_m2{};     ///< row-major 2x2
-  std::vector<std::string> sensors;          ///< the sensors that saw it
+  int id = 0;                             ///< pole id
+  double x_m = 0.0, y_m = 0.0;            ///< centre in the frame of the vehicle's poses, metres
+  std::array<double, 4> covariance_m2{};  ///< row-major 2x2
+  std::vector<std::string> sensors;       ///< the sensors that saw it
 };
 
 struct RigModel {
-  std::string frame;                   ///< "vehicle" or "relative"
-  std::string reference;               ///< the reference sensor's name
-  std::string vehicle_frame;           ///< the frame the mountings are in (e.g. base_footprint)
-  bool scale_free = false;             ///< the common range scale was held (reference alpha_1 = 1)
-  bool motion_prior = false;           ///< odometry steps were the vehicle's prior
-  double radius_m = 0.0;               ///< pole radius
+  std::string frame;          ///< "vehicle" or "relative"
+  std::string reference;      ///< the reference sensor's name
+  std::string vehicle_frame;  ///< the frame the mountings are in (e.g. base_footprint)
+  bool scale_free = false;    ///< the common range scale was held (reference alpha_1 = 1)
+  bool motion_prior = false;  ///< odometry steps were the vehicle's prior
+  double radius_m = 0.0;      ///< pole radius
   std::vector<RigModelSensor> sensors;
   std::vector<RigModelRelative> relative;
-  std::vector<RigModelPole> poles;     ///< centres in the frame of the vehicle's poses
-  std::vector<Pose2> stops;            ///< the vehicle's refined pose per stop
-  std::vector<std::string> notes;      ///< what the data determine and what not
-  Status status;                       ///< ok, or why there are no mountings
+  std::vector<RigModelPole> poles;  ///< centres in the frame of the vehicle's poses
+  std::vector<Pose2> stops;         ///< the vehicle's refined pose per stop
+  std::vector<std::string> notes;   ///< what the data determine and what not
+  Status status;                    ///< ok, or why there are no mountings
   /// Index of the block whose name, topic or frame is `key`; nullopt when none.
   std::optional<std::size_t> find(const std::string& key) const;
 };
@@ -74,13 +76,15 @@ RigModel readRigModel(const std::filesystem::path& file);
 /// The model of one sensor: a single-sensor model.json as it is (`key` unused), or the block of a
 /// rig model whose name, topic or frame is `key`. Throws InputError listing the blocks when `key`
 /// is empty or names none. `chosen` (optional) receives the block's name ("" for a single model).
-CalibrationModel readModelFor(const std::filesystem::path& file, const std::string& key, std::string* chosen = nullptr);
+CalibrationModel readModelFor(const std::filesystem::path& file, const std::string& key,
+                              std::string* chosen = nullptr);
 
 /// The model a live node applies: a single-sensor model.json as it is; of a rig model, the block
 /// `sensor_name` names when it is set, else the block whose topic is `topic` (the node's input,
 /// resolved). Throws InputError naming the file and its "sensors", listing the blocks, when no
 /// block matches: the node's refusal of a model of another sensor. `chosen` as readModelFor's.
-CalibrationModel readModelForNode(const std::filesystem::path& file, const std::optional<std::string>& sensor_name,
+CalibrationModel readModelForNode(const std::filesystem::path& file,
+                                  const std::optional<std::string>& sensor_name,
                                   const std::string& topic, std::string* chosen = nullptr);
 
 }  // namespace lidarcal::io

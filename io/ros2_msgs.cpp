@@ -66,12 +66,14 @@ void decodeLaserScan(const std::uint8_t* data, std::size_t size, Ros2LaserScan& 
 
 void patchLaserScanRanges(const Ros2LaserScan& msg, std::uint8_t* data, std::size_t size) {
   if (msg.ranges_offset + 4 * msg.ranges.size() > size)
-    throw std::logic_error("patchLaserScanRanges: the message is not the one the scan was decoded from");
+    throw std::logic_error(
+        "patchLaserScanRanges: the message is not the one the scan was decoded from");
   std::uint8_t* p = data + msg.ranges_offset;
   for (float r : msg.ranges) {
     std::uint32_t bits = 0;
     std::memcpy(&bits, &r, sizeof bits);
-    for (int b = 0; b < 4; ++b) *p++ = static_cast<std::uint8_t>(bits >> (8 * (msg.big_endian ? 3 - b : b)));
+    for (int b = 0; b < 4; ++b)
+      *p++ = static_cast<std::uint8_t>(bits >> (8 * (msg.big_endian ? 3 - b : b)));
   }
 }
 

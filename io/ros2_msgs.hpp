@@ -18,16 +18,16 @@ namespace lidarcal::io {
 
 /// sensor_msgs/msg/LaserScan; reused from message to message (its vectors keep their capacity).
 struct Ros2LaserScan {
-  std::int32_t stamp_sec = 0;       ///< header.stamp.sec
-  std::uint32_t stamp_nanosec = 0;  ///< header.stamp.nanosec
-  std::string frame_id;             ///< header.frame_id
+  std::int32_t stamp_sec = 0;                               ///< header.stamp.sec
+  std::uint32_t stamp_nanosec = 0;                          ///< header.stamp.nanosec
+  std::string frame_id;                                     ///< header.frame_id
   float angle_min = 0, angle_max = 0, angle_increment = 0;  ///< rad
   float time_increment = 0, scan_time = 0;                  ///< s
   float range_min = 0, range_max = 0;                       ///< m
-  std::vector<float> ranges;        ///< m
-  std::vector<float> intensities;   ///< sensor units
-  std::size_t ranges_offset = 0;    ///< byte offset of ranges[0] in the serialised message
-  bool big_endian = false;          ///< the message's CDR byte order
+  std::vector<float> ranges;                                ///< m
+  std::vector<float> intensities;                           ///< sensor units
+  std::size_t ranges_offset = 0;  ///< byte offset of ranges[0] in the serialised message
+  bool big_endian = false;        ///< the message's CDR byte order
 
   /// The fields as the shared conversion (fillRawScan) takes them; views into this message.
   LaserScanView view() const;
@@ -39,12 +39,13 @@ void patchLaserScanRanges(const Ros2LaserScan& msg, std::uint8_t* data, std::siz
 
 /// A stamped transform of a tf message or the pose of an odometry message.
 struct Ros2StampedTransform {
-  double stamp_s = 0.0;      ///< header.stamp, seconds
-  std::string parent;        ///< header.frame_id
-  std::string child;         ///< child_frame_id
-  Transform3 transform;      ///< child -> parent
+  double stamp_s = 0.0;  ///< header.stamp, seconds
+  std::string parent;    ///< header.frame_id
+  std::string child;     ///< child_frame_id
+  Transform3 transform;  ///< child -> parent
 };
-/// nav_msgs/msg/Odometry: header, child_frame_id and pose.pose (the covariance and twist are not read).
+/// nav_msgs/msg/Odometry: header, child_frame_id and pose.pose (the covariance and twist are not
+/// read).
 Ros2StampedTransform decodeOdometry(const std::uint8_t* data, std::size_t size);
 /// tf2_msgs/msg/TFMessage: sequence<geometry_msgs/msg/TransformStamped>.
 std::vector<Ros2StampedTransform> decodeTfMessage(const std::uint8_t* data, std::size_t size);

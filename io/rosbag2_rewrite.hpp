@@ -24,13 +24,15 @@ namespace lidarcal::io {
 /// Writes `out` from `in` (a .mcap or .db3 file: `out` a new file; a rosbag2 directory: `out` an
 /// existing empty directory; the caller makes either atomic). `topic` empty = the bag's only
 /// LaserScan topic. Throws InputError for an unreadable bag, topic or message.
-BagRewriteReport rewriteRosbag2(const std::filesystem::path& in, const std::filesystem::path& out, const std::string& topic,
-                                const RangesCallback& on_scan);
+BagRewriteReport rewriteRosbag2(const std::filesystem::path& in, const std::filesystem::path& out,
+                                const std::string& topic, const RangesCallback& on_scan);
 
 /// The same for the ranges of every topic in `topics` in one pass (each checked as `topic`
 /// above; several sensors of one vehicle, each with its own model). The callback is told each
 /// message's topic; messages reach it in time order.
-BagRewriteReport rewriteRosbag2Topics(const std::filesystem::path& in, const std::filesystem::path& out,
-                                      const std::vector<std::string>& topics, const TopicRangesCallback& on_scan);
+BagRewriteReport rewriteRosbag2Topics(const std::filesystem::path& in,
+                                      const std::filesystem::path& out,
+                                      const std::vector<std::string>& topics,
+                                      const TopicRangesCallback& on_scan);
 
 }  // namespace lidarcal::io

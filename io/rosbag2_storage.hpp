@@ -23,14 +23,14 @@ namespace lidarcal::io {
 
 /// A topic of a ROS 2 bag.
 struct Rosbag2Topic {
-  BagTopic topic;           ///< name, type (e.g. sensor_msgs/msg/LaserScan), messages (over all files)
-  std::string encoding;     ///< serialisation format, e.g. cdr
+  BagTopic topic;        ///< name, type (e.g. sensor_msgs/msg/LaserScan), messages (over all files)
+  std::string encoding;  ///< serialisation format, e.g. cdr
 };
 
 /// One serialised message; `data` is valid during the callback only.
 struct Rosbag2Message {
   const std::string* topic = nullptr;
-  std::int64_t time_ns = 0;           ///< receive (log) time, nanoseconds
+  std::int64_t time_ns = 0;  ///< receive (log) time, nanoseconds
   const std::uint8_t* data = nullptr;
   std::size_t size = 0;
 };
@@ -42,7 +42,8 @@ class Rosbag2File {
   virtual ~Rosbag2File() = default;
   virtual std::vector<Rosbag2Topic> topics() const = 0;
   /// Messages of `topics` in time order; returns false when the callback stopped it.
-  virtual bool forEach(const std::set<std::string>& topics, const Rosbag2MessageCallback& on_message) const = 0;
+  virtual bool forEach(const std::set<std::string>& topics,
+                       const Rosbag2MessageCallback& on_message) const = 0;
 };
 
 class Rosbag2 {
@@ -63,10 +64,10 @@ class Rosbag2 {
 
 /// What metadata.yaml says about the storage (only the entries lidarcal needs).
 struct Rosbag2Metadata {
-  std::string storage_identifier;             ///< sqlite3 or mcap
+  std::string storage_identifier;                ///< sqlite3 or mcap
   std::vector<std::string> relative_file_paths;  ///< the storage files, in order
-  std::string compression_format;             ///< empty when not compressed
-  std::string compression_mode;               ///< empty, FILE or MESSAGE
+  std::string compression_format;                ///< empty when not compressed
+  std::string compression_mode;                  ///< empty, FILE or MESSAGE
 };
 /// Parses the block-style YAML rosbag2 writes (`key: value`, `- item` lists). Throws InputError
 /// (naming `file`) when storage_identifier or relative_file_paths is missing.

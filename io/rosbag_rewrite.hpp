@@ -21,23 +21,26 @@ namespace lidarcal::io {
 using RangesCallback = std::function<void(std::vector<float>& ranges_m, const RawScan& scan)>;
 
 /// The same with the message's topic, for a rewrite of several topics.
-using TopicRangesCallback = std::function<void(const std::string& topic, std::vector<float>& ranges_m, const RawScan& scan)>;
+using TopicRangesCallback = std::function<void(const std::string& topic,
+                                               std::vector<float>& ranges_m, const RawScan& scan)>;
 
 struct BagRewriteReport {
-  std::string topic;            ///< the (first) LaserScan topic whose ranges went through the callback
-  std::size_t messages = 0;     ///< messages written (all topics)
+  std::string topic;         ///< the (first) LaserScan topic whose ranges went through the callback
+  std::size_t messages = 0;  ///< messages written (all topics)
   std::size_t connections = 0;  ///< connections of the input (each written with its header)
   std::size_t scans = 0;        ///< LaserScan messages passed to the callback
 };
 
 /// Writes `out` (a new file; the caller makes it atomic) from `in`. `topic` empty = the bag's
 /// only LaserScan topic (as readRosbag). Throws InputError for an unreadable bag or topic.
-BagRewriteReport rewriteRosbag(const std::filesystem::path& in, const std::filesystem::path& out, const std::string& topic,
-                               const RangesCallback& on_scan);
+BagRewriteReport rewriteRosbag(const std::filesystem::path& in, const std::filesystem::path& out,
+                               const std::string& topic, const RangesCallback& on_scan);
 
 /// The same for the ranges of every topic in `topics` (each checked as `topic` above; several
 /// sensors of one vehicle, each with its own model).
-BagRewriteReport rewriteRosbagTopics(const std::filesystem::path& in, const std::filesystem::path& out,
-                                     const std::vector<std::string>& topics, const TopicRangesCallback& on_scan);
+BagRewriteReport rewriteRosbagTopics(const std::filesystem::path& in,
+                                     const std::filesystem::path& out,
+                                     const std::vector<std::string>& topics,
+                                     const TopicRangesCallback& on_scan);
 
 }  // namespace lidarcal::io

@@ -36,7 +36,8 @@ RangeEffects parseEffects(const JsonView& v) {
   if (e.mixed_pixel_fraction > 1.0) v.fail("mixed_pixel_fraction", "must lie in [0, 1]");
   e.noise_student_dof = v.getNonNegative("noise_student_dof", 0.0);
   if (e.noise_student_dof != 0.0 && e.noise_student_dof <= 2.0)
-    v.fail("noise_student_dof", "must be 0 (Gaussian noise) or above 2 (a Student t with finite variance)");
+    v.fail("noise_student_dof",
+           "must be 0 (Gaussian noise) or above 2 (a Student t with finite variance)");
   e.range_resolution_m = v.getNonNegative("range_resolution_m", 0.0);
   e.dark_noise_exponent = v.getNumber("dark_noise_exponent", 0.0);
   e.dark_reference_intensity = v.getPositive("dark_reference_intensity", 1.0);
@@ -52,7 +53,8 @@ ojson effectsToJson(const RangeEffects& e) {
   if (e.incidence_noise_exponent != 0.0) j["incidence_noise_exponent"] = e.incidence_noise_exponent;
   if (e.incidence_bias_m != 0.0) j["incidence_bias_m"] = e.incidence_bias_m;
   if (e.range_drift_m_per_scan != 0.0) j["range_drift_m_per_scan"] = e.range_drift_m_per_scan;
-  if (e.range_drift_reference_scan != 0.0) j["range_drift_reference_scan"] = e.range_drift_reference_scan;
+  if (e.range_drift_reference_scan != 0.0)
+    j["range_drift_reference_scan"] = e.range_drift_reference_scan;
   if (e.mixed_pixel_fraction != 0.0) j["mixed_pixel_fraction"] = e.mixed_pixel_fraction;
   if (e.noise_student_dof != 0.0) j["noise_student_dof"] = e.noise_student_dof;
   if (e.range_resolution_m != 0.0) j["range_resolution_m"] = e.range_resolution_m;
@@ -72,7 +74,8 @@ Pose2 parsePose(const JsonView& v) {
   Pose2 p;
   p.x_m = v.getNumber("x_m", 0.0);
   p.y_m = v.getNumber("y_m", 0.0);
-  if (v.has("yaw_rad") && v.has("yaw_deg")) v.fail("yaw_deg", "give either yaw_deg or yaw_rad, not both");
+  if (v.has("yaw_rad") && v.has("yaw_deg"))
+    v.fail("yaw_deg", "give either yaw_deg or yaw_rad, not both");
   p.yaw_rad = v.has("yaw_rad") ? v.getNumber("yaw_rad") : deg2rad(v.getNumber("yaw_deg", 0.0));
   return p;
 }
@@ -86,11 +89,15 @@ NoiseModel parseNoise(const JsonView& v) {
   NoiseModel n;
   const std::string kind = v.getString("kind");
   if (!parseNoiseKind(kind, n.kind))
-    v.fail("kind", "unknown noise kind '" + kind + "' (expected none, constant, polynomial, squared or power)");
+    v.fail("kind", "unknown noise kind '" + kind +
+                       "' (expected none, constant, polynomial, squared or power)");
   switch (n.kind) {
-    case NoiseKind::none: break;
+    case NoiseKind::none:
+      break;
     case NoiseKind::constant:
-    case NoiseKind::squared: n.sigma_e = v.getNonNegative("sigma_e"); break;
+    case NoiseKind::squared:
+      n.sigma_e = v.getNonNegative("sigma_e");
+      break;
     case NoiseKind::power:
       n.sigma_e = v.getNonNegative("sigma_e");
       n.exponent = v.getNumber("exponent");
@@ -106,14 +113,19 @@ NoiseModel parseNoise(const JsonView& v) {
 ojson noiseToJson(const NoiseModel& n) {
   ojson j{{"kind", toString(n.kind)}};
   switch (n.kind) {
-    case NoiseKind::none: break;
+    case NoiseKind::none:
+      break;
     case NoiseKind::constant:
-    case NoiseKind::squared: j["sigma_e"] = n.sigma_e; break;
+    case NoiseKind::squared:
+      j["sigma_e"] = n.sigma_e;
+      break;
     case NoiseKind::power:
       j["sigma_e"] = n.sigma_e;
       j["exponent"] = n.exponent;
       break;
-    case NoiseKind::polynomial: j["beta"] = n.beta; break;
+    case NoiseKind::polynomial:
+      j["beta"] = n.beta;
+      break;
   }
   return j;
 }
@@ -122,7 +134,9 @@ ojson noiseToJson(const NoiseModel& n) {
 void parseDriving(const JsonView& path, PathSpec& p) {
   for (const char* key : {"step_m", "stops", "scans_per_stop", "sigma_s_m", "sigma_psi_deg"})
     if (path.has(key))
-      path.fail(key, "is a key of stop-and-go paths; a driving path takes scans, speed_m_per_scan, route and odometry");
+      path.fail(key,
+                "is a key of stop-and-go paths; a driving path takes scans, speed_m_per_scan, "
+                "route and odometry");
   p.stops = path.getPositiveInt("scans");
   p.scans_per_stop = path.getPositiveInt("scans_per_pose", 1);
   if (static_cast<long long>(p.stops) * p.scans_per_stop > 10'000'000)
@@ -153,7 +167,8 @@ PathSpec parsePath(const JsonView& path) {
   path.requireObject();
   PathSpec p;
   const std::string kind = path.getString("kind", "stops");
-  if (kind != "stops" && kind != "driving") path.fail("kind", "unknown path kind '" + kind + "' (expected stops or driving)");
+  if (kind != "stops" && kind != "driving")
+    path.fail("kind", "unknown path kind '" + kind + "' (expected stops or driving)");
   p.kind = kind == "driving" ? PathKind::driving : PathKind::stops;
   if (path.has("start")) p.start = parsePose(path.child("start"));
   if (p.kind == PathKind::driving) {
@@ -175,11 +190,13 @@ PathSpec parsePath(const JsonView& path) {
 /// The path as JSON: a stop-and-go path with exactly the keys it always had (scenes keep their
 /// bytes), a driving path with its own keys.
 ojson pathToJson(const PathSpec& p) {
-  const ojson start{{"x_m", p.start.x_m}, {"y_m", p.start.y_m}, {"yaw_deg", rad2deg(p.start.yaw_rad)}};
+  const ojson start{
+      {"x_m", p.start.x_m}, {"y_m", p.start.y_m}, {"yaw_deg", rad2deg(p.start.yaw_rad)}};
   ojson path;
   if (p.kind == PathKind::driving) {
     ojson route = ojson::array();
-    for (const auto& r : p.driving.route) route.push_back(ojson{{"length_m", r.length_m}, {"turn_deg", rad2deg(r.turn_rad)}});
+    for (const auto& r : p.driving.route)
+      route.push_back(ojson{{"length_m", r.length_m}, {"turn_deg", rad2deg(r.turn_rad)}});
     const OdometryNoise& o = p.driving.odometry;
     path = ojson{{"kind", "driving"},
                  {"start", start},
@@ -191,12 +208,9 @@ ojson pathToJson(const PathSpec& p) {
                                     {"heading_deg_per_m", rad2deg(o.heading_rad_per_m)},
                                     {"heading_fraction", o.heading_fraction}}}};
   } else {
-    path = ojson{{"start", start},
-                 {"step_m", p.step_m},
-                 {"stops", p.stops},
-                 {"scans_per_stop", p.scans_per_stop},
-                 {"sigma_s_m", p.sigma_s_m},
-                 {"sigma_psi_deg", rad2deg(p.sigma_psi_rad)}};
+    path = ojson{{"start", start},           {"step_m", p.step_m},
+                 {"stops", p.stops},         {"scans_per_stop", p.scans_per_stop},
+                 {"sigma_s_m", p.sigma_s_m}, {"sigma_psi_deg", rad2deg(p.sigma_psi_rad)}};
   }
   if (p.step_error_fraction != 0.0) path["step_error_fraction"] = p.step_error_fraction;
   return path;
@@ -211,17 +225,22 @@ Scene parseScene(const JsonView& root) {
   SensorSpec& spec = s.sensor;
   spec.name = sensor.getString("name", spec.name);
   spec.beams = sensor.getPositiveInt("beams", spec.beams);
-  if (spec.beams > 1'000'000) sensor.fail("beams", "more than a million beams per scan is not a 2D lidar");
+  if (spec.beams > 1'000'000)
+    sensor.fail("beams", "more than a million beams per scan is not a 2D lidar");
   spec.angle_min_rad = deg2rad(sensor.getNumber("angle_min_deg", 0.0));
   spec.angle_increment_rad = deg2rad(sensor.getPositive("angle_increment_deg", 360.0 / spec.beams));
   spec.range.range_min_m = sensor.getNonNegative("range_min_m");
   spec.range.range_max_m = sensor.getPositive("range_max_m");
-  if (spec.range.range_min_m >= spec.range.range_max_m) sensor.fail("range_min_m", "must be smaller than range_max_m");
-  spec.range.bias.alpha = sensor.has("bias_alpha") ? sensor.getNumbers("bias_alpha") : std::vector<double>{0.0, 1.0};
+  if (spec.range.range_min_m >= spec.range.range_max_m)
+    sensor.fail("range_min_m", "must be smaller than range_max_m");
+  spec.range.bias.alpha =
+      sensor.has("bias_alpha") ? sensor.getNumbers("bias_alpha") : std::vector<double>{0.0, 1.0};
   if (spec.range.bias.alpha.empty() || spec.range.bias.alpha.size() > 10)
     sensor.fail("bias_alpha", "must hold 1 to 10 coefficients alpha_0..alpha_n");
-  if (sensor.has("noise")) spec.range.noise = parseNoise(sensor.child("noise"));
-  else spec.range.noise.kind = NoiseKind::none;
+  if (sensor.has("noise"))
+    spec.range.noise = parseNoise(sensor.child("noise"));
+  else
+    spec.range.noise.kind = NoiseKind::none;
   spec.bearing_noise_rad = deg2rad(sensor.getNonNegative("bearing_noise_deg", 0.0));
   spec.mount_yaw_rad = deg2rad(sensor.getNumber("mount_yaw_deg", 0.0));
   if (sensor.has("effects")) spec.effects = parseEffects(sensor.child("effects"));
@@ -235,8 +254,12 @@ Scene parseScene(const JsonView& root) {
   if (root.has("walls"))
     for (const auto& e : root.array("walls")) {
       e.requireObject();
-      Segment w{e.getNumber("x0_m"), e.getNumber("y0_m"), e.getNumber("x1_m"), e.getNumber("y1_m"),
-                e.getNumber("range_offset_m", 0.0), e.getNonNegative("intensity", 0.0)};
+      Segment w{e.getNumber("x0_m"),
+                e.getNumber("y0_m"),
+                e.getNumber("x1_m"),
+                e.getNumber("y1_m"),
+                e.getNumber("range_offset_m", 0.0),
+                e.getNonNegative("intensity", 0.0)};
       if (std::hypot(w.x1_m - w.x0_m, w.y1_m - w.y0_m) <= 0.0) e.fail("", "wall has zero length");
       s.walls.push_back(w);
     }
@@ -280,8 +303,12 @@ nlohmann::ordered_json sceneToJson(const Scene& s) {
     if (w.range_offset_m != 0.0) walls.back()["range_offset_m"] = w.range_offset_m;
     if (w.intensity != 0.0) walls.back()["intensity"] = w.intensity;
   }
-  return ojson{{"name", s.name},       {"sensor", sensor},   {"path", path},
-               {"landmarks", cylinders(s.landmarks)}, {"clutter", cylinders(s.clutter)}, {"walls", walls},
+  return ojson{{"name", s.name},
+               {"sensor", sensor},
+               {"path", path},
+               {"landmarks", cylinders(s.landmarks)},
+               {"clutter", cylinders(s.clutter)},
+               {"walls", walls},
                {"publish_landmark_radius", s.publish_landmark_radius}};
 }
 
@@ -289,7 +316,8 @@ void writeTruth(const std::filesystem::path& file, const Truth& t) {
   ojson landmarks = ojson::array();
   for (std::size_t i = 0; i < t.scene.landmarks.size(); ++i) {
     const auto& c = t.scene.landmarks[i];
-    landmarks.push_back(ojson{{"id", i + 1}, {"x_m", c.x_m}, {"y_m", c.y_m}, {"radius_m", c.radius_m}});
+    landmarks.push_back(
+        ojson{{"id", i + 1}, {"x_m", c.x_m}, {"y_m", c.y_m}, {"radius_m", c.radius_m}});
   }
   ojson stops = ojson::array();
   for (std::size_t k = 0; k < t.stops.size(); ++k) {

@@ -85,11 +85,13 @@ std::optional<ScanNumber> scanNumber(std::string_view name) {
   if (start == stem.size() || (start > 0 && stem[start - 1] == '.')) return std::nullopt;
   const std::string_view digits = stem.substr(start);
   const std::size_t nz = digits.find_first_not_of('0');
-  return ScanNumber{stem.substr(0, start), nz == std::string_view::npos ? std::string_view("0") : digits.substr(nz)};
+  return ScanNumber{stem.substr(0, start),
+                    nz == std::string_view::npos ? std::string_view("0") : digits.substr(nz)};
 }
 
 std::uint8_t flagsOf(const ScanHeader& h) {
-  return static_cast<std::uint8_t>((h.has_intensity ? 1u : 0u) | (h.has_label ? 2u : 0u) | (h.binary ? 4u : 0u));
+  return static_cast<std::uint8_t>((h.has_intensity ? 1u : 0u) | (h.has_label ? 2u : 0u) |
+                                   (h.binary ? 4u : 0u));
 }
 
 /// Bitwise, so that -0.0 and 0.0 stay apart: each scan gives back exactly what was read.
@@ -123,7 +125,8 @@ std::optional<NumberedName> numberedName(std::string_view name) {
 }
 
 /// Appends the name PREFIX + `number` zero-padded to `width` digits + `.pcd`.
-void appendNumberedName(std::string& out, std::string_view prefix, std::size_t width, std::uint64_t number) {
+void appendNumberedName(std::string& out, std::string_view prefix, std::size_t width,
+                        std::uint64_t number) {
   char digits[24];
   std::size_t len = 0;
   do {
@@ -161,7 +164,8 @@ const Run& runOf(const std::vector<Run>& runs, std::size_t i) {
 
 std::string ScanList::path(std::size_t i) const {
   if (i >= size_)
-    throw std::out_of_range("ScanList::path: scan " + std::to_string(i) + " of " + std::to_string(size_));
+    throw std::out_of_range("ScanList::path: scan " + std::to_string(i) + " of " +
+                            std::to_string(size_));
   std::string p = dir_;
   if (numbered_) {
     const NameRun& r = runOf(name_runs_, i);
@@ -189,7 +193,9 @@ ScanHeader ScanList::operator[](std::size_t i) const {
 }
 
 ScanHeader ScanList::at(std::size_t i) const {
-  if (i >= size()) throw std::out_of_range("ScanList::at: scan " + std::to_string(i) + " of " + std::to_string(size()));
+  if (i >= size())
+    throw std::out_of_range("ScanList::at: scan " + std::to_string(i) + " of " +
+                            std::to_string(size()));
   return (*this)[i];
 }
 
@@ -200,7 +206,8 @@ ScanList::ScanList(std::string dir, const std::vector<std::string>& names) : dir
   for (const auto& n : names) {
     chars += n.size();
     const std::optional<NumberedName> num = numberedName(n);
-    if (!num || (first && (num->prefix != first->prefix || num->width != first->width))) one_pattern = false;
+    if (!num || (first && (num->prefix != first->prefix || num->width != first->width)))
+      one_pattern = false;
     if (!first) first = num;
   }
   if (one_pattern) {
@@ -274,7 +281,8 @@ void ScanList::namesToText() {
   numbered_ = false;
   name_end_.reserve(size_ + 1);
   for (std::size_t k = 0; k < runs.size(); ++k) {
-    const std::size_t end = k + 1 < runs.size() ? static_cast<std::size_t>(runs[k + 1].start) : size_;
+    const std::size_t end =
+        k + 1 < runs.size() ? static_cast<std::size_t>(runs[k + 1].start) : size_;
     for (std::size_t i = static_cast<std::size_t>(runs[k].start); i < end; ++i) {
       appendNumberedName(names_, prefix_, width_, runs[k].first + (i - runs[k].start));
       name_end_.push_back(names_.size());
@@ -288,8 +296,10 @@ void ScanList::appendHeader(const ScanHeader& h) {
   const std::uint8_t flags = flagsOf(h);
   const bool same = !header_runs_.empty() && [&] {
     const HeaderRun& r = header_runs_.back();
-    return sameBits(r.viewpoint.x_m, h.viewpoint.x_m) && sameBits(r.viewpoint.y_m, h.viewpoint.y_m) &&
-           sameBits(r.viewpoint.yaw_rad, h.viewpoint.yaw_rad) && r.points == h.points && r.flags == flags;
+    return sameBits(r.viewpoint.x_m, h.viewpoint.x_m) &&
+           sameBits(r.viewpoint.y_m, h.viewpoint.y_m) &&
+           sameBits(r.viewpoint.yaw_rad, h.viewpoint.yaw_rad) && r.points == h.points &&
+           r.flags == flags;
   }();
   if (!same) header_runs_.push_back(HeaderRun{headers_, h.viewpoint, h.points, flags});
   ++headers_;
@@ -298,17 +308,19 @@ void ScanList::appendHeader(const ScanHeader& h) {
 void ScanList::setHeader(std::size_t i, const ScanHeader& h) {
   const std::string p = path(i);
   if (i != headers_)
-    throw std::invalid_argument("ScanList: header of scan " + std::to_string(i) + " given where that of scan " +
-                                std::to_string(headers_) + " is due (headers are set in index order, each once)");
+    throw std::invalid_argument("ScanList: header of scan " + std::to_string(i) +
+                                " given where that of scan " + std::to_string(headers_) +
+                                " is due (headers are set in index order, each once)");
   if (h.path != p)
-    throw std::invalid_argument("ScanList: header of " + h.path + " given for scan " + std::to_string(i));
+    throw std::invalid_argument("ScanList: header of " + h.path + " given for scan " +
+                                std::to_string(i));
   appendHeader(h);
 }
 
 void ScanList::push_back(const ScanHeader& h) {
   if (headers_ != size_)
-    throw std::invalid_argument("ScanList::push_back: the header of scan " + std::to_string(headers_) +
-                                " is not set yet");
+    throw std::invalid_argument("ScanList::push_back: the header of scan " +
+                                std::to_string(headers_) + " is not set yet");
   const std::string name = h.name();
   const std::string dir = h.path.substr(0, h.path.size() - name.size());
   if (empty())
@@ -348,7 +360,8 @@ void checkScanNumbers(const fs::path& dir, const std::vector<std::string>& sorte
     return std::make_pair(n.prefix, n.value);
   };
   std::vector<std::size_t> by_number = numbered;
-  std::stable_sort(by_number.begin(), by_number.end(), [&](std::size_t a, std::size_t b) { return key(a) < key(b); });
+  std::stable_sort(by_number.begin(), by_number.end(),
+                   [&](std::size_t a, std::size_t b) { return key(a) < key(b); });
   std::size_t clash = sorted.size(), clash_first = 0;
   for (std::size_t k = 1, run = 0; k < by_number.size(); ++k) {
     if (key(by_number[k - 1]) != key(by_number[k])) {
@@ -360,7 +373,8 @@ void checkScanNumbers(const fs::path& dir, const std::vector<std::string>& sorte
   if (clash < sorted.size())
     throw InputError(dir.string(), sorted[clash],
                      "has the same scan number as " + sorted[clash_first] +
-                         " (written with different zero padding): two recordings or a copy mixed in one sequence",
+                         " (written with different zero padding): two recordings or a copy mixed "
+                         "in one sequence",
                      "keep one of the two files; a sequence directory holds one recording");
   std::unordered_map<std::string_view, std::size_t> last;  // prefix -> file last seen with it
   for (std::size_t i : numbered) {
@@ -368,9 +382,12 @@ void checkScanNumbers(const fs::path& dir, const std::vector<std::string>& sorte
     auto it = last.find(n.prefix);
     if (it != last.end() && !numberLess(scanNumber(sorted[it->second])->value, n.value))
       throw InputError(dir.string(), sorted[i],
-                       "sorts after " + sorted[it->second] + " but has a smaller scan number: the numbers are not "
-                       "zero-padded, so the scans would be read out of order (files are read in lexicographic order)",
-                       "rename the files with zero-padded numbers of one width (scan_000002.pcd, scan_000010.pcd)");
+                       "sorts after " + sorted[it->second] +
+                           " but has a smaller scan number: the numbers are not "
+                           "zero-padded, so the scans would be read out of order (files are read "
+                           "in lexicographic order)",
+                       "rename the files with zero-padded numbers of one width (scan_000002.pcd, "
+                       "scan_000010.pcd)");
     last[n.prefix] = i;
   }
 }
@@ -382,11 +399,11 @@ namespace {
 /// The scan file names of a directory: while every name reads PREFIX + digits of one width +
 /// .pcd (what lidarcal writes), only the numbers (8 bytes a scan); else the names, sorted.
 struct ScanNames {
-  std::vector<std::string> files;   ///< the names, sorted (one_pattern false)
+  std::vector<std::string> files;      ///< the names, sorted (one_pattern false)
   std::vector<std::uint64_t> numbers;  ///< the numbers, sorted (one_pattern true)
-  std::string prefix;               ///< of the numbered names
-  std::size_t width = 0;            ///< digits of the numbered names
-  bool one_pattern = true;          ///< every name numbered alike
+  std::string prefix;                  ///< of the numbered names
+  std::size_t width = 0;               ///< digits of the numbered names
+  bool one_pattern = true;             ///< every name numbered alike
   std::size_t size() const { return one_pattern ? numbers.size() : files.size(); }
 };
 
@@ -396,7 +413,8 @@ void checkSequenceDirectory(const fs::path& dir) {
   if (!fs::exists(dir, ec))
     throw InputError(dir.string(), "", "sequence directory does not exist", "check the path");
   if (!fs::is_directory(dir, ec))
-    throw InputError(dir.string(), "", "is not a directory: a sequence is a directory of .pcd files",
+    throw InputError(dir.string(), "",
+                     "is not a directory: a sequence is a directory of .pcd files",
                      "pass the directory that holds the scans");
 }
 
@@ -414,9 +432,11 @@ ScanNames listScanNames(const fs::path& dir) {
     std::string name = entry.path().filename().string();
     if (name[0] == '.') continue;
     if (isPcdNameInOtherCase(name))
-      throw InputError(entry.path().string(), "", "has the extension '" + name.substr(name.size() - 4) +
-                                                      "': lidarcal reads only files ending in lower-case .pcd and would skip this scan",
-                       "rename it to end in .pcd (mind a file of that name already present)");
+      throw InputError(
+          entry.path().string(), "",
+          "has the extension '" + name.substr(name.size() - 4) +
+              "': lidarcal reads only files ending in lower-case .pcd and would skip this scan",
+          "rename it to end in .pcd (mind a file of that name already present)");
     if (!isPcdName(name)) continue;
     if (names.one_pattern) {
       const std::optional<NumberedName> num = numberedName(name);
@@ -427,15 +447,19 @@ ScanNames listScanNames(const fs::path& dir) {
       }
       names.one_pattern = false;
       files.reserve(numbers.size() + 1);
-      for (std::uint64_t v : numbers) files.push_back(numberedFileName(names.prefix, names.width, v));
+      for (std::uint64_t v : numbers)
+        files.push_back(numberedFileName(names.prefix, names.width, v));
       std::vector<std::uint64_t>().swap(numbers);
     }
     files.push_back(std::move(name));
   }
-  if (ec) throw InputError(dir.string(), "", "cannot list the directory (" + ec.message() + ")", "check its permissions");
+  if (ec)
+    throw InputError(dir.string(), "", "cannot list the directory (" + ec.message() + ")",
+                     "check its permissions");
   if (files.empty() && numbers.empty())
     throw InputError(dir.string(), "", "holds no .pcd file: an empty sequence",
-                     "point to a directory of scans (see docs/FORMAT.md), or create one with `lidarcal simulate` or `lidarcal import`");
+                     "point to a directory of scans (see docs/FORMAT.md), or create one with "
+                     "`lidarcal simulate` or `lidarcal import`");
   if (names.one_pattern) {
     // One prefix, one width: numeric order is lexicographic order and no number can appear twice
     // (same width and value = same name), so checkScanNumbers has nothing to report here.
@@ -455,8 +479,9 @@ ScanList compactScanList(const fs::path& dir, ScanNames& names) {
     return first.substr(0, first.size() - first_name.size());
   };
   if (names.one_pattern) {
-    ScanList list = ScanList::numbered(dirOf(numberedFileName(names.prefix, names.width, names.numbers.front())),
-                                       names.prefix, names.width, names.numbers);
+    ScanList list = ScanList::numbered(
+        dirOf(numberedFileName(names.prefix, names.width, names.numbers.front())), names.prefix,
+        names.width, names.numbers);
     std::vector<std::uint64_t>().swap(names.numbers);
     return list;
   }
@@ -479,7 +504,8 @@ void readHeadersIntoStops(Sequence& seq, std::size_t n, const StopTolerance& tol
       // Scans come in name order: a listed name before this one was not among them.
       if (seq.meta.stop_starts[next_start] < name)
         throw InputError((dir / "sequence.json").string(), "stop_starts",
-                         "names '" + seq.meta.stop_starts[next_start] + "', which is not a scan of this directory",
+                         "names '" + seq.meta.stop_starts[next_start] +
+                             "', which is not a scan of this directory",
                          "remove it from stop_starts or restore the scan");
       if (seq.meta.stop_starts[next_start] == name) {
         starts_stop = true;
@@ -489,16 +515,20 @@ void readHeadersIntoStops(Sequence& seq, std::size_t n, const StopTolerance& tol
     seq.scans.setHeader(i, h);
     if (seq.meta.beams && h.points != static_cast<std::size_t>(*seq.meta.beams))
       throw InputError(f.string(), "POINTS",
-                       "has " + std::to_string(h.points) + " points, but sequence.json says every scan has beams = " +
-                           std::to_string(*seq.meta.beams) + ": scans of another sensor (or another mode) mixed in",
-                       "keep one sensor's scans per sequence directory; if this sensor's beam count varies from scan "
+                       "has " + std::to_string(h.points) +
+                           " points, but sequence.json says every scan has beams = " +
+                           std::to_string(*seq.meta.beams) +
+                           ": scans of another sensor (or another mode) mixed in",
+                       "keep one sensor's scans per sequence directory; if this sensor's beam "
+                       "count varies from scan "
                        "to scan, remove `beams` from sequence.json");
     addToStops(seq.stops, i, h.viewpoint, tol, starts_stop);
   }
   if (next_start < seq.meta.stop_starts.size())
-    throw InputError((dir / "sequence.json").string(), "stop_starts",
-                     "names '" + seq.meta.stop_starts[next_start] + "', which is not a scan of this directory",
-                     "remove it from stop_starts or restore the scan");
+    throw InputError(
+        (dir / "sequence.json").string(), "stop_starts",
+        "names '" + seq.meta.stop_starts[next_start] + "', which is not a scan of this directory",
+        "remove it from stop_starts or restore the scan");
 }
 
 }  // namespace
@@ -522,10 +552,12 @@ Sequence openSequence(const fs::path& dir, const StopTolerance& tol) {
 
 std::size_t Sequence::stopOf(std::size_t i) const {
   if (i >= scans.size())
-    throw std::out_of_range("Sequence::stopOf: scan " + std::to_string(i) + " of " + std::to_string(scans.size()));
+    throw std::out_of_range("Sequence::stopOf: scan " + std::to_string(i) + " of " +
+                            std::to_string(scans.size()));
   // The last stop whose first scan is at or before i (stops cover the scans in order).
-  const auto it = std::upper_bound(stops.begin(), stops.end(), i,
-                                   [](std::size_t scan, const Stop& s) { return scan < s.scans.front(); });
+  const auto it =
+      std::upper_bound(stops.begin(), stops.end(), i,
+                       [](std::size_t scan, const Stop& s) { return scan < s.scans.front(); });
   return static_cast<std::size_t>(it - stops.begin()) - 1;
 }
 
@@ -550,14 +582,17 @@ SequenceMeta readSequenceMeta(const fs::path& file) {
   if (v.has("range_max_m")) m.range_max_m = v.getPositive("range_max_m");
   if (v.has("beams")) m.beams = v.getPositiveInt("beams");
   if (v.has("stop_starts")) {
-    for (const auto& e : v.array("stop_starts")) m.stop_starts.push_back(e.json().is_string() ? e.json().get<std::string>() : "");
+    for (const auto& e : v.array("stop_starts"))
+      m.stop_starts.push_back(e.json().is_string() ? e.json().get<std::string>() : "");
     for (std::size_t k = 0; k < m.stop_starts.size(); ++k)
       if (m.stop_starts[k].empty() || (k > 0 && !(m.stop_starts[k - 1] < m.stop_starts[k])))
         throw InputError(file.string(), "stop_starts[" + std::to_string(k) + "]",
-                         "must be scan file names, each once, in sorted order", "fix sequence.json");
+                         "must be scan file names, each once, in sorted order",
+                         "fix sequence.json");
   }
   if (m.range_min_m && m.range_max_m && *m.range_min_m >= *m.range_max_m)
-    throw InputError(file.string(), "range_min_m", "must be smaller than range_max_m", "fix sequence.json");
+    throw InputError(file.string(), "range_min_m", "must be smaller than range_max_m",
+                     "fix sequence.json");
   return m;
 }
 

@@ -21,11 +21,11 @@ namespace lidarcal::io {
 
 /// Optional metadata of a sequence (sequence.json). Ground truth never lives here.
 struct SequenceMeta {
-  std::optional<std::string> sensor_name;       ///< free text, e.g. "RPLIDAR A2"
-  std::optional<double> landmark_radius_m;      ///< common radius of the landmarks, when known
-  std::optional<double> range_min_m;            ///< smallest range the sensor reports
-  std::optional<double> range_max_m;            ///< largest range the sensor reports
-  std::optional<int> beams;                     ///< beams per scan
+  std::optional<std::string> sensor_name;   ///< free text, e.g. "RPLIDAR A2"
+  std::optional<double> landmark_radius_m;  ///< common radius of the landmarks, when known
+  std::optional<double> range_min_m;        ///< smallest range the sensor reports
+  std::optional<double> range_max_m;        ///< largest range the sensor reports
+  std::optional<int> beams;                 ///< beams per scan
   /// Scan files that begin a new stop even where the VIEWPOINT does not change (recordings
   /// taken apart at one pose, e.g. `lidarcal import --stop-per-input`), sorted; empty: stops
   /// by VIEWPOINT alone.
@@ -45,10 +45,18 @@ class ScanRange {
     iterator() = default;
     explicit iterator(std::size_t i) : i_(i) {}
     std::size_t operator*() const { return i_; }
-    iterator& operator++() { ++i_; return *this; }
-    iterator operator++(int) { iterator t = *this; ++i_; return t; }
+    iterator& operator++() {
+      ++i_;
+      return *this;
+    }
+    iterator operator++(int) {
+      iterator t = *this;
+      ++i_;
+      return t;
+    }
     bool operator==(const iterator& o) const { return i_ == o.i_; }
     bool operator!=(const iterator& o) const { return i_ != o.i_; }
+
    private:
     std::size_t i_ = 0;
   };
@@ -68,8 +76,8 @@ class ScanRange {
 
 /// Consecutive scans taken at one commanded pose.
 struct Stop {
-  Pose2 commanded;   ///< VIEWPOINT of the stop's first scan
-  ScanRange scans;   ///< indices into Sequence::scans, in file order
+  Pose2 commanded;  ///< VIEWPOINT of the stop's first scan
+  ScanRange scans;  ///< indices into Sequence::scans, in file order
 };
 
 /// The scan headers of a sequence, stored compactly. File names: when they all read
@@ -90,10 +98,18 @@ class ScanList {
     iterator() = default;
     iterator(const ScanList* list, std::size_t i) : list_(list), i_(i) {}
     ScanHeader operator*() const { return (*list_)[i_]; }
-    iterator& operator++() { ++i_; return *this; }
-    iterator operator++(int) { iterator t = *this; ++i_; return t; }
+    iterator& operator++() {
+      ++i_;
+      return *this;
+    }
+    iterator operator++(int) {
+      iterator t = *this;
+      ++i_;
+      return t;
+    }
     bool operator==(const iterator& o) const { return i_ == o.i_; }
     bool operator!=(const iterator& o) const { return i_ != o.i_; }
+
    private:
     const ScanList* list_ = nullptr;
     std::size_t i_ = 0;
@@ -102,11 +118,11 @@ class ScanList {
   bool empty() const { return size_ == 0; }   ///< no scan
   /// Header of scan i (i < size(); throws std::logic_error when its header is not set yet).
   ScanHeader operator[](std::size_t i) const;
-  ScanHeader at(std::size_t i) const;  ///< throws std::out_of_range
-  std::string path(std::size_t i) const;  ///< the path of scan i (throws std::out_of_range)
+  ScanHeader at(std::size_t i) const;         ///< throws std::out_of_range
+  std::string path(std::size_t i) const;      ///< the path of scan i (throws std::out_of_range)
   ScanHeader front() const { return at(0); }  ///< header of the first scan
-  ScanHeader back() const { return at(size() - 1); }  ///< header of the last scan
-  iterator begin() const { return iterator(this, 0); }  ///< first scan
+  ScanHeader back() const { return at(size() - 1); }       ///< header of the last scan
+  iterator begin() const { return iterator(this, 0); }     ///< first scan
   iterator end() const { return iterator(this, size()); }  ///< past the last scan
   ScanList() = default;
   /// Files `names` in the directory `dir` (with its trailing separator), in this order. The
@@ -142,36 +158,36 @@ class ScanList {
     std::uint64_t start;
     Pose2 viewpoint;
     std::uint64_t points;
-    std::uint8_t flags;       // has_intensity 1, has_label 2, binary 4
+    std::uint8_t flags;  // has_intensity 1, has_label 2, binary 4
   };
   void appendName(const std::string& name);
   void addNumber(std::uint64_t number);  // numbered form: the next name
-  void namesToText();  // leaves the numbered form for the names buffer
+  void namesToText();                    // leaves the numbered form for the names buffer
   void appendHeader(const ScanHeader& header);
 
-  std::string dir_;                       // the first path without its file name
-  std::size_t size_ = 0;                  // names given
-  bool numbered_ = false;                 // names as prefix_ + number + ".pcd" (name_runs_)
+  std::string dir_;        // the first path without its file name
+  std::size_t size_ = 0;   // names given
+  bool numbered_ = false;  // names as prefix_ + number + ".pcd" (name_runs_)
   std::string prefix_;
   std::size_t width_ = 0;
   std::vector<NameRun> name_runs_;
-  std::string names_;                     // else: file names, back to back
-  std::vector<std::uint64_t> name_end_;   // end of each name in names_
+  std::string names_;                    // else: file names, back to back
+  std::vector<std::uint64_t> name_end_;  // end of each name in names_
   std::vector<HeaderRun> header_runs_;
-  std::size_t headers_ = 0;               // headers set: scans 0 .. headers_ - 1
+  std::size_t headers_ = 0;  // headers set: scans 0 .. headers_ - 1
 };
 
 /// Tolerances for "same VIEWPOINT" (docs/FORMAT.md: 1 mm and 0.01 degree).
 struct StopTolerance {
-  double position_m = 1e-3;               ///< max distance between viewpoints of one stop
+  double position_m = 1e-3;  ///< max distance between viewpoints of one stop
   double yaw_rad = 0.01 * 3.14159265358979323846 / 180.0;  ///< max heading difference
 };
 
 struct Sequence {
-  std::filesystem::path dir;          ///< the sequence directory
-  ScanList scans;                     ///< one per .pcd file, lexicographic order
-  std::vector<Stop> stops;            ///< consecutive scans with the same VIEWPOINT
-  SequenceMeta meta;                  ///< sequence.json, when present
+  std::filesystem::path dir;  ///< the sequence directory
+  ScanList scans;             ///< one per .pcd file, lexicographic order
+  std::vector<Stop> stops;    ///< consecutive scans with the same VIEWPOINT
+  SequenceMeta meta;          ///< sequence.json, when present
   /// Stop index of scan i (a binary search over the stops; nothing is kept per scan).
   /// Throws std::out_of_range when i >= scans.size().
   std::size_t stopOf(std::size_t i) const;

@@ -62,7 +62,8 @@ bool SequenceWriter::add(const RawScan& raw) {
   }
   scratch_.name = scanFileName(summary_.written);
   if (start_next_) {
-    if (summary_.written > 0) stop_starts_.push_back(scratch_.name);  // the first scan begins a stop anyway
+    // the first scan begins a stop anyway
+    if (summary_.written > 0) stop_starts_.push_back(scratch_.name);
     start_next_ = false;
   }
   scratch_.viewpoint = raw.pose;
@@ -81,11 +82,13 @@ bool SequenceWriter::add(const RawScan& raw) {
 
 SequenceWriteSummary SequenceWriter::commit(const std::string& sensor_name) {
   if (summary_.written == 0)
-    throw InputError(summary_.out.string(), "", "the input holds no scan to import: nothing was written",
+    throw InputError(summary_.out.string(), "",
+                     "the input holds no scan to import: nothing was written",
                      "check the input file and the options (--from, --topic)");
   SequenceMeta meta;
   if (!sensor_name.empty()) meta.sensor_name = sensor_name;
-  if (std::isfinite(summary_.range_min_m) && summary_.range_min_m >= 0.0) meta.range_min_m = summary_.range_min_m;
+  if (std::isfinite(summary_.range_min_m) && summary_.range_min_m >= 0.0)
+    meta.range_min_m = summary_.range_min_m;
   if (std::isfinite(summary_.range_max_m) && summary_.range_max_m > summary_.range_min_m)
     meta.range_max_m = summary_.range_max_m;
   if (summary_.min_beams == summary_.max_beams && summary_.max_beams > 0)

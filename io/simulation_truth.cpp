@@ -17,13 +17,14 @@ SimulationTruth loadTruth(const std::filesystem::path& truth_json) {
   std::size_t scans = 0;
   for (const auto& s : t.truth.stops) scans += s.scans;
   if (t.ranges.size() != scans * t.beams)
-    throw InputError(csv.string(), "", "holds " + std::to_string(t.ranges.size()) + " rows, truth.json promises " +
-                                           std::to_string(scans * t.beams),
+    throw InputError(csv.string(), "",
+                     "holds " + std::to_string(t.ranges.size()) + " rows, truth.json promises " +
+                         std::to_string(scans * t.beams),
                      "regenerate the simulation");
   for (std::size_t i = 0; i < t.ranges.size(); ++i)
     if (t.ranges[i].scan != i / t.beams || t.ranges[i].beam != i % t.beams)
-      throw InputError(csv.string(), "line " + std::to_string(i + 2), "rows are not in scan, beam order",
-                       "regenerate the simulation");
+      throw InputError(csv.string(), "line " + std::to_string(i + 2),
+                       "rows are not in scan, beam order", "regenerate the simulation");
   return t;
 }
 

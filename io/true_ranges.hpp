@@ -17,12 +17,12 @@ const char* toString(TargetKind kind);
 
 /// Truth of one beam.
 struct TrueRange {
-  std::uint32_t scan = 0;          ///< scan index in the sequence (file order)
-  std::uint32_t beam = 0;          ///< beam (point) index in the scan
-  double range_m = 0.0;            ///< true distance to the surface hit; NaN when nothing was hit
+  std::uint32_t scan = 0;  ///< scan index in the sequence (file order)
+  std::uint32_t beam = 0;  ///< beam (point) index in the scan
+  double range_m = 0.0;    ///< true distance to the surface hit; NaN when nothing was hit
   TargetKind target = TargetKind::none;  ///< kind of surface hit
-  int target_id = 0;               ///< 1-based id within its kind (landmark ids match truth.json); 0 for none
-  double incidence_rad = 0.0;      ///< angle between the beam and the surface normal
+  int target_id = 0;  ///< 1-based id within its kind (landmark ids match truth.json); 0 for none
+  double incidence_rad = 0.0;  ///< angle between the beam and the surface normal
 };
 
 /// Streams rows to a CSV file (the caller makes the enclosing output atomic).

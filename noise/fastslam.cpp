@@ -35,7 +35,8 @@ Pose2 compose(const Pose2& pose, double dx, double dy, double dtheta) {
 
 // Predicted errors of one observation against one particle: reading minus h(pose, landmark)
 // (Sharma 2020 ch. 3.2), without the assumed bias.
-void predictedError(const Pose2& pose, const Eigen::Vector2d& lm, const Observation& o, double& er, double& eb) {
+void predictedError(const Pose2& pose, const Eigen::Vector2d& lm, const Observation& o, double& er,
+                    double& eb) {
   const double dx = lm.x() - pose.x_m, dy = lm.y() - pose.y_m;
   er = o.range_m - std::hypot(dx, dy);
   eb = wrapAngle(o.bearing_rad - (std::atan2(dy, dx) - pose.yaw_rad));
@@ -66,12 +67,14 @@ namespace {
 
 void validateAssumed(const NoiseProblem& problem, const NoiseSetting& assumed) {
   if (static_cast<int>(assumed.sensors.size()) < problem.sensors)
-    throw InputError("", "assumed noise", "has " + std::to_string(assumed.sensors.size()) + " sensors, the data " +
-                                              std::to_string(problem.sensors));
+    throw InputError("", "assumed noise",
+                     "has " + std::to_string(assumed.sensors.size()) + " sensors, the data " +
+                         std::to_string(problem.sensors));
   for (int s = 0; s < problem.sensors; ++s) {
     const SensorNoise& n = assumed.sensors[static_cast<std::size_t>(s)];
     if (!(n.range_var_m2 > 0.0) || !(n.bearing_var_rad2 > 0.0))
-      throw InputError("", "assumed noise of sensor " + std::to_string(s), "variances must be positive");
+      throw InputError("", "assumed noise of sensor " + std::to_string(s),
+                       "variances must be positive");
   }
 }
 
@@ -79,14 +82,15 @@ void validateAssumed(const NoiseProblem& problem, const NoiseSetting& assumed) {
 /// record the predicted errors and the mean pose, resample (Sharma 2020 ch. 3.1-3.2).
 class FastSlamFilter {
  public:
-  FastSlamFilter(const NoiseProblem& problem, const NoiseSetting& assumed, const FastSlamConfig& config, std::uint64_t seed,
-                 std::uint64_t stream);
+  FastSlamFilter(const NoiseProblem& problem, const NoiseSetting& assumed,
+                 const FastSlamConfig& config, std::uint64_t seed, std::uint64_t stream);
   FastSlamResult run();
 
  private:
   void predict(int k);
   bool update(const Observation& o);
-  bool updateParticle(std::size_t pi, const Observation& o, const SensorNoise& n, const Eigen::Matrix2d& R);
+  bool updateParticle(std::size_t pi, const Observation& o, const SensorNoise& n,
+                      const Eigen::Matrix2d& R);
   void recordErrors(const Observation& o);
   void recordMeanPose();
   void resample();
@@ -108,18 +112,21 @@ class FastSlamFilter {
 // Without process noise every particle follows the same path with the same map and weight:
 // one particle gives the same result (up to rounding) at 1/N of the cost.
 std::size_t particleCount(const ProcessNoise& q, const FastSlamConfig& config) {
-  const bool deterministic = config.collapse_identical_particles && q.dx_var_m2 == 0.0 && q.dy_var_m2 == 0.0 &&
-                             q.dtheta_var_rad2 == 0.0;
+  const bool deterministic = config.collapse_identical_particles && q.dx_var_m2 == 0.0 &&
+                             q.dy_var_m2 == 0.0 && q.dtheta_var_rad2 == 0.0;
   return deterministic ? std::size_t{1} : static_cast<std::size_t>(config.particles);
 }
 
-FastSlamFilter::FastSlamFilter(const NoiseProblem& problem, const NoiseSetting& assumed, const FastSlamConfig& config,
-                               std::uint64_t seed, std::uint64_t stream)
+FastSlamFilter::FastSlamFilter(const NoiseProblem& problem, const NoiseSetting& assumed,
+                               const FastSlamConfig& config, std::uint64_t seed,
+                               std::uint64_t stream)
     : problem_(problem),
       assumed_(assumed),
       config_(config),
       n_particles_(particleCount(assumed.process, config)),
-      particles_(n_particles_, Particle{Pose2{}, std::vector<LandmarkEkf>(static_cast<std::size_t>(problem.landmarks))}),
+      particles_(
+          n_particles_,
+          Particle{Pose2{}, std::vector<LandmarkEkf>(static_cast<std::size_t>(problem.landmarks))}),
       weight_(n_particles_, 1.0 / static_cast<double>(n_particles_)),
       log_lik_(n_particles_),
       initialised_(n_particles_),
@@ -154,11 +161,13 @@ void FastSlamFilter::predict(int k) {
   const OdometryStep& u = problem_.odometry[static_cast<std::size_t>(k)];
   for (auto& p : particles_) {
     const double n1 = normal_(rng_), n2 = normal_(rng_), n3 = normal_(rng_);
-    p.pose = compose(p.pose, u.dx_m + sq_dx_ * n1, u.dy_m + sq_dy_ * n2, u.dtheta_rad + sq_dt_ * n3);
+    p.pose =
+        compose(p.pose, u.dx_m + sq_dx_ * n1, u.dy_m + sq_dy_ * n2, u.dtheta_rad + sq_dt_ * n3);
   }
 }
 
-/// Updates every particle with one observation; true when it initialised its landmark in all of them.
+/// Updates every particle with one observation; true when it initialised its landmark in all of
+/// them.
 bool FastSlamFilter::update(const Observation& o) {
   const SensorNoise& n = assumed_.sensors[static_cast<std::size_t>(o.sensor)];
   const Eigen::Matrix2d R = Eigen::Vector2d(n.range_var_m2, n.bearing_var_rad2).asDiagonal();
@@ -178,7 +187,8 @@ bool FastSlamFilter::update(const Observation& o) {
 
 /// One particle's landmark EKF: initialised from the inverse observation model when first
 /// seen, else updated; true when updated (log_lik_ then holds the innovation's log-likelihood).
-bool FastSlamFilter::updateParticle(std::size_t pi, const Observation& o, const SensorNoise& n, const Eigen::Matrix2d& R) {
+bool FastSlamFilter::updateParticle(std::size_t pi, const Observation& o, const SensorNoise& n,
+                                    const Eigen::Matrix2d& R) {
   Particle& p = particles_[pi];
   LandmarkEkf& lm = p.map[static_cast<std::size_t>(o.landmark)];
   initialised_[pi] = 0;
@@ -200,8 +210,9 @@ bool FastSlamFilter::updateParticle(std::size_t pi, const Observation& o, const 
   const double q2 = dx * dx + dy * dy;
   if (q2 < 1e-18) return false;  // landmark estimate on the robot: no usable linearisation
   const double rho = std::sqrt(q2);
-  const Eigen::Vector2d nu(o.range_m - (rho + n.range_mean_m),
-                           wrapAngle(o.bearing_rad - (std::atan2(dy, dx) - p.pose.yaw_rad + n.bearing_mean_rad)));
+  const Eigen::Vector2d nu(
+      o.range_m - (rho + n.range_mean_m),
+      wrapAngle(o.bearing_rad - (std::atan2(dy, dx) - p.pose.yaw_rad + n.bearing_mean_rad)));
   Eigen::Matrix2d H;
   H << dx / rho, dy / rho, -dy / q2, dx / q2;
   const Eigen::Matrix2d S = H * lm.cov * H.transpose() + R;
@@ -220,7 +231,8 @@ void FastSlamFilter::recordErrors(const Observation& o) {
   double mr = 0.0, mr2 = 0.0, mb = 0.0, mb2 = 0.0;
   for (std::size_t pi = 0; pi < n_particles_; ++pi) {
     double er = 0.0, eb = 0.0;
-    predictedError(particles_[pi].pose, particles_[pi].map[static_cast<std::size_t>(o.landmark)].mean, o, er, eb);
+    predictedError(particles_[pi].pose,
+                   particles_[pi].map[static_cast<std::size_t>(o.landmark)].mean, o, er, eb);
     mr += weight_[pi] * er;
     mr2 += weight_[pi] * er * er;
     mb += weight_[pi] * eb;
@@ -272,8 +284,8 @@ void FastSlamFilter::resample() {
 
 }  // namespace
 
-FastSlamResult runFastSlam(const NoiseProblem& problem, const NoiseSetting& assumed, const FastSlamConfig& config,
-                           std::uint64_t seed, std::uint64_t stream) {
+FastSlamResult runFastSlam(const NoiseProblem& problem, const NoiseSetting& assumed,
+                           const FastSlamConfig& config, std::uint64_t seed, std::uint64_t stream) {
   config.validate();
   validateAssumed(problem, assumed);
   return FastSlamFilter(problem, assumed, config, seed, stream).run();

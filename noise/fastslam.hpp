@@ -20,9 +20,9 @@
 #include <cstdint>
 #include <vector>
 
-#include "noise/problem.hpp"
 #include "common/observation.hpp"
 #include "common/pose2.hpp"
+#include "noise/problem.hpp"
 
 namespace lidarcal::noise {
 
@@ -47,22 +47,23 @@ struct FastSlamConfig {
 
 /// Predicted errors of one sensor, one entry per observation used (Sharma 2020 ch. 3.2).
 struct SensorErrorSamples {
-  std::vector<double> range_m;           ///< particle-weighted mean range error, metres
-  std::vector<double> range_sq_m2;       ///< particle-weighted mean squared range error, m^2
-  std::vector<double> bearing_rad;       ///< particle-weighted mean bearing error, radians
-  std::vector<double> bearing_sq_rad2;   ///< particle-weighted mean squared bearing error, rad^2
+  std::vector<double> range_m;          ///< particle-weighted mean range error, metres
+  std::vector<double> range_sq_m2;      ///< particle-weighted mean squared range error, m^2
+  std::vector<double> bearing_rad;      ///< particle-weighted mean bearing error, radians
+  std::vector<double> bearing_sq_rad2;  ///< particle-weighted mean squared bearing error, rad^2
 };
 
 struct FastSlamResult {
   std::vector<SensorErrorSamples> errors;  ///< per sensor
-  std::vector<Pose2> mean_trajectory;      ///< particle-weighted mean pose of every stop (after its update)
-  double log_evidence = 0.0;               ///< sum over updates of log(mean particle likelihood), nats
-  int resamplings = 0;                     ///< stops after which the particles were resampled
+  /// particle-weighted mean pose of every stop (after its update)
+  std::vector<Pose2> mean_trajectory;
+  double log_evidence = 0.0;  ///< sum over updates of log(mean particle likelihood), nats
+  int resamplings = 0;        ///< stops after which the particles were resampled
 };
 
 /// Runs the filter over the whole problem under the `assumed` noise (every sensor needs
 /// positive variances). Throws InputError when `assumed` has fewer sensors than the problem.
-FastSlamResult runFastSlam(const NoiseProblem& problem, const NoiseSetting& assumed, const FastSlamConfig& config,
-                           std::uint64_t seed, std::uint64_t stream);
+FastSlamResult runFastSlam(const NoiseProblem& problem, const NoiseSetting& assumed,
+                           const FastSlamConfig& config, std::uint64_t seed, std::uint64_t stream);
 
 }  // namespace lidarcal::noise

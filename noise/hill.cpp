@@ -11,7 +11,8 @@
 namespace lidarcal::noise {
 
 void HillClimbConfig::validate() const {
-  if (!(step > 0.0) || !std::isfinite(step)) throw InputError("", "step", "must be positive", "the seed uses 0.01");
+  if (!(step > 0.0) || !std::isfinite(step))
+    throw InputError("", "step", "must be positive", "the seed uses 0.01");
   if (max_jumps < 0) throw InputError("", "max_jumps", "must not be negative", "the seed uses 5");
   if (jump_steps < 1) throw InputError("", "jump_steps", "must be at least 1");
   if (max_evaluations < 1) throw InputError("", "max_evaluations", "must be at least 1");
@@ -30,10 +31,16 @@ namespace {
 class LatticeClimber {
  public:
   using Index = std::vector<long long>;
-  LatticeClimber(const std::function<double(const std::vector<double>&)>& objective, const std::vector<double>& start,
-                 const std::vector<double>& lower, const HillClimbConfig& config,
+  LatticeClimber(const std::function<double(const std::vector<double>&)>& objective,
+                 const std::vector<double>& start, const std::vector<double>& lower,
+                 const HillClimbConfig& config,
                  const std::function<void(int, double)>& on_evaluation)
-      : objective_(objective), start_(start), lower_(lower), config_(config), on_evaluation_(on_evaluation), n_(start.size()) {}
+      : objective_(objective),
+        start_(start),
+        lower_(lower),
+        config_(config),
+        on_evaluation_(on_evaluation),
+        n_(start.size()) {}
   HillClimbResult run(std::mt19937_64& rng);
 
  private:
@@ -56,7 +63,8 @@ class LatticeClimber {
 
 std::vector<double> LatticeClimber::at(const Index& idx) const {
   std::vector<double> x(n_);
-  for (std::size_t i = 0; i < n_; ++i) x[i] = start_[i] + config_.step * static_cast<double>(idx[i]);
+  for (std::size_t i = 0; i < n_; ++i)
+    x[i] = start_[i] + config_.step * static_cast<double>(idx[i]);
   return x;
 }
 
@@ -124,7 +132,8 @@ HillClimbResult LatticeClimber::run(std::mt19937_64& rng) {
     ++jumps_in_a_row;
     ++r_.jumps;
     current_ = best_idx_;
-    for (std::size_t i = 0; i < n_; ++i) current_[i] = std::max(lowest(i), current_[i] + offset(rng));
+    for (std::size_t i = 0; i < n_; ++i)
+      current_[i] = std::max(lowest(i), current_[i] + offset(rng));
     current_value_ = evaluate(current_, true);
     if (current_value_ < best_before) jumps_in_a_row = 0;
   }
@@ -157,7 +166,8 @@ std::vector<double> packNoise(const NoiseSetting& n, const KlHillConfig& config)
   return x;
 }
 
-NoiseSetting unpackNoise(const std::vector<double>& x, const NoiseSetting& base, const KlHillConfig& config) {
+NoiseSetting unpackNoise(const std::vector<double>& x, const NoiseSetting& base,
+                         const KlHillConfig& config) {
   NoiseSetting n = base;
   std::size_t i = 0;
   for (auto& s : n.sensors) {
@@ -174,12 +184,14 @@ NoiseSetting unpackNoise(const std::vector<double>& x, const NoiseSetting& base,
   return n;
 }
 
-KlHillResult estimateNoiseKlHill(const NoiseProblem& problem, const NoiseSetting& initial, const KlHillConfig& config,
-                                 std::uint64_t seed, const std::function<void(int, double)>& on_evaluation) {
+KlHillResult estimateNoiseKlHill(const NoiseProblem& problem, const NoiseSetting& initial,
+                                 const KlHillConfig& config, std::uint64_t seed,
+                                 const std::function<void(int, double)>& on_evaluation) {
   config.validate();
   if (static_cast<int>(initial.sensors.size()) != problem.sensors)
-    throw InputError("", "initial noise", "lists " + std::to_string(initial.sensors.size()) + " sensors, the data " +
-                                              std::to_string(problem.sensors),
+    throw InputError("", "initial noise",
+                     "lists " + std::to_string(initial.sensors.size()) + " sensors, the data " +
+                         std::to_string(problem.sensors),
                      "give one entry per sensor in --init");
   KlHillResult result;
   std::vector<double> lower;
@@ -207,10 +219,13 @@ KlHillResult estimateNoiseKlHill(const NoiseProblem& problem, const NoiseSetting
 
   std::uint64_t evaluation = 0;
   auto objective = [&](const std::vector<double>& x) {
-    return evaluateKlObjective(problem, unpackNoise(x, initial, config), config.objective, seed, evaluation++).total;
+    return evaluateKlObjective(problem, unpackNoise(x, initial, config), config.objective, seed,
+                               evaluation++)
+        .total;
   };
   auto rng = makeRng(seed, 0);
-  result.climb = hillClimb(objective, packNoise(initial, config), lower, config.climb, rng, on_evaluation);
+  result.climb =
+      hillClimb(objective, packNoise(initial, config), lower, config.climb, rng, on_evaluation);
   result.noise = unpackNoise(result.climb.best, initial, config);
   // Objective parts at the best point, re-evaluated on the common stream (deterministic).
   result.at_best = evaluateKlObjective(problem, result.noise, config.objective, seed, 0);

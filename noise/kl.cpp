@@ -30,7 +30,8 @@ KlObjectiveConfig KlObjectiveConfig::sound() {
   return c;
 }
 
-ErrorGaussian fitErrors(const std::vector<double>& e, const std::vector<double>& e2, ErrorStatistic statistic) {
+ErrorGaussian fitErrors(const std::vector<double>& e, const std::vector<double>& e2,
+                        ErrorStatistic statistic) {
   ErrorGaussian g;
   if (e.empty()) return g;
   const double n = static_cast<double>(e.size());
@@ -47,7 +48,8 @@ ErrorGaussian fitErrors(const std::vector<double>& e, const std::vector<double>&
 }
 
 KlEvaluation evaluateKlObjective(const NoiseProblem& problem, const NoiseSetting& assumed,
-                                 const KlObjectiveConfig& config, std::uint64_t seed, std::uint64_t evaluation) {
+                                 const KlObjectiveConfig& config, std::uint64_t seed,
+                                 std::uint64_t evaluation) {
   const std::uint64_t stream = config.common_random_numbers ? 1 : 2 + evaluation;
   const FastSlamResult filter = runFastSlam(problem, assumed, config.filter, seed, stream);
   KlEvaluation out;
@@ -60,8 +62,10 @@ KlEvaluation evaluateKlObjective(const NoiseProblem& problem, const NoiseSetting
     const ErrorGaussian pr = fitErrors(e.range_m, e.range_sq_m2, config.statistic);
     const ErrorGaussian pb = fitErrors(e.bearing_rad, e.bearing_sq_rad2, config.statistic);
     // Sharma 2020 ch. 3.3: KL(assumed || predicted), summed over sensors (and here components).
-    const double kr = gaussianKl(a.range_mean_m, asVariance(a.range_var_m2), pr.mean, asVariance(pr.var));
-    const double kb = gaussianKl(a.bearing_mean_rad, asVariance(a.bearing_var_rad2), pb.mean, asVariance(pb.var));
+    const double kr =
+        gaussianKl(a.range_mean_m, asVariance(a.range_var_m2), pr.mean, asVariance(pr.var));
+    const double kb =
+        gaussianKl(a.bearing_mean_rad, asVariance(a.bearing_var_rad2), pb.mean, asVariance(pb.var));
     out.predicted_range.push_back(pr);
     out.predicted_bearing.push_back(pb);
     out.kl_range.push_back(kr);

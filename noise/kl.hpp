@@ -16,9 +16,9 @@
 #include <cstdint>
 #include <vector>
 
+#include "common/observation.hpp"
 #include "noise/fastslam.hpp"
 #include "noise/problem.hpp"
-#include "common/observation.hpp"
 
 namespace lidarcal::noise {
 
@@ -32,14 +32,15 @@ enum class KlScale {
   variance_as_scale,  ///< N(mean, var^2): the variance value used as the standard deviation (seed)
 };
 enum class ErrorStatistic {
-  central,         ///< mean and central variance of the weighted mean errors (ours)
-  squared_errors,  ///< mean of the weighted mean errors; variance = mean weighted squared error about 0 (seed)
+  central,  ///< mean and central variance of the weighted mean errors (ours)
+  /// mean of the weighted mean errors; variance = mean weighted squared error about 0 (seed)
+  squared_errors,
 };
 
 struct KlObjectiveConfig {
-  FastSlamConfig filter;                               ///< particle filter (80 particles, seed ch. 5)
-  bool common_random_numbers = true;                   ///< same filter stream for every evaluation
-  KlScale scale = KlScale::variance;                   ///< how a (mean, var) pair becomes a Gaussian
+  FastSlamConfig filter;              ///< particle filter (80 particles, seed ch. 5)
+  bool common_random_numbers = true;  ///< same filter stream for every evaluation
+  KlScale scale = KlScale::variance;  ///< how a (mean, var) pair becomes a Gaussian
   ErrorStatistic statistic = ErrorStatistic::central;  ///< how the predicted Gaussian is fitted
 
   /// The seed's variant: no common random numbers, variance as scale, squared errors, every
@@ -57,21 +58,23 @@ struct ErrorGaussian {
 
 /// The objective at one noise setting, with its parts.
 struct KlEvaluation {
-  double total = 0.0;                         ///< sum of KL over sensors and components, nats
+  double total = 0.0;                            ///< sum of KL over sensors and components, nats
   std::vector<ErrorGaussian> predicted_range;    ///< per sensor
   std::vector<ErrorGaussian> predicted_bearing;  ///< per sensor
-  std::vector<double> kl_range;               ///< per sensor, nats
-  std::vector<double> kl_bearing;             ///< per sensor, nats
-  double log_evidence = 0.0;                  ///< the filter's log marginal likelihood, nats
+  std::vector<double> kl_range;                  ///< per sensor, nats
+  std::vector<double> kl_bearing;                ///< per sensor, nats
+  double log_evidence = 0.0;                     ///< the filter's log marginal likelihood, nats
 };
 
 /// Fits the predicted Gaussian of one component to weighted mean errors `e` and weighted mean
 /// squared errors `e2` (same length) with `statistic`.
-ErrorGaussian fitErrors(const std::vector<double>& e, const std::vector<double>& e2, ErrorStatistic statistic);
+ErrorGaussian fitErrors(const std::vector<double>& e, const std::vector<double>& e2,
+                        ErrorStatistic statistic);
 
 /// Evaluates the objective at `assumed`. The filter stream is `1` with common random numbers,
 /// `2 + evaluation` without, under base `seed`.
 KlEvaluation evaluateKlObjective(const NoiseProblem& problem, const NoiseSetting& assumed,
-                                 const KlObjectiveConfig& config, std::uint64_t seed, std::uint64_t evaluation);
+                                 const KlObjectiveConfig& config, std::uint64_t seed,
+                                 std::uint64_t evaluation);
 
 }  // namespace lidarcal::noise

@@ -6,9 +6,9 @@
 #include <limits>
 #include <memory>
 
+#include <ceres/ceres.h>
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
-#include <ceres/ceres.h>
 
 #include "common/errors.hpp"
 #include "noise/ml_model.hpp"
@@ -30,7 +30,8 @@ void MlNoiseConfig::validate() const {
   if (!(tolerance > 0.0)) throw InputError("", "tolerance", "must be positive");
   if (!(min_variance > 0.0)) throw InputError("", "min_variance", "must be positive");
   if (solver_iterations < 1) throw InputError("", "solver_iterations", "must be at least 1");
-  if (max_motions_for_information < 0) throw InputError("", "max_motions_for_information", "must be at least 0");
+  if (max_motions_for_information < 0)
+    throw InputError("", "max_motions_for_information", "must be at least 0");
   for (const auto& s : initial.sensors)
     if (!(s.range_var_m2 > 0.0) || !(s.bearing_var_rad2 > 0.0))
       throw InputError("", "initial noise", "sensor variances must be positive");
@@ -41,7 +42,8 @@ MlState initialState(const NoiseProblem& problem) {
   st.poses.push_back(Pose2{});
   for (int k = 1; k < problem.stops; ++k) {
     const OdometryStep& u = problem.odometry[static_cast<std::size_t>(k)];
-    st.poses.push_back(compose(st.poses.back(), Pose2{u.dx_m, u.dy_m, u.dtheta_rad}));  // dead reckoning
+    // dead reckoning
+    st.poses.push_back(compose(st.poses.back(), Pose2{u.dx_m, u.dy_m, u.dtheta_rad}));
   }
   st.landmarks.assign(static_cast<std::size_t>(problem.landmarks), {0.0, 0.0});
   std::vector<int> count(static_cast<std::size_t>(problem.landmarks), 0);
@@ -62,13 +64,15 @@ MlState initialState(const NoiseProblem& problem) {
   return st;
 }
 
-std::vector<double> residualsAt(const NoiseProblem& problem, const MlState& state, std::vector<int>* group) {
+std::vector<double> residualsAt(const NoiseProblem& problem, const MlState& state,
+                                std::vector<int>* group) {
   std::vector<double> r;
   if (group) group->clear();
   const int S = problem.sensors;
   for (const auto& o : problem.observations) {
     ObservationLinear lin;
-    linearizeObservation(state.poses[static_cast<std::size_t>(o.stop)], state.landmarks[static_cast<std::size_t>(o.landmark)].data(),
+    linearizeObservation(state.poses[static_cast<std::size_t>(o.stop)],
+                         state.landmarks[static_cast<std::size_t>(o.landmark)].data(),
                          state.biases[static_cast<std::size_t>(o.sensor)].data(), o, lin);
     for (int c = 0; c < 2; ++c) {
       r.push_back(lin.res[c]);
@@ -77,7 +81,8 @@ std::vector<double> residualsAt(const NoiseProblem& problem, const MlState& stat
   }
   for (int k = 1; k < problem.stops; ++k) {
     OdometryLinear lin;
-    linearizeOdometry(state.poses[static_cast<std::size_t>(k - 1)], state.poses[static_cast<std::size_t>(k)],
+    linearizeOdometry(state.poses[static_cast<std::size_t>(k - 1)],
+                      state.poses[static_cast<std::size_t>(k)],
                       problem.odometry[static_cast<std::size_t>(k)], lin);
     for (int c = 0; c < 3; ++c) {
       r.push_back(lin.res[c]);
@@ -93,8 +98,9 @@ namespace {
 void checkData(const NoiseProblem& problem, const MlNoiseConfig& config) {
   const int S = problem.sensors;
   if (!config.initial.sensors.empty() && static_cast<int>(config.initial.sensors.size()) != S)
-    throw InputError("", "initial noise", "lists " + std::to_string(config.initial.sensors.size()) +
-                                              " sensors, the data " + std::to_string(S));
+    throw InputError("", "initial noise",
+                     "lists " + std::to_string(config.initial.sensors.size()) +
+                         " sensors, the data " + std::to_string(S));
   if (config.estimate_biases) {
     double travel = 0.0;
     for (const auto& u : problem.odometry) travel += std::hypot(u.dx_m, u.dy_m);
@@ -112,8 +118,10 @@ std::vector<double> initialVariances(int S, const MlNoiseConfig& config) {
   for (int c = 0; c < 3; ++c) var[static_cast<std::size_t>(2 * S + c)] = 0.01;
   if (!config.initial.sensors.empty())
     for (int s = 0; s < S; ++s) {
-      var[static_cast<std::size_t>(2 * s)] = config.initial.sensors[static_cast<std::size_t>(s)].range_var_m2;
-      var[static_cast<std::size_t>(2 * s + 1)] = config.initial.sensors[static_cast<std::size_t>(s)].bearing_var_rad2;
+      var[static_cast<std::size_t>(2 * s)] =
+          config.initial.sensors[static_cast<std::size_t>(s)].range_var_m2;
+      var[static_cast<std::size_t>(2 * s + 1)] =
+          config.initial.sensors[static_cast<std::size_t>(s)].bearing_var_rad2;
     }
   const ProcessNoise& q0 = config.initial.process;
   const double q0v[3] = {q0.dx_var_m2, q0.dy_var_m2, q0.dtheta_var_rad2};
@@ -167,14 +175,14 @@ class VceEstimator {
   const NoiseProblem& problem_;
   const MlNoiseConfig& config_;
   const int S_, K_, G_;
-  std::vector<double> var_;                         // current variances, order of the groups
-  std::vector<double> inv_sigma_;                   // 1 / sqrt(var), read by the cost functions
+  std::vector<double> var_;        // current variances, order of the groups
+  std::vector<double> inv_sigma_;  // 1 / sqrt(var), read by the cost functions
   MlNoiseResult result_;
   std::vector<std::array<double, 3>> pose_blocks_;  // Ceres parameter blocks of the poses
   ceres::Problem cp_;
   const ceres::Solver::Options sopts_;
   const std::vector<std::string> names_;
-  std::vector<double> acceleration_, last_step_;    // per group: scoring step factor, last step
+  std::vector<double> acceleration_, last_step_;  // per group: scoring step factor, last step
 };
 
 VceEstimator::VceEstimator(const NoiseProblem& problem, const MlNoiseConfig& config)
@@ -193,7 +201,8 @@ VceEstimator::VceEstimator(const NoiseProblem& problem, const MlNoiseConfig& con
       last_step_(static_cast<std::size_t>(G_), 0.0) {}
 
 void VceEstimator::setWeights() {
-  for (int g = 0; g < G_; ++g) inv_sigma_[static_cast<std::size_t>(g)] = 1.0 / std::sqrt(var_[static_cast<std::size_t>(g)]);
+  for (int g = 0; g < G_; ++g)
+    inv_sigma_[static_cast<std::size_t>(g)] = 1.0 / std::sqrt(var_[static_cast<std::size_t>(g)]);
 }
 
 void VceEstimator::buildAdjustment() {
@@ -210,7 +219,8 @@ void VceEstimator::buildAdjustment() {
     if (o.stop == 0)
       cp_.AddResidualBlock(new ObservationCost(o, false, w), nullptr, lm, bias);
     else
-      cp_.AddResidualBlock(new ObservationCost(o, true, w), nullptr, pose_blocks_[static_cast<std::size_t>(o.stop)].data(), lm, bias);
+      cp_.AddResidualBlock(new ObservationCost(o, true, w), nullptr,
+                           pose_blocks_[static_cast<std::size_t>(o.stop)].data(), lm, bias);
   }
   for (int k = 1; k < K_; ++k) {
     const double* w = &inv_sigma_[static_cast<std::size_t>(2 * S_)];
@@ -218,7 +228,8 @@ void VceEstimator::buildAdjustment() {
     if (k == 1)
       cp_.AddResidualBlock(new OdometryCost(u, true, w), nullptr, pose_blocks_[1].data());
     else
-      cp_.AddResidualBlock(new OdometryCost(u, false, w), nullptr, pose_blocks_[static_cast<std::size_t>(k - 1)].data(),
+      cp_.AddResidualBlock(new OdometryCost(u, false, w), nullptr,
+                           pose_blocks_[static_cast<std::size_t>(k - 1)].data(),
                            pose_blocks_[static_cast<std::size_t>(k)].data());
   }
   if (!config_.estimate_biases)
@@ -232,7 +243,8 @@ void VceEstimator::solve(bool wrap_yaw) {
   result_.solver_iterations += static_cast<int>(summary.iterations.size());
   for (int k = 0; k < K_; ++k) {
     const auto& b = pose_blocks_[static_cast<std::size_t>(k)];
-    result_.state.poses[static_cast<std::size_t>(k)] = Pose2{b[0], b[1], wrap_yaw ? wrapAngle(b[2]) : b[2]};
+    result_.state.poses[static_cast<std::size_t>(k)] =
+        Pose2{b[0], b[1], wrap_yaw ? wrapAngle(b[2]) : b[2]};
   }
 }
 
@@ -244,9 +256,13 @@ void VceEstimator::checkLandmarksOffRobot() const {
     const auto& l = st.landmarks[static_cast<std::size_t>(o.landmark)];
     const Pose2& p = st.poses[static_cast<std::size_t>(o.stop)];
     if (std::hypot(l[0] - p.x_m, l[1] - p.y_m) < 1e-4)
-      throw DataError("observations", "stop " + std::to_string(o.stop) + ", landmark " + std::to_string(problem_.landmark_ids[static_cast<std::size_t>(o.landmark)]),
-                      "the adjustment put the landmark on the robot (reading range " + std::to_string(o.range_m) + " m)",
-                      "leave out readings at ranges the sensor cannot measure (below its minimum range)");
+      throw DataError(
+          "observations",
+          "stop " + std::to_string(o.stop) + ", landmark " +
+              std::to_string(problem_.landmark_ids[static_cast<std::size_t>(o.landmark)]),
+          "the adjustment put the landmark on the robot (reading range " +
+              std::to_string(o.range_m) + " m)",
+          "leave out readings at ranges the sensor cannot measure (below its minimum range)");
   }
 }
 
@@ -276,7 +292,8 @@ bool VceEstimator::updateVariances() {
     omega[static_cast<std::size_t>(group_of[i])] += res[i] * res[i];
     ++count[static_cast<std::size_t>(group_of[i])];
   }
-  const AdjustmentAnalysis an = analyseAdjustment(problem_, result_.state, var_, config_.estimate_biases);
+  const AdjustmentAnalysis an =
+      analyseAdjustment(problem_, result_.state, var_, config_.estimate_biases);
   // Restricted (REML) negative log-likelihood of the linearised model, constants dropped:
   //   1/2 [ sum_g n_g log var_g + sum_g Omega_g / var_g + log det N ].
   double nll = 0.5 * an.log_det_normal;
@@ -288,10 +305,12 @@ bool VceEstimator::updateVariances() {
     grp.count = count[ug];
     grp.redundancy = an.redundancy[ug];
     grp.sum_sq = omega[ug];
-    if (count[ug] > 0) nll += 0.5 * (omega[ug] / var_[ug] + static_cast<double>(count[ug]) * std::log(var_[ug]));
+    if (count[ug] > 0)
+      nll += 0.5 * (omega[ug] / var_[ug] + static_cast<double>(count[ug]) * std::log(var_[ug]));
     const double r = an.redundancy[ug], r2 = an.redundancy_sq[ug];
     double updated = var_[ug];
-    if (!fixedGroup(g) && count[ug] > 0 && r > 1e-12 && r2 > 1e-24) updated = updatedVariance(g, r, r2, omega[ug]);
+    if (!fixedGroup(g) && count[ug] > 0 && r > 1e-12 && r2 > 1e-24)
+      updated = updatedVariance(g, r, r2, omega[ug]);
     const double se = updated * std::sqrt(2.0 / std::max(r2, 1e-24));
     // Converged when the change is small against the variance or, for components near zero,
     // against their standard error (the likelihood is flat there).
@@ -338,7 +357,8 @@ void VceEstimator::standardErrors(const AdjustmentAnalysis& an) {
   if (n_free > 0 && llt.info() == Eigen::Success) {
     const Eigen::MatrixXd cov = llt.solve(Eigen::MatrixXd::Identity(n_free, n_free));
     for (Eigen::Index a = 0; a < n_free; ++a)
-      result_.groups[static_cast<std::size_t>(free[static_cast<std::size_t>(a)])].standard_error = std::sqrt(cov(a, a));
+      result_.groups[static_cast<std::size_t>(free[static_cast<std::size_t>(a)])].standard_error =
+          std::sqrt(cov(a, a));
     result_.standard_error_method = "information";
   }
 }
@@ -358,13 +378,15 @@ MlNoiseResult VceEstimator::run() {
     }
   }
   if (!result_.converged)
-    result_.message = "variances still changing after " + std::to_string(config_.max_iterations) + " iterations";
+    result_.message =
+        "variances still changing after " + std::to_string(config_.max_iterations) + " iterations";
   // Final solve at the final variances so poses, landmarks and biases match them.
   setWeights();
   solve(true);
   fillNoise();
   const bool full_information = K_ - 1 <= config_.max_motions_for_information;
-  const AdjustmentAnalysis an = analyseAdjustment(problem_, result_.state, var_, config_.estimate_biases, full_information);
+  const AdjustmentAnalysis an =
+      analyseAdjustment(problem_, result_.state, var_, config_.estimate_biases, full_information);
   result_.bias_standard_error = an.bias_std;
   if (full_information) standardErrors(an);
   return std::move(result_);

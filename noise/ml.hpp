@@ -30,60 +30,68 @@
 
 #include <Eigen/Core>
 
-#include "noise/problem.hpp"
 #include "common/observation.hpp"
 #include "common/pose2.hpp"
+#include "noise/problem.hpp"
 
 namespace lidarcal::noise {
 
 struct MlNoiseConfig {
-  int max_iterations = 100;       ///< VCE iterations (adjustments) at most
-  double tolerance = 1e-3;        ///< stop when every variance changes by less than this fraction (of itself or its standard error)
-  double min_variance = 1e-8;     ///< floor of every variance (a component at the floor is reported as such), unit^2
-  bool estimate_biases = true;    ///< estimate each sensor's range and bearing bias (else fixed at 0)
-  bool estimate_process = true;   ///< estimate the process variances (else fixed at `initial.process`)
-  NoiseSetting initial;           ///< starting variances; empty sensors: 1 for the sensors, 0.01 for the process
-  int solver_iterations = 50;     ///< Ceres iterations per adjustment at most
+  int max_iterations = 100;  ///< VCE iterations (adjustments) at most
+  /// stop when every variance changes by less than this fraction (of itself or its standard error)
+  double tolerance = 1e-3;
+  /// floor of every variance (a component at the floor is reported as such), unit^2
+  double min_variance = 1e-8;
+  bool estimate_biases = true;  ///< estimate each sensor's range and bearing bias (else fixed at 0)
+  /// estimate the process variances (else fixed at `initial.process`)
+  bool estimate_process = true;
+  /// starting variances; empty sensors: 1 for the sensors, 0.01 for the process
+  NoiseSetting initial;
+  int solver_iterations = 50;  ///< Ceres iterations per adjustment at most
   /// Standard errors from the full information of the variances up to this many motions (K - 1);
   /// beyond, the diagonal estimate. Cost: 3(K-1) solves and a 3(K-1)^2 matrix (72 MB at 1000).
   int max_motions_for_information = 1000;
-  void validate() const;          ///< throws InputError
+  void validate() const;  ///< throws InputError
 };
 
 /// The unknowns of the adjustment.
 struct MlState {
-  std::vector<Pose2> poses;                       ///< K poses; poses[0] is the origin (the gauge)
-  std::vector<std::array<double, 2>> landmarks;   ///< L positions (x, y), metres, frame of pose 0
-  std::vector<std::array<double, 2>> biases;      ///< S biases (range m, bearing rad)
+  std::vector<Pose2> poses;                      ///< K poses; poses[0] is the origin (the gauge)
+  std::vector<std::array<double, 2>> landmarks;  ///< L positions (x, y), metres, frame of pose 0
+  std::vector<std::array<double, 2>> biases;     ///< S biases (range m, bearing rad)
 };
 
 /// One variance component.
 struct MlGroup {
-  std::string name;          ///< "s0.range", "s0.bearing", ..., "process.dx", "process.dy", "process.dtheta"
-  std::size_t count = 0;     ///< observations in the group
-  double redundancy = 0.0;   ///< r_g (sum of the group's redundancy numbers)
-  double sum_sq = 0.0;       ///< Omega_g, sum of squared (unweighted) residuals, unit^2
-  double variance = 0.0;     ///< estimate, unit^2
-  double standard_error = 0.0;  ///< of the variance, unit^2 (MlNoiseResult::standard_error_method says how)
-  bool at_floor = false;     ///< the estimate reached min_variance (true value ~0 or not identifiable)
+  /// "s0.range", "s0.bearing", ..., "process.dx", "process.dy", "process.dtheta"
+  std::string name;
+  std::size_t count = 0;    ///< observations in the group
+  double redundancy = 0.0;  ///< r_g (sum of the group's redundancy numbers)
+  double sum_sq = 0.0;      ///< Omega_g, sum of squared (unweighted) residuals, unit^2
+  double variance = 0.0;    ///< estimate, unit^2
+  /// of the variance, unit^2 (MlNoiseResult::standard_error_method says how)
+  double standard_error = 0.0;
+  bool at_floor = false;  ///< the estimate reached min_variance (true value ~0 or not identifiable)
 };
 
 struct MlNoiseResult {
-  bool converged = false;             ///< variances stopped changing within max_iterations
-  std::string message;                ///< why not converged, or notes (empty when all is well)
-  NoiseSetting noise;                 ///< estimated biases (means) and variances
+  bool converged = false;  ///< variances stopped changing within max_iterations
+  std::string message;     ///< why not converged, or notes (empty when all is well)
+  NoiseSetting noise;      ///< estimated biases (means) and variances
   std::vector<double> bias_standard_error;  ///< per sensor: range (m), bearing (rad), interleaved
-  std::vector<MlGroup> groups;        ///< 2S + 3 variance components
+  std::vector<MlGroup> groups;              ///< 2S + 3 variance components
   /// "information": from the inverse REML information of the estimated variances (terms with a
   /// process group in full); "diagonal": var sqrt(2 / sum r_ii^2) per group, which ignores the
   /// correlation of the motion residuals along the chain and overstates the process errors
   /// (used beyond max_motions_for_information, for fixed variances and those at the floor).
   std::string standard_error_method = "diagonal";
-  MlState state;                      ///< adjusted poses, landmarks, biases
-  std::vector<double> objective_trace;  ///< restricted -log likelihood (nats, constants dropped) at each iteration's variances
-  std::vector<std::vector<double>> variance_trace;  ///< variances (order of `groups`) after each iteration
-  int iterations = 0;                 ///< adjustments solved (VCE iterations)
-  int solver_iterations = 0;          ///< Ceres iterations over all adjustments
+  MlState state;  ///< adjusted poses, landmarks, biases
+  /// restricted -log likelihood (nats, constants dropped) at each iteration's variances
+  std::vector<double> objective_trace;
+  /// variances (order of `groups`) after each iteration
+  std::vector<std::vector<double>> variance_trace;
+  int iterations = 0;         ///< adjustments solved (VCE iterations)
+  int solver_iterations = 0;  ///< Ceres iterations over all adjustments
 };
 
 /// Estimates the noise. Throws DataError when the data cannot support it (no translation in
@@ -96,8 +104,10 @@ MlState initialState(const NoiseProblem& problem);
 
 /// Unweighted residuals (model minus reading) at `state`, in order: for each observation of
 /// the problem its range and wrapped bearing residual, then for k = 1..K-1 the motion residual
-/// (dx, dy, wrapped dtheta). Group of each residual in `group` (0..2S+2, as in MlNoiseResult::groups).
-std::vector<double> residualsAt(const NoiseProblem& problem, const MlState& state, std::vector<int>* group = nullptr);
+/// (dx, dy, wrapped dtheta). Group of each residual in `group` (0..2S+2, as in
+/// MlNoiseResult::groups).
+std::vector<double> residualsAt(const NoiseProblem& problem, const MlState& state,
+                                std::vector<int>* group = nullptr);
 
 /// Redundancy of each group at `state` with variances `variances` (2S + 3 entries, order of
 /// MlNoiseResult::groups), using the pose chain's block-tridiagonal structure. With
@@ -107,7 +117,7 @@ std::vector<double> groupRedundancy(const NoiseProblem& problem, const MlState& 
 
 /// REML information matrix of the 2S + 3 variances at `state` (the one behind the standard
 /// errors; see standard_error_method). Exposed for tests.
-Eigen::MatrixXd groupInformation(const NoiseProblem& problem, const MlState& state, const std::vector<double>& variances,
-                                 bool with_biases);
+Eigen::MatrixXd groupInformation(const NoiseProblem& problem, const MlState& state,
+                                 const std::vector<double>& variances, bool with_biases);
 
 }  // namespace lidarcal::noise

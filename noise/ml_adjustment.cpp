@@ -15,9 +15,10 @@ namespace lidarcal::noise {
 namespace ml {
 namespace {
 
-/// One whitened observation row: pose part (3, when the stop is not 0) and z part (indices, values).
+/// One whitened observation row: pose part (3, when the stop is not 0) and z part (indices,
+/// values).
 struct ObsRow {
-  int p;          // pose index (stop - 1) or -1
+  int p;  // pose index (stop - 1) or -1
   Vec3 ap;
   int nz;
   int cols[3];
@@ -39,7 +40,8 @@ struct OdoRow {
 /// recursion over the chain). Leverage of a whitened row a: h = a^T N^-1 a; r_g = sum(1 - h).
 class AdjustmentAnalyser {
  public:
-  AdjustmentAnalyser(const NoiseProblem& problem, const MlState& state, const std::vector<double>& variances, bool with_biases);
+  AdjustmentAnalyser(const NoiseProblem& problem, const MlState& state,
+                     const std::vector<double>& variances, bool with_biases);
   AdjustmentAnalysis analyse(bool with_information);
 
  private:
@@ -59,20 +61,20 @@ class AdjustmentAnalyser {
   const bool with_biases_;
   const int S_, K_, L_, P_, m_;
   const std::size_t uP_;
-  std::vector<Mat3> Dd_, Do_;     // D: diagonal and first off-diagonal pose blocks
-  Eigen::MatrixXd B_, C_;         // N_yz, N_zz
+  std::vector<Mat3> Dd_, Do_;  // D: diagonal and first off-diagonal pose blocks
+  Eigen::MatrixXd B_, C_;      // N_yz, N_zz
   std::vector<ObsRow> obs_rows_;
   std::vector<int> obs_group_;
   std::vector<OdoRow> odo_rows_;
   std::vector<int> odo_group_;
-  std::vector<Mat3> Pinv_;        // inverses of the pose Schur blocks (forward elimination)
-  double log_det_ = 0.0;          // log det N = sum log det(pose Schur blocks) + log det S
-  Eigen::MatrixXd E_, Sinv_, F_;  // D^-1 B, S^-1, E S^-1
+  std::vector<Mat3> Pinv_;           // inverses of the pose Schur blocks (forward elimination)
+  double log_det_ = 0.0;             // log det N = sum log det(pose Schur blocks) + log det S
+  Eigen::MatrixXd E_, Sinv_, F_;     // D^-1 B, S^-1, E S^-1
   std::vector<Mat3> Mdiag_, Mnext_;  // (N^-1) blocks of a pose with itself and with the next pose
 };
 
-AdjustmentAnalyser::AdjustmentAnalyser(const NoiseProblem& problem, const MlState& state, const std::vector<double>& variances,
-                                       bool with_biases)
+AdjustmentAnalyser::AdjustmentAnalyser(const NoiseProblem& problem, const MlState& state,
+                                       const std::vector<double>& variances, bool with_biases)
     : problem_(problem),
       state_(state),
       variances_(variances),
@@ -92,7 +94,8 @@ void AdjustmentAnalyser::observationRows() {
   obs_rows_.reserve(problem_.observations.size() * 2);
   for (const auto& o : problem_.observations) {
     ObservationLinear lin;
-    linearizeObservation(state_.poses[static_cast<std::size_t>(o.stop)], state_.landmarks[static_cast<std::size_t>(o.landmark)].data(),
+    linearizeObservation(state_.poses[static_cast<std::size_t>(o.stop)],
+                         state_.landmarks[static_cast<std::size_t>(o.landmark)].data(),
                          state_.biases[static_cast<std::size_t>(o.sensor)].data(), o, lin);
     for (int c = 0; c < 2; ++c) {
       const int g = 2 * o.sensor + c;
@@ -110,7 +113,8 @@ void AdjustmentAnalyser::observationRows() {
       }
       if (row.p >= 0) {
         Dd_[static_cast<std::size_t>(row.p)] += row.ap * row.ap.transpose();
-        for (int i = 0; i < row.nz; ++i) B_.block(3 * row.p, row.cols[i], 3, 1) += row.ap * row.az[i];
+        for (int i = 0; i < row.nz; ++i)
+          B_.block(3 * row.p, row.cols[i], 3, 1) += row.ap * row.az[i];
       }
       for (int i = 0; i < row.nz; ++i)
         for (int j = 0; j < row.nz; ++j) C_(row.cols[i], row.cols[j]) += row.az[i] * row.az[j];
@@ -123,7 +127,8 @@ void AdjustmentAnalyser::observationRows() {
 void AdjustmentAnalyser::odometryRows() {
   for (int k = 1; k < K_; ++k) {
     OdometryLinear lin;
-    linearizeOdometry(state_.poses[static_cast<std::size_t>(k - 1)], state_.poses[static_cast<std::size_t>(k)],
+    linearizeOdometry(state_.poses[static_cast<std::size_t>(k - 1)],
+                      state_.poses[static_cast<std::size_t>(k)],
                       problem_.odometry[static_cast<std::size_t>(k)], lin);
     for (int c = 0; c < 3; ++c) {
       const int g = 2 * S_ + c;
@@ -143,7 +148,8 @@ void AdjustmentAnalyser::odometryRows() {
 
 template <class Llt>
 void addLogDet(const Llt& llt, double& log_det) {
-  for (Eigen::Index i = 0; i < llt.matrixLLT().rows(); ++i) log_det += 2.0 * std::log(llt.matrixLLT()(i, i));
+  for (Eigen::Index i = 0; i < llt.matrixLLT().rows(); ++i)
+    log_det += 2.0 * std::log(llt.matrixLLT()(i, i));
 }
 
 /// Block-tridiagonal elimination of the pose chain (forward).
@@ -154,7 +160,8 @@ void AdjustmentAnalyser::eliminateChain() {
     if (p > 0) schur -= Do_[p - 1].transpose() * Pinv_[p - 1] * Do_[p - 1];
     Eigen::LLT<Mat3> llt(schur);
     if (llt.info() != Eigen::Success)
-      throw DataError("", "pose " + std::to_string(p + 1), "is not determined by the data (singular normal matrix)",
+      throw DataError("", "pose " + std::to_string(p + 1),
+                      "is not determined by the data (singular normal matrix)",
                       "check the odometry and that every stop is connected to the previous one");
     addLogDet(llt, log_det_);
     Pinv_[p] = llt.solve(Mat3::Identity());
@@ -165,7 +172,8 @@ void AdjustmentAnalyser::eliminateChain() {
 void AdjustmentAnalyser::solveChain(Eigen::MatrixXd& M) const {
   for (std::size_t p = 1; p < uP_; ++p)
     M.middleRows(3 * static_cast<Eigen::Index>(p), 3) -=
-        Do_[p - 1].transpose() * Pinv_[p - 1] * M.middleRows(3 * static_cast<Eigen::Index>(p - 1), 3);
+        Do_[p - 1].transpose() * Pinv_[p - 1] *
+        M.middleRows(3 * static_cast<Eigen::Index>(p - 1), 3);
   for (std::size_t p = uP_; p-- > 0;) {
     Eigen::MatrixXd y = M.middleRows(3 * static_cast<Eigen::Index>(p), 3);
     if (p + 1 < uP_) y -= Do_[p] * M.middleRows(3 * static_cast<Eigen::Index>(p + 1), 3);
@@ -190,8 +198,9 @@ void AdjustmentAnalyser::invertBlocks() {
     const Eigen::MatrixXd Sz = C_ - B_.transpose() * E_;
     Eigen::LLT<Eigen::MatrixXd> llt(Sz);
     if (llt.info() != Eigen::Success)
-      throw DataError("", "landmarks and biases", "are not determined by the data (singular normal matrix)",
-                      "biases need translation in the odometry; every landmark needs an observation");
+      throw DataError(
+          "", "landmarks and biases", "are not determined by the data (singular normal matrix)",
+          "biases need translation in the odometry; every landmark needs an observation");
     addLogDet(llt, log_det_);
     Sinv_ = llt.solve(Eigen::MatrixXd::Identity(m_, m_));
   }
@@ -221,7 +230,8 @@ void AdjustmentAnalyser::redundancies(AdjustmentAnalysis& out) const {
       for (int b = 0; b < row.nz; ++b) h += row.az[a] * Sinv_(row.cols[a], row.cols[b]) * row.az[b];
     if (row.p >= 0) {
       h += row.ap.dot(Mdiag_[static_cast<std::size_t>(row.p)] * row.ap);
-      for (int a = 0; a < row.nz; ++a) h -= 2.0 * row.ap.dot(F_.block(3 * row.p, row.cols[a], 3, 1).col(0)) * row.az[a];
+      for (int a = 0; a < row.nz; ++a)
+        h -= 2.0 * row.ap.dot(F_.block(3 * row.p, row.cols[a], 3, 1).col(0)) * row.az[a];
     }
     out.redundancy[static_cast<std::size_t>(obs_group_[i])] += 1.0 - h;
     out.redundancy_sq[static_cast<std::size_t>(obs_group_[i])] += (1.0 - h) * (1.0 - h);
@@ -242,7 +252,8 @@ void AdjustmentAnalyser::redundancies(AdjustmentAnalysis& out) const {
 Eigen::MatrixXd AdjustmentAnalyser::motionTraces() const {
   const int G = 2 * S_ + 3;
   Eigen::MatrixXd T = Eigen::MatrixXd::Zero(G, G);
-  const Eigen::Index n_motion = static_cast<Eigen::Index>(odo_rows_.size());  // 3P, column c * P + k
+  // 3P, column c * P + k
+  const Eigen::Index n_motion = static_cast<Eigen::Index>(odo_rows_.size());
   if (n_motion == 0) return T;
   // Motion rows have no landmark or bias part: x_z = -F^T a_y, x_y = D^-1 a_y - E x_z.
   Eigen::MatrixXd Xy = Eigen::MatrixXd::Zero(3 * P_, n_motion), Xz(m_, n_motion);
@@ -306,8 +317,11 @@ void AdjustmentAnalyser::information(AdjustmentAnalysis& out) const {
     for (int h = 0; h < G; ++h) {
       const auto ug = static_cast<std::size_t>(g);
       double v = T(g, h);
-      if (g == h && g < 2 * S_) v = out.redundancy_sq[ug];
-      else if (g == h) v += static_cast<double>(count[ug]) - 2.0 * (static_cast<double>(count[ug]) - out.redundancy[ug]);
+      if (g == h && g < 2 * S_)
+        v = out.redundancy_sq[ug];
+      else if (g == h)
+        v += static_cast<double>(count[ug]) -
+             2.0 * (static_cast<double>(count[ug]) - out.redundancy[ug]);
       out.fisher(g, h) = 0.5 * v / (variances_[ug] * variances_[static_cast<std::size_t>(h)]);
     }
 }
@@ -325,7 +339,8 @@ AdjustmentAnalysis AdjustmentAnalyser::analyse(bool with_information) {
   if (with_biases_)
     for (int s = 0; s < S_; ++s)
       for (int c = 0; c < 2; ++c)
-        out.bias_std[static_cast<std::size_t>(2 * s + c)] = std::sqrt(Sinv_(biasCol(s, c), biasCol(s, c)));
+        out.bias_std[static_cast<std::size_t>(2 * s + c)] =
+            std::sqrt(Sinv_(biasCol(s, c), biasCol(s, c)));
   return out;
 }
 
@@ -344,8 +359,8 @@ std::vector<double> groupRedundancy(const NoiseProblem& problem, const MlState& 
   return ml::analyseAdjustment(problem, state, variances, with_biases).redundancy;
 }
 
-Eigen::MatrixXd groupInformation(const NoiseProblem& problem, const MlState& state, const std::vector<double>& variances,
-                                 bool with_biases) {
+Eigen::MatrixXd groupInformation(const NoiseProblem& problem, const MlState& state,
+                                 const std::vector<double>& variances, bool with_biases) {
   return ml::analyseAdjustment(problem, state, variances, with_biases, true).fisher;
 }
 

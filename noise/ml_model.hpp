@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include <Eigen/Core>
 #include <ceres/ceres.h>
+#include <Eigen/Core>
 
 #include "noise/ml.hpp"
 
@@ -24,8 +24,8 @@ struct ObservationLinear {
   double d_landmark[2][2];
 };
 
-inline void linearizeObservation(const Pose2& pose, const double* lm, const double* bias, const Observation& o,
-                          ObservationLinear& out) {
+inline void linearizeObservation(const Pose2& pose, const double* lm, const double* bias,
+                                 const Observation& o, ObservationLinear& out) {
   const double dx = lm[0] - pose.x_m, dy = lm[1] - pose.y_m;
   const double q = std::max(dx * dx + dy * dy, 1e-18), rho = std::sqrt(q);
   out.res[0] = rho + bias[0] - o.range_m;
@@ -43,7 +43,8 @@ struct OdometryLinear {
   double d_b[3][3];
 };
 
-inline void linearizeOdometry(const Pose2& a, const Pose2& b, const OdometryStep& u, OdometryLinear& out) {
+inline void linearizeOdometry(const Pose2& a, const Pose2& b, const OdometryStep& u,
+                              OdometryLinear& out) {
   const double c = std::cos(a.yaw_rad), s = std::sin(a.yaw_rad);
   const double ddx = b.x_m - a.x_m, ddy = b.y_m - a.y_m;
   const double rx = c * ddx + s * ddy, ry = -s * ddx + c * ddy;
@@ -136,11 +137,13 @@ class OdometryCost final : public ceres::CostFunction {
 
 /// What the adjustment's normal matrix tells at a state and variances (ml_adjustment.cpp).
 struct AdjustmentAnalysis {
-  std::vector<double> redundancy;       // per group: sum of the redundancy numbers r_ii
-  std::vector<double> redundancy_sq;    // per group: sum of r_ii^2 (diagonal Fisher information of the variance)
-  double log_det_normal = 0.0;          // log det N (whitened normal matrix)
-  std::vector<double> bias_std;         // per sensor, range and bearing interleaved (NaN when not estimated)
-  Eigen::MatrixXd fisher;               // with_information: G x G information of the variances (see below)
+  std::vector<double> redundancy;  // per group: sum of the redundancy numbers r_ii
+  // per group: sum of r_ii^2 (diagonal Fisher information of the variance)
+  std::vector<double> redundancy_sq;
+  double log_det_normal = 0.0;  // log det N (whitened normal matrix)
+  // per sensor, range and bearing interleaved (NaN when not estimated)
+  std::vector<double> bias_std;
+  Eigen::MatrixXd fisher;  // with_information: G x G information of the variances (see below)
 };
 
 /// The normal matrix of the adjustment at `state` under `variances` (2S + 3, order of

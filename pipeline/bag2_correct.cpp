@@ -25,13 +25,17 @@ SensorFacts rosbag2SensorFacts(const fs::path& bag, const std::string& topic) {
   return facts;
 }
 
-CorrectionStats correctRosbag2(const fs::path& in, const fs::path& out, const std::string& topic, const CalibrationModel& model,
-                               const calibration::ReadingCorrector& correct, const fs::path& model_file) {
+CorrectionStats correctRosbag2(const fs::path& in, const fs::path& out, const std::string& topic,
+                               const CalibrationModel& model,
+                               const calibration::ReadingCorrector& correct,
+                               const fs::path& model_file) {
   CorrectionStats stats;
   MemoCorrector memo(correct);
   const io::BagRewriteReport report =
       io::rewriteRosbag2(in, out, topic, [&](std::vector<float>& ranges, const io::RawScan& scan) {
-        checkModelBeams(model, ranges.size(), in.string() + " (LaserScan " + std::to_string(scan.source_index) + ")", model_file);
+        checkModelBeams(model, ranges.size(),
+                        in.string() + " (LaserScan " + std::to_string(scan.source_index) + ")",
+                        model_file);
         correctLaserRanges(ranges, scan.range_min_m, scan.range_max_m, memo, stats);
       });
   stats.scans = report.scans;
@@ -45,15 +49,25 @@ void checkBagOutputKind(const fs::path& in, const fs::path& out, bool ros1) {
   const std::string want = ros1 ? ".bag" : dir ? "" : in.extension().string();
   const bool ros2_name = ext == ".mcap" || ext == ".db3";
   if (ros1 && ros2_name)
-    throw InputError(out.string(), "--out", "is a ROS 2 bag name, but " + in.string() + " is a ROS1 bag: lidarcal writes a corrected bag in the input's format",
-                     "write -o OUT.bag, then convert it to ROS 2 with a bag converter (e.g. the rosbags package's rosbags-convert)");
+    throw InputError(out.string(), "--out",
+                     "is a ROS 2 bag name, but " + in.string() +
+                         " is a ROS1 bag: lidarcal writes a corrected bag in the input's format",
+                     "write -o OUT.bag, then convert it to ROS 2 with a bag converter (e.g. the "
+                     "rosbags package's rosbags-convert)");
   if (!ros1 && ext == ".bag")
-    throw InputError(out.string(), "--out", "is a ROS1 bag name, but " + in.string() + " is a ROS 2 bag: lidarcal writes a corrected bag in the input's format",
-                     dir ? "name an output directory (e.g. -o OUT_DIR)" : "write -o OUT" + in.extension().string());
+    throw InputError(out.string(), "--out",
+                     "is a ROS1 bag name, but " + in.string() +
+                         " is a ROS 2 bag: lidarcal writes a corrected bag in the input's format",
+                     dir ? "name an output directory (e.g. -o OUT_DIR)"
+                         : "write -o OUT" + in.extension().string());
   if (!ros1 && dir && ros2_name)
-    throw InputError(out.string(), "--out", "is a file name, but " + in.string() + " is a rosbag2 directory", "name an output directory (e.g. -o OUT_DIR)");
+    throw InputError(out.string(), "--out",
+                     "is a file name, but " + in.string() + " is a rosbag2 directory",
+                     "name an output directory (e.g. -o OUT_DIR)");
   if (!ros1 && !dir && ext != want && (want == ".mcap" || want == ".db3"))
-    throw InputError(out.string(), "--out", "does not end in " + want + " like " + in.string() + " (the output keeps the input's storage)",
+    throw InputError(out.string(), "--out",
+                     "does not end in " + want + " like " + in.string() +
+                         " (the output keeps the input's storage)",
                      "write -o OUT" + want);
 }
 

@@ -19,15 +19,16 @@ calibration::CorrectedReading MemoCorrector::operator()(float reading_m) {
   return c;
 }
 
-void correctLaserRanges(std::vector<float>& ranges_m, double range_min_m, double range_max_m, MemoCorrector& correct,
-                        CorrectionStats& stats) {
+void correctLaserRanges(std::vector<float>& ranges_m, double range_min_m, double range_max_m,
+                        MemoCorrector& correct, CorrectionStats& stats) {
   stats.points += ranges_m.size();
   for (float& r : ranges_m) {
     // The importer's rule for a return (io/sequence_writer.cpp): anything else is not a reading.
     if (!std::isfinite(r) || !(r > 0.0f) || r < range_min_m || r > range_max_m) continue;
     const calibration::CorrectedReading c = correct(r);
     stats.add(c, r, r < correct.window().reading_min_m);
-    r = static_cast<float>(c.range_m);  // the reading itself when kept; NaN when dropped or unresolved
+    // the reading itself when kept; NaN when dropped or unresolved
+    r = static_cast<float>(c.range_m);
   }
 }
 
@@ -46,14 +47,16 @@ SensorFacts bagSensorFacts(const std::filesystem::path& bag, const std::string& 
   return facts;
 }
 
-CorrectionStats correctRosbag(const std::filesystem::path& in, const std::filesystem::path& out, const std::string& topic,
-                              const CalibrationModel& model, const calibration::ReadingCorrector& correct,
+CorrectionStats correctRosbag(const std::filesystem::path& in, const std::filesystem::path& out,
+                              const std::string& topic, const CalibrationModel& model,
+                              const calibration::ReadingCorrector& correct,
                               const std::filesystem::path& model_file) {
   CorrectionStats stats;
   MemoCorrector memo(correct);
   const io::BagRewriteReport report =
       io::rewriteRosbag(in, out, topic, [&](std::vector<float>& ranges, const io::RawScan& scan) {
-        checkModelBeams(model, ranges.size(), in.string() + " (LaserScan " + std::to_string(scan.source_index) + ")",
+        checkModelBeams(model, ranges.size(),
+                        in.string() + " (LaserScan " + std::to_string(scan.source_index) + ")",
                         model_file);
         correctLaserRanges(ranges, scan.range_min_m, scan.range_max_m, memo, stats);
       });

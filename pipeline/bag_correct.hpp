@@ -25,7 +25,8 @@ namespace lidarcal::pipeline {
 /// 2^20, about 40 MB); beyond, readings are corrected without being stored.
 class MemoCorrector {
  public:
-  explicit MemoCorrector(calibration::ReadingCorrector correct, std::size_t capacity = std::size_t{1} << 20)
+  explicit MemoCorrector(calibration::ReadingCorrector correct,
+                         std::size_t capacity = std::size_t{1} << 20)
       : correct_(std::move(correct)), capacity_(capacity) {}
   calibration::CorrectedReading operator()(float reading_m);
   std::size_t remembered() const { return memo_.size(); }
@@ -40,8 +41,8 @@ class MemoCorrector {
 
 /// Corrects the ranges of one LaserScan in place; the same rule for bags and the ROS node.
 /// `stats` counts the returns (scans is not touched).
-void correctLaserRanges(std::vector<float>& ranges_m, double range_min_m, double range_max_m, MemoCorrector& correct,
-                        CorrectionStats& stats);
+void correctLaserRanges(std::vector<float>& ranges_m, double range_min_m, double range_max_m,
+                        MemoCorrector& correct, CorrectionStats& stats);
 
 /// What the first LaserScan of the bag's topic says about the sensor (as `import` would write
 /// it to sequence.json), for checkModelFitsSensor.
@@ -49,8 +50,9 @@ SensorFacts bagSensorFacts(const std::filesystem::path& bag, const std::string& 
 
 /// Writes `out` (a new file; the caller makes it atomic) from `in`; refuses a message whose beam
 /// count differs from the model's (InputError naming the message).
-CorrectionStats correctRosbag(const std::filesystem::path& in, const std::filesystem::path& out, const std::string& topic,
-                              const CalibrationModel& model, const calibration::ReadingCorrector& correct,
+CorrectionStats correctRosbag(const std::filesystem::path& in, const std::filesystem::path& out,
+                              const std::string& topic, const CalibrationModel& model,
+                              const calibration::ReadingCorrector& correct,
                               const std::filesystem::path& model_file);
 
 }  // namespace lidarcal::pipeline

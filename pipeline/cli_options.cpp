@@ -10,76 +10,102 @@ namespace lidarcal::pipeline {
 
 void addThreadsOption(CLI::App* app, int& threads, const std::string& work) {
   app->add_option("--threads", threads,
-                  "Threads (0: the machine's cores, at most 8) " + work + "; the output does not depend on it")
+                  "Threads (0: the machine's cores, at most 8) " + work +
+                      "; the output does not depend on it")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
 }
 
 void addCalibrationOptions(CLI::App* app, const std::shared_ptr<CalibrationOptions>& o) {
-  addThreadsOption(app, o->threads,
-                   "detecting scans, fitting the bias orders and (run) correcting scans side by side");
+  addThreadsOption(
+      app, o->threads,
+      "detecting scans, fitting the bias orders and (run) correcting scans side by side");
   app->add_option("--method", o->method,
-                  std::string("closed-form: triangulation + least squares as in ") + papers::kLandmarks +
+                  std::string("closed-form: triangulation + least squares as in ") +
+                      papers::kLandmarks +
                       "; joint: refine poses, landmarks "
-                  "and bias together from every reading")
+                      "and bias together from every reading")
       ->check(CLI::IsMember({"closed-form", "joint"}))
       ->capture_default_str();
   app->add_option("--max-order", o->max_order, "Largest bias polynomial order tried (n_max)")
       ->check(CLI::Range(1, 6))
       ->capture_default_str();
-  app->add_option("--order-rule", o->order_rule, "Order rule of the closed form: aic or validation (fit/choose/test split)")
+  app->add_option("--order-rule", o->order_rule,
+                  "Order rule of the closed form: aic or validation (fit/choose/test split)")
       ->check(CLI::IsMember({"aic", "validation"}))
       ->capture_default_str();
   app->add_option("--joint-order-rule", o->joint_order_rule,
-                  "Order rule of the joint refinement: aic, aic-parsimonious (smallest order within 2 of the best AIC) or bic")
+                  "Order rule of the joint refinement: aic, aic-parsimonious (smallest order "
+                  "within 2 of the best AIC) or bic")
       ->check(CLI::IsMember({"aic", "aic-parsimonious", "bic"}))
       ->capture_default_str();
-  app->add_option("--noise", o->noise, std::string("Noise law: squared (") + papers::kTriangulation + ": sigma_e f(d)^2), polynomial (" +
-                      papers::kLandmarks + "), constant")
+  app->add_option("--noise", o->noise,
+                  std::string("Noise law: squared (") + papers::kTriangulation +
+                      ": sigma_e f(d)^2), polynomial (" + papers::kLandmarks + "), constant")
       ->check(CLI::IsMember({"squared", "polynomial", "constant"}))
       ->capture_default_str();
-  app->add_option("--sigma-s", o->sigma_s_m, "How far a stop may be from its commanded position (std. dev., m)")
+  app->add_option("--sigma-s", o->sigma_s_m,
+                  "How far a stop may be from its commanded position (std. dev., m)")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
-  app->add_option("--sigma-psi", o->sigma_psi_deg, "How far a stop's heading may be from the command (std. dev., degrees)")
+  app->add_option("--sigma-psi", o->sigma_psi_deg,
+                  "How far a stop's heading may be from the command (std. dev., degrees)")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
-  app->add_option("--sigma-theta", o->sigma_theta_deg, "Bearing noise assumed by the triangulation weights (degrees)")
+  app->add_option("--sigma-theta", o->sigma_theta_deg,
+                  "Bearing noise assumed by the triangulation weights (degrees)")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
-  app->add_option("--radius", o->radius_m, "Landmark radius in metres (default: sequence.json, else estimated)")
+  app->add_option("--radius", o->radius_m,
+                  "Landmark radius in metres (default: sequence.json, else estimated)")
       ->check(CLI::PositiveNumber);
-  app->add_option("--min-stops", o->min_stops, "A landmark must be seen from at least this many stops")
+  app->add_option("--min-stops", o->min_stops,
+                  "A landmark must be seen from at least this many stops")
       ->check(CLI::Range(2, 1000))
       ->capture_default_str();
-  app->add_option("--inlier-threshold", o->inlier_threshold, "Inlier threshold of the circle and line fits, t(r) = A + B r^2 metres (r: range), as A,B; about three standard deviations of the sensor's range noise. Default 0.01,0.005 (a triangulation lidar, noise growing with range squared; poles count as too far once t exceeds twice their radius); a time-of-flight sensor with millimetre noise: e.g. 0.01,0.0005")
+  app->add_option("--inlier-threshold", o->inlier_threshold,
+                  "Inlier threshold of the circle and line fits, t(r) = A + B r^2 metres (r: "
+                  "range), as A,B; about three standard deviations of the sensor's range noise. "
+                  "Default 0.01,0.005 (a triangulation lidar, noise growing with range squared; "
+                  "poles count as too far once t exceeds twice their radius); a time-of-flight "
+                  "sensor with millimetre noise: e.g. 0.01,0.0005")
       ->expected(2)
       ->delimiter(',')
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   app->add_option("--motion-prior", o->motion_prior,
-                  "Odometry between consecutive stops as a prior of the joint refinement: auto (on when the robot never "
-                  "stopped: at least 20 stops, most of one scan each), on, or off (every stop tied to its own commanded pose)")
+                  "Odometry between consecutive stops as a prior of the joint refinement: auto (on "
+                  "when the robot never "
+                  "stopped: at least 20 stops, most of one scan each), on, or off (every stop tied "
+                  "to its own commanded pose)")
       ->check(CLI::IsMember({"auto", "on", "off"}))
       ->capture_default_str();
-  app->add_option("--effects", o->effects,
-                  "Comma-separated effect terms for the joint refinement, as `lidarcal diagnose` names them: " +
-                      effectNames([](const EffectInfo& i) { return i.joint_term && i.effect != Effect::heading_error; }) +
-                      " (heavy_tails: Student-t noise; quantisation: the readings rounded to the grid they lie on; "
-                      "dark_surface: noise growing as the return intensity falls, needs scans with intensities; per-stop "
-                      "headings, heading_error, are always refined)");
+  app->add_option(
+      "--effects", o->effects,
+      "Comma-separated effect terms for the joint refinement, as `lidarcal diagnose` names them: " +
+          effectNames([](const EffectInfo& i) {
+            return i.joint_term && i.effect != Effect::heading_error;
+          }) +
+          " (heavy_tails: Student-t noise; quantisation: the readings rounded to the grid they lie "
+          "on; "
+          "dark_surface: noise growing as the return intensity falls, needs scans with "
+          "intensities; per-stop "
+          "headings, heading_error, are always refined)");
 }
 
 calibration::CalibrationConfig calibrationConfig(const CalibrationOptions& o) {
   calibration::CalibrationConfig c;
-  c.method = o.method == "closed-form" ? calibration::Method::closed_form : calibration::Method::joint;
+  c.method =
+      o.method == "closed-form" ? calibration::Method::closed_form : calibration::Method::joint;
   c.threads = o.threads;
   c.max_order = o.max_order;
-  c.closed_form_rule = o.order_rule == "validation" ? calibration::OrderRule::validation : calibration::OrderRule::aic;
+  c.closed_form_rule = o.order_rule == "validation" ? calibration::OrderRule::validation
+                                                    : calibration::OrderRule::aic;
   c.joint_rule = o.joint_order_rule == "aic"   ? calibration::JointOrderRule::aic
                  : o.joint_order_rule == "bic" ? calibration::JointOrderRule::bic
                                                : calibration::JointOrderRule::aic_parsimonious;
-  if (!parseNoiseKind(o.noise, c.noise)) throw InputError("", "--noise", "unknown noise law '" + o.noise + "'");
+  if (!parseNoiseKind(o.noise, c.noise))
+    throw InputError("", "--noise", "unknown noise law '" + o.noise + "'");
   c.triangulation.sigma_s_m = o.sigma_s_m;
   c.triangulation.sigma_theta_rad = deg2rad(o.sigma_theta_deg);
   c.triangulation.min_stops = o.min_stops;
@@ -99,9 +125,12 @@ calibration::CalibrationConfig calibrationConfig(const CalibrationOptions& o) {
       throw InputError("", "--effects", "unknown effect '" + e + "'",
                        "use " + effectNames([](const EffectInfo& i) { return i.joint_term; }));
   }
-  if ((c.joint.effects.incidence_noise || c.joint.effects.noise_exponent || c.joint.effects.dark_noise) &&
+  if ((c.joint.effects.incidence_noise || c.joint.effects.noise_exponent ||
+       c.joint.effects.dark_noise) &&
       c.noise == NoiseKind::polynomial)
-    throw InputError("", "--effects", "incidence_noise, range_noise_law and dark_surface need --noise squared or constant");
+    throw InputError(
+        "", "--effects",
+        "incidence_noise, range_noise_law and dark_surface need --noise squared or constant");
   return c;
 }
 
@@ -124,20 +153,25 @@ calibration::InversionMethod CorrectionOptions::method() const {
 calibration::Outside CorrectionOptions::outsidePolicy() const {
   calibration::Outside o = calibration::kDefaultOutside;
   if (!calibration::parseOutside(outside, o))
-    throw InputError("", "--outside", "unknown policy '" + outside + "'", "use " + calibration::outsideNames());
+    throw InputError("", "--outside", "unknown policy '" + outside + "'",
+                     "use " + calibration::outsideNames());
   return o;
 }
 
 void addCorrectionOptions(CLI::App* app, const std::shared_ptr<CorrectionOptions>& o) {
   app->add_option("--inversion", o->inversion,
-                  "ls: the distance whose f equals the reading (" + std::string(papers::kTriangulation) +
+                  "ls: the distance whose f equals the reading (" +
+                      std::string(papers::kTriangulation) +
                       ", eq. 30); ml: the most likely distance (eq. 28, squared noise law only)")
       ->check(CLI::IsMember({"ls", "ml"}))
       ->capture_default_str();
   app->add_option("--outside", o->outside,
-                  "Readings beyond the distances the model was fitted over (model.json fitted_range): linear continues "
-                  "the fitted correction past the edge at its slope there (no step, no kink; the default), keep leaves "
-                  "them as read, extrapolate applies the polynomial itself, drop removes them (no return). Corrected "
+                  "Readings beyond the distances the model was fitted over (model.json "
+                  "fitted_range): linear continues "
+                  "the fitted correction past the edge at its slope there (no step, no kink; the "
+                  "default), keep leaves "
+                  "them as read, extrapolate applies the polynomial itself, drop removes them (no "
+                  "return). Corrected "
                   "scans mark each point in their `correction` field (docs/FORMAT.md)")
       ->check(CLI::IsMember(calibration::outsidePolicies()))
       ->capture_default_str();

@@ -27,10 +27,12 @@ struct CalibrationOptions {
   double sigma_theta_deg = 1.0;
   double radius_m = 0.0;  // 0: from sequence.json or estimated
   int min_stops = 3;
-  std::vector<double> inlier_threshold{0.01, 0.005};  // A, B of the detector's t(r) = A + B r^2, metres
+  // A, B of the detector's t(r) = A + B r^2, metres
+  std::vector<double> inlier_threshold{0.01, 0.005};
   std::string motion_prior = "auto";  // auto, on, off (JointConfig::motion)
-  std::string effects;  // comma-separated effect terms of the joint refinement (lidarcal diagnose's names)
-  int threads = 0;      // threads (detection, the joint refinement's orders, correction); 0: automatic
+  // comma-separated effect terms of the joint refinement (lidarcal diagnose's names)
+  std::string effects;
+  int threads = 0;  // threads (detection, the joint refinement's orders, correction); 0: automatic
 };
 
 /// --threads: the threads for the work that runs side by side, which `work` names for the help
@@ -46,7 +48,8 @@ detectors::SequenceDetectionConfig detectionConfig(const CalibrationOptions& o);
 /// How readings are corrected: `correct`, `export` and the ROS node share these options.
 struct CorrectionOptions {
   std::string inversion = "ls";  ///< --inversion ls|ml
-  std::string outside = calibration::toString(calibration::kDefaultOutside);  ///< --outside keep|extrapolate|drop
+  /// --outside keep|extrapolate|drop
+  std::string outside = calibration::toString(calibration::kDefaultOutside);
   calibration::InversionMethod method() const;
   calibration::Outside outsidePolicy() const;
 };

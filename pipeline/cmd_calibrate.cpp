@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// lidarcal calibrate SEQ --out model.json [--method closed-form|joint] [--truth truth.json | --reference REF.json] [--report DIR]
+// lidarcal calibrate SEQ --out model.json [--method closed-form|joint] [--truth truth.json |
+// --reference REF.json] [--report DIR]
 
 #include <cstdio>
 #include <memory>
@@ -9,21 +10,21 @@
 
 #include <CLI/CLI.hpp>
 
+#include "calibration/truth_evaluation.hpp"
 #include "common/errors.hpp"
 #include "io/atomic_file.hpp"
 #include "io/model_io.hpp"
+#include "io/reference_io.hpp"
 #include "pipeline/cli_options.hpp"
-#include "pipeline/commands.hpp"
-#include "pipeline/progress.hpp"
-#include "pipeline/report.hpp"
-#include "pipeline/model_text.hpp"
-#include "calibration/truth_evaluation.hpp"
-#include "pipeline/reference_stage.hpp"
 #include "pipeline/cmd_rig.hpp"
+#include "pipeline/commands.hpp"
+#include "pipeline/model_text.hpp"
+#include "pipeline/progress.hpp"
+#include "pipeline/reference_stage.hpp"
+#include "pipeline/report.hpp"
 #include "pipeline/stages.hpp"
 #include "pipeline/ways_forward.hpp"
 #include "pipeline/words.hpp"
-#include "io/reference_io.hpp"
 
 namespace lidarcal::pipeline {
 namespace {
@@ -35,9 +36,9 @@ struct CalibrateCommand {
   RigCalibrateSettings rig;  // a rig sequence's own options
 };
 
-/// --reference-fit: distances alone (Alhashimi et al. 2016 section 5) or inside the self-calibration. auto:
-/// alone when every stop has a measured distance and nothing else is given, combined otherwise
-/// (see calibrateWithMeasurements for its fallback).
+/// --reference-fit: distances alone (Alhashimi et al. 2016 section 5) or inside the
+/// self-calibration. auto: alone when every stop has a measured distance and nothing else is given,
+/// combined otherwise (see calibrateWithMeasurements for its fallback).
 bool combineWithSelfCalibration(const Reference& ref, std::size_t stops, const std::string& mode) {
   if (mode == "distances") return false;
   if (mode == "combined") return true;
@@ -56,26 +57,30 @@ struct MeasurementsShown {
 /// that never moved, some of its recordings untaped — are fitted alone. Spans are always fitted
 /// with the distances alone (the self-calibration takes none).
 SequenceCalibration calibrateWithMeasurements(const CalibrateCommand& c, const io::Sequence& seq,
-                                              const calibration::CalibrationConfig& config, MeasurementsShown& shown) {
+                                              const calibration::CalibrationConfig& config,
+                                              MeasurementsShown& shown) {
   const Reference ref = io::readReference(c.reference);
   io::checkReference(ref, seq.stops.size(), c.reference);
   const auto detection = detectionConfig(*c.options);
   if (!ref.spans.empty() && c.reference_fit == "combined")
     throw InputError(c.reference, "spans",
-                     "are fitted with the measured distances alone; the self-calibration (--reference-fit combined) "
+                     "are fitted with the measured distances alone; the self-calibration "
+                     "(--reference-fit combined) "
                      "takes no spans",
                      "use --reference-fit auto or distances, or leave the spans out");
   const bool alone_possible = measuredStops(ref) >= 3 && ref.landmarks.empty() && ref.stops.empty();
-  if (ref.spans.empty() && (ref.distances.empty() || combineWithSelfCalibration(ref, seq.stops.size(), c.reference_fit))) {
+  if (ref.spans.empty() && (ref.distances.empty() ||
+                            combineWithSelfCalibration(ref, seq.stops.size(), c.reference_fit))) {
     // The self-calibration with the surveyed geometry held fixed and the distances (measured at
     // some stops) in its likelihood.
     StageBars progress;
     std::vector<detectors::SurveyMatch> found;
     SequenceCalibration result =
         ref.distances.empty()
-            ? calibrateSequenceWithSurvey(seq, ref, c.reference, detection, config, &found, std::ref(progress))
-            : calibrateSequenceWithDistancesAndSelf(seq, ref, c.reference, detection, config, &shown.matches, &found,
-                                                    std::ref(progress));
+            ? calibrateSequenceWithSurvey(seq, ref, c.reference, detection, config, &found,
+                                          std::ref(progress))
+            : calibrateSequenceWithDistancesAndSelf(seq, ref, c.reference, detection, config,
+                                                    &shown.matches, &found, std::ref(progress));
     progress.finish();
     const bool fall_back = !result.model.status.ok() && c.reference_fit == "auto" && alone_possible;
     if (!fall_back) {
@@ -83,20 +88,24 @@ SequenceCalibration calibrateWithMeasurements(const CalibrateCommand& c, const i
       return result;
     }
     std::fprintf(stderr,
-                 "lidarcal: the self-calibration cannot use this sequence (%s); fitting the distances of the %s "
+                 "lidarcal: the self-calibration cannot use this sequence (%s); fitting the "
+                 "distances of the %s "
                  "alone instead (--reference-fit distances)\n",
                  result.model.status.name(), plural(measuredStops(ref), "measured stop").c_str());
     shown.matches.clear();
   }
   // Against the distances (and spans) alone (Alhashimi et al. 2016 section 5).
   if (!ref.landmarks.empty() || !ref.stops.empty())
-    std::fprintf(stderr, "lidarcal: warning: %s: %s fits the measured distances and spans alone: the surveyed "
-                         "landmarks and measured stops are checked but not used\n",
-                 c.reference.c_str(), ref.spans.empty() ? "--reference-fit distances" : "a REF.json with spans");
+    std::fprintf(
+        stderr,
+        "lidarcal: warning: %s: %s fits the measured distances and spans alone: the surveyed "
+        "landmarks and measured stops are checked but not used\n",
+        c.reference.c_str(),
+        ref.spans.empty() ? "--reference-fit distances" : "a REF.json with spans");
   Progress progress("detect", seq.scans.size());
-  SequenceCalibration result =
-      calibrateSequenceWithReference(seq, ref, c.reference, detection, config, &shown.matches,
-                                     [&](std::size_t done, std::size_t) { progress.update(done); }, &shown.spans);
+  SequenceCalibration result = calibrateSequenceWithReference(
+      seq, ref, c.reference, detection, config, &shown.matches,
+      [&](std::size_t done, std::size_t) { progress.update(done); }, &shown.spans);
   progress.finish();
   return result;
 }
@@ -104,7 +113,8 @@ SequenceCalibration calibrateWithMeasurements(const CalibrateCommand& c, const i
 void runCalibrate(const CalibrateCommand& c) {
   if (io::isRigDirectory(c.seq)) {
     if (!c.truth.empty() || !c.reference.empty() || !c.report.empty())
-      throw InputError(c.seq, "--truth/--reference/--report", "are for one sensor's sequence, not a rig",
+      throw InputError(c.seq, "--truth/--reference/--report",
+                       "are for one sensor's sequence, not a rig",
                        "calibrate one sensor's directory of the rig with them");
     RigCalibrateSettings rig = c.rig;
     rig.dir = c.seq;
@@ -117,7 +127,8 @@ void runCalibrate(const CalibrateCommand& c) {
   io::checkOutputFile(c.out, c.overwrite);
   if (!c.report.empty()) io::checkOutsideInput(c.seq, c.report);
   const io::Sequence seq = io::openSequence(c.seq);
-  if (const std::string w = beamCountWarning(seq); !w.empty()) std::fprintf(stderr, "lidarcal: warning: %s\n", w.c_str());
+  if (const std::string w = beamCountWarning(seq); !w.empty())
+    std::fprintf(stderr, "lidarcal: warning: %s\n", w.c_str());
   const auto config = calibrationConfig(*c.options);
   // The report directory appears only with the model (staged, committed after model.json).
   std::optional<io::StagedDirectory> report;
@@ -138,7 +149,8 @@ void runCalibrate(const CalibrateCommand& c) {
   }
   const CalibrationModel& model = result.model;
   if (!model.status.ok())
-    throw DataError(c.seq, "calibration", std::string(model.status.name()) + ": " + model.status.message,
+    throw DataError(c.seq, "calibration",
+                    std::string(model.status.name()) + ": " + model.status.message,
                     waysForward(seq, model.status.code));
   if (report) {
     ReportInputs in;
@@ -149,71 +161,93 @@ void runCalibrate(const CalibrateCommand& c) {
     in.observations = &result.observations;
     in.model = &model;
     if (!c.reference.empty() && !result.known.empty()) in.known = &result.known;
-    in.command = "lidarcal calibrate " + c.seq + " --out " + c.out +
-                 (c.reference.empty() ? " --method " + c.options->method : " --reference " + c.reference);
+    in.command =
+        "lidarcal calibrate " + c.seq + " --out " + c.out +
+        (c.reference.empty() ? " --method " + c.options->method : " --reference " + c.reference);
     writeReport(report->path(), in);
   }
   io::writeModel(c.out, model);
   if (report) report->commit();
   if (!shown.matches.empty()) std::fputs(referenceTable(shown.matches).c_str(), stdout);
-  if (!shown.spans.checks.empty()) std::fputs(spanTable(shown.spans.found, shown.spans.checks).c_str(), stdout);
+  if (!shown.spans.checks.empty())
+    std::fputs(spanTable(shown.spans.found, shown.spans.checks).c_str(), stdout);
   if (!shown.survey.empty()) std::fputs(shown.survey.c_str(), stdout);
   std::fputs(modelSummary(model).c_str(), stdout);
   if (!quiet() && model.motion_prior)
-    std::fprintf(stderr, "continuous motion: the odometry between consecutive stops entered the joint refinement as a "
-                         "motion prior (--motion-prior off to tie every stop to its own commanded pose)\n");
+    std::fprintf(stderr,
+                 "continuous motion: the odometry between consecutive stops entered the joint "
+                 "refinement as a "
+                 "motion prior (--motion-prior off to tie every stop to its own commanded pose)\n");
   if (!quiet())
-    std::fprintf(stderr, "%s model, %s, written to %s\n", model.method.c_str(), orderText(model).c_str(), c.out.c_str());
+    std::fprintf(stderr, "%s model, %s, written to %s\n", model.method.c_str(),
+                 orderText(model).c_str(), c.out.c_str());
 }
 
 }  // namespace
 
 void addCalibrateCommand(CLI::App& app) {
   auto c = std::make_shared<CalibrateCommand>();
-  CLI::App* sub = app.add_subcommand("calibrate", "Fit the range model of a sequence (no ground truth needed)");
+  CLI::App* sub =
+      app.add_subcommand("calibrate", "Fit the range model of a sequence (no ground truth needed)");
   sub->add_option("SEQ", c->seq, "Sequence directory (docs/FORMAT.md)")->required();
   sub->add_option("-o,--out", c->out, "model.json to write")->required();
   CLI::Option* truth = sub->add_option("--truth", c->truth,
-                  "truth.json of a simulated sequence: fit against the true distances instead (the oracle, for comparison)");
+                                       "truth.json of a simulated sequence: fit against the true "
+                                       "distances instead (the oracle, for comparison)");
   sub->add_option("--frame", c->frame,
-                  "With --truth: true distances as they are (true), or scaled into the commanded frame (commanded): "
+                  "With --truth: true distances as they are (true), or scaled into the commanded "
+                  "frame (commanded): "
                   "the best a self-calibration can reach")
       ->check(CLI::IsMember({"true", "commanded"}))
       ->capture_default_str();
   CLI::Option* reference = sub->add_option("--reference", c->reference,
-                  "REF.json with what you measured (docs/FORMAT.md, \"Reference measurements\"): distances (tape, "
-                  "laser meter) and wall-to-wall spans (a laser meter across the room between two walls the sensor "
-                  "sees) fit the range model to them (Alhashimi et al. 2016, section 5); without distances or spans, "
-                  "surveyed landmark centres and measured stop poses are held fixed in the self-calibration")
-      ->excludes(truth);
+                                           "REF.json with what you measured (docs/FORMAT.md, "
+                                           "\"Reference measurements\"): distances (tape, "
+                                           "laser meter) and wall-to-wall spans (a laser meter "
+                                           "across the room between two walls the sensor "
+                                           "sees) fit the range model to them (Alhashimi et al. "
+                                           "2016, section 5); without distances or spans, "
+                                           "surveyed landmark centres and measured stop poses are "
+                                           "held fixed in the self-calibration")
+                               ->excludes(truth);
   sub->add_option("--reference-fit", c->reference_fit,
-                  "With --reference distances: distances (fit the range model to them alone; every measured stop "
-                  "counts), combined (add them to the self-calibration of the whole sequence, with the surveyed "
-                  "landmarks and stops held fixed), or auto: distances when every stop has one and no landmarks or "
-                  "stops are given, combined otherwise, and distances after all when the self-calibration cannot use "
-                  "the sequence (a sensor that never moved) and 3 or more stops have one. Spans are always fitted "
+                  "With --reference distances: distances (fit the range model to them alone; every "
+                  "measured stop "
+                  "counts), combined (add them to the self-calibration of the whole sequence, with "
+                  "the surveyed "
+                  "landmarks and stops held fixed), or auto: distances when every stop has one and "
+                  "no landmarks or "
+                  "stops are given, combined otherwise, and distances after all when the "
+                  "self-calibration cannot use "
+                  "the sequence (a sensor that never moved) and 3 or more stops have one. Spans "
+                  "are always fitted "
                   "with the distances alone")
       ->check(CLI::IsMember({"auto", "distances", "combined"}))
       ->capture_default_str()
       ->needs(reference);
   sub->add_option("--report", c->report,
-                  "Also write a report (report.md with SVG plots, and the .dat/.gp files that draw them) into this new "
+                  "Also write a report (report.md with SVG plots, and the .dat/.gp files that draw "
+                  "them) into this new "
                   "directory (not with --truth)")
       ->excludes(truth);
   sub->add_flag("--overwrite", c->overwrite, "Replace --out if it exists");
   addCalibrationOptions(sub, c->options);
   sub->add_option("--rig-frame", c->rig.frame,
-                  "Rig sequence: the frame of the mountings: vehicle (needs recorded poses and a turn), relative (the "
+                  "Rig sequence: the frame of the mountings: vehicle (needs recorded poses and a "
+                  "turn), relative (the "
                   "reference sensor held at its tf_static design) or auto")
       ->check(CLI::IsMember({"auto", "vehicle", "relative"}))
       ->capture_default_str();
-  sub->add_option("--reference-sensor", c->rig.reference, "Rig sequence: the reference sensor (default: the first)");
+  sub->add_option("--reference-sensor", c->rig.reference,
+                  "Rig sequence: the reference sensor (default: the first)");
   sub->add_option("--min-intensity", c->rig.min_intensity,
-                  "Rig sequence: points returning less intensity read as no return (retro-reflective poles stand out; "
+                  "Rig sequence: points returning less intensity read as no return "
+                  "(retro-reflective poles stand out; "
                   "0: off)")
       ->capture_default_str();
   sub->add_option("--associate", c->rig.associate_m,
-                  "Rig sequence: a detection within this many metres of a pole (designed mountings, vehicle poses) is "
+                  "Rig sequence: a detection within this many metres of a pole (designed "
+                  "mountings, vehicle poses) is "
                   "that pole")
       ->capture_default_str();
   sub->callback([c] { runCalibrate(*c); });

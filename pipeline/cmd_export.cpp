@@ -24,11 +24,13 @@ void addExportCommand(CLI::App& app) {
   };
   auto o = std::make_shared<Options>();
   auto c = std::make_shared<CorrectionOptions>();
-  CLI::App* sub = app.add_subcommand(
-      "export", "Write a model.json for a ROS driver: ROS parameters (yaml) or a lookup table reading -> range (lut)");
+  CLI::App* sub = app.add_subcommand("export",
+                                     "Write a model.json for a ROS driver: ROS parameters (yaml) "
+                                     "or a lookup table reading -> range (lut)");
   sub->add_option("MODEL", o->model, "model.json from lidarcal calibrate")->required();
   sub->add_option("--format", o->format,
-                  "yaml: ROS parameter file (bias polynomial, the readings it corrects, inversion); lut: CSV "
+                  "yaml: ROS parameter file (bias polynomial, the readings it corrects, "
+                  "inversion); lut: CSV "
                   "reading_m,range_m over those readings, each row what `lidarcal correct` gives")
       ->check(CLI::IsMember({"yaml", "lut"}))
       ->required();
@@ -47,8 +49,10 @@ void addExportCommand(CLI::App& app) {
     config.step_m = o->step_m;
     config.source = o->model;
     checkModelInvertible(model, o->model, config.outside);
-    modelCorrector(model, config.inversion, config.outside, o->model);  // refuses ml without the squared law
-    const std::string text = o->format == "yaml" ? exportYaml(model, config) : exportLut(model, config);
+    // refuses ml without the squared law
+    modelCorrector(model, config.inversion, config.outside, o->model);
+    const std::string text =
+        o->format == "yaml" ? exportYaml(model, config) : exportLut(model, config);
     if (o->out.empty()) {
       std::fwrite(text.data(), 1, text.size(), stdout);
       return;

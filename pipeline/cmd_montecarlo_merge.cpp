@@ -34,11 +34,12 @@ void runMerge(const MergeOptions& o) {
   io::StagedDirectory out(o.out, o.overwrite);
   const MergedStudy merged = readShards(dirs);
   const StudySetup setup = studySetup(merged.options);
-  const studies::StudyOutput result = studies::studyOutput(setup.figures, setup.grids, setup.config, setup.run, merged.results);
+  const studies::StudyOutput result =
+      studies::studyOutput(setup.figures, setup.grids, setup.config, setup.run, merged.results);
   const std::string plots = writeStudyOutput(out.path(), result);
   out.commit();
-  std::printf("Monte Carlo study merged from %zu shards: %zu cells x %zu trials\n", dirs.size(), result.cells,
-              setup.run.trials);
+  std::printf("Monte Carlo study merged from %zu shards: %zu cells x %zu trials\n", dirs.size(),
+              result.cells, setup.run.trials);
   std::printf("Output: %s (summary.md; per figure .csv, .png, .gp, .md)\n", o.out.c_str());
   if (!plots.empty()) std::printf("Plots: %s\n", plots.c_str());
 }
@@ -47,13 +48,17 @@ void runMerge(const MergeOptions& o) {
 
 void addMonteCarloMergeCommand(CLI::App& app) {
   auto o = std::make_shared<MergeOptions>();
-  CLI::App* sub = app.add_subcommand(
-      "montecarlo-merge",
-      "Merges the shards of a Monte Carlo study (`montecarlo --shard K/N`, one directory each) into the files the "
-      "whole study writes, byte for byte. Every slice 1..N must be given once, all of one study (same --study, "
-      "--seed, --trials and options); otherwise nothing is written and the command exits 2 naming the file and field.");
+  CLI::App* sub = app.add_subcommand("montecarlo-merge",
+                                     "Merges the shards of a Monte Carlo study (`montecarlo "
+                                     "--shard K/N`, one directory each) into the files the "
+                                     "whole study writes, byte for byte. Every slice 1..N must be "
+                                     "given once, all of one study (same --study, "
+                                     "--seed, --trials and options); otherwise nothing is written "
+                                     "and the command exits 2 naming the file and field.");
   sub->add_option("shards", o->shards, "The shard directories (any order)")->required();
-  sub->add_option("-o,--out", o->out, "Output directory (created whole at the end; see docs/FORMAT.md)")->required();
+  sub->add_option("-o,--out", o->out,
+                  "Output directory (created whole at the end; see docs/FORMAT.md)")
+      ->required();
   sub->add_flag("--overwrite", o->overwrite, "Replace OUT if it exists");
   sub->callback([o] { runMerge(*o); });
 }

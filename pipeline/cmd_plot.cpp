@@ -52,8 +52,8 @@ void runPlot(const PlotOptions& o) {
       if (row.file != name) continue;
       for (int k = 0; k <= 72; ++k) {
         const double a = 2.0 * 3.14159265358979323846 * k / 72.0;
-        circles << row.centre_x_m + row.radius_m * std::cos(a) << ' ' << row.centre_y_m + row.radius_m * std::sin(a)
-                << ' ' << row.landmark << '\n';
+        circles << row.centre_x_m + row.radius_m * std::cos(a) << ' '
+                << row.centre_y_m + row.radius_m * std::sin(a) << ' ' << row.landmark << '\n';
       }
       circles << '\n';
       ++n_circles;
@@ -72,19 +72,26 @@ void runPlot(const PlotOptions& o) {
   // One series per kind of thing the scan has: a legend entry only for what is drawn.
   std::vector<std::string> series;
   if (n_background)
-    series.push_back("\"background.dat\" using 1:2 with points pt 7 ps 0.35 lc rgb \"#aaaaaa\" title \"" +
-                     std::string(scan.labels.empty() ? "points" : "background (label 0)") + "\"");
+    series.push_back(
+        "\"background.dat\" using 1:2 with points pt 7 ps 0.35 lc rgb \"#aaaaaa\" title \"" +
+        std::string(scan.labels.empty() ? "points" : "background (label 0)") + "\"");
   if (n_labelled)
-    series.push_back("\"labelled.dat\" using 1:2:(int($3)%5) with points pt 7 ps 0.9 lc palette title "
-                     "\"landmark points (label > 0)\"");
-  if (n_circles) series.push_back("\"circles.dat\" using 1:2 with lines lw 1.5 lc rgb \"black\" title \"fitted circles\"");
+    series.push_back(
+        "\"labelled.dat\" using 1:2:(int($3)%5) with points pt 7 ps 0.9 lc palette title "
+        "\"landmark points (label > 0)\"");
+  if (n_circles)
+    series.push_back(
+        "\"circles.dat\" using 1:2 with lines lw 1.5 lc rgb \"black\" title \"fitted circles\"");
   series.push_back("\"+\" using (0):(0) with points pt 9 ps 2 lc rgb \"#0044aa\" title \"sensor\"");
   std::ostringstream gp;
   gp << "set terminal pngcairo size 900,900 font \"DejaVu Sans,11\"\n"
      << "set output \"plot.png\"\nset size ratio -1\nset grid\nset key outside below horizontal\n"
-     << "set title " << gnuplotString(title + " (sensor frame; " + plural(n_labelled, "point") + " on landmarks)", true)
+     << "set title "
+     << gnuplotString(title + " (sensor frame; " + plural(n_labelled, "point") + " on landmarks)",
+                      true)
      << "\n"
-     << "set xlabel \"x [m] (forward)\"\nset ylabel \"y [m] (left)\"\nset palette defined (0 '#1b9e77', 1 '#d95f02', 2 '#7570b3', 3 '#e7298a', 4 '#66a61e')\n"
+     << "set xlabel \"x [m] (forward)\"\nset ylabel \"y [m] (left)\"\nset palette defined (0 "
+        "'#1b9e77', 1 '#d95f02', 2 '#7570b3', 3 '#e7298a', 4 '#66a61e')\n"
      << "unset colorbox\nplot ";
   for (std::size_t i = 0; i < series.size(); ++i) gp << (i ? ", \\\n     " : "") << series[i];
   gp << "\n";
@@ -102,11 +109,13 @@ void runPlot(const PlotOptions& o) {
 
 void addPlotCommand(CLI::App& app) {
   auto o = std::make_shared<PlotOptions>();
-  CLI::App* sub = app.add_subcommand("plot", "Draw one scan as a PNG, points coloured by label (output of detect)");
+  CLI::App* sub = app.add_subcommand(
+      "plot", "Draw one scan as a PNG, points coloured by label (output of detect)");
   sub->add_option("SCAN", o->scan, "A .pcd scan (labelled by lidarcal detect, or not)")->required();
   sub->add_option("-o,--out", o->out, "PNG to write")->required();
   sub->add_flag("--overwrite", o->overwrite, "Replace --out if it exists");
-  sub->add_option("--landmarks", o->landmarks, "landmarks.csv from lidarcal detect: also draw the fitted circles");
+  sub->add_option("--landmarks", o->landmarks,
+                  "landmarks.csv from lidarcal detect: also draw the fitted circles");
   sub->add_option("--title", o->title, "Title of the picture (default: the file name)");
   sub->callback([o] { runPlot(*o); });
 }

@@ -19,15 +19,16 @@ void runRigImport(const RigImportSettings& settings);
 struct RigCalibrateSettings {
   std::string dir, out;
   bool overwrite = false;
-  CalibrationOptions options;   ///< --radius, --inlier-threshold, --motion-prior apply
-  std::string frame = "auto";   ///< --rig-frame auto|vehicle|relative
-  std::string reference;        ///< --reference-sensor (default: the first)
-  double min_intensity = 0.0;   ///< --min-intensity (retro-reflectors)
-  double associate_m = 0.3;     ///< --associate, metres
+  CalibrationOptions options;  ///< --radius, --inlier-threshold, --motion-prior apply
+  std::string frame = "auto";  ///< --rig-frame auto|vehicle|relative
+  std::string reference;       ///< --reference-sensor (default: the first)
+  double min_intensity = 0.0;  ///< --min-intensity (retro-reflectors)
+  double associate_m = 0.3;    ///< --associate, metres
 };
 
 /// `calibrate RIG --out model.json`: detects, associates, calibrates, writes the rig model and
-/// prints the mountings against tf_static. Throws DataError (exit 3) when the data cannot give them.
+/// prints the mountings against tf_static. Throws DataError (exit 3) when the data cannot give
+/// them.
 void runRigCalibrate(const RigCalibrateSettings& settings);
 
 /// Topics listed with commas (`--topic /a,/b`); one topic gives one element.

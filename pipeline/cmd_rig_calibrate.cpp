@@ -6,10 +6,10 @@
 #include "calibration/rig_calibrate.hpp"
 #include "common/errors.hpp"
 #include "common/plural.hpp"
+#include "detectors/rig_sightings.hpp"
 #include "io/atomic_file.hpp"
 #include "pipeline/cmd_rig.hpp"
 #include "pipeline/progress.hpp"
-#include "detectors/rig_sightings.hpp"
 #include "pipeline/rig_report.hpp"
 
 namespace lidarcal::pipeline {
@@ -17,7 +17,7 @@ namespace {
 
 calibration::RigConfig rigConfig(const RigCalibrateSettings& s, const io::Rig& rig) {
   calibration::RigConfig c;
-  c.frame = s.frame == "vehicle" ? calibration::RigFrame::vehicle
+  c.frame = s.frame == "vehicle"    ? calibration::RigFrame::vehicle
             : s.frame == "relative" ? calibration::RigFrame::relative
                                     : calibration::RigFrame::automatic;
   c.motion = s.options.motion_prior == "on"    ? calibration::MotionPrior::on
@@ -25,7 +25,9 @@ calibration::RigConfig rigConfig(const RigCalibrateSettings& s, const io::Rig& r
                                                : calibration::MotionPrior::automatic;
   if (!s.reference.empty()) {
     const auto k = rig.meta.find(s.reference);
-    if (!k) throw InputError(rig.dir.string(), "--reference-sensor " + s.reference, "names no sensor of the rig");
+    if (!k)
+      throw InputError(rig.dir.string(), "--reference-sensor " + s.reference,
+                       "names no sensor of the rig");
     c.reference = *k;
   }
   return c;
@@ -34,9 +36,12 @@ calibration::RigConfig rigConfig(const RigCalibrateSettings& s, const io::Rig& r
 /// What to record when the data leave the mountings undetermined.
 std::string whatToRecord(const io::Rig& rig) {
   if (!rig.meta.vehiclePosesKnown())
-    return "record the vehicle's poses (import with --pose tf:FRAME or odom:TOPIC) while it drives through a turn "
-           "past poles that two sensors see, or calibrate the mountings relative to one sensor (--rig-frame relative)";
-  return "record poles that two sensors see at once, spread around the vehicle, while it turns by 20 deg or more";
+    return "record the vehicle's poses (import with --pose tf:FRAME or odom:TOPIC) while it drives "
+           "through a turn "
+           "past poles that two sensors see, or calibrate the mountings relative to one sensor "
+           "(--rig-frame relative)";
+  return "record poles that two sensors see at once, spread around the vehicle, while it turns by "
+         "20 deg or more";
 }
 
 }  // namespace
@@ -58,13 +63,17 @@ void runRigCalibrate(const RigCalibrateSettings& s) {
   std::printf("| sensor | scans | circles | on poles | poles |\n|---|---|---|---|---|\n");
   for (std::size_t k = 0; k < found.sensors.size(); ++k) {
     const detectors::RigSensorDetections& d = found.sensors[k];
-    std::printf("| %s | %zu | %zu | %zu | %zu |\n", rig.meta.sensors[k].name.c_str(), d.scans, d.detections, d.sightings, d.poles);
+    std::printf("| %s | %zu | %zu | %zu | %zu |\n", rig.meta.sensors[k].name.c_str(), d.scans,
+                d.detections, d.sightings, d.poles);
   }
-  std::printf("%s, %zu seen by two sensors or more\n", plural(found.poles, "pole").c_str(), found.shared_poles);
+  std::printf("%s, %zu seen by two sensors or more\n", plural(found.poles, "pole").c_str(),
+              found.shared_poles);
   Activity fitting("fitting mountings, range models and poles jointly");
   const calibration::RigResult r = calibration::calibrateRig(found.observations, rigConfig(s, rig));
   fitting.finish();
-  if (!r.ok()) throw DataError(s.dir, "calibration", std::string(r.status.name()) + ": " + r.status.message, whatToRecord(rig));
+  if (!r.ok())
+    throw DataError(s.dir, "calibration", std::string(r.status.name()) + ": " + r.status.message,
+                    whatToRecord(rig));
   const io::RigModel model = rigModel(rig, r);
   io::writeRigModel(s.out, model);
   std::fputs(rigMountingTable(model).c_str(), stdout);
@@ -72,9 +81,12 @@ void runRigCalibrate(const RigCalibrateSettings& s) {
   for (const std::string& note : model.notes) std::printf("  %s\n", note.c_str());
   for (const io::RigModelSensor& sensor : model.sensors)
     if (!sensor.model.status.ok())
-      std::fprintf(stderr, "warning: the range model of %s is not determined; correct refuses its block (the table's status says why)\n",
+      std::fprintf(stderr,
+                   "warning: the range model of %s is not determined; correct refuses its block "
+                   "(the table's status says why)\n",
                    sensor.name.c_str());
-  std::fprintf(stderr, "rig model (%s) written to %s\n", plural(model.sensors.size(), "sensor").c_str(), s.out.c_str());
+  std::fprintf(stderr, "rig model (%s) written to %s\n",
+               plural(model.sensors.size(), "sensor").c_str(), s.out.c_str());
 }
 
 }  // namespace lidarcal::pipeline

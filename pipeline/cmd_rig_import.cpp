@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// lidarcal import BAG... --topic /front,/back [--sensor-names front,back] [--vehicle-frame F] -o RIG
+// lidarcal import BAG... --topic /front,/back [--sensor-names front,back] [--vehicle-frame F] -o
+// RIG
 
 #include <algorithm>
 #include <cstdio>
@@ -27,24 +28,31 @@ void runRigImport(const RigImportSettings& settings) {
   const RigImportResult r =
       importRig(settings, [&](double f) { progress.update(static_cast<std::size_t>(f * 1000.0)); });
   progress.finish();
-  std::printf("imported %zu sensors from %s into %s (a rig sequence: rig.json, scans.csv, one directory per sensor)\n",
-              r.meta.sensors.size(), plural(settings.base.inputs.size(), "recording").c_str(),
-              settings.base.out.string().c_str());
-  std::printf("| sensor | topic | frame | scans | beams | designed mounting (%s) |\n|---|---|---|---|---|---|\n",
-              r.meta.vehicle_frame.empty() ? "vehicle frame unknown" : r.meta.vehicle_frame.c_str());
+  std::printf(
+      "imported %zu sensors from %s into %s (a rig sequence: rig.json, scans.csv, one directory "
+      "per sensor)\n",
+      r.meta.sensors.size(), plural(settings.base.inputs.size(), "recording").c_str(),
+      settings.base.out.string().c_str());
+  std::printf(
+      "| sensor | topic | frame | scans | beams | designed mounting (%s) "
+      "|\n|---|---|---|---|---|---|\n",
+      r.meta.vehicle_frame.empty() ? "vehicle frame unknown" : r.meta.vehicle_frame.c_str());
   for (std::size_t k = 0; k < r.meta.sensors.size(); ++k) {
     const io::RigSensorInfo& s = r.meta.sensors[k];
     const auto& w = r.written[k];
     char mount[160] = "none in /tf_static";
     if (s.mounting)
-      std::snprintf(mount, sizeof mount, "x %.4f m, y %.4f m, yaw %.2f deg%s", s.mounting->x_m, s.mounting->y_m,
-                    rad2deg(s.mounting->yaw_rad), s.mounting->upside_down ? ", upside down" : "");
-    std::string beams = w.min_beams == w.max_beams ? std::to_string(w.max_beams)
-                                                   : std::to_string(w.min_beams) + "-" + std::to_string(w.max_beams);
-    std::printf("| %s | %s | %s | %zu | %s | %s |\n", s.name.c_str(), s.topic.c_str(), s.frame_id.c_str(), w.written,
-                beams.c_str(), mount);
+      std::snprintf(mount, sizeof mount, "x %.4f m, y %.4f m, yaw %.2f deg%s", s.mounting->x_m,
+                    s.mounting->y_m, rad2deg(s.mounting->yaw_rad),
+                    s.mounting->upside_down ? ", upside down" : "");
+    std::string beams = w.min_beams == w.max_beams
+                            ? std::to_string(w.max_beams)
+                            : std::to_string(w.min_beams) + "-" + std::to_string(w.max_beams);
+    std::printf("| %s | %s | %s | %zu | %s | %s |\n", s.name.c_str(), s.topic.c_str(),
+                s.frame_id.c_str(), w.written, beams.c_str(), mount);
   }
-  std::printf("  vehicle poses: %s; %s\n", r.meta.pose_source.c_str(), plural(r.stops, "stop").c_str());
+  std::printf("  vehicle poses: %s; %s\n", r.meta.pose_source.c_str(),
+              plural(r.stops, "stop").c_str());
   for (const auto& note : r.notes) std::printf("  %s\n", note.c_str());
 }
 

@@ -35,28 +35,35 @@ struct RunCommand {
 };
 
 /// The run in a few lines on stdout.
-void printRun(const RunCommand& c, const io::Sequence& seq, const SequenceCalibration& cal, const ReportInputs& in,
-              const CorrectionStats& stats, calibration::Outside outside) {
+void printRun(const RunCommand& c, const io::Sequence& seq, const SequenceCalibration& cal,
+              const ReportInputs& in, const CorrectionStats& stats, calibration::Outside outside) {
   namespace fs = std::filesystem;
   std::printf("lidarcal run: %s, %s, %s found\n", plural(seq.scans.size(), "scan").c_str(),
-              plural(seq.stops.size(), "stop").c_str(), plural(cal.detections.association.landmarks.size(), "landmark").c_str());
+              plural(seq.stops.size(), "stop").c_str(),
+              plural(cal.detections.association.landmarks.size(), "landmark").c_str());
   std::fputs(modelSummary(cal.model).c_str(), stdout);
-  std::printf("  corrected scans: %zu returns inside the fitted range, %zu beyond it, %zu without a distance\n",
-              stats.corrected, stats.extrapolated, stats.unresolved);
+  std::printf(
+      "  corrected scans: %zu returns inside the fitted range, %zu beyond it, %zu without a "
+      "distance\n",
+      stats.corrected, stats.extrapolated, stats.unresolved);
   if (const std::string beyond = beyondFitText(stats, cal.model, outside); !beyond.empty())
     std::printf("  %s\n", beyond.c_str());
   if (!in.compared.empty()) {
     const calibration::Evaluation& ours = in.compared.front().evaluation;
-    std::printf("  against the truth (MSE ratio = raw MSE / corrected MSE: higher is better, 1 = no gain):\n");
+    std::printf(
+        "  against the truth (MSE ratio = raw MSE / corrected MSE: higher is better, 1 = no "
+        "gain):\n");
     std::printf("    %-62s %12s %12s\n", "", "landmarks", "all returns");
-    std::printf("    %-62s %9.1f mm %9.1f mm\n", "raw readings, RMS:", 1000.0 * std::sqrt(ours.landmarks.mse_raw_m2),
+    std::printf("    %-62s %9.1f mm %9.1f mm\n",
+                "raw readings, RMS:", 1000.0 * std::sqrt(ours.landmarks.mse_raw_m2),
                 1000.0 * std::sqrt(ours.all.mse_raw_m2));
     for (const auto& m : in.compared)
-      std::printf("    %-62s %12.2f %12.2f\n", (m.name + ", MSE ratio:").c_str(), m.evaluation.landmarks.mse_ratio,
-                  m.evaluation.all.mse_ratio);
+      std::printf("    %-62s %12.2f %12.2f\n", (m.name + ", MSE ratio:").c_str(),
+                  m.evaluation.landmarks.mse_ratio, m.evaluation.all.mse_ratio);
   }
-  std::printf("  model:     %s\n  corrected: %s\n  report:    %s\n", (fs::path(c.out) / "model.json").c_str(),
-              (fs::path(c.out) / "corrected").c_str(), (fs::path(c.out) / "report/report.md").c_str());
+  std::printf("  model:     %s\n  corrected: %s\n  report:    %s\n",
+              (fs::path(c.out) / "model.json").c_str(), (fs::path(c.out) / "corrected").c_str(),
+              (fs::path(c.out) / "report/report.md").c_str());
 }
 
 /// The truth to evaluate against: --truth, or found next to a simulated sequence (DIR/scans +
@@ -73,8 +80,8 @@ std::filesystem::path truthFile(const RunCommand& c, const std::filesystem::path
 
 /// summary.json: the sequence, the model, the corrected returns and, with truth, the evaluations.
 nlohmann::ordered_json runSummary(const std::filesystem::path& seq_dir, const io::Sequence& seq,
-                                  const SequenceCalibration& cal, const ReportInputs& in, const CorrectionStats& stats,
-                                  calibration::Outside outside) {
+                                  const SequenceCalibration& cal, const ReportInputs& in,
+                                  const CorrectionStats& stats, calibration::Outside outside) {
   nlohmann::ordered_json summary{{"sequence", seq_dir.string()},
                                  {"scans", seq.scans.size()},
                                  {"stops", seq.stops.size()},
@@ -102,28 +109,34 @@ nlohmann::ordered_json runSummary(const std::filesystem::path& seq_dir, const io
 void runRun(const RunCommand& c) {
   namespace fs = std::filesystem;
   const fs::path seq_dir = c.seq.empty() ? bundledExample() : fs::path(c.seq);
-  if (c.seq.empty() && !quiet()) std::fprintf(stderr, "no sequence given: running on the bundled example %s\n", seq_dir.c_str());
+  if (c.seq.empty() && !quiet())
+    std::fprintf(stderr, "no sequence given: running on the bundled example %s\n", seq_dir.c_str());
   io::checkOutsideInput(seq_dir, c.out);
   const io::Sequence seq = io::openSequence(seq_dir);
-  if (const std::string w = beamCountWarning(seq); !w.empty()) std::fprintf(stderr, "lidarcal: warning: %s\n", w.c_str());
+  if (const std::string w = beamCountWarning(seq); !w.empty())
+    std::fprintf(stderr, "lidarcal: warning: %s\n", w.c_str());
   const fs::path truth_file = truthFile(c, seq_dir);
 
   io::StagedDirectory out(c.out, c.overwrite);
   const auto config = calibrationConfig(*c.options);
   StageBars progress;
-  const SequenceCalibration cal = calibrateSequence(seq, detectionConfig(*c.options), config, std::ref(progress));
+  const SequenceCalibration cal =
+      calibrateSequence(seq, detectionConfig(*c.options), config, std::ref(progress));
   progress.finish();
   if (!cal.model.status.ok())
-    throw DataError(seq_dir.string(), "calibration", cal.model.status.name() + std::string(": ") + cal.model.status.message,
+    throw DataError(seq_dir.string(), "calibration",
+                    cal.model.status.name() + std::string(": ") + cal.model.status.message,
                     waysForward(seq, cal.model.status.code));
   io::writeModel(out.path() / "model.json", cal.model);
 
-  const auto method = c.inversion == "ml" ? calibration::InversionMethod::ml : calibration::InversionMethod::ls;
+  const auto method =
+      c.inversion == "ml" ? calibration::InversionMethod::ml : calibration::InversionMethod::ls;
   const calibration::Outside outside = calibration::kDefaultOutside;
   fs::create_directory(out.path() / "corrected");
   Progress cprog("correct", seq.scans.size());
-  const auto stats = correctSequence(seq, cal.model, method, out.path() / "corrected", io::PcdEncoding::binary,
-                                     [&](std::size_t d, std::size_t) { cprog.update(d); }, outside, c.options->threads);
+  const auto stats = correctSequence(
+      seq, cal.model, method, out.path() / "corrected", io::PcdEncoding::binary,
+      [&](std::size_t d, std::size_t) { cprog.update(d); }, outside, c.options->threads);
   cprog.finish();
 
   ReportInputs in;
@@ -140,17 +153,21 @@ void runRun(const RunCommand& c) {
     Activity activity("evaluate against the truth");
     const io::SimulationTruth truth = io::loadTruth(truth_file);
     in.true_landmarks = truth.truth.scene.landmarks;
-    in.compared = compareWithTruth(seq, out.path() / "corrected", truth, cal, config, method, outside);
+    in.compared =
+        compareWithTruth(seq, out.path() / "corrected", truth, cal, config, method, outside);
     in.truth_note = "Evaluated on the calibration sequence itself against " + truth_file.string() +
-                    " (simulator truth; calibration did not use it). Our row scores the corrected scans as written "
-                    "in corrected/, read back; the other rows apply their models under the same rule (--outside " +
+                    " (simulator truth; calibration did not use it). Our row scores the corrected "
+                    "scans as written "
+                    "in corrected/, read back; the other rows apply their models under the same "
+                    "rule (--outside " +
                     calibration::toString(outside) + ").";
   }
   {
     Activity activity("report");
     writeReport(out.path() / "report", in);
   }
-  io::writeTextAtomically(out.path() / "summary.json", runSummary(seq_dir, seq, cal, in, stats, outside).dump(2) + "\n");
+  io::writeTextAtomically(out.path() / "summary.json",
+                          runSummary(seq_dir, seq, cal, in, stats, outside).dump(2) + "\n");
   out.commit();
   printRun(c, seq, cal, in, stats, outside);
 }
@@ -159,18 +176,23 @@ void runRun(const RunCommand& c) {
 
 void addRunCommand(CLI::App& app) {
   auto c = std::make_shared<RunCommand>();
-  CLI::App* sub = app.add_subcommand("run", "The main job: detect, calibrate, correct and report (default: the bundled example)");
+  CLI::App* sub = app.add_subcommand(
+      "run", "The main job: detect, calibrate, correct and report (default: the bundled example)");
   sub->add_option("SEQ", c->seq, "Sequence directory (default: the bundled example)");
   sub->add_option("-o,--out", c->out,
-                  "Output directory: model.json, corrected/, report/ (report.md with SVG plots), summary.json")
+                  "Output directory: model.json, corrected/, report/ (report.md with SVG plots), "
+                  "summary.json")
       ->capture_default_str();
-  sub->add_option("--truth", c->truth, "truth.json of a simulated sequence, to evaluate against (found automatically next "
-                                       "to DIR/scans)");
+  sub->add_option(
+      "--truth", c->truth,
+      "truth.json of a simulated sequence, to evaluate against (found automatically next "
+      "to DIR/scans)");
   sub->add_flag("--no-truth", c->no_truth, "Do not look for a truth.json next to the sequence");
   sub->add_option("--inversion", c->inversion, "ls or ml (see lidarcal correct --help)")
       ->check(CLI::IsMember({"ls", "ml"}))
       ->capture_default_str();
-  sub->add_flag("--overwrite", c->overwrite, "Replace OUT if it exists (needed to run again into the same OUT)");
+  sub->add_flag("--overwrite", c->overwrite,
+                "Replace OUT if it exists (needed to run again into the same OUT)");
   addCalibrationOptions(sub, c->options);
   sub->callback([c] { runRun(*c); });
 }

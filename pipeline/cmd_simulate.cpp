@@ -57,19 +57,22 @@ void runSimulate(const SimulateOptions& o) {
   meta.beams = scene.sensor.beams;
   if (scene.publish_landmark_radius && !scene.landmarks.empty()) {
     bool common = true;
-    for (const auto& l : scene.landmarks) common = common && l.radius_m == scene.landmarks.front().radius_m;
+    for (const auto& l : scene.landmarks)
+      common = common && l.radius_m == scene.landmarks.front().radius_m;
     if (common) meta.landmark_radius_m = scene.landmarks.front().radius_m;
   }
   io::writeSequenceMeta(scans_dir / "sequence.json", meta);
 
   io::TrueRangesWriter ranges(out.path() / truth.true_ranges_file);
-  const std::size_t total = static_cast<std::size_t>(scene.path.stops) * static_cast<std::size_t>(scene.path.scans_per_stop);
+  const std::size_t total = static_cast<std::size_t>(scene.path.stops) *
+                            static_cast<std::size_t>(scene.path.scans_per_stop);
   Progress progress("simulate", total);
   std::size_t done = 0;
   for (const TruthStop& stop : truth.stops) {
     for (std::size_t i = 0; i < stop.scans; ++i) {
       const auto sim = simulation::simulateScan(scene, stop, stop.first_scan + i, o.seed);
-      io::writeScan(scans_dir / sim.scan.name, sim.scan, o.ascii ? io::PcdEncoding::ascii : io::PcdEncoding::binary);
+      io::writeScan(scans_dir / sim.scan.name, sim.scan,
+                    o.ascii ? io::PcdEncoding::ascii : io::PcdEncoding::binary);
       for (const auto& row : sim.truth) ranges.write(row);
       progress.update(++done);
     }
@@ -79,7 +82,8 @@ void runSimulate(const SimulateOptions& o) {
   io::writeTruth(out.path() / "truth.json", truth);
   out.commit();
   if (!quiet())
-    std::fprintf(stderr, "simulated %s at %s into %s (sequence: %s)\n", plural(total, "scan").c_str(),
+    std::fprintf(stderr, "simulated %s at %s into %s (sequence: %s)\n",
+                 plural(total, "scan").c_str(),
                  plural(static_cast<std::size_t>(scene.path.stops), "stop").c_str(), o.out.c_str(),
                  (fs::path(o.out) / "scans").c_str());
 }
@@ -88,13 +92,19 @@ void runSimulate(const SimulateOptions& o) {
 
 void addSimulateCommand(CLI::App& app) {
   auto o = std::make_shared<SimulateOptions>();
-  CLI::App* sub = app.add_subcommand("simulate", "Simulate a scan sequence of a scene, with its ground truth");
-  sub->add_option("--scene", o->scene, "Scene file (JSON, see docs/FORMAT.md and data/scenes/)")->required();
-  sub->add_option("-o,--out", o->out, "Output directory: OUT/scans/ (sequence), OUT/truth.json, OUT/true_ranges.csv")
+  CLI::App* sub =
+      app.add_subcommand("simulate", "Simulate a scan sequence of a scene, with its ground truth");
+  sub->add_option("--scene", o->scene, "Scene file (JSON, see docs/FORMAT.md and data/scenes/)")
       ->required();
-  sub->add_option("--seed", o->seed, "Random seed; the same scene and seed give the same bytes")->capture_default_str();
-  sub->add_option("--stops", o->stops, "Override the scene's number of stops")->check(CLI::PositiveNumber);
-  sub->add_option("--scans-per-stop", o->scans_per_stop, "Override the scene's scans per stop")->check(CLI::PositiveNumber);
+  sub->add_option("-o,--out", o->out,
+                  "Output directory: OUT/scans/ (sequence), OUT/truth.json, OUT/true_ranges.csv")
+      ->required();
+  sub->add_option("--seed", o->seed, "Random seed; the same scene and seed give the same bytes")
+      ->capture_default_str();
+  sub->add_option("--stops", o->stops, "Override the scene's number of stops")
+      ->check(CLI::PositiveNumber);
+  sub->add_option("--scans-per-stop", o->scans_per_stop, "Override the scene's scans per stop")
+      ->check(CLI::PositiveNumber);
   sub->add_flag("--ascii", o->ascii, "Write ASCII PCD instead of binary");
   sub->add_flag("--overwrite", o->overwrite, "Replace OUT if it exists");
   sub->callback([o] { runSimulate(*o); });

@@ -31,13 +31,14 @@ void addLandmarksToObservationsCommand(CLI::App& app);
 
 /// `lidarcal simulate` of a scene with "kind": "observations" (pipeline/cmd_observations.cpp):
 /// writes OUT/observations.csv, OUT/odometry.csv, OUT/noise_truth.json.
-void simulateObservationScene(const std::string& scene_file, const std::string& out_dir, std::uint64_t seed,
-                              bool overwrite);
+void simulateObservationScene(const std::string& scene_file, const std::string& out_dir,
+                              std::uint64_t seed, bool overwrite);
 void addMonteCarloCommand(CLI::App& app);
 /// `lidarcal montecarlo-merge` (pipeline/cmd_montecarlo_merge.cpp): shards into the whole study.
 void addMonteCarloMergeCommand(CLI::App& app);
 void addDiagnoseCommand(CLI::App& app);
-/// `lidarcal fleet` (pipeline/cmd_fleet.cpp): many calibrations in one report, moved and outlying sensors flagged.
+/// `lidarcal fleet` (pipeline/cmd_fleet.cpp): many calibrations in one report, moved and outlying
+/// sensors flagged.
 void addFleetCommand(CLI::App& app);
 
 /// Directory of the bundled data (scenes, example): $LIDARCAL_DATA_DIR, the source tree's

@@ -47,8 +47,10 @@ std::string fmt(double v, int digits) {
 std::string pfmt(double p) {
   if (!std::isfinite(p)) return "-";
   char buf[64];
-  if (p < 1e-3) std::snprintf(buf, sizeof buf, "%.1e", p);
-  else std::snprintf(buf, sizeof buf, "%.3f", p);
+  if (p < 1e-3)
+    std::snprintf(buf, sizeof buf, "%.1e", p);
+  else
+    std::snprintf(buf, sizeof buf, "%.3f", p);
   return buf;
 }
 
@@ -61,27 +63,34 @@ struct Variable {
 
 std::vector<Variable> variables(diagnosis::DiagnoseMode mode) {
   std::vector<Variable> v;
-  v.push_back({"range", "range", "range (predicted true distance or mean reading) [m]", [](const ResidualRecord& r) { return r.range_m; }, 0.25});
+  v.push_back({"range", "range", "range (predicted true distance or mean reading) [m]",
+               [](const ResidualRecord& r) { return r.range_m; }, 0.25});
   v.push_back({"incidence", "incidence angle", "incidence angle on the surface [deg]",
                [](const ResidualRecord& r) { return rad2deg(r.incidence_rad); }, 5.0});
   if (mode == diagnosis::DiagnoseMode::sequence)
-    v.push_back({"lateral", "position across the pole", "beam's miss distance from the centre / radius (0 centre, +-1 edge)",
+    v.push_back({"lateral", "position across the pole",
+                 "beam's miss distance from the centre / radius (0 centre, +-1 edge)",
                  [](const ResidualRecord& r) { return r.lateral; }, 0.1});
   else
     v.push_back({"edge", "depth discontinuity", "0: inside a surface, 1: at a depth discontinuity",
                  [](const ResidualRecord& r) { return r.edge ? 1.0 : 0.0; }, 0.0});
-  v.push_back({"time", "scan index (time)", "scan index", [](const ResidualRecord& r) { return r.time; }, 0.0});
-  v.push_back({"bearing", "beam angle", "beam angle in the sensor frame [deg]", [](const ResidualRecord& r) { return rad2deg(r.bearing_rad); }, 10.0});
+  v.push_back({"time", "scan index (time)", "scan index",
+               [](const ResidualRecord& r) { return r.time; }, 0.0});
+  v.push_back({"bearing", "beam angle", "beam angle in the sensor frame [deg]",
+               [](const ResidualRecord& r) { return rad2deg(r.bearing_rad); }, 10.0});
   v.push_back({"group", mode == diagnosis::DiagnoseMode::sequence ? "landmark" : "wall",
-               mode == diagnosis::DiagnoseMode::sequence ? "landmark id" : "wall line (0: not on a fitted wall)",
+               mode == diagnosis::DiagnoseMode::sequence ? "landmark id"
+                                                         : "wall line (0: not on a fitted wall)",
                [](const ResidualRecord& r) { return static_cast<double>(r.group); }, 0.0});
   if (mode == diagnosis::DiagnoseMode::sequence)
-    v.push_back({"stop", "stop", "stop index", [](const ResidualRecord& r) { return static_cast<double>(r.stop); }, 0.0});
+    v.push_back({"stop", "stop", "stop index",
+                 [](const ResidualRecord& r) { return static_cast<double>(r.stop); }, 0.0});
   return v;
 }
 
 /// Per bin of x: mean residual (mm) and standard deviation of z, for one set of records.
-std::map<double, std::array<double, 4>> binned(const std::vector<ResidualRecord>& rs, const Variable& v, double time_bin) {
+std::map<double, std::array<double, 4>> binned(const std::vector<ResidualRecord>& rs,
+                                               const Variable& v, double time_bin) {
   std::map<double, std::array<double, 4>> acc;  // sum r, sum z, sum z^2, n
   for (const auto& r : rs) {
     const double x = v.x(r);
@@ -103,7 +112,8 @@ std::map<double, std::array<double, 4>> binned(const std::vector<ResidualRecord>
   return out;
 }
 
-std::string scatter(const std::vector<ResidualRecord>& rs, const Variable& v, std::size_t max_points) {
+std::string scatter(const std::vector<ResidualRecord>& rs, const Variable& v,
+                    std::size_t max_points) {
   std::ostringstream s;
   s.precision(6);
   const std::size_t stride = std::max<std::size_t>(1, rs.size() / max_points);
@@ -128,13 +138,15 @@ std::string histogram(const std::vector<ResidualRecord>& rs) {
 }
 
 ojson baselineJson(const DiagnosisResult& r, const DiagnosisSource& src) {
-  ojson baseline{{"bias_alpha", r.baseline.bias.alpha},
-                 {"noise", ojson{{"kind", toString(r.baseline.noise.kind)}, {"sigma_e", num(r.baseline.noise.sigma_e)}}},
-                 {"range_min_m", r.baseline.range_min_m},
-                 {"range_max_m", num(r.baseline.range_max_m < 1e8 ? r.baseline.range_max_m : std::nan(""))},
-                 {"neg_log_likelihood", num(r.baseline_neg_log_likelihood)},
-                 {"heldout_nats_per_point", num(r.baseline_heldout_nats_per_point)},
-                 {"fitted", numbers(r.baseline_extra)}};
+  ojson baseline{
+      {"bias_alpha", r.baseline.bias.alpha},
+      {"noise", ojson{{"kind", toString(r.baseline.noise.kind)},
+                      {"sigma_e", num(r.baseline.noise.sigma_e)}}},
+      {"range_min_m", r.baseline.range_min_m},
+      {"range_max_m", num(r.baseline.range_max_m < 1e8 ? r.baseline.range_max_m : std::nan(""))},
+      {"neg_log_likelihood", num(r.baseline_neg_log_likelihood)},
+      {"heldout_nats_per_point", num(r.baseline_heldout_nats_per_point)},
+      {"fitted", numbers(r.baseline_extra)}};
   if (r.mode == diagnosis::DiagnoseMode::sequence) {
     baseline["sigma_theta_rad"] = num(r.baseline_sigma_theta_rad);
     baseline["landmark_radius_m"] = num(r.baseline_radius_m);
@@ -194,7 +206,8 @@ ojson candidateJson(const diagnosis::CandidateResult& c) {
 
 /// Static mode: what the tails are made of (diagnosis/tails.hpp); null when not fitted.
 ojson tailsJson(const diagnosis::TailAttribution& t) {
-  if (!t.fitted) return t.note.empty() ? ojson(nullptr) : ojson{{"fitted", false}, {"note", t.note}};
+  if (!t.fitted)
+    return t.note.empty() ? ojson(nullptr) : ojson{{"fitted", false}, {"note", t.note}};
   ojson covs = ojson::array();
   for (const auto& c : t.covariates)
     covs.push_back(ojson{{"covariate", c.covariate},
@@ -217,43 +230,51 @@ ojson tailsJson(const diagnosis::TailAttribution& t) {
                           {"tail_fraction", num(b.tail_fraction)},
                           {"tail_probability", num(b.tail_probability)},
                           {"class", b.cls}});
-  return ojson{{"fitted", true},
-               {"cause", t.cause},
-               {"significant", t.significant},
-               {"p_value", num(t.p_value)},
-               {"pooled", ojson{{"fraction", num(t.pooled_fraction)},
-                                {"wide_scale", num(t.pooled_wide_scale)},
-                                {"heldout_gain_nats_per_point", num(t.pooled_gain_nats_per_point)},
-                                {"heldout_gain_se", num(t.pooled_gain_se)}}},
-               {"explained", ojson{{"heldout_gain_nats_per_point", num(t.explained_gain_nats_per_point)},
-                                   {"heldout_gain_se", num(t.explained_gain_se)}}},
-               {"covariates", covs},
-               {"model", numbers(t.model)},
-               {"tail_readings", num(t.tail_readings)},
-               {"tail_readings_by_class", numbers(t.tail_readings_by_class)},
-               {"readings_by_class", numbers(t.readings_by_class)},
-               {"top_beams", beams},
-               {"robust", numbers(t.robust)}};
+  return ojson{
+      {"fitted", true},
+      {"cause", t.cause},
+      {"significant", t.significant},
+      {"p_value", num(t.p_value)},
+      {"pooled", ojson{{"fraction", num(t.pooled_fraction)},
+                       {"wide_scale", num(t.pooled_wide_scale)},
+                       {"heldout_gain_nats_per_point", num(t.pooled_gain_nats_per_point)},
+                       {"heldout_gain_se", num(t.pooled_gain_se)}}},
+      {"explained", ojson{{"heldout_gain_nats_per_point", num(t.explained_gain_nats_per_point)},
+                          {"heldout_gain_se", num(t.explained_gain_se)}}},
+      {"covariates", covs},
+      {"model", numbers(t.model)},
+      {"tail_readings", num(t.tail_readings)},
+      {"tail_readings_by_class", numbers(t.tail_readings_by_class)},
+      {"readings_by_class", numbers(t.readings_by_class)},
+      {"top_beams", beams},
+      {"robust", numbers(t.robust)}};
 }
 
 /// The named effect's gain: held out, delta AIC, closeness of simulations, calibration.
 ojson gainJson(const DiagnosisResult& r, bool named) {
-  ojson gain{{"heldout_nats_per_point", named ? num(r.gain_heldout_nats_per_point) : ojson(nullptr)},
-             {"delta_aic", named ? num(r.gain_delta_aic) : ojson(nullptr)},
-             {"closeness", ojson{{"baseline_simulation", closenessJson(r.closeness_baseline)},
-                                 {"extended_simulation", named ? closenessJson(r.closeness_extended) : ojson(nullptr)}}}};
+  ojson gain{
+      {"heldout_nats_per_point", named ? num(r.gain_heldout_nats_per_point) : ojson(nullptr)},
+      {"delta_aic", named ? num(r.gain_delta_aic) : ojson(nullptr)},
+      {"closeness", ojson{{"baseline_simulation", closenessJson(r.closeness_baseline)},
+                          {"extended_simulation",
+                           named ? closenessJson(r.closeness_extended) : ojson(nullptr)}}}};
   if (r.calibration_mse_ratio_baseline > 0.0)
-    gain["calibration_mse_ratio"] = ojson{{"baseline", num(r.calibration_mse_ratio_baseline)},
-                                          {"extended", named ? num(r.calibration_mse_ratio_extended) : ojson(nullptr)}};
+    gain["calibration_mse_ratio"] =
+        ojson{{"baseline", num(r.calibration_mse_ratio_baseline)},
+              {"extended", named ? num(r.calibration_mse_ratio_extended) : ojson(nullptr)}};
   return gain;
 }
 
 ojson dataJson(const DiagnosisResult& r, const DiagnosisSource& src) {
-  ojson data{{"path", src.data.string()}, {"scans", r.scans}, {"stops", r.stops}, {"readings", r.readings}};
+  ojson data{{"path", src.data.string()},
+             {"scans", r.scans},
+             {"stops", r.stops},
+             {"readings", r.readings}};
   data[r.mode == diagnosis::DiagnoseMode::sequence ? "landmarks" : "walls"] = r.landmarks;
   if (!src.sensor.empty()) data["sensor"] = src.sensor;
   if (!src.selection.empty()) data["selection"] = src.selection;
-  if (r.mode == diagnosis::DiagnoseMode::sequence) data["readings_beside_poles"] = src.beside_pole_readings;
+  if (r.mode == diagnosis::DiagnoseMode::sequence)
+    data["readings_beside_poles"] = src.beside_pole_readings;
   if (!src.model.empty()) data["corrected_with_model"] = src.model;
   return data;
 }
@@ -263,14 +284,20 @@ ojson dataJson(const DiagnosisResult& r, const DiagnosisSource& src) {
 void writeDataLine(std::ostream& md, const DiagnosisResult& r, const DiagnosisSource& src) {
   const bool seq = r.mode == diagnosis::DiagnoseMode::sequence;
   md << "# lidarcal diagnosis\n\n";
-  md << "Data: `" << src.data.string() << "`" << (src.sensor.empty() ? "" : " (" + src.sensor + ")") << ", **"
-     << toString(r.mode) << "** mode: " << plural(r.scans, "scan");
-  if (seq) md << " at " << plural(r.stops, "stop") << (src.selection.empty() ? "" : " (" + src.selection + ")") << ", " << plural(r.landmarks, "landmark");
-  else md << (src.selection.empty() ? "" : " (" + src.selection + ")") << ", " << plural(r.landmarks, "wall line");
+  md << "Data: `" << src.data.string() << "`" << (src.sensor.empty() ? "" : " (" + src.sensor + ")")
+     << ", **" << toString(r.mode) << "** mode: " << plural(r.scans, "scan");
+  if (seq)
+    md << " at " << plural(r.stops, "stop")
+       << (src.selection.empty() ? "" : " (" + src.selection + ")") << ", "
+       << plural(r.landmarks, "landmark");
+  else
+    md << (src.selection.empty() ? "" : " (" + src.selection + ")") << ", "
+       << plural(r.landmarks, "wall line");
   md << ", " << plural(r.readings, "reading");
   if (seq && src.beside_pole_readings > 0)
     md << " (" << src.beside_pole_readings
-       << " of them beside a pole, between it and the background: mixed-pixel candidates the detector leaves out)";
+       << " of them beside a pole, between it and the background: mixed-pixel candidates the "
+          "detector leaves out)";
   md << ".";
   if (!src.model.empty()) md << " Readings first corrected with `" << src.model << "`.";
   md << "\n\n";
@@ -279,18 +306,20 @@ void writeDataLine(std::ostream& md, const DiagnosisResult& r, const DiagnosisSo
 void writeVerdict(std::ostream& md, const DiagnosisResult& r) {
   md << "## Verdict\n\n**Primary cause: `" << r.primary_cause << "`.** " << r.decision << ".\n\n";
   if (!r.extended_parameters.empty()) {
-    md << "Held-out gain of the extended model: " << fmt(r.gain_heldout_nats_per_point, 4) << " nats per point; delta AIC "
-       << fmt(r.gain_delta_aic, 1) << ".\n\n";
+    md << "Held-out gain of the extended model: " << fmt(r.gain_heldout_nats_per_point, 4)
+       << " nats per point; delta AIC " << fmt(r.gain_delta_aic, 1) << ".\n\n";
   }
 }
 
 void writeWallTable(std::ostream& md, const std::vector<diagnosis::WallLine>& walls) {
-  md << "\nWall lines fitted to the beam means (the geometric reference):\n\n| wall | normal [deg] | distance [m] | beams from [deg] | to [deg] | beams | RMS about the model [mm] |\n|---|---|---|---|---|---|---|\n";
+  md << "\nWall lines fitted to the beam means (the geometric reference):\n\n| wall | normal [deg] "
+        "| distance [m] | beams from [deg] | to [deg] | beams | RMS about the model [mm] "
+        "|\n|---|---|---|---|---|---|---|\n";
   for (std::size_t i = 0; i < walls.size(); ++i) {
     const auto& w = walls[i];
-    md << "| " << i + 1 << " | " << fmt(rad2deg(w.normal_rad), 2) << " | " << fmt(w.distance_m, 4) << " | "
-       << fmt(rad2deg(w.first_angle_rad), 1) << " | " << fmt(rad2deg(w.last_angle_rad), 1) << " | " << w.bins << " | "
-       << fmt(1000.0 * w.rms_m, 2) << " |\n";
+    md << "| " << i + 1 << " | " << fmt(rad2deg(w.normal_rad), 2) << " | " << fmt(w.distance_m, 4)
+       << " | " << fmt(rad2deg(w.first_angle_rad), 1) << " | " << fmt(rad2deg(w.last_angle_rad), 1)
+       << " | " << w.bins << " | " << fmt(1000.0 * w.rms_m, 2) << " |\n";
   }
 }
 
@@ -300,29 +329,37 @@ void writeBaseline(std::ostream& md, const DiagnosisResult& r, const DiagnosisSo
   md << "- bias f(d) = ";
   for (std::size_t i = 0; i < r.baseline.bias.alpha.size(); ++i) {
     const double a = r.baseline.bias.alpha[i];
-    md << (i ? (a < 0 ? " - " : " + ") : (a < 0 ? "-" : "")) << fmt(std::abs(a), 5) << (i ? " d" : "")
-       << (i > 1 ? "^" + std::to_string(i) : "");
+    md << (i ? (a < 0 ? " - " : " + ") : (a < 0 ? "-" : "")) << fmt(std::abs(a), 5)
+       << (i ? " d" : "") << (i > 1 ? "^" + std::to_string(i) : "");
   }
-  md << "\n- noise sigma = " << fmt(r.baseline.noise.sigma_e, 6) << " f(d)^2 (Alhashimi et al. 2016, eq. 1)";
+  md << "\n- noise sigma = " << fmt(r.baseline.noise.sigma_e, 6)
+     << " f(d)^2 (Alhashimi et al. 2016, eq. 1)";
   md << ": " << fmt(1000.0 * r.baseline.noise.stddev(1.0, r.baseline.bias), 1) << " mm at 1 m, "
      << fmt(1000.0 * r.baseline.noise.stddev(3.0, r.baseline.bias), 1) << " mm at 3 m\n";
   if (seq)
-    md << "- landmark radius " << fmt(r.baseline_radius_m, 4) << " m (" << (r.radius_known ? "given" : "estimated")
-       << "), sighting bearing noise " << fmt(rad2deg(r.baseline_sigma_theta_rad), 3) << " deg, stop headings at the commanded ones\n";
-  for (const auto& [k, v] : r.baseline_extra) md << "- " << k << ": " << (v == std::round(v) ? fmt(v, 0) : fmt(v, 5)) << "\n";
-  md << "- held-out log-likelihood " << fmt(r.baseline_heldout_nats_per_point, 4) << " nats per point\n";
+    md << "- landmark radius " << fmt(r.baseline_radius_m, 4) << " m ("
+       << (r.radius_known ? "given" : "estimated") << "), sighting bearing noise "
+       << fmt(rad2deg(r.baseline_sigma_theta_rad), 3)
+       << " deg, stop headings at the commanded ones\n";
+  for (const auto& [k, v] : r.baseline_extra)
+    md << "- " << k << ": " << (v == std::round(v) ? fmt(v, 0) : fmt(v, 5)) << "\n";
+  md << "- held-out log-likelihood " << fmt(r.baseline_heldout_nats_per_point, 4)
+     << " nats per point\n";
   if (!seq && !src.walls.empty()) writeWallTable(md, src.walls);
 }
 
 void writeBattery(std::ostream& md, const DiagnosisResult& r) {
   md << "\n## What the baseline gets wrong: discrepancy statistics\n\n";
   md << "Each statistic on the data against " << r.replicas
-     << " parametric bootstrap replicas (the same geometry simulated from the fitted baseline and refitted); p-value from the "
+     << " parametric bootstrap replicas (the same geometry simulated from the fitted baseline and "
+        "refitted); p-value from the "
         "replicas (Student-t predictive), effect size in replica standard deviations.\n\n";
-  md << "| statistic | against | value | replicas: mean | sd | effect size | p-value |\n|---|---|---|---|---|---|---|\n";
+  md << "| statistic | against | value | replicas: mean | sd | effect size | p-value "
+        "|\n|---|---|---|---|---|---|---|\n";
   for (const auto& d : r.battery)
-    md << "| `" << d.name << "` | " << d.variable << " | " << fmt(d.value, 3) << " | " << fmt(d.replica_mean, 3) << " | "
-       << fmt(d.replica_sd, 3) << " | " << fmt(d.effect_size, 1) << " | " << pfmt(d.p_value) << " |\n";
+    md << "| `" << d.name << "` | " << d.variable << " | " << fmt(d.value, 3) << " | "
+       << fmt(d.replica_mean, 3) << " | " << fmt(d.replica_sd, 3) << " | " << fmt(d.effect_size, 1)
+       << " | " << pfmt(d.p_value) << " |\n";
   md << "\n<details><summary>How each statistic is computed</summary>\n\n";
   for (const auto& d : r.battery) md << "- `" << d.name << "`: " << d.description << "\n";
   md << "\n</details>\n";
@@ -338,21 +375,29 @@ bool motionPrior(const DiagnosisResult& r) {
 void writeCandidates(std::ostream& md, const DiagnosisResult& r) {
   const bool seq = r.mode == diagnosis::DiagnoseMode::sequence;
   md << "\n## Candidate effects\n\n";
-  md << "Each effect added to the baseline and fitted; held-out log-likelihood gain per point (" << r.folds
-     << " folds by scan" << (!seq ? ", wall beams leave-one-out" : motionPrior(r) ? "" : ", odometry leave-one-stop-out")
-     << "), its one-sided p-value, Holm-adjusted across the candidates; significant = adjusted p < alpha with a positive gain"
-     << "; `quantisation` (readings on a grid): the p of its held-out gain alone, every other model scored on the readings "
+  md << "Each effect added to the baseline and fitted; held-out log-likelihood gain per point ("
+     << r.folds << " folds by scan"
+     << (!seq             ? ", wall beams leave-one-out"
+         : motionPrior(r) ? ""
+                          : ", odometry leave-one-stop-out")
+     << "), its one-sided p-value, Holm-adjusted across the candidates; significant = adjusted p < "
+        "alpha with a positive gain"
+     << "; `quantisation` (readings on a grid): the p of its held-out gain alone, every other "
+        "model scored on the readings "
         "spread over their grid cells"
      << ".\n\n";
-  md << "| effect | held-out gain [nats/pt] | se | p | Holm p | delta AIC | params | significant | identifiable | estimates | note |\n"
+  md << "| effect | held-out gain [nats/pt] | se | p | Holm p | delta AIC | params | significant | "
+        "identifiable | estimates | note |\n"
         "|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const auto& c : r.candidates) {
     std::string est;
     for (const auto& [k, v] : c.estimates) est += (est.empty() ? "" : ", ") + k + " = " + fmt(v, 5);
-    md << "| `" << toString(c.effect) << "` | " << (c.applicable ? fmt(c.heldout_gain_nats_per_point, 5) : "-") << " | "
-       << (c.applicable ? fmt(c.heldout_gain_se, 5) : "-") << " | " << pfmt(c.p_value) << " | " << pfmt(c.p_holm) << " | "
-       << (c.applicable ? fmt(c.delta_aic, 1) : "-") << " | " << c.parameters << " | " << (c.significant ? "**yes**" : "no")
-       << " | " << (c.identifiable ? "yes" : "no") << " | " << est << " | " << c.note << " |\n";
+    md << "| `" << toString(c.effect) << "` | "
+       << (c.applicable ? fmt(c.heldout_gain_nats_per_point, 5) : "-") << " | "
+       << (c.applicable ? fmt(c.heldout_gain_se, 5) : "-") << " | " << pfmt(c.p_value) << " | "
+       << pfmt(c.p_holm) << " | " << (c.applicable ? fmt(c.delta_aic, 1) : "-") << " | "
+       << c.parameters << " | " << (c.significant ? "**yes**" : "no") << " | "
+       << (c.identifiable ? "yes" : "no") << " | " << est << " | " << c.note << " |\n";
   }
 }
 
@@ -360,27 +405,34 @@ void writeTails(std::ostream& md, const DiagnosisResult& r) {
   const auto& t = r.tails;
   if (!t.fitted) return;
   md << "\n## What the tails are made of\n\n";
-  md << "A contamination mixture (diagnosis/tails.hpp): pooled, a fraction " << fmt(t.pooled_fraction, 4)
-     << " of readings " << fmt(t.pooled_wide_scale, 3) << " times as wide as the core, held-out gain "
-     << fmt(t.pooled_gain_nats_per_point, 4) << " +- " << fmt(t.pooled_gain_se, 4)
-     << " nats per reading over the Gaussian baseline; with its probability depending on the covariates, a further "
-     << fmt(t.explained_gain_nats_per_point, 4) << " +- " << fmt(t.explained_gain_se, 4) << ". Cause: `" << t.cause << "`.\n\n";
-  md << "| covariate | effect | coefficient | unique held-out gain [nats/pt] | se | Holm p | share | significant |\n"
+  md << "A contamination mixture (diagnosis/tails.hpp): pooled, a fraction "
+     << fmt(t.pooled_fraction, 4) << " of readings " << fmt(t.pooled_wide_scale, 3)
+     << " times as wide as the core, held-out gain " << fmt(t.pooled_gain_nats_per_point, 4)
+     << " +- " << fmt(t.pooled_gain_se, 4)
+     << " nats per reading over the Gaussian baseline; with its probability depending on the "
+        "covariates, a further "
+     << fmt(t.explained_gain_nats_per_point, 4) << " +- " << fmt(t.explained_gain_se, 4)
+     << ". Cause: `" << t.cause << "`.\n\n";
+  md << "| covariate | effect | coefficient | unique held-out gain [nats/pt] | se | Holm p | share "
+        "| significant |\n"
         "|---|---|---|---|---|---|---|---|\n";
   for (const auto& c : t.covariates)
-    md << "| " << c.covariate << " | `" << toString(c.effect) << "` | " << fmt(c.coefficient, 3) << " | "
-       << fmt(c.unique_gain_nats_per_point, 5) << " | " << fmt(c.unique_gain_se, 5) << " | " << pfmt(c.p_holm) << " | "
-       << fmt(100.0 * c.share, 1) << " % | " << (c.significant ? "**yes**" : "no") << " |\n";
+    md << "| " << c.covariate << " | `" << toString(c.effect) << "` | " << fmt(c.coefficient, 3)
+       << " | " << fmt(c.unique_gain_nats_per_point, 5) << " | " << fmt(c.unique_gain_se, 5)
+       << " | " << pfmt(c.p_holm) << " | " << fmt(100.0 * c.share, 1) << " % | "
+       << (c.significant ? "**yes**" : "no") << " |\n";
   md << "\nTail readings (posterior sums) by class of beam, of " << fmt(t.tail_readings, 1) << ":";
   for (const auto& [k, v] : t.tail_readings_by_class)
     md << " " << k << " " << fmt(v, 1) << " of " << fmt(t.readings_by_class.at(k), 0) << ";";
-  md << "\n\n| beam [deg] | range [m] | incidence [deg] | intensity | edge | readings | tail fraction | fitted pi | class |\n"
+  md << "\n\n| beam [deg] | range [m] | incidence [deg] | intensity | edge | readings | tail "
+        "fraction | fitted pi | class |\n"
         "|---|---|---|---|---|---|---|---|---|\n";
   for (const auto& b : t.top_beams)
     md << "| " << fmt(rad2deg(b.bearing_rad), 1) << " | " << fmt(b.range_m, 3) << " | "
        << (std::isfinite(b.incidence_rad) ? fmt(rad2deg(b.incidence_rad), 1) : "-") << " | "
-       << (std::isfinite(b.intensity) ? fmt(b.intensity, 1) : "-") << " | " << (b.edge ? "yes" : "no") << " | " << b.readings
-       << " | " << fmt(b.tail_fraction, 3) << " | " << fmt(b.tail_probability, 3) << " | " << b.cls << " |\n";
+       << (std::isfinite(b.intensity) ? fmt(b.intensity, 1) : "-") << " | "
+       << (b.edge ? "yes" : "no") << " | " << b.readings << " | " << fmt(b.tail_fraction, 3)
+       << " | " << fmt(b.tail_probability, 3) << " | " << b.cls << " |\n";
   md << "\nUnder the pooled contamination:";
   for (const auto& [k, v] : t.robust) md << " " << k << " = " << fmt(v, 4) << ";";
   md << "\n";
@@ -396,14 +448,19 @@ void writeExtended(std::ostream& md, const DiagnosisResult& r) {
   for (const auto& [k, v] : r.extended_parameters) md << " " << k << " = " << fmt(v, 5) << ";";
   md << "\n\nScene keys that simulate it (`lidarcal simulate`, docs/FORMAT.md):\n\n";
   for (const auto& [k, v] : r.scene_keys) md << "- `" << k << "` = " << fmt(v, 6) << "\n";
-  md << "\n| simulation | KS distance of standardised residuals to the data | median abs ln(variance ratio) per group | groups |\n|---|---|---|---|\n";
-  md << "| baseline | " << fmt(r.closeness_baseline.ks_distance, 4) << " | " << fmt(r.closeness_baseline.variance_ratio_median_abs_log, 3)
-     << " | " << r.closeness_baseline.groups << " |\n";
-  md << "| extended | " << fmt(r.closeness_extended.ks_distance, 4) << " | " << fmt(r.closeness_extended.variance_ratio_median_abs_log, 3)
-     << " | " << r.closeness_extended.groups << " |\n";
+  md << "\n| simulation | KS distance of standardised residuals to the data | median abs "
+        "ln(variance ratio) per group | groups |\n|---|---|---|---|\n";
+  md << "| baseline | " << fmt(r.closeness_baseline.ks_distance, 4) << " | "
+     << fmt(r.closeness_baseline.variance_ratio_median_abs_log, 3) << " | "
+     << r.closeness_baseline.groups << " |\n";
+  md << "| extended | " << fmt(r.closeness_extended.ks_distance, 4) << " | "
+     << fmt(r.closeness_extended.variance_ratio_median_abs_log, 3) << " | "
+     << r.closeness_extended.groups << " |\n";
   if (r.calibration_mse_ratio_baseline > 0.0)
-    md << "\nAgainst the truth: MSE ratio (raw MSE / corrected MSE, higher is better; Alhashimi et al. 2021, eq. 31) of the calibration " << fmt(r.calibration_mse_ratio_baseline, 1)
-       << " with the baseline, " << fmt(r.calibration_mse_ratio_extended, 1) << " with the extended model.\n";
+    md << "\nAgainst the truth: MSE ratio (raw MSE / corrected MSE, higher is better; Alhashimi et "
+          "al. 2021, eq. 31) of the calibration "
+       << fmt(r.calibration_mse_ratio_baseline, 1) << " with the baseline, "
+       << fmt(r.calibration_mse_ratio_extended, 1) << " with the extended model.\n";
 }
 
 // ---- Plots ----
@@ -426,7 +483,8 @@ std::pair<double, double> residualRange(const std::vector<ResidualRecord>& measu
   return {ylo, yhi};
 }
 
-/// binned_<v>.dat: x, measured mean residual and z spread, simulated spreads, simulated baseline mean.
+/// binned_<v>.dat: x, measured mean residual and z spread, simulated spreads, simulated baseline
+/// mean.
 std::string binnedTable(const DiagnosisResult& r, const Variable& v, double time_bin) {
   std::ostringstream b;
   b.precision(6);
@@ -445,33 +503,51 @@ std::string binnedTable(const DiagnosisResult& r, const Variable& v, double time
 
 /// The gnuplot commands of one variable's residual plot (scatter and means, spreads).
 void residualPlot(std::ostream& gp, const Variable& v, double ylo, double yhi) {
-  gp << "set output \"residuals_" << v.file << ".png\"\nset multiplot layout 2,1 title \"Residuals against " << v.title
+  gp << "set output \"residuals_" << v.file
+     << ".png\"\nset multiplot layout 2,1 title \"Residuals against " << v.title
      << ": measured vs simulated\"\n";
-  gp << "set xlabel \"" << v.label << "\"\nset ylabel \"residual [mm] (central 99 %)\"\nset key top right\nset yrange ["
-     << ylo << ":" << yhi << "]\n";
-  gp << "plot \"scatter_" << v.file << ".dat\" using 1:2 with points pt 7 ps 0.2 lc rgb \"#bbbbbb\" title \"measured readings\", "
-     << "\"binned_" << v.file << ".dat\" using 1:2 with linespoints lw 2 pt 7 lc rgb \"#cc3311\" title \"measured, mean\", "
-     << "\"binned_" << v.file << ".dat\" using 1:6 with linespoints lw 2 pt 6 dt 2 lc rgb \"#0077bb\" title \"simulated baseline, mean\"\n";
+  gp << "set xlabel \"" << v.label
+     << "\"\nset ylabel \"residual [mm] (central 99 %)\"\nset key top right\nset yrange [" << ylo
+     << ":" << yhi << "]\n";
+  gp << "plot \"scatter_" << v.file
+     << ".dat\" using 1:2 with points pt 7 ps 0.2 lc rgb \"#bbbbbb\" title \"measured readings\", "
+     << "\"binned_" << v.file
+     << ".dat\" using 1:2 with linespoints lw 2 pt 7 lc rgb \"#cc3311\" title \"measured, mean\", "
+     << "\"binned_" << v.file
+     << ".dat\" using 1:6 with linespoints lw 2 pt 6 dt 2 lc rgb \"#0077bb\" title \"simulated "
+        "baseline, mean\"\n";
   gp << "set ylabel \"sd of standardised residual\"\nset yrange [*:*]\n";
-  gp << "plot \"binned_" << v.file << ".dat\" using 1:3 with linespoints lw 2 pt 7 lc rgb \"#cc3311\" title \"measured\", "
-     << "\"binned_" << v.file << ".dat\" using 1:4 with linespoints lw 2 pt 6 lc rgb \"#0077bb\" title \"simulated baseline\", "
-     << "\"binned_" << v.file << ".dat\" using 1:5 with linespoints lw 2 pt 4 lc rgb \"#009944\" title \"simulated extended\", "
+  gp << "plot \"binned_" << v.file
+     << ".dat\" using 1:3 with linespoints lw 2 pt 7 lc rgb \"#cc3311\" title \"measured\", "
+     << "\"binned_" << v.file
+     << ".dat\" using 1:4 with linespoints lw 2 pt 6 lc rgb \"#0077bb\" title \"simulated "
+        "baseline\", "
+     << "\"binned_" << v.file
+     << ".dat\" using 1:5 with linespoints lw 2 pt 4 lc rgb \"#009944\" title \"simulated "
+        "extended\", "
      << "1 with lines dt 2 lc rgb \"black\" notitle\n";
   gp << "unset multiplot\n";
 }
 
 /// The distribution plot's data files and gnuplot commands.
-void distributionPlot(const std::filesystem::path& dir, const DiagnosisResult& r, std::ostream& gp) {
+void distributionPlot(const std::filesystem::path& dir, const DiagnosisResult& r,
+                      std::ostream& gp) {
   io::writeTextAtomically(dir / "hist_measured.dat", histogram(r.measured));
   io::writeTextAtomically(dir / "hist_baseline.dat", histogram(r.simulated_baseline));
   io::writeTextAtomically(dir / "hist_extended.dat", histogram(r.simulated_extended));
-  gp << "set terminal pngcairo size 900,600 font \"DejaVu Sans,10\"\nset output \"residual_distribution.png\"\n"
-     << "set title \"Standardised residuals under the baseline: measured vs simulated\"\nset xlabel \"z\"\n"
+  gp << "set terminal pngcairo size 900,600 font \"DejaVu Sans,10\"\nset output "
+        "\"residual_distribution.png\"\n"
+     << "set title \"Standardised residuals under the baseline: measured vs simulated\"\nset "
+        "xlabel \"z\"\n"
      << "set ylabel \"density\"\nset logscale y\nset yrange [1e-5:1]\nset key top right\n"
-     << "plot \"hist_measured.dat\" using 1:2 with steps lw 2 lc rgb \"#cc3311\" title \"measured\", "
-     << "\"hist_baseline.dat\" using 1:2 with steps lw 2 lc rgb \"#0077bb\" title \"simulated baseline\", "
-     << "\"hist_extended.dat\" using 1:2 with steps lw 2 lc rgb \"#009944\" title \"simulated extended\", "
-     << "exp(-x*x/2)/sqrt(2*pi) with lines dt 2 lc rgb \"black\" title \"N(0,1)\"\nunset logscale y\n";
+     << "plot \"hist_measured.dat\" using 1:2 with steps lw 2 lc rgb \"#cc3311\" title "
+        "\"measured\", "
+     << "\"hist_baseline.dat\" using 1:2 with steps lw 2 lc rgb \"#0077bb\" title \"simulated "
+        "baseline\", "
+     << "\"hist_extended.dat\" using 1:2 with steps lw 2 lc rgb \"#009944\" title \"simulated "
+        "extended\", "
+     << "exp(-x*x/2)/sqrt(2*pi) with lines dt 2 lc rgb \"black\" title \"N(0,1)\"\nunset logscale "
+        "y\n";
 }
 
 /// Writes the plots' data and plots.gp, runs gnuplot and adds the Plots section.
@@ -497,10 +573,13 @@ void writePlots(const std::filesystem::path& dir, const DiagnosisResult& r, std:
     md << "(" << why << ")\n";
     return;
   }
-  md << "Top: residuals of the measured readings under the baseline (grey), their mean per bin (red) and the same for a "
-        "simulated replica of the baseline (blue). Bottom: spread of the standardised residuals per bin, measured and "
+  md << "Top: residuals of the measured readings under the baseline (grey), their mean per bin "
+        "(red) and the same for a "
+        "simulated replica of the baseline (blue). Bottom: spread of the standardised residuals "
+        "per bin, measured and "
         "simulated from the baseline and from the extended model (1 = the model's noise).\n\n";
-  for (const auto& v : vars) md << "![residuals against " << v.title << "](residuals_" << v.file << ".png)\n\n";
+  for (const auto& v : vars)
+    md << "![residuals against " << v.title << "](residuals_" << v.file << ".png)\n\n";
   md << "![distribution of the standardised residuals](residual_distribution.png)\n";
 }
 
@@ -534,7 +613,8 @@ nlohmann::ordered_json diagnosisJson(const DiagnosisResult& r, const DiagnosisSo
                {"gain", gainJson(r, named)}};
 }
 
-void writeDiagnosis(const std::filesystem::path& dir, const DiagnosisResult& r, const DiagnosisSource& src) {
+void writeDiagnosis(const std::filesystem::path& dir, const DiagnosisResult& r,
+                    const DiagnosisSource& src) {
   io::writeTextAtomically(dir / "diagnosis.json", diagnosisJson(r, src).dump(2) + "\n");
   std::ostringstream md;
   writeDataLine(md, r, src);

@@ -17,8 +17,10 @@
 namespace lidarcal::pipeline {
 namespace {
 
-constexpr double kMadToSd = 1.482602218505602;  // 1 / Phi^-1(3/4): MAD to standard deviation for normal data
-constexpr double kHalfPi = 1.5707963267948966;  // variance of a median of n normal values: (pi / 2) sigma^2 / n
+// 1 / Phi^-1(3/4): MAD to standard deviation for normal data
+constexpr double kMadToSd = 1.482602218505602;
+// variance of a median of n normal values: (pi / 2) sigma^2 / n
+constexpr double kHalfPi = 1.5707963267948966;
 
 bool insideFittedRange(const CalibrationModel& m, double d) {
   if (m.fitted_range_m) return d >= m.fitted_range_m->first && d <= m.fitted_range_m->second;
@@ -29,12 +31,13 @@ bool insideFittedRange(const CalibrationModel& m, double d) {
 Eigen::MatrixXd biasCovariance(const CalibrationModel& m, const std::vector<double>& distances_m) {
   const std::size_t p = m.model.bias.alpha.size();
   if (p == 0 || m.alpha_covariance.size() != p * p) return {};
-  const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> sigma(
-      m.alpha_covariance.data(), static_cast<Eigen::Index>(p), static_cast<Eigen::Index>(p));
+  const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>
+      sigma(m.alpha_covariance.data(), static_cast<Eigen::Index>(p), static_cast<Eigen::Index>(p));
   if (!sigma.allFinite()) return {};
   Eigen::MatrixXd J(static_cast<Eigen::Index>(distances_m.size()), static_cast<Eigen::Index>(p));
   for (std::size_t i = 0; i < distances_m.size(); ++i)
-    for (std::size_t j = 0; j < p; ++j) J(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = std::pow(distances_m[i], j);
+    for (std::size_t j = 0; j < p; ++j)
+      J(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = std::pow(distances_m[i], j);
   return J * sigma * J.transpose();
 }
 
@@ -55,14 +58,18 @@ std::pair<double, int> waldStatistic(const Eigen::VectorXd& D, const Eigen::Matr
 }
 
 /// Against the calibration before: the distances inside both fitted ranges.
-FleetTest movedTest(const FleetEntry& now, const FleetEntry& before, const std::vector<double>& distances_m) {
+FleetTest movedTest(const FleetEntry& now, const FleetEntry& before,
+                    const std::vector<double>& distances_m) {
   FleetTest t;
   std::vector<double> shared;
   for (double d : distances_m)
     if (insideFittedRange(now.model, d) && insideFittedRange(before.model, d)) shared.push_back(d);
-  const Eigen::MatrixXd c_now = biasCovariance(now.model, shared), c_before = biasCovariance(before.model, shared);
-  if (shared.empty()) t.why_not = "no distance lies inside both calibrations' fitted ranges";
-  else if (c_now.size() == 0 || c_before.size() == 0) t.why_not = "a calibration without alpha_covariance (standard errors)";
+  const Eigen::MatrixXd c_now = biasCovariance(now.model, shared),
+                        c_before = biasCovariance(before.model, shared);
+  if (shared.empty())
+    t.why_not = "no distance lies inside both calibrations' fitted ranges";
+  else if (c_now.size() == 0 || c_before.size() == 0)
+    t.why_not = "a calibration without alpha_covariance (standard errors)";
   if (!t.why_not.empty()) return t;
   Eigen::VectorXd D(static_cast<Eigen::Index>(shared.size()));
   for (std::size_t i = 0; i < shared.size(); ++i) {
@@ -85,9 +92,9 @@ FleetTest movedTest(const FleetEntry& now, const FleetEntry& before, const std::
 
 /// Robust summary of the other sensors' bias at one distance.
 struct FleetAt {
-  std::size_t n = 0;       ///< sensors
-  double median_m = kNaN;  ///< their median bias
-  double sd_m = kNaN;      ///< 1.4826 MAD
+  std::size_t n = 0;             ///< sensors
+  double median_m = kNaN;        ///< their median bias
+  double sd_m = kNaN;            ///< 1.4826 MAD
   double typical_var_m2 = kNaN;  ///< median of their own squared standard errors
 };
 
@@ -104,7 +111,8 @@ FleetAt fleetAt(const std::vector<double>& bias, const std::vector<double>& var)
 }
 
 /// Against the other sensors' current calibrations (`rows[self]` excluded), distance by distance.
-FleetTest outlierTest(const std::vector<FleetRow>& rows, std::size_t self, const FleetConfig& config) {
+FleetTest outlierTest(const std::vector<FleetRow>& rows, std::size_t self,
+                      const FleetConfig& config) {
   FleetTest t;
   double smallest_p = 1.0;
   for (std::size_t j = 0; j < config.distances_m.size(); ++j) {
@@ -123,7 +131,8 @@ FleetTest outlierTest(const std::vector<FleetRow>& rows, std::size_t self, const
     const double scale = std::sqrt(tau2 + mine.se_m * mine.se_m + kHalfPi * f.sd_m * f.sd_m / n);
     const double z = (mine.bias_m - f.median_m) / scale;
     const int dof = static_cast<int>(f.n) - 1;
-    const double p = 2.0 * boost::math::cdf(boost::math::complement(boost::math::students_t(dof), std::abs(z)));
+    const double p =
+        2.0 * boost::math::cdf(boost::math::complement(boost::math::students_t(dof), std::abs(z)));
     t.distances_m.push_back(config.distances_m[j]);
     t.difference_m.push_back(mine.bias_m - f.median_m);
     t.z.push_back(z);
@@ -132,8 +141,9 @@ FleetTest outlierTest(const std::vector<FleetRow>& rows, std::size_t self, const
     smallest_p = std::min(smallest_p, p);
   }
   if (t.distances_m.empty()) {
-    t.why_not = "fewer than " + std::to_string(config.min_fleet) +
-                " other sensors with standard errors at a distance inside this calibration's fitted range";
+    t.why_not =
+        "fewer than " + std::to_string(config.min_fleet) +
+        " other sensors with standard errors at a distance inside this calibration's fitted range";
     return t;
   }
   t.tested = true;
@@ -153,18 +163,21 @@ void holm(std::vector<FleetTest*> family, double alpha) {
 }
 
 /// The calibrations of each sensor, oldest first; refuses ambiguous histories.
-std::map<std::string, std::vector<const FleetEntry*>> bySensor(const std::vector<FleetEntry>& entries) {
+std::map<std::string, std::vector<const FleetEntry*>> bySensor(
+    const std::vector<FleetEntry>& entries) {
   std::map<std::string, std::vector<const FleetEntry*>> out;
   for (const FleetEntry& e : entries) out[e.sensor].push_back(&e);
   for (auto& [sensor, list] : out) {
-    std::stable_sort(list.begin(), list.end(), [](const FleetEntry* a, const FleetEntry* b) { return a->date < b->date; });
+    std::stable_sort(list.begin(), list.end(),
+                     [](const FleetEntry* a, const FleetEntry* b) { return a->date < b->date; });
     for (std::size_t i = 1; i < list.size(); ++i) {
       if (list[i - 1]->date.empty() || list[i]->date == list[i - 1]->date)
-        throw InputError(list[i]->source, "date",
-                         "sensor '" + sensor + "' has two calibrations " +
-                             (list[i - 1]->date.empty() ? "and one without a date" : "dated " + list[i]->date) + " (also " +
-                             list[i - 1]->source + ")",
-                         "give each calibration of a sensor its own date (a manifest: sensor,date,model)");
+        throw InputError(
+            list[i]->source, "date",
+            "sensor '" + sensor + "' has two calibrations " +
+                (list[i - 1]->date.empty() ? "and one without a date" : "dated " + list[i]->date) +
+                " (also " + list[i - 1]->source + ")",
+            "give each calibration of a sensor its own date (a manifest: sensor,date,model)");
     }
   }
   return out;
@@ -177,7 +190,8 @@ void FleetConfig::validate() const {
   for (std::size_t i = 0; i < distances_m.size(); ++i)
     if (!(distances_m[i] > 0.0) || (i > 0 && !(distances_m[i] > distances_m[i - 1])))
       throw std::invalid_argument("FleetConfig: distances must be positive and increasing");
-  if (!(alpha > 0.0 && alpha < 1.0)) throw std::invalid_argument("FleetConfig: alpha must lie in (0, 1)");
+  if (!(alpha > 0.0 && alpha < 1.0))
+    throw std::invalid_argument("FleetConfig: alpha must lie in (0, 1)");
   if (min_fleet < 2) throw std::invalid_argument("FleetConfig: min_fleet must be at least 2");
 }
 
@@ -215,7 +229,8 @@ FleetSummary summarizeFleet(const std::vector<FleetEntry>& entries, const FleetC
     }
     s.rows.push_back(std::move(row));
   }
-  for (std::size_t i = 0; i < s.rows.size(); ++i) s.rows[i].outlier = outlierTest(s.rows, i, config);
+  for (std::size_t i = 0; i < s.rows.size(); ++i)
+    s.rows[i].outlier = outlierTest(s.rows, i, config);
   std::vector<FleetTest*> moved, outliers;
   for (FleetRow& r : s.rows) {
     moved.push_back(&r.moved);

@@ -16,7 +16,8 @@
 //     var(m) = (pi / 2) s^2 / n the median's; two-sided p from Student's t with n - 1 degrees
 //     of freedom (the scale is estimated from n sensors), Bonferroni over the sensor's distances.
 //   False alarms over the fleet: each family of tests (moved, outlier) is adjusted by Holm's
-//     step-down method, so the chance of flagging any unchanged sensor is at most `alpha` per family.
+//     step-down method, so the chance of flagging any unchanged sensor is at most `alpha` per
+//     family.
 
 #include <cstddef>
 #include <optional>
@@ -28,18 +29,22 @@
 namespace lidarcal::pipeline {
 
 struct FleetConfig {
-  std::vector<double> distances_m = {1.0, 2.0, 3.0};  ///< where the bias is read and compared, metres (> 0, increasing)
-  /// Family-wise false-alarm rate of each family of tests (moved, outlier), Holm-adjusted. 0.01: one
-  /// false alarm in about a hundred weekly fleet checks.
+  /// where the bias is read and compared, metres (> 0, increasing)
+  std::vector<double> distances_m = {1.0, 2.0, 3.0};
+  /// Family-wise false-alarm rate of each family of tests (moved, outlier), Holm-adjusted. 0.01:
+  /// one false alarm in about a hundred weekly fleet checks.
   double alpha = 0.01;
-  std::size_t min_fleet = 5;  ///< fewest other sensors with the distance in range for a fleet comparison
-  void validate() const;      ///< throws std::invalid_argument
+  /// fewest other sensors with the distance in range for a fleet comparison
+  std::size_t min_fleet = 5;
+  void validate() const;  ///< throws std::invalid_argument
 };
 
 /// One calibration of one sensor.
 struct FleetEntry {
-  std::string sensor;      ///< the sensor's name (unique in the fleet)
-  std::string date;        ///< when it was calibrated, ISO 8601 (orders a sensor's calibrations; may be empty when it has one)
+  std::string sensor;  ///< the sensor's name (unique in the fleet)
+  /// when it was calibrated, ISO 8601 (orders a sensor's calibrations; may be empty when it has
+  /// one)
+  std::string date;
   std::string source;      ///< where the model was read from (for the report)
   CalibrationModel model;  ///< the calibrated model
 };
@@ -49,41 +54,45 @@ struct BiasAt {
   double distance_m = 0.0;  ///< d, metres
   double bias_m = 0.0;      ///< b(d) = f(d) - d, metres
   double se_m = 0.0;        ///< its standard error, metres (NaN without a covariance)
-  bool inside = false;      ///< d lies in the model's fitted range (else the bias is an extrapolation and not compared)
-  double noise_m = 0.0;     ///< the noise law's standard deviation at d, metres
+  /// d lies in the model's fitted range (else the bias is an extrapolation and not compared)
+  bool inside = false;
+  double noise_m = 0.0;  ///< the noise law's standard deviation at d, metres
 };
 
 /// One test of a sensor (against its previous calibration or against the fleet).
 struct FleetTest {
-  bool tested = false;               ///< the test could be made
-  std::string why_not;               ///< when not: why (no previous calibration, no covariance, ...)
-  std::vector<double> distances_m;   ///< the distances compared
-  std::vector<double> difference_m;  ///< sensor minus reference (previous calibration, or fleet median) at each
-  std::vector<double> z;             ///< outlier test: each distance's standardised difference
-  double statistic = 0.0;            ///< moved: Wald's W; outlier: the largest |z|
-  int dof = 0;                       ///< moved: degrees of freedom of W; outlier: of the t distribution
-  double p = 1.0;                    ///< p-value of the sensor's test (outlier: Bonferroni over its distances)
-  double p_holm = 1.0;               ///< Holm-adjusted over the family's sensors
-  bool flagged = false;              ///< p_holm < alpha
+  bool tested = false;              ///< the test could be made
+  std::string why_not;              ///< when not: why (no previous calibration, no covariance, ...)
+  std::vector<double> distances_m;  ///< the distances compared
+  /// sensor minus reference (previous calibration, or fleet median) at each
+  std::vector<double> difference_m;
+  std::vector<double> z;   ///< outlier test: each distance's standardised difference
+  double statistic = 0.0;  ///< moved: Wald's W; outlier: the largest |z|
+  int dof = 0;             ///< moved: degrees of freedom of W; outlier: of the t distribution
+  double p = 1.0;        ///< p-value of the sensor's test (outlier: Bonferroni over its distances)
+  double p_holm = 1.0;   ///< Holm-adjusted over the family's sensors
+  bool flagged = false;  ///< p_holm < alpha
 };
 
 /// A sensor's row: its latest calibration and how it compares.
 struct FleetRow {
-  FleetEntry current;              ///< the latest calibration
-  std::vector<BiasAt> bias;        ///< at each configured distance
+  FleetEntry current;                  ///< the latest calibration
+  std::vector<BiasAt> bias;            ///< at each configured distance
   std::optional<FleetEntry> previous;  ///< the calibration before, when there is one
   std::vector<BiasAt> previous_bias;   ///< its bias at each distance (empty when none)
-  FleetTest moved;                 ///< against the previous calibration
-  FleetTest outlier;               ///< against the other sensors' current calibrations
+  FleetTest moved;                     ///< against the previous calibration
+  FleetTest outlier;                   ///< against the other sensors' current calibrations
 };
 
 struct FleetSummary {
-  FleetConfig config;                  ///< the settings used
-  std::vector<FleetRow> rows;          ///< one per sensor, in order of the sensor names
-  std::vector<double> median_bias_m;   ///< fleet median of the current biases at each distance (NaN: too few sensors)
-  std::vector<double> robust_sd_m;     ///< 1.4826 MAD of them
-  std::vector<std::size_t> sensors_at; ///< current calibrations with each distance in their fitted range
-  std::vector<std::string> flagged;    ///< sensors flagged moved or outlier, in row order
+  FleetConfig config;          ///< the settings used
+  std::vector<FleetRow> rows;  ///< one per sensor, in order of the sensor names
+  /// fleet median of the current biases at each distance (NaN: too few sensors)
+  std::vector<double> median_bias_m;
+  std::vector<double> robust_sd_m;  ///< 1.4826 MAD of them
+  /// current calibrations with each distance in their fitted range
+  std::vector<std::size_t> sensors_at;
+  std::vector<std::string> flagged;  ///< sensors flagged moved or outlier, in row order
 };
 
 /// Summarises the calibrations. Throws InputError naming the sources when a sensor has two

@@ -13,7 +13,9 @@
 namespace lidarcal::pipeline {
 namespace {
 
-nlohmann::json number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
+nlohmann::json number(double v) {
+  return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr);
+}
 
 nlohmann::json numbers(const std::vector<double>& v) {
   nlohmann::json a = nlohmann::json::array();
@@ -24,8 +26,11 @@ nlohmann::json numbers(const std::vector<double>& v) {
 nlohmann::json biasJson(const std::vector<BiasAt>& bias) {
   nlohmann::json a = nlohmann::json::array();
   for (const BiasAt& b : bias)
-    a.push_back({{"distance_m", b.distance_m}, {"bias_m", number(b.bias_m)}, {"se_m", number(b.se_m)},
-                 {"inside_fitted_range", b.inside}, {"noise_sigma_m", number(b.noise_m)}});
+    a.push_back({{"distance_m", b.distance_m},
+                 {"bias_m", number(b.bias_m)},
+                 {"se_m", number(b.se_m)},
+                 {"inside_fitted_range", b.inside},
+                 {"noise_sigma_m", number(b.noise_m)}});
   return a;
 }
 
@@ -48,12 +53,21 @@ nlohmann::json testJson(const FleetTest& t) {
 
 nlohmann::json sensorJson(const FleetRow& r) {
   const CalibrationModel& m = r.current.model;
-  nlohmann::json j = {{"sensor", r.current.sensor}, {"date", r.current.date}, {"model", r.current.source},
-                      {"method", m.method}, {"order", m.model.bias.order()}, {"alpha", m.model.bias.alpha},
-                      {"status", toString(m.status.code)}, {"message", m.status.message},
-                      {"warnings", m.warnings}, {"bias", biasJson(r.bias)}};
-  j["fitted_range_m"] = m.fitted_range_m ? nlohmann::json{m.fitted_range_m->first, m.fitted_range_m->second} : nlohmann::json(nullptr);
-  j["previous"] = r.previous ? nlohmann::json{{"date", r.previous->date}, {"model", r.previous->source},
+  nlohmann::json j = {{"sensor", r.current.sensor},
+                      {"date", r.current.date},
+                      {"model", r.current.source},
+                      {"method", m.method},
+                      {"order", m.model.bias.order()},
+                      {"alpha", m.model.bias.alpha},
+                      {"status", toString(m.status.code)},
+                      {"message", m.status.message},
+                      {"warnings", m.warnings},
+                      {"bias", biasJson(r.bias)}};
+  j["fitted_range_m"] = m.fitted_range_m
+                            ? nlohmann::json{m.fitted_range_m->first, m.fitted_range_m->second}
+                            : nlohmann::json(nullptr);
+  j["previous"] = r.previous ? nlohmann::json{{"date", r.previous->date},
+                                              {"model", r.previous->source},
                                               {"bias", biasJson(r.previous_bias)}}
                              : nlohmann::json(nullptr);
   j["moved"] = testJson(r.moved);
@@ -87,13 +101,17 @@ std::string pValue(double p) { return p < 1e-4 ? "< 0.0001" : decimals(p, 4); }
 
 std::string testCell(const FleetTest& t, const std::string& size) {
   if (!t.tested) return "not tested";
-  return std::string(t.flagged ? "**" : "") + size + ", p_Holm " + pValue(t.p_holm) + (t.flagged ? "**" : "");
+  return std::string(t.flagged ? "**" : "") + size + ", p_Holm " + pValue(t.p_holm) +
+         (t.flagged ? "**" : "");
 }
 
 std::string tableRow(const FleetRow& r) {
   const CalibrationModel& m = r.current.model;
-  std::string row = "| " + r.current.sensor + " | " + (r.current.date.empty() ? "-" : r.current.date) + " |";
-  for (const BiasAt& b : r.bias) row += " " + mm(b.bias_m) + " ± " + decimals(1000.0 * b.se_m, 1) + (b.inside ? "" : " (outside)") + " |";
+  std::string row =
+      "| " + r.current.sensor + " | " + (r.current.date.empty() ? "-" : r.current.date) + " |";
+  for (const BiasAt& b : r.bias)
+    row += " " + mm(b.bias_m) + " ± " + decimals(1000.0 * b.se_m, 1) +
+           (b.inside ? "" : " (outside)") + " |";
   const BiasAt& middle = r.bias[r.bias.size() / 2];
   row += " " + decimals(1000.0 * middle.noise_m, 1) + " |";
   double largest = 0.0;
@@ -104,7 +122,9 @@ std::string tableRow(const FleetRow& r) {
   if (r.outlier.flagged) flags += std::string(flags.empty() ? "" : ", ") + "outlier";
   row += " " + (flags.empty() ? std::string("-") : "**" + flags + "**") + " |";
   const std::string status = toString(m.status.code);
-  row += " " + status + (m.warnings.empty() ? "" : ", " + std::to_string(m.warnings.size()) + " warning(s)") + " |";
+  row += " " + status +
+         (m.warnings.empty() ? "" : ", " + std::to_string(m.warnings.size()) + " warning(s)") +
+         " |";
   return row + "\n";
 }
 
@@ -141,25 +161,34 @@ class FleetPlot {
     data_ += "EOD\n";
     const bool named = titles_.insert(title).second;
     const std::string key = named ? "title " + gnuplotString(title) : "notitle";
-    left_ += (left_.empty() ? "plot " : ", \\\n     ") + name + " using 1:2 with lines " + style + " " + key;
-    right_ += (right_.empty() ? "plot " : ", \\\n     ") + name + " using 1:3 with lines " + style + " notitle";
+    left_ += (left_.empty() ? "plot " : ", \\\n     ") + name + " using 1:2 with lines " + style +
+             " " + key;
+    right_ += (right_.empty() ? "plot " : ", \\\n     ") + name + " using 1:3 with lines " + style +
+              " notitle";
   }
 
   std::string script(const std::string& plot_file) const {
-    std::string gp = "set terminal svg size 1400,600 font \"DejaVu Sans,11\" background rgb \"white\"\nset output " +
-                     gnuplotString(plot_file) + "\nset datafile missing \"-\"\nset grid\nset key top left noenhanced\n" +
-                     "set xlabel \"true distance d (m)\"\n" + data_ + "$median << EOD\n";
+    std::string gp =
+        "set terminal svg size 1400,600 font \"DejaVu Sans,11\" background rgb \"white\"\nset "
+        "output " +
+        gnuplotString(plot_file) +
+        "\nset datafile missing \"-\"\nset grid\nset key top left noenhanced\n" +
+        "set xlabel \"true distance d (m)\"\n" + data_ + "$median << EOD\n";
     for (std::size_t j = 0; j < summary_.config.distances_m.size(); ++j)
-      gp += general(summary_.config.distances_m[j]) + " " + general(1000.0 * summary_.median_bias_m[j]) + " " +
+      gp += general(summary_.config.distances_m[j]) + " " +
+            general(1000.0 * summary_.median_bias_m[j]) + " " +
             general(1000.0 * summary_.robust_sd_m[j]) + "\n";
     gp += "EOD\nset multiplot layout 1,2 title \"" + std::to_string(summary_.rows.size()) +
           " sensors, latest calibrations, each over its fitted range\"\n";
-    const std::string median_series = "$median using 1:2:3 with yerrorbars pt 7 ps 1 lc rgb \"black\" "
-                                      "title \"fleet median ± robust spread\"";
-    gp += "set title \"bias\"\nset ylabel \"bias f(d) - d (mm)\"\n" + left_ + (left_.empty() ? "plot " : ", \\\n     ") +
-          median_series + "\n";
-    gp += "set title \"difference from the fleet's median curve\"\nset ylabel \"bias - fleet median (mm)\"\n" +
-          (right_.empty() ? std::string("plot 0 notitle") : right_) + "\nunset multiplot\n";
+    const std::string median_series =
+        "$median using 1:2:3 with yerrorbars pt 7 ps 1 lc rgb \"black\" "
+        "title \"fleet median ± robust spread\"";
+    gp += "set title \"bias\"\nset ylabel \"bias f(d) - d (mm)\"\n" + left_ +
+          (left_.empty() ? "plot " : ", \\\n     ") + median_series + "\n";
+    gp +=
+        "set title \"difference from the fleet's median curve\"\nset ylabel \"bias - fleet median "
+        "(mm)\"\n" +
+        (right_.empty() ? std::string("plot 0 notitle") : right_) + "\nunset multiplot\n";
     return gp;
   }
 
@@ -185,10 +214,14 @@ class FleetPlot {
 nlohmann::json fleetJson(const FleetSummary& s) {
   nlohmann::json j;
   j["format"] = "lidarcal-fleet/1";
-  j["settings"] = {{"distances_m", s.config.distances_m}, {"alpha", s.config.alpha}, {"multiple_testing", "holm"},
+  j["settings"] = {{"distances_m", s.config.distances_m},
+                   {"alpha", s.config.alpha},
+                   {"multiple_testing", "holm"},
                    {"min_fleet", s.config.min_fleet}};
-  j["fleet"] = {{"sensors", s.rows.size()}, {"median_bias_m", numbers(s.median_bias_m)},
-                {"robust_sd_m", numbers(s.robust_sd_m)}, {"sensors_at_distance", s.sensors_at}};
+  j["fleet"] = {{"sensors", s.rows.size()},
+                {"median_bias_m", numbers(s.median_bias_m)},
+                {"robust_sd_m", numbers(s.robust_sd_m)},
+                {"sensors_at_distance", s.sensors_at}};
   j["sensors"] = nlohmann::json::array();
   for (const FleetRow& r : s.rows) j["sensors"].push_back(sensorJson(r));
   j["flagged"] = s.flagged;
@@ -197,8 +230,10 @@ nlohmann::json fleetJson(const FleetSummary& s) {
 
 std::string fleetMarkdown(const FleetSummary& s, const std::string& plot_file) {
   std::string md = "# Fleet report\n\n" + std::to_string(s.rows.size()) + " sensors; ";
-  md += s.flagged.empty() ? "none flagged.\n\n" : "flagged: **" + std::to_string(s.flagged.size()) + "**:";
-  for (std::size_t i = 0; i < s.flagged.size(); ++i) md += std::string(i ? ", " : " ") + s.flagged[i];
+  md += s.flagged.empty() ? "none flagged.\n\n"
+                          : "flagged: **" + std::to_string(s.flagged.size()) + "**:";
+  for (std::size_t i = 0; i < s.flagged.size(); ++i)
+    md += std::string(i ? ", " : " ") + s.flagged[i];
   if (!s.flagged.empty()) md += ".\n\n";
   if (!plot_file.empty()) md += "![every sensor's bias against distance](" + plot_file + ")\n\n";
   md += "| sensor | date |";
@@ -210,39 +245,54 @@ std::string fleetMarkdown(const FleetSummary& s, const std::string& plot_file) {
   for (const FleetRow& r : s.rows) md += tableRow(r);
   md += "\nFleet median bias (robust spread, sensors):";
   for (std::size_t j = 0; j < s.config.distances_m.size(); ++j)
-    md += std::string(j ? ";" : "") + " " + general(s.config.distances_m[j]) + " m: " + mm(s.median_bias_m[j]) + " mm (" +
-          decimals(1000.0 * s.robust_sd_m[j], 1) + " mm, " + std::to_string(s.sensors_at[j]) + ")";
+    md += std::string(j ? ";" : "") + " " + general(s.config.distances_m[j]) +
+          " m: " + mm(s.median_bias_m[j]) + " mm (" + decimals(1000.0 * s.robust_sd_m[j], 1) +
+          " mm, " + std::to_string(s.sensors_at[j]) + ")";
   md += ".\n\n";
   std::string warnings;
   for (const FleetRow& r : s.rows) {
-    for (const std::string& w : r.current.model.warnings) warnings += "- " + r.current.sensor + ": " + w + "\n";
-    if (!r.current.model.status.ok()) warnings += "- " + r.current.sensor + ": " + r.current.model.status.message + "\n";
+    for (const std::string& w : r.current.model.warnings)
+      warnings += "- " + r.current.sensor + ": " + w + "\n";
+    if (!r.current.model.status.ok())
+      warnings += "- " + r.current.sensor + ": " + r.current.model.status.message + "\n";
   }
   if (!warnings.empty()) md += "## Warnings\n\n" + warnings + "\n";
-  md += "## How to read it\n\n"
-        "Bias is f(d) − d, the reading's error at true distance d, with its standard error from the model's "
-        "covariance; `(outside)` marks a distance beyond the calibration's fitted range (not compared). "
-        "**Against its previous calibration**: Wald's test of the change in bias over the distances inside both "
-        "fitted ranges, with both calibrations' covariances (chi-square). **Against the fleet**: at each distance the "
-        "sensor's bias against the median of the other sensors, scaled by their robust spread (MAD) beyond their own "
-        "estimation noise plus the sensor's own standard error (Student's t), Bonferroni over the distances. Each "
-        "family of tests is Holm-adjusted over the sensors: a sensor is flagged when its adjusted p-value is below " +
-        general(s.config.alpha) + ", so the chance that any unchanged sensor is flagged is at most " +
-        general(s.config.alpha) + " per family.\n";
+  md +=
+      "## How to read it\n\n"
+      "Bias is f(d) − d, the reading's error at true distance d, with its standard error from the "
+      "model's "
+      "covariance; `(outside)` marks a distance beyond the calibration's fitted range (not "
+      "compared). "
+      "**Against its previous calibration**: Wald's test of the change in bias over the distances "
+      "inside both "
+      "fitted ranges, with both calibrations' covariances (chi-square). **Against the fleet**: at "
+      "each distance the "
+      "sensor's bias against the median of the other sensors, scaled by their robust spread (MAD) "
+      "beyond their own "
+      "estimation noise plus the sensor's own standard error (Student's t), Bonferroni over the "
+      "distances. Each "
+      "family of tests is Holm-adjusted over the sensors: a sensor is flagged when its adjusted "
+      "p-value is below " +
+      general(s.config.alpha) + ", so the chance that any unchanged sensor is flagged is at most " +
+      general(s.config.alpha) + " per family.\n";
   return md;
 }
 
 std::string fleetGnuplot(const FleetSummary& s, const std::string& plot_file) {
   FleetPlot plot(s);
   for (const FleetRow& r : s.rows)
-    if (!(r.moved.flagged || r.outlier.flagged)) plot.add(r.current.model, "lw 1 lc rgb \"#b0b0b0\"", "sensors not flagged");
-  static const char* kColours[] = {"#d95f02", "#7570b3", "#e7298a", "#66a61e", "#e6ab02", "#a6761d", "#1b9e77"};
+    if (!(r.moved.flagged || r.outlier.flagged))
+      plot.add(r.current.model, "lw 1 lc rgb \"#b0b0b0\"", "sensors not flagged");
+  static const char* kColours[] = {"#d95f02", "#7570b3", "#e7298a", "#66a61e",
+                                   "#e6ab02", "#a6761d", "#1b9e77"};
   std::size_t flagged = 0;
   for (const FleetRow& r : s.rows) {
     if (!(r.moved.flagged || r.outlier.flagged)) continue;
     const std::string colour = std::string("lc rgb \"") + kColours[flagged++ % 7] + "\"";
     plot.add(r.current.model, "lw 3 " + colour, r.current.sensor + " " + r.current.date);
-    if (r.previous) plot.add(r.previous->model, "lw 2 dt 2 " + colour, r.current.sensor + " " + r.previous->date + " (previous)");
+    if (r.previous)
+      plot.add(r.previous->model, "lw 2 dt 2 " + colour,
+               r.current.sensor + " " + r.previous->date + " (previous)");
   }
   return plot.script(plot_file);
 }

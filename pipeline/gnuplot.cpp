@@ -11,7 +11,8 @@ bool runGnuplot(const std::filesystem::path& dir, const std::string& script, std
     if (why) *why = "gnuplot is not installed (apt-get install gnuplot-nox); plots skipped";
     return false;
   }
-  const std::string cmd = "cd '" + dir.string() + "' && gnuplot '" + script + "' >/dev/null 2>gnuplot.log";
+  const std::string cmd =
+      "cd '" + dir.string() + "' && gnuplot '" + script + "' >/dev/null 2>gnuplot.log";
   if (std::system(cmd.c_str()) != 0) {
     if (why) *why = "gnuplot failed, see " + (dir / "gnuplot.log").string();
     return false;
@@ -26,8 +27,10 @@ std::string gnuplotString(const std::string& text, bool enhanced) {
   // resulting `\_` as a literal `_`.
   std::string out = "\"";
   for (char c : text) {
-    if (c == '"' || c == '\\') out += '\\';
-    else if (enhanced && std::string_view("_^{}@&~").find(c) != std::string_view::npos) out += "\\\\";
+    if (c == '"' || c == '\\')
+      out += '\\';
+    else if (enhanced && std::string_view("_^{}@&~").find(c) != std::string_view::npos)
+      out += "\\\\";
     out += c;
   }
   return out + "\"";

@@ -9,7 +9,8 @@
 namespace lidarcal::pipeline {
 
 /// Runs `gnuplot script` in `dir`. Returns false (with a reason) when gnuplot is missing or fails.
-bool runGnuplot(const std::filesystem::path& dir, const std::string& script, std::string* why = nullptr);
+bool runGnuplot(const std::filesystem::path& dir, const std::string& script,
+                std::string* why = nullptr);
 
 /// `text` as a double-quoted gnuplot string that shows as written. `enhanced`: the terminal uses
 /// enhanced text mode, so its markup characters (_ ^ { } @ & ~) are escaped too (a file name

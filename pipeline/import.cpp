@@ -19,16 +19,22 @@ ImportFormat parseImportFormat(const std::string& name) {
   if (name == "carmen") return ImportFormat::carmen;
   if (name == "ydlidar") return ImportFormat::ydlidar;
   if (name == "csv") return ImportFormat::csv;
-  throw InputError("", "--from", "unknown input format '" + name + "'", "use rosbag1, rosbag2, carmen, ydlidar or csv");
+  throw InputError("", "--from", "unknown input format '" + name + "'",
+                   "use rosbag1, rosbag2, carmen, ydlidar or csv");
 }
 
 const char* toString(ImportFormat format) {
   switch (format) {
-    case ImportFormat::rosbag1: return "rosbag1";
-    case ImportFormat::rosbag2: return "rosbag2";
-    case ImportFormat::carmen: return "carmen";
-    case ImportFormat::ydlidar: return "ydlidar";
-    case ImportFormat::csv: return "csv";
+    case ImportFormat::rosbag1:
+      return "rosbag1";
+    case ImportFormat::rosbag2:
+      return "rosbag2";
+    case ImportFormat::carmen:
+      return "carmen";
+    case ImportFormat::ydlidar:
+      return "ydlidar";
+    case ImportFormat::csv:
+      return "csv";
   }
   return "?";
 }
@@ -36,7 +42,8 @@ const char* toString(ImportFormat format) {
 namespace {
 
 /// Reads one recording into the writer's callback.
-io::ImportReport readOne(const ImportSettings& s, const std::filesystem::path& input, const io::ScanCallback& on_scan) {
+io::ImportReport readOne(const ImportSettings& s, const std::filesystem::path& input,
+                         const io::ScanCallback& on_scan) {
   const double inf = std::numeric_limits<double>::infinity();
   switch (s.format) {
     case ImportFormat::rosbag1:
@@ -46,7 +53,8 @@ io::ImportReport readOne(const ImportSettings& s, const std::filesystem::path& i
       c.range_min_m = s.range_min_m;
       c.range_max_m = s.range_max_m;
       c.pose = s.bag_pose;
-      return s.format == ImportFormat::rosbag1 ? io::readRosbag(input, c, on_scan) : io::readRosbag2(input, c, on_scan);
+      return s.format == ImportFormat::rosbag1 ? io::readRosbag(input, c, on_scan)
+                                               : io::readRosbag2(input, c, on_scan);
     }
     case ImportFormat::carmen: {
       io::CarmenConfig c;
@@ -73,16 +81,21 @@ io::ImportReport readOne(const ImportSettings& s, const std::filesystem::path& i
 
 }  // namespace
 
-bool isBag(ImportFormat format) { return format == ImportFormat::rosbag1 || format == ImportFormat::rosbag2; }
+bool isBag(ImportFormat format) {
+  return format == ImportFormat::rosbag1 || format == ImportFormat::rosbag2;
+}
 
 std::vector<io::BagTopic> listTopics(ImportFormat format, const std::filesystem::path& bag) {
   if (format == ImportFormat::rosbag2) return io::listRosbag2Topics(bag);
   if (format == ImportFormat::rosbag1) return io::listBagTopics(bag);
-  throw InputError("", "--list-topics", "applies to --from rosbag1 and rosbag2 only", "drop --list-topics");
+  throw InputError("", "--list-topics", "applies to --from rosbag1 and rosbag2 only",
+                   "drop --list-topics");
 }
 
-ImportResult importRecording(const ImportSettings& s, const std::function<void(double)>& on_progress) {
-  if (s.inputs.empty()) throw InputError("", "INPUT", "no recording given", "name one or more recordings to import");
+ImportResult importRecording(const ImportSettings& s,
+                             const std::function<void(double)>& on_progress) {
+  if (s.inputs.empty())
+    throw InputError("", "INPUT", "no recording given", "name one or more recordings to import");
   if (!isBag(s.format) && !s.topic.empty())
     throw InputError("", "--topic", "applies to --from rosbag1 and rosbag2 only", "drop --topic");
   for (const auto& input : s.inputs) {
@@ -106,7 +119,8 @@ ImportResult importRecording(const ImportSettings& s, const std::function<void(d
     result.read.stopped_early = read.stopped_early;
     if (result.read.sensor_name.empty()) result.read.sensor_name = read.sensor_name;
     for (const auto& note : read.notes)
-      if (std::find(result.read.notes.begin(), result.read.notes.end(), note) == result.read.notes.end())
+      if (std::find(result.read.notes.begin(), result.read.notes.end(), note) ==
+          result.read.notes.end())
         result.read.notes.push_back(note);
     if (!more) break;  // --max-scans reached
   }

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
-// `lidarcal import`: a recording (ROS1 bag, ROS 2 bag, CARMEN log, YDLIDAR X4 .dat, CSV) streamed scan by
-// scan into a PCD scan sequence. Composition of an io importer and io::SequenceWriter.
+// `lidarcal import`: a recording (ROS1 bag, ROS 2 bag, CARMEN log, YDLIDAR X4 .dat, CSV) streamed
+// scan by scan into a PCD scan sequence. Composition of an io importer and io::SequenceWriter.
 
 #include <filesystem>
 #include <functional>
@@ -23,30 +23,32 @@ ImportFormat parseImportFormat(const std::string& name);
 const char* toString(ImportFormat format);
 
 struct ImportSettings {
-  ImportFormat format = ImportFormat::csv;   ///< what the input is
-  std::vector<std::filesystem::path> inputs;  ///< the recordings (read only), imported one after the other
+  ImportFormat format = ImportFormat::csv;  ///< what the input is
+  /// the recordings (read only), imported one after the other
+  std::vector<std::filesystem::path> inputs;
   /// Each input begins a new stop, even where the poses of consecutive inputs are equal
   /// (recordings taken apart at one pose; sequence.json `stop_starts`). Default false.
   bool stop_per_input = false;
-  std::filesystem::path out;                 ///< the sequence directory to create
-  io::SequenceWriterConfig writer;           ///< --every, --max-scans, --overwrite, encoding
-  std::string topic;                         ///< rosbag1/rosbag2: LaserScan topic; empty = the only one
+  std::filesystem::path out;        ///< the sequence directory to create
+  io::SequenceWriterConfig writer;  ///< --every, --max-scans, --overwrite, encoding
+  std::string topic;                ///< rosbag1/rosbag2: LaserScan topic; empty = the only one
   io::CarmenPose carmen_pose = io::CarmenPose::corrected;  ///< carmen: pose written to VIEWPOINT
-  io::BagPoseConfig bag_pose;                ///< rosbag1/rosbag2: VIEWPOINT source (default: identity)
-  std::optional<double> range_min_m;         ///< overrides the format's lower range limit, metres
-  std::optional<double> range_max_m;         ///< overrides the format's upper range limit, metres
-  std::string sensor_name;                   ///< sensor_name for sequence.json; empty = what the input says
+  io::BagPoseConfig bag_pose;         ///< rosbag1/rosbag2: VIEWPOINT source (default: identity)
+  std::optional<double> range_min_m;  ///< overrides the format's lower range limit, metres
+  std::optional<double> range_max_m;  ///< overrides the format's upper range limit, metres
+  std::string sensor_name;  ///< sensor_name for sequence.json; empty = what the input says
 };
 
 struct ImportResult {
-  io::ImportReport read;               ///< what the importer read
-  io::SequenceWriteSummary written;    ///< what was written
+  io::ImportReport read;             ///< what the importer read
+  io::SequenceWriteSummary written;  ///< what was written
 };
 
 /// Imports settings.inputs into settings.out, in the order given. `on_progress` (optional)
-/// receives the fraction of the inputs read, 0..1 (each input an equal share). Nothing appears at settings.out unless the whole import succeeds.
-/// Throws InputError for bad input or options.
-ImportResult importRecording(const ImportSettings& settings, const std::function<void(double)>& on_progress = {});
+/// receives the fraction of the inputs read, 0..1 (each input an equal share). Nothing appears at
+/// settings.out unless the whole import succeeds. Throws InputError for bad input or options.
+ImportResult importRecording(const ImportSettings& settings,
+                             const std::function<void(double)>& on_progress = {});
 
 /// True for the bag formats (rosbag1, rosbag2): --topic, --list-topics and --pose odom:|tf: apply.
 bool isBag(ImportFormat format);

@@ -6,8 +6,8 @@
 #include <exception>
 #include <string>
 
-#include <CLI/CLI.hpp>
 #include <pcl/console/print.h>
+#include <CLI/CLI.hpp>
 
 #include "common/errors.hpp"
 #include "pipeline/commands.hpp"
@@ -54,14 +54,21 @@ int main(int argc, char** argv) {
   // PCL's readers print their own diagnostics; ours are clearer and name the file and field.
   pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);
 
-  CLI::App app{"lidarcal: calibrate cheap 2D lidars against fixed landmarks in unknown positions, without ground truth.\n"
-               "Formats: docs/FORMAT.md. Exit codes: 0 ok, 1 internal error, 2 bad input, 3 data cannot support the result."};
+  CLI::App app{
+      "lidarcal: calibrate cheap 2D lidars against fixed landmarks in unknown positions, without "
+      "ground truth.\n"
+      "Formats: docs/FORMAT.md. Exit codes: 0 ok, 1 internal error, 2 bad input, 3 data cannot "
+      "support the result."};
   app.set_version_flag("--version", LIDARCAL_VERSION);
-  app.footer("Method: Alhashimi et al. 2021, \"Calibrating Range Measurements of Lidars Using Fixed Landmarks in Unknown "
-             "Positions\" (Sensors); Alhashimi et al. 2016, \"Statistical Modeling and Calibration of Triangulation "
-             "Lidars\" (ICINCO); Sharma 2020, \"In-situ Sensor Calibration Using Noise Consistency\" (MSc thesis). "
-             "Equation numbers in "
-             "the help and the reports are those of these papers.");
+  app.footer(
+      "Method: Alhashimi et al. 2021, \"Calibrating Range Measurements of Lidars Using Fixed "
+      "Landmarks in Unknown "
+      "Positions\" (Sensors); Alhashimi et al. 2016, \"Statistical Modeling and Calibration of "
+      "Triangulation "
+      "Lidars\" (ICINCO); Sharma 2020, \"In-situ Sensor Calibration Using Noise Consistency\" (MSc "
+      "thesis). "
+      "Equation numbers in "
+      "the help and the reports are those of these papers.");
   bool quiet = false;
   app.add_flag("-q,--quiet", quiet, "No progress output on stderr");
   app.require_subcommand(1);
@@ -80,7 +87,9 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "lidarcal: error: %s\n", userPaths(e.what()).c_str());
     return 2;
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "lidarcal: internal error: %s\n(please report this with the command you ran)\n", e.what());
+    std::fprintf(stderr,
+                 "lidarcal: internal error: %s\n(please report this with the command you ran)\n",
+                 e.what());
     return 1;
   }
   return 0;

@@ -29,23 +29,28 @@ std::string list(const std::vector<double>& values) {
   return out + "]";
 }
 
-std::string quoted(const std::string& s) { return nlohmann::json(s).dump(); }  // a JSON string is a YAML string
+// a JSON string is a YAML string
+std::string quoted(const std::string& s) { return nlohmann::json(s).dump(); }
 
 }  // namespace
 
-std::pair<double, double> correctedReadings(const CalibrationModel& model, calibration::Outside outside,
+std::pair<double, double> correctedReadings(const CalibrationModel& model,
+                                            calibration::Outside outside,
                                             const std::string& model_file) {
   const calibration::CorrectionWindow w = calibration::correctionWindow(model, outside);
-  const bool beyond = outside == calibration::Outside::extrapolate || outside == calibration::Outside::linear;
+  const bool beyond =
+      outside == calibration::Outside::extrapolate || outside == calibration::Outside::linear;
   if (model.fitted_range_m && !beyond) return {w.reading_min_m, w.reading_max_m};
   const RangeModel& m = model.model;
   const bool limits_known = m.range_max_m < 1e9 && std::isfinite(m.range_min_m);
-  // The continuation corrects every reading; without the sensor's limits the table covers the fit's.
+  // The continuation corrects every reading; without the sensor's limits the table covers the
+  // fit's.
   if (!limits_known && model.fitted_range_m && outside == calibration::Outside::linear)
     return {w.reading_min_m, w.reading_max_m};
   if (!limits_known)
     throw DataError(model_file, "fitted_range / sensor.range_max_m",
-                    "the model records neither the range it was fitted over nor the sensor's range limits, so the "
+                    "the model records neither the range it was fitted over nor the sensor's range "
+                    "limits, so the "
                     "readings it corrects are unknown",
                     "calibrate again with this lidarcal (it records fitted_range)");
   return {m.range_min_m, m.range_max_m};
@@ -54,17 +59,22 @@ std::pair<double, double> correctedReadings(const CalibrationModel& model, calib
 std::string exportYaml(const CalibrationModel& model, const ExportConfig& config) {
   // The readings the fit itself covers; with `linear` the others are continued from its edges.
   const auto [y_lo, y_hi] = correctedReadings(
-      model, config.outside == calibration::Outside::linear ? calibration::Outside::keep : config.outside, config.source);
-  const auto [d_lo, d_hi] = model.fitted_range_m.value_or(std::pair<double, double>(model.model.range_min_m, model.model.range_max_m));
+      model,
+      config.outside == calibration::Outside::linear ? calibration::Outside::keep : config.outside,
+      config.source);
+  const auto [d_lo, d_hi] = model.fitted_range_m.value_or(
+      std::pair<double, double>(model.model.range_min_m, model.model.range_max_m));
   std::string y;
   y += "# lidarcal range model for a ROS driver (lidarcal export --format yaml; docs/FORMAT.md)\n";
   y += "# from " + config.source + "\n";
   y += "# A reading y (metres) in valid_reading_m is corrected to the distance d with f(d) = y,\n";
   y += "# f(d) = sum_i bias_alpha[i] * d^i; readings outside valid_reading_m: see `outside`\n";
-  y += "# (linear: d = d_edge + (y - f(d_edge)) / f'(d_edge) at the nearer edge of valid_range_m).\n";
+  y += "# (linear: d = d_edge + (y - f(d_edge)) / f'(d_edge) at the nearer edge of "
+       "valid_range_m).\n";
   y += "format: \"lidarcal-ros-params/1\"\n";
   y += "sensor_name: " + quoted(model.sensor_name) + "\n";
-  y += "beams: " + (model.beams ? std::to_string(*model.beams) : std::string("0")) + "  # 0: not recorded\n";
+  y += "beams: " + (model.beams ? std::to_string(*model.beams) : std::string("0")) +
+       "  # 0: not recorded\n";
   y += "bias_alpha: " + list(model.model.bias.alpha) + "  # alpha_i in m^(1-i)\n";
   y += "valid_range_m: " + list({d_lo, d_hi}) + "  # true distances the model was fitted over\n";
   y += "valid_reading_m: " + list({y_lo, y_hi}) + "  # readings corrected\n";
@@ -86,9 +96,11 @@ std::string exportLut(const CalibrationModel& model, const ExportConfig& config)
   const double rows = std::floor((hi - lo) / config.step_m) + 2.0;
   if (rows > 1e7)
     throw InputError("", "--step",
-                     "gives " + number(rows) + " rows over the readings " + number(lo) + "-" + number(hi) + " m (at most 10^7)",
+                     "gives " + number(rows) + " rows over the readings " + number(lo) + "-" +
+                         number(hi) + " m (at most 10^7)",
                      "use a larger step");
-  const calibration::ReadingCorrector correct = calibration::readingCorrector(model, config.inversion, config.outside);
+  const calibration::ReadingCorrector correct =
+      calibration::readingCorrector(model, config.inversion, config.outside);
   std::string out = "reading_m,range_m\n";
   out.reserve(static_cast<std::size_t>(rows) * 24);
   char text[64];

@@ -14,17 +14,19 @@
 namespace lidarcal::pipeline {
 
 struct ExportConfig {
-  calibration::InversionMethod inversion = calibration::InversionMethod::ls;  ///< ls (default) or ml, as `correct --inversion`
+  /// ls (default) or ml, as `correct --inversion`
+  calibration::InversionMethod inversion = calibration::InversionMethod::ls;
   calibration::Outside outside = calibration::kDefaultOutside;  ///< as `correct --outside`
-  double step_m = 0.001;            ///< lut: reading step, metres (> 0); default 1 mm
-  std::string source;               ///< model file named in the YAML comment
+  double step_m = 0.001;  ///< lut: reading step, metres (> 0); default 1 mm
+  std::string source;     ///< model file named in the YAML comment
 };
 
 /// Readings the model corrects, [first, second] metres: f over the fitted range with keep and
 /// drop; the sensor's range window with linear and extrapolate (linear without the sensor's
 /// limits: f over the fitted range), or for a model without fitted range. Throws DataError
 /// when the model gives neither (no fitted range and no finite range limits).
-std::pair<double, double> correctedReadings(const CalibrationModel& model, calibration::Outside outside,
+std::pair<double, double> correctedReadings(const CalibrationModel& model,
+                                            calibration::Outside outside,
                                             const std::string& model_file);
 
 /// The ROS parameter YAML (flat keys, to load under the driver's private namespace).

@@ -56,7 +56,8 @@ std::string modelSummary(const CalibrationModel& m);
 /// What happened to the returns beyond the fitted range, in a sentence (empty when there were
 /// none): how many, the share of all returns, their readings' span, and the policy. When most
 /// returns lie beyond, a second sentence starting "warning:" says so and what to record.
-std::string beyondFitText(const calibration::FilteringStats& stats, const CalibrationModel& m, calibration::Outside outside);
+std::string beyondFitText(const calibration::FilteringStats& stats, const CalibrationModel& m,
+                          calibration::Outside outside);
 
 /// The reference distances as matched: stop, target, measured (tape) distance, what the scans
 /// read there (mean over the scans, its standard error), the difference, and the readings used
@@ -73,7 +74,8 @@ std::string referenceTable(const std::vector<calibration::ReferenceMatch>& raw,
 /// with the model, and with the model's order fitted without the entry and the other spans
 /// between its walls; then the RMS of each column. Tape distances fitted beside the spans are
 /// rows too.
-std::string spanTable(const calibration::SpanReadings& found, const std::vector<calibration::SpanCheck>& checks);
+std::string spanTable(const calibration::SpanReadings& found,
+                      const std::vector<calibration::SpanCheck>& checks);
 
 /// The spans as measured on the scans (sum of the two walls' line distances, mean over the
 /// scans), raw and, with `corrected`, on the corrected scans (Markdown table with the RMS).

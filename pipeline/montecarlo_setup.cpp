@@ -20,7 +20,8 @@ std::vector<studies::Figure> figuresOf(const std::string& name) {
   if (name == "all") return studies::allFigures();
   studies::Figure f;
   if (!studies::parseFigure(name, f))
-    throw InputError("", "--study", "unknown study '" + name + "'", "use fig7, fig8, fig9, fig10, fig11 or all");
+    throw InputError("", "--study", "unknown study '" + name + "'",
+                     "use fig7, fig8, fig9, fig10, fig11 or all");
   return {f};
 }
 
@@ -30,11 +31,14 @@ studies::TrialConfig trialConfig(const MonteCarloOptions& o) {
     throw InputError("", "--level", "unknown level '" + o.level + "'", "use landmark or scan");
   const bool scan = config.level == studies::Level::scan;
   if (!studies::parseAngleNoise(o.angle_noise, config.angle_noise))
-    throw InputError("", "--angle-noise", "unknown model '" + o.angle_noise + "'", "use heading, beams or bearing");
+    throw InputError("", "--angle-noise", "unknown model '" + o.angle_noise + "'",
+                     "use heading, beams or bearing");
   if (!studies::parseNoiseLaw(o.noise_law, config.noise_law))
-    throw InputError("", "--noise-law", "unknown law '" + o.noise_law + "'", "use paper or squared");
+    throw InputError("", "--noise-law", "unknown law '" + o.noise_law + "'",
+                     "use paper or squared");
   if (scan && config.angle_noise != studies::AngleNoise::heading)
-    throw InputError("", "--angle-noise", "the scan level models the angle noise as heading noise only",
+    throw InputError("", "--angle-noise",
+                     "the scan level models the angle noise as heading noise only",
                      "drop --angle-noise or use heading");
   config.path.scans_per_stop = o.scans_per_stop;
   config.path.stops = o.stops;
@@ -56,14 +60,17 @@ studies::TrialConfig trialConfig(const MonteCarloOptions& o) {
 /// nothing, rather than leave a partial picture behind (gnuplot stops at the first failing panel).
 std::string drawPlots(const std::filesystem::path& dir, const std::vector<std::string>& scripts) {
   if (std::system("command -v gnuplot >/dev/null 2>&1") != 0)
-    return "skipped, gnuplot is not installed (apt-get install gnuplot-nox); run gnuplot on the .gp files later";
+    return "skipped, gnuplot is not installed (apt-get install gnuplot-nox); run gnuplot on the "
+           ".gp files later";
   for (const auto& script : scripts) {
     std::string why;
     if (!runGnuplot(dir, script, &why)) {
-      std::ifstream in(dir / "gnuplot.log");  // gnuplot's own messages, kept by runGnuplot on failure
+      // gnuplot's own messages, kept by runGnuplot on failure
+      std::ifstream in(dir / "gnuplot.log");
       std::string log((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
       if (log.size() > 2000) log = log.substr(0, 2000) + "...";
-      throw std::runtime_error("montecarlo: gnuplot failed on " + script + ", nothing was written:\n" + log);
+      throw std::runtime_error("montecarlo: gnuplot failed on " + script +
+                               ", nothing was written:\n" + log);
     }
   }
   return "";
@@ -71,11 +78,13 @@ std::string drawPlots(const std::filesystem::path& dir, const std::vector<std::s
 
 template <class T>
 T field(const nlohmann::json& j, const char* key, const std::string& file) {
-  if (!j.contains(key)) throw InputError(file, key, "missing", "write the shard again with this lidarcal");
+  if (!j.contains(key))
+    throw InputError(file, key, "missing", "write the shard again with this lidarcal");
   try {
     return j.at(key).get<T>();
   } catch (const nlohmann::json::exception&) {
-    throw InputError(file, key, "has the wrong type: " + j.at(key).dump(), "write the shard again with this lidarcal");
+    throw InputError(file, key, "has the wrong type: " + j.at(key).dump(),
+                     "write the shard again with this lidarcal");
   }
 }
 
@@ -109,12 +118,17 @@ StudySetup studySetup(const MonteCarloOptions& o) {
   s.grids = o.quick ? studies::StudyGrids::quick() : studies::StudyGrids{};
   const bool scan = s.config.level == studies::Level::scan;
   // Defaults: the landmark level runs the paper's 1000 trials (100 with --quick), the joint
-  // refinement on the first 200 (10); the scan level 100 trials (10), the joint on the first 50 (5).
+  // refinement on the first 200 (10); the scan level 100 trials (10), the joint on the first 50
+  // (5).
   s.run.trials = o.trials ? o.trials : (scan ? (o.quick ? 10 : 100) : (o.quick ? 100 : 1000));
   s.run.joint_trials =
-      o.no_joint ? 0 : (o.joint_trials ? o.joint_trials : (scan ? (o.quick ? 5 : 50) : (o.quick ? 10 : 200)));
+      o.no_joint
+          ? 0
+          : (o.joint_trials ? o.joint_trials : (scan ? (o.quick ? 5 : 50) : (o.quick ? 10 : 200)));
   s.run.joint_trials = std::min(s.run.joint_trials, s.run.trials);
-  s.run.threads = o.threads > 0 ? o.threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  s.run.threads = o.threads > 0
+                      ? o.threads
+                      : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   s.run.seed = o.seed;
   return s;
 }
@@ -133,9 +147,12 @@ nlohmann::json studyIdentity(const MonteCarloOptions& o, const StudySetup& s) {
 
 MonteCarloOptions optionsFromIdentity(const nlohmann::json& j, const std::string& file) {
   MonteCarloOptions o;
-  forEachIdentityField(o, [&](const char* key, auto& value) { value = field<std::decay_t<decltype(value)>>(j, key, file); });
+  forEachIdentityField(o, [&](const char* key, auto& value) {
+    value = field<std::decay_t<decltype(value)>>(j, key, file);
+  });
   o.no_joint = o.joint_trials == 0;
-  if (o.trials == 0) throw InputError(file, "study.trials", "must be at least 1", "write the shard again");
+  if (o.trials == 0)
+    throw InputError(file, "study.trials", "must be at least 1", "write the shard again");
   return o;
 }
 

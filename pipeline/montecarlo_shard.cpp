@@ -16,16 +16,17 @@ namespace {
 
 constexpr const char* kShardFormat = "lidarcal-montecarlo-shard/1";
 constexpr const char* kSameStudy =
-    "merge the shards of one study: the same --study, --seed, --trials and options, and the same lidarcal";
+    "merge the shards of one study: the same --study, --seed, --trials and options, and the same "
+    "lidarcal";
 
 /// What shard.json says about one directory.
 struct ShardHeader {
-  fs::path dir;              ///< the shard directory
-  std::string file;          ///< its shard.json, for messages
-  std::size_t index = 0;     ///< 0-based slice
-  std::size_t count = 0;     ///< slices of the study
-  std::size_t trials = 0;    ///< records trials.csv must hold
-  nlohmann::json identity;   ///< the study's identity
+  fs::path dir;             ///< the shard directory
+  std::string file;         ///< its shard.json, for messages
+  std::size_t index = 0;    ///< 0-based slice
+  std::size_t count = 0;    ///< slices of the study
+  std::size_t trials = 0;   ///< records trials.csv must hold
+  nlohmann::json identity;  ///< the study's identity
 };
 
 std::string slice(std::size_t index, std::size_t count) {
@@ -46,7 +47,9 @@ ShardHeader readHeader(const fs::path& dir) {
     v.fail("format", "is '" + v.getString("format") + "', expected '" + kShardFormat + "'");
   h.count = static_cast<std::size_t>(v.getPositiveInt("shards"));
   const int k = v.getPositiveInt("shard");
-  if (static_cast<std::size_t>(k) > h.count) v.fail("shard", "is " + std::to_string(k) + ", beyond the " + std::to_string(h.count) + " shards");
+  if (static_cast<std::size_t>(k) > h.count)
+    v.fail("shard",
+           "is " + std::to_string(k) + ", beyond the " + std::to_string(h.count) + " shards");
   h.index = static_cast<std::size_t>(k - 1);
   const int m = v.getInt("trials_in_shard");
   if (m < 0) v.fail("trials_in_shard", "must not be negative");
@@ -60,8 +63,10 @@ ShardHeader readHeader(const fs::path& dir) {
 /// often first, then the others (a study of another figure also has another cell count; the
 /// message names the figure).
 std::string firstDifference(const nlohmann::json& a, const nlohmann::json& b) {
-  for (const char* key : {"lidarcal_version", "study", "seed", "trials", "joint_trials", "quick", "level"})
-    if (a.contains(key) != b.contains(key) || (a.contains(key) && a.at(key) != b.at(key))) return key;
+  for (const char* key :
+       {"lidarcal_version", "study", "seed", "trials", "joint_trials", "quick", "level"})
+    if (a.contains(key) != b.contains(key) || (a.contains(key) && a.at(key) != b.at(key)))
+      return key;
   for (const auto& [key, value] : a.items())
     if (!b.contains(key) || b.at(key) != value) return key;
   for (const auto& [key, value] : b.items())
@@ -69,7 +74,9 @@ std::string firstDifference(const nlohmann::json& a, const nlohmann::json& b) {
   return "";
 }
 
-std::string shown(const nlohmann::json& j, const std::string& key) { return j.contains(key) ? j.at(key).dump() : "(absent)"; }
+std::string shown(const nlohmann::json& j, const std::string& key) {
+  return j.contains(key) ? j.at(key).dump() : "(absent)";
+}
 
 /// Every shard of the study exactly once, all of one study; returns them ordered by slice.
 std::vector<ShardHeader> checkSlices(std::vector<ShardHeader> shards) {
@@ -77,16 +84,21 @@ std::vector<ShardHeader> checkSlices(std::vector<ShardHeader> shards) {
   for (const ShardHeader& h : shards) {
     if (const std::string key = firstDifference(h.identity, first.identity); !key.empty())
       throw InputError(h.file, "study." + key,
-                       "is " + shown(h.identity, key) + ", but " + first.file + " has " + shown(first.identity, key), kSameStudy);
+                       "is " + shown(h.identity, key) + ", but " + first.file + " has " +
+                           shown(first.identity, key),
+                       kSameStudy);
     if (h.count != first.count)
       throw InputError(h.file, "shards",
-                       "is " + std::to_string(h.count) + ", but " + first.file + " has " + std::to_string(first.count),
+                       "is " + std::to_string(h.count) + ", but " + first.file + " has " +
+                           std::to_string(first.count),
                        "merge the shards of one run, all cut with the same --shard K/N count");
   }
   std::vector<const ShardHeader*> by_slice(first.count, nullptr);
   for (const ShardHeader& h : shards) {
     if (by_slice[h.index])
-      throw InputError(h.file, "shard", "slice " + slice(h.index, h.count) + " is given twice (also " + by_slice[h.index]->file + ")",
+      throw InputError(h.file, "shard",
+                       "slice " + slice(h.index, h.count) + " is given twice (also " +
+                           by_slice[h.index]->file + ")",
                        "pass each shard directory once");
     by_slice[h.index] = &h;
   }
@@ -94,8 +106,9 @@ std::vector<ShardHeader> checkSlices(std::vector<ShardHeader> shards) {
   for (std::size_t k = 0; k < first.count; ++k)
     if (!by_slice[k]) missing += (missing.empty() ? "" : ", ") + slice(k, first.count);
   if (!missing.empty())
-    throw InputError("", "shards", "missing slice(s) " + missing + " of the study in " + first.file,
-                     "run `lidarcal montecarlo --shard K/N` for each and pass every shard directory");
+    throw InputError(
+        "", "shards", "missing slice(s) " + missing + " of the study in " + first.file,
+        "run `lidarcal montecarlo --shard K/N` for each and pass every shard directory");
   std::vector<ShardHeader> ordered;
   for (const ShardHeader* h : by_slice) ordered.push_back(*h);
   return ordered;
@@ -106,10 +119,13 @@ void readRecords(const ShardHeader& h, const std::vector<studies::TrialIndex>& e
                  std::vector<std::vector<studies::TrialResult>>& results) {
   const fs::path file = h.dir / "trials.csv";
   if (!fs::is_regular_file(file))
-    throw InputError(h.dir.string(), "trials.csv", "not found", "run the shard again: its directory is incomplete");
+    throw InputError(h.dir.string(), "trials.csv", "not found",
+                     "run the shard again: its directory is incomplete");
   if (expected.size() != h.trials)
-    throw InputError(h.file, "trials_in_shard", "is " + std::to_string(h.trials) + ", but slice " + slice(h.index, h.count) +
-                     " of this study has " + std::to_string(expected.size()) + " trials", "run the shard again");
+    throw InputError(h.file, "trials_in_shard",
+                     "is " + std::to_string(h.trials) + ", but slice " + slice(h.index, h.count) +
+                         " of this study has " + std::to_string(expected.size()) + " trials",
+                     "run the shard again");
   std::map<std::pair<std::size_t, std::size_t>, bool> pending;  // trial -> read yet
   for (const auto& t : expected) pending[{t.cell, t.trial}] = false;
   io::LineReader in(file);
@@ -128,15 +144,19 @@ void readRecords(const ShardHeader& h, const std::vector<studies::TrialIndex>& e
     if (it == pending.end() || it->second)
       throw InputError(file.string(), where,
                        "trial " + std::to_string(r.trial) + " of cell " + std::to_string(r.cell) +
-                           (it == pending.end() ? " is not in slice " + slice(h.index, h.count) : " appears twice"),
+                           (it == pending.end() ? " is not in slice " + slice(h.index, h.count)
+                                                : " appears twice"),
                        "run the shard again");
     it->second = true;
     results[r.cell][r.trial] = std::move(r.result);
     ++read;
   }
   if (read != expected.size())
-    throw InputError(file.string(), "records", "holds " + std::to_string(read) + " of the " + std::to_string(expected.size()) +
-                     " trials of slice " + slice(h.index, h.count), "run the shard again: the file is incomplete");
+    throw InputError(file.string(), "records",
+                     "holds " + std::to_string(read) + " of the " +
+                         std::to_string(expected.size()) + " trials of slice " +
+                         slice(h.index, h.count),
+                     "run the shard again: the file is incomplete");
 }
 
 }  // namespace
@@ -149,11 +169,13 @@ void parseShard(const std::string& text, studies::RunOptions& run) {
   const std::string n_text = slash == std::string::npos ? "" : text.substr(slash + 1);
   const unsigned long long k = std::strtoull(k_text.c_str(), &end_k, 10);
   const unsigned long long n = std::strtoull(n_text.c_str(), &end_n, 10);
-  const bool digits = !k_text.empty() && !n_text.empty() && k_text.find_first_not_of("0123456789") == std::string::npos &&
+  const bool digits = !k_text.empty() && !n_text.empty() &&
+                      k_text.find_first_not_of("0123456789") == std::string::npos &&
                       n_text.find_first_not_of("0123456789") == std::string::npos;
   if (!digits || *end_k != '\0' || *end_n != '\0' || k < 1 || n < 1 || k > n || n > 1000000)
     throw InputError("", "--shard", "'" + text + "' is not K/N with 1 <= K <= N",
-                     "e.g. --shard 3/8 for the third of eight slices (a Slurm array task: $((SLURM_ARRAY_TASK_ID + 1))/N)");
+                     "e.g. --shard 3/8 for the third of eight slices (a Slurm array task: "
+                     "$((SLURM_ARRAY_TASK_ID + 1))/N)");
   run.shard_index = static_cast<std::size_t>(k - 1);
   run.shard_count = static_cast<std::size_t>(n);
 }
@@ -174,7 +196,9 @@ void writeShard(const fs::path& dir, const nlohmann::json& identity, const studi
 }
 
 MergedStudy readShards(const std::vector<fs::path>& dirs) {
-  if (dirs.empty()) throw InputError("", "SHARD_DIR", "no shard directory given", "pass every shard directory of the study");
+  if (dirs.empty())
+    throw InputError("", "SHARD_DIR", "no shard directory given",
+                     "pass every shard directory of the study");
   std::vector<ShardHeader> shards;
   for (const fs::path& d : dirs) shards.push_back(readHeader(d));
   shards = checkSlices(std::move(shards));
@@ -183,9 +207,11 @@ MergedStudy readShards(const std::vector<fs::path>& dirs) {
   const StudySetup setup = studySetup(merged.options);
   const std::size_t cells = studies::studyCells(setup.figures, setup.grids).size();
   const nlohmann::json& identity = shards.front().identity;
-  if (!identity.contains("cells") || !identity.at("cells").is_number_unsigned() || identity.at("cells").get<std::size_t>() != cells)
+  if (!identity.contains("cells") || !identity.at("cells").is_number_unsigned() ||
+      identity.at("cells").get<std::size_t>() != cells)
     throw InputError(shards.front().file, "study.cells",
-                     "is " + shown(shards.front().identity, "cells") + ", but the study has " + std::to_string(cells) + " cells",
+                     "is " + shown(shards.front().identity, "cells") + ", but the study has " +
+                         std::to_string(cells) + " cells",
                      kSameStudy);
   merged.results.assign(cells, std::vector<studies::TrialResult>(setup.run.trials));
   for (const ShardHeader& h : shards) {

@@ -7,7 +7,8 @@
 //
 //   DIR/shard.json   {"format": "lidarcal-montecarlo-shard/1", "shard": K, "shards": N,
 //                     "trials_in_shard": M, "study": {the study's identity}}
-//   DIR/trials.csv   a comment line, then one record per trial of the slice (studies/trial_record.hpp)
+//   DIR/trials.csv   a comment line, then one record per trial of the slice
+//   (studies/trial_record.hpp)
 
 #include <filesystem>
 #include <string>
@@ -26,8 +27,9 @@ void parseShard(const std::string& text, studies::RunOptions& run);
 
 /// Writes shard.json and trials.csv of slice run.shard_index into `dir` (atomically each): the
 /// results of the trials `slice` lists (shardTrials), in that order.
-void writeShard(const std::filesystem::path& dir, const nlohmann::json& identity, const studies::RunOptions& run,
-                const std::vector<studies::TrialIndex>& slice, const studies::StudyRun& results);
+void writeShard(const std::filesystem::path& dir, const nlohmann::json& identity,
+                const studies::RunOptions& run, const std::vector<studies::TrialIndex>& slice,
+                const studies::StudyRun& results);
 
 /// A study put back together from its shards.
 struct MergedStudy {

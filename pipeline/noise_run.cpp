@@ -34,7 +34,8 @@ ParameterTraces parameterTraces(const NoiseRun& run, int sensors) {
       t.names.push_back("s" + std::to_string(s) + ".range_var_m2");
       t.names.push_back("s" + std::to_string(s) + ".bearing_var_rad2");
     }
-    for (const char* n : {"process.dx_m2", "process.dy_m2", "process.dtheta_rad2"}) t.names.push_back(n);
+    for (const char* n : {"process.dx_m2", "process.dy_m2", "process.dtheta_rad2"})
+      t.names.push_back(n);
     t.rows = run.ml->variance_trace;
   }
   return t;
@@ -75,24 +76,29 @@ NoiseRun runNoiseEstimation(const noise::NoiseProblem& problem, const NoiseRunOp
   const auto t0 = std::chrono::steady_clock::now();
   if (options.method == NoiseMethod::kl_hill) {
     const noise::KlHillConfig& config = options.kl;
-    const NoiseSetting initial = options.initial ? *options.initial : defaultInitialNoise(problem.sensors);
+    const NoiseSetting initial =
+        options.initial ? *options.initial : defaultInitialNoise(problem.sensors);
     const auto total = static_cast<std::size_t>(config.climb.max_evaluations);
-    run.kl = noise::estimateNoiseKlHill(problem, initial, config, options.seed, [&](int done, double) {
-      if (on_progress) on_progress(static_cast<std::size_t>(done), total);
-    });
+    run.kl =
+        noise::estimateNoiseKlHill(problem, initial, config, options.seed, [&](int done, double) {
+          if (on_progress) on_progress(static_cast<std::size_t>(done), total);
+        });
     run.noise = run.kl->noise;
     run.process_estimated = config.climb_process;
     for (const auto& rec : run.kl->climb.trace) run.objective_trace.push_back(rec.best_value);
     run.evaluations = run.kl->climb.evaluations;
     if (!run.kl->climb.converged) {
       run.status = "not_converged";
-      run.message = "stopped at the evaluation cap (" + std::to_string(config.climb.max_evaluations) + ")";
+      run.message =
+          "stopped at the evaluation cap (" + std::to_string(config.climb.max_evaluations) + ")";
     }
   } else {
     noise::MlNoiseConfig config = options.ml;
     if (options.initial) config.initial = *options.initial;
     run.ml = noise::estimateNoiseMl(problem, config);
-    if (on_progress) on_progress(static_cast<std::size_t>(run.ml->iterations), static_cast<std::size_t>(run.ml->iterations));
+    if (on_progress)
+      on_progress(static_cast<std::size_t>(run.ml->iterations),
+                  static_cast<std::size_t>(run.ml->iterations));
     run.noise = run.ml->noise;
     run.process_estimated = config.estimate_process;
     run.objective_trace = run.ml->objective_trace;
@@ -106,8 +112,11 @@ NoiseRun runNoiseEstimation(const noise::NoiseProblem& problem, const NoiseRunOp
   return run;
 }
 
-ojson noiseRunToJson(const NoiseRun& run, const noise::NoiseProblem& problem, const std::vector<int>& sensor_labels) {
-  auto label = [&](std::size_t s) { return s < sensor_labels.size() ? sensor_labels[s] : static_cast<int>(s); };
+ojson noiseRunToJson(const NoiseRun& run, const noise::NoiseProblem& problem,
+                     const std::vector<int>& sensor_labels) {
+  auto label = [&](std::size_t s) {
+    return s < sensor_labels.size() ? sensor_labels[s] : static_cast<int>(s);
+  };
   ojson j{{"format", "lidarcal-noise-result/1"},
           {"method", run.method == NoiseMethod::kl_hill ? "kl-hill" : "ml"}};
   if (run.method == NoiseMethod::kl_hill) {
@@ -214,13 +223,20 @@ std::string writeNoisePlots(const std::filesystem::path& dir, const NoiseRun& ru
   gp << "set xlabel " << gnuplotString(xlabel) << "\n";
   gp << "set output " << gnuplotString((dir / "objective.png").string()) << "\n";
   if (kl) {
-    gp << "set title " << gnuplotString(std::string("KL noise consistency (") + (run.faithful ? "published variant" : "our variant") + "), seed " + std::to_string(run.seed)) << "\n";
+    gp << "set title "
+       << gnuplotString(std::string("KL noise consistency (") +
+                        (run.faithful ? "published variant" : "our variant") + "), seed " +
+                        std::to_string(run.seed))
+       << "\n";
     gp << "set ylabel \"total KL divergence (nats)\"\nset logscale y\n";
-    gp << "plot " << gnuplotString((dir / "trace.dat").string()) << " using 1:2 with points pt 7 ps 0.4 lc rgb \"#999999\" title \"evaluated\", \\\n"
+    gp << "plot " << gnuplotString((dir / "trace.dat").string())
+       << " using 1:2 with points pt 7 ps 0.4 lc rgb \"#999999\" title \"evaluated\", \\\n"
        << "     '' using 1:3 with steps lw 2 lc rgb \"#c00000\" title \"best so far\"\n";
   } else {
-    gp << "set title \"ML (VCE): negative log-likelihood per iteration\"\nset ylabel \"-log L (nats, constants dropped)\"\n";
-    gp << "plot " << gnuplotString((dir / "trace.dat").string()) << " using 1:2 with linespoints lw 2 title \"-log L\"\n";
+    gp << "set title \"ML (VCE): negative log-likelihood per iteration\"\nset ylabel \"-log L "
+          "(nats, constants dropped)\"\n";
+    gp << "plot " << gnuplotString((dir / "trace.dat").string())
+       << " using 1:2 with linespoints lw 2 title \"-log L\"\n";
   }
   gp << "unset logscale y\nunset title\n";
   // Parameters: variances on top, means below (kl-hill with climbed means).
@@ -230,14 +246,17 @@ std::string writeNoisePlots(const std::filesystem::path& dir, const NoiseRun& ru
   const int panels = means.empty() ? 1 : 2;
   gp << "set output " << gnuplotString((dir / "params.png").string()) << "\n";
   gp << "set multiplot layout " << panels << ",1 title "
-     << gnuplotString(std::string(kl ? "best parameters so far" : "variance components") + (truth ? " (dashed: truth)" : "")) << "\n";
+     << gnuplotString(std::string(kl ? "best parameters so far" : "variance components") +
+                      (truth ? " (dashed: truth)" : ""))
+     << "\n";
   auto panel = [&](const std::vector<std::size_t>& idx, const std::string& ylabel) {
-    gp << "set ylabel " << gnuplotString(ylabel) << "\nset title " << gnuplotString(ylabel.substr(0, ylabel.find(' ')) + "s")
-       << "\nplot ";
+    gp << "set ylabel " << gnuplotString(ylabel) << "\nset title "
+       << gnuplotString(ylabel.substr(0, ylabel.find(' ')) + "s") << "\nplot ";
     for (std::size_t n = 0; n < idx.size(); ++n) {
       const std::size_t i = idx[n];
-      gp << (n ? ", \\\n     " : "") << gnuplotString((dir / "params.dat").string()) << " using 1:" << i + 2
-         << " with steps lw 2 lc " << n + 1 << " title " << gnuplotString(params.names[i]);
+      gp << (n ? ", \\\n     " : "") << gnuplotString((dir / "params.dat").string())
+         << " using 1:" << i + 2 << " with steps lw 2 lc " << n + 1 << " title "
+         << gnuplotString(params.names[i]);
       if (truth) {
         const double t = valueOf(*truth, params.names[i]);
         if (std::isfinite(t)) gp << ", " << t << " with lines dt 2 lc " << n + 1 << " notitle";
@@ -255,7 +274,9 @@ std::string writeNoisePlots(const std::filesystem::path& dir, const NoiseRun& ru
   const std::string script = gp.str();
   std::fwrite(script.data(), 1, script.size(), pipe);
   const int status = ::pclose(pipe);
-  if (status != 0) return "gnuplot failed (is gnuplot with the pngcairo terminal installed? the script is plot.gp)";
+  if (status != 0)
+    return "gnuplot failed (is gnuplot with the pngcairo terminal installed? the script is "
+           "plot.gp)";
   return {};
 }
 

@@ -13,22 +13,23 @@
 
 #include <nlohmann/json_fwd.hpp>
 
+#include "common/observation.hpp"
 #include "noise/hill.hpp"
 #include "noise/ml.hpp"
 #include "noise/problem.hpp"
-#include "common/observation.hpp"
 
 namespace lidarcal::pipeline {
 
 enum class NoiseMethod { kl_hill, ml };
 
 struct NoiseRunOptions {
-  NoiseMethod method = NoiseMethod::ml;      ///< estimator
-  bool faithful = false;                     ///< kl-hill: label of the objective variant in `kl` (the seed's or ours)
-  std::uint64_t seed = 1;                    ///< kl-hill: jumps and particle filter streams
-  std::optional<NoiseSetting> initial;       ///< starting setting (kl-hill default: defaultInitialNoise)
-  noise::KlHillConfig kl;              ///< kl-hill settings (kl.objective: KlObjectiveConfig::faithful() or sound())
-  noise::MlNoiseConfig ml;             ///< ml settings (initial set from `initial` when given)
+  NoiseMethod method = NoiseMethod::ml;  ///< estimator
+  bool faithful = false;   ///< kl-hill: label of the objective variant in `kl` (the seed's or ours)
+  std::uint64_t seed = 1;  ///< kl-hill: jumps and particle filter streams
+  std::optional<NoiseSetting> initial;  ///< starting setting (kl-hill default: defaultInitialNoise)
+  /// kl-hill settings (kl.objective: KlObjectiveConfig::faithful() or sound())
+  noise::KlHillConfig kl;
+  noise::MlNoiseConfig ml;  ///< ml settings (initial set from `initial` when given)
 };
 
 /// Starting setting of the hill climbing when none is given: means 0, variances 0.5 (m^2,
@@ -39,14 +40,16 @@ struct NoiseRun {
   NoiseMethod method = NoiseMethod::ml;
   bool faithful = false;
   std::uint64_t seed = 0;
-  NoiseSetting noise;                        ///< the estimate
-  bool process_estimated = false;            ///< process variances estimated (else as assumed)
-  std::string status = "ok";                 ///< "ok" or "not_converged"
-  std::string message;                       ///< details when not ok
-  std::vector<double> objective_trace;       ///< kl-hill: best KL after each evaluation; ml: -log L per iteration
-  int evaluations = 0;                       ///< kl-hill: particle-filter runs; ml: adjustments solved
-  double time_s = 0.0;                       ///< wall time of the estimation (printed, not written: outputs are deterministic)
-  std::optional<noise::KlHillResult> kl;  ///< details of a kl-hill run
+  NoiseSetting noise;              ///< the estimate
+  bool process_estimated = false;  ///< process variances estimated (else as assumed)
+  std::string status = "ok";       ///< "ok" or "not_converged"
+  std::string message;             ///< details when not ok
+  /// kl-hill: best KL after each evaluation; ml: -log L per iteration
+  std::vector<double> objective_trace;
+  int evaluations = 0;  ///< kl-hill: particle-filter runs; ml: adjustments solved
+  /// wall time of the estimation (printed, not written: outputs are deterministic)
+  double time_s = 0.0;
+  std::optional<noise::KlHillResult> kl;   ///< details of a kl-hill run
   std::optional<noise::MlNoiseResult> ml;  ///< details of an ml run
 };
 

@@ -21,17 +21,23 @@ inline constexpr const char* kPredictionInterval = "Higgins, Thompson & Spiegelh
 
 /// Full references, one Markdown list item each.
 inline constexpr const char* kReferences =
-    "- Alhashimi et al. 2021: A. Alhashimi, M. Magnusson, S. Knorn, D. Varagnolo, \"Calibrating Range Measurements "
+    "- Alhashimi et al. 2021: A. Alhashimi, M. Magnusson, S. Knorn, D. Varagnolo, \"Calibrating "
+    "Range Measurements "
     "of Lidars Using Fixed Landmarks in Unknown Positions\", Sensors, 2021.\n"
-    "- Alhashimi et al. 2016: A. Alhashimi, D. Varagnolo, T. Gustafsson, \"Statistical Modeling and Calibration of "
+    "- Alhashimi et al. 2016: A. Alhashimi, D. Varagnolo, T. Gustafsson, \"Statistical Modeling "
+    "and Calibration of "
     "Triangulation Lidars\", ICINCO 2016.\n"
     "- Sharma 2020: S. V. Sharma, \"In-situ Sensor Calibration Using Noise Consistency\", MSc "
     "thesis, University of Texas at Arlington, 2020.\n"
-    "- Kennedy & O'Hagan 2001: M. C. Kennedy, A. O'Hagan, \"Bayesian calibration of computer models\", Journal of "
+    "- Kennedy & O'Hagan 2001: M. C. Kennedy, A. O'Hagan, \"Bayesian calibration of computer "
+    "models\", Journal of "
     "the Royal Statistical Society B 63(3), 2001.\n"
-    "- Viechtbauer 2005: W. Viechtbauer, \"Bias and efficiency of meta-analytic variance estimators in the "
+    "- Viechtbauer 2005: W. Viechtbauer, \"Bias and efficiency of meta-analytic variance "
+    "estimators in the "
     "random-effects model\", Journal of Educational and Behavioral Statistics 30(3), 2005.\n"
-    "- Higgins, Thompson & Spiegelhalter 2009: J. P. T. Higgins, S. G. Thompson, D. J. Spiegelhalter, \"A "
-    "re-evaluation of random-effects meta-analysis\", Journal of the Royal Statistical Society A 172(1), 2009.\n";
+    "- Higgins, Thompson & Spiegelhalter 2009: J. P. T. Higgins, S. G. Thompson, D. J. "
+    "Spiegelhalter, \"A "
+    "re-evaluation of random-effects meta-analysis\", Journal of the Royal Statistical Society A "
+    "172(1), 2009.\n";
 
 }  // namespace lidarcal::pipeline::papers

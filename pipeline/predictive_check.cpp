@@ -17,13 +17,17 @@ using ojson = nlohmann::ordered_json;
 ojson number(double v) { return std::isfinite(v) ? ojson(v) : ojson(nullptr); }
 
 /// Whether the readings at the entry's distance were corrected under the model's policy.
-bool corrected(const calibration::ReferenceMatch& m, const CalibrationModel& model, calibration::Outside outside) {
-  if (!model.fitted_range_m || outside == calibration::Outside::linear || outside == calibration::Outside::extrapolate)
+bool corrected(const calibration::ReferenceMatch& m, const CalibrationModel& model,
+               calibration::Outside outside) {
+  if (!model.fitted_range_m || outside == calibration::Outside::linear ||
+      outside == calibration::Outside::extrapolate)
     return true;
-  return m.surface_m >= model.fitted_range_m->first - 1e-3 && m.surface_m <= model.fitted_range_m->second + 1e-3;
+  return m.surface_m >= model.fitted_range_m->first - 1e-3 &&
+         m.surface_m <= model.fitted_range_m->second + 1e-3;
 }
 
-EntryInterval entryInterval(const calibration::ReferenceMatch& m, const Reference& ref, const CalibrationModel& model,
+EntryInterval entryInterval(const calibration::ReferenceMatch& m, const Reference& ref,
+                            const CalibrationModel& model,
                             const calibration::ReadingCorrector& correct) {
   EntryInterval e;
   e.entry = m.entry;
@@ -48,17 +52,21 @@ EntryInterval entryInterval(const calibration::ReferenceMatch& m, const Referenc
   return e;
 }
 
-std::string mm(double v, bool sign = false) { return std::isfinite(v) ? fixed(1000.0 * v, 1, sign) : std::string("-"); }
+std::string mm(double v, bool sign = false) {
+  return std::isfinite(v) ? fixed(1000.0 * v, 1, sign) : std::string("-");
+}
 
 std::string share(std::size_t k, std::size_t n) {
   return std::to_string(k) + " of " + std::to_string(n) +
-         (n ? " (" + fixed(100.0 * static_cast<double>(k) / static_cast<double>(n), 0) + " %)" : std::string());
+         (n ? " (" + fixed(100.0 * static_cast<double>(k) / static_cast<double>(n), 0) + " %)"
+            : std::string());
 }
 
 }  // namespace
 
-PredictiveCheck predictiveCheck(const std::vector<calibration::ReferenceMatch>& matches, const Reference& ref,
-                                const CalibrationModel& model, const calibration::ReadingCorrector& correct) {
+PredictiveCheck predictiveCheck(const std::vector<calibration::ReferenceMatch>& matches,
+                                const Reference& ref, const CalibrationModel& model,
+                                const calibration::ReadingCorrector& correct) {
   PredictiveCheck c;
   c.discrepancy = model.discrepancy;
   c.factor_68 = calibration::predictiveFactor(model.discrepancy, kLevel68);
@@ -97,8 +105,10 @@ ojson predictiveJson(const PredictiveCheck& c) {
   ojson j{{"discrepancy", {{"method", d.method}, {"sigma_m", number(d.sigma_m)}, {"dof", d.dof}}},
           {"factor_68", number(c.factor_68)},
           {"factor_95", number(c.factor_95)}};
-  const std::pair<const char*, std::size_t> counts[] = {
-      {"checked", c.checked}, {"inside_68", c.inside_68}, {"inside_95", c.inside_95}, {"inside_curve_95", c.inside_curve_95}};
+  const std::pair<const char*, std::size_t> counts[] = {{"checked", c.checked},
+                                                        {"inside_68", c.inside_68},
+                                                        {"inside_95", c.inside_95},
+                                                        {"inside_curve_95", c.inside_curve_95}};
   for (const auto& [key, count] : counts) j[key] = count;
   j["entries"] = entries;
   return j;
@@ -106,31 +116,38 @@ ojson predictiveJson(const PredictiveCheck& c) {
 
 std::string predictiveTable(const PredictiveCheck& c) {
   std::string s =
-      "\nEach measured distance against the model's intervals (corrected - reference; the interval's standard error "
+      "\nEach measured distance against the model's intervals (corrected - reference; the "
+      "interval's standard error "
       "combines the correction's predictive standard error, the scans' and the tape's):\n\n"
-      "| entry | reference [m] | corrected - reference [mm] | curve SE [mm] | predictive SE [mm] | tape [mm] | "
-      "predictive 95 % interval [mm] | inside 68 % | inside 95 % |\n|---|---|---|---|---|---|---|---|---|\n";
+      "| entry | reference [m] | corrected - reference [mm] | curve SE [mm] | predictive SE [mm] | "
+      "tape [mm] | "
+      "predictive 95 % interval [mm] | inside 68 % | inside 95 % "
+      "|\n|---|---|---|---|---|---|---|---|---|\n";
   for (const auto& e : c.entries) {
     s += "| " + std::to_string(e.entry) + " | " + fixed(e.reference_m, 3) + " | ";
     if (!e.checked) {
       s += "- | - | - | - | - | - | - |\n";
       continue;
     }
-    s += mm(e.error_m, true) + " | " + mm(e.curve_se_m) + " | " + mm(e.predictive_se_m) + " | " + mm(e.tape_sigma_m) +
-         " | +-" + mm(e.factor_95 * e.interval_se_m) + " | " + (e.inside_68 ? "yes" : "no") + " | " +
-         (e.inside_95 ? "yes" : "no") + " |\n";
+    s += mm(e.error_m, true) + " | " + mm(e.curve_se_m) + " | " + mm(e.predictive_se_m) + " | " +
+         mm(e.tape_sigma_m) + " | +-" + mm(e.factor_95 * e.interval_se_m) + " | " +
+         (e.inside_68 ? "yes" : "no") + " | " + (e.inside_95 ? "yes" : "no") + " |\n";
   }
   const Discrepancy& d = c.discrepancy;
-  s += "\nInside the predictive intervals: 68 %: " + share(c.inside_68, c.checked) + ", 95 %: " +
-       share(c.inside_95, c.checked) + "; inside the curve's 95 % interval (+-1.96 curve SE, with the scans' and the "
-       "tape's): " + share(c.inside_curve_95, c.checked) + ". ";
+  s += "\nInside the predictive intervals: 68 %: " + share(c.inside_68, c.checked) +
+       ", 95 %: " + share(c.inside_95, c.checked) +
+       "; inside the curve's 95 % interval (+-1.96 curve SE, with the scans' and the "
+       "tape's): " +
+       share(c.inside_curve_95, c.checked) + ". ";
   if (d.estimated())
-    s += "Model discrepancy " + fixed(1000.0 * d.sigma_m, 1) + " mm (" + d.method + ", " + plural(d.dof, "degree") +
-         " of freedom; " + papers::kDiscrepancy + "), Student-t factors " + fixed(c.factor_68, 2) + " and " +
-         fixed(c.factor_95, 2) + " for the correction alone, nearer the normal's where an entry's known tape and "
+    s += "Model discrepancy " + fixed(1000.0 * d.sigma_m, 1) + " mm (" + d.method + ", " +
+         plural(d.dof, "degree") + " of freedom; " + papers::kDiscrepancy +
+         "), Student-t factors " + fixed(c.factor_68, 2) + " and " + fixed(c.factor_95, 2) +
+         " for the correction alone, nearer the normal's where an entry's known tape and "
          "scan errors make up part of its interval (Welch-Satterthwaite).\n";
   else
-    s += "The model has no discrepancy estimate: its predictive interval is the curve's (" + d.note + ").\n";
+    s += "The model has no discrepancy estimate: its predictive interval is the curve's (" +
+         d.note + ").\n";
   return s;
 }
 

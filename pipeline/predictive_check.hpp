@@ -33,36 +33,41 @@ inline constexpr double kLevel95 = 0.95;
 
 /// One reference entry against the intervals.
 struct EntryInterval {
-  std::size_t entry = 0;           ///< REF.json distances index
-  double reference_m = 0.0;        ///< the measured distance, metres
-  bool checked = false;            ///< found on the corrected scans, and corrected there (see predictiveCheck)
-  double error_m = 0.0;            ///< corrected measured - reference, metres
-  double curve_se_m = 0.0;         ///< the correction's curve standard error at the entry, metres
-  double predictive_se_m = 0.0;    ///< the correction's predictive standard error there, metres
-  double measured_se_m = 0.0;      ///< standard error of the scans' mean (0 when not known), metres
-  double tape_sigma_m = 0.0;       ///< the entry's stated tape error, metres
-  double interval_se_m = 0.0;      ///< sqrt(predictive^2 + measured^2 + tape^2), metres
-  double factor_68 = 0.0;          ///< t_68: half-width of the 68 % predictive interval in interval_se_m
-  double factor_95 = 0.0;          ///< t_95: and of the 95 % one
-  bool inside_68 = false;          ///< |error| <= t_68 interval_se_m
-  bool inside_95 = false;          ///< |error| <= t_95 interval_se_m
-  bool inside_curve_95 = false;    ///< |error| <= 1.96 sqrt(curve^2 + measured^2 + tape^2)
+  std::size_t entry = 0;     ///< REF.json distances index
+  double reference_m = 0.0;  ///< the measured distance, metres
+  /// found on the corrected scans, and corrected there (see predictiveCheck)
+  bool checked = false;
+  double error_m = 0.0;          ///< corrected measured - reference, metres
+  double curve_se_m = 0.0;       ///< the correction's curve standard error at the entry, metres
+  double predictive_se_m = 0.0;  ///< the correction's predictive standard error there, metres
+  double measured_se_m = 0.0;    ///< standard error of the scans' mean (0 when not known), metres
+  double tape_sigma_m = 0.0;     ///< the entry's stated tape error, metres
+  double interval_se_m = 0.0;    ///< sqrt(predictive^2 + measured^2 + tape^2), metres
+  double factor_68 = 0.0;  ///< t_68: half-width of the 68 % predictive interval in interval_se_m
+  double factor_95 = 0.0;  ///< t_95: and of the 95 % one
+  bool inside_68 = false;  ///< |error| <= t_68 interval_se_m
+  bool inside_95 = false;  ///< |error| <= t_95 interval_se_m
+  bool inside_curve_95 = false;  ///< |error| <= 1.96 sqrt(curve^2 + measured^2 + tape^2)
 };
 
 /// The entries and how many of them each interval holds.
 struct PredictiveCheck {
-  Discrepancy discrepancy;          ///< the model's
-  double factor_68 = 0.0;           ///< half-width of the 68 % interval of the correction alone, in its predictive SE
-  double factor_95 = 0.0;           ///< and of the 95 % one (each entry has its own, with its known variances)
+  Discrepancy discrepancy;  ///< the model's
+  /// half-width of the 68 % interval of the correction alone, in its predictive SE
+  double factor_68 = 0.0;
+  /// and of the 95 % one (each entry has its own, with its known variances)
+  double factor_95 = 0.0;
   std::vector<EntryInterval> entries;
-  std::size_t checked = 0, inside_68 = 0, inside_95 = 0, inside_curve_95 = 0;  ///< counts over the checked entries
+  /// counts over the checked entries
+  std::size_t checked = 0, inside_68 = 0, inside_95 = 0, inside_curve_95 = 0;
 };
 
 /// Each entry of `corrected` (matched on scans corrected by `correct`) against the intervals of
 /// `model`. An entry is checked when it was found and its readings were corrected: inside the
 /// fitted range, or beyond it under an `outside` policy that corrects (linear, extrapolate).
-PredictiveCheck predictiveCheck(const std::vector<calibration::ReferenceMatch>& corrected, const Reference& ref,
-                                const CalibrationModel& model, const calibration::ReadingCorrector& correct);
+PredictiveCheck predictiveCheck(const std::vector<calibration::ReferenceMatch>& corrected,
+                                const Reference& ref, const CalibrationModel& model,
+                                const calibration::ReadingCorrector& correct);
 
 /// E.json's `predictive` block (docs/FORMAT.md, "Evaluation against reference measurements").
 nlohmann::ordered_json predictiveJson(const PredictiveCheck& check);

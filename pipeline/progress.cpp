@@ -1,10 +1,10 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "pipeline/progress.hpp"
 
+#include <unistd.h>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <unistd.h>
 
 namespace lidarcal::pipeline {
 namespace {
@@ -20,9 +20,13 @@ double secondsSince(std::chrono::steady_clock::time_point start) {
 std::string duration(double s) {
   char buf[48];
   if (!(s >= 0.0)) s = 0.0;
-  if (s < 60.0) std::snprintf(buf, sizeof buf, "%.0f s", s);
-  else if (s < 3600.0) std::snprintf(buf, sizeof buf, "%.0f min %02.0f s", std::floor(s / 60.0), std::fmod(s, 60.0));
-  else std::snprintf(buf, sizeof buf, "%.0f h %02.0f min", std::floor(s / 3600.0), std::floor(std::fmod(s, 3600.0) / 60.0));
+  if (s < 60.0)
+    std::snprintf(buf, sizeof buf, "%.0f s", s);
+  else if (s < 3600.0)
+    std::snprintf(buf, sizeof buf, "%.0f min %02.0f s", std::floor(s / 60.0), std::fmod(s, 60.0));
+  else
+    std::snprintf(buf, sizeof buf, "%.0f h %02.0f min", std::floor(s / 3600.0),
+                  std::floor(std::fmod(s, 3600.0) / 60.0));
   return buf;
 }
 
@@ -31,13 +35,15 @@ std::string duration(double s) {
 void setQuiet(bool q) { g_quiet = q; }
 bool quiet() { return g_quiet; }
 
-std::string progressText(const std::string& label, std::size_t done, std::size_t total, double elapsed_s, bool final) {
+std::string progressText(const std::string& label, std::size_t done, std::size_t total,
+                         double elapsed_s, bool final) {
   char buf[256];
   if (!(elapsed_s >= 0.0)) elapsed_s = 0.0;
   if (total == 0) {
     // Unknown amount of work: what was counted, if anything, and the time spent.
     const std::string count = done ? std::to_string(done) + " " : std::string();
-    std::snprintf(buf, sizeof buf, "%s %s%s %.1f s", label.c_str(), count.c_str(), final ? "done in" : "...", elapsed_s);
+    std::snprintf(buf, sizeof buf, "%s %s%s %.1f s", label.c_str(), count.c_str(),
+                  final ? "done in" : "...", elapsed_s);
     return buf;
   }
   done = std::min(done, total);
@@ -47,17 +53,23 @@ std::string progressText(const std::string& label, std::size_t done, std::size_t
   std::string bar(static_cast<std::size_t>(kWidth), '.');
   std::fill(bar.begin(), bar.begin() + filled, '#');
   if (final) {
-    std::snprintf(buf, sizeof buf, "%s [%s] %zu/%zu in %.1f s", label.c_str(), bar.c_str(), done, total, elapsed_s);
+    std::snprintf(buf, sizeof buf, "%s [%s] %zu/%zu in %.1f s", label.c_str(), bar.c_str(), done,
+                  total, elapsed_s);
     return buf;
   }
   const double rate = elapsed_s > 0.0 ? static_cast<double>(done) / elapsed_s : 0.0;
-  const std::string left = rate > 0.0 ? duration(static_cast<double>(total - done) / rate) + " left" : "starting";
-  std::snprintf(buf, sizeof buf, "%s [%s] %zu/%zu %.1f/s, %s", label.c_str(), bar.c_str(), done, total, rate, left.c_str());
+  const std::string left =
+      rate > 0.0 ? duration(static_cast<double>(total - done) / rate) + " left" : "starting";
+  std::snprintf(buf, sizeof buf, "%s [%s] %zu/%zu %.1f/s, %s", label.c_str(), bar.c_str(), done,
+                total, rate, left.c_str());
   return buf;
 }
 
 Progress::Progress(std::string label, std::size_t total, bool enabled)
-    : label_(std::move(label)), total_(total), enabled_(drawable(enabled)), start_(std::chrono::steady_clock::now()),
+    : label_(std::move(label)),
+      total_(total),
+      enabled_(drawable(enabled)),
+      start_(std::chrono::steady_clock::now()),
       last_draw_(start_) {}
 
 Progress::~Progress() {
@@ -85,18 +97,22 @@ void Progress::finish() {
 
 void Progress::draw(bool final) {
   // Padding clears what a longer previous line left behind.
-  std::fprintf(stderr, "\r%s%12s%s", progressText(label_, done_, total_, secondsSince(start_), final).c_str(), "",
+  std::fprintf(stderr, "\r%s%12s%s",
+               progressText(label_, done_, total_, secondsSince(start_), final).c_str(), "",
                final ? "\n" : "");
   std::fflush(stderr);
 }
 
 Activity::Activity(std::string label, bool enabled)
-    : label_(std::move(label)), enabled_(drawable(enabled)), start_(std::chrono::steady_clock::now()) {
+    : label_(std::move(label)),
+      enabled_(drawable(enabled)),
+      start_(std::chrono::steady_clock::now()) {
   if (!enabled_) return;
   thread_ = std::thread([this] {
     std::unique_lock<std::mutex> lock(mutex_);
     do {
-      std::fprintf(stderr, "\r%s%12s", progressText(label_, 0, 0, secondsSince(start_), false).c_str(), "");
+      std::fprintf(stderr, "\r%s%12s",
+                   progressText(label_, 0, 0, secondsSince(start_), false).c_str(), "");
       std::fflush(stderr);
     } while (!wake_.wait_for(lock, std::chrono::seconds(1), [this] { return stop_; }));
   });
@@ -112,7 +128,8 @@ void Activity::finish() {
   }
   wake_.notify_one();
   thread_.join();
-  std::fprintf(stderr, "\r%s%12s\n", progressText(label_, 0, 0, secondsSince(start_), true).c_str(), "");
+  std::fprintf(stderr, "\r%s%12s\n", progressText(label_, 0, 0, secondsSince(start_), true).c_str(),
+               "");
   std::fflush(stderr);
 }
 

@@ -19,7 +19,8 @@ namespace lidarcal::pipeline {
 /// shown as `total` (a count never runs past its total, the time left never goes negative);
 /// `total` 0 means the amount of work is unknown: the line shows the count (if any) and the
 /// time spent. Pure, for tests.
-std::string progressText(const std::string& label, std::size_t done, std::size_t total, double elapsed_s, bool final);
+std::string progressText(const std::string& label, std::size_t done, std::size_t total,
+                         double elapsed_s, bool final);
 
 class Progress {
  public:

@@ -25,13 +25,16 @@
 namespace lidarcal::pipeline {
 
 /// Loads scan i of `seq`; with `correct`, every point moved to its corrected distance first.
-detectors::ScanLoader scanLoader(const io::Sequence& seq, const calibration::ReadingCorrector* correct = nullptr);
+detectors::ScanLoader scanLoader(const io::Sequence& seq,
+                                 const calibration::ReadingCorrector* correct = nullptr);
 
 struct ReferenceObservations {
-  LandmarkObservations observations;       ///< poles (and walls at the stops a wall or a span is measured at)
-  calibration::ReferenceReadings known;    ///< each reference distance matched, with its known-distance readings
-  calibration::SpanReadings spans;         ///< each span's two walls, with their beams
-  std::size_t landmarks = 0;               ///< poles found by the detection
+  /// poles (and walls at the stops a wall or a span is measured at)
+  LandmarkObservations observations;
+  /// each reference distance matched, with its known-distance readings
+  calibration::ReferenceReadings known;
+  calibration::SpanReadings spans;  ///< each span's two walls, with their beams
+  std::size_t landmarks = 0;        ///< poles found by the detection
 };
 
 /// Detection settings for reference measurements: a pole measured at one stop counts (a static
@@ -43,7 +46,8 @@ detectors::SequenceDetectionConfig referenceDetection(detectors::SequenceDetecti
 /// wall or a span is measured at, grouped into the surfaces of each stop).
 ReferenceObservations observeReference(const io::Sequence& seq, const Reference& ref,
                                        const detectors::SequenceDetectionConfig& detection,
-                                       const detectors::ScanLoader& load, const StageProgress& on_scan = {});
+                                       const detectors::ScanLoader& load,
+                                       const StageProgress& on_scan = {});
 
 /// What calibrate --reference shows about the spans: which walls each one was found between,
 /// and how the model reproduces it (also when left out of the fit).
@@ -55,37 +59,39 @@ struct SpanReport {
 /// The range model from the reference distances and spans (method "reference"): with spans,
 /// calibrateWithSpans over both; else calibrateWithReference. Throws DataError naming every
 /// entry whose target was not found (with what to do).
-SequenceCalibration calibrateSequenceWithReference(const io::Sequence& seq, const Reference& ref,
-                                           const std::filesystem::path& ref_file,
-                                           const detectors::SequenceDetectionConfig& detection,
-                                           const calibration::CalibrationConfig& config,
-                                           std::vector<calibration::ReferenceMatch>* matches = nullptr,
-                                           const StageProgress& on_scan = {}, SpanReport* spans = nullptr);
+SequenceCalibration calibrateSequenceWithReference(
+    const io::Sequence& seq, const Reference& ref, const std::filesystem::path& ref_file,
+    const detectors::SequenceDetectionConfig& detection,
+    const calibration::CalibrationConfig& config,
+    std::vector<calibration::ReferenceMatch>* matches = nullptr, const StageProgress& on_scan = {},
+    SpanReport* spans = nullptr);
 
 /// Self-calibration (detection, triangulation, joint refinement) with the surveyed landmark
 /// centres and the measured stop poses of `ref` held fixed (REF.json without distances). Each
 /// surveyed landmark is matched to the nearest detected one (detectors::matchSurvey);
 /// throws DataError naming the entries that match none.
-SequenceCalibration calibrateSequenceWithSurvey(const io::Sequence& seq, const Reference& ref,
-                                                const std::filesystem::path& ref_file,
-                                                const detectors::SequenceDetectionConfig& detection,
-                                                const calibration::CalibrationConfig& config,
-                                                std::vector<detectors::SurveyMatch>* matches = nullptr,
-                                                const NamedProgress& progress = {});
+SequenceCalibration calibrateSequenceWithSurvey(
+    const io::Sequence& seq, const Reference& ref, const std::filesystem::path& ref_file,
+    const detectors::SequenceDetectionConfig& detection,
+    const calibration::CalibrationConfig& config,
+    std::vector<detectors::SurveyMatch>* matches = nullptr, const NamedProgress& progress = {});
 
 /// Throws DataError naming every reference distance whose target was not found (with what to do).
-void requireEveryDistanceFound(const calibration::ReferenceReadings& known, const std::filesystem::path& ref_file);
+void requireEveryDistanceFound(const calibration::ReferenceReadings& known,
+                               const std::filesystem::path& ref_file);
 
 /// Throws InputError naming the first reference distance that matched the same target at the
 /// same stop as an earlier one (its readings would count twice).
-void requireDistinctTargets(const calibration::ReferenceReadings& known, const std::filesystem::path& ref_file);
+void requireDistinctTargets(const calibration::ReferenceReadings& known,
+                            const std::filesystem::path& ref_file);
 
 /// Throws DataError naming every span whose walls were not found, by the REF.json field at
 /// fault (e.g. `spans[0].bearing_b_deg`), with the walls the stop does show.
-void requireEverySpanFound(const calibration::SpanReadings& spans, const std::filesystem::path& ref_file);
+void requireEverySpanFound(const calibration::SpanReadings& spans,
+                           const std::filesystem::path& ref_file);
 
-/// Stops with at least one measured distance (all of the sequence's: Alhashimi et al. 2016's fit on the
-/// distances alone is the calibration; fewer: they join the self-calibration).
+/// Stops with at least one measured distance (all of the sequence's: Alhashimi et al. 2016's fit on
+/// the distances alone is the calibration; fewer: they join the self-calibration).
 std::size_t measuredStops(const Reference& ref);
 
 /// Self-calibration of the whole sequence with the measured distances in the same likelihood
@@ -93,13 +99,12 @@ std::size_t measuredStops(const Reference& ref);
 /// surveyed landmarks and measured stops of `ref` held fixed as in calibrateSequenceWithSurvey.
 /// For distances measured at only some stops. Method "joint+reference". Throws
 /// InputError for --method closed-form, DataError for a distance whose target is not found.
-SequenceCalibration calibrateSequenceWithDistancesAndSelf(const io::Sequence& seq, const Reference& ref,
-                                                         const std::filesystem::path& ref_file,
-                                                         const detectors::SequenceDetectionConfig& detection,
-                                                         const calibration::CalibrationConfig& config,
-                                                         std::vector<calibration::ReferenceMatch>* matches = nullptr,
-                                                         std::vector<detectors::SurveyMatch>* survey = nullptr,
-                                                         const NamedProgress& progress = {});
+SequenceCalibration calibrateSequenceWithDistancesAndSelf(
+    const io::Sequence& seq, const Reference& ref, const std::filesystem::path& ref_file,
+    const detectors::SequenceDetectionConfig& detection,
+    const calibration::CalibrationConfig& config,
+    std::vector<calibration::ReferenceMatch>* matches = nullptr,
+    std::vector<detectors::SurveyMatch>* survey = nullptr, const NamedProgress& progress = {});
 
 /// The matches as a Markdown table for stdout.
 std::string surveyTable(const std::vector<detectors::SurveyMatch>& matches, const Reference& ref);

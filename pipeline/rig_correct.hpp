@@ -22,17 +22,19 @@ struct RigCorrection {
 /// The blocks to apply: every block whose topic the bag holds, or those `keys` name (sensor name,
 /// topic or frame). Throws InputError naming the model file when a key names no block, a block
 /// has no topic, or no block's topic is in the bag.
-std::vector<std::size_t> rigBlocksForBag(const io::RigModel& model, const std::filesystem::path& model_file,
-                                         const std::vector<std::string>& bag_topics, const std::vector<std::string>& keys);
+std::vector<std::size_t> rigBlocksForBag(const io::RigModel& model,
+                                         const std::filesystem::path& model_file,
+                                         const std::vector<std::string>& bag_topics,
+                                         const std::vector<std::string>& keys);
 
 /// Writes `out` (a new file, or for a rosbag2 directory an existing empty one; the caller makes it
 /// atomic) from `in` (a ROS 2 bag when `ros2`), each chosen block's topic corrected by its model in
 /// one pass (checked first: status, sensor name, range limits unless `force`; warnings go to
 /// `warnings`). Throws InputError or DataError naming the block.
-std::vector<RigCorrection> correctRigRosbag(const std::filesystem::path& in, const std::filesystem::path& out,
-                                            const io::RigModel& model, const std::filesystem::path& model_file,
-                                            const std::vector<std::size_t>& blocks, calibration::InversionMethod method,
-                                            calibration::Outside outside, bool force, bool ros2,
-                                            std::vector<std::string>& warnings);
+std::vector<RigCorrection> correctRigRosbag(
+    const std::filesystem::path& in, const std::filesystem::path& out, const io::RigModel& model,
+    const std::filesystem::path& model_file, const std::vector<std::size_t>& blocks,
+    calibration::InversionMethod method, calibration::Outside outside, bool force, bool ros2,
+    std::vector<std::string>& warnings);
 
 }  // namespace lidarcal::pipeline

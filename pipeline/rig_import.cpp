@@ -19,22 +19,29 @@ namespace {
 
 void checkSettings(const RigImportSettings& s, const std::vector<std::string>& names) {
   if (!isBag(s.base.format))
-    throw InputError("", "--topic", "several topics are read from ROS1 or ROS 2 bags only", "import one topic at a time");
-  if (s.topics.size() < 2) throw InputError("", "--topic", "a rig needs two topics or more", "list them: --topic /a,/b");
+    throw InputError("", "--topic", "several topics are read from ROS1 or ROS 2 bags only",
+                     "import one topic at a time");
+  if (s.topics.size() < 2)
+    throw InputError("", "--topic", "a rig needs two topics or more", "list them: --topic /a,/b");
   if (names.size() != s.topics.size())
-    throw InputError("", "--sensor-names", "gives " + std::to_string(names.size()) + " names for " +
-                     std::to_string(s.topics.size()) + " topics", "one name per topic, in the same order");
+    throw InputError("", "--sensor-names",
+                     "gives " + std::to_string(names.size()) + " names for " +
+                         std::to_string(s.topics.size()) + " topics",
+                     "one name per topic, in the same order");
   std::set<std::string> seen_topics, seen_names;
   for (std::size_t k = 0; k < names.size(); ++k) {
     if (!seen_topics.insert(s.topics[k]).second)
       throw InputError("", "--topic " + s.topics[k], "is listed twice", "list each topic once");
     const std::string& n = names[k];
-    if (n.empty() || n[0] == '.' || n.find_first_of("/\\,") != std::string::npos || !seen_names.insert(n).second)
-      throw InputError("", "--sensor-names " + n, "must be distinct plain names (no '/', '\\', ',' or leading '.')",
+    if (n.empty() || n[0] == '.' || n.find_first_of("/\\,") != std::string::npos ||
+        !seen_names.insert(n).second)
+      throw InputError("", "--sensor-names " + n,
+                       "must be distinct plain names (no '/', '\\', ',' or leading '.')",
                        "e.g. --sensor-names front,back");
   }
   if (!s.base.sensor_name.empty())
-    throw InputError("", "--sensor-name", "names one sensor; a rig names each", "use --sensor-names front,back");
+    throw InputError("", "--sensor-name", "names one sensor; a rig names each",
+                     "use --sensor-names front,back");
 }
 
 /// The vehicle's stops over the rig's rows: a new stop at every recording, and within one, when
@@ -43,7 +50,8 @@ std::size_t assignStops(std::vector<io::RigScan>& rows, const io::BagPoseConfig&
   std::vector<std::size_t> order(rows.size());
   std::iota(order.begin(), order.end(), 0);
   std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-    return rows[a].input != rows[b].input ? rows[a].input < rows[b].input : rows[a].stamp_s < rows[b].stamp_s;
+    return rows[a].input != rows[b].input ? rows[a].input < rows[b].input
+                                          : rows[a].stamp_s < rows[b].stamp_s;
   });
   std::size_t stop = 0, input = 0;
   bool first = true;
@@ -68,15 +76,16 @@ std::size_t assignStops(std::vector<io::RigScan>& rows, const io::BagPoseConfig&
 
 std::string describe(const Mounting& m) {
   char text[160];
-  std::snprintf(text, sizeof text, "x %.4f m, y %.4f m, yaw %.2f deg%s", m.x_m, m.y_m, rad2deg(m.yaw_rad),
-                m.upside_down ? ", upside down" : "");
+  std::snprintf(text, sizeof text, "x %.4f m, y %.4f m, yaw %.2f deg%s", m.x_m, m.y_m,
+                rad2deg(m.yaw_rad), m.upside_down ? ", upside down" : "");
   return text;
 }
 
 /// Reads one topic of one recording into the sensor's writer and rows.
-io::ImportReport readTopic(const RigImportSettings& s, std::size_t input, std::size_t sensor, const std::string& name,
-                           io::SequenceWriter& writer, std::vector<io::RigScan>& rows, io::RigInput& record,
-                           io::RigMeta& meta, bool& missing_pose, const std::function<void(double)>& progress) {
+io::ImportReport readTopic(const RigImportSettings& s, std::size_t input, std::size_t sensor,
+                           const std::string& name, io::SequenceWriter& writer,
+                           std::vector<io::RigScan>& rows, io::RigInput& record, io::RigMeta& meta,
+                           bool& missing_pose, const std::function<void(double)>& progress) {
   io::RigSensorInfo& info = meta.sensors[sensor];
   io::RosbagConfig c;
   c.topic = s.topics[sensor];
@@ -94,22 +103,24 @@ io::ImportReport readTopic(const RigImportSettings& s, std::size_t input, std::s
       row.stamp_s = scan.stamp_s;
       row.input = input;
       if (scan.vehicle_pose) row.vehicle = *scan.vehicle_pose;
-      missing_pose = missing_pose || (s.base.bag_pose.kind != io::BagPoseConfig::Kind::none && !scan.vehicle_pose);
+      missing_pose = missing_pose ||
+                     (s.base.bag_pose.kind != io::BagPoseConfig::Kind::none && !scan.vehicle_pose);
       rows.push_back(row);
       if (scan.mounting && !record.mountings.count(name)) record.mountings[name] = *scan.mounting;
       if (info.frame_id.empty()) info.frame_id = scan.frame_id;
       if (meta.vehicle_frame.empty()) meta.vehicle_frame = scan.vehicle_frame;
       if (scan.vehicle_frame != meta.vehicle_frame)
         throw InputError(s.base.inputs[input].string(), "topic " + c.topic,
-                         "its frame " + scan.frame_id + " rides on " + scan.vehicle_frame + ", another sensor's on " +
-                             meta.vehicle_frame,
+                         "its frame " + scan.frame_id + " rides on " + scan.vehicle_frame +
+                             ", another sensor's on " + meta.vehicle_frame,
                          "name the vehicle's frame with --vehicle-frame");
     }
     if (progress) progress(scan.progress);
     return more;
   };
   const std::filesystem::path& bag = s.base.inputs[input];
-  return s.base.format == ImportFormat::rosbag1 ? io::readRosbag(bag, c, on_scan) : io::readRosbag2(bag, c, on_scan);
+  return s.base.format == ImportFormat::rosbag1 ? io::readRosbag(bag, c, on_scan)
+                                                : io::readRosbag2(bag, c, on_scan);
 }
 
 }  // namespace
@@ -124,10 +135,13 @@ std::vector<std::string> sensorNamesFromTopics(const std::vector<std::string>& t
   return names;
 }
 
-RigImportResult importRig(const RigImportSettings& s, const std::function<void(double)>& on_progress) {
-  const std::vector<std::string> names = s.names.empty() ? sensorNamesFromTopics(s.topics) : s.names;
+RigImportResult importRig(const RigImportSettings& s,
+                          const std::function<void(double)>& on_progress) {
+  const std::vector<std::string> names =
+      s.names.empty() ? sensorNamesFromTopics(s.topics) : s.names;
   checkSettings(s, names);
-  if (s.base.inputs.empty()) throw InputError("", "INPUT", "no recording given", "name one or more bags to import");
+  if (s.base.inputs.empty())
+    throw InputError("", "INPUT", "no recording given", "name one or more bags to import");
   for (const auto& input : s.base.inputs) {
     if (s.base.format == ImportFormat::rosbag1) io::requireRosbagSupport(input);
     io::checkOutsideInput(input, s.base.out);
@@ -153,11 +167,13 @@ RigImportResult importRig(const RigImportSettings& s, const std::function<void(d
       const auto progress = [&](double f) {
         if (on_progress) on_progress((static_cast<double>(in * names.size() + k) + f) * share);
       };
-      const io::ImportReport r = readTopic(s, in, k, names[k], *writers[k], rows, record, result.meta, missing_pose, progress);
+      const io::ImportReport r = readTopic(s, in, k, names[k], *writers[k], rows, record,
+                                           result.meta, missing_pose, progress);
       result.read[k].scans += r.scans;
       if (result.read[k].sensor_name.empty()) result.read[k].sensor_name = r.sensor_name;
       for (const auto& note : r.notes)
-        if (std::find(result.notes.begin(), result.notes.end(), note) == result.notes.end()) result.notes.push_back(note);
+        if (std::find(result.notes.begin(), result.notes.end(), note) == result.notes.end())
+          result.notes.push_back(note);
     }
     result.meta.inputs.push_back(record);
   }
@@ -165,27 +181,34 @@ RigImportResult importRig(const RigImportSettings& s, const std::function<void(d
   if (known && missing_pose)
     throw DataError(s.base.out.string(), "--pose", "some scans have no pose of the vehicle frame",
                     "name the vehicle frame with --vehicle-frame, or import without --pose");
-  result.meta.pose_source = !known ? "none" : (s.base.bag_pose.kind == io::BagPoseConfig::Kind::tf ? "tf:" : "odom:") +
-                                                  s.base.bag_pose.name;
+  result.meta.pose_source =
+      !known ? "none"
+             : (s.base.bag_pose.kind == io::BagPoseConfig::Kind::tf ? "tf:" : "odom:") +
+                   s.base.bag_pose.name;
   for (std::size_t k = 0; k < names.size(); ++k) {
     for (const io::RigInput& in : result.meta.inputs)
       if (const auto it = in.mountings.find(names[k]); it != in.mountings.end()) {
-        if (!result.meta.sensors[k].mounting) result.meta.sensors[k].mounting = it->second;
+        if (!result.meta.sensors[k].mounting)
+          result.meta.sensors[k].mounting = it->second;
         else if (std::abs(it->second.x_m - result.meta.sensors[k].mounting->x_m) > 1e-6 ||
                  std::abs(it->second.y_m - result.meta.sensors[k].mounting->y_m) > 1e-6 ||
                  std::abs(it->second.yaw_rad - result.meta.sensors[k].mounting->yaw_rad) > 1e-9)
-          result.notes.push_back(names[k] + ": tf_static gives another mounting in " + in.name + " (" +
-                                 describe(it->second) + ") than in the first recording (" +
-                                 describe(*result.meta.sensors[k].mounting) + "): rig.json keeps each");
+          result.notes.push_back(names[k] + ": tf_static gives another mounting in " + in.name +
+                                 " (" + describe(it->second) + ") than in the first recording (" +
+                                 describe(*result.meta.sensors[k].mounting) +
+                                 "): rig.json keeps each");
       }
     if (!result.meta.sensors[k].mounting)
-      result.notes.push_back(names[k] + ": no mounting in /tf_static (the calibration starts from the identity; "
-                                        "give the mountings' designs with --mount at calibrate)");
+      result.notes.push_back(
+          names[k] +
+          ": no mounting in /tf_static (the calibration starts from the identity; "
+          "give the mountings' designs with --mount at calibrate)");
   }
   result.stops = assignStops(rows, s.base.bag_pose, known);
   // scans.csv: by sensor, then in the order written.
   std::stable_sort(rows.begin(), rows.end(), [&](const io::RigScan& a, const io::RigScan& b) {
-    return std::find(names.begin(), names.end(), a.sensor) < std::find(names.begin(), names.end(), b.sensor);
+    return std::find(names.begin(), names.end(), a.sensor) <
+           std::find(names.begin(), names.end(), b.sensor);
   });
   for (std::size_t k = 0; k < names.size(); ++k)
     result.written.push_back(writers[k]->commit(result.read[k].sensor_name));

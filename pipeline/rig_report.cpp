@@ -17,7 +17,9 @@ std::array<double, 9> flat(const Eigen::Matrix3d& c) {
   return out;
 }
 
-double se(const std::array<double, 9>& c, int i) { return std::sqrt(std::max(0.0, c[static_cast<std::size_t>(4 * i)])); }
+double se(const std::array<double, 9>& c, int i) {
+  return std::sqrt(std::max(0.0, c[static_cast<std::size_t>(4 * i)]));
+}
 
 /// One sensor's range model as a single-sensor model.json holds it.
 CalibrationModel sensorModel(const io::Rig& rig, std::size_t k, const calibration::RigResult& r) {
@@ -36,7 +38,8 @@ CalibrationModel sensorModel(const io::Rig& rig, std::size_t k, const calibratio
     m.orders.push_back(row);
   }
   const auto n = static_cast<std::size_t>(e.alpha_covariance.rows());
-  for (std::size_t i = 0; i < n * n; ++i) m.alpha_covariance.push_back(e.alpha_covariance(i / n, i % n));
+  for (std::size_t i = 0; i < n * n; ++i)
+    m.alpha_covariance.push_back(e.alpha_covariance(i / n, i % n));
   m.fitted_range_m = std::make_pair(e.d_min_m, e.d_max_m);
   m.status = e.model_status;
   m.iterations = r.solver_iterations;
@@ -58,11 +61,12 @@ std::string row(const char* format, ...) {
 }
 
 /// The design and the difference (mm, deg; the design is exact, so the estimate's standard errors).
-std::string designCells(const Pose2& estimate, const std::optional<Pose2>& design, const std::array<double, 9>& c) {
+std::string designCells(const Pose2& estimate, const std::optional<Pose2>& design,
+                        const std::array<double, 9>& c) {
   if (!design) return " none | - |\n";
-  return row(" %.4f, %.4f, %.2f | %+.1f +- %.1f, %+.1f +- %.1f, %+.2f +- %.2f |\n", design->x_m, design->y_m,
-             rad2deg(design->yaw_rad), 1000.0 * (estimate.x_m - design->x_m), 1000.0 * se(c, 0),
-             1000.0 * (estimate.y_m - design->y_m), 1000.0 * se(c, 1),
+  return row(" %.4f, %.4f, %.2f | %+.1f +- %.1f, %+.1f +- %.1f, %+.2f +- %.2f |\n", design->x_m,
+             design->y_m, rad2deg(design->yaw_rad), 1000.0 * (estimate.x_m - design->x_m),
+             1000.0 * se(c, 0), 1000.0 * (estimate.y_m - design->y_m), 1000.0 * se(c, 1),
              rad2deg(wrapAngle(estimate.yaw_rad - design->yaw_rad)), rad2deg(se(c, 2)));
 }
 
@@ -78,20 +82,32 @@ io::RigModel rigModel(const io::Rig& rig, const calibration::RigResult& r) {
   m.radius_m = r.radius_m;
   for (std::size_t k = 0; k < r.sensors.size(); ++k) {
     const io::RigSensorInfo& info = rig.meta.sensors[k];
-    io::RigModelSensor s{info.name, info.topic, info.frame_id, r.sensors[k].mounting,
-                         flat(r.sensors[k].mounting_covariance), r.sensors[k].mounting_held, info.mounting,
-                         r.sensors[k].beam_scatter_m, sensorModel(rig, k, r)};
+    io::RigModelSensor s{info.name,
+                         info.topic,
+                         info.frame_id,
+                         r.sensors[k].mounting,
+                         flat(r.sensors[k].mounting_covariance),
+                         r.sensors[k].mounting_held,
+                         info.mounting,
+                         r.sensors[k].beam_scatter_m,
+                         sensorModel(rig, k, r)};
     m.sensors.push_back(std::move(s));
   }
   for (const calibration::RigRelativeMounting& rel : r.relative) {
-    io::RigModelRelative out{m.sensors[rel.reference].name, m.sensors[rel.sensor].name, rel.pose, flat(rel.covariance),
-                             std::nullopt};
+    io::RigModelRelative out{m.sensors[rel.reference].name, m.sensors[rel.sensor].name, rel.pose,
+                             flat(rel.covariance), std::nullopt};
     if (m.sensors[rel.reference].design && m.sensors[rel.sensor].design)
-      out.design = relativeMounting(*m.sensors[rel.reference].design, *m.sensors[rel.sensor].design);
+      out.design =
+          relativeMounting(*m.sensors[rel.reference].design, *m.sensors[rel.sensor].design);
     m.relative.push_back(out);
   }
   for (const calibration::RigPoleEstimate& p : r.poles) {
-    io::RigModelPole pole{p.id, p.x_m, p.y_m, {p.covariance(0, 0), p.covariance(0, 1), p.covariance(1, 0), p.covariance(1, 1)}, {}};
+    io::RigModelPole pole{
+        p.id,
+        p.x_m,
+        p.y_m,
+        {p.covariance(0, 0), p.covariance(0, 1), p.covariance(1, 0), p.covariance(1, 1)},
+        {}};
     for (const std::size_t k : p.sensors) pole.sensors.push_back(m.sensors[k].name);
     m.poles.push_back(pole);
   }
@@ -102,37 +118,47 @@ io::RigModel rigModel(const io::Rig& rig, const calibration::RigResult& r) {
 }
 
 std::string rigMountingTable(const io::RigModel& m) {
-  std::string t = row("mountings in %s (%s frame%s), +- one standard error\n", m.vehicle_frame.empty() ? "the vehicle frame" : m.vehicle_frame.c_str(),
-                      m.frame.c_str(), m.frame == "relative" ? (", " + m.reference + " held at its design").c_str() : "");
-  t += "| sensor | x (m) | y (m) | yaw (deg) | flip | design x, y (m), yaw (deg) | difference x, y (mm), yaw (deg) |\n"
+  std::string t =
+      row("mountings in %s (%s frame%s), +- one standard error\n",
+          m.vehicle_frame.empty() ? "the vehicle frame" : m.vehicle_frame.c_str(), m.frame.c_str(),
+          m.frame == "relative" ? (", " + m.reference + " held at its design").c_str() : "");
+  t += "| sensor | x (m) | y (m) | yaw (deg) | flip | design x, y (m), yaw (deg) | difference x, y "
+       "(mm), yaw (deg) |\n"
        "|---|---|---|---|---|---|---|\n";
   for (const io::RigModelSensor& s : m.sensors) {
     const auto& c = s.mounting_covariance;
-    t += row("| %s | %.4f +- %.4f | %.4f +- %.4f | %.2f +- %.2f | %s |", s.name.c_str(), s.mounting.x_m, se(c, 0),
-             s.mounting.y_m, se(c, 1), rad2deg(s.mounting.yaw_rad), rad2deg(se(c, 2)),
-             s.mounting.upside_down ? "upside down" : "upright");
-    t += designCells(s.mounting.pose(), s.design ? std::optional<Pose2>(s.design->pose()) : std::nullopt, c);
+    t += row("| %s | %.4f +- %.4f | %.4f +- %.4f | %.2f +- %.2f | %s |", s.name.c_str(),
+             s.mounting.x_m, se(c, 0), s.mounting.y_m, se(c, 1), rad2deg(s.mounting.yaw_rad),
+             rad2deg(se(c, 2)), s.mounting.upside_down ? "upside down" : "upright");
+    t += designCells(s.mounting.pose(),
+                     s.design ? std::optional<Pose2>(s.design->pose()) : std::nullopt, c);
   }
   if (!m.relative.empty())
-    t += "\n| sensor in reference's frame | x (m) | y (m) | yaw (deg) | tf_static x, y (m), yaw (deg) | difference x, y (mm), yaw (deg) |\n"
+    t += "\n| sensor in reference's frame | x (m) | y (m) | yaw (deg) | tf_static x, y (m), yaw "
+         "(deg) | difference x, y (mm), yaw (deg) |\n"
          "|---|---|---|---|---|---|\n";
   for (const io::RigModelRelative& r : m.relative) {
     const auto& c = r.covariance;
-    t += row("| %s in %s | %.4f +- %.4f | %.4f +- %.4f | %.2f +- %.2f |", r.sensor.c_str(), r.reference.c_str(), r.pose.x_m,
-             se(c, 0), r.pose.y_m, se(c, 1), rad2deg(r.pose.yaw_rad), rad2deg(se(c, 2)));
+    t += row("| %s in %s | %.4f +- %.4f | %.4f +- %.4f | %.2f +- %.2f |", r.sensor.c_str(),
+             r.reference.c_str(), r.pose.x_m, se(c, 0), r.pose.y_m, se(c, 1),
+             rad2deg(r.pose.yaw_rad), rad2deg(se(c, 2)));
     t += designCells(r.pose, r.design, c);
   }
-  t += "\n| sensor | range model f(d) | noise | beams' repeating error (mm) | status |\n|---|---|---|---|---|\n";
+  t += "\n| sensor | range model f(d) | noise | beams' repeating error (mm) | status "
+       "|\n|---|---|---|---|---|\n";
   for (const io::RigModelSensor& s : m.sensors) {
     std::string f;
     const auto& a = s.model.model.bias.alpha;
     const std::size_t n = a.size();
     for (std::size_t i = 0; i < n; ++i) {
-      const double sd = s.model.alpha_covariance.size() == n * n ? std::sqrt(std::max(0.0, s.model.alpha_covariance[i * n + i])) : 0.0;
+      const double sd = s.model.alpha_covariance.size() == n * n
+                            ? std::sqrt(std::max(0.0, s.model.alpha_covariance[i * n + i]))
+                            : 0.0;
       f += row("%salpha_%zu %.5f +- %.5f", i ? ", " : "", i, a[i], sd);
     }
-    t += row("| %s | %s | %s | %.1f | %s |\n", s.name.c_str(), f.c_str(), toString(s.model.model.noise.kind),
-             1000.0 * s.beam_scatter_m, s.model.status.ok() ? "ok" : s.model.status.message.c_str());
+    t += row("| %s | %s | %s | %.1f | %s |\n", s.name.c_str(), f.c_str(),
+             toString(s.model.model.noise.kind), 1000.0 * s.beam_scatter_m,
+             s.model.status.ok() ? "ok" : s.model.status.message.c_str());
   }
   return t;
 }
@@ -146,11 +172,14 @@ std::string rigSnippets(const io::RigModel& m) {
     const double roll = s.mounting.upside_down ? M_PI : 0.0;
     // static_transform_publisher x y z yaw pitch roll parent child (ZYX Euler): roll pi turns the
     // sensor over about its x axis, which keeps the heading of that axis.
-    launch += row("rosrun tf2_ros static_transform_publisher %.4f %.4f %.4f %.5f 0 %.5f %s %s\n", s.mounting.x_m,
-                  s.mounting.y_m, z, s.mounting.yaw_rad, roll, parent.c_str(), child.c_str());
-    urdf += row("<joint name=\"%s_joint\" type=\"fixed\"><parent link=\"%s\"/><child link=\"%s\"/>"
-                "<origin xyz=\"%.4f %.4f %.4f\" rpy=\"%.5f 0 %.5f\"/></joint>\n",
-                child.c_str(), parent.c_str(), child.c_str(), s.mounting.x_m, s.mounting.y_m, z, roll, s.mounting.yaw_rad);
+    launch += row("rosrun tf2_ros static_transform_publisher %.4f %.4f %.4f %.5f 0 %.5f %s %s\n",
+                  s.mounting.x_m, s.mounting.y_m, z, s.mounting.yaw_rad, roll, parent.c_str(),
+                  child.c_str());
+    urdf +=
+        row("<joint name=\"%s_joint\" type=\"fixed\"><parent link=\"%s\"/><child link=\"%s\"/>"
+            "<origin xyz=\"%.4f %.4f %.4f\" rpy=\"%.5f 0 %.5f\"/></joint>\n",
+            child.c_str(), parent.c_str(), child.c_str(), s.mounting.x_m, s.mounting.y_m, z, roll,
+            s.mounting.yaw_rad);
   }
   return "tf_static with the estimated mountings (z from the design):\n" + launch + urdf;
 }

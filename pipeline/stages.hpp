@@ -21,8 +21,10 @@
 namespace lidarcal::pipeline {
 
 using StageProgress = std::function<void(std::size_t done, std::size_t total)>;
-/// Progress of several named stages ("detect", "joint refinement"): steps done of the stage's total.
-using NamedProgress = std::function<void(const std::string& stage, std::size_t done, std::size_t total)>;
+/// Progress of several named stages ("detect", "joint refinement"): steps done of the stage's
+/// total.
+using NamedProgress =
+    std::function<void(const std::string& stage, std::size_t done, std::size_t total)>;
 
 struct SequenceCalibration {
   detectors::SequenceDetections detections;  ///< circles per scan and landmark ids
@@ -38,9 +40,12 @@ struct SequenceCalibration {
 /// calibration's own stages (config.progress, which is called as well).
 /// `adjust`, when given, may change the calibration's configuration once the landmarks are
 /// known (e.g. hold surveyed landmarks fixed by their ids).
-using CalibrationAdjust = std::function<void(const detectors::SequenceDetections&, calibration::CalibrationConfig&)>;
-SequenceCalibration calibrateSequence(const io::Sequence& seq, const detectors::SequenceDetectionConfig& detection,
-                                      const calibration::CalibrationConfig& config, const NamedProgress& progress = {},
+using CalibrationAdjust =
+    std::function<void(const detectors::SequenceDetections&, calibration::CalibrationConfig&)>;
+SequenceCalibration calibrateSequence(const io::Sequence& seq,
+                                      const detectors::SequenceDetectionConfig& detection,
+                                      const calibration::CalibrationConfig& config,
+                                      const NamedProgress& progress = {},
                                       const CalibrationAdjust& adjust = {});
 
 /// A warning for calibrate/run when the scans of `seq` differ in their number of points (empty
@@ -52,8 +57,9 @@ std::string beamCountWarning(const io::Sequence& seq);
 /// that differ on a sensor of the same name (or unnamed) are refused unless `force`; then the
 /// returned text is a warning to print (empty when everything fits). With `outside` other than
 /// extrapolate, f must be invertible over the fitted range only.
-std::string checkModelFits(const CalibrationModel& model, const io::Sequence& seq, const std::filesystem::path& model_file,
-                           bool force = false, calibration::Outside outside = calibration::kDefaultOutside);
+std::string checkModelFits(const CalibrationModel& model, const io::Sequence& seq,
+                           const std::filesystem::path& model_file, bool force = false,
+                           calibration::Outside outside = calibration::kDefaultOutside);
 
 /// What a recording says about its sensor (sequence.json, a bag's LaserScan messages).
 struct SensorFacts {
@@ -70,7 +76,8 @@ std::string checkModelFitsSensor(const CalibrationModel& model, const SensorFact
                                  const std::filesystem::path& model_file, bool force = false,
                                  calibration::Outside outside = calibration::kDefaultOutside);
 
-/// Throws InputError naming `where` when a scan of `beams` beams does not match the model's beam count.
+/// Throws InputError naming `where` when a scan of `beams` beams does not match the model's beam
+/// count.
 void checkModelBeams(const CalibrationModel& model, std::size_t beams, const std::string& where,
                      const std::filesystem::path& model_file);
 
@@ -79,8 +86,10 @@ void checkModelBeams(const CalibrationModel& model, std::size_t beams, const std
 /// that need no recording: `export`).
 /// The model's reading corrector (calibration::readingCorrector); throws InputError naming
 /// --inversion when the model cannot be inverted that way (ML without the squared noise law).
-calibration::ReadingCorrector modelCorrector(const CalibrationModel& model, calibration::InversionMethod method,
-                                             calibration::Outside outside, const std::filesystem::path& model_file);
+calibration::ReadingCorrector modelCorrector(const CalibrationModel& model,
+                                             calibration::InversionMethod method,
+                                             calibration::Outside outside,
+                                             const std::filesystem::path& model_file);
 
 void checkModelInvertible(const CalibrationModel& model, const std::filesystem::path& model_file,
                           calibration::Outside outside = calibration::kDefaultOutside);
@@ -94,8 +103,10 @@ struct CorrectionStats : calibration::FilteringStats {
 /// directory); copies sequence.json. `threads` (0: the machine's cores, at most 8) correct
 /// scans side by side; the files and counts do not depend on it.
 CorrectionStats correctSequence(const io::Sequence& seq, const CalibrationModel& model,
-                                calibration::InversionMethod method, const std::filesystem::path& out_dir,
-                                io::PcdEncoding encoding, const StageProgress& on_scan = {},
-                                calibration::Outside outside = calibration::kDefaultOutside, int threads = 0);
+                                calibration::InversionMethod method,
+                                const std::filesystem::path& out_dir, io::PcdEncoding encoding,
+                                const StageProgress& on_scan = {},
+                                calibration::Outside outside = calibration::kDefaultOutside,
+                                int threads = 0);
 
 }  // namespace lidarcal::pipeline

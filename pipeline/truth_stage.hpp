@@ -20,9 +20,12 @@ namespace lidarcal::pipeline {
 /// corrected scans as written (read back from `corrected_dir`), then under the same rule
 /// (`method`, `outside`) in memory: the closed form (unless ours is one), the oracle in the
 /// commanded frame (the odometry scale error no self-calibration sees) and the plain oracle.
-std::vector<ComparedModel> compareWithTruth(const io::Sequence& seq, const std::filesystem::path& corrected_dir,
-                                            const io::SimulationTruth& truth, const SequenceCalibration& cal,
+std::vector<ComparedModel> compareWithTruth(const io::Sequence& seq,
+                                            const std::filesystem::path& corrected_dir,
+                                            const io::SimulationTruth& truth,
+                                            const SequenceCalibration& cal,
                                             const calibration::CalibrationConfig& config,
-                                            calibration::InversionMethod method, calibration::Outside outside);
+                                            calibration::InversionMethod method,
+                                            calibration::Outside outside);
 
 }  // namespace lidarcal::pipeline

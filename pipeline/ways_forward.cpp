@@ -15,7 +15,8 @@ namespace {
 /// Scans of a stop whose walls are enough to name them (the first ones; their noise averages out).
 constexpr std::size_t kScansForWalls = 20;
 
-constexpr const char* kReferenceFormat = "docs/FORMAT.md#wall-to-wall-spans, in \"Reference measurements\"";
+constexpr const char* kReferenceFormat =
+    "docs/FORMAT.md#wall-to-wall-spans, in \"Reference measurements\"";
 
 }  // namespace
 
@@ -27,7 +28,8 @@ std::string wallsSeen(const io::Sequence& seq, std::size_t stop) {
   const auto& scans = seq.stops[stop].scans;
   for (std::size_t k = 0; k < std::min(scans.size(), kScansForWalls); ++k) {
     const io::Scan scan = io::readScan(seq.scans.path(scans[k]));
-    for (WallSighting& ws : detectors::wallSightings(*scan.cloud, stop, scans[k], config)) walls.push_back(std::move(ws));
+    for (WallSighting& ws : detectors::wallSightings(*scan.cloud, stop, scans[k], config))
+      walls.push_back(std::move(ws));
   }
   detectors::labelWallSurfaces(walls);
   return calibration::surfaceList(calibration::wallSurfaces(walls), stop);
@@ -38,29 +40,43 @@ std::string waysForward(const io::Sequence& seq, StatusCode code) {
   const std::string dir = seq.dir.string();
   if (one_place) {
     const std::string walls = wallsSeen(seq, 0);
-    std::string text = "this recording was made from one place, which calibrates against what you measure there: "
-                       "`lidarcal calibrate " + dir + " --reference REF.json -o model.json` with wall-to-wall spans "
-                       "(a laser meter across the room between two walls the sensor sees on opposite sides";
-    if (walls != "none") text += "; the walls stop 0 shows, by normal direction and distance as read: " + walls;
-    text += "), or tape distances to a pole or wall from 3 or more places (one recording each, imported with "
-            "--stop-per-input) (" + std::string(kReferenceFormat) + "); `lidarcal diagnose " + dir + " -o DIR` criticises the range model on these scans; to self-calibrate, "
-            "record poles from 3 or more stops along a line of at least 1 m, each stop with its own VIEWPOINT "
-            "(see docs/ERRORS.md)";
+    std::string text =
+        "this recording was made from one place, which calibrates against what you measure there: "
+        "`lidarcal calibrate " +
+        dir +
+        " --reference REF.json -o model.json` with wall-to-wall spans "
+        "(a laser meter across the room between two walls the sensor sees on opposite sides";
+    if (walls != "none")
+      text += "; the walls stop 0 shows, by normal direction and distance as read: " + walls;
+    text +=
+        "), or tape distances to a pole or wall from 3 or more places (one recording each, "
+        "imported with "
+        "--stop-per-input) (" +
+        std::string(kReferenceFormat) + "); `lidarcal diagnose " + dir +
+        " -o DIR` criticises the range model on these scans; to self-calibrate, "
+        "record poles from 3 or more stops along a line of at least 1 m, each stop with its own "
+        "VIEWPOINT "
+        "(see docs/ERRORS.md)";
     return text;
   }
   switch (code) {
     case StatusCode::too_few_stops:
-      return "record 3 or more stops along a line, each with its own VIEWPOINT; or calibrate these " +
-             plural(seq.stops.size(), "stop") + " against tape distances or wall-to-wall spans measured there "
-             "(`lidarcal calibrate " + dir + " --reference REF.json`, " + kReferenceFormat + "); `lidarcal diagnose " + dir +
+      return "record 3 or more stops along a line, each with its own VIEWPOINT; or calibrate "
+             "these " +
+             plural(seq.stops.size(), "stop") +
+             " against tape distances or wall-to-wall spans measured there "
+             "(`lidarcal calibrate " +
+             dir + " --reference REF.json`, " + kReferenceFormat + "); `lidarcal diagnose " + dir +
              " -o DIR` criticises the range model on them (see docs/ERRORS.md)";
     case StatusCode::no_usable_landmark:
     case StatusCode::too_few_observations:
     case StatusCode::joint_failed:
-      return "`lidarcal detect " + dir + " -o DIR` shows which poles are found where; distances or wall-to-wall spans "
-             "measured at some stops calibrate without triangulation (`--reference REF.json`, " + kReferenceFormat +
-             ") (see docs/ERRORS.md)";
-    default: return "see docs/ERRORS.md";
+      return "`lidarcal detect " + dir +
+             " -o DIR` shows which poles are found where; distances or wall-to-wall spans "
+             "measured at some stops calibrate without triangulation (`--reference REF.json`, " +
+             kReferenceFormat + ") (see docs/ERRORS.md)";
+    default:
+      return "see docs/ERRORS.md";
   }
 }
 

@@ -12,7 +12,8 @@ namespace {
 
 /// The entity, or a std::runtime_error naming `what` when Cyclone returned an error code.
 dds_entity_t check(dds_entity_t e, const char* what) {
-  if (e < 0) throw std::runtime_error(std::string("Cyclone DDS: ") + what + " failed: " + dds_strretcode(e));
+  if (e < 0)
+    throw std::runtime_error(std::string("Cyclone DDS: ") + what + " failed: " + dds_strretcode(e));
   return e;
 }
 
@@ -42,15 +43,18 @@ CycloneRelay::CycloneRelay(const RelayConfig& c) {
   dds_qset_entity_name(pq, c.participant_name.c_str());
   participant_ = dds_create_participant(static_cast<dds_domainid_t>(c.domain_id), pq, nullptr);
   dds_delete_qos(pq);
-  check(participant_, "creating the participant (domain from ROS_DOMAIN_ID, configuration from CYCLONEDDS_URI)");
+  check(participant_,
+        "creating the participant (domain from ROS_DOMAIN_ID, configuration from CYCLONEDDS_URI)");
   try {
     const dds_entity_t in =
-        check(dds_create_topic(participant_, &sensor_msgs_msg_dds__LaserScan__desc, c.input_topic.c_str(), nullptr, nullptr),
+        check(dds_create_topic(participant_, &sensor_msgs_msg_dds__LaserScan__desc,
+                               c.input_topic.c_str(), nullptr, nullptr),
               "creating the input topic");
     const dds_entity_t out =
         c.output_topic == c.input_topic
             ? in
-            : check(dds_create_topic(participant_, &sensor_msgs_msg_dds__LaserScan__desc, c.output_topic.c_str(), nullptr, nullptr),
+            : check(dds_create_topic(participant_, &sensor_msgs_msg_dds__LaserScan__desc,
+                                     c.output_topic.c_str(), nullptr, nullptr),
                     "creating the output topic");
     dds_qos_t* rq = profileQos(c.input_qos);
     reader_ = dds_create_reader(participant_, in, rq, nullptr);
@@ -61,7 +65,8 @@ CycloneRelay::CycloneRelay(const RelayConfig& c) {
     dds_delete_qos(wq);
     check(writer_, "creating the writer");
     waitset_ = check(dds_create_waitset(participant_), "creating the waitset");
-    check(dds_set_status_mask(reader_, DDS_DATA_AVAILABLE_STATUS), "setting the reader's status mask");
+    check(dds_set_status_mask(reader_, DDS_DATA_AVAILABLE_STATUS),
+          "setting the reader's status mask");
     check(dds_waitset_attach(waitset_, reader_, reader_), "attaching the reader");
   } catch (...) {
     dds_delete(participant_);

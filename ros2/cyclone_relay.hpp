@@ -17,12 +17,12 @@ struct sensor_msgs_msg_dds__LaserScan_;
 namespace lidarcal::ros2 {
 
 struct RelayConfig {
-  int domain_id = 0;                                // ROS_DOMAIN_ID
-  std::string participant_name = "lidarcal";        // the node's name, shown by DDS tools
-  std::string input_topic = "rt/scan";              // DDS topic read
-  std::string output_topic = "rt/scan_corrected";   // DDS topic written
-  QosProfile input_qos = QosProfile::sensor_data;   // reader QoS
-  QosProfile output_qos = QosProfile::reliable;     // writer QoS
+  int domain_id = 0;                               // ROS_DOMAIN_ID
+  std::string participant_name = "lidarcal";       // the node's name, shown by DDS tools
+  std::string input_topic = "rt/scan";             // DDS topic read
+  std::string output_topic = "rt/scan_corrected";  // DDS topic written
+  QosProfile input_qos = QosProfile::sensor_data;  // reader QoS
+  QosProfile output_qos = QosProfile::reliable;    // writer QoS
 };
 
 /// Return true to publish the (changed) scan, false to drop it.

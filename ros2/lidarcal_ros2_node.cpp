@@ -46,15 +46,18 @@ LoadedModel loadModel(const ros2::NodeParameters& p) {
     m.model = std::move(e.model);
     m.inversion = e.inversion;
     if (!calibration::parseOutside(e.outside, m.outside))
-      throw InputError(p.model_file, "outside", "'" + e.outside + "' is not a policy of `lidarcal correct --outside`",
+      throw InputError(p.model_file, "outside",
+                       "'" + e.outside + "' is not a policy of `lidarcal correct --outside`",
                        "export the model again, or set -p outside:=...");
   } else {
-    m.model = io::readModelForNode(p.model_file, p.sensor_name, ros2::resolveTopic(p.input, p), &m.block);
+    m.model =
+        io::readModelForNode(p.model_file, p.sensor_name, ros2::resolveTopic(p.input, p), &m.block);
   }
   if (p.inversion) m.inversion = *p.inversion;
   if (p.outside) calibration::parseOutside(*p.outside, m.outside);  // checked by parseNodeArguments
   if (m.inversion != "ls" && m.inversion != "ml")
-    throw InputError(p.model_file, "inversion", "'" + m.inversion + "' is not ls or ml", "set -p inversion:=ls");
+    throw InputError(p.model_file, "inversion", "'" + m.inversion + "' is not ls or ml",
+                     "set -p inversion:=ls");
   return m;
 }
 
@@ -77,11 +80,14 @@ double nowSeconds() {
 
 void printSummary(const ros2::LiveStats& st) {
   const auto& c = st.correction;
-  std::printf("lidarcal_ros2_node: %zu scans, %zu returns corrected, %zu outside the fitted readings, %zu without a distance; "
-              "%zu malformed scans dropped",
-              c.scans, c.corrected, c.outside, c.unresolved, st.droppedTotal());
+  std::printf(
+      "lidarcal_ros2_node: %zu scans, %zu returns corrected, %zu outside the fitted readings, %zu "
+      "without a distance; "
+      "%zu malformed scans dropped",
+      c.scans, c.corrected, c.outside, c.unresolved, st.droppedTotal());
   for (std::size_t r = 0; r < st.dropped.size(); ++r)
-    if (st.dropped[r] > 0) std::printf(", %zu %s", st.dropped[r], ros2::toString(static_cast<ros2::DropReason>(r)));
+    if (st.dropped[r] > 0)
+      std::printf(", %zu %s", st.dropped[r], ros2::toString(static_cast<ros2::DropReason>(r)));
   std::printf("\n");
   std::fflush(stdout);
 }
@@ -91,16 +97,19 @@ int run(const ros2::NodeParameters& p) {
   ros2::LiveSettings s;
   s.model_file = p.model_file;
   s.topic = ros2::resolveTopic(p.input, p);
-  s.method = m.inversion == "ml" ? calibration::InversionMethod::ml : calibration::InversionMethod::ls;
+  s.method =
+      m.inversion == "ml" ? calibration::InversionMethod::ml : calibration::InversionMethod::ls;
   s.outside = m.outside;
   // A rig model's block chosen by sensor_name: the block's own sensor_name need not repeat it.
   if (m.block.empty()) s.sensor_name = p.sensor_name;
   s.force = p.force;
   pipeline::checkModelInvertible(m.model, p.model_file, s.outside);
   if (s.sensor_name)  // refused at start when the name is given; beams and limits at the first scan
-    pipeline::checkModelFitsSensor(m.model, {s.sensor_name, std::nullopt, std::nullopt, "parameter sensor_name", "node"},
-                                   p.model_file, p.force, s.outside);
-  ros2::LiveCorrector corrector(m.model, s, pipeline::modelCorrector(m.model, s.method, s.outside, p.model_file));
+    pipeline::checkModelFitsSensor(
+        m.model, {s.sensor_name, std::nullopt, std::nullopt, "parameter sensor_name", "node"},
+        p.model_file, p.force, s.outside);
+  ros2::LiveCorrector corrector(
+      m.model, s, pipeline::modelCorrector(m.model, s.method, s.outside, p.model_file));
 
   ros2::RelayConfig rc;
   rc.domain_id = ros2::domainIdFromEnvironment();
@@ -112,9 +121,13 @@ int run(const ros2::NodeParameters& p) {
   rc.output_qos = p.output_qos;
   ros2::CycloneRelay relay(rc);
   const std::string block = m.block.empty() ? "" : " block " + m.block;
-  std::fprintf(stderr, "lidarcal_ros2_node: correcting %s -> %s on domain %d with %s%s (sensor '%s', %s beams; inversion %s, outside %s)\n",
-               s.topic.c_str(), output.c_str(), rc.domain_id, p.model_file.c_str(), block.c_str(), m.model.sensor_name.c_str(),
-               m.model.beams ? std::to_string(*m.model.beams).c_str() : "any", m.inversion.c_str(), calibration::toString(s.outside));
+  std::fprintf(stderr,
+               "lidarcal_ros2_node: correcting %s -> %s on domain %d with %s%s (sensor '%s', %s "
+               "beams; inversion %s, outside %s)\n",
+               s.topic.c_str(), output.c_str(), rc.domain_id, p.model_file.c_str(), block.c_str(),
+               m.model.sensor_name.c_str(),
+               m.model.beams ? std::to_string(*m.model.beams).c_str() : "any", m.inversion.c_str(),
+               calibration::toString(s.outside));
 
   ros2::WarningLimiter warnings;
   int status = 0;
@@ -124,18 +137,22 @@ int run(const ros2::NodeParameters& p) {
       ros2::ScanFields f = fieldsOf(scan);
       const ros2::ScanVerdict v = corrector.process(f);
       if (v == ros2::ScanVerdict::refuse) {
-        std::fprintf(stderr, "lidarcal_ros2_node: refusing to correct %s with %s (a model of another sensor?): %s\n",
-                     s.topic.c_str(), p.model_file.c_str(), corrector.message().c_str());
+        std::fprintf(
+            stderr,
+            "lidarcal_ros2_node: refusing to correct %s with %s (a model of another sensor?): %s\n",
+            s.topic.c_str(), p.model_file.c_str(), corrector.message().c_str());
         status = 2;
         return false;
       }
       if (v == ros2::ScanVerdict::drop) {
-        const std::string w = warnings.offer(ros2::toString(corrector.dropReason()), "dropped " + corrector.message(), nowSeconds());
+        const std::string w = warnings.offer(ros2::toString(corrector.dropReason()),
+                                             "dropped " + corrector.message(), nowSeconds());
         if (!w.empty()) std::fprintf(stderr, "lidarcal_ros2_node: warning: %s\n", w.c_str());
         return false;
       }
       if (!corrector.sensorWarning().empty() && corrector.stats().correction.scans == 1)
-        std::fprintf(stderr, "lidarcal_ros2_node: warning: %s\n", corrector.sensorWarning().c_str());
+        std::fprintf(stderr, "lidarcal_ros2_node: warning: %s\n",
+                     corrector.sensorWarning().c_str());
       return true;
     });
   }

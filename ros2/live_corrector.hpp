@@ -29,9 +29,9 @@ namespace lidarcal::ros2 {
 struct ScanFields {
   float angle_min = 0, angle_max = 0, angle_increment = 0;  ///< rad
   float range_min = 0, range_max = 0;                       ///< m
-  float* ranges = nullptr;                                  ///< m, `beams` values, corrected in place
-  std::size_t beams = 0;                                    ///< number of ranges
-  std::size_t intensities = 0;                              ///< number of intensities
+  float* ranges = nullptr;      ///< m, `beams` values, corrected in place
+  std::size_t beams = 0;        ///< number of ranges
+  std::size_t intensities = 0;  ///< number of intensities
 };
 
 /// Why a scan was dropped.
@@ -46,32 +46,36 @@ enum class ScanVerdict {
 
 /// How the node corrects, from its parameters and the model file.
 struct LiveSettings {
-  std::string model_file;                          ///< for messages
-  std::string topic;                               ///< the input topic, for messages
+  std::string model_file;  ///< for messages
+  std::string topic;       ///< the input topic, for messages
   calibration::InversionMethod method = calibration::InversionMethod::ls;  ///< inversion
-  calibration::Outside outside = calibration::kDefaultOutside;             ///< readings outside the fitted range
-  std::optional<std::string> sensor_name;          ///< checked against the model at the first scan when set
-  bool force = false;                              ///< apply a model whose range limits differ (with a warning)
+  /// readings outside the fitted range
+  calibration::Outside outside = calibration::kDefaultOutside;
+  std::optional<std::string> sensor_name;  ///< checked against the model at the first scan when set
+  bool force = false;  ///< apply a model whose range limits differ (with a warning)
 };
 
 /// Counts over the node's life.
 struct LiveStats {
-  pipeline::CorrectionStats correction;            ///< scans published and what happened to their returns
-  std::array<std::size_t, static_cast<std::size_t>(DropReason::count_)> dropped{};  ///< scans dropped, by reason
+  pipeline::CorrectionStats correction;  ///< scans published and what happened to their returns
+  /// scans dropped, by reason
+  std::array<std::size_t, static_cast<std::size_t>(DropReason::count_)> dropped{};
   std::size_t droppedTotal() const;
 };
 
 class LiveCorrector {
  public:
   /// `correct`: pipeline::modelCorrector(model, settings.method, settings.outside, model_file).
-  LiveCorrector(const CalibrationModel& model, const LiveSettings& settings, const calibration::ReadingCorrector& correct);
+  LiveCorrector(const CalibrationModel& model, const LiveSettings& settings,
+                const calibration::ReadingCorrector& correct);
 
   /// Checks and corrects one scan (see the header comment).
   ScanVerdict process(ScanFields& scan);
   /// Why the last scan was dropped or refused (empty after a published scan).
   const std::string& message() const { return message_; }
   DropReason dropReason() const { return reason_; }
-  /// A warning from the sensor check at the first scan (range limits applied under force); empty otherwise.
+  /// A warning from the sensor check at the first scan (range limits applied under force); empty
+  /// otherwise.
   const std::string& sensorWarning() const { return sensor_warning_; }
   const LiveStats& stats() const { return stats_; }
 
@@ -80,9 +84,10 @@ class LiveCorrector {
 
   CalibrationModel model_;
   LiveSettings settings_;
-  pipeline::MemoCorrector correct_;  // remembers the readings seen: a lookup per beam after the first scans
-  std::vector<float> ranges_;        // the scan's ranges, as correctLaserRanges takes them (reused)
-  std::size_t sensor_beams_ = 0;     // the beam count of the first accepted scan (0: none yet)
+  // remembers the readings seen: a lookup per beam after the first scans
+  pipeline::MemoCorrector correct_;
+  std::vector<float> ranges_;     // the scan's ranges, as correctLaserRanges takes them (reused)
+  std::size_t sensor_beams_ = 0;  // the beam count of the first accepted scan (0: none yet)
   LiveStats stats_;
   std::string message_, sensor_warning_;
   DropReason reason_ = DropReason::empty;

@@ -13,7 +13,8 @@ namespace {
 const char* const kUsage = "see lidarcal_ros2_node --help";
 
 /// "name:=value" split at ":="; throws naming the argument when there is none.
-std::pair<std::string, std::string> splitAssignment(const std::string& text, const std::string& flag) {
+std::pair<std::string, std::string> splitAssignment(const std::string& text,
+                                                    const std::string& flag) {
   const auto at = text.find(":=");
   if (at == std::string::npos || at == 0)
     throw InputError("", flag + " " + text, "is not NAME:=VALUE", kUsage);
@@ -22,7 +23,8 @@ std::pair<std::string, std::string> splitAssignment(const std::string& text, con
 
 /// A parameter value as ROS 2 reads it from the command line (YAML): quotes removed.
 std::string unquote(const std::string& v) {
-  if (v.size() >= 2 && (v.front() == '"' || v.front() == '\'') && v.back() == v.front()) return v.substr(1, v.size() - 2);
+  if (v.size() >= 2 && (v.front() == '"' || v.front() == '\'') && v.back() == v.front())
+    return v.substr(1, v.size() - 2);
   return v;
 }
 
@@ -35,29 +37,45 @@ bool parseBool(const std::string& name, const std::string& v) {
 QosProfile parseQos(const std::string& name, const std::string& v) {
   if (v == "sensor_data") return QosProfile::sensor_data;
   if (v == "default" || v == "reliable") return QosProfile::reliable;
-  throw InputError("", "-p " + name + ":=" + v, "is not a QoS profile of this node", "use sensor_data or default");
+  throw InputError("", "-p " + name + ":=" + v, "is not a QoS profile of this node",
+                   "use sensor_data or default");
 }
 
 void setParameter(NodeParameters& p, const std::string& name, const std::string& raw) {
   const std::string v = unquote(raw);
-  if (name == "model") p.model_file = v;
-  else if (name == "input") p.input = v;
-  else if (name == "output") p.output = v;
-  else if (name == "inversion") p.inversion = v;
-  else if (name == "outside") p.outside = v;
-  else if (name == "sensor_name") p.sensor_name = v;
-  else if (name == "force") p.force = parseBool(name, v);
-  else if (name == "input_qos") p.input_qos = parseQos(name, v);
-  else if (name == "output_qos") p.output_qos = parseQos(name, v);
-  else if (name == "use_sim_time") parseBool(name, v);  // every ROS 2 node accepts it; stamps are copied, not made
-  else throw InputError("", "-p " + name + ":=" + raw, "is not a parameter of lidarcal_ros2_node", kUsage);
+  if (name == "model")
+    p.model_file = v;
+  else if (name == "input")
+    p.input = v;
+  else if (name == "output")
+    p.output = v;
+  else if (name == "inversion")
+    p.inversion = v;
+  else if (name == "outside")
+    p.outside = v;
+  else if (name == "sensor_name")
+    p.sensor_name = v;
+  else if (name == "force")
+    p.force = parseBool(name, v);
+  else if (name == "input_qos")
+    p.input_qos = parseQos(name, v);
+  else if (name == "output_qos")
+    p.output_qos = parseQos(name, v);
+  // every ROS 2 node accepts it; stamps are copied, not made
+  else if (name == "use_sim_time")
+    parseBool(name, v);
+  else
+    throw InputError("", "-p " + name + ":=" + raw, "is not a parameter of lidarcal_ros2_node",
+                     kUsage);
 }
 
 void applyRemap(NodeParameters& p, const std::string& from, const std::string& to) {
   if (from == "__node" || from == "__name") {
     p.node_name = to;
   } else if (from == "__ns") {
-    if (to.empty() || to[0] != '/') throw InputError("", "-r __ns:=" + to, "a namespace must be absolute", "e.g. -r __ns:=/robot1");
+    if (to.empty() || to[0] != '/')
+      throw InputError("", "-r __ns:=" + to, "a namespace must be absolute",
+                       "e.g. -r __ns:=/robot1");
     p.node_namespace = to;
   } else {
     p.remaps.emplace_back(from, to);
@@ -67,14 +85,16 @@ void applyRemap(NodeParameters& p, const std::string& from, const std::string& t
 bool validTopicName(const std::string& n) {
   if (n.empty()) return false;
   for (char c : n)
-    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '/' || c == '~')) return false;
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '/' || c == '~'))
+      return false;
   return n.find("//") == std::string::npos && (n.size() == 1 || n.back() != '/');
 }
 
 /// The name made absolute, without remapping.
 std::string qualify(const std::string& name, const NodeParameters& p) {
   if (!validTopicName(name))
-    throw InputError("", "topic '" + name + "'", "is not a valid ROS 2 topic name (letters, digits, '_', '/', a leading '~')",
+    throw InputError("", "topic '" + name + "'",
+                     "is not a valid ROS 2 topic name (letters, digits, '_', '/', a leading '~')",
                      "e.g. -p input:=scan or -p input:=/robot/scan");
   const std::string ns = p.node_namespace == "/" ? "" : p.node_namespace;
   if (name[0] == '/') return name;
@@ -84,7 +104,9 @@ std::string qualify(const std::string& name, const NodeParameters& p) {
 
 }  // namespace
 
-const char* toString(QosProfile q) { return q == QosProfile::sensor_data ? "sensor_data" : "default"; }
+const char* toString(QosProfile q) {
+  return q == QosProfile::sensor_data ? "sensor_data" : "default";
+}
 
 NodeParameters parseNodeArguments(int argc, const char* const* argv) {
   NodeParameters p;
@@ -111,46 +133,62 @@ NodeParameters parseNodeArguments(int argc, const char* const* argv) {
       next(a);  // accepted as every ROS 2 node accepts them; this node logs to stderr only
     } else if (ros_args && a == "--params-file") {
       throw InputError("", a, "is not supported by this node (it is not an rclcpp node)",
-                       "pass the parameters with -p NAME:=VALUE; a model exported as YAML goes in -p model:=FILE.yaml");
+                       "pass the parameters with -p NAME:=VALUE; a model exported as YAML goes in "
+                       "-p model:=FILE.yaml");
     } else {
-      throw InputError("", a, ros_args ? "is not a ROS argument this node knows" : "is an unknown argument", kUsage);
+      throw InputError(
+          "", a, ros_args ? "is not a ROS argument this node knows" : "is an unknown argument",
+          kUsage);
     }
   }
   if (p.help) return p;
   if (p.model_file.empty())
-    throw InputError("", "parameter model", "is not set", "give this sensor's model: --ros-args -p model:=/path/model.json");
+    throw InputError("", "parameter model", "is not set",
+                     "give this sensor's model: --ros-args -p model:=/path/model.json");
   if (p.inversion && *p.inversion != "ls" && *p.inversion != "ml")
     throw InputError("", "-p inversion:=" + *p.inversion, "is not an inversion", "use ls or ml");
   calibration::Outside outside = calibration::kDefaultOutside;
   if (p.outside && !calibration::parseOutside(*p.outside, outside))
-    throw InputError("", "-p outside:=" + *p.outside, "is not a policy of `lidarcal correct --outside`",
-                     std::string("see lidarcal correct --help; the default is ") + calibration::toString(calibration::kDefaultOutside));
+    throw InputError("", "-p outside:=" + *p.outside,
+                     "is not a policy of `lidarcal correct --outside`",
+                     std::string("see lidarcal correct --help; the default is ") +
+                         calibration::toString(calibration::kDefaultOutside));
   return p;
 }
 
 std::string nodeHelp() {
   std::string h =
-      "lidarcal_ros2_node: corrects a sensor_msgs/msg/LaserScan topic with a lidarcal model and republishes it\n"
+      "lidarcal_ros2_node: corrects a sensor_msgs/msg/LaserScan topic with a lidarcal model and "
+      "republishes it\n"
       "(same header and intensities; ranges corrected with the rule of `lidarcal correct`).\n\n"
-      "usage: lidarcal_ros2_node --ros-args -p model:=MODEL [-p NAME:=VALUE ...] [-r __node:=NAME] [-r __ns:=/NS] [-r FROM:=TO]\n\n"
+      "usage: lidarcal_ros2_node --ros-args -p model:=MODEL [-p NAME:=VALUE ...] [-r __node:=NAME] "
+      "[-r __ns:=/NS] [-r FROM:=TO]\n\n"
       "parameters:\n"
-      "  model        model.json of `lidarcal calibrate` (one sensor's or a rig's), or the YAML of\n"
+      "  model        model.json of `lidarcal calibrate` (one sensor's or a rig's), or the YAML "
+      "of\n"
       "               `lidarcal export --format yaml` (required)\n"
       "  input        LaserScan topic to read (default scan)\n"
       "  output       topic of the corrected scans (default scan_corrected)\n"
       "  inversion    ls | ml, as `lidarcal correct --inversion` (default: the YAML's, else ls)\n"
-      "  outside      readings outside the fitted range, as `lidarcal correct --outside` (default: the YAML's, else ";
+      "  outside      readings outside the fitted range, as `lidarcal correct --outside` (default: "
+      "the YAML's, else ";
   h += calibration::toString(calibration::kDefaultOutside);
-  h +=
-      ")\n"
-      "  sensor_name  the sensor's name as in the model; another name is refused at start (default: not checked).\n"
-      "               With a rig model: the block to apply (name, topic or frame); unset: the block whose topic is input\n"
-      "  force        true: apply a model whose range limits differ from the scans' (default false)\n"
-      "  input_qos    sensor_data (best effort, keep last 5; default) or default (reliable, keep last 10)\n"
-      "  output_qos   default (reliable, keep last 10; default) or sensor_data\n\n"
-      "environment: ROS_DOMAIN_ID (default 0); CYCLONEDDS_URI configures the DDS participant (Cyclone DDS).\n"
-      "exit status: 0 after Ctrl-C / SIGTERM, 2 a bad argument or a model of another sensor (at start or at the\n"
-      "first scan), 3 a model that cannot correct. Malformed scans are dropped, counted and warned about.\n";
+  h += ")\n"
+       "  sensor_name  the sensor's name as in the model; another name is refused at start "
+       "(default: not checked).\n"
+       "               With a rig model: the block to apply (name, topic or frame); unset: the "
+       "block whose topic is input\n"
+       "  force        true: apply a model whose range limits differ from the scans' (default "
+       "false)\n"
+       "  input_qos    sensor_data (best effort, keep last 5; default) or default (reliable, keep "
+       "last 10)\n"
+       "  output_qos   default (reliable, keep last 10; default) or sensor_data\n\n"
+       "environment: ROS_DOMAIN_ID (default 0); CYCLONEDDS_URI configures the DDS participant "
+       "(Cyclone DDS).\n"
+       "exit status: 0 after Ctrl-C / SIGTERM, 2 a bad argument or a model of another sensor (at "
+       "start or at the\n"
+       "first scan), 3 a model that cannot correct. Malformed scans are dropped, counted and "
+       "warned about.\n";
   return h;
 }
 
@@ -169,7 +207,8 @@ int domainIdFromEnvironment() {
   char* end = nullptr;
   const long id = std::strtol(text, &end, 10);
   if (*end != '\0' || id < 0 || id > 232)
-    throw InputError("", std::string("ROS_DOMAIN_ID=") + text, "is not a domain id", "use an integer from 0 to 232 (or unset it: 0)");
+    throw InputError("", std::string("ROS_DOMAIN_ID=") + text, "is not a domain id",
+                     "use an integer from 0 to 232 (or unset it: 0)");
   return static_cast<int>(id);
 }
 

@@ -1,4 +1,5 @@
 #!/usr/bin/env bash
+# SPDX-License-Identifier: BSD-3-Clause
 # Installs the Debian 12 packages lidarcal needs. Idempotent: checks what is installed first
 # and returns at once when nothing is missing. Uses sudo when not run as root.
 set -euo pipefail
@@ -18,6 +19,7 @@ PACKAGES=(
   libroscpp-dev python3-rosmaster  # lidarcal_node (roscpp) and the rosmaster its test starts
   cyclonedds-dev cyclonedds-tools  # lidarcal_ros2_node: Eclipse Cyclone DDS and its IDL compiler idlc
   libfastrtps-dev fastddsgen       # eProsima Fast DDS and fastddsgen: the other vendor, for the cross-vendor test
+  clang-format-14                  # the style check (scripts/check-format.sh, .clang-format)
   clang-14 libclang-rt-14-dev      # libFuzzer targets (scripts/fuzz.sh): clang's -fsanitize=fuzzer and its runtime
   slurmctld slurmd slurm-client munge  # the Slurm recipes' test (scripts/slurm/): a single-node cluster it starts and stops
 )

@@ -16,7 +16,9 @@ namespace lidarcal::simulation {
 namespace {
 
 /// What the beams of a surface record as intensity: its own, or NaN (none recorded).
-double recordedIntensity(const Cylinder& c) { return c.intensity > 0.0 ? c.intensity : std::nan(""); }
+double recordedIntensity(const Cylinder& c) {
+  return c.intensity > 0.0 ? c.intensity : std::nan("");
+}
 
 /// The stop's actual pose and the random streams of one scan.
 struct ScanDraw {
@@ -29,10 +31,11 @@ struct ScanDraw {
 
 /// Without beams: one reading of the landmark's nearest point along the (noisy) bearing, with
 /// the true distance in `truth`; false when the reading leaves the sensor's window.
-bool addCentralReading(const LandmarkLevelConfig& config, const Cylinder& c, double centre, double e, ScanDraw& draw,
-                       Sighting& s, std::vector<double>& truth) {
+bool addCentralReading(const LandmarkLevelConfig& config, const Cylinder& c, double centre,
+                       double e, ScanDraw& draw, Sighting& s, std::vector<double>& truth) {
   const double d = centre - c.radius_m;  // Alhashimi et al. 2021 eq. 2 minus the radius
-  const double y = effectReading(config.model, config.effects, d, BeamContext{1.0, c.range_offset_m, draw.scan, c.intensity}, e,
+  const double y = effectReading(config.model, config.effects, d,
+                                 BeamContext{1.0, c.range_offset_m, draw.scan, c.intensity}, e,
                                  draw.effect_rng);  // eq. 3
   if (y < config.model.range_min_m || y > config.model.range_max_m) return false;
   s.beams.push_back(BeamReading{s.bearing_rad, y, 0, recordedIntensity(c)});
@@ -42,8 +45,9 @@ bool addCentralReading(const LandmarkLevelConfig& config, const Cylinder& c, dou
 
 /// With beams: every grid beam that hits the landmark, its reading (the outermost ones may be
 /// mixed pixels with what `background` shows behind), and its true distance in `truth`.
-void addBeamReadings(const LandmarkLevelConfig& config, const Scene& background, const Cylinder& c, double centre,
-                     double true_bearing, ScanDraw& draw, Sighting& s, std::vector<double>& truth) {
+void addBeamReadings(const LandmarkLevelConfig& config, const Scene& background, const Cylinder& c,
+                     double centre, double true_bearing, ScanDraw& draw, Sighting& s,
+                     std::vector<double>& truth) {
   const Pose2& a = draw.actual;
   const double mount = config.mount_yaw_rad;
   const double half = std::asin(c.radius_m / centre);
@@ -62,7 +66,8 @@ void addBeamReadings(const LandmarkLevelConfig& config, const Scene& background,
   for (long j = first; j <= last; ++j) {
     const auto t = intersectCircle(rayAt(j), c);
     hits.emplace_back(j, t ? *t : std::nan(""));
-    beam_noise.push_back(draw.normal(draw.rng));  // drawn for every grid beam, as before effects existed
+    // drawn for every grid beam, as before effects existed
+    beam_noise.push_back(draw.normal(draw.rng));
   }
   long first_hit = last + 1, last_hit = first - 1;
   for (const auto& [j, t] : hits)
@@ -77,18 +82,22 @@ void addBeamReadings(const LandmarkLevelConfig& config, const Scene& background,
     for (long nb : {j - 1, j + 1}) {
       if ((nb == j - 1 && j != first_hit) || (nb == j + 1 && j != last_hit)) continue;
       const RayHit bh = castRay(background, rayAt(nb));
-      if (bh.kind != io::TargetKind::none && bh.range_m > t && (std::isnan(back) || bh.range_m < back))
+      if (bh.kind != io::TargetKind::none && bh.range_m > t &&
+          (std::isnan(back) || bh.range_m < back))
         back = bh.range_m;
     }
     const double dm = mixedPixelDistance(config.effects, t, back, draw.effect_rng);
     const Ray ray = rayAt(j);
     const double perp = (c.y_m - a.y_m) * ray.dx - (c.x_m - a.x_m) * ray.dy;
-    const double cos_inc = std::sqrt(std::max(0.0, 1.0 - (perp / c.radius_m) * (perp / c.radius_m)));
-    const double y = effectReading(config.model, config.effects, dm, BeamContext{cos_inc, c.range_offset_m, draw.scan, c.intensity},
+    const double cos_inc =
+        std::sqrt(std::max(0.0, 1.0 - (perp / c.radius_m) * (perp / c.radius_m)));
+    const double y = effectReading(config.model, config.effects, dm,
+                                   BeamContext{cos_inc, c.range_offset_m, draw.scan, c.intensity},
                                    beam_noise[h], draw.effect_rng);
     if (y < config.model.range_min_m || y > config.model.range_max_m) continue;
     const auto beam = static_cast<std::uint32_t>(((j % n) + n) % n);
-    s.beams.push_back(BeamReading{wrapAngle(grid + static_cast<double>(j) * inc), y, beam, recordedIntensity(c)});
+    s.beams.push_back(
+        BeamReading{wrapAngle(grid + static_cast<double>(j) * inc), y, beam, recordedIntensity(c)});
     truth.push_back(t);
   }
 }
@@ -99,10 +108,12 @@ LandmarkLevelSample simulateLandmarkLevel(const LandmarkLevelConfig& config, std
   LandmarkLevelSample out;
   Scene scene;
   scene.path = config.path;
-  out.stops = config.stops.empty() ? planStops(scene, seed) : config.stops;  // eqs. 7-8, shared with the scan-level simulator
+  // eqs. 7-8, shared with the scan-level simulator
+  out.stops = config.stops.empty() ? planStops(scene, seed) : config.stops;
   out.obs.range_min_m = config.model.range_min_m;
   out.obs.range_max_m = config.model.range_max_m;
-  if (config.publish_radius && !config.landmarks.empty()) out.obs.landmark_radius_m = config.landmarks.front().radius_m;
+  if (config.publish_radius && !config.landmarks.empty())
+    out.obs.landmark_radius_m = config.landmarks.front().radius_m;
   for (const auto& s : out.stops) out.obs.commanded.push_back(s.commanded);
 
   std::normal_distribution<double> normal(0.0, 1.0);

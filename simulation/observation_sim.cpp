@@ -56,8 +56,8 @@ ObservationSimulation simulateObservations(const ObservationScene& scene, std::u
         o.sensor = static_cast<int>(s);
         o.landmark = static_cast<int>(j);
         o.range_m = range + sensor.noise.range_mean_m + std::sqrt(sensor.noise.range_var_m2) * e1;
-        o.bearing_rad =
-            wrapAngle(bearing + sensor.noise.bearing_mean_rad + std::sqrt(sensor.noise.bearing_var_rad2) * e2);
+        o.bearing_rad = wrapAngle(bearing + sensor.noise.bearing_mean_rad +
+                                  std::sqrt(sensor.noise.bearing_var_rad2) * e2);
         sim.observations.push_back(o);
       }
     }

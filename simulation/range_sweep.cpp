@@ -13,12 +13,16 @@ namespace lidarcal::simulation {
 void RangeSweepConfig::validate() const {
   if (distances_m.empty()) throw std::invalid_argument("RangeSweepConfig: no distance");
   for (double d : distances_m)
-    if (!(d > radius_m)) throw std::invalid_argument("RangeSweepConfig: every distance must exceed the pole's radius");
+    if (!(d > radius_m))
+      throw std::invalid_argument("RangeSweepConfig: every distance must exceed the pole's radius");
   if (!(radius_m > 0.0)) throw std::invalid_argument("RangeSweepConfig: radius_m must be positive");
-  if (scans_per_stop == 0) throw std::invalid_argument("RangeSweepConfig: scans_per_stop must be at least 1");
-  if (!(angle_increment_rad > 0.0)) throw std::invalid_argument("RangeSweepConfig: angle_increment_rad must be positive");
+  if (scans_per_stop == 0)
+    throw std::invalid_argument("RangeSweepConfig: scans_per_stop must be at least 1");
+  if (!(angle_increment_rad > 0.0))
+    throw std::invalid_argument("RangeSweepConfig: angle_increment_rad must be positive");
   if (!(tape_error_m >= 0.0) || !(stated_sigma_m >= 0.0))
-    throw std::invalid_argument("RangeSweepConfig: tape_error_m and stated_sigma_m must not be negative");
+    throw std::invalid_argument(
+        "RangeSweepConfig: tape_error_m and stated_sigma_m must not be negative");
   if (effects.ripple_amplitude_m != 0.0 && !(effects.ripple_wavelength_m > 0.0))
     throw std::invalid_argument("RangeSweepConfig: a ripple needs a positive wavelength");
 }

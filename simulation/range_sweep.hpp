@@ -19,21 +19,27 @@
 namespace lidarcal::simulation {
 
 struct RangeSweepConfig {
-  std::vector<double> distances_m;  ///< the pole's centre distance at each stop, metres (one stop each)
-  double radius_m = 0.045;          ///< the pole's radius, metres. Default 0.045 (the Hokuyo's reflector)
+  /// the pole's centre distance at each stop, metres (one stop each)
+  std::vector<double> distances_m;
+  double radius_m = 0.045;  ///< the pole's radius, metres. Default 0.045 (the Hokuyo's reflector)
   std::size_t scans_per_stop = 10;  ///< scans recorded at each stop. Default 10
-  double angle_increment_rad = 0.004363323129985824;  ///< the beam grid's step, radians. Default 0.25 degrees
-  RangeModel model;                 ///< the sensor's bias polynomial, noise law and range window
-  RangeEffects effects;             ///< e.g. a ripple of the bias (RangeEffects::ripple_amplitude_m)
-  double tape_error_m = 0.0;        ///< standard deviation of the error drawn for each tape distance, metres. Default 0
-  double stated_sigma_m = 0.0;      ///< sigma_m written into each REF.json entry, metres. Default 0 (exact)
-  void validate() const;            ///< throws std::invalid_argument
+  /// the beam grid's step, radians. Default 0.25 degrees
+  double angle_increment_rad = 0.004363323129985824;
+  RangeModel model;      ///< the sensor's bias polynomial, noise law and range window
+  RangeEffects effects;  ///< e.g. a ripple of the bias (RangeEffects::ripple_amplitude_m)
+  /// standard deviation of the error drawn for each tape distance, metres. Default 0
+  double tape_error_m = 0.0;
+  /// sigma_m written into each REF.json entry, metres. Default 0 (exact)
+  double stated_sigma_m = 0.0;
+  void validate() const;  ///< throws std::invalid_argument
 };
 
 struct RangeSweep {
-  LandmarkObservations obs;          ///< the pole's sightings with their beams, one stop per distance
-  Reference reference;               ///< one landmark entry per stop: the tape distance (with its error), bearing 0
-  std::vector<double> true_distance_m;  ///< the pole's true centre distance at each stop (distances_m)
+  LandmarkObservations obs;  ///< the pole's sightings with their beams, one stop per distance
+  /// one landmark entry per stop: the tape distance (with its error), bearing 0
+  Reference reference;
+  /// the pole's true centre distance at each stop (distances_m)
+  std::vector<double> true_distance_m;
 };
 
 /// One draw: randomness from `seed` (the readings as simulateLandmarkLevel draws them; the tape

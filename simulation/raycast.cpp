@@ -16,7 +16,8 @@ std::optional<double> intersectCircle(const Ray& ray, const Cylinder& c) {
   if (disc < 0.0) return std::nullopt;
   // Entry root; written to avoid cancellation: t = q / (-b + sqrt(disc)) = -b - sqrt(disc).
   const double s = std::sqrt(disc);
-  if (b >= 0.0) return std::nullopt;  // circle behind the origin (q > 0 means both roots share b's sign)
+  // circle behind the origin (q > 0 means both roots share b's sign)
+  if (b >= 0.0) return std::nullopt;
   const double t = q / (-b + s);
   return t > 0.0 ? std::optional<double>(t) : std::nullopt;
 }
@@ -26,8 +27,8 @@ std::optional<double> intersectSegment(const Ray& ray, const Segment& w) {
   const double denom = ray.dx * ey - ray.dy * ex;  // cross(d, e)
   if (std::abs(denom) < 1e-15) return std::nullopt;
   const double px = w.x0_m - ray.ox, py = w.y0_m - ray.oy;
-  const double t = (px * ey - py * ex) / denom;         // along the ray
-  const double u = (px * ray.dy - py * ray.dx) / denom; // along the segment, [0, 1]
+  const double t = (px * ey - py * ex) / denom;          // along the ray
+  const double u = (px * ray.dy - py * ray.dx) / denom;  // along the segment, [0, 1]
   if (t <= 0.0 || u < 0.0 || u > 1.0) return std::nullopt;
   return t;
 }
@@ -71,10 +72,14 @@ template <class Field>
 double ofSurfaceHit(const Scene& scene, const RayHit& hit, Field field) {
   const auto index = static_cast<std::size_t>(hit.id - 1);
   switch (hit.kind) {
-    case io::TargetKind::landmark: return field(scene.landmarks.at(index));
-    case io::TargetKind::clutter: return field(scene.clutter.at(index));
-    case io::TargetKind::wall: return field(scene.walls.at(index));
-    default: return 0.0;
+    case io::TargetKind::landmark:
+      return field(scene.landmarks.at(index));
+    case io::TargetKind::clutter:
+      return field(scene.clutter.at(index));
+    case io::TargetKind::wall:
+      return field(scene.walls.at(index));
+    default:
+      return 0.0;
   }
 }
 

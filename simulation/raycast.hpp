@@ -17,10 +17,10 @@ struct Ray {
 
 /// Where a ray first meets a surface.
 struct RayHit {
-  double range_m = 0.0;                         ///< distance along the ray, metres
-  io::TargetKind kind = io::TargetKind::none;   ///< what was hit (none: nothing)
-  int id = 0;                                   ///< 1-based index within its kind
-  double incidence_rad = 0.0;                   ///< angle between the ray and the surface normal, [0, pi/2]
+  double range_m = 0.0;                        ///< distance along the ray, metres
+  io::TargetKind kind = io::TargetKind::none;  ///< what was hit (none: nothing)
+  int id = 0;                                  ///< 1-based index within its kind
+  double incidence_rad = 0.0;  ///< angle between the ray and the surface normal, [0, pi/2]
 };
 
 /// Smallest t > 0 with |o + t d - c| = r, the entry point of the ray into the circle.

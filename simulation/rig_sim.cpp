@@ -39,16 +39,18 @@ std::vector<TruthStop> planRigStops(const RigSimConfig& c, std::uint64_t seed) {
 }
 
 /// Distance along `ray` to the first pole it meets, and which (none: nullopt).
-std::optional<std::pair<double, std::size_t>> firstPole(const std::vector<Cylinder>& poles, const Ray& ray) {
+std::optional<std::pair<double, std::size_t>> firstPole(const std::vector<Cylinder>& poles,
+                                                        const Ray& ray) {
   std::optional<std::pair<double, std::size_t>> best;
   for (std::size_t i = 0; i < poles.size(); ++i)
-    if (const auto t = intersectCircle(ray, poles[i]); t && (!best || *t < best->first)) best = std::make_pair(*t, i);
+    if (const auto t = intersectCircle(ray, poles[i]); t && (!best || *t < best->first))
+      best = std::make_pair(*t, i);
   return best;
 }
 
 /// The sightings of one sensor in one scan: every beam of its grid that meets pole p first.
-void sweep(const RigSimConfig& c, std::size_t s, const Pose2& vehicle, std::size_t stop, std::size_t scan,
-           std::mt19937_64& rng, std::vector<RigSighting>& out) {
+void sweep(const RigSimConfig& c, std::size_t s, const Pose2& vehicle, std::size_t stop,
+           std::size_t scan, std::mt19937_64& rng, std::vector<RigSighting>& out) {
   const RigSimSensor& sensor = c.sensors[s];
   const Pose2 pose = compose(vehicle, sensor.mounting.pose());
   const double flip = sensor.mounting.flip();
@@ -59,11 +61,14 @@ void sweep(const RigSimConfig& c, std::size_t s, const Pose2& vehicle, std::size
     const double centre = std::hypot(dx, dy);
     if (centre <= pole.radius_m) continue;
     const double half = std::asin(pole.radius_m / centre);
-    const double mid = flip * wrapAngle(std::atan2(dy, dx) - pose.yaw_rad);  // the pole's bearing in the sensor frame
+    // the pole's bearing in the sensor frame
+    const double mid = flip * wrapAngle(std::atan2(dy, dx) - pose.yaw_rad);
     const double inc = sensor.angle_increment_rad;
-    const long first = std::max(0L, static_cast<long>(std::ceil((mid - half - sensor.angle_min_rad) / inc)));
-    const long last = std::min(static_cast<long>(sensor.beams) - 1,
-                               static_cast<long>(std::floor((mid + half - sensor.angle_min_rad) / inc)));
+    const long first =
+        std::max(0L, static_cast<long>(std::ceil((mid - half - sensor.angle_min_rad) / inc)));
+    const long last =
+        std::min(static_cast<long>(sensor.beams) - 1,
+                 static_cast<long>(std::floor((mid + half - sensor.angle_min_rad) / inc)));
     RigSighting sighting{s, stop, scan, static_cast<int>(p) + 1, {}};
     for (long j = first; j <= last; ++j) {
       const double a = sensor.angle_min_rad + static_cast<double>(j) * inc;

@@ -20,8 +20,8 @@ std::mt19937_64 effectRng(std::uint64_t seed, std::size_t scan) {
   return makeRng(deriveSeed(seed, 0xEFFEC75ULL), static_cast<std::uint64_t>(scan) + 1);
 }
 
-double effectReading(const RangeModel& model, const RangeEffects& fx, double d_m, const BeamContext& beam,
-                     double unit_normal, std::mt19937_64& effect_rng) {
+double effectReading(const RangeModel& model, const RangeEffects& fx, double d_m,
+                     const BeamContext& beam, double unit_normal, std::mt19937_64& effect_rng) {
   if (!fx.any() && beam.surface_offset_m == 0.0) return rangeReading(model, d_m, unit_normal);
   double e = unit_normal;
   if (fx.noise_student_dof > 0.0) {
@@ -31,17 +31,22 @@ double effectReading(const RangeModel& model, const RangeEffects& fx, double d_m
     e = unit_normal / std::sqrt(chi2(effect_rng) / nu) * std::sqrt((nu - 2.0) / nu);
   }
   const double c = clampCosIncidence(beam.cos_incidence);
-  const double sigma = model.noise.stddev(d_m, model.bias) * incidenceNoiseFactor(fx.incidence_noise_exponent, c) *
-                       darkNoiseFactor(fx.dark_noise_exponent, darkness(beam.intensity, fx.dark_reference_intensity));
+  const double sigma = model.noise.stddev(d_m, model.bias) *
+                       incidenceNoiseFactor(fx.incidence_noise_exponent, c) *
+                       darkNoiseFactor(fx.dark_noise_exponent,
+                                       darkness(beam.intensity, fx.dark_reference_intensity));
   // The mean reading as the joint refinement models it (common/range_effects.hpp), with the
   // ripple no fit models.
-  const double y = expectedReading(model.bias(d_m) + rangeRipple(fx, d_m), beam.surface_offset_m, fx.range_drift_m_per_scan,
-                                   static_cast<double>(beam.scan) - fx.range_drift_reference_scan, fx.incidence_bias_m, c) +
+  const double y = expectedReading(model.bias(d_m) + rangeRipple(fx, d_m), beam.surface_offset_m,
+                                   fx.range_drift_m_per_scan,
+                                   static_cast<double>(beam.scan) - fx.range_drift_reference_scan,
+                                   fx.incidence_bias_m, c) +
                    sigma * e;
   return quantise(y, fx.range_resolution_m);
 }
 
-double mixedPixelDistance(const RangeEffects& fx, double d_m, double background_m, std::mt19937_64& effect_rng) {
+double mixedPixelDistance(const RangeEffects& fx, double d_m, double background_m,
+                          std::mt19937_64& effect_rng) {
   if (fx.mixed_pixel_fraction <= 0.0) return d_m;
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   const double u = unit(effect_rng), w = unit(effect_rng);
@@ -51,15 +56,16 @@ double mixedPixelDistance(const RangeEffects& fx, double d_m, double background_
 
 namespace {
 
-
 /// Walks a route piece by piece (each an arc of constant curvature, or straight), looping.
 class RouteWalker {
  public:
   explicit RouteWalker(const std::vector<RouteSegment>& route) : route_(route) {
-    if (route_.empty()) throw std::invalid_argument("planStops: a driving route needs at least one piece");
+    if (route_.empty())
+      throw std::invalid_argument("planStops: a driving route needs at least one piece");
     for (const auto& r : route_)
       if (!(r.length_m > 0.0) || !std::isfinite(r.length_m) || !std::isfinite(r.turn_rad))
-        throw std::invalid_argument("planStops: route pieces need a finite length > 0 and a finite turn");
+        throw std::invalid_argument(
+            "planStops: route pieces need a finite length > 0 and a finite turn");
   }
   /// Moves `pose` forward by `distance_m` along the route.
   void advance(Pose2& pose, double distance_m) {
@@ -68,9 +74,11 @@ class RouteWalker {
       const double ds = std::min(distance_m, piece.length_m - done_m_);
       const double curvature = piece.turn_rad / piece.length_m;
       const double turn = curvature * ds;
-      // Exact arc: chord (sin(turn), 1 - cos(turn)) / curvature; a straight step when it does not turn.
+      // Exact arc: chord (sin(turn), 1 - cos(turn)) / curvature; a straight step when it does not
+      // turn.
       const Pose2 step = std::abs(turn) < 1e-12 ? Pose2{ds, 0.0, 0.0}
-                                                : Pose2{std::sin(turn) / curvature, (1.0 - std::cos(turn)) / curvature, turn};
+                                                : Pose2{std::sin(turn) / curvature,
+                                                        (1.0 - std::cos(turn)) / curvature, turn};
       pose = compose(pose, step);
       done_m_ += ds;
       distance_m -= ds;
@@ -109,9 +117,11 @@ std::vector<TruthStop> planDriving(const Scene& scene, std::uint64_t seed) {
       const Pose2 step = stepBetween(actual, next);
       const double s = std::hypot(step.x_m, step.y_m);
       const double e1 = normal(rng), e2 = normal(rng), e3 = normal(rng);
-      const Pose2 measured{reported * step.x_m + odo.translation_fraction * s * e1,
-                           reported * step.y_m + odo.translation_fraction * s * e2,
-                           step.yaw_rad + (odo.heading_rad_per_m * s + odo.heading_fraction * std::abs(step.yaw_rad)) * e3};
+      const Pose2 measured{
+          reported * step.x_m + odo.translation_fraction * s * e1,
+          reported * step.y_m + odo.translation_fraction * s * e2,
+          step.yaw_rad +
+              (odo.heading_rad_per_m * s + odo.heading_fraction * std::abs(step.yaw_rad)) * e3};
       commanded = compose(commanded, measured);
       actual = next;
     }
@@ -146,14 +156,16 @@ std::vector<TruthStop> planStops(const Scene& scene, std::uint64_t seed) {
     s.actual.x_m += scene.path.sigma_s_m * ex;
     s.actual.y_m += scene.path.sigma_s_m * ey;
     s.actual.yaw_rad = wrapAngle(s.actual.yaw_rad + scene.path.sigma_psi_rad * epsi);
-    s.first_scan = static_cast<std::size_t>(k) * static_cast<std::size_t>(scene.path.scans_per_stop);
+    s.first_scan =
+        static_cast<std::size_t>(k) * static_cast<std::size_t>(scene.path.scans_per_stop);
     s.scans = static_cast<std::size_t>(scene.path.scans_per_stop);
     stops.push_back(s);
   }
   return stops;
 }
 
-SimulatedScan simulateScan(const Scene& scene, const TruthStop& stop, std::size_t scan_index, std::uint64_t seed) {
+SimulatedScan simulateScan(const Scene& scene, const TruthStop& stop, std::size_t scan_index,
+                           std::uint64_t seed) {
   const SensorSpec& sensor = scene.sensor;
   const RangeModel& model = sensor.range;
   const auto n = static_cast<std::size_t>(sensor.beams);
@@ -163,8 +175,11 @@ SimulatedScan simulateScan(const Scene& scene, const TruthStop& stop, std::size_
   SimulatedScan out;
   out.scan.name = io::scanFileName(scan_index);
   out.scan.viewpoint = stop.commanded;
-  // An intensity field when a surface of the scene records one (the scans of scenes without stay as they were).
-  const auto bright = [](const auto& v) { return std::any_of(v.begin(), v.end(), [](const auto& s) { return s.intensity > 0.0; }); };
+  // An intensity field when a surface of the scene records one (the scans of scenes without stay as
+  // they were).
+  const auto bright = [](const auto& v) {
+    return std::any_of(v.begin(), v.end(), [](const auto& s) { return s.intensity > 0.0; });
+  };
   out.scan.has_intensity = bright(scene.landmarks) || bright(scene.clutter) || bright(scene.walls);
   out.scan.cloud.reset(new pcl::PointCloud<pcl::PointXYZI>);
   out.scan.cloud->resize(n);
@@ -180,21 +195,25 @@ SimulatedScan simulateScan(const Scene& scene, const TruthStop& stop, std::size_
   for (std::size_t b = 0; b < n; ++b) {
     // Draw both numbers for every beam, hit or not, so streams stay aligned across scenes.
     const double jitter = normal(rng), e = normal(rng);
-    const double beam_rad = sensor.angle_min_rad + static_cast<double>(b) * sensor.angle_increment_rad;
-    const double world_rad = stop.actual.yaw_rad + sensor.mount_yaw_rad + beam_rad + sensor.bearing_noise_rad * jitter;
+    const double beam_rad =
+        sensor.angle_min_rad + static_cast<double>(b) * sensor.angle_increment_rad;
+    const double world_rad =
+        stop.actual.yaw_rad + sensor.mount_yaw_rad + beam_rad + sensor.bearing_noise_rad * jitter;
     const Ray ray{stop.actual.x_m, stop.actual.y_m, std::cos(world_rad), std::sin(world_rad)};
     hits[b] = castRay(scene, ray);
     unit_normal[b] = e;
     beam_angle[b] = beam_rad;
   }
-  const bool full_circle = std::abs(static_cast<double>(n) * sensor.angle_increment_rad - 2.0 * kPi) < 1e-6;
+  const bool full_circle =
+      std::abs(static_cast<double>(n) * sensor.angle_increment_rad - 2.0 * kPi) < 1e-6;
   auto effect_rng = effectRng(seed, scan_index);
   for (std::size_t b = 0; b < n; ++b) {
     const RayHit& hit = hits[b];
     io::TrueRange& t = out.truth[b];
     t.scan = static_cast<std::uint32_t>(scan_index);
     t.beam = static_cast<std::uint32_t>(b);
-    t.range_m = hit.kind == io::TargetKind::none ? std::numeric_limits<double>::quiet_NaN() : hit.range_m;
+    t.range_m =
+        hit.kind == io::TargetKind::none ? std::numeric_limits<double>::quiet_NaN() : hit.range_m;
     t.target = hit.kind;
     t.target_id = hit.id;
     t.incidence_rad = hit.incidence_rad;
@@ -210,11 +229,14 @@ SimulatedScan simulateScan(const Scene& scene, const TruthStop& stop, std::size_
         if (full_circle) j = (j + static_cast<long>(n)) % static_cast<long>(n);
         if (j < 0 || j >= static_cast<long>(n)) continue;
         const RayHit& nb = hits[static_cast<std::size_t>(j)];
-        if (nb.kind == io::TargetKind::none || (nb.kind == hit.kind && nb.id == hit.id) || nb.range_m <= hit.range_m) continue;
+        if (nb.kind == io::TargetKind::none || (nb.kind == hit.kind && nb.id == hit.id) ||
+            nb.range_m <= hit.range_m)
+          continue;
         if (std::isnan(background) || nb.range_m < background) background = nb.range_m;
       }
       const double d = mixedPixelDistance(sensor.effects, hit.range_m, background, effect_rng);
-      const BeamContext ctx{std::cos(hit.incidence_rad), surfaceOffset(scene, hit), scan_index, surfaceIntensity(scene, hit)};
+      const BeamContext ctx{std::cos(hit.incidence_rad), surfaceOffset(scene, hit), scan_index,
+                            surfaceIntensity(scene, hit)};
       pt.intensity = static_cast<float>(ctx.intensity);
       reading = effectReading(model, sensor.effects, d, ctx, unit_normal[b], effect_rng);
     }

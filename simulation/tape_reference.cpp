@@ -24,7 +24,8 @@ Reference tapeReference(const Truth& truth, const TapeConfig& config) {
         const double d = std::hypot(o.x_m - at.x_m, o.y_m - at.y_m);
         const double b = std::atan2(o.y_m - at.y_m, o.x_m - at.x_m);
         hidden = hidden || (d < dl && std::abs(std::remainder(b - bl, 2.0 * M_PI)) <
-                                          std::asin(o.radius_m / d) + std::asin(l.radius_m / dl) + config.margin_rad);
+                                          std::asin(o.radius_m / d) + std::asin(l.radius_m / dl) +
+                                              config.margin_rad);
       }
       if (hidden) continue;
       ReferenceDistance e;

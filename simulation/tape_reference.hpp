@@ -13,12 +13,13 @@
 namespace lidarcal {
 
 struct TapeConfig {
-  double max_distance_m = 4.0;   ///< poles farther than this are not measured, metres. Default 4
+  double max_distance_m = 4.0;  ///< poles farther than this are not measured, metres. Default 4
   /// A pole is skipped when a nearer one covers it or comes within this angle of its edge,
   /// radians. Default 2 degrees (two beams of a 1-degree lidar).
   double margin_rad = 0.0349;
-  double sigma_m = 0.0;          ///< standard deviation of the tape error added to each distance, metres. Default 0 (exact)
-  std::uint64_t seed = 0;        ///< seed of the tape errors
+  /// standard deviation of the tape error added to each distance, metres. Default 0 (exact)
+  double sigma_m = 0.0;
+  std::uint64_t seed = 0;  ///< seed of the tape errors
 };
 
 /// One `landmark` distance with its bearing (sensor frame) per visible pole and stop, in stop

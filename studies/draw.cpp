@@ -17,8 +17,9 @@ namespace {
 constexpr std::uint64_t kBearingStream = 0xbea7000000000000ULL;
 }  // namespace
 
-Draw drawLandmarkLevel(const std::vector<Cylinder>& landmarks, const PathSpec& path, const RangeModel& sensor,
-                       double sigma_theta_rad, std::uint64_t seed, bool rotate_beams) {
+Draw drawLandmarkLevel(const std::vector<Cylinder>& landmarks, const PathSpec& path,
+                       const RangeModel& sensor, double sigma_theta_rad, std::uint64_t seed,
+                       bool rotate_beams) {
   simulation::LandmarkLevelConfig cfg;
   cfg.landmarks = landmarks;
   cfg.path = path;
@@ -52,7 +53,9 @@ std::vector<TruthReading> truthReadings(const Draw& draw) {
   std::vector<TruthReading> out;
   for (std::size_t i = 0; i < draw.obs.sightings.size(); ++i) {
     const Sighting& s = draw.obs.sightings[i];
-    const int id = s.landmark > 0 && static_cast<std::size_t>(s.landmark) < draw.true_id.size() ? draw.true_id[s.landmark] : 0;
+    const int id = s.landmark > 0 && static_cast<std::size_t>(s.landmark) < draw.true_id.size()
+                       ? draw.true_id[s.landmark]
+                       : 0;
     if (id <= 0) continue;
     for (std::size_t j = 0; j < s.beams.size(); ++j) {
       const double t = draw.truth_m[i][j];
@@ -105,7 +108,8 @@ LandmarkObservations averageScans(const LandmarkObservations& obs) {
     s.bearing_rad = std::atan2(g.sin, g.cos);
     s.centre_range_m = g.centre / g.n;
     s.radius_m = g.radius / g.n;
-    for (const auto& [beam, b] : g.beams) s.beams.push_back(BeamReading{b.angle, b.sum / b.n, beam});
+    for (const auto& [beam, b] : g.beams)
+      s.beams.push_back(BeamReading{b.angle, b.sum / b.n, beam});
     if (!s.beams.empty()) out.sightings.push_back(std::move(s));
   }
   return out;

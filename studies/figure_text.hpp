@@ -22,25 +22,36 @@ inline std::string num(double v, int digits = 6) {
 }
 
 /// Number for a Markdown table, "-" when not finite.
-inline std::string cellText(double v, int digits = 3) { return std::isfinite(v) ? num(v, digits) : "-"; }
+inline std::string cellText(double v, int digits = 3) {
+  return std::isfinite(v) ? num(v, digits) : "-";
+}
 
 inline std::string percent(double v) { return std::isfinite(v) ? num(100.0 * v, 3) + " %" : "-"; }
 
-inline bool same(double a, double b) { return std::abs(a - b) <= 1e-9 * std::max(1.0, std::abs(b)); }
+inline bool same(double a, double b) {
+  return std::abs(a - b) <= 1e-9 * std::max(1.0, std::abs(b));
+}
 
 /// The summary of the cell with these parameters, or nullptr.
-inline const CellSummary* find(const std::vector<CellSummary>& cells, int L, double sigma_s_m, double sigma_theta_deg) {
+inline const CellSummary* find(const std::vector<CellSummary>& cells, int L, double sigma_s_m,
+                               double sigma_theta_deg) {
   for (const auto& c : cells)
-    if (c.cell.landmarks == L && same(c.cell.sigma_s_m, sigma_s_m) && same(rad2deg(c.cell.sigma_theta_rad), sigma_theta_deg))
+    if (c.cell.landmarks == L && same(c.cell.sigma_s_m, sigma_s_m) &&
+        same(rad2deg(c.cell.sigma_theta_rad), sigma_theta_deg))
       return &c;
   return nullptr;
 }
 
-inline const RatioSummary& ratioOf(const CellSummary& c, Estimator e) { return c.ratio[static_cast<std::size_t>(e)]; }
-inline const PositionSummary& positionOf(const CellSummary& c, PositionEstimator e) { return c.position[static_cast<std::size_t>(e)]; }
+inline const RatioSummary& ratioOf(const CellSummary& c, Estimator e) {
+  return c.ratio[static_cast<std::size_t>(e)];
+}
+inline const PositionSummary& positionOf(const CellSummary& c, PositionEstimator e) {
+  return c.position[static_cast<std::size_t>(e)];
+}
 
 /// The MSE-ratio statistics of an estimator (AIC unless said: the rule the paper uses).
-inline const SampleStats& ratioStats(const CellSummary& c, Estimator e, Rule rule = Rule::aic, TestSet set = TestSet::beams) {
+inline const SampleStats& ratioStats(const CellSummary& c, Estimator e, Rule rule = Rule::aic,
+                                     TestSet set = TestSet::beams) {
   return ratioOf(c, e).rules[static_cast<std::size_t>(rule)].ratio[static_cast<std::size_t>(set)];
 }
 
@@ -51,14 +62,17 @@ inline double orderRate(const RatioSummary& r, int order, Rule rule = Rule::aic)
   return static_cast<double>(counts[static_cast<std::size_t>(order)]) / static_cast<double>(ok);
 }
 
-inline const std::vector<Estimator> kRatioEstimators = {Estimator::closed_form, Estimator::joint, Estimator::oracle};
-inline const std::vector<PositionEstimator> kPositionOrder = {PositionEstimator::triangulation, PositionEstimator::joint};
+inline const std::vector<Estimator> kRatioEstimators = {Estimator::closed_form, Estimator::joint,
+                                                        Estimator::oracle};
+inline const std::vector<PositionEstimator> kPositionOrder = {PositionEstimator::triangulation,
+                                                              PositionEstimator::joint};
 inline const std::vector<Rule> kRuleOrder = {Rule::aic, Rule::aic_parsimonious};
 
 /// Whether an estimator ran in any cell (the joint refinement does not with --no-joint): plots
 /// leave out what did not run, as gnuplot cannot draw a panel without a single point.
 inline bool ran(const std::vector<CellSummary>& cells, Estimator e) {
-  return std::any_of(cells.begin(), cells.end(), [&](const CellSummary& c) { return ratioOf(c, e).runs > 0; });
+  return std::any_of(cells.begin(), cells.end(),
+                     [&](const CellSummary& c) { return ratioOf(c, e).runs > 0; });
 }
 inline std::vector<Estimator> ranEstimators(const std::vector<CellSummary>& cells) {
   std::vector<Estimator> out;
@@ -74,9 +88,12 @@ inline std::vector<PositionEstimator> ranPositionEstimators(const std::vector<Ce
 
 inline std::string estimatorLabel(Estimator e) {
   switch (e) {
-    case Estimator::closed_form: return "closed form (paper)";
-    case Estimator::joint: return "joint refinement";
-    case Estimator::oracle: return "oracle (true distances)";
+    case Estimator::closed_form:
+      return "closed form (paper)";
+    case Estimator::joint:
+      return "joint refinement";
+    case Estimator::oracle:
+      return "oracle (true distances)";
   }
   return "";
 }
@@ -88,14 +105,18 @@ inline std::string positionLabel(PositionEstimator e) {
 inline std::string settingsText(const StudyMeta& m) {
   const TrialConfig& c = m.config;
   std::string s;
-  s += "level " + std::string(toString(c.level)) + ", angle noise on the " + toString(c.angle_noise) + ", " +
-       std::to_string(c.path.stops) + " stops " + num(c.path.step_m * 100.0, 3) + " cm apart, " +
-       std::to_string(c.path.scans_per_stop) + " scans per stop, noise " + num(c.noise_scale, 3) +
-       " x the paper's (beta = " + num(0.05 * c.noise_scale, 3) + " alpha), n_max " + std::to_string(c.max_order) + ", " +
-       std::to_string(m.trials) + " trials per cell (joint refinement on the first " +
-       std::to_string(std::min(m.joint_trials, m.trials)) + "), seed " + std::to_string(m.seed) + ", landmarks " +
-       num(c.placement.min_surface_m, 3) + "-" + num(c.placement.max_surface_m, 3) + " m from every stop, noise law " +
-       toString(c.noise_law) + ", reading window " + num(c.sensor.range_min_m, 3) + "-" + num(c.sensor.range_max_m, 3) + " m";
+  s += "level " + std::string(toString(c.level)) + ", angle noise on the " +
+       toString(c.angle_noise) + ", " + std::to_string(c.path.stops) + " stops " +
+       num(c.path.step_m * 100.0, 3) + " cm apart, " + std::to_string(c.path.scans_per_stop) +
+       " scans per stop, noise " + num(c.noise_scale, 3) +
+       " x the paper's (beta = " + num(0.05 * c.noise_scale, 3) + " alpha), n_max " +
+       std::to_string(c.max_order) + ", " + std::to_string(m.trials) +
+       " trials per cell (joint refinement on the first " +
+       std::to_string(std::min(m.joint_trials, m.trials)) + "), seed " + std::to_string(m.seed) +
+       ", landmarks " + num(c.placement.min_surface_m, 3) + "-" +
+       num(c.placement.max_surface_m, 3) + " m from every stop, noise law " +
+       toString(c.noise_law) + ", reading window " + num(c.sensor.range_min_m, 3) + "-" +
+       num(c.sensor.range_max_m, 3) + " m";
   return s;
 }
 
@@ -113,12 +134,14 @@ inline std::string block(const std::string& name, const std::vector<std::vector<
 
 inline std::string preamble(const std::string& file, int width, int height) {
   return "set terminal pngcairo size " + std::to_string(width) + "," + std::to_string(height) +
-         " font \"DejaVu Sans,10\"\nset output \"" + file + "\"\nset datafile missing \"NaN\"\nset grid\n"
+         " font \"DejaVu Sans,10\"\nset output \"" + file +
+         "\"\nset datafile missing \"NaN\"\nset grid\n"
          "set key top left font \",9\"\nset format y \"%g\"\n";
 }
 
 inline std::string colour(std::size_t i) {
-  static const char* kColours[] = {"#1b9e77", "#d95f02", "#7570b3", "#e7298a", "#66a61e", "#e6ab02", "#a6761d", "#666666"};
+  static const char* kColours[] = {"#1b9e77", "#d95f02", "#7570b3", "#e7298a",
+                                   "#66a61e", "#e6ab02", "#a6761d", "#666666"};
   return kColours[i % 8];
 }
 
@@ -126,10 +149,13 @@ inline std::string colour(std::size_t i) {
 struct Series {
   std::string data, columns, title, style;
 };
-inline std::string panel(const std::string& title, const std::string& settings, const std::vector<Series>& series) {
+inline std::string panel(const std::string& title, const std::string& settings,
+                         const std::vector<Series>& series) {
   std::string s = "set title \"" + title + "\"\n" + settings;
   std::string plot;
-  for (const auto& x : series) plot += (plot.empty() ? "plot " : ", \\\n     ") + x.data + " using " + x.columns + " " + x.style + " title \"" + x.title + "\"";
+  for (const auto& x : series)
+    plot += (plot.empty() ? "plot " : ", \\\n     ") + x.data + " using " + x.columns + " " +
+            x.style + " title \"" + x.title + "\"";
   return s + (plot.empty() ? "" : plot + "\n") + "unset logscale\n";
 }
 
@@ -147,12 +173,15 @@ inline std::string decadeRange(const std::vector<double>& values) {
          num(std::pow(10.0, std::ceil(std::log10(hi)))) + "]\n";
 }
 
-inline std::string sigmaText(double sigma_s_m) { return "σ_s " + num(sigma_s_m * 100.0, 3) + " cm"; }
+inline std::string sigmaText(double sigma_s_m) {
+  return "σ_s " + num(sigma_s_m * 100.0, 3) + " cm";
+}
 inline std::string thetaText(double deg) { return "σ_θ " + num(deg, 3) + "°"; }
 
 // Markdown
 
-inline std::string table(const std::vector<std::string>& header, const std::vector<std::vector<std::string>>& rows) {
+inline std::string table(const std::vector<std::string>& header,
+                         const std::vector<std::vector<std::string>>& rows) {
   std::string s = "|";
   for (const auto& h : header) s += " " + h + " |";
   s += "\n|";
@@ -169,8 +198,14 @@ inline std::string table(const std::vector<std::string>& header, const std::vect
 /// Verdict word for a claim.
 inline std::string verdict(bool agrees) { return agrees ? "**agrees**" : "**differs**"; }
 
-inline double rmse(const CellSummary* c, PositionEstimator e) { return c ? positionOf(*c, e).rmse_m : kNaN; }
-inline double medianRatio(const CellSummary* c, Estimator e) { return c ? ratioStats(*c, e).q.median : kNaN; }
-inline double meanRatio(const CellSummary* c, Estimator e) { return c ? ratioStats(*c, e).mean : kNaN; }
+inline double rmse(const CellSummary* c, PositionEstimator e) {
+  return c ? positionOf(*c, e).rmse_m : kNaN;
+}
+inline double medianRatio(const CellSummary* c, Estimator e) {
+  return c ? ratioStats(*c, e).q.median : kNaN;
+}
+inline double meanRatio(const CellSummary* c, Estimator e) {
+  return c ? ratioStats(*c, e).mean : kNaN;
+}
 
 }  // namespace lidarcal::studies

@@ -15,11 +15,16 @@ namespace lidarcal::studies {
 
 const char* toString(Figure f) {
   switch (f) {
-    case Figure::fig7: return "fig7";
-    case Figure::fig8: return "fig8";
-    case Figure::fig9: return "fig9";
-    case Figure::fig10: return "fig10";
-    case Figure::fig11: return "fig11";
+    case Figure::fig7:
+      return "fig7";
+    case Figure::fig8:
+      return "fig8";
+    case Figure::fig9:
+      return "fig9";
+    case Figure::fig10:
+      return "fig10";
+    case Figure::fig11:
+      return "fig11";
   }
   return "unknown";
 }
@@ -33,7 +38,9 @@ bool parseFigure(const std::string& name, Figure& f) {
   return false;
 }
 
-std::vector<Figure> allFigures() { return {Figure::fig7, Figure::fig8, Figure::fig9, Figure::fig10, Figure::fig11}; }
+std::vector<Figure> allFigures() {
+  return {Figure::fig7, Figure::fig8, Figure::fig9, Figure::fig10, Figure::fig11};
+}
 
 StudyGrids StudyGrids::quick() {
   StudyGrids g;
@@ -72,21 +79,26 @@ std::vector<Cell> figureCells(Figure f, const StudyGrids& g) {
 
 std::string figureCsv(Figure f, const std::vector<CellSummary>& cells, const StudyMeta& meta) {
   const int n_max = meta.config.max_order;
-  std::string s = "figure,level,angle_noise,noise_scale,noise_law,max_surface_m,range_max_m,stops,step_m,scans_per_stop,"
-                  "landmarks,sigma_s_m,sigma_theta_deg,trials,detected_landmarks";
+  std::string s =
+      "figure,level,angle_noise,noise_scale,noise_law,max_surface_m,range_max_m,stops,step_m,scans_"
+      "per_stop,"
+      "landmarks,sigma_s_m,sigma_theta_deg,trials,detected_landmarks";
   for (PositionEstimator e : kPositionOrder) {
     const std::string p = std::string("pos_") + toString(e) + "_";
-    s += "," + p + "samples," + p + "missing," + p + "bias_m," + p + "mean_radial_m," + p + "mean_tangential_m," + p +
-         "variance_m2," + p + "rmse_m," + p + "error_q25_m," + p + "error_median_m," + p + "error_q75_m," + p +
-         "radial_q25_m," + p + "radial_median_m," + p + "radial_q75_m";
+    s += "," + p + "samples," + p + "missing," + p + "bias_m," + p + "mean_radial_m," + p +
+         "mean_tangential_m," + p + "variance_m2," + p + "rmse_m," + p + "error_q25_m," + p +
+         "error_median_m," + p + "error_q75_m," + p + "radial_q25_m," + p + "radial_median_m," + p +
+         "radial_q75_m";
   }
-  // Ratio statistics of one test set: quartiles, median's standard error, mean and its standard error.
+  // Ratio statistics of one test set: quartiles, median's standard error, mean and its standard
+  // error.
   auto statColumns = [](const std::string& p) {
-    return "," + p + "_q25," + p + "_median," + p + "_q75," + p + "_median_se," + p + "_mean," + p + "_mean_se";
+    return "," + p + "_q25," + p + "_median," + p + "_q75," + p + "_median_se," + p + "_mean," + p +
+           "_mean_se";
   };
   auto statValues = [](const SampleStats& x) {
-    return "," + num(x.q.q25) + "," + num(x.q.median) + "," + num(x.q.q75) + "," + num(x.median_se) + "," + num(x.mean) + "," +
-           num(x.mean_se);
+    return "," + num(x.q.q25) + "," + num(x.q.median) + "," + num(x.q.q75) + "," +
+           num(x.median_se) + "," + num(x.mean) + "," + num(x.mean_se);
   };
   const std::array<std::string, kTestSets> set_names = {"ratio", "ratioc", "ratio1"};
   for (Estimator e : kRatioEstimators) {
@@ -102,23 +114,27 @@ std::string figureCsv(Figure f, const std::vector<CellSummary>& cells, const Stu
   s += "\n";
   const TrialConfig& c = meta.config;
   for (const CellSummary& x : cells) {
-    s += std::string(toString(f)) + "," + toString(c.level) + "," + toString(c.angle_noise) + "," + num(c.noise_scale) + "," +
-         toString(c.noise_law) + "," + num(c.placement.max_surface_m) + "," + num(c.sensor.range_max_m) + "," +
-         std::to_string(c.path.stops) + "," + num(c.path.step_m) + "," + std::to_string(c.path.scans_per_stop) + "," +
-         std::to_string(x.cell.landmarks) + "," + num(x.cell.sigma_s_m) + "," + num(rad2deg(x.cell.sigma_theta_rad)) + "," +
-         std::to_string(x.trials) + "," + num(x.detected_landmarks);
+    s += std::string(toString(f)) + "," + toString(c.level) + "," + toString(c.angle_noise) + "," +
+         num(c.noise_scale) + "," + toString(c.noise_law) + "," + num(c.placement.max_surface_m) +
+         "," + num(c.sensor.range_max_m) + "," + std::to_string(c.path.stops) + "," +
+         num(c.path.step_m) + "," + std::to_string(c.path.scans_per_stop) + "," +
+         std::to_string(x.cell.landmarks) + "," + num(x.cell.sigma_s_m) + "," +
+         num(rad2deg(x.cell.sigma_theta_rad)) + "," + std::to_string(x.trials) + "," +
+         num(x.detected_landmarks);
     for (PositionEstimator e : kPositionOrder) {
       const PositionSummary& p = positionOf(x, e);
-      s += "," + std::to_string(p.samples) + "," + std::to_string(p.missing) + "," + num(p.bias_m) + "," + num(p.mean_radial_m) +
-           "," + num(p.mean_tangential_m) + "," + num(p.variance_m2) + "," + num(p.rmse_m) + "," + num(p.error_m.q25) + "," +
-           num(p.error_m.median) + "," + num(p.error_m.q75) + "," + num(p.radial_m.q25) + "," + num(p.radial_m.median) + "," +
+      s += "," + std::to_string(p.samples) + "," + std::to_string(p.missing) + "," + num(p.bias_m) +
+           "," + num(p.mean_radial_m) + "," + num(p.mean_tangential_m) + "," + num(p.variance_m2) +
+           "," + num(p.rmse_m) + "," + num(p.error_m.q25) + "," + num(p.error_m.median) + "," +
+           num(p.error_m.q75) + "," + num(p.radial_m.q25) + "," + num(p.radial_m.median) + "," +
            num(p.radial_m.q75);
     }
     for (Estimator e : kRatioEstimators) {
       const RatioSummary& r = ratioOf(x, e);
       s += "," + std::to_string(r.runs) + "," + std::to_string(r.failures);
       for (Rule rule : kRuleOrder) {
-        for (std::size_t set = 0; set < kTestSets; ++set) s += statValues(r.rules[static_cast<std::size_t>(rule)].ratio[set]);
+        for (std::size_t set = 0; set < kTestSets; ++set)
+          s += statValues(r.rules[static_cast<std::size_t>(rule)].ratio[set]);
         for (int n = 0; n <= n_max; ++n) s += "," + num(orderRate(r, n, rule));
       }
     }

@@ -31,14 +31,16 @@ std::vector<TrialIndex> workOrder(std::size_t cells, const RunOptions& options) 
   for (std::size_t t = 0; t < T; ++t)
     for (std::size_t c = 0; c < cells; ++c) {
       const std::size_t number = t < J ? c * J + t : c * (T - J) + (t - J);
-      if (number % options.shard_count == options.shard_index) (t < J ? slow : fast).push_back({c, t});
+      if (number % options.shard_count == options.shard_index)
+        (t < J ? slow : fast).push_back({c, t});
     }
   std::vector<TrialIndex> out;
   out.reserve(slow.size() + fast.size());
   std::size_t i = 0, j = 0;
   while (i < slow.size() || j < fast.size()) {
     // Take from the list that is further behind its share.
-    const bool take_slow = j >= fast.size() || (i < slow.size() && i * fast.size() <= j * slow.size());
+    const bool take_slow =
+        j >= fast.size() || (i < slow.size() && i * fast.size() <= j * slow.size());
     out.push_back(take_slow ? slow[i++] : fast[j++]);
   }
   return out;
@@ -51,7 +53,8 @@ std::vector<TrialIndex> shardTrials(std::size_t cells, const RunOptions& options
   return workOrder(cells, options);
 }
 
-StudyRun runCells(const TrialConfig& config, const std::vector<Cell>& cells, const RunOptions& options) {
+StudyRun runCells(const TrialConfig& config, const std::vector<Cell>& cells,
+                  const RunOptions& options) {
   config.validate();
   options.validate();
   StudyRun run;
@@ -72,7 +75,8 @@ StudyRun runCells(const TrialConfig& config, const std::vector<Cell>& cells, con
         const Cell& cell = cells[it.cell];
         const auto layout = trialLayout(config, options.seed, it.trial, cell.landmarks);
         run.results[it.cell][it.trial] =
-            runTrial(config, cell, layout, trialSeed(options.seed, cell, it.trial), it.trial < options.joint_trials);
+            runTrial(config, cell, layout, trialSeed(options.seed, cell, it.trial),
+                     it.trial < options.joint_trials);
       } catch (...) {
         std::lock_guard<std::mutex> lock(error_mutex);
         if (!error) error = std::current_exception();

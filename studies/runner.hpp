@@ -16,18 +16,21 @@
 namespace lidarcal::studies {
 
 struct RunOptions {
-  int threads = 1;                 ///< worker threads (>= 1)
-  std::size_t trials = 1000;       ///< trials per cell
-  std::size_t joint_trials = 200;  ///< the first this many trials of each cell also run the joint refinement
-  std::uint64_t seed = 1;          ///< study seed
+  int threads = 1;            ///< worker threads (>= 1)
+  std::size_t trials = 1000;  ///< trials per cell
+  /// the first this many trials of each cell also run the joint refinement
+  std::size_t joint_trials = 200;
+  std::uint64_t seed = 1;  ///< study seed
   /// Shards: run only slice `shard_index` (0-based) of `shard_count` disjoint slices of the trials
   /// (shardTrials); the other trials' results stay default. Default: one slice, every trial.
   std::size_t shard_index = 0;
-  std::size_t shard_count = 1;     ///< number of slices (>= 1)
-  const std::atomic<bool>* stop = nullptr;  ///< when set to true, workers stop after their current trial
-  /// Called from the calling thread about five times a second and once at the end: trials done, total.
+  std::size_t shard_count = 1;  ///< number of slices (>= 1)
+  /// when set to true, workers stop after their current trial
+  const std::atomic<bool>* stop = nullptr;
+  /// Called from the calling thread about five times a second and once at the end: trials done,
+  /// total.
   std::function<void(std::size_t done, std::size_t total)> on_progress;
-  void validate() const;           ///< throws std::invalid_argument
+  void validate() const;  ///< throws std::invalid_argument
 };
 
 /// One trial of a study: its cell (index into the study's cells) and its number in the cell.
@@ -45,11 +48,12 @@ std::vector<TrialIndex> shardTrials(std::size_t cells, const RunOptions& options
 
 struct StudyRun {
   std::vector<std::vector<TrialResult>> results;  ///< results[cell][trial]
-  bool interrupted = false;        ///< stopped through RunOptions::stop: results are incomplete
+  bool interrupted = false;  ///< stopped through RunOptions::stop: results are incomplete
 };
 
-/// Runs every trial of every cell (of the slice options.shard_index). An exception in a trial (e.g. a layout that cannot be
-/// placed) stops the run and is rethrown here.
-StudyRun runCells(const TrialConfig& config, const std::vector<Cell>& cells, const RunOptions& options);
+/// Runs every trial of every cell (of the slice options.shard_index). An exception in a trial (e.g.
+/// a layout that cannot be placed) stops the run and is rethrown here.
+StudyRun runCells(const TrialConfig& config, const std::vector<Cell>& cells,
+                  const RunOptions& options);
 
 }  // namespace lidarcal::studies

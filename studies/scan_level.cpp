@@ -7,16 +7,16 @@
 #include <map>
 #include <stdexcept>
 
+#include "common/stats_util.hpp"
 #include "detectors/sequence_detector.hpp"
 #include "simulation/simulator.hpp"
 #include "studies/trial.hpp"
-#include "common/stats_util.hpp"
 
 namespace lidarcal::studies {
 namespace {
 
-
-Scene sceneOf(const std::vector<Cylinder>& layout, const PathSpec& path, const RangeModel& sensor, const ScanLevelConfig& c) {
+Scene sceneOf(const std::vector<Cylinder>& layout, const PathSpec& path, const RangeModel& sensor,
+              const ScanLevelConfig& c) {
   Scene scene;
   scene.name = "montecarlo";
   scene.sensor.beams = c.beams;
@@ -29,7 +29,8 @@ Scene sceneOf(const std::vector<Cylinder>& layout, const PathSpec& path, const R
 }
 
 /// Detected landmark -> nearest true landmark within the gate, one to one (closest pairs first).
-std::vector<int> matchLandmarks(const detectors::Association& a, const std::vector<Cylinder>& layout, double gate_m) {
+std::vector<int> matchLandmarks(const detectors::Association& a,
+                                const std::vector<Cylinder>& layout, double gate_m) {
   struct Candidate {
     double d;
     std::size_t det, truth;
@@ -37,7 +38,8 @@ std::vector<int> matchLandmarks(const detectors::Association& a, const std::vect
   std::vector<Candidate> c;
   for (std::size_t i = 0; i < a.landmarks.size(); ++i)
     for (std::size_t t = 0; t < layout.size(); ++t) {
-      const double d = std::hypot(a.landmarks[i].x_m - layout[t].x_m, a.landmarks[i].y_m - layout[t].y_m);
+      const double d =
+          std::hypot(a.landmarks[i].x_m - layout[t].x_m, a.landmarks[i].y_m - layout[t].y_m);
       if (d <= gate_m) c.push_back({d, i, t});
     }
   std::sort(c.begin(), c.end(), [](const Candidate& x, const Candidate& y) {
@@ -59,7 +61,8 @@ std::vector<int> matchLandmarks(const detectors::Association& a, const std::vect
 
 void ScanLevelConfig::validate() const {
   if (beams < 8) throw std::invalid_argument("ScanLevelConfig: beams must be >= 8");
-  if (!(match_distance_m > 0.0)) throw std::invalid_argument("ScanLevelConfig: match_distance_m must be positive");
+  if (!(match_distance_m > 0.0))
+    throw std::invalid_argument("ScanLevelConfig: match_distance_m must be positive");
 }
 
 ScanLevelConfig scanLevelConfig(const TrialConfig& config) {
@@ -76,7 +79,8 @@ struct SimulatedScans {
   std::vector<std::size_t> stop_of_scan;
 };
 
-SimulatedScans simulateStops(const Scene& scene, const std::vector<TruthStop>& stops, std::uint64_t seed) {
+SimulatedScans simulateStops(const Scene& scene, const std::vector<TruthStop>& stops,
+                             std::uint64_t seed) {
   SimulatedScans out;
   auto& scans = out.scans;
   auto& stop_of_scan = out.stop_of_scan;
@@ -89,8 +93,8 @@ SimulatedScans simulateStops(const Scene& scene, const std::vector<TruthStop>& s
 }
 
 /// Sightings by the truth's own grouping: every beam on landmark t in scan i is one sighting of t.
-void addTruthSightings(Draw& d, const std::vector<Cylinder>& layout, const std::vector<TruthStop>& stops,
-                       const SimulatedScans& sim) {
+void addTruthSightings(Draw& d, const std::vector<Cylinder>& layout,
+                       const std::vector<TruthStop>& stops, const SimulatedScans& sim) {
   const auto& scans = sim.scans;
   const auto& stop_of_scan = sim.stop_of_scan;
   d.true_id.resize(layout.size() + 1);
@@ -118,7 +122,8 @@ void addTruthSightings(Draw& d, const std::vector<Cylinder>& layout, const std::
         d.truth_m.emplace_back();
       }
       const double x = cloud[b].x, y = cloud[b].y;
-      d.obs.sightings[it->second].beams.push_back(BeamReading{std::atan2(y, x), std::hypot(x, y), static_cast<std::uint32_t>(b)});
+      d.obs.sightings[it->second].beams.push_back(
+          BeamReading{std::atan2(y, x), std::hypot(x, y), static_cast<std::uint32_t>(b)});
       d.truth_m[it->second].push_back(t.range_m);
     }
   }
@@ -127,7 +132,8 @@ void addTruthSightings(Draw& d, const std::vector<Cylinder>& layout, const std::
 /// Sightings of the detected landmarks: as detectors::toLandmarkObservations, from the scans in
 /// memory, but within a scan in the detector's order, not by landmark (the study's stop-and-go
 /// numbers in docs/results/montecarlo.md were measured in this order).
-void addDetectedSightings(Draw& d, const detectors::SequenceDetections& det, const SimulatedScans& sim) {
+void addDetectedSightings(Draw& d, const detectors::SequenceDetections& det,
+                          const SimulatedScans& sim) {
   const auto& scans = sim.scans;
   const auto& stop_of_scan = sim.stop_of_scan;
   for (std::size_t i = 0; i < det.scans.size(); ++i) {
@@ -145,17 +151,21 @@ void addDetectedSightings(Draw& d, const detectors::SequenceDetections& det, con
       s.centre_range_m = det_j.range_m;
       s.radius_m = det_j.radius_m;
       std::vector<double> truth;
-      const int true_id = static_cast<std::size_t>(ids[j]) < d.true_id.size() ? d.true_id[static_cast<std::size_t>(ids[j])] : 0;
+      const int true_id = static_cast<std::size_t>(ids[j]) < d.true_id.size()
+                              ? d.true_id[static_cast<std::size_t>(ids[j])]
+                              : 0;
       for (const auto idx : det_j.inliers) {
         const auto b = static_cast<std::size_t>(idx);
         const auto& p = cloud[b];
         if (!std::isfinite(p.x)) continue;
-        s.beams.push_back(BeamReading{std::atan2(static_cast<double>(p.y), static_cast<double>(p.x)),
-                                      std::hypot(static_cast<double>(p.x), static_cast<double>(p.y)),
-                                      static_cast<std::uint32_t>(b)});
+        s.beams.push_back(
+            BeamReading{std::atan2(static_cast<double>(p.y), static_cast<double>(p.x)),
+                        std::hypot(static_cast<double>(p.x), static_cast<double>(p.y)),
+                        static_cast<std::uint32_t>(b)});
         const io::TrueRange& t = scans[i].truth[b];
         // The truth of a beam counts only when it hit the landmark the detection was matched to.
-        truth.push_back(t.target == io::TargetKind::landmark && t.target_id == true_id ? t.range_m : kNaN);
+        truth.push_back(t.target == io::TargetKind::landmark && t.target_id == true_id ? t.range_m
+                                                                                       : kNaN);
       }
       if (s.beams.empty()) continue;
       d.obs.sightings.push_back(std::move(s));
@@ -166,8 +176,9 @@ void addDetectedSightings(Draw& d, const detectors::SequenceDetections& det, con
 
 }  // namespace
 
-Draw drawScanLevel(const std::vector<Cylinder>& layout, const PathSpec& path, const RangeModel& sensor,
-                   const ScanLevelConfig& config, std::uint64_t seed, bool detect) {
+Draw drawScanLevel(const std::vector<Cylinder>& layout, const PathSpec& path,
+                   const RangeModel& sensor, const ScanLevelConfig& config, std::uint64_t seed,
+                   bool detect) {
   config.validate();
   const Scene scene = sceneOf(layout, path, sensor, config);
   const auto stops = simulation::planStops(scene, seed);
@@ -187,7 +198,7 @@ Draw drawScanLevel(const std::vector<Cylinder>& layout, const PathSpec& path, co
   }
   detectors::SequenceDetectionConfig dc;
   dc.detection.landmark_radius_m = d.obs.landmark_radius_m;  // known radius, as the paper assumes
-  dc.threads = 1;  // the trials already run on every core
+  dc.threads = 1;                                            // the trials already run on every core
   const auto det = detectors::detectSequence(
       sim.scans.size(), [&](std::size_t i) { return sim.scans.at(i).scan; }, sim.stop_of_scan, dc);
   d.true_id = matchLandmarks(det.association, layout, config.match_distance_m);

@@ -16,9 +16,10 @@ namespace lidarcal::studies {
 struct TrialConfig;
 
 struct ScanLevelConfig {
-  int beams = 360;                   ///< beams per 360-degree sweep
-  double match_distance_m = 0.5;     ///< a detected landmark is the true one whose centre is nearest, within this, metres
-  void validate() const;             ///< throws std::invalid_argument
+  int beams = 360;  ///< beams per 360-degree sweep
+  /// a detected landmark is the true one whose centre is nearest, within this, metres
+  double match_distance_m = 0.5;
+  void validate() const;  ///< throws std::invalid_argument
 };
 
 /// The scan-level settings of a trial configuration.
@@ -27,7 +28,8 @@ ScanLevelConfig scanLevelConfig(const TrialConfig& config);
 /// One scan-level draw. `detect` true: detection and association in the loop, ids as detected
 /// and matched to the layout afterwards (Draw::true_id). `detect` false: every beam that hits a
 /// landmark, grouped by the truth (a test set needs no detector).
-Draw drawScanLevel(const std::vector<Cylinder>& layout, const PathSpec& path, const RangeModel& sensor,
-                   const ScanLevelConfig& config, std::uint64_t seed, bool detect);
+Draw drawScanLevel(const std::vector<Cylinder>& layout, const PathSpec& path,
+                   const RangeModel& sensor, const ScanLevelConfig& config, std::uint64_t seed,
+                   bool detect);
 
 }  // namespace lidarcal::studies

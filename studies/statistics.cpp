@@ -40,7 +40,9 @@ PositionSummary positionSummary(const std::vector<PositionError>& e, std::size_t
   s.mean_tangential_m = st / n;
   s.bias_m = std::hypot(s.mean_radial_m, s.mean_tangential_m);
   double v = 0.0;
-  for (const auto& x : e) v += std::pow(x.radial_m - s.mean_radial_m, 2) + std::pow(x.tangential_m - s.mean_tangential_m, 2);
+  for (const auto& x : e)
+    v += std::pow(x.radial_m - s.mean_radial_m, 2) +
+         std::pow(x.tangential_m - s.mean_tangential_m, 2);
   s.variance_m2 = e.size() > 1 ? v / (n - 1.0) : kNaN;
   s.rmse_m = std::sqrt(s2 / n);
   s.error_m = quartiles(std::move(len));
@@ -53,7 +55,9 @@ PositionSummary positionSummary(const std::vector<PositionError>& e, std::size_t
 Quartiles quartiles(std::vector<double> values) { return sampleStats(std::move(values)).q; }
 
 SampleStats sampleStats(std::vector<double> values) {
-  values.erase(std::remove_if(values.begin(), values.end(), [](double v) { return !std::isfinite(v); }), values.end());
+  values.erase(
+      std::remove_if(values.begin(), values.end(), [](double v) { return !std::isfinite(v); }),
+      values.end());
   SampleStats s;
   s.n = values.size();
   if (values.empty()) {
@@ -71,11 +75,15 @@ SampleStats sampleStats(std::vector<double> values) {
   for (double v : values) ss += (v - s.mean) * (v - s.mean);
   s.mean_se = values.size() > 1 ? std::sqrt(ss / (n - 1.0) / n) : kNaN;
   const double half = 0.5 / std::sqrt(n);  // the median's rank scatters by sqrt(n)/2 of n
-  s.median_se = values.size() > 1 ? 0.5 * (quantile(values, 0.5 + half) - quantile(values, 0.5 - half)) : kNaN;
+  s.median_se = values.size() > 1
+                    ? 0.5 * (quantile(values, 0.5 + half) - quantile(values, 0.5 - half))
+                    : kNaN;
   return s;
 }
 
-const char* toString(PositionEstimator e) { return e == PositionEstimator::triangulation ? "triangulation" : "joint"; }
+const char* toString(PositionEstimator e) {
+  return e == PositionEstimator::triangulation ? "triangulation" : "joint";
+}
 
 CellSummary summarize(const Cell& cell, const std::vector<TrialResult>& trials, int max_order) {
   CellSummary s;
@@ -95,19 +103,23 @@ CellSummary summarize(const Cell& cell, const std::vector<TrialResult>& trials, 
       }
       for (std::size_t rule = 0; rule < kRules; ++rule) {
         const RuleOutcome& x = o.rules[rule];
-        for (std::size_t set = 0; set < kTestSets; ++set) values[rule][set].push_back(x.mse_ratio[set]);
-        if (x.order >= 0 && x.order <= max_order) ++r.rules[rule].order_counts[static_cast<std::size_t>(x.order)];
+        for (std::size_t set = 0; set < kTestSets; ++set)
+          values[rule][set].push_back(x.mse_ratio[set]);
+        if (x.order >= 0 && x.order <= max_order)
+          ++r.rules[rule].order_counts[static_cast<std::size_t>(x.order)];
       }
     }
     for (std::size_t rule = 0; rule < kRules; ++rule)
-      for (std::size_t set = 0; set < kTestSets; ++set) r.rules[rule].ratio[set] = sampleStats(std::move(values[rule][set]));
+      for (std::size_t set = 0; set < kTestSets; ++set)
+        r.rules[rule].ratio[set] = sampleStats(std::move(values[rule][set]));
   }
   for (std::size_t set = 0; set < kTestSets; ++set) {
     std::vector<double> v;
     for (const TrialResult& t : trials) v.push_back(t.ceiling[set]);
     s.ceiling[set] = sampleStats(std::move(v));
   }
-  const std::array<Estimator, kPositionEstimators> source = {Estimator::closed_form, Estimator::joint};
+  const std::array<Estimator, kPositionEstimators> source = {Estimator::closed_form,
+                                                             Estimator::joint};
   for (std::size_t p = 0; p < kPositionEstimators; ++p) {
     std::vector<PositionError> errors;
     std::size_t missing = 0;
@@ -115,8 +127,10 @@ CellSummary summarize(const Cell& cell, const std::vector<TrialResult>& trials, 
       const EstimatorOutcome& o = t.estimators[static_cast<std::size_t>(source[p])];
       if (!o.ran) continue;
       for (const auto& e : o.landmarks) {
-        if (std::isfinite(e.radial_m) && std::isfinite(e.tangential_m)) errors.push_back(e);
-        else ++missing;
+        if (std::isfinite(e.radial_m) && std::isfinite(e.tangential_m))
+          errors.push_back(e);
+        else
+          ++missing;
       }
     }
     s.position[p] = positionSummary(errors, missing);

@@ -28,12 +28,13 @@ struct StudyOutput {
 /// of studyCells): what runStudy writes, whether the trials ran in this process or were read back
 /// from shards. Depends on (figures, grids, config, options.seed, options.trials,
 /// options.joint_trials, results) only.
-StudyOutput studyOutput(const std::vector<Figure>& figures, const StudyGrids& grids, const TrialConfig& config,
-                        const RunOptions& options, const std::vector<std::vector<TrialResult>>& results);
+StudyOutput studyOutput(const std::vector<Figure>& figures, const StudyGrids& grids,
+                        const TrialConfig& config, const RunOptions& options,
+                        const std::vector<std::vector<TrialResult>>& results);
 
 /// Runs the study (every trial: options.shard_count must be 1). The output depends on (figures,
 /// grids, config, options.seed, options.trials, options.joint_trials) only, not on options.threads.
-StudyOutput runStudy(const std::vector<Figure>& figures, const StudyGrids& grids, const TrialConfig& config,
-                     const RunOptions& options);
+StudyOutput runStudy(const std::vector<Figure>& figures, const StudyGrids& grids,
+                     const TrialConfig& config, const RunOptions& options);
 
 }  // namespace lidarcal::studies

@@ -9,16 +9,15 @@
 #include <stdexcept>
 #include <tuple>
 
-#include "calibration/inversion.hpp"
 #include "calibration/evaluation.hpp"
+#include "calibration/inversion.hpp"
 #include "common/rng.hpp"
+#include "common/stats_util.hpp"
 #include "studies/draw.hpp"
 #include "studies/scan_level.hpp"
-#include "common/stats_util.hpp"
 
 namespace lidarcal::studies {
 namespace {
-
 
 /// Stream tags, so the layout, the cells and the draws never share a random stream.
 constexpr std::uint64_t kLayoutTag = 0x6c61796f7574ULL;  // "layout"
@@ -46,8 +45,9 @@ std::vector<calibration::RangePair> oraclePairs(const Draw& draw) {
     const std::size_t j = calibration::centralBeam(s);
     const double t = draw.truth_m[i][j], y = s.beams[j].range_m;
     if (!std::isfinite(t) || !std::isfinite(y)) continue;
-    const int part = scans_of_stop.at(s.stop).size() >= 3 ? static_cast<int>(position.at(s.scan) % 3)
-                                                          : static_cast<int>((s.stop + static_cast<std::size_t>(s.landmark)) % 3);
+    const int part = scans_of_stop.at(s.stop).size() >= 3
+                         ? static_cast<int>(position.at(s.scan) % 3)
+                         : static_cast<int>((s.stop + static_cast<std::size_t>(s.landmark)) % 3);
     Acc& a = groups[{s.landmark, s.stop, part}];
     a.d += t;
     a.y += y;
@@ -80,7 +80,8 @@ TestSets testSets(const Draw& draw) {
     }
   };
   std::map<std::tuple<std::size_t, int, std::uint32_t>, Acc> beams;
-  for (const TruthReading& r : truthReadings(draw)) beams[{r.stop, r.landmark, r.beam}].add(r.true_m, r.range_m);
+  for (const TruthReading& r : truthReadings(draw))
+    beams[{r.stop, r.landmark, r.beam}].add(r.true_m, r.range_m);
   for (const auto& [key, a] : beams) {
     t[static_cast<std::size_t>(TestSet::beams)].truth.push_back(a.d / a.n);
     t[static_cast<std::size_t>(TestSet::beams)].raw.push_back(a.y / a.n);
@@ -89,13 +90,16 @@ TestSets testSets(const Draw& draw) {
   for (std::size_t i = 0; i < draw.obs.sightings.size(); ++i) {
     const Sighting& s = draw.obs.sightings[i];
     if (s.beams.empty()) continue;
-    const int id = s.landmark > 0 && static_cast<std::size_t>(s.landmark) < draw.true_id.size() ? draw.true_id[s.landmark] : 0;
+    const int id = s.landmark > 0 && static_cast<std::size_t>(s.landmark) < draw.true_id.size()
+                       ? draw.true_id[s.landmark]
+                       : 0;
     std::size_t nearest = s.beams.size();  // smallest true distance: the beam through the centre
     for (std::size_t j = 0; j < s.beams.size(); ++j)
       if (std::isfinite(draw.truth_m[i][j]) && std::isfinite(s.beams[j].range_m) &&
           (nearest == s.beams.size() || draw.truth_m[i][j] < draw.truth_m[i][nearest]))
         nearest = j;
-    if (id > 0 && nearest < s.beams.size()) centres[{s.stop, id}].add(draw.truth_m[i][nearest], s.beams[nearest].range_m);
+    if (id > 0 && nearest < s.beams.size())
+      centres[{s.stop, id}].add(draw.truth_m[i][nearest], s.beams[nearest].range_m);
     const std::size_t j = calibration::centralBeam(s);
     if (!std::isfinite(draw.truth_m[i][j]) || !std::isfinite(s.beams[j].range_m)) continue;
     t[static_cast<std::size_t>(TestSet::single)].truth.push_back(draw.truth_m[i][j]);
@@ -108,8 +112,8 @@ TestSets testSets(const Draw& draw) {
   return t;
 }
 
-/// Corrects readings with a model (LS inversion, Alhashimi et al. 2021 eq. 30); a reading the model cannot
-/// invert is left as it is (a filter in use has nothing better to report).
+/// Corrects readings with a model (LS inversion, Alhashimi et al. 2021 eq. 30); a reading the model
+/// cannot invert is left as it is (a filter in use has nothing better to report).
 std::vector<double> correct(const calibration::RangeInverter& inv, const std::vector<double>& raw) {
   std::vector<double> out(raw.size());
   for (std::size_t i = 0; i < raw.size(); ++i) {
@@ -120,33 +124,39 @@ std::vector<double> correct(const calibration::RangeInverter& inv, const std::ve
 }
 
 /// Eq. 31 of a bias polynomial on every test set.
-std::array<double, kTestSets> ratios(const std::vector<double>& alpha, const TestSets& tests, const LandmarkObservations& obs) {
+std::array<double, kTestSets> ratios(const std::vector<double>& alpha, const TestSets& tests,
+                                     const LandmarkObservations& obs) {
   RangeModel model;
   model.bias.alpha = alpha;
   model.range_min_m = obs.range_min_m;
   model.range_max_m = obs.range_max_m;
-  const calibration::RangeInverter inv(model, calibration::inversionWindow(model, calibration::InversionMethod::ls));
+  const calibration::RangeInverter inv(
+      model, calibration::inversionWindow(model, calibration::InversionMethod::ls));
   std::array<double, kTestSets> out{};
   for (std::size_t k = 0; k < kTestSets; ++k)
-    out[k] = calibration::compareRanges(tests[k].truth, tests[k].raw, correct(inv, tests[k].raw)).mse_ratio;
+    out[k] = calibration::compareRanges(tests[k].truth, tests[k].raw, correct(inv, tests[k].raw))
+                 .mse_ratio;
   return out;
 }
 
 /// Scores a model with both order rules: the bias of the order each picks from the model's table.
-void score(EstimatorOutcome& o, const CalibrationModel& m, const TestSets& tests, const LandmarkObservations& obs) {
+void score(EstimatorOutcome& o, const CalibrationModel& m, const TestSets& tests,
+           const LandmarkObservations& obs) {
   o.ok = m.status.ok();
   if (!o.ok) return;
   for (std::size_t r = 0; r < kRules; ++r) {
     RuleOutcome& out = o.rules[r];
     out.order = ruleOrder(m, static_cast<Rule>(r));
-    const int used = std::max(out.order, 1);  // order 0 cannot be inverted: the calibration uses order 1
+    // order 0 cannot be inverted: the calibration uses order 1
+    const int used = std::max(out.order, 1);
     for (const OrderRow& row : m.orders)
       if (row.order == used) out.mse_ratio = ratios(row.alpha, tests, obs);
   }
 }
 
 /// Position errors of a model's landmarks against the layout, in each landmark's frame.
-std::vector<PositionError> positionErrors(const CalibrationModel& m, const Draw& draw, const std::vector<Cylinder>& layout) {
+std::vector<PositionError> positionErrors(const CalibrationModel& m, const Draw& draw,
+                                          const std::vector<Cylinder>& layout) {
   std::vector<PositionError> out(layout.size(), PositionError{kNaN, kNaN});
   double mx = 0.0, my = 0.0;
   for (const Pose2& p : draw.obs.commanded) {
@@ -156,13 +166,15 @@ std::vector<PositionError> positionErrors(const CalibrationModel& m, const Draw&
   mx /= static_cast<double>(draw.obs.commanded.size());
   my /= static_cast<double>(draw.obs.commanded.size());
   for (const CalibratedLandmark& l : m.landmarks) {
-    if (l.status != "ok" || l.id <= 0 || static_cast<std::size_t>(l.id) >= draw.true_id.size()) continue;
+    if (l.status != "ok" || l.id <= 0 || static_cast<std::size_t>(l.id) >= draw.true_id.size())
+      continue;
     const int id = draw.true_id[static_cast<std::size_t>(l.id)];
     if (id <= 0) continue;
     const Cylinder& c = layout[static_cast<std::size_t>(id - 1)];
     const double ux = c.x_m - mx, uy = c.y_m - my, n = std::hypot(ux, uy);
     const double ex = l.x_m - c.x_m, ey = l.y_m - c.y_m;
-    out[static_cast<std::size_t>(id - 1)] = PositionError{(ex * ux + ey * uy) / n, (-ex * uy + ey * ux) / n};
+    out[static_cast<std::size_t>(id - 1)] =
+        PositionError{(ex * ux + ey * uy) / n, (-ex * uy + ey * ux) / n};
   }
   return out;
 }
@@ -186,17 +198,23 @@ CalibrationModel guarded(F&& f) {
 const char* toString(Level level) { return level == Level::landmark ? "landmark" : "scan"; }
 
 bool parseLevel(const std::string& name, Level& level) {
-  if (name == "landmark") level = Level::landmark;
-  else if (name == "scan") level = Level::scan;
-  else return false;
+  if (name == "landmark")
+    level = Level::landmark;
+  else if (name == "scan")
+    level = Level::scan;
+  else
+    return false;
   return true;
 }
 
 const char* toString(AngleNoise noise) {
   switch (noise) {
-    case AngleNoise::heading: return "heading";
-    case AngleNoise::beams: return "beams";
-    case AngleNoise::bearing: return "bearing";
+    case AngleNoise::heading:
+      return "heading";
+    case AngleNoise::beams:
+      return "beams";
+    case AngleNoise::bearing:
+      return "bearing";
   }
   return "unknown";
 }
@@ -220,7 +238,9 @@ bool parseAngleNoise(const std::string& name, AngleNoise& noise) {
 
 const char* toString(NoiseLaw law) { return law == NoiseLaw::paper ? "paper" : "squared"; }
 
-bool parseNoiseLaw(const std::string& name, NoiseLaw& law) { return parseByName(name, {NoiseLaw::paper, NoiseLaw::squared}, law); }
+bool parseNoiseLaw(const std::string& name, NoiseLaw& law) {
+  return parseByName(name, {NoiseLaw::paper, NoiseLaw::squared}, law);
+}
 
 const char* toString(Rule r) { return r == Rule::aic ? "aic" : "aic-parsimonious"; }
 
@@ -252,9 +272,12 @@ RangeModel simulatedSensor(const TrialConfig& config) {
 
 const char* toString(Estimator e) {
   switch (e) {
-    case Estimator::closed_form: return "closed_form";
-    case Estimator::joint: return "joint";
-    case Estimator::oracle: return "oracle";
+    case Estimator::closed_form:
+      return "closed_form";
+    case Estimator::joint:
+      return "joint";
+    case Estimator::oracle:
+      return "oracle";
   }
   return "unknown";
 }
@@ -280,11 +303,15 @@ RangeModel TrialConfig::paperSensor() {
 void TrialConfig::validate() const {
   if (path.stops < 3) throw std::invalid_argument("TrialConfig: at least 3 stops");
   if (!(path.step_m > 0.0)) throw std::invalid_argument("TrialConfig: step_m must be positive");
-  if (path.scans_per_stop < 1) throw std::invalid_argument("TrialConfig: scans_per_stop must be >= 1");
-  if (max_order < 1 || max_order > 6) throw std::invalid_argument("TrialConfig: max_order must be 1..6");
-  if (joint_outer_iterations < 1) throw std::invalid_argument("TrialConfig: joint_outer_iterations must be >= 1");
+  if (path.scans_per_stop < 1)
+    throw std::invalid_argument("TrialConfig: scans_per_stop must be >= 1");
+  if (max_order < 1 || max_order > 6)
+    throw std::invalid_argument("TrialConfig: max_order must be 1..6");
+  if (joint_outer_iterations < 1)
+    throw std::invalid_argument("TrialConfig: joint_outer_iterations must be >= 1");
   if (level == Level::scan && angle_noise != AngleNoise::heading)
-    throw std::invalid_argument("TrialConfig: the scan level models the angle noise as heading noise only");
+    throw std::invalid_argument(
+        "TrialConfig: the scan level models the angle noise as heading noise only");
   if (scan_beams < 8) throw std::invalid_argument("TrialConfig: scan_beams must be >= 8");
   if (!(noise_scale >= 0.0)) throw std::invalid_argument("TrialConfig: noise_scale must be >= 0");
   if (!(min_sigma_s_m > 0.0) || !(min_sigma_theta_rad > 0.0))
@@ -292,7 +319,8 @@ void TrialConfig::validate() const {
   placement.validate();
 }
 
-std::vector<Cylinder> trialLayout(const TrialConfig& config, std::uint64_t seed, std::size_t trial, int landmarks) {
+std::vector<Cylinder> trialLayout(const TrialConfig& config, std::uint64_t seed, std::size_t trial,
+                                  int landmarks) {
   auto rng = makeRng(deriveSeed(seed, kLayoutTag), trial);
   PlacementConfig p = config.placement;
   return placeLandmarks(config.path, landmarks, p, rng);
@@ -310,16 +338,18 @@ std::uint64_t trialSeed(std::uint64_t seed, const Cell& cell, std::size_t trial)
 calibration::CalibrationConfig estimatorConfig(const TrialConfig& config, const Cell& cell) {
   calibration::CalibrationConfig cc;
   cc.max_order = config.max_order;
-  cc.threads = 1;  // the trials already run on every core
+  cc.threads = 1;                    // the trials already run on every core
   cc.noise = NoiseKind::polynomial;  // the paper's noise law (eq. 3)
   cc.closed_form_rule = calibration::OrderRule::aic;
-  cc.joint_rule = calibration::JointOrderRule::aic;  // the model's own order; both rules are read from its table
+  // the model's own order; both rules are read from its table
+  cc.joint_rule = calibration::JointOrderRule::aic;
   const double s = std::max(cell.sigma_s_m, config.min_sigma_s_m);
   const double a = std::max(cell.sigma_theta_rad, config.min_sigma_theta_rad);
   cc.triangulation.sigma_s_m = s;
   cc.triangulation.sigma_theta_rad = a;
   cc.joint.sigma_s_m = s;
-  cc.joint.sigma_psi_rad = config.angle_noise == AngleNoise::heading ? a : config.min_sigma_theta_rad;
+  cc.joint.sigma_psi_rad =
+      config.angle_noise == AngleNoise::heading ? a : config.min_sigma_theta_rad;
   cc.joint.noise_order = std::max(1, static_cast<int>(config.sensor.noise.beta.size()) - 1);
   // Stop and go by construction: the per-stop averages (averageScans) hold one scan per stop,
   // which the automatic rule would take for continuous motion.
@@ -329,12 +359,14 @@ calibration::CalibrationConfig estimatorConfig(const TrialConfig& config, const 
   return cc;
 }
 
-TrialResult runTrial(const TrialConfig& config, const Cell& cell, const std::vector<Cylinder>& layout,
-                     std::uint64_t trial_seed, bool run_joint) {
+TrialResult runTrial(const TrialConfig& config, const Cell& cell,
+                     const std::vector<Cylinder>& layout, std::uint64_t trial_seed,
+                     bool run_joint) {
   PathSpec path = config.path;
   path.sigma_s_m = cell.sigma_s_m;
   path.sigma_psi_rad = config.angle_noise == AngleNoise::heading ? cell.sigma_theta_rad : 0.0;
-  const double bearing_noise = config.angle_noise == AngleNoise::heading ? 0.0 : cell.sigma_theta_rad;
+  const double bearing_noise =
+      config.angle_noise == AngleNoise::heading ? 0.0 : cell.sigma_theta_rad;
   const bool rotate_beams = config.angle_noise == AngleNoise::beams;
   const RangeModel sensor = simulatedSensor(config);
   const std::uint64_t calib_seed = deriveSeed(trial_seed, 0), test_seed = deriveSeed(trial_seed, 1);
@@ -350,7 +382,8 @@ TrialResult runTrial(const TrialConfig& config, const Cell& cell, const std::vec
   const TestSets tests = testSets(test);
 
   TrialResult r;
-  for (std::size_t l = 1; l < calib.true_id.size(); ++l) r.detected_landmarks += calib.true_id[l] > 0;
+  for (std::size_t l = 1; l < calib.true_id.size(); ++l)
+    r.detected_landmarks += calib.true_id[l] > 0;
   r.ceiling = ratios(sensor.bias.alpha, tests, calib.obs);
   calibration::CalibrationConfig cc = estimatorConfig(config, cell);
 
@@ -365,17 +398,21 @@ TrialResult runTrial(const TrialConfig& config, const Cell& cell, const std::vec
   if (run_joint) {
     cc.method = calibration::Method::joint;
     const CalibrationModel jm = guarded([&] {
-      return calibration::calibrate(config.joint_average_scans ? averageScans(calib.obs) : calib.obs, cc);
+      return calibration::calibrate(
+          config.joint_average_scans ? averageScans(calib.obs) : calib.obs, cc);
     });
     jt.ran = true;
     score(jt, jm, tests, calib.obs);
-    if (jm.status.ok()) jt.landmarks = positionErrors(jm, calib, layout);
-    else jt.landmarks.assign(layout.size(), PositionError{kNaN, kNaN});
+    if (jm.status.ok())
+      jt.landmarks = positionErrors(jm, calib, layout);
+    else
+      jt.landmarks.assign(layout.size(), PositionError{kNaN, kNaN});
   }
 
   EstimatorOutcome& orc = r.estimators[static_cast<std::size_t>(Estimator::oracle)];
   const CalibrationModel om = guarded([&] {
-    return calibration::calibrateAgainstTruth(oraclePairs(calib), cc, {}, calib.obs.range_min_m, calib.obs.range_max_m);
+    return calibration::calibrateAgainstTruth(oraclePairs(calib), cc, {}, calib.obs.range_min_m,
+                                              calib.obs.range_max_m);
   });
   orc.ran = true;
   score(orc, om, tests, calib.obs);

@@ -38,7 +38,8 @@ class RecordReader {
     std::size_t start = 0;
     for (;;) {
       const std::size_t comma = line.find(',', start);
-      fields_.push_back(line.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
+      fields_.push_back(
+          line.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
       if (comma == std::string::npos) break;
       start = comma + 1;
     }
@@ -49,7 +50,9 @@ class RecordReader {
     char* end = nullptr;
     const long long v = std::strtoll(f.c_str(), &end, 10);
     if (f.empty() || *end != '\0' || errno != 0 || v < lo || v > hi)
-      fail(at_, what, "expected an integer from " + std::to_string(lo) + " to " + std::to_string(hi) + ", found '" + f + "'");
+      fail(at_, what,
+           "expected an integer from " + std::to_string(lo) + " to " + std::to_string(hi) +
+               ", found '" + f + "'");
     return v;
   }
   bool flag(const char* what) { return integer(what, 0, 1) == 1; }
@@ -62,7 +65,8 @@ class RecordReader {
   }
   void finish() const {
     if (at_ != fields_.size())
-      throw std::invalid_argument(std::to_string(fields_.size() - at_) + " column(s) beyond the record's end");
+      throw std::invalid_argument(std::to_string(fields_.size() - at_) +
+                                  " column(s) beyond the record's end");
   }
 
  private:
@@ -114,8 +118,10 @@ EstimatorOutcome readEstimator(RecordReader& r) {
 }  // namespace
 
 std::string trialRecordHeader() {
-  return "# cell,trial,detected_landmarks,ceiling[3],{ran,ok,{order,mse_ratio[3]}[2 rules],landmarks,"
-         "{radial_m,tangential_m}[landmarks]}[closed_form,joint,oracle]; reals in C99 hexadecimal floating point";
+  return "# cell,trial,detected_landmarks,ceiling[3],{ran,ok,{order,mse_ratio[3]}[2 "
+         "rules],landmarks,"
+         "{radial_m,tangential_m}[landmarks]}[closed_form,joint,oracle]; reals in C99 hexadecimal "
+         "floating point";
 }
 
 std::string formatTrialRecord(const TrialRecord& record) {
@@ -134,7 +140,8 @@ TrialRecord parseTrialRecord(const std::string& line) {
   constexpr long long kMaxIndex = 1LL << 40;
   record.cell = static_cast<std::size_t>(r.integer("cell", 0, kMaxIndex));
   record.trial = static_cast<std::size_t>(r.integer("trial", 0, kMaxIndex));
-  record.result.detected_landmarks = static_cast<int>(r.integer("detected_landmarks", 0, kMaxLandmarks));
+  record.result.detected_landmarks =
+      static_cast<int>(r.integer("detected_landmarks", 0, kMaxLandmarks));
   for (double& x : record.result.ceiling) x = r.real("ceiling");
   for (EstimatorOutcome& o : record.result.estimators) o = readEstimator(r);
   r.finish();

@@ -62,10 +62,11 @@ inline void writeFile(const fs::path& p, const std::string& bytes) {
 /// `prefix` (e.g. `ulimit -f 0`), and captures its exit code, stdout and stderr.
 inline CliResult runCliPrefixed(const std::string& prefix, const std::string& args) {
   static int counter = 0;
-  const fs::path base = fs::temp_directory_path() / ("lidarcal-cli-" + std::to_string(::getpid()) + "-" +
-                                                     std::to_string(counter++));
-  const std::string cmd = (prefix.empty() ? std::string() : prefix + "; ") + "exec '" + LIDARCAL_EXE + "' " + args +
-                          " >'" + base.string() + ".out' 2>'" + base.string() + ".err'";
+  const fs::path base = fs::temp_directory_path() / ("lidarcal-cli-" + std::to_string(::getpid()) +
+                                                     "-" + std::to_string(counter++));
+  const std::string cmd = (prefix.empty() ? std::string() : prefix + "; ") + "exec '" +
+                          LIDARCAL_EXE + "' " + args + " >'" + base.string() + ".out' 2>'" +
+                          base.string() + ".err'";
   const int status = std::system(cmd.c_str());
   CliResult r;
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
@@ -90,7 +91,8 @@ inline std::map<std::string, std::string> snapshot(const fs::path& dir) {
 
 /// Expects `got` to hold the files of `expected`, byte for byte (a mismatch names the file but does
 /// not print the bytes: a PNG would flood the log).
-inline void expectSameFiles(const std::map<std::string, std::string>& expected, const std::map<std::string, std::string>& got) {
+inline void expectSameFiles(const std::map<std::string, std::string>& expected,
+                            const std::map<std::string, std::string>& got) {
   EXPECT_EQ(got.size(), expected.size());
   for (const auto& [name, bytes] : expected) {
     SCOPED_TRACE(name);

@@ -23,7 +23,8 @@ bool SequenceDiagnosis::fitBaseline(DiagnosisResult& out) {
   if (!calibrateBaseline(out)) return false;
   reading_grid_m_ = readingGrid(obs_);
   intensity_varies_ = intensitiesVary(obs_);
-  if (reading_grid_m_ > 0.0) dequantised_ = dequantised(obs_, reading_grid_m_, deriveSeed(config_.seed, 0xDE0A7ULL));
+  if (reading_grid_m_ > 0.0)
+    dequantised_ = dequantised(obs_, reading_grid_m_, deriveSeed(config_.seed, 0xDE0A7ULL));
   baseline_cfg_ = baselineConfig(calibration_, calibration_cfg_, obs_, config_);
   findStarts();
   chooseOrder();
@@ -88,7 +89,8 @@ void SequenceDiagnosis::findStarts() {
   if (n.centres.size() == calibrated_start_.centres.size()) neutral_start_ = n;
 }
 
-JointResult SequenceDiagnosis::bestOf(const JointInit& start, const JointConfig& cfg, bool both) const {
+JointResult SequenceDiagnosis::bestOf(const JointInit& start, const JointConfig& cfg,
+                                      bool both) const {
   JointResult r = refineJoint(obs_, withOrder(start, cfg.order), cfg);
   if (neutral_start_ && both) {
     JointResult other = refineJoint(obs_, withOrder(*neutral_start_, cfg.order), cfg);
@@ -107,8 +109,8 @@ JointResult SequenceDiagnosis::bestOf(const JointInit& start, const JointConfig&
 /// under the Cauchy loss a pose per scan leaves optima the direct fit cannot leave (a beam put past
 /// a thin pole's tangent is predicted at its closest approach, flat in the pose):
 /// docs/results/hidden-effects.md, Robots that never stop.
-JointResult SequenceDiagnosis::fitInTwoSteps(const LandmarkObservations& obs, const JointInit& start,
-                                             const JointConfig& cfg) const {
+JointResult SequenceDiagnosis::fitInTwoSteps(const LandmarkObservations& obs,
+                                             const JointInit& start, const JointConfig& cfg) const {
   JointConfig smooth = cfg;
   smooth.keep_all_beams = false;
   smooth.reselect = true;
@@ -141,8 +143,10 @@ void SequenceDiagnosis::chooseOrder() {
     }
     for (const JointResult& t : tried) {
       if (t.model.bias.order() == baseline_cfg_.order) continue;
-      JointResult again = refineJoint(obs_, withOrder(initFrom(t), baseline_cfg_.order), warmStartConfig(baseline_cfg_));
-      if (totalNegLogLikelihood(again) < totalNegLogLikelihood(baseline_fit_) - 1.0) baseline_fit_ = std::move(again);
+      JointResult again = refineJoint(obs_, withOrder(initFrom(t), baseline_cfg_.order),
+                                      warmStartConfig(baseline_cfg_));
+      if (totalNegLogLikelihood(again) < totalNegLogLikelihood(baseline_fit_) - 1.0)
+        baseline_fit_ = std::move(again);
     }
     return;
   }
@@ -163,7 +167,8 @@ void SequenceDiagnosis::describeBaseline(DiagnosisResult& out) const {
   out.baseline_sigma_theta_rad = baseline_fit_.sigma_theta_rad;
   out.baseline_radius_m = baseline_fit_.radius_m;
   out.radius_known = obs_.landmark_radius_m.has_value();
-  out.baseline_neg_log_likelihood = baseline_fit_.neg_log_likelihood + baseline_fit_.prior_neg_log_likelihood;
+  out.baseline_neg_log_likelihood =
+      baseline_fit_.neg_log_likelihood + baseline_fit_.prior_neg_log_likelihood;
   out.baseline_extra["pose_scatter_m"] = baseline_fit_.pose_scatter_m;
   out.baseline_extra["sigma_s_prior_m"] = baseline_cfg_.sigma_s_m;
   out.baseline_extra["readings_used"] = static_cast<double>(baseline_fit_.readings);
@@ -206,9 +211,11 @@ JointResult SequenceDiagnosis::replicaFit(const LandmarkObservations& rep) const
 }
 
 /// One bootstrap replica: simulated from the fitted baseline, refitted from it.
-void SequenceDiagnosis::replica(int b, std::map<std::string, std::vector<double>>& stats, DiagnosisResult& out) {
-  const LandmarkObservations rep = simulateReplica(baseline_plan_, obs_, poseNoise(baseline_fit_, baseline_cfg_),
-                                                   deriveSeed(config_.seed, 1000 + static_cast<std::uint64_t>(b)));
+void SequenceDiagnosis::replica(int b, std::map<std::string, std::vector<double>>& stats,
+                                DiagnosisResult& out) {
+  const LandmarkObservations rep =
+      simulateReplica(baseline_plan_, obs_, poseNoise(baseline_fit_, baseline_cfg_),
+                      deriveSeed(config_.seed, 1000 + static_cast<std::uint64_t>(b)));
   const JointResult f = replicaFit(rep);
   if (!f.ok()) return;
   const auto rr = readingRows(rep, f, baseline_cfg_);

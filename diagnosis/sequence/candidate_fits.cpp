@@ -18,14 +18,16 @@ namespace lidarcal::diagnosis::sequence {
 
 /// Fold f's held-out readings spread over their grid cells (nothing when the readings lie on no
 /// grid): split once per fold, for every model scored on them (scored).
-LandmarkObservations SequenceDiagnosis::dequantisedTestFold(const std::vector<int>& fold, int f) const {
+LandmarkObservations SequenceDiagnosis::dequantisedTestFold(const std::vector<int>& fold,
+                                                            int f) const {
   return reading_grid_m_ > 0.0 ? foldSplit(dequantised_, fold, f)->second : LandmarkObservations{};
 }
 
 /// The held-out readings a model of `cfg` is scored on: as recorded for the rounded model or when
 /// the readings lie on no grid, otherwise spread over their cells (`spread`, dequantisedTestFold).
-const LandmarkObservations& SequenceDiagnosis::scoredReadings(const JointConfig& cfg, const LandmarkObservations& recorded,
-                                                              const LandmarkObservations& spread) const {
+const LandmarkObservations& SequenceDiagnosis::scoredReadings(
+    const JointConfig& cfg, const LandmarkObservations& recorded,
+    const LandmarkObservations& spread) const {
   return reading_grid_m_ > 0.0 && !cfg.effects.quantised ? spread : recorded;
 }
 
@@ -39,10 +41,11 @@ void SequenceDiagnosis::fitCandidates(bool measured_start, const char* stage, st
     reportProgress(config_, stage, candidate_cfgs_.size(), steps);
     candidate_cfgs_.push_back(effectConfig(baseline_cfg_, e));
     // The neutral start matters for the terms that bend the geometry the baseline settled in.
-    candidate_fits_.push_back(notFitted(e)
-                                  ? baseline_fit_
-                                  : bestOf(measured_start ? candidateStart(e) : initFrom(baseline_fit_), candidate_cfgs_.back(),
-                                           e == Effect::incidence_bias || e == Effect::landmark_bias));
+    candidate_fits_.push_back(
+        notFitted(e) ? baseline_fit_
+                     : bestOf(measured_start ? candidateStart(e) : initFrom(baseline_fit_),
+                              candidate_cfgs_.back(),
+                              e == Effect::incidence_bias || e == Effect::landmark_bias));
   }
 }
 
@@ -50,13 +53,16 @@ void SequenceDiagnosis::fitCandidates(bool measured_start, const char* stage, st
 /// The baseline is refitted from candidate c's solution fc; when fc fits worse than the better of
 /// that refit and `base`, fc is refitted from it (the better of the two kept). Returns the refit
 /// when it beats `base` (nothing: `base` is the baseline in fc's optimum).
-std::optional<JointResult> SequenceDiagnosis::sameOptimum(const LandmarkObservations& obs, std::size_t c, JointResult& fc,
+std::optional<JointResult> SequenceDiagnosis::sameOptimum(const LandmarkObservations& obs,
+                                                          std::size_t c, JointResult& fc,
                                                           const JointResult& base) const {
-  std::optional<JointResult> back = refineJoint(obs, baselineStart(fc), warmStartConfig(baseline_cfg_));
+  std::optional<JointResult> back =
+      refineJoint(obs, baselineStart(fc), warmStartConfig(baseline_cfg_));
   if (!(totalNegLogLikelihood(*back) < totalNegLogLikelihood(base))) back.reset();
   const JointResult& better = back ? *back : base;
   if (totalNegLogLikelihood(fc) > totalNegLogLikelihood(better)) {
-    JointResult again = refineJoint(obs, driveStart(candidates_[c], better), warmStartConfig(candidate_cfgs_[c]));
+    JointResult again =
+        refineJoint(obs, driveStart(candidates_[c], better), warmStartConfig(candidate_cfgs_[c]));
     if (totalNegLogLikelihood(again) < totalNegLogLikelihood(fc)) fc = std::move(again);
   }
   return back;
@@ -75,8 +81,10 @@ bool SequenceDiagnosis::settleBaseline() {
     if (!candidate_fits_[c].ok() || notFitted(candidates_[c]) ||
         !(totalNegLogLikelihood(candidate_fits_[c]) < totalNegLogLikelihood(baseline_fit_) - 2.0))
       continue;
-    JointResult back = refineJoint(obs_, baselineStart(candidate_fits_[c]), warmStartConfig(baseline_cfg_));
-    if (totalNegLogLikelihood(back) < std::min(totalNegLogLikelihood(best), totalNegLogLikelihood(baseline_fit_) - 1.0))
+    JointResult back =
+        refineJoint(obs_, baselineStart(candidate_fits_[c]), warmStartConfig(baseline_cfg_));
+    if (totalNegLogLikelihood(back) <
+        std::min(totalNegLogLikelihood(best), totalNegLogLikelihood(baseline_fit_) - 1.0))
       best = std::move(back);
   }
   if (!best.ok()) return false;
@@ -107,8 +115,9 @@ void SequenceDiagnosis::heldOut(HeldOut& held) {
     if (notFitted(candidates_[c]) || !candidate_fits_[c].ok()) continue;
     const auto back = sameOptimum(obs_, c, candidate_fits_[c], baseline_fit_);
     if (back) baseline_nll_in_optimum_[c] = totalNegLogLikelihood(*back);
-    candidate_fits_[c] = withCorrectedShape(obs_, candidates_[c], back ? *back : baseline_fit_, baseline_cfg_,
-                                            std::move(candidate_fits_[c]), candidate_cfgs_[c], &shape_lr_statistic_[c]);
+    candidate_fits_[c] = withCorrectedShape(obs_, candidates_[c], back ? *back : baseline_fit_,
+                                            baseline_cfg_, std::move(candidate_fits_[c]),
+                                            candidate_cfgs_[c], &shape_lr_statistic_[c]);
   }
   // Under the motion prior each term of the geometry is paired with the baseline refitted from
   // its own solution, for the held-out steps (odometryLikelihoods).
@@ -116,14 +125,16 @@ void SequenceDiagnosis::heldOut(HeldOut& held) {
   paired_baselines_.resize(candidates_.size());
   for (std::size_t c = 0; c < candidates_.size() && baseline_fit_.motion_prior; ++c)
     if (geometryTerm(candidates_[c]) && !notFitted(candidates_[c]) && candidate_fits_[c].ok())
-      paired_baselines_[c] = refineJoint(obs_, baselineStart(candidate_fits_[c]), warmStartConfig(baseline_cfg_));
+      paired_baselines_[c] =
+          refineJoint(obs_, baselineStart(candidate_fits_[c]), warmStartConfig(baseline_cfg_));
   foldLikelihoods(held, steps_before, steps_before + fold_steps);
   odometryLikelihoods(held);
   held.points = static_cast<double>(held.base.size());
 }
 
 /// Readings of each fold's sightings under the models fitted on the other folds (block: scan).
-void SequenceDiagnosis::foldLikelihoods(HeldOut& held, std::size_t steps_before, std::size_t steps) const {
+void SequenceDiagnosis::foldLikelihoods(HeldOut& held, std::size_t steps_before,
+                                        std::size_t steps) const {
   const std::vector<int> fold = foldOfEachSighting(obs_, config_.folds);
   for (int f = 0; f < config_.folds; ++f) {
     reportProgress(config_, kHeldOutStage, steps_before + static_cast<std::size_t>(f), steps);
@@ -143,8 +154,9 @@ void SequenceDiagnosis::foldLikelihoods(HeldOut& held, std::size_t steps_before,
         ec[c] = eb;
         continue;
       }
-      JointResult fc = refineJoint(tr, !candidate_fits_[c].ok() ? initFrom(baseline_fit_) : initFrom(candidate_fits_[c]),
-                                   warmStartConfig(candidate_cfgs_[c]));
+      JointResult fc = refineJoint(
+          tr, !candidate_fits_[c].ok() ? initFrom(baseline_fit_) : initFrom(candidate_fits_[c]),
+          warmStartConfig(candidate_cfgs_[c]));
       if (!fc.ok()) {
         ok = false;
         break;
@@ -152,9 +164,12 @@ void SequenceDiagnosis::foldLikelihoods(HeldOut& held, std::size_t steps_before,
       // Under the motion prior the candidate is scored against the baseline in its own optimum
       // (sameOptimum): that baseline's difference to fb's is taken off its readings (held.base
       // stays fb's).
-      const std::optional<JointResult> bb = baseline_fit_.motion_prior ? sameOptimum(tr, c, fc, fb) : std::nullopt;
-      fc = withCorrectedShape(tr, candidates_[c], bb ? *bb : fb, baseline_cfg_, std::move(fc), candidate_cfgs_[c]);
-      ec[c] = heldOutLikelihoods(tr, scoredReadings(candidate_cfgs_[c], recorded, spread), fc, candidate_cfgs_[c]);
+      const std::optional<JointResult> bb =
+          baseline_fit_.motion_prior ? sameOptimum(tr, c, fc, fb) : std::nullopt;
+      fc = withCorrectedShape(tr, candidates_[c], bb ? *bb : fb, baseline_cfg_, std::move(fc),
+                              candidate_cfgs_[c]);
+      ec[c] = heldOutLikelihoods(tr, scoredReadings(candidate_cfgs_[c], recorded, spread), fc,
+                                 candidate_cfgs_[c]);
       if (ec[c].size() != eb.size()) {
         ok = false;
         continue;
@@ -200,11 +215,13 @@ void SequenceDiagnosis::odometryLikelihoods(HeldOut& held) const {
       // The candidate's steps against its paired baseline's, added to the baseline's.
       const std::vector<double> own = stepHeldOut(obs_, candidate_fits_[c], candidate_cfgs_[c]),
                                 pair = stepHeldOut(obs_, paired_baselines_[c], baseline_cfg_);
-      for (std::size_t k = 0; k < sb.size() && own.size() == sb.size() && pair.size() == sb.size(); ++k)
+      for (std::size_t k = 0; k < sb.size() && own.size() == sb.size() && pair.size() == sb.size();
+           ++k)
         sc[c][k] += own[k] - pair[k];
     }
     for (std::size_t k = 0; k < sb.size() && !held.base.empty(); ++k) {
-      if (!std::isfinite(sb[k])) continue;  // poses the readings do not locate: left out for every model
+      // poses the readings do not locate: left out for every model
+      if (!std::isfinite(sb[k])) continue;
       const std::size_t key = std::numeric_limits<std::size_t>::max() - k;
       for (int thrice = 0; thrice < 3; ++thrice) {
         held.base.push_back(sb[k] / 3.0);
@@ -217,8 +234,9 @@ void SequenceDiagnosis::odometryLikelihoods(HeldOut& held) const {
   const auto ob = odometryHeldOut(obs_, baseline_fit_, baseline_cfg_);
   std::vector<std::vector<double>> oc(candidates_.size());
   for (std::size_t c = 0; c < candidates_.size(); ++c)
-    oc[c] = !candidate_fits_[c].ok() ? std::vector<double>(ob.size(), kNaN)
-                                     : odometryHeldOut(obs_, candidate_fits_[c], candidate_cfgs_[c]);
+    oc[c] = !candidate_fits_[c].ok()
+                ? std::vector<double>(ob.size(), kNaN)
+                : odometryHeldOut(obs_, candidate_fits_[c], candidate_cfgs_[c]);
   for (std::size_t k = 0; k < ob.size() && !held.base.empty(); ++k) {
     // One block per stop, after the scans' blocks; two observations (x, y) per stop.
     const std::size_t key = std::numeric_limits<std::size_t>::max() - k;

@@ -19,7 +19,8 @@ namespace lidarcal::diagnosis::sequence {
 /// The gates of the rule table (diagnosis/rules.hpp), in its order: a candidate whose fit is no
 /// effect gets p = 1 (or the p of its estimate), whatever its held-out gain. `lr`: twice the log
 /// ratio of its fit on all the data against the baseline's in the same optimum.
-void SequenceDiagnosis::applyCandidateGates(CandidateResult& r, const JointResult& fc, double lr) const {
+void SequenceDiagnosis::applyCandidateGates(CandidateResult& r, const JointResult& fc,
+                                            double lr) const {
   auto say = [&r](const std::string& why) { r.note += (r.note.empty() ? "" : "; ") + why; };
   // Rule step_scale_at_bound: a path bent by another effect runs the scale to its bound
   // (docs/results/hidden-effects.md, Robots that never stop).
@@ -41,7 +42,8 @@ void SequenceDiagnosis::applyCandidateGates(CandidateResult& r, const JointResul
     }
   }
   // Rule mixed_pixels_at_floor.
-  if (r.effect == Effect::mixed_pixels && fc.effects.mixed_pixel_fraction <= kMinMixedPixelFraction * (1.0 + 1e-9)) {
+  if (r.effect == Effect::mixed_pixels &&
+      fc.effects.mixed_pixel_fraction <= kMinMixedPixelFraction * (1.0 + 1e-9)) {
     r.p_value = 1.0;
     say("no reading was attributed to mixed pixels (the fraction at its floor)");
   }
@@ -51,11 +53,14 @@ void SequenceDiagnosis::applyCandidateGates(CandidateResult& r, const JointResul
     r.p_value = 1.0;
     char buf[200];
     if (lr < -2.0 * rules::kNestedSlackNats)
-      std::snprintf(buf, sizeof buf, "its fit on all the data is %.1f nats less likely than the baseline's: not at its optimum",
+      std::snprintf(buf, sizeof buf,
+                    "its fit on all the data is %.1f nats less likely than the baseline's: not at "
+                    "its optimum",
                     -0.5 * lr);
     else
       std::snprintf(buf, sizeof buf,
-                    "its fit on all the data is no more likely than the baseline's (%+.2g nats): it explains nothing in sample",
+                    "its fit on all the data is no more likely than the baseline's (%+.2g nats): "
+                    "it explains nothing in sample",
                     0.5 * lr);
     say(buf);
   }
@@ -72,18 +77,21 @@ void SequenceDiagnosis::applyCandidateGates(CandidateResult& r, const JointResul
 void SequenceDiagnosis::setPValue(CandidateResult& r, std::size_t c, double lr) const {
   const bool rounded = r.effect == Effect::quantisation;
   const bool ratio = !baseline_fit_.motion_prior || pathTerm(r.effect);
-  const bool shape_ratio = baseline_fit_.motion_prior && restrictedShape(r.effect) && std::isfinite(shape_lr_statistic_[c]);
+  const bool shape_ratio = baseline_fit_.motion_prior && restrictedShape(r.effect) &&
+                           std::isfinite(shape_lr_statistic_[c]);
   r.p_likelihood_ratio = rounded       ? kNaN
                          : ratio       ? likelihoodRatioPValue(lr, r.parameters)
                          : shape_ratio ? boundedLikelihoodRatioPValue(shape_lr_statistic_[c])
                                        : kNaN;
-  const bool ratio_alone = baseline_fit_.motion_prior && pathTerm(r.effect) && std::isfinite(r.p_likelihood_ratio);
+  const bool ratio_alone =
+      baseline_fit_.motion_prior && pathTerm(r.effect) && std::isfinite(r.p_likelihood_ratio);
   r.p_value = rounded       ? r.p_heldout
               : ratio_alone ? r.p_likelihood_ratio
                             : combinedPValue(r.p_heldout, r.score_p_value, r.p_likelihood_ratio);
 }
 
-CandidateResult SequenceDiagnosis::candidate(std::size_t c, const HeldOut& held, const DiagnosisResult& out) const {
+CandidateResult SequenceDiagnosis::candidate(std::size_t c, const HeldOut& held,
+                                             const DiagnosisResult& out) const {
   CandidateResult r;
   r.effect = candidates_[c];
   r.statistic = statisticOf(r.effect, DiagnoseMode::sequence);
@@ -111,7 +119,8 @@ CandidateResult SequenceDiagnosis::candidate(std::size_t c, const HeldOut& held,
   double base_total = baseline_nll_in_optimum_[c];
   if (rounded) {
     double spread = 0.0;
-    for (const auto& x : evaluateJoint(dequantised_, baseline_fit_, baseline_cfg_)) spread -= x.log_likelihood;
+    for (const auto& x : evaluateJoint(dequantised_, baseline_fit_, baseline_cfg_))
+      spread -= x.log_likelihood;
     base_total = spread + baseline_fit_.prior_neg_log_likelihood;
   }
   const double lr = 2.0 * (base_total - fc.neg_log_likelihood - fc.prior_neg_log_likelihood);
@@ -124,21 +133,30 @@ CandidateResult SequenceDiagnosis::candidate(std::size_t c, const HeldOut& held,
   return r;
 }
 
-void SequenceDiagnosis::setIdentifiability(CandidateResult& r, const JointResult& fc, bool radius_known) const {
+void SequenceDiagnosis::setIdentifiability(CandidateResult& r, const JointResult& fc,
+                                           bool radius_known) const {
   if (const auto it = identifiability_.find(r.effect); it != identifiability_.end()) {
     r.information_ratio = it->second.ratio;
     r.standard_error = it->second.se;
     // Rule identifiable: estimable at the smallest size worth naming, or the estimate stands clear
     // of zero once the baseline's parameters are free.
-    r.identifiable = it->second.se < std::max(it->second.ref, effectSize(r.effect, fc) / rules::kIdentifiableEstimateSe);
+    r.identifiable = it->second.se < std::max(it->second.ref, effectSize(r.effect, fc) /
+                                                                  rules::kIdentifiableEstimateSe);
   }
   if (r.identifiable) return;
   if (r.effect == Effect::incidence_bias && !radius_known)
-    r.note = "confounded with the landmark radius and alpha_0 (radius estimated; give landmark_radius_m)";
+    r.note =
+        "confounded with the landmark radius and alpha_0 (radius estimated; give "
+        "landmark_radius_m)";
   else if (r.effect == Effect::odometry_scale && !radius_known)
-    r.note = "a step-length error is a change of the world's scale, which the bias polynomial absorbs when the radius is unknown";
-  else if (r.effect == Effect::mixed_pixels) r.note = "too few outermost or inner beams";
-  else r.note = "the baseline's parameters absorb it (standard error " + std::to_string(r.standard_error) + " after them)";
+    r.note =
+        "a step-length error is a change of the world's scale, which the bias polynomial absorbs "
+        "when the radius is unknown";
+  else if (r.effect == Effect::mixed_pixels)
+    r.note = "too few outermost or inner beams";
+  else
+    r.note = "the baseline's parameters absorb it (standard error " +
+             std::to_string(r.standard_error) + " after them)";
 }
 
 }  // namespace lidarcal::diagnosis::sequence

@@ -18,7 +18,8 @@ namespace {
 
 /// Group of a residual for the variance ratios: landmark x stop x edge.
 long groupKey(const JointReading& r) {
-  return (static_cast<long>(r.landmark) * 100000 + static_cast<long>(r.stop)) * 2 + (r.edge ? 1 : 0);
+  return (static_cast<long>(r.landmark) * 100000 + static_cast<long>(r.stop)) * 2 +
+         (r.edge ? 1 : 0);
 }
 
 }  // namespace
@@ -34,8 +35,10 @@ Closeness closeness(const ZSample& measured, const ZSample& simulated) {
   Closeness c;
   c.ks_distance = ksDistance(measured.z, simulated.z);
   std::map<long, std::pair<std::vector<double>, std::vector<double>>> g;
-  for (std::size_t i = 0; i < measured.z.size(); ++i) g[measured.group[i]].first.push_back(measured.z[i]);
-  for (std::size_t i = 0; i < simulated.z.size(); ++i) g[simulated.group[i]].second.push_back(simulated.z[i]);
+  for (std::size_t i = 0; i < measured.z.size(); ++i)
+    g[measured.group[i]].first.push_back(measured.z[i]);
+  for (std::size_t i = 0; i < simulated.z.size(); ++i)
+    g[simulated.group[i]].second.push_back(simulated.z[i]);
   auto var = [](const std::vector<double>& v) {
     double m = 0.0, s = 0.0;
     for (double x : v) m += x / static_cast<double>(v.size());
@@ -74,8 +77,8 @@ std::vector<ResidualRecord> residualRecords(const std::vector<ReadingRow>& rs) {
   return out;
 }
 
-double calibrationMseRatio(const LandmarkObservations& obs, const JointResult& fit, const JointConfig& cfg,
-                           const std::vector<std::vector<double>>& truth) {
+double calibrationMseRatio(const LandmarkObservations& obs, const JointResult& fit,
+                           const JointConfig& cfg, const std::vector<std::vector<double>>& truth) {
   RangeModel m = fit.model;
   m.range_min_m = obs.range_min_m;
   m.range_max_m = fit.window_max_m;
@@ -93,7 +96,8 @@ double calibrationMseRatio(const LandmarkObservations& obs, const JointResult& f
     for (std::size_t j = 0; j < s.beams.size(); ++j) {
       if (!std::isfinite(s.beams[j].range_m)) continue;
       while (k < rd.size() && rd[k].sighting < si) ++k;
-      if (k >= rd.size() || rd[k].sighting != si || si >= truth.size() || j >= truth[si].size()) continue;
+      if (k >= rd.size() || rd[k].sighting != si || si >= truth.size() || j >= truth[si].size())
+        continue;
       const JointReading& r = rd[k++];
       const double terms = r.mean_m - fit.model.bias(r.d_m);
       const auto d = inv->invert(r.y_m - terms);
@@ -110,7 +114,9 @@ double effectSize(Effect e, const JointResult& f) {
   if (e == Effect::landmark_bias) {
     double s = 0.0;
     for (const auto& [id, o] : x.landmark_offset_m) s += o * o;
-    return x.landmark_offset_m.empty() ? 0.0 : std::sqrt(s / static_cast<double>(x.landmark_offset_m.size()));
+    return x.landmark_offset_m.empty()
+               ? 0.0
+               : std::sqrt(s / static_cast<double>(x.landmark_offset_m.size()));
   }
   if (e == Effect::heading_error) return x.heading_rms_rad;
   if (e == Effect::range_drift) return std::abs(x.drift_m_per_scan);
@@ -140,7 +146,9 @@ std::map<std::string, double> effectEstimates(Effect e, const JointResult& f) {
       s += o * o;
     }
     m["landmark_offset_rms_m"] =
-        x.landmark_offset_m.empty() ? 0.0 : std::sqrt(s / static_cast<double>(x.landmark_offset_m.size()));
+        x.landmark_offset_m.empty()
+            ? 0.0
+            : std::sqrt(s / static_cast<double>(x.landmark_offset_m.size()));
   }
   if (e == Effect::heading_error) m["heading_rms_deg"] = rad2deg(x.heading_rms_rad);
   if (e == Effect::range_drift) m["range_drift_m_per_scan"] = x.drift_m_per_scan;
@@ -162,12 +170,13 @@ std::map<std::string, double> sceneKeys(Effect e, const JointResult& f, const Re
   const auto& c = plan.config;
   for (std::size_t i = 0; i < c.model.bias.alpha.size(); ++i)
     k["sensor.bias_alpha[" + std::to_string(i) + "]"] = c.model.bias.alpha[i];
-  if (c.model.noise.kind == NoiseKind::power) k["sensor.noise.exponent (kind power)"] = c.model.noise.exponent;
+  if (c.model.noise.kind == NoiseKind::power)
+    k["sensor.noise.exponent (kind power)"] = c.model.noise.exponent;
   k["sensor.noise.sigma_e"] = c.model.noise.sigma_e;
   if (e == Effect::landmark_bias)
     for (std::size_t i = 0; i < plan.ids.size(); ++i)
-      k["landmarks[" + std::to_string(i) + "].range_offset_m (id " + std::to_string(plan.ids[i]) + ")"] =
-          c.landmarks[i].range_offset_m;
+      k["landmarks[" + std::to_string(i) + "].range_offset_m (id " + std::to_string(plan.ids[i]) +
+        ")"] = c.landmarks[i].range_offset_m;
   const std::map<Effect, double> value = {{Effect::incidence_noise, x.incidence_noise_exponent},
                                           {Effect::incidence_bias, x.incidence_bias_m},
                                           {Effect::heading_error, rad2deg(x.heading_rms_rad)},
@@ -180,17 +189,21 @@ std::map<std::string, double> sceneKeys(Effect e, const JointResult& f, const Re
                                           {Effect::dark_surface, x.dark_noise_exponent}};
   if (const auto it = value.find(e); it != value.end()) k[info(e).scene_key] = it->second;
   // The fit's drift is zero at its mean scan; the simulator's at the reference scan given here.
-  if (e == Effect::range_drift) k["sensor.effects.range_drift_reference_scan"] = c.effects.range_drift_reference_scan;
+  if (e == Effect::range_drift)
+    k["sensor.effects.range_drift_reference_scan"] = c.effects.range_drift_reference_scan;
   if (e == Effect::dark_surface) {
     k["sensor.effects.dark_reference_intensity"] = c.effects.dark_reference_intensity;
     for (std::size_t i = 0; i < plan.ids.size(); ++i)
-      k["landmarks[" + std::to_string(i) + "].intensity (id " + std::to_string(plan.ids[i]) + ")"] = c.landmarks[i].intensity;
+      k["landmarks[" + std::to_string(i) + "].intensity (id " + std::to_string(plan.ids[i]) + ")"] =
+          c.landmarks[i].intensity;
   }
   return k;
 }
 
 void SequenceDiagnosis::afterCandidates(DiagnosisResult& out) const {
-  if (truth_) out.calibration_mse_ratio_baseline = calibrationMseRatio(obs_, baseline_fit_, baseline_cfg_, *truth_);
+  if (truth_)
+    out.calibration_mse_ratio_baseline =
+        calibrationMseRatio(obs_, baseline_fit_, baseline_cfg_, *truth_);
 }
 
 /// The named effect's model: its scene keys, and its simulation refitted with the baseline.
@@ -202,8 +215,9 @@ void SequenceDiagnosis::extend(std::size_t c, DiagnosisResult& out) const {
   out.scene_keys = sceneKeys(candidates_[c], fc, plan);
   ZSample sim_ext;
   for (int b = 0; b < config_.closeness_replicas; ++b) {
-    const LandmarkObservations rep = simulateReplica(plan, obs_, poseNoise(fc, candidate_cfgs_[c]),
-                                                     deriveSeed(config_.seed, 5000 + static_cast<std::uint64_t>(b)));
+    const LandmarkObservations rep =
+        simulateReplica(plan, obs_, poseNoise(fc, candidate_cfgs_[c]),
+                        deriveSeed(config_.seed, 5000 + static_cast<std::uint64_t>(b)));
     const JointResult f = replicaFit(rep);
     if (!f.ok()) continue;
     const auto rr = readingRows(rep, f, baseline_cfg_);

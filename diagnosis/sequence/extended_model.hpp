@@ -15,8 +15,8 @@ namespace lidarcal::diagnosis::sequence {
 
 /// Standardised residuals (under a baseline refit) of simulated data, with their groups.
 struct ZSample {
-  std::vector<double> z;      ///< standardised residuals (reading minus mean, over sigma)
-  std::vector<long> group;    ///< each one's group: landmark x stop x edge
+  std::vector<double> z;    ///< standardised residuals (reading minus mean, over sigma)
+  std::vector<long> group;  ///< each one's group: landmark x stop x edge
 };
 
 /// The standardised residuals of `rs`, appended to `sample` with their groups (landmark x stop x
@@ -32,8 +32,8 @@ std::vector<ResidualRecord> residualRecords(const std::vector<ReadingRow>& rs);
 
 /// MSE ratio (Alhashimi et al. 2021 eq. 31) of a fitted model's correction of the readings against
 /// the truth: the effect terms are taken off each reading, then f is inverted (LS).
-double calibrationMseRatio(const LandmarkObservations& obs, const JointResult& fit, const JointConfig& cfg,
-                           const std::vector<std::vector<double>>& truth);
+double calibrationMseRatio(const LandmarkObservations& obs, const JointResult& fit,
+                           const JointConfig& cfg, const std::vector<std::vector<double>>& truth);
 
 /// Size of a fitted effect in the unit of its identifiability standard error (RMS over components).
 double effectSize(Effect e, const JointResult& f);

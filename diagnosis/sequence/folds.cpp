@@ -24,8 +24,8 @@ LandmarkObservations subset(const LandmarkObservations& obs, const std::vector<b
 
 }  // namespace
 
-std::optional<std::pair<LandmarkObservations, LandmarkObservations>> foldSplit(const LandmarkObservations& obs,
-                                                                                const std::vector<int>& fold, int f) {
+std::optional<std::pair<LandmarkObservations, LandmarkObservations>> foldSplit(
+    const LandmarkObservations& obs, const std::vector<int>& fold, int f) {
   std::vector<bool> train(obs.sightings.size()), test(obs.sightings.size());
   bool any = false;
   for (std::size_t i = 0; i < obs.sightings.size(); ++i) {
@@ -73,7 +73,8 @@ std::vector<int> foldOfEachSighting(const LandmarkObservations& obs, int k) {
   for (std::size_t i = 0; i < obs.sightings.size(); ++i) {
     const auto& s = obs.sightings[i];
     f[i] = by_scan ? position[s.scan] % k
-                   : static_cast<int>((s.stop + static_cast<std::size_t>(s.landmark)) % static_cast<std::size_t>(k));
+                   : static_cast<int>((s.stop + static_cast<std::size_t>(s.landmark)) %
+                                      static_cast<std::size_t>(k));
   }
   return f;
 }

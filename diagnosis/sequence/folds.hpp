@@ -19,8 +19,8 @@ std::vector<int> foldOfEachSighting(const LandmarkObservations& obs, int k);
 
 /// Fold f of `fold` (the fold of each sighting): the other folds' sightings to fit on and fold
 /// f's to score; nothing when fold f holds no sighting.
-std::optional<std::pair<LandmarkObservations, LandmarkObservations>> foldSplit(const LandmarkObservations& obs,
-                                                                                const std::vector<int>& fold, int f);
+std::optional<std::pair<LandmarkObservations, LandmarkObservations>> foldSplit(
+    const LandmarkObservations& obs, const std::vector<int>& fold, int f);
 
 /// The readings' grid (detectReadingGrid over every finite beam; 0: none).
 double readingGrid(const LandmarkObservations& obs);

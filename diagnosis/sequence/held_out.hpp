@@ -19,8 +19,10 @@ namespace lidarcal::diagnosis::sequence {
 /// variance), its noise at the readings' own variance (noiseDofFactor); scored at the fitted pose
 /// alone, beams near a pole's edge fall many noise widths off (docs/FINDINGS.md).
 /// scans: when given, receives the scan of each reading.
-std::vector<double> heldOutLikelihoods(const LandmarkObservations& train, const LandmarkObservations& test,
-                                       const JointResult& fit, const JointConfig& cfg, std::vector<std::size_t>* scans = nullptr);
+std::vector<double> heldOutLikelihoods(const LandmarkObservations& train,
+                                       const LandmarkObservations& test, const JointResult& fit,
+                                       const JointConfig& cfg,
+                                       std::vector<std::size_t>* scans = nullptr);
 
 /// Held-out log-likelihood of the odometry: for each stop, the commanded position predicted from
 /// everything but its own odometry (its readings locate it in the world the other stops fix).
@@ -28,7 +30,8 @@ std::vector<double> heldOutLikelihoods(const LandmarkObservations& train, const 
 /// (heading profiled out when the model refines it), the position without its prior is
 /// p + H^-1 (p - c) / sigma_s^2 and c is N(that, sigma_s^2 I + H^-1). c is the commanded position
 /// (scaled by 1 + s with the odometry scale).
-std::vector<double> odometryHeldOut(const LandmarkObservations& obs, const JointResult& fit, const JointConfig& cfg);
+std::vector<double> odometryHeldOut(const LandmarkObservations& obs, const JointResult& fit,
+                                    const JointConfig& cfg);
 
 /// Held-out log-likelihood of each odometry step k - 1 -> k of a fit under the motion prior
 /// (element k - 1), predicted from everything but itself: linearised leave-one-out with the
@@ -38,6 +41,7 @@ std::vector<double> odometryHeldOut(const LandmarkObservations& obs, const Joint
 /// they were (each scan's heading absorbs it) and turns every step: the steps are where a
 /// continuous recording shows its path terms. NaN for a step whose two poses the readings do not
 /// both locate (kLocatingReadings): between them the step is odometry predicting odometry.
-std::vector<double> stepHeldOut(const LandmarkObservations& obs, const JointResult& fit, const JointConfig& cfg);
+std::vector<double> stepHeldOut(const LandmarkObservations& obs, const JointResult& fit,
+                                const JointConfig& cfg);
 
 }  // namespace lidarcal::diagnosis::sequence

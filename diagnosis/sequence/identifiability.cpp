@@ -49,8 +49,9 @@ std::map<int, int> centreColumns(const JointResult& fit, int col) {
 }
 
 /// The readings' rows of the design.
-void designReadingRows(const JointResult& fit, const std::vector<ReadingRow>& rs, const JointConfig& cfg,
-                       const std::map<int, int>& lm, int pose0, Design& x, DesignEntries& e) {
+void designReadingRows(const JointResult& fit, const std::vector<ReadingRow>& rs,
+                       const JointConfig& cfg, const std::map<int, int>& lm, int pose0, Design& x,
+                       DesignEntries& e) {
   const int na = fit.model.bias.order() + 1;
   const int n = static_cast<int>(rs.size());
   double tmean = 0.0;
@@ -66,8 +67,9 @@ void designReadingRows(const JointResult& fit, const std::vector<ReadingRow>& rs
     x.w(i) = 1.0 / (r.sigma_m * r.sigma_m);
     const Pose2& ps = fit.poses[r.stop];
     const auto& c = fit.centres.at(r.landmark);
-    const RayGradient g = rayGradient(ps.x_m, ps.y_m, ps.yaw_rad + r.angle_rad + fit.effects.angle_offset_rad, c.x(), c.y(),
-                                      fit.radius_m);
+    const RayGradient g =
+        rayGradient(ps.x_m, ps.y_m, ps.yaw_rad + r.angle_rad + fit.effects.angle_offset_rad, c.x(),
+                    c.y(), fit.radius_m);
     const double fp = fit.model.bias.derivative(g.d);
     double v = 1.0;
     for (int a = 0; a < na; ++a) {
@@ -96,8 +98,9 @@ void designReadingRows(const JointResult& fit, const std::vector<ReadingRow>& rs
 /// (`stop_of_slot`, in order): the first one's prior, then the odometry from each to the next
 /// (odometryStep: the steps in between composed, their variances added up), three rows each on
 /// the two poses' columns x, y, heading; the odometry scale's column is their derivative by it.
-void designMotionRows(const LandmarkObservations& obs, const JointResult& fit, const JointConfig& cfg,
-                      const std::vector<std::size_t>& stop_of_slot, int pose0, int row0, Design& x, DesignEntries& e) {
+void designMotionRows(const LandmarkObservations& obs, const JointResult& fit,
+                      const JointConfig& cfg, const std::vector<std::size_t>& stop_of_slot,
+                      int pose0, int row0, Design& x, DesignEntries& e) {
   if (stop_of_slot.empty()) return;
   const double inv_s = 1.0 / cfg.sigma_s_m, inv_psi = 1.0 / cfg.sigma_psi_rad;
   e.j.emplace_back(row0, pose0, inv_s);
@@ -105,28 +108,31 @@ void designMotionRows(const LandmarkObservations& obs, const JointResult& fit, c
   e.j.emplace_back(row0 + 2, pose0 + 2, inv_psi);
   for (std::size_t k = 1; k < stop_of_slot.size(); ++k) {
     const OdometryStep o = odometryStep(obs, fit, cfg, stop_of_slot[k - 1], stop_of_slot[k]);
-    const int row = row0 + 3 * static_cast<int>(k), ca = pose0 + 3 * static_cast<int>(k - 1), cb = ca + 3;
+    const int row = row0 + 3 * static_cast<int>(k), ca = pose0 + 3 * static_cast<int>(k - 1),
+              cb = ca + 3;
     for (int a = 0; a < 3; ++a)
       for (int b = 0; b < 3; ++b) {
         if (o.ja(a, b) != 0.0) e.j.emplace_back(row + a, ca + b, o.ja(a, b));
         if (o.jb(a, b) != 0.0) e.j.emplace_back(row + a, cb + b, o.jb(a, b));
       }
     // The odometry scale: d(residual)/d(s) = -(dx, dy) / sd.
-    const Pose2 step = stepBetween(obs.commanded[stop_of_slot[k - 1]], obs.commanded[stop_of_slot[k]]);
+    const Pose2 step =
+        stepBetween(obs.commanded[stop_of_slot[k - 1]], obs.commanded[stop_of_slot[k]]);
     x.x_scale(row, 0) = -step.x_m * o.inv_t;
     x.x_scale(row + 1, 0) = -step.y_m * o.inv_t;
   }
 }
 
-Design linearisedDesign(const LandmarkObservations& obs, const JointResult& fit, const std::vector<ReadingRow>& rs,
-                        const JointConfig& cfg) {
+Design linearisedDesign(const LandmarkObservations& obs, const JointResult& fit,
+                        const std::vector<ReadingRow>& rs, const JointConfig& cfg) {
   const int na = fit.model.bias.order() + 1;
   const std::map<int, int> lm = centreColumns(fit, na + (cfg.estimate_radius ? 1 : 0));
   // Under the motion prior a pose's heading is a nuisance parameter too: the baseline refines
   // it, so an effect the headings absorb (an angle offset) is known only as well as the odometry
   // steps say. The poses without readings are composed into the steps between those with (a dense
   // design over every pose of a long log does not fit in memory).
-  const bool motion = fit.motion_prior && cfg.effects.estimate_heading && obs.commanded.size() >= fit.poses.size();
+  const bool motion =
+      fit.motion_prior && cfg.effects.estimate_heading && obs.commanded.size() >= fit.poses.size();
   std::vector<bool> seen(fit.poses.size(), false);
   for (const auto& r : rs) seen[r.r.stop] = true;
   DesignEntries e;
@@ -146,8 +152,10 @@ Design linearisedDesign(const LandmarkObservations& obs, const JointResult& fit,
   Design x;
   x.landmarks = lm.size();
   x.w = Eigen::VectorXd::Ones(rows_total);
-  x.x_drift = Eigen::MatrixXd::Zero(rows_total, 1), x.x_angle = x.x_drift, x.x_inc = x.x_drift, x.x_scale = x.x_drift;
-  e.j.reserve(static_cast<std::size_t>(n) * static_cast<std::size_t>(na + 5) + 2 * static_cast<std::size_t>(k_stops));
+  x.x_drift = Eigen::MatrixXd::Zero(rows_total, 1), x.x_angle = x.x_drift, x.x_inc = x.x_drift,
+  x.x_scale = x.x_drift;
+  e.j.reserve(static_cast<std::size_t>(n) * static_cast<std::size_t>(na + 5) +
+              2 * static_cast<std::size_t>(k_stops));
   designReadingRows(fit, rs, cfg, lm, pose0, x, e);
   const Pose2& c0 = obs.commanded.front();
   if (motion) designMotionRows(obs, fit, cfg, stop_of_slot, pose0, n, x, e);
@@ -170,8 +178,9 @@ Design linearisedDesign(const LandmarkObservations& obs, const JointResult& fit,
 
 /// The nuisance parameters' information, factorised once for every mean-type effect.
 struct Nuisance {
-  Design::Sparse jw;                  ///< J^T W
-  Eigen::LDLT<Eigen::MatrixXd> ldlt;  ///< of J^T W J with a relative ridge (dense: pivoted, for the nearly singular)
+  Design::Sparse jw;  ///< J^T W
+  /// of J^T W J with a relative ridge (dense: pivoted, for the nearly singular)
+  Eigen::LDLT<Eigen::MatrixXd> ldlt;
 };
 
 Nuisance nuisanceInformation(const Design& x) {
@@ -190,7 +199,8 @@ Nuisance nuisanceInformation(const Design& x) {
 /// A mean-type effect with columns `xe` (sparse or dense): information left after profiling the
 /// nuisance out.
 template <class Columns>
-Identifiability meanEffectIdentifiability(const Design& x, const Nuisance& nu, const Columns& xe, double ref) {
+Identifiability meanEffectIdentifiability(const Design& x, const Nuisance& nu, const Columns& xe,
+                                          double ref) {
   Identifiability id;
   id.ref = ref;
   const Eigen::MatrixXd raw = Eigen::MatrixXd(xe.transpose() * x.w.asDiagonal() * xe);
@@ -210,7 +220,8 @@ Identifiability meanEffectIdentifiability(const Design& x, const Nuisance& nu, c
 
 /// A variance-type effect: the spread of its covariate beyond a constant (sigma_e).
 template <class Covariate>
-Identifiability covariateSpreadIdentifiability(const std::vector<ReadingRow>& rs, Covariate covariate, double ref) {
+Identifiability covariateSpreadIdentifiability(const std::vector<ReadingRow>& rs,
+                                               Covariate covariate, double ref) {
   const int n = static_cast<int>(rs.size());
   double m = 0.0, m2 = 0.0;
   for (const auto& r : rs) {
@@ -222,24 +233,30 @@ Identifiability covariateSpreadIdentifiability(const std::vector<ReadingRow>& rs
   id.ratio = std::clamp((m2 - m * m) / (m2 + 1e-4), 0.0, 1.0);
   // sigma of the exponent: 1 / sqrt(2 n var(g)) (Fisher information of a log-sigma slope).
   const double v = std::max(m2 - m * m, 0.0);
-  id.se = v > 0.0 ? 1.0 / std::sqrt(2.0 * static_cast<double>(n) * v) : std::numeric_limits<double>::infinity();
+  id.se = v > 0.0 ? 1.0 / std::sqrt(2.0 * static_cast<double>(n) * v)
+                  : std::numeric_limits<double>::infinity();
   id.ref = ref;
   return id;
 }
 
 }  // namespace
 
-std::map<Effect, Identifiability> identifiability(const LandmarkObservations& obs, const JointResult& fit,
-                                                  const std::vector<ReadingRow>& rs, const JointConfig& cfg) {
+std::map<Effect, Identifiability> identifiability(const LandmarkObservations& obs,
+                                                  const JointResult& fit,
+                                                  const std::vector<ReadingRow>& rs,
+                                                  const JointConfig& cfg) {
   const Design x = linearisedDesign(obs, fit, rs, cfg);
   const Nuisance nu = nuisanceInformation(x);
   std::map<Effect, Identifiability> out;
   if (x.landmarks >= 2)
     out[Effect::landmark_bias] = meanEffectIdentifiability(x, nu, x.x_lm, 0.01);
-  else out[Effect::landmark_bias] = Identifiability{0.0, std::numeric_limits<double>::infinity(), 0.01};
+  else
+    out[Effect::landmark_bias] =
+        Identifiability{0.0, std::numeric_limits<double>::infinity(), 0.01};
   out[Effect::heading_error] = meanEffectIdentifiability(x, nu, x.x_head, deg2rad(1.0));
   out[Effect::angle_offset] = meanEffectIdentifiability(x, nu, x.x_angle, deg2rad(1.0));
-  out[Effect::range_drift] = meanEffectIdentifiability(x, nu, x.x_drift, x.tmax > x.tmin ? 0.01 / (x.tmax - x.tmin) : 0.0);
+  out[Effect::range_drift] =
+      meanEffectIdentifiability(x, nu, x.x_drift, x.tmax > x.tmin ? 0.01 / (x.tmax - x.tmin) : 0.0);
   out[Effect::incidence_bias] = meanEffectIdentifiability(x, nu, x.x_inc, 0.01);
   out[Effect::odometry_scale] = meanEffectIdentifiability(x, nu, x.x_scale, 0.01);
   out[Effect::incidence_noise] = covariateSpreadIdentifiability(
@@ -247,17 +264,19 @@ std::map<Effect, Identifiability> identifiability(const LandmarkObservations& ob
   out[Effect::dark_surface] = covariateSpreadIdentifiability(
       rs, [](const JointReading& r) { return r.darkness; }, 0.5);
   out[Effect::range_noise_law] = covariateSpreadIdentifiability(
-      rs, [&](const JointReading& r) { return std::log(std::max(fit.model.bias(r.d_m), 1e-3)); }, 0.5);
+      rs, [&](const JointReading& r) { return std::log(std::max(fit.model.bias(r.d_m), 1e-3)); },
+      0.5);
   std::size_t edges = 0;
   for (const auto& r : rs) edges += r.r.edge;
   const bool both = edges >= 10 && rs.size() - edges >= 10;
-  out[Effect::mixed_pixels] = Identifiability{both ? 1.0 : 0.0, both ? 0.0 : std::numeric_limits<double>::infinity(), 0.02};
+  out[Effect::mixed_pixels] =
+      Identifiability{both ? 1.0 : 0.0, both ? 0.0 : std::numeric_limits<double>::infinity(), 0.02};
   // Student-t noise, parameter 1 / nu (0: Gaussian). Its score at the null is He4(z) / 4 of the
   // standardised residual (the t's log-density to first order in 1 / nu), orthogonal to the
   // location and scale terms, of variance 24 / 16: information 1.5 per reading. Smallest worth
   // naming: nu = 20.
-  const double tails_se =
-      rs.empty() ? std::numeric_limits<double>::infinity() : 1.0 / std::sqrt(1.5 * static_cast<double>(rs.size()));
+  const double tails_se = rs.empty() ? std::numeric_limits<double>::infinity()
+                                     : 1.0 / std::sqrt(1.5 * static_cast<double>(rs.size()));
   out[Effect::heavy_tails] = Identifiability{1.0, tails_se, 0.05};
   return out;
 }

@@ -22,11 +22,12 @@ void setNoiseShape(Effect e, double v, JointInit& init) {
   if (e == Effect::dark_surface) init.effects.dark_noise_exponent = v;
 }
 
-double restrictedShapeEstimate(const LandmarkObservations& obs, const JointResult& fit, const JointConfig& cfg, Effect e,
-                               double* statistic) {
+double restrictedShapeEstimate(const LandmarkObservations& obs, const JointResult& fit,
+                               const JointConfig& cfg, Effect e, double* statistic) {
   const std::vector<JointReading> rs = evaluateJoint(obs, fit, cfg);
   const std::vector<PoseInformation> info = poseInformation(obs, fit, cfg);
-  std::vector<Eigen::Matrix3d> odo_a, odo_b;  // the odometry's (and the first pose's prior's) blocks
+  // the odometry's (and the first pose's prior's) blocks
+  std::vector<Eigen::Matrix3d> odo_a, odo_b;
   poseChainInformation({}, obs, fit, cfg, 1.0, odo_a, odo_b);
   const JointEffectEstimates& fx = fit.effects;
   auto shapes = [&](double v) {  // the noise law's shape h_i of every reading at exponent v
@@ -34,7 +35,8 @@ double restrictedShapeEstimate(const LandmarkObservations& obs, const JointResul
     const double delta = e == Effect::dark_surface ? v : fx.dark_noise_exponent;
     std::vector<double> h(rs.size());
     for (std::size_t i = 0; i < rs.size(); ++i)
-      h[i] = std::max(fit.model.noise.stddev(rs[i].d_m, fit.model.bias) * incidenceNoiseFactor(gamma, rs[i].cos_incidence) *
+      h[i] = std::max(fit.model.noise.stddev(rs[i].d_m, fit.model.bias) *
+                          incidenceNoiseFactor(gamma, rs[i].cos_incidence) *
                           darkNoiseFactor(delta, rs[i].darkness),
                       1e-12);
     return h;
@@ -64,14 +66,17 @@ double restrictedShapeEstimate(const LandmarkObservations& obs, const JointResul
       std::vector<Eigen::Matrix3d> a = odo_a;
       for (std::size_t k = 0; k < a.size(); ++k) a[k] += reading_a[k] / s2;
       const double log_det = blockTridiagonalLogDet(a, odo_b);
-      return m * log_s + sum_log_h + 0.5 * sum_z2 / s2 + 0.5 * (std::isfinite(log_det) ? log_det : 1e300);
+      return m * log_s + sum_log_h + 0.5 * sum_z2 / s2 +
+             0.5 * (std::isfinite(log_det) ? log_det : 1e300);
     };
-    const double log_ml = 0.5 * std::log(std::max(sum_z2 / m, 1e-300));  // the scale without the poses' share
+    // the scale without the poses' share
+    const double log_ml = 0.5 * std::log(std::max(sum_z2 / m, 1e-300));
     return boost::math::tools::brent_find_minima(at_scale, log_ml - 1.0, log_ml + 1.0, 30).second;
   };
   // The refinement's upper ends, but from 0: grazing beams and dark returns are no less noisy than
   // the others (below 0 the restricted estimate still outgained the range law on drives).
-  const auto best = boost::math::tools::brent_find_minima(negative, 0.0, e == Effect::incidence_noise ? 4.0 : 3.0, 30);
+  const auto best = boost::math::tools::brent_find_minima(
+      negative, 0.0, e == Effect::incidence_noise ? 4.0 : 3.0, 30);
   if (statistic) *statistic = std::max(0.0, 2.0 * (negative(0.0) - best.second));
   return best.first;
 }
@@ -87,10 +92,13 @@ bool noiseShapeEffect(Effect e) {
 /// from its solution, then once more under that refit, refitted again when the estimate moved by
 /// more than 0.05. Under the motion prior alone (a pose per scan); otherwise, and for the other
 /// effects, fc.
-JointResult SequenceDiagnosis::withCorrectedShape(const LandmarkObservations& obs, Effect e, const JointResult& base,
-                                                  const JointConfig& base_cfg, JointResult fc, const JointConfig& fc_cfg,
+JointResult SequenceDiagnosis::withCorrectedShape(const LandmarkObservations& obs, Effect e,
+                                                  const JointResult& base,
+                                                  const JointConfig& base_cfg, JointResult fc,
+                                                  const JointConfig& fc_cfg,
                                                   double* statistic) const {
-  if (!restrictedShape(e) || !baseline_fit_.motion_prior || !baseline_cfg_.effects.estimate_heading || !fc.ok() || !base.ok())
+  if (!restrictedShape(e) || !baseline_fit_.motion_prior ||
+      !baseline_cfg_.effects.estimate_heading || !fc.ok() || !base.ok())
     return fc;
   JointConfig held = warmStartConfig(fc_cfg);
   held.hold_noise_shape = true;
@@ -98,8 +106,9 @@ JointResult SequenceDiagnosis::withCorrectedShape(const LandmarkObservations& ob
   from.effects.dark_reference_intensity = fc.effects.dark_reference_intensity;
   double previous = kNaN;
   for (int round = 0; round < 2; ++round) {
-    const double v = restrictedShapeEstimate(obs, round == 0 ? from : fc, round == 0 ? base_cfg : held, e,
-                                             round == 0 ? statistic : nullptr);
+    const double v =
+        restrictedShapeEstimate(obs, round == 0 ? from : fc, round == 0 ? base_cfg : held, e,
+                                round == 0 ? statistic : nullptr);
     if (!std::isfinite(v) || std::abs(v - previous) <= 0.05) break;
     JointInit start = initFrom(round == 0 ? from : fc);
     setNoiseShape(e, v, start);

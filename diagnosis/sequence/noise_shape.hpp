@@ -29,8 +29,8 @@ void setNoiseShape(Effect e, double v, JointInit& init);
 /// within 4 sigma. `statistic`, when given, gets the restricted likelihood ratio of the estimate
 /// against the exponent at 0 (twice the log ratio, the scale profiled in both, the geometry held at
 /// `fit`).
-double restrictedShapeEstimate(const LandmarkObservations& obs, const JointResult& fit, const JointConfig& cfg, Effect e,
-                               double* statistic = nullptr);
+double restrictedShapeEstimate(const LandmarkObservations& obs, const JointResult& fit,
+                               const JointConfig& cfg, Effect e, double* statistic = nullptr);
 
 /// Effects of the noise's shape (kappa, gamma, delta, nu, the mixed-pixel fraction): their
 /// parameters are estimated on the Gaussian residuals and only the law's scale by maximum

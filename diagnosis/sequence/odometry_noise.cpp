@@ -8,18 +8,22 @@
 
 namespace lidarcal::diagnosis::sequence {
 
-OdometryNoiseFactors odometryNoiseFactors(const LandmarkObservations& obs, const JointResult& fit, const JointConfig& cfg) {
+OdometryNoiseFactors odometryNoiseFactors(const LandmarkObservations& obs, const JointResult& fit,
+                                          const JointConfig& cfg) {
   if (std::min(fit.poses.size(), obs.commanded.size()) < 11) return {};
   std::vector<double> t, h;
   double leverage = 0.0;
-  forEachLocatedStep(obs, fit, cfg, [&](std::size_t, const OdometryStep& o, const Eigen::Matrix3d& s) {
-    for (int i = 0; i < 3; ++i) (i < 2 ? t : h).push_back(o.r(i) * o.r(i) / std::max(1.0 - s(i, i), 0.05));
-    leverage += s.trace() / 3.0;
-  });
+  forEachLocatedStep(obs, fit, cfg,
+                     [&](std::size_t, const OdometryStep& o, const Eigen::Matrix3d& s) {
+                       for (int i = 0; i < 3; ++i)
+                         (i < 2 ? t : h).push_back(o.r(i) * o.r(i) / std::max(1.0 - s(i, i), 0.05));
+                       leverage += s.trace() / 3.0;
+                     });
   if (h.size() < 10) return {};
   constexpr double kChi2OneMedian = 0.454936;
-  return {std::sqrt(median(t) / kChi2OneMedian), std::sqrt(median(h) / kChi2OneMedian), static_cast<double>(t.size()),
-          static_cast<double>(h.size()), leverage / static_cast<double>(h.size())};
+  return {std::sqrt(median(t) / kChi2OneMedian), std::sqrt(median(h) / kChi2OneMedian),
+          static_cast<double>(t.size()), static_cast<double>(h.size()),
+          leverage / static_cast<double>(h.size())};
 }
 
 double medianStepLength(const std::vector<Pose2>& commanded) {
@@ -51,13 +55,14 @@ void SequenceDiagnosis::fitOdometryNoise() {
     settled = std::abs(std::log(nt / ft)) < 0.02 && std::abs(std::log(nh / fh)) < 0.02;
     if (settled) break;
     // A (per metre, floor) pair scaled by this pass's factor, or back at the defaults when capped.
-    const auto rescale = [](double& per_m, double& floor, double factor, bool capped, double prior_per_m, double prior_floor) {
+    const auto rescale = [](double& per_m, double& floor, double factor, bool capped,
+                            double prior_per_m, double prior_floor) {
       per_m = capped ? prior_per_m : per_m * factor;
       floor = capped ? prior_floor : floor * factor;
     };
     JointConfig c = baseline_cfg_;
-    rescale(c.motion_sigma_fraction, c.motion_sigma_floor_m, f.translation, nt >= 1.0, prior.motion_sigma_fraction,
-            prior.motion_sigma_floor_m);
+    rescale(c.motion_sigma_fraction, c.motion_sigma_floor_m, f.translation, nt >= 1.0,
+            prior.motion_sigma_fraction, prior.motion_sigma_floor_m);
     rescale(c.motion_heading_sigma_rad_per_m, c.motion_heading_floor_rad, f.heading, nh >= 1.0,
             prior.motion_heading_sigma_rad_per_m, prior.motion_heading_floor_rad);
     JointResult again = refineJoint(obs_, initFrom(baseline_fit_), warmStartConfig(c));
@@ -70,12 +75,14 @@ void SequenceDiagnosis::fitOdometryNoise() {
   // Where the poses follow the steps (mean leverage above a half) their residuals cannot tell the
   // odometry's noise, and shrinking it draws the poses closer still (poses from SLAM:
   // docs/FINDINGS.md). Then, or when the factors do not settle, the prior's defaults stand.
-  odometry_noise_.fitted = settled && odometry_noise_.heading_count > 0.0 && odometry_noise_.leverage < 0.5;
+  odometry_noise_.fitted =
+      settled && odometry_noise_.heading_count > 0.0 && odometry_noise_.leverage < 0.5;
   if (!odometry_noise_.fitted) {
     baseline_cfg_ = prior;
     baseline_fit_ = at_prior;
   }
-  odometry_noise_.translation = baseline_cfg_.motion_sigma_floor_m / prior.motion_sigma_floor_m;  // floors > 0 (validate)
+  // floors > 0 (validate)
+  odometry_noise_.translation = baseline_cfg_.motion_sigma_floor_m / prior.motion_sigma_floor_m;
   odometry_noise_.heading = baseline_cfg_.motion_heading_floor_rad / prior.motion_heading_floor_rad;
 }
 

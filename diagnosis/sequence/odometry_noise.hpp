@@ -22,17 +22,22 @@ namespace lidarcal::diagnosis::sequence {
 /// median absolute deviation's as an estimate of a normal's scale). Steps whose poses the readings
 /// do not both locate are left out; factors 1 and counts 0 with fewer than 10 steps.
 struct OdometryNoiseFactors {
-  double translation = 1.0;        ///< factor on the prior's translation standard deviation (1: the default)
-  double heading = 1.0;            ///< factor on the prior's heading standard deviation (1: the default)
+  /// factor on the prior's translation standard deviation (1: the default)
+  double translation = 1.0;
+  double heading = 1.0;  ///< factor on the prior's heading standard deviation (1: the default)
   double translation_count = 0.0;  ///< residuals behind the translation factor
   double heading_count = 0.0;      ///< residuals behind the heading factor
-  double leverage = 0.0;  ///< the steps' mean S_ii: near 1, the poses follow the steps and their residuals say little
-  bool fitted = false;    ///< fitOdometryNoise kept them (otherwise the prior's defaults stand)
-  double translationSe() const { return translation * std::sqrt(1.36 / std::max(translation_count, 1.0)); }
+  /// the steps' mean S_ii: near 1, the poses follow the steps and their residuals say little
+  double leverage = 0.0;
+  bool fitted = false;  ///< fitOdometryNoise kept them (otherwise the prior's defaults stand)
+  double translationSe() const {
+    return translation * std::sqrt(1.36 / std::max(translation_count, 1.0));
+  }
   double headingSe() const { return heading * std::sqrt(1.36 / std::max(heading_count, 1.0)); }
 };
 
-OdometryNoiseFactors odometryNoiseFactors(const LandmarkObservations& obs, const JointResult& fit, const JointConfig& cfg);
+OdometryNoiseFactors odometryNoiseFactors(const LandmarkObservations& obs, const JointResult& fit,
+                                          const JointConfig& cfg);
 
 /// The median length of the commanded steps between consecutive poses (0 with none).
 double medianStepLength(const std::vector<Pose2>& commanded);

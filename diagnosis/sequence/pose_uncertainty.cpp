@@ -34,13 +34,14 @@ RayGradient rayGradient(double px, double py, double a, double cx, double cy, do
 Eigen::Vector3d poseGradient(const JointResult& fit, const JointReading& r) {
   const Pose2& p = fit.poses[r.stop];
   const auto& c = fit.centres.at(r.landmark);
-  const RayGradient g = rayGradient(p.x_m, p.y_m, p.yaw_rad + r.angle_rad + fit.effects.angle_offset_rad, c.x(), c.y(),
-                                    fit.radius_m);
+  const RayGradient g =
+      rayGradient(p.x_m, p.y_m, p.yaw_rad + r.angle_rad + fit.effects.angle_offset_rad, c.x(),
+                  c.y(), fit.radius_m);
   return fit.model.bias.derivative(g.d) * Eigen::Vector3d(-g.dcx, -g.dcy, g.da);
 }
 
-DistanceMoments heldOutDistance(const JointResult& fit, const JointReading& r, const Eigen::Matrix3d& cov,
-                                double root_extra) {
+DistanceMoments heldOutDistance(const JointResult& fit, const JointReading& r,
+                                const Eigen::Matrix3d& cov, double root_extra) {
   const Pose2& p = fit.poses[r.stop];
   const auto& centre = fit.centres.at(r.landmark);
   const double a = p.yaw_rad + r.angle_rad + fit.effects.angle_offset_rad;
@@ -51,14 +52,16 @@ DistanceMoments heldOutDistance(const JointResult& fit, const JointReading& r, c
   return poleDistanceMoments(along, perp, j * cov * j.transpose(), fit.radius_m, root_extra);
 }
 
-std::vector<PoseInformation> poseInformation(const LandmarkObservations& obs, const JointResult& fit, const JointConfig& cfg) {
+std::vector<PoseInformation> poseInformation(const LandmarkObservations& obs,
+                                             const JointResult& fit, const JointConfig& cfg) {
   std::vector<PoseInformation> out;
-  for (const auto& r : evaluateJoint(obs, fit, cfg)) out.push_back({r.stop, poseGradient(fit, r), r.sigma_m});
+  for (const auto& r : evaluateJoint(obs, fit, cfg))
+    out.push_back({r.stop, poseGradient(fit, r), r.sigma_m});
   return out;
 }
 
-OdometryStep odometryStep(const LandmarkObservations& obs, const JointResult& fit, const JointConfig& cfg, std::size_t a,
-                          std::size_t b) {
+OdometryStep odometryStep(const LandmarkObservations& obs, const JointResult& fit,
+                          const JointConfig& cfg, std::size_t a, std::size_t b) {
   const Pose2 step = stepBetween(obs.commanded[a], obs.commanded[b]);
   double sd_t = 0.0, sd_h = 0.0;
   for (std::size_t k = a + 1; k <= b; ++k) {  // the steps' variances add up over a run of them
@@ -68,8 +71,10 @@ OdometryStep odometryStep(const LandmarkObservations& obs, const JointResult& fi
   }
   const double t = 1.0 / sd_t, h = 1.0 / sd_h;
   const Pose2 &pa = fit.poses[a], &pb = fit.poses[b];
-  const double c = std::cos(pa.yaw_rad), s = std::sin(pa.yaw_rad), ex = pb.x_m - pa.x_m, ey = pb.y_m - pa.y_m;
-  const double along = c * ex + s * ey, across = c * ey - s * ex, f = 1.0 + fit.effects.odometry_scale;
+  const double c = std::cos(pa.yaw_rad), s = std::sin(pa.yaw_rad), ex = pb.x_m - pa.x_m,
+               ey = pb.y_m - pa.y_m;
+  const double along = c * ex + s * ey, across = c * ey - s * ex,
+               f = 1.0 + fit.effects.odometry_scale;
   OdometryStep o;
   o.r = Eigen::Vector3d((along / f - step.x_m) * t, (across / f - step.y_m) * t,
                         wrapAngle(pb.yaw_rad - pa.yaw_rad - step.yaw_rad) * h);
@@ -81,16 +86,19 @@ OdometryStep odometryStep(const LandmarkObservations& obs, const JointResult& fi
   return o;
 }
 
-void poseChainInformation(const std::vector<PoseInformation>& readings, const LandmarkObservations& obs,
-                          const JointResult& fit, const JointConfig& cfg, double noise_scale, std::vector<Eigen::Matrix3d>& a,
-                          std::vector<Eigen::Matrix3d>& b) {
+void poseChainInformation(const std::vector<PoseInformation>& readings,
+                          const LandmarkObservations& obs, const JointResult& fit,
+                          const JointConfig& cfg, double noise_scale,
+                          std::vector<Eigen::Matrix3d>& a, std::vector<Eigen::Matrix3d>& b) {
   const std::size_t n = fit.poses.size();
   a.assign(n, Eigen::Matrix3d::Zero());
   b.assign(n, Eigen::Matrix3d::Zero());
   if (n == 0) return;
-  for (const auto& r : readings) a[r.stop] += r.g * r.g.transpose() / (noise_scale * r.sigma * r.sigma);
-  a[0].diagonal() += Eigen::Vector3d(1.0 / (cfg.sigma_s_m * cfg.sigma_s_m), 1.0 / (cfg.sigma_s_m * cfg.sigma_s_m),
-                                     1.0 / (cfg.sigma_psi_rad * cfg.sigma_psi_rad));
+  for (const auto& r : readings)
+    a[r.stop] += r.g * r.g.transpose() / (noise_scale * r.sigma * r.sigma);
+  a[0].diagonal() +=
+      Eigen::Vector3d(1.0 / (cfg.sigma_s_m * cfg.sigma_s_m), 1.0 / (cfg.sigma_s_m * cfg.sigma_s_m),
+                      1.0 / (cfg.sigma_psi_rad * cfg.sigma_psi_rad));
   for (std::size_t k = 1; k < n && k < obs.commanded.size(); ++k) {
     const OdometryStep o = odometryStep(obs, fit, cfg, k - 1, k);
     a[k - 1] += o.ja.transpose() * o.ja;
@@ -99,8 +107,10 @@ void poseChainInformation(const std::vector<PoseInformation>& readings, const La
   }
 }
 
-std::vector<Eigen::Matrix3d> poseCovariances(const std::vector<PoseInformation>& readings, const LandmarkObservations& obs,
-                                             const JointResult& fit, const JointConfig& cfg, double noise_scale,
+std::vector<Eigen::Matrix3d> poseCovariances(const std::vector<PoseInformation>& readings,
+                                             const LandmarkObservations& obs,
+                                             const JointResult& fit, const JointConfig& cfg,
+                                             double noise_scale,
                                              std::vector<Eigen::Matrix3d>* upper) {
   std::vector<Eigen::Matrix3d> a, b;
   poseChainInformation(readings, obs, fit, cfg, noise_scale, a, b);
@@ -108,15 +118,16 @@ std::vector<Eigen::Matrix3d> poseCovariances(const std::vector<PoseInformation>&
   return blockTridiagonalInverseDiagonal(a, b, upper);
 }
 
-double noiseDofFactor(const std::vector<PoseInformation>& readings, const std::vector<Eigen::Matrix3d>& cov) {
+double noiseDofFactor(const std::vector<PoseInformation>& readings,
+                      const std::vector<Eigen::Matrix3d>& cov) {
   double h = 0.0;
   for (const auto& r : readings) h += r.g.dot(cov[r.stop] * r.g) / (r.sigma * r.sigma);
   const double n = static_cast<double>(readings.size());
   return n > h + 1.0 ? n / (n - h) : 1.0;
 }
 
-PoseUncertainty poseUncertainty(const LandmarkObservations& obs, const JointResult& fit, const JointConfig& cfg,
-                                std::vector<Eigen::Matrix3d>* upper) {
+PoseUncertainty poseUncertainty(const LandmarkObservations& obs, const JointResult& fit,
+                                const JointConfig& cfg, std::vector<Eigen::Matrix3d>* upper) {
   PoseUncertainty u;
   u.info = poseInformation(obs, fit, cfg);
   u.dof = noiseDofFactor(u.info, poseCovariances(u.info, obs, fit, cfg, 1.0));

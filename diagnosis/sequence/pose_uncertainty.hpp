@@ -37,19 +37,21 @@ Eigen::Vector3d poseGradient(const JointResult& fit, const JointReading& r);
 /// (linearised alone, a thin pole's outermost beams get many times their variance:
 /// docs/results/hidden-effects.md). root_extra: poleDistanceMoments's, for a fit with an incidence
 /// bias.
-DistanceMoments heldOutDistance(const JointResult& fit, const JointReading& r, const Eigen::Matrix3d& cov,
-                                double root_extra = 0.0);
+DistanceMoments heldOutDistance(const JointResult& fit, const JointReading& r,
+                                const Eigen::Matrix3d& cov, double root_extra = 0.0);
 
 /// A reading's information on its stop's pose: its pose gradient g and its standard deviation.
 struct PoseInformation {
-  std::size_t stop = 0;                         ///< the reading's stop
-  Eigen::Vector3d g = Eigen::Vector3d::Zero();  ///< its expected value's gradient by the pose (x, y, heading)
-  double sigma = 0.0;                           ///< its standard deviation, metres
+  std::size_t stop = 0;  ///< the reading's stop
+  /// its expected value's gradient by the pose (x, y, heading)
+  Eigen::Vector3d g = Eigen::Vector3d::Zero();
+  double sigma = 0.0;  ///< its standard deviation, metres
 };
 
 /// The readings of `obs` under `fit`, as information on their stops' poses (computed once for
 /// poseCovariances and noiseDofFactor).
-std::vector<PoseInformation> poseInformation(const LandmarkObservations& obs, const JointResult& fit, const JointConfig& cfg);
+std::vector<PoseInformation> poseInformation(const LandmarkObservations& obs,
+                                             const JointResult& fit, const JointConfig& cfg);
 
 /// The odometry from stop a to stop b > a of a fit under the motion prior, as the refinement
 /// weighs it (MotionPriorCost): its residual (the commanded step against the fitted one in the
@@ -57,31 +59,34 @@ std::vector<PoseInformation> poseInformation(const LandmarkObservations& obs, co
 /// deviations, the residual's derivatives by the two poses, and ln(1 / (sd_x sd_y sd_psi)).
 /// Over a run of steps (b > a + 1) their variances add up (the turns between them neglected).
 struct OdometryStep {
-  Eigen::Vector3d r = Eigen::Vector3d::Zero();   ///< residual (x, y, heading) in standard deviations
+  Eigen::Vector3d r = Eigen::Vector3d::Zero();  ///< residual (x, y, heading) in standard deviations
   Eigen::Matrix3d ja = Eigen::Matrix3d::Zero();  ///< its derivatives by pose a
   Eigen::Matrix3d jb = Eigen::Matrix3d::Zero();  ///< its derivatives by pose b
   double inv_t = 0.0;                            ///< 1 / the translation's standard deviation, 1/m
   double log_scale = 0.0;                        ///< ln(1 / (sd_x sd_y sd_psi))
 };
 
-OdometryStep odometryStep(const LandmarkObservations& obs, const JointResult& fit, const JointConfig& cfg, std::size_t a,
-                          std::size_t b);
+OdometryStep odometryStep(const LandmarkObservations& obs, const JointResult& fit,
+                          const JointConfig& cfg, std::size_t a, std::size_t b);
 
 /// Information matrix of the poses of a fit under the motion prior, the landmarks and the range
 /// model held at the fit: block-tridiagonal, the readings of each stop (Gaussian information
 /// g g^T / sigma^2 per reading) on the diagonal blocks `a`, the odometry steps between
 /// consecutive stops (odometryStep) on `a` and the blocks (k, k + 1) `b`. `readings`:
 /// poseInformation(obs, fit, cfg); `noise_scale`: a factor on every reading's variance.
-void poseChainInformation(const std::vector<PoseInformation>& readings, const LandmarkObservations& obs,
-                          const JointResult& fit, const JointConfig& cfg, double noise_scale, std::vector<Eigen::Matrix3d>& a,
-                          std::vector<Eigen::Matrix3d>& b);
+void poseChainInformation(const std::vector<PoseInformation>& readings,
+                          const LandmarkObservations& obs, const JointResult& fit,
+                          const JointConfig& cfg, double noise_scale,
+                          std::vector<Eigen::Matrix3d>& a, std::vector<Eigen::Matrix3d>& b);
 
 /// Marginal covariance of every stop's pose in a fit under the motion prior (a Laplace
 /// approximation with the landmarks and the range model held at the fit): the inverse of
 /// poseChainInformation's matrix (blockTridiagonalInverseDiagonal). `upper`, when given, gets the
 /// covariances of neighbouring poses.
-std::vector<Eigen::Matrix3d> poseCovariances(const std::vector<PoseInformation>& readings, const LandmarkObservations& obs,
-                                             const JointResult& fit, const JointConfig& cfg, double noise_scale,
+std::vector<Eigen::Matrix3d> poseCovariances(const std::vector<PoseInformation>& readings,
+                                             const LandmarkObservations& obs,
+                                             const JointResult& fit, const JointConfig& cfg,
+                                             double noise_scale,
                                              std::vector<Eigen::Matrix3d>* upper = nullptr);
 
 /// Factor that takes a fit's noise variance under the motion prior to the readings' own: with a
@@ -90,7 +95,8 @@ std::vector<Eigen::Matrix3d> poseCovariances(const std::vector<PoseInformation>&
 /// leverages, C the pose's marginal covariance), and the factor is n / (n - h), as a residual
 /// variance is divided by its degrees of freedom (docs/results/hidden-effects.md, Robots that never
 /// stop).
-double noiseDofFactor(const std::vector<PoseInformation>& readings, const std::vector<Eigen::Matrix3d>& cov);
+double noiseDofFactor(const std::vector<PoseInformation>& readings,
+                      const std::vector<Eigen::Matrix3d>& cov);
 
 /// What the readings of `obs` and the odometry know of each pose of a fit under the motion prior:
 /// the readings' pose information, the factor that takes the fit's noise variance to the
@@ -98,11 +104,12 @@ double noiseDofFactor(const std::vector<PoseInformation>& readings, const std::v
 /// given: the neighbours' covariances too).
 struct PoseUncertainty {
   std::vector<PoseInformation> info;  ///< the readings' information (poseInformation)
-  double dof = 1.0;                   ///< noiseDofFactor: the fit's noise variance to the readings' own
-  std::vector<Eigen::Matrix3d> cov;   ///< each pose's marginal covariance at that variance
+  double dof = 1.0;  ///< noiseDofFactor: the fit's noise variance to the readings' own
+  std::vector<Eigen::Matrix3d> cov;  ///< each pose's marginal covariance at that variance
 };
 
-PoseUncertainty poseUncertainty(const LandmarkObservations& obs, const JointResult& fit, const JointConfig& cfg,
+PoseUncertainty poseUncertainty(const LandmarkObservations& obs, const JointResult& fit,
+                                const JointConfig& cfg,
                                 std::vector<Eigen::Matrix3d>* upper = nullptr);
 
 /// Readings a pose needs before the odometry steps at it are held out (a pose is three numbers).
@@ -113,7 +120,8 @@ constexpr int kLocatingReadings = 3;
 /// leverage S = J C J^T, J its derivatives by the two poses, C their joint covariance
 /// (poseUncertainty).
 template <typename Fn>
-void forEachLocatedStep(const LandmarkObservations& obs, const JointResult& fit, const JointConfig& cfg, Fn fn) {
+void forEachLocatedStep(const LandmarkObservations& obs, const JointResult& fit,
+                        const JointConfig& cfg, Fn fn) {
   const std::size_t n = std::min(fit.poses.size(), obs.commanded.size());
   if (n < 2) return;
   std::vector<Eigen::Matrix3d> upper;

@@ -12,7 +12,8 @@ namespace lidarcal::diagnosis::sequence {
 
 JointConfig effectConfig(JointConfig c, Effect e) {
   if (!c.effects.enable(e))
-    throw std::invalid_argument(std::string("diagnose: no joint term for the effect '") + toString(e) + "'");
+    throw std::invalid_argument(std::string("diagnose: no joint term for the effect '") +
+                                toString(e) + "'");
   return c;
 }
 
@@ -24,7 +25,8 @@ JointConfig warmStartConfig(JointConfig c) {
 }
 
 double totalNegLogLikelihood(const JointResult& r) {
-  return !r.ok() ? std::numeric_limits<double>::infinity() : r.neg_log_likelihood + r.prior_neg_log_likelihood;
+  return !r.ok() ? std::numeric_limits<double>::infinity()
+                 : r.neg_log_likelihood + r.prior_neg_log_likelihood;
 }
 
 JointInit withOrder(JointInit i, int order) {
@@ -32,8 +34,8 @@ JointInit withOrder(JointInit i, int order) {
   return i;
 }
 
-JointConfig baselineConfig(const CalibrationModel& cal, const CalibrationConfig& cc, const LandmarkObservations& obs,
-                           const DiagnoseConfig& config) {
+JointConfig baselineConfig(const CalibrationModel& cal, const CalibrationConfig& cc,
+                           const LandmarkObservations& obs, const DiagnoseConfig& config) {
   JointConfig base;
   base.order = std::max(cal.model.bias.order(), 1);
   base.noise = NoiseKind::squared;

@@ -31,7 +31,7 @@ JointInit withOrder(JointInit i, int order);
 /// The baseline's joint refinement: the published model (Alhashimi et al. 2021 eq. 8, Alhashimi et
 /// al. 2016 eq. 1 with the squared noise law) on every beam of every sighting; the headings held at
 /// the commanded ones, except on a continuous recording, where the motion prior refines them.
-JointConfig baselineConfig(const CalibrationModel& cal, const CalibrationConfig& cc, const LandmarkObservations& obs,
-                           const DiagnoseConfig& config);
+JointConfig baselineConfig(const CalibrationModel& cal, const CalibrationConfig& cc,
+                           const LandmarkObservations& obs, const DiagnoseConfig& config);
 
 }  // namespace lidarcal::diagnosis::sequence

@@ -18,12 +18,16 @@ void setBeamGrid(const LandmarkObservations& obs, simulation::LandmarkLevelConfi
   std::vector<double> steps, origins;
   for (const auto& s : obs.sightings)
     for (std::size_t j = 1; j < s.beams.size(); ++j) {
-      const auto db = static_cast<double>(s.beams[j].beam) - static_cast<double>(s.beams[j - 1].beam);
-      if (db >= 1.0 && db <= 3.0) steps.push_back(wrapAngle(s.beams[j].angle_rad - s.beams[j - 1].angle_rad) / db);
+      const auto db =
+          static_cast<double>(s.beams[j].beam) - static_cast<double>(s.beams[j - 1].beam);
+      if (db >= 1.0 && db <= 3.0)
+        steps.push_back(wrapAngle(s.beams[j].angle_rad - s.beams[j - 1].angle_rad) / db);
     }
   if (!steps.empty()) c.angle_increment_rad = upperMedian(steps);
   for (const auto& s : obs.sightings)
-    for (const auto& b : s.beams) origins.push_back(wrapAngle(b.angle_rad - static_cast<double>(b.beam) * c.angle_increment_rad));
+    for (const auto& b : s.beams)
+      origins.push_back(
+          wrapAngle(b.angle_rad - static_cast<double>(b.beam) * c.angle_increment_rad));
   if (!origins.empty()) c.angle_min_rad = upperMedian(origins);
 }
 
@@ -32,8 +36,8 @@ void setBeamGrid(const LandmarkObservations& obs, simulation::LandmarkLevelConfi
 /// scaled by 1 + s, and its odometry (returned; the recorded one otherwise) reports each of them
 /// over 1 + s with the prior's noise, chained from the first pose, so that the replicas drift as
 /// the model says odometry does (noise on the path's side instead reads as a step scale).
-std::vector<Pose2> drawPoses(const LandmarkObservations& obs, const PoseNoise& noise, std::mt19937_64& rng,
-                             std::vector<TruthStop>& stops) {
+std::vector<Pose2> drawPoses(const LandmarkObservations& obs, const PoseNoise& noise,
+                             std::mt19937_64& rng, std::vector<TruthStop>& stops) {
   std::normal_distribution<double> normal(0.0, 1.0);
   const Pose2& c0 = obs.commanded.front();
   std::vector<Pose2> reported = obs.commanded;
@@ -45,7 +49,8 @@ std::vector<Pose2> drawPoses(const LandmarkObservations& obs, const PoseNoise& n
       const double len = motionStepLength(obs.commanded, k);
       const double st = noise.step_fraction * len + noise.step_floor_m;
       const double sh = noise.heading_per_m * len + noise.heading_floor_rad;
-      a = compose(stops[k - 1].actual, Pose2{(1.0 + noise.scale) * step.x_m, (1.0 + noise.scale) * step.y_m, step.yaw_rad});
+      a = compose(stops[k - 1].actual, Pose2{(1.0 + noise.scale) * step.x_m,
+                                             (1.0 + noise.scale) * step.y_m, step.yaw_rad});
       Pose2 odometry;
       odometry.x_m = step.x_m + st * normal(rng);
       odometry.y_m = step.y_m + st * normal(rng);
@@ -62,7 +67,8 @@ std::vector<Pose2> drawPoses(const LandmarkObservations& obs, const PoseNoise& n
 
 }  // namespace
 
-ReplicaPlan replicaPlan(const LandmarkObservations& obs, const JointResult& fit, bool radius_known) {
+ReplicaPlan replicaPlan(const LandmarkObservations& obs, const JointResult& fit,
+                        bool radius_known) {
   ReplicaPlan plan;
   auto& c = plan.config;
   // Each landmark returns the median intensity of its readings (0: none recorded).
@@ -83,8 +89,10 @@ ReplicaPlan replicaPlan(const LandmarkObservations& obs, const JointResult& fit,
   for (const auto& s : obs.sightings) {
     plan.present.insert({s.scan, s.landmark});
     auto it = scans.find(s.stop);
-    if (it == scans.end()) scans[s.stop] = {s.scan, s.scan};
-    else it->second = {std::min(it->second.first, s.scan), std::max(it->second.second, s.scan)};
+    if (it == scans.end())
+      scans[s.stop] = {s.scan, s.scan};
+    else
+      it->second = {std::min(it->second.first, s.scan), std::max(it->second.second, s.scan)};
   }
   for (std::size_t k = 0; k < obs.commanded.size(); ++k) {
     TruthStop t;
@@ -111,7 +119,8 @@ ReplicaPlan replicaPlan(const LandmarkObservations& obs, const JointResult& fit,
   c.effects.noise_student_dof = fit.effects.student_dof;
   c.effects.range_resolution_m = fit.effects.range_grid_m;
   c.effects.dark_noise_exponent = fit.effects.dark_noise_exponent;
-  if (fit.effects.dark_reference_intensity > 0.0) c.effects.dark_reference_intensity = fit.effects.dark_reference_intensity;
+  if (fit.effects.dark_reference_intensity > 0.0)
+    c.effects.dark_reference_intensity = fit.effects.dark_reference_intensity;
   c.mount_yaw_rad = fit.effects.angle_offset_rad;
   if (c.effects.mixed_pixel_fraction > 0.0) {
     // The fitted mixed pixels read uniformly up to the window's end: a background that far.
@@ -137,8 +146,9 @@ PoseNoise poseNoise(const JointResult& fit, const JointConfig& cfg) {
   return n;
 }
 
-LandmarkObservations simulateReplica(ReplicaPlan plan, const LandmarkObservations& obs, const PoseNoise& noise,
-                                     std::uint64_t seed, std::vector<std::vector<double>>* truth) {
+LandmarkObservations simulateReplica(ReplicaPlan plan, const LandmarkObservations& obs,
+                                     const PoseNoise& noise, std::uint64_t seed,
+                                     std::vector<std::vector<double>>* truth) {
   // The stop poses are redrawn: the baseline says how they scatter about the commanded ones,
   // and whatever the fitted poses show beyond that is evidence against it.
   auto rng = makeRng(seed, 0x9053ULL);

@@ -16,8 +16,8 @@ namespace lidarcal::diagnosis::sequence {
 
 /// Landmark-level simulation of the measured geometry from a fit (ids mapped to the fit's).
 struct ReplicaPlan {
-  simulation::LandmarkLevelConfig config;         ///< the simulator's scene, path, model and effects
-  std::vector<int> ids;                           ///< simulated landmark l + 1 -> data id
+  simulation::LandmarkLevelConfig config;  ///< the simulator's scene, path, model and effects
+  std::vector<int> ids;                    ///< simulated landmark l + 1 -> data id
   std::set<std::pair<std::size_t, int>> present;  ///< (scan, data landmark id) pairs of the data
 };
 
@@ -28,9 +28,10 @@ ReplicaPlan replicaPlan(const LandmarkObservations& obs, const JointResult& fit,
 /// How a replica's stop poses are drawn: around the commanded path (scaled by 1 + scale), with
 /// the model's position and heading scatter (Alhashimi et al. 2021 eq. 8).
 struct PoseNoise {
-  double sigma_s_m = 0.0;      ///< stop and go: a stop's position scatter, metres
-  double sigma_psi_rad = 0.0;  ///< stop and go: its heading scatter, radians (0: headings as commanded)
-  double scale = 0.0;          ///< odometry scale s: the true steps are 1 + s times the commanded ones
+  double sigma_s_m = 0.0;  ///< stop and go: a stop's position scatter, metres
+  /// stop and go: its heading scatter, radians (0: headings as commanded)
+  double sigma_psi_rad = 0.0;
+  double scale = 0.0;  ///< odometry scale s: the true steps are 1 + s times the commanded ones
   /// The motion prior (continuous recording): each pose is the one before moved by the
   /// commanded step, with noise of std. dev. step_fraction s + step_floor_m per coordinate and
   /// heading_per_m s + heading_floor_rad in heading (s the commanded step length).
@@ -48,7 +49,8 @@ PoseNoise poseNoise(const JointResult& fit, const JointConfig& cfg);
 /// under the motion prior: along the recorded steps, the odometry reported with its noise),
 /// simulated with `seed`, keeping the data's (scan, landmark) pairs. `truth`, when given,
 /// receives the true ranges of the kept sightings' beams.
-LandmarkObservations simulateReplica(ReplicaPlan plan, const LandmarkObservations& obs, const PoseNoise& noise,
-                                     std::uint64_t seed, std::vector<std::vector<double>>* truth = nullptr);
+LandmarkObservations simulateReplica(ReplicaPlan plan, const LandmarkObservations& obs,
+                                     const PoseNoise& noise, std::uint64_t seed,
+                                     std::vector<std::vector<double>>* truth = nullptr);
 
 }  // namespace lidarcal::diagnosis::sequence

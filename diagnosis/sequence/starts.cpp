@@ -38,14 +38,17 @@ void turnStart(JointInit& start, double turn, const std::vector<Pose2>& path) {
   start.effects.angle_offset_rad = turn;
 }
 
-std::pair<double, double> stepTurnAndStretch(const LandmarkObservations& obs, const JointResult& fit, const JointConfig& cfg) {
+std::pair<double, double> stepTurnAndStretch(const LandmarkObservations& obs,
+                                             const JointResult& fit, const JointConfig& cfg) {
   double turn = 0.0, stretch = 0.0, info = 0.0;
   const double f = 1.0 + fit.effects.odometry_scale;
   for (std::size_t k = 1; k < std::min(fit.poses.size(), obs.commanded.size()); ++k) {
-    const Pose2 cmd = stepBetween(obs.commanded[k - 1], obs.commanded[k]), got = stepBetween(fit.poses[k - 1], fit.poses[k]);
+    const Pose2 cmd = stepBetween(obs.commanded[k - 1], obs.commanded[k]),
+                got = stepBetween(fit.poses[k - 1], fit.poses[k]);
     const double len = f * std::hypot(cmd.x_m, cmd.y_m);
     if (!(len > 1e-6)) continue;
-    const double sd = cfg.motionStepSigma(motionStepLength(obs.commanded, k)), w = len * len / (sd * sd);
+    const double sd = cfg.motionStepSigma(motionStepLength(obs.commanded, k)),
+                 w = len * len / (sd * sd);
     turn += w * wrapAngle(std::atan2(got.y_m, got.x_m) - std::atan2(cmd.y_m, cmd.x_m));
     stretch += w * ((got.x_m * cmd.x_m + got.y_m * cmd.y_m) * f / (len * len) - 1.0);
     info += w;
@@ -63,9 +66,11 @@ JointInit SequenceDiagnosis::candidateStart(Effect e) const {
   // Turn the baseline's world (which turned to absorb the offset) back onto the commanded
   // path, and let the beams turn instead.
   if (e == Effect::angle_offset)
-    turnStart(start, -measured_stats_.at("path_rotation") * baseline_cfg_.sigma_s_m / sqrt_info, obs_.commanded);
+    turnStart(start, -measured_stats_.at("path_rotation") * baseline_cfg_.sigma_s_m / sqrt_info,
+              obs_.commanded);
   if (e == Effect::odometry_scale)
-    start.effects.odometry_scale = measured_stats_.at("path_scale") * baseline_cfg_.sigma_s_m / sqrt_info;
+    start.effects.odometry_scale =
+        measured_stats_.at("path_scale") * baseline_cfg_.sigma_s_m / sqrt_info;
   return start;
 }
 
@@ -81,7 +86,8 @@ JointInit SequenceDiagnosis::driveStart(Effect e, const JointResult& from) const
     for (auto& p : start.poses) p.yaw_rad += turn;
     start.effects.angle_offset_rad -= turn;
   }
-  if (e == Effect::odometry_scale) start.effects.odometry_scale = (1.0 + from.effects.odometry_scale) * (1.0 + stretch) - 1.0;
+  if (e == Effect::odometry_scale)
+    start.effects.odometry_scale = (1.0 + from.effects.odometry_scale) * (1.0 + stretch) - 1.0;
   return start;
 }
 

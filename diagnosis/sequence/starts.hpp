@@ -26,6 +26,7 @@ void turnStart(JointInit& start, double turn, const std::vector<Pose2>& path);
 /// turn by against the commanded ones in the frame of each scan, and the factor 1 + s they
 /// stretch by beyond the fit's odometry scale (each step weighted by its information on them,
 /// (length / sd)^2). A lidar yawed by a on the robot gives phi = -a in a fit without the offset.
-std::pair<double, double> stepTurnAndStretch(const LandmarkObservations& obs, const JointResult& fit, const JointConfig& cfg);
+std::pair<double, double> stepTurnAndStretch(const LandmarkObservations& obs,
+                                             const JointResult& fit, const JointConfig& cfg);
 
 }  // namespace lidarcal::diagnosis::sequence

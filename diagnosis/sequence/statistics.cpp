@@ -33,7 +33,8 @@ double spreadScore(const std::vector<ReadingRow>& rs, const std::vector<double>&
 
 /// Sum over groups of (group score)^2 / information, with the overall mean removed (the bias
 /// polynomial's alpha_0 absorbs it when `centre`), as a cube root (Wilson-Hilferty).
-double groupChi2(const std::vector<ReadingRow>& rs, const std::vector<int>& group, const std::vector<double>& x, bool centre) {
+double groupChi2(const std::vector<ReadingRow>& rs, const std::vector<int>& group,
+                 const std::vector<double>& x, bool centre) {
   std::map<int, std::pair<double, double>> g;  // score, information
   double u_all = 0.0, i_all = 0.0;
   for (std::size_t i = 0; i < rs.size(); ++i) {
@@ -56,8 +57,8 @@ double groupChi2(const std::vector<ReadingRow>& rs, const std::vector<int>& grou
 
 /// Residuals of a polynomial trend in x of order up to `order` (weighted least squares), so
 /// that a covariate is tested beyond what the bias polynomial already absorbs.
-std::vector<double> orthogonalise(const std::vector<double>& x, const std::vector<double>& d, const std::vector<double>& w,
-                                  int order) {
+std::vector<double> orthogonalise(const std::vector<double>& x, const std::vector<double>& d,
+                                  const std::vector<double>& w, int order) {
   const int p = order + 1;
   Eigen::MatrixXd a(static_cast<Eigen::Index>(x.size()), p);
   Eigen::VectorXd b(static_cast<Eigen::Index>(x.size()));
@@ -85,14 +86,15 @@ std::vector<double> orthogonalise(const std::vector<double>& x, const std::vecto
 
 /// Range and incidence: the residuals' trend beyond the bias polynomial, and their spread
 /// (noise law). `d`: predicted distances, `w`: weights 1 / sigma^2.
-void rangeStatistics(const JointResult& fit, const std::vector<ReadingRow>& rs, const std::vector<double>& d,
-                     const std::vector<double>& w, Statistics& st) {
+void rangeStatistics(const JointResult& fit, const std::vector<ReadingRow>& rs,
+                     const std::vector<double>& d, const std::vector<double>& w, Statistics& st) {
   const std::size_t n = rs.size();
   std::vector<double> x(n), g(n);
   const int order = fit.model.bias.order();
   for (std::size_t i = 0; i < n; ++i) x[i] = std::pow(d[i], order + 1);
   st["residual_vs_range"] = meanScore(rs, orthogonalise(x, d, w, order));
-  for (std::size_t i = 0; i < n; ++i) g[i] = std::log(std::max(std::abs(fit.model.bias(d[i])), 1e-3));
+  for (std::size_t i = 0; i < n; ++i)
+    g[i] = std::log(std::max(std::abs(fit.model.bias(d[i])), 1e-3));
   st["spread_vs_range"] = spreadScore(rs, g);
   for (std::size_t i = 0; i < n; ++i) x[i] = 1.0 - rs[i].r.cos_incidence;
   st["residual_vs_incidence"] = meanScore(rs, orthogonalise(x, d, w, 0));
@@ -104,7 +106,8 @@ void rangeStatistics(const JointResult& fit, const std::vector<ReadingRow>& rs, 
 
 /// Position within the object: outermost beams against the others.
 void edgeStatistics(const std::vector<ReadingRow>& rs, Statistics& st) {
-  double pos_edge = 0, neg_edge = 0, n_edge = 0, pos_in = 0, neg_in = 0, n_in = 0, s_edge = 0, s_in = 0;
+  double pos_edge = 0, neg_edge = 0, n_edge = 0, pos_in = 0, neg_in = 0, n_in = 0, s_edge = 0,
+         s_in = 0;
   for (const auto& r : rs) {
     const double z2 = std::min(r.z * r.z, kClip * kClip);
     if (r.r.edge) {
@@ -126,8 +129,8 @@ void edgeStatistics(const std::vector<ReadingRow>& rs, Statistics& st) {
 
 /// Landmark and stop identity (offsets beyond the common bias), rotations per stop (heading
 /// errors) and common (zero-angle offset), time, bearing in the sensor frame.
-void groupStatistics(const std::vector<ReadingRow>& rs, const std::vector<double>& d, const std::vector<double>& w,
-                     Statistics& st) {
+void groupStatistics(const std::vector<ReadingRow>& rs, const std::vector<double>& d,
+                     const std::vector<double>& w, Statistics& st) {
   const std::size_t n = rs.size();
   std::vector<double> x(n), one(n, 1.0);
   std::vector<int> grp(n);
@@ -151,13 +154,15 @@ void groupStatistics(const std::vector<ReadingRow>& rs, const std::vector<double
     xc[i] = std::cos(rs[i].r.angle_rad);
     xs[i] = std::sin(rs[i].r.angle_rad);
   }
-  const double a = meanScore(rs, orthogonalise(xc, d, w, 0)), b = meanScore(rs, orthogonalise(xs, d, w, 0));
+  const double a = meanScore(rs, orthogonalise(xc, d, w, 0)),
+               b = meanScore(rs, orthogonalise(xs, d, w, 0));
   st["residual_vs_bearing"] = cubeRootChi2(a * a + b * b, 2.0);
 }
 
 /// The refined path against the commanded one, about its centroid: rotated (a zero-angle
 /// offset turns the path the data see against the headings) or stretched (step length).
-void pathStatistics(const LandmarkObservations& obs, const JointResult& fit, const JointConfig& cfg, Statistics& st) {
+void pathStatistics(const LandmarkObservations& obs, const JointResult& fit, const JointConfig& cfg,
+                    Statistics& st) {
   double cx = 0.0, cy = 0.0;
   const std::size_t k_stops = std::min(fit.poses.size(), obs.commanded.size());
   for (std::size_t k = 0; k < k_stops; ++k) {
@@ -167,7 +172,8 @@ void pathStatistics(const LandmarkObservations& obs, const JointResult& fit, con
   double rot = 0.0, str = 0.0, info = 0.0;
   for (std::size_t k = 0; k < k_stops; ++k) {
     const double ex = obs.commanded[k].x_m - cx, ey = obs.commanded[k].y_m - cy;
-    const double dx = fit.poses[k].x_m - obs.commanded[k].x_m, dy = fit.poses[k].y_m - obs.commanded[k].y_m;
+    const double dx = fit.poses[k].x_m - obs.commanded[k].x_m,
+                 dy = fit.poses[k].y_m - obs.commanded[k].y_m;
     rot += ex * dy - ey * dx;
     str += ex * dx + ey * dy;
     info += ex * ex + ey * ey;
@@ -183,7 +189,8 @@ void bearingStatistics(const LandmarkObservations& obs, const JointResult& fit, 
     auto c = fit.centres.find(s.landmark);
     if (c == fit.centres.end() || s.stop >= fit.poses.size()) continue;
     const Pose2& p = fit.poses[s.stop];
-    const double predicted = std::atan2(c->second.y() - p.y_m, c->second.x() - p.x_m) - p.yaw_rad - fit.effects.angle_offset_rad;
+    const double predicted = std::atan2(c->second.y() - p.y_m, c->second.x() - p.x_m) - p.yaw_rad -
+                             fit.effects.angle_offset_rad;
     by_stop[s.stop].push_back(wrapAngle(s.bearing_rad - predicted));
   }
   double grand = 0.0, total = 0.0;
@@ -200,8 +207,10 @@ void bearingStatistics(const LandmarkObservations& obs, const JointResult& fit, 
     between += static_cast<double>(v.size()) * (m - grand) * (m - grand);
     for (double b : v) within += (b - m) * (b - m);
   }
-  const double dfb = static_cast<double>(by_stop.size()) - 1.0, dfw = total - static_cast<double>(by_stop.size());
-  st["bearing_within_stop_correlation"] = (dfb > 0 && dfw > 0 && within > 0) ? std::log((between / dfb) / (within / dfw)) : 0.0;
+  const double dfb = static_cast<double>(by_stop.size()) - 1.0,
+               dfw = total - static_cast<double>(by_stop.size());
+  st["bearing_within_stop_correlation"] =
+      (dfb > 0 && dfw > 0 && within > 0) ? std::log((between / dfb) / (within / dfw)) : 0.0;
 }
 
 /// Tails and quantisation.
@@ -222,7 +231,8 @@ void shapeStatistics(const std::vector<ReadingRow>& rs, Statistics& st) {
 
 }  // namespace
 
-std::vector<ReadingRow> readingRows(const LandmarkObservations& obs, const JointResult& fit, const JointConfig& cfg) {
+std::vector<ReadingRow> readingRows(const LandmarkObservations& obs, const JointResult& fit,
+                                    const JointConfig& cfg) {
   std::vector<ReadingRow> out;
   for (const auto& r : evaluateJoint(obs, fit, cfg)) {
     ReadingRow w;
@@ -231,16 +241,17 @@ std::vector<ReadingRow> readingRows(const LandmarkObservations& obs, const Joint
     w.psi = huberPsi(w.z, kClip);
     const Pose2& p = fit.poses[r.stop];
     const auto& c = fit.centres.at(r.landmark);
-    const RayGradient g = rayGradient(p.x_m, p.y_m, p.yaw_rad + r.angle_rad + fit.effects.angle_offset_rad, c.x(), c.y(),
-                                      fit.radius_m);
+    const RayGradient g =
+        rayGradient(p.x_m, p.y_m, p.yaw_rad + r.angle_rad + fit.effects.angle_offset_rad, c.x(),
+                    c.y(), fit.radius_m);
     w.dmu_da = fit.model.bias.derivative(g.d) * g.da;
     out.push_back(w);
   }
   return out;
 }
 
-Statistics sequenceStatistics(const LandmarkObservations& obs, const JointResult& fit, const std::vector<ReadingRow>& rs,
-                              const JointConfig& cfg) {
+Statistics sequenceStatistics(const LandmarkObservations& obs, const JointResult& fit,
+                              const std::vector<ReadingRow>& rs, const JointConfig& cfg) {
   Statistics st;
   const std::size_t n = rs.size();
   if (n == 0) return st;

@@ -25,13 +25,14 @@ struct ReadingRow {
 
 /// Every reading of `obs` under `fit` with its standardised residual, clipped residual and the
 /// derivative of its mean by the beam angle.
-std::vector<ReadingRow> readingRows(const LandmarkObservations& obs, const JointResult& fit, const JointConfig& cfg);
+std::vector<ReadingRow> readingRows(const LandmarkObservations& obs, const JointResult& fit,
+                                    const JointConfig& cfg);
 
 /// Statistic name -> value.
 using Statistics = std::map<std::string, double>;
 
 /// Every statistic of the battery (and the candidates' scores) under a baseline fit.
-Statistics sequenceStatistics(const LandmarkObservations& obs, const JointResult& fit, const std::vector<ReadingRow>& rs,
-                              const JointConfig& cfg);
+Statistics sequenceStatistics(const LandmarkObservations& obs, const JointResult& fit,
+                              const std::vector<ReadingRow>& rs, const JointConfig& cfg);
 
 }  // namespace lidarcal::diagnosis::sequence

@@ -23,8 +23,10 @@ namespace lidarcal::diagnosis::sequence {
 /// The rules after nameCause, in the table's order (diagnosis/rules.hpp): grid_first, tails_first,
 /// noise_term_beside_path.
 void SequenceDiagnosis::refineCause(DiagnosisResult& out) const {
-  if (names(out.primary_cause, Effect::quantisation)) nameCauseBesideSymptom(out, Effect::quantisation);
-  if (names(out.primary_cause, Effect::heavy_tails)) nameCauseBesideSymptom(out, Effect::heavy_tails);
+  if (names(out.primary_cause, Effect::quantisation))
+    nameCauseBesideSymptom(out, Effect::quantisation);
+  if (names(out.primary_cause, Effect::heavy_tails))
+    nameCauseBesideSymptom(out, Effect::heavy_tails);
   requireNoiseTermToHoldBesidePath(out);
 }
 
@@ -42,10 +44,13 @@ void SequenceDiagnosis::requireNoiseTermToHoldBesidePath(DiagnosisResult& out) c
   for (std::size_t c = 0; c < out.candidates.size(); ++c) {
     const CandidateResult& r = out.candidates[c];
     if (names(out.primary_cause, r.effect)) named = c;
-    if (pathTerm(r.effect) && r.significant && r.identifiable && (path == none || r.p_holm < out.candidates[path].p_holm))
+    if (pathTerm(r.effect) && r.significant && r.identifiable &&
+        (path == none || r.p_holm < out.candidates[path].p_holm))
       path = c;
   }
-  if (named == none || path == none || !noiseShapeEffect(candidates_[named]) || candidates_[named] == Effect::heavy_tails) return;
+  if (named == none || path == none || !noiseShapeEffect(candidates_[named]) ||
+      candidates_[named] == Effect::heavy_tails)
+    return;
   std::vector<JointResult> full;
   const HeldOutGain g = heldOutGainsBesideTerm({named}, path, full, true).front();
   const double p = g.finite ? heldoutPValue(g.gain, g.se) : 1.0;
@@ -56,17 +61,21 @@ void SequenceDiagnosis::requireNoiseTermToHoldBesidePath(DiagnosisResult& out) c
   char buf[600];
   if (p < config_.alpha) {
     std::snprintf(buf, sizeof buf,
-                  "; it holds beside %s, also significant (held-out gain over %s alone %+.4g +- %.2g nats per reading, p %.2g)",
+                  "; it holds beside %s, also significant (held-out gain over %s alone %+.4g +- "
+                  "%.2g nats per reading, p %.2g)",
                   toString(candidates_[path]), toString(candidates_[path]), g.gain, g.se, p);
     out.decision += buf;
     return;
   }
   std::snprintf(buf, sizeof buf,
-                "%s had the largest held-out gain (%+.4g nats per reading) but does not hold beside %s (%+.4g +- %.2g over %s "
-                "alone, p %.2g): its gain was the path's misfit, in the readings that move most with the pose; %s named "
+                "%s had the largest held-out gain (%+.4g nats per reading) but does not hold "
+                "beside %s (%+.4g +- %.2g over %s "
+                "alone, p %.2g): its gain was the path's misfit, in the readings that move most "
+                "with the pose; %s named "
                 "(held-out gain %+.4g, its evidence in the odometry steps)",
-                toString(r.effect), r.heldout_gain_nats_per_point, toString(candidates_[path]), g.gain, g.se,
-                toString(candidates_[path]), p, toString(candidates_[path]), out.candidates[path].heldout_gain_nats_per_point);
+                toString(r.effect), r.heldout_gain_nats_per_point, toString(candidates_[path]),
+                g.gain, g.se, toString(candidates_[path]), p, toString(candidates_[path]),
+                out.candidates[path].heldout_gain_nats_per_point);
   out.decision = buf;
   out.primary_cause = toString(candidates_[path]);
 }
@@ -80,9 +89,11 @@ bool SequenceDiagnosis::ratioCountsBeside(std::size_t under, bool grid) const {
   bool ratio_counts = !grid;
   if (grid) {
     std::vector<double> s;
-    for (const auto& x : evaluateJoint(obs_, candidate_fits_[under], candidate_cfgs_[under])) s.push_back(x.sigma_m);
+    for (const auto& x : evaluateJoint(obs_, candidate_fits_[under], candidate_cfgs_[under]))
+      s.push_back(x.sigma_m);
     std::sort(s.begin(), s.end());
-    ratio_counts = !s.empty() && candidate_fits_[under].effects.range_grid_m <= rules::kFineGridOverNoise * s[s.size() / 10];
+    ratio_counts = !s.empty() && candidate_fits_[under].effects.range_grid_m <=
+                                     rules::kFineGridOverNoise * s[s.size() / 10];
   }
   return ratio_counts;
 }
@@ -102,8 +113,10 @@ void SequenceDiagnosis::nameCauseBesideSymptom(DiagnosisResult& out, Effect symp
   std::vector<std::size_t> physical;
   for (std::size_t c = 0; c < out.candidates.size(); ++c) {
     const CandidateResult& r = out.candidates[c];
-    if (r.effect == symptom) under = c;
-    else if (r.significant && r.identifiable && r.effect != Effect::quantisation) physical.push_back(c);
+    if (r.effect == symptom)
+      under = c;
+    else if (r.significant && r.identifiable && r.effect != Effect::quantisation)
+      physical.push_back(c);
   }
   if (under == candidates_.size()) return;
   const bool ratio_counts = ratioCountsBeside(under, grid);
@@ -122,7 +135,9 @@ void SequenceDiagnosis::nameCauseBesideSymptom(DiagnosisResult& out, Effect symp
     // gain, as in the candidate's own p), when the held-out gain is positive.
     if (ratio_counts && g.finite && g.gain > 0.0 && !noiseShapeEffect(r.effect)) {
       const double p_lr = likelihoodRatioPBesideTerm(full[k], under);
-      if (std::isfinite(p_lr)) r.estimates[grid ? "p_likelihood_ratio_beside_grid" : "p_likelihood_ratio_beside_tails"] = p_lr;
+      if (std::isfinite(p_lr))
+        r.estimates[grid ? "p_likelihood_ratio_beside_grid" : "p_likelihood_ratio_beside_tails"] =
+            p_lr;
       p = combinedPValue(p, kNaN, p_lr);
     }
     if (!(p * static_cast<double>(physical.size()) < config_.alpha)) continue;
@@ -136,33 +151,45 @@ void SequenceDiagnosis::nameCauseBesideSymptom(DiagnosisResult& out, Effect symp
 
 /// The decision's words for nameCauseBesideSymptom (`best`: the candidate named, none when it is
 /// candidates_.size()), and the cause it names.
-void SequenceDiagnosis::describeCauseBesideSymptom(DiagnosisResult& out, bool grid, std::size_t under, std::size_t tried,
+void SequenceDiagnosis::describeCauseBesideSymptom(DiagnosisResult& out, bool grid,
+                                                   std::size_t under, std::size_t tried,
                                                    std::size_t best, double best_gain) const {
-  const std::string key_se = std::string(grid ? "heldout_gain_beside_grid" : "heldout_gain_beside_tails") + "_se";
-  const double value = grid ? 1000.0 * candidate_fits_[under].effects.range_grid_m : candidate_fits_[under].effects.student_dof;
+  const std::string key_se =
+      std::string(grid ? "heldout_gain_beside_grid" : "heldout_gain_beside_tails") + "_se";
+  const double value = grid ? 1000.0 * candidate_fits_[under].effects.range_grid_m
+                            : candidate_fits_[under].effects.student_dof;
   char buf[520];
   if (best == candidates_.size()) {
     std::snprintf(buf, sizeof buf,
-                  grid ? "; the readings' grid (%.3g mm) is significant and no other effect holds beside it (%zu tried, held-out "
+                  grid ? "; the readings' grid (%.3g mm) is significant and no other effect holds "
+                         "beside it (%zu tried, held-out "
                          "gain over the rounded model alone)"
-                       : "; the tails (Student t, nu %.3g) are significant and no physical effect holds beside them (%zu tried, "
+                       : "; the tails (Student t, nu %.3g) are significant and no physical effect "
+                         "holds beside them (%zu tried, "
                          "held-out gain over the t alone): cause unknown",
                   value, tried);
     out.decision += buf;
     return;
   }
   const CandidateResult& r = out.candidates[best];
-  std::snprintf(buf, sizeof buf,
-                grid ? "the readings' grid (%.3g mm) comes first, a format of the output that biases nothing; %s holds beside it "
-                       "(held-out gain over the rounded model alone +%.4g +- %.2g nats per reading; alone +%.4g): named, the "
-                       "rounding remains beside it"
-                     : "heavy tails (Student t, nu %.3g) come first, a symptom; %s holds beside them (held-out gain over the t "
-                       "alone +%.4g +- %.2g nats per reading; alone +%.4g): named, the tails remain beside it",
-                value, toString(r.effect), best_gain, r.estimates.at(key_se), r.heldout_gain_nats_per_point);
+  std::snprintf(
+      buf, sizeof buf,
+      grid
+          ? "the readings' grid (%.3g mm) comes first, a format of the output that biases nothing; "
+            "%s holds beside it "
+            "(held-out gain over the rounded model alone +%.4g +- %.2g nats per reading; alone "
+            "+%.4g): named, the "
+            "rounding remains beside it"
+          : "heavy tails (Student t, nu %.3g) come first, a symptom; %s holds beside them "
+            "(held-out gain over the t "
+            "alone +%.4g +- %.2g nats per reading; alone +%.4g): named, the tails remain beside it",
+      value, toString(r.effect), best_gain, r.estimates.at(key_se), r.heldout_gain_nats_per_point);
   out.decision = buf;
-  const auto lr = r.estimates.find(grid ? "p_likelihood_ratio_beside_grid" : "p_likelihood_ratio_beside_tails");
+  const auto lr =
+      r.estimates.find(grid ? "p_likelihood_ratio_beside_grid" : "p_likelihood_ratio_beside_tails");
   if (lr != r.estimates.end()) {
-    std::snprintf(buf, sizeof buf, "; in sample, the likelihood ratio beside it has p %.2g", lr->second);
+    std::snprintf(buf, sizeof buf, "; in sample, the likelihood ratio beside it has p %.2g",
+                  lr->second);
     out.decision += buf;
   }
   out.primary_cause = toString(r.effect);
@@ -175,31 +202,37 @@ void SequenceDiagnosis::describeCauseBesideSymptom(DiagnosisResult& out, bool gr
 /// (stop and go). from_under: both terms fitted from `under`'s solution (a path term's: its
 /// headings hold the offset), a restricted shape at its estimate under `under`'s fold fit
 /// (withCorrectedShape).
-std::vector<HeldOutGain> SequenceDiagnosis::heldOutGainsBesideTerm(const std::vector<std::size_t>& effects, std::size_t under,
-                                                                   std::vector<JointResult>& full, bool from_under) const {
+std::vector<HeldOutGain> SequenceDiagnosis::heldOutGainsBesideTerm(
+    const std::vector<std::size_t>& effects, std::size_t under, std::vector<JointResult>& full,
+    bool from_under) const {
   full.clear();
   full.resize(effects.size());
   std::vector<JointConfig> both(effects.size());
   std::vector<JointInit> start(effects.size());
   for (std::size_t k = 0; k < effects.size(); ++k)
-    std::tie(both[k], start[k]) = from_under ? configWithBothTerms(under, effects[k]) : configWithBothTerms(effects[k], under);
+    std::tie(both[k], start[k]) = from_under ? configWithBothTerms(under, effects[k])
+                                             : configWithBothTerms(effects[k], under);
   const std::vector<int> fold = foldOfEachSighting(obs_, config_.folds);
   std::vector<HeldOut> held(effects.size(), HeldOut(1));
   for (int f = 0; f < config_.folds; ++f) {
     const auto split = foldSplit(obs_, fold, f);
     if (!split) continue;
     const auto& [tr, recorded] = *split;
-    const JointResult ft = refineJoint(tr, initFrom(candidate_fits_[under]), warmStartConfig(candidate_cfgs_[under]));
+    const JointResult ft =
+        refineJoint(tr, initFrom(candidate_fits_[under]), warmStartConfig(candidate_cfgs_[under]));
     if (!ft.ok()) continue;
     const LandmarkObservations spread = dequantisedTestFold(fold, f);
     std::vector<std::size_t> scan;
-    const auto lt =
-        heldOutLikelihoods(tr, scoredReadings(candidate_cfgs_[under], recorded, spread), ft, candidate_cfgs_[under], &scan);
+    const auto lt = heldOutLikelihoods(tr, scoredReadings(candidate_cfgs_[under], recorded, spread),
+                                       ft, candidate_cfgs_[under], &scan);
     for (std::size_t k = 0; k < effects.size(); ++k) {
       JointResult fb = refineJoint(tr, start[k], warmStartConfig(both[k]));
-      if (from_under) fb = withCorrectedShape(tr, candidates_[effects[k]], ft, candidate_cfgs_[under], std::move(fb), both[k]);
+      if (from_under)
+        fb = withCorrectedShape(tr, candidates_[effects[k]], ft, candidate_cfgs_[under],
+                                std::move(fb), both[k]);
       if (!fb.ok()) continue;
-      const auto lb = heldOutLikelihoods(tr, scoredReadings(both[k], recorded, spread), fb, both[k]);
+      const auto lb =
+          heldOutLikelihoods(tr, scoredReadings(both[k], recorded, spread), fb, both[k]);
       if (lt.size() != lb.size()) continue;
       for (std::size_t i = 0; i < lt.size(); ++i) {
         held[k].base.push_back(lt[i]);
@@ -237,10 +270,12 @@ std::vector<HeldOutGain> SequenceDiagnosis::heldOutGainsBesideTerm(const std::ve
 
 /// Candidate c's refinement with candidate `under`'s term switched on too, and its start (c's
 /// solution, with the t's degrees of freedom when `under` is the Student-t noise).
-std::pair<JointConfig, JointInit> SequenceDiagnosis::configWithBothTerms(std::size_t c, std::size_t under) const {
+std::pair<JointConfig, JointInit> SequenceDiagnosis::configWithBothTerms(std::size_t c,
+                                                                         std::size_t under) const {
   std::pair<JointConfig, JointInit> out{candidate_cfgs_[c], initFrom(candidate_fits_[c])};
   out.first.effects.enable(candidates_[under]);
-  if (candidates_[under] == Effect::heavy_tails) out.second.effects.student_dof = candidate_fits_[under].effects.student_dof;
+  if (candidates_[under] == Effect::heavy_tails)
+    out.second.effects.student_dof = candidate_fits_[under].effects.student_dof;
   return out;
 }
 
@@ -250,10 +285,12 @@ std::pair<JointConfig, JointInit> SequenceDiagnosis::configWithBothTerms(std::si
 /// for one parameter. Both model the recorded readings, so their likelihoods compare; an angle
 /// offset shows in sample, the poles turning with the bearings take most of it out of sample
 /// (docs/results/hidden-effects.md, Readings on a grid).
-double SequenceDiagnosis::likelihoodRatioPBesideTerm(const JointResult& both, std::size_t under) const {
+double SequenceDiagnosis::likelihoodRatioPBesideTerm(const JointResult& both,
+                                                     std::size_t under) const {
   if (baseline_fit_.motion_prior || !both.ok()) return kNaN;
-  return likelihoodRatioPValue(2.0 * (totalNegLogLikelihood(candidate_fits_[under]) - totalNegLogLikelihood(both)),
-                               both.effect_parameters - candidate_fits_[under].effect_parameters);
+  return likelihoodRatioPValue(
+      2.0 * (totalNegLogLikelihood(candidate_fits_[under]) - totalNegLogLikelihood(both)),
+      both.effect_parameters - candidate_fits_[under].effect_parameters);
 }
 
 }  // namespace lidarcal::diagnosis::sequence

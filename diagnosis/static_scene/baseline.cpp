@@ -26,7 +26,8 @@ bool StaticDiagnosis::fitBaseline(DiagnosisResult& out) {
   if (!makeData(out)) return false;
   // 1. Baseline: bin locations, the squared noise law, the wall model with alpha_0.
   fitWallModel();
-  if (std::isfinite(config_.static_range_offset_m)) out.baseline_extra["alpha0_given_m"] = fixed_alpha0_;
+  if (std::isfinite(config_.static_range_offset_m))
+    out.baseline_extra["alpha0_given_m"] = fixed_alpha0_;
   std::vector<double> used_y;
   for (std::size_t i = 0; i < binned_.y.size(); ++i)
     if (binned_.bin_of[i] >= 0) used_y.push_back(binned_.y[i]);
@@ -44,10 +45,12 @@ bool StaticDiagnosis::fitBaseline(DiagnosisResult& out) {
   if (const double span = wallSector(); span < kMinWallSectorRad) {
     out.status.code = StatusCode::too_few_walls;
     char buf[320];
-    std::snprintf(buf, sizeof buf,
-                  "the returns lie on %s seen over %.1f degrees (at least %.0f needed): record the "
-                  "repeated scans in a room with walls in view at several distances, not one target alone",
-                  plural(wall_lines_.size(), "straight surface").c_str(), rad2deg(span), rad2deg(kMinWallSectorRad));
+    std::snprintf(
+        buf, sizeof buf,
+        "the returns lie on %s seen over %.1f degrees (at least %.0f needed): record the "
+        "repeated scans in a room with walls in view at several distances, not one target alone",
+        plural(wall_lines_.size(), "straight surface").c_str(), rad2deg(span),
+        rad2deg(kMinWallSectorRad));
     out.status.message = buf;
     return false;
   }
@@ -81,7 +84,8 @@ double StaticDiagnosis::wallSector() const {
 bool StaticDiagnosis::makeData(DiagnosisResult& out) {
   if (data_.scans < static_cast<std::size_t>(2 * config_.folds)) {
     out.status.code = StatusCode::too_few_scans;
-    out.status.message = "a static recording needs at least " + std::to_string(2 * config_.folds) + " scans from the same pose";
+    out.status.message = "a static recording needs at least " + std::to_string(2 * config_.folds) +
+                         " scans from the same pose";
     return false;
   }
   window_scans_ = config_.static_window > 0 ? static_cast<std::size_t>(config_.static_window) : 0;
@@ -97,7 +101,8 @@ bool StaticDiagnosis::makeData(DiagnosisResult& out) {
   out.baseline_extra["window_scans"] = static_cast<double>(window_scans_);
   // One pose: beams that saw objects move (a person, a reflector carried away) are left out;
   // the sensor's model is about the scene standing still.
-  if (window_scans_ == 0) out.baseline_extra["scene_changed_bins"] = static_cast<double>(dropChangedBins(binned_));
+  if (window_scans_ == 0)
+    out.baseline_extra["scene_changed_bins"] = static_cast<double>(dropChangedBins(binned_));
   if (binned_.bins.size() < 10) {
     out.status.code = StatusCode::too_few_beams;
     out.status.message = "fewer than 10 beam directions return in enough scans";
@@ -133,7 +138,9 @@ void StaticDiagnosis::describeBaseline(DiagnosisResult& out) const {
   extra["wall_bins"] = static_cast<double>(walls_.bins.size());
   extra["alpha0_m"] = walls_.ok && alpha0_identified_ ? walls_.alpha0 : kNaN;
   extra["alpha0_se_m"] =
-      walls_.ok && alpha0_identified_ && !std::isfinite(config_.static_range_offset_m) ? walls_.alpha0_se : kNaN;
+      walls_.ok && alpha0_identified_ && !std::isfinite(config_.static_range_offset_m)
+          ? walls_.alpha0_se
+          : kNaN;
   extra["wall_roughness_m"] = walls_.ok ? walls_.tau : kNaN;
   extra["reading_grid_m"] = reading_grid_m_;
   extra["edge_bins"] = static_cast<double>(edge_bins_);
@@ -165,21 +172,27 @@ void StaticDiagnosis::reportWalls() const {
 }
 
 std::map<std::string, double> StaticDiagnosis::measuredStatistics(DiagnosisResult& out) {
-  const auto measured_stats = staticStatistics(binned_, bin_fits_, baseline_model_, walls_, walls_with_bias_, reading_grid_m_);
+  const auto measured_stats = staticStatistics(binned_, bin_fits_, baseline_model_, walls_,
+                                               walls_with_bias_, reading_grid_m_);
   out.measured = residualRecordsOf(binned_, bin_fits_, baseline_model_);
   baseline_replicas_.var.resize(binned_.bins.size());
   return measured_stats;
 }
 
 /// One bootstrap replica: simulated from the fitted baseline, refitted from it.
-void StaticDiagnosis::replica(int b, std::map<std::string, std::vector<double>>& stats, DiagnosisResult& out) {
-  const BinnedReadings rep = simulateStatic(binned_, bin_fits_, walls_, baseline_model_,
-                                            deriveSeed(config_.seed, 2000 + static_cast<std::uint64_t>(b)), RangeEffects{});
+void StaticDiagnosis::replica(int b, std::map<std::string, std::vector<double>>& stats,
+                              DiagnosisResult& out) {
+  const BinnedReadings rep = simulateStatic(
+      binned_, bin_fits_, walls_, baseline_model_,
+      deriveSeed(config_.seed, 2000 + static_cast<std::uint64_t>(b)), RangeEffects{});
   std::vector<BinFit> fr;
   const ReadingModel mr = fitModel(rep, {}, FreeTerms{}, 0.0, fr);
-  const WallFit wr0 = fitWalls(rep, fr, walls_.ok ? walls_.lines : wall_lines_, false, fixed_alpha0_);
-  const WallFit wrb = fitWalls(rep, fr, walls_.ok ? walls_.lines : wall_lines_, true, fixed_alpha0_);
-  for (const auto& [k, v] : staticStatistics(rep, fr, mr, wr0, wrb, reading_grid_m_)) stats[k].push_back(v);
+  const WallFit wr0 =
+      fitWalls(rep, fr, walls_.ok ? walls_.lines : wall_lines_, false, fixed_alpha0_);
+  const WallFit wrb =
+      fitWalls(rep, fr, walls_.ok ? walls_.lines : wall_lines_, true, fixed_alpha0_);
+  for (const auto& [k, v] : staticStatistics(rep, fr, mr, wr0, wrb, reading_grid_m_))
+    stats[k].push_back(v);
   if (b >= config_.closeness_replicas && b != 0) return;
   const auto rec = residualRecordsOf(rep, fr, mr);
   if (b < config_.closeness_replicas) baseline_replicas_.add(rec, fr);

@@ -85,11 +85,13 @@ BinnedReadings makeBins(const StaticScans& s, std::size_t window) {
   std::map<std::pair<long long, long long>, std::vector<std::size_t>> groups;
   for (std::size_t i = 0; i < n; ++i) {
     const long long w = window > 0 ? static_cast<long long>(s.readings[i].scan / window) : 0;
-    const long long a = exact ? std::llround(d.a[i] * 1e7) : static_cast<long long>(std::floor((d.a[i] + kPi) / d.width));
+    const long long a = exact ? std::llround(d.a[i] * 1e7)
+                              : static_cast<long long>(std::floor((d.a[i] + kPi) / d.width));
     groups[{w, a}].push_back(i);
   }
   const std::size_t scans_per_bin = window > 0 ? window : s.scans;
-  const std::size_t min_n = window > 0 ? std::max<std::size_t>(5, (3 * window) / 4) : std::max<std::size_t>(8, s.scans / 10);
+  const std::size_t min_n = window > 0 ? std::max<std::size_t>(5, (3 * window) / 4)
+                                       : std::max<std::size_t>(8, s.scans / 10);
   d.bin_of.assign(n, -1);
   for (auto& [key, idx] : groups) {
     if (idx.size() < min_n) continue;
@@ -144,7 +146,8 @@ std::vector<BinFit> fitBins(const BinnedReadings& d, const std::vector<bool>& tr
     std::size_t k = 0;
     for (std::size_t i : bin.idx) {
       if (!train.empty() && !train[static_cast<std::size_t>(d.t[i])]) continue;
-      const Eigen::Vector3d x(1.0, bin.slope ? d.a[i] - f.abar : 0.0, d.trend ? d.t[i] - f.tbar : 0.0);
+      const Eigen::Vector3d x(1.0, bin.slope ? d.a[i] - f.abar : 0.0,
+                              d.trend ? d.t[i] - f.tbar : 0.0);
       ata += x * x.transpose();
       aty += x * ys[k++];
     }

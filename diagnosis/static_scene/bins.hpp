@@ -17,28 +17,29 @@ namespace lidarcal::diagnosis::static_scene {
 // Direction bins: a beam over the scans.
 
 struct Bin {
-  int window = 0;                   ///< window of scans it belongs to (0 when the whole recording is one pose)
-  double angle = 0.0;               ///< mean angle of its readings
-  std::vector<std::size_t> idx;     ///< its readings
-  bool slope = false;               ///< the angle varies within the bin (irregular beam grids)
-  int wall = -1;                    ///< wall line it lies on, -1 none
-  bool edge = false;                ///< next to a depth discontinuity
-  double near = 0.0, far = 0.0;     ///< at an edge: the depths on both sides
-  double cos_inc = 1.0;             ///< cosine of the incidence (1 when unknown)
+  int window = 0;      ///< window of scans it belongs to (0 when the whole recording is one pose)
+  double angle = 0.0;  ///< mean angle of its readings
+  std::vector<std::size_t> idx;  ///< its readings
+  bool slope = false;            ///< the angle varies within the bin (irregular beam grids)
+  int wall = -1;                 ///< wall line it lies on, -1 none
+  bool edge = false;             ///< next to a depth discontinuity
+  double near = 0.0, far = 0.0;  ///< at an edge: the depths on both sides
+  double cos_inc = 1.0;          ///< cosine of the incidence (1 when unknown)
   bool inc_known = false;
-  double intensity = kNaN;          ///< geometric mean intensity of its readings (NaN: none recorded)
-  double dark = 0.0;                ///< darkness ln(I_median / I) against the median bin's intensity (0: none recorded)
+  double intensity = kNaN;  ///< geometric mean intensity of its readings (NaN: none recorded)
+  /// darkness ln(I_median / I) against the median bin's intensity (0: none recorded)
+  double dark = 0.0;
 };
 
 /// Per-bin location fitted on a subset of the scans.
 struct BinFit {
-  double m = 0.0;     ///< mean reading at the bin's mean angle (and mean scan), metres
-  double g = 0.0;     ///< trend in angle (irregular grids), metres per radian
-  double abar = 0.0;  ///< mean angle of the readings fitted, radians
-  double med = 0.0;   ///< median reading (after the drift), metres
-  double s2 = 0.0;    ///< residual variance about the location, m^2
+  double m = 0.0;              ///< mean reading at the bin's mean angle (and mean scan), metres
+  double g = 0.0;              ///< trend in angle (irregular grids), metres per radian
+  double abar = 0.0;           ///< mean angle of the readings fitted, radians
+  double med = 0.0;            ///< median reading (after the drift), metres
+  double s2 = 0.0;             ///< residual variance about the location, m^2
   double h = 0.0, tbar = 0.0;  ///< time trend (windows: the sensor creeping), metres per scan
-  double n = 0.0;  ///< readings fitted (0: too few, no fit)
+  double n = 0.0;              ///< readings fitted (0: too few, no fit)
   /// Location of a reading at angle a in scan t.
   double at(double a, double t) const { return m + g * (a - abar) + h * (t - tbar); }
 };
@@ -51,11 +52,12 @@ struct BinnedReadings {
   double width = 0.0;           ///< bin width, radians (0: fixed grid, bins by exact angle)
   bool trend = false;           ///< windows: each bin has a time trend
   double t_mean = 0.0;          ///< mean scan index of the binned readings (the drift's centre)
-  double window_min = 0.0;      ///< the sensor's reading window, metres (the outlier floor's support)
+  double window_min = 0.0;  ///< the sensor's reading window, metres (the outlier floor's support)
   double window_max = 1.0;
-  bool intensity = false;       ///< the bins carry an intensity
-  double i_ref = kNaN;          ///< the median bin's intensity (the darkness reference; NaN: none recorded)
-  std::vector<double> y_cell;   ///< dequantised data: the reading each y was spread from (its grid cell's centre)
+  bool intensity = false;  ///< the bins carry an intensity
+  double i_ref = kNaN;  ///< the median bin's intensity (the darkness reference; NaN: none recorded)
+  /// dequantised data: the reading each y was spread from (its grid cell's centre)
+  std::vector<double> y_cell;
 };
 
 /// Calls fn(i, bin, fit) for every reading i in a bin that has a location fit, in reading order.

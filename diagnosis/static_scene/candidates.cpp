@@ -15,7 +15,8 @@ namespace lidarcal::diagnosis::static_scene {
 /// Held-out readings (folds by scan) and held-out wall bins (leave one out).
 void StaticDiagnosis::heldOut(HeldOut& held) {
   std::vector<int> fold(data_.scans);
-  for (std::size_t t = 0; t < data_.scans; ++t) fold[t] = static_cast<int>(t % static_cast<std::size_t>(config_.folds));
+  for (std::size_t t = 0; t < data_.scans; ++t)
+    fold[t] = static_cast<int>(t % static_cast<std::size_t>(config_.folds));
   for (const auto& e : candidates_) free_terms_.push_back(freeTermsOf(e));
   startTails();
   const auto folds = static_cast<std::size_t>(config_.folds);
@@ -26,7 +27,8 @@ void StaticDiagnosis::heldOut(HeldOut& held) {
   }
   reportProgress(config_, kHeldOutStage, folds, folds);
   held.points = static_cast<double>(held.base.size());
-  if (tail_study_on_) tail_study_.gauss = held.base;  // the readings' part (the wall bins come next); deliberate copy
+  // the readings' part (the wall bins come next); deliberate copy
+  if (tail_study_on_) tail_study_.gauss = held.base;
   wallLikelihoods(held);
 }
 
@@ -39,16 +41,21 @@ void StaticDiagnosis::foldLikelihoods(int k, const std::vector<int>& fold, HeldO
   const ReadingModel mb = fitModel(binned_, train, FreeTerms{}, reading_grid_m_, fb);
   std::vector<std::vector<BinFit>> fc(candidates_.size());
   std::vector<ReadingModel> mc(candidates_.size());
-  for (std::size_t c = 0; c < candidates_.size(); ++c) mc[c] = fitModel(binned_, train, free_terms_[c], reading_grid_m_, fc[c]);
+  for (std::size_t c = 0; c < candidates_.size(); ++c)
+    mc[c] = fitModel(binned_, train, free_terms_[c], reading_grid_m_, fc[c]);
   for (std::size_t i = 0; i < binned_.y.size(); ++i) {
     const int bi = binned_.bin_of[i];
-    if (bi < 0 || train[static_cast<std::size_t>(binned_.t[i])] || fb[static_cast<std::size_t>(bi)].n == 0) continue;
+    if (bi < 0 || train[static_cast<std::size_t>(binned_.t[i])] ||
+        fb[static_cast<std::size_t>(bi)].n == 0)
+      continue;
     const Bin& bin = binned_.bins[static_cast<std::size_t>(bi)];
-    held.base.push_back(readingLL(mb, *scored_readings_, bin, fb[static_cast<std::size_t>(bi)], i, floor_w));
+    held.base.push_back(
+        readingLL(mb, *scored_readings_, bin, fb[static_cast<std::size_t>(bi)], i, floor_w));
     held.block.push_back(static_cast<std::size_t>(binned_.t[i]));
     for (std::size_t c = 0; c < candidates_.size(); ++c)
       held.cand[c].push_back(fc[c][static_cast<std::size_t>(bi)].n > 0
-                                 ? readingLL(mc[c], *scored_readings_, bin, fc[c][static_cast<std::size_t>(bi)], i, floor_w)
+                                 ? readingLL(mc[c], *scored_readings_, bin,
+                                             fc[c][static_cast<std::size_t>(bi)], i, floor_w)
                                  : kNaN);
   }
 }
@@ -60,7 +67,9 @@ void StaticDiagnosis::wallLikelihoods(HeldOut& held) const {
     held.base.push_back(walls_.loo_ll[k]);
     held.block.push_back(std::numeric_limits<std::size_t>::max() - k);
     for (std::size_t c = 0; c < candidates_.size(); ++c)
-      held.cand[c].push_back(free_terms_[c].wall_b && walls_with_bias_.ok ? walls_with_bias_.loo_ll[k] : walls_.loo_ll[k]);
+      held.cand[c].push_back(free_terms_[c].wall_b && walls_with_bias_.ok
+                                 ? walls_with_bias_.loo_ll[k]
+                                 : walls_.loo_ll[k]);
   }
 }
 
@@ -82,7 +91,8 @@ void StaticDiagnosis::beforeCandidates(DiagnosisResult& out) {
   fit_on_all_.resize(candidates_.size());
 }
 
-CandidateResult StaticDiagnosis::candidate(std::size_t c, const HeldOut& held, const DiagnosisResult& out) {
+CandidateResult StaticDiagnosis::candidate(std::size_t c, const HeldOut& held,
+                                           const DiagnosisResult& out) {
   CandidateResult r;
   r.effect = candidates_[c];
   r.statistic = statisticOf(r.effect, DiagnoseMode::static_scene);
@@ -99,11 +109,13 @@ CandidateResult StaticDiagnosis::candidate(std::size_t c, const HeldOut& held, c
   // A reading grid is plain in the readings (the `quantisation` statistic), on real sensors as
   // much as in simulations; whether the rounding explains anything is the held-out gain's to say
   // (on the dequantised readings, where the rounded model is the true one when it is).
-  r.p_value = r.effect == Effect::quantisation ? r.p_heldout : combinedPValue(r.p_heldout, r.score_p_value);
+  r.p_value =
+      r.effect == Effect::quantisation ? r.p_heldout : combinedPValue(r.p_heldout, r.score_p_value);
   r.parameters = free_terms_[c].parameters();
   double ll_in = inSampleLogLikelihood(free_terms_[c], &fit_on_all_[c]);
   if (free_terms_[c].wall_b && walls_with_bias_.ok && walls_.ok)
-    ll_in = baseline_in_sample_ll_ + (walls_with_bias_.in_ll - walls_.in_ll);  // only the walls' part differs
+    // only the walls' part differs
+    ll_in = baseline_in_sample_ll_ + (walls_with_bias_.in_ll - walls_.in_ll);
   r.delta_aic = 2.0 * r.parameters - 2.0 * (ll_in - baseline_in_sample_ll_);
   setIdentifiability(r);
   setEstimates(r, fit_on_all_[c]);
@@ -123,8 +135,10 @@ bool StaticDiagnosis::notApplicable(CandidateResult& r) const {
   if (e == Effect::dark_surface && !darknessVaries(binned_)) {
     r.applicable = false;
     r.p_value = r.p_holm = r.score_p_value = kNaN;
-    r.note = "no reading records a return intensity (or all record one value): record with the driver's intensities on "
-             "(ROS LaserScan intensities, a PCD intensity field)";
+    r.note =
+        "no reading records a return intensity (or all record one value): record with the driver's "
+        "intensities on "
+        "(ROS LaserScan intensities, a PCD intensity field)";
     return true;
   }
   if (e == Effect::landmark_bias) {
@@ -165,21 +179,26 @@ void StaticDiagnosis::setIdentifiability(CandidateResult& r) const {
     // Rule identifiable: below 1 cm, or the estimate clear of zero.
     r.standard_error = walls_with_bias_.ok ? walls_with_bias_.b_se : kInf;
     r.identifiable = alpha0_identified_ && walls_with_bias_.ok &&
-                     r.standard_error < std::max(0.01, std::abs(walls_with_bias_.b) / rules::kIdentifiableEstimateSe);
+                     r.standard_error < std::max(0.01, std::abs(walls_with_bias_.b) /
+                                                           rules::kIdentifiableEstimateSe);
     if (!r.identifiable)
       r.note = alpha0_identified_
-                   ? "bends the walls almost as a range offset does: give the offset (--range-offset) from a reference distance"
+                   ? "bends the walls almost as a range offset does: give the offset "
+                     "(--range-offset) from a reference distance"
                    : "too few straight walls, or walls seen over too narrow a range of incidence";
-  } else if (e == Effect::incidence_noise || e == Effect::range_noise_law || e == Effect::dark_surface) {
+  } else if (e == Effect::incidence_noise || e == Effect::range_noise_law ||
+             e == Effect::dark_surface) {
     // The exponent's standard error from the spread of its covariate over the bins (the score's
     // information for a log-linear variance: n var(g) / 2).
     double mm = 0.0, m2 = 0.0, n = 0.0;
     for (const auto& b : binned_.bins) {
       if (e == Effect::incidence_noise && !b.inc_known) continue;
-      const double g = e == Effect::incidence_noise ? -std::log(b.cos_inc)
-                       : e == Effect::dark_surface
-                           ? b.dark
-                           : std::log(std::max(bin_fits_[static_cast<std::size_t>(&b - binned_.bins.data())].m, 1e-3));
+      const double g =
+          e == Effect::incidence_noise ? -std::log(b.cos_inc)
+          : e == Effect::dark_surface
+              ? b.dark
+              : std::log(std::max(bin_fits_[static_cast<std::size_t>(&b - binned_.bins.data())].m,
+                                  1e-3));
       mm += g;
       m2 += g * g;
       n += static_cast<double>(b.idx.size());
@@ -194,15 +213,20 @@ void StaticDiagnosis::setIdentifiability(CandidateResult& r) const {
                : e == Effect::dark_surface  ? "no spread of intensities"
                                             : "no spread of ranges";
     // Rule dark_follows_range.
-    if (r.identifiable && e == Effect::dark_surface && std::abs(darkRangeCorrelation()) > rules::kConfounded) {
+    if (r.identifiable && e == Effect::dark_surface &&
+        std::abs(darkRangeCorrelation()) > rules::kConfounded) {
       r.identifiable = false;
-      r.note = "the intensity follows the range on this recording (correlation " + std::to_string(darkRangeCorrelation()) +
-               "): a dark surface cannot be told from the range law; record surfaces of different reflectivity at the same "
+      r.note = "the intensity follows the range on this recording (correlation " +
+               std::to_string(darkRangeCorrelation()) +
+               "): a dark surface cannot be told from the range law; record surfaces of different "
+               "reflectivity at the same "
                "distance";
     }
   } else if (e == Effect::range_drift && window_scans_ > 0) {
     r.identifiable = false;
-    r.note = "each window of scans has its own time trend per beam (the sensor moved), which absorbs a drift";
+    r.note =
+        "each window of scans has its own time trend per beam (the sensor moved), which absorbs a "
+        "drift";
   } else if (e == Effect::mixed_pixels) {
     r.identifiable = edge_bins_ >= 3;
     if (!r.identifiable) r.note = "fewer than 3 beams at depth discontinuities";
@@ -226,7 +250,8 @@ void StaticDiagnosis::setEstimates(CandidateResult& r, const ReadingModel& fm) c
   if (e == Effect::heavy_tails) r.estimates["student_dof"] = fm.dof;
   if (e == Effect::quantisation) {
     r.estimates["grid_m"] = fm.q;
-    r.estimates["noise_scale_unrounded"] = fm.sigma_e;  // sigma_e of sigma_e |m|^kappa before the rounding
+    // sigma_e of sigma_e |m|^kappa before the rounding
+    r.estimates["noise_scale_unrounded"] = fm.sigma_e;
   }
   if (e == Effect::incidence_bias) {
     r.estimates["incidence_bias_m"] = walls_with_bias_.b;

@@ -11,32 +11,43 @@ namespace lidarcal::diagnosis::static_scene {
 
 FreeTerms freeTermsOf(Effect e) {
   FreeTerms f;
-  if (e == Effect::range_noise_law) f.kappa = true;
-  else if (e == Effect::incidence_noise) f.gamma = true;
-  else if (e == Effect::range_drift) f.drift = true;
-  else if (e == Effect::mixed_pixels) f.mixed = true;
-  else if (e == Effect::heavy_tails) f.dof = true;
-  else if (e == Effect::quantisation) f.quant = true;
-  else if (e == Effect::incidence_bias) f.wall_b = true;
-  else if (e == Effect::dark_surface) f.delta = true;
+  if (e == Effect::range_noise_law)
+    f.kappa = true;
+  else if (e == Effect::incidence_noise)
+    f.gamma = true;
+  else if (e == Effect::range_drift)
+    f.drift = true;
+  else if (e == Effect::mixed_pixels)
+    f.mixed = true;
+  else if (e == Effect::heavy_tails)
+    f.dof = true;
+  else if (e == Effect::quantisation)
+    f.quant = true;
+  else if (e == Effect::incidence_bias)
+    f.wall_b = true;
+  else if (e == Effect::dark_surface)
+    f.delta = true;
   return f;
 }
 
 double shapeOf(const ReadingModel& m, const Bin& b, double loc) {
-  return std::pow(std::max(std::abs(loc), 1e-3), m.kappa) * incidenceNoiseFactor(m.gamma, b.cos_inc) *
-         darkNoiseFactor(m.delta, b.dark);
+  return std::pow(std::max(std::abs(loc), 1e-3), m.kappa) *
+         incidenceNoiseFactor(m.gamma, b.cos_inc) * darkNoiseFactor(m.delta, b.dark);
 }
 
-double centreOf(const ReadingModel& m, const Bin& b, const BinFit& f) { return m.robust_edges && b.edge ? f.med : f.m; }
+double centreOf(const ReadingModel& m, const Bin& b, const BinFit& f) {
+  return m.robust_edges && b.edge ? f.med : f.m;
+}
 
 double expected(const ReadingModel& m, const Bin& b, const BinFit& f, double a, double t) {
   return f.at(a, t) + (centreOf(m, b, f) - f.m);
 }
 
-double readingLL(const ReadingModel& m, const BinnedReadings& d, const Bin& b, const BinFit& f, std::size_t i,
-                 double floor_weight) {
+double readingLL(const ReadingModel& m, const BinnedReadings& d, const Bin& b, const BinFit& f,
+                 std::size_t i, double floor_weight) {
   const double centre = expected(m, b, f, d.a[i], d.t[i]) + m.drift * (d.t[i] - d.t_mean);
-  const double sigma = std::max(m.sigma_e * shapeOf(m, b, centre) * std::sqrt(1.0 + 1.0 / std::max(f.n, 1.0)), 1e-6);
+  const double sigma =
+      std::max(m.sigma_e * shapeOf(m, b, centre) * std::sqrt(1.0 + 1.0 / std::max(f.n, 1.0)), 1e-6);
   const double y = d.y[i];
   const double z = (y - centre) / sigma;
   double dens;
@@ -50,15 +61,18 @@ double readingLL(const ReadingModel& m, const BinnedReadings& d, const Bin& b, c
     dens = normalMass(cell - 0.5 * m.q, cell + 0.5 * m.q, centre, sigma) / m.q;
   } else if (m.dof > 0.0) {
     const double nu = m.dof, s = sigma * std::sqrt((nu - 2.0) / nu), x = (y - centre) / s;
-    dens = std::exp(std::lgamma(0.5 * (nu + 1.0)) - std::lgamma(0.5 * nu) - 0.5 * std::log(nu * kPi) -
-                    0.5 * (nu + 1.0) * std::log1p(x * x / nu)) / s;
+    dens = std::exp(std::lgamma(0.5 * (nu + 1.0)) - std::lgamma(0.5 * nu) -
+                    0.5 * std::log(nu * kPi) - 0.5 * (nu + 1.0) * std::log1p(x * x / nu)) /
+           s;
   } else {
     dens = std::exp(-0.5 * z * z) / (sigma * std::sqrt(2.0 * kPi));
   }
   double mix = 0.0;
-  if (m.mixed > 0.0 && b.edge && b.far > b.near && y >= b.near && y <= b.far) mix = 1.0 / (b.far - b.near);
+  if (m.mixed > 0.0 && b.edge && b.far > b.near && y >= b.near && y <= b.far)
+    mix = 1.0 / (b.far - b.near);
   const double window = d.window_max > d.window_min ? 1.0 / (d.window_max - d.window_min) : 0.0;
-  const double total = (1.0 - floor_weight) * ((1.0 - m.mixed) * dens + m.mixed * mix) + floor_weight * window;
+  const double total =
+      (1.0 - floor_weight) * ((1.0 - m.mixed) * dens + m.mixed * mix) + floor_weight * window;
   return std::log(std::max(total, 1e-300));
 }
 
@@ -68,14 +82,21 @@ namespace {
 /// (profile likelihood on per-bin sums), drift, mixed-pixel fraction (EM), Student-t dof.
 class ModelFitter {
  public:
-  ModelFitter(const BinnedReadings& d, const std::vector<bool>& train, const FreeTerms& fl, std::vector<BinFit>& fits);
+  ModelFitter(const BinnedReadings& d, const std::vector<bool>& train, const FreeTerms& fl,
+              std::vector<BinFit>& fits);
   ReadingModel fit(double q_detected);
 
  private:
-  const Bin& binOf(std::size_t i) const { return binned_.bins[static_cast<std::size_t>(binned_.bin_of[i])]; }
-  const BinFit& fitOf(std::size_t i) const { return fits_[static_cast<std::size_t>(binned_.bin_of[i])]; }
+  const Bin& binOf(std::size_t i) const {
+    return binned_.bins[static_cast<std::size_t>(binned_.bin_of[i])];
+  }
+  const BinFit& fitOf(std::size_t i) const {
+    return fits_[static_cast<std::size_t>(binned_.bin_of[i])];
+  }
   double residual(std::size_t i) const;
-  double sigmaOf(std::size_t i) const { return m_.sigma_e * shapeOf(m_, binOf(i), centreOf(m_, binOf(i), fitOf(i))); }
+  double sigmaOf(std::size_t i) const {
+    return m_.sigma_e * shapeOf(m_, binOf(i), centreOf(m_, binOf(i), fitOf(i)));
+  }
   void refresh();
   double profile(const ReadingModel& t, double* sigma_e) const;
   /// profile() with one exponent of the noise law changed.
@@ -103,11 +124,19 @@ class ModelFitter {
   std::vector<double> bin_ss_, bin_n_;
 };
 
-ModelFitter::ModelFitter(const BinnedReadings& d, const std::vector<bool>& train, const FreeTerms& fl, std::vector<BinFit>& fits)
-    : binned_(d), train_(train), fl_(fl), fits_(fits), weight_(d.y.size(), 1.0), bin_ss_(d.bins.size()), bin_n_(d.bins.size()) {}
+ModelFitter::ModelFitter(const BinnedReadings& d, const std::vector<bool>& train,
+                         const FreeTerms& fl, std::vector<BinFit>& fits)
+    : binned_(d),
+      train_(train),
+      fl_(fl),
+      fits_(fits),
+      weight_(d.y.size(), 1.0),
+      bin_ss_(d.bins.size()),
+      bin_n_(d.bins.size()) {}
 
 double ModelFitter::residual(std::size_t i) const {
-  return binned_.y[i] - expected(m_, binOf(i), fitOf(i), binned_.a[i], binned_.t[i]) - m_.drift * (binned_.t[i] - binned_.t_mean);
+  return binned_.y[i] - expected(m_, binOf(i), fitOf(i), binned_.a[i], binned_.t[i]) -
+         m_.drift * (binned_.t[i] - binned_.t_mean);
 }
 
 void ModelFitter::refresh() {
@@ -127,7 +156,8 @@ double ModelFitter::profile(const ReadingModel& t, double* sigma_e) const {
   double s2 = 0.0, logh = 0.0, n = 0.0;
   for (std::size_t b = 0; b < binned_.bins.size(); ++b) {
     if (bin_n_[b] == 0.0) continue;
-    const double h = std::max(shapeOf(t, binned_.bins[b], centreOf(t, binned_.bins[b], fits_[b])), 1e-9);
+    const double h =
+        std::max(shapeOf(t, binned_.bins[b], centreOf(t, binned_.bins[b], fits_[b])), 1e-9);
     s2 += bin_ss_[b] / (h * h);
     logh += bin_n_[b] * std::log(h);
     n += bin_n_[b];
@@ -141,8 +171,10 @@ double ModelFitter::profile(const ReadingModel& t, double* sigma_e) const {
 void ModelFitter::dropOutliers() {
   for (std::size_t i : use_) {
     const double s = sigmaOf(i);
-    if (std::abs(residual(i)) > 6.0 * s) weight_[i] = 0.0;
-    else if (!fl_.mixed) weight_[i] = 1.0;
+    if (std::abs(residual(i)) > 6.0 * s)
+      weight_[i] = 0.0;
+    else if (!fl_.mixed)
+      weight_[i] = 1.0;
   }
 }
 
@@ -171,7 +203,9 @@ void ModelFitter::fitMixed() {
     const double s = sigmaOf(i);
     const double z = residual(i) / s;
     const double nd = std::exp(-0.5 * z * z) / (s * std::sqrt(2.0 * kPi));
-    const double u = (b.far > b.near && binned_.y[i] >= b.near && binned_.y[i] <= b.far) ? 1.0 / (b.far - b.near) : 0.0;
+    const double u = (b.far > b.near && binned_.y[i] >= b.near && binned_.y[i] <= b.far)
+                         ? 1.0 / (b.far - b.near)
+                         : 0.0;
     const double resp = m_.mixed * u / (m_.mixed * u + (1.0 - m_.mixed) * nd + 1e-300);
     weight_[i] = 1.0 - resp;
     sum += resp;
@@ -203,8 +237,10 @@ void ModelFitter::fitCellScale() {
   std::vector<double> shape(use_.size()), centre(use_.size());
   for (std::size_t k = 0; k < use_.size(); ++k) {
     const std::size_t i = use_[k];
-    centre[k] = expected(m_, binOf(i), fitOf(i), binned_.a[i], binned_.t[i]) + m_.drift * (binned_.t[i] - binned_.t_mean);
-    shape[k] = shapeOf(m_, binOf(i), centreOf(m_, binOf(i), fitOf(i)));  // at the bin's location, as profile() takes it
+    centre[k] = expected(m_, binOf(i), fitOf(i), binned_.a[i], binned_.t[i]) +
+                m_.drift * (binned_.t[i] - binned_.t_mean);
+    // at the bin's location, as profile() takes it
+    shape[k] = shapeOf(m_, binOf(i), centreOf(m_, binOf(i), fitOf(i)));
   }
   auto ll = [&](double log_sigma) {
     const double se = std::exp(log_sigma);
@@ -213,7 +249,9 @@ void ModelFitter::fitCellScale() {
       const std::size_t i = use_[k];
       if (weight_[i] < 0.5) continue;
       const double sigma = std::max(se * shape[k], 1e-6);
-      s += std::log(std::max(normalMass(binned_.y[i] - 0.5 * m_.q, binned_.y[i] + 0.5 * m_.q, centre[k], sigma), 1e-300));
+      s += std::log(std::max(
+          normalMass(binned_.y[i] - 0.5 * m_.q, binned_.y[i] + 0.5 * m_.q, centre[k], sigma),
+          1e-300));
     }
     return s;
   };
@@ -237,12 +275,19 @@ ReadingModel ModelFitter::fit(double q_detected) {
     dropOutliers();
     refresh();
     if (fl_.kappa)
-      m_.kappa = ternaryMax([&](double k) { return profileWith([k](ReadingModel& t) { t.kappa = k; }); }, -1.0, 5.0, 50);
+      m_.kappa =
+          ternaryMax([&](double k) { return profileWith([k](ReadingModel& t) { t.kappa = k; }); },
+                     -1.0, 5.0, 50);
     if (fl_.gamma)
-      m_.gamma = ternaryMax([&](double g) { return profileWith([g](ReadingModel& t) { t.gamma = g; }); }, -1.0, 4.0, 50);
-    // The dark-surface exponent as the sequence's joint refinement takes it (JointEffects::dark_noise).
+      m_.gamma =
+          ternaryMax([&](double g) { return profileWith([g](ReadingModel& t) { t.gamma = g; }); },
+                     -1.0, 4.0, 50);
+    // The dark-surface exponent as the sequence's joint refinement takes it
+    // (JointEffects::dark_noise).
     if (fl_.delta)
-      m_.delta = ternaryMax([&](double x) { return profileWith([x](ReadingModel& t) { t.delta = x; }); }, -1.0, 3.0, 50);
+      m_.delta =
+          ternaryMax([&](double x) { return profileWith([x](ReadingModel& t) { t.delta = x; }); },
+                     -1.0, 3.0, 50);
     profile(m_, &m_.sigma_e);
     if (fl_.drift) fitDrift();
     if (fl_.mixed) fitMixed();
@@ -254,8 +299,8 @@ ReadingModel ModelFitter::fit(double q_detected) {
 
 }  // namespace
 
-ReadingModel fitModel(const BinnedReadings& d, const std::vector<bool>& train, const FreeTerms& fl, double q_detected,
-                      std::vector<BinFit>& fits) {
+ReadingModel fitModel(const BinnedReadings& d, const std::vector<bool>& train, const FreeTerms& fl,
+                      double q_detected, std::vector<BinFit>& fits) {
   return ModelFitter(d, train, fl, fits).fit(q_detected);
 }
 

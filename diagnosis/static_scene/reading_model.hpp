@@ -15,14 +15,15 @@ namespace lidarcal::diagnosis::static_scene {
 
 /// A reading model's parameters (the baseline: the squared law, Gaussian, no drift).
 struct ReadingModel {
-  double sigma_e = 0.01;   ///< scale of sigma = sigma_e |m|^kappa (1 / cos phi)^gamma (I_ref / I)^delta
-  double kappa = 2.0;      ///< range exponent (Alhashimi et al. 2016: 2)
-  double gamma = 0.0;      ///< incidence exponent
-  double delta = 0.0;      ///< dark-surface exponent: sigma times (I_ref / I)^delta
-  double drift = 0.0;      ///< metres per scan
-  double mixed = 0.0;      ///< fraction of mixed readings at edge bins
-  double dof = 0.0;        ///< Student t degrees of freedom (0: Gaussian)
-  double q = 0.0;          ///< quantisation step (0: densities)
+  /// scale of sigma = sigma_e |m|^kappa (1 / cos phi)^gamma (I_ref / I)^delta
+  double sigma_e = 0.01;
+  double kappa = 2.0;         ///< range exponent (Alhashimi et al. 2016: 2)
+  double gamma = 0.0;         ///< incidence exponent
+  double delta = 0.0;         ///< dark-surface exponent: sigma times (I_ref / I)^delta
+  double drift = 0.0;         ///< metres per scan
+  double mixed = 0.0;         ///< fraction of mixed readings at edge bins
+  double dof = 0.0;           ///< Student t degrees of freedom (0: Gaussian)
+  double q = 0.0;             ///< quantisation step (0: densities)
   bool robust_edges = false;  ///< edge bins centred on their median (mixed-pixel model)
 };
 
@@ -52,12 +53,12 @@ double centreOf(const ReadingModel& m, const Bin& b, const BinFit& f);
 double expected(const ReadingModel& m, const Bin& b, const BinFit& f, double a, double t);
 
 /// Log-likelihood of one reading (predictive: the bin's location is known to 1 / n_train).
-double readingLL(const ReadingModel& m, const BinnedReadings& d, const Bin& b, const BinFit& f, std::size_t i,
-                 double floor_weight);
+double readingLL(const ReadingModel& m, const BinnedReadings& d, const Bin& b, const BinFit& f,
+                 std::size_t i, double floor_weight);
 
 /// Fits the free parameters of a model on the readings of the training scans (`fits`: the bin
 /// locations it ends with).
-ReadingModel fitModel(const BinnedReadings& d, const std::vector<bool>& train, const FreeTerms& fl, double q_detected,
-                      std::vector<BinFit>& fits);
+ReadingModel fitModel(const BinnedReadings& d, const std::vector<bool>& train, const FreeTerms& fl,
+                      double q_detected, std::vector<BinFit>& fits);
 
 }  // namespace lidarcal::diagnosis::static_scene

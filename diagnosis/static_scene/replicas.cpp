@@ -11,8 +11,9 @@
 
 namespace lidarcal::diagnosis::static_scene {
 
-BinnedReadings simulateStatic(const BinnedReadings& d, const std::vector<BinFit>& f, const WallFit& w, const ReadingModel& m,
-                              std::uint64_t seed, const RangeEffects& fx) {
+BinnedReadings simulateStatic(const BinnedReadings& d, const std::vector<BinFit>& f,
+                              const WallFit& w, const ReadingModel& m, std::uint64_t seed,
+                              const RangeEffects& fx) {
   BinnedReadings r = d;
   RangeModel rm;
   rm.bias.alpha = {w.ok ? w.alpha0 : 0.0, 1.0};
@@ -37,7 +38,8 @@ BinnedReadings simulateStatic(const BinnedReadings& d, const std::vector<BinFit>
     double mean = bf.at(d.a[i], d.t[i]);
     if (w.ok && b.wall >= 0 && wall_index.count(static_cast<std::size_t>(bi))) {
       const Line& l = w.lines[static_cast<std::size_t>(b.wall)];
-      mean = w.alpha0 + l.p / std::max(std::cos(d.a[i] - l.theta), 0.05) + u[static_cast<std::size_t>(bi)];
+      mean = w.alpha0 + l.p / std::max(std::cos(d.a[i] - l.theta), 0.05) +
+             u[static_cast<std::size_t>(bi)];
     }
     const auto scan = static_cast<std::uint32_t>(d.t[i]);
     auto it = gen_of.find(scan);
@@ -54,19 +56,23 @@ BinnedReadings simulateStatic(const BinnedReadings& d, const std::vector<BinFit>
       std::uniform_real_distribution<double> unit(0.0, 1.0);
       const double u1 = unit(gen), share = unit(gen);
       if (b.edge && u1 < fx.mixed_pixel_fraction) {
-        const double other = (std::abs(mean - b.near) < std::abs(mean - b.far) ? b.far : b.near) - rm.bias.alpha[0];
+        const double other =
+            (std::abs(mean - b.near) < std::abs(mean - b.far) ? b.far : b.near) - rm.bias.alpha[0];
         dist = share * dist + (1.0 - share) * other;
       }
     }
     RangeEffects no_mix = fx;
     no_mix.mixed_pixel_fraction = 0.0;
     const double intensity = std::isfinite(b.intensity) ? b.intensity : 0.0;
-    r.y[i] = simulation::effectReading(rm, no_mix, dist, simulation::BeamContext{b.cos_inc, 0.0, scan, intensity}, e, gen);
+    r.y[i] = simulation::effectReading(
+        rm, no_mix, dist, simulation::BeamContext{b.cos_inc, 0.0, scan, intensity}, e, gen);
   }
   return r;
 }
 
-std::vector<ResidualRecord> residualRecordsOf(const BinnedReadings& dd, const std::vector<BinFit>& ff, const ReadingModel& mm) {
+std::vector<ResidualRecord> residualRecordsOf(const BinnedReadings& dd,
+                                              const std::vector<BinFit>& ff,
+                                              const ReadingModel& mm) {
   std::vector<ResidualRecord> rec;
   forEachFitted(dd, ff, [&](std::size_t i, const Bin& b, const BinFit& bf) {
     ResidualRecord r;

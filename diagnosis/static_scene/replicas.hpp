@@ -16,15 +16,18 @@ namespace lidarcal::diagnosis::static_scene {
 /// The baseline's readings, simulated with the project's simulator (reading level): the same
 /// beams and scans, true distance from the bin's location (wall bins: the wall model with a
 /// roughness draw), the fitted range model, optionally with effects.
-BinnedReadings simulateStatic(const BinnedReadings& d, const std::vector<BinFit>& f, const WallFit& w, const ReadingModel& m,
-                              std::uint64_t seed, const RangeEffects& fx);
+BinnedReadings simulateStatic(const BinnedReadings& d, const std::vector<BinFit>& f,
+                              const WallFit& w, const ReadingModel& m, std::uint64_t seed,
+                              const RangeEffects& fx);
 
 /// Residual records of a data set under a fit (measured or simulated).
-std::vector<ResidualRecord> residualRecordsOf(const BinnedReadings& dd, const std::vector<BinFit>& ff, const ReadingModel& mm);
+std::vector<ResidualRecord> residualRecordsOf(const BinnedReadings& dd,
+                                              const std::vector<BinFit>& ff,
+                                              const ReadingModel& mm);
 
 /// Standardised residuals and per-bin variances of simulations refitted with the baseline.
 struct SimSample {
-  std::vector<double> z;  ///< standardised residuals of every simulation
+  std::vector<double> z;                 ///< standardised residuals of every simulation
   std::vector<std::vector<double>> var;  ///< per bin, over the simulations
   void add(const std::vector<ResidualRecord>& rec, const std::vector<BinFit>& fr) {
     for (const auto& r : rec) z.push_back(r.z);

@@ -29,7 +29,8 @@ bool sceneChanged(const BinnedReadings& d, const Bin& b) {
   const double step = std::max(kSceneStepM, 6.0 * kMadToSigma * upperMedian(dev));
   std::vector<std::pair<double, bool>> seq;  // (scan, off)
   for (std::size_t i : b.idx) seq.emplace_back(d.t[i], std::abs(d.y[i] - med) > step);
-  std::stable_sort(seq.begin(), seq.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+  std::stable_sort(seq.begin(), seq.end(),
+                   [](const auto& x, const auto& y) { return x.first < y.first; });
   const auto n = static_cast<double>(seq.size());
   double off = 0.0, runs = seq.empty() ? 0.0 : 1.0;
   for (std::size_t k = 0; k < seq.size(); ++k) {
@@ -51,8 +52,10 @@ constexpr double kMedianEfficiency = 1.2533141373155003;
 std::size_t dropChangedBins(BinnedReadings& d) {
   std::vector<bool> drop(d.bins.size());
   std::size_t changed = 0;
-  for (std::size_t b = 0; b < d.bins.size(); ++b) changed += (drop[b] = sceneChanged(d, d.bins[b])) ? 1 : 0;
-  if (changed == 0 || static_cast<double>(changed) > 0.5 * static_cast<double>(d.bins.size())) return 0;
+  for (std::size_t b = 0; b < d.bins.size(); ++b)
+    changed += (drop[b] = sceneChanged(d, d.bins[b])) ? 1 : 0;
+  if (changed == 0 || static_cast<double>(changed) > 0.5 * static_cast<double>(d.bins.size()))
+    return 0;
   std::vector<Bin> kept;
   d.bin_of.assign(d.y.size(), -1);
   for (std::size_t b = 0; b < d.bins.size(); ++b) {

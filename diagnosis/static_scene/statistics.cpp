@@ -32,7 +32,8 @@ double lag1Correlation(const BinnedReadings& d, const std::vector<BinFit>& f) {
 
 }  // namespace
 
-std::map<std::string, double> staticStatistics(const BinnedReadings& d, const std::vector<BinFit>& f, const ReadingModel& m,
+std::map<std::string, double> staticStatistics(const BinnedReadings& d,
+                                               const std::vector<BinFit>& f, const ReadingModel& m,
                                                const WallFit& w0, const WallFit& wb, double q) {
   std::map<std::string, double> st;
   std::vector<double> z, psi, xs, logm, zi, loginc, zc, cb, sb, zd, dark;

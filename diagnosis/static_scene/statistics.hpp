@@ -16,7 +16,8 @@ namespace lidarcal::diagnosis::static_scene {
 
 /// Every statistic of the battery under the model m with bin locations f, the wall model without
 /// (w0) and with (wb) the incidence bias, and the reading grid q (0: none).
-std::map<std::string, double> staticStatistics(const BinnedReadings& d, const std::vector<BinFit>& f, const ReadingModel& m,
+std::map<std::string, double> staticStatistics(const BinnedReadings& d,
+                                               const std::vector<BinFit>& f, const ReadingModel& m,
                                                const WallFit& w0, const WallFit& wb, double q);
 
 }  // namespace lidarcal::diagnosis::static_scene

@@ -14,7 +14,8 @@ namespace lidarcal::diagnosis::static_scene {
 
 /// The tail study's beams, covariates and specs (only when heavy_tails is a candidate).
 void StaticDiagnosis::startTails() {
-  tail_study_on_ = std::find(candidates_.begin(), candidates_.end(), Effect::heavy_tails) != candidates_.end();
+  tail_study_on_ =
+      std::find(candidates_.begin(), candidates_.end(), Effect::heavy_tails) != candidates_.end();
   if (!tail_study_on_) return;
   tail_study_.beams = tailBeams(binned_, bin_fits_);
   tail_study_.available = tailAvailable(binned_, tail_study_.beams, edge_bins_);
@@ -22,7 +23,9 @@ void StaticDiagnosis::startTails() {
   for (const auto& b : binned_.bins) inc_known += b.inc_known;
   setupTailSpecs(tail_study_, inc_known >= 3, edge_bins_ >= 3, darknessVaries(binned_));
   tail_study_.floor_w = config_.outlier_floor;
-  tail_study_.floor_density = binned_.window_max > binned_.window_min ? 1.0 / (binned_.window_max - binned_.window_min) : 0.0;
+  tail_study_.floor_density = binned_.window_max > binned_.window_min
+                                  ? 1.0 / (binned_.window_max - binned_.window_min)
+                                  : 0.0;
 }
 
 /// Fold k's readings under every tail model fitted on the other scans (the same folds, the same
@@ -37,11 +40,15 @@ void StaticDiagnosis::tailFold(int k, const std::vector<int>& fold) {
   // full one, the robust effects from the pooled one.
   std::vector<TailModel> models;
   for (std::size_t s = 0; s < tail_study_.specs.size(); ++s) {
-    const TailModel* start_from = s == 0 ? nullptr : tail_study_.dropped[s] >= 0 ? &models[1] : &models[0];
-    models.push_back(fitTailModel(tail_study_.beams, fit_on, tail_study_.specs[s], baseline_model_.sigma_e, tail_study_.floor_w,
+    const TailModel* start_from = s == 0                        ? nullptr
+                                  : tail_study_.dropped[s] >= 0 ? &models[1]
+                                                                : &models[0];
+    models.push_back(fitTailModel(tail_study_.beams, fit_on, tail_study_.specs[s],
+                                  baseline_model_.sigma_e, tail_study_.floor_w,
                                   tail_study_.floor_density, 60, start_from));
     for (const auto& r : test)
-      tail_study_.ll[s].push_back(models[s].logDensity(tail_study_.beams[r.beam], r.residual_m, r.inflation, tail_study_.floor_w,
+      tail_study_.ll[s].push_back(models[s].logDensity(tail_study_.beams[r.beam], r.residual_m,
+                                                       r.inflation, tail_study_.floor_w,
                                                        tail_study_.floor_density));
   }
 }
@@ -87,7 +94,8 @@ void StaticDiagnosis::tailCovariateGains(TailAttribution& ta) const {
     c.unique_gain_nats_per_point = g.gain;
     c.unique_gain_se = g.se;
     c.p_value = g.finite ? heldoutPValue(g.gain, g.se) : kNaN;
-    c.share = ta.explained_gain_nats_per_point > 0.0 ? g.gain / ta.explained_gain_nats_per_point : 0.0;
+    c.share =
+        ta.explained_gain_nats_per_point > 0.0 ? g.gain / ta.explained_gain_nats_per_point : 0.0;
     p.push_back(c.p_value);
     ta.covariates.push_back(c);
   }
@@ -96,20 +104,25 @@ void StaticDiagnosis::tailCovariateGains(TailAttribution& ta) const {
   for (std::size_t k = 0; k < ta.covariates.size(); ++k) {
     TailCovariateResult& c = ta.covariates[k];
     c.p_holm = adj[k];
-    c.significant = std::isfinite(adj[k]) && adj[k] < config_.alpha && c.unique_gain_nats_per_point > 0.0;
-    if (c.significant && (!top || c.unique_gain_nats_per_point > top->unique_gain_nats_per_point)) top = &c;
+    c.significant =
+        std::isfinite(adj[k]) && adj[k] < config_.alpha && c.unique_gain_nats_per_point > 0.0;
+    if (c.significant && (!top || c.unique_gain_nats_per_point > top->unique_gain_nats_per_point))
+      top = &c;
   }
   ta.cause = top ? toString(top->effect) : cause::kUnknown;
 }
 
 /// The pooled and the full tail models on all the data: parameters, and which beams carry the
 /// tails. Returns the pooled model (the robust effects start from it).
-TailModel StaticDiagnosis::tailFullData(TailAttribution& ta, const std::vector<TailReading>& all) const {
+TailModel StaticDiagnosis::tailFullData(TailAttribution& ta,
+                                        const std::vector<TailReading>& all) const {
   const double fw = tail_study_.floor_w, fd = tail_study_.floor_density;
-  const TailModel pooled = fitTailModel(tail_study_.beams, all, tail_study_.specs[0], baseline_model_.sigma_e, fw, fd);
+  const TailModel pooled =
+      fitTailModel(tail_study_.beams, all, tail_study_.specs[0], baseline_model_.sigma_e, fw, fd);
   ta.pooled_fraction = pooled.tailProbability(TailBeam{});
   ta.pooled_wide_scale = pooled.wide;
-  const TailModel full = fitTailModel(tail_study_.beams, all, tail_study_.specs[1], baseline_model_.sigma_e, fw, fd, 60, &pooled);
+  const TailModel full = fitTailModel(tail_study_.beams, all, tail_study_.specs[1],
+                                      baseline_model_.sigma_e, fw, fd, 60, &pooled);
   ta.model["sigma_e"] = full.sigma_e;
   ta.model["wide_scale"] = full.wide;
   ta.model["wide_range_exponent"] = full.wide_exponent;
@@ -128,11 +141,12 @@ TailModel StaticDiagnosis::tailFullData(TailAttribution& ta, const std::vector<T
 }
 
 /// Tail readings (posterior sums) by class of beam, and the beams with the largest tail fraction.
-void StaticDiagnosis::tailClasses(TailAttribution& ta, const TailModel& full, const std::vector<TailReading>& all) const {
+void StaticDiagnosis::tailClasses(TailAttribution& ta, const TailModel& full,
+                                  const std::vector<TailReading>& all) const {
   std::vector<double> tail(binned_.bins.size(), 0.0), n(binned_.bins.size(), 0.0);
   for (const auto& r : all) {
-    tail[r.beam] +=
-        full.responsibility(tail_study_.beams[r.beam], r.residual_m, r.inflation, tail_study_.floor_w, tail_study_.floor_density);
+    tail[r.beam] += full.responsibility(tail_study_.beams[r.beam], r.residual_m, r.inflation,
+                                        tail_study_.floor_w, tail_study_.floor_density);
     n[r.beam] += 1.0;
   }
   for (const char* cls : {"edge", "grazing", "range", "dark", "unknown"}) {
@@ -160,7 +174,9 @@ void StaticDiagnosis::tailClasses(TailAttribution& ta, const TailModel& full, co
     beams.push_back(r);
   }
   std::stable_sort(beams.begin(), beams.end(),
-                   [](const TailBeamReport& a, const TailBeamReport& b) { return a.tail_fraction > b.tail_fraction; });
+                   [](const TailBeamReport& a, const TailBeamReport& b) {
+                     return a.tail_fraction > b.tail_fraction;
+                   });
   if (beams.size() > 10) beams.resize(10);
   ta.top_beams = std::move(beams);
 }
@@ -168,7 +184,8 @@ void StaticDiagnosis::tailClasses(TailAttribution& ta, const TailModel& full, co
 /// Incidence exponent, range exponent, mixed-pixel fraction and dark-surface exponent fitted under
 /// the pooled contamination (the tails do not drag them), with their held-out gains over the pooled
 /// model.
-void StaticDiagnosis::tailRobust(DiagnosisResult& out, const std::vector<TailReading>& all, const TailModel& pooled) {
+void StaticDiagnosis::tailRobust(DiagnosisResult& out, const std::vector<TailReading>& all,
+                                 const TailModel& pooled) {
   struct Item {
     std::size_t spec;
     Effect effect;
@@ -180,8 +197,9 @@ void StaticDiagnosis::tailRobust(DiagnosisResult& out, const std::vector<TailRea
                         {tail_study_.delta, Effect::dark_surface, "dark_noise_exponent"}};
   for (const Item& it : items) {
     if (it.spec == 0) continue;
-    const TailModel m = fitTailModel(tail_study_.beams, all, tail_study_.specs[it.spec], baseline_model_.sigma_e,
-                                     tail_study_.floor_w, tail_study_.floor_density, 60, &pooled);
+    const TailModel m =
+        fitTailModel(tail_study_.beams, all, tail_study_.specs[it.spec], baseline_model_.sigma_e,
+                     tail_study_.floor_w, tail_study_.floor_density, 60, &pooled);
     const double value = it.spec == tail_study_.gamma   ? m.gamma
                          : it.spec == tail_study_.kappa ? m.kappa
                          : it.spec == tail_study_.delta ? m.delta

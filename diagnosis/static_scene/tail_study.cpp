@@ -39,7 +39,9 @@ std::vector<TailBeam> tailBeams(const BinnedReadings& d, const std::vector<BinFi
   return beams;
 }
 
-std::array<bool, kTailCovariates> tailAvailable(const BinnedReadings& d, const std::vector<TailBeam>& beams, std::size_t edges) {
+std::array<bool, kTailCovariates> tailAvailable(const BinnedReadings& d,
+                                                const std::vector<TailBeam>& beams,
+                                                std::size_t edges) {
   std::array<bool, kTailCovariates> a{};
   a[kTailEdge] = edges >= 3;
   for (int j : {kTailGrazing, kTailRange, kTailDark}) {
@@ -54,8 +56,9 @@ std::array<bool, kTailCovariates> tailAvailable(const BinnedReadings& d, const s
   return a;
 }
 
-std::vector<TailReading> tailResiduals(const BinnedReadings& d, const std::vector<BinFit>& f, const std::vector<bool>& train,
-                                       bool held_out, std::vector<std::size_t>* scans) {
+std::vector<TailReading> tailResiduals(const BinnedReadings& d, const std::vector<BinFit>& f,
+                                       const std::vector<bool>& train, bool held_out,
+                                       std::vector<std::size_t>* scans) {
   std::vector<TailReading> out;
   forEachFitted(d, f, [&](std::size_t i, const Bin& b, const BinFit& bf) {
     const bool in_train = train.empty() || train[static_cast<std::size_t>(d.t[i])];
@@ -96,7 +99,8 @@ void setupTailSpecs(TailStudy& ts, bool incidence_known, bool edges, bool dark) 
   ts.ll.assign(ts.specs.size(), {});
 }
 
-HeldOutGain gainOf(const std::vector<double>& a, const std::vector<double>& b, const std::vector<std::size_t>& block) {
+HeldOutGain gainOf(const std::vector<double>& a, const std::vector<double>& b,
+                   const std::vector<std::size_t>& block) {
   HeldOut h(1);
   h.base = b;  // deliberate copies: a few vectors, once per diagnosis
   h.cand[0] = a;
@@ -105,7 +109,8 @@ HeldOutGain gainOf(const std::vector<double>& a, const std::vector<double>& b, c
   return heldOutGain(h, 0);
 }
 
-std::string tailClass(const TailModel& m, const TailBeam& b, const std::vector<TailCovariateResult>& covs) {
+std::string tailClass(const TailModel& m, const TailBeam& b,
+                      const std::vector<TailCovariateResult>& covs) {
   std::string cls = "unknown";
   double best = std::log(2.0);
   for (const auto& c : covs) {

@@ -37,7 +37,8 @@ bool StaticDiagnosis::reRankUnderTails(DiagnosisResult& out) {
   const auto& rob = out.tails.robust;
   std::vector<Effect> effects;
   std::vector<double> p;
-  for (Effect e : {Effect::incidence_noise, Effect::range_noise_law, Effect::mixed_pixels, Effect::dark_surface}) {
+  for (Effect e : {Effect::incidence_noise, Effect::range_noise_law, Effect::mixed_pixels,
+                   Effect::dark_surface}) {
     const std::string key = robustEffectOf(e);
     if (!rob.count(key + "_p")) continue;
     effects.push_back(e);
@@ -55,9 +56,10 @@ bool StaticDiagnosis::reRankUnderTails(DiagnosisResult& out) {
   }
   if (best.empty()) return false;
   if (best == out.primary_cause) return true;
-  out.decision = "the tails are significant and dominate the Gaussian likelihood that ranked " + out.primary_cause +
-                 " first; fitted beside a pooled contamination, " + best + " has the largest significant held-out gain (+" +
-                 std::to_string(best_gain) + " nats per reading)";
+  out.decision = "the tails are significant and dominate the Gaussian likelihood that ranked " +
+                 out.primary_cause + " first; fitted beside a pooled contamination, " + best +
+                 " has the largest significant held-out gain (+" + std::to_string(best_gain) +
+                 " nats per reading)";
   out.primary_cause = best;
   return true;
 }
@@ -69,11 +71,14 @@ void StaticDiagnosis::refineCause(DiagnosisResult& out) {
   // Rule contamination_caution: a contamination of most readings is the main component, not a
   // tail, and what is fitted beside it describes the wild readings (docs/FINDINGS.md).
   if (named_by_tails_ && out.tails.pooled_fraction > rules::kMostReadings)
-    out.decision += "; caution: the pooled contamination holds " +
-                    std::to_string(static_cast<int>(std::lround(100.0 * out.tails.pooled_fraction))) +
-                    " % of the readings, so the values fitted beside it describe those readings more than the sensor's "
-                    "core noise: look for what the beams see besides the scene (the vehicle's body, moving objects) and "
-                    "leave it out (import --range-min, a shorter stretch of scans)";
+    out.decision +=
+        "; caution: the pooled contamination holds " +
+        std::to_string(static_cast<int>(std::lround(100.0 * out.tails.pooled_fraction))) +
+        " % of the readings, so the values fitted beside it describe those readings more than the "
+        "sensor's "
+        "core noise: look for what the beams see besides the scene (the vehicle's body, moving "
+        "objects) and "
+        "leave it out (import --range-min, a shorter stretch of scans)";
 }
 
 /// Rules tails_significant, rerank_beside_contamination and tails_name_cause: when the named cause
@@ -100,32 +105,41 @@ void StaticDiagnosis::refineCauseByTails(DiagnosisResult& out) {
     // verdict, and the tails' own cause is named.
     named_by_tails_ = false;
     why = out.primary_cause +
-          ", first under the Gaussian likelihood, is not significant beside a pooled contamination (nor is another noise "
+          ", first under the Gaussian likelihood, is not significant beside a pooled contamination "
+          "(nor is another noise "
           "law, mixed pixels or a dark surface)";
     out.primary_cause = cause::kNone;
   }
   // Rule tails_name_cause.
   if (!names(out.primary_cause, Effect::heavy_tails) && out.primary_cause != cause::kNone) return;
   if (ta.cause == cause::kUnknown) {
-    if (!why.empty()) out.decision = why;
+    if (!why.empty())
+      out.decision = why;
     else if (out.primary_cause == cause::kNone)
-      out.decision = "the tails are significant (a contamination mixture predicts held-out readings better, p " +
-                     std::to_string(ta.p_value) + ") but no candidate is";
+      out.decision =
+          "the tails are significant (a contamination mixture predicts held-out readings better, "
+          "p " +
+          std::to_string(ta.p_value) + ") but no candidate is";
     out.primary_cause = toString(Effect::heavy_tails);
-    out.decision += "; no covariate of the tails (edge, grazing, range, dark) explains them held out: cause unknown";
+    out.decision +=
+        "; no covariate of the tails (edge, grazing, range, dark) explains them held out: cause "
+        "unknown";
     return;
   }
   const TailCovariateResult* top = nullptr;
   for (const auto& c : ta.covariates)
-    if (c.significant && names(ta.cause, c.effect) && (!top || c.unique_gain_nats_per_point > top->unique_gain_nats_per_point))
+    if (c.significant && names(ta.cause, c.effect) &&
+        (!top || c.unique_gain_nats_per_point > top->unique_gain_nats_per_point))
       top = &c;
   char buf[400];
   std::snprintf(buf, sizeof buf,
                 "the tails are significant; of what their covariates explain "
-                "held out (+%.4g nats per reading over a pooled contamination), `%s` carries the largest significant share "
+                "held out (+%.4g nats per reading over a pooled contamination), `%s` carries the "
+                "largest significant share "
                 "(%.0f %%, +%.4g +- %.2g nats, Holm p %.2g): %s",
-                ta.explained_gain_nats_per_point, top->covariate.c_str(), 100.0 * top->share, top->unique_gain_nats_per_point,
-                top->unique_gain_se, top->p_holm, ta.cause.c_str());
+                ta.explained_gain_nats_per_point, top->covariate.c_str(), 100.0 * top->share,
+                top->unique_gain_nats_per_point, top->unique_gain_se, top->p_holm,
+                ta.cause.c_str());
   out.decision = why.empty() ? std::string(buf) : why + "; " + buf;
   out.primary_cause = ta.cause;
   named_by_tails_ = true;
@@ -133,7 +147,8 @@ void StaticDiagnosis::refineCauseByTails(DiagnosisResult& out) {
   // candidate; dark_surface's model is the Gaussian noise law with the darkness factor, simulated
   // with the exponent fitted on all readings).
   out.extended_parameters = ta.model;
-  out.gain_heldout_nats_per_point = ta.pooled_gain_nats_per_point + ta.explained_gain_nats_per_point;
+  out.gain_heldout_nats_per_point =
+      ta.pooled_gain_nats_per_point + ta.explained_gain_nats_per_point;
 }
 
 }  // namespace lidarcal::diagnosis::static_scene

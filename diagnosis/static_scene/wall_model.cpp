@@ -22,20 +22,24 @@ double wallMean(const BinnedReadings& d, const WallFit& w, std::size_t b, double
 /// The wall model's least-squares system at its current parameters: Jacobian (alpha_0, b when
 /// fitted, then p and theta of each line), residuals and weights of the wall bins.
 struct WallSystem {
-  Eigen::SparseMatrix<double, Eigen::RowMajor> j;  ///< four entries a row at most: the normal matrix is an arrow
+  /// four entries a row at most: the normal matrix is an arrow
+  Eigen::SparseMatrix<double, Eigen::RowMajor> j;
   Eigen::VectorXd r, wt;
 };
 
 /// The weighted normal matrix J^T W J (alpha_0 held: its diagonal set to `held_diagonal`).
-Eigen::SparseMatrix<double> wallNormal(const WallSystem& s, bool alpha0_free, double held_diagonal) {
+Eigen::SparseMatrix<double> wallNormal(const WallSystem& s, bool alpha0_free,
+                                       double held_diagonal) {
   const Eigen::SparseMatrix<double, Eigen::RowMajor> jw = s.wt.asDiagonal() * s.j;
-  Eigen::SparseMatrix<double> h = Eigen::SparseMatrix<double>(s.j.transpose()) * Eigen::SparseMatrix<double>(jw);
+  Eigen::SparseMatrix<double> h =
+      Eigen::SparseMatrix<double>(s.j.transpose()) * Eigen::SparseMatrix<double>(jw);
   if (!alpha0_free) h.coeffRef(0, 0) = held_diagonal;
   return h;
 }
 
 /// Residuals and weights of the wall bins (roughness tau2 plus the bin mean's variance).
-void wallResiduals(const BinnedReadings& d, const std::vector<BinFit>& f, const WallFit& w, double tau2, WallSystem& s) {
+void wallResiduals(const BinnedReadings& d, const std::vector<BinFit>& f, const WallFit& w,
+                   double tau2, WallSystem& s) {
   for (int k = 0; k < static_cast<int>(w.bins.size()); ++k) {
     const std::size_t b = w.bins[static_cast<std::size_t>(k)];
     double u, cu;
@@ -46,8 +50,8 @@ void wallResiduals(const BinnedReadings& d, const std::vector<BinFit>& f, const 
 
 /// Gauss-Newton on the wall model at fixed roughness (at most 15 steps); false when a step is
 /// not finite.
-bool wallGaussNewton(const BinnedReadings& d, const std::vector<BinFit>& f, WallFit& w, bool with_b, bool alpha0_free,
-                     double tau2, WallSystem& s) {
+bool wallGaussNewton(const BinnedReadings& d, const std::vector<BinFit>& f, WallFit& w, bool with_b,
+                     bool alpha0_free, double tau2, WallSystem& s) {
   const int nb = static_cast<int>(w.bins.size()), nl = static_cast<int>(w.lines.size());
   std::vector<Eigen::Triplet<double>> entries;
   for (int it = 0; it < 15; ++it) {
@@ -71,7 +75,8 @@ bool wallGaussNewton(const BinnedReadings& d, const std::vector<BinFit>& f, Wall
     // costs seconds a step.
     const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(wallNormal(s, alpha0_free, 1.0));
     if (ldlt.info() != Eigen::Success) return false;
-    const Eigen::VectorXd step = ldlt.solve(Eigen::VectorXd(s.j.transpose() * s.wt.cwiseProduct(s.r)));
+    const Eigen::VectorXd step =
+        ldlt.solve(Eigen::VectorXd(s.j.transpose() * s.wt.cwiseProduct(s.r)));
     if (!step.allFinite()) return false;
     w.alpha0 += step(0);
     int c = 1;
@@ -103,8 +108,8 @@ double wallRoughness(const std::vector<BinFit>& f, const WallFit& w, const Eigen
 
 /// Final residuals, standard errors and leave-one-out predictive log-likelihoods (the
 /// Jacobian is the last Gauss-Newton step's).
-void finishWalls(const BinnedReadings& d, const std::vector<BinFit>& f, WallFit& w, bool with_b, bool alpha0_free, double tau2,
-                 WallSystem& s) {
+void finishWalls(const BinnedReadings& d, const std::vector<BinFit>& f, WallFit& w, bool with_b,
+                 bool alpha0_free, double tau2, WallSystem& s) {
   const int nb = static_cast<int>(w.bins.size());
   const auto np = static_cast<int>(s.j.cols());
   wallResiduals(d, f, w, tau2, s);
@@ -136,8 +141,8 @@ void finishWalls(const BinnedReadings& d, const std::vector<BinFit>& f, WallFit&
 
 }  // namespace
 
-WallFit fitWalls(const BinnedReadings& d, const std::vector<BinFit>& f, const std::vector<Line>& start, bool with_b,
-                 double fixed_alpha0) {
+WallFit fitWalls(const BinnedReadings& d, const std::vector<BinFit>& f,
+                 const std::vector<Line>& start, bool with_b, double fixed_alpha0) {
   WallFit w;
   w.lines = start;
   const bool alpha0_free = !std::isfinite(fixed_alpha0);
@@ -148,7 +153,8 @@ WallFit fitWalls(const BinnedReadings& d, const std::vector<BinFit>& f, const st
   const int np = 1 + (with_b ? 1 : 0) + 2 * nl;
   const int nb = static_cast<int>(w.bins.size());
   if (nl == 0 || nb < np + 3) return w;
-  WallSystem s{Eigen::SparseMatrix<double, Eigen::RowMajor>(nb, np), Eigen::VectorXd(nb), Eigen::VectorXd(nb)};
+  WallSystem s{Eigen::SparseMatrix<double, Eigen::RowMajor>(nb, np), Eigen::VectorXd(nb),
+               Eigen::VectorXd(nb)};
   double tau2 = 1e-6;
   for (int outer = 0; outer < 4; ++outer) {
     if (!wallGaussNewton(d, f, w, with_b, alpha0_free, tau2, s)) return w;

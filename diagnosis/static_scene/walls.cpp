@@ -23,7 +23,8 @@ std::vector<std::size_t> binOrder(const BinnedReadings& d) {
   std::vector<std::size_t> order(d.bins.size());
   std::iota(order.begin(), order.end(), 0);
   std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-    return d.bins[a].window != d.bins[b].window ? d.bins[a].window < d.bins[b].window : d.bins[a].angle < d.bins[b].angle;
+    return d.bins[a].window != d.bins[b].window ? d.bins[a].window < d.bins[b].window
+                                                : d.bins[a].angle < d.bins[b].angle;
   });
   return order;
 }
@@ -32,7 +33,8 @@ std::vector<std::size_t> binOrder(const BinnedReadings& d) {
 double binStep(const BinnedReadings& d, const std::vector<std::size_t>& order) {
   if (d.width > 0.0) return d.width;
   std::vector<double> gaps;
-  for (std::size_t k = 1; k < order.size(); ++k) gaps.push_back(d.bins[order[k]].angle - d.bins[order[k - 1]].angle);
+  for (std::size_t k = 1; k < order.size(); ++k)
+    gaps.push_back(d.bins[order[k]].angle - d.bins[order[k - 1]].angle);
   return gaps.empty() ? deg2rad(1.0) : upperMedian(gaps);
 }
 
@@ -59,14 +61,17 @@ std::vector<std::vector<std::size_t>> findRuns(BinnedReadings& d, const std::vec
         }
       }
     }
-    if (joins) runs.back().push_back(b);
-    else runs.push_back({b});
+    if (joins)
+      runs.back().push_back(b);
+    else
+      runs.push_back({b});
   }
   return runs;
 }
 
 /// Incidence from the local slope of the means (any surface): tan(phi) = |dm / da| / m.
-void setIncidences(BinnedReadings& d, const std::vector<BinFit>& f, const std::vector<std::vector<std::size_t>>& runs) {
+void setIncidences(BinnedReadings& d, const std::vector<BinFit>& f,
+                   const std::vector<std::vector<std::size_t>>& runs) {
   for (const auto& run : runs) {
     for (std::size_t k = 0; k < run.size(); ++k) {
       if (run.size() < 3) break;

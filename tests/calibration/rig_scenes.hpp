@@ -45,7 +45,8 @@ inline std::vector<simulation::RigSimSensor> rigSensors(bool three) {
 /// Poles around the vehicle's working area (radius 45 mm, as the forklift's reflectors).
 inline std::vector<Cylinder> rigPoles() {
   std::vector<Cylinder> p;
-  const double xy[][2] = {{3.0, 1.2}, {2.6, -1.5}, {-1.5, -1.6}, {-1.8, 1.0}, {0.6, 2.2}, {0.8, -2.4}, {4.2, -0.2}, {-2.8, -0.3}};
+  const double xy[][2] = {{3.0, 1.2}, {2.6, -1.5}, {-1.5, -1.6}, {-1.8, 1.0},
+                          {0.6, 2.2}, {0.8, -2.4}, {4.2, -0.2},  {-2.8, -0.3}};
   for (const auto& q : xy) p.push_back(Cylinder{q[0], q[1], 0.045});
   return p;
 }
@@ -76,17 +77,20 @@ inline simulation::RigSimConfig driving(bool three) {
   c.driving.stops = 120;
   c.driving.scans_per_stop = 1;
   c.driving.driving.speed_m_per_scan = 0.03;
-  c.driving.driving.route = {RouteSegment{1.2, 0.0}, RouteSegment{1.0, deg2rad(90.0)}, RouteSegment{0.6, 0.0}};
+  c.driving.driving.route = {RouteSegment{1.2, 0.0}, RouteSegment{1.0, deg2rad(90.0)},
+                             RouteSegment{0.6, 0.0}};
   c.driving.driving.odometry = OdometryNoise{0.05, deg2rad(2.0), 0.02};
   c.scans_per_stop = 1;
   return c;
 }
 
-/// The static forklift: one stop, no recorded motion, poles on the right where both corners see them.
+/// The static forklift: one stop, no recorded motion, poles on the right where both corners see
+/// them.
 inline simulation::RigSimConfig staticVehicle(bool three) {
   simulation::RigSimConfig c = stopAndGo(three);
   c.poles.clear();
-  const double xy[][2] = {{2.6, -1.5}, {0.8, -2.4}, {2.0, -2.8}, {3.6, -0.9}, {1.4, -1.3}, {-0.4, -2.0}};
+  const double xy[][2] = {{2.6, -1.5}, {0.8, -2.4}, {2.0, -2.8},
+                          {3.6, -0.9}, {1.4, -1.3}, {-0.4, -2.0}};
   for (const auto& q : xy) c.poles.push_back(Cylinder{q[0], q[1], 0.045});
   c.stops = {Pose2{0.0, 0.0, 0.0}};
   c.sigma_s_m = 0.0;

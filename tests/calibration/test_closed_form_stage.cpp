@@ -47,7 +47,8 @@ TEST(ClosedFormStage, NoiseFreeReadingsOfAKnownCircleGiveTheirExactDistances) {
   for (const bool per_scan : {false, true}) {
     SCOPED_TRACE(per_scan);
     const auto pairs = calibration::closedFormPairs(obs, {l}, r, per_scan);
-    ASSERT_EQ(pairs.size(), 12u);  // per scan, or averaged per (stop, part): three scans a stop, one part each
+    // per scan, or averaged per (stop, part): three scans a stop, one part each
+    ASSERT_EQ(pairs.size(), 12u);
     for (const auto& p : pairs) {
       EXPECT_NEAR(p.d_m, p.y_m, 1e-9);
       EXPECT_GE(p.part, 0);
@@ -71,7 +72,8 @@ TEST(ClosedFormStage, ReadingsAtOneDistanceFormOneBatchPerStopLandmarkAndBeam) {
 }
 
 TEST(ClosedFormStage, TheRadiusIsTheKnownOneElseTheMedianOfTheFits) {
-  LandmarkObservations obs = poleSeenFromALine(1.0, 3.0, 0.05, 2, 3);  // fitted radii 0.050, 0.051, 0.052
+  // fitted radii 0.050, 0.051, 0.052
+  LandmarkObservations obs = poleSeenFromALine(1.0, 3.0, 0.05, 2, 3);
   EXPECT_NEAR(calibration::landmarkRadius(obs), 0.051, 1e-12);
   obs.landmark_radius_m = 0.04;
   EXPECT_EQ(calibration::landmarkRadius(obs), 0.04);
@@ -80,8 +82,8 @@ TEST(ClosedFormStage, TheRadiusIsTheKnownOneElseTheMedianOfTheFits) {
 TEST(ClosedFormStage, AnOrderIsAdmissibleOnlyWhenItInvertsTheReadingWindow) {
   const calibration::Admissible ok = calibration::invertibleOver(0.1, 10.0);
   EXPECT_TRUE(ok({0.01, 1.02}));
-  EXPECT_FALSE(ok({0.01, -1.0}));   // falls with distance
-  EXPECT_FALSE(ok({0.0}));          // order 0: no distance to invert to
+  EXPECT_FALSE(ok({0.01, -1.0}));  // falls with distance
+  EXPECT_FALSE(ok({0.0}));         // order 0: no distance to invert to
 }
 
 TEST(ClosedFormStage, TheResidualRmsIsZeroOnTheCurveAndTheOffsetOffIt) {

@@ -10,8 +10,8 @@
 #include <random>
 #include <vector>
 
-#include <Eigen/Dense>
 #include <gtest/gtest.h>
+#include <Eigen/Dense>
 
 #include "calibration/discrepancy.hpp"
 #include "calibration/held_out.hpp"
@@ -22,7 +22,8 @@ namespace lidarcal::calibration {
 namespace {
 
 /// Entries at distances 0.5, 0.6, ... with the given residuals and one known variance each.
-std::vector<EntryResidual> entriesOf(const std::vector<double>& residuals, double known_variance_m2) {
+std::vector<EntryResidual> entriesOf(const std::vector<double>& residuals,
+                                     double known_variance_m2) {
   std::vector<EntryResidual> e;
   for (std::size_t g = 0; g < residuals.size(); ++g) {
     EntryResidual r;
@@ -40,7 +41,8 @@ double polynomialRss(const std::vector<EntryResidual>& e, int order) {
   Eigen::MatrixXd x(static_cast<Eigen::Index>(e.size()), order + 1);
   Eigen::VectorXd r(static_cast<Eigen::Index>(e.size()));
   for (std::size_t g = 0; g < e.size(); ++g) {
-    for (int i = 0; i <= order; ++i) x(static_cast<Eigen::Index>(g), i) = std::pow(e[g].distance_m, i);
+    for (int i = 0; i <= order; ++i)
+      x(static_cast<Eigen::Index>(g), i) = std::pow(e[g].distance_m, i);
     r(static_cast<Eigen::Index>(g)) = e[g].residual_m;
   }
   return (r - x * x.colPivHouseholderQr().solve(r)).squaredNorm();
@@ -58,7 +60,8 @@ TEST(Discrepancy, RemlWithEquallyPreciseEntriesIsTheResidualVarianceLessTheKnown
     const int order = 1 + trial % 4;
     for (const double k : {0.0, 4e-6, 1e-4}) {
       const auto e = entriesOf(r, k);
-      const double expected = std::sqrt(std::max(0.0, polynomialRss(e, order) / (15.0 - order - 1.0) - k));
+      const double expected =
+          std::sqrt(std::max(0.0, polynomialRss(e, order) / (15.0 - order - 1.0) - k));
       const Discrepancy d = estimateDiscrepancy(e, order);
       EXPECT_EQ(d.method, "reml");
       EXPECT_EQ(d.dof, 15 - order - 1);
@@ -80,24 +83,27 @@ TEST(Discrepancy, EntriesThatLeaveNoDegreeOfFreedomGiveNoneWithAReason) {
 TEST(Discrepancy, RandomEffectsWeightsCountEachEntryByItsWholeVariance) {
   auto entries = entriesOf({0.001, -0.002, 0.003, 0.0, 0.001}, 0.0);
   for (std::size_t g = 0; g < entries.size(); ++g) {
-    entries[g].weight = g % 2 ? 100.0 : 1.0;                    // a hundred times the readings
+    entries[g].weight = g % 2 ? 100.0 : 1.0;                  // a hundred times the readings
     entries[g].known_variance_m2 = 1e-6 / entries[g].weight;  // so a hundredth of the noise
   }
   Discrepancy d;
   d.method = "reml";
   d.sigma_m = 0.0;
   d.dof = 2;
-  EXPECT_TRUE(randomEffectsFactors(entries, d).empty()) << "no discrepancy, no tape error: the noise law's weights stand";
+  EXPECT_TRUE(randomEffectsFactors(entries, d).empty())
+      << "no discrepancy, no tape error: the noise law's weights stand";
   d.sigma_m = 0.003;
   const auto f = randomEffectsFactors(entries, d);
   ASSERT_EQ(f.size(), entries.size());
   for (const auto& e : entries)
-    EXPECT_NEAR(e.weight * f.at(e.entry), 1.0 / (9e-6 + e.known_variance_m2), 1e-6 / (9e-6 + e.known_variance_m2));
+    EXPECT_NEAR(e.weight * f.at(e.entry), 1.0 / (9e-6 + e.known_variance_m2),
+                1e-6 / (9e-6 + e.known_variance_m2));
   // tau dominates: the entry with 100 times the readings counts barely more than the other.
   EXPECT_LT(entries[1].weight * f.at(1) / (entries[0].weight * f.at(0)), 1.12);
   entries[0].tape_sigma_m = 0.002;
   d.sigma_m = 0.0;
-  EXPECT_EQ(randomEffectsFactors(entries, d).size(), entries.size()) << "a stated tape error alone changes the weights";
+  EXPECT_EQ(randomEffectsFactors(entries, d).size(), entries.size())
+      << "a stated tape error alone changes the weights";
   EXPECT_TRUE(randomEffectsFactors(entries, Discrepancy{}).empty()) << "none estimated";
 }
 
@@ -193,7 +199,8 @@ TEST(Discrepancy, IntervalsWithAKnownPartOfTheirVarianceHoldTheirLevel) {
 
 /// A time-of-flight sensor (a few millimetres of polynomial bias, constant noise) seen at 30
 /// distances over 0.3-3.0 m, one drawn inside each of 30 equal cells.
-simulation::RangeSweepConfig sweep(std::uint64_t seed, double noise_m, double ripple_m, double tape_m) {
+simulation::RangeSweepConfig sweep(std::uint64_t seed, double noise_m, double ripple_m,
+                                   double tape_m) {
   simulation::RangeSweepConfig c;
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(0.1, 0.9);
@@ -226,7 +233,8 @@ TEST(Discrepancy, IsZeroForANoiseFreeSensorThatFollowsThePolynomial) {
   EXPECT_LT(d.sigma_m, 1e-6);
 }
 
-TEST(Discrepancy, IsNearZeroForANoisySensorThatFollowsThePolynomialAndNearTheRippleForOneThatDoesNot) {
+TEST(Discrepancy,
+     IsNearZeroForANoisySensorThatFollowsThePolynomialAndNearTheRippleForOneThatDoesNot) {
   // The noise of an entry's mean is about 0.3 mm here (4.2 mm over ~200 readings). Without a
   // ripple the estimate is 0 in about half the fits (the likelihood peaks at the boundary) and
   // small otherwise; with a ripple of amplitude A its standard deviation is A / sqrt(2).
@@ -290,9 +298,11 @@ Coverage coverage(double ripple_m, double tape_m, int first, int seeds) {
         c.tape68 += h.inside(half.model.discrepancy, 0.6827);
         c.tape95 += h.inside(half.model.discrepancy, 0.95);
         const double d = s.true_distance_m[known.matches[h.entry].stop] - config.radius_m;
-        const double error = half.model.model.bias(d) - config.model.bias(d) - rangeRipple(config.effects, d);
+        const double error =
+            half.model.model.bias(d) - config.model.bias(d) - rangeRipple(config.effects, d);
         const double curve = curveStandardError(half.model, d);
-        c.truth95 += std::abs(error) <= f95 * predictiveStandardError(curve, half.model.discrepancy);
+        c.truth95 +=
+            std::abs(error) <= f95 * predictiveStandardError(curve, half.model.discrepancy);
         c.curve95 += std::abs(error) <= 1.96 * curve;
       }
     }

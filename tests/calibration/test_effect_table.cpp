@@ -37,12 +37,14 @@ TEST(EffectTable, TheJointRefinementHasATermExactlyForTheEffectsTheTableSays) {
     const calibration::JointEffects before = fx;
     const bool has = fx.enable(i.effect);
     EXPECT_EQ(has, i.joint_term) << i.name;
-    const bool changed = fx.estimate_heading != before.estimate_heading || fx.landmark_offsets != before.landmark_offsets ||
-                         fx.drift != before.drift || fx.angle_offset != before.angle_offset ||
-                         fx.incidence_bias != before.incidence_bias || fx.incidence_noise != before.incidence_noise ||
-                         fx.noise_exponent != before.noise_exponent || fx.mixed_pixels != before.mixed_pixels ||
-                         fx.odometry_scale != before.odometry_scale || fx.student_noise != before.student_noise ||
-                         fx.quantised != before.quantised || fx.dark_noise != before.dark_noise;
+    const bool changed =
+        fx.estimate_heading != before.estimate_heading ||
+        fx.landmark_offsets != before.landmark_offsets || fx.drift != before.drift ||
+        fx.angle_offset != before.angle_offset || fx.incidence_bias != before.incidence_bias ||
+        fx.incidence_noise != before.incidence_noise ||
+        fx.noise_exponent != before.noise_exponent || fx.mixed_pixels != before.mixed_pixels ||
+        fx.odometry_scale != before.odometry_scale || fx.student_noise != before.student_noise ||
+        fx.quantised != before.quantised || fx.dark_noise != before.dark_noise;
     EXPECT_EQ(changed, has) << i.name;
     // A sequence can test exactly the effects the joint refinement can fit.
     EXPECT_EQ(i.sequence_statistic != nullptr, i.joint_term) << i.name;
@@ -50,13 +52,24 @@ TEST(EffectTable, TheJointRefinementHasATermExactlyForTheEffectsTheTableSays) {
 }
 
 TEST(EffectTable, EffectNamesListsTheSelectedNamesInTableOrder) {
-  EXPECT_EQ(effectNames([](const EffectInfo& i) { return i.static_statistic && !i.sequence_statistic; }), "");
-  EXPECT_EQ(effectNames([](const EffectInfo& i) { return i.static_statistic && i.sequence_statistic && !i.joint_term; }), "");
-  EXPECT_EQ(effectNames([](const EffectInfo& i) { return !i.static_statistic && !i.sequence_statistic; }), "");
+  EXPECT_EQ(
+      effectNames([](const EffectInfo& i) { return i.static_statistic && !i.sequence_statistic; }),
+      "");
+  EXPECT_EQ(effectNames([](const EffectInfo& i) {
+              return i.static_statistic && i.sequence_statistic && !i.joint_term;
+            }),
+            "");
+  EXPECT_EQ(
+      effectNames([](const EffectInfo& i) { return !i.static_statistic && !i.sequence_statistic; }),
+      "");
   // Every effect is a candidate in both modes (dark_surface in static data too).
-  EXPECT_EQ(effectNames([](const EffectInfo& i) { return !i.static_statistic || !i.sequence_statistic; }), "");
+  EXPECT_EQ(
+      effectNames([](const EffectInfo& i) { return !i.static_statistic || !i.sequence_statistic; }),
+      "");
   // One pose shows nothing of stops, headings or one surface's offset: no static statistic.
-  EXPECT_EQ(effectNames([](const EffectInfo& i) { return i.static_statistic && *i.static_statistic == '\0'; }),
+  EXPECT_EQ(effectNames([](const EffectInfo& i) {
+              return i.static_statistic && *i.static_statistic == '\0';
+            }),
             "landmark_bias, heading_error, angle_offset, odometry_scale");
   EXPECT_EQ(effectNames([](const EffectInfo&) { return false; }), "");
 }

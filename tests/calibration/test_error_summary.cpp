@@ -27,7 +27,8 @@ TEST(ErrorSummary, TheRmsStandardErrorIsTheSpreadOfTheRmsOverRecordings) {
     ASSERT_EQ(r.entries, 20u);
     sum += r.rms_m, sum2 += r.rms_m * r.rms_m, se2 += r.se_m * r.se_m;
   }
-  const double spread = std::sqrt(sum2 / trials - std::pow(sum / trials, 2)), stated = std::sqrt(se2 / trials);
+  const double spread = std::sqrt(sum2 / trials - std::pow(sum / trials, 2)),
+               stated = std::sqrt(se2 / trials);
   EXPECT_NEAR(stated / spread, 1.0, 0.1);
   EXPECT_NEAR(sum / trials, 0.004, 0.0002);  // the RMS itself is nearly unbiased
 }

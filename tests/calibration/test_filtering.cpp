@@ -22,9 +22,9 @@ CalibrationModel quadraticModel() {
   m.model.range_min_m = 0.2;
   m.model.range_max_m = 12.0;
   m.fitted_range_m = std::make_pair(1.0, 4.0);
-  m.alpha_covariance = {1e-6, -2e-7, 1e-8,  //
-                        -2e-7, 1e-6, -1e-7,  //
-                        1e-8, -1e-7, 1e-7};
+  m.alpha_covariance = {1e-6,  -2e-7, 1e-8,   //
+                        -2e-7, 1e-6,  -1e-7,  //
+                        1e-8,  -1e-7, 1e-7};
   return m;
 }
 
@@ -43,8 +43,10 @@ TEST(Filtering, LinearContinuationJoinsTheFitWithoutAStepOrAKink) {
     EXPECT_EQ(out_a.fate, ReadingFate::extrapolated);
     // No step: the corrected distances on either side of the edge differ by the reading step
     // over the slope; no kink: the slopes on either side agree.
-    const double slope_in = (in_b.range_m - in_a.range_m) / h, slope_out = (out_b.range_m - out_a.range_m) / h;
-    EXPECT_NEAR(out_a.range_m - in_b.range_m, 2 * h / m.model.bias.derivative(edge_d) * (edge_d > 2 ? 1 : -1), 1e-9);
+    const double slope_in = (in_b.range_m - in_a.range_m) / h,
+                 slope_out = (out_b.range_m - out_a.range_m) / h;
+    EXPECT_NEAR(out_a.range_m - in_b.range_m,
+                2 * h / m.model.bias.derivative(edge_d) * (edge_d > 2 ? 1 : -1), 1e-9);
     EXPECT_NEAR(slope_out, slope_in, 1e-4 * std::abs(slope_in));
   }
 }
@@ -85,7 +87,8 @@ TEST(Filtering, TheStandardErrorIsTheDeltaMethodsAndGrowsPastTheEdge) {
   const double x[3] = {1.0, d, d * d};
   double v = 0.0;
   for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) v += x[i] * m.alpha_covariance[static_cast<std::size_t>(3 * i + j)] * x[j];
+    for (int j = 0; j < 3; ++j)
+      v += x[i] * m.alpha_covariance[static_cast<std::size_t>(3 * i + j)] * x[j];
   EXPECT_NEAR(correct(y).standard_error_m, std::sqrt(v) / m.model.bias.derivative(d), 1e-12);
   // Beyond: continuous at the edge, then growing with the distance past it.
   const double at_edge = correct(m.model.bias(4.0)).standard_error_m;
@@ -100,7 +103,8 @@ TEST(Filtering, TheStandardErrorIsTheDeltaMethodsAndGrowsPastTheEdge) {
   // Without a covariance there is no standard error to give.
   CalibrationModel bare = m;
   bare.alpha_covariance.clear();
-  EXPECT_TRUE(std::isnan(readingCorrector(bare, InversionMethod::ls, Outside::linear)(3.0).standard_error_m));
+  EXPECT_TRUE(std::isnan(
+      readingCorrector(bare, InversionMethod::ls, Outside::linear)(3.0).standard_error_m));
 }
 
 TEST(Filtering, ThePredictiveStandardErrorAddsTheDiscrepancyThroughTheSlope) {
@@ -118,7 +122,8 @@ TEST(Filtering, ThePredictiveStandardErrorAddsTheDiscrepancyThroughTheSlope) {
     const CorrectedReading before = curve_only(reading), c = correct(reading);
     EXPECT_DOUBLE_EQ(c.range_m, before.range_m);
     EXPECT_DOUBLE_EQ(c.curve_standard_error_m, before.standard_error_m);
-    EXPECT_DOUBLE_EQ(before.standard_error_m, before.curve_standard_error_m);  // no discrepancy: the curve's
+    // no discrepancy: the curve's
+    EXPECT_DOUBLE_EQ(before.standard_error_m, before.curve_standard_error_m);
     const double slope = m.model.bias.derivative(std::min(c.range_m, 4.0));
     const double expected = std::hypot(c.curve_standard_error_m, 0.004 / slope);
     EXPECT_NEAR(c.standard_error_m, expected, 1e-12);
@@ -135,7 +140,8 @@ TEST(Filtering, AReadingContinuedBelowZeroDistanceHasNone) {
   // 0.01 m lies just above it and still has a distance; a reading of 0 or less has none.
   EXPECT_EQ(c.fate, ReadingFate::extrapolated);
   EXPECT_GT(c.range_m, 0.0);
-  EXPECT_EQ(readingCorrector(m, InversionMethod::ls, Outside::linear)(0.0).fate, ReadingFate::unresolved);
+  EXPECT_EQ(readingCorrector(m, InversionMethod::ls, Outside::linear)(0.0).fate,
+            ReadingFate::unresolved);
 }
 
 TEST(Filtering, CorrectedScansMarkEveryPointAndCountTheReadingsBeyond) {
@@ -151,7 +157,8 @@ TEST(Filtering, CorrectedScansMarkEveryPointAndCountTheReadingsBeyond) {
     scan.cloud->push_back(p);
   }
   FilteringStats stats;
-  const io::Scan linear = correctScan(scan, readingCorrector(m, InversionMethod::ls, Outside::linear), &stats);
+  const io::Scan linear =
+      correctScan(scan, readingCorrector(m, InversionMethod::ls, Outside::linear), &stats);
   ASSERT_EQ(linear.correction.size(), 4u);
   EXPECT_EQ(linear.correction[0], io::PointCorrection::extrapolated);
   EXPECT_EQ(linear.correction[1], io::PointCorrection::corrected);
@@ -163,7 +170,8 @@ TEST(Filtering, CorrectedScansMarkEveryPointAndCountTheReadingsBeyond) {
   EXPECT_EQ(stats.beyond_min_m, 0.5);
   EXPECT_EQ(stats.beyond_max_m, 8.0);
   EXPECT_TRUE(std::isfinite(linear.correction_se[3]));
-  const io::Scan kept = correctScan(scan, readingCorrector(m, InversionMethod::ls, Outside::keep), &stats);
+  const io::Scan kept =
+      correctScan(scan, readingCorrector(m, InversionMethod::ls, Outside::keep), &stats);
   EXPECT_EQ(kept.correction[3], io::PointCorrection::raw);
   EXPECT_EQ((*kept.cloud)[3].x, 8.0f);
   EXPECT_EQ(stats.outside, 2u);

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Inversion of the bias (Alhashimi et al. 2016 section 5.2): LS round trip f(f^-1(y)) = y over the range
-// limits for every order, and ML satisfying eq. 28.
+// Inversion of the bias (Alhashimi et al. 2016 section 5.2): LS round trip f(f^-1(y)) = y over the
+// range limits for every order, and ML satisfying eq. 28.
 
 #include <algorithm>
 #include <cmath>
@@ -37,7 +37,8 @@ TEST_P(InversionRoundTrip, FOfTheInverseIsTheReadingOverTheRangeLimits) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Orders, InversionRoundTrip,
-                         ::testing::Values(Case{"order1", {0.05, 1.1}}, Case{"order2", {0.0525, 0.8838, 0.0584}},
+                         ::testing::Values(Case{"order1", {0.05, 1.1}},
+                                           Case{"order2", {0.0525, 0.8838, 0.0584}},
                                            Case{"order3", {0.02, 0.95, 0.03, 0.004}},
                                            Case{"order4", {0.01, 0.9, 0.05, 0.002, 0.0003}}),
                          [](const auto& p) { return std::string(p.param.name); });
@@ -83,7 +84,8 @@ TEST(Inversion, ReadingWindowIsCheckedOnlyWhereReadingsCanFall) {
   EXPECT_TRUE(invertsReadingWindow(peaked, 0.2, 6.0));
   double where = 0;
   EXPECT_FALSE(invertsReadingWindow(peaked, 0.2, 6.5, &where));  // 6.25 is the most it reads
-  BiasPolynomial dip{{0.0, 1.0, -0.5, 0.06}};  // f' = 1 - d + 0.18 d^2 < 0 on (1.31, 4.25), where f is ~0.6
+  // f' = 1 - d + 0.18 d^2 < 0 on (1.31, 4.25), where f is ~0.6
+  BiasPolynomial dip{{0.0, 1.0, -0.5, 0.06}};
   EXPECT_FALSE(invertsReadingWindow(dip, 0.2, 6.0, &where));
   EXPECT_NEAR(where, (1.0 - std::sqrt(0.28)) / 0.36, 1e-9);
 }
@@ -108,7 +110,9 @@ std::vector<double> gridRoots(const BiasPolynomial& f, double y, double lo, doub
 
 TEST(Inversion, LsTakesTheRootNearestTheReadingAmongAllRootsInTheWindow) {
   // Non-monotone polynomials with one to three distances per reading inside [0, 8] m.
-  const std::vector<std::vector<double>> models = {{0.0, 1.0, -0.5, 0.06}, {0.05, 2.5, -0.25}, {0.02, 0.95, 0.03, 0.004},
+  const std::vector<std::vector<double>> models = {{0.0, 1.0, -0.5, 0.06},
+                                                   {0.05, 2.5, -0.25},
+                                                   {0.02, 0.95, 0.03, 0.004},
                                                    {-0.1, 1.6, -0.5, 0.04, 0.0006}};
   for (const auto& alpha : models) {
     RangeModel m;
@@ -127,10 +131,12 @@ TEST(Inversion, LsTakesTheRootNearestTheReadingAmongAllRootsInTheWindow) {
         return std::abs(a - y) < std::abs(b - y);
       });
       EXPECT_NEAR(*d, nearest, 1e-9) << "y = " << y;
-      EXPECT_NEAR(m.bias(*d), y, 1e-12 * std::max(1.0, std::abs(y))) << "to machine precision, y = " << y;
+      EXPECT_NEAR(m.bias(*d), y, 1e-12 * std::max(1.0, std::abs(y)))
+          << "to machine precision, y = " << y;
     }
     if (alpha[2] < 0.0) {
-      EXPECT_GT(multiple, 10) << "a falling part must give readings several distances (model " << &alpha - models.data() << ")";
+      EXPECT_GT(multiple, 10) << "a falling part must give readings several distances (model "
+                              << &alpha - models.data() << ")";
     }
   }
 }

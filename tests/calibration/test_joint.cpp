@@ -20,7 +20,8 @@ namespace {
 
 simulation::LandmarkLevelConfig paperField(double sigma_s, double sigma_psi_deg, double sigma_e) {
   simulation::LandmarkLevelConfig c;
-  c.landmarks = {{1.5, 0.75, 0.12}, {0.3, 2.2, 0.12}, {2.4, 3.4, 0.12}, {3.9, -1.3, 0.12}, {0.9, -2.8, 0.12}};
+  c.landmarks = {
+      {1.5, 0.75, 0.12}, {0.3, 2.2, 0.12}, {2.4, 3.4, 0.12}, {3.9, -1.3, 0.12}, {0.9, -2.8, 0.12}};
   c.path.stops = 10;
   c.path.scans_per_stop = 10;
   c.path.sigma_s_m = sigma_s;
@@ -37,10 +38,12 @@ simulation::LandmarkLevelConfig paperField(double sigma_s, double sigma_psi_deg,
 
 /// The joint refinement's start on a simulated sample: commanded poses, triangulated centres,
 /// the poles' true radius and `model`.
-JointInit triangulatedStart(const simulation::LandmarkLevelSample& sample, const RangeModel& model) {
+JointInit triangulatedStart(const simulation::LandmarkLevelSample& sample,
+                            const RangeModel& model) {
   JointInit init;
   init.poses = sample.obs.commanded;
-  for (const auto& l : triangulateAll(sample.obs, TriangulationConfig{})) init.centres[l.id] = Eigen::Vector2d(l.x_m, l.y_m);
+  for (const auto& l : triangulateAll(sample.obs, TriangulationConfig{}))
+    init.centres[l.id] = Eigen::Vector2d(l.x_m, l.y_m);
   init.radius_m = 0.12;
   init.model = model;
   return init;
@@ -186,7 +189,8 @@ TEST(Calibrate, TheNoiseScaleOfTheSquaredLawIsRecoveredOnALongSequence) {
     ASSERT_STREQ(m.status.name(), "ok") << m.status.message;
     ASSERT_EQ(m.model.noise.kind, NoiseKind::squared);
     EXPECT_NEAR(m.model.noise.sigma_e / 0.0019176, 1.0, 0.03);
-    EXPECT_EQ(m.noise_fits.exponent_best, 2);  // Alhashimi et al. 2016's test (eqs. 10-15) picks k = 2
+    // Alhashimi et al. 2016's test (eqs. 10-15) picks k = 2
+    EXPECT_EQ(m.noise_fits.exponent_best, 2);
   }
 }
 
@@ -198,12 +202,14 @@ TEST(Calibrate, SurveyedCentresOrMeasuredPosesGiveTheScaleAnOdometryScaleErrorHi
   const auto cfg = scaleErrorField();
   const auto bias = [](const CalibrationModel& m, double d) { return m.model.bias(d) - d; };
   const auto truthBias = [&](double d) { return cfg.model.bias(d) - d; };
-  const auto standardError = [](const CalibrationModel& m, double d) {  // of f(d), from the alpha covariance
+  // of f(d), from the alpha covariance
+  const auto standardError = [](const CalibrationModel& m, double d) {
     const std::size_t n = m.model.bias.alpha.size();
     if (m.alpha_covariance.size() != n * n) return 0.0;
     double v = 0.0;
     for (std::size_t i = 0; i < n; ++i)
-      for (std::size_t j = 0; j < n; ++j) v += std::pow(d, i) * std::pow(d, j) * m.alpha_covariance[i * n + j];
+      for (std::size_t j = 0; j < n; ++j)
+        v += std::pow(d, i) * std::pow(d, j) * m.alpha_covariance[i * n + j];
     return std::sqrt(v);
   };
   for (std::uint64_t seed = 1; seed <= 3; ++seed) {
@@ -217,11 +223,13 @@ TEST(Calibrate, SurveyedCentresOrMeasuredPosesGiveTheScaleAnOdometryScaleErrorHi
       surveyed.joint.known_centres[static_cast<int>(l) + 1] = c;
       scaled.joint.known_centres[static_cast<int>(l) + 1] = 1.03 * c;
     }
-    for (std::size_t k = 0; k < sample.stops.size(); ++k) posed.joint.known_poses[k] = sample.stops[k].actual;
+    for (std::size_t k = 0; k < sample.stops.size(); ++k)
+      posed.joint.known_poses[k] = sample.stops[k].actual;
     const CalibrationModel with_centres = calibrate(sample.obs, surveyed);
     const CalibrationModel with_poses = calibrate(sample.obs, posed);
     const CalibrationModel with_scaled = calibrate(sample.obs, scaled);
-    for (const auto* m : {&self, &with_centres, &with_poses, &with_scaled}) ASSERT_STREQ(m->status.name(), "ok") << m->status.message;
+    for (const auto* m : {&self, &with_centres, &with_poses, &with_scaled})
+      ASSERT_STREQ(m->status.name(), "ok") << m->status.message;
     for (double d : {1.0, 2.0, 3.0}) {
       SCOPED_TRACE(d);
       const double e_self = std::abs(bias(self, d) - truthBias(d));
@@ -246,10 +254,11 @@ TEST(Calibrate, SurveyedCentresOrMeasuredPosesGiveTheScaleAnOdometryScaleErrorHi
   }
 }
 
-// Tape-measured distances at two stops only (too few for Alhashimi et al. 2016's fit on its own, which needs
-// three) combined with the self-calibration of the whole recording (JointConfig::known_ranges):
-// the tape gives the scale an odometry scale error hides, the poles and the other
-// stops the shape. The truth the test controls: the beams' true distances from the simulation.
+// Tape-measured distances at two stops only (too few for Alhashimi et al. 2016's fit on its own,
+// which needs three) combined with the self-calibration of the whole recording
+// (JointConfig::known_ranges): the tape gives the scale an odometry scale error hides, the poles
+// and the other stops the shape. The truth the test controls: the beams' true distances from the
+// simulation.
 TEST(Calibrate, DistancesMeasuredAtTwoStopsGiveTheSelfCalibrationItsScale) {
   const auto cfg = scaleErrorField();
   const auto bias = [](const CalibrationModel& m, double d) { return m.model.bias(d) - d; };
@@ -291,7 +300,8 @@ TEST(Calibrate, DistancesMeasuredAtTwoStopsGiveTheSelfCalibrationItsScale) {
     ASSERT_STREQ(with_tape.status.name(), "ok") << with_tape.status.message;
     for (double d : {1.0, 2.0, 3.0}) {
       SCOPED_TRACE(d);
-      const double e_self = std::abs(bias(self, d) - truthBias(d)), e_tape = std::abs(bias(with_tape, d) - truthBias(d));
+      const double e_self = std::abs(bias(self, d) - truthBias(d)),
+                   e_tape = std::abs(bias(with_tape, d) - truthBias(d));
       EXPECT_LT(e_tape, 0.005);
       if (d >= 2.0) {
         EXPECT_LT(5.0 * e_tape, e_self) << "the tape must fix what the odometry scale error hides";
@@ -320,7 +330,8 @@ TEST(Calibrate, ClosedFormStandardErrorsDescribeItsError) {
       ASSERT_EQ(m.alpha_covariance.size(), k * k);
       double v = 0.0;
       for (std::size_t i = 0; i < k; ++i)
-        for (std::size_t j = 0; j < k; ++j) v += std::pow(d, i) * std::pow(d, j) * m.alpha_covariance[i * k + j];
+        for (std::size_t j = 0; j < k; ++j)
+          v += std::pow(d, i) * std::pow(d, j) * m.alpha_covariance[i * k + j];
       ASSERT_GT(v, 0.0);
       const double z = (m.model.bias(d) - cfg.model.bias(d)) / std::sqrt(v);
       sum_z2 += z * z;
@@ -384,12 +395,15 @@ TEST(JointRefinement, PoolingRepeatedScansLeavesTheEstimatesUnchanged) {
     ASSERT_EQ(pooled.model.bias.alpha.size(), each.model.bias.alpha.size());
     for (std::size_t i = 0; i < each.model.bias.alpha.size(); ++i)
       EXPECT_NEAR(pooled.model.bias.alpha[i], each.model.bias.alpha[i],
-                  1e-3 * std::sqrt(each.alpha_covariance(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(i))))
+                  1e-3 * std::sqrt(each.alpha_covariance(static_cast<Eigen::Index>(i),
+                                                         static_cast<Eigen::Index>(i))))
           << "alpha_" << i;
-    EXPECT_NEAR(pooled.model.noise.sigma_e, each.model.noise.sigma_e, 1e-6 * each.model.noise.sigma_e);
+    EXPECT_NEAR(pooled.model.noise.sigma_e, each.model.noise.sigma_e,
+                1e-6 * each.model.noise.sigma_e);
     EXPECT_NEAR(pooled.radius_m, each.radius_m, 1e-7);
     for (int i = 0; i < 3; ++i)
-      EXPECT_NEAR(pooled.alpha_covariance(i, i), each.alpha_covariance(i, i), 1e-4 * each.alpha_covariance(i, i));
+      EXPECT_NEAR(pooled.alpha_covariance(i, i), each.alpha_covariance(i, i),
+                  1e-4 * each.alpha_covariance(i, i));
   }
 }
 
@@ -405,12 +419,14 @@ int compareBeamDerivatives(std::mt19937_64& rng) {
     double pose[3] = {u(rng), u(rng), 0.3 * u(rng)};
     const double a = pose[2] + angle, range = 2.5 + u(rng), miss = 0.3 * u(rng);
     // A centre near the ray: |miss| below the radius hits, above it misses.
-    double centre[2] = {pose[0] + range * std::cos(a) - miss * std::sin(a), pose[1] + range * std::sin(a) + miss * std::cos(a)};
+    double centre[2] = {pose[0] + range * std::cos(a) - miss * std::sin(a),
+                        pose[1] + range * std::sin(a) + miss * std::cos(a)};
     double radius[1] = {0.1 + 0.1 * (1.0 + u(rng))};
     double alpha[N];
     for (int k = 0; k < N; ++k) alpha[k] = (k == 1 ? 1.0 : 0.0) + 0.05 * u(rng);
     const double r2 = radius[0] * radius[0], m2 = miss * miss;
-    if (std::abs(r2 - m2) < 1e-3 * r2) continue;  // at the tangent the slope is unbounded on one side
+    // at the tangent the slope is unbounded on one side
+    if (std::abs(r2 - m2) < 1e-3 * r2) continue;
     hits += m2 < r2;
     const joint::BeamRangeAnalyticCost<N> written(angle, y, inv_sigma);
     const ceres::AutoDiffCostFunction<joint::BeamRangeCost<N>, 1, 3, 2, 1, N> reference(
@@ -425,7 +441,8 @@ int compareBeamDerivatives(std::mt19937_64& rng) {
     const int sizes[4] = {3, 2, 1, N};
     for (int b = 0; b < 4; ++b)
       for (int k = 0; k < sizes[b]; ++k)
-        EXPECT_NEAR(jw[b][k], ja[b][k], 1e-9 * (1.0 + std::abs(ja[b][k]))) << "N " << N << " block " << b << " entry " << k;
+        EXPECT_NEAR(jw[b][k], ja[b][k], 1e-9 * (1.0 + std::abs(ja[b][k])))
+            << "N " << N << " block " << b << " entry " << k;
     double r_only = 0.0;
     EXPECT_TRUE(written.Evaluate(params, &r_only, nullptr));
     EXPECT_EQ(r_only, r_a);
@@ -436,8 +453,9 @@ int compareBeamDerivatives(std::mt19937_64& rng) {
 TEST(JointRefinement, WrittenOutBeamDerivativesAreThoseOfAutomaticDifferentiation) {
   // 1,200 geometries drawn at random: no answer depends on the draw.
   std::mt19937_64 rng(0x5eed);
-  const int hits = compareBeamDerivatives<2>(rng) + compareBeamDerivatives<3>(rng) + compareBeamDerivatives<4>(rng) +
-                   compareBeamDerivatives<5>(rng) + compareBeamDerivatives<6>(rng) + compareBeamDerivatives<7>(rng);
+  const int hits = compareBeamDerivatives<2>(rng) + compareBeamDerivatives<3>(rng) +
+                   compareBeamDerivatives<4>(rng) + compareBeamDerivatives<5>(rng) +
+                   compareBeamDerivatives<6>(rng) + compareBeamDerivatives<7>(rng);
   // Both branches were compared: rays through the pole and rays past it.
   EXPECT_GT(hits, 100);
   EXPECT_LT(hits, 6 * 200 - 100);
@@ -448,11 +466,14 @@ TEST(JointRefinement, WrittenOutMotionPriorDerivativesAreThoseOfAutomaticDiffere
   std::mt19937_64 rng(0x0d0);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   for (int trial = 0; trial < 500; ++trial) {
-    const joint::MotionPriorCost cost{0.3 * u(rng), 0.1 * u(rng), 0.5 * u(rng), 20.0 * (1.5 + u(rng)), 100.0 * (1.5 + u(rng))};
-    double a[3] = {2.0 * u(rng), 2.0 * u(rng), 3.0 * u(rng)}, b[3] = {a[0] + 0.3 * u(rng), a[1] + 0.3 * u(rng), a[2] + 0.5 * u(rng)};
+    const joint::MotionPriorCost cost{0.3 * u(rng), 0.1 * u(rng), 0.5 * u(rng),
+                                      20.0 * (1.5 + u(rng)), 100.0 * (1.5 + u(rng))};
+    double a[3] = {2.0 * u(rng), 2.0 * u(rng), 3.0 * u(rng)},
+           b[3] = {a[0] + 0.3 * u(rng), a[1] + 0.3 * u(rng), a[2] + 0.5 * u(rng)};
     double scale[1] = {0.05 * u(rng)};
     const joint::MotionPriorAnalyticCost written(cost);
-    const ceres::AutoDiffCostFunction<joint::MotionPriorCost, 3, 3, 3, 1> reference(new joint::MotionPriorCost(cost));
+    const ceres::AutoDiffCostFunction<joint::MotionPriorCost, 3, 3, 3, 1> reference(
+        new joint::MotionPriorCost(cost));
     const double* params[3] = {a, b, scale};
     double r_w[3], r_a[3], jw[3][9] = {}, ja[3][9] = {};
     double* jac_w[3] = {jw[0], jw[1], jw[2]};
@@ -463,7 +484,8 @@ TEST(JointRefinement, WrittenOutMotionPriorDerivativesAreThoseOfAutomaticDiffere
     for (int k = 0; k < 3; ++k) EXPECT_NEAR(r_w[k], r_a[k], 1e-12 * (1.0 + std::abs(r_a[k])));
     for (int blk = 0; blk < 3; ++blk)
       for (int k = 0; k < sizes[blk]; ++k)
-        EXPECT_NEAR(jw[blk][k], ja[blk][k], 1e-9 * (1.0 + std::abs(ja[blk][k]))) << "block " << blk << " entry " << k;
+        EXPECT_NEAR(jw[blk][k], ja[blk][k], 1e-9 * (1.0 + std::abs(ja[blk][k])))
+            << "block " << blk << " entry " << k;
     double r_only[3];
     EXPECT_TRUE(written.Evaluate(params, r_only, nullptr));
     for (int k = 0; k < 3; ++k) EXPECT_EQ(r_only[k], r_w[k]);

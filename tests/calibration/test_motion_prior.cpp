@@ -40,16 +40,19 @@ simulation::LandmarkLevelConfig driving() {
 double positionRms(const std::vector<Pose2>& poses, const std::vector<TruthStop>& truth) {
   double s = 0.0;
   for (std::size_t k = 0; k < poses.size(); ++k)
-    s += std::pow(poses[k].x_m - truth[k].actual.x_m, 2) + std::pow(poses[k].y_m - truth[k].actual.y_m, 2);
+    s += std::pow(poses[k].x_m - truth[k].actual.x_m, 2) +
+         std::pow(poses[k].y_m - truth[k].actual.y_m, 2);
   return std::sqrt(s / static_cast<double>(poses.size()));
 }
 
 /// A refinement's start: the commanded poses, the true landmarks and range model.
-JointInit startAtTheTruth(const simulation::LandmarkLevelConfig& cfg, const LandmarkObservations& obs) {
+JointInit startAtTheTruth(const simulation::LandmarkLevelConfig& cfg,
+                          const LandmarkObservations& obs) {
   JointInit init;
   init.poses = obs.commanded;
   for (std::size_t l = 0; l < cfg.landmarks.size(); ++l)
-    init.centres[static_cast<int>(l) + 1] = Eigen::Vector2d(cfg.landmarks[l].x_m, cfg.landmarks[l].y_m);
+    init.centres[static_cast<int>(l) + 1] =
+        Eigen::Vector2d(cfg.landmarks[l].x_m, cfg.landmarks[l].y_m);
   init.radius_m = cfg.landmarks.front().radius_m;
   init.model = cfg.model;
   return init;
@@ -118,16 +121,20 @@ TEST(MotionPrior, ReportedPriorLikelihoodIsTheOdometrysDensityAtThePoses) {
   ASSERT_TRUE(f.ok()) << f.status.message;
   ASSERT_TRUE(f.motion_prior);
   ASSERT_EQ(f.poses.size(), sample.obs.commanded.size());
-  auto gauss = [](double e, double sd) { return 0.5 * e * e / (sd * sd) + 0.5 * kLog2Pi + std::log(sd); };
+  auto gauss = [](double e, double sd) {
+    return 0.5 * e * e / (sd * sd) + 0.5 * kLog2Pi + std::log(sd);
+  };
   const auto& c = sample.obs.commanded;
-  double expected = gauss(f.poses[0].x_m - c[0].x_m, jc.sigma_s_m) + gauss(f.poses[0].y_m - c[0].y_m, jc.sigma_s_m) +
+  double expected = gauss(f.poses[0].x_m - c[0].x_m, jc.sigma_s_m) +
+                    gauss(f.poses[0].y_m - c[0].y_m, jc.sigma_s_m) +
                     gauss(wrapAngle(f.poses[0].yaw_rad - c[0].yaw_rad), jc.sigma_psi_rad);
   double heading = 0.0;
   for (std::size_t k = 1; k < f.poses.size(); ++k) {
     // Each step seen from the pose before it, commanded and refined.
     const Pose2 want = stepBetween(c[k - 1], c[k]), got = stepBetween(f.poses[k - 1], f.poses[k]);
     const double len = motionStepLength(c, k);
-    expected += gauss(got.x_m - want.x_m, jc.motionStepSigma(len)) + gauss(got.y_m - want.y_m, jc.motionStepSigma(len));
+    expected += gauss(got.x_m - want.x_m, jc.motionStepSigma(len)) +
+                gauss(got.y_m - want.y_m, jc.motionStepSigma(len));
     const double h = gauss(wrapAngle(got.yaw_rad - want.yaw_rad), jc.motionHeadingSigma(len));
     expected += h;
     heading += h;
@@ -148,14 +155,15 @@ TEST(MotionPrior, AStepIsWeighedAtTheLengthItsNeighboursReport) {
   }
   EXPECT_NEAR(motionStepLength(c, 20), 0.03, 1e-12);
   EXPECT_NEAR(motionStepLength(c, 10), 0.3, 1e-12);
-  EXPECT_NEAR(motionStepLength(c, 1), 0.03, 1e-12);    // the window clipped at the start
-  EXPECT_NEAR(motionStepLength(c, 60), 0.06, 1e-12);   // and at the end
-  EXPECT_NEAR(motionStepLength(c, 25), 0.03, 1e-12);   // 20 neighbours, 19 of 3 cm
+  EXPECT_NEAR(motionStepLength(c, 1), 0.03, 1e-12);   // the window clipped at the start
+  EXPECT_NEAR(motionStepLength(c, 60), 0.06, 1e-12);  // and at the end
+  EXPECT_NEAR(motionStepLength(c, 25), 0.03, 1e-12);  // 20 neighbours, 19 of 3 cm
   EXPECT_NEAR(motionStepLength(c, 55), 0.06, 1e-12);
   // Across the change, the majority of the window (its own within half of that).
-  EXPECT_NEAR(motionStepLength(c, 36), 0.03, 1e-12);   // steps 26-46 but 36: 14 of 3 cm, 6 of 6 cm
-  EXPECT_NEAR(motionStepLength(c, 46), 0.06, 1e-12);   // steps 36-56 but 46: 5 of 3 cm, 15 of 6 cm
-  EXPECT_NEAR(motionStepLength(c, 40), 0.045, 1e-12);  // steps 30-50 but 40: 10 of 3 cm, 10 of 6 cm; its own 3 cm within half of 4.5
+  EXPECT_NEAR(motionStepLength(c, 36), 0.03, 1e-12);  // steps 26-46 but 36: 14 of 3 cm, 6 of 6 cm
+  EXPECT_NEAR(motionStepLength(c, 46), 0.06, 1e-12);  // steps 36-56 but 46: 5 of 3 cm, 15 of 6 cm
+  // steps 30-50 but 40: 10 of 3 cm, 10 of 6 cm; its own 3 cm within half of 4.5
+  EXPECT_NEAR(motionStepLength(c, 40), 0.045, 1e-12);
 }
 
 // The step scale of a drive is unbiased: odometry that reports every step 1 / (1 + s) times its
@@ -188,7 +196,8 @@ TEST(MotionPrior, TheStepScaleOfADriveIsUnbiased) {
   for (double e : err) mean += e / static_cast<double>(err.size());
   for (double e : err) var += (e - mean) * (e - mean) / static_cast<double>(err.size() - 1);
   const double se = std::sqrt(var / static_cast<double>(err.size()));
-  ::testing::Test::RecordProperty("mean_error", std::to_string(mean));  // --gtest_output=xml shows them
+  // --gtest_output=xml shows them
+  ::testing::Test::RecordProperty("mean_error", std::to_string(mean));
   ::testing::Test::RecordProperty("standard_error", std::to_string(se));
   EXPECT_GT(se, 0.0005);  // the drives differ: a spread of about half a percent each
   EXPECT_LT(std::abs(mean), 3.0 * se) << "mean error " << mean << " standard error " << se;

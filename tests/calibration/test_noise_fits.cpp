@@ -38,7 +38,8 @@ TEST(NoiseFits, TheSquaredAndConstantLawsRecoverTheirSigmaFromDrawnReadings) {
 }
 
 TEST(NoiseFits, ALawWithoutAFitIsRefused) {
-  EXPECT_THROW(calibration::fitNoiseLaw(NoiseKind::power, 1, BiasPolynomial{}, {1.0}, {1.0}), std::invalid_argument);
+  EXPECT_THROW(calibration::fitNoiseLaw(NoiseKind::power, 1, BiasPolynomial{}, {1.0}, {1.0}),
+               std::invalid_argument);
 }
 
 TEST(NoiseFits, EstimatorsThatCannotRunAreNotedAndTheResultDoesNotDependOnTheThreads) {

@@ -14,7 +14,8 @@
 namespace lidarcal {
 namespace {
 
-std::vector<calibration::RangePair> pairsOf(const BiasPolynomial& f, double sigma_e, int n, std::uint64_t seed) {
+std::vector<calibration::RangePair> pairsOf(const BiasPolynomial& f, double sigma_e, int n,
+                                            std::uint64_t seed) {
   auto rng = makeRng(seed, 0);
   std::uniform_real_distribution<double> dist(0.5, 6.0);
   std::normal_distribution<double> e(0.0, 1.0);
@@ -46,7 +47,8 @@ TEST(Oracle, TheSquaredLawsSigmaIsRecoveredWithinItsStandardError) {
   for (std::uint64_t seed = 1; seed <= 3; ++seed) {
     SCOPED_TRACE(seed);
     const double sigma_e = 0.003;
-    const CalibrationModel m = calibration::calibrateAgainstTruth(pairsOf(f, sigma_e, 5000, seed), config);
+    const CalibrationModel m =
+        calibration::calibrateAgainstTruth(pairsOf(f, sigma_e, 5000, seed), config);
     ASSERT_TRUE(m.status.ok());
     EXPECT_NEAR(m.model.noise.sigma_e, sigma_e, 4.0 * sigma_e / std::sqrt(2.0 * 5000));
   }
@@ -54,7 +56,8 @@ TEST(Oracle, TheSquaredLawsSigmaIsRecoveredWithinItsStandardError) {
 
 TEST(Oracle, TooFewReadingsAreAStatus) {
   calibration::CalibrationConfig config;  // max_order 4: 7 needed
-  const CalibrationModel m = calibration::calibrateAgainstTruth(pairsOf(BiasPolynomial{}, 0.0, 6, 1), config);
+  const CalibrationModel m =
+      calibration::calibrateAgainstTruth(pairsOf(BiasPolynomial{}, 0.0, 6, 1), config);
   EXPECT_EQ(m.status.code, StatusCode::too_few_observations);
 }
 

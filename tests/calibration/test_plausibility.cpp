@@ -5,8 +5,8 @@
 #include <cmath>
 #include <string>
 
-#include <Eigen/Geometry>
 #include <gtest/gtest.h>
+#include <Eigen/Geometry>
 
 #include "calibration/calibrate.hpp"
 
@@ -71,8 +71,11 @@ TEST(PlausibilityWarnings, LandmarksTheDataDoNotLocateAreFlaggedByTheirMedianCen
     CalibrationModel m = withBias({0.01, 1.0}, 1.0, 3.0);
     JointResult j;
     const Eigen::Rotation2Dd turn(0.7);
-    const Eigen::Matrix2d axes = Eigen::Vector2d(0.004 * 0.004, worst_axis * worst_axis).asDiagonal();
-    for (int id = 1; id <= 4; ++id) j.centre_covariance[id] = turn.toRotationMatrix() * axes * turn.toRotationMatrix().transpose();
+    const Eigen::Matrix2d axes =
+        Eigen::Vector2d(0.004 * 0.004, worst_axis * worst_axis).asDiagonal();
+    for (int id = 1; id <= 4; ++id)
+      j.centre_covariance[id] =
+          turn.toRotationMatrix() * axes * turn.toRotationMatrix().transpose();
     j.centre_covariance[5] = Eigen::Matrix2d::Identity() * 100.0;  // one landmark 10 m uncertain
     addPlausibilityWarnings(m, &j);
     EXPECT_EQ(mentions(m, "not pinned down by the data"), worst_axis > kUnlocatedLandmarkM);

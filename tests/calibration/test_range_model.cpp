@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Range-model fits: least squares, AIC on a hand-computable case, Alhashimi et al. 2016's closed form
-// against its formula, ML, Alhashimi et al. 2021's noise polynomial, the noise-exponent test.
+// Range-model fits: least squares, AIC on a hand-computable case, Alhashimi et al. 2016's closed
+// form against its formula, ML, Alhashimi et al. 2021's noise polynomial, the noise-exponent test.
 
 #include <cmath>
 #include <numeric>
@@ -15,12 +15,12 @@
 namespace lidarcal::calibration {
 namespace {
 
-
 TEST(FitPolynomial, RecoversAnExactPolynomialOfEveryOrder) {
   for (int order = 0; order <= 5; ++order) {
     SCOPED_TRACE(order);
     std::vector<double> truth(static_cast<std::size_t>(order) + 1);
-    for (int i = 0; i <= order; ++i) truth[static_cast<std::size_t>(i)] = 0.3 * (i + 1) * (i % 2 ? -1 : 1);
+    for (int i = 0; i <= order; ++i)
+      truth[static_cast<std::size_t>(i)] = 0.3 * (i + 1) * (i % 2 ? -1 : 1);
     BiasPolynomial f{truth};
     std::vector<double> d, y;
     for (int i = 0; i < 40; ++i) {
@@ -59,7 +59,8 @@ TEST(SelectOrder, AicOnAHandComputableCase) {
   for (int k = 0; k < 4; ++k) {
     SCOPED_TRACE(k);
     EXPECT_NEAR(sel.table[static_cast<std::size_t>(k)].rss_m2, rss[k], 1e-9);
-    EXPECT_NEAR(sel.table[static_cast<std::size_t>(k)].aic, 2.0 * (k + 2) + n * (kLog2Pi + std::log(rss[k] / n) + 1.0), 1e-6);
+    EXPECT_NEAR(sel.table[static_cast<std::size_t>(k)].aic,
+                2.0 * (k + 2) + n * (kLog2Pi + std::log(rss[k] / n) + 1.0), 1e-6);
   }
   EXPECT_EQ(sel.order_aic, 2);
   EXPECT_EQ(sel.chosen, 2);
@@ -123,7 +124,8 @@ TEST(Alhashimi2016ML, RecoversTheModelAndImprovesOnTheClosedFormLikelihood) {
     // ML maximises the likelihood of model (1): never worse than its start.
     EXPECT_LE(ml.neg_log_likelihood, cf.neg_log_likelihood + 1e-9);
     EXPECT_NEAR(ml.sigma_e, m.noise.sigma_e, 0.1 * m.noise.sigma_e);
-    for (double dist : {0.5, 2.0, 4.0}) EXPECT_NEAR(BiasPolynomial{ml.alpha}(dist), m.bias(dist), 0.01);
+    for (double dist : {0.5, 2.0, 4.0})
+      EXPECT_NEAR(BiasPolynomial{ml.alpha}(dist), m.bias(dist), 0.01);
   }
 }
 
@@ -138,7 +140,8 @@ TEST(NoisePolynomial, RecoversThePolynomialNoiseOfAlhashimi2021) {
     std::vector<double> r(draws.d.size());
     for (std::size_t i = 0; i < r.size(); ++i) r[i] = draws.y[i] - m.bias(draws.d[i]);
     const auto beta = fitNoisePolynomial(draws.d, r, 1);
-    for (double dist : {0.5, 2.0, 4.0}) EXPECT_NEAR(std::abs(beta[0] + beta[1] * dist), 0.01 + 0.02 * dist, 0.005);
+    for (double dist : {0.5, 2.0, 4.0})
+      EXPECT_NEAR(std::abs(beta[0] + beta[1] * dist), 0.01 + 0.02 * dist, 0.005);
   }
 }
 

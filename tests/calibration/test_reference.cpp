@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Calibration against measured distances (Alhashimi et al. 2016 section 5): the known-distance readings of
-// poles and walls, the fit with its stop-clustered standard errors, the noise exponent test,
-// and the matching of reference entries to targets.
+// Calibration against measured distances (Alhashimi et al. 2016 section 5): the known-distance
+// readings of poles and walls, the fit with its stop-clustered standard errors, the noise exponent
+// test, and the matching of reference entries to targets.
 
 #include <cmath>
 #include <random>
@@ -17,7 +17,8 @@ namespace {
 
 simulation::LandmarkLevelConfig field(NoiseKind noise, double sigma_e) {
   simulation::LandmarkLevelConfig c;
-  c.landmarks = {{1.5, 0.75, 0.12}, {0.3, 2.2, 0.12}, {2.4, 3.4, 0.12}, {3.9, -1.3, 0.12}, {0.9, -2.8, 0.12}};
+  c.landmarks = {
+      {1.5, 0.75, 0.12}, {0.3, 2.2, 0.12}, {2.4, 3.4, 0.12}, {3.9, -1.3, 0.12}, {0.9, -2.8, 0.12}};
   c.path.stops = 10;
   c.path.scans_per_stop = 10;
   c.path.sigma_s_m = 0.02;
@@ -35,15 +36,18 @@ simulation::LandmarkLevelConfig field(NoiseKind noise, double sigma_e) {
 /// What a user with a tape would write: every visible pole's centre distance from the true
 /// pose of each stop, with its bearing (so that the entry names one pole). A pole behind a
 /// nearer one is left out: the landmark-level simulator does not occlude, a real sensor would.
-Reference tapeMeasured(const simulation::LandmarkLevelConfig& c, const simulation::LandmarkLevelSample& s) {
+Reference tapeMeasured(const simulation::LandmarkLevelConfig& c,
+                       const simulation::LandmarkLevelSample& s) {
   Reference ref;
   for (std::size_t k = 0; k < s.stops.size(); ++k) {
     const Pose2& a = s.stops[k].actual;
     auto hidden = [&](const Cylinder& l) {
-      const double dl = std::hypot(l.x_m - a.x_m, l.y_m - a.y_m), bl = std::atan2(l.y_m - a.y_m, l.x_m - a.x_m);
+      const double dl = std::hypot(l.x_m - a.x_m, l.y_m - a.y_m),
+                   bl = std::atan2(l.y_m - a.y_m, l.x_m - a.x_m);
       for (const auto& o : c.landmarks) {
         const double dox = o.x_m - a.x_m, doy = o.y_m - a.y_m, d = std::hypot(dox, doy);
-        if (d < dl && std::abs(wrapAngle(std::atan2(doy, dox) - bl)) < std::asin(o.radius_m / d) + std::asin(l.radius_m / dl))
+        if (d < dl && std::abs(wrapAngle(std::atan2(doy, dox) - bl)) <
+                          std::asin(o.radius_m / d) + std::asin(l.radius_m / dl))
           return true;
       }
       return false;
@@ -85,7 +89,8 @@ TEST(ReferenceCalibration, RecoversTheBiasAndIts95PercentIntervalsCoverTheTruth)
     SCOPED_TRACE(seed);
     const auto sample = simulation::simulateLandmarkLevel(cfg, static_cast<std::uint64_t>(seed));
     const ReferenceReadings known = knownReadings(sample.obs, tapeMeasured(cfg, sample), 0.12);
-    for (const auto& m : known.matches) ASSERT_TRUE(m.ok()) << "entry " << m.entry << ": " << m.status;
+    for (const auto& m : known.matches)
+      ASSERT_TRUE(m.ok()) << "entry " << m.entry << ": " << m.status;
     const CalibrationModel m = calibrateWithReference(known.readings, CalibrationConfig{});
     ASSERT_STREQ(m.status.name(), "ok") << m.status.message;
     ASSERT_TRUE(m.fitted_range_m.has_value());
@@ -96,8 +101,10 @@ TEST(ReferenceCalibration, RecoversTheBiasAndIts95PercentIntervalsCoverTheTruth)
       covered[i] += std::abs(err) <= 1.96 * fStdErr(m, at[i]);
     }
   }
-  for (std::size_t i = 0; i < at.size(); ++i) EXPECT_GE(covered[i], 34) << "coverage at " << at[i] << " m";
-  EXPECT_GE(exponent_two, 36) << "Alhashimi et al. 2016's test should name the squared law it was simulated with";
+  for (std::size_t i = 0; i < at.size(); ++i)
+    EXPECT_GE(covered[i], 34) << "coverage at " << at[i] << " m";
+  EXPECT_GE(exponent_two, 36)
+      << "Alhashimi et al. 2016's test should name the squared law it was simulated with";
 }
 
 TEST(ReferenceCalibration, NoiseExponentTestNamesConstantNoiseOfATimeOfFlightSensor) {
@@ -125,7 +132,8 @@ TEST(ReferenceCalibration, MatchesEntriesByBearingOrByMeasuredDistance) {
   by_distance.stop = 2;
   by_distance.distance_m = std::hypot(far_pole.x_m - a.x_m, far_pole.y_m - a.y_m);
   ReferenceDistance wrong_bearing = by_distance;
-  wrong_bearing.bearing_rad = wrapAngle(std::atan2(far_pole.y_m - a.y_m, far_pole.x_m - a.x_m) - a.yaw_rad + kPi);
+  wrong_bearing.bearing_rad =
+      wrapAngle(std::atan2(far_pole.y_m - a.y_m, far_pole.x_m - a.x_m) - a.yaw_rad + kPi);
   ReferenceDistance nothing_there = by_distance;
   nothing_there.distance_m = 9.0;
   Reference ref;
@@ -135,7 +143,8 @@ TEST(ReferenceCalibration, MatchesEntriesByBearingOrByMeasuredDistance) {
   EXPECT_TRUE(known.matches[0].ok()) << known.matches[0].status;
   EXPECT_EQ(known.matches[0].landmark, 4);
   EXPECT_GT(known.matches[0].readings, 0u);
-  for (const auto& r : known.readings) EXPECT_EQ(r.entry, 0u);  // the failed entries give no readings
+  // the failed entries give no readings
+  for (const auto& r : known.readings) EXPECT_EQ(r.entry, 0u);
   EXPECT_FALSE(known.matches[1].ok());
   EXPECT_NE(known.matches[1].status.find("bearing"), std::string::npos) << known.matches[1].status;
   EXPECT_FALSE(known.matches[2].ok());
@@ -144,14 +153,16 @@ TEST(ReferenceCalibration, MatchesEntriesByBearingOrByMeasuredDistance) {
 
 /// Readings at twelve taped stops, 0.5-3.25 m, of a sensor whose mean reading is truth(d) with
 /// 3 mm noise: readings(k) of them at stop k, each stop's tape off by its own 2 mm error (stated).
-std::vector<KnownReading> tapedReadings(std::uint64_t seed, const BiasPolynomial& truth, int (*readings)(std::size_t)) {
+std::vector<KnownReading> tapedReadings(std::uint64_t seed, const BiasPolynomial& truth,
+                                        int (*readings)(std::size_t)) {
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> noise(0.0, 0.003), tape(0.0, 0.002);
   std::vector<KnownReading> r;
   for (std::size_t k = 0; k < 12; ++k) {
     const double d = 0.5 + 0.25 * static_cast<double>(k), taped = d + tape(rng);
     for (int i = 0; i < readings(k); ++i)
-      r.push_back({k, k, static_cast<std::size_t>(i), kUnknownBeam, taped, truth(d) + noise(rng), 0.0, 0.002});
+      r.push_back({k, k, static_cast<std::size_t>(i), kUnknownBeam, taped, truth(d) + noise(rng),
+                   0.0, 0.002});
   }
   return r;
 }
@@ -166,8 +177,8 @@ TEST(ReferenceCalibration, WhereTheTapeErrorOutweighsTheNoiseEveryEntryCountsAbo
   const int seeds = 40;
   double re_se = 0.0, law_se = 0.0;
   for (int seed = 301; seed < 301 + seeds; ++seed) {
-    const std::vector<KnownReading> r =
-        tapedReadings(static_cast<std::uint64_t>(seed), truth, [](std::size_t k) { return k % 2 ? 500 : 5; });
+    const std::vector<KnownReading> r = tapedReadings(
+        static_cast<std::uint64_t>(seed), truth, [](std::size_t k) { return k % 2 ? 500 : 5; });
     CalibrationConfig config;
     config.max_order = 2;  // the truth's: the weights, not the order, are under test
     config.noise = NoiseKind::constant;
@@ -192,11 +203,13 @@ TEST(ReferenceCalibration, AWrongTapeReadingIsNamedInAWarningAndCorrectOnesAreNo
   int clean_warnings = 0, named = 0;
   const int seeds = 20;
   for (int seed = 401; seed < 401 + seeds; ++seed) {
-    std::vector<KnownReading> r = tapedReadings(static_cast<std::uint64_t>(seed), truth, [](std::size_t) { return 50; });
+    std::vector<KnownReading> r =
+        tapedReadings(static_cast<std::uint64_t>(seed), truth, [](std::size_t) { return 50; });
     auto disagreeing = [](const CalibrationModel& m) {
       std::vector<std::string> w;
       for (const auto& s : m.warnings)
-        if (s.find("disagrees with the other measured distances") != std::string::npos) w.push_back(s);
+        if (s.find("disagrees with the other measured distances") != std::string::npos)
+          w.push_back(s);
       return w;
     };
     CalibrationConfig config;
@@ -216,7 +229,8 @@ TEST(ReferenceCalibration, AWrongTapeReadingIsNamedInAWarningAndCorrectOnesAreNo
 TEST(ReferenceCalibration, TooFewStopsIsAStatusNotAModel) {
   std::vector<KnownReading> r;
   for (std::size_t k = 0; k < 2; ++k)
-    for (int i = 0; i < 50; ++i) r.push_back({k, k, 0, static_cast<std::uint32_t>(i), 1.0 + k, 1.01 + k});
+    for (int i = 0; i < 50; ++i)
+      r.push_back({k, k, 0, static_cast<std::uint32_t>(i), 1.0 + k, 1.01 + k});
   const CalibrationModel m = calibrateWithReference(r, CalibrationConfig{});
   EXPECT_STREQ(m.status.name(), "too_few_reference_stops");
   EXPECT_NE(m.status.message.find("3 or more stops"), std::string::npos);
@@ -246,7 +260,8 @@ TEST(ReferenceCalibration, WallReadingsHaveTheDistanceAlongTheBeamToTheMeasuredP
   ws.distance_m = walls[0].distance_m;
   for (const auto i : walls[0].inliers) {
     const auto& p = cloud[static_cast<std::size_t>(i)];
-    ws.beams.push_back({std::atan2(double(p.y), double(p.x)), std::hypot(double(p.x), double(p.y)), static_cast<std::uint32_t>(i)});
+    ws.beams.push_back({std::atan2(double(p.y), double(p.x)), std::hypot(double(p.x), double(p.y)),
+                        static_cast<std::uint32_t>(i)});
   }
   obs.walls = {ws};
   Reference ref;
@@ -258,7 +273,8 @@ TEST(ReferenceCalibration, WallReadingsHaveTheDistanceAlongTheBeamToTheMeasuredP
   ASSERT_TRUE(known.matches[0].ok()) << known.matches[0].status;
   EXPECT_NEAR(known.matches[0].measured_m, 1.02 * D, 1e-4);
   ASSERT_GT(known.readings.size(), 40u);
-  for (const auto& r : known.readings) EXPECT_NEAR(r.y_m / r.d_m, 1.02, 1e-5);  // the 2 % the sensor reads long
+  // the 2 % the sensor reads long
+  for (const auto& r : known.readings) EXPECT_NEAR(r.y_m / r.d_m, 1.02, 1e-5);
 }
 
 }  // namespace

@@ -23,7 +23,8 @@ TEST(Refusals, StopsWithinTheMinimumBaselineCannotTriangulate) {
   EXPECT_NE(problem->find("2 stops lie within 0.05 m"), std::string::npos) << *problem;
   EXPECT_NE(problem->find("--reference"), std::string::npos);
   EXPECT_FALSE(calibration::baselineProblem({{0, 0, 0}, {0.2, 0, 0}}, config).has_value());
-  EXPECT_FALSE(calibration::baselineProblem({{0, 0, 0}}, config).has_value());  // one stop: refused later
+  // one stop: refused later
+  EXPECT_FALSE(calibration::baselineProblem({{0, 0, 0}}, config).has_value());
 }
 
 TEST(Refusals, UnusableInputIsRefusedWithItsCode) {
@@ -64,7 +65,8 @@ TEST(Refusals, TooFewPairsForTheOrdersAreRefusedWithTheCountNeeded) {
   CalibrationModel m;
   EXPECT_TRUE(calibration::refuseTooFewPairs(m, obs, config, {}, 6, 2, 1.0));
   EXPECT_EQ(m.status.code, StatusCode::too_few_observations);
-  EXPECT_NE(m.status.message.find("only 6 landmark-stop distances from 2 triangulated landmarks (at least 7 needed)"),
+  EXPECT_NE(m.status.message.find(
+                "only 6 landmark-stop distances from 2 triangulated landmarks (at least 7 needed)"),
             std::string::npos)
       << m.status.message;
   CalibrationModel fine;

@@ -43,7 +43,8 @@ void expectMountingsWithin(const RigResult& r, const simulation::RigSimConfig& s
     const Mounting& t = sim.sensors[s].mounting;
     EXPECT_LE(std::abs(e.mounting.x_m - t.x_m), k * std::sqrt(e.mounting_covariance(0, 0)));
     EXPECT_LE(std::abs(e.mounting.y_m - t.y_m), k * std::sqrt(e.mounting_covariance(1, 1)));
-    EXPECT_LE(std::abs(wrapAngle(e.mounting.yaw_rad - t.yaw_rad)), k * std::sqrt(e.mounting_covariance(2, 2)));
+    EXPECT_LE(std::abs(wrapAngle(e.mounting.yaw_rad - t.yaw_rad)),
+              k * std::sqrt(e.mounting_covariance(2, 2)));
     EXPECT_EQ(e.mounting.upside_down, t.upside_down);
   }
 }
@@ -73,7 +74,8 @@ TEST(RigCalibration, StopAndGoRecoversTwoAndThreeMountingsInTheVehicleFrame) {
     for (std::uint64_t seed = 1; seed <= 3; ++seed) {
       SCOPED_TRACE(seed);
       const simulation::RigSimConfig sim = stopAndGo(three);
-      const RigResult r = calibration::calibrateRig(simulation::simulateRig(sim, seed).obs, configFor(sim));
+      const RigResult r =
+          calibration::calibrateRig(simulation::simulateRig(sim, seed).obs, configFor(sim));
       EXPECT_EQ(r.frame, RigFrame::vehicle);
       EXPECT_FALSE(r.scale_free);
       expectMountingsWithin(r, sim, 4.0);
@@ -82,7 +84,8 @@ TEST(RigCalibration, StopAndGoRecoversTwoAndThreeMountingsInTheVehicleFrame) {
 
 TEST(RigCalibration, ADrivingVehicleRecoversItsMountingsWithTheOdometryAsMotionPrior) {
   const simulation::RigSimConfig sim = driving(false);
-  const RigResult r = calibration::calibrateRig(simulation::simulateRig(sim, 2).obs, configFor(sim));
+  const RigResult r =
+      calibration::calibrateRig(simulation::simulateRig(sim, 2).obs, configFor(sim));
   EXPECT_TRUE(r.motion_prior);
   expectMountingsWithin(r, sim, 4.0);
 }
@@ -111,11 +114,13 @@ TEST(RigCalibration, ARangeModelBeyondWhatLidarsAreBuiltToIsNotDeterminedHowever
   calibration::RigSensorEstimate bent = fittedOver({1.14, -1.77, 1.85}, 0.55, 1.01);
   calibration::checkRangeModel(bent, "back", c);
   EXPECT_EQ(bent.model_status.code, StatusCode::not_identifiable);
-  EXPECT_NE(bent.model_status.message.find("0.55-1.01 m"), std::string::npos) << bent.model_status.message;
+  EXPECT_NE(bent.model_status.message.find("0.55-1.01 m"), std::string::npos)
+      << bent.model_status.message;
   // The same polynomial's standard error alone would pass it.
   EXPECT_LT(bent.model_se_m, c.max_model_se_m);
   // Just inside and just outside the bound (25 % of the distance at 2 m: 500 mm).
-  calibration::RigSensorEstimate inside = fittedOver({0.49, 1.0}, 2.0, 4.0), outside = fittedOver({0.51, 1.0}, 2.0, 4.0);
+  calibration::RigSensorEstimate inside = fittedOver({0.49, 1.0}, 2.0, 4.0),
+                                 outside = fittedOver({0.51, 1.0}, 2.0, 4.0);
   calibration::checkRangeModel(inside, "a", c);
   calibration::checkRangeModel(outside, "b", c);
   EXPECT_TRUE(inside.model_status.ok());
@@ -124,7 +129,8 @@ TEST(RigCalibration, ARangeModelBeyondWhatLidarsAreBuiltToIsNotDeterminedHowever
 
 TEST(RigCalibration, EachSensorGetsItsOwnNoiseLaw) {
   const simulation::RigSimConfig sim = stopAndGo(true);  // the side lidar's noise grows with f(d)^2
-  const RigResult r = calibration::calibrateRig(simulation::simulateRig(sim, 1).obs, configFor(sim));
+  const RigResult r =
+      calibration::calibrateRig(simulation::simulateRig(sim, 1).obs, configFor(sim));
   ASSERT_TRUE(r.ok()) << r.status.message;
   EXPECT_EQ(r.sensors[0].model.noise.kind, NoiseKind::constant);
   EXPECT_EQ(r.sensors[2].model.noise.kind, NoiseKind::squared);
@@ -134,7 +140,8 @@ TEST(RigCalibration, EachSensorGetsItsOwnNoiseLaw) {
 
 TEST(RigCalibration, AStaticVehicleGivesTheRelativeMountingsOnlyAndSaysWhy) {
   const simulation::RigSimConfig sim = staticVehicle(false);
-  const RigResult r = calibration::calibrateRig(simulation::simulateRig(sim, 4).obs, configFor(sim));
+  const RigResult r =
+      calibration::calibrateRig(simulation::simulateRig(sim, 4).obs, configFor(sim));
   ASSERT_TRUE(r.ok()) << r.status.message;
   EXPECT_EQ(r.frame, RigFrame::relative);
   EXPECT_TRUE(r.scale_free);
@@ -146,7 +153,8 @@ TEST(RigCalibration, AStaticVehicleGivesTheRelativeMountingsOnlyAndSaysWhy) {
   const double scale = sim.sensors[0].model.bias.alpha[1];  // lengths in the reference's units
   EXPECT_LE(std::abs(rel.pose.x_m - scale * truth.x_m), 4.0 * std::sqrt(rel.covariance(0, 0)));
   EXPECT_LE(std::abs(rel.pose.y_m - scale * truth.y_m), 4.0 * std::sqrt(rel.covariance(1, 1)));
-  EXPECT_LE(std::abs(wrapAngle(rel.pose.yaw_rad - truth.yaw_rad)), 4.0 * std::sqrt(rel.covariance(2, 2)));
+  EXPECT_LE(std::abs(wrapAngle(rel.pose.yaw_rad - truth.yaw_rad)),
+            4.0 * std::sqrt(rel.covariance(2, 2)));
   bool scale_note = false, frame_note = false;
   for (const auto& n : r.notes) {
     scale_note = scale_note || n.find("range scale") != std::string::npos;
@@ -166,8 +174,10 @@ TEST(RigCalibration, TheVehicleFrameOfAStaticVehicleIsRefusedWithWhatToRecord) {
 
 TEST(RigCalibration, ASensorThatSharesNoPoleIsRefusedOnAStaticVehicle) {
   simulation::RigSimConfig sim = staticVehicle(false);
-  sim.poles = {Cylinder{3.0, 1.2, 0.045}, Cylinder{-1.5, -1.6, 0.045}};  // one in each sensor's view only
-  const RigResult r = calibration::calibrateRig(simulation::simulateRig(sim, 1).obs, configFor(sim));
+  // one in each sensor's view only
+  sim.poles = {Cylinder{3.0, 1.2, 0.045}, Cylinder{-1.5, -1.6, 0.045}};
+  const RigResult r =
+      calibration::calibrateRig(simulation::simulateRig(sim, 1).obs, configFor(sim));
   EXPECT_EQ(r.status.code, StatusCode::no_shared_landmark) << r.status.message;
 }
 

@@ -45,7 +45,8 @@ ReferenceSpan span(double bearing_a_deg, double bearing_b_deg, double distance_m
   return r;
 }
 
-const ReferenceSpan kWalls = span(-20, 160, 6.0), kCabinet = span(-20, 160, 5.6), kAcross = span(-110, 70, 4.5);
+const ReferenceSpan kWalls = span(-20, 160, 6.0), kCabinet = span(-20, 160, 5.6),
+                    kAcross = span(-110, 70, 4.5);
 
 /// The walls of every simulated scan, grouped into surfaces as `calibrate --reference` does.
 LandmarkObservations observe(const Scene& scene, std::uint64_t seed) {
@@ -58,7 +59,9 @@ LandmarkObservations observe(const Scene& scene, std::uint64_t seed) {
   config.threshold_per_m2 = 0.005;
   for (int i = 0; i < scene.path.scans_per_stop; ++i) {
     const auto sim = simulation::simulateScan(scene, stops[0], static_cast<std::size_t>(i), seed);
-    for (auto& w : detectors::wallSightings(*sim.scan.cloud, 0, static_cast<std::size_t>(i), config)) obs.walls.push_back(w);
+    for (auto& w :
+         detectors::wallSightings(*sim.scan.cloud, 0, static_cast<std::size_t>(i), config))
+      obs.walls.push_back(w);
   }
   detectors::labelWallSurfaces(obs.walls);
   return obs;
@@ -85,7 +88,8 @@ double biasSe(const CalibrationModel& m, double d) {
   const std::size_t n = m.model.bias.alpha.size();
   double v = 0.0;
   for (std::size_t i = 0; i < n; ++i)
-    for (std::size_t j = 0; j < n; ++j) v += std::pow(d, double(i)) * m.alpha_covariance[i * n + j] * std::pow(d, double(j));
+    for (std::size_t j = 0; j < n; ++j)
+      v += std::pow(d, double(i)) * m.alpha_covariance[i * n + j] * std::pow(d, double(j));
   return std::sqrt(v);
 }
 
@@ -97,7 +101,8 @@ TEST(SpanFit, WallDistanceUnderTheTrueBiasIsTheTrueDistance) {
   w.normal_rad = deg2rad(31.0);
   for (int j = -40; j <= 25; ++j) {
     const double a = deg2rad(30.0 + j);
-    w.beams.push_back({a, f(2.5 / std::cos(a - deg2rad(30.0))), 10, static_cast<std::uint32_t>(j + 40)});
+    w.beams.push_back(
+        {a, f(2.5 / std::cos(a - deg2rad(30.0))), 10, static_cast<std::uint32_t>(j + 40)});
   }
   const WallDistance d = wallDistance(w, f);
   ASSERT_TRUE(d.ok);
@@ -108,11 +113,13 @@ TEST(SpanFit, WallDistanceUnderTheTrueBiasIsTheTrueDistance) {
 
 // Noise-free scans: an offset is recovered exactly, and so is a scale from spans of three lengths.
 TEST(SpanFit, NoiseFreeRoomsGiveTheExactBias) {
-  for (const std::vector<double>& alpha : {std::vector<double>{0.03, 1.0}, std::vector<double>{0.01, 1.02}}) {
+  for (const std::vector<double>& alpha :
+       {std::vector<double>{0.03, 1.0}, std::vector<double>{0.01, 1.02}}) {
     SCOPED_TRACE(alpha[1]);
     const Fitted f = calibrate(observe(room(alpha, 0.0, 2), 1), {kWalls, kCabinet, kAcross});
     ASSERT_TRUE(f.model.status.ok()) << f.model.status.message;
-    for (double d : {2.0, 3.0, 4.0}) EXPECT_NEAR(f.model.model.bias(d), alpha[0] + alpha[1] * d, 2e-4) << d;
+    for (double d : {2.0, 3.0, 4.0})
+      EXPECT_NEAR(f.model.model.bias(d), alpha[0] + alpha[1] * d, 2e-4) << d;
   }
 }
 
@@ -121,11 +128,13 @@ TEST(SpanFit, NoiseFreeRoomsGiveTheExactBias) {
 TEST(SpanFit, AnOffsetIsRecoveredWithinItsStandardError) {
   for (std::uint64_t seed = 1; seed <= 10; ++seed) {
     SCOPED_TRACE(seed);
-    const Fitted f = calibrate(observe(room({0.03, 1.0}, 0.005, 10), seed), {kWalls, kCabinet, kAcross});
+    const Fitted f =
+        calibrate(observe(room({0.03, 1.0}, 0.005, 10), seed), {kWalls, kCabinet, kAcross});
     ASSERT_TRUE(f.model.status.ok()) << f.model.status.message;
     const double se = biasSe(f.model, 3.0);
     ASSERT_GT(se, 0.0);
-    EXPECT_LT(std::abs(f.model.model.bias(3.0) - 3.03), 3.0 * se) << "f(3) = " << f.model.model.bias(3.0) << " +- " << se;
+    EXPECT_LT(std::abs(f.model.model.bias(3.0) - 3.03), 3.0 * se)
+        << "f(3) = " << f.model.model.bias(3.0) << " +- " << se;
     EXPECT_LT(se, 0.005);
     const Eigen::VectorXd raw = entryErrors(f.problem, BiasPolynomial{});
     for (Eigen::Index k = 0; k < raw.size(); ++k) EXPECT_NEAR(raw(k), 0.06, 0.01);
@@ -137,12 +146,14 @@ TEST(SpanFit, AnOffsetIsRecoveredWithinItsStandardError) {
 TEST(SpanFit, SpansOfDifferentLengthsRecoverAScale) {
   for (std::uint64_t seed = 1; seed <= 5; ++seed) {
     SCOPED_TRACE(seed);
-    const Fitted f = calibrate(observe(room({0.01, 1.02}, 0.005, 10), seed), {kWalls, kCabinet, kAcross});
+    const Fitted f =
+        calibrate(observe(room({0.01, 1.02}, 0.005, 10), seed), {kWalls, kCabinet, kAcross});
     ASSERT_TRUE(f.model.status.ok()) << f.model.status.message;
     EXPECT_GE(f.model.order_validation, 1);
     for (double d : {2.5, 3.5}) {
       const double se = biasSe(f.model, d);
-      EXPECT_LT(std::abs(f.model.model.bias(d) - (0.01 + 1.02 * d)), 3.0 * se) << d << ": +- " << se;
+      EXPECT_LT(std::abs(f.model.model.bias(d) - (0.01 + 1.02 * d)), 3.0 * se)
+          << d << ": +- " << se;
     }
   }
 }
@@ -159,7 +170,8 @@ TEST(SpanFit, OnePairOfWallsDeterminesAnOffsetOnly) {
   EXPECT_TRUE(fitSpanModel(one.problem, 0, {true, true}).identifiable);
   EXPECT_EQ(one.model.order_validation, 0);
   ASSERT_FALSE(one.model.warnings.empty());
-  EXPECT_NE(one.model.warnings.front().find("offset only"), std::string::npos) << one.model.warnings.front();
+  EXPECT_NE(one.model.warnings.front().find("offset only"), std::string::npos)
+      << one.model.warnings.front();
   const Fitted two = calibrate(obs, {kWalls, kAcross});
   EXPECT_TRUE(fitSpanModel(two.problem, 1, {true, true}).identifiable);
 }
@@ -173,12 +185,14 @@ TEST(SpanWalls, ASpanWithoutItsWallsNamesTheField) {
   const SpanReadings found = spanReadings(obs, ref);
   ASSERT_EQ(found.matches.size(), 3u);
   EXPECT_EQ(found.matches[0].field, "bearing_b_deg");
-  EXPECT_NE(found.matches[0].status.find("no wall within 20 deg of 115 deg"), std::string::npos) << found.matches[0].status;
-  EXPECT_NE(found.matches[0].status.find("160 deg at 2.50 m"), std::string::npos) << "the walls seen are listed: "
-                                                                                 << found.matches[0].status;
+  EXPECT_NE(found.matches[0].status.find("no wall within 20 deg of 115 deg"), std::string::npos)
+      << found.matches[0].status;
+  EXPECT_NE(found.matches[0].status.find("160 deg at 2.50 m"), std::string::npos)
+      << "the walls seen are listed: " << found.matches[0].status;
   EXPECT_EQ(found.matches[1].field, "distance_m");
   EXPECT_EQ(found.matches[2].field, "bearing_b_deg");
-  EXPECT_NE(found.matches[2].status.find("not parallel"), std::string::npos) << found.matches[2].status;
+  EXPECT_NE(found.matches[2].status.find("not parallel"), std::string::npos)
+      << found.matches[2].status;
 }
 
 }  // namespace

@@ -1,14 +1,14 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Triangulation (Alhashimi et al. 2021 section 3.1): exact on noise-free data, equivariant under rigid
-// motions, the eq. 25 weights on noisy data against a hand-built weighted least squares,
+// Triangulation (Alhashimi et al. 2021 section 3.1): exact on noise-free data, equivariant under
+// rigid motions, the eq. 25 weights on noisy data against a hand-built weighted least squares,
 // degenerate geometry reported.
 
 #include <cmath>
 #include <map>
 
+#include <gtest/gtest.h>
 #include <Eigen/LU>
 #include <Eigen/QR>
-#include <gtest/gtest.h>
 
 #include "calibration/triangulation.hpp"
 #include "simulation/landmark_level.hpp"
@@ -18,7 +18,8 @@ namespace {
 
 simulation::LandmarkLevelConfig noiseFree(const Pose2& start) {
   simulation::LandmarkLevelConfig c;
-  c.landmarks = {{1.5, 0.75, 0.12}, {0.3, 2.2, 0.12}, {2.4, 3.4, 0.12}, {3.9, -1.3, 0.12}, {0.9, -2.8, 0.12}};
+  c.landmarks = {
+      {1.5, 0.75, 0.12}, {0.3, 2.2, 0.12}, {2.4, 3.4, 0.12}, {3.9, -1.3, 0.12}, {0.9, -2.8, 0.12}};
   c.path.start = start;
   c.path.stops = 10;
   c.path.scans_per_stop = 2;
@@ -48,7 +49,8 @@ TEST_P(TriangulationWeightsTest, ExactOnNoiseFreeData) {
 }
 
 INSTANTIATE_TEST_SUITE_P(AllWeights, TriangulationWeightsTest,
-                         ::testing::Values(LineWeights::paper, LineWeights::residual, LineWeights::uniform));
+                         ::testing::Values(LineWeights::paper, LineWeights::residual,
+                                           LineWeights::uniform));
 
 TEST(Triangulation, ARigidMotionOfTheSceneMovesTheAnswerTheSameWay) {
   auto cfg = noiseFree(Pose2{});
@@ -64,8 +66,10 @@ TEST(Triangulation, ARigidMotionOfTheSceneMovesTheAnswerTheSameWay) {
     // except the position noise, which is drawn in world axes: compare with sigma_s = 0.
     auto a = cfg, b = moved;
     a.path.sigma_s_m = b.path.sigma_s_m = 0.0;
-    const auto ea = triangulateAll(simulation::simulateLandmarkLevel(a, seed).obs, TriangulationConfig{});
-    const auto eb = triangulateAll(simulation::simulateLandmarkLevel(b, seed).obs, TriangulationConfig{});
+    const auto ea =
+        triangulateAll(simulation::simulateLandmarkLevel(a, seed).obs, TriangulationConfig{});
+    const auto eb =
+        triangulateAll(simulation::simulateLandmarkLevel(b, seed).obs, TriangulationConfig{});
     ASSERT_EQ(ea.size(), eb.size());
     for (std::size_t i = 0; i < ea.size(); ++i) {
       double x = 0, y = 0;
@@ -91,7 +95,8 @@ TEST(Triangulation, CovarianceMatchesTheScatterOverSeeds) {
   for (int seed = 1; seed <= n; ++seed) {
     auto c = cfg;
     c.landmarks = {{1.5, 0.75, 0.12}};
-    const auto e = triangulateAll(simulation::simulateLandmarkLevel(c, static_cast<std::uint64_t>(seed)).obs, tc)[0];
+    const auto e = triangulateAll(
+        simulation::simulateLandmarkLevel(c, static_cast<std::uint64_t>(seed)).obs, tc)[0];
     const Eigen::Vector2d err(e.x_m - 1.5, e.y_m - 0.75);
     z2 += err.dot(e.covariance.inverse() * err);
     ++count;
@@ -122,7 +127,8 @@ TEST(Triangulation, ThreeNoisyBearingsLocateTheLandmarkWithinTheirReportedUncert
   for (int seed = 1; seed <= n; ++seed) {
     auto c = cfg;
     c.landmarks = {{1.0, 1.5, 0.12}};
-    const auto e = triangulateAll(simulation::simulateLandmarkLevel(c, static_cast<std::uint64_t>(seed)).obs, tc)[0];
+    const auto e = triangulateAll(
+        simulation::simulateLandmarkLevel(c, static_cast<std::uint64_t>(seed)).obs, tc)[0];
     ASSERT_EQ(e.status, TriangulationStatus::ok) << seed;
     ASSERT_EQ(e.stops, 3);
     ASSERT_GT(e.residual_rms_m, 0.0) << seed;
@@ -143,7 +149,8 @@ struct HandBuilt {
   Eigen::Vector2d centre;
   Eigen::Matrix2d covariance;
 };
-HandBuilt handBuiltWls(const LandmarkObservations& obs, int id, double sigma_s, double sigma_theta) {
+HandBuilt handBuiltWls(const LandmarkObservations& obs, int id, double sigma_s,
+                       double sigma_theta) {
   struct Stop {
     double s = 0, c = 0, sum = 0, sum2 = 0;
     int n = 0;
@@ -153,7 +160,8 @@ HandBuilt handBuiltWls(const LandmarkObservations& obs, int id, double sigma_s, 
     if (x.landmark != id) continue;
     std::size_t nearest = 0;
     for (std::size_t j = 0; j < x.beams.size(); ++j)
-      if (std::abs(wrapAngle(x.beams[j].angle_rad - x.bearing_rad)) < std::abs(wrapAngle(x.beams[nearest].angle_rad - x.bearing_rad)))
+      if (std::abs(wrapAngle(x.beams[j].angle_rad - x.bearing_rad)) <
+          std::abs(wrapAngle(x.beams[nearest].angle_rad - x.bearing_rad)))
         nearest = j;
     Stop& st = stops[x.stop];
     st.s += std::sin(x.bearing_rad);
@@ -171,7 +179,8 @@ HandBuilt handBuiltWls(const LandmarkObservations& obs, int id, double sigma_s, 
     const double theta = p.yaw_rad + std::atan2(st.s, st.c);
     const double mean = st.sum / st.n;
     const double var = (st.sum2 - st.n * mean * mean) / (st.n - 1);
-    w(i) = 1.0 / (sigma_s * sigma_s) + 1.0 / (sigma_theta * sigma_theta * var);  // Alhashimi et al. 2021 eq. 25
+    // Alhashimi et al. 2021 eq. 25
+    w(i) = 1.0 / (sigma_s * sigma_s) + 1.0 / (sigma_theta * sigma_theta * var);
     A(i, 0) = std::sqrt(w(i)) * std::sin(theta);
     A(i, 1) = -std::sqrt(w(i)) * std::cos(theta);
     rhs(i) = std::sqrt(w(i)) * (std::sin(theta) * p.x_m - std::cos(theta) * p.y_m);
@@ -184,7 +193,8 @@ HandBuilt handBuiltWls(const LandmarkObservations& obs, int id, double sigma_s, 
   return h;
 }
 
-TEST(Triangulation, PaperWeightsOnNoisyDataWithSeveralScansPerStopMatchAHandBuiltWeightedLeastSquares) {
+TEST(Triangulation,
+     PaperWeightsOnNoisyDataWithSeveralScansPerStopMatchAHandBuiltWeightedLeastSquares) {
   // Noisy bearings, positions and ranges, five scans per stop: the eq. 25 weights come from the
   // sample variance of each stop's readings (noise-free data would take the fallback weights).
   auto cfg = noiseFree(Pose2{0.2, -0.1, deg2rad(10.0)});
@@ -210,7 +220,8 @@ TEST(Triangulation, PaperWeightsOnNoisyDataWithSeveralScansPerStopMatchAHandBuil
       EXPECT_NEAR(e.x_m, h.centre.x(), 1e-9);
       EXPECT_NEAR(e.y_m, h.centre.y(), 1e-9);
       for (int a = 0; a < 2; ++a)
-        for (int b = 0; b < 2; ++b) EXPECT_NEAR(e.covariance(a, b), h.covariance(a, b), 1e-9 * h.covariance.norm());
+        for (int b = 0; b < 2; ++b)
+          EXPECT_NEAR(e.covariance(a, b), h.covariance(a, b), 1e-9 * h.covariance.norm());
       // And the estimate is where the landmark is. (Not within k standard deviations of this
       // covariance: the eq. 25 weights are not the inverse variances of the line residuals,
       // sigma_s^2 + d^2 sigma_theta^2, so the residual-scaled covariance understates the scatter.)
@@ -226,7 +237,8 @@ TEST(Triangulation, LandmarkOnThePathLineIsDegenerate) {
   auto cfg = noiseFree(Pose2{});
   cfg.landmarks = {{6.0, 0.001, 0.12}};
   cfg.model.range_max_m = 20.0;
-  const auto e = triangulateAll(simulation::simulateLandmarkLevel(cfg, 1).obs, TriangulationConfig{});
+  const auto e =
+      triangulateAll(simulation::simulateLandmarkLevel(cfg, 1).obs, TriangulationConfig{});
   ASSERT_EQ(e.size(), 1u);
   EXPECT_EQ(e[0].status, TriangulationStatus::degenerate_geometry);
   EXPECT_NE(e[0].message.find("path line"), std::string::npos);
@@ -235,7 +247,8 @@ TEST(Triangulation, LandmarkOnThePathLineIsDegenerate) {
 TEST(Triangulation, SeenFromTooFewStops) {
   auto cfg = noiseFree(Pose2{});
   cfg.path.stops = 2;
-  const auto e = triangulateAll(simulation::simulateLandmarkLevel(cfg, 1).obs, TriangulationConfig{});
+  const auto e =
+      triangulateAll(simulation::simulateLandmarkLevel(cfg, 1).obs, TriangulationConfig{});
   ASSERT_FALSE(e.empty());
   for (const auto& l : e) EXPECT_EQ(l.status, TriangulationStatus::too_few_stops);
 }

@@ -24,8 +24,9 @@ TEST(TruthEvaluation, TheCommandedScaleIsTheScaleOfTheCommandedPathOverTheActual
       s.actual = Pose2{0.3 * k, 0.1 * k * k, 0.2 * k};
       // The commanded path: the actual one scaled, turned by 0.4 rad and moved (a similarity).
       const double c = std::cos(0.4), sn = std::sin(0.4);
-      s.commanded = Pose2{2.0 + scale * (c * s.actual.x_m - sn * s.actual.y_m),
-                          -1.0 + scale * (sn * s.actual.x_m + c * s.actual.y_m), s.actual.yaw_rad + 0.4};
+      s.commanded =
+          Pose2{2.0 + scale * (c * s.actual.x_m - sn * s.actual.y_m),
+                -1.0 + scale * (sn * s.actual.x_m + c * s.actual.y_m), s.actual.yaw_rad + 0.4};
       t.stops.push_back(s);
     }
     EXPECT_NEAR(calibration::commandedScale(t), scale, 1e-9);
@@ -56,7 +57,8 @@ TEST(TruthEvaluation, TheOraclesPairsAreTheTrueDistancesOfTheLandmarkBeamsTimesT
     EXPECT_EQ(scaled[i].y_m, plain[i].y_m);
     // Each reading is the simulated sensor's at its true distance: f(d) within 6 of its sigmas.
     const double d = plain[i].d_m;
-    EXPECT_LT(std::abs(plain[i].y_m - sensor.bias(d)), 6.0 * sensor.noise.stddev(d, sensor.bias)) << d;
+    EXPECT_LT(std::abs(plain[i].y_m - sensor.bias(d)), 6.0 * sensor.noise.stddev(d, sensor.bias))
+        << d;
   }
 }
 

@@ -15,7 +15,8 @@ TEST(StudentT, QuantilesMatchTheClosedFormsForOneAndTwoDegreesOfFreedom) {
   constexpr double kPi = 3.14159265358979323846;
   for (const double p : {0.01, 0.1, 0.3, 0.6, 0.8413, 0.975, 0.999}) {
     SCOPED_TRACE(p);
-    EXPECT_NEAR(studentTQuantile(p, 1.0), std::tan(kPi * (p - 0.5)), 1e-9 * (1.0 + std::abs(std::tan(kPi * (p - 0.5)))));
+    EXPECT_NEAR(studentTQuantile(p, 1.0), std::tan(kPi * (p - 0.5)),
+                1e-9 * (1.0 + std::abs(std::tan(kPi * (p - 0.5)))));
     const double two = (2.0 * p - 1.0) / std::sqrt(2.0 * p * (1.0 - p));
     EXPECT_NEAR(studentTQuantile(p, 2.0), two, 1e-9 * (1.0 + std::abs(two)));
   }

@@ -48,8 +48,8 @@ int main(int argc, char** argv) {
   io::writeModel(fs::path(argv[1]) / "consumer-model.json", written);
 
   const CalibrationModel model = io::readModel(fs::path(argv[1]) / "consumer-model.json");
-  const calibration::ReadingCorrector correct =
-      calibration::readingCorrector(model, calibration::InversionMethod::ls, calibration::Outside::keep);
+  const calibration::ReadingCorrector correct = calibration::readingCorrector(
+      model, calibration::InversionMethod::ls, calibration::Outside::keep);
   const calibration::CorrectedReading c = correct(3.006);
   std::printf("reading 3.006 m -> %.6f m\n", c.range_m);
   return c.fate == calibration::ReadingFate::corrected && std::abs(c.range_m - 3.0) < 1e-9 ? 0 : 1;

@@ -22,14 +22,17 @@ struct Synthetic {
 };
 
 struct Field {
-  std::vector<std::pair<double, double>> landmarks{{1.5, 0.75}, {0.3, 2.2}, {2.4, 3.4}, {3.9, -1.3}, {0.9, -2.8}};
+  std::vector<std::pair<double, double>> landmarks{
+      {1.5, 0.75}, {0.3, 2.2}, {2.4, 3.4}, {3.9, -1.3}, {0.9, -2.8}};
   int stops = 10, scans_per_stop = 5;
-  double drift_per_stop_m = 0.03;   // odometry drift accumulating along the path (x; half of it in y)
+  // odometry drift accumulating along the path (x; half of it in y)
+  double drift_per_stop_m = 0.03;
   double drift_yaw_per_stop_rad = 0.005;  // heading drift accumulating along the path
-  double noise_m = 0.02;            // scatter of the detected centre
-  double bias_per_m = 0.03;         // range stretched by 1 + bias * range (a lidar's range bias: +12% at 4 m)
-  double occlusion = 0.2;           // probability that a landmark is hidden at a stop
-  double spurious_per_scan = 0.3;   // random circles anywhere (expected number per scan)
+  double noise_m = 0.02;                  // scatter of the detected centre
+  // range stretched by 1 + bias * range (a lidar's range bias: +12% at 4 m)
+  double bias_per_m = 0.03;
+  double occlusion = 0.2;          // probability that a landmark is hidden at a stop
+  double spurious_per_scan = 0.3;  // random circles anywhere (expected number per scan)
 };
 
 Synthetic make(const Field& s, std::uint64_t seed) {
@@ -39,8 +42,8 @@ Synthetic make(const Field& s, std::uint64_t seed) {
   Synthetic out;
   for (int k = 0; k < s.stops; ++k) {
     const Pose2 commanded{0.3 * k, 0.0, 0.0};
-    const Pose2 actual{commanded.x_m + s.drift_per_stop_m * k, commanded.y_m - 0.5 * s.drift_per_stop_m * k,
-                       s.drift_yaw_per_stop_rad * k};
+    const Pose2 actual{commanded.x_m + s.drift_per_stop_m * k,
+                       commanded.y_m - 0.5 * s.drift_per_stop_m * k, s.drift_yaw_per_stop_rad * k};
     std::vector<bool> hidden(s.landmarks.size());
     // Where each landmark appears in the world at this stop (commanded pose, biased range).
     std::vector<std::pair<double, double>> apparent;
@@ -61,7 +64,8 @@ Synthetic make(const Field& s, std::uint64_t seed) {
         if (hidden[l]) continue;
         double x = 0, y = 0;
         actual.toSensor(s.landmarks[l].first, s.landmarks[l].second, x, y);
-        const double r = std::hypot(x, y) * (1.0 + s.bias_per_m * std::hypot(x, y)), b = std::atan2(y, x);
+        const double r = std::hypot(x, y) * (1.0 + s.bias_per_m * std::hypot(x, y)),
+                     b = std::atan2(y, x);
         Detection d;
         d.centre_x_m = r * std::cos(b) + s.noise_m * n(rng);
         d.centre_y_m = r * std::sin(b) + s.noise_m * n(rng);
@@ -72,13 +76,14 @@ Synthetic make(const Field& s, std::uint64_t seed) {
         t.push_back(static_cast<int>(l) + 1);
       }
       for (int q = std::poisson_distribution<int>(s.spurious_per_scan)(rng); q > 0; --q) {
-        // Anywhere but within 0.5 m of where a landmark appears: a circle there, at a stop where the
-        // landmark is hidden, cannot be told from a weak detection of the landmark itself.
+        // Anywhere but within 0.5 m of where a landmark appears: a circle there, at a stop where
+        // the landmark is hidden, cannot be told from a weak detection of the landmark itself.
         double wx = 0, wy = 0;
         do {
           wx = pos(rng), wy = pos(rng);
-        } while (std::any_of(apparent.begin(), apparent.end(),
-                             [&](const auto& l) { return std::hypot(l.first - wx, l.second - wy) < 0.5; }));
+        } while (std::any_of(apparent.begin(), apparent.end(), [&](const auto& l) {
+          return std::hypot(l.first - wx, l.second - wy) < 0.5;
+        }));
         Detection d;
         commanded.toSensor(wx, wy, d.centre_x_m, d.centre_y_m);
         d.bearing_rad = std::atan2(d.centre_y_m, d.centre_x_m);
@@ -186,7 +191,9 @@ TEST(Associate, LandmarksSeenAtTooFewStopsAreDiscarded) {
     if (ten.scans[i].stop < 2) continue;
     auto& d = ten.scans[i].detections;
     for (std::size_t j = d.size(); j-- > 0;)
-      if (ten.truth[i][j] == 3) d.erase(d.begin() + static_cast<std::ptrdiff_t>(j)), ten.truth[i].erase(ten.truth[i].begin() + static_cast<std::ptrdiff_t>(j));
+      if (ten.truth[i][j] == 3)
+        d.erase(d.begin() + static_cast<std::ptrdiff_t>(j)),
+            ten.truth[i].erase(ten.truth[i].begin() + static_cast<std::ptrdiff_t>(j));
   }
   const Association a = associate(ten.scans, ten.viewpoints, cfg);
   EXPECT_EQ(a.landmarks.size(), 4u);
@@ -196,7 +203,8 @@ TEST(Associate, LandmarksSeenAtTooFewStopsAreDiscarded) {
 
 TEST(Associate, LandmarksCloserThanTheLinkDistanceAreSplit) {
   Field s;
-  s.landmarks = {{1.5, 1.0}, {1.5, 1.28}, {3.0, -1.0}};  // 0.28 m apart: linked, but seen together in every scan
+  // 0.28 m apart: linked, but seen together in every scan
+  s.landmarks = {{1.5, 1.0}, {1.5, 1.28}, {3.0, -1.0}};
   s.noise_m = 0.01;
   s.bias_per_m = 0.0;
   s.drift_per_stop_m = 0.0;
@@ -261,12 +269,15 @@ TEST(StopLinker, TracksHeldStayBoundedOverALongSequence) {
   StopLinker linker(cfg, stops);
   std::mt19937_64 rng(5);
   std::normal_distribution<double> noise(0.0, 0.01);
-  const std::vector<std::pair<double, double>> poles{{1.5, 0.75}, {0.3, 2.2}, {2.4, 3.4}, {3.9, -1.3}, {0.9, -2.8}};
+  const std::vector<std::pair<double, double>> poles{
+      {1.5, 0.75}, {0.3, 2.2}, {2.4, 3.4}, {3.9, -1.3}, {0.9, -2.8}};
   std::size_t most = 0;
   for (std::size_t k = 0; k < stops; ++k) {
     StopClusters cs;
-    for (const auto& p : poles) cs.push_back(cluster(k, p.first + noise(rng), p.second + noise(rng)));
-    cs.push_back(cluster(k, 100.0 + static_cast<double>(k), 50.0));  // a new object, never seen again
+    for (const auto& p : poles)
+      cs.push_back(cluster(k, p.first + noise(rng), p.second + noise(rng)));
+    // a new object, never seen again
+    cs.push_back(cluster(k, 100.0 + static_cast<double>(k), 50.0));
     std::sort(cs.begin(), cs.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
     linker.add(cs, 0);
     most = std::max(most, linker.alive());

@@ -22,14 +22,16 @@ namespace {
 using Cloud = pcl::PointCloud<pcl::PointXYZ>;
 
 /// n points on the arc [a0, a1] of the circle (cx, cy, r), plus Gaussian radial noise sigma.
-Cloud arc(double cx, double cy, double r, double a0_rad, double a1_rad, int n, double sigma = 0.0, unsigned seed = 1) {
+Cloud arc(double cx, double cy, double r, double a0_rad, double a1_rad, int n, double sigma = 0.0,
+          unsigned seed = 1) {
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> noise(0.0, 1.0);
   Cloud c;
   for (int i = 0; i < n; ++i) {
     const double a = a0_rad + (a1_rad - a0_rad) * i / (n - 1);
     const double rr = r + sigma * noise(rng);
-    c.push_back(pcl::PointXYZ(static_cast<float>(cx + rr * std::cos(a)), static_cast<float>(cy + rr * std::sin(a)), 0.0f));
+    c.push_back(pcl::PointXYZ(static_cast<float>(cx + rr * std::cos(a)),
+                              static_cast<float>(cy + rr * std::sin(a)), 0.0f));
   }
   return c;
 }
@@ -165,7 +167,8 @@ TEST(FitCircle, RadiusOutsideTheLimitsIsAStatus) {
   cfg.radius_min_m = 2.0;
   cfg.radius_max_m = 3.0;
   const CircleFit fit = fitCircle(c, all(c), cfg);
-  EXPECT_TRUE(fit.status == FitStatus::no_consensus || fit.status == FitStatus::radius_out_of_limits)
+  EXPECT_TRUE(fit.status == FitStatus::no_consensus ||
+              fit.status == FitStatus::radius_out_of_limits)
       << toString(fit.status);
   EXPECT_FALSE(fit.message.empty());
   // Below ransac_min_points the refinement itself is checked against the limits.
@@ -197,8 +200,9 @@ TEST(FitCircle, RigidMotionMovesTheCentreTheSameWay) {
   const double yaw = 0.7, tx = 1.25, ty = -0.5;
   Cloud moved;
   for (const auto& p : base)
-    moved.push_back(pcl::PointXYZ(static_cast<float>(tx + std::cos(yaw) * p.x - std::sin(yaw) * p.y),
-                                  static_cast<float>(ty + std::sin(yaw) * p.x + std::cos(yaw) * p.y), 0.0f));
+    moved.push_back(
+        pcl::PointXYZ(static_cast<float>(tx + std::cos(yaw) * p.x - std::sin(yaw) * p.y),
+                      static_cast<float>(ty + std::sin(yaw) * p.x + std::cos(yaw) * p.y), 0.0f));
   const CircleFit b = fitCircle(moved, all(moved), CircleFitConfig{});
   ASSERT_EQ(b.status, FitStatus::ok);
   EXPECT_NEAR(b.circle.x_m, tx + std::cos(yaw) * a.circle.x_m - std::sin(yaw) * a.circle.y_m, 1e-5);
@@ -231,7 +235,8 @@ TEST(FitCircle, IndicesSelectTheSubsetAndNanPointsAreSkipped) {
 TEST(FitCircle, BadConfigurationIsRefused) {
   const Cloud c = arc(0.0, 0.0, 0.5, 0.0, 2.0, 10);
   CircleFitConfig cfg;
-  cfg.radius_max_m = std::numeric_limits<double>::infinity();  // PCL would silently ignore the limits
+  // PCL would silently ignore the limits
+  cfg.radius_max_m = std::numeric_limits<double>::infinity();
   EXPECT_THROW(fitCircle(c, all(c), cfg), std::invalid_argument);
   cfg = CircleFitConfig{};
   cfg.inlier_threshold_m = 0.0;
@@ -268,25 +273,45 @@ const float kNaN = std::numeric_limits<float>::quiet_NaN();
 
 INSTANTIATE_TEST_SUITE_P(
     Inputs, DegenerateCircle,
-    ::testing::Values(DegenerateCase{"empty", {}, FitStatus::too_few_points},
-                      DegenerateCase{"one_point", {{1.0f, 1.0f}}, FitStatus::too_few_points},
-                      DegenerateCase{"two_points", {{1.0f, 1.0f}, {2.0f, 1.0f}}, FitStatus::too_few_points},
-                      DegenerateCase{"nan_only", {{kNaN, kNaN}, {kNaN, 1.0f}, {kNaN, kNaN}}, FitStatus::too_few_points},
-                      DegenerateCase{"all_equal", {{1.0f, 2.0f}, {1.0f, 2.0f}, {1.0f, 2.0f}, {1.0f, 2.0f}}, FitStatus::degenerate},
-                      DegenerateCase{"two_distinct_duplicated",
-                                     {{1.0f, 2.0f}, {1.0f, 2.0f}, {3.0f, 2.0f}, {3.0f, 2.0f}, {1.0f, 2.0f}, {3.0f, 2.0f}, {1.0f, 2.0f}},
-                                     FitStatus::degenerate},
-                      DegenerateCase{"collinear_three", {{0.0f, 0.0f}, {1.0f, 1.0f}, {2.0f, 2.0f}}, FitStatus::degenerate},
-                      DegenerateCase{"collinear_many",
-                                     {{0.5f, 1.0f}, {0.6f, 1.2f}, {0.7f, 1.4f}, {0.8f, 1.6f}, {0.9f, 1.8f}, {1.0f, 2.0f},
-                                      {1.1f, 2.2f}, {1.2f, 2.4f}},
-                                     FitStatus::degenerate},
-                      DegenerateCase{"horizontal_line", {{0.0f, 1.0f}, {1.0f, 1.0f}, {2.0f, 1.0f}, {3.0f, 1.0f}}, FitStatus::degenerate}),
+    ::testing::Values(
+        DegenerateCase{"empty", {}, FitStatus::too_few_points},
+        DegenerateCase{"one_point", {{1.0f, 1.0f}}, FitStatus::too_few_points},
+        DegenerateCase{"two_points", {{1.0f, 1.0f}, {2.0f, 1.0f}}, FitStatus::too_few_points},
+        DegenerateCase{
+            "nan_only", {{kNaN, kNaN}, {kNaN, 1.0f}, {kNaN, kNaN}}, FitStatus::too_few_points},
+        DegenerateCase{"all_equal",
+                       {{1.0f, 2.0f}, {1.0f, 2.0f}, {1.0f, 2.0f}, {1.0f, 2.0f}},
+                       FitStatus::degenerate},
+        DegenerateCase{"two_distinct_duplicated",
+                       {{1.0f, 2.0f},
+                        {1.0f, 2.0f},
+                        {3.0f, 2.0f},
+                        {3.0f, 2.0f},
+                        {1.0f, 2.0f},
+                        {3.0f, 2.0f},
+                        {1.0f, 2.0f}},
+                       FitStatus::degenerate},
+        DegenerateCase{
+            "collinear_three", {{0.0f, 0.0f}, {1.0f, 1.0f}, {2.0f, 2.0f}}, FitStatus::degenerate},
+        DegenerateCase{"collinear_many",
+                       {{0.5f, 1.0f},
+                        {0.6f, 1.2f},
+                        {0.7f, 1.4f},
+                        {0.8f, 1.6f},
+                        {0.9f, 1.8f},
+                        {1.0f, 2.0f},
+                        {1.1f, 2.2f},
+                        {1.2f, 2.4f}},
+                       FitStatus::degenerate},
+        DegenerateCase{"horizontal_line",
+                       {{0.0f, 1.0f}, {1.0f, 1.0f}, {2.0f, 1.0f}, {3.0f, 1.0f}},
+                       FitStatus::degenerate}),
     [](const auto& p) { return std::string(p.param.name); });
 
 TEST(Taubin, ExactOnCirclePointsAndNothingOnALine) {
   std::vector<Eigen::Vector2d> pts;
-  for (int i = 0; i < 7; ++i) pts.emplace_back(3.0 + 0.4 * std::cos(0.3 * i), -1.0 + 0.4 * std::sin(0.3 * i));
+  for (int i = 0; i < 7; ++i)
+    pts.emplace_back(3.0 + 0.4 * std::cos(0.3 * i), -1.0 + 0.4 * std::sin(0.3 * i));
   const auto c = taubinCircle(pts);
   ASSERT_TRUE(c);
   EXPECT_NEAR(c->x_m, 3.0, 1e-9);

@@ -35,14 +35,16 @@ Simulated simulate(const Scene& scene, std::uint64_t seed) {
   s.truth.stops = simulation::planStops(scene, seed);
   for (std::size_t k = 0; k < s.truth.stops.size(); ++k)
     for (std::size_t i = 0; i < s.truth.stops[k].scans; ++i) {
-      s.scans.push_back(simulation::simulateScan(scene, s.truth.stops[k], s.truth.stops[k].first_scan + i, seed));
+      s.scans.push_back(
+          simulation::simulateScan(scene, s.truth.stops[k], s.truth.stops[k].first_scan + i, seed));
       s.stop_of_scan.push_back(k);
     }
   return s;
 }
 
 SequenceDetections run(const Simulated& s, const SequenceDetectionConfig& cfg) {
-  return detectSequence(s.scans.size(), [&](std::size_t i) { return s.scans[i].scan; }, s.stop_of_scan, cfg);
+  return detectSequence(
+      s.scans.size(), [&](std::size_t i) { return s.scans[i].scan; }, s.stop_of_scan, cfg);
 }
 
 /// Truth landmark (1-based; 0: not a landmark) of a detection: the target of most of its beams.
@@ -70,7 +72,8 @@ struct IdScore {
 /// its id (a new id after a loop) counts its later sightings as missed.
 IdScore score(const Simulated& s, const SequenceDetections& r) {
   std::vector<ScanTruth> truth;
-  for (std::size_t i = 0; i < s.scans.size(); ++i) truth.push_back(makeScanTruth(s.truth, i, s.scans[i].truth, *s.scans[i].scan.cloud));
+  for (std::size_t i = 0; i < s.scans.size(); ++i)
+    truth.push_back(makeScanTruth(s.truth, i, s.scans[i].truth, *s.scans[i].scan.cloud));
   IdScore out;
   out.observable = evaluateDetections(r.scans, nullptr, truth, s.truth).observable;
   std::map<int, std::map<int, std::size_t>> ids_of_truth, truths_of_id;
@@ -125,7 +128,8 @@ TEST(ContinuousMotion, DrivingLoopsKeepTheirIds) {
       SCOPED_TRACE(testing::Message() << "odometry x" << factor << " seed " << seed);
       const Simulated s = simulate(driving(factor, 600), seed);
       SequenceDetectionConfig cfg;
-      cfg.detection.landmark_radius_m = s.truth.scene.landmarks.front().radius_m;  // as sequence.json gives it
+      // as sequence.json gives it
+      cfg.detection.landmark_radius_m = s.truth.scene.landmarks.front().radius_m;
       const SequenceDetections r = run(s, cfg);
       EXPECT_TRUE(r.continuous);
       const IdScore sc = score(s, r);
@@ -162,7 +166,8 @@ TEST(FewPointsPerTarget, NoSingleArcDeterminesTheRadius) {
   // The per-arc free fit alone finds fewer than one in ten of the 4 x 100 sightings.
   EXPECT_LT(free_found, scene.landmarks.size() * s.scans.size() / 10);
   std::vector<const pcl::PointCloud<pcl::PointXYZI>*> stop0;
-  for (std::size_t i = 0; i < s.truth.stops[0].scans; ++i) stop0.push_back(s.scans[i].scan.cloud.get());
+  for (std::size_t i = 0; i < s.truth.stops[0].scans; ++i)
+    stop0.push_back(s.scans[i].scan.cloud.get());
   const auto pooled = pooledStopRadii(stop0, cfg.detection);
   // The ten scans of stop 0 pooled: a circle at (nearly) every pole, within 1 cm of its centre.
   EXPECT_GE(pooled.size(), scene.landmarks.size() - 1);
@@ -170,7 +175,8 @@ TEST(FewPointsPerTarget, NoSingleArcDeterminesTheRadius) {
   for (const auto& h : pooled) {
     double wx = 0.0, wy = 0.0, nearest = 1e9;
     s.truth.stops[0].actual.toWorld(h.x_m, h.y_m, wx, wy);
-    for (const auto& l : scene.landmarks) nearest = std::min(nearest, std::hypot(l.x_m - wx, l.y_m - wy));
+    for (const auto& l : scene.landmarks)
+      nearest = std::min(nearest, std::hypot(l.x_m - wx, l.y_m - wy));
     EXPECT_LT(nearest, 0.01);
   }
   // One scan alone: nothing to pool.

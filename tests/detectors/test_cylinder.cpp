@@ -24,7 +24,8 @@ namespace lidarcal::detectors {
 namespace {
 
 /// Distance from point p to the line through a along unit u.
-double distanceToLine(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& u) {
+double distanceToLine(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
+                      const Eigen::Vector3d& u) {
   return ((p - a) - (p - a).dot(u) * u).norm();
 }
 
@@ -37,11 +38,13 @@ TEST(DetectCylinder, SyntheticCylinderStandingOnAPlane) {
     pcl::PointCloud<pcl::PointXYZ>::Ptr cloud(new pcl::PointCloud<pcl::PointXYZ>);
     // Floor z = 0.5 (1.2 x 1.2 m), a vertical cylinder of radius 0.05 m at (0.1, -0.2).
     for (int i = 0; i < 6000; ++i)
-      cloud->push_back(pcl::PointXYZ(static_cast<float>(1.2 * u(rng) - 0.6), static_cast<float>(1.2 * u(rng) - 0.6),
+      cloud->push_back(pcl::PointXYZ(static_cast<float>(1.2 * u(rng) - 0.6),
+                                     static_cast<float>(1.2 * u(rng) - 0.6),
                                      static_cast<float>(0.5 + n(rng))));
     for (int i = 0; i < 3000; ++i) {
       const double a = 2.0 * kPi * u(rng), h = 0.5 + 0.3 * u(rng), r = 0.05 + n(rng);
-      cloud->push_back(pcl::PointXYZ(static_cast<float>(0.1 + r * std::cos(a)), static_cast<float>(-0.2 + r * std::sin(a)),
+      cloud->push_back(pcl::PointXYZ(static_cast<float>(0.1 + r * std::cos(a)),
+                                     static_cast<float>(-0.2 + r * std::sin(a)),
                                      static_cast<float>(h)));
     }
     CylinderConfig cfg;
@@ -89,15 +92,18 @@ TEST(DetectCylinder, FindsTheMugOfPclsTutorial) {
   ASSERT_EQ(res.status, FitStatus::ok) << res.message;
 
   // The oracle: the tutorial's code, step by step.
-  pcl::PointCloud<pcl::PointXYZ>::Ptr filtered(new pcl::PointCloud<pcl::PointXYZ>), rest(new pcl::PointCloud<pcl::PointXYZ>);
-  pcl::PointCloud<pcl::Normal>::Ptr normals(new pcl::PointCloud<pcl::Normal>), rest_normals(new pcl::PointCloud<pcl::Normal>);
+  pcl::PointCloud<pcl::PointXYZ>::Ptr filtered(new pcl::PointCloud<pcl::PointXYZ>),
+      rest(new pcl::PointCloud<pcl::PointXYZ>);
+  pcl::PointCloud<pcl::Normal>::Ptr normals(new pcl::PointCloud<pcl::Normal>),
+      rest_normals(new pcl::PointCloud<pcl::Normal>);
   pcl::PassThrough<pcl::PointXYZ> pass;
   pass.setInputCloud(cloud);
   pass.setFilterFieldName("z");
   pass.setFilterLimits(0, 1.5);
   pass.filter(*filtered);
   pcl::NormalEstimation<pcl::PointXYZ, pcl::Normal> ne;
-  ne.setSearchMethod(pcl::search::KdTree<pcl::PointXYZ>::Ptr(new pcl::search::KdTree<pcl::PointXYZ>));
+  ne.setSearchMethod(
+      pcl::search::KdTree<pcl::PointXYZ>::Ptr(new pcl::search::KdTree<pcl::PointXYZ>));
   ne.setInputCloud(filtered);
   ne.setKSearch(50);
   ne.compute(*normals);
@@ -132,14 +138,20 @@ TEST(DetectCylinder, FindsTheMugOfPclsTutorial) {
   seg.segment(*cyl, cyl_c);
   ASSERT_EQ(cyl_c.values.size(), 7u);
   EXPECT_EQ(res.inliers.size(), cyl->indices.size());
-  for (int k = 0; k < 3; ++k) EXPECT_NEAR(res.point_on_axis[k], cyl_c.values[static_cast<std::size_t>(k)], 1e-6);
-  EXPECT_NEAR(std::abs(res.axis.dot(Eigen::Vector3d(cyl_c.values[3], cyl_c.values[4], cyl_c.values[5]).normalized())), 1.0, 1e-9);
+  for (int k = 0; k < 3; ++k)
+    EXPECT_NEAR(res.point_on_axis[k], cyl_c.values[static_cast<std::size_t>(k)], 1e-6);
+  EXPECT_NEAR(std::abs(res.axis.dot(
+                  Eigen::Vector3d(cyl_c.values[3], cyl_c.values[4], cyl_c.values[5]).normalized())),
+              1.0, 1e-9);
   EXPECT_NEAR(res.radius_m, cyl_c.values[6], 1e-7);
 
   // The documented numbers.
   EXPECT_NEAR(res.radius_m, 0.0396354, 0.002);
-  EXPECT_LT(distanceToLine(Eigen::Vector3d(0.0452105, 0.0924601, 0.790215), res.point_on_axis, res.axis), 0.015);
-  const Eigen::Vector3d documented_axis = Eigen::Vector3d(0.20495, -0.721649, -0.661225).normalized();
+  EXPECT_LT(
+      distanceToLine(Eigen::Vector3d(0.0452105, 0.0924601, 0.790215), res.point_on_axis, res.axis),
+      0.015);
+  const Eigen::Vector3d documented_axis =
+      Eigen::Vector3d(0.20495, -0.721649, -0.661225).normalized();
   EXPECT_GT(std::abs(res.axis.dot(documented_axis)), std::cos(deg2rad(15.0)));
   // The table (tutorial: -0.0161854, 0.837724, 0.545855, -0.528787), and the mug stands on it.
   const Eigen::Vector3d table = res.plane.head<3>().normalized();

@@ -42,9 +42,11 @@ void addRoom(Scene& s, double half = 6.0) {
 void addBox(Scene& s, double cx, double cy, double w, double h, double yaw) {
   const double c = std::cos(yaw), sn = std::sin(yaw);
   std::vector<std::pair<double, double>> p;
-  for (auto [dx, dy] : {std::pair{-w / 2, -h / 2}, {w / 2, -h / 2}, {w / 2, h / 2}, {-w / 2, h / 2}})
+  for (auto [dx, dy] :
+       {std::pair{-w / 2, -h / 2}, {w / 2, -h / 2}, {w / 2, h / 2}, {-w / 2, h / 2}})
     p.emplace_back(cx + c * dx - sn * dy, cy + sn * dx + c * dy);
-  for (std::size_t i = 0; i < 4; ++i) s.walls.push_back({p[i].first, p[i].second, p[(i + 1) % 4].first, p[(i + 1) % 4].second});
+  for (std::size_t i = 0; i < 4; ++i)
+    s.walls.push_back({p[i].first, p[i].second, p[(i + 1) % 4].first, p[(i + 1) % 4].second});
 }
 
 simulation::SimulatedScan simulate(const Scene& s, std::uint64_t seed) {
@@ -65,10 +67,10 @@ TEST(Segmentation, SplitsAtJumpsBridgesOneMissingBeamAndClosesTheCircle) {
   };
   // A full circle in 1-degree steps.
   for (int b = 0; b < 360; ++b) {
-    double r = 3.0;                       // background wall at 3 m
-    if (b >= 10 && b <= 14) r = 1.0;      // an object at 1 m: jumps on both sides
-    if (b == 100) r = 0.0;                // one missing beam: bridged
-    if (b == 200 || b == 201) r = 0.0;    // two missing beams: split
+    double r = 3.0;                     // background wall at 3 m
+    if (b >= 10 && b <= 14) r = 1.0;    // an object at 1 m: jumps on both sides
+    if (b == 100) r = 0.0;              // one missing beam: bridged
+    if (b == 200 || b == 201) r = 0.0;  // two missing beams: split
     polar(r, b);
   }
   const auto clusters = segmentScan(c, SegmentationConfig{});
@@ -90,7 +92,8 @@ TEST(DetectScan, PoleInFrontOfAWallIsFoundWhereItIs) {
       SCOPED_TRACE(std::to_string(range) + " m at " + std::to_string(bearing_deg) + " deg");
       Scene s = oneStop({0.0, 1.0}, 0.0);
       addRoom(s);
-      s.landmarks.push_back({range * std::cos(deg2rad(bearing_deg)), range * std::sin(deg2rad(bearing_deg)), 0.12});
+      s.landmarks.push_back(
+          {range * std::cos(deg2rad(bearing_deg)), range * std::sin(deg2rad(bearing_deg)), 0.12});
       for (bool known : {true, false}) {
         DetectionConfig cfg;
         if (known) cfg.landmark_radius_m = 0.12;
@@ -108,7 +111,8 @@ TEST(DetectScan, PoleInFrontOfAWallIsFoundWhereItIs) {
         EXPECT_NEAR(det.radius_m, 0.12, known ? 0.0 : 2e-5);
         EXPECT_EQ(det.radius_fixed, known);
         // Every inlier is a beam on the pole.
-        for (auto i : det.inliers) EXPECT_EQ(sim.truth[static_cast<std::size_t>(i)].target, io::TargetKind::landmark);
+        for (auto i : det.inliers)
+          EXPECT_EQ(sim.truth[static_cast<std::size_t>(i)].target, io::TargetKind::landmark);
         EXPECT_EQ(det.inliers.size(), det.cluster_points);
       }
     }
@@ -123,16 +127,20 @@ TEST(DetectScan, APoleAcrossTheEndOfTheScanRunsFromOneEdgeToTheOther) {
     SCOPED_TRACE(std::to_string(bearing_deg) + " deg");
     Scene s = oneStop({0.0, 1.0}, 0.0);
     addRoom(s);
-    s.landmarks.push_back({1.2 * std::cos(deg2rad(bearing_deg)), 1.2 * std::sin(deg2rad(bearing_deg)), 0.12});
+    s.landmarks.push_back(
+        {1.2 * std::cos(deg2rad(bearing_deg)), 1.2 * std::sin(deg2rad(bearing_deg)), 0.12});
     DetectionConfig cfg;
     cfg.landmark_radius_m = 0.12;
     const ScanDetections d = detectScan(simulate(s, 1).scan, cfg);
     ASSERT_EQ(d.detections.size(), 1u);
     const pcl::Indices& in = d.detections[0].inliers;
     ASSERT_GE(in.size(), 5u);
-    for (std::size_t k = 1; k < in.size(); ++k) EXPECT_EQ(in[k], (in[k - 1] + 1) % 360) << "inlier " << k;
+    for (std::size_t k = 1; k < in.size(); ++k)
+      EXPECT_EQ(in[k], (in[k - 1] + 1) % 360) << "inlier " << k;
     // The edges are the beams farthest from the pole's bearing.
-    auto off = [&](int beam) { return std::abs(wrapAngle(deg2rad(beam) - d.detections[0].bearing_rad)); };
+    auto off = [&](int beam) {
+      return std::abs(wrapAngle(deg2rad(beam) - d.detections[0].bearing_rad));
+    };
     for (auto i : in) {
       EXPECT_LE(off(i), std::max(off(in.front()), off(in.back())) + 1e-9);
       if (i != in.front() && i != in.back()) {
@@ -150,7 +158,8 @@ TEST(DetectScan, BearingStaysAccurateUnderTheRangeBias) {
       SCOPED_TRACE(std::to_string(range) + " m at " + std::to_string(bearing_deg) + " deg");
       Scene s = oneStop({0.0525, 0.8838, 0.0584}, 0.0);
       addRoom(s);
-      s.landmarks.push_back({range * std::cos(deg2rad(bearing_deg)), range * std::sin(deg2rad(bearing_deg)), 0.12});
+      s.landmarks.push_back(
+          {range * std::cos(deg2rad(bearing_deg)), range * std::sin(deg2rad(bearing_deg)), 0.12});
       DetectionConfig cfg;
       cfg.landmark_radius_m = 0.12;
       const ScanDetections d = detectScan(simulate(s, 1).scan, cfg);
@@ -174,8 +183,8 @@ TEST(DetectScan, WallsAndBoxesAreNeverCirclesWithTheRadiusKnown) {
     for (std::uint64_t seed = 1; seed <= 40; ++seed) {
       SCOPED_TRACE(std::to_string(radius) + " m, seed " + std::to_string(seed));
       std::mt19937_64 rng(seed);
-      std::uniform_real_distribution<double> pos(-4.0, 4.0), size(3.0 * radius, 10.0 * radius), yaw(0.0, kPi),
-          noise(0.0, 0.003);
+      std::uniform_real_distribution<double> pos(-4.0, 4.0), size(3.0 * radius, 10.0 * radius),
+          yaw(0.0, kPi), noise(0.0, 0.003);
       Scene s = oneStop({0.0525, 0.8838, 0.0584}, noise(rng));
       addRoom(s, 5.0);
       for (int b = 0; b < 6; ++b) {
@@ -186,8 +195,9 @@ TEST(DetectScan, WallsAndBoxesAreNeverCirclesWithTheRadiusKnown) {
       DetectionConfig cfg;
       cfg.landmark_radius_m = radius;
       const ScanDetections d = detectScan(simulate(s, seed).scan, cfg);
-      EXPECT_TRUE(d.detections.empty()) << d.detections.size() << " detections, first at "
-                                        << (d.detections.empty() ? 0.0 : d.detections[0].range_m) << " m";
+      EXPECT_TRUE(d.detections.empty())
+          << d.detections.size() << " detections, first at "
+          << (d.detections.empty() ? 0.0 : d.detections[0].range_m) << " m";
     }
   }
 }
@@ -223,7 +233,8 @@ TEST(DetectScan, ChairLegsAreNotCirclesWithTheRadiusKnown) {
     DetectionConfig cfg;
     cfg.landmark_radius_m = 0.12;
     const ScanDetections d = detectScan(simulate(s, seed).scan, cfg);
-    for (const auto& det : d.detections) ADD_FAILURE() << "circle at " << det.range_m << " m with " << det.inliers.size() << " points";
+    for (const auto& det : d.detections)
+      ADD_FAILURE() << "circle at " << det.range_m << " m with " << det.inliers.size() << " points";
   }
 }
 

@@ -35,14 +35,16 @@ Simulated simulateScene(const Scene& scene, std::uint64_t seed, std::vector<Trut
   s.truth.stops = stops.empty() ? simulation::planStops(scene, seed) : std::move(stops);
   for (std::size_t k = 0; k < s.truth.stops.size(); ++k)
     for (std::size_t i = 0; i < s.truth.stops[k].scans; ++i) {
-      s.scans.push_back(simulation::simulateScan(scene, s.truth.stops[k], s.truth.stops[k].first_scan + i, seed));
+      s.scans.push_back(
+          simulation::simulateScan(scene, s.truth.stops[k], s.truth.stops[k].first_scan + i, seed));
       s.stop_of_scan.push_back(k);
     }
   return s;
 }
 
 SequenceDetections run(const Simulated& s, const SequenceDetectionConfig& cfg) {
-  return detectSequence(s.scans.size(), [&](std::size_t i) { return s.scans[i].scan; }, s.stop_of_scan, cfg);
+  return detectSequence(
+      s.scans.size(), [&](std::size_t i) { return s.scans[i].scan; }, s.stop_of_scan, cfg);
 }
 
 Scene paperField() { return io::readScene(test::sourceDir() / "data/scenes/paper_field.json"); }
@@ -95,7 +97,8 @@ TEST(DetectSequence, PaperFieldFindsAllFiveLandmarksWithTheRightIds) {
 // stop cluster instead of all ten (the arcs of ten stops at different ranges still pin it).
 TEST(DetectSequence, RadiusIsEstimatedWhenNotGiven) {
   for (const auto& [seed, arcs] : {std::pair<std::uint64_t, std::size_t>{4, 16}, {6, 2}}) {
-    SCOPED_TRACE("seed " + std::to_string(seed) + ", arcs per stop cluster " + std::to_string(arcs));
+    SCOPED_TRACE("seed " + std::to_string(seed) + ", arcs per stop cluster " +
+                 std::to_string(arcs));
     const Simulated s = simulateScene(paperField(), seed);
     SequenceDetectionConfig cfg;
     cfg.arcs_per_stop_cluster = arcs;
@@ -114,17 +117,21 @@ TEST(DetectSequence, RadiusIsEstimatedWhenNotGiven) {
 // the detections and ids that keeping them gives: read back from the detection log, and (when
 // no log could be made) by detecting each stop again; forEachLoadedScan gives the very scans
 // loaded. With spurious circles (clutter), with the radius known and estimated.
-void expectSameAsKept(const Simulated& s, const SequenceDetections& lean, const SequenceDetections& kept) {
+void expectSameAsKept(const Simulated& s, const SequenceDetections& lean,
+                      const SequenceDetections& kept) {
   std::size_t visited = 0;
   auto load = [&](std::size_t i) { return s.scans[i].scan; };
   forEachLoadedScan(lean, s.scans.size(), load, s.stop_of_scan,
-                    [&](std::size_t i, const io::Scan& scan, const ScanDetections& d, const std::vector<int>& ids) {
+                    [&](std::size_t i, const io::Scan& scan, const ScanDetections& d,
+                        const std::vector<int>& ids) {
                       ASSERT_EQ(i, visited++);
-                      EXPECT_EQ(scan.cloud, s.scans[i].scan.cloud);  // the scan itself, not another one
+                      // the scan itself, not another one
+                      EXPECT_EQ(scan.cloud, s.scans[i].scan.cloud);
                       EXPECT_EQ(ids, kept.association.ids[i]);
                       ASSERT_EQ(d.detections.size(), kept.scans[i].detections.size());
                       for (std::size_t j = 0; j < d.detections.size(); ++j) {
-                        EXPECT_EQ(d.detections[j].centre_x_m, kept.scans[i].detections[j].centre_x_m);
+                        EXPECT_EQ(d.detections[j].centre_x_m,
+                                  kept.scans[i].detections[j].centre_x_m);
                         EXPECT_EQ(d.detections[j].radius_m, kept.scans[i].detections[j].radius_m);
                         EXPECT_EQ(d.detections[j].rms_m, kept.scans[i].detections[j].rms_m);
                         EXPECT_EQ(d.detections[j].inliers, kept.scans[i].detections[j].inliers);
@@ -153,7 +160,8 @@ TEST(DetectSequence, WithoutKeptScansTheLogAndTheReplayGiveTheSameDetectionsAndI
       for (std::size_t l = 0; l < kept.association.landmarks.size(); ++l) {
         EXPECT_EQ(lean.association.landmarks[l].x_m, kept.association.landmarks[l].x_m);
         EXPECT_EQ(lean.association.landmarks[l].radius_m, kept.association.landmarks[l].radius_m);
-        EXPECT_EQ(lean.association.landmarks[l].detections, kept.association.landmarks[l].detections);
+        EXPECT_EQ(lean.association.landmarks[l].detections,
+                  kept.association.landmarks[l].detections);
       }
       EXPECT_EQ(lean.association.detections, kept.association.detections);
       {
@@ -175,7 +183,8 @@ TEST(DetectSequence, WithoutKeptScansTheLogAndTheReplayGiveTheSameDetectionsAndI
 // intensities of their own, as the simulator writes them into the scans.
 TEST(DetectSequence, KeptDetectionsCarryTheirInliersCoordinates) {
   Scene scene = paperField();
-  for (std::size_t l = 0; l < scene.landmarks.size(); ++l) scene.landmarks[l].intensity = 40.0 + 30.0 * static_cast<double>(l);
+  for (std::size_t l = 0; l < scene.landmarks.size(); ++l)
+    scene.landmarks[l].intensity = 40.0 + 30.0 * static_cast<double>(l);
   const Simulated s = simulateScene(scene, 1);
   std::set<float> seen;
   SequenceDetectionConfig cfg;
@@ -196,7 +205,8 @@ TEST(DetectSequence, KeptDetectionsCarryTheirInliersCoordinates) {
     }
   EXPECT_GT(checked, 1000u);
   // Every pole's intensity reaches the detections.
-  for (const auto& l : scene.landmarks) EXPECT_EQ(seen.count(static_cast<float>(l.intensity)), 1u) << l.intensity;
+  for (const auto& l : scene.landmarks)
+    EXPECT_EQ(seen.count(static_cast<float>(l.intensity)), 1u) << l.intensity;
 }
 
 // Scans that change between detectSequence and forEachScan (here: the poles removed) cannot be
@@ -214,9 +224,11 @@ TEST(DetectSequence, ReplayRefusesScansThatChanged) {
   ASSERT_NE(r.log, nullptr);
   auto load_other = [&](std::size_t i) { return other.scans[i].scan; };
   auto nothing = [](std::size_t, const ScanDetections&, const std::vector<int>&) {};
-  EXPECT_THROW(forEachScan(r, other.scans.size(), load_other, other.stop_of_scan, nothing), DataError);
+  EXPECT_THROW(forEachScan(r, other.scans.size(), load_other, other.stop_of_scan, nothing),
+               DataError);
   r.log.reset();
-  EXPECT_THROW(forEachScan(r, other.scans.size(), load_other, other.stop_of_scan, nothing), DataError);
+  EXPECT_THROW(forEachScan(r, other.scans.size(), load_other, other.stop_of_scan, nothing),
+               DataError);
 }
 
 TEST(DetectSequence, TheScansOfAStopMustBeConsecutive) {
@@ -283,8 +295,8 @@ TEST(DetectSequence, WallsChairsAndBoxesAreNeverLabelled) {
     for (const Scene* scene : {&with, &without}) {
       const Simulated s = simulateScene(*scene, seed);
       for (bool known : {true, false}) {
-        SCOPED_TRACE(std::to_string(seed) + (scene == &with ? " with" : " without") + " landmarks, radius known " +
-                     std::to_string(known));
+        SCOPED_TRACE(std::to_string(seed) + (scene == &with ? " with" : " without") +
+                     " landmarks, radius known " + std::to_string(known));
         SequenceDetectionConfig cfg;
         if (known) cfg.detection.landmark_radius_m = 0.12;
         const SequenceDetections r = run(s, cfg);
@@ -293,7 +305,8 @@ TEST(DetectSequence, WallsChairsAndBoxesAreNeverLabelled) {
           const auto labels = scanLabels(r, i, s.scans[i].scan.cloud->size());
           for (std::size_t b = 0; b < labels.size(); ++b)
             if (labels[b] != 0) {
-              EXPECT_EQ(s.scans[i].truth[b].target, io::TargetKind::landmark) << "scan " << i << " beam " << b;
+              EXPECT_EQ(s.scans[i].truth[b].target, io::TargetKind::landmark)
+                  << "scan " << i << " beam " << b;
             }
         }
       }
@@ -303,7 +316,8 @@ TEST(DetectSequence, WallsChairsAndBoxesAreNeverLabelled) {
 
 TEST(DetectSequence, SameInputSameOutput) {
   const Simulated s = simulateScene(paperField(), 2);
-  const SequenceDetections a = run(s, SequenceDetectionConfig{}), b = run(s, SequenceDetectionConfig{});
+  const SequenceDetections a = run(s, SequenceDetectionConfig{}),
+                           b = run(s, SequenceDetectionConfig{});
   ASSERT_EQ(a.association.ids, b.association.ids);
   for (std::size_t i = 0; i < a.scans.size(); ++i)
     for (std::size_t j = 0; j < a.scans[i].detections.size(); ++j) {
@@ -324,11 +338,17 @@ TEST(DetectSequence, TheNumberOfThreadsChangesNothing) {
     cfg.threads = 1;
     const SequenceDetections one = run(s, cfg);
     for (int threads : {2, 3, 5}) {
-      SCOPED_TRACE(std::string(known ? "radius known, " : "radius estimated, ") + std::to_string(threads) + " threads");
+      SCOPED_TRACE(std::string(known ? "radius known, " : "radius estimated, ") +
+                   std::to_string(threads) + " threads");
       cfg.threads = threads;
       std::vector<std::atomic<int>> loads(s.scans.size());
       const SequenceDetections many = detectSequence(
-          s.scans.size(), [&](std::size_t i) { ++loads[i]; return s.scans[i].scan; }, s.stop_of_scan, cfg);
+          s.scans.size(),
+          [&](std::size_t i) {
+            ++loads[i];
+            return s.scans[i].scan;
+          },
+          s.stop_of_scan, cfg);
       for (const auto& l : loads) EXPECT_EQ(l.load(), known ? 1 : 2);
       ASSERT_EQ(many.association.ids, one.association.ids);
       ASSERT_EQ(many.association.landmarks.size(), one.association.landmarks.size());

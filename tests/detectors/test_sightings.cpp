@@ -38,7 +38,8 @@ void expectSameSightings(const LandmarkObservations& x, const LandmarkObservatio
 
 TEST(Sightings, KeptInlierCoordinatesGiveTheSightingsOfASecondRead) {
   const io::Sequence seq = io::openSequence(test::sourceDir() / "data/example/scans");
-  const detectors::SequenceDetections kept = detectors::detectSequence(seq, detectors::SequenceDetectionConfig{});
+  const detectors::SequenceDetections kept =
+      detectors::detectSequence(seq, detectors::SequenceDetectionConfig{});
   std::size_t reads = 0;
   const detectors::ScanLoader counting = [&](std::size_t i) {
     ++reads;
@@ -50,7 +51,8 @@ TEST(Sightings, KeptInlierCoordinatesGiveTheSightingsOfASecondRead) {
   detectors::SequenceDetections stripped = kept;
   for (auto& scan : stripped.scans)
     for (auto& d : scan.detections) d.inlier_xyi.clear();
-  const LandmarkObservations from_files = detectors::toLandmarkObservations(seq, stripped, counting);
+  const LandmarkObservations from_files =
+      detectors::toLandmarkObservations(seq, stripped, counting);
   EXPECT_GT(reads, 0u);
 
   ASSERT_FALSE(from_kept.sightings.empty());
@@ -59,9 +61,11 @@ TEST(Sightings, KeptInlierCoordinatesGiveTheSightingsOfASecondRead) {
 
 TEST(Sightings, TheSightingsOfAScanComeByLandmarkWhateverTheDetectorsOrder) {
   const io::Sequence seq = io::openSequence(test::sourceDir() / "data/example/scans");
-  const detectors::SequenceDetections det = detectors::detectSequence(seq, detectors::SequenceDetectionConfig{});
+  const detectors::SequenceDetections det =
+      detectors::detectSequence(seq, detectors::SequenceDetectionConfig{});
   detectors::SequenceDetections reversed = det;
-  std::size_t turned = 0;  // scans with two poles or more, whose detections now come the other way round
+  // scans with two poles or more, whose detections now come the other way round
+  std::size_t turned = 0;
   for (std::size_t i = 0; i < reversed.scans.size(); ++i) {
     auto& d = reversed.scans[i].detections;
     auto& ids = reversed.association.ids.at(i);

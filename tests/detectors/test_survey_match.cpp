@@ -24,7 +24,8 @@ TEST(SurveyMatch, TheClosestPairsMatchFirstOneToOneWithinTheGate) {
   // Surveyed 0 is 0.1 m from detected 7 and 0.3 m from detected 8; surveyed 1 is 0.05 m from
   // detected 7 and 0.34 m from detected 8; surveyed 2 has nothing within kSurveyGateM.
   const std::vector<ReferenceLandmark> surveyed = {{0.0, 0.0, {}}, {0.15, 0.0, {}}, {5.0, 5.0, {}}};
-  const std::vector<detectors::Landmark> found = {detected(7, 0.1, 0.0), detected(8, 0.0, 0.3), detected(9, 5.6, 5.0)};
+  const std::vector<detectors::Landmark> found = {detected(7, 0.1, 0.0), detected(8, 0.0, 0.3),
+                                                  detected(9, 5.6, 5.0)};
   const auto m = detectors::matchSurvey(surveyed, found);
   ASSERT_EQ(m.size(), 3u);
   for (std::size_t s = 0; s < m.size(); ++s) EXPECT_EQ(m[s].entry, s);
@@ -43,9 +44,12 @@ TEST(SurveyMatch, NoDetectedLandmarkLeavesEveryEntryUnmatched) {
 }
 
 TEST(SurveyMatch, TheSurveyedRadiusIsTheOneEveryEntryAgreesOn) {
-  EXPECT_NEAR(*detectors::surveyedRadius({{0, 0, 0.050}, {1, 0, 0.0505}}), 0.05025, 1e-12);  // within 1 mm
-  EXPECT_FALSE(detectors::surveyedRadius({{0, 0, 0.050}, {1, 0, 0.052}}).has_value());    // 2 mm apart
-  EXPECT_FALSE(detectors::surveyedRadius({{0, 0, 0.050}, {1, 0, {}}}).has_value());       // one not measured
+  // within 1 mm
+  EXPECT_NEAR(*detectors::surveyedRadius({{0, 0, 0.050}, {1, 0, 0.0505}}), 0.05025, 1e-12);
+  // 2 mm apart
+  EXPECT_FALSE(detectors::surveyedRadius({{0, 0, 0.050}, {1, 0, 0.052}}).has_value());
+  // one not measured
+  EXPECT_FALSE(detectors::surveyedRadius({{0, 0, 0.050}, {1, 0, {}}}).has_value());
 }
 
 }  // namespace

@@ -13,8 +13,8 @@
 #include <stdexcept>
 #include <vector>
 
-#include <Eigen/Core>
 #include <gtest/gtest.h>
+#include <Eigen/Core>
 
 #include "common/pose2.hpp"
 #include "detectors/wall_tracks.hpp"
@@ -30,8 +30,8 @@ struct TrueWall {
 
 /// One 360-beam scan (1 degree) from the origin of a convex room bounded by `walls` (each beam
 /// reads the nearest wall), range noise `sigma_m`; beams listed in `gap` have no return.
-pcl::PointCloud<pcl::PointXYZI> roomScan(const std::vector<TrueWall>& walls, double sigma_m, std::mt19937_64& rng,
-                                         const std::vector<int>& gap = {}) {
+pcl::PointCloud<pcl::PointXYZI> roomScan(const std::vector<TrueWall>& walls, double sigma_m,
+                                         std::mt19937_64& rng, const std::vector<int>& gap = {}) {
   std::normal_distribution<double> noise(0.0, 1.0);
   pcl::PointCloud<pcl::PointXYZI> cloud;
   for (int i = 0; i < 360; ++i) {
@@ -57,7 +57,8 @@ pcl::PointCloud<pcl::PointXYZI> roomScan(const std::vector<TrueWall>& walls, dou
 const Wall* nearest(const std::vector<Wall>& walls, double normal_rad) {
   const Wall* best = nullptr;
   for (const Wall& w : walls)
-    if (!best || std::abs(wrapAngle(w.normal_rad - normal_rad)) < std::abs(wrapAngle(best->normal_rad - normal_rad)))
+    if (!best || std::abs(wrapAngle(w.normal_rad - normal_rad)) <
+                     std::abs(wrapAngle(best->normal_rad - normal_rad)))
       best = &w;
   return best;
 }
@@ -65,7 +66,8 @@ const Wall* nearest(const std::vector<Wall>& walls, double normal_rad) {
 // The four walls of a room seen from inside form one cluster (each corner joins two walls):
 // split at the corners, each wall is found at its normal and distance.
 TEST(FindWalls, EveryWallOfARoomSeenFromInsideIsFoundWhereItStands) {
-  const std::vector<TrueWall> room{{deg2rad(20), 2.5}, {deg2rad(110), 1.8}, {deg2rad(200), 3.2}, {deg2rad(290), 2.2}};
+  const std::vector<TrueWall> room{
+      {deg2rad(20), 2.5}, {deg2rad(110), 1.8}, {deg2rad(200), 3.2}, {deg2rad(290), 2.2}};
   std::mt19937_64 rng(1);
   const auto walls = findWalls(roomScan(room, 0.0, rng), WallConfig{});
   ASSERT_EQ(walls.size(), room.size());
@@ -80,13 +82,16 @@ TEST(FindWalls, EveryWallOfARoomSeenFromInsideIsFoundWhereItStands) {
 // A wall interrupted by beams without return (a table leg, a dark patch) is two clusters of the
 // segmentation, and one wall: merged, with the inliers of both pieces.
 TEST(FindWalls, PiecesOfOneWallAreMergedIntoOne) {
-  const std::vector<TrueWall> room{{0.0, 2.0}, {deg2rad(90), 2.0}, {deg2rad(180), 2.0}, {deg2rad(270), 2.0}};
+  const std::vector<TrueWall> room{
+      {0.0, 2.0}, {deg2rad(90), 2.0}, {deg2rad(180), 2.0}, {deg2rad(270), 2.0}};
   std::mt19937_64 rng(2);
-  const auto walls = findWalls(roomScan(room, 0.0, rng, {0, 1, 2, 3, 4}), WallConfig{});  // a gap on the wall at 0 deg
+  // a gap on the wall at 0 deg
+  const auto walls = findWalls(roomScan(room, 0.0, rng, {0, 1, 2, 3, 4}), WallConfig{});
   ASSERT_EQ(walls.size(), 4u);
   const Wall* w = nearest(walls, 0.0);
   EXPECT_NEAR(w->distance_m, 2.0, 1e-5);
-  // Beams 315..359 and 5..44 meet it before the corners: all of them inliers, on both sides of the gap.
+  // Beams 315..359 and 5..44 meet it before the corners: all of them inliers, on both sides of the
+  // gap.
   EXPECT_TRUE(std::find(w->inliers.begin(), w->inliers.end(), 10) != w->inliers.end());
   EXPECT_TRUE(std::find(w->inliers.begin(), w->inliers.end(), 350) != w->inliers.end());
   EXPECT_GE(w->inliers.size(), 80u);
@@ -96,7 +101,8 @@ TEST(FindWalls, PiecesOfOneWallAreMergedIntoOne) {
 // 1 cm inlier threshold keeps too few of a wall's points (the walls come apart or are missed);
 // t(r) = 0.01 + 0.005 r^2 finds each wall whole.
 TEST(FindWalls, ANoisyFarWallNeedsTheThresholdThatGrowsWithRange) {
-  const std::vector<TrueWall> room{{0.0, 3.5}, {deg2rad(90), 3.5}, {deg2rad(180), 3.5}, {deg2rad(270), 3.5}};
+  const std::vector<TrueWall> room{
+      {0.0, 3.5}, {deg2rad(90), 3.5}, {deg2rad(180), 3.5}, {deg2rad(270), 3.5}};
   int fixed_whole = 0;
   for (int seed = 0; seed < 10; ++seed) {
     SCOPED_TRACE(seed);
@@ -111,7 +117,9 @@ TEST(FindWalls, ANoisyFarWallNeedsTheThresholdThatGrowsWithRange) {
       EXPECT_GE(w.inliers.size(), 80u);  // of the 89 beams before the corners
     }
     const auto fixed = findWalls(cloud, WallConfig{});
-    fixed_whole += fixed.size() == 4 && std::all_of(fixed.begin(), fixed.end(), [](const Wall& w) { return w.inliers.size() >= 80; });
+    fixed_whole += fixed.size() == 4 && std::all_of(fixed.begin(), fixed.end(), [](const Wall& w) {
+                     return w.inliers.size() >= 80;
+                   });
   }
   EXPECT_LT(fixed_whole, 5);
 }
@@ -124,7 +132,8 @@ TEST(LabelWallSurfaces, SightingsOfOneSurfaceShareAnIdAndACabinetInFrontIsAnothe
   std::normal_distribution<double> jitter(0.0, 1.0);
   for (std::size_t stop = 0; stop < 2; ++stop)
     for (std::size_t scan = 0; scan < 10; ++scan)
-      for (const TrueWall& t : {TrueWall{deg2rad(30), 2.4}, TrueWall{deg2rad(30), 2.8}, TrueWall{deg2rad(-150), 3.1}}) {
+      for (const TrueWall& t :
+           {TrueWall{deg2rad(30), 2.4}, TrueWall{deg2rad(30), 2.8}, TrueWall{deg2rad(-150), 3.1}}) {
         WallSighting w;
         w.stop = stop;
         w.scan = stop * 10 + scan;
@@ -139,8 +148,10 @@ TEST(LabelWallSurfaces, SightingsOfOneSurfaceShareAnIdAndACabinetInFrontIsAnothe
   labelWallSurfaces(shuffled);
   // Ids by ascending mean normal: the surface at -150 deg is 1, the two at 30 deg are 2 and 3.
   for (const WallSighting& w : walls) {
-    if (w.normal_rad < 0.0) EXPECT_EQ(w.wall, 1);
-    else EXPECT_TRUE(w.wall == 2 || w.wall == 3) << w.wall;
+    if (w.normal_rad < 0.0)
+      EXPECT_EQ(w.wall, 1);
+    else
+      EXPECT_TRUE(w.wall == 2 || w.wall == 3) << w.wall;
   }
   // One id per surface and stop, the same whatever the input order.
   for (std::size_t i = 0; i < walls.size(); ++i)
@@ -158,11 +169,10 @@ TEST(LabelWallSurfaces, SightingsOfOneSurfaceShareAnIdAndACabinetInFrontIsAnothe
   }
 }
 
-
 /// n points along the wall x cos(normal) + y sin(normal) = distance, from -half to +half metres
 /// along it, seen from the origin in beam order, with Gaussian noise across it.
-std::vector<Eigen::Vector2d> wallPoints(double normal_rad, double distance_m, double half_m, int n, double sigma = 0.0,
-                                        unsigned seed = 1) {
+std::vector<Eigen::Vector2d> wallPoints(double normal_rad, double distance_m, double half_m, int n,
+                                        double sigma = 0.0, unsigned seed = 1) {
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> noise(0.0, 1.0);
   const Eigen::Vector2d nrm(std::cos(normal_rad), std::sin(normal_rad)), along(-nrm.y(), nrm.x());
@@ -199,7 +209,8 @@ TEST(WallsInRun, ACornerIsSplitIntoItsTwoWallsAndARotationTurnsThem) {
     SCOPED_TRACE(turn);
     std::vector<Eigen::Vector2d> run;
     for (const auto& p : corner)
-      run.emplace_back(std::cos(turn) * p.x() - std::sin(turn) * p.y(), std::sin(turn) * p.x() + std::cos(turn) * p.y());
+      run.emplace_back(std::cos(turn) * p.x() - std::sin(turn) * p.y(),
+                       std::sin(turn) * p.x() + std::cos(turn) * p.y());
     const auto walls = findWallsInRun(run, RunWallConfig{});
     ASSERT_EQ(walls.size(), 2u);
     EXPECT_NEAR(wrapAngle(walls[0].normal_rad - turn), 0.0, 1e-9);
@@ -209,14 +220,17 @@ TEST(WallsInRun, ACornerIsSplitIntoItsTwoWallsAndARotationTurnsThem) {
     for (const auto& w : walls)
       for (const auto k : w.inliers) {
         const auto& q = run[static_cast<std::size_t>(k)];
-        EXPECT_LE(std::abs(q.x() * std::cos(w.normal_rad) + q.y() * std::sin(w.normal_rad) - w.distance_m), 0.025);
+        EXPECT_LE(std::abs(q.x() * std::cos(w.normal_rad) + q.y() * std::sin(w.normal_rad) -
+                           w.distance_m),
+                  0.025);
       }
   }
 }
 
 TEST(WallsInRun, ShortRunsGiveNoWallAndBadSettingsAnError) {
   EXPECT_TRUE(findWallsInRun({}, RunWallConfig{}).empty());
-  EXPECT_TRUE(findWallsInRun(wallPoints(0.0, 1.0, 0.5, 9), RunWallConfig{}).empty());  // 7 inner points
+  // 7 inner points
+  EXPECT_TRUE(findWallsInRun(wallPoints(0.0, 1.0, 0.5, 9), RunWallConfig{}).empty());
   RunWallConfig keep_ends;
   keep_ends.drop_run_ends = false;
   EXPECT_EQ(findWallsInRun(wallPoints(0.0, 1.0, 0.5, 9), keep_ends).size(), 1u);

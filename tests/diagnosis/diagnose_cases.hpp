@@ -1,13 +1,13 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Simulated sequences with one effect hidden in them (or none), for the diagnosis tests and
-// bench/diagnose_accuracy. The paper field of Alhashimi et al. 2021 section 4.3 at the landmark level: five
-// poles of 0.12 m (radius published), ten stops of 0.30 m, ten scans per stop, Alhashimi et al. 2016's bias
-// and squared noise (2 cm at 3 m), stop positions scattered by 2 cm, sighting bearings by 0.2
-// degree, and the room's walls behind the poles (the background of mixed pixels). Which size
-// (and sign) the effect takes is drawn from the case seed; the tests only look at the name.
-// And the static cases: a room seen from one pose (or a sensor turning in place), one effect
-// each, with the causes the truth allows.
+// bench/diagnose_accuracy. The paper field of Alhashimi et al. 2021 section 4.3 at the landmark
+// level: five poles of 0.12 m (radius published), ten stops of 0.30 m, ten scans per stop,
+// Alhashimi et al. 2016's bias and squared noise (2 cm at 3 m), stop positions scattered by 2 cm,
+// sighting bearings by 0.2 degree, and the room's walls behind the poles (the background of mixed
+// pixels). Which size (and sign) the effect takes is drawn from the case seed; the tests only look
+// at the name. And the static cases: a room seen from one pose (or a sensor turning in place), one
+// effect each, with the causes the truth allows.
 
 #include <algorithm>
 #include <cmath>
@@ -19,8 +19,8 @@
 #include <limits>
 #include <vector>
 
-#include "diagnosis/static_scene.hpp"
 #include "common/rng.hpp"
+#include "diagnosis/static_scene.hpp"
 #include "simulation/landmark_level.hpp"
 #include "simulation/simulator.hpp"
 
@@ -34,8 +34,12 @@ struct HiddenEffectCase {
 
 inline simulation::LandmarkLevelConfig paperFieldLandmarkLevel() {
   simulation::LandmarkLevelConfig c;
-  c.landmarks = {{1.5, 0.75, 0.12}, {0.3, 2.2, 0.12}, {2.4, 3.4, 0.12}, {3.9, -1.3, 0.12}, {0.9, -2.8, 0.12}};
-  c.walls = {{-1.5, -3.8, 5.0, -3.8}, {5.0, -3.8, 5.0, 4.5}, {5.0, 4.5, -1.5, 4.5}, {-1.5, 4.5, -1.5, -3.8}};
+  c.landmarks = {
+      {1.5, 0.75, 0.12}, {0.3, 2.2, 0.12}, {2.4, 3.4, 0.12}, {3.9, -1.3, 0.12}, {0.9, -2.8, 0.12}};
+  c.walls = {{-1.5, -3.8, 5.0, -3.8},
+             {5.0, -3.8, 5.0, 4.5},
+             {5.0, 4.5, -1.5, 4.5},
+             {-1.5, 4.5, -1.5, -3.8}};
   c.path.stops = 10;
   c.path.step_m = 0.30;
   c.path.scans_per_stop = 10;
@@ -75,7 +79,8 @@ inline HiddenEffectCase hiddenEffectCase(const std::string& effect, std::uint64_
   if (effect == "none") {
     h.size = "clean";
   } else if (effect == "incidence_noise") {
-    c.effects.incidence_noise_exponent = 1.0 + 0.5 * u(rng);  // sigma (1 / cos phi)^gamma, gamma in [1, 1.5]
+    // sigma (1 / cos phi)^gamma, gamma in [1, 1.5]
+    c.effects.incidence_noise_exponent = 1.0 + 0.5 * u(rng);
     std::snprintf(buf, sizeof buf, "gamma %.2f", c.effects.incidence_noise_exponent);
   } else if (effect == "incidence_bias") {
     c.effects.incidence_bias_m = sign * (0.02 + 0.02 * u(rng));  // 2-4 cm at grazing incidence
@@ -94,8 +99,9 @@ inline HiddenEffectCase hiddenEffectCase(const std::string& effect, std::uint64_
     const double rms = std::sqrt(ss / static_cast<double>(c.landmarks.size()));
     const double common = 0.02 * (u(rng) - 0.5);  // and a common part, up to +-1 cm
     for (auto& l : c.landmarks) l.range_offset_m = common + (l.range_offset_m - mean) * sigma / rms;
-    std::snprintf(buf, sizeof buf, "offsets %.3f %.3f %.3f %.3f %.3f m", c.landmarks[0].range_offset_m,
-                  c.landmarks[1].range_offset_m, c.landmarks[2].range_offset_m, c.landmarks[3].range_offset_m,
+    std::snprintf(buf, sizeof buf, "offsets %.3f %.3f %.3f %.3f %.3f m",
+                  c.landmarks[0].range_offset_m, c.landmarks[1].range_offset_m,
+                  c.landmarks[2].range_offset_m, c.landmarks[3].range_offset_m,
                   c.landmarks[4].range_offset_m);
   } else if (effect == "heading_error") {
     c.path.sigma_psi_rad = deg2rad(1.0 + 0.5 * u(rng));  // per stop, 1-1.5 degrees
@@ -122,7 +128,8 @@ inline HiddenEffectCase hiddenEffectCase(const std::string& effect, std::uint64_
     c.path.step_error_fraction = sign * (0.03 + 0.02 * u(rng));  // true steps 3-5 % off
     std::snprintf(buf, sizeof buf, "step error %.3f", c.path.step_error_fraction);
   } else if (effect == "heavy_tails") {
-    c.effects.noise_student_dof = 3.0 + 2.0 * u(rng);  // Student t noise, 3-5 degrees of freedom (same variance)
+    // Student t noise, 3-5 degrees of freedom (same variance)
+    c.effects.noise_student_dof = 3.0 + 2.0 * u(rng);
     std::snprintf(buf, sizeof buf, "nu %.2f", c.effects.noise_student_dof);
   } else if (effect == "quantisation") {
     // Readings rounded to 5, 10 or 20 mm (a sensor reporting whole centimetres: the SICK LMS
@@ -137,9 +144,9 @@ inline HiddenEffectCase hiddenEffectCase(const std::string& effect, std::uint64_
     giveIntensities(c, case_seed);
     c.effects.dark_noise_exponent = 0.5 + 0.5 * u(rng);  // delta in [0.5, 1]
     c.effects.dark_reference_intensity = std::sqrt(15.0 * 250.0);
-    std::snprintf(buf, sizeof buf, "delta %.2f, intensities %.0f %.0f %.0f %.0f %.0f", c.effects.dark_noise_exponent,
-                  c.landmarks[0].intensity, c.landmarks[1].intensity, c.landmarks[2].intensity, c.landmarks[3].intensity,
-                  c.landmarks[4].intensity);
+    std::snprintf(buf, sizeof buf, "delta %.2f, intensities %.0f %.0f %.0f %.0f %.0f",
+                  c.effects.dark_noise_exponent, c.landmarks[0].intensity, c.landmarks[1].intensity,
+                  c.landmarks[2].intensity, c.landmarks[3].intensity, c.landmarks[4].intensity);
   } else {
     throw std::invalid_argument("hiddenEffectCase: unknown effect " + effect);
   }
@@ -156,7 +163,8 @@ inline NoiseModel squaredNoise(double sigma_e) {
 
 /// The scene of staticRoom(): an irregular room seen from one pose, walls at several distances
 /// and incidences, a pillar and a box (depth discontinuities), bias 0.01 + d.
-inline Scene staticRoomScene(const RangeEffects& fx, const NoiseModel& noise, int scans, double step_error_fraction) {
+inline Scene staticRoomScene(const RangeEffects& fx, const NoiseModel& noise, int scans,
+                             double step_error_fraction) {
   Scene s;
   s.sensor.beams = 360;
   s.sensor.range.range_min_m = 0.15;
@@ -168,7 +176,11 @@ inline Scene staticRoomScene(const RangeEffects& fx, const NoiseModel& noise, in
   s.path.scans_per_stop = scans;
   s.path.start = Pose2{0.3, -0.2, 0.4};
   s.path.step_error_fraction = step_error_fraction;
-  s.walls = {{-2.0, -3.0, 4.0, -3.0}, {4.0, -3.0, 4.0, 1.0}, {4.0, 1.0, 2.5, 3.5}, {2.5, 3.5, -2.0, 3.5}, {-2.0, 3.5, -2.0, -3.0}};
+  s.walls = {{-2.0, -3.0, 4.0, -3.0},
+             {4.0, -3.0, 4.0, 1.0},
+             {4.0, 1.0, 2.5, 3.5},
+             {2.5, 3.5, -2.0, 3.5},
+             {-2.0, 3.5, -2.0, -3.0}};
   s.clutter = {{1.5, 1.0, 0.2}};
   s.walls.push_back({-1.0, 0.8, -0.4, 1.6});
   return s;
@@ -187,7 +199,8 @@ inline diagnosis::StaticScans roomScans(int scans) {
 /// The scans of a one-stop scene `s` (its scans_per_stop), as `diagnose` reads them.
 /// `turn_rad_per_scan`: the sensor turns in place by this much per scan (the scans are cast from
 /// the turned heading).
-inline diagnosis::StaticScans sceneScans(const Scene& s, std::uint64_t seed, double turn_rad_per_scan = 0.0) {
+inline diagnosis::StaticScans sceneScans(const Scene& s, std::uint64_t seed,
+                                         double turn_rad_per_scan = 0.0) {
   const auto stops = simulation::planStops(s, seed);
   diagnosis::StaticScans out = roomScans(s.path.scans_per_stop);
   out.beams_per_scan = static_cast<std::size_t>(s.sensor.beams);
@@ -200,17 +213,22 @@ inline diagnosis::StaticScans sceneScans(const Scene& s, std::uint64_t seed, dou
     out.has_intensity = sim.scan.has_intensity;
     for (const auto& p : *sim.scan.cloud)
       if (std::isfinite(p.x))
-        out.readings.push_back({std::atan2(static_cast<double>(p.y), static_cast<double>(p.x)),
-                                std::hypot(static_cast<double>(p.x), static_cast<double>(p.y)), static_cast<std::uint32_t>(k),
-                                sim.scan.has_intensity ? static_cast<double>(p.intensity) : std::nan("")});
+        out.readings.push_back(
+            {std::atan2(static_cast<double>(p.y), static_cast<double>(p.x)),
+             std::hypot(static_cast<double>(p.x), static_cast<double>(p.y)),
+             static_cast<std::uint32_t>(k),
+             sim.scan.has_intensity ? static_cast<double>(p.intensity) : std::nan("")});
   }
   return out;
 }
 
 /// A simulated room seen from one pose (staticRoomScene), `scans` scans.
-inline diagnosis::StaticScans staticRoom(const RangeEffects& fx, const NoiseModel& noise, std::uint64_t seed, int scans = 150,
-                                           double step_error_fraction = 0.0, double turn_rad_per_scan = 0.0) {
-  return sceneScans(staticRoomScene(fx, noise, scans, step_error_fraction), seed, turn_rad_per_scan);
+inline diagnosis::StaticScans staticRoom(const RangeEffects& fx, const NoiseModel& noise,
+                                         std::uint64_t seed, int scans = 150,
+                                         double step_error_fraction = 0.0,
+                                         double turn_rad_per_scan = 0.0) {
+  return sceneScans(staticRoomScene(fx, noise, scans, step_error_fraction), seed,
+                    turn_rad_per_scan);
 }
 
 /// Where the extra-wide errors of staticRoomWithTails() occur.
@@ -228,7 +246,8 @@ inline std::vector<bool> tailBeams(const simulation::SimulatedScan& sim, TailWhe
     const double prev = sim.truth[(b + n - 1) % n].range_m, next = sim.truth[(b + 1) % n].range_m;
     const bool edge = !(std::abs(prev - t.range_m) <= 0.1) || !(std::abs(next - t.range_m) <= 0.1);
     const bool dark = t.target == io::TargetKind::wall && t.target_id == 4;
-    in[b] = where == TailWhere::everywhere || (where == TailWhere::grazing && t.incidence_rad > deg2rad(45.0)) ||
+    in[b] = where == TailWhere::everywhere ||
+            (where == TailWhere::grazing && t.incidence_rad > deg2rad(45.0)) ||
             (where == TailWhere::edge && edge) || (where == TailWhere::dark && dark);
   }
   return in;
@@ -237,8 +256,9 @@ inline std::vector<bool> tailBeams(const simulation::SimulatedScan& sim, TailWhe
 /// staticRoom() with extra-wide errors the test controls: with probability `rate` a reading of a
 /// beam of class `where` gets a further N(0, wide_m^2) (its own stream, drawn for every beam).
 /// Every reading carries an intensity: 20 on the dark wall, 200 elsewhere (whatever `where` is).
-inline diagnosis::StaticScans staticRoomWithTails(TailWhere where, double rate, double wide_m, std::uint64_t seed,
-                                                  const RangeEffects& fx = {}, int scans = 150) {
+inline diagnosis::StaticScans staticRoomWithTails(TailWhere where, double rate, double wide_m,
+                                                  std::uint64_t seed, const RangeEffects& fx = {},
+                                                  int scans = 150) {
   const Scene s = staticRoomScene(fx, squaredNoise(0.0015), scans, 0.0);
   const auto stops = simulation::planStops(s, seed);
   diagnosis::StaticScans out = roomScans(scans);
@@ -255,7 +275,8 @@ inline diagnosis::StaticScans staticRoomWithTails(TailWhere where, double rate, 
       if (!std::isfinite(p.x)) continue;
       const double r = std::hypot(static_cast<double>(p.x), static_cast<double>(p.y));
       out.readings.push_back({std::atan2(static_cast<double>(p.y), static_cast<double>(p.x)),
-                              in[b] && u < rate ? r + wide_m * e : r, static_cast<std::uint32_t>(k), dark[b] ? 20.0 : 200.0});
+                              in[b] && u < rate ? r + wide_m * e : r, static_cast<std::uint32_t>(k),
+                              dark[b] ? 20.0 : 200.0});
     }
   }
   return out;
@@ -275,8 +296,8 @@ inline std::string dominantTailClass(const diagnosis::TailAttribution& tails) {
 
 /// One static case: an effect hidden in the room and the causes the truth allows.
 struct StaticCase {
-  const char* name;      ///< case name
-  const char* effect;    ///< the cause the truth allows (the hidden effect, or "none")
+  const char* name;               ///< case name
+  const char* effect;             ///< the cause the truth allows (the hidden effect, or "none")
   std::vector<std::string> also;  ///< other causes the truth allows (none: only `effect`)
   RangeEffects fx;
   NoiseModel noise = squaredNoise(0.0015);
@@ -295,19 +316,23 @@ struct StaticCase {
 inline diagnosis::StaticScans staticRoom(const StaticCase& c, std::uint64_t seed) {
   Scene s = staticRoomScene(c.fx, c.noise, 150, c.step_error_fraction);
   for (std::size_t k = 0; k < c.intensities.size(); ++k)
-    (k < s.walls.size() ? s.walls[k].intensity : s.clutter[k - s.walls.size()].intensity) = c.intensities[k];
+    (k < s.walls.size() ? s.walls[k].intensity : s.clutter[k - s.walls.size()].intensity) =
+        c.intensities[k];
   return sceneScans(s, seed);
 }
 
 /// Surfaces of several intensities (dark 20-40, bright 150-250; the median wall 90).
-inline std::vector<double> roomIntensities() { return {200.0, 35.0, 120.0, 20.0, 90.0, 250.0, 60.0}; }
+inline std::vector<double> roomIntensities() {
+  return {200.0, 35.0, 120.0, 20.0, 90.0, 250.0, 60.0};
+}
 
 /// The static cases. The room's alpha_0 is 0.01 m. An incidence-dependent bias bends straight walls
 /// almost as an offset does: with the offset given (a reference distance) it is named; without it
 /// the truth allows it, "not identifiable" or nothing named (over seeds 101-110 it was named in 5
 /// of 10), but no other cause. A step-length error
 /// cannot exist with one pose (nothing moves): the data are clean. Quantisation: a 2 mm grid, as
-/// coarse as the noise at 1-2 m (docs/results/static-diagnosis.md gives the rates for coarser grids).
+/// coarse as the noise at 1-2 m (docs/results/static-diagnosis.md gives the rates for coarser
+/// grids).
 inline std::vector<StaticCase> staticCases() {
   auto fx = [](auto set) {
     RangeEffects e;
@@ -320,22 +345,50 @@ inline std::vector<StaticCase> staticCases() {
   half_power.sigma_e = 0.0015 * std::pow(3.0, 1.5);
   const double none = std::numeric_limits<double>::quiet_NaN();
   return {
-      {"incidence_noise", "incidence_noise", {}, fx([](RangeEffects& e) { e.incidence_noise_exponent = 1.0; })},
-      {"range_drift", "range_drift", {}, fx([](RangeEffects& e) { e.range_drift_m_per_scan = 2e-4; })},
+      {"incidence_noise", "incidence_noise", {}, fx([](RangeEffects& e) {
+         e.incidence_noise_exponent = 1.0;
+       })},
+      {"range_drift", "range_drift", {}, fx([](RangeEffects& e) {
+         e.range_drift_m_per_scan = 2e-4;
+       })},
       {"heavy_tails", "heavy_tails", {}, fx([](RangeEffects& e) { e.noise_student_dof = 3.0; })},
       {"range_noise_law", "range_noise_law", {}, RangeEffects{}, half_power},
-      {"incidence_bias_offset_given", "incidence_bias", {}, fx([](RangeEffects& e) { e.incidence_bias_m = 0.05; }),
-       squaredNoise(0.0015), 0.01},
-      {"incidence_bias_offset_unknown", "incidence_bias", {"not_identifiable", "none"}, fx([](RangeEffects& e) { e.incidence_bias_m = 0.05; })},
-      {"mixed_pixels", "mixed_pixels", {}, fx([](RangeEffects& e) { e.mixed_pixel_fraction = 0.08; })},
-      {"quantisation", "quantisation", {}, fx([](RangeEffects& e) { e.range_resolution_m = 0.002; })},
+      {"incidence_bias_offset_given",
+       "incidence_bias",
+       {},
+       fx([](RangeEffects& e) { e.incidence_bias_m = 0.05; }),
+       squaredNoise(0.0015),
+       0.01},
+      {"incidence_bias_offset_unknown",
+       "incidence_bias",
+       {"not_identifiable", "none"},
+       fx([](RangeEffects& e) { e.incidence_bias_m = 0.05; })},
+      {"mixed_pixels", "mixed_pixels", {}, fx([](RangeEffects& e) {
+         e.mixed_pixel_fraction = 0.08;
+       })},
+      {"quantisation", "quantisation", {}, fx([](RangeEffects& e) {
+         e.range_resolution_m = 0.002;
+       })},
       {"odometry_scale_cannot_exist", "none", {}, RangeEffects{}, squaredNoise(0.0015), none, 0.04},
-      {"clean_with_intensities", "none", {}, RangeEffects{}, squaredNoise(0.0015), none, 0.0, roomIntensities()},
-      {"dark_surface", "dark_surface", {}, fx([](RangeEffects& e) {
+      {"clean_with_intensities",
+       "none",
+       {},
+       RangeEffects{},
+       squaredNoise(0.0015),
+       none,
+       0.0,
+       roomIntensities()},
+      {"dark_surface",
+       "dark_surface",
+       {},
+       fx([](RangeEffects& e) {
          e.dark_noise_exponent = 0.75;
          e.dark_reference_intensity = 90.0;
        }),
-       squaredNoise(0.0015), none, 0.0, roomIntensities()},
+       squaredNoise(0.0015),
+       none,
+       0.0,
+       roomIntensities()},
   };
 }
 

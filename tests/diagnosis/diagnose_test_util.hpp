@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
-// Helpers of the diagnosis' hidden-effect tests: case seeds drawn from a seed the tests do not read,
-// the case and replica counts the environment can raise (LIDARCAL_DIAGNOSE_CASES,
+// Helpers of the diagnosis' hidden-effect tests: case seeds drawn from a seed the tests do not
+// read, the case and replica counts the environment can raise (LIDARCAL_DIAGNOSE_CASES,
 // LIDARCAL_DIAGNOSE_REPLICAS, LIDARCAL_DIAGNOSE_FIRST; tests/CMakeLists.txt registers the long
 // runs), and a hidden sequence case diagnosed.
 
@@ -64,7 +64,8 @@ inline std::vector<std::uint64_t> caseSeeds(const std::string& effect, int n) {
   const char* env = std::getenv("LIDARCAL_DIAGNOSE_FIRST");
   if (env && *env) {
     std::vector<std::uint64_t> out;
-    for (int k = 0; k < n; ++k) out.push_back(static_cast<std::uint64_t>(std::max(1, std::atoi(env)) + k));
+    for (int k = 0; k < n; ++k)
+      out.push_back(static_cast<std::uint64_t>(std::max(1, std::atoi(env)) + k));
     return out;
   }
   return unreadSeeds(nameTag(effect), n);
@@ -72,7 +73,8 @@ inline std::vector<std::uint64_t> caseSeeds(const std::string& effect, int n) {
 
 /// Hidden case h simulated and diagnosed with diagnose seed `seed` and `replicas` bootstrap
 /// replicas; one replica for the extended simulation, whose closeness these tests do not look at.
-inline DiagnosisResult diagnoseCase(const test::HiddenEffectCase& h, std::uint64_t seed, int replicas) {
+inline DiagnosisResult diagnoseCase(const test::HiddenEffectCase& h, std::uint64_t seed,
+                                    int replicas) {
   const auto s = simulation::simulateLandmarkLevel(h.config, h.seed);
   DiagnoseConfig dc;
   dc.seed = seed;
@@ -83,14 +85,17 @@ inline DiagnosisResult diagnoseCase(const test::HiddenEffectCase& h, std::uint64
 
 /// The candidate row of effect `e` in `r` (nullptr when `e` was not a candidate).
 inline const CandidateResult* candidateFor(const DiagnosisResult& r, Effect e) {
-  const auto c = std::find_if(r.candidates.begin(), r.candidates.end(), [e](const CandidateResult& x) { return x.effect == e; });
+  const auto c = std::find_if(r.candidates.begin(), r.candidates.end(),
+                              [e](const CandidateResult& x) { return x.effect == e; });
   return c == r.candidates.end() ? nullptr : &*c;
 }
 
 /// The hidden size of a signed effect (0: not signed) and the key of its estimate.
-inline std::pair<double, const char*> signedTruth(const std::string& e, const test::HiddenEffectCase& h) {
+inline std::pair<double, const char*> signedTruth(const std::string& e,
+                                                  const test::HiddenEffectCase& h) {
   if (e == "incidence_bias") return {h.config.effects.incidence_bias_m, "incidence_bias_m"};
-  if (e == "range_drift") return {h.config.effects.range_drift_m_per_scan, "range_drift_m_per_scan"};
+  if (e == "range_drift")
+    return {h.config.effects.range_drift_m_per_scan, "range_drift_m_per_scan"};
   if (e == "angle_offset") return {h.config.mount_yaw_rad, "angle_offset_deg"};
   return {0.0, ""};
 }

@@ -13,8 +13,8 @@
 #include <optional>
 #include <random>
 
-#include <Eigen/Dense>
 #include <gtest/gtest.h>
+#include <Eigen/Dense>
 
 #include "calibration/joint_refinement.hpp"
 #include "common/rng.hpp"
@@ -40,7 +40,8 @@ TEST(DiagnoseStats, BlockTridiagonalInverseAndLogDetMatchTheDenseOnes) {
   };
   for (int k = 0; k < n; ++k) {
     const Eigen::Matrix3d j = random3();
-    const Eigen::Matrix3d info = j.transpose() * j * (k % 3 == 1 ? 1e-3 : 1.0);  // some poses nearly unseen
+    // some poses nearly unseen
+    const Eigen::Matrix3d info = j.transpose() * j * (k % 3 == 1 ? 1e-3 : 1.0);
     diag[k] += info;
     dense.block<3, 3>(3 * k, 3 * k) += info;
   }
@@ -86,10 +87,12 @@ TEST(DiagnoseStats, LeaveOneOutLogDensityMatchesTheRefitWithoutTheBlock) {
   std::vector<Eigen::Matrix<double, 3, 6>> j(blocks);
   std::vector<Eigen::Vector3d> y(blocks);
   for (int b = 0; b < blocks; ++b) {
-    for (int i = 0; i < 18; ++i) j[b](i / 6, i % 6) = n01(rng) * (b == 0 ? 0.2 : 1.0);  // block 0: little leverage
+    // block 0: little leverage
+    for (int i = 0; i < 18; ++i) j[b](i / 6, i % 6) = n01(rng) * (b == 0 ? 0.2 : 1.0);
     for (int i = 0; i < 3; ++i) y[b](i) = n01(rng) * 2.0;  // residuals of any size
   }
-  auto fit = [&](int without, Eigen::Matrix<double, 6, 1>& theta, Eigen::Matrix<double, 6, 6>& cov) {
+  auto fit = [&](int without, Eigen::Matrix<double, 6, 1>& theta,
+                 Eigen::Matrix<double, 6, 6>& cov) {
     Eigen::Matrix<double, 6, 6> h = Eigen::Matrix<double, 6, 6>::Zero();
     Eigen::Matrix<double, 6, 1> g = Eigen::Matrix<double, 6, 1>::Zero();
     for (int b = 0; b < blocks; ++b)
@@ -109,20 +112,23 @@ TEST(DiagnoseStats, LeaveOneOutLogDensityMatchesTheRefitWithoutTheBlock) {
     fit(k, theta_k, cov_k);
     const Eigen::Vector3d e = y[k] - j[k] * theta_k;
     const Eigen::Matrix3d p = Eigen::Matrix3d::Identity() + j[k] * cov_k * j[k].transpose();
-    const double want = -0.5 * e.dot(p.inverse() * e) - 0.5 * std::log(p.determinant()) - 1.5 * std::log(2.0 * std::acos(-1.0));
+    const double want = -0.5 * e.dot(p.inverse() * e) - 0.5 * std::log(p.determinant()) -
+                        1.5 * std::log(2.0 * std::acos(-1.0));
     const Eigen::Vector3d r = y[k] - j[k] * theta;
     const double got = diagnosis::leaveOneOutLogDensity(r, j[k] * cov * j[k].transpose());
     EXPECT_NEAR(got, want, 1e-9 * std::max(1.0, std::abs(want))) << "block " << k;
   }
   // A block that alone determines a direction of the parameters: S has an eigenvalue 1.
-  EXPECT_TRUE(std::isnan(diagnosis::leaveOneOutLogDensity(Eigen::Vector3d(1.0, 0.0, 0.0), Eigen::Matrix3d::Identity())));
+  EXPECT_TRUE(std::isnan(diagnosis::leaveOneOutLogDensity(Eigen::Vector3d(1.0, 0.0, 0.0),
+                                                          Eigen::Matrix3d::Identity())));
 }
 
 namespace {
 /// poleDistanceMoments(1.2, perp, v, r, extra) against the sampled moments of
 /// along - q - extra r cos(phi) over the draws whose beam hits the pole (q = sqrt(r^2 - perp^2),
 /// cos(phi) = q / r clamped as the model clamps it), for miss distances far inside the tangent,
-/// near it, at it and past it (the fit's miss distance outside the pole while the reading came from it).
+/// near it, at it and past it (the fit's miss distance outside the pole while the reading came from
+/// it).
 void expectPoleMomentsMatchSamples(double r, double extra) {
   std::mt19937_64 rng(11);
   std::normal_distribution<double> n01(0.0, 1.0);
@@ -133,7 +139,8 @@ void expectPoleMomentsMatchSamples(double r, double extra) {
       const Eigen::Matrix2d l = v.llt().matrixL();
       double n = 0.0, m = 0.0, m2 = 0.0;
       for (int k = 0; k < 400000; ++k) {
-        const Eigen::Vector2d x = Eigen::Vector2d(1.2, perp) + l * Eigen::Vector2d(n01(rng), n01(rng));
+        const Eigen::Vector2d x =
+            Eigen::Vector2d(1.2, perp) + l * Eigen::Vector2d(n01(rng), n01(rng));
         if (std::abs(x(1)) >= r) continue;
         const double q = std::sqrt(r * r - x(1) * x(1));
         const double d = x(0) - q - extra * r * std::max(q / r, 0.05);
@@ -146,8 +153,10 @@ void expectPoleMomentsMatchSamples(double r, double extra) {
       const double var = m2 / n - m * m;
       const auto got = diagnosis::poleDistanceMoments(1.2, perp, v, r, extra);
       const double se_mean = std::sqrt(var / n);
-      EXPECT_NEAR(got.mean, m, 5.0 * se_mean + 2e-5) << "perp " << perp << " sd " << sp << " extra " << extra;
-      EXPECT_NEAR(got.var, var, 0.05 * var) << "perp " << perp << " sd " << sp << " extra " << extra;
+      EXPECT_NEAR(got.mean, m, 5.0 * se_mean + 2e-5)
+          << "perp " << perp << " sd " << sp << " extra " << extra;
+      EXPECT_NEAR(got.var, var, 0.05 * var)
+          << "perp " << perp << " sd " << sp << " extra " << extra;
     }
   }
 }
@@ -160,7 +169,8 @@ TEST(DiagnoseStats, PoleDistanceMomentsMatchSampledHits) {
   expectPoleMomentsMatchSamples(r, 0.0);
   // No spread at all: the ray's own distance (its closest approach when it misses).
   EXPECT_DOUBLE_EQ(diagnosis::poleDistanceMoments(1.0, 0.03, Eigen::Matrix2d::Zero(), r).mean, 1.0);
-  EXPECT_DOUBLE_EQ(diagnosis::poleDistanceMoments(1.0, 0.0, Eigen::Matrix2d::Zero(), r).mean, 1.0 - r);
+  EXPECT_DOUBLE_EQ(diagnosis::poleDistanceMoments(1.0, 0.0, Eigen::Matrix2d::Zero(), r).mean,
+                   1.0 - r);
 }
 
 TEST(DiagnoseStats, PoleReadingMomentsWithAnIncidenceBiasMatchSampledHits) {
@@ -169,14 +179,17 @@ TEST(DiagnoseStats, PoleReadingMomentsWithAnIncidenceBiasMatchSampledHits) {
   constexpr double r = 0.0275;
   expectPoleMomentsMatchSamples(r, 0.033 / r);
   expectPoleMomentsMatchSamples(r, 0.004 / r);
-  // The extra root's variance: far inside the tangent, to first order (1 + c)^2 times the distance's.
+  // The extra root's variance: far inside the tangent, to first order (1 + c)^2 times the
+  // distance's.
   Eigen::Matrix2d v;
   v << 0.0, 0.0, 0.0, 1e-8;
   const double plain = diagnosis::poleDistanceMoments(1.0, 0.01, v, r).var;
-  EXPECT_NEAR(diagnosis::poleDistanceMoments(1.0, 0.01, v, r, 1.2).var, 2.2 * 2.2 * plain, 1e-6 * plain);
+  EXPECT_NEAR(diagnosis::poleDistanceMoments(1.0, 0.01, v, r, 1.2).var, 2.2 * 2.2 * plain,
+              1e-6 * plain);
   // With no spread: the root and its extra share at the given miss distance.
   const double q = std::sqrt(r * r - 0.01 * 0.01);
-  EXPECT_NEAR(diagnosis::poleDistanceMoments(1.0, 0.01, Eigen::Matrix2d::Zero(), r, 1.2).mean, 1.0 - q - 1.2 * q, 1e-12);
+  EXPECT_NEAR(diagnosis::poleDistanceMoments(1.0, 0.01, Eigen::Matrix2d::Zero(), r, 1.2).mean,
+              1.0 - q - 1.2 * q, 1e-12);
 }
 
 }  // namespace

@@ -15,8 +15,8 @@
 #include <sstream>
 #include <string>
 
-#include <Eigen/Dense>
 #include <gtest/gtest.h>
+#include <Eigen/Dense>
 
 #include "calibration/joint_refinement.hpp"
 #include "common/rng.hpp"
@@ -39,28 +39,34 @@ TEST(DiagnoseStats, CauseNamingRules) {
     c.identifiable = id;
     return c;
   };
-  const Effect a = Effect::incidence_noise, b = Effect::incidence_bias, c = Effect::range_drift, d = Effect::mixed_pixels;
+  const Effect a = Effect::incidence_noise, b = Effect::incidence_bias, c = Effect::range_drift,
+               d = Effect::mixed_pixels;
   const Effect per_stop = Effect::heading_error, common = Effect::angle_offset;
   std::string why;
-  std::vector<CandidateResult> none = {cand(a, 0.2, 0.001, 0.001, 1), cand(b, 0.5, -0.01, 0.001, 1)};
+  std::vector<CandidateResult> none = {cand(a, 0.2, 0.001, 0.001, 1),
+                                       cand(b, 0.5, -0.01, 0.001, 1)};
   EXPECT_EQ(nameCause(none, 0.01, why), cause::kNone);
   // Largest significant gain wins.
-  std::vector<CandidateResult> two = {cand(a, 1e-9, 0.01, 0.001, 1), cand(b, 1e-12, 0.05, 0.001, 1)};
+  std::vector<CandidateResult> two = {cand(a, 1e-9, 0.01, 0.001, 1),
+                                      cand(b, 1e-12, 0.05, 0.001, 1)};
   EXPECT_EQ(nameCause(two, 0.01, why), toString(b));
   // A simpler effect nested in the top one, within two standard errors, is preferred (parsimony);
   // one that is not nested is not.
-  std::vector<CandidateResult> nested = {cand(per_stop, 1e-12, 0.0105, 0.001, 10), cand(common, 1e-12, 0.0100, 0.001, 1)};
+  std::vector<CandidateResult> nested = {cand(per_stop, 1e-12, 0.0105, 0.001, 10),
+                                         cand(common, 1e-12, 0.0100, 0.001, 1)};
   EXPECT_EQ(nameCause(nested, 0.01, why, {{common, per_stop}}), toString(common));
   EXPECT_EQ(nameCause(nested, 0.01, why), toString(per_stop));
   // A significant effect that cannot be estimated apart from the baseline.
-  std::vector<CandidateResult> confounded = {cand(a, 1e-12, 0.05, 0.001, 1, false), cand(b, 1e-9, 0.01, 0.001, 1)};
+  std::vector<CandidateResult> confounded = {cand(a, 1e-12, 0.05, 0.001, 1, false),
+                                             cand(b, 1e-9, 0.01, 0.001, 1)};
   EXPECT_EQ(nameCause(confounded, 0.01, why), cause::kNotIdentifiable);
   // Two effects that explain the data alike and are declared indistinguishable.
-  std::vector<CandidateResult> twins = {cand(a, 1e-12, 0.0500, 0.002, 1), cand(b, 1e-12, 0.0495, 0.002, 1)};
+  std::vector<CandidateResult> twins = {cand(a, 1e-12, 0.0500, 0.002, 1),
+                                        cand(b, 1e-12, 0.0495, 0.002, 1)};
   EXPECT_EQ(nameCause(twins, 0.01, why, {}, {{a, b}}), cause::kNotIdentifiable);
   // Holm: p = 0.004 is not significant among four candidates at alpha 0.01.
-  std::vector<CandidateResult> holm = {cand(a, 0.004, 0.01, 0.001, 1), cand(b, 0.9, 0, 1, 1), cand(c, 0.9, 0, 1, 1),
-                                       cand(d, 0.9, 0, 1, 1)};
+  std::vector<CandidateResult> holm = {cand(a, 0.004, 0.01, 0.001, 1), cand(b, 0.9, 0, 1, 1),
+                                       cand(c, 0.9, 0, 1, 1), cand(d, 0.9, 0, 1, 1)};
   EXPECT_EQ(nameCause(holm, 0.01, why), cause::kNone);
 }
 
@@ -75,7 +81,8 @@ TEST(DiagnoseRules, TheTableIsTheDocumentedOneInItsOrder) {
   std::vector<std::string> coded;
   for (const VerdictRule& rule : verdictRules()) {
     coded.push_back(rule.id);
-    EXPECT_TRUE(std::string(rule.condition).size() > 0 && std::string(rule.reason).size() > 0) << rule.id;
+    EXPECT_TRUE(std::string(rule.condition).size() > 0 && std::string(rule.reason).size() > 0)
+        << rule.id;
   }
   EXPECT_EQ(documented, coded);
 }

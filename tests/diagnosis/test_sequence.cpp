@@ -19,8 +19,8 @@
 #include <optional>
 #include <random>
 
-#include <Eigen/Dense>
 #include <gtest/gtest.h>
+#include <Eigen/Dense>
 
 #include "calibration/joint_refinement.hpp"
 #include "common/rng.hpp"
@@ -47,8 +47,10 @@ TEST_P(HiddenEffect, DiagnoseNamesItAndItsSignAndItsLikelihoodRatio) {
     const auto h = test::hiddenEffectCase(e, k);
     const auto r = diagnoseCase(h, k, replicasPerCase());
     ASSERT_STREQ(r.status.name(), "ok") << r.status.message;
-    if (r.primary_cause == e) ++named;
-    else misses += " case " + std::to_string(k) + " (" + h.size + "): " + r.primary_cause + ";";
+    if (r.primary_cause == e)
+      ++named;
+    else
+      misses += " case " + std::to_string(k) + " (" + h.size + "): " + r.primary_cause + ";";
     const std::optional<Effect> hidden = parseEffect(e);
     const CandidateResult* c = hidden ? candidateFor(r, *hidden) : nullptr;
     if (!c) continue;  // none
@@ -69,16 +71,21 @@ TEST_P(HiddenEffect, DiagnoseNamesItAndItsSignAndItsLikelihoodRatio) {
   // Binomial allowance: at least n - 1 of n. A method that is right with probability 0.99 per
   // case fails 9 of 10 with probability 0.4 % (4 of 5: 0.1 %), one right with 0.95 with 8.6 %
   // (2.3 %); the long run (20 cases, ctest -L long) asks 19 of 20. Fewer than 5 cases: all.
-  auto required = [](int cases) { return cases >= 20 ? (19 * cases + 19) / 20 : cases >= 5 ? cases - 1 : cases; };
+  auto required = [](int cases) {
+    return cases >= 20 ? (19 * cases + 19) / 20 : cases >= 5 ? cases - 1 : cases;
+  };
   EXPECT_GE(named, required(n)) << e << ": named in " << named << " of " << n << ";" << misses;
-  EXPECT_GE(lr_significant, required(lr_cases)) << e << ": likelihood ratio p < 0.01 in " << lr_significant << " of " << lr_cases;
-  EXPECT_GE(signs, required(signed_cases)) << e << ": fitted sign right in " << signs << " of " << signed_cases;
+  EXPECT_GE(lr_significant, required(lr_cases))
+      << e << ": likelihood ratio p < 0.01 in " << lr_significant << " of " << lr_cases;
+  EXPECT_GE(signs, required(signed_cases))
+      << e << ": fitted sign right in " << signs << " of " << signed_cases;
 }
 
 INSTANTIATE_TEST_SUITE_P(Sequence, HiddenEffect,
-                         ::testing::Values("none", "incidence_noise", "incidence_bias", "landmark_bias", "heading_error",
-                                           "range_drift", "mixed_pixels", "angle_offset", "range_noise_law", "heavy_tails",
-                                           "quantisation", "dark_surface"),
+                         ::testing::Values("none", "incidence_noise", "incidence_bias",
+                                           "landmark_bias", "heading_error", "range_drift",
+                                           "mixed_pixels", "angle_offset", "range_noise_law",
+                                           "heavy_tails", "quantisation", "dark_surface"),
                          [](const auto& p) { return std::string(p.param); });
 
 TEST(DiagnoseSequence, ResultCarriesEveryCandidateAndTheExtendedModel) {
@@ -90,8 +97,9 @@ TEST(DiagnoseSequence, ResultCarriesEveryCandidateAndTheExtendedModel) {
   EXPECT_EQ(r.mode, DiagnoseMode::sequence);
   std::vector<std::string> names;
   for (const auto& c : r.candidates) names.push_back(toString(c.effect));
-  for (const char* e : {"incidence_noise", "incidence_bias", "landmark_bias", "heading_error", "range_drift", "mixed_pixels",
-                        "angle_offset", "range_noise_law", "heavy_tails"})
+  for (const char* e :
+       {"incidence_noise", "incidence_bias", "landmark_bias", "heading_error", "range_drift",
+        "mixed_pixels", "angle_offset", "range_noise_law", "heavy_tails"})
     EXPECT_NE(std::find(names.begin(), names.end(), e), names.end()) << e;
   ASSERT_EQ(r.primary_cause, "landmark_bias");
   // The offsets are recovered (relative to their mean, as simulated): the estimates explain most
@@ -106,10 +114,12 @@ TEST(DiagnoseSequence, ResultCarriesEveryCandidateAndTheExtendedModel) {
     ss_true += truth * truth;
     ss_err += (est - truth) * (est - truth);
   }
-  EXPECT_LT(std::sqrt(ss_err), 0.35 * std::sqrt(ss_true)) << "error " << std::sqrt(ss_err / 5) << " m RMS";
+  EXPECT_LT(std::sqrt(ss_err), 0.35 * std::sqrt(ss_true))
+      << "error " << std::sqrt(ss_err / 5) << " m RMS";
   EXPECT_TRUE(r.scene_keys.count("landmarks[0].range_offset_m (id 1)"));
   // The extended simulation is closer to the data, and calibrating with the offsets is better.
-  EXPECT_LT(r.closeness_extended.variance_ratio_median_abs_log, r.closeness_baseline.variance_ratio_median_abs_log);
+  EXPECT_LT(r.closeness_extended.variance_ratio_median_abs_log,
+            r.closeness_baseline.variance_ratio_median_abs_log);
   EXPECT_GT(r.calibration_mse_ratio_extended, r.calibration_mse_ratio_baseline);
 }
 
@@ -132,7 +142,8 @@ TEST(DiagnoseSequence, ADriftsSceneKeysGiveItsReferenceScanBesideTheFittedOffset
   EXPECT_LT(t_ref, 0.75 * last);
   ASSERT_FALSE(r.extended_bias_alpha.empty());
   EXPECT_EQ(r.scene_keys.at("sensor.bias_alpha[0]"), r.extended_bias_alpha[0]);
-  EXPECT_EQ(r.scene_keys.at("sensor.effects.range_drift_m_per_scan"), r.extended_parameters.at("range_drift_m_per_scan"));
+  EXPECT_EQ(r.scene_keys.at("sensor.effects.range_drift_m_per_scan"),
+            r.extended_parameters.at("range_drift_m_per_scan"));
 }
 
 TEST(DiagnoseSequence, AStepLengthErrorIsNotIdentifiableWithoutTheRadius) {

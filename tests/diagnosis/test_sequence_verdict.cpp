@@ -13,8 +13,8 @@
 #include <optional>
 #include <random>
 
-#include <Eigen/Dense>
 #include <gtest/gtest.h>
+#include <Eigen/Dense>
 
 #include "calibration/joint_refinement.hpp"
 #include "common/rng.hpp"
@@ -30,8 +30,8 @@ namespace {
 /// Effects in readings rounded to whole millimetres, as every real sensor reports them. The
 /// squared law's noise is 0.5 mm at 0.5 m, so the rounding is real and its model gains held out
 /// (+0.01 nats per reading): a hidden effect is named when it holds beside the rounding
-/// (SequenceDiagnosis::nameCauseBesideSymptom), clean data are `none` or `quantisation`, never a physical
-/// effect. Three cases per effect whose seeds come from a seed this test does not read, 5
+/// (SequenceDiagnosis::nameCauseBesideSymptom), clean data are `none` or `quantisation`, never a
+/// physical effect. Three cases per effect whose seeds come from a seed this test does not read, 5
 /// bootstrap replicas each.
 class OnAMillimetreGrid : public ::testing::TestWithParam<const char*> {};
 
@@ -45,9 +45,12 @@ TEST_P(OnAMillimetreGrid, TheEffectIsNamedBesideTheRounding) {
     h.config.effects.range_resolution_m = 0.001;
     const auto r = diagnoseCase(h, k, 5);
     ASSERT_STREQ(r.status.name(), "ok") << r.status.message;
-    const bool right = e == "none" ? r.primary_cause == "none" || r.primary_cause == "quantisation" : r.primary_cause == e;
+    const bool right = e == "none" ? r.primary_cause == "none" || r.primary_cause == "quantisation"
+                                   : r.primary_cause == e;
     named += right;
-    if (!right) misses += " case " + std::to_string(k) + " (" + h.size + "): " + r.primary_cause + " [" + r.decision + "];";
+    if (!right)
+      misses += " case " + std::to_string(k) + " (" + h.size + "): " + r.primary_cause + " [" +
+                r.decision + "];";
     // The grid is found whatever is named.
     const CandidateResult* q = candidateFor(r, Effect::quantisation);
     ASSERT_NE(q, nullptr);
@@ -59,7 +62,9 @@ TEST_P(OnAMillimetreGrid, TheEffectIsNamedBesideTheRounding) {
   EXPECT_GE(named, 2) << e << ":" << misses;
 }
 
-INSTANTIATE_TEST_SUITE_P(Sequence, OnAMillimetreGrid, ::testing::Values("none", "angle_offset", "incidence_noise", "landmark_bias"),
+INSTANTIATE_TEST_SUITE_P(Sequence, OnAMillimetreGrid,
+                         ::testing::Values("none", "angle_offset", "incidence_noise",
+                                           "landmark_bias"),
                          [](const auto& p) { return std::string(p.param); });
 
 /// Effects where the poles return intensities of 15 to 250 (black to white) and the noise does
@@ -79,16 +84,20 @@ TEST_P(WithIntensities, TheDarkSurfaceModelTakesNoOtherEffectsPlace) {
     const auto r = diagnoseCase(h, k, 5);
     ASSERT_STREQ(r.status.name(), "ok") << r.status.message;
     named += r.primary_cause == e;
-    if (r.primary_cause != e) misses += " case " + std::to_string(k) + " (" + h.size + "): " + r.primary_cause + " [" + r.decision + "];";
+    if (r.primary_cause != e)
+      misses += " case " + std::to_string(k) + " (" + h.size + "): " + r.primary_cause + " [" +
+                r.decision + "];";
     const CandidateResult* d = candidateFor(r, Effect::dark_surface);
     ASSERT_NE(d, nullptr);
     ASSERT_TRUE(d->applicable) << d->note;
-    EXPECT_FALSE(d->significant) << "dark_surface significant with noise independent of intensity: " << r.decision;
+    EXPECT_FALSE(d->significant) << "dark_surface significant with noise independent of intensity: "
+                                 << r.decision;
   }
   EXPECT_GE(named, 2) << e << ":" << misses;
 }
 
-INSTANTIATE_TEST_SUITE_P(Sequence, WithIntensities, ::testing::Values("none", "incidence_noise", "landmark_bias"),
+INSTANTIATE_TEST_SUITE_P(Sequence, WithIntensities,
+                         ::testing::Values("none", "incidence_noise", "landmark_bias"),
                          [](const auto& p) { return std::string(p.param); });
 
 TEST(DiagnoseSequence, WithoutIntensitiesTheDarkSurfaceModelIsNotApplicable) {
@@ -107,9 +116,10 @@ TEST(DiagnoseSequence, WithoutIntensitiesTheDarkSurfaceModelIsNotApplicable) {
 TEST(DiagnoseSequence, AnAngleOffsetUnderHeavyTailsIsNamedByItsLikelihoodRatioBesideTheT) {
   // A lidar yawed 2-3 degrees in Student-t noise of 3 degrees of freedom: the t comes first, and
   // the offset's evidence is in sample (its held-out gain beside the t is about 2 standard errors),
-  // so it is named by the likelihood ratio of the two t fits (SequenceDiagnosis::nameCauseBesideSymptom; named
-  // in 18 of 20 fresh cases, docs/results/hidden-effects.md). Three cases whose seeds come from a
-  // seed this test does not read, at least 2 named.
+  // so it is named by the likelihood ratio of the two t fits
+  // (SequenceDiagnosis::nameCauseBesideSymptom; named in 18 of 20 fresh cases,
+  // docs/results/hidden-effects.md). Three cases whose seeds come from a seed this test does not
+  // read, at least 2 named.
   int named = 0;
   std::string misses;
   for (const std::uint64_t k : unreadSeeds(nameTag("angle offset under tails"), 3)) {
@@ -119,7 +129,8 @@ TEST(DiagnoseSequence, AnAngleOffsetUnderHeavyTailsIsNamedByItsLikelihoodRatioBe
     const auto r = diagnoseCase(h, k, 5);
     ASSERT_STREQ(r.status.name(), "ok") << r.status.message;
     named += r.primary_cause == "angle_offset";
-    if (r.primary_cause != "angle_offset") misses += " case " + std::to_string(k) + ": " + r.primary_cause + " [" + r.decision + "];";
+    if (r.primary_cause != "angle_offset")
+      misses += " case " + std::to_string(k) + ": " + r.primary_cause + " [" + r.decision + "];";
     const CandidateResult* a = candidateFor(r, Effect::angle_offset);
     ASSERT_NE(a, nullptr);
     if (r.primary_cause == "angle_offset" && a->estimates.count("heldout_gain_beside_tails")) {
@@ -150,10 +161,12 @@ TEST(DiagnoseSequence, APhysicalEffectUnderHeavyTailsIsNamedAndTheTailsStayBesid
       // Checked beside the t: the gain over the t alone is reported with its standard error.
       if (c.effect == Effect::landmark_bias && c.estimates.count("heldout_gain_beside_tails")) {
         ++beside;
-        EXPECT_GT(c.estimates.at("heldout_gain_beside_tails"), 3.0 * c.estimates.at("heldout_gain_beside_tails_se"));
+        EXPECT_GT(c.estimates.at("heldout_gain_beside_tails"),
+                  3.0 * c.estimates.at("heldout_gain_beside_tails_se"));
       }
     }
-    std::printf("case %llu: %s (%s)\n", static_cast<unsigned long long>(k), r.primary_cause.c_str(), r.decision.c_str());
+    std::printf("case %llu: %s (%s)\n", static_cast<unsigned long long>(k), r.primary_cause.c_str(),
+                r.decision.c_str());
   }
   std::printf("checked beside the tails in %d of 3\n", beside);
 }

@@ -14,8 +14,8 @@
 #include <optional>
 #include <random>
 
-#include <Eigen/Dense>
 #include <gtest/gtest.h>
+#include <Eigen/Dense>
 #include <nlohmann/json.hpp>
 
 #include "calibration/joint_refinement.hpp"
@@ -46,7 +46,8 @@ TEST(SimulatorEffects, EffectReadingMatchesTheDefinitionAtEveryIncidence) {
       fx.incidence_bias_m = b;
       fx.range_drift_m_per_scan = 1e-4;
       for (double cos_inc : {1.0, 0.95, 0.8, 0.5, 0.3, 0.1}) {
-        SCOPED_TRACE(testing::Message() << "b " << b << ", gamma " << gamma << ", cos phi " << cos_inc);
+        SCOPED_TRACE(testing::Message()
+                     << "b " << b << ", gamma " << gamma << ", cos phi " << cos_inc);
         const double mean = m.bias(d) + b * (1.0 - cos_inc) + 0.01 + 1e-4 * 100;
         const double y0 = simulation::effectReading(m, fx, d, {cos_inc, 0.01, 100}, 0.0, unused);
         const double y1 = simulation::effectReading(m, fx, d, {cos_inc, 0.01, 100}, 1.0, unused);
@@ -54,7 +55,8 @@ TEST(SimulatorEffects, EffectReadingMatchesTheDefinitionAtEveryIncidence) {
         EXPECT_NEAR(y1 - y0, m.noise.stddev(d, m.bias) * std::pow(1.0 / cos_inc, gamma), 1e-12);
       }
       // Grazing beams are treated as at cos phi = 0.05 (87 degrees).
-      EXPECT_NEAR(simulation::effectReading(m, fx, d, {0.01, 0.0, 0}, 0.0, unused), m.bias(d) + b * 0.95, 1e-12);
+      EXPECT_NEAR(simulation::effectReading(m, fx, d, {0.01, 0.0, 0}, 0.0, unused),
+                  m.bias(d) + b * 0.95, 1e-12);
     }
   }
   // The bias grows away from normal incidence (b > 0: longer readings at grazing incidence).
@@ -67,9 +69,12 @@ TEST(SimulatorEffects, EffectReadingMatchesTheDefinitionAtEveryIncidence) {
   RangeEffects drift;
   drift.range_drift_m_per_scan = 2e-4;
   drift.range_drift_reference_scan = 40.0;
-  EXPECT_NEAR(simulation::effectReading(m, drift, d, {1.0, 0.0, 40}, 0.0, unused), m.bias(d), 1e-12);
-  EXPECT_NEAR(simulation::effectReading(m, drift, d, {1.0, 0.0, 50}, 0.0, unused), m.bias(d) + 2e-4 * 10, 1e-12);
-  EXPECT_NEAR(simulation::effectReading(m, drift, d, {1.0, 0.0, 0}, 0.0, unused), m.bias(d) - 2e-4 * 40, 1e-12);
+  EXPECT_NEAR(simulation::effectReading(m, drift, d, {1.0, 0.0, 40}, 0.0, unused), m.bias(d),
+              1e-12);
+  EXPECT_NEAR(simulation::effectReading(m, drift, d, {1.0, 0.0, 50}, 0.0, unused),
+              m.bias(d) + 2e-4 * 10, 1e-12);
+  EXPECT_NEAR(simulation::effectReading(m, drift, d, {1.0, 0.0, 0}, 0.0, unused),
+              m.bias(d) - 2e-4 * 40, 1e-12);
   // Every effect off: exactly rangeReading().
   EXPECT_DOUBLE_EQ(simulation::effectReading(m, RangeEffects{}, d, {0.3, 0.0, 7}, 0.7, unused),
                    simulation::rangeReading(m, d, 0.7));
@@ -92,8 +97,8 @@ TEST(SimulatorEffects, StudentNoiseKeepsTheVarianceAndQuantisationTheGrid) {
     s2 += (y - 2.0) * (y - 2.0) / kN;
     s4 += std::pow(y - 2.0, 4) / kN;
   }
-  EXPECT_NEAR(s2 / (0.01 * 0.01), 1.0, 0.1);           // unit-variance t (quantisation adds 1/12 mm^2)
-  EXPECT_GT(s4 / (s2 * s2), 4.0);                       // heavier tails than a normal (kurtosis 3)
+  EXPECT_NEAR(s2 / (0.01 * 0.01), 1.0, 0.1);  // unit-variance t (quantisation adds 1/12 mm^2)
+  EXPECT_GT(s4 / (s2 * s2), 4.0);             // heavier tails than a normal (kurtosis 3)
 }
 
 TEST(SimulatorEffects, MixedPixelsOnlyAtTheEdgesAndAtTheRequestedRate) {
@@ -119,7 +124,8 @@ TEST(SimulatorEffects, MixedPixelsOnlyAtTheEdgesAndAtTheRequestedRate) {
 }
 
 TEST(SimulatorEffects, SceneKeysRoundTripAndStayAbsentWhenOff) {
-  const auto file = std::filesystem::temp_directory_path() / ("lidarcal-effects-" + std::to_string(::getpid()) + ".json");
+  const auto file = std::filesystem::temp_directory_path() /
+                    ("lidarcal-effects-" + std::to_string(::getpid()) + ".json");
   {
     std::ofstream out(file);
     out << R"({"sensor": {"range_min_m": 0.1, "range_max_m": 8,
@@ -160,7 +166,8 @@ TEST(SimulatorEffects, StepErrorScalesTheTruePath) {
   s.path.step_m = 0.4;
   s.path.step_error_fraction = 0.05;
   const auto stops = simulation::planStops(s, 1);
-  for (std::size_t k = 0; k < stops.size(); ++k) EXPECT_NEAR(stops[k].actual.x_m, 0.42 * static_cast<double>(k), 1e-12);
+  for (std::size_t k = 0; k < stops.size(); ++k)
+    EXPECT_NEAR(stops[k].actual.x_m, 0.42 * static_cast<double>(k), 1e-12);
 }
 
 }  // namespace

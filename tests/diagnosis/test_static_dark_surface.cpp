@@ -13,8 +13,8 @@
 #include <optional>
 #include <random>
 
-#include <Eigen/Dense>
 #include <gtest/gtest.h>
+#include <Eigen/Dense>
 
 #include "calibration/joint_refinement.hpp"
 #include "common/rng.hpp"
@@ -26,9 +26,8 @@ namespace lidarcal::diagnosis {
 using namespace lidarcal::calibration;  // the joint refinement the diagnosis refits with
 namespace {
 
-
-/// A noise law that grows on dark surfaces, sigma times (I_ref / I)^delta, in a room whose six walls
-/// and pillar return intensities 20-250 (shuffled over the surfaces per room) and delta from
+/// A noise law that grows on dark surfaces, sigma times (I_ref / I)^delta, in a room whose six
+/// walls and pillar return intensities 20-250 (shuffled over the surfaces per room) and delta from
 /// 0.2 to 1, both drawn from seeds the test does not read: dark_surface is named, its exponent
 /// recovered and its reference the intensity of the median beam's surface.
 struct DarkRoom {
@@ -69,8 +68,9 @@ TEST(DiagnoseStatic, ADarkSurfaceNoiseLawIsNamedAndItsExponentRecovered) {
     // The reference is the median beam's intensity: that of one of the surfaces (the scale
     // sigma_e takes up the difference from the simulator's reference).
     const double ref = k->estimates.at("dark_reference_intensity");
-    EXPECT_TRUE(std::any_of(c.intensities.begin(), c.intensities.end(), [ref](double v) { return std::abs(ref / v - 1.0) < 1e-6; }))
-        << ref;
+    EXPECT_TRUE(std::any_of(c.intensities.begin(), c.intensities.end(), [ref](double v) {
+      return std::abs(ref / v - 1.0) < 1e-6;
+    })) << ref;
     EXPECT_TRUE(r.scene_keys.count("sensor.effects.dark_noise_exponent"));
   }
 }
@@ -85,8 +85,9 @@ TEST(DiagnoseStatic, ADarkSurfaceLawUnderHeavyTailsIsNamedBesideTheContamination
     ASSERT_STREQ(r.status.name(), "ok") << r.status.message;
     ASSERT_TRUE(r.tails.robust.count("dark_noise_exponent"));
     const double robust = r.tails.robust.at("dark_noise_exponent");
-    std::printf("seed %llu: delta %.3f, beside the contamination %.3f; named %s\n", static_cast<unsigned long long>(seed),
-                c.fx.dark_noise_exponent, robust, r.primary_cause.c_str());
+    std::printf("seed %llu: delta %.3f, beside the contamination %.3f; named %s\n",
+                static_cast<unsigned long long>(seed), c.fx.dark_noise_exponent, robust,
+                r.primary_cause.c_str());
     EXPECT_NEAR(robust, c.fx.dark_noise_exponent, 0.15);
     EXPECT_EQ(r.primary_cause, "dark_surface") << r.decision;
   }
@@ -110,7 +111,8 @@ TEST(DiagnoseStatic, IntensityThatFollowsTheRangeCannotNameADarkSurface) {
   const auto r = diagnoseStatic(scans, dc);
   ASSERT_STREQ(r.status.name(), "ok") << r.status.message;
   EXPECT_NE(r.primary_cause, "dark_surface") << r.decision;
-  EXPECT_TRUE(r.primary_cause == "range_noise_law" || r.primary_cause == "not_identifiable") << r.primary_cause << ": " << r.decision;
+  EXPECT_TRUE(r.primary_cause == "range_noise_law" || r.primary_cause == "not_identifiable")
+      << r.primary_cause << ": " << r.decision;
   for (const auto& k : r.candidates)
     if (k.effect == Effect::dark_surface) {
       EXPECT_FALSE(k.identifiable);
@@ -131,14 +133,18 @@ TEST(DiagnoseStatic, ACauseNamedBesideAContaminationOfMostReadingsComesWithACaut
     DiagnoseConfig dc;
     dc.replicas = 5;
     dc.seed = seed;
-    const auto r = diagnoseStatic(test::staticRoomWithTails(test::TailWhere::everywhere, rate, 0.05, seed, fx), dc);
+    const auto r = diagnoseStatic(
+        test::staticRoomWithTails(test::TailWhere::everywhere, rate, 0.05, seed, fx), dc);
     ASSERT_STREQ(r.status.name(), "ok") << r.status.message;
     ASSERT_TRUE(r.tails.fitted) << r.tails.note;
-    std::printf("contamination %.2f: pooled fraction %.2f, named %s\n", rate, r.tails.pooled_fraction, r.primary_cause.c_str());
+    std::printf("contamination %.2f: pooled fraction %.2f, named %s\n", rate,
+                r.tails.pooled_fraction, r.primary_cause.c_str());
     const bool caution = r.decision.find("caution") != std::string::npos;
     EXPECT_EQ(caution, r.tails.pooled_fraction > 0.5) << r.decision;
-    if (rate > 0.5) EXPECT_TRUE(caution) << r.primary_cause << ": " << r.decision;
-    else EXPECT_FALSE(caution) << r.decision;
+    if (rate > 0.5)
+      EXPECT_TRUE(caution) << r.primary_cause << ": " << r.decision;
+    else
+      EXPECT_FALSE(caution) << r.decision;
   }
 }
 

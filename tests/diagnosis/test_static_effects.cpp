@@ -12,8 +12,8 @@
 #include <optional>
 #include <random>
 
-#include <Eigen/Dense>
 #include <gtest/gtest.h>
+#include <Eigen/Dense>
 
 #include "calibration/joint_refinement.hpp"
 #include "common/rng.hpp"
@@ -63,9 +63,11 @@ TEST_P(ReadingGrid, ReadingsRoundedToItAreNamedQuantisation) {
   EXPECT_GE(right, 3) << "grid " << grid << ":" << log;
 }
 
-INSTANTIATE_TEST_SUITE_P(Room, ReadingGrid, ::testing::Values(0.002, 0.005, 0.010), [](const auto& grid_info) {
-  return "mm" + std::to_string(static_cast<int>(std::lround(grid_info.param * 1e3)));
-});
+INSTANTIATE_TEST_SUITE_P(Room, ReadingGrid, ::testing::Values(0.002, 0.005, 0.010),
+                         [](const auto& grid_info) {
+                           return "mm" + std::to_string(
+                                             static_cast<int>(std::lround(grid_info.param * 1e3)));
+                         });
 
 TEST(DiagnoseStatic, MixedPixelsAtTwoToTenPercentOfEdgeReadingsAreNamed) {
   int right = 0;
@@ -79,8 +81,9 @@ TEST(DiagnoseStatic, MixedPixelsAtTwoToTenPercentOfEdgeReadingsAreNamed) {
     ASSERT_STREQ(r.status.name(), "ok") << r.status.message;
     right += names(r.primary_cause, Effect::mixed_pixels);
     char buf[200];
-    std::snprintf(buf, sizeof buf, " seed %d (fraction %.3f): %s, tails %s;", static_cast<int>(seed), fx.mixed_pixel_fraction,
-                  r.primary_cause.c_str(), r.tails.cause.c_str());
+    std::snprintf(buf, sizeof buf, " seed %d (fraction %.3f): %s, tails %s;",
+                  static_cast<int>(seed), fx.mixed_pixel_fraction, r.primary_cause.c_str(),
+                  r.tails.cause.c_str());
     log += buf;
   }
   std::printf("mixed pixels:%s\n", log.c_str());
@@ -98,22 +101,28 @@ TEST(DiagnoseStatic, IncidenceExponentIsRecoveredUnderContamination) {
     DiagnoseConfig dc;
     dc.replicas = 5;
     dc.seed = seed;
-    const auto r = diagnoseStatic(test::staticRoomWithTails(test::TailWhere::everywhere, 0.05, 0.05, seed, fx), dc);
+    const auto r = diagnoseStatic(
+        test::staticRoomWithTails(test::TailWhere::everywhere, 0.05, 0.05, seed, fx), dc);
     ASSERT_STREQ(r.status.name(), "ok") << r.status.message;
     ASSERT_TRUE(r.tails.fitted) << r.tails.note;
     const double robust = r.tails.robust.at("incidence_noise_exponent");
     double gaussian = std::numeric_limits<double>::quiet_NaN();
     for (const auto& k : r.candidates)
-      if (k.effect == Effect::incidence_noise) gaussian = k.estimates.at("incidence_noise_exponent");
-    std::printf("seed %d: incidence exponent %.3f under the contamination, %.3f under the Gaussian; named %s; robust gains: "
-                "gamma %.4f +- %.4f, kappa %.4f +- %.4f\n",
-                static_cast<int>(seed), robust, gaussian, r.primary_cause.c_str(), r.tails.robust.at("incidence_noise_exponent_gain"),
-                r.tails.robust.at("incidence_noise_exponent_gain_se"), r.tails.robust.at("noise_exponent_gain"),
-                r.tails.robust.at("noise_exponent_gain_se"));
+      if (k.effect == Effect::incidence_noise)
+        gaussian = k.estimates.at("incidence_noise_exponent");
+    std::printf(
+        "seed %d: incidence exponent %.3f under the contamination, %.3f under the Gaussian; named "
+        "%s; robust gains: "
+        "gamma %.4f +- %.4f, kappa %.4f +- %.4f\n",
+        static_cast<int>(seed), robust, gaussian, r.primary_cause.c_str(),
+        r.tails.robust.at("incidence_noise_exponent_gain"),
+        r.tails.robust.at("incidence_noise_exponent_gain_se"),
+        r.tails.robust.at("noise_exponent_gain"), r.tails.robust.at("noise_exponent_gain_se"));
     EXPECT_NEAR(robust, 1.0, 0.15);
     // The Gaussian ranking, dominated by the tails, puts a range law first; ranked beside the
     // contamination the incidence noise comes first.
-    EXPECT_EQ(r.primary_cause, "incidence_noise") << r.decision << " tails significant " << r.tails.significant << " p " << r.tails.p_value;
+    EXPECT_EQ(r.primary_cause, "incidence_noise")
+        << r.decision << " tails significant " << r.tails.significant << " p " << r.tails.p_value;
     EXPECT_GT(r.tails.robust.at("incidence_noise_exponent_gain"), 0.0);
   }
 }

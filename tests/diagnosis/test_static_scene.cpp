@@ -14,8 +14,8 @@
 #include <optional>
 #include <random>
 
-#include <Eigen/Dense>
 #include <gtest/gtest.h>
+#include <Eigen/Dense>
 
 #include "calibration/joint_refinement.hpp"
 #include "common/rng.hpp"
@@ -41,7 +41,8 @@ TEST(DiagnoseStatic, CleanRoomHasNoCauseAndFindsItsWalls) {
   EXPECT_EQ(r.mode, DiagnoseMode::static_scene);
   EXPECT_EQ(r.primary_cause, cause::kNone) << r.decision;
   EXPECT_GE(walls.size(), 4u);
-  EXPECT_NEAR(r.baseline_extra.at("alpha0_m"), 0.01, 4.0 * r.baseline_extra.at("alpha0_se_m") + 0.002);
+  EXPECT_NEAR(r.baseline_extra.at("alpha0_m"), 0.01,
+              4.0 * r.baseline_extra.at("alpha0_se_m") + 0.002);
   EXPECT_NEAR(r.baseline.noise.sigma_e, 0.0015, 0.0002);
   for (const auto& c : r.candidates) {
     if (c.effect == Effect::heading_error || c.effect == Effect::angle_offset) {
@@ -70,7 +71,8 @@ TEST_P(StaticHiddenEffect, DiagnoseNamesWhatTheTruthAllows) {
     EXPECT_EQ(r.primary_cause, c.effect) << r.decision;
   }
   for (const auto& k : r.candidates) {
-    if (k.effect == Effect::heading_error || k.effect == Effect::angle_offset || k.effect == Effect::odometry_scale) {
+    if (k.effect == Effect::heading_error || k.effect == Effect::angle_offset ||
+        k.effect == Effect::odometry_scale) {
       EXPECT_FALSE(k.applicable) << toString(k.effect);  // one pose: no stops, no headings
     }
   }
@@ -109,7 +111,8 @@ TEST(DiagnoseStatic, ADriftIsSimulatedOnTheFitsConventionFromItsSceneKeys) {
   ASSERT_TRUE(r.scene_keys.count("sensor.effects.range_drift_reference_scan"));
   EXPECT_NEAR(r.scene_keys.at("sensor.effects.range_drift_reference_scan"), (scans - 1) / 2.0, 1.0);
   EXPECT_NEAR(r.scene_keys.at("sensor.effects.range_drift_m_per_scan"), 2e-4, 4e-5);
-  EXPECT_LT(r.closeness_extended.variance_ratio_median_abs_log, r.closeness_baseline.variance_ratio_median_abs_log);
+  EXPECT_LT(r.closeness_extended.variance_ratio_median_abs_log,
+            r.closeness_baseline.variance_ratio_median_abs_log);
 }
 
 TEST(DiagnoseStatic, ProgressHearsEveryStepAndChangesNothing) {
@@ -128,8 +131,8 @@ TEST(DiagnoseStatic, ProgressHearsEveryStepAndChangesNothing) {
     EXPECT_TRUE(total == 0 || done <= total) << stage;
   };
   const auto heard = diagnoseStatic(s, dc);
-  EXPECT_EQ(stages, (std::vector<std::string>{"baseline fit", "bootstrap replicas", "held-out fits", "candidate tests",
-                                              "extended model"}));
+  EXPECT_EQ(stages, (std::vector<std::string>{"baseline fit", "bootstrap replicas", "held-out fits",
+                                              "candidate tests", "extended model"}));
   EXPECT_EQ(replicas_done, 5u);
   EXPECT_EQ(heard.primary_cause, quiet.primary_cause);
   EXPECT_EQ(heard.baseline_heldout_nats_per_point, quiet.baseline_heldout_nats_per_point);
@@ -147,7 +150,8 @@ TEST(DiagnoseStatic, CleanRoomFalsePositiveRateOverSeeds) {
   for (int seed = 101; seed < 101 + n; ++seed) {
     DiagnoseConfig dc;
     dc.seed = static_cast<std::uint64_t>(seed);
-    const auto r = diagnoseStatic(staticRoom({}, squared(0.0015), static_cast<std::uint64_t>(seed)), dc);
+    const auto r =
+        diagnoseStatic(staticRoom({}, squared(0.0015), static_cast<std::uint64_t>(seed)), dc);
     ASSERT_STREQ(r.status.name(), "ok") << r.status.message;
     if (r.primary_cause != cause::kNone) {
       ++named;
@@ -181,8 +185,10 @@ TEST(DiagnoseStatic, OneTargetAloneIsRefusedAndOneLongWallIsNot) {
         std::pair{"a 0.2 m board 1.7 m away", sceneOf({{2.0, -0.1, 2.0, 0.1}}, {}, 4)}}) {
     SCOPED_TRACE(what);
     const auto r = diagnoseStatic(scans, dc);
-    EXPECT_STREQ(r.status.name(), "too_few_walls") << r.status.message << " cause " << r.primary_cause;
-    EXPECT_NE(r.status.message.find("room"), std::string::npos) << r.status.message;  // says what to record
+    EXPECT_STREQ(r.status.name(), "too_few_walls")
+        << r.status.message << " cause " << r.primary_cause;
+    // says what to record
+    EXPECT_NE(r.status.message.find("room"), std::string::npos) << r.status.message;
   }
   // One wall 1.7 m away across 120 degrees of the view is enough.
   const auto wall = diagnoseStatic(sceneOf({{2.0, -3.0, 2.0, 3.0}}, {}, 5), dc);

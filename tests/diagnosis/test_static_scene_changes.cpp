@@ -12,8 +12,8 @@
 #include <optional>
 #include <random>
 
-#include <Eigen/Dense>
 #include <gtest/gtest.h>
+#include <Eigen/Dense>
 
 #include "calibration/joint_refinement.hpp"
 #include "common/rng.hpp"
@@ -28,12 +28,14 @@ namespace {
 using test::staticRoom;
 NoiseModel squared(double sigma_e) { return test::squaredNoise(sigma_e); }
 
-/// The beams of a 20-degree sector (sensor frame, 10 to 29 degrees) of the room at 0.6 of their range in the scans
-/// `moved` says: an object standing in front of the walls there.
-diagnosis::StaticScans roomWithObject(std::uint64_t seed, const std::function<bool(std::uint32_t)>& moved) {
+/// The beams of a 20-degree sector (sensor frame, 10 to 29 degrees) of the room at 0.6 of their
+/// range in the scans `moved` says: an object standing in front of the walls there.
+diagnosis::StaticScans roomWithObject(std::uint64_t seed,
+                                      const std::function<bool(std::uint32_t)>& moved) {
   diagnosis::StaticScans s = staticRoom({}, squared(0.0015), seed);
   for (auto& r : s.readings)
-    if (r.angle_rad > deg2rad(9.5) && r.angle_rad < deg2rad(29.5) && moved(r.scan)) r.range_m *= 0.6;
+    if (r.angle_rad > deg2rad(9.5) && r.angle_rad < deg2rad(29.5) && moved(r.scan))
+      r.range_m *= 0.6;
   return s;
 }
 
@@ -46,7 +48,8 @@ TEST(DiagnoseStatic, BeamsThatSawAnObjectCarriedAwayAreLeftOutAndTheRoomStaysCle
   // room is the clean room it is.
   DiagnoseConfig dc;
   dc.replicas = 9;
-  const auto r = diagnoseStatic(roomWithObject(3, [](std::uint32_t scan) { return scan < 50; }), dc);
+  const auto r =
+      diagnoseStatic(roomWithObject(3, [](std::uint32_t scan) { return scan < 50; }), dc);
   ASSERT_STREQ(r.status.name(), "ok") << r.status.message;
   EXPECT_EQ(r.baseline_extra.at("window_scans"), 0.0);
   // Every beam of the sector; a few beams' readings fall in two bins (their angles, computed
@@ -65,11 +68,13 @@ TEST(DiagnoseStatic, ReadingsOffTheirBeamAtRandomScansAreNotASceneChange) {
     SCOPED_TRACE(seed);
     auto rng = makeRng(seed, 5);
     std::vector<bool> off(150);
-    for (std::size_t t = 0; t < off.size(); ++t) off[t] = std::uniform_real_distribution<double>(0.0, 1.0)(rng) < 1.0 / 3.0;
+    for (std::size_t t = 0; t < off.size(); ++t)
+      off[t] = std::uniform_real_distribution<double>(0.0, 1.0)(rng) < 1.0 / 3.0;
     DiagnoseConfig dc;
     dc.replicas = 5;
     dc.candidates = {Effect::mixed_pixels};
-    const auto r = diagnoseStatic(roomWithObject(3, [&](std::uint32_t scan) { return off[scan]; }), dc);
+    const auto r =
+        diagnoseStatic(roomWithObject(3, [&](std::uint32_t scan) { return off[scan]; }), dc);
     ASSERT_STREQ(r.status.name(), "ok") << r.status.message;
     EXPECT_EQ(r.baseline_extra.at("scene_changed_bins"), 0.0);
   }

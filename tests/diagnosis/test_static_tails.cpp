@@ -13,8 +13,8 @@
 #include <optional>
 #include <random>
 
-#include <Eigen/Dense>
 #include <gtest/gtest.h>
+#include <Eigen/Dense>
 
 #include "calibration/joint_refinement.hpp"
 #include "common/rng.hpp"
@@ -25,7 +25,6 @@
 namespace lidarcal::diagnosis {
 using namespace lidarcal::calibration;  // the joint refinement the diagnosis refits with
 namespace {
-
 
 /// Where the test puts the extra-wide errors, and what the diagnosis must say about them.
 struct TailTruth {
@@ -54,17 +53,19 @@ TEST_P(StaticTails, DiagnoseNamesThePhysicalCauseAndTheBeamsThatCarryTheTails) {
     ASSERT_TRUE(r.tails.fitted) << r.tails.note;
     const std::string top = test::dominantTailClass(r.tails);
     right += r.primary_cause == c.effect && r.tails.cause == c.effect && top == c.cls;
-    log += " seed " + std::to_string(seed) + ": " + r.primary_cause + ", tails " + r.tails.cause + ", class " + top + ";";
+    log += " seed " + std::to_string(seed) + ": " + r.primary_cause + ", tails " + r.tails.cause +
+           ", class " + top + ";";
   }
   std::printf("%s:%s\n", c.name, log.c_str());
   EXPECT_GE(right, 3) << log;
 }
 
-INSTANTIATE_TEST_SUITE_P(Room, StaticTails,
-                         ::testing::Values(TailTruth{"grazing", test::TailWhere::grazing, "incidence_noise", "grazing"},
-                                           TailTruth{"edge", test::TailWhere::edge, "mixed_pixels", "edge"},
-                                           TailTruth{"dark", test::TailWhere::dark, "dark_surface", "dark"}),
-                         [](const auto& p) { return std::string(p.param.name); });
+INSTANTIATE_TEST_SUITE_P(
+    Room, StaticTails,
+    ::testing::Values(TailTruth{"grazing", test::TailWhere::grazing, "incidence_noise", "grazing"},
+                      TailTruth{"edge", test::TailWhere::edge, "mixed_pixels", "edge"},
+                      TailTruth{"dark", test::TailWhere::dark, "dark_surface", "dark"}),
+    [](const auto& p) { return std::string(p.param.name); });
 
 /// The tail study gives the same numbers, to the last bit, when run again with the same seed.
 TEST(DiagnoseStatic, TailStudyIsDeterministic) {
@@ -79,7 +80,8 @@ TEST(DiagnoseStatic, TailStudyIsDeterministic) {
   EXPECT_EQ(a.tails.tail_readings_by_class, b.tails.tail_readings_by_class);
   ASSERT_EQ(a.tails.covariates.size(), b.tails.covariates.size());
   for (std::size_t k = 0; k < a.tails.covariates.size(); ++k)
-    EXPECT_EQ(a.tails.covariates[k].unique_gain_nats_per_point, b.tails.covariates[k].unique_gain_nats_per_point);
+    EXPECT_EQ(a.tails.covariates[k].unique_gain_nats_per_point,
+              b.tails.covariates[k].unique_gain_nats_per_point);
   ASSERT_EQ(a.tails.top_beams.size(), b.tails.top_beams.size());
   for (std::size_t k = 0; k < a.tails.top_beams.size(); ++k)
     EXPECT_EQ(a.tails.top_beams[k].bearing_rad, b.tails.top_beams[k].bearing_rad);

@@ -13,8 +13,8 @@
 #include <optional>
 #include <random>
 
-#include <Eigen/Dense>
 #include <gtest/gtest.h>
+#include <Eigen/Dense>
 
 #include "calibration/joint_refinement.hpp"
 #include "common/rng.hpp"
@@ -63,7 +63,8 @@ TEST(DiagnoseStats, KolmogorovSmirnovDistance) {
 }
 
 TEST(DiagnoseStats, ReplicaPValueIsCalibratedForNormalStatistics) {
-  // Over many draws of (statistic, 19 replicas) from one normal law, p < 0.05 about 5 % of the time.
+  // Over many draws of (statistic, 19 replicas) from one normal law, p < 0.05 about 5 % of the
+  // time.
   std::mt19937_64 rng(5);
   std::normal_distribution<double> n(3.0, 2.0);
   int below = 0;
@@ -90,7 +91,8 @@ TEST(DiagnoseStats, GridResultantTellsQuantisedReadings) {
   }
   EXPECT_GT(gridResultant(grid, 1e-3), 0.999);
   EXPECT_LT(gridResultant(cont, 1e-3), 0.05);
-  EXPECT_LT(gridResultant(grid, 2e-3), 0.05);  // a coarser grid than the readings' (half on it, half between)
+  // a coarser grid than the readings' (half on it, half between)
+  EXPECT_LT(gridResultant(grid, 2e-3), 0.05);
 }
 
 TEST(DiagnoseStats, HeldOutPValue) {

@@ -12,8 +12,8 @@
 #include <optional>
 #include <random>
 
-#include <Eigen/Dense>
 #include <gtest/gtest.h>
+#include <Eigen/Dense>
 
 #include "calibration/joint_refinement.hpp"
 #include "common/rng.hpp"
@@ -44,7 +44,8 @@ TEST(DiagnoseTails, EmRecoversTheContaminationModelFromItsOwnDraws) {
       beams[b].log_sec_inc = -std::log(std::cos(deg2rad(70.0) * unit(rng)));
       beams[b].x = {b % 2 == 0 ? 1.0 : 0.0, beams[b].log_sec_inc, beams[b].log_range - 0.8, 0.0};
       for (int k = 0; k < 200; ++k) {
-        const double s = truth.sigma(beams[b]) * (unit(rng) < truth.tailProbability(beams[b]) ? truth.wide : 1.0);
+        const double s = truth.sigma(beams[b]) *
+                         (unit(rng) < truth.tailProbability(beams[b]) ? truth.wide : 1.0);
         readings.push_back({b, s * normal(rng), 1.0});
       }
     }
@@ -76,7 +77,8 @@ TEST(DiagnoseTails, DegenerateInputsGiveFiniteParameters) {
   for (std::size_t b = 0; b < beams.size(); ++b)
     for (int k = 0; k < 20; ++k) zeros.push_back({b, 0.0, 1.0});
   const TailModel flat = fitTailModel(beams, zeros, spec, 0.01, 1e-3, 0.1);
-  for (double v : {flat.sigma_e, flat.kappa, flat.gamma, flat.wide, flat.mixed, flat.beta[0]}) EXPECT_TRUE(std::isfinite(v));
+  for (double v : {flat.sigma_e, flat.kappa, flat.gamma, flat.wide, flat.mixed, flat.beta[0]})
+    EXPECT_TRUE(std::isfinite(v));
   EXPECT_TRUE(std::isfinite(flat.logDensity(beams[0], 0.001, 1.0, 1e-3, 0.1)));
 }
 

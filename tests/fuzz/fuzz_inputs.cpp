@@ -33,7 +33,8 @@ namespace fs = std::filesystem;
 class Scratch {
  public:
   explicit Scratch(const std::string& name)
-      : path_(fs::temp_directory_path() / ("lidarcal-fuzz-" + std::to_string(::getpid()) + "-" + name)) {}
+      : path_(fs::temp_directory_path() /
+              ("lidarcal-fuzz-" + std::to_string(::getpid()) + "-" + name)) {}
   ~Scratch() {
     std::error_code ec;
     fs::remove(path_, ec);
@@ -87,7 +88,8 @@ void csv(const std::uint8_t* data, std::size_t size) {
 
 /// Every scan an importer hands on must be consistent (one angle per range).
 bool checkScan(const io::RawScan& s) {
-  if (s.angles_rad.size() != s.ranges_m.size()) throw std::logic_error("importer: angles and ranges differ in number");
+  if (s.angles_rad.size() != s.ranges_m.size())
+    throw std::logic_error("importer: angles and ranges differ in number");
   if (!s.intensities.empty() && s.intensities.size() != s.ranges_m.size())
     throw std::logic_error("importer: intensities and ranges differ in number");
   return true;
@@ -125,7 +127,8 @@ void mcap(const std::uint8_t* data, std::size_t size) {
     for (const auto& c : reader.channels()) all.insert(c.topic);
     std::uint64_t sum = 0;
     reader.forEachMessage(all, [&](const io::McapMessage& m) {
-      for (std::size_t i = 0; i < m.size; ++i) sum += m.data[i];  // every byte handed on must be readable (ASan)
+      // every byte handed on must be readable (ASan)
+      for (std::size_t i = 0; i < m.size; ++i) sum += m.data[i];
       return true;
     });
   });
@@ -147,9 +150,10 @@ void cdr(const std::uint8_t* data, std::size_t size) {
 }  // namespace
 
 const std::vector<NamedTarget>& targets() {
-  static const std::vector<NamedTarget> all = {{"pcd", pcd},         {"json", json},       {"csv", csv},
-                                               {"carmen", carmen}, {"ydlidar", ydlidar}, {"csv_import", csvImport},
-                                               {"mcap", mcap},     {"cdr", cdr}};
+  static const std::vector<NamedTarget> all = {{"pcd", pcd},         {"json", json},
+                                               {"csv", csv},         {"carmen", carmen},
+                                               {"ydlidar", ydlidar}, {"csv_import", csvImport},
+                                               {"mcap", mcap},       {"cdr", cdr}};
   return all;
 }
 

@@ -21,7 +21,8 @@ struct NamedTarget {
   Target run;
 };
 
-/// Every target: pcd, json, csv, carmen, ydlidar, csv_import, mcap (MCAP reader + ROS 2 import), cdr (ROS 2 message decoders).
+/// Every target: pcd, json, csv, carmen, ydlidar, csv_import, mcap (MCAP reader + ROS 2 import),
+/// cdr (ROS 2 message decoders).
 const std::vector<NamedTarget>& targets();
 
 }  // namespace lidarcal::fuzz

@@ -37,7 +37,9 @@ TEST_P(FuzzRegressions, EveryCorpusAndRegressionInputIsReadOrRefusedCleanly) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Targets, FuzzRegressions, ::testing::ValuesIn(fuzz::targets()),
-                         [](const ::testing::TestParamInfo<fuzz::NamedTarget>& p) { return std::string(p.param.name); });
+                         [](const ::testing::TestParamInfo<fuzz::NamedTarget>& p) {
+                           return std::string(p.param.name);
+                         });
 
 }  // namespace
 }  // namespace lidarcal

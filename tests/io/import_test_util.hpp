@@ -18,7 +18,8 @@ namespace lidarcal::test {
 inline void writeGzip(const std::filesystem::path& file, const std::string& text) {
   gzFile f = gzopen(file.c_str(), "wb");
   ASSERT_NE(f, nullptr);
-  ASSERT_EQ(gzwrite(f, text.data(), static_cast<unsigned>(text.size())), static_cast<int>(text.size()));
+  ASSERT_EQ(gzwrite(f, text.data(), static_cast<unsigned>(text.size())),
+            static_cast<int>(text.size()));
   ASSERT_EQ(gzclose(f), Z_OK);
 }
 
@@ -35,8 +36,12 @@ struct Collector {
 };
 
 /// Bearing and range of a point in the sensor frame.
-inline double bearingOf(float x, float y) { return std::atan2(static_cast<double>(y), static_cast<double>(x)); }
-inline double rangeOf(float x, float y) { return std::hypot(static_cast<double>(x), static_cast<double>(y)); }
+inline double bearingOf(float x, float y) {
+  return std::atan2(static_cast<double>(y), static_cast<double>(x));
+}
+inline double rangeOf(float x, float y) {
+  return std::hypot(static_cast<double>(x), static_cast<double>(y));
+}
 
 /// Angle difference wrapped to (-pi, pi].
 inline double angleDiff(double a, double b) {

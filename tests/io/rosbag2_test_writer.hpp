@@ -27,7 +27,9 @@ namespace lidarcal::test {
 /// each primitive aligned on its size counted from the byte after the header.
 class CdrWriter {
  public:
-  explicit CdrWriter(bool big_endian) : big_(big_endian) { bytes_ = {'\0', big_endian ? '\0' : '\1', '\0', '\0'}; }
+  explicit CdrWriter(bool big_endian) : big_(big_endian) {
+    bytes_ = {'\0', big_endian ? '\0' : '\1', '\0', '\0'};
+  }
   void u32(std::uint32_t v) { put(v, 4); }
   void i32(std::int32_t v) { put(static_cast<std::uint32_t>(v), 4); }
   void f32(float v) {
@@ -83,7 +85,8 @@ inline TestScan recordedScan(int k, std::size_t beams) {
     s.ranges.push_back(0.2f + 0.11f * static_cast<float>(i % 100) + 0.01f * static_cast<float>(k));
     s.intensities.push_back(static_cast<float>(i % 7));
   }
-  const float not_readings[] = {std::numeric_limits<float>::infinity(), std::numeric_limits<float>::quiet_NaN(), 0.0f, 0.1f, 12.5f};
+  const float not_readings[] = {std::numeric_limits<float>::infinity(),
+                                std::numeric_limits<float>::quiet_NaN(), 0.0f, 0.1f, 12.5f};
   for (std::size_t i = 0; i < 5 && i + 1 < beams; ++i) s.ranges[i + 1] = not_readings[i];
   return s;
 }
@@ -94,7 +97,9 @@ inline std::string laserScanCdr(const TestScan& s, bool big_endian = false) {
   w.u32(s.nanosec);
   w.str(s.frame_id);
   w.f32(s.angle_min);
-  w.f32(s.angle_min + s.angle_increment * static_cast<float>(s.ranges.empty() ? 0 : s.ranges.size() - 1));  // angle_max
+  // angle_max
+  w.f32(s.angle_min +
+        s.angle_increment * static_cast<float>(s.ranges.empty() ? 0 : s.ranges.size() - 1));
   w.f32(s.angle_increment);
   w.f32(0.0001f);  // time_increment
   w.f32(0.1f);     // scan_time
@@ -106,7 +111,8 @@ inline std::string laserScanCdr(const TestScan& s, bool big_endian = false) {
 }
 
 /// nav_msgs/msg/Odometry at (x, y) with heading yaw (rotation about z); covariance and twist zero.
-inline std::string odometryCdr(std::int32_t sec, std::uint32_t nanosec, double x, double y, double yaw, bool big_endian = false) {
+inline std::string odometryCdr(std::int32_t sec, std::uint32_t nanosec, double x, double y,
+                               double yaw, bool big_endian = false) {
   CdrWriter w(big_endian);
   w.i32(sec);
   w.u32(nanosec);
@@ -123,7 +129,8 @@ struct TestTransform {
   std::string parent, child;
   double x, y, yaw;
 };
-inline std::string tfMessageCdr(const std::vector<TestTransform>& transforms, bool big_endian = false) {
+inline std::string tfMessageCdr(const std::vector<TestTransform>& transforms,
+                                bool big_endian = false) {
   CdrWriter w(big_endian);
   w.u32(static_cast<std::uint32_t>(transforms.size()));
   for (const auto& t : transforms) {
@@ -149,10 +156,12 @@ inline std::string record(std::uint8_t op, const std::string& content) {
 inline std::string schemaRecord(std::uint16_t id, const std::string& name) {
   return record(0x03, le(id, 2) + mstr(name) + mstr("ros2msg") + mstr("# definition"));
 }
-inline std::string channelRecord(std::uint16_t id, std::uint16_t schema, const std::string& topic, const std::string& enc = "cdr") {
+inline std::string channelRecord(std::uint16_t id, std::uint16_t schema, const std::string& topic,
+                                 const std::string& enc = "cdr") {
   return record(0x04, le(id, 2) + le(schema, 2) + mstr(topic) + mstr(enc) + le(0, 4));
 }
-inline std::string messageRecord(std::uint16_t channel, std::uint64_t log_time, const std::string& data) {
+inline std::string messageRecord(std::uint16_t channel, std::uint64_t log_time,
+                                 const std::string& data) {
   return record(0x05, le(channel, 2) + le(0, 4) + le(log_time, 8) + le(log_time, 8) + data);
 }
 
@@ -165,7 +174,8 @@ inline std::string compress(const std::string& raw, const std::string& compressi
     out.resize(n);
   } else if (compression == "lz4") {
     out.resize(LZ4F_compressFrameBound(raw.size(), nullptr));
-    const std::size_t n = LZ4F_compressFrame(out.data(), out.size(), raw.data(), raw.size(), nullptr);
+    const std::size_t n =
+        LZ4F_compressFrame(out.data(), out.size(), raw.data(), raw.size(), nullptr);
     EXPECT_FALSE(LZ4F_isError(n));
     out.resize(n);
   } else {
@@ -175,16 +185,20 @@ inline std::string compress(const std::string& raw, const std::string& compressi
 }
 
 /// A Chunk record holding `records` (start/end times given by the test).
-inline std::string chunkRecord(const std::string& records, const std::string& compression, std::uint64_t start,
-                               std::uint64_t end, bool with_crc = true) {
+inline std::string chunkRecord(const std::string& records, const std::string& compression,
+                               std::uint64_t start, std::uint64_t end, bool with_crc = true) {
   const std::string packed = compress(records, compression);
-  const auto crc = with_crc ? crc32(0L, reinterpret_cast<const Bytef*>(records.data()), static_cast<uInt>(records.size())) : 0;
-  return record(0x06, le(start, 8) + le(end, 8) + le(records.size(), 8) + le(crc, 4) + mstr(compression) +
-                          le(packed.size(), 8) + packed);
+  const auto crc = with_crc ? crc32(0L, reinterpret_cast<const Bytef*>(records.data()),
+                                    static_cast<uInt>(records.size()))
+                            : 0;
+  return record(0x06, le(start, 8) + le(end, 8) + le(records.size(), 8) + le(crc, 4) +
+                          mstr(compression) + le(packed.size(), 8) + packed);
 }
 
 inline const std::string kMcapMagic("\x89MCAP0\r\n", 8);
-inline std::string mcapHead() { return kMcapMagic + record(0x01, mstr("ros2") + mstr("lidarcal-test")); }
+inline std::string mcapHead() {
+  return kMcapMagic + record(0x01, mstr("ros2") + mstr("lidarcal-test"));
+}
 /// DataEnd, an (empty) summary, Footer and the closing magic.
 inline std::string mcapTail() {
   return record(0x0F, le(0, 4)) + record(0x02, le(0, 8) + le(0, 8) + le(0, 4)) + kMcapMagic;
@@ -197,22 +211,28 @@ struct Db3Message {
   std::string data;
 };
 inline void writeDb3(const std::filesystem::path& file,
-                     const std::vector<std::tuple<int, std::string, std::string>>& topics,  // id, name, type
+                     // id, name, type
+                     const std::vector<std::tuple<int, std::string, std::string>>& topics,
                      const std::vector<Db3Message>& messages) {
   sqlite3* db = nullptr;
   ASSERT_EQ(sqlite3_open(file.c_str(), &db), SQLITE_OK);
   const char* schema =
       "CREATE TABLE topics(id INTEGER PRIMARY KEY, name TEXT NOT NULL, type TEXT NOT NULL, "
       "serialization_format TEXT NOT NULL, offered_qos_profiles TEXT NOT NULL);"
-      "CREATE TABLE messages(id INTEGER PRIMARY KEY, topic_id INTEGER NOT NULL, timestamp INTEGER NOT NULL, "
+      "CREATE TABLE messages(id INTEGER PRIMARY KEY, topic_id INTEGER NOT NULL, timestamp INTEGER "
+      "NOT NULL, "
       "data BLOB NOT NULL);";
   ASSERT_EQ(sqlite3_exec(db, schema, nullptr, nullptr, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
   for (const auto& [id, name, type] : topics) {
-    const std::string sql = "INSERT INTO topics VALUES(" + std::to_string(id) + ",'" + name + "','" + type + "','cdr','')";
-    ASSERT_EQ(sqlite3_exec(db, sql.c_str(), nullptr, nullptr, nullptr), SQLITE_OK) << sqlite3_errmsg(db);
+    const std::string sql = "INSERT INTO topics VALUES(" + std::to_string(id) + ",'" + name +
+                            "','" + type + "','cdr','')";
+    ASSERT_EQ(sqlite3_exec(db, sql.c_str(), nullptr, nullptr, nullptr), SQLITE_OK)
+        << sqlite3_errmsg(db);
   }
   sqlite3_stmt* st = nullptr;
-  ASSERT_EQ(sqlite3_prepare_v2(db, "INSERT INTO messages(topic_id, timestamp, data) VALUES(?,?,?)", -1, &st, nullptr), SQLITE_OK);
+  ASSERT_EQ(sqlite3_prepare_v2(db, "INSERT INTO messages(topic_id, timestamp, data) VALUES(?,?,?)",
+                               -1, &st, nullptr),
+            SQLITE_OK);
   for (const auto& m : messages) {
     sqlite3_bind_int(st, 1, m.topic_id);
     sqlite3_bind_int64(st, 2, m.timestamp);

@@ -8,8 +8,8 @@
 #include <gtest/gtest.h>
 
 #include "common/errors.hpp"
-#include "io/import_carmen.hpp"
 #include "import_test_util.hpp"
+#include "io/import_carmen.hpp"
 #include "test_util.hpp"
 
 namespace lidarcal::io {
@@ -19,17 +19,20 @@ using test::Collector;
 using test::TempDir;
 
 /// A FLASER line with ranges r_i = 1 + 0.01 i, laser pose (x, y, th) and odometry (ox, oy, oth).
-std::string flaser(int n, double x, double y, double th, double ox, double oy, double oth, double ts) {
+std::string flaser(int n, double x, double y, double th, double ox, double oy, double oth,
+                   double ts) {
   std::ostringstream o;
   o << "FLASER " << n;
   for (int i = 0; i < n; ++i) o << ' ' << 1.0 + 0.01 * i;
-  o << ' ' << x << ' ' << y << ' ' << th << ' ' << ox << ' ' << oy << ' ' << oth << ' ' << ts << " host " << ts << '\n';
+  o << ' ' << x << ' ' << y << ' ' << th << ' ' << ox << ' ' << oy << ' ' << oth << ' ' << ts
+    << " host " << ts << '\n';
   return o.str();
 }
 
 std::string robotlaser1(int n, double start, double res, double max_range, bool remissions) {
   std::ostringstream o;
-  o << "ROBOTLASER1 0 " << start << ' ' << res * (n - 1) << ' ' << res << ' ' << max_range << " 0.01 0 " << n;
+  o << "ROBOTLASER1 0 " << start << ' ' << res * (n - 1) << ' ' << res << ' ' << max_range
+    << " 0.01 0 " << n;
   for (int i = 0; i < n; ++i) o << ' ' << 2.0 + 0.1 * i;
   o << ' ' << (remissions ? n : 0);
   if (remissions)
@@ -43,7 +46,8 @@ std::string header() {
          "PARAM robot_front_laser_max 50 1.0 host 1.0\nODOM 0 0 0 0 0 0 1.0 host 1.0\n";
 }
 
-std::filesystem::path writeLog(const TempDir& dir, const std::string& text, const std::string& name = "log.log") {
+std::filesystem::path writeLog(const TempDir& dir, const std::string& text,
+                               const std::string& name = "log.log") {
   test::writeFile(dir / name, text);
   return dir / name;
 }
@@ -61,7 +65,8 @@ TEST_P(FlaserAngles, FollowCarmensFieldOfViewForTheBeamCount) {
   const FovCase c = GetParam();
   TempDir dir;
   Collector got;
-  readCarmenLog(writeLog(dir, header() + flaser(c.beams, 0, 0, 0, 0, 0, 0, 1.0)), {}, got.callback());
+  readCarmenLog(writeLog(dir, header() + flaser(c.beams, 0, 0, 0, 0, 0, 0, 1.0)), {},
+                got.callback());
   ASSERT_EQ(got.scans.size(), 1u);
   const auto& a = got.scans[0].angles_rad;
   ASSERT_EQ(a.size(), static_cast<std::size_t>(c.beams));
@@ -72,14 +77,16 @@ TEST_P(FlaserAngles, FollowCarmensFieldOfViewForTheBeamCount) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Carmen, FlaserAngles,
-                         ::testing::Values(FovCase{181, -90, 90}, FovCase{180, -89.5, 89.5}, FovCase{361, -90, 90},
-                                           FovCase{360, -89.75, 89.75}, FovCase{401, -50, 50},
-                                           FovCase{400, -49.875, 49.875}, FovCase{90, -90, 90}));
+                         ::testing::Values(FovCase{181, -90, 90}, FovCase{180, -89.5, 89.5},
+                                           FovCase{361, -90, 90}, FovCase{360, -89.75, 89.75},
+                                           FovCase{401, -50, 50}, FovCase{400, -49.875, 49.875},
+                                           FovCase{90, -90, 90}));
 
 TEST(CarmenLog, FlaserRangesPosesAndTheChoiceOfPose) {
   TempDir dir;
   const auto log = writeLog(dir, header() + flaser(5, 1.5, -2.0, 0.3, 1.0, -1.0, 0.1, 10.25) +
-                                     "ODOM 1 2 3 0 0 0 10.3 host 10.3\n" + flaser(5, 1.6, -2.0, 3.5, 1.1, -1.0, 0.2, 10.5));
+                                     "ODOM 1 2 3 0 0 0 10.3 host 10.3\n" +
+                                     flaser(5, 1.6, -2.0, 3.5, 1.1, -1.0, 0.2, 10.5));
   Collector corrected, odometry;
   const ImportReport r = readCarmenLog(log, {}, corrected.callback());
   CarmenConfig odo;
@@ -97,7 +104,8 @@ TEST(CarmenLog, FlaserRangesPosesAndTheChoiceOfPose) {
   EXPECT_DOUBLE_EQ(odometry.scans[0].pose.y_m, -1.0);
   EXPECT_NEAR(odometry.scans[0].pose.yaw_rad, 0.1, 1e-12);
   ASSERT_EQ(s.ranges_m.size(), 5u);
-  for (int i = 0; i < 5; ++i) EXPECT_FLOAT_EQ(s.ranges_m[static_cast<std::size_t>(i)], static_cast<float>(1.0 + 0.01 * i));
+  for (int i = 0; i < 5; ++i)
+    EXPECT_FLOAT_EQ(s.ranges_m[static_cast<std::size_t>(i)], static_cast<float>(1.0 + 0.01 * i));
   EXPECT_DOUBLE_EQ(s.stamp_s, 10.25);
   EXPECT_TRUE(s.intensities.empty());
   EXPECT_DOUBLE_EQ(s.range_max_m, kFlaserRangeMax_m);
@@ -107,7 +115,8 @@ TEST(CarmenLog, FlaserRangesPosesAndTheChoiceOfPose) {
 
 TEST(CarmenLog, RobotLaser1AnglesRemissionsAndMaxRangeComeFromTheLine) {
   TempDir dir;
-  const auto log = writeLog(dir, header() + robotlaser1(4, -1.0, 0.25, 30.0, true) + robotlaser1(4, -1.0, 0.25, 30.0, false));
+  const auto log = writeLog(dir, header() + robotlaser1(4, -1.0, 0.25, 30.0, true) +
+                                     robotlaser1(4, -1.0, 0.25, 30.0, false));
   Collector got;
   readCarmenLog(log, {}, got.callback());
   ASSERT_EQ(got.scans.size(), 2u);
@@ -134,8 +143,9 @@ TEST(CarmenLog, RobotLaser1AnglesRemissionsAndMaxRangeComeFromTheLine) {
 
 TEST(CarmenLog, TheFirstLaserKindWinsAndTheOtherIsIgnored) {
   TempDir dir;
-  const auto log = writeLog(dir, header() + flaser(3, 0, 0, 0, 0, 0, 0, 1) + robotlaser1(4, -1, 0.25, 30, false) +
-                                     flaser(3, 0, 0, 0, 0, 0, 0, 2));
+  const auto log =
+      writeLog(dir, header() + flaser(3, 0, 0, 0, 0, 0, 0, 1) +
+                        robotlaser1(4, -1, 0.25, 30, false) + flaser(3, 0, 0, 0, 0, 0, 0, 2));
   Collector got;
   const ImportReport r = readCarmenLog(log, {}, got.callback());
   EXPECT_EQ(r.scans, 2u);
@@ -184,7 +194,8 @@ class CarmenBadLine : public ::testing::TestWithParam<BadLine> {};
 TEST_P(CarmenBadLine, IsAnErrorNamingTheLine) {
   const BadLine& c = GetParam();
   TempDir dir;
-  const std::string good = c.robotlaser ? robotlaser1(4, -1, 0.25, 30, false) : flaser(3, 0, 0, 0, 0, 0, 0, 1);
+  const std::string good =
+      c.robotlaser ? robotlaser1(4, -1, 0.25, 30, false) : flaser(3, 0, 0, 0, 0, 0, 0, 1);
   const auto log = writeLog(dir, header() + good + c.line + good);
   Collector got;
   try {
@@ -207,15 +218,18 @@ std::string withoutLastValue(std::string line) {
 
 INSTANTIATE_TEST_SUITE_P(
     Carmen, CarmenBadLine,
-    ::testing::Values(BadLine{"OneValueShort", withoutLastValue(flaser(3, 0, 0, 0, 0, 0, 0, 1)), "has 12 values after FLASER, expected 13"},
-                      BadLine{"OneValueTooMany", "FLASER 2 1.0 1.1 1.2 0 0 0 0 0 0 1 host 1\n", "expected 12"},
-                      BadLine{"CountSaysMore", "FLASER 4 1.0 1.1 0 0 0 0 0 0 1 host 1\n", "expected 14"},
-                      BadLine{"RangeNotANumber", "FLASER 2 1.0 abc 0 0 0 0 0 0 1 host 1\n", "'abc', not a number"},
-                      BadLine{"NoCount", "FLASER\n", "beam count"},
-                      BadLine{"NegativeCount", "FLASER -3 1 2 3\n", "whole number"},
-                      BadLine{"PoseNotFinite", "FLASER 2 1.0 1.1 nan 0 0 0 0 0 1 host 1\n", "pose is not finite"},
-                      BadLine{"RobotLaserShort", withoutLastValue(robotlaser1(4, -1, 0.25, 30, false)),
-                              "line 6 (ROBOTLASER1): has 26 values after ROBOTLASER1, expected 27", true}),
+    ::testing::Values(
+        BadLine{"OneValueShort", withoutLastValue(flaser(3, 0, 0, 0, 0, 0, 0, 1)),
+                "has 12 values after FLASER, expected 13"},
+        BadLine{"OneValueTooMany", "FLASER 2 1.0 1.1 1.2 0 0 0 0 0 0 1 host 1\n", "expected 12"},
+        BadLine{"CountSaysMore", "FLASER 4 1.0 1.1 0 0 0 0 0 0 1 host 1\n", "expected 14"},
+        BadLine{"RangeNotANumber", "FLASER 2 1.0 abc 0 0 0 0 0 0 1 host 1\n",
+                "'abc', not a number"},
+        BadLine{"NoCount", "FLASER\n", "beam count"},
+        BadLine{"NegativeCount", "FLASER -3 1 2 3\n", "whole number"},
+        BadLine{"PoseNotFinite", "FLASER 2 1.0 1.1 nan 0 0 0 0 0 1 host 1\n", "pose is not finite"},
+        BadLine{"RobotLaserShort", withoutLastValue(robotlaser1(4, -1, 0.25, 30, false)),
+                "line 6 (ROBOTLASER1): has 26 values after ROBOTLASER1, expected 27", true}),
     [](const auto& p) { return std::string(p.param.name); });
 
 TEST(CarmenLog, NoLaserLineIsAnError) {
@@ -232,7 +246,8 @@ TEST(CarmenLog, DamagedGzipIsAnErrorNamingTheFile) {
   const std::string gz = test::readFile(dir / "good.log.gz");
   test::writeFile(dir / "cut.log.gz", gz.substr(0, gz.size() / 2));
   std::string flipped = gz;
-  for (std::size_t i = gz.size() / 3; i < gz.size() / 3 + 64; ++i) flipped[i] = static_cast<char>(~flipped[i]);
+  for (std::size_t i = gz.size() / 3; i < gz.size() / 3 + 64; ++i)
+    flipped[i] = static_cast<char>(~flipped[i]);
   test::writeFile(dir / "flipped.log.gz", flipped);
   for (const char* name : {"cut.log.gz", "flipped.log.gz"}) {
     SCOPED_TRACE(name);

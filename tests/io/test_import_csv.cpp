@@ -6,8 +6,8 @@
 #include <gtest/gtest.h>
 
 #include "common/errors.hpp"
-#include "io/import_csv.hpp"
 #include "import_test_util.hpp"
+#include "io/import_csv.hpp"
 #include "test_util.hpp"
 
 namespace lidarcal::io {
@@ -16,7 +16,8 @@ namespace {
 using test::Collector;
 using test::TempDir;
 
-std::vector<RawScan> read(const TempDir& dir, const std::string& text, const CsvConfig& config = {}) {
+std::vector<RawScan> read(const TempDir& dir, const std::string& text,
+                          const CsvConfig& config = {}) {
   test::writeFile(dir / "scans.csv", text);
   Collector got;
   readCsvScans(dir / "scans.csv", config, got.callback());
@@ -51,7 +52,8 @@ TEST(CsvScans, RowsBecomeScansWithPoseAnglesRangesAndIntensity) {
 
 TEST(CsvScans, ColumnsInAnyOrderAndUnknownColumnsIgnored) {
   TempDir dir;
-  const auto scans = read(dir, "range_m,comment,angle_rad,yaw_rad,y_m,x_m,scan\n2.0,hello,0.1,0,0,0,3\n");
+  const auto scans =
+      read(dir, "range_m,comment,angle_rad,yaw_rad,y_m,x_m,scan\n2.0,hello,0.1,0,0,0,3\n");
   ASSERT_EQ(scans.size(), 1u);
   EXPECT_FLOAT_EQ(scans[0].ranges_m[0], 2.0f);
   EXPECT_DOUBLE_EQ(scans[0].angles_rad[0], 0.1);

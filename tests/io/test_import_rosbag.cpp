@@ -13,8 +13,8 @@
 #include <std_msgs/String.h>
 
 #include "common/errors.hpp"
-#include "io/import_rosbag.hpp"
 #include "import_test_util.hpp"
+#include "io/import_rosbag.hpp"
 #include "ros/laser_scan_util.hpp"
 #include "test_util.hpp"
 
@@ -30,7 +30,8 @@ constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 sensor_msgs::LaserScan laserScan(int k, std::size_t n, bool intensities) {
   return test::laserScanOf(
       ros::Time(100 + k, 5000000), n, 0.0175f,
-      [k](std::size_t i) { return 1.0f + 0.01f * static_cast<float>(i) + static_cast<float>(k); }, intensities ? 50 : 0);
+      [k](std::size_t i) { return 1.0f + 0.01f * static_cast<float>(i) + static_cast<float>(k); },
+      intensities ? 50 : 0);
 }
 
 /// /scan_a: 5 LaserScans of 12 beams with intensities (some readings invalid); /scan_b: 3
@@ -64,7 +65,8 @@ void expectErrorMentions(const std::function<void()>& f, const std::vector<std::
     f();
     FAIL() << "no error";
   } catch (const InputError& e) {
-    for (const auto& p : parts) EXPECT_NE(std::string(e.what()).find(p), std::string::npos) << e.what() << "\nmissing: " << p;
+    for (const auto& p : parts)
+      EXPECT_NE(std::string(e.what()).find(p), std::string::npos) << e.what() << "\nmissing: " << p;
     EXPECT_FALSE(e.remedy().empty());
   }
 }
@@ -100,7 +102,8 @@ TEST(RosbagImport, AnglesRangesLimitsIntensitiesAndIdentityPoseOfTheChosenTopic)
     const sensor_msgs::LaserScan m = laserScan(k, 12, true);
     ASSERT_EQ(s.ranges_m.size(), 12u);
     for (std::size_t i = 0; i < 12; ++i) {
-      EXPECT_DOUBLE_EQ(s.angles_rad[i], static_cast<double>(m.angle_min) + static_cast<double>(i) * m.angle_increment);
+      EXPECT_DOUBLE_EQ(s.angles_rad[i], static_cast<double>(m.angle_min) +
+                                            static_cast<double>(i) * m.angle_increment);
       if (i >= 5) {
         EXPECT_EQ(s.ranges_m[i], m.ranges[i]);
       }
@@ -136,14 +139,17 @@ TEST(RosbagImport, TopicErrorsNameTheTopicAndTheCandidates) {
   TempDir dir;
   const auto bag = writeBag(dir);
   Collector got;
-  expectErrorMentions([&] { readRosbag(bag, {}, got.callback()); }, {"several LaserScan topics", "/scan_a", "/scan_b", "--topic"});
+  expectErrorMentions([&] { readRosbag(bag, {}, got.callback()); },
+                      {"several LaserScan topics", "/scan_a", "/scan_b", "--topic"});
   RosbagConfig missing;
   missing.topic = "/scan";
-  expectErrorMentions([&] { readRosbag(bag, missing, got.callback()); },
-                      {bag.string(), "--topic /scan", "no such topic", "/scan_a, /scan_b", "--list-topics"});
+  expectErrorMentions(
+      [&] { readRosbag(bag, missing, got.callback()); },
+      {bag.string(), "--topic /scan", "no such topic", "/scan_a, /scan_b", "--list-topics"});
   RosbagConfig wrong_type;
   wrong_type.topic = "/chatter";
-  expectErrorMentions([&] { readRosbag(bag, wrong_type, got.callback()); }, {"/chatter", "std_msgs/String"});
+  expectErrorMentions([&] { readRosbag(bag, wrong_type, got.callback()); },
+                      {"/chatter", "std_msgs/String"});
   EXPECT_TRUE(got.scans.empty());
 }
 
@@ -154,19 +160,23 @@ TEST(RosbagImport, TruncatedOrForeignFilesAreClearErrors) {
     SCOPED_TRACE(keep);
     test::writeFile(dir / "cut.bag", bytes.substr(0, keep));
     Collector got;
-    expectErrorMentions([&] { readRosbag(dir / "cut.bag", {}, got.callback()); }, {"cut.bag", "rosbag reindex"});
+    expectErrorMentions([&] { readRosbag(dir / "cut.bag", {}, got.callback()); },
+                        {"cut.bag", "rosbag reindex"});
   }
   test::writeFile(dir / "text.bag", "not a bag at all\n");
   Collector got;
-  expectErrorMentions([&] { listBagTopics(dir / "text.bag"); }, {"text.bag", "cannot be read as a ROS1 bag"});
-  expectErrorMentions([&] { readRosbag(dir / "missing.bag", {}, got.callback()); }, {"does not exist"});
+  expectErrorMentions([&] { listBagTopics(dir / "text.bag"); },
+                      {"text.bag", "cannot be read as a ROS1 bag"});
+  expectErrorMentions([&] { readRosbag(dir / "missing.bag", {}, got.callback()); },
+                      {"does not exist"});
 }
 
 TEST(RosbagImport, RplidarRecordingMatchesTheMessages) {
   const auto bag_file = test::sharedData() / "rplidar_a2_room/rplidar_1.bag";
   if (!std::filesystem::exists(bag_file)) GTEST_SKIP() << "shared data absent: " << bag_file;
   Collector got;
-  const ImportReport r = readRosbag(bag_file, {}, got.callback());  // the bag's only LaserScan topic
+  // the bag's only LaserScan topic
+  const ImportReport r = readRosbag(bag_file, {}, got.callback());
   ASSERT_EQ(r.scans, 1319u);
   // Oracle: the messages as the ROS library deserialises them.
   rosbag::Bag bag(bag_file.string(), rosbag::bagmode::Read);
@@ -178,7 +188,8 @@ TEST(RosbagImport, RplidarRecordingMatchesTheMessages) {
     ASSERT_EQ(s.ranges_m.size(), 360u);
     ASSERT_EQ(msg->ranges.size(), 360u);
     for (std::size_t i : {0u, 1u, 90u, 179u, 270u, 359u}) {
-      EXPECT_EQ(s.angles_rad[i], static_cast<double>(msg->angle_min) + static_cast<double>(i) * msg->angle_increment);
+      EXPECT_EQ(s.angles_rad[i], static_cast<double>(msg->angle_min) +
+                                     static_cast<double>(i) * msg->angle_increment);
       EXPECT_EQ(s.ranges_m[i], msg->ranges[i]);
       EXPECT_EQ(s.intensities[i], msg->intensities[i]);
     }

@@ -11,13 +11,13 @@
 #include <gtest/gtest.h>
 
 #include "common/errors.hpp"
+#include "import_test_util.hpp"
 #include "io/cdr.hpp"
 #include "io/detect_format.hpp"
 #include "io/import_rosbag2.hpp"
 #include "io/pcd_scan.hpp"
 #include "io/ros2_msgs.hpp"
 #include "io/sequence.hpp"
-#include "import_test_util.hpp"
 #include "rosbag2_test_writer.hpp"
 #include "test_util.hpp"
 
@@ -39,8 +39,10 @@ TestScan scanA(int k) {
   TestScan s;
   s.sec = 100 + k;
   s.nanosec = 500000000;
-  s.ranges = {1.0f + 0.1f * static_cast<float>(k), kNaN, kInf, -kInf, 0.0f, 0.05f, 20.0f, 3.25f, 11.5f - static_cast<float>(k)};
-  for (std::size_t i = 0; i < kBeams; ++i) s.intensities.push_back(static_cast<float>(10 * k + static_cast<int>(i)));
+  s.ranges = {1.0f + 0.1f * static_cast<float>(k), kNaN, kInf, -kInf, 0.0f, 0.05f, 20.0f, 3.25f,
+              11.5f - static_cast<float>(k)};
+  for (std::size_t i = 0; i < kBeams; ++i)
+    s.intensities.push_back(static_cast<float>(10 * k + static_cast<int>(i)));
   return s;
 }
 
@@ -62,7 +64,8 @@ void expectPoints(const Scan& got, const TestScan& want) {
   for (std::size_t i = 0; i < want.ranges.size(); ++i) {
     SCOPED_TRACE(i);
     const double r = want.ranges[i];
-    const double a = static_cast<double>(want.angle_min) + static_cast<double>(i) * static_cast<double>(want.angle_increment);
+    const double a = static_cast<double>(want.angle_min) +
+                     static_cast<double>(i) * static_cast<double>(want.angle_increment);
     const auto& p = got.cloud->points[i];
     if (std::isfinite(r) && r > 0 && r >= 0.15 && r <= 12.0) {
       EXPECT_NEAR(p.x, r * std::cos(a), 2e-6);
@@ -77,7 +80,8 @@ void expectPoints(const Scan& got, const TestScan& want) {
 }
 
 /// `lidarcal import -q ARGS -o OUT` succeeds and scan k of OUT holds the points of want(k).
-void importAndExpectPoints(const std::string& args, const fs::path& out, TestScan (*want)(int), std::size_t scans) {
+void importAndExpectPoints(const std::string& args, const fs::path& out, TestScan (*want)(int),
+                           std::size_t scans) {
   const auto r = test::runCli("import -q " + args + " -o " + out.string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const Sequence seq = openSequence(out);
@@ -92,7 +96,9 @@ struct McapCase {
   std::string first, second;  // compressions of the two chunks
   bool big_endian;
 };
-void PrintTo(const McapCase& c, std::ostream* os) { *os << "'" << c.first << "' + '" << c.second << "'" << (c.big_endian ? " big-endian" : ""); }
+void PrintTo(const McapCase& c, std::ostream* os) {
+  *os << "'" << c.first << "' + '" << c.second << "'" << (c.big_endian ? " big-endian" : "");
+}
 
 /// /scan: scans 0..5 in two chunks with interleaved log times (even k in the first chunk, odd k
 /// in the second, each chunk's in reverse time order), scan 6 as a message outside chunks;
@@ -100,11 +106,14 @@ void PrintTo(const McapCase& c, std::ostream* os) { *os << "'" << c.first << "' 
 std::string mcapBag(const McapCase& c) {
   using namespace test;
   const auto t = [](int k) { return std::uint64_t{1000} + 10u * static_cast<unsigned>(k); };
-  std::string a = schemaRecord(1, "sensor_msgs/msg/LaserScan") + channelRecord(1, 1, "/scan") + channelRecord(3, 1, "/scan_b");
+  std::string a = schemaRecord(1, "sensor_msgs/msg/LaserScan") + channelRecord(1, 1, "/scan") +
+                  channelRecord(3, 1, "/scan_b");
   std::string b = schemaRecord(2, "std_msgs/msg/String") + channelRecord(2, 2, "/chatter");
-  for (int k = 5; k >= 0; --k) (k % 2 ? b : a) += messageRecord(1, t(k), laserScanCdr(scanA(k), c.big_endian));
+  for (int k = 5; k >= 0; --k)
+    (k % 2 ? b : a) += messageRecord(1, t(k), laserScanCdr(scanA(k), c.big_endian));
   for (int k = 0; k < 3; ++k) a += messageRecord(3, t(k) + 1, laserScanCdr(scanB(k), c.big_endian));
-  b += messageRecord(2, 1001, "\0\1\0\0\3\0\0\0hi\0"s) + messageRecord(2, 1051, "\0\1\0\0\3\0\0\0hi\0"s);
+  b += messageRecord(2, 1001, "\0\1\0\0\3\0\0\0hi\0"s) +
+       messageRecord(2, 1051, "\0\1\0\0\3\0\0\0hi\0"s);
   return mcapHead() + chunkRecord(a, c.first, t(0), t(4)) + chunkRecord(b, c.second, t(1), 1051) +
          messageRecord(1, t(6), laserScanCdr(scanA(6), c.big_endian)) + mcapTail();
 }
@@ -133,7 +142,9 @@ TEST_P(Rosbag2Mcap, ScansInLogTimeOrderWithTheTestsRangesAnglesAndLimits) {
       if (!std::isnan(want.ranges[i])) {
         EXPECT_EQ(s.ranges_m[i], want.ranges[i]);
       }
-      EXPECT_EQ(s.angles_rad[i], static_cast<double>(want.angle_min) + static_cast<double>(i) * static_cast<double>(want.angle_increment));
+      EXPECT_EQ(s.angles_rad[i],
+                static_cast<double>(want.angle_min) +
+                    static_cast<double>(i) * static_cast<double>(want.angle_increment));
       EXPECT_EQ(s.intensities[i], want.intensities[i]);
     }
     EXPECT_DOUBLE_EQ(s.range_min_m, 0.15);  // the float 0.15f as the decimal it was written as
@@ -148,16 +159,19 @@ TEST_P(Rosbag2Mcap, TheCommandWritesThePointsTheTestComputes) {
   const fs::path bag = dir / "recording";  // no extension: the content decides
   test::writeFile(bag, mcapBag(GetParam()));
   importAndExpectPoints(bag.string() + " --topic /scan", dir / "seq", scanA, 7);
-  importAndExpectPoints("--from rosbag2 " + bag.string() + " --topic /scan_b", dir / "seq_b", scanB, 3);
+  importAndExpectPoints("--from rosbag2 " + bag.string() + " --topic /scan_b", dir / "seq_b", scanB,
+                        3);
 }
 
-INSTANTIATE_TEST_SUITE_P(Compressions, Rosbag2Mcap,
-                         ::testing::Values(McapCase{"", "zstd", false}, McapCase{"zstd", "lz4", false},
-                                           McapCase{"lz4", "", false}, McapCase{"zstd", "lz4", true}),
-                         [](const ::testing::TestParamInfo<McapCase>& p) {
-                           auto name = [](const std::string& c) { return c.empty() ? std::string("none") : c; };
-                           return name(p.param.first) + "_" + name(p.param.second) + (p.param.big_endian ? "_big_endian" : "");
-                         });
+INSTANTIATE_TEST_SUITE_P(
+    Compressions, Rosbag2Mcap,
+    ::testing::Values(McapCase{"", "zstd", false}, McapCase{"zstd", "lz4", false},
+                      McapCase{"lz4", "", false}, McapCase{"zstd", "lz4", true}),
+    [](const ::testing::TestParamInfo<McapCase>& p) {
+      auto name = [](const std::string& c) { return c.empty() ? std::string("none") : c; };
+      return name(p.param.first) + "_" + name(p.param.second) +
+             (p.param.big_endian ? "_big_endian" : "");
+    });
 
 TEST(Rosbag2McapTopics, ListsTopicsWithTypesAndCounts) {
   TempDir dir;
@@ -171,7 +185,8 @@ TEST(Rosbag2McapTopics, ListsTopicsWithTypesAndCounts) {
   EXPECT_EQ(topics[1].datatype, "sensor_msgs/msg/LaserScan");
   EXPECT_EQ(topics[1].messages, 7u);
   EXPECT_EQ(topics[2].messages, 3u);
-  const auto r = test::runCli("import --from rosbag2 " + (dir / "bag.mcap").string() + " --list-topics");
+  const auto r =
+      test::runCli("import --from rosbag2 " + (dir / "bag.mcap").string() + " --list-topics");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("| /scan | sensor_msgs/msg/LaserScan | 7 |"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("| /chatter | std_msgs/msg/String | 2 |"), std::string::npos) << r.out;
@@ -191,9 +206,11 @@ TEST(Rosbag2McapTopics, SeveralScanTopicsWithoutTopicIsAnErrorNamingThem) {
 /// Scans one per second from stamp 100.5; odometry from 100 to 107 s moving 1 m/s along x.
 std::string mcapWithOdometry() {
   using namespace test;
-  std::string records = schemaRecord(1, "sensor_msgs/msg/LaserScan") + channelRecord(1, 1, "/scan") +
-                        schemaRecord(2, "nav_msgs/msg/Odometry") + channelRecord(2, 2, "/odom");
-  for (int k = 0; k <= 7; ++k) records += messageRecord(2, 100 * k, odometryCdr(100 + k, 0, k, 0.0, 0.0, k % 2 == 1));
+  std::string records = schemaRecord(1, "sensor_msgs/msg/LaserScan") +
+                        channelRecord(1, 1, "/scan") + schemaRecord(2, "nav_msgs/msg/Odometry") +
+                        channelRecord(2, 2, "/odom");
+  for (int k = 0; k <= 7; ++k)
+    records += messageRecord(2, 100 * k, odometryCdr(100 + k, 0, k, 0.0, 0.0, k % 2 == 1));
   for (int k = 0; k < 5; ++k) records += messageRecord(1, 100 * k + 50, laserScanCdr(scanA(k)));
   return mcapHead() + chunkRecord(records, "zstd", 0, 750) + mcapTail();
 }
@@ -217,21 +234,28 @@ TEST(Rosbag2Pose, OdometryGivesEachScanTheInterpolatedPose) {
     EXPECT_NEAR(got.scans[static_cast<std::size_t>(k)].pose.yaw_rad, 0.0, 1e-12);
   }
   EXPECT_EQ(r.other_records, 8u);
-  const auto cli = test::runCli("import -q " + (dir / "bag.mcap").string() + " --pose odom:/odom -o " + (dir / "seq").string());
+  const auto cli = test::runCli("import -q " + (dir / "bag.mcap").string() +
+                                " --pose odom:/odom -o " + (dir / "seq").string());
   ASSERT_EQ(cli.exit_code, 0) << cli.err;
   EXPECT_NEAR(readScanHeader(openSequence(dir / "seq").scans[3].path).viewpoint.x_m, 3.5, 1e-6);
   config.pose.name = "/scan";
-  EXPECT_THROW(readRosbag2(dir / "bag.mcap", config, Collector{}.callback()), InputError);  // not an Odometry topic
+  // not an Odometry topic
+  EXPECT_THROW(readRosbag2(dir / "bag.mcap", config, Collector{}.callback()), InputError);
 }
 
 /// Scans 0..4 in frame "laser", mounted on base_link 0.2 m ahead and turned by 90 degrees
 /// (/tf_static); base_link in map moves 1 m/s along y (/tf, samples 100..107 s).
 std::string mcapWithTf() {
   using namespace test;
-  std::string records = schemaRecord(1, "sensor_msgs/msg/LaserScan") + channelRecord(1, 1, "/scan") +
-                        schemaRecord(2, "tf2_msgs/msg/TFMessage") + channelRecord(2, 2, "/tf") + channelRecord(3, 2, "/tf_static");
+  std::string records = schemaRecord(1, "sensor_msgs/msg/LaserScan") +
+                        channelRecord(1, 1, "/scan") + schemaRecord(2, "tf2_msgs/msg/TFMessage") +
+                        channelRecord(2, 2, "/tf") + channelRecord(3, 2, "/tf_static");
   records += messageRecord(3, 0, tfMessageCdr({{100, "base_link", "laser", 0.2, 0.0, M_PI / 2}}));
-  for (int k = 0; k <= 7; ++k) records += messageRecord(2, 100 * k, tfMessageCdr({{100 + k, "map", "base_link", 0.0, static_cast<double>(k), 0.0}}, k % 2 == 1));
+  for (int k = 0; k <= 7; ++k)
+    records += messageRecord(
+        2, 100 * k,
+        tfMessageCdr({{100 + k, "map", "base_link", 0.0, static_cast<double>(k), 0.0}},
+                     k % 2 == 1));
   for (int k = 0; k < 5; ++k) records += messageRecord(1, 100 * k + 50, laserScanCdr(scanA(k)));
   return mcapHead() + chunkRecord(records, "lz4", 0, 750) + mcapTail();
 }
@@ -255,8 +279,8 @@ TEST(Rosbag2Pose, TfChainGivesTheScanFramesPoseInTheFixedFrame) {
 }
 
 /// Writes the fuzz seeds (tests/fuzz/corpus/mcap, cdr) into $LIDARCAL_FUZZ_SEEDS when set:
-/// `LIDARCAL_FUZZ_SEEDS=tests/fuzz/corpus build/tests/test_import_rosbag2 --gtest_also_run_disabled_tests
-/// --gtest_filter='*WriteFuzzSeeds*'`.
+/// `LIDARCAL_FUZZ_SEEDS=tests/fuzz/corpus build/tests/test_import_rosbag2
+/// --gtest_also_run_disabled_tests --gtest_filter='*WriteFuzzSeeds*'`.
 TEST(Rosbag2Seeds, DISABLED_WriteFuzzSeeds) {
   const char* root = std::getenv("LIDARCAL_FUZZ_SEEDS");
   if (!root) GTEST_SKIP() << "LIDARCAL_FUZZ_SEEDS not set";
@@ -270,7 +294,9 @@ TEST(Rosbag2Seeds, DISABLED_WriteFuzzSeeds) {
   test::writeFile(cdr / "laser_scan_le.cdr", test::laserScanCdr(scanA(1)));
   test::writeFile(cdr / "laser_scan_be.cdr", test::laserScanCdr(scanB(2), true));
   test::writeFile(cdr / "odometry_le.cdr", test::odometryCdr(5, 7, 1.0, 2.0, 0.5));
-  test::writeFile(cdr / "tf_be.cdr", test::tfMessageCdr({{1, "map", "odom", 1, 2, 3}, {2, "odom", "base", 4, 5, 6}}, true));
+  test::writeFile(
+      cdr / "tf_be.cdr",
+      test::tfMessageCdr({{1, "map", "odom", 1, 2, 3}, {2, "odom", "base", 4, 5, 6}}, true));
 }
 
 // ---- SQLite (.db3) and rosbag2 directories ----
@@ -293,15 +319,18 @@ std::string metadataYaml(const std::string& storage, const std::vector<std::stri
 fs::path db3Bag(const TempDir& dir, bool big_endian = false) {
   const fs::path bag = dir / "bag_db3";
   fs::create_directories(bag);
-  const std::vector<std::tuple<int, std::string, std::string>> topics = {{1, "/scan", "sensor_msgs/msg/LaserScan"},
-                                                                         {2, "/chatter", "std_msgs/msg/String"}};
+  const std::vector<std::tuple<int, std::string, std::string>> topics = {
+      {1, "/scan", "sensor_msgs/msg/LaserScan"}, {2, "/chatter", "std_msgs/msg/String"}};
   std::vector<test::Db3Message> first, second;
-  for (int k : {2, 0, 3, 1}) first.push_back({1, 1000 + 10 * k, test::laserScanCdr(scanA(k), big_endian)});
+  for (int k : {2, 0, 3, 1})
+    first.push_back({1, 1000 + 10 * k, test::laserScanCdr(scanA(k), big_endian)});
   first.push_back({2, 1005, "\0\1\0\0\3\0\0\0hi\0"s});
-  for (int k = 4; k < 7; ++k) second.push_back({1, 1000 + 10 * k, test::laserScanCdr(scanA(k), big_endian)});
+  for (int k = 4; k < 7; ++k)
+    second.push_back({1, 1000 + 10 * k, test::laserScanCdr(scanA(k), big_endian)});
   test::writeDb3(bag / "bag_db3_0.db3", topics, first);
   test::writeDb3(bag / "bag_db3_1.db3", topics, second);
-  test::writeFile(bag / "metadata.yaml", metadataYaml("sqlite3", {"bag_db3_0.db3", "bag_db3_1.db3"}));
+  test::writeFile(bag / "metadata.yaml",
+                  metadataYaml("sqlite3", {"bag_db3_0.db3", "bag_db3_1.db3"}));
   return bag;
 }
 
@@ -329,7 +358,8 @@ TEST(Rosbag2Directory, McapFilesInTheOrderOfTheMetadata) {
   const fs::path bag = dir / "bag_mcap";
   fs::create_directories(bag);
   using namespace test;
-  const std::string defs = schemaRecord(1, "sensor_msgs/msg/LaserScan") + channelRecord(1, 1, "/scan");
+  const std::string defs =
+      schemaRecord(1, "sensor_msgs/msg/LaserScan") + channelRecord(1, 1, "/scan");
   std::string a = defs, b = defs;
   for (int k = 0; k < 4; ++k) a += messageRecord(1, 1000 + 10 * k, laserScanCdr(scanA(k)));
   for (int k = 4; k < 7; ++k) b += messageRecord(1, 1000 + 10 * k, laserScanCdr(scanA(k)));
@@ -339,7 +369,8 @@ TEST(Rosbag2Directory, McapFilesInTheOrderOfTheMetadata) {
   Collector got;
   const ImportReport r = readRosbag2(bag, RosbagConfig{}, got.callback());
   ASSERT_EQ(got.scans.size(), 7u);
-  for (int k = 0; k < 7; ++k) EXPECT_NEAR(got.scans[static_cast<std::size_t>(k)].stamp_s, 100.5 + k, 1e-9);
+  for (int k = 0; k < 7; ++k)
+    EXPECT_NEAR(got.scans[static_cast<std::size_t>(k)].stamp_s, 100.5 + k, 1e-9);
   EXPECT_EQ(r.scans, 7u);
 }
 
@@ -368,22 +399,32 @@ TEST(Cdr, EveryTruncationAndAHugeCountAreCleanErrors) {
   const std::string bytes = test::laserScanCdr(scanA(2));
   Ros2LaserScan msg;
   for (std::size_t n = 0; n < bytes.size(); ++n)
-    EXPECT_THROW(decodeLaserScan(reinterpret_cast<const std::uint8_t*>(bytes.data()), n, msg), InputError) << n;
+    EXPECT_THROW(decodeLaserScan(reinterpret_cast<const std::uint8_t*>(bytes.data()), n, msg),
+                 InputError)
+        << n;
   std::string huge = bytes;
-  const std::size_t count_at = bytes.size() - 4 * (2 * kBeams + 2);  // the ranges' count: two counts and 2 x 9 floats follow
+  // the ranges' count: two counts and 2 x 9 floats follow
+  const std::size_t count_at = bytes.size() - 4 * (2 * kBeams + 2);
   huge.replace(count_at, 4, "\xff\xff\xff\x7f", 4);
-  EXPECT_THROW(decodeLaserScan(reinterpret_cast<const std::uint8_t*>(huge.data()), huge.size(), msg), InputError);
+  EXPECT_THROW(
+      decodeLaserScan(reinterpret_cast<const std::uint8_t*>(huge.data()), huge.size(), msg),
+      InputError);
   const std::string xcdr2 = "\x00\x07\x00\x00"s + bytes.substr(4);
-  EXPECT_THROW(decodeLaserScan(reinterpret_cast<const std::uint8_t*>(xcdr2.data()), xcdr2.size(), msg), InputError);
+  EXPECT_THROW(
+      decodeLaserScan(reinterpret_cast<const std::uint8_t*>(xcdr2.data()), xcdr2.size(), msg),
+      InputError);
 }
 
 // ---- corrupt input: a clean error naming the file and what is wrong, exit 2, nothing written ----
 
-void expectCliError(const TempDir& dir, const fs::path& input, const std::vector<std::string>& parts,
+void expectCliError(const TempDir& dir, const fs::path& input,
+                    const std::vector<std::string>& parts,
                     const std::string& from = "--from rosbag2 ") {
-  const auto r = test::runCli("import -q " + from + input.string() + " -o " + (dir / "out").string());
+  const auto r =
+      test::runCli("import -q " + from + input.string() + " -o " + (dir / "out").string());
   EXPECT_EQ(r.exit_code, 2) << r.err;
-  for (const auto& p : parts) EXPECT_NE(r.err.find(p), std::string::npos) << r.err << "\nmissing: " << p;
+  for (const auto& p : parts)
+    EXPECT_NE(r.err.find(p), std::string::npos) << r.err << "\nmissing: " << p;
   EXPECT_FALSE(fs::exists(dir / "out"));
 }
 
@@ -398,30 +439,43 @@ TEST(Rosbag2BadInput, CorruptMcapFilesGiveCleanErrors) {
   using namespace test;
   const std::string good = mcapBag({"zstd", "lz4", false});
   const std::size_t chunk_at = mcapHead().size();  // the first Chunk record
-  const std::string records = schemaRecord(1, "sensor_msgs/msg/LaserScan") + channelRecord(1, 1, "/scan") +
+  const std::string records = schemaRecord(1, "sensor_msgs/msg/LaserScan") +
+                              channelRecord(1, 1, "/scan") +
                               messageRecord(1, 5, laserScanCdr(scanA(0)));
   const auto write = [&](const std::string& name, const std::string& bytes) {
     writeFile(dir / name, bytes);
     return dir / name;
   };
-  expectCliError(dir, write("cut.mcap", good.substr(0, good.size() / 2)), {"cut.mcap", "(Chunk)", "cut short", "mcap recover"});
-  expectCliError(dir, write("cut2.mcap", good.substr(0, chunk_at)), {"cut2.mcap", "without a Footer", "mcap recover"});
-  expectCliError(dir, write("magic.mcap", "\x89MCAP1\r\n"s + good.substr(8)), {"magic.mcap", "magic"});
-  expectCliError(dir, write("long.mcap", patch64(good, chunk_at + 1, 1u << 30)), {"long.mcap", "(Chunk)", "past the end"});
+  expectCliError(dir, write("cut.mcap", good.substr(0, good.size() / 2)),
+                 {"cut.mcap", "(Chunk)", "cut short", "mcap recover"});
+  expectCliError(dir, write("cut2.mcap", good.substr(0, chunk_at)),
+                 {"cut2.mcap", "without a Footer", "mcap recover"});
+  expectCliError(dir, write("magic.mcap", "\x89MCAP1\r\n"s + good.substr(8)),
+                 {"magic.mcap", "magic"});
+  expectCliError(dir, write("long.mcap", patch64(good, chunk_at + 1, 1u << 30)),
+                 {"long.mcap", "(Chunk)", "past the end"});
   // uncompressed_size (after start and end times) one byte off, for each compression.
   for (const char* c : {"", "zstd", "lz4"}) {
     SCOPED_TRACE(c);
     const std::string bag = mcapHead() + chunkRecord(records, c, 5, 5) + mcapTail();
-    expectCliError(dir, write("size.mcap", patch64(bag, chunk_at + 9 + 16, records.size() + 1)), {"size.mcap", "uncompressed"});
-    expectCliError(dir, write("size2.mcap", patch64(bag, chunk_at + 9 + 16, records.size() - 1)), {"size2.mcap", "Chunk"});
+    expectCliError(dir, write("size.mcap", patch64(bag, chunk_at + 9 + 16, records.size() + 1)),
+                   {"size.mcap", "uncompressed"});
+    expectCliError(dir, write("size2.mcap", patch64(bag, chunk_at + 9 + 16, records.size() - 1)),
+                   {"size2.mcap", "Chunk"});
   }
-  expectCliError(dir, write("bz2.mcap", mcapHead() + chunkRecord(records, "bz2", 5, 5) + mcapTail()),
+  expectCliError(dir,
+                 write("bz2.mcap", mcapHead() + chunkRecord(records, "bz2", 5, 5) + mcapTail()),
                  {"bz2.mcap", "unknown compression 'bz2'"});
-  expectCliError(dir, write("crc.mcap", mcapHead() + record(0x06, chunkRecord(records, "", 5, 5).substr(9, 28) + mstr("") +
-                                                                        le(records.size(), 8) + records.substr(0, records.size() - 1) + "X") +
-                                            mcapTail()),
-                 {"crc.mcap", "CRC"});
-  expectCliError(dir, write("nochannel.mcap", mcapHead() + messageRecord(7, 5, "x") + mcapTail()), {"channel 7"});
+  expectCliError(
+      dir,
+      write("crc.mcap", mcapHead() +
+                            record(0x06, chunkRecord(records, "", 5, 5).substr(9, 28) + mstr("") +
+                                             le(records.size(), 8) +
+                                             records.substr(0, records.size() - 1) + "X") +
+                            mcapTail()),
+      {"crc.mcap", "CRC"});
+  expectCliError(dir, write("nochannel.mcap", mcapHead() + messageRecord(7, 5, "x") + mcapTail()),
+                 {"channel 7"});
 }
 
 TEST(Rosbag2BadInput, EveryTruncationAndRandomByteChangesAreResultsOrInputErrors) {
@@ -431,7 +485,8 @@ TEST(Rosbag2BadInput, EveryTruncationAndRandomByteChangesAreResultsOrInputErrors
   auto attempt = [&](const std::string& bytes) {
     test::writeFile(file, bytes);
     try {
-      readRosbag2(file, RosbagConfig{"/scan", {}, {}, {}}, [](const RawScan& s) { return s.angles_rad.size() == s.ranges_m.size(); });
+      readRosbag2(file, RosbagConfig{"/scan", {}, {}, {}},
+                  [](const RawScan& s) { return s.angles_rad.size() == s.ranges_m.size(); });
     } catch (const InputError&) {
     }
   };
@@ -448,9 +503,12 @@ TEST(Rosbag2BadInput, EveryTruncationAndRandomByteChangesAreResultsOrInputErrors
 TEST(Rosbag2BadInput, DirectoriesWithBadMetadataAndBadDb3Files) {
   TempDir dir;
   const fs::path bag = db3Bag(dir);
-  test::writeFile(bag / "metadata.yaml", metadataYaml("sqlite3", {"bag_db3_0.db3", "bag_db3_9.db3"}));
-  expectCliError(dir, bag, {"metadata.yaml", "relative_file_paths", "bag_db3_9.db3", "ros2 bag reindex"}, "");
-  test::writeFile(bag / "metadata.yaml", "rosbag2_bagfile_information:\n  storage_identifier: sqlite3\n");
+  test::writeFile(bag / "metadata.yaml",
+                  metadataYaml("sqlite3", {"bag_db3_0.db3", "bag_db3_9.db3"}));
+  expectCliError(dir, bag,
+                 {"metadata.yaml", "relative_file_paths", "bag_db3_9.db3", "ros2 bag reindex"}, "");
+  test::writeFile(bag / "metadata.yaml",
+                  "rosbag2_bagfile_information:\n  storage_identifier: sqlite3\n");
   expectCliError(dir, bag, {"metadata.yaml", "relative_file_paths", "missing"});
   test::writeFile(bag / "metadata.yaml", metadataYaml("rosbag_v2", {"bag_db3_0.db3"}));
   expectCliError(dir, bag, {"storage_identifier", "rosbag_v2"});
@@ -467,8 +525,10 @@ TEST(Rosbag2BadInput, DirectoriesWithBadMetadataAndBadDb3Files) {
   test::writeFile(dir / "notes.txt", "hello\n");
   expectCliError(dir, dir / "notes.txt", {"notes.txt", "neither an MCAP file nor"});
   // A message whose CDR is cut short.
-  test::writeDb3(dir / "short.db3", {{1, "/scan", "sensor_msgs/msg/LaserScan"}}, {{1, 5, test::laserScanCdr(scanA(0)).substr(0, 30)}});
-  expectCliError(dir, dir / "short.db3", {"short.db3", "topic /scan, message 0", "not a valid CDR"});
+  test::writeDb3(dir / "short.db3", {{1, "/scan", "sensor_msgs/msg/LaserScan"}},
+                 {{1, 5, test::laserScanCdr(scanA(0)).substr(0, 30)}});
+  expectCliError(dir, dir / "short.db3",
+                 {"short.db3", "topic /scan, message 0", "not a valid CDR"});
 }
 
 }  // namespace

@@ -8,8 +8,8 @@
 #include <gtest/gtest.h>
 
 #include "common/errors.hpp"
-#include "io/import_ydlidar.hpp"
 #include "import_test_util.hpp"
+#include "io/import_ydlidar.hpp"
 #include "test_util.hpp"
 
 namespace lidarcal::io {
@@ -28,7 +28,8 @@ std::string datLine(double dist_mm, double dtheta_deg, double dt, int n) {
   return o.str();
 }
 
-std::vector<RawScan> read(const TempDir& dir, const std::string& text, const YdlidarConfig& config = {}) {
+std::vector<RawScan> read(const TempDir& dir, const std::string& text,
+                          const YdlidarConfig& config = {}) {
   test::writeFile(dir / "rec.dat", text);
   Collector got;
   readYdlidarDat(dir / "rec.dat", config, got.callback());
@@ -60,12 +61,13 @@ TEST(YdlidarIntegration, ChordsOfARegularPolygonCloseTheLoop) {
 
 TEST(YdlidarDat, PosesFromMillimetresAndDegreesFirstLineDeltasNotApplied) {
   TempDir dir;
-  // Line 1 carries motion from before the recording (ignored). Then a 1 m square, counter-clockwise.
+  // Line 1 carries motion from before the recording (ignored). Then a 1 m square,
+  // counter-clockwise.
   std::string text = datLine(1234, -754.3, 89.2, 8);
   for (int side = 0; side < 4; ++side) text += datLine(1000, 0, 0.1, 8) + datLine(0, 90, 0.1, 8);
   const auto scans = read(dir, text);
   ASSERT_EQ(scans.size(), 9u);
-  const double expected[9][3] = {{0, 0, 0},  {1, 0, 0},  {1, 0, 90},  {1, 1, 90}, {1, 1, 180},
+  const double expected[9][3] = {{0, 0, 0},   {1, 0, 0},   {1, 0, 90},  {1, 1, 90}, {1, 1, 180},
                                  {0, 1, 180}, {0, 1, -90}, {0, 0, -90}, {0, 0, 0}};
   for (std::size_t k = 0; k < 9; ++k) {
     SCOPED_TRACE(k);
@@ -84,8 +86,10 @@ TEST(YdlidarDat, BeamIAtTwoPiIOverNRangesAsWrittenLimitsFromTheDatasetReadme) {
     const std::size_t n = s.ranges_m.size();
     ASSERT_EQ(s.angles_rad.size(), n);
     for (std::size_t i = 0; i < n; ++i) {
-      EXPECT_NEAR(s.angles_rad[i], 2 * kPi * static_cast<double>(i) / static_cast<double>(n), 1e-12);
-      EXPECT_FLOAT_EQ(s.ranges_m[i], i % 3 == 0 ? 0.0f : static_cast<float>(1.0 + 0.001 * static_cast<double>(i)));
+      EXPECT_NEAR(s.angles_rad[i], 2 * kPi * static_cast<double>(i) / static_cast<double>(n),
+                  1e-12);
+      EXPECT_FLOAT_EQ(s.ranges_m[i],
+                      i % 3 == 0 ? 0.0f : static_cast<float>(1.0 + 0.001 * static_cast<double>(i)));
     }
     EXPECT_DOUBLE_EQ(s.range_min_m, 0.12);
     EXPECT_DOUBLE_EQ(s.range_max_m, 10.0);

@@ -64,20 +64,24 @@ TEST(SequenceNames, OneScanNumberTwiceAndUnpaddedOrderAndUpperCaseAreRefused) {
     TempDir dir;
     writeScan(dir / "scan_0007.pcd", tinyScan(0.0));
     writeScan(dir / "scan_7.pcd", tinyScan(0.0));
-    EXPECT_NE(problemOf([&] { openSequence(dir.path()); }).find("scan_7.pcd: has the same scan number as scan_0007.pcd"),
+    EXPECT_NE(problemOf([&] {
+                openSequence(dir.path());
+              }).find("scan_7.pcd: has the same scan number as scan_0007.pcd"),
               std::string::npos);
   }
   {
     TempDir dir;
     writeScan(dir / "s9.pcd", tinyScan(0.0));
     writeScan(dir / "s10.pcd", tinyScan(0.0));
-    EXPECT_NE(problemOf([&] { openSequence(dir.path()); }).find("s9.pcd: sorts after s10.pcd"), std::string::npos);
+    EXPECT_NE(problemOf([&] { openSequence(dir.path()); }).find("s9.pcd: sorts after s10.pcd"),
+              std::string::npos);
   }
   {
     TempDir dir;
     writeScan(dir / "a.pcd", tinyScan(0.0));
     writeScan(dir / "b.Pcd", tinyScan(0.0));
-    EXPECT_NE(problemOf([&] { openSequence(dir.path()); }).find("b.Pcd: has the extension '.Pcd'"), std::string::npos);
+    EXPECT_NE(problemOf([&] { openSequence(dir.path()); }).find("b.Pcd: has the extension '.Pcd'"),
+              std::string::npos);
   }
 }
 
@@ -89,54 +93,74 @@ TEST(SequenceBeams, ScansDisagreeingWithSequenceJsonBeamsAreRefused) {
   writeScan(dir / "b.pcd", four);
   EXPECT_EQ(pointCountRange(openSequence(dir.path())), (std::pair<std::size_t, std::size_t>{3, 4}));
   writeSequenceMeta(dir / "sequence.json", SequenceMeta{{}, {}, {}, {}, 3, {}});
-  EXPECT_NE(problemOf([&] { openSequence(dir.path()); }).find("b.pcd: POINTS: has 4 points, but sequence.json says"),
+  EXPECT_NE(problemOf([&] {
+              openSequence(dir.path());
+            }).find("b.pcd: POINTS: has 4 points, but sequence.json says"),
             std::string::npos);
 }
 
 TEST(AtomicOutput, NeverReplacesADeviceOrADirectory) {
-  struct stat before{};
+  struct stat before {};
   ASSERT_EQ(::stat("/dev/null", &before), 0);
-  EXPECT_NE(problemOf([] { writeTextAtomically("/dev/null", "x"); }).find("not a regular file"), std::string::npos);
-  struct stat after{};
+  EXPECT_NE(problemOf([] { writeTextAtomically("/dev/null", "x"); }).find("not a regular file"),
+            std::string::npos);
+  struct stat after {};
   ASSERT_EQ(::stat("/dev/null", &after), 0);
   EXPECT_TRUE(S_ISCHR(after.st_mode));
   EXPECT_EQ(before.st_ino, after.st_ino);
   TempDir dir;
   fs::create_directories(dir / "d");
-  EXPECT_NE(problemOf([&] { writeTextAtomically(dir / "d", "x"); }).find("is a directory"), std::string::npos);
-  EXPECT_NE(problemOf([&] { checkOutputFile(dir / "d", true); }).find("is a directory"), std::string::npos);
+  EXPECT_NE(problemOf([&] { writeTextAtomically(dir / "d", "x"); }).find("is a directory"),
+            std::string::npos);
+  EXPECT_NE(problemOf([&] { checkOutputFile(dir / "d", true); }).find("is a directory"),
+            std::string::npos);
   test::writeFile(dir / "f", "keep");
-  EXPECT_NE(problemOf([&] { checkOutputFile(dir / "f", false); }).find("already exists"), std::string::npos);
+  EXPECT_NE(problemOf([&] { checkOutputFile(dir / "f", false); }).find("already exists"),
+            std::string::npos);
   EXPECT_NO_THROW(checkOutputFile(dir / "f", true));
-  EXPECT_NE(problemOf([&] { checkOutputFile(dir / "f" / "g", true); }).find("is a file, not a directory"), std::string::npos);
-  EXPECT_NE(problemOf([&] { StagedDirectory s(dir / "f", true); }).find("is a file; the output is a directory"),
+  EXPECT_NE(
+      problemOf([&] { checkOutputFile(dir / "f" / "g", true); }).find("is a file, not a directory"),
+      std::string::npos);
+  EXPECT_NE(problemOf([&] {
+              StagedDirectory s(dir / "f", true);
+            }).find("is a file; the output is a directory"),
             std::string::npos);
   EXPECT_EQ(test::readFile(dir / "f"), "keep");
 }
 
 TEST(PcdHeader, PointsThatTheDataCannotHoldAreRefusedBeforeLoading) {
   TempDir dir;
-  const std::string head = "VERSION .7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nVIEWPOINT 0 0 0 1 0 0 0\n";
-  test::writeFile(dir / "a.pcd", head + "WIDTH 100000000\nHEIGHT 1\nPOINTS 100000000\nDATA ascii\n1 2 3\n");
-  EXPECT_NE(problemOf([&] { readScan(dir / "a.pcd"); }).find("cannot hold the 100000000 points"), std::string::npos);
-  test::writeFile(dir / "c.pcd", head + "WIDTH 50000000\nHEIGHT 1\nPOINTS 50000000\nDATA binary_compressed\n" +
-                                     std::string(64, '\x01'));
+  const std::string head =
+      "VERSION .7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nVIEWPOINT 0 0 0 1 0 0 0\n";
+  test::writeFile(dir / "a.pcd",
+                  head + "WIDTH 100000000\nHEIGHT 1\nPOINTS 100000000\nDATA ascii\n1 2 3\n");
+  EXPECT_NE(problemOf([&] { readScan(dir / "a.pcd"); }).find("cannot hold the 100000000 points"),
+            std::string::npos);
+  test::writeFile(dir / "c.pcd",
+                  head + "WIDTH 50000000\nHEIGHT 1\nPOINTS 50000000\nDATA binary_compressed\n" +
+                      std::string(64, '\x01'));
   // (the compressed block's own sizes give it away first)
-  EXPECT_NE(problemOf([&] { readScan(dir / "c.pcd"); }).find("c.pcd: DATA: the compressed block unpacks to"),
+  EXPECT_NE(problemOf([&] {
+              readScan(dir / "c.pcd");
+            }).find("c.pcd: DATA: the compressed block unpacks to"),
             std::string::npos);
 }
 
 TEST(PcdHeader, DataThatPclWouldReadAsMoreHeaderIsRefused) {
   // Found by fuzzing (tests/fuzz/regressions/pcd/): PCL reads on past DATA while lines look
   // like header lines, and loaded a garbage field list instead of x y z.
-  const fs::path file = test::sourceDir() / "tests/fuzz/regressions/pcd/crash-columns-line-in-binary-data.pcd";
-  EXPECT_NE(problemOf([&] { readScan(file); }).find("DATA: the data begins with a line PCL would read as more header"),
+  const fs::path file =
+      test::sourceDir() / "tests/fuzz/regressions/pcd/crash-columns-line-in-binary-data.pcd";
+  EXPECT_NE(problemOf([&] {
+              readScan(file);
+            }).find("DATA: the data begins with a line PCL would read as more header"),
             std::string::npos);
   // Comments and empty lines after DATA are skipped by PCL too and do not matter; binary data
   // that does not read as a keyword loads.
   TempDir dir;
-  const std::string head = "VERSION .7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 1\nHEIGHT 1\n"
-                           "VIEWPOINT 0 0 0 1 0 0 0\nPOINTS 1\nDATA ascii\n";
+  const std::string head =
+      "VERSION .7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 1\nHEIGHT 1\n"
+      "VIEWPOINT 0 0 0 1 0 0 0\nPOINTS 1\nDATA ascii\n";
   test::writeFile(dir / "a.pcd", head + "1 2 0\n");
   EXPECT_NO_THROW(readScan(dir / "a.pcd"));
   test::writeFile(dir / "b.pcd", head + "WIDTH 7\n1 2 0\n");
@@ -146,11 +170,12 @@ TEST(PcdHeader, DataThatPclWouldReadAsMoreHeaderIsRefused) {
 TEST(TrueRangesCsv, RowsWithBadValuesNameTheColumn) {
   TempDir dir;
   const std::string head = "scan,beam,true_range_m,target,target_id,incidence_rad\n";
-  const std::pair<const char*, const char*> cases[] = {{"-1,0,1.0,wall,1,0.1", "column scan"},
-                                                       {"0,0,1.0,tree,1,0.1", "column target"},
-                                                       {"0,0,1.0,wall,1", "expected 6"},
-                                                       {"0,0.5,1.0,wall,1,0.1", "column beam"},
-                                                       {"0,0,-2,wall,1,0.1", "column true_range_m"}};
+  const std::pair<const char*, const char*> cases[] = {
+      {"-1,0,1.0,wall,1,0.1", "column scan"},
+      {"0,0,1.0,tree,1,0.1", "column target"},
+      {"0,0,1.0,wall,1", "expected 6"},
+      {"0,0.5,1.0,wall,1,0.1", "column beam"},
+      {"0,0,-2,wall,1,0.1", "column true_range_m"}};
   for (const auto& [row, needle] : cases) {
     SCOPED_TRACE(row);
     test::writeFile(dir / "t.csv", head + "0,0,nan,none,0,nan\n" + row + "\n");

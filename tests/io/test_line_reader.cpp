@@ -4,9 +4,9 @@
 #include <gtest/gtest.h>
 
 #include "common/errors.hpp"
+#include "import_test_util.hpp"
 #include "io/line_reader.hpp"
 #include "io/text_fields.hpp"
-#include "import_test_util.hpp"
 #include "test_util.hpp"
 
 namespace lidarcal::io {
@@ -29,7 +29,8 @@ TEST(LineReader, PlainAndGzipGiveTheSameLines) {
   TempDir dir;
   const std::string long_line(100000, 'x');
   const std::string text = "first\r\n\nthird " + long_line + "\nlast without newline";
-  const std::vector<std::string> expected = {"first", "", "third " + long_line, "last without newline"};
+  const std::vector<std::string> expected = {"first", "", "third " + long_line,
+                                             "last without newline"};
   test::writeFile(dir / "a.txt", text);
   test::writeGzip(dir / "a.txt.gz", text);
   EXPECT_EQ(readAll(dir / "a.txt"), expected);
@@ -57,7 +58,8 @@ TEST(LineReader, TruncatedGzipIsAnError) {
     readAll(dir / "cut.gz");
     FAIL() << "no error";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("gzip data is damaged or cut short"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("gzip data is damaged or cut short"), std::string::npos)
+        << e.what();
     EXPECT_NE(std::string(e.what()).find("cut.gz"), std::string::npos) << e.what();
   }
 }
@@ -83,7 +85,8 @@ TEST(TextFields, SplitAndParse) {
   EXPECT_EQ(v, -0.25);
   EXPECT_TRUE(parseNumber("nan", v));
   EXPECT_TRUE(std::isnan(v));
-  for (const char* bad : {"", "1.5x", "abc", " 1", "1,5", "+"}) EXPECT_FALSE(parseNumber(bad, v)) << bad;
+  for (const char* bad : {"", "1.5x", "abc", " 1", "1,5", "+"})
+    EXPECT_FALSE(parseNumber(bad, v)) << bad;
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// observations.csv, odometry.csv, observation scenes, noise settings and the landmarks.csv converter.
+// observations.csv, odometry.csv, observation scenes, noise settings and the landmarks.csv
+// converter.
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -28,7 +29,8 @@ std::string errorOf(const std::function<void()>& f) {
 
 TEST(ObservationsCsv, RoundTripsExactlyEnoughAndKeepsTheOrder) {
   TempDir dir;
-  const std::vector<Observation> rows{{0, 0, 3, 2.5, -0.25}, {0, 1, -1, 7.123456789012, 3.1}, {4, 0, 12, -0.01, 1e-9}};
+  const std::vector<Observation> rows{
+      {0, 0, 3, 2.5, -0.25}, {0, 1, -1, 7.123456789012, 3.1}, {4, 0, 12, -0.01, 1e-9}};
   writeObservations(dir / "o.csv", rows);
   std::vector<int> sensors, landmarks;
   const auto back = readObservations(dir / "o.csv", &sensors, &landmarks);
@@ -36,7 +38,8 @@ TEST(ObservationsCsv, RoundTripsExactlyEnoughAndKeepsTheOrder) {
   for (std::size_t i = 0; i < rows.size(); ++i) {
     EXPECT_EQ(back[i].stop, rows[i].stop);
     EXPECT_EQ(sensors.at(static_cast<std::size_t>(back[i].sensor)), rows[i].sensor);
-    EXPECT_EQ(back[i].landmark < 0 ? -1 : landmarks.at(static_cast<std::size_t>(back[i].landmark)), rows[i].landmark);
+    EXPECT_EQ(back[i].landmark < 0 ? -1 : landmarks.at(static_cast<std::size_t>(back[i].landmark)),
+              rows[i].landmark);
     EXPECT_NEAR(back[i].range_m, rows[i].range_m, 1e-11 * std::max(1.0, std::abs(rows[i].range_m)));
     EXPECT_NEAR(back[i].bearing_rad, rows[i].bearing_rad, 1e-11);
   }
@@ -51,29 +54,43 @@ TEST(ObservationsCsv, ErrorsNameTheFileLineColumnAndRemedy) {
   TempDir dir;
   const auto f = dir / "o.csv";
   writeFile(f, "stop,sensor,landmark,range_m\n");
-  EXPECT_NE(errorOf([&] { readObservations(f); }).find("line 1: header must be `stop,sensor,landmark,range_m,bearing_rad`"),
+  EXPECT_NE(errorOf([&] {
+              readObservations(f);
+            }).find("line 1: header must be `stop,sensor,landmark,range_m,bearing_rad`"),
             std::string::npos);
   writeFile(f, "stop,sensor,landmark,range_m,bearing_rad\n0,0,1,2.0,0.1\n1,0,1,far,0.1\n");
   const std::string e = errorOf([&] { readObservations(f); });
-  EXPECT_NE(e.find(f.string() + ": line 3, column range_m: `far` is not a number"), std::string::npos) << e;
+  EXPECT_NE(e.find(f.string() + ": line 3, column range_m: `far` is not a number"),
+            std::string::npos)
+      << e;
   EXPECT_NE(e.find("docs/FORMAT.md"), std::string::npos) << e;
   writeFile(f, "stop,sensor,landmark,range_m,bearing_rad\n0,0,99999999999,2.0,0.1\n");
-  EXPECT_NE(errorOf([&] { readObservations(f); }).find("line 2, column landmark: is too large"), std::string::npos);
+  EXPECT_NE(errorOf([&] { readObservations(f); }).find("line 2, column landmark: is too large"),
+            std::string::npos);
   writeFile(f, "stop,sensor,landmark,range_m,bearing_rad\n-1,0,1,2.0,0.1\n");
-  EXPECT_NE(errorOf([&] { readObservations(f); }).find("line 2, column stop: must be >= 0"), std::string::npos);
+  EXPECT_NE(errorOf([&] { readObservations(f); }).find("line 2, column stop: must be >= 0"),
+            std::string::npos);
   writeFile(f, "stop,sensor,landmark,range_m,bearing_rad\n0,0,1,2.0\n");
-  EXPECT_NE(errorOf([&] { readObservations(f); }).find("line 2: expected 5 comma-separated values, found 4"), std::string::npos);
+  EXPECT_NE(errorOf([&] {
+              readObservations(f);
+            }).find("line 2: expected 5 comma-separated values, found 4"),
+            std::string::npos);
   writeFile(f, "stop,sensor,landmark,range_m,bearing_rad\n0,0,1,nan,0.1\n");
-  EXPECT_NE(errorOf([&] { readObservations(f); }).find("column range_m: `nan` is not a finite number"), std::string::npos);
-  EXPECT_NE(errorOf([&] { readObservations(dir / "missing.csv"); }).find("file does not exist"), std::string::npos);
+  EXPECT_NE(
+      errorOf([&] { readObservations(f); }).find("column range_m: `nan` is not a finite number"),
+      std::string::npos);
+  EXPECT_NE(errorOf([&] { readObservations(dir / "missing.csv"); }).find("file does not exist"),
+            std::string::npos);
 }
 
 TEST(ObservationsCsv, SensorIdsAreLabelsNumberedInAscendingOrder) {
   TempDir dir;
   const auto f = dir / "o.csv";
   // Sensors 7, -3 and 12 (in file order), landmarks with any ids: -1 stays "unknown".
-  writeFile(f, "stop,sensor,landmark,range_m,bearing_rad\n0,7,100,1.0,0.1\n0,-3,-5,2.0,0.2\n1,12,-1,3.0,0.3\n"
-               "1,7,2000000000,4.0,0.4\n");
+  writeFile(f,
+            "stop,sensor,landmark,range_m,bearing_rad\n0,7,100,1.0,0.1\n0,-3,-5,2.0,0.2\n1,12,-1,3."
+            "0,0.3\n"
+            "1,7,2000000000,4.0,0.4\n");
   std::vector<int> labels, landmarks;
   const auto rows = readObservations(f, &labels, &landmarks);
   EXPECT_EQ(labels, (std::vector<int>{-3, 7, 12}));
@@ -102,7 +119,8 @@ TEST(OdometryCsv, StopsMustRunFromZeroInOrderAndStopZeroIsTheStart) {
   TempDir dir;
   const auto f = dir / "d.csv";
   writeFile(f, "stop,dx_m,dy_m,dtheta_rad\n0,0,0,0\n2,1,0,0\n");
-  EXPECT_NE(errorOf([&] { readOdometry(f); }).find("line 3, column stop: expected stop 1"), std::string::npos);
+  EXPECT_NE(errorOf([&] { readOdometry(f); }).find("line 3, column stop: expected stop 1"),
+            std::string::npos);
   writeFile(f, "stop,dx_m,dy_m,dtheta_rad\n0,1,0,0\n");
   EXPECT_NE(errorOf([&] { readOdometry(f); }).find("stop 0 is the start"), std::string::npos);
   writeFile(f, "stop,dx_m,dy_m,dtheta_rad\n");
@@ -129,12 +147,16 @@ TEST(ObservationScene, ParsesRoundTripsAndReportsFieldPaths) {
   const ObservationScene t = readObservationScene(dir / "t.json");
   EXPECT_EQ(observationSceneToJson(t), observationSceneToJson(s));
 
-  writeFile(dir / "bad.json", R"({"kind": "observations", "sensors": [{"range_var_m2": -1, "bearing_var_rad2": 0}],
+  writeFile(dir / "bad.json",
+            R"({"kind": "observations", "sensors": [{"range_var_m2": -1, "bearing_var_rad2": 0}],
     "landmarks": [{"x_m": 0, "y_m": 0}], "trajectory": {"motions": [{}]}})");
-  EXPECT_NE(errorOf([&] { readObservationScene(dir / "bad.json"); }).find("sensors[0].range_var_m2: must not be negative"),
+  EXPECT_NE(errorOf([&] {
+              readObservationScene(dir / "bad.json");
+            }).find("sensors[0].range_var_m2: must not be negative"),
             std::string::npos);
   writeFile(dir / "k.json", R"({"kind": "pictures"})");
-  EXPECT_NE(errorOf([&] { readSceneKind(dir / "k.json"); }).find("unknown scene kind 'pictures'"), std::string::npos);
+  EXPECT_NE(errorOf([&] { readSceneKind(dir / "k.json"); }).find("unknown scene kind 'pictures'"),
+            std::string::npos);
 }
 
 TEST(NoiseSetting, ReadsWhatItWritesAndRequiresSensorsInOrder) {
@@ -147,8 +169,10 @@ TEST(NoiseSetting, ReadsWhatItWritesAndRequiresSensorsInOrder) {
   ASSERT_EQ(back.sensors.size(), 2u);
   EXPECT_DOUBLE_EQ(back.sensors[0].bearing_var_rad2, 0.4);
   EXPECT_DOUBLE_EQ(back.process.dtheta_var_rad2, 0.03);
-  writeFile(dir / "o.json", R"({"sensors": [{"sensor": 1, "range_var_m2": 1, "bearing_var_rad2": 1}]})");
-  EXPECT_NE(errorOf([&] { readNoiseSetting(dir / "o.json"); }).find("sensors[0].sensor"), std::string::npos);
+  writeFile(dir / "o.json",
+            R"({"sensors": [{"sensor": 1, "range_var_m2": 1, "bearing_var_rad2": 1}]})");
+  EXPECT_NE(errorOf([&] { readNoiseSetting(dir / "o.json"); }).find("sensors[0].sensor"),
+            std::string::npos);
 }
 
 TEST(LandmarksToObservations, ConvertsRangesToTheCentreOrTheSurfaceAndStopPosesToMotions) {
@@ -159,7 +183,7 @@ TEST(LandmarksToObservations, ConvertsRangesToTheCentreOrTheSurfaceAndStopPosesT
             "scan_000000.pcd,0,0,-0.5,2.0,0,0,0.10,18,0.01\n");
   const auto centre = observationsFromLandmarksCsv(dir / "l.csv", RangeReference::centre);
   ASSERT_EQ(centre.size(), 2u);
-  EXPECT_EQ(centre[0].stop, 0);  // sorted by stop
+  EXPECT_EQ(centre[0].stop, 0);       // sorted by stop
   EXPECT_EQ(centre[0].landmark, -1);  // id 0 = not a landmark
   EXPECT_EQ(centre[1].landmark, 2);
   EXPECT_DOUBLE_EQ(centre[1].range_m, 3.0);
@@ -167,13 +191,15 @@ TEST(LandmarksToObservations, ConvertsRangesToTheCentreOrTheSurfaceAndStopPosesT
   const auto surface = observationsFromLandmarksCsv(dir / "l.csv", RangeReference::surface);
   EXPECT_DOUBLE_EQ(surface[1].range_m, 3.0 - 0.12);
   writeFile(dir / "m.csv", "file,stop,landmark,range_m\nx,0,1,2\n");
-  EXPECT_NE(errorOf([&] { observationsFromLandmarksCsv(dir / "m.csv", RangeReference::centre); }).find("no column `bearing_rad`"),
+  EXPECT_NE(errorOf([&] {
+              observationsFromLandmarksCsv(dir / "m.csv", RangeReference::centre);
+            }).find("no column `bearing_rad`"),
             std::string::npos);
 
   std::vector<Stop> stops(3);
   stops[0].commanded = Pose2{1.0, 1.0, kPi / 2};
-  stops[1].commanded = Pose2{1.0, 2.0, kPi / 2};   // 1 m forward
-  stops[2].commanded = Pose2{0.0, 2.0, kPi};       // 1 m to the left, turned 90 degrees
+  stops[1].commanded = Pose2{1.0, 2.0, kPi / 2};  // 1 m forward
+  stops[2].commanded = Pose2{0.0, 2.0, kPi};      // 1 m to the left, turned 90 degrees
   const auto odo = odometryFromStops(stops);
   ASSERT_EQ(odo.size(), 3u);
   EXPECT_DOUBLE_EQ(odo[0].dx_m, 0.0);

@@ -74,7 +74,8 @@ TEST_P(PcdRoundTrip, OptionalFieldsStayAbsent) {
   EXPECT_TRUE(out.labels.empty());
 }
 
-INSTANTIATE_TEST_SUITE_P(Encodings, PcdRoundTrip, ::testing::Values(PcdEncoding::binary, PcdEncoding::ascii));
+INSTANTIATE_TEST_SUITE_P(Encodings, PcdRoundTrip,
+                         ::testing::Values(PcdEncoding::binary, PcdEncoding::ascii));
 
 TEST(PcdScan, PclsOwnReaderOpensOurFilesWithTheViewpoint) {
   TempDir dir;
@@ -82,7 +83,7 @@ TEST(PcdScan, PclsOwnReaderOpensOurFilesWithTheViewpoint) {
   in.viewpoint = Pose2{-2.0, 3.5, -2.5};
   writeScan(dir / "t.pcd", in);
   pcl::PointCloud<pcl::PointXYZL> cloud;
-  ASSERT_EQ(pcl::io::loadPCDFile(( dir / "t.pcd").string(), cloud), 0);
+  ASSERT_EQ(pcl::io::loadPCDFile((dir / "t.pcd").string(), cloud), 0);
   ASSERT_EQ(cloud.size(), 20u);
   EXPECT_NEAR(cloud.sensor_origin_[0], -2.0, 1e-5);
   EXPECT_NEAR(cloud.sensor_origin_[1], 3.5, 1e-5);
@@ -96,7 +97,8 @@ TEST(PcdScan, ReadsFilesWrittenByPcl) {
   TempDir dir;
   pcl::PointCloud<pcl::PointXYZ> cloud;
   cloud.push_back(pcl::PointXYZ(1.0f, 2.0f, 0.0f));
-  cloud.push_back(pcl::PointXYZ(std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::quiet_NaN(),
+  cloud.push_back(pcl::PointXYZ(std::numeric_limits<float>::quiet_NaN(),
+                                std::numeric_limits<float>::quiet_NaN(),
                                 std::numeric_limits<float>::quiet_NaN()));
   cloud.is_dense = false;
   cloud.sensor_origin_ = Eigen::Vector4f(0.5f, 0.25f, 0.0f, 0.0f);
@@ -123,11 +125,12 @@ struct BadPcdCase {
   const char* expected_problem;
 };
 
-std::string header(const std::string& fields, const std::string& sizes, const std::string& types, int points,
-                   const std::string& viewpoint = "VIEWPOINT 0 0 0 1 0 0 0\n", const std::string& data = "ascii",
-                   int width = -1) {
-  return "# .PCD v0.7\nVERSION 0.7\nFIELDS " + fields + "\nSIZE " + sizes + "\nTYPE " + types + "\nCOUNT 1 1 1\nWIDTH " + std::to_string(width < 0 ? points : width) +
-         "\nHEIGHT 1\n" + viewpoint + "POINTS " + std::to_string(points) + "\nDATA " + data + "\n";
+std::string header(const std::string& fields, const std::string& sizes, const std::string& types,
+                   int points, const std::string& viewpoint = "VIEWPOINT 0 0 0 1 0 0 0\n",
+                   const std::string& data = "ascii", int width = -1) {
+  return "# .PCD v0.7\nVERSION 0.7\nFIELDS " + fields + "\nSIZE " + sizes + "\nTYPE " + types +
+         "\nCOUNT 1 1 1\nWIDTH " + std::to_string(width < 0 ? points : width) + "\nHEIGHT 1\n" +
+         viewpoint + "POINTS " + std::to_string(points) + "\nDATA " + data + "\n";
 }
 
 class BadPcd : public ::testing::TestWithParam<BadPcdCase> {};
@@ -142,7 +145,8 @@ TEST_P(BadPcd, GivesAClearError) {
   } catch (const InputError& e) {
     EXPECT_EQ(e.file(), file.string());
     EXPECT_NE(e.item().find(GetParam().expected_item), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find(GetParam().expected_problem), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find(GetParam().expected_problem), std::string::npos)
+        << e.what();
   }
 }
 
@@ -154,26 +158,42 @@ std::string truncatedBinary() {
 INSTANTIATE_TEST_SUITE_P(
     Catalogue, BadPcd,
     ::testing::Values(
-        BadPcdCase{"garbage", "\x7f" "ELF garbage\x01\x02\n", "header line 1", "unknown header keyword"},
+        BadPcdCase{"garbage",
+                   "\x7f"
+                   "ELF garbage\x01\x02\n",
+                   "header line 1", "unknown header keyword"},
         BadPcdCase{"empty", "", "DATA", "no DATA line"},
         BadPcdCase{"truncated binary", truncatedBinary(), "DATA", "truncated"},
-        BadPcdCase{"truncated ascii", header("x y z", "4 4 4", "F F F", 3) + "1 2 0\n", "DATA", "truncated"},
-        BadPcdCase{"no x", header("a y z", "4 4 4", "F F F", 1) + "1 2 0\n", "FIELDS", "no 'x' field"},
-        BadPcdCase{"no y", header("x b z", "4 4 4", "F F F", 1) + "1 2 0\n", "FIELDS", "no 'y' field"},
-        BadPcdCase{"points != width*height", header("x y z", "4 4 4", "F F F", 3, "VIEWPOINT 0 0 0 1 0 0 0\n", "ascii", 2) +
-                                                 "1 2 0\n1 2 0\n1 2 0\n",
+        BadPcdCase{"truncated ascii", header("x y z", "4 4 4", "F F F", 3) + "1 2 0\n", "DATA",
+                   "truncated"},
+        BadPcdCase{"no x", header("a y z", "4 4 4", "F F F", 1) + "1 2 0\n", "FIELDS",
+                   "no 'x' field"},
+        BadPcdCase{"no y", header("x b z", "4 4 4", "F F F", 1) + "1 2 0\n", "FIELDS",
+                   "no 'y' field"},
+        BadPcdCase{"points != width*height",
+                   header("x y z", "4 4 4", "F F F", 3, "VIEWPOINT 0 0 0 1 0 0 0\n", "ascii", 2) +
+                       "1 2 0\n1 2 0\n1 2 0\n",
                    "POINTS", "differs from WIDTH x HEIGHT"},
-        BadPcdCase{"missing viewpoint", header("x y z", "4 4 4", "F F F", 1, "") + "1 2 0\n", "VIEWPOINT", "missing"},
-        BadPcdCase{"short viewpoint", header("x y z", "4 4 4", "F F F", 1, "VIEWPOINT 0 0 0 1\n") + "1 2 0\n",
+        BadPcdCase{"missing viewpoint", header("x y z", "4 4 4", "F F F", 1, "") + "1 2 0\n",
+                   "VIEWPOINT", "missing"},
+        BadPcdCase{"short viewpoint",
+                   header("x y z", "4 4 4", "F F F", 1, "VIEWPOINT 0 0 0 1\n") + "1 2 0\n",
                    "VIEWPOINT", "expected 7 numbers"},
-        BadPcdCase{"non-unit quaternion", header("x y z", "4 4 4", "F F F", 1, "VIEWPOINT 0 0 0 2 0 0 0\n") + "1 2 0\n",
+        BadPcdCase{"non-unit quaternion",
+                   header("x y z", "4 4 4", "F F F", 1, "VIEWPOINT 0 0 0 2 0 0 0\n") + "1 2 0\n",
                    "VIEWPOINT", "unit length"},
-        BadPcdCase{"roll in viewpoint", header("x y z", "4 4 4", "F F F", 1, "VIEWPOINT 0 0 0 0.7071 0.7071 0 0\n") + "1 2 0\n",
-                   "VIEWPOINT", "only a yaw rotation"},
-        BadPcdCase{"infinite coordinate", header("x y z", "4 4 4", "F F F", 1) + "inf 2 0\n", "point 0", "infinite"},
-        BadPcdCase{"absurd range", header("x y z", "4 4 4", "F F F", 1) + "1e30 2 0\n", "point 0", "beyond 100 km"},
-        BadPcdCase{"half NaN", header("x y z", "4 4 4", "F F F", 1) + "nan 2 0\n", "point 0", "only one of x, y is NaN"},
-        BadPcdCase{"integer x", header("x y z", "4 4 4", "I F F", 1) + "1 2 0\n", "field 'x'", "single float"}),
+        BadPcdCase{
+            "roll in viewpoint",
+            header("x y z", "4 4 4", "F F F", 1, "VIEWPOINT 0 0 0 0.7071 0.7071 0 0\n") + "1 2 0\n",
+            "VIEWPOINT", "only a yaw rotation"},
+        BadPcdCase{"infinite coordinate", header("x y z", "4 4 4", "F F F", 1) + "inf 2 0\n",
+                   "point 0", "infinite"},
+        BadPcdCase{"absurd range", header("x y z", "4 4 4", "F F F", 1) + "1e30 2 0\n", "point 0",
+                   "beyond 100 km"},
+        BadPcdCase{"half NaN", header("x y z", "4 4 4", "F F F", 1) + "nan 2 0\n", "point 0",
+                   "only one of x, y is NaN"},
+        BadPcdCase{"integer x", header("x y z", "4 4 4", "I F F", 1) + "1 2 0\n", "field 'x'",
+                   "single float"}),
     [](const ::testing::TestParamInfo<BadPcdCase>& p) {
       std::string n = p.param.name;
       for (char& c : n)

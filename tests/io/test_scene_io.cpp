@@ -51,21 +51,25 @@ TEST_P(BadSceneTest, NamesTheField) {
   }
 }
 
-
 INSTANTIATE_TEST_SUITE_P(
     Cases, BadSceneTest,
-    ::testing::Values(BadScene{"[1, 2]", "(top level)"}, BadScene{R"({"path": {}})", "sensor"},
-                      BadScene{R"({"sensor": {"range_min_m": 0.2}, "path": {}})", "sensor.range_max_m"},
-                      BadScene{R"({"sensor": {"range_min_m": 1, "range_max_m": 0.5}, "path": {}})", "sensor.range_min_m"},
-                      BadScene{R"({"sensor": {"range_min_m": 0, "range_max_m": 5, "bias_alpha": [1, "x"]}, "path": {}})",
-                               "sensor.bias_alpha[1]"},
-                      BadScene{R"({"sensor": {"range_min_m": 0, "range_max_m": 5, "noise": {"kind": "pink"}}, "path": {}})",
-                               "sensor.noise.kind"},
-                      BadScene{R"({"sensor": {"range_min_m": 0, "range_max_m": 5}, "path": {"stops": 0}})", "path.stops"},
-                      BadScene{R"({"sensor": {"range_min_m": 0, "range_max_m": 5}, "path": {},
+    ::testing::Values(
+        BadScene{"[1, 2]", "(top level)"}, BadScene{R"({"path": {}})", "sensor"},
+        BadScene{R"({"sensor": {"range_min_m": 0.2}, "path": {}})", "sensor.range_max_m"},
+        BadScene{R"({"sensor": {"range_min_m": 1, "range_max_m": 0.5}, "path": {}})",
+                 "sensor.range_min_m"},
+        BadScene{
+            R"({"sensor": {"range_min_m": 0, "range_max_m": 5, "bias_alpha": [1, "x"]}, "path": {}})",
+            "sensor.bias_alpha[1]"},
+        BadScene{
+            R"({"sensor": {"range_min_m": 0, "range_max_m": 5, "noise": {"kind": "pink"}}, "path": {}})",
+            "sensor.noise.kind"},
+        BadScene{R"({"sensor": {"range_min_m": 0, "range_max_m": 5}, "path": {"stops": 0}})",
+                 "path.stops"},
+        BadScene{R"({"sensor": {"range_min_m": 0, "range_max_m": 5}, "path": {},
                                    "landmarks": [{"x_m": 1, "y_m": 1, "radius_m": 0.1}, {"x_m": 1, "y_m": 1, "radius_m": -0.1}]})",
-                               "landmarks[1].radius_m"},
-                      BadScene{"{\n\"sensor\": {,}\n}", "line 2 column 12"}));
+                 "landmarks[1].radius_m"},
+        BadScene{"{\n\"sensor\": {,}\n}", "line 2 column 12"}));
 
 // The effect table's scene keys (common/effect.hpp) are the keys the scene reader reads: every
 // "sensor.effects.*" key of the table, set in a scene, comes back from reading and writing it.
@@ -90,7 +94,8 @@ TEST(SceneIo, EveryEffectSceneKeyOfTheTableIsRead) {
 }
 
 /// Writes `scene` to `file` and expects readScene to refuse it with an InputError naming `key`.
-void expectRefusedNaming(const std::filesystem::path& file, const nlohmann::json& scene, const std::string& key) {
+void expectRefusedNaming(const std::filesystem::path& file, const nlohmann::json& scene,
+                         const std::string& key) {
   test::writeFile(file, scene.dump());
   try {
     readScene(file);
@@ -113,7 +118,8 @@ TEST(SceneIo, SurfaceIntensitiesAndTheDarkNoiseRoundTrip) {
   EXPECT_EQ(s.sensor.effects.dark_noise_exponent, 0.5);
   EXPECT_EQ(s.sensor.effects.dark_reference_intensity, 90.0);
   const auto back = sceneToJson(s);
-  EXPECT_FALSE(back["landmarks"][0].contains("intensity"));  // scenes without intensities keep their bytes
+  // scenes without intensities keep their bytes
+  EXPECT_FALSE(back["landmarks"][0].contains("intensity"));
   EXPECT_EQ(back["landmarks"][1]["intensity"], 35.5);
   EXPECT_EQ(back["sensor"]["effects"]["dark_reference_intensity"], 90.0);
   // A reference of 0 makes no sense (the factor is (I_ref / I)^delta): refused, naming the key.
@@ -125,7 +131,8 @@ TEST(SceneIo, TheRippleOfTheBiasRoundTripsAndItsWavelengthMustBePositive) {
   TempDir dir;
   nlohmann::json j;
   std::ifstream(test::sourceDir() / "data/scenes/paper_field.json") >> j;
-  j["sensor"]["effects"] = {{"ripple_amplitude_m", 0.004}, {"ripple_wavelength_m", 0.3}, {"ripple_phase_rad", 1.0}};
+  j["sensor"]["effects"] = {
+      {"ripple_amplitude_m", 0.004}, {"ripple_wavelength_m", 0.3}, {"ripple_phase_rad", 1.0}};
   test::writeFile(dir / "s.json", j.dump());
   const Scene s = readScene(dir / "s.json");
   EXPECT_EQ(s.sensor.effects.ripple_amplitude_m, 0.004);
@@ -133,7 +140,8 @@ TEST(SceneIo, TheRippleOfTheBiasRoundTripsAndItsWavelengthMustBePositive) {
   EXPECT_EQ(s.sensor.effects.ripple_phase_rad, 1.0);
   EXPECT_TRUE(s.sensor.effects.any());
   // The sensor's mean reading gains A sin(2 pi d / lambda + phi).
-  EXPECT_NEAR(rangeRipple(s.sensor.effects, 0.075), 0.004 * std::sin(0.5 * 3.14159265358979323846 + 1.0), 1e-15);
+  EXPECT_NEAR(rangeRipple(s.sensor.effects, 0.075),
+              0.004 * std::sin(0.5 * 3.14159265358979323846 + 1.0), 1e-15);
   const auto back = sceneToJson(s);
   EXPECT_EQ(back["sensor"]["effects"]["ripple_wavelength_m"], 0.3);
   j["sensor"]["effects"]["ripple_wavelength_m"] = 0.0;

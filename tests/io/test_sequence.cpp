@@ -29,16 +29,24 @@ InputError openError(const std::filesystem::path& dir) {
 namespace fs = std::filesystem;
 
 TEST(GroupStops, ConsecutiveEqualViewpointsFormOneStop) {
-  const std::vector<Pose2> v = {{0, 0, 0}, {0.0004, 0, 0}, {0, 0.0009, deg2rad(0.009)},  // stop 0 (within tolerance)
-                                {0.3, 0, 0}, {0.3, 0, 0},                                 // stop 1
-                                {0.3, 0, deg2rad(0.02)},                                  // heading differs: stop 2
-                                {0, 0, 0}};                                               // back at start: new stop 3
+  // stop 0 (within tolerance)
+  const std::vector<Pose2> v = {{0, 0, 0},
+                                {0.0004, 0, 0},
+                                {0, 0.0009, deg2rad(0.009)},
+                                {0.3, 0, 0},
+                                {0.3, 0, 0},              // stop 1
+                                {0.3, 0, deg2rad(0.02)},  // heading differs: stop 2
+                                {0, 0, 0}};               // back at start: new stop 3
   const auto stops = groupStops(v);
   ASSERT_EQ(stops.size(), 4u);
-  EXPECT_EQ(std::vector<std::size_t>(stops[0].scans.begin(), stops[0].scans.end()), (std::vector<std::size_t>{0, 1, 2}));
-  EXPECT_EQ(std::vector<std::size_t>(stops[1].scans.begin(), stops[1].scans.end()), (std::vector<std::size_t>{3, 4}));
-  EXPECT_EQ(std::vector<std::size_t>(stops[2].scans.begin(), stops[2].scans.end()), (std::vector<std::size_t>{5}));
-  EXPECT_EQ(std::vector<std::size_t>(stops[3].scans.begin(), stops[3].scans.end()), (std::vector<std::size_t>{6}));
+  EXPECT_EQ(std::vector<std::size_t>(stops[0].scans.begin(), stops[0].scans.end()),
+            (std::vector<std::size_t>{0, 1, 2}));
+  EXPECT_EQ(std::vector<std::size_t>(stops[1].scans.begin(), stops[1].scans.end()),
+            (std::vector<std::size_t>{3, 4}));
+  EXPECT_EQ(std::vector<std::size_t>(stops[2].scans.begin(), stops[2].scans.end()),
+            (std::vector<std::size_t>{5}));
+  EXPECT_EQ(std::vector<std::size_t>(stops[3].scans.begin(), stops[3].scans.end()),
+            (std::vector<std::size_t>{6}));
 }
 
 TEST(GroupStops, PositionJustBeyondOneMillimetreStartsANewStop) {
@@ -75,7 +83,8 @@ TEST(OpenSequence, StopStartsInSequenceJsonBeginStopsAtOnePose) {
   // Recordings taken apart at one pose (import --stop-per-input): the scans listed in
   // stop_starts begin stops although every VIEWPOINT is the same; names survive a rewrite.
   TempDir dir;
-  for (int i = 0; i < 6; ++i) writeScan(dir / scanFileName(static_cast<std::size_t>(i)), tinyScan({0, 0, 0}));
+  for (int i = 0; i < 6; ++i)
+    writeScan(dir / scanFileName(static_cast<std::size_t>(i)), tinyScan({0, 0, 0}));
   SequenceMeta meta;
   meta.stop_starts = {scanFileName(2), scanFileName(5)};
   writeSequenceMeta(dir / "sequence.json", meta);
@@ -92,7 +101,8 @@ TEST(OpenSequence, StopStartsInSequenceJsonBeginStopsAtOnePose) {
   meta.stop_starts = {"scan_000001x.pcd"};  // between two scans, not one of them
   writeSequenceMeta(dir / "sequence.json", meta);
   EXPECT_NE(std::string(openError(dir.path()).what()).find("not a scan"), std::string::npos);
-  test::writeFile(dir / "sequence.json", R"({"stop_starts": ["scan_000005.pcd", "scan_000002.pcd"]})");
+  test::writeFile(dir / "sequence.json",
+                  R"({"stop_starts": ["scan_000005.pcd", "scan_000002.pcd"]})");
   EXPECT_NE(std::string(openError(dir.path()).what()).find("sorted"), std::string::npos);
 }
 
@@ -171,18 +181,21 @@ bool sameHeader(const ScanHeader& a, const ScanHeader& b) {
 }
 
 std::string describe(const ScanHeader& h) {
-  return h.path + " vp " + std::to_string(h.viewpoint.x_m) + " " + std::to_string(h.viewpoint.y_m) + " " +
-         std::to_string(h.viewpoint.yaw_rad) + " points " + std::to_string(h.points) + " flags " +
-         std::to_string(h.has_intensity) + std::to_string(h.has_label) + std::to_string(h.binary);
+  return h.path + " vp " + std::to_string(h.viewpoint.x_m) + " " + std::to_string(h.viewpoint.y_m) +
+         " " + std::to_string(h.viewpoint.yaw_rad) + " points " + std::to_string(h.points) +
+         " flags " + std::to_string(h.has_intensity) + std::to_string(h.has_label) +
+         std::to_string(h.binary);
 }
 
 // Numbered names with gaps are kept as one run per contiguous block and give back every path in
 // lexicographic order; directories, hidden files and other files are skipped as before.
 TEST(OpenSequence, NumberedNamesWithGapsComeBackInOrder) {
   TempDir dir;
-  const std::vector<std::string> names = {"scan_000.pcd", "scan_001.pcd", "scan_002.pcd", "scan_007.pcd",
-                                          "scan_008.pcd", "scan_009.pcd", "scan_020.pcd"};
-  for (auto it = names.rbegin(); it != names.rend(); ++it) writeScan(dir / *it, tinyScan({0, 0, 0}));
+  const std::vector<std::string> names = {"scan_000.pcd", "scan_001.pcd", "scan_002.pcd",
+                                          "scan_007.pcd", "scan_008.pcd", "scan_009.pcd",
+                                          "scan_020.pcd"};
+  for (auto it = names.rbegin(); it != names.rend(); ++it)
+    writeScan(dir / *it, tinyScan({0, 0, 0}));
   fs::create_directory(dir / "scan_003.pcd");
   test::writeFile(dir / ".scan_004.pcd", "not a scan");
   test::writeFile(dir / "notes.txt", "not a scan");
@@ -201,20 +214,22 @@ TEST(OpenSequence, NumberedNamesWithGapsComeBackInOrder) {
 // Names of more than one pattern (or none) are read as before: every name, lexicographic order.
 TEST(OpenSequence, MixedPatternsReadAsTheNamesInLexicographicOrder) {
   const std::vector<std::vector<std::string>> cases = {
-      {"a_01.pcd", "a_02.pcd", "a_03.pcd", "a_04.pcd", "a_05.pcd", "a_06.pcd", "a_07.pcd", "a_08.pcd",
-       "a_09.pcd", "a_10.pcd", "a_11.pcd", "b_1.pcd", "zz.pcd"},
-      {"s_1.pcd", "s_20.pcd", "s_300.pcd"},          // one prefix, widths that still sort
-      {"t_01.pcd", "t_02.pcd", "t_1.5.pcd"},         // a decimal fraction is no scan number
+      {"a_01.pcd", "a_02.pcd", "a_03.pcd", "a_04.pcd", "a_05.pcd", "a_06.pcd", "a_07.pcd",
+       "a_08.pcd", "a_09.pcd", "a_10.pcd", "a_11.pcd", "b_1.pcd", "zz.pcd"},
+      {"s_1.pcd", "s_20.pcd", "s_300.pcd"},   // one prefix, widths that still sort
+      {"t_01.pcd", "t_02.pcd", "t_1.5.pcd"},  // a decimal fraction is no scan number
       {"n_18446744073709551615.pcd", "n_99999999999999999999.pcd"},  // beyond 64 bits
   };
   for (const auto& names : cases) {
     TempDir dir;
-    for (auto it = names.rbegin(); it != names.rend(); ++it) writeScan(dir / *it, tinyScan({0, 0, 0}));
+    for (auto it = names.rbegin(); it != names.rend(); ++it)
+      writeScan(dir / *it, tinyScan({0, 0, 0}));
     std::vector<std::string> sorted = names;
     std::sort(sorted.begin(), sorted.end());
     const Sequence seq = openSequence(dir.path());
     ASSERT_EQ(seq.scans.size(), sorted.size());
-    for (std::size_t i = 0; i < sorted.size(); ++i) EXPECT_EQ(seq.scans.path(i), (dir / sorted[i]).string());
+    for (std::size_t i = 0; i < sorted.size(); ++i)
+      EXPECT_EQ(seq.scans.path(i), (dir / sorted[i]).string());
     EXPECT_EQ(seq.scans.nameRuns(), 0u) << names.front();
   }
 }
@@ -223,7 +238,8 @@ TEST(OpenSequence, MixedPatternsReadAsTheNamesInLexicographicOrder) {
 TEST(OpenSequence, ScanNumberChecksRunWhenTheNamesLeaveThePattern) {
   {
     TempDir dir;
-    for (std::size_t i = 0; i < 20; ++i) test::writeFile(dir / scanFileName(i), "headers are not read");
+    for (std::size_t i = 0; i < 20; ++i)
+      test::writeFile(dir / scanFileName(i), "headers are not read");
     test::writeFile(dir / "scan_3.pcd", "headers are not read");
     const std::string what = openError(dir.path()).what();
     EXPECT_NE(what.find("scan_3.pcd"), std::string::npos) << what;
@@ -231,7 +247,8 @@ TEST(OpenSequence, ScanNumberChecksRunWhenTheNamesLeaveThePattern) {
   }
   {
     TempDir dir;
-    for (std::size_t i = 10; i < 30; ++i) test::writeFile(dir / ("s_" + std::to_string(i) + ".pcd"), "x");
+    for (std::size_t i = 10; i < 30; ++i)
+      test::writeFile(dir / ("s_" + std::to_string(i) + ".pcd"), "x");
     test::writeFile(dir / "s_2.pcd", "x");
     const std::string what = openError(dir.path()).what();
     EXPECT_NE(what.find("s_2.pcd: sorts after s_19.pcd"), std::string::npos) << what;
@@ -250,7 +267,8 @@ TEST(OpenSequence, HeadersThatChangeAnywhereComeBackAsRead) {
     PcdEncoding enc;
   };
   const std::vector<Spec> specs = {
-      {a, 4, false, false, PcdEncoding::binary}, {a, 4, false, false, PcdEncoding::binary},
+      {a, 4, false, false, PcdEncoding::binary},
+      {a, 4, false, false, PcdEncoding::binary},
       {a, 5, false, false, PcdEncoding::binary},  // points
       {a, 5, true, false, PcdEncoding::binary},   // intensity
       {a, 5, true, false, PcdEncoding::ascii},    // encoding
@@ -258,8 +276,10 @@ TEST(OpenSequence, HeadersThatChangeAnywhereComeBackAsRead) {
       {b, 5, true, true, PcdEncoding::ascii},     // yaw, in the last bits
       {b, 5, true, true, PcdEncoding::ascii},
       {a, 4, false, false, PcdEncoding::binary},  // back to the first values
-      {z, 4, false, false, PcdEncoding::binary},  {mz, 4, false, false, PcdEncoding::binary},
-      {z, 4, false, false, PcdEncoding::binary},  {z, 4, false, false, PcdEncoding::binary},
+      {z, 4, false, false, PcdEncoding::binary},
+      {mz, 4, false, false, PcdEncoding::binary},
+      {z, 4, false, false, PcdEncoding::binary},
+      {z, 4, false, false, PcdEncoding::binary},
   };
   for (std::size_t i = 0; i < specs.size(); ++i) {
     Scan s = tinyScan(specs[i].vp);
@@ -286,14 +306,16 @@ TEST(OpenSequence, HeadersThatChangeAnywhereComeBackAsRead) {
   EXPECT_EQ(seq.scans.headerRuns(), runs);
   EXPECT_EQ(seq.scans.nameRuns(), 1u);
   std::size_t n = 0;
-  for (const ScanHeader& h : seq.scans) EXPECT_TRUE(sameHeader(h, readScanHeader(dir / scanFileName(n++))));
+  for (const ScanHeader& h : seq.scans)
+    EXPECT_TRUE(sameHeader(h, readScanHeader(dir / scanFileName(n++))));
   EXPECT_EQ(n, specs.size());
 }
 
 // push_back keeps every header, whether the names stay numbered or not.
 TEST(ScanList, PushBackGivesBackEveryHeader) {
-  const std::vector<std::string> names = {"scan_0001.pcd", "scan_0002.pcd", "scan_0003.pcd", "scan_0010.pcd",
-                                          "scan_0005.pcd", "scan_0006.pcd", "other.pcd",     "scan_0011.pcd"};
+  const std::vector<std::string> names = {"scan_0001.pcd", "scan_0002.pcd", "scan_0003.pcd",
+                                          "scan_0010.pcd", "scan_0005.pcd", "scan_0006.pcd",
+                                          "other.pcd",     "scan_0011.pcd"};
   std::vector<ScanHeader> headers;
   for (std::size_t i = 0; i < names.size(); ++i) {
     ScanHeader h;
@@ -325,8 +347,9 @@ TEST(ScanList, PushBackGivesBackEveryHeader) {
 
 // The names constructor and numbered(): the names as given; headers only in index order.
 TEST(ScanList, NamesAndHeadersAsGiven) {
-  const std::vector<std::string> names = {"n_18446744073709551614.pcd", "n_18446744073709551615.pcd",
-                                          "n_00000000000000000000.pcd", "n_00000000000000000001.pcd"};
+  const std::vector<std::string> names = {
+      "n_18446744073709551614.pcd", "n_18446744073709551615.pcd", "n_00000000000000000000.pcd",
+      "n_00000000000000000001.pcd"};
   const ScanList l("/d/", names);
   ASSERT_EQ(l.size(), names.size());
   for (std::size_t i = 0; i < names.size(); ++i) EXPECT_EQ(l.path(i), "/d/" + names[i]);
@@ -334,7 +357,8 @@ TEST(ScanList, NamesAndHeadersAsGiven) {
   EXPECT_THROW(l[0], std::logic_error);
 
   ScanList m = ScanList::numbered("/e/", "x", 3, {4, 5, 9, 1, 2});
-  const std::vector<std::string> expected = {"/e/x004.pcd", "/e/x005.pcd", "/e/x009.pcd", "/e/x001.pcd", "/e/x002.pcd"};
+  const std::vector<std::string> expected = {"/e/x004.pcd", "/e/x005.pcd", "/e/x009.pcd",
+                                             "/e/x001.pcd", "/e/x002.pcd"};
   ASSERT_EQ(m.size(), expected.size());
   for (std::size_t i = 0; i < expected.size(); ++i) EXPECT_EQ(m.path(i), expected[i]);
   EXPECT_EQ(m.nameRuns(), 3u);
@@ -362,7 +386,8 @@ TEST(ScanList, NamesAndHeadersAsGiven) {
 
 TEST(OpenSequence, EmptyDirectoryIsAnError) {
   TempDir dir;
-  EXPECT_NE(std::string(openError(dir.path()).what()).find("holds no .pcd file"), std::string::npos);
+  EXPECT_NE(std::string(openError(dir.path()).what()).find("holds no .pcd file"),
+            std::string::npos);
 }
 
 TEST(OpenSequence, MissingDirectoryIsAnError) {

@@ -9,9 +9,9 @@
 #include <pcl/io/pcd_io.h>
 
 #include "common/errors.hpp"
+#include "import_test_util.hpp"
 #include "io/sequence.hpp"
 #include "io/sequence_writer.hpp"
-#include "import_test_util.hpp"
 #include "test_util.hpp"
 
 namespace lidarcal::io {
@@ -49,7 +49,8 @@ TEST(SequenceWriter, PointsAreRangeTimesCosSinOfTheBearingAndPclReadsThem) {
   pcl::PCLPointCloud2 blob;
   Eigen::Vector4f origin;
   Eigen::Quaternionf orientation;
-  ASSERT_EQ(pcl::io::loadPCDFile((dir / "seq/scan_000000.pcd").string(), blob, origin, orientation), 0);
+  ASSERT_EQ(pcl::io::loadPCDFile((dir / "seq/scan_000000.pcd").string(), blob, origin, orientation),
+            0);
   bool has_intensity = false;
   for (const auto& f : blob.fields) has_intensity = has_intensity || f.name == "intensity";
   EXPECT_TRUE(has_intensity);
@@ -59,7 +60,8 @@ TEST(SequenceWriter, PointsAreRangeTimesCosSinOfTheBearingAndPclReadsThem) {
   for (std::size_t i = 0; i < 8; ++i) {
     SCOPED_TRACE(i);
     EXPECT_NEAR(test::rangeOf(cloud[i].x, cloud[i].y), s.ranges_m[i], 1e-6);
-    EXPECT_NEAR(test::angleDiff(test::bearingOf(cloud[i].x, cloud[i].y), s.angles_rad[i]), 0.0, 1e-6);
+    EXPECT_NEAR(test::angleDiff(test::bearingOf(cloud[i].x, cloud[i].y), s.angles_rad[i]), 0.0,
+                1e-6);
     EXPECT_EQ(cloud[i].z, 0.0f);
     EXPECT_EQ(cloud[i].intensity, s.intensities[i]);
   }
@@ -98,7 +100,8 @@ TEST(SequenceWriter, EveryAndMaxScansPickScansZeroNTwoN) {
     more.push_back(w.add(s));
   }
   // Scans 0, 3, 6 are written; add() says "stop" on the third write (source scan 6).
-  EXPECT_EQ(more, (std::vector<bool>{true, true, true, true, true, true, false, false, false, false, false, false}));
+  EXPECT_EQ(more, (std::vector<bool>{true, true, true, true, true, true, false, false, false, false,
+                                     false, false}));
   const SequenceWriteSummary sum = w.commit("");
   EXPECT_EQ(sum.written, 3u);
   const Sequence seq = openSequence(dir / "seq");

@@ -10,11 +10,13 @@ namespace lidarcal::test {
 
 /// A 6 m square driven `laps` times with turns, 12 landmarks around it, two sensors with the
 /// given noise (reading landmarks from 1 m on) and the given process noise.
-inline ObservationScene squareScene(int laps, const SensorNoise& s0, const SensorNoise& s1, const ProcessNoise& q) {
+inline ObservationScene squareScene(int laps, const SensorNoise& s0, const SensorNoise& s1,
+                                    const ProcessNoise& q) {
   ObservationScene scene;
   scene.name = "test square";
   RangeBearingSensor a, b;
-  a.min_range_m = b.min_range_m = 1.0;  // a real sensor's blind zone: no readings of a pole the robot brushes
+  // a real sensor's blind zone: no readings of a pole the robot brushes
+  a.min_range_m = b.min_range_m = 1.0;
   a.name = "a";
   a.noise = s0;
   b.name = "b";

@@ -6,16 +6,17 @@
 #include <gtest/gtest.h>
 
 #include "noise/fastslam.hpp"
-#include "noise/problem.hpp"
 #include "noise/noise_scenes.hpp"
+#include "noise/problem.hpp"
 #include "simulation/observation_sim.hpp"
 
 namespace lidarcal::noise {
 namespace {
 
 TEST(FastSlam, TracksTheTrueTrajectoryBetterThanDeadReckoning) {
-  const ObservationScene scene = test::squareScene(2, SensorNoise{0.0, 0.01, 0.0, 0.001}, SensorNoise{0.0, 0.02, 0.0, 0.002},
-                                                   ProcessNoise{0.01, 0.01, 0.002});
+  const ObservationScene scene =
+      test::squareScene(2, SensorNoise{0.0, 0.01, 0.0, 0.001}, SensorNoise{0.0, 0.02, 0.0, 0.002},
+                        ProcessNoise{0.01, 0.01, 0.002});
   for (std::uint64_t seed = 1; seed <= 3; ++seed) {
     SCOPED_TRACE(seed);
     const auto sim = simulation::simulateObservations(scene, seed);
@@ -42,11 +43,13 @@ TEST(FastSlam, TracksTheTrueTrajectoryBetterThanDeadReckoning) {
 }
 
 TEST(FastSlam, PredictedErrorsOfNoiseFreeReadingsWithExactOdometryAreZero) {
-  const ObservationScene scene = test::squareScene(1, SensorNoise{0.0, 0.0, 0.0, 0.0}, SensorNoise{0.0, 0.0, 0.0, 0.0}, ProcessNoise{});
+  const ObservationScene scene = test::squareScene(1, SensorNoise{0.0, 0.0, 0.0, 0.0},
+                                                   SensorNoise{0.0, 0.0, 0.0, 0.0}, ProcessNoise{});
   const auto sim = simulation::simulateObservations(scene, 1);
   NoiseSetting assumed = trueNoise(scene);
   for (auto& s : assumed.sensors) s = SensorNoise{0.0, 0.01, 0.0, 0.01};
-  const FastSlamResult r = runFastSlam(makeNoiseProblem(sim.observations, sim.odometry), assumed, FastSlamConfig{}, 1, 1);
+  const FastSlamResult r = runFastSlam(makeNoiseProblem(sim.observations, sim.odometry), assumed,
+                                       FastSlamConfig{}, 1, 1);
   for (const auto& e : r.errors)
     for (std::size_t i = 0; i < e.range_m.size(); ++i) {
       EXPECT_NEAR(e.range_m[i], 0.0, 1e-9);
@@ -55,7 +58,8 @@ TEST(FastSlam, PredictedErrorsOfNoiseFreeReadingsWithExactOdometryAreZero) {
 }
 
 TEST(FastSlam, SkippingInitialisingReadingsDropsOneSamplePerLandmark) {
-  const ObservationScene scene = test::squareScene(1, SensorNoise{0.0, 0.04, 0.0, 0.01}, SensorNoise{0.0, 0.04, 0.0, 0.01}, ProcessNoise{});
+  const ObservationScene scene = test::squareScene(
+      1, SensorNoise{0.0, 0.04, 0.0, 0.01}, SensorNoise{0.0, 0.04, 0.0, 0.01}, ProcessNoise{});
   const auto sim = simulation::simulateObservations(scene, 1);
   const NoiseProblem problem = makeNoiseProblem(sim.observations, sim.odometry);
   FastSlamConfig config;

@@ -7,11 +7,11 @@
 
 #include <gtest/gtest.h>
 
+#include "common/rng.hpp"
 #include "noise/hill.hpp"
 #include "noise/kl.hpp"
-#include "noise/problem.hpp"
 #include "noise/noise_scenes.hpp"
-#include "common/rng.hpp"
+#include "noise/problem.hpp"
 #include "simulation/observation_sim.hpp"
 
 namespace lidarcal::noise {
@@ -67,7 +67,8 @@ class KlObjective : public ::testing::Test {
  protected:
   void SetUp() override {
     const ObservationScene scene =
-        test::squareScene(1, SensorNoise{0.0, 0.04, 0.0, 0.01}, SensorNoise{0.0, 0.09, 0.0, 0.02}, ProcessNoise{0.01, 0.002, 0.001});
+        test::squareScene(1, SensorNoise{0.0, 0.04, 0.0, 0.01}, SensorNoise{0.0, 0.09, 0.0, 0.02},
+                          ProcessNoise{0.01, 0.002, 0.001});
     const auto sim = simulation::simulateObservations(scene, 5);
     problem = makeNoiseProblem(sim.observations, sim.odometry);
     truth = trueNoise(scene);
@@ -96,7 +97,8 @@ TEST_F(KlObjective, WithCommonRandomNumbersIsADeterministicFunctionOfTheParamete
 TEST_F(KlObjective, TermsAreTheClosedFormOfTheAssumedAndPredictedGaussiansInEachVariant) {
   for (const bool faithful : {false, true}) {
     SCOPED_TRACE(faithful);
-    KlObjectiveConfig config = faithful ? KlObjectiveConfig::faithful() : KlObjectiveConfig::sound();
+    KlObjectiveConfig config =
+        faithful ? KlObjectiveConfig::faithful() : KlObjectiveConfig::sound();
     config.filter.particles = 10;
     const KlEvaluation e = evaluateKlObjective(problem, truth, config, 3, 0);
     double total = 0.0;
@@ -104,10 +106,12 @@ TEST_F(KlObjective, TermsAreTheClosedFormOfTheAssumedAndPredictedGaussiansInEach
       const SensorNoise& a = truth.sensors[s];
       // The seed's variant uses the variance value as the standard deviation: N(mean, var^2).
       auto v = [&](double x) { return faithful ? x * x : x; };
-      EXPECT_DOUBLE_EQ(e.kl_range[s], gaussianKl(a.range_mean_m, v(a.range_var_m2), e.predicted_range[s].mean,
-                                                 v(e.predicted_range[s].var)));
-      EXPECT_DOUBLE_EQ(e.kl_bearing[s], gaussianKl(a.bearing_mean_rad, v(a.bearing_var_rad2), e.predicted_bearing[s].mean,
-                                                   v(e.predicted_bearing[s].var)));
+      EXPECT_DOUBLE_EQ(e.kl_range[s],
+                       gaussianKl(a.range_mean_m, v(a.range_var_m2), e.predicted_range[s].mean,
+                                  v(e.predicted_range[s].var)));
+      EXPECT_DOUBLE_EQ(e.kl_bearing[s],
+                       gaussianKl(a.bearing_mean_rad, v(a.bearing_var_rad2),
+                                  e.predicted_bearing[s].mean, v(e.predicted_bearing[s].var)));
       total += e.kl_range[s] + e.kl_bearing[s];
     }
     EXPECT_DOUBLE_EQ(e.total, total);

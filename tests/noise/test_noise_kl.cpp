@@ -29,11 +29,13 @@ double numericKl(double mp, double vp, double mq, double vq) {
 
 TEST(GaussianKl, IsZeroForIdenticalGaussians) {
   for (double m : {-1.0, 0.0, 0.3})
-    for (double v : {1e-4, 0.3, 5.0}) EXPECT_DOUBLE_EQ(gaussianKl(m, v, m, v), 0.0) << m << " " << v;
+    for (double v : {1e-4, 0.3, 5.0})
+      EXPECT_DOUBLE_EQ(gaussianKl(m, v, m, v), 0.0) << m << " " << v;
 }
 
 TEST(GaussianKl, MatchesNumericalIntegration) {
-  const double cases[][4] = {{0.0, 0.3, 0.0, 0.5}, {0.1, 0.4, -0.2, 0.2}, {0.0, 1.0, 2.0, 1.0}, {1.0, 0.01, 1.1, 0.09}};
+  const double cases[][4] = {
+      {0.0, 0.3, 0.0, 0.5}, {0.1, 0.4, -0.2, 0.2}, {0.0, 1.0, 2.0, 1.0}, {1.0, 0.01, 1.1, 0.09}};
   for (const auto& c : cases) {
     SCOPED_TRACE(testing::Message() << c[0] << " " << c[1] << " " << c[2] << " " << c[3]);
     EXPECT_NEAR(gaussianKl(c[0], c[1], c[2], c[3]), numericKl(c[0], c[1], c[2], c[3]), 1e-6);

@@ -4,13 +4,13 @@
 #include <cmath>
 #include <vector>
 
-#include <Eigen/Dense>
 #include <gtest/gtest.h>
+#include <Eigen/Dense>
 
-#include "noise/ml.hpp"
-#include "noise/problem.hpp"
-#include "noise/noise_scenes.hpp"
 #include "common/errors.hpp"
+#include "noise/ml.hpp"
+#include "noise/noise_scenes.hpp"
+#include "noise/problem.hpp"
 #include "simulation/observation_sim.hpp"
 
 namespace lidarcal::noise {
@@ -37,7 +37,8 @@ struct DenseModel {
   std::vector<int> group;
 };
 
-DenseModel denseModel(const NoiseProblem& problem, MlState st, const std::vector<double>& variances) {
+DenseModel denseModel(const NoiseProblem& problem, MlState st,
+                      const std::vector<double>& variances) {
   DenseModel d;
   const std::vector<double> r0 = residualsAt(problem, st, &d.group);
   std::vector<double*> x = unknowns(st);
@@ -59,8 +60,9 @@ DenseModel denseModel(const NoiseProblem& problem, MlState st, const std::vector
 // One lap of the small square: two sensors (one biased), process noise in all three
 // components; the dense oracles evaluate at these variances (sensors, then process).
 NoiseProblem oneLapProblem(std::uint64_t seed) {
-  const ObservationScene scene = test::squareScene(1, SensorNoise{0.1, 0.04, 0.02, 0.01}, SensorNoise{0.0, 0.09, 0.0, 0.02},
-                                                   ProcessNoise{0.01, 0.004, 0.001});
+  const ObservationScene scene =
+      test::squareScene(1, SensorNoise{0.1, 0.04, 0.02, 0.01}, SensorNoise{0.0, 0.09, 0.0, 0.02},
+                        ProcessNoise{0.01, 0.004, 0.001});
   const auto sim = simulation::simulateObservations(scene, seed);
   return makeNoiseProblem(sim.observations, sim.odometry);
 }
@@ -108,7 +110,8 @@ TEST(NoiseMlInformation, MatchesTheDenseRemlInformationInEveryTermWithAProcessGr
   const Eigen::Index G = 7;
   Eigen::MatrixXd expected = Eigen::MatrixXd::Zero(G, G);
   for (Eigen::Index i = 0; i < Pm.rows(); ++i)
-    for (Eigen::Index j = 0; j < Pm.cols(); ++j) expected(d.group[i], d.group[j]) += 0.5 * Pm(i, j) * Pm(i, j);
+    for (Eigen::Index j = 0; j < Pm.cols(); ++j)
+      expected(d.group[i], d.group[j]) += 0.5 * Pm(i, j) * Pm(i, j);
 
   const Eigen::MatrixXd got = groupInformation(problem, st, variances, true);
   ASSERT_EQ(got.rows(), G);
@@ -116,7 +119,8 @@ TEST(NoiseMlInformation, MatchesTheDenseRemlInformationInEveryTermWithAProcessGr
     for (Eigen::Index h = 0; h < G; ++h) {
       SCOPED_TRACE(::testing::Message() << g << "," << h);
       if (g >= 4 || h >= 4) {
-        EXPECT_NEAR(got(g, h), expected(g, h), 1e-4 * std::abs(expected(g, h)));  // computed in full
+        // computed in full
+        EXPECT_NEAR(got(g, h), expected(g, h), 1e-4 * std::abs(expected(g, h)));
       } else if (g == h) {
         // Correlations between readings are left out: a lower bound, close in this small scene.
         EXPECT_LE(got(g, h), expected(g, h) * (1.0 + 1e-9));
@@ -126,7 +130,9 @@ TEST(NoiseMlInformation, MatchesTheDenseRemlInformationInEveryTermWithAProcessGr
   // What the information is for: the standard errors of the process variances.
   const Eigen::MatrixXd cov_expected = expected.inverse(), cov_got = got.inverse();
   for (Eigen::Index g = 4; g < G; ++g)
-    EXPECT_NEAR(std::sqrt(cov_got(g, g)), std::sqrt(cov_expected(g, g)), 0.02 * std::sqrt(cov_expected(g, g))) << g;
+    EXPECT_NEAR(std::sqrt(cov_got(g, g)), std::sqrt(cov_expected(g, g)),
+                0.02 * std::sqrt(cov_expected(g, g)))
+        << g;
 }
 
 TEST(NoiseMl, RecoversVariancesAndBiasesWithinFourStandardErrors) {
@@ -137,25 +143,30 @@ TEST(NoiseMl, RecoversVariancesAndBiasesWithinFourStandardErrors) {
   for (std::uint64_t seed = 1; seed <= 6; ++seed) {
     SCOPED_TRACE(seed);
     const auto sim = simulation::simulateObservations(scene, seed);
-    const MlNoiseResult r = estimateNoiseMl(makeNoiseProblem(sim.observations, sim.odometry), MlNoiseConfig{});
+    const MlNoiseResult r =
+        estimateNoiseMl(makeNoiseProblem(sim.observations, sim.odometry), MlNoiseConfig{});
     ASSERT_TRUE(r.converged) << r.message;
-    const double truth[] = {s0.range_var_m2, s0.bearing_var_rad2, s1.range_var_m2, s1.bearing_var_rad2,
-                            q.dx_var_m2,     q.dy_var_m2,         q.dtheta_var_rad2};
+    const double truth[] = {s0.range_var_m2,     s0.bearing_var_rad2, s1.range_var_m2,
+                            s1.bearing_var_rad2, q.dx_var_m2,         q.dy_var_m2,
+                            q.dtheta_var_rad2};
     for (std::size_t g = 0; g < 7; ++g) {
       SCOPED_TRACE(r.groups[g].name);
       // Tolerance: 4 of the estimator's standard errors, sqrt(2 / sum r_ii^2) of the true variance.
       const double se = r.groups[g].standard_error * truth[g] / r.groups[g].variance;
       EXPECT_NEAR(r.groups[g].variance, truth[g], 4.0 * se);
     }
-    const double bias[] = {s0.range_mean_m, s0.bearing_mean_rad, s1.range_mean_m, s1.bearing_mean_rad};
+    const double bias[] = {s0.range_mean_m, s0.bearing_mean_rad, s1.range_mean_m,
+                           s1.bearing_mean_rad};
     const double est[] = {r.noise.sensors[0].range_mean_m, r.noise.sensors[0].bearing_mean_rad,
                           r.noise.sensors[1].range_mean_m, r.noise.sensors[1].bearing_mean_rad};
-    for (std::size_t b = 0; b < 4; ++b) EXPECT_NEAR(est[b], bias[b], 4.0 * r.bias_standard_error[b]) << b;
+    for (std::size_t b = 0; b < 4; ++b)
+      EXPECT_NEAR(est[b], bias[b], 4.0 * r.bias_standard_error[b]) << b;
   }
 }
 
 TEST(NoiseMl, WithTheProcessNoiseGivenEstimatesTheSensorsAndKeepsTheProcessAsGiven) {
-  // Sharma 2020's experiments tell the estimator the true process noise; only the sensors are unknown.
+  // Sharma 2020's experiments tell the estimator the true process noise; only the sensors are
+  // unknown.
   const SensorNoise s0{0.0, 0.3, 0.0, 0.4}, s1{0.0, 0.5, 0.0, 0.3};  // Sharma 2020 experiment 3
   const ProcessNoise q{0.01, 0.002, 0.001};
   const ObservationScene scene = test::squareScene(4, s0, s1, q);
@@ -165,11 +176,13 @@ TEST(NoiseMl, WithTheProcessNoiseGivenEstimatesTheSensorsAndKeepsTheProcessAsGiv
     MlNoiseConfig config;
     config.estimate_process = false;
     config.initial.process = q;  // the sensors start from the default (1), not from the truth
-    const MlNoiseResult r = estimateNoiseMl(makeNoiseProblem(sim.observations, sim.odometry), config);
+    const MlNoiseResult r =
+        estimateNoiseMl(makeNoiseProblem(sim.observations, sim.odometry), config);
     ASSERT_TRUE(r.converged) << r.message;
     const double truth[] = {0.3, 0.4, 0.5, 0.3};
     for (std::size_t g = 0; g < 4; ++g)
-      EXPECT_NEAR(r.groups[g].variance, truth[g], 4.0 * r.groups[g].standard_error * truth[g] / r.groups[g].variance)
+      EXPECT_NEAR(r.groups[g].variance, truth[g],
+                  4.0 * r.groups[g].standard_error * truth[g] / r.groups[g].variance)
           << r.groups[g].name;
     EXPECT_EQ(r.noise.process.dx_var_m2, q.dx_var_m2);
     EXPECT_EQ(r.noise.process.dy_var_m2, q.dy_var_m2);
@@ -178,8 +191,9 @@ TEST(NoiseMl, WithTheProcessNoiseGivenEstimatesTheSensorsAndKeepsTheProcessAsGiv
 }
 
 TEST(NoiseMl, BeyondTheInformationCapTheStandardErrorsAreDiagonalAndTheEstimateIsUnchanged) {
-  const ObservationScene scene = test::squareScene(2, SensorNoise{0.0, 0.09, 0.0, 0.02}, SensorNoise{0.0, 0.04, 0.0, 0.01},
-                                                   ProcessNoise{0.01, 0.004, 0.001});
+  const ObservationScene scene =
+      test::squareScene(2, SensorNoise{0.0, 0.09, 0.0, 0.02}, SensorNoise{0.0, 0.04, 0.0, 0.01},
+                        ProcessNoise{0.01, 0.004, 0.001});
   const auto sim = simulation::simulateObservations(scene, 5);
   const NoiseProblem problem = makeNoiseProblem(sim.observations, sim.odometry);
   const MlNoiseResult full = estimateNoiseMl(problem, MlNoiseConfig{});
@@ -198,12 +212,17 @@ TEST(NoiseMl, ZeroProcessNoiseIsEstimatedNearZeroAndSensorVariancesStayUnbiased)
   const SensorNoise s0{0.0, 0.3, 0.0, 0.4}, s1{0.0, 0.5, 0.0, 0.6};  // Sharma 2020 experiment 2
   const ObservationScene scene = test::squareScene(4, s0, s1, ProcessNoise{});
   const auto sim = simulation::simulateObservations(scene, 11);
-  const MlNoiseResult r = estimateNoiseMl(makeNoiseProblem(sim.observations, sim.odometry), MlNoiseConfig{});
+  const MlNoiseResult r =
+      estimateNoiseMl(makeNoiseProblem(sim.observations, sim.odometry), MlNoiseConfig{});
   ASSERT_TRUE(r.converged) << r.message;
-  for (int g = 4; g < 7; ++g) EXPECT_LT(r.groups[static_cast<std::size_t>(g)].variance, 1e-4) << r.groups[static_cast<std::size_t>(g)].name;
+  for (int g = 4; g < 7; ++g)
+    EXPECT_LT(r.groups[static_cast<std::size_t>(g)].variance, 1e-4)
+        << r.groups[static_cast<std::size_t>(g)].name;
   const double truth[] = {0.3, 0.4, 0.5, 0.6};
   for (std::size_t g = 0; g < 4; ++g)
-    EXPECT_NEAR(r.groups[g].variance, truth[g], 4.0 * r.groups[g].standard_error * truth[g] / r.groups[g].variance) << g;
+    EXPECT_NEAR(r.groups[g].variance, truth[g],
+                4.0 * r.groups[g].standard_error * truth[g] / r.groups[g].variance)
+        << g;
 }
 
 TEST(NoiseMl, BiasesWithoutTranslationAreADataError) {
@@ -217,7 +236,8 @@ TEST(NoiseProblem, RejectsStopsOutsideTheOdometryAndSensorGapsAndSkipsUnassociat
   EXPECT_THROW(makeNoiseProblem({{2, 0, 1, 2.0, 0.1}}, odo), InputError);
   EXPECT_THROW(makeNoiseProblem({{0, 1, 1, 2.0, 0.1}}, odo), DataError);  // sensor 0 has nothing
   EXPECT_THROW(makeNoiseProblem({{0, 0, -1, 2.0, 0.1}}, odo), DataError);
-  const NoiseProblem p = makeNoiseProblem({{1, 0, 7, 2.0, 0.1}, {0, 0, -1, 1.0, 0.0}, {0, 0, 3, 2.0, 0.2}}, odo);
+  const NoiseProblem p =
+      makeNoiseProblem({{1, 0, 7, 2.0, 0.1}, {0, 0, -1, 1.0, 0.0}, {0, 0, 3, 2.0, 0.2}}, odo);
   EXPECT_EQ(p.skipped_unassociated, 1u);
   EXPECT_EQ(p.landmarks, 2);
   ASSERT_EQ(p.observations.size(), 2u);

@@ -13,7 +13,9 @@
 
 namespace lidarcal::test {
 
-inline std::string scenePath(const char* name) { return (sourceDir() / "data/scenes" / name).string(); }
+inline std::string scenePath(const char* name) {
+  return (sourceDir() / "data/scenes" / name).string();
+}
 
 /// Shared fixtures, built once: FIX/bin (binary, 4 stops x 2 scans: enough to calibrate, so that
 /// output failures are reached), FIX/ascii (the same in ASCII), FIX/model.json (calibrated on
@@ -21,25 +23,28 @@ inline std::string scenePath(const char* name) { return (sourceDir() / "data/sce
 inline const fs::path& fixtures() {
   static const fs::path dir = cachedFixture("bad-input", [](const fs::path& d) {
     const std::string scene = scenePath("paper_field.json");
-    for (const auto& [name, flags] : {std::pair<const char*, const char*>{"bin", ""}, {"ascii", " --ascii"}}) {
+    for (const auto& [name, flags] :
+         {std::pair<const char*, const char*>{"bin", ""}, {"ascii", " --ascii"}}) {
       const auto r = runCli("simulate -q --scene " + scene + " --out " + (d / name).string() +
                             " --stops 4 --scans-per-stop 2 --seed 3" + flags);
       EXPECT_EQ(r.exit_code, 0) << r.err;
     }
-    auto r = runCli("simulate -q --scene " + scene + " --out " + (d / "cal").string() + " --scans-per-stop 2 --seed 4");
+    auto r = runCli("simulate -q --scene " + scene + " --out " + (d / "cal").string() +
+                    " --scans-per-stop 2 --seed 4");
     EXPECT_EQ(r.exit_code, 0) << r.err;
-    r = runCli("calibrate -q " + (d / "cal/scans").string() + " --out " + (d / "model.json").string());
+    r = runCli("calibrate -q " + (d / "cal/scans").string() + " --out " +
+               (d / "model.json").string());
     EXPECT_EQ(r.exit_code, 0) << r.err;
   });
   return dir;
 }
 
-
 inline void copySequence(const Ws& w) { copyTree(w.fix / "bin/scans", w.seq()); }
 inline void copyAsciiSequence(const Ws& w) { copyTree(w.fix / "ascii/scans", w.seq()); }
 
 /// Copies the binary sequence and edits one scan.
-inline std::function<void(const Ws&)> withScan(const char* file, std::function<void(std::string&)> edit) {
+inline std::function<void(const Ws&)> withScan(const char* file,
+                                               std::function<void(std::string&)> edit) {
   return [file, edit](const Ws& w) {
     copySequence(w);
     editFile(w.seq() / file, edit);
@@ -61,24 +66,29 @@ inline std::function<void(const Ws&)> simulated(std::string scene_json, std::str
   return [scene_json, flags](const Ws& w) {
     fs::create_directories(w.in);
     writeFile(w.in / "scene.json", scene_json);
-    const auto r = runCli("simulate -q --scene " + (w.in / "scene.json").string() + " --out " + (w.in / "sim").string() + " " + flags);
+    const auto r = runCli("simulate -q --scene " + (w.in / "scene.json").string() + " --out " +
+                          (w.in / "sim").string() + " " + flags);
     ASSERT_EQ(r.exit_code, 0) << r.err;
   };
 }
 
 /// The paper's sensor and walls with the given landmarks and path.
-inline std::string scene(const std::string& landmarks, const std::string& path, const std::string& sensor_extra = "") {
+inline std::string scene(const std::string& landmarks, const std::string& path,
+                         const std::string& sensor_extra = "") {
   return R"({"sensor": {"beams": 360, "range_min_m": 0.2, "range_max_m": 6.0, "bias_alpha": [0.0525, 0.8838, 0.0584],
-      "noise": {"kind": "squared", "sigma_e": 0.0019176})" + sensor_extra + R"(},
-    "path": )" + path + R"(, "landmarks": [)" + landmarks + R"(],
+      "noise": {"kind": "squared", "sigma_e": 0.0019176})" +
+         sensor_extra + R"(},
+    "path": )" +
+         path + R"(, "landmarks": [)" + landmarks + R"(],
     "walls": [{"x0_m": -1.5, "y0_m": -3.8, "x1_m": 5.0, "y1_m": -3.8}, {"x0_m": 5.0, "y0_m": -3.8, "x1_m": 5.0, "y1_m": 4.5},
               {"x0_m": 5.0, "y0_m": 4.5, "x1_m": -1.5, "y1_m": 4.5}, {"x0_m": -1.5, "y0_m": 4.5, "x1_m": -1.5, "y1_m": -3.8}]})";
 }
-inline const char* kPaperPoles = R"({"x_m": 1.5, "y_m": 0.75, "radius_m": 0.12}, {"x_m": 0.3, "y_m": 2.2, "radius_m": 0.12},
+inline const char* kPaperPoles =
+    R"({"x_m": 1.5, "y_m": 0.75, "radius_m": 0.12}, {"x_m": 0.3, "y_m": 2.2, "radius_m": 0.12},
     {"x_m": 2.4, "y_m": 3.4, "radius_m": 0.12}, {"x_m": 3.9, "y_m": -1.3, "radius_m": 0.12}, {"x_m": 0.9, "y_m": -2.8, "radius_m": 0.12})";
 inline std::string path(int stops, int scans = 2) {
-  return R"({"step_m": 0.3, "sigma_s_m": 0.02, "sigma_psi_deg": 0.5, "stops": )" + std::to_string(stops) +
-         R"(, "scans_per_stop": )" + std::to_string(scans) + "}";
+  return R"({"step_m": 0.3, "sigma_s_m": 0.02, "sigma_psi_deg": 0.5, "stops": )" +
+         std::to_string(stops) + R"(, "scans_per_stop": )" + std::to_string(scans) + "}";
 }
 
 inline std::string flaserLine(int n, double r) {

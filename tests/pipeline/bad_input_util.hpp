@@ -40,10 +40,12 @@ namespace lidarcal::test {
 /// runs each test case in a process of its own): kept in the build tree, keyed by the `lidarcal`
 /// binary that made it (rebuilt when lidarcal changes), built under a temporary name and renamed
 /// into place, so that two processes building at once do not disturb each other.
-inline fs::path cachedFixture(const std::string& name, const std::function<void(const fs::path&)>& build) {
+inline fs::path cachedFixture(const std::string& name,
+                              const std::function<void(const fs::path&)>& build) {
   const fs::path exe = LIDARCAL_EXE;
-  const auto stamp = static_cast<unsigned long long>(fs::last_write_time(exe).time_since_epoch().count()) ^
-                     static_cast<unsigned long long>(fs::file_size(exe));
+  const auto stamp =
+      static_cast<unsigned long long>(fs::last_write_time(exe).time_since_epoch().count()) ^
+      static_cast<unsigned long long>(fs::file_size(exe));
   const fs::path dir = fs::path(LIDARCAL_TEST_FIXTURE_DIR) / (name + "-" + std::to_string(stamp));
   if (fs::exists(dir)) return dir;
   const fs::path tmp = dir.string() + ".tmp-" + std::to_string(::getpid());
@@ -62,18 +64,18 @@ inline fs::path cachedFixture(const std::string& name, const std::function<void(
 
 /// Where one case runs.
 struct Ws {
-  fs::path in;    ///< inputs (snapshotted before and after)
-  fs::path out;   ///< the output path handed to the command ({OUT})
-  fs::path fix;   ///< shared fixtures ({FIX})
+  fs::path in;   ///< inputs (snapshotted before and after)
+  fs::path out;  ///< the output path handed to the command ({OUT})
+  fs::path fix;  ///< shared fixtures ({FIX})
   fs::path seq() const { return in / "scans"; }
 };
 
 struct BadInputCase {
-  std::string name;                              ///< test name (and docs/ERRORS.md row)
-  std::string args;                              ///< command line after `lidarcal`, with placeholders
-  std::function<void(const Ws&)> prepare;        ///< builds the inputs under Ws::in
-  int exit_code = 2;                             ///< 2 bad input, 3 data cannot support the result
-  std::vector<std::string> message;              ///< parts the message must contain (file, item, problem)
+  std::string name;                        ///< test name (and docs/ERRORS.md row)
+  std::string args;                        ///< command line after `lidarcal`, with placeholders
+  std::function<void(const Ws&)> prepare;  ///< builds the inputs under Ws::in
+  int exit_code = 2;                       ///< 2 bad input, 3 data cannot support the result
+  std::vector<std::string> message;        ///< parts the message must contain (file, item, problem)
   /// Runs the command under this shell prefix (e.g. a file-size limit); empty = none.
   std::string shell_prefix;
   /// Returns why the case cannot run here (empty: it runs).
@@ -85,17 +87,18 @@ struct BadInputCase {
 inline void PrintTo(const BadInputCase& c, std::ostream* os) { *os << c.name; }
 
 inline std::string replaceAll(std::string s, const std::string& from, const std::string& to) {
-  for (std::size_t at = s.find(from); at != std::string::npos; at = s.find(from, at + to.size())) s.replace(at, from.size(), to);
+  for (std::size_t at = s.find(from); at != std::string::npos; at = s.find(from, at + to.size()))
+    s.replace(at, from.size(), to);
   return s;
 }
-
 
 /// Every path under `dir` (files, directories, hidden entries), relative.
 inline std::set<std::string> listing(const fs::path& dir) {
   std::set<std::string> names;
   std::error_code ec;
   if (!fs::exists(dir, ec)) return names;
-  for (auto it = fs::recursive_directory_iterator(dir, ec); it != fs::recursive_directory_iterator(); it.increment(ec))
+  for (auto it = fs::recursive_directory_iterator(dir, ec);
+       it != fs::recursive_directory_iterator(); it.increment(ec))
     names.insert(fs::relative(it->path(), dir).string());
   return names;
 }
@@ -125,7 +128,8 @@ inline std::size_t firstReturn(const std::string& bytes, std::size_t point_bytes
 
 /// Sets float `field` (0 x, 1 y, 2 z) of point `i` of a binary PCD with 12-byte points.
 inline void setFloat(std::string& bytes, std::size_t i, int field, float value) {
-  std::memcpy(bytes.data() + pcdDataOffset(bytes) + i * 12 + static_cast<std::size_t>(field) * 4, &value, 4);
+  std::memcpy(bytes.data() + pcdDataOffset(bytes) + i * 12 + static_cast<std::size_t>(field) * 4,
+              &value, 4);
 }
 
 /// Applies `edit` to a file's bytes.

@@ -14,7 +14,9 @@
 
 namespace lidarcal {
 
-inline nlohmann::json json(const std::filesystem::path& p) { return nlohmann::json::parse(test::readFile(p)); }
+inline nlohmann::json json(const std::filesystem::path& p) {
+  return nlohmann::json::parse(test::readFile(p));
+}
 
 /// The paper field (data/scenes/paper_field.json) without heading errors, modified by `edit`.
 inline std::filesystem::path writeScene(const std::filesystem::path& dir, const std::string& name,
@@ -29,22 +31,22 @@ inline std::filesystem::path writeScene(const std::filesystem::path& dir, const 
 
 inline void simulate(const std::filesystem::path& scene, const std::filesystem::path& out, int seed,
                      const std::string& extra = "") {
-  const auto r = test::runCli("simulate -q --scene " + scene.string() + " --out " + out.string() + " --seed " +
-                              std::to_string(seed) + " " + extra);
+  const auto r = test::runCli("simulate -q --scene " + scene.string() + " --out " + out.string() +
+                              " --seed " + std::to_string(seed) + " " + extra);
   ASSERT_EQ(r.exit_code, 0) << r.err;
 }
 
 /// A thin-pole drive (data/scenes/driving_small_poles.json) with `edit` applied to its scene,
 /// simulated with `seed` into dir/drive and diagnosed with `replicas` replicas into dir/d.
 inline test::CliResult diagnoseThinPoleDrive(const std::filesystem::path& dir,
-                                             const std::function<void(nlohmann::json&)>& edit, int seed,
-                                             int replicas = 5) {
+                                             const std::function<void(nlohmann::json&)>& edit,
+                                             int seed, int replicas = 5) {
   nlohmann::json s = json(test::sourceDir() / "data/scenes/driving_small_poles.json");
   edit(s);
   test::writeFile(dir / "scene.json", s.dump(1));
   simulate(dir / "scene.json", dir / "drive", seed);
-  return test::runCli("diagnose -q " + (dir / "drive/scans").string() + " --replicas " + std::to_string(replicas) +
-                      " --out " + (dir / "d").string());
+  return test::runCli("diagnose -q " + (dir / "drive/scans").string() + " --replicas " +
+                      std::to_string(replicas) + " --out " + (dir / "d").string());
 }
 
 /// Twice the log-likelihood ratio of candidate c's fit on all the data against the baseline's.
@@ -54,7 +56,8 @@ inline double likelihoodRatio(const nlohmann::json& c) {
 
 /// The terms in the mean of the readings or the path: their fits nest the baseline's.
 inline bool meanTerm(const nlohmann::json& c) {
-  for (const char* e : {"incidence_bias", "landmark_bias", "range_drift", "angle_offset", "odometry_scale"})
+  for (const char* e :
+       {"incidence_bias", "landmark_bias", "range_drift", "angle_offset", "odometry_scale"})
     if (c["effect"] == e) return true;
   return false;
 }

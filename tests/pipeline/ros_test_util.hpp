@@ -34,7 +34,8 @@ inline CalibrationModel polynomialModel(const std::string& name, int beams) {
 }
 
 /// A rig model of two 100-beam lidars, "front" on `front_topic` (polynomialModel) and "back" on
-/// `back_topic` (f(d) = -0.02 + 1.01 d): each topic corrected by its own block differs from the other's.
+/// `back_topic` (f(d) = -0.02 + 1.01 d): each topic corrected by its own block differs from the
+/// other's.
 inline io::RigModel twoLidarModel(const std::string& front_topic, const std::string& back_topic) {
   io::RigModel rig;
   rig.frame = "relative";

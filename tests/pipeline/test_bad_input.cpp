@@ -44,15 +44,17 @@ void writableInputs(const Ws& w) {
   fs::copy_file(scenePath("paper_field.json"), w.in / "scene.json");
   std::string csv = "scan,x_m,y_m,yaw_rad,angle_rad,range_m\n";
   for (int s = 0; s < 40; ++s)
-    for (int b = 0; b < 360; ++b) csv += std::to_string(s) + ",0,0,0," + std::to_string(b * 0.0174533) + ",2.5\n";
+    for (int b = 0; b < 360; ++b)
+      csv += std::to_string(s) + ",0,0,0," + std::to_string(b * 0.0174533) + ",2.5\n";
   writeFile(w.in / "scans.csv", csv);
   writeFile(w.in / "file.txt", "a file where a directory is expected\n");
 }
 
 std::vector<BadInputCase> cases() {
   std::vector<BadInputCase> c;
-  const auto forEach = [&](const auto& commands, const std::string& name, std::function<void(const Ws&)> prepare,
-                           int code, std::vector<std::string> message) {
+  const auto forEach = [&](const auto& commands, const std::string& name,
+                           std::function<void(const Ws&)> prepare, int code,
+                           std::vector<std::string> message) {
     for (const auto& [cmd, args] : commands) {
       BadInputCase k;
       k.name = name + "_" + cmd;
@@ -65,8 +67,9 @@ std::vector<BadInputCase> cases() {
   };
 
   // ---- scan files (every command that reads a sequence)
-  forEach(kSequenceCommands, "pcd_truncated", withScan("scan_000001.pcd", [](std::string& b) { b.resize(b.size() - 100); }),
-          2, {"scan_000001.pcd", "DATA", "truncated"});
+  forEach(kSequenceCommands, "pcd_truncated",
+          withScan("scan_000001.pcd", [](std::string& b) { b.resize(b.size() - 100); }), 2,
+          {"scan_000001.pcd", "DATA", "truncated"});
   forEach(kSequenceCommands, "pcd_truncated_ascii",
           [](const Ws& w) {
             copyAsciiSequence(w);
@@ -78,41 +81,57 @@ std::vector<BadInputCase> cases() {
             copySequence(w);
             std::string junk;
             std::uint32_t x = 12345;
-            for (int i = 0; i < 5000; ++i) junk += static_cast<char>((x = x * 1103515245u + 12345u) >> 24);
+            for (int i = 0; i < 5000; ++i)
+              junk += static_cast<char>((x = x * 1103515245u + 12345u) >> 24);
             writeFile(w.seq() / "scan_000003.pcd", junk);
           },
           2, {"scan_000003.pcd", "header", "not a PCD file"});
   forEach(kSequenceCommands, "pcd_fields_without_xy",
-          withScan("scan_000000.pcd", [](std::string& b) { setHeaderLine(b, "FIELDS", "FIELDS a b z"); }), 2,
-          {"scan_000000.pcd", "FIELDS", "no 'x' field"});
-  forEach(kSequenceCommands, "pcd_points_not_width_x_height",
-          withScan("scan_000000.pcd", [](std::string& b) { setHeaderLine(b, "POINTS", "POINTS 361"); }), 2,
-          {"scan_000000.pcd", "POINTS", "differs from WIDTH x HEIGHT"});
+          withScan("scan_000000.pcd",
+                   [](std::string& b) { setHeaderLine(b, "FIELDS", "FIELDS a b z"); }),
+          2, {"scan_000000.pcd", "FIELDS", "no 'x' field"});
+  forEach(
+      kSequenceCommands, "pcd_points_not_width_x_height",
+      withScan("scan_000000.pcd", [](std::string& b) { setHeaderLine(b, "POINTS", "POINTS 361"); }),
+      2, {"scan_000000.pcd", "POINTS", "differs from WIDTH x HEIGHT"});
   forEach(kSequenceCommands, "pcd_nan_in_one_coordinate",
-          withScan("scan_000001.pcd", [](std::string& b) { setFloat(b, firstReturn(b), 1, std::nanf("")); }), 2,
-          {"scan_000001.pcd", "point ", "only one of x, y is NaN", "without return must have x and y NaN"});
+          withScan("scan_000001.pcd",
+                   [](std::string& b) { setFloat(b, firstReturn(b), 1, std::nanf("")); }),
+          2,
+          {"scan_000001.pcd", "point ", "only one of x, y is NaN",
+           "without return must have x and y NaN"});
   forEach(kSequenceCommands, "pcd_infinite_coordinate",
           withScan("scan_000001.pcd",
-                   [](std::string& b) { setFloat(b, firstReturn(b), 0, std::numeric_limits<float>::infinity()); }),
+                   [](std::string& b) {
+                     setFloat(b, firstReturn(b), 0, std::numeric_limits<float>::infinity());
+                   }),
           2, {"scan_000001.pcd", "point ", "infinite", "write NaN"});
-  forEach(kSequenceCommands, "pcd_absurd_range",
-          withScan("scan_000002.pcd", [](std::string& b) { setFloat(b, firstReturn(b), 0, 1e30f); }), 2,
-          {"scan_000002.pcd", "point ", "beyond 100 km", "units"});
+  forEach(
+      kSequenceCommands, "pcd_absurd_range",
+      withScan("scan_000002.pcd", [](std::string& b) { setFloat(b, firstReturn(b), 0, 1e30f); }), 2,
+      {"scan_000002.pcd", "point ", "beyond 100 km", "units"});
   forEach(kSequenceCommands, "viewpoint_missing",
           withScan("scan_000000.pcd", [](std::string& b) { setHeaderLine(b, "VIEWPOINT", ""); }), 2,
           {"scan_000000.pcd", "VIEWPOINT", "missing", "VIEWPOINT tx ty 0 qw 0 0 qz"});
   forEach(kSequenceCommands, "viewpoint_six_numbers",
-          withScan("scan_000000.pcd", [](std::string& b) { setHeaderLine(b, "VIEWPOINT", "VIEWPOINT 0 0 0 1 0 0"); }), 2,
-          {"scan_000000.pcd", "VIEWPOINT", "expected 7 numbers"});
-  forEach(kSequenceCommands, "viewpoint_not_a_number",
-          withScan("scan_000000.pcd", [](std::string& b) { setHeaderLine(b, "VIEWPOINT", "VIEWPOINT 0 0 0 one 0 0 0"); }),
-          2, {"scan_000000.pcd", "VIEWPOINT", "'one' is not a finite number"});
-  forEach(kSequenceCommands, "viewpoint_not_unit",
-          withScan("scan_000000.pcd", [](std::string& b) { setHeaderLine(b, "VIEWPOINT", "VIEWPOINT 0 0 0 2 0 0 0"); }), 2,
-          {"scan_000000.pcd", "VIEWPOINT", "not of unit length"});
+          withScan("scan_000000.pcd",
+                   [](std::string& b) { setHeaderLine(b, "VIEWPOINT", "VIEWPOINT 0 0 0 1 0 0"); }),
+          2, {"scan_000000.pcd", "VIEWPOINT", "expected 7 numbers"});
+  forEach(
+      kSequenceCommands, "viewpoint_not_a_number",
+      withScan("scan_000000.pcd",
+               [](std::string& b) { setHeaderLine(b, "VIEWPOINT", "VIEWPOINT 0 0 0 one 0 0 0"); }),
+      2, {"scan_000000.pcd", "VIEWPOINT", "'one' is not a finite number"});
+  forEach(
+      kSequenceCommands, "viewpoint_not_unit",
+      withScan("scan_000000.pcd",
+               [](std::string& b) { setHeaderLine(b, "VIEWPOINT", "VIEWPOINT 0 0 0 2 0 0 0"); }),
+      2, {"scan_000000.pcd", "VIEWPOINT", "not of unit length"});
   forEach(kSequenceCommands, "viewpoint_roll",
           withScan("scan_000000.pcd",
-                   [](std::string& b) { setHeaderLine(b, "VIEWPOINT", "VIEWPOINT 0 0 0 0.7071068 0.7071068 0 0"); }),
+                   [](std::string& b) {
+                     setHeaderLine(b, "VIEWPOINT", "VIEWPOINT 0 0 0 0.7071068 0.7071068 0 0");
+                   }),
           2, {"scan_000000.pcd", "VIEWPOINT", "roll/pitch"});
 
   // ---- the sequence directory
@@ -122,18 +141,23 @@ std::vector<BadInputCase> cases() {
             fs::copy_file(w.fix / "bin/scans/sequence.json", w.seq() / "sequence.json");
           },
           2, {"scans", "holds no .pcd file", "lidarcal simulate"});
-  forEach(kSequenceCommands, "sequence_missing", [](const Ws& w) { fs::create_directories(w.in); }, 2,
-          {"scans", "does not exist", "check the path"});
+  forEach(kSequenceCommands, "sequence_missing", [](const Ws& w) { fs::create_directories(w.in); },
+          2, {"scans", "does not exist", "check the path"});
   forEach(kSequenceCommands, "sequence_mixes_sensors",
           [](const Ws& w) {
             copySequence(w);
             // A 180-beam scan of another sensor in a sequence whose sequence.json says 360 beams.
-            writeFile(w.in / "half.json", replaceAll(readFile(scenePath("paper_field.json")), "\"beams\": 360", "\"beams\": 180"));
-            ASSERT_EQ(runCli("simulate -q --scene " + (w.in / "half.json").string() + " --out " + (w.in / "other").string() +
-                             " --stops 1 --scans-per-stop 1").exit_code, 0);
+            writeFile(w.in / "half.json", replaceAll(readFile(scenePath("paper_field.json")),
+                                                     "\"beams\": 360", "\"beams\": 180"));
+            ASSERT_EQ(runCli("simulate -q --scene " + (w.in / "half.json").string() + " --out " +
+                             (w.in / "other").string() + " --stops 1 --scans-per-stop 1")
+                          .exit_code,
+                      0);
             fs::copy_file(w.in / "other/scans/scan_000000.pcd", w.seq() / "scan_000008.pcd");
           },
-          2, {"scan_000008.pcd", "POINTS", "has 180 points", "beams = 360", "one sensor's scans per sequence"});
+          2,
+          {"scan_000008.pcd", "POINTS", "has 180 points", "beams = 360",
+           "one sensor's scans per sequence"});
   forEach(kSequenceCommands, "sequence_upper_case_extension",
           [](const Ws& w) {
             copySequence(w);
@@ -149,7 +173,8 @@ std::vector<BadInputCase> cases() {
   forEach(kSequenceCommands, "sequence_numbers_not_zero_padded",
           [](const Ws& w) {
             copySequence(w);
-            for (int i = 0; i < 8; ++i) fs::remove(w.seq() / ("scan_00000" + std::to_string(i) + ".pcd"));
+            for (int i = 0; i < 8; ++i)
+              fs::remove(w.seq() / ("scan_00000" + std::to_string(i) + ".pcd"));
             const fs::path src = w.fix / "bin/scans";
             fs::copy_file(src / "scan_000000.pcd", w.seq() / "s_2.pcd");
             fs::copy_file(src / "scan_000001.pcd", w.seq() / "s_10.pcd");
@@ -158,69 +183,91 @@ std::vector<BadInputCase> cases() {
 
   // ---- data that cannot support a calibration (exit 3)
   const std::vector<std::pair<const char*, std::string>> calibrating = {
-      {"calibrate", "calibrate {IN}/sim/scans --out {OUT}"}, {"run", "run {IN}/sim/scans --no-truth --out {OUT}"}};
+      {"calibrate", "calibrate {IN}/sim/scans --out {OUT}"},
+      {"run", "run {IN}/sim/scans --no-truth --out {OUT}"}};
   forEach(calibrating, "one_single_stop", simulated(scene(kPaperPoles, path(1, 3))), 3,
-          {"sim/scans", "calibration", "too_few_stops", "has 1 stop ", "at least 3 stops", "its own VIEWPOINT",
-           "made from one place", "--reference REF.json", "wall-to-wall spans", "lidarcal diagnose"});
-  forEach(calibrating, "two_stops", simulated(scene(kPaperPoles, path(2, 3))), 3,
-          {"sim/scans", "calibration", "too_few_stops", "has 2 stops", "at least 3 stops", "--reference REF.json",
+          {"sim/scans", "calibration", "too_few_stops", "has 1 stop ", "at least 3 stops",
+           "its own VIEWPOINT", "made from one place", "--reference REF.json", "wall-to-wall spans",
            "lidarcal diagnose"});
+  forEach(calibrating, "two_stops", simulated(scene(kPaperPoles, path(2, 3))), 3,
+          {"sim/scans", "calibration", "too_few_stops", "has 2 stops", "at least 3 stops",
+           "--reference REF.json", "lidarcal diagnose"});
   // Five stops, but a 2 m sensor sees each pole from two of them only.
-  forEach(calibrating, "landmarks_at_fewer_than_3_stops",
-          simulated(R"({"sensor": {"beams": 360, "range_min_m": 0.2, "range_max_m": 2.0, "bias_alpha": [0.0525, 0.8838, 0.0584],
+  forEach(
+      calibrating, "landmarks_at_fewer_than_3_stops",
+      simulated(
+          R"({"sensor": {"beams": 360, "range_min_m": 0.2, "range_max_m": 2.0, "bias_alpha": [0.0525, 0.8838, 0.0584],
               "noise": {"kind": "squared", "sigma_e": 0.0019176}},
             "path": {"start": {"x_m": -1.0}, "step_m": 1.2, "stops": 5, "scans_per_stop": 2},
             "landmarks": [{"x_m": -0.4, "y_m": 1.3, "radius_m": 0.12}, {"x_m": 2.0, "y_m": -1.3, "radius_m": 0.12},
                           {"x_m": 3.2, "y_m": 1.3, "radius_m": 0.12}]})"),
-          3, {"sim/scans", "calibration", "no_usable_landmark", "3 or more stops", "zero landmarks", "lidarcal detect"});
-  forEach(calibrating, "landmarks_on_the_path_line",
-          simulated(scene(R"({"x_m": 4.2, "y_m": 0.0, "radius_m": 0.12}, {"x_m": 5.5, "y_m": 0.0, "radius_m": 0.12})",
-                          path(6, 2))),
-          3, {"sim/scans", "calibration", "no_usable_landmark", "degenerate_geometry", "move it sideways"});
-  forEach(calibrating, "circles_with_too_few_points",
-          simulated(scene(R"({"x_m": 3.5, "y_m": 2.0, "radius_m": 0.02}, {"x_m": 3.0, "y_m": -2.5, "radius_m": 0.02},
-                             {"x_m": 4.5, "y_m": 0.8, "radius_m": 0.02})", path(6, 2))),
-          3, {"sim/scans", "calibration", "no_usable_landmark", "ERRORS.md"});
+      3,
+      {"sim/scans", "calibration", "no_usable_landmark", "3 or more stops", "zero landmarks",
+       "lidarcal detect"});
+  forEach(
+      calibrating, "landmarks_on_the_path_line",
+      simulated(scene(
+          R"({"x_m": 4.2, "y_m": 0.0, "radius_m": 0.12}, {"x_m": 5.5, "y_m": 0.0, "radius_m": 0.12})",
+          path(6, 2))),
+      3,
+      {"sim/scans", "calibration", "no_usable_landmark", "degenerate_geometry",
+       "move it sideways"});
+  forEach(
+      calibrating, "circles_with_too_few_points",
+      simulated(scene(
+          R"({"x_m": 3.5, "y_m": 2.0, "radius_m": 0.02}, {"x_m": 3.0, "y_m": -2.5, "radius_m": 0.02},
+                             {"x_m": 4.5, "y_m": 0.8, "radius_m": 0.02})",
+          path(6, 2))),
+      3, {"sim/scans", "calibration", "no_usable_landmark", "ERRORS.md"});
   // The dark-surface noise term on scans whose intensity field holds 0 everywhere (none recorded).
   const std::vector<std::pair<const char*, std::string>> dark = {
       {"calibrate", "calibrate {IN}/sim/scans --out {OUT} --effects dark_surface"}};
-  forEach(dark, "dark_surface_without_intensity",
-          simulated(scene(kPaperPoles, path(6, 2))), 3,
+  forEach(dark, "dark_surface_without_intensity", simulated(scene(kPaperPoles, path(6, 2))), 3,
           {"sim/scans", "calibration", "no_intensity", "dark_surface", "intensities on"});
 
   // ---- model files (correct)
   const std::vector<std::pair<const char*, std::string>> correcting = {
       {"correct", "correct {SEQ} --model {IN}/model.json --out {OUT}"}};
-  forEach(correcting, "model_bias_not_monotone",
-          withModel([](nlohmann::json& j) { j["bias"]["alpha"] = {0.0, 2.0, -0.3}; }), 3,
-          {"model.json", "bias.alpha", "more than one distance", "lower --max-order"});
-  forEach(correcting, "model_of_another_sensor_beams", withModel([](nlohmann::json& j) { j["sensor"]["beams"] = 720; }), 2,
-          {"scan_000000.pcd", "POINTS", "has 360 beams", "model.json", "720", "calibrated on this sensor"});
+  forEach(correcting, "model_bias_not_monotone", withModel([](nlohmann::json& j) {
+            j["bias"]["alpha"] = {0.0, 2.0, -0.3};
+          }),
+          3, {"model.json", "bias.alpha", "more than one distance", "lower --max-order"});
+  forEach(correcting, "model_of_another_sensor_beams",
+          withModel([](nlohmann::json& j) { j["sensor"]["beams"] = 720; }), 2,
+          {"scan_000000.pcd", "POINTS", "has 360 beams", "model.json", "720",
+           "calibrated on this sensor"});
   forEach(correcting, "model_of_another_sensor_range",
           withModel([](nlohmann::json& j) { j["sensor"]["range_max_m"] = 12.0; }), 2,
           {"model.json", "range_max_m", "range limits differ", "calibrate this one"});
   forEach(correcting, "model_not_json",
           [](const Ws& w) {
             copySequence(w);
-            writeFile(w.in / "model.json", "{\"format\": \"lidarcal-model/1\",\n \"bias\": [1, 2,\n");
+            writeFile(w.in / "model.json",
+                      "{\"format\": \"lidarcal-model/1\",\n \"bias\": [1, 2,\n");
           },
           2, {"model.json", "line 3", "not valid JSON"});
-  forEach(correcting, "model_wrong_format", withModel([](nlohmann::json& j) { j["format"] = "something-else"; }), 2,
+  forEach(correcting, "model_wrong_format",
+          withModel([](nlohmann::json& j) { j["format"] = "something-else"; }), 2,
           {"model.json", "format", "lidarcal calibrate"});
-  forEach(correcting, "model_bad_field", withModel([](nlohmann::json& j) { j["noise"]["kind"] = "pink"; }), 2,
+  forEach(correcting, "model_bad_field",
+          withModel([](nlohmann::json& j) { j["noise"]["kind"] = "pink"; }), 2,
           {"model.json", "noise.kind", "unknown noise kind"});
-  forEach(correcting, "model_discrepancy_method",
-          withModel([](nlohmann::json& j) { j["discrepancy"] = {{"method", "guess"}, {"sigma_m", 0.003}}; }), 2,
-          {"model.json", "discrepancy.method", "\"none\" or \"reml\""});
-  forEach(correcting, "model_discrepancy_negative",
-          withModel([](nlohmann::json& j) { j["discrepancy"] = {{"method", "reml"}, {"sigma_m", -0.003}, {"dof", 5}}; }), 2,
-          {"model.json", "discrepancy.sigma_m"});
-  forEach(correcting, "model_unknown_status", withModel([](nlohmann::json& j) { j["diagnostics"]["status"] = "wobbly"; }), 2,
+  forEach(correcting, "model_discrepancy_method", withModel([](nlohmann::json& j) {
+            j["discrepancy"] = {{"method", "guess"}, {"sigma_m", 0.003}};
+          }),
+          2, {"model.json", "discrepancy.method", "\"none\" or \"reml\""});
+  forEach(correcting, "model_discrepancy_negative", withModel([](nlohmann::json& j) {
+            j["discrepancy"] = {{"method", "reml"}, {"sigma_m", -0.003}, {"dof", 5}};
+          }),
+          2, {"model.json", "discrepancy.sigma_m"});
+  forEach(correcting, "model_unknown_status",
+          withModel([](nlohmann::json& j) { j["diagnostics"]["status"] = "wobbly"; }), 2,
           {"model.json", "diagnostics.status", "'wobbly' is not a status lidarcal writes"});
   forEach(correcting, "model_failed_calibration",
           withModel([](nlohmann::json& j) { j["diagnostics"]["status"] = "joint_failed"; }), 3,
           {"model.json", "diagnostics.status", "not usable", "calibrate again"});
-  forEach(correcting, "model_missing", [](const Ws& w) { copySequence(w); }, 2, {"model.json", "does not exist"});
+  forEach(correcting, "model_missing", [](const Ws& w) { copySequence(w); }, 2,
+          {"model.json", "does not exist"});
 
   // ---- scene files (simulate)
   const std::vector<std::pair<const char*, std::string>> simulating = {
@@ -234,13 +281,15 @@ std::vector<BadInputCase> cases() {
   forEach(simulating, "scene_bad_field",
           [](const Ws& w) {
             fs::create_directories(w.in);
-            writeFile(w.in / "scene.json", R"({"sensor": {"range_min_m": 0.2, "range_max_m": "far"}, "path": {}})");
+            writeFile(w.in / "scene.json",
+                      R"({"sensor": {"range_min_m": 0.2, "range_max_m": "far"}, "path": {}})");
           },
           2, {"scene.json", "sensor.range_max_m", "must be a number", "FORMAT.md"});
   forEach(simulating, "scene_too_many_scans",
           [](const Ws& w) {
             fs::create_directories(w.in);
-            writeFile(w.in / "scene.json", scene(kPaperPoles, R"({"stops": 100000, "scans_per_stop": 1000})"));
+            writeFile(w.in / "scene.json",
+                      scene(kPaperPoles, R"({"stops": 100000, "scans_per_stop": 1000})"));
           },
           2, {"scene.json", "path.stops", "10 million"});
 
@@ -251,25 +300,30 @@ std::vector<BadInputCase> cases() {
       edit(w.in);
     };
   };
-  forEach(std::vector<std::pair<const char*, std::string>>{{"evaluate", "evaluate {SEQ} --truth {IN}/truth.json --out {OUT}"},
-                                                           {"detect", "detect {SEQ} --truth {IN}/truth.json --out {OUT}"}},
-          "truth_not_json", simWithTruth([](const fs::path& in) { writeFile(in / "truth.json", "[1, 2"); }), 2,
-          {"truth.json", "not valid JSON"});
-  forEach(std::vector<std::pair<const char*, std::string>>{{"evaluate", "evaluate {SEQ} --truth {IN}/truth.json --out {OUT}"},
-                                                           {"detect", "detect {SEQ} --truth {IN}/truth.json --out {OUT}"}},
-          "true_ranges_bad_value",
-          simWithTruth([](const fs::path& in) {
-            editFile(in / "true_ranges.csv", [](std::string& b) {
-              const auto at = b.find('\n', b.find('\n') + 1) + 1;  // line 3
-              b.insert(at, "0,1,abc,wall,1,0.1\n");
-            });
-          }),
-          2, {"true_ranges.csv", "line 3", "true_range_m", "`abc`"});
+  forEach(
+      std::vector<std::pair<const char*, std::string>>{
+          {"evaluate", "evaluate {SEQ} --truth {IN}/truth.json --out {OUT}"},
+          {"detect", "detect {SEQ} --truth {IN}/truth.json --out {OUT}"}},
+      "truth_not_json",
+      simWithTruth([](const fs::path& in) { writeFile(in / "truth.json", "[1, 2"); }), 2,
+      {"truth.json", "not valid JSON"});
+  forEach(
+      std::vector<std::pair<const char*, std::string>>{
+          {"evaluate", "evaluate {SEQ} --truth {IN}/truth.json --out {OUT}"},
+          {"detect", "detect {SEQ} --truth {IN}/truth.json --out {OUT}"}},
+      "true_ranges_bad_value", simWithTruth([](const fs::path& in) {
+        editFile(in / "true_ranges.csv", [](std::string& b) {
+          const auto at = b.find('\n', b.find('\n') + 1) + 1;  // line 3
+          b.insert(at, "0,1,abc,wall,1,0.1\n");
+        });
+      }),
+      2, {"true_ranges.csv", "line 3", "true_range_m", "`abc`"});
 
   // ---- observation and odometry files (noise-consistency, docs/FORMAT.md "Noise estimation")
   const std::vector<std::pair<const char*, std::string>> estimating = {
-      {"noise_consistency", "noise-consistency --observations {IN}/observations.csv --odometry {IN}/odometry.csv "
-                            "--method ml --out {OUT}"}};
+      {"noise_consistency",
+       "noise-consistency --observations {IN}/observations.csv --odometry {IN}/odometry.csv "
+       "--method ml --out {OUT}"}};
   // A valid pair (4 stops, one sensor, two landmarks), then one file edited.
   const auto noiseFiles = [](std::string observations, std::string odometry) {
     return [observations, odometry](const Ws& w) {
@@ -279,17 +333,22 @@ std::vector<BadInputCase> cases() {
     };
   };
   const std::string good_obs =
-      "stop,sensor,landmark,range_m,bearing_rad\n0,0,1,2.0,0.5\n0,0,2,3.0,-0.5\n1,0,1,1.8,0.6\n1,0,2,2.9,-0.4\n"
+      "stop,sensor,landmark,range_m,bearing_rad\n0,0,1,2.0,0.5\n0,0,2,3.0,-0.5\n1,0,1,1.8,0.6\n1,0,"
+      "2,2.9,-0.4\n"
       "2,0,1,1.6,0.7\n2,0,2,2.8,-0.3\n3,0,1,1.4,0.8\n3,0,2,2.7,-0.2\n";
-  const std::string good_odo = "stop,dx_m,dy_m,dtheta_rad\n0,0,0,0\n1,0.3,0,0\n2,0.3,0,0\n3,0.3,0,0\n";
+  const std::string good_odo =
+      "stop,dx_m,dy_m,dtheta_rad\n0,0,0,0\n1,0.3,0,0\n2,0.3,0,0\n3,0.3,0,0\n";
   forEach(estimating, "observations_bad_header",
           noiseFiles("stop,sensor,landmark,range,bearing\n0,0,1,2.0,0.5\n", good_odo), 2,
           {"observations.csv", "line 1", "header must be", "FORMAT.md"});
-  forEach(estimating, "observations_not_a_number", noiseFiles("stop,sensor,landmark,range_m,bearing_rad\n0,0,1,2.0,0.5\n1,0,1,abc,0.5\n", good_odo),
+  forEach(estimating, "observations_not_a_number",
+          noiseFiles("stop,sensor,landmark,range_m,bearing_rad\n0,0,1,2.0,0.5\n1,0,1,abc,0.5\n",
+                     good_odo),
           2, {"observations.csv", "line 3", "range_m", "`abc`", "FORMAT.md"});
-  forEach(estimating, "observations_sensor_id_too_large",
-          noiseFiles("stop,sensor,landmark,range_m,bearing_rad\n0,4294967296,1,2.0,0.5\n", good_odo), 2,
-          {"observations.csv", "line 2", "sensor", "too large"});
+  forEach(
+      estimating, "observations_sensor_id_too_large",
+      noiseFiles("stop,sensor,landmark,range_m,bearing_rad\n0,4294967296,1,2.0,0.5\n", good_odo), 2,
+      {"observations.csv", "line 2", "sensor", "too large"});
   forEach(estimating, "observations_infinite_range",
           noiseFiles("stop,sensor,landmark,range_m,bearing_rad\n0,0,1,inf,0.5\n", good_odo), 2,
           {"observations.csv", "line 2", "range_m", "not a finite number"});
@@ -302,7 +361,8 @@ std::vector<BadInputCase> cases() {
   forEach(estimating, "odometry_stops_out_of_order",
           noiseFiles(good_obs, "stop,dx_m,dy_m,dtheta_rad\n0,0,0,0\n2,0.3,0,0\n1,0.3,0,0\n"), 2,
           {"odometry.csv", "line 3", "stop", "in order"});
-  forEach(estimating, "odometry_start_moves", noiseFiles(good_obs, "stop,dx_m,dy_m,dtheta_rad\n0,1,0,0\n1,0.3,0,0\n"), 2,
+  forEach(estimating, "odometry_start_moves",
+          noiseFiles(good_obs, "stop,dx_m,dy_m,dtheta_rad\n0,1,0,0\n1,0.3,0,0\n"), 2,
           {"odometry.csv", "line 2", "stop 0 is the start"});
   forEach(estimating, "odometry_no_stop", noiseFiles(good_obs, "stop,dx_m,dy_m,dtheta_rad\n"), 2,
           {"odometry.csv", "holds no stop"});
@@ -326,7 +386,8 @@ std::vector<BadInputCase> cases() {
   forEach(importing("carmen", "bad.log"), "carmen_line_cut_short",
           [](const Ws& w) {
             fs::create_directories(w.in);
-            writeFile(w.in / "bad.log", flaserLine(181, 2.0) + "FLASER 181 1 2 3 0 0 0 0 0 0 1.5 host 1.5\n");
+            writeFile(w.in / "bad.log",
+                      flaserLine(181, 2.0) + "FLASER 181 1 2 3 0 0 0 0 0 0 1.5 host 1.5\n");
           },
           2, {"bad.log", "line 2 (FLASER)", "expected 191", "fix or delete the line"});
   forEach(importing("carmen", "odom.log"), "carmen_no_laser_line",
@@ -350,29 +411,35 @@ std::vector<BadInputCase> cases() {
   forEach(importing("csv", "a.csv"), "csv_pose_changes_within_a_scan",
           [](const Ws& w) {
             fs::create_directories(w.in);
-            writeFile(w.in / "a.csv", "scan,x_m,y_m,yaw_rad,angle_rad,range_m\n0,0,0,0,0,1\n0,1,0,0,0.1,1\n");
+            writeFile(w.in / "a.csv",
+                      "scan,x_m,y_m,yaw_rad,angle_rad,range_m\n0,0,0,0,0,1\n0,1,0,0,0.1,1\n");
           },
           2, {"a.csv", "line 3", "a scan has one sensor pose"});
-  forEach(importing("csv", "none.csv"), "import_input_missing", [](const Ws& w) { fs::create_directories(w.in); }, 2,
-          {"none.csv", "does not exist"});
+  forEach(importing("csv", "none.csv"), "import_input_missing",
+          [](const Ws& w) { fs::create_directories(w.in); }, 2, {"none.csv", "does not exist"});
   {
     BadInputCase k;
     k.name = "rosbag_without_the_topic_import";
-    k.args = "import --from rosbag1 {SHARED}/rplidar_a2_room/rplidar_1.bag --topic /scan --out {OUT}";
+    k.args =
+        "import --from rosbag1 {SHARED}/rplidar_a2_room/rplidar_1.bag --topic /scan --out {OUT}";
     k.prepare = [](const Ws& w) { fs::create_directories(w.in); };
     k.message = {"rplidar_1.bag", "--topic /scan", "no such topic", "/scan_rplidar"};
     k.skip = [](const Ws&) -> std::string {
       if (!fs::exists(sharedData() / "rplidar_a2_room/rplidar_1.bag")) return "shared data absent";
-      const auto r = runCli("import --from rosbag1 " + (sharedData() / "rplidar_a2_room/rplidar_1.bag").string() + " --list-topics");
+      const auto r =
+          runCli("import --from rosbag1 " +
+                 (sharedData() / "rplidar_a2_room/rplidar_1.bag").string() + " --list-topics");
       return r.exit_code == 0 ? "" : "built without ROS1 bag support";
     };
-    k.also_unchanged = [](const Ws&) { return std::vector<fs::path>{sharedData() / "rplidar_a2_room"}; };
+    k.also_unchanged = [](const Ws&) {
+      return std::vector<fs::path>{sharedData() / "rplidar_a2_room"};
+    };
     c.push_back(k);
   }
 
   // ---- where the output goes (every command that writes)
-  forEach(kWritingCommands, "out_is_the_input",
-          [](const Ws& w) { writableInputs(w); }, 2, {"--out", "inside it", "outside the input"});
+  forEach(kWritingCommands, "out_is_the_input", [](const Ws& w) { writableInputs(w); }, 2,
+          {"--out", "inside it", "outside the input"});
   for (auto& k : c)
     if (k.name.rfind("out_is_the_input_", 0) == 0) {
       const std::string& name = k.name;
@@ -383,40 +450,52 @@ std::vector<BadInputCase> cases() {
       // simulate reads a file, not a directory: its output may not be the scene file either.
     }
   // (simulate and import read a file: "inside" does not apply; out_is_the_input covers them.)
-  forEach(std::vector<std::pair<const char*, std::string>>(kWritingCommands.begin(), kWritingCommands.begin() + 4),
-          "out_inside_the_input", [](const Ws& w) { writableInputs(w); }, 2, {"--out", "inside it", "outside the input"});
+  forEach(std::vector<std::pair<const char*, std::string>>(kWritingCommands.begin(),
+                                                           kWritingCommands.begin() + 4),
+          "out_inside_the_input", [](const Ws& w) { writableInputs(w); }, 2,
+          {"--out", "inside it", "outside the input"});
   for (auto& k : c)
-    if (k.name.rfind("out_inside_the_input_", 0) == 0) k.args = replaceAll(k.args, "--out {OUT}", "--out {SEQ}/out");
-  forEach(kWritingCommands, "out_parent_is_a_file", [](const Ws& w) { writableInputs(w); }, 2, {"--out", "not a directory"});
+    if (k.name.rfind("out_inside_the_input_", 0) == 0)
+      k.args = replaceAll(k.args, "--out {OUT}", "--out {SEQ}/out");
+  forEach(kWritingCommands, "out_parent_is_a_file", [](const Ws& w) { writableInputs(w); }, 2,
+          {"--out", "not a directory"});
   for (auto& k : c)
     if (k.name.rfind("out_parent_is_a_file_", 0) == 0)
       k.args = replaceAll(k.args, "--out {OUT}", "--out {IN}/file.txt/result");
-  forEach(kWritingCommands, "out_in_proc", [](const Ws& w) { writableInputs(w); }, 2, {"/proc/result", "writable"});
+  forEach(kWritingCommands, "out_in_proc", [](const Ws& w) { writableInputs(w); }, 2,
+          {"/proc/result", "writable"});
   for (auto& k : c)
-    if (k.name.rfind("out_in_proc_", 0) == 0) k.args = replaceAll(k.args, "--out {OUT}", "--out /proc/result");
+    if (k.name.rfind("out_in_proc_", 0) == 0)
+      k.args = replaceAll(k.args, "--out {OUT}", "--out /proc/result");
   forEach(kWritingCommands, "out_directory_not_writable", [](const Ws& w) { writableInputs(w); }, 2,
           {"result", "check that", "writable"});
   for (auto& k : c)
     if (k.name.rfind("out_directory_not_writable_", 0) == 0) {
       k.shell_prefix = "chmod 0555 {OUTDIR}";
       k.skip = [](const Ws& w) -> std::string {
-        return permissionsAreIgnored(w.in) ? "running as root: a read-only mode does not stop writes (the /proc case covers it)"
+        return permissionsAreIgnored(w.in) ? "running as root: a read-only mode does not stop "
+                                             "writes (the /proc case covers it)"
                                            : "";
       };
     }
   // Disk full, simulated without privileges: a file-size limit (ulimit -f, in KiB) with SIGXFSZ
   // ignored makes write() fail with EFBIG as a full disk fails with ENOSPC.
   forEach(kWritingCommands, "disk_full", [](const Ws& w) { writableInputs(w); }, 2,
-          {"outdir/result", "disk full?", "free some space"});  // the final path, not the staging one
+          // the final path, not the staging one
+          {"outdir/result", "disk full?", "free some space"});
   for (auto& k : c)
     if (k.name.rfind("disk_full_", 0) == 0) {
       // 1 KiB: model.json (~10 KB) and scans (~4.4 KB) cannot be written; small files can.
       k.shell_prefix = "trap '' XFSZ; ulimit -f 1";
     }
-  forEach(std::vector<std::pair<const char*, std::string>>{{"calibrate", "calibrate {SEQ} --out {IN}"},
-                                                           {"evaluate", "evaluate {SEQ} --truth {IN}/truth.json --out {IN}"}},
-          "out_file_is_a_directory", [](const Ws& w) { copyTree(w.fix / "bin", w.in); }, 2, {"is a directory"});
-  forEach(std::vector<std::pair<const char*, std::string>>{{"detect", "detect {SEQ} --out {IN}/truth.json"}},
+  forEach(
+      std::vector<std::pair<const char*, std::string>>{
+          {"calibrate", "calibrate {SEQ} --out {IN}"},
+          {"evaluate", "evaluate {SEQ} --truth {IN}/truth.json --out {IN}"}},
+      "out_file_is_a_directory", [](const Ws& w) { copyTree(w.fix / "bin", w.in); }, 2,
+      {"is a directory"});
+  forEach(std::vector<std::pair<const char*, std::string>>{{"detect",
+                                                            "detect {SEQ} --out {IN}/truth.json"}},
           "out_directory_is_a_file", [](const Ws& w) { copyTree(w.fix / "bin", w.in); }, 2,
           {"truth.json", "--out", "is a file"});
   return c;
@@ -449,29 +528,37 @@ TEST_P(BadInput, FailsCleanlyNamingFileItemAndRemedy) {
   if (!prefix.empty()) ::chmod(w.out.parent_path().c_str(), 0755);
   SCOPED_TRACE("lidarcal " + args + "\nstderr: " + r.err);
   // LIDARCAL_PRINT_MESSAGES=1 prints every message (to keep docs/ERRORS.md in step).
-  if (std::getenv("LIDARCAL_PRINT_MESSAGES")) std::printf("MESSAGE %s: %s", k.name.c_str(), r.err.c_str());
+  if (std::getenv("LIDARCAL_PRINT_MESSAGES"))
+    std::printf("MESSAGE %s: %s", k.name.c_str(), r.err.c_str());
 
   EXPECT_EQ(r.exit_code, k.exit_code);
-  EXPECT_NE(r.err.find(k.exit_code == 3 ? "lidarcal: cannot proceed: " : "lidarcal: error: "), std::string::npos);
-  for (const auto& part : k.message) EXPECT_NE(r.err.find(part), std::string::npos) << "missing: " << part;
+  EXPECT_NE(r.err.find(k.exit_code == 3 ? "lidarcal: cannot proceed: " : "lidarcal: error: "),
+            std::string::npos);
+  for (const auto& part : k.message)
+    EXPECT_NE(r.err.find(part), std::string::npos) << "missing: " << part;
   // The remedy closes the message in parentheses.
   std::string last = r.err.substr(0, r.err.find_last_not_of('\n') + 1);
   last = last.substr(last.rfind('\n') == std::string::npos ? 0 : last.rfind('\n') + 1);
-  EXPECT_TRUE(!last.empty() && last.back() == ')' && last.find(" (") != std::string::npos) << "no remedy: " << last;
+  EXPECT_TRUE(!last.empty() && last.back() == ')' && last.find(" (") != std::string::npos)
+      << "no remedy: " << last;
   EXPECT_EQ(r.out.find("internal error"), std::string::npos);
   // Input unchanged, byte for byte and entry for entry.
-  for (std::size_t i = 0; i < unchanged.size(); ++i) EXPECT_TRUE(snapshot(unchanged[i]) == before[i]) << unchanged[i];
+  for (std::size_t i = 0; i < unchanged.size(); ++i)
+    EXPECT_TRUE(snapshot(unchanged[i]) == before[i]) << unchanged[i];
   EXPECT_EQ(listing(w.in), listing_before);
   // Nothing written: the output directory's parent is as it was (empty), no staging leftovers.
   EXPECT_TRUE(listing(w.out.parent_path()).empty()) << "left behind in " << w.out.parent_path();
   for (const auto& name : listing(dir.path()))
-    EXPECT_TRUE(name.find(".partial-") == std::string::npos && name.find(".tmp-") == std::string::npos &&
-                name.find(".old-") == std::string::npos && name.find(".probe-") == std::string::npos)
+    EXPECT_TRUE(
+        name.find(".partial-") == std::string::npos && name.find(".tmp-") == std::string::npos &&
+        name.find(".old-") == std::string::npos && name.find(".probe-") == std::string::npos)
         << "left behind: " << name;
 }
 
 INSTANTIATE_TEST_SUITE_P(Catalogue, BadInput, ::testing::ValuesIn(cases()),
-                         [](const ::testing::TestParamInfo<BadInputCase>& p) { return p.param.name; });
+                         [](const ::testing::TestParamInfo<BadInputCase>& p) {
+                           return p.param.name;
+                         });
 
 }  // namespace
 }  // namespace lidarcal

@@ -11,9 +11,9 @@
 
 #include <gtest/gtest.h>
 
+#include <nav_msgs/Odometry.h>
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
-#include <nav_msgs/Odometry.h>
 #include <sensor_msgs/LaserScan.h>
 #include <std_msgs/String.h>
 #include <tf2_msgs/TFMessage.h>
@@ -32,11 +32,12 @@ const std::string kSensor = "ROS1 sensor_msgs/LaserScan on /scan (frame laser)";
 
 /// /scan: `scans` LaserScans of 100 beams; /chatter: strings from two publishers (two connections);
 /// /scan_b: a second LaserScan topic when `second_topic`.
-std::filesystem::path writeBag(const std::filesystem::path& file, int scans, bool second_topic = false,
-                               std::size_t odd_beams_at = 0) {
+std::filesystem::path writeBag(const std::filesystem::path& file, int scans,
+                               bool second_topic = false, std::size_t odd_beams_at = 0) {
   rosbag::Bag bag(file.string(), rosbag::bagmode::Write);
   for (int k = 0; k < scans; ++k) {
-    const sensor_msgs::LaserScan m = laserScan(k, k > 0 && static_cast<std::size_t>(k) == odd_beams_at ? 99 : 100);
+    const sensor_msgs::LaserScan m =
+        laserScan(k, k > 0 && static_cast<std::size_t>(k) == odd_beams_at ? 99 : 100);
     bag.write("/scan", m.header.stamp, m);
     std_msgs::String s;
     s.data = "message " + std::to_string(k);
@@ -57,7 +58,8 @@ struct BagMessage {
   sensor_msgs::LaserScan::ConstPtr scan;
 };
 
-std::vector<BagMessage> readAll(const std::filesystem::path& file, std::size_t* connections = nullptr) {
+std::vector<BagMessage> readAll(const std::filesystem::path& file,
+                                std::size_t* connections = nullptr) {
   rosbag::Bag bag(file.string(), rosbag::bagmode::Read);
   rosbag::View view(bag);
   if (connections) *connections = view.getConnections().size();
@@ -67,15 +69,17 @@ std::vector<BagMessage> readAll(const std::filesystem::path& file, std::size_t* 
     b.bytes.resize(m.size());
     ros::serialization::OStream s(b.bytes.data(), static_cast<std::uint32_t>(b.bytes.size()));
     m.write(s);
-    if (m.getDataType() == "sensor_msgs/LaserScan") b.scan = m.instantiate<sensor_msgs::LaserScan>();
+    if (m.getDataType() == "sensor_msgs/LaserScan")
+      b.scan = m.instantiate<sensor_msgs::LaserScan>();
     out.push_back(std::move(b));
   }
   return out;
 }
 
 /// Everything but the ranges of `topic` is identical; returns the scans of the topic (in, out).
-std::vector<std::pair<sensor_msgs::LaserScan::ConstPtr, sensor_msgs::LaserScan::ConstPtr>> expectSameBagButRanges(
-    const std::filesystem::path& in, const std::filesystem::path& out, const std::string& topic) {
+std::vector<std::pair<sensor_msgs::LaserScan::ConstPtr, sensor_msgs::LaserScan::ConstPtr>>
+expectSameBagButRanges(const std::filesystem::path& in, const std::filesystem::path& out,
+                       const std::string& topic) {
   std::size_t cin = 0, cout = 0;
   const auto a = readAll(in, &cin);
   const auto b = readAll(out, &cout);
@@ -100,7 +104,8 @@ std::vector<std::pair<sensor_msgs::LaserScan::ConstPtr, sensor_msgs::LaserScan::
 
 /// Readings the importer turns into points are corrected (f(out) = in inside the fitted readings,
 /// f continued as its tangent at the nearer edge beyond them); the others are left bit for bit.
-void expectRangesCorrected(const sensor_msgs::LaserScan& in, const sensor_msgs::LaserScan& out, const CalibrationModel& m) {
+void expectRangesCorrected(const sensor_msgs::LaserScan& in, const sensor_msgs::LaserScan& out,
+                           const CalibrationModel& m) {
   const auto& f = m.model.bias;
   const double lo = f(m.fitted_range_m->first), hi = f(m.fitted_range_m->second);
   std::size_t corrected = 0;
@@ -128,15 +133,16 @@ TEST(CorrectBag, CopiesEveryMessageAndCorrectsTheRanges) {
   const auto in = writeBag(dir / "in.bag", 20);
   const CalibrationModel m = polynomialModel(kSensor, 100);
   io::writeModel(dir / "model.json", m);
-  const CliResult r = runCli("correct " + in.string() + " --model " + (dir / "model.json").string() + " -o " +
-                             (dir / "out.bag").string());
+  const CliResult r = runCli("correct " + in.string() + " --model " +
+                             (dir / "model.json").string() + " -o " + (dir / "out.bag").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto scans = expectSameBagButRanges(in, dir / "out.bag", "/scan");
   ASSERT_EQ(scans.size(), 20u);
   for (const auto& [a, b] : scans) expectRangesCorrected(*a, *b, m);
   // Atomic: no temporary file left beside the output.
   std::size_t files = 0;
-  for (const auto& e : std::filesystem::directory_iterator(dir.path())) files += e.is_regular_file();
+  for (const auto& e : std::filesystem::directory_iterator(dir.path()))
+    files += e.is_regular_file();
   EXPECT_EQ(files, 3u);  // in.bag, model.json, out.bag
 }
 
@@ -145,15 +151,18 @@ TEST(CorrectBag, RangesEqualCorrectOnTheImportedSequence) {
   const auto in = writeBag(dir / "in.bag", 5);
   io::writeModel(dir / "model.json", polynomialModel(kSensor, 100));
   const std::string model = " --model " + (dir / "model.json").string();
-  for (const std::string options : {" --inversion ml", " --outside drop", " --outside extrapolate"}) {
+  for (const std::string options :
+       {" --inversion ml", " --outside drop", " --outside extrapolate"}) {
     SCOPED_TRACE(options);
     std::filesystem::remove_all(dir / "seq");
     std::filesystem::remove_all(dir / "seq-out");
     std::filesystem::remove(dir / "out.bag");
     ASSERT_EQ(runCli("import " + in.string() + " -o " + (dir / "seq").string()).exit_code, 0);
-    const CliResult s = runCli("correct " + (dir / "seq").string() + model + options + " -o " + (dir / "seq-out").string());
+    const CliResult s = runCli("correct " + (dir / "seq").string() + model + options + " -o " +
+                               (dir / "seq-out").string());
     ASSERT_EQ(s.exit_code, 0) << s.err;
-    const CliResult b = runCli("correct " + in.string() + model + options + " -o " + (dir / "out.bag").string());
+    const CliResult b =
+        runCli("correct " + in.string() + model + options + " -o " + (dir / "out.bag").string());
     ASSERT_EQ(b.exit_code, 0) << b.err;
     const io::Sequence seq = io::openSequence(dir / "seq-out");
     const auto bag = readAll(dir / "out.bag");
@@ -166,7 +175,8 @@ TEST(CorrectBag, RangesEqualCorrectOnTheImportedSequence) {
       for (std::size_t i = 0; i < scan.cloud->size(); ++i) {
         const auto& p = (*scan.cloud)[i];
         const float r = msg.scan->ranges[i];
-        const bool reading = std::isfinite(r) && r >= msg.scan->range_min && r <= msg.scan->range_max;
+        const bool reading =
+            std::isfinite(r) && r >= msg.scan->range_min && r <= msg.scan->range_max;
         if (std::isnan(p.x)) {
           EXPECT_TRUE(!reading || std::isnan(r)) << i << ": " << r;  // no return in both
           continue;
@@ -187,11 +197,13 @@ TEST(CorrectBag, TopicChoice) {
   const auto in = writeBag(dir / "in.bag", 4, true);
   io::writeModel(dir / "model.json", polynomialModel("", 100));
   const std::string model = " --model " + (dir / "model.json").string();
-  const CliResult several = runCli("correct " + in.string() + model + " -o " + (dir / "out.bag").string());
+  const CliResult several =
+      runCli("correct " + in.string() + model + " -o " + (dir / "out.bag").string());
   EXPECT_EQ(several.exit_code, 2);
   EXPECT_NE(several.err.find("several LaserScan topics"), std::string::npos) << several.err;
   EXPECT_FALSE(std::filesystem::exists(dir / "out.bag"));
-  const CliResult b = runCli("correct " + in.string() + model + " --topic /scan_b -o " + (dir / "out.bag").string());
+  const CliResult b = runCli("correct " + in.string() + model + " --topic /scan_b -o " +
+                             (dir / "out.bag").string());
   ASSERT_EQ(b.exit_code, 0) << b.err;
   const auto scans = expectSameBagButRanges(in, dir / "out.bag", "/scan_b");
   ASSERT_EQ(scans.size(), 4u);
@@ -204,7 +216,8 @@ TEST(CorrectBag, RigModelCorrectsEachTopicWithItsOwnBlock) {
   const io::RigModel rig = twoLidarModel("/scan", "/scan_b");
   io::writeRigModel(dir / "rig.json", rig);
   const std::string model = " --model " + (dir / "rig.json").string();
-  const CliResult r = runCli("correct " + in.string() + model + " -o " + (dir / "out.bag").string());
+  const CliResult r =
+      runCli("correct " + in.string() + model + " -o " + (dir / "out.bag").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto a = readAll(in), b = readAll(dir / "out.bag");
   ASSERT_EQ(a.size(), b.size());
@@ -212,24 +225,31 @@ TEST(CorrectBag, RigModelCorrectsEachTopicWithItsOwnBlock) {
   for (std::size_t i = 0; i < a.size(); ++i) {
     SCOPED_TRACE(i);
     ASSERT_EQ(a[i].topic, b[i].topic);
-    if (a[i].topic == "/scan") expectRangesCorrected(*a[i].scan, *b[i].scan, rig.sensors[0].model), ++front;
-    else if (a[i].topic == "/scan_b") expectRangesCorrected(*a[i].scan, *b[i].scan, rig.sensors[1].model), ++back;
-    else EXPECT_EQ(a[i].bytes, b[i].bytes);
+    if (a[i].topic == "/scan")
+      expectRangesCorrected(*a[i].scan, *b[i].scan, rig.sensors[0].model), ++front;
+    else if (a[i].topic == "/scan_b")
+      expectRangesCorrected(*a[i].scan, *b[i].scan, rig.sensors[1].model), ++back;
+    else
+      EXPECT_EQ(a[i].bytes, b[i].bytes);
   }
   EXPECT_EQ(front, 6u);
   EXPECT_EQ(back, 6u);
   // One block by name: the other topic is copied as it was.
-  const CliResult one = runCli("correct " + in.string() + model + " --sensor back -o " + (dir / "back.bag").string());
+  const CliResult one =
+      runCli("correct " + in.string() + model + " --sensor back -o " + (dir / "back.bag").string());
   ASSERT_EQ(one.exit_code, 0) << one.err;
   const auto scans = expectSameBagButRanges(in, dir / "back.bag", "/scan_b");
   ASSERT_EQ(scans.size(), 6u);
   for (const auto& [x, y] : scans) expectRangesCorrected(*x, *y, rig.sensors[1].model);
   // A sequence needs the block named; the error lists the blocks.
-  ASSERT_EQ(runCli("import " + in.string() + " --topic /scan -o " + (dir / "seq").string()).exit_code, 0);
-  const CliResult seq = runCli("correct " + (dir / "seq").string() + model + " -o " + (dir / "seq-out").string());
+  ASSERT_EQ(
+      runCli("import " + in.string() + " --topic /scan -o " + (dir / "seq").string()).exit_code, 0);
+  const CliResult seq =
+      runCli("correct " + (dir / "seq").string() + model + " -o " + (dir / "seq-out").string());
   EXPECT_EQ(seq.exit_code, 2);
   EXPECT_NE(seq.err.find("front (/scan)"), std::string::npos) << seq.err;
-  const CliResult unknown = runCli("correct " + in.string() + model + " --sensor side -o " + (dir / "x.bag").string());
+  const CliResult unknown =
+      runCli("correct " + in.string() + model + " --sensor side -o " + (dir / "x.bag").string());
   EXPECT_EQ(unknown.exit_code, 2);
   EXPECT_NE(unknown.err.find("'side'"), std::string::npos) << unknown.err;
 }
@@ -237,8 +257,9 @@ TEST(CorrectBag, RigModelCorrectsEachTopicWithItsOwnBlock) {
 TEST(ImportRig, TwoTopicsKeepEachScansSensor) {
   TempDir dir;
   const auto in = writeBag(dir / "in.bag", 5, true);
-  const CliResult r = runCli("import " + in.string() + " --topic /scan,/scan_b --sensor-names front,back -o " +
-                             (dir / "rig").string());
+  const CliResult r =
+      runCli("import " + in.string() + " --topic /scan,/scan_b --sensor-names front,back -o " +
+             (dir / "rig").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const io::Rig rig = io::openRig(dir / "rig");
   ASSERT_EQ(rig.meta.sensors.size(), 2u);
@@ -250,9 +271,12 @@ TEST(ImportRig, TwoTopicsKeepEachScansSensor) {
   EXPECT_EQ(back, 5u);
   for (const io::Sequence& seq : rig.sequences) EXPECT_EQ(seq.scans.size(), 5u);
   // Single-topic imports are unchanged: no rig files.
-  ASSERT_EQ(runCli("import " + in.string() + " --topic /scan -o " + (dir / "one").string()).exit_code, 0);
+  ASSERT_EQ(
+      runCli("import " + in.string() + " --topic /scan -o " + (dir / "one").string()).exit_code, 0);
   EXPECT_FALSE(io::isRigDirectory(dir / "one"));
-  const CliResult names = runCli("import " + in.string() + " --topic /scan,/scan_b --sensor-names a -o " + (dir / "x").string());
+  const CliResult names =
+      runCli("import " + in.string() + " --topic /scan,/scan_b --sensor-names a -o " +
+             (dir / "x").string());
   EXPECT_EQ(names.exit_code, 2);
   EXPECT_NE(names.err.find("--sensor-names"), std::string::npos) << names.err;
 }
@@ -262,22 +286,27 @@ TEST(CorrectBag, RefusesAnotherSensorsModelAndLeavesNoOutput) {
   const auto in = writeBag(dir / "in.bag", 6, false, 4);  // message 4 has 99 beams
   const std::string out = " -o " + (dir / "out.bag").string();
   io::writeModel(dir / "other.json", polynomialModel("RPLIDAR A2", 100));
-  const CliResult name = runCli("correct " + in.string() + " --model " + (dir / "other.json").string() + out);
+  const CliResult name =
+      runCli("correct " + in.string() + " --model " + (dir / "other.json").string() + out);
   EXPECT_EQ(name.exit_code, 2);
   EXPECT_NE(name.err.find("sensor_name"), std::string::npos) << name.err;
   io::writeModel(dir / "beams.json", polynomialModel(kSensor, 100));
-  const CliResult beams = runCli("correct " + in.string() + " --model " + (dir / "beams.json").string() + out);
+  const CliResult beams =
+      runCli("correct " + in.string() + " --model " + (dir / "beams.json").string() + out);
   EXPECT_EQ(beams.exit_code, 2);
   EXPECT_NE(beams.err.find("99 beams"), std::string::npos) << beams.err;
   std::size_t files = 0;
-  for (const auto& e : std::filesystem::directory_iterator(dir.path())) files += e.is_regular_file();
+  for (const auto& e : std::filesystem::directory_iterator(dir.path()))
+    files += e.is_regular_file();
   EXPECT_EQ(files, 3u) << "an output or a temporary file was left";  // in.bag and the two models
   writeFile(dir / "out.bag", "keep");
   io::writeModel(dir / "any.json", polynomialModel("", 0));
-  const CliResult taken = runCli("correct " + in.string() + " --model " + (dir / "any.json").string() + out);
+  const CliResult taken =
+      runCli("correct " + in.string() + " --model " + (dir / "any.json").string() + out);
   EXPECT_EQ(taken.exit_code, 2);
   EXPECT_EQ(readFile(dir / "out.bag"), "keep");
-  const CliResult ascii = runCli("correct " + in.string() + " --ascii --overwrite --model " + (dir / "any.json").string() + out);
+  const CliResult ascii = runCli("correct " + in.string() + " --ascii --overwrite --model " +
+                                 (dir / "any.json").string() + out);
   EXPECT_EQ(ascii.exit_code, 2);
 }
 
@@ -286,18 +315,21 @@ TEST(CorrectBag, SharedRplidarRecording) {
   if (!std::filesystem::exists(in)) GTEST_SKIP() << "shared recording absent: " << in;
   TempDir dir;
   // A model for this sensor (name and limits as import writes them), beams from the bag itself.
-  ASSERT_EQ(runCli("import " + in.string() + " --max-scans 1 -o " + (dir / "seq").string()).exit_code, 0);
+  ASSERT_EQ(
+      runCli("import " + in.string() + " --max-scans 1 -o " + (dir / "seq").string()).exit_code, 0);
   const io::Sequence seq = io::openSequence(dir / "seq");
-  CalibrationModel m = polynomialModel(seq.meta.sensor_name.value_or(""), static_cast<int>(seq.scans.front().points));
+  CalibrationModel m = polynomialModel(seq.meta.sensor_name.value_or(""),
+                                       static_cast<int>(seq.scans.front().points));
   m.model.range_min_m = seq.meta.range_min_m.value_or(0.0);
   m.model.range_max_m = seq.meta.range_max_m.value_or(12.0);
   io::writeModel(dir / "model.json", m);
-  const CliResult r = runCli("correct " + in.string() + " --model " + (dir / "model.json").string() + " -o " +
-                             (dir / "out.bag").string());
+  const CliResult r = runCli("correct " + in.string() + " --model " +
+                             (dir / "model.json").string() + " -o " + (dir / "out.bag").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto scans = expectSameBagButRanges(in, dir / "out.bag", "/scan_rplidar");
   EXPECT_EQ(scans.size(), 1319u);
-  for (std::size_t i = 0; i < scans.size(); i += 97) expectRangesCorrected(*scans[i].first, *scans[i].second, m);
+  for (std::size_t i = 0; i < scans.size(); i += 97)
+    expectRangesCorrected(*scans[i].first, *scans[i].second, m);
 }
 
 // --- import --pose odom:TOPIC | tf:FRAME --------------------------------------------------
@@ -308,7 +340,7 @@ Pose2 baseAt(double t) {
   const double u = std::clamp((t - 2.0) / 2.0, 0.0, 1.0);
   return {1.0 * u, 0.5 * u, 0.3 * u};
 }
-constexpr double kT0 = 1000.0;  // bag time of t = 0
+constexpr double kT0 = 1000.0;       // bag time of t = 0
 const Pose2 kMount{0.2, -0.1, 0.5};  // laser on base_link (/tf_static)
 
 geometry_msgs::Quaternion yawQuaternion(double yaw) {
@@ -318,7 +350,8 @@ geometry_msgs::Quaternion yawQuaternion(double yaw) {
   return q;
 }
 
-geometry_msgs::TransformStamped stamped(const std::string& parent, const std::string& child, double t, const Pose2& p) {
+geometry_msgs::TransformStamped stamped(const std::string& parent, const std::string& child,
+                                        double t, const Pose2& p) {
   geometry_msgs::TransformStamped s;
   s.header.frame_id = parent;
   s.header.stamp = ros::Time(kT0 + t);
@@ -385,7 +418,8 @@ TEST_P(ImportPose, ViewpointIsTheLasersPoseAtEachStamp) {
   const bool in_map = pose == "tf:map";
   TempDir dir;
   const auto in = writePoseBag(dir / "pose.bag");
-  const CliResult r = runCli("import " + in.string() + " --topic /scan --pose " + pose + " -o " + (dir / "seq").string());
+  const CliResult r = runCli("import " + in.string() + " --topic /scan --pose " + pose + " -o " +
+                             (dir / "seq").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("stops"), std::string::npos) << r.out;
   const io::Sequence seq = io::openSequence(dir / "seq");
@@ -404,8 +438,8 @@ TEST_P(ImportPose, ViewpointIsTheLasersPoseAtEachStamp) {
     EXPECT_NEAR(wrapAngle(v.yaw_rad - truth.yaw_rad), 0.0, tol);
     still += !moving;
   }
-  // Stops: all scans of 0-2 s share one VIEWPOINT, all of 4-6 s another; moving scans (0.15 rad/s and
-  // 0.56 m/s, 5.6 cm per scan) each their own.
+  // Stops: all scans of 0-2 s share one VIEWPOINT, all of 4-6 s another; moving scans (0.15 rad/s
+  // and 0.56 m/s, 5.6 cm per scan) each their own.
   EXPECT_EQ(seq.stops.size(), 2u + (seq.scans.size() - still));
   EXPECT_EQ(seq.stops.front().scans.size(), 20u);
   EXPECT_EQ(seq.stops.back().scans.size(), 20u);
@@ -414,7 +448,8 @@ TEST_P(ImportPose, ViewpointIsTheLasersPoseAtEachStamp) {
 INSTANTIATE_TEST_SUITE_P(Sources, ImportPose, ::testing::Values("odom:/odom", "tf:map", "tf:odom"),
                          [](const auto& p) {
                            std::string name;
-                           for (const char c : std::string(p.param)) name += std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
+                           for (const char c : std::string(p.param))
+                             name += std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
                            return name;
                          });
 
@@ -432,7 +467,8 @@ TEST(ImportPoseErrors, NamesTheSourceAndWhatToDo) {
   EXPECT_EQ(runCli(base + " --pose tf:").exit_code, 2);
   EXPECT_EQ(runCli(base + " --still-m 0.1").exit_code, 2);  // without --pose
   EXPECT_FALSE(std::filesystem::exists(dir / "seq"));
-  // A looser tolerance: the whole drive (1.1 m, 17 deg) stays within 2 m and 30 deg of the first pose: one stop.
+  // A looser tolerance: the whole drive (1.1 m, 17 deg) stays within 2 m and 30 deg of the first
+  // pose: one stop.
   const CliResult loose = runCli(base + " --pose odom:/odom --still-m 2 --still-deg 30");
   ASSERT_EQ(loose.exit_code, 0) << loose.err;
   EXPECT_EQ(io::openSequence(dir / "seq").stops.size(), 1u);
@@ -440,7 +476,8 @@ TEST(ImportPoseErrors, NamesTheSourceAndWhatToDo) {
 
 TEST(ImportPose, SharedAgvBagsStandStill) {
   const auto dir_in = sharedData() / "hokuyo_ust30lx_reflector" / "agv_two_lidars";
-  if (!std::filesystem::exists(dir_in / "obs2.bag")) GTEST_SKIP() << "shared recordings absent: " << dir_in;
+  if (!std::filesystem::exists(dir_in / "obs2.bag"))
+    GTEST_SKIP() << "shared recordings absent: " << dir_in;
   TempDir dir;
   std::vector<Pose2> first;
   for (const std::string topic : {"/scan_front", "/scan_back"}) {
@@ -448,8 +485,8 @@ TEST(ImportPose, SharedAgvBagsStandStill) {
     const auto out = dir / topic.substr(1);
     // The vehicle's localisation (map -> base_footprint) jitters by a few centimetres while it
     // stands: the default 1 cm splits the recording into many stops and says what to try.
-    const std::string import = "import " + (dir_in / "obs2.bag").string() + " --topic " + topic + " --pose tf:map -o " +
-                               out.string() + " --overwrite";
+    const std::string import = "import " + (dir_in / "obs2.bag").string() + " --topic " + topic +
+                               " --pose tf:map -o " + out.string() + " --overwrite";
     const CliResult tight = runCli(import);
     ASSERT_EQ(tight.exit_code, 0) << tight.err;
     EXPECT_NE(tight.out.find("try --still-m 0.05"), std::string::npos) << tight.out;
@@ -461,7 +498,8 @@ TEST(ImportPose, SharedAgvBagsStandStill) {
     EXPECT_EQ(seq.stops.size(), 1u);  // the forklift stands still
     first.push_back(seq.scans.front().viewpoint);
   }
-  // The two lidars sit at opposite ends of the vehicle: different positions, headings about opposite.
+  // The two lidars sit at opposite ends of the vehicle: different positions, headings about
+  // opposite.
   EXPECT_GT(std::hypot(first[0].x_m - first[1].x_m, first[0].y_m - first[1].y_m), 0.5);
 }
 

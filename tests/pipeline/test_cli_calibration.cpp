@@ -20,16 +20,21 @@ namespace {
 using test::runCli;
 using test::TempDir;
 
-std::string scene(const char* name = "paper_field.json") { return (test::sourceDir() / "data/scenes" / name).string(); }
+std::string scene(const char* name = "paper_field.json") {
+  return (test::sourceDir() / "data/scenes" / name).string();
+}
 
 /// A small simulated sequence of the paper's field: 10 stops, 3 scans each.
-void simulate(const std::filesystem::path& dir, int seed, const char* scene_name = "paper_field.json") {
-  const auto r = runCli("simulate -q --scene " + scene(scene_name) + " --out " + dir.string() + " --seed " +
-                        std::to_string(seed) + " --scans-per-stop 3");
+void simulate(const std::filesystem::path& dir, int seed,
+              const char* scene_name = "paper_field.json") {
+  const auto r = runCli("simulate -q --scene " + scene(scene_name) + " --out " + dir.string() +
+                        " --seed " + std::to_string(seed) + " --scans-per-stop 3");
   ASSERT_EQ(r.exit_code, 0) << r.err;
 }
 
-nlohmann::json json(const std::filesystem::path& p) { return nlohmann::json::parse(test::readFile(p)); }
+nlohmann::json json(const std::filesystem::path& p) {
+  return nlohmann::json::parse(test::readFile(p));
+}
 
 class CliCalibration : public ::testing::Test {
  protected:
@@ -76,13 +81,17 @@ TEST_F(CliCalibration, CorrectMovesEveryPointAlongItsBeamToTheInverseOfTheBiasAn
   // Readings inside the range the model was fitted over (model.json fitted_range) move to f^-1 of
   // the reading; those beyond it to f continued as its tangent at the nearer edge (the default).
   TempDir out;
-  ASSERT_EQ(runCli("calibrate -q " + (a() / "scans").string() + " --out " + (out / "m.json").string()).exit_code, 0);
+  ASSERT_EQ(
+      runCli("calibrate -q " + (a() / "scans").string() + " --out " + (out / "m.json").string())
+          .exit_code,
+      0);
   // Correct the other sequence (a different draw of the same sensor).
-  const auto r = runCli("correct -q " + (b() / "scans").string() + " --model " + (out / "m.json").string() + " --out " +
-                        (out / "c").string());
+  const auto r = runCli("correct -q " + (b() / "scans").string() + " --model " +
+                        (out / "m.json").string() + " --out " + (out / "c").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto model = io::readModel(out / "m.json");
-  const calibration::RangeInverter inv(model.model, calibration::inversionWindow(model.model, calibration::InversionMethod::ls));
+  const calibration::RangeInverter inv(
+      model.model, calibration::inversionWindow(model.model, calibration::InversionMethod::ls));
   const auto raw = io::openSequence(b() / "scans");
   std::size_t continued = 0, moved = 0;
   for (std::size_t i : {0u, 17u, 29u}) {
@@ -106,21 +115,23 @@ TEST_F(CliCalibration, CorrectMovesEveryPointAlongItsBeamToTheInverseOfTheBiasAn
       ASSERT_EQ(cs.correction.size(), cs.cloud->size());
       if (rr < f(lo) || rr > f(hi)) {
         const double edge = rr < f(lo) ? lo : hi;
-        EXPECT_NEAR(rc, edge + (rr - f(edge)) / f.derivative(edge), 1e-5);  // the tangent at the edge
+        // the tangent at the edge
+        EXPECT_NEAR(rc, edge + (rr - f(edge)) / f.derivative(edge), 1e-5);
         EXPECT_EQ(cs.correction[k], io::PointCorrection::extrapolated);
         ++continued;
         continue;
       }
       ++moved;
       EXPECT_EQ(cs.correction[k], io::PointCorrection::corrected);
-      EXPECT_NEAR(rc, *inv.invert(rr), 1e-5);                            // corrected distance
-      EXPECT_NEAR(model.model.bias(rc), rr, 1e-5);                       // f(corrected) = raw
+      EXPECT_NEAR(rc, *inv.invert(rr), 1e-5);       // corrected distance
+      EXPECT_NEAR(model.model.bias(rc), rr, 1e-5);  // f(corrected) = raw
     }
   }
   EXPECT_GT(moved, 100u);
   EXPECT_GT(continued, 10u);  // the walls beyond the farthest pole
   // Evaluate: the correction of an independent sequence beats the raw readings by far.
-  const auto e = runCli("evaluate " + (out / "c").string() + " --truth " + (b() / "truth.json").string());
+  const auto e =
+      runCli("evaluate " + (out / "c").string() + " --truth " + (b() / "truth.json").string());
   ASSERT_EQ(e.exit_code, 0) << e.err;
   const auto j = nlohmann::json::parse(e.out);
   EXPECT_GT(j["landmarks"]["mse_ratio"].get<double>(), 30.0);
@@ -129,9 +140,12 @@ TEST_F(CliCalibration, CorrectMovesEveryPointAlongItsBeamToTheInverseOfTheBiasAn
   // from the edge by default they gain far more than kept as read.
   EXPECT_GT(j["walls"]["mse_ratio"].get<double>(), 10.0);
   EXPECT_GT(j["beyond_fitted_range"]["n"].get<double>(), 10.0);
-  ASSERT_EQ(runCli("correct -q " + (b() / "scans").string() + " --model " + (out / "m.json").string() +
-                   " --outside keep --out " + (out / "k").string()).exit_code, 0);
-  const auto k = runCli("evaluate " + (out / "k").string() + " --truth " + (b() / "truth.json").string());
+  ASSERT_EQ(runCli("correct -q " + (b() / "scans").string() + " --model " +
+                   (out / "m.json").string() + " --outside keep --out " + (out / "k").string())
+                .exit_code,
+            0);
+  const auto k =
+      runCli("evaluate " + (out / "k").string() + " --truth " + (b() / "truth.json").string());
   ASSERT_EQ(k.exit_code, 0) << k.err;
   EXPECT_LT(nlohmann::json::parse(k.out)["walls"]["mse_ratio"].get<double>(), 3.0);
 }
@@ -170,7 +184,8 @@ TEST_F(CliCalibration, RunsFiguresAreThoseOfTheScansItWrote) {
       all.add(t.range_m, y, c);
       if (t.target == io::TargetKind::landmark) landmarks.add(t.range_m, y, c);
       if (t.target == io::TargetKind::wall) walls.add(t.range_m, y, c);
-      if (cs.correction[b] == io::PointCorrection::extrapolated) beyond.add(t.range_m, y, c), ++extrapolated;
+      if (cs.correction[b] == io::PointCorrection::extrapolated)
+        beyond.add(t.range_m, y, c), ++extrapolated;
       if (cs.correction[b] == io::PointCorrection::corrected) ++corrected;
     }
   }
@@ -179,8 +194,10 @@ TEST_F(CliCalibration, RunsFiguresAreThoseOfTheScansItWrote) {
   EXPECT_EQ(summary["corrected_returns"].get<std::size_t>(), corrected);
   EXPECT_EQ(summary["extrapolated_returns"].get<std::size_t>(), extrapolated);
   EXPECT_GT(extrapolated, 100u);
-  const std::pair<const char*, const Scored*> rows[] = {
-      {"landmarks", &landmarks}, {"walls", &walls}, {"all", &all}, {"beyond_fitted_range", &beyond}};
+  const std::pair<const char*, const Scored*> rows[] = {{"landmarks", &landmarks},
+                                                        {"walls", &walls},
+                                                        {"all", &all},
+                                                        {"beyond_fitted_range", &beyond}};
   for (const auto& [name, s] : rows) {
     SCOPED_TRACE(name);
     EXPECT_EQ(e[name]["n"].get<std::size_t>(), s->n);
@@ -209,8 +226,10 @@ TEST_F(CliCalibration, AWallCrossingTheEdgeOfTheFittedRangeHasNoStep) {
   const std::size_t beams = truth.size() / raw.scans.size();
   auto steps = [&](const std::string& outside) {
     const std::string dir = (out / outside).string();
-    EXPECT_EQ(runCli("correct -q " + (b() / "scans").string() + " --model " + model + " --outside " + outside +
-                     " --out " + dir).exit_code, 0);
+    EXPECT_EQ(runCli("correct -q " + (b() / "scans").string() + " --model " + model +
+                     " --outside " + outside + " --out " + dir)
+                  .exit_code,
+              0);
     double sum = 0.0, variance = 0.0;  // of the error steps, and of the noise expected in them
     std::size_t n = 0;
     for (std::size_t i = 0; i < raw.scans.size(); ++i) {
@@ -220,30 +239,35 @@ TEST_F(CliCalibration, AWallCrossingTheEdgeOfTheFittedRangeHasNoStep) {
         const double edge = m.fitted_range_m->second;
         const bool crossing = (t0.range_m <= edge) != (t1.range_m <= edge);
         const auto &p0 = (*cs.cloud)[b], &p1 = (*cs.cloud)[b + 1];
-        if (!crossing || t0.target != io::TargetKind::wall || t1.target != t0.target || t1.target_id != t0.target_id ||
-            !std::isfinite(p0.x) || !std::isfinite(p1.x))
+        if (!crossing || t0.target != io::TargetKind::wall || t1.target != t0.target ||
+            t1.target_id != t0.target_id || !std::isfinite(p0.x) || !std::isfinite(p1.x))
           continue;
-        const double e0 = std::hypot(p0.x, p0.y) - t0.range_m, e1 = std::hypot(p1.x, p1.y) - t1.range_m;
+        const double e0 = std::hypot(p0.x, p0.y) - t0.range_m,
+                     e1 = std::hypot(p1.x, p1.y) - t1.range_m;
         sum += t0.range_m <= edge ? e1 - e0 : e0 - e1;  // beyond minus inside
-        const double s0 = m.model.noise.stddev(t0.range_m, m.model.bias) / m.model.bias.derivative(t0.range_m);
-        const double s1 = m.model.noise.stddev(t1.range_m, m.model.bias) / m.model.bias.derivative(t1.range_m);
+        const double s0 =
+            m.model.noise.stddev(t0.range_m, m.model.bias) / m.model.bias.derivative(t0.range_m);
+        const double s1 =
+            m.model.noise.stddev(t1.range_m, m.model.bias) / m.model.bias.derivative(t1.range_m);
         variance += s0 * s0 + s1 * s1;
         ++n;
       }
     }
     EXPECT_GT(n, 5u) << outside;
-    return std::make_pair(sum / static_cast<double>(n), std::sqrt(variance) / static_cast<double>(n));
+    return std::make_pair(sum / static_cast<double>(n),
+                          std::sqrt(variance) / static_cast<double>(n));
   };
   const auto [step, sigma] = steps("linear");
   EXPECT_LT(std::abs(step), 3.0 * sigma) << "mean step " << step << " m, sigma " << sigma << " m";
   const auto [kept_step, kept_sigma] = steps("keep");
-  EXPECT_GT(std::abs(kept_step), 10.0 * kept_sigma);  // what the test would see without the continuation
+  // what the test would see without the continuation
+  EXPECT_GT(std::abs(kept_step), 10.0 * kept_sigma);
 }
 
 TEST_F(CliCalibration, OracleRecoversTheSimulatedBias) {
   TempDir out;
-  ASSERT_EQ(runCli("calibrate -q " + (a() / "scans").string() + " --truth " + (a() / "truth.json").string() + " --out " +
-                   (out / "o.json").string())
+  ASSERT_EQ(runCli("calibrate -q " + (a() / "scans").string() + " --truth " +
+                   (a() / "truth.json").string() + " --out " + (out / "o.json").string())
                 .exit_code,
             0);
   const auto m = io::readModel(out / "o.json");
@@ -255,7 +279,8 @@ TEST_F(CliCalibration, OracleRecoversTheSimulatedBias) {
 TEST_F(CliCalibration, SameInputGivesTheSameModelAndCorrectedBytes) {
   TempDir out;
   for (const char* n : {"x", "y"})
-    ASSERT_EQ(runCli("run -q " + (a() / "scans").string() + " --out " + (out / n).string()).exit_code, 0);
+    ASSERT_EQ(
+        runCli("run -q " + (a() / "scans").string() + " --out " + (out / n).string()).exit_code, 0);
   EXPECT_EQ(test::readFile(out / "x/model.json"), test::readFile(out / "y/model.json"));
   EXPECT_TRUE(test::snapshot(out / "x/corrected") == test::snapshot(out / "y/corrected"));
 }
@@ -270,7 +295,9 @@ TEST_F(CliCalibration, ModelBytesDoNotDependOnHowThePathsAreSpelled) {
   const std::string long_name(120, 'x');
   ASSERT_EQ(runCli("run -q " + scans + " --out " + (out / "o").string()).exit_code, 0);
   ASSERT_EQ(runCli("run -q " + scans + " --out " + (out / long_name).string()).exit_code, 0);
-  ASSERT_EQ(runCli("run -q " + (a() / "./scans/").string() + " --out " + (out / "p").string()).exit_code, 0);
+  ASSERT_EQ(
+      runCli("run -q " + (a() / "./scans/").string() + " --out " + (out / "p").string()).exit_code,
+      0);
   const std::string model = test::readFile(out / "o/model.json");
   EXPECT_EQ(model, test::readFile(out / long_name / "model.json"));
   EXPECT_EQ(model, test::readFile(out / "p/model.json"));
@@ -278,39 +305,45 @@ TEST_F(CliCalibration, ModelBytesDoNotDependOnHowThePathsAreSpelled) {
 
 TEST_F(CliCalibration, CorrectRefusesAModelOfAnotherSensor) {
   TempDir out;
-  ASSERT_EQ(runCli("calibrate -q " + (a() / "scans").string() + " --out " + (out / "m.json").string()).exit_code, 0);
+  ASSERT_EQ(
+      runCli("calibrate -q " + (a() / "scans").string() + " --out " + (out / "m.json").string())
+          .exit_code,
+      0);
   auto j = json(out / "m.json");
   j["sensor"]["beams"] = 720;
   test::writeFile(out / "beams.json", j.dump());
-  auto r = runCli("correct " + (b() / "scans").string() + " --model " + (out / "beams.json").string() + " --out " +
-                  (out / "c1").string());
+  auto r = runCli("correct " + (b() / "scans").string() + " --model " +
+                  (out / "beams.json").string() + " --out " + (out / "c1").string());
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("has 360 beams"), std::string::npos) << r.err;
   EXPECT_FALSE(std::filesystem::exists(out / "c1"));
   j = json(out / "m.json");
   j["sensor"]["range_max_m"] = 12.0;
   test::writeFile(out / "range.json", j.dump());
-  r = runCli("correct " + (b() / "scans").string() + " --model " + (out / "range.json").string() + " --out " +
-             (out / "c2").string());
+  r = runCli("correct " + (b() / "scans").string() + " --model " + (out / "range.json").string() +
+             " --out " + (out / "c2").string());
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("range limits differ"), std::string::npos) << r.err;
 }
 
 TEST_F(CliCalibration, CorrectRefusesABiasThatCannotBeInvertedAndAMalformedModel) {
   TempDir out;
-  ASSERT_EQ(runCli("calibrate -q " + (a() / "scans").string() + " --out " + (out / "m.json").string()).exit_code, 0);
+  ASSERT_EQ(
+      runCli("calibrate -q " + (a() / "scans").string() + " --out " + (out / "m.json").string())
+          .exit_code,
+      0);
   auto j = json(out / "m.json");
   j["bias"]["alpha"] = {0.0, 2.0, -0.3};  // peaks at d = 3.3 m with f = 3.3 m < 6 m
   test::writeFile(out / "peak.json", j.dump());
-  auto r = runCli("correct " + (b() / "scans").string() + " --model " + (out / "peak.json").string() + " --out " +
-                  (out / "c").string());
+  auto r = runCli("correct " + (b() / "scans").string() + " --model " +
+                  (out / "peak.json").string() + " --out " + (out / "c").string());
   EXPECT_EQ(r.exit_code, 3);
   EXPECT_NE(r.err.find("bias.alpha"), std::string::npos) << r.err;
   j = json(out / "m.json");
   j["noise"]["kind"] = "pink";
   test::writeFile(out / "bad.json", j.dump());
-  r = runCli("correct " + (b() / "scans").string() + " --model " + (out / "bad.json").string() + " --out " +
-             (out / "c").string());
+  r = runCli("correct " + (b() / "scans").string() + " --model " + (out / "bad.json").string() +
+             " --out " + (out / "c").string());
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("noise.kind"), std::string::npos) << r.err;
   EXPECT_FALSE(std::filesystem::exists(out / "c"));
@@ -318,7 +351,8 @@ TEST_F(CliCalibration, CorrectRefusesABiasThatCannotBeInvertedAndAMalformedModel
 
 TEST_F(CliCalibration, OutputInsideTheInputIsRefused) {
   const auto before = test::snapshot(a());
-  const auto r = runCli("run " + (a() / "scans").string() + " --out " + (a() / "scans/out").string());
+  const auto r =
+      runCli("run " + (a() / "scans").string() + " --out " + (a() / "scans/out").string());
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("inside it"), std::string::npos) << r.err;
   EXPECT_TRUE(before == test::snapshot(a()));
@@ -329,8 +363,12 @@ TEST(CliCalibrationNoLandmark, ASequenceWithoutPolesCannotBeCalibrated) {
   test::writeFile(dir / "walls.json", R"({"sensor": {"range_min_m": 0.2, "range_max_m": 6.0,
       "bias_alpha": [0.0525, 0.8838, 0.0584]}, "path": {"stops": 4, "scans_per_stop": 1},
       "walls": [{"x0_m": -2, "y0_m": -2, "x1_m": 3, "y1_m": -2}, {"x0_m": 3, "y0_m": -2, "x1_m": 3, "y1_m": 2}]})");
-  ASSERT_EQ(runCli("simulate -q --scene " + (dir / "walls.json").string() + " --out " + (dir / "s").string()).exit_code, 0);
-  const auto r = runCli("calibrate " + (dir / "s/scans").string() + " --out " + (dir / "m.json").string());
+  ASSERT_EQ(runCli("simulate -q --scene " + (dir / "walls.json").string() + " --out " +
+                   (dir / "s").string())
+                .exit_code,
+            0);
+  const auto r =
+      runCli("calibrate " + (dir / "s/scans").string() + " --out " + (dir / "m.json").string());
   EXPECT_EQ(r.exit_code, 3);
   EXPECT_NE(r.err.find("no landmark"), std::string::npos) << r.err;
   EXPECT_FALSE(std::filesystem::exists(dir / "m.json"));

@@ -33,12 +33,15 @@ bool sameFloat(float a, float b) { return std::memcmp(&a, &b, sizeof a) == 0; }
 TEST(CliDetect, AOneStopRecordingIsDescribedAsOne) {
   TempDir dir;
   const std::string sim = (dir / "sim").string();
-  ASSERT_EQ(runCli("simulate -q --scene " + scene("paper_field.json") + " --out " + sim + " --seed 3 --stops 1 --scans-per-stop 4")
-                .exit_code, 0);
+  ASSERT_EQ(runCli("simulate -q --scene " + scene("paper_field.json") + " --out " + sim +
+                   " --seed 3 --stops 1 --scans-per-stop 4")
+                .exit_code,
+            0);
   const auto r = runCli("detect -q " + sim + "/scans --out " + (dir / "det").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("4 scans at 1 stop\n"), std::string::npos) << r.out;
-  EXPECT_NE(r.out.find("found in fewer than half the scans of the stop"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("found in fewer than half the scans of the stop"), std::string::npos)
+      << r.out;
   EXPECT_EQ(r.out.find("too few stops"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("this recording has 1 stop,"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("calibrate --reference"), std::string::npos) << r.out;
@@ -48,14 +51,18 @@ TEST(CliDetect, AOneStopRecordingIsDescribedAsOne) {
 TEST(CliDetect, LabelsEveryScanAndWritesTheLandmarkTable) {
   TempDir dir;
   const std::string sim = (dir / "sim").string(), out = (dir / "det").string();
-  ASSERT_EQ(runCli("simulate -q --scene " + scene("paper_field.json") + " --out " + sim + " --seed 3 --stops 4 --scans-per-stop 3")
-                .exit_code, 0);
+  ASSERT_EQ(runCli("simulate -q --scene " + scene("paper_field.json") + " --out " + sim +
+                   " --seed 3 --stops 4 --scans-per-stop 3")
+                .exit_code,
+            0);
   const auto before = test::snapshot(sim);
-  const auto r = runCli("detect -q " + sim + "/scans --out " + out + " --truth " + sim + "/truth.json");
+  const auto r =
+      runCli("detect -q " + sim + "/scans --out " + out + " --truth " + sim + "/truth.json");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("5 landmarks"), std::string::npos) << r.out;
   // The evaluation row: every detection a true positive, no false positive, precision 1.
-  EXPECT_TRUE(std::regex_search(r.out, std::regex(R"(\| (\d+) \| \1 \| 0 \| 1\.0000 \|)"))) << r.out;
+  EXPECT_TRUE(std::regex_search(r.out, std::regex(R"(\| (\d+) \| \1 \| 0 \| 1\.0000 \|)")))
+      << r.out;
   EXPECT_TRUE(test::snapshot(sim) == before);  // the input is untouched
 
   // Same points in the same order (NaN kept), plus a label; the table agrees with the labels.
@@ -65,7 +72,8 @@ TEST(CliDetect, LabelsEveryScanAndWritesTheLandmarkTable) {
   const auto rows = io::readLandmarksCsv(fs::path(out) / "landmarks.csv");
   std::map<std::pair<std::string, int>, std::size_t> points_of;  // (file, id) -> n_points
   for (const auto& row : rows) {
-    EXPECT_TRUE(points_of.emplace(std::make_pair(row.file, row.landmark), row.n_points).second) << "one row per id per scan";
+    EXPECT_TRUE(points_of.emplace(std::make_pair(row.file, row.landmark), row.n_points).second)
+        << "one row per id per scan";
     EXPECT_NEAR(row.range_m, std::hypot(row.centre_x_m, row.centre_y_m), 1e-6);
     EXPECT_NEAR(row.bearing_rad, std::atan2(row.centre_y_m, row.centre_x_m), 1e-6);
     EXPECT_DOUBLE_EQ(row.radius_m, 0.12);
@@ -79,7 +87,8 @@ TEST(CliDetect, LabelsEveryScanAndWritesTheLandmarkTable) {
     EXPECT_NEAR(b.viewpoint.x_m, a.viewpoint.x_m, 1e-9);
     std::map<int, std::size_t> count;
     for (std::size_t k = 0; k < a.cloud->size(); ++k) {
-      EXPECT_TRUE(sameFloat((*a.cloud)[k].x, (*b.cloud)[k].x) && sameFloat((*a.cloud)[k].y, (*b.cloud)[k].y));
+      EXPECT_TRUE(sameFloat((*a.cloud)[k].x, (*b.cloud)[k].x) &&
+                  sameFloat((*a.cloud)[k].y, (*b.cloud)[k].y));
       if (b.labels[k] != 0) {
         EXPECT_TRUE(std::isfinite((*b.cloud)[k].x));
         ++count[static_cast<int>(b.labels[k])];
@@ -87,7 +96,8 @@ TEST(CliDetect, LabelsEveryScanAndWritesTheLandmarkTable) {
       }
     }
     const std::string name = in.scans[i].name();
-    for (const auto& [id, n] : count) EXPECT_EQ(points_of[std::make_pair(name, id)], n) << name << " id " << id;
+    for (const auto& [id, n] : count)
+      EXPECT_EQ(points_of[std::make_pair(name, id)], n) << name << " id " << id;
   }
   EXPECT_EQ(ids, (std::set<int>{1, 2, 3, 4, 5}));
 }
@@ -101,14 +111,17 @@ TEST(CliDetect, SameInputGivesTheSameBytesAndOverwriteIsExplicit) {
   const auto again = runCli("detect -q " + seq + " --out " + (dir / "a").string());
   EXPECT_EQ(again.exit_code, 2);
   EXPECT_NE(again.err.find("overwrite"), std::string::npos) << again.err;
-  EXPECT_EQ(runCli("detect -q " + seq + " --out " + (dir / "a").string() + " --overwrite").exit_code, 0);
+  EXPECT_EQ(
+      runCli("detect -q " + seq + " --out " + (dir / "a").string() + " --overwrite").exit_code, 0);
 }
 
 TEST(CliDetect, RefusesAnOutputInsideTheInput) {
   TempDir dir;
   const std::string sim = (dir / "sim").string();
-  ASSERT_EQ(runCli("simulate -q --scene " + scene("paper_field.json") + " --out " + sim + " --stops 1 --scans-per-stop 1")
-                .exit_code, 0);
+  ASSERT_EQ(runCli("simulate -q --scene " + scene("paper_field.json") + " --out " + sim +
+                   " --stops 1 --scans-per-stop 1")
+                .exit_code,
+            0);
   const auto before = test::snapshot(sim);
   const auto r = runCli("detect -q " + sim + "/scans --out " + sim + "/scans/labelled");
   EXPECT_EQ(r.exit_code, 2);
@@ -123,8 +136,10 @@ TEST(CliDetect, SequenceWithoutLandmarksOrMetadataGivesZeroLandmarks) {
   s.landmarks.clear();
   test::writeFile(dir / "walls.json", io::sceneToJson(s).dump());
   const std::string sim = (dir / "sim").string();
-  ASSERT_EQ(runCli("simulate -q --scene " + (dir / "walls.json").string() + " --out " + sim + " --stops 3 --scans-per-stop 2")
-                .exit_code, 0);
+  ASSERT_EQ(runCli("simulate -q --scene " + (dir / "walls.json").string() + " --out " + sim +
+                   " --stops 3 --scans-per-stop 2")
+                .exit_code,
+            0);
   fs::remove(fs::path(sim) / "scans/sequence.json");
   const auto r = runCli("detect -q " + sim + "/scans --out " + (dir / "det").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -139,9 +154,15 @@ TEST(CliDetect, BadOptionsAreRefused) {
   TempDir dir;
   const std::string seq = (test::sourceDir() / "data/example/scans").string();
   EXPECT_EQ(runCli("detect " + seq).exit_code, 2);  // --out is required
-  EXPECT_EQ(runCli("detect " + seq + " --out " + (dir / "x").string() + " --radius -1").exit_code, 2);
-  EXPECT_EQ(runCli("detect " + seq + " --out " + (dir / "x").string() + " --radius 0.1 --estimate-radius").exit_code, 2);
-  EXPECT_EQ(runCli("detect " + (dir / "missing").string() + " --out " + (dir / "x").string()).exit_code, 2);
+  EXPECT_EQ(runCli("detect " + seq + " --out " + (dir / "x").string() + " --radius -1").exit_code,
+            2);
+  EXPECT_EQ(
+      runCli("detect " + seq + " --out " + (dir / "x").string() + " --radius 0.1 --estimate-radius")
+          .exit_code,
+      2);
+  EXPECT_EQ(
+      runCli("detect " + (dir / "missing").string() + " --out " + (dir / "x").string()).exit_code,
+      2);
   EXPECT_FALSE(fs::exists(dir / "x"));
 }
 

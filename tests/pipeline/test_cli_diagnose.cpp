@@ -28,7 +28,8 @@ class CliDiagnose : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     dir_ = new TempDir;
-    simulate(writeScene(dir_->path(), "heading", [](nlohmann::json& s) { s["path"]["sigma_psi_deg"] = 1.2; }),
+    simulate(writeScene(dir_->path(), "heading",
+                        [](nlohmann::json& s) { s["path"]["sigma_psi_deg"] = 1.2; }),
              dir_->path() / "heading", 5);
     simulate(writeScene(dir_->path(), "clean", [](nlohmann::json&) {}), dir_->path() / "clean", 6);
   }
@@ -44,8 +45,8 @@ TempDir* CliDiagnose::dir_ = nullptr;
 TEST_F(CliDiagnose, NamesAHeadingErrorInDetectedScansAndWritesTheReport) {
   TempDir out;
   const auto before = test::snapshot(at("heading"));
-  const auto r = runCli("diagnose -q " + at("heading/scans").string() + " --out " + (out / "d").string() + " --truth " +
-                        at("heading/truth.json").string());
+  const auto r = runCli("diagnose -q " + at("heading/scans").string() + " --out " +
+                        (out / "d").string() + " --truth " + at("heading/truth.json").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(r.out, "heading_error\n");
   EXPECT_TRUE(before == test::snapshot(at("heading")));  // input untouched
@@ -57,11 +58,12 @@ TEST_F(CliDiagnose, NamesAHeadingErrorInDetectedScansAndWritesTheReport) {
   std::set<std::string> names;
   for (const auto& c : j["candidates"]) {
     names.insert(c["effect"].get<std::string>());
-    for (const char* key : {"effect", "p_value", "heldout_gain_nats_per_point", "delta_aic", "significant", "identifiable"})
+    for (const char* key : {"effect", "p_value", "heldout_gain_nats_per_point", "delta_aic",
+                            "significant", "identifiable"})
       EXPECT_TRUE(c.contains(key)) << key;
   }
-  for (const char* e : {"incidence_noise", "incidence_bias", "landmark_bias", "heading_error", "range_drift", "mixed_pixels",
-                        "angle_offset", "range_noise_law"})
+  for (const char* e : {"incidence_noise", "incidence_bias", "landmark_bias", "heading_error",
+                        "range_drift", "mixed_pixels", "angle_offset", "range_noise_law"})
     EXPECT_TRUE(names.count(e)) << e;
   EXPECT_FALSE(j["battery"].empty());
   ASSERT_TRUE(j["extended_model"].is_object());
@@ -75,11 +77,14 @@ TEST_F(CliDiagnose, NamesAHeadingErrorInDetectedScansAndWritesTheReport) {
   double ss = 0.0;
   const auto truth = json(at("heading/truth.json"));
   for (const auto& st : truth["stops"]) {
-    const double psi = st["actual"]["yaw_rad"].get<double>() - st["commanded"]["yaw_rad"].get<double>();
+    const double psi =
+        st["actual"]["yaw_rad"].get<double>() - st["commanded"]["yaw_rad"].get<double>();
     ss += psi * psi;
   }
-  const double realised_deg = std::sqrt(ss / static_cast<double>(truth["stops"].size())) * 180.0 / M_PI;
-  EXPECT_NEAR(j["extended_model"]["scene_keys"]["path.sigma_psi_deg"].get<double>(), realised_deg, 0.25 * realised_deg)
+  const double realised_deg =
+      std::sqrt(ss / static_cast<double>(truth["stops"].size())) * 180.0 / M_PI;
+  EXPECT_NEAR(j["extended_model"]["scene_keys"]["path.sigma_psi_deg"].get<double>(), realised_deg,
+              0.25 * realised_deg)
       << "realised " << realised_deg << " degrees";
   EXPECT_GT(j["gain"]["heldout_nats_per_point"].get<double>(), 0.0);
   EXPECT_GT(j["gain"]["calibration_mse_ratio"]["baseline"].get<double>(), 0.0);
@@ -112,7 +117,8 @@ TEST_F(CliDiagnose, ALongSequenceIsDiagnosedOverItsLeadingStopsAndSaysSo) {
   const auto all = json(out / "all/diagnosis.json")["data"];
   EXPECT_FALSE(all.contains("selection"));
   const int total = all["readings"].get<int>(), cap = total / 2;
-  const auto r = runCli("diagnose -q --max-readings " + std::to_string(cap) + args + (out / "half").string());
+  const auto r =
+      runCli("diagnose -q --max-readings " + std::to_string(cap) + args + (out / "half").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto half = json(out / "half/diagnosis.json")["data"];
   EXPECT_LE(half["readings"].get<int>(), cap);
@@ -121,10 +127,12 @@ TEST_F(CliDiagnose, ALongSequenceIsDiagnosedOverItsLeadingStopsAndSaysSo) {
   EXPECT_LT(half["scans"].get<int>(), all["scans"].get<int>());
   const std::string said = "the first " + std::to_string(half["stops"].get<int>()) + " of " +
                            std::to_string(all["stops"].get<int>()) + " stops";
-  EXPECT_NE(half["selection"].get<std::string>().find(said), std::string::npos) << half["selection"];
+  EXPECT_NE(half["selection"].get<std::string>().find(said), std::string::npos)
+      << half["selection"];
   EXPECT_NE(test::readFile(out / "half/report.md").find(said), std::string::npos);
   // A cap below one stop's readings keeps the two stops a sequence diagnosis needs.
-  const auto tiny = runCli("diagnose -q --mode sequence --max-readings 1" + args + (out / "tiny").string());
+  const auto tiny =
+      runCli("diagnose -q --mode sequence --max-readings 1" + args + (out / "tiny").string());
   EXPECT_TRUE(tiny.exit_code == 0 || tiny.exit_code == 3) << tiny.exit_code << " " << tiny.err;
   EXPECT_EQ(json(out / "tiny/diagnosis.json")["data"]["stops"].get<int>(), 2);
 }
@@ -139,9 +147,13 @@ TEST(CliDiagnoseStopAndGo, MixedPixelsAtPoleEdgesInTheScansAreNamed) {
   auto rng = makeRng(20261128, 31);
   const double fraction = std::uniform_real_distribution<double>(0.05, 0.10)(rng);
   const int seed = std::uniform_int_distribution<int>(100, 100000)(rng);
-  simulate(writeScene(dir.path(), "mixed", [&](nlohmann::json& s) { s["sensor"]["effects"] = {{"mixed_pixel_fraction", fraction}}; }),
+  simulate(writeScene(dir.path(), "mixed",
+                      [&](nlohmann::json& s) {
+                        s["sensor"]["effects"] = {{"mixed_pixel_fraction", fraction}};
+                      }),
            dir / "mixed", seed);
-  const auto r = runCli("diagnose -q " + (dir / "mixed/scans").string() + " --replicas 9 --out " + (dir / "d").string());
+  const auto r = runCli("diagnose -q " + (dir / "mixed/scans").string() + " --replicas 9 --out " +
+                        (dir / "d").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(r.out, "mixed_pixels\n") << "seed " << seed << ", fraction " << fraction;
   EXPECT_GT(json(dir / "d/diagnosis.json")["data"]["readings_beside_poles"].get<int>(), 0);
@@ -155,17 +167,23 @@ TEST(CliDiagnoseIntensity, DarkPolesAreNamedFromTheScansIntensitiesAndCalibrated
   const double intensity[] = {20.0, 180.0, 60.0, 240.0, 40.0};
   simulate(writeScene(dir.path(), "dark",
                       [&](nlohmann::json& s) {
-                        for (std::size_t l = 0; l < s["landmarks"].size(); ++l) s["landmarks"][l]["intensity"] = intensity[l % 5];
-                        s["sensor"]["effects"] = {{"dark_noise_exponent", 1.0}, {"dark_reference_intensity", 80.0}};
+                        for (std::size_t l = 0; l < s["landmarks"].size(); ++l)
+                          s["landmarks"][l]["intensity"] = intensity[l % 5];
+                        s["sensor"]["effects"] = {{"dark_noise_exponent", 1.0},
+                                                  {"dark_reference_intensity", 80.0}};
                       }),
            dir / "dark", 7);
-  ASSERT_NE(test::readFile(dir / "dark/scans/scan_000000.pcd").find("intensity"), std::string::npos);
-  auto r = runCli("diagnose -q " + (dir / "dark/scans").string() + " --out " + (dir / "d").string() + " --replicas 5");
+  ASSERT_NE(test::readFile(dir / "dark/scans/scan_000000.pcd").find("intensity"),
+            std::string::npos);
+  auto r = runCli("diagnose -q " + (dir / "dark/scans").string() + " --out " +
+                  (dir / "d").string() + " --replicas 5");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(r.out, "dark_surface\n");
   const auto j = json(dir / "d/diagnosis.json");
-  EXPECT_NEAR(j["extended_model"]["scene_keys"]["sensor.effects.dark_noise_exponent"].get<double>(), 1.0, 0.25);
-  r = runCli("calibrate -q " + (dir / "dark/scans").string() + " --out " + (dir / "m.json").string() + " --effects dark_surface");
+  EXPECT_NEAR(j["extended_model"]["scene_keys"]["sensor.effects.dark_noise_exponent"].get<double>(),
+              1.0, 0.25);
+  r = runCli("calibrate -q " + (dir / "dark/scans").string() + " --out " +
+             (dir / "m.json").string() + " --effects dark_surface");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto m = json(dir / "m.json");
   EXPECT_NEAR(m["effects"]["dark_noise_exponent"].get<double>(), 1.0, 0.25);
@@ -181,11 +199,13 @@ TEST(CliDiagnoseErrors, BadInputsExplainThemselves) {
     s["path"]["scans_per_stop"] = 12;
   });
   simulate(scene, dir / "one", 1);
-  r = runCli("diagnose -q " + (dir / "one/scans").string() + " --out " + (dir / "d").string() + " --mode sequence");
+  r = runCli("diagnose -q " + (dir / "one/scans").string() + " --out " + (dir / "d").string() +
+             " --mode sequence");
   EXPECT_EQ(r.exit_code, 3) << r.err;
   EXPECT_NE(r.err.find("two stops"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir / "d"));
-  r = runCli("diagnose -q " + (dir / "one/scans").string() + " --out " + (dir / "d").string() + " --candidates wobble");
+  r = runCli("diagnose -q " + (dir / "one/scans").string() + " --out " + (dir / "d").string() +
+             " --candidates wobble");
   EXPECT_EQ(r.exit_code, 2) << r.err;
   EXPECT_NE(r.err.find("wobble"), std::string::npos) << r.err;
 }
@@ -197,8 +217,8 @@ TEST(CliCalibrateEffects, TheCalibrationUsesAnEffectTermAndWritesIt) {
     s["landmarks"][3]["range_offset_m"] = -0.03;
   });
   simulate(scene, dir / "s", 2, "--scans-per-stop 3");
-  auto r = runCli("calibrate -q " + (dir / "s/scans").string() + " --out " + (dir / "m.json").string() +
-                  " --effects landmark_bias");
+  auto r = runCli("calibrate -q " + (dir / "s/scans").string() + " --out " +
+                  (dir / "m.json").string() + " --effects landmark_bias");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto m = io::readModel(dir / "m.json");
   ASSERT_EQ(m.effects.size(), 5u);
@@ -211,7 +231,8 @@ TEST(CliCalibrateEffects, TheCalibrationUsesAnEffectTermAndWritesIt) {
   }
   EXPECT_NEAR(hi, 0.04 - mean, 0.01);
   EXPECT_NEAR(lo, -0.03 - mean, 0.01);
-  r = runCli("calibrate -q " + (dir / "s/scans").string() + " --out " + (dir / "n.json").string() + " --effects wobble");
+  r = runCli("calibrate -q " + (dir / "s/scans").string() + " --out " + (dir / "n.json").string() +
+             " --effects wobble");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("wobble"), std::string::npos);
   // The remedy lists every effect term there is.

@@ -34,14 +34,18 @@ TEST(CliDiagnoseStatic, ARoomFromOnePoseIsDiagnosedInStaticModeAndTheEffectNamed
   });
   simulate(scene, dir / "room", 3);
   // The simulator kept the effect's key in the scene it simulated.
-  EXPECT_EQ(json(dir / "room/truth.json")["scene"]["sensor"]["effects"]["incidence_noise_exponent"], 1.0);
-  const auto r = runCli("diagnose -q " + (dir / "room/scans").string() + " --out " + (dir / "d").string() + " --replicas 9");
+  EXPECT_EQ(json(dir / "room/truth.json")["scene"]["sensor"]["effects"]["incidence_noise_exponent"],
+            1.0);
+  const auto r = runCli("diagnose -q " + (dir / "room/scans").string() + " --out " +
+                        (dir / "d").string() + " --replicas 9");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(r.out, "incidence_noise\n");
   const auto j = json(dir / "d/diagnosis.json");
   EXPECT_EQ(j["mode"], "static");
   EXPECT_GE(j["baseline"]["walls"].size(), 4u);
-  EXPECT_NEAR(j["extended_model"]["scene_keys"]["sensor.effects.incidence_noise_exponent"].get<double>(), 1.0, 0.25);
+  EXPECT_NEAR(
+      j["extended_model"]["scene_keys"]["sensor.effects.incidence_noise_exponent"].get<double>(),
+      1.0, 0.25);
   for (const auto& c : j["candidates"]) {
     if (c["effect"] == "heading_error") {
       EXPECT_TRUE(c["p_value"].is_null());
@@ -53,16 +57,20 @@ TEST(CliDiagnoseMeasured, RplidarRecordingIsAStaticRoom) {
   const fs::path bag = test::sharedData() / "rplidar_a2_room/rplidar_1.bag";
   if (!fs::exists(bag)) GTEST_SKIP() << "shared data absent: " << bag;
   TempDir dir;
-  auto r = runCli("import -q --from rosbag1 " + bag.string() + " --out " + (dir / "seq").string() + " --max-scans 300");
-  if (r.exit_code != 0 && r.err.find("ROS") != std::string::npos) GTEST_SKIP() << "built without the ROS1 importer";
+  auto r = runCli("import -q --from rosbag1 " + bag.string() + " --out " + (dir / "seq").string() +
+                  " --max-scans 300");
+  if (r.exit_code != 0 && r.err.find("ROS") != std::string::npos)
+    GTEST_SKIP() << "built without the ROS1 importer";
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  r = runCli("diagnose -q " + (dir / "seq").string() + " --out " + (dir / "d").string() + " --replicas 5 --folds 2");
+  r = runCli("diagnose -q " + (dir / "seq").string() + " --out " + (dir / "d").string() +
+             " --replicas 5 --folds 2");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto j = json(dir / "d/diagnosis.json");
   EXPECT_EQ(j["mode"], "static");
   EXPECT_EQ(j["baseline"]["fitted"]["window_scans"], 0.0);  // it did not move
   EXPECT_GE(j["baseline"]["walls"].size(), 4u);
-  EXPECT_EQ(j["baseline"]["fitted"]["reading_grid_m"], 0.001);  // the bag's ranges are whole millimetres
+  // the bag's ranges are whole millimetres
+  EXPECT_EQ(j["baseline"]["fitted"]["reading_grid_m"], 0.001);
   // What is established about this recording (docs/FINDINGS.md, on all 1319 scans): its noise has
   // heavy tails (a few readings up to 1.3 m off at depth discontinuities and dark furniture) and
   // grows with the incidence on the walls; the 1 mm grid is certain but far finer than the noise.

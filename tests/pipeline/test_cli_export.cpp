@@ -39,8 +39,8 @@ TEST(Export, YamlCarriesTheModelExactly) {
   TempDir dir;
   const CalibrationModel m = polynomialModel("test sensor", 360);
   io::writeModel(dir / "model.json", m);
-  const CliResult r = runCli("export " + (dir / "model.json").string() + " --format yaml --inversion ml -o " +
-                             (dir / "model.yaml").string());
+  const CliResult r = runCli("export " + (dir / "model.json").string() +
+                             " --format yaml --inversion ml -o " + (dir / "model.yaml").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const std::string y = readFile(dir / "model.yaml");
   EXPECT_EQ(yamlList(y, "bias_alpha"), m.model.bias.alpha);  // shortest round-trip text: exact
@@ -54,7 +54,8 @@ TEST(Export, YamlCarriesTheModelExactly) {
   EXPECT_EQ(yamlValue(y, "beams"), "360");
   EXPECT_NE(y.find("\nsensor_name: \"test sensor\"\n"), std::string::npos) << y;
   // Standard output when no -o is given: the same text.
-  const CliResult s = runCli("export " + (dir / "model.json").string() + " --format yaml --inversion ml");
+  const CliResult s =
+      runCli("export " + (dir / "model.json").string() + " --format yaml --inversion ml");
   ASSERT_EQ(s.exit_code, 0) << s.err;
   EXPECT_EQ(s.out, y);
 }
@@ -63,8 +64,9 @@ TEST(Export, LutInvertsThePolynomialOverTheFittedRange) {
   TempDir dir;
   const CalibrationModel m = polynomialModel("test sensor", 0);
   io::writeModel(dir / "model.json", m);
-  const CliResult r = runCli("export " + (dir / "model.json").string() + " --format lut --step 0.01 --outside keep -o " +
-                             (dir / "lut.csv").string());
+  const CliResult r =
+      runCli("export " + (dir / "model.json").string() +
+             " --format lut --step 0.01 --outside keep -o " + (dir / "lut.csv").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto rows = readLut(readFile(dir / "lut.csv"));
   const double lo = m.model.bias(0.5), hi = m.model.bias(8.0);
@@ -101,9 +103,11 @@ TEST_P(LutEqualsCorrect, ForEveryRow) {
   TempDir dir;
   const CalibrationModel m = polynomialModel("test sensor", 0);
   io::writeModel(dir / "model.json", m);
-  const std::string options = std::string(" --inversion ") + c.inversion + " --outside " + c.outside;
-  const CliResult r = runCli("export " + (dir / "model.json").string() + " --format lut --step 0.05 -o " +
-                             (dir / "lut.csv").string() + options);
+  const std::string options =
+      std::string(" --inversion ") + c.inversion + " --outside " + c.outside;
+  const CliResult r =
+      runCli("export " + (dir / "model.json").string() + " --format lut --step 0.05 -o " +
+             (dir / "lut.csv").string() + options);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto rows = readLut(readFile(dir / "lut.csv"));
   ASSERT_GT(rows.size(), 100u);
@@ -119,13 +123,15 @@ TEST_P(LutEqualsCorrect, ForEveryRow) {
     writer.add(scan);
     writer.commit("test sensor");
   }
-  const CliResult corrected = runCli("correct " + (dir / "seq").string() + " --model " + (dir / "model.json").string() +
-                                     " -o " + (dir / "out").string() + options);
+  const CliResult corrected =
+      runCli("correct " + (dir / "seq").string() + " --model " + (dir / "model.json").string() +
+             " -o " + (dir / "out").string() + options);
   ASSERT_EQ(corrected.exit_code, 0) << corrected.err;
   const io::Scan raw = io::readScan(dir / "seq" / io::scanFileName(0));
   const io::Scan out = io::readScan(dir / "out" / io::scanFileName(0));
   ASSERT_EQ(out.cloud->size(), rows.size());
-  const bool extrapolate = std::string(c.outside) == "extrapolate" || std::string(c.outside) == "linear";
+  const bool extrapolate =
+      std::string(c.outside) == "extrapolate" || std::string(c.outside) == "linear";
   std::size_t nan_rows = 0, outside_rows = 0;
   for (std::size_t i = 0; i < rows.size(); ++i) {
     SCOPED_TRACE(i);
@@ -155,9 +161,12 @@ TEST_P(LutEqualsCorrect, ForEveryRow) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Policies, LutEqualsCorrect,
-                         ::testing::Values(LutCase{"ls", "keep"}, LutCase{"ml", "keep"}, LutCase{"ls", "extrapolate"},
-                                           LutCase{"ls", "linear"}, LutCase{"ml", "linear"}),
-                         [](const auto& p) { return std::string(p.param.inversion) + "_" + p.param.outside; });
+                         ::testing::Values(LutCase{"ls", "keep"}, LutCase{"ml", "keep"},
+                                           LutCase{"ls", "extrapolate"}, LutCase{"ls", "linear"},
+                                           LutCase{"ml", "linear"}),
+                         [](const auto& p) {
+                           return std::string(p.param.inversion) + "_" + p.param.outside;
+                         });
 
 TEST(Export, TheDefaultContinuesTheTangentOverTheSensorsRangeWindow) {
   TempDir dir;
@@ -174,7 +183,8 @@ TEST(Export, TheDefaultContinuesTheTangentOverTheSensorsRangeWindow) {
   for (const auto& [y, d] : rows) {
     if (y >= f(0.5) && y <= f(8.0)) continue;
     const double edge = y < f(0.5) ? 0.5 : 8.0;
-    EXPECT_NEAR(d, edge + (y - f(edge)) / f.derivative(edge), 1e-8 * d + 1e-9) << y;  // 9 significant digits
+    // 9 significant digits
+    EXPECT_NEAR(d, edge + (y - f(edge)) / f.derivative(edge), 1e-8 * d + 1e-9) << y;
     ++beyond;
   }
   EXPECT_GT(beyond, 100u);
@@ -183,7 +193,8 @@ TEST(Export, TheDefaultContinuesTheTangentOverTheSensorsRangeWindow) {
 TEST(Export, ExtrapolateSpansTheSensorsRangeWindow) {
   TempDir dir;
   io::writeModel(dir / "model.json", polynomialModel("s", 0));
-  const CliResult r = runCli("export " + (dir / "model.json").string() + " --format lut --outside extrapolate");
+  const CliResult r =
+      runCli("export " + (dir / "model.json").string() + " --format lut --outside extrapolate");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto rows = readLut(r.out);
   ASSERT_FALSE(rows.empty());
@@ -201,14 +212,16 @@ TEST(Export, RefusesBadInputWithExitCodes) {
   EXPECT_EQ(runCli("export " + model + " --format yaml --step 0.1").exit_code, 2);
   EXPECT_EQ(runCli("export " + model + " --format csv").exit_code, 2);
   writeFile(dir / "taken.csv", "keep me");
-  const CliResult taken = runCli("export " + model + " --format lut -o " + (dir / "taken.csv").string());
+  const CliResult taken =
+      runCli("export " + model + " --format lut -o " + (dir / "taken.csv").string());
   EXPECT_EQ(taken.exit_code, 2);
   EXPECT_NE(taken.err.find("--overwrite"), std::string::npos) << taken.err;
   EXPECT_EQ(readFile(dir / "taken.csv"), "keep me");
   // ML needs the squared noise law.
   m.model.noise.kind = NoiseKind::constant;
   io::writeModel(dir / "constant.json", m);
-  const CliResult ml = runCli("export " + (dir / "constant.json").string() + " --format lut --inversion ml");
+  const CliResult ml =
+      runCli("export " + (dir / "constant.json").string() + " --format lut --inversion ml");
   EXPECT_EQ(ml.exit_code, 2);
   EXPECT_NE(ml.err.find("--inversion"), std::string::npos) << ml.err;
   // A polynomial that turns back inside its fitted range: the data cannot support a table.

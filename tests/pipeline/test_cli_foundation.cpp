@@ -19,14 +19,16 @@ std::string paperScene() { return (test::sourceDir() / "data/scenes/paper_field.
 
 TEST(CliSimulate, WritesASequencePclCanOpenWithTheCommandedPoseAndTheTruth) {
   TempDir dir;
-  const auto r = runCli("simulate --scene " + paperScene() + " --out " + (dir / "sim").string() + " --seed 1");
+  const auto r =
+      runCli("simulate --scene " + paperScene() + " --out " + (dir / "sim").string() + " --seed 1");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const Truth truth = io::readTruth(dir / "sim/truth.json");
   ASSERT_EQ(truth.stops.size(), 10u);
   EXPECT_TRUE(std::filesystem::exists(dir / "sim/true_ranges.csv"));
   EXPECT_TRUE(std::filesystem::exists(dir / "sim/scans/sequence.json"));
   for (std::size_t scan : {0u, 47u, 99u}) {
-    const auto file = dir / ("sim/scans/scan_0000" + std::string(scan < 10 ? "0" : "") + std::to_string(scan) + ".pcd");
+    const auto file = dir / ("sim/scans/scan_0000" + std::string(scan < 10 ? "0" : "") +
+                             std::to_string(scan) + ".pcd");
     pcl::PointCloud<pcl::PointXYZ> cloud;
     ASSERT_EQ(pcl::io::loadPCDFile(file.string(), cloud), 0) << file;
     EXPECT_EQ(cloud.size(), 360u);
@@ -34,16 +36,25 @@ TEST(CliSimulate, WritesASequencePclCanOpenWithTheCommandedPoseAndTheTruth) {
     EXPECT_NEAR(cloud.sensor_origin_[0], stop.commanded.x_m, 1e-5);
     EXPECT_NEAR(cloud.sensor_origin_[1], stop.commanded.y_m, 1e-5);
     // The actual pose differs from the commanded one (sigma_s = 2 cm).
-    EXPECT_GT(std::hypot(stop.actual.x_m - stop.commanded.x_m, stop.actual.y_m - stop.commanded.y_m), 0.0);
+    EXPECT_GT(
+        std::hypot(stop.actual.x_m - stop.commanded.x_m, stop.actual.y_m - stop.commanded.y_m),
+        0.0);
   }
 }
 
 TEST(CliSimulate, SameSceneAndSeedGiveTheSameBytes) {
   TempDir dir;
   for (const char* name : {"a", "b"})
-    ASSERT_EQ(runCli("simulate -q --scene " + paperScene() + " --out " + (dir / name).string() + " --seed 7").exit_code, 0);
-  ASSERT_EQ(runCli("simulate -q --scene " + paperScene() + " --out " + (dir / "c").string() + " --seed 8").exit_code, 0);
-  const auto a = test::snapshot(dir / "a"), b = test::snapshot(dir / "b"), c = test::snapshot(dir / "c");
+    ASSERT_EQ(runCli("simulate -q --scene " + paperScene() + " --out " + (dir / name).string() +
+                     " --seed 7")
+                  .exit_code,
+              0);
+  ASSERT_EQ(
+      runCli("simulate -q --scene " + paperScene() + " --out " + (dir / "c").string() + " --seed 8")
+          .exit_code,
+      0);
+  const auto a = test::snapshot(dir / "a"), b = test::snapshot(dir / "b"),
+             c = test::snapshot(dir / "c");
   EXPECT_EQ(a.size(), 103u);  // 100 scans, sequence.json, truth.json, true_ranges.csv
   EXPECT_TRUE(a == b);
   EXPECT_NE(a.at("scans/scan_000000.pcd"), c.at("scans/scan_000000.pcd"));
@@ -51,9 +62,13 @@ TEST(CliSimulate, SameSceneAndSeedGiveTheSameBytes) {
 
 TEST(CliSimulate, BundledExampleIsTheSimulationOfThePaperFieldWithSeed1) {
   // data/example is committed; regenerate it with
-  //   lidarcal simulate --scene data/scenes/paper_field.json --out data/example --seed 1 --overwrite
+  //   lidarcal simulate --scene data/scenes/paper_field.json --out data/example --seed 1
+  //   --overwrite
   TempDir dir;
-  ASSERT_EQ(runCli("simulate -q --scene " + paperScene() + " --out " + (dir / "ex").string() + " --seed 1").exit_code, 0);
+  ASSERT_EQ(runCli("simulate -q --scene " + paperScene() + " --out " + (dir / "ex").string() +
+                   " --seed 1")
+                .exit_code,
+            0);
   const auto fresh = test::snapshot(dir / "ex");
   const auto bundled = test::snapshot(test::sourceDir() / "data/example");
   EXPECT_EQ(bundled.size(), fresh.size());
@@ -69,7 +84,8 @@ TEST(CliSimulate, UnreadableOrMalformedSceneIsReported) {
   auto r = runCli("simulate --scene /nonexistent/scene.json --out " + (dir / "o").string());
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("/nonexistent/scene.json: file does not exist"), std::string::npos) << r.err;
-  test::writeFile(dir / "s.json", R"({"sensor": {"range_min_m": 0.2, "range_max_m": "far"}, "path": {}})");
+  test::writeFile(dir / "s.json",
+                  R"({"sensor": {"range_min_m": 0.2, "range_max_m": "far"}, "path": {}})");
   r = runCli("simulate --scene " + (dir / "s.json").string() + " --out " + (dir / "o").string());
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("sensor.range_max_m: must be a number"), std::string::npos) << r.err;
@@ -89,7 +105,8 @@ TEST(CliSimulate, RefusesToOverwriteAnExistingOutput) {
 class CliInfoBadInput : public ::testing::Test {
  protected:
   void SetUp() override {
-    ASSERT_EQ(runCli("simulate -q --scene " + paperScene() + " --out " + (dir_ / "sim").string() + " --stops 2 --scans-per-stop 2")
+    ASSERT_EQ(runCli("simulate -q --scene " + paperScene() + " --out " + (dir_ / "sim").string() +
+                     " --stops 2 --scans-per-stop 2")
                   .exit_code,
               0);
     seq_ = dir_ / "sim/scans";

@@ -14,8 +14,8 @@
 
 #include "common/pose2.hpp"
 #include "io/import_rosbag.hpp"
-#include "io/sequence.hpp"
 #include "io/import_test_util.hpp"
+#include "io/sequence.hpp"
 #include "test_util.hpp"
 
 namespace lidarcal {
@@ -25,7 +25,8 @@ namespace fs = std::filesystem;
 using test::runCli;
 using test::TempDir;
 
-/// Line `k` (0-based) among the lines of a (possibly gzip) text file starting with `prefix`, read with zlib.
+/// Line `k` (0-based) among the lines of a (possibly gzip) text file starting with `prefix`, read
+/// with zlib.
 std::string nthLine(const fs::path& file, const std::string& prefix, std::size_t k) {
   gzFile f = gzopen(file.c_str(), "rb");
   std::string line;
@@ -59,7 +60,8 @@ std::size_t pcdCount(const fs::path& dir) {
   return n;
 }
 
-pcl::PointCloud<pcl::PointXYZ> loadWithPcl(const fs::path& file, Eigen::Vector4f* origin = nullptr) {
+pcl::PointCloud<pcl::PointXYZ> loadWithPcl(const fs::path& file,
+                                           Eigen::Vector4f* origin = nullptr) {
   pcl::PointCloud<pcl::PointXYZ> cloud;
   EXPECT_EQ(pcl::io::loadPCDFile(file.string(), cloud), 0) << file;
   if (origin) *origin = cloud.sensor_origin_;
@@ -82,7 +84,8 @@ TEST_P(CliImportCarmen, CountsAnglesRangesAndPosesMatchTheLog) {
   const fs::path log = test::sharedData() / "carmen" / c.file;
   if (!fs::exists(log)) GTEST_SKIP() << "shared data absent: " << log;
   TempDir dir;
-  const auto r = runCli("import -q --from carmen " + log.string() + " --out " + (dir / "seq").string());
+  const auto r =
+      runCli("import -q --from carmen " + log.string() + " --out " + (dir / "seq").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(pcdCount(dir / "seq"), c.scans);
   const io::SequenceMeta meta = io::readSequenceMeta(dir / "seq/sequence.json");
@@ -90,7 +93,8 @@ TEST_P(CliImportCarmen, CountsAnglesRangesAndPosesMatchTheLog) {
   EXPECT_DOUBLE_EQ(*meta.range_max_m, 80.0);
   for (std::size_t k : {std::size_t{0}, c.scans / 2, c.scans - 1}) {
     SCOPED_TRACE(k);
-    const std::vector<double> v = numbersAfter(nthLine(log, "FLASER ", k), ' ', 1);  // n r1..rn x y th ox oy oth ts
+    // n r1..rn x y th ox oy oth ts
+    const std::vector<double> v = numbersAfter(nthLine(log, "FLASER ", k), ' ', 1);
     ASSERT_EQ(v.size(), c.beams + 8);  // the hostname stopped the stream
     ASSERT_EQ(v[0], static_cast<double>(c.beams));
     Eigen::Vector4f origin;
@@ -103,19 +107,24 @@ TEST_P(CliImportCarmen, CountsAnglesRangesAndPosesMatchTheLog) {
         continue;
       }
       EXPECT_NEAR(test::rangeOf(cloud[i].x, cloud[i].y), r_src, 1e-5 * r_src + 1e-6) << i;
-      EXPECT_NEAR(test::bearingOf(cloud[i].x, cloud[i].y), deg2rad(c.first_deg + c.step_deg * static_cast<double>(i)), 1e-5) << i;
+      EXPECT_NEAR(test::bearingOf(cloud[i].x, cloud[i].y),
+                  deg2rad(c.first_deg + c.step_deg * static_cast<double>(i)), 1e-5)
+          << i;
     }
-    EXPECT_NEAR(origin[0], v[1 + c.beams], 1e-3 + 1e-5 * std::abs(v[1 + c.beams]));  // 6 significant digits
+    // 6 significant digits
+    EXPECT_NEAR(origin[0], v[1 + c.beams], 1e-3 + 1e-5 * std::abs(v[1 + c.beams]));
     EXPECT_NEAR(origin[1], v[2 + c.beams], 1e-3 + 1e-5 * std::abs(v[2 + c.beams]));
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(SharedData, CliImportCarmen,
-                         ::testing::Values(CarmenCase{"Intel", "intel-corrected.log.gz", 910, 180, -89.5, 1.0},
-                                           CarmenCase{"MitCsail", "csail-corrected.log.gz", 406, 361, -90.0, 0.5},
-                                           CarmenCase{"Freiburg079", "freiburg-079-corrected.log.gz", 4791, 360, -89.75, 0.5},
-                                           CarmenCase{"FreiburgCampus", "freiburg-campus-corrected.log.gz", 2008, 360, -89.75, 0.5}),
-                         [](const auto& p) { return std::string(p.param.name); });
+INSTANTIATE_TEST_SUITE_P(
+    SharedData, CliImportCarmen,
+    ::testing::Values(
+        CarmenCase{"Intel", "intel-corrected.log.gz", 910, 180, -89.5, 1.0},
+        CarmenCase{"MitCsail", "csail-corrected.log.gz", 406, 361, -90.0, 0.5},
+        CarmenCase{"Freiburg079", "freiburg-079-corrected.log.gz", 4791, 360, -89.75, 0.5},
+        CarmenCase{"FreiburgCampus", "freiburg-campus-corrected.log.gz", 2008, 360, -89.75, 0.5}),
+    [](const auto& p) { return std::string(p.param.name); });
 
 TEST(CliImportYdlidar, EveryFileImportsWithOneScanPerLineAndItsBeamCount) {
   const fs::path folder = test::sharedData() / "ydlidar_x4";
@@ -126,7 +135,8 @@ TEST(CliImportYdlidar, EveryFileImportsWithOneScanPerLineAndItsBeamCount) {
     ++files;
     SCOPED_TRACE(e.path().string());
     TempDir dir;
-    const auto r = runCli("import -q --from ydlidar " + e.path().string() + " --out " + (dir / "seq").string());
+    const auto r = runCli("import -q --from ydlidar " + e.path().string() + " --out " +
+                          (dir / "seq").string());
     ASSERT_EQ(r.exit_code, 0) << r.err;
     std::size_t lines = 0;
     {
@@ -146,7 +156,10 @@ TEST(CliImportYdlidar, EveryFileImportsWithOneScanPerLineAndItsBeamCount) {
           continue;
         }
         EXPECT_NEAR(test::rangeOf(cloud[i].x, cloud[i].y), r_src, 1e-5 * r_src) << i;
-        EXPECT_NEAR(test::angleDiff(test::bearingOf(cloud[i].x, cloud[i].y), 2 * kPi * static_cast<double>(i) / static_cast<double>(n)), 0.0, 1e-5) << i;
+        EXPECT_NEAR(test::angleDiff(test::bearingOf(cloud[i].x, cloud[i].y),
+                                    2 * kPi * static_cast<double>(i) / static_cast<double>(n)),
+                    0.0, 1e-5)
+            << i;
       }
     }
     const io::Sequence seq = io::openSequence(dir / "seq");
@@ -161,7 +174,8 @@ TEST(CliImportRosbag, RplidarBagGives1319ScansOf360BeamsAtOneStop) {
   if (!fs::exists(bag)) GTEST_SKIP() << "shared data absent: " << bag;
   if (!io::rosbagSupported()) GTEST_SKIP() << "built without ROS1 bag support";
   TempDir dir;
-  const auto r = runCli("import -q --from rosbag1 " + bag.string() + " --topic /scan_rplidar --out " + (dir / "seq").string());
+  const auto r = runCli("import -q --from rosbag1 " + bag.string() +
+                        " --topic /scan_rplidar --out " + (dir / "seq").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const io::Sequence seq = io::openSequence(dir / "seq");
   ASSERT_EQ(seq.scans.size(), 1319u);
@@ -185,19 +199,23 @@ TEST(CliImportRosbag, RplidarBagGives1319ScansOf360BeamsAtOneStop) {
   }
   const auto list = runCli("import --from rosbag1 " + bag.string() + " --list-topics");
   EXPECT_EQ(list.exit_code, 0);
-  EXPECT_NE(list.out.find("| /scan_rplidar | sensor_msgs/LaserScan | 1319 |"), std::string::npos) << list.out;
+  EXPECT_NE(list.out.find("| /scan_rplidar | sensor_msgs/LaserScan | 1319 |"), std::string::npos)
+      << list.out;
   // --every / --max-scans
-  const auto some = runCli("import -q --from rosbag1 " + bag.string() + " --every 10 --max-scans 50 --out " + (dir / "some").string());
+  const auto some = runCli("import -q --from rosbag1 " + bag.string() +
+                           " --every 10 --max-scans 50 --out " + (dir / "some").string());
   ASSERT_EQ(some.exit_code, 0) << some.err;
   EXPECT_EQ(pcdCount(dir / "some"), 50u);
-  EXPECT_EQ(test::readFile(dir / "some/scan_000001.pcd"), test::readFile(dir / "seq/scan_000010.pcd"));
+  EXPECT_EQ(test::readFile(dir / "some/scan_000001.pcd"),
+            test::readFile(dir / "seq/scan_000010.pcd"));
 }
 
 TEST(CliImportRosbag, WithoutRosSupportTheErrorSaysHowToEnableIt) {
   if (io::rosbagSupported()) GTEST_SKIP() << "this build reads bags";
   TempDir dir;
   test::writeFile(dir / "a.bag", "#ROSBAG V2.0\n");
-  const auto r = runCli("import --from rosbag1 " + (dir / "a.bag").string() + " --out " + (dir / "seq").string());
+  const auto r = runCli("import --from rosbag1 " + (dir / "a.bag").string() + " --out " +
+                        (dir / "seq").string());
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("built without ROS1 bag support"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("-DLIDARCAL_WITH_ROSBAG=ON"), std::string::npos) << r.err;
@@ -207,8 +225,8 @@ TEST(CliImportRosbag, WithoutRosSupportTheErrorSaysHowToEnableIt) {
 // ---- bad inputs: exit 2, a message naming file and line/topic with a remedy, nothing left behind.
 
 struct BadImport {
-  fs::path input_dir;    // snapshotted before and after
-  std::string args;      // the whole command line after `import`
+  fs::path input_dir;               // snapshotted before and after
+  std::string args;                 // the whole command line after `import`
   std::vector<std::string> expect;  // parts of the message
 };
 
@@ -216,7 +234,8 @@ void expectCleanFailure(const TempDir& dir, const BadImport& b) {
   const auto before = test::snapshot(b.input_dir);
   const auto r = runCli("import " + b.args + " --out " + (dir / "out").string());
   EXPECT_EQ(r.exit_code, 2) << r.err;
-  for (const auto& part : b.expect) EXPECT_NE(r.err.find(part), std::string::npos) << r.err << "\nmissing: " << part;
+  for (const auto& part : b.expect)
+    EXPECT_NE(r.err.find(part), std::string::npos) << r.err << "\nmissing: " << part;
   EXPECT_NE(r.err.find(" ("), std::string::npos) << "no remedy: " << r.err;
   EXPECT_FALSE(fs::exists(dir / "out"));
   for (const auto& e : fs::directory_iterator(dir.path()))
@@ -240,7 +259,8 @@ TEST(CliImportBadInput, CarmenLineWithAWrongCount) {
   log += "FLASER 181 1 2 3 0 0 0 0 0 0 1.5 host 1.5\n";  // line 32: 3 ranges instead of 181
   for (int k = 0; k < 5; ++k) log += flaserLine(181, 2.0);
   test::writeGzip(dir / "in/bad.log.gz", log);
-  expectCleanFailure(dir, {dir / "in", "--from carmen " + (dir / "in/bad.log.gz").string(),
+  expectCleanFailure(dir, {dir / "in",
+                           "--from carmen " + (dir / "in/bad.log.gz").string(),
                            {"bad.log.gz", "line 32 (FLASER)", "expected 191"}});
 }
 
@@ -253,12 +273,16 @@ TEST(CliImportBadInput, CorruptedGzip) {
   std::string gz = test::readFile(dir / "good.log.gz");
   fs::remove(dir / "good.log.gz");
   test::writeFile(dir / "in/cut.log.gz", gz.substr(0, gz.size() * 2 / 3));
-  expectCleanFailure(dir, {dir / "in", "--from carmen " + (dir / "in/cut.log.gz").string(),
+  expectCleanFailure(dir, {dir / "in",
+                           "--from carmen " + (dir / "in/cut.log.gz").string(),
                            {"cut.log.gz", "after line", "gzip data is damaged or cut short"}});
-  for (std::size_t i = gz.size() / 2; i < gz.size() / 2 + 16; ++i) gz[i] = static_cast<char>(gz[i] ^ 0x5a);
+  for (std::size_t i = gz.size() / 2; i < gz.size() / 2 + 16; ++i)
+    gz[i] = static_cast<char>(gz[i] ^ 0x5a);
   fs::remove(dir / "in/cut.log.gz");
   test::writeFile(dir / "in/flipped.log.gz", gz);
-  expectCleanFailure(dir, {dir / "in", "--from carmen " + (dir / "in/flipped.log.gz").string(), {"flipped.log.gz", "line"}});
+  expectCleanFailure(dir, {dir / "in",
+                           "--from carmen " + (dir / "in/flipped.log.gz").string(),
+                           {"flipped.log.gz", "line"}});
 }
 
 TEST(CliImportBadInput, TruncatedBagAndMissingTopic) {
@@ -268,8 +292,11 @@ TEST(CliImportBadInput, TruncatedBagAndMissingTopic) {
   TempDir dir;
   fs::create_directories(dir / "in");
   test::writeFile(dir / "in/cut.bag", test::readFile(bag).substr(0, 1500000));
-  expectCleanFailure(dir, {dir / "in", "--from rosbag1 " + (dir / "in/cut.bag").string(), {"cut.bag", "rosbag reindex"}});
-  expectCleanFailure(dir, {bag.parent_path(), "--from rosbag1 " + bag.string() + " --topic /scan",
+  expectCleanFailure(dir, {dir / "in",
+                           "--from rosbag1 " + (dir / "in/cut.bag").string(),
+                           {"cut.bag", "rosbag reindex"}});
+  expectCleanFailure(dir, {bag.parent_path(),
+                           "--from rosbag1 " + bag.string() + " --topic /scan",
                            {"rplidar_1.bag", "--topic /scan", "no such topic", "/scan_rplidar"}});
 }
 
@@ -277,11 +304,17 @@ TEST(CliImportBadInput, OptionsThatDoNotApplyAndOutputInsideTheInput) {
   TempDir dir;
   fs::create_directories(dir / "in");
   test::writeFile(dir / "in/a.csv", "scan,x_m,y_m,yaw_rad,angle_rad,range_m\n0,0,0,0,0,1\n");
-  expectCleanFailure(dir, {dir / "in", "--from csv " + (dir / "in/a.csv").string() + " --topic /scan", {"--topic"}});
-  expectCleanFailure(dir, {dir / "in", "--from csv " + (dir / "in/a.csv").string() + " --pose odometry", {"--pose"}});
-  const auto r = runCli("import --from csv " + (dir / "in/a.csv").string() + " --out " + (dir / "in/a.csv").string());
+  expectCleanFailure(
+      dir,
+      {dir / "in", "--from csv " + (dir / "in/a.csv").string() + " --topic /scan", {"--topic"}});
+  expectCleanFailure(
+      dir,
+      {dir / "in", "--from csv " + (dir / "in/a.csv").string() + " --pose odometry", {"--pose"}});
+  const auto r = runCli("import --from csv " + (dir / "in/a.csv").string() + " --out " +
+                        (dir / "in/a.csv").string());
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_EQ(test::readFile(dir / "in/a.csv"), "scan,x_m,y_m,yaw_rad,angle_rad,range_m\n0,0,0,0,0,1\n");
+  EXPECT_EQ(test::readFile(dir / "in/a.csv"),
+            "scan,x_m,y_m,yaw_rad,angle_rad,range_m\n0,0,0,0,0,1\n");
 }
 
 TEST(CliImport, CsvRoundTripThroughTheCommand) {
@@ -290,8 +323,9 @@ TEST(CliImport, CsvRoundTripThroughTheCommand) {
                   "scan,x_m,y_m,yaw_rad,angle_rad,range_m,intensity\n"
                   "0,0.5,0.25,0.1,0.0,2.0,7\n0,0.5,0.25,0.1,1.5707963267948966,,8\n"
                   "1,0.75,0.25,0.1,0.0,3.0,9\n1,0.75,0.25,0.1,1.5707963267948966,1.0,10\n");
-  const auto r = runCli("import --from csv " + (dir / "a.csv").string() + " --range-max 2.5 --sensor-name 'my lidar' --out " +
-                        (dir / "seq").string());
+  const auto r =
+      runCli("import --from csv " + (dir / "a.csv").string() +
+             " --range-max 2.5 --sensor-name 'my lidar' --out " + (dir / "seq").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("imported 2 of 2 scans"), std::string::npos) << r.out;
   const io::Sequence seq = io::openSequence(dir / "seq");

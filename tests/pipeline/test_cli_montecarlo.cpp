@@ -24,7 +24,9 @@ using test::TempDir;
 namespace fs = std::filesystem;
 
 /// A small, fast study: 8 stops, 3 scans per stop, 4 trials of the quick grid.
-const std::string kSmall = "montecarlo -q --quick --stops 8 --step 0.3 --scans-per-stop 3 --trials 4 --joint-trials 1 --seed 5";
+const std::string kSmall =
+    "montecarlo -q --quick --stops 8 --step 0.3 --scans-per-stop 3 --trials 4 --joint-trials 1 "
+    "--seed 5";
 
 TEST(CliMonteCarlo, WritesEveryFileAndTheCsvDoesNotDependOnTheThreadCount) {
   TempDir dir;
@@ -84,7 +86,8 @@ TEST(CliMonteCarlo, APlotThatFailsFailsTheCommandAndWritesNothing) {
   test::writeFile(bin / "gnuplot", "#!/bin/sh\necho 'line 12: x range is invalid' >&2\nexit 1\n");
   fs::permissions(bin / "gnuplot", fs::perms::owner_all);
   const fs::path out = dir / "o";
-  const auto r = test::runCliPrefixed("export PATH='" + bin.string() + "':\"$PATH\"", kSmall + " --study fig10 --out " + out.string());
+  const auto r = test::runCliPrefixed("export PATH='" + bin.string() + "':\"$PATH\"",
+                                      kSmall + " --study fig10 --out " + out.string());
   EXPECT_EQ(r.exit_code, 1) << r.err;
   EXPECT_NE(r.err.find("gnuplot failed on fig10.gp"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("x range is invalid"), std::string::npos) << r.err;
@@ -93,7 +96,8 @@ TEST(CliMonteCarlo, APlotThatFailsFailsTheCommandAndWritesNothing) {
   const fs::path empty = dir / "empty";
   fs::create_directories(empty);
   const fs::path out2 = dir / "o2";
-  const auto r2 = test::runCliPrefixed("export PATH='" + empty.string() + "'", kSmall + " --study fig10 --out " + out2.string());
+  const auto r2 = test::runCliPrefixed("export PATH='" + empty.string() + "'",
+                                       kSmall + " --study fig10 --out " + out2.string());
   ASSERT_EQ(r2.exit_code, 0) << r2.err;
   EXPECT_NE(r2.out.find("Plots: skipped, gnuplot is not installed"), std::string::npos) << r2.out;
   EXPECT_TRUE(fs::exists(out2 / "fig10.csv"));
@@ -115,7 +119,8 @@ TEST(CliMonteCarlo, RefusesBadOptions) {
   EXPECT_NE(help.out.find("writes nothing"), std::string::npos) << help.out;
 }
 
-// Fig. 8 places four poles and more beside the path; three stops 0.15 m apart leave too little room.
+// Fig. 8 places four poles and more beside the path; three stops 0.15 m apart leave too little
+// room.
 TEST(CliMonteCarlo, APathTooShortForItsLandmarksIsRefusedWithWhatToChange) {
   TempDir dir;
   const std::string out = (dir / "o").string();
@@ -137,8 +142,8 @@ TEST(CliMonteCarlo, InterruptStopsCleanlyAndWritesNothing) {
   if (pid == 0) {
     const int fd = ::open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
     ::dup2(fd, 2);
-    ::execl(LIDARCAL_EXE, LIDARCAL_EXE, "montecarlo", "-q", "--study", "fig9", "--trials", "100000", "--threads", "2",
-            "--out", out.c_str(), static_cast<char*>(nullptr));
+    ::execl(LIDARCAL_EXE, LIDARCAL_EXE, "montecarlo", "-q", "--study", "fig9", "--trials", "100000",
+            "--threads", "2", "--out", out.c_str(), static_cast<char*>(nullptr));
     ::_exit(127);
   }
   auto staging = [&] {
@@ -157,9 +162,11 @@ TEST(CliMonteCarlo, InterruptStopsCleanlyAndWritesNothing) {
   ASSERT_TRUE(started) << "the study never started";
   ASSERT_TRUE(WIFEXITED(status)) << "killed by a signal";
   EXPECT_EQ(WEXITSTATUS(status), 130);
-  EXPECT_NE(test::readFile(err).find("nothing was written"), std::string::npos) << test::readFile(err);
+  EXPECT_NE(test::readFile(err).find("nothing was written"), std::string::npos)
+      << test::readFile(err);
   // Neither the output nor the staging directory is left.
-  for (const auto& e : fs::directory_iterator(dir.path())) EXPECT_EQ(e.path().filename(), "err.txt") << e.path();
+  for (const auto& e : fs::directory_iterator(dir.path()))
+    EXPECT_EQ(e.path().filename(), "err.txt") << e.path();
 }
 
 }  // namespace

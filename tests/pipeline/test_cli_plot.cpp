@@ -12,22 +12,28 @@ using test::runCli;
 using test::TempDir;
 
 TEST(CliPlot, DrawsALabelledScanWithItsCircles) {
-  if (std::system("command -v gnuplot >/dev/null 2>&1") != 0) GTEST_SKIP() << "gnuplot is not installed";
+  if (std::system("command -v gnuplot >/dev/null 2>&1") != 0)
+    GTEST_SKIP() << "gnuplot is not installed";
   TempDir dir;
   const std::string scene = (test::sourceDir() / "data/scenes/paper_field.json").string();
-  ASSERT_EQ(runCli("simulate -q --scene " + scene + " --out " + (dir / "s").string() + " --stops 4 --scans-per-stop 1")
+  ASSERT_EQ(runCli("simulate -q --scene " + scene + " --out " + (dir / "s").string() +
+                   " --stops 4 --scans-per-stop 1")
                 .exit_code,
             0);
-  ASSERT_EQ(runCli("detect -q " + (dir / "s/scans").string() + " --out " + (dir / "d").string()).exit_code, 0);
-  const auto r = runCli("plot " + (dir / "d/scan_000000.pcd").string() + " --landmarks " + (dir / "d/landmarks.csv").string() +
-                        " --out " + (dir / "scan.png").string());
+  ASSERT_EQ(runCli("detect -q " + (dir / "s/scans").string() + " --out " + (dir / "d").string())
+                .exit_code,
+            0);
+  const auto r =
+      runCli("plot " + (dir / "d/scan_000000.pcd").string() + " --landmarks " +
+             (dir / "d/landmarks.csv").string() + " --out " + (dir / "scan.png").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const std::string png = test::readFile(dir / "scan.png");
   ASSERT_GT(png.size(), 1000u);
   EXPECT_EQ(png.substr(1, 3), "PNG");
   // Nothing else is left beside the picture.
   std::size_t entries = 0;
-  for (const auto& e : std::filesystem::directory_iterator(dir.path())) entries += e.path().filename().string()[0] == '.';
+  for (const auto& e : std::filesystem::directory_iterator(dir.path()))
+    entries += e.path().filename().string()[0] == '.';
   EXPECT_EQ(entries, 0u);
 }
 

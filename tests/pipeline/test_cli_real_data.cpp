@@ -40,29 +40,36 @@ TEST_P(RealRecording, CalibratesOrRefusesWithAReason) {
     start = end + 1;
   }
   TempDir dir;
-  const auto imp = runCli("import -q" + inputs + " " + rec.import + " --out " + (dir / "seq").string());
-  if (rec.rosbag && imp.exit_code == 2 && imp.err.find("ROS1") != std::string::npos) GTEST_SKIP() << "no ROS1 reader in this build";
+  const auto imp =
+      runCli("import -q" + inputs + " " + rec.import + " --out " + (dir / "seq").string());
+  if (rec.rosbag && imp.exit_code == 2 && imp.err.find("ROS1") != std::string::npos)
+    GTEST_SKIP() << "no ROS1 reader in this build";
   ASSERT_EQ(imp.exit_code, 0) << imp.err;
   for (const std::string command : {"calibrate", "run"}) {
     SCOPED_TRACE(command);
     const fs::path out = dir / (command + "-out");
-    const auto r = runCli(command + " -q " + (dir / "seq").string() + " --out " +
-                          (command == std::string("calibrate") ? (dir / "model.json").string() : out.string()));
+    const auto r = runCli(
+        command + " -q " + (dir / "seq").string() + " --out " +
+        (command == std::string("calibrate") ? (dir / "model.json").string() : out.string()));
     ASSERT_TRUE(r.exit_code == 0 || r.exit_code == 3) << "exit " << r.exit_code << ": " << r.err;
     EXPECT_EQ(r.err.find("internal error"), std::string::npos) << r.err;
     if (r.exit_code == 3) {
       // What is missing and what to do about it.
-      EXPECT_TRUE(r.err.find("record") != std::string::npos || r.err.find("give") != std::string::npos) << r.err;
+      EXPECT_TRUE(r.err.find("record") != std::string::npos ||
+                  r.err.find("give") != std::string::npos)
+          << r.err;
       continue;
     }
-    const fs::path model = command == std::string("calibrate") ? dir / "model.json" : out / "model.json";
+    const fs::path model =
+        command == std::string("calibrate") ? dir / "model.json" : out / "model.json";
     const auto m = nlohmann::json::parse(test::readFile(model));
-    EXPECT_EQ(m["bias"]["standard_error"].size(), m["bias"]["alpha"].size()) << "every coefficient with its error";
+    EXPECT_EQ(m["bias"]["standard_error"].size(), m["bias"]["alpha"].size())
+        << "every coefficient with its error";
     EXPECT_TRUE(m.contains("fitted_range"));
     EXPECT_NE(r.out.find("+-"), std::string::npos) << "standard errors on stdout:\n" << r.out;
     // A model given exit 0 is one `correct` takes (positive distances, a rising bias).
-    const auto c = runCli("correct -q " + (dir / "seq").string() + " --model " + model.string() + " --out " +
-                          (dir / (command + "-corrected")).string());
+    const auto c = runCli("correct -q " + (dir / "seq").string() + " --model " + model.string() +
+                          " --out " + (dir / (command + "-corrected")).string());
     EXPECT_EQ(c.exit_code, 0) << c.err;
   }
 }
@@ -81,19 +88,30 @@ INSTANTIATE_TEST_SUITE_P(
         Recording{"carmen_csail", "carmen/csail-corrected.log.gz", "--from carmen"},
         // 4791 poses: every third scan keeps the test short; the whole log calibrates too
         // (docs/results/real-sensors.md).
-        Recording{"carmen_freiburg_079", "carmen/freiburg-079-corrected.log.gz", "--from carmen --every 3"},
-        Recording{"carmen_freiburg_campus", "carmen/freiburg-campus-corrected.log.gz", "--from carmen"},
-        Recording{"hokuyo_range_sweep_one_bag", kHokuyo + "range_sweep/bs_exp_1041.bag", "--from rosbag1", true},
-        Recording{"hokuyo_range_sweep_stops", kHokuyo + "range_sweep/bs_exp_540.bag " + kHokuyo +
-                  "range_sweep/bs_exp_1041.bag " + kHokuyo + "range_sweep/bs_exp_1550.bag " + kHokuyo +
-                  "range_sweep/bs_exp_2050.bag", "--from rosbag1 --stop-per-input --every 10", true},
-        Recording{"hokuyo_reference_scenes", kHokuyo + "reference_scenes/ref_505.bag " + kHokuyo +
-                  "reference_scenes/ref_707.bag " + kHokuyo + "reference_scenes/ref_909.bag " + kHokuyo +
-                  "reference_scenes/ref_1111.bag", "--from rosbag1 --stop-per-input --every 10", true},
-        Recording{"hokuyo_agv_front", kHokuyo + "agv_two_lidars/obs2.bag " + kHokuyo + "agv_two_lidars/obs3.bag " +
-                  kHokuyo + "agv_two_lidars/obs4.bag", "--from rosbag1 --topic /scan_front --stop-per-input --every 5", true},
-        Recording{"hokuyo_agv_back", kHokuyo + "agv_two_lidars/obs5.bag " + kHokuyo + "agv_two_lidars/obs6.bag " +
-                  kHokuyo + "agv_two_lidars/obs7.bag", "--from rosbag1 --topic /scan_back --stop-per-input --every 5", true}),
+        Recording{"carmen_freiburg_079", "carmen/freiburg-079-corrected.log.gz",
+                  "--from carmen --every 3"},
+        Recording{"carmen_freiburg_campus", "carmen/freiburg-campus-corrected.log.gz",
+                  "--from carmen"},
+        Recording{"hokuyo_range_sweep_one_bag", kHokuyo + "range_sweep/bs_exp_1041.bag",
+                  "--from rosbag1", true},
+        Recording{"hokuyo_range_sweep_stops",
+                  kHokuyo + "range_sweep/bs_exp_540.bag " + kHokuyo +
+                      "range_sweep/bs_exp_1041.bag " + kHokuyo + "range_sweep/bs_exp_1550.bag " +
+                      kHokuyo + "range_sweep/bs_exp_2050.bag",
+                  "--from rosbag1 --stop-per-input --every 10", true},
+        Recording{"hokuyo_reference_scenes",
+                  kHokuyo + "reference_scenes/ref_505.bag " + kHokuyo +
+                      "reference_scenes/ref_707.bag " + kHokuyo + "reference_scenes/ref_909.bag " +
+                      kHokuyo + "reference_scenes/ref_1111.bag",
+                  "--from rosbag1 --stop-per-input --every 10", true},
+        Recording{"hokuyo_agv_front",
+                  kHokuyo + "agv_two_lidars/obs2.bag " + kHokuyo + "agv_two_lidars/obs3.bag " +
+                      kHokuyo + "agv_two_lidars/obs4.bag",
+                  "--from rosbag1 --topic /scan_front --stop-per-input --every 5", true},
+        Recording{"hokuyo_agv_back",
+                  kHokuyo + "agv_two_lidars/obs5.bag " + kHokuyo + "agv_two_lidars/obs6.bag " +
+                      kHokuyo + "agv_two_lidars/obs7.bag",
+                  "--from rosbag1 --topic /scan_back --stop-per-input --every 5", true}),
     [](const ::testing::TestParamInfo<Recording>& p) { return p.param.name; });
 
 }  // namespace

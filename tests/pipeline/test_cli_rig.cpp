@@ -10,10 +10,10 @@
 
 #include <gtest/gtest.h>
 
-#include <Eigen/Dense>
 #include <rosbag/bag.h>
 #include <sensor_msgs/LaserScan.h>
 #include <tf2_msgs/TFMessage.h>
+#include <Eigen/Dense>
 
 #include "calibration/rig_scenes.hpp"
 #include "io/rig_model_io.hpp"
@@ -38,14 +38,19 @@ geometry_msgs::TransformStamped mountingTransform(const simulation::RigSimSensor
   t.transform.translation.y = s.design.y_m;
   t.transform.translation.z = s.design.z_m;
   const double c = std::cos(s.design.yaw_rad / 2), n = std::sin(s.design.yaw_rad / 2);
-  if (s.mounting.upside_down) t.transform.rotation.x = c, t.transform.rotation.y = n;  // q_z(yaw) q_x(pi)
-  else t.transform.rotation.w = c, t.transform.rotation.z = n;
+  // q_z(yaw) q_x(pi)
+  if (s.mounting.upside_down)
+    t.transform.rotation.x = c, t.transform.rotation.y = n;
+  else
+    t.transform.rotation.w = c, t.transform.rotation.z = n;
   return t;
 }
 
 /// The simulated sightings as LaserScans: one per sensor and scan, no return (inf) off the poles.
-void writeRigBag(const std::filesystem::path& file, const simulation::RigSimConfig& sim, const RigObservations& obs) {
-  std::map<std::size_t, sensor_msgs::LaserScan> scans;  // by the simulator's scan index (unique over sensors)
+void writeRigBag(const std::filesystem::path& file, const simulation::RigSimConfig& sim,
+                 const RigObservations& obs) {
+  // by the simulator's scan index (unique over sensors)
+  std::map<std::size_t, sensor_msgs::LaserScan> scans;
   const std::size_t S = sim.sensors.size();
   for (const RigSighting& g : obs.sightings) {
     const simulation::RigSimSensor& s = sim.sensors[g.sensor];
@@ -53,7 +58,8 @@ void writeRigBag(const std::filesystem::path& file, const simulation::RigSimConf
     sensor_msgs::LaserScan& m = it->second;
     if (fresh) {
       m.header.frame_id = frameOf(s);
-      m.header.stamp = ros::Time(kT0 + 0.1 * static_cast<double>(g.scan / S) + 0.01 * static_cast<double>(g.sensor));
+      m.header.stamp = ros::Time(kT0 + 0.1 * static_cast<double>(g.scan / S) +
+                                 0.01 * static_cast<double>(g.sensor));
       m.angle_min = static_cast<float>(s.angle_min_rad);
       m.angle_increment = static_cast<float>(s.angle_increment_rad);
       m.angle_max = static_cast<float>(s.angle_min_rad + s.angle_increment_rad * (s.beams - 1));
@@ -67,20 +73,25 @@ void writeRigBag(const std::filesystem::path& file, const simulation::RigSimConf
   tf2_msgs::TFMessage mounts;
   for (const auto& s : sim.sensors) mounts.transforms.push_back(mountingTransform(s));
   bag.write("/tf_static", ros::Time(kT0), mounts);
-  for (const auto& [index, m] : scans) bag.write(topicOf(sim.sensors[index % S]), m.header.stamp, m);
+  for (const auto& [index, m] : scans)
+    bag.write(topicOf(sim.sensors[index % S]), m.header.stamp, m);
 }
 
-double standardError(const std::array<double, 9>& c, int i) { return std::sqrt(c[static_cast<std::size_t>(4 * i)]); }
+double standardError(const std::array<double, 9>& c, int i) {
+  return std::sqrt(c[static_cast<std::size_t>(4 * i)]);
+}
 
 TEST(CalibrateRig, TwoLidarBagGivesTheTrueRelativeMountingAndBiases) {
   TempDir dir;
   const simulation::RigSimConfig sim = staticVehicle(false);
   const simulation::RigSimSample sample = simulation::simulateRig(sim, 7);
   writeRigBag(dir / "rig.bag", sim, sample.obs);
-  const CliResult imported = runCli("import " + (dir / "rig.bag").string() + " --topic /scan_front,/scan_back --sensor-names front,back -o " +
-                                    (dir / "rig").string());
+  const CliResult imported = runCli(
+      "import " + (dir / "rig.bag").string() +
+      " --topic /scan_front,/scan_back --sensor-names front,back -o " + (dir / "rig").string());
   ASSERT_EQ(imported.exit_code, 0) << imported.err;
-  const CliResult calibrated = runCli("calibrate " + (dir / "rig").string() + " --radius 0.045 -o " + (dir / "model.json").string());
+  const CliResult calibrated = runCli("calibrate " + (dir / "rig").string() +
+                                      " --radius 0.045 -o " + (dir / "model.json").string());
   ASSERT_EQ(calibrated.exit_code, 0) << calibrated.out << calibrated.err;
   const io::RigModel model = io::readRigModel(dir / "model.json");
   ASSERT_EQ(model.sensors.size(), 2u);
@@ -96,10 +107,12 @@ TEST(CalibrateRig, TwoLidarBagGivesTheTrueRelativeMountingAndBiases) {
   const Pose2 truth = relativeMounting(sim.sensors[0].mounting, sim.sensors[1].mounting);
   EXPECT_NEAR(rel.pose.x_m, scale * truth.x_m, 3.0 * standardError(rel.covariance, 0));
   EXPECT_NEAR(rel.pose.y_m, scale * truth.y_m, 3.0 * standardError(rel.covariance, 1));
-  EXPECT_NEAR(wrapAngle(rel.pose.yaw_rad - truth.yaw_rad), 0.0, 3.0 * standardError(rel.covariance, 2));
+  EXPECT_NEAR(wrapAngle(rel.pose.yaw_rad - truth.yaw_rad), 0.0,
+              3.0 * standardError(rel.covariance, 2));
   // Not a tautology: the designs in /tf_static are centimetres and degrees off.
   const Pose2 design = relativeMounting(sim.sensors[0].design, sim.sensors[1].design);
-  EXPECT_GT(std::hypot(design.x_m - truth.x_m, design.y_m - truth.y_m), 6.0 * standardError(rel.covariance, 0));
+  EXPECT_GT(std::hypot(design.x_m - truth.x_m, design.y_m - truth.y_m),
+            6.0 * standardError(rel.covariance, 0));
 
   // Each sensor's reading at a true distance d: f_s(d) against the fitted f at d in those units.
   for (std::size_t s = 0; s < 2; ++s) {
@@ -108,10 +121,13 @@ TEST(CalibrateRig, TwoLidarBagGivesTheTrueRelativeMountingAndBiases) {
     ASSERT_TRUE(m.fitted_range_m);
     const auto n = static_cast<Eigen::Index>(m.model.bias.alpha.size());
     ASSERT_EQ(m.alpha_covariance.size(), static_cast<std::size_t>(n * n));
-    const Eigen::MatrixXd cov = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
-        m.alpha_covariance.data(), n, n);
+    const Eigen::MatrixXd cov =
+        Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+            m.alpha_covariance.data(), n, n);
     for (const double u : {0.1, 0.5, 0.9}) {
-      const double d = (m.fitted_range_m->first + u * (m.fitted_range_m->second - m.fitted_range_m->first)) / scale;
+      const double d =
+          (m.fitted_range_m->first + u * (m.fitted_range_m->second - m.fitted_range_m->first)) /
+          scale;
       Eigen::VectorXd g(n);
       for (Eigen::Index k = 0; k < n; ++k) g(k) = std::pow(scale * d, static_cast<double>(k));
       const double fitted = m.model.bias(scale * d), true_reading = sim.sensors[s].model.bias(d);

@@ -17,7 +17,8 @@ using namespace test;
 struct WritingCommand {
   const char* name;
   std::string args;  ///< placeholders: {IN} inputs (below), {OUT} output path, {SHARED} shared data
-  std::string skip_unless_exists = {};  ///< relative to {SHARED}: skip when absent (empty: always runs)
+  /// relative to {SHARED}: skip when absent (empty: always runs)
+  std::string skip_unless_exists = {};
 };
 
 /// Inputs under IN: sim/ (paper field, 10 stops x 2 scans, with truth), model.json (calibrated
@@ -26,21 +27,34 @@ const fs::path& inputs() {
   static const fs::path dir = cachedFixture("determinism-2", [](const fs::path& d) {
     const fs::path in = d;
     const std::string scene = (sourceDir() / "data/scenes/paper_field.json").string();
-    EXPECT_EQ(runCli("simulate -q --scene " + scene + " --out " + (in / "sim").string() + " --scans-per-stop 2 --seed 9")
-                  .exit_code, 0);
-    EXPECT_EQ(runCli("calibrate -q " + (in / "sim/scans").string() + " --out " + (in / "model.json").string()).exit_code, 0);
-    EXPECT_EQ(runCli("correct -q " + (in / "sim/scans").string() + " --model " + (in / "model.json").string() + " --out " +
-                     (in / "corrected").string()).exit_code, 0);
-    EXPECT_EQ(runCli("detect -q " + (in / "sim/scans").string() + " --out " + (in / "detected").string()).exit_code, 0);
-    EXPECT_EQ(runCli("simulate -q --scene " + (sourceDir() / "data/scenes/noise_exp3.json").string() + " --out " +
-                     (in / "noise").string() + " --seed 2").exit_code, 0);
+    EXPECT_EQ(runCli("simulate -q --scene " + scene + " --out " + (in / "sim").string() +
+                     " --scans-per-stop 2 --seed 9")
+                  .exit_code,
+              0);
+    EXPECT_EQ(runCli("calibrate -q " + (in / "sim/scans").string() + " --out " +
+                     (in / "model.json").string())
+                  .exit_code,
+              0);
+    EXPECT_EQ(runCli("correct -q " + (in / "sim/scans").string() + " --model " +
+                     (in / "model.json").string() + " --out " + (in / "corrected").string())
+                  .exit_code,
+              0);
+    EXPECT_EQ(
+        runCli("detect -q " + (in / "sim/scans").string() + " --out " + (in / "detected").string())
+            .exit_code,
+        0);
+    EXPECT_EQ(
+        runCli("simulate -q --scene " + (sourceDir() / "data/scenes/noise_exp3.json").string() +
+               " --out " + (in / "noise").string() + " --seed 2")
+            .exit_code,
+        0);
     std::string csv = "scan,x_m,y_m,yaw_rad,angle_rad,range_m,intensity\n", carmen, dat;
     for (int s = 0; s < 6; ++s) {
       std::string flaser = "FLASER 181", ranges;
       for (int b = 0; b < 181; ++b) {
         const double r = 1.0 + 0.01 * b + 0.1 * s;
-        csv += std::to_string(s) + "," + std::to_string(0.1 * s) + ",0,0," + std::to_string(0.0174533 * b) + "," +
-               std::to_string(r) + ",7\n";
+        csv += std::to_string(s) + "," + std::to_string(0.1 * s) + ",0,0," +
+               std::to_string(0.0174533 * b) + "," + std::to_string(r) + ",7\n";
         flaser += " " + std::to_string(r);
         ranges += "," + std::to_string(r);
       }
@@ -55,31 +69,42 @@ const fs::path& inputs() {
 }
 
 const std::vector<WritingCommand> kCommands = {
-    {"simulate", "simulate -q --scene {SRC}/data/scenes/field_clutter.json --out {OUT} --stops 3 --scans-per-stop 2 --seed 5"},
+    {"simulate",
+     "simulate -q --scene {SRC}/data/scenes/field_clutter.json --out {OUT} --stops 3 "
+     "--scans-per-stop 2 --seed 5"},
     {"import_csv", "import -q --from csv {IN}/rec.csv --out {OUT}"},
     {"import_carmen", "import -q --from carmen {IN}/rec.log.gz --out {OUT}"},
     {"import_ydlidar", "import -q --from ydlidar {IN}/rec.dat --out {OUT}"},
-    {"import_rosbag", "import -q --from rosbag1 {SHARED}/rplidar_a2_room/rplidar_1.bag --max-scans 50 --out {OUT}",
+    {"import_rosbag",
+     "import -q --from rosbag1 {SHARED}/rplidar_a2_room/rplidar_1.bag --max-scans 50 --out {OUT}",
      "rplidar_a2_room/rplidar_1.bag"},
     {"detect", "detect -q {IN}/sim/scans --out {OUT}"},
-    {"detect_estimated_radius", "detect -q {IN}/sim/scans --estimate-radius --truth {IN}/sim/truth.json --out {OUT}"},
+    {"detect_estimated_radius",
+     "detect -q {IN}/sim/scans --estimate-radius --truth {IN}/sim/truth.json --out {OUT}"},
     {"calibrate", "calibrate -q {IN}/sim/scans --out {OUT}"},
-    {"calibrate_report", "calibrate -q {IN}/sim/scans --method closed-form --report {OUT}.report --out {OUT}"},
+    {"calibrate_report",
+     "calibrate -q {IN}/sim/scans --method closed-form --report {OUT}.report --out {OUT}"},
     {"calibrate_oracle", "calibrate -q {IN}/sim/scans --truth {IN}/sim/truth.json --out {OUT}"},
     {"correct", "correct -q {IN}/sim/scans --model {IN}/model.json --out {OUT}"},
-    {"correct_ml", "correct -q {IN}/sim/scans --model {IN}/model.json --inversion ml --ascii --out {OUT}"},
+    {"correct_ml",
+     "correct -q {IN}/sim/scans --model {IN}/model.json --inversion ml --ascii --out {OUT}"},
     {"run", "run -q {IN}/sim/scans --out {OUT}"},
     {"evaluate", "evaluate {IN}/corrected --truth {IN}/sim/truth.json --out {OUT}"},
-    {"simulate_observations", "simulate -q --scene {SRC}/data/scenes/noise_exp12.json --out {OUT} --seed 5"},
+    {"simulate_observations",
+     "simulate -q --scene {SRC}/data/scenes/noise_exp12.json --out {OUT} --seed 5"},
     {"landmarks_to_observations",
-     "landmarks-to-observations --landmarks {IN}/detected/landmarks.csv --sequence {IN}/sim/scans --out {OUT}"},
+     "landmarks-to-observations --landmarks {IN}/detected/landmarks.csv --sequence {IN}/sim/scans "
+     "--out {OUT}"},
     {"noise_consistency_ml",
-     "noise-consistency -q --observations {IN}/noise/observations.csv --odometry {IN}/noise/odometry.csv --method ml "
+     "noise-consistency -q --observations {IN}/noise/observations.csv --odometry "
+     "{IN}/noise/odometry.csv --method ml "
      "--out {OUT}"},
     {"noise_consistency_kl_hill",
-     "noise-consistency -q --observations {IN}/noise/observations.csv --odometry {IN}/noise/odometry.csv --method kl-hill "
+     "noise-consistency -q --observations {IN}/noise/observations.csv --odometry "
+     "{IN}/noise/odometry.csv --method kl-hill "
      "--particles 4 --max-evaluations 6 --seed 3 --out {OUT}"},
-    {"diagnose", "diagnose -q {IN}/sim/scans --replicas 5 --folds 2 --truth {IN}/sim/truth.json --out {OUT}"},
+    {"diagnose",
+     "diagnose -q {IN}/sim/scans --replicas 5 --folds 2 --truth {IN}/sim/truth.json --out {OUT}"},
     {"montecarlo", "montecarlo -q --study fig8 --quick --trials 4 --joint-trials 2 --out {OUT}"},
 };
 
@@ -122,12 +147,15 @@ TEST_P(Determinism, SameInputGivesTheSameBytes) {
   for (const auto& [name, bytes] : results[0]) {
     SCOPED_TRACE(name);
     ASSERT_TRUE(results[1].count(name));
-    EXPECT_TRUE(results[1].at(name) == bytes) << "differs between runs" << (threads ? " (1 and 2 threads)" : "");
+    EXPECT_TRUE(results[1].at(name) == bytes)
+        << "differs between runs" << (threads ? " (1 and 2 threads)" : "");
   }
 }
 
 INSTANTIATE_TEST_SUITE_P(EveryWritingCommand, Determinism, ::testing::ValuesIn(kCommands),
-                         [](const ::testing::TestParamInfo<WritingCommand>& p) { return std::string(p.param.name); });
+                         [](const ::testing::TestParamInfo<WritingCommand>& p) {
+                           return std::string(p.param.name);
+                         });
 
 }  // namespace
 }  // namespace lidarcal

@@ -41,7 +41,9 @@ nlohmann::json json(const fs::path& p) { return nlohmann::json::parse(readFile(p
 
 std::string scene(const char* name) { return (test::sourceDir() / "data/scenes" / name).string(); }
 
-bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+bool contains(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
 
 /// Rows of a whitespace-separated data file (blank lines skipped).
 std::vector<std::vector<double>> rows(const fs::path& file) {
@@ -58,14 +60,16 @@ std::vector<std::vector<double>> rows(const fs::path& file) {
   return out;
 }
 
-/// Two small simulated sequences of the paper's field (10 stops, 3 scans each), shared by the suite.
+/// Two small simulated sequences of the paper's field (10 stops, 3 scans each), shared by the
+/// suite.
 class FirstHour : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     dir_ = new TempDir;
     for (const char* name : {"a", "b"}) {
-      const auto r = runCli("simulate -q --scene " + scene("paper_field.json") + " -o " + (dir_->path() / name).string() +
-                            " --seed " + (name[0] == 'a' ? "31" : "32") + " --scans-per-stop 3");
+      const auto r = runCli("simulate -q --scene " + scene("paper_field.json") + " -o " +
+                            (dir_->path() / name).string() + " --seed " +
+                            (name[0] == 'a' ? "31" : "32") + " --scans-per-stop 3");
       ASSERT_EQ(r.exit_code, 0) << r.err;
     }
   }
@@ -100,7 +104,8 @@ TEST(ProgressText, CountNeverRunsPastTheTotalAndTimeLeftNeverGoesNegative) {
   // Final line: the total and the time taken.
   EXPECT_TRUE(contains(progressText("correct", 100, 100, 3.4, true), "100/100 in 3.4 s"));
   // Unknown total: the name and the time spent, no bar.
-  const std::string unknown = progressText("diagnose (repeated scans of one pose)", 0, 0, 14.0, false);
+  const std::string unknown =
+      progressText("diagnose (repeated scans of one pose)", 0, 0, 14.0, false);
   EXPECT_EQ(unknown, "diagnose (repeated scans of one pose) ... 14.0 s");
   EXPECT_EQ(progressText("ml iterations", 12, 0, 2.0, true), "ml iterations 12 done in 2.0 s");
 }
@@ -137,7 +142,8 @@ TEST_F(FirstHour, EveryStageReportsItsOwnProgressUpToItsTotal) {
   EXPECT_EQ(seen["detect"].total, seq.scans.size());
   // The settling pass, one solve per order (max order 4), the covariance.
   EXPECT_EQ(seen["joint refinement"].total, 1u + 4u + 1u);
-  EXPECT_EQ(seen["joint refinement"].calls, seen["joint refinement"].total + 1);  // 0, 1, ..., total
+  // 0, 1, ..., total
+  EXPECT_EQ(seen["joint refinement"].calls, seen["joint refinement"].total + 1);
 }
 
 TEST_F(FirstHour, DetectionWithAnEstimatedRadiusCountsBothPassesAgainstOneTotal) {
@@ -150,12 +156,13 @@ TEST_F(FirstHour, DetectionWithAnEstimatedRadiusCountsBothPassesAgainstOneTotal)
   ASSERT_FALSE(seq.meta.landmark_radius_m.has_value());
   std::size_t first_total = 0, last = 0, largest_total = 0;
   bool within = true;
-  detectors::detectSequence(seq, detectors::SequenceDetectionConfig{}, [&](std::size_t done, std::size_t total) {
-    if (!first_total) first_total = total;
-    largest_total = std::max(largest_total, total);
-    within = within && done <= total;
-    last = done;
-  });
+  detectors::detectSequence(seq, detectors::SequenceDetectionConfig{},
+                            [&](std::size_t done, std::size_t total) {
+                              if (!first_total) first_total = total;
+                              largest_total = std::max(largest_total, total);
+                              within = within && done <= total;
+                              last = done;
+                            });
   EXPECT_TRUE(within);
   EXPECT_EQ(first_total, 2 * seq.scans.size());
   EXPECT_EQ(largest_total, first_total);
@@ -166,8 +173,8 @@ TEST_F(FirstHour, DetectionWithAnEstimatedRadiusCountsBothPassesAgainstOneTotal)
 
 TEST_F(FirstHour, ReportPlotsTheFittedRangeWithResidualsAfterCorrectionAndMarksExtrapolation) {
   TempDir out;
-  const auto r = runCli("calibrate -q " + (a() / "scans").string() + " -o " + (out / "m.json").string() + " --report " +
-                        (out / "report").string());
+  const auto r = runCli("calibrate -q " + (a() / "scans").string() + " -o " +
+                        (out / "m.json").string() + " --report " + (out / "report").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const fs::path rep = out / "report";
   // The fitted range: the estimated distances of the readings (distance.dat column 1).
@@ -267,7 +274,8 @@ TEST_F(FirstHour, RunDrawsTheTrueLandmarksAndExplainsTheMseRatio) {
   // The true landmarks (5 poles) are drawn on the map: 5 circles of 73 points each.
   const auto truth = rows(out / "o/report/truth.dat");
   EXPECT_EQ(truth.size(), 5u * 73u);
-  EXPECT_TRUE(contains(readFile(out / "o/report/plots.gp"), "\"truth.dat\"")) << readFile(out / "o/report/plots.gp");
+  EXPECT_TRUE(contains(readFile(out / "o/report/plots.gp"), "\"truth.dat\""))
+      << readFile(out / "o/report/plots.gp");
   // The printed summary says what the MSE ratio means and gives the RMS in mm before and after.
   EXPECT_TRUE(contains(r.out, "raw MSE / corrected MSE: higher is better")) << r.out;
   EXPECT_TRUE(contains(r.out, "raw readings, RMS:")) << r.out;
@@ -291,7 +299,8 @@ struct GnuplotStub {
     fs::create_directories(dir / "bin");
     fs::create_directories(dir / "seen");
     writeFile(dir / "bin/gnuplot", "#!/bin/sh\ncp \"$1\" '" + (dir / "seen/script.gp").string() +
-                                       "'\nfor f in *.dat; do cp \"$f\" '" + (dir / "seen").string() +
+                                       "'\nfor f in *.dat; do cp \"$f\" '" +
+                                       (dir / "seen").string() +
                                        "/'; done\nprintf '\\211PNG stub' > plot.png\n");
     fs::permissions(dir / "bin/gnuplot", fs::perms::owner_all);
   }
@@ -303,26 +312,31 @@ TEST_F(FirstHour, PlotEscapesTheTitleAndListsOnlyTheSeriesItDraws) {
   TempDir out;
   const GnuplotStub stub(out / "stub");
   // An unlabelled scan: no landmark points, no circles.
-  const auto r = runCliPrefixed(stub.prefix(), "plot " + (a() / "scans/scan_000000.pcd").string() + " -o " +
-                                                   (out / "scan.png").string());
+  const auto r = runCliPrefixed(stub.prefix(), "plot " + (a() / "scans/scan_000000.pcd").string() +
+                                                   " -o " + (out / "scan.png").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const std::string gp = stub.script();
-  EXPECT_TRUE(contains(gp, "set title \"scan\\\\_000000.pcd (sensor frame; 0 points on landmarks)\"")) << gp;
+  EXPECT_TRUE(
+      contains(gp, "set title \"scan\\\\_000000.pcd (sensor frame; 0 points on landmarks)\""))
+      << gp;
   EXPECT_FALSE(contains(gp, "landmark points")) << gp;
   EXPECT_FALSE(contains(gp, "fitted circles")) << gp;
   EXPECT_TRUE(contains(gp, "title \"points\"")) << gp;
   EXPECT_TRUE(contains(gp, "title \"sensor\"")) << gp;
   // Every markup character of gnuplot's enhanced text is escaped.
-  const auto t = runCliPrefixed(stub.prefix(), "plot " + (a() / "scans/scan_000000.pcd").string() + " -o " +
-                                                   (out / "t.png").string() + " --title 'a_b^c{d}e@f&g~h\"i'");
+  const auto t =
+      runCliPrefixed(stub.prefix(), "plot " + (a() / "scans/scan_000000.pcd").string() + " -o " +
+                                        (out / "t.png").string() + " --title 'a_b^c{d}e@f&g~h\"i'");
   ASSERT_EQ(t.exit_code, 0) << t.err;
-  EXPECT_TRUE(contains(stub.script(), "set title \"a\\\\_b\\\\^c\\\\{d\\\\}e\\\\@f\\\\&g\\\\~h\\\"i (sensor frame"))
+  EXPECT_TRUE(contains(
+      stub.script(), "set title \"a\\\\_b\\\\^c\\\\{d\\\\}e\\\\@f\\\\&g\\\\~h\\\"i (sensor frame"))
       << stub.script();
   // A labelled scan with its circles lists both.
   const auto d = runCli("detect -q " + (a() / "scans").string() + " -o " + (out / "d").string());
   ASSERT_EQ(d.exit_code, 0) << d.err;
-  const auto l = runCliPrefixed(stub.prefix(), "plot " + (out / "d/scan_000000.pcd").string() + " --landmarks " +
-                                                   (out / "d/landmarks.csv").string() + " -o " + (out / "l.png").string());
+  const auto l = runCliPrefixed(
+      stub.prefix(), "plot " + (out / "d/scan_000000.pcd").string() + " --landmarks " +
+                         (out / "d/landmarks.csv").string() + " -o " + (out / "l.png").string());
   ASSERT_EQ(l.exit_code, 0) << l.err;
   EXPECT_TRUE(contains(stub.script(), "landmark points (label > 0)")) << stub.script();
   EXPECT_TRUE(contains(stub.script(), "fitted circles")) << stub.script();
@@ -333,7 +347,8 @@ TEST_F(FirstHour, PlotRefusesToOverwriteUnlessAsked) {
   TempDir out;
   const GnuplotStub stub(out / "stub");
   writeFile(out / "scan.png", "mine");
-  const std::string args = "plot " + (a() / "scans/scan_000000.pcd").string() + " -o " + (out / "scan.png").string();
+  const std::string args =
+      "plot " + (a() / "scans/scan_000000.pcd").string() + " -o " + (out / "scan.png").string();
   const auto r = runCliPrefixed(stub.prefix(), args);
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_TRUE(contains(r.err, "already exists")) << r.err;
@@ -348,12 +363,14 @@ TEST_F(FirstHour, ADirectoryOrA3dCloudWhereAScanIsExpectedIsNamed) {
   TempDir out;
   const auto r = runCli("plot " + (a() / "scans").string() + " -o " + (out / "x.png").string());
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_TRUE(contains(r.err, "is a directory; give a .pcd file (e.g. " + (a() / "scans/scan_000000.pcd").string()))
+  EXPECT_TRUE(contains(
+      r.err, "is a directory; give a .pcd file (e.g. " + (a() / "scans/scan_000000.pcd").string()))
       << r.err;
   EXPECT_FALSE(contains(r.err, "DATA line")) << r.err;
   // An organised 3D cloud, as PCL writes them (2 x 2 points, VIEWPOINT with a roll).
   writeFile(out / "cloud.pcd",
-            "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 2\nHEIGHT 2\nVIEWPOINT 0 0 0 0 1 0 0\n"
+            "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 2\nHEIGHT "
+            "2\nVIEWPOINT 0 0 0 0 1 0 0\n"
             "POINTS 4\nDATA ascii\n0 0 1\n0.1 0 1\n0 0.1 1\n0.1 0.1 1\n");
   const auto c = runCli("plot " + (out / "cloud.pcd").string() + " -o " + (out / "y.png").string());
   EXPECT_EQ(c.exit_code, 2);
@@ -365,7 +382,7 @@ TEST_F(FirstHour, ADirectoryOrA3dCloudWhereAScanIsExpectedIsNamed) {
   fs::create_directories(out / "seq");
   fs::copy_file(mug, out / "seq/scan_000000.pcd");
   for (const std::string& cmd : {"plot " + mug.string() + " -o " + (out / "z.png").string(),
-                                "info " + (out / "seq").string()}) {
+                                 "info " + (out / "seq").string()}) {
     const auto m = runCli(cmd);
     EXPECT_EQ(m.exit_code, 2) << cmd;
     EXPECT_TRUE(contains(m.err, "this is a 3D organised cloud (640x480 points)")) << m.err;
@@ -378,8 +395,9 @@ TEST(Conventions, EveryCommandWithOutAcceptsDashO) {
   const auto help = runCli("--help");
   ASSERT_EQ(help.exit_code, 0);
   std::size_t with_out = 0;
-  for (const char* cmd : {"simulate", "info", "run", "calibrate", "correct", "evaluate", "import", "detect", "plot",
-                          "noise-consistency", "landmarks-to-observations", "montecarlo", "diagnose"}) {
+  for (const char* cmd :
+       {"simulate", "info", "run", "calibrate", "correct", "evaluate", "import", "detect", "plot",
+        "noise-consistency", "landmarks-to-observations", "montecarlo", "diagnose"}) {
     SCOPED_TRACE(cmd);
     const auto r = runCli(std::string(cmd) + " --help");
     ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -415,11 +433,14 @@ TEST_F(FirstHour, InfoJsonCarriesTheSummaryForScripts) {
 
 TEST_F(FirstHour, CorrectRefusesOtherRangeLimitsUnlessForced) {
   TempDir out;
-  ASSERT_EQ(runCli("calibrate -q " + (a() / "scans").string() + " -o " + (out / "m.json").string()).exit_code, 0);
+  ASSERT_EQ(runCli("calibrate -q " + (a() / "scans").string() + " -o " + (out / "m.json").string())
+                .exit_code,
+            0);
   auto j = json(out / "m.json");
   j["sensor"]["range_max_m"] = 8.0;  // same sensor name, other limit
   writeFile(out / "limits.json", j.dump());
-  const std::string args = "correct " + (b() / "scans").string() + " --model " + (out / "limits.json").string();
+  const std::string args =
+      "correct " + (b() / "scans").string() + " --model " + (out / "limits.json").string();
   const auto refused = runCli(args + " -o " + (out / "c1").string());
   EXPECT_EQ(refused.exit_code, 2);
   EXPECT_TRUE(contains(refused.err, "range limits")) << refused.err;
@@ -435,15 +456,17 @@ TEST_F(FirstHour, CorrectRefusesOtherRangeLimitsUnlessForced) {
   j["sensor"]["name"] = "another lidar";
   j["sensor"]["range_max_m"] = 8.0;
   writeFile(out / "other.json", j.dump());
-  const auto other = runCli("correct " + (b() / "scans").string() + " --model " + (out / "other.json").string() + " -o " +
-                            (out / "c3").string() + " --force");
+  const auto other =
+      runCli("correct " + (b() / "scans").string() + " --model " + (out / "other.json").string() +
+             " -o " + (out / "c3").string() + " --force");
   EXPECT_EQ(other.exit_code, 2);
   EXPECT_TRUE(contains(other.err, "another sensor")) << other.err;
 }
 
 TEST(ObservationIds, AnyIntegerSensorIdsAreLabelsKeptInTheResult) {
   TempDir dir;
-  ASSERT_EQ(runCli("simulate -q --scene " + scene("noise_exp12.json") + " -o " + (dir / "sim").string() + " --seed 3")
+  ASSERT_EQ(runCli("simulate -q --scene " + scene("noise_exp12.json") + " -o " +
+                   (dir / "sim").string() + " --seed 3")
                 .exit_code,
             0);
   // The same observations with sensors 0, 1 renamed 40, -7 and landmarks shifted by 1000.
@@ -455,18 +478,20 @@ TEST(ObservationIds, AnyIntegerSensorIdsAreLabelsKeptInTheResult) {
   while (std::getline(in, line)) {
     int stop = 0, sensor = 0, landmark = 0;
     char rest[128] = {};
-    ASSERT_EQ(std::sscanf(line.c_str(), "%d,%d,%d,%127s", &stop, &sensor, &landmark, rest), 4) << line;
-    relabelled << stop << ',' << (sensor == 0 ? 40 : -7) << ',' << (landmark < 0 ? -1 : landmark + 1000) << ',' << rest
-               << '\n';
+    ASSERT_EQ(std::sscanf(line.c_str(), "%d,%d,%d,%127s", &stop, &sensor, &landmark, rest), 4)
+        << line;
+    relabelled << stop << ',' << (sensor == 0 ? 40 : -7) << ','
+               << (landmark < 0 ? -1 : landmark + 1000) << ',' << rest << '\n';
   }
   writeFile(dir / "relabelled.csv", relabelled.str());
   const std::string odo = " --odometry " + (dir / "sim/odometry.csv").string() + " --method ml";
-  ASSERT_EQ(runCli("noise-consistency -q --observations " + (dir / "sim/observations.csv").string() + odo + " -o " +
-                   (dir / "plain.json").string())
-                .exit_code,
-            0);
-  const auto r = runCli("noise-consistency -q --observations " + (dir / "relabelled.csv").string() + odo + " -o " +
-                        (dir / "labelled.json").string());
+  ASSERT_EQ(
+      runCli("noise-consistency -q --observations " + (dir / "sim/observations.csv").string() +
+             odo + " -o " + (dir / "plain.json").string())
+          .exit_code,
+      0);
+  const auto r = runCli("noise-consistency -q --observations " + (dir / "relabelled.csv").string() +
+                        odo + " -o " + (dir / "labelled.json").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto plain = json(dir / "plain.json");
   const auto labelled = json(dir / "labelled.json");
@@ -476,9 +501,12 @@ TEST(ObservationIds, AnyIntegerSensorIdsAreLabelsKeptInTheResult) {
   EXPECT_EQ(labelled["sensors"][1]["sensor"], 40);
   for (const char* field : {"range_var_m2", "bearing_var_rad2", "range_mean_m"}) {
     SCOPED_TRACE(field);
-    const double a0 = plain["sensors"][1][field].get<double>(), a1 = plain["sensors"][0][field].get<double>();
-    EXPECT_NEAR(labelled["sensors"][0][field].get<double>(), a0, 1e-6 * std::max(1.0, std::abs(a0)));
-    EXPECT_NEAR(labelled["sensors"][1][field].get<double>(), a1, 1e-6 * std::max(1.0, std::abs(a1)));
+    const double a0 = plain["sensors"][1][field].get<double>(),
+                 a1 = plain["sensors"][0][field].get<double>();
+    EXPECT_NEAR(labelled["sensors"][0][field].get<double>(), a0,
+                1e-6 * std::max(1.0, std::abs(a0)));
+    EXPECT_NEAR(labelled["sensors"][1][field].get<double>(), a1,
+                1e-6 * std::max(1.0, std::abs(a1)));
   }
   EXPECT_EQ(labelled["data"]["landmarks"], plain["data"]["landmarks"]);
 }

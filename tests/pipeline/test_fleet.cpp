@@ -8,8 +8,8 @@
 #include <random>
 #include <string>
 
-#include <Eigen/Dense>
 #include <gtest/gtest.h>
+#include <Eigen/Dense>
 
 #include "common/errors.hpp"
 #include "common/rng.hpp"
@@ -32,7 +32,8 @@ Eigen::Matrix3d typicalCovariance() {
 
 /// A calibration of a sensor whose true coefficients are `truth`: alpha drawn from N(truth, Sigma)
 /// (what a calibration with that covariance reports), fitted over 0.6-4.1 m.
-FleetEntry calibration(const std::string& sensor, const std::string& date, std::vector<double> truth, std::mt19937_64& rng) {
+FleetEntry calibration(const std::string& sensor, const std::string& date,
+                       std::vector<double> truth, std::mt19937_64& rng) {
   const Eigen::Matrix3d sigma = typicalCovariance();
   const Eigen::Matrix3d L = sigma.llt().matrixL();
   std::normal_distribution<double> n01;
@@ -45,14 +46,17 @@ FleetEntry calibration(const std::string& sensor, const std::string& date, std::
   e.model.model.bias.alpha = truth;
   e.model.model.noise.kind = NoiseKind::squared;
   e.model.model.noise.sigma_e = 0.0019;
-  e.model.alpha_covariance.assign(sigma.data(), sigma.data() + 9);  // symmetric: storage order does not matter
+  // symmetric: storage order does not matter
+  e.model.alpha_covariance.assign(sigma.data(), sigma.data() + 9);
   e.model.fitted_range_m = std::make_pair(0.6, 4.1);
   e.model.method = "joint";
   return e;
 }
 
-/// A fleet of `sensors` calibrated twice; sensor `moved` (if any) has alpha_0 + offset the second time.
-std::vector<FleetEntry> fleet(std::uint64_t seed, int sensors, int moved = -1, double offset_m = 0.02) {
+/// A fleet of `sensors` calibrated twice; sensor `moved` (if any) has alpha_0 + offset the second
+/// time.
+std::vector<FleetEntry> fleet(std::uint64_t seed, int sensors, int moved = -1,
+                              double offset_m = 0.02) {
   std::mt19937_64 rng = makeRng(seed, 0);
   std::vector<FleetEntry> out;
   for (int i = 0; i < sensors; ++i) {
@@ -83,7 +87,8 @@ TEST(FleetStatistics, BiasAndItsStandardErrorFollowTheCovariance) {
 
 TEST(FleetStatistics, MovedAtOneDistanceIsTheSquaredChangeOverBothVariances) {
   std::mt19937_64 rng = makeRng(3, 0);
-  std::vector<FleetEntry> two = {calibration("a", "2024-01-01", kTrueAlpha, rng), calibration("a", "2024-02-01", kTrueAlpha, rng)};
+  std::vector<FleetEntry> two = {calibration("a", "2024-01-01", kTrueAlpha, rng),
+                                 calibration("a", "2024-02-01", kTrueAlpha, rng)};
   two[1].model.model.bias.alpha[0] += 0.004;
   FleetConfig config;
   config.distances_m = {2.0};
@@ -136,8 +141,9 @@ TEST(FleetStatistics, ATwoCentimetreOffsetAmongTwentyUnchangedSensorsIsFlagged) 
 
 TEST(FleetStatistics, WhatCannotBeTestedSaysWhy) {
   std::vector<FleetEntry> entries = fleet(5, 4);
-  entries[1].model.alpha_covariance.clear();     // robot100's latest without standard errors
-  entries[3].model.fitted_range_m = std::make_pair(5.0, 6.0);  // robot101's latest far from the others
+  entries[1].model.alpha_covariance.clear();  // robot100's latest without standard errors
+  // robot101's latest far from the others
+  entries[3].model.fitted_range_m = std::make_pair(5.0, 6.0);
   const FleetSummary s = summarizeFleet(entries, FleetConfig{});
   ASSERT_EQ(s.rows.size(), 4u);
   EXPECT_FALSE(s.rows[0].moved.tested);

@@ -18,7 +18,8 @@ namespace lidarcal::test {
 /// limits 0.15-12 m, reading i = range(i), intensity i = intensity(i) (none when intensity_mod 0:
 /// i mod intensity_mod otherwise).
 template <class Range>
-sensor_msgs::LaserScan laserScanOf(ros::Time stamp, std::size_t n, float increment, Range range, unsigned intensity_mod) {
+sensor_msgs::LaserScan laserScanOf(ros::Time stamp, std::size_t n, float increment, Range range,
+                                   unsigned intensity_mod) {
   sensor_msgs::LaserScan m;
   m.header.stamp = stamp;
   m.header.frame_id = "laser";
@@ -40,7 +41,10 @@ sensor_msgs::LaserScan laserScanOf(ros::Time stamp, std::size_t n, float increme
 inline sensor_msgs::LaserScan laserScan(int k, std::size_t n) {
   sensor_msgs::LaserScan m = laserScanOf(
       ros::Time(100 + k, 1000 * k), n, 0.06f,
-      [k](std::size_t i) { return 0.2f + 0.11f * static_cast<float>(i) + 0.01f * static_cast<float>(k); }, 7);
+      [k](std::size_t i) {
+        return 0.2f + 0.11f * static_cast<float>(i) + 0.01f * static_cast<float>(k);
+      },
+      7);
   m.header.seq = static_cast<std::uint32_t>(k);
   m.ranges[1] = std::numeric_limits<float>::infinity();
   m.ranges[2] = std::numeric_limits<float>::quiet_NaN();
@@ -55,7 +59,8 @@ inline bool sameFloat(float a, float b) { return (std::isnan(a) && std::isnan(b)
 
 /// Everything of two LaserScans but their range values is equal (header, angles, limits,
 /// intensities, number of ranges).
-inline void expectSameScanButRanges(const sensor_msgs::LaserScan& x, const sensor_msgs::LaserScan& y) {
+inline void expectSameScanButRanges(const sensor_msgs::LaserScan& x,
+                                    const sensor_msgs::LaserScan& y) {
   EXPECT_EQ(x.header.stamp, y.header.stamp);
   EXPECT_EQ(x.header.seq, y.header.seq);
   EXPECT_EQ(x.header.frame_id, y.header.frame_id);

@@ -30,7 +30,8 @@ namespace {
 class RosNode : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    dir_ = new fs::path(fs::temp_directory_path() / ("lidarcal-ros-node-" + std::to_string(getpid())));
+    dir_ =
+        new fs::path(fs::temp_directory_path() / ("lidarcal-ros-node-" + std::to_string(getpid())));
     fs::create_directories(*dir_);
     const int port = freeLoopbackPort();
     ASSERT_GT(port, 0);
@@ -40,10 +41,13 @@ class RosNode : public ::testing::Test {
     unsetenv("ROS_HOSTNAME");
     setenv("ROS_HOME", dir_->c_str(), 1);
     setenv("ROS_LOG_DIR", dir_->c_str(), 1);
-    master_ = new Child({LIDARCAL_ROSMASTER, "--core", "-p", std::to_string(port), "-w", "2"}, *dir_ / "rosmaster.log");
+    master_ = new Child({LIDARCAL_ROSMASTER, "--core", "-p", std::to_string(port), "-w", "2"},
+                        *dir_ / "rosmaster.log");
     int argc = 0;
-    ros::init(argc, nullptr, "lidarcal_node_test", ros::init_options::NoSigintHandler | ros::init_options::NoRosout);
-    ASSERT_TRUE(waitFor([] { return ros::master::check(); }, 30.0)) << "rosmaster did not answer: " << master_->log();
+    ros::init(argc, nullptr, "lidarcal_node_test",
+              ros::init_options::NoSigintHandler | ros::init_options::NoRosout);
+    ASSERT_TRUE(waitFor([] { return ros::master::check(); }, 30.0))
+        << "rosmaster did not answer: " << master_->log();
     spinner_ = new ros::AsyncSpinner(1);
     spinner_->start();
   }
@@ -65,15 +69,17 @@ class RosNode : public ::testing::Test {
 
   /// Publishes `scans` on `input` to a running node, each after the previous one came back on
   /// `output`; returns the scans received.
-  static std::vector<sensor_msgs::LaserScan> correctLive(const Child& node, const std::string& input, const std::string& output,
-                                                         const std::vector<sensor_msgs::LaserScan>& scans) {
+  static std::vector<sensor_msgs::LaserScan> correctLive(
+      const Child& node, const std::string& input, const std::string& output,
+      const std::vector<sensor_msgs::LaserScan>& scans) {
     ros::NodeHandle nh;
     std::mutex mutex;
     std::vector<sensor_msgs::LaserScan> received;
-    ros::Subscriber sub = nh.subscribe<sensor_msgs::LaserScan>(output, 100, [&](const sensor_msgs::LaserScan::ConstPtr& m) {
-      std::lock_guard<std::mutex> lock(mutex);
-      received.push_back(*m);
-    });
+    ros::Subscriber sub = nh.subscribe<sensor_msgs::LaserScan>(
+        output, 100, [&](const sensor_msgs::LaserScan::ConstPtr& m) {
+          std::lock_guard<std::mutex> lock(mutex);
+          received.push_back(*m);
+        });
     ros::Publisher pub = nh.advertise<sensor_msgs::LaserScan>(input, 100);
     if (!waitFor([&] { return pub.getNumSubscribers() > 0 && sub.getNumPublishers() > 0; }, 30.0)) {
       ADD_FAILURE() << "the node did not connect: " << node.log();
@@ -81,7 +87,12 @@ class RosNode : public ::testing::Test {
     }
     for (std::size_t k = 0; k < scans.size(); ++k) {
       pub.publish(scans[k]);
-      if (!waitFor([&] { std::lock_guard<std::mutex> lock(mutex); return received.size() > k; }, 10.0)) {
+      if (!waitFor(
+              [&] {
+                std::lock_guard<std::mutex> lock(mutex);
+                return received.size() > k;
+              },
+              10.0)) {
         ADD_FAILURE() << "no corrected scan " << k << ": " << node.log();
         break;
       }
@@ -91,10 +102,12 @@ class RosNode : public ::testing::Test {
   }
 
   /// The LaserScans of `topic` in a bag, in order.
-  static std::vector<sensor_msgs::LaserScan> scansOf(const fs::path& bag_file, const std::string& topic) {
+  static std::vector<sensor_msgs::LaserScan> scansOf(const fs::path& bag_file,
+                                                     const std::string& topic) {
     std::vector<sensor_msgs::LaserScan> out;
     rosbag::Bag bag(bag_file.string(), rosbag::bagmode::Read);
-    for (const auto& m : rosbag::View(bag, rosbag::TopicQuery(topic))) out.push_back(*m.instantiate<sensor_msgs::LaserScan>());
+    for (const auto& m : rosbag::View(bag, rosbag::TopicQuery(topic)))
+      out.push_back(*m.instantiate<sensor_msgs::LaserScan>());
     return out;
   }
 
@@ -120,19 +133,25 @@ TEST_F(RosNode, PublishesWhatCorrectWritesToABag) {
   for (const std::string inversion : {"ls", "ml"}) {
     SCOPED_TRACE(inversion);
     const std::string out = (dir / ("out-" + inversion + ".bag")).string();
-    const CliResult c = runCli("correct " + (dir / "in.bag").string() + " --model " + (dir / "model.json").string() +
-                               " --inversion " + inversion + " -o " + out);
+    const CliResult c =
+        runCli("correct " + (dir / "in.bag").string() + " --model " +
+               (dir / "model.json").string() + " --inversion " + inversion + " -o " + out);
     ASSERT_EQ(c.exit_code, 0) << c.err;
-    const std::vector<sensor_msgs::LaserScan> in = scansOf(dir / "in.bag", "/scan"), expected = scansOf(out, "/scan");
+    const std::vector<sensor_msgs::LaserScan> in = scansOf(dir / "in.bag", "/scan"),
+                                              expected = scansOf(out, "/scan");
     ASSERT_EQ(expected.size(), in.size());
 
     const std::string input = "/raw_" + inversion, output = "/corrected_" + inversion;
     // LS from model.json; ML from the model exported as YAML, whose inversion the node takes.
-    std::vector<std::string> params = {"_model:=" + (dir / "model.json").string(), "_input:=" + input, "_output:=" + output,
+    std::vector<std::string> params = {"_model:=" + (dir / "model.json").string(),
+                                       "_input:=" + input, "_output:=" + output,
                                        "_inversion:=" + inversion};
     if (inversion == "ml") {
       const fs::path yaml = dir / "model.yaml";
-      ASSERT_EQ(runCli("export " + (dir / "model.json").string() + " --format yaml --inversion ml -o " + yaml.string()).exit_code, 0);
+      ASSERT_EQ(runCli("export " + (dir / "model.json").string() +
+                       " --format yaml --inversion ml -o " + yaml.string())
+                    .exit_code,
+                0);
       params = {"_model:=" + yaml.string(), "_input:=" + input, "_output:=" + output};
     }
     Child node = startNode("lidarcal_" + inversion, params);
@@ -148,7 +167,8 @@ TEST_F(RosNode, PublishesWhatCorrectWritesToABag) {
       expectSameScanButRanges(r, e);
       ASSERT_EQ(r.ranges.size(), e.ranges.size());
       for (std::size_t i = 0; i < r.ranges.size(); ++i) {
-        EXPECT_TRUE(sameFloat(r.ranges[i], e.ranges[i])) << i << ": " << r.ranges[i] << " vs " << e.ranges[i];
+        EXPECT_TRUE(sameFloat(r.ranges[i], e.ranges[i]))
+            << i << ": " << r.ranges[i] << " vs " << e.ranges[i];
         changed += !sameFloat(r.ranges[i], in[k].ranges[i]);
       }
     }
@@ -159,8 +179,8 @@ TEST_F(RosNode, PublishesWhatCorrectWritesToABag) {
 TEST_F(RosNode, RefusesAnotherSensorsModelAtTheFirstScan) {
   TempDir dir;
   io::writeModel(dir / "model.json", polynomialModel("", 360));  // a 360-beam sensor's model
-  Child node = startNode("lidarcal_refuse", {"_model:=" + (dir / "model.json").string(), "_input:=/raw_other",
-                                             "_output:=/corrected_other"});
+  Child node = startNode("lidarcal_refuse", {"_model:=" + (dir / "model.json").string(),
+                                             "_input:=/raw_other", "_output:=/corrected_other"});
   ros::NodeHandle nh;
   ros::Publisher pub = nh.advertise<sensor_msgs::LaserScan>("/raw_other", 10);
   ASSERT_TRUE(waitFor([&] { return pub.getNumSubscribers() > 0; }, 30.0)) << node.log();
@@ -186,10 +206,12 @@ TEST_F(RosNode, PicksTheBlockOfARigModelByTopicOrSensorName) {
   }
   const fs::path rig = dir / "rig.json";
   io::writeRigModel(rig, twoLidarModel("/scan_front", "/scan_back"));
-  const CliResult c = runCli("correct " + (dir / "in.bag").string() + " --model " + rig.string() + " -o " + (dir / "out.bag").string());
+  const CliResult c = runCli("correct " + (dir / "in.bag").string() + " --model " + rig.string() +
+                             " -o " + (dir / "out.bag").string());
   ASSERT_EQ(c.exit_code, 0) << c.err;
   const std::vector<sensor_msgs::LaserScan> in = scansOf(dir / "in.bag", "/scan_back");
-  const std::vector<sensor_msgs::LaserScan> front = scansOf(dir / "out.bag", "/scan_front"), back = scansOf(dir / "out.bag", "/scan_back");
+  const std::vector<sensor_msgs::LaserScan> front = scansOf(dir / "out.bag", "/scan_front"),
+                                            back = scansOf(dir / "out.bag", "/scan_back");
   ASSERT_EQ(in.size(), 8u);
   ASSERT_EQ(back.size(), 8u);
   ASSERT_FALSE(sameFloat(front[0].ranges[50], back[0].ranges[50]));  // the blocks tell apart
@@ -202,10 +224,12 @@ TEST_F(RosNode, PicksTheBlockOfARigModelByTopicOrSensorName) {
   for (const Case& k : {Case{"lidarcal_rig_topic", "/scan_back", "back", {}},
                         Case{"lidarcal_rig_name", "/raw_rig", "front", {"_sensor_name:=front"}}}) {
     SCOPED_TRACE(k.name);
-    std::vector<std::string> params = {"_model:=" + rig.string(), "_input:=" + k.input, "_output:=/corrected_rig"};
+    std::vector<std::string> params = {"_model:=" + rig.string(), "_input:=" + k.input,
+                                       "_output:=/corrected_rig"};
     params.insert(params.end(), k.extra.begin(), k.extra.end());
     Child node = startNode(k.name, params);
-    const std::vector<sensor_msgs::LaserScan> received = correctLive(node, k.input, "/corrected_rig", in);
+    const std::vector<sensor_msgs::LaserScan> received =
+        correctLive(node, k.input, "/corrected_rig", in);
     EXPECT_EQ(node.stop(), 0) << node.log();
     EXPECT_NE(node.log().find("block " + k.block), std::string::npos) << node.log();
     const std::vector<sensor_msgs::LaserScan>& expected = k.block == "back" ? back : front;
@@ -216,8 +240,9 @@ TEST_F(RosNode, PicksTheBlockOfARigModelByTopicOrSensorName) {
   }
 
   // No block for the topic or the name: refused at start, the blocks listed.
-  for (const std::vector<std::string>& p : {std::vector<std::string>{"_input:=/scan_side"},
-                                            std::vector<std::string>{"_input:=/scan_back", "_sensor_name:=side"}}) {
+  for (const std::vector<std::string>& p :
+       {std::vector<std::string>{"_input:=/scan_side"},
+        std::vector<std::string>{"_input:=/scan_back", "_sensor_name:=side"}}) {
     std::vector<std::string> params = {"_model:=" + rig.string()};
     params.insert(params.end(), p.begin(), p.end());
     Child node = startNode("lidarcal_rig_none", params);
@@ -233,9 +258,11 @@ TEST_F(RosNode, HelpPrintsTheParametersWithoutAMaster) {
   TempDir dir;
   // No master at this address: --help must not wait for one.
   for (const char* flag : {"--help", "-h"}) {
-    Child help({"env", "ROS_MASTER_URI=http://127.0.0.1:9", LIDARCAL_NODE_EXE, flag}, dir / "help.log");
+    Child help({"env", "ROS_MASTER_URI=http://127.0.0.1:9", LIDARCAL_NODE_EXE, flag},
+               dir / "help.log");
     ASSERT_EQ(help.waitExit(10.0).value_or(-1), 0) << help.log();
-    for (const char* p : {"~model", "~input", "~output", "~inversion", "~outside", "~sensor_name", "~force", "export --format yaml"})
+    for (const char* p : {"~model", "~input", "~output", "~inversion", "~outside", "~sensor_name",
+                          "~force", "export --format yaml"})
       EXPECT_NE(help.log().find(p), std::string::npos) << p << "\n" << help.log();
   }
 }
@@ -243,7 +270,8 @@ TEST_F(RosNode, HelpPrintsTheParametersWithoutAMaster) {
 TEST_F(RosNode, RefusesAtStart) {
   TempDir dir;
   io::writeModel(dir / "model.json", polynomialModel("RPLIDAR A2", 360));
-  Child named = startNode("lidarcal_named", {"_model:=" + (dir / "model.json").string(), "_sensor_name:=YDLIDAR X4"});
+  Child named = startNode("lidarcal_named",
+                          {"_model:=" + (dir / "model.json").string(), "_sensor_name:=YDLIDAR X4"});
   const auto status = named.waitExit(20.0);
   ASSERT_TRUE(status) << named.log();
   EXPECT_EQ(*status, 2);

@@ -9,6 +9,8 @@
 #include <stdexcept>
 #include <thread>
 
+#include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
+#include <fastrtps/utils/IPLocator.h>
 #include <fastdds/dds/domain/DomainParticipant.hpp>
 #include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/dds/publisher/DataWriter.hpp>
@@ -19,8 +21,6 @@
 #include <fastdds/dds/subscriber/Subscriber.hpp>
 #include <fastdds/dds/topic/Topic.hpp>
 #include <fastdds/dds/topic/TypeSupport.hpp>
-#include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
-#include <fastrtps/utils/IPLocator.h>
 
 namespace lidarcal::test {
 
@@ -31,7 +31,8 @@ namespace {
 
 void applyProfile(PeerQos q, dds::ReliabilityQosPolicy& reliability, dds::HistoryQosPolicy& history,
                   dds::DurabilityQosPolicy& durability) {
-  reliability.kind = q == PeerQos::sensor_data ? dds::BEST_EFFORT_RELIABILITY_QOS : dds::RELIABLE_RELIABILITY_QOS;
+  reliability.kind =
+      q == PeerQos::sensor_data ? dds::BEST_EFFORT_RELIABILITY_QOS : dds::RELIABLE_RELIABILITY_QOS;
   history.kind = dds::KEEP_LAST_HISTORY_QOS;
   history.depth = q == PeerQos::sensor_data ? 5 : 10;
   durability.kind = dds::VOLATILE_DURABILITY_QOS;
@@ -65,7 +66,8 @@ struct FastDdsPeer::Impl : public dds::DataReaderListener {
   void on_data_available(dds::DataReader* r) override {
     Ros2Scan scan;
     dds::SampleInfo info;
-    while (r->take_next_sample(&scan, &info) == eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK) {
+    while (r->take_next_sample(&scan, &info) ==
+           eprosima::fastrtps::types::ReturnCode_t::RETCODE_OK) {
       if (!info.valid_data) continue;
       std::lock_guard<std::mutex> lock(mutex);
       received.push_back(scan);
@@ -73,7 +75,8 @@ struct FastDdsPeer::Impl : public dds::DataReaderListener {
   }
 
   dds::Topic* topic(const std::string& name) {
-    if (dds::TopicDescription* d = participant->lookup_topicdescription(name)) return static_cast<dds::Topic*>(d);
+    if (dds::TopicDescription* d = participant->lookup_topicdescription(name))
+      return static_cast<dds::Topic*>(d);
     dds::Topic* t = participant->create_topic(name, type.get_type_name(), dds::TOPIC_QOS_DEFAULT);
     if (!t) throw std::runtime_error("Fast DDS: cannot create topic " + name);
     return t;
@@ -137,8 +140,10 @@ bool FastDdsPeer::waitMatched(double seconds) const {
       [&] {
         dds::PublicationMatchedStatus pub;
         dds::SubscriptionMatchedStatus sub;
-        const bool w = !impl_->writer || (impl_->writer->get_publication_matched_status(pub), pub.current_count > 0);
-        const bool r = !impl_->reader || (impl_->reader->get_subscription_matched_status(sub), sub.current_count > 0);
+        const bool w = !impl_->writer ||
+                       (impl_->writer->get_publication_matched_status(pub), pub.current_count > 0);
+        const bool r = !impl_->reader ||
+                       (impl_->reader->get_subscription_matched_status(sub), sub.current_count > 0);
         return w && r;
       },
       seconds);
@@ -164,9 +169,12 @@ std::vector<Ros2Scan> FastDdsPeer::received() const {
 }
 
 std::string cycloneLoopbackConfig() {
-  return "<CycloneDDS><Domain Id=\"any\"><General><Interfaces><NetworkInterface address=\"127.0.0.1\"/></Interfaces>"
-         "<AllowMulticast>false</AllowMulticast></General><Discovery><ParticipantIndex>auto</ParticipantIndex>"
-         "<MaxAutoParticipantIndex>20</MaxAutoParticipantIndex><Peers><Peer address=\"127.0.0.1\"/></Peers></Discovery>"
+  return "<CycloneDDS><Domain Id=\"any\"><General><Interfaces><NetworkInterface "
+         "address=\"127.0.0.1\"/></Interfaces>"
+         "<AllowMulticast>false</AllowMulticast></General><Discovery><ParticipantIndex>auto</"
+         "ParticipantIndex>"
+         "<MaxAutoParticipantIndex>20</MaxAutoParticipantIndex><Peers><Peer "
+         "address=\"127.0.0.1\"/></Peers></Discovery>"
          "</Domain></CycloneDDS>";
 }
 

@@ -17,7 +17,8 @@ namespace lidarcal::test {
 
 using Ros2Scan = sensor_msgs::msg::dds_::LaserScan_;
 
-/// ROS 2's profiles: sensor data (best effort, keep last 5) or default (reliable, keep last 10); both volatile.
+/// ROS 2's profiles: sensor data (best effort, keep last 5) or default (reliable, keep last 10);
+/// both volatile.
 enum class PeerQos { sensor_data, reliable };
 
 class FastDdsPeer {
@@ -28,7 +29,8 @@ class FastDdsPeer {
   FastDdsPeer(const FastDdsPeer&) = delete;
   FastDdsPeer& operator=(const FastDdsPeer&) = delete;
 
-  /// A writer on DDS topic `topic` (e.g. "rt/scan"); replaces the previous writer (a restart of the publisher).
+  /// A writer on DDS topic `topic` (e.g. "rt/scan"); replaces the previous writer (a restart of the
+  /// publisher).
   void advertise(const std::string& topic, PeerQos qos);
   /// Deletes the writer (the publisher goes away).
   void unadvertise();

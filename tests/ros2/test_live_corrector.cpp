@@ -28,15 +28,16 @@ ros2::NodeParameters parse(std::vector<const char*> args) {
 }
 
 TEST(Ros2NodeArguments, RosArgsParametersAndRemapsAsRos2TakesThem) {
-  const ros2::NodeParameters p = parse({"--ros-args", "-p", "model:=/m.json", "-p", "input:=laser", "--param", "output:='fixed'",
-                                        "-p", "inversion:=ml", "-p", "force:=true", "-p", "input_qos:=default", "-r",
-                                        "__node:=front", "-r", "__ns:=/robot", "-r", "laser:=/front/scan"});
+  const ros2::NodeParameters p = parse(
+      {"--ros-args", "-p", "model:=/m.json", "-p", "input:=laser", "--param", "output:='fixed'",
+       "-p", "inversion:=ml", "-p", "force:=true", "-p", "input_qos:=default", "-r",
+       "__node:=front", "-r", "__ns:=/robot", "-r", "laser:=/front/scan"});
   EXPECT_EQ(p.model_file, "/m.json");
   EXPECT_EQ(*p.inversion, "ml");
   EXPECT_TRUE(p.force);
   EXPECT_EQ(p.input_qos, ros2::QosProfile::reliable);
   EXPECT_EQ(p.node_name, "front");
-  EXPECT_EQ(ros2::resolveTopic(p.input, p), "/front/scan");  // remapped
+  EXPECT_EQ(ros2::resolveTopic(p.input, p), "/front/scan");    // remapped
   EXPECT_EQ(ros2::resolveTopic(p.output, p), "/robot/fixed");  // relative to the namespace
   EXPECT_EQ(ros2::resolveTopic("~/diag", p), "/robot/front/diag");
   EXPECT_EQ(ros2::ddsTopicName("/robot/fixed"), "rt/robot/fixed");
@@ -51,14 +52,14 @@ TEST(Ros2NodeArguments, HelpNeedsNothingElseAndMistakesAreInputErrors) {
   EXPECT_TRUE(parse({"--help"}).help);
   EXPECT_TRUE(parse({"--ros-args", "-p", "model:=m", "--", "-h"}).help);  // after the ROS arguments
   for (const auto& bad : std::vector<std::vector<const char*>>{
-           {"--ros-args"},                                           // no model
-           {"--ros-args", "-p", "model:=m", "-p", "colour:=red"},    // unknown parameter
-           {"--ros-args", "-p", "model"},                            // not NAME:=VALUE
-           {"--ros-args", "-p", "model:=m", "-p", "inversion:=x"},   // not ls/ml
-           {"--ros-args", "-p", "model:=m", "-p", "outside:=maybe"}, // not a policy
-           {"--ros-args", "-p", "model:=m", "-p", "force:=yes"},     // not a boolean
-           {"--ros-args", "-p", "model:=m", "-r", "__ns:=robot"},    // relative namespace
-           {"-p", "model:=m"},                                       // outside --ros-args
+           {"--ros-args"},                                            // no model
+           {"--ros-args", "-p", "model:=m", "-p", "colour:=red"},     // unknown parameter
+           {"--ros-args", "-p", "model"},                             // not NAME:=VALUE
+           {"--ros-args", "-p", "model:=m", "-p", "inversion:=x"},    // not ls/ml
+           {"--ros-args", "-p", "model:=m", "-p", "outside:=maybe"},  // not a policy
+           {"--ros-args", "-p", "model:=m", "-p", "force:=yes"},      // not a boolean
+           {"--ros-args", "-p", "model:=m", "-r", "__ns:=robot"},     // relative namespace
+           {"-p", "model:=m"},                                        // outside --ros-args
        }) {
     EXPECT_THROW(parse(bad), InputError) << bad.back();
   }
@@ -107,8 +108,8 @@ ros2::LiveSettings settings() {
 
 struct LiveCase {
   CalibrationModel model = polynomialModel("", 100);
-  calibration::ReadingCorrector correct =
-      calibration::readingCorrector(model, calibration::InversionMethod::ls, calibration::kDefaultOutside);
+  calibration::ReadingCorrector correct = calibration::readingCorrector(
+      model, calibration::InversionMethod::ls, calibration::kDefaultOutside);
   ros2::LiveCorrector live{model, settings(), correct};
 };
 
@@ -122,7 +123,8 @@ TEST(Ros2LiveCorrector, CorrectsExactlyAsCorrectLaserRanges) {
     ros2::ScanFields f = fields(r, 100);
     ASSERT_EQ(c.live.process(f), ros2::ScanVerdict::publish);
     for (std::size_t i = 0; i < r.size(); ++i)
-      EXPECT_TRUE(std::memcmp(&r[i], &expected[i], sizeof(float)) == 0) << i << ": " << r[i] << " vs " << expected[i];
+      EXPECT_TRUE(std::memcmp(&r[i], &expected[i], sizeof(float)) == 0)
+          << i << ": " << r[i] << " vs " << expected[i];
   }
   EXPECT_EQ(c.live.stats().correction.scans, 3u);
 }
@@ -142,8 +144,11 @@ TEST(Ros2LiveCorrector, MalformedScansAreDroppedUntouchedAndCounted) {
   bad[3].range_max = -std::numeric_limits<float>::infinity();
   bad[4].range_min = 13.0f;
   bad[5].intensities = 7;
-  const ros2::DropReason reasons[] = {ros2::DropReason::empty, ros2::DropReason::beam_count, ros2::DropReason::non_finite_field,
-                                      ros2::DropReason::non_finite_field, ros2::DropReason::range_limits,
+  const ros2::DropReason reasons[] = {ros2::DropReason::empty,
+                                      ros2::DropReason::beam_count,
+                                      ros2::DropReason::non_finite_field,
+                                      ros2::DropReason::non_finite_field,
+                                      ros2::DropReason::range_limits,
                                       ros2::DropReason::intensities};
   for (std::size_t k = 0; k < bad.size(); ++k) {
     SCOPED_TRACE(k);
@@ -151,14 +156,16 @@ TEST(Ros2LiveCorrector, MalformedScansAreDroppedUntouchedAndCounted) {
     EXPECT_EQ(c.live.dropReason(), reasons[k]);
     EXPECT_FALSE(c.live.message().empty());
   }
-  EXPECT_EQ(std::memcmp(r.data(), untouched.data(), r.size() * sizeof(float)), 0);  // nothing corrected
+  // nothing corrected
+  EXPECT_EQ(std::memcmp(r.data(), untouched.data(), r.size() * sizeof(float)), 0);
   EXPECT_EQ(c.live.stats().droppedTotal(), 6u);
   EXPECT_EQ(c.live.stats().correction.scans, 1u);
 }
 
 TEST(Ros2LiveCorrector, TheFirstScanOfAnotherSensorIsRefused) {
   CalibrationModel m = polynomialModel("", 360);
-  const auto correct = calibration::readingCorrector(m, calibration::InversionMethod::ls, calibration::kDefaultOutside);
+  const auto correct = calibration::readingCorrector(m, calibration::InversionMethod::ls,
+                                                     calibration::kDefaultOutside);
   ros2::LiveCorrector live(m, settings(), correct);
   std::vector<float> r = ranges();
   ros2::ScanFields f = fields(r);
@@ -188,7 +195,8 @@ TEST(Ros2WarningLimiter, OnePerPeriodAndTheHeldBackOnesCounted) {
 TEST(ExportedModelYaml, CorrectsEveryReadingAsTheModelItWasExportedFrom) {
   TempDir dir;
   const CalibrationModel m = polynomialModel("RPLIDAR A2", 360);
-  for (const auto inversion : {calibration::InversionMethod::ls, calibration::InversionMethod::ml}) {
+  for (const auto inversion :
+       {calibration::InversionMethod::ls, calibration::InversionMethod::ml}) {
     pipeline::ExportConfig config;
     config.inversion = inversion;
     config.outside = calibration::Outside::drop;
@@ -205,7 +213,8 @@ TEST(ExportedModelYaml, CorrectsEveryReadingAsTheModelItWasExportedFrom) {
     for (double y = 0.15; y < 12.0; y += 0.0037) {
       const auto ca = a(y), cb = b(y);
       EXPECT_EQ(ca.fate, cb.fate) << y;
-      EXPECT_TRUE(ca.range_m == cb.range_m || (std::isnan(ca.range_m) && std::isnan(cb.range_m))) << y;
+      EXPECT_TRUE(ca.range_m == cb.range_m || (std::isnan(ca.range_m) && std::isnan(cb.range_m)))
+          << y;
     }
   }
   io::writeModel(dir / "model.json", m);

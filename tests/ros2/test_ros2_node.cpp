@@ -9,18 +9,18 @@
 #include <cmath>
 #include <cstdlib>
 #include <limits>
-#include <optional>
 #include <map>
+#include <optional>
 #include <regex>
 #include <set>
 
 #include <gtest/gtest.h>
 
+#include "child_process.hpp"
 #include "io/mcap_reader.hpp"
 #include "io/model_yaml.hpp"
 #include "io/ros2_msgs.hpp"
 #include "io/rosbag2_test_writer.hpp"
-#include "child_process.hpp"
 #include "pipeline/ros_test_util.hpp"
 #include "ros2/fastdds_peer.hpp"
 
@@ -62,7 +62,8 @@ std::vector<io::Ros2LaserScan> scansOf(const fs::path& mcap) {
 }
 
 /// Everything but the ranges' values is the sent scan's; the ranges are `expected`, bit for bit.
-void expectCorrected(const Ros2Scan& got, const io::Ros2LaserScan& sent, const std::vector<float>& expected) {
+void expectCorrected(const Ros2Scan& got, const io::Ros2LaserScan& sent,
+                     const std::vector<float>& expected) {
   EXPECT_EQ(got.header().stamp().sec(), sent.stamp_sec);
   EXPECT_EQ(got.header().stamp().nanosec(), sent.stamp_nanosec);
   EXPECT_EQ(got.header().frame_id(), sent.frame_id);
@@ -76,7 +77,8 @@ void expectCorrected(const Ros2Scan& got, const io::Ros2LaserScan& sent, const s
   EXPECT_EQ(got.intensities(), sent.intensities);
   ASSERT_EQ(got.ranges().size(), expected.size());
   for (std::size_t i = 0; i < expected.size(); ++i)
-    EXPECT_TRUE(sameFloat(got.ranges()[i], expected[i])) << i << ": " << got.ranges()[i] << " vs " << expected[i];
+    EXPECT_TRUE(sameFloat(got.ranges()[i], expected[i]))
+        << i << ": " << got.ranges()[i] << " vs " << expected[i];
 }
 
 class Ros2Node : public ::testing::Test {
@@ -97,8 +99,11 @@ class Ros2Node : public ::testing::Test {
   /// 30 scans on /scan in one zstd chunk.
   static std::string recording() {
     std::string records;
-    for (int k = 0; k < 30; ++k) records += messageRecord(1, 1000000000ull * static_cast<std::uint64_t>(100 + k), laserScanCdr(recordedScan(k, kBeams)));
-    return mcapHead() + schemaRecord(1, "sensor_msgs/msg/LaserScan") + channelRecord(1, 1, "/scan") +
+    for (int k = 0; k < 30; ++k)
+      records += messageRecord(1, 1000000000ull * static_cast<std::uint64_t>(100 + k),
+                               laserScanCdr(recordedScan(k, kBeams)));
+    return mcapHead() + schemaRecord(1, "sensor_msgs/msg/LaserScan") +
+           channelRecord(1, 1, "/scan") +
            chunkRecord(records, "zstd", 100000000000ull, 129000000000ull) + mcapTail();
   }
 
@@ -129,19 +134,22 @@ class Ros2Node : public ::testing::Test {
       const std::size_t before = peer->received().size();
       peer->publish(toDds(scans[k]));
       ++well_formed_sent_;
-      ASSERT_TRUE(peer->waitReceived(before + 1, kDeliveryS)) << "no corrected scan " << k << ": " << node.log();
+      ASSERT_TRUE(peer->waitReceived(before + 1, kDeliveryS))
+          << "no corrected scan " << k << ": " << node.log();
     }
   }
 
   /// Runs `node` (started with reliable input QoS) on `sent` from `input` to `output` and checks
   /// that every scan came back once, known by its stamp, with the ranges of `expected`.
   void expectCorrectedLive(Child& node, const std::string& input, const std::string& output,
-                           const std::vector<io::Ros2LaserScan>& sent, const std::vector<io::Ros2LaserScan>& expected) {
+                           const std::vector<io::Ros2LaserScan>& sent,
+                           const std::vector<io::Ros2LaserScan>& expected) {
     peer = std::make_unique<FastDdsPeer>(domain_);
     well_formed_sent_ = 0;
     peer->subscribe("rt/" + output, PeerQos::reliable);
     peer->advertise("rt/" + input, PeerQos::reliable);
-    ASSERT_TRUE(peer->waitMatched(kDiscoveryS)) << "the node and the peer did not match: " << node.log();
+    ASSERT_TRUE(peer->waitMatched(kDiscoveryS))
+        << "the node and the peer did not match: " << node.log();
     prime(sent[0], node);
     publishAll(sent, node);
     EXPECT_EQ(node.stop(), 0) << node.log();
@@ -180,25 +188,32 @@ int Ros2Node::domain_ = 0;
 TEST_F(Ros2Node, PublishesWhatCorrectWritesToAnMcapBitForBit) {
   // The JSON model with LS, and the same model exported as YAML with ML (the node takes the
   // inversion from the YAML), each against `correct` with that inversion.
-  ASSERT_EQ(runCli("export " + (dir / "model.json").string() + " --format yaml --inversion ml -o " + (dir / "model.yaml").string()).exit_code, 0);
+  ASSERT_EQ(runCli("export " + (dir / "model.json").string() + " --format yaml --inversion ml -o " +
+                   (dir / "model.yaml").string())
+                .exit_code,
+            0);
   const std::vector<io::Ros2LaserScan> sent = scansOf(dir / "in.mcap");
   ASSERT_EQ(sent.size(), 30u);
   for (const std::string inversion : {"ls", "ml"}) {
     SCOPED_TRACE(inversion);
     const fs::path out = dir / ("out-" + inversion + ".mcap");
-    const CliResult c = runCli("correct " + (dir / "in.mcap").string() + " --model " + (dir / "model.json").string() +
-                               " --inversion " + inversion + " -o " + out.string());
+    const CliResult c =
+        runCli("correct " + (dir / "in.mcap").string() + " --model " +
+               (dir / "model.json").string() + " --inversion " + inversion + " -o " + out.string());
     ASSERT_EQ(c.exit_code, 0) << c.err;
     const std::vector<io::Ros2LaserScan> expected = scansOf(out);
     ASSERT_EQ(expected.size(), sent.size());
 
-    const std::string model = inversion == "ls" ? (dir / "model.json").string() : (dir / "model.yaml").string();
-    Child node = startNode("lidarcal_" + inversion, {"model:=" + model, "input:=raw_" + inversion, "output:=corrected_" + inversion,
-                                                     "input_qos:=default"});
+    const std::string model =
+        inversion == "ls" ? (dir / "model.json").string() : (dir / "model.yaml").string();
+    Child node = startNode("lidarcal_" + inversion,
+                           {"model:=" + model, "input:=raw_" + inversion,
+                            "output:=corrected_" + inversion, "input_qos:=default"});
     expectCorrectedLive(node, "raw_" + inversion, "corrected_" + inversion, sent, expected);
     std::size_t changed = 0;
     for (std::size_t k = 0; k < sent.size(); ++k)
-      for (std::size_t i = 0; i < kBeams; ++i) changed += !sameFloat(expected[k].ranges[i], sent[k].ranges[i]);
+      for (std::size_t i = 0; i < kBeams; ++i)
+        changed += !sameFloat(expected[k].ranges[i], sent[k].ranges[i]);
     EXPECT_GT(changed, sent.size() * 50);  // most readings lie in the fitted range and moved
   }
 }
@@ -215,12 +230,14 @@ TEST_F(Ros2Node, PicksTheBlockOfARigModelByTopicOrSensorName) {
     const std::string block = s.name;
     const fs::path out = dir / (block + ".mcap"), model = dir / (block + ".json");
     io::writeModel(model, s.model);
-    const CliResult c = runCli("correct " + (dir / "in.mcap").string() + " --model " + model.string() + " -o " + out.string());
+    const CliResult c = runCli("correct " + (dir / "in.mcap").string() + " --model " +
+                               model.string() + " -o " + out.string());
     ASSERT_EQ(c.exit_code, 0) << c.err;
     expected[block] = scansOf(out);
     ASSERT_EQ(expected[block].size(), sent.size());
   }
-  ASSERT_FALSE(sameFloat(expected["front"][0].ranges[50], expected["back"][0].ranges[50]));  // the blocks tell apart
+  // the blocks tell apart
+  ASSERT_FALSE(sameFloat(expected["front"][0].ranges[50], expected["back"][0].ranges[50]));
   {
     SCOPED_TRACE("by topic");
     Child node = startNode("lidarcal_rig_topic", {"model:=" + rig.string(), "input_qos:=default"});
@@ -229,8 +246,9 @@ TEST_F(Ros2Node, PicksTheBlockOfARigModelByTopicOrSensorName) {
   }
   {
     SCOPED_TRACE("by sensor_name");
-    Child node = startNode("lidarcal_rig_name", {"model:=" + rig.string(), "sensor_name:=front", "input:=raw_rig",
-                                                 "output:=corrected_rig", "input_qos:=default"});
+    Child node = startNode("lidarcal_rig_name",
+                           {"model:=" + rig.string(), "sensor_name:=front", "input:=raw_rig",
+                            "output:=corrected_rig", "input_qos:=default"});
     expectCorrectedLive(node, "raw_rig", "corrected_rig", sent, expected["front"]);
     EXPECT_NE(node.log().find("block front"), std::string::npos) << node.log();
   }
@@ -242,20 +260,22 @@ TEST_F(Ros2Node, PicksTheBlockOfARigModelByTopicOrSensorName) {
     const std::string log = node.log();
     EXPECT_NE(log.find(rig.string()), std::string::npos) << log;
     EXPECT_NE(log.find("front (/scan_front), back (/scan)"), std::string::npos) << log;
-    EXPECT_NE(log.find(p == "input:=scan_side" ? "'/scan_side'" : "'side'"), std::string::npos) << log;
+    EXPECT_NE(log.find(p == "input:=scan_side" ? "'/scan_side'" : "'side'"), std::string::npos)
+        << log;
   }
 }
 
 TEST_F(Ros2Node, TheSensorDataProfileMatchesAndAPublisherThatComesBackIsServed) {
   const std::vector<io::Ros2LaserScan> sent = scansOf(dir / "in.mcap");
-  Child node = startNode("lidarcal_restart", {"model:=" + (dir / "model.json").string()});  // input scan, output scan_corrected
+  // input scan, output scan_corrected
+  Child node = startNode("lidarcal_restart", {"model:=" + (dir / "model.json").string()});
   peer->subscribe("rt/scan_corrected", PeerQos::sensor_data);
   peer->advertise("rt/scan", PeerQos::sensor_data);
   ASSERT_TRUE(peer->waitMatched(kDiscoveryS)) << node.log();
   prime(sent[0], node);
   publishAll({sent.begin() + 1, sent.begin() + 5}, node);
   const std::size_t before = peer->received().size();
-  peer->unadvertise();  // the driver stops ...
+  peer->unadvertise();                               // the driver stops ...
   peer->advertise("rt/scan", PeerQos::sensor_data);  // ... and starts again with a new writer
   ASSERT_TRUE(peer->waitMatched(kDiscoveryS)) << node.log();
   prime(sent[5], node);
@@ -269,7 +289,8 @@ TEST_F(Ros2Node, TheSensorDataProfileMatchesAndAPublisherThatComesBackIsServed) 
 
 TEST_F(Ros2Node, DropsMalformedScansCountsThemAndRunsOn) {
   const std::vector<io::Ros2LaserScan> sent = scansOf(dir / "in.mcap");
-  Child node = startNode("lidarcal_malformed", {"model:=" + (dir / "model.json").string(), "input_qos:=default"});
+  Child node = startNode("lidarcal_malformed",
+                         {"model:=" + (dir / "model.json").string(), "input_qos:=default"});
   peer->subscribe("rt/scan_corrected", PeerQos::reliable);
   peer->advertise("rt/scan", PeerQos::reliable);
   ASSERT_TRUE(peer->waitMatched(kDiscoveryS)) << node.log();
@@ -287,7 +308,8 @@ TEST_F(Ros2Node, DropsMalformedScansCountsThemAndRunsOn) {
   publishAll({sent[2]}, node);  // reliable and in order: the malformed ones were handled first
   EXPECT_EQ(node.stop(), 0) << node.log();
   for (const Ros2Scan& got : peer->received())  // only the well-formed scans came out
-    EXPECT_TRUE(got.header().stamp().sec() == sent[0].stamp_sec || got.header().stamp().sec() == sent[2].stamp_sec);
+    EXPECT_TRUE(got.header().stamp().sec() == sent[0].stamp_sec ||
+                got.header().stamp().sec() == sent[2].stamp_sec);
   EXPECT_EQ(peer->received().back().header().stamp().sec(), sent[2].stamp_sec);
   expectSummaryCounts(node);
   const std::string log = node.log();
@@ -297,7 +319,8 @@ TEST_F(Ros2Node, DropsMalformedScansCountsThemAndRunsOn) {
 
 TEST_F(Ros2Node, RefusesAnotherSensorsModelAtTheFirstScan) {
   io::writeModel(dir / "model360.json", polynomialModel("", 360));
-  Child node = startNode("lidarcal_refuse", {"model:=" + (dir / "model360.json").string(), "input:=/raw_other"});
+  Child node = startNode("lidarcal_refuse",
+                         {"model:=" + (dir / "model360.json").string(), "input:=/raw_other"});
   peer->advertise("rt/raw_other", PeerQos::sensor_data);
   ASSERT_TRUE(peer->waitMatched(kDiscoveryS)) << node.log();
   const io::Ros2LaserScan first = scansOf(dir / "in.mcap")[0];
@@ -315,15 +338,18 @@ TEST_F(Ros2Node, RefusesAnotherSensorsModelAtTheFirstScan) {
 TEST_F(Ros2Node, HelpAndBadArgumentsAnswerAtOnce) {
   Child help(std::vector<std::string>{LIDARCAL_ROS2_NODE_EXE, "--help"}, dir / "help.log");
   ASSERT_EQ(help.waitExit(20.0).value_or(-1), 0) << help.log();
-  for (const char* p : {"model", "input", "output", "inversion", "outside", "sensor_name", "force", "input_qos", "ROS_DOMAIN_ID"})
+  for (const char* p : {"model", "input", "output", "inversion", "outside", "sensor_name", "force",
+                        "input_qos", "ROS_DOMAIN_ID"})
     EXPECT_NE(help.log().find(p), std::string::npos) << p;
   Child no_model = startNode("lidarcal_no_model", {});
   EXPECT_EQ(no_model.waitExit(20.0).value_or(-1), 2) << no_model.log();
   io::writeModel(dir / "named.json", polynomialModel("RPLIDAR A2", static_cast<int>(kBeams)));
-  Child named = startNode("lidarcal_named", {"model:=" + (dir / "named.json").string(), "sensor_name:=YDLIDAR X4"});
+  Child named = startNode("lidarcal_named",
+                          {"model:=" + (dir / "named.json").string(), "sensor_name:=YDLIDAR X4"});
   EXPECT_EQ(named.waitExit(20.0).value_or(-1), 2) << named.log();
   EXPECT_NE(named.log().find("RPLIDAR A2"), std::string::npos) << named.log();
-  Child unknown = startNode("lidarcal_unknown", {"model:=" + (dir / "model.json").string(), "colour:=red"});
+  Child unknown =
+      startNode("lidarcal_unknown", {"model:=" + (dir / "model.json").string(), "colour:=red"});
   EXPECT_EQ(unknown.waitExit(20.0).value_or(-1), 2) << unknown.log();
 }
 

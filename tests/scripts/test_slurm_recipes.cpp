@@ -24,7 +24,8 @@ namespace {
 class SlurmRecipes : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    dir_ = new fs::path(fs::temp_directory_path() / ("lidarcal-slurm-" + std::to_string(::getpid())));
+    dir_ =
+        new fs::path(fs::temp_directory_path() / ("lidarcal-slurm-" + std::to_string(::getpid())));
     fs::remove_all(*dir_);
     cluster_ = new SlurmCluster;
     std::string why_not;
@@ -42,7 +43,8 @@ class SlurmRecipes : public ::testing::Test {
   void SetUp() override {
     if (skip_->empty()) return;
     const char* require = std::getenv("LIDARCAL_REQUIRE_SLURM");
-    if (require && std::string(require) == "1" && skip_->find("must run as root") == std::string::npos)
+    if (require && std::string(require) == "1" &&
+        skip_->find("must run as root") == std::string::npos)
       FAIL() << *skip_;
     GTEST_SKIP() << *skip_;
   }
@@ -50,10 +52,12 @@ class SlurmRecipes : public ::testing::Test {
   /// Runs a submit script; returns the job ids it prints as NAME_job=ID, in order.
   static std::vector<std::string> submit(const std::string& script, const std::string& args) {
     std::string out;
-    const int code = shell("bash " + (sourceDir() / "scripts" / "slurm" / script).string() + " " + args, &out);
+    const int code =
+        shell("bash " + (sourceDir() / "scripts" / "slurm" / script).string() + " " + args, &out);
     EXPECT_EQ(code, 0) << out;
     std::vector<std::string> ids;
-    for (std::size_t at = out.find("_job="); at != std::string::npos; at = out.find("_job=", at + 1))
+    for (std::size_t at = out.find("_job="); at != std::string::npos;
+         at = out.find("_job=", at + 1))
       ids.push_back(out.substr(at + 5, out.find('\n', at) - at - 5));
     return ids;
   }
@@ -64,13 +68,16 @@ class SlurmRecipes : public ::testing::Test {
     std::string list;
     for (const auto& id : ids) list += (list.empty() ? "" : ",") + id;
     std::string queued;
-    const bool done = waitFor([&] { return shell("squeue -h -j " + list + " -o %i", &queued) == 0 && queued.empty(); }, 600.0);
+    const bool done = waitFor(
+        [&] { return shell("squeue -h -j " + list + " -o %i", &queued) == 0 && queued.empty(); },
+        600.0);
     EXPECT_TRUE(done) << "still queued: " << queued << cluster_->logs();
     std::string states;
     for (const auto& id : ids) {
       std::string show;
       shell("scontrol -o show job " + id, &show);
-      for (std::size_t at = show.find("JobState="); at != std::string::npos; at = show.find("JobState=", at + 1))
+      for (std::size_t at = show.find("JobState="); at != std::string::npos;
+           at = show.find("JobState=", at + 1))
         states += show.substr(at + 9, show.find(' ', at) - at - 9) + " ";
     }
     return states;
@@ -89,13 +96,18 @@ SlurmCluster* SlurmRecipes::cluster_ = nullptr;
 std::string* SlurmRecipes::skip_ = new std::string;
 
 TEST_F(SlurmRecipes, StudyShardsAndTheirMergeGiveTheSingleProcessBytes) {
-  const std::string study = "--quick --study fig9 --trials 4 --joint-trials 1 --stops 8 --step 0.3 --scans-per-stop 3 --seed 5";
+  const std::string study =
+      "--quick --study fig9 --trials 4 --joint-trials 1 --stops 8 --step 0.3 --scans-per-stop 3 "
+      "--seed 5";
   const fs::path out = *dir_ / "study";
   const auto ids = submit("submit-montecarlo.sh", "3 " + out.string() + " " + study);
   ASSERT_EQ(ids.size(), 2u);
   const std::string states = waitForJobs(ids);
-  ASSERT_TRUE(allCompleted(states)) << states << "\n" << readFile(out / "logs" / "merge.out") << readFile(out / "logs" / "shard-0.out");
-  for (int k = 1; k <= 3; ++k) EXPECT_TRUE(fs::exists(out / "shards" / std::to_string(k) / "shard.json")) << k;
+  ASSERT_TRUE(allCompleted(states))
+      << states << "\n"
+      << readFile(out / "logs" / "merge.out") << readFile(out / "logs" / "shard-0.out");
+  for (int k = 1; k <= 3; ++k)
+    EXPECT_TRUE(fs::exists(out / "shards" / std::to_string(k) / "shard.json")) << k;
   const auto whole = runCli("-q montecarlo " + study + " --out " + (*dir_ / "whole").string());
   ASSERT_EQ(whole.exit_code, 0) << whole.err;
   expectSameFiles(snapshot(*dir_ / "whole"), snapshot(out / "study"));
@@ -103,7 +115,8 @@ TEST_F(SlurmRecipes, StudyShardsAndTheirMergeGiveTheSingleProcessBytes) {
 
 TEST_F(SlurmRecipes, FleetTasksAndTheirReportAgreeWithThePerRecordingModels) {
   // Four sensors recorded on two dates: eight `lidarcal run` tasks, then the report.
-  const nlohmann::json base = nlohmann::json::parse(readFile(sourceDir() / "data/scenes/paper_field.json"));
+  const nlohmann::json base =
+      nlohmann::json::parse(readFile(sourceDir() / "data/scenes/paper_field.json"));
   const fs::path fleet = *dir_ / "fleet";
   fs::create_directories(fleet / "recordings");
   std::string list = "sensor,date,input\n";
@@ -116,7 +129,8 @@ TEST_F(SlurmRecipes, FleetTasksAndTheirReportAgreeWithThePerRecordingModels) {
       const std::string tag = "agv" + std::to_string(i) + "_" + dates[w];
       writeFile(fleet / (tag + ".json"), scene.dump());
       const auto sim = runCli("-q simulate --scene " + (fleet / (tag + ".json")).string() + " -o " +
-                              (fleet / "recordings" / tag).string() + " --seed " + std::to_string(10 * i + static_cast<int>(w) + 1));
+                              (fleet / "recordings" / tag).string() + " --seed " +
+                              std::to_string(10 * i + static_cast<int>(w) + 1));
       ASSERT_EQ(sim.exit_code, 0) << sim.err;
       list += "agv" + std::to_string(i) + "," + dates[w] + ",recordings/" + tag + "/scans\n";
     }
@@ -125,7 +139,9 @@ TEST_F(SlurmRecipes, FleetTasksAndTheirReportAgreeWithThePerRecordingModels) {
   const auto ids = submit("submit-fleet.sh", (fleet / "list.csv").string() + " " + out.string());
   ASSERT_EQ(ids.size(), 2u);
   const std::string states = waitForJobs(ids);
-  ASSERT_TRUE(allCompleted(states)) << states << "\n" << readFile(out / "logs" / "summary.out") << readFile(out / "logs" / "run-0.out");
+  ASSERT_TRUE(allCompleted(states))
+      << states << "\n"
+      << readFile(out / "logs" / "summary.out") << readFile(out / "logs" / "run-0.out");
 
   const nlohmann::json report = nlohmann::json::parse(readFile(out / "report" / "fleet.json"));
   ASSERT_EQ(report["sensors"].size(), 4u);
@@ -145,10 +161,12 @@ TEST_F(SlurmRecipes, FleetTasksAndTheirReportAgreeWithThePerRecordingModels) {
     }
   }
   // A task's model is the one `lidarcal run` writes outside Slurm.
-  const auto local = runCli("-q run " + (fleet / "recordings" / ("agv2_" + dates[1]) / "scans").string() + " -o " +
-                            (fleet / "local").string());
+  const auto local =
+      runCli("-q run " + (fleet / "recordings" / ("agv2_" + dates[1]) / "scans").string() + " -o " +
+             (fleet / "local").string());
   ASSERT_EQ(local.exit_code, 0) << local.err;
-  EXPECT_EQ(readFile(fleet / "local" / "model.json"), readFile(out / "runs" / "agv2" / dates[1] / "model.json"));
+  EXPECT_EQ(readFile(fleet / "local" / "model.json"),
+            readFile(out / "runs" / "agv2" / dates[1] / "model.json"));
   EXPECT_TRUE(fs::exists(out / "fleet.csv"));
   EXPECT_TRUE(fs::exists(out / "report" / "fleet.md"));
 }

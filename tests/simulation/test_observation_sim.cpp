@@ -12,7 +12,8 @@ namespace lidarcal::simulation {
 namespace {
 
 TEST(ObservationSim, NoiseFreeReadingsAreTheTrueRangeAndBearingFromTheTruePose) {
-  ObservationScene scene = test::squareScene(1, SensorNoise{}, SensorNoise{}, ProcessNoise{0.01, 0.01, 0.01});
+  ObservationScene scene =
+      test::squareScene(1, SensorNoise{}, SensorNoise{}, ProcessNoise{0.01, 0.01, 0.01});
   scene.sensors[1].max_range_m = 5.0;
   scene.sensors[1].fov_rad = kPi;
   const auto sim = simulateObservations(scene, 3);
@@ -23,7 +24,8 @@ TEST(ObservationSim, NoiseFreeReadingsAreTheTrueRangeAndBearingFromTheTruePose) 
     const Pose2& p = sim.true_poses[static_cast<std::size_t>(o.stop)];
     const auto& l = scene.landmarks[static_cast<std::size_t>(o.landmark)];
     EXPECT_NEAR(o.range_m, std::hypot(l.x_m - p.x_m, l.y_m - p.y_m), 1e-12);
-    EXPECT_NEAR(wrapAngle(o.bearing_rad - (std::atan2(l.y_m - p.y_m, l.x_m - p.x_m) - p.yaw_rad)), 0.0, 1e-12);
+    EXPECT_NEAR(wrapAngle(o.bearing_rad - (std::atan2(l.y_m - p.y_m, l.x_m - p.x_m) - p.yaw_rad)),
+                0.0, 1e-12);
     if (o.sensor == 1) {
       ++seen1;
       EXPECT_LE(o.range_m, 5.0);
@@ -50,7 +52,8 @@ TEST(ObservationSim, ReadingErrorsHaveTheConfiguredMeanAndVariance) {
       const Pose2& p = sim.true_poses[static_cast<std::size_t>(o.stop)];
       const auto& l = scene.landmarks[static_cast<std::size_t>(o.landmark)];
       const double er = o.range_m - std::hypot(l.x_m - p.x_m, l.y_m - p.y_m);
-      const double eb = wrapAngle(o.bearing_rad - (std::atan2(l.y_m - p.y_m, l.x_m - p.x_m) - p.yaw_rad));
+      const double eb =
+          wrapAngle(o.bearing_rad - (std::atan2(l.y_m - p.y_m, l.x_m - p.x_m) - p.yaw_rad));
       sr += er, sr2 += er * er, sb += eb, sb2 += eb * eb, count += 1;
     }
     const double mr = sr / count, mb = sb / count;
@@ -64,7 +67,8 @@ TEST(ObservationSim, ReadingErrorsHaveTheConfiguredMeanAndVariance) {
 }
 
 TEST(ObservationSim, ChangingOneSensorLeavesTheOthersReadingsUnchanged) {
-  ObservationScene a = test::squareScene(1, SensorNoise{0.0, 0.1, 0.0, 0.1}, SensorNoise{0.0, 0.2, 0.0, 0.2}, ProcessNoise{0.01, 0, 0});
+  ObservationScene a = test::squareScene(1, SensorNoise{0.0, 0.1, 0.0, 0.1},
+                                         SensorNoise{0.0, 0.2, 0.0, 0.2}, ProcessNoise{0.01, 0, 0});
   ObservationScene b = a;
   b.sensors[1].noise.range_var_m2 = 0.7;
   b.sensors[1].max_range_m = 3.0;

@@ -11,7 +11,9 @@
 namespace lidarcal::simulation {
 namespace {
 
-Ray rayAt(double ox, double oy, double angle) { return Ray{ox, oy, std::cos(angle), std::sin(angle)}; }
+Ray rayAt(double ox, double oy, double angle) {
+  return Ray{ox, oy, std::cos(angle), std::sin(angle)};
+}
 
 TEST(RayCircle, CylinderStraightAheadIsHitAtCentreDistanceMinusRadius) {
   const auto t = intersectCircle(rayAt(0, 0, 0), Cylinder{5.0, 0.0, 0.5});
@@ -39,7 +41,8 @@ TEST(RayCircle, CircleBehindOrAroundTheOriginIsNotHit) {
 TEST(RaySegment, WallAtAnAngle) {
   // Wall through (3, 0) at 30 degrees from the y axis; a beam along x hits it at (3, 0).
   const double a = deg2rad(30.0);
-  const Segment w{3.0 - 2.0 * std::sin(a), -2.0 * std::cos(a), 3.0 + 2.0 * std::sin(a), 2.0 * std::cos(a)};
+  const Segment w{3.0 - 2.0 * std::sin(a), -2.0 * std::cos(a), 3.0 + 2.0 * std::sin(a),
+                  2.0 * std::cos(a)};
   const auto t = intersectSegment(rayAt(0, 0, 0), w);
   ASSERT_TRUE(t);
   EXPECT_NEAR(*t, 3.0, 1e-12);
@@ -98,7 +101,8 @@ TEST(RayCircle, PropertyHitPointLiesOnTheCircleAndNothingIsCloser) {
     ASSERT_EQ(static_cast<bool>(t), expect_hit);
     if (!t) continue;
     ++hits;
-    EXPECT_NEAR(std::hypot(ray.ox + *t * ray.dx - c.x_m, ray.oy + *t * ray.dy - c.y_m), c.radius_m, 1e-9);
+    EXPECT_NEAR(std::hypot(ray.ox + *t * ray.dx - c.x_m, ray.oy + *t * ray.dy - c.y_m), c.radius_m,
+                1e-9);
     EXPECT_NEAR(*t, along - std::sqrt(c.radius_m * c.radius_m - perp * perp), 1e-9);
   }
   EXPECT_GT(hits, 50);

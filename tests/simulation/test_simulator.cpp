@@ -70,13 +70,15 @@ NoiseModel squaredNoise() {
 NoiseModel polynomialNoise() {
   NoiseModel n;
   n.kind = NoiseKind::polynomial;
-  n.beta = {0.05 * 0.0525, 0.05 * 0.8838, 0.05 * 0.0584};  // Alhashimi et al. 2021 section 4.1: beta = 0.05 alpha
+  // Alhashimi et al. 2021 section 4.1: beta = 0.05 alpha
+  n.beta = {0.05 * 0.0525, 0.05 * 0.8838, 0.05 * 0.0584};
   return n;
 }
 
 INSTANTIATE_TEST_SUITE_P(BothForms, NoiseStatistics,
                          ::testing::Values(NoiseCase{"alhashimi2016_squared", squaredNoise()},
-                                           NoiseCase{"alhashimi2021_polynomial", polynomialNoise()}),
+                                           NoiseCase{"alhashimi2021_polynomial",
+                                                     polynomialNoise()}),
                          [](const auto& p) { return std::string(p.param.name); });
 
 TEST(Simulator, NoiseFreeReadingsAreTheBiasOfTheTrueRange) {
@@ -138,8 +140,10 @@ TEST(Simulator, AScanDoesNotDependOnWhichScansWereSimulatedBefore) {
   for (std::size_t b = 0; b < alone.scan.cloud->size(); ++b) {
     const auto& p = (*alone.scan.cloud)[b];
     const auto& q = (*after.scan.cloud)[b];
-    if (std::isnan(p.x)) EXPECT_TRUE(std::isnan(q.x));
-    else EXPECT_EQ(p.x, q.x);
+    if (std::isnan(p.x))
+      EXPECT_TRUE(std::isnan(q.x));
+    else
+      EXPECT_EQ(p.x, q.x);
   }
   EXPECT_NE((*alone.scan.cloud)[0].x, (*simulateScan(scene, stops[0], 4, 9).scan.cloud)[0].x);
 }

@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Monte Carlo study (Alhashimi et al. 2021 Figs. 7-11): layouts keep their constraints, per-stop averaging is
-// exact, quartiles follow their definition, the study is deterministic whatever the thread count,
-// and a tiny study's statistics agree with a direct computation done here from the simulator and
-// the estimators.
+// Monte Carlo study (Alhashimi et al. 2021 Figs. 7-11): layouts keep their constraints, per-stop
+// averaging is exact, quartiles follow their definition, the study is deterministic whatever the
+// thread count, and a tiny study's statistics agree with a direct computation done here from the
+// simulator and the estimators.
 
 #include <algorithm>
 #include <cmath>
@@ -46,14 +46,16 @@ TEST(Placement, EveryLayoutKeepsItsConstraintsAndLayoutsAreNested) {
       }
       EXPECT_GE(std::abs(big[i].y_m - path.start.y_m), cfg.min_lateral_m);
       for (std::size_t j = 0; j < i; ++j)
-        EXPECT_GE(std::hypot(big[i].x_m - big[j].x_m, big[i].y_m - big[j].y_m), 2 * cfg.radius_m + cfg.min_separation_m);
+        EXPECT_GE(std::hypot(big[i].x_m - big[j].x_m, big[i].y_m - big[j].y_m),
+                  2 * cfg.radius_m + cfg.min_separation_m);
     }
     // The first L landmarks of a layout of 8 are the layout of L drawn from the same stream,
     // unless the layout of 8 had to be drawn again (rare: 4 in 1000 trials of the default study).
     auto rng3 = makeRng(seed, 0);
     const auto small = placeLandmarks(path, 3, cfg, rng3);
     bool same = true;
-    for (std::size_t i = 0; i < small.size(); ++i) same = same && small[i].x_m == big[i].x_m && small[i].y_m == big[i].y_m;
+    for (std::size_t i = 0; i < small.size(); ++i)
+      same = same && small[i].x_m == big[i].x_m && small[i].y_m == big[i].y_m;
     nested += same;
   }
   EXPECT_GE(nested, 18);
@@ -168,17 +170,22 @@ std::map<std::string, double> csvRow(const std::string& csv) {
   std::getline(in, header);
   std::getline(in, row);
   std::vector<std::string> names, values;
-  for (std::istringstream h(header); std::getline(h, names.emplace_back(), ',');) {}
-  for (std::istringstream r(row); std::getline(r, values.emplace_back(), ',');) {}
+  for (std::istringstream h(header); std::getline(h, names.emplace_back(), ',');) {
+  }
+  for (std::istringstream r(row); std::getline(r, values.emplace_back(), ',');) {
+  }
   std::map<std::string, double> out;
   for (std::size_t i = 0; i < std::min(names.size(), values.size()); ++i)
-    if (!names[i].empty()) out[names[i]] = values[i] == "NaN" ? std::nan("") : std::atof(values[i].c_str());
+    if (!names[i].empty())
+      out[names[i]] = values[i] == "NaN" ? std::nan("") : std::atof(values[i].c_str());
   return out;
 }
 
 /// Eq. 31 computed here: MSE of raw over MSE of corrected readings (LS inversion).
-double mseRatio(const RangeModel& model, const std::vector<double>& truth, const std::vector<double>& raw) {
-  const calibration::RangeInverter inv(model, calibration::inversionWindow(model, calibration::InversionMethod::ls));
+double mseRatio(const RangeModel& model, const std::vector<double>& truth,
+                const std::vector<double>& raw) {
+  const calibration::RangeInverter inv(
+      model, calibration::inversionWindow(model, calibration::InversionMethod::ls));
   double a = 0.0, b = 0.0;
   for (std::size_t i = 0; i < truth.size(); ++i) {
     const auto c = inv.invert(raw[i]);
@@ -247,7 +254,8 @@ TEST(Study, TinyStudyStatisticsAgreeWithADirectComputation) {
       // Without bearing noise the central beam is the one closest to the true bearing.
       std::size_t best = 0;
       for (std::size_t j = 1; j < s.beams.size(); ++j)
-        if (std::abs(wrapAngle(s.beams[j].angle_rad - s.bearing_rad)) < std::abs(wrapAngle(s.beams[best].angle_rad - s.bearing_rad)))
+        if (std::abs(wrapAngle(s.beams[j].angle_rad - s.bearing_rad)) <
+            std::abs(wrapAngle(s.beams[best].angle_rad - s.bearing_rad)))
           best = j;
       single_truth.push_back(test.true_range_m[i][best]);
       single_raw.push_back(s.beams[best].range_m);
@@ -266,15 +274,18 @@ TEST(Study, TinyStudyStatisticsAgreeWithADirectComputation) {
     cf_single.push_back(mseRatio(cf.model, single_truth, single_raw));
     ++cf_orders[cf.order_aic];
 
-    // Oracle: central readings with their true distances, averaged per (landmark, stop, third of the scans).
+    // Oracle: central readings with their true distances, averaged per (landmark, stop, third of
+    // the scans).
     std::map<std::tuple<int, std::size_t, int>, std::array<double, 3>> og;
     for (std::size_t i = 0; i < calib.obs.sightings.size(); ++i) {
       const Sighting& s = calib.obs.sightings[i];
       std::size_t best = 0;
       for (std::size_t j = 1; j < s.beams.size(); ++j)
-        if (std::abs(wrapAngle(s.beams[j].angle_rad - s.bearing_rad)) < std::abs(wrapAngle(s.beams[best].angle_rad - s.bearing_rad)))
+        if (std::abs(wrapAngle(s.beams[j].angle_rad - s.bearing_rad)) <
+            std::abs(wrapAngle(s.beams[best].angle_rad - s.bearing_rad)))
           best = j;
-      const int part = static_cast<int>((s.scan - s.stop * 3) % 3);  // 3 scans per stop: scan position in its stop
+      // 3 scans per stop: scan position in its stop
+      const int part = static_cast<int>((s.scan - s.stop * 3) % 3);
       auto& a = og[{s.landmark, s.stop, part}];
       a[0] += calib.true_range_m[i][best];
       a[1] += s.beams[best].range_m;
@@ -282,7 +293,8 @@ TEST(Study, TinyStudyStatisticsAgreeWithADirectComputation) {
     }
     std::vector<calibration::RangePair> pairs;
     for (const auto& [k, a] : og) pairs.push_back({a[0] / a[2], a[1] / a[2], std::get<2>(k)});
-    CalibrationModel orc = calibration::calibrateAgainstTruth(pairs, cc, {}, calib.obs.range_min_m, calib.obs.range_max_m);
+    CalibrationModel orc = calibration::calibrateAgainstTruth(pairs, cc, {}, calib.obs.range_min_m,
+                                                              calib.obs.range_max_m);
     ASSERT_STREQ(orc.status.name(), "ok") << orc.status.message;
     orc.model.range_min_m = calib.obs.range_min_m;
     orc.model.range_max_m = calib.obs.range_max_m;
@@ -318,7 +330,8 @@ TEST(Study, TinyStudyStatisticsAgreeWithADirectComputation) {
   near(q(oracle_ratio, 1), "oracle_ratio_q25");
   near(q(oracle_ratio, 2), "oracle_ratio_median");
   near(q(oracle_ratio, 3), "oracle_ratio_q75");
-  for (int n = 0; n <= 3; ++n) near(cf_orders[n] / 5.0, "closed_form_order" + std::to_string(n) + "_rate");
+  for (int n = 0; n <= 3; ++n)
+    near(cf_orders[n] / 5.0, "closed_form_order" + std::to_string(n) + "_rate");
   EXPECT_EQ(row.at("joint_runs"), 0.0);
   // Bias and variance over the 10 (trial, landmark) samples.
   double mr = 0.0, mt = 0.0;
@@ -327,7 +340,8 @@ TEST(Study, TinyStudyStatisticsAgreeWithADirectComputation) {
     mt += tangential[i] / static_cast<double>(radial.size());
   }
   double var = 0.0;
-  for (std::size_t i = 0; i < radial.size(); ++i) var += (std::pow(radial[i] - mr, 2) + std::pow(tangential[i] - mt, 2)) / (radial.size() - 1.0);
+  for (std::size_t i = 0; i < radial.size(); ++i)
+    var += (std::pow(radial[i] - mr, 2) + std::pow(tangential[i] - mt, 2)) / (radial.size() - 1.0);
   near(static_cast<double>(radial.size()), "pos_triangulation_samples");
   near(std::hypot(mr, mt), "pos_triangulation_bias_m");
   near(var, "pos_triangulation_variance_m2");
@@ -351,7 +365,8 @@ TEST(AngleNoise, EachModePerturbsWhatItSaysAndNothingElse) {
   ASSERT_EQ(exact.obs.sightings.size(), beams.obs.sightings.size());
   double bearing_ss = 0.0;
   for (std::size_t i = 0; i < exact.obs.sightings.size(); ++i) {
-    const Sighting &e = exact.obs.sightings[i], &a = bearing.obs.sightings[i], &b = beams.obs.sightings[i];
+    const Sighting &e = exact.obs.sightings[i], &a = bearing.obs.sightings[i],
+                   &b = beams.obs.sightings[i];
     const double v = wrapAngle(b.bearing_rad - e.bearing_rad);
     EXPECT_NEAR(wrapAngle(a.bearing_rad - e.bearing_rad), v, 1e-12);
     bearing_ss += v * v;
@@ -366,7 +381,8 @@ TEST(AngleNoise, EachModePerturbsWhatItSaysAndNothingElse) {
   }
   // One v per (stop, landmark), the same in the stop's 10 scans, drawn with sigma_theta: 60
   // draws, chi-square with 60 degrees of freedom, within 4 standard deviations of 60.
-  EXPECT_NEAR(bearing_ss / (config.path.scans_per_stop * sigma * sigma), 60.0, 4.0 * std::sqrt(120.0));
+  EXPECT_NEAR(bearing_ss / (config.path.scans_per_stop * sigma * sigma), 60.0,
+              4.0 * std::sqrt(120.0));
   // heading: every bearing of a stop is off by the same angle, minus the stop's heading error
   // (the sensor turned with the robot); seen from the true position with the commanded heading.
   path.sigma_psi_rad = sigma;
@@ -375,13 +391,16 @@ TEST(AngleNoise, EachModePerturbsWhatItSaysAndNothingElse) {
   for (const Sighting& s : heading.obs.sightings) {
     const Pose2& p = heading.actual[s.stop];
     const Cylinder& c = layout[static_cast<std::size_t>(s.landmark - 1)];
-    const double truth = std::atan2(c.y_m - p.y_m, c.x_m - p.x_m) - heading.obs.commanded[s.stop].yaw_rad;
+    const double truth =
+        std::atan2(c.y_m - p.y_m, c.x_m - p.x_m) - heading.obs.commanded[s.stop].yaw_rad;
     errors[s.stop].push_back(wrapAngle(s.bearing_rad - truth));
   }
   double psi_ss = 0.0;
   for (const auto& [stop, e] : errors) {
     for (double x : e) EXPECT_NEAR(x, e.front(), 1e-12) << "stop " << stop;
-    EXPECT_NEAR(-e.front(), wrapAngle(heading.actual[stop].yaw_rad - heading.obs.commanded[stop].yaw_rad), 1e-12);
+    EXPECT_NEAR(-e.front(),
+                wrapAngle(heading.actual[stop].yaw_rad - heading.obs.commanded[stop].yaw_rad),
+                1e-12);
     psi_ss += e.front() * e.front();
   }
   EXPECT_NEAR(psi_ss / (sigma * sigma), 20.0, 4.0 * std::sqrt(40.0));  // 20 stops
@@ -394,7 +413,8 @@ TEST(AngleNoise, TheJointRefinementHardlySeesTheBearingModeAndSeesTheOthers) {
   // (the default) and the beams mode it sees the noise. Same layouts and draws for both cells.
   TrialConfig c;  // the study's path: 20 stops, 10 scans per stop
   const Cell quiet{3, 0.01, deg2rad(0.5)}, noisy{3, 0.01, deg2rad(5.0)};
-  const auto joint = static_cast<std::size_t>(Estimator::joint), cf = static_cast<std::size_t>(Estimator::closed_form);
+  const auto joint = static_cast<std::size_t>(Estimator::joint),
+             cf = static_cast<std::size_t>(Estimator::closed_form);
   for (AngleNoise mode : {AngleNoise::bearing, AngleNoise::heading, AngleNoise::beams}) {
     c.angle_noise = mode;
     double joint_change = 0.0, cf_change = 0.0;
@@ -402,13 +422,18 @@ TEST(AngleNoise, TheJointRefinementHardlySeesTheBearingModeAndSeesTheOthers) {
     for (std::size_t t = 0; t < 4; ++t) {
       const auto layout = trialLayout(c, 6, t, 3);
       const std::uint64_t seed = 1000 + t;
-      const TrialResult a = runTrial(c, quiet, layout, seed, true), b = runTrial(c, noisy, layout, seed, true);
-      ASSERT_TRUE(a.estimators[joint].ok && b.estimators[joint].ok) << toString(mode) << ", trial " << t;
-      const double jc = std::abs(std::log(b.estimators[joint].rules[0].mse_ratio[0] / a.estimators[joint].rules[0].mse_ratio[0]));
+      const TrialResult a = runTrial(c, quiet, layout, seed, true),
+                        b = runTrial(c, noisy, layout, seed, true);
+      ASSERT_TRUE(a.estimators[joint].ok && b.estimators[joint].ok)
+          << toString(mode) << ", trial " << t;
+      const double jc = std::abs(std::log(b.estimators[joint].rules[0].mse_ratio[0] /
+                                          a.estimators[joint].rules[0].mse_ratio[0]));
       joint_change += jc / 4.0;
       joint_steady += jc < 0.03;
       std::printf("%s trial %zu: joint |ln change| %.4f\n", toString(mode), t, jc);
-      cf_change += std::abs(std::log(b.estimators[cf].rules[0].mse_ratio[0] / a.estimators[cf].rules[0].mse_ratio[0])) / 4.0;
+      cf_change += std::abs(std::log(b.estimators[cf].rules[0].mse_ratio[0] /
+                                     a.estimators[cf].rules[0].mse_ratio[0])) /
+                   4.0;
     }
     SCOPED_TRACE(toString(mode));
     // Mean |ln(ratio at 5 degrees / ratio at 0.5 degree)| over 4 trials (measured: closed form
@@ -427,12 +452,14 @@ TEST(AngleNoise, TheJointRefinementHardlySeesTheBearingModeAndSeesTheOthers) {
   }
 }
 
-// ------------------------------------------------------------------ the ratio against the sensor model
+// ------------------------------------------------------------------ the ratio against the sensor
+// model
 
 /// Eq. 31 expected for a perfect calibration on the `centre` test set of a layout, computed from
 /// the sensor model alone: each (landmark, stop) reading averaged over K scans has mean f(d) and
 /// variance sigma(d)^2 / K; inverting the true f leaves an error of variance sigma^2 / (K f'^2).
-double expectedCeiling(const std::vector<Cylinder>& layout, const PathSpec& path, const RangeModel& sensor) {
+double expectedCeiling(const std::vector<Cylinder>& layout, const PathSpec& path,
+                       const RangeModel& sensor) {
   const double K = path.scans_per_stop;
   double raw = 0.0, corrected = 0.0;
   for (const Cylinder& c : layout)
@@ -459,8 +486,8 @@ RunOptions fig9Options(std::uint64_t seed) {
 }
 
 /// Fig. 9 of the paper's setting with five landmarks, over the given noise grid.
-auto fig9AtFiveLandmarks(const TrialConfig& config, std::vector<double> sigma_s_m, std::vector<double> sigma_theta_deg,
-                         const RunOptions& o) {
+auto fig9AtFiveLandmarks(const TrialConfig& config, std::vector<double> sigma_s_m,
+                         std::vector<double> sigma_theta_deg, const RunOptions& o) {
   StudyGrids g;
   g.fig9_landmarks = {5};
   g.sigma_s_m = std::move(sigma_s_m);
@@ -478,7 +505,8 @@ TEST(Study, TheCeilingIsTheSensorModelsAndTheOracleComesCloseToIt) {
   ASSERT_FALSE(out.interrupted);
   const auto row = csvRow(out.files.at(0).second);
   double expected = 0.0;
-  for (std::size_t t = 0; t < o.trials; ++t) expected += expectedCeiling(trialLayout(config, o.seed, t, 5), config.path, config.sensor);
+  for (std::size_t t = 0; t < o.trials; ++t)
+    expected += expectedCeiling(trialLayout(config, o.seed, t, 5), config.path, config.sensor);
   expected /= static_cast<double>(o.trials);
   // Mean over 40 trials: each ratio scatters by about 15 % (its denominator is a sum of about 100
   // scaled chi-squares), so the mean by 2.5 %; the model ignores sigma_s (1 cm) and the curvature
@@ -493,7 +521,8 @@ TEST(Study, TheCeilingIsTheSensorModelsAndTheOracleComesCloseToIt) {
     const double ceiling = row.at(std::string("ceiling_") + set + "_median");
     EXPECT_GT(row.at(std::string("oracle_") + set + "_median"), 0.8 * ceiling);
     EXPECT_LE(row.at(std::string("oracle_") + set + "_median"), ceiling);
-    EXPECT_LE(row.at(std::string("closed_form_") + set + "_median"), row.at(std::string("oracle_") + set + "_median"));
+    EXPECT_LE(row.at(std::string("closed_form_") + set + "_median"),
+              row.at(std::string("oracle_") + set + "_median"));
   }
 }
 
@@ -509,17 +538,21 @@ std::vector<std::map<std::string, double>> csvRows(const std::string& csv) {
 }
 
 TEST(Study, Fig9ClaimsHoldWhereWeReproduceThemAndFailWhereWeDoNot) {
-  // Alhashimi et al. 2021 on Fig. 9: raising sigma_theta and sigma_s "does not lead to abrupt decays". In
-  // sigma_s this holds for the closed form (docs/results/montecarlo.md, L = 5, sigma_theta 1 deg:
-  // 16.3 at 0.1 cm, 11.9 at 3 cm); in sigma_theta it does not (about 1 at 5 deg: the calibration no
-  // longer helps). Both are asserted, so that a change either way is seen; and at low noise the
-  // closed form reaches most of what the true model can (14.7 of 21.9 at 1 cm, 1 deg).
+  // Alhashimi et al. 2021 on Fig. 9: raising sigma_theta and sigma_s "does not lead to abrupt
+  // decays". In sigma_s this holds for the closed form (docs/results/montecarlo.md, L = 5,
+  // sigma_theta 1 deg: 16.3 at 0.1 cm, 11.9 at 3 cm); in sigma_theta it does not (about 1 at 5 deg:
+  // the calibration no longer helps). Both are asserted, so that a change either way is seen; and
+  // at low noise the closed form reaches most of what the true model can (14.7 of 21.9 at 1 cm, 1
+  // deg).
   const auto out = fig9AtFiveLandmarks(TrialConfig{}, {0.001, 0.03}, {1.0, 5.0}, fig9Options(11));
   ASSERT_FALSE(out.interrupted);
   std::map<std::pair<double, double>, std::map<std::string, double>> cell;
-  for (const auto& row : csvRows(out.files.at(0).second)) cell[{row.at("sigma_s_m"), row.at("sigma_theta_deg")}] = row;
+  for (const auto& row : csvRows(out.files.at(0).second))
+    cell[{row.at("sigma_s_m"), row.at("sigma_theta_deg")}] = row;
   ASSERT_EQ(cell.size(), 4u);
-  auto closedForm = [&](double ss, double st) { return cell.at({ss, st}).at("closed_form_ratio_median"); };
+  auto closedForm = [&](double ss, double st) {
+    return cell.at({ss, st}).at("closed_form_ratio_median");
+  };
   auto ceiling = [&](double ss, double st) { return cell.at({ss, st}).at("ceiling_ratio_median"); };
   // A median over 40 trials scatters by about 3 %; the bounds sit well outside that.
   EXPECT_GT(closedForm(0.001, 1.0), 0.5 * ceiling(0.001, 1.0));
@@ -555,7 +588,8 @@ TEST(ScanLevel, OneTrialFindsTheLandmarksAndCalibrates) {
     for (const auto& rule : r.estimators[static_cast<std::size_t>(Estimator::oracle)].rules)
       EXPECT_GT(rule.mse_ratio[0], 0.5 * ceiling);
     // Every matched landmark is placed within 10 cm by the triangulation.
-    for (const auto& e : r.estimators[0].landmarks) EXPECT_LT(std::hypot(e.radial_m, e.tangential_m), 0.1);
+    for (const auto& e : r.estimators[0].landmarks)
+      EXPECT_LT(std::hypot(e.radial_m, e.tangential_m), 0.1);
   }
 }
 

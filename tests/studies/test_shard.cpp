@@ -20,7 +20,8 @@
 namespace lidarcal::studies {
 namespace {
 
-RunOptions options(std::size_t trials, std::size_t joint_trials, std::size_t shard, std::size_t shards) {
+RunOptions options(std::size_t trials, std::size_t joint_trials, std::size_t shard,
+                   std::size_t shards) {
   RunOptions o;
   o.trials = trials;
   o.joint_trials = joint_trials;
@@ -30,11 +31,16 @@ RunOptions options(std::size_t trials, std::size_t joint_trials, std::size_t sha
 }
 
 TEST(MontecarloShards, SlicesHoldEveryTrialOnceAndShareTheJointTrialsAndEveryCellEvenly) {
-  for (const auto& [cells, trials, joint] : {std::tuple<std::size_t, std::size_t, std::size_t>{1, 1, 1}, {3, 6, 2},
-                                             {18, 6, 2}, {5, 40, 0}, {24, 10, 10}, {7, 13, 4}})
+  for (const auto& [cells, trials, joint] :
+       {std::tuple<std::size_t, std::size_t, std::size_t>{1, 1, 1},
+        {3, 6, 2},
+        {18, 6, 2},
+        {5, 40, 0},
+        {24, 10, 10},
+        {7, 13, 4}})
     for (std::size_t shards : {1, 2, 3, 4, 7, 64}) {
-      SCOPED_TRACE("cells " + std::to_string(cells) + ", trials " + std::to_string(trials) + ", joint " +
-                   std::to_string(joint) + ", shards " + std::to_string(shards));
+      SCOPED_TRACE("cells " + std::to_string(cells) + ", trials " + std::to_string(trials) +
+                   ", joint " + std::to_string(joint) + ", shards " + std::to_string(shards));
       std::map<std::pair<std::size_t, std::size_t>, int> seen;
       std::size_t fewest_joint = SIZE_MAX, most_joint = 0, fewest = SIZE_MAX, most = 0;
       std::vector<std::size_t> fewest_of_cell(cells, SIZE_MAX), most_of_cell(cells, 0);
@@ -62,7 +68,9 @@ TEST(MontecarloShards, SlicesHoldEveryTrialOnceAndShareTheJointTrialsAndEveryCel
       for (const auto& [trial, count] : seen) EXPECT_EQ(count, 1);
       EXPECT_LE(most_joint - fewest_joint, 1u);  // the slow trials as evenly as they divide
       EXPECT_LE(most - fewest, 2u);              // and so the slices' sizes
-      for (std::size_t c = 0; c < cells; ++c) EXPECT_LE(most_of_cell[c] - fewest_of_cell[c], 2u) << "cell " << c;  // every cell shared
+      // every cell shared
+      for (std::size_t c = 0; c < cells; ++c)
+        EXPECT_LE(most_of_cell[c] - fewest_of_cell[c], 2u) << "cell " << c;
     }
 }
 
@@ -74,8 +82,10 @@ TEST(MontecarloShards, ASliceBeyondTheCountIsRefused) {
 bool sameBits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
 
 TEST(MontecarloShards, ARecordReadsBackBitForBit) {
-  const double kAwkward[] = {0.1, -0.0, 1e-310, std::numeric_limits<double>::max(), -1.0 / 3.0,
-                             std::numeric_limits<double>::infinity(), 6.02214076e23};
+  const double kAwkward[] = {0.1,          -0.0,
+                             1e-310,       std::numeric_limits<double>::max(),
+                             -1.0 / 3.0,   std::numeric_limits<double>::infinity(),
+                             6.02214076e23};
   TrialRecord r;
   r.cell = 87;
   r.trial = 999;
@@ -87,9 +97,12 @@ TEST(MontecarloShards, ARecordReadsBackBitForBit) {
     o.ok = e == 0;
     for (std::size_t rule = 0; rule < kRules; ++rule) {
       o.rules[rule].order = static_cast<int>(e + rule) - 1;
-      for (std::size_t s = 0; s < kTestSets; ++s) o.rules[rule].mse_ratio[s] = kAwkward[(e + rule + s) % 7];
+      for (std::size_t s = 0; s < kTestSets; ++s)
+        o.rules[rule].mse_ratio[s] = kAwkward[(e + rule + s) % 7];
     }
-    if (e == 0) o.landmarks = {{kAwkward[3], kAwkward[4]}, {std::numeric_limits<double>::quiet_NaN(), kAwkward[1]}};
+    if (e == 0)
+      o.landmarks = {{kAwkward[3], kAwkward[4]},
+                     {std::numeric_limits<double>::quiet_NaN(), kAwkward[1]}};
   }
   const std::string line = formatTrialRecord(r);
   EXPECT_EQ(line.find('\n'), std::string::npos);
@@ -98,7 +111,9 @@ TEST(MontecarloShards, ARecordReadsBackBitForBit) {
   EXPECT_EQ(back.trial, r.trial);
   EXPECT_EQ(back.result.detected_landmarks, r.result.detected_landmarks);
   for (std::size_t s = 0; s < kTestSets; ++s)
-    EXPECT_TRUE(std::isnan(r.result.ceiling[s]) ? std::isnan(back.result.ceiling[s]) : sameBits(back.result.ceiling[s], r.result.ceiling[s]));
+    EXPECT_TRUE(std::isnan(r.result.ceiling[s])
+                    ? std::isnan(back.result.ceiling[s])
+                    : sameBits(back.result.ceiling[s], r.result.ceiling[s]));
   for (std::size_t e = 0; e < kEstimators; ++e) {
     SCOPED_TRACE(e);
     const EstimatorOutcome &a = r.result.estimators[e], &b = back.result.estimators[e];
@@ -106,12 +121,14 @@ TEST(MontecarloShards, ARecordReadsBackBitForBit) {
     EXPECT_EQ(a.ok, b.ok);
     for (std::size_t rule = 0; rule < kRules; ++rule) {
       EXPECT_EQ(a.rules[rule].order, b.rules[rule].order);
-      for (std::size_t s = 0; s < kTestSets; ++s) EXPECT_TRUE(sameBits(a.rules[rule].mse_ratio[s], b.rules[rule].mse_ratio[s]));
+      for (std::size_t s = 0; s < kTestSets; ++s)
+        EXPECT_TRUE(sameBits(a.rules[rule].mse_ratio[s], b.rules[rule].mse_ratio[s]));
     }
     ASSERT_EQ(a.landmarks.size(), b.landmarks.size());
     for (std::size_t l = 0; l < a.landmarks.size(); ++l) {
-      EXPECT_TRUE(std::isnan(a.landmarks[l].radial_m) ? std::isnan(b.landmarks[l].radial_m)
-                                                      : sameBits(a.landmarks[l].radial_m, b.landmarks[l].radial_m));
+      EXPECT_TRUE(std::isnan(a.landmarks[l].radial_m)
+                      ? std::isnan(b.landmarks[l].radial_m)
+                      : sameBits(a.landmarks[l].radial_m, b.landmarks[l].radial_m));
       EXPECT_TRUE(sameBits(a.landmarks[l].tangential_m, b.landmarks[l].tangential_m));
     }
   }
@@ -138,7 +155,8 @@ TEST(MontecarloShards, ADamagedRecordIsRefusedNamingItsColumn) {
   for (int comma = 0; comma < 6; ++comma) at = line.find(',', at) + 1;
   std::string flag = line;
   flag.replace(at, 1, "7");
-  EXPECT_NE(message(flag).find("column 7 (ran): expected an integer from 0 to 1, found '7'"), std::string::npos)
+  EXPECT_NE(message(flag).find("column 7 (ran): expected an integer from 0 to 1, found '7'"),
+            std::string::npos)
       << message(flag);
 }
 
@@ -165,7 +183,8 @@ TEST(MontecarloShards, TheSlicesPutTogetherGiveTheWholeStudysFiles) {
     const StudyRun run = runCells(config, cells, s);
     for (const TrialIndex& t : shardTrials(cells.size(), s)) {
       // Through the text a shard writes, as the merge reads it.
-      const TrialRecord back = parseTrialRecord(formatTrialRecord({t.cell, t.trial, run.results[t.cell][t.trial]}));
+      const TrialRecord back =
+          parseTrialRecord(formatTrialRecord({t.cell, t.trial, run.results[t.cell][t.trial]}));
       merged[back.cell][back.trial] = back.result;
     }
   }
