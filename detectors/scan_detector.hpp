@@ -3,9 +3,10 @@
 // Landmark candidates in one 2D scan: segment (segmentation.hpp), then classify each cluster as a
 // circle (a pole: landmark candidate), a line (wall, box face) or clutter.
 //
-// A cluster is a circle when (Alhashimi et al. 2021 section 2, A1: cylinders of known or inferable
-//  radius) - it is near enough for its shape to show (t(range) <= max_threshold_to_radius R); - it
-//  stands in front of its surroundings: the beams next to its ends have no return or a
+// A cluster is a circle when (Alhashimi et al. 2021 section 2, A1: cylinders of known or
+// inferable radius)
+//  - it is near enough for its shape to show (t(range) <= max_threshold_to_radius R);
+//  - it stands in front of its surroundings: the beams next to its ends have no return or a
 //    farther one (require_free_edges; a wall seen between chair legs is cut by nearer returns);
 //  - it has enough points and its width across the line of sight fits the landmark: at most
 //    2 R extent_factor, and an angular width of at least min_width_fraction of the angle a pole
