@@ -62,20 +62,12 @@ const dds_topic_descriptor& participantEntitiesInfoType(RosDistro distro) {
   return gidBytes(distro) == 24 ? gid24 : gid16;
 }
 
-TopicQos discoveryQos() {
-  TopicQos q;
-  q.reliable = true;
-  q.transient_local = true;
-  q.depth = 1;
-  return q;
-}
-
 GraphPublisher::GraphPublisher(int participant, RosDistro distro) : distro_(distro) {
   const dds_entity_t topic =
       checkDds(dds_create_topic(participant, &participantEntitiesInfoType(distro), kDiscoveryTopic,
                                 nullptr, nullptr),
                "creating the topic ros_discovery_info");
-  writer_ = checkDds(dds_create_writer(participant, topic, makeQos(discoveryQos()).get(), nullptr),
+  writer_ = checkDds(dds_create_writer(participant, topic, makeQos(latchedQos()).get(), nullptr),
                      "creating the writer of ros_discovery_info");
 }
 

@@ -4,8 +4,8 @@
 // participant's GID and one entry per node (namespace, name, the GIDs of its readers and
 // writers), as rmw_cyclonedds_cpp publishes it (rmw_cyclonedds: rmw_cyclonedds_cpp/src/
 // rmw_node.cpp): DDS topic "ros_discovery_info" without the "rt" prefix, QoS reliable,
-// transient local, keep last 1. A GID is the entity's 16-byte DDS GUID, zero padded to the
-// release's GID length (24 bytes up to Humble, 16 from Iron on).
+// transient local, keep last 1 (latchedQos()). A GID is the entity's 16-byte DDS GUID, zero padded
+// to the release's GID length (24 bytes up to Humble, 16 from Iron on).
 
 #include "ros2/ros_participant.hpp"
 
@@ -17,9 +17,6 @@ inline constexpr const char* kDiscoveryTopic = "ros_discovery_info";
 /// ParticipantEntitiesInfo in the layout of `distro`, under its ROS 2 type name
 /// rmw_dds_common::msg::dds_::ParticipantEntitiesInfo_ (both layouts share it).
 const dds_topic_descriptor& participantEntitiesInfoType(RosDistro distro);
-
-/// The QoS of ros_discovery_info's writer: reliable, transient local, keep last 1.
-TopicQos discoveryQos();
 
 class GraphPublisher {
  public:

@@ -27,14 +27,6 @@ TopicQos rosoutQos() {
   return q;
 }
 
-TopicQos latchedQos() {
-  TopicQos q;
-  q.reliable = true;
-  q.transient_local = true;
-  q.depth = 1;
-  return q;
-}
-
 RosoutLogger::RosoutLogger(RosParticipant& participant, std::string logger_name)
     : writer_(participant.createWriter(ddsTopicName("/rosout"), rcl_interfaces_msg_dds__Log__desc,
                                        rosoutQos())),

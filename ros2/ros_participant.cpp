@@ -16,6 +16,14 @@ TopicQos topicQos(QosProfile profile) {
   return q;
 }
 
+TopicQos latchedQos() {
+  TopicQos q;
+  q.reliable = true;
+  q.transient_local = true;
+  q.depth = 1;
+  return q;
+}
+
 Guid RosParticipant::guidOf(int entity) {
   dds_guid_t g;
   checkDds(dds_get_guid(entity, &g), "reading an entity's GUID");
@@ -61,24 +69,26 @@ int RosParticipant::topic(const std::string& dds_topic, const dds_topic_descript
   return t;
 }
 
+int RosParticipant::createEndpoint(bool reader, const std::string& dds_topic,
+                                   const dds_topic_descriptor& type, const TopicQos& qos) {
+  const dds_entity_t t = topic(dds_topic, type);
+  const QosPtr q = makeQos(qos);
+  const dds_entity_t e = reader ? dds_create_reader(participant_, t, q.get(), nullptr)
+                                : dds_create_writer(participant_, t, q.get(), nullptr);
+  checkDds(e, ((reader ? "creating a reader on " : "creating a writer on ") + dds_topic).c_str());
+  (reader ? readers_ : writers_).emplace_back(e, guidOf(e));
+  announce();
+  return e;
+}
+
 int RosParticipant::createWriter(const std::string& dds_topic, const dds_topic_descriptor& type,
                                  const TopicQos& qos) {
-  const dds_entity_t w =
-      checkDds(dds_create_writer(participant_, topic(dds_topic, type), makeQos(qos).get(), nullptr),
-               ("creating a writer on " + dds_topic).c_str());
-  writers_.emplace_back(w, guidOf(w));
-  announce();
-  return w;
+  return createEndpoint(false, dds_topic, type, qos);
 }
 
 int RosParticipant::createReader(const std::string& dds_topic, const dds_topic_descriptor& type,
                                  const TopicQos& qos) {
-  const dds_entity_t r =
-      checkDds(dds_create_reader(participant_, topic(dds_topic, type), makeQos(qos).get(), nullptr),
-               ("creating a reader on " + dds_topic).c_str());
-  readers_.emplace_back(r, guidOf(r));
-  announce();
-  return r;
+  return createEndpoint(true, dds_topic, type, qos);
 }
 
 void RosParticipant::deleteEntity(int entity) {

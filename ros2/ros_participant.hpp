@@ -37,6 +37,9 @@ struct TopicQos {
 /// rmw_qos_profile_sensor_data (best effort, keep last 5) or rmw_qos_profile_default (reliable,
 /// keep last 10), both volatile.
 TopicQos topicQos(QosProfile profile);
+/// Reliable, transient local, keep last 1: a late reader that asks for transient local gets the
+/// last sample written (ros_discovery_info's QoS in rmw, and a latched topic's).
+TopicQos latchedQos();
 
 struct ParticipantSettings {
   int domain_id = 0;                         ///< ROS_DOMAIN_ID
@@ -88,6 +91,8 @@ class RosParticipant {
 
  private:
   int topic(const std::string& dds_topic, const dds_topic_descriptor& type);
+  int createEndpoint(bool reader, const std::string& dds_topic, const dds_topic_descriptor& type,
+                     const TopicQos& qos);
   void announce();
 
   int participant_ = 0;

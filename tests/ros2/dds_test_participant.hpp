@@ -75,18 +75,12 @@ class TestParticipant {
   /// A writer of `type` on `topic` with plain CDR (XCDR1), reliable unless `qos` says otherwise.
   dds_entity_t writer(const std::string& topic, const dds_topic_descriptor_t& type,
                       const ros2::TopicQos& qos = {}) {
-    const dds_entity_t w = dds_create_writer(participant_, this->topic(topic, type),
-                                             ros2::makeQos(qos).get(), nullptr);
-    if (w < 0) throw std::runtime_error("test: cannot create a writer on " + topic);
-    return w;
+    return endpoint(false, topic, type, qos);
   }
   /// A reader whose samples are kept as received bytes (rawSamples).
   dds_entity_t reader(const std::string& topic, const dds_topic_descriptor_t& type,
                       const ros2::TopicQos& qos = {}) {
-    const dds_entity_t r = dds_create_reader(participant_, this->topic(topic, type),
-                                             ros2::makeQos(qos).get(), nullptr);
-    if (r < 0) throw std::runtime_error("test: cannot create a reader on " + topic);
-    return r;
+    return endpoint(true, topic, type, qos);
   }
   /// Waits at most `seconds` until the writer or reader `e` has matched one of the other kind.
   static bool waitMatched(dds_entity_t e, double seconds) {
@@ -150,6 +144,15 @@ class TestParticipant {
   }
 
  private:
+  dds_entity_t endpoint(bool reader, const std::string& topic, const dds_topic_descriptor_t& type,
+                        const ros2::TopicQos& qos) {
+    const dds_entity_t t = this->topic(topic, type);
+    const ros2::QosPtr q = ros2::makeQos(qos);
+    const dds_entity_t e = reader ? dds_create_reader(participant_, t, q.get(), nullptr)
+                                  : dds_create_writer(participant_, t, q.get(), nullptr);
+    if (e < 0) throw std::runtime_error("test: cannot create an endpoint on " + topic);
+    return e;
+  }
   dds_entity_t topic(const std::string& name, const dds_topic_descriptor_t& type) {
     const auto it = topics_.find(name);
     if (it != topics_.end()) return it->second;

@@ -111,7 +111,7 @@ TEST_P(NodeOnTheGraph, AnnouncesItsNodeWithTheGuidsOfItsEndpointsAndLogsToRosout
   const std::string name = std::string("graph_") + ros2::toString(distro);
   TestParticipant test(testDomain());
   const dds_entity_t info = test.reader(
-      ros2::kDiscoveryTopic, ros2::participantEntitiesInfoType(distro), ros2::discoveryQos());
+      ros2::kDiscoveryTopic, ros2::participantEntitiesInfoType(distro), ros2::latchedQos());
   const dds_entity_t rosout =
       test.reader("rt/rosout", rcl_interfaces_msg_dds__Log__desc, ros2::rosoutQos());
   io::writeModel(dir.path() / "model.json", polynomialModel("", 100));

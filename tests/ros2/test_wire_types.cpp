@@ -154,8 +154,8 @@ TEST_P(WireGraph, ParticipantEntitiesInfoInTheReleasesLayoutAndAnnouncedOnEveryC
       node.createWriter("rt/wire_test/scan_corrected", sensor_msgs_msg_dds__LaserScan__desc, {});
   const int extra_writer =
       node.createWriter("rt/wire_test/extra", sensor_msgs_msg_dds__LaserScan__desc, {});
-  const dds_entity_t r = test.reader(
-      ros2::kDiscoveryTopic, ros2::participantEntitiesInfoType(distro), ros2::discoveryQos());
+  const dds_entity_t r = test.reader(ros2::kDiscoveryTopic,
+                                     ros2::participantEntitiesInfoType(distro), ros2::latchedQos());
   ros2::NodeEntities expected{"/wire_test", "wire_graph", {}, {}};
   // The GUIDs from Cyclone directly.
   const auto guid = [](int entity) {
