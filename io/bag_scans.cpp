@@ -146,9 +146,15 @@ void BagPoses::checkFilled(const fs::path& file) const {
                     "the topic has no odometry message", "choose another --pose");
 }
 
-std::optional<Transform3> BagPoses::at(const std::string& frame, double stamp_s, std::string& why) {
+std::optional<Transform3> BagPoses::at(const std::string& frame, double stamp_s, std::string& why,
+                                       bool* mount_missing) {
+  if (mount_missing) *mount_missing = false;
   if (config_.kind == BagPoseConfig::Kind::tf)
     return tree_.lookup(config_.name, frame, stamp_s, config_.hold_s, &why);
+  if (odom_.empty()) {
+    why = "no odometry message on " + config_.name + " yet";
+    return std::nullopt;
+  }
   const std::optional<Transform3> base = odom_.at(stamp_s, config_.hold_s);
   if (!base) {
     const auto [first, last] = odom_.span();
@@ -163,7 +169,10 @@ std::optional<Transform3> BagPoses::at(const std::string& frame, double stamp_s,
   if (!odom_child_.empty() && frame != odom_child_)
     if (const auto mount = tree_.lookup(odom_child_, frame, stamp_s, config_.hold_s, &unused))
       return *base * *mount;
-  if (frame != odom_child_ && !odom_child_.empty()) mount_missing_ = true;
+  if (frame != odom_child_ && !odom_child_.empty()) {
+    mount_missing_ = true;
+    if (mount_missing) *mount_missing = true;
+  }
   return base;
 }
 

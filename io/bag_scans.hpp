@@ -107,7 +107,8 @@ struct LaserScanView {
 /// message (as the decimal they were written as) unless `config` overrides them.
 void fillRawScan(const LaserScanView& msg, const RosbagConfig& config, RawScan& scan);
 
-/// The poses a bag records for --pose: an odometry track or a tf tree, filled by the reader.
+/// The poses a bag records for --pose: an odometry track or a tf tree, filled by the reader (or,
+/// live, by lidarcal_ros2_node's pose input with the same rules).
 class BagPoses {
  public:
   explicit BagPoses(const BagPoseConfig& config) : config_(config) {}
@@ -116,12 +117,22 @@ class BagPoses {
                     const Transform3& t, bool is_static);
   /// Throws DataError when --pose odom: found no odometry message on its topic.
   void checkFilled(const std::filesystem::path& file) const;
-  /// The sensor's pose at the scan's stamp, or nothing (and why).
-  std::optional<Transform3> at(const std::string& frame, double stamp_s, std::string& why);
+  /// The sensor's pose at the scan's stamp, or nothing (and why). odom: `mount_missing` (when
+  /// given) tells whether the pose is the odometry's child frame's because /tf_static has no
+  /// link from it to `frame`.
+  std::optional<Transform3> at(const std::string& frame, double stamp_s, std::string& why,
+                               bool* mount_missing = nullptr);
   /// Notes for the report.
   std::vector<std::string> notes() const;
   /// Rig import: the vehicle's pose and the scan frame's mounting at `stamp_s` into `scan`.
   void addRigPoses(const std::string& frame, double stamp_s, RawScan& scan) const;
+  /// True once an odometry message was added.
+  bool hasOdometry() const { return !odom_.empty(); }
+  /// A live stream's poses: TransformTrack::keepWithin on the odometry and every /tf edge.
+  void keepWithin(double window_s, std::size_t max_samples) {
+    odom_.keepWithin(window_s, max_samples);
+    tree_.keepWithin(window_s, max_samples);
+  }
 
  private:
   BagPoseConfig config_;

@@ -58,6 +58,13 @@ std::uint64_t CdrReader::raw(std::size_t n) {
   return v;
 }
 
+std::uint8_t CdrReader::u8() { return *take(1); }
+
+std::vector<std::uint8_t> CdrReader::octets(std::size_t n) {
+  const std::uint8_t* p = take(n);
+  return {p, p + n};
+}
+
 std::uint32_t CdrReader::u32() { return static_cast<std::uint32_t>(raw(4)); }
 
 float CdrReader::f32() {

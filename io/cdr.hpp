@@ -26,6 +26,9 @@ class CdrReader {
   /// Bytes read so far, counted from the start of the data (encapsulation header included).
   std::size_t offset() const { return pos_; }
 
+  std::uint8_t u8();  ///< an octet, uint8, char or bool (no alignment)
+  /// A fixed array of `n` octets (e.g. `char[16]` of a .msg): no alignment, no length.
+  std::vector<std::uint8_t> octets(std::size_t n);
   std::uint32_t u32();
   std::int32_t i32() { return static_cast<std::int32_t>(u32()); }
   float f32();

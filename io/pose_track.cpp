@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <set>
 
 namespace lidarcal::io {
@@ -48,6 +49,19 @@ std::optional<Transform3> TransformTrack::at(double stamp_s, double hold_s) cons
   const double u = t1 > t0 ? (stamp_s - t0) / (t1 - t0) : 1.0;
   return Transform3{a.translation + u * (b.translation - a.translation),
                     a.rotation.slerp(u, b.rotation)};
+}
+
+void TransformTrack::keepWithin(double window_s, std::size_t max_samples) {
+  if (samples_.size() < 2) return;
+  sort();
+  const double oldest_kept = samples_.back().first - window_s;
+  auto first = std::lower_bound(samples_.begin(), samples_.end(), oldest_kept,
+                                [](const auto& s, double t) { return s.first < t; });
+  if (first != samples_.begin()) --first;  // the last sample before the window
+  const std::size_t keep = std::max<std::size_t>(max_samples, 2);
+  const auto by_count =
+      samples_.end() - static_cast<std::ptrdiff_t>(std::min(keep, samples_.size()));
+  samples_.erase(samples_.begin(), std::max(first, by_count));
 }
 
 void TransformTree::addStatic(const std::string& parent, const std::string& child,
@@ -97,6 +111,10 @@ std::optional<Transform3> TransformTree::lookup(const std::string& fixed, const 
     current = e.parent;
   }
   return pose;
+}
+
+void TransformTree::keepWithin(double window_s, std::size_t max_samples) {
+  for (auto& [child, e] : parent_of_) e.track.keepWithin(window_s, max_samples);
 }
 
 std::vector<std::string> TransformTree::frames() const {

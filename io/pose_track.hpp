@@ -46,6 +46,10 @@ class TransformTrack {
   /// The transform at `stamp_s`: interpolated between the samples around it; the nearest end
   /// sample within `hold_s` outside the span; nothing further out.
   std::optional<Transform3> at(double stamp_s, double hold_s) const;
+  /// Forgets the samples stamped more than `window_s` before the newest one, keeping the last of
+  /// them (so a stamp inside the window still interpolates), and then all but the newest
+  /// `max_samples` (at least 2 kept). For a live stream, whose past must not grow without bound.
+  void keepWithin(double window_s, std::size_t max_samples);
 
  private:
   void sort() const;
@@ -64,6 +68,8 @@ class TransformTree {
   /// `stamp_s` outside an edge's recorded span by more than `hold_s`).
   std::optional<Transform3> lookup(const std::string& fixed, const std::string& frame,
                                    double stamp_s, double hold_s, std::string* why = nullptr) const;
+  /// TransformTrack::keepWithin on every dynamic edge.
+  void keepWithin(double window_s, std::size_t max_samples);
   /// Frames known (parents and children), sorted, for messages.
   std::vector<std::string> frames() const;
   /// The frame a sensor `frame` rides on: the one just below the first dynamic (/tf) link met

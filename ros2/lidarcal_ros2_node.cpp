@@ -1,13 +1,15 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // lidarcal_ros2_node: corrects a sensor_msgs/msg/LaserScan topic live with a lidarcal model, as
-// a ROS 2 node seen by `ros2 topic list` and `ros2 topic echo`: a DDS participant (Cyclone DDS)
-// that follows ROS 2's conventions (topic "rt/<name>", type sensor_msgs::msg::dds_::LaserScan_,
-// plain CDR, ROS 2's QoS profiles, ROS_DOMAIN_ID). Parameters: ros2/node_args.hpp (--help).
+// a ROS 2 node seen by `ros2 node list`, `ros2 topic list`, `ros2 topic info -v` and `ros2 topic
+// echo`: a DDS participant (Cyclone DDS) that follows ROS 2's conventions (topic "rt/<name>",
+// type sensor_msgs::msg::dds_::LaserScan_, plain CDR, ROS 2's QoS profiles, ROS_DOMAIN_ID) and
+// announces itself on ros_discovery_info. Parameters: ros2/node_args.hpp (--help).
 //
 // Each scan goes through ros2::LiveCorrector (the rule of `lidarcal correct`) and is republished
 // with the same header, angles and intensities. A model of another sensor is refused at the
 // first scan (exit 2); malformed scans are dropped with a rate-limited warning and counted.
-// SIGINT/SIGTERM end it with a summary line and exit status 0.
+// SIGINT/SIGTERM end it with a summary line and exit status 0. The start line, the warnings, a
+// refusal and the summary go to /rosout as well as to stderr (the summary: stdout).
 
 #include <chrono>
 #include <csignal>
@@ -21,6 +23,8 @@
 #include "ros2/cyclone_relay.hpp"
 #include "ros2/live_corrector.hpp"
 #include "ros2/node_args.hpp"
+#include "ros2/node_outputs.hpp"
+#include "ros2/ros_participant.hpp"
 #include "ros2/warning_limiter.hpp"
 
 namespace {
@@ -78,18 +82,43 @@ double nowSeconds() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
-void printSummary(const ros2::LiveStats& st) {
+/// A log line to stderr (or `stream`) and to /rosout.
+struct NodeLog {
+  ros2::RosoutLogger& rosout;
+  void line(ros2::LogLevel level, const std::string& text, const ros2::LogOrigin& origin,
+            std::FILE* stream = stderr) {
+    const char* tag = level == ros2::LogLevel::warn ? "warning: " : "";
+    std::fprintf(stream, "lidarcal_ros2_node: %s%s\n", tag, text.c_str());
+    std::fflush(stream);
+    rosout.log({ros2::wallClockNow(), level, text, origin});
+  }
+};
+
+std::string summary(const ros2::LiveStats& st) {
   const auto& c = st.correction;
-  std::printf(
-      "lidarcal_ros2_node: %zu scans, %zu returns corrected, %zu outside the fitted readings, %zu "
-      "without a distance; "
-      "%zu malformed scans dropped",
-      c.scans, c.corrected, c.outside, c.unresolved, st.droppedTotal());
+  char text[256];
+  std::snprintf(text, sizeof text,
+                "%zu scans, %zu returns corrected, %zu outside the fitted readings, %zu without a "
+                "distance; %zu malformed scans dropped",
+                c.scans, c.corrected, c.outside, c.unresolved, st.droppedTotal());
+  std::string out = text;
   for (std::size_t r = 0; r < st.dropped.size(); ++r)
     if (st.dropped[r] > 0)
-      std::printf(", %zu %s", st.dropped[r], ros2::toString(static_cast<ros2::DropReason>(r)));
-  std::printf("\n");
-  std::fflush(stdout);
+      out += ", " + std::to_string(st.dropped[r]) + " " +
+             ros2::toString(static_cast<ros2::DropReason>(r));
+  return out;
+}
+
+/// The start line: topics, domain, model and how it corrects.
+std::string startLine(const ros2::NodeParameters& p, const LoadedModel& m,
+                      const ros2::LiveSettings& s, const std::string& output, int domain) {
+  const std::string block = m.block.empty() ? "" : " block " + m.block;
+  const std::string beams = m.model.beams ? std::to_string(*m.model.beams) : "any";
+  return "correcting " + s.topic + " -> " + output + " on domain " + std::to_string(domain) +
+         " with " + p.model_file + block + " (sensor '" + m.model.sensor_name + "', " + beams +
+         " beams; inversion " + m.inversion + ", outside " + calibration::toString(s.outside) +
+         "); node " + ros2::fullyQualifiedNodeName(p) + " (ros_distro " +
+         ros2::toString(p.ros_distro) + ")";
 }
 
 int run(const ros2::NodeParameters& p) {
@@ -111,23 +140,22 @@ int run(const ros2::NodeParameters& p) {
   ros2::LiveCorrector corrector(
       m.model, s, pipeline::modelCorrector(m.model, s.method, s.outside, p.model_file));
 
+  ros2::ParticipantSettings ps;
+  ps.domain_id = ros2::domainIdFromEnvironment();
+  ps.node_name = p.node_name;
+  ps.node_namespace = p.node_namespace;
+  ps.ros_distro = p.ros_distro;
+  ros2::RosParticipant participant(ps);
+  ros2::RosoutLogger rosout(participant, ros2::loggerName(p));
+  NodeLog log{rosout};
   ros2::RelayConfig rc;
-  rc.domain_id = ros2::domainIdFromEnvironment();
-  rc.participant_name = p.node_name;
   rc.input_topic = ros2::ddsTopicName(s.topic);
   const std::string output = ros2::resolveTopic(p.output, p);
   rc.output_topic = ros2::ddsTopicName(output);
   rc.input_qos = p.input_qos;
   rc.output_qos = p.output_qos;
-  ros2::CycloneRelay relay(rc);
-  const std::string block = m.block.empty() ? "" : " block " + m.block;
-  std::fprintf(stderr,
-               "lidarcal_ros2_node: correcting %s -> %s on domain %d with %s%s (sensor '%s', %s "
-               "beams; inversion %s, outside %s)\n",
-               s.topic.c_str(), output.c_str(), rc.domain_id, p.model_file.c_str(), block.c_str(),
-               m.model.sensor_name.c_str(),
-               m.model.beams ? std::to_string(*m.model.beams).c_str() : "any", m.inversion.c_str(),
-               calibration::toString(s.outside));
+  ros2::CycloneRelay relay(participant, rc);
+  log.line(ros2::LogLevel::info, startLine(p, m, s, output, ps.domain_id), LIDARCAL_LOG_ORIGIN);
 
   ros2::WarningLimiter warnings;
   int status = 0;
@@ -137,26 +165,25 @@ int run(const ros2::NodeParameters& p) {
       ros2::ScanFields f = fieldsOf(scan);
       const ros2::ScanVerdict v = corrector.process(f);
       if (v == ros2::ScanVerdict::refuse) {
-        std::fprintf(
-            stderr,
-            "lidarcal_ros2_node: refusing to correct %s with %s (a model of another sensor?): %s\n",
-            s.topic.c_str(), p.model_file.c_str(), corrector.message().c_str());
+        log.line(ros2::LogLevel::error,
+                 "refusing to correct " + s.topic + " with " + p.model_file +
+                     " (a model of another sensor?): " + corrector.message(),
+                 LIDARCAL_LOG_ORIGIN);
         status = 2;
         return false;
       }
       if (v == ros2::ScanVerdict::drop) {
         const std::string w = warnings.offer(ros2::toString(corrector.dropReason()),
                                              "dropped " + corrector.message(), nowSeconds());
-        if (!w.empty()) std::fprintf(stderr, "lidarcal_ros2_node: warning: %s\n", w.c_str());
+        if (!w.empty()) log.line(ros2::LogLevel::warn, w, LIDARCAL_LOG_ORIGIN);
         return false;
       }
       if (!corrector.sensorWarning().empty() && corrector.stats().correction.scans == 1)
-        std::fprintf(stderr, "lidarcal_ros2_node: warning: %s\n",
-                     corrector.sensorWarning().c_str());
+        log.line(ros2::LogLevel::warn, corrector.sensorWarning(), LIDARCAL_LOG_ORIGIN);
       return true;
     });
   }
-  printSummary(corrector.stats());
+  log.line(ros2::LogLevel::info, summary(corrector.stats()), LIDARCAL_LOG_ORIGIN, stdout);
   return status;
 }
 

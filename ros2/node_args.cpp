@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "ros2/node_args.hpp"
 
+#include <algorithm>
 #include <cctype>
 #include <cstdlib>
 
@@ -34,6 +35,25 @@ bool parseBool(const std::string& name, const std::string& v) {
   throw InputError("", "-p " + name + ":=" + v, "is not a boolean", "use true or false");
 }
 
+/// A ROS 2 name token: letters, digits and '_', not starting with a digit (rmw's node name rule).
+bool validToken(const std::string& t) {
+  if (t.empty() || t.size() > 255 || std::isdigit(static_cast<unsigned char>(t[0]))) return false;
+  for (char c : t)
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_')) return false;
+  return true;
+}
+
+bool validNamespace(const std::string& ns) {
+  if (ns == "/") return true;
+  if (ns.size() < 2 || ns[0] != '/' || ns.back() == '/' || ns.size() > 255) return false;
+  for (std::size_t at = 1; at < ns.size();) {
+    const std::size_t end = std::min(ns.find('/', at), ns.size());
+    if (!validToken(ns.substr(at, end - at))) return false;
+    at = end + 1;
+  }
+  return true;
+}
+
 QosProfile parseQos(const std::string& name, const std::string& v) {
   if (v == "sensor_data") return QosProfile::sensor_data;
   if (v == "default" || v == "reliable") return QosProfile::reliable;
@@ -61,6 +81,10 @@ void setParameter(NodeParameters& p, const std::string& name, const std::string&
     p.input_qos = parseQos(name, v);
   else if (name == "output_qos")
     p.output_qos = parseQos(name, v);
+  else if (name == "ros_distro")
+    p.ros_distro = parseRosDistro(v);
+  else if (name == "pose")
+    p.pose = parsePoseSource(v);
   // every ROS 2 node accepts it; stamps are copied, not made
   else if (name == "use_sim_time")
     parseBool(name, v);
@@ -71,10 +95,19 @@ void setParameter(NodeParameters& p, const std::string& name, const std::string&
 
 void applyRemap(NodeParameters& p, const std::string& from, const std::string& to) {
   if (from == "__node" || from == "__name") {
+    if (!validToken(to))
+      throw InputError("", "-r " + from + ":=" + to,
+                       "is not a ROS 2 node name (letters, digits and '_', not starting with a "
+                       "digit)",
+                       "e.g. -r __node:=front_lidar");
     p.node_name = to;
   } else if (from == "__ns") {
     if (to.empty() || to[0] != '/')
       throw InputError("", "-r __ns:=" + to, "a namespace must be absolute",
+                       "e.g. -r __ns:=/robot1");
+    if (!validNamespace(to))
+      throw InputError("", "-r __ns:=" + to,
+                       "is not a ROS 2 namespace ('/'-separated names of letters, digits and '_')",
                        "e.g. -r __ns:=/robot1");
     p.node_namespace = to;
   } else {
@@ -108,6 +141,60 @@ const char* toString(QosProfile q) {
   return q == QosProfile::sensor_data ? "sensor_data" : "default";
 }
 
+namespace {
+constexpr RosDistro kDistros[] = {RosDistro::foxy,   RosDistro::galactic, RosDistro::humble,
+                                  RosDistro::iron,   RosDistro::jazzy,    RosDistro::kilted,
+                                  RosDistro::rolling};
+}
+
+const char* toString(RosDistro d) {
+  switch (d) {
+    case RosDistro::foxy:
+      return "foxy";
+    case RosDistro::galactic:
+      return "galactic";
+    case RosDistro::humble:
+      return "humble";
+    case RosDistro::iron:
+      return "iron";
+    case RosDistro::jazzy:
+      return "jazzy";
+    case RosDistro::kilted:
+      return "kilted";
+    case RosDistro::rolling:
+      return "rolling";
+  }
+  return "?";
+}
+
+std::size_t gidBytes(RosDistro d) {
+  return d == RosDistro::foxy || d == RosDistro::galactic || d == RosDistro::humble ? 24 : 16;
+}
+
+RosDistro parseRosDistro(const std::string& text) {
+  std::string known;
+  for (RosDistro d : kDistros) {
+    if (text == toString(d)) return d;
+    known += std::string(known.empty() ? "" : ", ") + toString(d);
+  }
+  throw InputError("", "-p ros_distro:=" + text, "is not a ROS 2 release this node knows",
+                   "use one of " + known + " (the release of the other nodes)");
+}
+
+PoseSource parsePoseSource(const std::string& text) {
+  const auto colon = text.find(':');
+  const std::string kind = text.substr(0, colon);
+  PoseSource s;
+  s.name = colon == std::string::npos ? "" : text.substr(colon + 1);
+  if ((kind != "odom" && kind != "tf") || s.name.empty() || s.name == "/")
+    throw InputError("", "-p pose:=" + text,
+                     "is odom:TOPIC (nav_msgs/msg/Odometry) or tf:FIXED_FRAME",
+                     "e.g. -p pose:=odom:/odom or -p pose:=tf:map");
+  s.kind = kind == "odom" ? PoseSource::Kind::odom : PoseSource::Kind::tf;
+  if (s.kind == PoseSource::Kind::tf && s.name.front() == '/') s.name.erase(0, 1);
+  return s;
+}
+
 NodeParameters parseNodeArguments(int argc, const char* const* argv) {
   NodeParameters p;
   bool ros_args = false;
@@ -130,7 +217,7 @@ NodeParameters parseNodeArguments(int argc, const char* const* argv) {
       const auto [from, to] = splitAssignment(next(a), a);
       applyRemap(p, from, to);
     } else if (ros_args && (a == "--log-level" || a == "-e" || a == "--enclave")) {
-      next(a);  // accepted as every ROS 2 node accepts them; this node logs to stderr only
+      next(a);  // accepted as every ROS 2 node accepts them; logs go out at every level
     } else if (ros_args && a == "--params-file") {
       throw InputError("", a, "is not supported by this node (it is not an rclcpp node)",
                        "pass the parameters with -p NAME:=VALUE; a model exported as YAML goes in "
@@ -147,6 +234,7 @@ NodeParameters parseNodeArguments(int argc, const char* const* argv) {
                      "give this sensor's model: --ros-args -p model:=/path/model.json");
   if (p.inversion && *p.inversion != "ls" && *p.inversion != "ml")
     throw InputError("", "-p inversion:=" + *p.inversion, "is not an inversion", "use ls or ml");
+  if (p.pose.kind == PoseSource::Kind::odom) resolveTopic(p.pose.name, p);  // a valid topic name
   calibration::Outside outside = calibration::kDefaultOutside;
   if (p.outside && !calibration::parseOutside(*p.outside, outside))
     throw InputError("", "-p outside:=" + *p.outside,
@@ -182,7 +270,17 @@ std::string nodeHelp() {
        "false)\n"
        "  input_qos    sensor_data (best effort, keep last 5; default) or default (reliable, keep "
        "last 10)\n"
-       "  output_qos   default (reliable, keep last 10; default) or sensor_data\n\n"
+       "  output_qos   default (reliable, keep last 10; default) or sensor_data\n"
+       "  ros_distro   the ROS 2 release of the other nodes: humble (default; also foxy, "
+       "galactic) announces 24-byte\n"
+       "               GIDs on ros_discovery_info, iron, jazzy, kilted, rolling 16-byte ones\n"
+       "  pose         odom:TOPIC (nav_msgs/msg/Odometry, composed with the mount from "
+       "/tf_static) or tf:FRAME\n"
+       "               (the scan frame's pose in the fixed FRAME through /tf and /tf_static); "
+       "default odom:odom.\n"
+       "               Checked at start; correcting scans reads no poses\n\n"
+       "The node appears in `ros2 node list` as /NS/NAME and logs to /rosout as well as to "
+       "stderr.\n\n"
        "environment: ROS_DOMAIN_ID (default 0); CYCLONEDDS_URI configures the DDS participant "
        "(Cyclone DDS).\n"
        "exit status: 0 after Ctrl-C / SIGTERM, 2 a bad argument or a model of another sensor (at "
@@ -197,6 +295,18 @@ std::string resolveTopic(const std::string& name, const NodeParameters& p) {
   for (const auto& [from, to] : p.remaps)
     if (qualify(from, p) == fq) return qualify(to, p);
   return fq;
+}
+
+std::string fullyQualifiedNodeName(const NodeParameters& p) {
+  return (p.node_namespace == "/" ? "" : p.node_namespace) + "/" + p.node_name;
+}
+
+std::string loggerName(const NodeParameters& p) {
+  if (p.node_namespace == "/") return p.node_name;
+  std::string name = p.node_namespace.substr(1);
+  for (char& c : name)
+    if (c == '/') c = '.';
+  return name + "." + p.node_name;
 }
 
 std::string ddsTopicName(const std::string& resolved) { return "rt" + resolved; }

@@ -5,14 +5,15 @@
 //   lidarcal_ros2_node [--help] --ros-args -p model:=M.json [-p input:=scan] [-p
 //                      output:=scan_corrected] [-p inversion:=ls|ml] [-p outside:=POLICY] [-p
 //                      sensor_name:=NAME] [-p force:=true] [-p input_qos:=sensor_data|default] [-p
-//                      output_qos:=sensor_data|default] [-r __node:=NAME] [-r __ns:=/NS] [-r
-//                      FROM:=TO]
+//                      output_qos:=sensor_data|default] [-p ros_distro:=humble|jazzy|...] [-p
+//                      pose:=odom:TOPIC|tf:FRAME] [-r __node:=NAME] [-r __ns:=/NS] [-r FROM:=TO]
 //
 // `--param` and `--remap` are the long forms of -p and -r; `--` ends the ROS arguments. Topic
 // names resolve as ROS 2 resolves them (relative to the namespace; `~/x` under the node's name)
 // and then go through the remapping rules; the DDS topic is "rt" + the resolved name. The domain
 // comes from ROS_DOMAIN_ID (0 when unset), as for any ROS 2 node. No printing here.
 
+#include <cstddef>
 #include <optional>
 #include <string>
 #include <utility>
@@ -28,6 +29,26 @@ enum class QosProfile {
 };
 const char* toString(QosProfile q);
 
+/// The ROS 2 release of the other nodes on the domain. It decides the layout of what the node
+/// announces on `ros_discovery_info`: a GID is 24 bytes up to Humble and 16 bytes from Iron on
+/// (rmw_dds_common: rmw_dds_common/msg/Gid.msg on the branches humble and iron).
+enum class RosDistro { foxy, galactic, humble, iron, jazzy, kilted, rolling };
+const char* toString(RosDistro d);
+/// The length of a GID on the wire in that release: 24 or 16 bytes.
+std::size_t gidBytes(RosDistro d);
+
+/// Where the vehicle's poses come from (parameter `pose`), as `lidarcal import --pose`.
+struct PoseSource {
+  enum class Kind {
+    /// nav_msgs/msg/Odometry on `name`, composed with the sensor's mount from /tf_static
+    odom,
+    /// the chain from the fixed frame `name` to the scan's frame_id through /tf and /tf_static
+    tf,
+  };
+  Kind kind = Kind::odom;     ///< default odom
+  std::string name = "odom";  ///< odom: the topic (a ROS name, default odom); tf: the fixed frame
+};
+
 struct NodeParameters {
   /// model: model.json (a sensor's or a rig's) or export's YAML (required)
   std::string model_file;
@@ -42,8 +63,13 @@ struct NodeParameters {
   bool force = false;  ///< force: apply a model whose range limits differ from the scans'
   QosProfile input_qos = QosProfile::sensor_data;  ///< input_qos: sensor_data (default) or default
   QosProfile output_qos = QosProfile::reliable;    ///< output_qos: default (default) or sensor_data
-  std::string node_name = "lidarcal";              ///< -r __node:=NAME
-  std::string node_namespace = "/";                ///< -r __ns:=/NS (absolute)
+  /// ros_distro: the other nodes' ROS 2 release (default humble): the GID layout announced
+  RosDistro ros_distro = RosDistro::humble;
+  /// pose: odom:TOPIC | tf:FRAME (default odom:odom); read by the watch modes, not by apply
+  PoseSource pose;
+  /// -r __node:=NAME (letters, digits, '_'; not starting with a digit)
+  std::string node_name = "lidarcal";
+  std::string node_namespace = "/";  ///< -r __ns:=/NS (absolute; tokens as node names)
   std::vector<std::pair<std::string, std::string>> remaps;  ///< -r FROM:=TO for topics, in order
   bool help = false;  ///< --help or -h was given: print nodeHelp() and exit 0
 };
@@ -59,6 +85,20 @@ std::string nodeHelp();
 /// "scan" -> "/NS/scan", "~/x" -> "/NS/NODE/x", "/abs" unchanged. Throws InputError for a name
 /// ROS 2 would refuse (empty, with characters other than alphanumerics, '_', '/', '~').
 std::string resolveTopic(const std::string& name, const NodeParameters& p);
+
+/// The node's fully qualified name: "/NS/NAME" ("/NAME" in the root namespace).
+std::string fullyQualifiedNodeName(const NodeParameters& p);
+/// The node's logger name as rcl makes it (rcl: rcl/src/rcl/node.c): the namespace without its
+/// leading '/', its '/' replaced by '.', then '.' and the node's name ("NAME" in the root
+/// namespace; "robot1.NAME" in "/robot1").
+std::string loggerName(const NodeParameters& p);
+
+/// `-p pose:=` parsed: "odom:TOPIC" or "tf:FRAME" (a frame's leading '/' removed). Throws
+/// InputError naming the parameter for anything else.
+PoseSource parsePoseSource(const std::string& text);
+/// `-p ros_distro:=` parsed (the release's name in lower case). Throws InputError listing the
+/// names known.
+RosDistro parseRosDistro(const std::string& text);
 
 /// The DDS topic of a resolved ROS 2 topic: "rt" + name ("/scan" -> "rt/scan").
 std::string ddsTopicName(const std::string& resolved);

@@ -1,10 +1,10 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Test-side writers of ROS 2 bags, built straight from the specifications and independent of the
-// reader under test: CDR serialisation of LaserScan, Odometry and TFMessage (CORBA 3.3 Part 2
-// §9.3, DDS-XTypes encapsulation header), MCAP files record by record (https://mcap.dev/spec),
-// chunks compressed with libzstd / liblz4 directly, and rosbag2 SQLite files through the sqlite3
-// C API. Also used to write the fuzz seeds (tests/fuzz/corpus/mcap, cdr).
+// reader under test: CDR serialisation of LaserScan, Odometry and TFMessage (cdr_test_writer.hpp:
+// CORBA 3.3 Part 2 §9.3, DDS-XTypes encapsulation header), MCAP files record by record
+// (https://mcap.dev/spec), chunks compressed with libzstd / liblz4 directly, and rosbag2 SQLite
+// files through the sqlite3 C API. Also used to write the fuzz seeds (tests/fuzz/corpus/mcap, cdr).
 
 #include <cmath>
 #include <cstdint>
@@ -21,46 +21,9 @@
 #include <zlib.h>
 #include <zstd.h>
 
+#include "io/cdr_test_writer.hpp"
+
 namespace lidarcal::test {
-
-/// CDR bytes: encapsulation header (0x0000 big-endian, 0x0001 little-endian, options 0), then
-/// each primitive aligned on its size counted from the byte after the header.
-class CdrWriter {
- public:
-  explicit CdrWriter(bool big_endian) : big_(big_endian) {
-    bytes_ = {'\0', big_endian ? '\0' : '\1', '\0', '\0'};
-  }
-  void u32(std::uint32_t v) { put(v, 4); }
-  void i32(std::int32_t v) { put(static_cast<std::uint32_t>(v), 4); }
-  void f32(float v) {
-    std::uint32_t b;
-    std::memcpy(&b, &v, 4);
-    put(b, 4);
-  }
-  void f64(double v) {
-    std::uint64_t b;
-    std::memcpy(&b, &v, 8);
-    put(b, 8);
-  }
-  void str(const std::string& s) {
-    u32(static_cast<std::uint32_t>(s.size() + 1));
-    bytes_ += s;
-    bytes_ += '\0';
-  }
-  void f32seq(const std::vector<float>& v) {
-    u32(static_cast<std::uint32_t>(v.size()));
-    for (float x : v) f32(x);
-  }
-  const std::string& bytes() const { return bytes_; }
-
- private:
-  void put(std::uint64_t v, int n) {
-    while ((bytes_.size() - 4) % static_cast<std::size_t>(n)) bytes_ += '\0';
-    for (int i = 0; i < n; ++i) bytes_ += static_cast<char>(v >> (8 * (big_ ? n - 1 - i : i)));
-  }
-  bool big_;
-  std::string bytes_;
-};
 
 /// The fields of a LaserScan the tests choose.
 struct TestScan {

@@ -45,6 +45,24 @@ TEST(TransformTrack, HoldsTheEndsOnlyWithinTheHoldTime) {
   EXPECT_FALSE(TransformTrack().at(10.0, 1.0));
 }
 
+TEST(TransformTrack, KeepsTheWindowAndTheSampleBeforeIt) {
+  TransformTrack track;
+  for (int k = 0; k <= 20; ++k)
+    track.add(static_cast<double>(k), planar(static_cast<double>(k), 0.0, 0.0));
+  track.keepWithin(5.5, 1000);  // newest 20: the window starts at 14.5, the sample at 14 stays
+  EXPECT_EQ(track.size(), 7u);
+  EXPECT_EQ(track.span().first, 14.0);
+  const auto mid = track.at(14.75, 0.0);  // still interpolates at the window's start
+  ASSERT_TRUE(mid);
+  EXPECT_NEAR(mid->translation.x(), 14.75, 1e-12);
+  EXPECT_FALSE(track.at(13.0, 0.1));  // forgotten
+  track.keepWithin(100.0, 3);         // then by count
+  EXPECT_EQ(track.size(), 3u);
+  EXPECT_EQ(track.span(), std::make_pair(18.0, 20.0));
+  track.keepWithin(0.0, 0);  // never below two samples
+  EXPECT_EQ(track.size(), 2u);
+}
+
 TEST(TransformTree, ComposesTheChainToTheFixedFrame) {
   TransformTree tree;
   tree.addDynamic("map", "odom", 0.0, planar(1.0, 2.0, 0.5));

@@ -1,8 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "ros2/fastdds_peer.hpp"
 
-#include <unistd.h>
-
 #include <chrono>
 #include <condition_variable>
 #include <mutex>
@@ -166,21 +164,6 @@ bool FastDdsPeer::waitReceived(std::size_t n, double seconds) const {
 std::vector<Ros2Scan> FastDdsPeer::received() const {
   std::lock_guard<std::mutex> lock(impl_->mutex);
   return impl_->received;
-}
-
-std::string cycloneLoopbackConfig() {
-  return "<CycloneDDS><Domain Id=\"any\"><General><Interfaces><NetworkInterface "
-         "address=\"127.0.0.1\"/></Interfaces>"
-         "<AllowMulticast>false</AllowMulticast></General><Discovery><ParticipantIndex>auto</"
-         "ParticipantIndex>"
-         "<MaxAutoParticipantIndex>20</MaxAutoParticipantIndex><Peers><Peer "
-         "address=\"127.0.0.1\"/></Peers></Discovery>"
-         "</Domain></CycloneDDS>";
-}
-
-int uniqueDomainId() {
-  const auto t = static_cast<unsigned long>(Clock::now().time_since_epoch().count());
-  return 1 + static_cast<int>((static_cast<unsigned long>(getpid()) * 7919ul + t) % 200ul);
 }
 
 }  // namespace lidarcal::test

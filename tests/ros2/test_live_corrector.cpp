@@ -1,12 +1,15 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// The ROS 2 node without DDS: its command line (ROS 2's -p/-r syntax, name resolution), the
-// per-scan rule (ros2::LiveCorrector against pipeline::correctLaserRanges, the rule of
-// `correct`), the rate limit of its warnings, and the model read from export's YAML.
+// The ROS 2 node without DDS: its command line (ROS 2's -p/-r syntax, name resolution, the
+// release and pose source, the node's names), the per-scan rule (ros2::LiveCorrector against
+// pipeline::correctLaserRanges, the rule of `correct`), the rate limit of its warnings, and the
+// model read from export's YAML.
 
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <limits>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -65,6 +68,43 @@ TEST(Ros2NodeArguments, HelpNeedsNothingElseAndMistakesAreInputErrors) {
   }
   const ros2::NodeParameters p = parse({"--ros-args", "-p", "model:=m", "-p", "input:=bad name"});
   EXPECT_THROW(ros2::resolveTopic(p.input, p), InputError);
+}
+
+TEST(Ros2NodeArguments, RosDistroPoseSourceAndTheNodesNames) {
+  const ros2::NodeParameters d = parse({"--ros-args", "-p", "model:=m"});
+  EXPECT_EQ(d.ros_distro, ros2::RosDistro::humble);
+  EXPECT_EQ(d.pose.kind, ros2::PoseSource::Kind::odom);
+  EXPECT_EQ(ros2::resolveTopic(d.pose.name, d), "/odom");
+  EXPECT_EQ(ros2::fullyQualifiedNodeName(d), "/lidarcal");
+  EXPECT_EQ(ros2::loggerName(d), "lidarcal");
+  // rmw_dds_common's Gid.msg: char[24] up to humble, char[16] from iron on.
+  for (const auto& [name, bytes] : std::vector<std::pair<const char*, std::size_t>>{
+           {"foxy", 24}, {"humble", 24}, {"iron", 16}, {"jazzy", 16}, {"rolling", 16}}) {
+    const ros2::RosDistro r = ros2::parseRosDistro(name);
+    EXPECT_EQ(std::string(ros2::toString(r)), name);
+    EXPECT_EQ(ros2::gidBytes(r), bytes) << name;
+  }
+  const ros2::NodeParameters p =
+      parse({"--ros-args", "-p", "model:=m", "-p", "ros_distro:=jazzy", "-p", "pose:=tf:/map", "-r",
+             "__ns:=/fleet/robot1", "-r", "__node:=front_lidar"});
+  EXPECT_EQ(p.ros_distro, ros2::RosDistro::jazzy);
+  EXPECT_EQ(p.pose.kind, ros2::PoseSource::Kind::tf);
+  EXPECT_EQ(p.pose.name, "map");  // a frame: no leading slash
+  EXPECT_EQ(ros2::fullyQualifiedNodeName(p), "/fleet/robot1/front_lidar");
+  EXPECT_EQ(ros2::loggerName(p), "fleet.robot1.front_lidar");  // as rcl names the logger
+  const ros2::NodeParameters o =
+      parse({"--ros-args", "-p", "model:=m", "-p", "pose:=odom:wheel_odom", "-r", "__ns:=/robot1"});
+  EXPECT_EQ(ros2::resolveTopic(o.pose.name, o), "/robot1/wheel_odom");
+  for (const char* bad : {"ros_distro:=ardent", "ros_distro:=Humble", "pose:=gps:/fix",
+                          "pose:=odom:", "pose:=tf:/", "pose:=odom:bad name", "pose:=map"}) {
+    SCOPED_TRACE(bad);
+    EXPECT_THROW(parse({"--ros-args", "-p", "model:=m", "-p", bad}), InputError);
+  }
+  for (const char* bad : {"__node:=2lidar", "__node:=front-lidar", "__node:=", "__ns:=/robot/",
+                          "__ns:=/robot//one", "__ns:=/9robot"}) {
+    SCOPED_TRACE(bad);
+    EXPECT_THROW(parse({"--ros-args", "-p", "model:=m", "-r", bad}), InputError);
+  }
 }
 
 TEST(Ros2NodeArguments, DomainIdFromTheEnvironment) {

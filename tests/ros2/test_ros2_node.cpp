@@ -339,7 +339,7 @@ TEST_F(Ros2Node, HelpAndBadArgumentsAnswerAtOnce) {
   Child help(std::vector<std::string>{LIDARCAL_ROS2_NODE_EXE, "--help"}, dir / "help.log");
   ASSERT_EQ(help.waitExit(20.0).value_or(-1), 0) << help.log();
   for (const char* p : {"model", "input", "output", "inversion", "outside", "sensor_name", "force",
-                        "input_qos", "ROS_DOMAIN_ID"})
+                        "input_qos", "ros_distro", "pose", "ROS_DOMAIN_ID"})
     EXPECT_NE(help.log().find(p), std::string::npos) << p;
   Child no_model = startNode("lidarcal_no_model", {});
   EXPECT_EQ(no_model.waitExit(20.0).value_or(-1), 2) << no_model.log();
