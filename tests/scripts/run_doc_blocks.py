@@ -126,12 +126,14 @@ def missing_output(expected, output):
 
 
 def workspace(source, build, shared):
-    """A temporary directory: repo/ (links to SRC's entries, build -> BUILD), shared/data, tmp/."""
+    """A temporary directory: repo/ (links to SRC's entries, build -> BUILD), shared/data, tmp/.
+    Outputs written relative to repo/ stay there: the links are to inputs only."""
     root = tempfile.mkdtemp(prefix='lidarcal-docs-')
     repo = os.path.join(root, 'repo')
     os.mkdir(repo)
     for name in os.listdir(source):
-        if name != 'build' and not name.startswith('.'):
+        # Not the build trees, nor what `run` writes by default: the docs write there.
+        if not name.startswith(('.', 'build', 'lidarcal-out')):
             os.symlink(os.path.join(source, name), os.path.join(repo, name))
     os.symlink(build, os.path.join(repo, 'build'))
     if shared and os.path.isdir(shared):
