@@ -238,6 +238,11 @@ bool BagScanSink::offer(RawScan& scan, const std::string& frame_id) {
   return false;
 }
 
+std::string shortStopsAdvice() {
+  return "if the sensor stood still, its poses jitter by more than that (localisation typically "
+         "by centimetres): try --still-m 0.05 --still-deg 1";
+}
+
 void BagScanSink::finish(const fs::path& file, const std::string& topic) {
   if (report_.scans == 0 && without_pose_ > 0)
     throw DataError(file.string(), "--pose",
@@ -251,17 +256,17 @@ void BagScanSink::finish(const fs::path& file, const std::string& topic) {
         "VIEWPOINT = identity for every scan (--pose odom:TOPIC or tf:FRAME reads the bag's "
         "poses)");
   for (const auto& note : poses_.notes()) report_.notes.push_back(note);
-  if (config_.kind != BagPoseConfig::Kind::none) {
+  if (config_.kind != BagPoseConfig::Kind::none)
+    report_.short_stops = still_.stops() > 1 && 2 * still_.stops() > report_.scans;
+  // A rig import reports the vehicle's stops over all its topics itself.
+  if (config_.kind != BagPoseConfig::Kind::none && config_.vehicle_frame.empty()) {
     char text[200];
     std::snprintf(
         text, sizeof text, "%zu stops (poses held while they stay within %.3g m and %.3g deg)",
         still_.stops(), config_.still_m, config_.still_rad * 180.0 / 3.14159265358979323846);
     report_.notes.push_back(text);
-    if (still_.stops() > 1 && 2 * still_.stops() > report_.scans)
-      report_.notes.push_back(
-          "most stops hold one or two scans: if the sensor stood still, its poses jitter by more "
-          "than "
-          "that (localisation typically by centimetres): try --still-m 0.05 --still-deg 1");
+    if (report_.short_stops)
+      report_.notes.push_back("most stops hold one or two scans: " + shortStopsAdvice());
   }
   if (without_pose_ > 0)
     report_.notes.push_back(plural(without_pose_, "scan") +

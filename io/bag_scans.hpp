@@ -142,6 +142,10 @@ class BagPoses {
   bool mount_missing_ = false;
 };
 
+/// What to do when most stops hold one or two scans (ImportReport::short_stops): the tolerances
+/// to try.
+std::string shortStopsAdvice();
+
 /// What both readers do with each converted scan: its pose (when --pose), the stop filter, the
 /// count and the callback; then the checks and notes of the report.
 class BagScanSink {

@@ -55,6 +55,10 @@ struct ImportReport {
   std::string sensor_name;     ///< what the input says about the sensor (for sequence.json)
   /// facts the user should know (e.g. which pose went into VIEWPOINT)
   std::vector<std::string> notes;
+  /// most stops the still-pose filter found (a bag read with a pose source) hold one or two
+  /// scans: the poses jitter by more than the stop tolerances, which split a sensor that stood
+  /// still (BagPoseConfig::still_m, still_rad). Default false
+  bool short_stops = false;
 };
 
 /// Checks a range window for the importers' configs: 0 <= range_min_m < range_max_m (max may

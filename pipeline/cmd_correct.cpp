@@ -48,6 +48,15 @@ bool isRosbag2(const std::string& input) {
   return kind == io::RecordingKind::mcap || kind == io::RecordingKind::rosbag2;
 }
 
+/// A missing path named like a bag file (.bag, .mcap, .db3) is a missing file, not a missing
+/// sequence directory: throws InputError saying so.
+void checkBagFileExists(const std::string& input) {
+  const std::string ext = std::filesystem::path(input).extension().string();
+  std::error_code ec;
+  if ((ext == ".bag" || ext == ".mcap" || ext == ".db3") && !std::filesystem::exists(input, ec))
+    throw InputError(input, "", "file does not exist", "check the path");
+}
+
 void printStats(const CorrectionStats& stats, const std::string& out, const CalibrationModel& model,
                 calibration::Outside outside) {
   if (quiet()) return;
@@ -199,6 +208,7 @@ void addCorrectCommand(CLI::App& app) {
                 "limits set), with a "
                 "warning");
   sub->callback([o, c, sub] {
+    checkBagFileExists(o->seq);
     const bool ros1 = isRosbag(o->seq), ros2 = !ros1 && isRosbag2(o->seq);
     if (ros1 || ros2) {
       if (o->ascii)

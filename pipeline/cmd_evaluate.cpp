@@ -1,5 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// lidarcal evaluate OUT --truth truth.json [--raw RAW]: MSE ratio of raw vs corrected ranges.
+// lidarcal evaluate OUT --truth truth.json [--raw RAW]: a simulated sequence's corrected ranges
+// against the simulator's true ones, raw vs corrected (MSE ratio, normalised MSE), as JSON.
+// lidarcal evaluate SEQ --reference REF.json [--model M]: what the scans read at the distances and
+// spans you measured, raw and with M corrected, each entry against the model's intervals.
 
 #include <cmath>
 #include <cstdio>

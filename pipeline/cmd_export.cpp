@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// lidarcal export model.json --format yaml|lut [-o FILE] [--step S]
+// lidarcal export model.json --format yaml|lut [-o FILE] [--step S] [--sensor NAME]
 
 #include <cstdio>
 #include <memory>
@@ -9,6 +9,7 @@
 #include "common/errors.hpp"
 #include "io/atomic_file.hpp"
 #include "io/model_io.hpp"
+#include "io/rig_model_io.hpp"
 #include "pipeline/cli_options.hpp"
 #include "pipeline/commands.hpp"
 #include "pipeline/model_export.hpp"
@@ -18,7 +19,7 @@ namespace lidarcal::pipeline {
 
 void addExportCommand(CLI::App& app) {
   struct Options {
-    std::string model, format, out;
+    std::string model, format, out, sensor;
     double step_m = 0.001;
     bool overwrite = false;
   };
@@ -36,21 +37,25 @@ void addExportCommand(CLI::App& app) {
       ->required();
   sub->add_option("-o,--out", o->out, "Output file (default: standard output)");
   sub->add_option("--step", o->step_m, "lut: reading step, metres")->capture_default_str();
+  sub->add_option("--sensor", o->sensor,
+                  "With a rig model (several sensors, from `calibrate RIG`): the block to export, "
+                  "by sensor name, topic or frame");
   addCorrectionOptions(sub, c);
   sub->add_flag("--overwrite", o->overwrite, "Replace the output file if it exists");
   sub->callback([o, c, sub] {
     if (o->format != "lut" && sub->count("--step") > 0)
       throw InputError("", "--step", "applies to --format lut only", "drop --step");
     if (!o->out.empty()) io::checkOutputFile(o->out, o->overwrite);
-    const CalibrationModel model = io::readModel(o->model);
+    std::string sensor;  // the rig's block chosen, empty for a single sensor's model
+    const CalibrationModel model = io::readModelFor(o->model, o->sensor, &sensor);
     ExportConfig config;
     config.inversion = c->method();
     config.outside = c->outsidePolicy();
     config.step_m = o->step_m;
-    config.source = o->model;
-    checkModelInvertible(model, o->model, config.outside);
+    config.source = sensor.empty() ? o->model : o->model + " (sensor " + sensor + ")";
+    checkModelInvertible(model, config.source, config.outside);
     // refuses ml without the squared law
-    modelCorrector(model, config.inversion, config.outside, o->model);
+    modelCorrector(model, config.inversion, config.outside, config.source);
     const std::string text =
         o->format == "yaml" ? exportYaml(model, config) : exportLut(model, config);
     if (o->out.empty()) {

@@ -82,7 +82,8 @@ void runRigCalibrate(const RigCalibrateSettings& s) {
   for (const io::RigModelSensor& sensor : model.sensors)
     if (!sensor.model.status.ok())
       std::fprintf(stderr,
-                   "warning: the range model of %s is not determined; correct refuses its block "
+                   "lidarcal: warning: the range model of %s is not determined; correct refuses "
+                   "its block "
                    "(the table's status says why)\n",
                    sensor.name.c_str());
   std::fprintf(stderr, "rig model (%s) written to %s\n",

@@ -6,6 +6,7 @@
 #include <cstdio>
 
 #include "common/plural.hpp"
+#include "io/bag_scans.hpp"
 #include "pipeline/cmd_rig.hpp"
 #include "pipeline/progress.hpp"
 #include "pipeline/words.hpp"
@@ -51,9 +52,23 @@ void runRigImport(const RigImportSettings& settings) {
     std::printf("| %s | %s | %s | %zu | %s | %s |\n", s.name.c_str(), s.topic.c_str(),
                 s.frame_id.c_str(), w.written, beams.c_str(), mount);
   }
-  std::printf("  vehicle poses: %s; %s\n", r.meta.pose_source.c_str(),
+  const io::BagPoseConfig& pose = settings.base.bag_pose;
+  std::printf("  vehicle poses: %s; %s", r.meta.pose_source.c_str(),
               plural(r.stops, "stop").c_str());
+  if (pose.kind != io::BagPoseConfig::Kind::none)
+    std::printf(" (a new one at each recording and where the poses move beyond %.3g m or %.3g deg)",
+                pose.still_m, rad2deg(pose.still_rad));
+  std::printf("\n");
   for (const auto& note : r.notes) std::printf("  %s\n", note.c_str());
+  if (!r.short_stops.empty()) {
+    std::string where;
+    for (const std::string& s : r.short_stops) where += (where.empty() ? "" : ", ") + s;
+    std::fprintf(stderr,
+                 "lidarcal: warning: %s: most stops hold one or two scans, the poses held while "
+                 "they stay within %.3g m and %.3g deg: %s\n",
+                 where.c_str(), pose.still_m, rad2deg(pose.still_rad),
+                 io::shortStopsAdvice().c_str());
+  }
 }
 
 }  // namespace lidarcal::pipeline

@@ -29,9 +29,10 @@ namespace lidarcal::pipeline {
 namespace {
 
 struct RunCommand {
-  std::string seq, out = "lidarcal-out", truth, inversion = "ls";
+  std::string seq, out = "lidarcal-out", truth;
   bool overwrite = false, no_truth = false;
   std::shared_ptr<CalibrationOptions> options = std::make_shared<CalibrationOptions>();
+  std::shared_ptr<CorrectionOptions> correction = std::make_shared<CorrectionOptions>();
 };
 
 /// The run in a few lines on stdout.
@@ -57,6 +58,9 @@ void printRun(const RunCommand& c, const io::Sequence& seq, const SequenceCalibr
     std::printf("    %-62s %9.1f mm %9.1f mm\n",
                 "raw readings, RMS:", 1000.0 * std::sqrt(ours.landmarks.mse_raw_m2),
                 1000.0 * std::sqrt(ours.all.mse_raw_m2));
+    std::printf("    %-62s %9.1f mm %9.1f mm\n", "corrected readings (the written scans), RMS:",
+                1000.0 * std::sqrt(ours.landmarks.mse_corrected_m2),
+                1000.0 * std::sqrt(ours.all.mse_corrected_m2));
     for (const auto& m : in.compared)
       std::printf("    %-62s %12.2f %12.2f\n", (m.name + ", MSE ratio:").c_str(),
                   m.evaluation.landmarks.mse_ratio, m.evaluation.all.mse_ratio);
@@ -129,9 +133,8 @@ void runRun(const RunCommand& c) {
                     waysForward(seq, cal.model.status.code));
   io::writeModel(out.path() / "model.json", cal.model);
 
-  const auto method =
-      c.inversion == "ml" ? calibration::InversionMethod::ml : calibration::InversionMethod::ls;
-  const calibration::Outside outside = calibration::kDefaultOutside;
+  const calibration::InversionMethod method = c.correction->method();
+  const calibration::Outside outside = c.correction->outsidePolicy();
   fs::create_directory(out.path() / "corrected");
   Progress cprog("correct", seq.scans.size());
   const auto stats = correctSequence(
@@ -188,9 +191,7 @@ void addRunCommand(CLI::App& app) {
       "truth.json of a simulated sequence, to evaluate against (found automatically next "
       "to DIR/scans)");
   sub->add_flag("--no-truth", c->no_truth, "Do not look for a truth.json next to the sequence");
-  sub->add_option("--inversion", c->inversion, "ls or ml (see lidarcal correct --help)")
-      ->check(CLI::IsMember({"ls", "ml"}))
-      ->capture_default_str();
+  addCorrectionOptions(sub, c->correction);
   sub->add_flag("--overwrite", c->overwrite,
                 "Replace OUT if it exists (needed to run again into the same OUT)");
   addCalibrationOptions(sub, c->options);

@@ -2,19 +2,37 @@
 #include "pipeline/gnuplot.hpp"
 
 #include <cstdlib>
+#include <fstream>
 #include <string_view>
 
 namespace lidarcal::pipeline {
 
+bool gnuplotInstalled() { return std::system("command -v gnuplot >/dev/null 2>&1") == 0; }
+
+std::string gnuplotBroken(const std::filesystem::path& log) {
+  if (std::system("gnuplot -e 'set terminal pngcairo; set terminal svg' </dev/null >/dev/null "
+                  "2>&1") == 0)
+    return {};
+  std::string first;
+  std::ifstream in(log);
+  std::getline(in, first);
+  return "gnuplot does not start or lacks the pngcairo and svg terminals" +
+         (first.empty() ? std::string() : " (" + first + ")") + "; " + kGnuplotPackage;
+}
+
 bool runGnuplot(const std::filesystem::path& dir, const std::string& script, std::string* why) {
-  if (std::system("command -v gnuplot >/dev/null 2>&1") != 0) {
-    if (why) *why = "gnuplot is not installed (apt-get install gnuplot-nox); plots skipped";
+  if (!gnuplotInstalled()) {
+    if (why)
+      *why = std::string("gnuplot is not installed (") + kGnuplotPackage + "); plots skipped";
     return false;
   }
   const std::string cmd =
       "cd '" + dir.string() + "' && gnuplot '" + script + "' >/dev/null 2>gnuplot.log";
   if (std::system(cmd.c_str()) != 0) {
-    if (why) *why = "gnuplot failed, see " + (dir / "gnuplot.log").string();
+    const std::string broken = gnuplotBroken(dir / "gnuplot.log");
+    if (why)
+      *why = broken.empty() ? "gnuplot failed, see " + (dir / "gnuplot.log").string()
+                            : broken + "; plots skipped";
     return false;
   }
   std::error_code ec;

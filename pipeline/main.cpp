@@ -5,11 +5,13 @@
 #include <cstring>
 #include <exception>
 #include <string>
+#include <vector>
 
 #include <pcl/console/print.h>
 #include <CLI/CLI.hpp>
 
 #include "common/errors.hpp"
+#include "pipeline/cli_usage.hpp"
 #include "pipeline/commands.hpp"
 #include "pipeline/progress.hpp"
 #include "pipeline/words.hpp"
@@ -48,6 +50,21 @@ std::string userPaths(const std::string& message) {
   return out;
 }
 
+/// Prints `message` on stderr, every line with the `lidarcal: ` prefix, the first after `kind`.
+void printError(const std::string& kind, const std::string& message) {
+  std::size_t start = 0;
+  bool first = true;
+  while (start <= message.size()) {
+    std::size_t end = message.find('\n', start);
+    if (end == std::string::npos) end = message.size();
+    const std::string line = message.substr(start, end - start);
+    if (first || !line.empty())
+      std::fprintf(stderr, "lidarcal: %s%s\n", first ? kind.c_str() : "  ", line.c_str());
+    first = false;
+    start = end + 1;
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -59,6 +76,8 @@ int main(int argc, char** argv) {
       "ground truth.\n"
       "Formats: docs/FORMAT.md. Exit codes: 0 ok, 1 internal error, 2 bad input, 3 data cannot "
       "support the result."};
+  app.name("lidarcal");
+  lidarcal::pipeline::wrapHelp(app, lidarcal::pipeline::terminalWidth());
   app.set_version_flag("--version", LIDARCAL_VERSION);
   app.footer(
       "Method: Alhashimi et al. 2021, \"Calibrating Range Measurements of Lidars Using Fixed "
@@ -79,17 +98,20 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e) == 0 ? 0 : 2;
+    if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
+    const std::vector<std::string> args(argv + 1, argv + argc);
+    for (const std::string& line : lidarcal::pipeline::parseErrorLines(app, e, args))
+      std::fprintf(stderr, "lidarcal: %s\n", line.c_str());
+    return 2;
   } catch (const lidarcal::DataError& e) {
-    std::fprintf(stderr, "lidarcal: cannot proceed: %s\n", userPaths(e.what()).c_str());
+    printError("cannot proceed: ", userPaths(e.what()));
     return 3;
   } catch (const lidarcal::InputError& e) {
-    std::fprintf(stderr, "lidarcal: error: %s\n", userPaths(e.what()).c_str());
+    printError("error: ", userPaths(e.what()));
     return 2;
   } catch (const std::exception& e) {
-    std::fprintf(stderr,
-                 "lidarcal: internal error: %s\n(please report this with the command you ran)\n",
-                 e.what());
+    printError("internal error: ",
+               std::string(e.what()) + "\nplease report this with the command you ran");
     return 1;
   }
   return 0;

@@ -56,15 +56,18 @@ studies::TrialConfig trialConfig(const MonteCarloOptions& o) {
 }
 
 /// Runs every figure's gnuplot script in `dir`. A missing gnuplot is reported (the returned text,
-/// empty when every plot was drawn); a script that fails is an error: the command fails and writes
-/// nothing, rather than leave a partial picture behind (gnuplot stops at the first failing panel).
+/// empty when every plot was drawn); one that cannot draw here is bad input (InputError naming the
+/// package); a script that fails is an error: the command fails and writes nothing, rather than
+/// leave a partial picture behind (gnuplot stops at the first failing panel).
 std::string drawPlots(const std::filesystem::path& dir, const std::vector<std::string>& scripts) {
-  if (std::system("command -v gnuplot >/dev/null 2>&1") != 0)
-    return "skipped, gnuplot is not installed (apt-get install gnuplot-nox); run gnuplot on the "
-           ".gp files later";
+  if (!gnuplotInstalled())
+    return std::string("skipped, gnuplot is not installed (") + kGnuplotPackage +
+           "); run gnuplot on the .gp files later";
   for (const auto& script : scripts) {
     std::string why;
     if (!runGnuplot(dir, script, &why)) {
+      if (const std::string broken = gnuplotBroken(dir / "gnuplot.log"); !broken.empty())
+        throw InputError("", "", broken, "nothing was written");
       // gnuplot's own messages, kept by runGnuplot on failure
       std::ifstream in(dir / "gnuplot.log");
       std::string log((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());

@@ -123,6 +123,30 @@ io::ImportReport readTopic(const RigImportSettings& s, std::size_t input, std::s
                                                 : io::readRosbag2(bag, c, on_scan);
 }
 
+/// Each sensor's designed mounting: the first recording's from /tf_static, with a note where a
+/// later recording gives another or none is given.
+void noteMountings(const std::vector<std::string>& names, RigImportResult& result) {
+  for (std::size_t k = 0; k < names.size(); ++k) {
+    for (const io::RigInput& in : result.meta.inputs)
+      if (const auto it = in.mountings.find(names[k]); it != in.mountings.end()) {
+        if (!result.meta.sensors[k].mounting)
+          result.meta.sensors[k].mounting = it->second;
+        else if (std::abs(it->second.x_m - result.meta.sensors[k].mounting->x_m) > 1e-6 ||
+                 std::abs(it->second.y_m - result.meta.sensors[k].mounting->y_m) > 1e-6 ||
+                 std::abs(it->second.yaw_rad - result.meta.sensors[k].mounting->yaw_rad) > 1e-9)
+          result.notes.push_back(names[k] + ": tf_static gives another mounting in " + in.name +
+                                 " (" + describe(it->second) + ") than in the first recording (" +
+                                 describe(*result.meta.sensors[k].mounting) +
+                                 "): rig.json keeps each");
+      }
+    if (!result.meta.sensors[k].mounting)
+      result.notes.push_back(
+          names[k] +
+          ": no mounting in /tf_static (the calibration starts from the identity; "
+          "give the mountings' designs with --mount at calibrate)");
+  }
+}
+
 }  // namespace
 
 std::vector<std::string> sensorNamesFromTopics(const std::vector<std::string>& topics) {
@@ -170,6 +194,7 @@ RigImportResult importRig(const RigImportSettings& s,
       const io::ImportReport r = readTopic(s, in, k, names[k], *writers[k], rows, record,
                                            result.meta, missing_pose, progress);
       result.read[k].scans += r.scans;
+      if (r.short_stops) result.short_stops.push_back(names[k] + " in " + record.name);
       if (result.read[k].sensor_name.empty()) result.read[k].sensor_name = r.sensor_name;
       for (const auto& note : r.notes)
         if (std::find(result.notes.begin(), result.notes.end(), note) == result.notes.end())
@@ -185,25 +210,7 @@ RigImportResult importRig(const RigImportSettings& s,
       !known ? "none"
              : (s.base.bag_pose.kind == io::BagPoseConfig::Kind::tf ? "tf:" : "odom:") +
                    s.base.bag_pose.name;
-  for (std::size_t k = 0; k < names.size(); ++k) {
-    for (const io::RigInput& in : result.meta.inputs)
-      if (const auto it = in.mountings.find(names[k]); it != in.mountings.end()) {
-        if (!result.meta.sensors[k].mounting)
-          result.meta.sensors[k].mounting = it->second;
-        else if (std::abs(it->second.x_m - result.meta.sensors[k].mounting->x_m) > 1e-6 ||
-                 std::abs(it->second.y_m - result.meta.sensors[k].mounting->y_m) > 1e-6 ||
-                 std::abs(it->second.yaw_rad - result.meta.sensors[k].mounting->yaw_rad) > 1e-9)
-          result.notes.push_back(names[k] + ": tf_static gives another mounting in " + in.name +
-                                 " (" + describe(it->second) + ") than in the first recording (" +
-                                 describe(*result.meta.sensors[k].mounting) +
-                                 "): rig.json keeps each");
-      }
-    if (!result.meta.sensors[k].mounting)
-      result.notes.push_back(
-          names[k] +
-          ": no mounting in /tf_static (the calibration starts from the identity; "
-          "give the mountings' designs with --mount at calibrate)");
-  }
+  noteMountings(names, result);
   result.stops = assignStops(rows, s.base.bag_pose, known);
   // scans.csv: by sensor, then in the order written.
   std::stable_sort(rows.begin(), rows.end(), [&](const io::RigScan& a, const io::RigScan& b) {

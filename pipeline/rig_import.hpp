@@ -29,6 +29,9 @@ struct RigImportResult {
   std::vector<io::ImportReport> read;             ///< per sensor, summed over the recordings
   std::size_t stops = 0;                          ///< the vehicle's stops
   std::vector<std::string> notes;                 ///< facts the user should know
+  /// "SENSOR in RECORDING" for each topic of a recording whose stops mostly hold one or two scans
+  /// (io::ImportReport::short_stops)
+  std::vector<std::string> short_stops;
 };
 
 /// Sensor names from topics: the topic without its leading slash, other slashes as '_'.

@@ -70,6 +70,38 @@ std::string designCells(const Pose2& estimate, const std::optional<Pose2>& desig
              rad2deg(wrapAngle(estimate.yaw_rad - design->yaw_rad)), rad2deg(se(c, 2)));
 }
 
+/// "front and back", "a, b and c".
+std::string listed(const std::vector<std::string>& names) {
+  std::string out;
+  for (std::size_t i = 0; i < names.size(); ++i)
+    out += (i == 0 ? "" : i + 1 == names.size() ? " and " : ", ") + names[i];
+  return out;
+}
+
+/// The caution printed right above the lines to paste when a range model was refused: the
+/// mountings were fitted together with those models, and how far each lies from its design.
+std::string refusedModelsCaution(const io::RigModel& m) {
+  std::vector<std::string> refused, offsets;
+  for (const io::RigModelSensor& s : m.sensors) {
+    if (!s.model.status.ok()) refused.push_back(s.name);
+    if (s.mounting_held) {
+      offsets.push_back(s.name + " is held at its design");
+    } else if (s.design) {
+      const double dx = s.mounting.x_m - s.design->x_m, dy = s.mounting.y_m - s.design->y_m;
+      offsets.push_back(
+          row("%s lies %.0f mm from its design (x %+.0f mm, y %+.0f mm, yaw %+.2f deg)",
+              s.name.c_str(), 1000.0 * std::hypot(dx, dy), 1000.0 * dx, 1000.0 * dy,
+              rad2deg(wrapAngle(s.mounting.yaw_rad - s.design->yaw_rad))));
+    }
+  }
+  if (refused.empty()) return {};
+  return "caution: these mountings rest on range models that were refused (" + listed(refused) +
+         ": see the status above), fitted together with them; " +
+         (offsets.empty() ? std::string("no design to compare them with") : listed(offsets)) +
+         ". Check them against a tape before pasting, or calibrate again with data that "
+         "determine the range models.\n";
+}
+
 }  // namespace
 
 io::RigModel rigModel(const io::Rig& rig, const calibration::RigResult& r) {
@@ -181,7 +213,8 @@ std::string rigSnippets(const io::RigModel& m) {
             child.c_str(), parent.c_str(), child.c_str(), s.mounting.x_m, s.mounting.y_m, z, roll,
             s.mounting.yaw_rad);
   }
-  return "tf_static with the estimated mountings (z from the design):\n" + launch + urdf;
+  return "tf_static with the estimated mountings (z from the design):\n" + refusedModelsCaution(m) +
+         launch + urdf;
 }
 
 }  // namespace lidarcal::pipeline

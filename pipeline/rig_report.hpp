@@ -21,7 +21,9 @@ io::RigModel rigModel(const io::Rig& rig, const calibration::RigResult& result);
 std::string rigMountingTable(const io::RigModel& model);
 
 /// `static_transform_publisher` arguments and URDF joints for the estimated mountings (the
-/// vehicle frame as parent; in the relative frame, the reference held at its design).
+/// vehicle frame as parent; in the relative frame, the reference held at its design). When a
+/// sensor's range model was refused, a caution right above them says that the mountings rest on
+/// it and how far each lies from its design.
 std::string rigSnippets(const io::RigModel& model);
 
 }  // namespace lidarcal::pipeline

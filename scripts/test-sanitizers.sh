@@ -17,7 +17,7 @@ cmake --build build-asan -j"$JOBS"
 
 supp="$PWD/tests/sanitizers"
 # detect_odr_violation=0: Debian's PCL and VTK libraries define some globals in more than one
-# shared object (not our code; see tests/sanitizers/README.md).
+# shared object (not our code; docs/BUILDING.md, "Sanitizers").
 export ASAN_OPTIONS="detect_leaks=1:detect_odr_violation=0:abort_on_error=0:exitcode=99:strict_string_checks=1:check_initialization_order=1:detect_stack_use_after_return=1"
 export LSAN_OPTIONS="suppressions=$supp/lsan.supp:print_suppressions=0:exitcode=98"
 export UBSAN_OPTIONS="suppressions=$supp/ubsan.supp:print_stacktrace=1:halt_on_error=1"

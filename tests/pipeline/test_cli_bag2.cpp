@@ -212,6 +212,17 @@ TEST_F(CorrectRosbag2, RefusesToTurnOneKindOfBagIntoAnotherNamingTheRemedy) {
   EXPECT_FALSE(fs::exists(dir / "out.db3"));
 }
 
+TEST_F(CorrectRosbag2, AMissingBagFileIsNamedAsAFileNotASequence) {
+  for (const char* name : {"missing.mcap", "missing.db3", "missing.bag"}) {
+    const CliResult r = correct(name, "out.mcap");
+    EXPECT_EQ(r.exit_code, 2);
+    EXPECT_NE(r.err.find(std::string(name) + ": file does not exist (check the path)"),
+              std::string::npos)
+        << r.err;
+    EXPECT_EQ(r.err.find("sequence"), std::string::npos) << r.err;
+  }
+}
+
 /// Scans on /scan and /scan_b (the back lidar's readings 0.3 m longer) and /chatter after each, at
 /// time k; the rows of the same bag as .db3 into `rows`.
 void writeTwoLidarMcap(const fs::path& file, std::vector<Db3Message>& rows) {

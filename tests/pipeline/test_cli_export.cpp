@@ -233,5 +233,38 @@ TEST(Export, RefusesBadInputWithExitCodes) {
   EXPECT_NE(turning.err.find("bias.alpha"), std::string::npos) << turning.err;
 }
 
+// A rig model holds one model per sensor: `--sensor` picks a block by name, topic or frame, and the
+// table is the one that block's model gives exported alone (the oracle: a single-sensor file).
+TEST(Export, SensorPicksOneBlockOfARigModel) {
+  TempDir dir;
+  const io::RigModel rig = twoLidarModel("/scan_front", "/scan_back");
+  io::writeRigModel(dir / "rig.json", rig);
+  const std::string model = (dir / "rig.json").string();
+  for (std::size_t k = 0; k < rig.sensors.size(); ++k) {
+    const io::RigModelSensor& s = rig.sensors[k];
+    SCOPED_TRACE(s.name);
+    io::writeModel(dir / (s.name + ".json"), s.model);
+    const CliResult alone =
+        runCli("export " + (dir / (s.name + ".json")).string() + " --format lut --step 0.1");
+    ASSERT_EQ(alone.exit_code, 0) << alone.err;
+    for (const std::string& key : {s.name, s.topic, s.frame_id}) {
+      const CliResult r = runCli("export " + model + " --format lut --step 0.1 --sensor " + key);
+      ASSERT_EQ(r.exit_code, 0) << key << ": " << r.err;
+      EXPECT_EQ(r.out, alone.out) << key;
+    }
+    const CliResult yaml = runCli("export " + model + " --format yaml --sensor " + s.name);
+    ASSERT_EQ(yaml.exit_code, 0) << yaml.err;
+    EXPECT_EQ(yamlList(yaml.out, "bias_alpha"), s.model.model.bias.alpha);
+    EXPECT_NE(yaml.out.find("(sensor " + s.name + ")"), std::string::npos) << yaml.out;
+  }
+  // Without --sensor, or naming no block: exit 2, naming the blocks it holds.
+  const CliResult none = runCli("export " + model + " --format lut");
+  EXPECT_EQ(none.exit_code, 2);
+  EXPECT_NE(none.err.find("--sensor"), std::string::npos) << none.err;
+  const CliResult other = runCli("export " + model + " --format lut --sensor side");
+  EXPECT_EQ(other.exit_code, 2);
+  EXPECT_NE(other.err.find("front"), std::string::npos) << other.err;
+}
+
 }  // namespace
 }  // namespace lidarcal::test

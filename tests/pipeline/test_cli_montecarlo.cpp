@@ -77,17 +77,27 @@ TEST(CliMonteCarlo, WithoutTheJointRefinementEveryPlotIsDrawnFromWhatRan) {
   EXPECT_NE(test::readFile(out / "fig9.gp").find("set multiplot layout 2,2"), std::string::npos);
 }
 
-TEST(CliMonteCarlo, APlotThatFailsFailsTheCommandAndWritesNothing) {
-  // A gnuplot that fails (here a stand-in on the PATH that reports an error) must not leave a
-  // successful run with a broken figure behind.
-  TempDir dir;
+/// The small study of fig10 into `out` with a stand-in `gnuplot` (a shell script of `body`, in
+/// DIR/bin) first on the PATH.
+test::CliResult withGnuplot(const TempDir& dir, const std::string& body, const fs::path& out) {
   const fs::path bin = dir / "bin";
   fs::create_directories(bin);
-  test::writeFile(bin / "gnuplot", "#!/bin/sh\necho 'line 12: x range is invalid' >&2\nexit 1\n");
+  test::writeFile(bin / "gnuplot", "#!/bin/sh\n" + body);
   fs::permissions(bin / "gnuplot", fs::perms::owner_all);
+  return test::runCliPrefixed("export PATH='" + bin.string() + "':\"$PATH\"",
+                              kSmall + " --study fig10 --out " + out.string());
+}
+
+TEST(CliMonteCarlo, APlotThatFailsFailsTheCommandAndWritesNothing) {
+  // A gnuplot that fails on the script (here a stand-in on the PATH that starts, knows its
+  // terminals and reports an error in the script) must not leave a successful run with a broken
+  // figure behind: a bug of ours, exit 1.
+  TempDir dir;
   const fs::path out = dir / "o";
-  const auto r = test::runCliPrefixed("export PATH='" + bin.string() + "':\"$PATH\"",
-                                      kSmall + " --study fig10 --out " + out.string());
+  const auto r = withGnuplot(dir,
+                             "[ \"$1\" = -e ] && exit 0\necho 'line 12: x range is invalid' >&2\n"
+                             "exit 1\n",
+                             out);
   EXPECT_EQ(r.exit_code, 1) << r.err;
   EXPECT_NE(r.err.find("gnuplot failed on fig10.gp"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("x range is invalid"), std::string::npos) << r.err;
@@ -102,6 +112,21 @@ TEST(CliMonteCarlo, APlotThatFailsFailsTheCommandAndWritesNothing) {
   EXPECT_NE(r2.out.find("Plots: skipped, gnuplot is not installed"), std::string::npos) << r2.out;
   EXPECT_TRUE(fs::exists(out2 / "fig10.csv"));
   EXPECT_FALSE(fs::exists(out2 / "fig10.png"));
+}
+
+TEST(CliMonteCarlo, AGnuplotThatCannotDrawIsRefusedNamingItsPackage) {
+  // Installed but broken (a library missing, or built without the cairo terminals): the machine
+  // lacks something, not a bug of ours. Exit 2, the package named, nothing written.
+  TempDir dir;
+  const fs::path out = dir / "o";
+  const auto r = withGnuplot(
+      dir, "echo 'gnuplot: error while loading shared libraries: libcairo.so.2' >&2\nexit 127\n",
+      out);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("apt-get install gnuplot-nox"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("libcairo.so.2"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("internal error"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out));
 }
 
 TEST(CliMonteCarlo, RefusesBadOptions) {

@@ -4,9 +4,11 @@
 // rig model read back against the simulated truth (the same vehicle as the coverage bench's
 // static scenario, tests/calibration/rig_scenes.hpp).
 
+#include <cctype>
 #include <cmath>
 #include <limits>
 #include <map>
+#include <sstream>
 
 #include <gtest/gtest.h>
 
@@ -46,9 +48,27 @@ geometry_msgs::TransformStamped mountingTransform(const simulation::RigSimSensor
   return t;
 }
 
+/// /tf for a vehicle that stands still at the origin of `map` while its localisation jitters by
+/// 2 cm from one pose to the next, every 0.1 s (the scans' period) from just before `from_s` to
+/// just after `to_s`.
+void writeJitteringPoses(rosbag::Bag& bag, double from_s, double to_s) {
+  for (int k = 0; from_s - 0.1 + 0.1 * k <= to_s + 0.1; ++k) {
+    geometry_msgs::TransformStamped t;
+    t.header.frame_id = "map";
+    t.header.stamp = ros::Time(from_s - 0.1 + 0.1 * k);
+    t.child_frame_id = "base_link";
+    t.transform.translation.x = k % 2 == 0 ? 0.0 : 0.02;
+    t.transform.rotation.w = 1.0;
+    tf2_msgs::TFMessage m;
+    m.transforms.push_back(t);
+    bag.write("/tf", t.header.stamp, m);
+  }
+}
+
 /// The simulated sightings as LaserScans: one per sensor and scan, no return (inf) off the poles.
+/// With `jittering_poses`, /tf holds a still vehicle's jittering poses in `map`.
 void writeRigBag(const std::filesystem::path& file, const simulation::RigSimConfig& sim,
-                 const RigObservations& obs) {
+                 const RigObservations& obs, bool jittering_poses = false) {
   // by the simulator's scan index (unique over sensors)
   std::map<std::size_t, sensor_msgs::LaserScan> scans;
   const std::size_t S = sim.sensors.size();
@@ -73,6 +93,8 @@ void writeRigBag(const std::filesystem::path& file, const simulation::RigSimConf
   tf2_msgs::TFMessage mounts;
   for (const auto& s : sim.sensors) mounts.transforms.push_back(mountingTransform(s));
   bag.write("/tf_static", ros::Time(kT0), mounts);
+  if (jittering_poses && !scans.empty())
+    writeJitteringPoses(bag, kT0, scans.rbegin()->second.header.stamp.toSec());
   for (const auto& [index, m] : scans)
     bag.write(topicOf(sim.sensors[index % S]), m.header.stamp, m);
 }
@@ -136,6 +158,37 @@ TEST(CalibrateRig, TwoLidarBagGivesTheTrueRelativeMountingAndBiases) {
       EXPECT_NEAR(fitted, true_reading, 3.0 * se) << "d " << d << " m";
     }
   }
+}
+
+// A vehicle that stood still while its poses jittered: every scan makes a stop of its own. Import
+// says so once, on stderr, naming each sensor and recording, instead of a line of stops per topic
+// and recording among the notes.
+TEST(ImportRig, StopsSplitByJitterGiveOneLabelledWarning) {
+  TempDir dir;
+  const simulation::RigSimConfig sim = staticVehicle(false);
+  const simulation::RigSimSample sample = simulation::simulateRig(sim, 7);
+  writeRigBag(dir / "rig.bag", sim, sample.obs, true);
+  const CliResult r =
+      runCli("import " + (dir / "rig.bag").string() +
+             " --topic /scan_front,/scan_back --sensor-names front,back --pose tf:map -o " +
+             (dir / "rig").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("lidarcal: warning: front in rig.bag, back in rig.bag: most stops hold one "
+                       "or two scans"),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("try --still-m 0.05 --still-deg 1"), std::string::npos) << r.err;
+  EXPECT_EQ(r.out.find("most stops hold"), std::string::npos) << r.out;
+  std::istringstream lines(r.out);
+  std::string line;
+  while (std::getline(lines, line)) {
+    // No unlabelled "N stops (...)" line: the vehicle's stops are on the labelled line alone.
+    const auto words = line.find_first_not_of(' ');
+    if (words != std::string::npos && std::isdigit(static_cast<unsigned char>(line[words]))) {
+      EXPECT_EQ(line.find(" stops ("), std::string::npos) << line;
+    }
+  }
+  EXPECT_NE(r.out.find("vehicle poses: tf:map; "), std::string::npos) << r.out;
 }
 
 }  // namespace

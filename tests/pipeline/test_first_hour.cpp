@@ -289,6 +289,28 @@ TEST_F(FirstHour, RunDrawsTheTrueLandmarksAndExplainsTheMseRatio) {
   EXPECT_TRUE(contains(again.err, "--overwrite")) << again.err;
 }
 
+TEST_F(FirstHour, RunPrintsTheCorrectedRmsAndTakesTheOutsideRule) {
+  TempDir out;
+  for (const char* outside : {"linear", "drop"}) {
+    SCOPED_TRACE(outside);
+    const fs::path o = out / outside;
+    const auto r = runCli("run -q " + (a() / "scans").string() + " --outside " + outside + " -o " +
+                          o.string());
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const nlohmann::json summary = json(o / "summary.json");
+    EXPECT_EQ(summary.at("outside"), outside);
+    // The corrected RMS on the poles, as evaluate's MSE gives it, next to the raw one.
+    const std::string row = "corrected readings (the written scans), RMS:";
+    const auto at = r.out.find(row);
+    ASSERT_NE(at, std::string::npos) << r.out;
+    const double printed_mm = std::strtod(r.out.c_str() + at + row.size(), nullptr);
+    const auto& landmarks = summary.at("evaluation").at("landmarks");
+    EXPECT_NEAR(printed_mm, 1000.0 * std::sqrt(landmarks.at("mse_corrected_m2").get<double>()),
+                0.05);
+    EXPECT_LT(printed_mm, 1000.0 * std::sqrt(landmarks.at("mse_raw_m2").get<double>()) / 5.0);
+  }
+}
+
 // ---- plot
 
 /// A fake gnuplot first on PATH (in `dir`, which must outlive it): keeps the script it was given
