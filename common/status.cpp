@@ -7,7 +7,7 @@
 namespace lidarcal {
 namespace {
 
-constexpr std::array<std::pair<StatusCode, const char*>, 23> kNames = {{
+constexpr std::array<std::pair<StatusCode, const char*>, 26> kNames = {{
     {StatusCode::ok, "ok"},
     {StatusCode::too_few_stops, "too_few_stops"},
     {StatusCode::no_baseline, "no_baseline"},
@@ -31,6 +31,9 @@ constexpr std::array<std::pair<StatusCode, const char*>, 23> kNames = {{
     {StatusCode::too_few_walls, "too_few_walls"},
     {StatusCode::not_identifiable, "not_identifiable"},
     {StatusCode::no_shared_landmark, "no_shared_landmark"},
+    {StatusCode::too_few_samples, "too_few_samples"},
+    {StatusCode::degenerate_motion, "degenerate_motion"},
+    {StatusCode::negative_axle, "negative_axle"},
 }};
 
 }  // namespace

@@ -41,6 +41,11 @@ enum class StatusCode {
   not_identifiable,  ///< the data leave a mounting (or another parameter) undetermined
   /// a sensor sees no pole another sensor sees, and nothing else ties their frames
   no_shared_landmark,
+  // odometry and laser mounting (odometry/)
+  too_few_samples,    ///< fewer intervals (samples) than the calibration needs
+  degenerate_motion,  ///< the motion leaves a parameter undetermined (no turns, only straight
+                      ///< lines)
+  negative_axle,      ///< positive wheel radii would need a negative axle (a wheel's sign swapped)
 };
 
 /// The code's name as written in model.json and diagnosis.json ("ok", "joint_failed", ...).

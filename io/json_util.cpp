@@ -13,7 +13,7 @@ namespace {
 constexpr const char* kRemedy = "see docs/FORMAT.md";
 }
 
-nlohmann::json readJsonFile(const std::filesystem::path& file) {
+std::string readWholeFile(const std::filesystem::path& file) {
   std::ifstream in(file, std::ios::binary);
   if (!in) {
     std::error_code ec;
@@ -23,7 +23,11 @@ nlohmann::json readJsonFile(const std::filesystem::path& file) {
   }
   std::stringstream buffer;
   buffer << in.rdbuf();
-  const std::string text = buffer.str();
+  return buffer.str();
+}
+
+nlohmann::json readJsonFile(const std::filesystem::path& file) {
+  const std::string text = readWholeFile(file);
   try {
     return nlohmann::json::parse(text);
   } catch (const nlohmann::json::parse_error& e) {

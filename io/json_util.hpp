@@ -11,6 +11,10 @@
 
 namespace lidarcal::io {
 
+/// The whole content of an input file; throws InputError when it does not exist or cannot be
+/// opened.
+std::string readWholeFile(const std::filesystem::path& file);
+
 /// Parses a JSON file; throws InputError with the line and column of a syntax error.
 nlohmann::json readJsonFile(const std::filesystem::path& file);
 

@@ -40,6 +40,9 @@ void addDiagnoseCommand(CLI::App& app);
 /// `lidarcal fleet` (pipeline/cmd_fleet.cpp): many calibrations in one report, moved and outlying
 /// sensors flagged.
 void addFleetCommand(CLI::App& app);
+/// `lidarcal odometry` (pipeline/cmd_odometry.cpp): wheel radii, axle and the laser's mounting
+/// from odometry tuples (Censi et al. 2013).
+void addOdometryCommand(CLI::App& app);
 
 /// Directory of the bundled data (scenes, example): $LIDARCAL_DATA_DIR, the source tree's
 /// data/ for a build tree, or the installed share/lidarcal.

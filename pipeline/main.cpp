@@ -85,7 +85,9 @@ int main(int argc, char** argv) {
       "Positions\" (Sensors); Alhashimi et al. 2016, \"Statistical Modeling and Calibration of "
       "Triangulation "
       "Lidars\" (ICINCO); Sharma 2020, \"In-situ Sensor Calibration Using Noise Consistency\" (MSc "
-      "thesis). "
+      "thesis); "
+      "`odometry`: Censi et al. 2013, \"Simultaneous calibration of odometry and sensor "
+      "parameters for mobile robots\" (IEEE Transactions on Robotics). "
       "Equation numbers in "
       "the help and the reports are those of these papers.");
   bool quiet = false;

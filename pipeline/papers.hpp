@@ -12,6 +12,9 @@ inline constexpr const char* kTriangulation = "Alhashimi et al. 2016";
 /// Noise estimation by noise consistency.
 inline constexpr const char* kNoiseConsistency = "Sharma 2020";
 
+/// The simultaneous calibration of odometry and the laser's mounting (`lidarcal odometry`).
+inline constexpr const char* kOdometry = "Censi et al. 2013";
+
 /// The model discrepancy beside a fitted model (calibration/discrepancy.hpp).
 inline constexpr const char* kDiscrepancy = "Kennedy & O'Hagan 2001";
 /// Its variance by restricted maximum likelihood over the measured entries.

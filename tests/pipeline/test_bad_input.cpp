@@ -367,6 +367,53 @@ std::vector<BadInputCase> cases() {
   forEach(estimating, "odometry_no_stop", noiseFiles(good_obs, "stop,dx_m,dy_m,dtheta_rad\n"), 2,
           {"odometry.csv", "holds no stop"});
 
+  // ---- odometry tuples (lidarcal odometry, docs/FORMAT.md "Odometry tuples")
+  const std::vector<std::pair<const char*, std::string>> odometry = {
+      {"odometry", "odometry {IN}/drive.tuple --out {OUT}"}};
+  const auto tuples = [](std::string text) {
+    return [text](const Ws& w) {
+      fs::create_directories(w.in);
+      writeFile(w.in / "drive.tuple", text);
+    };
+  };
+  const std::string tuple = R"({"T": 0.8, "phi_l": 0.5, "phi_r": -0.5, "sm": [0.001, 0, -0.18]})";
+  /// `n` tuples of driving straight at one speed: the wheel radii cannot be told apart.
+  const auto straight = [](int n) {
+    std::string text;
+    for (int k = 0; k < n; ++k)
+      text += R"({"T": 0.8, "phi_l": 0.5, "phi_r": 0.5, "sm": [0.0082, )" +
+              std::to_string(1e-4 * (k % 3)) + ", 0]}\n";
+    return text;
+  };
+  /// Straight driving and turns in place, the turns' sign that of swapped wheels.
+  const auto swapped = [] {
+    std::string text;
+    for (int k = 0; k < 200; ++k)
+      text += k % 2 ? R"({"T": 0.8, "phi_l": 0.5, "phi_r": 0.5, "sm": [0.0082, 0, 0]})"
+                      "\n"
+                    : R"({"T": 0.8, "phi_l": -0.5, "phi_r": 0.5, "sm": [0.0005, )" +
+                          std::to_string(1e-4 * (k % 3)) + ", -0.18]}\n";
+    return text;
+  };
+  forEach(odometry, "tuples_cut_short", tuples(tuple + "\n" + tuple.substr(0, 25)), 2,
+          {"drive.tuple", "object 2 (line 2)", "cut short"});
+  forEach(odometry, "tuples_missing_field",
+          tuples(tuple + R"({"T": 0.8, "phi_l": 0.5, "sm": [0, 0, 0]})"), 2,
+          {"drive.tuple", "object 2 (line 1), field phi_r", "is missing", "FORMAT.md"});
+  forEach(odometry, "tuples_not_a_number",
+          tuples(R"({"T": 0.8, "phi_l": "fast", "phi_r": 0, "sm": [0, 0, 0]})"), 2,
+          {"drive.tuple", "object 1 (line 1), field phi_l", "must be a number"});
+  forEach(odometry, "tuples_interval_not_positive",
+          tuples(R"({"T": 0, "phi_l": 0.5, "phi_r": 0, "sm": [0, 0, 0]})"), 2,
+          {"drive.tuple", "field T", "must be positive"});
+  forEach(odometry, "tuples_empty", tuples("\n"), 2, {"drive.tuple", "holds no tuple"});
+  forEach(odometry, "tuples_only_straight", tuples(straight(200)), 3,
+          {"drive.tuple", "calibration", "degenerate_motion", "turns in both directions"});
+  forEach(odometry, "tuples_too_few", tuples(straight(5)), 3,
+          {"drive.tuple", "too_few_samples", "record longer"});
+  forEach(odometry, "tuples_wheels_swapped", tuples(swapped()), 3,
+          {"drive.tuple", "negative_axle", "phi_l must be the left wheel"});
+
   // ---- importers
   const auto importing = [](const char* from, const char* file) {
     return std::vector<std::pair<const char*, std::string>>{
