@@ -29,6 +29,7 @@ void addUnsupportedCorrectionWarning(CalibrationModel& m) {
     if (c > 2.0 * se) return;  // a correction the data support somewhere
     if (c > largest) largest = c, largest_se = se;
   }
+  m.plausibility.correction_supported = false;
   char text[400];
   std::snprintf(text, sizeof text,
                 "the correction is within two standard errors of none over the whole fitted range "
@@ -63,6 +64,7 @@ void addPlausibilityWarnings(CalibrationModel& m, const JointResult* j) {
         j->alpha_radius_covariance(0) / std::sqrt(m.alpha_covariance[0] * j->radius_variance);
     m.offset_radius_correlation = corr;
     if (std::abs(corr) > 0.9) {
+      m.plausibility.offset_determined = false;
       std::snprintf(text, sizeof text,
                     "the offset alpha_0 = %.1f mm (+-%.1f) trades off against the estimated pole "
                     "radius %.1f mm "
@@ -87,6 +89,7 @@ void addPlausibilityWarnings(CalibrationModel& m, const JointResult* j) {
           std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(c).eigenvalues()(1))));
     const double typical = median(se);
     if (typical > kUnlocatedLandmarkM) {
+      m.plausibility.landmarks_located = false;
       std::snprintf(
           text, sizeof text,
           "the landmarks' positions are not pinned down by the data (median standard error of a "
@@ -108,6 +111,7 @@ void addPlausibilityWarnings(CalibrationModel& m, const JointResult* j) {
     const auto [lo, hi] = *m.fitted_range_m;
     const RelativeCorrection worst = largestRelativeCorrection(m.model.bias, lo, hi);
     if (worst.fraction > kImplausibleCorrection) {
+      m.plausibility.correction_plausible = false;
       std::snprintf(text, sizeof text,
                     "the model changes readings by up to %.0f %% (%.0f mm at %.2f m): more than "
                     "the range error of "

@@ -91,6 +91,21 @@ struct Discrepancy {
   bool estimated() const { return method != "none" && sigma_m >= 0.0; }
 };
 
+/// What the plausibility checks found (calibration/plausibility.hpp): each flag false where a
+/// warning was added. Kept in memory for code that must decide on a model (the field watcher's
+/// switch); model.json carries the warnings' text instead.
+struct Plausibility {
+  bool correction_supported = true;  ///< the correction exceeds two standard errors somewhere
+  bool offset_determined = true;     ///< the offset does not trade off against the pole radius
+  bool landmarks_located = true;     ///< the landmark centres are pinned down by the data
+  bool correction_plausible = true;  ///< no correction beyond what lidars are built to
+  /// None of the checks that say the model may be wrong failed (an unsupported correction is
+  /// not wrong, only not shown to help).
+  bool trustworthy() const {
+    return offset_determined && landmarks_located && correction_plausible;
+  }
+};
+
 struct CalibrationModel {
   std::string format = "lidarcal-model/1";
   std::string method;            ///< closed-form, joint, oracle or oracle-commanded
@@ -113,6 +128,8 @@ struct CalibrationModel {
   Discrepancy discrepancy;
   /// What a user should read before trusting the model (plausibility checks); empty when none.
   std::vector<std::string> warnings;
+  /// The plausibility checks' findings behind those warnings (not written to model.json).
+  Plausibility plausibility;
   /// Effect terms the joint refinement estimated with them (`calibrate --effects`, name with
   /// unit -> value, e.g. "range_drift_m_per_scan"); empty without effects. They describe the
   /// calibration data; `correct` applies the bias only.

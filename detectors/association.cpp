@@ -429,11 +429,18 @@ void StopLinker::forgetStale(std::size_t stop) {
   std::size_t w = 0;
   for (std::size_t t = 0; t < tracks_.size(); ++t) {
     Track& tr = tracks_[t];
-    if (tr.strong_stops < min_stops_ && stop - tr.last_stop > config_.forget_after_stops) {
+    const std::size_t unseen = stop - tr.last_stop;
+    const bool landmark = tr.strong_stops >= min_stops_;
+    const bool stale = landmark ? config_.forget_landmarks_after_stops > 0 &&
+                                      unseen > config_.forget_landmarks_after_stops
+                                : unseen > config_.forget_after_stops;
+    if (stale) {
       forgotten_.push_back(tr.serial);
       forgotten_.insert(forgotten_.end(), tr.aliases.begin(), tr.aliases.end());
-      totals_.discarded_few_stops += tr.detections;
-      ++totals_.discarded_components;
+      if (!landmark) {
+        totals_.discarded_few_stops += tr.detections;
+        ++totals_.discarded_components;
+      }
       continue;
     }
     if (w != t) tracks_[w] = std::move(tr);

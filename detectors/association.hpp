@@ -65,6 +65,10 @@ struct AssociationConfig {
   /// object is left behind on the path. Bounds memory on long sequences; an object revisited
   /// later than this before it reached min_stops starts a new track. Default 500.
   std::size_t forget_after_stops = 500;
+  /// Landmarks too are dropped once unseen for this many stops (StopLinker::forgotten lists
+  /// them; finish() no longer knows them). 0 (default): kept to the end, as a whole sequence's
+  /// association needs. A watcher that runs for hours bounds its memory with it.
+  std::size_t forget_landmarks_after_stops = 0;
   /// Continuous motion: growth of a track's reach per metre travelled since its last strong
   /// sighting (travel: path length plus 1 m per radian turned, StopLinker::moveTo), metres per
   /// metre. 0 (default): the reach stays link_distance_m (stop and go).
@@ -195,7 +199,8 @@ class StopLinker {
   /// (AssociationConfig::drift_per_m). Without calls the travel stays 0.
   void moveTo(const Pose2& pose);
 
-  /// Tracks dropped by the last add() (forget_after_stops): they will not become landmarks.
+  /// Tracks dropped by the last add() (forget_after_stops; landmarks with
+  /// forget_landmarks_after_stops): they will not become landmarks, or are no longer.
   const std::vector<TrackSerial>& forgotten() const { return forgotten_; }
   /// Tracks merged by the last add(): (merged track, the track it joined), in order.
   const std::vector<std::pair<TrackSerial, TrackSerial>>& merged() const { return merged_; }

@@ -102,6 +102,24 @@ struct LaserScanView {
   std::size_t intensity_count = 0;
 };
 
+/// A ROS1 sensor_msgs/LaserScan's fields as a LaserScanView (the bag reader's and lidarcal_node's;
+/// a template so that this header needs no ROS types).
+template <class Ros1LaserScan>
+LaserScanView ros1ScanView(const Ros1LaserScan& msg) {
+  LaserScanView v;
+  v.stamp_sec = msg.header.stamp.sec;
+  v.stamp_nanosec = msg.header.stamp.nsec;
+  v.angle_min = msg.angle_min;
+  v.angle_increment = msg.angle_increment;
+  v.range_min = msg.range_min;
+  v.range_max = msg.range_max;
+  v.ranges = msg.ranges.data();
+  v.count = msg.ranges.size();
+  v.intensities = msg.intensities.data();
+  v.intensity_count = msg.intensities.size();
+  return v;
+}
+
 /// The importer's view of a LaserScan (pose left as it is): beam i at angle_min + i *
 /// angle_increment, intensities kept when there is one per range, range limits from the
 /// message (as the decimal they were written as) unless `config` overrides them.

@@ -57,22 +57,6 @@ std::vector<BagTopic> topicsOf(const rosbag::Bag& bag) {
   return out;
 }
 
-/// The importer's view of a ROS1 LaserScan (views into the message).
-LaserScanView viewOf(const sensor_msgs::LaserScan& msg) {
-  LaserScanView v;
-  v.stamp_sec = msg.header.stamp.sec;
-  v.stamp_nanosec = msg.header.stamp.nsec;
-  v.angle_min = msg.angle_min;
-  v.angle_increment = msg.angle_increment;
-  v.range_min = msg.range_min;
-  v.range_max = msg.range_max;
-  v.ranges = msg.ranges.data();
-  v.count = msg.ranges.size();
-  v.intensities = msg.intensities.data();
-  v.intensity_count = msg.intensities.size();
-  return v;
-}
-
 Transform3 toTransform(const geometry_msgs::Point& p, const geometry_msgs::Quaternion& q) {
   return makeTransform(p.x, p.y, p.z, q.x, q.y, q.z, q.w);
 }
@@ -150,7 +134,7 @@ ImportReport readRosbag(const fs::path& file, const RosbagConfig& config,
             file.string(), "topic " + topic + ", message " + std::to_string(index),
             "is not a " + std::string(kLaserScanType) + " (type " + m.getDataType() + ")",
             "choose another topic");
-      fillRawScan(viewOf(*msg), config, scan);
+      fillRawScan(ros1ScanView(*msg), config, scan);
       if (report.sensor_name.empty())
         report.sensor_name =
             "ROS1 " + std::string(kLaserScanType) + " on " + topic +
@@ -204,7 +188,7 @@ BagRewriteReport rewriteRosbagTopics(const fs::path& in, const fs::path& out,
               in.string(), where,
               "is not a " + std::string(kLaserScanType) + " (type " + m.getDataType() + ")",
               "choose another topic");
-        fillRawScan(viewOf(*msg), RosbagConfig{}, scan);
+        fillRawScan(ros1ScanView(*msg), RosbagConfig{}, scan);
         scan.source_index = report.scans++;
         on_scan(m.getTopic(), msg->ranges, scan);
         written.write(m.getTopic(), m.getTime(), *msg, m.getConnectionHeader());

@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "common/errors.hpp"
+#include "io/raw_scan_cloud.hpp"
 #include "io/sequence.hpp"
 
 namespace lidarcal::io {
@@ -33,33 +34,12 @@ bool SequenceWriter::add(const RawScan& raw) {
   if (config_.max_scans != 0 && summary_.written >= config_.max_scans) return false;
   const std::size_t index = summary_.offered++;
   if (index % config_.every != 0) return true;
-  if (raw.angles_rad.size() != raw.ranges_m.size())
-    throw std::invalid_argument("SequenceWriter::add: angles and ranges differ in number");
-  const bool has_intensity = !raw.intensities.empty();
-  if (has_intensity && raw.intensities.size() != raw.ranges_m.size())
-    throw std::invalid_argument("SequenceWriter::add: intensities and ranges differ in number");
-
   const std::size_t n = raw.ranges_m.size();
-  const float nan = std::numeric_limits<float>::quiet_NaN();
-  auto& cloud = *scratch_.cloud;
-  cloud.resize(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    const double r = raw.ranges_m[i];
-    pcl::PointXYZI& p = cloud[i];
-    p.intensity = has_intensity ? raw.intensities[i] : 0.0f;
-    if (!std::isfinite(r) || r <= 0.0) {
-      ++summary_.no_return;
-      p.x = p.y = p.z = nan;
-    } else if (r < raw.range_min_m || r > raw.range_max_m) {
-      ++summary_.outside_limits;
-      p.x = p.y = p.z = nan;
-    } else {
-      ++summary_.returns;
-      p.x = static_cast<float>(r * std::cos(raw.angles_rad[i]));
-      p.y = static_cast<float>(r * std::sin(raw.angles_rad[i]));
-      p.z = 0.0f;
-    }
-  }
+  const bool has_intensity = !raw.intensities.empty();
+  const CloudCounts counts = toCloud(raw, *scratch_.cloud);
+  summary_.no_return += counts.no_return;
+  summary_.outside_limits += counts.outside_limits;
+  summary_.returns += counts.returns;
   scratch_.name = scanFileName(summary_.written);
   if (start_next_) {
     // the first scan begins a stop anyway

@@ -45,16 +45,7 @@ struct ImportOptions {
 
 /// rosbag1/rosbag2 --pose odom:TOPIC | tf:FRAME.
 io::BagPoseConfig bagPose(const ImportOptions& o, const CLI::App& sub) {
-  io::BagPoseConfig p;
-  const auto colon = o.pose.find(':');
-  const std::string kind = o.pose.substr(0, colon);
-  if (colon == std::string::npos || (kind != "odom" && kind != "tf") || colon + 1 == o.pose.size())
-    throw InputError("", "--pose " + o.pose,
-                     "for a ROS bag, --pose is odom:TOPIC (nav_msgs/Odometry) or tf:FIXED_FRAME",
-                     "e.g. --pose odom:/odom or --pose tf:map");
-  p.kind = kind == "odom" ? io::BagPoseConfig::Kind::odom : io::BagPoseConfig::Kind::tf;
-  p.name = o.pose.substr(colon + 1);
-  if (kind == "tf" && p.name.front() == '/') p.name.erase(0, 1);  // tf frames have no leading slash
+  io::BagPoseConfig p = parseBagPose(o.pose);
   if (!(o.still_m >= 0.0))
     throw InputError("", "--still-m", "must be >= 0", "give a distance in metres");
   if (!(o.still_deg >= 0.0))
@@ -64,39 +55,12 @@ io::BagPoseConfig bagPose(const ImportOptions& o, const CLI::App& sub) {
   return p;
 }
 
-/// --from, else what the content says (a message for formats that cannot be read).
-/// The format of one recording, from its content.
-ImportFormat detectedFormat(const std::string& input) {
-  const io::DetectedFormat d = io::detectRecordingFormat(input);
-  switch (d.kind) {
-    case io::RecordingKind::rosbag1:
-      return ImportFormat::rosbag1;
-    case io::RecordingKind::mcap:
-    case io::RecordingKind::rosbag2:
-      return ImportFormat::rosbag2;
-    case io::RecordingKind::carmen:
-      return ImportFormat::carmen;
-    case io::RecordingKind::ydlidar:
-      return ImportFormat::ydlidar;
-    case io::RecordingKind::csv:
-      return ImportFormat::csv;
-    case io::RecordingKind::unknown:
-      break;
-  }
-  throw InputError(
-      input, "",
-      std::string("cannot tell the recording's format from its content") +
-          (d.gzip ? " (gzip-compressed)" : "") +
-          ": not a ROS1 or ROS 2 bag, a CARMEN log, a YDLIDAR X4 .dat or a CSV with a header",
-      "name the format with --from rosbag1|rosbag2|carmen|ydlidar|csv (docs/FORMAT.md)");
-}
-
 /// --from, or the format every input's content shows (they must agree).
 ImportFormat inputFormat(const ImportOptions& o) {
   if (!o.from.empty()) return parseImportFormat(o.from);
-  const ImportFormat first = detectedFormat(o.inputs.front());
+  const ImportFormat first = detectImportFormat(o.inputs.front());
   for (const auto& input : o.inputs)
-    if (const ImportFormat f = detectedFormat(input); f != first)
+    if (const ImportFormat f = detectImportFormat(input); f != first)
       throw InputError(input, "",
                        std::string("reads as ") + toString(f) + " but " + o.inputs.front() +
                            " as " + toString(first),

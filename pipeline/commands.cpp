@@ -24,6 +24,7 @@ void registerCommands(CLI::App& app) {
   addMonteCarloMergeCommand(app);
   addDiagnoseCommand(app);
   addFleetCommand(app);
+  addWatchCommand(app);
   addOdometryCommand(app);
 }
 

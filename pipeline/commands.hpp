@@ -40,6 +40,8 @@ void addDiagnoseCommand(CLI::App& app);
 /// `lidarcal fleet` (pipeline/cmd_fleet.cpp): many calibrations in one report, moved and outlying
 /// sensors flagged.
 void addFleetCommand(CLI::App& app);
+/// lidarcal watch: the field watcher replayed on a recording (cmd_watch.cpp).
+void addWatchCommand(CLI::App& app);
 /// `lidarcal odometry` (pipeline/cmd_odometry.cpp): wheel radii, axle and the laser's mounting
 /// from odometry tuples (Censi et al. 2013).
 void addOdometryCommand(CLI::App& app);

@@ -7,9 +7,9 @@
 #include <stdexcept>
 
 #include <Eigen/Dense>
-#include <boost/math/distributions/chi_squared.hpp>
 #include <boost/math/distributions/students_t.hpp>
 
+#include "calibration/model_comparison.hpp"
 #include "common/errors.hpp"
 #include "common/stats_util.hpp"
 #include "diagnosis/stats.hpp"
@@ -22,71 +22,20 @@ constexpr double kMadToSd = 1.482602218505602;
 // variance of a median of n normal values: (pi / 2) sigma^2 / n
 constexpr double kHalfPi = 1.5707963267948966;
 
-bool insideFittedRange(const CalibrationModel& m, double d) {
-  if (m.fitted_range_m) return d >= m.fitted_range_m->first && d <= m.fitted_range_m->second;
-  return d >= m.model.range_min_m && d <= m.model.range_max_m;
-}
-
-/// Covariance of the bias at the distances, C = J Sigma J^T; empty without a usable covariance.
-Eigen::MatrixXd biasCovariance(const CalibrationModel& m, const std::vector<double>& distances_m) {
-  const std::size_t p = m.model.bias.alpha.size();
-  if (p == 0 || m.alpha_covariance.size() != p * p) return {};
-  const Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>
-      sigma(m.alpha_covariance.data(), static_cast<Eigen::Index>(p), static_cast<Eigen::Index>(p));
-  if (!sigma.allFinite()) return {};
-  Eigen::MatrixXd J(static_cast<Eigen::Index>(distances_m.size()), static_cast<Eigen::Index>(p));
-  for (std::size_t i = 0; i < distances_m.size(); ++i)
-    for (std::size_t j = 0; j < p; ++j)
-      J(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = std::pow(distances_m[i], j);
-  return J * sigma * J.transpose();
-}
-
-/// Wald's statistic D^T C^+ D with the rank of C (eigenvalues above a relative tolerance).
-std::pair<double, int> waldStatistic(const Eigen::VectorXd& D, const Eigen::MatrixXd& C) {
-  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(C);
-  const double largest = eig.eigenvalues().maxCoeff();
-  double w = 0.0;
-  int rank = 0;
-  for (Eigen::Index i = 0; i < eig.eigenvalues().size(); ++i) {
-    const double lambda = eig.eigenvalues()(i);
-    if (!(lambda > 1e-10 * largest)) continue;
-    const double u = eig.eigenvectors().col(i).dot(D);
-    w += u * u / lambda;
-    ++rank;
-  }
-  return {w, rank};
-}
-
 /// Against the calibration before: the distances inside both fitted ranges.
 FleetTest movedTest(const FleetEntry& now, const FleetEntry& before,
                     const std::vector<double>& distances_m) {
+  const calibration::ModelDifference diff =
+      calibration::compareModels(now.model, before.model, distances_m);
   FleetTest t;
-  std::vector<double> shared;
-  for (double d : distances_m)
-    if (insideFittedRange(now.model, d) && insideFittedRange(before.model, d)) shared.push_back(d);
-  const Eigen::MatrixXd c_now = biasCovariance(now.model, shared),
-                        c_before = biasCovariance(before.model, shared);
-  if (shared.empty())
-    t.why_not = "no distance lies inside both calibrations' fitted ranges";
-  else if (c_now.size() == 0 || c_before.size() == 0)
-    t.why_not = "a calibration without alpha_covariance (standard errors)";
-  if (!t.why_not.empty()) return t;
-  Eigen::VectorXd D(static_cast<Eigen::Index>(shared.size()));
-  for (std::size_t i = 0; i < shared.size(); ++i) {
-    const double diff = now.model.model.bias(shared[i]) - before.model.model.bias(shared[i]);
-    D(static_cast<Eigen::Index>(i)) = diff;
-    t.difference_m.push_back(diff);
-  }
-  const auto [w, rank] = waldStatistic(D, c_now + c_before);
-  if (rank == 0) {
-    t.why_not = "the calibrations' covariances are zero";
-    return t;
-  }
+  t.why_not = diff.why_not;
+  t.difference_m = diff.difference_m;
+  if (!diff.tested) return t;
   t.tested = true;
-  t.distances_m = shared;
-  t.statistic = w;
-  t.dof = rank;
-  t.p = boost::math::cdf(boost::math::complement(boost::math::chi_squared(rank), w));
+  t.distances_m = diff.distances_m;
+  t.statistic = diff.wald.statistic;
+  t.dof = diff.wald.dof;
+  t.p = diff.wald.p;
   return t;
 }
 
@@ -196,7 +145,7 @@ void FleetConfig::validate() const {
 }
 
 std::vector<BiasAt> biasAt(const CalibrationModel& m, const std::vector<double>& distances_m) {
-  const Eigen::MatrixXd C = biasCovariance(m, distances_m);
+  const Eigen::MatrixXd C = calibration::biasCovariance(m, distances_m);
   std::vector<BiasAt> out;
   for (std::size_t i = 0; i < distances_m.size(); ++i) {
     BiasAt b;
@@ -204,7 +153,7 @@ std::vector<BiasAt> biasAt(const CalibrationModel& m, const std::vector<double>&
     b.bias_m = m.model.bias(b.distance_m) - b.distance_m;
     const Eigen::Index k = static_cast<Eigen::Index>(i);
     b.se_m = C.size() ? std::sqrt(std::max(0.0, C(k, k))) : kNaN;
-    b.inside = insideFittedRange(m, b.distance_m);
+    b.inside = calibration::insideFittedRange(m, b.distance_m);
     b.noise_m = m.model.noise.stddev(b.distance_m, m.model.bias);
     out.push_back(b);
   }

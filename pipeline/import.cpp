@@ -6,6 +6,7 @@
 
 #include "common/errors.hpp"
 #include "io/atomic_file.hpp"
+#include "io/detect_format.hpp"
 #include "io/import_csv.hpp"
 #include "io/import_rosbag.hpp"
 #include "io/import_rosbag2.hpp"
@@ -39,11 +40,8 @@ const char* toString(ImportFormat format) {
   return "?";
 }
 
-namespace {
-
-/// Reads one recording into the writer's callback.
-io::ImportReport readOne(const ImportSettings& s, const std::filesystem::path& input,
-                         const io::ScanCallback& on_scan) {
+io::ImportReport readRecording(const ImportSettings& s, const std::filesystem::path& input,
+                               const io::ScanCallback& on_scan) {
   const double inf = std::numeric_limits<double>::infinity();
   switch (s.format) {
     case ImportFormat::rosbag1:
@@ -79,7 +77,44 @@ io::ImportReport readOne(const ImportSettings& s, const std::filesystem::path& i
   return {};
 }
 
-}  // namespace
+io::BagPoseConfig parseBagPose(const std::string& spec) {
+  io::BagPoseConfig p;
+  const auto colon = spec.find(':');
+  const std::string kind = spec.substr(0, colon);
+  if (colon == std::string::npos || (kind != "odom" && kind != "tf") || colon + 1 == spec.size())
+    throw InputError("", "--pose " + spec,
+                     "for a ROS bag, --pose is odom:TOPIC (nav_msgs/Odometry) or tf:FIXED_FRAME",
+                     "e.g. --pose odom:/odom or --pose tf:map");
+  p.kind = kind == "odom" ? io::BagPoseConfig::Kind::odom : io::BagPoseConfig::Kind::tf;
+  p.name = spec.substr(colon + 1);
+  if (kind == "tf" && p.name.front() == '/') p.name.erase(0, 1);  // tf frames have no leading slash
+  return p;
+}
+
+ImportFormat detectImportFormat(const std::string& input) {
+  const io::DetectedFormat d = io::detectRecordingFormat(input);
+  switch (d.kind) {
+    case io::RecordingKind::rosbag1:
+      return ImportFormat::rosbag1;
+    case io::RecordingKind::mcap:
+    case io::RecordingKind::rosbag2:
+      return ImportFormat::rosbag2;
+    case io::RecordingKind::carmen:
+      return ImportFormat::carmen;
+    case io::RecordingKind::ydlidar:
+      return ImportFormat::ydlidar;
+    case io::RecordingKind::csv:
+      return ImportFormat::csv;
+    case io::RecordingKind::unknown:
+      break;
+  }
+  throw InputError(
+      input, "",
+      std::string("cannot tell the recording's format from its content") +
+          (d.gzip ? " (gzip-compressed)" : "") +
+          ": not a ROS1 or ROS 2 bag, a CARMEN log, a YDLIDAR X4 .dat or a CSV with a header",
+      "name the format with --from rosbag1|rosbag2|carmen|ydlidar|csv (docs/FORMAT.md)");
+}
 
 bool isBag(ImportFormat format) {
   return format == ImportFormat::rosbag1 || format == ImportFormat::rosbag2;
@@ -113,7 +148,7 @@ ImportResult importRecording(const ImportSettings& s,
       if (on_progress) on_progress((static_cast<double>(k) + scan.progress) * share);
       return more;
     };
-    const io::ImportReport read = readOne(s, s.inputs[k], on_scan);
+    const io::ImportReport read = readRecording(s, s.inputs[k], on_scan);
     result.read.scans += read.scans;
     result.read.other_records += read.other_records;
     result.read.stopped_early = read.stopped_early;

@@ -50,6 +50,19 @@ struct ImportResult {
 ImportResult importRecording(const ImportSettings& settings,
                              const std::function<void(double)>& on_progress = {});
 
+/// Streams the scans of one recording (settings.format, topic, pose and range limits; the
+/// output settings are not used) to `on_scan`, as importRecording reads each input.
+io::ImportReport readRecording(const ImportSettings& settings, const std::filesystem::path& input,
+                               const io::ScanCallback& on_scan);
+
+/// The format of one recording, from its content. Throws InputError naming the file when it
+/// cannot be told (give --from).
+ImportFormat detectImportFormat(const std::string& input);
+
+/// A bag's --pose: odom:TOPIC (nav_msgs/Odometry) or tf:FIXED_FRAME. Throws InputError naming
+/// --pose otherwise.
+io::BagPoseConfig parseBagPose(const std::string& spec);
+
 /// True for the bag formats (rosbag1, rosbag2): --topic, --list-topics and --pose odom:|tf: apply.
 bool isBag(ImportFormat format);
 /// The topics of a bag of either format (`import --list-topics`).

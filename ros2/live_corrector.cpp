@@ -34,13 +34,40 @@ std::size_t LiveStats::droppedTotal() const {
 
 LiveCorrector::LiveCorrector(const CalibrationModel& model, const LiveSettings& settings,
                              const calibration::ReadingCorrector& correct)
-    : model_(model), settings_(settings), correct_(correct) {}
+    : model_(model), settings_(settings), correct_(std::in_place, correct) {}
+
+LiveCorrector::LiveCorrector(const LiveSettings& settings) : settings_(settings) {}
+
+void LiveCorrector::useModel(const CalibrationModel& model,
+                             const calibration::ReadingCorrector& correct) {
+  model_ = model;
+  correct_.emplace(correct);
+}
 
 ScanVerdict LiveCorrector::drop(DropReason reason, std::string why) {
   reason_ = reason;
   message_ = std::move(why);
   ++stats_.dropped[static_cast<std::size_t>(reason)];
   return ScanVerdict::drop;
+}
+
+/// The first accepted scan: is the model this sensor's (beams, range limits)? Without a model
+/// there is nothing to check; the scan's beam count is kept either way.
+ScanVerdict LiveCorrector::checkSensor(std::size_t beams, double range_min, double range_max) {
+  if (correct_) {
+    try {
+      pipeline::checkModelBeams(model_, beams, "topic " + settings_.topic, settings_.model_file);
+      const pipeline::SensorFacts facts{settings_.sensor_name, range_min, range_max,
+                                        "topic " + settings_.topic, "topic"};
+      sensor_warning_ = pipeline::checkModelFitsSensor(model_, facts, settings_.model_file,
+                                                       settings_.force, settings_.outside);
+    } catch (const std::exception& e) {
+      message_ = e.what();
+      return ScanVerdict::refuse;
+    }
+  }
+  sensor_beams_ = beams;
+  return ScanVerdict::publish;
 }
 
 ScanVerdict LiveCorrector::process(ScanFields& scan) {
@@ -66,22 +93,14 @@ ScanVerdict LiveCorrector::process(ScanFields& scan) {
   // As `correct IN.bag`: the limits as the decimals they were written as.
   const double range_min = io::float32Decimal(scan.range_min),
                range_max = io::float32Decimal(scan.range_max);
-  if (sensor_beams_ == 0) {
-    try {
-      pipeline::checkModelBeams(model_, scan.beams, "topic " + settings_.topic,
-                                settings_.model_file);
-      const pipeline::SensorFacts facts{settings_.sensor_name, range_min, range_max,
-                                        "topic " + settings_.topic, "topic"};
-      sensor_warning_ = pipeline::checkModelFitsSensor(model_, facts, settings_.model_file,
-                                                       settings_.force, settings_.outside);
-    } catch (const std::exception& e) {
-      message_ = e.what();
-      return ScanVerdict::refuse;
-    }
-    sensor_beams_ = scan.beams;
+  if (sensor_beams_ == 0 && checkSensor(scan.beams, range_min, range_max) == ScanVerdict::refuse)
+    return ScanVerdict::refuse;
+  if (!correct_) {
+    ++stats_.uncorrected;
+    return ScanVerdict::publish;
   }
   ranges_.assign(scan.ranges, scan.ranges + scan.beams);
-  pipeline::correctLaserRanges(ranges_, range_min, range_max, correct_, stats_.correction);
+  pipeline::correctLaserRanges(ranges_, range_min, range_max, *correct_, stats_.correction);
   std::copy(ranges_.begin(), ranges_.end(), scan.ranges);
   ++stats_.correction.scans;
   return ScanVerdict::publish;

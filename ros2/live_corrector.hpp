@@ -32,6 +32,9 @@ struct ScanFields {
   float* ranges = nullptr;      ///< m, `beams` values, corrected in place
   std::size_t beams = 0;        ///< number of ranges
   std::size_t intensities = 0;  ///< number of intensities
+  /// the intensities themselves (`intensities` values; read only, for the watcher's copy of the
+  /// raw scan); null: not given
+  const float* intensity_values = nullptr;
 };
 
 /// Why a scan was dropped.
@@ -57,7 +60,10 @@ struct LiveSettings {
 
 /// Counts over the node's life.
 struct LiveStats {
-  pipeline::CorrectionStats correction;  ///< scans published and what happened to their returns
+  /// scans corrected and published, and what happened to their returns
+  pipeline::CorrectionStats correction;
+  /// scans published uncorrected: learn mode before a model is learnt
+  std::size_t uncorrected = 0;
   /// scans dropped, by reason
   std::array<std::size_t, static_cast<std::size_t>(DropReason::count_)> dropped{};
   std::size_t droppedTotal() const;
@@ -68,6 +74,15 @@ class LiveCorrector {
   /// `correct`: pipeline::modelCorrector(model, settings.method, settings.outside, model_file).
   LiveCorrector(const CalibrationModel& model, const LiveSettings& settings,
                 const calibration::ReadingCorrector& correct);
+  /// Without a model yet (learn mode): scans are checked and published uncorrected until
+  /// useModel().
+  explicit LiveCorrector(const LiveSettings& settings);
+
+  /// Corrects from the next scan on with `model` (a model learnt from this sensor's scans, so the
+  /// first scan's checks of the sensor are not made again); counts and the sensor's beam count
+  /// carry on. `correct` as for the constructor.
+  void useModel(const CalibrationModel& model, const calibration::ReadingCorrector& correct);
+  bool hasModel() const { return correct_.has_value(); }  ///< false: scans pass uncorrected
 
   /// Checks and corrects one scan (see the header comment).
   ScanVerdict process(ScanFields& scan);
@@ -82,10 +97,12 @@ class LiveCorrector {
  private:
   ScanVerdict drop(DropReason reason, std::string why);
 
+  ScanVerdict checkSensor(std::size_t beams, double range_min, double range_max);
+
   CalibrationModel model_;
   LiveSettings settings_;
-  // remembers the readings seen: a lookup per beam after the first scans
-  pipeline::MemoCorrector correct_;
+  // remembers the readings seen: a lookup per beam after the first scans; none: no model yet
+  std::optional<pipeline::MemoCorrector> correct_;
   std::vector<float> ranges_;     // the scan's ranges, as correctLaserRanges takes them (reused)
   std::size_t sensor_beams_ = 0;  // the beam count of the first accepted scan (0: none yet)
   LiveStats stats_;

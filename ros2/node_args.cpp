@@ -3,10 +3,14 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
+#include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 
 #include "calibration/filtering.hpp"
 #include "common/errors.hpp"
+#include "watch/watch_settings.hpp"
 
 namespace lidarcal::ros2 {
 namespace {
@@ -54,11 +58,53 @@ bool validNamespace(const std::string& ns) {
   return true;
 }
 
+/// A number > 0 (finite), as `-p name:=v` gives it; throws naming the parameter and an example.
+double parsePositive(const std::string& name, const std::string& v, const char* example) {
+  char* end = nullptr;
+  const double x = std::strtod(v.c_str(), &end);
+  if (v.empty() || *end != '\0' || !std::isfinite(x) || !(x > 0.0))
+    throw InputError("", "-p " + name + ":=" + v, "is not a number above 0",
+                     std::string("e.g. -p ") + name + ":=" + example);
+  return x;
+}
+
 QosProfile parseQos(const std::string& name, const std::string& v) {
   if (v == "sensor_data") return QosProfile::sensor_data;
   if (v == "default" || v == "reliable") return QosProfile::reliable;
   throw InputError("", "-p " + name + ":=" + v, "is not a QoS profile of this node",
                    "use sensor_data or default");
+}
+
+/// The parameters of the watch and learn modes (checked in every mode), and the ones every ROS 2
+/// node accepts; anything else is refused.
+void setWatchParameter(NodeParameters& p, const std::string& name, const std::string& v,
+                       const std::string& raw) {
+  if (name == "mode")
+    p.mode = parseNodeMode(v);
+  else if (name == "false_alarms")
+    p.false_alarms = parsePositive(name, v, "0.1");
+  else if (name == "false_alarms_per") {
+    if (v != "km" && v != "hour")
+      throw InputError("", "-p false_alarms_per:=" + v, "is not km or hour",
+                       "count false alarms per km travelled (km) or per hour of driving (hour)");
+    p.false_alarms_per_hour = v == "hour";
+  } else if (name == "check_every")
+    p.check_every_m = parsePositive(name, v, "3");
+  else if (name == "landmark_radius")  // empty: unset, so that a launch file can pass its default
+    p.landmark_radius_m =
+        v.empty() ? std::nullopt : std::optional<double>(parsePositive(name, v, "0.05"));
+  else if (name == "candidate_topic")
+    p.candidate_topic = v;
+  else if (name == "candidate_file")
+    p.candidate_file = v.empty() ? std::nullopt : std::optional<std::string>(v);
+  else if (name == "diagnostics_period")
+    p.diagnostics_period_s = parsePositive(name, v, "1");
+  // every ROS 2 node accepts it; stamps are copied, not made
+  else if (name == "use_sim_time")
+    parseBool(name, v);
+  else
+    throw InputError("", "-p " + name + ":=" + raw, "is not a parameter of lidarcal_ros2_node",
+                     kUsage);
 }
 
 void setParameter(NodeParameters& p, const std::string& name, const std::string& raw) {
@@ -85,12 +131,8 @@ void setParameter(NodeParameters& p, const std::string& name, const std::string&
     p.ros_distro = parseRosDistro(v);
   else if (name == "pose")
     p.pose = parsePoseSource(v);
-  // every ROS 2 node accepts it; stamps are copied, not made
-  else if (name == "use_sim_time")
-    parseBool(name, v);
   else
-    throw InputError("", "-p " + name + ":=" + raw, "is not a parameter of lidarcal_ros2_node",
-                     kUsage);
+    setWatchParameter(p, name, v, raw);
 }
 
 void applyRemap(NodeParameters& p, const std::string& from, const std::string& to) {
@@ -135,10 +177,84 @@ std::string qualify(const std::string& name, const NodeParameters& p) {
   return ns + "/" + name;
 }
 
+/// The part of --help on the watch and learn modes, with the watcher's defaults.
+std::string watchHelp() {
+  const watch::WatchSettings d = watch::defaultWatchSettings();
+  char text[2400];
+  std::snprintf(
+      text, sizeof text,
+      "  mode         apply (default): correct only; watch: correct and check the model against "
+      "the poles passed\n"
+      "               (needs poses); learn: also refit after an alarm and switch to the new model "
+      "(without a model:\n"
+      "               scans pass uncorrected until one is learnt)\n"
+      "  false_alarms       alarms expected per unit while the model holds (default %g)\n"
+      "  false_alarms_per   km (travelled; default) or hour (of driving)\n"
+      "  check_every        metres of travel between two checks (default %g)\n"
+      "  landmark_radius    the poles' radius, m (default, or empty: estimated with the bias)\n"
+      "  candidate_topic    learn: each refit's model as JSON, std_msgs/msg/String, latched "
+      "(default %s)\n"
+      "  candidate_file     learn: each refit's model also written to this file, atomically "
+      "(default, or empty: none)\n"
+      "  diagnostics_period seconds between two messages on /diagnostics (default 1; every "
+      "mode)\n",
+      d.false_alarms.per_unit, d.check.every_m, kCandidateModelTopic);
+  return text;
+}
+
+/// The checks that need every parameter: the model (optional in learn mode only), the names and
+/// policies, the candidate file's directory.
+void checkParameters(const NodeParameters& p) {
+  if (p.model_file.empty() && p.mode != NodeMode::learn)
+    throw InputError("", "parameter model", "is not set",
+                     "give this sensor's model: --ros-args -p model:=/path/model.json (only -p "
+                     "mode:=learn starts without one)");
+  if (p.inversion && *p.inversion != "ls" && *p.inversion != "ml")
+    throw InputError("", "-p inversion:=" + *p.inversion, "is not an inversion", "use ls or ml");
+  if (p.pose.kind == PoseSource::Kind::odom) resolveTopic(p.pose.name, p);  // a valid topic name
+  resolveTopic(p.candidate_topic, p);
+  calibration::Outside outside = calibration::kDefaultOutside;
+  if (p.outside && !calibration::parseOutside(*p.outside, outside))
+    throw InputError("", "-p outside:=" + *p.outside,
+                     "is not a policy of `lidarcal correct --outside`",
+                     std::string("see lidarcal correct --help; the default is ") +
+                         calibration::toString(calibration::kDefaultOutside));
+  if (p.candidate_file) {
+    namespace fs = std::filesystem;
+    const fs::path file = *p.candidate_file;
+    const fs::path dir = file.has_parent_path() ? file.parent_path() : fs::path(".");
+    std::error_code ec;
+    if (file.empty() || !fs::is_directory(dir, ec) || fs::is_directory(file, ec))
+      throw InputError("", "-p candidate_file:=" + file.string(),
+                       "is not a file in an existing directory",
+                       "give a path such as /tmp/candidate_model.json (the directory must exist)");
+  }
+}
+
 }  // namespace
 
 const char* toString(QosProfile q) {
   return q == QosProfile::sensor_data ? "sensor_data" : "default";
+}
+
+const char* toString(NodeMode m) {
+  switch (m) {
+    case NodeMode::apply:
+      return "apply";
+    case NodeMode::watch:
+      return "watch";
+    case NodeMode::learn:
+      return "learn";
+  }
+  return "?";
+}
+
+NodeMode parseNodeMode(const std::string& text) {
+  for (NodeMode m : {NodeMode::apply, NodeMode::watch, NodeMode::learn})
+    if (text == toString(m)) return m;
+  throw InputError("", "-p mode:=" + text, "is not a mode of this node",
+                   "use apply (correct only), watch (correct and check the model) or learn "
+                   "(also refit and switch)");
 }
 
 namespace {
@@ -228,19 +344,7 @@ NodeParameters parseNodeArguments(int argc, const char* const* argv) {
           kUsage);
     }
   }
-  if (p.help) return p;
-  if (p.model_file.empty())
-    throw InputError("", "parameter model", "is not set",
-                     "give this sensor's model: --ros-args -p model:=/path/model.json");
-  if (p.inversion && *p.inversion != "ls" && *p.inversion != "ml")
-    throw InputError("", "-p inversion:=" + *p.inversion, "is not an inversion", "use ls or ml");
-  if (p.pose.kind == PoseSource::Kind::odom) resolveTopic(p.pose.name, p);  // a valid topic name
-  calibration::Outside outside = calibration::kDefaultOutside;
-  if (p.outside && !calibration::parseOutside(*p.outside, outside))
-    throw InputError("", "-p outside:=" + *p.outside,
-                     "is not a policy of `lidarcal correct --outside`",
-                     std::string("see lidarcal correct --help; the default is ") +
-                         calibration::toString(calibration::kDefaultOutside));
+  if (!p.help) checkParameters(p);
   return p;
 }
 
@@ -249,12 +353,13 @@ std::string nodeHelp() {
       "lidarcal_ros2_node: corrects a sensor_msgs/msg/LaserScan topic with a lidarcal model and "
       "republishes it\n"
       "(same header and intensities; ranges corrected with the rule of `lidarcal correct`).\n\n"
-      "usage: lidarcal_ros2_node --ros-args -p model:=MODEL [-p NAME:=VALUE ...] [-r __node:=NAME] "
+      "usage: lidarcal_ros2_node --ros-args [-p model:=MODEL] [-p NAME:=VALUE ...] [-r "
+      "__node:=NAME] "
       "[-r __ns:=/NS] [-r FROM:=TO]\n\n"
       "parameters:\n"
       "  model        model.json of `lidarcal calibrate` (one sensor's or a rig's), or the YAML "
       "of\n"
-      "               `lidarcal export --format yaml` (required)\n"
+      "               `lidarcal export --format yaml` (required, except in mode learn)\n"
       "  input        LaserScan topic to read (default scan)\n"
       "  output       topic of the corrected scans (default scan_corrected)\n"
       "  inversion    ls | ml, as `lidarcal correct --inversion` (default: the YAML's, else ls)\n"
@@ -278,9 +383,12 @@ std::string nodeHelp() {
        "/tf_static) or tf:FRAME\n"
        "               (the scan frame's pose in the fixed FRAME through /tf and /tf_static); "
        "default odom:odom.\n"
-       "               Checked at start; correcting scans reads no poses\n\n"
-       "The node appears in `ros2 node list` as /NS/NAME and logs to /rosout as well as to "
-       "stderr.\n\n"
+       "               Read in modes watch and learn (apply reads no poses)\n";
+  h += watchHelp();
+  h += "\n"
+       "The node appears in `ros2 node list` as /NS/NAME, logs to /rosout as well as to stderr "
+       "and states its\n"
+       "model's health on /diagnostics (OK, WARN, ERROR; docs/ROS2.md).\n\n"
        "environment: ROS_DOMAIN_ID (default 0); CYCLONEDDS_URI configures the DDS participant "
        "(Cyclone DDS).\n"
        "exit status: 0 after Ctrl-C / SIGTERM, 2 a bad argument or a model of another sensor (at "

@@ -6,7 +6,11 @@
 //                      output:=scan_corrected] [-p inversion:=ls|ml] [-p outside:=POLICY] [-p
 //                      sensor_name:=NAME] [-p force:=true] [-p input_qos:=sensor_data|default] [-p
 //                      output_qos:=sensor_data|default] [-p ros_distro:=humble|jazzy|...] [-p
-//                      pose:=odom:TOPIC|tf:FRAME] [-r __node:=NAME] [-r __ns:=/NS] [-r FROM:=TO]
+//                      pose:=odom:TOPIC|tf:FRAME] [-p mode:=apply|watch|learn] [-p
+//                      false_alarms:=0.1] [-p false_alarms_per:=km|hour] [-p check_every:=3] [-p
+//                      landmark_radius:=R] [-p candidate_topic:=~/candidate_model] [-p
+//                      candidate_file:=PATH] [-p diagnostics_period:=1] [-r __node:=NAME] [-r
+//                      __ns:=/NS] [-r FROM:=TO]
 //
 // `--param` and `--remap` are the long forms of -p and -r; `--` ends the ROS arguments. Topic
 // names resolve as ROS 2 resolves them (relative to the namespace; `~/x` under the node's name)
@@ -20,6 +24,17 @@
 #include <vector>
 
 namespace lidarcal::ros2 {
+
+/// The default topic of the candidate model (a ROS name, resolved under the node's name).
+inline constexpr const char* kCandidateModelTopic = "~/candidate_model";
+
+/// What the node does beside correcting (parameter `mode`).
+enum class NodeMode {
+  apply,  ///< corrects with the model given; no watcher, no pose input (default)
+  watch,  ///< corrects with the model given and checks it against the poles as the robot drives
+  learn,  ///< also refits after an alarm and switches; without a model, learns one first
+};
+const char* toString(NodeMode m);
 
 /// The QoS profiles of ROS 2 (rmw_qos_profile_sensor_data, rmw_qos_profile_default).
 enum class QosProfile {
@@ -50,7 +65,8 @@ struct PoseSource {
 };
 
 struct NodeParameters {
-  /// model: model.json (a sensor's or a rig's) or export's YAML (required)
+  /// model: model.json (a sensor's or a rig's) or export's YAML (required; may be empty in mode
+  /// learn only)
   std::string model_file;
   std::string input = "scan";             ///< input: LaserScan topic to correct (ROS name)
   std::string output = "scan_corrected";  ///< output: topic of the corrected scans (ROS name)
@@ -67,6 +83,25 @@ struct NodeParameters {
   RosDistro ros_distro = RosDistro::humble;
   /// pose: odom:TOPIC | tf:FRAME (default odom:odom); read by the watch modes, not by apply
   PoseSource pose;
+  NodeMode mode = NodeMode::apply;  ///< mode: apply (default), watch or learn
+  /// false_alarms: alarms expected per unit of exposure while the model holds (> 0); unset: the
+  /// watcher's default, 0.1 (watch::FalseAlarmRate). Read in watch and learn modes.
+  std::optional<double> false_alarms;
+  /// false_alarms_per: the exposure counted, "km" travelled (false, default) or "hour" of
+  /// driving (true)
+  bool false_alarms_per_hour = false;
+  /// check_every: metres of travel between two checks (> 0); unset: the watcher's default, 3 m
+  std::optional<double> check_every_m;
+  /// landmark_radius: the poles' radius in metres (> 0); unset (or given empty): estimated with
+  /// the bias
+  std::optional<double> landmark_radius_m;
+  /// candidate_topic: where learn mode publishes each refit's model as JSON (ROS name)
+  std::string candidate_topic = kCandidateModelTopic;
+  /// candidate_file: learn mode also writes each refit's model there, atomically (its directory
+  /// must exist); unset (or given empty): no file
+  std::optional<std::string> candidate_file;
+  /// diagnostics_period: seconds between two DiagnosticArray messages (> 0; default 1)
+  double diagnostics_period_s = 1.0;
   /// -r __node:=NAME (letters, digits, '_'; not starting with a digit)
   std::string node_name = "lidarcal";
   std::string node_namespace = "/";  ///< -r __ns:=/NS (absolute; tokens as node names)
@@ -75,7 +110,8 @@ struct NodeParameters {
 };
 
 /// Parses argv (argv[0] skipped). Throws InputError naming the argument and the remedy for an
-/// unknown parameter, a malformed -p/-r, a bad value, or a missing model (unless help).
+/// unknown parameter, a malformed -p/-r, a bad value, or a missing model (unless help; the model
+/// may be left out in mode learn only).
 NodeParameters parseNodeArguments(int argc, const char* const* argv);
 
 /// The parameters and their defaults, for --help.
@@ -96,6 +132,8 @@ std::string loggerName(const NodeParameters& p);
 /// `-p pose:=` parsed: "odom:TOPIC" or "tf:FRAME" (a frame's leading '/' removed). Throws
 /// InputError naming the parameter for anything else.
 PoseSource parsePoseSource(const std::string& text);
+/// `-p mode:=` parsed. Throws InputError naming the modes.
+NodeMode parseNodeMode(const std::string& text);
 /// `-p ros_distro:=` parsed (the release's name in lower case). Throws InputError listing the
 /// names known.
 RosDistro parseRosDistro(const std::string& text);

@@ -25,8 +25,6 @@ namespace lidarcal::ros2 {
 
 /// The QoS of /rosout's writer in rcl: reliable, transient local, keep last 1000, lifespan 10 s.
 TopicQos rosoutQos();
-/// The default topic of the candidate model (a ROS name, resolved under the node's name).
-inline constexpr const char* kCandidateModelTopic = "~/candidate_model";
 
 class RosoutLogger {
  public:

@@ -17,6 +17,7 @@ PACKAGES=(
   librcpputils-dev librcutils-dev libament-index-cpp-dev
   libnav-msgs-dev libtf2-msgs-dev  # odometry and tf in bags (import --pose odom:|tf:)
   libroscpp-dev python3-rosmaster  # lidarcal_node (roscpp) and the rosmaster its test starts
+  libdiagnostic-msgs-dev libstd-msgs-dev  # lidarcal_node's /diagnostics status and learn mode's candidate topic
   cyclonedds-dev cyclonedds-tools  # lidarcal_ros2_node: Eclipse Cyclone DDS and its IDL compiler idlc
   libfastrtps-dev fastddsgen       # eProsima Fast DDS and fastddsgen: the other vendor, for the cross-vendor test
   clang-format-14                  # the style check (scripts/check-format.sh, .clang-format)

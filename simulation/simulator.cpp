@@ -137,6 +137,20 @@ std::vector<TruthStop> planDriving(const Scene& scene, std::uint64_t seed) {
 
 }  // namespace
 
+std::pair<double, double> poleDistanceRange(const Scene& scene,
+                                            const std::vector<TruthStop>& stops) {
+  const RangeModel& r = scene.sensor.range;
+  double lo = HUGE_VAL, hi = -HUGE_VAL;
+  for (const TruthStop& s : stops)
+    for (const Cylinder& c : scene.landmarks) {
+      const double d = std::hypot(c.x_m - s.actual.x_m, c.y_m - s.actual.y_m) - c.radius_m;
+      if (d < r.range_min_m || d > r.range_max_m) continue;
+      lo = std::min(lo, d);
+      hi = std::max(hi, d);
+    }
+  return lo <= hi ? std::make_pair(lo, hi) : std::make_pair(r.range_min_m, r.range_max_m);
+}
+
 std::vector<TruthStop> planStops(const Scene& scene, std::uint64_t seed) {
   if (scene.path.kind == PathKind::driving) return planDriving(scene, seed);
   auto rng = makeRng(seed, 0);

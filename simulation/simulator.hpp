@@ -59,6 +59,12 @@ double mixedPixelDistance(const RangeEffects& effects, double d_m, double backgr
 /// scan is taken at one pose (the motion during a sweep is not simulated).
 std::vector<TruthStop> planStops(const Scene& scene, std::uint64_t seed);
 
+/// The distances from the stops' true poses to the nearest point of each pole the sensor reaches
+/// (inside its range window; occlusion ignored), [min, max] metres: the fitted range a calibration
+/// of these stops would report. {range_min, range_max} when no pole is in reach.
+std::pair<double, double> poleDistanceRange(const Scene& scene,
+                                            const std::vector<TruthStop>& stops);
+
 /// One simulated scan with the truth of each of its beams.
 struct SimulatedScan {
   io::Scan scan;                     ///< points in the sensor frame, VIEWPOINT = commanded pose

@@ -1,123 +1,24 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// lidarcal_node against a real rosmaster (Debian's python3-rosmaster) on loopback, started and
-// stopped here: recorded scans published, corrected scans received and compared bit for bit
-// with `lidarcal correct IN.bag --out OUT.bag` (the same correction rule); models of another
-// sensor refused. Every wait is bounded; processes are ended by their pid.
+// lidarcal_node in apply mode against a real rosmaster (ros_node_fixture.hpp): recorded scans
+// published, corrected scans received and compared bit for bit with `lidarcal correct IN.bag
+// --out OUT.bag` (the same correction rule); models of another sensor and bad parameters
+// refused; the /diagnostics status. The watch and learn modes: test_ros_node_watch.cpp.
 
-#include <chrono>
 #include <cmath>
-#include <cstdlib>
-#include <functional>
-#include <mutex>
 #include <optional>
-#include <thread>
 #include <vector>
 
 #include <gtest/gtest.h>
 
-#include <ros/ros.h>
 #include <rosbag/bag.h>
-#include <rosbag/view.h>
 #include <sensor_msgs/LaserScan.h>
 
-#include "child_process.hpp"
 #include "pipeline/ros_test_util.hpp"
 #include "ros/laser_scan_util.hpp"
+#include "ros/ros_node_fixture.hpp"
 
 namespace lidarcal::test {
 namespace {
-
-class RosNode : public ::testing::Test {
- protected:
-  static void SetUpTestSuite() {
-    dir_ =
-        new fs::path(fs::temp_directory_path() / ("lidarcal-ros-node-" + std::to_string(getpid())));
-    fs::create_directories(*dir_);
-    const int port = freeLoopbackPort();
-    ASSERT_GT(port, 0);
-    const std::string uri = "http://127.0.0.1:" + std::to_string(port);
-    setenv("ROS_MASTER_URI", uri.c_str(), 1);
-    setenv("ROS_IP", "127.0.0.1", 1);  // loopback only: rosmaster and the nodes bind to it
-    unsetenv("ROS_HOSTNAME");
-    setenv("ROS_HOME", dir_->c_str(), 1);
-    setenv("ROS_LOG_DIR", dir_->c_str(), 1);
-    master_ = new Child({LIDARCAL_ROSMASTER, "--core", "-p", std::to_string(port), "-w", "2"},
-                        *dir_ / "rosmaster.log");
-    int argc = 0;
-    ros::init(argc, nullptr, "lidarcal_node_test",
-              ros::init_options::NoSigintHandler | ros::init_options::NoRosout);
-    ASSERT_TRUE(waitFor([] { return ros::master::check(); }, 30.0))
-        << "rosmaster did not answer: " << master_->log();
-    spinner_ = new ros::AsyncSpinner(1);
-    spinner_->start();
-  }
-  static void TearDownTestSuite() {
-    if (spinner_) spinner_->stop();
-    delete spinner_;
-    ros::shutdown();
-    delete master_;  // SIGINT, bounded
-    std::error_code ec;
-    if (dir_) fs::remove_all(*dir_, ec);
-    delete dir_;
-  }
-
-  static Child startNode(const std::string& name, const std::vector<std::string>& params) {
-    std::vector<std::string> argv = {LIDARCAL_NODE_EXE, "__name:=" + name};
-    argv.insert(argv.end(), params.begin(), params.end());
-    return Child(argv, *dir_ / (name + ".log"));
-  }
-
-  /// Publishes `scans` on `input` to a running node, each after the previous one came back on
-  /// `output`; returns the scans received.
-  static std::vector<sensor_msgs::LaserScan> correctLive(
-      const Child& node, const std::string& input, const std::string& output,
-      const std::vector<sensor_msgs::LaserScan>& scans) {
-    ros::NodeHandle nh;
-    std::mutex mutex;
-    std::vector<sensor_msgs::LaserScan> received;
-    ros::Subscriber sub = nh.subscribe<sensor_msgs::LaserScan>(
-        output, 100, [&](const sensor_msgs::LaserScan::ConstPtr& m) {
-          std::lock_guard<std::mutex> lock(mutex);
-          received.push_back(*m);
-        });
-    ros::Publisher pub = nh.advertise<sensor_msgs::LaserScan>(input, 100);
-    if (!waitFor([&] { return pub.getNumSubscribers() > 0 && sub.getNumPublishers() > 0; }, 30.0)) {
-      ADD_FAILURE() << "the node did not connect: " << node.log();
-      return {};
-    }
-    for (std::size_t k = 0; k < scans.size(); ++k) {
-      pub.publish(scans[k]);
-      if (!waitFor(
-              [&] {
-                std::lock_guard<std::mutex> lock(mutex);
-                return received.size() > k;
-              },
-              10.0)) {
-        ADD_FAILURE() << "no corrected scan " << k << ": " << node.log();
-        break;
-      }
-    }
-    std::lock_guard<std::mutex> lock(mutex);
-    return received;
-  }
-
-  /// The LaserScans of `topic` in a bag, in order.
-  static std::vector<sensor_msgs::LaserScan> scansOf(const fs::path& bag_file,
-                                                     const std::string& topic) {
-    std::vector<sensor_msgs::LaserScan> out;
-    rosbag::Bag bag(bag_file.string(), rosbag::bagmode::Read);
-    for (const auto& m : rosbag::View(bag, rosbag::TopicQuery(topic)))
-      out.push_back(*m.instantiate<sensor_msgs::LaserScan>());
-    return out;
-  }
-
-  static fs::path* dir_;
-  static Child* master_;
-  static ros::AsyncSpinner* spinner_;
-};
-fs::path* RosNode::dir_ = nullptr;
-Child* RosNode::master_ = nullptr;
-ros::AsyncSpinner* RosNode::spinner_ = nullptr;
 
 TEST_F(RosNode, PublishesWhatCorrectWritesToABag) {
   TempDir dir;
@@ -262,9 +163,43 @@ TEST_F(RosNode, HelpPrintsTheParametersWithoutAMaster) {
                dir / "help.log");
     ASSERT_EQ(help.waitExit(10.0).value_or(-1), 0) << help.log();
     for (const char* p : {"~model", "~input", "~output", "~inversion", "~outside", "~sensor_name",
-                          "~force", "export --format yaml"})
+                          "~force", "export --format yaml", "~mode", "~false_alarms",
+                          "~false_alarms_per", "~check_every", "~landmark_radius", "~pose",
+                          "~candidate_topic", "~candidate_file", "~diagnostics_period"})
       EXPECT_NE(help.log().find(p), std::string::npos) << p << "\n" << help.log();
   }
+}
+
+TEST_F(RosNode, PublishesAnOkStatusInApplyMode) {
+  TempDir dir;
+  io::writeModel(dir / "model.json", polynomialModel("RPLIDAR A2", 100));
+  DiagnosticsLog diagnostics("lidarcal: range model of /raw_diag");
+  Child node =
+      startNode("lidarcal_diag", {"_model:=" + (dir / "model.json").string(), "_input:=/raw_diag",
+                                  "_output:=/corrected_diag", "_diagnostics_period:=0.2"});
+  std::vector<sensor_msgs::LaserScan> scans;
+  for (int k = 0; k < 5; ++k) scans.push_back(laserScan(k, 100));
+  ASSERT_EQ(correctLive(node, "/raw_diag", "/corrected_diag", scans).size(), scans.size());
+  ASSERT_TRUE(diagnostics.waitFor(
+      [](const diagnostic_msgs::DiagnosticStatus& s) {
+        return valueOf(s, "scans received") == "5";
+      },
+      20.0))
+      << node.log();
+  const diagnostic_msgs::DiagnosticStatus last = diagnostics.entries().back().status;
+  EXPECT_EQ(last.level, diagnostic_msgs::DiagnosticStatus::OK) << last.message;
+  EXPECT_EQ(last.hardware_id, "RPLIDAR A2");
+  EXPECT_EQ(valueOf(last, "mode"), "apply");
+  EXPECT_NE(last.message.find((dir / "model.json").string()), std::string::npos) << last.message;
+  // Every reading of the 5 scans (95 of 100 beams each: laserScan) is accounted for, most
+  // corrected.
+  const std::size_t corrected = std::stoul(valueOf(last, "returns corrected"));
+  EXPECT_EQ(corrected +
+                std::stoul(valueOf(last, "returns beyond the fitted range left uncorrected")) +
+                std::stoul(valueOf(last, "returns without a distance")),
+            5u * 95u);
+  EXPECT_GT(corrected, 5u * 50u);
+  EXPECT_EQ(node.stop(), 0) << node.log();
 }
 
 TEST_F(RosNode, RefusesAtStart) {

@@ -22,12 +22,14 @@ inline std::string cycloneLoopbackConfig() {
          "</Domain></CycloneDDS>";
 }
 
-/// A domain id for one test run (1..200, from the process id and the clock): separate runs on
-/// one machine do not hear each other.
-inline int uniqueDomainId() {
+/// A domain id for one test run (first..first+count-1, default 1..200, from the process id and
+/// the clock): separate runs on one machine do not hear each other, and a suite given a range of
+/// its own never shares a domain with the others.
+inline int uniqueDomainId(int first = 1, int count = 200) {
   const auto t =
       static_cast<unsigned long>(std::chrono::steady_clock::now().time_since_epoch().count());
-  return 1 + static_cast<int>((static_cast<unsigned long>(getpid()) * 7919ul + t) % 200ul);
+  return first + static_cast<int>((static_cast<unsigned long>(getpid()) * 7919ul + t) %
+                                  static_cast<unsigned long>(count));
 }
 
 }  // namespace lidarcal::test

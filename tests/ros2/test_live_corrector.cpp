@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // The ROS 2 node without DDS: its command line (ROS 2's -p/-r syntax, name resolution, the
-// release and pose source, the node's names), the per-scan rule (ros2::LiveCorrector against
-// pipeline::correctLaserRanges, the rule of `correct`), the rate limit of its warnings, and the
-// model read from export's YAML.
+// release and pose source, the node's names, the watch modes' parameters and the watcher's
+// settings made from them), the per-scan rule (ros2::LiveCorrector against
+// pipeline::correctLaserRanges, the rule of `correct`; in learn mode also without a model yet),
+// the rate limit of its warnings, and the model read from export's YAML.
 
 #include <cmath>
 #include <cstdlib>
@@ -21,6 +22,7 @@
 #include "ros2/live_corrector.hpp"
 #include "ros2/node_args.hpp"
 #include "ros2/warning_limiter.hpp"
+#include "ros2/watched_corrector.hpp"
 
 namespace lidarcal::test {
 namespace {
@@ -115,6 +117,56 @@ TEST(Ros2NodeArguments, DomainIdFromTheEnvironment) {
   setenv("ROS_DOMAIN_ID", "300", 1);
   EXPECT_THROW(ros2::domainIdFromEnvironment(), InputError);
   unsetenv("ROS_DOMAIN_ID");
+}
+
+TEST(Ros2NodeArguments, TheWatchModesParametersMapOntoTheWatchersSettings) {
+  const ros2::NodeParameters d = parse({"--ros-args", "-p", "model:=m"});
+  EXPECT_EQ(d.mode, ros2::NodeMode::apply);
+  EXPECT_EQ(d.diagnostics_period_s, 1.0);
+  EXPECT_EQ(ros2::resolveTopic(d.candidate_topic, d), "/lidarcal/candidate_model");
+  EXPECT_FALSE(d.candidate_file.has_value());
+  // Unset parameters leave the watcher's defaults.
+  const watch::WatchSettings w0 = ros2::watchSettingsFor(d), def = watch::defaultWatchSettings();
+  EXPECT_EQ(w0.mode, watch::Mode::watch);
+  EXPECT_EQ(w0.false_alarms.per_unit, def.false_alarms.per_unit);
+  EXPECT_EQ(w0.false_alarms.unit, watch::Exposure::distance);
+  EXPECT_EQ(w0.check.every_m, def.check.every_m);
+  EXPECT_FALSE(w0.check.landmark_radius_m.has_value());
+  EXPECT_EQ(w0.association.drift_per_m, def.association.drift_per_m);
+  TempDir dir;
+  const std::string file = "candidate_file:=" + (dir / "candidate.json").string();
+  const ros2::NodeParameters p = parse(
+      {"--ros-args", "-p", "mode:=learn", "-p", "false_alarms:=0.02", "-p",
+       "false_alarms_per:=hour", "-p", "check_every:=5.5", "-p", "landmark_radius:=0.04", "-p",
+       "candidate_topic:=/fleet/candidate", "-p", file.c_str(), "-p", "diagnostics_period:=0.5"});
+  EXPECT_TRUE(p.model_file.empty());  // learn mode may start without a model
+  EXPECT_EQ(p.candidate_topic, "/fleet/candidate");
+  EXPECT_EQ(*p.candidate_file, (dir / "candidate.json").string());
+  EXPECT_EQ(p.diagnostics_period_s, 0.5);
+  const watch::WatchSettings w = ros2::watchSettingsFor(p);
+  EXPECT_EQ(w.mode, watch::Mode::learn);
+  EXPECT_EQ(w.false_alarms.per_unit, 0.02);
+  EXPECT_EQ(w.false_alarms.unit, watch::Exposure::time);
+  EXPECT_EQ(w.check.every_m, 5.5);
+  EXPECT_EQ(w.check.landmark_radius_m.value_or(0), 0.04);  // the checks' radius and the detector's
+  EXPECT_EQ(w.detection.landmark_radius_m.value_or(0), 0.04);
+  EXPECT_NO_THROW(w.validate());
+  for (const char* bad : {"mode:=observe", "false_alarms:=0", "false_alarms:=-1",
+                          "false_alarms:=abc", "false_alarms:=nan", "false_alarms_per:=day",
+                          "check_every:=0", "landmark_radius:=-0.1", "diagnostics_period:=0",
+                          "candidate_topic:=bad name", "candidate_file:=/no/such/dir/m.json"}) {
+    SCOPED_TRACE(bad);
+    EXPECT_THROW(parse({"--ros-args", "-p", "model:=m", "-p", bad}), InputError);
+  }
+  // Empty values (a launch file's defaults) leave them unset.
+  const ros2::NodeParameters e = parse(
+      {"--ros-args", "-p", "model:=m", "-p", "landmark_radius:=", "-p", "candidate_file:=''"});
+  EXPECT_FALSE(e.landmark_radius_m.has_value());
+  EXPECT_FALSE(e.candidate_file.has_value());
+  EXPECT_THROW(parse({"--ros-args", "-p", "mode:=watch"}), InputError);  // watch needs a model
+  EXPECT_THROW(parse({"--ros-args", "-p", "mode:=learn", "-p",
+                      ("candidate_file:=" + dir.path().string()).c_str()}),
+               InputError);  // a directory
 }
 
 /// A 100-beam scan whose ranges cover 0.2-11.1 m.
@@ -220,6 +272,35 @@ TEST(Ros2LiveCorrector, TheFirstScanOfAnotherSensorIsRefused) {
   ros2::LiveCorrector lenient(polynomialModel("", 100), forced, correct);
   EXPECT_EQ(lenient.process(f), ros2::ScanVerdict::publish);
   EXPECT_FALSE(lenient.sensorWarning().empty());
+}
+
+TEST(Ros2LiveCorrector, WithoutAModelScansPassUncorrectedUntilOneIsLearnt) {
+  ros2::LiveCorrector live(settings());
+  EXPECT_FALSE(live.hasModel());
+  std::vector<float> r = ranges();
+  const std::vector<float> received = r;
+  ros2::ScanFields f = fields(r);
+  ASSERT_EQ(live.process(f), ros2::ScanVerdict::publish);
+  EXPECT_EQ(std::memcmp(r.data(), received.data(), r.size() * sizeof(float)), 0);
+  std::vector<float> longer = ranges();
+  longer.push_back(3.0f);
+  ros2::ScanFields other = fields(longer);  // the first scan set the sensor's beam count
+  EXPECT_EQ(live.process(other), ros2::ScanVerdict::drop);
+  EXPECT_EQ(live.dropReason(), ros2::DropReason::beam_count);
+  // A model learnt: from the next scan on, corrected as `correct` corrects.
+  LiveCase c;
+  live.useModel(c.model, c.correct);
+  EXPECT_TRUE(live.hasModel());
+  std::vector<float> next = ranges(0.013f), expected = next;
+  pipeline::MemoCorrector memo(c.correct);
+  pipeline::CorrectionStats stats;
+  pipeline::correctLaserRanges(expected, 0.15, 12.0, memo, stats);
+  ros2::ScanFields g = fields(next);
+  ASSERT_EQ(live.process(g), ros2::ScanVerdict::publish);
+  EXPECT_EQ(std::memcmp(next.data(), expected.data(), next.size() * sizeof(float)), 0);
+  EXPECT_EQ(live.stats().uncorrected, 1u);
+  EXPECT_EQ(live.stats().correction.scans, 1u);
+  EXPECT_EQ(live.stats().droppedTotal(), 1u);
 }
 
 TEST(Ros2WarningLimiter, OnePerPeriodAndTheHeldBackOnesCounted) {

@@ -3,8 +3,8 @@
 // domain (loopback only): the ParticipantEntitiesInfo it writes on ros_discovery_info, decoded
 // here by hand (io::CdrReader) in the layout of each release, names the node (namespace, name)
 // and lists as its readers and writers exactly the GUIDs that the DDS builtin topics report for
-// its scan reader, its scan writer and its /rosout writer; its start line arrives on /rosout as
-// rcl_interfaces/msg/Log with rcl's logger name. Every wait is bounded.
+// its scan reader, its scan writer and its /rosout and /diagnostics writers; its start line arrives
+// on /rosout as rcl_interfaces/msg/Log with rcl's logger name. Every wait is bounded.
 
 #include <algorithm>
 #include <ctime>
@@ -122,13 +122,14 @@ TEST_P(NodeOnTheGraph, AnnouncesItsNodeWithTheGuidsOfItsEndpointsAndLogsToRosout
               std::string("ros_distro:=") + ros2::toString(distro)},
              dir.path() / "node.log");
 
-  // The node's entry once it lists its scan reader and its two writers (scans, /rosout).
+  // The node's entry once it lists its scan reader and its three writers (scans, /rosout,
+  // /diagnostics).
   Announcement a;
   const auto announced = [&] {
     for (const std::string& bytes : test.rawSamples(info)) {
       try {
         Announcement got = decodeAnnouncement(bytes, gid_bytes);
-        if (got.nodes.size() == 1 && got.nodes[0].name == name && got.nodes[0].writers.size() == 2)
+        if (got.nodes.size() == 1 && got.nodes[0].name == name && got.nodes[0].writers.size() == 3)
           a = got;
       } catch (const InputError&) {  // another participant's, in the other layout
       }
@@ -144,19 +145,23 @@ TEST_P(NodeOnTheGraph, AnnouncesItsNodeWithTheGuidsOfItsEndpointsAndLogsToRosout
 
   // The same GUIDs as the builtin topics report for the node's participant.
   const std::string scan_type = "sensor_msgs::msg::dds_::LaserScan_";
-  std::set<ros2::Guid> scan_writer, log_writer, scan_reader;
+  std::set<ros2::Guid> scan_writer, log_writer, diagnostics_writer, scan_reader;
   ASSERT_TRUE(waitFor(
       [&] {
         const auto pubs = test.endpoints(true), subs = test.endpoints(false);
         scan_writer = endpointsOn(pubs, participant, "rt/wire_test/scan_corrected", scan_type);
         log_writer = endpointsOn(pubs, participant, "rt/rosout", "rcl_interfaces::msg::dds_::Log_");
+        diagnostics_writer = endpointsOn(pubs, participant, "rt/diagnostics",
+                                         "diagnostic_msgs::msg::dds_::DiagnosticArray_");
         scan_reader = endpointsOn(subs, participant, "rt/wire_test/scan", scan_type);
-        return scan_writer.size() == 1 && log_writer.size() == 1 && scan_reader.size() == 1;
+        return scan_writer.size() == 1 && log_writer.size() == 1 &&
+               diagnostics_writer.size() == 1 && scan_reader.size() == 1;
       },
       kDiscoveryS))
       << "the node's endpoints were not discovered under its participant: " << node.log();
   std::set<ros2::Guid> writers = scan_writer;
   writers.insert(log_writer.begin(), log_writer.end());
+  writers.insert(diagnostics_writer.begin(), diagnostics_writer.end());
   EXPECT_EQ(guidsOf(n.writers), writers);
   EXPECT_EQ(guidsOf(n.readers), scan_reader);
 

@@ -1,0 +1,117 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "watch/shift_history.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <vector>
+
+#include <Eigen/Dense>
+#include <boost/math/distributions/fisher_f.hpp>
+
+namespace lidarcal::watch {
+
+namespace {
+constexpr double kQ = 2.0;  // coordinates of a shift
+}
+
+double fTail(double f, double d1, double d2) {
+  if (!(f > 0.0) || !std::isfinite(f)) return f > 0.0 ? 0.0 : 1.0;
+  return boost::math::cdf(boost::math::complement(boost::math::fisher_f(d1, d2), f));
+}
+
+ShiftHistory::ShiftHistory(std::size_t capacity) : capacity_(capacity) {
+  if (capacity_ < 2) throw std::invalid_argument("ShiftHistory: capacity must be >= 2");
+}
+
+void ShiftHistory::add(const Shift& shift) {
+  shifts_.push_back(shift);
+  while (shifts_.size() > capacity_) shifts_.pop_front();
+}
+
+ShiftHistory::Pooled ShiftHistory::gls(double tau2) const {
+  Eigen::Matrix2d w_sum = Eigen::Matrix2d::Zero();
+  Eigen::Vector2d ws_sum = Eigen::Vector2d::Zero();
+  Pooled p;
+  p.tau2 = tau2;
+  p.log_det = 0.0;
+  for (const Shift& x : shifts_) {
+    const Eigen::Matrix2d c = x.c + tau2 * Eigen::Matrix2d::Identity();
+    const Eigen::Matrix2d w = c.inverse();
+    w_sum += w;
+    ws_sum += w * x.s;
+    p.log_det += std::log(c.determinant());
+  }
+  p.v = w_sum.inverse();
+  p.b = p.v * ws_sum;
+  p.log_det -= std::log(p.v.determinant());  // + log det(sum W)
+  double rss = 0.0;
+  for (const Shift& x : shifts_) {
+    const Eigen::Vector2d r = x.s - p.b;
+    rss += r.dot((x.c + tau2 * Eigen::Matrix2d::Identity()).inverse() * r);
+  }
+  p.nu = kQ * (static_cast<double>(shifts_.size()) - 1.0);
+  p.phi2 = rss / p.nu;
+  p.rss = rss;
+  return p;
+}
+
+ShiftHistory::Pooled ShiftHistory::pool() const {
+  if (shifts_.size() < 2) throw std::logic_error("ShiftHistory: fewer than 2 checks");
+  // tau^2 by restricted maximum likelihood: minimise log|C_j + tau^2 I| summed, + log|sum W_j|,
+  // + the weighted residual sum of squares, over a grid of 0 and 60 values from 1e-4 to 1e2 times
+  // the checks' typical variance, then a golden-section refinement between the grid's
+  // neighbours. Deterministic.
+  double typical = 0.0;
+  for (const Shift& x : shifts_) typical += 0.5 * x.c.trace() / static_cast<double>(size());
+  auto objective = [this](double t) {
+    const Pooled p = gls(t);
+    return p.log_det + p.rss;
+  };
+  std::vector<double> grid = {0.0};
+  for (int i = 0; i <= 60; ++i) grid.push_back(typical * std::pow(10.0, -4.0 + 6.0 * i / 60.0));
+  std::size_t best = 0;
+  double best_value = objective(0.0);
+  for (std::size_t i = 1; i < grid.size(); ++i)
+    if (const double v = objective(grid[i]); v < best_value) best = i, best_value = v;
+  double lo = grid[best == 0 ? 0 : best - 1], hi = grid[std::min(best + 1, grid.size() - 1)];
+  const double g = 0.5 * (std::sqrt(5.0) - 1.0);
+  for (int it = 0; it < 40 && hi - lo > 1e-6 * typical; ++it) {
+    const double a = hi - g * (hi - lo), b = lo + g * (hi - lo);
+    (objective(a) < objective(b) ? hi : lo) = (objective(a) < objective(b) ? b : a);
+  }
+  const double tau2 = objective(0.5 * (lo + hi)) < best_value ? 0.5 * (lo + hi) : grid[best];
+  return gls(tau2);
+}
+
+FTest ShiftHistory::change(const Shift& now) const {
+  const Pooled p = pool();
+  const Eigen::Vector2d r = now.s - p.b;
+  FTest t;
+  t.dof1 = kQ;
+  t.dof2 = p.nu;
+  const Eigen::Matrix2d c = now.c + p.tau2 * Eigen::Matrix2d::Identity() + p.v;
+  t.statistic = r.dot(c.inverse() * r) / (kQ * p.phi2);
+  t.p = fTail(t.statistic, t.dof1, t.dof2);
+  return t;
+}
+
+FTest ShiftHistory::absolute(const Eigen::Matrix2d& model_covariance) const {
+  const Pooled p = pool();
+  FTest t;
+  t.dof1 = kQ;
+  t.dof2 = p.nu;
+  t.statistic = p.b.dot((p.phi2 * p.v + model_covariance).inverse() * p.b) / kQ;
+  t.p = fTail(t.statistic, t.dof1, t.dof2);
+  return t;
+}
+
+Eigen::Vector2d ShiftHistory::mean() const { return pool().b; }
+Eigen::Matrix2d ShiftHistory::meanCovariance() const {
+  const Pooled p = pool();
+  return p.phi2 * p.v;
+}
+double ShiftHistory::scale() const { return pool().phi2; }
+double ShiftHistory::spread() const { return pool().tau2; }
+
+}  // namespace lidarcal::watch
