@@ -59,6 +59,9 @@ double residentMiB() {
 struct SeedResult {
   std::size_t checks = 0, failed = 0, false_alarms = 0, tests_before = 0, exceed_before = 0;
   double levels_before = 0.0;
+  // the same for the absolute tests alone (the rest are change tests)
+  std::size_t absolute_before = 0, absolute_exceed = 0;
+  double absolute_levels = 0.0;
   long detected_at = -1;
   double detect_m = NAN, change_m = NAN;
   std::size_t poles_passed = 0;
@@ -100,6 +103,7 @@ void compareWithFresh(const Options& o, std::uint64_t seed, const watch::RangeCh
                       const std::vector<std::vector<io::TrueRange>>& truth, SeedResult& r) {
   namespace fs = std::filesystem;
   const fs::path dir = fs::path(o.work) / ("seed" + std::to_string(seed));
+  fs::create_directories(dir);
   io::SequenceWriterConfig wc;
   wc.overwrite = true;
   io::SequenceWriter writer(dir / "after", wc);
@@ -116,20 +120,10 @@ void compareWithFresh(const Options& o, std::uint64_t seed, const watch::RangeCh
   r.err_raw = poleError(nullptr, after, truth, first);
 }
 
-SeedResult runSeed(const Scene& scene, const std::shared_ptr<const CalibrationModel>& model,
-                   const Options& o, std::uint64_t seed, const watch::RangeChange& change) {
-  SeedResult r;
-  watch::WatchSettings ws = watch::defaultWatchSettings();
-  ws.mode = o.learn ? watch::Mode::learn : watch::Mode::watch;
-  ws.false_alarms.per_unit = o.rate;
-  ws.false_alarms.unit = o.per_hour ? watch::Exposure::time : watch::Exposure::distance;
-  ws.check.every_m = o.every_m;
-  if (o.radius && !scene.landmarks.empty())
-    ws.check.landmark_radius_m = scene.landmarks[0].radius_m;
-  ws.detection.landmark_radius_m = ws.check.landmark_radius_m;
-  std::vector<std::size_t> alarm_scans;
+/// A sink that counts the checks, false alarms, the detection and the switch of one drive in `r`.
+watch::WatchSink seedSink(const Options& o, const watch::RangeChange& change, SeedResult& r) {
   watch::WatchSink sink;
-  sink.check = [&](const watch::CheckEvent& e) {
+  sink.check = [&o, &change, &r](const watch::CheckEvent& e) {
     if (!e.check.status.ok()) {
       ++r.failed;
       return;
@@ -151,18 +145,38 @@ SeedResult runSeed(const Scene& scene, const std::shared_ptr<const CalibrationMo
       ++r.tests_before;
       r.levels_before += e.level;
       r.exceed_before += e.exceeds;
+      if (e.test == watch::Test::absolute) {
+        ++r.absolute_before;
+        r.absolute_levels += e.level;
+        r.absolute_exceed += e.exceeds;
+      }
     }
     if (e.alarm && after && r.detected_at < 0) {
       r.detected_at = static_cast<long>(e.decided_at);
       r.detect_m = e.stretch.travel_m;
     }
   };
-  sink.refit = [&](const watch::RefitEvent& e) {
+  sink.refit = [&r](const watch::RefitEvent& e) {
     if (e.decision.adopt && r.switched_at < 0) {
       r.switched_at = static_cast<long>(e.decided_at);
       r.switched = e.candidate;
     }
   };
+  return sink;
+}
+
+SeedResult runSeed(const Scene& scene, const std::shared_ptr<const CalibrationModel>& model,
+                   const Options& o, std::uint64_t seed, const watch::RangeChange& change) {
+  SeedResult r;
+  watch::WatchSettings ws = watch::defaultWatchSettings();
+  ws.mode = o.learn ? watch::Mode::learn : watch::Mode::watch;
+  ws.false_alarms.per_unit = o.rate;
+  ws.false_alarms.unit = o.per_hour ? watch::Exposure::time : watch::Exposure::distance;
+  ws.check.every_m = o.every_m;
+  if (o.radius && !scene.landmarks.empty())
+    ws.check.landmark_radius_m = scene.landmarks[0].radius_m;
+  ws.detection.landmark_radius_m = ws.check.landmark_radius_m;
+  const watch::WatchSink sink = seedSink(o, change, r);
   watch::Engine engine(ws, model, watch::FitExecution::at_scan, sink);
   const auto stops = simulation::planStops(scene, seed);
   std::set<int> poles_after;
@@ -232,11 +246,16 @@ int main(int argc, char** argv) {
         o.change.empty() ? watch::RangeChange{} : watch::parseRangeChange(o.change);
     std::size_t detected = 0, false_alarms = 0, checks = 0, with_false = 0, exceeding = 0;
     double levels = 0.0;
+    std::size_t abs_tests = 0, abs_exceeding = 0;
+    double abs_levels = 0.0;
     for (std::size_t k = 0; k < o.seeds; ++k) {
       const std::uint64_t seed = o.first_seed + k;
       const SeedResult r = runSeed(scene, model, o, seed, change);
       checks += r.checks;
       exceeding += r.exceed_before;
+      abs_tests += r.absolute_before;
+      abs_exceeding += r.absolute_exceed;
+      abs_levels += r.absolute_levels;
       levels += r.levels_before;
       false_alarms += r.false_alarms;
       with_false += r.false_alarms > 0;
@@ -263,6 +282,10 @@ int main(int argc, char** argv) {
         "seeds %zu, tests %zu, false alarms %zu (drives with one: %zu), detected %zu; "
         "before the change %zu tests exceeded their level, %.2f expected (sum of levels)\n",
         o.seeds, checks, false_alarms, with_false, detected, exceeding, levels);
+    std::printf(
+        "of which change tests %zu exceeded, %.2f expected; absolute tests (%zu) %zu exceeded, "
+        "%.2f expected\n",
+        exceeding - abs_exceeding, levels - abs_levels, abs_tests, abs_exceeding, abs_levels);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "watch_drives: %s\n", e.what());
     return 2;

@@ -126,17 +126,66 @@ void writeOutputs(const WatchOptions& o, const WatchTimeline& t) {
   dir.commit();
 }
 
+/// The change --inject asks for, if any.
+std::optional<watch::RangeChange> injection(const WatchOptions& o) {
+  if (o.inject.empty()) return std::nullopt;
+  try {
+    return watch::parseRangeChange(o.inject);
+  } catch (const std::invalid_argument& e) {
+    throw InputError("", "--inject", e.what(), "e.g. --inject 20@300 (20 mm from scan 300)");
+  }
+}
+
+/// A sink that records every check and refit in `t` and prints the lines worth a user's eye.
+watch::WatchSink recordingSink(WatchTimeline& t) {
+  watch::WatchSink sink;
+  sink.check = [&t](const watch::CheckEvent& e) {
+    t.checks.push_back(e);
+    if (const std::string line = checkLine(e); !line.empty()) std::printf("%s\n", line.c_str());
+  };
+  sink.refit = [&t](const watch::RefitEvent& e) {
+    RefitRecord r{e, ""};
+    if (e.decision.adopt)
+      r.model_file = "models/model_v" + std::to_string(e.model_version) + ".json";
+    else
+      r.event.candidate.reset();  // a summary is enough; memory stays small on long logs
+    r.event.previous.reset();
+    t.refits.push_back(std::move(r));
+    if (const std::string line = refitLine(e); !line.empty()) std::printf("%s\n", line.c_str());
+  };
+  return sink;
+}
+
+/// Exit 3 when the recording allowed neither a model (learn without one) nor a test: the
+/// timeline is written, and the message says what to record instead.
+void refuseWithoutResult(const WatchOptions& o, const WatchTimeline& t) {
+  if (t.final_state.model_version == 0)
+    throw DataError(o.input, "",
+                    "no model could be learnt on this recording (" +
+                        std::to_string(t.refits.size()) + " refits over " +
+                        std::to_string(static_cast<int>(t.final_state.travel_m)) + " m): " +
+                        (t.refits.empty() ? std::string("too little travel for a refit")
+                                          : t.refits.back().event.decision.reason),
+                    "record a longer drive past poles (a bag with its poses: --pose)");
+  if (t.final_state.checks == 0)
+    throw DataError(o.input, "",
+                    "no test of the model could be made on this recording (" +
+                        std::to_string(t.checks.size()) + " checks tried over " +
+                        std::to_string(t.final_state.scans) + " scans, " +
+                        std::to_string(static_cast<int>(t.final_state.travel_m)) +
+                        " m): a test needs " + std::to_string(t.settings.check.baseline_checks) +
+                        " checks, each on poles seen from a robot driving " +
+                        std::to_string(static_cast<int>(t.settings.check.every_m)) + " m",
+                    "record a longer drive past poles (a bag with its poses: --pose), and read "
+                    "timeline.json for why each check could not be made");
+}
+
 void runWatch(const WatchOptions& o) {
   if (o.out.empty())
     throw InputError("", "--out", "no output directory given", "give -o DIR for the timeline");
   if (o.per != "km" && o.per != "hour")
     throw InputError("", "--per", "'" + o.per + "' is not km or hour", "use --per km");
-  std::optional<watch::RangeChange> change;
-  if (!o.inject.empty()) try {
-      change = watch::parseRangeChange(o.inject);
-    } catch (const std::invalid_argument& e) {
-      throw InputError("", "--inject", e.what(), "e.g. --inject 20@300 (20 mm from scan 300)");
-    }
+  const std::optional<watch::RangeChange> change = injection(o);
   std::optional<double> radius;
   if (o.radius_m > 0.0) radius = o.radius_m;
   watch::WatchSettings settings = settingsFrom(o, radius);
@@ -148,21 +197,7 @@ void runWatch(const WatchOptions& o) {
   t.input = o.input;
   t.model_file = o.model;
   t.injected = change;
-  watch::WatchSink sink;
-  sink.check = [&](const watch::CheckEvent& e) {
-    t.checks.push_back(e);
-    if (const std::string line = checkLine(e); !line.empty()) std::printf("%s\n", line.c_str());
-  };
-  sink.refit = [&](const watch::RefitEvent& e) {
-    RefitRecord r{e, ""};
-    if (e.decision.adopt)
-      r.model_file = "models/model_v" + std::to_string(e.model_version) + ".json";
-    else
-      r.event.candidate.reset();  // a summary is enough; memory stays small on long logs
-    r.event.previous.reset();
-    t.refits.push_back(std::move(r));
-    if (const std::string line = refitLine(e); !line.empty()) std::printf("%s\n", line.c_str());
-  };
+  const watch::WatchSink sink = recordingSink(t);
   std::unique_ptr<watch::Engine> engine;
   std::size_t index = 0, total = 0;
   Progress progress("watching", 0, !quiet());
@@ -187,25 +222,7 @@ void runWatch(const WatchOptions& o) {
   writeOutputs(o, t);
   std::printf("%s", watchSummary(t).c_str());
   std::printf("Output: %s (timeline.json, timeline.png)\n", o.out.c_str());
-  if (engine->state().model_version == 0)
-    throw DataError(o.input, "",
-                    "no model could be learnt on this recording (" +
-                        std::to_string(t.refits.size()) + " refits over " +
-                        std::to_string(static_cast<int>(engine->state().travel_m)) + " m): " +
-                        (t.refits.empty() ? std::string("too little travel for a refit")
-                                          : t.refits.back().event.decision.reason),
-                    "record a longer drive past poles (a bag with its poses: --pose)");
-  if (engine->state().checks == 0)
-    throw DataError(o.input, "",
-                    "no test of the model could be made on this recording (" +
-                        std::to_string(t.checks.size()) + " checks tried over " +
-                        std::to_string(engine->state().scans) + " scans, " +
-                        std::to_string(static_cast<int>(engine->state().travel_m)) +
-                        " m): a test needs " + std::to_string(settings.check.baseline_checks) +
-                        " checks, each on poles seen from a robot driving " +
-                        std::to_string(static_cast<int>(settings.check.every_m)) + " m",
-                    "record a longer drive past poles (a bag with its poses: --pose), and read "
-                    "timeline.json for why each check could not be made");
+  refuseWithoutResult(o, t);
 }
 
 }  // namespace

@@ -276,6 +276,7 @@ void Engine::applyCheck(const Fit& fit) {
       // all the window holds.
       learn_first_ =
           e.test == Test::absolute ? window_.oldest().index : fit.check_stretch.last_scan + 1;
+      learn_refits_ = 0;
       next_fit_m_ = state_.travel_m;  // the first refit at the next scan
     }
   }
@@ -288,7 +289,14 @@ void Engine::applyRefit(const Fit& fit) {
   e.decided_at = state_.scans - 1;
   e.candidate = fit.candidate;
   e.previous = model_;
-  e.decision = decideSwitch(*fit.candidate, model_.get(), settings_.learn);
+  // One alarm is followed by refit after refit against the model in use: refit k is tested at
+  // switch_level / (k (k + 1)), which sums to switch_level over all of them, so a false alarm
+  // leads to a switch with probability at most switch_level.
+  ++learn_refits_;
+  LearnSettings learn = settings_.learn;
+  const double k = static_cast<double>(learn_refits_);
+  learn.switch_level /= k * (k + 1.0);
+  e.decision = decideSwitch(*fit.candidate, model_.get(), learn);
   if (e.decision.adopt) {
     useModel(fit.candidate);
     ++state_.switches;

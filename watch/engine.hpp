@@ -99,6 +99,7 @@ class Engine {
   double next_fit_m_ = 0.0;                   // travel at which the next fit is due
   double decided_m_ = 0.0, decided_h_ = 0.0;  // travel and driving at the last decision
   std::optional<std::size_t> learn_first_;    // learning: first scan of the refit's stretch
+  std::size_t learn_refits_ = 0;              // refits judged since learning began
   std::future<Fit> running_;                  // a fit under way (background)
   bool alarmed_ = false;  // a test rejected the model in use (latched until it is replaced)
   CheckEvent alarm_;      // that first rejection, the alarm

@@ -4,7 +4,9 @@
 // readings of the stretch since the alarm as `calibrate` would (the joint refinement, its order
 // chosen by the parsimonious AIC). The watcher switches only when all three hold:
 //   differs     the candidate's bias differs from the model in use's where both were fitted
-//               (calibration/model_comparison.hpp: Wald over 11 distances, p < switch_level);
+//               (calibration/model_comparison.hpp: Wald over 11 distances, p below the
+//               level the engine gives this refit: switch_level spent over the refits that
+//               follow one alarm);
 //   determined  its curve's standard error stays below max_standard_error_m there, and its
 //               expected squared error, 2 SE_c^2 averaged over those distances, is below the
 //               model in use's as the data now show it (the squared difference, which holds the

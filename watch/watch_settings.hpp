@@ -68,7 +68,8 @@ struct LearnSettings {
   /// A candidate counts as determined when the standard error of its curve stays below this
   /// over the distances compared, metres. Default 0.003.
   double max_standard_error_m = 0.003;
-  /// Level of the test that the candidate differs from the active model. Default 0.01.
+  /// Level of the test that a candidate differs from the active model, over all the refits
+  /// after one alarm (refit k is tested at switch_level / (k (k + 1))). Default 0.01.
   double switch_level = 0.01;
   /// The most scans a refit takes (the latest ones since the change). Default 3000.
   std::size_t max_scans = 3000;
