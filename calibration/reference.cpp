@@ -21,6 +21,7 @@
 #include "calibration/joint_refinement.hpp"
 #include "calibration/noise_exponent.hpp"
 #include "calibration/range_model_fit.hpp"
+#include "common/number_text.hpp"
 #include "common/plural.hpp"
 #include "common/stats_util.hpp"
 
@@ -28,12 +29,6 @@ namespace lidarcal::calibration {
 namespace {
 
 /// v with `digits` decimals.
-std::string fixed(double v, int digits) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", digits, v);
-  return buf;
-}
-
 /// Running mean and spread of a quantity over the scans of a stop, with a circular mean of an
 /// angle.
 struct Tally {

@@ -12,17 +12,12 @@
 
 #include "calibration/plausibility.hpp"
 #include "calibration/rig_problem.hpp"
+#include "common/number_text.hpp"
 
 namespace lidarcal::calibration {
 namespace {
 
 using rig::FitSetup;
-
-std::string fixed(double v, int digits) {
-  char text[64];
-  std::snprintf(text, sizeof text, "%.*f", digits, v);
-  return text;
-}
 
 /// How far the recorded poses of the stops with sightings spread: travel (metres) and heading span
 /// (radians).

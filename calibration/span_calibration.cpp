@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "calibration/inversion.hpp"
+#include "common/number_text.hpp"
 #include "common/stats_util.hpp"
 
 namespace lidarcal::calibration {
@@ -147,12 +148,6 @@ std::vector<SpanCheck> entryChecks(const SpanProblem& problem, const OrderResult
     checks.push_back(c);
   }
   return checks;
-}
-
-std::string fixed(double v, int digits) {
-  char text[64];
-  std::snprintf(text, sizeof text, "%.*f", digits, v);
-  return text;
 }
 
 }  // namespace

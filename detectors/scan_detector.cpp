@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "common/pose2.hpp"
+#include "common/stats_util.hpp"
 #include "detectors/line_fit.hpp"
 
 namespace lidarcal::detectors {
@@ -171,9 +172,7 @@ struct Classifier {
       pts.emplace_back(p.x, p.y);
       ranges.push_back(pts.back().norm());
     }
-    auto mid = ranges.begin() + static_cast<std::ptrdiff_t>(ranges.size() / 2);
-    std::nth_element(ranges.begin(), mid, ranges.end());
-    const double range = *mid;
+    const double range = upperMedian(std::move(ranges));
     const double t = cfg.threshold(range);
     const std::optional<double> radius_known =
         cfg.landmark_radius_m ? cfg.landmark_radius_m : hintedRadius(pts);

@@ -5,6 +5,9 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <utility>
+
+#include "common/stats_util.hpp"
 
 namespace lidarcal::detectors {
 
@@ -84,10 +87,7 @@ double estimateAngularStep(const pcl::PointCloud<pcl::PointXYZI>& cloud) {
     if (!valid(a) || !valid(b)) continue;
     steps.push_back(beamAngle(a, b));
   }
-  if (steps.empty()) return 0.0;
-  const auto mid = steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2);
-  std::nth_element(steps.begin(), mid, steps.end());
-  return *mid;
+  return steps.empty() ? 0.0 : upperMedian(std::move(steps));
 }
 
 }  // namespace lidarcal::detectors

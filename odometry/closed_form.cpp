@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "odometry/closed_form.hpp"
+#include "common/number_text.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -14,12 +15,6 @@ namespace {
 
 using Matrix5 = Eigen::Matrix<double, 5, 5>;
 using Vector5 = Eigen::Matrix<double, 5, 1>;
-
-std::string number(double value) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.3g", value);
-  return text;
-}
 
 Status refuse(StatusCode code, std::string message) { return {code, std::move(message)}; }
 
@@ -47,7 +42,8 @@ RotationFit fitRotation(const std::vector<OdometrySample>& samples,
   if (!(fit.spread >= settings.min_wheel_spread)) {
     fit.status = refuse(StatusCode::degenerate_motion,
                         "the wheels turned in one proportion only (spread of the wheel turns " +
-                            number(fit.spread) + ", at least " + number(settings.min_wheel_spread) +
+                            significant(fit.spread, 3) + ", at least " +
+                            significant(settings.min_wheel_spread, 3) +
                             " needed): the two wheel radii cannot be told apart");
     return fit;
   }
@@ -101,8 +97,8 @@ LoopSolution solveLoop(const Matrix5& normal, const OdometrySettings& settings) 
     out.status = refuse(StatusCode::degenerate_motion,
                         "the motion does not separate the axle from the laser's position "
                         "(spread " +
-                            number(spread) + ", at least " +
-                            number(settings.min_translation_spread) + " needed)");
+                            significant(spread, 3) + ", at least " +
+                            significant(settings.min_translation_spread, 3) + " needed)");
     return out;
   }
   const Eigen::LDLT<Eigen::Matrix3d> a_solver(a);
@@ -168,8 +164,8 @@ ClosedFormFit fitClosedForm(const std::vector<OdometrySample>& samples,
   if (!(fit.params.left_radius_m > 0.0 && fit.params.right_radius_m > 0.0))
     fit.status =
         refuse(StatusCode::negative_axle,
-               "positive wheel radii would need a negative axle (J21 = " + number(fit.j21) +
-                   ", J22 = " + number(fit.j22) +
+               "positive wheel radii would need a negative axle (J21 = " + significant(fit.j21, 3) +
+                   ", J22 = " + significant(fit.j22, 3) +
                    " rad per wheel rad, where a robot that turns left as its right wheel turns "
                    "forward has "
                    "J21 < 0 < J22)");

@@ -15,15 +15,6 @@
 #include "pipeline/words.hpp"
 
 namespace lidarcal::pipeline {
-std::string fixed(double v, int digits, bool sign) {
-  char buf[64];
-  if (sign)
-    std::snprintf(buf, sizeof buf, "%+.*f", digits, v);
-  else
-    std::snprintf(buf, sizeof buf, "%.*f", digits, v);
-  return buf;
-}
-
 std::string polynomialText(const std::vector<double>& a, const std::vector<double>& se) {
   std::string s;
   for (std::size_t i = 0; i < a.size(); ++i) {

@@ -12,11 +12,9 @@
 #include "calibration/reference.hpp"
 #include "calibration/span_calibration.hpp"
 #include "common/calibration_model.hpp"
+#include "common/number_text.hpp"
 
 namespace lidarcal::pipeline {
-
-/// v with `digits` decimals (and a sign when `sign`).
-std::string fixed(double v, int digits, bool sign = false);
 
 /// "0.05250 + 0.88380 d + 0.05840 d^2"; with `se` (one per coefficient, NaN to leave one out),
 /// each coefficient followed by " (+-SE)".

@@ -5,6 +5,7 @@
 #include <cstdio>
 
 #include "calibration/model_comparison.hpp"
+#include "common/number_text.hpp"
 
 namespace lidarcal::watch {
 
@@ -20,19 +21,13 @@ std::string mmText(double value_m, double se_m) {
   return text;
 }
 
-std::string number(double v, int decimals) {
-  char text[64];
-  std::snprintf(text, sizeof text, "%.*f", decimals, v);
-  return text;
-}
-
 }  // namespace
 
 std::string biasText(const CalibrationModel& m, double d) {
   if (!calibration::insideFittedRange(m, d)) {
     if (!m.fitted_range_m) return "outside the sensor's window";
-    return "outside the fitted range " + number(m.fitted_range_m->first, 2) + "-" +
-           number(m.fitted_range_m->second, 2) + " m";
+    return "outside the fitted range " + fixed(m.fitted_range_m->first, 2) + "-" +
+           fixed(m.fitted_range_m->second, 2) + " m";
   }
   const Eigen::MatrixXd c = calibration::biasCovariance(m, {d});
   return mmText(m.model.bias(d) - d, c.size() ? std::sqrt(std::max(0.0, c(0, 0))) : NAN);
@@ -49,22 +44,22 @@ DiagnosticReport diagnosticReport(const WatchState& s, const CalibrationModel* m
   add("mode", toString(settings.mode));
   add("model version", std::to_string(s.model_version));
   if (model)
-    for (double d : {1.0, 2.0, 3.0}) add("bias at " + number(d, 0) + " m", biasText(*model, d));
+    for (double d : {1.0, 2.0, 3.0}) add("bias at " + fixed(d, 0) + " m", biasText(*model, d));
   const ModelCheck& k = s.last_check.check;
   if (s.last_check.test != Test::none)
     for (std::size_t i = 0; i < 2; ++i)
-      add("last check: shift at " + number(k.distance_m[i], 2) + " m",
+      add("last check: shift at " + fixed(k.distance_m[i], 2) + " m",
           mmText(k.shift_m[i], k.shift_se_m[i]));
   add("sightings in window", std::to_string(s.sightings));
   add("poles tracked", std::to_string(s.tracks));
-  add("since last test", number(s.since_check_m, 1) + " m, " + number(s.since_check_s, 0) + " s");
+  add("since last test", fixed(s.since_check_m, 1) + " m, " + fixed(s.since_check_s, 0) + " s");
   add("scans watched", std::to_string(s.scans));
   add("scans not watched", std::to_string(not_watched));
   add("checks tested", std::to_string(s.checks));
   add("alarms", std::to_string(s.alarms));
   add("switches", std::to_string(s.switches));
   add("false alarms set",
-      number(settings.false_alarms.per_unit, 3) + " per " + toString(settings.false_alarms.unit));
+      fixed(settings.false_alarms.per_unit, 3) + " per " + toString(settings.false_alarms.unit));
   return r;
 }
 

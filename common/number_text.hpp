@@ -1,0 +1,15 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+// Numbers as text for messages and reports, in the two forms the project prints.
+
+#include <string>
+
+namespace lidarcal {
+
+/// `v` with `digits` decimals ("%.*f"), with a leading + for positive values when `sign`.
+std::string fixed(double v, int digits, bool sign = false);
+
+/// `v` with `digits` significant digits ("%.*g").
+std::string significant(double v, int digits);
+
+}  // namespace lidarcal
