@@ -31,7 +31,7 @@ done
 $W --scene "$(scene large_poles)" --seeds 10 --first-seed 2000 --scans 2000 --change 20@900 \
   --learn --work "$OUT/learn_work" > "$OUT/learn_large_poles.txt"
 # Clean drives in learn mode at 20 false alarms per km, so that refits happen: none may switch.
-$W --scene "$(scene large_poles)" --seeds 50 --first-seed 3000 --scans 1500 --learn --rate 20 \
+$W --scene "$(scene large_poles)" --seeds 20 --first-seed 3000 --scans 1500 --learn --rate 20 \
   > "$OUT/learn_clean_rate20.txt"
 # 4. Memory over a 100,000-scan drive.
 $W --scene "$(scene large_poles)" --seeds 1 --first-seed 4000 --scans 100000 --rss-every 10000 \

@@ -12,6 +12,7 @@
 #include <optional>
 #include <string>
 
+#include <glog/logging.h>
 #include <CLI/CLI.hpp>
 
 #include "common/errors.hpp"
@@ -181,6 +182,9 @@ void refuseWithoutResult(const WatchOptions& o, const WatchTimeline& t) {
 }
 
 void runWatch(const WatchOptions& o) {
+  // A refit on a stretch that cannot determine a model makes Ceres warn (through glog) of a
+  // rank-deficient covariance; the refit's decision says so in the timeline instead.
+  FLAGS_minloglevel = google::GLOG_ERROR;
   if (o.out.empty())
     throw InputError("", "--out", "no output directory given", "give -o DIR for the timeline");
   if (o.per != "km" && o.per != "hour")
