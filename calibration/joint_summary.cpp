@@ -7,6 +7,7 @@
 #include <cmath>
 #include <memory>
 
+#include "common/information_criteria.hpp"
 #include "common/stats_util.hpp"
 
 namespace lidarcal::calibration::joint {
@@ -143,8 +144,8 @@ void JointProblem::reportLikelihood() {
                    (config_.noise == NoiseKind::polynomial ? config_.noise_order + 1.0 : 1.0) +
                    (config_.estimate_radius ? 1.0 : 0.0) +
                    static_cast<double>(out_.effect_parameters - heading_params);
-  out_.aic = 2.0 * k + 2.0 * out_.neg_log_likelihood;
-  out_.bic = k * std::log(static_cast<double>(readings_.size())) + 2.0 * out_.neg_log_likelihood;
+  out_.aic = akaike(k, out_.neg_log_likelihood);
+  out_.bic = schwarz(k, readings_.size(), out_.neg_log_likelihood);
 }
 
 /// Centre-bearing residuals: detected centre bearing against the refined geometry.

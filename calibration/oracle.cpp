@@ -8,6 +8,7 @@
 #include "calibration/closed_form_stage.hpp"
 #include "calibration/inversion.hpp"
 #include "calibration/noise_fits.hpp"
+#include "common/information_criteria.hpp"
 
 namespace lidarcal::calibration {
 
@@ -46,8 +47,8 @@ CalibrationModel calibrateAgainstTruth(const std::vector<RangePair>& pairs,
       const Alhashimi2016Fit ml = fitAlhashimi2016ML(d, y, cf.alpha);
       const double k = row.order + 2.0;
       row.alpha = ml.alpha;
-      row.aic = 2.0 * k + 2.0 * ml.neg_log_likelihood;
-      row.bic = k * std::log(static_cast<double>(d.size())) + 2.0 * ml.neg_log_likelihood;
+      row.aic = akaike(k, ml.neg_log_likelihood);
+      row.bic = schwarz(k, d.size(), ml.neg_log_likelihood);
       row.invertible = !window || window(row.alpha);
       if (row.invertible && row.aic < best) {
         best = row.aic;

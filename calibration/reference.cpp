@@ -21,6 +21,7 @@
 #include "calibration/joint_refinement.hpp"
 #include "calibration/noise_exponent.hpp"
 #include "calibration/range_model_fit.hpp"
+#include "common/information_criteria.hpp"
 #include "common/number_text.hpp"
 #include "common/plural.hpp"
 #include "common/stats_util.hpp"
@@ -424,8 +425,8 @@ int fitEveryOrder(const ReadingColumns& c, double exponent, const CalibrationCon
     row.order = n;
     row.alpha = f.alpha;
     const double k = n + 2.0;
-    row.aic = 2.0 * k + 2.0 * f.neg_log_likelihood;
-    row.bic = k * std::log(static_cast<double>(c.d.size())) + 2.0 * f.neg_log_likelihood;
+    row.aic = akaike(k, f.neg_log_likelihood);
+    row.bic = schwarz(k, c.d.size(), f.neg_log_likelihood);
     row.validation_mse_m2 = f.cv_mse_m2;
     row.test_mse_m2 = kNaN;
     row.invertible = isMonotone(BiasPolynomial{f.alpha}, d_lo, d_hi);

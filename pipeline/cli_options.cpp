@@ -63,16 +63,7 @@ void addCalibrationOptions(CLI::App* app, const std::shared_ptr<CalibrationOptio
                   "A landmark must be seen from at least this many stops")
       ->check(CLI::Range(2, 1000))
       ->capture_default_str();
-  app->add_option("--inlier-threshold", o->inlier_threshold,
-                  "Inlier threshold of the circle and line fits, t(r) = A + B r^2 metres (r: "
-                  "range), as A,B; about three standard deviations of the sensor's range noise. "
-                  "Default 0.01,0.005 (a triangulation lidar, noise growing with range squared; "
-                  "poles count as too far once t exceeds twice their radius); a time-of-flight "
-                  "sensor with millimetre noise: e.g. 0.01,0.0005")
-      ->expected(2)
-      ->delimiter(',')
-      ->check(CLI::NonNegativeNumber)
-      ->capture_default_str();
+  addInlierThresholdOption(app, o->inlier_threshold);
   app->add_option("--motion-prior", o->motion_prior,
                   "Odometry between consecutive stops as a prior of the joint refinement: auto (on "
                   "when the robot never "
@@ -134,15 +125,33 @@ calibration::CalibrationConfig calibrationConfig(const CalibrationOptions& o) {
   return c;
 }
 
+void addInlierThresholdOption(CLI::App* app, std::vector<double>& threshold) {
+  app->add_option("--inlier-threshold", threshold,
+                  "Inlier threshold of the circle and line fits, t(r) = A + B r^2 metres (r: "
+                  "range), as A,B; about three standard deviations of the sensor's range noise. "
+                  "Default 0.01,0.005 (a triangulation lidar, noise growing with range squared; "
+                  "poles count as too far once t exceeds twice their radius); a time-of-flight "
+                  "sensor with millimetre noise: e.g. 0.01,0.0005")
+      ->expected(2)
+      ->delimiter(',')
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+}
+
+void applyInlierThreshold(const std::vector<double>& threshold,
+                          detectors::DetectionConfig& detection) {
+  if (!(threshold.at(0) > 0.0))
+    throw InputError("", "--inlier-threshold", "A (the threshold at range 0) must be > 0");
+  detection.threshold_m = threshold.at(0);
+  detection.threshold_per_m2 = threshold.at(1);
+}
+
 detectors::SequenceDetectionConfig detectionConfig(const CalibrationOptions& o) {
   detectors::SequenceDetectionConfig c;
   if (o.radius_m > 0.0) c.detection.landmark_radius_m = o.radius_m;
   c.association.min_stops = o.min_stops;
   c.threads = o.threads;
-  if (!(o.inlier_threshold.at(0) > 0.0))
-    throw InputError("", "--inlier-threshold", "A (the threshold at range 0) must be > 0");
-  c.detection.threshold_m = o.inlier_threshold.at(0);
-  c.detection.threshold_per_m2 = o.inlier_threshold.at(1);
+  applyInlierThreshold(o.inlier_threshold, c.detection);
   return c;
 }
 

@@ -39,6 +39,12 @@ struct CalibrationOptions {
 /// (0, the default: the machine's cores, at most 8).
 void addThreadsOption(CLI::App* app, int& threads, const std::string& work);
 
+/// --inlier-threshold A,B: the threshold t(r) = A + B r^2 (metres) of the circle and line fits.
+void addInlierThresholdOption(CLI::App* app, std::vector<double>& threshold);
+/// Sets the detection's threshold from the option's values (InputError when A is not > 0).
+void applyInlierThreshold(const std::vector<double>& threshold,
+                          detectors::DetectionConfig& detection);
+
 /// Adds the options to a subcommand.
 void addCalibrationOptions(CLI::App* app, const std::shared_ptr<CalibrationOptions>& o);
 /// Maps them into the stage configs (throws InputError for a bad value).

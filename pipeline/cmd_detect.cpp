@@ -74,10 +74,7 @@ detectors::SequenceDetectionConfig detectionSettings(const DetectOptions& o) {
   cfg.association.min_stops = o.min_stops;
   cfg.association.link_distance_m = o.link_distance_m;
   cfg.detection.segmentation.max_missing_beams = o.max_missing_beams;
-  if (!(o.inlier_threshold.at(0) > 0.0))
-    throw InputError("", "--inlier-threshold", "A (the threshold at range 0) must be > 0");
-  cfg.detection.threshold_m = o.inlier_threshold.at(0);
-  cfg.detection.threshold_per_m2 = o.inlier_threshold.at(1);
+  applyInlierThreshold(o.inlier_threshold, cfg.detection);
   cfg.association.min_link_distance_m =
       std::min(cfg.association.min_link_distance_m, o.link_distance_m);
   // The evaluation against the truth needs every scan's detections at once; otherwise nothing
@@ -265,16 +262,7 @@ void addDetectCommand(CLI::App& app) {
                   "such as the YDLIDAR X4)")
       ->check(CLI::Range(0, 50))
       ->capture_default_str();
-  sub->add_option("--inlier-threshold", o->inlier_threshold,
-                  "Inlier threshold of the circle and line fits, t(r) = A + B r^2 metres (r: "
-                  "range), as A,B; about three standard deviations of the sensor's range noise. "
-                  "Default 0.01,0.005 (a triangulation lidar, noise growing with range squared; "
-                  "poles count as too far once t exceeds twice their radius); a time-of-flight "
-                  "sensor with millimetre noise: e.g. 0.01,0.0005")
-      ->expected(2)
-      ->delimiter(',')
-      ->check(CLI::NonNegativeNumber)
-      ->capture_default_str();
+  addInlierThresholdOption(sub, o->inlier_threshold);
   sub->add_flag("--ascii", o->ascii, "Write ASCII PCD instead of binary");
   sub->add_option("--truth", o->truth,
                   "Simulator truth (DIR/truth.json, with DIR/true_ranges.csv): also print "
