@@ -162,62 +162,79 @@ struct Classifier {
       s.kind = ClusterKind::line;
   }
 
-  std::optional<Detection> classify(const pcl::Indices& idx, ClusterSummary& s) const {
-    std::vector<Eigen::Vector2d> pts;
-    std::vector<double> ranges;
-    pts.reserve(idx.size());
-    ranges.reserve(idx.size());
-    for (auto i : idx) {
-      const auto& p = cloud[static_cast<std::size_t>(i)];
-      pts.emplace_back(p.x, p.y);
-      ranges.push_back(pts.back().norm());
-    }
-    const double range = upperMedian(std::move(ranges));
-    const double t = cfg.threshold(range);
-    const std::optional<double> radius_known =
-        cfg.landmark_radius_m ? cfg.landmark_radius_m : hintedRadius(pts);
-    const bool known = radius_known.has_value();
-    const double r_lo = known ? *radius_known * cfg.known_radius_min_factor : cfg.radius_min_m;
-    const double r_hi = known ? *radius_known * cfg.known_radius_max_factor : cfg.radius_max_m;
-    const std::size_t min_points =
-        static_cast<std::size_t>(known ? cfg.min_points : cfg.min_points_free);
-    const double r_wide = known ? *radius_known : cfg.radius_max_m;
+  /// What a cluster is held against: the noise threshold at its range and the radii a landmark
+  /// may have there.
+  struct Gates {
+    double range = 0.0;  // upper median range of the points
+    double t = 0.0;      // inlier threshold at that range
+    std::optional<double> radius_known;
+    double r_lo = 0.0, r_hi = 0.0, r_wide = 0.0;
+    std::size_t min_points = 0;
+  };
 
-    if (idx.size() < min_points) {
+  Gates gates(const std::vector<Eigen::Vector2d>& pts) const {
+    std::vector<double> ranges;
+    ranges.reserve(pts.size());
+    for (const auto& p : pts) ranges.push_back(p.norm());
+    Gates g;
+    g.range = upperMedian(std::move(ranges));
+    g.t = cfg.threshold(g.range);
+    g.radius_known = cfg.landmark_radius_m ? cfg.landmark_radius_m : hintedRadius(pts);
+    const bool known = g.radius_known.has_value();
+    g.r_lo = known ? *g.radius_known * cfg.known_radius_min_factor : cfg.radius_min_m;
+    g.r_hi = known ? *g.radius_known * cfg.known_radius_max_factor : cfg.radius_max_m;
+    g.min_points = static_cast<std::size_t>(known ? cfg.min_points : cfg.min_points_free);
+    g.r_wide = known ? *g.radius_known : cfg.radius_max_m;
+    return g;
+  }
+
+  /// True (with the reason in s) when the cluster is no landmark before any fit.
+  bool rejectedBeforeFit(const pcl::Indices& idx, const std::vector<Eigen::Vector2d>& pts,
+                         const Gates& g, ClusterSummary& s) const {
+    if (idx.size() < g.min_points) {
       s.reason = "too few points (" + std::to_string(idx.size()) + ")";
-      return std::nullopt;
+      return true;
     }
-    if (t > cfg.max_threshold_to_radius * r_wide) {
+    if (g.t > cfg.max_threshold_to_radius * g.r_wide) {
       s.reason = "too far: the noise hides the shape of a landmark";
-      return std::nullopt;
+      return true;
     }
     if (cfg.require_free_edges &&
         (nearerNeighbour(idx.front(), -1) || nearerNeighbour(idx.back(), +1))) {
       s.reason = "partly hidden (a neighbouring return is nearer)";
-      return std::nullopt;
+      return true;
     }
     // Width across the line of sight: bearings are exact while range noise moves points radially.
     const Eigen::Vector2d& mid_point = pts[pts.size() / 2];
-    if (range * angularSpan(pts, std::atan2(mid_point.y(), mid_point.x())) >
-        2.0 * r_wide * cfg.extent_factor) {
-      notCircle(idx, t, s, "wider than a landmark");
-      return std::nullopt;
+    if (g.range * angularSpan(pts, std::atan2(mid_point.y(), mid_point.x())) >
+        2.0 * g.r_wide * cfg.extent_factor) {
+      notCircle(idx, g.t, s, "wider than a landmark");
+      return true;
     }
+    return false;
+  }
+
+  /// The circle fit and the checks on it; nullopt (with the reason in s) when it fails. Sets
+  /// radius_stddev, the free radius's standard deviation.
+  std::optional<CircleFit> fittedCircle(const pcl::Indices& idx, const Gates& g, ClusterSummary& s,
+                                        double& radius_stddev) const {
+    const bool known = g.radius_known.has_value();
     CircleFitConfig cc;
-    cc.inlier_threshold_m = t;
-    cc.radius_min_m = r_lo;
-    cc.radius_max_m = r_hi;
-    cc.fixed_radius_m = radius_known;
+    cc.inlier_threshold_m = g.t;
+    cc.radius_min_m = g.r_lo;
+    cc.radius_max_m = g.r_hi;
+    cc.fixed_radius_m = g.radius_known;
     cc.seen_from = Eigen::Vector2d::Zero();
     cc.ransac_min_points = cfg.ransac_min_points;
     cc.max_iterations = cfg.max_iterations;
-    const CircleFit fit = fitCircle(cloud, idx, cc);
+    CircleFit fit = fitCircle(cloud, idx, cc);
+    const double t = g.t;
     if (fit.status != FitStatus::ok) {
       notCircle(idx, t, s, std::string("circle fit: ") + toString(fit.status));
       return std::nullopt;
     }
     const std::size_t n_in = fit.inliers.size();
-    if (n_in < min_points ||
+    if (n_in < g.min_points ||
         static_cast<double>(n_in) < cfg.min_inlier_fraction * static_cast<double>(idx.size())) {
       notCircle(idx, t, s, "too few points on the circle");
       return std::nullopt;
@@ -228,8 +245,7 @@ struct Classifier {
     }
     const double p_free =
         static_cast<double>(n_in) > 3.0 ? std::sqrt(double(n_in) / (double(n_in) - 3.0)) : 0.0;
-    const double radius_stddev =
-        fit.free_radius_sensitivity * std::max(fit.free_rms_m * p_free, t / 3.0);
+    radius_stddev = fit.free_radius_sensitivity * std::max(fit.free_rms_m * p_free, t / 3.0);
     if (!known && !(radius_stddev <= cfg.max_radius_uncertainty * fit.free_circle.radius_m)) {
       notCircle(idx, t, s, "radius not determined by the arc");
       return std::nullopt;
@@ -241,6 +257,13 @@ struct Classifier {
                     toString(fit.free_status) + ")");
       return std::nullopt;
     }
+    return fit;
+  }
+
+  /// True (with the reason in s) when the circle's inliers are no pole after all: an arc
+  /// narrower than a pole looks, or a line or a corner that explains them better.
+  bool notAPole(const CircleFit& fit, const Gates& g, ClusterSummary& s) const {
+    const std::size_t n_in = fit.inliers.size();
     std::vector<Eigen::Vector2d> in;
     in.reserve(n_in);
     for (auto i : fit.inliers)
@@ -253,7 +276,7 @@ struct Classifier {
     const double width = 2.0 * std::asin(std::min(1.0, radius / dist));
     if (angularSpan(in, bearing) < cfg.min_width_fraction * width - 2.0 * angular_step_rad) {
       s.reason = "arc narrower than a landmark";
-      return std::nullopt;
+      return true;
     }
     // Neither a straight line (a wall, a box face) nor two straight faces meeting at a corner (a
     // box) may explain the points clearly better: a lower sum of squares by more than
@@ -263,8 +286,8 @@ struct Classifier {
       return wrapAngle(std::atan2(a.y(), a.x()) - bearing) <
              wrapAngle(std::atan2(b.y(), b.x()) - bearing);
     });
-    const double n = static_cast<double>(n_in), p_circle = known ? 2.0 : 3.0;
-    const double ss_circle = n * fit.rms_m * fit.rms_m, sigma = t / 3.0;
+    const double n = static_cast<double>(n_in), p_circle = g.radius_known ? 2.0 : 3.0;
+    const double ss_circle = n * fit.rms_m * fit.rms_m, sigma = g.t / 3.0;
     auto explainsBetter = [&](double ss, double params) {
       if (!(n > params) || !(n > p_circle)) return false;
       const double evidence = (ss_circle - ss) / (sigma * sigma);
@@ -276,25 +299,40 @@ struct Classifier {
     if (explainsBetter(n * line.rms_m * line.rms_m, 2.0)) {
       s.kind = ClusterKind::line;
       s.reason = "a line fits better";
-      return std::nullopt;
+      return true;
     }
     if (explainsBetter(cornerSumSquares(in), 5.0)) {
       s.kind = ClusterKind::line;
       s.reason = "two straight faces (a corner) fit better";
-      return std::nullopt;
+      return true;
     }
+    return false;
+  }
+
+  std::optional<Detection> classify(const pcl::Indices& idx, ClusterSummary& s) const {
+    std::vector<Eigen::Vector2d> pts;
+    pts.reserve(idx.size());
+    for (auto i : idx) {
+      const auto& p = cloud[static_cast<std::size_t>(i)];
+      pts.emplace_back(p.x, p.y);
+    }
+    const Gates g = gates(pts);
+    if (rejectedBeforeFit(idx, pts, g, s)) return std::nullopt;
+    double radius_stddev = 0.0;
+    const std::optional<CircleFit> fit = fittedCircle(idx, g, s, radius_stddev);
+    if (!fit || notAPole(*fit, g, s)) return std::nullopt;
     Detection d;
-    setCentre(d, fit.circle);
-    d.radius_fixed = known;
-    d.rms_m = fit.rms_m;
-    d.free_status = fit.free_status;
-    d.free_centre_x_m = fit.free_circle.x_m;
-    d.free_centre_y_m = fit.free_circle.y_m;
-    d.free_radius_m = fit.free_circle.radius_m;
-    d.free_rms_m = fit.free_rms_m;
-    d.free_radius_stddev_m = fit.free_status == FitStatus::ok ? radius_stddev : 0.0;
+    setCentre(d, fit->circle);
+    d.radius_fixed = g.radius_known.has_value();
+    d.rms_m = fit->rms_m;
+    d.free_status = fit->free_status;
+    d.free_centre_x_m = fit->free_circle.x_m;
+    d.free_centre_y_m = fit->free_circle.y_m;
+    d.free_radius_m = fit->free_circle.radius_m;
+    d.free_rms_m = fit->free_rms_m;
+    d.free_radius_stddev_m = fit->free_status == FitStatus::ok ? radius_stddev : 0.0;
     d.cluster_points = idx.size();
-    d.inliers = fit.inliers;
+    d.inliers = fit->inliers;
     s.kind = ClusterKind::circle;
     return d;
   }
