@@ -200,10 +200,7 @@ watch::DiagnosticReport ScanPath::report() const {
         "correcting with " + settings_.model_file + " (apply mode: the model is not checked)";
     r.values.emplace_back("mode", "apply");
     r.values.emplace_back("model", settings_.model_file);
-    if (model_)
-      for (double d : {1.0, 2.0, 3.0})
-        r.values.emplace_back("bias at " + std::to_string(static_cast<int>(d)) + " m",
-                              watch::biasText(*model_, d));
+    if (model_) watch::addBiasValues(*model_, r.values);
   }
   addCorrectionCounts(stats_, r);
   return r;

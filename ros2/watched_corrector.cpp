@@ -148,9 +148,7 @@ DiagnosticEntry applyDiagnostics(const LiveCorrector& c, const CalibrationModel&
       DiagnosticLevel::ok, entryName(topic), "correcting with " + model_file, hardware_id, {}};
   e.values.emplace_back("mode", "apply");
   e.values.emplace_back("model", model_file);
-  for (double d : kBiasDistancesM)
-    e.values.emplace_back("bias at " + std::to_string(static_cast<int>(d)) + " m",
-                          watch::biasText(model, d));
+  watch::addBiasValues(model, e.values);
   addCorrectionValues(c.stats(), e);
   return e;
 }

@@ -33,6 +33,12 @@ std::string biasText(const CalibrationModel& m, double d) {
   return mmText(m.model.bias(d) - d, c.size() ? std::sqrt(std::max(0.0, c(0, 0))) : NAN);
 }
 
+void addBiasValues(const CalibrationModel& model,
+                   std::vector<std::pair<std::string, std::string>>& values) {
+  for (double d : {1.0, 2.0, 3.0})
+    values.emplace_back("bias at " + fixed(d, 0) + " m", biasText(model, d));
+}
+
 DiagnosticReport diagnosticReport(const WatchState& s, const CalibrationModel* model,
                                   const WatchSettings& settings, std::size_t not_watched) {
   DiagnosticReport r;
@@ -43,8 +49,7 @@ DiagnosticReport diagnosticReport(const WatchState& s, const CalibrationModel* m
   };
   add("mode", toString(settings.mode));
   add("model version", std::to_string(s.model_version));
-  if (model)
-    for (double d : {1.0, 2.0, 3.0}) add("bias at " + fixed(d, 0) + " m", biasText(*model, d));
+  if (model) addBiasValues(*model, r.values);
   const ModelCheck& k = s.last_check.check;
   if (s.last_check.test != Test::none)
     for (std::size_t i = 0; i < 2; ++i)

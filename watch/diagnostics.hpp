@@ -31,4 +31,9 @@ DiagnosticReport diagnosticReport(const WatchState& state, const CalibrationMode
 /// there is none ("outside the fitted range 0.4-3.1 m").
 std::string biasText(const CalibrationModel& model, double d_m);
 
+/// Appends the model's bias at 1, 2 and 3 m ("bias at 1 m" -> biasText), as every mode's
+/// /diagnostics status carries it.
+void addBiasValues(const CalibrationModel& model,
+                   std::vector<std::pair<std::string, std::string>>& values);
+
 }  // namespace lidarcal::watch
