@@ -71,6 +71,7 @@ struct SeedResult {
   std::shared_ptr<const CalibrationModel> switched;
   double seconds = 0.0;
   std::vector<double> p_values;
+  std::vector<double> refit_p;  // the difference test's p of each refit judged against a model
 };
 
 /// RMS of corrected minus true range over the pole beams of the scans from `first` on (raw
@@ -157,6 +158,7 @@ watch::WatchSink seedSink(const Options& o, const watch::RangeChange& change, Se
     }
   };
   sink.refit = [&r](const watch::RefitEvent& e) {
+    if (e.decision.difference.tested) r.refit_p.push_back(e.decision.difference.wald.p);
     if (e.decision.adopt && r.switched_at < 0) {
       r.switched_at = static_cast<long>(e.decided_at);
       r.switched = e.candidate;
@@ -248,6 +250,7 @@ int main(int argc, char** argv) {
     double levels = 0.0;
     std::size_t abs_tests = 0, abs_exceeding = 0;
     double abs_levels = 0.0;
+    std::size_t refits = 0, refits_05 = 0, refits_01 = 0, switched = 0;
     for (std::size_t k = 0; k < o.seeds; ++k) {
       const std::uint64_t seed = o.first_seed + k;
       const SeedResult r = runSeed(scene, model, o, seed, change);
@@ -260,6 +263,9 @@ int main(int argc, char** argv) {
       false_alarms += r.false_alarms;
       with_false += r.false_alarms > 0;
       detected += r.detected_at >= 0;
+      switched += r.switched_at >= 0;
+      refits += r.refit_p.size();
+      for (double p : r.refit_p) refits_05 += p < 0.05, refits_01 += p < 0.01;
       std::printf("seed %3llu: %3zu checks (%zu not possible), %zu false alarms",
                   static_cast<unsigned long long>(seed), r.checks, r.failed, r.false_alarms);
       if (!change.none()) std::printf(", detected %s", r.detected_at < 0 ? "no" : "");
@@ -275,6 +281,8 @@ int main(int argc, char** argv) {
             1000.0 * r.err_switched, 1000.0 * r.err_fresh, 1000.0 * r.err_raw);
       std::printf("; p:");
       for (double p : r.p_values) std::printf(" %.2g", p);
+      if (!r.refit_p.empty()) std::printf("; refits' p:");
+      for (double p : r.refit_p) std::printf(" %.2g", p);
       std::printf("  [%.1f s]\n", r.seconds);
       std::fflush(stdout);
     }
@@ -286,6 +294,11 @@ int main(int argc, char** argv) {
         "of which change tests %zu exceeded, %.2f expected; absolute tests (%zu) %zu exceeded, "
         "%.2f expected\n",
         exceeding - abs_exceeding, levels - abs_levels, abs_tests, abs_exceeding, abs_levels);
+    if (o.learn)
+      std::printf(
+          "learn: %zu drives switched; %zu refits compared with the model in use, p < 0.05 in "
+          "%zu, p < 0.01 in %zu\n",
+          switched, refits, refits_05, refits_01);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "watch_drives: %s\n", e.what());
     return 2;
