@@ -158,7 +158,7 @@ watch::WatchSink seedSink(const Options& o, const watch::RangeChange& change, Se
     }
   };
   sink.refit = [&r](const watch::RefitEvent& e) {
-    if (e.decision.difference.tested) r.refit_p.push_back(e.decision.difference.wald.p);
+    if (e.decision.test.tested) r.refit_p.push_back(e.decision.test.f.p);
     if (e.decision.adopt && r.switched_at < 0) {
       r.switched_at = static_cast<long>(e.decided_at);
       r.switched = e.candidate;

@@ -70,6 +70,13 @@ ordered_json refitJson(const RefitRecord& r) {
   if (e.candidate) j["candidate"] = candidateJson(*e.candidate);
   const watch::SwitchDecision& d = e.decision;
   j["differs"] = d.differs;
+  if (d.test.tested) {
+    j["difference_checks"] = d.test.checks;
+    j["difference_f"] = num(d.test.f.statistic);
+    j["difference_p"] = num(d.test.f.p);
+  } else if (!d.test.why_not.empty()) {
+    j["difference_not_tested"] = d.test.why_not;
+  }
   j["determined"] = d.determined;
   j["plausible"] = d.plausible;
   j["switched"] = d.adopt;
@@ -78,7 +85,6 @@ ordered_json refitJson(const RefitRecord& r) {
   if (d.difference.tested) {
     j["difference_distances_m"] = d.difference.distances_m;
     j["difference_m"] = d.difference.difference_m;
-    j["difference_p"] = num(d.difference.wald.p);
   }
   if (!r.model_file.empty()) j["model_file"] = r.model_file;
   j["model_version"] = e.model_version;

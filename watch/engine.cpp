@@ -211,6 +211,8 @@ void Engine::useModel(std::shared_ptr<const CalibrationModel> model) {
   distances_m_ = referenceDistances(*model_);
   model_covariance_ = modelShiftCovariance(*model_, distances_m_);
   record_.clear();
+  alarm_record_.clear();
+  after_alarm_.clear();
   rejected_ = alarmed_ = false;
   alarm_ = CheckEvent{};
   state_.last_check = CheckEvent{};
@@ -243,6 +245,10 @@ void Engine::decide(CheckEvent& e, const Shift& shift) {
   if (e.alarm) {
     alarm_ = e;
     alarm_mean_ = record_.mean();  // the baseline's, or the passed checks' before this one
+    alarm_record_ = record_;
+    after_alarm_.clear();
+  } else if (alarmed_) {
+    after_alarm_.add(shift);
   }
   if (e.test == Test::change) record_.add(shift);
   if (e.test == Test::absolute) {
@@ -296,7 +302,7 @@ void Engine::applyRefit(const Fit& fit) {
   LearnSettings learn = settings_.learn;
   const double k = static_cast<double>(learn_refits_);
   learn.switch_level /= k * (k + 1.0);
-  e.decision = decideSwitch(*fit.candidate, model_.get(), learn);
+  e.decision = decideSwitch(*fit.candidate, model_.get(), switchTest(), learn);
   if (e.decision.adopt) {
     useModel(fit.candidate);
     ++state_.switches;
@@ -314,6 +320,25 @@ void Engine::applyRefit(const Fit& fit) {
   }
   e.model_version = state_.model_version;
   if (sink_.refit) sink_.refit(e);
+}
+
+/// Whether the sensor differs from the model in use since the alarm: the checks made since
+/// against those before it, or against zero when the model was wrong from the start (its
+/// baseline failed the absolute test). Those checks are fits of the kind the record holds, over
+/// stretches after the alarm's, so under no change they are draws of the record's law.
+SwitchTest Engine::switchTest() const {
+  SwitchTest t;
+  if (!model_) return t;
+  const std::size_t need = rejected_ ? 2 : 1;
+  if (after_alarm_.size() < need) {
+    t.why_not = "checks since the alarm: " + std::to_string(after_alarm_.size()) + " of the " +
+                std::to_string(need) + " needed";
+    return t;
+  }
+  t.f = rejected_ ? after_alarm_.absolute(model_covariance_) : after_alarm_.sameMean(alarm_record_);
+  t.checks = after_alarm_.size();
+  t.tested = true;
+  return t;
 }
 
 void Engine::updateLevel() {

@@ -80,6 +80,7 @@ class Engine {
   void poll(bool wait);
   void applyCheck(const Fit& fit);
   void applyRefit(const Fit& fit);
+  SwitchTest switchTest() const;
   void updateLevel();
   void decide(CheckEvent& e, const Shift& shift);
   void useModel(std::shared_ptr<const CalibrationModel> model);
@@ -106,7 +107,9 @@ class Engine {
   Eigen::Vector2d alarm_mean_ = Eigen::Vector2d::Zero();  // the record's mean shift then
   bool rejected_ = false;  // the model's baseline failed its absolute test: wrong from the start
   ShiftHistory record_;    // the checks that passed under the model in use
-  std::array<double, 2> distances_m_{};                         // the model's reference distances
+  ShiftHistory alarm_record_;            // the record when the alarm came
+  ShiftHistory after_alarm_;             // the checks since: a switch needs them to differ from it
+  std::array<double, 2> distances_m_{};  // the model's reference distances
   Eigen::Matrix2d model_covariance_ = Eigen::Matrix2d::Zero();  // its own error there
 };
 

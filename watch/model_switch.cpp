@@ -6,6 +6,7 @@
 #include <cstdio>
 
 #include "calibration/calibrate.hpp"
+#include "common/number_text.hpp"
 
 namespace lidarcal::watch {
 
@@ -47,8 +48,9 @@ std::vector<double> evenDistances(double lo, double hi, int count) {
 }
 
 SwitchDecision decideSwitch(const CalibrationModel& candidate, const CalibrationModel* in_use,
-                            const LearnSettings& settings) {
+                            const SwitchTest& test, const LearnSettings& settings) {
   SwitchDecision s;
+  if (in_use) s.test = test;
   s.plausible = candidate.status.ok() && candidate.plausibility.trustworthy();
   if (!candidate.status.ok() || !candidate.fitted_range_m) {
     s.reason = "no candidate: " + candidate.status.message;
@@ -69,7 +71,7 @@ SwitchDecision decideSwitch(const CalibrationModel& candidate, const Calibration
   s.determined = largest <= settings.max_standard_error_m;
   if (in_use) {
     s.difference = calibration::compareModels(candidate, *in_use, d);
-    s.differs = s.difference.tested && s.difference.wald.p < settings.switch_level;
+    s.differs = test.tested && test.f.p < settings.switch_level;
     double diff_sq = 0.0;
     for (double x : s.difference.difference_m)
       diff_sq += x * x / static_cast<double>(s.difference.difference_m.size());
@@ -77,16 +79,16 @@ SwitchDecision decideSwitch(const CalibrationModel& candidate, const Calibration
   }
   s.adopt = s.determined && s.plausible && (!in_use || s.differs);
   if (s.adopt)
-    s.reason = in_use
-                   ? "the candidate differs from the model in use (" + pText(s.difference.wald.p) +
-                         "), is determined to " + mm(largest) + " and plausible"
-                   : "the candidate is determined to " + mm(largest) + " and plausible";
+    s.reason = in_use ? "the sensor differs from the model in use (" + pText(test.f.p) +
+                            "), it is determined to " + mm(largest) + " and plausible"
+                      : "the candidate is determined to " + mm(largest) + " and plausible";
   else if (!s.plausible)
     s.reason = "the candidate fails calibrate's plausibility checks";
   else if (in_use && !s.differs)
-    s.reason = s.difference.tested ? "the candidate does not differ from the model in use (" +
-                                         pText(s.difference.wald.p) + ")"
-                                   : "not comparable: " + s.difference.why_not;
+    s.reason = test.tested
+                   ? "the sensor does not differ from the model in use (" + pText(test.f.p) +
+                         ", level " + significant(settings.switch_level, 2) + ")"
+                   : "not tested: " + test.why_not;
   else
     s.reason = "the candidate is determined to only " + mm(largest) + " (needs " +
                mm(settings.max_standard_error_m) +

@@ -29,43 +29,70 @@ void ShiftHistory::add(const Shift& shift) {
   while (shifts_.size() > capacity_) shifts_.pop_front();
 }
 
-ShiftHistory::Pooled ShiftHistory::gls(double tau2) const {
-  Eigen::Matrix2d w_sum = Eigen::Matrix2d::Zero();
-  Eigen::Vector2d ws_sum = Eigen::Vector2d::Zero();
+namespace {
+
+/// Records that share tau^2 and phi^2, each with a mean of its own.
+using Groups = std::vector<const std::deque<Shift>*>;
+
+struct Pooled {
+  std::vector<Eigen::Vector2d> b;  // b^ of each group
+  std::vector<Eigen::Matrix2d> v;  // V_b of each group
+  double tau2 = 0.0;               // the spread between checks, m^2
+  double phi2 = 1.0;               // the scale
+  double nu = 0.0;                 // its degrees of freedom: q (checks - groups)
+  double rss = 0.0;                // the weighted residual sum of squares
+  double log_det = 0.0;            // sum log|C_j + tau^2 I| + sum over groups log|sum W_j|
+};
+
+std::size_t checks(const Groups& groups) {
+  std::size_t n = 0;
+  for (const auto* g : groups) n += g->size();
+  return n;
+}
+
+Pooled gls(const Groups& groups, double tau2) {
   Pooled p;
   p.tau2 = tau2;
   p.log_det = 0.0;
-  for (const Shift& x : shifts_) {
-    const Eigen::Matrix2d c = x.c + tau2 * Eigen::Matrix2d::Identity();
-    const Eigen::Matrix2d w = c.inverse();
-    w_sum += w;
-    ws_sum += w * x.s;
-    p.log_det += std::log(c.determinant());
-  }
-  p.v = w_sum.inverse();
-  p.b = p.v * ws_sum;
-  p.log_det -= std::log(p.v.determinant());  // + log det(sum W)
   double rss = 0.0;
-  for (const Shift& x : shifts_) {
-    const Eigen::Vector2d r = x.s - p.b;
-    rss += r.dot((x.c + tau2 * Eigen::Matrix2d::Identity()).inverse() * r);
+  for (const auto* shifts : groups) {
+    Eigen::Matrix2d w_sum = Eigen::Matrix2d::Zero();
+    Eigen::Vector2d ws_sum = Eigen::Vector2d::Zero();
+    for (const Shift& x : *shifts) {
+      const Eigen::Matrix2d c = x.c + tau2 * Eigen::Matrix2d::Identity();
+      const Eigen::Matrix2d w = c.inverse();
+      w_sum += w;
+      ws_sum += w * x.s;
+      p.log_det += std::log(c.determinant());
+    }
+    const Eigen::Matrix2d v = w_sum.inverse();
+    const Eigen::Vector2d b = v * ws_sum;
+    p.log_det -= std::log(v.determinant());  // + log det(sum W)
+    for (const Shift& x : *shifts) {
+      const Eigen::Vector2d r = x.s - b;
+      rss += r.dot((x.c + tau2 * Eigen::Matrix2d::Identity()).inverse() * r);
+    }
+    p.b.push_back(b);
+    p.v.push_back(v);
   }
-  p.nu = kQ * (static_cast<double>(shifts_.size()) - 1.0);
+  p.nu = kQ * (static_cast<double>(checks(groups)) - static_cast<double>(groups.size()));
   p.phi2 = rss / p.nu;
   p.rss = rss;
   return p;
 }
 
-ShiftHistory::Pooled ShiftHistory::pool() const {
-  if (shifts_.size() < 2) throw std::logic_error("ShiftHistory: fewer than 2 checks");
+Pooled pool(const Groups& groups) {
+  const std::size_t n = checks(groups);
+  if (n < groups.size() + 1) throw std::logic_error("ShiftHistory: too few checks");
   // tau^2 by restricted maximum likelihood: minimise log|C_j + tau^2 I| summed, + log|sum W_j|,
   // + the weighted residual sum of squares, over a grid of 0 and 60 values from 1e-4 to 1e2 times
   // the checks' typical variance, then a golden-section refinement between the grid's
   // neighbours. Deterministic.
   double typical = 0.0;
-  for (const Shift& x : shifts_) typical += 0.5 * x.c.trace() / static_cast<double>(size());
-  auto objective = [this](double t) {
-    const Pooled p = gls(t);
+  for (const auto* g : groups)
+    for (const Shift& x : *g) typical += 0.5 * x.c.trace() / static_cast<double>(n);
+  auto objective = [&groups](double t) {
+    const Pooled p = gls(groups, t);
     return p.log_det + p.rss;
   };
   std::vector<double> grid = {0.0};
@@ -81,37 +108,50 @@ ShiftHistory::Pooled ShiftHistory::pool() const {
     (objective(a) < objective(b) ? hi : lo) = (objective(a) < objective(b) ? b : a);
   }
   const double tau2 = objective(0.5 * (lo + hi)) < best_value ? 0.5 * (lo + hi) : grid[best];
-  return gls(tau2);
+  return gls(groups, tau2);
 }
 
+}  // namespace
+
 FTest ShiftHistory::change(const Shift& now) const {
-  const Pooled p = pool();
-  const Eigen::Vector2d r = now.s - p.b;
+  const Pooled p = pool({&shifts_});
+  const Eigen::Vector2d r = now.s - p.b[0];
   FTest t;
   t.dof1 = kQ;
   t.dof2 = p.nu;
-  const Eigen::Matrix2d c = now.c + p.tau2 * Eigen::Matrix2d::Identity() + p.v;
+  const Eigen::Matrix2d c = now.c + p.tau2 * Eigen::Matrix2d::Identity() + p.v[0];
   t.statistic = r.dot(c.inverse() * r) / (kQ * p.phi2);
   t.p = fTail(t.statistic, t.dof1, t.dof2);
   return t;
 }
 
 FTest ShiftHistory::absolute(const Eigen::Matrix2d& model_covariance) const {
-  const Pooled p = pool();
+  const Pooled p = pool({&shifts_});
   FTest t;
   t.dof1 = kQ;
   t.dof2 = p.nu;
-  t.statistic = p.b.dot((p.phi2 * p.v + model_covariance).inverse() * p.b) / kQ;
+  t.statistic = p.b[0].dot((p.phi2 * p.v[0] + model_covariance).inverse() * p.b[0]) / kQ;
   t.p = fTail(t.statistic, t.dof1, t.dof2);
   return t;
 }
 
-Eigen::Vector2d ShiftHistory::mean() const { return pool().b; }
-Eigen::Matrix2d ShiftHistory::meanCovariance() const {
-  const Pooled p = pool();
-  return p.phi2 * p.v;
+FTest ShiftHistory::sameMean(const ShiftHistory& earlier) const {
+  const Pooled p = pool({&earlier.shifts_, &shifts_});
+  const Eigen::Vector2d d = p.b[1] - p.b[0];
+  FTest t;
+  t.dof1 = kQ;
+  t.dof2 = p.nu;
+  t.statistic = d.dot((p.v[0] + p.v[1]).inverse() * d) / (kQ * p.phi2);
+  t.p = fTail(t.statistic, t.dof1, t.dof2);
+  return t;
 }
-double ShiftHistory::scale() const { return pool().phi2; }
-double ShiftHistory::spread() const { return pool().tau2; }
+
+Eigen::Vector2d ShiftHistory::mean() const { return pool({&shifts_}).b[0]; }
+Eigen::Matrix2d ShiftHistory::meanCovariance() const {
+  const Pooled p = pool({&shifts_});
+  return p.phi2 * p.v[0];
+}
+double ShiftHistory::scale() const { return pool({&shifts_}).phi2; }
+double ShiftHistory::spread() const { return pool({&shifts_}).tau2; }
 
 }  // namespace lidarcal::watch

@@ -20,7 +20,9 @@
 // holds `baseline` checks, the model itself is tested (a unit swapped before the watcher
 // started, a model of another sensor): with C_model the model's own error at the distances,
 //     absolute:  F = b^T (phi^2^ V_b + C_model)^-1 b^ / q                            ~ F(q, nu)
-//     nearly.
+//     nearly. Two records, the checks before an alarm and those after it, are compared with
+// tau^2 and phi^2 shared and a mean each (nu = q (n_1 + n_2 - 2)):
+//     same mean: F = (b^_2 - b^_1)^T (V_1 + V_2)^-1 (b^_2 - b^_1) / (q phi^2^)        ~ F(q, nu).
 // The levels come from false_alarms.hpp.
 
 #include <cstddef>
@@ -57,6 +59,9 @@ class ShiftHistory {
   FTest change(const Shift& now) const;
   /// The test of the record's mean shift against zero; needs size() >= 2.
   FTest absolute(const Eigen::Matrix2d& model_covariance) const;
+  /// The test that this record's checks have the mean of `earlier`'s (the same fits over other
+  /// stretches); needs at least three checks in the two.
+  FTest sameMean(const ShiftHistory& earlier) const;
   /// The estimated mean shift b^ and its covariance phi^2^ V_b (the fit's scale applied).
   Eigen::Vector2d mean() const;
   Eigen::Matrix2d meanCovariance() const;
@@ -66,17 +71,6 @@ class ShiftHistory {
   double spread() const;
 
  private:
-  struct Pooled {
-    Eigen::Vector2d b;     // b^
-    Eigen::Matrix2d v;     // V_b
-    double tau2 = 0.0;     // the spread between checks, m^2
-    double phi2 = 1.0;     // the scale
-    double nu = 0.0;       // its degrees of freedom
-    double rss = 0.0;      // the weighted residual sum of squares
-    double log_det = 0.0;  // sum log|C_j + tau^2 I| + log|sum W_j|
-  };
-  Pooled gls(double tau2) const;
-  Pooled pool() const;
   std::size_t capacity_;
   std::deque<Shift> shifts_;
 };
