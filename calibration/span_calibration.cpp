@@ -150,6 +150,43 @@ std::vector<SpanCheck> entryChecks(const SpanProblem& problem, const OrderResult
   return checks;
 }
 
+/// The order with the smallest cross-validated error among those identifiable and invertible
+/// (with one pair of walls, nothing to cross-validate with: the offset); -1: none.
+int chooseOrder(const std::vector<OrderResult>& results, bool one_group) {
+  int best = -1;
+  for (const OrderResult& r : results) {
+    const bool candidate =
+        r.fit.identifiable && r.invertible && (one_group ? r.fit.order == 0 : r.cross_validated);
+    if (candidate && (best < 0 || r.cv_mse_m2 < results[static_cast<std::size_t>(best)].cv_mse_m2))
+      best = r.fit.order;
+  }
+  return best;
+}
+
+/// What the spans cannot say: an offset only, no spare entry, or entries that disagree.
+void addSpanWarnings(const std::vector<OrderResult>& results, const OrderResult& chosen,
+                     std::vector<std::string>& warnings) {
+  if (results.size() > 1 && !results[1].fit.identifiable)
+    warnings.push_back(
+        "the measured entries determine an offset only (f(d) = d + alpha_0): spans between one "
+        "pair of "
+        "walls, or pairs of one length, fix the sum of two distances and nothing else; measure "
+        "spans "
+        "between walls at other distances (the room's other axis, a cabinet in front of a wall) or "
+        "tape "
+        "distances to determine a scale");
+  if (chosen.fit.dof == 0)
+    warnings.push_back(
+        "no spare measured entry: the standard errors rest on sigma_m alone and hold nothing the "
+        "model "
+        "misses (measure one more span to check them)");
+  else if (chosen.fit.chi2 > static_cast<double>(chosen.fit.dof))
+    warnings.push_back(
+        "the measured entries disagree with the model by " +
+        fixed(std::sqrt(chosen.fit.chi2 / static_cast<double>(chosen.fit.dof)), 1) +
+        " times what their sigma_m says; the standard errors are widened by that factor");
+}
+
 }  // namespace
 
 CalibrationModel calibrateWithSpans(const LandmarkObservations& obs, const SpanProblem& problem,
@@ -172,13 +209,7 @@ CalibrationModel calibrateWithSpans(const LandmarkObservations& obs, const SpanP
     results.push_back(evaluateOrder(problem, order));
   const std::vector<std::size_t> group = problem.groups();
   const bool one_group = *std::max_element(group.begin(), group.end()) == 0;
-  int best = -1;
-  for (const OrderResult& r : results) {
-    const bool candidate =
-        r.fit.identifiable && r.invertible && (one_group ? r.fit.order == 0 : r.cross_validated);
-    if (candidate && (best < 0 || r.cv_mse_m2 < results[static_cast<std::size_t>(best)].cv_mse_m2))
-      best = r.fit.order;
-  }
+  const int best = chooseOrder(results, one_group);
   m.orders = orderTable(results, n);
   if (best < 0) {
     m.status.code = StatusCode::no_invertible_order;
@@ -221,25 +252,7 @@ CalibrationModel calibrateWithSpans(const LandmarkObservations& obs, const SpanP
   for (const KnownReading& r : readings) s += std::pow(r.y_m - f(r.d_m), 2);
   m.residual_rms_m = readings.empty() ? 0.0 : std::sqrt(s / static_cast<double>(readings.size()));
 
-  if (results.size() > 1 && !results[1].fit.identifiable)
-    m.warnings.push_back(
-        "the measured entries determine an offset only (f(d) = d + alpha_0): spans between one "
-        "pair of "
-        "walls, or pairs of one length, fix the sum of two distances and nothing else; measure "
-        "spans "
-        "between walls at other distances (the room's other axis, a cabinet in front of a wall) or "
-        "tape "
-        "distances to determine a scale");
-  if (chosen.fit.dof == 0)
-    m.warnings.push_back(
-        "no spare measured entry: the standard errors rest on sigma_m alone and hold nothing the "
-        "model "
-        "misses (measure one more span to check them)");
-  else if (chosen.fit.chi2 > static_cast<double>(chosen.fit.dof))
-    m.warnings.push_back(
-        "the measured entries disagree with the model by " +
-        fixed(std::sqrt(chosen.fit.chi2 / static_cast<double>(chosen.fit.dof)), 1) +
-        " times what their sigma_m says; the standard errors are widened by that factor");
+  addSpanWarnings(results, chosen, m.warnings);
   if (checks) *checks = entryChecks(problem, chosen);
   return m;
 }

@@ -88,6 +88,42 @@ std::vector<StopBearing> stopBearings(const LandmarkObservations& obs, int landm
   return out;
 }
 
+namespace {
+
+/// Largest angle between two bearing lines (lines, so modulo pi).
+double bearingSpread(const std::vector<StopBearing>& bearings) {
+  double spread = 0.0;
+  for (std::size_t i = 0; i < bearings.size(); ++i)
+    for (std::size_t j = i + 1; j < bearings.size(); ++j) {
+      double a = std::abs(wrapAngle(bearings[i].bearing_world_rad - bearings[j].bearing_world_rad));
+      a = std::min(a, kPi - a);
+      spread = std::max(spread, a);
+    }
+  return spread;
+}
+
+/// The weight of one bearing line (eq. 25 with repeated scans' range variance).
+double lineWeight(const StopBearing& sb, bool have_var, const TriangulationConfig& config) {
+  const double ss = config.sigma_s_m * config.sigma_s_m,
+               st = config.sigma_theta_rad * config.sigma_theta_rad;
+  double weight = 1.0;
+  switch (config.weights) {
+    case LineWeights::paper:
+      weight = have_var ? 1.0 / ss + 1.0 / (st * sb.range_var_m2)  // eq. 25
+                        : 1.0 / (ss + sb.range_m * sb.range_m * st);
+      break;
+    case LineWeights::residual:
+      weight = 1.0 / (ss + sb.range_m * sb.range_m * st);
+      break;
+    case LineWeights::uniform:
+      weight = 1.0;
+      break;
+  }
+  return weight;
+}
+
+}  // namespace
+
 LandmarkEstimate triangulate(int id, const std::vector<StopBearing>& bearings,
                              const std::vector<Pose2>& commanded,
                              const TriangulationConfig& config) {
@@ -102,13 +138,7 @@ LandmarkEstimate triangulate(int id, const std::vector<StopBearing>& bearings,
                   " are needed: place the landmark where more stops can see it";
     return est;
   }
-  // Largest angle between two bearing lines (lines, so modulo pi).
-  for (std::size_t i = 0; i < bearings.size(); ++i)
-    for (std::size_t j = i + 1; j < bearings.size(); ++j) {
-      double a = std::abs(wrapAngle(bearings[i].bearing_world_rad - bearings[j].bearing_world_rad));
-      a = std::min(a, kPi - a);
-      est.bearing_spread_rad = std::max(est.bearing_spread_rad, a);
-    }
+  est.bearing_spread_rad = bearingSpread(bearings);
 
   // Rows of eq. 19 with the commanded positions (eq. 22): H = [sin, -cos],
   // b = sin(theta) x_k - cos(theta) y_k. (Eq. 22 as printed has the opposite sign of b;
@@ -126,22 +156,7 @@ LandmarkEstimate triangulate(int id, const std::vector<StopBearing>& bearings,
     H(static_cast<Eigen::Index>(i), 0) = s;
     H(static_cast<Eigen::Index>(i), 1) = -c;
     b(static_cast<Eigen::Index>(i)) = s * p.x_m - c * p.y_m;
-    const double ss = config.sigma_s_m * config.sigma_s_m,
-                 st = config.sigma_theta_rad * config.sigma_theta_rad;
-    double weight = 1.0;
-    switch (config.weights) {
-      case LineWeights::paper:
-        weight = have_var ? 1.0 / ss + 1.0 / (st * sb.range_var_m2)  // eq. 25
-                          : 1.0 / (ss + sb.range_m * sb.range_m * st);
-        break;
-      case LineWeights::residual:
-        weight = 1.0 / (ss + sb.range_m * sb.range_m * st);
-        break;
-      case LineWeights::uniform:
-        weight = 1.0;
-        break;
-    }
-    w(static_cast<Eigen::Index>(i)) = weight;
+    w(static_cast<Eigen::Index>(i)) = lineWeight(sb, have_var, config);
   }
   const Eigen::Matrix2d N = H.transpose() * w.asDiagonal() * H;
   const Eigen::Vector2d rhs = H.transpose() * w.asDiagonal() * b;

@@ -99,10 +99,50 @@ DetectionConfig configFor(const DetectionConfig& base, const std::vector<RadiusH
 /// The stop of scan i (non-decreasing in i): a vector's entries, or a sequence's stops.
 using StopOf = std::function<std::size_t(std::size_t)>;
 
-void detectByStop(std::size_t scan_count, const ScanLoader& load, const StopOf& stop_of,
-                  const DetectionConfig& base, const std::vector<RadiusHint>& hints_world,
-                  bool collect_arcs, int threads, const std::function<void(StopBlock&)>& on_stop,
+/// The scans of a sequence: how many, how to load one, and the stop of each.
+struct ScanSource {
+  std::size_t count;
+  const ScanLoader& load;
+  const StopOf& stop_of;
+};
+
+/// What one pass over the scans detects with.
+struct PassSetup {
+  const DetectionConfig& base;
+  const std::vector<RadiusHint>& hints_world;  ///< radius hints, world frame
+  bool collect_arcs;                           ///< keep each detection's arc
+};
+
+/// The radius unknown (first pass): thin far poles that no single arc determines are fitted
+/// with the radius of the stop's scans pooled (stop_radius.hpp). Only objects no scan of the
+/// stop found already: elsewhere the detections stay as they were.
+void redetectWithPooledRadii(const std::vector<io::Scan>& loaded,
+                             std::vector<ScanDetections>& found, const PassSetup& pass,
+                             int threads) {
+  std::vector<const pcl::PointCloud<pcl::PointXYZI>*> clouds;
+  for (const auto& sc : loaded) clouds.push_back(sc.cloud.get());
+  std::vector<RadiusHint> pooled;
+  for (const RadiusHint& h : pooledStopRadii(clouds, pass.base)) {
+    bool known = false;
+    for (const auto& f : found)
+      for (const auto& det : f.detections)
+        known = known || std::hypot(det.centre_x_m - h.x_m, det.centre_y_m - h.y_m) <
+                             det.radius_m + h.radius_m;
+    if (!known) pooled.push_back(h);
+  }
+  if (!pooled.empty())
+    parallelFor(loaded.size(), threads, [&](std::size_t k) {
+      DetectionConfig cfg = configFor(pass.base, pass.hints_world, loaded[k].viewpoint);
+      cfg.radius_hints.insert(cfg.radius_hints.end(), pooled.begin(), pooled.end());
+      found[k] = detectScan(loaded[k], cfg);
+    });
+}
+
+void detectByStop(const ScanSource& source, const PassSetup& pass, int threads,
+                  const std::function<void(StopBlock&)>& on_stop,
                   const std::function<void(std::size_t)>& on_scan) {
+  const std::size_t scan_count = source.count;
+  const StopOf& stop_of = source.stop_of;
   // Scans are loaded and detected a window at a time on `threads` threads (a scan's detection
   // depends on the scan and the pass's hints alone), then taken stop by stop in order. Memory:
   // the current stop and one window.
@@ -121,8 +161,9 @@ void detectByStop(std::size_t scan_count, const ScanLoader& load, const StopOf& 
     ahead.assign(end - first, io::Scan{});
     ahead_found.assign(end - first, ScanDetections{});
     parallelFor(ahead.size(), threads, [&](std::size_t k) {
-      ahead[k] = load(first + k);
-      ahead_found[k] = detectScan(ahead[k], configFor(base, hints_world, ahead[k].viewpoint));
+      ahead[k] = source.load(first + k);
+      ahead_found[k] =
+          detectScan(ahead[k], configFor(pass.base, pass.hints_world, ahead[k].viewpoint));
     });
   };
   std::vector<io::Scan> loaded;  // the scans of the current stop (one stop in memory)
@@ -137,34 +178,14 @@ void detectByStop(std::size_t scan_count, const ScanLoader& load, const StopOf& 
     if (i + 1 < scan_count && stop_of(i + 1) == stop) continue;
     StopBlock block;
     block.stop = stop;
-    if (collect_arcs && !base.landmark_radius_m && loaded.size() >= 2) {
-      // The radius unknown (first pass): thin far poles that no single arc determines are
-      // fitted with the radius of the stop's scans pooled (stop_radius.hpp). Only objects no
-      // scan of the stop found already: elsewhere the detections stay as they were.
-      std::vector<const pcl::PointCloud<pcl::PointXYZI>*> clouds;
-      for (const auto& sc : loaded) clouds.push_back(sc.cloud.get());
-      std::vector<RadiusHint> pooled;
-      for (const RadiusHint& h : pooledStopRadii(clouds, base)) {
-        bool known = false;
-        for (const auto& f : found)
-          for (const auto& det : f.detections)
-            known = known || std::hypot(det.centre_x_m - h.x_m, det.centre_y_m - h.y_m) <
-                                 det.radius_m + h.radius_m;
-        if (!known) pooled.push_back(h);
-      }
-      if (!pooled.empty())
-        parallelFor(loaded.size(), threads, [&](std::size_t k) {
-          DetectionConfig cfg = configFor(base, hints_world, loaded[k].viewpoint);
-          cfg.radius_hints.insert(cfg.radius_hints.end(), pooled.begin(), pooled.end());
-          found[k] = detectScan(loaded[k], cfg);
-        });
-    }
+    if (pass.collect_arcs && !pass.base.landmark_radius_m && loaded.size() >= 2)
+      redetectWithPooledRadii(loaded, found, pass, threads);
     for (std::size_t k = 0; k < loaded.size(); ++k) {
       const io::Scan& scan = loaded[k];
       ScanDetections& d = found[k];
       d.scan_index = index[k];
       d.stop = stop;
-      if (collect_arcs) {
+      if (pass.collect_arcs) {
         auto& arcs = block.arcs.emplace_back();
         for (const auto& det : d.detections) arcs.push_back(arcOf(*scan.cloud, det));
       }
@@ -271,18 +292,17 @@ struct Pass {
   Association association;
 };
 
-Pass runPass(std::size_t scan_count, const ScanLoader& load, const StopOf& stop_of,
-             const DetectionConfig& base, const std::vector<RadiusHint>& hints_world,
-             const SequenceDetectionConfig& config, bool collect_arcs, bool keep_scans,
-             const std::function<void(std::size_t)>& on_scan) {
+Pass runPass(const ScanSource& source, const PassSetup& pass, const SequenceDetectionConfig& config,
+             bool keep_scans, const std::function<void(std::size_t)>& on_scan) {
   Pass p;
-  StopLinker linker(config.association, countStops(scan_count, stop_of));
+  const bool collect_arcs = pass.collect_arcs;
+  StopLinker linker(config.association, countStops(source.count, source.stop_of));
   std::vector<std::vector<int>> cluster_of_scan;  // kept scans: cluster of each detection
   // kept scans: track of each of its stop's clusters
   std::vector<std::vector<TrackSerial>> track_of_scan;
   if (!keep_scans) p.log = DetectionLog::create();
   detectByStop(
-      scan_count, load, stop_of, base, hints_world, collect_arcs, threadsFor(config.threads),
+      source, pass, threadsFor(config.threads),
       [&](StopBlock& block) {
         StopClusters clusters;
         std::vector<std::vector<int>> cluster_of;
@@ -404,7 +424,9 @@ SequenceDetections detectSequenceImpl(std::size_t scan_count, const ScanLoader& 
       if (on_scan) on_scan(offset + i + 1, total);
     };
   };
-  Pass first = runPass(scan_count, load, stop_of, config.detection, {}, config, !known,
+  const ScanSource source{scan_count, load, stop_of};
+  const std::vector<RadiusHint> no_hints;
+  Pass first = runPass(source, PassSetup{config.detection, no_hints, !known}, config,
                        config.keep_scans, progress(0));
   adopt(r, first);
   if (!known && !r.association.landmarks.empty()) {
@@ -425,7 +447,7 @@ SequenceDetections detectSequenceImpl(std::size_t scan_count, const ScanLoader& 
         cfg.landmark_radius_m = median;
         r.common_radius_m = median;
       }
-      Pass second = runPass(scan_count, load, stop_of, cfg, world, config, false, config.keep_scans,
+      Pass second = runPass(source, PassSetup{cfg, world, false}, config, config.keep_scans,
                             progress(scan_count));
       adopt(r, second);
       r.replay.detection = cfg;
@@ -496,14 +518,14 @@ void visitLogged(const SequenceDetections& r, std::size_t scan_count, const Scan
 
 /// The final pass run again stop by stop: the same stops and objects give the same tracks, and
 /// the ids found at the end of the first run.
-void visitReplayed(const SequenceDetections& r, std::size_t scan_count, const ScanLoader& load,
-                   const StopOf& stop_of, const LoadedScanVisitor& visit,
-                   const ProgressCallback& on_scan) {
+void visitReplayed(const SequenceDetections& r, const ScanSource& source,
+                   const LoadedScanVisitor& visit, const ProgressCallback& on_scan) {
   const auto& rp = r.replay;
-  StopLinker linker(rp.association, countStops(scan_count, stop_of));
+  const std::size_t scan_count = source.count;
+  StopLinker linker(rp.association, countStops(scan_count, source.stop_of));
   std::uint64_t print = 0xcbf29ce484222325ull;
   detectByStop(
-      scan_count, load, stop_of, rp.detection, rp.hints_world, false, threadsFor(rp.threads),
+      source, PassSetup{rp.detection, rp.hints_world, false}, threadsFor(rp.threads),
       [&](StopBlock& block) {
         StopClusters clusters;
         std::vector<std::vector<int>> cluster_of;
@@ -523,13 +545,12 @@ void visitReplayed(const SequenceDetections& r, std::size_t scan_count, const Sc
 }
 
 /// Every scan with its detections: kept, logged or replayed, whichever the result allows.
-void forEachScanImpl(const SequenceDetections& r, std::size_t scan_count, const ScanLoader& load,
-                     const StopOf& stop_of, bool with_scan, const LoadedScanVisitor& visit,
-                     const ProgressCallback& on_scan) {
-  if (!r.scans.empty() || scan_count == 0)
-    return visitKept(r, scan_count, load, with_scan, visit, on_scan);
-  if (r.log) return visitLogged(r, scan_count, load, visit, on_scan);
-  visitReplayed(r, scan_count, load, stop_of, visit, on_scan);
+void forEachScanImpl(const SequenceDetections& r, const ScanSource& source, bool with_scan,
+                     const LoadedScanVisitor& visit, const ProgressCallback& on_scan) {
+  if (!r.scans.empty() || source.count == 0)
+    return visitKept(r, source.count, source.load, with_scan, visit, on_scan);
+  if (r.log) return visitLogged(r, source.count, source.load, visit, on_scan);
+  visitReplayed(r, source, visit, on_scan);
 }
 
 /// A visitor of detections as a visitor of loaded scans.
@@ -581,7 +602,7 @@ SequenceDetections detectSequence(const io::Sequence& sequence, const ScanLoader
 void forEachScan(const SequenceDetections& r, std::size_t scan_count, const ScanLoader& load,
                  const std::vector<std::size_t>& stop_of_scan, const ScanVisitor& visit,
                  const ProgressCallback& on_scan) {
-  forEachScanImpl(r, scan_count, load, stopsOf(stop_of_scan, scan_count), false,
+  forEachScanImpl(r, ScanSource{scan_count, load, stopsOf(stop_of_scan, scan_count)}, false,
                   ignoringScan(visit), on_scan);
 }
 
@@ -593,21 +614,21 @@ void forEachScan(const SequenceDetections& result, const io::Sequence& sequence,
 void forEachScan(const SequenceDetections& result, const io::Sequence& sequence,
                  const ScanLoader& load, const ScanVisitor& visit,
                  const ProgressCallback& on_scan) {
-  forEachScanImpl(result, sequence.scans.size(), load, stopsOf(sequence), false,
+  forEachScanImpl(result, ScanSource{sequence.scans.size(), load, stopsOf(sequence)}, false,
                   ignoringScan(visit), on_scan);
 }
 
 void forEachLoadedScan(const SequenceDetections& result, std::size_t scan_count,
                        const ScanLoader& load, const std::vector<std::size_t>& stop_of_scan,
                        const LoadedScanVisitor& visit, const ProgressCallback& on_scan) {
-  forEachScanImpl(result, scan_count, load, stopsOf(stop_of_scan, scan_count), true, visit,
-                  on_scan);
+  forEachScanImpl(result, ScanSource{scan_count, load, stopsOf(stop_of_scan, scan_count)}, true,
+                  visit, on_scan);
 }
 
 void forEachLoadedScan(const SequenceDetections& result, const io::Sequence& sequence,
                        const LoadedScanVisitor& visit, const ProgressCallback& on_scan) {
-  forEachScanImpl(result, sequence.scans.size(), loaderOf(sequence), stopsOf(sequence), true, visit,
-                  on_scan);
+  forEachScanImpl(result, ScanSource{sequence.scans.size(), loaderOf(sequence), stopsOf(sequence)},
+                  true, visit, on_scan);
 }
 
 std::vector<std::uint32_t> scanLabels(const ScanDetections& detections, const std::vector<int>& ids,

@@ -10,140 +10,100 @@
 namespace lidarcal::diagnosis {
 namespace {
 
-/// Every statistic of both modes: mode, name, variable, description, two-sided. The order within
-/// a mode is the battery's output order.
-struct StatisticRow {
-  DiagnoseMode mode;
-  StatisticInfo info;
-};
-
-const std::vector<StatisticRow>& statisticTable() {
-  static const std::vector<StatisticRow> table = {
-      {DiagnoseMode::sequence,
-       {"residual_vs_range", "range",
-        "score of a range trend of the residuals beyond the bias polynomial (order n + 1), ~N(0,1)",
-        true}},
-      {DiagnoseMode::sequence,
-       {"spread_vs_range", "range",
-        "score of the noise growing with log f(d) beyond the squared law (clipped squared "
-        "residuals), ~N(0,1)",
-        true}},
-      {DiagnoseMode::sequence,
-       {"residual_vs_incidence", "incidence angle",
-        "score of the residuals against 1 - cos(incidence), ~N(0,1)", true}},
-      {DiagnoseMode::sequence,
-       {"spread_vs_incidence", "incidence angle",
-        "score of the noise growing with -ln cos(incidence), ~N(0,1)", true}},
-      {DiagnoseMode::sequence,
-       {"spread_vs_intensity", "intensity",
-        "score of the noise growing with ln(I_ref / I), the darkness of the return (0 without "
-        "intensities), ~N(0,1)",
-        true}},
-      {DiagnoseMode::sequence,
-       {"edge_excess", "position within the object",
-        "positive minus negative |z| > 3 residuals on the outermost beams, beyond the inner beams' "
-        "rate, per sqrt(edge beams)",
-        false}},
-      {DiagnoseMode::sequence,
-       {"edge_vs_centre_spread", "position within the object",
-        "mean clipped z^2 on the outermost beams minus on the inner beams", true}},
-      {DiagnoseMode::sequence,
-       {"landmark_identity", "landmark",
-        "cube root of chi^2 / dof of the per-landmark mean residuals (overall mean removed)",
-        false}},
-      {DiagnoseMode::sequence,
-       {"stop_identity", "stop index",
-        "cube root of chi^2 / dof of the per-stop mean residuals (overall mean removed)", false}},
-      {DiagnoseMode::sequence,
-       {"heading_within_stop", "stop index",
-        "cube root of chi^2 / dof of per-stop rotation scores (a heading shared by all beams of a "
-        "stop)",
-        false}},
-      {DiagnoseMode::sequence,
-       {"common_rotation", "bearing",
-        "score of one rotation shared by every beam (zero-angle offset), ~N(0,1)", true}},
-      {DiagnoseMode::sequence,
-       {"residual_vs_time", "scan index",
-        "score of a linear trend of the residuals over the scans, ~N(0,1)", true}},
-      {DiagnoseMode::sequence,
-       {"residual_vs_bearing", "bearing",
-        "cube root of chi^2 / 2 of the residuals against cos and sin of the beam angle", false}},
-      {DiagnoseMode::sequence,
-       {"path_rotation", "stop index",
-        "rotation of the refined stop positions against the commanded path about its centroid, "
-        "over the position prior, ~N(0,1)",
-        true}},
-      {DiagnoseMode::sequence,
-       {"path_scale", "stop index",
-        "stretch of the refined stop positions against the commanded path about its centroid, over "
-        "the position prior, ~N(0,1)",
-        true}},
-      {DiagnoseMode::sequence,
-       {"bearing_within_stop_correlation", "stop index",
-        "ln F of the sighting bearing residuals between stops against within stops", false}},
-      {DiagnoseMode::sequence,
-       {"tail_weight", "residual", "excess kurtosis of the standardised residuals", false}},
-      {DiagnoseMode::sequence,
-       {"quantisation_1mm", "reading",
-        "resultant length of the readings' phase on a 1 mm grid (1: on the grid)", false}},
-      {DiagnoseMode::static_scene,
-       {"spread_vs_range", "range",
-        "score of the noise growing with ln(mean reading) beyond the squared law, ~N(0,1)", true}},
-      {DiagnoseMode::static_scene,
-       {"spread_vs_incidence", "incidence angle",
-        "score of the noise growing with -ln cos(incidence), ~N(0,1)", true}},
-      {DiagnoseMode::static_scene,
-       {"spread_vs_intensity", "intensity",
-        "score of the noise growing with ln(I_median / I), the darkness of the return, away from "
-        "discontinuities (0 without intensities that vary), ~N(0,1)",
-        true}},
-      {DiagnoseMode::static_scene,
-       {"spread_vs_bearing", "bearing",
-        "cube root of chi^2 / 2 of the noise against cos and sin of the beam angle", false}},
-      {DiagnoseMode::static_scene,
-       {"residual_vs_time", "scan index",
-        "score of a trend shared by all beams over the scans, ~N(0,1)", true}},
-      {DiagnoseMode::static_scene,
-       {"lag1_correlation", "scan index",
-        "pooled lag-1 correlation of successive readings of a beam, times sqrt(pairs)", true}},
-      {DiagnoseMode::static_scene,
-       {"edge_excess", "position within the object",
-        "|z| > 3 readings at depth discontinuities beyond the rate elsewhere, per sqrt(edge "
-        "readings)",
-        false}},
-      {DiagnoseMode::static_scene,
-       {"edge_vs_centre_spread", "position within the object",
-        "mean clipped z^2 at depth discontinuities minus elsewhere", true}},
-      {DiagnoseMode::static_scene,
-       {"tail_weight", "residual",
-        "excess kurtosis of the standardised residuals (away from discontinuities)", false}},
-      {DiagnoseMode::static_scene,
-       {"quantisation", "reading",
-        "resultant length of the readings' phase on the detected grid (1: on the grid)", false}},
-      {DiagnoseMode::static_scene,
-       {"wall_curvature", "incidence angle",
-        "incidence bias b (1 - cos phi) fitted on the wall lines, over its standard error", true}},
-      {DiagnoseMode::static_scene,
-       {"wall_roughness_mm", "wall", "scatter of the beam means about the wall model, mm", false}},
-      {DiagnoseMode::static_scene,
-       {"range_offset_mm", "wall", "range offset alpha_0 the walls' straightness implies, mm",
-        true}},
+/// The statistics of a sequence (the residuals of the joint fit): name, variable, description,
+/// two-sided, in the battery's output order.
+std::vector<StatisticInfo> sequenceStatistics() {
+  return {
+      {"residual_vs_range", "range",
+       "score of a range trend of the residuals beyond the bias polynomial (order n + 1), ~N(0,1)",
+       true},
+      {"spread_vs_range", "range",
+       "score of the noise growing with log f(d) beyond the squared law (clipped squared "
+       "residuals), ~N(0,1)",
+       true},
+      {"residual_vs_incidence", "incidence angle",
+       "score of the residuals against 1 - cos(incidence), ~N(0,1)", true},
+      {"spread_vs_incidence", "incidence angle",
+       "score of the noise growing with -ln cos(incidence), ~N(0,1)", true},
+      {"spread_vs_intensity", "intensity",
+       "score of the noise growing with ln(I_ref / I), the darkness of the return (0 without "
+       "intensities), ~N(0,1)",
+       true},
+      {"edge_excess", "position within the object",
+       "positive minus negative |z| > 3 residuals on the outermost beams, beyond the inner beams' "
+       "rate, per sqrt(edge beams)",
+       false},
+      {"edge_vs_centre_spread", "position within the object",
+       "mean clipped z^2 on the outermost beams minus on the inner beams", true},
+      {"landmark_identity", "landmark",
+       "cube root of chi^2 / dof of the per-landmark mean residuals (overall mean removed)", false},
+      {"stop_identity", "stop index",
+       "cube root of chi^2 / dof of the per-stop mean residuals (overall mean removed)", false},
+      {"heading_within_stop", "stop index",
+       "cube root of chi^2 / dof of per-stop rotation scores (a heading shared by all beams of a "
+       "stop)",
+       false},
+      {"common_rotation", "bearing",
+       "score of one rotation shared by every beam (zero-angle offset), ~N(0,1)", true},
+      {"residual_vs_time", "scan index",
+       "score of a linear trend of the residuals over the scans, ~N(0,1)", true},
+      {"residual_vs_bearing", "bearing",
+       "cube root of chi^2 / 2 of the residuals against cos and sin of the beam angle", false},
+      {"path_rotation", "stop index",
+       "rotation of the refined stop positions against the commanded path about its centroid, "
+       "over the position prior, ~N(0,1)",
+       true},
+      {"path_scale", "stop index",
+       "stretch of the refined stop positions against the commanded path about its centroid, over "
+       "the position prior, ~N(0,1)",
+       true},
+      {"bearing_within_stop_correlation", "stop index",
+       "ln F of the sighting bearing residuals between stops against within stops", false},
+      {"tail_weight", "residual", "excess kurtosis of the standardised residuals", false},
+      {"quantisation_1mm", "reading",
+       "resultant length of the readings' phase on a 1 mm grid (1: on the grid)", false},
   };
-  return table;
 }
 
-std::vector<StatisticInfo> rowsOf(DiagnoseMode mode) {
-  std::vector<StatisticInfo> out;
-  for (const auto& row : statisticTable())
-    if (row.mode == mode) out.push_back(row.info);
-  return out;
+/// The statistics of a static scene (repeated scans of walls), as sequenceStatistics().
+std::vector<StatisticInfo> staticStatistics() {
+  return {
+      {"spread_vs_range", "range",
+       "score of the noise growing with ln(mean reading) beyond the squared law, ~N(0,1)", true},
+      {"spread_vs_incidence", "incidence angle",
+       "score of the noise growing with -ln cos(incidence), ~N(0,1)", true},
+      {"spread_vs_intensity", "intensity",
+       "score of the noise growing with ln(I_median / I), the darkness of the return, away from "
+       "discontinuities (0 without intensities that vary), ~N(0,1)",
+       true},
+      {"spread_vs_bearing", "bearing",
+       "cube root of chi^2 / 2 of the noise against cos and sin of the beam angle", false},
+      {"residual_vs_time", "scan index",
+       "score of a trend shared by all beams over the scans, ~N(0,1)", true},
+      {"lag1_correlation", "scan index",
+       "pooled lag-1 correlation of successive readings of a beam, times sqrt(pairs)", true},
+      {"edge_excess", "position within the object",
+       "|z| > 3 readings at depth discontinuities beyond the rate elsewhere, per sqrt(edge "
+       "readings)",
+       false},
+      {"edge_vs_centre_spread", "position within the object",
+       "mean clipped z^2 at depth discontinuities minus elsewhere", true},
+      {"tail_weight", "residual",
+       "excess kurtosis of the standardised residuals (away from discontinuities)", false},
+      {"quantisation", "reading",
+       "resultant length of the readings' phase on the detected grid (1: on the grid)", false},
+      {"wall_curvature", "incidence angle",
+       "incidence bias b (1 - cos phi) fitted on the wall lines, over its standard error", true},
+      {"wall_roughness_mm", "wall", "scatter of the beam means about the wall model, mm", false},
+      {"range_offset_mm", "wall", "range offset alpha_0 the walls' straightness implies, mm", true},
+  };
 }
 
 }  // namespace
 
 const std::vector<StatisticInfo>& statisticInfo(DiagnoseMode mode) {
-  static const std::vector<StatisticInfo> sequence = rowsOf(DiagnoseMode::sequence);
-  static const std::vector<StatisticInfo> static_scene = rowsOf(DiagnoseMode::static_scene);
+  static const std::vector<StatisticInfo> sequence = sequenceStatistics();
+  static const std::vector<StatisticInfo> static_scene = staticStatistics();
   return mode == DiagnoseMode::sequence ? sequence : static_scene;
 }
 

@@ -8,9 +8,11 @@
 
 namespace lidarcal::diagnosis {
 
-const std::vector<VerdictRule>& verdictRules() {
-  static const std::vector<VerdictRule> table = {
-      // Each candidate's p-value (step 3).
+namespace {
+
+/// Each candidate's p-value (step 3).
+std::vector<VerdictRule> candidateRules() {
+  return {
       {"evidence", "both", "candidate",
        "p = k min(p_heldout, p_score, p_lr) over the k tests that apply; a reading grid: p_heldout "
        "alone; a drive's "
@@ -37,8 +39,12 @@ const std::vector<VerdictRule>& verdictRules() {
        "optima"},
       {"dark_follows_range", "static", "candidate",
        "a dark surface whose darkness follows ln range over the beams is not identifiable",
-       "|correlation| > 0.95 (kConfounded)", "the two covariates then say the same"},
-      // The shared naming (step 4, nameCause).
+       "|correlation| > 0.95 (kConfounded)", "the two covariates then say the same"}};
+}
+
+/// The shared naming (step 4, nameCause).
+std::vector<VerdictRule> namingRules() {
+  return {
       {"significant", "both", "name",
        "Holm-adjusted p < alpha across the candidates, and a positive held-out gain", "alpha",
        "the family-wise error stays at alpha, and the extended model must predict new data better"},
@@ -62,8 +68,12 @@ const std::vector<VerdictRule>& verdictRules() {
        "not_identifiable (no "
        "pair is declared at present)",
        "2 SE (kCloseGainSe)",
-       "two effects that explain the data equally well cannot be told apart"},
-      // After the naming (step 4, each mode's refineCause).
+       "two effects that explain the data equally well cannot be told apart"}};
+}
+
+/// After the naming (step 4, each mode's refineCause).
+std::vector<VerdictRule> refineRules() {
+  return {
       {"grid_first", "sequence", "refine",
        "quantisation named: each significant identifiable physical effect is refitted beside the "
        "rounding; the largest "
@@ -101,8 +111,18 @@ const std::vector<VerdictRule>& verdictRules() {
        "named from the tails while the pooled contamination holds most readings: a caution is "
        "added to the decision",
        "share > 0.5 (kMostReadings)",
-       "then it is the main component, and what is fitted beside it describes the wild readings"},
-  };
+       "then it is the main component, and what is fitted beside it describes the wild readings"}};
+}
+
+}  // namespace
+
+const std::vector<VerdictRule>& verdictRules() {
+  static const std::vector<VerdictRule> table = [] {
+    std::vector<VerdictRule> rules = candidateRules();
+    for (auto part : {namingRules(), refineRules()})
+      rules.insert(rules.end(), part.begin(), part.end());
+    return rules;
+  }();
   return table;
 }
 

@@ -72,7 +72,9 @@ void writeModel(const std::filesystem::path& file, const CalibrationModel& m) {
   writeTextAtomically(file, modelJson(m).dump(2) + "\n");
 }
 
-ojson modelJson(const CalibrationModel& m) {
+namespace {
+
+ojson ordersJson(const CalibrationModel& m) {
   ojson orders = ojson::array();
   for (const auto& o : m.orders)
     orders.push_back(ojson{{"order", o.order},
@@ -82,6 +84,13 @@ ojson modelJson(const CalibrationModel& m) {
                            {"validation_mse_m2", number(o.validation_mse_m2)},
                            {"test_mse_m2", number(o.test_mse_m2)},
                            {"invertible", o.invertible}});
+  return ojson{{"rule", m.order_rule},
+               {"order_aic", m.order_aic},
+               {"order_validation", m.order_validation},
+               {"table", orders}};
+}
+
+ojson landmarksJson(const CalibrationModel& m) {
   ojson landmarks = ojson::array();
   for (const auto& l : m.landmarks)
     landmarks.push_back(ojson{
@@ -93,48 +102,44 @@ ojson modelJson(const CalibrationModel& m) {
                                         number(l.covariance_m2[2]), number(l.covariance_m2[3])})},
         {"stops", l.stops},
         {"status", l.status}});
+  return landmarks;
+}
+
+ojson stopsJson(const CalibrationModel& m) {
   ojson stops = ojson::array();
   for (const auto& p : m.stop_poses)
     stops.push_back(ojson{{"x_m", p.x_m}, {"y_m", p.y_m}, {"yaw_rad", p.yaw_rad}});
-  const auto& nf = m.noise_fits;
-  ojson j{
-      {"format", m.format},
-      {"method", m.method},
-      {"sensor", ojson{{"name", m.sensor_name},
-                       {"beams", m.beams ? ojson(*m.beams) : ojson(nullptr)},
-                       {"range_min_m", m.model.range_min_m},
-                       {"range_max_m", m.model.range_max_m}}},
-      {"bias", biasJson(m)},
-      {"noise", noiseJson(m.model.noise)},
-      {"sigma_theta_rad", m.sigma_theta_rad},
-      {"alpha_covariance", m.alpha_covariance},
-      {"discrepancy", discrepancyJson(m.discrepancy)},
-      {"order_selection", ojson{{"rule", m.order_rule},
-                                {"order_aic", m.order_aic},
-                                {"order_validation", m.order_validation},
-                                {"table", orders}}},
-      {"noise_estimators",
-       ojson{{"alhashimi2021_beta", nf.alhashimi2021_beta},
-             {"alhashimi2016_closed_form", ojson{{"alpha", nf.alhashimi2016_cf_alpha},
-                                                 {"sigma_e", nf.alhashimi2016_cf_sigma_e}}},
-             {"alhashimi2016_ml", ojson{{"alpha", nf.alhashimi2016_ml_alpha},
-                                        {"sigma_e", nf.alhashimi2016_ml_sigma_e}}},
-             {"exponent_test",
-              ojson{{"log_likelihood_h0_h3",
-                     ojson::array({number(nf.exponent_loglik[0]), number(nf.exponent_loglik[1]),
-                                   number(nf.exponent_loglik[2]), number(nf.exponent_loglik[3])})},
-                    {"best", nf.exponent_best},
-                    {"batches", nf.exponent_batches}}}}},
-      {"landmarks", landmarks},
-      {"stops", stops},
-      {"diagnostics", ojson{{"status", m.status.name()},
-                            {"message", m.status.message},
-                            {"iterations", m.iterations},
-                            {"residual_rms_m", m.residual_rms_m},
-                            {"readings", m.readings},
-                            {"pose_scatter_m", m.pose_scatter_m},
-                            {"heading_scatter_rad", m.heading_scatter_rad},
-                            {"offset_radius_correlation", number(m.offset_radius_correlation)}}}};
+  return stops;
+}
+
+ojson noiseEstimatorsJson(const NoiseFits& nf) {
+  return ojson{
+      {"alhashimi2021_beta", nf.alhashimi2021_beta},
+      {"alhashimi2016_closed_form",
+       ojson{{"alpha", nf.alhashimi2016_cf_alpha}, {"sigma_e", nf.alhashimi2016_cf_sigma_e}}},
+      {"alhashimi2016_ml",
+       ojson{{"alpha", nf.alhashimi2016_ml_alpha}, {"sigma_e", nf.alhashimi2016_ml_sigma_e}}},
+      {"exponent_test",
+       ojson{{"log_likelihood_h0_h3",
+              ojson::array({number(nf.exponent_loglik[0]), number(nf.exponent_loglik[1]),
+                            number(nf.exponent_loglik[2]), number(nf.exponent_loglik[3])})},
+             {"best", nf.exponent_best},
+             {"batches", nf.exponent_batches}}}};
+}
+
+ojson diagnosticsJson(const CalibrationModel& m) {
+  return ojson{{"status", m.status.name()},
+               {"message", m.status.message},
+               {"iterations", m.iterations},
+               {"residual_rms_m", m.residual_rms_m},
+               {"readings", m.readings},
+               {"pose_scatter_m", m.pose_scatter_m},
+               {"heading_scatter_rad", m.heading_scatter_rad},
+               {"offset_radius_correlation", number(m.offset_radius_correlation)}};
+}
+
+/// The parts written only when present, so that models without them keep their bytes.
+void addOptionalParts(const CalibrationModel& m, ojson& j) {
   if (m.fitted_range_m) {
     const auto [lo, hi] = *m.fitted_range_m;
     j["fitted_range"] = ojson{{"d_min_m", lo},
@@ -142,12 +147,11 @@ ojson modelJson(const CalibrationModel& m) {
                               {"reading_min_m", m.model.bias(lo)},
                               {"reading_max_m", m.model.bias(hi)}};
   }
-  // Only when used, so that stop-and-go models keep their bytes.
   if (m.motion_prior) j["diagnostics"]["motion_prior"] = true;
   if (!m.warnings.empty()) j["warnings"] = m.warnings;
-  if (!nf.unavailable.empty()) {
+  if (!m.noise_fits.unavailable.empty()) {
     ojson na = ojson::object();
-    for (const auto& [k, v] : nf.unavailable) na[k] = v;
+    for (const auto& [k, v] : m.noise_fits.unavailable) na[k] = v;
     j["noise_estimators"]["unavailable"] = na;
   }
   if (!m.effects.empty()) {
@@ -155,6 +159,28 @@ ojson modelJson(const CalibrationModel& m) {
     for (const auto& [k, v] : m.effects) fx[k] = number(v);
     j["effects"] = fx;
   }
+}
+
+}  // namespace
+
+ojson modelJson(const CalibrationModel& m) {
+  ojson j{{"format", m.format},
+          {"method", m.method},
+          {"sensor", ojson{{"name", m.sensor_name},
+                           {"beams", m.beams ? ojson(*m.beams) : ojson(nullptr)},
+                           {"range_min_m", m.model.range_min_m},
+                           {"range_max_m", m.model.range_max_m}}},
+          {"bias", biasJson(m)},
+          {"noise", noiseJson(m.model.noise)},
+          {"sigma_theta_rad", m.sigma_theta_rad},
+          {"alpha_covariance", m.alpha_covariance},
+          {"discrepancy", discrepancyJson(m.discrepancy)},
+          {"order_selection", ordersJson(m)},
+          {"noise_estimators", noiseEstimatorsJson(m.noise_fits)},
+          {"landmarks", landmarksJson(m)},
+          {"stops", stopsJson(m)},
+          {"diagnostics", diagnosticsJson(m)}};
+  addOptionalParts(m, j);
   return j;
 }
 
@@ -162,22 +188,22 @@ CalibrationModel readModel(const std::filesystem::path& file) {
   return modelFromJson(readJsonFile(file), file.string());
 }
 
-CalibrationModel modelFromJson(const nlohmann::json& j, const std::string& file,
-                               const std::string& path) {
-  const JsonView root(file, j, path);
-  root.requireObject();
-  CalibrationModel m;
-  m.format = root.getString("format", "");
-  if (m.format == "lidarcal-rig-model/1")
+namespace {
+
+void requireModelFormat(const JsonView& root, const std::string& format) {
+  if (format == "lidarcal-rig-model/1")
     root.fail("format",
               "holds one model per sensor of a rig (\"lidarcal-rig-model/1\"): pick one with "
               "--sensor NAME "
               "(`correct`, `export`) or the node's sensor parameter");
-  if (m.format != "lidarcal-model/1")
+  if (format != "lidarcal-model/1")
     root.fail("format",
               "not a lidarcal model file (expected \"lidarcal-model/1\"); create one with "
               "`lidarcal calibrate`");
-  m.method = root.getString("method", "");
+}
+
+/// The sensor, bias and noise: what correcting a reading needs.
+void readRangeModel(const JsonView& root, CalibrationModel& m) {
   const JsonView sensor = root.child("sensor");
   m.sensor_name = sensor.getString("name", "");
   if (sensor.has("beams") && !sensor.json().at("beams").is_null())
@@ -200,6 +226,9 @@ CalibrationModel modelFromJson(const nlohmann::json& j, const std::string& file,
     m.model.noise.sigma_e = noise.getNonNegative("sigma_e");
   if (m.model.noise.kind == NoiseKind::power) m.model.noise.exponent = noise.getNumber("exponent");
   m.sigma_theta_rad = root.getNonNegative("sigma_theta_rad", 0.0);
+}
+
+void readLandmarksAndStops(const JsonView& root, CalibrationModel& m) {
   if (root.has("landmarks"))
     for (const auto& e : root.array("landmarks")) {
       e.requireObject();
@@ -217,6 +246,10 @@ CalibrationModel modelFromJson(const nlohmann::json& j, const std::string& file,
       e.requireObject();
       m.stop_poses.push_back(Pose2{e.getNumber("x_m"), e.getNumber("y_m"), e.getNumber("yaw_rad")});
     }
+}
+
+/// The fitted range, warnings, uncertainty, effects and the fit's status.
+void readFitFacts(const JsonView& root, CalibrationModel& m) {
   if (root.has("fitted_range")) {
     const JsonView fr = root.child("fitted_range");
     const double lo = fr.getNonNegative("d_min_m"), hi = fr.getPositive("d_max_m");
@@ -247,6 +280,21 @@ CalibrationModel modelFromJson(const nlohmann::json& j, const std::string& file,
                  "' is not a status lidarcal writes (ok, joint_failed, ...: docs/ERRORS.md)");
     m.status = Status{*code, d.getString("message", "")};
   }
+}
+
+}  // namespace
+
+CalibrationModel modelFromJson(const nlohmann::json& j, const std::string& file,
+                               const std::string& path) {
+  const JsonView root(file, j, path);
+  root.requireObject();
+  CalibrationModel m;
+  m.format = root.getString("format", "");
+  requireModelFormat(root, m.format);
+  m.method = root.getString("method", "");
+  readRangeModel(root, m);
+  readLandmarksAndStops(root, m);
+  readFitFacts(root, m);
   return m;
 }
 

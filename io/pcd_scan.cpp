@@ -381,6 +381,67 @@ pcl::PCLPointCloud2 readBlob(PcdFile& f, const ParsedHeader& h, const std::strin
   return blob;
 }
 
+/// The fields of a scan cloud (x and y required; the rest may be null).
+struct ScanFields {
+  const pcl::PCLPointField *x, *y, *z, *intensity, *label, *correction, *correction_se;
+};
+
+ScanFields scanFields(const pcl::PCLPointCloud2& blob, const std::string& where) {
+  const ScanFields f{cloudField(blob, "x"),
+                     cloudField(blob, "y"),
+                     cloudField(blob, "z"),
+                     cloudField(blob, "intensity"),
+                     cloudField(blob, "label"),
+                     cloudField(blob, "correction"),
+                     cloudField(blob, "correction_se")};
+  if (!f.x || !f.y)  // the header we checked has them; PCL must have read the same header
+    throw InputError(where, "FIELDS",
+                     "PCL read other fields than the header lists (a damaged file)",
+                     "re-export the scan");
+  return f;
+}
+
+/// A point's coordinates as a reading can have them: both NaN (no return) or finite and within
+/// 100 km.
+void checkCoordinates(double x, double y, double z, const std::string& where, std::size_t i) {
+  const auto item = [i] { return "point " + std::to_string(i); };
+  const bool nan_x = std::isnan(x), nan_y = std::isnan(y);
+  if (nan_x != nan_y)
+    throw InputError(where, item(),
+                     "only one of x, y is NaN: a beam without return must have x and y NaN",
+                     kFormatRemedy);
+  if (nan_x) return;
+  if (!std::isfinite(x) || !std::isfinite(y) || (!std::isnan(z) && !std::isfinite(z)))
+    throw InputError(where, item(), "coordinate is infinite",
+                     "write NaN for a beam with no return");
+  if (std::abs(x) > kMaxAbsCoordinate_m || std::abs(y) > kMaxAbsCoordinate_m ||
+      (!std::isnan(z) && std::abs(z) > kMaxAbsCoordinate_m))
+    throw InputError(where, item(), "coordinate beyond 100 km: not a lidar reading",
+                     "check the units (metres) or write NaN for a beam with no return");
+}
+
+/// Point i's label and correction, when the cloud has them.
+void readPointExtras(const std::uint8_t* p, const ScanFields& f, std::size_t i,
+                     const std::string& where, Scan& scan) {
+  if (f.label) {
+    const double label = readValue(p + f.label->offset, f.label->datatype);
+    if (!(label >= 0.0) || label > 4294967295.0)
+      throw InputError(where, "point " + std::to_string(i), "label is not a non-negative integer",
+                       kFormatRemedy);
+    scan.labels[i] = static_cast<std::uint32_t>(label);
+  }
+  if (f.correction) {
+    const double code = readValue(p + f.correction->offset, f.correction->datatype);
+    if (!(code >= 0.0 && code <= 3.0) || code != std::floor(code))
+      throw InputError(where, "point " + std::to_string(i), "correction is not 0, 1, 2 or 3",
+                       kFormatRemedy);
+    scan.correction[i] = static_cast<PointCorrection>(static_cast<std::uint8_t>(code));
+    if (f.correction_se)
+      scan.correction_se[i] =
+          static_cast<float>(readValue(p + f.correction_se->offset, f.correction_se->datatype));
+  }
+}
+
 }  // namespace
 
 Scan readScan(const fs::path& file) {
@@ -399,72 +460,37 @@ Scan readScan(const fs::path& file) {
   if (n != header.points || blob.data.size() < n * blob.point_step)
     throw InputError(where, "DATA", "holds fewer points than the header's POINTS",
                      "re-export the scan");
-
-  const pcl::PCLPointField* fx = cloudField(blob, "x");
-  const pcl::PCLPointField* fy = cloudField(blob, "y");
-  const pcl::PCLPointField* fz = cloudField(blob, "z");
-  const pcl::PCLPointField* fi = cloudField(blob, "intensity");
-  const pcl::PCLPointField* fl = cloudField(blob, "label");
-  const pcl::PCLPointField* fc = cloudField(blob, "correction");
-  const pcl::PCLPointField* fs = cloudField(blob, "correction_se");
-  if (!fx || !fy)  // the header we checked has them; PCL must have read the same header
-    throw InputError(where, "FIELDS",
-                     "PCL read other fields than the header lists (a damaged file)",
-                     "re-export the scan");
+  const ScanFields fields = scanFields(blob, where);
 
   Scan scan;
   scan.name = file.filename().string();
   scan.viewpoint = header.viewpoint;
-  scan.has_intensity = fi != nullptr;
+  scan.has_intensity = fields.intensity != nullptr;
   scan.cloud.reset(new pcl::PointCloud<pcl::PointXYZI>);
   scan.cloud->resize(n);
   scan.cloud->width = static_cast<std::uint32_t>(n);
   scan.cloud->height = 1;
   scan.cloud->is_dense = true;
-  if (fl) scan.labels.resize(n);
-  if (fc) scan.correction.resize(n);
-  if (fc && fs) scan.correction_se.resize(n);
+  if (fields.label) scan.labels.resize(n);
+  if (fields.correction) scan.correction.resize(n);
+  if (fields.correction && fields.correction_se) scan.correction_se.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
     const std::uint8_t* p = blob.data.data() + i * blob.point_step;
-    const double x = readValue(p + fx->offset, fx->datatype);
-    const double y = readValue(p + fy->offset, fy->datatype);
-    const double z = fz ? readValue(p + fz->offset, fz->datatype) : 0.0;
-    const bool nan_x = std::isnan(x), nan_y = std::isnan(y);
-    const auto item = [i] { return "point " + std::to_string(i); };
-    if (nan_x != nan_y)
-      throw InputError(where, item(),
-                       "only one of x, y is NaN: a beam without return must have x and y NaN",
-                       kFormatRemedy);
-    if (!nan_x) {
-      if (!std::isfinite(x) || !std::isfinite(y) || (!std::isnan(z) && !std::isfinite(z)))
-        throw InputError(where, item(), "coordinate is infinite",
-                         "write NaN for a beam with no return");
-      if (std::abs(x) > kMaxAbsCoordinate_m || std::abs(y) > kMaxAbsCoordinate_m ||
-          (!std::isnan(z) && std::abs(z) > kMaxAbsCoordinate_m))
-        throw InputError(where, item(), "coordinate beyond 100 km: not a lidar reading",
-                         "check the units (metres) or write NaN for a beam with no return");
-    } else {
-      scan.cloud->is_dense = false;
-    }
+    const double x = readValue(p + fields.x->offset, fields.x->datatype);
+    const double y = readValue(p + fields.y->offset, fields.y->datatype);
+    const double z = fields.z ? readValue(p + fields.z->offset, fields.z->datatype) : 0.0;
+    checkCoordinates(x, y, z, where, i);
+    const bool no_return = std::isnan(x);
+    if (no_return) scan.cloud->is_dense = false;
     auto& pt = (*scan.cloud)[i];
     pt.x = static_cast<float>(x);
     pt.y = static_cast<float>(y);
-    pt.z = nan_x ? std::numeric_limits<float>::quiet_NaN()
-                 : static_cast<float>(std::isnan(z) ? 0.0 : z);
-    pt.intensity = fi ? static_cast<float>(readValue(p + fi->offset, fi->datatype)) : 0.0f;
-    if (fl) {
-      const double label = readValue(p + fl->offset, fl->datatype);
-      if (!(label >= 0.0) || label > 4294967295.0)
-        throw InputError(where, item(), "label is not a non-negative integer", kFormatRemedy);
-      scan.labels[i] = static_cast<std::uint32_t>(label);
-    }
-    if (fc) {
-      const double code = readValue(p + fc->offset, fc->datatype);
-      if (!(code >= 0.0 && code <= 3.0) || code != std::floor(code))
-        throw InputError(where, item(), "correction is not 0, 1, 2 or 3", kFormatRemedy);
-      scan.correction[i] = static_cast<PointCorrection>(static_cast<std::uint8_t>(code));
-      if (fs) scan.correction_se[i] = static_cast<float>(readValue(p + fs->offset, fs->datatype));
-    }
+    pt.z = no_return ? std::numeric_limits<float>::quiet_NaN()
+                     : static_cast<float>(std::isnan(z) ? 0.0 : z);
+    pt.intensity = fields.intensity ? static_cast<float>(readValue(p + fields.intensity->offset,
+                                                                   fields.intensity->datatype))
+                                    : 0.0f;
+    readPointExtras(p, fields, i, where, scan);
   }
   return scan;
 }

@@ -11,35 +11,15 @@ namespace lidarcal::pipeline {
 namespace fs = std::filesystem;
 
 SensorFacts rosbag2SensorFacts(const fs::path& bag, const std::string& topic) {
-  SensorFacts facts;
-  io::RosbagConfig config;
-  config.topic = topic;
-  const io::ImportReport report = io::readRosbag2(bag, config, [&](const io::RawScan& scan) {
-    facts.range_min_m = scan.range_min_m;
-    facts.range_max_m = scan.range_max_m;
-    return false;  // the first message is enough
-  });
-  facts.sensor_name = report.sensor_name;
-  facts.source = bag.string();
-  facts.noun = "bag";
-  return facts;
+  return firstScanFacts(bag, topic, io::readRosbag2);
 }
 
 CorrectionStats correctRosbag2(const fs::path& in, const fs::path& out, const std::string& topic,
                                const CalibrationModel& model,
                                const calibration::ReadingCorrector& correct,
                                const fs::path& model_file) {
-  CorrectionStats stats;
-  MemoCorrector memo(correct);
-  const io::BagRewriteReport report =
-      io::rewriteRosbag2(in, out, topic, [&](std::vector<float>& ranges, const io::RawScan& scan) {
-        checkModelBeams(model, ranges.size(),
-                        in.string() + " (LaserScan " + std::to_string(scan.source_index) + ")",
-                        model_file);
-        correctLaserRanges(ranges, scan.range_min_m, scan.range_max_m, memo, stats);
-      });
-  stats.scans = report.scans;
-  return stats;
+  return correctBagRanges(in, out, BagCorrection{topic, model, correct, model_file},
+                          io::rewriteRosbag2);
 }
 
 void checkBagOutputKind(const fs::path& in, const fs::path& out, bool ros1) {

@@ -32,11 +32,12 @@ void correctLaserRanges(std::vector<float>& ranges_m, double range_min_m, double
   }
 }
 
-SensorFacts bagSensorFacts(const std::filesystem::path& bag, const std::string& topic) {
+SensorFacts firstScanFacts(const std::filesystem::path& bag, const std::string& topic,
+                           BagScanReader read) {
   SensorFacts facts;
   io::RosbagConfig config;
   config.topic = topic;
-  const io::ImportReport report = io::readRosbag(bag, config, [&](const io::RawScan& scan) {
+  const io::ImportReport report = read(bag, config, [&](const io::RawScan& scan) {
     facts.range_min_m = scan.range_min_m;
     facts.range_max_m = scan.range_max_m;
     return false;  // the first message is enough
@@ -47,21 +48,31 @@ SensorFacts bagSensorFacts(const std::filesystem::path& bag, const std::string& 
   return facts;
 }
 
-CorrectionStats correctRosbag(const std::filesystem::path& in, const std::filesystem::path& out,
-                              const std::string& topic, const CalibrationModel& model,
-                              const calibration::ReadingCorrector& correct,
-                              const std::filesystem::path& model_file) {
+CorrectionStats correctBagRanges(const std::filesystem::path& in, const std::filesystem::path& out,
+                                 const BagCorrection& c, BagRangesRewriter rewrite) {
   CorrectionStats stats;
-  MemoCorrector memo(correct);
+  MemoCorrector memo(c.correct);
   const io::BagRewriteReport report =
-      io::rewriteRosbag(in, out, topic, [&](std::vector<float>& ranges, const io::RawScan& scan) {
-        checkModelBeams(model, ranges.size(),
+      rewrite(in, out, c.topic, [&](std::vector<float>& ranges, const io::RawScan& scan) {
+        checkModelBeams(c.model, ranges.size(),
                         in.string() + " (LaserScan " + std::to_string(scan.source_index) + ")",
-                        model_file);
+                        c.model_file);
         correctLaserRanges(ranges, scan.range_min_m, scan.range_max_m, memo, stats);
       });
   stats.scans = report.scans;
   return stats;
+}
+
+SensorFacts bagSensorFacts(const std::filesystem::path& bag, const std::string& topic) {
+  return firstScanFacts(bag, topic, io::readRosbag);
+}
+
+CorrectionStats correctRosbag(const std::filesystem::path& in, const std::filesystem::path& out,
+                              const std::string& topic, const CalibrationModel& model,
+                              const calibration::ReadingCorrector& correct,
+                              const std::filesystem::path& model_file) {
+  return correctBagRanges(in, out, BagCorrection{topic, model, correct, model_file},
+                          io::rewriteRosbag);
 }
 
 }  // namespace lidarcal::pipeline

@@ -14,6 +14,9 @@
 
 #include "calibration/filtering.hpp"
 #include "common/calibration_model.hpp"
+#include "io/bag_scans.hpp"
+#include "io/import.hpp"
+#include "io/rosbag_rewrite.hpp"
 #include "pipeline/stages.hpp"
 
 namespace lidarcal::pipeline {
@@ -43,6 +46,31 @@ class MemoCorrector {
 /// `stats` counts the returns (scans is not touched).
 void correctLaserRanges(std::vector<float>& ranges_m, double range_min_m, double range_max_m,
                         MemoCorrector& correct, CorrectionStats& stats);
+
+/// A reader of a bag's scans (io::readRosbag, io::readRosbag2) and a rewriter of its LaserScan
+/// ranges (io::rewriteRosbag, io::rewriteRosbag2): ROS 1 and ROS 2 bags are corrected alike.
+using BagScanReader = io::ImportReport (*)(const std::filesystem::path&, const io::RosbagConfig&,
+                                           const io::ScanCallback&);
+using BagRangesRewriter = io::BagRewriteReport (*)(const std::filesystem::path&,
+                                                   const std::filesystem::path&, const std::string&,
+                                                   const io::RangesCallback&);
+
+/// What the first LaserScan of the bag's topic, read by `read`, says about the sensor.
+SensorFacts firstScanFacts(const std::filesystem::path& bag, const std::string& topic,
+                           BagScanReader read);
+
+/// The model applied to a bag's topic.
+struct BagCorrection {
+  const std::string& topic;
+  const CalibrationModel& model;
+  const calibration::ReadingCorrector& correct;
+  const std::filesystem::path& model_file;  ///< named in errors
+};
+
+/// Writes `out` from `in` with `rewrite`, the topic's ranges corrected; refuses a message whose
+/// beam count differs from the model's (InputError naming the message).
+CorrectionStats correctBagRanges(const std::filesystem::path& in, const std::filesystem::path& out,
+                                 const BagCorrection& c, BagRangesRewriter rewrite);
 
 /// What the first LaserScan of the bag's topic says about the sensor (as `import` would write
 /// it to sequence.json), for checkModelFitsSensor.

@@ -75,12 +75,12 @@ SequenceCalibration calibrateWithMeasurements(const CalibrateCommand& c, const i
     // some stops) in its likelihood.
     StageBars progress;
     std::vector<detectors::SurveyMatch> found;
+    const std::filesystem::path ref_file = c.reference;
+    const ReferencedSequence r{seq, ref, ref_file, detection, config};
     SequenceCalibration result =
         ref.distances.empty()
-            ? calibrateSequenceWithSurvey(seq, ref, c.reference, detection, config, &found,
-                                          std::ref(progress))
-            : calibrateSequenceWithDistancesAndSelf(seq, ref, c.reference, detection, config,
-                                                    &shown.matches, &found, std::ref(progress));
+            ? calibrateSequenceWithSurvey(r, &found, std::ref(progress))
+            : calibrateSequenceWithDistancesAndSelf(r, &shown.matches, &found, std::ref(progress));
     progress.finish();
     const bool fall_back = !result.model.status.ok() && c.reference_fit == "auto" && alone_possible;
     if (!fall_back) {
@@ -103,8 +103,9 @@ SequenceCalibration calibrateWithMeasurements(const CalibrateCommand& c, const i
         c.reference.c_str(),
         ref.spans.empty() ? "--reference-fit distances" : "a REF.json with spans");
   Progress progress("detect", seq.scans.size());
+  const std::filesystem::path ref_file = c.reference;
   SequenceCalibration result = calibrateSequenceWithReference(
-      seq, ref, c.reference, detection, config, &shown.matches,
+      ReferencedSequence{seq, ref, ref_file, detection, config}, &shown.matches,
       [&](std::size_t done, std::size_t) { progress.update(done); }, &shown.spans);
   progress.finish();
   return result;

@@ -70,58 +70,67 @@ void printStats(const CorrectionStats& stats, const std::string& out, const Cali
     std::fprintf(stderr, "%s\n", beyond.c_str());
 }
 
-/// correct IN.bag --out OUT.bag: every message copied, the topic's ranges corrected.
-void correctBag(const std::string& in, const std::string& model_file, const std::string& out,
-                const std::string& topic, const CorrectionOptions& c, bool overwrite, bool force,
-                const std::string& sensor) {
-  checkBagOutputKind(in, out, true);
-  io::requireRosbagSupport(in);
-  io::checkOutsideInput(in, out);
-  io::checkOutputFile(out, overwrite);
-  const CalibrationModel model = io::readModelFor(model_file, sensor.empty() ? topic : sensor);
+/// The command line of `correct`.
+struct CorrectOptions {
+  std::string seq, model, out, topic, sensor;
+  bool ascii = false, overwrite = false, force = false;
+  int threads = 0;
+};
+
+/// The model for a bag's topic (ROS 1 or ROS 2), checked against the sensor facts the bag
+/// records (a warning with --force), and its corrector.
+struct BagModel {
+  CalibrationModel model;
+  calibration::Outside outside;
+  calibration::ReadingCorrector correct;
+};
+
+BagModel bagModel(const CorrectOptions& o, const CorrectionOptions& c, bool ros2) {
+  CalibrationModel model = io::readModelFor(o.model, o.sensor.empty() ? o.topic : o.sensor);
   const calibration::Outside outside = c.outsidePolicy();
-  if (const std::string w =
-          checkModelFitsSensor(model, bagSensorFacts(in, topic), model_file, force, outside);
+  const SensorFacts facts =
+      ros2 ? rosbag2SensorFacts(o.seq, o.topic) : bagSensorFacts(o.seq, o.topic);
+  if (const std::string w = checkModelFitsSensor(model, facts, o.model, o.force, outside);
       !w.empty())
     std::fprintf(stderr, "lidarcal: warning: %s\n", w.c_str());
-  const calibration::ReadingCorrector correct =
-      modelCorrector(model, c.method(), outside, model_file);
+  calibration::ReadingCorrector correct = modelCorrector(model, c.method(), outside, o.model);
+  return {std::move(model), outside, std::move(correct)};
+}
+
+/// correct IN.bag --out OUT.bag: every message copied, the topic's ranges corrected.
+void correctBag(const CorrectOptions& o, const CorrectionOptions& c) {
+  checkBagOutputKind(o.seq, o.out, true);
+  io::requireRosbagSupport(o.seq);
+  io::checkOutsideInput(o.seq, o.out);
+  io::checkOutputFile(o.out, o.overwrite);
+  const BagModel m = bagModel(o, c, false);
   CorrectionStats stats;
-  io::writeAtomically(out, [&](const std::filesystem::path& tmp) {
-    stats = correctRosbag(in, tmp, topic, model, correct, model_file);
+  io::writeAtomically(o.out, [&](const std::filesystem::path& tmp) {
+    stats = correctRosbag(o.seq, tmp, o.topic, m.model, m.correct, o.model);
   });
-  printStats(stats, out, model, outside);
+  printStats(stats, o.out, m.model, m.outside);
 }
 
 /// correct IN.mcap|IN.db3|IN_DIR --out the same kind: every message copied, the topic's ranges
 /// corrected.
-void correctBag2(const std::string& in, const std::string& model_file, const std::string& out,
-                 const std::string& topic, const CorrectionOptions& c, bool overwrite, bool force,
-                 const std::string& sensor) {
-  checkBagOutputKind(in, out, false);
-  io::checkOutsideInput(in, out);
+void correctBag2(const CorrectOptions& o, const CorrectionOptions& c) {
+  checkBagOutputKind(o.seq, o.out, false);
+  io::checkOutsideInput(o.seq, o.out);
   std::error_code ec;
-  const bool dir = std::filesystem::is_directory(in, ec);
-  if (!dir) io::checkOutputFile(out, overwrite);
-  const CalibrationModel model = io::readModelFor(model_file, sensor.empty() ? topic : sensor);
-  const calibration::Outside outside = c.outsidePolicy();
-  if (const std::string w =
-          checkModelFitsSensor(model, rosbag2SensorFacts(in, topic), model_file, force, outside);
-      !w.empty())
-    std::fprintf(stderr, "lidarcal: warning: %s\n", w.c_str());
-  const calibration::ReadingCorrector correct =
-      modelCorrector(model, c.method(), outside, model_file);
+  const bool dir = std::filesystem::is_directory(o.seq, ec);
+  if (!dir) io::checkOutputFile(o.out, o.overwrite);
+  const BagModel m = bagModel(o, c, true);
   CorrectionStats stats;
   if (dir) {
-    io::StagedDirectory staged(out, overwrite);
-    stats = correctRosbag2(in, staged.path(), topic, model, correct, model_file);
+    io::StagedDirectory staged(o.out, o.overwrite);
+    stats = correctRosbag2(o.seq, staged.path(), o.topic, m.model, m.correct, o.model);
     staged.commit();
   } else {
-    io::writeAtomically(out, [&](const std::filesystem::path& tmp) {
-      stats = correctRosbag2(in, tmp, topic, model, correct, model_file);
+    io::writeAtomically(o.out, [&](const std::filesystem::path& tmp) {
+      stats = correctRosbag2(o.seq, tmp, o.topic, m.model, m.correct, o.model);
     });
   }
-  printStats(stats, out, model, outside);
+  printStats(stats, o.out, m.model, m.outside);
 }
 
 /// The topics of a ROS1 or ROS 2 bag, of any type (the rewriter refuses a block's topic that is not
@@ -135,9 +144,11 @@ std::vector<std::string> bagTopicNames(const std::string& in, bool ros2) {
 
 /// correct IN.bag|IN.mcap|IN.db3|IN_DIR --model RIG_MODEL.json: each sensor's topic corrected by
 /// its block, in one pass.
-void correctRigBag(const std::string& in, const std::string& model_file, const std::string& out,
-                   const std::vector<std::string>& keys, const CorrectionOptions& c, bool overwrite,
-                   bool force, bool ros2) {
+void correctRigBag(const CorrectOptions& o, const CorrectionOptions& c, bool ros2) {
+  const std::string &in = o.seq, &out = o.out, &model_file = o.model;
+  const bool overwrite = o.overwrite, force = o.force;
+  std::vector<std::string> keys = splitList(o.sensor);
+  for (const std::string& t : splitList(o.topic)) keys.push_back(t);
   checkBagOutputKind(in, out, !ros2);
   if (!ros2) io::requireRosbagSupport(in);
   io::checkOutsideInput(in, out);
@@ -150,8 +161,10 @@ void correctRigBag(const std::string& in, const std::string& model_file, const s
   std::vector<std::string> warnings;
   std::vector<RigCorrection> done;
   const auto write = [&](const std::filesystem::path& tmp) {
-    done = correctRigRosbag(in, tmp, model, model_file, blocks, c.method(), c.outsidePolicy(),
-                            force, ros2, warnings);
+    done = correctRigRosbag(
+        in, tmp,
+        RigBagCorrection{model, model_file, blocks, c.method(), c.outsidePolicy(), force, ros2},
+        warnings);
   };
   if (dir) {
     io::StagedDirectory staged(out, overwrite);
@@ -170,12 +183,7 @@ void correctRigBag(const std::string& in, const std::string& model_file, const s
 }  // namespace
 
 void addCorrectCommand(CLI::App& app) {
-  struct Options {
-    std::string seq, model, out, topic, sensor;
-    bool ascii = false, overwrite = false, force = false;
-    int threads = 0;
-  };
-  auto o = std::make_shared<Options>();
+  auto o = std::make_shared<CorrectOptions>();
   auto c = std::make_shared<CorrectionOptions>();
   CLI::App* sub = app.add_subcommand("correct",
                                      "Rewrite every scan of a sequence (or every LaserScan of a "
@@ -213,15 +221,8 @@ void addCorrectCommand(CLI::App& app) {
     if (ros1 || ros2) {
       if (o->ascii)
         throw InputError("", "--ascii", "applies to sequences, not to bags", "drop --ascii");
-      if (io::isRigModel(o->model)) {
-        std::vector<std::string> keys = splitList(o->sensor);
-        for (const std::string& t : splitList(o->topic)) keys.push_back(t);
-        return correctRigBag(o->seq, o->model, o->out, keys, *c, o->overwrite, o->force, ros2);
-      }
-      if (ros1)
-        return correctBag(o->seq, o->model, o->out, o->topic, *c, o->overwrite, o->force,
-                          o->sensor);
-      return correctBag2(o->seq, o->model, o->out, o->topic, *c, o->overwrite, o->force, o->sensor);
+      if (io::isRigModel(o->model)) return correctRigBag(*o, *c, ros2);
+      return ros1 ? correctBag(*o, *c) : correctBag2(*o, *c);
     }
     if (sub->count("--topic") > 0)
       throw InputError(o->seq, "--topic", "applies to bags only (this is not one)", "drop --topic");
@@ -240,10 +241,11 @@ void addCorrectCommand(CLI::App& app) {
                    o->seq.c_str(), fewest, most);
     io::StagedDirectory out(o->out, o->overwrite);
     Progress progress("correct", seq.scans.size());
+    const SequenceCorrection how{c->method(), outside,
+                                 o->ascii ? io::PcdEncoding::ascii : io::PcdEncoding::binary,
+                                 o->threads};
     const auto stats = correctSequence(
-        seq, model, c->method(), out.path(),
-        o->ascii ? io::PcdEncoding::ascii : io::PcdEncoding::binary,
-        [&](std::size_t done, std::size_t) { progress.update(done); }, outside, o->threads);
+        seq, model, out.path(), how, [&](std::size_t done, std::size_t) { progress.update(done); });
     progress.finish();
     out.commit();
     printStats(stats, o->out, model, outside);

@@ -137,19 +137,27 @@ nlohmann::ordered_json spansJson(const std::vector<calibration::SpanMatch>& matc
       {"rms_error_m", number(e.rms_m)}, {"rms_error_se_m", number(e.se_m)}, {"entries", entries}};
 }
 
+/// The command line of `evaluate`.
+struct EvaluateOptions {
+  std::string corrected, truth, raw, out, reference, model,
+      inversion = "ls", outside = calibration::toString(calibration::kDefaultOutside);
+  double radius_m = 0.0;
+  bool force = false;
+};
+
 /// evaluate SEQ --reference REF.json [--model model.json]: what the scans measure at the
 /// reference distances and spans, raw and corrected.
-void evaluateReference(const std::string& seq_dir, const std::string& ref_file,
-                       const std::string& model_file, const std::string& inversion,
-                       const std::string& outside_name, double radius_m, const std::string& out,
-                       bool force) {
+void evaluateReference(const EvaluateOptions& o) {
+  const std::string &seq_dir = o.corrected, &ref_file = o.reference, &model_file = o.model;
+  const std::string &inversion = o.inversion, &out = o.out;
+  const bool force = o.force;
   const io::Sequence seq = io::openSequence(seq_dir);
   const Reference ref = io::readReference(ref_file);
   io::checkReference(ref, seq.stops.size(), ref_file);
   calibration::Outside outside = calibration::kDefaultOutside;
-  calibration::parseOutside(outside_name, outside);  // checked by the option
+  calibration::parseOutside(o.outside, outside);  // checked by the option
   CalibrationOptions options;
-  options.radius_m = radius_m;
+  options.radius_m = o.radius_m;
   const auto detection = referenceDetection(detectionConfig(options));
   Progress raw_progress("measure (raw)", seq.scans.size());
   const auto raw = observeReference(seq, ref, detection, scanLoader(seq),
@@ -215,13 +223,7 @@ void evaluateReference(const std::string& seq_dir, const std::string& ref_file,
 }  // namespace
 
 void addEvaluateCommand(CLI::App& app) {
-  struct Options {
-    std::string corrected, truth, raw, out, reference, model,
-        inversion = "ls", outside = calibration::toString(calibration::kDefaultOutside);
-    double radius_m = 0.0;
-    bool force = false;
-  };
-  auto o = std::make_shared<Options>();
+  auto o = std::make_shared<EvaluateOptions>();
   CLI::App* sub = app.add_subcommand(
       "evaluate",
       std::string(
@@ -270,9 +272,7 @@ void addEvaluateCommand(CLI::App& app) {
       io::checkOutsideInput(o->corrected, o->out);
       io::checkOutputFile(o->out, true);
     }
-    if (!o->reference.empty())
-      return evaluateReference(o->corrected, o->reference, o->model, o->inversion, o->outside,
-                               o->radius_m, o->out, o->force);
+    if (!o->reference.empty()) return evaluateReference(*o);
     if (o->truth.empty())
       throw InputError("", "--truth", "evaluate needs --truth or --reference", "give one of them");
     const io::SimulationTruth truth = io::loadTruth(o->truth);

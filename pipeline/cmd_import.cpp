@@ -88,6 +88,51 @@ std::uintmax_t inputBytes(const std::filesystem::path& input) {
   return bytes;
 }
 
+/// --pose (a bag's odometry topic or tf frame, or a CARMEN log's pose) and the stillness
+/// options that need it.
+void applyPoseOptions(const ImportOptions& o, const CLI::App& sub, ImportSettings& s) {
+  if (sub.count("--pose") && isBag(s.format)) {
+    s.bag_pose = bagPose(o, sub);
+  } else if (sub.count("--pose")) {
+    if (s.format != ImportFormat::carmen)
+      throw InputError("", "--pose", "applies to --from carmen, rosbag1 and rosbag2 only",
+                       "drop --pose");
+    if (o.pose != "corrected" && o.pose != "odometry")
+      throw InputError("", "--pose " + o.pose, "for a CARMEN log, --pose is corrected or odometry",
+                       "e.g. --pose odometry");
+    s.carmen_pose = o.pose == "odometry" ? io::CarmenPose::odometry : io::CarmenPose::corrected;
+  }
+  if ((sub.count("--still-m") || sub.count("--still-deg")) &&
+      s.bag_pose.kind == io::BagPoseConfig::Kind::none)
+    throw InputError("", "--still-m/--still-deg",
+                     "apply to a ROS bag with --pose odom:TOPIC or tf:FRAME only",
+                     "drop them, or give --pose");
+}
+
+/// What an import wrote, in a few lines.
+void printImportSummary(const ImportOptions& o, const ImportResult& r, ImportFormat format) {
+  const auto& w = r.written;
+  const std::string from =
+      o.inputs.size() == 1 ? o.inputs.front() : std::to_string(o.inputs.size()) + " recordings";
+  std::printf("imported %zu of %s from %s (%s) into %s\n", w.written,
+              plural(r.read.scans, "scan").c_str(), from.c_str(), toString(format), w.out.c_str());
+  if (o.stop_per_input)
+    std::printf("  one stop per recording (%zu; sequence.json stop_starts)\n", o.inputs.size());
+  if (w.min_beams == w.max_beams)
+    std::printf("  beams per scan: %zu\n", w.max_beams);
+  else
+    std::printf("  beams per scan: %zu-%zu (sequence.json has no `beams`)\n", w.min_beams,
+                w.max_beams);
+  std::printf(
+      "  returns: %zu of %zu points; %zu without return in the source, %zu outside the range "
+      "limits\n",
+      w.returns, w.points, w.no_return, w.outside_limits);
+  std::printf("  scans with intensity: %zu\n", w.with_intensity);
+  if (r.read.other_records) std::printf("  other records ignored: %zu\n", r.read.other_records);
+  if (r.read.stopped_early) std::printf("  stopped after --max-scans %zu\n", o.max_scans);
+  for (const auto& note : r.read.notes) std::printf("  %s\n", note.c_str());
+}
+
 void runImport(const ImportOptions& o, const CLI::App& sub) {
   if (o.list_topics) return printTopics(o);
   if (o.out.empty())
@@ -105,22 +150,7 @@ void runImport(const ImportOptions& o, const CLI::App& sub) {
   s.writer.max_scans = o.max_scans;
   s.writer.overwrite = o.overwrite;
   s.writer.encoding = o.ascii ? io::PcdEncoding::ascii : io::PcdEncoding::binary;
-  if (sub.count("--pose") && isBag(s.format)) {
-    s.bag_pose = bagPose(o, sub);
-  } else if (sub.count("--pose")) {
-    if (s.format != ImportFormat::carmen)
-      throw InputError("", "--pose", "applies to --from carmen, rosbag1 and rosbag2 only",
-                       "drop --pose");
-    if (o.pose != "corrected" && o.pose != "odometry")
-      throw InputError("", "--pose " + o.pose, "for a CARMEN log, --pose is corrected or odometry",
-                       "e.g. --pose odometry");
-    s.carmen_pose = o.pose == "odometry" ? io::CarmenPose::odometry : io::CarmenPose::corrected;
-  }
-  if ((sub.count("--still-m") || sub.count("--still-deg")) &&
-      s.bag_pose.kind == io::BagPoseConfig::Kind::none)
-    throw InputError("", "--still-m/--still-deg",
-                     "apply to a ROS bag with --pose odom:TOPIC or tf:FRAME only",
-                     "drop them, or give --pose");
+  applyPoseOptions(o, sub, s);
   if (sub.count("--range-min")) s.range_min_m = o.range_min_m;
   if (sub.count("--range-max")) s.range_max_m = o.range_max_m;
   s.sensor_name = o.sensor_name;
@@ -147,27 +177,7 @@ void runImport(const ImportOptions& o, const CLI::App& sub) {
   });
   progress.finish();
 
-  const auto& w = r.written;
-  const std::string from =
-      o.inputs.size() == 1 ? o.inputs.front() : std::to_string(o.inputs.size()) + " recordings";
-  std::printf("imported %zu of %s from %s (%s) into %s\n", w.written,
-              plural(r.read.scans, "scan").c_str(), from.c_str(), toString(s.format),
-              w.out.c_str());
-  if (o.stop_per_input)
-    std::printf("  one stop per recording (%zu; sequence.json stop_starts)\n", o.inputs.size());
-  if (w.min_beams == w.max_beams)
-    std::printf("  beams per scan: %zu\n", w.max_beams);
-  else
-    std::printf("  beams per scan: %zu-%zu (sequence.json has no `beams`)\n", w.min_beams,
-                w.max_beams);
-  std::printf(
-      "  returns: %zu of %zu points; %zu without return in the source, %zu outside the range "
-      "limits\n",
-      w.returns, w.points, w.no_return, w.outside_limits);
-  std::printf("  scans with intensity: %zu\n", w.with_intensity);
-  if (r.read.other_records) std::printf("  other records ignored: %zu\n", r.read.other_records);
-  if (r.read.stopped_early) std::printf("  stopped after --max-scans %zu\n", o.max_scans);
-  for (const auto& note : r.read.notes) std::printf("  %s\n", note.c_str());
+  printImportSummary(o, r, s.format);
 }
 
 }  // namespace

@@ -129,6 +129,54 @@ bool runMonteCarlo(const MonteCarloOptions& o) {
   return o.shard.empty() ? runWholeStudy(o, setup, run) : runShard(o, setup, run);
 }
 
+/// What each trial simulates: the level, the noise, the scene and the orders tried.
+void addSimulationOptions(CLI::App& sub, MonteCarloOptions& o) {
+  sub.add_option("--level", o.level,
+                 "landmark: Alhashimi et al. 2021 eqs. 3, 5, 8 with beams ray-cast on each "
+                 "landmark (fast); scan: whole scans "
+                 "ray-cast and the detector in the loop")
+      ->capture_default_str();
+  sub.add_option("--angle-noise", o.angle_noise,
+                 "What sigma_theta perturbs: heading (the robot's heading at each stop: every "
+                 "beam of the stop "
+                 "turns; default, the scan level's only model), beams (eq. 5: each landmark's "
+                 "centre bearing and "
+                 "beam angles at each stop) or bearing (eq. 5 on the centre bearing only: the "
+                 "joint refinement, "
+                 "which fits beam angles, does not see it)")
+      ->capture_default_str();
+  sub.add_option("--noise-law", o.noise_law,
+                 "Simulated range noise: paper (Alhashimi et al. 2021: 5 % of f(d)) or squared "
+                 "(Alhashimi et al. 2016: sigma_e f(d)^2, the "
+                 "same at 3 m)")
+      ->capture_default_str();
+  sub.add_option("--max-distance", o.max_distance_m,
+                 "Farthest landmark surface from any stop, metres (Alhashimi et al. 2021, section "
+                 "4.3, keeps them within 5 m)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.5, 100.0));
+  sub.add_option("--range-max", o.range_max_m, "Upper end of the sensor's reading window, metres")
+      ->capture_default_str()
+      ->check(CLI::Range(1.0, 1000.0));
+  sub.add_option("--scans-per-stop", o.scans_per_stop, "Scans averaged at each stop")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  sub.add_option("--stops", o.stops, "Stops along the path")
+      ->capture_default_str()
+      ->check(CLI::Range(3, 1000));
+  sub.add_option("--step", o.step_m, "Distance between stops, metres")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  sub.add_option("--max-order", o.max_order, "Highest polynomial order tried (n_max)")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 6));
+  sub.add_option("--noise-scale", o.noise_scale,
+                 "Multiplies the paper's range noise (beta = 0.05 alpha); default 1 at the "
+                 "landmark level, 0.2 at "
+                 "the scan level (the detector cannot find the poles through the paper's noise)")
+      ->check(CLI::NonNegativeNumber);
+}
+
 }  // namespace
 
 void addMonteCarloCommand(CLI::App& app) {
@@ -159,50 +207,7 @@ void addMonteCarloCommand(CLI::App& app) {
       ->check(CLI::PositiveNumber);
   sub->add_option("--seed", o->seed, "Study seed; the same seed and options give the same bytes")
       ->capture_default_str();
-  sub->add_option("--level", o->level,
-                  "landmark: Alhashimi et al. 2021 eqs. 3, 5, 8 with beams ray-cast on each "
-                  "landmark (fast); scan: whole scans "
-                  "ray-cast and the detector in the loop")
-      ->capture_default_str();
-  sub->add_option("--angle-noise", o->angle_noise,
-                  "What sigma_theta perturbs: heading (the robot's heading at each stop: every "
-                  "beam of the stop "
-                  "turns; default, the scan level's only model), beams (eq. 5: each landmark's "
-                  "centre bearing and "
-                  "beam angles at each stop) or bearing (eq. 5 on the centre bearing only: the "
-                  "joint refinement, "
-                  "which fits beam angles, does not see it)")
-      ->capture_default_str();
-  sub->add_option("--noise-law", o->noise_law,
-                  "Simulated range noise: paper (Alhashimi et al. 2021: 5 % of f(d)) or squared "
-                  "(Alhashimi et al. 2016: sigma_e f(d)^2, the "
-                  "same at 3 m)")
-      ->capture_default_str();
-  sub->add_option("--max-distance", o->max_distance_m,
-                  "Farthest landmark surface from any stop, metres (Alhashimi et al. 2021, section "
-                  "4.3, keeps them within 5 m)")
-      ->capture_default_str()
-      ->check(CLI::Range(0.5, 100.0));
-  sub->add_option("--range-max", o->range_max_m, "Upper end of the sensor's reading window, metres")
-      ->capture_default_str()
-      ->check(CLI::Range(1.0, 1000.0));
-  sub->add_option("--scans-per-stop", o->scans_per_stop, "Scans averaged at each stop")
-      ->capture_default_str()
-      ->check(CLI::PositiveNumber);
-  sub->add_option("--stops", o->stops, "Stops along the path")
-      ->capture_default_str()
-      ->check(CLI::Range(3, 1000));
-  sub->add_option("--step", o->step_m, "Distance between stops, metres")
-      ->capture_default_str()
-      ->check(CLI::PositiveNumber);
-  sub->add_option("--max-order", o->max_order, "Highest polynomial order tried (n_max)")
-      ->capture_default_str()
-      ->check(CLI::Range(1, 6));
-  sub->add_option("--noise-scale", o->noise_scale,
-                  "Multiplies the paper's range noise (beta = 0.05 alpha); default 1 at the "
-                  "landmark level, 0.2 at "
-                  "the scan level (the detector cannot find the poles through the paper's noise)")
-      ->check(CLI::NonNegativeNumber);
+  addSimulationOptions(*sub, *o);
   sub->add_flag("--quick", o->quick, "Coarse grids and fewer trials, for a first look");
   sub->add_option("--shard", o->shard,
                   "K/N: run only the K-th of N disjoint slices of the trials (each trial seeded as "

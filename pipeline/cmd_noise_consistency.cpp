@@ -40,6 +40,43 @@ struct NoiseOptions {
   bool record_time = false;
 };
 
+/// The estimator's options from the command line's.
+NoiseRunOptions runOptions(const NoiseOptions& o) {
+  NoiseRunOptions opts;
+  opts.method = o.method == "kl-hill" ? NoiseMethod::kl_hill : NoiseMethod::ml;
+  opts.faithful = o.variant == "faithful";
+  opts.seed = o.seed;
+  opts.kl.objective =
+      opts.faithful ? noise::KlObjectiveConfig::faithful() : noise::KlObjectiveConfig::sound();
+  opts.kl.objective.filter.particles = o.particles;
+  opts.kl.climb.step = o.step;
+  opts.kl.climb.max_jumps = o.jumps;
+  opts.kl.climb.max_evaluations = o.max_evaluations;
+  opts.kl.climb_process = o.climb_process;
+  opts.kl.climb_means = !o.fixed_means;
+  opts.ml.estimate_biases = !o.no_biases;
+  opts.ml.estimate_process = !o.fixed_process;
+  return opts;
+}
+
+/// The estimates on stderr, one line per sensor and one for the process.
+void printNoiseSummary(const NoiseRun& run, const std::vector<int>& sensor_labels, bool kl) {
+  std::fprintf(stderr, "%s: %s after %d %s in %.2f s\n", kl ? "kl-hill" : "ml", run.status.c_str(),
+               run.evaluations, kl ? "evaluations" : "iterations", run.time_s);
+  for (std::size_t s = 0; s < run.noise.sensors.size(); ++s) {
+    const SensorNoise& n = run.noise.sensors[s];
+    std::fprintf(
+        stderr,
+        "  sensor %d: range mean %+.4f m var %.5f m^2, bearing mean %+.4f rad var %.5f rad^2\n",
+        s < sensor_labels.size() ? sensor_labels[s] : static_cast<int>(s), n.range_mean_m,
+        n.range_var_m2, n.bearing_mean_rad, n.bearing_var_rad2);
+  }
+  const ProcessNoise& q = run.noise.process;
+  std::fprintf(stderr, "  process var (%s): dx %.6f m^2, dy %.6f m^2, dtheta %.6f rad^2\n",
+               run.process_estimated ? "estimated" : "assumed", q.dx_var_m2, q.dy_var_m2,
+               q.dtheta_var_rad2);
+}
+
 void runNoiseConsistency(const NoiseOptions& o) {
   namespace fs = std::filesystem;
   std::error_code ec;
@@ -59,10 +96,7 @@ void runNoiseConsistency(const NoiseOptions& o) {
   const noise::NoiseProblem problem = noise::makeNoiseProblem(
       io::readObservations(o.observations, &sensor_labels), io::readOdometry(o.odometry));
 
-  NoiseRunOptions opts;
-  opts.method = o.method == "kl-hill" ? NoiseMethod::kl_hill : NoiseMethod::ml;
-  opts.faithful = o.variant == "faithful";
-  opts.seed = o.seed;
+  NoiseRunOptions opts = runOptions(o);
   if (!o.init.empty()) {
     opts.initial = io::readNoiseSetting(o.init, &sensor_labels);
     if (static_cast<int>(opts.initial->sensors.size()) != problem.sensors)
@@ -72,16 +106,6 @@ void runNoiseConsistency(const NoiseOptions& o) {
               " sensors but the observations have " + std::to_string(problem.sensors),
           "give one entry per sensor of observations.csv, in the ascending order of their ids");
   }
-  opts.kl.objective =
-      opts.faithful ? noise::KlObjectiveConfig::faithful() : noise::KlObjectiveConfig::sound();
-  opts.kl.objective.filter.particles = o.particles;
-  opts.kl.climb.step = o.step;
-  opts.kl.climb.max_jumps = o.jumps;
-  opts.kl.climb.max_evaluations = o.max_evaluations;
-  opts.kl.climb_process = o.climb_process;
-  opts.kl.climb_means = !o.fixed_means;
-  opts.ml.estimate_biases = !o.no_biases;
-  opts.ml.estimate_process = !o.fixed_process;
   std::optional<NoiseSetting> truth;
   if (!o.truth.empty()) truth = io::readNoiseSetting(o.truth, &sensor_labels);
 
@@ -105,23 +129,7 @@ void runNoiseConsistency(const NoiseOptions& o) {
     if (!problem_text.empty())
       std::fprintf(stderr, "lidarcal: warning: plots not drawn: %s\n", problem_text.c_str());
   }
-  if (!quiet()) {
-    std::fprintf(stderr, "%s: %s after %d %s in %.2f s\n", kl ? "kl-hill" : "ml",
-                 run.status.c_str(), run.evaluations, kl ? "evaluations" : "iterations",
-                 run.time_s);
-    for (std::size_t s = 0; s < run.noise.sensors.size(); ++s) {
-      const SensorNoise& n = run.noise.sensors[s];
-      std::fprintf(
-          stderr,
-          "  sensor %d: range mean %+.4f m var %.5f m^2, bearing mean %+.4f rad var %.5f rad^2\n",
-          s < sensor_labels.size() ? sensor_labels[s] : static_cast<int>(s), n.range_mean_m,
-          n.range_var_m2, n.bearing_mean_rad, n.bearing_var_rad2);
-    }
-    const ProcessNoise& q = run.noise.process;
-    std::fprintf(stderr, "  process var (%s): dx %.6f m^2, dy %.6f m^2, dtheta %.6f rad^2\n",
-                 run.process_estimated ? "estimated" : "assumed", q.dx_var_m2, q.dy_var_m2,
-                 q.dtheta_var_rad2);
-  }
+  if (!quiet()) printNoiseSummary(run, sensor_labels, kl);
 }
 
 }  // namespace

@@ -138,8 +138,9 @@ void runRun(const RunCommand& c) {
   fs::create_directory(out.path() / "corrected");
   Progress cprog("correct", seq.scans.size());
   const auto stats = correctSequence(
-      seq, cal.model, method, out.path() / "corrected", io::PcdEncoding::binary,
-      [&](std::size_t d, std::size_t) { cprog.update(d); }, outside, c.options->threads);
+      seq, cal.model, out.path() / "corrected",
+      SequenceCorrection{method, outside, io::PcdEncoding::binary, c.options->threads},
+      [&](std::size_t d, std::size_t) { cprog.update(d); });
   cprog.finish();
 
   ReportInputs in;

@@ -187,40 +187,39 @@ ojson noiseRunToJson(const NoiseRun& run, const noise::NoiseProblem& problem,
   return j;
 }
 
-std::string writeNoisePlots(const std::filesystem::path& dir, const NoiseRun& run,
-                            const std::optional<NoiseSetting>& truth) {
-  const int sensors = static_cast<int>(run.noise.sensors.size());
-  const bool kl = run.method == NoiseMethod::kl_hill;
-  {
-    std::ostringstream o;
-    o.precision(12);
-    o << "# " << (kl ? "evaluation value best_value" : "iteration neg_log_likelihood") << "\n";
-    for (std::size_t i = 0; i < run.objective_trace.size(); ++i) {
-      o << i + 1;
-      if (kl) o << ' ' << run.kl->climb.trace[i].value;
-      o << ' ' << run.objective_trace[i] << '\n';
-    }
-    io::writeTextAtomically(dir / "trace.dat", o.str());
-  }
-  const ParameterTraces params = parameterTraces(run, sensors);
-  {
-    std::ostringstream o;
-    o.precision(12);
-    o << "# " << (kl ? "evaluation" : "iteration");
-    for (const auto& n : params.names) o << ' ' << n;
-    o << '\n';
-    for (std::size_t i = 0; i < params.rows.size(); ++i) {
-      o << i + 1;
-      for (double v : params.rows[i]) o << ' ' << v;
-      o << '\n';
-    }
-    io::writeTextAtomically(dir / "params.dat", o.str());
-  }
+namespace {
 
-  const std::string xlabel = kl ? "objective evaluation" : "VCE iteration";
-  std::ostringstream gp;
-  gp << "set terminal pngcairo size 1000,700 noenhanced\nset grid\nset key outside right\n";
-  gp << "set xlabel " << gnuplotString(xlabel) << "\n";
+/// trace.dat: the objective per evaluation (kl-hill, with the best so far) or iteration (ML).
+void writeTrace(const std::filesystem::path& dir, const NoiseRun& run, bool kl) {
+  std::ostringstream o;
+  o.precision(12);
+  o << "# " << (kl ? "evaluation value best_value" : "iteration neg_log_likelihood") << "\n";
+  for (std::size_t i = 0; i < run.objective_trace.size(); ++i) {
+    o << i + 1;
+    if (kl) o << ' ' << run.kl->climb.trace[i].value;
+    o << ' ' << run.objective_trace[i] << '\n';
+  }
+  io::writeTextAtomically(dir / "trace.dat", o.str());
+}
+
+/// params.dat: the parameters per evaluation or iteration.
+void writeParameters(const std::filesystem::path& dir, const ParameterTraces& params, bool kl) {
+  std::ostringstream o;
+  o.precision(12);
+  o << "# " << (kl ? "evaluation" : "iteration");
+  for (const auto& n : params.names) o << ' ' << n;
+  o << '\n';
+  for (std::size_t i = 0; i < params.rows.size(); ++i) {
+    o << i + 1;
+    for (double v : params.rows[i]) o << ' ' << v;
+    o << '\n';
+  }
+  io::writeTextAtomically(dir / "params.dat", o.str());
+}
+
+/// The objective's plot.
+void objectivePlot(std::ostringstream& gp, const std::filesystem::path& dir, const NoiseRun& run,
+                   bool kl) {
   gp << "set output " << gnuplotString((dir / "objective.png").string()) << "\n";
   if (kl) {
     gp << "set title "
@@ -239,7 +238,13 @@ std::string writeNoisePlots(const std::filesystem::path& dir, const NoiseRun& ru
        << " using 1:2 with linespoints lw 2 title \"-log L\"\n";
   }
   gp << "unset logscale y\nunset title\n";
-  // Parameters: variances on top, means below (kl-hill with climbed means).
+}
+
+/// The parameters' plot: variances on top, means below (kl-hill with climbed means); the truth
+/// dashed when known.
+void parameterPlot(std::ostringstream& gp, const std::filesystem::path& dir,
+                   const ParameterTraces& params, const std::optional<NoiseSetting>& truth,
+                   bool kl) {
   std::vector<std::size_t> vars, means;
   for (std::size_t i = 0; i < params.names.size(); ++i)
     (params.names[i].find("_mean_") != std::string::npos ? means : vars).push_back(i);
@@ -267,17 +272,24 @@ std::string writeNoisePlots(const std::filesystem::path& dir, const NoiseRun& ru
   panel(vars, "variance (m^2 or rad^2)");
   if (!means.empty()) panel(means, "mean (m or rad)");
   gp << "unset multiplot\n";
-  io::writeTextAtomically(dir / "plot.gp", gp.str());
+}
 
-  FILE* pipe = ::popen("gnuplot 2>/dev/null", "w");
-  if (!pipe) return "cannot start gnuplot";
-  const std::string script = gp.str();
-  std::fwrite(script.data(), 1, script.size(), pipe);
-  const int status = ::pclose(pipe);
-  if (status != 0)
-    return "gnuplot failed (is gnuplot with the pngcairo terminal installed? the script is "
-           "plot.gp)";
-  return {};
+}  // namespace
+
+std::string writeNoisePlots(const std::filesystem::path& dir, const NoiseRun& run,
+                            const std::optional<NoiseSetting>& truth) {
+  const bool kl = run.method == NoiseMethod::kl_hill;
+  writeTrace(dir, run, kl);
+  const ParameterTraces params = parameterTraces(run, static_cast<int>(run.noise.sensors.size()));
+  writeParameters(dir, params, kl);
+  std::ostringstream gp;
+  gp << "set terminal pngcairo size 1000,700 noenhanced\nset grid\nset key outside right\n";
+  gp << "set xlabel " << gnuplotString(kl ? "objective evaluation" : "VCE iteration") << "\n";
+  objectivePlot(gp, dir, run, kl);
+  parameterPlot(gp, dir, params, truth, kl);
+  io::writeTextAtomically(dir / "plot.gp", gp.str());
+  std::string why;
+  return runGnuplot(dir, "plot.gp", &why) ? std::string() : why;
 }
 
 }  // namespace lidarcal::pipeline

@@ -136,10 +136,12 @@ std::size_t measuredStops(const Reference& ref) {
 }
 
 SequenceCalibration calibrateSequenceWithReference(
-    const io::Sequence& seq, const Reference& ref, const std::filesystem::path& ref_file,
-    const detectors::SequenceDetectionConfig& detection,
-    const calibration::CalibrationConfig& config, std::vector<calibration::ReferenceMatch>* matches,
+    const ReferencedSequence& r, std::vector<calibration::ReferenceMatch>* matches,
     const StageProgress& on_scan, SpanReport* spans) {
+  const io::Sequence& seq = r.seq;
+  const Reference& ref = r.ref;
+  const std::filesystem::path& ref_file = r.ref_file;
+  const calibration::CalibrationConfig& config = r.config;
   if (ref.distances.empty() && ref.spans.empty())
     throw InputError(
         ref_file.string(), "distances",
@@ -147,7 +149,7 @@ SequenceCalibration calibrateSequenceWithReference(
         "wall-to-wall spans",
         "add the distances or spans you measured (docs/FORMAT.md, \"Reference measurements\")");
   ReferenceObservations ro =
-      observeReference(seq, ref, referenceDetection(detection), scanLoader(seq), on_scan);
+      observeReference(seq, ref, referenceDetection(r.detection), scanLoader(seq), on_scan);
   if (matches) *matches = ro.known.matches;
   requireEveryDistanceFound(ro.known, ref_file);
   requireDistinctTargets(ro.known, ref_file);
@@ -176,17 +178,17 @@ SequenceCalibration calibrateSequenceWithReference(
   return out;
 }
 
-SequenceCalibration calibrateSequenceWithSurvey(const io::Sequence& seq, const Reference& ref,
-                                                const std::filesystem::path& ref_file,
-                                                const detectors::SequenceDetectionConfig& detection,
-                                                const calibration::CalibrationConfig& config,
+SequenceCalibration calibrateSequenceWithSurvey(const ReferencedSequence& r,
                                                 std::vector<detectors::SurveyMatch>* matches,
                                                 const NamedProgress& progress) {
-  detectors::SequenceDetectionConfig det = detection;
+  const io::Sequence& seq = r.seq;
+  const Reference& ref = r.ref;
+  const std::filesystem::path& ref_file = r.ref_file;
+  detectors::SequenceDetectionConfig det = r.detection;
   if (!det.detection.landmark_radius_m && !seq.meta.landmark_radius_m)
-    if (const auto r = detectors::surveyedRadius(ref.landmarks))
-      det.detection.landmark_radius_m = *r;
-  calibration::CalibrationConfig cfg = config;
+    if (const auto radius = detectors::surveyedRadius(ref.landmarks))
+      det.detection.landmark_radius_m = *radius;
+  calibration::CalibrationConfig cfg = r.config;
   for (const auto& s : ref.stops) cfg.joint.known_poses[s.stop] = s.pose;
   std::vector<detectors::SurveyMatch> found;
   const auto adjust = [&](const detectors::SequenceDetections& d,
@@ -220,11 +222,12 @@ SequenceCalibration calibrateSequenceWithSurvey(const io::Sequence& seq, const R
 }
 
 SequenceCalibration calibrateSequenceWithDistancesAndSelf(
-    const io::Sequence& seq, const Reference& ref, const std::filesystem::path& ref_file,
-    const detectors::SequenceDetectionConfig& detection,
-    const calibration::CalibrationConfig& config, std::vector<calibration::ReferenceMatch>* matches,
+    const ReferencedSequence& r, std::vector<calibration::ReferenceMatch>* matches,
     std::vector<detectors::SurveyMatch>* survey, const NamedProgress& progress) {
-  if (config.method != calibration::Method::joint)
+  const io::Sequence& seq = r.seq;
+  const Reference& ref = r.ref;
+  const std::filesystem::path& ref_file = r.ref_file;
+  if (r.config.method != calibration::Method::joint)
     throw InputError(
         ref_file.string(), "distances",
         "measured at only some stops (or given with surveyed landmarks or stops) are combined with "
@@ -232,14 +235,14 @@ SequenceCalibration calibrateSequenceWithDistancesAndSelf(
         "self-calibration in the joint refinement, which --method closed-form skips",
         "use --method joint, or --reference-fit distances to fit the measured distances alone");
   const ReferenceObservations ro =
-      observeReference(seq, ref, referenceDetection(detection), scanLoader(seq));
+      observeReference(seq, ref, referenceDetection(r.detection), scanLoader(seq));
   if (matches) *matches = ro.known.matches;
   requireEveryDistanceFound(ro.known, ref_file);
   requireDistinctTargets(ro.known, ref_file);
-  calibration::CalibrationConfig cfg = config;
+  calibration::CalibrationConfig cfg = r.config;
   cfg.joint.known_ranges = calibration::knownRanges(ro.known, ref);
   SequenceCalibration out =
-      calibrateSequenceWithSurvey(seq, ref, ref_file, detection, cfg, survey, progress);
+      calibrateSequenceWithSurvey({seq, ref, ref_file, r.detection, cfg}, survey, progress);
   if (out.model.status.ok()) out.model.method = "joint+reference";
   // The measured entries were terms of the fit, none held out: REML counts the polynomial's
   // coefficients as fitted to them, so the discrepancy is estimated only where they outnumber them.

@@ -56,25 +56,29 @@ struct SpanReport {
   std::vector<calibration::SpanCheck> checks;  ///< each entry of the fit: raw, fitted, left out
 };
 
+/// A sequence with the reference measurements of it, and how to detect and fit.
+struct ReferencedSequence {
+  const io::Sequence& seq;
+  const Reference& ref;
+  const std::filesystem::path& ref_file;  ///< named in errors
+  const detectors::SequenceDetectionConfig& detection;
+  const calibration::CalibrationConfig& config;
+};
+
 /// The range model from the reference distances and spans (method "reference"): with spans,
 /// calibrateWithSpans over both; else calibrateWithReference. Throws DataError naming every
 /// entry whose target was not found (with what to do).
 SequenceCalibration calibrateSequenceWithReference(
-    const io::Sequence& seq, const Reference& ref, const std::filesystem::path& ref_file,
-    const detectors::SequenceDetectionConfig& detection,
-    const calibration::CalibrationConfig& config,
-    std::vector<calibration::ReferenceMatch>* matches = nullptr, const StageProgress& on_scan = {},
-    SpanReport* spans = nullptr);
+    const ReferencedSequence& r, std::vector<calibration::ReferenceMatch>* matches = nullptr,
+    const StageProgress& on_scan = {}, SpanReport* spans = nullptr);
 
 /// Self-calibration (detection, triangulation, joint refinement) with the surveyed landmark
 /// centres and the measured stop poses of `ref` held fixed (REF.json without distances). Each
 /// surveyed landmark is matched to the nearest detected one (detectors::matchSurvey);
 /// throws DataError naming the entries that match none.
 SequenceCalibration calibrateSequenceWithSurvey(
-    const io::Sequence& seq, const Reference& ref, const std::filesystem::path& ref_file,
-    const detectors::SequenceDetectionConfig& detection,
-    const calibration::CalibrationConfig& config,
-    std::vector<detectors::SurveyMatch>* matches = nullptr, const NamedProgress& progress = {});
+    const ReferencedSequence& r, std::vector<detectors::SurveyMatch>* matches = nullptr,
+    const NamedProgress& progress = {});
 
 /// Throws DataError naming every reference distance whose target was not found (with what to do).
 void requireEveryDistanceFound(const calibration::ReferenceReadings& known,
@@ -100,10 +104,7 @@ std::size_t measuredStops(const Reference& ref);
 /// For distances measured at only some stops. Method "joint+reference". Throws
 /// InputError for --method closed-form, DataError for a distance whose target is not found.
 SequenceCalibration calibrateSequenceWithDistancesAndSelf(
-    const io::Sequence& seq, const Reference& ref, const std::filesystem::path& ref_file,
-    const detectors::SequenceDetectionConfig& detection,
-    const calibration::CalibrationConfig& config,
-    std::vector<calibration::ReferenceMatch>* matches = nullptr,
+    const ReferencedSequence& r, std::vector<calibration::ReferenceMatch>* matches = nullptr,
     std::vector<detectors::SurveyMatch>* survey = nullptr, const NamedProgress& progress = {});
 
 /// The matches as a Markdown table for stdout.

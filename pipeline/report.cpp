@@ -240,29 +240,11 @@ PlotData knownPlotData(const std::vector<calibration::KnownReading>& known,
   return p;
 }
 
-/// The gnuplot script of the report. Distance plots share the x range of the fitted data;
-/// legends sit outside the plotting area; every label_every-th of `stops` stops is numbered.
-std::string reportScript(const FittedRange& fitted, bool histogram, bool truth, std::size_t stops,
-                         std::size_t readings, bool reference) {
-  const auto [lo, hi] = plotRange(fitted);
-  // An even sample of the readings on the scatter plots (all of them stay in distance.dat).
-  const std::size_t every =
-      std::max<std::size_t>(1, (readings + kMaxScatterPoints - 1) / kMaxScatterPoints);
-  const std::string sample = every == 1 ? std::string() : " every " + std::to_string(every);
-  const std::string shown =
-      every == 1 ? std::string() : " (1 in " + std::to_string(every) + " shown)";
-  std::ostringstream g;
-  g.precision(6);
-  g << "set terminal svg size 1000,650 font \"DejaVu Sans,11\" background rgb \"white\"\n"
-       "set grid\n"
-       "set key outside below horizontal\n"
-       "set xrange ["
-    << lo << ":" << hi << "]\n"
-    << "fit_min = " << fitted.min_m << "\nfit_max = " << fitted.max_m
-    << "\n"
-    // About 20 stop numbers on the map at most (a long recording has a stop per scan).
-    << "label_every = " << std::max<std::size_t>(1, (stops + 19) / 20) << "\n"
-    << R"GP(set arrow 1 from fit_min, graph 0 to fit_min, graph 1 nohead dt 3 lc rgb "#666666"
+/// The plots against distance: raw error with the fitted bias, error before and after
+/// correction (the readings sampled as `sample` says), and noise.
+void distancePlots(std::ostringstream& g, const std::string& sample, const std::string& shown,
+                   bool reference) {
+  g << R"GP(set arrow 1 from fit_min, graph 0 to fit_min, graph 1 nohead dt 3 lc rgb "#666666"
 set arrow 2 from fit_max, graph 0 to fit_max, graph 1 nohead dt 3 lc rgb "#666666"
 set output "distance.svg"
 set title "Raw range error against the )GP"
@@ -297,15 +279,10 @@ plot "noise.dat" using 1:($2*1000) with points pt 7 ps 1 lc rgb "#0077bb" title 
 unset arrow 1
 unset arrow 2
 )GP";
-  if (histogram)
-    g << R"GP(set output "histogram.svg"
-set title "Error of the readings on landmarks, before and after correction"
-set autoscale x
-set xlabel "reading - estimated distance [mm]"
-set ylabel "readings"
-plot "histogram.dat" using (1000*$1):2 with histeps lw 2 lc rgb "#cc3311" title "raw", \
-     "histogram.dat" using (1000*$1):3 with histeps lw 2 lc rgb "#009944" title "corrected"
-)GP";
+}
+
+/// The map: landmarks (estimated, and true when known), raw and corrected points, the stops.
+void mapPlot(std::ostringstream& g, bool truth, bool reference) {
   g << R"GP(set terminal svg size 900,900 font "DejaVu Sans,11" background rgb "white"
 set output "map.svg"
 set title ")GP"
@@ -328,6 +305,41 @@ plot )GP";
      "stops.dat" using 1:2 with points pt 7 ps 0.8 lc rgb "#0044aa" title "stops (numbered)", \
      "stops.dat" using 1:2:(int($3) % label_every == 0 ? sprintf("%d", $3) : "") with labels offset 0.8,0.8 font ",9" tc rgb "#0044aa" notitle
 )GP";
+}
+
+/// The gnuplot script of the report. Distance plots share the x range of the fitted data;
+/// legends sit outside the plotting area; every label_every-th of `stops` stops is numbered.
+std::string reportScript(const FittedRange& fitted, bool histogram, bool truth, std::size_t stops,
+                         std::size_t readings, bool reference) {
+  const auto [lo, hi] = plotRange(fitted);
+  // An even sample of the readings on the scatter plots (all of them stay in distance.dat).
+  const std::size_t every =
+      std::max<std::size_t>(1, (readings + kMaxScatterPoints - 1) / kMaxScatterPoints);
+  const std::string sample = every == 1 ? std::string() : " every " + std::to_string(every);
+  const std::string shown =
+      every == 1 ? std::string() : " (1 in " + std::to_string(every) + " shown)";
+  std::ostringstream g;
+  g.precision(6);
+  g << "set terminal svg size 1000,650 font \"DejaVu Sans,11\" background rgb \"white\"\n"
+       "set grid\n"
+       "set key outside below horizontal\n"
+       "set xrange ["
+    << lo << ":" << hi << "]\n"
+    << "fit_min = " << fitted.min_m << "\nfit_max = " << fitted.max_m
+    << "\n"
+    // About 20 stop numbers on the map at most (a long recording has a stop per scan).
+    << "label_every = " << std::max<std::size_t>(1, (stops + 19) / 20) << "\n";
+  distancePlots(g, sample, shown, reference);
+  if (histogram)
+    g << R"GP(set output "histogram.svg"
+set title "Error of the readings on landmarks, before and after correction"
+set autoscale x
+set xlabel "reading - estimated distance [mm]"
+set ylabel "readings"
+plot "histogram.dat" using (1000*$1):2 with histeps lw 2 lc rgb "#cc3311" title "raw", \
+     "histogram.dat" using (1000*$1):3 with histeps lw 2 lc rgb "#009944" title "corrected"
+)GP";
+  mapPlot(g, truth, reference);
   return g.str();
 }
 

@@ -43,11 +43,15 @@ std::vector<std::size_t> rigBlocksForBag(const io::RigModel& model,
   return blocks;
 }
 
-std::vector<RigCorrection> correctRigRosbag(
-    const std::filesystem::path& in, const std::filesystem::path& out, const io::RigModel& model,
-    const std::filesystem::path& model_file, const std::vector<std::size_t>& blocks,
-    calibration::InversionMethod method, calibration::Outside outside, bool force, bool ros2,
-    std::vector<std::string>& warnings) {
+std::vector<RigCorrection> correctRigRosbag(const std::filesystem::path& in,
+                                            const std::filesystem::path& out,
+                                            const RigBagCorrection& c,
+                                            std::vector<std::string>& warnings) {
+  const io::RigModel& model = c.model;
+  const std::filesystem::path& model_file = c.model_file;
+  const std::vector<std::size_t>& blocks = c.blocks;
+  const calibration::Outside outside = c.outside;
+  const bool ros2 = c.ros2;
   std::vector<RigCorrection> done;
   std::vector<std::unique_ptr<MemoCorrector>> memos;
   std::map<std::string, std::size_t> by_topic;
@@ -56,11 +60,11 @@ std::vector<RigCorrection> correctRigRosbag(
     const io::RigModelSensor& s = model.sensors[k];
     const std::string where = model_file.string() + " (sensor " + s.name + ")";
     const SensorFacts facts = ros2 ? rosbag2SensorFacts(in, s.topic) : bagSensorFacts(in, s.topic);
-    if (const std::string w = checkModelFitsSensor(s.model, facts, where, force, outside);
+    if (const std::string w = checkModelFitsSensor(s.model, facts, where, c.force, outside);
         !w.empty())
       warnings.push_back(w);
     memos.push_back(
-        std::make_unique<MemoCorrector>(modelCorrector(s.model, method, outside, where)));
+        std::make_unique<MemoCorrector>(modelCorrector(s.model, c.method, outside, where)));
     by_topic[s.topic] = done.size();
     done.push_back(RigCorrection{s.name, s.topic, {}});
     topics.push_back(s.topic);

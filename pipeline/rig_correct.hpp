@@ -27,14 +27,24 @@ std::vector<std::size_t> rigBlocksForBag(const io::RigModel& model,
                                          const std::vector<std::string>& bag_topics,
                                          const std::vector<std::string>& keys);
 
+/// The blocks of a rig model applied to a bag, and how.
+struct RigBagCorrection {
+  const io::RigModel& model;
+  const std::filesystem::path& model_file;  ///< named in errors
+  const std::vector<std::size_t>& blocks;   ///< rigBlocksForBag
+  calibration::InversionMethod method;
+  calibration::Outside outside;
+  bool force = false;  ///< apply a model whose range limits differ, with a warning
+  bool ros2 = false;   ///< the bag is a ROS 2 bag
+};
+
 /// Writes `out` (a new file, or for a rosbag2 directory an existing empty one; the caller makes it
-/// atomic) from `in` (a ROS 2 bag when `ros2`), each chosen block's topic corrected by its model in
-/// one pass (checked first: status, sensor name, range limits unless `force`; warnings go to
-/// `warnings`). Throws InputError or DataError naming the block.
-std::vector<RigCorrection> correctRigRosbag(
-    const std::filesystem::path& in, const std::filesystem::path& out, const io::RigModel& model,
-    const std::filesystem::path& model_file, const std::vector<std::size_t>& blocks,
-    calibration::InversionMethod method, calibration::Outside outside, bool force, bool ros2,
-    std::vector<std::string>& warnings);
+/// atomic) from `in`, each chosen block's topic corrected by its model in one pass (checked
+/// first: status, sensor name, range limits unless `force`; warnings go to `warnings`). Throws
+/// InputError or DataError naming the block.
+std::vector<RigCorrection> correctRigRosbag(const std::filesystem::path& in,
+                                            const std::filesystem::path& out,
+                                            const RigBagCorrection& c,
+                                            std::vector<std::string>& warnings);
 
 }  // namespace lidarcal::pipeline

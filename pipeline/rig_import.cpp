@@ -81,14 +81,29 @@ std::string describe(const Mounting& m) {
   return text;
 }
 
-/// Reads one topic of one recording into the sensor's writer and rows.
-io::ImportReport readTopic(const RigImportSettings& s, std::size_t input, std::size_t sensor,
-                           const std::string& name, io::SequenceWriter& writer,
-                           std::vector<io::RigScan>& rows, io::RigInput& record, io::RigMeta& meta,
-                           bool& missing_pose, const std::function<void(double)>& progress) {
-  io::RigSensorInfo& info = meta.sensors[sensor];
+/// One topic of one recording: which recording, which sensor.
+struct TopicSource {
+  std::size_t input, sensor;
+  const std::string& name;  ///< the sensor's name
+};
+
+/// What reading the topics builds: a row per scan written and the rig's facts.
+struct RigRows {
+  std::vector<io::RigScan> rows;
+  io::RigMeta& meta;
+  bool missing_pose = false;  ///< a scan without the vehicle's pose (with --pose)
+};
+
+/// Reads one topic of one recording into the sensor's writer and the rows.
+io::ImportReport readTopic(const RigImportSettings& s, const TopicSource& t,
+                           io::SequenceWriter& writer, io::RigInput& record, RigRows& out,
+                           const std::function<void(double)>& progress) {
+  const std::size_t input = t.input;
+  const std::string& name = t.name;
+  io::RigMeta& meta = out.meta;
+  io::RigSensorInfo& info = meta.sensors[t.sensor];
   io::RosbagConfig c;
-  c.topic = s.topics[sensor];
+  c.topic = s.topics[t.sensor];
   c.range_min_m = s.base.range_min_m;
   c.range_max_m = s.base.range_max_m;
   c.pose = s.base.bag_pose;
@@ -103,9 +118,10 @@ io::ImportReport readTopic(const RigImportSettings& s, std::size_t input, std::s
       row.stamp_s = scan.stamp_s;
       row.input = input;
       if (scan.vehicle_pose) row.vehicle = *scan.vehicle_pose;
-      missing_pose = missing_pose ||
-                     (s.base.bag_pose.kind != io::BagPoseConfig::Kind::none && !scan.vehicle_pose);
-      rows.push_back(row);
+      out.missing_pose =
+          out.missing_pose ||
+          (s.base.bag_pose.kind != io::BagPoseConfig::Kind::none && !scan.vehicle_pose);
+      out.rows.push_back(row);
       if (scan.mounting && !record.mountings.count(name)) record.mountings[name] = *scan.mounting;
       if (info.frame_id.empty()) info.frame_id = scan.frame_id;
       if (meta.vehicle_frame.empty()) meta.vehicle_frame = scan.vehicle_frame;
@@ -180,8 +196,7 @@ RigImportResult importRig(const RigImportSettings& s,
     result.meta.sensors.push_back(io::RigSensorInfo{names[k], s.topics[k], "", std::nullopt});
   }
   result.read.resize(names.size());
-  std::vector<io::RigScan> rows;
-  bool missing_pose = false;
+  RigRows out{{}, result.meta};
   const double share = 1.0 / static_cast<double>(s.base.inputs.size() * names.size());
   for (std::size_t in = 0; in < s.base.inputs.size(); ++in) {
     io::RigInput record;
@@ -191,8 +206,8 @@ RigImportResult importRig(const RigImportSettings& s,
       const auto progress = [&](double f) {
         if (on_progress) on_progress((static_cast<double>(in * names.size() + k) + f) * share);
       };
-      const io::ImportReport r = readTopic(s, in, k, names[k], *writers[k], rows, record,
-                                           result.meta, missing_pose, progress);
+      const io::ImportReport r =
+          readTopic(s, TopicSource{in, k, names[k]}, *writers[k], record, out, progress);
       result.read[k].scans += r.scans;
       if (r.short_stops) result.short_stops.push_back(names[k] + " in " + record.name);
       if (result.read[k].sensor_name.empty()) result.read[k].sensor_name = r.sensor_name;
@@ -203,7 +218,7 @@ RigImportResult importRig(const RigImportSettings& s,
     result.meta.inputs.push_back(record);
   }
   const bool known = s.base.bag_pose.kind != io::BagPoseConfig::Kind::none;
-  if (known && missing_pose)
+  if (known && out.missing_pose)
     throw DataError(s.base.out.string(), "--pose", "some scans have no pose of the vehicle frame",
                     "name the vehicle frame with --vehicle-frame, or import without --pose");
   result.meta.pose_source =
@@ -211,6 +226,7 @@ RigImportResult importRig(const RigImportSettings& s,
              : (s.base.bag_pose.kind == io::BagPoseConfig::Kind::tf ? "tf:" : "odom:") +
                    s.base.bag_pose.name;
   noteMountings(names, result);
+  std::vector<io::RigScan>& rows = out.rows;
   result.stops = assignStops(rows, s.base.bag_pose, known);
   // scans.csv: by sensor, then in the order written.
   std::stable_sort(rows.begin(), rows.end(), [&](const io::RigScan& a, const io::RigScan& b) {

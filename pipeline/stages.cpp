@@ -228,16 +228,14 @@ std::string checkModelFits(const CalibrationModel& model, const io::Sequence& se
 }
 
 CorrectionStats correctSequence(const io::Sequence& seq, const CalibrationModel& model,
-                                calibration::InversionMethod method,
-                                const std::filesystem::path& out_dir, io::PcdEncoding encoding,
-                                const StageProgress& on_scan, calibration::Outside outside,
-                                int threads) {
+                                const std::filesystem::path& out_dir, const SequenceCorrection& how,
+                                const StageProgress& on_scan) {
   const calibration::ReadingCorrector correct =
-      calibration::readingCorrector(model, method, outside);
+      calibration::readingCorrector(model, how.method, how.outside);
   CorrectionStats stats;
   // A window of scans at a time on `threads` threads (each scan read, corrected and written on
   // its own); the counts added up and the progress told in scan order.
-  const int t = threadsFor(threads);
+  const int t = threadsFor(how.threads);
   const std::size_t n = seq.scans.size(), window = 16 * static_cast<std::size_t>(t);
   std::vector<calibration::FilteringStats> f(window);
   for (std::size_t first = 0; first < n; first += window) {
@@ -247,7 +245,7 @@ CorrectionStats correctSequence(const io::Sequence& seq, const CalibrationModel&
       const io::Scan scan = io::readScan(seq.scans[i].path);
       f[k] = calibration::FilteringStats{};
       io::writeScan(out_dir / seq.scans[i].name(), calibration::correctScan(scan, correct, &f[k]),
-                    encoding);
+                    how.encoding);
     });
     for (std::size_t k = 0; k < count; ++k) {
       ++stats.scans;

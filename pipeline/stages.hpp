@@ -99,14 +99,20 @@ struct CorrectionStats : calibration::FilteringStats {
   std::size_t scans = 0;  ///< scans (or LaserScan messages) corrected
 };
 
+/// How a sequence's scans are corrected and written.
+struct SequenceCorrection {
+  calibration::InversionMethod method = calibration::InversionMethod::ls;
+  calibration::Outside outside = calibration::kDefaultOutside;
+  io::PcdEncoding encoding = io::PcdEncoding::binary;
+  /// Scans corrected side by side (0: the machine's cores, at most 8); the files and counts do
+  /// not depend on it.
+  int threads = 0;
+};
+
 /// Streams every scan through the filtering stage into `out_dir` (an existing, empty staging
-/// directory); copies sequence.json. `threads` (0: the machine's cores, at most 8) correct
-/// scans side by side; the files and counts do not depend on it.
+/// directory); copies sequence.json.
 CorrectionStats correctSequence(const io::Sequence& seq, const CalibrationModel& model,
-                                calibration::InversionMethod method,
-                                const std::filesystem::path& out_dir, io::PcdEncoding encoding,
-                                const StageProgress& on_scan = {},
-                                calibration::Outside outside = calibration::kDefaultOutside,
-                                int threads = 0);
+                                const std::filesystem::path& out_dir, const SequenceCorrection& how,
+                                const StageProgress& on_scan = {});
 
 }  // namespace lidarcal::pipeline

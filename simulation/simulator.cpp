@@ -178,6 +178,42 @@ std::vector<TruthStop> planStops(const Scene& scene, std::uint64_t seed) {
   return stops;
 }
 
+namespace {
+
+/// Depth discontinuity: the nearest neighbour beam of `b` on another surface farther away is the
+/// background (NaN: none).
+double backgroundRange(const std::vector<RayHit>& hits, std::size_t b, bool full_circle) {
+  const RayHit& hit = hits[b];
+  const auto n = static_cast<long>(hits.size());
+  double background = std::numeric_limits<double>::quiet_NaN();
+  for (long step : {-1L, 1L}) {
+    long j = static_cast<long>(b) + step;
+    if (full_circle) j = (j + n) % n;
+    if (j < 0 || j >= n) continue;
+    const RayHit& nb = hits[static_cast<std::size_t>(j)];
+    if (nb.kind == io::TargetKind::none || (nb.kind == hit.kind && nb.id == hit.id) ||
+        nb.range_m <= hit.range_m)
+      continue;
+    if (std::isnan(background) || nb.range_m < background) background = nb.range_m;
+  }
+  return background;
+}
+
+/// The true range of a beam's hit, as the truth file records it.
+io::TrueRange trueRange(const RayHit& hit, std::size_t scan_index, std::size_t b) {
+  io::TrueRange t;
+  t.scan = static_cast<std::uint32_t>(scan_index);
+  t.beam = static_cast<std::uint32_t>(b);
+  t.range_m =
+      hit.kind == io::TargetKind::none ? std::numeric_limits<double>::quiet_NaN() : hit.range_m;
+  t.target = hit.kind;
+  t.target_id = hit.id;
+  t.incidence_rad = hit.incidence_rad;
+  return t;
+}
+
+}  // namespace
+
 SimulatedScan simulateScan(const Scene& scene, const TruthStop& stop, std::size_t scan_index,
                            std::uint64_t seed) {
   const SensorSpec& sensor = scene.sensor;
@@ -223,31 +259,13 @@ SimulatedScan simulateScan(const Scene& scene, const TruthStop& stop, std::size_
   auto effect_rng = effectRng(seed, scan_index);
   for (std::size_t b = 0; b < n; ++b) {
     const RayHit& hit = hits[b];
-    io::TrueRange& t = out.truth[b];
-    t.scan = static_cast<std::uint32_t>(scan_index);
-    t.beam = static_cast<std::uint32_t>(b);
-    t.range_m =
-        hit.kind == io::TargetKind::none ? std::numeric_limits<double>::quiet_NaN() : hit.range_m;
-    t.target = hit.kind;
-    t.target_id = hit.id;
-    t.incidence_rad = hit.incidence_rad;
+    out.truth[b] = trueRange(hit, scan_index, b);
 
     auto& pt = (*out.scan.cloud)[b];
     pt.intensity = 0.0f;
     double reading = std::numeric_limits<double>::quiet_NaN();
     if (hit.kind != io::TargetKind::none) {
-      // Depth discontinuity: a neighbour beam on another surface farther away is the background.
-      double background = std::numeric_limits<double>::quiet_NaN();
-      for (long step : {-1L, 1L}) {
-        long j = static_cast<long>(b) + step;
-        if (full_circle) j = (j + static_cast<long>(n)) % static_cast<long>(n);
-        if (j < 0 || j >= static_cast<long>(n)) continue;
-        const RayHit& nb = hits[static_cast<std::size_t>(j)];
-        if (nb.kind == io::TargetKind::none || (nb.kind == hit.kind && nb.id == hit.id) ||
-            nb.range_m <= hit.range_m)
-          continue;
-        if (std::isnan(background) || nb.range_m < background) background = nb.range_m;
-      }
+      const double background = backgroundRange(hits, b, full_circle);
       const double d = mixedPixelDistance(sensor.effects, hit.range_m, background, effect_rng);
       const BeamContext ctx{std::cos(hit.incidence_rad), surfaceOffset(scene, hit), scan_index,
                             surfaceIntensity(scene, hit)};
