@@ -158,99 +158,92 @@ void print(const char* name, const Tally& t, const std::vector<double>& at) {
     std::printf(" - |\n");
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  CLI::App app{"Coverage of the 95 % intervals of the calibrated range model over simulated seeds"};
+/// The command line: the scene, the seeds, and how each is simulated and calibrated.
+struct Options {
   std::string scene = "data/scenes/paper_field.json", work = "/tmp/lidarcal-coverage";
   int seeds = 100, first = 1001, scans = 10;
-  double tape_sigma = 0.002;
-  app.add_option("--scene", scene)->capture_default_str();
-  app.add_option("--seeds", seeds)->capture_default_str();
-  app.add_option("--first-seed", first,
-                 "Seeds first .. first + seeds - 1 (disjoint from those the tests use)")
-      ->capture_default_str();
-  app.add_option("--scans-per-stop", scans)->capture_default_str();
-  app.add_option("--work", work)->capture_default_str();
-  app.add_option("--tape-sigma", tape_sigma,
-                 "Standard deviation of the simulated tape error, metres")
-      ->capture_default_str();
-  std::string joint_args;
-  app.add_option("--joint-args", joint_args,
-                 "More options for the joint refinement's calibrate (e.g. \"--max-order 2\")");
-  int taped_stops = 5;
-  app.add_option("--taped-stops", taped_stops,
-                 "Stops whose tape distances join the self-calibration (--reference-fit combined) "
-                 "in the last row")
-      ->capture_default_str()
-      ->check(CLI::PositiveNumber);
-  CLI11_PARSE(app, argc, argv);
-  const std::string exe = LIDARCAL_EXE;
-  const std::vector<double> at = {1.0, 2.0, 3.0};
-  const lidarcal::Scene base = lidarcal::io::readScene(scene);
-  Tally joint{std::vector<int>(at.size()), std::vector<int>(at.size())};
-  Tally reference = joint, taped = joint, closed = joint, combined = joint;
-  fs::create_directories(work);
-  for (int seed = first; seed < first + seeds; ++seed) {
-    const fs::path dir = fs::path(work) / ("s" + std::to_string(seed));
-    // A rippled sensor gets its ripple's phase drawn per seed: a predictive interval speaks of a
-    // distance the fit did not see, not of one fixed point of one fixed ripple.
-    lidarcal::Scene drawn = base;
-    std::string scene_file = scene;
-    if (drawn.sensor.effects.ripple_amplitude_m != 0.0) {
-      std::mt19937_64 rng(static_cast<std::uint64_t>(seed) ^ 0x9e3779b97f4a7c15ULL);
-      drawn.sensor.effects.ripple_phase_rad =
-          std::uniform_real_distribution<double>(0.0, 6.283185307179586)(rng);
-      scene_file = (fs::path(work) / ("scene-" + std::to_string(seed) + ".json")).string();
-      std::ofstream(scene_file) << lidarcal::io::sceneToJson(drawn).dump(1);
-    }
-    const lidarcal::RangeEffects& fx = drawn.sensor.effects;
-    if (!sh(exe + " simulate -q --scene " + scene_file + " --out " + dir.string() + " --seed " +
-            std::to_string(seed) + " --scans-per-stop " + std::to_string(scans) + " --overwrite")) {
-      std::fprintf(stderr, "simulate failed for seed %d\n", seed);
-      return 1;
-    }
-    const auto truth_json = readJson(dir / "truth.json");
-    const std::vector<double> truth = truth_json["model"]["bias_alpha"];
-    if (sh(exe + " calibrate -q " + joint_args + " " + (dir / "scans").string() + " -o " +
-           (dir / "joint.json").string() + " --overwrite"))
-      check(dir / "joint.json", truth, fx, at, joint);
-    else
-      ++joint.failed;
-    if (sh(exe + " calibrate -q --method closed-form " + (dir / "scans").string() + " -o " +
-           (dir / "cf.json").string() + " --overwrite"))
-      check(dir / "cf.json", truth, fx, at, closed);
-    else
-      ++closed.failed;
-    tapeReference(dir / "truth.json", dir / "ref.json", 0.0, 0);
-    if (sh(exe + " calibrate -q " + (dir / "scans").string() + " --reference " +
-           (dir / "ref.json").string() + " -o " + (dir / "ref-model.json").string() +
-           " --overwrite"))
-      check(dir / "ref-model.json", truth, fx, at, reference, true);
-    else
-      ++reference.failed;
-    tapeReference(dir / "truth.json", dir / "tape.json", tape_sigma,
-                  static_cast<std::uint64_t>(seed));
-    if (sh(exe + " calibrate -q " + (dir / "scans").string() + " --reference " +
-           (dir / "tape.json").string() + " -o " + (dir / "tape-model.json").string() +
-           " --overwrite"))
-      check(dir / "tape-model.json", truth, fx, at, taped, true);
-    else
-      ++taped.failed;
-    tapeReference(dir / "truth.json", dir / "taped-stops.json", tape_sigma,
-                  static_cast<std::uint64_t>(seed), taped_stops);
-    if (sh(exe + " calibrate -q " + (dir / "scans").string() + " --reference " +
-           (dir / "taped-stops.json").string() + " --reference-fit combined -o " +
-           (dir / "combined.json").string() + " --overwrite"))
-      check(dir / "combined.json", truth, fx, at, combined);
-    else
-      ++combined.failed;
-    std::fprintf(stderr, "\rseed %d of %d", seed - first + 1, seeds);
-    fs::remove_all(dir / "scans");
+  double tape_sigma = 0.002;  ///< standard deviation of the simulated tape error, metres
+  std::string joint_args;     ///< more options for the joint refinement's calibrate
+  int taped_stops = 5;        ///< stops whose tape distances join the self-calibration
+};
+
+/// One tally per row of the table.
+struct Tallies {
+  Tally joint, closed, reference, taped, combined;
+};
+
+/// The scene file of `seed`, `drawn` its scene: a rippled sensor gets its ripple's phase drawn
+/// per seed (a predictive interval speaks of a distance the fit did not see, not of one fixed
+/// point of one fixed ripple), written to the work directory; any other scene is the given one.
+std::string sceneOfSeed(const Options& o, const lidarcal::Scene& base, int seed,
+                        lidarcal::Scene& drawn) {
+  drawn = base;
+  std::string scene_file = o.scene;
+  if (drawn.sensor.effects.ripple_amplitude_m != 0.0) {
+    std::mt19937_64 rng(static_cast<std::uint64_t>(seed) ^ 0x9e3779b97f4a7c15ULL);
+    drawn.sensor.effects.ripple_phase_rad =
+        std::uniform_real_distribution<double>(0.0, 6.283185307179586)(rng);
+    scene_file = (fs::path(o.work) / ("scene-" + std::to_string(seed) + ".json")).string();
+    std::ofstream(scene_file) << lidarcal::io::sceneToJson(drawn).dump(1);
   }
-  std::fprintf(stderr, "\n");
+  return scene_file;
+}
+
+/// Simulates `seed`, calibrates it each way the table compares and tallies the checks; false
+/// when the simulation fails.
+bool runSeed(const Options& o, const lidarcal::Scene& base, int seed, const std::vector<double>& at,
+             Tallies& t) {
+  const std::string exe = LIDARCAL_EXE;
+  const fs::path dir = fs::path(o.work) / ("s" + std::to_string(seed));
+  lidarcal::Scene drawn;
+  const std::string scene_file = sceneOfSeed(o, base, seed, drawn);
+  const lidarcal::RangeEffects& fx = drawn.sensor.effects;
+  if (!sh(exe + " simulate -q --scene " + scene_file + " --out " + dir.string() + " --seed " +
+          std::to_string(seed) + " --scans-per-stop " + std::to_string(o.scans) + " --overwrite")) {
+    std::fprintf(stderr, "simulate failed for seed %d\n", seed);
+    return false;
+  }
+  const auto truth_json = readJson(dir / "truth.json");
+  const std::vector<double> truth = truth_json["model"]["bias_alpha"];
+  if (sh(exe + " calibrate -q " + o.joint_args + " " + (dir / "scans").string() + " -o " +
+         (dir / "joint.json").string() + " --overwrite"))
+    check(dir / "joint.json", truth, fx, at, t.joint);
+  else
+    ++t.joint.failed;
+  if (sh(exe + " calibrate -q --method closed-form " + (dir / "scans").string() + " -o " +
+         (dir / "cf.json").string() + " --overwrite"))
+    check(dir / "cf.json", truth, fx, at, t.closed);
+  else
+    ++t.closed.failed;
+  tapeReference(dir / "truth.json", dir / "ref.json", 0.0, 0);
+  if (sh(exe + " calibrate -q " + (dir / "scans").string() + " --reference " +
+         (dir / "ref.json").string() + " -o " + (dir / "ref-model.json").string() + " --overwrite"))
+    check(dir / "ref-model.json", truth, fx, at, t.reference, true);
+  else
+    ++t.reference.failed;
+  tapeReference(dir / "truth.json", dir / "tape.json", o.tape_sigma,
+                static_cast<std::uint64_t>(seed));
+  if (sh(exe + " calibrate -q " + (dir / "scans").string() + " --reference " +
+         (dir / "tape.json").string() + " -o " + (dir / "tape-model.json").string() +
+         " --overwrite"))
+    check(dir / "tape-model.json", truth, fx, at, t.taped, true);
+  else
+    ++t.taped.failed;
+  tapeReference(dir / "truth.json", dir / "taped-stops.json", o.tape_sigma,
+                static_cast<std::uint64_t>(seed), o.taped_stops);
+  if (sh(exe + " calibrate -q " + (dir / "scans").string() + " --reference " +
+         (dir / "taped-stops.json").string() + " --reference-fit combined -o " +
+         (dir / "combined.json").string() + " --overwrite"))
+    check(dir / "combined.json", truth, fx, at, t.combined);
+  else
+    ++t.combined.failed;
+  fs::remove_all(dir / "scans");
+  return true;
+}
+
+void printTable(const Options& o, const std::vector<double>& at, const Tallies& t) {
   std::printf("Coverage of the 95 %% intervals, %s, seeds %d-%d, %d scans per stop\n\n",
-              scene.c_str(), first, first + seeds - 1, scans);
+              o.scene.c_str(), o.first, o.first + o.seeds - 1, o.scans);
   std::printf("| method | fits (without SE) |");
   for (double d : at) std::printf(" f(%.0f m) |", d);
   std::printf(
@@ -259,17 +252,53 @@ int main(int argc, char** argv) {
       "|\n|---|---|");
   for (std::size_t k = 0; k < at.size(); ++k) std::printf("---|");
   std::printf("---|---|---|---|---|\n");
-  print("joint refinement (no ground truth)", joint, at);
-  print("closed form of Alhashimi et al. 2021, jackknife SE (no ground truth)", closed, at);
-  print("against exact distances (--reference)", reference, at);
+  print("joint refinement (no ground truth)", t.joint, at);
+  print("closed form of Alhashimi et al. 2021, jackknife SE (no ground truth)", t.closed, at);
+  print("against exact distances (--reference)", t.reference, at);
   char name[96];
   std::snprintf(name, sizeof name, "against tape distances, tape error %.1f mm (--reference)",
-                1000.0 * tape_sigma);
-  print(name, taped, at);
+                1000.0 * o.tape_sigma);
+  print(name, t.taped, at);
   std::snprintf(
       name, sizeof name,
       "joint refinement with the first %d stops' tape distances (--reference-fit combined)",
-      taped_stops);
-  print(name, combined, at);
+      o.taped_stops);
+  print(name, t.combined, at);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Coverage of the 95 % intervals of the calibrated range model over simulated seeds"};
+  Options o;
+  app.add_option("--scene", o.scene)->capture_default_str();
+  app.add_option("--seeds", o.seeds)->capture_default_str();
+  app.add_option("--first-seed", o.first,
+                 "Seeds first .. first + seeds - 1 (disjoint from those the tests use)")
+      ->capture_default_str();
+  app.add_option("--scans-per-stop", o.scans)->capture_default_str();
+  app.add_option("--work", o.work)->capture_default_str();
+  app.add_option("--tape-sigma", o.tape_sigma,
+                 "Standard deviation of the simulated tape error, metres")
+      ->capture_default_str();
+  app.add_option("--joint-args", o.joint_args,
+                 "More options for the joint refinement's calibrate (e.g. \"--max-order 2\")");
+  app.add_option("--taped-stops", o.taped_stops,
+                 "Stops whose tape distances join the self-calibration (--reference-fit combined) "
+                 "in the last row")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  CLI11_PARSE(app, argc, argv);
+  const std::vector<double> at = {1.0, 2.0, 3.0};
+  const lidarcal::Scene base = lidarcal::io::readScene(o.scene);
+  Tally empty{std::vector<int>(at.size()), std::vector<int>(at.size())};
+  Tallies t{empty, empty, empty, empty, empty};
+  fs::create_directories(o.work);
+  for (int seed = o.first; seed < o.first + o.seeds; ++seed) {
+    if (!runSeed(o, base, seed, at, t)) return 1;
+    std::fprintf(stderr, "\rseed %d of %d", seed - o.first + 1, o.seeds);
+  }
+  std::fprintf(stderr, "\n");
+  printTable(o, at, t);
   return 0;
 }

@@ -128,66 +128,91 @@ void printMisses(const SequenceDetections& r, const std::vector<ScanTruth>& trut
   }
 }
 
-void runScene(const std::string& file, const Options& o) {
-  const Scene scene = io::readScene(file);
-  Totals t;
-  for (int k = 0; k < o.seeds; ++k) {
-    const auto seed = static_cast<std::uint64_t>(o.first_seed + k);
-    Truth truth;
-    truth.seed = seed;
-    truth.scene = scene;
-    truth.stops = simulation::planStops(scene, seed);
-    std::vector<simulation::SimulatedScan> sims;
-    std::vector<std::size_t> stop_of_scan;
-    for (std::size_t s = 0; s < truth.stops.size(); ++s)
-      for (std::size_t i = 0; i < truth.stops[s].scans; ++i) {
-        sims.push_back(
-            simulation::simulateScan(scene, truth.stops[s], truth.stops[s].first_scan + i, seed));
-        stop_of_scan.push_back(s);
-      }
-    SequenceDetectionConfig cfg;
-    bool common = !scene.landmarks.empty();
-    for (const auto& l : scene.landmarks)
-      common = common && l.radius_m == scene.landmarks.front().radius_m;
-    if (scene.publish_landmark_radius && common && !o.estimate_radius)
-      cfg.detection.landmark_radius_m = scene.landmarks.front().radius_m;
-    const SequenceDetections r = detectSequence(
-        sims.size(), [&](std::size_t i) { return sims[i].scan; }, stop_of_scan, cfg);
-    std::vector<ScanTruth> st;
-    for (std::size_t i = 0; i < sims.size(); ++i) {
-      for (const auto& b : sims[i].truth)
-        if (b.target != io::TargetKind::none && b.target != io::TargetKind::wall) {
-          ++t.object_beams;
-          if (b.target == io::TargetKind::clutter) ++t.clutter_beams;
-        }
-      st.push_back(makeScanTruth(truth, i, sims[i].truth, *sims[i].scan.cloud));
+/// One seed of a scene simulated: the truth and every scan, with the stop each belongs to.
+struct SimulatedRun {
+  Truth truth;
+  std::vector<simulation::SimulatedScan> sims;
+  std::vector<std::size_t> stop_of_scan;
+};
+
+SimulatedRun simulateRun(const Scene& scene, std::uint64_t seed) {
+  SimulatedRun run;
+  run.truth.seed = seed;
+  run.truth.scene = scene;
+  run.truth.stops = simulation::planStops(scene, seed);
+  const auto& stops = run.truth.stops;
+  for (std::size_t s = 0; s < stops.size(); ++s)
+    for (std::size_t i = 0; i < stops[s].scans; ++i) {
+      run.sims.push_back(simulation::simulateScan(scene, stops[s], stops[s].first_scan + i, seed));
+      run.stop_of_scan.push_back(s);
     }
-    const EvaluationConfig ecfg;
-    const DetectionEvaluation ev = evaluateDetections(r.scans, &r.association, st, truth, ecfg);
-    const DetectionEvaluation raw = evaluateDetections(r.scans, nullptr, st, truth, ecfg);
-    accumulate(t, ev, raw);
-    std::vector<bool> found(scene.landmarks.size() + 1, false);
-    for (int l : ev.truth_of_id)
-      if (l > 0) found[static_cast<std::size_t>(l)] = true;
-    bool all = true;
-    for (std::size_t l = 1; l < found.size(); ++l) all = all && found[l];
-    if (all && ev.ids == scene.landmarks.size()) ++t.runs_all_found;
-    for (std::size_t id = 1; id <= ev.truth_of_id.size(); ++id) {
-      const int l = ev.truth_of_id[id - 1];
-      if (l > 0 && r.association.landmarks[id - 1].radius_estimated) {
-        t.radius_abs_error_sum += std::abs(r.association.landmarks[id - 1].radius_m -
-                                           scene.landmarks[std::size_t(l - 1)].radius_m);
-        ++t.radius_estimates;
-      }
-    }
-    if (o.misses) {
-      std::printf("seed %llu: %zu ids, precision %.4f recall %.4f purity %.4f\n",
-                  static_cast<unsigned long long>(seed), ev.ids, ev.precision, ev.recall,
-                  ev.purity);
-      printMisses(r, st, scene.landmarks.size(), ecfg.min_beams);
+  return run;
+}
+
+/// The detector is given the landmarks' radius when the scene publishes one common to all
+/// (unless --estimate-radius).
+SequenceDetectionConfig detectionConfig(const Scene& scene, const Options& o) {
+  SequenceDetectionConfig cfg;
+  bool common = !scene.landmarks.empty();
+  for (const auto& l : scene.landmarks)
+    common = common && l.radius_m == scene.landmarks.front().radius_m;
+  if (scene.publish_landmark_radius && common && !o.estimate_radius)
+    cfg.detection.landmark_radius_m = scene.landmarks.front().radius_m;
+  return cfg;
+}
+
+/// Whether every landmark got exactly one id, and the errors of the radii the association
+/// estimated.
+void countIdentities(const Scene& scene, const SequenceDetections& r, const DetectionEvaluation& ev,
+                     Totals& t) {
+  std::vector<bool> found(scene.landmarks.size() + 1, false);
+  for (int l : ev.truth_of_id)
+    if (l > 0) found[static_cast<std::size_t>(l)] = true;
+  bool all = true;
+  for (std::size_t l = 1; l < found.size(); ++l) all = all && found[l];
+  if (all && ev.ids == scene.landmarks.size()) ++t.runs_all_found;
+  for (std::size_t id = 1; id <= ev.truth_of_id.size(); ++id) {
+    const int l = ev.truth_of_id[id - 1];
+    if (l > 0 && r.association.landmarks[id - 1].radius_estimated) {
+      t.radius_abs_error_sum += std::abs(r.association.landmarks[id - 1].radius_m -
+                                         scene.landmarks[std::size_t(l - 1)].radius_m);
+      ++t.radius_estimates;
     }
   }
-  auto ratio = [](std::size_t a, std::size_t b) { return b ? double(a) / double(b) : 1.0; };
+}
+
+/// Detects and evaluates one seed of the scene, adding to the scene's totals.
+void runSeed(const Scene& scene, std::uint64_t seed, const Options& o, Totals& t) {
+  const SimulatedRun run = simulateRun(scene, seed);
+  const auto& sims = run.sims;
+  const SequenceDetections r = detectSequence(
+      sims.size(), [&](std::size_t i) { return sims[i].scan; }, run.stop_of_scan,
+      detectionConfig(scene, o));
+  std::vector<ScanTruth> st;
+  for (std::size_t i = 0; i < sims.size(); ++i) {
+    for (const auto& b : sims[i].truth)
+      if (b.target != io::TargetKind::none && b.target != io::TargetKind::wall) {
+        ++t.object_beams;
+        if (b.target == io::TargetKind::clutter) ++t.clutter_beams;
+      }
+    st.push_back(makeScanTruth(run.truth, i, sims[i].truth, *sims[i].scan.cloud));
+  }
+  const EvaluationConfig ecfg;
+  const DetectionEvaluation ev = evaluateDetections(r.scans, &r.association, st, run.truth, ecfg);
+  const DetectionEvaluation raw = evaluateDetections(r.scans, nullptr, st, run.truth, ecfg);
+  accumulate(t, ev, raw);
+  countIdentities(scene, r, ev, t);
+  if (o.misses) {
+    std::printf("seed %llu: %zu ids, precision %.4f recall %.4f purity %.4f\n",
+                static_cast<unsigned long long>(seed), ev.ids, ev.precision, ev.recall, ev.purity);
+    printMisses(r, st, scene.landmarks.size(), ecfg.min_beams);
+  }
+}
+
+double ratio(std::size_t a, std::size_t b) { return b ? double(a) / double(b) : 1.0; }
+
+/// The scene's section of docs/results/detection.md: the detection table and the table by range.
+void printTotals(const std::string& file, const Scene& scene, const Options& o, const Totals& t) {
   std::printf("\n### %s\n\n", file.c_str());
   std::printf(
       "%s; %zu landmarks, %zu clutter cylinders, %zu wall segments; %d seeds x %zu scans; radius "
@@ -229,6 +254,14 @@ void runScene(const std::string& file, const Options& o) {
                 1e3 * std::sqrt(b.bearing2 / n), b.range / n, std::sqrt(b.range2 / n), b.free / nf,
                 std::sqrt(b.free2 / nf));
   }
+}
+
+void runScene(const std::string& file, const Options& o) {
+  const Scene scene = io::readScene(file);
+  Totals t;
+  for (int k = 0; k < o.seeds; ++k)
+    runSeed(scene, static_cast<std::uint64_t>(o.first_seed + k), o, t);
+  printTotals(file, scene, o, t);
 }
 
 }  // namespace

@@ -76,19 +76,16 @@ std::string processCell(const NoiseSetting& n) {
          fmt(n.process.dtheta_var_rad2) + "]";
 }
 
-void sideBySide(const std::string& scene_file, const std::string& init_file, std::uint64_t seed,
-                const std::string& out, int kl_max) {
-  const ObservationScene scene = io::readObservationScene(scene_file);
-  const NoiseSetting truth = trueNoise(scene);
-  const NoiseSetting init = io::readNoiseSetting(init_file);
-  const auto sim = simulation::simulateObservations(scene, seed);
-  const noise::NoiseProblem problem = noise::makeNoiseProblem(sim.observations, sim.odometry);
-  fs::create_directories(out);
+/// One method of the side-by-side table: its label, the directory of its result and its options.
+struct Row {
+  std::string label, dir;
+  pipeline::NoiseRunOptions options;
+};
 
-  struct Row {
-    std::string label, dir;
-    pipeline::NoiseRunOptions options;
-  };
+/// The side-by-side table's methods: the KL hill climbing (the seed's variant and ours, means and
+/// variances or variances only; ours with the process variances when the truth has any) and ML.
+std::vector<Row> sideBySideRows(const NoiseSetting& truth, const NoiseSetting& init,
+                                std::uint64_t seed, int kl_max) {
   std::vector<Row> rows;
   for (const bool faithful : {true, false})
     for (const bool means : {true, false}) {
@@ -132,6 +129,18 @@ void sideBySide(const std::string& scene_file, const std::string& init_file, std
   ml.options.ml.estimate_process = false;
   ml.options.ml.initial.process = init.process;
   rows.push_back(ml);
+  return rows;
+}
+
+void sideBySide(const std::string& scene_file, const std::string& init_file, std::uint64_t seed,
+                const std::string& out, int kl_max) {
+  const ObservationScene scene = io::readObservationScene(scene_file);
+  const NoiseSetting truth = trueNoise(scene);
+  const NoiseSetting init = io::readNoiseSetting(init_file);
+  const auto sim = simulation::simulateObservations(scene, seed);
+  const noise::NoiseProblem problem = noise::makeNoiseProblem(sim.observations, sim.odometry);
+  fs::create_directories(out);
+  const std::vector<Row> rows = sideBySideRows(truth, init, seed, kl_max);
 
   std::printf(
       "Data: %d stops, %d sensors, %d landmarks, %zu observations (seed %llu). Truth: sensors %s, "
@@ -162,23 +171,30 @@ void sideBySide(const std::string& scene_file, const std::string& init_file, std
   }
 }
 
-void mlStudy(const std::string& scene_file, int seeds, bool process_given) {
-  const ObservationScene scene = io::readObservationScene(scene_file);
-  const NoiseSetting truth = trueNoise(scene);
-  const auto names = variances(truth);
-  // Rows of the tables: every variance, or the sensors' only when the process variances are given.
-  const std::size_t shown = process_given ? 2 * truth.sensors.size() : names.size();
-  std::vector<std::vector<double>> est(names.size()), reported_se(names.size());
-  std::vector<std::vector<double>> bias_err(truth.sensors.size() * 2);
+/// The ML estimator over seeds 1..seeds: per variance (in the order of variances()) the
+/// estimates and the estimator's own standard errors, per sensor the bias errors.
+struct MlStudy {
+  int seeds = 0;
+  std::vector<std::vector<double>> est, reported_se;
+  std::vector<std::vector<double>> bias_err;  ///< per sensor: range, bearing
   std::vector<double> times, iterations;
   int not_converged = 0;
   std::size_t observations = 0;
   int stops = 0;
+};
+
+MlStudy runMlStudy(const ObservationScene& scene, const NoiseSetting& truth, int seeds,
+                   bool process_given) {
+  MlStudy r;
+  r.seeds = seeds;
+  r.est.resize(variances(truth).size());
+  r.reported_se.resize(r.est.size());
+  r.bias_err.resize(truth.sensors.size() * 2);
   for (int seed = 1; seed <= seeds; ++seed) {
     const auto sim = simulation::simulateObservations(scene, static_cast<std::uint64_t>(seed));
     const noise::NoiseProblem problem = noise::makeNoiseProblem(sim.observations, sim.odometry);
-    observations = problem.observations.size();
-    stops = problem.stops;
+    r.observations = problem.observations.size();
+    r.stops = problem.stops;
     pipeline::NoiseRunOptions o;
     o.method = pipeline::NoiseMethod::ml;
     if (process_given) {
@@ -187,95 +203,117 @@ void mlStudy(const std::string& scene_file, int seeds, bool process_given) {
       o.ml.initial.process = truth.process;
     }
     const pipeline::NoiseRun run = pipeline::runNoiseEstimation(problem, o);
-    if (run.status != "ok") ++not_converged;
+    if (run.status != "ok") ++r.not_converged;
     const auto v = variances(run.noise);
     for (std::size_t i = 0; i < v.size(); ++i) {
-      est[i].push_back(v[i].second);
+      r.est[i].push_back(v[i].second);
       if (run.ml && i < run.ml->groups.size())
-        reported_se[i].push_back(run.ml->groups[i].standard_error);
+        r.reported_se[i].push_back(run.ml->groups[i].standard_error);
     }
     for (std::size_t s = 0; s < truth.sensors.size(); ++s) {
-      bias_err[2 * s].push_back(
+      r.bias_err[2 * s].push_back(
           std::abs(run.noise.sensors[s].range_mean_m - truth.sensors[s].range_mean_m));
-      bias_err[2 * s + 1].push_back(
+      r.bias_err[2 * s + 1].push_back(
           std::abs(run.noise.sensors[s].bearing_mean_rad - truth.sensors[s].bearing_mean_rad));
     }
-    times.push_back(run.time_s);
-    iterations.push_back(run.evaluations);
+    r.times.push_back(run.time_s);
+    r.iterations.push_back(run.evaluations);
   }
+  return r;
+}
+
+/// Per variance: the median estimate and the median relative error against the truth.
+void printMedians(const MlStudy& r, const std::vector<std::pair<std::string, double>>& names,
+                  std::size_t shown) {
+  std::printf(
+      "| variance | truth | median estimate | median estimate / truth − 1 | median \\|rel. "
+      "error\\| | within 10%% (seeds) |\n|---|---|---|---|---|---|\n");
+  for (std::size_t i = 0; i < shown; ++i) {
+    const double t = names[i].second;
+    const double med = median(r.est[i]);
+    if (t > 0) {
+      std::vector<double> rel;
+      int within = 0;
+      for (double e : r.est[i]) {
+        rel.push_back(std::abs(e / t - 1.0));
+        within += std::abs(e / t - 1.0) <= 0.10;
+      }
+      std::printf("| %s | %s | %s | %+.1f %% | %.1f %% | %d / %d |\n", names[i].first.c_str(),
+                  fmt(t).c_str(), fmt(med).c_str(), 100.0 * (med / t - 1.0), 100.0 * median(rel),
+                  within, r.seeds);
+    } else {
+      std::printf("| %s | 0 | %s | (truth 0) | max %s | |\n", names[i].first.c_str(),
+                  fmt(med).c_str(),
+                  fmt(*std::max_element(r.est[i].begin(), r.est[i].end())).c_str());
+    }
+  }
+}
+
+/// Over 40 seeds or more: the mean, the spread against the estimator's own standard error, and
+/// the sampling spread of a 20-seed median (the seeds cut into consecutive blocks of 20).
+void printBlocks(const MlStudy& r, const std::vector<std::pair<std::string, double>>& names,
+                 std::size_t shown) {
+  const int seeds = r.seeds;
+  const int blocks = seeds / 20;
+  std::printf(
+      "\nOver %d seeds: mean estimate, the spread of the estimates (standard deviation / truth) "
+      "against the "
+      "estimator's own standard error (median over seeds, / truth), and the %d disjoint blocks "
+      "of 20 seeds "
+      "(1-20, 21-40, ...) whose median estimate is within 10 %% of the truth.\n\n",
+      seeds, blocks);
+  std::printf(
+      "| variance | mean estimate / truth − 1 | std of the estimates / truth | reported standard "
+      "error / truth | "
+      "20-seed medians within 10 %% | range of the 20-seed medians / truth − 1 "
+      "|\n|---|---|---|---|---|---|\n");
+  for (std::size_t i = 0; i < shown; ++i) {
+    const double t = names[i].second;
+    if (!(t > 0)) continue;
+    const std::vector<double>& est = r.est[i];
+    double mean = 0.0, var = 0.0;
+    for (double e : est) mean += e / static_cast<double>(seeds);
+    for (double e : est) var += (e - mean) * (e - mean) / static_cast<double>(seeds - 1);
+    int within = 0;
+    double lo = 1e300, hi = -1e300;
+    for (int b = 0; b < blocks; ++b) {
+      const double m =
+          median(std::vector<double>(est.begin() + 20 * b, est.begin() + 20 * (b + 1))) / t - 1.0;
+      within += std::abs(m) <= 0.10;
+      lo = std::min(lo, m), hi = std::max(hi, m);
+    }
+    char se[32] = "";
+    if (!r.reported_se[i].empty())
+      std::snprintf(se, sizeof se, "%.3f", median(r.reported_se[i]) / t);
+    std::printf("| %s | %+.1f %% | %.3f | %s | %d / %d | %+.1f %% .. %+.1f %% |\n",
+                names[i].first.c_str(), 100.0 * (mean / t - 1.0), std::sqrt(var) / t, se, within,
+                blocks, 100.0 * lo, 100.0 * hi);
+  }
+}
+
+void mlStudy(const std::string& scene_file, int seeds, bool process_given) {
+  const ObservationScene scene = io::readObservationScene(scene_file);
+  const NoiseSetting truth = trueNoise(scene);
+  const auto names = variances(truth);
+  // Rows of the tables: every variance, or the sensors' only when the process variances are given.
+  const std::size_t shown = process_given ? 2 * truth.sensors.size() : names.size();
+  const MlStudy r = runMlStudy(scene, truth, seeds, process_given);
   std::printf(
       "%d seeds; each %d stops, %zu observations. Median wall time %.2f s, median %g iterations, "
       "%d not converged.\n\n",
-      seeds, stops, observations, median(times), median(iterations), not_converged);
+      seeds, r.stops, r.observations, median(r.times), median(r.iterations), r.not_converged);
   if (process_given)
     std::printf(
         "Process variances given (fixed at the truth %s, as Sharma 2020 assumes them); the "
         "sensors' variances and "
         "biases estimated.\n\n",
         processCell(truth).c_str());
-  std::printf(
-      "| variance | truth | median estimate | median estimate / truth − 1 | median \\|rel. "
-      "error\\| | within 10%% (seeds) |\n|---|---|---|---|---|---|\n");
-  for (std::size_t i = 0; i < shown; ++i) {
-    const double t = names[i].second;
-    const double med = median(est[i]);
-    if (t > 0) {
-      std::vector<double> rel;
-      int within = 0;
-      for (double e : est[i]) {
-        rel.push_back(std::abs(e / t - 1.0));
-        within += std::abs(e / t - 1.0) <= 0.10;
-      }
-      std::printf("| %s | %s | %s | %+.1f %% | %.1f %% | %d / %d |\n", names[i].first.c_str(),
-                  fmt(t).c_str(), fmt(med).c_str(), 100.0 * (med / t - 1.0), 100.0 * median(rel),
-                  within, seeds);
-    } else {
-      std::printf("| %s | 0 | %s | (truth 0) | max %s | |\n", names[i].first.c_str(),
-                  fmt(med).c_str(), fmt(*std::max_element(est[i].begin(), est[i].end())).c_str());
-    }
-  }
-  if (seeds >= 40) {
-    // The sampling spread of a 20-seed median: the seeds cut into consecutive blocks of 20.
-    const int blocks = seeds / 20;
-    std::printf(
-        "\nOver %d seeds: mean estimate, the spread of the estimates (standard deviation / truth) "
-        "against the "
-        "estimator's own standard error (median over seeds, / truth), and the %d disjoint blocks "
-        "of 20 seeds "
-        "(1-20, 21-40, ...) whose median estimate is within 10 %% of the truth.\n\n",
-        seeds, blocks);
-    std::printf(
-        "| variance | mean estimate / truth − 1 | std of the estimates / truth | reported standard "
-        "error / truth | "
-        "20-seed medians within 10 %% | range of the 20-seed medians / truth − 1 "
-        "|\n|---|---|---|---|---|---|\n");
-    for (std::size_t i = 0; i < shown; ++i) {
-      const double t = names[i].second;
-      if (!(t > 0)) continue;
-      double mean = 0.0, var = 0.0;
-      for (double e : est[i]) mean += e / static_cast<double>(seeds);
-      for (double e : est[i]) var += (e - mean) * (e - mean) / static_cast<double>(seeds - 1);
-      int within = 0;
-      double lo = 1e300, hi = -1e300;
-      for (int b = 0; b < blocks; ++b) {
-        const double m =
-            median(std::vector<double>(est[i].begin() + 20 * b, est[i].begin() + 20 * (b + 1))) /
-                t -
-            1.0;
-        within += std::abs(m) <= 0.10;
-        lo = std::min(lo, m), hi = std::max(hi, m);
-      }
-      char se[32] = "";
-      if (!reported_se[i].empty()) std::snprintf(se, sizeof se, "%.3f", median(reported_se[i]) / t);
-      std::printf("| %s | %+.1f %% | %.3f | %s | %d / %d | %+.1f %% .. %+.1f %% |\n",
-                  names[i].first.c_str(), 100.0 * (mean / t - 1.0), std::sqrt(var) / t, se, within,
-                  blocks, 100.0 * lo, 100.0 * hi);
-    }
-  }
+  printMedians(r, names, shown);
+  if (seeds >= 40) printBlocks(r, names, shown);
   std::printf("\nMedian absolute bias error per sensor (range m, bearing rad):");
   for (std::size_t s = 0; s < truth.sensors.size(); ++s)
-    std::printf(" sensor %zu [%s, %s]", s, fmt(median(bias_err[2 * s])).c_str(),
-                fmt(median(bias_err[2 * s + 1])).c_str());
+    std::printf(" sensor %zu [%s, %s]", s, fmt(median(r.bias_err[2 * s])).c_str(),
+                fmt(median(r.bias_err[2 * s + 1])).c_str());
   std::printf("\n");
 }
 

@@ -78,10 +78,12 @@ std::vector<double> sweepDistances(std::mt19937_64& rng) {
   return d;
 }
 
-/// Fits on the readings of the stops with parity `fit`, checks the others.
-void checkHalf(const simulation::RangeSweep& sweep, const calibration::ReferenceReadings& known,
-               int fit, const RangeModel& truth, const RangeEffects& fx, double radius_m,
-               Tally& t) {
+/// Fits on the readings of the stops with parity `fit`, checks the others against the sweep's
+/// truth (`config`: the sensor's model, its effects and the pole's radius).
+void checkHalf(const simulation::RangeSweep& sweep, const simulation::RangeSweepConfig& config,
+               const calibration::ReferenceReadings& known, int fit, Tally& t) {
+  const RangeModel& truth = config.model;
+  const double radius_m = config.radius_m;
   const calibration::HalfCheck half = calibration::checkInterleavedHalf(known.readings, fit);
   const CalibrationModel& m = half.model;
   if (!m.status.ok()) {
@@ -100,7 +102,7 @@ void checkHalf(const simulation::RangeSweep& sweep, const calibration::Reference
                  (h.predictive_se_m * h.predictive_se_m + h.entry_se_m * h.entry_se_m);
     // The sensor's true mean reading at the pole's nearest point, against the fit's.
     const double d = sweep.true_distance_m[known.matches[h.entry].stop] - radius_m;
-    const double error = m.model.bias(d) - (truth.bias(d) + rangeRipple(fx, d));
+    const double error = m.model.bias(d) - (truth.bias(d) + rangeRipple(config.effects, d));
     const double curve = calibration::curveStandardError(m, d);
     const double predictive = calibration::predictiveStandardError(curve, m.discrepancy);
     t.truth68 += std::abs(error) <= f68 * predictive;
@@ -126,8 +128,7 @@ void runCase(const Case& c, int first, int seeds) {
         std::uniform_real_distribution<double>(0.0, 6.283185307179586)(rng);
     const auto sweep = simulation::simulateRangeSweep(config, static_cast<std::uint64_t>(seed));
     const auto known = calibration::knownReadings(sweep.obs, sweep.reference, config.radius_m);
-    for (int fit = 0; fit < 2; ++fit)
-      checkHalf(sweep, known, fit, c.model, config.effects, config.radius_m, t);
+    for (int fit = 0; fit < 2; ++fit) checkHalf(sweep, config, known, fit, t);
     std::fprintf(stderr, "\r%s: seed %d of %d", c.name.c_str(), seed - first + 1, seeds);
   }
   std::fprintf(stderr, "\n");

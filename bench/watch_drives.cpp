@@ -215,11 +215,72 @@ SeedResult runSeed(const Scene& scene, const std::shared_ptr<const CalibrationMo
   return r;
 }
 
-}  // namespace
+/// Sums over the seeds.
+struct Summary {
+  std::size_t detected = 0, false_alarms = 0, checks = 0, with_false = 0, exceeding = 0;
+  double levels = 0.0;  ///< sum of the levels of the tests before the change
+  std::size_t abs_tests = 0, abs_exceeding = 0;
+  double abs_levels = 0.0;
+  std::size_t refits = 0, refits_05 = 0, refits_01 = 0, switched = 0;
+};
 
-int main(int argc, char** argv) {
-  Options o;
-  CLI::App app{"The field watcher on simulated drives (docs/results/watch.md)"};
+void addSeed(Summary& s, const SeedResult& r) {
+  s.checks += r.checks;
+  s.exceeding += r.exceed_before;
+  s.abs_tests += r.absolute_before;
+  s.abs_exceeding += r.absolute_exceed;
+  s.abs_levels += r.absolute_levels;
+  s.levels += r.levels_before;
+  s.false_alarms += r.false_alarms;
+  s.with_false += r.false_alarms > 0;
+  s.detected += r.detected_at >= 0;
+  s.switched += r.switched_at >= 0;
+  s.refits += r.refit_p.size();
+  for (double p : r.refit_p) s.refits_05 += p < 0.05, s.refits_01 += p < 0.01;
+}
+
+/// The seed's line: checks, alarms, detection, switch, and the tests' p-values.
+void printSeed(std::uint64_t seed, const SeedResult& r, const watch::RangeChange& change,
+               const Options& o) {
+  std::printf("seed %3llu: %3zu checks (%zu not possible), %zu false alarms",
+              static_cast<unsigned long long>(seed), r.checks, r.failed, r.false_alarms);
+  if (!change.none()) std::printf(", detected %s", r.detected_at < 0 ? "no" : "");
+  if (r.detected_at >= 0)
+    std::printf("at scan %ld (%ld scans, %.1f m, %zu poles after the change)", r.detected_at,
+                r.detected_at - static_cast<long>(change.from_scan), r.detect_m - r.change_m,
+                r.poles_passed);
+  if (o.learn) std::printf(", switched at %ld", r.switched_at);
+  if (std::isfinite(r.err_switched))
+    std::printf(
+        " (pole error after it: %.2f mm with the model switched to, %.2f mm with "
+        "`calibrate` on the scans after the change, %.2f mm raw)",
+        1000.0 * r.err_switched, 1000.0 * r.err_fresh, 1000.0 * r.err_raw);
+  std::printf("; p:");
+  for (double p : r.p_values) std::printf(" %.2g", p);
+  if (!r.refit_p.empty()) std::printf("; refits' p:");
+  for (double p : r.refit_p) std::printf(" %.2g", p);
+  std::printf("  [%.1f s]\n", r.seconds);
+  std::fflush(stdout);
+}
+
+void printSummary(const Summary& s, const Options& o) {
+  std::printf(
+      "seeds %zu, tests %zu, false alarms %zu (drives with one: %zu), detected %zu; "
+      "before the change %zu tests exceeded their level, %.2f expected (sum of levels)\n",
+      o.seeds, s.checks, s.false_alarms, s.with_false, s.detected, s.exceeding, s.levels);
+  std::printf(
+      "of which change tests %zu exceeded, %.2f expected; absolute tests (%zu) %zu exceeded, "
+      "%.2f expected\n",
+      s.exceeding - s.abs_exceeding, s.levels - s.abs_levels, s.abs_tests, s.abs_exceeding,
+      s.abs_levels);
+  if (o.learn)
+    std::printf(
+        "learn: %zu drives switched; %zu refits compared with the model in use, p < 0.05 in "
+        "%zu, p < 0.01 in %zu\n",
+        s.switched, s.refits, s.refits_05, s.refits_01);
+}
+
+void addOptions(CLI::App& app, Options& o) {
   app.add_option("--scene", o.scene, "Scene (path.kind driving)")->required();
   app.add_option("--model", o.model, "truth, or a model.json");
   app.add_option("--change", o.change, "Change injected: OFFSET_MM@SCAN, SCALE%@SCAN");
@@ -238,6 +299,14 @@ int main(int argc, char** argv) {
                  "With --learn and --change: a directory for the scans after the change, which "
                  "`lidarcal calibrate` fits afresh to compare its corrected error with the model "
                  "switched to");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options o;
+  CLI::App app{"The field watcher on simulated drives (docs/results/watch.md)"};
+  addOptions(app, o);
   CLI11_PARSE(app, argc, argv);
   try {
     Scene scene = io::readScene(o.scene);
@@ -246,59 +315,14 @@ int main(int argc, char** argv) {
         o.model == "truth" ? simulation::truthModel(scene) : io::readModel(o.model));
     const watch::RangeChange change =
         o.change.empty() ? watch::RangeChange{} : watch::parseRangeChange(o.change);
-    std::size_t detected = 0, false_alarms = 0, checks = 0, with_false = 0, exceeding = 0;
-    double levels = 0.0;
-    std::size_t abs_tests = 0, abs_exceeding = 0;
-    double abs_levels = 0.0;
-    std::size_t refits = 0, refits_05 = 0, refits_01 = 0, switched = 0;
+    Summary summary;
     for (std::size_t k = 0; k < o.seeds; ++k) {
       const std::uint64_t seed = o.first_seed + k;
       const SeedResult r = runSeed(scene, model, o, seed, change);
-      checks += r.checks;
-      exceeding += r.exceed_before;
-      abs_tests += r.absolute_before;
-      abs_exceeding += r.absolute_exceed;
-      abs_levels += r.absolute_levels;
-      levels += r.levels_before;
-      false_alarms += r.false_alarms;
-      with_false += r.false_alarms > 0;
-      detected += r.detected_at >= 0;
-      switched += r.switched_at >= 0;
-      refits += r.refit_p.size();
-      for (double p : r.refit_p) refits_05 += p < 0.05, refits_01 += p < 0.01;
-      std::printf("seed %3llu: %3zu checks (%zu not possible), %zu false alarms",
-                  static_cast<unsigned long long>(seed), r.checks, r.failed, r.false_alarms);
-      if (!change.none()) std::printf(", detected %s", r.detected_at < 0 ? "no" : "");
-      if (r.detected_at >= 0)
-        std::printf("at scan %ld (%ld scans, %.1f m, %zu poles after the change)", r.detected_at,
-                    r.detected_at - static_cast<long>(change.from_scan), r.detect_m - r.change_m,
-                    r.poles_passed);
-      if (o.learn) std::printf(", switched at %ld", r.switched_at);
-      if (std::isfinite(r.err_switched))
-        std::printf(
-            " (pole error after it: %.2f mm with the model switched to, %.2f mm with "
-            "`calibrate` on the scans after the change, %.2f mm raw)",
-            1000.0 * r.err_switched, 1000.0 * r.err_fresh, 1000.0 * r.err_raw);
-      std::printf("; p:");
-      for (double p : r.p_values) std::printf(" %.2g", p);
-      if (!r.refit_p.empty()) std::printf("; refits' p:");
-      for (double p : r.refit_p) std::printf(" %.2g", p);
-      std::printf("  [%.1f s]\n", r.seconds);
-      std::fflush(stdout);
+      addSeed(summary, r);
+      printSeed(seed, r, change, o);
     }
-    std::printf(
-        "seeds %zu, tests %zu, false alarms %zu (drives with one: %zu), detected %zu; "
-        "before the change %zu tests exceeded their level, %.2f expected (sum of levels)\n",
-        o.seeds, checks, false_alarms, with_false, detected, exceeding, levels);
-    std::printf(
-        "of which change tests %zu exceeded, %.2f expected; absolute tests (%zu) %zu exceeded, "
-        "%.2f expected\n",
-        exceeding - abs_exceeding, levels - abs_levels, abs_tests, abs_exceeding, abs_levels);
-    if (o.learn)
-      std::printf(
-          "learn: %zu drives switched; %zu refits compared with the model in use, p < 0.05 in "
-          "%zu, p < 0.01 in %zu\n",
-          switched, refits, refits_05, refits_01);
+    printSummary(summary, o);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "watch_drives: %s\n", e.what());
     return 2;

@@ -21,9 +21,10 @@ namespace {
 
 using Cloud = pcl::PointCloud<pcl::PointXYZ>;
 
-/// n points on the arc [a0, a1] of the circle (cx, cy, r), plus Gaussian radial noise sigma.
-Cloud arc(double cx, double cy, double r, double a0_rad, double a1_rad, int n, double sigma = 0.0,
+/// n points on the arc [a0, a1] of the circle, plus Gaussian radial noise sigma.
+Cloud arc(const Circle2& circle, double a0_rad, double a1_rad, int n, double sigma = 0.0,
           unsigned seed = 1) {
+  const double cx = circle.x_m, cy = circle.y_m, r = circle.radius_m;
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> noise(0.0, 1.0);
   Cloud c;
@@ -45,7 +46,7 @@ pcl::Indices all(const Cloud& c) {
 // PCL's own test idea (test_sample_consensus_quadric_models: circle 2D): points on a known
 // circle plus one far outlier; RANSAC keeps exactly the circle points and the coefficients.
 TEST(FitCircle, KnownCirclePlusOneOutlierPclStyle) {
-  Cloud c = arc(2.5, -3.0, 1.5, 0.0, 2.0 * kPi * 16.0 / 17.0, 17);
+  Cloud c = arc({2.5, -3.0, 1.5}, 0.0, 2.0 * kPi * 16.0 / 17.0, 17);
   c.push_back(pcl::PointXYZ(-5.0f, 7.0f, 0.0f));  // index 17: the outlier
   CircleFitConfig cfg;
   cfg.inlier_threshold_m = 0.01;
@@ -68,7 +69,7 @@ TEST(FitCircle, AgreesWithPclsOptimisedModelOnCleanArcs) {
     std::uniform_real_distribution<double> u(-3.0, 3.0);
     const double cx = u(rng), cy = u(rng), r = 0.2 + std::abs(u(rng)) / 3.0;
     const double a0 = u(rng);
-    const Cloud::Ptr c(new Cloud(arc(cx, cy, r, a0, a0 + 2.5, 40, 0.001, seed)));
+    const Cloud::Ptr c(new Cloud(arc({cx, cy, r}, a0, a0 + 2.5, 40, 0.001, seed)));
     pcl::SACSegmentation<pcl::PointXYZ> seg(false);
     seg.setModelType(pcl::SACMODEL_CIRCLE2D);
     seg.setMethodType(pcl::SAC_RANSAC);
@@ -93,7 +94,7 @@ TEST(FitCircle, AgreesWithPclsOptimisedModelOnCleanArcs) {
 
 TEST(FitCircle, ArcsOf60DegreesRecoverCentreAndRadius) {
   // Noise-free: exact to float rounding of the points.
-  const Cloud c = arc(1.0, 2.0, 0.12, 0.3, 0.3 + deg2rad(60.0), 10);
+  const Cloud c = arc({1.0, 2.0, 0.12}, 0.3, 0.3 + deg2rad(60.0), 10);
   const CircleFit exact = fitCircle(c, all(c), CircleFitConfig{});
   ASSERT_EQ(exact.status, FitStatus::ok) << exact.message;
   EXPECT_NEAR(exact.circle.x_m, 1.0, 1e-5);
@@ -103,7 +104,7 @@ TEST(FitCircle, ArcsOf60DegreesRecoverCentreAndRadius) {
   // uncertainty (for a 60-degree arc the radius is about 10x less certain than the noise).
   for (unsigned seed = 1; seed <= 30; ++seed) {
     SCOPED_TRACE(seed);
-    const Cloud n = arc(-0.4, 0.7, 0.12, 1.0, 1.0 + deg2rad(60.0), 30, 0.0005, seed);
+    const Cloud n = arc({-0.4, 0.7, 0.12}, 1.0, 1.0 + deg2rad(60.0), 30, 0.0005, seed);
     CircleFitConfig cfg;
     cfg.inlier_threshold_m = 0.003;
     const CircleFit fit = fitCircle(n, all(n), cfg);
@@ -118,7 +119,7 @@ TEST(FitCircle, ArcsOf60DegreesRecoverCentreAndRadius) {
 TEST(FitCircle, FloatPointsFarFromTheOriginStillFitExactly) {
   // Metres away from the origin, float coordinates keep about 1e-6 relative precision; the
   // points are centred before PCL sees them.
-  const Cloud c = arc(80.0, -60.0, 0.1, 0.0, deg2rad(90.0), 12);
+  const Cloud c = arc({80.0, -60.0, 0.1}, 0.0, deg2rad(90.0), 12);
   const CircleFit fit = fitCircle(c, all(c), CircleFitConfig{});
   ASSERT_EQ(fit.status, FitStatus::ok) << fit.message;
   EXPECT_NEAR(fit.circle.radius_m, 0.1, 2e-4);
@@ -126,7 +127,7 @@ TEST(FitCircle, FloatPointsFarFromTheOriginStillFitExactly) {
 }
 
 TEST(FitCircle, FixedRadiusFitsTheCentreAndReportsTheFreeFitToo) {
-  const Cloud c = arc(2.0, 0.5, 0.12, kPi - 1.2, kPi + 1.2, 9);  // the side facing the origin
+  const Cloud c = arc({2.0, 0.5, 0.12}, kPi - 1.2, kPi + 1.2, 9);  // the side facing the origin
   CircleFitConfig cfg;
   cfg.fixed_radius_m = 0.12;
   cfg.seen_from = Eigen::Vector2d::Zero();
@@ -141,7 +142,7 @@ TEST(FitCircle, FixedRadiusFitsTheCentreAndReportsTheFreeFitToo) {
 
 TEST(FitCircle, FixedRadiusWithThreePointsStartsBehindTheArc) {
   // Three points only (a far pole): the centre lies one radius behind them, not in front.
-  const Cloud c = arc(4.0, 0.0, 0.12, kPi - 0.5, kPi + 0.5, 3);
+  const Cloud c = arc({4.0, 0.0, 0.12}, kPi - 0.5, kPi + 0.5, 3);
   CircleFitConfig cfg;
   cfg.fixed_radius_m = 0.12;
   cfg.seen_from = Eigen::Vector2d::Zero();
@@ -153,7 +154,7 @@ TEST(FitCircle, FixedRadiusWithThreePointsStartsBehindTheArc) {
 
 TEST(FitCircle, ConcaveArcSeenFromInsideIsTheWrongSide) {
   // The sensor inside a round room: the arc curves around it.
-  const Cloud c = arc(0.0, 0.0, 2.0, -0.3, 0.3, 12);
+  const Cloud c = arc({0.0, 0.0, 2.0}, -0.3, 0.3, 12);
   CircleFitConfig cfg;
   cfg.seen_from = Eigen::Vector2d(0.5, 0.0);
   const CircleFit fit = fitCircle(c, all(c), cfg);
@@ -162,7 +163,7 @@ TEST(FitCircle, ConcaveArcSeenFromInsideIsTheWrongSide) {
 }
 
 TEST(FitCircle, RadiusOutsideTheLimitsIsAStatus) {
-  const Cloud c = arc(0.0, 0.0, 1.0, 0.0, 3.0, 20);
+  const Cloud c = arc({0.0, 0.0, 1.0}, 0.0, 3.0, 20);
   CircleFitConfig cfg;
   cfg.radius_min_m = 2.0;
   cfg.radius_max_m = 3.0;
@@ -172,7 +173,7 @@ TEST(FitCircle, RadiusOutsideTheLimitsIsAStatus) {
       << toString(fit.status);
   EXPECT_FALSE(fit.message.empty());
   // Below ransac_min_points the refinement itself is checked against the limits.
-  const Cloud few = arc(0.0, 0.0, 1.0, 0.0, 3.0, 4);
+  const Cloud few = arc({0.0, 0.0, 1.0}, 0.0, 3.0, 4);
   EXPECT_EQ(fitCircle(few, all(few), cfg).status, FitStatus::radius_out_of_limits);
 }
 
@@ -180,7 +181,7 @@ TEST(FitCircle, RadiusOutsideTheLimitsIsAStatus) {
 // falls back to RANSAC's unoptimised model, which respects the limits, and keeps its inliers.
 TEST(FitCircle, RefinementLeavingTheLimitsFallsBackToTheRansacModel) {
   // Noise makes some minimal samples fall inside the limits; the least-squares circle does not.
-  const Cloud c = arc(0.0, 0.0, 1.0, 0.0, kPi / 2.0, 30, 0.01, 5);
+  const Cloud c = arc({0.0, 0.0, 1.0}, 0.0, kPi / 2.0, 30, 0.01, 5);
   CircleFitConfig cfg;
   cfg.inlier_threshold_m = 0.03;
   cfg.radius_min_m = 0.5;
@@ -194,7 +195,7 @@ TEST(FitCircle, RefinementLeavingTheLimitsFallsBackToTheRansacModel) {
 }
 
 TEST(FitCircle, RigidMotionMovesTheCentreTheSameWay) {
-  const Cloud base = arc(0.3, -0.2, 0.15, 0.2, 2.5, 25, 0.002, 3);
+  const Cloud base = arc({0.3, -0.2, 0.15}, 0.2, 2.5, 25, 0.002, 3);
   const CircleFit a = fitCircle(base, all(base), CircleFitConfig{});
   ASSERT_EQ(a.status, FitStatus::ok);
   const double yaw = 0.7, tx = 1.25, ty = -0.5;
@@ -211,7 +212,7 @@ TEST(FitCircle, RigidMotionMovesTheCentreTheSameWay) {
 }
 
 TEST(FitCircle, SameInputSameResult) {
-  Cloud c = arc(1.0, 1.0, 0.3, 0.0, 4.0, 50, 0.003, 9);
+  Cloud c = arc({1.0, 1.0, 0.3}, 0.0, 4.0, 50, 0.003, 9);
   for (int i = 0; i < 10; ++i) c.push_back(pcl::PointXYZ(0.1f * static_cast<float>(i), 3.0f, 0.0f));
   CircleFitConfig cfg;
   cfg.inlier_threshold_m = 0.01;
@@ -222,7 +223,7 @@ TEST(FitCircle, SameInputSameResult) {
 }
 
 TEST(FitCircle, IndicesSelectTheSubsetAndNanPointsAreSkipped) {
-  Cloud c = arc(0.0, 0.0, 0.5, 0.0, 2.0, 10);
+  Cloud c = arc({0.0, 0.0, 0.5}, 0.0, 2.0, 10);
   c.push_back(pcl::PointXYZ(std::numeric_limits<float>::quiet_NaN(), 0.0f, 0.0f));
   c.push_back(pcl::PointXYZ(9.0f, 9.0f, 0.0f));
   const pcl::Indices idx{0, 2, 4, 6, 8, 10};  // 10 is NaN; 11 is never looked at
@@ -233,7 +234,7 @@ TEST(FitCircle, IndicesSelectTheSubsetAndNanPointsAreSkipped) {
 }
 
 TEST(FitCircle, BadConfigurationIsRefused) {
-  const Cloud c = arc(0.0, 0.0, 0.5, 0.0, 2.0, 10);
+  const Cloud c = arc({0.0, 0.0, 0.5}, 0.0, 2.0, 10);
   CircleFitConfig cfg;
   // PCL would silently ignore the limits
   cfg.radius_max_m = std::numeric_limits<double>::infinity();

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include "common/errors.hpp"
+#include "common/pose2.hpp"
 #include "import_test_util.hpp"
 #include "io/import_carmen.hpp"
 #include "test_util.hpp"
@@ -18,14 +19,13 @@ namespace {
 using test::Collector;
 using test::TempDir;
 
-/// A FLASER line with ranges r_i = 1 + 0.01 i, laser pose (x, y, th) and odometry (ox, oy, oth).
-std::string flaser(int n, double x, double y, double th, double ox, double oy, double oth,
-                   double ts) {
+/// A FLASER line with ranges r_i = 1 + 0.01 i, the laser's pose and the odometry's pose.
+std::string flaser(int n, const Pose2& laser, const Pose2& odom, double ts) {
   std::ostringstream o;
   o << "FLASER " << n;
   for (int i = 0; i < n; ++i) o << ' ' << 1.0 + 0.01 * i;
-  o << ' ' << x << ' ' << y << ' ' << th << ' ' << ox << ' ' << oy << ' ' << oth << ' ' << ts
-    << " host " << ts << '\n';
+  o << ' ' << laser.x_m << ' ' << laser.y_m << ' ' << laser.yaw_rad << ' ' << odom.x_m << ' '
+    << odom.y_m << ' ' << odom.yaw_rad << ' ' << ts << " host " << ts << '\n';
   return o.str();
 }
 
@@ -65,8 +65,7 @@ TEST_P(FlaserAngles, FollowCarmensFieldOfViewForTheBeamCount) {
   const FovCase c = GetParam();
   TempDir dir;
   Collector got;
-  readCarmenLog(writeLog(dir, header() + flaser(c.beams, 0, 0, 0, 0, 0, 0, 1.0)), {},
-                got.callback());
+  readCarmenLog(writeLog(dir, header() + flaser(c.beams, {}, {}, 1.0)), {}, got.callback());
   ASSERT_EQ(got.scans.size(), 1u);
   const auto& a = got.scans[0].angles_rad;
   ASSERT_EQ(a.size(), static_cast<std::size_t>(c.beams));
@@ -84,9 +83,9 @@ INSTANTIATE_TEST_SUITE_P(Carmen, FlaserAngles,
 
 TEST(CarmenLog, FlaserRangesPosesAndTheChoiceOfPose) {
   TempDir dir;
-  const auto log = writeLog(dir, header() + flaser(5, 1.5, -2.0, 0.3, 1.0, -1.0, 0.1, 10.25) +
+  const auto log = writeLog(dir, header() + flaser(5, {1.5, -2.0, 0.3}, {1.0, -1.0, 0.1}, 10.25) +
                                      "ODOM 1 2 3 0 0 0 10.3 host 10.3\n" +
-                                     flaser(5, 1.6, -2.0, 3.5, 1.1, -1.0, 0.2, 10.5));
+                                     flaser(5, {1.6, -2.0, 3.5}, {1.1, -1.0, 0.2}, 10.5));
   Collector corrected, odometry;
   const ImportReport r = readCarmenLog(log, {}, corrected.callback());
   CarmenConfig odo;
@@ -143,9 +142,8 @@ TEST(CarmenLog, RobotLaser1AnglesRemissionsAndMaxRangeComeFromTheLine) {
 
 TEST(CarmenLog, TheFirstLaserKindWinsAndTheOtherIsIgnored) {
   TempDir dir;
-  const auto log =
-      writeLog(dir, header() + flaser(3, 0, 0, 0, 0, 0, 0, 1) +
-                        robotlaser1(4, -1, 0.25, 30, false) + flaser(3, 0, 0, 0, 0, 0, 0, 2));
+  const auto log = writeLog(dir, header() + flaser(3, {}, {}, 1) +
+                                     robotlaser1(4, -1, 0.25, 30, false) + flaser(3, {}, {}, 2));
   Collector got;
   const ImportReport r = readCarmenLog(log, {}, got.callback());
   EXPECT_EQ(r.scans, 2u);
@@ -156,7 +154,7 @@ TEST(CarmenLog, TheFirstLaserKindWinsAndTheOtherIsIgnored) {
 TEST(CarmenLog, GzipAndPlainGiveTheSameScans) {
   TempDir dir;
   std::string text = header();
-  for (int k = 0; k < 50; ++k) text += flaser(181, 0.1 * k, 0.2, 0.01 * k, 0, 0, 0, k);
+  for (int k = 0; k < 50; ++k) text += flaser(181, {0.1 * k, 0.2, 0.01 * k}, {}, k);
   Collector plain, gz;
   readCarmenLog(writeLog(dir, text), {}, plain.callback());
   test::writeGzip(dir / "log.log.gz", text);
@@ -172,7 +170,7 @@ TEST(CarmenLog, GzipAndPlainGiveTheSameScans) {
 TEST(CarmenLog, StopsWhenTheCallbackSaysSo) {
   TempDir dir;
   std::string text = header();
-  for (int k = 0; k < 10; ++k) text += flaser(3, 0, 0, 0, 0, 0, 0, k);
+  for (int k = 0; k < 10; ++k) text += flaser(3, {}, {}, k);
   Collector got;
   got.stop_after = 4;
   const ImportReport r = readCarmenLog(writeLog(dir, text), {}, got.callback());
@@ -195,7 +193,7 @@ TEST_P(CarmenBadLine, IsAnErrorNamingTheLine) {
   const BadLine& c = GetParam();
   TempDir dir;
   const std::string good =
-      c.robotlaser ? robotlaser1(4, -1, 0.25, 30, false) : flaser(3, 0, 0, 0, 0, 0, 0, 1);
+      c.robotlaser ? robotlaser1(4, -1, 0.25, 30, false) : flaser(3, {}, {}, 1);
   const auto log = writeLog(dir, header() + good + c.line + good);
   Collector got;
   try {
@@ -219,7 +217,7 @@ std::string withoutLastValue(std::string line) {
 INSTANTIATE_TEST_SUITE_P(
     Carmen, CarmenBadLine,
     ::testing::Values(
-        BadLine{"OneValueShort", withoutLastValue(flaser(3, 0, 0, 0, 0, 0, 0, 1)),
+        BadLine{"OneValueShort", withoutLastValue(flaser(3, {}, {}, 1)),
                 "has 12 values after FLASER, expected 13"},
         BadLine{"OneValueTooMany", "FLASER 2 1.0 1.1 1.2 0 0 0 0 0 0 1 host 1\n", "expected 12"},
         BadLine{"CountSaysMore", "FLASER 4 1.0 1.1 0 0 0 0 0 0 1 host 1\n", "expected 14"},
@@ -241,7 +239,7 @@ TEST(CarmenLog, NoLaserLineIsAnError) {
 TEST(CarmenLog, DamagedGzipIsAnErrorNamingTheFile) {
   TempDir dir;
   std::string text = header();
-  for (int k = 0; k < 400; ++k) text += flaser(361, 0.1 * k, 0.2, 0.01 * k, 0, 0, 0, k);
+  for (int k = 0; k < 400; ++k) text += flaser(361, {0.1 * k, 0.2, 0.01 * k}, {}, k);
   test::writeGzip(dir / "good.log.gz", text);
   const std::string gz = test::readFile(dir / "good.log.gz");
   test::writeFile(dir / "cut.log.gz", gz.substr(0, gz.size() / 2));

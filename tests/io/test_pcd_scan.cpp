@@ -125,12 +125,35 @@ struct BadPcdCase {
   const char* expected_problem;
 };
 
-std::string header(const std::string& fields, const std::string& sizes, const std::string& types,
-                   int points, const std::string& viewpoint = "VIEWPOINT 0 0 0 1 0 0 0\n",
-                   const std::string& data = "ascii", int width = -1) {
-  return "# .PCD v0.7\nVERSION 0.7\nFIELDS " + fields + "\nSIZE " + sizes + "\nTYPE " + types +
-         "\nCOUNT 1 1 1\nWIDTH " + std::to_string(width < 0 ? points : width) + "\nHEIGHT 1\n" +
-         viewpoint + "POINTS " + std::to_string(points) + "\nDATA " + data + "\n";
+/// A PCD header; by default one x y z float point in ascii, the case each bad file departs from.
+struct PcdHeader {
+  std::string fields = "x y z";
+  std::string sizes = "4 4 4";
+  std::string types = "F F F";
+  int points = 1;
+  std::string viewpoint = "VIEWPOINT 0 0 0 1 0 0 0\n";  ///< the whole line; "" for none
+  std::string data = "ascii";
+  int width = -1;  ///< -1: as many as points
+};
+
+std::string header(const PcdHeader& h) {
+  return "# .PCD v0.7\nVERSION 0.7\nFIELDS " + h.fields + "\nSIZE " + h.sizes + "\nTYPE " +
+         h.types + "\nCOUNT 1 1 1\nWIDTH " + std::to_string(h.width < 0 ? h.points : h.width) +
+         "\nHEIGHT 1\n" + h.viewpoint + "POINTS " + std::to_string(h.points) + "\nDATA " + h.data +
+         "\n";
+}
+
+/// The default header for `points` points with the one departure `edit` makes.
+template <typename Edit>
+std::string header(int points, Edit edit) {
+  PcdHeader h;
+  h.points = points;
+  edit(h);
+  return header(h);
+}
+
+std::string header(int points) {
+  return header(points, [](PcdHeader&) {});
 }
 
 class BadPcd : public ::testing::TestWithParam<BadPcdCase> {};
@@ -151,8 +174,7 @@ TEST_P(BadPcd, GivesAClearError) {
 }
 
 std::string truncatedBinary() {
-  std::string h = header("x y z", "4 4 4", "F F F", 100, "VIEWPOINT 0 0 0 1 0 0 0\n", "binary");
-  return h + std::string(100 * 12 - 5, '\0');
+  return header(100, [](PcdHeader& h) { h.data = "binary"; }) + std::string(100 * 12 - 5, '\0');
 }
 
 INSTANTIATE_TEST_SUITE_P(
@@ -164,36 +186,34 @@ INSTANTIATE_TEST_SUITE_P(
                    "header line 1", "unknown header keyword"},
         BadPcdCase{"empty", "", "DATA", "no DATA line"},
         BadPcdCase{"truncated binary", truncatedBinary(), "DATA", "truncated"},
-        BadPcdCase{"truncated ascii", header("x y z", "4 4 4", "F F F", 3) + "1 2 0\n", "DATA",
-                   "truncated"},
-        BadPcdCase{"no x", header("a y z", "4 4 4", "F F F", 1) + "1 2 0\n", "FIELDS",
-                   "no 'x' field"},
-        BadPcdCase{"no y", header("x b z", "4 4 4", "F F F", 1) + "1 2 0\n", "FIELDS",
-                   "no 'y' field"},
+        BadPcdCase{"truncated ascii", header(3) + "1 2 0\n", "DATA", "truncated"},
+        BadPcdCase{"no x", header(1, [](PcdHeader& h) { h.fields = "a y z"; }) + "1 2 0\n",
+                   "FIELDS", "no 'x' field"},
+        BadPcdCase{"no y", header(1, [](PcdHeader& h) { h.fields = "x b z"; }) + "1 2 0\n",
+                   "FIELDS", "no 'y' field"},
         BadPcdCase{"points != width*height",
-                   header("x y z", "4 4 4", "F F F", 3, "VIEWPOINT 0 0 0 1 0 0 0\n", "ascii", 2) +
-                       "1 2 0\n1 2 0\n1 2 0\n",
-                   "POINTS", "differs from WIDTH x HEIGHT"},
-        BadPcdCase{"missing viewpoint", header("x y z", "4 4 4", "F F F", 1, "") + "1 2 0\n",
-                   "VIEWPOINT", "missing"},
+                   header(3, [](PcdHeader& h) { h.width = 2; }) + "1 2 0\n1 2 0\n1 2 0\n", "POINTS",
+                   "differs from WIDTH x HEIGHT"},
+        BadPcdCase{"missing viewpoint",
+                   header(1, [](PcdHeader& h) { h.viewpoint = ""; }) + "1 2 0\n", "VIEWPOINT",
+                   "missing"},
         BadPcdCase{"short viewpoint",
-                   header("x y z", "4 4 4", "F F F", 1, "VIEWPOINT 0 0 0 1\n") + "1 2 0\n",
+                   header(1, [](PcdHeader& h) { h.viewpoint = "VIEWPOINT 0 0 0 1\n"; }) + "1 2 0\n",
                    "VIEWPOINT", "expected 7 numbers"},
-        BadPcdCase{"non-unit quaternion",
-                   header("x y z", "4 4 4", "F F F", 1, "VIEWPOINT 0 0 0 2 0 0 0\n") + "1 2 0\n",
-                   "VIEWPOINT", "unit length"},
+        BadPcdCase{
+            "non-unit quaternion",
+            header(1, [](PcdHeader& h) { h.viewpoint = "VIEWPOINT 0 0 0 2 0 0 0\n"; }) + "1 2 0\n",
+            "VIEWPOINT", "unit length"},
         BadPcdCase{
             "roll in viewpoint",
-            header("x y z", "4 4 4", "F F F", 1, "VIEWPOINT 0 0 0 0.7071 0.7071 0 0\n") + "1 2 0\n",
+            header(1, [](PcdHeader& h) { h.viewpoint = "VIEWPOINT 0 0 0 0.7071 0.7071 0 0\n"; }) +
+                "1 2 0\n",
             "VIEWPOINT", "only a yaw rotation"},
-        BadPcdCase{"infinite coordinate", header("x y z", "4 4 4", "F F F", 1) + "inf 2 0\n",
-                   "point 0", "infinite"},
-        BadPcdCase{"absurd range", header("x y z", "4 4 4", "F F F", 1) + "1e30 2 0\n", "point 0",
-                   "beyond 100 km"},
-        BadPcdCase{"half NaN", header("x y z", "4 4 4", "F F F", 1) + "nan 2 0\n", "point 0",
-                   "only one of x, y is NaN"},
-        BadPcdCase{"integer x", header("x y z", "4 4 4", "I F F", 1) + "1 2 0\n", "field 'x'",
-                   "single float"}),
+        BadPcdCase{"infinite coordinate", header(1) + "inf 2 0\n", "point 0", "infinite"},
+        BadPcdCase{"absurd range", header(1) + "1e30 2 0\n", "point 0", "beyond 100 km"},
+        BadPcdCase{"half NaN", header(1) + "nan 2 0\n", "point 0", "only one of x, y is NaN"},
+        BadPcdCase{"integer x", header(1, [](PcdHeader& h) { h.types = "I F F"; }) + "1 2 0\n",
+                   "field 'x'", "single float"}),
     [](const ::testing::TestParamInfo<BadPcdCase>& p) {
       std::string n = p.param.name;
       for (char& c : n)

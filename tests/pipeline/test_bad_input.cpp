@@ -19,8 +19,10 @@ namespace {
 
 using namespace test;
 
+using Commands = std::vector<std::pair<const char*, std::string>>;
+
 // Commands that read a scan sequence, for the PCD and sequence cases.
-const std::vector<std::pair<const char*, std::string>> kSequenceCommands = {
+const Commands kSequenceCommands = {
     {"info", "info {SEQ}"},
     {"detect", "detect {SEQ} --out {OUT}"},
     {"calibrate", "calibrate {SEQ} --out {OUT}"},
@@ -29,7 +31,7 @@ const std::vector<std::pair<const char*, std::string>> kSequenceCommands = {
 };
 
 // Commands that write an output, with an input to read, for the output cases.
-const std::vector<std::pair<const char*, std::string>> kWritingCommands = {
+const Commands kWritingCommands = {
     {"detect", "detect {SEQ} --out {OUT}"},
     {"calibrate", "calibrate {SEQ} --out {OUT}"},
     {"correct", "correct {SEQ} --model {FIX}/model.json --out {OUT}"},
@@ -50,33 +52,32 @@ void writableInputs(const Ws& w) {
   writeFile(w.in / "file.txt", "a file where a directory is expected\n");
 }
 
-std::vector<BadInputCase> cases() {
-  std::vector<BadInputCase> c;
-  const auto forEach = [&](const auto& commands, const std::string& name,
-                           std::function<void(const Ws&)> prepare, int code,
-                           std::vector<std::string> message) {
-    for (const auto& [cmd, args] : commands) {
-      BadInputCase k;
-      k.name = name + "_" + cmd;
-      k.args = args;
-      k.prepare = prepare;
-      k.exit_code = code;
-      k.message = message;
-      c.push_back(k);
-    }
-  };
+/// Adds one case per command: the same input, exit code and message parts, named `name`_command.
+void forEach(std::vector<BadInputCase>& c, const Commands& commands, const std::string& name,
+             std::function<void(const Ws&)> prepare, int code, std::vector<std::string> message) {
+  for (const auto& [cmd, args] : commands) {
+    BadInputCase k;
+    k.name = name + "_" + cmd;
+    k.args = args;
+    k.prepare = prepare;
+    k.exit_code = code;
+    k.message = message;
+    c.push_back(k);
+  }
+}
 
-  // ---- scan files (every command that reads a sequence)
-  forEach(kSequenceCommands, "pcd_truncated",
+/// Scan files, for every command that reads a sequence.
+void scanFileCases(std::vector<BadInputCase>& c) {
+  forEach(c, kSequenceCommands, "pcd_truncated",
           withScan("scan_000001.pcd", [](std::string& b) { b.resize(b.size() - 100); }), 2,
           {"scan_000001.pcd", "DATA", "truncated"});
-  forEach(kSequenceCommands, "pcd_truncated_ascii",
+  forEach(c, kSequenceCommands, "pcd_truncated_ascii",
           [](const Ws& w) {
             copyAsciiSequence(w);
             editFile(w.seq() / "scan_000002.pcd", [](std::string& b) { b.resize(b.size() / 2); });
           },
           2, {"scan_000002.pcd", "DATA", "re-export the scan"});
-  forEach(kSequenceCommands, "pcd_garbage",
+  forEach(c, kSequenceCommands, "pcd_garbage",
           [](const Ws& w) {
             copySequence(w);
             std::string junk;
@@ -86,64 +87,67 @@ std::vector<BadInputCase> cases() {
             writeFile(w.seq() / "scan_000003.pcd", junk);
           },
           2, {"scan_000003.pcd", "header", "not a PCD file"});
-  forEach(kSequenceCommands, "pcd_fields_without_xy",
+  forEach(c, kSequenceCommands, "pcd_fields_without_xy",
           withScan("scan_000000.pcd",
                    [](std::string& b) { setHeaderLine(b, "FIELDS", "FIELDS a b z"); }),
           2, {"scan_000000.pcd", "FIELDS", "no 'x' field"});
   forEach(
-      kSequenceCommands, "pcd_points_not_width_x_height",
+      c, kSequenceCommands, "pcd_points_not_width_x_height",
       withScan("scan_000000.pcd", [](std::string& b) { setHeaderLine(b, "POINTS", "POINTS 361"); }),
       2, {"scan_000000.pcd", "POINTS", "differs from WIDTH x HEIGHT"});
-  forEach(kSequenceCommands, "pcd_nan_in_one_coordinate",
+  forEach(c, kSequenceCommands, "pcd_nan_in_one_coordinate",
           withScan("scan_000001.pcd",
                    [](std::string& b) { setFloat(b, firstReturn(b), 1, std::nanf("")); }),
           2,
           {"scan_000001.pcd", "point ", "only one of x, y is NaN",
            "without return must have x and y NaN"});
-  forEach(kSequenceCommands, "pcd_infinite_coordinate",
+  forEach(c, kSequenceCommands, "pcd_infinite_coordinate",
           withScan("scan_000001.pcd",
                    [](std::string& b) {
                      setFloat(b, firstReturn(b), 0, std::numeric_limits<float>::infinity());
                    }),
           2, {"scan_000001.pcd", "point ", "infinite", "write NaN"});
   forEach(
-      kSequenceCommands, "pcd_absurd_range",
+      c, kSequenceCommands, "pcd_absurd_range",
       withScan("scan_000002.pcd", [](std::string& b) { setFloat(b, firstReturn(b), 0, 1e30f); }), 2,
       {"scan_000002.pcd", "point ", "beyond 100 km", "units"});
-  forEach(kSequenceCommands, "viewpoint_missing",
+  forEach(c, kSequenceCommands, "viewpoint_missing",
           withScan("scan_000000.pcd", [](std::string& b) { setHeaderLine(b, "VIEWPOINT", ""); }), 2,
           {"scan_000000.pcd", "VIEWPOINT", "missing", "VIEWPOINT tx ty 0 qw 0 0 qz"});
-  forEach(kSequenceCommands, "viewpoint_six_numbers",
+  forEach(c, kSequenceCommands, "viewpoint_six_numbers",
           withScan("scan_000000.pcd",
                    [](std::string& b) { setHeaderLine(b, "VIEWPOINT", "VIEWPOINT 0 0 0 1 0 0"); }),
           2, {"scan_000000.pcd", "VIEWPOINT", "expected 7 numbers"});
   forEach(
-      kSequenceCommands, "viewpoint_not_a_number",
+      c, kSequenceCommands, "viewpoint_not_a_number",
       withScan("scan_000000.pcd",
                [](std::string& b) { setHeaderLine(b, "VIEWPOINT", "VIEWPOINT 0 0 0 one 0 0 0"); }),
       2, {"scan_000000.pcd", "VIEWPOINT", "'one' is not a finite number"});
   forEach(
-      kSequenceCommands, "viewpoint_not_unit",
+      c, kSequenceCommands, "viewpoint_not_unit",
       withScan("scan_000000.pcd",
                [](std::string& b) { setHeaderLine(b, "VIEWPOINT", "VIEWPOINT 0 0 0 2 0 0 0"); }),
       2, {"scan_000000.pcd", "VIEWPOINT", "not of unit length"});
-  forEach(kSequenceCommands, "viewpoint_roll",
+  forEach(c, kSequenceCommands, "viewpoint_roll",
           withScan("scan_000000.pcd",
                    [](std::string& b) {
                      setHeaderLine(b, "VIEWPOINT", "VIEWPOINT 0 0 0 0.7071068 0.7071068 0 0");
                    }),
           2, {"scan_000000.pcd", "VIEWPOINT", "roll/pitch"});
+}
 
-  // ---- the sequence directory
-  forEach(kSequenceCommands, "sequence_empty",
+/// The sequence directory, for every command that reads one.
+void sequenceDirectoryCases(std::vector<BadInputCase>& c) {
+  forEach(c, kSequenceCommands, "sequence_empty",
           [](const Ws& w) {
             fs::create_directories(w.seq());
             fs::copy_file(w.fix / "bin/scans/sequence.json", w.seq() / "sequence.json");
           },
           2, {"scans", "holds no .pcd file", "lidarcal simulate"});
-  forEach(kSequenceCommands, "sequence_missing", [](const Ws& w) { fs::create_directories(w.in); },
-          2, {"scans", "does not exist", "check the path"});
-  forEach(kSequenceCommands, "sequence_mixes_sensors",
+  forEach(c, kSequenceCommands, "sequence_missing",
+          [](const Ws& w) { fs::create_directories(w.in); }, 2,
+          {"scans", "does not exist", "check the path"});
+  forEach(c, kSequenceCommands, "sequence_mixes_sensors",
           [](const Ws& w) {
             copySequence(w);
             // A 180-beam scan of another sensor in a sequence whose sequence.json says 360 beams.
@@ -158,19 +162,19 @@ std::vector<BadInputCase> cases() {
           2,
           {"scan_000008.pcd", "POINTS", "has 180 points", "beams = 360",
            "one sensor's scans per sequence"});
-  forEach(kSequenceCommands, "sequence_upper_case_extension",
+  forEach(c, kSequenceCommands, "sequence_upper_case_extension",
           [](const Ws& w) {
             copySequence(w);
             fs::copy_file(w.seq() / "scan_000003.pcd", w.seq() / "scan_000008.PCD");
           },
           2, {"scan_000008.PCD", "'.PCD'", "rename it"});
-  forEach(kSequenceCommands, "sequence_same_scan_number_twice",
+  forEach(c, kSequenceCommands, "sequence_same_scan_number_twice",
           [](const Ws& w) {
             copySequence(w);
             fs::copy_file(w.seq() / "scan_000003.pcd", w.seq() / "scan_3.pcd");
           },
           2, {"scans", "scan_3.pcd", "same scan number as scan_000003.pcd", "keep one"});
-  forEach(kSequenceCommands, "sequence_numbers_not_zero_padded",
+  forEach(c, kSequenceCommands, "sequence_numbers_not_zero_padded",
           [](const Ws& w) {
             copySequence(w);
             for (int i = 0; i < 8; ++i)
@@ -180,21 +184,22 @@ std::vector<BadInputCase> cases() {
             fs::copy_file(src / "scan_000001.pcd", w.seq() / "s_10.pcd");
           },
           2, {"s_2.pcd", "sorts after s_10.pcd", "zero-padded"});
+}
 
-  // ---- data that cannot support a calibration (exit 3)
-  const std::vector<std::pair<const char*, std::string>> calibrating = {
-      {"calibrate", "calibrate {IN}/sim/scans --out {OUT}"},
-      {"run", "run {IN}/sim/scans --no-truth --out {OUT}"}};
-  forEach(calibrating, "one_single_stop", simulated(scene(kPaperPoles, path(1, 3))), 3,
+/// Data that cannot support a calibration (exit 3).
+void unusableDataCases(std::vector<BadInputCase>& c) {
+  const Commands calibrating = {{"calibrate", "calibrate {IN}/sim/scans --out {OUT}"},
+                                {"run", "run {IN}/sim/scans --no-truth --out {OUT}"}};
+  forEach(c, calibrating, "one_single_stop", simulated(scene(kPaperPoles, path(1, 3))), 3,
           {"sim/scans", "calibration", "too_few_stops", "has 1 stop ", "at least 3 stops",
            "its own VIEWPOINT", "made from one place", "--reference REF.json", "wall-to-wall spans",
            "lidarcal diagnose"});
-  forEach(calibrating, "two_stops", simulated(scene(kPaperPoles, path(2, 3))), 3,
+  forEach(c, calibrating, "two_stops", simulated(scene(kPaperPoles, path(2, 3))), 3,
           {"sim/scans", "calibration", "too_few_stops", "has 2 stops", "at least 3 stops",
            "--reference REF.json", "lidarcal diagnose"});
   // Five stops, but a 2 m sensor sees each pole from two of them only.
   forEach(
-      calibrating, "landmarks_at_fewer_than_3_stops",
+      c, calibrating, "landmarks_at_fewer_than_3_stops",
       simulated(
           R"({"sensor": {"beams": 360, "range_min_m": 0.2, "range_max_m": 2.0, "bias_alpha": [0.0525, 0.8838, 0.0584],
               "noise": {"kind": "squared", "sigma_e": 0.0019176}},
@@ -205,7 +210,7 @@ std::vector<BadInputCase> cases() {
       {"sim/scans", "calibration", "no_usable_landmark", "3 or more stops", "zero landmarks",
        "lidarcal detect"});
   forEach(
-      calibrating, "landmarks_on_the_path_line",
+      c, calibrating, "landmarks_on_the_path_line",
       simulated(scene(
           R"({"x_m": 4.2, "y_m": 0.0, "radius_m": 0.12}, {"x_m": 5.5, "y_m": 0.0, "radius_m": 0.12})",
           path(6, 2))),
@@ -213,114 +218,118 @@ std::vector<BadInputCase> cases() {
       {"sim/scans", "calibration", "no_usable_landmark", "degenerate_geometry",
        "move it sideways"});
   forEach(
-      calibrating, "circles_with_too_few_points",
+      c, calibrating, "circles_with_too_few_points",
       simulated(scene(
           R"({"x_m": 3.5, "y_m": 2.0, "radius_m": 0.02}, {"x_m": 3.0, "y_m": -2.5, "radius_m": 0.02},
                              {"x_m": 4.5, "y_m": 0.8, "radius_m": 0.02})",
           path(6, 2))),
       3, {"sim/scans", "calibration", "no_usable_landmark", "ERRORS.md"});
   // The dark-surface noise term on scans whose intensity field holds 0 everywhere (none recorded).
-  const std::vector<std::pair<const char*, std::string>> dark = {
+  const Commands dark = {
       {"calibrate", "calibrate {IN}/sim/scans --out {OUT} --effects dark_surface"}};
-  forEach(dark, "dark_surface_without_intensity", simulated(scene(kPaperPoles, path(6, 2))), 3,
+  forEach(c, dark, "dark_surface_without_intensity", simulated(scene(kPaperPoles, path(6, 2))), 3,
           {"sim/scans", "calibration", "no_intensity", "dark_surface", "intensities on"});
+}
 
-  // ---- model files (correct)
-  const std::vector<std::pair<const char*, std::string>> correcting = {
-      {"correct", "correct {SEQ} --model {IN}/model.json --out {OUT}"}};
-  forEach(correcting, "model_bias_not_monotone", withModel([](nlohmann::json& j) {
+/// Model files (correct).
+void modelFileCases(std::vector<BadInputCase>& c) {
+  const Commands correcting = {{"correct", "correct {SEQ} --model {IN}/model.json --out {OUT}"}};
+  forEach(c, correcting, "model_bias_not_monotone", withModel([](nlohmann::json& j) {
             j["bias"]["alpha"] = {0.0, 2.0, -0.3};
           }),
           3, {"model.json", "bias.alpha", "more than one distance", "lower --max-order"});
-  forEach(correcting, "model_of_another_sensor_beams",
+  forEach(c, correcting, "model_of_another_sensor_beams",
           withModel([](nlohmann::json& j) { j["sensor"]["beams"] = 720; }), 2,
           {"scan_000000.pcd", "POINTS", "has 360 beams", "model.json", "720",
            "calibrated on this sensor"});
-  forEach(correcting, "model_of_another_sensor_range",
+  forEach(c, correcting, "model_of_another_sensor_range",
           withModel([](nlohmann::json& j) { j["sensor"]["range_max_m"] = 12.0; }), 2,
           {"model.json", "range_max_m", "range limits differ", "calibrate this one"});
-  forEach(correcting, "model_not_json",
+  forEach(c, correcting, "model_not_json",
           [](const Ws& w) {
             copySequence(w);
             writeFile(w.in / "model.json",
                       "{\"format\": \"lidarcal-model/1\",\n \"bias\": [1, 2,\n");
           },
           2, {"model.json", "line 3", "not valid JSON"});
-  forEach(correcting, "model_wrong_format",
+  forEach(c, correcting, "model_wrong_format",
           withModel([](nlohmann::json& j) { j["format"] = "something-else"; }), 2,
           {"model.json", "format", "lidarcal calibrate"});
-  forEach(correcting, "model_bad_field",
+  forEach(c, correcting, "model_bad_field",
           withModel([](nlohmann::json& j) { j["noise"]["kind"] = "pink"; }), 2,
           {"model.json", "noise.kind", "unknown noise kind"});
-  forEach(correcting, "model_discrepancy_method", withModel([](nlohmann::json& j) {
+  forEach(c, correcting, "model_discrepancy_method", withModel([](nlohmann::json& j) {
             j["discrepancy"] = {{"method", "guess"}, {"sigma_m", 0.003}};
           }),
           2, {"model.json", "discrepancy.method", "\"none\" or \"reml\""});
-  forEach(correcting, "model_discrepancy_negative", withModel([](nlohmann::json& j) {
+  forEach(c, correcting, "model_discrepancy_negative", withModel([](nlohmann::json& j) {
             j["discrepancy"] = {{"method", "reml"}, {"sigma_m", -0.003}, {"dof", 5}};
           }),
           2, {"model.json", "discrepancy.sigma_m"});
-  forEach(correcting, "model_unknown_status",
+  forEach(c, correcting, "model_unknown_status",
           withModel([](nlohmann::json& j) { j["diagnostics"]["status"] = "wobbly"; }), 2,
           {"model.json", "diagnostics.status", "'wobbly' is not a status lidarcal writes"});
-  forEach(correcting, "model_failed_calibration",
+  forEach(c, correcting, "model_failed_calibration",
           withModel([](nlohmann::json& j) { j["diagnostics"]["status"] = "joint_failed"; }), 3,
           {"model.json", "diagnostics.status", "not usable", "calibrate again"});
-  forEach(correcting, "model_missing", [](const Ws& w) { copySequence(w); }, 2,
+  forEach(c, correcting, "model_missing", [](const Ws& w) { copySequence(w); }, 2,
           {"model.json", "does not exist"});
+}
 
-  // ---- scene files (simulate)
-  const std::vector<std::pair<const char*, std::string>> simulating = {
-      {"simulate", "simulate --scene {IN}/scene.json --out {OUT}"}};
-  forEach(simulating, "scene_not_json",
+/// Scene files (simulate).
+void sceneFileCases(std::vector<BadInputCase>& c) {
+  const Commands simulating = {{"simulate", "simulate --scene {IN}/scene.json --out {OUT}"}};
+  forEach(c, simulating, "scene_not_json",
           [](const Ws& w) {
             fs::create_directories(w.in);
             writeFile(w.in / "scene.json", "{\"sensor\": {\"beams\": 360,}\n}");
           },
           2, {"scene.json", "line 1", "not valid JSON"});
-  forEach(simulating, "scene_bad_field",
+  forEach(c, simulating, "scene_bad_field",
           [](const Ws& w) {
             fs::create_directories(w.in);
             writeFile(w.in / "scene.json",
                       R"({"sensor": {"range_min_m": 0.2, "range_max_m": "far"}, "path": {}})");
           },
           2, {"scene.json", "sensor.range_max_m", "must be a number", "FORMAT.md"});
-  forEach(simulating, "scene_too_many_scans",
+  forEach(c, simulating, "scene_too_many_scans",
           [](const Ws& w) {
             fs::create_directories(w.in);
             writeFile(w.in / "scene.json",
                       scene(kPaperPoles, R"({"stops": 100000, "scans_per_stop": 1000})"));
           },
           2, {"scene.json", "path.stops", "10 million"});
+}
 
-  // ---- truth files (evaluate, detect --truth)
+/// Truth files (evaluate, detect --truth).
+void truthFileCases(std::vector<BadInputCase>& c) {
   const auto simWithTruth = [](std::function<void(const fs::path&)> edit) {
     return [edit](const Ws& w) {
       copyTree(w.fix / "bin", w.in);
       edit(w.in);
     };
   };
-  forEach(
-      std::vector<std::pair<const char*, std::string>>{
-          {"evaluate", "evaluate {SEQ} --truth {IN}/truth.json --out {OUT}"},
-          {"detect", "detect {SEQ} --truth {IN}/truth.json --out {OUT}"}},
-      "truth_not_json",
-      simWithTruth([](const fs::path& in) { writeFile(in / "truth.json", "[1, 2"); }), 2,
-      {"truth.json", "not valid JSON"});
-  forEach(
-      std::vector<std::pair<const char*, std::string>>{
-          {"evaluate", "evaluate {SEQ} --truth {IN}/truth.json --out {OUT}"},
-          {"detect", "detect {SEQ} --truth {IN}/truth.json --out {OUT}"}},
-      "true_ranges_bad_value", simWithTruth([](const fs::path& in) {
-        editFile(in / "true_ranges.csv", [](std::string& b) {
-          const auto at = b.find('\n', b.find('\n') + 1) + 1;  // line 3
-          b.insert(at, "0,1,abc,wall,1,0.1\n");
-        });
-      }),
-      2, {"true_ranges.csv", "line 3", "true_range_m", "`abc`"});
+  forEach(c,
+          Commands{{"evaluate", "evaluate {SEQ} --truth {IN}/truth.json --out {OUT}"},
+                   {"detect", "detect {SEQ} --truth {IN}/truth.json --out {OUT}"}},
+          "truth_not_json",
+          simWithTruth([](const fs::path& in) { writeFile(in / "truth.json", "[1, 2"); }), 2,
+          {"truth.json", "not valid JSON"});
+  forEach(c,
+          Commands{{"evaluate", "evaluate {SEQ} --truth {IN}/truth.json --out {OUT}"},
+                   {"detect", "detect {SEQ} --truth {IN}/truth.json --out {OUT}"}},
+          "true_ranges_bad_value", simWithTruth([](const fs::path& in) {
+            editFile(in / "true_ranges.csv", [](std::string& b) {
+              const auto at = b.find('\n', b.find('\n') + 1) + 1;  // line 3
+              b.insert(at, "0,1,abc,wall,1,0.1\n");
+            });
+          }),
+          2, {"true_ranges.csv", "line 3", "true_range_m", "`abc`"});
+}
 
-  // ---- observation and odometry files (noise-consistency, docs/FORMAT.md "Noise estimation")
-  const std::vector<std::pair<const char*, std::string>> estimating = {
+/// Observation and odometry files (noise-consistency, docs/FORMAT.md "Noise estimation").
+void noiseFileCases(std::vector<BadInputCase>& c) {
+  const Commands estimating = {
       {"noise_consistency",
        "noise-consistency --observations {IN}/observations.csv --odometry {IN}/odometry.csv "
        "--method ml --out {OUT}"}};
@@ -338,38 +347,39 @@ std::vector<BadInputCase> cases() {
       "2,0,1,1.6,0.7\n2,0,2,2.8,-0.3\n3,0,1,1.4,0.8\n3,0,2,2.7,-0.2\n";
   const std::string good_odo =
       "stop,dx_m,dy_m,dtheta_rad\n0,0,0,0\n1,0.3,0,0\n2,0.3,0,0\n3,0.3,0,0\n";
-  forEach(estimating, "observations_bad_header",
+  forEach(c, estimating, "observations_bad_header",
           noiseFiles("stop,sensor,landmark,range,bearing\n0,0,1,2.0,0.5\n", good_odo), 2,
           {"observations.csv", "line 1", "header must be", "FORMAT.md"});
-  forEach(estimating, "observations_not_a_number",
+  forEach(c, estimating, "observations_not_a_number",
           noiseFiles("stop,sensor,landmark,range_m,bearing_rad\n0,0,1,2.0,0.5\n1,0,1,abc,0.5\n",
                      good_odo),
           2, {"observations.csv", "line 3", "range_m", "`abc`", "FORMAT.md"});
   forEach(
-      estimating, "observations_sensor_id_too_large",
+      c, estimating, "observations_sensor_id_too_large",
       noiseFiles("stop,sensor,landmark,range_m,bearing_rad\n0,4294967296,1,2.0,0.5\n", good_odo), 2,
       {"observations.csv", "line 2", "sensor", "too large"});
-  forEach(estimating, "observations_infinite_range",
+  forEach(c, estimating, "observations_infinite_range",
           noiseFiles("stop,sensor,landmark,range_m,bearing_rad\n0,0,1,inf,0.5\n", good_odo), 2,
           {"observations.csv", "line 2", "range_m", "not a finite number"});
-  forEach(estimating, "observations_missing",
+  forEach(c, estimating, "observations_missing",
           [good_odo](const Ws& w) {
             fs::create_directories(w.in);
             writeFile(w.in / "odometry.csv", good_odo);
           },
           2, {"observations.csv", "does not exist"});
-  forEach(estimating, "odometry_stops_out_of_order",
+  forEach(c, estimating, "odometry_stops_out_of_order",
           noiseFiles(good_obs, "stop,dx_m,dy_m,dtheta_rad\n0,0,0,0\n2,0.3,0,0\n1,0.3,0,0\n"), 2,
           {"odometry.csv", "line 3", "stop", "in order"});
-  forEach(estimating, "odometry_start_moves",
+  forEach(c, estimating, "odometry_start_moves",
           noiseFiles(good_obs, "stop,dx_m,dy_m,dtheta_rad\n0,1,0,0\n1,0.3,0,0\n"), 2,
           {"odometry.csv", "line 2", "stop 0 is the start"});
-  forEach(estimating, "odometry_no_stop", noiseFiles(good_obs, "stop,dx_m,dy_m,dtheta_rad\n"), 2,
+  forEach(c, estimating, "odometry_no_stop", noiseFiles(good_obs, "stop,dx_m,dy_m,dtheta_rad\n"), 2,
           {"odometry.csv", "holds no stop"});
+}
 
-  // ---- odometry tuples (lidarcal odometry, docs/FORMAT.md "Odometry tuples")
-  const std::vector<std::pair<const char*, std::string>> odometry = {
-      {"odometry", "odometry {IN}/drive.tuple --out {OUT}"}};
+/// Odometry tuples (lidarcal odometry, docs/FORMAT.md "Odometry tuples").
+void odometryTupleCases(std::vector<BadInputCase>& c) {
+  const Commands odometry = {{"odometry", "odometry {IN}/drive.tuple --out {OUT}"}};
   const auto tuples = [](std::string text) {
     return [text](const Ws& w) {
       fs::create_directories(w.in);
@@ -395,31 +405,53 @@ std::vector<BadInputCase> cases() {
                           std::to_string(1e-4 * (k % 3)) + ", -0.18]}\n";
     return text;
   };
-  forEach(odometry, "tuples_cut_short", tuples(tuple + "\n" + tuple.substr(0, 25)), 2,
+  forEach(c, odometry, "tuples_cut_short", tuples(tuple + "\n" + tuple.substr(0, 25)), 2,
           {"drive.tuple", "object 2 (line 2)", "cut short"});
-  forEach(odometry, "tuples_missing_field",
+  forEach(c, odometry, "tuples_missing_field",
           tuples(tuple + R"({"T": 0.8, "phi_l": 0.5, "sm": [0, 0, 0]})"), 2,
           {"drive.tuple", "object 2 (line 1), field phi_r", "is missing", "FORMAT.md"});
-  forEach(odometry, "tuples_not_a_number",
+  forEach(c, odometry, "tuples_not_a_number",
           tuples(R"({"T": 0.8, "phi_l": "fast", "phi_r": 0, "sm": [0, 0, 0]})"), 2,
           {"drive.tuple", "object 1 (line 1), field phi_l", "must be a number"});
-  forEach(odometry, "tuples_interval_not_positive",
+  forEach(c, odometry, "tuples_interval_not_positive",
           tuples(R"({"T": 0, "phi_l": 0.5, "phi_r": 0, "sm": [0, 0, 0]})"), 2,
           {"drive.tuple", "field T", "must be positive"});
-  forEach(odometry, "tuples_empty", tuples("\n"), 2, {"drive.tuple", "holds no tuple"});
-  forEach(odometry, "tuples_only_straight", tuples(straight(200)), 3,
+  forEach(c, odometry, "tuples_empty", tuples("\n"), 2, {"drive.tuple", "holds no tuple"});
+  forEach(c, odometry, "tuples_only_straight", tuples(straight(200)), 3,
           {"drive.tuple", "calibration", "degenerate_motion", "turns in both directions"});
-  forEach(odometry, "tuples_too_few", tuples(straight(5)), 3,
+  forEach(c, odometry, "tuples_too_few", tuples(straight(5)), 3,
           {"drive.tuple", "too_few_samples", "record longer"});
-  forEach(odometry, "tuples_wheels_swapped", tuples(swapped()), 3,
+  forEach(c, odometry, "tuples_wheels_swapped", tuples(swapped()), 3,
           {"drive.tuple", "negative_axle", "phi_l must be the left wheel"});
+}
 
-  // ---- importers
+/// Importing a ROS bag by a topic it does not hold (needs the shared data and ROS1 bag support).
+BadInputCase rosbagWithoutTheTopic() {
+  BadInputCase k;
+  k.name = "rosbag_without_the_topic_import";
+  k.args = "import --from rosbag1 {SHARED}/rplidar_a2_room/rplidar_1.bag --topic /scan --out {OUT}";
+  k.prepare = [](const Ws& w) { fs::create_directories(w.in); };
+  k.message = {"rplidar_1.bag", "--topic /scan", "no such topic", "/scan_rplidar"};
+  k.skip = [](const Ws&) -> std::string {
+    if (!fs::exists(sharedData() / "rplidar_a2_room/rplidar_1.bag")) return "shared data absent";
+    const auto r =
+        runCli("import --from rosbag1 " +
+               (sharedData() / "rplidar_a2_room/rplidar_1.bag").string() + " --list-topics");
+    return r.exit_code == 0 ? "" : "built without ROS1 bag support";
+  };
+  k.also_unchanged = [](const Ws&) {
+    return std::vector<fs::path>{sharedData() / "rplidar_a2_room"};
+  };
+  return k;
+}
+
+/// The importers.
+void importerCases(std::vector<BadInputCase>& c) {
   const auto importing = [](const char* from, const char* file) {
-    return std::vector<std::pair<const char*, std::string>>{
+    return Commands{
         {"import", std::string("import --from ") + from + " {IN}/" + file + " --out {OUT}"}};
   };
-  forEach(importing("carmen", "cut.log.gz"), "carmen_gzip_cut_short",
+  forEach(c, importing("carmen", "cut.log.gz"), "carmen_gzip_cut_short",
           [](const Ws& w) {
             fs::create_directories(w.in);
             std::string log;
@@ -430,62 +462,46 @@ std::vector<BadInputCase> cases() {
             writeFile(w.in / "cut.log.gz", gz.substr(0, gz.size() * 2 / 3));
           },
           2, {"cut.log.gz", "after line", "gzip data is damaged or cut short", "gzip -t"});
-  forEach(importing("carmen", "bad.log"), "carmen_line_cut_short",
+  forEach(c, importing("carmen", "bad.log"), "carmen_line_cut_short",
           [](const Ws& w) {
             fs::create_directories(w.in);
             writeFile(w.in / "bad.log",
                       flaserLine(181, 2.0) + "FLASER 181 1 2 3 0 0 0 0 0 0 1.5 host 1.5\n");
           },
           2, {"bad.log", "line 2 (FLASER)", "expected 191", "fix or delete the line"});
-  forEach(importing("carmen", "odom.log"), "carmen_no_laser_line",
+  forEach(c, importing("carmen", "odom.log"), "carmen_no_laser_line",
           [](const Ws& w) {
             fs::create_directories(w.in);
             writeFile(w.in / "odom.log", "ODOM 0 0 0 0 0 0 1.5 host 1.5\n");
           },
           2, {"odom.log", "not a CARMEN laser log", "check --from"});
-  forEach(importing("ydlidar", "x4.dat"), "ydlidar_bad_number",
+  forEach(c, importing("ydlidar", "x4.dat"), "ydlidar_bad_number",
           [](const Ws& w) {
             fs::create_directories(w.in);
             writeFile(w.in / "x4.dat", "0,0,0.1,1.0,1.1,1.2\n5,1,0.1,1.0,x,1.2\n");
           },
           2, {"x4.dat", "line 2", "range 1 is 'x'"});
-  forEach(importing("csv", "a.csv"), "csv_missing_column",
+  forEach(c, importing("csv", "a.csv"), "csv_missing_column",
           [](const Ws& w) {
             fs::create_directories(w.in);
             writeFile(w.in / "a.csv", "scan,x_m,y_m,angle_rad,range_m\n0,0,0,0,1\n");
           },
           2, {"a.csv", "line 1 (header)", "no column 'yaw_rad'"});
-  forEach(importing("csv", "a.csv"), "csv_pose_changes_within_a_scan",
+  forEach(c, importing("csv", "a.csv"), "csv_pose_changes_within_a_scan",
           [](const Ws& w) {
             fs::create_directories(w.in);
             writeFile(w.in / "a.csv",
                       "scan,x_m,y_m,yaw_rad,angle_rad,range_m\n0,0,0,0,0,1\n0,1,0,0,0.1,1\n");
           },
           2, {"a.csv", "line 3", "a scan has one sensor pose"});
-  forEach(importing("csv", "none.csv"), "import_input_missing",
+  forEach(c, importing("csv", "none.csv"), "import_input_missing",
           [](const Ws& w) { fs::create_directories(w.in); }, 2, {"none.csv", "does not exist"});
-  {
-    BadInputCase k;
-    k.name = "rosbag_without_the_topic_import";
-    k.args =
-        "import --from rosbag1 {SHARED}/rplidar_a2_room/rplidar_1.bag --topic /scan --out {OUT}";
-    k.prepare = [](const Ws& w) { fs::create_directories(w.in); };
-    k.message = {"rplidar_1.bag", "--topic /scan", "no such topic", "/scan_rplidar"};
-    k.skip = [](const Ws&) -> std::string {
-      if (!fs::exists(sharedData() / "rplidar_a2_room/rplidar_1.bag")) return "shared data absent";
-      const auto r =
-          runCli("import --from rosbag1 " +
-                 (sharedData() / "rplidar_a2_room/rplidar_1.bag").string() + " --list-topics");
-      return r.exit_code == 0 ? "" : "built without ROS1 bag support";
-    };
-    k.also_unchanged = [](const Ws&) {
-      return std::vector<fs::path>{sharedData() / "rplidar_a2_room"};
-    };
-    c.push_back(k);
-  }
+  c.push_back(rosbagWithoutTheTopic());
+}
 
-  // ---- where the output goes (every command that writes)
-  forEach(kWritingCommands, "out_is_the_input", [](const Ws& w) { writableInputs(w); }, 2,
+/// Where the output goes, for every command that writes.
+void outputCases(std::vector<BadInputCase>& c) {
+  forEach(c, kWritingCommands, "out_is_the_input", [](const Ws& w) { writableInputs(w); }, 2,
           {"--out", "inside it", "outside the input"});
   for (auto& k : c)
     if (k.name.rfind("out_is_the_input_", 0) == 0) {
@@ -497,25 +513,24 @@ std::vector<BadInputCase> cases() {
       // simulate reads a file, not a directory: its output may not be the scene file either.
     }
   // (simulate and import read a file: "inside" does not apply; out_is_the_input covers them.)
-  forEach(std::vector<std::pair<const char*, std::string>>(kWritingCommands.begin(),
-                                                           kWritingCommands.begin() + 4),
+  forEach(c, Commands(kWritingCommands.begin(), kWritingCommands.begin() + 4),
           "out_inside_the_input", [](const Ws& w) { writableInputs(w); }, 2,
           {"--out", "inside it", "outside the input"});
   for (auto& k : c)
     if (k.name.rfind("out_inside_the_input_", 0) == 0)
       k.args = replaceAll(k.args, "--out {OUT}", "--out {SEQ}/out");
-  forEach(kWritingCommands, "out_parent_is_a_file", [](const Ws& w) { writableInputs(w); }, 2,
+  forEach(c, kWritingCommands, "out_parent_is_a_file", [](const Ws& w) { writableInputs(w); }, 2,
           {"--out", "not a directory"});
   for (auto& k : c)
     if (k.name.rfind("out_parent_is_a_file_", 0) == 0)
       k.args = replaceAll(k.args, "--out {OUT}", "--out {IN}/file.txt/result");
-  forEach(kWritingCommands, "out_in_proc", [](const Ws& w) { writableInputs(w); }, 2,
+  forEach(c, kWritingCommands, "out_in_proc", [](const Ws& w) { writableInputs(w); }, 2,
           {"/proc/result", "writable"});
   for (auto& k : c)
     if (k.name.rfind("out_in_proc_", 0) == 0)
       k.args = replaceAll(k.args, "--out {OUT}", "--out /proc/result");
-  forEach(kWritingCommands, "out_directory_not_writable", [](const Ws& w) { writableInputs(w); }, 2,
-          {"result", "check that", "writable"});
+  forEach(c, kWritingCommands, "out_directory_not_writable", [](const Ws& w) { writableInputs(w); },
+          2, {"result", "check that", "writable"});
   for (auto& k : c)
     if (k.name.rfind("out_directory_not_writable_", 0) == 0) {
       k.shell_prefix = "chmod 0555 {OUTDIR}";
@@ -527,7 +542,7 @@ std::vector<BadInputCase> cases() {
     }
   // Disk full, simulated without privileges: a file-size limit (ulimit -f, in KiB) with SIGXFSZ
   // ignored makes write() fail with EFBIG as a full disk fails with ENOSPC.
-  forEach(kWritingCommands, "disk_full", [](const Ws& w) { writableInputs(w); }, 2,
+  forEach(c, kWritingCommands, "disk_full", [](const Ws& w) { writableInputs(w); }, 2,
           // the final path, not the staging one
           {"outdir/result", "disk full?", "free some space"});
   for (auto& k : c)
@@ -535,16 +550,28 @@ std::vector<BadInputCase> cases() {
       // 1 KiB: model.json (~10 KB) and scans (~4.4 KB) cannot be written; small files can.
       k.shell_prefix = "trap '' XFSZ; ulimit -f 1";
     }
-  forEach(
-      std::vector<std::pair<const char*, std::string>>{
-          {"calibrate", "calibrate {SEQ} --out {IN}"},
-          {"evaluate", "evaluate {SEQ} --truth {IN}/truth.json --out {IN}"}},
-      "out_file_is_a_directory", [](const Ws& w) { copyTree(w.fix / "bin", w.in); }, 2,
-      {"is a directory"});
-  forEach(std::vector<std::pair<const char*, std::string>>{{"detect",
-                                                            "detect {SEQ} --out {IN}/truth.json"}},
-          "out_directory_is_a_file", [](const Ws& w) { copyTree(w.fix / "bin", w.in); }, 2,
+  forEach(c,
+          Commands{{"calibrate", "calibrate {SEQ} --out {IN}"},
+                   {"evaluate", "evaluate {SEQ} --truth {IN}/truth.json --out {IN}"}},
+          "out_file_is_a_directory", [](const Ws& w) { copyTree(w.fix / "bin", w.in); }, 2,
+          {"is a directory"});
+  forEach(c, Commands{{"detect", "detect {SEQ} --out {IN}/truth.json"}}, "out_directory_is_a_file",
+          [](const Ws& w) { copyTree(w.fix / "bin", w.in); }, 2,
           {"truth.json", "--out", "is a file"});
+}
+
+std::vector<BadInputCase> cases() {
+  std::vector<BadInputCase> c;
+  scanFileCases(c);
+  sequenceDirectoryCases(c);
+  unusableDataCases(c);
+  modelFileCases(c);
+  sceneFileCases(c);
+  truthFileCases(c);
+  noiseFileCases(c);
+  odometryTupleCases(c);
+  importerCases(c);
+  outputCases(c);
   return c;
 }
 

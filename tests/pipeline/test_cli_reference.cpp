@@ -52,18 +52,9 @@ void writeTapeReference(const fs::path& truth_file, const fs::path& ref_file) {
   io::writeReference(ref_file, tapeReference(io::readTruth(truth_file)));
 }
 
-TEST(CliReference, CalibratesAgainstTapeDistancesAndHalvesTheErrorOnAnotherRecording) {
-  TempDir dir;
-  simulate(dir / "fit", 31);
-  simulate(dir / "test", 32);
-  writeTapeReference(dir / "fit/truth.json", dir / "fit.json");
-  writeTapeReference(dir / "test/truth.json", dir / "test.json");
-  const auto cal = runCli("calibrate -q " + (dir / "fit/scans").string() + " --reference " +
-                          (dir / "fit.json").string() + " --out " + (dir / "model.json").string() +
-                          " --report " + (dir / "report").string());
-  ASSERT_EQ(cal.exit_code, 0) << cal.err;
-  EXPECT_NE(cal.out.find("+-"), std::string::npos) << "standard errors on stdout:\n" << cal.out;
-  // The report: the readings of known distance; its plots what `calibrate --help` promises.
+/// The report of `calibrate --reference`: the readings of known distance; its plots what
+/// `calibrate --help` promises.
+void expectTheReportAndItsPlots(const fs::path& dir) {
   ASSERT_TRUE(fs::exists(dir / "report/report.md"));
   EXPECT_NE(test::readFile(dir / "report/report.md").find("of known true distance"),
             std::string::npos);
@@ -76,6 +67,11 @@ TEST(CliReference, CalibratesAgainstTapeDistancesAndHalvesTheErrorOnAnotherRecor
   if (fs::exists(dir / "report/distance.svg")) {
     EXPECT_NE(test::readFile(dir / "report/report.md").find("](distance.svg)"), std::string::npos);
   }
+}
+
+/// The model file of `calibrate --reference` on paper_field.json's sensor, and the intervals
+/// its stdout (`cal_out`) and report name.
+void expectTheModelOfTheSimulatedSensor(const fs::path& dir, const std::string& cal_out) {
   const auto m = json(dir / "model.json");
   EXPECT_EQ(m["method"], "reference");
   EXPECT_EQ(m["bias"]["standard_error"].size(), m["bias"]["alpha"].size());
@@ -95,16 +91,15 @@ TEST(CliReference, CalibratesAgainstTapeDistancesAndHalvesTheErrorOnAnotherRecor
   EXPECT_EQ(int(q["dof"]), int(q["entries"]) - int(m["bias"]["alpha"].size()));
   EXPECT_EQ(model.discrepancy.method, "reml");
   EXPECT_EQ(model.discrepancy.dof, int(q["dof"]));
-  EXPECT_NE(cal.out.find("curve SE"), std::string::npos) << cal.out;
-  EXPECT_NE(cal.out.find("predictive 95 % interval"), std::string::npos) << cal.out;
+  EXPECT_NE(cal_out.find("curve SE"), std::string::npos) << cal_out;
+  EXPECT_NE(cal_out.find("predictive 95 % interval"), std::string::npos) << cal_out;
   EXPECT_NE(test::readFile(dir / "report/report.md").find("predictive 95 % interval"),
             std::string::npos);
+}
 
-  const auto ev = runCli("evaluate -q " + (dir / "test/scans").string() + " --reference " +
-                         (dir / "test.json").string() + " --model " +
-                         (dir / "model.json").string() + " --out " + (dir / "eval.json").string());
-  ASSERT_EQ(ev.exit_code, 0) << ev.err;
-  const auto e = json(dir / "eval.json");
+/// `evaluate --model` on another recording (`e`, its stdout `ev_out`): the correction more than
+/// halves the error, with the gain's uncertainty.
+void expectTheCorrectionHelps(const nlohmann::json& e, const std::string& ev_out) {
   for (const auto& entry : e["corrected"]["entries"])
     EXPECT_EQ(entry["status"], "ok") << entry.dump();
   const double raw = e["raw"]["rms_error_m"], corrected = e["corrected"]["rms_error_m"];
@@ -122,8 +117,13 @@ TEST(CliReference, CalibratesAgainstTapeDistancesAndHalvesTheErrorOnAnotherRecor
   }
   EXPECT_GT(ratio["low_95"].get<double>(), 1.0);
   EXPECT_GT(ratio["high_95"].get<double>(), ratio["ratio"].get<double>());
-  EXPECT_NE(ev.out.find("the correction helps on these distances"), std::string::npos) << ev.out;
-  // Every entry of another recording against the intervals: the counts are those of the entries.
+  EXPECT_NE(ev_out.find("the correction helps on these distances"), std::string::npos) << ev_out;
+}
+
+/// Every entry of another recording against the predictive intervals: the counts are those of
+/// the entries.
+void expectEveryEntryCheckedAgainstTheIntervals(const nlohmann::json& e,
+                                                const std::string& ev_out) {
   const auto& p = e["predictive"];
   ASSERT_EQ(p["entries"].size(), e["corrected"]["entries"].size());
   std::size_t checked = 0, inside_68 = 0, inside_95 = 0;
@@ -151,7 +151,30 @@ TEST(CliReference, CalibratesAgainstTapeDistancesAndHalvesTheErrorOnAnotherRecor
   EXPECT_EQ(p["inside_68"], inside_68);
   EXPECT_EQ(p["inside_95"], inside_95);
   EXPECT_GE(double(p["factor_95"]), 1.959);  // Student t: at least the normal's
-  EXPECT_NE(ev.out.find("Inside the predictive intervals"), std::string::npos) << ev.out;
+  EXPECT_NE(ev_out.find("Inside the predictive intervals"), std::string::npos) << ev_out;
+}
+
+TEST(CliReference, CalibratesAgainstTapeDistancesAndHalvesTheErrorOnAnotherRecording) {
+  TempDir dir;
+  simulate(dir / "fit", 31);
+  simulate(dir / "test", 32);
+  writeTapeReference(dir / "fit/truth.json", dir / "fit.json");
+  writeTapeReference(dir / "test/truth.json", dir / "test.json");
+  const auto cal = runCli("calibrate -q " + (dir / "fit/scans").string() + " --reference " +
+                          (dir / "fit.json").string() + " --out " + (dir / "model.json").string() +
+                          " --report " + (dir / "report").string());
+  ASSERT_EQ(cal.exit_code, 0) << cal.err;
+  EXPECT_NE(cal.out.find("+-"), std::string::npos) << "standard errors on stdout:\n" << cal.out;
+  ASSERT_NO_FATAL_FAILURE(expectTheReportAndItsPlots(dir.path()));
+  ASSERT_NO_FATAL_FAILURE(expectTheModelOfTheSimulatedSensor(dir.path(), cal.out));
+
+  const auto ev = runCli("evaluate -q " + (dir / "test/scans").string() + " --reference " +
+                         (dir / "test.json").string() + " --model " +
+                         (dir / "model.json").string() + " --out " + (dir / "eval.json").string());
+  ASSERT_EQ(ev.exit_code, 0) << ev.err;
+  const auto e = json(dir / "eval.json");
+  expectTheCorrectionHelps(e, ev.out);
+  expectEveryEntryCheckedAgainstTheIntervals(e, ev.out);
 }
 
 TEST(CliReference, CorrectWritesThePredictiveStandardErrorOfTheModelFile) {

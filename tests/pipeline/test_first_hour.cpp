@@ -171,12 +171,17 @@ TEST_F(FirstHour, DetectionWithAnEstimatedRadiusCountsBothPassesAgainstOneTotal)
 
 // ---- report
 
-TEST_F(FirstHour, ReportPlotsTheFittedRangeWithResidualsAfterCorrectionAndMarksExtrapolation) {
-  TempDir out;
-  const auto r = runCli("calibrate -q " + (a() / "scans").string() + " -o " +
-                        (out / "m.json").string() + " --report " + (out / "report").string());
-  ASSERT_EQ(r.exit_code, 0) << r.err;
-  const fs::path rep = out / "report";
+/// What the report's distance plot holds: its readings, those corrected, and the model's fitted
+/// range, metres.
+struct DistancePlot {
+  std::size_t readings = 0, corrected = 0;
+  double lo_m = 0.0, hi_m = 0.0;
+};
+
+/// distance.dat in the report `rep`: the residuals after correction are the small ones, and the
+/// fitted range of the model file covers every reading the fit used.
+void expectReadingsInsideTheFittedRange(const fs::path& rep, const fs::path& model_file,
+                                        DistancePlot& plot) {
   // The fitted range: the estimated distances of the readings (distance.dat column 1).
   const auto dist = rows(rep / "distance.dat");
   ASSERT_GT(dist.size(), 100u);
@@ -198,7 +203,7 @@ TEST_F(FirstHour, ReportPlotsTheFittedRangeWithResidualsAfterCorrectionAndMarksE
   // The paper field's sensor reads to 6 m; the poles are within about 4 m of the stops.
   ASSERT_LT(hi, 5.0);
   // The model's fitted range covers every reading the fit used.
-  const auto model = io::readModel(out / "m.json");
+  const auto model = io::readModel(model_file);
   ASSERT_TRUE(model.fitted_range_m.has_value());
   EXPECT_LE(model.fitted_range_m->first, lo);
   EXPECT_GE(model.fitted_range_m->second, hi);
@@ -206,8 +211,13 @@ TEST_F(FirstHour, ReportPlotsTheFittedRangeWithResidualsAfterCorrectionAndMarksE
     EXPECT_GE(row[1], model.model.bias(model.fitted_range_m->first) - 1e-5);
     EXPECT_LE(row[1], model.model.bias(model.fitted_range_m->second) + 1e-5);
   }
-  lo = model.fitted_range_m->first;
-  hi = model.fitted_range_m->second;
+  plot = {dist.size(), corrected, model.fitted_range_m->first, model.fitted_range_m->second};
+}
+
+/// plots.gp and its data in the report `rep`: drawn over the fitted range with a margin, the
+/// residuals after correction and the histogram plotted, legends outside, stops numbered.
+void expectThePlotsOverTheFittedRange(const fs::path& rep, const DistancePlot& plot) {
+  const double lo = plot.lo_m, hi = plot.hi_m;
   // The script's x range is the fitted one with a margin, not 0..range_max.
   const std::string gp = readFile(rep / "plots.gp");
   const auto at = gp.find("set xrange [");
@@ -235,16 +245,19 @@ TEST_F(FirstHour, ReportPlotsTheFittedRangeWithResidualsAfterCorrectionAndMarksE
     n_raw += row[1];
     n_cor += row[2];
   }
-  EXPECT_GT(n_raw, 0.9 * static_cast<double>(dist.size()));
-  EXPECT_GT(n_cor, 0.9 * static_cast<double>(corrected));
+  EXPECT_GT(n_raw, 0.9 * static_cast<double>(plot.readings));
+  EXPECT_GT(n_cor, 0.9 * static_cast<double>(plot.corrected));
   // Stops are numbered on the map (x, y, number).
   const auto stops = rows(rep / "stops.dat");
   ASSERT_EQ(stops.size(), 10u);
   for (std::size_t k = 0; k < stops.size(); ++k) EXPECT_EQ(stops[k][2], static_cast<double>(k));
   EXPECT_TRUE(contains(gp, "with labels")) << gp;
   EXPECT_TRUE(contains(gp, "label_every = 1\n")) << gp;  // 10 stops: every one numbered
-  // No truth was given: no true landmarks.
-  EXPECT_FALSE(fs::exists(rep / "truth.dat"));
+}
+
+/// report.md in `rep`: rows beyond the fitted range marked extrapolated, those inside fitted;
+/// every picture it shows drawn.
+void expectTheErrorTableAndItsPictures(const fs::path& rep) {
   // The error table: rows beyond the fitted range are marked extrapolated, those inside fitted.
   const std::string md = readFile(rep / "report.md");
   EXPECT_TRUE(contains(md, "| 5.00 m * |")) << md;
@@ -265,6 +278,20 @@ TEST_F(FirstHour, ReportPlotsTheFittedRangeWithResidualsAfterCorrectionAndMarksE
     }
     EXPECT_GE(images, 5u) << md;
   }
+}
+
+TEST_F(FirstHour, ReportPlotsTheFittedRangeWithResidualsAfterCorrectionAndMarksExtrapolation) {
+  TempDir out;
+  const auto r = runCli("calibrate -q " + (a() / "scans").string() + " -o " +
+                        (out / "m.json").string() + " --report " + (out / "report").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const fs::path rep = out / "report";
+  DistancePlot plot;
+  ASSERT_NO_FATAL_FAILURE(expectReadingsInsideTheFittedRange(rep, out / "m.json", plot));
+  ASSERT_NO_FATAL_FAILURE(expectThePlotsOverTheFittedRange(rep, plot));
+  // No truth was given: no true landmarks.
+  EXPECT_FALSE(fs::exists(rep / "truth.dat"));
+  expectTheErrorTableAndItsPictures(rep);
 }
 
 TEST_F(FirstHour, RunDrawsTheTrueLandmarksAndExplainsTheMseRatio) {

@@ -14,18 +14,18 @@
 namespace lidarcal::test {
 namespace {
 
-/// A planar transform (rotation about z by yaw) from `parent` to `child` at `sec` + `nanosec`.
+/// A planar transform (rotation about z by the pose's yaw) from `parent` to `child` at `sec` +
+/// `nanosec`.
 ros2::ReceivedTransform planar(const std::string& parent, const std::string& child,
-                               std::int32_t sec, std::uint32_t nanosec, double x, double y,
-                               double yaw) {
+                               std::int32_t sec, std::uint32_t nanosec, const Pose2& pose) {
   ros2::ReceivedTransform t;
   t.stamp = {sec, nanosec};
   t.parent = parent;
   t.child = child;
-  t.x = x;
-  t.y = y;
-  t.qz = std::sin(yaw / 2);
-  t.qw = std::cos(yaw / 2);
+  t.x = pose.x_m;
+  t.y = pose.y_m;
+  t.qz = std::sin(pose.yaw_rad / 2);
+  t.qw = std::cos(pose.yaw_rad / 2);
   return t;
 }
 
@@ -48,14 +48,14 @@ TEST(LivePoses, OdometryInterpolatedAndComposedWithTheMount) {
   EXPECT_FALSE(poses.at("laser", {100, 0}).pose);
   EXPECT_NE(poses.at("laser", {100, 0}).why.find("no odometry message on /odom"),
             std::string::npos);
-  EXPECT_FALSE(poses.addOdometry(planar("odom", "base_link", 100, 0, 1.0, 2.0, 0.0)));
-  EXPECT_FALSE(poses.addOdometry(planar("odom", "base_link", 101, 0, 3.0, 2.0, 0.4)));
+  EXPECT_FALSE(poses.addOdometry(planar("odom", "base_link", 100, 0, {1.0, 2.0, 0.0})));
+  EXPECT_FALSE(poses.addOdometry(planar("odom", "base_link", 101, 0, {3.0, 2.0, 0.4})));
   // Without the mount the pose is base_link's, and the lookup says so.
   ros2::PoseLookup bare = poses.at("laser", {100, 500000000});
   expectPose(bare, {2.0, 2.0, 0.2});
   EXPECT_TRUE(bare.mount_missing);
   EXPECT_EQ(bare.fixed_frame, "odom");
-  EXPECT_FALSE(poses.addTransform(planar("base_link", "laser", 1, 0, 0.2, 0.1, kPi / 2), true));
+  EXPECT_FALSE(poses.addTransform(planar("base_link", "laser", 1, 0, {0.2, 0.1, kPi / 2}), true));
   const ros2::PoseLookup mounted = poses.at("/laser", {100, 500000000});
   expectPose(mounted, compose(Pose2{2.0, 2.0, 0.2}, {0.2, 0.1, kPi / 2}));
   EXPECT_FALSE(mounted.mount_missing);
@@ -70,12 +70,12 @@ TEST(LivePoses, OdometryInterpolatedAndComposedWithTheMount) {
 
 TEST(LivePoses, TfChainToTheFixedFrameAndTheMissingLinkNamed) {
   ros2::LivePoses poses(source(ros2::PoseSource::Kind::tf, "map"));
-  poses.addTransform(planar("map", "odom", 10, 0, 1.0, 2.0, 0.5), false);
-  poses.addTransform(planar("map", "odom", 12, 0, 1.0, 2.0, 0.5), false);
-  poses.addTransform(planar("odom", "base_link", 10, 0, 0.0, 0.0, 0.0), false);
-  poses.addTransform(planar("odom", "base_link", 12, 0, 4.0, 0.0, 1.0), false);
-  poses.addTransform(planar("base_link", "laser", 0, 1, 0.3, 0.0, kPi), true);
-  EXPECT_FALSE(poses.addOdometry(planar("odom", "base_link", 11, 0, 9.0, 9.0, 0.0)));  // ignored
+  poses.addTransform(planar("map", "odom", 10, 0, {1.0, 2.0, 0.5}), false);
+  poses.addTransform(planar("map", "odom", 12, 0, {1.0, 2.0, 0.5}), false);
+  poses.addTransform(planar("odom", "base_link", 10, 0, {0.0, 0.0, 0.0}), false);
+  poses.addTransform(planar("odom", "base_link", 12, 0, {4.0, 0.0, 1.0}), false);
+  poses.addTransform(planar("base_link", "laser", 0, 1, {0.3, 0.0, kPi}), true);
+  EXPECT_FALSE(poses.addOdometry(planar("odom", "base_link", 11, 0, {9.0, 9.0, 0.0})));  // ignored
   // At 11.5 s base_link is (3, 0, 0.75) in odom.
   const ros2::PoseLookup p = poses.at("laser", {11, 500000000});
   expectPose(p, compose(Pose2{1.0, 2.0, 0.5}, compose(Pose2{3.0, 0.0, 0.75}, {0.3, 0.0, kPi})));
@@ -84,7 +84,7 @@ TEST(LivePoses, TfChainToTheFixedFrameAndTheMissingLinkNamed) {
   const ros2::PoseLookup camera = poses.at("camera", {11, 0});
   EXPECT_FALSE(camera.pose);
   EXPECT_NE(camera.why.find("'camera' is not connected to 'map'"), std::string::npos) << camera.why;
-  poses.addTransform(planar("rear_mount", "rear_laser", 0, 1, 0.0, 0.0, 0.0), true);
+  poses.addTransform(planar("rear_mount", "rear_laser", 0, 1, {0.0, 0.0, 0.0}), true);
   const ros2::PoseLookup rear = poses.at("rear_laser", {11, 0});
   EXPECT_FALSE(rear.pose);
   EXPECT_NE(rear.why.find("the chain ends at 'rear_mount'"), std::string::npos) << rear.why;
@@ -97,7 +97,7 @@ TEST(LivePoses, KeepsAShortBuffer) {
   ros2::LivePoses poses(s);
   for (int k = 0; k <= 50; ++k)  // 10 Hz for 5 s
     poses.addOdometry(planar("odom", "base_link", 100 + k / 10,
-                             static_cast<std::uint32_t>(k % 10) * 100000000u, 0.1 * k, 0.0, 0.0));
+                             static_cast<std::uint32_t>(k % 10) * 100000000u, {0.1 * k, 0.0, 0.0}));
   expectPose(poses.at("base_link", {104, 250000000}), {4.25, 0.0, 0.0});
   const ros2::PoseLookup old = poses.at("base_link", {101, 0});  // more than 2 s before the newest
   EXPECT_FALSE(old.pose);
@@ -107,19 +107,19 @@ TEST(LivePoses, KeepsAShortBuffer) {
 TEST(LivePoses, DropsWhatCannotBeAPoseByReason) {
   ros2::LivePoses poses(source(ros2::PoseSource::Kind::tf, "map"));
   const double nan = std::numeric_limits<double>::quiet_NaN();
-  ros2::ReceivedTransform rotation_nan = planar("map", "base_link", 10, 0, 1.0, 0.0, 0.0);
+  ros2::ReceivedTransform rotation_nan = planar("map", "base_link", 10, 0, {1.0, 0.0, 0.0});
   rotation_nan.qw = nan;
-  ros2::ReceivedTransform infinite = planar("map", "base_link", 10, 0, 1.0, 0.0, 0.0);
+  ros2::ReceivedTransform infinite = planar("map", "base_link", 10, 0, {1.0, 0.0, 0.0});
   infinite.y = std::numeric_limits<double>::infinity();
   using R = ros2::PoseDropReason;
   const std::vector<std::pair<ros2::ReceivedTransform, R>> bad = {
-      {planar("map", "base_link", 10, 1000000000u, 1.0, 0.0, 0.0), R::bad_stamp},
-      {planar("map", "base_link", 0, 0, 1.0, 0.0, 0.0), R::bad_stamp},
-      {planar("map", "base_link", -5, 0, 1.0, 0.0, 0.0), R::bad_stamp},
-      {planar("", "base_link", 10, 0, 1.0, 0.0, 0.0), R::empty_frame},
-      {planar("map", "/", 10, 0, 1.0, 0.0, 0.0), R::empty_frame},
-      {planar("map", "/map", 10, 0, 1.0, 0.0, 0.0), R::self_transform},
-      {planar("map", "base_link", 10, 0, nan, 0.0, 0.0), R::non_finite},
+      {planar("map", "base_link", 10, 1000000000u, {1.0, 0.0, 0.0}), R::bad_stamp},
+      {planar("map", "base_link", 0, 0, {1.0, 0.0, 0.0}), R::bad_stamp},
+      {planar("map", "base_link", -5, 0, {1.0, 0.0, 0.0}), R::bad_stamp},
+      {planar("", "base_link", 10, 0, {1.0, 0.0, 0.0}), R::empty_frame},
+      {planar("map", "/", 10, 0, {1.0, 0.0, 0.0}), R::empty_frame},
+      {planar("map", "/map", 10, 0, {1.0, 0.0, 0.0}), R::self_transform},
+      {planar("map", "base_link", 10, 0, {nan, 0.0, 0.0}), R::non_finite},
       {rotation_nan, R::non_finite},
       {infinite, R::non_finite},
   };
@@ -133,11 +133,11 @@ TEST(LivePoses, DropsWhatCannotBeAPoseByReason) {
   EXPECT_FALSE(poses.at("base_link", {10, 0}).pose);  // nothing of them was kept
   // An unset quaternion is the identity, as tf takes it; a scaled one is normalised.
   // A static transform may leave its stamp unset.
-  ros2::ReceivedTransform zero = planar("map", "base_link", 0, 0, 1.0, 0.0, 0.0);
+  ros2::ReceivedTransform zero = planar("map", "base_link", 0, 0, {1.0, 0.0, 0.0});
   zero.qw = 0.0;
   EXPECT_FALSE(poses.addTransform(zero, true));
   expectPose(poses.at("base_link", {10, 0}), {1.0, 0.0, 0.0});
-  ros2::ReceivedTransform scaled = planar("map", "laser", 10, 0, 0.0, 0.0, 0.6);
+  ros2::ReceivedTransform scaled = planar("map", "laser", 10, 0, {0.0, 0.0, 0.6});
   scaled.qz *= 3.0;
   scaled.qw *= 3.0;
   EXPECT_FALSE(poses.addTransform(scaled, true));

@@ -22,16 +22,16 @@ namespace {
 
 constexpr double kDeliveryS = 20.0;
 
-/// A planar TransformStamped (rotation about z by yaw); the frame names must outlive it.
+/// A planar TransformStamped (rotation about z by the pose's yaw); the frame names must outlive it.
 geometry_msgs_msg_dds__TransformStamped_ planar(const char* parent, const char* child,
-                                                std::int32_t sec, std::uint32_t nanosec, double x,
-                                                double y, double yaw) {
+                                                std::int32_t sec, std::uint32_t nanosec,
+                                                const Pose2& pose) {
   geometry_msgs_msg_dds__TransformStamped_ t{};
   t.header.stamp = {sec, nanosec};
   t.header.frame_id = const_cast<char*>(parent);
   t.child_frame_id = const_cast<char*>(child);
-  t.transform.translation = {x, y, 0.0};
-  t.transform.rotation = {0.0, 0.0, std::sin(yaw / 2), std::cos(yaw / 2)};
+  t.transform.translation = {pose.x_m, pose.y_m, 0.0};
+  t.transform.rotation = {0.0, 0.0, std::sin(pose.yaw_rad / 2), std::cos(pose.yaw_rad / 2)};
   return t;
 }
 
@@ -99,7 +99,7 @@ TEST_F(PoseInputDds, OdometryComposedWithTheMountFromTfStatic) {
   ASSERT_TRUE(TestParticipant::waitMatched(odom, kDeliveryS));
   writeOdometry(odom, 100, 1.0, 2.0, 0.0);
   writeOdometry(odom, 101, 3.0, 2.0, 0.4);
-  writeTf(mount, {planar("base_link", "laser", 100, 0, 0.2, 0.1, kPi / 2)});
+  writeTf(mount, {planar("base_link", "laser", 100, 0, {0.2, 0.1, kPi / 2})});
   ASSERT_TRUE(pollUntil(
       input, [&] { return input.stats().odometry == 2 && input.stats().transforms == 1; }));
   const ros2::PoseLookup p = input.at("laser", {100, 500000000});
@@ -116,11 +116,11 @@ TEST_F(PoseInputDds, TfChainInterpolatedAtTheScanStampAndAMissingFrameNamed) {
   const dds_entity_t tf = test.writer("rt/tf", tf2_msgs_msg_dds__TFMessage__desc);
   const dds_entity_t mount = tfStaticWriter();
   ASSERT_TRUE(TestParticipant::waitMatched(tf, kDeliveryS));
-  writeTf(tf, {planar("map", "odom", 10, 0, 1.0, 2.0, 0.5),
-               planar("odom", "base_link", 10, 0, 0.0, 0.0, 0.0)});
-  writeTf(tf, {planar("map", "odom", 12, 0, 1.0, 2.0, 0.5),
-               planar("odom", "base_link", 12, 0, 4.0, 0.0, 1.0)});
-  writeTf(mount, {planar("base_link", "laser", 10, 0, 0.3, 0.0, kPi)});
+  writeTf(tf, {planar("map", "odom", 10, 0, {1.0, 2.0, 0.5}),
+               planar("odom", "base_link", 10, 0, {0.0, 0.0, 0.0})});
+  writeTf(tf, {planar("map", "odom", 12, 0, {1.0, 2.0, 0.5}),
+               planar("odom", "base_link", 12, 0, {4.0, 0.0, 1.0})});
+  writeTf(mount, {planar("base_link", "laser", 10, 0, {0.3, 0.0, kPi})});
   ASSERT_TRUE(pollUntil(input, [&] { return input.stats().transforms == 5; }));
   for (double u : {0.0, 0.25, 0.5, 1.0}) {  // base_link moves from (0, 0, 0) to (4, 0, 1)
     SCOPED_TRACE(u);
@@ -139,11 +139,11 @@ TEST_F(PoseInputDds, MalformedMessagesAreDroppedAndTheNextOneServed) {
   const dds_entity_t tf = test.writer("rt/tf", tf2_msgs_msg_dds__TFMessage__desc);
   ASSERT_TRUE(TestParticipant::waitMatched(tf, kDeliveryS));
   const double nan = std::numeric_limits<double>::quiet_NaN();
-  writeTf(tf, {planar("map", "base_link", 20, 0, nan, 0.0, 0.0),
-               planar("", "base_link", 20, 0, 1.0, 0.0, 0.0),
-               planar("base_link", "base_link", 20, 0, 1.0, 0.0, 0.0),
-               planar("map", "base_link", 20, 1500000000u, 1.0, 0.0, 0.0),
-               planar("map", "base_link", 20, 0, 1.0, 0.0, 0.0)});
+  writeTf(tf, {planar("map", "base_link", 20, 0, {nan, 0.0, 0.0}),
+               planar("", "base_link", 20, 0, {1.0, 0.0, 0.0}),
+               planar("base_link", "base_link", 20, 0, {1.0, 0.0, 0.0}),
+               planar("map", "base_link", 20, 1500000000u, {1.0, 0.0, 0.0}),
+               planar("map", "base_link", 20, 0, {1.0, 0.0, 0.0})});
   // Bytes no TFMessage can be, under its type name: Cyclone's reader discards them.
   const std::string tf_type = "tf2_msgs::msg::dds_::TFMessage_";
   const dds_topic_descriptor_t long_sequence =
@@ -161,7 +161,7 @@ TEST_F(PoseInputDds, MalformedMessagesAreDroppedAndTheNextOneServed) {
   ASSERT_EQ(dds_write(g2, &open), DDS_RETCODE_OK);
   EXPECT_EQ(dds_wait_for_acks(g1, DDS_SECS(10)), DDS_RETCODE_OK);  // delivered, then discarded
   EXPECT_EQ(dds_wait_for_acks(g2, DDS_SECS(10)), DDS_RETCODE_OK);
-  writeTf(tf, {planar("map", "base_link", 22, 0, 3.0, 0.0, 0.0)});
+  writeTf(tf, {planar("map", "base_link", 22, 0, {3.0, 0.0, 0.0})});
   ASSERT_TRUE(pollUntil(input, [&] { return input.stats().transforms == 2; }));
   expectPose(input.at("base_link", {21, 0}), {2.0, 0.0, 0.0});
   using R = ros2::PoseDropReason;

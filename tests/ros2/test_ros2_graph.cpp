@@ -101,6 +101,25 @@ std::set<ros2::Guid> endpointsOn(const std::vector<DiscoveredEndpoint>& all,
   return out;
 }
 
+/// The node's endpoints under `participant` as the builtin topics report them: true once there
+/// are its three writers (scans, /rosout, /diagnostics) and its scan reader, one of each.
+bool nodeEndpoints(TestParticipant& test, const ros2::Guid& participant,
+                   std::set<ros2::Guid>& writers, std::set<ros2::Guid>& readers) {
+  const std::string scan_type = "sensor_msgs::msg::dds_::LaserScan_";
+  const auto pubs = test.endpoints(true), subs = test.endpoints(false);
+  const auto scan_writer = endpointsOn(pubs, participant, "rt/wire_test/scan_corrected", scan_type);
+  const auto log_writer =
+      endpointsOn(pubs, participant, "rt/rosout", "rcl_interfaces::msg::dds_::Log_");
+  const auto diagnostics_writer = endpointsOn(pubs, participant, "rt/diagnostics",
+                                              "diagnostic_msgs::msg::dds_::DiagnosticArray_");
+  readers = endpointsOn(subs, participant, "rt/wire_test/scan", scan_type);
+  writers = scan_writer;
+  writers.insert(log_writer.begin(), log_writer.end());
+  writers.insert(diagnostics_writer.begin(), diagnostics_writer.end());
+  return scan_writer.size() == 1 && log_writer.size() == 1 && diagnostics_writer.size() == 1 &&
+         readers.size() == 1;
+}
+
 class NodeOnTheGraph : public ::testing::TestWithParam<ros2::RosDistro> {
  protected:
   TempDir dir;
@@ -144,26 +163,12 @@ TEST_P(NodeOnTheGraph, AnnouncesItsNodeWithTheGuidsOfItsEndpointsAndLogsToRosout
   const ros2::Guid participant = guidOfGid(a.participant);
 
   // The same GUIDs as the builtin topics report for the node's participant.
-  const std::string scan_type = "sensor_msgs::msg::dds_::LaserScan_";
-  std::set<ros2::Guid> scan_writer, log_writer, diagnostics_writer, scan_reader;
-  ASSERT_TRUE(waitFor(
-      [&] {
-        const auto pubs = test.endpoints(true), subs = test.endpoints(false);
-        scan_writer = endpointsOn(pubs, participant, "rt/wire_test/scan_corrected", scan_type);
-        log_writer = endpointsOn(pubs, participant, "rt/rosout", "rcl_interfaces::msg::dds_::Log_");
-        diagnostics_writer = endpointsOn(pubs, participant, "rt/diagnostics",
-                                         "diagnostic_msgs::msg::dds_::DiagnosticArray_");
-        scan_reader = endpointsOn(subs, participant, "rt/wire_test/scan", scan_type);
-        return scan_writer.size() == 1 && log_writer.size() == 1 &&
-               diagnostics_writer.size() == 1 && scan_reader.size() == 1;
-      },
-      kDiscoveryS))
+  std::set<ros2::Guid> writers, readers;
+  ASSERT_TRUE(
+      waitFor([&] { return nodeEndpoints(test, participant, writers, readers); }, kDiscoveryS))
       << "the node's endpoints were not discovered under its participant: " << node.log();
-  std::set<ros2::Guid> writers = scan_writer;
-  writers.insert(log_writer.begin(), log_writer.end());
-  writers.insert(diagnostics_writer.begin(), diagnostics_writer.end());
   EXPECT_EQ(guidsOf(n.writers), writers);
-  EXPECT_EQ(guidsOf(n.readers), scan_reader);
+  EXPECT_EQ(guidsOf(n.readers), readers);
 
   // The start line on /rosout.
   std::optional<LogLine> start;

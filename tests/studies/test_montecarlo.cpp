@@ -196,6 +196,140 @@ double mseRatio(const RangeModel& model, const std::vector<double>& truth,
   return a / b;
 }
 
+/// What the direct computation finds over the trials of one cell.
+struct DirectResults {
+  std::vector<double> cf_ratio, oracle_ratio, cf_single;  ///< Eq. 31's MSE ratios, per trial
+  std::vector<double> radial, tangential;  ///< triangulated centres' errors, per (trial, landmark)
+  std::map<int, int> cf_orders;            ///< the closed form's AIC order -> trials
+};
+
+/// A test set's true distances and raw readings: averaged per (stop, landmark, beam), and the
+/// single central readings.
+struct TestReadings {
+  std::vector<double> truth, raw, single_truth, single_raw;
+};
+
+/// The beam closest to the sighting's bearing: without bearing noise, the central beam.
+std::size_t centralBeam(const Sighting& s) {
+  std::size_t best = 0;
+  for (std::size_t j = 1; j < s.beams.size(); ++j)
+    if (std::abs(wrapAngle(s.beams[j].angle_rad - s.bearing_rad)) <
+        std::abs(wrapAngle(s.beams[best].angle_rad - s.bearing_rad)))
+      best = j;
+  return best;
+}
+
+TestReadings testReadings(const simulation::LandmarkLevelSample& test) {
+  std::map<std::tuple<std::size_t, int, std::uint32_t>, std::array<double, 3>> groups;
+  TestReadings r;
+  for (std::size_t i = 0; i < test.obs.sightings.size(); ++i) {
+    const Sighting& s = test.obs.sightings[i];
+    for (std::size_t j = 0; j < s.beams.size(); ++j) {
+      auto& a = groups[{s.stop, s.landmark, s.beams[j].beam}];
+      a[0] += test.true_range_m[i][j];
+      a[1] += s.beams[j].range_m;
+      a[2] += 1.0;
+    }
+    const std::size_t best = centralBeam(s);
+    r.single_truth.push_back(test.true_range_m[i][best]);
+    r.single_raw.push_back(s.beams[best].range_m);
+  }
+  for (const auto& [k, a] : groups) {
+    r.truth.push_back(a[0] / a[2]);
+    r.raw.push_back(a[1] / a[2]);
+  }
+  return r;
+}
+
+/// The oracle: central readings with their true distances, averaged per (landmark, stop, third
+/// of the scans).
+CalibrationModel oracleFit(const simulation::LandmarkLevelSample& calib,
+                           const calibration::CalibrationConfig& cc) {
+  std::map<std::tuple<int, std::size_t, int>, std::array<double, 3>> og;
+  for (std::size_t i = 0; i < calib.obs.sightings.size(); ++i) {
+    const Sighting& s = calib.obs.sightings[i];
+    const std::size_t best = centralBeam(s);
+    // 3 scans per stop: scan position in its stop
+    const int part = static_cast<int>((s.scan - s.stop * 3) % 3);
+    auto& a = og[{s.landmark, s.stop, part}];
+    a[0] += calib.true_range_m[i][best];
+    a[1] += s.beams[best].range_m;
+    a[2] += 1.0;
+  }
+  std::vector<calibration::RangePair> pairs;
+  for (const auto& [k, a] : og) pairs.push_back({a[0] / a[2], a[1] / a[2], std::get<2>(k)});
+  return calibration::calibrateAgainstTruth(pairs, cc, {}, calib.obs.range_min_m,
+                                            calib.obs.range_max_m);
+}
+
+/// Triangulated centres against the layout, in each landmark's radial/tangential frame.
+void addCentreErrors(const CalibrationModel& cf, const simulation::LandmarkLevelSample& calib,
+                     const std::vector<Cylinder>& layout, DirectResults& r) {
+  double mx = 0.0, my = 0.0;
+  for (const Pose2& p : calib.obs.commanded) {
+    mx += p.x_m / static_cast<double>(calib.obs.commanded.size());
+    my += p.y_m / static_cast<double>(calib.obs.commanded.size());
+  }
+  for (const auto& l : cf.landmarks) {
+    const Cylinder& c = layout.at(static_cast<std::size_t>(l.id - 1));
+    const double ux = c.x_m - mx, uy = c.y_m - my, n = std::hypot(ux, uy);
+    r.radial.push_back(((l.x_m - c.x_m) * ux + (l.y_m - c.y_m) * uy) / n);
+    r.tangential.push_back((-(l.x_m - c.x_m) * uy + (l.y_m - c.y_m) * ux) / n);
+  }
+}
+
+/// The closed-form calibration the direct computation runs on each trial of the cell.
+calibration::CalibrationConfig closedFormConfig() {
+  calibration::CalibrationConfig cc;
+  cc.max_order = 3;
+  cc.noise = NoiseKind::polynomial;
+  cc.closed_form_rule = calibration::OrderRule::aic;
+  cc.method = calibration::Method::closed_form;
+  cc.triangulation.sigma_s_m = 0.01;
+  cc.triangulation.sigma_theta_rad = deg2rad(0.1);  // the study's floor for a zero sigma_theta
+  return cc;
+}
+
+/// The study's CSV row against the direct computation over its 5 trials.
+void expectTheRowAgrees(const std::map<std::string, double>& row, const DirectResults& r) {
+  auto q = [](std::vector<double> v, int i) {
+    std::sort(v.begin(), v.end());
+    return v.at(static_cast<std::size_t>(i));
+  };
+  const double tol = 1e-5;  // the CSV holds 6 significant digits
+  auto near = [&](double expected, const std::string& column) {
+    SCOPED_TRACE(column);
+    ASSERT_TRUE(row.count(column));
+    EXPECT_NEAR(row.at(column), expected, tol * std::abs(expected) + 1e-12);
+  };
+  near(q(r.cf_ratio, 1), "closed_form_ratio_q25");
+  near(q(r.cf_ratio, 2), "closed_form_ratio_median");
+  near(q(r.cf_ratio, 3), "closed_form_ratio_q75");
+  near(q(r.cf_single, 2), "closed_form_ratio1_median");
+  near(q(r.oracle_ratio, 1), "oracle_ratio_q25");
+  near(q(r.oracle_ratio, 2), "oracle_ratio_median");
+  near(q(r.oracle_ratio, 3), "oracle_ratio_q75");
+  for (int n = 0; n <= 3; ++n) {
+    const int trials = r.cf_orders.count(n) ? r.cf_orders.at(n) : 0;
+    near(trials / 5.0, "closed_form_order" + std::to_string(n) + "_rate");
+  }
+  EXPECT_EQ(row.at("joint_runs"), 0.0);
+  // Bias and variance over the 10 (trial, landmark) samples.
+  const std::vector<double>& radial = r.radial;
+  const std::vector<double>& tangential = r.tangential;
+  double mr = 0.0, mt = 0.0;
+  for (std::size_t i = 0; i < radial.size(); ++i) {
+    mr += radial[i] / static_cast<double>(radial.size());
+    mt += tangential[i] / static_cast<double>(radial.size());
+  }
+  double var = 0.0;
+  for (std::size_t i = 0; i < radial.size(); ++i)
+    var += (std::pow(radial[i] - mr, 2) + std::pow(tangential[i] - mt, 2)) / (radial.size() - 1.0);
+  near(static_cast<double>(radial.size()), "pos_triangulation_samples");
+  near(std::hypot(mr, mt), "pos_triangulation_bias_m");
+  near(var, "pos_triangulation_variance_m2");
+}
+
 TEST(Study, TinyStudyStatisticsAgreeWithADirectComputation) {
   // One cell, 5 trials (quartiles are then order statistics 2, 3 and 4), no bearing noise (so
   // a draw is exactly simulateLandmarkLevel's output), closed form and oracle.
@@ -216,17 +350,8 @@ TEST(Study, TinyStudyStatisticsAgreeWithADirectComputation) {
   ASSERT_FALSE(out.interrupted);
   const auto row = csvRow(out.files.at(0).second);
 
-  calibration::CalibrationConfig cc;
-  cc.max_order = 3;
-  cc.noise = NoiseKind::polynomial;
-  cc.closed_form_rule = calibration::OrderRule::aic;
-  cc.method = calibration::Method::closed_form;
-  cc.triangulation.sigma_s_m = 0.01;
-  cc.triangulation.sigma_theta_rad = deg2rad(0.1);  // the study's floor for a zero sigma_theta
-
-  std::vector<double> cf_ratio, oracle_ratio, cf_single;
-  std::vector<double> radial, tangential;
-  std::map<int, int> cf_orders;
+  const calibration::CalibrationConfig cc = closedFormConfig();
+  DirectResults r;
   for (std::size_t t = 0; t < trials; ++t) {
     SCOPED_TRACE(t);
     const auto layout = trialLayout(config, seed, t, cell.landmarks);
@@ -238,113 +363,25 @@ TEST(Study, TinyStudyStatisticsAgreeWithADirectComputation) {
     sim.beams = true;
     const std::uint64_t ts = trialSeed(seed, cell, t);
     const auto calib = simulation::simulateLandmarkLevel(sim, deriveSeed(ts, 0));
-    const auto test = simulation::simulateLandmarkLevel(sim, deriveSeed(ts, 1));
-
-    // Test set: readings of each (stop, landmark, beam) averaged; single central readings.
-    std::map<std::tuple<std::size_t, int, std::uint32_t>, std::array<double, 3>> groups;
-    std::vector<double> single_truth, single_raw;
-    for (std::size_t i = 0; i < test.obs.sightings.size(); ++i) {
-      const Sighting& s = test.obs.sightings[i];
-      for (std::size_t j = 0; j < s.beams.size(); ++j) {
-        auto& a = groups[{s.stop, s.landmark, s.beams[j].beam}];
-        a[0] += test.true_range_m[i][j];
-        a[1] += s.beams[j].range_m;
-        a[2] += 1.0;
-      }
-      // Without bearing noise the central beam is the one closest to the true bearing.
-      std::size_t best = 0;
-      for (std::size_t j = 1; j < s.beams.size(); ++j)
-        if (std::abs(wrapAngle(s.beams[j].angle_rad - s.bearing_rad)) <
-            std::abs(wrapAngle(s.beams[best].angle_rad - s.bearing_rad)))
-          best = j;
-      single_truth.push_back(test.true_range_m[i][best]);
-      single_raw.push_back(s.beams[best].range_m);
-    }
-    std::vector<double> truth, raw;
-    for (const auto& [k, a] : groups) {
-      truth.push_back(a[0] / a[2]);
-      raw.push_back(a[1] / a[2]);
-    }
+    const TestReadings test =
+        testReadings(simulation::simulateLandmarkLevel(sim, deriveSeed(ts, 1)));
 
     CalibrationModel cf = calibration::calibrate(calib.obs, cc);
     ASSERT_STREQ(cf.status.name(), "ok") << cf.status.message;
     cf.model.range_min_m = calib.obs.range_min_m;
     cf.model.range_max_m = calib.obs.range_max_m;
-    cf_ratio.push_back(mseRatio(cf.model, truth, raw));
-    cf_single.push_back(mseRatio(cf.model, single_truth, single_raw));
-    ++cf_orders[cf.order_aic];
+    r.cf_ratio.push_back(mseRatio(cf.model, test.truth, test.raw));
+    r.cf_single.push_back(mseRatio(cf.model, test.single_truth, test.single_raw));
+    ++r.cf_orders[cf.order_aic];
 
-    // Oracle: central readings with their true distances, averaged per (landmark, stop, third of
-    // the scans).
-    std::map<std::tuple<int, std::size_t, int>, std::array<double, 3>> og;
-    for (std::size_t i = 0; i < calib.obs.sightings.size(); ++i) {
-      const Sighting& s = calib.obs.sightings[i];
-      std::size_t best = 0;
-      for (std::size_t j = 1; j < s.beams.size(); ++j)
-        if (std::abs(wrapAngle(s.beams[j].angle_rad - s.bearing_rad)) <
-            std::abs(wrapAngle(s.beams[best].angle_rad - s.bearing_rad)))
-          best = j;
-      // 3 scans per stop: scan position in its stop
-      const int part = static_cast<int>((s.scan - s.stop * 3) % 3);
-      auto& a = og[{s.landmark, s.stop, part}];
-      a[0] += calib.true_range_m[i][best];
-      a[1] += s.beams[best].range_m;
-      a[2] += 1.0;
-    }
-    std::vector<calibration::RangePair> pairs;
-    for (const auto& [k, a] : og) pairs.push_back({a[0] / a[2], a[1] / a[2], std::get<2>(k)});
-    CalibrationModel orc = calibration::calibrateAgainstTruth(pairs, cc, {}, calib.obs.range_min_m,
-                                                              calib.obs.range_max_m);
+    CalibrationModel orc = oracleFit(calib, cc);
     ASSERT_STREQ(orc.status.name(), "ok") << orc.status.message;
     orc.model.range_min_m = calib.obs.range_min_m;
     orc.model.range_max_m = calib.obs.range_max_m;
-    oracle_ratio.push_back(mseRatio(orc.model, truth, raw));
-
-    // Triangulated centres against the layout, in each landmark's radial/tangential frame.
-    double mx = 0.0, my = 0.0;
-    for (const Pose2& p : calib.obs.commanded) {
-      mx += p.x_m / static_cast<double>(calib.obs.commanded.size());
-      my += p.y_m / static_cast<double>(calib.obs.commanded.size());
-    }
-    for (const auto& l : cf.landmarks) {
-      const Cylinder& c = layout.at(static_cast<std::size_t>(l.id - 1));
-      const double ux = c.x_m - mx, uy = c.y_m - my, n = std::hypot(ux, uy);
-      radial.push_back(((l.x_m - c.x_m) * ux + (l.y_m - c.y_m) * uy) / n);
-      tangential.push_back((-(l.x_m - c.x_m) * uy + (l.y_m - c.y_m) * ux) / n);
-    }
+    r.oracle_ratio.push_back(mseRatio(orc.model, test.truth, test.raw));
+    addCentreErrors(cf, calib, layout, r);
   }
-  auto q = [](std::vector<double> v, int i) {
-    std::sort(v.begin(), v.end());
-    return v.at(static_cast<std::size_t>(i));
-  };
-  const double tol = 1e-5;  // the CSV holds 6 significant digits
-  auto near = [&](double expected, const std::string& column) {
-    SCOPED_TRACE(column);
-    ASSERT_TRUE(row.count(column));
-    EXPECT_NEAR(row.at(column), expected, tol * std::abs(expected) + 1e-12);
-  };
-  near(q(cf_ratio, 1), "closed_form_ratio_q25");
-  near(q(cf_ratio, 2), "closed_form_ratio_median");
-  near(q(cf_ratio, 3), "closed_form_ratio_q75");
-  near(q(cf_single, 2), "closed_form_ratio1_median");
-  near(q(oracle_ratio, 1), "oracle_ratio_q25");
-  near(q(oracle_ratio, 2), "oracle_ratio_median");
-  near(q(oracle_ratio, 3), "oracle_ratio_q75");
-  for (int n = 0; n <= 3; ++n)
-    near(cf_orders[n] / 5.0, "closed_form_order" + std::to_string(n) + "_rate");
-  EXPECT_EQ(row.at("joint_runs"), 0.0);
-  // Bias and variance over the 10 (trial, landmark) samples.
-  double mr = 0.0, mt = 0.0;
-  for (std::size_t i = 0; i < radial.size(); ++i) {
-    mr += radial[i] / static_cast<double>(radial.size());
-    mt += tangential[i] / static_cast<double>(radial.size());
-  }
-  double var = 0.0;
-  for (std::size_t i = 0; i < radial.size(); ++i)
-    var += (std::pow(radial[i] - mr, 2) + std::pow(tangential[i] - mt, 2)) / (radial.size() - 1.0);
-  near(static_cast<double>(radial.size()), "pos_triangulation_samples");
-  near(std::hypot(mr, mt), "pos_triangulation_bias_m");
-  near(var, "pos_triangulation_variance_m2");
+  expectTheRowAgrees(row, r);
 }
 
 // ------------------------------------------------------------------ what each estimator sees
