@@ -48,7 +48,7 @@ CalibrationModel calibrate(const LandmarkObservations& obs, const CalibrationCon
 
   // 2. Closed-form seed: landmark-stop distances, the order, the bias and the noise law (3.2).
   const auto pairs = closedFormPairs(obs, tri, radius, false);
-  if (refuseTooFewPairs(m, obs, config, tri, pairs.size(), usable, baseline)) return m;
+  if (refuseTooFewPairs(m, obs, config, tri, pairs.size(), usable)) return m;
   const ClosedFormSeed seed = closedFormSeed(obs, tri, radius, pairs, config);
   fillClosedForm(m, obs, tri, seed, config);
   const auto batches = constantDistanceBatches(obs);

@@ -94,8 +94,8 @@ BeamGeometry beamGeometry(const double* pose, double angle, const double* centre
   return g;
 }
 
-double noiseShape(const NoiseModel& n, const BiasPolynomial& f, double d, double cos_inc,
-                  double gamma, double dark, double delta) {
+double noiseShape(const NoiseModel& n, const BiasPolynomial& f, const NoiseCovariates& c) {
+  const double d = c.d;
   double h = 1.0;
   switch (n.kind) {
     case NoiseKind::squared:
@@ -112,6 +112,6 @@ double noiseShape(const NoiseModel& n, const BiasPolynomial& f, double d, double
     default:
       break;
   }
-  return h * incidenceNoiseFactor(gamma, cos_inc) * darkNoiseFactor(delta, dark);
+  return h * incidenceNoiseFactor(c.gamma, c.cos_inc) * darkNoiseFactor(c.delta, c.dark);
 }
 }  // namespace lidarcal::calibration::joint

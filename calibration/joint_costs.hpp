@@ -252,19 +252,27 @@ struct BeamGeometry {
 };
 BeamGeometry beamGeometry(const double* pose, double angle, const double* centre, double radius);
 
-/// Noise shape h (sigma = scale * h) of a reading: the law's dependence on d, the incidence
-/// ((1 / cos phi)^gamma) and the darkness ln(I_ref / I) of its return ((I_ref / I)^delta).
-double noiseShape(const NoiseModel& n, const BiasPolynomial& f, double d, double cos_inc,
-                  double gamma, double dark, double delta);
+/// What a reading's noise depends on beyond its law: the distance, the incidence and the
+/// darkness of its return, with the effects' exponents.
+struct NoiseCovariates {
+  double d = 0.0;        ///< distance, metres
+  double cos_inc = 1.0;  ///< cosine of the incidence phi
+  double gamma = 0.0;    ///< incidence exponent: (1 / cos phi)^gamma
+  double dark = 0.0;     ///< darkness ln(I_ref / I) of the return
+  double delta = 0.0;    ///< darkness exponent: (I_ref / I)^delta
+};
+
+/// Noise shape h (sigma = scale * h) of a reading: the law's dependence on d, the incidence and
+/// the darkness.
+double noiseShape(const NoiseModel& n, const BiasPolynomial& f, const NoiseCovariates& c);
 /// The scale that multiplies the shape: sigma_e, or 1 for the polynomial law (its beta carry the
 /// scale).
 inline double noiseScale(const NoiseModel& n) {
   return n.kind == NoiseKind::polynomial ? 1.0 : n.sigma_e;
 }
 /// sigma_i = scale * h_i.
-inline double readingSigma(const NoiseModel& n, const BiasPolynomial& f, double d, double cos_inc,
-                           double gamma, double dark, double delta) {
-  return noiseScale(n) * noiseShape(n, f, d, cos_inc, gamma, dark, delta);
+inline double readingSigma(const NoiseModel& n, const BiasPolynomial& f, const NoiseCovariates& c) {
+  return noiseScale(n) * noiseShape(n, f, c);
 }
 
 }  // namespace lidarcal::calibration::joint

@@ -198,8 +198,8 @@ double JointProblem::meanOf(std::size_t i, const BiasPolynomial& f) const {
 }
 
 double JointProblem::sigmaOf(std::size_t i, const RangeModel& m) const {
-  return readingSigma(m.noise, m.bias, geo_[i].d, geo_[i].cos_inc, gamma_, readings_[i].darkness,
-                      delta_);
+  return readingSigma(m.noise, m.bias,
+                      {geo_[i].d, geo_[i].cos_inc, gamma_, readings_[i].darkness, delta_});
 }
 
 std::vector<double> JointProblem::residualsNow(const BiasPolynomial& f) const {

@@ -150,11 +150,11 @@ double coreLogDensity(double y, double mean, double sigma, double student_dof, d
   return -0.5 * (kLog2Pi + z * z) - std::log(sigma);
 }
 
-double readingLogLikelihood(double y, double mean, double sigma, double mixed_fraction,
-                            double outlier_floor, double window_min, double window_max,
-                            double student_dof, double grid_m) {
+double readingLogLikelihood(double y, double mean, double sigma, const ReadingLaw& law) {
+  const double mixed_fraction = law.mixed_fraction, outlier_floor = law.outlier_floor;
+  const double window_min = law.window_min_m, window_max = law.window_max_m;
   // The core density (named log_normal all the same below).
-  const double log_normal = coreLogDensity(y, mean, sigma, student_dof, grid_m);
+  const double log_normal = coreLogDensity(y, mean, sigma, law.student_dof, law.grid_m);
   if (mixed_fraction <= 0.0 && outlier_floor <= 0.0) return log_normal;
   // Mixture densities, computed relative to the normal density to stay finite far in the tails.
   double mixed = 0.0;
@@ -262,12 +262,14 @@ std::vector<JointReading> evaluateJoint(const LandmarkObservations& obs, const J
           fit.model.bias(g.d), offset != e.landmark_offset_m.end() ? offset->second : 0.0,
           e.drift_m_per_scan, static_cast<double>(s.scan) - e.drift_reference_scan,
           e.incidence_bias_m, g.cos_inc);
-      r.sigma_m = std::max(joint::readingSigma(fit.model.noise, fit.model.bias, g.d, g.cos_inc,
-                                               gamma, r.darkness, e.dark_noise_exponent),
-                           1e-6);
+      r.sigma_m =
+          std::max(joint::readingSigma(fit.model.noise, fit.model.bias,
+                                       {g.d, g.cos_inc, gamma, r.darkness, e.dark_noise_exponent}),
+                   1e-6);
       r.log_likelihood = readingLogLikelihood(
-          r.y_m, r.mean_m, r.sigma_m, r.edge ? e.mixed_pixel_fraction : 0.0, config.outlier_floor,
-          fit.window_min_m, fit.window_max_m, e.student_dof, e.range_grid_m);
+          r.y_m, r.mean_m, r.sigma_m,
+          ReadingLaw{r.edge ? e.mixed_pixel_fraction : 0.0, config.outlier_floor, fit.window_min_m,
+                     fit.window_max_m, e.student_dof, e.range_grid_m});
       out.push_back(r);
     }
   }

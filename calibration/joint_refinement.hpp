@@ -328,17 +328,24 @@ struct JointReading {
 std::vector<JointReading> evaluateJoint(const LandmarkObservations& obs, const JointResult& fit,
                                         const JointConfig& config);
 
-/// Log-likelihood of a reading y with predicted mean and standard deviation, as refineJoint
-/// reports it: Gaussian, mixed with a uniform over [mean, window_max] with weight
-/// `mixed_fraction` (mixed pixels) and with a uniform over the window with weight `outlier_floor`.
-/// `student_dof` > 2: a Student t of that many degrees of freedom and standard deviation sigma
-/// instead of the Gaussian. `grid_m` > 0: y is a reading rounded to that grid, and the core
-/// density is the noise's probability of y's cell [y - q/2, y + q/2] over q (the density of the
-/// reading plus a uniform rounding error: comparable with a continuous model's density at a
-/// reading spread over its cell).
-double readingLogLikelihood(double y_m, double mean_m, double sigma_m, double mixed_fraction,
-                            double outlier_floor, double window_min_m, double window_max_m,
-                            double student_dof = 0.0, double grid_m = 0.0);
+/// The law of a reading beyond its mean and standard deviation, as refineJoint fits it.
+struct ReadingLaw {
+  double mixed_fraction = 0.0;  ///< weight of a uniform over [mean, window_max] (mixed pixels)
+  double outlier_floor = 0.0;   ///< weight of a uniform over the window
+  double window_min_m = 0.0, window_max_m = 0.0;
+  /// > 2: a Student t of that many degrees of freedom and standard deviation sigma instead of
+  /// the Gaussian.
+  double student_dof = 0.0;
+  /// > 0: readings are rounded to that grid, and the core density is the noise's probability
+  /// of y's cell [y - q/2, y + q/2] over q (the density of the reading plus a uniform rounding
+  /// error: comparable with a continuous model's density at a reading spread over its cell).
+  double grid_m = 0.0;
+};
+
+/// Log-likelihood of a reading y with predicted mean and standard deviation under `law`, as
+/// refineJoint reports it: the core density (Gaussian or Student t, rounded or not) mixed with
+/// the law's uniforms.
+double readingLogLikelihood(double y_m, double mean_m, double sigma_m, const ReadingLaw& law);
 
 /// Log-density of a reading y under the noise alone: Gaussian of mean and standard deviation
 /// sigma, or a Student t of that standard deviation (`student_dof` > 2); with `grid_m` > 0 the

@@ -223,8 +223,8 @@ void JointProblem::fitStudent(const std::vector<double>& res, const BiasPolynomi
   std::vector<double> x;  // residual over the law's shape (polynomial law: over sigma)
   for (std::size_t i = 0; i < readings_.size(); ++i) {
     if (!(std::abs(res[i]) <= 30.0 * sigma_[i])) continue;
-    const double h = noiseShape(out_.model.noise, f, geo_[i].d, geo_[i].cos_inc, gamma_,
-                                readings_[i].darkness, delta_);
+    const double h = noiseShape(
+        out_.model.noise, f, {geo_[i].d, geo_[i].cos_inc, gamma_, readings_[i].darkness, delta_});
     x.push_back(res[i] / (scaled ? std::max(h, 1e-9) : sigma_[i]));
   }
   if (x.size() < 10) return;
@@ -295,7 +295,7 @@ double JointProblem::profileNoise(NoiseModel n, double g, double delta,
   double s2 = 0.0, logh = 0.0;
   for (std::size_t i : in) {
     const double h = std::max(
-        noiseShape(n, f, geo_[i].d, geo_[i].cos_inc, g, readings_[i].darkness, delta), 1e-9);
+        noiseShape(n, f, {geo_[i].d, geo_[i].cos_inc, g, readings_[i].darkness, delta}), 1e-9);
     s2 += res[i] * res[i] / (h * h);
     logh += std::log(h);
   }

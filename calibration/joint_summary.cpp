@@ -129,8 +129,9 @@ void JointProblem::reportLikelihood() {
     const double mean = meanOf(i, out_.model.bias);
     const double r = (readings_[i].y_m - mean) / s;
     out_.neg_log_likelihood -= readingLogLikelihood(
-        readings_[i].y_m, mean, s, readings_[i].edge ? e.mixed_pixel_fraction : 0.0,
-        config_.outlier_floor, out_.window_min_m, window_max_, e.student_dof, e.range_grid_m);
+        readings_[i].y_m, mean, s,
+        ReadingLaw{readings_[i].edge ? e.mixed_pixel_fraction : 0.0, config_.outlier_floor,
+                   out_.window_min_m, window_max_, e.student_dof, e.range_grid_m});
     out_.residual_rms_m += r * r * s * s;
     if (std::abs(r) > config_.huber_sigmas * 2.0) ++out_.outliers;
   }

@@ -414,9 +414,11 @@ ReadingColumns columnsOf(const std::vector<KnownReading>& readings) {
 
 /// Fits every order the stops can support (leave-one-out needs more stops than coefficients)
 /// into `fits` and m.orders; returns the index of the invertible order with the smallest
-/// leave-one-stop-out error, -1 when none is invertible over [d_lo, d_hi].
+/// leave-one-stop-out error, -1 when none is invertible over the distances measured.
 int fitEveryOrder(const ReadingColumns& c, double exponent, const CalibrationConfig& config,
-                  double d_lo, double d_hi, CalibrationModel& m, std::vector<ClusteredFit>& fits) {
+                  CalibrationModel& m, std::vector<ClusteredFit>& fits) {
+  const double d_lo = *std::min_element(c.d.begin(), c.d.end()),
+               d_hi = *std::max_element(c.d.begin(), c.d.end());
   int best = -1;
   for (int n = 1; n <= config.max_order && static_cast<std::size_t>(n) + 2 <= c.stops; ++n) {
     fits.push_back(fitClustered(c.d, c.y, c.stop, n, exponent));
@@ -504,7 +506,7 @@ CalibrationModel calibrateWithReference(const std::vector<KnownReading>& reading
   const double d_lo = *std::min_element(c.d.begin(), c.d.end()),
                d_hi = *std::max_element(c.d.begin(), c.d.end());
   std::vector<ClusteredFit> fits;
-  const int best = fitEveryOrder(c, exponent, config, d_lo, d_hi, m, fits);
+  const int best = fitEveryOrder(c, exponent, config, m, fits);
   if (best < 0) {
     m.status.code = StatusCode::no_invertible_order;
     m.status.message = "no polynomial order fitted to the known distances increases over " +

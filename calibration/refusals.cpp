@@ -101,7 +101,7 @@ bool refuseTriangulation(CalibrationModel& m, const std::vector<LandmarkEstimate
 
 bool refuseTooFewPairs(CalibrationModel& m, const LandmarkObservations& obs,
                        const CalibrationConfig& config, const std::vector<LandmarkEstimate>& tri,
-                       std::size_t pairs, int usable, double baseline) {
+                       std::size_t pairs, int usable) {
   if (pairs >= static_cast<std::size_t>(config.max_order) + 3) return false;
   std::size_t read = 0;  // sightings with a finite central reading on a triangulated landmark
   for (const auto& s : obs.sightings)
@@ -118,7 +118,7 @@ bool refuseTooFewPairs(CalibrationModel& m, const LandmarkObservations& obs,
                         " meets its triangulated landmark in front of the sensor, so the "
                         "bearing-only positions are wrong "
                         "(a path of " +
-                        metres(baseline) + " is short for landmarks this far)";
+                        metres(pathExtent(obs.commanded)) + " is short for landmarks this far)";
   m.status.message +=
       ": record more stops along a longer straight line past 3 or more poles, or give measured "
       "distances with "

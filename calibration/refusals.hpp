@@ -38,10 +38,10 @@ bool refuseTriangulation(CalibrationModel& m, const std::vector<LandmarkEstimate
 
 /// Refuses a closed form with fewer than config.max_order + 3 landmark-stop distances
 /// (too_few_observations); says so when no reading met its landmark in front of the sensor
-/// (a path of `baseline_m` too short). True when refused.
+/// (the path, pathExtent(obs.commanded), too short). True when refused.
 bool refuseTooFewPairs(CalibrationModel& m, const LandmarkObservations& obs,
                        const CalibrationConfig& config, const std::vector<LandmarkEstimate>& tri,
-                       std::size_t pairs, int usable, double baseline_m);
+                       std::size_t pairs, int usable);
 
 /// Refuses a joint refinement that failed, or that ran away: a solution placing a landmark where
 /// the sensor could not have read it (distances far beyond its range limit), at a stop, or with a

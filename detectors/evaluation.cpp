@@ -131,17 +131,26 @@ struct Tally {
   std::vector<std::pair<int, int>> id_truth;
 };
 
-/// Scores the detections of scan s against its truth; returns which landmarks were detected.
-std::vector<bool> scoreDetections(Tally& tally, const std::vector<ScanDetections>& scans,
-                                  std::size_t s, const Association* association, const ScanTruth& t,
-                                  const LandmarksSeen& seen, const Scene& scene,
+/// One scan to score: its detections with their ids (null: not associated), its truth and
+/// where its landmarks lie in the sensor frame.
+struct ScoredScan {
+  const ScanDetections& found;
+  const std::vector<int>* ids;
+  const ScanTruth& truth;
+  const LandmarksSeen& seen;
+};
+
+/// Scores the detections of a scan against its truth; returns which landmarks were detected.
+std::vector<bool> scoreDetections(Tally& tally, const ScoredScan& scan, const Scene& scene,
                                   const EvaluationConfig& cfg) {
+  const ScanTruth& t = scan.truth;
+  const LandmarksSeen& seen = scan.seen;
   const std::size_t L = scene.landmarks.size();
   std::vector<bool> detected(L + 1, false);
-  for (std::size_t j = 0; j < scans[s].detections.size(); ++j) {
-    const Detection& d = scans[s].detections[j];
-    const int id = association ? association->ids[s][j] : 0;
-    if (association && id == 0) continue;
+  for (std::size_t j = 0; j < scan.found.detections.size(); ++j) {
+    const Detection& d = scan.found.detections[j];
+    const int id = scan.ids ? (*scan.ids)[j] : 0;
+    if (scan.ids && id == 0) continue;
     ++tally.ev.detections;
     const auto [kind, target] = votedTarget(d, t);
     int truth_l = 0;
@@ -159,7 +168,7 @@ std::vector<bool> scoreDetections(Tally& tally, const std::vector<ScanDetections
       if (kind == io::TargetKind::clutter) ++tally.ev.false_on_clutter;
       if (kind == io::TargetKind::wall) ++tally.ev.false_on_walls;
     }
-    if (association) tally.id_truth.emplace_back(id, truth_l);
+    if (scan.ids) tally.id_truth.emplace_back(id, truth_l);
   }
   return detected;
 }
@@ -259,8 +268,8 @@ DetectionEvaluation evaluateDetections(const std::vector<ScanDetections>& scans,
   tally.bins.resize(cfg.range_edges_m.size() > 1 ? cfg.range_edges_m.size() - 1 : 0);
   for (std::size_t s = 0; s < scans.size(); ++s) {
     const LandmarksSeen seen = landmarksInSensorFrame(truth[s], scene.landmarks);
-    const std::vector<bool> detected =
-        scoreDetections(tally, scans, s, association, truth[s], seen, scene, cfg);
+    const ScoredScan scored{scans[s], association ? &association->ids[s] : nullptr, truth[s], seen};
+    const std::vector<bool> detected = scoreDetections(tally, scored, scene, cfg);
     countObservable(tally, truth[s], seen, detected, L, cfg);
   }
   DetectionEvaluation& ev = tally.ev;

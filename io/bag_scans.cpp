@@ -37,10 +37,10 @@ void RosbagConfig::validate() const {
                    range_max_m.value_or(std::numeric_limits<double>::infinity()));
 }
 
-Transform3 makeTransform(double x, double y, double z, double qx, double qy, double qz, double qw) {
+Transform3 makeTransform(const Eigen::Vector3d& translation, const Eigen::Quaterniond& rotation) {
   Transform3 t;
-  t.translation = {x, y, z};
-  t.rotation = Eigen::Quaterniond(qw, qx, qy, qz);
+  t.translation = translation;
+  t.rotation = rotation;
   // tf's default for an unset quaternion
   if (!(t.rotation.norm() > 0.0)) t.rotation = Eigen::Quaterniond::Identity();
   t.rotation.normalize();

@@ -188,9 +188,9 @@ class BagScanSink {
   bool upside_down_ = false;
 };
 
-/// A transform from a ROS position and quaternion; an unset (all-zero) quaternion is the
-/// identity, as tf takes it; others are normalised.
-Transform3 makeTransform(double x, double y, double z, double qx, double qy, double qz, double qw);
+/// A transform from a ROS position and quaternion (Eigen's (w, x, y, z)); an unset (all-zero)
+/// quaternion is the identity, as tf takes it; others are normalised.
+Transform3 makeTransform(const Eigen::Vector3d& translation, const Eigen::Quaterniond& rotation);
 
 /// A frame name without its leading slash (ROS1 tf allowed one).
 std::string stripSlash(const std::string& frame);

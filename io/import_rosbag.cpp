@@ -58,13 +58,13 @@ std::vector<BagTopic> topicsOf(const rosbag::Bag& bag) {
 }
 
 Transform3 toTransform(const geometry_msgs::Point& p, const geometry_msgs::Quaternion& q) {
-  return makeTransform(p.x, p.y, p.z, q.x, q.y, q.z, q.w);
+  return makeTransform({p.x, p.y, p.z}, Eigen::Quaterniond(q.w, q.x, q.y, q.z));
 }
 
 Transform3 toTransform(const geometry_msgs::Transform& tf) {
   const auto& p = tf.translation;
   const auto& q = tf.rotation;
-  return makeTransform(p.x, p.y, p.z, q.x, q.y, q.z, q.w);
+  return makeTransform({p.x, p.y, p.z}, Eigen::Quaterniond(q.w, q.x, q.y, q.z));
 }
 
 /// Fills `poses` from the bag's odometry and tf topics that config.pose needs.

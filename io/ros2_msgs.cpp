@@ -28,7 +28,7 @@ double readHeader(CdrReader& in, std::string& frame_id) {
 Transform3 readTransform(CdrReader& in) {
   const double x = in.f64(), y = in.f64(), z = in.f64();
   const double qx = in.f64(), qy = in.f64(), qz = in.f64(), qw = in.f64();
-  return makeTransform(x, y, z, qx, qy, qz, qw);
+  return makeTransform({x, y, z}, Eigen::Quaterniond(qw, qx, qy, qz));
 }
 
 }  // namespace

@@ -137,10 +137,9 @@ void runRun(const RunCommand& c) {
   const calibration::Outside outside = c.correction->outsidePolicy();
   fs::create_directory(out.path() / "corrected");
   Progress cprog("correct", seq.scans.size());
-  const auto stats = correctSequence(
-      seq, cal.model, out.path() / "corrected",
-      SequenceCorrection{method, outside, io::PcdEncoding::binary, c.options->threads},
-      [&](std::size_t d, std::size_t) { cprog.update(d); });
+  const SequenceCorrection how{method, outside, io::PcdEncoding::binary, c.options->threads};
+  const auto stats = correctSequence(seq, cal.model, out.path() / "corrected", how,
+                                     [&](std::size_t d, std::size_t) { cprog.update(d); });
   cprog.finish();
 
   ReportInputs in;
@@ -157,8 +156,7 @@ void runRun(const RunCommand& c) {
     Activity activity("evaluate against the truth");
     const io::SimulationTruth truth = io::loadTruth(truth_file);
     in.true_landmarks = truth.truth.scene.landmarks;
-    in.compared =
-        compareWithTruth(seq, out.path() / "corrected", truth, cal, config, method, outside);
+    in.compared = compareWithTruth(seq, out.path() / "corrected", truth, cal, config, how);
     in.truth_note = "Evaluated on the calibration sequence itself against " + truth_file.string() +
                     " (simulator truth; calibration did not use it). Our row scores the corrected "
                     "scans as written "

@@ -15,9 +15,10 @@ std::vector<ComparedModel> compareWithTruth(const io::Sequence& seq,
                                             const io::SimulationTruth& truth,
                                             const SequenceCalibration& cal,
                                             const calibration::CalibrationConfig& config,
-                                            calibration::InversionMethod method,
-                                            calibration::Outside outside) {
+                                            const SequenceCorrection& how) {
   using calibration::evaluate;
+  const calibration::InversionMethod method = how.method;
+  const calibration::Outside outside = how.outside;
   std::vector<ComparedModel> compared;
   compared.push_back({"lidarcal " + cal.model.method + " (no ground truth), the written scans",
                       cal.model, evaluate(io::openSequence(corrected_dir), seq, truth)});

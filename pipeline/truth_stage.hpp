@@ -17,15 +17,15 @@
 namespace lidarcal::pipeline {
 
 /// The comparison with the simulator's truth, in the report's order: our model scored on the
-/// corrected scans as written (read back from `corrected_dir`), then under the same rule
-/// (`method`, `outside`) in memory: the closed form (unless ours is one), the oracle in the
-/// commanded frame (the odometry scale error no self-calibration sees) and the plain oracle.
+/// corrected scans as written (read back from `corrected_dir`, corrected as `how` says), then
+/// under the same rule (its method and outside policy) in memory: the closed form (unless ours
+/// is one), the oracle in the commanded frame (the odometry scale error no self-calibration
+/// sees) and the plain oracle.
 std::vector<ComparedModel> compareWithTruth(const io::Sequence& seq,
                                             const std::filesystem::path& corrected_dir,
                                             const io::SimulationTruth& truth,
                                             const SequenceCalibration& cal,
                                             const calibration::CalibrationConfig& config,
-                                            calibration::InversionMethod method,
-                                            calibration::Outside outside);
+                                            const SequenceCorrection& how);
 
 }  // namespace lidarcal::pipeline

@@ -16,7 +16,7 @@ io::BagPoseConfig bagConfig(const LivePoseSettings& s) {
 }
 
 io::Transform3 transformOf(const ReceivedTransform& t) {
-  return io::makeTransform(t.x, t.y, t.z, t.qx, t.qy, t.qz, t.qw);
+  return io::makeTransform({t.x, t.y, t.z}, Eigen::Quaterniond(t.qw, t.qx, t.qy, t.qz));
 }
 
 }  // namespace

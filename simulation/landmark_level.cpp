@@ -29,10 +29,20 @@ struct ScanDraw {
   std::normal_distribution<double>& normal;
 };
 
+/// A landmark in view: the cylinder, its centre's distance and its true bearing in the sensor
+/// frame.
+struct InView {
+  const Cylinder& c;
+  double centre;        ///< metres
+  double true_bearing;  ///< radians
+};
+
 /// Without beams: one reading of the landmark's nearest point along the (noisy) bearing, with
 /// the true distance in `truth`; false when the reading leaves the sensor's window.
-bool addCentralReading(const LandmarkLevelConfig& config, const Cylinder& c, double centre,
-                       double e, ScanDraw& draw, Sighting& s, std::vector<double>& truth) {
+bool addCentralReading(const LandmarkLevelConfig& config, const InView& v, double e, ScanDraw& draw,
+                       Sighting& s, std::vector<double>& truth) {
+  const Cylinder& c = v.c;
+  const double centre = v.centre;
   const double d = centre - c.radius_m;  // Alhashimi et al. 2021 eq. 2 minus the radius
   const double y = effectReading(config.model, config.effects, d,
                                  BeamContext{1.0, c.range_offset_m, draw.scan, c.intensity}, e,
@@ -45,9 +55,10 @@ bool addCentralReading(const LandmarkLevelConfig& config, const Cylinder& c, dou
 
 /// With beams: every grid beam that hits the landmark, its reading (the outermost ones may be
 /// mixed pixels with what `background` shows behind), and its true distance in `truth`.
-void addBeamReadings(const LandmarkLevelConfig& config, const Scene& background, const Cylinder& c,
-                     double centre, double true_bearing, ScanDraw& draw, Sighting& s,
-                     std::vector<double>& truth) {
+void addBeamReadings(const LandmarkLevelConfig& config, const Scene& background, const InView& v,
+                     ScanDraw& draw, Sighting& s, std::vector<double>& truth) {
+  const Cylinder& c = v.c;
+  const double centre = v.centre, true_bearing = v.true_bearing;
   const Pose2& a = draw.actual;
   const double mount = config.mount_yaw_rad;
   const double half = std::asin(c.radius_m / centre);
@@ -146,9 +157,10 @@ LandmarkLevelSample simulateLandmarkLevel(const LandmarkLevelConfig& config, std
         s.radius_m = c.radius_m;
         std::vector<double> truth;
         if (!config.beams) {
-          if (!addCentralReading(config, c, centre, e, draw, s, truth)) continue;
+          if (!addCentralReading(config, InView{c, centre, true_bearing}, e, draw, s, truth))
+            continue;
         } else {
-          addBeamReadings(config, background, c, centre, true_bearing, draw, s, truth);
+          addBeamReadings(config, background, InView{c, centre, true_bearing}, draw, s, truth);
           if (s.beams.empty()) continue;
         }
         out.obs.sightings.push_back(std::move(s));

@@ -48,9 +48,17 @@ std::optional<std::pair<double, std::size_t>> firstPole(const std::vector<Cylind
   return best;
 }
 
+/// Where and when a sensor sweeps: the vehicle's true pose, the stop and the scan's index.
+struct SweepAt {
+  const Pose2& vehicle;
+  std::size_t stop, scan;
+};
+
 /// The sightings of one sensor in one scan: every beam of its grid that meets pole p first.
-void sweep(const RigSimConfig& c, std::size_t s, const Pose2& vehicle, std::size_t stop,
-           std::size_t scan, std::mt19937_64& rng, std::vector<RigSighting>& out) {
+void sweep(const RigSimConfig& c, std::size_t s, const SweepAt& at, std::mt19937_64& rng,
+           std::vector<RigSighting>& out) {
+  const Pose2& vehicle = at.vehicle;
+  const std::size_t stop = at.stop, scan = at.scan;
   const RigSimSensor& sensor = c.sensors[s];
   const Pose2 pose = compose(vehicle, sensor.mounting.pose());
   const double flip = sensor.mounting.flip();
@@ -113,7 +121,7 @@ RigSimSample simulateRig(const RigSimConfig& c, std::uint64_t seed) {
       for (std::size_t s = 0; s < c.sensors.size(); ++s) {
         auto rng = makeRng(seed, 1 + scan * c.sensors.size() + s);
         // A rig scan index unique over sensors: the pooling groups by (sensor, stop, pole, beam).
-        sweep(c, s, t.actual, k, scan * c.sensors.size() + s, rng, obs.sightings);
+        sweep(c, s, SweepAt{t.actual, k, scan * c.sensors.size() + s}, rng, obs.sightings);
       }
     }
   }

@@ -44,8 +44,10 @@ std::vector<double> heldOutLikelihoods(const LandmarkObservations& train,
     const double sigma = std::sqrt(dof * r.sigma_m * r.sigma_m + slope * slope * dm.var);
     const double mean = r.mean_m + slope * (dm.mean - at_fit);
     ll[i] = readingLogLikelihood(
-        r.y_m, mean, sigma, r.edge ? fit.effects.mixed_pixel_fraction : 0.0, cfg.outlier_floor,
-        fit.window_min_m, fit.window_max_m, fit.effects.student_dof, fit.effects.range_grid_m);
+        r.y_m, mean, sigma,
+        calibration::ReadingLaw{r.edge ? fit.effects.mixed_pixel_fraction : 0.0, cfg.outlier_floor,
+                                fit.window_min_m, fit.window_max_m, fit.effects.student_dof,
+                                fit.effects.range_grid_m});
   }
   return ll;
 }

@@ -34,7 +34,9 @@ struct Design {
 struct DesignEntries {
   std::vector<Eigen::Triplet<double>> j, lm, head;
   std::vector<int> slot;
+  std::vector<std::size_t> stop_of_slot;  ///< the stop of each slot, in order
   int stride = 2;  ///< columns per pose: x, y, and under the motion prior the heading too
+  int pose0 = 0;   ///< the first pose's column
 };
 
 /// Landmark id -> column of its centre's x (y at +1), from column `col` on.
@@ -50,8 +52,9 @@ std::map<int, int> centreColumns(const JointResult& fit, int col) {
 
 /// The readings' rows of the design.
 void designReadingRows(const JointResult& fit, const std::vector<ReadingRow>& rs,
-                       const JointConfig& cfg, const std::map<int, int>& lm, int pose0, Design& x,
+                       const JointConfig& cfg, const std::map<int, int>& lm, Design& x,
                        DesignEntries& e) {
+  const int pose0 = e.pose0;
   const int na = fit.model.bias.order() + 1;
   const int n = static_cast<int>(rs.size());
   double tmean = 0.0;
@@ -99,8 +102,9 @@ void designReadingRows(const JointResult& fit, const std::vector<ReadingRow>& rs
 /// (odometryStep: the steps in between composed, their variances added up), three rows each on
 /// the two poses' columns x, y, heading; the odometry scale's column is their derivative by it.
 void designMotionRows(const LandmarkObservations& obs, const JointResult& fit,
-                      const JointConfig& cfg, const std::vector<std::size_t>& stop_of_slot,
-                      int pose0, int row0, Design& x, DesignEntries& e) {
+                      const JointConfig& cfg, int row0, Design& x, DesignEntries& e) {
+  const std::vector<std::size_t>& stop_of_slot = e.stop_of_slot;
+  const int pose0 = e.pose0;
   if (stop_of_slot.empty()) return;
   const double inv_s = 1.0 / cfg.sigma_s_m, inv_psi = 1.0 / cfg.sigma_psi_rad;
   e.j.emplace_back(row0, pose0, inv_s);
@@ -138,7 +142,7 @@ Design linearisedDesign(const LandmarkObservations& obs, const JointResult& fit,
   DesignEntries e;
   e.stride = motion ? 3 : 2;
   e.slot.assign(fit.poses.size(), -1);
-  std::vector<std::size_t> stop_of_slot;
+  std::vector<std::size_t>& stop_of_slot = e.stop_of_slot;
   for (std::size_t k = 0; k < seen.size(); ++k)
     if (seen[k]) {
       e.slot[k] = static_cast<int>(stop_of_slot.size());
@@ -146,6 +150,7 @@ Design linearisedDesign(const LandmarkObservations& obs, const JointResult& fit,
     }
   const int k_stops = static_cast<int>(stop_of_slot.size());
   const int pose0 = na + (cfg.estimate_radius ? 1 : 0) + 2 * static_cast<int>(lm.size());
+  e.pose0 = pose0;
   const int p = pose0 + e.stride * k_stops;
   const int n = static_cast<int>(rs.size());
   const int rows_total = n + e.stride * k_stops;
@@ -156,9 +161,9 @@ Design linearisedDesign(const LandmarkObservations& obs, const JointResult& fit,
   x.x_scale = x.x_drift;
   e.j.reserve(static_cast<std::size_t>(n) * static_cast<std::size_t>(na + 5) +
               2 * static_cast<std::size_t>(k_stops));
-  designReadingRows(fit, rs, cfg, lm, pose0, x, e);
+  designReadingRows(fit, rs, cfg, lm, x, e);
   const Pose2& c0 = obs.commanded.front();
-  if (motion) designMotionRows(obs, fit, cfg, stop_of_slot, pose0, n, x, e);
+  if (motion) designMotionRows(obs, fit, cfg, n, x, e);
   for (int k = 0; k < k_stops && !motion; ++k) {
     const double inv = 1.0 / cfg.sigma_s_m;
     const Pose2& c = obs.commanded[stop_of_slot[static_cast<std::size_t>(k)]];

@@ -27,8 +27,8 @@ double restrictedShapeEstimate(const LandmarkObservations& obs, const JointResul
   const std::vector<JointReading> rs = evaluateJoint(obs, fit, cfg);
   const std::vector<PoseInformation> info = poseInformation(obs, fit, cfg);
   // the odometry's (and the first pose's prior's) blocks
-  std::vector<Eigen::Matrix3d> odo_a, odo_b;
-  poseChainInformation({}, obs, fit, cfg, 1.0, odo_a, odo_b);
+  const PoseChain odo = poseChainInformation({}, obs, fit, cfg, 1.0);
+  const std::vector<Eigen::Matrix3d>&odo_a = odo.a, &odo_b = odo.b;
   const JointEffectEstimates& fx = fit.effects;
   auto shapes = [&](double v) {  // the noise law's shape h_i of every reading at exponent v
     const double gamma = e == Effect::incidence_noise ? v : fx.incidence_noise_exponent;

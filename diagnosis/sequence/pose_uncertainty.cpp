@@ -86,14 +86,16 @@ OdometryStep odometryStep(const LandmarkObservations& obs, const JointResult& fi
   return o;
 }
 
-void poseChainInformation(const std::vector<PoseInformation>& readings,
-                          const LandmarkObservations& obs, const JointResult& fit,
-                          const JointConfig& cfg, double noise_scale,
-                          std::vector<Eigen::Matrix3d>& a, std::vector<Eigen::Matrix3d>& b) {
+PoseChain poseChainInformation(const std::vector<PoseInformation>& readings,
+                               const LandmarkObservations& obs, const JointResult& fit,
+                               const JointConfig& cfg, double noise_scale) {
   const std::size_t n = fit.poses.size();
+  PoseChain chain;
+  auto& a = chain.a;
+  auto& b = chain.b;
   a.assign(n, Eigen::Matrix3d::Zero());
   b.assign(n, Eigen::Matrix3d::Zero());
-  if (n == 0) return;
+  if (n == 0) return chain;
   for (const auto& r : readings)
     a[r.stop] += r.g * r.g.transpose() / (noise_scale * r.sigma * r.sigma);
   a[0].diagonal() +=
@@ -105,6 +107,7 @@ void poseChainInformation(const std::vector<PoseInformation>& readings,
     a[k] += o.jb.transpose() * o.jb;
     b[k - 1] += o.ja.transpose() * o.jb;
   }
+  return chain;
 }
 
 std::vector<Eigen::Matrix3d> poseCovariances(const std::vector<PoseInformation>& readings,
@@ -112,10 +115,9 @@ std::vector<Eigen::Matrix3d> poseCovariances(const std::vector<PoseInformation>&
                                              const JointResult& fit, const JointConfig& cfg,
                                              double noise_scale,
                                              std::vector<Eigen::Matrix3d>* upper) {
-  std::vector<Eigen::Matrix3d> a, b;
-  poseChainInformation(readings, obs, fit, cfg, noise_scale, a, b);
-  if (a.empty()) return {};
-  return blockTridiagonalInverseDiagonal(a, b, upper);
+  const PoseChain chain = poseChainInformation(readings, obs, fit, cfg, noise_scale);
+  if (chain.a.empty()) return {};
+  return blockTridiagonalInverseDiagonal(chain.a, chain.b, upper);
 }
 
 double noiseDofFactor(const std::vector<PoseInformation>& readings,

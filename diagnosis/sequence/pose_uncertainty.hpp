@@ -74,10 +74,13 @@ OdometryStep odometryStep(const LandmarkObservations& obs, const JointResult& fi
 /// g g^T / sigma^2 per reading) on the diagonal blocks `a`, the odometry steps between
 /// consecutive stops (odometryStep) on `a` and the blocks (k, k + 1) `b`. `readings`:
 /// poseInformation(obs, fit, cfg); `noise_scale`: a factor on every reading's variance.
-void poseChainInformation(const std::vector<PoseInformation>& readings,
-                          const LandmarkObservations& obs, const JointResult& fit,
-                          const JointConfig& cfg, double noise_scale,
-                          std::vector<Eigen::Matrix3d>& a, std::vector<Eigen::Matrix3d>& b);
+struct PoseChain {
+  std::vector<Eigen::Matrix3d> a;  ///< diagonal blocks
+  std::vector<Eigen::Matrix3d> b;  ///< blocks (k, k + 1)
+};
+PoseChain poseChainInformation(const std::vector<PoseInformation>& readings,
+                               const LandmarkObservations& obs, const JointResult& fit,
+                               const JointConfig& cfg, double noise_scale);
 
 /// Marginal covariance of every stop's pose in a fit under the motion prior (a Laplace
 /// approximation with the landmarks and the range model held at the fit): the inverse of

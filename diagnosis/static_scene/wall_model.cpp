@@ -50,8 +50,18 @@ void wallResiduals(const BinnedReadings& d, const std::vector<BinFit>& f, const 
 
 /// Gauss-Newton on the wall model at fixed roughness (at most 15 steps); false when a step is
 /// not finite.
-bool wallGaussNewton(const BinnedReadings& d, const std::vector<BinFit>& f, WallFit& w, bool with_b,
-                     bool alpha0_free, double tau2, WallSystem& s) {
+/// What a wall fit estimates: the incidence term b, the offset alpha_0 (else held), and the
+/// walls' roughness tau^2 it weights the bins with.
+struct WallTerms {
+  bool with_b = false;
+  bool alpha0_free = true;
+  double tau2 = 0.0;
+};
+
+bool wallGaussNewton(const BinnedReadings& d, const std::vector<BinFit>& f, WallFit& w,
+                     const WallTerms& terms, WallSystem& s) {
+  const bool with_b = terms.with_b, alpha0_free = terms.alpha0_free;
+  const double tau2 = terms.tau2;
   const int nb = static_cast<int>(w.bins.size()), nl = static_cast<int>(w.lines.size());
   std::vector<Eigen::Triplet<double>> entries;
   for (int it = 0; it < 15; ++it) {
@@ -108,8 +118,10 @@ double wallRoughness(const std::vector<BinFit>& f, const WallFit& w, const Eigen
 
 /// Final residuals, standard errors and leave-one-out predictive log-likelihoods (the
 /// Jacobian is the last Gauss-Newton step's).
-void finishWalls(const BinnedReadings& d, const std::vector<BinFit>& f, WallFit& w, bool with_b,
-                 bool alpha0_free, double tau2, WallSystem& s) {
+void finishWalls(const BinnedReadings& d, const std::vector<BinFit>& f, WallFit& w,
+                 const WallTerms& terms, WallSystem& s) {
+  const bool with_b = terms.with_b, alpha0_free = terms.alpha0_free;
+  const double tau2 = terms.tau2;
   const int nb = static_cast<int>(w.bins.size());
   const auto np = static_cast<int>(s.j.cols());
   wallResiduals(d, f, w, tau2, s);
@@ -157,11 +169,11 @@ WallFit fitWalls(const BinnedReadings& d, const std::vector<BinFit>& f,
                Eigen::VectorXd(nb)};
   double tau2 = 1e-6;
   for (int outer = 0; outer < 4; ++outer) {
-    if (!wallGaussNewton(d, f, w, with_b, alpha0_free, tau2, s)) return w;
+    if (!wallGaussNewton(d, f, w, WallTerms{with_b, alpha0_free, tau2}, s)) return w;
     tau2 = wallRoughness(f, w, s.r);
   }
   w.tau = std::sqrt(tau2);
-  finishWalls(d, f, w, with_b, alpha0_free, tau2, s);
+  finishWalls(d, f, w, WallTerms{with_b, alpha0_free, tau2}, s);
   return w;
 }
 

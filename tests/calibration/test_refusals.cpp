@@ -63,14 +63,14 @@ TEST(Refusals, TooFewPairsForTheOrdersAreRefusedWithTheCountNeeded) {
   calibration::CalibrationConfig config;  // max_order 4: 7 pairs needed
   LandmarkObservations obs;
   CalibrationModel m;
-  EXPECT_TRUE(calibration::refuseTooFewPairs(m, obs, config, {}, 6, 2, 1.0));
+  EXPECT_TRUE(calibration::refuseTooFewPairs(m, obs, config, {}, 6, 2));
   EXPECT_EQ(m.status.code, StatusCode::too_few_observations);
   EXPECT_NE(m.status.message.find(
                 "only 6 landmark-stop distances from 2 triangulated landmarks (at least 7 needed)"),
             std::string::npos)
       << m.status.message;
   CalibrationModel fine;
-  EXPECT_FALSE(calibration::refuseTooFewPairs(fine, obs, config, {}, 7, 2, 1.0));
+  EXPECT_FALSE(calibration::refuseTooFewPairs(fine, obs, config, {}, 7, 2));
 }
 
 TEST(Refusals, AJointFitThatPlacesALandmarkBeyondTheSensorsRangeRanAway) {
