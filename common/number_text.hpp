@@ -12,4 +12,7 @@ std::string fixed(double v, int digits, bool sign = false);
 /// `v` with `digits` significant digits ("%.*g").
 std::string significant(double v, int digits);
 
+/// printf's text for `format` and the values, whatever its length.
+[[gnu::format(printf, 1, 2)]] std::string formatted(const char* format, ...);
+
 }  // namespace lidarcal

@@ -2,9 +2,9 @@
 #include "pipeline/rig_report.hpp"
 
 #include <cmath>
-#include <cstdarg>
 #include <cstdio>
 
+#include "common/number_text.hpp"
 #include "pipeline/words.hpp"
 
 namespace lidarcal::pipeline {
@@ -50,24 +50,15 @@ CalibrationModel sensorModel(const io::Rig& rig, std::size_t k, const calibratio
   return m;
 }
 
-std::string row(const char* format, ...) __attribute__((format(printf, 1, 2)));
-std::string row(const char* format, ...) {
-  char text[512];
-  va_list args;
-  va_start(args, format);
-  std::vsnprintf(text, sizeof text, format, args);
-  va_end(args);
-  return text;
-}
-
 /// The design and the difference (mm, deg; the design is exact, so the estimate's standard errors).
 std::string designCells(const Pose2& estimate, const std::optional<Pose2>& design,
                         const std::array<double, 9>& c) {
   if (!design) return " none | - |\n";
-  return row(" %.4f, %.4f, %.2f | %+.1f +- %.1f, %+.1f +- %.1f, %+.2f +- %.2f |\n", design->x_m,
-             design->y_m, rad2deg(design->yaw_rad), 1000.0 * (estimate.x_m - design->x_m),
-             1000.0 * se(c, 0), 1000.0 * (estimate.y_m - design->y_m), 1000.0 * se(c, 1),
-             rad2deg(wrapAngle(estimate.yaw_rad - design->yaw_rad)), rad2deg(se(c, 2)));
+  return formatted(" %.4f, %.4f, %.2f | %+.1f +- %.1f, %+.1f +- %.1f, %+.2f +- %.2f |\n",
+                   design->x_m, design->y_m, rad2deg(design->yaw_rad),
+                   1000.0 * (estimate.x_m - design->x_m), 1000.0 * se(c, 0),
+                   1000.0 * (estimate.y_m - design->y_m), 1000.0 * se(c, 1),
+                   rad2deg(wrapAngle(estimate.yaw_rad - design->yaw_rad)), rad2deg(se(c, 2)));
 }
 
 /// "front and back", "a, b and c".
@@ -89,9 +80,9 @@ std::string refusedModelsCaution(const io::RigModel& m) {
     } else if (s.design) {
       const double dx = s.mounting.x_m - s.design->x_m, dy = s.mounting.y_m - s.design->y_m;
       offsets.push_back(
-          row("%s lies %.0f mm from its design (x %+.0f mm, y %+.0f mm, yaw %+.2f deg)",
-              s.name.c_str(), 1000.0 * std::hypot(dx, dy), 1000.0 * dx, 1000.0 * dy,
-              rad2deg(wrapAngle(s.mounting.yaw_rad - s.design->yaw_rad))));
+          formatted("%s lies %.0f mm from its design (x %+.0f mm, y %+.0f mm, yaw %+.2f deg)",
+                    s.name.c_str(), 1000.0 * std::hypot(dx, dy), 1000.0 * dx, 1000.0 * dy,
+                    rad2deg(wrapAngle(s.mounting.yaw_rad - s.design->yaw_rad))));
     }
   }
   if (refused.empty()) return {};
@@ -150,18 +141,18 @@ io::RigModel rigModel(const io::Rig& rig, const calibration::RigResult& r) {
 }
 
 std::string rigMountingTable(const io::RigModel& m) {
-  std::string t =
-      row("mountings in %s (%s frame%s), +- one standard error\n",
-          m.vehicle_frame.empty() ? "the vehicle frame" : m.vehicle_frame.c_str(), m.frame.c_str(),
-          m.frame == "relative" ? (", " + m.reference + " held at its design").c_str() : "");
+  std::string t = formatted(
+      "mountings in %s (%s frame%s), +- one standard error\n",
+      m.vehicle_frame.empty() ? "the vehicle frame" : m.vehicle_frame.c_str(), m.frame.c_str(),
+      m.frame == "relative" ? (", " + m.reference + " held at its design").c_str() : "");
   t += "| sensor | x (m) | y (m) | yaw (deg) | flip | design x, y (m), yaw (deg) | difference x, y "
        "(mm), yaw (deg) |\n"
        "|---|---|---|---|---|---|---|\n";
   for (const io::RigModelSensor& s : m.sensors) {
     const auto& c = s.mounting_covariance;
-    t += row("| %s | %.4f +- %.4f | %.4f +- %.4f | %.2f +- %.2f | %s |", s.name.c_str(),
-             s.mounting.x_m, se(c, 0), s.mounting.y_m, se(c, 1), rad2deg(s.mounting.yaw_rad),
-             rad2deg(se(c, 2)), s.mounting.upside_down ? "upside down" : "upright");
+    t += formatted("| %s | %.4f +- %.4f | %.4f +- %.4f | %.2f +- %.2f | %s |", s.name.c_str(),
+                   s.mounting.x_m, se(c, 0), s.mounting.y_m, se(c, 1), rad2deg(s.mounting.yaw_rad),
+                   rad2deg(se(c, 2)), s.mounting.upside_down ? "upside down" : "upright");
     t += designCells(s.mounting.pose(),
                      s.design ? std::optional<Pose2>(s.design->pose()) : std::nullopt, c);
   }
@@ -171,9 +162,9 @@ std::string rigMountingTable(const io::RigModel& m) {
          "|---|---|---|---|---|---|\n";
   for (const io::RigModelRelative& r : m.relative) {
     const auto& c = r.covariance;
-    t += row("| %s in %s | %.4f +- %.4f | %.4f +- %.4f | %.2f +- %.2f |", r.sensor.c_str(),
-             r.reference.c_str(), r.pose.x_m, se(c, 0), r.pose.y_m, se(c, 1),
-             rad2deg(r.pose.yaw_rad), rad2deg(se(c, 2)));
+    t += formatted("| %s in %s | %.4f +- %.4f | %.4f +- %.4f | %.2f +- %.2f |", r.sensor.c_str(),
+                   r.reference.c_str(), r.pose.x_m, se(c, 0), r.pose.y_m, se(c, 1),
+                   rad2deg(r.pose.yaw_rad), rad2deg(se(c, 2)));
     t += designCells(r.pose, r.design, c);
   }
   t += "\n| sensor | range model f(d) | noise | beams' repeating error (mm) | status "
@@ -186,11 +177,11 @@ std::string rigMountingTable(const io::RigModel& m) {
       const double sd = s.model.alpha_covariance.size() == n * n
                             ? std::sqrt(std::max(0.0, s.model.alpha_covariance[i * n + i]))
                             : 0.0;
-      f += row("%salpha_%zu %.5f +- %.5f", i ? ", " : "", i, a[i], sd);
+      f += formatted("%salpha_%zu %.5f +- %.5f", i ? ", " : "", i, a[i], sd);
     }
-    t += row("| %s | %s | %s | %.1f | %s |\n", s.name.c_str(), f.c_str(),
-             toString(s.model.model.noise.kind), 1000.0 * s.beam_scatter_m,
-             s.model.status.ok() ? "ok" : s.model.status.message.c_str());
+    t += formatted("| %s | %s | %s | %.1f | %s |\n", s.name.c_str(), f.c_str(),
+                   toString(s.model.model.noise.kind), 1000.0 * s.beam_scatter_m,
+                   s.model.status.ok() ? "ok" : s.model.status.message.c_str());
   }
   return t;
 }
@@ -204,14 +195,14 @@ std::string rigSnippets(const io::RigModel& m) {
     const double roll = s.mounting.upside_down ? M_PI : 0.0;
     // static_transform_publisher x y z yaw pitch roll parent child (ZYX Euler): roll pi turns the
     // sensor over about its x axis, which keeps the heading of that axis.
-    launch += row("rosrun tf2_ros static_transform_publisher %.4f %.4f %.4f %.5f 0 %.5f %s %s\n",
-                  s.mounting.x_m, s.mounting.y_m, z, s.mounting.yaw_rad, roll, parent.c_str(),
-                  child.c_str());
-    urdf +=
-        row("<joint name=\"%s_joint\" type=\"fixed\"><parent link=\"%s\"/><child link=\"%s\"/>"
-            "<origin xyz=\"%.4f %.4f %.4f\" rpy=\"%.5f 0 %.5f\"/></joint>\n",
-            child.c_str(), parent.c_str(), child.c_str(), s.mounting.x_m, s.mounting.y_m, z, roll,
-            s.mounting.yaw_rad);
+    launch += formatted(
+        "rosrun tf2_ros static_transform_publisher %.4f %.4f %.4f %.5f 0 %.5f %s %s\n",
+        s.mounting.x_m, s.mounting.y_m, z, s.mounting.yaw_rad, roll, parent.c_str(), child.c_str());
+    urdf += formatted(
+        "<joint name=\"%s_joint\" type=\"fixed\"><parent link=\"%s\"/><child link=\"%s\"/>"
+        "<origin xyz=\"%.4f %.4f %.4f\" rpy=\"%.5f 0 %.5f\"/></joint>\n",
+        child.c_str(), parent.c_str(), child.c_str(), s.mounting.x_m, s.mounting.y_m, z, roll,
+        s.mounting.yaw_rad);
   }
   return "tf_static with the estimated mountings (z from the design):\n" + refusedModelsCaution(m) +
          launch + urdf;

@@ -111,39 +111,34 @@ Pooled pool(const Groups& groups) {
   return gls(groups, tau2);
 }
 
+/// The F test of `statistic` on q and the pooled record's degrees of freedom.
+FTest fTest(double statistic, const Pooled& p) {
+  FTest t;
+  t.dof1 = kQ;
+  t.dof2 = p.nu;
+  t.statistic = statistic;
+  t.p = fTail(t.statistic, t.dof1, t.dof2);
+  return t;
+}
+
 }  // namespace
 
 FTest ShiftHistory::change(const Shift& now) const {
   const Pooled p = pool({&shifts_});
   const Eigen::Vector2d r = now.s - p.b[0];
-  FTest t;
-  t.dof1 = kQ;
-  t.dof2 = p.nu;
   const Eigen::Matrix2d c = now.c + p.tau2 * Eigen::Matrix2d::Identity() + p.v[0];
-  t.statistic = r.dot(c.inverse() * r) / (kQ * p.phi2);
-  t.p = fTail(t.statistic, t.dof1, t.dof2);
-  return t;
+  return fTest(r.dot(c.inverse() * r) / (kQ * p.phi2), p);
 }
 
 FTest ShiftHistory::absolute(const Eigen::Matrix2d& model_covariance) const {
   const Pooled p = pool({&shifts_});
-  FTest t;
-  t.dof1 = kQ;
-  t.dof2 = p.nu;
-  t.statistic = p.b[0].dot((p.phi2 * p.v[0] + model_covariance).inverse() * p.b[0]) / kQ;
-  t.p = fTail(t.statistic, t.dof1, t.dof2);
-  return t;
+  return fTest(p.b[0].dot((p.phi2 * p.v[0] + model_covariance).inverse() * p.b[0]) / kQ, p);
 }
 
 FTest ShiftHistory::sameMean(const ShiftHistory& earlier) const {
   const Pooled p = pool({&earlier.shifts_, &shifts_});
   const Eigen::Vector2d d = p.b[1] - p.b[0];
-  FTest t;
-  t.dof1 = kQ;
-  t.dof2 = p.nu;
-  t.statistic = d.dot((p.v[0] + p.v[1]).inverse() * d) / (kQ * p.phi2);
-  t.p = fTail(t.statistic, t.dof1, t.dof2);
-  return t;
+  return fTest(d.dot((p.v[0] + p.v[1]).inverse() * d) / (kQ * p.phi2), p);
 }
 
 Eigen::Vector2d ShiftHistory::mean() const { return pool({&shifts_}).b[0]; }

@@ -11,7 +11,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdarg>
 #include <cstdint>
 #include <cstdio>
 #include <random>
@@ -21,6 +20,7 @@
 #include <limits>
 #include <vector>
 
+#include "common/number_text.hpp"
 #include "common/rng.hpp"
 #include "diagnosis/static_scene.hpp"
 #include "simulation/landmark_level.hpp"
@@ -66,16 +66,6 @@ inline void giveIntensities(simulation::LandmarkLevelConfig& c, std::uint64_t ca
   for (auto& l : c.landmarks) l.intensity = std::exp(u(rng));
 }
 
-/// The drawn size in words, as printf formats it (at most 159 characters).
-[[gnu::format(printf, 1, 2)]] inline std::string formatSize(const char* format, ...) {
-  char buf[160];
-  va_list args;
-  va_start(args, format);
-  std::vsnprintf(buf, sizeof buf, format, args);
-  va_end(args);
-  return buf;
-}
-
 /// Per-landmark offsets with sigma 2-2.5 cm: a random pattern scaled to that RMS about its mean
 /// (the mean is a common offset, which the bias polynomial's alpha_0 takes).
 inline std::string hideLandmarkBias(simulation::LandmarkLevelConfig& c, std::mt19937_64& rng,
@@ -91,9 +81,9 @@ inline std::string hideLandmarkBias(simulation::LandmarkLevelConfig& c, std::mt1
   const double rms = std::sqrt(ss / static_cast<double>(c.landmarks.size()));
   const double common = 0.02 * (u(rng) - 0.5);  // and a common part, up to +-1 cm
   for (auto& l : c.landmarks) l.range_offset_m = common + (l.range_offset_m - mean) * sigma / rms;
-  return formatSize("offsets %.3f %.3f %.3f %.3f %.3f m", c.landmarks[0].range_offset_m,
-                    c.landmarks[1].range_offset_m, c.landmarks[2].range_offset_m,
-                    c.landmarks[3].range_offset_m, c.landmarks[4].range_offset_m);
+  return formatted("offsets %.3f %.3f %.3f %.3f %.3f m", c.landmarks[0].range_offset_m,
+                   c.landmarks[1].range_offset_m, c.landmarks[2].range_offset_m,
+                   c.landmarks[3].range_offset_m, c.landmarks[4].range_offset_m);
 }
 
 /// Noise growing as (I_ref / I)^delta on the landmarks' intensities (giveIntensities): delta 0.5
@@ -105,10 +95,10 @@ inline std::string hideDarkSurface(simulation::LandmarkLevelConfig& c, std::uint
   giveIntensities(c, case_seed);
   c.effects.dark_noise_exponent = 0.5 + 0.5 * u(rng);  // delta in [0.5, 1]
   c.effects.dark_reference_intensity = std::sqrt(15.0 * 250.0);
-  return formatSize("delta %.2f, intensities %.0f %.0f %.0f %.0f %.0f",
-                    c.effects.dark_noise_exponent, c.landmarks[0].intensity,
-                    c.landmarks[1].intensity, c.landmarks[2].intensity, c.landmarks[3].intensity,
-                    c.landmarks[4].intensity);
+  return formatted("delta %.2f, intensities %.0f %.0f %.0f %.0f %.0f",
+                   c.effects.dark_noise_exponent, c.landmarks[0].intensity,
+                   c.landmarks[1].intensity, c.landmarks[2].intensity, c.landmarks[3].intensity,
+                   c.landmarks[4].intensity);
 }
 
 /// The case `case_seed` of effect `effect` ("none" for clean data). Sizes: around the issue's
@@ -127,25 +117,25 @@ inline HiddenEffectCase hiddenEffectCase(const std::string& effect, std::uint64_
   } else if (effect == "incidence_noise") {
     // sigma (1 / cos phi)^gamma, gamma in [1, 1.5]
     c.effects.incidence_noise_exponent = 1.0 + 0.5 * u(rng);
-    h.size = formatSize("gamma %.2f", c.effects.incidence_noise_exponent);
+    h.size = formatted("gamma %.2f", c.effects.incidence_noise_exponent);
   } else if (effect == "incidence_bias") {
     c.effects.incidence_bias_m = sign * (0.02 + 0.02 * u(rng));  // 2-4 cm at grazing incidence
-    h.size = formatSize("b %.3f m", c.effects.incidence_bias_m);
+    h.size = formatted("b %.3f m", c.effects.incidence_bias_m);
   } else if (effect == "landmark_bias") {
     h.size = hideLandmarkBias(c, rng, u);
   } else if (effect == "heading_error") {
     c.path.sigma_psi_rad = deg2rad(1.0 + 0.5 * u(rng));  // per stop, 1-1.5 degrees
-    h.size = formatSize("sigma_psi %.2f deg", rad2deg(c.path.sigma_psi_rad));
+    h.size = formatted("sigma_psi %.2f deg", rad2deg(c.path.sigma_psi_rad));
   } else if (effect == "range_drift") {
     const double total = sign * (0.03 + 0.01 * u(rng));  // 3-4 cm over the sequence
     c.effects.range_drift_m_per_scan = total / (scans - 1.0);
-    h.size = formatSize("%.3f m over the sequence", total);
+    h.size = formatted("%.3f m over the sequence", total);
   } else if (effect == "mixed_pixels") {
     c.effects.mixed_pixel_fraction = 0.05 + 0.05 * u(rng);  // 5-10 % of the outermost beams
-    h.size = formatSize("fraction %.3f", c.effects.mixed_pixel_fraction);
+    h.size = formatted("fraction %.3f", c.effects.mixed_pixel_fraction);
   } else if (effect == "angle_offset") {
     c.mount_yaw_rad = sign * deg2rad(2.0 + u(rng));  // 2-3 degrees
-    h.size = formatSize("%.2f deg", rad2deg(c.mount_yaw_rad));
+    h.size = formatted("%.2f deg", rad2deg(c.mount_yaw_rad));
   } else if (effect == "range_noise_law") {
     // sigma = sigma_e f^k with k far from 2, the same noise at 3 m.
     const double k = u(rng) < 0.5 ? 0.5 + 0.5 * u(rng) : 3.0 + 0.5 * u(rng);
@@ -153,20 +143,20 @@ inline HiddenEffectCase hiddenEffectCase(const std::string& effect, std::uint64_
     c.model.noise.kind = NoiseKind::power;
     c.model.noise.exponent = k;
     c.model.noise.sigma_e = at3 / std::pow(c.model.bias(3.0), k);
-    h.size = formatSize("exponent %.2f", k);
+    h.size = formatted("exponent %.2f", k);
   } else if (effect == "odometry_scale") {
     c.path.step_error_fraction = sign * (0.03 + 0.02 * u(rng));  // true steps 3-5 % off
-    h.size = formatSize("step error %.3f", c.path.step_error_fraction);
+    h.size = formatted("step error %.3f", c.path.step_error_fraction);
   } else if (effect == "heavy_tails") {
     // Student t noise, 3-5 degrees of freedom (same variance)
     c.effects.noise_student_dof = 3.0 + 2.0 * u(rng);
-    h.size = formatSize("nu %.2f", c.effects.noise_student_dof);
+    h.size = formatted("nu %.2f", c.effects.noise_student_dof);
   } else if (effect == "quantisation") {
     // Readings rounded to 5, 10 or 20 mm (a sensor reporting whole centimetres: the SICK LMS
     // logs of CARMEN). The noise is 2 mm at 1 m and 2 cm at 3 m: the grid shows near the poles.
     const double grids[] = {0.005, 0.01, 0.02};
     c.effects.range_resolution_m = grids[std::min(2, static_cast<int>(3.0 * u(rng)))];
-    h.size = formatSize("grid %.0f mm", 1000.0 * c.effects.range_resolution_m);
+    h.size = formatted("grid %.0f mm", 1000.0 * c.effects.range_resolution_m);
   } else if (effect == "dark_surface") {
     h.size = hideDarkSurface(c, case_seed, rng, u);
   } else {
