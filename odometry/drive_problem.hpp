@@ -1,0 +1,45 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#pragma once
+// Internal to drive_fit.cpp: the drive's least-squares problem over a DriveState. One Ceres
+// problem holds a residual block per odometry step and per sighting (normalised by their
+// standard deviations, so that the cost is the negative log-likelihood up to a constant).
+// Pose 0 fixes the world frame and held parameters are constant.
+
+#include <memory>
+#include <vector>
+
+#include <ceres/ceres.h>
+
+#include "odometry/drive_fit.hpp"
+
+namespace lidarcal::odometry {
+
+class DriveProblem {
+ public:
+  /// Builds the problem over a copy of `state`.
+  DriveProblem(const DriveRecord& record, const DriveState& state, const DriveFitSetup& setup);
+
+  ceres::Problem& problem() { return *problem_; }
+  /// The free blocks in the order nuisance first (poses 1.., poles by id), then the estimated
+  /// calibrated quantities in their order; nuisanceColumns() counts the first part's columns.
+  const std::vector<double*>& freeBlocks() const { return free_blocks_; }
+  int nuisanceColumns() const { return nuisance_columns_; }
+  /// The estimated parameters' indices (0..7), in the order of freeBlocks()'s tail.
+  const std::vector<int>& estimatedIndices() const { return estimated_; }
+  /// The current values as a state.
+  DriveState state() const;
+
+ private:
+  void addSteps(const DriveRecord& record, const DriveFitSetup& setup);
+  void addSightings(const DriveRecord& record, const DriveFitSetup& setup);
+
+  std::vector<Eigen::Vector3d> poses_;
+  std::map<int, Eigen::Vector2d> poles_;
+  double globals_[kDriveParameterCount] = {};
+  std::unique_ptr<ceres::Problem> problem_;
+  std::vector<double*> free_blocks_;
+  int nuisance_columns_ = 0;
+  std::vector<int> estimated_;
+};
+
+}  // namespace lidarcal::odometry
