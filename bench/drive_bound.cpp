@@ -128,11 +128,19 @@ int main(int argc, char** argv) {
   app.add_option("--seeds", seeds, "simulated drives")->check(CLI::PositiveNumber);
   app.add_option("--first-seed", first_seed, "seed of the first drive");
   app.add_option("--laps", sim.laps, "times each drive goes round")->check(CLI::PositiveNumber);
+  double fov_deg = 360.0;
+  app.add_option("--fov", fov_deg, "the laser's field of view, degrees")
+      ->check(CLI::Range(10.0, 360.0));
+  app.add_option("--bearing-sigma", sim.noise.bearing_sigma_rad, "bearing noise, radians")
+      ->capture_default_str();
+  app.add_option("--range-sigma", sim.noise.range_sigma_m, "range noise, metres")
+      ->capture_default_str();
   app.add_option("--json", json_path, "write the tables here as JSON");
   std::string example;
   app.add_option("--write-example", example,
                  "write the first drive to DIR as odometry-drive's input, and stop");
   CLI11_PARSE(app, argc, argv);
+  sim.field_of_view_rad = fov_deg * 3.14159265358979323846 / 180.0;
   if (!example.empty()) {
     sim.seed = first_seed;
     writeExample(lidarcal::odometry::simulateDrive(sim), example);
@@ -152,6 +160,9 @@ int main(int argc, char** argv) {
   nlohmann::json out = {{"seeds", seeds},
                         {"first_seed", first_seed},
                         {"laps", sim.laps},
+                        {"field_of_view_deg", fov_deg},
+                        {"bearing_sigma_rad", sim.noise.bearing_sigma_rad},
+                        {"range_sigma_m", sim.noise.range_sigma_m},
                         {"joint", report(joint_tally, joint)},
                         {"range_held_exact", report(exact_tally, exact_range)}};
   print("joint fit (range offset estimated)", out["joint"]);

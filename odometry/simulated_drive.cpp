@@ -61,6 +61,7 @@ void sight(const DriveSimulation& s, const std::vector<Eigen::Vector3d>& poses,
       const Eigen::Vector2d seen = predictSighting(poses[k], s.poles[j], s.truth, s.pole_radius_m);
       const double surface = (seen[0] - s.truth.range_offset_m) / (1.0 + s.truth.range_scale);
       if (surface > s.max_range_m || surface <= 0.0) continue;
+      if (std::abs(seen[1]) > s.field_of_view_rad / 2.0) continue;
       record.sightings.push_back(
           {k, static_cast<int>(j), seen[0] + s.noise.range_sigma_m * normal(rng),
            std::remainder(seen[1] + s.noise.bearing_sigma_rad * normal(rng), 2.0 * kPi)});

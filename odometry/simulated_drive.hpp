@@ -25,9 +25,11 @@ struct DriveSimulation {
                                         {-1.5, 4.0}, {-2.0, -1.5}, {1.5, -2.5}};
   double pole_radius_m = 0.05;
   double max_range_m = 8.0;  ///< poles farther than this (to the surface) are not seen
-  double side_m = 3.0;       ///< the square's side
-  double speed_m_s = 0.3;    ///< commanded forward speed
-  double turn_rad_s = 0.8;   ///< commanded turn rate in place
+  /// the laser's field of view, centred on its x axis (2 pi: all round)
+  double field_of_view_rad = 2.0 * 3.14159265358979323846;
+  double side_m = 3.0;      ///< the square's side
+  double speed_m_s = 0.3;   ///< commanded forward speed
+  double turn_rad_s = 0.8;  ///< commanded turn rate in place
   double circle_radius_m = 1.0;
   double scan_period_s = 0.1;  ///< time between scans
   int laps = 1;                ///< times the square and the circles are driven

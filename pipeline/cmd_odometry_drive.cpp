@@ -25,6 +25,7 @@
 #include "pipeline/commands.hpp"
 #include "pipeline/papers.hpp"
 #include "pipeline/progress.hpp"
+#include "pipeline/shown_parameter.hpp"
 
 namespace lidarcal::pipeline {
 namespace {
@@ -38,13 +39,7 @@ struct DriveOptions {
   bool overwrite = false;
 };
 
-/// How each parameter is shown: its label, the unit and the factor from SI.
-struct Shown {
-  const char* label;
-  const char* unit;
-  double scale;
-};
-constexpr Shown kShown[odometry::kDriveParameterCount] = {
+constexpr ShownParameter kShown[odometry::kDriveParameterCount] = {
     {"left wheel radius r_L", "mm", 1e3},
     {"right wheel radius r_R", "mm", 1e3},
     {"axle b", "mm", 1e3},
