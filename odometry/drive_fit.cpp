@@ -97,8 +97,36 @@ std::vector<Eigen::Vector3d> deadReckoning(const DriveRecord& record,
   return poses;
 }
 
+namespace {
+
+/// The variance factor and the squared residuals by kind, at the solution.
+void summariseResiduals(const DriveRecord& record, const DriveFitSetup& setup,
+                        DriveProblem& problem, DriveFit& out) {
+  std::vector<double> r;
+  ceres::Problem::EvaluateOptions options;
+  options.num_threads = 1;
+  problem.problem().Evaluate(options, nullptr, &r, nullptr, nullptr);
+  for (std::size_t i = 0; i < r.size(); ++i)
+    out.squared_by_kind[residualKind(i, record.steps.size())] += r[i] * r[i];
+  double free = 3.0 * (record.scans() - 1) + 2.0 * out.state.poles.size();
+  for (bool e : setup.estimated) free += e ? 1.0 : 0.0;
+  const double dof = static_cast<double>(r.size()) - free;
+  out.variance_factor = dof > 0.0 ? out.squared_by_kind.sum() / dof : 0.0;
+}
+
+}  // namespace
+
 Vector8 DriveFit::standardErrors() const {
   return information.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
+}
+
+VarianceByKind varianceByKind(const DriveRecord& record, const DriveFitSetup& setup,
+                              const DriveFit& fit) {
+  VarianceByKind out;
+  out.redundancy = redundancyByKind(record, fit.state, setup);
+  for (int k = 0; k < 4; ++k)
+    out.factor[k] = out.redundancy[k] > 0.0 ? fit.squared_by_kind[k] / out.redundancy[k] : 0.0;
+  return out;
 }
 
 DriveFit fitDrive(const DriveRecord& record, const DriveFitSetup& setup) {
@@ -125,6 +153,7 @@ DriveFit fitDrive(const DriveRecord& record, const DriveFitSetup& setup) {
     return out;
   }
   out.state = problem.state();
+  summariseResiduals(record, setup, problem, out);
   out.information = driveInformation(record, out.state, setup);
   out.status = out.information.status;
   return out;

@@ -9,6 +9,7 @@
 // Censi et al. 2013 calibrate the same odometry and mounting assuming the laser's ranges are
 // exact; holding a_0 = a_1 = 0 here is that assumption.
 
+#include <cmath>
 #include <map>
 #include <vector>
 
@@ -65,13 +66,34 @@ struct DriveFit {
   int iterations = 0;
   /// half the sum of squared normalised residuals at the estimate
   double cost = 0.0;
+  /// the a-posteriori variance factor: squared normalised residuals over their degrees of
+  /// freedom (residuals minus free parameters); 1 in expectation when the stated noise is right
+  double variance_factor = 0.0;
+  /// squared normalised residuals summed by kind: odometry translation, odometry heading,
+  /// range, bearing
+  Eigen::Vector4d squared_by_kind = Eigen::Vector4d::Zero();
   bool ok() const { return status.ok(); }
-  Vector8 standardErrors() const;  ///< square roots of the covariance's diagonal
+  /// square roots of the covariance's diagonal: the spread the stated noise implies
+  Vector8 standardErrors() const;
+  /// the same with the noise scaled by the variance factor, as the data show it
+  Vector8 scaledStandardErrors() const { return standardErrors() * std::sqrt(variance_factor); }
 };
 
 /// The fit: dead reckoning with the initial parameters, poles placed from their sightings, then
 /// Gauss-Newton (Levenberg-Marquardt) over everything. Deterministic. Never throws on data.
 DriveFit fitDrive(const DriveRecord& record, const DriveFitSetup& setup);
+
+/// The variance factor of each kind of residual (odometry translation, odometry heading, range,
+/// bearing): its squared normalised residuals over its redundancy (Foerstner's redundancy
+/// numbers summed over its rows: rows minus the trace of the hat matrix over them; they sum to
+/// the degrees of freedom). Which stated noise is off, and by how much (the square root); a
+/// factor's relative SD is about sqrt(2 / redundancy). Costs a solve per residual row.
+struct VarianceByKind {
+  Eigen::Vector4d factor = Eigen::Vector4d::Zero();
+  Eigen::Vector4d redundancy = Eigen::Vector4d::Zero();
+};
+VarianceByKind varianceByKind(const DriveRecord& record, const DriveFitSetup& setup,
+                              const DriveFit& fit);
 
 /// Dead reckoning: the poses the wheels give for `params`, from the origin.
 std::vector<Eigen::Vector3d> deadReckoning(const DriveRecord& record,

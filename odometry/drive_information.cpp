@@ -24,18 +24,22 @@ namespace {
 /// taken as undetermined (double precision leaves about 1e-16 of the largest).
 constexpr double kSingularRatio = 1e-10;
 
-Eigen::SparseMatrix<double> normalMatrix(DriveProblem& problem) {
+/// The normalised residuals' Jacobian over the free blocks, rows in residual order.
+Eigen::SparseMatrix<double, Eigen::RowMajor> jacobianOf(DriveProblem& problem) {
   ceres::Problem::EvaluateOptions options;
   options.parameter_blocks = problem.freeBlocks();
   options.apply_loss_function = false;
   options.num_threads = 1;
   ceres::CRSMatrix jacobian;
   problem.problem().Evaluate(options, nullptr, nullptr, nullptr, &jacobian);
-  const Eigen::Map<const Eigen::SparseMatrix<double, Eigen::RowMajor>> j(
+  return Eigen::Map<const Eigen::SparseMatrix<double, Eigen::RowMajor>>(
       jacobian.num_rows, jacobian.num_cols, static_cast<int>(jacobian.values.size()),
       jacobian.rows.data(), jacobian.cols.data(), jacobian.values.data());
-  Eigen::SparseMatrix<double> jc = j;
-  return Eigen::SparseMatrix<double>(jc.transpose() * jc);
+}
+
+Eigen::SparseMatrix<double> normalMatrix(DriveProblem& problem) {
+  const Eigen::SparseMatrix<double> j = jacobianOf(problem);
+  return Eigen::SparseMatrix<double>(j.transpose() * j);
 }
 
 /// The reduced information of the estimated parameters at `state`, or nothing when the poses
@@ -90,6 +94,29 @@ std::vector<Vector8> nullDirections(const Eigen::MatrixXd& reduced,
 }
 
 }  // namespace
+
+int residualKind(std::size_t row, std::size_t steps) {
+  if (row < 3 * steps) return row % 3 == 2 ? 1 : 0;
+  return (row - 3 * steps) % 2 == 0 ? 2 : 3;
+}
+
+Eigen::Vector4d redundancyByKind(const DriveRecord& record, const DriveState& state,
+                                 const DriveFitSetup& setup) {
+  DriveProblem problem(record, state, setup);
+  const Eigen::SparseMatrix<double, Eigen::RowMajor> j = jacobianOf(problem);
+  const Eigen::SparseMatrix<double> normal = Eigen::SparseMatrix<double>(j.transpose() * j);
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(normal);
+  Eigen::Vector4d rows = Eigen::Vector4d::Zero(), leverage = Eigen::Vector4d::Zero();
+  if (ldlt.info() != Eigen::Success) return rows;
+  Eigen::VectorXd row(j.cols());
+  for (Eigen::Index i = 0; i < j.rows(); ++i) {
+    row = Eigen::VectorXd(j.row(i).transpose());
+    const int kind = residualKind(static_cast<std::size_t>(i), record.steps.size());
+    rows[kind] += 1.0;
+    leverage[kind] += row.dot(ldlt.solve(row));  // h_ii = j_i' (J'J)^-1 j_i
+  }
+  return rows - leverage;
+}
 
 DriveInformation driveInformation(const DriveRecord& record, const DriveState& state,
                                   const DriveFitSetup& setup) {

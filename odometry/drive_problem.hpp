@@ -14,6 +14,15 @@
 
 namespace lidarcal::odometry {
 
+/// The kind of residual row `row` (in the order DriveProblem adds them: 3 per step, then 2 per
+/// sighting): 0 odometry translation, 1 odometry heading, 2 range, 3 bearing.
+int residualKind(std::size_t row, std::size_t steps);
+
+/// Redundancy of each kind of residual at `state` (Foerstner's redundancy numbers summed by
+/// kind: rows minus the trace of the hat matrix over them), for the variance factor of each.
+Eigen::Vector4d redundancyByKind(const DriveRecord& record, const DriveState& state,
+                                 const DriveFitSetup& setup);
+
 class DriveProblem {
  public:
   /// Builds the problem over a copy of `state`.

@@ -104,24 +104,15 @@ std::string combinationText(const odometry::Vector8& d) {
   return text;
 }
 
-/// Sum of squared normalised residuals over their degrees of freedom (residuals minus free
-/// parameters): 1 in expectation when the stated noise is the drive's.
-double residualVariance(const odometry::DriveRecord& record, const odometry::DriveFitSetup& setup,
-                        const odometry::DriveFit& fit) {
-  const double residuals = 3.0 * record.steps.size() + 2.0 * record.sightings.size();
-  double free = 3.0 * (record.scans() - 1) + 2.0 * fit.state.poles.size();
-  for (bool estimated : setup.estimated) free += estimated ? 1.0 : 0.0;
-  return residuals > free ? 2.0 * fit.cost / (residuals - free) : 0.0;
-}
-
 nlohmann::json outputJson(const DriveOptions& o, const odometry::DriveRecord& record,
-                          const odometry::DriveFitSetup& setup, const odometry::DriveFit& fit) {
+                          const odometry::DriveFitSetup& setup, const odometry::DriveFit& fit,
+                          const odometry::VarianceByKind& by_kind) {
   nlohmann::json j;
   j["format"] = "lidarcal-odometry-drive/1";
   j["input"] = {{"wheels", o.wheels}, {"landmarks", o.landmarks}};
   j["method"] =
       "joint maximum likelihood over every pose and pole; covariance: the inverse "
-      "Fisher information with poses and poles eliminated";
+      "Fisher information with poses and poles eliminated, times the variance factor";
   j["noise"] = {{"range_sigma_m", o.noise.range_sigma_m},
                 {"bearing_sigma_rad", o.noise.bearing_sigma_rad},
                 {"slip_m_per_sqrt_m", o.noise.slip_m_per_sqrt_m},
@@ -130,36 +121,46 @@ nlohmann::json outputJson(const DriveOptions& o, const odometry::DriveRecord& re
                 {"sightings", record.sightings.size()},
                 {"pole_radius_m", record.pole_radius_m}};
   j["status"] = {{"code", fit.status.name()}, {"message", fit.status.message}};
-  const odometry::Vector8 value = fit.state.params.toVector(), se = fit.standardErrors();
-  nlohmann::json estimate, error, held = nlohmann::json::array();
+  const odometry::Vector8 value = fit.state.params.toVector(), se = fit.scaledStandardErrors(),
+                          stated = fit.standardErrors();
+  nlohmann::json estimate, error, error_stated, held = nlohmann::json::array();
   for (int i = 0; i < odometry::kDriveParameterCount; ++i) {
-    estimate[odometry::kDriveParameterNames[i]] = value[i];
-    error[odometry::kDriveParameterNames[i]] = setup.estimated[i] ? nlohmann::json(se[i]) : nullptr;
-    if (!setup.estimated[i]) held.push_back(odometry::kDriveParameterNames[i]);
+    const char* name = odometry::kDriveParameterNames[i];
+    estimate[name] = value[i];
+    error[name] = setup.estimated[i] ? nlohmann::json(se[i]) : nullptr;
+    error_stated[name] = setup.estimated[i] ? nlohmann::json(stated[i]) : nullptr;
+    if (!setup.estimated[i]) held.push_back(name);
   }
   j["estimate"] = estimate;
   j["standard_error"] = error;
+  j["standard_error_stated_noise"] = error_stated;
   j["held"] = held;
   nlohmann::json matrix = nlohmann::json::array();
   for (int a = 0; a < odometry::kDriveParameterCount; ++a) {
     nlohmann::json row = nlohmann::json::array();
     for (int b = 0; b < odometry::kDriveParameterCount; ++b)
-      row.push_back(fit.information.covariance(a, b));
+      row.push_back(fit.information.covariance(a, b) * fit.variance_factor);
     matrix.push_back(row);
   }
   j["covariance"] = {{"order", odometry::kDriveParameterNames}, {"matrix", matrix}};
-  j["normalised_residual_variance"] = residualVariance(record, setup, fit);
+  j["variance_factor"] = fit.variance_factor;
+  nlohmann::json kinds;
+  const char* names[] = {"odometry_translation", "odometry_heading", "range", "bearing"};
+  for (int k = 0; k < 4; ++k)
+    kinds[names[k]] = {{"variance_factor", by_kind.factor[k]},
+                       {"redundancy", by_kind.redundancy[k]}};
+  j["by_kind"] = kinds;
   return j;
 }
 
 void printResult(const odometry::DriveRecord& record, const odometry::DriveFitSetup& setup,
-                 const odometry::DriveFit& fit) {
+                 const odometry::DriveFit& fit, const odometry::VarianceByKind& by_kind) {
   std::printf("odometry, mounting and range from a drive of %s and %s (%s)\n\n",
               plural(record.scans(), "scan").c_str(),
               plural(record.sightings.size(), "pole sighting").c_str(),
               fit.iterations > 0 ? "joint maximum likelihood" : "not fitted");
   std::printf("| parameter | estimate | standard error | unit |\n|---|---|---|---|\n");
-  const odometry::Vector8 value = fit.state.params.toVector(), se = fit.standardErrors();
+  const odometry::Vector8 value = fit.state.params.toVector(), se = fit.scaledStandardErrors();
   for (int k = 0; k < odometry::kDriveParameterCount; ++k) {
     const double s = kShown[k].scale;
     if (setup.estimated[k])
@@ -168,8 +169,12 @@ void printResult(const odometry::DriveRecord& record, const odometry::DriveFitSe
     else
       std::printf("| %s | %.3f | held | %s |\n", kShown[k].label, value[k] * s, kShown[k].unit);
   }
-  std::printf("\nnormalised residual variance %.3f (near 1 when the stated noise is right)\n",
-              residualVariance(record, setup, fit));
+  std::printf(
+      "\nvariance factor %.3f: the residuals over the stated noise (near 1 when it is right; the "
+      "standard errors above include it)\nby kind: odometry %.2f (translation), %.2f (heading); "
+      "range %.2f; bearing %.2f\n",
+      fit.variance_factor, by_kind.factor[0], by_kind.factor[1], by_kind.factor[2],
+      by_kind.factor[3]);
 }
 
 void runOdometryDrive(const DriveOptions& o) {
@@ -187,8 +192,9 @@ void runOdometryDrive(const DriveOptions& o) {
                     "turns in place, curves both ways and straight lines among at least three "
                     "poles");
   }
-  io::writeTextAtomically(o.out, outputJson(o, record, setup, fit).dump(2) + "\n");
-  printResult(record, setup, fit);
+  const odometry::VarianceByKind by_kind = odometry::varianceByKind(record, setup, fit);
+  io::writeTextAtomically(o.out, outputJson(o, record, setup, fit, by_kind).dump(2) + "\n");
+  printResult(record, setup, fit, by_kind);
   if (!quiet()) std::fprintf(stderr, "odometry-drive calibration written to %s\n", o.out.c_str());
 }
 
