@@ -12,13 +12,13 @@ struct StepCost {
   double inv_translation = 1.0;
   double inv_heading = 1.0;
 
+  /// `wheels`: left radius, right radius, axle.
   template <typename T>
-  bool operator()(const T* from, const T* to, const T* left_radius, const T* right_radius,
-                  const T* axle, T* residual) const {
+  bool operator()(const T* from, const T* to, const T* wheels, T* residual) const {
     using std::cos;
     using std::sin;
     const Eigen::Matrix<T, 3, 1> arc =
-        robotDisplacement(*left_radius, *right_radius, *axle, step.left_rad, step.right_rad);
+        robotDisplacement(wheels[0], wheels[1], wheels[2], step.left_rad, step.right_rad);
     const T dx = to[0] - from[0], dy = to[1] - from[1];
     const T c = cos(from[2]), s = sin(from[2]);
     residual[0] = (c * dx + s * dy - arc[0]) * T(inv_translation);
@@ -35,22 +35,22 @@ struct SightingCost {
   double pole_radius_m;
   double inv_range, inv_bearing;
 
+  /// `mount`: laser x, y, heading; `range`: offset, scale.
   template <typename T>
-  bool operator()(const T* pose, const T* pole, const T* laser_x, const T* laser_y,
-                  const T* laser_theta, const T* offset, const T* scale, T* residual) const {
+  bool operator()(const T* pose, const T* pole, const T* mount, const T* range, T* residual) const {
     using std::atan2;
     using std::cos;
     using std::sin;
     using std::sqrt;
     const T c = cos(pose[2]), s = sin(pose[2]);
-    const T lx = pose[0] + c * *laser_x - s * *laser_y;  // laser origin, world frame
-    const T ly = pose[1] + s * *laser_x + c * *laser_y;
-    const T heading = pose[2] + *laser_theta;
+    const T lx = pose[0] + c * mount[0] - s * mount[1];  // laser origin, world frame
+    const T ly = pose[1] + s * mount[0] + c * mount[1];
+    const T heading = pose[2] + mount[2];
     const T ch = cos(heading), sh = sin(heading);
     const T wx = pole[0] - lx, wy = pole[1] - ly;
     const T px = ch * wx + sh * wy, py = -sh * wx + ch * wy;  // centre, laser frame
     const T distance = sqrt(px * px + py * py);
-    const T predicted = (distance - T(pole_radius_m)) * (T(1.0) + *scale) + *offset;
+    const T predicted = (distance - T(pole_radius_m)) * (T(1.0) + range[1]) + range[0];
     residual[0] = (T(range_m) - predicted) * T(inv_range);
     // the angle from the measured direction to the predicted one, through +-pi without a jump
     const T cross = T(bearing_cos) * py - T(bearing_sin) * px;
@@ -72,7 +72,7 @@ DriveProblem::DriveProblem(const DriveRecord& record, const DriveState& state,
   problem_ = std::make_unique<ceres::Problem>(options);
   addSteps(record, setup);
   addSightings(record, setup);
-  for (int i = 0; i < kDriveParameterCount; ++i) problem_->AddParameterBlock(&globals_[i], 1);
+  for (const Group& g : kGroups) problem_->AddParameterBlock(&globals_[g.first], g.size);
 
   problem_->SetParameterBlockConstant(poses_[0].data());
   for (std::size_t k = 1; k < poses_.size(); ++k) free_blocks_.push_back(poses_[k].data());
@@ -81,36 +81,44 @@ DriveProblem::DriveProblem(const DriveRecord& record, const DriveState& state,
   }
   nuisance_columns_ = 3 * static_cast<int>(poses_.size() - 1);
   nuisance_columns_ += 2 * static_cast<int>(free_blocks_.size() - (poses_.size() - 1));
-  for (int i = 0; i < kDriveParameterCount; ++i) {
-    if (setup.estimated[i]) {
-      free_blocks_.push_back(&globals_[i]);
-      estimated_.push_back(i);
-    } else {
-      problem_->SetParameterBlockConstant(&globals_[i]);
-    }
-  }
+  for (const Group& g : kGroups) holdWithin(g, setup.estimated);
 }
 
 void DriveProblem::addSteps(const DriveRecord& record, const DriveFitSetup& setup) {
   for (std::size_t k = 0; k < record.steps.size(); ++k) {
     const Eigen::Vector2d sigma = stepSigmas(record.steps[k], setup.noiseNominal(), setup.noise);
-    auto* cost = new ceres::AutoDiffCostFunction<StepCost, 3, 3, 3, 1, 1, 1>(
+    auto* cost = new ceres::AutoDiffCostFunction<StepCost, 3, 3, 3, 3>(
         new StepCost{record.steps[k], 1.0 / sigma[0], 1.0 / sigma[1]});
-    problem_->AddResidualBlock(cost, nullptr, poses_[k].data(), poses_[k + 1].data(), &globals_[0],
-                               &globals_[1], &globals_[2]);
+    problem_->AddResidualBlock(cost, nullptr, poses_[k].data(), poses_[k + 1].data(),
+                               &globals_[kWheels]);
   }
 }
 
 void DriveProblem::addSightings(const DriveRecord& record, const DriveFitSetup& setup) {
   for (const PoleSighting& s : record.sightings) {
-    auto* cost =
-        new ceres::AutoDiffCostFunction<SightingCost, 2, 3, 2, 1, 1, 1, 1, 1>(new SightingCost{
-            s.range_m, std::cos(s.bearing_rad), std::sin(s.bearing_rad), record.pole_radius_m,
-            1.0 / setup.noise.range_sigma_m, 1.0 / setup.noise.bearing_sigma_rad});
+    auto* cost = new ceres::AutoDiffCostFunction<SightingCost, 2, 3, 2, 3, 2>(new SightingCost{
+        s.range_m, std::cos(s.bearing_rad), std::sin(s.bearing_rad), record.pole_radius_m,
+        1.0 / setup.noise.range_sigma_m, 1.0 / setup.noise.bearing_sigma_rad});
     problem_->AddResidualBlock(cost, nullptr, poses_[s.scan].data(), poles_.at(s.pole).data(),
-                               &globals_[3], &globals_[4], &globals_[5], &globals_[6],
-                               &globals_[7]);
+                               &globals_[kMount], &globals_[kRange]);
   }
+}
+
+void DriveProblem::holdWithin(const Group& g, const EstimatedSet& estimated) {
+  double* block = &globals_[g.first];
+  std::vector<int> held;
+  for (int i = 0; i < g.size; ++i) {
+    if (estimated[g.first + i])
+      estimated_.push_back(g.first + i);  // its column: the block's tangent space keeps the order
+    else
+      held.push_back(i);
+  }
+  if (static_cast<int>(held.size()) == g.size) {
+    problem_->SetParameterBlockConstant(block);
+    return;
+  }
+  if (!held.empty()) problem_->SetManifold(block, new ceres::SubsetManifold(g.size, held));
+  free_blocks_.push_back(block);
 }
 
 DriveState DriveProblem::state() const {

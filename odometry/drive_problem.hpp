@@ -39,6 +39,14 @@ class DriveProblem {
   DriveState state() const;
 
  private:
+  /// The calibrated quantities in three parameter blocks: wheels (r_L, r_R, b), mounting
+  /// (l_x, l_y, l_theta), range (a_0, a_1); a held quantity is a constant part of its block.
+  struct Group {
+    int first, size;
+  };
+  static constexpr int kWheels = 0, kMount = 3, kRange = 6;
+  static constexpr Group kGroups[] = {{kWheels, 3}, {kMount, 3}, {kRange, 2}};
+  void holdWithin(const Group& g, const EstimatedSet& estimated);
   void addSteps(const DriveRecord& record, const DriveFitSetup& setup);
   void addSightings(const DriveRecord& record, const DriveFitSetup& setup);
 
