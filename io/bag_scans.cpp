@@ -110,6 +110,16 @@ std::vector<std::string> poseTopics(const fs::path& file, const std::vector<BagT
   return read;
 }
 
+void checkWheelTopic(const fs::path& file, const std::vector<BagTopic>& topics,
+                     const WheelJoints& joints, const BagFlavour& flavour) {
+  const BagTopic* t = findTopic(topics, joints.topic);
+  if (!t || t->datatype != flavour.joint_type)
+    throw InputError(
+        file.string(), "--wheels " + joints.topic,
+        !t ? "no such topic in the bag" : "carries " + t->datatype + ", not " + flavour.joint_type,
+        "`lidarcal import --list-topics BAG` lists the topics and their types");
+}
+
 void fillRawScan(const LaserScanView& msg, const RosbagConfig& config, RawScan& scan) {
   const std::size_t n = msg.count;
   scan.ranges_m.assign(msg.ranges, msg.ranges + n);

@@ -15,6 +15,7 @@
 
 #include "io/import.hpp"
 #include "io/pose_track.hpp"
+#include "io/wheel_track.hpp"
 
 namespace lidarcal::io {
 
@@ -59,6 +60,7 @@ struct RosbagConfig {
   /// overrides each message's range_max, metres; default: the message's
   std::optional<double> range_max_m;
   BagPoseConfig pose;  ///< VIEWPOINT source; default identity
+  WheelJoints wheels;  ///< the wheels' joint states to look up at each scan; default none
 
   /// Throws InputError when the limits are inconsistent.
   void validate() const;
@@ -66,15 +68,21 @@ struct RosbagConfig {
 
 /// The names one bag flavour uses (ROS1 or ROS 2), for choosing topics and for messages.
 struct BagFlavour {
-  const char* from;       ///< the --from value: rosbag1 or rosbag2
-  const char* label;      ///< for sensor_name: ROS1 or ROS 2
-  const char* scan_type;  ///< sensor_msgs/LaserScan or sensor_msgs/msg/LaserScan
-  const char* odom_type;  ///< nav_msgs/Odometry or nav_msgs/msg/Odometry
+  const char* from;        ///< the --from value: rosbag1 or rosbag2
+  const char* label;       ///< for sensor_name: ROS1 or ROS 2
+  const char* scan_type;   ///< sensor_msgs/LaserScan or sensor_msgs/msg/LaserScan
+  const char* odom_type;   ///< nav_msgs/Odometry or nav_msgs/msg/Odometry
+  const char* joint_type;  ///< sensor_msgs/JointState or sensor_msgs/msg/JointState
 };
 inline constexpr BagFlavour kRos1Flavour{"rosbag1", "ROS1", "sensor_msgs/LaserScan",
-                                         "nav_msgs/Odometry"};
+                                         "nav_msgs/Odometry", "sensor_msgs/JointState"};
 inline constexpr BagFlavour kRos2Flavour{"rosbag2", "ROS 2", "sensor_msgs/msg/LaserScan",
-                                         "nav_msgs/msg/Odometry"};
+                                         "nav_msgs/msg/Odometry", "sensor_msgs/msg/JointState"};
+
+/// Checks that the bag has `joints.topic` with `flavour`'s JointState type; throws InputError
+/// naming the option otherwise.
+void checkWheelTopic(const std::filesystem::path& file, const std::vector<BagTopic>& topics,
+                     const WheelJoints& joints, const BagFlavour& flavour);
 
 /// The LaserScan topic to read: `wanted`, checked, or the bag's only LaserScan topic. Throws
 /// InputError naming the LaserScan topics when there is none, several or `wanted` is not one.

@@ -9,6 +9,7 @@
 #include <functional>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <optional>
@@ -39,6 +40,9 @@ struct RawScan {
   /// the vehicle (tf, tf_static; unset when they do not connect), and the frames themselves.
   std::optional<Pose2> vehicle_pose;
   std::optional<Mounting> mounting;
+  /// each wheel's angle (left, right, radians) at this scan's stamp (bags read with --wheels;
+  /// unset otherwise, and for a scan outside the recorded joint states)
+  std::optional<std::pair<double, double>> wheel_angles_rad;
   std::string frame_id;       ///< the scan's frame (bags; empty otherwise)
   std::string vehicle_frame;  ///< the vehicle frame the mounting is in (rig import)
 };

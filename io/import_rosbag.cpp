@@ -13,6 +13,7 @@
 #include <nav_msgs/Odometry.h>
 #include <rosbag/bag.h>
 #include <rosbag/view.h>
+#include <sensor_msgs/JointState.h>
 #include <sensor_msgs/LaserScan.h>
 #include <tf2_msgs/TFMessage.h>
 
@@ -91,6 +92,18 @@ void readPoses(const rosbag::Bag& bag, const fs::path& file, const std::vector<B
   poses.checkFilled(file);
 }
 
+/// The wheels' angles from the JointState topic --wheels names.
+void readWheels(const rosbag::Bag& bag, const fs::path& file, const std::vector<BagTopic>& topics,
+                const WheelJoints& joints, WheelTrack& track) {
+  if (!joints.enabled()) return;
+  checkWheelTopic(file, topics, joints, kRos1Flavour);
+  for (const rosbag::MessageInstance& m : rosbag::View(bag, rosbag::TopicQuery(joints.topic))) {
+    const sensor_msgs::JointState::ConstPtr j = m.instantiate<sensor_msgs::JointState>();
+    if (j) track.addMessage(j->header.stamp.toSec(), j->name, j->position, joints);
+  }
+  track.checkFilled(file, joints);
+}
+
 }  // namespace
 
 bool rosbagSupported() { return true; }
@@ -126,6 +139,8 @@ ImportReport readRosbag(const fs::path& file, const RosbagConfig& config,
     for (const BagTopic& t : topics)
       if (t.topic != topic) report.other_records += t.messages;
     readPoses(bag, file, topics, config.pose, poses);
+    WheelTrack wheels;
+    readWheels(bag, file, topics, config.wheels, wheels);
     RawScan scan;  // pose: the identity unless config.pose names a source
     for (const rosbag::MessageInstance& m : view) {
       const sensor_msgs::LaserScan::ConstPtr msg = m.instantiate<sensor_msgs::LaserScan>();
@@ -135,6 +150,7 @@ ImportReport readRosbag(const fs::path& file, const RosbagConfig& config,
             "is not a " + std::string(kLaserScanType) + " (type " + m.getDataType() + ")",
             "choose another topic");
       fillRawScan(ros1ScanView(*msg), config, scan);
+      scan.wheel_angles_rad = wheels.at(scan.stamp_s);
       if (report.sensor_name.empty())
         report.sensor_name =
             "ROS1 " + std::string(kLaserScanType) + " on " + topic +

@@ -67,6 +67,23 @@ void readPoses(const Rosbag2& bag, const fs::path& file, const BagPoseConfig& co
   poses.checkFilled(file);
 }
 
+/// The wheels' angles from the JointState topic --wheels names (sensor_msgs/msg/JointState).
+void readWheels(const Rosbag2& bag, const fs::path& file, const WheelJoints& joints,
+                WheelTrack& track) {
+  if (!joints.enabled()) return;
+  checkWheelTopic(file, bag.bagTopics(), joints, kRos2Flavour);
+  requireCdr(file, bag, joints.topic);
+  std::size_t index = 0;
+  Ros2JointState msg;
+  bag.forEach({joints.topic}, [&](const Rosbag2Message& m) {
+    decodeOrExplain(file, joints.topic, index++, kRos2Flavour.joint_type,
+                    [&] { decodeJointState(m.data, m.size, msg); });
+    track.addMessage(msg.stamp_s, msg.name, msg.position, joints);
+    return true;
+  });
+  track.checkFilled(file, joints);
+}
+
 }  // namespace
 
 std::vector<BagTopic> listRosbag2Topics(const fs::path& bag) { return Rosbag2(bag).bagTopics(); }
@@ -82,6 +99,8 @@ ImportReport readRosbag2(const fs::path& file, const RosbagConfig& config,
     if (t.topic.topic != topic) report.other_records += t.topic.messages;
   BagPoses poses(config.pose);
   readPoses(bag, file, config.pose, poses);
+  WheelTrack wheels;
+  readWheels(bag, file, config.wheels, wheels);
   BagScanSink sink(config.pose, poses, on_scan, report);
   const std::size_t total = topicOf(bag, topic).topic.messages;
   Ros2LaserScan msg;  // reused: its vectors keep their capacity
@@ -91,6 +110,7 @@ ImportReport readRosbag2(const fs::path& file, const RosbagConfig& config,
     decodeOrExplain(file, topic, index, kRos2Flavour.scan_type,
                     [&] { decodeLaserScan(m.data, m.size, msg); });
     fillRawScan(msg.view(), config, scan);
+    scan.wheel_angles_rad = wheels.at(scan.stamp_s);
     if (report.sensor_name.empty())
       report.sensor_name = std::string(kRos2Flavour.label) + " " + kRos2Flavour.scan_type + " on " +
                            topic + (msg.frame_id.empty() ? "" : " (frame " + msg.frame_id + ")");

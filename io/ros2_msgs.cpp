@@ -86,6 +86,16 @@ Ros2StampedTransform decodeOdometry(const std::uint8_t* data, std::size_t size) 
   return o;
 }
 
+void decodeJointState(const std::uint8_t* data, std::size_t size, Ros2JointState& out) {
+  CdrReader in(data, size);
+  std::string frame_id;
+  out.stamp_s = readHeader(in, frame_id);
+  out.name.resize(in.count(5));  // a string: its 4-byte length and at least the NUL
+  for (std::string& n : out.name) n = in.str();
+  out.position.resize(in.count(8));
+  for (double& p : out.position) p = in.f64();
+}
+
 std::vector<Ros2StampedTransform> decodeTfMessage(const std::uint8_t* data, std::size_t size) {
   CdrReader in(data, size);
   // A TransformStamped holds at least 4 + 4 + 4 + 4 bytes before its 56 bytes of float64.

@@ -47,6 +47,15 @@ struct Ros2StampedTransform {
 /// nav_msgs/msg/Odometry: header, child_frame_id and pose.pose (the covariance and twist are not
 /// read).
 Ros2StampedTransform decodeOdometry(const std::uint8_t* data, std::size_t size);
+/// sensor_msgs/msg/JointState: the stamp, the joints' names and positions (velocity and effort
+/// are not read).
+struct Ros2JointState {
+  double stamp_s = 0.0;
+  std::vector<std::string> name;
+  std::vector<double> position;
+};
+/// Decodes into `out` (its vectors are reused).
+void decodeJointState(const std::uint8_t* data, std::size_t size, Ros2JointState& out);
 /// tf2_msgs/msg/TFMessage: sequence<geometry_msgs/msg/TransformStamped>.
 std::vector<Ros2StampedTransform> decodeTfMessage(const std::uint8_t* data, std::size_t size);
 

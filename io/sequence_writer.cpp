@@ -54,6 +54,8 @@ bool SequenceWriter::add(const RawScan& raw) {
   summary_.max_beams = std::max(summary_.max_beams, n);
   summary_.points += n;
   if (has_intensity) ++summary_.with_intensity;
+  if (raw.wheel_angles_rad)
+    wheels_.push_back({scratch_.name, raw.wheel_angles_rad->first, raw.wheel_angles_rad->second});
   summary_.range_min_m = std::min(summary_.range_min_m, raw.range_min_m);
   summary_.range_max_m = std::max(summary_.range_max_m, raw.range_max_m);
   ++summary_.written;
@@ -75,6 +77,8 @@ SequenceWriteSummary SequenceWriter::commit(const std::string& sensor_name) {
     meta.beams = static_cast<int>(summary_.max_beams);
   meta.stop_starts = stop_starts_;
   writeSequenceMeta(dir_.path() / "sequence.json", meta);
+  summary_.with_wheels = wheels_.size();
+  if (!wheels_.empty()) writeWheelAnglesCsv(dir_.path() / "wheel_angles.csv", wheels_);
   dir_.commit();
   return summary_;
 }

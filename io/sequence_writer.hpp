@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // The streaming sink of every importer: writes scan_NNNNNN.pcd files one at a time into a
-// staged output directory and, at commit(), sequence.json (sensor name, range limits, beams).
+// staged output directory and, at commit(), sequence.json (sensor name, range limits, beams)
+// and, when the scans carry the wheels' angles, wheel_angles.csv.
 // Nothing appears at the output path until commit(); a failed import leaves nothing behind.
 
 #include <cstddef>
@@ -12,6 +13,7 @@
 #include "io/atomic_file.hpp"
 #include "io/import.hpp"
 #include "io/pcd_scan.hpp"
+#include "io/wheel_angles_csv.hpp"
 
 namespace lidarcal::io {
 
@@ -44,6 +46,8 @@ struct SequenceWriteSummary {
   double range_min_m = 0.0;
   /// upper range limit recorded (largest over the scans; inf when unbounded: then not recorded)
   double range_max_m = 0.0;
+  /// written scans with the wheels' angles (rows of wheel_angles.csv; 0: no file written)
+  std::size_t with_wheels = 0;
 };
 
 class SequenceWriter {
@@ -74,6 +78,7 @@ class SequenceWriter {
   Scan scratch_;                          // reused for every scan: memory stays that of one scan
   bool start_next_ = false;               // startStop() called since the last scan written
   std::vector<std::string> stop_starts_;  // names of the scans that begin a stop (startStop)
+  std::vector<WheelAngleRow> wheels_;     // rows of wheel_angles.csv, one per scan with wheels
 };
 
 }  // namespace lidarcal::io

@@ -66,18 +66,28 @@ void arcFactors(const T& a, T& sin_over_a, T& one_minus_cos_over_a) {
   one_minus_cos_over_a = T(2.0) * half_sin * half_sin / a;  // 1 - cos a without cancellation
 }
 
-/// The robot's displacement over `sample` (x forward, y left, theta; robot frame at the
-/// interval's start) for wheel radii and axle in metres.
+/// The robot's displacement (x forward, y left, theta; robot frame at the start) when its left
+/// and right wheels turn by `left_turn_rad` and `right_turn_rad`, for wheel radii and axle in
+/// metres.
 template <typename T>
 Eigen::Matrix<T, 3, 1> robotDisplacement(const T& left_radius, const T& right_radius, const T& axle,
-                                         const OdometrySample& sample) {
-  const T left = left_radius * T(sample.left_wheel_rad_s * sample.duration_s);     // r_L phi_L T
-  const T right = right_radius * T(sample.right_wheel_rad_s * sample.duration_s);  // r_R phi_R T
-  const T distance = (left + right) / T(2.0);                                      // v T
-  const T turn = (right - left) / axle;                                            // omega T
+                                         double left_turn_rad, double right_turn_rad) {
+  const T left = left_radius * T(left_turn_rad);     // r_L phi_L T
+  const T right = right_radius * T(right_turn_rad);  // r_R phi_R T
+  const T distance = (left + right) / T(2.0);        // v T
+  const T turn = (right - left) / axle;              // omega T
   T sin_over, cos_over;
   arcFactors(turn, sin_over, cos_over);
   return {distance * sin_over, distance * cos_over, turn};
+}
+
+/// The robot's displacement over `sample` (robot frame at the interval's start).
+template <typename T>
+Eigen::Matrix<T, 3, 1> robotDisplacement(const T& left_radius, const T& right_radius, const T& axle,
+                                         const OdometrySample& sample) {
+  return robotDisplacement(left_radius, right_radius, axle,
+                           sample.left_wheel_rad_s * sample.duration_s,
+                           sample.right_wheel_rad_s * sample.duration_s);
 }
 
 /// The laser displacement the parameters predict for `sample`, (-)l (+) r (+) l, in the

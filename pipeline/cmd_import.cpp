@@ -41,6 +41,7 @@ struct ImportOptions {
   double still_deg = rad2deg(io::BagPoseConfig{}.still_rad);
   std::string sensor_names;            // rig: one per topic
   std::string vehicle_frame = "auto";  // rig: the frame the mountings are in
+  std::string wheels;                  // TOPIC:LEFT,RIGHT
 };
 
 /// rosbag1/rosbag2 --pose odom:TOPIC | tf:FRAME.
@@ -128,6 +129,9 @@ void printImportSummary(const ImportOptions& o, const ImportResult& r, ImportFor
       "limits\n",
       w.returns, w.points, w.no_return, w.outside_limits);
   std::printf("  scans with intensity: %zu\n", w.with_intensity);
+  if (!o.wheels.empty())
+    std::printf("  wheel angles: %zu of %zu scans (wheel_angles.csv%s)\n", w.with_wheels, w.written,
+                w.with_wheels < w.written ? "; the others lie outside the joint states" : "");
   if (r.read.other_records) std::printf("  other records ignored: %zu\n", r.read.other_records);
   if (r.read.stopped_early) std::printf("  stopped after --max-scans %zu\n", o.max_scans);
   for (const auto& note : r.read.notes) std::printf("  %s\n", note.c_str());
@@ -151,6 +155,12 @@ void runImport(const ImportOptions& o, const CLI::App& sub) {
   s.writer.overwrite = o.overwrite;
   s.writer.encoding = o.ascii ? io::PcdEncoding::ascii : io::PcdEncoding::binary;
   applyPoseOptions(o, sub, s);
+  if (sub.count("--wheels")) {
+    if (!isBag(s.format))
+      throw InputError("", "--wheels", "applies to --from rosbag1 and rosbag2 only",
+                       "write wheel_angles.csv yourself for other recordings (docs/FORMAT.md)");
+    s.wheels = io::WheelJoints::parse(o.wheels, "--wheels");
+  }
   if (sub.count("--range-min")) s.range_min_m = o.range_min_m;
   if (sub.count("--range-max")) s.range_max_m = o.range_max_m;
   s.sensor_name = o.sensor_name;
@@ -220,6 +230,9 @@ void addImportCommand(CLI::App& app) {
                   "(default auto: the frame below the first /tf link above each scan frame, e.g. "
                   "base_footprint)")
       ->capture_default_str();
+  sub->add_option("--wheels", o->wheels,
+                  "rosbag1/rosbag2: TOPIC:LEFT_JOINT,RIGHT_JOINT of sensor_msgs/JointState; each "
+                  "wheel's angle at each scan goes to SEQ/wheel_angles.csv (for odometry-drive)");
   sub->add_flag("--list-topics", o->list_topics, "rosbag1/rosbag2: list the bag's topics and exit");
   sub->add_option("--every", o->every, "Keep every N-th scan")
       ->check(CLI::PositiveNumber)

@@ -24,6 +24,7 @@
 #include "pipeline/commands.hpp"
 #include "pipeline/papers.hpp"
 #include "pipeline/progress.hpp"
+#include "pipeline/shown_parameter.hpp"
 
 namespace lidarcal::pipeline {
 namespace {
@@ -36,18 +37,13 @@ struct OdometryOptions {
   bool overwrite = false;
 };
 
-/// How each parameter is shown: its name in the table, the unit and the factor from SI.
-struct Shown {
-  const char* label;
-  const char* unit;
-  double scale;
-};
-constexpr Shown kShown[odometry::kParameterCount] = {{"left wheel radius r_L", "mm", 1e3},
-                                                     {"right wheel radius r_R", "mm", 1e3},
-                                                     {"axle b", "mm", 1e3},
-                                                     {"laser x l_x", "mm", 1e3},
-                                                     {"laser y l_y", "mm", 1e3},
-                                                     {"laser heading l_theta", "deg", 180.0 / kPi}};
+constexpr ShownParameter kShown[odometry::kParameterCount] = {
+    {"left wheel radius r_L", "mm", 1e3},
+    {"right wheel radius r_R", "mm", 1e3},
+    {"axle b", "mm", 1e3},
+    {"laser x l_x", "mm", 1e3},
+    {"laser y l_y", "mm", 1e3},
+    {"laser heading l_theta", "deg", 180.0 / kPi}};
 
 /// What to record when the data cannot determine the parameters.
 std::string whatToRecord(StatusCode code) {

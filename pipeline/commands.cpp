@@ -26,6 +26,7 @@ void registerCommands(CLI::App& app) {
   addFleetCommand(app);
   addWatchCommand(app);
   addOdometryCommand(app);
+  addOdometryDriveCommand(app);
 }
 
 std::filesystem::path dataDir() {

@@ -45,6 +45,9 @@ void addWatchCommand(CLI::App& app);
 /// `lidarcal odometry` (pipeline/cmd_odometry.cpp): wheel radii, axle and the laser's mounting
 /// from odometry tuples (Censi et al. 2013).
 void addOdometryCommand(CLI::App& app);
+/// `lidarcal odometry-drive` (pipeline/cmd_odometry_drive.cpp): odometry, mounting and range
+/// offset in one fit over a drive among poles.
+void addOdometryDriveCommand(CLI::App& app);
 
 /// Directory of the bundled data (scenes, example): $LIDARCAL_DATA_DIR, the source tree's
 /// data/ for a build tree, or the installed share/lidarcal.

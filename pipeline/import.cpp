@@ -51,6 +51,7 @@ io::ImportReport readRecording(const ImportSettings& s, const std::filesystem::p
       c.range_min_m = s.range_min_m;
       c.range_max_m = s.range_max_m;
       c.pose = s.bag_pose;
+      c.wheels = s.wheels;
       return s.format == ImportFormat::rosbag1 ? io::readRosbag(input, c, on_scan)
                                                : io::readRosbag2(input, c, on_scan);
     }

@@ -33,7 +33,8 @@ struct ImportSettings {
   io::SequenceWriterConfig writer;  ///< --every, --max-scans, --overwrite, encoding
   std::string topic;                ///< rosbag1/rosbag2: LaserScan topic; empty = the only one
   io::CarmenPose carmen_pose = io::CarmenPose::corrected;  ///< carmen: pose written to VIEWPOINT
-  io::BagPoseConfig bag_pose;         ///< rosbag1/rosbag2: VIEWPOINT source (default: identity)
+  io::BagPoseConfig bag_pose;  ///< rosbag1/rosbag2: VIEWPOINT source (default: identity)
+  io::WheelJoints wheels;      ///< rosbag1/rosbag2: the wheels' joint states (wheel_angles.csv)
   std::optional<double> range_min_m;  ///< overrides the format's lower range limit, metres
   std::optional<double> range_max_m;  ///< overrides the format's upper range limit, metres
   std::string sensor_name;  ///< sensor_name for sequence.json; empty = what the input says

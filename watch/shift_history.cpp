@@ -142,11 +142,5 @@ FTest ShiftHistory::sameMean(const ShiftHistory& earlier) const {
 }
 
 Eigen::Vector2d ShiftHistory::mean() const { return pool({&shifts_}).b[0]; }
-Eigen::Matrix2d ShiftHistory::meanCovariance() const {
-  const Pooled p = pool({&shifts_});
-  return p.phi2 * p.v[0];
-}
-double ShiftHistory::scale() const { return pool({&shifts_}).phi2; }
-double ShiftHistory::spread() const { return pool({&shifts_}).tau2; }
 
 }  // namespace lidarcal::watch

@@ -62,13 +62,8 @@ class ShiftHistory {
   /// The test that this record's checks have the mean of `earlier`'s (the same fits over other
   /// stretches); needs at least three checks in the two.
   FTest sameMean(const ShiftHistory& earlier) const;
-  /// The estimated mean shift b^ and its covariance phi^2^ V_b (the fit's scale applied).
+  /// The estimated mean shift b^.
   Eigen::Vector2d mean() const;
-  Eigen::Matrix2d meanCovariance() const;
-  /// phi^2^: the checks' scatter over what the fits state and tau^2 (1: as stated).
-  double scale() const;
-  /// tau^2^: the spread between checks beyond their fits' own, m^2.
-  double spread() const;
 
  private:
   std::size_t capacity_;

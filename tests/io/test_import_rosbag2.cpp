@@ -485,7 +485,7 @@ TEST(Rosbag2BadInput, EveryTruncationAndRandomByteChangesAreResultsOrInputErrors
   auto attempt = [&](const std::string& bytes) {
     test::writeFile(file, bytes);
     try {
-      readRosbag2(file, RosbagConfig{"/scan", {}, {}, {}},
+      readRosbag2(file, RosbagConfig{"/scan", {}, {}, {}, {}},
                   [](const RawScan& s) { return s.angles_rad.size() == s.ranges_m.size(); });
     } catch (const InputError&) {
     }
