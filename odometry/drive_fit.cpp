@@ -2,6 +2,7 @@
 #include "odometry/drive_fit.hpp"
 
 #include <cmath>
+#include <utility>
 
 #include "common/pose2.hpp"
 #include "odometry/drive_problem.hpp"
@@ -135,6 +136,13 @@ DriveFit fitDrive(const DriveRecord& record, const DriveFitSetup& setup) {
   if (!out.status.ok()) return out;
   DriveState start{setup.initial, deadReckoning(record, setup.initial.odometry), {}};
   start.poles = placePoles(record, start.poses, setup.initial);
+  // a drive that cannot separate the parameters is refused before the fit
+  if (DriveInformation first = separability(record, start, setup); !first.status.ok()) {
+    out.state = start;
+    out.information = std::move(first);
+    out.status = out.information.status;
+    return out;
+  }
   DriveProblem problem(record, start, setup);
   ceres::Solver::Options options;
   options.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;

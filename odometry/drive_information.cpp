@@ -118,35 +118,56 @@ Eigen::Vector4d redundancyByKind(const DriveRecord& record, const DriveState& st
   return rows - leverage;
 }
 
-DriveInformation driveInformation(const DriveRecord& record, const DriveState& state,
-                                  const DriveFitSetup& setup) {
-  DriveInformation out;
+namespace {
+
+const char* const kUntied =
+    "the poses and poles are not determined by the steps and sightings (a pole or a stretch of "
+    "the drive is not tied to the rest)";
+const char* const kInseparable =
+    "the drive leaves a combination of the estimated parameters undetermined: hold one of them at "
+    "a measured value, or drive turns and straight lines among the poles";
+
+std::vector<int> estimatedIndices(const DriveFitSetup& setup) {
   std::vector<int> estimated;
   for (int i = 0; i < kDriveParameterCount; ++i)
     if (setup.estimated[i]) estimated.push_back(i);
+  return estimated;
+}
+
+}  // namespace
+
+DriveInformation separability(const DriveRecord& record, const DriveState& state,
+                              const DriveFitSetup& setup) {
+  DriveInformation out;
   const auto [clean_record, clean_state] = noiseFree(record, state);
   const std::optional<Eigen::MatrixXd> clean = reducedInformation(clean_record, clean_state, setup);
+  if (!clean) {
+    out.status = {StatusCode::not_identifiable, kUntied};
+    return out;
+  }
+  out.inseparable = nullDirections(*clean, estimatedIndices(setup));
+  if (!out.inseparable.empty()) out.status = {StatusCode::not_identifiable, kInseparable};
+  return out;
+}
+
+DriveInformation driveInformation(const DriveRecord& record, const DriveState& state,
+                                  const DriveFitSetup& setup) {
+  DriveInformation out = separability(record, state, setup);
+  if (!out.status.ok()) return out;
   const std::optional<Eigen::MatrixXd> reduced = reducedInformation(record, state, setup);
-  if (!clean || !reduced) {
-    out.status = {StatusCode::not_identifiable,
-                  "the poses and poles are not determined by the steps and sightings (a pole "
-                  "or a stretch of the drive is not tied to the rest)"};
+  if (!reduced) {
+    out.status = {StatusCode::not_identifiable, kUntied};
     return out;
   }
+  const std::vector<int> estimated = estimatedIndices(setup);
   const int g = static_cast<int>(estimated.size());
-  for (int a = 0; a < g; ++a)
-    for (int b = 0; b < g; ++b) out.information(estimated[a], estimated[b]) = (*reduced)(a, b);
-  out.inseparable = nullDirections(*clean, estimated);
-  if (!out.inseparable.empty()) {
-    out.status = {StatusCode::not_identifiable,
-                  "the drive leaves a combination of the estimated parameters undetermined: hold "
-                  "one of them at a measured value, or drive turns and straight lines among "
-                  "the poles"};
-    return out;
-  }
   const Eigen::MatrixXd inverse = reduced->ldlt().solve(Eigen::MatrixXd::Identity(g, g));
-  for (int a = 0; a < g; ++a)
-    for (int b = 0; b < g; ++b) out.covariance(estimated[a], estimated[b]) = inverse(a, b);
+  for (int a = 0; a < g; ++a) {
+    for (int b = 0; b < g; ++b) {
+      out.information(estimated[a], estimated[b]) = (*reduced)(a, b);
+      out.covariance(estimated[a], estimated[b]) = inverse(a, b);
+    }
+  }
   return out;
 }
 

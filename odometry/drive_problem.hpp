@@ -23,6 +23,11 @@ int residualKind(std::size_t row, std::size_t steps);
 Eigen::Vector4d redundancyByKind(const DriveRecord& record, const DriveState& state,
                                  const DriveFitSetup& setup);
 
+/// Only the rank part of driveInformation(): whether the drive separates the estimated
+/// parameters near `state` (read at the noise-free state there), with the directions it does not.
+DriveInformation separability(const DriveRecord& record, const DriveState& state,
+                              const DriveFitSetup& setup);
+
 class DriveProblem {
  public:
   /// Builds the problem over a copy of `state`.
