@@ -13,8 +13,8 @@
 //              range   = (|c| - R)(1 + a_1) + a_0 + N(0, s_range^2),
 //              bearing = atan2(c_y, c_x) + N(0, s_bearing^2),
 // with d the arc of motion_model.hpp, l = (l_x, l_y, l_theta) the mounting, R the poles' known
-// radius and (a_0, a_1) the range bias polynomial (Alhashimi et al. 2016, eq. 30, to first
-// order). Odometry errors are per metre driven and per radian turned, as a wheel's slip is.
+// radius and (a_0, a_1) the range bias polynomial of Alhashimi et al. 2021 (eq. 3) to first
+// order. Odometry errors are per metre driven and per radian turned, as a wheel's slip is.
 
 #include <array>
 #include <cstddef>
