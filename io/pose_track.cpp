@@ -15,55 +15,6 @@ Pose2 planarPose(const Transform3& t) {
 
 bool isUpsideDown(const Transform3& t) { return (t.rotation * Eigen::Vector3d::UnitZ()).z() < 0.0; }
 
-void TransformTrack::add(double stamp_s, const Transform3& t) {
-  if (!samples_.empty() && stamp_s < samples_.back().first) sorted_ = false;
-  samples_.emplace_back(stamp_s, t);
-}
-
-void TransformTrack::sort() const {
-  if (sorted_) return;
-  std::stable_sort(samples_.begin(), samples_.end(),
-                   [](const auto& a, const auto& b) { return a.first < b.first; });
-  sorted_ = true;
-}
-
-std::pair<double, double> TransformTrack::span() const {
-  sort();
-  return {samples_.front().first, samples_.back().first};
-}
-
-std::optional<Transform3> TransformTrack::at(double stamp_s, double hold_s) const {
-  if (samples_.empty() || !std::isfinite(stamp_s)) return std::nullopt;
-  sort();
-  const auto after = std::lower_bound(samples_.begin(), samples_.end(), stamp_s,
-                                      [](const auto& s, double t) { return s.first < t; });
-  if (after == samples_.begin())
-    return stamp_s >= after->first - hold_s ? std::optional<Transform3>(after->second)
-                                            : std::nullopt;
-  if (after == samples_.end()) {
-    const auto& last = samples_.back();
-    return stamp_s <= last.first + hold_s ? std::optional<Transform3>(last.second) : std::nullopt;
-  }
-  const auto& [t1, b] = *after;
-  const auto& [t0, a] = *std::prev(after);
-  const double u = t1 > t0 ? (stamp_s - t0) / (t1 - t0) : 1.0;
-  return Transform3{a.translation + u * (b.translation - a.translation),
-                    a.rotation.slerp(u, b.rotation)};
-}
-
-void TransformTrack::keepWithin(double window_s, std::size_t max_samples) {
-  if (samples_.size() < 2) return;
-  sort();
-  const double oldest_kept = samples_.back().first - window_s;
-  auto first = std::lower_bound(samples_.begin(), samples_.end(), oldest_kept,
-                                [](const auto& s, double t) { return s.first < t; });
-  if (first != samples_.begin()) --first;  // the last sample before the window
-  const std::size_t keep = std::max<std::size_t>(max_samples, 2);
-  const auto by_count =
-      samples_.end() - static_cast<std::ptrdiff_t>(std::min(keep, samples_.size()));
-  samples_.erase(samples_.begin(), std::max(first, by_count));
-}
-
 void TransformTree::addStatic(const std::string& parent, const std::string& child,
                               const Transform3& t) {
   Edge& e = parent_of_[child];
@@ -94,8 +45,7 @@ std::optional<Transform3> TransformTree::lookup(const std::string& fixed, const 
       return std::nullopt;
     }
     const Edge& e = it->second;
-    std::optional<Transform3> step = e.fixed;
-    if (!e.track.empty()) step = e.track.at(stamp_s, hold_s);
+    const std::optional<Transform3> step = e.track.empty() ? e.fixed : e.track.at(stamp_s, hold_s);
     if (!step) {
       if (why) {
         const auto [first, last] = e.track.span();

@@ -13,6 +13,7 @@
 #include <Eigen/Geometry>
 
 #include "common/pose2.hpp"
+#include "io/stamped_track.hpp"
 
 namespace lidarcal::io {
 
@@ -33,29 +34,16 @@ Pose2 planarPose(const Transform3& t);
 /// beams run clockwise in the parent's plane, which a planar VIEWPOINT cannot express).
 bool isUpsideDown(const Transform3& t);
 
+/// Linear in position, slerp in rotation.
+struct TransformLerp {
+  static Transform3 lerp(const Transform3& a, const Transform3& b, double u) {
+    return {a.translation + u * (b.translation - a.translation), a.rotation.slerp(u, b.rotation)};
+  }
+};
+
 /// Transforms of one frame over time (sorted by stamp), interpolated linearly in position and by
 /// slerp in rotation.
-class TransformTrack {
- public:
-  /// Adds a sample; stamps may come in any order (sorted on first lookup).
-  void add(double stamp_s, const Transform3& t);
-  bool empty() const { return samples_.empty(); }
-  std::size_t size() const { return samples_.size(); }
-  /// Stamp range [first, last], seconds. Undefined when empty.
-  std::pair<double, double> span() const;
-  /// The transform at `stamp_s`: interpolated between the samples around it; the nearest end
-  /// sample within `hold_s` outside the span; nothing further out.
-  std::optional<Transform3> at(double stamp_s, double hold_s) const;
-  /// Forgets the samples stamped more than `window_s` before the newest one, keeping the last of
-  /// them (so a stamp inside the window still interpolates), and then all but the newest
-  /// `max_samples` (at least 2 kept). For a live stream, whose past must not grow without bound.
-  void keepWithin(double window_s, std::size_t max_samples);
-
- private:
-  void sort() const;
-  mutable std::vector<std::pair<double, Transform3>> samples_;
-  mutable bool sorted_ = true;
-};
+using TransformTrack = StampedTrack<Transform3, TransformLerp>;
 
 /// A tf tree: static transforms (/tf_static) and tracks over time (/tf), edge parent -> child.
 class TransformTree {

@@ -38,31 +38,13 @@ void WheelTrack::addMessage(double stamp_s, const std::vector<std::string>& name
         names_seen_.push_back(n);
     return;
   }
-  if (!samples_.empty() && stamp_s < samples_.back().first) sorted_ = false;
-  samples_.emplace_back(stamp_s, Eigen::Vector2d(positions[l], positions[r]));
-}
-
-void WheelTrack::sort() const {
-  if (sorted_) return;
-  std::stable_sort(samples_.begin(), samples_.end(),
-                   [](const auto& a, const auto& b) { return a.first < b.first; });
-  sorted_ = true;
+  samples_.add(stamp_s, Eigen::Vector2d(positions[l], positions[r]));
 }
 
 std::optional<std::pair<double, double>> WheelTrack::at(double stamp_s) const {
-  sort();
-  if (samples_.empty() || !std::isfinite(stamp_s) || stamp_s < samples_.front().first ||
-      stamp_s > samples_.back().first)
-    return std::nullopt;
-  const auto after = std::lower_bound(samples_.begin(), samples_.end(), stamp_s,
-                                      [](const auto& s, double t) { return s.first < t; });
-  Eigen::Vector2d angles = after->second;
-  if (after->first != stamp_s && after != samples_.begin()) {
-    const auto before = after - 1;
-    const double w = (stamp_s - before->first) / (after->first - before->first);
-    angles = (1.0 - w) * before->second + w * after->second;
-  }
-  return std::pair{angles[0], angles[1]};
+  const std::optional<Eigen::Vector2d> angles = samples_.at(stamp_s, 0.0);  // nothing outside
+  if (!angles) return std::nullopt;
+  return std::pair{(*angles)[0], (*angles)[1]};
 }
 
 void WheelTrack::checkFilled(const std::filesystem::path& file, const WheelJoints& joints) const {

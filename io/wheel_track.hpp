@@ -14,6 +14,8 @@
 
 #include <Eigen/Core>
 
+#include "io/stamped_track.hpp"
+
 namespace lidarcal::io {
 
 /// Which JointState topic and which two of its joints are the wheels.
@@ -42,9 +44,12 @@ class WheelTrack {
   void checkFilled(const std::filesystem::path& file, const WheelJoints& joints) const;
 
  private:
-  void sort() const;
-  mutable std::vector<std::pair<double, Eigen::Vector2d>> samples_;
-  mutable bool sorted_ = true;
+  struct Lerp {
+    static Eigen::Vector2d lerp(const Eigen::Vector2d& a, const Eigen::Vector2d& b, double u) {
+      return (1.0 - u) * a + u * b;
+    }
+  };
+  StampedTrack<Eigen::Vector2d, Lerp> samples_;
   std::vector<std::string> names_seen_;  ///< for the message when the wheels are missing
 };
 
