@@ -81,6 +81,20 @@ std::string chooseScanTopic(const fs::path& file, const std::vector<BagTopic>& t
   return candidates.front();
 }
 
+namespace {
+
+/// Throws InputError naming `option` unless the bag has `name` carrying `type`.
+void requireTopicType(const fs::path& file, const std::vector<BagTopic>& topics,
+                      const std::string& name, const char* type, const std::string& option) {
+  const BagTopic* t = findTopic(topics, name);
+  if (!t || t->datatype != type)
+    throw InputError(file.string(), option,
+                     !t ? "no such topic in the bag" : "carries " + t->datatype + ", not " + type,
+                     "`lidarcal import --list-topics BAG` lists the topics and their types");
+}
+
+}  // namespace
+
 std::vector<std::string> poseTopics(const fs::path& file, const std::vector<BagTopic>& topics,
                                     const BagPoseConfig& config, const BagFlavour& flavour) {
   std::vector<std::string> read;
@@ -95,12 +109,7 @@ std::vector<std::string> poseTopics(const fs::path& file, const std::vector<BagT
         (config.kind == BagPoseConfig::Kind::tf || std::string(name) == "/tf_static"))
       read.emplace_back(name);
   if (config.kind == BagPoseConfig::Kind::odom) {
-    const BagTopic* t = findTopic(topics, config.name);
-    if (!t || t->datatype != flavour.odom_type)
-      throw InputError(
-          file.string(), "--pose odom:" + config.name,
-          !t ? "no such topic in the bag" : "carries " + t->datatype + ", not " + flavour.odom_type,
-          "`lidarcal import --list-topics BAG` lists the topics and their types");
+    requireTopicType(file, topics, config.name, flavour.odom_type, "--pose odom:" + config.name);
     read.push_back(config.name);
   } else if (read.empty()) {
     throw InputError(file.string(), "--pose tf:" + config.name,
@@ -112,12 +121,7 @@ std::vector<std::string> poseTopics(const fs::path& file, const std::vector<BagT
 
 void checkWheelTopic(const fs::path& file, const std::vector<BagTopic>& topics,
                      const WheelJoints& joints, const BagFlavour& flavour) {
-  const BagTopic* t = findTopic(topics, joints.topic);
-  if (!t || t->datatype != flavour.joint_type)
-    throw InputError(
-        file.string(), "--wheels " + joints.topic,
-        !t ? "no such topic in the bag" : "carries " + t->datatype + ", not " + flavour.joint_type,
-        "`lidarcal import --list-topics BAG` lists the topics and their types");
+  requireTopicType(file, topics, joints.topic, flavour.joint_type, "--wheels " + joints.topic);
 }
 
 void fillRawScan(const LaserScanView& msg, const RosbagConfig& config, RawScan& scan) {
