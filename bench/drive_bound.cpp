@@ -16,6 +16,7 @@
 #include <nlohmann/json.hpp>
 
 #include "io/landmarks_csv.hpp"
+#include "io/sequence.hpp"
 #include "io/wheel_angles_csv.hpp"
 #include "odometry/drive_fit.hpp"
 #include "odometry/simulated_drive.hpp"
@@ -97,11 +98,7 @@ void print(const char* title, const nlohmann::json& r) {
 /// DIR/landmarks.csv (as `lidarcal detect --radius R` writes it; one pole per landmark id).
 void writeExample(const lidarcal::odometry::SimulatedDrive& drive, const std::string& dir) {
   std::filesystem::create_directories(dir);
-  const auto name = [](std::size_t k) {
-    char text[32];
-    std::snprintf(text, sizeof text, "scan_%06zu.pcd", k);
-    return std::string(text);
-  };
+  const auto name = lidarcal::io::scanFileName;
   std::vector<lidarcal::io::WheelAngleRow> wheels{{name(0), 0.0, 0.0}};
   for (const auto& step : drive.record.steps)
     wheels.push_back({name(wheels.size()), wheels.back().left_rad + step.left_rad,

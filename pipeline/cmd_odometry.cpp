@@ -22,6 +22,7 @@
 #include "odometry/calibrate.hpp"
 #include "odometry/subsets.hpp"
 #include "pipeline/commands.hpp"
+#include "pipeline/covariance_json.hpp"
 #include "pipeline/papers.hpp"
 #include "pipeline/progress.hpp"
 #include "pipeline/shown_parameter.hpp"
@@ -116,13 +117,7 @@ nlohmann::json outputJson(const OdometryOptions& o, const odometry::OdometryResu
                    {"trim_percentile", o.settings.trim_percentile}};
   j.update(resultJson(r));
   j["fits"] = r.fits;
-  nlohmann::json matrix = nlohmann::json::array();
-  for (int a = 0; a < odometry::kParameterCount; ++a) {
-    nlohmann::json row = nlohmann::json::array();
-    for (int b = 0; b < odometry::kParameterCount; ++b) row.push_back(r.covariance(a, b));
-    matrix.push_back(row);
-  }
-  j["covariance"] = {{"order", odometry::kParameterNames}, {"matrix", matrix}};
+  j["covariance"] = covarianceJson(odometry::kParameterNames, r.covariance);
   j["residual_sigma"] = {{"x_m", r.residual_sigma[0]},
                          {"y_m", r.residual_sigma[1]},
                          {"theta_rad", r.residual_sigma[2]}};

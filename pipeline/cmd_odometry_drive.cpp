@@ -23,6 +23,7 @@
 #include "io/wheel_angles_csv.hpp"
 #include "odometry/drive_fit.hpp"
 #include "pipeline/commands.hpp"
+#include "pipeline/covariance_json.hpp"
 #include "pipeline/papers.hpp"
 #include "pipeline/progress.hpp"
 #include "pipeline/shown_parameter.hpp"
@@ -135,14 +136,8 @@ nlohmann::json outputJson(const DriveOptions& o, const odometry::DriveRecord& re
   j["standard_error"] = error;
   j["standard_error_stated_noise"] = error_stated;
   j["held"] = held;
-  nlohmann::json matrix = nlohmann::json::array();
-  for (int a = 0; a < odometry::kDriveParameterCount; ++a) {
-    nlohmann::json row = nlohmann::json::array();
-    for (int b = 0; b < odometry::kDriveParameterCount; ++b)
-      row.push_back(fit.information.covariance(a, b) * fit.variance_factor);
-    matrix.push_back(row);
-  }
-  j["covariance"] = {{"order", odometry::kDriveParameterNames}, {"matrix", matrix}};
+  j["covariance"] = covarianceJson(odometry::kDriveParameterNames,
+                                   fit.information.covariance * fit.variance_factor);
   j["variance_factor"] = fit.variance_factor;
   nlohmann::json kinds;
   const char* names[] = {"odometry_translation", "odometry_heading", "range", "bearing"};
