@@ -67,20 +67,20 @@ DriveProblem::DriveProblem(const DriveRecord& record, const DriveState& state,
     : poses_(state.poses), poles_(state.poles) {
   const Vector8 v = state.params.toVector();
   for (int i = 0; i < kDriveParameterCount; ++i) globals_[i] = v[i];
-  ceres::Problem::Options options;
-  options.enable_fast_removal = false;
-  problem_ = std::make_unique<ceres::Problem>(options);
+  problem_ = std::make_unique<ceres::Problem>();
   addSteps(record, setup);
   addSightings(record, setup);
   for (const Group& g : kGroups) problem_->AddParameterBlock(&globals_[g.first], g.size);
 
   problem_->SetParameterBlockConstant(poses_[0].data());
   for (std::size_t k = 1; k < poses_.size(); ++k) free_blocks_.push_back(poses_[k].data());
+  int sighted = 0;  // poles in the problem: a pole no scan saw has no block
   for (auto& [id, centre] : poles_) {
-    if (problem_->HasParameterBlock(centre.data())) free_blocks_.push_back(centre.data());
+    if (!problem_->HasParameterBlock(centre.data())) continue;
+    free_blocks_.push_back(centre.data());
+    ++sighted;
   }
-  nuisance_columns_ = 3 * static_cast<int>(poses_.size() - 1);
-  nuisance_columns_ += 2 * static_cast<int>(free_blocks_.size() - (poses_.size() - 1));
+  nuisance_columns_ = 3 * static_cast<int>(poses_.size() - 1) + 2 * sighted;
   for (const Group& g : kGroups) holdWithin(g, setup.estimated);
 }
 
