@@ -16,6 +16,7 @@
 #include "calibration/predictive_check.hpp"
 #include "common/errors.hpp"
 #include "io/atomic_file.hpp"
+#include "io/json_number.hpp"
 #include "io/model_io.hpp"
 #include "io/reference_io.hpp"
 #include "pipeline/commands/cli_options.hpp"
@@ -52,10 +53,6 @@ nlohmann::ordered_json evaluationJson(const calibration::Evaluation& e) {
 
 namespace {
 
-nlohmann::ordered_json number(double v) {
-  return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(nullptr);
-}
-
 /// Whether a reference distance lies within the distances the model was fitted over (all do
 /// without a model or a recorded range).
 bool inFittedRange(const calibration::ReferenceMatch& m, const CalibrationModel* model) {
@@ -74,7 +71,7 @@ nlohmann::ordered_json matchJson(const calibration::ReferenceMatch& m,
                            {"status", m.status}};
   if (m.ok()) {
     j["measured_m"] = m.measured_m;
-    j["measured_se_m"] = number(m.measured_se_m);
+    j["measured_se_m"] = io::jsonNumber(m.measured_se_m);
     j["error_m"] = m.measured_m - m.reference_m;
     j["scans"] = m.sightings;
     j["readings"] = m.readings;
@@ -95,9 +92,9 @@ std::vector<double> entryErrors(const std::vector<calibration::ReferenceMatch>& 
 void addRms(nlohmann::ordered_json& j, const std::vector<calibration::ReferenceMatch>& matches,
             const CalibrationModel* model) {
   const calibration::RmsError e = calibration::rmsError(entryErrors(matches, model));
-  j["rms_error_m"] = number(e.rms_m);
-  j["rms_error_se_m"] = number(e.se_m);
-  j["rms_error_all_m"] = number(calibration::rmsError(entryErrors(matches)).rms_m);
+  j["rms_error_m"] = io::jsonNumber(e.rms_m);
+  j["rms_error_se_m"] = io::jsonNumber(e.se_m);
+  j["rms_error_all_m"] = io::jsonNumber(calibration::rmsError(entryErrors(matches)).rms_m);
 }
 
 /// Raw against corrected over the entries matched in both and inside the model's fitted range.
@@ -117,7 +114,7 @@ nlohmann::ordered_json spanJson(const calibration::SpanMatch& m) {
       {"entry", m.entry}, {"stop", m.stop}, {"reference_m", m.reference_m}, {"status", m.status}};
   if (m.ok()) {
     j["measured_m"] = m.measured_m;
-    j["measured_se_m"] = number(m.measured_se_m);
+    j["measured_se_m"] = io::jsonNumber(m.measured_se_m);
     j["error_m"] = m.measured_m - m.reference_m;
     j["scans"] = m.scans;
   }
@@ -134,8 +131,9 @@ nlohmann::ordered_json spansJson(const std::vector<calibration::SpanMatch>& matc
     if (m.ok()) errors.push_back(m.measured_m - m.reference_m);
   }
   const calibration::RmsError e = calibration::rmsError(errors);
-  return {
-      {"rms_error_m", number(e.rms_m)}, {"rms_error_se_m", number(e.se_m)}, {"entries", entries}};
+  return {{"rms_error_m", io::jsonNumber(e.rms_m)},
+          {"rms_error_se_m", io::jsonNumber(e.se_m)},
+          {"entries", entries}};
 }
 
 /// The command line of `evaluate`.
@@ -197,9 +195,9 @@ void evaluateReference(const EvaluateOptions& o) {
     addRms(j["corrected"], corrected->known.matches, fitted);
     const calibration::MseRatio ratio =
         pairedMseRatio(raw.known.matches, corrected->known.matches, *model);
-    j["corrected"]["mse_ratio"] = {{"ratio", number(ratio.ratio)},
-                                   {"low_95", number(ratio.low)},
-                                   {"high_95", number(ratio.high)},
+    j["corrected"]["mse_ratio"] = {{"ratio", io::jsonNumber(ratio.ratio)},
+                                   {"low_95", io::jsonNumber(ratio.low)},
+                                   {"high_95", io::jsonNumber(ratio.high)},
                                    {"entries", ratio.entries}};
     j["corrected"]["entries"] = cor_json;
     if (!ref.spans.empty()) j["corrected"]["spans"] = spansJson(corrected->spans.matches);

@@ -6,6 +6,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "io/json_number.hpp"
 #include "pipeline/reports/diagnose_report.hpp"
 
 namespace lidarcal::pipeline {
@@ -15,18 +16,15 @@ using ojson = nlohmann::ordered_json;
 using diagnosis::DiagnosisResult;
 using diagnosis::ResidualRecord;
 
-/// A number, or null when it is not finite (JSON has no NaN).
-ojson num(double v) { return std::isfinite(v) ? ojson(v) : ojson(nullptr); }
-
 ojson numbers(const std::map<std::string, double>& m) {
   ojson j = ojson::object();
-  for (const auto& [k, v] : m) j[k] = num(v);
+  for (const auto& [k, v] : m) j[k] = io::jsonNumber(v);
   return j;
 }
 
 ojson closenessJson(const diagnosis::Closeness& c) {
-  return ojson{{"ks_distance", num(c.ks_distance)},
-               {"variance_ratio_median_abs_log", num(c.variance_ratio_median_abs_log)},
+  return ojson{{"ks_distance", io::jsonNumber(c.ks_distance)},
+               {"variance_ratio_median_abs_log", io::jsonNumber(c.variance_ratio_median_abs_log)},
                {"groups", c.groups}};
 }
 
@@ -34,15 +32,16 @@ ojson baselineJson(const DiagnosisResult& r, const DiagnosisSource& src) {
   ojson baseline{
       {"bias_alpha", r.baseline.bias.alpha},
       {"noise", ojson{{"kind", toString(r.baseline.noise.kind)},
-                      {"sigma_e", num(r.baseline.noise.sigma_e)}}},
+                      {"sigma_e", io::jsonNumber(r.baseline.noise.sigma_e)}}},
       {"range_min_m", r.baseline.range_min_m},
-      {"range_max_m", num(r.baseline.range_max_m < 1e8 ? r.baseline.range_max_m : std::nan(""))},
-      {"neg_log_likelihood", num(r.baseline_neg_log_likelihood)},
-      {"heldout_nats_per_point", num(r.baseline_heldout_nats_per_point)},
+      {"range_max_m",
+       io::jsonNumber(r.baseline.range_max_m < 1e8 ? r.baseline.range_max_m : std::nan(""))},
+      {"neg_log_likelihood", io::jsonNumber(r.baseline_neg_log_likelihood)},
+      {"heldout_nats_per_point", io::jsonNumber(r.baseline_heldout_nats_per_point)},
       {"fitted", numbers(r.baseline_extra)}};
   if (r.mode == diagnosis::DiagnoseMode::sequence) {
-    baseline["sigma_theta_rad"] = num(r.baseline_sigma_theta_rad);
-    baseline["landmark_radius_m"] = num(r.baseline_radius_m);
+    baseline["sigma_theta_rad"] = io::jsonNumber(r.baseline_sigma_theta_rad);
+    baseline["landmark_radius_m"] = io::jsonNumber(r.baseline_radius_m);
     baseline["landmark_radius_known"] = r.radius_known;
   } else {
     ojson walls = ojson::array();
@@ -52,7 +51,7 @@ ojson baselineJson(const DiagnosisResult& r, const DiagnosisSource& src) {
                             {"first_angle_rad", w.first_angle_rad},
                             {"last_angle_rad", w.last_angle_rad},
                             {"bins", w.bins},
-                            {"rms_m", num(w.rms_m)}});
+                            {"rms_m", io::jsonNumber(w.rms_m)}});
     baseline["walls"] = walls;
   }
   return baseline;
@@ -63,11 +62,11 @@ ojson batteryJson(const std::vector<diagnosis::Discrepancy>& battery) {
   for (const auto& d : battery)
     out.push_back(ojson{{"name", d.name},
                         {"variable", d.variable},
-                        {"value", num(d.value)},
-                        {"replica_mean", num(d.replica_mean)},
-                        {"replica_sd", num(d.replica_sd)},
-                        {"effect_size", num(d.effect_size)},
-                        {"p_value", num(d.p_value)},
+                        {"value", io::jsonNumber(d.value)},
+                        {"replica_mean", io::jsonNumber(d.replica_mean)},
+                        {"replica_sd", io::jsonNumber(d.replica_sd)},
+                        {"effect_size", io::jsonNumber(d.effect_size)},
+                        {"p_value", io::jsonNumber(d.p_value)},
                         {"two_sided", d.two_sided},
                         {"description", d.description}});
   return out;
@@ -75,24 +74,25 @@ ojson batteryJson(const std::vector<diagnosis::Discrepancy>& battery) {
 
 ojson candidateJson(const diagnosis::CandidateResult& c) {
   ojson j{{"effect", toString(c.effect)},
-          {"p_value", num(c.p_value)},
-          {"p_holm", num(c.p_holm)},
-          {"p_heldout", num(c.p_heldout)},
-          {"p_likelihood_ratio", num(c.p_likelihood_ratio)},
-          {"heldout_gain_nats_per_point", num(c.heldout_gain_nats_per_point)},
-          {"heldout_gain_se", num(c.heldout_gain_se)},
-          {"delta_aic", num(c.delta_aic)},
+          {"p_value", io::jsonNumber(c.p_value)},
+          {"p_holm", io::jsonNumber(c.p_holm)},
+          {"p_heldout", io::jsonNumber(c.p_heldout)},
+          {"p_likelihood_ratio", io::jsonNumber(c.p_likelihood_ratio)},
+          {"heldout_gain_nats_per_point", io::jsonNumber(c.heldout_gain_nats_per_point)},
+          {"heldout_gain_se", io::jsonNumber(c.heldout_gain_se)},
+          {"delta_aic", io::jsonNumber(c.delta_aic)},
           {"parameters", c.parameters},
           {"significant", c.significant},
           {"identifiable", c.identifiable},
           {"applicable", c.applicable},
-          {"information_ratio", num(c.information_ratio)},
-          {"standard_error", num(c.standard_error)},
+          {"information_ratio", io::jsonNumber(c.information_ratio)},
+          {"standard_error", io::jsonNumber(c.standard_error)},
           {"statistic", c.statistic},
-          {"statistic_p_value", num(c.score_p_value)},
-          {"statistic_effect_size", num(c.effect_size)},
+          {"statistic_p_value", io::jsonNumber(c.score_p_value)},
+          {"statistic_effect_size", io::jsonNumber(c.effect_size)},
           {"estimates", numbers(c.estimates)}};
-  if (c.calibration_mse_ratio > 0.0) j["calibration_mse_ratio"] = num(c.calibration_mse_ratio);
+  if (c.calibration_mse_ratio > 0.0)
+    j["calibration_mse_ratio"] = io::jsonNumber(c.calibration_mse_ratio);
   if (!c.note.empty()) j["note"] = c.note;
   return j;
 }
@@ -103,58 +103,60 @@ ojson tailsJson(const diagnosis::TailAttribution& t) {
     return t.note.empty() ? ojson(nullptr) : ojson{{"fitted", false}, {"note", t.note}};
   ojson covs = ojson::array();
   for (const auto& c : t.covariates)
-    covs.push_back(ojson{{"covariate", c.covariate},
-                         {"effect", toString(c.effect)},
-                         {"coefficient", num(c.coefficient)},
-                         {"unique_gain_nats_per_point", num(c.unique_gain_nats_per_point)},
-                         {"unique_gain_se", num(c.unique_gain_se)},
-                         {"p_value", num(c.p_value)},
-                         {"p_holm", num(c.p_holm)},
-                         {"share", num(c.share)},
-                         {"significant", c.significant}});
+    covs.push_back(
+        ojson{{"covariate", c.covariate},
+              {"effect", toString(c.effect)},
+              {"coefficient", io::jsonNumber(c.coefficient)},
+              {"unique_gain_nats_per_point", io::jsonNumber(c.unique_gain_nats_per_point)},
+              {"unique_gain_se", io::jsonNumber(c.unique_gain_se)},
+              {"p_value", io::jsonNumber(c.p_value)},
+              {"p_holm", io::jsonNumber(c.p_holm)},
+              {"share", io::jsonNumber(c.share)},
+              {"significant", c.significant}});
   ojson beams = ojson::array();
   for (const auto& b : t.top_beams)
-    beams.push_back(ojson{{"bearing_rad", num(b.bearing_rad)},
-                          {"range_m", num(b.range_m)},
-                          {"incidence_rad", num(b.incidence_rad)},
-                          {"intensity", num(b.intensity)},
+    beams.push_back(ojson{{"bearing_rad", io::jsonNumber(b.bearing_rad)},
+                          {"range_m", io::jsonNumber(b.range_m)},
+                          {"incidence_rad", io::jsonNumber(b.incidence_rad)},
+                          {"intensity", io::jsonNumber(b.intensity)},
                           {"edge", b.edge},
                           {"readings", b.readings},
-                          {"tail_fraction", num(b.tail_fraction)},
-                          {"tail_probability", num(b.tail_probability)},
+                          {"tail_fraction", io::jsonNumber(b.tail_fraction)},
+                          {"tail_probability", io::jsonNumber(b.tail_probability)},
                           {"class", b.cls}});
-  return ojson{
-      {"fitted", true},
-      {"cause", t.cause},
-      {"significant", t.significant},
-      {"p_value", num(t.p_value)},
-      {"pooled", ojson{{"fraction", num(t.pooled_fraction)},
-                       {"wide_scale", num(t.pooled_wide_scale)},
-                       {"heldout_gain_nats_per_point", num(t.pooled_gain_nats_per_point)},
-                       {"heldout_gain_se", num(t.pooled_gain_se)}}},
-      {"explained", ojson{{"heldout_gain_nats_per_point", num(t.explained_gain_nats_per_point)},
-                          {"heldout_gain_se", num(t.explained_gain_se)}}},
-      {"covariates", covs},
-      {"model", numbers(t.model)},
-      {"tail_readings", num(t.tail_readings)},
-      {"tail_readings_by_class", numbers(t.tail_readings_by_class)},
-      {"readings_by_class", numbers(t.readings_by_class)},
-      {"top_beams", beams},
-      {"robust", numbers(t.robust)}};
+  return ojson{{"fitted", true},
+               {"cause", t.cause},
+               {"significant", t.significant},
+               {"p_value", io::jsonNumber(t.p_value)},
+               {"pooled",
+                ojson{{"fraction", io::jsonNumber(t.pooled_fraction)},
+                      {"wide_scale", io::jsonNumber(t.pooled_wide_scale)},
+                      {"heldout_gain_nats_per_point", io::jsonNumber(t.pooled_gain_nats_per_point)},
+                      {"heldout_gain_se", io::jsonNumber(t.pooled_gain_se)}}},
+               {"explained", ojson{{"heldout_gain_nats_per_point",
+                                    io::jsonNumber(t.explained_gain_nats_per_point)},
+                                   {"heldout_gain_se", io::jsonNumber(t.explained_gain_se)}}},
+               {"covariates", covs},
+               {"model", numbers(t.model)},
+               {"tail_readings", io::jsonNumber(t.tail_readings)},
+               {"tail_readings_by_class", numbers(t.tail_readings_by_class)},
+               {"readings_by_class", numbers(t.readings_by_class)},
+               {"top_beams", beams},
+               {"robust", numbers(t.robust)}};
 }
 
 /// The named effect's gain: held out, delta AIC, closeness of simulations, calibration.
 ojson gainJson(const DiagnosisResult& r, bool named) {
-  ojson gain{
-      {"heldout_nats_per_point", named ? num(r.gain_heldout_nats_per_point) : ojson(nullptr)},
-      {"delta_aic", named ? num(r.gain_delta_aic) : ojson(nullptr)},
-      {"closeness", ojson{{"baseline_simulation", closenessJson(r.closeness_baseline)},
-                          {"extended_simulation",
-                           named ? closenessJson(r.closeness_extended) : ojson(nullptr)}}}};
+  ojson gain{{"heldout_nats_per_point",
+              named ? io::jsonNumber(r.gain_heldout_nats_per_point) : ojson(nullptr)},
+             {"delta_aic", named ? io::jsonNumber(r.gain_delta_aic) : ojson(nullptr)},
+             {"closeness", ojson{{"baseline_simulation", closenessJson(r.closeness_baseline)},
+                                 {"extended_simulation",
+                                  named ? closenessJson(r.closeness_extended) : ojson(nullptr)}}}};
   if (r.calibration_mse_ratio_baseline > 0.0)
-    gain["calibration_mse_ratio"] =
-        ojson{{"baseline", num(r.calibration_mse_ratio_baseline)},
-              {"extended", named ? num(r.calibration_mse_ratio_extended) : ojson(nullptr)}};
+    gain["calibration_mse_ratio"] = ojson{
+        {"baseline", io::jsonNumber(r.calibration_mse_ratio_baseline)},
+        {"extended", named ? io::jsonNumber(r.calibration_mse_ratio_extended) : ojson(nullptr)}};
   return gain;
 }
 

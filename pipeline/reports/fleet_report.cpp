@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "pipeline/reports/fleet_report.hpp"
+#include "io/json_number.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -13,13 +14,9 @@
 namespace lidarcal::pipeline {
 namespace {
 
-nlohmann::json number(double v) {
-  return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr);
-}
-
 nlohmann::json numbers(const std::vector<double>& v) {
   nlohmann::json a = nlohmann::json::array();
-  for (double x : v) a.push_back(number(x));
+  for (double x : v) a.push_back(io::jsonNumber<nlohmann::json>(x));
   return a;
 }
 
@@ -27,10 +24,10 @@ nlohmann::json biasJson(const std::vector<calibration::BiasAt>& bias) {
   nlohmann::json a = nlohmann::json::array();
   for (const calibration::BiasAt& b : bias)
     a.push_back({{"distance_m", b.distance_m},
-                 {"bias_m", number(b.bias_m)},
-                 {"se_m", number(b.se_m)},
+                 {"bias_m", io::jsonNumber<nlohmann::json>(b.bias_m)},
+                 {"se_m", io::jsonNumber<nlohmann::json>(b.se_m)},
                  {"inside_fitted_range", b.inside},
-                 {"noise_sigma_m", number(b.noise_m)}});
+                 {"noise_sigma_m", io::jsonNumber<nlohmann::json>(b.noise_m)}});
   return a;
 }
 
@@ -43,10 +40,10 @@ nlohmann::json testJson(const calibration::FleetTest& t) {
   j["distances_m"] = t.distances_m;
   j["difference_m"] = numbers(t.difference_m);
   if (!t.z.empty()) j["z"] = numbers(t.z);
-  j["statistic"] = number(t.statistic);
+  j["statistic"] = io::jsonNumber<nlohmann::json>(t.statistic);
   j["dof"] = t.dof;
-  j["p"] = number(t.p);
-  j["p_holm"] = number(t.p_holm);
+  j["p"] = io::jsonNumber<nlohmann::json>(t.p);
+  j["p_holm"] = io::jsonNumber<nlohmann::json>(t.p_holm);
   j["flagged"] = t.flagged;
   return j;
 }

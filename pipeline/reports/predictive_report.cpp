@@ -5,6 +5,7 @@
 #include <utility>
 
 #include "common/plural.hpp"
+#include "io/json_number.hpp"
 #include "pipeline/reports/model_text.hpp"
 #include "pipeline/reports/papers.hpp"
 
@@ -13,8 +14,6 @@ namespace {
 
 using ojson = nlohmann::ordered_json;
 using calibration::PredictiveCheck;
-
-ojson number(double v) { return std::isfinite(v) ? ojson(v) : ojson(nullptr); }
 
 std::string mm(double v, bool sign = false) {
   return std::isfinite(v) ? fixed(1000.0 * v, 1, sign) : std::string("-");
@@ -34,11 +33,11 @@ ojson predictiveJson(const PredictiveCheck& c) {
     ojson j{{"entry", e.entry}, {"reference_m", e.reference_m}, {"checked", e.checked}};
     if (e.checked) {
       j["error_m"] = e.error_m;
-      j["curve_se_m"] = number(e.curve_se_m);
-      j["predictive_se_m"] = number(e.predictive_se_m);
-      j["measured_se_m"] = number(e.measured_se_m);
+      j["curve_se_m"] = io::jsonNumber(e.curve_se_m);
+      j["predictive_se_m"] = io::jsonNumber(e.predictive_se_m);
+      j["measured_se_m"] = io::jsonNumber(e.measured_se_m);
       j["tape_sigma_m"] = e.tape_sigma_m;
-      j["interval_se_m"] = number(e.interval_se_m);
+      j["interval_se_m"] = io::jsonNumber(e.interval_se_m);
       j["factor_68"] = e.factor_68;
       j["factor_95"] = e.factor_95;
       j["inside_68"] = e.inside_68;
@@ -48,9 +47,10 @@ ojson predictiveJson(const PredictiveCheck& c) {
     entries.push_back(j);
   }
   const Discrepancy& d = c.discrepancy;
-  ojson j{{"discrepancy", {{"method", d.method}, {"sigma_m", number(d.sigma_m)}, {"dof", d.dof}}},
-          {"factor_68", number(c.factor_68)},
-          {"factor_95", number(c.factor_95)}};
+  ojson j{{"discrepancy",
+           {{"method", d.method}, {"sigma_m", io::jsonNumber(d.sigma_m)}, {"dof", d.dof}}},
+          {"factor_68", io::jsonNumber(c.factor_68)},
+          {"factor_95", io::jsonNumber(c.factor_95)}};
   const std::pair<const char*, std::size_t> counts[] = {{"checked", c.checked},
                                                         {"inside_68", c.inside_68},
                                                         {"inside_95", c.inside_95},
