@@ -57,12 +57,10 @@ const Data& data(const std::string& scene_file) {
   d->truth.scene = io::readScene(std::string(LIDARCAL_SOURCE_DIR) + "/data/scenes/" + scene_file);
   d->truth.seed = 1;
   d->truth.stops = simulation::planStops(d->truth.scene, 1);
-  for (std::size_t k = 0; k < d->truth.stops.size(); ++k)
-    for (std::size_t i = 0; i < d->truth.stops[k].scans; ++i) {
-      d->scans.push_back(simulation::simulateScan(d->truth.scene, d->truth.stops[k],
-                                                  d->truth.stops[k].first_scan + i, 1));
-      d->stop_of_scan.push_back(k);
-    }
+  simulation::SimulatedSequence sequence =
+      simulation::simulateSequence(d->truth.scene, d->truth.stops, 1);
+  d->scans = std::move(sequence.scans);
+  d->stop_of_scan = std::move(sequence.stop_of_scan);
   for (std::size_t i = 0; i < d->scans.size(); ++i)
     d->scan_truth.push_back(makeScanTruth(d->truth, i, d->scans[i].truth, *d->scans[i].scan.cloud));
   return *d;

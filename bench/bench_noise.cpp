@@ -12,7 +12,7 @@
 
 #include "io/noise_json.hpp"
 #include "noise/problem.hpp"
-#include "pipeline/noise_run.hpp"
+#include "pipeline/stages/noise_run.hpp"
 #include "simulation/observation_sim.hpp"
 
 namespace {

@@ -25,7 +25,7 @@
 #include <random>
 #include <vector>
 
-#include "pipeline/bag_correct.hpp"
+#include "pipeline/stages/bag_correct.hpp"
 #include "ros2/live_corrector.hpp"
 
 namespace {

@@ -140,12 +140,10 @@ SimulatedRun simulateRun(const Scene& scene, std::uint64_t seed) {
   run.truth.seed = seed;
   run.truth.scene = scene;
   run.truth.stops = simulation::planStops(scene, seed);
-  const auto& stops = run.truth.stops;
-  for (std::size_t s = 0; s < stops.size(); ++s)
-    for (std::size_t i = 0; i < stops[s].scans; ++i) {
-      run.sims.push_back(simulation::simulateScan(scene, stops[s], stops[s].first_scan + i, seed));
-      run.stop_of_scan.push_back(s);
-    }
+  simulation::SimulatedSequence sequence =
+      simulation::simulateSequence(scene, run.truth.stops, seed);
+  run.sims = std::move(sequence.scans);
+  run.stop_of_scan = std::move(sequence.stop_of_scan);
   return run;
 }
 

@@ -12,6 +12,7 @@
 #include "calibration/inversion.hpp"
 #include "calibration/jackknife.hpp"
 #include "calibration/noise_fits.hpp"
+#include "common/information_criteria.hpp"
 #include "common/stats_util.hpp"
 
 namespace lidarcal::calibration {
@@ -138,8 +139,8 @@ void fillOrders(CalibrationModel& m, const OrderSelection& sel, std::size_t n) {
     o.order = row.order;
     o.alpha = row.alpha;
     o.aic = row.aic;
-    o.bic =
-        row.aic - 2.0 * (row.order + 2.0) + (row.order + 2.0) * std::log(static_cast<double>(n));
+    const double k = row.order + 2.0;  // its free parameters, as the AIC counts them
+    o.bic = schwarz(k, n, 0.5 * (row.aic - 2.0 * k));  // -log L read back from the AIC
     o.validation_mse_m2 = row.validation_mse_m2;
     o.test_mse_m2 = row.test_mse_m2;
     m.orders.push_back(o);

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "calibration/range_model_fit.hpp"
 
+#include "common/information_criteria.hpp"
 #include "common/pose2.hpp"
 #include "common/stats_util.hpp"
 
@@ -191,7 +192,8 @@ OrderSelection selectOrder(const std::vector<RangePair>& pairs, int n_max, Order
       row.rss_m2 += r * r;
     }
     const double k = order + 2.0;  // n + 1 coefficients and the noise variance
-    row.aic = 2.0 * k + n * (kLog2Pi + std::log(std::max(row.rss_m2, 1e-300) / n) + 1.0);
+    // -log L of Gaussian residuals at the ML variance rss / n
+    row.aic = akaike(k, 0.5 * (n * (kLog2Pi + std::log(std::max(row.rss_m2, 1e-300) / n) + 1.0)));
     if (d_fit.size() >= static_cast<std::size_t>(order + 2)) {
       const auto alpha_fit = fitPolynomial(d_fit, y_fit, order);
       row.validation_mse_m2 = mse(alpha_fit, pairs, 1);

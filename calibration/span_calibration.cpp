@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "calibration/inversion.hpp"
+#include "common/information_criteria.hpp"
 #include "common/number_text.hpp"
 #include "common/stats_util.hpp"
 
@@ -110,8 +111,9 @@ std::vector<OrderRow> orderTable(const std::vector<OrderResult>& results, std::s
     row.order = r.fit.order;
     row.alpha = r.fit.alpha;
     const double k = r.fit.order == 0 ? 1.0 : r.fit.order + 1.0;
-    row.aic = r.fit.chi2 + 2.0 * k;
-    row.bic = r.fit.chi2 + k * std::log(static_cast<double>(entries));
+    // chi2 is -2 log L up to a constant the orders share
+    row.aic = akaike(k, 0.5 * r.fit.chi2);
+    row.bic = schwarz(k, entries, 0.5 * r.fit.chi2);
     row.validation_mse_m2 = r.cv_mse_m2;
     row.test_mse_m2 = kNaN;
     row.invertible = r.invertible;

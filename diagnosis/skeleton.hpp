@@ -26,68 +26,45 @@ inline void reportProgress(const DiagnoseConfig& config, const char* stage, std:
   if (config.progress) config.progress(stage, done, total);
 }
 
-/// Runs the five steps of diagnosis.hpp on a mode's problem object, which provides:
-///   bool fitBaseline(DiagnosisResult&)                 1. false: out.status says why not
-///   std::map<std::string, double> measuredStatistics(DiagnosisResult&)   (and out.measured)
-///   void replica(int b, std::map<std::string, std::vector<double>>&, DiagnosisResult&)   2.
-///   const std::vector<StatisticInfo>& statisticInfo()
-///   void heldOut(HeldOut&); const char* noHeldOut()   3.
-///   void beforeCandidates(DiagnosisResult&); CandidateResult candidate(std::size_t, const
-///   HeldOut&, const DiagnosisResult&); void afterCandidates(DiagnosisResult&)
-///   std::vector<std::pair<Effect, Effect>> nestedEffects()   4. (see nameCause)
-///   void refineCause(DiagnosisResult&)   4. after nameCause: the mode's rules of
-///   diagnosis/rules.hpp
-///   Closeness closenessBaseline(const DiagnosisResult&); void extend(std::size_t,
-///   DiagnosisResult&)   5.
-/// Steps run in this order; what a mode draws at random is seeded per replica.
-template <class Mode>
-void runDiagnosis(Mode& mode, const DiagnoseConfig& config, const std::vector<Effect>& candidates,
-                  DiagnosisResult& out) {
-  // 1. Baseline: the published model.
-  reportProgress(config, "baseline fit", 0, 0);
-  if (!mode.fitBaseline(out)) return;
-  const std::map<std::string, double> measured = mode.measuredStatistics(out);
-  // 2. Parametric bootstrap from the fitted baseline: the battery's p-values.
-  std::map<std::string, std::vector<double>> replica_stats;
-  const auto replicas = static_cast<std::size_t>(config.replicas);
-  for (int b = 0; b < config.replicas; ++b) {
-    reportProgress(config, "bootstrap replicas", static_cast<std::size_t>(b), replicas);
-    mode.replica(b, replica_stats, out);
-  }
-  reportProgress(config, "bootstrap replicas", replicas, replicas);
-  out.battery = makeBattery(mode.statisticInfo(), measured, replica_stats);
-  // 3. Candidates: held-out gain, delta AIC, identifiability.
-  HeldOut held(candidates.size());
-  reportProgress(config, kHeldOutStage, 0, 0);
-  mode.heldOut(held);
-  if (held.base.empty()) {
-    out.status.code = StatusCode::cross_validation_failed;
-    out.status.message = mode.noHeldOut();
-    return;
-  }
-  out.baseline_heldout_nats_per_point = held.baselineMean();
-  mode.beforeCandidates(out);
-  for (std::size_t c = 0; c < candidates.size(); ++c) {
-    reportProgress(config, "candidate tests", c, candidates.size());
-    out.candidates.push_back(mode.candidate(c, held, out));
-  }
-  reportProgress(config, "candidate tests", candidates.size(), candidates.size());
-  mode.afterCandidates(out);
-  // 4. The cause: the rules of diagnosis/rules.hpp, in the table's order.
-  out.primary_cause = nameCause(out.candidates, config.alpha, out.decision, mode.nestedEffects());
-  mode.refineCause(out);
-  // 5. The extended model and how close its simulation comes to the data.
-  reportProgress(config, "extended model", 0, 0);
-  out.closeness_baseline = mode.closenessBaseline(out);
-  for (std::size_t c = 0; c < candidates.size(); ++c) {
-    if (toString(candidates[c]) != out.primary_cause) continue;
-    const CandidateResult& r = out.candidates[c];
-    out.extended_parameters = r.estimates;
-    out.gain_heldout_nats_per_point = r.heldout_gain_nats_per_point;
-    out.gain_delta_aic = r.delta_aic;
-    mode.extend(c, out);
-    break;
-  }
-}
+/// What a kind of data must provide for the five steps of diagnosis.hpp, in the order
+/// runDiagnosis calls them. What a mode draws at random is seeded per replica.
+class DiagnosisMode {
+ public:
+  virtual ~DiagnosisMode() = default;
+
+  // 1. The published model. False: out.status says why it could not be fitted.
+  virtual bool fitBaseline(DiagnosisResult& out) = 0;
+  /// The battery's statistics on the data (also recorded in out.measured).
+  virtual std::map<std::string, double> measuredStatistics(DiagnosisResult& out) = 0;
+
+  // 2. Parametric bootstrap: replica `b` simulated from the baseline, its statistics appended.
+  virtual void replica(int b, std::map<std::string, std::vector<double>>& stats,
+                       DiagnosisResult& out) = 0;
+  virtual const std::vector<StatisticInfo>& statisticInfo() const = 0;
+
+  // 3. Candidates scored out of sample. heldOut fills the baseline's and each candidate's
+  // held-out terms; an empty baseline stops the diagnosis with noHeldOut() as the reason.
+  virtual void heldOut(HeldOut& held) = 0;
+  virtual const char* noHeldOut() const = 0;
+  virtual void beforeCandidates(DiagnosisResult& out) = 0;
+  virtual CandidateResult candidate(std::size_t c, const HeldOut& held,
+                                    const DiagnosisResult& out) = 0;
+  virtual void afterCandidates(DiagnosisResult& out) = 0;
+
+  // 4. The cause: pairs (outer, inner) where the inner effect is nested in the outer (see
+  // nameCause), then the mode's own rules of diagnosis/rules.hpp after nameCause.
+  virtual std::vector<std::pair<Effect, Effect>> nestedEffects() const = 0;
+  virtual void refineCause(DiagnosisResult& out) = 0;
+
+  // 5. How close the baseline's simulation comes to the data, and the model extended by
+  // candidate `c` (the named cause).
+  virtual Closeness closenessBaseline(const DiagnosisResult& out) const = 0;
+  virtual void extend(std::size_t c, DiagnosisResult& out) const = 0;
+};
+
+/// Runs the five steps of diagnosis.hpp on `mode`: the baseline, the bootstrap battery, the
+/// candidates held out, the cause and the extended model, into `out`.
+void runDiagnosis(DiagnosisMode& mode, const DiagnoseConfig& config,
+                  const std::vector<Effect>& candidates, DiagnosisResult& out);
 
 }  // namespace lidarcal::diagnosis

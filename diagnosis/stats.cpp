@@ -71,21 +71,6 @@ double boundedLikelihoodRatioPValue(double statistic) {
   return statistic > 0.0 ? 0.5 * likelihoodRatioPValue(statistic, 1) : 1.0;
 }
 
-std::vector<double> holmAdjust(const std::vector<double>& p) {
-  std::vector<std::size_t> idx;
-  for (std::size_t i = 0; i < p.size(); ++i)
-    if (std::isfinite(p[i])) idx.push_back(i);
-  std::sort(idx.begin(), idx.end(), [&](std::size_t a, std::size_t b) { return p[a] < p[b]; });
-  std::vector<double> out(p.size(), std::numeric_limits<double>::quiet_NaN());
-  const double m = static_cast<double>(idx.size());
-  double running = 0.0;
-  for (std::size_t r = 0; r < idx.size(); ++r) {
-    running = std::max(running, std::min(1.0, (m - static_cast<double>(r)) * p[idx[r]]));
-    out[idx[r]] = running;
-  }
-  return out;
-}
-
 double ksDistance(std::vector<double> a, std::vector<double> b) {
   if (a.empty() || b.empty()) return 0.0;
   std::sort(a.begin(), a.end());

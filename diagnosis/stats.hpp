@@ -6,6 +6,8 @@
 
 #include <vector>
 
+#include "common/multiple_testing.hpp"  // holmAdjust, used beside these tests
+
 #include "common/stats_util.hpp"
 
 namespace lidarcal::diagnosis {
@@ -43,9 +45,6 @@ double likelihoodRatioPValue(double statistic, int parameters);
 /// bound half the time, so the statistic is 0 or chi-square with one degree of freedom, half and
 /// half (Self and Liang 1987): half likelihoodRatioPValue's; 1 at or below 0.
 double boundedLikelihoodRatioPValue(double statistic);
-
-/// Holm's step-down adjustment of p-values (NaN entries are left out and stay NaN).
-std::vector<double> holmAdjust(const std::vector<double>& p);
 
 /// Two-sample Kolmogorov-Smirnov distance sup |F_a - F_b| (0 when either is empty).
 double ksDistance(std::vector<double> a, std::vector<double> b);

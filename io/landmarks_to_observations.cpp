@@ -2,42 +2,28 @@
 #include "io/landmarks_to_observations.hpp"
 
 #include <algorithm>
-#include <cmath>
-#include <map>
+#include <limits>
 #include <string>
 
 #include "common/errors.hpp"
-#include "io/csv_row.hpp"
+#include "io/landmarks_csv.hpp"
 
 namespace lidarcal::io {
 
 std::vector<Observation> observationsFromLandmarksCsv(const std::filesystem::path& file,
                                                       RangeReference reference) {
-  CsvReader csv(file, "landmarks.csv is written by `lidarcal detect` (docs/FORMAT.md)");
-  const std::vector<std::string> header = csv.readHeader();
-  std::map<std::string, std::size_t> column;
-  for (std::size_t i = 0; i < header.size(); ++i) column[header[i]] = i;
-  for (const char* needed : {"stop", "landmark", "bearing_rad", "range_m", "radius_m"})
-    if (!column.count(needed))
-      throw InputError(file.string(), "line 1",
-                       std::string("no column `") + needed + "` in the header",
-                       "landmarks.csv is written by `lidarcal detect` (docs/FORMAT.md)");
   std::vector<Observation> out;
-  while (csv.next(header.size())) {
+  for (const LandmarkRow& row : readLandmarksCsv(file)) {
+    if (row.stop > static_cast<std::size_t>(std::numeric_limits<int>::max()))
+      throw InputError(file.string(), "column stop",
+                       "stop " + std::to_string(row.stop) + " is too large",
+                       "landmarks.csv is written by `lidarcal detect` (docs/FORMAT.md)");
     Observation o;
-    const long long stop = csv.integer(column["stop"], "stop");
-    if (stop < 0 || stop > 100'000'000) csv.fail("stop", "must be a stop index >= 0");
-    o.stop = static_cast<int>(stop);
+    o.stop = static_cast<int>(row.stop);
     o.sensor = 0;
-    const long long id = csv.integer(column["landmark"], "landmark");
-    o.landmark = id > 0 && id <= 100'000'000 ? static_cast<int>(id) : -1;
-    o.bearing_rad = csv.number(column["bearing_rad"], "bearing_rad");
-    o.range_m = csv.number(column["range_m"], "range_m");
-    if (reference == RangeReference::surface) {
-      const double radius = csv.number(column["radius_m"], "radius_m");
-      if (radius < 0.0) csv.fail("radius_m", "must not be negative");
-      o.range_m -= radius;
-    }
+    o.landmark = row.landmark;
+    o.bearing_rad = row.bearing_rad;
+    o.range_m = reference == RangeReference::surface ? row.range_m - row.radius_m : row.range_m;
     out.push_back(o);
   }
   std::stable_sort(out.begin(), out.end(),

@@ -24,9 +24,9 @@ enum class RangeReference {
   surface,
 };
 
-/// Reads landmarks.csv and returns one observation per row: sensor 0, the row's stop and
-/// landmark id (ids <= 0 become -1, unassociated), its range (per `reference`) and bearing.
-/// Throws InputError (file, line, column) on a missing column or a malformed value.
+/// Reads landmarks.csv (io/landmarks_csv.hpp) and returns one observation per row, sorted by
+/// stop: sensor 0, the row's stop and landmark id, its range (per `reference`) and bearing.
+/// Throws InputError (file, line, column) as readLandmarksCsv does.
 std::vector<Observation> observationsFromLandmarksCsv(const std::filesystem::path& file,
                                                       RangeReference reference);
 

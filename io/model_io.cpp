@@ -7,15 +7,13 @@
 
 #include "common/errors.hpp"
 #include "io/atomic_file.hpp"
+#include "io/json_number.hpp"
 #include "io/json_util.hpp"
 
 namespace lidarcal::io {
 namespace {
 
 using ojson = nlohmann::ordered_json;
-
-/// NaN is not JSON: write null.
-ojson number(double v) { return std::isfinite(v) ? ojson(v) : ojson(nullptr); }
 
 ojson noiseJson(const NoiseModel& n) {
   ojson j{{"kind", toString(n.kind)}};
@@ -33,7 +31,7 @@ ojson biasJson(const CalibrationModel& m) {
   if (m.alpha_covariance.size() == n * n) {
     ojson se = ojson::array();
     for (std::size_t i = 0; i < n; ++i)
-      se.push_back(number(std::sqrt(m.alpha_covariance[i * n + i])));
+      se.push_back(jsonNumber(std::sqrt(m.alpha_covariance[i * n + i])));
     j["standard_error"] = se;
   }
   return j;
@@ -41,11 +39,11 @@ ojson biasJson(const CalibrationModel& m) {
 
 /// The model discrepancy beside the curve's covariance (docs/FORMAT.md, "discrepancy").
 ojson discrepancyJson(const Discrepancy& d) {
-  ojson j{{"method", d.method}, {"sigma_m", number(d.sigma_m)}};
+  ojson j{{"method", d.method}, {"sigma_m", jsonNumber(d.sigma_m)}};
   if (d.estimated()) {
     j["dof"] = d.dof;
     j["entries"] = d.entries;
-    j["tape_sigma_m"] = number(d.tape_sigma_m);
+    j["tape_sigma_m"] = jsonNumber(d.tape_sigma_m);
   }
   j["note"] = d.note;
   return j;
@@ -79,10 +77,10 @@ ojson ordersJson(const CalibrationModel& m) {
   for (const auto& o : m.orders)
     orders.push_back(ojson{{"order", o.order},
                            {"alpha", o.alpha},
-                           {"aic", number(o.aic)},
-                           {"bic", number(o.bic)},
-                           {"validation_mse_m2", number(o.validation_mse_m2)},
-                           {"test_mse_m2", number(o.test_mse_m2)},
+                           {"aic", jsonNumber(o.aic)},
+                           {"bic", jsonNumber(o.bic)},
+                           {"validation_mse_m2", jsonNumber(o.validation_mse_m2)},
+                           {"test_mse_m2", jsonNumber(o.test_mse_m2)},
                            {"invertible", o.invertible}});
   return ojson{{"rule", m.order_rule},
                {"order_aic", m.order_aic},
@@ -93,15 +91,16 @@ ojson ordersJson(const CalibrationModel& m) {
 ojson landmarksJson(const CalibrationModel& m) {
   ojson landmarks = ojson::array();
   for (const auto& l : m.landmarks)
-    landmarks.push_back(ojson{
-        {"id", l.id},
-        {"x_m", l.x_m},
-        {"y_m", l.y_m},
-        {"radius_m", l.radius_m},
-        {"covariance_m2", ojson::array({number(l.covariance_m2[0]), number(l.covariance_m2[1]),
-                                        number(l.covariance_m2[2]), number(l.covariance_m2[3])})},
-        {"stops", l.stops},
-        {"status", l.status}});
+    landmarks.push_back(
+        ojson{{"id", l.id},
+              {"x_m", l.x_m},
+              {"y_m", l.y_m},
+              {"radius_m", l.radius_m},
+              {"covariance_m2",
+               ojson::array({jsonNumber(l.covariance_m2[0]), jsonNumber(l.covariance_m2[1]),
+                             jsonNumber(l.covariance_m2[2]), jsonNumber(l.covariance_m2[3])})},
+              {"stops", l.stops},
+              {"status", l.status}});
   return landmarks;
 }
 
@@ -121,8 +120,8 @@ ojson noiseEstimatorsJson(const NoiseFits& nf) {
        ojson{{"alpha", nf.alhashimi2016_ml_alpha}, {"sigma_e", nf.alhashimi2016_ml_sigma_e}}},
       {"exponent_test",
        ojson{{"log_likelihood_h0_h3",
-              ojson::array({number(nf.exponent_loglik[0]), number(nf.exponent_loglik[1]),
-                            number(nf.exponent_loglik[2]), number(nf.exponent_loglik[3])})},
+              ojson::array({jsonNumber(nf.exponent_loglik[0]), jsonNumber(nf.exponent_loglik[1]),
+                            jsonNumber(nf.exponent_loglik[2]), jsonNumber(nf.exponent_loglik[3])})},
              {"best", nf.exponent_best},
              {"batches", nf.exponent_batches}}}};
 }
@@ -135,7 +134,7 @@ ojson diagnosticsJson(const CalibrationModel& m) {
                {"readings", m.readings},
                {"pose_scatter_m", m.pose_scatter_m},
                {"heading_scatter_rad", m.heading_scatter_rad},
-               {"offset_radius_correlation", number(m.offset_radius_correlation)}};
+               {"offset_radius_correlation", jsonNumber(m.offset_radius_correlation)}};
 }
 
 /// The parts written only when present, so that models without them keep their bytes.
@@ -156,7 +155,7 @@ void addOptionalParts(const CalibrationModel& m, ojson& j) {
   }
   if (!m.effects.empty()) {
     ojson fx = ojson::object();
-    for (const auto& [k, v] : m.effects) fx[k] = number(v);
+    for (const auto& [k, v] : m.effects) fx[k] = jsonNumber(v);
     j["effects"] = fx;
   }
 }

@@ -8,6 +8,7 @@
 
 #include "common/errors.hpp"
 #include "io/atomic_file.hpp"
+#include "io/json_number.hpp"
 #include "io/json_util.hpp"
 #include "io/model_io.hpp"
 #include "io/rig.hpp"
@@ -18,17 +19,15 @@ namespace {
 using ojson = nlohmann::ordered_json;
 constexpr const char* kFormat = "lidarcal-rig-model/1";
 
-ojson number(double v) { return std::isfinite(v) ? ojson(v) : ojson(nullptr); }
-
 ojson poseJson(const Pose2& p) {
   return ojson{{"x_m", p.x_m}, {"y_m", p.y_m}, {"yaw_rad", p.yaw_rad}};
 }
 
 /// Standard errors of (x, y, yaw) from a row-major 3x3 covariance, in mm and degrees.
 ojson standardErrors(const std::array<double, 9>& c) {
-  return ojson{{"x_mm", number(1000.0 * std::sqrt(c[0]))},
-               {"y_mm", number(1000.0 * std::sqrt(c[4]))},
-               {"yaw_deg", number(rad2deg(std::sqrt(c[8])))}};
+  return ojson{{"x_mm", jsonNumber(1000.0 * std::sqrt(c[0]))},
+               {"y_mm", jsonNumber(1000.0 * std::sqrt(c[4]))},
+               {"yaw_deg", jsonNumber(rad2deg(std::sqrt(c[8])))}};
 }
 
 Pose2 readPose(const JsonView& v) {
@@ -94,13 +93,14 @@ void writeRigModel(const std::filesystem::path& file, const RigModel& m) {
   }
   ojson poles = ojson::array();
   for (const auto& p : m.poles)
-    poles.push_back(ojson{
-        {"id", p.id},
-        {"x_m", p.x_m},
-        {"y_m", p.y_m},
-        {"covariance_m2", ojson::array({number(p.covariance_m2[0]), number(p.covariance_m2[1]),
-                                        number(p.covariance_m2[2]), number(p.covariance_m2[3])})},
-        {"sensors", p.sensors}});
+    poles.push_back(
+        ojson{{"id", p.id},
+              {"x_m", p.x_m},
+              {"y_m", p.y_m},
+              {"covariance_m2",
+               ojson::array({jsonNumber(p.covariance_m2[0]), jsonNumber(p.covariance_m2[1]),
+                             jsonNumber(p.covariance_m2[2]), jsonNumber(p.covariance_m2[3])})},
+              {"sensors", p.sensors}});
   ojson stops = ojson::array();
   for (const Pose2& p : m.stops) stops.push_back(poseJson(p));
   const ojson j{{"format", kFormat},

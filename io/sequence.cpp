@@ -18,6 +18,7 @@
 #include "common/errors.hpp"
 #include "io/atomic_file.hpp"
 #include "io/json_util.hpp"
+#include "io/scan_names.hpp"
 
 namespace lidarcal::io {
 namespace fs = std::filesystem;
@@ -50,44 +51,7 @@ std::vector<Stop> groupStops(const std::vector<Pose2>& viewpoints, const StopTol
   return stops;
 }
 
-std::string scanFileName(std::size_t index) {
-  char name[32];
-  std::snprintf(name, sizeof name, "scan_%06zu.pcd", index);
-  return name;
-}
-
 namespace {
-
-bool isPcdName(std::string_view name) {
-  return name.size() > 4 && name.compare(name.size() - 4, 4, ".pcd") == 0;
-}
-
-/// `.PCD`, `.Pcd`, ...: a scan the user meant, with an extension lidarcal would skip.
-bool isPcdNameInOtherCase(const std::string& name) {
-  if (name.size() <= 4 || isPcdName(name)) return false;
-  std::string ext = name.substr(name.size() - 4);
-  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return ext == ".pcd";
-}
-
-/// A scan name `PREFIX<digits>.pcd`: the digits are the scan number. No number when the stem
-/// does not end in a digit or the digits follow a '.' (a decimal fraction, e.g. a time stamp).
-/// Views into the name (a sequence of 100,000 names is checked without copying them).
-struct ScanNumber {
-  std::string_view prefix;  ///< the stem before the digits
-  std::string_view value;   ///< the digits without leading zeros ("0" for zero)
-};
-
-std::optional<ScanNumber> scanNumber(std::string_view name) {
-  const std::string_view stem = name.substr(0, name.size() - 4);
-  std::size_t start = stem.size();
-  while (start > 0 && std::isdigit(static_cast<unsigned char>(stem[start - 1]))) --start;
-  if (start == stem.size() || (start > 0 && stem[start - 1] == '.')) return std::nullopt;
-  const std::string_view digits = stem.substr(start);
-  const std::size_t nz = digits.find_first_not_of('0');
-  return ScanNumber{stem.substr(0, start),
-                    nz == std::string_view::npos ? std::string_view("0") : digits.substr(nz)};
-}
 
 std::uint8_t flagsOf(const ScanHeader& h) {
   return static_cast<std::uint8_t>((h.has_intensity ? 1u : 0u) | (h.has_label ? 2u : 0u) |
@@ -100,49 +64,6 @@ bool sameBits(double a, double b) {
   std::memcpy(&x, &a, sizeof x);
   std::memcpy(&y, &b, sizeof y);
   return x == y;
-}
-
-/// A name PREFIX<width digits>.pcd whose number fits in 64 bits.
-struct NumberedName {
-  std::string_view prefix;
-  std::size_t width = 0;
-  std::uint64_t number = 0;
-};
-
-std::optional<NumberedName> numberedName(std::string_view name) {
-  if (!isPcdName(name)) return std::nullopt;
-  const std::optional<ScanNumber> n = scanNumber(name);
-  if (!n) return std::nullopt;
-  NumberedName r;
-  r.prefix = n->prefix;
-  r.width = name.size() - 4 - n->prefix.size();
-  for (char c : n->value) {
-    const std::uint64_t d = static_cast<std::uint64_t>(c - '0');
-    if (r.number > (std::numeric_limits<std::uint64_t>::max() - d) / 10) return std::nullopt;
-    r.number = r.number * 10 + d;
-  }
-  return r;
-}
-
-/// Appends the name PREFIX + `number` zero-padded to `width` digits + `.pcd`.
-void appendNumberedName(std::string& out, std::string_view prefix, std::size_t width,
-                        std::uint64_t number) {
-  char digits[24];
-  std::size_t len = 0;
-  do {
-    digits[len++] = static_cast<char>('0' + number % 10);
-    number /= 10;
-  } while (number != 0);
-  out += prefix;
-  if (width > len) out.append(width - len, '0');
-  while (len > 0) out += digits[--len];
-  out += ".pcd";
-}
-
-std::string numberedFileName(std::string_view prefix, std::size_t width, std::uint64_t number) {
-  std::string name;
-  appendNumberedName(name, prefix, width, number);
-  return name;
 }
 
 std::size_t digitCount(std::uint64_t v) {
@@ -340,11 +261,6 @@ void ScanList::shrink_to_fit() {
 
 namespace {
 
-/// Numbers compare by length, then text (no overflow however long).
-bool numberLess(std::string_view a, std::string_view b) {
-  return a.size() != b.size() ? a.size() < b.size() : a < b;
-}
-
 /// Files are read in lexicographic order. Where names number the scans (PREFIX<digits>.pcd),
 /// that order must be the numeric order and no number may appear twice: two files for one scan
 /// number are two recordings mixed in one directory (or a copy); numbers without zero padding
@@ -391,10 +307,6 @@ void checkScanNumbers(const fs::path& dir, const std::vector<std::string>& sorte
     last[n.prefix] = i;
   }
 }
-
-}  // namespace
-
-namespace {
 
 /// The scan file names of a directory: while every name reads PREFIX + digits of one width +
 /// .pcd (what lidarcal writes), only the numbers (8 bytes a scan); else the names, sorted.

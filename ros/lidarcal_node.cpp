@@ -22,7 +22,7 @@
 #include "io/model_io.hpp"
 #include "io/model_yaml.hpp"
 #include "io/rig_model_io.hpp"
-#include "pipeline/stages.hpp"
+#include "pipeline/stages/stages.hpp"
 #include "ros/node_params.hpp"
 #include "ros/node_watch.hpp"
 #include "ros/scan_path.hpp"

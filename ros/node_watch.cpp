@@ -8,7 +8,7 @@
 
 #include "io/atomic_file.hpp"
 #include "io/model_io.hpp"
-#include "pipeline/watch_report.hpp"
+#include "pipeline/reports/watch_report.hpp"
 
 namespace lidarcal::ros1 {
 namespace {

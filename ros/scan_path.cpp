@@ -13,7 +13,7 @@
 #include <thread>
 #include <utility>
 
-#include "pipeline/stages.hpp"
+#include "pipeline/stages/stages.hpp"
 
 namespace lidarcal::ros1 {
 namespace {

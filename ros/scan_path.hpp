@@ -21,7 +21,7 @@
 #include "calibration/filtering.hpp"
 #include "common/calibration_model.hpp"
 #include "io/bag_scans.hpp"
-#include "pipeline/bag_correct.hpp"
+#include "pipeline/stages/bag_correct.hpp"
 #include "ros2/live_poses.hpp"
 #include "watch/diagnostics.hpp"
 #include "watch/live_watcher.hpp"

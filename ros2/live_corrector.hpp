@@ -20,8 +20,8 @@
 
 #include "calibration/filtering.hpp"
 #include "common/calibration_model.hpp"
-#include "pipeline/bag_correct.hpp"
-#include "pipeline/stages.hpp"
+#include "pipeline/stages/bag_correct.hpp"
+#include "pipeline/stages/stages.hpp"
 
 namespace lidarcal::ros2 {
 

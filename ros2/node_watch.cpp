@@ -9,7 +9,7 @@
 #include "common/errors.hpp"
 #include "io/atomic_file.hpp"
 #include "io/model_io.hpp"
-#include "pipeline/watch_report.hpp"
+#include "pipeline/reports/watch_report.hpp"
 
 namespace lidarcal::ros2 {
 

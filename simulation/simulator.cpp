@@ -285,4 +285,21 @@ SimulatedScan simulateScan(const Scene& scene, const TruthStop& stop, std::size_
   return out;
 }
 
+void forEachScan(const Scene& scene, const std::vector<TruthStop>& stops, std::uint64_t seed,
+                 const std::function<void(std::size_t stop, SimulatedScan&& scan)>& visit) {
+  for (std::size_t k = 0; k < stops.size(); ++k)
+    for (std::size_t i = 0; i < stops[k].scans; ++i)
+      visit(k, simulateScan(scene, stops[k], stops[k].first_scan + i, seed));
+}
+
+SimulatedSequence simulateSequence(const Scene& scene, const std::vector<TruthStop>& stops,
+                                   std::uint64_t seed) {
+  SimulatedSequence out;
+  forEachScan(scene, stops, seed, [&](std::size_t k, SimulatedScan&& scan) {
+    out.scans.push_back(std::move(scan));
+    out.stop_of_scan.push_back(k);
+  });
+  return out;
+}
+
 }  // namespace lidarcal::simulation

@@ -9,6 +9,7 @@
 // scan can be produced on its own (streaming, threads) with the same bytes.
 
 #include <cstdint>
+#include <functional>
 #include <random>
 #include <vector>
 
@@ -74,5 +75,20 @@ struct SimulatedScan {
 /// Simulates scan `scan_index` (taken at `stop`) of the sequence.
 SimulatedScan simulateScan(const Scene& scene, const TruthStop& stop, std::size_t scan_index,
                            std::uint64_t seed);
+
+/// Calls visit(k, scan) for every scan taken at `stops`, in order (stop k's scans in turn), each
+/// simulated when it is visited, so a long sequence need not be held in memory.
+void forEachScan(const Scene& scene, const std::vector<TruthStop>& stops, std::uint64_t seed,
+                 const std::function<void(std::size_t stop, SimulatedScan&& scan)>& visit);
+
+/// Every scan taken at the stops, in order, and the stop each was taken at.
+struct SimulatedSequence {
+  std::vector<SimulatedScan> scans;
+  std::vector<std::size_t> stop_of_scan;  ///< index into the stops, one per scan
+};
+
+/// The whole sequence in memory: forEachScan, collected.
+SimulatedSequence simulateSequence(const Scene& scene, const std::vector<TruthStop>& stops,
+                                   std::uint64_t seed);
 
 }  // namespace lidarcal::simulation

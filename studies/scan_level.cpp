@@ -73,28 +73,10 @@ ScanLevelConfig scanLevelConfig(const TrialConfig& config) {
 
 namespace {
 
-/// The simulated scans of every stop, in order, and the stop of each.
-struct SimulatedScans {
-  std::vector<simulation::SimulatedScan> scans;
-  std::vector<std::size_t> stop_of_scan;
-};
-
-SimulatedScans simulateStops(const Scene& scene, const std::vector<TruthStop>& stops,
-                             std::uint64_t seed) {
-  SimulatedScans out;
-  auto& scans = out.scans;
-  auto& stop_of_scan = out.stop_of_scan;
-  for (std::size_t k = 0; k < stops.size(); ++k)
-    for (std::size_t i = 0; i < stops[k].scans; ++i) {
-      scans.push_back(simulation::simulateScan(scene, stops[k], stops[k].first_scan + i, seed));
-      stop_of_scan.push_back(k);
-    }
-  return out;
-}
-
 /// Sightings by the truth's own grouping: every beam on landmark t in scan i is one sighting of t.
 void addTruthSightings(Draw& d, const std::vector<Cylinder>& layout,
-                       const std::vector<TruthStop>& stops, const SimulatedScans& sim) {
+                       const std::vector<TruthStop>& stops,
+                       const simulation::SimulatedSequence& sim) {
   const auto& scans = sim.scans;
   const auto& stop_of_scan = sim.stop_of_scan;
   d.true_id.resize(layout.size() + 1);
@@ -133,7 +115,7 @@ void addTruthSightings(Draw& d, const std::vector<Cylinder>& layout,
 /// memory, but within a scan in the detector's order, not by landmark (the study's stop-and-go
 /// numbers in docs/results/montecarlo.md were measured in this order).
 void addDetectedSightings(Draw& d, const detectors::SequenceDetections& det,
-                          const SimulatedScans& sim) {
+                          const simulation::SimulatedSequence& sim) {
   const auto& scans = sim.scans;
   const auto& stop_of_scan = sim.stop_of_scan;
   for (std::size_t i = 0; i < det.scans.size(); ++i) {
@@ -182,7 +164,7 @@ Draw drawScanLevel(const std::vector<Cylinder>& layout, const PathSpec& path,
   config.validate();
   const Scene scene = sceneOf(layout, path, sensor, config);
   const auto stops = simulation::planStops(scene, seed);
-  const SimulatedScans sim = simulateStops(scene, stops, seed);
+  const simulation::SimulatedSequence sim = simulation::simulateSequence(scene, stops, seed);
 
   Draw d;
   for (const auto& s : stops) {

@@ -91,7 +91,7 @@ void SequenceDiagnosis::setPValue(CandidateResult& r, std::size_t c, double lr) 
 }
 
 CandidateResult SequenceDiagnosis::candidate(std::size_t c, const HeldOut& held,
-                                             const DiagnosisResult& out) const {
+                                             const DiagnosisResult& out) {
   CandidateResult r;
   r.effect = candidates_[c];
   r.statistic = statisticOf(r.effect, DiagnoseMode::sequence);

@@ -200,7 +200,7 @@ std::map<std::string, double> sceneKeys(Effect e, const JointResult& f, const Re
   return k;
 }
 
-void SequenceDiagnosis::afterCandidates(DiagnosisResult& out) const {
+void SequenceDiagnosis::afterCandidates(DiagnosisResult& out) {
   if (truth_)
     out.calibration_mse_ratio_baseline =
         calibrationMseRatio(obs_, baseline_fit_, baseline_cfg_, *truth_);

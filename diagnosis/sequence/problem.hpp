@@ -21,35 +21,39 @@
 
 namespace lidarcal::diagnosis::sequence {
 
-/// A scan sequence with landmarks, diagnosed with joint refinements: the problem object of
+/// A scan sequence with landmarks, diagnosed with joint refinements: the DiagnosisMode of
 /// runDiagnosis (diagnosis/skeleton.hpp), its steps in the order they run. Its methods live in
 /// baseline.cpp (step 1-2), candidate_fits.cpp and candidate_result.cpp (step 3), verdict.cpp
 /// (step 4), extended_model.cpp (step 5), starts.cpp, noise_shape.cpp and odometry_noise.cpp.
-class SequenceDiagnosis {
+class SequenceDiagnosis final : public DiagnosisMode {
  public:
   SequenceDiagnosis(const LandmarkObservations& obs, const DiagnoseConfig& config,
                     const std::vector<Effect>& candidates,
                     const std::vector<std::vector<double>>* truth)
       : obs_(obs), config_(config), candidates_(candidates), truth_(truth) {}
 
-  bool fitBaseline(DiagnosisResult& out);
-  std::map<std::string, double> measuredStatistics(DiagnosisResult& out);
-  void replica(int b, std::map<std::string, std::vector<double>>& stats, DiagnosisResult& out);
-  const std::vector<StatisticInfo>& statisticInfo() const {
+  bool fitBaseline(DiagnosisResult& out) override;
+  std::map<std::string, double> measuredStatistics(DiagnosisResult& out) override;
+  void replica(int b, std::map<std::string, std::vector<double>>& stats,
+               DiagnosisResult& out) override;
+  const std::vector<StatisticInfo>& statisticInfo() const override {
     return diagnosis::statisticInfo(DiagnoseMode::sequence);
   }
-  void heldOut(HeldOut& held);
-  const char* noHeldOut() const { return "no fold could be fitted: too few scans or landmarks"; }
-  void beforeCandidates(DiagnosisResult&) {
+  void heldOut(HeldOut& held) override;
+  const char* noHeldOut() const override {
+    return "no fold could be fitted: too few scans or landmarks";
+  }
+  void beforeCandidates(DiagnosisResult&) override {
     identifiability_ = identifiability(obs_, baseline_fit_, measured_rows_, baseline_cfg_);
   }
-  CandidateResult candidate(std::size_t c, const HeldOut& held, const DiagnosisResult& out) const;
-  void afterCandidates(DiagnosisResult& out) const;
+  CandidateResult candidate(std::size_t c, const HeldOut& held,
+                            const DiagnosisResult& out) override;
+  void afterCandidates(DiagnosisResult& out) override;
   /// An angle offset is one heading shared by all stops (nested), handled by parsimony.
-  std::vector<std::pair<Effect, Effect>> nestedEffects() const {
+  std::vector<std::pair<Effect, Effect>> nestedEffects() const override {
     return {{Effect::angle_offset, Effect::heading_error}};
   }
-  void refineCause(DiagnosisResult& out) const;
+  void refineCause(DiagnosisResult& out) override;
   void nameCauseBesideSymptom(DiagnosisResult& out, Effect symptom) const;
   bool ratioCountsBeside(std::size_t under, bool grid) const;
   void describeCauseBesideSymptom(DiagnosisResult& out, bool grid, std::size_t under,
@@ -60,10 +64,10 @@ class SequenceDiagnosis {
                                                   bool from_under = false) const;
   std::pair<JointConfig, JointInit> configWithBothTerms(std::size_t c, std::size_t under) const;
   double likelihoodRatioPBesideTerm(const JointResult& both, std::size_t under) const;
-  Closeness closenessBaseline(const DiagnosisResult&) const {
+  Closeness closenessBaseline(const DiagnosisResult&) const override {
     return closeness(measured_z_, baseline_replica_z_);
   }
-  void extend(std::size_t c, DiagnosisResult& out) const;
+  void extend(std::size_t c, DiagnosisResult& out) const override;
 
  private:
   bool calibrateBaseline(DiagnosisResult& out);

@@ -22,7 +22,7 @@ namespace lidarcal::diagnosis::sequence {
 
 /// The rules after nameCause, in the table's order (diagnosis/rules.hpp): grid_first, tails_first,
 /// noise_term_beside_path.
-void SequenceDiagnosis::refineCause(DiagnosisResult& out) const {
+void SequenceDiagnosis::refineCause(DiagnosisResult& out) {
   if (names(out.primary_cause, Effect::quantisation))
     nameCauseBesideSymptom(out, Effect::quantisation);
   if (names(out.primary_cause, Effect::heavy_tails))

@@ -18,11 +18,11 @@
 
 namespace lidarcal::diagnosis::static_scene {
 
-/// Repeated scans from one pose, diagnosed with the bin and wall models: the problem object of
+/// Repeated scans from one pose, diagnosed with the bin and wall models: the DiagnosisMode of
 /// runDiagnosis (diagnosis/skeleton.hpp), its steps in the order they run. Its methods live in
 /// baseline.cpp (steps 1-2), candidates.cpp and tail_attribution.cpp (step 3), verdict.cpp (step 4)
 /// and extended_model.cpp (step 5).
-class StaticDiagnosis {
+class StaticDiagnosis final : public DiagnosisMode {
  public:
   StaticDiagnosis(const StaticScans& data, const DiagnoseConfig& config,
                   const std::vector<Effect>& candidates, std::vector<WallLine>* walls_out)
@@ -30,26 +30,28 @@ class StaticDiagnosis {
   StaticDiagnosis(const StaticDiagnosis&) = delete;  // scored_readings_ points into the object
   StaticDiagnosis& operator=(const StaticDiagnosis&) = delete;
 
-  bool fitBaseline(DiagnosisResult& out);
-  std::map<std::string, double> measuredStatistics(DiagnosisResult& out);
-  void replica(int b, std::map<std::string, std::vector<double>>& stats, DiagnosisResult& out);
-  const std::vector<StatisticInfo>& statisticInfo() const {
+  bool fitBaseline(DiagnosisResult& out) override;
+  std::map<std::string, double> measuredStatistics(DiagnosisResult& out) override;
+  void replica(int b, std::map<std::string, std::vector<double>>& stats,
+               DiagnosisResult& out) override;
+  const std::vector<StatisticInfo>& statisticInfo() const override {
     return diagnosis::statisticInfo(DiagnoseMode::static_scene);
   }
-  void heldOut(HeldOut& held);
-  const char* noHeldOut() const { return "no held-out reading"; }
-  void beforeCandidates(DiagnosisResult& out);
-  CandidateResult candidate(std::size_t c, const HeldOut& held, const DiagnosisResult& out);
-  void afterCandidates(DiagnosisResult& out);
-  std::vector<std::pair<Effect, Effect>> nestedEffects() const { return {}; }
-  void refineCause(DiagnosisResult& out);
+  void heldOut(HeldOut& held) override;
+  const char* noHeldOut() const override { return "no held-out reading"; }
+  void beforeCandidates(DiagnosisResult& out) override;
+  CandidateResult candidate(std::size_t c, const HeldOut& held,
+                            const DiagnosisResult& out) override;
+  void afterCandidates(DiagnosisResult& out) override;
+  std::vector<std::pair<Effect, Effect>> nestedEffects() const override { return {}; }
+  void refineCause(DiagnosisResult& out) override;
   void refineCauseByTails(DiagnosisResult& out);
   double darkRangeCorrelation() const;
   bool reRankUnderTails(DiagnosisResult& out);
-  Closeness closenessBaseline(const DiagnosisResult& out) const {
+  Closeness closenessBaseline(const DiagnosisResult& out) const override {
     return closenessOf(out.measured, baseline_replicas_);
   }
-  void extend(std::size_t c, DiagnosisResult& out) const;
+  void extend(std::size_t c, DiagnosisResult& out) const override;
 
  private:
   bool makeData(DiagnosisResult& out);

@@ -33,12 +33,9 @@ Simulated simulate(const Scene& scene, std::uint64_t seed) {
   s.truth.seed = seed;
   s.truth.scene = scene;
   s.truth.stops = simulation::planStops(scene, seed);
-  for (std::size_t k = 0; k < s.truth.stops.size(); ++k)
-    for (std::size_t i = 0; i < s.truth.stops[k].scans; ++i) {
-      s.scans.push_back(
-          simulation::simulateScan(scene, s.truth.stops[k], s.truth.stops[k].first_scan + i, seed));
-      s.stop_of_scan.push_back(k);
-    }
+  simulation::SimulatedSequence sequence = simulation::simulateSequence(scene, s.truth.stops, seed);
+  s.scans = std::move(sequence.scans);
+  s.stop_of_scan = std::move(sequence.stop_of_scan);
   return s;
 }
 

@@ -180,20 +180,28 @@ TEST(LandmarksToObservations, ConvertsRangesToTheCentreOrTheSurfaceAndStopPosesT
   writeFile(dir / "l.csv",
             "file,stop,landmark,bearing_rad,range_m,centre_x_m,centre_y_m,radius_m,n_points,rms_m\n"
             "scan_000010.pcd,1,2,0.5,3.0,0,0,0.12,20,0.01\n"
-            "scan_000000.pcd,0,0,-0.5,2.0,0,0,0.10,18,0.01\n");
+            "scan_000000.pcd,0,1,-0.5,2.0,0,0,0.10,18,0.01\n");
   const auto centre = observationsFromLandmarksCsv(dir / "l.csv", RangeReference::centre);
   ASSERT_EQ(centre.size(), 2u);
-  EXPECT_EQ(centre[0].stop, 0);       // sorted by stop
-  EXPECT_EQ(centre[0].landmark, -1);  // id 0 = not a landmark
+  EXPECT_EQ(centre[0].stop, 0);  // sorted by stop
+  EXPECT_EQ(centre[0].landmark, 1);
   EXPECT_EQ(centre[1].landmark, 2);
   EXPECT_DOUBLE_EQ(centre[1].range_m, 3.0);
   EXPECT_DOUBLE_EQ(centre[1].bearing_rad, 0.5);
   const auto surface = observationsFromLandmarksCsv(dir / "l.csv", RangeReference::surface);
   EXPECT_DOUBLE_EQ(surface[1].range_m, 3.0 - 0.12);
+  // One reader for landmarks.csv: its header and its ids (>= 1) as `detect` writes them.
   writeFile(dir / "m.csv", "file,stop,landmark,range_m\nx,0,1,2\n");
   EXPECT_NE(errorOf([&] {
               observationsFromLandmarksCsv(dir / "m.csv", RangeReference::centre);
-            }).find("no column `bearing_rad`"),
+            }).find("header must be"),
+            std::string::npos);
+  writeFile(dir / "z.csv",
+            "file,stop,landmark,bearing_rad,range_m,centre_x_m,centre_y_m,radius_m,n_points,rms_m\n"
+            "scan_000000.pcd,0,0,-0.5,2.0,0,0,0.10,18,0.01\n");
+  EXPECT_NE(errorOf([&] {
+              observationsFromLandmarksCsv(dir / "z.csv", RangeReference::centre);
+            }).find("column landmark"),
             std::string::npos);
 
   std::vector<Stop> stops(3);

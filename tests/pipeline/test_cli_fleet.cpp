@@ -11,8 +11,8 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "calibration/fleet.hpp"
 #include "io/model_io.hpp"
-#include "pipeline/fleet.hpp"
 #include "test_util.hpp"
 
 namespace lidarcal {
@@ -82,7 +82,7 @@ TEST(FleetCli, FlagsTheOneSensorWhoseOffsetMovedByTwoCentimetres) {
     EXPECT_TRUE(row["outlier"]["tested"].get<bool>());
     // The row is the second week's model, read back: bias and standard error at every distance.
     const auto model = io::readModel(dir / (sensorName(i) + "_2_model.json"));
-    const auto expected = pipeline::biasAt(model, distances);
+    const auto expected = calibration::biasAt(model, distances);
     for (std::size_t j = 0; j < distances.size(); ++j) {
       EXPECT_DOUBLE_EQ(row["bias"][j]["bias_m"].get<double>(), expected[j].bias_m);
       EXPECT_DOUBLE_EQ(row["bias"][j]["se_m"].get<double>(), expected[j].se_m);

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // What a user meets at the command line before any work is done: help that fits an 80-column
 // terminal, and parse errors that name what was not understood, in the order given, with the
-// nearest command or option (pipeline/cli_usage.hpp).
+// nearest command or option (pipeline/commands/cli_usage.hpp).
 
 #include <algorithm>
 #include <sstream>
@@ -10,7 +10,7 @@
 
 #include <gtest/gtest.h>
 
-#include "pipeline/cli_usage.hpp"
+#include "pipeline/commands/cli_usage.hpp"
 #include "test_util.hpp"
 
 namespace lidarcal::test {

@@ -3,6 +3,7 @@
 // drive of the same scene, clean and with a change injected; what it refuses and when it can
 // test nothing.
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 
 #include <gtest/gtest.h>
@@ -30,21 +31,48 @@ fs::path drive(const fs::path& dir, const std::string& name, int scans, int seed
   return dir / name / "scans";
 }
 
+/// The drives every test watches: one to calibrate on (900 scans, model.json) and one to watch
+/// (1200 scans); `complete` is written last.
+void makeDrives(const fs::path& dir) {
+  const fs::path cal = drive(dir, "calibration", 900, 7);
+  const auto r = runCli("calibrate -q " + cal.string() + " -o " + (dir / "model.json").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  drive(dir, "watched", 1200, 8);
+  test::writeFile(dir / "complete", "");
+}
+
+/// The directory a ctest run shares among this suite's processes (tests/CMakeLists.txt: the
+/// fixture test below makes the drives there once), when it is set.
+const char* sharedDrives() { return std::getenv("LIDARCAL_TEST_FIXTURE_DIR"); }
+
+TEST(CliWatchFixture, MakesTheDrivesOnce) {
+  if (!sharedDrives())
+    GTEST_SKIP() << "LIDARCAL_TEST_FIXTURE_DIR is not set: each suite makes its own";
+  const fs::path dir = sharedDrives();
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  makeDrives(dir);
+}
+
 class CliWatch : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    dir_ = new TempDir;
-    const fs::path cal = drive(dir_->path(), "calibration", 900, 7);
-    const auto r = runCli("calibrate -q " + cal.string() + " -o " + model().string());
-    ASSERT_EQ(r.exit_code, 0) << r.err;
-    drive(dir_->path(), "watched", 1200, 8);
+    if (sharedDrives() && fs::exists(fs::path(sharedDrives()) / "complete")) {
+      base_ = sharedDrives();
+      return;
+    }
+    own_ = new TempDir;
+    base_ = own_->path();
+    makeDrives(base_);
   }
-  static void TearDownTestSuite() { delete dir_; }
-  static fs::path model() { return *dir_ / "model.json"; }
-  static fs::path watched() { return *dir_ / "watched" / "scans"; }
-  static TempDir* dir_;
+  static void TearDownTestSuite() { delete own_; }
+  static fs::path model() { return base_ / "model.json"; }
+  static fs::path watched() { return base_ / "watched" / "scans"; }
+  static TempDir* own_;
+  static fs::path base_;
 };
-TempDir* CliWatch::dir_ = nullptr;
+TempDir* CliWatch::own_ = nullptr;
+fs::path CliWatch::base_;
 
 TEST_F(CliWatch, AnInjectedOffsetIsAnAlarmAfterItsScanAndTheCleanPartIsNot) {
   TempDir out;

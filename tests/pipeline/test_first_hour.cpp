@@ -17,13 +17,13 @@
 #include <nlohmann/json.hpp>
 
 #include "common/errors.hpp"
+#include "io/gnuplot.hpp"
 #include "io/model_io.hpp"
 #include "io/sequence.hpp"
-#include "pipeline/cli_options.hpp"
-#include "pipeline/gnuplot.hpp"
-#include "pipeline/progress.hpp"
-#include "pipeline/stages.hpp"
-#include "pipeline/words.hpp"
+#include "pipeline/commands/cli_options.hpp"
+#include "pipeline/commands/progress.hpp"
+#include "pipeline/reports/words.hpp"
+#include "pipeline/stages/stages.hpp"
 #include "test_util.hpp"
 
 namespace lidarcal {
@@ -564,8 +564,8 @@ TEST(Words, PluralsAndGnuplotStrings) {
   EXPECT_EQ(pipeline::plural(1, "stop"), "1 stop");
   EXPECT_EQ(pipeline::plural(0, "stop"), "0 stops");
   EXPECT_EQ(pipeline::plural(2, "stop"), "2 stops");
-  EXPECT_EQ(pipeline::gnuplotString("scan_1.pcd"), "\"scan_1.pcd\"");
-  EXPECT_EQ(pipeline::gnuplotString("scan_1.pcd", true), "\"scan\\\\_1.pcd\"");
+  EXPECT_EQ(io::gnuplotString("scan_1.pcd"), "\"scan_1.pcd\"");
+  EXPECT_EQ(io::gnuplotString("scan_1.pcd", true), "\"scan\\\\_1.pcd\"");
 }
 
 }  // namespace

@@ -1,14 +1,14 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // What `calibrate` prints for a rig: the lines to paste into a launch file or URDF carry a caution
 // right above them when a range model was refused, with how far each mounting lies from its
-// design (pipeline/rig_report.hpp).
+// design (pipeline/reports/rig_report.hpp).
 
 #include <cmath>
 #include <string>
 
 #include <gtest/gtest.h>
 
-#include "pipeline/rig_report.hpp"
+#include "pipeline/reports/rig_report.hpp"
 
 namespace lidarcal::test {
 namespace {

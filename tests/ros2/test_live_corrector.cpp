@@ -17,8 +17,8 @@
 
 #include "common/errors.hpp"
 #include "io/model_yaml.hpp"
-#include "pipeline/model_export.hpp"
 #include "pipeline/ros_test_util.hpp"
+#include "pipeline/stages/model_export.hpp"
 #include "ros2/live_corrector.hpp"
 #include "ros2/node_args.hpp"
 #include "ros2/warning_limiter.hpp"

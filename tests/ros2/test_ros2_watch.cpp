@@ -21,7 +21,7 @@
 #include "Odometry.h"
 #include "String.h"
 #include "io/model_io.hpp"
-#include "pipeline/bag_correct.hpp"
+#include "pipeline/stages/bag_correct.hpp"
 #include "ros2/dds_test_participant.hpp"
 #include "ros2/node_outputs.hpp"
 #include "watch/drive.hpp"

@@ -3,7 +3,7 @@
 """Docs that run: executes every shell block (```sh) of the Markdown files given, in order within
 each file, against the build being tested, and checks each command's exit code.
 
-    run_doc_blocks.py --source SRC --build BUILD [--shared DATA] FILE...
+    run_doc_blocks.py --source SRC --build BUILD [--shared DATA] [--slow] FILE...
     run_doc_blocks.py --source SRC --build BUILD --covers FILE
 
 How the docs are written, and what the test makes of it:
@@ -24,6 +24,9 @@ How the docs are written, and what the test makes of it:
 - A block that cannot run in a test (it installs the machine, needs a robot or a ROS 2 machine)
   carries on the line above it a marker that Markdown does not show, with the reason the test
   prints:  <!-- docs-test: skip: REASON -->
+- A block that takes long (a minute or more) carries  <!-- docs-test: slow -->  instead: it runs
+  only with --slow (CI's step for the tests labelled slow), which runs only such blocks, so each
+  must stand alone.
 
 --covers FILE checks that the shell blocks of FILE (skipped ones included) run every command that
 `lidarcal --help` lists, and no command it does not list.
@@ -42,16 +45,18 @@ import time
 
 FENCE = re.compile(r'^\s*```\s*([\w-]*)')
 MARKER = re.compile(r'^\s*<!--\s*docs-test:\s*skip:\s*(.*?)\s*-->\s*$')
+SLOW = re.compile(r'^\s*<!--\s*docs-test:\s*slow\s*-->\s*$')
 EXITS = re.compile(r'#.*\bexits (\d+)\b')
 TMP = re.compile(r'(?<![\w./-])/tmp/')
 COMMAND = re.compile(r'(?<![\w/.-])(?:build/pipeline/)?lidarcal(?:\s+-q)?\s+([a-z][a-z0-9-]*)')
 
 
 class Block:
-    def __init__(self, line, text, skip):
+    def __init__(self, line, text, skip, slow):
         self.line = line      # line number of the opening fence (1-based)
         self.text = text      # the shell commands
         self.skip = skip      # reason given by a marker, or None
+        self.slow = slow      # marked slow: runs only with --slow
         self.expected = None  # lines of the ```text blocks that show its output, or None
 
 
@@ -78,7 +83,9 @@ def parse_blocks(path):
             while k >= 0 and not lines[k].strip():
                 k -= 1
             marker = MARKER.match(lines[k]) if k >= 0 else None
-            blocks.append(Block(start + 1, '\n'.join(body), marker.group(1) if marker else None))
+            slow = bool(SLOW.match(lines[k])) if k >= 0 else False
+            blocks.append(Block(start + 1, '\n'.join(body), marker.group(1) if marker else None,
+                                slow))
             last_sh_end = len(blocks) - 1
             continue
         if lang == 'text' and last_sh_end is not None:
@@ -184,6 +191,10 @@ def run_file(path, args):
             if block.skip is not None:
                 print('%s: skipped: %s' % (where, block.skip))
                 continue
+            if block.slow != args.slow:
+                if block.slow:
+                    print('%s: marked slow: runs with --slow (the docs test labelled slow)' % where)
+                continue
             if '../shared/data' in block.text and not shared_here:
                 print('%s: skipped: it reads ../shared/data, which is absent (%s)' %
                       (where, args.shared))
@@ -236,6 +247,8 @@ def main():
     parser.add_argument('--build', required=True, help='the build to run the commands with')
     parser.add_argument('--shared', default='', help='the shared recordings (../shared/data)')
     parser.add_argument('--timeout', type=int, default=600, help='seconds per block')
+    parser.add_argument('--slow', action='store_true',
+                        help='run only the blocks marked <!-- docs-test: slow -->')
     parser.add_argument('--covers', help='check this file against lidarcal --help instead')
     parser.add_argument('files', nargs='*', help='Markdown files, relative to --source')
     args = parser.parse_args()

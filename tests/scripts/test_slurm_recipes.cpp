@@ -14,8 +14,8 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "calibration/fleet.hpp"
 #include "io/model_io.hpp"
-#include "pipeline/fleet.hpp"
 #include "slurm_cluster.hpp"
 
 namespace lidarcal::test {
@@ -154,7 +154,8 @@ TEST_F(SlurmRecipes, FleetTasksAndTheirReportAgreeWithThePerRecordingModels) {
     const fs::path run = out / "runs" / ("agv" + std::to_string(i));
     EXPECT_EQ(row["previous"]["model"], (run / dates[0] / "model.json").string());
     EXPECT_TRUE(row["moved"]["tested"].get<bool>()) << row["moved"].dump();
-    const auto expected = pipeline::biasAt(io::readModel(run / dates[1] / "model.json"), distances);
+    const auto expected =
+        calibration::biasAt(io::readModel(run / dates[1] / "model.json"), distances);
     for (std::size_t j = 0; j < distances.size(); ++j) {
       EXPECT_DOUBLE_EQ(row["bias"][j]["bias_m"].get<double>(), expected[j].bias_m);
       EXPECT_DOUBLE_EQ(row["bias"][j]["se_m"].get<double>(), expected[j].se_m);
