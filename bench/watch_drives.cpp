@@ -40,6 +40,7 @@ struct Options {
   std::string scene, model = "truth", change, csv;
   std::size_t first_seed = 1, seeds = 20, scans = 2000;
   double rate = 0.1, every_m = 3.0;
+  int bias_replicas = 0;
   bool per_hour = false, learn = false, radius = true, verbose = false;
   double scan_hz = 10.0;
   std::size_t rss_every = 0;
@@ -175,6 +176,7 @@ SeedResult runSeed(const Scene& scene, const std::shared_ptr<const CalibrationMo
   ws.false_alarms.per_unit = o.rate;
   ws.false_alarms.unit = o.per_hour ? watch::Exposure::time : watch::Exposure::distance;
   ws.check.every_m = o.every_m;
+  ws.check.bias_replicas = o.bias_replicas;
   if (o.radius && !scene.landmarks.empty())
     ws.check.landmark_radius_m = scene.landmarks[0].radius_m;
   ws.detection.landmark_radius_m = ws.check.landmark_radius_m;
@@ -291,6 +293,8 @@ void addOptions(CLI::App& app, Options& o) {
   app.add_flag("--per-hour", o.per_hour, "The rate per hour of driving (scans at --scan-hz)");
   app.add_option("--scan-hz", o.scan_hz, "Scans per second");
   app.add_option("--every", o.every_m, "Metres between checks");
+  app.add_option("--bias-replicas", o.bias_replicas,
+                 "Bootstrap replicas per check for the check fit's own bias (0: none)");
   app.add_flag("--learn", o.learn, "Learn mode");
   app.add_flag("!--no-radius", o.radius, "Do not give the watcher the poles' radius");
   app.add_flag("--verbose", o.verbose, "Each check on stderr");

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <string>
 
 #include <ros/node_handle.h>
 
@@ -77,6 +78,11 @@ WatchParameters readWatchParameters(const ros::NodeHandle& pnh) {
              {{"km", watch::Exposure::distance}, {"hour", watch::Exposure::time}}, "km or hour",
              w.false_alarms_per);
   readPositive(pnh, "check_every", w.check_every_m, "the metres between checks", "3");
+  if (readParam(pnh, "check_bias_replicas", w.check_bias_replicas, "a whole number", "4") &&
+      (w.check_bias_replicas < 0 || w.check_bias_replicas > 100))
+    throw InputError("", "~check_bias_replicas",
+                     "is " + std::to_string(w.check_bias_replicas) + ": must be in 0..100",
+                     "e.g. _check_bias_replicas:=4");
   double radius = 0.0;
   if (readPositive(pnh, "landmark_radius", radius, "the poles' radius in metres", "0.05"))
     w.landmark_radius_m = radius;
@@ -133,6 +139,7 @@ watch::WatchSettings watchSettingsFrom(const WatchParameters& p) {
   s.false_alarms.per_unit = p.false_alarms;
   s.false_alarms.unit = p.false_alarms_per;
   s.check.every_m = p.check_every_m;
+  s.check.bias_replicas = p.check_bias_replicas;
   s.check.landmark_radius_m = p.landmark_radius_m;
   s.detection.landmark_radius_m = p.landmark_radius_m;
   return s;
@@ -172,6 +179,8 @@ std::string nodeHelp() {
          "0.1)\n"
          "  ~false_alarms_per  km (default) | hour (of driving)\n"
          "  ~check_every       metres of travel between two checks (default 3)\n"
+         "  ~check_bias_replicas  replicas per check that estimate its fit's own bias (default "
+         "0: none)\n"
          "  ~landmark_radius   the poles' radius, metres (default: estimated)\n"
          "  ~pose              odom:TOPIC (nav_msgs/Odometry, default odom:/odom) | "
          "tf:FIXED_FRAME (/tf, /tf_static)\n"

@@ -68,6 +68,17 @@ double parsePositive(const std::string& name, const std::string& v, const char* 
   return x;
 }
 
+/// A whole number in [lo, hi], as `-p name:=v` gives it; throws naming the parameter.
+int parseCount(const std::string& name, const std::string& v, int lo, int hi, const char* example) {
+  char* end = nullptr;
+  const long x = std::strtol(v.c_str(), &end, 10);
+  if (v.empty() || *end != '\0' || x < lo || x > hi)
+    throw InputError("", "-p " + name + ":=" + v,
+                     "is not a whole number in " + std::to_string(lo) + ".." + std::to_string(hi),
+                     std::string("e.g. -p ") + name + ":=" + example);
+  return static_cast<int>(x);
+}
+
 QosProfile parseQos(const std::string& name, const std::string& v) {
   if (v == "sensor_data") return QosProfile::sensor_data;
   if (v == "default" || v == "reliable") return QosProfile::reliable;
@@ -90,6 +101,8 @@ void setWatchParameter(NodeParameters& p, const std::string& name, const std::st
     p.false_alarms_per_hour = v == "hour";
   } else if (name == "check_every")
     p.check_every_m = parsePositive(name, v, "3");
+  else if (name == "check_bias_replicas")
+    p.check_bias_replicas = parseCount(name, v, 0, 100, "4");
   else if (name == "landmark_radius")  // empty: unset, so that a launch file can pass its default
     p.landmark_radius_m =
         v.empty() ? std::nullopt : std::optional<double>(parsePositive(name, v, "0.05"));
@@ -191,6 +204,8 @@ std::string watchHelp() {
       "  false_alarms       alarms expected per unit while the model holds (default %g)\n"
       "  false_alarms_per   km (travelled; default) or hour (of driving)\n"
       "  check_every        metres of travel between two checks (default %g)\n"
+      "  check_bias_replicas replicas per check that estimate its fit's own bias (default %d: "
+      "none)\n"
       "  landmark_radius    the poles' radius, m (default, or empty: estimated with the bias)\n"
       "  candidate_topic    learn: each refit's model as JSON, std_msgs/msg/String, latched "
       "(default %s)\n"
@@ -198,7 +213,7 @@ std::string watchHelp() {
       "(default, or empty: none)\n"
       "  diagnostics_period seconds between two messages on /diagnostics (default 1; every "
       "mode)\n",
-      d.false_alarms.per_unit, d.check.every_m, kCandidateModelTopic);
+      d.false_alarms.per_unit, d.check.every_m, d.check.bias_replicas, kCandidateModelTopic);
   return text;
 }
 

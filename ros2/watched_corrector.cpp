@@ -62,6 +62,7 @@ watch::WatchSettings watchSettingsFor(const NodeParameters& p) {
   if (p.false_alarms) s.false_alarms.per_unit = *p.false_alarms;
   s.false_alarms.unit = p.false_alarms_per_hour ? watch::Exposure::time : watch::Exposure::distance;
   if (p.check_every_m) s.check.every_m = *p.check_every_m;
+  if (p.check_bias_replicas) s.check.bias_replicas = *p.check_bias_replicas;
   s.check.landmark_radius_m = p.landmark_radius_m;
   s.detection.landmark_radius_m = p.landmark_radius_m;
   return s;

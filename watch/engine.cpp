@@ -182,7 +182,10 @@ void Engine::schedule(std::size_t index) {
   const std::array<double, 2> distances = distances_m_;
   auto work = [fit, model, settings, refit, distances, check_obs = std::move(check_obs),
                refit_obs = std::move(refit_obs)]() mutable {
-    if (fit.check) fit.check = checkModel(check_obs, *model, distances, CheckFit{settings.threads});
+    if (fit.check)
+      fit.check = checkModel(
+          check_obs, *model, distances,
+          CheckFit{settings.threads, settings.check.bias_replicas, fit.check_stretch.first_scan});
     if (refit)
       fit.candidate = std::make_shared<const CalibrationModel>(
           refitModel(refit_obs, settings.learn, settings.threads));

@@ -3,6 +3,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
+#include <optional>
+#include <random>
 #include <set>
 #include <string>
 #include <utility>
@@ -11,7 +14,9 @@
 
 #include "calibration/calibrate.hpp"
 #include "calibration/filtering.hpp"
+#include "calibration/joint_refinement.hpp"
 #include "calibration/model_comparison.hpp"
+#include "common/rng.hpp"
 
 namespace lidarcal::watch {
 
@@ -81,6 +86,61 @@ LandmarkObservations correctedObservations(const LandmarkObservations& raw,
   return out;
 }
 
+LandmarkObservations replicaObservations(const LandmarkObservations& obs,
+                                         const CalibrationModel& fit, std::uint64_t seed) {
+  std::map<int, const CalibratedLandmark*> poles;
+  for (const auto& l : fit.landmarks) poles[l.id] = &l;
+  std::mt19937_64 rng = makeRng(seed, 0);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  LandmarkObservations out = obs;
+  out.sightings.clear();
+  for (const Sighting& s : obs.sightings) {
+    const auto pole = poles.find(s.landmark);
+    if (pole == poles.end() || s.stop >= fit.stop_poses.size()) continue;
+    const Pose2& pose = fit.stop_poses[s.stop];
+    const CalibratedLandmark& l = *pole->second;
+    Sighting r = s;
+    for (BeamReading& b : r.beams) {
+      const double d = calibration::rayCircleDistance(
+          pose.x_m, pose.y_m, pose.yaw_rad + b.angle_rad, l.x_m, l.y_m, l.radius_m);
+      b.range_m = fit.model.bias(d) + fit.model.noise.stddev(d, fit.model.bias) * normal(rng);
+    }
+    double sx = 0.0, sy = 0.0;
+    pose.toSensor(l.x_m, l.y_m, sx, sy);
+    r.centre_range_m = std::hypot(sx, sy);
+    r.bearing_rad = std::atan2(sy, sx);
+    r.radius_m = l.radius_m;
+    out.sightings.push_back(std::move(r));
+  }
+  return out;
+}
+
+namespace {
+
+/// The bootstrap estimate of the line fit's bias at `d`: the replicas' mean shift minus the
+/// fitted one; nullopt when no replica could be fitted.
+std::optional<Eigen::Vector2d> fitBias(const LandmarkObservations& obs,
+                                       const CalibrationModel& line, const std::vector<double>& d,
+                                       const CheckFit& fit, int& used) {
+  Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+  used = 0;
+  for (int k = 0; k < fit.bias_replicas; ++k) {
+    const LandmarkObservations rep =
+        replicaObservations(obs, line, deriveSeed(fit.seed, static_cast<std::uint64_t>(k)));
+    const CalibrationModel m = calibration::calibrate(rep, lineFitConfig(fit));
+    if (!m.status.ok()) continue;
+    for (Eigen::Index i = 0; i < 2; ++i) {
+      const double at = d[static_cast<std::size_t>(i)];
+      sum(i) += m.model.bias(at) - line.model.bias(at);
+    }
+    ++used;
+  }
+  if (used == 0) return std::nullopt;
+  return Eigen::Vector2d(sum / used);
+}
+
+}  // namespace
+
 ModelCheck checkModel(const LandmarkObservations& raw, const CalibrationModel& model,
                       const std::array<double, 2>& distances_m, const CheckFit& fit) {
   ModelCheck r;
@@ -121,8 +181,21 @@ ModelCheck checkModel(const LandmarkObservations& raw, const CalibrationModel& m
     return r;
   }
   c *= n / (n - p);
+  Eigen::Vector2d bias = Eigen::Vector2d::Zero();
+  if (fit.bias_replicas > 0) {
+    const std::optional<Eigen::Vector2d> b = fitBias(obs, line, d, fit, r.bias_replicas);
+    if (!b) {
+      r.status = {StatusCode::joint_failed,
+                  "no replica of the stretch could be fitted, so the "
+                  "check's own bias is unknown"};
+      return r;
+    }
+    bias = *b;
+    c *= 1.0 + 1.0 / r.bias_replicas;
+  }
   for (std::size_t i = 0; i < 2; ++i) {
-    r.shift_m[i] = line.model.bias(d[i]) - d[i];
+    r.fit_bias_m[i] = bias(static_cast<Eigen::Index>(i));
+    r.shift_m[i] = line.model.bias(d[i]) - d[i] - r.fit_bias_m[i];
     r.shift_se_m[i] = std::sqrt(c(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(i)));
   }
   r.covariance = c;

@@ -10,10 +10,17 @@
 // a bump moves a_0, a new scale a_1. The check states s and the fit's covariance of it,
 // A Sigma_a A^T with A = [1 d_1; 1 d_2], Sigma_a scaled by N / (N - P): the noise the fit
 // estimates from N readings with P parameters (a pose per scan among them) is the
-// residuals' mean square, which P parameters shrink. shift_history.hpp decides on it.
+// residuals' mean square, which P parameters shrink. The fit may also carry a bias of its own
+// at the stretch's geometry (thin poles seen by a few beams: radius, centre and offset trade
+// off). With bias_replicas = R > 0 it is estimated by a parametric bootstrap: the stretch's
+// readings are drawn R times from the fitted poses, poles, line and noise law, each replica is
+// fitted the same way, and the mean of the replicas' shifts minus the fitted shift is the bias
+// (Efron & Tibshirani 1993, ch. 10). The check states s minus that bias, with its covariance
+// times (1 + 1/R) for the replicas' own scatter. shift_history.hpp decides on it.
 
 #include <array>
 #include <cstddef>
+#include <cstdint>
 #include <limits>
 
 #include <Eigen/Core>
@@ -36,6 +43,9 @@ struct ModelCheck {
   std::array<double, 2> shift_m{kNaN, kNaN};
   /// the fit's standard error of s(d), metres
   std::array<double, 2> shift_se_m{kNaN, kNaN};
+  /// the fit's own bias at d taken out of shift_m (0 without replicas), metres
+  std::array<double, 2> fit_bias_m{0.0, 0.0};
+  int bias_replicas = 0;                                 ///< replicas that estimated it (0: none)
   Eigen::Matrix2d covariance = Eigen::Matrix2d::Zero();  ///< the fit's covariance of s, m^2
   std::pair<double, double> fitted_m{kNaN, kNaN};  ///< distances the stretch's fit saw, metres
   std::size_t poles = 0;                           ///< poles in the fit
@@ -46,6 +56,10 @@ struct ModelCheck {
 /// How the check fits.
 struct CheckFit {
   int threads = 1;  ///< threads of the fit (the result does not depend on it)
+  /// Replicas that estimate the fit's own bias (header); 0: none.
+  int bias_replicas = 0;
+  /// Seed of the replicas (the stretch's first scan: the same stretch draws the same replicas).
+  std::uint64_t seed = 0;
 };
 
 /// The reference distances of a model: the quartiles of its fitted range (of its reporting
@@ -66,5 +80,12 @@ ModelCheck checkModel(const LandmarkObservations& raw, const CalibrationModel& m
 /// readings dropped.
 LandmarkObservations correctedObservations(const LandmarkObservations& raw,
                                            const CalibrationModel& model);
+
+/// A replica of `obs` under its fit: every beam of every sighting of a pole the fit located,
+/// read from the fitted pose of its scan along its beam to the fitted circle, through the
+/// fitted bias curve with the fitted noise law's Gaussian noise; the commanded poses as
+/// recorded. Deterministic in `seed`.
+LandmarkObservations replicaObservations(const LandmarkObservations& obs,
+                                         const CalibrationModel& fit, std::uint64_t seed);
 
 }  // namespace lidarcal::watch

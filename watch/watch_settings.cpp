@@ -31,6 +31,8 @@ void WatchSettings::validate() const {
   if (!(check.stale_after_spans >= 1.0)) fail("check.stale_after_spans", "must be >= 1");
   if (check.landmark_radius_m && !(*check.landmark_radius_m > 0.0))
     fail("check.landmark_radius_m", "must be > 0");
+  if (check.bias_replicas < 0 || check.bias_replicas > 100)
+    fail("check.bias_replicas", "must be in 0..100");
   if (learn.max_order < 1 || learn.max_order > 6) fail("learn.max_order", "must be in 1..6");
   if (!(learn.max_standard_error_m > 0.0)) fail("learn.max_standard_error_m", "must be > 0");
   if (!(learn.switch_level > 0.0 && learn.switch_level < 1.0))

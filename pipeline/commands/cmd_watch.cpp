@@ -37,6 +37,7 @@ struct WatchOptions {
   double false_alarms = watch::FalseAlarmRate{}.per_unit;
   double every_m = watch::CheckSettings{}.every_m;
   double radius_m = 0.0;
+  int bias_replicas = watch::CheckSettings{}.bias_replicas;
   bool overwrite = false;
 };
 
@@ -51,6 +52,10 @@ watch::WatchSettings settingsFrom(const WatchOptions& o, std::optional<double> r
   if (!(o.every_m > 0.0))
     throw InputError("", "--check-every", "must be > 0 metres", "e.g. --check-every 3");
   s.check.every_m = o.every_m;
+  if (o.bias_replicas < 0 || o.bias_replicas > 100)
+    throw InputError("", "--check-bias-replicas", "must be in 0..100",
+                     "e.g. --check-bias-replicas 4");
+  s.check.bias_replicas = o.bias_replicas;
   s.check.landmark_radius_m = radius;
   s.detection.landmark_radius_m = radius;
   return s;
@@ -254,6 +259,10 @@ void addWatchCommand(CLI::App& app) {
       ->capture_default_str();
   sub->add_option("--per", o->per, "km (default) or hour (of driving: needs time stamps)");
   sub->add_option("--check-every", o->every_m, "Metres of travel between checks")
+      ->capture_default_str();
+  sub->add_option("--check-bias-replicas", o->bias_replicas,
+                  "Replicas per check that estimate the check fit's own bias by a parametric "
+                  "bootstrap, taken out before the test (0: none; each costs one more fit)")
       ->capture_default_str();
   sub->add_option("--radius", o->radius_m,
                   "Pole radius in metres (default: sequence.json, else estimated)");

@@ -36,6 +36,10 @@ ordered_json checkJson(const watch::CheckEvent& e) {
   j["distances_m"] = pair(e.check.distance_m);
   j["shift_m"] = pair(e.check.shift_m);
   j["shift_se_m"] = pair(e.check.shift_se_m);
+  if (e.check.bias_replicas > 0) {
+    j["fit_bias_m"] = pair(e.check.fit_bias_m);
+    j["bias_replicas"] = e.check.bias_replicas;
+  }
   j["test"] = watch::toString(e.test);
   if (e.test == watch::Test::absolute || e.test == watch::Test::change) {
     j["f"] = num(e.f.statistic);

@@ -132,6 +132,10 @@ TEST_F(CliWatch, RefusesWhatItCannotUse) {
              " --inject x@5 -o " + (out / "b").string());
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("--inject"), std::string::npos) << r.err;
+  r = runCli("watch -q " + watched().string() + " --model " + model().string() +
+             " --check-bias-replicas 101 -o " + (out / "r").string());
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--check-bias-replicas"), std::string::npos) << r.err;
   auto m = readJson(model());
   m.erase("alpha_covariance");
   test::writeFile(out / "nocov.json", m.dump());

@@ -162,10 +162,11 @@ TEST_F(RosNode, HelpPrintsTheParametersWithoutAMaster) {
     Child help({"env", "ROS_MASTER_URI=http://127.0.0.1:9", LIDARCAL_NODE_EXE, flag},
                dir / "help.log");
     ASSERT_EQ(help.waitExit(10.0).value_or(-1), 0) << help.log();
-    for (const char* p : {"~model", "~input", "~output", "~inversion", "~outside", "~sensor_name",
-                          "~force", "export --format yaml", "~mode", "~false_alarms",
-                          "~false_alarms_per", "~check_every", "~landmark_radius", "~pose",
-                          "~candidate_topic", "~candidate_file", "~diagnostics_period"})
+    for (const char* p :
+         {"~model", "~input", "~output", "~inversion", "~outside", "~sensor_name", "~force",
+          "export --format yaml", "~mode", "~false_alarms", "~false_alarms_per", "~check_every",
+          "~check_bias_replicas", "~landmark_radius", "~pose", "~candidate_topic",
+          "~candidate_file", "~diagnostics_period"})
       EXPECT_NE(help.log().find(p), std::string::npos) << p << "\n" << help.log();
   }
 }

@@ -375,6 +375,7 @@ TEST_F(RosNode, RefusesBadWatchParametersAtStart) {
         Case{{m, "_mode:=watch", "_false_alarms:=often"}, "~false_alarms"},
         Case{{m, "_mode:=watch", "_false_alarms_per:=week"}, "~false_alarms_per"},
         Case{{m, "_mode:=watch", "_check_every:=0"}, "~check_every"},
+        Case{{m, "_mode:=watch", "_check_bias_replicas:=-1"}, "~check_bias_replicas"},
         Case{{m, "_mode:=watch", "_landmark_radius:=-0.1"}, "~landmark_radius"},
         Case{{m, "_mode:=watch", "_pose:=gps"}, "~pose"},
         Case{{m, "_mode:=learn", "_candidate_file:=" + (dir / "missing" / "c.json").string()},
