@@ -130,17 +130,19 @@ watch::WatchSink seedSink(const Options& o, const watch::RangeChange& change, Se
       ++r.failed;
       return;
     }
-    if (e.test == watch::Test::baseline) return;
-    ++r.checks;
-    r.p_values.push_back(e.f.p);
     if (o.verbose)
       std::fprintf(stderr,
                    "check %zu-%zu: %s record %zu poles %zu readings %zu shift %.2f +- %.2f mm at "
-                   "%.2f, %.2f +- %.2f mm at %.2f, p %.3g\n",
+                   "%.2f, %.2f +- %.2f mm at %.2f (fit's own bias taken out: %.2f, %.2f mm), "
+                   "p %.3g\n",
                    e.stretch.first_scan, e.stretch.last_scan, watch::toString(e.test), e.record,
                    e.check.poles, e.check.readings, 1e3 * e.check.shift_m[0],
                    1e3 * e.check.shift_se_m[0], e.check.distance_m[0], 1e3 * e.check.shift_m[1],
-                   1e3 * e.check.shift_se_m[1], e.check.distance_m[1], e.f.p);
+                   1e3 * e.check.shift_se_m[1], e.check.distance_m[1], 1e3 * e.check.fit_bias_m[0],
+                   1e3 * e.check.fit_bias_m[1], e.f.p);
+    if (e.test == watch::Test::baseline) return;
+    ++r.checks;
+    r.p_values.push_back(e.f.p);
     const bool after = !change.none() && e.stretch.last_scan >= change.from_scan;
     if (e.alarm && !after) ++r.false_alarms;
     if (!after) {
@@ -297,7 +299,8 @@ void addOptions(CLI::App& app, Options& o) {
                  "Bootstrap replicas per check for the check fit's own bias (0: none)");
   app.add_flag("--learn", o.learn, "Learn mode");
   app.add_flag("!--no-radius", o.radius, "Do not give the watcher the poles' radius");
-  app.add_flag("--verbose", o.verbose, "Each check on stderr");
+  app.add_flag("--verbose", o.verbose,
+               "Each check on stderr (baseline checks too, with the fit bias taken out)");
   app.add_option("--rss-every", o.rss_every, "Print resident memory every N scans");
   app.add_option("--work", o.work,
                  "With --learn and --change: a directory for the scans after the change, which "
