@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include "common/pose2.hpp"
 #include "odometry/drive_fit.hpp"
 #include "odometry/simulated_drive.hpp"
 
@@ -35,6 +36,49 @@ TEST(DriveFit, NoiseFreeDriveGivesTheTruth) {
     EXPECT_NEAR(error[i], 0.0, 1e-6) << kDriveParameterNames[i];
   for (const auto& [id, centre] : drive.truth.poles)
     EXPECT_LT((fit.state.poles.at(id) - centre).norm(), 1e-6) << "pole " << id;
+}
+
+TEST(DriveFit, NoiseFreeBeamsGiveTheTruth) {
+  DriveSimulation sim;
+  sim.beam_step_rad = 1.0 * kPi / 180.0;
+  sim.noise.range_sigma_m = 1e-7;
+  sim.noise.slip_m_per_sqrt_m = 1e-8;
+  sim.noise.slip_rad_per_sqrt_rad = 1e-8;
+  sim.noise.floor_m = 1e-9;
+  sim.noise.floor_rad = 1e-9;
+  const SimulatedDrive drive = simulateDrive(sim);
+  ASSERT_GT(drive.record.beams.size(), 2 * drive.record.sightings.size());
+  const DriveFit fit = fitDrive(drive.record, setupFor(sim));
+  ASSERT_TRUE(fit.ok()) << fit.status.message;
+  const Vector8 error = fit.state.params.toVector() - sim.truth.toVector();
+  for (int i = 0; i < kDriveParameterCount; ++i)
+    EXPECT_NEAR(error[i], 0.0, 1e-6) << kDriveParameterNames[i];
+  for (const auto& [id, centre] : drive.truth.poles)
+    EXPECT_LT((fit.state.poles.at(id) - centre).norm(), 1e-6) << "pole " << id;
+}
+
+TEST(DriveFit, BeamsRecoverTheTruthWithinTheirStandardErrors) {
+  // Beam by beam the bearing noise plays no part: the beams' angles are exact and their
+  // readings carry the range noise.
+  DriveSimulation sim;
+  sim.beam_step_rad = 1.0 * kPi / 180.0;
+  sim.noise.range_sigma_m = 0.005;
+  for (std::uint64_t seed : {7u, 8u}) {
+    sim.seed = seed;
+    const SimulatedDrive drive = simulateDrive(sim);
+    const DriveFit fit = fitDrive(drive.record, setupFor(sim));
+    ASSERT_TRUE(fit.ok()) << fit.status.message;
+    const Vector8 error = fit.state.params.toVector() - sim.truth.toVector();
+    const Vector8 se = fit.standardErrors();
+    for (int i = 0; i < kDriveParameterCount - 1; ++i) {
+      EXPECT_GT(se[i], 0.0) << kDriveParameterNames[i];
+      EXPECT_LT(std::abs(error[i]), 4.0 * se[i]) << kDriveParameterNames[i] << ", seed " << seed;
+    }
+    const VarianceByKind by_kind = varianceByKind(drive.record, setupFor(sim), fit);
+    EXPECT_NEAR(by_kind.factor[2], 1.0, 4.0 * std::sqrt(2.0 / by_kind.redundancy[2]))
+        << "the beams' stated noise is their noise";
+    EXPECT_TRUE(std::isnan(by_kind.factor[3])) << "no bearing residual when fitted by beam";
+  }
 }
 
 TEST(DriveFit, RecoversTheTruthWithinItsStandardErrors) {
@@ -102,6 +146,10 @@ TEST(DriveFit, ARecordWithoutStepsOrSightingsIsAStatus) {
   record.sightings.push_back({5, 0, 2.0, 0.0});
   EXPECT_EQ(fitDrive(record, setupFor(DriveSimulation{})).status.code, StatusCode::too_few_samples)
       << "a sighting past the last scan";
+  record.sightings.back().scan = 1;
+  record.beams.push_back({1, 3, 0.0, 2.0});
+  EXPECT_EQ(fitDrive(record, setupFor(DriveSimulation{})).status.code, StatusCode::too_few_samples)
+      << "a beam on a pole no sighting places";
 }
 
 TEST(SimulatedDrive, NoiseFreeTruthIsTheDeadReckoning) {
