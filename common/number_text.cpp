@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "common/number_text.hpp"
 
+#include <cmath>
 #include <cstdarg>
 #include <cstdio>
 
@@ -10,6 +11,10 @@ std::string fixed(double v, int digits, bool sign) {
   char text[64];
   std::snprintf(text, sizeof text, sign ? "%+.*f" : "%.*f", digits, v);
   return text;
+}
+
+std::string fixedOrDash(double v, int digits, bool sign) {
+  return std::isfinite(v) ? fixed(v, digits, sign) : std::string("-");
 }
 
 std::string significant(double v, int digits) {

@@ -9,6 +9,9 @@ namespace lidarcal {
 /// `v` with `digits` decimals ("%.*f"), with a leading + for positive values when `sign`.
 std::string fixed(double v, int digits, bool sign = false);
 
+/// fixed(v, digits, sign), or "-" when `v` is not finite (a table cell with no value).
+std::string fixedOrDash(double v, int digits, bool sign = false);
+
 /// `v` with `digits` significant digits ("%.*g").
 std::string significant(double v, int digits);
 

@@ -267,9 +267,7 @@ std::string referenceTable(const std::vector<calibration::ReferenceMatch>& raw,
 
 namespace {
 
-std::string mm(double v) {
-  return std::isfinite(v) ? fixed(1000.0 * v, 1, true) : std::string("-");
-}
+std::string mm(double v) { return fixedOrDash(1000.0 * v, 1, true); }
 
 std::string wallText(const calibration::SpanWall& w) {
   return fixed(rad2deg(w.normal_rad), 0) + " deg at " + fixed(w.distance_m, 3) + " m";

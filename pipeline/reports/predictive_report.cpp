@@ -15,9 +15,7 @@ namespace {
 using ojson = nlohmann::ordered_json;
 using calibration::PredictiveCheck;
 
-std::string mm(double v, bool sign = false) {
-  return std::isfinite(v) ? fixed(1000.0 * v, 1, sign) : std::string("-");
-}
+std::string mm(double v, bool sign = false) { return fixedOrDash(1000.0 * v, 1, sign); }
 
 std::string share(std::size_t k, std::size_t n) {
   return std::to_string(k) + " of " + std::to_string(n) +

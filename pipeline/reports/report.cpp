@@ -167,9 +167,8 @@ void writeOrderSection(std::ostringstream& md, const CalibrationModel& m) {
         "[mm^2] |\n|---|---|---|---|---|---|\n";
   for (const auto& o : m.orders)
     md << "| " << o.order << " | " << polynomialText(o.alpha) << " | " << fixed(o.aic, 1) << " | "
-       << fixed(o.bic, 1) << " | "
-       << (std::isfinite(o.validation_mse_m2) ? fixed(1e6 * o.validation_mse_m2, 2) : "-") << " | "
-       << (std::isfinite(o.test_mse_m2) ? fixed(1e6 * o.test_mse_m2, 2) : "-") << " |\n";
+       << fixed(o.bic, 1) << " | " << fixedOrDash(1e6 * o.validation_mse_m2, 2) << " | "
+       << fixedOrDash(1e6 * o.test_mse_m2, 2) << " |\n";
   md << "\nAIC picks order " << m.order_aic;
   if (m.order_validation >= 0) md << ", held-out validation order " << m.order_validation;
   md << ".\n";

@@ -1,11 +1,11 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "pipeline/reports/watch_report.hpp"
 
-#include <cmath>
 #include <cstdio>
 #include <sstream>
 
 #include "io/atomic_file.hpp"
+#include "io/json_number.hpp"
 
 namespace lidarcal::pipeline {
 
@@ -13,17 +13,16 @@ namespace {
 
 using nlohmann::ordered_json;
 
-/// A number, or null when it is not finite (JSON has no NaN).
-ordered_json num(double v) { return std::isfinite(v) ? ordered_json(v) : ordered_json(nullptr); }
-
-ordered_json pair(const std::array<double, 2>& v) { return {num(v[0]), num(v[1])}; }
+ordered_json pair(const std::array<double, 2>& v) {
+  return {io::jsonNumber(v[0]), io::jsonNumber(v[1])};
+}
 
 ordered_json stretchJson(const watch::Stretch& s) {
   return {{"first_scan", s.first_scan},
           {"last_scan", s.last_scan},
-          {"travel_m", num(s.travel_m)},
-          {"length_m", num(s.length_m)},
-          {"stamp_s", num(s.stamp_s)}};
+          {"travel_m", io::jsonNumber(s.travel_m)},
+          {"length_m", io::jsonNumber(s.length_m)},
+          {"stamp_s", io::jsonNumber(s.stamp_s)}};
 }
 
 ordered_json checkJson(const watch::CheckEvent& e) {
@@ -42,11 +41,11 @@ ordered_json checkJson(const watch::CheckEvent& e) {
   }
   j["test"] = watch::toString(e.test);
   if (e.test == watch::Test::absolute || e.test == watch::Test::change) {
-    j["f"] = num(e.f.statistic);
+    j["f"] = io::jsonNumber(e.f.statistic);
     j["dof"] = {e.f.dof1, e.f.dof2};
-    j["p"] = num(e.f.p);
-    j["level"] = num(e.level);
-    j["exposure"] = num(e.exposure);
+    j["p"] = io::jsonNumber(e.f.p);
+    j["level"] = io::jsonNumber(e.level);
+    j["exposure"] = io::jsonNumber(e.exposure);
     j["exceeds"] = e.exceeds;
     j["alarm"] = e.alarm;
   }
@@ -76,8 +75,8 @@ ordered_json refitJson(const RefitRecord& r) {
   j["differs"] = d.differs;
   if (d.test.tested) {
     j["difference_checks"] = d.test.checks;
-    j["difference_f"] = num(d.test.f.statistic);
-    j["difference_p"] = num(d.test.f.p);
+    j["difference_f"] = io::jsonNumber(d.test.f.statistic);
+    j["difference_p"] = io::jsonNumber(d.test.f.p);
   } else if (!d.test.why_not.empty()) {
     j["difference_not_tested"] = d.test.why_not;
   }
@@ -85,7 +84,7 @@ ordered_json refitJson(const RefitRecord& r) {
   j["plausible"] = d.plausible;
   j["switched"] = d.adopt;
   j["reason"] = d.reason;
-  j["largest_se_m"] = num(d.largest_se_m);
+  j["largest_se_m"] = io::jsonNumber(d.largest_se_m);
   if (d.difference.tested) {
     j["difference_distances_m"] = d.difference.distances_m;
     j["difference_m"] = d.difference.difference_m;
