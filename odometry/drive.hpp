@@ -12,8 +12,8 @@
 //   sighting:  laser pose = x_k (+) l;  c the pole's centre in the laser frame;
 //              range   = (|c| - R)(1 + a_1) + a_0 + N(0, s_range^2),
 //              bearing = atan2(c_y, c_x) + N(0, s_bearing^2);
-//   or, beam by beam (DriveRecord::beams): each beam that hit the pole reads
-//              range   = d (1 + a_1) + a_0 + N(0, s_range^2),
+//   or, beam by beam (DriveRecord::beams), the range replaced by each beam that hit the pole:
+//              reading = d (1 + a_1) + a_0 + N(0, s_range^2),
 //              d the distance along the beam from the laser to the pole's circle,
 // with d the arc of motion_model.hpp, l = (l_x, l_y, l_theta) the mounting, R the poles' known
 // radius and (a_0, a_1) the range bias polynomial of Alhashimi et al. 2021 (eq. 3) to first
@@ -54,9 +54,9 @@ struct BeamReading {
 struct DriveRecord {
   std::vector<WheelStep> steps;         ///< steps[k] moves the robot from scan k to k + 1
   std::vector<PoleSighting> sightings;  ///< in any order
-  /// When not empty the fit explains these readings, beam by beam, and the sightings only
-  /// place the poles at the start: a circle fitted through returns that the range bias moved
-  /// along their own beams is not where the pole is.
+  /// When not empty the fit explains these readings, beam by beam, in place of the sightings'
+  /// ranges (of which only the bearings are kept): a circle fitted through returns that the
+  /// range bias moved along their own beams is not where the pole is.
   std::vector<BeamReading> beams;
   double pole_radius_m = 0.0;  ///< the poles' radius, known (measured), metres
   std::size_t scans() const { return steps.size() + 1; }
@@ -107,6 +107,13 @@ Eigen::Vector3d advance(const Eigen::Vector3d& x, const Eigen::Vector3d& arc);
 /// the surface (through the range bias) and bearing of the centre, wrapped to [-pi, pi].
 Eigen::Vector2d predictSighting(const Eigen::Vector3d& pose, const Eigen::Vector2d& pole,
                                 const DriveParameters& params, double pole_radius_m);
+
+/// The beams of `record` that pass within `fraction` of the pole's radius from the centre its
+/// sighting in the same scan gives (range and bearing); the others, and beams without such a
+/// sighting, are left out. Near the tangent a beam's distance to the circle changes faster than
+/// any first-order fit follows (and real returns there mix the pole with what lies behind);
+/// 0.7 keeps incidences below about 45 degrees.
+DriveRecord centralBeams(const DriveRecord& record, double fraction);
 
 /// What a noise-free laser reads along the beam at `angle_rad` (laser frame) from robot pose
 /// `pose`, of the pole centred at `pole`: the distance to its circle through the range bias.

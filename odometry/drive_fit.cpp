@@ -2,6 +2,7 @@
 #include "odometry/drive_fit.hpp"
 
 #include <cmath>
+#include <map>
 #include <set>
 #include <string>
 #include <utility>
@@ -96,6 +97,23 @@ double predictBeam(const Eigen::Vector3d& pose, const Eigen::Vector2d& pole,
   const double d =
       rayCircleDistance(laser[0], laser[1], laser[2] + angle_rad, pole[0], pole[1], pole_radius_m);
   return d * (1.0 + params.range_scale) + params.range_offset_m;
+}
+
+DriveRecord centralBeams(const DriveRecord& record, double fraction) {
+  std::map<std::pair<std::size_t, int>, Eigen::Vector2d> centre;  // laser frame, by (scan, pole)
+  for (const PoleSighting& s : record.sightings)
+    centre[{s.scan, s.pole}] = (s.range_m + record.pole_radius_m) *
+                               Eigen::Vector2d(std::cos(s.bearing_rad), std::sin(s.bearing_rad));
+  DriveRecord out = record;
+  out.beams.clear();
+  for (const BeamReading& b : record.beams) {
+    const auto it = centre.find({b.scan, b.pole});
+    if (it == centre.end()) continue;
+    const double miss =
+        it->second.y() * std::cos(b.angle_rad) - it->second.x() * std::sin(b.angle_rad);
+    if (std::abs(miss) < fraction * record.pole_radius_m) out.beams.push_back(b);
+  }
+  return out;
 }
 
 Eigen::Vector2d stepSigmas(const WheelStep& step, const OdometryParameters& nominal,

@@ -102,7 +102,7 @@ std::vector<Vector8> nullDirections(const Eigen::MatrixXd& reduced,
 int residualKind(std::size_t row, const DriveRecord& record) {
   const std::size_t steps = record.steps.size();
   if (row < 3 * steps) return row % 3 == 2 ? 1 : 0;
-  if (record.byBeam()) return 2;
+  if (record.byBeam()) return row < 3 * steps + record.beams.size() ? 2 : 3;
   return (row - 3 * steps) % 2 == 0 ? 2 : 3;
 }
 

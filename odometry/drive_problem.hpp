@@ -15,7 +15,7 @@
 namespace lidarcal::odometry {
 
 /// The kind of residual row `row` (in the order DriveProblem adds them: 3 per step, then 2 per
-/// sighting, or 1 per beam when the record is fitted by beam): 0 odometry translation,
+/// sighting; fitted by beam, 1 per beam and then 1 per sighting's bearing): 0 odometry translation,
 /// 1 odometry heading, 2 range, 3 bearing.
 int residualKind(std::size_t row, const DriveRecord& record);
 

@@ -46,6 +46,10 @@ struct DriveOptions {
   bool overwrite = false;
 };
 
+/// Beams passing within this fraction of a pole's radius from its centre are fitted
+/// (odometry::centralBeams); as `calibrate --reference` selects them.
+constexpr double kCentralFraction = 0.7;
+
 constexpr ShownParameter kShown[odometry::kDriveParameterCount] = {
     {"left wheel radius r_L", "mm", 1e3},
     {"right wheel radius r_R", "mm", 1e3},
@@ -114,8 +118,9 @@ odometry::DriveRecord driveRecord(const DriveOptions& o) {
     record.sightings.push_back({it->second, r.landmark, r.range_m - r.radius_m, r.bearing_rad});
   }
   if (!rows.empty()) record.pole_radius_m = rows.front().radius_m;
-  if (o.beams) addBeams(o, rows, scan_of, record);
-  return record;
+  if (!o.beams) return record;
+  addBeams(o, rows, scan_of, record);
+  return odometry::centralBeams(record, kCentralFraction);
 }
 
 odometry::DriveFitSetup fitSetup(const DriveOptions& o) {
@@ -207,12 +212,9 @@ void printResult(const odometry::DriveRecord& record, const odometry::DriveFitSe
   std::printf(
       "\nvariance factor %.3f: the residuals over the stated noise (near 1 when it is right; the "
       "standard errors above include it)\nby kind: odometry %.2f (translation), %.2f (heading); "
-      "range %.2f",
-      fit.variance_factor, by_kind.factor[0], by_kind.factor[1], by_kind.factor[2]);
-  if (record.byBeam())
-    std::printf(" (beams)\n");
-  else
-    std::printf("; bearing %.2f\n", by_kind.factor[3]);
+      "range%s %.2f; bearing %.2f\n",
+      fit.variance_factor, by_kind.factor[0], by_kind.factor[1], record.byBeam() ? " (beams)" : "",
+      by_kind.factor[2], by_kind.factor[3]);
 }
 
 void runOdometryDrive(const DriveOptions& o) {
@@ -262,7 +264,7 @@ void addOdometryDriveCommand(CLI::App& app) {
                                                      odometry::kDriveParameterNames.end())));
   sub->add_flag("--beams", o->beams,
                 "Fit every labelled return of the scans beside --landmarks (detect's output) "
-                "instead of each detection's circle: no error from circles fitted through "
+                "in place of each detection's range: no error from circles fitted through "
                 "returns that the range bias moved along their beams; --range-sigma is then one "
                 "beam's noise");
   sub->add_flag("--estimate-range-scale", o->estimate_range_scale,
