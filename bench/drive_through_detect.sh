@@ -3,8 +3,9 @@
 # odometry-drive end to end through simulated scans and `detect` (docs/results/odometry.md):
 # the bundled driving scene with a laser that reads 30 mm long and exact odometry, simulated,
 # its poles detected with their known radius, the wheels' angles derived from the true poses of
-# truth.json for wheels of radius 50 mm on a 300 mm axle, then fitted. One run per beam noise:
-# none, constant 5 mm, and the scene's own (growing with the square of the range).
+# truth.json for wheels of radius 50 mm on a 300 mm axle, then fitted twice: on the circles of
+# landmarks.csv and (--beams) on the labelled returns. One run per beam noise: none, constant
+# 5 mm, and the scene's own (growing with the square of the range).
 # Usage: bench/drive_through_detect.sh [BUILD_DIR] [WORK_DIR]
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
@@ -54,7 +55,10 @@ for noise in none constant squared; do
   "$lidarcal" --quiet detect "$work/sim_$noise/scans" --out "$work/det_$noise" --radius 0.1 --overwrite > /dev/null
   wheels "$work/sim_$noise/truth.json" "$work/wheels_$noise.csv"
   echo "== beam noise: $noise (truth: radii 50 mm, axle 300 mm, mounting 0, range offset 30 mm)"
-  "$lidarcal" --quiet odometry-drive --wheels "$work/wheels_$noise.csv" \
-    --landmarks "$work/det_$noise/landmarks.csv" --nominal 0.05,0.05,0.30,0,0,0 \
-    -o "$work/drive_$noise.json" --overwrite
+  for level in circles beams; do
+    echo "-- fitted by ${level}"
+    "$lidarcal" --quiet odometry-drive --wheels "$work/wheels_$noise.csv" \
+      --landmarks "$work/det_$noise/landmarks.csv" --nominal 0.05,0.05,0.30,0,0,0 \
+      -o "$work/drive_${noise}_$level.json" --overwrite $([ $level = beams ] && echo --beams)
+  done
 done

@@ -356,11 +356,6 @@ double coreLogDensity(double y_m, double mean_m, double sigma_m, double student_
 /// sigma, at x (the simulator's unit-variance t scaled by sigma).
 double studentLogDensity(double x, double sigma, double nu);
 
-/// Distance along a ray from (px, py) at angle a to the circle (cx, cy, r); for a ray that
-/// misses, the distance to the point of closest approach (continuous at the tangent).
-template <typename T>
-T rayCircleDistance(const T& px, const T& py, const T& a, const T& cx, const T& cy, const T& r);
-
 }  // namespace lidarcal::calibration
 
 #include "calibration/joint_refinement_impl.hpp"

@@ -2,9 +2,14 @@
 #include "odometry/drive_fit.hpp"
 
 #include <cmath>
+#include <map>
+#include <set>
+#include <string>
 #include <utility>
 
 #include "common/pose2.hpp"
+#include "common/ray_circle.hpp"
+#include "common/stats_util.hpp"
 #include "odometry/drive_problem.hpp"
 
 namespace lidarcal::odometry {
@@ -36,11 +41,21 @@ Status checkRecord(const DriveRecord& record) {
     return {StatusCode::too_few_samples,
             "the drive needs at least one wheel step and one pole sighting: record the wheels' "
             "turns between scans and scans that see the poles"};
+  const auto beyond = [&record](const char* what, std::size_t scan) {
+    return Status{StatusCode::too_few_samples, std::string(what) + " names scan " +
+                                                   std::to_string(scan) + " but the wheels cover " +
+                                                   std::to_string(record.scans()) + " scans"};
+  };
+  std::set<int> sighted;
   for (const PoleSighting& s : record.sightings) {
-    if (s.scan >= record.scans())
-      return {StatusCode::too_few_samples, "a sighting names scan " + std::to_string(s.scan) +
-                                               " but the wheels cover " +
-                                               std::to_string(record.scans()) + " scans"};
+    if (s.scan >= record.scans()) return beyond("a sighting", s.scan);
+    sighted.insert(s.pole);
+  }
+  for (const BeamReading& b : record.beams) {
+    if (b.scan >= record.scans()) return beyond("a beam", b.scan);
+    if (sighted.count(b.pole) == 0)
+      return {StatusCode::too_few_samples,
+              "beams hit pole " + std::to_string(b.pole) + ", which no sighting places"};
   }
   return {};
 }
@@ -73,6 +88,32 @@ Eigen::Vector2d predictSighting(const Eigen::Vector3d& pose, const Eigen::Vector
   const double bearing = std::atan2(w.y(), w.x()) - pose[2] - o.laser_theta_rad;
   return {surface * (1.0 + params.range_scale) + params.range_offset_m,
           std::remainder(bearing, 2.0 * kPi)};
+}
+
+double predictBeam(const Eigen::Vector3d& pose, const Eigen::Vector2d& pole,
+                   const DriveParameters& params, double pole_radius_m, double angle_rad) {
+  const OdometryParameters& o = params.odometry;
+  const Eigen::Vector3d laser = advance(pose, {o.laser_x_m, o.laser_y_m, o.laser_theta_rad});
+  const double d =
+      rayCircleDistance(laser[0], laser[1], laser[2] + angle_rad, pole[0], pole[1], pole_radius_m);
+  return d * (1.0 + params.range_scale) + params.range_offset_m;
+}
+
+DriveRecord centralBeams(const DriveRecord& record, double fraction) {
+  std::map<std::pair<std::size_t, int>, Eigen::Vector2d> centre;  // laser frame, by (scan, pole)
+  for (const PoleSighting& s : record.sightings)
+    centre[{s.scan, s.pole}] = (s.range_m + record.pole_radius_m) *
+                               Eigen::Vector2d(std::cos(s.bearing_rad), std::sin(s.bearing_rad));
+  DriveRecord out = record;
+  out.beams.clear();
+  for (const BeamReading& b : record.beams) {
+    const auto it = centre.find({b.scan, b.pole});
+    if (it == centre.end()) continue;
+    const double miss =
+        it->second.y() * std::cos(b.angle_rad) - it->second.x() * std::sin(b.angle_rad);
+    if (std::abs(miss) < fraction * record.pole_radius_m) out.beams.push_back(b);
+  }
+  return out;
 }
 
 Eigen::Vector2d stepSigmas(const WheelStep& step, const OdometryParameters& nominal,
@@ -108,8 +149,8 @@ void summariseResiduals(const DriveRecord& record, const DriveFitSetup& setup,
   options.num_threads = 1;
   problem.problem().Evaluate(options, nullptr, &r, nullptr, nullptr);
   for (std::size_t i = 0; i < r.size(); ++i)
-    out.squared_by_kind[residualKind(i, record.steps.size())] += r[i] * r[i];
-  double free = 3.0 * (record.scans() - 1) + 2.0 * out.state.poles.size();
+    out.squared_by_kind[residualKind(i, record)] += r[i] * r[i];
+  double free = problem.nuisanceColumns();
   for (bool e : setup.estimated) free += e ? 1.0 : 0.0;
   const double dof = static_cast<double>(r.size()) - free;
   out.variance_factor = dof > 0.0 ? out.squared_by_kind.sum() / dof : 0.0;
@@ -126,7 +167,7 @@ VarianceByKind varianceByKind(const DriveRecord& record, const DriveFitSetup& se
   VarianceByKind out;
   out.redundancy = redundancyByKind(record, fit.state, setup);
   for (int k = 0; k < 4; ++k)
-    out.factor[k] = out.redundancy[k] > 0.0 ? fit.squared_by_kind[k] / out.redundancy[k] : 0.0;
+    out.factor[k] = out.redundancy[k] > 0.0 ? fit.squared_by_kind[k] / out.redundancy[k] : kNaN;
   return out;
 }
 

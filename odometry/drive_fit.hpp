@@ -70,7 +70,7 @@ struct DriveFit {
   /// freedom (residuals minus free parameters); 1 in expectation when the stated noise is right
   double variance_factor = 0.0;
   /// squared normalised residuals summed by kind: odometry translation, odometry heading,
-  /// range, bearing
+  /// range (of sightings, or of beams when fitted by beam), bearing
   Eigen::Vector4d squared_by_kind = Eigen::Vector4d::Zero();
   bool ok() const { return status.ok(); }
   /// square roots of the covariance's diagonal: the spread the stated noise implies
@@ -87,7 +87,8 @@ DriveFit fitDrive(const DriveRecord& record, const DriveFitSetup& setup);
 /// bearing): its squared normalised residuals over its redundancy (Foerstner's redundancy
 /// numbers summed over its rows: rows minus the trace of the hat matrix over them; they sum to
 /// the degrees of freedom). Which stated noise is off, and by how much (the square root); a
-/// factor's relative SD is about sqrt(2 / redundancy). Costs a solve per residual row.
+/// factor's relative SD is about sqrt(2 / redundancy); NaN for a kind without rows. Costs a
+/// solve per residual row.
 struct VarianceByKind {
   Eigen::Vector4d factor = Eigen::Vector4d::Zero();
   Eigen::Vector4d redundancy = Eigen::Vector4d::Zero();

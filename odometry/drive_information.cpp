@@ -60,16 +60,20 @@ std::optional<Eigen::MatrixXd> reducedInformation(const DriveRecord& record,
   return Eigen::MatrixXd(0.5 * (reduced + reduced.transpose()));
 }
 
-/// The state noise-free data would give near `state`, with the sightings it predicts.
+/// The state noise-free data would give near `state`, with the sightings and beams it predicts.
 std::pair<DriveRecord, DriveState> noiseFree(const DriveRecord& record, const DriveState& state) {
   std::pair<DriveRecord, DriveState> out{record, state};
-  out.second.poses = deadReckoning(record, state.params.odometry);
+  const std::vector<Eigen::Vector3d>& poses = out.second.poses =
+      deadReckoning(record, state.params.odometry);
   for (PoleSighting& s : out.first.sightings) {
-    const Eigen::Vector2d seen = predictSighting(out.second.poses[s.scan], state.poles.at(s.pole),
-                                                 state.params, record.pole_radius_m);
+    const Eigen::Vector2d seen =
+        predictSighting(poses[s.scan], state.poles.at(s.pole), state.params, record.pole_radius_m);
     s.range_m = seen[0];
     s.bearing_rad = seen[1];
   }
+  for (BeamReading& b : out.first.beams)
+    b.range_m = predictBeam(poses[b.scan], state.poles.at(b.pole), state.params,
+                            record.pole_radius_m, b.angle_rad);
   return out;
 }
 
@@ -95,8 +99,10 @@ std::vector<Vector8> nullDirections(const Eigen::MatrixXd& reduced,
 
 }  // namespace
 
-int residualKind(std::size_t row, std::size_t steps) {
+int residualKind(std::size_t row, const DriveRecord& record) {
+  const std::size_t steps = record.steps.size();
   if (row < 3 * steps) return row % 3 == 2 ? 1 : 0;
+  if (record.byBeam()) return row < 3 * steps + record.beams.size() ? 2 : 3;
   return (row - 3 * steps) % 2 == 0 ? 2 : 3;
 }
 
@@ -111,7 +117,7 @@ Eigen::Vector4d redundancyByKind(const DriveRecord& record, const DriveState& st
   Eigen::VectorXd row(j.cols());
   for (Eigen::Index i = 0; i < j.rows(); ++i) {
     row = Eigen::VectorXd(j.row(i).transpose());
-    const int kind = residualKind(static_cast<std::size_t>(i), record.steps.size());
+    const int kind = residualKind(static_cast<std::size_t>(i), record);
     rows[kind] += 1.0;
     leverage[kind] += row.dot(ldlt.solve(row));  // h_ii = j_i' (J'J)^-1 j_i
   }

@@ -3,6 +3,8 @@
 
 #include <cmath>
 
+#include "common/ray_circle.hpp"
+
 namespace lidarcal::odometry {
 namespace {
 
@@ -28,6 +30,40 @@ struct StepCost {
   }
 };
 
+/// The laser's origin in the world frame, from the robot's pose and the mounting's (x, y).
+template <typename T>
+void laserOrigin(const T* pose, const T* mount, T& x, T& y) {
+  using std::cos;
+  using std::sin;
+  const T c = cos(pose[2]), s = sin(pose[2]);
+  x = pose[0] + c * mount[0] - s * mount[1];
+  y = pose[1] + s * mount[0] + c * mount[1];
+}
+
+/// The pole's centre in the laser frame.
+template <typename T>
+void centreInLaser(const T* pose, const T* pole, const T* mount, T& px, T& py) {
+  using std::cos;
+  using std::sin;
+  T lx, ly;
+  laserOrigin(pose, mount, lx, ly);
+  const T heading = pose[2] + mount[2];
+  const T ch = cos(heading), sh = sin(heading);
+  const T wx = pole[0] - lx, wy = pole[1] - ly;
+  px = ch * wx + sh * wy;
+  py = -sh * wx + ch * wy;
+}
+
+/// The angle from the measured direction (cos, sin) to the centre at (px, py), through +-pi
+/// without a jump.
+template <typename T>
+T bearingError(double bearing_cos, double bearing_sin, const T& px, const T& py) {
+  using std::atan2;
+  const T cross = T(bearing_cos) * py - T(bearing_sin) * px;
+  const T dot = T(bearing_cos) * px + T(bearing_sin) * py;
+  return atan2(cross, dot);
+}
+
 /// One sighting: range to the surface through the bias polynomial, and the centre's bearing.
 struct SightingCost {
   double range_m;
@@ -38,24 +74,46 @@ struct SightingCost {
   /// `mount`: laser x, y, heading; `range`: offset, scale.
   template <typename T>
   bool operator()(const T* pose, const T* pole, const T* mount, const T* range, T* residual) const {
-    using std::atan2;
-    using std::cos;
-    using std::sin;
     using std::sqrt;
-    const T c = cos(pose[2]), s = sin(pose[2]);
-    const T lx = pose[0] + c * mount[0] - s * mount[1];  // laser origin, world frame
-    const T ly = pose[1] + s * mount[0] + c * mount[1];
-    const T heading = pose[2] + mount[2];
-    const T ch = cos(heading), sh = sin(heading);
-    const T wx = pole[0] - lx, wy = pole[1] - ly;
-    const T px = ch * wx + sh * wy, py = -sh * wx + ch * wy;  // centre, laser frame
+    T px, py;
+    centreInLaser(pose, pole, mount, px, py);
     const T distance = sqrt(px * px + py * py);
     const T predicted = (distance - T(pole_radius_m)) * (T(1.0) + range[1]) + range[0];
     residual[0] = (T(range_m) - predicted) * T(inv_range);
-    // the angle from the measured direction to the predicted one, through +-pi without a jump
-    const T cross = T(bearing_cos) * py - T(bearing_sin) * px;
-    const T dot = T(bearing_cos) * px + T(bearing_sin) * py;
-    residual[1] = atan2(cross, dot) * T(inv_bearing);
+    residual[1] = bearingError(bearing_cos, bearing_sin, px, py) * T(inv_bearing);
+    return true;
+  }
+};
+
+/// The bearing of a sighting alone (fitted by beam: the ranges come from the beams, the
+/// centre's direction from which beams hit).
+struct BearingCost {
+  double bearing_cos, bearing_sin;
+  double inv_bearing;
+
+  template <typename T>
+  bool operator()(const T* pose, const T* pole, const T* mount, T* residual) const {
+    T px, py;
+    centreInLaser(pose, pole, mount, px, py);
+    residual[0] = bearingError(bearing_cos, bearing_sin, px, py) * T(inv_bearing);
+    return true;
+  }
+};
+
+/// One beam: its reading against the distance along it to the pole's circle, through the bias.
+struct BeamCost {
+  double angle_rad;
+  double range_m;
+  double pole_radius_m;
+  double inv_range;
+
+  template <typename T>
+  bool operator()(const T* pose, const T* pole, const T* mount, const T* range, T* residual) const {
+    T lx, ly;
+    laserOrigin(pose, mount, lx, ly);
+    const T d = rayCircleDistance(lx, ly, pose[2] + mount[2] + T(angle_rad), pole[0], pole[1],
+                                  T(pole_radius_m));
+    residual[0] = (T(range_m) - d * (T(1.0) + range[1]) - range[0]) * T(inv_range);
     return true;
   }
 };
@@ -69,7 +127,10 @@ DriveProblem::DriveProblem(const DriveRecord& record, const DriveState& state,
   for (int i = 0; i < kDriveParameterCount; ++i) globals_[i] = v[i];
   problem_ = std::make_unique<ceres::Problem>();
   addSteps(record, setup);
-  addSightings(record, setup);
+  if (record.byBeam())
+    addBeams(record, setup);
+  else
+    addSightings(record, setup);
   for (const Group& g : kGroups) problem_->AddParameterBlock(&globals_[g.first], g.size);
 
   problem_->SetParameterBlockConstant(poses_[0].data());
@@ -101,6 +162,21 @@ void DriveProblem::addSightings(const DriveRecord& record, const DriveFitSetup& 
         1.0 / setup.noise.range_sigma_m, 1.0 / setup.noise.bearing_sigma_rad});
     problem_->AddResidualBlock(cost, nullptr, poses_[s.scan].data(), poles_.at(s.pole).data(),
                                &globals_[kMount], &globals_[kRange]);
+  }
+}
+
+void DriveProblem::addBeams(const DriveRecord& record, const DriveFitSetup& setup) {
+  for (const BeamReading& b : record.beams) {
+    auto* cost = new ceres::AutoDiffCostFunction<BeamCost, 1, 3, 2, 3, 2>(new BeamCost{
+        b.angle_rad, b.range_m, record.pole_radius_m, 1.0 / setup.noise.range_sigma_m});
+    problem_->AddResidualBlock(cost, nullptr, poses_[b.scan].data(), poles_.at(b.pole).data(),
+                               &globals_[kMount], &globals_[kRange]);
+  }
+  for (const PoleSighting& s : record.sightings) {
+    auto* cost = new ceres::AutoDiffCostFunction<BearingCost, 1, 3, 2, 3>(new BearingCost{
+        std::cos(s.bearing_rad), std::sin(s.bearing_rad), 1.0 / setup.noise.bearing_sigma_rad});
+    problem_->AddResidualBlock(cost, nullptr, poses_[s.scan].data(), poles_.at(s.pole).data(),
+                               &globals_[kMount]);
   }
 }
 

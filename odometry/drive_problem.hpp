@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #pragma once
 // Internal to drive_fit.cpp: the drive's least-squares problem over a DriveState. One Ceres
-// problem holds a residual block per odometry step and per sighting (normalised by their
+// problem holds a residual block per odometry step and per sighting or beam (normalised by their
 // standard deviations, so that the cost is the negative log-likelihood up to a constant).
 // Pose 0 fixes the world frame and held parameters are constant.
 
@@ -15,8 +15,9 @@
 namespace lidarcal::odometry {
 
 /// The kind of residual row `row` (in the order DriveProblem adds them: 3 per step, then 2 per
-/// sighting): 0 odometry translation, 1 odometry heading, 2 range, 3 bearing.
-int residualKind(std::size_t row, std::size_t steps);
+/// sighting; fitted by beam, 1 per beam and then 1 per sighting's bearing): 0 odometry translation,
+/// 1 odometry heading, 2 range, 3 bearing.
+int residualKind(std::size_t row, const DriveRecord& record);
 
 /// Redundancy of each kind of residual at `state` (Foerstner's redundancy numbers summed by
 /// kind: rows minus the trace of the hat matrix over them), for the variance factor of each.
@@ -54,6 +55,7 @@ class DriveProblem {
   void holdWithin(const Group& g, const EstimatedSet& estimated);
   void addSteps(const DriveRecord& record, const DriveFitSetup& setup);
   void addSightings(const DriveRecord& record, const DriveFitSetup& setup);
+  void addBeams(const DriveRecord& record, const DriveFitSetup& setup);
 
   std::vector<Eigen::Vector3d> poses_;
   std::map<int, Eigen::Vector2d> poles_;

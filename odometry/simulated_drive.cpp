@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "odometry/simulated_drive.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -69,6 +70,28 @@ void sight(const DriveSimulation& s, const std::vector<Eigen::Vector3d>& poses,
   }
 }
 
+/// The beams of a sweep with one every `beam_step_rad` that hit each pole of each sighting.
+void beams(const DriveSimulation& s, const std::vector<Eigen::Vector3d>& poses,
+           std::mt19937_64& rng, DriveRecord& record) {
+  std::normal_distribution<double> normal(0.0, 1.0);
+  const OdometryParameters& o = s.truth.odometry;
+  for (const PoleSighting& seen : record.sightings) {
+    const Eigen::Vector3d laser =
+        advance(poses[seen.scan], {o.laser_x_m, o.laser_y_m, o.laser_theta_rad});
+    const Eigen::Vector2d centre = s.poles[static_cast<std::size_t>(seen.pole)];
+    const Eigen::Vector2d w = centre - laser.head<2>();
+    const double bearing = std::remainder(std::atan2(w.y(), w.x()) - laser[2], 2.0 * kPi);
+    const double half = std::asin(std::min(1.0, s.pole_radius_m / w.norm()));
+    for (long m = std::lround(std::ceil((bearing - half) / s.beam_step_rad));
+         m * s.beam_step_rad < bearing + half; ++m) {
+      const double angle = std::remainder(m * s.beam_step_rad, 2.0 * kPi);
+      const double reading = predictBeam(poses[seen.scan], centre, s.truth, s.pole_radius_m, angle);
+      record.beams.push_back(
+          {seen.scan, seen.pole, angle, reading + s.noise.range_sigma_m * normal(rng)});
+    }
+  }
+}
+
 }  // namespace
 
 SimulatedDrive simulateDrive(const DriveSimulation& settings) {
@@ -82,6 +105,10 @@ SimulatedDrive simulateDrive(const DriveSimulation& settings) {
   for (std::size_t j = 0; j < settings.poles.size(); ++j)
     out.truth.poles[static_cast<int>(j)] = settings.poles[j];
   sight(settings, out.truth.poses, sightings, out.record);
+  if (settings.beam_step_rad > 0.0) {
+    std::mt19937_64 beam_noise = makeRng(settings.seed, 2);
+    beams(settings, out.truth.poses, beam_noise, out.record);
+  }
   return out;
 }
 

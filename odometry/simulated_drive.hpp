@@ -33,6 +33,9 @@ struct DriveSimulation {
   double circle_radius_m = 1.0;
   double scan_period_s = 0.1;  ///< time between scans
   int laps = 1;                ///< times the square and the circles are driven
+  /// > 0: the record also holds the beams that hit each sighted pole (DriveRecord::beams), one
+  /// every this many radians of the laser's sweep, each read with the range noise
+  double beam_step_rad = 0.0;
   DriveNoise noise;
   std::uint64_t seed = 1;  ///< base seed (common/rng.hpp)
 };

@@ -16,6 +16,7 @@
 #include "calibration/filtering.hpp"
 #include "calibration/joint_refinement.hpp"
 #include "calibration/model_comparison.hpp"
+#include "common/ray_circle.hpp"
 #include "common/rng.hpp"
 
 namespace lidarcal::watch {
@@ -101,8 +102,8 @@ LandmarkObservations replicaObservations(const LandmarkObservations& obs,
     const CalibratedLandmark& l = *pole->second;
     Sighting r = s;
     for (BeamReading& b : r.beams) {
-      const double d = calibration::rayCircleDistance(
-          pose.x_m, pose.y_m, pose.yaw_rad + b.angle_rad, l.x_m, l.y_m, l.radius_m);
+      const double d = rayCircleDistance(pose.x_m, pose.y_m, pose.yaw_rad + b.angle_rad, l.x_m,
+                                         l.y_m, l.radius_m);
       b.range_m = fit.model.bias(d) + fit.model.noise.stddev(d, fit.model.bias) * normal(rng);
     }
     double sx = 0.0, sy = 0.0;

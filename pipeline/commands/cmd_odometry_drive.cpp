@@ -5,9 +5,12 @@
 // pole estimated with them (odometry/drive_fit.hpp); prints each estimate with its standard error
 // and writes OUT.json (docs/FORMAT.md, "lidarcal-odometry-drive/1").
 
+#include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <map>
 #include <memory>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -19,7 +22,9 @@
 #include "common/plural.hpp"
 #include "common/pose2.hpp"
 #include "io/atomic_file.hpp"
+#include "io/json_number.hpp"
 #include "io/landmarks_csv.hpp"
+#include "io/pcd_scan.hpp"
 #include "io/wheel_angles_csv.hpp"
 #include "odometry/drive_fit.hpp"
 #include "pipeline/commands/commands.hpp"
@@ -36,9 +41,14 @@ struct DriveOptions {
   std::vector<double> nominal;
   std::vector<std::string> hold;
   bool estimate_range_scale = false;
+  bool beams = false;
   odometry::DriveNoise noise;
   bool overwrite = false;
 };
+
+/// Beams passing within this fraction of a pole's radius from its centre are fitted
+/// (odometry::centralBeams); as `calibrate --reference` selects them.
+constexpr double kCentralFraction = 0.7;
 
 constexpr ShownParameter kShown[odometry::kDriveParameterCount] = {
     {"left wheel radius r_L", "mm", 1e3},
@@ -50,8 +60,38 @@ constexpr ShownParameter kShown[odometry::kDriveParameterCount] = {
     {"range offset a_0", "mm", 1e3},
     {"range scale a_1", "%", 100.0}};
 
-/// The drive as the fit sees it: steps between consecutive rows of the wheel angles, and each
-/// landmark row as a sighting of the scan of its file.
+/// Every labelled return of the scans `detect` wrote beside landmarks.csv, as a beam of the
+/// scan of its file on the pole of its label.
+void addBeams(const DriveOptions& o, const std::vector<io::LandmarkRow>& rows,
+              const std::map<std::string, std::size_t>& scan_of, odometry::DriveRecord& record) {
+  const std::filesystem::path dir = std::filesystem::path(o.landmarks).parent_path();
+  std::set<std::string> read;
+  Progress progress("reading labelled scans", scan_of.size(), !quiet());
+  for (const io::LandmarkRow& r : rows) {
+    if (!read.insert(r.file).second) continue;
+    progress.update(read.size());
+    const std::filesystem::path file = dir / r.file;
+    if (!std::filesystem::exists(file))
+      throw InputError(file.string(), "file", "the labelled scan is missing",
+                       "give --landmarks the landmarks.csv of `lidarcal detect --out DIR`, in DIR "
+                       "beside the labelled scans, or leave out --beams");
+    const io::Scan scan = io::readScan(file);
+    if (scan.labels.empty())
+      throw InputError(file.string(), "label", "the scan has no label field",
+                       "give --landmarks the landmarks.csv of `lidarcal detect`, in the directory "
+                       "of its labelled scans");
+    for (std::size_t i = 0; i < scan.labels.size(); ++i) {
+      const double x = scan.cloud->points[i].x, y = scan.cloud->points[i].y;
+      if (scan.labels[i] == 0 || !std::isfinite(x) || !std::isfinite(y)) continue;
+      record.beams.push_back({scan_of.at(r.file), static_cast<int>(scan.labels[i]),
+                              std::atan2(y, x), std::hypot(x, y)});
+    }
+  }
+  progress.finish();
+}
+
+/// The drive as the fit sees it: steps between consecutive rows of the wheel angles, each
+/// landmark row as a sighting of the scan of its file, and with --beams the labelled returns.
 odometry::DriveRecord driveRecord(const DriveOptions& o) {
   const std::vector<io::WheelAngleRow> wheels = io::readWheelAnglesCsv(o.wheels);
   const std::vector<io::LandmarkRow> rows = io::readLandmarksCsv(o.landmarks);
@@ -78,7 +118,9 @@ odometry::DriveRecord driveRecord(const DriveOptions& o) {
     record.sightings.push_back({it->second, r.landmark, r.range_m - r.radius_m, r.bearing_rad});
   }
   if (!rows.empty()) record.pole_radius_m = rows.front().radius_m;
-  return record;
+  if (!o.beams) return record;
+  addBeams(o, rows, scan_of, record);
+  return odometry::centralBeams(record, kCentralFraction);
 }
 
 odometry::DriveFitSetup fitSetup(const DriveOptions& o) {
@@ -121,6 +163,7 @@ nlohmann::json outputJson(const DriveOptions& o, const odometry::DriveRecord& re
   j["drive"] = {{"scans", record.scans()},
                 {"sightings", record.sightings.size()},
                 {"pole_radius_m", record.pole_radius_m}};
+  if (record.byBeam()) j["drive"]["beams"] = record.beams.size();
   j["status"] = {{"code", fit.status.name()}, {"message", fit.status.message}};
   const odometry::Vector8 value = fit.state.params.toVector(), se = fit.scaledStandardErrors(),
                           stated = fit.standardErrors();
@@ -142,7 +185,7 @@ nlohmann::json outputJson(const DriveOptions& o, const odometry::DriveRecord& re
   nlohmann::json kinds;
   const char* names[] = {"odometry_translation", "odometry_heading", "range", "bearing"};
   for (int k = 0; k < 4; ++k)
-    kinds[names[k]] = {{"variance_factor", by_kind.factor[k]},
+    kinds[names[k]] = {{"variance_factor", io::jsonNumber<nlohmann::json>(by_kind.factor[k])},
                        {"redundancy", by_kind.redundancy[k]}};
   j["by_kind"] = kinds;
   return j;
@@ -150,9 +193,11 @@ nlohmann::json outputJson(const DriveOptions& o, const odometry::DriveRecord& re
 
 void printResult(const odometry::DriveRecord& record, const odometry::DriveFitSetup& setup,
                  const odometry::DriveFit& fit, const odometry::VarianceByKind& by_kind) {
+  const std::string seen = record.byBeam() ? plural(record.beams.size(), "beam") + " on " +
+                                                 plural(record.sightings.size(), "pole sighting")
+                                           : plural(record.sightings.size(), "pole sighting");
   std::printf("odometry, mounting and range from a drive of %s and %s (%s)\n\n",
-              plural(record.scans(), "scan").c_str(),
-              plural(record.sightings.size(), "pole sighting").c_str(),
+              plural(record.scans(), "scan").c_str(), seen.c_str(),
               fit.iterations > 0 ? "joint maximum likelihood" : "not fitted");
   std::printf("| parameter | estimate | standard error | unit |\n|---|---|---|---|\n");
   const odometry::Vector8 value = fit.state.params.toVector(), se = fit.scaledStandardErrors();
@@ -167,9 +212,9 @@ void printResult(const odometry::DriveRecord& record, const odometry::DriveFitSe
   std::printf(
       "\nvariance factor %.3f: the residuals over the stated noise (near 1 when it is right; the "
       "standard errors above include it)\nby kind: odometry %.2f (translation), %.2f (heading); "
-      "range %.2f; bearing %.2f\n",
-      fit.variance_factor, by_kind.factor[0], by_kind.factor[1], by_kind.factor[2],
-      by_kind.factor[3]);
+      "range%s %.2f; bearing %.2f\n",
+      fit.variance_factor, by_kind.factor[0], by_kind.factor[1], record.byBeam() ? " (beams)" : "",
+      by_kind.factor[2], by_kind.factor[3]);
 }
 
 void runOdometryDrive(const DriveOptions& o) {
@@ -217,6 +262,11 @@ void addOdometryDriveCommand(CLI::App& app) {
       ->delimiter(',')
       ->check(CLI::IsMember(std::vector<std::string>(odometry::kDriveParameterNames.begin(),
                                                      odometry::kDriveParameterNames.end())));
+  sub->add_flag("--beams", o->beams,
+                "Fit every labelled return of the scans beside --landmarks (detect's output) "
+                "in place of each detection's range: no error from circles fitted through "
+                "returns that the range bias moved along their beams; --range-sigma is then one "
+                "beam's noise");
   sub->add_flag("--estimate-range-scale", o->estimate_range_scale,
                 "Also fit a range scale a_1 (with free wheel radii it cannot be told from a common "
                 "scale of the robot: hold the radii or the axle)");

@@ -13,6 +13,7 @@
 #include "calibration/filtering.hpp"
 #include "calibration/inversion.hpp"
 #include "calibration/joint_refinement.hpp"
+#include "common/ray_circle.hpp"
 #include "io/atomic_file.hpp"
 #include "io/gnuplot.hpp"
 #include "io/output_files.hpp"
@@ -263,8 +264,7 @@ PlotData plotData(const LandmarkObservations& obs, const CalibrationModel& m,
     const Pose2& cmd = obs.commanded[s.stop];
     const bool map_scan = first_scan_of_stop[s.stop] == s.scan;  // one scan per stop on the map
     for (const auto& b : s.beams) {
-      const double d =
-          calibration::rayCircleDistance(est.x_m, est.y_m, est.yaw_rad + b.angle_rad,
+      const double d = rayCircleDistance(est.x_m, est.y_m, est.yaw_rad + b.angle_rad,
                                          it->second->x_m, it->second->y_m, it->second->radius_m);
       if (!std::isfinite(d)) continue;
       const double c = tally.add(p, m, d, b.range_m);
