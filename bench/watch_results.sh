@@ -36,6 +36,9 @@ for s in small_poles large_poles; do
   $W --scene "$(scene $s)" --seeds 20 --first-seed 3000 --scans 1500 --learn --rate 1000 \
     > "$OUT/learn_clean_$s.txt"
 done
+# 200 more thin-pole drives, for the switch rate after a false alarm (about 40 min).
+$W --scene "$(scene small_poles)" --seeds 200 --first-seed 3020 --scans 1500 --learn --rate 1000 \
+  > "$OUT/learn_clean_small_poles_200.txt"
 # The same with the check fit's own bias taken out by four replicas per check: the baseline's
 # absolute test (drives that end after it) and the thin-pole learn drives.
 $W --scene "$(scene small_poles)" --seeds 200 --first-seed 1000 --scans 560 --rate 20 \
