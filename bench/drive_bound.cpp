@@ -15,6 +15,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "common/pose2.hpp"
 #include "io/landmarks_csv.hpp"
 #include "io/sequence.hpp"
 #include "io/wheel_angles_csv.hpp"
@@ -134,16 +135,16 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   double beam_step_deg = 0.0;
   app.add_option("--beam-step", beam_step_deg,
-                 "> 0: fit the beams one every this many degrees hit (within 0.7 of a pole's "
-                 "radius from its centre, as odometry-drive --beams), with --range-sigma per beam")
+                 "> 0: fit the beams one every this many degrees hit (those odometry-drive "
+                 "--beams keeps), with --range-sigma per beam")
       ->check(CLI::Range(0.0, 10.0));
   app.add_option("--json", json_path, "write the tables here as JSON");
   std::string example;
   app.add_option("--write-example", example,
                  "write the first drive to DIR as odometry-drive's input, and stop");
   CLI11_PARSE(app, argc, argv);
-  sim.field_of_view_rad = fov_deg * 3.14159265358979323846 / 180.0;
-  sim.beam_step_rad = beam_step_deg * 3.14159265358979323846 / 180.0;
+  sim.field_of_view_rad = fov_deg * lidarcal::kPi / 180.0;
+  sim.beam_step_rad = beam_step_deg * lidarcal::kPi / 180.0;
   if (!example.empty()) {
     sim.seed = first_seed;
     writeExample(lidarcal::odometry::simulateDrive(sim), example);
@@ -156,7 +157,9 @@ int main(int argc, char** argv) {
   for (int s = 0; s < seeds; ++s) {
     sim.seed = first_seed + static_cast<std::uint64_t>(s);
     auto drive = lidarcal::odometry::simulateDrive(sim);
-    if (sim.beam_step_rad > 0.0) drive.record = lidarcal::odometry::centralBeams(drive.record, 0.7);
+    if (sim.beam_step_rad > 0.0)
+      drive.record =
+          lidarcal::odometry::centralBeams(drive.record, lidarcal::odometry::kCentralFraction);
     fitOne(drive, sim, joint, joint_tally);
     fitOne(drive, sim, exact_range, exact_tally);
     if ((s + 1) % 50 == 0) std::fprintf(stderr, "%d of %d drives\n", s + 1, seeds);

@@ -112,8 +112,11 @@ Eigen::Vector2d predictSighting(const Eigen::Vector3d& pose, const Eigen::Vector
 /// sighting in the same scan gives (range and bearing); the others, and beams without such a
 /// sighting, are left out. Near the tangent a beam's distance to the circle changes faster than
 /// any first-order fit follows (and real returns there mix the pole with what lies behind);
-/// 0.7 keeps incidences below about 45 degrees.
+/// kCentralFraction keeps incidences below about 45 degrees.
 DriveRecord centralBeams(const DriveRecord& record, double fraction);
+
+/// The fraction `odometry-drive --beams` fits with, as `calibrate --reference` selects beams.
+inline constexpr double kCentralFraction = 0.7;
 
 /// What a noise-free laser reads along the beam at `angle_rad` (laser frame) from robot pose
 /// `pose`, of the pole centred at `pole`: the distance to its circle through the range bias.

@@ -46,10 +46,6 @@ struct DriveOptions {
   bool overwrite = false;
 };
 
-/// Beams passing within this fraction of a pole's radius from its centre are fitted
-/// (odometry::centralBeams); as `calibrate --reference` selects them.
-constexpr double kCentralFraction = 0.7;
-
 constexpr ShownParameter kShown[odometry::kDriveParameterCount] = {
     {"left wheel radius r_L", "mm", 1e3},
     {"right wheel radius r_R", "mm", 1e3},
@@ -120,7 +116,7 @@ odometry::DriveRecord driveRecord(const DriveOptions& o) {
   if (!rows.empty()) record.pole_radius_m = rows.front().radius_m;
   if (!o.beams) return record;
   addBeams(o, rows, scan_of, record);
-  return odometry::centralBeams(record, kCentralFraction);
+  return odometry::centralBeams(record, odometry::kCentralFraction);
 }
 
 odometry::DriveFitSetup fitSetup(const DriveOptions& o) {

@@ -20,7 +20,8 @@ DriveFitSetup setupFor(const DriveSimulation& sim, EstimatedSet estimated = kEst
   return setup;
 }
 
-TEST(DriveFit, NoiseFreeDriveGivesTheTruth) {
+/// The default simulation with every noise nearly off (a fit then lands on the truth).
+DriveSimulation nearlyNoiseFree() {
   DriveSimulation sim;
   sim.noise.range_sigma_m = 1e-7;
   sim.noise.bearing_sigma_rad = 1e-8;
@@ -28,7 +29,11 @@ TEST(DriveFit, NoiseFreeDriveGivesTheTruth) {
   sim.noise.slip_rad_per_sqrt_rad = 1e-8;
   sim.noise.floor_m = 1e-9;
   sim.noise.floor_rad = 1e-9;
-  const SimulatedDrive drive = simulateDrive(sim);
+  return sim;
+}
+
+/// Every parameter and pole of `drive`'s fit within 1e-6 of the truth.
+void expectTheTruth(const SimulatedDrive& drive, const DriveSimulation& sim) {
   const DriveFit fit = fitDrive(drive.record, setupFor(sim));
   ASSERT_TRUE(fit.ok()) << fit.status.message;
   const Vector8 error = fit.state.params.toVector() - sim.truth.toVector();
@@ -38,24 +43,27 @@ TEST(DriveFit, NoiseFreeDriveGivesTheTruth) {
     EXPECT_LT((fit.state.poles.at(id) - centre).norm(), 1e-6) << "pole " << id;
 }
 
+/// Each estimated parameter but the range scale within 4 of its standard errors of the truth.
+void expectWithinFourStandardErrors(const DriveFit& fit, const DriveSimulation& sim) {
+  const Vector8 error = fit.state.params.toVector() - sim.truth.toVector();
+  const Vector8 se = fit.standardErrors();
+  for (int i = 0; i < kDriveParameterCount - 1; ++i) {
+    EXPECT_GT(se[i], 0.0) << kDriveParameterNames[i];
+    EXPECT_LT(std::abs(error[i]), 4.0 * se[i]) << kDriveParameterNames[i] << ", seed " << sim.seed;
+  }
+}
+
+TEST(DriveFit, NoiseFreeDriveGivesTheTruth) {
+  const DriveSimulation sim = nearlyNoiseFree();
+  expectTheTruth(simulateDrive(sim), sim);
+}
+
 TEST(DriveFit, NoiseFreeBeamsGiveTheTruth) {
-  DriveSimulation sim;
+  DriveSimulation sim = nearlyNoiseFree();
   sim.beam_step_rad = 1.0 * kPi / 180.0;
-  sim.noise.range_sigma_m = 1e-7;
-  sim.noise.bearing_sigma_rad = 1e-8;
-  sim.noise.slip_m_per_sqrt_m = 1e-8;
-  sim.noise.slip_rad_per_sqrt_rad = 1e-8;
-  sim.noise.floor_m = 1e-9;
-  sim.noise.floor_rad = 1e-9;
   const SimulatedDrive drive = simulateDrive(sim);
   ASSERT_GT(drive.record.beams.size(), drive.record.sightings.size() / 2);
-  const DriveFit fit = fitDrive(drive.record, setupFor(sim));
-  ASSERT_TRUE(fit.ok()) << fit.status.message;
-  const Vector8 error = fit.state.params.toVector() - sim.truth.toVector();
-  for (int i = 0; i < kDriveParameterCount; ++i)
-    EXPECT_NEAR(error[i], 0.0, 1e-6) << kDriveParameterNames[i];
-  for (const auto& [id, centre] : drive.truth.poles)
-    EXPECT_LT((fit.state.poles.at(id) - centre).norm(), 1e-6) << "pole " << id;
+  expectTheTruth(drive, sim);
 }
 
 TEST(DriveFit, BeamsRecoverTheTruthWithinTheirStandardErrors) {
@@ -68,16 +76,11 @@ TEST(DriveFit, BeamsRecoverTheTruthWithinTheirStandardErrors) {
     sim.seed = seed;
     SimulatedDrive drive = simulateDrive(sim);
     const std::size_t all = drive.record.beams.size();
-    drive.record = centralBeams(drive.record, 0.7);
+    drive.record = centralBeams(drive.record, kCentralFraction);
     EXPECT_LT(drive.record.beams.size(), all);
     const DriveFit fit = fitDrive(drive.record, setupFor(sim));
     ASSERT_TRUE(fit.ok()) << fit.status.message;
-    const Vector8 error = fit.state.params.toVector() - sim.truth.toVector();
-    const Vector8 se = fit.standardErrors();
-    for (int i = 0; i < kDriveParameterCount - 1; ++i) {
-      EXPECT_GT(se[i], 0.0) << kDriveParameterNames[i];
-      EXPECT_LT(std::abs(error[i]), 4.0 * se[i]) << kDriveParameterNames[i] << ", seed " << seed;
-    }
+    expectWithinFourStandardErrors(fit, sim);
     // The beams' variance factor is not tested against 1: on poles far enough that the poses'
     // lateral uncertainty nears the radius it exceeds the first-order redundancy's prediction
     // (docs/results/odometry.md).
@@ -106,13 +109,8 @@ TEST(DriveFit, RecoversTheTruthWithinItsStandardErrors) {
   const SimulatedDrive drive = simulateDrive(sim);
   const DriveFit fit = fitDrive(drive.record, setupFor(sim));
   ASSERT_TRUE(fit.ok()) << fit.status.message;
-  const Vector8 error = fit.state.params.toVector() - sim.truth.toVector();
-  const Vector8 se = fit.standardErrors();
-  for (int i = 0; i < kDriveParameterCount - 1; ++i) {
-    EXPECT_GT(se[i], 0.0) << kDriveParameterNames[i];
-    EXPECT_LT(std::abs(error[i]), 4.0 * se[i]) << kDriveParameterNames[i];
-  }
-  EXPECT_EQ(se[7], 0.0) << "the held range scale has no standard error";
+  expectWithinFourStandardErrors(fit, sim);
+  EXPECT_EQ(fit.standardErrors()[7], 0.0) << "the held range scale has no standard error";
   EXPECT_EQ(fit.state.params.range_scale, 0.0) << "a held parameter stays where it was given";
 }
 
