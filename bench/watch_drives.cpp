@@ -128,12 +128,15 @@ watch::WatchSink seedSink(const Options& o, const watch::RangeChange& change, Se
   sink.check = [&o, &change, &r](const watch::CheckEvent& e) {
     if (!e.check.status.ok()) {
       ++r.failed;
+      if (o.verbose)
+        std::fprintf(stderr, "check %zu-%zu: not possible: %s\n", e.stretch.first_scan,
+                     e.stretch.last_scan, e.check.status.message.c_str());
       return;
     }
     if (o.verbose)
       std::fprintf(stderr,
                    "check %zu-%zu: %s record %zu poles %zu readings %zu shift %.2f +- %.2f mm at "
-                   "%.2f, %.2f +- %.2f mm at %.2f (fit's own bias taken out: %.2f, %.2f mm), "
+                   "%.2f, %.2f +- %.2f mm at %.2f (fit's own bias: %.2f, %.2f mm), "
                    "p %.3g\n",
                    e.stretch.first_scan, e.stretch.last_scan, watch::toString(e.test), e.record,
                    e.check.poles, e.check.readings, 1e3 * e.check.shift_m[0],
