@@ -40,7 +40,7 @@ struct Options {
   std::string scene, model = "truth", change, csv;
   std::size_t first_seed = 1, seeds = 20, scans = 2000;
   double rate = 0.1, every_m = 3.0;
-  int bias_replicas = 0;
+  int bias_replicas = watch::CheckSettings{}.bias_replicas;
   bool per_hour = false, learn = false, radius = true, verbose = false;
   double scan_hz = 10.0;
   std::size_t rss_every = 0;
@@ -128,12 +128,15 @@ watch::WatchSink seedSink(const Options& o, const watch::RangeChange& change, Se
   sink.check = [&o, &change, &r](const watch::CheckEvent& e) {
     if (!e.check.status.ok()) {
       ++r.failed;
+      if (o.verbose)
+        std::fprintf(stderr, "check %zu-%zu: not possible: %s\n", e.stretch.first_scan,
+                     e.stretch.last_scan, e.check.status.message.c_str());
       return;
     }
     if (o.verbose)
       std::fprintf(stderr,
                    "check %zu-%zu: %s record %zu poles %zu readings %zu shift %.2f +- %.2f mm at "
-                   "%.2f, %.2f +- %.2f mm at %.2f (fit's own bias taken out: %.2f, %.2f mm), "
+                   "%.2f, %.2f +- %.2f mm at %.2f (fit's own bias: %.2f, %.2f mm), "
                    "p %.3g\n",
                    e.stretch.first_scan, e.stretch.last_scan, watch::toString(e.test), e.record,
                    e.check.poles, e.check.readings, 1e3 * e.check.shift_m[0],
@@ -296,11 +299,13 @@ void addOptions(CLI::App& app, Options& o) {
   app.add_option("--scan-hz", o.scan_hz, "Scans per second");
   app.add_option("--every", o.every_m, "Metres between checks");
   app.add_option("--bias-replicas", o.bias_replicas,
-                 "Bootstrap replicas per check for the check fit's own bias (0: none)");
+                 "Bootstrap replicas for the check fit's own bias, on the checks tested against "
+                 "zero (0: none)")
+      ->capture_default_str();
   app.add_flag("--learn", o.learn, "Learn mode");
   app.add_flag("!--no-radius", o.radius, "Do not give the watcher the poles' radius");
   app.add_flag("--verbose", o.verbose,
-               "Each check on stderr (baseline checks too, with the fit bias taken out)");
+               "Each check on stderr (baseline checks too, with the fit's own bias)");
   app.add_option("--rss-every", o.rss_every, "Print resident memory every N scans");
   app.add_option("--work", o.work,
                  "With --learn and --change: a directory for the scans after the change, which "

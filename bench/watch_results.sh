@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: BSD-3-Clause
 # The numbers of docs/results/watch.md: the field watcher on simulated drives (build/bench/
-# watch_drives) and on the shared recordings (lidarcal watch). About two hours on 2 cores; each
+# watch_drives) and on the shared recordings (lidarcal watch). About four hours on 2 cores; each
 # part writes OUT/NAME.txt.
 #
 #   bench/watch_results.sh [OUT]        (default /tmp/lidarcal-watch-results)
@@ -31,22 +31,18 @@ done
 $W --scene "$(scene large_poles)" --seeds 10 --first-seed 2000 --scans 2000 --change 20@900 \
   --learn --work "$OUT/learn_work" > "$OUT/learn_large_poles.txt"
 # Clean drives in learn mode at 1000 false alarms per km, so that nearly every drive raises one
-# and refits: how many of those false alarms lead to a switch (at most 1 % should).
+# and refits: how many of those false alarms lead to a switch (at most 1 % should). Thin poles:
+# 400 drives (about 2 hours on one core).
+$W --scene "$(scene small_poles)" --seeds 400 --first-seed 3000 --scans 1500 --learn --rate 1000 \
+  > "$OUT/learn_clean_small_poles.txt"
+$W --scene "$(scene large_poles)" --seeds 20 --first-seed 3000 --scans 1500 --learn --rate 1000 \
+  > "$OUT/learn_clean_large_poles.txt"
+# The baseline's absolute test without the check fit's own bias taken out, for comparison
+# (drives that end after it).
 for s in small_poles large_poles; do
-  $W --scene "$(scene $s)" --seeds 20 --first-seed 3000 --scans 1500 --learn --rate 1000 \
-    > "$OUT/learn_clean_$s.txt"
+  $W --scene "$(scene $s)" --seeds 200 --first-seed 1000 --scans 560 --rate 20 \
+    --bias-replicas 0 > "$OUT/clean_no_replicas_$s.txt"
 done
-# 200 more thin-pole drives, for the switch rate after a false alarm (about 40 min).
-$W --scene "$(scene small_poles)" --seeds 200 --first-seed 3020 --scans 1500 --learn --rate 1000 \
-  > "$OUT/learn_clean_small_poles_200.txt"
-# The same with the check fit's own bias taken out by four replicas per check: the baseline's
-# absolute test (drives that end after it) and the thin-pole learn drives.
-$W --scene "$(scene small_poles)" --seeds 200 --first-seed 1000 --scans 560 --rate 20 \
-  --bias-replicas 4 > "$OUT/clean_replicas_small_poles.txt"
-$W --scene "$(scene large_poles)" --seeds 100 --first-seed 1000 --scans 560 --rate 20 \
-  --bias-replicas 4 > "$OUT/clean_replicas_large_poles.txt"
-$W --scene "$(scene small_poles)" --seeds 20 --first-seed 3000 --scans 1500 --learn --rate 1000 \
-  --bias-replicas 4 > "$OUT/learn_clean_replicas_small_poles.txt"
 # 4. Memory over a 100,000-scan drive.
 $W --scene "$(scene large_poles)" --seeds 1 --first-seed 4000 --scans 100000 --rss-every 10000 \
   > "$OUT/memory.txt"

@@ -179,8 +179,11 @@ std::string nodeHelp() {
          "0.1)\n"
          "  ~false_alarms_per  km (default) | hour (of driving)\n"
          "  ~check_every       metres of travel between two checks (default 3)\n"
-         "  ~check_bias_replicas  replicas per check that estimate its fit's own bias (default "
-         "0: none)\n"
+         "  ~check_bias_replicas  replicas that estimate a check fit's own bias, for the checks "
+         "tested against zero\n"
+         "                (0: none; default " +
+         std::to_string(watch::CheckSettings{}.bias_replicas) +
+         ")\n"
          "  ~landmark_radius   the poles' radius, metres (default: estimated)\n"
          "  ~pose              odom:TOPIC (nav_msgs/Odometry, default odom:/odom) | "
          "tf:FIXED_FRAME (/tf, /tf_static)\n"

@@ -30,7 +30,7 @@ struct WatchParameters {
   watch::Exposure false_alarms_per = watch::Exposure::distance;
   double check_every_m = watch::CheckSettings{}.every_m;  ///< ~check_every: metres; default 3
   std::optional<double> landmark_radius_m;  ///< ~landmark_radius: metres; unset: estimated
-  /// ~check_bias_replicas: replicas per check for its fit's own bias (0..100); default 0: none
+  /// ~check_bias_replicas: replicas for a check fit's own bias (0..100; 0: none)
   int check_bias_replicas = watch::CheckSettings{}.bias_replicas;
   /// ~pose: odom:TOPIC (nav_msgs/Odometry; default odom:/odom) | tf:FIXED_FRAME
   ros2::PoseSource pose{ros2::PoseSource::Kind::odom, "/odom"};

@@ -92,8 +92,8 @@ struct NodeParameters {
   bool false_alarms_per_hour = false;
   /// check_every: metres of travel between two checks (> 0); unset: the watcher's default, 3 m
   std::optional<double> check_every_m;
-  /// check_bias_replicas: replicas per check that estimate its fit's own bias (0..100); unset:
-  /// the watcher's default, 0 (none)
+  /// check_bias_replicas: replicas that estimate a check fit's own bias, for the checks tested
+  /// against zero (0..100; 0: none); unset: the watcher's default, 4
   std::optional<int> check_bias_replicas;
   /// landmark_radius: the poles' radius in metres (> 0); unset (or given empty): estimated with
   /// the bias

@@ -79,7 +79,8 @@ Engine::Engine(const WatchSettings& settings, std::shared_ptr<const CalibrationM
       tracker_(settings_.detection, settings_.association),
       window_(windowCapacity(settings_)),
       budget_(settings_.false_alarms),
-      record_(settings_.check.record_checks) {
+      record_(settings_.check.record_checks),
+      baseline_(settings_.check.baseline_checks) {
   checkModelUsable(model.get(), settings_.mode);
   if (model) useModel(std::move(model));
   state_.learning = !model_;
@@ -180,12 +181,12 @@ void Engine::schedule(std::size_t index) {
   const std::shared_ptr<const CalibrationModel> model = model_;
   const WatchSettings settings = settings_;
   const std::array<double, 2> distances = distances_m_;
-  auto work = [fit, model, settings, refit, distances, check_obs = std::move(check_obs),
+  const int replicas = testedAgainstZero() ? settings_.check.bias_replicas : 0;
+  auto work = [fit, model, settings, refit, distances, replicas, check_obs = std::move(check_obs),
                refit_obs = std::move(refit_obs)]() mutable {
     if (fit.check)
-      fit.check = checkModel(
-          check_obs, *model, distances,
-          CheckFit{settings.threads, settings.check.bias_replicas, fit.check_stretch.first_scan});
+      fit.check = checkModel(check_obs, *model, distances,
+                             CheckFit{settings.threads, replicas, fit.check_stretch.first_scan});
     if (refit)
       fit.candidate = std::make_shared<const CalibrationModel>(
           refitModel(refit_obs, settings.learn, settings.threads));
@@ -214,6 +215,7 @@ void Engine::useModel(std::shared_ptr<const CalibrationModel> model) {
   distances_m_ = referenceDistances(*model_);
   model_covariance_ = modelShiftCovariance(*model_, distances_m_);
   record_.clear();
+  baseline_.clear();
   alarm_record_.clear();
   after_alarm_.clear();
   rejected_ = alarmed_ = false;
@@ -221,19 +223,32 @@ void Engine::useModel(std::shared_ptr<const CalibrationModel> model) {
   state_.last_check = CheckEvent{};
 }
 
-/// Tests one check (shift_history.hpp) and spends the level the exposure allows.
-void Engine::decide(CheckEvent& e, const Shift& shift) {
+/// Whether the next check will be tested against zero, where the fit's own bias does not
+/// cancel: a check of the baseline, or in learn mode one after the baseline failed (the switch
+/// test then asks whether the checks since still say the model is wrong: switchTest()).
+bool Engine::testedAgainstZero() const {
+  return record_.size() < settings_.check.baseline_checks ||
+         (settings_.mode == Mode::learn && rejected_);
+}
+
+/// Tests one check (shift_history.hpp) and spends the level the exposure allows. The change
+/// tests compare fitted shifts, whose shared bias cancels; the tests against zero take the
+/// shifts with the fit's own bias out.
+void Engine::decide(CheckEvent& e) {
+  const Shift shift = fittedShift(e.check);
   const std::size_t baseline = settings_.check.baseline_checks;
   e.record = record_.size();
   if (record_.size() + 1 < baseline) {
     record_.add(shift);
+    baseline_.add(unbiasedShift(e.check));
     e.test = Test::baseline;
     return;
   }
   if (record_.size() + 1 == baseline) {
     record_.add(shift);
+    baseline_.add(unbiasedShift(e.check));
     e.test = Test::absolute;
-    e.f = record_.absolute(model_covariance_);
+    e.f = baseline_.absolute(model_covariance_);
   } else {
     e.test = Test::change;
     e.f = record_.change(shift);
@@ -247,11 +262,12 @@ void Engine::decide(CheckEvent& e, const Shift& shift) {
   e.alarm = e.exceeds && !alarmed_;
   if (e.alarm) {
     alarm_ = e;
-    alarm_mean_ = record_.mean();  // the baseline's, or the passed checks' before this one
+    // the baseline's (its bias out), or the passed checks' before this one
+    alarm_mean_ = e.test == Test::absolute ? baseline_.mean() : record_.mean();
     alarm_record_ = record_;
     after_alarm_.clear();
   } else if (alarmed_) {
-    after_alarm_.add(shift);
+    after_alarm_.add(rejected_ ? unbiasedShift(e.check) : shift);
   }
   if (e.test == Test::change) record_.add(shift);
   if (e.test == Test::absolute) {
@@ -272,7 +288,7 @@ void Engine::applyCheck(const Fit& fit) {
   e.model_version = fit.version;
   // A check of a model no longer in use (a switch came first) decides nothing.
   if (e.check.status.ok() && fit.version == state_.model_version) {
-    decide(e, Shift{Eigen::Vector2d(e.check.shift_m[0], e.check.shift_m[1]), e.check.covariance});
+    decide(e);
     stretch_first_ = fit.check_stretch.last_scan + 1;
     if (e.test != Test::baseline) {
       decided_m_ = state_.travel_m;

@@ -82,7 +82,8 @@ class Engine {
   void applyRefit(const Fit& fit);
   SwitchTest switchTest() const;
   void updateLevel();
-  void decide(CheckEvent& e, const Shift& shift);
+  bool testedAgainstZero() const;
+  void decide(CheckEvent& e);
   void useModel(std::shared_ptr<const CalibrationModel> model);
   Stretch stretchOf(std::size_t first, std::size_t last) const;
 
@@ -107,6 +108,7 @@ class Engine {
   Eigen::Vector2d alarm_mean_ = Eigen::Vector2d::Zero();  // the record's mean shift then
   bool rejected_ = false;  // the model's baseline failed its absolute test: wrong from the start
   ShiftHistory record_;    // the checks that passed under the model in use
+  ShiftHistory baseline_;  // its baseline's checks with the fit's own bias out
   ShiftHistory alarm_record_;            // the record when the alarm came
   ShiftHistory after_alarm_;             // the checks since: a switch needs them to differ from it
   std::array<double, 2> distances_m_{};  // the model's reference distances

@@ -142,6 +142,17 @@ std::optional<Eigen::Vector2d> fitBias(const LandmarkObservations& obs,
 
 }  // namespace
 
+Shift fittedShift(const ModelCheck& check) {
+  return {Eigen::Vector2d(check.shift_m[0], check.shift_m[1]), check.covariance};
+}
+
+Shift unbiasedShift(const ModelCheck& check) {
+  if (check.bias_replicas <= 0) return fittedShift(check);
+  return {Eigen::Vector2d(check.shift_m[0] - check.fit_bias_m[0],
+                          check.shift_m[1] - check.fit_bias_m[1]),
+          check.covariance * (1.0 + 1.0 / check.bias_replicas)};
+}
+
 ModelCheck checkModel(const LandmarkObservations& raw, const CalibrationModel& model,
                       const std::array<double, 2>& distances_m, const CheckFit& fit) {
   ModelCheck r;
@@ -182,7 +193,6 @@ ModelCheck checkModel(const LandmarkObservations& raw, const CalibrationModel& m
     return r;
   }
   c *= n / (n - p);
-  Eigen::Vector2d bias = Eigen::Vector2d::Zero();
   if (fit.bias_replicas > 0) {
     const std::optional<Eigen::Vector2d> b = fitBias(obs, line, d, fit, r.bias_replicas);
     if (!b) {
@@ -191,12 +201,10 @@ ModelCheck checkModel(const LandmarkObservations& raw, const CalibrationModel& m
                   "check's own bias is unknown"};
       return r;
     }
-    bias = *b;
-    c *= 1.0 + 1.0 / r.bias_replicas;
+    r.fit_bias_m = {(*b)(0), (*b)(1)};
   }
   for (std::size_t i = 0; i < 2; ++i) {
-    r.fit_bias_m[i] = bias(static_cast<Eigen::Index>(i));
-    r.shift_m[i] = line.model.bias(d[i]) - d[i] - r.fit_bias_m[i];
+    r.shift_m[i] = line.model.bias(d[i]) - d[i];
     r.shift_se_m[i] = std::sqrt(c(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(i)));
   }
   r.covariance = c;

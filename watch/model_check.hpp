@@ -15,8 +15,9 @@
 // off). With bias_replicas = R > 0 it is estimated by a parametric bootstrap: the stretch's
 // readings are drawn R times from the fitted poses, poles, line and noise law, each replica is
 // fitted the same way, and the mean of the replicas' shifts minus the fitted shift is the bias
-// (Efron & Tibshirani 1993, ch. 10). The check states s minus that bias, with its covariance
-// times (1 + 1/R) for the replicas' own scatter. shift_history.hpp decides on it.
+// (Efron & Tibshirani 1993, ch. 10). The check states s and that bias; unbiasedShift() is s
+// minus the bias, with the covariance times (1 + 1/R) for the replicas' own scatter.
+// shift_history.hpp decides on it.
 
 #include <array>
 #include <cstddef>
@@ -39,11 +40,11 @@ struct ModelCheck {
   /// data do not support: calibrate's own refusals).
   Status status{StatusCode::not_run, ""};
   std::array<double, 2> distance_m{kNaN, kNaN};  ///< d_1, d_2, metres
-  /// s(d): mean corrected reading minus true distance there, metres
+  /// s(d): mean corrected reading minus true distance there, as fitted, metres
   std::array<double, 2> shift_m{kNaN, kNaN};
   /// the fit's standard error of s(d), metres
   std::array<double, 2> shift_se_m{kNaN, kNaN};
-  /// the fit's own bias at d taken out of shift_m (0 without replicas), metres
+  /// the fit's own bias at d, estimated by the replicas (0 without), metres
   std::array<double, 2> fit_bias_m{0.0, 0.0};
   int bias_replicas = 0;                                 ///< replicas that estimated it (0: none)
   Eigen::Matrix2d covariance = Eigen::Matrix2d::Zero();  ///< the fit's covariance of s, m^2
@@ -52,6 +53,18 @@ struct ModelCheck {
   std::size_t readings = 0;                        ///< corrected readings in the fit
   std::size_t scans = 0;                           ///< scans of the stretch
 };
+
+/// One check's shift at the reference distances as a test takes it (shift_history.hpp).
+struct Shift {
+  Eigen::Vector2d s = Eigen::Vector2d::Zero();  ///< metres
+  Eigen::Matrix2d c = Eigen::Matrix2d::Zero();  ///< m^2
+};
+
+/// The shift as fitted, with the fit's covariance.
+Shift fittedShift(const ModelCheck& check);
+/// The shift less the fit's own bias, with the covariance times (1 + 1/R) for the replicas'
+/// scatter; the fitted shift when no replica ran.
+Shift unbiasedShift(const ModelCheck& check);
 
 /// How the check fits.
 struct CheckFit {

@@ -30,13 +30,9 @@
 
 #include <Eigen/Core>
 
-namespace lidarcal::watch {
+#include "watch/model_check.hpp"
 
-/// One check's shift at the reference distances and its covariance as the fit states it.
-struct Shift {
-  Eigen::Vector2d s = Eigen::Vector2d::Zero();  ///< metres
-  Eigen::Matrix2d c = Eigen::Matrix2d::Zero();  ///< m^2
-};
+namespace lidarcal::watch {
 
 /// An F test's result.
 struct FTest {

@@ -58,10 +58,12 @@ struct CheckSettings {
   /// Pole radius, metres; unset: estimated from the arcs with the bias (an offset trades off
   /// against it, so a known radius checks the offset far better). Default unset.
   std::optional<double> landmark_radius_m;
-  /// Parametric-bootstrap replicas per check that estimate the check fit's own bias at the
-  /// stretch's geometry (model_check.hpp); the shift is tested with that bias taken out. 0:
-  /// none, the bias is left to the record (default 0).
-  int bias_replicas = 0;
+  /// Parametric-bootstrap replicas that estimate a check fit's own bias at its stretch's
+  /// geometry (model_check.hpp), for the checks tested against zero: a model's baseline, and in
+  /// learn mode the checks after its baseline failed. Their shifts are tested with that bias
+  /// taken out; the change tests, which cancel a bias all checks share, use the fitted shifts.
+  /// 0: none. Default 4.
+  int bias_replicas = 4;
 };
 
 /// How learn mode refits and when it switches (model_switch.hpp).

@@ -261,8 +261,9 @@ void addWatchCommand(CLI::App& app) {
   sub->add_option("--check-every", o->every_m, "Metres of travel between checks")
       ->capture_default_str();
   sub->add_option("--check-bias-replicas", o->bias_replicas,
-                  "Replicas per check that estimate the check fit's own bias by a parametric "
-                  "bootstrap, taken out before the test (0: none; each costs one more fit)")
+                  "Replicas that estimate a check fit's own bias by a parametric bootstrap, "
+                  "for the checks tested against zero: the baseline's, and in learn mode those "
+                  "after it failed (0: none; each costs one more fit)")
       ->capture_default_str();
   sub->add_option("--radius", o->radius_m,
                   "Pole radius in metres (default: sequence.json, else estimated)");

@@ -143,7 +143,8 @@ ordered_json timelineJson(const WatchTimeline& t) {
       {"record_checks", w.check.record_checks},
       {"min_sightings", w.check.min_sightings},
       {"landmark_radius_m", w.check.landmark_radius_m ? ordered_json(*w.check.landmark_radius_m)
-                                                      : ordered_json(nullptr)}};
+                                                      : ordered_json(nullptr)},
+      {"check_bias_replicas", w.check.bias_replicas}};
   if (t.injected)
     j["injected"] = {{"offset_m", t.injected->offset_m},
                      {"scale", t.injected->scale},

@@ -131,14 +131,14 @@ TEST(Ros2NodeArguments, TheWatchModesParametersMapOntoTheWatchersSettings) {
   EXPECT_EQ(w0.false_alarms.per_unit, def.false_alarms.per_unit);
   EXPECT_EQ(w0.false_alarms.unit, watch::Exposure::distance);
   EXPECT_EQ(w0.check.every_m, def.check.every_m);
-  EXPECT_EQ(w0.check.bias_replicas, 0);
+  EXPECT_EQ(w0.check.bias_replicas, def.check.bias_replicas);
   EXPECT_FALSE(w0.check.landmark_radius_m.has_value());
   EXPECT_EQ(w0.association.drift_per_m, def.association.drift_per_m);
   TempDir dir;
   const std::string file = "candidate_file:=" + (dir / "candidate.json").string();
   const ros2::NodeParameters p =
       parse({"--ros-args", "-p", "mode:=learn", "-p", "false_alarms:=0.02", "-p",
-             "false_alarms_per:=hour", "-p", "check_every:=5.5", "-p", "check_bias_replicas:=4",
+             "false_alarms_per:=hour", "-p", "check_every:=5.5", "-p", "check_bias_replicas:=2",
              "-p", "landmark_radius:=0.04", "-p", "candidate_topic:=/fleet/candidate", "-p",
              file.c_str(), "-p", "diagnostics_period:=0.5"});
   EXPECT_TRUE(p.model_file.empty());  // learn mode may start without a model
@@ -150,7 +150,7 @@ TEST(Ros2NodeArguments, TheWatchModesParametersMapOntoTheWatchersSettings) {
   EXPECT_EQ(w.false_alarms.per_unit, 0.02);
   EXPECT_EQ(w.false_alarms.unit, watch::Exposure::time);
   EXPECT_EQ(w.check.every_m, 5.5);
-  EXPECT_EQ(w.check.bias_replicas, 4);
+  EXPECT_EQ(w.check.bias_replicas, 2);
   EXPECT_EQ(w.check.landmark_radius_m.value_or(0), 0.04);  // the checks' radius and the detector's
   EXPECT_EQ(w.detection.landmark_radius_m.value_or(0), 0.04);
   EXPECT_NO_THROW(w.validate());

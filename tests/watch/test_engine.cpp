@@ -45,6 +45,14 @@ TEST(WatchEngine, CleanDrivesRaiseNoAlarmAndTestTheModel) {
     EXPECT_GE(e.state().checks, 5u);  // the absolute test and change tests were made
     EXPECT_EQ(e.state().level, Health::ok) << e.state().message;
     EXPECT_LE(e.state().sightings, e.state().scans * 10);
+    // The fit's own bias is estimated where a shift is tested against zero (the baseline), not
+    // for the change tests, which cancel it.
+    const int replicas = CheckSettings{}.bias_replicas;
+    for (const auto& c : r.checks) {
+      if (!c.check.status.ok()) continue;
+      const bool against_zero = c.test == watch::Test::baseline || c.test == watch::Test::absolute;
+      EXPECT_EQ(c.check.bias_replicas, against_zero ? replicas : 0) << c.decided_at;
+    }
   }
 }
 
@@ -69,17 +77,30 @@ TEST(WatchEngine, An20MmOffsetIsFoundAtTheNextCheckAndNotBefore) {
 
 TEST(WatchEngine, AModelOfAnotherSensorFailsItsBaseline) {
   const Scene scene = drivingScene("driving_large_poles", 700);
-  Recorded r;
-  Engine e(watchSettings(scene, Mode::watch), trueModel(scene), FitExecution::at_scan, r.sink());
-  test::driveThrough(e, scene, 41, parseRangeChange("30@0"));
-  ASSERT_FALSE(r.checks.empty());
-  const auto absolute = std::find_if(r.checks.begin(), r.checks.end(), [](const CheckEvent& c) {
-    return c.test == watch::Test::absolute;
-  });
-  ASSERT_NE(absolute, r.checks.end());
-  EXPECT_TRUE(absolute->alarm);
-  EXPECT_EQ(e.state().level, Health::error);
-  EXPECT_NE(e.state().message.find("does not describe this sensor"), std::string::npos);
+  for (const Mode mode : {Mode::watch, Mode::learn}) {
+    Recorded r;
+    Engine e(watchSettings(scene, mode), trueModel(scene), FitExecution::at_scan, r.sink());
+    test::driveThrough(e, scene, 41, parseRangeChange("30@0"));
+    ASSERT_FALSE(r.checks.empty());
+    const auto absolute = std::find_if(r.checks.begin(), r.checks.end(), [](const CheckEvent& c) {
+      return c.test == watch::Test::absolute;
+    });
+    ASSERT_NE(absolute, r.checks.end());
+    EXPECT_TRUE(absolute->alarm);
+    if (mode == Mode::watch) {
+      EXPECT_EQ(e.state().level, Health::error);
+      EXPECT_NE(e.state().message.find("does not describe this sensor"), std::string::npos);
+    }
+    // In learn mode the checks after the failed baseline are tested against zero again (the
+    // switch test), so they too have the fit's bias estimated; in watch mode nothing tests them.
+    std::size_t after = 0;
+    for (auto c = absolute + 1; c != r.checks.end(); ++c) {
+      if (!c->check.status.ok() || c->model_version != absolute->model_version) continue;
+      ++after;
+      EXPECT_EQ(c->check.bias_replicas, mode == Mode::learn ? CheckSettings{}.bias_replicas : 0);
+    }
+    EXPECT_GE(after, 1u);
+  }
 }
 
 TEST(WatchEngine, LearnModeSwitchesAfterAChangeToAModelOfTheChangedSensor) {

@@ -103,5 +103,23 @@ TEST(CheckReplica, LeavesOutPolesTheFitDidNotLocate) {
   for (const Sighting& s : rep.sightings) EXPECT_EQ(s.landmark, 7);
 }
 
+TEST(ModelCheckShift, TheTestedShiftTakesTheFitsOwnBiasOutAndWidensForTheReplicasScatter) {
+  ModelCheck c;
+  c.shift_m = {0.004, 0.009};
+  c.fit_bias_m = {-0.001, -0.002};
+  c.covariance << 4e-6, 1e-6, 1e-6, 9e-6;
+  const Shift fitted = fittedShift(c);
+  EXPECT_EQ(fitted.s, Eigen::Vector2d(0.004, 0.009));
+  EXPECT_EQ(fitted.c, c.covariance);
+  // Without replicas the bias is unknown and the shift is tested as fitted.
+  EXPECT_EQ(unbiasedShift(c).s, fitted.s);
+  EXPECT_EQ(unbiasedShift(c).c, fitted.c);
+  c.bias_replicas = 4;
+  const Shift unbiased = unbiasedShift(c);
+  EXPECT_NEAR(unbiased.s(0), 0.005, 1e-15);
+  EXPECT_NEAR(unbiased.s(1), 0.011, 1e-15);
+  EXPECT_TRUE(unbiased.c.isApprox(1.25 * c.covariance, 1e-15));
+}
+
 }  // namespace
 }  // namespace lidarcal::watch
