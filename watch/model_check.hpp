@@ -29,6 +29,7 @@
 #include "common/calibration_model.hpp"
 #include "common/landmark_observations.hpp"
 #include "common/status.hpp"
+#include "watch/shift_history.hpp"
 
 namespace lidarcal::watch {
 
@@ -52,12 +53,6 @@ struct ModelCheck {
   std::size_t poles = 0;                           ///< poles in the fit
   std::size_t readings = 0;                        ///< corrected readings in the fit
   std::size_t scans = 0;                           ///< scans of the stretch
-};
-
-/// One check's shift at the reference distances as a test takes it (shift_history.hpp).
-struct Shift {
-  Eigen::Vector2d s = Eigen::Vector2d::Zero();  ///< metres
-  Eigen::Matrix2d c = Eigen::Matrix2d::Zero();  ///< m^2
 };
 
 /// The shift as fitted, with the fit's covariance.

@@ -30,9 +30,13 @@
 
 #include <Eigen/Core>
 
-#include "watch/model_check.hpp"
-
 namespace lidarcal::watch {
+
+/// One check's shift at the reference distances and its covariance, as a test takes it.
+struct Shift {
+  Eigen::Vector2d s = Eigen::Vector2d::Zero();  ///< metres
+  Eigen::Matrix2d c = Eigen::Matrix2d::Zero();  ///< m^2
+};
 
 /// An F test's result.
 struct FTest {
