@@ -43,6 +43,9 @@ for s in small_poles large_poles; do
   $W --scene "$(scene $s)" --seeds 200 --first-seed 1000 --scans 560 --rate 20 \
     --bias-replicas 0 > "$OUT/clean_no_replicas_$s.txt"
 done
+# The change test on draws of its own model: rejections per level by record length, spread and
+# scale (about a minute).
+build/bench/change_test_level > "$OUT/change_test_level.txt"
 # 4. Memory over a 100,000-scan drive.
 $W --scene "$(scene large_poles)" --seeds 1 --first-seed 4000 --scans 100000 --rss-every 10000 \
   > "$OUT/memory.txt"

@@ -21,6 +21,19 @@ std::string gnuplotBroken(const std::filesystem::path& log) {
          (first.empty() ? std::string() : " (" + first + ")") + "; " + kGnuplotPackage;
 }
 
+namespace {
+
+/// The last non-empty line of gnuplot's log: its error, after any warnings.
+std::string lastMessage(const std::filesystem::path& log) {
+  std::ifstream in(log);
+  std::string line, last = "no message";
+  while (std::getline(in, line))
+    if (line.find_first_not_of(" \t\r") != std::string::npos) last = line;
+  return last;
+}
+
+}  // namespace
+
 bool runGnuplot(const std::filesystem::path& dir, const std::string& script, std::string* why) {
   if (!gnuplotInstalled()) {
     if (why)
@@ -32,8 +45,9 @@ bool runGnuplot(const std::filesystem::path& dir, const std::string& script, std
   if (std::system(cmd.c_str()) != 0) {
     const std::string broken = gnuplotBroken(dir / "gnuplot.log");
     if (why)
-      *why = broken.empty() ? "gnuplot failed, see " + (dir / "gnuplot.log").string()
-                            : broken + "; plots skipped";
+      *why = broken.empty()
+                 ? "gnuplot failed on " + script + ": " + lastMessage(dir / "gnuplot.log")
+                 : broken + "; plots skipped";
     return false;
   }
   std::error_code ec;

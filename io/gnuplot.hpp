@@ -22,7 +22,8 @@ bool gnuplotInstalled();
 /// empty when gnuplot draws, so a failure lies in the script.
 std::string gnuplotBroken(const std::filesystem::path& log);
 
-/// Runs `gnuplot script` in `dir`. Returns false (with a reason) when gnuplot is missing or fails.
+/// Runs `gnuplot script` in `dir`. Returns false when gnuplot is missing or fails, with a reason
+/// that quotes gnuplot's last message rather than a path: `dir` may be a staging directory.
 bool runGnuplot(const std::filesystem::path& dir, const std::string& script,
                 std::string* why = nullptr);
 

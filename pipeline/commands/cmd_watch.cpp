@@ -116,21 +116,26 @@ std::size_t replay(const WatchOptions& o, const std::function<void(io::RawScan&)
   return n;
 }
 
-void writeOutputs(const WatchOptions& o, const WatchTimeline& t) {
+/// Writes DIR; returns what it holds, for the user.
+std::string writeOutputs(const WatchOptions& o, const WatchTimeline& t) {
   io::checkOutsideInput(o.input, o.out);
   io::StagedDirectory dir(o.out, o.overwrite);
   std::string json = timelineJson(t).dump(2);
   io::writeTextAtomically(dir.path() / "timeline.json", json + "\n");
+  std::string written = "timeline.json";
   for (const auto& r : t.refits)
     if (!r.model_file.empty()) {
+      if (!std::filesystem::exists(dir.path() / "models")) written += ", models/";
       io::makeDirectory(dir.path() / "models");
       io::writeModel(dir.path() / r.model_file, *r.event.candidate);
     }
-  writeTimelinePlot(dir.path(), t);
-  std::string why;
-  if (!io::runGnuplot(dir.path(), "timeline.gp", &why) && !quiet())
+  std::string why = "no test was made, so there is nothing to draw";
+  if (writeTimelinePlot(dir.path(), t) > 0 && io::runGnuplot(dir.path(), "timeline.gp", &why))
+    written += ", timeline.png";
+  else if (!quiet())
     std::fprintf(stderr, "lidarcal watch: no plot (%s)\n", why.c_str());
   dir.commit();
+  return written;
 }
 
 /// The change --inject asks for, if any.
@@ -229,9 +234,9 @@ void runWatch(const WatchOptions& o) {
   engine->finish();
   t.settings = settings;
   t.final_state = engine->state();
-  writeOutputs(o, t);
+  const std::string written = writeOutputs(o, t);
   std::printf("%s", watchSummary(t).c_str());
-  std::printf("Output: %s (timeline.json, timeline.png)\n", o.out.c_str());
+  std::printf("Output: %s (%s)\n", o.out.c_str(), written.c_str());
   refuseWithoutResult(o, t);
 }
 

@@ -157,7 +157,8 @@ ordered_json timelineJson(const WatchTimeline& t) {
   return j;
 }
 
-void writeTimelinePlot(const std::filesystem::path& dir, const WatchTimeline& t) {
+std::size_t writeTimelinePlot(const std::filesystem::path& dir, const WatchTimeline& t) {
+  std::size_t drawn = 0;
   std::ostringstream data;
   data << "# travel_m shift1_mm se1_mm shift2_mm se2_mm kind (0 baseline, 1 passed, 2 alarm)\n";
   for (const auto& c : t.checks) {
@@ -168,7 +169,9 @@ void writeTimelinePlot(const std::filesystem::path& dir, const WatchTimeline& t)
                   1000.0 * c.check.shift_m[0], 1000.0 * c.check.shift_se_m[0],
                   1000.0 * c.check.shift_m[1], 1000.0 * c.check.shift_se_m[1], kind);
     data << line;
+    ++drawn;
   }
+  if (drawn == 0) return 0;
   io::writeTextAtomically(dir / "timeline.dat", data.str());
   std::ostringstream gp;
   gp << "set terminal pngcairo size 1200,500 font \"DejaVu Sans,10\"\n"
@@ -188,6 +191,7 @@ void writeTimelinePlot(const std::filesystem::path& dir, const WatchTimeline& t)
         "  \"\" using 1:($6==2?$2:1/0):3 with yerrorbars pt 9 ps 1.5 lc rgb \"#e63946\" title "
         "\"rejects the model\"\n";
   io::writeTextAtomically(dir / "timeline.gp", gp.str());
+  return drawn;
 }
 
 std::string checkLine(const watch::CheckEvent& e) {

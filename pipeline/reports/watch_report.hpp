@@ -38,8 +38,9 @@ struct WatchTimeline {
 /// timeline.json (format lidarcal-watch/1).
 nlohmann::ordered_json timelineJson(const WatchTimeline& t);
 
-/// The gnuplot data and script of the plot (timeline.dat, timeline.gp) into `dir`.
-void writeTimelinePlot(const std::filesystem::path& dir, const WatchTimeline& t);
+/// The gnuplot data and script of the plot (timeline.dat, timeline.gp) into `dir`; the number of
+/// checks drawn. With none (no test was made) it writes nothing: there is no plot to draw.
+std::size_t writeTimelinePlot(const std::filesystem::path& dir, const WatchTimeline& t);
 
 /// The line printed for an alarm, a rejected model or a switch (empty for a quiet check).
 std::string checkLine(const watch::CheckEvent& e);

@@ -112,6 +112,7 @@ TEST_F(CliWatch, LearnModeSwitchesAfterTheChangeAndWritesTheNewModel) {
       EXPECT_GE(f["first_scan"].get<std::size_t>() + 100, 700u);
     }
   ASSERT_FALSE(file.empty());
+  EXPECT_NE(r.out.find("(timeline.json, models/"), std::string::npos) << r.out;
   // The model learnt reads 25 mm longer than the one given where both were fitted.
   const auto learnt = readJson(out / "w" / file);
   const auto given = readJson(model());
@@ -148,11 +149,16 @@ TEST_F(CliWatch, RefusesWhatItCannotUse) {
 TEST_F(CliWatch, ARobotStandingStillCanTestNothingAndSaysWhatToRecord) {
   TempDir out;
   // The bundled example stops 10 times with 10 scans each: too little travel for one test.
-  const auto r = runCli("watch -q " + (test::sourceDir() / "data/example/scans").string() +
+  const auto r = runCli("watch " + (test::sourceDir() / "data/example/scans").string() +
                         " --model " + model().string() + " -o " + (out / "w").string());
   EXPECT_EQ(r.exit_code, 3) << r.out << r.err;
   EXPECT_NE(r.err.find("record a longer drive"), std::string::npos) << r.err;
   EXPECT_TRUE(fs::exists(out / "w" / "timeline.json"));
+  // Without a test there is no point to draw: no plot, said plainly, and no gnuplot failure.
+  EXPECT_NE(r.err.find("no plot (no test was made"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("gnuplot failed"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out / "w" / "timeline.png"));
+  EXPECT_NE(r.out.find("(timeline.json)"), std::string::npos) << r.out;
 }
 
 }  // namespace

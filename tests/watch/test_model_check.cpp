@@ -103,6 +103,27 @@ TEST(CheckReplica, LeavesOutPolesTheFitDidNotLocate) {
   for (const Sighting& s : rep.sightings) EXPECT_EQ(s.landmark, 7);
 }
 
+TEST(CheckReplica, LeavesOutPolesTheFitListsButSetAside) {
+  // A second pole the fit listed but did not use, with a circle that encloses the poses: beams
+  // drawn from it would read below zero.
+  CalibrationModel fit = poleFit(NoiseKind::none, 0.0);
+  CalibratedLandmark aside = fit.landmarks.front();
+  aside.id = 8;
+  aside.x_m = 1.2;
+  aside.y_m = 1.9;
+  aside.radius_m = 1.0;
+  aside.status = "degenerate_geometry";
+  fit.landmarks.push_back(aside);
+  LandmarkObservations obs = sightings(fit, 1);
+  obs.sightings.front().landmark = 8;
+  const LandmarkObservations rep = replicaObservations(obs, fit, 1);
+  ASSERT_EQ(rep.sightings.size(), obs.sightings.size() - 1);
+  for (const Sighting& s : rep.sightings) {
+    EXPECT_EQ(s.landmark, 7);
+    for (const BeamReading& b : s.beams) EXPECT_GT(b.range_m, 0.0);
+  }
+}
+
 TEST(ModelCheckShift, TheTestedShiftTakesTheFitsOwnBiasOutAndWidensForTheReplicasScatter) {
   ModelCheck c;
   c.shift_m = {0.004, 0.009};
