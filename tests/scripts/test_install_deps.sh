@@ -113,13 +113,21 @@ expect nothing-missing "exit status" 0 "$status"
 expect nothing-missing "no apt-get call" "" "$log"
 expect nothing-missing "message" "install-deps: all ${#packages[@]} packages present" "$out"
 
+# Whether PACKAGES lists $1. A loop, not `printf | grep -q`: under pipefail, grep quitting at its
+# first match can kill printf with SIGPIPE and fail the pipeline.
+listed() {
+  local p
+  for p in "${packages[@]}"; do [ "$p" = "$1" ] && return 0; done
+  return 1
+}
+
 # The docs tell users to open scans with pcl_viewer: the script must install it.
-if printf '%s\n' "${packages[@]}" | "$grep_bin" -qx pcl-tools; then echo "ok   pcl-tools listed (pcl_viewer)"
+if listed pcl-tools; then echo "ok   pcl-tools listed (pcl_viewer)"
 else echo "FAIL pcl-tools (pcl_viewer, mentioned in docs/FORMAT.md) is not in PACKAGES"; failures=$((failures + 1)); fi
 
 # The build needs them for ROS 2 bags (io/CMakeLists.txt stops without them).
 for p in libzstd-dev liblz4-dev libsqlite3-dev; do
-  if printf '%s\n' "${packages[@]}" | "$grep_bin" -qx "$p"; then echo "ok   $p listed (ROS 2 bag import)"
+  if listed "$p"; then echo "ok   $p listed (ROS 2 bag import)"
   else echo "FAIL $p (needed to build io/ for ROS 2 bags) is not in PACKAGES"; failures=$((failures + 1)); fi
 done
 
