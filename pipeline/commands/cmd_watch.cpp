@@ -123,12 +123,14 @@ std::string writeOutputs(const WatchOptions& o, const WatchTimeline& t) {
   std::string json = timelineJson(t).dump(2);
   io::writeTextAtomically(dir.path() / "timeline.json", json + "\n");
   std::string written = "timeline.json";
+  bool models = false;
   for (const auto& r : t.refits)
     if (!r.model_file.empty()) {
-      if (!std::filesystem::exists(dir.path() / "models")) written += ", models/";
-      io::makeDirectory(dir.path() / "models");
+      if (!models) io::makeDirectory(dir.path() / "models");
+      models = true;
       io::writeModel(dir.path() / r.model_file, *r.event.candidate);
     }
+  if (models) written += ", models/";
   std::string why = "no test was made, so there is nothing to draw";
   if (writeTimelinePlot(dir.path(), t) > 0 && io::runGnuplot(dir.path(), "timeline.gp", &why))
     written += ", timeline.png";

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Running gnuplot (io/gnuplot.hpp): a failure is reported by gnuplot's own message, not by a path
 // that may be a staging directory gone by the time the user reads it.
-#include <cstdlib>
+#include <filesystem>
 #include <string>
 
 #include <gtest/gtest.h>
