@@ -43,9 +43,10 @@ for s in small_poles large_poles; do
   $W --scene "$(scene $s)" --seeds 200 --first-seed 1000 --scans 560 --rate 20 \
     --bias-replicas 0 > "$OUT/clean_no_replicas_$s.txt"
 done
-# The change test on draws of its own model: rejections per level by record length, spread and
-# scale (about a minute).
+# The change test and the baseline's absolute test on draws of their own model: rejections per
+# level by record length, spread and scale (about a minute each).
 build/bench/change_test_level > "$OUT/change_test_level.txt"
+build/bench/change_test_level --absolute > "$OUT/absolute_test_level.txt"
 # 4. Memory over a 100,000-scan drive.
 $W --scene "$(scene large_poles)" --seeds 1 --first-seed 4000 --scans 100000 --rss-every 10000 \
   > "$OUT/memory.txt"

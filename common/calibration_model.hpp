@@ -36,6 +36,7 @@ struct CalibratedLandmark {
   std::array<double, 4> covariance_m2{};  ///< row-major 2x2 covariance of (x, y)
   int stops = 0;                          ///< stops that saw it
   std::string status = "ok";              ///< ok or why it was not used
+  bool ok() const { return status == "ok"; }
 };
 
 /// Results of the noise-law estimators, reported side by side.
@@ -149,5 +150,13 @@ struct CalibrationModel {
   /// near +-1 the offset is not determined by the data.
   double offset_radius_correlation = std::numeric_limits<double>::quiet_NaN();
 };
+
+/// The landmarks the model located (status ok), by id: those it set aside have no circle.
+inline std::map<int, const CalibratedLandmark*> locatedLandmarks(const CalibrationModel& m) {
+  std::map<int, const CalibratedLandmark*> out;
+  for (const CalibratedLandmark& l : m.landmarks)
+    if (l.ok()) out[l.id] = &l;
+  return out;
+}
 
 }  // namespace lidarcal

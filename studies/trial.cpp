@@ -166,8 +166,7 @@ std::vector<PositionError> positionErrors(const CalibrationModel& m, const Draw&
   mx /= static_cast<double>(draw.obs.commanded.size());
   my /= static_cast<double>(draw.obs.commanded.size());
   for (const CalibratedLandmark& l : m.landmarks) {
-    if (l.status != "ok" || l.id <= 0 || static_cast<std::size_t>(l.id) >= draw.true_id.size())
-      continue;
+    if (!l.ok() || l.id <= 0 || static_cast<std::size_t>(l.id) >= draw.true_id.size()) continue;
     const int id = draw.true_id[static_cast<std::size_t>(l.id)];
     if (id <= 0) continue;
     const Cylinder& c = layout[static_cast<std::size_t>(id - 1)];

@@ -89,11 +89,9 @@ LandmarkObservations correctedObservations(const LandmarkObservations& raw,
 
 LandmarkObservations replicaObservations(const LandmarkObservations& obs,
                                          const CalibrationModel& fit, std::uint64_t seed) {
-  std::map<int, const CalibratedLandmark*> poles;
   // Only poles the fit located: one it set aside (say, degenerate geometry) has no trustworthy
   // circle, and beams drawn from it can read below zero.
-  for (const auto& l : fit.landmarks)
-    if (l.status == "ok") poles[l.id] = &l;
+  const std::map<int, const CalibratedLandmark*> poles = locatedLandmarks(fit);
   std::mt19937_64 rng = makeRng(seed, 0);
   std::normal_distribution<double> normal(0.0, 1.0);
   LandmarkObservations out = obs;

@@ -70,7 +70,7 @@ void SequenceDiagnosis::findStarts() {
   calibrated_start_.model = calibration_.model;
   calibrated_start_.radius_m = landmarkRadius(obs_);
   for (const auto& l : calibration_.landmarks)
-    if (l.status == "ok") {
+    if (l.ok()) {
       calibrated_start_.centres[l.id] = Eigen::Vector2d(l.x_m, l.y_m);
       calibrated_start_.radius_m = l.radius_m;
     }
@@ -83,7 +83,7 @@ void SequenceDiagnosis::findStarts() {
   n.poses = obs_.commanded;
   n.radius_m = calibrated_start_.radius_m;
   for (const auto& l : m.landmarks)
-    if (l.status == "ok") n.centres[l.id] = Eigen::Vector2d(l.x_m, l.y_m);
+    if (l.ok()) n.centres[l.id] = Eigen::Vector2d(l.x_m, l.y_m);
   n.model = m.model;
   closed_form_order_ = std::max(m.model.bias.order(), 1);
   if (n.centres.size() == calibrated_start_.centres.size()) neutral_start_ = n;

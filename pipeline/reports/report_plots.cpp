@@ -249,9 +249,7 @@ PlotData plotData(const LandmarkObservations& obs, const CalibrationModel& m,
   ReadingTally tally(m);
   std::ostringstream raw, cor, circles, stops, true_circles;
   for (auto* o : {&raw, &cor, &stops}) o->precision(6);
-  std::map<int, const CalibratedLandmark*> lm;
-  for (const auto& l : m.landmarks)
-    if (l.status == "ok") lm[l.id] = &l;
+  const std::map<int, const CalibratedLandmark*> lm = locatedLandmarks(m);
   std::map<std::size_t, std::size_t> first_scan_of_stop;
   for (const auto& s : obs.sightings) {
     auto f = first_scan_of_stop.find(s.stop);
